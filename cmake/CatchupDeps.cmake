@@ -1,0 +1,95 @@
+# Finding every dependency, each with the Debian package that provides it.
+# A missing dependency stops configuration with a message that names the
+# package to install, instead of a CMake backtrace.
+
+function(catchup_missing what package)
+  message(FATAL_ERROR
+    "catchup: ${what} was not found.\n"
+    "  On Debian/Ubuntu install it with:  apt-get install ${package}\n"
+    "  (or run scripts/setup, which installs every missing package).")
+endfunction()
+
+find_package(PkgConfig QUIET)
+
+# --- GSL (quadrature, special functions) ---------------------------------
+find_package(GSL QUIET)
+if(NOT GSL_FOUND)
+  catchup_missing("GSL (GNU Scientific Library)" "libgsl-dev")
+endif()
+
+# --- CHOLMOD (SuiteSparse): prefer SuiteSparse 7+ config files ---------------
+find_package(CHOLMOD CONFIG QUIET)
+if(TARGET SuiteSparse::CHOLMOD)
+  add_library(catchup_cholmod INTERFACE IMPORTED)
+  target_link_libraries(catchup_cholmod INTERFACE SuiteSparse::CHOLMOD)
+else()
+  find_package(CHOLMODLegacy MODULE QUIET)
+  if(NOT CHOLMODLegacy_FOUND)
+    catchup_missing("CHOLMOD (SuiteSparse)" "libsuitesparse-dev")
+  endif()
+endif()
+
+# --- libyaml (scene and sweep files) ---------------------------------------
+set(_yaml_found FALSE)
+if(PKG_CONFIG_FOUND)
+  pkg_check_modules(YAML QUIET IMPORTED_TARGET yaml-0.1)
+  if(YAML_FOUND)
+    set(_yaml_found TRUE)
+    add_library(catchup_yaml INTERFACE IMPORTED)
+    target_link_libraries(catchup_yaml INTERFACE PkgConfig::YAML)
+  endif()
+endif()
+if(NOT _yaml_found)
+  find_path(YAML_INCLUDE_DIR yaml.h)
+  find_library(YAML_LIBRARY NAMES yaml)
+  if(NOT YAML_INCLUDE_DIR OR NOT YAML_LIBRARY)
+    catchup_missing("libyaml" "libyaml-dev")
+  endif()
+  add_library(catchup_yaml INTERFACE IMPORTED)
+  target_include_directories(catchup_yaml INTERFACE ${YAML_INCLUDE_DIR})
+  target_link_libraries(catchup_yaml INTERFACE ${YAML_LIBRARY})
+endif()
+
+# --- MPI and HDF5: only for src/io's HDF5 part and the apps -----------------
+if(CATCHUP_BUILD_APPS)
+  set(_mpi_langs C)
+  if(CATCHUP_BUILD_FORTRAN)
+    list(APPEND _mpi_langs Fortran)
+  endif()
+  find_package(MPI QUIET COMPONENTS ${_mpi_langs})
+  if(NOT MPI_C_FOUND)
+    catchup_missing("MPI for C (Open MPI)" "libopenmpi-dev openmpi-bin")
+  endif()
+  if(CATCHUP_BUILD_FORTRAN AND NOT MPI_Fortran_FOUND)
+    catchup_missing("MPI for Fortran (Open MPI)" "libopenmpi-dev gfortran")
+  endif()
+  # Parallel and serial HDF5 sit side by side on Debian; a plain find may pick
+  # the serial one. We need the build that matches our MPI.
+  set(HDF5_PREFER_PARALLEL TRUE)
+  find_package(HDF5 QUIET COMPONENTS C)
+  if(NOT HDF5_FOUND)
+    catchup_missing("HDF5 (parallel build)" "libhdf5-openmpi-dev hdf5-tools")
+  endif()
+  if(NOT TARGET hdf5::hdf5)
+    add_library(hdf5::hdf5 INTERFACE IMPORTED)
+    target_include_directories(hdf5::hdf5 INTERFACE ${HDF5_C_INCLUDE_DIRS} ${HDF5_INCLUDE_DIRS})
+    target_link_libraries(hdf5::hdf5 INTERFACE ${HDF5_C_LIBRARIES} ${HDF5_LIBRARIES})
+    target_compile_definitions(hdf5::hdf5 INTERFACE ${HDF5_C_DEFINITIONS} ${HDF5_DEFINITIONS})
+  endif()
+endif()
+
+# --- cmocka: tests only -------------------------------------------------------
+if(CATCHUP_BUILD_TESTS)
+  set(_cmocka_found FALSE)
+  if(PKG_CONFIG_FOUND)
+    pkg_check_modules(CMOCKA QUIET IMPORTED_TARGET cmocka)
+    if(CMOCKA_FOUND)
+      set(_cmocka_found TRUE)
+      add_library(catchup_cmocka INTERFACE IMPORTED)
+      target_link_libraries(catchup_cmocka INTERFACE PkgConfig::CMOCKA)
+    endif()
+  endif()
+  if(NOT _cmocka_found)
+    catchup_missing("cmocka (unit test framework)" "libcmocka-dev")
+  endif()
+endif()

@@ -1,0 +1,14 @@
+/* catchup.h — the one public header of the catchup library.
+ *
+ * catchup simulates Moreau sweeping processes and linear complementarity
+ * systems by the inexact catching-up algorithm. Conventions (DESIGN.md):
+ * prefix cup_; create / set / solve / free; options structs filled by
+ * cup_*_options_default(); 0 ok, negative errors, positive warnings; the
+ * library never prints, exits or aborts. */
+#ifndef CATCHUP_H
+#define CATCHUP_H
+
+#include "catchup/version.h"
+#include "catchup/status.h"
+
+#endif

@@ -1,0 +1,55 @@
+/* catchup/status.h — status codes: 0 ok, negative errors, positive warnings. */
+#ifndef CATCHUP_STATUS_H
+#define CATCHUP_STATUS_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One list gives both the enum and the messages (cup_status_string).
+ * Numbers are part of the ABI and of the HDF5 output: append, never renumber. */
+#define CUP_STATUS_LIST(X)                                                    \
+  X(CUP_OK,                  0, "ok")                                         \
+  X(CUP_ERR_NOMEM,          -1, "out of memory")                              \
+  X(CUP_ERR_ARG,            -2, "invalid argument")                           \
+  X(CUP_ERR_DIM,            -3, "dimension mismatch")                         \
+  X(CUP_ERR_NONFINITE,      -4, "NaN or Inf in the input")                    \
+  X(CUP_ERR_NOT_SPD,        -5, "metric P is not symmetric positive definite") \
+  X(CUP_ERR_EMPTY_SET,      -6, "the set is empty (Farkas certificate in info)") \
+  X(CUP_ERR_PB_CT,          -7, "P B differs from C^T")                       \
+  X(CUP_ERR_CALLBACK,       -8, "a user callback failed or returned NaN/Inf") \
+  X(CUP_ERR_DIVERGED,       -9, "an iterate became NaN or Inf")               \
+  X(CUP_ERR_IO,            -10, "file input/output failed")                   \
+  X(CUP_ERR_PARSE,         -11, "syntax or schema error in an input file")    \
+  X(CUP_ERR_LINALG,        -12, "sparse factorization failed")                \
+  X(CUP_ERR_TIME_LIMIT,    -13, "time limit reached")                         \
+  X(CUP_ERR_INTERRUPTED,   -14, "interrupted by the caller")                  \
+  X(CUP_ERR_UNSUPPORTED,   -15, "not supported for this configuration")      \
+  X(CUP_WARN_NOT_CERTIFIED,  1, "requested (eps, eta) not certified within the iteration limit; bounds reached are in info") \
+  X(CUP_WARN_STIFF,          2, "explicit scheme with h*rho(A) > 2: the free step is unstable") \
+  X(CUP_WARN_QUADRATURE,     3, "input quadrature did not reach its tolerance")
+
+typedef enum cup_status {
+#define CUP_STATUS_ENUM_(name, value, text) name = value,
+  CUP_STATUS_LIST(CUP_STATUS_ENUM_)
+#undef CUP_STATUS_ENUM_
+} cup_status;
+
+/** Message for a status code; "unknown status" for a value not in the list. */
+const char *cup_status_string(int status);
+
+/** Symbolic name ("CUP_ERR_EMPTY_SET"); "CUP_UNKNOWN" for a value not in the list. */
+const char *cup_status_name(int status);
+
+/** Most severe of two statuses: any error beats any warning beats ok; among
+ *  errors (or warnings) the first one is kept. */
+static inline int cup_status_merge(int first, int second) {
+  if (first < 0) return first;
+  if (second < 0) return second;
+  return first > 0 ? first : second;
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,15 @@
+# Configure, build and run the unit tests with -fsanitize=address,undefined.
+# Invoked by ctest as: cmake -DSRC=... -DBIN=... -P run_sanitize.cmake
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "sanitizer run failed at: ${ARGN}")
+  endif()
+endfunction()
+run(${CMAKE_COMMAND} -S ${SRC} -B ${BIN} -G ${GENERATOR}
+    -DCMAKE_BUILD_TYPE=Debug -DCATCHUP_SANITIZE=ON -DCATCHUP_WERROR=ON
+    -DCATCHUP_BUILD_APPS=OFF -DCATCHUP_BUILD_FORTRAN=OFF)
+run(${CMAKE_COMMAND} --build ${BIN} --parallel 2)
+set(ENV{ASAN_OPTIONS} "detect_leaks=1:abort_on_error=0:halt_on_error=1")
+set(ENV{UBSAN_OPTIONS} "print_stacktrace=1:halt_on_error=1")
+run(${CMAKE_CTEST_COMMAND} --test-dir ${BIN} -L unit --output-on-failure)
