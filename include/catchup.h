@@ -10,5 +10,8 @@
 
 #include "catchup/version.h"
 #include "catchup/status.h"
+#include "catchup/sparse.h"
+#include "catchup/polyset.h"
+#include "catchup/projector.h"
 
 #endif

@@ -1,0 +1,107 @@
+/* catchup/projector.h — certified (eps, eta)-approximate projections onto a
+ * polyset in the P-metric (paper, Sec. 2 definition and Sec. 7 method).
+ *
+ * z is an (eps, eta)-approximate projection of x onto K when
+ *     ||x - z||_P^2 < d_K(x)^2 + eps   and   d_K(z) <= eta
+ * (z may lie outside K). Every return carries certified bounds: eps_cert from
+ * weak duality (a dual point lambda >= 0 gives d_K(x)^2 >= 2 q(lambda)), and
+ * eta_cert from an exactly feasible point v found on a segment from z or by a
+ * push along a direction into K; eta_cert bounds the true distance d_K(z), not
+ * the raw constraint violation. */
+#ifndef CATCHUP_PROJECTOR_H
+#define CATCHUP_PROJECTOR_H
+
+#include "catchup/polyset.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cup_projector cup_projector;
+
+typedef enum cup_proj_method {
+  CUP_PROJ_AUTO = 0,      /**< fastest method that certifies the tolerances */
+  CUP_PROJ_PG = 1,        /**< the paper's dual projected gradient, step 1/L */
+  CUP_PROJ_FISTA = 2,     /**< accelerated dual gradient with adaptive restart */
+  CUP_PROJ_ACTIVESET = 3  /**< exact: active-set Newton on the dual (dense or CHOLMOD) */
+} cup_proj_method;
+
+/** Options; fill with cup_projector_options_default() and change fields. */
+typedef struct cup_projector_options {
+  cup_proj_method method; /**< CUP_PROJ_AUTO */
+  double eps_abs;         /**< target eps = eps_abs + eps_rel * S^2 (S: scale) */
+  double eps_rel;         /**< default 1e-12 */
+  double eta_abs;         /**< target eta = eta_abs + eta_rel * S */
+  double eta_rel;         /**< default 1e-10 */
+  int max_iter;           /**< dual iterations (first-order) per call; 100000 */
+  int warm_start;         /**< start from the previous lambda; 1 */
+  int return_feasible;    /**< return the exactly feasible point v instead of z; 0 */
+  double lipschitz;       /**< step 1/L uses this L if > 0 (must bound lambda_max(C P^-1 C^T)); 0 = guaranteed bound */
+  const double *feasible_point; /**< a known point of K for the default offset (copied), or NULL */
+} cup_projector_options;
+
+/** What one projection did and what it certifies. */
+typedef struct cup_proj_info {
+  int status;             /**< as returned */
+  int method;             /**< method that produced the answer (cup_proj_method) */
+  int iterations;         /**< dual iterations (first-order steps + Newton solves) */
+  int factorizations;     /**< sparse numeric factorizations */
+  int skipped;            /**< 1 if x was already in K: z = x exactly */
+  int active;             /**< constraints with lambda_i > 0 */
+  double scale;           /**< S = max(||x||_P, max_i |g_i| / ||c_i||_{P^-1}) */
+  double eps_target;      /**< eps requested (absolute) */
+  double eta_target;      /**< eta requested (absolute) */
+  double eps_cert;        /**< certified: ||x - z||_P^2 - d_K(x)^2 <= eps_cert */
+  double eta_cert;        /**< certified: d_K(z) <= eta_cert (INFINITY if unknown) */
+  double violation;       /**< raw max_i (-(C z + g)_i)_+ for comparison with eta_cert */
+  double dual_value;      /**< 2 q(lambda): a certified lower bound on d_K(x)^2 */
+  double farkas_gap;      /**< empty K: g^T y (< 0) for the certificate y >= 0 */
+  double farkas_residual; /**< empty K: ||C^T y||_{P^-1}; K has no point within
+                               radius -farkas_gap / farkas_residual of 0 */
+} cup_proj_info;
+
+void cup_projector_options_default(cup_projector_options *opt);
+
+/** Create a projector onto K; allocates all workspace (cup_project does not
+ *  allocate). The projector keeps a pointer to K, which must outlive it. */
+int cup_projector_create(cup_projector **p, const cup_polyset *K,
+                         const cup_projector_options *opt, char *errmsg);
+void cup_projector_free(cup_projector **p);
+
+/** Replace the offset g (m entries, copied) for the following projections:
+ *  K(t) = {x : C x + g(t) >= 0} with g(t) = G u(t) + F. */
+int cup_projector_set_offset(cup_projector *p, const double *g);
+/** Change the absolute/relative tolerances for the following projections. */
+int cup_projector_set_tolerances(cup_projector *p, double eps_abs, double eps_rel,
+                                 double eta_abs, double eta_rel);
+/** Offer a point believed to be in K(current offset); it is checked (with a
+ *  rounding bound) and used as an anchor for eta certificates if feasible.
+ *  Returns 1 if accepted. */
+int cup_projector_offer_feasible(cup_projector *p, const double *w);
+/** Forget the warm start. */
+void cup_projector_reset(cup_projector *p);
+
+/** Project x onto K in the P-metric: z (dim entries; may alias x) and info
+ *  (may be NULL). Returns CUP_OK when (eps_target, eta_target) are certified,
+ *  CUP_WARN_NOT_CERTIFIED with the bounds reached otherwise,
+ *  CUP_ERR_EMPTY_SET with a Farkas certificate (cup_projector_farkas),
+ *  CUP_ERR_NONFINITE for a NaN/Inf in x, CUP_ERR_DIVERGED if an iterate
+ *  became non-finite. On an error z is left unchanged. */
+int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info);
+
+/** Multipliers lambda (m entries) of the last projection (0 after a skip). */
+const double *cup_projector_lambda(const cup_projector *p);
+/** An exactly feasible point v of K found while certifying the last
+ *  projection (eta_cert = ||z - v||_P), or NULL if none was needed/found. */
+const double *cup_projector_feasible(const cup_projector *p);
+/** After CUP_ERR_EMPTY_SET: y >= 0 (m entries) with C^T y ~ 0 and g^T y < 0. */
+const double *cup_projector_farkas(const cup_projector *p);
+
+const char *cup_proj_method_name(int method);
+/** Parse "auto", "pg", "fista", "activeset"; returns -1 if unknown. */
+int cup_proj_method_parse(const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

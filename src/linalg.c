@@ -1,0 +1,202 @@
+/* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "linalg.h"
+
+int cup_fail(char *buf, int status, const char *fmt, ...) {
+  if (buf) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, CUP_ERRMSG_LEN, fmt, ap);
+    va_end(ap);
+  }
+  return status;
+}
+
+int cup_sparse_alloc(cup_sparse *A, int nrow, int ncol, int nnz) {
+  A->nrow = nrow; A->ncol = ncol; A->nnz = nnz;
+  A->p = malloc(sizeof(int) * ((size_t)ncol + 1));
+  A->i = malloc(sizeof(int) * ((size_t)nnz + 1));
+  A->x = malloc(sizeof(double) * ((size_t)nnz + 1));
+  if (!A->p || !A->i || !A->x) { cup_sparse_free(A); return CUP_ERR_NOMEM; }
+  A->p[0] = 0;
+  return CUP_OK;
+}
+
+void cup_sparse_free(cup_sparse *A) {
+  free(A->p); free(A->i); free(A->x);
+  A->p = NULL; A->i = NULL; A->x = NULL;
+  A->nnz = 0;
+}
+
+int cup_sparse_copy(cup_sparse *A, const cup_csc *v, const char *name,
+                    int nrow, int ncol, char *errmsg) {
+  memset(A, 0, sizeof *A);
+  if (!v || !v->colptr || (v->colptr[v->ncol] > 0 && (!v->rowind || !v->values)))
+    return cup_fail(errmsg, CUP_ERR_ARG, "%s: missing colptr, rowind or values", name);
+  if (v->nrow != nrow || v->ncol != ncol)
+    return cup_fail(errmsg, CUP_ERR_DIM, "%s is %d x %d, expected %d x %d",
+                    name, v->nrow, v->ncol, nrow, ncol);
+  if (v->colptr[0] != 0)
+    return cup_fail(errmsg, CUP_ERR_ARG, "%s: colptr[0] = %d, must be 0", name, v->colptr[0]);
+  for (int j = 0; j < ncol; j++) {
+    if (v->colptr[j + 1] < v->colptr[j])
+      return cup_fail(errmsg, CUP_ERR_ARG, "%s: colptr decreases at column %d", name, j);
+    for (int k = v->colptr[j]; k < v->colptr[j + 1]; k++) {
+      int r = v->rowind[k];
+      if (r < 0 || r >= nrow)
+        return cup_fail(errmsg, CUP_ERR_ARG, "%s: column %d has row index %d outside [0, %d)",
+                        name, j, r, nrow);
+      if (k > v->colptr[j] && r <= v->rowind[k - 1])
+        return cup_fail(errmsg, CUP_ERR_ARG,
+                        "%s: column %d row indices not strictly increasing (%d after %d)",
+                        name, j, r, v->rowind[k - 1]);
+      if (!isfinite(v->values[k]))
+        return cup_fail(errmsg, CUP_ERR_NONFINITE, "%s(%d,%d) is %g", name, r, j, v->values[k]);
+    }
+  }
+  int nnz = v->colptr[ncol];
+  if (cup_sparse_alloc(A, nrow, ncol, nnz) != CUP_OK)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory copying %d entries", name, nnz);
+  memcpy(A->p, v->colptr, sizeof(int) * ((size_t)ncol + 1));
+  if (nnz) {
+    memcpy(A->i, v->rowind, sizeof(int) * (size_t)nnz);
+    memcpy(A->x, v->values, sizeof(double) * (size_t)nnz);
+  }
+  return CUP_OK;
+}
+
+int cup_sparse_transpose(cup_sparse *At, const cup_sparse *A) {
+  int st = cup_sparse_alloc(At, A->ncol, A->nrow, A->nnz);
+  if (st) return st;
+  int *cnt = calloc((size_t)A->nrow + 1, sizeof(int));
+  if (!cnt) { cup_sparse_free(At); return CUP_ERR_NOMEM; }
+  for (int k = 0; k < A->nnz; k++) cnt[A->i[k] + 1]++;
+  for (int r = 0; r < A->nrow; r++) cnt[r + 1] += cnt[r];
+  memcpy(At->p, cnt, sizeof(int) * ((size_t)A->nrow + 1));
+  for (int j = 0; j < A->ncol; j++)       /* columns in order: rows of At sorted */
+    for (int k = A->p[j]; k < A->p[j + 1]; k++) {
+      int dst = cnt[A->i[k]]++;
+      At->i[dst] = j;
+      At->x[dst] = A->x[k];
+    }
+  free(cnt);
+  return CUP_OK;
+}
+
+void cup_sparse_gaxpy(const cup_sparse *A, const double *x, double *y) {
+  for (int j = 0; j < A->ncol; j++) {
+    double xj = x[j];
+    if (xj == 0) continue;
+    for (int k = A->p[j]; k < A->p[j + 1]; k++) y[A->i[k]] += A->x[k] * xj;
+  }
+}
+
+void cup_sparse_gatxy(const cup_sparse *A, const double *x, double *y) {
+  for (int j = 0; j < A->ncol; j++) {
+    double s = 0;
+    for (int k = A->p[j]; k < A->p[j + 1]; k++) s += A->x[k] * x[A->i[k]];
+    y[j] = s;
+  }
+}
+
+int cup_dense_pchol(double *a, int k, int *perm, double tol) {
+  double dmax = 0;
+  for (int j = 0; j < k; j++) {
+    perm[j] = j;
+    if (a[j + (size_t)j * k] > dmax) dmax = a[j + (size_t)j * k];
+  }
+  if (!(dmax > 0)) return 0;
+  double floor_ = tol * dmax;
+  /* Right-looking with symmetric pivoting on the largest remaining diagonal.
+   * Rows and columns are swapped physically so that L is contiguous. */
+  for (int j = 0; j < k; j++) {
+    int piv = j;
+    for (int i = j + 1; i < k; i++)
+      if (a[i + (size_t)i * k] > a[piv + (size_t)piv * k]) piv = i;
+    if (!(a[piv + (size_t)piv * k] > floor_)) return j;
+    if (piv != j) {
+      int t = perm[j]; perm[j] = perm[piv]; perm[piv] = t;
+      for (int c = 0; c < k; c++) {           /* swap rows j, piv */
+        double s = a[j + (size_t)c * k]; a[j + (size_t)c * k] = a[piv + (size_t)c * k];
+        a[piv + (size_t)c * k] = s;
+      }
+      for (int r = 0; r < k; r++) {           /* swap columns j, piv */
+        double s = a[r + (size_t)j * k]; a[r + (size_t)j * k] = a[r + (size_t)piv * k];
+        a[r + (size_t)piv * k] = s;
+      }
+    }
+    double d = sqrt(a[j + (size_t)j * k]);
+    a[j + (size_t)j * k] = d;
+    for (int i = j + 1; i < k; i++) a[i + (size_t)j * k] /= d;
+    /* Update the whole trailing block (both triangles) so later symmetric
+     * swaps see consistent entries. */
+    for (int c = j + 1; c < k; c++) {
+      double lc = a[c + (size_t)j * k];
+      for (int i = j + 1; i < k; i++) a[i + (size_t)c * k] -= a[i + (size_t)j * k] * lc;
+    }
+  }
+  return k;
+}
+
+void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
+                           const double *b, double *x, double *w) {
+  for (int j = 0; j < r; j++) w[j] = b[perm[j]];
+  for (int j = 0; j < r; j++) {             /* L w = b */
+    w[j] /= l[j + (size_t)j * k];
+    for (int i = j + 1; i < r; i++) w[i] -= l[i + (size_t)j * k] * w[j];
+  }
+  for (int j = r - 1; j >= 0; j--) {        /* L^T w = w */
+    for (int i = j + 1; i < r; i++) w[j] -= l[i + (size_t)j * k] * w[i];
+    w[j] /= l[j + (size_t)j * k];
+  }
+  for (int j = 0; j < k; j++) x[perm[j]] = j < r ? w[j] : 0.0;
+}
+
+int cup_cholmod_start(cholmod_common *c) {
+  if (!cholmod_start(c)) return CUP_ERR_LINALG;
+  c->print = 0;            /* the library never prints */
+  c->error_handler = NULL;
+  return CUP_OK;
+}
+
+void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w) {
+  const int n = (int)L->n;
+  const int *Lp = L->p, *Li = L->i, *Lnz = L->nz, *perm = L->Perm;
+  const double *Lx = L->x;
+  for (int k = 0; k < n; k++) w[k] = perm ? x[perm[k]] : x[k];
+  if (L->is_ll) {
+    for (int j = 0; j < n; j++) {                    /* L w = b */
+      int p0 = Lp[j], p1 = Lp[j] + Lnz[j];
+      double wj = w[j] / Lx[p0];
+      w[j] = wj;
+      for (int p = p0 + 1; p < p1; p++) w[Li[p]] -= Lx[p] * wj;
+    }
+    for (int j = n - 1; j >= 0; j--) {               /* L^T w = w */
+      int p0 = Lp[j], p1 = Lp[j] + Lnz[j];
+      double wj = w[j];
+      for (int p = p0 + 1; p < p1; p++) wj -= Lx[p] * w[Li[p]];
+      w[j] = wj / Lx[p0];
+    }
+  } else {
+    for (int j = 0; j < n; j++) {                    /* unit L */
+      int p0 = Lp[j], p1 = Lp[j] + Lnz[j];
+      double wj = w[j];
+      for (int p = p0 + 1; p < p1; p++) w[Li[p]] -= Lx[p] * wj;
+    }
+    for (int j = 0; j < n; j++) w[j] /= Lx[Lp[j]];  /* D */
+    for (int j = n - 1; j >= 0; j--) {
+      int p0 = Lp[j], p1 = Lp[j] + Lnz[j];
+      double wj = w[j];
+      for (int p = p0 + 1; p < p1; p++) wj -= Lx[p] * w[Li[p]];
+      w[j] = wj;
+    }
+  }
+  for (int k = 0; k < n; k++) {
+    if (perm) x[perm[k]] = w[k]; else x[k] = w[k];
+  }
+}

@@ -1,0 +1,59 @@
+/* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up.
+ * Internal to the library. */
+#ifndef CUP_LINALG_H
+#define CUP_LINALG_H
+
+#include <stddef.h>
+#include <cholmod.h>
+#include "catchup/sparse.h"
+
+/* An owned CSC matrix. */
+typedef struct cup_sparse {
+  int nrow, ncol, nnz;
+  int *p;       /* ncol+1 */
+  int *i;       /* nnz */
+  double *x;    /* nnz */
+} cup_sparse;
+
+/* Format an error message into buf (may be NULL); returns status. */
+int cup_fail(char *buf, int status, const char *fmt, ...)
+  __attribute__((format(printf, 3, 4)));
+
+/* Copy and validate a view: sizes, index ranges, strictly increasing rows in
+ * each column, finite values. `name` is used in messages ("C", "P"). */
+int cup_sparse_copy(cup_sparse *A, const cup_csc *view, const char *name,
+                    int nrow, int ncol, char *errmsg);
+int cup_sparse_alloc(cup_sparse *A, int nrow, int ncol, int nnz);
+void cup_sparse_free(cup_sparse *A);
+/* At = A^T (allocates At). */
+int cup_sparse_transpose(cup_sparse *At, const cup_sparse *A);
+/* y += A x */
+void cup_sparse_gaxpy(const cup_sparse *A, const double *x, double *y);
+/* y = A^T x computed by column gathers (y has A->ncol entries). */
+void cup_sparse_gatxy(const cup_sparse *A, const double *x, double *y);
+
+/* Dense pivoted Cholesky of the k x k symmetric matrix a (column-major,
+ * lower triangle used, overwritten by L). perm receives the pivot order; the
+ * returned rank r counts pivots above tol * (largest diagonal). Rows beyond
+ * the rank are treated as linearly dependent. */
+int cup_dense_pchol(double *a, int k, int *perm, double tol);
+/* Solve with the first r pivots of a factor from cup_dense_pchol: x[perm[j]]
+ * for j < r is set, x[perm[j]] = 0 for j >= r. b is not modified. */
+void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
+                           const double *b, double *x, double *work);
+
+/* A CHOLMOD common that never prints and uses our memory routines. */
+int cup_cholmod_start(cholmod_common *c);
+
+static inline double cup_dot(const double *a, const double *b, int n) {
+  double s = 0;
+  for (int k = 0; k < n; k++) s += a[k] * b[k];
+  return s;
+}
+
+#endif
+
+/* In-place solve with a simplicial CHOLMOD factor (LL^T or LDL^T) including
+ * its fill-reducing permutation: x <- A^-1 x. w is n entries of scratch.
+ * Allocation-free (cholmod_solve2 allocates on every call). */
+void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w);

@@ -1,0 +1,481 @@
+/* polyset — K = {x : C x + g >= 0} with a metric P (paper, Sec. 7: the
+ * polyhedron K(t) and the metric P with P B = C^T). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <gsl/gsl_eigen.h>
+#include "catchup.h"
+#include "catchup/polyset.h"
+#include "polyset_impl.h"
+
+static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg);
+static int row_norms_and_lipschitz(cup_polyset *K, char *errmsg);
+static int dense_setup(cup_polyset *K, char *errmsg);
+static void find_interior_direction(cup_polyset *K);
+
+int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
+                       const cup_metric *P, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: output pointer is NULL");
+  *out = NULL;
+  if (!C) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: C is NULL");
+  if (C->ncol < 1 || C->nrow < 0)
+    return cup_fail(errmsg, CUP_ERR_DIM, "polyset: C is %d x %d; need at least one column",
+                    C->nrow, C->ncol);
+  cup_polyset *K = calloc(1, sizeof *K);
+  if (!K) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  K->n = C->ncol;
+  K->m = C->nrow;
+  int st = cup_sparse_copy(&K->C, C, "C", K->m, K->n, errmsg);
+  if (!st) st = cup_sparse_transpose(&K->Ct, &K->C);
+  if (!st) {
+    K->g0 = calloc((size_t)K->m + 1, sizeof(double));
+    K->rownnz = calloc((size_t)K->m + 1, sizeof(int));
+    K->rownorm = calloc((size_t)K->m + 1, sizeof(double));
+    if (!K->g0 || !K->rownnz || !K->rownorm) st = CUP_ERR_NOMEM;
+  }
+  if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "polyset: out of memory");
+  for (int i = 0; !st && i < K->m; i++) {
+    K->rownnz[i] = K->Ct.p[i + 1] - K->Ct.p[i];
+    if (g) {
+      if (!isfinite(g[i])) st = cup_fail(errmsg, CUP_ERR_NONFINITE, "g[%d] is %g", i, g[i]);
+      K->g0[i] = g[i];
+    }
+  }
+  if (!st) st = metric_setup(K, P, errmsg);
+  if (!st) st = row_norms_and_lipschitz(K, errmsg);
+  if (!st && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
+    st = dense_setup(K, errmsg);
+  if (st) { cup_polyset_free(&K); return st; }
+  if (K->dense) find_interior_direction(K);
+  *out = K;
+  return CUP_OK;
+}
+
+void cup_polyset_free(cup_polyset **Kp) {
+  if (!Kp || !*Kp) return;
+  cup_polyset *K = *Kp;
+  cup_sparse_free(&K->C);
+  cup_sparse_free(&K->Ct);
+  cup_sparse_free(&K->Pfull);
+  if (K->LP) {
+    cholmod_free_factor(&K->LP, &K->cm);
+    cholmod_finish(&K->cm);
+  }
+  free(K->g0); free(K->pd); free(K->pdinv); free(K->rownorm); free(K->rownnz);
+  free(K->Md); free(K->Bt); free(K->rdir); free(K->Crdir);
+  free(K);
+  *Kp = NULL;
+}
+
+int cup_polyset_dim(const cup_polyset *K) { return K ? K->n : 0; }
+int cup_polyset_rows(const cup_polyset *K) { return K ? K->m : 0; }
+double cup_polyset_lipschitz(const cup_polyset *K) { return K ? K->lip : 0; }
+const double *cup_polyset_interior_direction(const cup_polyset *K) {
+  return K ? K->rdir : NULL;
+}
+
+/* ---- metric ---------------------------------------------------------------- */
+
+static int diag_setup(cup_polyset *K, const double *d, char *errmsg) {
+  K->pd = malloc(sizeof(double) * (size_t)K->n);
+  K->pdinv = malloc(sizeof(double) * (size_t)K->n);
+  if (!K->pd || !K->pdinv) return cup_fail(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+  for (int j = 0; j < K->n; j++) {
+    double v = d ? d[j] : 1.0;
+    if (!isfinite(v)) return cup_fail(errmsg, CUP_ERR_NONFINITE, "P(%d,%d) is %g", j, j, v);
+    if (!(v > 0))
+      return cup_fail(errmsg, CUP_ERR_NOT_SPD,
+                      "P(%d,%d) = %g: a positive definite P needs a positive diagonal", j, j, v);
+    K->pd[j] = v;
+    K->pdinv[j] = 1.0 / v;
+  }
+  return CUP_OK;
+}
+
+/* Full symmetric storage of a sparse P given as both triangles or the lower
+ * one; checks symmetry, and reports whether any off-diagonal is nonzero. */
+static int sparse_metric_full(cup_polyset *K, const cup_metric *P, int *offdiag,
+                              char *errmsg) {
+  cup_sparse A, At;
+  int st = cup_sparse_copy(&A, &P->matrix, "P", K->n, K->n, errmsg);
+  if (st) return st;
+  *offdiag = 0;
+  if (P->lower_only) {
+    for (int j = 0; j < K->n && !st; j++)
+      for (int k = A.p[j]; k < A.p[j + 1]; k++)
+        if (A.i[k] < j) {
+          st = cup_fail(errmsg, CUP_ERR_ARG,
+                        "P: lower_only is set but entry (%d,%d) is above the diagonal", A.i[k], j);
+          break;
+        }
+    if (!st) st = cup_sparse_transpose(&At, &A);
+    if (st) { cup_sparse_free(&A); return st; }
+    /* full = A + A^T - diag(A): merge sorted columns */
+    st = cup_sparse_alloc(&K->Pfull, K->n, K->n, 2 * A.nnz);
+    int nz = 0;
+    for (int j = 0; !st && j < K->n; j++) {
+      int a = At.p[j], b = A.p[j];     /* At column j: rows <= j; A column j: rows >= j */
+      for (; a < At.p[j + 1]; a++) {
+        if (At.i[a] == j) continue;    /* the diagonal comes from A */
+        K->Pfull.i[nz] = At.i[a]; K->Pfull.x[nz++] = At.x[a];
+      }
+      for (; b < A.p[j + 1]; b++) { K->Pfull.i[nz] = A.i[b]; K->Pfull.x[nz++] = A.x[b]; }
+      K->Pfull.p[j + 1] = nz;
+    }
+    if (!st) K->Pfull.nnz = nz;
+    cup_sparse_free(&At);
+    cup_sparse_free(&A);
+    if (st) return cup_fail(errmsg, st, "P: out of memory");
+  } else {
+    st = cup_sparse_transpose(&At, &A);
+    if (st) { cup_sparse_free(&A); return cup_fail(errmsg, st, "P: out of memory"); }
+    double amax = 0;
+    for (int k = 0; k < A.nnz; k++) amax = fmax(amax, fabs(A.x[k]));
+    /* Same pattern and values as the transpose, to rounding. */
+    for (int j = 0; j < K->n && !st; j++) {
+      if (A.p[j + 1] - A.p[j] != At.p[j + 1] - At.p[j]) {
+        st = cup_fail(errmsg, CUP_ERR_NOT_SPD,
+                      "P is not symmetric: row %d and column %d have different patterns", j, j);
+        break;
+      }
+      for (int k = A.p[j]; k < A.p[j + 1]; k++)
+        if (A.i[k] != At.i[k] || fabs(A.x[k] - At.x[k]) > 1e-12 * amax) {
+          st = cup_fail(errmsg, CUP_ERR_NOT_SPD,
+                        "P is not symmetric: P(%d,%d) = %.17g but P(%d,%d) = %.17g",
+                        A.i[k], j, A.x[k], j, A.i[k], At.x[k]);
+          break;
+        }
+    }
+    cup_sparse_free(&At);
+    if (st) { cup_sparse_free(&A); return st; }
+    K->Pfull = A;
+  }
+  for (int j = 0; j < K->n; j++) {
+    int has_diag = 0;
+    for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++) {
+      if (K->Pfull.i[k] == j) {
+        has_diag = 1;
+        if (!(K->Pfull.x[k] > 0))
+          return cup_fail(errmsg, CUP_ERR_NOT_SPD,
+                          "P(%d,%d) = %g: a positive definite P needs a positive diagonal",
+                          j, j, K->Pfull.x[k]);
+      } else if (K->Pfull.x[k] != 0) {
+        *offdiag = 1;
+      }
+    }
+    if (!has_diag)
+      return cup_fail(errmsg, CUP_ERR_NOT_SPD, "P(%d,%d) is missing: the diagonal must be positive", j, j);
+  }
+  return CUP_OK;
+}
+
+static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg) {
+  if (!P || P->kind == CUP_METRIC_IDENTITY) {
+    K->pkind = CUP_METRIC_IDENTITY;
+    return diag_setup(K, NULL, errmsg);
+  }
+  if (P->kind == CUP_METRIC_DIAGONAL) {
+    if (!P->diag) return cup_fail(errmsg, CUP_ERR_ARG, "P: kind is DIAGONAL but diag is NULL");
+    K->pkind = CUP_METRIC_DIAGONAL;
+    return diag_setup(K, P->diag, errmsg);
+  }
+  if (P->kind != CUP_METRIC_SPARSE)
+    return cup_fail(errmsg, CUP_ERR_ARG, "P: unknown metric kind %d", (int)P->kind);
+  int offdiag = 0;
+  int st = sparse_metric_full(K, P, &offdiag, errmsg);
+  if (st) return st;
+  if (!offdiag) {                   /* a diagonal matrix given in sparse form */
+    double *d = malloc(sizeof(double) * (size_t)K->n);
+    if (!d) return cup_fail(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+    for (int j = 0; j < K->n; j++)
+      for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++)
+        if (K->Pfull.i[k] == j) d[j] = K->Pfull.x[k];
+    cup_sparse_free(&K->Pfull);
+    K->pkind = CUP_METRIC_DIAGONAL;
+    st = diag_setup(K, d, errmsg);
+    free(d);
+    return st;
+  }
+  K->pkind = CUP_METRIC_SPARSE;
+  if (cup_cholmod_start(&K->cm)) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD start failed");
+  K->cm.final_ll = 1;               /* L L^T so that ||L^-1 Pi c|| = ||c||_{P^-1} */
+  K->cm.supernodal = CHOLMOD_SIMPLICIAL;  /* solved by cup_simplicial_solve, no allocation */
+  cholmod_sparse A = {0};
+  A.nrow = A.ncol = (size_t)K->n;
+  A.nzmax = (size_t)K->Pfull.nnz;
+  A.p = K->Pfull.p; A.i = K->Pfull.i; A.x = K->Pfull.x;
+  A.stype = 1;                      /* use the upper triangle of the full matrix */
+  A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
+  A.sorted = 1; A.packed = 1;
+  K->LP = cholmod_analyze(&A, &K->cm);
+  if (!K->LP) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD analysis failed (status %d)", K->cm.status);
+  cholmod_factorize(&A, K->LP, &K->cm);
+  if (K->cm.status == CHOLMOD_NOT_POSDEF) {
+    int bad = (int)K->LP->minor;
+    int col = K->LP->Perm ? ((int *)K->LP->Perm)[bad] : bad;
+    return cup_fail(errmsg, CUP_ERR_NOT_SPD,
+                    "P is not positive definite: the Cholesky factorization breaks down at column %d", col);
+  }
+  if (K->cm.status < 0)
+    return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD factorization failed (status %d)", K->cm.status);
+  return CUP_OK;
+}
+
+void cup_metric_apply(const cup_polyset *K, const double *v, double *out) {
+  if (K->pkind == CUP_METRIC_SPARSE) {
+    memset(out, 0, sizeof(double) * (size_t)K->n);
+    cup_sparse_gaxpy(&K->Pfull, v, out);
+  } else {
+    for (int j = 0; j < K->n; j++) out[j] = K->pd[j] * v[j];
+  }
+}
+
+double cup_polyset_norm(const cup_polyset *K, const double *v) {
+  double s = 0;
+  if (K->pkind == CUP_METRIC_SPARSE) {
+    for (int j = 0; j < K->n; j++) {
+      double pv = 0;
+      for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++) pv += K->Pfull.x[k] * v[K->Pfull.i[k]];
+      s += v[j] * pv;
+    }
+  } else {
+    for (int j = 0; j < K->n; j++) s += K->pd[j] * v[j] * v[j];
+  }
+  return sqrt(fmax(s, 0));
+}
+
+double cup_slack(const cup_polyset *K, const double *g, const double *x,
+                 double *s, double *gam) {
+  const int *p = K->Ct.p, *ri = K->Ct.i;
+  const double *cx = K->Ct.x;
+  double worst = INFINITY;
+  for (int i = 0; i < K->m; i++) {
+    double acc = g[i], mag = fabs(g[i]);
+    for (int k = p[i]; k < p[i + 1]; k++) {
+      double t = cx[k] * x[ri[k]];
+      acc += t;
+      mag += fabs(t);
+    }
+    s[i] = acc;
+    double margin = (K->rownnz[i] + 2) * DBL_EPSILON * mag;
+    if (gam) gam[i] = margin;
+    double slack = acc - (gam ? margin : 0);
+    if (!(slack >= worst)) worst = slack;      /* NaN propagates as the minimum */
+  }
+  return worst;
+}
+
+int cup_polyset_contains(const cup_polyset *K, const double *g, const double *x) {
+  if (!K || !x) return 0;
+  double *s = malloc(sizeof(double) * ((size_t)K->m * 2 + 1));
+  if (!s) return 0;
+  double worst = cup_slack(K, g ? g : K->g0, x, s, s + K->m);
+  free(s);
+  return worst >= 0;                 /* false for NaN */
+}
+
+/* ---- row norms and the guaranteed Lipschitz bound ----------------------------- */
+
+/* Collatz-Wielandt: for any v > 0 and nonnegative N, rho(N) <= max_i (Nv)_i/v_i.
+ * With N >= |M| entrywise, this bounds lambda_max(M). apply(N) is a callback
+ * over either |C| D^-1 |C|^T or |W|^T |W| (W = L^-1 Pi C^T). */
+typedef void (*abs_apply_fn)(const cup_polyset *K, const void *W, const double *v,
+                             double *out, double *tmp);
+
+static void abs_apply_diag(const cup_polyset *K, const void *W, const double *v,
+                           double *out, double *tmp) {
+  (void)W;
+  for (int j = 0; j < K->n; j++) {              /* tmp = D^-1 |C|^T v */
+    double s = 0;
+    for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++) s += fabs(K->C.x[k]) * v[K->C.i[k]];
+    tmp[j] = s * K->pdinv[j];
+  }
+  for (int i = 0; i < K->m; i++) {              /* out = |C| tmp */
+    double s = 0;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) s += fabs(K->Ct.x[k]) * tmp[K->Ct.i[k]];
+    out[i] = s;
+  }
+}
+
+static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
+                        double *out, double *tmp) {
+  const cholmod_sparse *W = Wv;                 /* n x m, columns = constraints */
+  const int *p = W->p, *ri = W->i;
+  const double *x = W->x;
+  memset(tmp, 0, sizeof(double) * (size_t)K->n);
+  for (int i = 0; i < K->m; i++)
+    for (int k = p[i]; k < p[i + 1]; k++) tmp[ri[k]] += fabs(x[k]) * v[i];
+  for (int i = 0; i < K->m; i++) {
+    double s = 0;
+    for (int k = p[i]; k < p[i + 1]; k++) s += fabs(x[k]) * tmp[ri[k]];
+    out[i] = s;
+  }
+}
+
+static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
+                               double *v, double *w, double *tmp) {
+  for (int i = 0; i < K->m; i++) v[i] = 1.0;
+  for (int it = 0; it < 40; it++) {
+    apply(K, W, v, w, tmp);
+    double wmax = 0;
+    for (int i = 0; i < K->m; i++) wmax = fmax(wmax, w[i]);
+    if (!(wmax > 0)) return 0;
+    for (int i = 0; i < K->m; i++) v[i] = fmax(w[i] / wmax, 1e-12);
+  }
+  apply(K, W, v, w, tmp);
+  double bound = 0;
+  for (int i = 0; i < K->m; i++) bound = fmax(bound, w[i] / v[i]);
+  return bound * (1 + 1e-12);
+}
+
+static int row_norms_and_lipschitz(cup_polyset *K, char *errmsg) {
+  if (K->m == 0) { K->lip = 0; return CUP_OK; }
+  double *v = malloc(sizeof(double) * (2 * (size_t)K->m + (size_t)K->n));
+  if (!v) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  double *w = v + K->m, *tmp = w + K->m;
+  if (K->pkind != CUP_METRIC_SPARSE) {
+    for (int i = 0; i < K->m; i++) {
+      double s = 0;
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) {
+        double c = K->Ct.x[k];
+        s += c * c * K->pdinv[K->Ct.i[k]];
+      }
+      K->rownorm[i] = sqrt(s);
+    }
+    K->lip = collatz_wielandt(K, abs_apply_diag, NULL, v, w, tmp);
+  } else {
+    /* W = L^-1 Pi C^T, so that M = W^T W and ||W(:,i)|| = ||c_i||_{P^-1}. */
+    cholmod_sparse Ct = {0};
+    Ct.nrow = (size_t)K->n; Ct.ncol = (size_t)K->m; Ct.nzmax = (size_t)K->Ct.nnz;
+    Ct.p = K->Ct.p; Ct.i = K->Ct.i; Ct.x = K->Ct.x;
+    Ct.stype = 0; Ct.itype = CHOLMOD_INT; Ct.xtype = CHOLMOD_REAL;
+    Ct.dtype = CHOLMOD_DOUBLE; Ct.sorted = 1; Ct.packed = 1;
+    cholmod_sparse *PC = cholmod_spsolve(CHOLMOD_P, K->LP, &Ct, &K->cm);
+    cholmod_sparse *W = PC ? cholmod_spsolve(CHOLMOD_L, K->LP, PC, &K->cm) : NULL;
+    cholmod_free_sparse(&PC, &K->cm);
+    if (!W) { free(v); return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed"); }
+    const int *p = W->p;
+    const double *x = W->x;
+    for (int i = 0; i < K->m; i++) {
+      double s = 0;
+      for (int k = p[i]; k < p[i + 1]; k++) s += x[k] * x[k];
+      K->rownorm[i] = sqrt(s);
+    }
+    K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp);
+    cholmod_free_sparse(&W, &K->cm);
+  }
+  free(v);
+  return CUP_OK;
+}
+
+/* ---- small sets: dense M and P^-1 C^T ------------------------------------------- */
+
+static int dense_setup(cup_polyset *K, char *errmsg) {
+  int n = K->n, m = K->m;
+  K->Bt = calloc((size_t)n * m + 1, sizeof(double));
+  K->Md = calloc((size_t)m * m + 1, sizeof(double));
+  if (!K->Bt || !K->Md) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  for (int i = 0; i < m; i++) {            /* column i of Bt = P^-1 c_i */
+    double *b = K->Bt + (size_t)i * n;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) b[K->Ct.i[k]] = K->Ct.x[k];
+  }
+  if (K->pkind == CUP_METRIC_SPARSE) {
+    cholmod_dense B = {0};
+    B.nrow = (size_t)n; B.ncol = (size_t)m; B.nzmax = (size_t)n * m; B.d = (size_t)n;
+    B.x = K->Bt; B.xtype = CHOLMOD_REAL; B.dtype = CHOLMOD_DOUBLE;
+    cholmod_dense *X = cholmod_solve(CHOLMOD_A, K->LP, &B, &K->cm);
+    if (!X) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve failed");
+    memcpy(K->Bt, X->x, sizeof(double) * (size_t)n * m);
+    cholmod_free_dense(&X, &K->cm);
+  } else {
+    for (int i = 0; i < m; i++) cup_metric_solve_diag(K, K->Bt + (size_t)i * n);
+  }
+  for (int j = 0; j < m; j++)              /* M(:,j) = C Bt(:,j) */
+    for (int i = 0; i < m; i++) {
+      double s = 0;
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) s += K->Ct.x[k] * K->Bt[(size_t)j * n + K->Ct.i[k]];
+      K->Md[i + (size_t)j * m] = s;
+    }
+  for (int j = 0; j < m; j++)              /* exact symmetry */
+    for (int i = j + 1; i < m; i++) {
+      double a = 0.5 * (K->Md[i + (size_t)j * m] + K->Md[j + (size_t)i * m]);
+      K->Md[i + (size_t)j * m] = K->Md[j + (size_t)i * m] = a;
+    }
+  /* A backward-stable eigenvalue is within c u ||M||_F of the true one. */
+  if (m > 0) {
+    gsl_matrix *A = gsl_matrix_alloc((size_t)m, (size_t)m);
+    gsl_vector *ev = gsl_vector_alloc((size_t)m);
+    gsl_eigen_symm_workspace *ws = gsl_eigen_symm_alloc((size_t)m);
+    if (!A || !ev || !ws) {
+      if (A) gsl_matrix_free(A);
+      if (ev) gsl_vector_free(ev);
+      if (ws) gsl_eigen_symm_free(ws);
+      return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+    }
+    double fro = 0;
+    for (int j = 0; j < m; j++)
+      for (int i = 0; i < m; i++) {
+        double a = K->Md[i + (size_t)j * m];
+        gsl_matrix_set(A, (size_t)i, (size_t)j, a);
+        fro += a * a;
+      }
+    gsl_eigen_symm(A, ev, ws);
+    double lmax = gsl_vector_max(ev);
+    double bound = lmax + 16.0 * (m + 1) * DBL_EPSILON * sqrt(fro);
+    if (bound < K->lip) K->lip = bound;
+    gsl_eigen_symm_free(ws); gsl_vector_free(ev); gsl_matrix_free(A);
+  }
+  K->dense = 1;
+  return CUP_OK;
+}
+
+/* A direction d = P^-1 C^T mu with C d > 0 lets any point be pushed into K
+ * (x + theta d), which certifies distances on cones and unbounded sets. We
+ * look for C d >= ||c_i|| / 2 by FISTA on min 1/2 mu'M mu - r'mu, mu >= 0. */
+static void find_interior_direction(cup_polyset *K) {
+  int m = K->m, n = K->n;
+  if (m == 0 || !(K->lip > 0)) return;
+  double *buf = calloc((size_t)5 * m + 2 * (size_t)n, sizeof(double));
+  if (!buf) return;
+  double *mu = buf, *mu_old = mu + m, *yv = mu_old + m, *grad = yv + m, *cd = grad + m;
+  double *d = cd + m, *pdv = d + n;
+  double t = 1, step = 1.0 / K->lip;
+  int found = 0;
+  for (int it = 0; it < 5000 && !found; it++) {
+    for (int i = 0; i < m; i++) {          /* gradient at yv: M yv - r */
+      double s = -K->rownorm[i];
+      for (int j = 0; j < m; j++) s += K->Md[i + (size_t)j * m] * yv[j];
+      grad[i] = s;
+    }
+    memcpy(mu_old, mu, sizeof(double) * (size_t)m);
+    for (int i = 0; i < m; i++) mu[i] = fmax(0, yv[i] - step * grad[i]);
+    double tn = 0.5 * (1 + sqrt(1 + 4 * t * t));
+    for (int i = 0; i < m; i++) yv[i] = mu[i] + (t - 1) / tn * (mu[i] - mu_old[i]);
+    t = tn;
+    if (it % 10 == 9) {
+      memset(d, 0, sizeof(double) * (size_t)n);
+      for (int i = 0; i < m; i++)
+        for (int j = 0; j < n; j++) d[j] += K->Bt[(size_t)i * n + j] * mu[i];
+      memset(cd, 0, sizeof(double) * (size_t)m);
+      cup_sparse_gaxpy(&K->C, d, cd);
+      found = 1;
+      for (int i = 0; i < m && found; i++)
+        if (K->rownorm[i] > 0 && !(cd[i] >= 0.5 * K->rownorm[i])) found = 0;
+    }
+  }
+  if (found) {
+    K->rdir = malloc(sizeof(double) * (size_t)n);
+    K->Crdir = malloc(sizeof(double) * (size_t)m);
+    if (K->rdir && K->Crdir) {
+      memcpy(K->rdir, d, sizeof(double) * (size_t)n);
+      memcpy(K->Crdir, cd, sizeof(double) * (size_t)m);
+      K->rdir_norm = cup_polyset_norm(K, d);
+    } else {
+      free(K->rdir); free(K->Crdir);
+      K->rdir = K->Crdir = NULL;
+    }
+  }
+  (void)pdv;
+  free(buf);
+}

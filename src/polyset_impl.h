@@ -1,0 +1,48 @@
+/* Internal layout of cup_polyset, shared by the projector modules. */
+#ifndef CUP_POLYSET_IMPL_H
+#define CUP_POLYSET_IMPL_H
+
+#include <cholmod.h>
+#include "catchup/polyset.h"
+#include "linalg.h"
+
+/* Sets with at most this many rows (and CUP_DENSE_MAX_DIM columns) keep
+ * M = C P^-1 C^T and P^-1 C^T dense: the exact active-set path. */
+#define CUP_DENSE_MAX_ROWS 64
+#define CUP_DENSE_MAX_DIM 256
+
+struct cup_polyset {
+  int n, m;
+  cup_sparse C;        /* m x n, CSC */
+  cup_sparse Ct;       /* n x m, CSC of C^T: the rows of C */
+  double *g0;          /* default offset, m */
+  int pkind;           /* CUP_METRIC_* after simplification */
+  double *pd, *pdinv;  /* IDENTITY/DIAGONAL: P's diagonal and its inverse */
+  cup_sparse Pfull;    /* SPARSE: both triangles, for products P v */
+  cholmod_common cm;   /* SPARSE: owns LP; used only at creation and free */
+  cholmod_factor *LP;  /* SPARSE: L L^T = Pi P Pi^T (read-only after creation) */
+  double *rownorm;     /* ||c_i||_{P^-1} = sqrt(M_ii) */
+  int *rownnz;         /* nonzeros per row of C (rounding bounds) */
+  double lip;          /* guaranteed L >= lambda_max(M) */
+  int dense;           /* small set: Md and Bt below are valid */
+  double *Md;          /* m x m, column-major, M = C P^-1 C^T */
+  double *Bt;          /* n x m, column-major, column i = P^-1 c_i */
+  double *rdir;        /* direction with C d > 0, or NULL */
+  double *Crdir;       /* C d */
+  double rdir_norm;    /* ||d||_P */
+};
+
+/* P v into out (n entries). */
+void cup_metric_apply(const cup_polyset *K, const double *v, double *out);
+/* In place P^-1 v for IDENTITY/DIAGONAL metrics. SPARSE metrics go through
+ * the projector's CHOLMOD workspace (cup_metric_solve in projector_impl.h). */
+static inline void cup_metric_solve_diag(const cup_polyset *K, double *v) {
+  if (K->pkind == CUP_METRIC_IDENTITY) return;
+  for (int j = 0; j < K->n; j++) v[j] *= K->pdinv[j];
+}
+/* s = C x + g and, if gam is not NULL, gam_i = a bound on the rounding
+ * error of s_i. Returns min_i (s_i - gam_i) (or min s_i when gam is NULL). */
+double cup_slack(const cup_polyset *K, const double *g, const double *x,
+                 double *s, double *gam);
+
+#endif

@@ -1,0 +1,71 @@
+/* First-order dual methods: the paper's projected gradient (Sec. 7, eq.
+ *   lambda_{k+1} = [lambda_k - (1/L)(C P^-1 C^T lambda_k + C x + g)]_+ )
+ * and its accelerated variant (FISTA with O'Donoghue-Candes gradient
+ * restart). The gradient C P^-1 C^T lambda + b is the slack s(y(lambda)) of
+ * the recovered primal point y = x + P^-1 C^T lambda, so one evaluation per
+ * iteration gives both the step and the certificate. Starts from p->lam;
+ * runs at most `budget` iterations. */
+#include <math.h>
+#include <string.h>
+#include "catchup.h"
+#include "projector_impl.h"
+
+#define SWAP(a, b) do { double *t_ = (a); (a) = (b); (b) = t_; } while (0)
+
+int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
+                        int budget, cup_proj_info *info) {
+  const cup_polyset *K = p->K;
+  int m = p->m;
+  size_t msz = sizeof(double) * (size_t)m;
+  info->method = accelerated ? CUP_PROJ_FISTA : CUP_PROJ_PG;
+  double L = p->opt.lipschitz > 0 ? p->opt.lipschitz : K->lip;
+  cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+  if (!(L > 0)) {                       /* no row constrains x: K is everything */
+    memset(p->lam, 0, msz);
+    cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+    return cup_certify(p, x, p->lam, p->y, info) ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  }
+  double tau = 1.0 / L, t = 1;
+  double *mu = p->wm2, *smu = p->wm3, *snap = p->wm4;
+  if (accelerated) { memcpy(mu, p->lam, msz); memcpy(smu, p->s, msz); }
+  memcpy(snap, p->lam, msz);
+  int next_full = 0;
+  for (int it = 0;; it++) {
+    double eq = 0;
+    for (int i = 0; i < m; i++) eq += 2 * p->lam[i] * (p->s[i] + p->gam[i]);
+    if (!isfinite(eq)) return CUP_ERR_DIVERGED;
+    int last = it >= budget;
+    if (last || (eq <= info->eps_target && it >= next_full)) {
+      if (cup_certify(p, x, p->lam, p->y, info)) return CUP_OK;
+      if (last) return CUP_WARN_NOT_CERTIFIED;
+      next_full = it + 1 + it / 8;      /* eta pushes cost O(nnz): back off */
+    }
+    const double *src = accelerated ? mu : p->lam;
+    const double *gsrc = accelerated ? smu : p->s;
+    double *lnew = p->wm;
+    for (int i = 0; i < m; i++) lnew[i] = fmax(0, src[i] - tau * gsrc[i]);
+    cup_eval_primal(p, x, p->g, lnew, p->y2, p->s2, p->gam2);
+    p->iters++;
+    if (accelerated) {
+      double r = 0;
+      for (int i = 0; i < m; i++) r += (mu[i] - lnew[i]) * (lnew[i] - p->lam[i]);
+      double tn = r > 0 ? 1 : 0.5 * (1 + sqrt(1 + 4 * t * t));
+      double beta = r > 0 ? 0 : (t - 1) / tn;
+      for (int i = 0; i < m; i++) {
+        mu[i] = lnew[i] + beta * (lnew[i] - p->lam[i]);
+        smu[i] = p->s2[i] + beta * (p->s2[i] - p->s[i]);
+      }
+      t = tn;
+    }
+    SWAP(p->lam, p->wm);
+    SWAP(p->y, p->y2);
+    SWAP(p->s, p->s2);
+    SWAP(p->gam, p->gam2);
+    if ((it + 1) % 64 == 0) {           /* an empty K makes lambda grow along a Farkas ray */
+      double *d = p->wm;                /* free now: holds the previous lambda */
+      for (int i = 0; i < m; i++) d[i] = fmax(0, p->lam[i] - snap[i]);
+      if (cup_farkas_test(p, d, info)) return CUP_ERR_EMPTY_SET;
+      memcpy(snap, p->lam, msz);
+    }
+  }
+}

@@ -1,0 +1,118 @@
+/* Internal layout of cup_projector, shared by projector.c (set-up, skip,
+ * certificates), proj_firstorder.c (pg, fista) and proj_activeset.c. */
+#ifndef CUP_PROJECTOR_IMPL_H
+#define CUP_PROJECTOR_IMPL_H
+
+#include <stdint.h>
+#include <cholmod.h>
+#include "catchup/projector.h"
+#include "polyset_impl.h"
+
+#define CUP_DENSE_CACHE 4
+
+/* A cached dense pivoted Cholesky of M_AA for one active set A (m <= 64). */
+typedef struct dense_fact {
+  uint64_t mask;      /* the active set; 0 = unused slot */
+  int k, rank;        /* |A| and numerical rank */
+  int *idx;           /* A's rows, increasing (k) */
+  int *perm;          /* pivot order (k) */
+  double *l;          /* k x k factor */
+  unsigned stamp;     /* for least-recently-used replacement */
+} dense_fact;
+
+/* Iterate and scratch of one projected-Newton solve (proj_newton.c). */
+typedef struct pn_ws {
+  double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
+  double *y2, *s2, *gam2;           /* line-search trial */
+  double *d, *lt, *snap, *r, *keep; /* m each */
+  unsigned char *act, *prev;        /* free set, and the previous one */
+} pn_ws;
+
+/* Sparse Newton on the active set: the quasi-definite KKT matrix
+ *   [ P    C_A^T ]
+ *   [ C_A  -delta I ]   (inactive rows: zero C row, -1 on the diagonal)
+ * symmetrically permuted once (AMD) and stored upper, so that CHOLMOD's
+ * numeric refactorization with the natural ordering allocates nothing. */
+typedef struct kkt_ws {
+  cholmod_common cm;
+  cholmod_sparse *Ku;   /* permuted upper KKT; values rewritten per active set */
+  cholmod_factor *L;    /* simplicial LDL^T of Ku */
+  int *cpos;            /* position in Ku->x of each entry of C (C's CSC order) */
+  int *dpos;            /* position in Ku->x of constraint i's diagonal */
+  int *iperm;           /* KKT index -> permuted index */
+  int *pperm;           /* permuted index -> KKT index */
+  double *rhs, *sol, *res, *work;   /* n + m each */
+  unsigned char *fact_act;          /* active set of the current factorization */
+  int has_fact;
+  pn_ws pmain;          /* the projection (lam, y, s, gam shared with the projector) */
+  pn_ws pin;            /* the inward anchor's solve */
+  double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
+  double fact_delta;    /* delta of the current factorization */
+  double delta;         /* smallest regularization of the (2,2) block */
+} kkt_ws;
+
+struct cup_projector {
+  const cup_polyset *K;
+  cup_projector_options opt;
+  int n, m;
+  double *g;            /* current offset */
+  double gscale;        /* max_i |g_i| / ||c_i||_{P^-1} */
+  int empty_row;        /* a zero row of C with g_i < 0 (K empty), or -1 */
+  double *lam;          /* multipliers of the last projection */
+  double *lam_warm;     /* warm start (kept across skips) */
+  double *lam_fista;    /* FISTA's own iterate across bursts of a fallback */
+  int has_fista;
+  double *b;            /* s(x) = C x + g at the point being projected */
+  double *s, *gam;      /* slack and its rounding bound at the candidate z */
+  double *sv, *gamv;    /* the same at a trial feasible point v */
+  double *y, *u;        /* candidate z = x + u, u = P^-1 C^T lambda */
+  double *y2, *s2, *gam2;      /* the next iterate's (first-order methods) */
+  double *v;            /* exactly feasible point found by certification */
+  int has_v;
+  double *anchor, *s_anchor;   /* last certified feasible point, its slack */
+  int anchor_ok;        /* anchor is feasible for the current offset */
+  double *user_pt, *s_user;    /* options.feasible_point, its slack */
+  int user_ok;
+  double *inward, *s_inward;   /* inward point from the exact method, its slack */
+  int has_inward;
+  void (*make_inward)(cup_projector *);  /* builds it on demand, or NULL */
+  double *farkas;       /* Farkas certificate y >= 0 */
+  double *wn, *wn2;     /* n scratch */
+  double *wm, *wm2, *wm3, *wm4; /* m scratch */
+  int *iwm;             /* m scratch */
+  unsigned char *act, *act2;    /* m flags */
+  /* dense path */
+  dense_fact cache[CUP_DENSE_CACHE];
+  unsigned stamp;
+  double *dwork;        /* m*m + m scratch */
+  /* sparse Newton */
+  kkt_ws *kkt;
+  /* statistics of the current call */
+  int iters, facts;
+};
+
+/* u = P^-1 v in place (any metric), allocation-free. */
+void cup_metric_solve(cup_projector *p, double *v);
+/* y = x + P^-1 C^T lam, s = C y + g with rounding bounds gam. */
+void cup_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
+                     double *y, double *s, double *gam);
+/* Certificates for candidate (lam, z) with slack s, gam at z; fills info's
+ * eps_cert, eta_cert, violation, dual_value; sets p->v/has_v. Returns 1 when
+ * both targets are met. */
+int cup_certify(cup_projector *p, const double *x, const double *lam,
+                const double *z, cup_proj_info *info);
+/* Farkas test on a direction dlam >= 0 (copied into p->farkas when it
+ * certifies emptiness); returns 1 if K is declared empty. */
+int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info);
+
+/* Methods: each fills p->lam (>= 0) and p->y = z with certificates in info,
+ * and returns a status. b = s(x) is in p->b. The first-order methods start
+ * from p->lam and stop after `budget` iterations. */
+int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
+                        int budget, cup_proj_info *info);
+int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *info);
+int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *info);
+int cup_kkt_create(cup_projector *p, char *errmsg);
+void cup_kkt_free(cup_projector *p);
+
+#endif

@@ -1,0 +1,178 @@
+/* polyset: validation with messages that name the problem, the guaranteed
+ * Lipschitz bound against eigenvalues computed by GSL, membership, norms and
+ * the interior direction. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include <gsl/gsl_eigen.h>
+#include "testutil.h"
+
+/* The paper circuit: P = diag(1, L3, L2) = diag(1, 2, 1), C = [[0,1,-1],[0,1,0]]. */
+static const int circ_p[4] = {0, 0, 2, 3};
+static const int circ_i[3] = {0, 1, 0};
+static const double circ_x[3] = {1, 1, -1};
+static const double circ_d[3] = {1, 2, 1};
+
+static cup_polyset *circuit(void) {
+  cup_csc C = {2, 3, circ_p, circ_i, circ_x};
+  cup_metric P = {CUP_METRIC_DIAGONAL, circ_d, {0}, 0};
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &C, NULL, &P, NULL), CUP_OK);
+  return K;
+}
+
+static void test_circuit_lipschitz_is_exact_eigenvalue(void **state) {
+  (void)state;
+  cup_polyset *K = circuit();
+  /* M = C P^-1 C^T = [[1.5, .5], [.5, .5]]: lambda_max = 1 + sqrt(.5). */
+  double lmax = 1 + sqrt(0.5);
+  double L = cup_polyset_lipschitz(K);
+  assert_true(L >= lmax);
+  assert_true(L <= lmax * (1 + 1e-12));
+  assert_int_equal(cup_polyset_dim(K), 3);
+  assert_int_equal(cup_polyset_rows(K), 2);
+  cup_polyset_free(&K);
+  assert_null(K);
+}
+
+static void test_membership_and_norm(void **state) {
+  (void)state;
+  cup_polyset *K = circuit();
+  double in[3] = {5, 1, 0.5}, out[3] = {0, 1, 2}, edge[3] = {0, 0, 0};
+  assert_int_equal(cup_polyset_contains(K, NULL, in), 1);
+  assert_int_equal(cup_polyset_contains(K, NULL, out), 0);
+  assert_int_equal(cup_polyset_contains(K, NULL, edge), 1);   /* exact zeros */
+  double nan3[3] = {0, NAN, 0};
+  assert_int_equal(cup_polyset_contains(K, NULL, nan3), 0);    /* NaN is never inside */
+  double g[2] = {-1, 0};                                       /* x2 - x3 >= 1 */
+  assert_int_equal(cup_polyset_contains(K, g, in), 0);
+  double v[3] = {1, 2, 3};
+  assert_close(cup_polyset_norm(K, v), sqrt(1 + 2 * 4 + 9), 1e-15);
+  cup_polyset_free(&K);
+}
+
+static void test_interior_direction_enters_the_set(void **state) {
+  (void)state;
+  cup_polyset *K = circuit();
+  const double *d = cup_polyset_interior_direction(K);
+  assert_non_null(d);
+  /* C d > 0 row by row, computed here from the matrix above */
+  assert_true(d[1] - d[2] > 0);
+  assert_true(d[1] > 0);
+  cup_polyset_free(&K);
+}
+
+static int create_err(const cup_csc *C, const double *g, const cup_metric *P, char *msg) {
+  cup_polyset *K = (cup_polyset *)0x1;
+  int st = cup_polyset_create(&K, C, g, P, msg);
+  assert_null(K);                 /* a failed create leaves nothing behind */
+  return st;
+}
+
+static void test_validation_messages(void **state) {
+  (void)state;
+  char msg[CUP_ERRMSG_LEN];
+  int p[4] = {0, 0, 2, 3}, ri[3] = {0, 1, 0};
+  double x[3] = {1, 1, -1};
+  cup_csc C = {2, 3, p, ri, x};
+
+  int bad_row[3] = {0, 5, 0};
+  cup_csc Cb = {2, 3, p, bad_row, x};
+  assert_int_equal(create_err(&Cb, NULL, NULL, msg), CUP_ERR_ARG);
+  assert_non_null(strstr(msg, "row index 5"));
+
+  int unsorted[3] = {1, 0, 0};
+  cup_csc Cu = {2, 3, p, unsorted, x};
+  assert_int_equal(create_err(&Cu, NULL, NULL, msg), CUP_ERR_ARG);
+  assert_non_null(strstr(msg, "column 1"));
+
+  double xn[3] = {1, NAN, -1};
+  cup_csc Cn = {2, 3, p, ri, xn};
+  assert_int_equal(create_err(&Cn, NULL, NULL, msg), CUP_ERR_NONFINITE);
+  assert_non_null(strstr(msg, "C(1,1)"));
+
+  double gbad[2] = {0, INFINITY};
+  assert_int_equal(create_err(&C, gbad, NULL, msg), CUP_ERR_NONFINITE);
+  assert_non_null(strstr(msg, "g[1]"));
+
+  double dneg[3] = {1, -2, 1};
+  cup_metric Pneg = {CUP_METRIC_DIAGONAL, dneg, {0}, 0};
+  assert_int_equal(create_err(&C, NULL, &Pneg, msg), CUP_ERR_NOT_SPD);
+  assert_non_null(strstr(msg, "P(1,1)"));
+
+  /* sparse P, not symmetric */
+  double Pd[9] = {2, 1, 0, 0, 2, 0, 0, 0, 2};
+  tcsc Pa; tcsc_from_dense(&Pa, Pd, 3, 3);
+  cup_metric Pns = {CUP_METRIC_SPARSE, NULL, Pa.view, 0};
+  assert_int_equal(create_err(&C, NULL, &Pns, msg), CUP_ERR_NOT_SPD);
+  assert_non_null(strstr(msg, "not symmetric"));
+  tcsc_free(&Pa);
+
+  /* sparse P, symmetric but indefinite: eigenvalues 3 and -1 in the first block */
+  double Pi[9] = {1, 2, 0, 2, 1, 0, 0, 0, 1};
+  tcsc Pb; tcsc_from_dense(&Pb, Pi, 3, 3);
+  cup_metric Pind = {CUP_METRIC_SPARSE, NULL, Pb.view, 0};
+  assert_int_equal(create_err(&C, NULL, &Pind, msg), CUP_ERR_NOT_SPD);
+  assert_non_null(strstr(msg, "not positive definite"));
+  tcsc_free(&Pb);
+
+  cup_csc Cdim = {2, 3, p, ri, x};
+  Cdim.ncol = 0;
+  assert_int_equal(create_err(&Cdim, NULL, NULL, msg), CUP_ERR_DIM);
+  assert_int_equal(create_err(NULL, NULL, NULL, msg), CUP_ERR_ARG);
+}
+
+/* Random sets, diagonal and non-diagonal P: L >= lambda_max(M) always. */
+static void test_lipschitz_bound_is_guaranteed(void **state) {
+  (void)state;
+  rng_t r = {12345};
+  for (int trial = 0; trial < 300; trial++) {
+    int n = rng_int(&r, 1, 12), m = rng_int(&r, 1, 90);
+    double *C = calloc((size_t)m * n, sizeof(double)), *P = calloc((size_t)n * n, sizeof(double));
+    for (int k = 0; k < m * n; k++) if (rng_unif(&r) < 0.5) C[k] = rng_normal(&r);
+    int dense_p = trial % 2;
+    for (int a = 0; a < n; a++) P[a * n + a] = 0.2 + 3 * rng_unif(&r);
+    if (dense_p) {
+      for (int a = 0; a < n; a++)
+        for (int b = 0; b < a; b++) if (rng_unif(&r) < 0.4) {
+          double v = 0.3 * rng_normal(&r);
+          P[a * n + b] = P[b * n + a] = v;
+          P[a * n + a] += fabs(v); P[b * n + b] += fabs(v);   /* diagonally dominant */
+        }
+    }
+    tcsc Ct, Pt;
+    tcsc_from_dense(&Ct, C, m, n);
+    tcsc_from_dense(&Pt, P, n, n);
+    cup_metric Pm = {CUP_METRIC_SPARSE, NULL, Pt.view, 0};
+    cup_polyset *K = NULL;
+    char msg[CUP_ERRMSG_LEN];
+    assert_int_equal(cup_polyset_create(&K, &Ct.view, NULL, &Pm, msg), CUP_OK);
+    ref_problem q = {n, m, C, NULL, P};
+    ref_work w; ref_setup(&q, &w);
+    gsl_matrix *A = gsl_matrix_alloc(m, m);
+    for (int i = 0; i < m; i++) for (int j = 0; j < m; j++) gsl_matrix_set(A, i, j, w.M[i * m + j]);
+    gsl_vector *ev = gsl_vector_alloc(m);
+    gsl_eigen_symm_workspace *ws = gsl_eigen_symm_alloc(m);
+    gsl_eigen_symm(A, ev, ws);
+    double lmax = gsl_vector_max(ev);
+    double L = cup_polyset_lipschitz(K);
+    assert_true(L >= lmax * (1 - 1e-13));
+    assert_true(L <= (m + 1.0) * fmax(lmax, 1e-300) * 1.01 + 1e-12);   /* a bound, not a wild one */
+    gsl_eigen_symm_free(ws); gsl_vector_free(ev); gsl_matrix_free(A); ref_free(&w);
+    cup_polyset_free(&K);
+    tcsc_free(&Ct); tcsc_free(&Pt); free(C); free(P);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_circuit_lipschitz_is_exact_eigenvalue),
+    cmocka_unit_test(test_membership_and_norm),
+    cmocka_unit_test(test_interior_direction_enters_the_set),
+    cmocka_unit_test(test_validation_messages),
+    cmocka_unit_test(test_lipschitz_bound_is_guaranteed),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

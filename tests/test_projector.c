@@ -1,0 +1,665 @@
+/* projector: answers and certificates against an independent reference
+ * (tests/testutil.h: GSL, enumeration of active sets for m <= 10, Hildreth +
+ * least-squares polish for larger m). Every certificate is checked to be
+ * true: eps_cert >= ||x - z||_P^2 - d_K(x)^2 and eta_cert >= d_K(z). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "testutil.h"
+
+/* ---- a counting allocator (glibc interposition; off under ASan) -------------- */
+#if defined(__SANITIZE_ADDRESS__)
+#define CUP_COUNTING 0
+#else
+#define CUP_COUNTING 1
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void *__libc_memalign(size_t, size_t);
+static volatile long alloc_count = 0;
+static volatile int counting = 0;
+void *malloc(size_t n) { if (counting) alloc_count++; return __libc_malloc(n); }
+void *calloc(size_t a, size_t b) { if (counting) alloc_count++; return __libc_calloc(a, b); }
+void *realloc(void *q, size_t n) { if (counting) alloc_count++; return __libc_realloc(q, n); }
+void *aligned_alloc(size_t al, size_t n) { if (counting) alloc_count++; return __libc_memalign(al, n); }
+int posix_memalign(void **q, size_t al, size_t n) {
+  if (counting) alloc_count++;
+  *q = __libc_memalign(al, n);
+  return *q ? 0 : 12;
+}
+#endif
+
+/* ---- random polyhedra ---------------------------------------------------------- */
+
+enum { GENERIC, DUPLICATE, NEAR_PARALLEL, RANK_DEFICIENT, THIN_WEDGE, CONE, NKIND };
+static const char *kind_name[] = {"generic", "duplicate", "near-parallel", "rank-deficient",
+                                  "thin-wedge", "cone"};
+
+typedef struct {
+  int n, m, kind, dense_p;
+  double *C, *g, *P, *w0;
+  tcsc Ct, Pt;
+  cup_metric Pm;
+  double theta;
+} inst;
+
+static void inst_make(inst *I, rng_t *r, int kind, int n, int m, int dense_p) {
+  memset(I, 0, sizeof *I);
+  I->n = n; I->m = m; I->kind = kind; I->dense_p = dense_p;
+  I->C = calloc((size_t)m * n, sizeof(double));
+  I->g = calloc((size_t)m + 1, sizeof(double));
+  I->P = calloc((size_t)n * n, sizeof(double));
+  I->w0 = calloc((size_t)n, sizeof(double));
+  for (int a = 0; a < n; a++) I->w0[a] = kind == CONE ? 0 : rng_normal(r);
+  double *C = I->C;
+  for (int k = 0; k < m * n; k++) C[k] = rng_unif(r) < 0.7 ? rng_normal(r) : 0;
+  for (int i = 0; i < m; i++) {                   /* no zero rows */
+    int nz = 0;
+    for (int a = 0; a < n; a++) nz |= C[i * n + a] != 0;
+    if (!nz) C[i * n + rng_int(r, 0, n - 1)] = 1;
+  }
+  if (kind == DUPLICATE && m >= 2) {
+    int src = rng_int(r, 0, m - 2);
+    memcpy(C + (m - 1) * n, C + src * n, sizeof(double) * n);
+  }
+  if (kind == NEAR_PARALLEL && m >= 2) {
+    int src = rng_int(r, 0, m - 2);
+    for (int a = 0; a < n; a++) C[(m - 1) * n + a] = C[src * n + a] * (1 + 1e-8 * rng_normal(r));
+  }
+  if (kind == RANK_DEFICIENT) {                   /* C = U V with rank < min(m, n) */
+    int rk = n > 1 ? rng_int(r, 1, n - 1) : 1;
+    double *Um = malloc(sizeof(double) * m * rk), *V = malloc(sizeof(double) * rk * n);
+    for (int k = 0; k < m * rk; k++) Um[k] = rng_normal(r);
+    for (int k = 0; k < rk * n; k++) V[k] = rng_normal(r);
+    for (int i = 0; i < m; i++)
+      for (int a = 0; a < n; a++) {
+        double s = 0;
+        for (int k = 0; k < rk; k++) s += Um[i * rk + k] * V[k * n + a];
+        C[i * n + a] = s;
+      }
+    free(Um); free(V);
+  }
+  if (kind == THIN_WEDGE) {                       /* theta y1 >= |y2|: cond(M) = 1/theta^2 */
+    static const double thetas[] = {1e-3, 1e-4, 1e-5, 1e-6};
+    I->theta = thetas[rng_int(r, 0, 3)];
+    memset(C, 0, sizeof(double) * 2 * n);
+    C[0] = I->theta; C[1] = 1;
+    C[n] = I->theta; C[n + 1] = -1;
+  }
+  for (int i = 0; i < m; i++) {                   /* nonempty: w0 is feasible */
+    double s = 0;
+    for (int a = 0; a < n; a++) s += C[i * n + a] * I->w0[a];
+    double slack = (kind == CONE || kind == THIN_WEDGE || rng_unif(r) < 0.3) ? 0 : fabs(rng_normal(r));
+    I->g[i] = -s + slack;
+  }
+  if (kind == DUPLICATE && m >= 2 && rng_unif(r) < 0.5) I->g[m - 1] += 0.5;  /* redundant copy */
+  for (int a = 0; a < n; a++) I->P[a * n + a] = 0.5 + 4.5 * rng_unif(r);
+  if (dense_p)
+    for (int a = 0; a < n; a++)
+      for (int b = 0; b < a; b++) if (rng_unif(r) < 0.5) {
+        double v = 0.4 * rng_normal(r);
+        I->P[a * n + b] = I->P[b * n + a] = v;
+        I->P[a * n + a] += fabs(v); I->P[b * n + b] += fabs(v);
+      }
+  tcsc_from_dense(&I->Ct, C, m, n);
+  tcsc_from_dense(&I->Pt, I->P, n, n);
+  I->Pm = (cup_metric){CUP_METRIC_SPARSE, NULL, I->Pt.view, 0};  /* diagonal is detected */
+}
+
+static void inst_free(inst *I) {
+  free(I->C); free(I->g); free(I->P); free(I->w0);
+  tcsc_free(&I->Ct); tcsc_free(&I->Pt);
+}
+
+static ref_problem inst_ref(const inst *I) {
+  return (ref_problem){I->n, I->m, I->C, I->g, I->P};
+}
+
+static double pdist(const inst *I, const double *a, const double *b) {
+  double *d = malloc(sizeof(double) * I->n);
+  for (int k = 0; k < I->n; k++) d[k] = a[k] - b[k];
+  ref_problem q = inst_ref(I);
+  double v = sqrt(ref_pnorm2(&q, d));
+  free(d);
+  return v;
+}
+
+static void random_point(const inst *I, rng_t *r, double *x) {
+  double amp = rng_unif(r) < 0.5 ? 0.3 : 3;
+  for (int a = 0; a < I->n; a++) x[a] = I->w0[a] + amp * rng_normal(r);
+}
+
+/* Write an instance and a point as text (for reproducing a failure outside
+ * the test: CUP_TEST_DUMP=1). */
+static void dump_instance(const inst *I, const double *x, const char *path) {
+  FILE *f = fopen(path, "w");
+  if (!f) return;
+  fprintf(f, "%d %d %s\n", I->n, I->m, kind_name[I->kind]);
+  for (int k = 0; k < I->m * I->n; k++) fprintf(f, "%.17g ", I->C[k]);
+  fprintf(f, "\n");
+  for (int k = 0; k < I->m; k++) fprintf(f, "%.17g ", I->g[k]);
+  fprintf(f, "\n");
+  for (int k = 0; k < I->n * I->n; k++) fprintf(f, "%.17g ", I->P[k]);
+  fprintf(f, "\n");
+  for (int k = 0; k < I->n; k++) fprintf(f, "%.17g ", x[k]);
+  fprintf(f, "\n");
+  fclose(f);
+}
+
+/* Project with the library and check the answer and both certificates
+ * against the reference. Returns the status. */
+typedef struct {
+  int ok, warn, checked;
+  double worst_rel_err;
+} tally;
+
+static int check_one(const inst *I, cup_projector *pr, const double *x, double acc_rel,
+                     tally *t) {
+  int n = I->n;
+  double *z = malloc(sizeof(double) * n), *zr = malloc(sizeof(double) * n);
+  double *zz = malloc(sizeof(double) * n);
+  cup_proj_info info;
+  int st = cup_project(pr, x, z, &info);
+  if (st != CUP_OK && st != CUP_WARN_NOT_CERTIFIED)
+    fail_msg("%s n=%d m=%d: status %s", kind_name[I->kind], I->n, I->m, cup_status_name(st));
+  ref_problem q = inst_ref(I);
+  if (ref_project(&q, x, zr) != 0)
+    fail_msg("%s n=%d m=%d: the reference found no feasible point", kind_name[I->kind], I->n, I->m);
+  double S = info.scale;
+  double d = pdist(I, x, zr), dz = pdist(I, x, z);
+  double excess = dz * dz - d * d;
+  /* the reference is exact to ~1e-15 S: allow for its error in d^2 */
+  double allow = 8e-15 * S * S + 1e-14 * d * d;
+  if (!(info.eps_cert >= excess - allow))
+    fail_msg("%s n=%d m=%d: eps_cert %.3e < excess %.3e", kind_name[I->kind], I->n, I->m,
+             info.eps_cert, excess);
+  /* the true distance of z to K, by projecting z with the reference */
+  if (ref_project(&q, z, zz) != 0 && getenv("CUP_TEST_DUMP"))
+    dump_instance(I, x, "/tmp/cupdump_fail.txt");
+  if (ref_project(&q, z, zz) != 0)
+    fail_msg("%s n=%d m=%d: the reference could not project z (status %s)", kind_name[I->kind],
+             I->n, I->m, cup_status_name(st));
+  double dist = pdist(I, z, zz);
+  if (!(info.eta_cert >= dist - 1e-13 * S))
+    fail_msg("%s n=%d m=%d: eta_cert %.3e < distance %.3e (violation %.3e)", kind_name[I->kind],
+             I->n, I->m, info.eta_cert, dist, info.violation);
+  /* what the certificates imply about z: ||z - z*|| <= eta + sqrt(eps + 2 eta ||x-z|| + eta^2) */
+  double err = pdist(I, z, zr);
+  double implied = info.eta_cert + sqrt(info.eps_cert + 2 * info.eta_cert * dz +
+                                        info.eta_cert * info.eta_cert);
+  if (!(err <= implied + 1e-12 * S))
+    fail_msg("%s: ||z - z*|| = %.3e exceeds what the certificates imply (%.3e)",
+             kind_name[I->kind], err, implied);
+  if (st == CUP_OK) {
+    t->ok++;
+    assert_true(info.eps_cert <= info.eps_target);
+    assert_true(info.eta_cert <= info.eta_target);
+    if (!(err <= acc_rel * S))
+      fail_msg("%s n=%d m=%d: ||z - z*||_P = %.3e > %.1e S (S = %.3e)", kind_name[I->kind],
+               I->n, I->m, err, acc_rel, S);
+    if (S > 0) t->worst_rel_err = fmax(t->worst_rel_err, err / S);
+  } else {
+    t->warn++;
+    static int ndump = 0;
+    if (getenv("CUP_TEST_DUMP") && ndump < 20) {
+      char fn[64];
+      snprintf(fn, sizeof fn, "/tmp/cupdump_%d.txt", ndump++);
+      dump_instance(I, x, fn);
+    }
+    if (getenv("CUP_TEST_VERBOSE"))
+      fprintf(stderr, "warn %s n=%d m=%d method %d: eps %.2e/%.2e eta %.2e/%.2e viol %.2e it %d err/S %.2e\n",
+              kind_name[I->kind], I->n, I->m, info.method, info.eps_cert, info.eps_target,
+              info.eta_cert, info.eta_target, info.violation, info.iterations, err / S);
+  }
+  t->checked++;
+  free(z); free(zr); free(zz);
+  return st;
+}
+
+/* Does K have an interior point? Independently: K shrunk by tau (each row
+ * moved inward by tau ||c_i||_{P^-1}) is nonempty by the reference. */
+static int has_interior(const inst *I) {
+  ref_problem q = inst_ref(I);
+  ref_work w; ref_setup(&q, &w);
+  double *gs = malloc(sizeof(double) * I->m), *z = malloc(sizeof(double) * I->n);
+  double tau = 1e-7 * (1 + sqrt(ref_pnorm2(&q, I->w0)));
+  for (int i = 0; i < I->m; i++) gs[i] = I->g[i] - tau * sqrt(w.M[i * I->m + i]);
+  ref_problem qs = {I->n, I->m, I->C, gs, I->P};
+  int ok = ref_project(&qs, I->w0, z) == 0;
+  free(gs); free(z); ref_free(&w);
+  return ok;
+}
+
+/* >= 1000 random polyhedra, every degenerate family, diagonal and
+ * non-diagonal P, default (exact) method. Tolerances sit at what floating
+ * point can certify: (1e-14, 1e-12) relative, and (1e-8, 1e-6) on thin
+ * wedges, whose certificates grow like u/theta. Sets without interior (a
+ * vertex whose halfplanes positively span the plane makes K a point) admit
+ * no certified eta for an infeasible z: there we check that the warning's
+ * bounds are true. */
+static void test_random_polyhedra_enumeration(void **state) {
+  (void)state;
+  rng_t r = {20261121};
+  tally with = {0}, without = {0}, wedge = {0};
+  int per_kind[NKIND] = {0};
+  for (int trial = 0; trial < 1200; trial++) {
+    int kind = trial % NKIND;
+    int n = rng_int(&r, 2, 8), m = rng_int(&r, 1, 10);
+    if (kind == DUPLICATE || kind == NEAR_PARALLEL) m = m < 2 ? 2 : m;
+    if (kind == THIN_WEDGE) m = 2;
+    if (kind == RANK_DEFICIENT) m = rng_int(&r, n, 10);
+    inst I;
+    inst_make(&I, &r, kind, n, m, trial % 3 == 0);
+    cup_polyset *K = NULL;
+    char msg[CUP_ERRMSG_LEN];
+    if (cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, msg)) fail_msg("create: %s", msg);
+    cup_projector_options o;
+    cup_projector_options_default(&o);
+    o.eps_rel = kind == THIN_WEDGE ? 1e-8 : 1e-14;
+    o.eta_rel = kind == THIN_WEDGE ? 1e-6 : 1e-12;
+    cup_projector *pr = NULL;
+    assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_OK);
+    tally *t = kind == THIN_WEDGE ? &wedge : has_interior(&I) ? &with : &without;
+    double *x = malloc(sizeof(double) * n);
+    for (int rep = 0; rep < 3; rep++) {
+      random_point(&I, &r, x);
+      check_one(&I, pr, x, kind == THIN_WEDGE ? 1e-5 : 1e-7, t);
+    }
+    per_kind[kind]++;
+    free(x);
+    cup_projector_free(&pr);
+    cup_polyset_free(&K);
+    inst_free(&I);
+  }
+  for (int k = 0; k < NKIND; k++) assert_true(per_kind[k] >= 150);
+  print_message("random polyhedra with interior: %d projections, %d certified at (1e-14, 1e-12), "
+                "worst ||z - z*||/S %.2e\n", with.checked, with.ok, with.worst_rel_err);
+  print_message("thin wedges (theta 1e-3..1e-6): %d projections, %d certified at (1e-8, 1e-6)\n",
+                wedge.checked, wedge.ok);
+  print_message("sets without interior: %d projections, %d certified, %d warnings with true bounds\n",
+                without.checked, without.ok, without.warn);
+  assert_true(with.checked >= 2000);
+  assert_true(with.ok >= 0.99 * with.checked);
+  assert_true(wedge.ok >= 0.99 * wedge.checked);
+}
+
+/* Larger sets (m > 64, the sparse KKT path) against the Hildreth reference. */
+static void test_random_polyhedra_sparse_path(void **state) {
+  (void)state;
+  rng_t r = {777};
+  tally t = {0};
+  static const int kinds[] = {GENERIC, DUPLICATE, GENERIC, CONE};
+  for (int trial = 0; trial < 60; trial++) {
+    int kind = kinds[trial % 4];
+    int n = rng_int(&r, 20, 60), m = rng_int(&r, 65, 110);
+    if (kind == CONE) n = m + 10;                 /* a cone with interior */
+    inst I;
+    inst_make(&I, &r, kind, n, m, trial % 2);
+    cup_polyset *K = NULL;
+    char msg[CUP_ERRMSG_LEN];
+    if (cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, msg)) fail_msg("create: %s", msg);
+    cup_projector_options o;
+    cup_projector_options_default(&o);
+    o.eps_rel = 1e-11;   /* the rigorous floor 2 sum lam_i gam_i is ~1e-13 S^2 here */
+    o.eta_rel = 1e-9;
+    cup_projector *pr = NULL;
+    assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_OK);
+    double *x = malloc(sizeof(double) * n);
+    random_point(&I, &r, x);
+    check_one(&I, pr, x, 1e-7, &t);
+    free(x);
+    cup_projector_free(&pr);
+    cup_polyset_free(&K);
+    inst_free(&I);
+  }
+  print_message("sparse path: %d projections, %d certified, %d warnings, worst rel err %.2e\n",
+                t.checked, t.ok, t.warn, t.worst_rel_err);
+  assert_true(t.ok >= 0.95 * t.checked);
+}
+
+/* The paper's projected gradient and FISTA: certificates true at every
+ * return, certified when the iteration budget allows. */
+static void test_first_order_methods(void **state) {
+  (void)state;
+  rng_t r = {4242};
+  for (int method = CUP_PROJ_PG; method <= CUP_PROJ_FISTA; method++) {
+    tally t = {0};
+    for (int trial = 0; trial < 200; trial++) {
+      int kind = trial % NKIND;
+      int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
+      inst I;
+      inst_make(&I, &r, kind, n, m, trial % 2);
+      cup_polyset *K = NULL;
+      assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+      cup_projector_options o;
+      cup_projector_options_default(&o);
+      o.method = method;
+      o.eps_rel = 1e-9;
+      o.eta_rel = 1e-7;
+      o.max_iter = 20000;
+      cup_projector *pr = NULL;
+      assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+      double *x = malloc(sizeof(double) * n);
+      random_point(&I, &r, x);
+      check_one(&I, pr, x, 1e-3, &t);
+      free(x);
+      cup_projector_free(&pr);
+      cup_polyset_free(&K);
+      inst_free(&I);
+    }
+    print_message("%s: %d projections, %d certified, %d warnings (all certificates true)\n",
+                  cup_proj_method_name(method), t.checked, t.ok, t.warn);
+    assert_true(t.ok >= 0.6 * t.checked);   /* thin wedges need ~1/theta^2 steps */
+  }
+}
+
+/* Scaling every length by s scales the answer by s (relative 1e-10). */
+static void test_scaling(void **state) {
+  (void)state;
+  rng_t r = {99};
+  static const double scales[] = {1e-9, 1e9};
+  for (int trial = 0; trial < 120; trial++) {
+    int kind = trial % NKIND;
+    int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
+    inst I;
+    inst_make(&I, &r, kind, n, m, trial % 2);
+    double *x = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
+    double *xs = malloc(sizeof(double) * n), *zs = malloc(sizeof(double) * n);
+    double *gs = malloc(sizeof(double) * m);
+    random_point(&I, &r, x);
+    cup_polyset *K = NULL;
+    assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+    cup_projector *pr = NULL;
+    assert_int_equal(cup_projector_create(&pr, K, NULL, NULL), CUP_OK);
+    cup_proj_info info;
+    int st = cup_project(pr, x, z, &info);
+    assert_true(st == CUP_OK || st == CUP_WARN_NOT_CERTIFIED);
+    double S = info.scale;
+    for (int k = 0; k < 2; k++) {
+      double s = scales[k];
+      for (int a = 0; a < n; a++) xs[a] = x[a] * s;
+      for (int i = 0; i < m; i++) gs[i] = I.g[i] * s;
+      cup_projector_reset(pr);
+      assert_int_equal(cup_projector_set_offset(pr, gs), CUP_OK);
+      assert_int_equal(cup_project(pr, xs, zs, &info), st);
+      for (int a = 0; a < n; a++) zs[a] /= s;
+      double e = pdist(&I, z, zs);
+      if (!(e <= 1e-10 * S))
+        fail_msg("%s scale %g: ||z_s/s - z|| = %.3e (S = %.3e)", kind_name[kind], s, e, S);
+    }
+    cup_projector_free(&pr);
+    cup_polyset_free(&K);
+    free(x); free(z); free(xs); free(zs); free(gs);
+    inst_free(&I);
+  }
+}
+
+/* A point of K comes back unchanged, bit for bit, with zero iterations. */
+static void test_skip_returns_x_exactly(void **state) {
+  (void)state;
+  rng_t r = {5};
+  inst I;
+  inst_make(&I, &r, GENERIC, 5, 6, 1);
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+  for (int method = 0; method < 4; method++) {
+    cup_projector_options o;
+    cup_projector_options_default(&o);
+    o.method = method;
+    cup_projector *pr = NULL;
+    assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+    double z[5];
+    cup_proj_info info;
+    assert_int_equal(cup_project(pr, I.w0, z, &info), CUP_OK);
+    assert_memory_equal(z, I.w0, sizeof z);
+    assert_int_equal(info.iterations, 0);
+    assert_int_equal(info.skipped, 1);
+    assert_true(info.eps_cert == 0);
+    for (int i = 0; i < 6; i++) assert_true(cup_projector_lambda(pr)[i] == 0);
+    cup_projector_free(&pr);
+  }
+  cup_polyset_free(&K);
+  inst_free(&I);
+}
+
+/* Empty sets: status, and a Farkas certificate y >= 0, C^T y = 0, g^T y < 0
+ * checked here from the data. */
+static void check_farkas(int n, int m, const double *C, const double *g, int method) {
+  tcsc Ct;
+  tcsc_from_dense(&Ct, C, m, n);
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &Ct.view, g, NULL, NULL), CUP_OK);
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.method = method;
+  cup_projector *pr = NULL;
+  assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+  double x[16] = {0.3, -0.2, 0.1, 0.5}, z[16];
+  assert_true(n <= 16);
+  for (int a = 0; a < 16; a++) z[a] = 7;
+  cup_proj_info info;
+  int st = cup_project(pr, x, z, &info);
+  if (st != CUP_ERR_EMPTY_SET)
+    fail_msg("%s: status %s, expected CUP_ERR_EMPTY_SET", cup_proj_method_name(method),
+             cup_status_name(st));
+  assert_true(z[0] == 7 && z[1] == 7);        /* output untouched */
+  const double *y = cup_projector_farkas(pr);
+  double gy = 0, ysum = 0;
+  for (int i = 0; i < m; i++) { assert_true(y[i] >= 0); gy += g[i] * y[i]; ysum += y[i]; }
+  assert_true(ysum > 0);
+  assert_true(gy < 0);
+  for (int a = 0; a < n; a++) {
+    double cty = 0;
+    for (int i = 0; i < m; i++) cty += C[i * n + a] * y[i];
+    assert_true(fabs(cty) <= 1e-6 * fabs(gy));
+  }
+  assert_true(info.farkas_gap < 0);
+  cup_projector_free(&pr);
+  cup_polyset_free(&K);
+  tcsc_free(&Ct);
+}
+
+static void test_empty_sets(void **state) {
+  (void)state;
+  for (int method = 0; method < 4; method++) {
+    double C1[2] = {1, -1}, g1[2] = {-1, 0};               /* y >= 1 and y <= 0 */
+    check_farkas(1, 2, C1, g1, method);
+    double C2[6] = {1, 0, 0, 1, -1, -1}, g2[3] = {-1, -1, 1};  /* y1,y2 >= 1, y1+y2 <= 1 */
+    check_farkas(2, 3, C2, g2, method);
+    double C3[4] = {1, 0, 0, 0}, g3[2] = {0, -1};           /* a zero row: 0 >= 1 */
+    check_farkas(2, 2, C3, g3, method);
+  }
+  /* a larger empty set on the sparse path: 80 rows, the last contradicts the
+   * sum of two others */
+  int n = 10, m = 80;
+  double *C = calloc(m * n, sizeof(double)), *g = calloc(m, sizeof(double));
+  rng_t r = {3};
+  for (int i = 0; i < m - 1; i++) {
+    for (int a = 0; a < n; a++) C[i * n + a] = rng_normal(&r);
+    g[i] = 1;
+  }
+  for (int a = 0; a < n; a++) C[(m - 1) * n + a] = -(C[a] + C[n + a]);
+  g[m - 1] = -2.5;   /* c0 y + c1 y >= -2 and -(c0 + c1) y >= 2.5: contradiction */
+  for (int method = 0; method < 4; method++) check_farkas(n, m, C, g, method);
+  free(C); free(g);
+}
+
+/* The feasible point itself, on request: certainly feasible, with eta = 0. */
+static void test_return_feasible(void **state) {
+  (void)state;
+  rng_t r = {11};
+  for (int trial = 0; trial < 200; trial++) {
+    int kind = trial % NKIND;
+    int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
+    inst I;
+    inst_make(&I, &r, kind, n, m, trial % 2);
+    cup_polyset *K = NULL;
+    assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+    cup_projector_options o;
+    cup_projector_options_default(&o);
+    o.return_feasible = 1;
+    o.method = trial % 3 == 0 ? CUP_PROJ_FISTA : CUP_PROJ_AUTO;
+    o.eps_rel = 1e-8;
+    o.eta_rel = 1e-6;
+    cup_projector *pr = NULL;
+    assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+    double *x = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
+    random_point(&I, &r, x);
+    cup_proj_info info;
+    int st = cup_project(pr, x, z, &info);
+    if (st == CUP_OK) {
+      assert_true(info.eta_cert == 0);
+      for (int i = 0; i < m; i++) {           /* feasibility from the data, here */
+        long double s = I.g[i];
+        for (int a = 0; a < n; a++) s += (long double)I.C[i * n + a] * z[a];
+        assert_true(s >= 0);
+      }
+      ref_problem q = inst_ref(&I);
+      double *zr = malloc(sizeof(double) * n);
+      assert_int_equal(ref_project(&q, x, zr), 0);
+      double d = pdist(&I, x, zr), dz = pdist(&I, x, z);
+      assert_true(info.eps_cert >= dz * dz - d * d - 8e-15 * info.scale * info.scale);
+      free(zr);
+    }
+    free(x); free(z);
+    cup_projector_free(&pr);
+    cup_polyset_free(&K);
+    inst_free(&I);
+  }
+}
+
+static void test_bad_input(void **state) {
+  (void)state;
+  rng_t r = {8};
+  inst I;
+  inst_make(&I, &r, GENERIC, 3, 4, 0);
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+  cup_projector *pr = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.eps_rel = NAN;                               /* NaN is not >= 0 */
+  assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_ERR_ARG);
+  assert_null(pr);
+  assert_non_null(strstr(msg, "tolerances"));
+  assert_int_equal(cup_projector_create(&pr, K, NULL, NULL), CUP_OK);
+  double x[3] = {1, NAN, 0}, z[3] = {5, 5, 5};
+  assert_int_equal(cup_project(pr, x, z, NULL), CUP_ERR_NONFINITE);
+  assert_true(z[0] == 5 && z[1] == 5 && z[2] == 5);
+  double gbad[4] = {0, 0, NAN, 0};
+  assert_int_equal(cup_projector_set_offset(pr, gbad), CUP_ERR_NONFINITE);
+  assert_int_equal(cup_project(NULL, x, z, NULL), CUP_ERR_ARG);
+  assert_int_equal(cup_proj_method_parse("fista"), CUP_PROJ_FISTA);
+  assert_int_equal(cup_proj_method_parse("newton"), -1);
+  cup_projector_free(&pr);
+  cup_projector_free(&pr);                       /* a second free is harmless */
+  cup_polyset_free(&K);
+  inst_free(&I);
+}
+
+/* Warm start: along a slowly drifting sequence, the exact method mostly
+ * finishes in one solve, and answers equal the cold ones. */
+static void test_warm_start_sequence(void **state) {
+  (void)state;
+  int cp[4] = {0, 0, 2, 3}, ci[3] = {0, 1, 0};
+  double cx[3] = {1, 1, -1}, d[3] = {1, 2, 1};
+  cup_csc C = {2, 3, cp, ci, cx};
+  cup_metric P = {CUP_METRIC_DIAGONAL, d, {0}, 0};
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &C, NULL, &P, NULL), CUP_OK);
+  cup_projector *warm = NULL, *cold = NULL;
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  assert_int_equal(cup_projector_create(&warm, K, &o, NULL), CUP_OK);
+  o.warm_start = 0;
+  assert_int_equal(cup_projector_create(&cold, K, &o, NULL), CUP_OK);
+  int warm_it = 0, projected = 0;
+  for (int k = 0; k < 100; k++) {
+    double x[3] = {0.1, -0.5 + 0.003 * k, 0.2 + 0.002 * k}, zw[3], zc[3];
+    cup_proj_info iw, ic;
+    assert_int_equal(cup_project(warm, x, zw, &iw), CUP_OK);
+    assert_int_equal(cup_project(cold, x, zc, &ic), CUP_OK);
+    for (int a = 0; a < 3; a++) assert_close(zw[a], zc[a], 1e-14);
+    if (!iw.skipped) { warm_it += iw.iterations; projected++; }
+    if (getenv("CUP_TEST_VERBOSE")) fprintf(stderr, "k %d skipped %d it %d active %d\n", k, iw.skipped, iw.iterations, iw.active);
+  }
+  assert_true(projected > 50);
+  assert_true(warm_it <= projected + 3);           /* one solve per projection */
+  cup_projector_free(&warm);
+  cup_projector_free(&cold);
+  cup_polyset_free(&K);
+}
+
+/* No allocation in cup_project: 10^4 projections per configuration. */
+static void test_no_allocation(void **state) {
+  (void)state;
+#if !CUP_COUNTING
+  skip();
+#else
+  rng_t r = {2};
+  inst small, big;
+  inst_make(&small, &r, GENERIC, 4, 6, 0);
+  inst_make(&big, &r, GENERIC, 40, 90, 1);         /* sparse path, non-diagonal P */
+  inst *sets[2] = {&small, &big};
+  for (int s = 0; s < 2; s++) {
+    inst *I = sets[s];
+    cup_polyset *K = NULL;
+    assert_int_equal(cup_polyset_create(&K, &I->Ct.view, I->g, &I->Pm, NULL), CUP_OK);
+    for (int method = 0; method < 4; method++) {
+      cup_projector_options o;
+      cup_projector_options_default(&o);
+      o.method = method;
+      o.max_iter = 2000;
+      o.eps_rel = 1e-8;
+      o.eta_rel = 1e-6;
+      cup_projector *pr = NULL;
+      assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+      double *x = malloc(sizeof(double) * I->n), *z = malloc(sizeof(double) * I->n);
+      double *dir = malloc(sizeof(double) * I->n);
+      random_point(I, &r, x);
+      for (int a = 0; a < I->n; a++) dir[a] = 1e-3 * rng_normal(&r);
+      /* 10^4 projections on the small set; the big one with the exact method
+       * too, fewer with the slow first-order methods */
+      int nproj = s == 0 || method == CUP_PROJ_AUTO ? 10000 : 300;
+      long before = alloc_count;
+      counting = 1;
+      int bad = 0;
+      for (int k = 0; k < nproj; k++) {
+        for (int a = 0; a < I->n; a++) x[a] += dir[a] * (k % 200 < 100 ? 1 : -1);
+        int st = cup_project(pr, x, z, NULL);
+        bad += st < 0;
+      }
+      counting = 0;
+      long allocs = alloc_count - before;
+      if (allocs != 0)
+        fail_msg("set %d method %s: %ld allocations in %d projections", s,
+                 cup_proj_method_name(method), allocs, nproj);
+      assert_int_equal(bad, 0);
+      free(x); free(z); free(dir);
+      cup_projector_free(&pr);
+    }
+    cup_polyset_free(&K);
+  }
+  inst_free(&small);
+  inst_free(&big);
+#endif
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_random_polyhedra_enumeration),
+    cmocka_unit_test(test_random_polyhedra_sparse_path),
+    cmocka_unit_test(test_first_order_methods),
+    cmocka_unit_test(test_scaling),
+    cmocka_unit_test(test_skip_returns_x_exactly),
+    cmocka_unit_test(test_empty_sets),
+    cmocka_unit_test(test_return_feasible),
+    cmocka_unit_test(test_bad_input),
+    cmocka_unit_test(test_warm_start_sequence),
+    cmocka_unit_test(test_no_allocation),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
