@@ -13,5 +13,9 @@
 #include "catchup/sparse.h"
 #include "catchup/polyset.h"
 #include "catchup/projector.h"
+#include "catchup/input.h"
+#include "catchup/lcs.h"
+#include "catchup/integrator.h"
+#include "catchup/scene.h"
 
 #endif

@@ -1,0 +1,61 @@
+/* catchup/input.h — inputs u(t) in R^p: sums of built-in waveforms with
+ * exact integrals, or a user callback integrated by GSL quadrature. */
+#ifndef CATCHUP_INPUT_H
+#define CATCHUP_INPUT_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cup_input cup_input;
+
+typedef enum cup_wave_kind {
+  CUP_WAVE_CONSTANT = 0, /**< value */
+  CUP_WAVE_SINE = 1,     /**< amplitude * sin(2 pi frequency t + phase) */
+  CUP_WAVE_SQUARE = 2,   /**< amplitude * sign(sin(2 pi frequency t + phase)), sign(0) = 0 */
+  CUP_WAVE_PWL = 3       /**< piecewise linear through (t_k, v_k); constant outside */
+} cup_wave_kind;
+
+/** One waveform term; u_j(t) is the sum of the terms added to component j. */
+typedef struct cup_wave {
+  cup_wave_kind kind;
+  double value;          /**< CONSTANT */
+  double amplitude;      /**< SINE, SQUARE */
+  double frequency;      /**< SINE, SQUARE: cycles per unit time (16 sin(6 pi t): 3) */
+  double phase;          /**< SINE, SQUARE: radians */
+  int npoints;           /**< PWL: number of points (>= 1), times strictly increasing */
+  const double *t;       /**< PWL: times (copied) */
+  const double *v;       /**< PWL: values (copied) */
+} cup_wave;
+
+/** User input: write u(t) (p entries) into u; return 0, or nonzero to stop
+ *  the run with CUP_ERR_CALLBACK. Must be callable from Fortran (bind(C)). */
+typedef int (*cup_input_fn)(double t, double *u, void *ctx);
+
+/** An input with p components, all zero until terms are added. */
+int cup_input_create(cup_input **u, int p, char *errmsg);
+void cup_input_free(cup_input **u);
+/** Add a waveform term to component j (0-based). Validates finiteness,
+ *  frequency >= 0, PWL times increasing; errmsg names the problem. */
+int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg);
+/** Replace the waveforms by a callback. Integrals use adaptive GSL quadrature
+ *  (QAG, 21-point Gauss-Kronrod) per component to the absolute/relative
+ *  tolerance given; a step that misses it yields CUP_WARN_QUADRATURE. */
+int cup_input_set_callback(cup_input *u, cup_input_fn fn, void *ctx,
+                           double abs_tol, double rel_tol);
+
+int cup_input_dim(const cup_input *u);
+/** 1 if u is constant in time (then integrals are h * u and never recomputed). */
+int cup_input_is_constant(const cup_input *u);
+/** u(t) into out (p entries). */
+int cup_input_eval(const cup_input *u, double t, double *out);
+/** The exact integral of u over [a, b] into out (quadrature for callbacks). */
+int cup_input_integral(const cup_input *u, double a, double b, double *out);
+/** The next time > t at which some term is not smooth (a square-wave jump
+ *  or a PWL breakpoint), or INFINITY. Used by the exponential scheme. */
+double cup_input_next_break(const cup_input *u, double t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,113 @@
+/* catchup/integrator.h — the inexact catching-up algorithm (paper, Sec. 3):
+ *     x_{k+1} in proj^{eps_n, eta_n}_{K(t_{k+1})}( free step from x_k ),
+ * on the uniform grid t_k = k T / n (computed as k*h, never accumulated). */
+#ifndef CATCHUP_INTEGRATOR_H
+#define CATCHUP_INTEGRATOR_H
+
+#include "catchup/lcs.h"
+#include "catchup/input.h"
+#include "catchup/projector.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cup_integrator cup_integrator;
+
+typedef enum cup_scheme {
+  CUP_SCHEME_EXPLICIT = 0,    /**< the paper: x_k + h A x_k + E int u + int f */
+  CUP_SCHEME_IMPLICIT = 1,    /**< (I - h A)^-1 (x_k + E int u + int f), then project */
+  CUP_SCHEME_EXPONENTIAL = 2  /**< exact flow of A with the exact input convolution */
+} cup_scheme;
+
+/** A tolerance schedule: value(n) = coef * n^power ("n^-2.1": coef 1,
+ *  power -2.1; "1e-6": coef 1e-6, power 0; "0.5*n^-1.05"). */
+typedef struct cup_schedule {
+  double coef;
+  double power;
+} cup_schedule;
+/** Parse "n^-2.1", "3e-7", "0.5*n^-1" (spaces allowed). Returns CUP_ERR_PARSE
+ *  with a message for anything else (a NaN or negative coefficient too). */
+int cup_schedule_parse(const char *spec, cup_schedule *out, char *errmsg);
+double cup_schedule_value(const cup_schedule *s, long n);
+/** Format back as the canonical text ("n^-2.1", "1e-06", "0.5*n^-1.05"). */
+int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size);
+
+typedef enum cup_output_kind {
+  CUP_OUTPUT_EVERY = 0,   /**< steps 0, k, 2k, ... and always the last */
+  CUP_OUTPUT_SAMPLES = 1, /**< N samples at steps round(j n / (N - 1)), j = 0..N-1 */
+  CUP_OUTPUT_FINAL = 2,   /**< the final state only */
+  CUP_OUTPUT_NONE = 3     /**< statistics only */
+} cup_output_kind;
+
+/** Perturbation f(t, x) (n entries into f); return nonzero to stop the run
+ *  with CUP_ERR_CALLBACK. Its integral over a step, x frozen at x_k, uses
+ *  Gauss-Legendre quadrature of the given order (exact for polynomials in t
+ *  of degree 2 order - 1). Callable from Fortran (bind(C)). */
+typedef int (*cup_rhs_fn)(double t, const double *x, double *f, void *ctx);
+
+/** Receives the selected states: step k, time t_k = k h, state x (n entries,
+ *  original x coordinates). Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
+typedef int (*cup_sample_fn)(long k, double t, const double *x, void *ctx);
+
+typedef struct cup_integrator_options {
+  cup_scheme scheme;          /**< CUP_SCHEME_EXPLICIT */
+  double T;                   /**< final time, > 0 */
+  long n;                     /**< steps, >= 1 */
+  cup_schedule eps;           /**< eps_n (absolute, squared length); default n^-2.1 */
+  cup_schedule eta;           /**< eta_n (absolute, length); default n^-1.05 */
+  cup_projector_options proj; /**< method and limits; its eps/eta are replaced by the schedules */
+  cup_output_kind output;     /**< CUP_OUTPUT_EVERY */
+  long output_every;          /**< EVERY: stride (default 1) */
+  long output_samples;        /**< SAMPLES: N >= 2 */
+  cup_rhs_fn f;               /**< extra perturbation, or NULL */
+  void *f_ctx;                /**< passed to f */
+  int f_order;                /**< Gauss-Legendre points for int f (default 3) */
+  double max_wall_seconds;    /**< stop with CUP_ERR_TIME_LIMIT after this (0: none) */
+} cup_integrator_options;
+
+/** What a run did. A run stops at the first error and says where. */
+typedef struct cup_run_info {
+  int status;                 /**< CUP_OK, a warning (first one seen), or the error */
+  long step;                  /**< steps completed (n when finished) */
+  double t;                   /**< t_step = step * h */
+  long projected;             /**< steps whose free point was outside K and projected */
+  long skipped;               /**< steps whose free point was already in K */
+  long not_certified;         /**< projections returned with CUP_WARN_NOT_CERTIFIED */
+  long long dual_iterations;  /**< total projector iterations */
+  long factorizations;        /**< sparse numeric factorizations */
+  double max_eps_cert;        /**< largest certified eps over the run */
+  double max_eta_cert;        /**< largest certified eta over the run */
+  double eps_target;          /**< eps_n used */
+  double eta_target;          /**< eta_n used */
+  double h_rho;               /**< h * spectral radius of A */
+  long samples;               /**< states passed to the sink */
+  char message[256];          /**< what went wrong, with step and time */
+} cup_run_info;
+
+void cup_integrator_options_default(cup_integrator_options *o);
+
+/** Set up an integrator for the LCS with input u (may be NULL when the LCS
+ *  has no input). Does everything that does not depend on the state: the
+ *  free-step operator (e^{hA}, (I - hA)^-1), input integrals when u is
+ *  constant, the projector (factored once), the stiffness check. */
+int cup_integrator_create(cup_integrator **I, const cup_lcs *L, const cup_input *u,
+                          const cup_integrator_options *o, char *errmsg);
+void cup_integrator_free(cup_integrator **I);
+
+/** Run from x0 (n entries) over [0, T], passing the selected states to sink
+ *  (may be NULL). Allocates nothing per step. Returns info->status. */
+int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
+                       void *sink_ctx, cup_run_info *info);
+
+/** The final state of the last run (n entries). */
+const double *cup_integrator_state(const cup_integrator *I);
+
+const char *cup_scheme_name(int scheme);
+/** "explicit", "implicit", "exponential"; -1 if unknown. */
+int cup_scheme_parse(const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,58 @@
+/* catchup/lcs.h — linear complementarity systems (paper, Sec. 7)
+ *     x' = A x + B zeta + E u(t),   0 <= zeta  _|_  C x + G u(t) + F >= 0,
+ * with an SPD P such that P B = C^T. In x coordinates the catching-up step
+ * is the P-metric projection onto K(t) = {x : C x + G u(t) + F >= 0}. */
+#ifndef CATCHUP_LCS_H
+#define CATCHUP_LCS_H
+
+#include "catchup/sparse.h"
+#include "catchup/polyset.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cup_lcs cup_lcs;
+
+/** The matrices of an LCS. A matrix with ncol = 0 (all fields zero) is
+ *  absent: A = 0, no B check, E = 0, G = 0. Everything is copied. */
+typedef struct cup_lcs_desc {
+  int n;           /**< state dimension */
+  int m;           /**< complementarity rows */
+  int p;           /**< input dimension (0: no input) */
+  cup_csc A;       /**< n x n drift */
+  cup_csc B;       /**< n x m; checked against P B = C^T */
+  cup_csc C;       /**< m x n */
+  cup_csc E;       /**< n x p */
+  const double *F; /**< m entries, or NULL for 0 */
+  cup_csc G;       /**< m x p: K moves with u when nonzero */
+  cup_metric P;    /**< the metric (kind IDENTITY: P = I) */
+  double pb_tol;   /**< relative tolerance of ||P B - C^T||; 0 means 1e-12 */
+} cup_lcs_desc;
+
+/** Validate and copy. Fails with CUP_ERR_PB_CT and a message naming the
+ *  largest entry of P B - C^T when the check fails, CUP_ERR_DIM for sizes. */
+int cup_lcs_create(cup_lcs **L, const cup_lcs_desc *d, char *errmsg);
+void cup_lcs_free(cup_lcs **L);
+
+int cup_lcs_dim(const cup_lcs *L);
+int cup_lcs_rows(const cup_lcs *L);
+int cup_lcs_inputs(const cup_lcs *L);
+/** The set {x : C x + F >= 0} with metric P (offset moved by G u(t)). */
+const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
+/** 1 if G is absent or zero: K does not move. */
+int cup_lcs_fixed_set(const cup_lcs *L);
+
+/** The paper's circuit (Sec. 7, after Acary-Brogliato Ex. 2.52): R1, R2, R3
+ *  >= 0, L2, L3, C4 > 0, and g = G (2 entries, NULL for 0). Builds A, B, C,
+ *  E, P = diag(1, L3, L2) as in the paper. */
+typedef struct cup_circuit {
+  double R1, R2, R3, L2, L3, C4;
+  double G[2];
+} cup_circuit;
+int cup_lcs_circuit(cup_lcs **L, const cup_circuit *c, char *errmsg);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

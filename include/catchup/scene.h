@@ -1,0 +1,42 @@
+/* catchup/scene.h — scene files (YAML): an LCS (or the paper's circuit as a
+ * parameterised family), its input, x0, T, n, tolerances, scheme, projector
+ * and output. The format is documented in docs/scene-format.md. Every error
+ * names file:line:column and the key. */
+#ifndef CATCHUP_SCENE_H
+#define CATCHUP_SCENE_H
+
+#include "catchup/integrator.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cup_scene cup_scene;
+
+/** Load a scene. overrides (may be NULL) are "dotted.key=value" strings
+ *  applied to the document before it is read, value parsed as YAML
+ *  ("circuit.R1=2", "n=1000", "input.0.amplitude=8", "x0=[0, 1, 0]"). Matrix
+ *  Market files named in the scene are found relative to its directory. */
+int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides,
+                   int n_overrides, char *errmsg);
+/** The same from text; `name` is used in messages in place of a file name
+ *  and `dir` (may be NULL: the working directory) to find Matrix Market files. */
+int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,
+                          const char *const *overrides, int n_overrides, char *errmsg);
+void cup_scene_free(cup_scene **s);
+
+const char *cup_scene_name(const cup_scene *s);          /**< the `name` key, or the file stem */
+const cup_lcs *cup_scene_lcs(const cup_scene *s);
+const cup_input *cup_scene_input(const cup_scene *s);    /**< NULL when p = 0 */
+const double *cup_scene_x0(const cup_scene *s);          /**< n entries */
+/** T, n, eps, eta, scheme, projector, output from the file. */
+const cup_integrator_options *cup_scene_options(const cup_scene *s);
+const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "n^-2.1" */
+const char *cup_scene_eta_spec(const cup_scene *s);
+/** The document after overrides, as YAML text (for provenance attributes). */
+const char *cup_scene_text(const cup_scene *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
