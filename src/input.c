@@ -159,7 +159,7 @@ static double pwl_integral(const cup_term *w, double a, double b) {
   return sum;
 }
 
-static double term_value(const cup_term *w, double t) {
+double cup_term_value(const cup_term *w, double t) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value;
     case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
@@ -194,7 +194,7 @@ int cup_input_eval(const cup_input *u, double t, double *out) {
     return CUP_OK;
   }
   for (int j = 0; j < u->p; j++) out[j] = 0;
-  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += term_value(&u->terms[k], t);
+  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_value(&u->terms[k], t);
   return CUP_OK;
 }
 

@@ -57,3 +57,14 @@ static inline double cup_dot(const double *a, const double *b, int n) {
  * its fill-reducing permutation: x <- A^-1 x. w is n entries of scratch.
  * Allocation-free (cholmod_solve2 allocates on every call). */
 void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w);
+
+/* ---- small dense matrices (column-major, k x k), allocation-free ---------- */
+
+/* LU with partial pivoting in place; piv gets the row order. Returns 0, or
+ * j+1 if the pivot in column j is exactly zero. */
+int cup_dense_lu(double *a, int k, int *piv);
+/* Solve with the factor from cup_dense_lu, in place; w: k doubles. */
+void cup_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w);
+/* out = exp(a) by scaling and squaring of a degree-18 Taylor polynomial;
+ * work holds 3 k*k doubles. a and out must differ. */
+void cup_dense_expm(const double *a, int k, double *out, double *work);
