@@ -236,7 +236,6 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
     return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the LCS expects %d",
                     cup_input_dim(u), p);
   fs->ubuf = zalloc((size_t)p + 1, sizeof(double), &fail);
-  fs->eu = zalloc((size_t)n, sizeof(double), &fail);
   fs->eu_const = zalloc((size_t)n, sizeof(double), &fail);
   fs->fsum = zalloc((size_t)n, sizeof(double), &fail);
   fs->fbuf = zalloc((size_t)n, sizeof(double), &fail);
@@ -248,6 +247,17 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
   if (gl_nodes(fs->nf, fs->fnode, fs->fweight)) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
   if (fs->u && fs->u->fn && cup_quad_ws_init(&fs->qws, p))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "input quadrature: out of memory");
+  if (fs->u && !fs->u->fn) {
+    fs->term_h = zalloc((size_t)fs->u->nterms + 1, sizeof(double), &fail);
+    if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "free step: out of memory");
+    for (int k = 0; k < fs->u->nterms; k++) {
+      const cup_term *t = &fs->u->terms[k];
+      if (t->kind == CUP_WAVE_CONSTANT) fs->term_h[k] = t->value * h;
+      else if (t->kind == CUP_WAVE_SINE)
+        fs->term_h[k] = t->omega > 0 ? 2 * t->amp / t->omega * sin(0.5 * t->omega * h)
+                                     : t->amp * sin(t->phase) * h;
+    }
+  }
   /* a constant input is integrated once */
   fs->const_input = !fs->u || cup_input_is_constant(fs->u);
   if (fs->u && fs->const_input && L->has_E) {
@@ -261,7 +271,7 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
 }
 
 void cup_freestep_free(cup_freestep *fs) {
-  free(fs->eu_const); free(fs->ubuf); free(fs->eu); free(fs->fsum); free(fs->fbuf); free(fs->work);
+  free(fs->eu_const); free(fs->term_h); free(fs->ubuf); free(fs->fsum); free(fs->fbuf); free(fs->work);
   cup_quad_ws_free(&fs->qws);
   free(fs->lu); free(fs->piv);
   free(fs->gen_of_term); free(fs->M); free(fs->Eh); free(fs->Es); free(fs->ework);
@@ -269,15 +279,39 @@ void cup_freestep_free(cup_freestep *fs) {
   memset(fs, 0, sizeof *fs);
 }
 
-/* E int_{t0}^{t1} u into fs->eu (zero without input). */
-static int input_term(cup_freestep *fs, double t0, double t1) {
+/* int_{t0}^{t1} u over a full step of the grid, with the step-length
+ * factors of constants and sines cached (one sin per sine term and step:
+ * int A sin(w s + p) = 2A/w sin(w h/2) sin(w t_mid + p)). */
+static void waveform_step_integral(cup_freestep *fs, double t0, double t1) {
+  const cup_input *u = fs->u;
+  double tmid = 0.5 * (t0 + t1);
+  for (int j = 0; j < fs->p; j++) fs->ubuf[j] = 0;
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    double v;
+    switch (t->kind) {
+      case CUP_WAVE_CONSTANT: v = fs->term_h[k]; break;
+      case CUP_WAVE_SINE: v = t->omega > 0 ? fs->term_h[k] * sin(t->omega * tmid + t->phase) : fs->term_h[k]; break;
+      default: v = cup_term_integral(t, t0, t1); break;
+    }
+    fs->ubuf[t->comp] += v;
+  }
+}
+
+/* xf += E int_{t0}^{t1} u (nothing without input; the precomputed h E u
+ * for a constant one). */
+static int add_input(cup_freestep *fs, double t0, double t1, double *xf) {
   const cup_lcs *L = fs->L;
-  if (!fs->u || !L->has_E) { memset(fs->eu, 0, sizeof(double) * (size_t)fs->n); return CUP_OK; }
-  if (fs->const_input) { memcpy(fs->eu, fs->eu_const, sizeof(double) * (size_t)fs->n); return CUP_OK; }
-  int st = cup_input_integral_ws(fs->u, t0, t1, fs->ubuf, &fs->qws);
+  if (!fs->u || !L->has_E) return CUP_OK;
+  if (fs->const_input) {
+    for (int i = 0; i < fs->n; i++) xf[i] += fs->eu_const[i];
+    return CUP_OK;
+  }
+  int st = CUP_OK;
+  if (fs->u->fn) st = cup_input_integral_ws(fs->u, t0, t1, fs->ubuf, &fs->qws);
+  else waveform_step_integral(fs, t0, t1);
   if (st < 0) return st;
-  memset(fs->eu, 0, sizeof(double) * (size_t)fs->n);
-  cup_sparse_gaxpy(&L->E, fs->ubuf, fs->eu);
+  cup_sparse_gaxpy(&L->E, fs->ubuf, xf);
   return st;
 }
 
@@ -317,17 +351,17 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
   if (f && (st = rhs_term(fs, t0, x, f, fctx)) < 0) return st;
   switch (fs->scheme) {
     case CUP_SCHEME_EXPLICIT:
-      if ((st = cup_status_merge(st, input_term(fs, t0, t1))) < 0) return st;
-      for (int i = 0; i < n; i++) xf[i] = x[i] + fs->eu[i];
+      cup_copy(xf, x, n);
       if (L->has_A)                          /* + h A x */
         for (int j = 0; j < n; j++) {
           double hx = fs->h * x[j];
           for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) xf[L->A.i[k]] += L->A.x[k] * hx;
         }
+      if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
       break;
     case CUP_SCHEME_IMPLICIT:
-      if ((st = cup_status_merge(st, input_term(fs, t0, t1))) < 0) return st;
-      for (int i = 0; i < n; i++) xf[i] = x[i] + fs->eu[i] + (f ? fs->fsum[i] : 0);
+      for (int i = 0; i < n; i++) xf[i] = x[i] + (f ? fs->fsum[i] : 0);
+      if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
       cup_dense_lu_solve(fs->lu, n, fs->piv, xf, fs->work);
       return st;
     case CUP_SCHEME_EXPONENTIAL:

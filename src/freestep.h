@@ -23,8 +23,10 @@ typedef struct cup_freestep {
   const cup_input *u;
   int const_input;          /* u constant: E int u = h E u precomputed */
   double *eu_const;         /* n */
-  double *ubuf, *eu, *fsum, *fbuf, *work;  /* p, n, n, n, 2 n scratch */
+  double *ubuf, *fsum, *fbuf, *work;       /* p, n, n, 2 n scratch */
   cup_quad_ws qws;          /* callback input quadrature */
+  double *term_h;           /* per waveform term over a full step: constant c h;
+                               sine 2A/w sin(w h / 2) (times sin(w t_mid + phase)) */
   /* Gauss-Legendre nodes on [0, 1] for int f and for callback convolutions */
   int nf;
   double fnode[CUP_GL_MAX], fweight[CUP_GL_MAX];

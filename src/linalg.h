@@ -45,6 +45,21 @@ void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
 /* A CHOLMOD common that never prints and uses our memory routines. */
 int cup_cholmod_start(cholmod_common *c);
 
+/* max/min without a libm call (fmax is not inlined at -O2); with a NaN
+ * argument they return the second argument, so callers that must not let
+ * NaN through use explicit comparisons instead. */
+static inline double cup_max(double a, double b) { return a > b ? a : b; }
+static inline double cup_min(double a, double b) { return a < b ? a : b; }
+
+/* Copies and fills of short vectors: loops beat a libc call for the tiny
+ * sizes of circuit models and are no worse for long ones. */
+static inline void cup_copy(double *dst, const double *src, int n) {
+  for (int k = 0; k < n; k++) dst[k] = src[k];
+}
+static inline void cup_zero(double *dst, int n) {
+  for (int k = 0; k < n; k++) dst[k] = 0;
+}
+
 static inline double cup_dot(const double *a, const double *b, int n) {
   double s = 0;
   for (int k = 0; k < n; k++) s += a[k] * b[k];
