@@ -286,6 +286,13 @@ static void test_overrides_change_values(void **state) {
   assert_array_close(d.A, A, 9, TOL, "A");
   assert_close(d.P[4], 4, 0);
   cup_scene_free(&s);
+  /* one matrix entry, by list indices */
+  const char *entry[] = {"lcs.A.1.2=0.25"};
+  s = load_ok(EX "/lcs-generic.yaml", entry, 1);
+  dense_lcs_of(s, &d);
+  const double A2[9] = {0, 1, 0, -0.5, -1, 0.25, 0, 1, -3};
+  assert_array_close(d.A, A2, 9, 0, "A");
+  cup_scene_free(&s);
 }
 
 static void test_overrides_add_keys(void **state) {
