@@ -3,7 +3,9 @@
  * through cup_scene_text; and the malformed corpus: every .yaml file in
  * tests/scenes/bad names its expected error in a "# expect: ..." first line.
  * The LCS internals (src/lcs_impl.h) are read to compare matrices. */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE                  /* dladdr */
+#include <dlfcn.h>
+#include <execinfo.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -13,6 +15,61 @@
 #include "testutil.h"
 #include "lcs_impl.h"
 #include "polyset_impl.h"
+
+/* ---- an allocator that fails on request and counts live blocks (glibc
+ * interposition, as in test_projector.c; off under ASan) ------------------- */
+#if defined(__SANITIZE_ADDRESS__)
+#define CUP_FAULTS 0
+#else
+#define CUP_FAULTS 1
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+static long fault_at = -1, alloc_calls = 0, live_blocks = 0;
+static int tracking = 0;
+/* Dependencies whose own out-of-memory paths fail are left alone (the
+ * next allocation is failed instead): GSL (its default handler aborts, and
+ * gsl_matrix_alloc leaks its struct when the block allocation fails) and
+ * CHOLMOD 3.0.14's cholmod_spsolve (dereferences X when spzeros fails). */
+static int dependency_bug(void *caller) {
+  Dl_info info;
+  if (dladdr(caller, &info) && info.dli_fname && strstr(info.dli_fname, "libgsl")) return 1;
+  void *frames[16];
+  int n = backtrace(frames, 16);
+  for (int k = 0; k < n; k++)
+    if (dladdr(frames[k], &info) && info.dli_sname && !strcmp(info.dli_sname, "cholmod_spsolve")) return 1;
+  return 0;
+}
+
+static int inject(void *caller) {
+  if (!tracking || ++alloc_calls != fault_at) return 0;
+  if (dependency_bug(caller)) { fault_at++; return 0; }
+  return 1;
+}
+void *malloc(size_t n) {
+  if (inject(__builtin_return_address(0))) return NULL;
+  void *q = __libc_malloc(n);
+  if (tracking && q) live_blocks++;
+  return q;
+}
+void *calloc(size_t a, size_t b) {
+  if (inject(__builtin_return_address(0))) return NULL;
+  void *q = __libc_calloc(a, b);
+  if (tracking && q) live_blocks++;
+  return q;
+}
+void *realloc(void *p, size_t n) {
+  if (inject(__builtin_return_address(0))) return NULL;
+  void *q = __libc_realloc(p, n);
+  if (tracking && q && !p) live_blocks++;
+  return q;
+}
+void free(void *p) {
+  if (tracking && p) live_blocks--;
+  __libc_free(p);
+}
+#endif
 
 #define EX CUP_EXAMPLES_DIR
 #define BAD CUP_BAD_SCENES_DIR
@@ -501,6 +558,45 @@ static void test_mutations(void **state) {
   }
 }
 
+/* Fail the k-th allocation of a load, for every k until the load no longer
+ * needs to fail: each must return an error with *s NULL and free every block
+ * it took. */
+static void fault_sweep(const char *path, int final_status) {
+#if CUP_FAULTS
+  char err[CUP_ERRMSG_LEN];
+  long k = 1;
+  for (;; k++) {
+    cup_scene *s = (cup_scene *)&err;
+    alloc_calls = 0; live_blocks = 0; fault_at = k; tracking = 1;
+    int st = cup_scene_load(&s, path, NULL, 0, err);
+    int failed = alloc_calls >= fault_at;      /* some allocation was refused */
+    if (st == CUP_OK) cup_scene_free(&s);
+    tracking = 0; fault_at = -1;
+    if (live_blocks != 0) fail_msg("%s: failing allocation %ld leaves %ld blocks", path, k, live_blocks);
+    if (!failed) { assert_int_equal(st, final_status); break; }   /* the load needs fewer: done */
+    if (st == CUP_OK) continue;   /* a refusal someone absorbed (e.g. a libc buffer) */
+    assert_true(st < 0);
+    assert_null(s);
+  }
+  print_message("%s: %ld allocations, each failed once\n", path, k - 1);
+#else
+  (void)path; (void)final_status;
+  skip();
+#endif
+}
+
+static void test_allocation_failures(void **state) {
+  (void)state;
+#if CUP_FAULTS
+  void *warm[2];
+  backtrace(warm, 2);                      /* its first call allocates (loads libgcc) */
+#endif
+  fault_sweep(EX "/paper-fig2.yaml", CUP_OK);
+  fault_sweep(EX "/sparse-mtx/scene.yaml", CUP_OK);
+  fault_sweep(BAD "/PB-not-CT.yaml", CUP_ERR_PB_CT);   /* the error path of cup_lcs_create */
+  fault_sweep(BAD "/mtx-nan.yaml", CUP_ERR_PARSE);
+}
+
 /* The message layout, exactly: FILE:LINE:COL: KEY: problem. */
 static void test_message_layout(void **state) {
   (void)state;
@@ -548,6 +644,7 @@ int main(void) {
     cmocka_unit_test(test_round_trip),
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_mutations),
+    cmocka_unit_test(test_allocation_failures),
     cmocka_unit_test(test_message_layout),
     cmocka_unit_test(test_api_edges),
   };
