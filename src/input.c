@@ -111,9 +111,11 @@ int cup_input_is_constant(const cup_input *u) {
  * even where sin(pi q) evaluates to 1e-16. */
 static double square_q(const cup_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
 
+/* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
+static double mod2(double q) { return q - 2.0 * floor(0.5 * q); }
+
 static double sign_sin_q(double q) {
-  double r = fmod(q, 2.0);
-  if (r < 0) r += 2.0;
+  double r = mod2(q);
   double tol = 4 * DBL_EPSILON * fmax(1.0, fabs(q));
   if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
   return r < 1 ? 1 : -1;
@@ -121,8 +123,7 @@ static double sign_sin_q(double q) {
 
 /* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1. */
 static double sign_sin_q_integral(double q) {
-  double r = fmod(q, 2.0);
-  if (r < 0) r += 2.0;
+  double r = mod2(q);
   return r <= 1 ? r : 2 - r;
 }
 
@@ -159,7 +160,7 @@ static double pwl_integral(const cup_term *w, double a, double b) {
   return sum;
 }
 
-static double term_value(const cup_term *w, double t) {
+double cup_term_value(const cup_term *w, double t) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value;
     case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
@@ -169,7 +170,7 @@ static double term_value(const cup_term *w, double t) {
   return 0;
 }
 
-static double term_integral(const cup_term *w, double a, double b) {
+double cup_term_integral(const cup_term *w, double a, double b) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value * (b - a);
     case CUP_WAVE_SINE:
@@ -194,7 +195,7 @@ int cup_input_eval(const cup_input *u, double t, double *out) {
     return CUP_OK;
   }
   for (int j = 0; j < u->p; j++) out[j] = 0;
-  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += term_value(&u->terms[k], t);
+  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_value(&u->terms[k], t);
   return CUP_OK;
 }
 
@@ -213,7 +214,7 @@ int cup_input_integral_ws(const cup_input *u, double a, double b, double *out,
                           cup_quad_ws *ws) {
   if (!u->fn) {
     for (int j = 0; j < u->p; j++) out[j] = 0;
-    for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += term_integral(&u->terms[k], a, b);
+    for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_integral(&u->terms[k], a, b);
     return CUP_OK;
   }
   int st = CUP_OK;

@@ -29,6 +29,11 @@ typedef struct cup_quad_ws {
   double *buf;          /* p entries for the callback */
 } cup_quad_ws;
 
+/* One term's value at t (its component's share of u(t)). */
+double cup_term_value(const cup_term *w, double t);
+/* One term's exact integral over [a, b]. */
+double cup_term_integral(const cup_term *w, double a, double b);
+
 int cup_quad_ws_init(cup_quad_ws *ws, int p);
 void cup_quad_ws_free(cup_quad_ws *ws);
 /* Integral with a caller-owned workspace (needed only for callbacks). */
