@@ -573,6 +573,10 @@ static void fault_sweep(const char *path, int final_status) {
     if (st == CUP_OK) cup_scene_free(&s);
     tracking = 0; fault_at = -1;
     if (live_blocks != 0) fail_msg("%s: failing allocation %ld leaves %ld blocks", path, k, live_blocks);
+    if (!failed && alloc_calls == 0) {          /* valgrind replaced our malloc */
+      print_message("%s: malloc is not interposed here; sweep skipped\n", path);
+      skip();
+    }
     if (!failed) { assert_int_equal(st, final_status); break; }   /* the load needs fewer: done */
     if (st == CUP_OK) continue;   /* a refusal someone absorbed (e.g. a libc buffer) */
     assert_true(st < 0);
