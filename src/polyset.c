@@ -65,8 +65,8 @@ void cup_polyset_free(cup_polyset **Kp) {
   cup_sparse_free(&K->C);
   cup_sparse_free(&K->Ct);
   cup_sparse_free(&K->Pfull);
-  if (K->LP) {
-    cholmod_free_factor(&K->LP, &K->cm);
+  if (K->pkind == CUP_METRIC_SPARSE) {   /* started: holds workspace even if analysis failed */
+    if (K->LP) cholmod_free_factor(&K->LP, &K->cm);
     cholmod_finish(&K->cm);
   }
   free(K->g0); free(K->pd); free(K->pdinv); free(K->rownorm); free(K->rownnz); free(K->rowgam);
