@@ -86,6 +86,7 @@ program fortran_callback_input
   call cup_integrator_free(integ)
   call cup_input_free(u)
   call cup_lcs_free(lcs)
+  deallocate(t, X)        ! main-program allocatables are not freed at exit
 
 contains
 

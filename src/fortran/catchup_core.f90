@@ -91,6 +91,11 @@ contains
     out(1:n) = v
   end subroutine copy_out
 
+  ! Optional array arguments are copied into local allocatables before their
+  ! address goes to C (creation-time data, copied by C anyway): gfortran 12
+  ! at -O2 crashes when an absent optional assumed-shape actual is forwarded
+  ! to an OPTIONAL, CONTIGUOUS dummy, and users do forward optionals.
+
   ! ---- polyset.h -----------------------------------------------------------------
 
   !> K = {x : C x + g >= 0} with metric P: identity (default), diag(Pdiag), or
@@ -99,11 +104,12 @@ contains
     type(cup_polyset_t), intent(out) :: K
     type(cup_csc_matrix), intent(in), target :: C
     integer, intent(out) :: ierr
-    real(c_double), intent(in), optional, target, contiguous :: g(:), Pdiag(:)
+    real(c_double), intent(in), optional :: g(:), Pdiag(:)
     type(cup_csc_matrix), intent(in), optional, target :: Psparse
     logical, intent(in), optional :: lower_only
     character(len=*), intent(out), optional :: errmsg
     type(cup_metric), target :: P
+    real(c_double), allocatable, target :: gl(:), dl(:)   ! see contiguous_copy
     type(c_ptr) :: gp
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
@@ -117,7 +123,8 @@ contains
         call size_fail('polyset: g', size(g), int(C%nrow), ierr, errmsg)
         return
       end if
-      if (size(g) > 0) gp = c_loc(g)
+      gl = g
+      if (size(gl) > 0) gp = c_loc(gl)
     end if
     if (present(Pdiag) .and. present(Psparse)) then
       call cup_fail_(CUP_ERR_ARG, 'polyset: give Pdiag or Psparse, not both', ierr, errmsg)
@@ -128,8 +135,9 @@ contains
         call size_fail('polyset: Pdiag', size(Pdiag), int(C%ncol), ierr, errmsg)
         return
       end if
+      dl = Pdiag
       P%kind = CUP_METRIC_DIAGONAL
-      P%diag = c_loc(Pdiag)
+      if (size(dl) > 0) P%diag = c_loc(dl)
     else if (present(Psparse)) then
       P%kind = CUP_METRIC_SPARSE
       P%matrix = cup_csc_view(Psparse)
@@ -182,7 +190,8 @@ contains
   logical function cup_polyset_contains(K, x, g)
     type(cup_polyset_t), intent(in) :: K
     real(c_double), intent(in) :: x(:)
-    real(c_double), intent(in), optional, target, contiguous :: g(:)
+    real(c_double), intent(in), optional :: g(:)
+    real(c_double), allocatable, target :: gl(:)
     type(c_ptr) :: gp
     cup_polyset_contains = .false.
     if (.not. c_associated(K%ptr)) return
@@ -190,7 +199,8 @@ contains
     gp = c_null_ptr
     if (present(g)) then
       if (size(g) /= c_cup_polyset_rows(K%ptr)) return
-      if (size(g) > 0) gp = c_loc(g)
+      gl = g
+      if (size(gl) > 0) gp = c_loc(gl)
     end if
     cup_polyset_contains = c_cup_polyset_contains(K%ptr, gp, x) /= 0
   end function cup_polyset_contains
@@ -221,9 +231,10 @@ contains
     type(cup_polyset_t), intent(in) :: K
     integer, intent(out) :: ierr
     type(cup_projector_options), intent(in), optional :: opt
-    real(c_double), intent(in), optional, target, contiguous :: feasible_point(:)
+    real(c_double), intent(in), optional :: feasible_point(:)
     character(len=*), intent(out), optional :: errmsg
     type(cup_projector_options) :: o
+    real(c_double), allocatable, target :: fl(:)
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
     if (null_fail(K%ptr, 'projector: polyset', ierr, errmsg)) return
@@ -238,7 +249,8 @@ contains
           int(c_cup_polyset_dim(K%ptr)), ierr, errmsg)
         return
       end if
-      o%feasible_point = c_loc(feasible_point)
+      fl = feasible_point
+      if (size(fl) > 0) o%feasible_point = c_loc(fl)
     end if
     cmsg = cup_errbuf_()
     st = c_cup_projector_create(p%ptr, K%ptr, o, cmsg)
