@@ -4,6 +4,8 @@
 ! own (catchup_h5_fortran over catchup_h5, built with the apps):
 !     use catchup
 !     use catchup_h5run
+! Preprocessed: CATCHUP_H5RUN_ERRMSG is defined when h5run.h declares
+! cup_h5run_errmsg (CMake reads the header).
 module catchup_h5run
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
     c_associated, c_funloc
@@ -16,6 +18,9 @@ module catchup_h5run
   public :: cup_h5run_create, cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
     cup_h5run_attr_double, cup_h5run_attr_long, cup_h5run_attr_string, cup_h5run_flush, &
     cup_h5run_count, cup_h5_version, cup_integrator_run_h5
+#ifdef CATCHUP_H5RUN_ERRMSG
+  public :: cup_h5run_errmsg, c_cup_h5run_errmsg
+#endif
   ! the C sink itself: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...)
   public :: cup_h5run_sink
   public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
@@ -80,6 +85,13 @@ module catchup_h5run
       type(c_ptr), value :: w
       integer(c_long) :: n
     end function c_cup_h5run_count
+#ifdef CATCHUP_H5RUN_ERRMSG
+    function c_cup_h5run_errmsg(w) bind(C, name="cup_h5run_errmsg") result(s)
+      import :: c_ptr
+      type(c_ptr), value :: w
+      type(c_ptr) :: s
+    end function c_cup_h5run_errmsg
+#endif
     function c_cup_h5_version(buf, size) bind(C, name="cup_h5_version") result(n)
       import :: c_int, c_long, c_char
       character(kind=c_char), intent(inout) :: buf(*)
@@ -171,6 +183,17 @@ contains
     type(cup_h5run_t), intent(in) :: w
     cup_h5run_count = c_cup_h5run_count(w%ptr)
   end function cup_h5run_count
+
+#ifdef CATCHUP_H5RUN_ERRMSG
+  !> Message of the writer's first failure ('' if none): a sink cannot
+  !> return one, so after a run stopped by the writer, ask here.
+  function cup_h5run_errmsg(w) result(s)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(w%ptr)) s = cup_c_string(c_cup_h5run_errmsg(w%ptr))
+  end function cup_h5run_errmsg
+#endif
 
   !> "HDF5 1.10.8" of the linked HDF5.
   function cup_h5_version() result(s)
