@@ -563,8 +563,10 @@ contains
     p = 0
     if (size(E) > 0) p = size(E, 2)
     if (size(G) > 0) p = size(G, 2)
-    if (.not. shape_ok('A', A, n, n) .or. .not. shape_ok('B', B, n, m) .or. &
-        .not. shape_ok('E', E, n, p) .or. .not. shape_ok('G', G, m, p)) return
+    if (.not. shape_ok('A', A, n, n)) return
+    if (.not. shape_ok('B', B, n, m)) return
+    if (.not. shape_ok('E', E, n, p)) return
+    if (.not. shape_ok('G', G, m, p)) return
     if (size(F) /= 0 .and. size(F) /= m) then
       call size_fail('LCS: F', size(F), m, ierr, errmsg)
       return
