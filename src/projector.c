@@ -24,6 +24,7 @@ void cup_projector_options_default(cup_projector_options *o) {
   o->return_feasible = 0;
   o->lipschitz = 0;
   o->feasible_point = NULL;
+  o->factor_updates = 1;
 }
 
 const char *cup_proj_method_name(int method) {
@@ -145,10 +146,10 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
         return cup_fail(errmsg, CUP_ERR_NONFINITE, "projector: feasible_point[%d] is not finite", j);
       }
   }
-  int needs_kkt = !K->dense && m > 0 &&
-                  (o.method == CUP_PROJ_AUTO || o.method == CUP_PROJ_ACTIVESET);
-  if (needs_kkt) {
-    int st = cup_kkt_create(p, errmsg);
+  int needs_newton = !K->dense && m > 0 &&
+                     (o.method == CUP_PROJ_AUTO || o.method == CUP_PROJ_ACTIVESET);
+  if (needs_newton) {
+    int st = cup_newton_create(p, errmsg);
     if (st) { cup_projector_free(&p); return st; }
   }
   *out = p;
@@ -158,7 +159,7 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
 void cup_projector_free(cup_projector **pp) {
   if (!pp || !*pp) return;
   cup_projector *p = *pp;
-  cup_kkt_free(p);
+  cup_newton_free(p);
   free(p->g); free(p->lam); free(p->lam_warm); free(p->lam_fista); free(p->b); free(p->s); free(p->gam);
   free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->s_v); free(p->anchor);
   free(p->s_anchor); free(p->user_pt); free(p->s_user); free(p->inward); free(p->s_inward); free(p->farkas);
@@ -422,7 +423,7 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
   p->has_v = 0;
   p->has_inward = 0;
   p->make_inward = NULL;
-  p->iters = p->facts = 0;
+  p->iters = p->facts = p->updates = 0;
   double S = cup_max(cup_polyset_norm(K, x), p->gscale);
   info->scale = S;
   info->eps_target = p->opt.eps_abs + p->opt.eps_rel * S * S;
@@ -467,6 +468,7 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
   }
   info->iterations = p->iters;
   info->factorizations = p->facts;
+  info->row_updates = p->updates;
   info->status = st;
   if (st < 0) return st;
   int active = 0;

@@ -28,28 +28,15 @@ typedef struct pn_ws {
   unsigned char *act, *prev;        /* free set, and the previous one */
 } pn_ws;
 
-/* Sparse Newton on the active set: the quasi-definite KKT matrix
- *   [ P    C_A^T ]
- *   [ C_A  -delta I ]   (inactive rows: zero C row, -1 on the diagonal)
- * symmetrically permuted once (AMD) and stored upper, so that CHOLMOD's
- * numeric refactorization with the natural ordering allocates nothing. */
-typedef struct kkt_ws {
-  cholmod_common cm;
-  cholmod_sparse *Ku;   /* permuted upper KKT; values rewritten per active set */
-  cholmod_factor *L;    /* simplicial LDL^T of Ku */
-  int *cpos;            /* position in Ku->x of each entry of C (C's CSC order) */
-  int *dpos;            /* position in Ku->x of constraint i's diagonal */
-  int *iperm;           /* KKT index -> permuted index */
-  int *pperm;           /* permuted index -> KKT index */
-  double *rhs, *sol, *res, *work;   /* n + m each */
-  unsigned char *fact_act;          /* active set of the current factorization */
-  int has_fact;
+/* The sparse exact path (proj_newton.c): the dual factor and the iterates
+ * of the main and the inward-anchor solves. */
+typedef struct newton_ws {
+  struct cup_dfact *df;
   pn_ws pmain;          /* the projection (lam, y, s, gam shared with the projector) */
   pn_ws pin;            /* the inward anchor's solve */
   double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
-  double fact_delta;    /* delta of the current factorization */
-  double delta;         /* smallest regularization of the (2,2) block */
-} kkt_ws;
+  double *tau, *rhs;    /* slack targets of the finishing solve; a dual vector */
+} newton_ws;
 
 struct cup_projector {
   const cup_polyset *K;
@@ -86,9 +73,9 @@ struct cup_projector {
   unsigned stamp;
   double *dwork;        /* m*m + m scratch */
   /* sparse Newton */
-  kkt_ws *kkt;
+  newton_ws *nw;
   /* statistics of the current call */
-  int iters, facts;
+  int iters, facts, updates;
 };
 
 /* u = P^-1 v in place (any metric), allocation-free. */
@@ -112,7 +99,7 @@ int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
                         int budget, cup_proj_info *info);
 int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *info);
 int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *info);
-int cup_kkt_create(cup_projector *p, char *errmsg);
-void cup_kkt_free(cup_projector *p);
+int cup_newton_create(cup_projector *p, char *errmsg);
+void cup_newton_free(cup_projector *p);
 
 #endif

@@ -606,11 +606,12 @@ static void test_no_allocation(void **state) {
   skip();
 #else
   rng_t r = {2};
-  inst small, big;
+  inst small, big, bigd;
   inst_make(&small, &r, GENERIC, 4, 6, 0);
-  inst_make(&big, &r, GENERIC, 40, 90, 1);         /* sparse path, non-diagonal P */
-  inst *sets[2] = {&small, &big};
-  for (int s = 0; s < 2; s++) {
+  inst_make(&big, &r, GENERIC, 40, 90, 1);         /* sparse path, non-diagonal P: KKT form */
+  inst_make(&bigd, &r, GENERIC, 40, 90, 0);        /* sparse path, diagonal P: row updates */
+  inst *sets[3] = {&small, &big, &bigd};
+  for (int s = 0; s < 3; s++) {
     inst *I = sets[s];
     cup_polyset *K = NULL;
     assert_int_equal(cup_polyset_create(&K, &I->Ct.view, I->g, &I->Pm, NULL), CUP_OK);
@@ -651,6 +652,7 @@ static void test_no_allocation(void **state) {
   }
   inst_free(&small);
   inst_free(&big);
+  inst_free(&bigd);
 #endif
 }
 

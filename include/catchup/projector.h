@@ -38,6 +38,10 @@ typedef struct cup_projector_options {
   int return_feasible;    /**< return the exactly feasible point v instead of z; 0 */
   double lipschitz;       /**< step 1/L uses this L if > 0 (must bound lambda_max(C P^-1 C^T)); 0 = guaranteed bound */
   const double *feasible_point; /**< a known point of K for the default offset (copied), or NULL */
+  int factor_updates;     /**< sparse exact path with a diagonal P: update the factorization
+                               row by row when few rows change (1, default), or always
+                               refactor (0: strictly allocation-free; with 1, CHOLMOD's row
+                               update may allocate a temporary on factors of ~10^4+ rows) */
 } cup_projector_options;
 
 /** What one projection did and what it certifies. */
@@ -58,6 +62,7 @@ typedef struct cup_proj_info {
   double farkas_gap;      /**< empty K: g^T y (< 0) for the certificate y >= 0 */
   double farkas_residual; /**< empty K: ||C^T y||_{P^-1}; K has no point within
                                radius -farkas_gap / farkas_residual of 0 */
+  int row_updates;        /**< rows added to or removed from the sparse factor */
 } cup_proj_info;
 
 void cup_projector_options_default(cup_projector_options *opt);

@@ -57,6 +57,7 @@ module catchup_types
     integer(c_int) :: return_feasible = 0
     real(c_double) :: lipschitz = 0
     type(c_ptr) :: feasible_point = c_null_ptr   !< c_loc of dim entries (copied), or null
+    integer(c_int) :: factor_updates = 0         !< 1: row updates of the sparse factor; 0: refactor
   end type cup_projector_options
 
   type, bind(C), public :: cup_proj_info
@@ -75,6 +76,7 @@ module catchup_types
     real(c_double) :: dual_value = 0
     real(c_double) :: farkas_gap = 0
     real(c_double) :: farkas_residual = 0
+    integer(c_int) :: row_updates = 0
   end type cup_proj_info
 
   ! ---- input.h --------------------------------------------------------------

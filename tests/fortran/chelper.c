@@ -37,7 +37,7 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_projector_options, eta_abs), OFF(cup_projector_options, eta_rel),
         OFF(cup_projector_options, max_iter), OFF(cup_projector_options, warm_start),
         OFF(cup_projector_options, return_feasible), OFF(cup_projector_options, lipschitz),
-        OFF(cup_projector_options, feasible_point));
+        OFF(cup_projector_options, feasible_point), OFF(cup_projector_options, factor_updates));
   if (!strcmp(name, "cup_proj_info"))
     PUT(sizeof(cup_proj_info), OFF(cup_proj_info, status), OFF(cup_proj_info, method),
         OFF(cup_proj_info, iterations), OFF(cup_proj_info, factorizations),
@@ -45,7 +45,8 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_proj_info, eps_target), OFF(cup_proj_info, eta_target),
         OFF(cup_proj_info, eps_cert), OFF(cup_proj_info, eta_cert),
         OFF(cup_proj_info, violation), OFF(cup_proj_info, dual_value),
-        OFF(cup_proj_info, farkas_gap), OFF(cup_proj_info, farkas_residual));
+        OFF(cup_proj_info, farkas_gap), OFF(cup_proj_info, farkas_residual),
+        OFF(cup_proj_info, row_updates));
   if (!strcmp(name, "cup_wave"))
     PUT(sizeof(cup_wave), OFF(cup_wave, kind), OFF(cup_wave, value), OFF(cup_wave, amplitude),
         OFF(cup_wave, frequency), OFF(cup_wave, phase), OFF(cup_wave, npoints), OFF(cup_wave, t),

@@ -67,14 +67,15 @@ contains
     call compare('cup_projector_options', [int(c_sizeof(po), c_long), off(b, c_loc(po%method)), &
       off(b, c_loc(po%eps_abs)), off(b, c_loc(po%eps_rel)), off(b, c_loc(po%eta_abs)), &
       off(b, c_loc(po%eta_rel)), off(b, c_loc(po%max_iter)), off(b, c_loc(po%warm_start)), &
-      off(b, c_loc(po%return_feasible)), off(b, c_loc(po%lipschitz)), off(b, c_loc(po%feasible_point))])
+      off(b, c_loc(po%return_feasible)), off(b, c_loc(po%lipschitz)), off(b, c_loc(po%feasible_point)), &
+      off(b, c_loc(po%factor_updates))])
     b = c_loc(pi)
     call compare('cup_proj_info', [int(c_sizeof(pi), c_long), off(b, c_loc(pi%status)), &
       off(b, c_loc(pi%method)), off(b, c_loc(pi%iterations)), off(b, c_loc(pi%factorizations)), &
       off(b, c_loc(pi%skipped)), off(b, c_loc(pi%active)), off(b, c_loc(pi%scale)), &
       off(b, c_loc(pi%eps_target)), off(b, c_loc(pi%eta_target)), off(b, c_loc(pi%eps_cert)), &
       off(b, c_loc(pi%eta_cert)), off(b, c_loc(pi%violation)), off(b, c_loc(pi%dual_value)), &
-      off(b, c_loc(pi%farkas_gap)), off(b, c_loc(pi%farkas_residual))])
+      off(b, c_loc(pi%farkas_gap)), off(b, c_loc(pi%farkas_residual)), off(b, c_loc(pi%row_updates))])
     b = c_loc(w)
     call compare('cup_wave', [int(c_sizeof(w), c_long), off(b, c_loc(w%kind)), off(b, c_loc(w%value)), &
       off(b, c_loc(w%amplitude)), off(b, c_loc(w%frequency)), off(b, c_loc(w%phase)), &

@@ -1,0 +1,363 @@
+/* dual_factor — see dual_factor.h. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "dual_factor.h"
+
+struct cup_dfact {
+  const cup_polyset *K;
+  int kkt;                    /* 1: KKT form (sparse P); 0: M form (diagonal P) */
+  int n, m, N;                /* N: order of the factored matrix (n + m or m) */
+  int updates;                /* M form: row updates allowed */
+  cholmod_common cm;
+  cholmod_sparse *Ku;         /* permuted upper matrix; values rewritten */
+  double *orig;               /* its unmasked values (M form) */
+  cholmod_sparse *Mp;         /* M form: permuted full M, for rowadd columns */
+  cholmod_sparse *R;          /* M form: one column for rowadd */
+  cholmod_factor *L;          /* simplicial LDL^T */
+  int *pperm, *iperm;         /* permuted <-> natural (KKT order for the KKT form) */
+  int *cpos, *dpos;           /* KKT form: positions of C's entries and of row diagonals */
+  double *work;               /* 2 N */
+  unsigned char *fact_act;    /* rows free in the current factor (natural order) */
+  double fact_delta, delta_min;
+  int has_fact;
+  long update_limit;          /* M form: row changes beyond which refactoring is cheaper */
+};
+
+double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
+
+/* ---- permutation and upper storage (shared) ---------------------------------- */
+
+/* From a symmetric matrix given by its lower triangle (natural order; each
+ * entry tagged), build the permuted upper triangle with a map from every
+ * original entry to its position. */
+static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, const double *Ax,
+                          int *map, char *errmsg) {
+  int nnz = Ap[N];
+  cholmod_sparse A = {0};
+  A.nrow = A.ncol = (size_t)N; A.nzmax = (size_t)nnz;
+  A.p = (void *)Ap; A.i = (void *)Ai; A.x = (void *)Ax; A.stype = -1;
+  A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
+  A.sorted = 1; A.packed = 1;
+  f->cm.supernodal = CHOLMOD_SIMPLICIAL;
+  f->cm.final_ll = 0;
+  cholmod_factor *L0 = cholmod_analyze(&A, &f->cm);   /* fill-reducing order */
+  if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  f->pperm = malloc(sizeof(int) * (size_t)N);
+  f->iperm = malloc(sizeof(int) * (size_t)N);
+  int *rowcnt = calloc((size_t)N + 1, sizeof(int)), *colcnt = calloc((size_t)N + 1, sizeof(int));
+  int *order = malloc(sizeof(int) * ((size_t)nnz + 1)), *colof = malloc(sizeof(int) * ((size_t)nnz + 1));
+  f->Ku = cholmod_allocate_sparse((size_t)N, (size_t)N, (size_t)nnz, 1, 1, 1, CHOLMOD_REAL, &f->cm);
+  int st = CUP_OK;
+  if (!f->pperm || !f->iperm || !rowcnt || !colcnt || !order || !colof || !f->Ku) {
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    goto done;
+  }
+  for (int k = 0; k < N; k++) {
+    int orig = L0->Perm ? ((int *)L0->Perm)[k] : k;
+    f->pperm[k] = orig;
+    f->iperm[orig] = k;
+  }
+  for (int c = 0; c < N; c++)
+    for (int e = Ap[c]; e < Ap[c + 1]; e++) {
+      int pr = f->iperm[Ai[e]], pc = f->iperm[c];
+      rowcnt[(pr < pc ? pr : pc) + 1]++;
+      colcnt[(pr < pc ? pc : pr) + 1]++;
+      colof[e] = c;
+    }
+  for (int k = 0; k < N; k++) { rowcnt[k + 1] += rowcnt[k]; colcnt[k + 1] += colcnt[k]; }
+  int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  double *Kx = f->Ku->x;
+  memcpy(Kp, colcnt, sizeof(int) * ((size_t)N + 1));
+  for (int e = 0; e < nnz; e++) {                    /* bucket by row, then append by column */
+    int pr = f->iperm[Ai[e]], pc = f->iperm[colof[e]];
+    order[rowcnt[pr < pc ? pr : pc]++] = e;
+  }
+  for (int t = 0; t < nnz; t++) {
+    int e = order[t];
+    int pr = f->iperm[Ai[e]], pc = f->iperm[colof[e]];
+    int row = pr < pc ? pr : pc, col = pr < pc ? pc : pr;
+    int pos = colcnt[col]++;
+    Ki[pos] = row;
+    Kx[pos] = Ax[e];
+    map[e] = pos;
+  }
+done:
+  cholmod_free_factor(&L0, &f->cm);
+  free(rowcnt); free(colcnt); free(order); free(colof);
+  return st;
+}
+
+/* Symbolic analysis in the stored (natural) order, unpacked so that row
+ * updates find room, and a first numeric factorization so that later ones
+ * reuse L's memory. */
+static int symbolic(cup_dfact *f, char *errmsg) {
+  f->cm.nmethods = 1;
+  f->cm.method[0].ordering = CHOLMOD_NATURAL;
+  f->cm.postorder = 0;
+  f->cm.final_pack = 0;
+  f->L = cholmod_analyze(f->Ku, &f->cm);
+  if (!f->L) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  cholmod_factorize(f->Ku, f->L, &f->cm);
+  if (f->cm.status < 0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: factorization failed (%d)", f->cm.status);
+  f->has_fact = 1;
+  f->fact_delta = -1;                      /* no delta yet: the first real factor is full */
+  return CUP_OK;
+}
+
+/* ---- the KKT form (sparse P) ---------------------------------------------------- */
+
+static int kkt_create(cup_dfact *f, char *errmsg) {
+  const cup_polyset *K = f->K;
+  int n = f->n, m = f->m, N = f->N = n + m;
+  int nnzP = 0;
+  for (int j = 0; j < n; j++)
+    for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++) nnzP += K->Pfull.i[k] >= j;
+  int nnz = nnzP + K->C.nnz + m;
+  int *Ap = malloc(sizeof(int) * ((size_t)N + 1)), *Ai = malloc(sizeof(int) * (size_t)nnz);
+  int *tag = malloc(sizeof(int) * (size_t)nnz), *map = malloc(sizeof(int) * (size_t)nnz);
+  double *Ax = malloc(sizeof(double) * (size_t)nnz);
+  f->cpos = malloc(sizeof(int) * ((size_t)K->C.nnz + 1));
+  f->dpos = malloc(sizeof(int) * ((size_t)m + 1));
+  int st = CUP_OK;
+  if (!Ap || !Ai || !tag || !map || !Ax || !f->cpos || !f->dpos) {
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    goto done;
+  }
+  /* lower triangle: P's lower part and C_j's entries below in each column
+   * j < n; the constraint diagonals after. Tags: >= 0 an entry of C, -1-i
+   * the diagonal of row i, -1-m a P entry. */
+  int q = 0;
+  Ap[0] = 0;
+  for (int j = 0; j < n; j++) {
+    for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++)
+      if (K->Pfull.i[k] >= j) { Ai[q] = K->Pfull.i[k]; Ax[q] = K->Pfull.x[k]; tag[q++] = -1 - m; }
+    for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++) { Ai[q] = n + K->C.i[k]; Ax[q] = 0; tag[q++] = k; }
+    Ap[j + 1] = q;
+  }
+  for (int i = 0; i < m; i++) { Ai[q] = n + i; Ax[q] = -1; tag[q++] = -1 - i; Ap[n + i + 1] = q; }
+  st = permuted_upper(f, N, Ap, Ai, Ax, map, errmsg);
+  for (int e = 0; !st && e < nnz; e++) {
+    if (tag[e] >= 0) f->cpos[tag[e]] = map[e];
+    else if (tag[e] > -1 - m) f->dpos[-1 - tag[e]] = map[e];
+  }
+  if (!st) st = symbolic(f, errmsg);
+done:
+  free(Ap); free(Ai); free(tag); free(map); free(Ax);
+  return st;
+}
+
+static int kkt_factor(cup_dfact *f, const unsigned char *act, double delta) {
+  const cup_sparse *C = &f->K->C;
+  double *Kx = f->Ku->x;
+  for (int j = 0; j < C->ncol; j++)
+    for (int k = C->p[j]; k < C->p[j + 1]; k++) Kx[f->cpos[k]] = act[C->i[k]] ? C->x[k] : 0;
+  for (int i = 0; i < f->m; i++) Kx[f->dpos[i]] = act[i] ? -delta : -1;
+  cholmod_factorize(f->Ku, f->L, &f->cm);
+  return f->cm.status < 0 || f->cm.status == CHOLMOD_NOT_POSDEF ? CUP_ERR_LINALG : CUP_OK;
+}
+
+/* [P C_F^T; C_F -delta][u; w] = [0; v]  gives  w = -(M_FF + delta)^-1 v. */
+static void kkt_solve(cup_dfact *f, double *v) {
+  int n = f->n, m = f->m, N = f->N;
+  double *t = f->work, *scratch = f->work + N;
+  for (int k = 0; k < N; k++) {
+    int o = f->pperm[k];
+    t[k] = o < n ? 0 : v[o - n];
+  }
+  cup_simplicial_solve(f->L, t, scratch);
+  for (int k = 0; k < N; k++) {
+    int o = f->pperm[k];
+    if (o >= n) v[o - n] = -t[k];
+  }
+  (void)m;
+}
+
+/* ---- the M form (diagonal P) ------------------------------------------------------ */
+
+static int mform_create(cup_dfact *f, char *errmsg) {
+  const cup_polyset *K = f->K;
+  int m = f->m, N = f->N = m;
+  /* S = C D^-1/2 (m x n), M = S S^T */
+  cholmod_sparse *S = cholmod_allocate_sparse((size_t)m, (size_t)f->n, (size_t)K->C.nnz, 1, 1, 0,
+                                              CHOLMOD_REAL, &f->cm);
+  if (!S) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  memcpy(S->p, K->C.p, sizeof(int) * ((size_t)f->n + 1));
+  memcpy(S->i, K->C.i, sizeof(int) * (size_t)K->C.nnz);
+  for (int j = 0; j < f->n; j++)
+    for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++)
+      ((double *)S->x)[k] = K->C.x[k] * sqrt(K->pdinv[j]);
+  cholmod_sparse *M = cholmod_aat(S, NULL, 0, 1, &f->cm);
+  cholmod_free_sparse(&S, &f->cm);
+  if (!M || !cholmod_sort(M, &f->cm)) {
+    cholmod_free_sparse(&M, &f->cm);
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+  }
+  /* rows of C that are zero give an empty column in M: give every row a diagonal */
+  cholmod_sparse *I = cholmod_speye((size_t)m, (size_t)m, CHOLMOD_REAL, &f->cm);
+  double zero[2] = {0, 0}, one[2] = {1, 0};
+  cholmod_sparse *Mz = I ? cholmod_add(M, I, one, zero, 1, 1, &f->cm) : NULL;
+  cholmod_free_sparse(&I, &f->cm);
+  cholmod_free_sparse(&M, &f->cm);
+  if (!Mz) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  cholmod_sort(Mz, &f->cm);
+  /* lower triangle for the ordering */
+  const int *Mp = Mz->p, *Mi = Mz->i;
+  const double *Mx = Mz->x;
+  int nnzl = 0;
+  for (int j = 0; j < m; j++)
+    for (int k = Mp[j]; k < Mp[j + 1]; k++) nnzl += Mi[k] >= j;
+  int *Ap = malloc(sizeof(int) * ((size_t)m + 1)), *Ai = malloc(sizeof(int) * ((size_t)nnzl + 1));
+  int *map = malloc(sizeof(int) * ((size_t)nnzl + 1));
+  double *Ax = malloc(sizeof(double) * ((size_t)nnzl + 1));
+  int st = CUP_OK;
+  if (!Ap || !Ai || !map || !Ax) { st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory"); goto done; }
+  int q = 0;
+  Ap[0] = 0;
+  for (int j = 0; j < m; j++) {
+    for (int k = Mp[j]; k < Mp[j + 1]; k++)
+      if (Mi[k] >= j) { Ai[q] = Mi[k]; Ax[q++] = Mx[k]; }
+    Ap[j + 1] = q;
+  }
+  st = permuted_upper(f, N, Ap, Ai, Ax, map, errmsg);
+  if (st) goto done;
+  f->orig = malloc(sizeof(double) * ((size_t)nnzl + 1));
+  f->Mp = cholmod_submatrix(Mz, f->pperm, m, f->pperm, m, 1, 1, &f->cm);   /* permuted, full */
+  f->R = cholmod_allocate_sparse((size_t)m, 1, (size_t)m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
+  if (!f->orig || !f->Mp || !f->R) { st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory"); goto done; }
+  memcpy(f->orig, f->Ku->x, sizeof(double) * (size_t)nnzl);
+  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  /* start from M~ = I (nothing free) */
+  double *Kx = f->Ku->x;
+  for (int j = 0; j < m; j++)
+    for (int k = Kp[j]; k < Kp[j + 1]; k++) Kx[k] = Ki[k] == j ? 1 : 0;
+  st = symbolic(f, errmsg);
+  f->update_limit = 8 + m / 64;
+done:
+  cholmod_free_sparse(&Mz, &f->cm);
+  free(Ap); free(Ai); free(map); free(Ax);
+  return st;
+}
+
+static int mform_refactor(cup_dfact *f, const unsigned char *act, double delta) {
+  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  double *Kx = f->Ku->x;
+  for (int j = 0; j < f->m; j++) {
+    int aj = act[f->pperm[j]];
+    for (int k = Kp[j]; k < Kp[j + 1]; k++) {
+      int i = Ki[k];
+      if (i == j) Kx[k] = aj ? f->orig[k] + delta : 1;
+      else Kx[k] = aj && act[f->pperm[i]] ? f->orig[k] : 0;
+    }
+  }
+  cholmod_factorize(f->Ku, f->L, &f->cm);
+  return f->cm.status < 0 || f->cm.status == CHOLMOD_NOT_POSDEF ? CUP_ERR_LINALG : CUP_OK;
+}
+
+/* Free row i (natural) joins: its column of M~ against the rows free now. */
+static int mform_rowadd(cup_dfact *f, int i, double delta) {
+  int k = f->iperm[i];
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  const double *Mx = f->Mp->x;
+  int *Rp = f->R->p, *Ri = f->R->i;
+  double *Rx = f->R->x;
+  int nz = 0;
+  for (int e = Mp[k]; e < Mp[k + 1]; e++) {
+    int r = Mi[e];
+    if (r == k) { Ri[nz] = r; Rx[nz++] = Mx[e] + delta; }
+    else if (f->fact_act[f->pperm[r]]) { Ri[nz] = r; Rx[nz++] = Mx[e]; }
+  }
+  Rp[0] = 0;
+  Rp[1] = nz;
+  if (!cholmod_rowadd((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
+  f->fact_act[i] = 1;
+  return CUP_OK;
+}
+
+static int mform_rowdel(cup_dfact *f, int i) {
+  if (!cholmod_rowdel((size_t)f->iperm[i], NULL, f->L, &f->cm)) return CUP_ERR_LINALG;
+  f->fact_act[i] = 0;
+  return CUP_OK;
+}
+
+static void mform_solve(cup_dfact *f, double *v) {
+  int m = f->m;
+  double *t = f->work, *scratch = f->work + m;
+  for (int k = 0; k < m; k++) t[k] = v[f->pperm[k]];
+  cup_simplicial_solve(f->L, t, scratch);
+  for (int k = 0; k < m; k++) v[f->pperm[k]] = t[k];
+}
+
+/* ---- the interface ------------------------------------------------------------------- */
+
+int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *errmsg) {
+  *out = NULL;
+  cup_dfact *f = calloc(1, sizeof *f);
+  if (!f) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  f->K = K;
+  f->n = K->n;
+  f->m = K->m;
+  f->kkt = K->pkind == CUP_METRIC_SPARSE;
+  f->updates = updates && !f->kkt;
+  int st = cup_cholmod_start(&f->cm) ? cup_fail(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
+  if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, errmsg);
+  if (!st) {
+    f->work = malloc(sizeof(double) * 2 * (size_t)f->N);
+    f->fact_act = calloc((size_t)f->m + 1, 1);
+    if (!f->work || !f->fact_act) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  }
+  double mmax = 0;
+  for (int i = 0; i < f->m; i++) mmax = fmax(mmax, K->rownorm[i] * K->rownorm[i]);
+  f->delta_min = 1e-10 * (mmax > 0 ? mmax : 1);
+  if (st) { cup_dfact_free(&f); return st; }
+  *out = f;
+  return CUP_OK;
+}
+
+void cup_dfact_free(cup_dfact **fp) {
+  if (!fp || !*fp) return;
+  cup_dfact *f = *fp;
+  if (f->L) cholmod_free_factor(&f->L, &f->cm);
+  if (f->Ku) cholmod_free_sparse(&f->Ku, &f->cm);
+  if (f->Mp) cholmod_free_sparse(&f->Mp, &f->cm);
+  if (f->R) cholmod_free_sparse(&f->R, &f->cm);
+  cholmod_finish(&f->cm);
+  free(f->orig); free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
+  free(f->work); free(f->fact_act);
+  free(f);
+  *fp = NULL;
+}
+
+int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
+                     int *refactorizations, int *row_updates) {
+  int m = f->m;
+  long changes = 0;
+  for (int i = 0; i < m; i++) changes += act[i] != f->fact_act[i];
+  if (f->has_fact && f->fact_delta == delta && changes == 0) return CUP_OK;
+  int st;
+  if (f->updates && f->has_fact && f->fact_delta == delta && changes <= f->update_limit) {
+    /* rows leave first, so that each joining row sees the final free set */
+    st = CUP_OK;
+    for (int i = 0; i < m && !st; i++)
+      if (f->fact_act[i] && !act[i]) st = mform_rowdel(f, i);
+    for (int i = 0; i < m && !st; i++)
+      if (!f->fact_act[i] && act[i]) st = mform_rowadd(f, i, delta);
+    *row_updates += (int)changes;
+    if (st) f->has_fact = 0;
+    return st;
+  }
+  st = f->kkt ? kkt_factor(f, act, delta) : mform_refactor(f, act, delta);
+  (*refactorizations)++;
+  if (st) { f->has_fact = 0; return st; }
+  memcpy(f->fact_act, act, (size_t)m);
+  f->fact_delta = delta;
+  f->has_fact = 1;
+  return CUP_OK;
+}
+
+void cup_dfact_solve(cup_dfact *f, double *v) {
+  if (f->kkt) kkt_solve(f, v);
+  else mform_solve(f, v);
+}

@@ -1,0 +1,30 @@
+/* dual_factor — the regularized dual Newton matrix of the sparse exact path,
+ *     M~(F, delta) = M_FF + delta I on the free rows F, identity elsewhere,
+ *     M = C P^-1 C^T,
+ * factored and solved without allocating. Two forms:
+ *  - diagonal P: M itself (sparse, formed once), simplicial LDL^T updated
+ *    row by row (CHOLMOD rowadd/rowdel) when few rows change, refactored
+ *    otherwise;
+ *  - sparse P: the quasi-definite KKT matrix [P C_F^T; C_F -delta I],
+ *    refactored (M would be dense).
+ * Both are symmetrically permuted once (AMD/METIS) and stored upper, so that
+ * CHOLMOD refactorizes with the natural ordering without allocating. */
+#ifndef CUP_DUAL_FACTOR_H
+#define CUP_DUAL_FACTOR_H
+
+#include "polyset_impl.h"
+
+typedef struct cup_dfact cup_dfact;
+
+int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, char *errmsg);
+void cup_dfact_free(cup_dfact **f);
+/* Make the factor that of M~(act, delta); counts refactorizations and row
+ * updates. Returns CUP_OK or CUP_ERR_LINALG. */
+int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
+                     int *refactorizations, int *row_updates);
+/* v <- M~^-1 v (m entries; rows outside F come back unchanged). */
+void cup_dfact_solve(cup_dfact *f, double *v);
+/* The smallest regularization, relative to the scale of M. */
+double cup_dfact_delta_min(const cup_dfact *f);
+
+#endif
