@@ -14,7 +14,12 @@
  *
  * Errors return CUP_ERR_IO (or CUP_ERR_ARG / CUP_ERR_NOMEM) with a message
  * naming the operation and the file; HDF5's automatic error printing is
- * switched off inside each call and restored before it returns. */
+ * switched off inside each call and restored before it returns. The writer
+ * keeps 8 MiB free on the file's device: below that it stops taking samples
+ * (CUP_ERR_IO) but still writes attributes and closes cleanly, because HDF5
+ * 1.10 cannot close a file after a write failed for lack of space (the file
+ * is then unreadable and the library may crash at exit). After any failed
+ * HDF5 call the writer refuses everything but close, for the same reason. */
 #ifndef CATCHUP_H5RUN_H
 #define CATCHUP_H5RUN_H
 
@@ -29,8 +34,8 @@ typedef struct cup_h5run cup_h5run;
  *  NULL) names the path and the problem on failure; *w is then NULL. */
 int cup_h5run_create(cup_h5run **w, const char *path, int dim, char *errmsg);
 /** A cup_sample_fn: append (t, x) through ctx = the cup_h5run (k is not
- *  stored). Returns nonzero (the status) once writing has failed, so that a
- *  run stops instead of computing what cannot be saved. */
+ *  stored). Returns nonzero (the status) once writing has failed or space
+ *  ran short, so that a run stops instead of computing what cannot be saved. */
 int cup_h5run_sink(long k, double t, const double *x, void *ctx);
 /** Scalar attributes on the root group, replacing one of the same name:
  *  float64, int64, and variable-length UTF-8 string (h5py reads it as str).

@@ -16,7 +16,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <libgen.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <hdf5.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
@@ -24,6 +26,11 @@
 enum { MAX_CHUNK_ROWS = 4096 };
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
 #define FLUSH_SECONDS 1.0
+/* Free space kept on the device: HDF5 1.10 cannot close a file once a write
+ * has failed for lack of space (the file is left corrupt and the library
+ * crashes at exit), so the writer stops while HDF5 can still close cleanly:
+ * dirty chunk caches (1 MiB per dataset), metadata and final attributes. */
+#define SPACE_MARGIN (8u << 20)
 /* A chunk must stay under HDF5's 4 GiB limit even when it holds one row. */
 #define MAX_DIM ((int)(UINT32_MAX / sizeof(double)))
 
@@ -36,6 +43,7 @@ struct cup_h5run {
   double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
   double last_flush;      /* monotonic seconds */
   int data_status;        /* first failure of the data path; sticky */
+  int h5_failed;          /* an HDF5 call failed: only close is attempted */
   char *path;
   char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind */
 };
@@ -75,9 +83,13 @@ static void h5_detail(char *buf) {
   if (!buf[0]) snprintf(buf, 160, "HDF5 call failed");
 }
 
-/* Record "h5run: cannot <op> '<path>': <detail>" unless an earlier failure
- * is already recorded (the first one explains the rest). */
+/* An HDF5 call failed. Record "h5run: cannot <op> '<path>': <detail>" unless
+ * an earlier failure is already recorded (the first one explains the rest),
+ * and stop the writer: HDF5 1.10 may crash if used further on a file it
+ * failed to write, so after this only close is attempted. */
 static int set_error(cup_h5run *w, int status, const char *op) {
+  w->h5_failed = 1;
+  if (w->data_status == CUP_OK) w->data_status = status;
   if (!w->errmsg[0]) {
     char detail[160];
     h5_detail(detail);
@@ -114,6 +126,14 @@ static double now_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* 1 when the device holding path has less than SPACE_MARGIN available.
+ * A device that does not report sizes (f_blocks = 0) is never "full". */
+static int space_low(const char *path) {
+  struct statvfs v;
+  if (statvfs(path, &v) != 0 || v.f_blocks == 0) return 0;
+  return (double)v.f_bavail * (double)v.f_frsize < (double)SPACE_MARGIN;
+}
+
 /* ---- file and datasets ---- */
 
 static hid_t create_dataset(hid_t file, const char *name, int rank, hsize_t dim,
@@ -132,7 +152,20 @@ static hid_t create_dataset(hid_t file, const char *name, int rank, hsize_t dim,
   return d;
 }
 
+/* The directory the file goes into (the file may not exist yet). */
+static int dir_space_low(const char *path) {
+  char *copy = strdup(path);
+  int low = copy ? space_low(dirname(copy)) : 0;
+  free(copy);
+  return low;
+}
+
 static int open_file(cup_h5run *w) {
+  if (dir_space_low(w->path)) {
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': less than %u MiB "
+             "left on its device", w->path, SPACE_MARGIN >> 20);
+    return CUP_ERR_IO;
+  }
   hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
   /* Upper bound 1.8: never the version-3 superblock, whose "file is open for
    * writing" flag would make a killed writer's file unreadable until h5clear.
@@ -229,35 +262,42 @@ static herr_t append(hid_t d, int rank, hsize_t at, hsize_t rows, hsize_t cols,
   return r;
 }
 
-/* Hand the buffered rows to HDF5 (no flush). A failure is sticky: the sink
- * then refuses samples so that the run stops. */
+/* Hand the buffered rows to HDF5 (no flush). Any failure is sticky: the sink
+ * then refuses samples so that the run stops. Running short of space stops
+ * the data after these rows, with HDF5 still able to flush and close. */
 static int write_buffer(cup_h5run *w) {
   if (w->nbuf == 0 || w->data_status != CUP_OK) return w->data_status;
   quiet_t q = quiet_begin();
-  int st = CUP_OK;
   if (append(w->dset_x, 2, w->written, w->nbuf, (hsize_t)w->dim, w->xbuf) < 0)
-    st = set_error(w, CUP_ERR_IO, "append rows to /x in");
+    set_error(w, CUP_ERR_IO, "append rows to /x in");
   else if (append(w->dset_t, 1, w->written, w->nbuf, 1, w->tbuf) < 0)
-    st = set_error(w, CUP_ERR_IO, "append rows to /t in");
+    set_error(w, CUP_ERR_IO, "append rows to /t in");
   quiet_end(q);
-  if (st == CUP_OK) {
-    w->written += w->nbuf;
-    w->nbuf = 0;
+  if (w->h5_failed) return w->data_status;
+  w->written += w->nbuf;
+  w->nbuf = 0;
+  if (space_low(w->path)) {
+    if (!w->errmsg[0])
+      snprintf(w->errmsg, sizeof w->errmsg, "h5run: stopped writing '%s' after %llu rows: "
+               "less than %u MiB left on its device", w->path,
+               (unsigned long long)w->written, SPACE_MARGIN >> 20);
+    w->data_status = CUP_ERR_IO;
   }
-  w->data_status = st;
-  return st;
+  return w->data_status;
 }
 
+/* Flushes even after the data stopped for lack of space, so that the rows
+ * and attributes written so far reach the file; not after HDF5 failed. */
 int cup_h5run_flush(cup_h5run *w) {
   if (!w) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
   int st = write_buffer(w);
-  if (st != CUP_OK) return st;
+  if (w->h5_failed) return st;
   quiet_t q = quiet_begin();
-  if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) st = set_error(w, CUP_ERR_IO, "flush");
+  if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) set_error(w, CUP_ERR_IO, "flush");
   quiet_end(q);
   w->last_flush = now_seconds();
-  w->data_status = st;
-  return st;
+  return w->data_status;
 }
 
 /* Rows until the next chunk boundary: after a flush of a partial buffer the
@@ -301,6 +341,7 @@ const char *cup_h5run_errmsg(const cup_h5run *w) {
  * even with another type. */
 static int put_attr(cup_h5run *w, const char *name, hid_t ftype, hid_t mtype, const void *buf) {
   if (!w || !name || !name[0]) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;   /* see set_error */
   quiet_t q = quiet_begin();
   hid_t space = H5Screate(H5S_SCALAR);
   hid_t a = H5I_INVALID_HID;
