@@ -100,10 +100,10 @@ static const struct { const char *flag, *key; } value_flags[] = {
 };
 
 /* Split "--flag=value" or take the value from the next argument. */
-static int flag_value(int argc, char **argv, int *i, const char *arg, const char **v) {
-  const char *eq = strchr(arg, '=');
+static int flag_value(int argc, char **argv, int *i, const char *flag, const char **v) {
+  const char *arg = argv[*i], *eq = strchr(arg, '=');
   if (eq && strncmp(arg, "--", 2) == 0) { *v = eq + 1; return 0; }
-  if (*i + 1 >= argc) return usage_error("%s needs a value", arg);
+  if (*i + 1 >= argc) return usage_error("%s needs a value", flag);
   *v = argv[++*i];
   return 0;
 }
@@ -352,7 +352,7 @@ static void report(const run_t *r) {
             r->message);
   if (!a->quiet)
     fprintf(stderr, "catchup-run: %s -> %s: n=%ld %s, %ld samples, %ld projected, %ld skipped, "
-            "%lld dual iterations, max eps_cert %.3g, max eta_cert %.3g, %.3f s: %s\n",
+            "%lld dual iterations, max eps_cert %.3g, max eta_cert %.3g, %.3g s: %s\n",
             a->scene, a->out, r->opts.n, cup_scheme_name(r->opts.scheme), i->samples,
             i->projected, i->skipped, i->dual_iterations, i->max_eps_cert, i->max_eta_cert,
             r->wall, cup_status_name(r->status));
