@@ -200,3 +200,75 @@ void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w) {
     if (perm) x[perm[k]] = w[k]; else x[k] = w[k];
   }
 }
+
+int cup_dense_lu(double *a, int k, int *piv) {
+  for (int i = 0; i < k; i++) piv[i] = i;
+  for (int j = 0; j < k; j++) {
+    int p = j;
+    for (int i = j + 1; i < k; i++)
+      if (fabs(a[i + (size_t)j * k]) > fabs(a[p + (size_t)j * k])) p = i;
+    if (a[p + (size_t)j * k] == 0) return j + 1;
+    if (p != j) {
+      int t = piv[j]; piv[j] = piv[p]; piv[p] = t;
+      for (int c = 0; c < k; c++) {
+        double s = a[j + (size_t)c * k]; a[j + (size_t)c * k] = a[p + (size_t)c * k];
+        a[p + (size_t)c * k] = s;
+      }
+    }
+    double d = a[j + (size_t)j * k];
+    for (int i = j + 1; i < k; i++) a[i + (size_t)j * k] /= d;
+    for (int c = j + 1; c < k; c++) {
+      double f = a[j + (size_t)c * k];
+      if (f == 0) continue;
+      for (int i = j + 1; i < k; i++) a[i + (size_t)c * k] -= a[i + (size_t)j * k] * f;
+    }
+  }
+  return 0;
+}
+
+void cup_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w) {
+  for (int i = 0; i < k; i++) w[i] = b[piv[i]];
+  memcpy(b, w, sizeof(double) * (size_t)k);
+  for (int j = 0; j < k; j++)               /* L y = Pb, unit diagonal */
+    for (int i = j + 1; i < k; i++) b[i] -= lu[i + (size_t)j * k] * b[j];
+  for (int j = k - 1; j >= 0; j--) {        /* U x = y */
+    b[j] /= lu[j + (size_t)j * k];
+    for (int i = 0; i < j; i++) b[i] -= lu[i + (size_t)j * k] * b[j];
+  }
+}
+
+static void dense_mul(const double *a, const double *b, int k, double *c) {
+  memset(c, 0, sizeof(double) * (size_t)k * k);
+  for (int j = 0; j < k; j++)
+    for (int l = 0; l < k; l++) {
+      double blj = b[l + (size_t)j * k];
+      if (blj == 0) continue;
+      for (int i = 0; i < k; i++) c[i + (size_t)j * k] += a[i + (size_t)l * k] * blj;
+    }
+}
+
+void cup_dense_expm(const double *a, int k, double *out, double *work) {
+  double *s = work, *term = work + (size_t)k * k, *tmp = term + (size_t)k * k;
+  double norm = 0;                          /* infinity norm */
+  for (int i = 0; i < k; i++) {
+    double r = 0;
+    for (int j = 0; j < k; j++) r += fabs(a[i + (size_t)j * k]);
+    norm = fmax(norm, r);
+  }
+  int sq = 0;
+  while (norm > 0.5 && sq < 1000) { norm *= 0.5; sq++; }
+  double scale = ldexp(1.0, -sq);
+  for (size_t q = 0; q < (size_t)k * k; q++) s[q] = a[q] * scale;
+  /* Taylor to degree 18: remainder < 0.5^19 / 19! relative */
+  memset(out, 0, sizeof(double) * (size_t)k * k);
+  for (int i = 0; i < k; i++) out[i + (size_t)i * k] = 1;
+  memcpy(term, out, sizeof(double) * (size_t)k * k);
+  for (int d = 1; d <= 18; d++) {
+    dense_mul(term, s, k, tmp);
+    for (size_t q = 0; q < (size_t)k * k; q++) { term[q] = tmp[q] / d; out[q] += term[q]; }
+  }
+  for (int r = 0; r < sq; r++) {
+    dense_mul(out, out, k, tmp);
+    memcpy(out, tmp, sizeof(double) * (size_t)k * k);
+  }
+}

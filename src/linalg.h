@@ -45,6 +45,21 @@ void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
 /* A CHOLMOD common that never prints and uses our memory routines. */
 int cup_cholmod_start(cholmod_common *c);
 
+/* max/min without a libm call (fmax is not inlined at -O2); with a NaN
+ * argument they return the second argument, so callers that must not let
+ * NaN through use explicit comparisons instead. */
+static inline double cup_max(double a, double b) { return a > b ? a : b; }
+static inline double cup_min(double a, double b) { return a < b ? a : b; }
+
+/* Copies and fills of short vectors: loops beat a libc call for the tiny
+ * sizes of circuit models and are no worse for long ones. */
+static inline void cup_copy(double *dst, const double *src, int n) {
+  for (int k = 0; k < n; k++) dst[k] = src[k];
+}
+static inline void cup_zero(double *dst, int n) {
+  for (int k = 0; k < n; k++) dst[k] = 0;
+}
+
 static inline double cup_dot(const double *a, const double *b, int n) {
   double s = 0;
   for (int k = 0; k < n; k++) s += a[k] * b[k];
@@ -57,3 +72,14 @@ static inline double cup_dot(const double *a, const double *b, int n) {
  * its fill-reducing permutation: x <- A^-1 x. w is n entries of scratch.
  * Allocation-free (cholmod_solve2 allocates on every call). */
 void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w);
+
+/* ---- small dense matrices (column-major, k x k), allocation-free ---------- */
+
+/* LU with partial pivoting in place; piv gets the row order. Returns 0, or
+ * j+1 if the pivot in column j is exactly zero. */
+int cup_dense_lu(double *a, int k, int *piv);
+/* Solve with the factor from cup_dense_lu, in place; w: k doubles. */
+void cup_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w);
+/* out = exp(a) by scaling and squaring of a degree-18 Taylor polynomial;
+ * work holds 3 k*k doubles. a and out must differ. */
+void cup_dense_expm(const double *a, int k, double *out, double *work);

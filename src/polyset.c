@@ -32,17 +32,24 @@ int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
     K->g0 = calloc((size_t)K->m + 1, sizeof(double));
     K->rownnz = calloc((size_t)K->m + 1, sizeof(int));
     K->rownorm = calloc((size_t)K->m + 1, sizeof(double));
-    if (!K->g0 || !K->rownnz || !K->rownorm) st = CUP_ERR_NOMEM;
+    K->rowgam = calloc((size_t)K->m + 1, sizeof(double));
+    if (!K->g0 || !K->rownnz || !K->rownorm || !K->rowgam) st = CUP_ERR_NOMEM;
   }
   if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "polyset: out of memory");
   for (int i = 0; !st && i < K->m; i++) {
     K->rownnz[i] = K->Ct.p[i + 1] - K->Ct.p[i];
+    K->rowgam[i] = (K->rownnz[i] + 2) * DBL_EPSILON;
     if (g) {
       if (!isfinite(g[i])) st = cup_fail(errmsg, CUP_ERR_NONFINITE, "g[%d] is %g", i, g[i]);
       K->g0[i] = g[i];
     }
   }
   if (!st) st = metric_setup(K, P, errmsg);
+  K->solve_amp = 1;
+  if (!st && K->pkind == CUP_METRIC_SPARSE) {
+    double r = cholmod_rcond(K->LP, &K->cm);
+    K->solve_amp = r > 0 ? 1 / r : 1e16;
+  }
   if (!st) st = row_norms_and_lipschitz(K, errmsg);
   if (!st && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
     st = dense_setup(K, errmsg);
@@ -58,11 +65,11 @@ void cup_polyset_free(cup_polyset **Kp) {
   cup_sparse_free(&K->C);
   cup_sparse_free(&K->Ct);
   cup_sparse_free(&K->Pfull);
-  if (K->LP) {
-    cholmod_free_factor(&K->LP, &K->cm);
+  if (K->pkind == CUP_METRIC_SPARSE) {   /* started: holds workspace even if analysis failed */
+    if (K->LP) cholmod_free_factor(&K->LP, &K->cm);
     cholmod_finish(&K->cm);
   }
-  free(K->g0); free(K->pd); free(K->pdinv); free(K->rownorm); free(K->rownnz);
+  free(K->g0); free(K->pd); free(K->pdinv); free(K->rownorm); free(K->rownnz); free(K->rowgam);
   free(K->Md); free(K->Bt); free(K->rdir); free(K->Crdir);
   free(K);
   *Kp = NULL;
@@ -248,7 +255,7 @@ double cup_polyset_norm(const cup_polyset *K, const double *v) {
 double cup_slack(const cup_polyset *K, const double *g, const double *x,
                  double *s, double *gam) {
   const int *p = K->Ct.p, *ri = K->Ct.i;
-  const double *cx = K->Ct.x;
+  const double *cx = K->Ct.x, *rg = K->rowgam;
   double worst = INFINITY;
   for (int i = 0; i < K->m; i++) {
     double acc = g[i], mag = fabs(g[i]);
@@ -258,9 +265,9 @@ double cup_slack(const cup_polyset *K, const double *g, const double *x,
       mag += fabs(t);
     }
     s[i] = acc;
-    double margin = (K->rownnz[i] + 2) * DBL_EPSILON * mag;
+    double margin = gam ? rg[i] * mag : 0;
     if (gam) gam[i] = margin;
-    double slack = acc - (gam ? margin : 0);
+    double slack = acc - margin;
     if (!(slack >= worst)) worst = slack;      /* NaN propagates as the minimum */
   }
   return worst;

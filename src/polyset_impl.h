@@ -22,8 +22,10 @@ struct cup_polyset {
   cholmod_common cm;   /* SPARSE: owns LP; used only at creation and free */
   cholmod_factor *LP;  /* SPARSE: L L^T = Pi P Pi^T (read-only after creation) */
   double *rownorm;     /* ||c_i||_{P^-1} = sqrt(M_ii) */
-  int *rownnz;         /* nonzeros per row of C (rounding bounds) */
+  int *rownnz;         /* nonzeros per row of C */
+  double *rowgam;      /* (rownnz + 2) eps: the rounding bound of a row's slack per unit magnitude */
   double lip;          /* guaranteed L >= lambda_max(M) */
+  double solve_amp;    /* bound on the relative error amplification of P^-1 (1, or 1/rcond) */
   int dense;           /* small set: Md and Bt below are valid */
   double *Md;          /* m x m, column-major, M = C P^-1 C^T */
   double *Bt;          /* n x m, column-major, column i = P^-1 c_i */

@@ -160,22 +160,24 @@ static int dual_activeset_dense(cup_projector *p, const double *b, const unsigne
  * z = x + P^-1 C^T lambda is accurate to rounding even when M_AA is
  * ill-conditioned (thin wedges square the conditioning of C_A), so
  * M_AA dlam = -s_A(z) restores z to working accuracy in a step or two. */
-static void refine_dense(cup_projector *p, const double *x) {
+static int refine_dense(cup_projector *p, const double *x) {
   int m = p->m;
   uint64_t mask = mask_of(p->act, m);
-  if (!mask) return;
+  if (!mask) return 0;
   double *rhs = p->wm, *dl = p->wm2;
   for (int step = 0; step < 3; step++) {
     cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
-    int small = 1;
+    int small = 1, nonneg = 1;
     for (int i = 0; i < m; i++) {
       rhs[i] = p->act[i] ? -p->s[i] : 0;
       if (p->act[i] && fabs(p->s[i]) > 2 * p->gam[i]) small = 0;
+      nonneg &= p->lam[i] >= 0;
     }
-    if (small) return;
+    if (small) return nonneg;              /* y, s, gam are those of lam */
     dense_solve(p, mask, rhs, dl);
     for (int i = 0; i < m; i++) p->lam[i] += dl[i];
   }
+  return 0;
 }
 
 /* An inward anchor: the P-nearest point w to z with slack >= 16 gam on the
@@ -209,11 +211,14 @@ static void inward_dense(cup_projector *p) {
   p->has_inward = 1;
 }
 
-/* Clip lambda, recover z, certify. */
+/* Clip lambda, recover z (unless y, s, gam already belong to lambda >= 0),
+ * certify. */
 static int finish(cup_projector *p, const double *x, cup_proj_info *info,
-                  void (*inward)(cup_projector *)) {
-  for (int i = 0; i < p->m; i++) p->lam[i] = fmax(p->lam[i], 0);
-  cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+                  void (*inward)(cup_projector *), int evaluated) {
+  if (!evaluated) {
+    for (int i = 0; i < p->m; i++) p->lam[i] = cup_max(p->lam[i], 0);
+    cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+  }
   p->has_inward = 0;
   p->make_inward = inward;
   int ok = cup_certify(p, x, p->lam, p->y, info);
@@ -234,8 +239,7 @@ int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *i
   int st = dual_activeset_dense(p, p->b, NULL, p->act, p->lam, tolA);
   if (st < 0 && cup_farkas_test(p, p->dwork + 4 * (size_t)m, info)) return CUP_ERR_EMPTY_SET;
   if (st == 1) {
-    refine_dense(p, x);
-    if (finish(p, x, info, inward_dense)) return CUP_OK;
+    if (finish(p, x, info, inward_dense, refine_dense(p, x))) return CUP_OK;
     /* The exact optimum, certified only to what rounding allows (a set
      * without interior, or a thin wedge): iterating cannot do better. */
     return CUP_WARN_NOT_CERTIFIED;
@@ -250,13 +254,12 @@ int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *i
     memcpy(p->wm4, p->lam, sizeof(double) * (size_t)m);   /* keep FISTA's answer */
     for (int i = 0; i < m; i++) { p->act[i] = p->lam[i] > 0; p->lam[i] = 0; }
     entry_tolerances(p, info->scale, tolA);
-    if (dual_activeset_dense(p, p->b, NULL, p->act, p->lam, tolA) == 1) {
-      refine_dense(p, x);
-      if (finish(p, x, info, inward_dense)) return CUP_OK;
-    }
+    if (dual_activeset_dense(p, p->b, NULL, p->act, p->lam, tolA) == 1 &&
+        finish(p, x, info, inward_dense, refine_dense(p, x)))
+      return CUP_OK;
     memcpy(p->lam, p->wm4, sizeof(double) * (size_t)m);
   }
-  finish(p, x, info, NULL);
+  finish(p, x, info, NULL, 0);
   return CUP_WARN_NOT_CERTIFIED;
 }
 

@@ -104,6 +104,7 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
   p->s2 = xalloc(M, sizeof(double), &fail);
   p->gam2 = xalloc(M, sizeof(double), &fail);
   p->v = xalloc(N, sizeof(double), &fail);
+  p->s_v = xalloc(M, sizeof(double), &fail);
   p->anchor = xalloc(N, sizeof(double), &fail);
   p->s_anchor = xalloc(M, sizeof(double), &fail);
   p->inward = xalloc(N, sizeof(double), &fail);
@@ -159,7 +160,7 @@ void cup_projector_free(cup_projector **pp) {
   cup_projector *p = *pp;
   cup_kkt_free(p);
   free(p->g); free(p->lam); free(p->lam_warm); free(p->lam_fista); free(p->b); free(p->s); free(p->gam);
-  free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->anchor);
+  free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->s_v); free(p->anchor);
   free(p->s_anchor); free(p->user_pt); free(p->s_user); free(p->inward); free(p->s_inward); free(p->farkas);
   free(p->wn); free(p->wn2); free(p->wm); free(p->wm2); free(p->wm3); free(p->wm4);
   free(p->iwm); free(p->act); free(p->act2); free(p->dwork);
@@ -289,10 +290,12 @@ static double push_along_direction(cup_projector *p, const double *z) {
   return INFINITY;
 }
 
+/* Keep the trial point in p->wn (slack in p->sv) if it is the nearest yet. */
 static void keep_candidate(cup_projector *p, double dist, double *best) {
   if (dist < *best) {
     *best = dist;
-    memcpy(p->v, p->wn, sizeof(double) * (size_t)p->n);
+    cup_copy(p->v, p->wn, p->n);
+    cup_copy(p->s_v, p->sv, p->m);
     p->has_v = 1;
   }
 }
@@ -304,27 +307,23 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
   /* z = fl(x + u): the exact y(lam) = x + P^-1 C^T lam differs from z by e,
    * bounded elementwise by a few ulps of |x| + |u| (times P's condition for
    * a sparse metric, whose solve is backward stable). */
-  double cs = 1;
-  if (K->pkind == CUP_METRIC_SPARSE) {
-    double r = cholmod_rcond(K->LP, (cholmod_common *)&K->cm);
-    cs = r > 0 ? 1 / r : 1e16;
+  double un = 0;                           /* ||z - x||_P = ||u||_P */
+  if (z != x) {
+    for (int j = 0; j < n; j++) p->wn2[j] = z[j] - x[j];
+    un = cup_polyset_norm(K, p->wn2);
   }
-  for (int j = 0; j < n; j++) p->wn2[j] = z[j] - x[j];
-  double ebound = 8 * U * (cup_polyset_norm(K, x) + cs * cup_polyset_norm(K, p->wn2));
-  double eps_z = ebound * ebound, viol = 0, worst = INFINITY;
+  double ebound = 8 * U * (info->scale + K->solve_amp * un);   /* scale >= ||x||_P */
+  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0;
   for (int i = 0; i < m; i++) {
     eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
-    viol = fmax(viol, -p->s[i]);
+    viol = cup_max(viol, -p->s[i]);
     double sl = p->s[i] - p->gam[i];
     if (!(sl >= worst)) worst = sl;
+    dq -= 2 * lam[i] * p->b[i];
   }
   info->violation = viol;
-  info->eps_cert = fmax(eps_z, 0);
-  if (isnan(eps_z)) info->eps_cert = NAN;
+  info->eps_cert = isnan(eps_z) ? NAN : cup_max(eps_z, 0);
   /* 2 q(lambda) = -||u||_P^2 - 2 lam^T b, reported as a lower bound on d^2. */
-  double dq = 0;
-  for (int i = 0; i < m; i++) dq -= 2 * lam[i] * p->b[i];
-  double un = cup_polyset_norm(K, p->wn2);
   info->dual_value = dq - un * un;
 
   p->has_v = 0;
@@ -333,7 +332,7 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
    * when that already exceeds the target, no anchor can help */
   double dlow = 0;
   for (int i = 0; i < m; i++)
-    if (p->s[i] < 0 && K->rownorm[i] > 0) dlow = fmax(dlow, -p->s[i] / K->rownorm[i]);
+    if (p->s[i] < 0 && K->rownorm[i] > 0) dlow = cup_max(dlow, -p->s[i] / K->rownorm[i]);
   if (worst >= 0) {
     eta = 0;
   } else if (dlow > info->eta_target) {
@@ -359,7 +358,8 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
   }
   info->eta_cert = eta;
   if (p->opt.return_feasible && p->has_v) {
-    /* eps for v: 2 lam^T s(v) + ||v - y||_P^2, no cancellation */
+    /* eps for v: 2 lam^T s(v) + ||v - y||_P^2, no cancellation; s(v) is
+     * at most s_v plus its rounding bound */
     verify_feasible(p, p->v);
     double ev = 0;
     for (int i = 0; i < m; i++) ev += 2 * lam[i] * (p->sv[i] + p->gamv[i]);
@@ -368,11 +368,9 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
     info->eta_cert = 0;
   }
   /* Remember a certainly feasible point as the next anchor. */
-  const double *feas = worst >= 0 ? z : (p->has_v ? p->v : NULL);
-  if (feas) {
-    memcpy(p->anchor, feas, sizeof(double) * (size_t)n);
-    if (feas == z) memcpy(p->s_anchor, p->s, sizeof(double) * (size_t)m);
-    else { verify_feasible(p, p->v); memcpy(p->s_anchor, p->sv, sizeof(double) * (size_t)m); }
+  if (worst >= 0 || p->has_v) {
+    cup_copy(p->anchor, worst >= 0 ? z : p->v, n);
+    cup_copy(p->s_anchor, worst >= 0 ? p->s : p->s_v, m);
     p->anchor_ok = 1;
   }
   return info->eps_cert <= info->eps_target && info->eta_cert <= info->eta_target;
@@ -415,7 +413,7 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
   p->has_inward = 0;
   p->make_inward = NULL;
   p->iters = p->facts = 0;
-  double S = fmax(cup_polyset_norm(K, x), p->gscale);
+  double S = cup_max(cup_polyset_norm(K, x), p->gscale);
   info->scale = S;
   info->eps_target = p->opt.eps_abs + p->opt.eps_rel * S * S;
   info->eta_target = p->opt.eta_abs + p->opt.eta_rel * S;
@@ -429,14 +427,21 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
   }
   cup_slack(K, p->g, x, p->b, p->gam);
   double worst_raw = INFINITY;
-  for (int i = 0; i < m; i++) worst_raw = fmin(worst_raw, p->b[i]);
+  for (int i = 0; i < m; i++) worst_raw = cup_min(worst_raw, p->b[i]);
   if (worst_raw >= 0) {                    /* x in K: returned unchanged, exactly */
-    if (z != x) memcpy(z, x, sizeof(double) * (size_t)n);
-    if (m) {
-      memset(p->lam, 0, sizeof(double) * (size_t)m);
-      memcpy(p->s, p->b, sizeof(double) * (size_t)m);
-    }
+    if (z != x) cup_copy(z, x, n);
+    cup_zero(p->lam, m);
     info->skipped = 1;
+    double worst = INFINITY;
+    for (int i = 0; i < m; i++) worst = cup_min(worst, p->b[i] - p->gam[i]);
+    if (worst >= 0) {                      /* certainly inside: nothing to certify */
+      info->eta_cert = info->eps_cert = 0;
+      cup_copy(p->anchor, x, n);           /* and a good anchor for later */
+      cup_copy(p->s_anchor, p->b, m);
+      p->anchor_ok = 1;
+      return info->status = CUP_OK;
+    }
+    cup_copy(p->s, p->b, m);
     cup_certify(p, x, p->lam, x, info);
     info->eps_cert = 0;                    /* z = x exactly: no excess at all */
     info->status = info->eta_cert <= info->eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;

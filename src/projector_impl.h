@@ -67,7 +67,7 @@ struct cup_projector {
   double *sv, *gamv;    /* the same at a trial feasible point v */
   double *y, *u;        /* candidate z = x + u, u = P^-1 C^T lambda */
   double *y2, *s2, *gam2;      /* the next iterate's (first-order methods) */
-  double *v;            /* exactly feasible point found by certification */
+  double *v, *s_v;      /* exactly feasible point found by certification, its slack */
   int has_v;
   double *anchor, *s_anchor;   /* last certified feasible point, its slack */
   int anchor_ok;        /* anchor is feasible for the current offset */

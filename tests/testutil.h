@@ -15,6 +15,10 @@
 #include <gsl/gsl_vector.h>
 #include "catchup.h"
 
+#ifndef M_PIl
+#define M_PIl 3.141592653589793238462643383279502884L
+#endif
+
 /* |a - b| <= tol, with both values in the failure message (cmocka 1.1.5 has
  * no double comparison). Needs cmocka.h included before this header. */
 #define assert_close(a, b, tol) do {                                          \

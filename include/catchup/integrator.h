@@ -1,6 +1,7 @@
 /* catchup/integrator.h — the inexact catching-up algorithm (paper, Sec. 3):
  *     x_{k+1} in proj^{eps_n, eta_n}_{K(t_{k+1})}( free step from x_k ),
- * on the uniform grid t_k = k T / n (computed as k*h, never accumulated). */
+ * on the uniform grid t_k = k T / n (each t_k computed directly from k,
+ * never by accumulating t += h, so t_n = T exactly). */
 #ifndef CATCHUP_INTEGRATOR_H
 #define CATCHUP_INTEGRATOR_H
 
@@ -50,12 +51,20 @@ typedef int (*cup_rhs_fn)(double t, const double *x, double *f, void *ctx);
  *  original x coordinates). Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
 typedef int (*cup_sample_fn)(long k, double t, const double *x, void *ctx);
 
+/** Per-step report: step k (1..n) just taken to time t, with the statistics
+ *  of its projection (pi->skipped is 1 when the free point was already in
+ *  K). Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
+typedef int (*cup_step_fn)(long k, double t, const cup_proj_info *pi, void *ctx);
+
 typedef struct cup_integrator_options {
   cup_scheme scheme;          /**< CUP_SCHEME_EXPLICIT */
   double T;                   /**< final time, > 0 */
   long n;                     /**< steps, >= 1 */
-  cup_schedule eps;           /**< eps_n (absolute, squared length); default n^-2.1 */
-  cup_schedule eta;           /**< eta_n (absolute, length); default n^-1.05 */
+  cup_schedule eps;           /**< eps_n (absolute, squared length); default n^-2.1;
+                                   a zero schedule asks for the exact projection
+                                   (certified to 1e-12 relative) */
+  cup_schedule eta;           /**< eta_n (absolute, length); default n^-1.05;
+                                   zero: 1e-10 relative */
   cup_projector_options proj; /**< method and limits; its eps/eta are replaced by the schedules */
   cup_output_kind output;     /**< CUP_OUTPUT_EVERY */
   long output_every;          /**< EVERY: stride (default 1) */
@@ -64,6 +73,8 @@ typedef struct cup_integrator_options {
   void *f_ctx;                /**< passed to f */
   int f_order;                /**< Gauss-Legendre points for int f (default 3) */
   double max_wall_seconds;    /**< stop with CUP_ERR_TIME_LIMIT after this (0: none) */
+  cup_step_fn on_step;        /**< per-step projector statistics, or NULL */
+  void *step_ctx;             /**< passed to on_step */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */

@@ -1,0 +1,355 @@
+/* catchup-bench — figures, not tests: run time and iterations of the
+ * projector on problem directories, steps per second of the integrator on
+ * the paper's circuit, and peak memory against n.
+ *
+ *   catchup-bench projector DIR... [--reps R] [--methods auto,pg,fista] [--eps-rel E] [--eta-rel E]
+ *   catchup-bench integrate [--n N] [--reps R]
+ *   catchup-bench memory [--n N]...
+ *
+ * One JSON line per measurement on stdout; a table on stderr. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+#include <cholmod.h>
+#include "catchup.h"
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static double median(double *v, int n) {
+  qsort(v, (size_t)n, sizeof *v, cmp_double);
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static void die(const char *fmt, const char *a) {
+  fprintf(stderr, "catchup-bench: ");
+  fprintf(stderr, fmt, a);
+  fprintf(stderr, "\n");
+  exit(1);
+}
+
+/* ---- problem directories (the format scripts/make_problems.py writes) ------ */
+
+typedef struct {
+  char name[256];
+  int n, m, K;
+  cholmod_sparse *C, *P;        /* P full symmetric */
+  double *g, *x, *ref;          /* m; K x n; K x n or NULL */
+  cup_polyset *set;
+} problem;
+
+static cholmod_sparse *read_mtx(const char *dir, const char *file, cholmod_common *cm) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", dir, file);
+  FILE *f = fopen(path, "r");
+  if (!f) die("cannot open %s", path);
+  cholmod_sparse *A = cholmod_read_sparse(f, cm);
+  fclose(f);
+  if (!A) die("cannot read Matrix Market file %s", path);
+  if (A->stype != 0) {                     /* expand a symmetric file */
+    cholmod_sparse *B = cholmod_copy(A, 0, 1, cm);
+    cholmod_free_sparse(&A, cm);
+    A = B;
+  }
+  cholmod_sort(A, cm);
+  return A;
+}
+
+static double *read_numbers(const char *dir, const char *file, long count, int optional) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", dir, file);
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    if (optional) return NULL;
+    die("cannot open %s", path);
+  }
+  double *v = malloc(sizeof(double) * (size_t)count);
+  for (long k = 0; k < count; k++)
+    if (fscanf(f, "%lf", &v[k]) != 1) die("too few numbers in %s", path);
+  fclose(f);
+  return v;
+}
+
+static long count_lines(const char *dir, const char *file) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", dir, file);
+  FILE *f = fopen(path, "r");
+  if (!f) die("cannot open %s", path);
+  long lines = 0;
+  int c, last = '\n';
+  while ((c = fgetc(f)) != EOF) { if (c == '\n') lines++; last = c; }
+  if (last != '\n') lines++;
+  fclose(f);
+  return lines;
+}
+
+static cup_csc view(const cholmod_sparse *A) {
+  return (cup_csc){(int)A->nrow, (int)A->ncol, A->p, A->i, A->x};
+}
+
+static void load_problem(problem *pb, const char *dir, cholmod_common *cm) {
+  memset(pb, 0, sizeof *pb);
+  const char *slash = strrchr(dir, '/');
+  snprintf(pb->name, sizeof pb->name, "%s", slash && slash[1] ? slash + 1 : dir);
+  pb->C = read_mtx(dir, "C.mtx", cm);
+  pb->P = read_mtx(dir, "P.mtx", cm);
+  pb->m = (int)pb->C->nrow;
+  pb->n = (int)pb->C->ncol;
+  pb->K = (int)count_lines(dir, "points.txt");
+  pb->g = read_numbers(dir, "g.txt", pb->m, 0);
+  pb->x = read_numbers(dir, "points.txt", (long)pb->K * pb->n, 0);
+  pb->ref = read_numbers(dir, "ref.txt", (long)pb->K * pb->n, 1);
+  cup_csc C = view(pb->C);
+  cup_metric P = {CUP_METRIC_SPARSE, NULL, view(pb->P), 0};
+  char msg[CUP_ERRMSG_LEN];
+  double t0 = now();
+  if (cup_polyset_create(&pb->set, &C, pb->g, &P, msg)) die("%s", msg);
+  fprintf(stderr, "%s: n %d, m %d, %d points, polyset set-up %.3f s\n", pb->name, pb->n, pb->m,
+          pb->K, now() - t0);
+}
+
+static void free_problem(problem *pb, cholmod_common *cm) {
+  cup_polyset_free(&pb->set);
+  cholmod_free_sparse(&pb->C, cm);
+  cholmod_free_sparse(&pb->P, cm);
+  free(pb->g); free(pb->x); free(pb->ref);
+}
+
+/* ||z - ref||_P / max(||ref||_P, ||x||_P) over the sequence */
+static double rel_error(const problem *pb, const double *z, int k, double *tmp) {
+  const double *r = pb->ref + (size_t)k * pb->n, *x = pb->x + (size_t)k * pb->n;
+  for (int j = 0; j < pb->n; j++) tmp[j] = z[j] - r[j];
+  double e = cup_polyset_norm(pb->set, tmp);
+  double s = fmax(cup_polyset_norm(pb->set, r), cup_polyset_norm(pb->set, x));
+  return e / (s > 0 ? s : 1);
+}
+
+static void bench_projector(int argc, char **argv) {
+  int reps = 5;
+  double eps_rel = 1e-12, eta_rel = 1e-8;
+  const char *methods = "auto,pg,fista";
+  int ndirs = 0;
+  char **dirs = calloc((size_t)argc, sizeof(char *));
+  for (int a = 0; a < argc; a++) {
+    if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
+    else if (!strcmp(argv[a], "--methods") && a + 1 < argc) methods = argv[++a];
+    else if (!strcmp(argv[a], "--eta-rel") && a + 1 < argc) eta_rel = atof(argv[++a]);
+    else if (!strcmp(argv[a], "--eps-rel") && a + 1 < argc) eps_rel = atof(argv[++a]);
+    else dirs[ndirs++] = argv[a];
+  }
+  if (!ndirs) die("%s", "projector: give at least one problem directory");
+  cholmod_common cm;
+  cholmod_start(&cm);
+  cm.print = 0;
+  fprintf(stderr, "%-16s %-6s %-5s %12s %8s %6s %8s %10s %9s\n", "problem", "method", "mode",
+          "median/proj", "iters", "facts", "cert", "max rel err", "setup s");
+  for (int d = 0; d < ndirs; d++) {
+    problem pb;
+    load_problem(&pb, dirs[d], &cm);
+    double *z = malloc(sizeof(double) * (size_t)pb.n), *tmp = malloc(sizeof(double) * (size_t)pb.n);
+    double *times = malloc(sizeof(double) * (size_t)reps);
+    char mlist[256];
+    snprintf(mlist, sizeof mlist, "%s", methods);
+    for (char *tok = strtok(mlist, ","); tok; tok = strtok(NULL, ",")) {
+      int method = cup_proj_method_parse(tok);
+      if (method < 0) die("unknown method %s", tok);
+      for (int warm = 0; warm <= 1; warm++) {
+        cup_projector_options o;
+        cup_projector_options_default(&o);
+        o.method = method;
+        o.warm_start = warm;
+        o.eps_rel = eps_rel;
+        o.eta_rel = eta_rel;
+        o.max_iter = 200000;
+        cup_projector *pr = NULL;
+        char msg[CUP_ERRMSG_LEN];
+        double t0 = now();
+        if (cup_projector_create(&pr, pb.set, &o, msg)) die("%s", msg);
+        double setup = now() - t0;
+        long iters = 0, certified = 0, proj = 0, facts = 0;
+        double maxerr = 0;
+        for (int r = 0; r < reps; r++) {
+          cup_projector_reset(pr);
+          iters = certified = proj = facts = 0;
+          maxerr = 0;
+          double elapsed = 0;
+          for (int k = 0; k < pb.K; k++) {
+            cup_proj_info info;
+            double a = now();
+            int st = cup_project(pr, pb.x + (size_t)k * pb.n, z, &info);
+            elapsed += now() - a;
+            if (!warm) cup_projector_reset(pr);
+            iters += info.iterations;
+            facts += info.factorizations;
+            certified += st == CUP_OK;
+            proj++;
+            if (pb.ref && r == reps - 1) maxerr = fmax(maxerr, rel_error(&pb, z, k, tmp));
+          }
+          times[r] = elapsed / pb.K;
+        }
+        double med = median(times, reps);
+        fprintf(stderr, "%-16s %-6s %-5s %10.3g s %8.1f %6.1f %4ld/%-3ld %10.2e %9.3f\n", pb.name, tok,
+                warm ? "warm" : "cold", med, (double)iters / proj, (double)facts / proj, certified, proj,
+                pb.ref ? maxerr : NAN, setup);
+        printf("{\"bench\": \"projector\", \"problem\": \"%s\", \"solver\": \"catchup-%s\", "
+               "\"mode\": \"%s\", \"n\": %d, \"m\": %d, \"K\": %d, \"reps\": %d, "
+               "\"median_s_per_projection\": %.6g, \"iterations_mean\": %.3f, \"factorizations_mean\": %.3f, "
+               "\"certified\": %ld, \"eps_rel\": %.3g, \"eta_rel\": %.3g, \"max_rel_err\": %.3e, "
+               "\"setup_s\": %.4g}\n",
+               pb.name, tok, warm ? "warm" : "cold", pb.n, pb.m, pb.K, reps, med,
+               (double)iters / proj, (double)facts / proj, certified, eps_rel, eta_rel, pb.ref ? maxerr : -1.0, setup);
+        fflush(stdout);
+        cup_projector_free(&pr);
+      }
+    }
+    free(z); free(tmp); free(times);
+    free_problem(&pb, &cm);
+  }
+  cholmod_finish(&cm);
+  free(dirs);
+}
+
+/* ---- the integrator on the paper's circuit ------------------------------------- */
+
+static cup_input *paper_input(int cas) {
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  if (cas == 1) {
+    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
+    cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
+    cup_input_add(u, 0, &s, NULL);
+    cup_input_add(u, 0, &c, NULL);
+  } else {
+    cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
+    cup_input_add(u, 0, &q, NULL);
+  }
+  return u;
+}
+
+static double run_circuit(int cas, long n, int scheme, int method, cup_output_kind out,
+                          cup_run_info *info) {
+  cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
+  cup_lcs *L = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+  cup_input *u = paper_input(cas);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = n;
+  o.scheme = scheme;
+  o.proj.method = method;
+  o.output = out;
+  o.output_samples = 1001;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, L, u, &o, msg)) die("%s", msg);
+  double x0[3] = {0, 0, 0};
+  double t0 = now();
+  cup_integrator_run(I, x0, NULL, NULL, info);
+  double dt = now() - t0;
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+  return dt;
+}
+
+static void bench_integrate(int argc, char **argv) {
+  long n = 1000000;
+  int reps = 5;
+  for (int a = 0; a < argc; a++) {
+    if (!strcmp(argv[a], "--n") && a + 1 < argc) n = atol(argv[++a]);
+    else if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
+    else die("integrate: unknown argument %s", argv[a]);
+  }
+  double *t = malloc(sizeof(double) * (size_t)reps);
+  fprintf(stderr, "%-5s %-11s %-9s %10s %12s %8s\n", "case", "scheme", "projector", "steps/s", "ns/step", "status");
+  for (int cas = 1; cas <= 2; cas++)
+    for (int scheme = 0; scheme < 3; scheme++)
+      for (int method = 0; method < 4; method++) {
+        cup_run_info info;
+        for (int r = 0; r < reps; r++) t[r] = run_circuit(cas, n, scheme, method, CUP_OUTPUT_NONE, &info);
+        double med = median(t, reps);
+        fprintf(stderr, "%-5d %-11s %-9s %10.3g %12.1f %8s\n", cas, cup_scheme_name(scheme),
+                cup_proj_method_name(method), n / med, med / n * 1e9, cup_status_name(info.status));
+        printf("{\"bench\": \"integrate\", \"case\": %d, \"scheme\": \"%s\", \"projector\": \"%s\", "
+               "\"n\": %ld, \"reps\": %d, \"median_s\": %.6g, \"steps_per_s\": %.6g, "
+               "\"ns_per_step\": %.4g, \"status\": \"%s\", \"projected\": %ld, \"skipped\": %ld, "
+               "\"dual_iterations\": %lld, \"max_eps_cert\": %.3e, \"max_eta_cert\": %.3e}\n",
+               cas, cup_scheme_name(scheme), cup_proj_method_name(method), n, reps, med, n / med,
+               med / n * 1e9, cup_status_name(info.status), info.projected, info.skipped,
+               info.dual_iterations, info.max_eps_cert, info.max_eta_cert);
+        fflush(stdout);
+      }
+  free(t);
+}
+
+/* Peak resident memory of a run with decimated output, each n in a fresh
+ * process so that the high-water marks do not mix. */
+static void bench_memory(int argc, char **argv) {
+  long ns[16];
+  int k = 0;
+  for (int a = 0; a < argc; a++) {
+    if (!strcmp(argv[a], "--n") && a + 1 < argc && k < 16) ns[k++] = atol(argv[++a]);
+    else die("memory: unknown argument %s", argv[a]);
+  }
+  if (!k) { ns[0] = 100000; ns[1] = 1000000; ns[2] = 10000000; ns[3] = 100000000; k = 4; }
+  fprintf(stderr, "%12s %10s %12s\n", "n", "seconds", "peak RSS kB");
+  for (int q = 0; q < k; q++) {
+    int fd[2];
+    if (pipe(fd)) die("%s", "pipe failed");
+    pid_t pid = fork();
+    if (pid == 0) {
+      close(fd[0]);
+      cup_run_info info;
+      double dt = run_circuit(1, ns[q], CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, CUP_OUTPUT_SAMPLES, &info);
+      struct rusage ru;
+      getrusage(RUSAGE_SELF, &ru);
+      char buf[128];
+      int len = snprintf(buf, sizeof buf, "%.6g %ld %d\n", dt, ru.ru_maxrss, info.status);
+      if (write(fd[1], buf, (size_t)len) != len) _exit(1);
+      _exit(0);
+    }
+    close(fd[1]);
+    char buf[128] = {0};
+    ssize_t got = read(fd[0], buf, sizeof buf - 1);
+    close(fd[0]);
+    int wst;
+    waitpid(pid, &wst, 0);
+    double dt = 0;
+    long rss = 0;
+    int st = 0;
+    if (got <= 0 || sscanf(buf, "%lf %ld %d", &dt, &rss, &st) != 3) die("%s", "memory: child failed");
+    fprintf(stderr, "%12ld %10.2f %12ld\n", ns[q], dt, rss);
+    printf("{\"bench\": \"memory\", \"case\": 1, \"n\": %ld, \"output_samples\": 1001, "
+           "\"seconds\": %.4g, \"peak_rss_kb\": %ld, \"status\": \"%s\"}\n", ns[q], dt, rss,
+           cup_status_name(st));
+    fflush(stdout);
+  }
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+    fprintf(stderr, "usage: catchup-bench projector DIR... [--reps R] [--methods auto,pg,fista] [--eps-rel E] [--eta-rel E]\n"
+                    "       catchup-bench integrate [--n N] [--reps R]\n"
+                    "       catchup-bench memory [--n N]...\n");
+    return argc < 2 ? 2 : 0;
+  }
+  if (!strcmp(argv[1], "projector")) bench_projector(argc - 2, argv + 2);
+  else if (!strcmp(argv[1], "integrate")) bench_integrate(argc - 2, argv + 2);
+  else if (!strcmp(argv[1], "memory")) bench_memory(argc - 2, argv + 2);
+  else die("unknown benchmark '%s' (projector, integrate, memory)", argv[1]);
+  return 0;
+}

@@ -1,0 +1,228 @@
+! catchup_h5run -- Fortran wrappers of include/catchup/h5run.h, the HDF5
+! writer of one run (/t [N], /x [N, dim]). Like the C header, which
+! catchup.h does not include, it is a module of its own in a library of its
+! own (catchup_h5_fortran over catchup_h5, built with the apps):
+!     use catchup
+!     use catchup_h5run
+! Preprocessed: CATCHUP_H5RUN_ERRMSG is defined when h5run.h declares
+! cup_h5run_errmsg (CMake reads the header).
+module catchup_h5run
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
+    c_associated, c_funloc
+  use catchup_constants
+  use catchup_types
+  use catchup_base
+  use catchup_core, only: cup_integrator_run
+  implicit none
+  private
+  public :: cup_h5run_create, cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
+    cup_h5run_attr_double, cup_h5run_attr_long, cup_h5run_attr_string, cup_h5run_flush, &
+    cup_h5run_count, cup_h5_version, cup_integrator_run_h5
+#ifdef CATCHUP_H5RUN_ERRMSG
+  public :: cup_h5run_errmsg, c_cup_h5run_errmsg
+#endif
+  ! the C sink itself: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...)
+  public :: cup_h5run_sink
+  public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
+    c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
+    c_cup_h5_version
+
+  !> Root attribute: real(c_double), integer (stored as long) or string.
+  interface cup_h5run_attr
+    module procedure cup_h5run_attr_double, attr_int, cup_h5run_attr_long, cup_h5run_attr_string
+  end interface cup_h5run_attr
+
+  interface
+    function c_cup_h5run_create(w, path, dim, errmsg) bind(C, name="cup_h5run_create") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(out) :: w
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: dim
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_create
+    function cup_h5run_sink(k, t, x, ctx) bind(C, name="cup_h5run_sink") result(st)
+      import :: c_int, c_long, c_double, c_ptr
+      integer(c_long), value :: k
+      real(c_double), value :: t
+      real(c_double), intent(in) :: x(*)
+      type(c_ptr), value :: ctx
+      integer(c_int) :: st
+    end function cup_h5run_sink
+    function c_cup_h5run_attr_double(w, name, v) bind(C, name="cup_h5run_attr_double") result(st)
+      import :: c_int, c_double, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      real(c_double), value :: v
+      integer(c_int) :: st
+    end function c_cup_h5run_attr_double
+    function c_cup_h5run_attr_long(w, name, v) bind(C, name="cup_h5run_attr_long") result(st)
+      import :: c_int, c_long, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_long), value :: v
+      integer(c_int) :: st
+    end function c_cup_h5run_attr_long
+    function c_cup_h5run_attr_string(w, name, v) bind(C, name="cup_h5run_attr_string") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*), v(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_attr_string
+    function c_cup_h5run_flush(w) bind(C, name="cup_h5run_flush") result(st)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: w
+      integer(c_int) :: st
+    end function c_cup_h5run_flush
+    function c_cup_h5run_close(w, errmsg) bind(C, name="cup_h5run_close") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(inout) :: w
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_close
+    function c_cup_h5run_count(w) bind(C, name="cup_h5run_count") result(n)
+      import :: c_long, c_ptr
+      type(c_ptr), value :: w
+      integer(c_long) :: n
+    end function c_cup_h5run_count
+#ifdef CATCHUP_H5RUN_ERRMSG
+    function c_cup_h5run_errmsg(w) bind(C, name="cup_h5run_errmsg") result(s)
+      import :: c_ptr
+      type(c_ptr), value :: w
+      type(c_ptr) :: s
+    end function c_cup_h5run_errmsg
+#endif
+    function c_cup_h5_version(buf, size) bind(C, name="cup_h5_version") result(n)
+      import :: c_int, c_long, c_char
+      character(kind=c_char), intent(inout) :: buf(*)
+      integer(c_long), value :: size
+      integer(c_int) :: n
+    end function c_cup_h5_version
+  end interface
+
+contains
+
+  !> Create (truncate) path for states of dimension dim.
+  subroutine cup_h5run_create(w, path, dim, ierr, errmsg)
+    type(cup_h5run_t), intent(out) :: w
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: dim
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    cmsg = cup_errbuf_()
+    st = c_cup_h5run_create(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    if (st == CUP_OK) w%dim = dim
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_h5run_create
+
+  !> Flush, close, free; w%ptr becomes null (closing a null handle is CUP_OK).
+  subroutine cup_h5run_close(w, ierr, errmsg)
+    type(cup_h5run_t), intent(inout) :: w
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    st = CUP_OK
+    cmsg = cup_errbuf_()
+    if (c_associated(w%ptr)) st = c_cup_h5run_close(w%ptr, cmsg)
+    w%ptr = c_null_ptr
+    w%dim = 0
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_h5run_close
+
+  !> Close ignoring the status (for clean-up paths; use cup_h5run_close to
+  !> learn whether every sample reached the file).
+  subroutine cup_h5run_free(w)
+    type(cup_h5run_t), intent(inout) :: w
+    integer :: ierr
+    call cup_h5run_close(w, ierr)
+  end subroutine cup_h5run_free
+
+  subroutine cup_h5run_attr_double(w, name, v, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name
+    real(c_double), intent(in) :: v
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_attr_double(w%ptr, cup_f_c_string(name), v))
+  end subroutine cup_h5run_attr_double
+
+  subroutine cup_h5run_attr_long(w, name, v, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name
+    integer(c_long), intent(in) :: v
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_attr_long(w%ptr, cup_f_c_string(name), v))
+  end subroutine cup_h5run_attr_long
+
+  subroutine attr_int(w, name, v, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: v
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_attr_long(w%ptr, cup_f_c_string(name), int(v, c_long)))
+  end subroutine attr_int
+
+  subroutine cup_h5run_attr_string(w, name, v, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name, v
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_attr_string(w%ptr, cup_f_c_string(name), cup_f_c_string(v)))
+  end subroutine cup_h5run_attr_string
+
+  !> Write what is buffered and flush the file to the OS.
+  subroutine cup_h5run_flush(w, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_flush(w%ptr))
+  end subroutine cup_h5run_flush
+
+  !> Samples written so far.
+  integer(c_long) function cup_h5run_count(w)
+    type(cup_h5run_t), intent(in) :: w
+    cup_h5run_count = c_cup_h5run_count(w%ptr)
+  end function cup_h5run_count
+
+#ifdef CATCHUP_H5RUN_ERRMSG
+  !> Message of the writer's first failure ('' if none): a sink cannot
+  !> return one, so after a run stopped by the writer, ask here.
+  function cup_h5run_errmsg(w) result(s)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(w%ptr)) s = cup_c_string(c_cup_h5run_errmsg(w%ptr))
+  end function cup_h5run_errmsg
+#endif
+
+  !> "HDF5 1.10.8" of the linked HDF5.
+  function cup_h5_version() result(s)
+    character(len=:), allocatable :: s
+    character(kind=c_char) :: probe(1)
+    character(kind=c_char), allocatable :: buf(:)
+    integer(c_int) :: n
+    n = c_cup_h5_version(probe, 1_c_long)
+    allocate(buf(max(n, 0) + 1))
+    n = c_cup_h5_version(buf, int(size(buf), c_long))
+    s = cup_chars_to_string(buf)
+  end function cup_h5_version
+
+  !> cup_integrator_run with the states written to w (/t, /x).
+  subroutine cup_integrator_run_h5(integ, x0, w, ierr, info, errmsg)
+    type(cup_integrator_t), intent(in) :: integ
+    real(c_double), intent(in) :: x0(:)
+    type(cup_h5run_t), intent(in) :: w
+    integer, intent(out) :: ierr
+    type(cup_run_info), intent(out), optional :: info
+    character(len=*), intent(out), optional :: errmsg
+    if (.not. c_associated(w%ptr)) then
+      call cup_fail_(CUP_ERR_ARG, 'HDF5 writer handle is null', ierr, errmsg)
+      return
+    end if
+    if (w%dim /= integ%dim) then
+      call cup_fail_(CUP_ERR_DIM, 'HDF5 writer and integrator have different dimensions', ierr, errmsg)
+      return
+    end if
+    call cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ierr, info, errmsg)
+  end subroutine cup_integrator_run_h5
+end module catchup_h5run

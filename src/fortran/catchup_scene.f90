@@ -1,0 +1,256 @@
+! catchup_scene -- Fortran wrappers of include/catchup/scene.h (scene files,
+! implemented in libcatchup by src/io/scene.c). Re-exported by module
+! `catchup` whenever the C library is built with the scene loader.
+module catchup_scene
+  use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_ptr, c_null_ptr, &
+    c_null_char, c_associated, c_f_pointer, c_loc
+  use catchup_constants
+  use catchup_types
+  use catchup_c, only: c_cup_lcs_dim
+  use catchup_base
+  implicit none
+  private
+  public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, &
+    cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
+    cup_scene_eta_spec, cup_scene_text
+  public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, &
+    c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
+    c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text
+
+  interface
+    function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
+        bind(C, name="cup_scene_load") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(out) :: s
+      character(kind=c_char), intent(in) :: path(*)
+      type(c_ptr), value :: overrides          ! const char *const *, or NULL
+      integer(c_int), value :: n_overrides
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_load
+    function c_cup_scene_load_string(s, text, name, dir, overrides, n_overrides, errmsg) &
+        bind(C, name="cup_scene_load_string") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(out) :: s
+      character(kind=c_char), intent(in) :: text(*), name(*)
+      type(c_ptr), value :: dir                ! may be NULL
+      type(c_ptr), value :: overrides
+      integer(c_int), value :: n_overrides
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_load_string
+    subroutine c_cup_scene_free(s) bind(C, name="cup_scene_free")
+      import :: c_ptr
+      type(c_ptr), intent(inout) :: s
+    end subroutine c_cup_scene_free
+    function c_cup_scene_name(s) bind(C, name="cup_scene_name") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_name
+    function c_cup_scene_lcs(s) bind(C, name="cup_scene_lcs") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_lcs
+    function c_cup_scene_input(s) bind(C, name="cup_scene_input") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_input
+    function c_cup_scene_x0(s) bind(C, name="cup_scene_x0") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_x0
+    function c_cup_scene_options(s) bind(C, name="cup_scene_options") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_options
+    function c_cup_scene_eps_spec(s) bind(C, name="cup_scene_eps_spec") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_eps_spec
+    function c_cup_scene_eta_spec(s) bind(C, name="cup_scene_eta_spec") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_eta_spec
+    function c_cup_scene_text(s) bind(C, name="cup_scene_text") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_text
+  end interface
+
+contains
+
+  !> NUL-terminated copies of the trimmed overrides, one per column of buf,
+  !> and the array of pointers to them (const char *const *).
+  subroutine pack_overrides(overrides, buf, ptrs)
+    character(len=*), intent(in) :: overrides(:)
+    character(kind=c_char), allocatable, target, intent(out) :: buf(:, :)
+    type(c_ptr), allocatable, target, intent(out) :: ptrs(:)
+    integer :: i, k, n
+    allocate(buf(len(overrides) + 1, size(overrides)), ptrs(size(overrides)))
+    buf = c_null_char
+    do i = 1, size(overrides)
+      n = len_trim(overrides(i))
+      do k = 1, n
+        buf(k, i) = overrides(i)(k:k)
+      end do
+      ptrs(i) = c_loc(buf(1, i))
+    end do
+  end subroutine pack_overrides
+
+  !> Load the scene file `path`; overrides are "dotted.key=value" strings
+  !> ("circuit.R1=2", "n=1000") applied before the document is read.
+  subroutine cup_scene_load(s, path, ierr, overrides, errmsg)
+    type(cup_scene_t), intent(out) :: s
+    character(len=*), intent(in) :: path
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: overrides(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char), allocatable, target :: buf(:, :)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    type(c_ptr) :: op
+    integer(c_int) :: nov, st
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    op = c_null_ptr
+    nov = 0
+    if (present(overrides)) then
+      if (size(overrides) > 0) then
+        call pack_overrides(overrides, buf, ptrs)
+        op = c_loc(ptrs)
+        nov = int(size(overrides), c_int)
+      end if
+    end if
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_load(s%ptr, cup_f_c_string(path), op, nov, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_load
+
+  !> The same from YAML text; `name` stands for the file name in messages and
+  !> `dir` (default: the working directory) is where Matrix Market files are.
+  subroutine cup_scene_load_string(s, text, name, ierr, dir, overrides, errmsg)
+    type(cup_scene_t), intent(out) :: s
+    character(len=*), intent(in) :: text, name
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: dir
+    character(len=*), intent(in), optional :: overrides(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char), allocatable, target :: buf(:, :)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    character(kind=c_char, len=:), allocatable, target :: cdir
+    type(c_ptr) :: op, dp
+    integer(c_int) :: nov, st
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    op = c_null_ptr
+    nov = 0
+    if (present(overrides)) then
+      if (size(overrides) > 0) then
+        call pack_overrides(overrides, buf, ptrs)
+        op = c_loc(ptrs)
+        nov = int(size(overrides), c_int)
+      end if
+    end if
+    dp = c_null_ptr
+    if (present(dir)) then
+      cdir = cup_f_c_string(dir)
+      dp = c_loc(cdir)
+    end if
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_load_string(s%ptr, cup_f_c_string(text), cup_f_c_string(name), dp, op, nov, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_load_string
+
+  !> Free the scene (its LCS, input and options with it) and null the handle.
+  subroutine cup_scene_free(s)
+    type(cup_scene_t), intent(inout) :: s
+    call c_cup_scene_free(s%ptr)
+    s%ptr = c_null_ptr
+  end subroutine cup_scene_free
+
+  function cup_scene_name(s) result(text)
+    type(cup_scene_t), intent(in) :: s
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_name(s%ptr))
+  end function cup_scene_name
+
+  !> The scene's LCS, owned by the scene (a borrowed handle).
+  function cup_scene_lcs(s) result(L)
+    type(cup_scene_t), intent(in) :: s
+    type(cup_lcs_t) :: L
+    if (c_associated(s%ptr)) L%ptr = c_cup_scene_lcs(s%ptr)
+    L%borrowed = .true.
+  end function cup_scene_lcs
+
+  !> The scene's input, owned by the scene (null pointer when p = 0).
+  function cup_scene_input(s) result(u)
+    type(cup_scene_t), intent(in) :: s
+    type(cup_input_t) :: u
+    if (c_associated(s%ptr)) u%ptr = c_cup_scene_input(s%ptr)
+    u%borrowed = .true.
+  end function cup_scene_input
+
+  !> x0 (n entries) of the scene.
+  subroutine cup_scene_x0(s, x0, ierr)
+    type(cup_scene_t), intent(in) :: s
+    real(c_double), allocatable, intent(out) :: x0(:)
+    integer, intent(out) :: ierr
+    real(c_double), pointer :: v(:)
+    type(c_ptr) :: p
+    integer :: n
+    allocate(x0(0))
+    ierr = CUP_ERR_ARG
+    if (.not. c_associated(s%ptr)) return
+    n = int(c_cup_lcs_dim(c_cup_scene_lcs(s%ptr)))
+    p = c_cup_scene_x0(s%ptr)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, v, [n])
+    x0 = v
+    ierr = CUP_OK
+  end subroutine cup_scene_x0
+
+  !> The integrator options of the scene (T, n, eps, eta, scheme, ...), a copy.
+  subroutine cup_scene_options(s, o, ierr)
+    type(cup_scene_t), intent(in) :: s
+    type(cup_integrator_options), intent(out) :: o
+    integer, intent(out) :: ierr
+    type(cup_integrator_options), pointer :: op
+    type(c_ptr) :: p
+    ierr = CUP_ERR_ARG
+    if (.not. c_associated(s%ptr)) return
+    p = c_cup_scene_options(s%ptr)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, op)
+    o = op
+    ierr = CUP_OK
+  end subroutine cup_scene_options
+
+  !> eps as written in the scene, e.g. "n^-2.1".
+  function cup_scene_eps_spec(s) result(text)
+    type(cup_scene_t), intent(in) :: s
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_eps_spec(s%ptr))
+  end function cup_scene_eps_spec
+
+  function cup_scene_eta_spec(s) result(text)
+    type(cup_scene_t), intent(in) :: s
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_eta_spec(s%ptr))
+  end function cup_scene_eta_spec
+
+  !> The document after overrides, as YAML text.
+  function cup_scene_text(s) result(text)
+    type(cup_scene_t), intent(in) :: s
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_text(s%ptr))
+  end function cup_scene_text
+end module catchup_scene

@@ -1,0 +1,239 @@
+! catchup_types -- the C structs of the catchup API mirrored as bind(C)
+! derived types (same members, same order, same C types: the layout test
+! tests/fortran/test_layout compares every offset with the C compiler's),
+! the opaque handles, and the callback interfaces.
+!
+! Mirrored structs carry zero/null default initialization so that a fresh
+! variable is well defined; the *library defaults* of an options struct come
+! only from the C functions cup_projector_options_default and
+! cup_integrator_options_default (never copied here).
+!
+! One rename: C's cup_lcs_desc has both `p` (input dimension) and `P` (the
+! metric); Fortran is case-insensitive, so the metric is `metric` here.
+module catchup_types
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_long_long, c_double, &
+    c_char, c_ptr, c_funptr, c_null_ptr, c_null_funptr, c_null_char
+  use catchup_constants
+  implicit none
+  private
+
+  ! ---- sparse.h -------------------------------------------------------------
+  !> A 0-based CSC matrix *view* (cup_csc). The library copies what it needs.
+  type, bind(C), public :: cup_csc
+    integer(c_int) :: nrow = 0
+    integer(c_int) :: ncol = 0
+    type(c_ptr) :: colptr = c_null_ptr   !< ncol+1 column starts, colptr(0) = 0
+    type(c_ptr) :: rowind = c_null_ptr   !< 0-based row indices
+    type(c_ptr) :: values = c_null_ptr
+  end type cup_csc
+
+  !> A 0-based CSC matrix owned by Fortran (allocatable arrays), built by
+  !> cup_csc_from_fortran / cup_csc_from_dense; cup_csc_view gives its view.
+  type, public :: cup_csc_matrix
+    integer(c_int) :: nrow = 0
+    integer(c_int) :: ncol = 0
+    integer(c_int), allocatable :: colptr(:)   !< 0-based, size ncol+1
+    integer(c_int), allocatable :: rowind(:)   !< 0-based, size max(nnz, 1)
+    real(c_double), allocatable :: values(:)   !< size max(nnz, 1)
+  end type cup_csc_matrix
+
+  ! ---- polyset.h ------------------------------------------------------------
+  type, bind(C), public :: cup_metric
+    integer(c_int) :: kind = CUP_METRIC_IDENTITY   !< cup_metric_kind
+    type(c_ptr) :: diag = c_null_ptr               !< DIAGONAL: dim entries
+    type(cup_csc) :: matrix                        !< SPARSE
+    integer(c_int) :: lower_only = 0
+  end type cup_metric
+
+  ! ---- projector.h ----------------------------------------------------------
+  type, bind(C), public :: cup_projector_options
+    integer(c_int) :: method = 0           !< cup_proj_method
+    real(c_double) :: eps_abs = 0
+    real(c_double) :: eps_rel = 0
+    real(c_double) :: eta_abs = 0
+    real(c_double) :: eta_rel = 0
+    integer(c_int) :: max_iter = 0
+    integer(c_int) :: warm_start = 0
+    integer(c_int) :: return_feasible = 0
+    real(c_double) :: lipschitz = 0
+    type(c_ptr) :: feasible_point = c_null_ptr   !< c_loc of dim entries (copied), or null
+  end type cup_projector_options
+
+  type, bind(C), public :: cup_proj_info
+    integer(c_int) :: status = 0
+    integer(c_int) :: method = 0
+    integer(c_int) :: iterations = 0
+    integer(c_int) :: factorizations = 0
+    integer(c_int) :: skipped = 0
+    integer(c_int) :: active = 0
+    real(c_double) :: scale = 0
+    real(c_double) :: eps_target = 0
+    real(c_double) :: eta_target = 0
+    real(c_double) :: eps_cert = 0
+    real(c_double) :: eta_cert = 0
+    real(c_double) :: violation = 0
+    real(c_double) :: dual_value = 0
+    real(c_double) :: farkas_gap = 0
+    real(c_double) :: farkas_residual = 0
+  end type cup_proj_info
+
+  ! ---- input.h --------------------------------------------------------------
+  type, bind(C), public :: cup_wave
+    integer(c_int) :: kind = CUP_WAVE_CONSTANT   !< cup_wave_kind
+    real(c_double) :: value = 0
+    real(c_double) :: amplitude = 0
+    real(c_double) :: frequency = 0
+    real(c_double) :: phase = 0
+    integer(c_int) :: npoints = 0
+    type(c_ptr) :: t = c_null_ptr
+    type(c_ptr) :: v = c_null_ptr
+  end type cup_wave
+
+  ! ---- lcs.h ----------------------------------------------------------------
+  type, bind(C), public :: cup_lcs_desc
+    integer(c_int) :: n = 0
+    integer(c_int) :: m = 0
+    integer(c_int) :: p = 0          !< input dimension
+    type(cup_csc) :: A
+    type(cup_csc) :: B
+    type(cup_csc) :: C
+    type(cup_csc) :: E
+    type(c_ptr) :: F = c_null_ptr    !< m entries, or null for 0
+    type(cup_csc) :: G
+    type(cup_metric) :: metric       !< C's member `P` (renamed: Fortran is case-insensitive)
+    real(c_double) :: pb_tol = 0
+  end type cup_lcs_desc
+
+  type, bind(C), public :: cup_circuit
+    real(c_double) :: R1 = 0, R2 = 0, R3 = 0, L2 = 0, L3 = 0, C4 = 0
+    real(c_double) :: G(2) = 0
+  end type cup_circuit
+
+  ! ---- integrator.h ---------------------------------------------------------
+  type, bind(C), public :: cup_schedule
+    real(c_double) :: coef = 0
+    real(c_double) :: power = 0
+  end type cup_schedule
+
+  type, bind(C), public :: cup_integrator_options
+    integer(c_int) :: scheme = 0           !< cup_scheme
+    real(c_double) :: T = 0
+    integer(c_long) :: n = 0
+    type(cup_schedule) :: eps
+    type(cup_schedule) :: eta
+    type(cup_projector_options) :: proj
+    integer(c_int) :: output = 0           !< cup_output_kind
+    integer(c_long) :: output_every = 0
+    integer(c_long) :: output_samples = 0
+    type(c_funptr) :: f = c_null_funptr    !< c_funloc of a procedure(cup_rhs_fn), or null
+    type(c_ptr) :: f_ctx = c_null_ptr
+    integer(c_int) :: f_order = 0
+    real(c_double) :: max_wall_seconds = 0
+    type(c_funptr) :: on_step = c_null_funptr   !< c_funloc of a procedure(cup_step_fn)
+    type(c_ptr) :: step_ctx = c_null_ptr
+  end type cup_integrator_options
+
+  type, bind(C), public :: cup_run_info
+    integer(c_int) :: status = 0
+    integer(c_long) :: step = 0
+    real(c_double) :: t = 0
+    integer(c_long) :: projected = 0
+    integer(c_long) :: skipped = 0
+    integer(c_long) :: not_certified = 0
+    integer(c_long_long) :: dual_iterations = 0
+    integer(c_long) :: factorizations = 0
+    real(c_double) :: max_eps_cert = 0
+    real(c_double) :: max_eta_cert = 0
+    real(c_double) :: eps_target = 0
+    real(c_double) :: eta_target = 0
+    real(c_double) :: h_rho = 0
+    integer(c_long) :: samples = 0
+    character(kind=c_char) :: message(256) = c_null_char   !< use cup_run_info_message(info)
+  end type cup_run_info
+
+  ! ---- handles --------------------------------------------------------------
+  ! `ptr` is the C pointer (pass it to the raw interfaces of catchup_c);
+  ! `borrowed` marks a handle the library owns (cup_lcs_polyset, cup_scene_*):
+  ! freeing it only forgets the pointer. *_free sets ptr to c_null_ptr, so a
+  ! second free is harmless.
+  type, public :: cup_polyset_t
+    type(c_ptr) :: ptr = c_null_ptr
+    logical :: borrowed = .false.
+  end type cup_polyset_t
+
+  type, public :: cup_projector_t
+    type(c_ptr) :: ptr = c_null_ptr
+    integer :: dim = 0   !< variables of the polyset (cached at creation)
+    integer :: m = 0     !< its constraints
+  end type cup_projector_t
+
+  type, public :: cup_input_t
+    type(c_ptr) :: ptr = c_null_ptr
+    logical :: borrowed = .false.
+  end type cup_input_t
+
+  type, public :: cup_lcs_t
+    type(c_ptr) :: ptr = c_null_ptr
+    logical :: borrowed = .false.
+  end type cup_lcs_t
+
+  type, public :: cup_integrator_t
+    type(c_ptr) :: ptr = c_null_ptr
+    integer :: dim = 0                 !< state dimension (cached at creation)
+    integer(c_long) :: expected = 0    !< samples a full run passes to a sink
+  end type cup_integrator_t
+
+  type, public :: cup_scene_t
+    type(c_ptr) :: ptr = c_null_ptr
+  end type cup_scene_t
+
+  type, public :: cup_h5run_t
+    type(c_ptr) :: ptr = c_null_ptr
+    integer :: dim = 0
+  end type cup_h5run_t
+
+  ! ---- callbacks (write them as bind(C) procedures, pass c_funloc(fn)) -------
+  abstract interface
+    !> u(t): write the p entries of u; return 0, nonzero stops the run
+    !> (CUP_ERR_CALLBACK). ctx is what was given to cup_input_set_callback.
+    function cup_input_fn(t, u, ctx) result(stat) bind(C)
+      import :: c_double, c_ptr, c_int
+      real(c_double), value :: t
+      real(c_double), intent(inout) :: u(*)
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_input_fn
+
+    !> Perturbation f(t, x): write the n entries of f; nonzero stops the run.
+    function cup_rhs_fn(t, x, f, ctx) result(stat) bind(C)
+      import :: c_double, c_ptr, c_int
+      real(c_double), value :: t
+      real(c_double), intent(in) :: x(*)
+      real(c_double), intent(inout) :: f(*)
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_rhs_fn
+
+    !> Output sink: step k, time t_k, state x (n entries); nonzero stops the
+    !> run (CUP_ERR_INTERRUPTED).
+    function cup_sample_fn(k, t, x, ctx) result(stat) bind(C)
+      import :: c_long, c_double, c_ptr, c_int
+      integer(c_long), value :: k
+      real(c_double), value :: t
+      real(c_double), intent(in) :: x(*)
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_sample_fn
+
+    !> Per-step report with the projection statistics; nonzero stops the run.
+    function cup_step_fn(k, t, pi, ctx) result(stat) bind(C)
+      import :: c_long, c_double, c_ptr, c_int, cup_proj_info
+      integer(c_long), value :: k
+      real(c_double), value :: t
+      type(cup_proj_info), intent(in) :: pi
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_step_fn
+  end interface
+  public :: cup_input_fn, cup_rhs_fn, cup_sample_fn, cup_step_fn
+end module catchup_types

@@ -1,0 +1,375 @@
+/* freestep — the free step of the catching-up scheme (see freestep.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <gsl/gsl_complex_math.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_integration.h>
+#include "catchup.h"
+#include "freestep.h"
+
+static void *zalloc(size_t count, size_t size, int *fail) {
+  void *q = calloc(count ? count : 1, size);
+  if (!q) *fail = 1;
+  return q;
+}
+
+/* Gauss-Legendre nodes and weights on [0, 1]. */
+static int gl_nodes(int order, double *node, double *weight) {
+  gsl_integration_glfixed_table *t = gsl_integration_glfixed_table_alloc((size_t)order);
+  if (!t) return CUP_ERR_NOMEM;
+  for (int i = 0; i < order; i++) gsl_integration_glfixed_point(0, 1, (size_t)i, &node[i], &weight[i], t);
+  gsl_integration_glfixed_table_free(t);
+  return CUP_OK;
+}
+
+static void dense_A(const cup_lcs *L, double *a) {
+  int n = L->n;
+  memset(a, 0, sizeof(double) * (size_t)n * n);
+  if (!L->has_A) return;
+  for (int j = 0; j < n; j++)
+    for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) a[L->A.i[k] + (size_t)j * n] = L->A.x[k];
+}
+
+double cup_freestep_h_rho(const cup_lcs *L, double h) {
+  int n = L->n;
+  if (!L->has_A) return 0;
+  if (n > CUP_IMPLICIT_MAX_DIM) {            /* Gershgorin: rho <= max row sum of |A| */
+    double *row = calloc((size_t)n, sizeof(double)), r = 0;
+    if (!row) return INFINITY;
+    for (int j = 0; j < n; j++)
+      for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) row[L->A.i[k]] += fabs(L->A.x[k]);
+    for (int i = 0; i < n; i++) r = fmax(r, row[i]);
+    free(row);
+    return h * r;
+  }
+  gsl_matrix *a = gsl_matrix_calloc((size_t)n, (size_t)n);
+  gsl_vector_complex *ev = gsl_vector_complex_alloc((size_t)n);
+  gsl_eigen_nonsymm_workspace *w = gsl_eigen_nonsymm_alloc((size_t)n);
+  double rho = INFINITY;
+  if (a && ev && w) {
+    for (int j = 0; j < n; j++)
+      for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) gsl_matrix_set(a, (size_t)L->A.i[k], (size_t)j, L->A.x[k]);
+    gsl_error_handler_t *old = gsl_set_error_handler_off();
+    if (gsl_eigen_nonsymm(a, ev, w) == 0) {
+      rho = 0;
+      for (int i = 0; i < n; i++) rho = fmax(rho, gsl_complex_abs(gsl_vector_complex_get(ev, (size_t)i)));
+    }
+    gsl_set_error_handler(old);
+  }
+  if (w) gsl_eigen_nonsymm_free(w);
+  if (ev) gsl_vector_complex_free(ev);
+  if (a) gsl_matrix_free(a);
+  return h * rho;
+}
+
+/* ---- exponential scheme: inputs as outputs of small linear generators -------- */
+
+/* States per term: constant 1 (w' = 0), sine 2 (s' = om c, c' = -om s, the
+ * input is s), square 1 (piecewise constant), table 2 (v' = slope). */
+static int gen_states(const cup_term *t) {
+  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL ? 2 : 1;
+}
+
+static int exp_init(cup_freestep *fs, char *errmsg) {
+  const cup_lcs *L = fs->L;
+  const cup_input *u = fs->u;
+  int n = fs->n, fail = 0;
+  int nterms = u && !u->fn ? u->nterms : 0;
+  fs->nw = 0;
+  fs->gen_of_term = zalloc((size_t)nterms + 1, sizeof(int), &fail);
+  for (int k = 0; k < nterms && !fail; k++) { fs->gen_of_term[k] = fs->nw; fs->nw += gen_states(&u->terms[k]); }
+  int na = fs->na = n + fs->nw;
+  if (na > CUP_EXPONENTIAL_MAX_DIM)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "exponential scheme: state plus input generators = %d exceeds the dense limit %d; "
+                    "use the explicit or implicit scheme", na, CUP_EXPONENTIAL_MAX_DIM);
+  size_t NA = (size_t)na * na;
+  fs->M = zalloc(NA, sizeof(double), &fail);
+  fs->Eh = zalloc(NA, sizeof(double), &fail);
+  fs->Es = zalloc(NA, sizeof(double), &fail);
+  fs->ework = zalloc(4 * NA, sizeof(double), &fail);
+  fs->wgen = zalloc((size_t)fs->nw + 1, sizeof(double), &fail);
+  fs->xa = zalloc((size_t)na, sizeof(double), &fail);
+  fs->xa2 = zalloc((size_t)na, sizeof(double), &fail);
+  if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "exponential scheme: out of memory");
+  /* M = [A  E_coupling; 0  W] */
+  if (L->has_A)
+    for (int j = 0; j < n; j++)
+      for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) fs->M[L->A.i[k] + (size_t)j * na] = L->A.x[k];
+  for (int k = 0; k < nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    int g = n + fs->gen_of_term[k];
+    if (L->has_E)                            /* x' += E(:, comp) * (first generator state) */
+      for (int q = L->E.p[t->comp]; q < L->E.p[t->comp + 1]; q++) fs->M[L->E.i[q] + (size_t)g * na] = L->E.x[q];
+    if (t->kind == CUP_WAVE_SINE) {
+      fs->M[g + (size_t)(g + 1) * na] = t->omega;     /* s' = om c */
+      fs->M[(g + 1) + (size_t)g * na] = -t->omega;    /* c' = -om s */
+    } else if (t->kind == CUP_WAVE_PWL) {
+      fs->M[g + (size_t)(g + 1) * na] = 1;             /* v' = slope */
+    }
+  }
+  double *hM = fs->Es;
+  for (size_t q = 0; q < NA; q++) hM[q] = fs->h * fs->M[q];
+  cup_dense_expm(hM, na, fs->Eh, fs->ework);
+  /* callback input: Gauss-Legendre convolution with e^{A h (1 - tau)} E */
+  if (u && u->fn && L->has_E) {
+    fs->nu = 8;
+    if (gl_nodes(fs->nu, fs->unode, fs->uweight)) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    fs->Q = zalloc((size_t)fs->nu * n * fs->p, sizeof(double), &fail);
+    double *expA = zalloc((size_t)n * n, sizeof(double), &fail), *hA = zalloc((size_t)n * n, sizeof(double), &fail);
+    double *w3 = zalloc(3 * (size_t)n * n, sizeof(double), &fail);
+    if (fail) { free(expA); free(hA); free(w3); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
+    dense_A(L, hA);
+    for (int q = 0; q < fs->nu; q++) {
+      double tau = fs->h * (1 - fs->unode[q]);
+      double *sc = fs->Es;                   /* tau A, then exp */
+      for (size_t e = 0; e < (size_t)n * n; e++) sc[e] = tau * hA[e];
+      cup_dense_expm(sc, n, expA, w3);
+      double *Qq = fs->Q + (size_t)q * n * fs->p;
+      for (int c = 0; c < fs->p; c++)
+        for (int r = 0; r < n; r++) {
+          double s = 0;
+          for (int k = L->E.p[c]; k < L->E.p[c + 1]; k++) s += expA[r + (size_t)L->E.i[k] * n] * L->E.x[k];
+          Qq[r + (size_t)c * n] = s;
+        }
+    }
+    free(expA); free(hA); free(w3);
+  }
+  return CUP_OK;
+}
+
+/* Generator states on (a, b), from the waveform itself (not propagated, so
+ * nothing drifts): constants, sin/cos at a, the square's value on the open
+ * interval (at its midpoint: the jump instants carry no weight), the
+ * table's value at a and its slope on (a, b). */
+static void gen_values(const cup_freestep *fs, double a, double b) {
+  const cup_input *u = fs->u;
+  double mid = 0.5 * (a + b);
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    double *w = fs->wgen + fs->gen_of_term[k];
+    switch (t->kind) {
+      case CUP_WAVE_CONSTANT: w[0] = t->value; break;
+      case CUP_WAVE_SINE:
+        w[0] = t->amp * sin(t->omega * a + t->phase);
+        w[1] = t->amp * cos(t->omega * a + t->phase);
+        break;
+      case CUP_WAVE_SQUARE: w[0] = cup_term_value(t, mid); break;
+      case CUP_WAVE_PWL: {
+        double va = cup_term_value(t, a);
+        w[0] = va;
+        w[1] = mid > a ? (cup_term_value(t, mid) - va) / (mid - a) : 0;
+        break;
+      }
+    }
+  }
+}
+
+/* x <- top block of E [x; w(a..b)], E = exp((b - a) M). */
+static void exp_propagate(cup_freestep *fs, const double *E, double *x, double a, double b) {
+  int n = fs->n, na = fs->na;
+  if (fs->nw) gen_values(fs, a, b);
+  memcpy(fs->xa, x, sizeof(double) * (size_t)n);
+  memcpy(fs->xa + n, fs->wgen, sizeof(double) * (size_t)fs->nw);
+  for (int i = 0; i < n; i++) {
+    double s = 0;
+    for (int j = 0; j < na; j++) s += E[i + (size_t)j * na] * fs->xa[j];
+    x[i] = s;
+  }
+}
+
+/* A step holding square-wave jumps or table knots is split there; each piece
+ * needs exp(tau M) for its own length (rare: a few steps per period). */
+static void exp_step(cup_freestep *fs, double t0, double t1, const double *x, double *xf) {
+  memcpy(xf, x, sizeof(double) * (size_t)fs->n);
+  double brk = fs->nw ? cup_input_next_break(fs->u, t0) : INFINITY;
+  if (!(brk < t1)) {
+    exp_propagate(fs, fs->Eh, xf, t0, t1);
+    return;
+  }
+  size_t NA = (size_t)fs->na * fs->na;
+  for (double a = t0; a < t1;) {
+    double b = fmin(cup_input_next_break(fs->u, a), t1);
+    double *scaled = fs->ework + 3 * NA;     /* (b - a) M */
+    for (size_t q = 0; q < NA; q++) scaled[q] = (b - a) * fs->M[q];
+    cup_dense_expm(scaled, fs->na, fs->Es, fs->ework);
+    exp_propagate(fs, fs->Es, xf, a, b);
+    a = b;
+  }
+}
+
+/* ---- set-up and the step ------------------------------------------------------- */
+
+static int implicit_init(cup_freestep *fs, char *errmsg) {
+  int n = fs->n, fail = 0;
+  if (n > CUP_IMPLICIT_MAX_DIM)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "implicit scheme: state dimension %d exceeds the dense limit %d; use the explicit scheme",
+                    n, CUP_IMPLICIT_MAX_DIM);
+  fs->lu = zalloc((size_t)n * n, sizeof(double), &fail);
+  fs->piv = zalloc((size_t)n, sizeof(int), &fail);
+  if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "implicit scheme: out of memory");
+  dense_A(fs->L, fs->lu);
+  for (size_t q = 0; q < (size_t)n * n; q++) fs->lu[q] *= -fs->h;
+  for (int i = 0; i < n; i++) fs->lu[i + (size_t)i * n] += 1;
+  int bad = cup_dense_lu(fs->lu, n, fs->piv);
+  if (bad)
+    return cup_fail(errmsg, CUP_ERR_LINALG, "implicit scheme: I - h A is singular (column %d)", bad - 1);
+  return CUP_OK;
+}
+
+int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
+                      double h, int f_order, char *errmsg) {
+  memset(fs, 0, sizeof *fs);
+  fs->scheme = scheme;
+  fs->n = L->n;
+  fs->p = L->p;
+  fs->h = h;
+  fs->L = L;
+  fs->u = L->p > 0 ? u : NULL;
+  int n = fs->n, p = fs->p, fail = 0;
+  if (p > 0 && !u)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the LCS has %d input(s) but no input u(t) was given", p);
+  if (u && L->p > 0 && cup_input_dim(u) != p)
+    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the LCS expects %d",
+                    cup_input_dim(u), p);
+  fs->ubuf = zalloc((size_t)p + 1, sizeof(double), &fail);
+  fs->eu_const = zalloc((size_t)n, sizeof(double), &fail);
+  fs->fsum = zalloc((size_t)n, sizeof(double), &fail);
+  fs->fbuf = zalloc((size_t)n, sizeof(double), &fail);
+  fs->work = zalloc(2 * (size_t)n, sizeof(double), &fail);
+  if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "free step: out of memory");
+  if (f_order < 1 || f_order > CUP_GL_MAX)
+    return cup_fail(errmsg, CUP_ERR_ARG, "f_order = %d must be in [1, %d]", f_order, CUP_GL_MAX);
+  fs->nf = f_order;
+  if (gl_nodes(fs->nf, fs->fnode, fs->fweight)) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  if (fs->u && fs->u->fn && cup_quad_ws_init(&fs->qws, p))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "input quadrature: out of memory");
+  if (fs->u && !fs->u->fn) {
+    fs->term_h = zalloc((size_t)fs->u->nterms + 1, sizeof(double), &fail);
+    if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "free step: out of memory");
+    for (int k = 0; k < fs->u->nterms; k++) {
+      const cup_term *t = &fs->u->terms[k];
+      if (t->kind == CUP_WAVE_CONSTANT) fs->term_h[k] = t->value * h;
+      else if (t->kind == CUP_WAVE_SINE)
+        fs->term_h[k] = t->omega > 0 ? 2 * t->amp / t->omega * sin(0.5 * t->omega * h)
+                                     : t->amp * sin(t->phase) * h;
+    }
+  }
+  /* a constant input is integrated once */
+  fs->const_input = !fs->u || cup_input_is_constant(fs->u);
+  if (fs->u && fs->const_input && L->has_E) {
+    cup_input_integral_ws(fs->u, 0, h, fs->ubuf, NULL);
+    cup_sparse_gaxpy(&L->E, fs->ubuf, fs->eu_const);
+  }
+  if (scheme == CUP_SCHEME_IMPLICIT) return implicit_init(fs, errmsg);
+  if (scheme == CUP_SCHEME_EXPONENTIAL) return exp_init(fs, errmsg);
+  if (scheme != CUP_SCHEME_EXPLICIT) return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", scheme);
+  return CUP_OK;
+}
+
+void cup_freestep_free(cup_freestep *fs) {
+  free(fs->eu_const); free(fs->term_h); free(fs->ubuf); free(fs->fsum); free(fs->fbuf); free(fs->work);
+  cup_quad_ws_free(&fs->qws);
+  free(fs->lu); free(fs->piv);
+  free(fs->gen_of_term); free(fs->M); free(fs->Eh); free(fs->Es); free(fs->ework);
+  free(fs->wgen); free(fs->xa); free(fs->xa2); free(fs->Q);
+  memset(fs, 0, sizeof *fs);
+}
+
+/* int_{t0}^{t1} u over a full step of the grid, with the step-length
+ * factors of constants and sines cached (one sin per sine term and step:
+ * int A sin(w s + p) = 2A/w sin(w h/2) sin(w t_mid + p)). */
+static void waveform_step_integral(cup_freestep *fs, double t0, double t1) {
+  const cup_input *u = fs->u;
+  double tmid = 0.5 * (t0 + t1);
+  for (int j = 0; j < fs->p; j++) fs->ubuf[j] = 0;
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    double v;
+    switch (t->kind) {
+      case CUP_WAVE_CONSTANT: v = fs->term_h[k]; break;
+      case CUP_WAVE_SINE: v = t->omega > 0 ? fs->term_h[k] * sin(t->omega * tmid + t->phase) : fs->term_h[k]; break;
+      default: v = cup_term_integral(t, t0, t1); break;
+    }
+    fs->ubuf[t->comp] += v;
+  }
+}
+
+/* xf += E int_{t0}^{t1} u (nothing without input; the precomputed h E u
+ * for a constant one). */
+static int add_input(cup_freestep *fs, double t0, double t1, double *xf) {
+  const cup_lcs *L = fs->L;
+  if (!fs->u || !L->has_E) return CUP_OK;
+  if (fs->const_input) {
+    for (int i = 0; i < fs->n; i++) xf[i] += fs->eu_const[i];
+    return CUP_OK;
+  }
+  int st = CUP_OK;
+  if (fs->u->fn) st = cup_input_integral_ws(fs->u, t0, t1, fs->ubuf, &fs->qws);
+  else waveform_step_integral(fs, t0, t1);
+  if (st < 0) return st;
+  cup_sparse_gaxpy(&L->E, fs->ubuf, xf);
+  return st;
+}
+
+/* int_{t0}^{t1} f(s, x) ds by Gauss-Legendre, x frozen (paper, Sec. 3). */
+static int rhs_term(cup_freestep *fs, double t0, const double *x, cup_rhs_fn f, void *ctx) {
+  int n = fs->n;
+  memset(fs->fsum, 0, sizeof(double) * (size_t)n);
+  for (int q = 0; q < fs->nf; q++) {
+    if (f(t0 + fs->fnode[q] * fs->h, x, fs->fbuf, ctx) != 0) return CUP_ERR_CALLBACK;
+    for (int i = 0; i < n; i++) {
+      if (!isfinite(fs->fbuf[i])) return CUP_ERR_CALLBACK;
+      fs->fsum[i] += fs->h * fs->fweight[q] * fs->fbuf[i];
+    }
+  }
+  return CUP_OK;
+}
+
+/* Callback input under the exponential scheme: Gauss-Legendre on the
+ * convolution with the precomputed e^{A h (1 - tau_q)} E. */
+static int exp_callback_input(cup_freestep *fs, double t0, double *xf) {
+  int n = fs->n, p = fs->p;
+  for (int q = 0; q < fs->nu; q++) {
+    if (cup_input_eval(fs->u, t0 + fs->unode[q] * fs->h, fs->ubuf)) return CUP_ERR_CALLBACK;
+    const double *Qq = fs->Q + (size_t)q * n * p;
+    for (int c = 0; c < p; c++) {
+      double wc = fs->h * fs->uweight[q] * fs->ubuf[c];
+      for (int r = 0; r < n; r++) xf[r] += Qq[r + (size_t)c * n] * wc;
+    }
+  }
+  return CUP_OK;
+}
+
+int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf,
+                       cup_rhs_fn f, void *fctx) {
+  const cup_lcs *L = fs->L;
+  int n = fs->n, st = CUP_OK;
+  if (f && (st = rhs_term(fs, t0, x, f, fctx)) < 0) return st;
+  switch (fs->scheme) {
+    case CUP_SCHEME_EXPLICIT:
+      cup_copy(xf, x, n);
+      if (L->has_A)                          /* + h A x */
+        for (int j = 0; j < n; j++) {
+          double hx = fs->h * x[j];
+          for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) xf[L->A.i[k]] += L->A.x[k] * hx;
+        }
+      if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
+      break;
+    case CUP_SCHEME_IMPLICIT:
+      for (int i = 0; i < n; i++) xf[i] = x[i] + (f ? fs->fsum[i] : 0);
+      if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
+      cup_dense_lu_solve(fs->lu, n, fs->piv, xf, fs->work);
+      return st;
+    case CUP_SCHEME_EXPONENTIAL:
+      exp_step(fs, t0, t1, x, xf);
+      if (fs->u && fs->u->fn && L->has_E && exp_callback_input(fs, t0, xf)) return CUP_ERR_CALLBACK;
+      break;
+  }
+  if (f)
+    for (int i = 0; i < n; i++) xf[i] += fs->fsum[i];
+  return st;
+}

@@ -1,0 +1,59 @@
+/* freestep — the free step of the catching-up scheme, before projection:
+ *   explicit:    x_k + h A x_k + E int u + int f
+ *   implicit:    (I - h A)^-1 (x_k + E int u + int f)
+ *   exponential: e^{hA} x_k + int e^{A(t_{k+1}-s)} E u(s) ds + int f
+ * with f(s, x_k) frozen at x_k as in the paper. */
+#ifndef CUP_FREESTEP_H
+#define CUP_FREESTEP_H
+
+#include "catchup/integrator.h"
+#include "input_impl.h"
+#include "lcs_impl.h"
+
+/* Dense limits of the implicit and exponential schemes (the explicit scheme
+ * has none: A stays sparse). */
+#define CUP_IMPLICIT_MAX_DIM 512
+#define CUP_EXPONENTIAL_MAX_DIM 256
+#define CUP_GL_MAX 16
+
+typedef struct cup_freestep {
+  int scheme, n, p;
+  double h;
+  const cup_lcs *L;
+  const cup_input *u;
+  int const_input;          /* u constant: E int u = h E u precomputed */
+  double *eu_const;         /* n */
+  double *ubuf, *fsum, *fbuf, *work;       /* p, n, n, 2 n scratch */
+  cup_quad_ws qws;          /* callback input quadrature */
+  double *term_h;           /* per waveform term over a full step: constant c h;
+                               sine 2A/w sin(w h / 2) (times sin(w t_mid + phase)) */
+  /* Gauss-Legendre nodes on [0, 1] for int f and for callback convolutions */
+  int nf;
+  double fnode[CUP_GL_MAX], fweight[CUP_GL_MAX];
+  int nu;
+  double unode[CUP_GL_MAX], uweight[CUP_GL_MAX];
+  /* implicit: LU of I - h A */
+  double *lu;
+  int *piv;
+  /* exponential */
+  int nw, na;               /* generator states, n + nw */
+  int *gen_of_term;         /* first generator state of each input term */
+  double *M;                /* na x na augmented generator */
+  double *Eh;               /* exp(h M), na x na */
+  double *Es, *ework;       /* exp(tau M) for split steps; 3 na^2 work */
+  double *wgen, *xa, *xa2;  /* nw; na; na */
+  double *Q;                /* callback input: e^{A h (1 - tau_q)} E, n x p per node */
+} cup_freestep;
+
+int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
+                      double h, int f_order, char *errmsg);
+void cup_freestep_free(cup_freestep *fs);
+/* xf from x over [t0, t1] (t1 - t0 = h). Returns CUP_OK, CUP_ERR_CALLBACK,
+ * or CUP_WARN_QUADRATURE. */
+int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf,
+                       cup_rhs_fn f, void *fctx);
+/* h * spectral radius of A (dense eigenvalues up to CUP_IMPLICIT_MAX_DIM,
+ * a Gershgorin upper bound beyond). */
+double cup_freestep_h_rho(const cup_lcs *L, double h);
+
+#endif

@@ -1,0 +1,277 @@
+/* input — u(t) in R^p as sums of built-in waveforms with exact integrals,
+ * or a user callback integrated by adaptive GSL quadrature. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_integration.h>
+#include "catchup.h"
+#include "input_impl.h"
+#include "linalg.h"
+
+#define TWO_PI 6.283185307179586476925286766559
+
+int cup_input_create(cup_input **out, int p, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "input: output pointer is NULL");
+  *out = NULL;
+  if (p < 0) return cup_fail(errmsg, CUP_ERR_DIM, "input: dimension %d < 0", p);
+  cup_input *u = calloc(1, sizeof *u);
+  if (!u) return cup_fail(errmsg, CUP_ERR_NOMEM, "input: out of memory");
+  u->p = p;
+  *out = u;
+  return CUP_OK;
+}
+
+void cup_input_free(cup_input **up) {
+  if (!up || !*up) return;
+  cup_input *u = *up;
+  for (int k = 0; k < u->nterms; k++) { free(u->terms[k].t); free(u->terms[k].v); }
+  free(u->terms);
+  free(u);
+  *up = NULL;
+}
+
+int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
+  if (!u || !w) return cup_fail(errmsg, CUP_ERR_ARG, "input: NULL argument");
+  if (j < 0 || j >= u->p)
+    return cup_fail(errmsg, CUP_ERR_DIM, "input: component %d outside [0, %d)", j, u->p);
+  cup_term t = {0};
+  t.comp = j;
+  t.kind = w->kind;
+  switch (w->kind) {
+    case CUP_WAVE_CONSTANT:
+      if (!isfinite(w->value)) return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: constant value is %g", w->value);
+      t.value = w->value;
+      break;
+    case CUP_WAVE_SINE:
+    case CUP_WAVE_SQUARE:
+      if (!isfinite(w->amplitude) || !isfinite(w->frequency) || !isfinite(w->phase))
+        return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: amplitude %g, frequency %g, phase %g must be finite",
+                        w->amplitude, w->frequency, w->phase);
+      if (w->frequency < 0)
+        return cup_fail(errmsg, CUP_ERR_ARG, "input: frequency %g must be >= 0", w->frequency);
+      t.amp = w->amplitude;
+      t.omega = TWO_PI * w->frequency;
+      t.phase = w->phase;
+      break;
+    case CUP_WAVE_PWL:
+      if (w->npoints < 1 || !w->t || !w->v)
+        return cup_fail(errmsg, CUP_ERR_ARG, "input: a piecewise-linear table needs at least one point");
+      for (int k = 0; k < w->npoints; k++) {
+        if (!isfinite(w->t[k]) || !isfinite(w->v[k]))
+          return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: table point %d is (%g, %g)", k, w->t[k], w->v[k]);
+        if (k > 0 && !(w->t[k] > w->t[k - 1]))
+          return cup_fail(errmsg, CUP_ERR_ARG, "input: table times must increase (point %d: %g after %g)",
+                          k, w->t[k], w->t[k - 1]);
+      }
+      t.np = w->npoints;
+      t.t = malloc(sizeof(double) * (size_t)t.np);
+      t.v = malloc(sizeof(double) * (size_t)t.np);
+      if (!t.t || !t.v) { free(t.t); free(t.v); return cup_fail(errmsg, CUP_ERR_NOMEM, "input: out of memory"); }
+      memcpy(t.t, w->t, sizeof(double) * (size_t)t.np);
+      memcpy(t.v, w->v, sizeof(double) * (size_t)t.np);
+      break;
+    default:
+      return cup_fail(errmsg, CUP_ERR_ARG, "input: unknown waveform kind %d", (int)w->kind);
+  }
+  cup_term *nt = realloc(u->terms, sizeof(cup_term) * ((size_t)u->nterms + 1));
+  if (!nt) { free(t.t); free(t.v); return cup_fail(errmsg, CUP_ERR_NOMEM, "input: out of memory"); }
+  u->terms = nt;
+  u->terms[u->nterms++] = t;
+  return CUP_OK;
+}
+
+int cup_input_set_callback(cup_input *u, cup_input_fn fn, void *ctx, double abs_tol, double rel_tol) {
+  if (!u || !fn) return CUP_ERR_ARG;
+  if (!(abs_tol >= 0) || !(rel_tol >= 0) || (abs_tol == 0 && rel_tol == 0)) return CUP_ERR_ARG;
+  u->fn = fn;
+  u->ctx = ctx;
+  u->abs_tol = abs_tol;
+  u->rel_tol = rel_tol;
+  return CUP_OK;
+}
+
+int cup_input_dim(const cup_input *u) { return u ? u->p : 0; }
+
+int cup_input_is_constant(const cup_input *u) {
+  if (!u) return 1;
+  if (u->fn) return 0;
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    if ((t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_SQUARE) && t->amp != 0 && t->omega != 0) return 0;
+    if (t->kind == CUP_WAVE_PWL && t->np > 1) return 0;
+  }
+  return 1;
+}
+
+/* The square wave in units of pi: q = omega t / pi + phase / pi, so that
+ * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from
+ * sin) makes the jump instants exact: sign(0) = 0 there, as in the paper,
+ * even where sin(pi q) evaluates to 1e-16. */
+static double square_q(const cup_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
+
+/* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
+static double mod2(double q) { return q - 2.0 * floor(0.5 * q); }
+
+static double sign_sin_q(double q) {
+  double r = mod2(q);
+  double tol = 4 * DBL_EPSILON * fmax(1.0, fabs(q));
+  if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
+  return r < 1 ? 1 : -1;
+}
+
+/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1. */
+static double sign_sin_q_integral(double q) {
+  double r = mod2(q);
+  return r <= 1 ? r : 2 - r;
+}
+
+/* Index of the PWL segment [t_k, t_{k+1}] holding t (binary search). */
+static int pwl_segment(const cup_term *w, double t) {
+  int lo = 0, hi = w->np - 1;
+  while (hi - lo > 1) {
+    int mid = (lo + hi) / 2;
+    if (w->t[mid] <= t) lo = mid; else hi = mid;
+  }
+  return lo;
+}
+
+static double pwl_value(const cup_term *w, double t) {
+  if (t <= w->t[0]) return w->v[0];
+  if (t >= w->t[w->np - 1]) return w->v[w->np - 1];
+  int k = pwl_segment(w, t);
+  double s = (t - w->t[k]) / (w->t[k + 1] - w->t[k]);
+  return w->v[k] + s * (w->v[k + 1] - w->v[k]);
+}
+
+/* Exact integral of the PWL table over [a, b] (a <= b): constant tails plus
+ * trapezoids of the linear pieces, each clipped to [a, b]. */
+static double pwl_integral(const cup_term *w, double a, double b) {
+  double t0 = w->t[0], t1 = w->t[w->np - 1], sum = 0;
+  if (a < t0) { double e = fmin(b, t0); sum += w->v[0] * (e - a); a = e; }
+  if (b > t1) { double s = fmax(a, t1); sum += w->v[w->np - 1] * (b - s); b = s; }
+  if (!(b > a)) return sum;
+  for (int k = pwl_segment(w, a); k < w->np - 1 && w->t[k] < b; k++) {
+    double lo = fmax(a, w->t[k]), hi = fmin(b, w->t[k + 1]);
+    if (!(hi > lo)) continue;
+    sum += 0.5 * (pwl_value(w, lo) + pwl_value(w, hi)) * (hi - lo);
+  }
+  return sum;
+}
+
+double cup_term_value(const cup_term *w, double t) {
+  switch (w->kind) {
+    case CUP_WAVE_CONSTANT: return w->value;
+    case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
+    case CUP_WAVE_SQUARE: return w->amp * sign_sin_q(square_q(w, t));
+    case CUP_WAVE_PWL: return pwl_value(w, t);
+  }
+  return 0;
+}
+
+double cup_term_integral(const cup_term *w, double a, double b) {
+  switch (w->kind) {
+    case CUP_WAVE_CONSTANT: return w->value * (b - a);
+    case CUP_WAVE_SINE:
+      if (w->omega == 0) return w->amp * sin(w->phase) * (b - a);
+      /* cos(wa+p) - cos(wb+p) as a product: no cancellation for small b - a */
+      return 2 * w->amp / w->omega * sin(0.5 * w->omega * (a + b) + w->phase) *
+             sin(0.5 * w->omega * (b - a));
+    case CUP_WAVE_SQUARE:
+      if (w->omega == 0) return w->amp * sign_sin_q(w->phase / M_PI) * (b - a);
+      return w->amp * M_PI / w->omega * (sign_sin_q_integral(square_q(w, b)) -
+                                         sign_sin_q_integral(square_q(w, a)));
+    case CUP_WAVE_PWL: return pwl_integral(w, a, b);
+  }
+  return 0;
+}
+
+int cup_input_eval(const cup_input *u, double t, double *out) {
+  if (!u || !out) return CUP_ERR_ARG;
+  if (u->fn) {
+    if (u->fn(t, out, u->ctx) != 0) return CUP_ERR_CALLBACK;
+    for (int j = 0; j < u->p; j++) if (!isfinite(out[j])) return CUP_ERR_CALLBACK;
+    return CUP_OK;
+  }
+  for (int j = 0; j < u->p; j++) out[j] = 0;
+  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_value(&u->terms[k], t);
+  return CUP_OK;
+}
+
+/* ---- callback quadrature ------------------------------------------------------ */
+
+typedef struct { const cup_input *u; int comp; double *buf; int failed; } quad_ctx;
+
+static double quad_fn(double t, void *vp) {
+  quad_ctx *q = vp;
+  if (q->failed) return 0;
+  if (q->u->fn(t, q->buf, q->u->ctx) != 0 || !isfinite(q->buf[q->comp])) { q->failed = 1; return 0; }
+  return q->buf[q->comp];
+}
+
+int cup_input_integral_ws(const cup_input *u, double a, double b, double *out,
+                          cup_quad_ws *ws) {
+  if (!u->fn) {
+    for (int j = 0; j < u->p; j++) out[j] = 0;
+    for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_integral(&u->terms[k], a, b);
+    return CUP_OK;
+  }
+  int st = CUP_OK;
+  gsl_error_handler_t *old = gsl_set_error_handler_off();   /* GSL would abort */
+  for (int j = 0; j < u->p; j++) {
+    quad_ctx q = {u, j, ws->buf, 0};
+    gsl_function F = {quad_fn, &q};
+    double err = 0;
+    int rc = gsl_integration_qag(&F, a, b, u->abs_tol, u->rel_tol, ws->limit,
+                                 GSL_INTEG_GAUSS21, ws->w, &out[j], &err);
+    if (q.failed) { st = CUP_ERR_CALLBACK; break; }
+    if (rc) st = cup_status_merge(st, CUP_WARN_QUADRATURE);
+  }
+  gsl_set_error_handler(old);
+  return st;
+}
+
+int cup_quad_ws_init(cup_quad_ws *ws, int p) {
+  ws->limit = 200;
+  ws->w = gsl_integration_workspace_alloc(ws->limit);
+  ws->buf = malloc(sizeof(double) * ((size_t)p + 1));
+  if (!ws->w || !ws->buf) { cup_quad_ws_free(ws); return CUP_ERR_NOMEM; }
+  return CUP_OK;
+}
+
+void cup_quad_ws_free(cup_quad_ws *ws) {
+  if (ws->w) gsl_integration_workspace_free(ws->w);
+  free(ws->buf);
+  ws->w = NULL;
+  ws->buf = NULL;
+}
+
+int cup_input_integral(const cup_input *u, double a, double b, double *out) {
+  if (!u || !out) return CUP_ERR_ARG;
+  if (!u->fn) return cup_input_integral_ws(u, a, b, out, NULL);
+  cup_quad_ws ws = {0};
+  if (cup_quad_ws_init(&ws, u->p)) return CUP_ERR_NOMEM;
+  int st = cup_input_integral_ws(u, a, b, out, &ws);
+  cup_quad_ws_free(&ws);
+  return st;
+}
+
+double cup_input_next_break(const cup_input *u, double t) {
+  double next = INFINITY;
+  if (!u) return next;
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *w = &u->terms[k];
+    if (w->kind == CUP_WAVE_SQUARE && w->omega > 0 && w->amp != 0) {
+      /* jumps at integer q */
+      double j = floor(square_q(w, t)) + 1;
+      double tb = (j * M_PI - w->phase) / w->omega;
+      if (!(tb > t)) tb = ((j + 1) * M_PI - w->phase) / w->omega;
+      next = fmin(next, tb);
+    } else if (w->kind == CUP_WAVE_PWL) {
+      for (int i = 0; i < w->np; i++)
+        if (w->t[i] > t) { next = fmin(next, w->t[i]); break; }
+    }
+  }
+  return next;
+}

@@ -1,0 +1,342 @@
+/* integrator — the inexact catching-up algorithm (paper, Sec. 3, eq. for
+ * x_{k+1}): a free step (freestep.c), then an (eps_n, eta_n)-projection onto
+ * K(t_{k+1}) in the P-metric (projector.c). Everything that does not depend
+ * on the state is prepared once in cup_integrator_create; a step allocates
+ * nothing and a run keeps only the current state. */
+#define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "catchup.h"
+#include "freestep.h"
+#include "lcs_impl.h"
+#include "polyset_impl.h"
+
+struct cup_integrator {
+  const cup_lcs *L;
+  const cup_input *u;
+  cup_integrator_options o;
+  int n, m, p;
+  double h, eps_n, eta_n, h_rho;
+  cup_freestep fs;
+  cup_projector *proj;
+  double *x, *xnew, *xf, *g, *ut;
+};
+
+/* ---- schedules ---------------------------------------------------------------- */
+
+static const char *skip_ws(const char *s) { while (isspace((unsigned char)*s)) s++; return s; }
+
+int cup_schedule_parse(const char *spec, cup_schedule *out, char *errmsg) {
+  if (!spec || !out) return cup_fail(errmsg, CUP_ERR_ARG, "schedule: NULL argument");
+  const char *s = skip_ws(spec);
+  double coef = 1, power = 0;
+  char *end;
+  if (*s != 'n') {                           /* a number, maybe followed by "*n^p" */
+    coef = strtod(s, &end);
+    if (end == s) goto bad;
+    s = skip_ws(end);
+    if (*s == '*') {
+      s = skip_ws(s + 1);
+      if (*s != 'n') goto bad;
+    } else if (*s) {
+      goto bad;
+    }
+  }
+  if (*s == 'n') {
+    s = skip_ws(s + 1);
+    if (*s == '^') {
+      s = skip_ws(s + 1);
+      power = strtod(s, &end);
+      if (end == s) goto bad;
+      s = end;
+    } else {
+      power = 1;
+    }
+    s = skip_ws(s);
+    if (*s) goto bad;
+  }
+  if (!isfinite(coef) || !isfinite(power) || coef < 0)
+    return cup_fail(errmsg, CUP_ERR_PARSE, "schedule '%s': the coefficient must be finite and >= 0", spec);
+  out->coef = coef;
+  out->power = power;
+  return CUP_OK;
+bad:
+  return cup_fail(errmsg, CUP_ERR_PARSE,
+                  "schedule '%s': expected a number, \"n^-2.1\" or \"0.5*n^-1.05\"", spec);
+}
+
+double cup_schedule_value(const cup_schedule *s, long n) {
+  if (!s) return NAN;
+  return s->power == 0 ? s->coef : s->coef * pow((double)n, s->power);
+}
+
+int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size) {
+  if (!s) return -1;
+  if (s->power == 0) return snprintf(buf, size, "%.17g", s->coef);
+  if (s->coef == 1) return snprintf(buf, size, "n^%.17g", s->power);
+  return snprintf(buf, size, "%.17g*n^%.17g", s->coef, s->power);
+}
+
+const char *cup_scheme_name(int scheme) {
+  switch (scheme) {
+    case CUP_SCHEME_EXPLICIT: return "explicit";
+    case CUP_SCHEME_IMPLICIT: return "implicit";
+    case CUP_SCHEME_EXPONENTIAL: return "exponential";
+  }
+  return "unknown";
+}
+
+int cup_scheme_parse(const char *name) {
+  for (int k = 0; k < 3; k++)
+    if (name && strcmp(name, cup_scheme_name(k)) == 0) return k;
+  return -1;
+}
+
+void cup_integrator_options_default(cup_integrator_options *o) {
+  if (!o) return;
+  memset(o, 0, sizeof *o);
+  o->scheme = CUP_SCHEME_EXPLICIT;
+  o->T = 1;
+  o->n = 100;
+  o->eps = (cup_schedule){1, -2.1};
+  o->eta = (cup_schedule){1, -1.05};
+  cup_projector_options_default(&o->proj);
+  o->output = CUP_OUTPUT_EVERY;
+  o->output_every = 1;
+  o->output_samples = 0;
+  o->f_order = 3;
+}
+
+/* ---- set-up --------------------------------------------------------------------- */
+
+static int validate(const cup_integrator_options *o, char *errmsg) {
+  if (!(o->T > 0) || !isfinite(o->T))
+    return cup_fail(errmsg, CUP_ERR_ARG, "T = %g must be finite and > 0", o->T);
+  if (o->n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "n = %ld must be >= 1", o->n);
+  if (o->scheme < CUP_SCHEME_EXPLICIT || o->scheme > CUP_SCHEME_EXPONENTIAL)
+    return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", (int)o->scheme);
+  double e = cup_schedule_value(&o->eps, o->n), t = cup_schedule_value(&o->eta, o->n);
+  if (!(e >= 0) || !isfinite(e) || !(t >= 0) || !isfinite(t))
+    return cup_fail(errmsg, CUP_ERR_ARG, "tolerances eps_n = %g, eta_n = %g must be finite and >= 0", e, t);
+  switch (o->output) {
+    case CUP_OUTPUT_EVERY:
+      if (o->output_every < 1)
+        return cup_fail(errmsg, CUP_ERR_ARG, "output every %ld: the stride must be >= 1", o->output_every);
+      break;
+    case CUP_OUTPUT_SAMPLES:
+      if (o->output_samples < 2 || o->output_samples - 1 > o->n)
+        return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be in [2, n + 1 = %ld]",
+                        o->output_samples, o->n + 1);
+      break;
+    case CUP_OUTPUT_FINAL:
+    case CUP_OUTPUT_NONE:
+      break;
+    default:
+      return cup_fail(errmsg, CUP_ERR_ARG, "unknown output kind %d", (int)o->output);
+  }
+  if (!(o->max_wall_seconds >= 0))
+    return cup_fail(errmsg, CUP_ERR_ARG, "max_wall_seconds = %g must be >= 0", o->max_wall_seconds);
+  return CUP_OK;
+}
+
+int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
+                          const cup_integrator_options *opt, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
+  *out = NULL;
+  if (!L) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
+  cup_integrator_options o;
+  if (opt) o = *opt; else cup_integrator_options_default(&o);
+  int st = validate(&o, errmsg);
+  if (st) return st;
+  cup_integrator *I = calloc(1, sizeof *I);
+  if (!I) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  I->L = L; I->u = u; I->o = o;
+  I->n = L->n; I->m = L->m; I->p = L->p;
+  I->h = o.T / (double)o.n;
+  I->eps_n = cup_schedule_value(&o.eps, o.n);
+  I->eta_n = cup_schedule_value(&o.eta, o.n);
+  size_t N = (size_t)I->n, M = (size_t)I->m + 1, P = (size_t)I->p + 1;
+  I->x = calloc(N, sizeof(double));
+  I->xnew = calloc(N, sizeof(double));
+  I->xf = calloc(N, sizeof(double));
+  I->g = calloc(M, sizeof(double));
+  I->ut = calloc(P, sizeof(double));
+  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut) {
+    cup_integrator_free(&I);
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  }
+  st = cup_freestep_init(&I->fs, L, u, o.scheme, I->h, o.f_order, errmsg);
+  /* the paper's tolerances are absolute; a zero schedule asks for the exact
+   * projection, certified relative to the problem's scale */
+  cup_projector_options po = o.proj;
+  po.eps_abs = I->eps_n;
+  po.eps_rel = I->eps_n > 0 ? 0 : 1e-12;
+  po.eta_abs = I->eta_n;
+  po.eta_rel = I->eta_n > 0 ? 0 : 1e-10;
+  if (!st) st = cup_projector_create(&I->proj, L->K, &po, errmsg);
+  if (st) { cup_integrator_free(&I); return st; }
+  I->h_rho = cup_freestep_h_rho(L, I->h);
+  *out = I;
+  return CUP_OK;
+}
+
+void cup_integrator_free(cup_integrator **Ip) {
+  if (!Ip || !*Ip) return;
+  cup_integrator *I = *Ip;
+  cup_freestep_free(&I->fs);
+  cup_projector_free(&I->proj);
+  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut);
+  free(I);
+  *Ip = NULL;
+}
+
+const double *cup_integrator_state(const cup_integrator *I) { return I ? I->x : NULL; }
+
+/* ---- the run ---------------------------------------------------------------------- */
+
+/* t_k = k T / n computed from k alone: no accumulation, and t_n = T. */
+static double grid_time(const cup_integrator *I, long k) {
+  return k == I->o.n ? I->o.T : (double)k * I->h;
+}
+
+typedef struct { long next_j; } sampler;
+
+static int selected(const cup_integrator *I, sampler *sp, long k) {
+  const cup_integrator_options *o = &I->o;
+  switch (o->output) {
+    case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
+    case CUP_OUTPUT_FINAL: return k == o->n;
+    case CUP_OUTPUT_NONE: return 0;
+    case CUP_OUTPUT_SAMPLES: {
+      long S = o->output_samples;
+      long step = (long)llround((double)sp->next_j * (double)o->n / (double)(S - 1));
+      if (sp->next_j < S && k == step) { sp->next_j++; return 1; }
+      return 0;
+    }
+  }
+  return 0;
+}
+
+static double wall_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
+  info->status = status;
+  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
+  return status;
+}
+
+/* g = F + G u(t) for a moving set. */
+static int moving_offset(cup_integrator *I, double t) {
+  const cup_lcs *L = I->L;
+  if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
+  memcpy(I->g, L->F, sizeof(double) * (size_t)I->m);
+  cup_sparse_gaxpy(&L->G, I->ut, I->g);
+  return cup_projector_set_offset(I->proj, I->g);
+}
+
+static void tally(cup_run_info *info, const cup_proj_info *pi) {
+  if (pi->skipped) info->skipped++; else info->projected++;
+  info->dual_iterations += pi->iterations;
+  info->factorizations += pi->factorizations;
+  if (!(pi->eps_cert <= info->max_eps_cert)) info->max_eps_cert = pi->eps_cert;
+  if (!(pi->eta_cert <= info->max_eta_cert)) info->max_eta_cert = pi->eta_cert;
+}
+
+static void describe_projection_error(char *buf, size_t size, int st, const cup_proj_info *pi) {
+  if (st == CUP_ERR_EMPTY_SET)
+    snprintf(buf, size, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, "
+             "||C^T y||_{P^-1} = %.3g (no point of K within %.3g of 0)",
+             pi->farkas_gap, pi->farkas_residual,
+             pi->farkas_residual > 0 ? -pi->farkas_gap / pi->farkas_residual : INFINITY);
+  else if (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)
+    snprintf(buf, size, "the free step produced NaN or Inf (the scheme diverged)");
+  else
+    snprintf(buf, size, "projection failed: %s", cup_status_string(st));
+}
+
+int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx,
+                       cup_run_info *info_out) {
+  cup_run_info local;
+  cup_run_info *info = info_out ? info_out : &local;
+  memset(info, 0, sizeof *info);
+  if (!I || !x0) return info->status = CUP_ERR_ARG;
+  const cup_integrator_options *o = &I->o;
+  int n = I->n;
+  info->eps_target = I->eps_n;
+  info->eta_target = I->eta_n;
+  info->h_rho = I->h_rho;
+  for (int j = 0; j < n; j++)
+    if (!isfinite(x0[j])) {
+      char what[96];
+      snprintf(what, sizeof what, "x0[%d] is %g", j, x0[j]);
+      return stop_at(info, CUP_ERR_NONFINITE, 0, 0, what);
+    }
+  memcpy(I->x, x0, sizeof(double) * (size_t)n);
+  cup_projector_reset(I->proj);
+  int fixed = I->L->fixed || !I->u;
+  if (fixed) cup_projector_set_offset(I->proj, I->L->F);
+  if (o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2) {
+    info->status = CUP_WARN_STIFF;
+    snprintf(info->message, sizeof info->message,
+             "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; "
+             "use the implicit or exponential scheme", I->h_rho);
+  }
+  sampler sp = {0};
+  if (sink && selected(I, &sp, 0)) {
+    info->samples++;
+    if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
+  }
+  double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
+  for (long k = 0; k < o->n; k++) {
+    double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
+    int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf, o->f, o->f_ctx);
+    if (st < 0)
+      return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
+                     ? "a user callback (input or perturbation) failed or returned NaN/Inf"
+                     : cup_status_string(st));
+    if (st > 0 && info->status == CUP_OK) {
+      info->status = st;
+      snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k + 1, t1, cup_status_string(st));
+    }
+    if (!fixed && (st = moving_offset(I, t1)) != CUP_OK)
+      return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
+                     "the input u(t) that moves K failed or returned NaN/Inf");
+    cup_proj_info pi;
+    st = cup_project(I->proj, I->xf, I->xnew, &pi);
+    if (st < 0) {
+      char what[200];
+      describe_projection_error(what, sizeof what, st, &pi);
+      return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
+    }
+    double *t = I->x; I->x = I->xnew; I->xnew = t;
+    info->step = k + 1;
+    info->t = t1;
+    tally(info, &pi);
+    if (st == CUP_WARN_NOT_CERTIFIED) {
+      if (info->not_certified++ == 0 && info->status == CUP_OK) {
+        info->status = st;
+        snprintf(info->message, sizeof info->message,
+                 "step %ld (t = %.17g): projection not certified: eps %.3g (target %.3g), eta %.3g (target %.3g)",
+                 k + 1, t1, pi.eps_cert, pi.eps_target, pi.eta_cert, pi.eta_target);
+      }
+    }
+    if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
+      return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback");
+    if (sink && selected(I, &sp, k + 1)) {
+      info->samples++;
+      if (sink(k + 1, t1, I->x, sink_ctx))
+        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");
+    }
+    if (start > 0 && (k & 1023) == 1023 && wall_seconds() - start > o->max_wall_seconds)
+      return stop_at(info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached");
+  }
+  return info->status;
+}

@@ -1,0 +1,1014 @@
+/* scene — scene files (YAML) into an LCS, its input, x0 and the integrator
+ * options (docs/scene-format.md). The document is copied into a tree that
+ * keeps positions (scene_tree.c), overrides are spliced in, and the tree is
+ * read key by key here; every error names FILE:LINE:COL and the dotted key
+ * (or the override it came from). Nothing heavy is computed. */
+#define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include "catchup.h"
+#include "linalg.h"
+#include "scene_tree.h"
+
+struct cup_scene {
+  char *name;
+  cup_lcs *lcs;
+  cup_input *u;                 /* NULL when p = 0 */
+  double *x0;
+  cup_integrator_options opt;
+  char *eps_spec, *eta_spec;    /* as written */
+  char *text;                   /* the document after overrides */
+};
+
+/* What every reader needs: names for messages, the directory of the file. */
+typedef struct rd {
+  st_src src;
+  const char *dir;
+  char *errmsg;
+} rd;
+
+#define KEY_LEN 128              /* dotted keys ("input.1.0.amplitude") */
+
+static int fail(rd *r, int status, const st_node *at, const char *key, const char *fmt, ...)
+  __attribute__((format(printf, 5, 6)));
+static int fail(rd *r, int status, const st_node *at, const char *key, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  st_verror(r->errmsg, status, &r->src, at, key, fmt, ap);
+  va_end(ap);
+  return status;
+}
+
+/* Dotted keys; a key too long for the buffer ends in "..." */
+static const char *join(char *buf, const char *parent, const char *k) {
+  if (snprintf(buf, KEY_LEN, "%s%s%s", parent, *parent ? "." : "", k) >= KEY_LEN)
+    strcpy(buf + KEY_LEN - 4, "...");
+  return buf;
+}
+
+static const char *joini(char *buf, const char *parent, int i) {
+  if (snprintf(buf, KEY_LEN, "%s.%d", parent, i) >= KEY_LEN) strcpy(buf + KEY_LEN - 4, "...");
+  return buf;
+}
+
+/* How a node looks, for "expected X (got Y)". */
+static const char *looks(const st_node *nd, char *buf, size_t n) {
+  if (st_is_null(nd)) return "nothing";
+  if (nd->kind == ST_SEQ) return nd->len ? "a list" : "an empty list";
+  if (nd->kind == ST_MAP) return "a mapping";
+  snprintf(buf, n, "'%.40s'", nd->text);
+  return buf;
+}
+
+/* ---- keys ---------------------------------------------------------------- */
+
+/* Optimal string alignment distance, case-insensitive (R1 vs r1 is 0). */
+static int osa_distance(const char *a, const char *b) {
+  int la = (int)strlen(a), lb = (int)strlen(b);
+  if (la > 30 || lb > 30) return 99;
+  int d[32][32];
+  for (int i = 0; i <= la; i++) d[i][0] = i;
+  for (int j = 0; j <= lb; j++) d[0][j] = j;
+  for (int i = 1; i <= la; i++)
+    for (int j = 1; j <= lb; j++) {
+      int c = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]);
+      int v = d[i - 1][j - 1] + c;
+      if (d[i - 1][j] + 1 < v) v = d[i - 1][j] + 1;
+      if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
+      if (i > 1 && j > 1 && tolower((unsigned char)a[i - 1]) == tolower((unsigned char)b[j - 2]) &&
+          tolower((unsigned char)a[i - 2]) == tolower((unsigned char)b[j - 1]) && d[i - 2][j - 2] + 1 < v)
+        v = d[i - 2][j - 2] + 1;
+      d[i][j] = v;
+    }
+  return d[la][lb];
+}
+
+/* The closest of `known` to `word` if it is close enough to be a typo. */
+static const char *closest(const char *word, const char *const *known) {
+  const char *best = NULL;
+  int bd = 3;
+  for (int k = 0; known[k]; k++) {
+    int d = osa_distance(word, known[k]);
+    if (d < bd && d < (int)strlen(known[k])) { bd = d; best = known[k]; }
+  }
+  return best;
+}
+
+/* "did you mean 'x'?" or "expected one of a, b, c". */
+static const char *suggest(char *buf, size_t n, const char *word, const char *const *known) {
+  const char *c = closest(word, known);
+  if (c) { snprintf(buf, n, "did you mean '%s'?", c); return buf; }
+  size_t w = (size_t)snprintf(buf, n, "expected one of");
+  for (int k = 0; known[k] && w < n; k++)
+    w += (size_t)snprintf(buf + w, n - w, "%s %s", k ? "," : "", known[k]);
+  return buf;
+}
+
+static int check_keys(rd *r, const st_node *map, const char *mkey, const char *const *known) {
+  for (int k = 0; k < map->len; k++) {
+    int ok = 0;
+    for (int j = 0; known[j] && !ok; j++) ok = strcmp(map->key[k]->text, known[j]) == 0;
+    if (ok) continue;
+    char key[KEY_LEN], hint[160];
+    return fail(r, CUP_ERR_PARSE, map->key[k], join(key, mkey, map->key[k]->text), "unknown key (%s)",
+                suggest(hint, sizeof hint, map->key[k]->text, known));
+  }
+  return CUP_OK;
+}
+
+/* The value of an optional key (NULL if absent or null). */
+static const st_node *opt(const st_node *map, const char *k) {
+  const st_node *v = st_get(map, k, NULL);
+  return st_is_null(v) ? NULL : v;
+}
+
+/* The value of a required key, or an error at the mapping. */
+static int need(rd *r, const st_node *map, const char *mkey, const char *k, const st_node **out) {
+  char key[KEY_LEN];
+  *out = opt(map, k);
+  if (*out) return CUP_OK;
+  return fail(r, CUP_ERR_PARSE, map, join(key, mkey, k), "missing (required)");
+}
+
+static int need_map(rd *r, const st_node *nd, const char *key, const char *what) {
+  char b[64];
+  if (nd->kind == ST_MAP) return CUP_OK;
+  return fail(r, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, looks(nd, b, sizeof b));
+}
+
+static int string(rd *r, const st_node *nd, const char *key, const char **out) {
+  char b[64];
+  if (nd->kind != ST_SCALAR || st_is_null(nd))
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", looks(nd, b, sizeof b));
+  *out = nd->text;
+  return CUP_OK;
+}
+
+/* ---- numbers ------------------------------------------------------------- */
+
+static int number(rd *r, const st_node *nd, const char *key, double *out) {
+  char b[64];
+  if (nd->kind == ST_SCALAR && nd->quoted && st_number(nd->text, out))
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got the string \"%.40s\": write numbers without quotes)",
+                nd->text);
+  if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, out))
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", looks(nd, b, sizeof b));
+  if (!isfinite(*out)) return fail(r, CUP_ERR_NONFINITE, nd, key, "must be finite (got %g)", *out);
+  return CUP_OK;
+}
+
+/* A number >= lo (strict: > lo). */
+static int number_min(rd *r, const st_node *nd, const char *key, double lo, int strict, double *out) {
+  int st = number(r, nd, key, out);
+  if (st) return st;
+  if (strict ? *out > lo : *out >= lo) return CUP_OK;
+  return fail(r, CUP_ERR_PARSE, nd, key, "must be %s %g (got %g)", strict ? ">" : ">=", lo, *out);
+}
+
+/* An integer in [lo, hi]; 1e6 is accepted (an exact integer in a float). */
+static int integer(rd *r, const st_node *nd, const char *key, long lo, long hi, long *out) {
+  double v;
+  int st = number(r, nd, key, &v);
+  if (st) return st;
+  if (v != floor(v)) return fail(r, CUP_ERR_PARSE, nd, key, "must be an integer (got %g)", v);
+  if (v < (double)lo) return fail(r, CUP_ERR_PARSE, nd, key, "must be >= %ld (got %g)", lo, v);
+  if (v > (double)hi) return fail(r, CUP_ERR_PARSE, nd, key, "must be <= %ld (got %g)", hi, v);
+  *out = (long)v;
+  return CUP_OK;
+}
+
+/* ---- matrices ------------------------------------------------------------ */
+
+/* An owned CSC matrix and where it was written. */
+typedef struct mat {
+  int nrow, ncol;
+  int *p, *i;
+  double *x;
+  const st_node *at;
+} mat;
+
+static void mat_free(mat *M) {
+  free(M->p); free(M->i); free(M->x);
+  memset(M, 0, sizeof *M);
+}
+
+static cup_csc mat_view(const mat *M) {
+  cup_csc v = {0};
+  if (M->p) v = (cup_csc){M->nrow, M->ncol, M->p, M->i, M->x};
+  return v;
+}
+
+/* CSC of a dense matrix with entry (i, j) at a[i*rs + j*cs]; zeros dropped. */
+static int mat_from_dense(mat *M, int nr, int nc, const double *a, size_t rs, size_t cs) {
+  size_t nnz = 0;
+  for (int j = 0; j < nc; j++)
+    for (int i = 0; i < nr; i++) nnz += a[i * rs + j * cs] != 0;
+  M->nrow = nr; M->ncol = nc;
+  M->p = malloc(sizeof(int) * ((size_t)nc + 1));
+  M->i = malloc(sizeof(int) * (nnz + 1));
+  M->x = malloc(sizeof(double) * (nnz + 1));
+  if (!M->p || !M->i || !M->x) return CUP_ERR_NOMEM;
+  int q = 0;
+  M->p[0] = 0;
+  for (int j = 0; j < nc; j++) {
+    for (int i = 0; i < nr; i++) {
+      double v = a[i * rs + j * cs];
+      if (v != 0) { M->i[q] = i; M->x[q++] = v; }
+    }
+    M->p[j + 1] = q;
+  }
+  return CUP_OK;
+}
+
+#define MATRIX_FORMS "a list of rows like [[1, 0], [0, 1]], or {file: name.mtx}"
+
+static int matrix_inline(rd *r, const st_node *nd, const char *key, mat *M) {
+  char k1[KEY_LEN], k2[KEY_LEN], b[64];
+  if (nd->len == 0 || nd->item[0]->kind != ST_SEQ)
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a matrix: " MATRIX_FORMS " (got %s)",
+                nd->len ? "a list of numbers" : "an empty list");
+  int nr = nd->len, nc = nd->item[0]->len;
+  if (nc == 0) return fail(r, CUP_ERR_PARSE, nd->item[0], joini(k1, key, 0), "a row needs at least one entry");
+  for (int i = 0; i < nr; i++) {
+    const st_node *row = nd->item[i];
+    if (row->kind != ST_SEQ)
+      return fail(r, CUP_ERR_PARSE, row, joini(k1, key, i), "expected a row: a list of numbers (got %s)",
+                  looks(row, b, sizeof b));
+    if (row->len != nc)
+      return fail(r, CUP_ERR_DIM, row, joini(k1, key, i), "row %d has %d entries but row 0 has %d", i,
+                  row->len, nc);
+  }
+  double *a = malloc(sizeof(double) * (size_t)nr * (size_t)nc);
+  if (!a) return CUP_ERR_NOMEM;
+  int st = CUP_OK;
+  for (int i = 0; i < nr && !st; i++)
+    for (int j = 0; j < nc && !st; j++)
+      st = number(r, nd->item[i]->item[j], joini(k2, joini(k1, key, i), j), &a[(size_t)i * nc + j]);
+  if (!st) st = mat_from_dense(M, nr, nc, a, (size_t)nc, 1);
+  free(a);
+  return st;
+}
+
+static int matrix_file(rd *r, const st_node *nd, const char *key, mat *M);
+
+static int matrix(rd *r, const st_node *nd, const char *key, mat *M) {
+  char b[64];
+  M->at = nd;
+  if (nd->kind == ST_MAP && st_get(nd, "file", NULL)) return matrix_file(r, nd, key, M);
+  if (nd->kind == ST_SEQ) return matrix_inline(r, nd, key, M);
+  return fail(r, CUP_ERR_PARSE, nd, key, "expected a matrix: " MATRIX_FORMS " (got %s)", looks(nd, b, sizeof b));
+}
+
+static int matrix_dims(rd *r, const mat *M, const char *key, int nr, int nc, const char *why) {
+  if (M->nrow == nr && M->ncol == nc) return CUP_OK;
+  return fail(r, CUP_ERR_DIM, M->at, key, "must be %d x %d (%s), got %d x %d", nr, nc, why, M->nrow, M->ncol);
+}
+
+/* ---- Matrix Market files ------------------------------------------------- */
+
+/* CHOLMOD's reader takes "1 1 abc" as a pattern entry of value 1 and stops
+ * quietly after the declared count, so each file is checked line by line
+ * first: the banner, the size line, every entry's indices and value, and
+ * the count. Then CHOLMOD builds the matrix (symmetric files expanded to
+ * both triangles, duplicates summed). */
+typedef struct mm_head {
+  int array, symmetric;
+  long nrow, ncol, nnz;
+} mm_head;
+
+typedef struct mm_ctx {
+  rd *r;
+  const st_node *at;
+  const char *key, *name;
+  long line;
+} mm_ctx;
+
+static int mm_fail(const mm_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int mm_fail(const mm_ctx *c, const char *fmt, ...) {
+  char msg[CUP_ERRMSG_LEN];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  if (c->line > 0) return fail(c->r, CUP_ERR_PARSE, c->at, c->key, "%s:%ld: %s", c->name, c->line, msg);
+  return fail(c->r, CUP_ERR_PARSE, c->at, c->key, "%s: %s", c->name, msg);
+}
+
+static int mm_banner(mm_ctx *c, const char *line, mm_head *h) {
+  char obj[16], fmt[16], field[16], sym[16];
+  if (strncasecmp(line, "%%MatrixMarket", 14) != 0 ||
+      sscanf(line + 14, "%15s %15s %15s %15s", obj, fmt, field, sym) != 4)
+    return mm_fail(c, "not a Matrix Market file (the first line must be "
+                      "'%%%%MatrixMarket matrix coordinate real general' or similar)");
+  if (strcasecmp(obj, "matrix") != 0) return mm_fail(c, "object '%s' is not 'matrix'", obj);
+  if (strcasecmp(fmt, "coordinate") && strcasecmp(fmt, "array"))
+    return mm_fail(c, "format '%s': expected coordinate or array", fmt);
+  if (strcasecmp(field, "real") && strcasecmp(field, "integer"))
+    return mm_fail(c, "field '%s': only real or integer matrices are supported", field);
+  if (strcasecmp(sym, "general") && strcasecmp(sym, "symmetric"))
+    return mm_fail(c, "symmetry '%s': only general or symmetric matrices are supported", sym);
+  h->array = strcasecmp(fmt, "array") == 0;
+  h->symmetric = strcasecmp(sym, "symmetric") == 0;
+  return CUP_OK;
+}
+
+/* Whitespace-separated tokens of a line (at most max). */
+static int tokens(char *line, char **tok, int max) {
+  int n = 0;
+  char *save = NULL;
+  for (char *s = strtok_r(line, " \t\r\n", &save); s; s = strtok_r(NULL, " \t\r\n", &save)) {
+    if (n < max) tok[n] = s;
+    n++;
+  }
+  return n;
+}
+
+static int mm_long(const char *s, long *v) {
+  char *end;
+  errno = 0;
+  *v = strtol(s, &end, 10);
+  return !errno && end != s && !*end;
+}
+
+static int mm_size(mm_ctx *c, char *line, mm_head *h) {
+  char *t[3];
+  int want = h->array ? 2 : 3, n = tokens(line, t, 3);
+  if (n != want || !mm_long(t[0], &h->nrow) || !mm_long(t[1], &h->ncol) || (!h->array && !mm_long(t[2], &h->nnz)))
+    return mm_fail(c, "expected the size line '%s'", h->array ? "ROWS COLS" : "ROWS COLS ENTRIES");
+  if (h->nrow < 1 || h->ncol < 1 || h->nrow > INT_MAX / 2 || h->ncol > INT_MAX / 2 || (!h->array && h->nnz < 0))
+    return mm_fail(c, "size %ld x %ld is out of range", h->nrow, h->ncol);
+  if (h->symmetric && h->nrow != h->ncol)
+    return mm_fail(c, "a symmetric matrix must be square (got %ld x %ld)", h->nrow, h->ncol);
+  if (h->array) h->nnz = h->symmetric ? h->nrow * (h->nrow + 1) / 2 : h->nrow * h->ncol;
+  return CUP_OK;
+}
+
+/* (i, j), 1-based, of the k-th value of an array file (column-major; the
+ * lower triangle only when symmetric). */
+static void mm_array_pos(const mm_head *h, long k, long *i, long *j) {
+  long col = 0, len = h->nrow;
+  while (h->symmetric && k >= len) { k -= len; col++; len--; }
+  if (h->symmetric) { *i = col + k + 1; *j = col + 1; return; }
+  *i = k % h->nrow + 1;
+  *j = k / h->nrow + 1;
+}
+
+static int mm_value(mm_ctx *c, const char *tok, long i, long j) {
+  char *end;
+  double v = strtod(tok, &end);
+  if (end == tok || *end) return mm_fail(c, "entry (%ld,%ld): '%.30s' is not a number", i, j, tok);
+  if (!isfinite(v)) {
+    c->line = 0;                               /* the spec's "file.mtx: entry (i,j) is nan" */
+    return mm_fail(c, "entry (%ld,%ld) is %s", i, j, isnan(v) ? "nan" : v > 0 ? "inf" : "-inf");
+  }
+  return CUP_OK;
+}
+
+static int mm_entry(mm_ctx *c, char *line, const mm_head *h, long *count) {
+  char *t[3];
+  int n = tokens(line, t, 3);
+  long i, j;
+  if (h->array) {
+    if (n != 1) return mm_fail(c, "expected one value per line");
+    if (*count >= h->nnz) return mm_fail(c, "more values than the %ld the size line declares", h->nnz);
+    mm_array_pos(h, (*count)++, &i, &j);
+    return mm_value(c, t[0], i, j);
+  }
+  if (n != 3 || !mm_long(t[0], &i) || !mm_long(t[1], &j))
+    return mm_fail(c, "expected an entry 'ROW COL VALUE'");
+  if (i < 1 || i > h->nrow || j < 1 || j > h->ncol)
+    return mm_fail(c, "entry (%ld,%ld) is outside the %ld x %ld matrix", i, j, h->nrow, h->ncol);
+  if (++*count > h->nnz) return mm_fail(c, "more entries than the %ld the size line declares", h->nnz);
+  return mm_value(c, t[2], i, j);
+}
+
+static int mm_check(mm_ctx *c, FILE *f, mm_head *h) {
+  char *line = NULL;
+  size_t cap = 0;
+  long count = 0;
+  int st = CUP_OK, have_size = 0;
+  c->line = 0;
+  while (!st && getline(&line, &cap, f) >= 0) {
+    c->line++;
+    if (c->line == 1) { st = mm_banner(c, line, h); continue; }
+    const char *s = line + strspn(line, " \t\r\n");
+    if (!*s || *s == '%') continue;
+    if (!have_size) { st = mm_size(c, line, h); have_size = 1; continue; }
+    st = mm_entry(c, line, h, &count);
+  }
+  free(line);
+  if (st) return st;
+  if (c->line == 0) return mm_fail(c, "empty file, not a Matrix Market file");
+  c->line = 0;
+  if (!have_size) return mm_fail(c, "no size line");
+  if (count != h->nnz) return mm_fail(c, "the size line declares %ld entries but the file has %ld", h->nnz, count);
+  return CUP_OK;
+}
+
+static int mat_from_cholmod(mat *M, cholmod_sparse *A) {
+  size_t nc = A->ncol, nnz = (size_t)((int *)A->p)[nc];
+  M->nrow = (int)A->nrow; M->ncol = (int)nc;
+  M->p = malloc(sizeof(int) * (nc + 1));
+  M->i = malloc(sizeof(int) * (nnz + 1));
+  M->x = malloc(sizeof(double) * (nnz + 1));
+  if (!M->p || !M->i || !M->x) return CUP_ERR_NOMEM;
+  memcpy(M->p, A->p, sizeof(int) * (nc + 1));
+  memcpy(M->i, A->i, sizeof(int) * nnz);
+  memcpy(M->x, A->x, sizeof(double) * nnz);
+  return CUP_OK;
+}
+
+/* CHOLMOD reads the checked file: sparse with both triangles, or dense. */
+static int mm_read(mm_ctx *c, FILE *f, mat *M) {
+  cholmod_common cm;
+  if (cup_cholmod_start(&cm)) return mm_fail(c, "CHOLMOD start failed");
+  int mtype = -1, st = CUP_OK;
+  void *X = cholmod_read_matrix(f, 1, &mtype, &cm);
+  if (X && mtype == CHOLMOD_SPARSE) {
+    cholmod_sparse *A = X;
+    if (!A->sorted) cholmod_sort(A, &cm);
+    st = A->packed && A->stype == 0 && A->xtype == CHOLMOD_REAL ? mat_from_cholmod(M, A)
+                                                                 : mm_fail(c, "unexpected CHOLMOD matrix layout");
+    cholmod_free_sparse(&A, &cm);
+  } else if (X && mtype == CHOLMOD_DENSE) {
+    cholmod_dense *D = X;
+    st = mat_from_dense(M, (int)D->nrow, (int)D->ncol, D->x, 1, D->d);
+    cholmod_free_dense(&D, &cm);
+  } else {
+    if (X && mtype == CHOLMOD_TRIPLET) cholmod_free_triplet((cholmod_triplet **)&X, &cm);
+    st = mm_fail(c, "CHOLMOD could not read it (status %d)", cm.status);
+  }
+  cholmod_finish(&cm);
+  return st;
+}
+
+static char *resolve(const char *dir, const char *name) {
+  if (name[0] == '/' || !dir || !*dir) return strdup(name);
+  size_t n = strlen(dir) + strlen(name) + 2;
+  char *s = malloc(n);
+  if (s) snprintf(s, n, "%s/%s", dir, name);
+  return s;
+}
+
+static int matrix_file(rd *r, const st_node *nd, const char *key, mat *M) {
+  static const char *const known[] = {"file", NULL};
+  char k1[KEY_LEN];
+  const st_node *fn = NULL;
+  const char *name = "";
+  int st = check_keys(r, nd, key, known);
+  if (!st) st = need(r, nd, key, "file", &fn);
+  if (!st) st = string(r, fn, join(k1, key, "file"), &name);
+  if (st) return st;
+  char *full = resolve(r->dir, name);
+  if (!full) return CUP_ERR_NOMEM;
+  FILE *f = fopen(full, "r");
+  if (!f) {
+    st = fail(r, CUP_ERR_IO, fn, k1, "cannot open '%s': %s", full, strerror(errno));
+    free(full);
+    return st;
+  }
+  mm_ctx c = {r, fn, k1, name, 0};
+  mm_head h = {0};
+  st = mm_check(&c, f, &h);
+  if (!st) {
+    rewind(f);
+    st = mm_read(&c, f, M);
+  }
+  fclose(f);
+  free(full);
+  return st;
+}
+
+/* ---- vectors ------------------------------------------------------------- */
+
+/* `want` numbers: an inline list or a single-column Matrix Market file.
+ * `why` says where want comes from ("n = 3"). */
+static int vector(rd *r, const st_node *nd, const char *key, int want, const char *why, double **out) {
+  char k1[KEY_LEN], b[64];
+  *out = NULL;
+  if (nd->kind == ST_MAP && st_get(nd, "file", NULL)) {
+    mat M = {0};
+    int st = matrix(r, nd, key, &M);
+    if (!st && (M.ncol != 1 || M.nrow != want))
+      st = fail(r, CUP_ERR_DIM, nd, key, "expected a %d x 1 matrix (%s), got %d x %d", want, why, M.nrow, M.ncol);
+    if (!st && !(*out = calloc((size_t)want, sizeof(double)))) st = CUP_ERR_NOMEM;
+    for (int k = 0; !st && k < M.p[1]; k++) (*out)[M.i[k]] = M.x[k];
+    mat_free(&M);
+    return st;
+  }
+  if (nd->kind != ST_SEQ)
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a list of %d numbers or {file: name.mtx} (got %s)", want,
+                looks(nd, b, sizeof b));
+  if (nd->len != want)
+    return fail(r, CUP_ERR_DIM, nd, key, "expected %d numbers (%s), got %d", want, why, nd->len);
+  double *v = calloc((size_t)want + 1, sizeof(double));
+  if (!v) return CUP_ERR_NOMEM;
+  for (int k = 0; k < want; k++) {
+    int st = number(r, nd->item[k], joini(k1, key, k), &v[k]);
+    if (st) { free(v); return st; }
+  }
+  *out = v;
+  return CUP_OK;
+}
+
+/* ---- the model: circuit or lcs ------------------------------------------- */
+
+static int read_circuit(rd *r, const st_node *knode, const st_node *map, cup_lcs **L) {
+  static const char *const known[] = {"R1", "R2", "R3", "L2", "L3", "C4", "G", NULL};
+  char key[KEY_LEN], lib[CUP_ERRMSG_LEN];
+  cup_circuit c = {0};
+  double *v[6] = {&c.R1, &c.R2, &c.R3, &c.L2, &c.L3, &c.C4};
+  int st = need_map(r, map, "circuit", "a mapping with R1, R2, R3, L2, L3, C4 and optionally G");
+  if (!st) st = check_keys(r, map, "circuit", known);
+  for (int k = 0; k < 6 && !st; k++) {        /* resistances >= 0; inductances, capacitance > 0 */
+    const st_node *nd;
+    st = need(r, map, "circuit", known[k], &nd);
+    if (!st) st = number_min(r, nd, join(key, "circuit", known[k]), 0, k >= 3, v[k]);
+  }
+  const st_node *g = st ? NULL : opt(map, "G");
+  if (g) {
+    double *gv;
+    st = vector(r, g, "circuit.G", 2, "g1, g2", &gv);
+    if (!st) { c.G[0] = gv[0]; c.G[1] = gv[1]; free(gv); }
+  }
+  if (!st && (st = cup_lcs_circuit(L, &c, lib))) st = fail(r, st, knode, "circuit", "%s", lib);
+  return st;
+}
+
+/* The matrices of an lcs, owned until the LCS has copied them. */
+typedef struct lcs_parts {
+  mat A, B, C, E, G, P;
+  double *F, *Pdiag;
+  const st_node *Pnode;
+} lcs_parts;
+
+static void parts_free(lcs_parts *q) {
+  mat_free(&q->A); mat_free(&q->B); mat_free(&q->C);
+  mat_free(&q->E); mat_free(&q->G); mat_free(&q->P);
+  free(q->F); free(q->Pdiag);
+}
+
+/* P: identity (default), a list of n positive numbers (the diagonal), or an
+ * n x n SPD matrix (inline or a file; symmetric files are expanded). */
+static int read_metric(rd *r, const st_node *nd, int n, lcs_parts *q, cup_metric *P) {
+  char k1[KEY_LEN], why[48];
+  *P = (cup_metric){CUP_METRIC_IDENTITY, NULL, {0}, 0};
+  q->Pnode = nd;
+  if (!nd) return CUP_OK;
+  snprintf(why, sizeof why, "n = %d from C's columns", n);
+  if (nd->kind == ST_SCALAR) {
+    if (!nd->quoted && !strcmp(nd->text, "identity")) return CUP_OK;
+    return fail(r, CUP_ERR_PARSE, nd, "lcs.P", "expected identity, a list of %d positive numbers (the diagonal) "
+                "or a %d x %d SPD matrix (got '%.40s')", n, n, n, nd->text);
+  }
+  if (nd->kind == ST_SEQ && nd->len && nd->item[0]->kind == ST_SCALAR) {
+    int st = vector(r, nd, "lcs.P", n, why, &q->Pdiag);
+    for (int k = 0; !st && k < n; k++)
+      if (!(q->Pdiag[k] > 0))
+        st = fail(r, CUP_ERR_NOT_SPD, nd->item[k], joini(k1, "lcs.P", k), "must be > 0 (got %g)", q->Pdiag[k]);
+    if (!st) *P = (cup_metric){CUP_METRIC_DIAGONAL, q->Pdiag, {0}, 0};
+    return st;
+  }
+  int st = matrix(r, nd, "lcs.P", &q->P);
+  if (!st) st = matrix_dims(r, &q->P, "lcs.P", n, n, why);
+  if (!st) *P = (cup_metric){CUP_METRIC_SPARSE, NULL, mat_view(&q->P), 0};
+  return st;
+}
+
+/* An optional matrix key of the lcs mapping, with its expected rows. */
+static int lcs_matrix(rd *r, const st_node *map, const char *k, mat *M) {
+  char key[KEY_LEN];
+  const st_node *nd = opt(map, k);
+  return nd ? matrix(r, nd, join(key, "lcs", k), M) : CUP_OK;
+}
+
+/* p is the number of columns of E or G; both given must agree. */
+static int input_dim(rd *r, const lcs_parts *q, int n, int m, int *p) {
+  char why[48];
+  *p = q->E.p ? q->E.ncol : q->G.p ? q->G.ncol : 0;
+  snprintf(why, sizeof why, "n = %d from C's columns, p = %d", n, *p);
+  if (q->E.p && q->E.nrow != n) return matrix_dims(r, &q->E, "lcs.E", n, *p, why);
+  snprintf(why, sizeof why, "m = %d from C's rows, p = %d from %s", m, *p, q->E.p ? "E's columns" : "G");
+  if (q->G.p) return matrix_dims(r, &q->G, "lcs.G", m, *p, why);
+  return CUP_OK;
+}
+
+/* Errors of cup_lcs_create point at the key that caused them. */
+static int lcs_fail(rd *r, int st, const char *lib, const st_node *knode, const lcs_parts *q) {
+  if ((st == CUP_ERR_NOT_SPD || st == CUP_ERR_LINALG) && q->Pnode)
+    return fail(r, st, q->Pnode, "lcs.P", "%s", lib);
+  if (st == CUP_ERR_PB_CT && q->B.at) return fail(r, st, q->B.at, "lcs.B", "%s", lib);
+  return fail(r, st, knode, "lcs", "%s", lib);
+}
+
+static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L) {
+  static const char *const known[] = {"A", "B", "C", "E", "F", "G", "P", "pb_tol", NULL};
+  char why[64], lib[CUP_ERRMSG_LEN];
+  lcs_parts q = {0};
+  cup_lcs_desc d = {0};
+  const st_node *nd;
+  int n = 0, m = 0;
+  int st = need_map(r, map, "lcs", "a mapping with the matrices A, B, C, E, F, G, P");
+  if (!st) st = check_keys(r, map, "lcs", known);
+  if (!st) st = need(r, map, "lcs", "C", &nd);
+  if (!st) st = matrix(r, nd, "lcs.C", &q.C);
+  if (!st) { n = q.C.ncol; m = q.C.nrow; snprintf(why, sizeof why, "n x n, n = %d from C's columns", n); }
+  if (!st) st = lcs_matrix(r, map, "A", &q.A);
+  if (!st && q.A.p) st = matrix_dims(r, &q.A, "lcs.A", n, n, why);
+  if (!st) st = lcs_matrix(r, map, "B", &q.B);
+  if (!st && q.B.p) snprintf(why, sizeof why, "n x m = C's columns x C's rows");
+  if (!st && q.B.p) st = matrix_dims(r, &q.B, "lcs.B", n, m, why);
+  if (!st) st = lcs_matrix(r, map, "E", &q.E);
+  if (!st) st = lcs_matrix(r, map, "G", &q.G);
+  if (!st) st = input_dim(r, &q, n, m, &d.p);
+  if (!st && (nd = opt(map, "F"))) {
+    snprintf(why, sizeof why, "m = %d from C's rows", m);
+    st = vector(r, nd, "lcs.F", m, why, &q.F);
+  }
+  if (!st) st = read_metric(r, opt(map, "P"), n, &q, &d.P);
+  if (!st && (nd = opt(map, "pb_tol"))) st = number_min(r, nd, "lcs.pb_tol", 0, 0, &d.pb_tol);
+  if (!st) {
+    d.n = n; d.m = m; d.F = q.F;
+    d.A = mat_view(&q.A); d.B = mat_view(&q.B); d.C = mat_view(&q.C);
+    d.E = mat_view(&q.E); d.G = mat_view(&q.G);
+    if ((st = cup_lcs_create(L, &d, lib))) st = lcs_fail(r, st, lib, knode, &q);
+  }
+  parts_free(&q);
+  return st;
+}
+
+static int read_model(rd *r, const st_node *root, cup_lcs **L) {
+  const st_node *kc, *kl;
+  const st_node *c = st_get(root, "circuit", &kc), *l = st_get(root, "lcs", &kl);
+  if (c && l)
+    return fail(r, CUP_ERR_PARSE, kc->line > kl->line ? kc : kl, kc->line > kl->line ? "circuit" : "lcs",
+                "give one model, circuit or lcs, not both");
+  if (c) return read_circuit(r, kc, c, L);
+  if (l) return read_lcs(r, kl, l, L);
+  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs", "missing: the scene needs a model, circuit: or lcs:");
+}
+
+/* ---- the input u(t) ------------------------------------------------------ */
+
+static const char *const wave_names[] = {"constant", "sine", "square", "pwl", NULL};
+
+static int read_points(rd *r, const st_node *nd, const char *key, cup_wave *w, double **buf) {
+  char k1[KEY_LEN], k2[KEY_LEN], b[64];
+  if (nd->kind != ST_SEQ || nd->len == 0)
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a list of [t, value] points (got %s)", looks(nd, b, sizeof b));
+  *buf = malloc(sizeof(double) * 2 * (size_t)nd->len);
+  if (!*buf) return CUP_ERR_NOMEM;
+  double *t = *buf, *v = *buf + nd->len;
+  for (int k = 0; k < nd->len; k++) {
+    const st_node *pt = nd->item[k];
+    joini(k1, key, k);
+    if (pt->kind != ST_SEQ || pt->len != 2)
+      return fail(r, CUP_ERR_PARSE, pt, k1, "expected a point [t, value] (got %s)", looks(pt, b, sizeof b));
+    int st = number(r, pt->item[0], joini(k2, k1, 0), &t[k]);
+    if (!st) st = number(r, pt->item[1], joini(k2, k1, 1), &v[k]);
+    if (st) return st;
+    if (k > 0 && !(t[k] > t[k - 1]))
+      return fail(r, CUP_ERR_PARSE, pt, k1, "times must increase strictly (got %g after %g)", t[k], t[k - 1]);
+  }
+  w->npoints = nd->len;
+  w->t = t;
+  w->v = v;
+  return CUP_OK;
+}
+
+/* The fields of a sine or square term. */
+static int read_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
+  char k1[KEY_LEN];
+  const st_node *nd;
+  int st = need(r, map, key, "amplitude", &nd);
+  if (!st) st = number(r, nd, join(k1, key, "amplitude"), &w->amplitude);
+  if (!st) st = need(r, map, key, "frequency", &nd);
+  if (!st) st = number_min(r, nd, join(k1, key, "frequency"), 0, 0, &w->frequency);
+  if (!st && (nd = opt(map, "phase"))) st = number(r, nd, join(k1, key, "phase"), &w->phase);
+  return st;
+}
+
+static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *u, int j) {
+  static const char *const keys[4][5] = {{"type", "value", NULL},
+                                         {"type", "amplitude", "frequency", "phase", NULL},
+                                         {"type", "amplitude", "frequency", "phase", NULL},
+                                         {"type", "points", NULL}};
+  char k1[KEY_LEN], hint[160], lib[CUP_ERRMSG_LEN];
+  const st_node *tn = NULL, *nd = NULL;
+  const char *type = "";
+  int st = need(r, map, key, "type", &tn);
+  if (!st) st = string(r, tn, join(k1, key, "type"), &type);
+  if (st) return st;
+  int kind = 0;
+  while (wave_names[kind] && strcmp(wave_names[kind], type)) kind++;
+  if (!wave_names[kind])
+    return fail(r, CUP_ERR_PARSE, tn, k1, "unknown input type '%.40s' (%s)", type,
+                suggest(hint, sizeof hint, type, wave_names));
+  cup_wave w = {0};
+  double *buf = NULL;
+  w.kind = (cup_wave_kind)kind;
+  st = check_keys(r, map, key, keys[kind]);
+  if (!st && kind == CUP_WAVE_CONSTANT) {
+    st = need(r, map, key, "value", &nd);
+    if (!st) st = number(r, nd, join(k1, key, "value"), &w.value);
+  }
+  if (!st && (kind == CUP_WAVE_SINE || kind == CUP_WAVE_SQUARE)) st = read_wave(r, map, key, &w);
+  if (!st && kind == CUP_WAVE_PWL) {
+    st = need(r, map, key, "points", &nd);
+    if (!st) st = read_points(r, nd, join(k1, key, "points"), &w, &buf);
+  }
+  if (!st && (st = cup_input_add(u, j, &w, lib))) st = fail(r, st, map, key, "%s", lib);
+  free(buf);
+  return st;
+}
+
+/* A term: a number (a constant) or a mapping with a type. */
+static int read_term(rd *r, const st_node *nd, const char *key, cup_input *u, int j) {
+  char b[64];
+  if (nd->kind == ST_MAP) return read_term_map(r, nd, key, u, j);
+  if (nd->kind == ST_SCALAR && !st_is_null(nd)) {
+    cup_wave w = {0};
+    char lib[CUP_ERRMSG_LEN];
+    w.kind = CUP_WAVE_CONSTANT;
+    int st = number(r, nd, key, &w.value);
+    if (!st && (st = cup_input_add(u, j, &w, lib))) st = fail(r, st, nd, key, "%s", lib);
+    return st;
+  }
+  return fail(r, CUP_ERR_PARSE, nd, key, "expected an input term: a number or a mapping with a type "
+              "(constant, sine, square, pwl) (got %s)", looks(nd, b, sizeof b));
+}
+
+/* One component u_j: a term, or a list of terms (their sum). */
+static int read_component(rd *r, const st_node *nd, const char *key, cup_input *u, int j) {
+  char k1[KEY_LEN];
+  if (nd->kind != ST_SEQ) return read_term(r, nd, key, u, j);
+  for (int k = 0; k < nd->len; k++) {
+    int st = read_term(r, nd->item[k], joini(k1, key, k), u, j);
+    if (st) return st;
+  }
+  return CUP_OK;
+}
+
+static int read_input(rd *r, const st_node *root, int p, cup_input **u) {
+  char k1[KEY_LEN], lib[CUP_ERRMSG_LEN], b[64];
+  const st_node *kn, *nd = st_get(root, "input", &kn);
+  if (st_is_null(nd)) nd = NULL;
+  *u = NULL;
+  if (p == 0)
+    return nd ? fail(r, CUP_ERR_DIM, kn, "input", "the model has no input (p = 0: no E or G); remove input") : CUP_OK;
+  int st = cup_input_create(u, p, lib);
+  if (st) return fail(r, st, kn, "input", "%s", lib);
+  if (!nd) return CUP_OK;                      /* u = 0 */
+  if (p == 1) return read_component(r, nd, "input", *u, 0);
+  if (nd->kind != ST_SEQ)
+    return fail(r, CUP_ERR_DIM, nd, "input", "expected a list of %d components, one per input (got %s)", p,
+                looks(nd, b, sizeof b));
+  if (nd->len != p)
+    return fail(r, CUP_ERR_DIM, nd, "input", "expected %d components, one per input (p = %d from E/G), got %d",
+                p, p, nd->len);
+  for (int j = 0; j < p && !st; j++) st = read_component(r, nd->item[j], joini(k1, "input", j), *u, j);
+  return st;
+}
+
+/* ---- run settings -------------------------------------------------------- */
+
+static int read_schedule(rd *r, const st_node *root, const char *key, const char *dflt, cup_schedule *s,
+                         char **spec) {
+  char lib[CUP_ERRMSG_LEN], b[64];
+  const st_node *nd = opt(root, key);
+  if (nd && nd->kind != ST_SCALAR)
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a schedule like \"n^-2.1\" or a number (got %s)",
+                looks(nd, b, sizeof b));
+  const char *text = nd ? nd->text : dflt;
+  int st = cup_schedule_parse(text, s, lib);
+  if (st) return fail(r, st, nd, key, "%s", lib);
+  *spec = strdup(text);
+  return *spec ? CUP_OK : CUP_ERR_NOMEM;
+}
+
+static const char *const scheme_names[] = {"explicit", "implicit", "exponential", NULL};
+static const char *const method_names[] = {"auto", "pg", "fista", "activeset", NULL};
+
+/* A word from a list, parsed by the library's own parser. */
+static int read_word(rd *r, const st_node *nd, const char *key, const char *what, const char *const *names,
+                     int (*parse)(const char *), int *out) {
+  char hint[160];
+  const char *w = "";
+  int st = string(r, nd, key, &w);
+  if (st) return st;
+  *out = parse(w);
+  if (*out >= 0) return CUP_OK;
+  return fail(r, CUP_ERR_PARSE, nd, key, "unknown %s '%.40s' (%s)", what, w, suggest(hint, sizeof hint, w, names));
+}
+
+static int read_projector(rd *r, const st_node *nd, cup_projector_options *po) {
+  static const char *const known[] = {"method", "max_iter", NULL};
+  int method = po->method, st;
+  if (nd->kind != ST_MAP) {
+    st = read_word(r, nd, "projector", "projector method", method_names, cup_proj_method_parse, &method);
+    po->method = (cup_proj_method)method;
+    return st;
+  }
+  const st_node *v;
+  st = check_keys(r, nd, "projector", known);
+  if (!st && (v = opt(nd, "method"))) {
+    st = read_word(r, v, "projector.method", "projector method", method_names, cup_proj_method_parse, &method);
+    po->method = (cup_proj_method)method;
+  }
+  long it;
+  if (!st && (v = opt(nd, "max_iter")) && !(st = integer(r, v, "projector.max_iter", 1, INT_MAX, &it)))
+    po->max_iter = (int)it;
+  return st;
+}
+
+static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
+  static const char *const known[] = {"every", "samples", NULL};
+  static const char *const words[] = {"final", "none", NULL};
+  char b[64], hint[160];
+  if (nd->kind == ST_SCALAR) {
+    if (!nd->quoted && !strcmp(nd->text, "final")) { o->output = CUP_OUTPUT_FINAL; return CUP_OK; }
+    if (!nd->quoted && !strcmp(nd->text, "none")) { o->output = CUP_OUTPUT_NONE; return CUP_OK; }
+    return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got '%.40s'; %s)",
+                nd->text, suggest(hint, sizeof hint, nd->text, words));
+  }
+  if (nd->kind != ST_MAP || nd->len != 1)
+    return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got %s)",
+                nd->kind == ST_MAP ? "a mapping with more than one key" : looks(nd, b, sizeof b));
+  int st = check_keys(r, nd, "output", known);
+  const st_node *v = nd->item[0];
+  if (!st && !strcmp(nd->key[0]->text, "every")) {
+    o->output = CUP_OUTPUT_EVERY;
+    st = integer(r, v, "output.every", 1, LONG_MAX, &o->output_every);
+  } else if (!st) {
+    o->output = CUP_OUTPUT_SAMPLES;
+    st = integer(r, v, "output.samples", 2, LONG_MAX, &o->output_samples);
+  }
+  return st;
+}
+
+/* Scheme, projector, output (all optional). */
+static int read_method(rd *r, const st_node *root, cup_integrator_options *o) {
+  const st_node *nd;
+  int st = CUP_OK, scheme;
+  if ((nd = opt(root, "scheme")) &&
+      !(st = read_word(r, nd, "scheme", "scheme", scheme_names, cup_scheme_parse, &scheme)))
+    o->scheme = (cup_scheme)scheme;
+  if (!st && (nd = opt(root, "projector"))) st = read_projector(r, nd, &o->proj);
+  if (!st && (nd = opt(root, "output"))) st = read_output(r, nd, o);
+  return st;
+}
+
+/* T, n, x0 and the tolerance schedules. */
+static int read_run(rd *r, const st_node *root, int dim, cup_scene *S) {
+  char why[48];
+  const st_node *nd;
+  cup_integrator_options *o = &S->opt;
+  int st = need(r, root, "", "T", &nd);
+  if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
+  if (!st) st = need(r, root, "", "n", &nd);
+  /* 2^53: every integer up to it is exact in a double */
+  if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
+  if (!st) st = read_schedule(r, root, "eps", "n^-2.1", &o->eps, &S->eps_spec);
+  if (!st) st = read_schedule(r, root, "eta", "n^-1.05", &o->eta, &S->eta_spec);
+  if (!st && (nd = opt(root, "x0"))) {
+    snprintf(why, sizeof why, "n = %d, the state dimension", dim);
+    st = vector(r, nd, "x0", dim, why, &S->x0);
+  } else if (!st && !(S->x0 = calloc((size_t)dim, sizeof(double)))) {
+    st = CUP_ERR_NOMEM;
+  }
+  return st;
+}
+
+/* The name, or the file's stem ("examples/paper-fig2.yaml" -> "paper-fig2"). */
+static int read_name(rd *r, const st_node *root, cup_scene *S) {
+  const st_node *nd = opt(root, "name");
+  const char *name = "";
+  if (nd) {
+    int st = string(r, nd, "name", &name);
+    if (st) return st;
+    S->name = strdup(name);
+  } else {
+    const char *base = strrchr(r->src.file, '/');
+    base = base ? base + 1 : r->src.file;
+    const char *dot = strrchr(base, '.');
+    size_t len = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    S->name = strndup(base, len);
+  }
+  return S->name ? CUP_OK : CUP_ERR_NOMEM;
+}
+
+static int read_scene(rd *r, const st_node *root, cup_scene *S) {
+  static const char *const known[] = {"name", "circuit", "lcs", "input", "x0", "T", "n", "eps", "eta",
+                                      "scheme", "projector", "output", NULL};
+  int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
+  if (!st) st = check_keys(r, root, "", known);
+  if (!st) st = read_model(r, root, &S->lcs);
+  if (!st) st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
+  cup_integrator_options_default(&S->opt);
+  if (!st) st = read_run(r, root, cup_lcs_dim(S->lcs), S);
+  if (!st) st = read_method(r, root, &S->opt);
+  if (!st) st = read_name(r, root, S);
+  return st;
+}
+
+/* ---- public -------------------------------------------------------------- */
+
+static int load(cup_scene **s, const char *text, size_t len, const char *name, const char *dir,
+                const char *const *ovr, int nov, char *errmsg) {
+  rd r = {{name, ovr}, dir, errmsg};
+  st_node *root = NULL;
+  cup_scene *S = NULL;
+  int st = st_parse(&root, text, len, &r.src, -1, NULL, errmsg);
+  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, errmsg);
+  if (!st && !(S = calloc(1, sizeof *S))) st = CUP_ERR_NOMEM;
+  if (!st) st = read_scene(&r, root, S);
+  if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;
+  st_free(root);
+  if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "%s: out of memory while loading the scene", name);
+  if (st) { cup_scene_free(&S); return st; }
+  *s = S;
+  return CUP_OK;
+}
+
+static int check_args(cup_scene **s, const void *src, const char *const *ovr, int nov, char *errmsg) {
+  if (errmsg) errmsg[0] = '\0';
+  if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: output pointer is NULL");
+  *s = NULL;
+  if (!src) return cup_fail(errmsg, CUP_ERR_ARG, "scene: path or text is NULL");
+  if (nov < 0 || (nov > 0 && !ovr)) return cup_fail(errmsg, CUP_ERR_ARG, "scene: %d overrides but no list", nov);
+  for (int k = 0; k < nov; k++)
+    if (!ovr[k]) return cup_fail(errmsg, CUP_ERR_ARG, "scene: override %d is NULL", k);
+  return CUP_OK;
+}
+
+int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,
+                          const char *const *overrides, int n_overrides, char *errmsg) {
+  int st = check_args(s, text, overrides, n_overrides, errmsg);
+  if (st) return st;
+  return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, errmsg);
+}
+
+static int slurp(const char *path, char **text, size_t *len, char *errmsg) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return cup_fail(errmsg, CUP_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  size_t cap = 4096, n = 0, got;
+  char *buf = malloc(cap);
+  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0) {
+    n += got;
+    if (n == cap) {
+      char *nb = realloc(buf, cap *= 2);
+      if (!nb) { free(buf); buf = NULL; }
+      buf = nb;
+    }
+  }
+  int err = ferror(f);
+  fclose(f);
+  if (!buf) return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path);
+  if (err) { free(buf); return cup_fail(errmsg, CUP_ERR_IO, "%s: read error", path); }
+  *text = buf;
+  *len = n;
+  return CUP_OK;
+}
+
+int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides, int n_overrides,
+                   char *errmsg) {
+  int st = check_args(s, path, overrides, n_overrides, errmsg);
+  char *text = NULL, *dir = NULL;
+  size_t len = 0;
+  if (!st) st = slurp(path, &text, &len, errmsg);
+  const char *slash = path ? strrchr(path, '/') : NULL;
+  if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
+  if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, errmsg);
+  free(text);
+  free(dir);
+  return st;
+}
+
+void cup_scene_free(cup_scene **s) {
+  if (!s || !*s) return;
+  cup_scene *S = *s;
+  free(S->name);
+  cup_lcs_free(&S->lcs);
+  cup_input_free(&S->u);
+  free(S->x0);
+  free(S->eps_spec);
+  free(S->eta_spec);
+  free(S->text);
+  free(S);
+  *s = NULL;
+}
+
+const char *cup_scene_name(const cup_scene *s) { return s ? s->name : NULL; }
+const cup_lcs *cup_scene_lcs(const cup_scene *s) { return s ? s->lcs : NULL; }
+const cup_input *cup_scene_input(const cup_scene *s) { return s ? s->u : NULL; }
+const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }
+const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ? &s->opt : NULL; }
+const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }
+const char *cup_scene_eta_spec(const cup_scene *s) { return s ? s->eta_spec : NULL; }
+const char *cup_scene_text(const cup_scene *s) { return s ? s->text : NULL; }

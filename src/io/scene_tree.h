@@ -1,0 +1,63 @@
+/* The scene loader's YAML tree: libyaml's document copied into small nodes
+ * that keep their position and their origin (the file, or the k-th
+ * override), so that overrides can be spliced in before the document is
+ * interpreted and every error can still say where its value came from.
+ * Internal to the library. */
+#ifndef CUP_SCENE_TREE_H
+#define CUP_SCENE_TREE_H
+
+#include <stdarg.h>
+#include <stddef.h>
+
+typedef enum st_kind { ST_SCALAR, ST_SEQ, ST_MAP } st_kind;
+
+typedef struct st_node st_node;
+struct st_node {
+  st_kind kind;
+  int line, col;      /* 1-based position in the file (origin -1) */
+  int origin;         /* -1: the file; k >= 0: override k */
+  int quoted;         /* SCALAR: quoted or block style, so always a string */
+  char *text;         /* SCALAR: the value (NUL-free, NUL-terminated) */
+  int len, cap;       /* SEQ: items; MAP: entries */
+  st_node **item;     /* SEQ: the items; MAP: the values */
+  st_node **key;      /* MAP: the keys (scalars, distinct) */
+};
+
+/* Where nodes come from, for messages. */
+typedef struct st_src {
+  const char *file;          /* name used in messages */
+  const char *const *ovr;    /* the override strings ("key=value") */
+} st_src;
+
+/* Format "FILE:LINE:COL: KEY: message" (or "override 'K=V': KEY: message"
+ * when `at` came from an override) into errmsg (CUP_ERRMSG_LEN bytes, may be
+ * NULL). key may be NULL. Returns status. */
+int st_error(char *errmsg, int status, const st_src *src, const st_node *at,
+             const char *key, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
+int st_verror(char *errmsg, int status, const st_src *src, const st_node *at,
+              const char *key, const char *fmt, va_list ap);
+
+/* Parse one YAML document (text of len bytes) into *root; every node gets
+ * `origin`. An empty document gives a null scalar. key names the text in
+ * messages (NULL for the file). */
+int st_parse(st_node **root, const char *text, size_t len, const st_src *src, int origin,
+             const char *key, char *errmsg);
+
+/* Apply src->ovr[k] ("dotted.key=value") to the document. */
+int st_apply_override(st_node **root, const st_src *src, int k, char *errmsg);
+
+/* The document as block-style YAML (numeric rows in flow style); NULL when
+ * out of memory. Reparsing gives the same tree up to positions. */
+char *st_emit(const st_node *root);
+
+void st_free(st_node *nd);
+
+/* The value of `key` in a mapping (NULL if absent); *keynode (may be NULL)
+ * receives the key node. */
+const st_node *st_get(const st_node *map, const char *key, const st_node **keynode);
+/* A plain scalar spelled as YAML null: "", "~", "null", "Null", "NULL". */
+int st_is_null(const st_node *nd);
+/* Parse a plain scalar as a YAML number (decimal, exponent, .inf, .nan). */
+int st_number(const char *s, double *out);
+
+#endif

@@ -1,0 +1,157 @@
+/* lcs — linear complementarity systems x' = A x + B zeta + E u,
+ * 0 <= zeta _|_ C x + G u + F >= 0 (paper, Sec. 7), as a sweeping process
+ * in the P-metric: P B = C^T makes B zeta a P-normal to K(t). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "lcs_impl.h"
+#include "polyset_impl.h"
+
+static int present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
+
+static int copy_opt(cup_sparse *dst, int *has, const cup_csc *src, const char *name,
+                    int nrow, int ncol, char *errmsg) {
+  *has = present(src);
+  if (!*has) { memset(dst, 0, sizeof *dst); return CUP_OK; }
+  return cup_sparse_copy(dst, src, name, nrow, ncol, errmsg);
+}
+
+/* P B = C^T, compared column by column of B: (P b_j) against row j of C.
+ * The message names the largest mismatch. */
+static int check_pb(const cup_polyset *K, const cup_sparse *B, double tol, char *errmsg) {
+  int n = K->n, m = K->m;
+  double *b = calloc((size_t)n, sizeof(double)), *pb = malloc(sizeof(double) * (size_t)n);
+  double *ct = calloc((size_t)n, sizeof(double));
+  if (!b || !pb || !ct) { free(b); free(pb); free(ct); return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory"); }
+  double worst = 0, scale = 0, pbv = 0, ctv = 0;
+  int wi = -1, wj = -1;
+  for (int j = 0; j < m; j++) {
+    memset(b, 0, sizeof(double) * (size_t)n);
+    for (int k = B->p[j]; k < B->p[j + 1]; k++) b[B->i[k]] = B->x[k];
+    cup_metric_apply(K, b, pb);
+    memset(ct, 0, sizeof(double) * (size_t)n);
+    for (int k = K->Ct.p[j]; k < K->Ct.p[j + 1]; k++) ct[K->Ct.i[k]] = K->Ct.x[k];
+    for (int i = 0; i < n; i++) {
+      scale = fmax(scale, fmax(fabs(pb[i]), fabs(ct[i])));
+      double d = fabs(pb[i] - ct[i]);
+      if (d > worst || isnan(d)) { worst = d; wi = i; wj = j; pbv = pb[i]; ctv = ct[i]; }
+    }
+  }
+  free(b); free(pb); free(ct);
+  if (wi >= 0 && !(worst <= tol * scale))
+    return cup_fail(errmsg, CUP_ERR_PB_CT,
+                    "P B differs from C^T: largest mismatch at (%d,%d): (P B) = %.17g but C^T = %.17g "
+                    "(relative %.3g > tolerance %.3g)", wi, wj, pbv, ctv, worst / (scale > 0 ? scale : 1), tol);
+  return CUP_OK;
+}
+
+int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: output pointer is NULL");
+  *out = NULL;
+  if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: description is NULL");
+  if (d->n < 1 || d->m < 0 || d->p < 0)
+    return cup_fail(errmsg, CUP_ERR_DIM, "LCS: n = %d, m = %d, p = %d; need n >= 1, m >= 0, p >= 0",
+                    d->n, d->m, d->p);
+  if (!(d->pb_tol >= 0)) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: pb_tol = %g must be >= 0", d->pb_tol);
+  cup_lcs *L = calloc(1, sizeof *L);
+  if (!L) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  L->n = d->n; L->m = d->m; L->p = d->p;
+  int st = CUP_OK;
+  if (d->C.nrow != d->m || d->C.ncol != d->n)
+    st = cup_fail(errmsg, CUP_ERR_DIM, "C is %d x %d, expected m x n = %d x %d", d->C.nrow, d->C.ncol, d->m, d->n);
+  if (!st) st = copy_opt(&L->A, &L->has_A, &d->A, "A", d->n, d->n, errmsg);
+  if (!st) st = copy_opt(&L->E, &L->has_E, &d->E, "E", d->n, d->p, errmsg);
+  if (!st) st = copy_opt(&L->G, &L->has_G, &d->G, "G", d->m, d->p, errmsg);
+  if (!st && (L->has_E || L->has_G) && d->p == 0)
+    st = cup_fail(errmsg, CUP_ERR_DIM, "E or G given but the input dimension p is 0");
+  if (!st) {
+    L->F = calloc((size_t)d->m + 1, sizeof(double));
+    if (!L->F) st = cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+    for (int i = 0; !st && d->F && i < d->m; i++) {
+      if (!isfinite(d->F[i])) st = cup_fail(errmsg, CUP_ERR_NONFINITE, "F[%d] is %g", i, d->F[i]);
+      L->F[i] = d->F[i];
+    }
+  }
+  if (!st) st = cup_polyset_create(&L->K, &d->C, L->F, &d->P, errmsg);
+  if (!st && present(&d->B)) {
+    cup_sparse B;
+    st = cup_sparse_copy(&B, &d->B, "B", d->n, d->m, errmsg);
+    if (!st) {
+      st = check_pb(L->K, &B, d->pb_tol > 0 ? d->pb_tol : 1e-12, errmsg);
+      cup_sparse_free(&B);
+    }
+  }
+  if (st) { cup_lcs_free(&L); return st; }
+  L->fixed = 1;
+  for (int k = 0; L->has_G && k < L->G.nnz; k++)
+    if (L->G.x[k] != 0) L->fixed = 0;
+  *out = L;
+  return CUP_OK;
+}
+
+void cup_lcs_free(cup_lcs **Lp) {
+  if (!Lp || !*Lp) return;
+  cup_lcs *L = *Lp;
+  cup_sparse_free(&L->A);
+  cup_sparse_free(&L->E);
+  cup_sparse_free(&L->G);
+  free(L->F);
+  cup_polyset_free(&L->K);
+  free(L);
+  *Lp = NULL;
+}
+
+int cup_lcs_dim(const cup_lcs *L) { return L ? L->n : 0; }
+int cup_lcs_rows(const cup_lcs *L) { return L ? L->m : 0; }
+int cup_lcs_inputs(const cup_lcs *L) { return L ? L->p : 0; }
+const cup_polyset *cup_lcs_polyset(const cup_lcs *L) { return L ? L->K : NULL; }
+int cup_lcs_fixed_set(const cup_lcs *L) { return L ? L->fixed : 1; }
+
+/* A dense row-major r x c matrix as a CSC view into caller storage. */
+static cup_csc dense_view(int r, int c, const double *a, int *cp, int *ri, double *vx) {
+  int q = 0;
+  cp[0] = 0;
+  for (int j = 0; j < c; j++) {
+    for (int i = 0; i < r; i++)
+      if (a[i * c + j] != 0) { ri[q] = i; vx[q++] = a[i * c + j]; }
+    cp[j + 1] = q;
+  }
+  return (cup_csc){r, c, cp, ri, vx};
+}
+
+int cup_lcs_circuit(cup_lcs **out, const cup_circuit *c, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: output pointer is NULL");
+  *out = NULL;
+  if (!c) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: parameters are NULL");
+  const double v[6] = {c->R1, c->R2, c->R3, c->L2, c->L3, c->C4};
+  const char *names[6] = {"R1", "R2", "R3", "L2", "L3", "C4"};
+  for (int k = 0; k < 6; k++) {
+    if (!isfinite(v[k])) return cup_fail(errmsg, CUP_ERR_NONFINITE, "circuit: %s = %g", names[k], v[k]);
+    if (k < 3 && v[k] < 0) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: %s = %g must be >= 0", names[k], v[k]);
+    if (k >= 3 && !(v[k] > 0)) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: %s = %g must be > 0", names[k], v[k]);
+  }
+  if (!isfinite(c->G[0]) || !isfinite(c->G[1]))
+    return cup_fail(errmsg, CUP_ERR_NONFINITE, "circuit: G = (%g, %g)", c->G[0], c->G[1]);
+  double R1 = c->R1, R2 = c->R2, R3 = c->R3, L2 = c->L2, L3 = c->L3, C4 = c->C4;
+  /* the paper's matrices (Sec. 7, example) */
+  const double A[9] = {0, 1, 0,
+                       -1 / (L3 * C4), -(R1 + R3) / L3, R1 / L3,
+                       0, R1 / L2, -(R1 + R2) / L2};
+  const double B[6] = {0, 0, 1 / L3, 1 / L3, -1 / L2, 0};
+  const double C[6] = {0, 1, -1, 0, 1, 0};
+  const double E[3] = {0, 1 / L3, 1 / L2};
+  const double G[2] = {c->G[0], c->G[1]};
+  const double P[3] = {1, L3, L2};
+  int pa[4], ia[9], pb[3], ib[6], pc[4], ic[6], pe[2], ie[3], pg[2], ig[2];
+  double xa[9], xb[6], xc[6], xe[3], xg[2];
+  cup_lcs_desc d = {0};
+  d.n = 3; d.m = 2; d.p = 1;
+  d.A = dense_view(3, 3, A, pa, ia, xa);
+  d.B = dense_view(3, 2, B, pb, ib, xb);
+  d.C = dense_view(2, 3, C, pc, ic, xc);
+  d.E = dense_view(3, 1, E, pe, ie, xe);
+  d.G = dense_view(2, 1, G, pg, ig, xg);
+  d.P = (cup_metric){CUP_METRIC_DIAGONAL, P, {0}, 0};
+  return cup_lcs_create(out, &d, errmsg);
+}

@@ -1,0 +1,216 @@
+/* input: waveform values and integrals against closed forms and GSL
+ * quadrature with the jump points given, sign(0) = 0 at jump instants, the
+ * callback path, breakpoints, validation. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <cmocka.h>
+#include <float.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_integration.h>
+#include "testutil.h"
+
+static cup_input *make(int p) {
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, p, NULL), CUP_OK);
+  return u;
+}
+
+/* the paper's inputs */
+static cup_input *case1(void) {
+  cup_input *u = make(1);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
+  cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
+  assert_int_equal(cup_input_add(u, 0, &s, NULL), CUP_OK);
+  assert_int_equal(cup_input_add(u, 0, &c, NULL), CUP_OK);
+  return u;
+}
+static cup_input *case2(void) {
+  cup_input *u = make(1);
+  cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
+  assert_int_equal(cup_input_add(u, 0, &q, NULL), CUP_OK);
+  return u;
+}
+
+static void test_case1_values_and_integrals(void **state) {
+  (void)state;
+  cup_input *u = case1();
+  rng_t r = {1};
+  for (int k = 0; k < 1000; k++) {
+    double a = rng_unif(&r), b = a + 1e-6 + rng_unif(&r) * (k % 2 ? 1e-3 : 0.5), v, I;
+    assert_int_equal(cup_input_eval(u, a, &v), CUP_OK);
+    assert_close(v, 16 * sin(6 * M_PI * a) - 0.5, 1e-13);
+    assert_int_equal(cup_input_integral(u, a, b, &I), CUP_OK);
+    /* closed form in long double: 16 (cos 6 pi a - cos 6 pi b) / (6 pi) - 0.5 (b - a) */
+    long double ref = 16.0L * (cosl(6 * M_PIl * a) - cosl(6 * M_PIl * b)) / (6 * M_PIl) - 0.5L * (b - a);
+    assert_close(I, (double)ref, 1e-14 * (1 + fabs((double)ref)));   /* rounding of sin(6 pi t), t <= 1.5 */
+  }
+  assert_int_equal(cup_input_is_constant(u), 0);
+  cup_input_free(&u);
+  assert_null(u);
+}
+
+static void test_sign_of_zero_at_jumps(void **state) {
+  (void)state;
+  cup_input *u = case2();
+  double v;
+  /* sign(sin(4 pi t)) jumps at multiples of 1/4; the paper takes sign(0) = 0 */
+  static const double jumps[] = {0, 0.25, 0.5, 0.75, 1.0};
+  for (int k = 0; k < 5; k++) {
+    assert_int_equal(cup_input_eval(u, jumps[k], &v), CUP_OK);
+    assert_true(v == 0);
+  }
+  for (long n = 4; n <= 4000000; n *= 10) {   /* grid points t_k = k/n that are jumps */
+    double h = 1.0 / (double)n;
+    assert_int_equal(cup_input_eval(u, (double)(n / 4) * h, &v), CUP_OK);
+    assert_true(v == 0);
+  }
+  cup_input_eval(u, 0.1, &v); assert_true(v == 1);
+  cup_input_eval(u, 0.3, &v); assert_true(v == -1);
+  cup_input_eval(u, 0.25 + 1e-12, &v); assert_true(v == -1);
+  cup_input_free(&u);
+}
+
+static double square_fn(double t, void *p) {
+  (void)p;
+  double s = sin(4 * M_PI * t);
+  return s > 0 ? 1 : s < 0 ? -1 : 0;
+}
+
+static void test_square_integral_against_quadrature(void **state) {
+  (void)state;
+  cup_input *u = case2();
+  gsl_set_error_handler_off();                 /* GSL's default handler aborts */
+  gsl_integration_workspace *w = gsl_integration_workspace_alloc(1000);
+  rng_t r = {2};
+  for (int k = 0; k < 300; k++) {
+    double a = 2 * rng_unif(&r), b = a + rng_unif(&r) * (k % 3 ? 0.01 : 1.3), I;
+    assert_int_equal(cup_input_integral(u, a, b, &I), CUP_OK);
+    /* QAGP with every jump inside [a, b] as a break point */
+    double pts[64];
+    int np = 0;
+    pts[np++] = a;
+    for (int j = (int)ceil(4 * a); j / 4.0 < b; j++) if (j / 4.0 > a) pts[np++] = j / 4.0;
+    pts[np++] = b;
+    gsl_function F = {square_fn, NULL};
+    double ref, err;
+    gsl_integration_qagp(&F, pts, (size_t)np, 1e-12, 1e-12, 1000, w, &ref, &err);
+    assert_close(I, ref, 1e-11);
+  }
+  gsl_integration_workspace_free(w);
+  cup_input_free(&u);
+}
+
+static void test_table(void **state) {
+  (void)state;
+  cup_input *u = make(2);
+  double t[3] = {0, 1, 3}, v[3] = {0, 2, -1};
+  cup_wave pwl = {.kind = CUP_WAVE_PWL, .npoints = 3, .t = t, .v = v};
+  cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = 5};
+  assert_int_equal(cup_input_add(u, 1, &pwl, NULL), CUP_OK);
+  assert_int_equal(cup_input_add(u, 0, &c, NULL), CUP_OK);
+  double val[2], I[2];
+  cup_input_eval(u, 2, val);
+  assert_close(val[1], 0.5, 1e-15);              /* halfway between 2 and -1 */
+  assert_close(val[0], 5, 0);
+  cup_input_eval(u, -7, val); assert_close(val[1], 0, 0);
+  cup_input_eval(u, 9, val); assert_close(val[1], -1, 0);
+  /* over [-1, 4]: tail 0 + 1 (triangle to 2) + 1 (trapezoid 2 -> -1 over 2) - 1 (tail) */
+  cup_input_integral(u, -1, 4, I);
+  assert_close(I[1], 1, 1e-15);
+  assert_close(I[0], 25, 1e-14);
+  cup_input_integral(u, 0.5, 2, I);             /* 0.75*0.5... by hand: 1.5*0.5 + (2+0.5)/2*1 */
+  assert_close(I[1], 0.5 * (1 + 2) * 0.5 + 0.5 * (2 + 0.5) * 1, 1e-15);
+  assert_close(cup_input_next_break(u, 0.5), 1, 0);
+  assert_close(cup_input_next_break(u, 1), 3, 0);
+  assert_true(isinf(cup_input_next_break(u, 3)));
+  cup_input_free(&u);
+}
+
+static void test_breaks_of_the_square_wave(void **state) {
+  (void)state;
+  cup_input *u = case2();
+  double t = 0;
+  for (int k = 1; k <= 8; k++) {
+    t = cup_input_next_break(u, t);
+    assert_close(t, k * 0.25, 1e-15);
+  }
+  cup_input_free(&u);
+}
+
+static int quad_cb(double t, double *out, void *ctx) {
+  int *calls = ctx;
+  (*calls)++;
+  out[0] = t * t;
+  out[1] = exp(t);
+  return 0;
+}
+static int nan_cb(double t, double *out, void *ctx) {
+  (void)ctx;
+  out[0] = t > 0.5 ? NAN : 1;
+  return 0;
+}
+static int fail_cb(double t, double *out, void *ctx) {
+  (void)ctx; (void)t;
+  out[0] = 0;
+  return 7;
+}
+
+static void test_callback(void **state) {
+  (void)state;
+  cup_input *u = make(2);
+  int calls = 0;
+  assert_int_equal(cup_input_set_callback(u, quad_cb, &calls, 1e-13, 1e-12), CUP_OK);
+  double I[2];
+  assert_int_equal(cup_input_integral(u, 0, 1, I), CUP_OK);
+  assert_close(I[0], 1.0 / 3, 1e-13);
+  assert_close(I[1], M_E - 1, 1e-12);
+  assert_true(calls > 0);
+  assert_int_equal(cup_input_is_constant(u), 0);
+  cup_input_free(&u);
+  u = make(1);
+  cup_input_set_callback(u, nan_cb, NULL, 1e-10, 0);
+  assert_int_equal(cup_input_integral(u, 0, 1, I), CUP_ERR_CALLBACK);
+  double v;
+  assert_int_equal(cup_input_eval(u, 0.9, &v), CUP_ERR_CALLBACK);
+  cup_input_set_callback(u, fail_cb, NULL, 1e-10, 0);
+  assert_int_equal(cup_input_eval(u, 0.1, &v), CUP_ERR_CALLBACK);
+  assert_int_equal(cup_input_set_callback(u, fail_cb, NULL, 0, 0), CUP_ERR_ARG);
+  cup_input_free(&u);
+}
+
+static void test_validation(void **state) {
+  (void)state;
+  char msg[CUP_ERRMSG_LEN];
+  cup_input *u = make(1);
+  double t[3] = {0, 2, 1}, v[3] = {0, 1, 2};
+  cup_wave bad = {.kind = CUP_WAVE_PWL, .npoints = 3, .t = t, .v = v};
+  assert_int_equal(cup_input_add(u, 0, &bad, msg), CUP_ERR_ARG);
+  assert_non_null(strstr(msg, "point 2"));
+  cup_wave neg = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = -1};
+  assert_int_equal(cup_input_add(u, 0, &neg, msg), CUP_ERR_ARG);
+  assert_non_null(strstr(msg, "frequency"));
+  cup_wave nan = {.kind = CUP_WAVE_CONSTANT, .value = NAN};
+  assert_int_equal(cup_input_add(u, 0, &nan, msg), CUP_ERR_NONFINITE);
+  cup_wave ok = {.kind = CUP_WAVE_CONSTANT, .value = 2};
+  assert_int_equal(cup_input_add(u, 1, &ok, msg), CUP_ERR_DIM);
+  assert_int_equal(cup_input_add(u, 0, &ok, msg), CUP_OK);
+  assert_int_equal(cup_input_is_constant(u), 1);
+  double I;
+  cup_input_integral(u, 1, 4, &I);
+  assert_close(I, 6, 0);
+  cup_input_free(&u);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_case1_values_and_integrals),
+    cmocka_unit_test(test_sign_of_zero_at_jumps),
+    cmocka_unit_test(test_square_integral_against_quadrature),
+    cmocka_unit_test(test_table),
+    cmocka_unit_test(test_breaks_of_the_square_wave),
+    cmocka_unit_test(test_callback),
+    cmocka_unit_test(test_validation),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,668 @@
+/* integrator: the paper's two circuits against the shared reference limits,
+ * five closed-form sweeping processes / LCS (derived in the comments, and in
+ * docs/closed-forms.md), the stiff rectifier, output modes, and errors that
+ * say where they happened without losing the states before. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "testutil.h"
+
+/* ---- helpers --------------------------------------------------------------------- */
+
+typedef double (*exact_fn)(double t, int i, const void *par);
+
+typedef struct {
+  exact_fn exact;        /* closed form, or NULL: compare with ref[] on a 1/1000 grid */
+  const void *par;
+  const double *ref;     /* 1001 x 3 */
+  int dim;
+  long n;
+  double err;            /* max over sampled grid points and components */
+  long count;
+} err_ctx;
+
+static int err_sink(long k, double t, const double *x, void *vp) {
+  err_ctx *c = vp;
+  for (int i = 0; i < c->dim; i++) {
+    double ex;
+    if (c->exact) {
+      ex = c->exact(t, i, c->par);
+    } else {
+      long stride = c->n / 1000;
+      if (k % stride) return 0;
+      ex = c->ref[(k / stride) * 3 + i];
+    }
+    c->err = fmax(c->err, fabs(x[i] - ex));
+  }
+  c->count++;
+  return 0;
+}
+
+static double run_error(const cup_lcs *L, const cup_input *u, const double *x0, long n, double T,
+                        int scheme, exact_fn exact, const void *par, const double *ref,
+                        cup_run_info *info) {
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = n;
+  o.T = T;
+  o.scheme = scheme;
+  o.eps = (cup_schedule){0, 0};          /* exact projections */
+  o.eta = (cup_schedule){0, 0};
+  cup_integrator *I = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
+  err_ctx c = {exact, par, ref, cup_lcs_dim(L), n, 0, 0};
+  cup_run_info local;
+  cup_run_info *ri = info ? info : &local;
+  int st = cup_integrator_run(I, x0, err_sink, &c, ri);
+  if (st < 0) fail_msg("run: %s", ri->message);
+  cup_integrator_free(&I);
+  return c.err;
+}
+
+static double order_of(double e1, double e2) { return log10(e1 / e2); }   /* n x10 */
+
+/* ---- the paper's circuits ----------------------------------------------------------- */
+
+static double ref1[1001 * 3], ref2[1001 * 3];
+
+static void load_ref(const char *name, double *ref) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/reference/%s", CUP_SHARED_DIR, name);
+  FILE *f = fopen(path, "r");
+  if (!f) fail_msg("cannot open %s", path);
+  char line[512];
+  assert_non_null(fgets(line, sizeof line, f));
+  for (int j = 0; j <= 1000; j++) {
+    double t;
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &t, &ref[3 * j], &ref[3 * j + 1], &ref[3 * j + 2]), 4);
+    assert_close(t, j / 1000.0, 1e-15);
+  }
+  fclose(f);
+}
+
+static cup_input *paper_input(int cas) {
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+  if (cas == 1) {
+    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
+    cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
+    cup_input_add(u, 0, &s, NULL);
+    cup_input_add(u, 0, &c, NULL);
+  } else {
+    cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
+    cup_input_add(u, 0, &q, NULL);
+  }
+  return u;
+}
+
+static cup_lcs *paper_lcs(int cas) {
+  cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
+  cup_lcs *L = NULL;
+  assert_int_equal(cup_lcs_circuit(&L, &c, NULL), CUP_OK);
+  return L;
+}
+
+/* Exact-projection catching-up: max-norm error within 2% of 1.52/n (case 1)
+ * and 1.79/n (case 2) at n = 10^3 and 10^4 (DESIGN.md, measured). */
+static void test_paper_cases_exact_projection(void **state) {
+  (void)state;
+  load_ref("ref_case1_limit_richardson.csv", ref1);
+  load_ref("ref_case2_limit_richardson.csv", ref2);
+  static const double C[3] = {0, 1.52, 1.79};
+  for (int cas = 1; cas <= 2; cas++) {
+    cup_lcs *L = paper_lcs(cas);
+    cup_input *u = paper_input(cas);
+    double x0[3] = {0, 0, 0};
+    for (long n = 1000; n <= 10000; n *= 10) {
+      double e = run_error(L, u, x0, n, 1, CUP_SCHEME_EXPLICIT, NULL, NULL, cas == 1 ? ref1 : ref2, NULL);
+      print_message("case %d n %ld: error %.6e = %.4f / n\n", cas, n, e, e * n);
+      assert_true(fabs(e * n - C[cas]) <= 0.02 * C[cas]);
+    }
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+  }
+}
+
+typedef struct { double *X; } store_ctx;
+static int store_sink(long k, double t, const double *x, void *vp) {
+  (void)t;
+  store_ctx *c = vp;
+  memcpy(c->X + 3 * k, x, 3 * sizeof(double));
+  return 0;
+}
+
+/* The paper's tolerances eps_n = n^-2.1, eta_n = n^-1.05 with the default
+ * projector: the trajectory differs from the exact-projection run by <= 1%
+ * of the discretization error. */
+static void test_paper_tolerances(void **state) {
+  (void)state;
+  for (int cas = 1; cas <= 2; cas++)
+    for (long n = 1000; n <= 10000; n *= 10) {
+      cup_lcs *L = paper_lcs(cas);
+      cup_input *u = paper_input(cas);
+      double *X[2];
+      for (int pass = 0; pass < 2; pass++) {
+        X[pass] = malloc(sizeof(double) * 3 * (size_t)(n + 1));
+        cup_integrator_options o;
+        cup_integrator_options_default(&o);           /* n^-2.1, n^-1.05 */
+        o.n = n;
+        if (pass == 0) { o.eps = (cup_schedule){0, 0}; o.eta = (cup_schedule){0, 0}; }
+        cup_integrator *I = NULL;
+        assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
+        double x0[3] = {0, 0, 0};
+        store_ctx sc = {X[pass]};
+        cup_run_info info;
+        assert_int_equal(cup_integrator_run(I, x0, store_sink, &sc, &info), CUP_OK);
+        if (pass == 1) {
+          assert_true(info.max_eps_cert <= pow((double)n, -2.1));
+          assert_true(info.max_eta_cert <= pow((double)n, -1.05));
+        }
+        cup_integrator_free(&I);
+      }
+      double d = 0;
+      for (long q = 0; q < 3 * (n + 1); q++) d = fmax(d, fabs(X[0][q] - X[1][q]));
+      double err = (cas == 1 ? 1.52 : 1.79) / n;
+      assert_true(d <= 0.01 * err);
+      free(X[0]); free(X[1]);
+      cup_input_free(&u);
+      cup_lcs_free(&L);
+    }
+}
+
+/* ---- closed forms --------------------------------------------------------------- */
+
+/* A small LCS from dense row-major matrices (absent ones: NULL). */
+typedef struct { tcsc A, B, C, E, G; cup_lcs *L; } lcs_built;
+
+static void build(lcs_built *b, int n, int m, int p, const double *A, const double *B,
+                  const double *C, const double *E, const double *F, const double *G,
+                  const double *Pdiag) {
+  memset(b, 0, sizeof *b);
+  cup_lcs_desc d = {0};
+  d.n = n; d.m = m; d.p = p;
+  if (A) { tcsc_from_dense(&b->A, A, n, n); d.A = b->A.view; }
+  if (B) { tcsc_from_dense(&b->B, B, n, m); d.B = b->B.view; }
+  tcsc_from_dense(&b->C, C, m, n); d.C = b->C.view;
+  if (E) { tcsc_from_dense(&b->E, E, n, p); d.E = b->E.view; }
+  if (G) { tcsc_from_dense(&b->G, G, m, p); d.G = b->G.view; }
+  d.F = F;
+  if (Pdiag) d.P = (cup_metric){CUP_METRIC_DIAGONAL, Pdiag, {0}, 0};
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_lcs_create(&b->L, &d, msg)) fail_msg("lcs: %s", msg);
+}
+
+static void unbuild(lcs_built *b) {
+  cup_lcs_free(&b->L);
+  if (b->A.p) tcsc_free(&b->A);
+  if (b->B.p) tcsc_free(&b->B);
+  tcsc_free(&b->C);
+  if (b->E.p) tcsc_free(&b->E);
+  if (b->G.p) tcsc_free(&b->G);
+}
+
+static cup_input *const_input(double v) {
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = v};
+  cup_input_add(u, 0, &c, NULL);
+  return u;
+}
+
+/* Observed order between n and 10 n in [0.9, 1.15]. */
+static void check_order(const char *name, const lcs_built *b, const cup_input *u, const double *x0,
+                        double T, exact_fn ex, const void *par, long n) {
+  double e1 = run_error(b->L, u, x0, n, T, CUP_SCHEME_EXPLICIT, ex, par, NULL, NULL);
+  double e2 = run_error(b->L, u, x0, 10 * n, T, CUP_SCHEME_EXPLICIT, ex, par, NULL, NULL);
+  double p = order_of(e1, e2);
+  print_message("%-28s n %6ld: %.3e, n %7ld: %.3e, order %.3f\n", name, n, e1, 10 * n, e2, p);
+  assert_true(p >= 0.9 && p <= 1.15);
+}
+
+/* (a) An interval of half-width r = 1/2 moving with sin t:
+ *     x' in -N_[sin t - r, sin t + r](x), x(0) = 0  (the play operator).
+ *   x = 0 until sin t - r reaches it at pi/6; then pushed: sin t - r up to
+ *   pi/2; rests at r until the upper edge sin t + r comes down at pi; pushed
+ *   down: sin t + r until 3 pi/2; rests at -r until 2 pi; and so on. */
+static double interval_exact(double t, int i, const void *par) {
+  (void)i; (void)par;
+  double r = 0.5;
+  if (t <= M_PI / 6) return 0;
+  if (t <= M_PI / 2) return sin(t) - r;
+  double tau = fmod(t - M_PI / 2, 2 * M_PI);
+  if (tau <= M_PI / 2) return r;
+  if (tau <= M_PI) return sin(t) + r;
+  if (tau <= 1.5 * M_PI) return -r;
+  return sin(t) - r;
+}
+
+static void test_closed_form_moving_interval(void **state) {
+  (void)state;
+  double C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};   /* x - sin t + r >= 0, -x + sin t + r >= 0 */
+  lcs_built b;
+  build(&b, 1, 2, 1, NULL, NULL, C, NULL, F, G, NULL);
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
+  cup_input_add(u, 0, &s, NULL);
+  double x0[1] = {0};
+  /* Rate independent: the catching-up iterate equals the solution at every
+   * grid point (a projection of the previous value is exactly what the play
+   * operator does), so the grid error is rounding. */
+  for (long n = 1000; n <= 100000; n *= 10) {
+    double e = run_error(b.L, u, x0, n, 2.5 * M_PI, CUP_SCHEME_EXPLICIT, interval_exact, NULL, NULL, NULL);
+    print_message("moving interval n %6ld: error %.3e (exact at grid points)\n", n, e);
+    assert_true(e <= 1e-12);
+  }
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* (a') The same interval with relaxation, x' in -N(x) - x, x(0) = 0. Phases:
+ *   free:  x = x_d e^{-(t - t_d)}, until it meets an edge sin t -/+ r;
+ *   lower: x = sin t - r while the edge outruns the drift, cos t > -(sin t - r);
+ *   upper: x = sin t + r while cos t < -(sin t + r).
+ * Event times by bracketing and bisection in long double. */
+#define RELAX_MAX 64
+typedef struct { int nev; long double t[RELAX_MAX], xd[RELAX_MAX]; int phase[RELAX_MAX]; } relax_par;
+
+static long double relax_free(long double xd, long double td, long double t) { return xd * expl(-(t - td)); }
+
+static long double relax_event(int phase, long double xd, long double td, long double t) {
+  switch (phase) {
+    case 0: {                                     /* free: distance to the nearer edge */
+      long double x = relax_free(xd, td, t);
+      return fminl(x - (sinl(t) - 0.5L), (sinl(t) + 0.5L) - x);
+    }
+    case 1: return cosl(t) + sinl(t) - 0.5L;      /* lower: detach when < 0 */
+    default: return -(cosl(t) + sinl(t) + 0.5L);  /* upper: detach when < 0 */
+  }
+}
+
+static void relax_setup(relax_par *q, double T) {
+  q->nev = 1;
+  q->t[0] = 0; q->xd[0] = 0; q->phase[0] = 0;
+  long double t = 0;
+  while (q->nev < RELAX_MAX) {
+    int k = q->nev - 1, ph = q->phase[k];
+    long double td = q->t[k], xd = q->xd[k], a = t, dt = 1e-3L, b = a + dt;
+    while (b < T + 1 && relax_event(ph, xd, td, b) > 0) { a = b; b += dt; }
+    if (b >= T + 1) break;
+    for (int it = 0; it < 200; it++) {
+      long double mid = 0.5L * (a + b);
+      if (relax_event(ph, xd, td, mid) > 0) a = mid; else b = mid;
+    }
+    t = 0.5L * (a + b);
+    long double x = ph == 0 ? relax_free(xd, td, t) : ph == 1 ? sinl(t) - 0.5L : sinl(t) + 0.5L;
+    int next = ph != 0 ? 0 : (fabsl(x - (sinl(t) - 0.5L)) < fabsl(x - (sinl(t) + 0.5L)) ? 1 : 2);
+    q->t[q->nev] = t; q->xd[q->nev] = x; q->phase[q->nev] = next;
+    q->nev++;
+    t += 1e-9L;
+  }
+}
+
+static double relax_exact(double t, int i, const void *vp) {
+  (void)i;
+  const relax_par *q = vp;
+  int k = 0;
+  while (k + 1 < q->nev && q->t[k + 1] <= t) k++;
+  switch (q->phase[k]) {
+    case 0: return (double)relax_free(q->xd[k], q->t[k], t);
+    case 1: return sin(t) - 0.5;
+    default: return sin(t) + 0.5;
+  }
+}
+
+static void test_closed_form_interval_with_relaxation(void **state) {
+  (void)state;
+  double A[1] = {-1}, C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};
+  lcs_built b;
+  build(&b, 1, 2, 1, A, NULL, C, NULL, F, G, NULL);
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
+  cup_input_add(u, 0, &s, NULL);
+  double T = 2.5 * M_PI, x0[1] = {0};
+  relax_par q;
+  relax_setup(&q, T);
+  assert_true(q.nev >= 4);                        /* free, pushed, free, pushed, ... */
+  check_order("moving interval, relaxation", &b, u, x0, T, relax_exact, &q, 1000);
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* (b) The quadrant cone with f = -x + c, c = (1, -1), x(0) = (0, 1):
+ *   x1 = 1 - e^-t (inside); x2 = 2 e^-t - 1 until it reaches 0 at ln 2, then
+ *   held at 0 since the free drift -1 points out. */
+static double cone_exact(double t, int i, const void *par) {
+  (void)par;
+  if (i == 0) return 1 - exp(-t);
+  return t <= log(2) ? 2 * exp(-t) - 1 : 0;
+}
+
+static void test_closed_form_cone(void **state) {
+  (void)state;
+  double A[4] = {-1, 0, 0, -1}, C[4] = {1, 0, 0, 1}, E[2] = {1, -1};
+  lcs_built b;
+  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, NULL);
+  cup_input *u = const_input(1);
+  double x0[2] = {0, 1};
+  check_order("cone, f = -x + c", &b, u, x0, 2, cone_exact, NULL, 1000);
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* (c) RL half-wave rectifier: L i' = -R i + V sin(w t) + zeta,
+ *   0 <= zeta _|_ i >= 0 (zeta = -v_diode); as an LCS A = -R/L, B = 1/L,
+ *   C = 1, E = V/L, P = L (P B = C^T). From i(0) = 0 it conducts:
+ *     i(t) = V/Z (sin(w t - phi) + sin(phi) e^{-t R/L}),
+ *   Z = sqrt(R^2 + w^2 L^2), phi = atan(w L / R), until i returns to 0 at
+ *   t_off in (pi/w, 2 pi/w) (found by bisection in long double); then
+ *   i = 0 until the source turns positive at 2 pi/w, and the period repeats. */
+typedef struct { double R, L, V, w; long double toff; } rect_par;
+
+static long double rect_cond(const rect_par *q, long double t) {
+  long double Z = sqrtl((long double)q->R * q->R + (long double)q->w * q->w * q->L * q->L);
+  long double phi = atanl((long double)q->w * q->L / q->R);
+  return q->V / Z * (sinl(q->w * t - phi) + sinl(phi) * expl(-t * q->R / q->L));
+}
+
+static void rect_setup(rect_par *q) {
+  long double lo = M_PIl / q->w, hi = 2 * M_PIl / q->w;
+  for (int k = 0; k < 200; k++) {
+    long double mid = 0.5L * (lo + hi);
+    if (rect_cond(q, mid) > 0) lo = mid; else hi = mid;
+  }
+  q->toff = 0.5L * (lo + hi);
+}
+
+static double rect_exact(double t, int i, const void *vp) {
+  (void)i;
+  const rect_par *q = vp;
+  double period = 2 * M_PI / q->w;
+  double tau = fmod(t, period);
+  if (t > 0 && tau == 0) tau = 0;
+  return tau <= q->toff ? (double)rect_cond(q, tau) : 0;
+}
+
+static void rect_build(lcs_built *b, const rect_par *q, double *P) {
+  double A[1] = {-q->R / q->L}, B[1] = {1 / q->L}, C[1] = {1}, E[1] = {q->V / q->L};
+  P[0] = q->L;
+  build(b, 1, 1, 1, A, B, C, E, NULL, NULL, P);
+}
+
+static cup_input *sine_input(double f) {
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = f};
+  cup_input_add(u, 0, &s, NULL);
+  return u;
+}
+
+static void test_closed_form_rectifier(void **state) {
+  (void)state;
+  rect_par q = {1, 0.2, 1, 2 * M_PI, 0};
+  rect_setup(&q);
+  double P[1];
+  lcs_built b;
+  rect_build(&b, &q, P);
+  cup_input *u = sine_input(1);
+  double x0[1] = {0};
+  check_order("RL half-wave rectifier", &b, u, x0, 2, rect_exact, &q, 1000);
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* (d) The quadrant with its corner active: x' = diag(-1, -2) x + (-1, -1),
+ *   x(0) = (1, 1), metric P = diag(2, 3) (axis-aligned rows: the same
+ *   normals). x1 = 2 e^-t - 1 until ln 2; x2 = 1.5 e^-2t - 0.5 until
+ *   ln(3)/2; each then held at 0, both after ln 2. */
+static double corner_exact(double t, int i, const void *par) {
+  (void)par;
+  if (i == 0) return t <= log(2) ? 2 * exp(-t) - 1 : 0;
+  return t <= 0.5 * log(3) ? 1.5 * exp(-2 * t) - 0.5 : 0;
+}
+
+static void test_closed_form_corner(void **state) {
+  (void)state;
+  double A[4] = {-1, 0, 0, -2}, C[4] = {1, 0, 0, 1}, E[2] = {-1, -1}, P[2] = {2, 3};
+  lcs_built b;
+  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, P);
+  cup_input *u = const_input(1);
+  double x0[2] = {1, 1};
+  check_order("corner of a quadrant", &b, u, x0, 1.5, corner_exact, NULL, 1000);
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* (e) A set that jumps: x' = -x, K(t) = {x >= s(t)}, s = sign(sin 2 pi t),
+ *   x(0) = 1. On (0, 1/2) s = 1 holds x at 1; on (1/2, 1) s = -1 frees it:
+ *   x = e^{-(t - 1/2)}; at t = 1 s(1) = 0 keeps it; just after, s = 1 throws
+ *   x up to 1 (a jump), held until 3/2, then free again. The error is
+ *   bounded by C h on the grid (n a multiple of 4 puts the jumps on it). */
+static double jump_exact(double t, int i, const void *par) {
+  (void)i; (void)par;
+  double tau = fmod(t, 1.0);
+  if (t == 0) return 1;
+  if (tau == 0) return exp(-0.5);              /* t = 1: K(1) = {x >= 0} */
+  return tau <= 0.5 ? 1 : exp(-(tau - 0.5));
+}
+
+static void test_closed_form_jumping_set(void **state) {
+  (void)state;
+  double A[1] = {-1}, C[1] = {1}, G[1] = {-1};
+  lcs_built b;
+  build(&b, 1, 1, 1, A, NULL, C, NULL, NULL, G, NULL);
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 1};
+  cup_input_add(u, 0, &q, NULL);
+  double x0[1] = {1};
+  for (long n = 1000; n <= 100000; n *= 10) {
+    double e = run_error(b.L, u, x0, n, 1.75, CUP_SCHEME_EXPLICIT, jump_exact, NULL, NULL, NULL);
+    print_message("jumping set n %6ld: error %.3e = %.3f h\n", n, e, e * n / 1.75);
+    assert_true(e <= 1.0 * 1.75 / n);            /* C = 1 */
+  }
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* Stiff: the rectifier with L = 1e-3 (time constant 1e-3) at n = 100 over two
+ * periods (h / tau = 20): explicit is flagged; implicit and exponential stay
+ * within 2x of their own error at n = 10^4 scaled by 100 (first order). */
+static void test_stiff_rectifier(void **state) {
+  (void)state;
+  rect_par q = {1, 1e-3, 1, 2 * M_PI, 0};
+  rect_setup(&q);
+  double P[1];
+  lcs_built b;
+  rect_build(&b, &q, P);
+  cup_input *u = sine_input(1);
+  double x0[1] = {0};
+  cup_run_info info;
+  double ex = run_error(b.L, u, x0, 100, 2, CUP_SCHEME_EXPLICIT, rect_exact, &q, NULL, &info);
+  assert_int_equal(info.status, CUP_WARN_STIFF);
+  assert_true(info.h_rho > 2);
+  assert_non_null(strstr(info.message, "h*rho(A)"));
+  print_message("stiff explicit n 100: h*rho = %.1f, error %.3e\n", info.h_rho, ex);
+  for (int scheme = CUP_SCHEME_IMPLICIT; scheme <= CUP_SCHEME_EXPONENTIAL; scheme++) {
+    double e100 = run_error(b.L, u, x0, 100, 2, scheme, rect_exact, &q, NULL, &info);
+    assert_int_equal(info.status, CUP_OK);
+    double e1e4 = run_error(b.L, u, x0, 10000, 2, scheme, rect_exact, &q, NULL, NULL);
+    print_message("stiff %-11s: n 100 error %.3e, n 1e4 error %.3e (x100 = %.3e)\n",
+                  cup_scheme_name(scheme), e100, e1e4, 100 * e1e4);
+    assert_true(e100 <= 2 * 100 * e1e4);
+  }
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+/* ---- output, schedules, errors ------------------------------------------------------ */
+
+typedef struct { long count, last_k; double last_t; long ks[64]; } count_ctx;
+static int count_sink(long k, double t, const double *x, void *vp) {
+  (void)x;
+  count_ctx *c = vp;
+  if (c->count < 64) c->ks[c->count] = k;
+  c->count++;
+  c->last_k = k;
+  c->last_t = t;
+  return 0;
+}
+
+static void test_output_modes_and_exact_time(void **state) {
+  (void)state;
+  cup_lcs *L = paper_lcs(1);
+  cup_input *u = paper_input(1);
+  double x0[3] = {0, 0, 0};
+  struct { cup_output_kind kind; long every, samples, expect; } cases[] = {
+    {CUP_OUTPUT_EVERY, 1, 0, 1001}, {CUP_OUTPUT_EVERY, 7, 0, 144},  /* 0,7,..,994 and 1000 */
+    {CUP_OUTPUT_SAMPLES, 0, 11, 11}, {CUP_OUTPUT_FINAL, 0, 0, 1}, {CUP_OUTPUT_NONE, 0, 0, 0},
+  };
+  for (int c = 0; c < 5; c++) {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.n = 1000; o.T = 3;
+    o.output = cases[c].kind;
+    o.output_every = cases[c].every ? cases[c].every : 1;
+    o.output_samples = cases[c].samples;
+    cup_integrator *I = NULL;
+    assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
+    count_ctx cc = {0};
+    cup_run_info info;
+    assert_int_equal(cup_integrator_run(I, x0, count_sink, &cc, &info), CUP_OK);
+    assert_int_equal(cc.count, cases[c].expect);
+    assert_int_equal(info.samples, cases[c].expect);
+    if (cc.count) {
+      assert_int_equal(cc.last_k, 1000);
+      assert_true(cc.last_t == 3.0);                /* t_n = T exactly */
+    }
+    if (cases[c].kind == CUP_OUTPUT_SAMPLES)
+      for (int j = 0; j < 11; j++) assert_int_equal(cc.ks[j], 100 * j);
+    assert_int_equal(info.step, 1000);
+    assert_true(info.t == 3.0);
+    assert_int_equal(info.projected + info.skipped, 1000);
+    cup_integrator_free(&I);
+  }
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+}
+
+static void test_schedules(void **state) {
+  (void)state;
+  cup_schedule s;
+  char msg[CUP_ERRMSG_LEN], buf[64];
+  assert_int_equal(cup_schedule_parse("n^-2.1", &s, msg), CUP_OK);
+  assert_close(cup_schedule_value(&s, 1000), pow(1000, -2.1), 1e-30);
+  assert_int_equal(cup_schedule_parse(" 0.5 * n^-1.05 ", &s, msg), CUP_OK);
+  assert_close(cup_schedule_value(&s, 100), 0.5 * pow(100, -1.05), 1e-18);
+  cup_schedule_format(&s, buf, sizeof buf);
+  assert_string_equal(buf, "0.5*n^-1.05");
+  assert_int_equal(cup_schedule_parse("3e-7", &s, msg), CUP_OK);
+  assert_close(cup_schedule_value(&s, 12345), 3e-7, 0);
+  static const char *bad[] = {"", "n^", "x^2", "1e-3 n", "n^-2.1x", "-1", "nan", "2*", NULL};
+  for (int k = 0; bad[k]; k++) {
+    assert_int_equal(cup_schedule_parse(bad[k], &s, msg), CUP_ERR_PARSE);
+    assert_non_null(strstr(msg, "schedule"));
+  }
+  assert_int_equal(cup_scheme_parse("implicit"), CUP_SCHEME_IMPLICIT);
+  assert_int_equal(cup_scheme_parse("rk4"), -1);
+}
+
+/* A callback that fails at t > 0.5: the run stops there, says where, and every
+ * state before was delivered. */
+static int f_fails_late(double t, const double *x, double *f, void *ctx) {
+  (void)x; (void)ctx;
+  f[0] = f[1] = f[2] = 0;
+  return t > 0.5 ? 1 : 0;
+}
+
+static void test_errors_say_where(void **state) {
+  (void)state;
+  cup_lcs *L = paper_lcs(1);
+  cup_input *u = paper_input(1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 1000;
+  o.f = f_fails_late;
+  o.f_order = 1;                                 /* node at the step's midpoint */
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
+  count_ctx cc = {0};
+  cup_run_info info;
+  double x0[3] = {0, 0, 0};
+  assert_int_equal(cup_integrator_run(I, x0, count_sink, &cc, &info), CUP_ERR_CALLBACK);
+  /* the step [0.5, 0.501] has its node at 0.5005 > 0.5: step 501 fails */
+  assert_int_equal(info.step, 500);
+  assert_non_null(strstr(info.message, "step 501"));
+  assert_non_null(strstr(info.message, "t = 0.501"));
+  assert_int_equal(cc.count, 501);               /* states 0..500 delivered */
+  assert_int_equal(cc.last_k, 500);
+  cup_integrator_free(&I);
+  double bad[3] = {0, NAN, 0};
+  o.f = NULL;
+  assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
+  assert_int_equal(cup_integrator_run(I, bad, NULL, NULL, &info), CUP_ERR_NONFINITE);
+  assert_non_null(strstr(info.message, "x0[1]"));
+  cup_integrator_free(&I);
+  char msg[CUP_ERRMSG_LEN];
+  o.T = -1;
+  assert_int_equal(cup_integrator_create(&I, L, u, &o, msg), CUP_ERR_ARG);
+  assert_non_null(strstr(msg, "T = -1"));
+  assert_null(I);
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+}
+
+/* An empty K(t) at one step: x >= u(t) and x <= 0 with u a table rising to 1
+ * at t = 0.5: the run stops at the first step with u > 0, with a Farkas
+ * certificate, after delivering every earlier state. */
+static void test_empty_set_at_a_step(void **state) {
+  (void)state;
+  double C[2] = {1, -1}, G[2] = {-1, 0};
+  lcs_built b;
+  build(&b, 1, 2, 1, NULL, NULL, C, NULL, NULL, G, NULL);
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  double tt[3] = {0, 0.5, 0.6}, vv[3] = {-1, 0, 1};
+  cup_wave w = {.kind = CUP_WAVE_PWL, .npoints = 3, .t = tt, .v = vv};
+  cup_input_add(u, 0, &w, NULL);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 100;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, b.L, u, &o, NULL), CUP_OK);
+  count_ctx cc = {0};
+  cup_run_info info;
+  double x0[1] = {-0.5};
+  assert_int_equal(cup_integrator_run(I, x0, count_sink, &cc, &info), CUP_ERR_EMPTY_SET);
+  assert_int_equal(info.step, 50);               /* u(0.51) = 0.1 > 0: step 51 fails */
+  assert_non_null(strstr(info.message, "step 51"));
+  assert_non_null(strstr(info.message, "Farkas"));
+  assert_int_equal(cc.count, 51);
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_paper_cases_exact_projection),
+    cmocka_unit_test(test_paper_tolerances),
+    cmocka_unit_test(test_closed_form_moving_interval),
+    cmocka_unit_test(test_closed_form_interval_with_relaxation),
+    cmocka_unit_test(test_closed_form_cone),
+    cmocka_unit_test(test_closed_form_rectifier),
+    cmocka_unit_test(test_closed_form_corner),
+    cmocka_unit_test(test_closed_form_jumping_set),
+    cmocka_unit_test(test_stiff_rectifier),
+    cmocka_unit_test(test_output_modes_and_exact_time),
+    cmocka_unit_test(test_schedules),
+    cmocka_unit_test(test_errors_say_where),
+    cmocka_unit_test(test_empty_set_at_a_step),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
