@@ -74,11 +74,22 @@ double cup_schedule_value(const cup_schedule *s, long n) {
   return s->power == 0 ? s->coef : s->coef * pow((double)n, s->power);
 }
 
+/* The shortest %g text that reads back as the same double. */
+static void shortest(double v, char *out, size_t size) {
+  for (int digits = 1; digits <= 17; digits++) {
+    snprintf(out, size, "%.*g", digits, v);
+    if (strtod(out, NULL) == v) return;
+  }
+}
+
 int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size) {
   if (!s) return -1;
-  if (s->power == 0) return snprintf(buf, size, "%.17g", s->coef);
-  if (s->coef == 1) return snprintf(buf, size, "n^%.17g", s->power);
-  return snprintf(buf, size, "%.17g*n^%.17g", s->coef, s->power);
+  char c[32], p[32];
+  shortest(s->coef, c, sizeof c);
+  shortest(s->power, p, sizeof p);
+  if (s->power == 0) return snprintf(buf, size, "%s", c);
+  if (s->coef == 1) return snprintf(buf, size, "n^%s", p);
+  return snprintf(buf, size, "%s*n^%s", c, p);
 }
 
 const char *cup_scheme_name(int scheme) {

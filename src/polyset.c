@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
 #include "catchup.h"
 #include "catchup/polyset.h"
 #include "polyset_impl.h"
@@ -411,9 +412,11 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
     }
   /* A backward-stable eigenvalue is within c u ||M||_F of the true one. */
   if (m > 0) {
+    gsl_error_handler_t *old = gsl_set_error_handler_off();   /* GSL would abort */
     gsl_matrix *A = gsl_matrix_alloc((size_t)m, (size_t)m);
     gsl_vector *ev = gsl_vector_alloc((size_t)m);
     gsl_eigen_symm_workspace *ws = gsl_eigen_symm_alloc((size_t)m);
+    gsl_set_error_handler(old);
     if (!A || !ev || !ws) {
       if (A) gsl_matrix_free(A);
       if (ev) gsl_vector_free(ev);
@@ -427,8 +430,10 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
         gsl_matrix_set(A, (size_t)i, (size_t)j, a);
         fro += a * a;
       }
-    gsl_eigen_symm(A, ev, ws);
-    double lmax = gsl_vector_max(ev);
+    old = gsl_set_error_handler_off();
+    int rc = gsl_eigen_symm(A, ev, ws);
+    gsl_set_error_handler(old);
+    double lmax = rc ? INFINITY : gsl_vector_max(ev);
     double bound = lmax + 16.0 * (m + 1) * DBL_EPSILON * sqrt(fro);
     if (bound < K->lip) K->lip = bound;
     gsl_eigen_symm_free(ws); gsl_vector_free(ev); gsl_matrix_free(A);

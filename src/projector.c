@@ -190,6 +190,16 @@ int cup_projector_set_tolerances(cup_projector *p, double eps_abs, double eps_re
   return CUP_OK;
 }
 
+int cup_projector_offer_feasible(cup_projector *p, const double *w) {
+  if (!p || !w) return 0;
+  for (int j = 0; j < p->n; j++)
+    if (!isfinite(w[j])) return 0;
+  if (cup_slack(p->K, p->g, w, p->s_anchor, p->gamv) < 0) return 0;
+  cup_copy(p->anchor, w, p->n);
+  p->anchor_ok = 1;
+  return 1;
+}
+
 void cup_projector_reset(cup_projector *p) {
   if (p && p->m) memset(p->lam_warm, 0, sizeof(double) * (size_t)p->m);
 }

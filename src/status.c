@@ -18,3 +18,9 @@ const char *cup_status_name(int status) {
   }
   return "CUP_UNKNOWN";
 }
+
+int cup_status_merge(int first, int second) {
+  if (first < 0) return first;
+  if (second < 0) return second;
+  return first > 0 ? first : second;
+}

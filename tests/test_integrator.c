@@ -561,6 +561,9 @@ static void test_schedules(void **state) {
   assert_close(cup_schedule_value(&s, 100), 0.5 * pow(100, -1.05), 1e-18);
   cup_schedule_format(&s, buf, sizeof buf);
   assert_string_equal(buf, "0.5*n^-1.05");
+  assert_int_equal(cup_schedule_parse("n^-2.1", &s, msg), CUP_OK);
+  cup_schedule_format(&s, buf, sizeof buf);
+  assert_string_equal(buf, "n^-2.1");           /* the shortest text that reads back */
   assert_int_equal(cup_schedule_parse("3e-7", &s, msg), CUP_OK);
   assert_close(cup_schedule_value(&s, 12345), 3e-7, 0);
   static const char *bad[] = {"", "n^", "x^2", "1e-3 n", "n^-2.1x", "-1", "nan", "2*", NULL};

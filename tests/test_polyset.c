@@ -44,6 +44,11 @@ static void test_membership_and_norm(void **state) {
   assert_int_equal(cup_polyset_contains(K, NULL, in), 1);
   assert_int_equal(cup_polyset_contains(K, NULL, out), 0);
   assert_int_equal(cup_polyset_contains(K, NULL, edge), 1);   /* exact zeros */
+  cup_projector *pr = NULL;                                     /* anchors offered */
+  assert_int_equal(cup_projector_create(&pr, K, NULL, NULL), CUP_OK);
+  assert_int_equal(cup_projector_offer_feasible(pr, in), 1);
+  assert_int_equal(cup_projector_offer_feasible(pr, out), 0);
+  cup_projector_free(&pr);
   double nan3[3] = {0, NAN, 0};
   assert_int_equal(cup_polyset_contains(K, NULL, nan3), 0);    /* NaN is never inside */
   double g[2] = {-1, 0};                                       /* x2 - x3 >= 1 */

@@ -552,6 +552,12 @@ static void test_bad_input(void **state) {
   double gbad[4] = {0, 0, NAN, 0};
   assert_int_equal(cup_projector_set_offset(pr, gbad), CUP_ERR_NONFINITE);
   assert_int_equal(cup_project(NULL, x, z, NULL), CUP_ERR_ARG);
+  /* an offered anchor is accepted exactly when it is certainly in K */
+  assert_int_equal(cup_projector_offer_feasible(pr, I.w0), cup_polyset_contains(K, NULL, I.w0));
+  double out[3] = {I.w0[0] + 100, I.w0[1] - 100, I.w0[2] + 100};
+  int inside = cup_polyset_contains(K, NULL, out);
+  assert_int_equal(cup_projector_offer_feasible(pr, out), inside);
+  assert_int_equal(cup_projector_offer_feasible(pr, x), 0);        /* NaN */
   assert_int_equal(cup_proj_method_parse("fista"), CUP_PROJ_FISTA);
   assert_int_equal(cup_proj_method_parse("newton"), -1);
   cup_projector_free(&pr);

@@ -30,7 +30,7 @@ typedef enum cup_proj_method {
 typedef struct cup_projector_options {
   cup_proj_method method; /**< CUP_PROJ_AUTO */
   double eps_abs;         /**< target eps = eps_abs + eps_rel * S^2 (S: scale) */
-  double eps_rel;         /**< default 1e-12 */
+  double eps_rel;         /**< default 1e-10 */
   double eta_abs;         /**< target eta = eta_abs + eta_rel * S */
   double eta_rel;         /**< default 1e-10 */
   int max_iter;           /**< dual iterations (first-order) per call; 100000 */

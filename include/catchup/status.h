@@ -43,11 +43,7 @@ const char *cup_status_name(int status);
 
 /** Most severe of two statuses: any error beats any warning beats ok; among
  *  errors (or warnings) the first one is kept. */
-static inline int cup_status_merge(int first, int second) {
-  if (first < 0) return first;
-  if (second < 0) return second;
-  return first > 0 ? first : second;
-}
+int cup_status_merge(int first, int second);
 
 #ifdef __cplusplus
 }

@@ -114,9 +114,8 @@ contains
   end function cup_status_name
 
   !> Most severe of two statuses (any error beats any warning beats ok; among
-  !> errors, or warnings, the first is kept). C's static inline
-  !> cup_status_merge has no symbol to bind, so it is restated here (and
-  !> tested against the C inline in tests/fortran).
+  !> errors, or warnings, the first is kept). Restated in Fortran so that it
+  !> can be elemental; tests/fortran compares it with the C function.
   elemental function cup_status_merge(first, second) result(st)
     integer, intent(in) :: first, second
     integer :: st
