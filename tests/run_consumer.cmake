@@ -17,6 +17,9 @@ run(${CMAKE_COMMAND} -S ${SRC} -B ${WORK}/cmake-build
 run(${CMAKE_COMMAND} --build ${WORK}/cmake-build)
 run(${WORK}/cmake-build/consumer_shared)
 run(${WORK}/cmake-build/consumer_static)
+if(EXISTS ${WORK}/cmake-build/consumer_h5)
+  run(${WORK}/cmake-build/consumer_h5 ${WORK})
+endif()
 
 # 2. pkg-config, plain cc
 find_program(PKG_CONFIG pkg-config REQUIRED)

@@ -1,7 +1,25 @@
 /* catchup/h5run.h — HDF5 output of one run (library catchup_h5, built with
  * the apps): datasets /t [N] and /x [N, dim] (original x coordinates),
- * chunked and extendable, appended as samples arrive and flushed so that an
- * interrupted run keeps every sample written before the interruption. */
+ * float64, chunked and extendable, appended as samples arrive and flushed so
+ * that an interrupted run keeps every sample written before the interruption.
+ *
+ * Memory is one chunk of rows (at most 4096 rows and about 1 MiB), however
+ * long the run. Full chunks go to HDF5 as they fill; H5Fflush runs at least
+ * once per second while samples arrive, on cup_h5run_flush and on close.
+ * The file uses the HDF5 1.8 format (no SWMR, no "open for writing" flag), so
+ * the file of a writer killed at any point opens with any HDF5 reader as it
+ * is — no h5clear — and holds every sample written before the last flush.
+ * After a crash, read min(len(/t), len(/x)) rows. H5Fflush does not fsync: a
+ * machine crash (not a process crash) may lose more.
+ *
+ * Errors return CUP_ERR_IO (or CUP_ERR_ARG / CUP_ERR_NOMEM) with a message
+ * naming the operation and the file; HDF5's automatic error printing is
+ * switched off inside each call and restored before it returns. The writer
+ * keeps 8 MiB free on the file's device: below that it stops taking samples
+ * (CUP_ERR_IO) but still writes attributes and closes cleanly, because HDF5
+ * 1.10 cannot close a file after a write failed for lack of space (the file
+ * is then unreadable and the library may crash at exit). After any failed
+ * HDF5 call the writer refuses everything but close, for the same reason. */
 #ifndef CATCHUP_H5RUN_H
 #define CATCHUP_H5RUN_H
 
@@ -11,20 +29,30 @@ extern "C" {
 
 typedef struct cup_h5run cup_h5run;
 
-/** Create (truncate) path for states of dimension dim. */
+/** Create (truncate) path for states of dimension dim; /t and /x exist, with
+ *  N = 0, on disk when this returns. errmsg (CUP_ERRMSG_LEN bytes, may be
+ *  NULL) names the path and the problem on failure; *w is then NULL. */
 int cup_h5run_create(cup_h5run **w, const char *path, int dim, char *errmsg);
-/** A cup_sample_fn: append (t, x) through ctx = the cup_h5run. */
+/** A cup_sample_fn: append (t, x) through ctx = the cup_h5run (k is not
+ *  stored). Returns nonzero (the status) once writing has failed or space
+ *  ran short, so that a run stops instead of computing what cannot be saved. */
 int cup_h5run_sink(long k, double t, const double *x, void *ctx);
-/** Root attributes. */
+/** Scalar attributes on the root group, replacing one of the same name:
+ *  float64, int64, and variable-length UTF-8 string (h5py reads it as str).
+ *  They reach the disk at the next flush or close. */
 int cup_h5run_attr_double(cup_h5run *w, const char *name, double v);
 int cup_h5run_attr_long(cup_h5run *w, const char *name, long v);
 int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v);
 /** Write what is buffered and flush the file to the OS. */
 int cup_h5run_flush(cup_h5run *w);
-/** Flush, close, free, set *w = NULL. errmsg (may be NULL) on failure. */
+/** Flush, close, free, set *w = NULL. Returns the first failure of the data
+ *  path during the writer's life (samples were lost) or of the close, with
+ *  its message in errmsg (may be NULL). */
 int cup_h5run_close(cup_h5run **w, char *errmsg);
-/** Samples written so far. */
+/** Samples accepted so far (written or buffered). */
 long cup_h5run_count(const cup_h5run *w);
+/** Message of the first failure ("" if none): a sink cannot return one. */
+const char *cup_h5run_errmsg(const cup_h5run *w);
 /** "HDF5 1.10.8" of the linked library, into buf (snprintf semantics). */
 int cup_h5_version(char *buf, unsigned long size);
 

@@ -1,0 +1,395 @@
+/* catchup-run — run one scene; write its trajectory and what ran to HDF5.
+ *
+ *   catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]
+ *               [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]
+ *
+ * Exit status: 0 success (a warning status is reported in one stderr line),
+ * 1 scene, run or I/O error, 2 usage error; every failure is one stderr line
+ * naming the file, the key and the problem. SIGINT/SIGTERM stop the run at
+ * the next sample, the file is closed with everything computed so far and
+ * status CUP_ERR_INTERRUPTED, and the program then ends by that signal (so
+ * that shells and make see the interruption); a second signal ends it at
+ * once. Nothing computed is lost on an error: the samples before it are in
+ * the file, closed cleanly with the status attributes. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "catchup.h"
+#include "catchup/h5run.h"
+
+enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
+enum { MSG_LEN = CUP_ERRMSG_LEN + 768 };   /* room for a path before a library message */
+
+static const char usage_text[] =
+  "usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
+  "                   [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]\n"
+  "  -o, --output OUT.h5  HDF5 file to write (/t, /x and attributes); replaced\n"
+  "  --n N                number of steps (scene key n)\n"
+  "  --eps SPEC           eps_n schedule, e.g. n^-2.1 or 1e-8 (scene key eps)\n"
+  "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
+  "  --scheme NAME        explicit, implicit or exponential (scene key scheme)\n"
+  "  --projector NAME     auto, pg, fista or activeset (scene key projector)\n"
+  "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
+  "  --quiet              no summary line (warnings and errors are still printed)\n"
+  "  -h, --help           this text;  --version  the library versions\n";
+
+/* ---- command line ---- */
+
+typedef struct {
+  const char *scene, *out;
+  char **overrides;          /* "key=value", owned, in command-line order */
+  int n_overrides;
+  int quiet;
+} args_t;
+
+__attribute__((format(printf, 1, 2)))
+static int usage_error(const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  fputs("catchup-run: ", stderr);
+  vfprintf(stderr, fmt, ap);
+  fputs(" (catchup-run --help for usage)\n", stderr);
+  va_end(ap);
+  return EXIT_USAGE;
+}
+
+static int add_override(args_t *a, const char *key, const char *value) {
+  size_t len = strlen(key) + strlen(value) + 2;
+  char *s = malloc(len);
+  if (!s) return usage_error("out of memory");
+  snprintf(s, len, "%s%s", key, value);
+  a->overrides[a->n_overrides++] = s;
+  return 0;
+}
+
+/* Check a flag's value before it reaches the scene, so that a typo is a
+ * usage error naming the flag rather than a scene error. */
+static int check_value(const char *flag, const char *v) {
+  char err[CUP_ERRMSG_LEN] = "";
+  cup_schedule sch;
+  char *end = NULL;
+  if (strcmp(flag, "--n") == 0) {
+    errno = 0;
+    long n = strtol(v, &end, 10);
+    if (errno || end == v || *end || n < 1)
+      return usage_error("--n '%s': not a positive integer", v);
+  } else if (strcmp(flag, "--eps") == 0 || strcmp(flag, "--eta") == 0) {
+    if (cup_schedule_parse(v, &sch, err) != CUP_OK) return usage_error("%s: %s", flag, err);
+  } else if (strcmp(flag, "--scheme") == 0) {
+    if (cup_scheme_parse(v) < 0)
+      return usage_error("--scheme '%s': unknown scheme (explicit, implicit, exponential)", v);
+  } else if (strcmp(flag, "--projector") == 0) {
+    if (cup_proj_method_parse(v) < 0)
+      return usage_error("--projector '%s': unknown projector (auto, pg, fista, activeset)", v);
+  } else if (strcmp(flag, "--set") == 0) {
+    const char *eq = strchr(v, '=');
+    if (!eq || eq == v) return usage_error("--set '%s': expected key=value", v);
+  }
+  return 0;
+}
+
+/* The scene key each value flag sets; --set passes key=value through. */
+static const struct { const char *flag, *key; } value_flags[] = {
+  {"--n", "n="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
+  {"--projector", "projector="}, {"--set", ""}, {"-o", NULL}, {"--output", NULL},
+};
+
+/* Split "--flag=value" or take the value from the next argument. */
+static int flag_value(int argc, char **argv, int *i, const char *flag, const char **v) {
+  const char *arg = argv[*i], *eq = strchr(arg, '=');
+  if (eq && strncmp(arg, "--", 2) == 0) { *v = eq + 1; return 0; }
+  if (*i + 1 >= argc) return usage_error("%s needs a value", flag);
+  *v = argv[++*i];
+  return 0;
+}
+
+static int parse_one(args_t *a, int argc, char **argv, int *i) {
+  const char *arg = argv[*i];
+  size_t flen = strncmp(arg, "--", 2) == 0 ? strcspn(arg, "=") : strlen(arg);
+  for (size_t f = 0; f < sizeof value_flags / sizeof value_flags[0]; f++) {
+    if (strlen(value_flags[f].flag) != flen || strncmp(arg, value_flags[f].flag, flen) != 0)
+      continue;
+    const char *v = NULL;
+    char flag[16];
+    snprintf(flag, sizeof flag, "%.*s", (int)flen, arg);
+    int rc = flag_value(argc, argv, i, flag, &v);
+    if (!rc && value_flags[f].key) rc = check_value(flag, v);
+    if (rc) return rc;
+    if (!value_flags[f].key) { a->out = v; return 0; }
+    return add_override(a, value_flags[f].key, v);
+  }
+  if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) { a->quiet = 1; return 0; }
+  if (arg[0] == '-' && arg[1]) return usage_error("unknown option '%s'", arg);
+  if (a->scene) return usage_error("one scene per run: '%s' after '%s'", arg, a->scene);
+  a->scene = arg;
+  return 0;
+}
+
+static void free_args(args_t *a) {
+  for (int i = 0; i < a->n_overrides; i++) free(a->overrides[i]);
+  free(a->overrides);
+}
+
+static int print_versions(void) {
+  char deps[256], h5[64];
+  cup_dependency_versions(deps, sizeof deps);
+  cup_h5_version(h5, sizeof h5);
+  printf("catchup-run %s (%s; %s)\n", cup_version(), deps, h5);
+  return 0;
+}
+
+/* Returns -1 to go on, else the exit status (help, version, usage error). */
+static int parse_args(args_t *a, int argc, char **argv) {
+  memset(a, 0, sizeof *a);
+  a->overrides = calloc((size_t)argc + 1, sizeof *a->overrides);
+  if (!a->overrides) return usage_error("out of memory");
+  for (int i = 1; i < argc; i++) {
+    if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) {
+      fputs(usage_text, stdout);
+      return 0;
+    }
+    if (strcmp(argv[i], "--version") == 0) return print_versions();
+    int rc = parse_one(a, argc, argv, &i);
+    if (rc) return rc;
+  }
+  if (!a->scene) return usage_error("no scene file given");
+  if (!a->out) return usage_error("no output file given: -o OUT.h5");
+  return -1;
+}
+
+/* ---- signals: a flag the sink reads ---- */
+
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_signal(int sig) { stop_signal = sig; }
+
+/* SA_RESETHAND: the first signal asks for a clean stop; a second one (a run
+ * with no output between its steps never reaches the sink) ends at once,
+ * and the file still holds everything up to its last flush. */
+static void install_handlers(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+static int sink(long k, double t, const double *x, void *ctx) {
+  if (stop_signal) return 1;
+  return cup_h5run_sink(k, t, x, ctx);
+}
+
+/* ---- the run ---- */
+
+typedef struct {
+  const args_t *args;
+  cup_scene *scene;
+  cup_integrator_options opts;
+  cup_integrator *I;
+  cup_h5run *w;
+  cup_run_info info;
+  double wall;               /* seconds in cup_integrator_run */
+  int status;
+  char message[MSG_LEN];
+} run_t;
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static const char *output_name(int kind) {
+  static const char *names[] = {"every", "samples", "final", "none"};
+  return kind >= 0 && kind < 4 ? names[kind] : "unknown";
+}
+
+/* The schedule as the scene wrote it, or in canonical form if it did not. */
+static const char *spec_text(const char *spec, const cup_schedule *s, char *buf, size_t size) {
+  if (spec && spec[0]) return spec;
+  cup_schedule_format(s, buf, size);
+  return buf;
+}
+
+/* What ran: written before the run so that even a killed run's file says it.
+ * The attribute calls record their first failure in the writer; the status
+ * of the last one is enough to know that one failed. */
+static int write_provenance(run_t *r) {
+  cup_h5run *w = r->w;
+  const cup_integrator_options *o = &r->opts;
+  char deps[512], h5[64], eps[64], eta[64];
+  int n = cup_dependency_versions(deps, sizeof deps);
+  cup_h5_version(h5, sizeof h5);
+  if (n >= 0 && (size_t)n < sizeof deps) snprintf(deps + n, sizeof deps - (size_t)n, "; %s", h5);
+  int st = cup_h5run_attr_long(w, "n", o->n);
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "T", o->T));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "eps",
+         spec_text(cup_scene_eps_spec(r->scene), &o->eps, eps, sizeof eps)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "eta",
+         spec_text(cup_scene_eta_spec(r->scene), &o->eta, eta, sizeof eta)));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "eps_value", cup_schedule_value(&o->eps, o->n)));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "eta_value", cup_schedule_value(&o->eta, o->n)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "scheme", cup_scheme_name(o->scheme)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "projector", cup_proj_method_name(o->proj.method)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "output", output_name(o->output)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "catchup_version", cup_version()));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "dependency_versions", deps));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "scene", cup_scene_text(r->scene)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_file", r->args->scene));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_name", cup_scene_name(r->scene)));
+  /* Overwritten at the end; what a reader finds if the process was killed. */
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "status", CUP_ERR_INTERRUPTED));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "status_name", "running"));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "message",
+         "the run did not finish: the process ended before closing the file; "
+         "/t and /x hold the samples up to its last flush"));
+  return cup_status_merge(st, cup_h5run_flush(w));
+}
+
+static int write_results(run_t *r) {
+  cup_h5run *w = r->w;
+  const cup_run_info *i = &r->info;
+  int st = cup_h5run_attr_double(w, "wall_time_s", r->wall);
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "projected", i->projected));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "skipped", i->skipped));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "not_certified", i->not_certified));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "dual_iterations", (long)i->dual_iterations));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "factorizations", i->factorizations));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "max_eps_cert", i->max_eps_cert));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "max_eta_cert", i->max_eta_cert));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "h_rho", i->h_rho));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "samples", cup_h5run_count(w)));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "stopped_step", i->step));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "stopped_t", i->t));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "status", r->status));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "status_name", cup_status_name(r->status)));
+  return cup_status_merge(st, cup_h5run_attr_string(w, "message", r->message));
+}
+
+/* Turn the integrator's status into the run's: a stop requested by the sink
+ * is either our signal or a write that failed (the writer knows which). */
+static void settle_status(run_t *r, int st) {
+  r->status = st;
+  snprintf(r->message, sizeof r->message, "%s", r->info.message);
+  if (st != CUP_ERR_INTERRUPTED) {
+    if (st != CUP_OK && !r->message[0]) snprintf(r->message, sizeof r->message, "%s", cup_status_string(st));
+    return;
+  }
+  if (stop_signal) {
+    snprintf(r->message, sizeof r->message, "stopped by %s at step %ld (t = %.17g)",
+             stop_signal == SIGINT ? "SIGINT" : "SIGTERM", r->info.step, r->info.t);
+  } else if (cup_h5run_errmsg(r->w)[0]) {
+    r->status = CUP_ERR_IO;
+    snprintf(r->message, sizeof r->message, "%s", cup_h5run_errmsg(r->w));
+  }
+}
+
+static int setup(run_t *r, char *err) {
+  const args_t *a = r->args;
+  if (cup_scene_load(&r->scene, a->scene, (const char *const *)a->overrides, a->n_overrides, err))
+    return EXIT_RUN;             /* the message names file:line:column and key */
+  r->opts = *cup_scene_options(r->scene);
+  const cup_lcs *L = cup_scene_lcs(r->scene);
+  char e2[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&r->I, L, cup_scene_input(r->scene), &r->opts, e2)) {
+    snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
+    return EXIT_RUN;
+  }
+  if (cup_h5run_create(&r->w, a->out, cup_lcs_dim(L), err)) return EXIT_RUN;
+  if (write_provenance(r)) {
+    snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
+    return EXIT_RUN;
+  }
+  return 0;
+}
+
+static void run(run_t *r) {
+  install_handlers();
+  double t0 = now_seconds();
+  int st = cup_integrator_run(r->I, cup_scene_x0(r->scene), sink, r->w, &r->info);
+  r->wall = now_seconds() - t0;
+  settle_status(r, st);
+}
+
+/* Results, then close; either failing makes an otherwise good run an I/O
+ * error (the samples may be incomplete). */
+static void finish_file(run_t *r) {
+  char err[CUP_ERRMSG_LEN] = "";
+  int wst = write_results(r);
+  if (wst != CUP_OK && r->status >= 0) {
+    r->status = CUP_ERR_IO;
+    snprintf(r->message, sizeof r->message, "%s", cup_h5run_errmsg(r->w));
+  }
+  if (cup_h5run_close(&r->w, err) != CUP_OK && r->status >= 0) {
+    r->status = CUP_ERR_IO;
+    snprintf(r->message, sizeof r->message, "%s", err);
+  }
+}
+
+/* An error is one line (plus nothing); a warning is one line before the
+ * summary; the summary is one line unless --quiet. */
+static void report(const run_t *r) {
+  const args_t *a = r->args;
+  const cup_run_info *i = &r->info;
+  if (r->status == CUP_ERR_IO) {   /* the message names the output file */
+    fprintf(stderr, "catchup-run: %s: %s\n", a->scene, r->message);
+    return;
+  }
+  if (r->status < 0) {
+    fprintf(stderr, "catchup-run: %s: %s: %s; the samples before it are in %s\n", a->scene,
+            cup_status_name(r->status), r->message, a->out);
+    return;
+  }
+  if (r->status > 0)
+    fprintf(stderr, "catchup-run: warning: %s: %s: %s\n", a->scene, cup_status_name(r->status),
+            r->message);
+  if (!a->quiet)
+    fprintf(stderr, "catchup-run: %s -> %s: n=%ld %s, %ld samples, %ld projected, %ld skipped, "
+            "%lld dual iterations, max eps_cert %.3g, max eta_cert %.3g, %.3g s: %s\n",
+            a->scene, a->out, r->opts.n, cup_scheme_name(r->opts.scheme), i->samples,
+            i->projected, i->skipped, i->dual_iterations, i->max_eps_cert, i->max_eta_cert,
+            r->wall, cup_status_name(r->status));
+}
+
+static void cleanup(run_t *r) {
+  if (r->w) cup_h5run_close(&r->w, NULL);
+  cup_integrator_free(&r->I);
+  cup_scene_free(&r->scene);
+}
+
+/* After a clean stop, end by the signal itself, as the shell expects. */
+static int end_by_signal(int sig) {
+  signal(sig, SIG_DFL);
+  raise(sig);
+  return 128 + sig;              /* not reached */
+}
+
+int main(int argc, char **argv) {
+  args_t args;
+  int rc = parse_args(&args, argc, argv);
+  if (rc >= 0) { free_args(&args); return rc; }
+  run_t r;
+  memset(&r, 0, sizeof r);
+  r.args = &args;
+  char err[MSG_LEN] = "";
+  rc = setup(&r, err);
+  if (rc) {
+    fprintf(stderr, "catchup-run: %s\n", err);
+  } else {
+    run(&r);
+    finish_file(&r);
+    report(&r);
+    rc = r.status < 0 ? EXIT_RUN : 0;
+  }
+  cleanup(&r);
+  free_args(&args);
+  if (r.status == CUP_ERR_INTERRUPTED && stop_signal) return end_by_signal(stop_signal);
+  return rc;
+}

@@ -1,0 +1,19 @@
+# catchup_h5: the HDF5 run writer (src/io/h5run.c, include/catchup/h5run.h).
+# Included from src/CMakeLists.txt only when CATCHUP_BUILD_APPS is ON, since
+# HDF5 (and MPI, which the parallel HDF5 headers include) are found only then.
+#
+# HDF5 and MPI are PRIVATE: h5run.h does not include hdf5.h, so a consumer of
+# the shared catchup::catchup_h5 needs neither at build time (the dynamic
+# linker finds them through the library's DT_NEEDED entries).
+add_library(catchup_h5 SHARED ${CMAKE_CURRENT_LIST_DIR}/h5run.c)
+set_target_properties(catchup_h5 PROPERTIES
+  VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}
+  EXPORT_NAME catchup_h5
+  INSTALL_RPATH "$ORIGIN")   # finds libcatchup beside it, wherever installed
+target_link_libraries(catchup_h5 PUBLIC catchup
+                      PRIVATE hdf5::hdf5 MPI::MPI_C catchup_warnings)
+add_library(catchup::catchup_h5 ALIAS catchup_h5)
+
+install(TARGETS catchup_h5 EXPORT catchupTargets
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

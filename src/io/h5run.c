@@ -1,0 +1,415 @@
+/* h5run — HDF5 output of one run: /t [N] and /x [N, dim], appended in
+ * chunk-sized blocks from a fixed in-memory buffer.
+ *
+ * Crash safety without SWMR: the file uses the 1.8-compatible format
+ * (superblock version <= 2, which has no "open for writing" flag, so a killed
+ * writer's file opens as is, without h5clear). HDF5 only promises a
+ * consistent file after H5Fflush; the file on disk is the file as of the last
+ * completed H5Fflush, which runs at least once per FLUSH_SECONDS while
+ * samples arrive, on cup_h5run_flush and on close. Whole chunks are handed to
+ * HDF5 as the buffer fills, between flushes. H5Fflush does not fsync: a
+ * machine crash (not a process crash) may lose more. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <libgen.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <hdf5.h>
+#include "catchup.h"
+#include "catchup/h5run.h"
+
+enum { MAX_CHUNK_ROWS = 4096 };
+#define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
+#define FLUSH_SECONDS 1.0
+/* Free space kept on the device: HDF5 1.10 cannot close a file once a write
+ * has failed for lack of space (the file is left corrupt and the library
+ * crashes at exit), so the writer stops while HDF5 can still close cleanly:
+ * dirty chunk caches (1 MiB per dataset), metadata and final attributes. */
+#define SPACE_MARGIN (8u << 20)
+/* A chunk must stay under HDF5's 4 GiB limit even when it holds one row. */
+#define MAX_DIM ((int)(UINT32_MAX / sizeof(double)))
+
+struct cup_h5run {
+  hid_t file, dset_t, dset_x;
+  int dim;
+  hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
+  hsize_t written;        /* rows already handed to HDF5 */
+  hsize_t nbuf;           /* rows waiting in the buffer */
+  double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
+  double last_flush;      /* monotonic seconds */
+  int data_status;        /* first failure of the data path; sticky */
+  int h5_failed;          /* an HDF5 call failed: only close is attempted */
+  char *path;
+  char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind */
+};
+
+/* ---- errors: HDF5 must not print, and must not stay silenced after us ---- */
+
+typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
+
+static quiet_t quiet_begin(void) {
+  quiet_t q = {NULL, NULL};
+  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+  return q;
+}
+
+static void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
+
+/* The innermost description on the error stack is the most specific one;
+ * for a failed open() it carries the system's message, which is all a user
+ * needs ("No such file or directory"). */
+static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
+  if (n == 0 && e->desc) snprintf((char *)out, 160, "%s", e->desc);
+  return 0;
+}
+
+static void h5_detail(char *buf) {
+  buf[0] = '\0';
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, buf);
+  const char *key = "error message = '";
+  char *s = strstr(buf, key);
+  if (s) {
+    s += strlen(key);
+    char *end = strchr(s, '\'');
+    if (end) *end = '\0';
+    memmove(buf, s, strlen(s) + 1);
+  }
+  if (!buf[0]) snprintf(buf, 160, "HDF5 call failed");
+}
+
+/* An HDF5 call failed. Record "h5run: cannot <op> '<path>': <detail>" unless
+ * an earlier failure is already recorded (the first one explains the rest),
+ * and stop the writer: HDF5 1.10 may crash if used further on a file it
+ * failed to write, so after this only close is attempted. */
+static int set_error(cup_h5run *w, int status, const char *op) {
+  w->h5_failed = 1;
+  if (w->data_status == CUP_OK) w->data_status = status;
+  if (!w->errmsg[0]) {
+    char detail[160];
+    h5_detail(detail);
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot %s '%s': %s", op, w->path, detail);
+  }
+  H5Eclear2(H5E_DEFAULT);
+  return status;
+}
+
+/* Closing handles after a failure is itself an HDF5 call, which clears the
+ * error stack: keep the failure's stack across the cleanup for set_error. */
+static hid_t keep_stack(int failed) {
+  return failed ? H5Eget_current_stack() : H5I_INVALID_HID;
+}
+
+static void restore_stack(hid_t saved) {
+  if (saved >= 0) H5Eset_current_stack(saved);
+}
+
+__attribute__((format(printf, 3, 4)))
+static int fail_msg(char *errmsg, int status, const char *fmt, ...) {
+  if (errmsg) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(errmsg, CUP_ERRMSG_LEN, fmt, ap);
+    va_end(ap);
+  }
+  return status;
+}
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* 1 when the device holding path has less than SPACE_MARGIN available.
+ * A device that does not report sizes (f_blocks = 0) is never "full". */
+static int space_low(const char *path) {
+  struct statvfs v;
+  if (statvfs(path, &v) != 0 || v.f_blocks == 0) return 0;
+  return (double)v.f_bavail * (double)v.f_frsize < (double)SPACE_MARGIN;
+}
+
+/* ---- file and datasets ---- */
+
+static hid_t create_dataset(hid_t file, const char *name, int rank, hsize_t dim,
+                            hsize_t chunk_rows) {
+  hsize_t dims[2] = {0, dim}, maxdims[2] = {H5S_UNLIMITED, dim};
+  hsize_t chunk[2] = {chunk_rows, dim};
+  hid_t space = H5Screate_simple(rank, dims, maxdims);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  hid_t d = H5I_INVALID_HID;
+  if (space >= 0 && dcpl >= 0 && H5Pset_chunk(dcpl, rank, chunk) >= 0)
+    d = H5Dcreate2(file, name, H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  hid_t err = keep_stack(d < 0);
+  if (dcpl >= 0) H5Pclose(dcpl);
+  if (space >= 0) H5Sclose(space);
+  restore_stack(err);
+  return d;
+}
+
+/* The directory the file goes into (the file may not exist yet). */
+static int dir_space_low(const char *path) {
+  char *copy = strdup(path);
+  int low = copy ? space_low(dirname(copy)) : 0;
+  free(copy);
+  return low;
+}
+
+static int open_file(cup_h5run *w) {
+  if (dir_space_low(w->path)) {
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': less than %u MiB "
+             "left on its device", w->path, SPACE_MARGIN >> 20);
+    return CUP_ERR_IO;
+  }
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  /* Upper bound 1.8: never the version-3 superblock, whose "file is open for
+   * writing" flag would make a killed writer's file unreadable until h5clear.
+   * Strong close: H5Fclose really closes, whatever is still open inside. */
+  if (fapl >= 0 && H5Pset_libver_bounds(fapl, H5F_LIBVER_EARLIEST, H5F_LIBVER_V18) >= 0 &&
+      H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) >= 0)
+    w->file = H5Fcreate(w->path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  hid_t err = keep_stack(w->file < 0);
+  if (fapl >= 0) H5Pclose(fapl);
+  restore_stack(err);
+  if (w->file < 0) return set_error(w, CUP_ERR_IO, "create");
+  w->dset_t = create_dataset(w->file, "t", 1, 1, w->chunk_rows);
+  if (w->dset_t < 0) return set_error(w, CUP_ERR_IO, "create dataset /t in");
+  w->dset_x = create_dataset(w->file, "x", 2, (hsize_t)w->dim, w->chunk_rows);
+  if (w->dset_x < 0) return set_error(w, CUP_ERR_IO, "create dataset /x in");
+  /* On disk and readable (with N = 0) before the first sample arrives. */
+  if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) return set_error(w, CUP_ERR_IO, "flush");
+  return CUP_OK;
+}
+
+/* Rows per chunk: 4096, halved while an /x chunk exceeds CHUNK_BYTES. */
+static hsize_t chunk_rows_for(int dim) {
+  hsize_t rows = MAX_CHUNK_ROWS;
+  while (rows > 1 && rows * (hsize_t)dim * sizeof(double) > CHUNK_BYTES) rows /= 2;
+  return rows;
+}
+
+static void free_writer(cup_h5run *w) {
+  quiet_t q = quiet_begin();
+  if (w->dset_x >= 0) H5Dclose(w->dset_x);
+  if (w->dset_t >= 0) H5Dclose(w->dset_t);
+  if (w->file >= 0) H5Fclose(w->file);
+  H5Eclear2(H5E_DEFAULT);
+  quiet_end(q);
+  free(w->tbuf);
+  free(w->xbuf);
+  free(w->path);
+  free(w);
+}
+
+int cup_h5run_create(cup_h5run **out, const char *path, int dim, char *errmsg) {
+  if (!out) return fail_msg(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
+  *out = NULL;
+  if (!path || !path[0]) return fail_msg(errmsg, CUP_ERR_ARG, "h5run: empty file name");
+  if (dim < 1 || dim > MAX_DIM)
+    return fail_msg(errmsg, CUP_ERR_ARG, "h5run: '%s': state dimension %d outside [1, %d]",
+                    path, dim, MAX_DIM);
+  /* HDF5 1.10 leaks internal state when a create fails after open() (a
+   * device, a /proc file) and then prints at exit; refuse those up front. */
+  struct stat sb;
+  if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+    return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
+  cup_h5run *w = calloc(1, sizeof *w);
+  if (!w) return fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
+  w->file = w->dset_t = w->dset_x = H5I_INVALID_HID;
+  w->dim = dim;
+  w->chunk_rows = chunk_rows_for(dim);
+  w->tbuf = malloc(sizeof(double) * w->chunk_rows);
+  w->xbuf = malloc(sizeof(double) * w->chunk_rows * (size_t)dim);
+  w->path = strdup(path);
+  if (!w->tbuf || !w->xbuf || !w->path) {
+    free_writer(w);
+    return fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
+  }
+  quiet_t q = quiet_begin();
+  int st = open_file(w);
+  quiet_end(q);
+  if (st != CUP_OK) {
+    if (errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
+    free_writer(w);
+    return st;
+  }
+  w->last_flush = now_seconds();
+  *out = w;
+  return CUP_OK;
+}
+
+/* ---- the data path ---- */
+
+/* Extend d to at + rows rows and write buf into rows [at, at + rows). */
+static herr_t append(hid_t d, int rank, hsize_t at, hsize_t rows, hsize_t cols,
+                     const double *buf) {
+  hsize_t ext[2] = {at + rows, cols}, start[2] = {at, 0}, count[2] = {rows, cols};
+  if (H5Dset_extent(d, ext) < 0) return -1;
+  hid_t fs = H5Dget_space(d);
+  hid_t ms = H5Screate_simple(rank, count, NULL);
+  herr_t r = -1;
+  if (fs >= 0 && ms >= 0 && H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL) >= 0)
+    r = H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, buf);
+  hid_t err = keep_stack(r < 0);
+  if (ms >= 0) H5Sclose(ms);
+  if (fs >= 0) H5Sclose(fs);
+  restore_stack(err);
+  return r;
+}
+
+/* Hand the buffered rows to HDF5 (no flush). Any failure is sticky: the sink
+ * then refuses samples so that the run stops. Running short of space stops
+ * the data after these rows, with HDF5 still able to flush and close. */
+static int write_buffer(cup_h5run *w) {
+  if (w->nbuf == 0 || w->data_status != CUP_OK) return w->data_status;
+  quiet_t q = quiet_begin();
+  if (append(w->dset_x, 2, w->written, w->nbuf, (hsize_t)w->dim, w->xbuf) < 0)
+    set_error(w, CUP_ERR_IO, "append rows to /x in");
+  else if (append(w->dset_t, 1, w->written, w->nbuf, 1, w->tbuf) < 0)
+    set_error(w, CUP_ERR_IO, "append rows to /t in");
+  quiet_end(q);
+  if (w->h5_failed) return w->data_status;
+  w->written += w->nbuf;
+  w->nbuf = 0;
+  if (space_low(w->path)) {
+    if (!w->errmsg[0])
+      snprintf(w->errmsg, sizeof w->errmsg, "h5run: stopped writing '%s' after %llu rows: "
+               "less than %u MiB left on its device", w->path,
+               (unsigned long long)w->written, SPACE_MARGIN >> 20);
+    w->data_status = CUP_ERR_IO;
+  }
+  return w->data_status;
+}
+
+/* Flushes even after the data stopped for lack of space, so that the rows
+ * and attributes written so far reach the file; not after HDF5 failed. */
+int cup_h5run_flush(cup_h5run *w) {
+  if (!w) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
+  int st = write_buffer(w);
+  if (w->h5_failed) return st;
+  quiet_t q = quiet_begin();
+  if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) set_error(w, CUP_ERR_IO, "flush");
+  quiet_end(q);
+  w->last_flush = now_seconds();
+  return w->data_status;
+}
+
+/* Rows until the next chunk boundary: after a flush of a partial buffer the
+ * next writes realign, so that HDF5 receives whole chunks. */
+static hsize_t room(const cup_h5run *w) {
+  return w->chunk_rows - w->written % w->chunk_rows;
+}
+
+/* Full chunks go to HDF5 as they fill; H5Fflush runs only once a second.
+ * A kill can damage the file only while H5Fflush rewrites metadata in place
+ * (B-tree nodes, object headers, in HDF5's order, not ours). Flushing after
+ * every chunk put a fast run inside that window most of the time (1 of 40
+ * kills left /t and /x of different lengths); once a second keeps it to a
+ * fraction of a millisecond per second, and rows reach a reader through a
+ * completed H5Fflush either way. */
+int cup_h5run_sink(long k, double t, const double *x, void *ctx) {
+  (void)k;
+  cup_h5run *w = ctx;
+  if (!w || !x) return CUP_ERR_ARG;
+  if (w->data_status != CUP_OK) return w->data_status;
+  w->tbuf[w->nbuf] = t;
+  memcpy(w->xbuf + w->nbuf * (hsize_t)w->dim, x, sizeof(double) * (size_t)w->dim);
+  w->nbuf++;
+  if (now_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
+  if (w->nbuf >= room(w)) return write_buffer(w);
+  return CUP_OK;
+}
+
+long cup_h5run_count(const cup_h5run *w) {
+  return w ? (long)(w->written + w->nbuf) : 0;
+}
+
+const char *cup_h5run_errmsg(const cup_h5run *w) {
+  return w ? w->errmsg : "";
+}
+
+/* ---- attributes on the root group ---- */
+
+/* Replace (delete, then create) the scalar attribute `name`, so that a value
+ * written before the run ("status" = running) can be rewritten after it,
+ * even with another type. */
+static int put_attr(cup_h5run *w, const char *name, hid_t ftype, hid_t mtype, const void *buf) {
+  if (!w || !name || !name[0]) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;   /* see set_error */
+  quiet_t q = quiet_begin();
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = H5I_INVALID_HID;
+  int ok = space >= 0;
+  htri_t exists = ok ? H5Aexists(w->file, name) : -1;
+  ok = exists >= 0 && (exists == 0 || H5Adelete(w->file, name) >= 0);
+  if (ok) a = H5Acreate2(w->file, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
+  ok = a >= 0 && H5Awrite(a, mtype, buf) >= 0;
+  hid_t err = keep_stack(!ok);
+  if (a >= 0) H5Aclose(a);
+  if (space >= 0) H5Sclose(space);
+  restore_stack(err);
+  int st = CUP_OK;
+  if (!ok) {
+    char op[128];
+    snprintf(op, sizeof op, "write attribute '%s' in", name);
+    st = set_error(w, CUP_ERR_IO, op);
+  }
+  quiet_end(q);
+  return st;
+}
+
+int cup_h5run_attr_double(cup_h5run *w, const char *name, double v) {
+  return put_attr(w, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v);
+}
+
+int cup_h5run_attr_long(cup_h5run *w, const char *name, long v) {
+  int64_t v64 = (int64_t)v;
+  return put_attr(w, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &v64);
+}
+
+/* Variable-length UTF-8: h5py returns str, h5dump prints the text, and the
+ * text lives in the global heap, so a long scene document does not hit the
+ * 64 KiB limit of an attribute stored in the object header. */
+int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v) {
+  if (!w || !v) return CUP_ERR_ARG;
+  quiet_t q = quiet_begin();
+  hid_t type = H5Tcopy(H5T_C_S1);
+  int ok = type >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
+           H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
+  int st = ok ? CUP_OK : set_error(w, CUP_ERR_IO, "make a string type for");
+  quiet_end(q);
+  if (st == CUP_OK) st = put_attr(w, name, type, type, &v);
+  if (type >= 0) H5Tclose(type);
+  return st;
+}
+
+/* ---- close ---- */
+
+int cup_h5run_close(cup_h5run **pw, char *errmsg) {
+  if (!pw || !*pw) return CUP_OK;
+  cup_h5run *w = *pw;
+  int st = cup_h5run_flush(w);   /* returns the earlier data failure, if any */
+  quiet_t q = quiet_begin();
+  herr_t r = H5Dclose(w->dset_x);
+  r = H5Dclose(w->dset_t) < 0 ? -1 : r;
+  r = H5Fclose(w->file) < 0 ? -1 : r;
+  w->dset_x = w->dset_t = w->file = H5I_INVALID_HID;
+  if (r < 0 && st == CUP_OK) st = set_error(w, CUP_ERR_IO, "close");
+  quiet_end(q);
+  if (st != CUP_OK && errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
+  free_writer(w);
+  *pw = NULL;
+  return st;
+}
+
+int cup_h5_version(char *buf, unsigned long size) {
+  unsigned maj = 0, min = 0, rel = 0;
+  H5get_libversion(&maj, &min, &rel);
+  return snprintf(buf, size, "HDF5 %u.%u.%u", maj, min, rel);
+}

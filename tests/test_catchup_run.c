@@ -1,0 +1,339 @@
+/* catchup-run end to end (DESIGN.md contract): exit codes and one-line
+ * messages; the file's datasets, grid and attributes read back through the
+ * HDF5 API; the trajectory in original x coordinates against the paper's
+ * reference limit; a clean stop on SIGINT and a readable file after kill -9. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+#include <signal.h>
+#include <time.h>
+#include <unistd.h>
+#include <fcntl.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <cmocka.h>
+#include <hdf5.h>
+#include "catchup.h"
+
+static char tmpdir[] = "/tmp/cup_cli_XXXXXX";
+static const char *fig2 = CUP_EXAMPLES_DIR "/paper-fig2.yaml";
+
+static const char *tmp_path(const char *name) {
+  static char buf[4][256];
+  static int next;
+  char *p = buf[next++ % 4];
+  snprintf(p, 256, "%s/%s", tmpdir, name);
+  return p;
+}
+
+/* ---- running the program ---- */
+
+typedef struct {
+  int exited, code, sig;     /* exit code, or the signal that ended it */
+  char err[4096];            /* its stderr */
+  int lines;                 /* lines on stderr */
+} result;
+
+static void sleep_s(double s) {
+  struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+  while (nanosleep(&ts, &ts) != 0) {}
+}
+
+/* Run catchup-run with the NULL-terminated arguments; if signal_after > 0,
+ * send sig after that many seconds. */
+static result run_cli(const char *const *args, double signal_after, int sig) {
+  result r;
+  memset(&r, 0, sizeof r);
+  const char *errfile = tmp_path("stderr.txt");
+  const char *argv[32] = {CUP_CATCHUP_RUN};
+  for (int i = 0; args[i] && i < 30; i++) argv[i + 1] = args[i];
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid < 0) skip();
+  if (pid == 0) {
+    int fd = open(errfile, O_WRONLY | O_CREAT | O_TRUNC, 0600), nul = open("/dev/null", O_WRONLY);
+    dup2(fd, 2);
+    dup2(nul, 1);
+    execv(CUP_CATCHUP_RUN, (char *const *)argv);
+    _exit(127);
+  }
+  if (signal_after > 0) {
+    sleep_s(signal_after);
+    kill(pid, sig);
+  }
+  int st = 0;
+  assert_int_equal(waitpid(pid, &st, 0), pid);
+  r.exited = WIFEXITED(st);
+  r.code = r.exited ? WEXITSTATUS(st) : -1;
+  r.sig = WIFSIGNALED(st) ? WTERMSIG(st) : 0;
+  FILE *f = fopen(errfile, "r");
+  assert_non_null(f);
+  size_t n = fread(r.err, 1, sizeof r.err - 1, f);
+  r.err[n] = '\0';
+  fclose(f);
+  for (size_t i = 0; i < n; i++) r.lines += r.err[i] == '\n';
+  return r;
+}
+
+static void expect_exit(const result *r, int code, int lines) {
+  if (!r->exited || r->code != code || r->lines != lines)
+    fail_msg("exit %d (signal %d) with %d stderr lines, expected exit %d with %d:\n%s",
+             r->code, r->sig, r->lines, code, lines, r->err);
+}
+
+static void expect_in_err(const result *r, const char *text) {
+  if (!strstr(r->err, text)) fail_msg("stderr lacks '%s':\n%s", text, r->err);
+}
+
+/* ---- reading the file ---- */
+
+static hsize_t read_rows(hid_t f, const char *name, int rank, hsize_t cols, double **out) {
+  hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+  assert_true(d >= 0);
+  hid_t s = H5Dget_space(d);
+  hsize_t dims[2] = {0, 0};
+  assert_int_equal(H5Sget_simple_extent_ndims(s), rank);
+  H5Sget_simple_extent_dims(s, dims, NULL);
+  if (rank == 2) assert_true(dims[1] == cols);
+  *out = malloc(sizeof(double) * (dims[0] * cols + 1));
+  if (dims[0] > 0)
+    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, *out) >= 0);
+  H5Sclose(s);
+  H5Dclose(d);
+  return dims[0];
+}
+
+static int64_t attr_i64(hid_t f, const char *name) {
+  int64_t v = 0;
+  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+  if (a < 0) fail_msg("attribute %s missing", name);
+  assert_true(H5Aread(a, H5T_NATIVE_INT64, &v) >= 0);
+  H5Aclose(a);
+  return v;
+}
+
+static double attr_f64(hid_t f, const char *name) {
+  double v = 0;
+  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+  if (a < 0) fail_msg("attribute %s missing", name);
+  assert_true(H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0);
+  H5Aclose(a);
+  return v;
+}
+
+static void expect_attr_str(hid_t f, const char *name, const char *expect) {
+  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+  if (a < 0) fail_msg("attribute %s missing", name);
+  hid_t type = H5Aget_type(a);
+  char *s = NULL;
+  assert_true(H5Tis_variable_str(type) > 0);
+  assert_true(H5Aread(a, type, &s) >= 0);
+  if (strcmp(s, expect) != 0) fail_msg("attribute %s = '%s', expected '%s'", name, s, expect);
+  H5free_memory(s);
+  H5Tclose(type);
+  H5Aclose(a);
+}
+
+static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; }
+
+/* ---- tests ---- */
+
+/* The paper's case 1 at n = 1000: the grid is t_k = k h exactly, the rows are
+ * x (not z = R x: x2 would be off by sqrt(L3)), and the error against the
+ * reference limit is the first-order error the paper's scheme has, ~1.52/n. */
+static void test_paper_case1_file(void **state) {
+  (void)state;
+  const char *out = tmp_path("case1.h5");
+  const char *args[] = {fig2, "-o", out, "--n", "1000", "--quiet", NULL};
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, 0, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t, *x;
+  assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
+  assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
+  double h = 1.0 / 1000, ref[4], err = 0;
+  FILE *csv = fopen(CUP_SHARED_DIR "/reference/ref_case1_limit_richardson.csv", "r");
+  char line[512];
+  assert_non_null(csv);
+  assert_non_null(fgets(line, sizeof line, csv));
+  for (int k = 0; k <= 1000; k++) {
+    assert_true(t[k] == (double)k * h);
+    assert_non_null(fgets(line, sizeof line, csv));
+    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
+    for (int j = 0; j < 3; j++) err = fmax(err, fabs(x[3 * k + j] - ref[j + 1]));
+  }
+  fclose(csv);
+  if (!(err > 1.0e-3 && err < 2.0e-3)) fail_msg("max error %.3g, expected ~1.52e-3", err);
+  assert_true(attr_i64(f, "n") == 1000);
+  assert_true(attr_f64(f, "T") == 1.0);
+  assert_true(attr_i64(f, "samples") == 1001);
+  assert_true(attr_i64(f, "status") == 0);
+  assert_true(attr_i64(f, "stopped_step") == 1000);
+  assert_true(attr_i64(f, "projected") + attr_i64(f, "skipped") == 1000);
+  assert_true(fabs(attr_f64(f, "eps_value") / pow(1000, -2.1) - 1) < 1e-12);
+  assert_true(attr_f64(f, "wall_time_s") >= 0);
+  expect_attr_str(f, "status_name", "CUP_OK");
+  expect_attr_str(f, "message", "");
+  expect_attr_str(f, "eps", "n^-2.1");
+  expect_attr_str(f, "scheme", "explicit");
+  expect_attr_str(f, "scene_file", fig2);
+  expect_attr_str(f, "catchup_version", cup_version());
+  const char *need[] = {"eta", "eta_value", "projector", "dependency_versions", "scene",
+                        "not_certified", "dual_iterations", "factorizations", "max_eps_cert",
+                        "max_eta_cert", "h_rho", "stopped_t"};
+  for (size_t i = 0; i < sizeof need / sizeof need[0]; i++)
+    if (!has_attr(f, need[i])) fail_msg("attribute %s missing", need[i]);
+  H5Fclose(f);
+  free(t);
+  free(x);
+}
+
+static void test_summary_line_and_overrides(void **state) {
+  (void)state;
+  const char *out = tmp_path("summary.h5");
+  char oarg[300];
+  snprintf(oarg, sizeof oarg, "--output=%s", out);
+  const char *args2[] = {fig2, oarg, "--n=50", "--eps", "1e-9", "--scheme", "implicit",
+                         "--set", "output.every=10", NULL};
+  result r = run_cli(args2, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=50 implicit, 6 samples");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  assert_true(attr_i64(f, "n") == 50);
+  assert_true(attr_f64(f, "eps_value") == 1e-9);
+  expect_attr_str(f, "scheme", "implicit");
+  double *t;
+  assert_int_equal(read_rows(f, "t", 1, 1, &t), 6);
+  assert_true(t[5] == 50 * (1.0 / 50));
+  free(t);
+  H5Fclose(f);
+}
+
+/* Each failure: the exit code and exactly one stderr line naming the thing. */
+static void test_errors_are_one_line(void **state) {
+  (void)state;
+  const char *out = tmp_path("err.h5");
+  struct { const char *args[8]; int code; const char *says; } cases[] = {
+    {{fig2, NULL}, 2, "-o OUT.h5"},
+    {{"-o", out, NULL}, 2, "no scene"},
+    {{fig2, "-o", out, "--n", "12x", NULL}, 2, "--n '12x'"},
+    {{fig2, "-o", out, "--eps", "banana", NULL}, 2, "banana"},
+    {{fig2, "-o", out, "--scheme", "rk4", NULL}, 2, "rk4"},
+    {{fig2, "-o", out, "--projector", "nope", NULL}, 2, "nope"},
+    {{fig2, "-o", out, "--frob", NULL}, 2, "--frob"},
+    {{fig2, "-o", out, "--set", "novalue", NULL}, 2, "novalue"},
+    {{fig2, "-o", out, "--set", "bogus=1", NULL}, 1, "bogus"},
+    {{fig2, "-o", out, "--set", "circuit.R1=-1", NULL}, 1, "circuit.R1"},
+    {{"/no/such/scene.yaml", "-o", out, NULL}, 1, "/no/such/scene.yaml"},
+    {{fig2, "-o", "/no/such/dir/out.h5", NULL}, 1, "/no/such/dir/out.h5"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    result r = run_cli(cases[i].args, 0, 0);
+    expect_exit(&r, cases[i].code, 1);
+    expect_in_err(&r, cases[i].says);
+  }
+}
+
+/* A warning: one line, exit 0 (with --quiet, nothing else). */
+static void test_warning_exits_zero(void **state) {
+  (void)state;
+  const char *out = tmp_path("warn.h5");
+  const char *args[] = {fig2, "-o", out, "--n", "20", "--projector", "pg", "--eps", "1e-40",
+                        "--eta", "1e-40", "--set", "output=final", "--quiet", NULL};
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "warning");
+  expect_in_err(&r, "CUP_WARN_NOT_CERTIFIED");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  assert_true(attr_i64(f, "status") == CUP_WARN_NOT_CERTIFIED);
+  H5Fclose(f);
+}
+
+/* Rows k = 0, 1000, 2000, ... of a run too long to finish. */
+static void check_prefix(hid_t f, hsize_t *rows) {
+  double *t, *x;
+  hsize_t nt = read_rows(f, "t", 1, 1, &t), nx = read_rows(f, "x", 2, 3, &x);
+  *rows = nt < nx ? nt : nx;
+  for (hsize_t j = 0; j < *rows; j++)
+    if (t[j] != (double)(j * 1000) * (1.0 / 1000000000))
+      fail_msg("t[%llu] = %.17g", (unsigned long long)j, t[j]);
+  free(t);
+  free(x);
+}
+
+static const char *long_run[] = {NULL, "-o", NULL, "--n", "1000000000", "--set",
+                                 "output.every=1000", "--quiet", NULL};
+
+static void test_sigint_stops_cleanly(void **state) {
+  (void)state;
+  const char *out = tmp_path("sigint.h5");
+  const char *args[9];
+  memcpy(args, long_run, sizeof args);
+  args[0] = fig2;
+  args[2] = out;
+  result r = run_cli(args, 1.5, SIGINT);
+  if (r.sig != SIGINT || r.lines != 1) fail_msg("signal %d, %d lines:\n%s", r.sig, r.lines, r.err);
+  expect_in_err(&r, "stopped by SIGINT");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  hsize_t rows;
+  check_prefix(f, &rows);
+  assert_true(rows > 0);
+  assert_true(attr_i64(f, "status") == CUP_ERR_INTERRUPTED);
+  assert_true(attr_i64(f, "samples") == (int64_t)rows);
+  expect_attr_str(f, "status_name", "CUP_ERR_INTERRUPTED");
+  H5Fclose(f);
+}
+
+/* kill -9: no chance to clean up; the file opens as is and says "running". */
+static void test_kill9_file_readable(void **state) {
+  (void)state;
+  const char *out = tmp_path("kill9.h5");
+  const char *args[9];
+  memcpy(args, long_run, sizeof args);
+  args[0] = fig2;
+  args[2] = out;
+  result r = run_cli(args, 2.5, SIGKILL);
+  assert_int_equal(r.sig, SIGKILL);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  hsize_t rows;
+  check_prefix(f, &rows);
+  assert_true(rows > 0);          /* at least the flush of the first second */
+  expect_attr_str(f, "status_name", "running");
+  assert_false(has_attr(f, "wall_time_s"));
+  H5Fclose(f);
+}
+
+static int make_tmpdir(void **state) {
+  (void)state;
+  return mkdtemp(tmpdir) ? 0 : -1;
+}
+
+static int remove_tmpdir(void **state) {
+  (void)state;
+  char cmd[300];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+  return system(cmd) == 0 ? 0 : -1;
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_paper_case1_file),
+    cmocka_unit_test(test_summary_line_and_overrides),
+    cmocka_unit_test(test_errors_are_one_line),
+    cmocka_unit_test(test_warning_exits_zero),
+    cmocka_unit_test(test_sigint_stops_cleanly),
+    cmocka_unit_test(test_kill9_file_readable),
+  };
+  return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
+}
