@@ -3,6 +3,7 @@
  * the paper's circuit, and peak memory against n.
  *
  *   catchup-bench projector DIR... [--reps R] [--methods auto,pg,fista] [--eps-rel E] [--eta-rel E]
+ *                           [--max-points K] [--verbose]
  *   catchup-bench integrate [--n N] [--reps R]
  *   catchup-bench memory [--n N]...
  *
@@ -139,7 +140,7 @@ static double rel_error(const problem *pb, const double *z, int k, double *tmp) 
 }
 
 static void bench_projector(int argc, char **argv) {
-  int reps = 5;
+  int reps = 5, max_points = 0, verbose = 0;
   double eps_rel = 1e-12, eta_rel = 1e-8;
   const char *methods = "auto,pg,fista";
   int ndirs = 0;
@@ -149,6 +150,8 @@ static void bench_projector(int argc, char **argv) {
     else if (!strcmp(argv[a], "--methods") && a + 1 < argc) methods = argv[++a];
     else if (!strcmp(argv[a], "--eta-rel") && a + 1 < argc) eta_rel = atof(argv[++a]);
     else if (!strcmp(argv[a], "--eps-rel") && a + 1 < argc) eps_rel = atof(argv[++a]);
+    else if (!strcmp(argv[a], "--max-points") && a + 1 < argc) max_points = atoi(argv[++a]);
+    else if (!strcmp(argv[a], "--verbose")) verbose = 1;
     else dirs[ndirs++] = argv[a];
   }
   if (!ndirs) die("%s", "projector: give at least one problem directory");
@@ -160,6 +163,7 @@ static void bench_projector(int argc, char **argv) {
   for (int d = 0; d < ndirs; d++) {
     problem pb;
     load_problem(&pb, dirs[d], &cm);
+    if (max_points > 0 && pb.K > max_points) pb.K = max_points;
     double *z = malloc(sizeof(double) * (size_t)pb.n), *tmp = malloc(sizeof(double) * (size_t)pb.n);
     double *times = malloc(sizeof(double) * (size_t)reps);
     char mlist[256];
@@ -193,6 +197,11 @@ static void bench_projector(int argc, char **argv) {
             int st = cup_project(pr, pb.x + (size_t)k * pb.n, z, &info);
             elapsed += now() - a;
             if (!warm) cup_projector_reset(pr);
+            if (verbose && r == reps - 1)
+              fprintf(stderr, "  point %d: %s, %d iterations, %d factorizations, %d row updates, "
+                      "eps %.3g (target %.3g), eta %.3g (target %.3g), %.3g s\n", k, cup_status_name(st),
+                      info.iterations, info.factorizations, info.row_updates, info.eps_cert,
+                      info.eps_target, info.eta_cert, info.eta_target, now() - a);
             iters += info.iterations;
             facts += info.factorizations;
             certified += st == CUP_OK;

@@ -296,6 +296,9 @@ static int setup(run_t *r, char *err) {
   if (cup_scene_load(&r->scene, a->scene, (const char *const *)a->overrides, a->n_overrides, err))
     return EXIT_RUN;             /* the message names file:line:column and key */
   r->opts = *cup_scene_options(r->scene);
+  /* a signal stops the run within 1024 steps even when no sample is due */
+  _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
+  r->opts.interrupt = (const volatile int *)&stop_signal;
   const cup_lcs *L = cup_scene_lcs(r->scene);
   char e2[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&r->I, L, cup_scene_input(r->scene), &r->opts, e2)) {

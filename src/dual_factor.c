@@ -28,6 +28,8 @@ struct cup_dfact {
 
 double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
 
+static int update_limit(cup_dfact *f, char *errmsg);
+
 /* ---- permutation and upper storage (shared) ---------------------------------- */
 
 /* From a symmetric matrix given by its lower triangle (natural order; each
@@ -234,11 +236,41 @@ static int mform_create(cup_dfact *f, char *errmsg) {
   for (int j = 0; j < m; j++)
     for (int k = Kp[j]; k < Kp[j + 1]; k++) Kx[k] = Ki[k] == j ? 1 : 0;
   st = symbolic(f, errmsg);
-  f->update_limit = 8 + m / 64;
+  if (!st) st = update_limit(f, errmsg);
+  /* rowadd/rowdel need 2m of CHOLMOD workspace: take it now, not in a projection */
+  if (!st && !cholmod_allocate_work((size_t)m, 2 * (size_t)m, 2 * (size_t)m, &f->cm))
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
 done:
   cholmod_free_sparse(&Mz, &f->cm);
   free(Ap); free(Ai); free(map); free(Ax);
   return st;
+}
+
+/* When do row updates beat a refactorization? A row update walks the
+ * elimination tree from its row to the root, touching each column on the
+ * way; a refactorization costs about sum_j c_j^2 (c_j: entries of column j).
+ * Averaged over rows, an update costs sum_j c_j |subtree(j)| / m. A chain
+ * (a path-shaped tree) makes updates as dear as refactoring; a crowd of
+ * disks makes them ~100x cheaper. With the natural order, parent(j) is the
+ * first row below the diagonal in column j of L. */
+static int update_limit(cup_dfact *f, char *errmsg) {
+  int m = f->m;
+  const cholmod_factor *L = f->L;
+  const int *Lp = L->p, *Li = L->i, *Lnz = L->nz;
+  double *sub = malloc(sizeof(double) * (size_t)m);
+  if (!sub) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  for (int j = 0; j < m; j++) sub[j] = 1;
+  double refactor = 0, update = 0;
+  for (int j = 0; j < m; j++) {            /* children precede parents in this order */
+    double c = Lnz[j];
+    refactor += c * c;
+    update += c * sub[j];
+    if (Lnz[j] > 1) sub[Li[Lp[j] + 1]] += sub[j];
+  }
+  free(sub);
+  double ratio = update > 0 ? refactor / (update / m) : m;
+  f->update_limit = (long)(0.5 * ratio);   /* margin for the updates' overhead */
+  return CUP_OK;
 }
 
 static int mform_refactor(cup_dfact *f, const unsigned char *act, double delta) {

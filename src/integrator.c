@@ -23,7 +23,7 @@ struct cup_integrator {
   double h, eps_n, eta_n, h_rho;
   cup_freestep fs;
   cup_projector *proj;
-  double *x, *xnew, *xf, *g, *ut;
+  double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
 /* ---- schedules ---------------------------------------------------------------- */
@@ -176,7 +176,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->xf = calloc(N, sizeof(double));
   I->g = calloc(M, sizeof(double));
   I->ut = calloc(P, sizeof(double));
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut) {
+  I->s0 = calloc(M, sizeof(double));
+  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0) {
     cup_integrator_free(&I);
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   }
@@ -200,7 +201,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_integrator *I = *Ip;
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
-  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut);
+  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0);
   free(I);
   *Ip = NULL;
 }
@@ -268,7 +269,7 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
              pi->farkas_gap, pi->farkas_residual,
              pi->farkas_residual > 0 ? -pi->farkas_gap / pi->farkas_residual : INFINITY);
   else if (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)
-    snprintf(buf, size, "the free step produced NaN or Inf (the scheme diverged)");
+    snprintf(buf, size, "the free step produced NaN or Inf, or overflowed (the scheme diverged)");
   else
     snprintf(buf, size, "projection failed: %s", cup_status_string(st));
 }
@@ -294,6 +295,14 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   cup_projector_reset(I->proj);
   int fixed = I->L->fixed || !I->u;
   if (fixed) cup_projector_set_offset(I->proj, I->L->F);
+  /* the paper assumes x0 in K(0); say so when it is not (the first step
+   * projects it), by the raw slack so that a point on the boundary passes */
+  const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->L->F;
+  if (cup_slack(I->L->K, g0, I->x, I->s0, NULL) < 0) {
+    info->status = CUP_WARN_X0_OUTSIDE;
+    snprintf(info->message, sizeof info->message,
+             "step 0 (t = 0): x0 is outside K(0); the first step projects it");
+  }
   if (o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2) {
     info->status = CUP_WARN_STIFF;
     snprintf(info->message, sizeof info->message,
@@ -346,8 +355,12 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       if (sink(k + 1, t1, I->x, sink_ctx))
         return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");
     }
-    if (start > 0 && (k & 1023) == 1023 && wall_seconds() - start > o->max_wall_seconds)
-      return stop_at(info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached");
+    if ((k & 1023) == 1023) {
+      if (o->interrupt && *o->interrupt)
+        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted");
+      if (start > 0 && wall_seconds() - start > o->max_wall_seconds)
+        return stop_at(info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached");
+    }
   }
   return info->status;
 }

@@ -24,6 +24,7 @@ typedef struct pn_problem {
   double *b;                     /* C xc + g */
   const double *tau;
   pn_ws *w;                      /* iterate and scratch */
+  int finishing;                 /* inside the finishing solve */
 } pn_problem;
 
 /* Scratch of a solve; with own = 0 the iterate buffers are the projector's
@@ -99,8 +100,11 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
   int m = p->m;
   pn_ws *w = q->w;
   double *rhs = p->nw->rhs;
+  /* the least regularized factor on F, and the iterate as the first guess
+   * (refinement from zero with a large delta crawls on ill-conditioned M_FF) */
+  if (factor(p, w->act, cup_dfact_delta_min(p->nw->df))) return 0;
   memcpy(w->keep, w->lam, sizeof(double) * (size_t)m);
-  for (int i = 0; i < m; i++) w->lam[i] = 0;
+  for (int i = 0; i < m; i++) if (!w->act[i]) w->lam[i] = 0;
   double prev = INFINITY;
   for (int step = 0; step < 30; step++) {
     cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
@@ -116,12 +120,39 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
     for (int i = 0; i < m; i++) if (w->act[i]) w->lam[i] += rhs[i];
   }
   int neg = 0;
-  for (int i = 0; i < m; i++) if (w->lam[i] < 0) { w->lam[i] = 0; neg = 1; }
+  for (int i = 0; i < m; i++)
+    if (w->lam[i] < 0) { w->lam[i] = 0; neg = 1; w->d[i] = -1; } else w->d[i] = 0;   /* d marks rows to drop */
   if (neg) cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
-  if (stop(p, q, info)) return 1;
+  ((pn_problem *)q)->finishing = 1;
+  int ok = stop(p, q, info);
+  ((pn_problem *)q)->finishing = 0;
+  if (ok) return 1;
+  memcpy(w->s2, w->s, sizeof(double) * (size_t)m);      /* the finished point's slack, */
+  memcpy(w->gam2, w->gam, sizeof(double) * (size_t)m);  /* for pn_correct */
   memcpy(w->lam, w->keep, sizeof(double) * (size_t)m);
   cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
   return 0;
+}
+
+/* f stopped decreasing above its rounding while a few rows may still be
+ * misclassified: finish on F, then correct F like a primal-dual active set
+ * (rows the finished point violates join, rows with negative multipliers
+ * leave) and finish again, a few times. */
+static int pn_correct(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
+                      cup_proj_info *info) {
+  pn_ws *w = q->w;
+  for (int round = 0; round < 8; round++) {
+    if (pn_finish(p, q, stop, info)) return CUP_OK;
+    /* pn_finish left the finished point's signs in d and slack in s2/gam2 */
+    int changed = 0;
+    for (int i = 0; i < p->m; i++) {
+      if (w->act[i] && w->d[i] < 0) { w->act[i] = 0; changed = 1; }
+      else if (!w->act[i] && w->s2[i] < -w->gam2[i] && (!q->rows || q->rows[i]) &&
+               p->K->rownorm[i] > 0) { w->act[i] = 1; changed = 1; }
+    }
+    if (!changed || factor(p, w->act, cup_dfact_delta_min(p->nw->df))) break;
+  }
+  return CUP_WARN_NOT_CERTIFIED;
 }
 
 /* Projected Newton: rows at (or within eps_k of) zero with a positive
@@ -164,7 +195,11 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
                   !(w->lam[i] <= epsk && w->s[i] > 0);
     int st = factor(p, w->act, delta);
     if (st) return st;
-    if (settled && memcmp(w->act, w->prev, (size_t)m) == 0 && pn_finish(p, q, stop, info))
+    /* finish once F repeats after a full step, or once the iterate is
+     * stationary to rounding (then steps shrink for reasons of rounding) */
+    int stationary = resid <= 64 * DBL_EPSILON * (lmax + DBL_MIN);
+    if ((settled || stationary) && memcmp(w->act, w->prev, (size_t)m) == 0 &&
+        pn_finish(p, q, stop, info))
       return CUP_OK;
     memcpy(w->prev, w->act, (size_t)m);
     double *rhs = p->nw->rhs;               /* d_F = -(M_FF + delta I)^-1 s_F */
@@ -190,10 +225,12 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
       if (!accepted) alpha *= 0.5;
     }
     if (!accepted)                          /* no decrease above rounding */
-      return pn_finish(p, q, stop, info) ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+      return pn_correct(p, q, stop, info);
     settled = alpha == 1;
-    /* Levenberg: short steps mean the model is poor; trust it less */
-    delta = alpha < 0.1 ? fmin(delta * 100, 1e-2 * K->lip) : fmax(delta * 0.1, dmin);
+    /* Levenberg: short steps that still change f mean the model is poor:
+     * trust it less (steps cut short by rounding say nothing) */
+    int measurable = f - ft > 1e3 * DBL_EPSILON * fabs(f);
+    delta = alpha < 0.1 && measurable ? fmin(delta * 100, 1e-2 * K->lip) : fmax(delta * 0.1, dmin);
     memcpy(w->lam, w->lt, msz);
     double *t;
     t = w->y; w->y = w->y2; w->y2 = t;
@@ -230,7 +267,7 @@ static void inward_sparse(cup_projector *p) {
   }
   if (!any) return;
   cup_slack(p->K, nw->gin, p->y, nw->bin, NULL);
-  pn_problem q = {p->y, nw->gin, a2, nw->bin, NULL, w};
+  pn_problem q = {p->y, nw->gin, a2, nw->bin, NULL, w, 0};
   cup_proj_info scratch = {0};
   if (pn_solve(p, &q, inward_stop, 50, &scratch) != CUP_OK) return;
   memcpy(p->inward, w->y, sizeof(double) * (size_t)n);
@@ -250,11 +287,18 @@ static void detach(cup_projector *p, const pn_ws *w) {
   p->y2 = w->y2; p->s2 = w->s2; p->gam2 = w->gam2;
 }
 
+/* The exact path returns an exact answer: a finishing solve's, or an
+ * iterate that is already certainly feasible with eps met (then ||z - z*||
+ * <= sqrt(eps)); an iterate certified only through an anchor's eta would be
+ * accurate to sqrt(eta ||x - z||) at best. */
 static int main_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info) {
   pn_ws *w = q->w;
-  double eq = 0;
-  for (int i = 0; i < p->m; i++) eq += 2 * w->lam[i] * (w->s[i] + w->gam[i]);
-  if (!(eq <= info->eps_target)) return 0;
+  double eq = 0, worst = INFINITY;
+  for (int i = 0; i < p->m; i++) {
+    eq += 2 * w->lam[i] * (w->s[i] + w->gam[i]);
+    worst = cup_min(worst, w->s[i] - w->gam[i]);
+  }
+  if (!(eq <= info->eps_target) || !(q->finishing || worst >= 0)) return 0;
   detach(p, w);                             /* cup_certify reads p->y, p->s, p->gam */
   p->has_inward = 0;                        /* an anchor belongs to one candidate */
   p->make_inward = inward_sparse;
@@ -274,7 +318,7 @@ int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *inf
   /* finishing target: a slack well above its rounding bound (the bound at x
    * is a fair estimate of the one at the answer) */
   for (int i = 0; i < m; i++) nw->tau[i] = 16 * p->gam[i] + DBL_MIN;
-  pn_problem q = {x, p->g, NULL, p->b, nw->tau, w};
+  pn_problem q = {x, p->g, NULL, p->b, nw->tau, w, 0};
   int st = pn_solve(p, &q, main_stop, p->opt.max_iter, info);
   detach(p, w);
   if (st == CUP_WARN_NOT_CERTIFIED) cup_certify(p, x, w->lam, w->y, info);

@@ -425,9 +425,10 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
   p->make_inward = NULL;
   p->iters = p->facts = p->updates = 0;
   double S = cup_max(cup_polyset_norm(K, x), p->gscale);
+  if (!isfinite(S)) return info->status = CUP_ERR_DIVERGED;   /* ||x||_P overflowed */
   info->scale = S;
-  info->eps_target = p->opt.eps_abs + p->opt.eps_rel * S * S;
-  info->eta_target = p->opt.eta_abs + p->opt.eta_rel * S;
+  info->eps_target = p->opt.eps_abs + (p->opt.eps_rel > 0 ? p->opt.eps_rel * S * S : 0);
+  info->eta_target = p->opt.eta_abs + (p->opt.eta_rel > 0 ? p->opt.eta_rel * S : 0);
   info->method = p->opt.method;
   if (p->empty_row >= 0) {                 /* a row 0 >= -g_i with g_i < 0 */
     memset(p->farkas, 0, sizeof(double) * (size_t)m);

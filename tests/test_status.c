@@ -15,7 +15,7 @@ static const struct { int value; const char *name; } documented[] = {
   {-10, "CUP_ERR_IO"}, {-11, "CUP_ERR_PARSE"}, {-12, "CUP_ERR_LINALG"},
   {-13, "CUP_ERR_TIME_LIMIT"}, {-14, "CUP_ERR_INTERRUPTED"},
   {-15, "CUP_ERR_UNSUPPORTED"}, {1, "CUP_WARN_NOT_CERTIFIED"},
-  {2, "CUP_WARN_STIFF"}, {3, "CUP_WARN_QUADRATURE"},
+  {2, "CUP_WARN_STIFF"}, {3, "CUP_WARN_QUADRATURE"}, {4, "CUP_WARN_X0_OUTSIDE"},
 };
 #define NDOC (sizeof documented / sizeof documented[0])
 

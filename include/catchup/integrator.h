@@ -75,6 +75,8 @@ typedef struct cup_integrator_options {
   double max_wall_seconds;    /**< stop with CUP_ERR_TIME_LIMIT after this (0: none) */
   cup_step_fn on_step;        /**< per-step projector statistics, or NULL */
   void *step_ctx;             /**< passed to on_step */
+  const volatile int *interrupt; /**< polled every 1024 steps: nonzero stops the run with
+                                      CUP_ERR_INTERRUPTED (e.g. set by a signal handler) */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */

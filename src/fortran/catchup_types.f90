@@ -133,6 +133,7 @@ module catchup_types
     real(c_double) :: max_wall_seconds = 0
     type(c_funptr) :: on_step = c_null_funptr   !< c_funloc of a procedure(cup_step_fn)
     type(c_ptr) :: step_ctx = c_null_ptr
+    type(c_ptr) :: interrupt = c_null_ptr   !< c_loc of an integer(c_int) flag polled every 1024 steps
   end type cup_integrator_options
 
   type, bind(C), public :: cup_run_info
