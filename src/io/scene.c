@@ -68,48 +68,6 @@ static const char *looks(const st_node *nd, char *buf, size_t n) {
 
 /* ---- keys ---------------------------------------------------------------- */
 
-/* Optimal string alignment distance, case-insensitive (R1 vs r1 is 0). */
-static int osa_distance(const char *a, const char *b) {
-  int la = (int)strlen(a), lb = (int)strlen(b);
-  if (la > 30 || lb > 30) return 99;
-  int d[32][32];
-  for (int i = 0; i <= la; i++) d[i][0] = i;
-  for (int j = 0; j <= lb; j++) d[0][j] = j;
-  for (int i = 1; i <= la; i++)
-    for (int j = 1; j <= lb; j++) {
-      int c = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]);
-      int v = d[i - 1][j - 1] + c;
-      if (d[i - 1][j] + 1 < v) v = d[i - 1][j] + 1;
-      if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
-      if (i > 1 && j > 1 && tolower((unsigned char)a[i - 1]) == tolower((unsigned char)b[j - 2]) &&
-          tolower((unsigned char)a[i - 2]) == tolower((unsigned char)b[j - 1]) && d[i - 2][j - 2] + 1 < v)
-        v = d[i - 2][j - 2] + 1;
-      d[i][j] = v;
-    }
-  return d[la][lb];
-}
-
-/* The closest of `known` to `word` if it is close enough to be a typo. */
-static const char *closest(const char *word, const char *const *known) {
-  const char *best = NULL;
-  int bd = 3;
-  for (int k = 0; known[k]; k++) {
-    int d = osa_distance(word, known[k]);
-    if (d < bd && d < (int)strlen(known[k])) { bd = d; best = known[k]; }
-  }
-  return best;
-}
-
-/* "did you mean 'x'?" or "expected one of a, b, c". */
-static const char *suggest(char *buf, size_t n, const char *word, const char *const *known) {
-  const char *c = closest(word, known);
-  if (c) { snprintf(buf, n, "did you mean '%s'?", c); return buf; }
-  size_t w = (size_t)snprintf(buf, n, "expected one of");
-  for (int k = 0; known[k] && w < n; k++)
-    w += (size_t)snprintf(buf + w, n - w, "%s %s", k ? "," : "", known[k]);
-  return buf;
-}
-
 static int check_keys(rd *r, const st_node *map, const char *mkey, const char *const *known) {
   for (int k = 0; k < map->len; k++) {
     int ok = 0;
@@ -117,7 +75,7 @@ static int check_keys(rd *r, const st_node *map, const char *mkey, const char *c
     if (ok) continue;
     char key[KEY_LEN], hint[160];
     return fail(r, CUP_ERR_PARSE, map->key[k], join(key, mkey, map->key[k]->text), "unknown key (%s)",
-                suggest(hint, sizeof hint, map->key[k]->text, known));
+                st_suggest(hint, sizeof hint, map->key[k]->text, known));
   }
   return CUP_OK;
 }
@@ -709,7 +667,7 @@ static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *
   while (wave_names[kind] && strcmp(wave_names[kind], type)) kind++;
   if (!wave_names[kind])
     return fail(r, CUP_ERR_PARSE, tn, k1, "unknown input type '%.40s' (%s)", type,
-                suggest(hint, sizeof hint, type, wave_names));
+                st_suggest(hint, sizeof hint, type, wave_names));
   cup_wave w = {0};
   double *buf = NULL;
   w.kind = (cup_wave_kind)kind;
@@ -804,7 +762,7 @@ static int read_word(rd *r, const st_node *nd, const char *key, const char *what
   if (st) return st;
   *out = parse(w);
   if (*out >= 0) return CUP_OK;
-  return fail(r, CUP_ERR_PARSE, nd, key, "unknown %s '%.40s' (%s)", what, w, suggest(hint, sizeof hint, w, names));
+  return fail(r, CUP_ERR_PARSE, nd, key, "unknown %s '%.40s' (%s)", what, w, st_suggest(hint, sizeof hint, w, names));
 }
 
 static int read_projector(rd *r, const st_node *nd, cup_projector_options *po) {
@@ -835,7 +793,7 @@ static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
     if (!nd->quoted && !strcmp(nd->text, "final")) { o->output = CUP_OUTPUT_FINAL; return CUP_OK; }
     if (!nd->quoted && !strcmp(nd->text, "none")) { o->output = CUP_OUTPUT_NONE; return CUP_OK; }
     return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got '%.40s'; %s)",
-                nd->text, suggest(hint, sizeof hint, nd->text, words));
+                nd->text, st_suggest(hint, sizeof hint, nd->text, words));
   }
   if (nd->kind != ST_MAP || nd->len != 1)
     return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got %s)",

@@ -140,6 +140,49 @@ int st_number(const char *s, double *out) {
   return 1;
 }
 
+/* ---- key suggestions ------------------------------------------------------ */
+
+/* Optimal string alignment distance, case-insensitive (R1 vs r1 is 0). */
+static int osa_distance(const char *a, const char *b) {
+  int la = (int)strlen(a), lb = (int)strlen(b);
+  if (la > 30 || lb > 30) return 99;
+  int d[32][32];
+  for (int i = 0; i <= la; i++) d[i][0] = i;
+  for (int j = 0; j <= lb; j++) d[0][j] = j;
+  for (int i = 1; i <= la; i++)
+    for (int j = 1; j <= lb; j++) {
+      int c = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]);
+      int v = d[i - 1][j - 1] + c;
+      if (d[i - 1][j] + 1 < v) v = d[i - 1][j] + 1;
+      if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
+      if (i > 1 && j > 1 && tolower((unsigned char)a[i - 1]) == tolower((unsigned char)b[j - 2]) &&
+          tolower((unsigned char)a[i - 2]) == tolower((unsigned char)b[j - 1]) && d[i - 2][j - 2] + 1 < v)
+        v = d[i - 2][j - 2] + 1;
+      d[i][j] = v;
+    }
+  return d[la][lb];
+}
+
+/* The closest of `known` to `word` if it is close enough to be a typo. */
+static const char *closest(const char *word, const char *const *known) {
+  const char *best = NULL;
+  int bd = 3;
+  for (int k = 0; known[k]; k++) {
+    int d = osa_distance(word, known[k]);
+    if (d < bd && d < (int)strlen(known[k])) { bd = d; best = known[k]; }
+  }
+  return best;
+}
+
+const char *st_suggest(char *buf, size_t n, const char *word, const char *const *known) {
+  const char *c = closest(word, known);
+  if (c) { snprintf(buf, n, "did you mean '%s'?", c); return buf; }
+  size_t w = (size_t)snprintf(buf, n, "expected one of");
+  for (int k = 0; known[k] && w < n; k++)
+    w += (size_t)snprintf(buf + w, n - w, "%s %s", k ? "," : "", known[k]);
+  return buf;
+}
+
 /* ---- libyaml document -> tree -------------------------------------------- */
 
 typedef struct conv {

@@ -57,6 +57,9 @@ void st_free(st_node *nd);
 const st_node *st_get(const st_node *map, const char *key, const st_node **keynode);
 /* A plain scalar spelled as YAML null: "", "~", "null", "Null", "NULL". */
 int st_is_null(const st_node *nd);
+/* "did you mean 'x'?" when word is a likely typo of one of the NULL-terminated
+ * known words, else "expected one of a, b, c"; into buf (n bytes). */
+const char *st_suggest(char *buf, size_t n, const char *word, const char *const *known);
 /* Parse a plain scalar as a YAML number (decimal, exponent, .inf, .nan). */
 int st_number(const char *s, double *out);
 

@@ -1,0 +1,777 @@
+/* catchup-sweep — a parameter study over (eps_n, eta_n, n) x schemes x
+ * projectors x scene variants into one restartable HDF5 file
+ * (docs/sweep-format.md).
+ *
+ *   mpirun -n K catchup-sweep SWEEP.yaml -o RESULTS.h5 [--resume] [--quiet]
+ *                             [--task-time-limit S]
+ *
+ * Rank 0 is the manager and the only rank that touches the file; ranks
+ * 1..K-1 are workers. With one rank, rank 0 computes too. Jobs (the
+ * variants' references first, then the tasks by decreasing estimated cost)
+ * go out in batches sized by cost, two batches ahead per worker so that a
+ * worker never waits for the manager; the manager polls with MPI_Iprobe and
+ * a short sleep so that it does not take a core from the workers, and writes
+ * each result as it arrives.
+ *
+ * Exit status: 0 when every task ran (failed tasks are results: their status
+ * is in /summary, and one stderr line counts them); 1 when the sweep file,
+ * the scenes or the results file fail (one stderr line naming the file, the
+ * key and the problem); 2 usage; 128 + signal after SIGINT/SIGTERM on rank 0,
+ * which stops dispatching, writes what has arrived and closes the file (a
+ * second signal ends at once; the file keeps everything flushed before).
+ *
+ * Test hooks (environment): CATCHUP_SWEEP_INJECT_FAIL=3,7,11 makes those
+ * tasks fail half-way through with CUP_ERR_CALLBACK; CATCHUP_SWEEP_DONE_LIST=
+ * FILE lists task ids (one per line) that must not be computed again: a rank
+ * asked to compute one aborts the whole job with a message. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <mpi.h>
+#include "catchup.h"
+#include "catchup/h5run.h"
+#include "sweep.h"
+#include "git_revision.h"
+
+enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
+enum { TAG_WORK = 1, TAG_RESULT = 2, TAG_STOP = 3, TAG_BYE = 4 };
+enum { AHEAD = 2, MAX_BATCH = 64 };
+/* Batches hold about this much work (cost units ~ steps, ~0.2 us each on
+ * the paper's circuit): long enough to hide the manager's reply latency. */
+#define BATCH_COST 25000.0
+#define FLUSH_SECONDS 1.0
+#define PROGRESS_SECONDS 0.25
+#define STOP_GRACE_SECONDS 10.0
+
+static const char usage_text[] =
+  "usage: mpirun -n K catchup-sweep SWEEP.yaml -o RESULTS.h5 [--resume] [--quiet]\n"
+  "                                 [--task-time-limit S]\n"
+  "  -o, --output FILE      results file (HDF5); replaced unless --resume\n"
+  "  --resume               continue FILE: run only the tasks not done yet\n"
+  "  --quiet                no progress line and no summary line\n"
+  "  --task-time-limit S    stop a task after S seconds (status CUP_ERR_TIME_LIMIT)\n"
+  "  -h, --help             this text;  --version  the library versions\n";
+
+typedef struct {
+  const char *sweep, *out;
+  int resume, quiet;
+  double time_limit;
+} args_t;
+
+static int rank, nranks;
+
+/* ---- small helpers ---- */
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void sleep_us(long us) {
+  struct timespec ts = {us / 1000000, (us % 1000000) * 1000};
+  nanosleep(&ts, NULL);
+}
+
+__attribute__((format(printf, 1, 2)))
+static void say(const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  fputs("catchup-sweep: ", stderr);
+  vfprintf(stderr, fmt, ap);
+  fputc('\n', stderr);
+  va_end(ap);
+}
+
+/* ---- command line (every rank parses; rank 0 reports) ---- */
+
+static int usage_error(const char *fmt, const char *what) {
+  if (rank == 0) {
+    fputs("catchup-sweep: ", stderr);
+    fprintf(stderr, fmt, what);
+    fputs(" (catchup-sweep --help for usage)\n", stderr);
+  }
+  return EXIT_USAGE;
+}
+
+static int parse_args(args_t *a, int argc, char **argv) {
+  memset(a, 0, sizeof *a);
+  for (int i = 1; i < argc; i++) {
+    const char *arg = argv[i], *eq = strchr(arg, '='), *v = NULL;
+    size_t flen = strncmp(arg, "--", 2) == 0 && eq ? (size_t)(eq - arg) : strlen(arg);
+    if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
+      if (rank == 0) fputs(usage_text, stdout);
+      return 0;
+    }
+    if (!strcmp(arg, "--version")) {
+      char deps[256], h5[64];
+      cup_dependency_versions(deps, sizeof deps);
+      cup_h5_version(h5, sizeof h5);
+      if (rank == 0) printf("catchup-sweep %s (%s; %s; git %s)\n", cup_version(), deps, h5, CATCHUP_GIT_REVISION);
+      return 0;
+    }
+    int is_out = (flen == 2 && !strncmp(arg, "-o", 2)) || (flen == 8 && !strncmp(arg, "--output", 8));
+    int is_tl = flen == 17 && !strncmp(arg, "--task-time-limit", 17);
+    if (is_out || is_tl) {
+      if (eq && arg[1] == '-') v = eq + 1;
+      else if (i + 1 < argc) v = argv[++i];
+      else return usage_error("%s needs a value", is_out ? "-o" : "--task-time-limit");
+      if (is_out) { a->out = v; continue; }
+      char *end;
+      errno = 0;
+      a->time_limit = strtod(v, &end);
+      if (errno || end == v || *end || !(a->time_limit > 0) || !isfinite(a->time_limit))
+        return usage_error("--task-time-limit '%s': not a positive number of seconds", v);
+    } else if (!strcmp(arg, "--resume")) {
+      a->resume = 1;
+    } else if (!strcmp(arg, "--quiet") || !strcmp(arg, "-q")) {
+      a->quiet = 1;
+    } else if (arg[0] == '-' && arg[1]) {
+      return usage_error("unknown option '%s'", arg);
+    } else if (a->sweep) {
+      return usage_error("one sweep file per run: '%s' is a second one", arg);
+    } else {
+      a->sweep = arg;
+    }
+  }
+  if (!a->sweep) return usage_error("%s", "no sweep file given");
+  if (!a->out) return usage_error("%s", "no output file given: -o RESULTS.h5");
+  return -1;
+}
+
+/* ---- signals ---- */
+
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_signal(int sig) { stop_signal = sig; }
+
+static void install_handlers(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;        /* a second signal ends the process at once */
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+/* ---- test hooks ---- */
+
+typedef struct { long *id; long len; } idset;
+
+static int cmp_long(const void *a, const void *b) {
+  long x = *(const long *)a, y = *(const long *)b;
+  return (x > y) - (x < y);
+}
+
+static int idset_has(const idset *s, long id) {
+  return s->len && bsearch(&id, s->id, (size_t)s->len, sizeof(long), cmp_long);
+}
+
+/* Numbers separated by commas, spaces or newlines. */
+static void idset_parse(idset *s, const char *text) {
+  s->id = NULL;
+  s->len = 0;
+  if (!text) return;
+  long cap = 0;
+  for (const char *p = text; *p;) {
+    char *end;
+    long v = strtol(p, &end, 10);
+    if (end == p) { p++; continue; }
+    if (s->len == cap) {
+      long *n = realloc(s->id, sizeof(long) * (size_t)(cap = 2 * cap + 16));
+      if (!n) break;
+      s->id = n;
+    }
+    s->id[s->len++] = v;
+    p = end;
+  }
+  if (s->len) qsort(s->id, (size_t)s->len, sizeof(long), cmp_long);
+}
+
+static char *slurp(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  size_t cap = 4096, n = 0, got;
+  char *buf = malloc(cap + 1);
+  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0)
+    if ((n += got) == cap) {
+      char *nb = realloc(buf, (cap *= 2) + 1);
+      if (!nb) free(buf);
+      buf = nb;
+    }
+  fclose(f);
+  if (buf) buf[n] = '\0';
+  return buf;
+}
+
+typedef struct {
+  idset inject, done_before;
+  const char *done_file;
+} hooks_t;
+
+static void hooks_read(hooks_t *h) {
+  idset_parse(&h->inject, getenv("CATCHUP_SWEEP_INJECT_FAIL"));
+  h->done_file = getenv("CATCHUP_SWEEP_DONE_LIST");
+  char *text = h->done_file && h->done_file[0] ? slurp(h->done_file) : NULL;
+  if (h->done_file && h->done_file[0] && !text) {
+    say("rank %d: CATCHUP_SWEEP_DONE_LIST=%s: cannot read: %s", rank, h->done_file, strerror(errno));
+    MPI_Abort(MPI_COMM_WORLD, 3);
+  }
+  idset_parse(&h->done_before, text);
+  free(text);
+}
+
+/* ---- the sweep on every rank ---- */
+
+/* Rank 0 reads the sweep file and the scenes; every rank then builds the
+ * same sweep from the same texts (so that only rank 0 needs the files). */
+static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
+  int st = CUP_OK;
+  if (rank == 0) {
+    st = sw_load(sp, a->sweep, err);
+    if (!st) st = sw_resolve_files(*sp, err);
+  }
+  MPI_Bcast(&st, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (st) return st;
+  if (nranks == 1) return CUP_OK;
+  cup_sweep *s = *sp;
+  long lens[2] = {rank == 0 ? (long)strlen(s->text) : 0, rank == 0 ? s->n_variants : 0};
+  MPI_Bcast(lens, 2, MPI_LONG, 0, MPI_COMM_WORLD);
+  char *text = rank == 0 ? s->text : malloc((size_t)lens[0] + 1);
+  char **scenes = rank == 0 ? NULL : calloc((size_t)lens[1], sizeof *scenes);
+  if (!text || (rank && !scenes)) MPI_Abort(MPI_COMM_WORLD, 1);
+  MPI_Bcast(text, (int)lens[0] + 1, MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (rank) st = sw_parse(sp, text, (size_t)lens[0], a->sweep, err);
+  for (long k = 0; k < lens[1]; k++) {
+    long len = rank == 0 ? (long)strlen(s->var[k].scene_text) : 0;
+    MPI_Bcast(&len, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+    char *t = rank == 0 ? s->var[k].scene_text : malloc((size_t)len + 1);
+    if (!t) MPI_Abort(MPI_COMM_WORLD, 1);
+    MPI_Bcast(t, (int)len + 1, MPI_CHAR, 0, MPI_COMM_WORLD);
+    if (rank) scenes[k] = t;
+  }
+  if (rank && !st) st = sw_resolve_texts(*sp, scenes, err);
+  if (rank) {
+    for (long k = 0; k < lens[1]; k++) free(scenes[k]);
+    free(scenes);
+    free(text);
+  }
+  if (rank && st) {                     /* the same texts gave rank 0 no error */
+    say("rank %d: %s", rank, err);
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  return st;
+}
+
+/* ---- computing a job (workers, or rank 0 alone) ---- */
+
+typedef struct {
+  const cup_sweep *s;
+  const hooks_t *hooks;
+  double time_limit;
+  long steps;                /* for polling a stop message */
+  int stop_msg;              /* the manager said stop */
+} computer;
+
+/* Every 4096 steps: has the manager asked to stop? (Workers only.) */
+static int poll_stop(long k, double t, const cup_proj_info *pi, void *ctx) {
+  (void)k; (void)t; (void)pi;
+  computer *c = ctx;
+  if (++c->steps & 4095) return 0;
+  int flag = 0;
+  MPI_Iprobe(0, TAG_STOP, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+  if (flag) c->stop_msg = 1;
+  return flag || stop_signal;
+}
+
+static void compute(computer *c, long job, sw_result *r, double *traj) {
+  const cup_sweep *s = c->s;
+  long task = job - s->n_variants;
+  if (task >= 0 && idset_has(&c->hooks->done_before, task)) {
+    say("rank %d: asked to compute task %ld, which CATCHUP_SWEEP_DONE_LIST (%s) says was done before "
+        "the resume: a finished task would be redone", rank, task, c->hooks->done_file);
+    MPI_Abort(MPI_COMM_WORLD, 3);
+  }
+  _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
+  sw_run_opts o = {(const volatile int *)&stop_signal, nranks > 1 ? poll_stop : NULL, c, c->time_limit,
+                   task >= 0 && idset_has(&c->hooks->inject, task)};
+  sw_run_job(s, job, &o, r, traj);
+}
+
+/* ---- worker ---- */
+
+typedef struct {
+  char *buf;
+  size_t cap;
+  MPI_Request req;
+} outbuf;
+
+/* Wait for a send without spinning (a blocking wait would take a core). */
+static void wait_request(MPI_Request *req) {
+  int done = 0;
+  long us = 50;
+  while (*req != MPI_REQUEST_NULL) {
+    MPI_Test(req, &done, MPI_STATUS_IGNORE);
+    if (done) break;
+    sleep_us(us);
+    if (us < 1000) us *= 2;
+  }
+}
+
+/* Probe for the next message from rank 0 with a short sleep. */
+static void wait_message(MPI_Status *status) {
+  int flag = 0;
+  long us = 50;
+  for (;;) {
+    MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, status);
+    if (flag) return;
+    sleep_us(us);
+    if (us < 1000) us *= 2;
+  }
+}
+
+static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
+  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)(s->samples * s->dim);
+  outbuf out[AHEAD];
+  for (int b = 0; b < AHEAD; b++) out[b] = (outbuf){NULL, 0, MPI_REQUEST_NULL};
+  computer c = {s, hooks, time_limit, 0, 0};
+  long ids[MAX_BATCH];
+  int next = 0;
+  for (;;) {
+    MPI_Status st;
+    wait_message(&st);
+    if (st.MPI_TAG != TAG_WORK) {
+      MPI_Recv(NULL, 0, MPI_BYTE, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      break;                                   /* TAG_STOP */
+    }
+    int count = 0;
+    MPI_Get_count(&st, MPI_LONG, &count);
+    MPI_Recv(ids, MAX_BATCH, MPI_LONG, 0, TAG_WORK, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    outbuf *ob = &out[next];
+    next = (next + 1) % AHEAD;
+    wait_request(&ob->req);
+    size_t need = sizeof(int64_t) + one * (size_t)count;
+    if (need > ob->cap) {
+      free(ob->buf);
+      if (!(ob->buf = malloc(ob->cap = need))) MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    int64_t n = 0;
+    for (int j = 0; j < count && !c.stop_msg && !stop_signal; j++) {
+      char *at = ob->buf + sizeof(int64_t) + one * (size_t)n;
+      sw_result *r = (sw_result *)(void *)at;
+      compute(&c, ids[j], r, (double *)(void *)(at + sizeof(sw_result)));
+      if (r->status == CUP_ERR_INTERRUPTED && (c.stop_msg || stop_signal)) break;   /* not a result */
+      n++;
+    }
+    if (c.stop_msg || stop_signal) break;      /* a partial batch is not sent: the manager re-queues it */
+    memcpy(ob->buf, &n, sizeof n);
+    MPI_Isend(ob->buf, (int)(sizeof(int64_t) + one * (size_t)n), MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD,
+              &ob->req);
+  }
+  for (int b = 0; b < AHEAD; b++) wait_request(&out[b].req);
+  MPI_Send(NULL, 0, MPI_BYTE, 0, TAG_BYE, MPI_COMM_WORLD);
+  if (c.stop_msg || stop_signal) {             /* drain: the STOP (and batches sent ahead) */
+    double t0 = now_seconds();
+    int flag = 1;
+    while (flag && now_seconds() - t0 < 0.5) {
+      MPI_Status st;
+      MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+      if (flag) {
+        MPI_Recv(ids, MAX_BATCH, MPI_LONG, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (st.MPI_TAG == TAG_STOP) break;
+      }
+    }
+  }
+  for (int b = 0; b < AHEAD; b++) free(out[b].buf);
+  return 0;
+}
+
+/* ---- manager: bookkeeping and writing ---- */
+
+typedef struct held { long task; sw_result r; double *traj; struct held *next; } held;
+
+typedef struct {
+  const args_t *args;
+  const cup_sweep *s;
+  sw_file *f;
+  long count;                /* samples * dim */
+  long *queue;               /* jobs to dispatch, in order */
+  long qhead, qlen;
+  double *cost;              /* per job */
+  double cost_left, cost_done;
+  long jobs_total, jobs_done, jobs_skipped, failures;
+  double t_start, last_flush, last_progress, busy, work_sum;
+  held **held;               /* per variant: results waiting for the reference (no /runs/x) */
+  double *scratch;           /* samples * dim */
+  int io_status;
+  char io_msg[SW_ERR_LEN];
+} manager_t;
+
+static void io_fail(manager_t *m, int st) {
+  if (st && !m->io_status) {
+    m->io_status = st;
+    snprintf(m->io_msg, sizeof m->io_msg, "%s", sw_file_errmsg(m->f)[0] ? sw_file_errmsg(m->f) : "out of memory");
+  }
+}
+
+static double task_error(manager_t *m, int status, const double *traj, const double *xref) {
+  if (status < 0 || !xref) return NAN;
+  return sw_max_error(traj, xref, m->count);
+}
+
+/* The reference of variant k is known: fill the errors of its tasks that
+ * were written without one (read back from /runs/x), then write the tasks
+ * held in memory (no /runs/x to read back from). */
+static void fill_errors(manager_t *m, int k) {
+  const cup_sweep *s = m->s;
+  const double *xref = sw_file_reference(m->f, k);
+  if (xref && s->out_samples > 0)
+    for (long t = k * s->per_variant; t < (k + 1) * s->per_variant && !m->io_status; t++) {
+      if (!sw_file_task_done(m->f, t) || sw_file_task_status(m->f, t) < 0 || !isnan(sw_file_task_error(m->f, t)))
+        continue;
+      int st = sw_file_read_traj(m->f, t, m->scratch);
+      if (!st) {
+        double e = task_error(m, CUP_OK, m->scratch, xref);
+        if (!isnan(e)) st = sw_file_set_error(m->f, t, e);
+      }
+      io_fail(m, st);
+    }
+  for (held *h = m->held[k], *nx; h; h = nx) {
+    nx = h->next;
+    if (!m->io_status)
+      io_fail(m, sw_file_write_task(m->f, h->task, &h->r, h->traj, task_error(m, h->r.status, h->traj, xref)));
+    free(h->traj);
+    free(h);
+  }
+  m->held[k] = NULL;
+}
+
+static void take_result(manager_t *m, const sw_result *r, const double *traj) {
+  const cup_sweep *s = m->s;
+  long job = r->job;
+  m->jobs_done++;
+  m->cost_done += m->cost[job];
+  m->cost_left -= m->cost[job];
+  m->work_sum += r->wall;
+  if (r->status < 0) m->failures++;
+  if (m->io_status) return;
+  if (job < s->n_variants) {
+    io_fail(m, sw_file_write_reference(m->f, (int)job, r, traj));
+    if (!m->io_status) fill_errors(m, (int)job);
+    return;
+  }
+  long task = job - s->n_variants;
+  int k = (int)(task / s->per_variant);
+  const double *xref = sw_file_reference(m->f, k);
+  if (!xref && s->out_samples == 0 && !sw_file_reference_done(m->f, k)) {
+    held *h = malloc(sizeof *h);
+    double *copy = malloc(sizeof(double) * (size_t)m->count);
+    if (!h || !copy) { free(h); free(copy); io_fail(m, CUP_ERR_NOMEM); return; }
+    memcpy(copy, traj, sizeof(double) * (size_t)m->count);
+    *h = (held){task, *r, copy, m->held[k]};
+    m->held[k] = h;
+    return;
+  }
+  io_fail(m, sw_file_write_task(m->f, task, r, traj, task_error(m, r->status, traj, xref)));
+}
+
+static void fmt_seconds(char *buf, size_t n, double s) {
+  if (!(s >= 0) || !isfinite(s)) snprintf(buf, n, "?");
+  else if (s < 120) snprintf(buf, n, "%.0f s", s);
+  else if (s < 7200) snprintf(buf, n, "%.0f min %02.0f s", floor(s / 60), fmod(s, 60));
+  else snprintf(buf, n, "%.0f h %02.0f min", floor(s / 3600), fmod(floor(s / 60), 60));
+}
+
+static void progress(manager_t *m, int final) {
+  double now = now_seconds();
+  if (m->args->quiet || (!final && now - m->last_progress < PROGRESS_SECONDS)) return;
+  m->last_progress = now;
+  char el[32], eta[32];
+  double elapsed = now - m->t_start;
+  fmt_seconds(el, sizeof el, elapsed);
+  fmt_seconds(eta, sizeof eta, m->cost_done > 0 ? elapsed * m->cost_left / m->cost_done : NAN);
+  fprintf(stderr, "\rcatchup-sweep: %ld/%ld done, %ld failed, %s elapsed, ETA %s   ",
+          m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, el, final ? "0 s" : eta);
+  if (final) fputc('\n', stderr);
+  fflush(stderr);
+}
+
+static void maybe_flush(manager_t *m, int force) {
+  double now = now_seconds();
+  if (m->io_status || (!force && now - m->last_flush < FLUSH_SECONDS)) return;
+  io_fail(m, sw_file_flush(m->f));
+  m->last_flush = now;
+}
+
+/* Unpack one result message (a count, then results with trajectories). */
+static void take_message(manager_t *m, const char *buf, size_t size) {
+  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)m->count;
+  int64_t n = 0;
+  if (size >= sizeof n) memcpy(&n, buf, sizeof n);
+  for (int64_t j = 0; j < n && sizeof n + one * (size_t)(j + 1) <= size; j++) {
+    const char *at = buf + sizeof n + one * (size_t)j;
+    sw_result r;
+    memcpy(&r, at, sizeof r);
+    take_result(m, &r, (const double *)(const void *)(at + sizeof r));
+  }
+}
+
+/* The next batch: jobs in queue order until the batch holds BATCH_COST of
+ * work, fewer near the end so that the last batches spread over the workers. */
+static int next_batch(manager_t *m, int workers, long *ids) {
+  double target = fmin(BATCH_COST, m->cost_left / (2.0 * workers)), sum = 0;
+  int n = 0;
+  while (m->qhead < m->qlen && n < MAX_BATCH && (n == 0 || sum + m->cost[m->queue[m->qhead]] <= target)) {
+    ids[n] = m->queue[m->qhead++];
+    sum += m->cost[ids[n++]];
+  }
+  return n;
+}
+
+/* ---- manager: MPI ---- */
+
+typedef struct {
+  long ids[AHEAD][MAX_BATCH];
+  int len[AHEAD];
+  int head, out;             /* FIFO of batches sent and not answered */
+  int alive;
+} wstate;
+
+/* Keep every live worker AHEAD batches ahead while there is work; returns
+ * the number of batches sent and not answered. */
+static int feed(manager_t *m, wstate *ws, int workers) {
+  int outstanding = 0;
+  for (int b = 0; b < AHEAD; b++)
+    for (int dest = 1; dest <= workers; dest++) {
+      wstate *w = &ws[dest];
+      if (!w->alive || w->out > b || m->qhead >= m->qlen) continue;
+      int slot = (w->head + w->out) % AHEAD;
+      int n = next_batch(m, workers, w->ids[slot]);
+      w->len[slot] = n;
+      w->out++;
+      MPI_Send(w->ids[slot], n, MPI_LONG, dest, TAG_WORK, MPI_COMM_WORLD);
+    }
+  for (int dest = 1; dest <= workers; dest++) outstanding += ws[dest].out;
+  return outstanding;
+}
+
+/* A worker left without being asked (its own signal): its batches go back
+ * to the front of the queue. */
+static void requeue(manager_t *m, wstate *w) {
+  for (int b = w->out - 1; b >= 0; b--) {
+    int slot = (w->head + b) % AHEAD;
+    for (int j = w->len[slot] - 1; j >= 0; j--) m->queue[--m->qhead] = w->ids[slot][j];
+  }
+  w->out = 0;
+}
+
+static void manager_mpi(manager_t *m) {
+  int workers = nranks - 1, live = workers;
+  wstate *ws = calloc((size_t)nranks, sizeof *ws);
+  if (!ws) { io_fail(m, CUP_ERR_NOMEM); return; }
+  char *buf = NULL;
+  size_t cap = 0;
+  for (int w = 1; w < nranks; w++) ws[w].alive = 1;
+  int outstanding = feed(m, ws, workers), stopping = 0;
+  long us = 200;
+  double stop_t0 = 0;
+  while (live > 0) {
+    if (!stopping && (stop_signal || m->io_status || outstanding == 0)) {
+      stopping = 1;                             /* done, or stop: every worker gets STOP */
+      stop_t0 = now_seconds();
+      for (int w = 1; w < nranks; w++)
+        if (ws[w].alive) MPI_Send(NULL, 0, MPI_BYTE, w, TAG_STOP, MPI_COMM_WORLD);
+    }
+    if (stopping && now_seconds() - stop_t0 > STOP_GRACE_SECONDS) break;
+    int flag = 0;
+    MPI_Status st;
+    MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+    if (!flag) {
+      progress(m, 0);
+      maybe_flush(m, 0);
+      sleep_us(us);
+      if (us < 1000) us = us * 3 / 2;
+      continue;
+    }
+    us = 200;
+    double t0 = now_seconds();
+    int src = st.MPI_SOURCE, size = 0;
+    MPI_Get_count(&st, MPI_BYTE, &size);
+    if ((size_t)size > cap) {
+      free(buf);
+      if (!(buf = malloc(cap = (size_t)size))) MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    MPI_Recv(buf, size, MPI_BYTE, src, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    wstate *w = &ws[src];
+    if (st.MPI_TAG == TAG_BYE) {
+      requeue(m, w);
+      w->alive = 0;
+      live--;
+    } else if (st.MPI_TAG == TAG_RESULT) {
+      take_message(m, buf, (size_t)size);
+      w->head = (w->head + 1) % AHEAD;
+      w->out--;
+    }
+    if (!stopping) outstanding = feed(m, ws, workers);
+    maybe_flush(m, 0);
+    m->busy += now_seconds() - t0;
+    progress(m, 0);
+  }
+  free(buf);
+  free(ws);
+}
+
+/* ---- manager: alone ---- */
+
+static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit) {
+  computer c = {m->s, hooks, time_limit, 0, 0};
+  sw_result r;
+  while (m->qhead < m->qlen && !stop_signal && !m->io_status) {
+    long job = m->queue[m->qhead++];
+    compute(&c, job, &r, m->scratch);
+    if (r.status == CUP_ERR_INTERRUPTED && stop_signal) break;   /* not a result */
+    double t0 = now_seconds();
+    double *traj = malloc(sizeof(double) * (size_t)m->count);
+    if (!traj) { io_fail(m, CUP_ERR_NOMEM); break; }
+    memcpy(traj, m->scratch, sizeof(double) * (size_t)m->count);
+    take_result(m, &r, traj);     /* fill_errors may reuse scratch */
+    free(traj);
+    maybe_flush(m, 0);
+    m->busy += now_seconds() - t0;
+    progress(m, 0);
+  }
+}
+
+/* ---- the run on rank 0 ---- */
+
+static int open_results(const args_t *a, const cup_sweep *s, int argc, char **argv, sw_file **f, char *err) {
+  if (a->resume) return sw_file_open(f, a->out, s, err);
+  char deps[512], h5[64], cmd[2048] = "";
+  int n = cup_dependency_versions(deps, sizeof deps);
+  cup_h5_version(h5, sizeof h5);
+  if (n >= 0 && (size_t)n < sizeof deps) snprintf(deps + n, sizeof deps - (size_t)n, "; %s", h5);
+  size_t w = 0;
+  for (int i = 0; i < argc && w < sizeof cmd; i++)
+    w += (size_t)snprintf(cmd + w, sizeof cmd - w, "%s%s", i ? " " : "", argv[i]);
+  sw_provenance p = {cup_version(), deps, CATCHUP_GIT_REVISION, cmd};
+  return sw_file_create(f, a->out, s, &p, err);
+}
+
+static int setup_queue(manager_t *m) {
+  const cup_sweep *s = m->s;
+  long J = s->n_variants + s->n_tasks;
+  long *order = malloc(sizeof(long) * (size_t)J);
+  m->queue = malloc(sizeof(long) * (size_t)J);
+  m->cost = malloc(sizeof(double) * (size_t)J);
+  m->held = calloc((size_t)s->n_variants, sizeof *m->held);
+  m->scratch = malloc(sizeof(double) * (size_t)m->count);
+  if (!order || !m->queue || !m->cost || !m->held || !m->scratch) { free(order); return CUP_ERR_NOMEM; }
+  sw_schedule(s, order);
+  m->jobs_total = J;
+  for (long j = 0; j < J; j++) {
+    long job = order[j];
+    m->cost[job] = sw_job_cost(s, job);
+    int done = job < s->n_variants ? sw_file_reference_done(m->f, (int)job)
+                                   : sw_file_task_done(m->f, job - s->n_variants);
+    if (done) { m->jobs_skipped++; continue; }
+    m->queue[m->qlen++] = job;
+    m->cost_left += m->cost[job];
+  }
+  free(order);
+  return CUP_OK;
+}
+
+static void free_manager(manager_t *m) {
+  for (int k = 0; m->held && k < m->s->n_variants; k++)
+    for (held *h = m->held[k], *nx; h; h = nx) { nx = h->next; free(h->traj); free(h); }
+  free(m->held);
+  free(m->queue);
+  free(m->cost);
+  free(m->scratch);
+}
+
+static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const hooks_t *hooks) {
+  manager_t m;
+  memset(&m, 0, sizeof m);
+  m.args = a;
+  m.s = s;
+  m.f = f;
+  m.count = s->samples * s->dim;
+  if (setup_queue(&m)) { free_manager(&m); say("%s: out of memory", a->out); return EXIT_RUN; }
+  m.t_start = m.last_flush = now_seconds();
+  m.last_progress = 0;
+  /* the errors of tasks written before their reference, in an earlier run */
+  for (int k = 0; k < s->n_variants; k++) fill_errors(&m, k);
+  if (nranks == 1) manager_alone(&m, hooks, a->time_limit);
+  else manager_mpi(&m);
+  double wall = now_seconds() - m.t_start;
+  progress(&m, 1);
+  char err[SW_ERR_LEN] = "";
+  sw_file *ff = f;
+  int cst = sw_file_close(&ff, err);
+  if (!m.io_status && cst) { m.io_status = cst; snprintf(m.io_msg, sizeof m.io_msg, "%s", err); }
+  long done = m.jobs_done + m.jobs_skipped;
+  int rc = 0;
+  if (m.io_status) {
+    say("%s", m.io_msg);
+    rc = EXIT_RUN;
+  } else if (stop_signal) {
+    say("stopped by %s: %ld of %ld jobs are done and saved in %s; continue with --resume",
+        stop_signal == SIGINT ? "SIGINT" : "SIGTERM", done, m.jobs_total, a->out);
+    rc = 128 + stop_signal;
+  } else if (done < m.jobs_total) {
+    say("%s: %ld of %ld jobs did not run (the workers stopped); continue with --resume", a->out,
+        m.jobs_total - done, m.jobs_total);
+    rc = EXIT_RUN;
+  }
+  if (!rc && !a->quiet) {
+    int workers = nranks > 1 ? nranks - 1 : 1;
+    say("%s -> %s: %ld tasks + %d references (%ld done before), %ld failed, %.3g s on %d rank%s; "
+        "parallel efficiency %.2f (task time / (workers x wall)), manager %.0f us per job",
+        a->sweep, a->out, s->n_tasks, s->n_variants, m.jobs_skipped, m.failures, wall, nranks,
+        nranks > 1 ? "s" : "", m.work_sum / (workers * wall),
+        m.jobs_done ? 1e6 * m.busy / (double)m.jobs_done : 0.0);
+  }
+  free_manager(&m);
+  return rc;
+}
+
+int main(int argc, char **argv) {
+  MPI_Init(&argc, &argv);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &nranks);
+  args_t a;
+  int rc = parse_args(&a, argc, argv);
+  if (rc >= 0) { MPI_Finalize(); return rc; }
+  install_handlers();
+  hooks_t hooks;
+  hooks_read(&hooks);
+  cup_sweep *s = NULL;
+  sw_file *f = NULL;
+  char err[SW_ERR_LEN] = "";
+  int st = share_sweep(&a, &s, err);
+  if (!st && rank == 0) st = open_results(&a, s, argc, argv, &f, err);
+  MPI_Bcast(&st, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (st) {
+    if (rank == 0) say("%s", err);
+    rc = EXIT_RUN;
+  } else if (rank == 0) {
+    rc = run_manager(&a, s, f, &hooks);
+  } else {
+    rc = worker(s, &hooks, a.time_limit);
+  }
+  sw_free(&s);
+  free(hooks.inject.id);
+  free(hooks.done_before.id);
+  MPI_Finalize();
+  return rc;
+}

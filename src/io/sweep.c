@@ -1,0 +1,782 @@
+/* sweep — the sweep file (docs/sweep-format.md), its tasks in a fixed
+ * order, and one job's computation. The file is read through the scene
+ * loader's tree (scene_tree.c), so every error names FILE:LINE:COL and the
+ * dotted key; a variant's scene is loaded by the scene loader itself, with
+ * the variant's `set` entries as overrides. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "scene_tree.h"
+#include "sha256.h"
+#include "sweep.h"
+
+static const char *const axis_names[SW_NAXES + 1] = {"n", "eps", "eta", "scheme", "projector", NULL};
+static const char *const scheme_names[] = {"explicit", "implicit", "exponential", NULL};
+static const char *const method_names[] = {"auto", "pg", "fista", "activeset", NULL};
+
+typedef struct prs {
+  st_src src;
+  char *errmsg;               /* SW_ERR_LEN bytes */
+} prs;
+
+/* st_error writes at most CUP_ERRMSG_LEN bytes, which is what we want for
+ * the sweep file's own messages; nested scene messages use SW_ERR_LEN. */
+__attribute__((format(printf, 5, 6)))
+static int fail(prs *p, int status, const st_node *at, const char *key, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  st_verror(p->errmsg, status, &p->src, at, key, fmt, ap);
+  va_end(ap);
+  return status;
+}
+
+static const char *looks(const st_node *nd, char *buf, size_t n) {
+  if (st_is_null(nd)) return "nothing";
+  if (nd->kind == ST_SEQ) return nd->len ? "a list" : "an empty list";
+  if (nd->kind == ST_MAP) return "a mapping";
+  snprintf(buf, n, "'%.40s'", nd->text);
+  return buf;
+}
+
+static int check_keys(prs *p, const st_node *map, const char *mkey, const char *const *known) {
+  for (int k = 0; k < map->len; k++) {
+    int ok = 0;
+    for (int j = 0; known[j] && !ok; j++) ok = strcmp(map->key[k]->text, known[j]) == 0;
+    if (ok) continue;
+    char key[128], hint[160];
+    snprintf(key, sizeof key, "%s%s%s", mkey, *mkey ? "." : "", map->key[k]->text);
+    return fail(p, CUP_ERR_PARSE, map->key[k], key, "unknown key (%s)",
+                st_suggest(hint, sizeof hint, map->key[k]->text, known));
+  }
+  return CUP_OK;
+}
+
+static const st_node *opt(const st_node *map, const char *k) {
+  const st_node *v = st_get(map, k, NULL);
+  return st_is_null(v) ? NULL : v;
+}
+
+static int need_map(prs *p, const st_node *nd, const char *key, const char *what) {
+  char b[64];
+  if (nd->kind == ST_MAP) return CUP_OK;
+  return fail(p, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, looks(nd, b, sizeof b));
+}
+
+static int string(prs *p, const st_node *nd, const char *key, const char **out) {
+  char b[64];
+  if (nd->kind != ST_SCALAR || st_is_null(nd) || !nd->text[0])
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", looks(nd, b, sizeof b));
+  *out = nd->text;
+  return CUP_OK;
+}
+
+/* An integer in [lo, hi]; 1e6 is accepted (an exact integer in a double). */
+static int integer(prs *p, const st_node *nd, const char *key, long lo, long hi, long *out) {
+  char b[64];
+  double v;
+  if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, &v) || !isfinite(v))
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected an integer (got %s)", looks(nd, b, sizeof b));
+  if (v != floor(v)) return fail(p, CUP_ERR_PARSE, nd, key, "must be an integer (got %g)", v);
+  if (v < (double)lo) return fail(p, CUP_ERR_PARSE, nd, key, "must be >= %ld (got %g)", lo, v);
+  if (v > (double)hi) return fail(p, CUP_ERR_PARSE, nd, key, "must be <= %ld (got %g)", hi, v);
+  *out = (long)v;
+  return CUP_OK;
+}
+
+static char *path_join(const char *dir, const char *name) {
+  if (!dir || name[0] == '/') return strdup(name);
+  size_t len = strlen(dir) + strlen(name) + 2;
+  char *s = malloc(len);
+  if (s) snprintf(s, len, "%s/%s", dir, name);
+  return s;
+}
+
+static char *dir_of(const char *path) {
+  const char *slash = strrchr(path, '/');
+  if (!slash) return NULL;
+  return strndup(path, slash == path ? 1 : (size_t)(slash - path));
+}
+
+/* ---- grid ---------------------------------------------------------------- */
+
+/* A scalar is a one-element list. */
+static int axis_items(prs *p, const st_node *nd, const char *key, const st_node *const **items, int *len) {
+  static const st_node *one[1];
+  if (nd->kind == ST_MAP) return fail(p, CUP_ERR_PARSE, nd, key, "expected a value or a list of values (got a mapping)");
+  if (nd->kind == ST_SCALAR) { one[0] = nd; *items = one; *len = 1; return CUP_OK; }
+  if (nd->len == 0) return fail(p, CUP_ERR_PARSE, nd, key, "empty list: give at least one value (or leave the axis out)");
+  *items = (const st_node *const *)nd->item;
+  *len = nd->len;
+  return CUP_OK;
+}
+
+static int read_word_item(prs *p, const st_node *nd, const char *key, const char *what,
+                          const char *const *names, int *out) {
+  char hint[160], b[64];
+  if (nd->kind != ST_SCALAR || st_is_null(nd))
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a %s name (got %s)", what, looks(nd, b, sizeof b));
+  for (int k = 0; names[k]; k++)
+    if (!strcmp(nd->text, names[k])) { *out = k; return CUP_OK; }
+  return fail(p, CUP_ERR_PARSE, nd, key, "unknown %s '%.40s' (%s)", what, nd->text,
+              st_suggest(hint, sizeof hint, nd->text, names));
+}
+
+static int read_schedule_item(prs *p, const st_node *nd, const char *key, char **out) {
+  char b[64], lib[CUP_ERRMSG_LEN];
+  cup_schedule sch;
+  if (nd->kind != ST_SCALAR || st_is_null(nd))
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a schedule like \"n^-2.1\" or a number (got %s)",
+                looks(nd, b, sizeof b));
+  if (cup_schedule_parse(nd->text, &sch, lib) != CUP_OK) return fail(p, CUP_ERR_PARSE, nd, key, "%s", lib);
+  if (strlen(nd->text) >= SW_SPEC_LEN)
+    return fail(p, CUP_ERR_PARSE, nd, key, "schedule text longer than %d characters", SW_SPEC_LEN - 1);
+  *out = strdup(nd->text);
+  return *out ? CUP_OK : CUP_ERR_NOMEM;
+}
+
+static int read_axis(prs *p, cup_sweep *s, int a, const st_node *nd) {
+  char key[64];
+  const st_node *const *items = NULL;
+  int len = 0, st = axis_items(p, nd, axis_names[a], &items, &len);
+  if (st) return st;
+  s->len[a] = len;
+  if (a == SW_AXIS_N) s->n = calloc((size_t)len, sizeof *s->n);
+  else if (a == SW_AXIS_EPS) s->eps = calloc((size_t)len, sizeof *s->eps);
+  else if (a == SW_AXIS_ETA) s->eta = calloc((size_t)len, sizeof *s->eta);
+  else if (a == SW_AXIS_SCHEME) s->scheme = calloc((size_t)len, sizeof *s->scheme);
+  else s->projector = calloc((size_t)len, sizeof *s->projector);
+  for (int k = 0; k < len && !st; k++) {
+    if (nd->kind == ST_SEQ) snprintf(key, sizeof key, "grid.%s.%d", axis_names[a], k);
+    else snprintf(key, sizeof key, "grid.%s", axis_names[a]);
+    switch (a) {
+      case SW_AXIS_N:
+        st = s->n ? integer(p, items[k], key, 1, 9007199254740992L, &s->n[k]) : CUP_ERR_NOMEM;
+        break;
+      case SW_AXIS_EPS:
+        st = s->eps ? read_schedule_item(p, items[k], key, &s->eps[k]) : CUP_ERR_NOMEM;
+        break;
+      case SW_AXIS_ETA:
+        st = s->eta ? read_schedule_item(p, items[k], key, &s->eta[k]) : CUP_ERR_NOMEM;
+        break;
+      case SW_AXIS_SCHEME:
+        st = s->scheme ? read_word_item(p, items[k], key, "scheme", scheme_names, &s->scheme[k]) : CUP_ERR_NOMEM;
+        break;
+      default:
+        st = s->projector ? read_word_item(p, items[k], key, "projector", method_names, &s->projector[k])
+                          : CUP_ERR_NOMEM;
+    }
+  }
+  return st;
+}
+
+/* zip: [eps, eta] (one group) or [[eps, eta], [scheme, projector]]. */
+static int read_zip_group(prs *p, cup_sweep *s, const st_node *nd, const char *key, int g) {
+  char k2[64];
+  if (nd->kind != ST_SEQ || nd->len < 2)
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a list of at least two axis names, e.g. [eps, eta]");
+  int first = -1;
+  for (int k = 0; k < nd->len; k++) {
+    snprintf(k2, sizeof k2, "%s.%d", key, k);
+    int a, st = read_word_item(p, nd->item[k], k2, "axis", axis_names, &a);
+    if (st) return st;
+    if (s->zip[a] >= 0) return fail(p, CUP_ERR_PARSE, nd->item[k], k2, "axis '%s' is zipped twice", axis_names[a]);
+    if (!s->len[a]) return fail(p, CUP_ERR_PARSE, nd->item[k], k2, "axis '%s' is not in the grid", axis_names[a]);
+    if (first < 0) first = a;
+    else if (s->len[a] != s->len[first])
+      return fail(p, CUP_ERR_PARSE, nd->item[k], k2, "zipped axes need equal lengths: %s has %d values, %s has %d",
+                  axis_names[first], s->len[first], axis_names[a], s->len[a]);
+    s->zip[a] = g;
+  }
+  return CUP_OK;
+}
+
+static int read_zip(prs *p, cup_sweep *s, const st_node *nd) {
+  if (nd->kind == ST_SEQ && nd->len > 0 && nd->item[0]->kind == ST_SEQ) {
+    char key[32];
+    int st = CUP_OK;
+    for (int g = 0; g < nd->len && !st; g++) {
+      snprintf(key, sizeof key, "grid.zip.%d", g);
+      st = read_zip_group(p, s, nd->item[g], key, g);
+    }
+    return st;
+  }
+  return read_zip_group(p, s, nd, "grid.zip", 0);
+}
+
+static int read_grid(prs *p, cup_sweep *s, const st_node *root) {
+  static const char *const known[] = {"n", "eps", "eta", "scheme", "projector", "zip", NULL};
+  for (int a = 0; a < SW_NAXES; a++) s->zip[a] = -1;
+  const st_node *g = opt(root, "grid"), *nd;
+  if (!g) return CUP_OK;
+  int st = need_map(p, g, "grid", "a mapping of axes (n, eps, eta, scheme, projector, zip)");
+  if (!st) st = check_keys(p, g, "grid", known);
+  for (int a = 0; a < SW_NAXES && !st; a++)
+    if ((nd = opt(g, axis_names[a]))) st = read_axis(p, s, a, nd);
+  if (!st && (nd = opt(g, "zip"))) st = read_zip(p, s, nd);
+  return st;
+}
+
+/* ---- variants ------------------------------------------------------------ */
+
+/* "key=value" with the value written back as YAML. */
+static char *override_text(const char *key, const st_node *v) {
+  char *val = NULL;
+  if (v->kind == ST_SCALAR && !v->quoted) {
+    val = strdup(v->text);
+  } else if (v->kind == ST_SCALAR) {       /* single-quoted: ' doubles */
+    size_t n = strlen(v->text), w = 0;
+    val = malloc(2 * n + 3);
+    if (val) {
+      val[w++] = '\'';
+      for (size_t i = 0; i < n; i++) {
+        if (v->text[i] == '\'') val[w++] = '\'';
+        val[w++] = v->text[i];
+      }
+      val[w++] = '\'';
+      val[w] = '\0';
+    }
+  } else {
+    val = st_emit(v);
+  }
+  if (!val) return NULL;
+  size_t len = strlen(key) + strlen(val) + 2;
+  char *s = malloc(len);
+  if (s) snprintf(s, len, "%s=%s", key, val);
+  free(val);
+  if (s) {                                 /* st_emit ends with a newline */
+    size_t n = strlen(s);
+    while (n && (s[n - 1] == '\n' || s[n - 1] == ' ')) s[--n] = '\0';
+  }
+  return s;
+}
+
+static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const char *base) {
+  static const char *const known[] = {"name", "scene", "set", NULL};
+  char key[64], k2[160];
+  sw_variant *v = &s->var[k];
+  v->line = nd->line;
+  v->col = nd->col;
+  snprintf(key, sizeof key, "variants.%d", k);
+  int st = need_map(p, nd, key, "a mapping with name and optionally scene and set");
+  if (!st) st = check_keys(p, nd, key, known);
+  if (st) return st;
+  const st_node *x = opt(nd, "name");
+  const char *name = NULL, *scene = base;
+  snprintf(k2, sizeof k2, "%s.name", key);
+  if (!x) return fail(p, CUP_ERR_PARSE, nd, k2, "missing (required)");
+  if ((st = string(p, x, k2, &name))) return st;
+  if (strlen(name) >= SW_NAME_LEN)
+    return fail(p, CUP_ERR_PARSE, x, k2, "longer than %d characters", SW_NAME_LEN - 1);
+  for (int j = 0; j < k; j++)
+    if (!strcmp(s->var[j].name, name))
+      return fail(p, CUP_ERR_PARSE, x, k2, "'%s' is also the name of variants.%d", name, j);
+  if (!(v->name = strdup(name))) return CUP_ERR_NOMEM;
+  if ((x = opt(nd, "scene"))) {
+    snprintf(k2, sizeof k2, "%s.scene", key);
+    if ((st = string(p, x, k2, &scene))) return st;
+  } else if (!base) {
+    return fail(p, CUP_ERR_PARSE, nd, key, "no scene: give base: at the top or scene: in this variant");
+  }
+  if (!(v->scene_file = path_join(s->dir, scene))) return CUP_ERR_NOMEM;
+  v->scene_dir = dir_of(v->scene_file);
+  if ((x = opt(nd, "set"))) {
+    snprintf(k2, sizeof k2, "%s.set", key);
+    if ((st = need_map(p, x, k2, "a mapping of dotted scene keys to values, e.g. {circuit.R1: 2}"))) return st;
+    if (!(v->set = calloc((size_t)x->len + 1, sizeof *v->set))) return CUP_ERR_NOMEM;
+    for (int j = 0; j < x->len; j++) {
+      if (!(v->set[j] = override_text(x->key[j]->text, x->item[j]))) return CUP_ERR_NOMEM;
+      v->n_set = j + 1;
+    }
+  }
+  return CUP_OK;
+}
+
+static int read_variants(prs *p, cup_sweep *s, const st_node *root) {
+  const st_node *kb, *b = st_get(root, "base", &kb), *nd = opt(root, "variants");
+  const char *base = NULL;
+  int st = CUP_OK;
+  if (b && !st_is_null(b) && (st = string(p, b, "base", &base))) return st;
+  if (!nd) return fail(p, CUP_ERR_PARSE, root, "variants", "missing (required): a list of at least one variant, "
+                       "e.g. [{name: case1}]");
+  if (nd->kind != ST_SEQ || nd->len == 0)
+    return fail(p, CUP_ERR_PARSE, nd, "variants", "expected a list of at least one variant (a mapping with name)");
+  if (!(s->var = calloc((size_t)nd->len, sizeof *s->var))) return CUP_ERR_NOMEM;
+  s->n_variants = nd->len;
+  for (int k = 0; k < nd->len && !st; k++) st = read_variant(p, s, nd->item[k], k, base);
+  return st;
+}
+
+/* ---- reference and output -------------------------------------------------- */
+
+static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
+  static const char *const known[] = {"samples", "n", NULL};
+  const st_node *r = opt(root, "reference"), *x;
+  s->samples = 1001;
+  s->ref_n = 0;
+  int st = CUP_OK;
+  if (!r) return st;
+  if ((st = need_map(p, r, "reference", "a mapping with samples and n"))) return st;
+  if ((st = check_keys(p, r, "reference", known))) return st;
+  if ((x = opt(r, "samples")) && (st = integer(p, x, "reference.samples", 2, 1000001, &s->samples))) return st;
+  if ((x = opt(r, "n")) && !(x->kind == ST_SCALAR && !x->quoted && !strcmp(x->text, "auto"))) {
+    if ((st = integer(p, x, "reference.n", 1, 4503599627370496L, &s->ref_n))) return st;
+    if (s->ref_n % (s->samples - 1))
+      return fail(p, CUP_ERR_PARSE, x, "reference.n", "must be a multiple of samples - 1 = %ld (got %ld), "
+                  "so that the reference's grid holds every sample time; or write auto", s->samples - 1, s->ref_n);
+  }
+  return st;
+}
+
+static int read_output(prs *p, cup_sweep *s, const st_node *root) {
+  static const char *const known[] = {"samples", NULL};
+  const st_node *o = opt(root, "output"), *x;
+  s->out_samples = s->samples;
+  int st = CUP_OK;
+  if (!o) return st;
+  if ((st = need_map(p, o, "output", "a mapping with samples"))) return st;
+  if ((st = check_keys(p, o, "output", known))) return st;
+  if ((x = opt(o, "samples")) && !(st = integer(p, x, "output.samples", 0, 1000001, &s->out_samples)) &&
+      s->out_samples != 0 && s->out_samples != s->samples)
+    return fail(p, CUP_ERR_PARSE, x, "output.samples", "must be 0 (no trajectories) or reference.samples = %ld "
+                "(trajectories are stored at the common sample times), got %ld", s->samples, s->out_samples);
+  return st;
+}
+
+/* ---- public: parse and resolve ---------------------------------------------- */
+
+static int read_sweep(prs *p, cup_sweep *s, const st_node *root) {
+  static const char *const known[] = {"name", "base", "grid", "variants", "reference", "output", NULL};
+  int st = need_map(p, root, NULL, "a mapping with base, grid and variants");
+  if (!st) st = check_keys(p, root, "", known);
+  const st_node *x;
+  const char *name = NULL;
+  if (!st && (x = opt(root, "name")) && !(st = string(p, x, "name", &name)) && !(s->name = strdup(name)))
+    st = CUP_ERR_NOMEM;
+  if (!st) st = read_grid(p, s, root);
+  if (!st) st = read_reference(p, s, root);
+  if (!st) st = read_output(p, s, root);
+  if (!st) st = read_variants(p, s, root);
+  return st;
+}
+
+int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, char *errmsg) {
+  *out = NULL;
+  if (errmsg) errmsg[0] = '\0';
+  cup_sweep *s = calloc(1, sizeof *s);
+  if (!s) return CUP_ERR_NOMEM;
+  prs p = {{path, NULL}, errmsg};
+  st_node *root = NULL;
+  s->path = strdup(path);
+  s->dir = dir_of(path);
+  s->text = malloc(len + 1);
+  int st = s->path && s->text ? CUP_OK : CUP_ERR_NOMEM;
+  if (!st) {
+    memcpy(s->text, text, len);
+    s->text[len] = '\0';
+    cup_sha256_hex(text, len, s->sha256);
+    st = st_parse(&root, text, len, &p.src, -1, NULL, errmsg);
+  }
+  if (!st) st = read_sweep(&p, s, root);
+  if (!st && !s->name) {
+    const char *b = strrchr(path, '/');
+    b = b ? b + 1 : path;
+    const char *dot = strrchr(b, '.');
+    if (!(s->name = strndup(b, dot && dot != b ? (size_t)(dot - b) : strlen(b)))) st = CUP_ERR_NOMEM;
+  }
+  st_free(root);
+  if (st == CUP_ERR_NOMEM && errmsg) snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path);
+  if (st) { sw_free(&s); return st; }
+  *out = s;
+  return CUP_OK;
+}
+
+int sw_load(cup_sweep **s, const char *path, char *errmsg) {
+  *s = NULL;
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: cannot open: %s", path, strerror(errno));
+    return CUP_ERR_IO;
+  }
+  size_t cap = 4096, n = 0, got;
+  char *buf = malloc(cap);
+  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0) {
+    n += got;
+    if (n == cap) {
+      char *nb = realloc(buf, cap *= 2);
+      if (!nb) free(buf);
+      buf = nb;
+    }
+  }
+  int err = ferror(f);
+  fclose(f);
+  if (!buf || err) {
+    free(buf);
+    snprintf(errmsg, SW_ERR_LEN, "%s: %s", path, err ? "read error" : "out of memory");
+    return err ? CUP_ERR_IO : CUP_ERR_NOMEM;
+  }
+  int st = sw_parse(s, buf, n, path, errmsg);
+  free(buf);
+  return st;
+}
+
+/* "SWEEP:LINE:COL: variants.K (NAME): " before a scene's own message. */
+static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, const char *fmt, ...)
+  __attribute__((format(printf, 5, 6)));
+static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, const char *fmt, ...) {
+  const sw_variant *v = &s->var[k];
+  int w = snprintf(errmsg, SW_ERR_LEN, "%s:%d:%d: variants.%d (%s): ", s->path, v->line, v->col, k, v->name);
+  va_list ap;
+  va_start(ap, fmt);
+  if (w >= 0 && w < SW_ERR_LEN) vsnprintf(errmsg + w, (size_t)(SW_ERR_LEN - w), fmt, ap);
+  va_end(ap);
+  return status;
+}
+
+int sw_resolve_files(cup_sweep *s, char *errmsg) {
+  char **texts = calloc((size_t)s->n_variants, sizeof *texts);
+  if (!texts) return CUP_ERR_NOMEM;
+  int st = CUP_OK;
+  for (int k = 0; k < s->n_variants && !st; k++) {
+    sw_variant *v = &s->var[k];
+    cup_scene *sc = NULL;
+    char err[CUP_ERRMSG_LEN];
+    st = cup_scene_load(&sc, v->scene_file, (const char *const *)v->set, v->n_set, err);
+    if (st) { variant_fail(s, k, st, errmsg, "%s", err); break; }
+    if (!(texts[k] = strdup(cup_scene_text(sc)))) st = CUP_ERR_NOMEM;
+    cup_scene_free(&sc);
+  }
+  if (!st) st = sw_resolve_texts(s, texts, errmsg);
+  for (int k = 0; k < s->n_variants; k++) free(texts[k]);
+  free(texts);
+  return st;
+}
+
+/* Axis a leads its zip group (or is not zipped). */
+static int leads(const cup_sweep *s, int a) {
+  for (int b = 0; b < a; b++)
+    if (s->zip[a] >= 0 && s->zip[b] == s->zip[a]) return 0;
+  return 1;
+}
+
+/* The largest n among a variant's tasks (the scene's n when the grid has none). */
+static long variant_max_n(const cup_sweep *s, const sw_variant *v) {
+  if (!s->len[SW_AXIS_N]) return cup_scene_options(v->scene)->n;
+  long m = 1;
+  for (int k = 0; k < s->len[SW_AXIS_N]; k++) m = s->n[k] > m ? s->n[k] : m;
+  return m;
+}
+
+int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
+  for (int k = 0; k < s->n_variants; k++) {
+    sw_variant *v = &s->var[k];
+    char err[CUP_ERRMSG_LEN];
+    cup_scene_free(&v->scene);
+    free(v->scene_text);
+    if (!(v->scene_text = strdup(texts[k]))) return CUP_ERR_NOMEM;
+    int st = cup_scene_load_string(&v->scene, v->scene_text, v->scene_file, v->scene_dir, NULL, 0, err);
+    if (st) return variant_fail(s, k, st, errmsg, "%s", err);
+    const cup_integrator_options *o = cup_scene_options(v->scene);
+    int dim = cup_lcs_dim(cup_scene_lcs(v->scene));
+    if (k == 0) { s->T = o->T; s->dim = dim; }
+    if (o->T != s->T)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "T = %.17g differs from variants.0's T = %.17g: "
+                          "the variants share the sample times", o->T, s->T);
+    if (dim != s->dim)
+      return variant_fail(s, k, CUP_ERR_DIM, errmsg, "state dimension %d differs from variants.0's %d",
+                          dim, s->dim);
+    long S1 = s->samples - 1;
+    if (s->ref_n) v->n_ref = s->ref_n;
+    else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
+  }
+  s->per_variant = 1;
+  for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */
+    if (s->len[a] && leads(s, a)) s->per_variant *= s->len[a];
+  s->n_tasks = s->per_variant * s->n_variants;
+  return CUP_OK;
+}
+
+void sw_free(cup_sweep **ps) {
+  if (!ps || !*ps) return;
+  cup_sweep *s = *ps;
+  for (int k = 0; k < s->n_variants; k++) {
+    sw_variant *v = &s->var[k];
+    free(v->name);
+    free(v->scene_file);
+    free(v->scene_dir);
+    for (int j = 0; j < v->n_set; j++) free(v->set[j]);
+    free(v->set);
+    free(v->scene_text);
+    cup_scene_free(&v->scene);
+  }
+  free(s->var);
+  for (int k = 0; k < s->len[SW_AXIS_EPS]; k++) free(s->eps[k]);
+  for (int k = 0; k < s->len[SW_AXIS_ETA]; k++) free(s->eta[k]);
+  free(s->n); free(s->eps); free(s->eta); free(s->scheme); free(s->projector);
+  free(s->path); free(s->dir); free(s->text); free(s->name);
+  free(s);
+  *ps = NULL;
+}
+
+/* ---- tasks ------------------------------------------------------------------ */
+
+int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
+  if (id < 0 || id >= s->n_tasks) return CUP_ERR_ARG;
+  memset(t, 0, sizeof *t);
+  t->id = id;
+  t->variant = (int)(id / s->per_variant);
+  long local = id % s->per_variant;
+  int d[SW_NAXES] = {0};
+  for (int a = SW_NAXES - 1; a >= 0; a--)    /* the last axis varies fastest */
+    if (s->len[a] && leads(s, a)) {
+      d[a] = (int)(local % s->len[a]);
+      local /= s->len[a];
+    }
+  for (int a = 0; a < SW_NAXES; a++)
+    if (s->zip[a] >= 0 && !leads(s, a))
+      for (int b = 0; b < a; b++)
+        if (s->zip[b] == s->zip[a]) { d[a] = d[b]; break; }
+  const cup_scene *sc = s->var[t->variant].scene;
+  const cup_integrator_options *o = cup_scene_options(sc);
+  t->n = s->len[SW_AXIS_N] ? s->n[d[SW_AXIS_N]] : o->n;
+  t->eps = s->len[SW_AXIS_EPS] ? s->eps[d[SW_AXIS_EPS]] : cup_scene_eps_spec(sc);
+  t->eta = s->len[SW_AXIS_ETA] ? s->eta[d[SW_AXIS_ETA]] : cup_scene_eta_spec(sc);
+  t->scheme = s->len[SW_AXIS_SCHEME] ? s->scheme[d[SW_AXIS_SCHEME]] : (int)o->scheme;
+  t->projector = s->len[SW_AXIS_PROJECTOR] ? s->projector[d[SW_AXIS_PROJECTOR]] : (int)o->proj.method;
+  if (cup_schedule_parse(t->eps, &t->eps_s, NULL) || cup_schedule_parse(t->eta, &t->eta_s, NULL))
+    return CUP_ERR_PARSE;
+  return CUP_OK;
+}
+
+/* Seconds per step relative to the explicit scheme with the default
+ * projector, measured on the paper's circuit; a fixed part for set-up. */
+double sw_job_cost(const cup_sweep *s, long job) {
+  static const double scheme_f[] = {1.0, 1.4, 1.15}, proj_f[] = {1.0, 1.0, 1.3, 1.2};
+  const double setup = 2000;
+  if (job < s->n_variants) return 3.0 * ((double)s->var[job].n_ref + setup);
+  sw_task t;
+  if (sw_task_get(s, job - s->n_variants, &t)) return 0;
+  return ((double)t.n + setup) * scheme_f[t.scheme] * proj_f[t.projector];
+}
+
+typedef struct { double cost; long job; } keyed;
+
+static int by_cost(const void *a, const void *b) {
+  const keyed *x = a, *y = b;
+  if (x->cost != y->cost) return x->cost > y->cost ? -1 : 1;
+  return (x->job > y->job) - (x->job < y->job);
+}
+
+void sw_schedule(const cup_sweep *s, long *out) {
+  long V = s->n_variants, N = s->n_tasks;
+  keyed *k = malloc(sizeof *k * (size_t)(V + N));
+  if (!k) {                                  /* order only affects speed */
+    for (long j = 0; j < V + N; j++) out[j] = j;
+    return;
+  }
+  for (long j = 0; j < V + N; j++) k[j] = (keyed){sw_job_cost(s, j), j};
+  qsort(k, (size_t)V, sizeof *k, by_cost);
+  qsort(k + V, (size_t)N, sizeof *k, by_cost);
+  for (long j = 0; j < V + N; j++) out[j] = k[j].job;
+  free(k);
+}
+
+/* ---- grid text ---------------------------------------------------------------- */
+
+typedef struct { char *s; size_t len, cap; } sbuf;
+
+__attribute__((format(printf, 2, 3)))
+static void sb_printf(sbuf *b, const char *fmt, ...) {
+  va_list ap;
+  for (;;) {
+    if (!b->s) return;
+    va_start(ap, fmt);
+    int w = vsnprintf(b->s + b->len, b->cap - b->len, fmt, ap);
+    va_end(ap);
+    if (w < 0) return;
+    if ((size_t)w < b->cap - b->len) { b->len += (size_t)w; return; }
+    char *ns = realloc(b->s, b->cap = 2 * b->cap + (size_t)w);
+    if (!ns) { free(b->s); b->s = NULL; return; }
+    b->s = ns;
+  }
+}
+
+char *sw_grid_text(const cup_sweep *s) {
+  sbuf b = {malloc(256), 0, 256};
+  if (b.s) b.s[0] = '\0';
+  for (int a = 0; a < SW_NAXES; a++) {
+    sb_printf(&b, "%s%s: ", a ? "; " : "", axis_names[a]);
+    if (!s->len[a]) { sb_printf(&b, "from each variant's scene"); continue; }
+    sb_printf(&b, "[");
+    for (int k = 0; k < s->len[a]; k++) {
+      const char *sep = k ? ", " : "";
+      if (a == SW_AXIS_N) sb_printf(&b, "%s%ld", sep, s->n[k]);
+      else if (a == SW_AXIS_EPS) sb_printf(&b, "%s\"%s\"", sep, s->eps[k]);
+      else if (a == SW_AXIS_ETA) sb_printf(&b, "%s\"%s\"", sep, s->eta[k]);
+      else if (a == SW_AXIS_SCHEME) sb_printf(&b, "%s%s", sep, scheme_names[s->scheme[k]]);
+      else sb_printf(&b, "%s%s", sep, method_names[s->projector[k]]);
+    }
+    sb_printf(&b, "]");
+  }
+  for (int g = 0; g < SW_NAXES; g++) {
+    int first = 1;
+    for (int a = 0; a < SW_NAXES; a++)
+      if (s->zip[a] == g) { sb_printf(&b, "%s%s", first ? "; zip: [" : ", ", axis_names[a]); first = 0; }
+    if (!first) sb_printf(&b, "]");
+  }
+  sb_printf(&b, "; tasks: %ld variants x %ld = %ld (variant-major, then n, eps, eta, scheme, projector; "
+            "the last varies fastest)", (long)s->n_variants, s->per_variant, s->n_tasks);
+  return b.s;
+}
+
+/* ---- one job -------------------------------------------------------------------- */
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Step nearest to t_j = j T / (S - 1) on the grid t_k = k T / n: round(j n / (S - 1)),
+ * halves rounded up, in integers. */
+static long nearest_step(long j, long n, long S1) {
+  return (long)((2 * (long long)j * n + S1) / (2 * (long long)S1));
+}
+
+typedef struct {
+  long S, n, next;
+  int dim;
+  double *traj;
+} sampler;
+
+static int sample_sink(long k, double t, const double *x, void *ctx) {
+  (void)t;
+  sampler *sp = ctx;
+  while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) < k) sp->next++;
+  while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) {
+    memcpy(sp->traj + sp->next * sp->dim, x, sizeof(double) * (size_t)sp->dim);
+    sp->next++;
+  }
+  return 0;
+}
+
+/* Fails once t reaches T/2: exercises a real mid-run failure (tests). */
+typedef struct { double half; int dim; } failing;
+
+static int failing_rhs(double t, const double *x, double *f, void *ctx) {
+  (void)x;
+  const failing *fc = ctx;
+  for (int i = 0; i < fc->dim; i++) f[i] = 0;
+  return t >= fc->half;
+}
+
+typedef struct {
+  long n;
+  cup_schedule eps, eta;
+  int scheme, projector;
+  double time_limit;
+  int inject;
+} run_params;
+
+static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *rp, const sw_run_opts *ro,
+                    sw_result *r, double *traj) {
+  long S = s->samples, S1 = S - 1;
+  int dim = s->dim;
+  for (long j = 0; j < S * dim; j++) traj[j] = NAN;
+  cup_integrator_options o = *cup_scene_options(v->scene);
+  o.n = rp->n;
+  o.eps = rp->eps;
+  o.eta = rp->eta;
+  o.scheme = (cup_scheme)rp->scheme;
+  o.proj.method = (cup_proj_method)rp->projector;
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = rp->n % S1 == 0 ? rp->n / S1 : 1;
+  o.max_wall_seconds = rp->time_limit;
+  o.interrupt = ro ? ro->interrupt : NULL;
+  o.on_step = ro ? ro->on_step : NULL;
+  o.step_ctx = ro ? ro->step_ctx : NULL;
+  failing fc = {0.5 * o.T, dim};
+  if (rp->inject) { o.f = failing_rhs; o.f_ctx = &fc; }
+  double t0 = now_seconds();
+  cup_integrator *I = NULL;
+  char err[CUP_ERRMSG_LEN] = "";
+  r->status = cup_integrator_create(&I, cup_scene_lcs(v->scene), cup_scene_input(v->scene), &o, err);
+  if (r->status < 0) {
+    snprintf(r->message, sizeof r->message, "set-up: %s", err);
+    r->wall += now_seconds() - t0;
+    return;
+  }
+  sampler sp = {S, rp->n, 0, dim, traj};
+  cup_run_info info;
+  r->status = cup_integrator_run(I, cup_scene_x0(v->scene), sample_sink, &sp, &info);
+  r->wall += now_seconds() - t0;
+  cup_integrator_free(&I);
+  r->max_eps_cert = fmax(r->max_eps_cert, info.max_eps_cert);
+  r->max_eta_cert = fmax(r->max_eta_cert, info.max_eta_cert);
+  r->projected += info.projected;
+  r->skipped += info.skipped;
+  r->not_certified += info.not_certified;
+  r->dual_iterations += info.dual_iterations;
+  r->factorizations += info.factorizations;
+  r->stopped_step = info.step;
+  if (rp->inject && r->status == CUP_ERR_CALLBACK)
+    snprintf(r->message, sizeof r->message, "injected failure (CATCHUP_SWEEP_INJECT_FAIL): %.200s",
+             info.message);
+  else
+    snprintf(r->message, sizeof r->message, "%s", info.message);
+}
+
+double sw_max_error(const double *traj, const double *ref, long count) {
+  double e = 0;
+  for (long j = 0; j < count; j++) {
+    double d = fabs(traj[j] - ref[j]);
+    if (isnan(d)) return NAN;
+    if (d > e) e = d;
+  }
+  return e;
+}
+
+/* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection explicit
+ * runs; the scheme is first order, so this removes the 1/n term. */
+static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
+  const sw_variant *v = &s->var[k];
+  long count = s->samples * s->dim;
+  double *coarse = malloc(sizeof(double) * (size_t)count);
+  if (!coarse) {
+    r->status = CUP_ERR_NOMEM;
+    snprintf(r->message, sizeof r->message, "reference: out of memory");
+    return;
+  }
+  run_params rp = {v->n_ref, {0, 0}, {0, 0}, CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, 0, 0};
+  run_one(s, v, &rp, ro, r, coarse);
+  if (r->status >= 0) {
+    rp.n = 2 * v->n_ref;
+    run_one(s, v, &rp, ro, r, traj);
+  }
+  if (r->status >= 0) {
+    r->correction = sw_max_error(traj, coarse, count);
+    for (long j = 0; j < count; j++) traj[j] = 2 * traj[j] - coarse[j];
+  } else {
+    for (long j = 0; j < count; j++) traj[j] = NAN;
+  }
+  free(coarse);
+}
+
+void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {
+  memset(r, 0, sizeof *r);
+  r->job = job;
+  if (job < s->n_variants) { run_reference(s, (int)job, ro, r, traj); return; }
+  sw_task t;
+  if (sw_task_get(s, job - s->n_variants, &t)) {
+    r->status = CUP_ERR_ARG;
+    snprintf(r->message, sizeof r->message, "no such task %ld", (long)(job - s->n_variants));
+    return;
+  }
+  run_params rp = {t.n, t.eps_s, t.eta_s, t.scheme, t.projector, ro ? ro->task_time_limit : 0,
+                   ro ? ro->inject_fail : 0};
+  run_one(s, &s->var[t.variant], &rp, ro, r, traj);
+}

@@ -1,0 +1,12 @@
+# catchup_sweep: the sweep file, its tasks and the results file of
+# catchup-sweep (src/io/sweep*.c). Internal (static, not installed): its
+# header src/io/sweep.h is not part of the public API. Included from
+# src/CMakeLists.txt with the apps, since the results file needs HDF5. It uses
+# the scene loader's YAML tree (scene_tree.c), which libcatchup exports.
+add_library(catchup_sweep STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/sweep.c
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
+  ${CMAKE_CURRENT_LIST_DIR}/sha256.c)
+target_include_directories(catchup_sweep PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_link_libraries(catchup_sweep PUBLIC catchup hdf5::hdf5 MPI::MPI_C
+                      PRIVATE catchup_warnings m)

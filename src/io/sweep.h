@@ -1,0 +1,158 @@
+/* sweep — parameter studies for catchup-sweep (docs/sweep-format.md): the
+ * sweep file (YAML, read with the scene loader's tree so that every error
+ * names FILE:LINE:COL and the key), its tasks in a fixed order, one task's
+ * computation, and the HDF5 results file (sweep_h5.c). No MPI here: the
+ * driver (apps/catchup-sweep.c) moves job numbers and results between ranks.
+ *
+ * Jobs: 0 .. V-1 are the variants' references, V .. V+N-1 the tasks (task
+ * id = job - V). Internal to the apps and tests; not installed. */
+#ifndef CUP_SWEEP_H
+#define CUP_SWEEP_H
+
+#include <stdint.h>
+#include "catchup.h"
+
+#define SW_ERR_LEN 1024          /* messages: a scene's message inside a sweep's */
+
+enum { SW_AXIS_N, SW_AXIS_EPS, SW_AXIS_ETA, SW_AXIS_SCHEME, SW_AXIS_PROJECTOR, SW_NAXES };
+
+/* String sizes of the /summary fields (fixed-length, NUL-terminated). */
+enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = 256 };
+
+typedef struct sw_variant {
+  char *name;
+  char *scene_file;          /* path as resolved against the sweep file's directory */
+  char *scene_dir;           /* its directory (Matrix Market files), or NULL */
+  char **set;                /* overrides "key=value", in file order */
+  int n_set;
+  int line, col;             /* where the variant is written, for messages */
+  char *scene_text;          /* after sw_resolve: cup_scene_text (overrides applied) */
+  cup_scene *scene;          /* loaded from scene_text (the same on every rank) */
+  long n_ref;                /* reference steps (a multiple of samples - 1) */
+} sw_variant;
+
+typedef struct cup_sweep {
+  char *path;                /* the sweep file as named on the command line */
+  char *dir;                 /* its directory, or NULL */
+  char *text;                /* its full text (hashed, stored) */
+  char sha256[65];
+  char *name;
+  int n_variants;
+  sw_variant *var;
+  /* Axes: len[a] = 0 when absent (the variant's scene supplies the value). */
+  int len[SW_NAXES];
+  long *n;
+  char **eps, **eta;         /* schedules as written ("n^-2.1", "0") */
+  int *scheme, *projector;
+  int zip[SW_NAXES];         /* zip group of each axis, -1 when not zipped */
+  long samples;              /* common sample times t_j = j T / (samples - 1) */
+  long ref_n;                /* reference.n as written; 0 = auto */
+  long out_samples;          /* trajectories stored per task: samples or 0 */
+  /* After sw_resolve: */
+  double T;                  /* every variant's final time (they must agree) */
+  int dim;                   /* every variant's state dimension */
+  long per_variant;          /* tasks per variant */
+  long n_tasks;              /* n_variants * per_variant */
+} cup_sweep;
+
+/* One task's parameters (sw_task_get). */
+typedef struct sw_task {
+  long id;
+  int variant;
+  long n;
+  const char *eps, *eta;     /* specs as written */
+  cup_schedule eps_s, eta_s;
+  int scheme, projector;
+} sw_task;
+
+/* What a job sends back, followed by samples * dim doubles (the trajectory
+ * at the common times; NaN where not reached). Plain data: it travels as
+ * bytes between ranks of one machine type. */
+typedef struct sw_result {
+  int64_t job;
+  int32_t status;            /* cup status of the run */
+  int32_t pad_;
+  double wall;               /* seconds: integrator set-up + run (+ the second run of a reference) */
+  double max_eps_cert, max_eta_cert;
+  int64_t projected, skipped, not_certified, dual_iterations, factorizations;
+  int64_t stopped_step;      /* steps completed */
+  double correction;         /* references: max |x(2 n_ref) - x(n_ref)| at the common times */
+  char message[SW_MSG_LEN];
+} sw_result;
+
+/* ---- the sweep file ---- */
+
+/* Parse the sweep file's text (no file access). path names it in messages
+ * and locates base/scene files. errmsg: SW_ERR_LEN bytes. */
+int sw_parse(cup_sweep **s, const char *text, size_t len, const char *path, char *errmsg);
+/* Read and parse a sweep file. */
+int sw_load(cup_sweep **s, const char *path, char *errmsg);
+/* Load every variant's scene from its file with its overrides and keep the
+ * resulting scene text (rank 0); then sw_resolve_texts. */
+int sw_resolve_files(cup_sweep *s, char *errmsg);
+/* Load the variants' scenes from texts (what rank 0 broadcast), check that
+ * T and the dimension agree, fix n_ref and the task count. */
+int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg);
+void sw_free(cup_sweep **s);
+
+int sw_task_get(const cup_sweep *s, long id, sw_task *t);
+/* Relative cost of a job (references first: they are the costliest). */
+double sw_job_cost(const cup_sweep *s, long job);
+/* Jobs in the order to dispatch: references, then tasks by decreasing cost
+ * (ties by task id). out: n_variants + n_tasks entries. */
+void sw_schedule(const cup_sweep *s, long *out);
+/* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
+char *sw_grid_text(const cup_sweep *s);
+
+/* ---- one job ---- */
+
+typedef struct sw_run_opts {
+  const volatile int *interrupt;  /* the integrator's interrupt flag (signals) */
+  cup_step_fn on_step;            /* e.g. polling for a stop message; may be NULL */
+  void *step_ctx;
+  double task_time_limit;         /* seconds per task (not references); 0: none */
+  int inject_fail;                /* make this task fail with CUP_ERR_CALLBACK (tests) */
+} sw_run_opts;
+
+/* Run job `job` (a reference or a task); fills r and traj (samples * dim). */
+void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *o, sw_result *r, double *traj);
+/* Max-norm of traj - ref over times and components; NaN if any entry is NaN. */
+double sw_max_error(const double *traj, const double *ref, long count);
+
+/* ---- the results file (sweep_h5.c) ---- */
+
+typedef struct sw_file sw_file;
+
+typedef struct sw_provenance {
+  const char *catchup_version, *dependency_versions, *git_revision, *command;
+} sw_provenance;
+
+/* Create (replace) path with every dataset at full size and all metadata,
+ * and flush: afterwards only raw data changes. */
+int sw_file_create(sw_file **f, const char *path, const cup_sweep *s, const sw_provenance *p,
+                   char *errmsg);
+/* Reopen for --resume: the stored sweep hash and variants must match s. */
+int sw_file_open(sw_file **f, const char *path, const cup_sweep *s, char *errmsg);
+int sw_file_close(sw_file **f, char *errmsg);
+int sw_file_flush(sw_file *f);
+
+/* State read at open (and kept up to date by the writes). */
+int sw_file_task_done(const sw_file *f, long task);
+double sw_file_task_error(const sw_file *f, long task);
+int sw_file_task_status(const sw_file *f, long task);
+/* The variant's reference (samples * dim), or NULL while not known (or failed). */
+const double *sw_file_reference(const sw_file *f, int variant);
+/* 1 once the variant's reference job finished (even if it failed). */
+int sw_file_reference_done(const sw_file *f, int variant);
+
+/* Write a task's trajectory (when stored) and then its /summary row with
+ * done = 1; error may be NaN (not known yet). */
+int sw_file_write_task(sw_file *f, long task, const sw_result *r, const double *traj, double error);
+/* Set the error of a row already written. */
+int sw_file_set_error(sw_file *f, long task, double error);
+/* Read back a stored trajectory (samples * dim); CUP_ERR_ARG if none is stored. */
+int sw_file_read_traj(sw_file *f, long task, double *traj);
+int sw_file_write_reference(sw_file *f, int variant, const sw_result *r, const double *xref);
+const char *sw_file_errmsg(const sw_file *f);
+
+#endif
