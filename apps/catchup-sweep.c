@@ -44,6 +44,7 @@
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { TAG_WORK = 1, TAG_RESULT = 2, TAG_STOP = 3, TAG_BYE = 4 };
 enum { AHEAD = 2, MAX_BATCH = 64 };
+#define MAX_MESSAGE (8u << 20)   /* bytes of a batch's answer, unless one job needs more */
 /* Batches hold about this much work (cost units ~ steps, ~0.2 us each on
  * the paper's circuit): long enough to hide the manager's reply latency. */
 #define BATCH_COST 25000.0
@@ -282,11 +283,13 @@ typedef struct {
   int stop_msg;              /* the manager said stop */
 } computer;
 
-/* Every 4096 steps: has the manager asked to stop? (Workers only.) */
+/* Every 1024 steps (~0.2 ms on the paper's circuit): has the manager asked
+ * to stop? The probe also moves MPI along, so that a result sent earlier
+ * reaches the manager while this rank computes. (Workers only.) */
 static int poll_stop(long k, double t, const cup_proj_info *pi, void *ctx) {
   (void)k; (void)t; (void)pi;
   computer *c = ctx;
-  if (++c->steps & 4095) return 0;
+  if (++c->steps & 1023) return 0;
   int flag = 0;
   MPI_Iprobe(0, TAG_STOP, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
   if (flag) c->stop_msg = 1;
@@ -371,6 +374,10 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
       compute(&c, ids[j], r, (double *)(void *)(at + sizeof(sw_result)));
       if (r->status == CUP_ERR_INTERRUPTED && (c.stop_msg || stop_signal)) break;   /* not a result */
       n++;
+      for (int b = 0; b < AHEAD; b++) {        /* move earlier answers along */
+        int done = 0;
+        if (out[b].req != MPI_REQUEST_NULL) MPI_Test(&out[b].req, &done, MPI_STATUS_IGNORE);
+      }
     }
     if (c.stop_msg || stop_signal) break;      /* a partial batch is not sent: the manager re-queues it */
     memcpy(ob->buf, &n, sizeof n);
@@ -404,6 +411,8 @@ typedef struct {
   const cup_sweep *s;
   sw_file *f;
   long count;                /* samples * dim */
+  size_t one;                /* bytes of one job's answer: sw_result + trajectory */
+  int max_batch;             /* jobs per batch: MAX_BATCH, fewer for long trajectories */
   long *queue;               /* jobs to dispatch, in order */
   long qhead, qlen;
   double *cost;              /* per job */
@@ -500,7 +509,7 @@ static void progress(manager_t *m, int final) {
   fmt_seconds(el, sizeof el, elapsed);
   fmt_seconds(eta, sizeof eta, m->cost_done > 0 ? elapsed * m->cost_left / m->cost_done : NAN);
   fprintf(stderr, "\rcatchup-sweep: %ld/%ld done, %ld failed, %s elapsed, ETA %s   ",
-          m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, el, final ? "0 s" : eta);
+          m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, el, m->cost_left <= 0 ? "0 s" : eta);
   if (final) fputc('\n', stderr);
   fflush(stderr);
 }
@@ -530,7 +539,7 @@ static void take_message(manager_t *m, const char *buf, size_t size) {
 static int next_batch(manager_t *m, int workers, long *ids) {
   double target = fmin(BATCH_COST, m->cost_left / (2.0 * workers)), sum = 0;
   int n = 0;
-  while (m->qhead < m->qlen && n < MAX_BATCH && (n == 0 || sum + m->cost[m->queue[m->qhead]] <= target)) {
+  while (m->qhead < m->qlen && n < m->max_batch && (n == 0 || sum + m->cost[m->queue[m->qhead]] <= target)) {
     ids[n] = m->queue[m->qhead++];
     sum += m->cost[ids[n++]];
   }
@@ -574,13 +583,25 @@ static void requeue(manager_t *m, wstate *w) {
   w->out = 0;
 }
 
-static void manager_mpi(manager_t *m) {
+/* One receive is always posted per live worker, into a buffer as large as
+ * its biggest batch's answer: the data flows as the worker sends it, and the
+ * manager only tests (MPI_Testany) and sleeps — a blocking MPI_Recv would
+ * spin until the busy worker's MPI progressed. Returns 0 when every worker
+ * said goodbye, -1 when some did not within the grace time after a stop. */
+static int manager_mpi(manager_t *m) {
   int workers = nranks - 1, live = workers;
   wstate *ws = calloc((size_t)nranks, sizeof *ws);
-  if (!ws) { io_fail(m, CUP_ERR_NOMEM); return; }
-  char *buf = NULL;
-  size_t cap = 0;
-  for (int w = 1; w < nranks; w++) ws[w].alive = 1;
+  MPI_Request *req = malloc(sizeof *req * (size_t)nranks);
+  char **buf = calloc((size_t)nranks, sizeof *buf);
+  size_t cap = sizeof(int64_t) + m->one * (size_t)m->max_batch;
+  if (!ws || !req || !buf) { io_fail(m, CUP_ERR_NOMEM); free(ws); free(req); free(buf); return 0; }
+  for (int w = 0; w < nranks; w++) {
+    req[w] = MPI_REQUEST_NULL;
+    if (w == 0) continue;
+    ws[w].alive = 1;
+    if (!(buf[w] = malloc(cap))) MPI_Abort(MPI_COMM_WORLD, 1);
+    MPI_Irecv(buf[w], (int)cap, MPI_BYTE, w, MPI_ANY_TAG, MPI_COMM_WORLD, &req[w]);
+  }
   int outstanding = feed(m, ws, workers), stopping = 0;
   long us = 200;
   double stop_t0 = 0;
@@ -592,10 +613,10 @@ static void manager_mpi(manager_t *m) {
         if (ws[w].alive) MPI_Send(NULL, 0, MPI_BYTE, w, TAG_STOP, MPI_COMM_WORLD);
     }
     if (stopping && now_seconds() - stop_t0 > STOP_GRACE_SECONDS) break;
-    int flag = 0;
+    int idx = MPI_UNDEFINED, flag = 0, size = 0;
     MPI_Status st;
-    MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
-    if (!flag) {
+    MPI_Testany(nranks, req, &idx, &flag, &st);
+    if (!flag || idx == MPI_UNDEFINED) {
       progress(m, 0);
       maybe_flush(m, 0);
       sleep_us(us);
@@ -604,30 +625,34 @@ static void manager_mpi(manager_t *m) {
     }
     us = 200;
     double t0 = now_seconds();
-    int src = st.MPI_SOURCE, size = 0;
-    MPI_Get_count(&st, MPI_BYTE, &size);
-    if ((size_t)size > cap) {
-      free(buf);
-      if (!(buf = malloc(cap = (size_t)size))) MPI_Abort(MPI_COMM_WORLD, 1);
-    }
-    MPI_Recv(buf, size, MPI_BYTE, src, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    int src = idx;
     wstate *w = &ws[src];
+    MPI_Get_count(&st, MPI_BYTE, &size);
     if (st.MPI_TAG == TAG_BYE) {
       requeue(m, w);
       w->alive = 0;
       live--;
-    } else if (st.MPI_TAG == TAG_RESULT) {
-      take_message(m, buf, (size_t)size);
+    } else {
+      take_message(m, buf[src], (size_t)size);
       w->head = (w->head + 1) % AHEAD;
       w->out--;
+      MPI_Irecv(buf[src], (int)cap, MPI_BYTE, src, MPI_ANY_TAG, MPI_COMM_WORLD, &req[src]);
     }
     if (!stopping) outstanding = feed(m, ws, workers);
     maybe_flush(m, 0);
     m->busy += now_seconds() - t0;
     progress(m, 0);
   }
+  for (int w = 1; w < nranks; w++)
+    if (req[w] != MPI_REQUEST_NULL) {
+      MPI_Cancel(&req[w]);
+      MPI_Wait(&req[w], MPI_STATUS_IGNORE);
+    }
+  for (int w = 1; w < nranks; w++) free(buf[w]);
   free(buf);
+  free(req);
   free(ws);
+  return live > 0 ? -1 : 0;
 }
 
 /* ---- manager: alone ---- */
@@ -706,13 +731,16 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   m.s = s;
   m.f = f;
   m.count = s->samples * s->dim;
+  m.one = sizeof(sw_result) + sizeof(double) * (size_t)m.count;
+  m.max_batch = (int)fmax(1, fmin(MAX_BATCH, (double)(MAX_MESSAGE - sizeof(int64_t)) / (double)m.one));
   if (setup_queue(&m)) { free_manager(&m); say("%s: out of memory", a->out); return EXIT_RUN; }
   m.t_start = m.last_flush = now_seconds();
   m.last_progress = 0;
   /* the errors of tasks written before their reference, in an earlier run */
   for (int k = 0; k < s->n_variants; k++) fill_errors(&m, k);
+  int lost = 0;
   if (nranks == 1) manager_alone(&m, hooks, a->time_limit);
-  else manager_mpi(&m);
+  else lost = manager_mpi(&m);
   double wall = now_seconds() - m.t_start;
   progress(&m, 1);
   char err[SW_ERR_LEN] = "";
@@ -742,6 +770,10 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
         m.jobs_done ? 1e6 * m.busy / (double)m.jobs_done : 0.0);
   }
   free_manager(&m);
+  if (lost) {                  /* a worker did not answer the stop: end the job */
+    fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, rc ? rc : EXIT_RUN);
+  }
   return rc;
 }
 

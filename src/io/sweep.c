@@ -281,6 +281,8 @@ static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const ch
     if ((st = string(p, x, k2, &scene))) return st;
   } else if (!base) {
     return fail(p, CUP_ERR_PARSE, nd, key, "no scene: give base: at the top or scene: in this variant");
+  } else {
+    v->from_base = 1;
   }
   if (!(v->scene_file = path_join(s->dir, scene))) return CUP_ERR_NOMEM;
   v->scene_dir = dir_of(v->scene_file);
@@ -301,6 +303,7 @@ static int read_variants(prs *p, cup_sweep *s, const st_node *root) {
   const char *base = NULL;
   int st = CUP_OK;
   if (b && !st_is_null(b) && (st = string(p, b, "base", &base))) return st;
+  if (base) { s->base_line = b->line; s->base_col = b->col; }
   if (!nd) return fail(p, CUP_ERR_PARSE, root, "variants", "missing (required): a list of at least one variant, "
                        "e.g. [{name: case1}]");
   if (nd->kind != ST_SEQ || nd->len == 0)
@@ -446,6 +449,10 @@ int sw_resolve_files(cup_sweep *s, char *errmsg) {
     cup_scene *sc = NULL;
     char err[CUP_ERRMSG_LEN];
     st = cup_scene_load(&sc, v->scene_file, (const char *const *)v->set, v->n_set, err);
+    if (st == CUP_ERR_IO && v->from_base) {   /* the base itself is missing: say where it is named */
+      snprintf(errmsg, SW_ERR_LEN, "%s:%d:%d: base: %s", s->path, s->base_line, s->base_col, err);
+      break;
+    }
     if (st) { variant_fail(s, k, st, errmsg, "%s", err); break; }
     if (!(texts[k] = strdup(cup_scene_text(sc)))) st = CUP_ERR_NOMEM;
     cup_scene_free(&sc);

@@ -26,6 +26,7 @@ typedef struct sw_variant {
   char **set;                /* overrides "key=value", in file order */
   int n_set;
   int line, col;             /* where the variant is written, for messages */
+  int from_base;             /* its scene is the sweep's base */
   char *scene_text;          /* after sw_resolve: cup_scene_text (overrides applied) */
   cup_scene *scene;          /* loaded from scene_text (the same on every rank) */
   long n_ref;                /* reference steps (a multiple of samples - 1) */
@@ -37,6 +38,7 @@ typedef struct cup_sweep {
   char *text;                /* its full text (hashed, stored) */
   char sha256[65];
   char *name;
+  int base_line, base_col;   /* where base: is written, for messages */
   int n_variants;
   sw_variant *var;
   /* Axes: len[a] = 0 when absent (the variant's scene supplies the value). */

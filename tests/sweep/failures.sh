@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Injected failures: exactly the listed tasks fail, with their status and
+# message in /summary, and the study completes; a time limit fails tasks
+# with CUP_ERR_TIME_LIMIT the same way.
+. "$(dirname "$0")/common.sh"
+CATCHUP_SWEEP_INJECT_FAIL=3,7,11 run 3 "$SMOKE" -o "$WORK/inject.h5" --quiet
+"$CHECK" complete "$WORK/inject.h5"
+got=$("$CHECK" failed "$WORK/inject.h5")
+want="3:CUP_ERR_CALLBACK,7:CUP_ERR_CALLBACK,11:CUP_ERR_CALLBACK"
+[ "$got" = "$want" ] || fail "failed rows '$got', expected '$want'"
+# the same at 1 rank, through the same code path as the workers'
+CATCHUP_SWEEP_INJECT_FAIL=0,47 run 0 "$SMOKE" -o "$WORK/inject1.h5" --quiet
+got=$("$CHECK" failed "$WORK/inject1.h5")
+[ "$got" = "0:CUP_ERR_CALLBACK,47:CUP_ERR_CALLBACK" ] || fail "1 rank: failed rows '$got'"
+echo "failures: injected tasks fail alone, the study completes"

@@ -1,0 +1,257 @@
+/* sweep (src/io/sweep.c, sha256.c): the sweep file, task order, the
+ * sampling of n that are not multiples of samples - 1, and the Richardson
+ * reference against the shared reference of the paper's case 1.
+ * tests/sweeps/bad names its expected error in a "# expect: ..." first line. */
+#define _POSIX_C_SOURCE 200809L
+#include <dirent.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+#include "catchup.h"
+#include "sha256.h"
+#include "sweep.h"
+
+#define EX CUP_EXAMPLES_DIR
+
+static void test_sha256_vectors(void **state) {
+  (void)state;
+  char hex[65];
+  cup_sha256_hex("", 0, hex);
+  assert_string_equal(hex, "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  cup_sha256_hex("abc", 3, hex);
+  assert_string_equal(hex, "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  const char *m = "abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq";   /* 448 bits: two blocks */
+  cup_sha256_hex(m, strlen(m), hex);
+  assert_string_equal(hex, "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  char *a = malloc(1000000);
+  assert_non_null(a);
+  memset(a, 'a', 1000000);
+  cup_sha256_hex(a, 1000000, hex);
+  assert_string_equal(hex, "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  free(a);
+}
+
+static cup_sweep *load_text(const char *text) {
+  cup_sweep *s = NULL;
+  char err[SW_ERR_LEN] = "";
+  int st = sw_parse(&s, text, strlen(text), EX "/inline-sweep.yaml", err);
+  if (!st) st = sw_resolve_files(s, err);
+  if (st) fail_msg("sweep did not load: %s", err);
+  return s;
+}
+
+static cup_sweep *load_file(const char *path) {
+  cup_sweep *s = NULL;
+  char err[SW_ERR_LEN] = "";
+  int st = sw_load(&s, path, err);
+  if (!st) st = sw_resolve_files(s, err);
+  if (st) fail_msg("%s did not load: %s", path, err);
+  return s;
+}
+
+static void expect_task(const cup_sweep *s, long id, int variant, long n, const char *eps, const char *eta,
+                        int scheme, int projector) {
+  sw_task t;
+  assert_int_equal(sw_task_get(s, id, &t), CUP_OK);
+  if (t.variant != variant || t.n != n || strcmp(t.eps, eps) || strcmp(t.eta, eta) || t.scheme != scheme ||
+      t.projector != projector)
+    fail_msg("task %ld: variant %d n %ld eps %s eta %s scheme %d projector %d", id, t.variant, t.n, t.eps,
+             t.eta, t.scheme, t.projector);
+}
+
+/* Variant-major, then n, eps, eta, scheme, projector (last fastest); the
+ * zipped eps/eta count once. */
+static void test_smoke_task_order(void **state) {
+  (void)state;
+  cup_sweep *s = load_file(EX "/sweep-smoke.yaml");
+  assert_int_equal(s->n_variants, 2);
+  assert_int_equal(s->per_variant, 3 * 2 * 2 * 2);
+  assert_int_equal(s->n_tasks, 48);
+  assert_int_equal(s->var[0].n_ref, 40000);
+  assert_int_equal(s->samples, 101);
+  assert_true(s->T == 1.0 && s->dim == 3);
+  expect_task(s, 0, 0, 100, "n^-2.1", "n^-1.05", CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO);
+  expect_task(s, 1, 0, 100, "n^-2.1", "n^-1.05", CUP_SCHEME_EXPLICIT, CUP_PROJ_PG);
+  expect_task(s, 2, 0, 100, "n^-2.1", "n^-1.05", CUP_SCHEME_IMPLICIT, CUP_PROJ_AUTO);
+  expect_task(s, 5, 0, 100, "0", "0", CUP_SCHEME_EXPLICIT, CUP_PROJ_PG);
+  expect_task(s, 8, 0, 250, "n^-2.1", "n^-1.05", CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO);
+  expect_task(s, 47, 1, 1000, "0", "0", CUP_SCHEME_IMPLICIT, CUP_PROJ_PG);
+  sw_task t;
+  assert_int_equal(sw_task_get(s, 48, &t), CUP_ERR_ARG);
+  /* references first, then tasks by non-increasing cost */
+  long order[50];
+  sw_schedule(s, order);
+  assert_true(order[0] < 2 && order[1] < 2);
+  for (int j = 3; j < 50; j++) assert_true(sw_job_cost(s, order[j - 1]) >= sw_job_cost(s, order[j]));
+  sw_free(&s);
+  assert_null(s);
+}
+
+/* Two zip groups; absent axes come from the scene; "auto" n_ref. */
+static void test_zip_groups_and_defaults(void **state) {
+  (void)state;
+  cup_sweep *s = load_text("base: paper-fig2.yaml\n"
+                           "grid:\n"
+                           "  n: [10, 20]\n"
+                           "  eps: [1e-8, 0]\n  eta: [1e-4, 0]\n"
+                           "  scheme: [explicit, exponential]\n  projector: [pg, fista]\n"
+                           "  zip: [[eps, eta], [scheme, projector]]\n"
+                           "variants:\n  - name: a\n  - {name: b, set: {n: 7, circuit.R1: 2}}\n"
+                           "reference: {samples: 11}\n");
+  assert_int_equal(s->per_variant, 2 * 2 * 2);
+  expect_task(s, 0, 0, 10, "1e-8", "1e-4", CUP_SCHEME_EXPLICIT, CUP_PROJ_PG);
+  expect_task(s, 1, 0, 10, "1e-8", "1e-4", CUP_SCHEME_EXPONENTIAL, CUP_PROJ_FISTA);
+  expect_task(s, 2, 0, 10, "0", "0", CUP_SCHEME_EXPLICIT, CUP_PROJ_PG);
+  expect_task(s, 15, 1, 20, "0", "0", CUP_SCHEME_EXPONENTIAL, CUP_PROJ_FISTA);
+  assert_int_equal(s->var[0].n_ref, 80);          /* smallest multiple of 10 >= 4 x 20 */
+  assert_non_null(strstr(s->var[1].scene_text, "R1: 2"));
+  sw_free(&s);
+  s = load_text("base: paper-fig2.yaml\nvariants:\n  - name: a\n  - {name: b, set: {n: 7, eps: 1e-9}}\n"
+                "reference: {samples: 6}\n");
+  assert_int_equal(s->n_tasks, 2);
+  expect_task(s, 0, 0, 100, "n^-2.1", "n^-1.05", CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO);   /* the scene's */
+  expect_task(s, 1, 1, 7, "1e-9", "n^-1.05", CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO);
+  assert_int_equal(s->var[0].n_ref, 400);
+  assert_int_equal(s->var[1].n_ref, 30);
+  sw_free(&s);
+}
+
+/* The shipped study: both paper cases, three circuit variants, n up to 10^6. */
+static void test_paper_sweep(void **state) {
+  (void)state;
+  cup_sweep *s = load_file(EX "/paper-sweep.yaml");
+  assert_true(s->n_variants >= 5);
+  assert_int_equal(s->var[0].n_ref % (s->samples - 1), 0);
+  long nmax = 0;
+  for (int k = 0; k < s->len[SW_AXIS_N]; k++) nmax = s->n[k] > nmax ? s->n[k] : nmax;
+  assert_int_equal(nmax, 1000000);
+  assert_int_equal(s->var[0].n_ref, 4000000);
+  char *g = sw_grid_text(s);
+  assert_non_null(strstr(g, "zip: [eps, eta]"));
+  free(g);
+  sw_free(&s);
+}
+
+static char *first_line_expect(const char *path) {
+  static char buf[1024];
+  FILE *f = fopen(path, "r");
+  assert_non_null(f);
+  assert_non_null(fgets(buf, sizeof buf, f));
+  fclose(f);
+  buf[strcspn(buf, "\n")] = '\0';
+  assert_true(strncmp(buf, "# expect: ", 10) == 0);
+  return buf + 10;
+}
+
+static void test_bad_corpus(void **state) {
+  (void)state;
+  DIR *d = opendir(CUP_BAD_SWEEPS_DIR);
+  assert_non_null(d);
+  struct dirent *e;
+  int count = 0;
+  while ((e = readdir(d))) {
+    size_t len = strlen(e->d_name);
+    if (len < 6 || strcmp(e->d_name + len - 5, ".yaml")) continue;
+    char path[1024], err[SW_ERR_LEN] = "";
+    snprintf(path, sizeof path, "%s/%s", CUP_BAD_SWEEPS_DIR, e->d_name);
+    const char *want = first_line_expect(path);
+    cup_sweep *s = NULL;
+    int st = sw_load(&s, path, err);
+    if (!st) st = sw_resolve_files(s, err);
+    if (st == CUP_OK) fail_msg("%s loaded without error", e->d_name);
+    if (!strstr(err, want)) fail_msg("%s:\n  got  %s\n  want %s", e->d_name, err, want);
+    assert_null(strchr(err, '\n'));
+    sw_free(&s);                                  /* parsed but not resolved */
+    count++;
+  }
+  closedir(d);
+  assert_true(count >= 10);
+}
+
+typedef struct { double x[101 * 3]; long k[101]; int n; } store_t;
+static int sink(long k, double t, const double *x, void *ctx) {
+  (void)t;
+  store_t *st = ctx;
+  if (st->n < 101) { st->k[st->n] = k; memcpy(st->x + 3 * st->n, x, 3 * sizeof(double)); st->n++; }
+  return 0;
+}
+
+/* n = 250 with 101 samples: the samples are the grid points nearest to
+ * t_j = j/100, i.e. steps round(2.5 j) (halves up) — the steps the library's
+ * own CUP_OUTPUT_SAMPLES picks, run here independently. */
+static void test_nearest_samples(void **state) {
+  (void)state;
+  cup_sweep *s = load_file(EX "/sweep-smoke.yaml");
+  long task = 8;                                  /* case1, n = 250, paper schedules, explicit, auto */
+  double *traj = malloc(sizeof(double) * 101 * 3);
+  sw_result r;
+  sw_run_job(s, s->n_variants + task, NULL, &r, traj);
+  assert_int_equal(r.status, CUP_OK);
+  assert_int_equal(r.stopped_step, 250);
+  cup_integrator_options o = *cup_scene_options(s->var[0].scene);
+  o.n = 250;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 101;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, cup_scene_lcs(s->var[0].scene), cup_scene_input(s->var[0].scene),
+                                         &o, NULL), CUP_OK);
+  store_t st = {{0}, {0}, 0};
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_scene_x0(s->var[0].scene), sink, &st, &info), CUP_OK);
+  assert_int_equal(st.n, 101);
+  for (int j = 0; j < 101; j++) {
+    assert_int_equal(st.k[j], (long)floor(2.5 * j + 0.5));
+    for (int i = 0; i < 3; i++)
+      if (traj[3 * j + i] != st.x[3 * j + i]) fail_msg("sample %d component %d differs", j, i);
+  }
+  cup_integrator_free(&I);
+  free(traj);
+  sw_free(&s);
+}
+
+/* The reference of the paper's case 1 (n_ref auto = 4 x 10^4 for n up to
+ * 10^4) against the shared Richardson reference on t = k/1000. */
+static void test_reference_vs_shared(void **state) {
+  (void)state;
+  FILE *csv = fopen(CUP_SHARED_DIR "/reference/ref_case1_limit_richardson.csv", "r");
+  if (!csv) skip();
+  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
+  assert_int_equal(s->var[0].n_ref, 40000);
+  double *x = malloc(sizeof(double) * 1001 * 3);
+  sw_result r;
+  sw_run_job(s, 0, NULL, &r, x);
+  assert_int_equal(r.status, CUP_OK);
+  char line[512];
+  double ref[4], err = 0;
+  assert_non_null(fgets(line, sizeof line, csv));
+  for (int j = 0; j <= 1000; j++) {
+    assert_non_null(fgets(line, sizeof line, csv));
+    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
+    for (int i = 0; i < 3; i++) err = fmax(err, fabs(x[3 * j + i] - ref[i + 1]));
+  }
+  fclose(csv);
+  printf("# reference (Richardson, n_ref = 40000) vs shared case-1 reference: max |diff| = %.3g; "
+         "correction removed %.3g\n", err, r.correction);
+  assert_true(err < 1e-6);
+  assert_true(r.correction > 1e-5 && r.correction < 1e-4);   /* ~1.9e-5: x(2 n_ref) alone is off by that */
+  free(x);
+  sw_free(&s);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_sha256_vectors),
+    cmocka_unit_test(test_smoke_task_order),
+    cmocka_unit_test(test_zip_groups_and_defaults),
+    cmocka_unit_test(test_paper_sweep),
+    cmocka_unit_test(test_bad_corpus),
+    cmocka_unit_test(test_nearest_samples),
+    cmocka_unit_test(test_reference_vs_shared),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
