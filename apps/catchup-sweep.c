@@ -43,11 +43,12 @@
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { TAG_WORK = 1, TAG_RESULT = 2, TAG_STOP = 3, TAG_BYE = 4 };
-enum { AHEAD = 2, MAX_BATCH = 64 };
+enum { AHEAD = 2, MAX_BATCH = 256 };
 #define MAX_MESSAGE (8u << 20)   /* bytes of a batch's answer, unless one job needs more */
 /* Batches hold about this much work (cost units ~ steps, ~0.2 us each on
- * the paper's circuit): long enough to hide the manager's reply latency. */
-#define BATCH_COST 25000.0
+ * the paper's circuit, ~10 ms here): with two batches ahead, much longer
+ * than the manager's reply latency (its sleep is at most 1 ms). */
+#define BATCH_COST 50000.0
 #define FLUSH_SECONDS 1.0
 #define PROGRESS_SECONDS 0.25
 #define STOP_GRACE_SECONDS 10.0
@@ -418,7 +419,7 @@ typedef struct {
   double *cost;              /* per job */
   double cost_left, cost_done;
   long jobs_total, jobs_done, jobs_skipped, failures;
-  double t_start, last_flush, last_progress, busy, work_sum;
+  double t_start, last_flush, last_progress, busy, work_sum, cpu_sum;
   held **held;               /* per variant: results waiting for the reference (no /runs/x) */
   double *scratch;           /* samples * dim */
   int io_status;
@@ -471,6 +472,7 @@ static void take_result(manager_t *m, const sw_result *r, const double *traj) {
   m->cost_done += m->cost[job];
   m->cost_left -= m->cost[job];
   m->work_sum += r->wall;
+  m->cpu_sum += r->cpu;
   if (r->status < 0) m->failures++;
   if (m->io_status) return;
   if (job < s->n_variants) {
@@ -764,9 +766,10 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   if (!rc && !a->quiet) {
     int workers = nranks > 1 ? nranks - 1 : 1;
     say("%s -> %s: %ld tasks + %d references (%ld done before), %ld failed, %.3g s on %d rank%s; "
-        "parallel efficiency %.2f (task time / (workers x wall)), manager %.0f us per job",
+        "parallel efficiency %.2f (task wall time / (workers x wall); %.2f by task CPU time), "
+        "manager %.0f us per job",
         a->sweep, a->out, s->n_tasks, s->n_variants, m.jobs_skipped, m.failures, wall, nranks,
-        nranks > 1 ? "s" : "", m.work_sum / (workers * wall),
+        nranks > 1 ? "s" : "", m.work_sum / (workers * wall), m.cpu_sum / (workers * wall),
         m.jobs_done ? 1e6 * m.busy / (double)m.jobs_done : 0.0);
   }
   free_manager(&m);

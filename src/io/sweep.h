@@ -75,6 +75,7 @@ typedef struct sw_result {
   int32_t status;            /* cup status of the run */
   int32_t pad_;
   double wall;               /* seconds: integrator set-up + run (+ the second run of a reference) */
+  double cpu;                /* CPU seconds of the same (the benchmark's second measure) */
   double max_eps_cert, max_eta_cert;
   int64_t projected, skipped, not_certified, dual_iterations, factorizations;
   int64_t stopped_step;      /* steps completed */
