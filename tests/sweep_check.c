@@ -9,6 +9,9 @@
  *   sweep_check complete FILE        exit 0 iff every task and reference is done
  *   sweep_check refdiff FILE V CSV TOL   max |/references/x[V] - CSV| at the CSV's rows
  *                                    t = j T / (samples - 1) (CSV on a finer grid k / (rows - 1))
+ *   sweep_check forget-reference FILE V  make reference V not done and its tasks' errors NaN, as if
+ *                                    they had finished before it (for --resume to fill them)
+ *   compare A B nox                  the same without /runs/x (a sweep with output.samples 0)
  *
  * Exit status 0 on success, 1 on a difference or failed check (one line
  * saying which), 2 on usage. */
@@ -102,12 +105,12 @@ static hid_t open_file(const char *path) {
   return f;
 }
 
-static int cmd_compare(const char *pa, const char *pb) {
+static int cmd_compare(const char *pa, const char *pb, int with_x) {
   hid_t fa = open_file(pa), fb = open_file(pb);
   if (fa < 0 || fb < 0) return 1;
   int ok = compare_dataset(fa, fb, "summary", "wall_time_s", 0) &&
            compare_dataset(fa, fb, "runs/t", NULL, 0) &&
-           compare_dataset(fa, fb, "runs/x", NULL, 1) &&
+           (!with_x || compare_dataset(fa, fb, "runs/x", NULL, 1)) &&
            compare_dataset(fa, fb, "references/x", NULL, 0) &&
            compare_dataset(fa, fb, "references/summary", "wall_time_s", 0) &&
            compare_dataset(fa, fb, "variants", NULL, 0);
@@ -250,14 +253,65 @@ static int cmd_refdiff(const char *path, int v, const char *csv, double tol) {
   return e <= tol ? 0 : 1;
 }
 
+/* Write one field of the rows selected by `pick` (NULL: all). */
+static int write_field(hid_t d, const char *field, hid_t type, const void *value, const int *pick, hsize_t n) {
+  hid_t mt = H5Tcreate(H5T_COMPOUND, H5Tget_size(type));
+  H5Tinsert(mt, field, 0, type);
+  hid_t fs = H5Dget_space(d), ms = H5Screate_simple(1, (hsize_t[]){1}, NULL);
+  int ok = 1;
+  for (hsize_t i = 0; i < n && ok; i++) {
+    if (pick && !pick[i]) continue;
+    hsize_t one = 1;
+    ok = H5Sselect_hyperslab(fs, H5S_SELECT_SET, &i, NULL, &one, NULL) >= 0 &&
+         H5Dwrite(d, mt, ms, fs, H5P_DEFAULT, value) >= 0;
+  }
+  H5Sclose(ms);
+  H5Sclose(fs);
+  H5Tclose(mt);
+  return ok ? 0 : -1;
+}
+
+static int cmd_forget_reference(const char *path, int v) {
+  hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+  if (f < 0) { printf("sweep_check: %s: cannot open for writing\n", path); return 1; }
+  hsize_t n = 0, nr = 0;
+  int *variant = column(f, "summary", "variant", H5T_NATIVE_INT, &n);
+  int *rvariant = column(f, "references/summary", "variant", H5T_NATIVE_INT, &nr);
+  if (!variant || !rvariant || v < 0 || (hsize_t)v >= nr) { printf("sweep_check: no variant %d\n", v); return 1; }
+  int *pick = calloc(n, sizeof *pick), *rpick = calloc(nr, sizeof *rpick);
+  for (hsize_t i = 0; i < n; i++) pick[i] = variant[i] == v;
+  rpick[v] = 1;
+  double nan = NAN;
+  signed char zero = 0;
+  hid_t s = H5Dopen2(f, "summary", H5P_DEFAULT), r = H5Dopen2(f, "references/summary", H5P_DEFAULT);
+  int bad = write_field(s, "error", H5T_NATIVE_DOUBLE, &nan, pick, n) ||
+            write_field(r, "done", H5T_NATIVE_SCHAR, &zero, rpick, nr);
+  hid_t x = H5Dopen2(f, "references/x", H5P_DEFAULT), sp = H5Dget_space(x);
+  hsize_t dims[3];
+  H5Sget_simple_extent_dims(sp, dims, NULL);
+  hsize_t start[3] = {(hsize_t)v, 0, 0}, cnt[3] = {1, dims[1], dims[2]};
+  double *buf = malloc(sizeof(double) * dims[1] * dims[2]);
+  for (hsize_t i = 0; i < dims[1] * dims[2]; i++) buf[i] = NAN;
+  hid_t ms = H5Screate_simple(3, cnt, NULL);
+  bad |= H5Sselect_hyperslab(sp, H5S_SELECT_SET, start, NULL, cnt, NULL) < 0 ||
+         H5Dwrite(x, H5T_NATIVE_DOUBLE, ms, sp, H5P_DEFAULT, buf) < 0;
+  H5Sclose(ms); H5Sclose(sp); H5Dclose(x); H5Dclose(s); H5Dclose(r);
+  free(buf); free(pick); free(rpick); free(variant); free(rvariant);
+  H5Fclose(f);
+  if (bad) printf("sweep_check: %s: cannot write\n", path);
+  return bad ? 1 : 0;
+}
+
 int main(int argc, char **argv) {
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
   if (argc == 3 && !strcmp(argv[1], "open")) return cmd_open(argv[2]);
-  if (argc == 4 && !strcmp(argv[1], "compare")) return cmd_compare(argv[2], argv[3]);
+  if (argc == 4 && !strcmp(argv[1], "compare")) return cmd_compare(argv[2], argv[3], 1);
+  if (argc == 5 && !strcmp(argv[1], "compare") && !strcmp(argv[4], "nox")) return cmd_compare(argv[2], argv[3], 0);
+  if (argc == 4 && !strcmp(argv[1], "forget-reference")) return cmd_forget_reference(argv[2], atoi(argv[3]));
   if (argc == 4 && !strcmp(argv[1], "donelist")) return cmd_donelist(argv[2], argv[3]);
   if (argc == 3 && !strcmp(argv[1], "failed")) return cmd_failed(argv[2]);
   if (argc == 3 && !strcmp(argv[1], "complete")) return cmd_complete(argv[2]);
   if (argc == 6 && !strcmp(argv[1], "refdiff")) return cmd_refdiff(argv[2], atoi(argv[3]), argv[4], atof(argv[5]));
-  fprintf(stderr, "usage: sweep_check open|compare|donelist|failed|complete|refdiff ...\n");
+  fprintf(stderr, "usage: sweep_check open|compare|donelist|failed|complete|refdiff|forget-reference ...\n");
   return 2;
 }

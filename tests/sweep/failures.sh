@@ -13,3 +13,16 @@ CATCHUP_SWEEP_INJECT_FAIL=0,47 run 0 "$SMOKE" -o "$WORK/inject1.h5" --quiet
 got=$("$CHECK" failed "$WORK/inject1.h5")
 [ "$got" = "0:CUP_ERR_CALLBACK,47:CUP_ERR_CALLBACK" ] || fail "1 rank: failed rows '$got'"
 echo "failures: injected tasks fail alone, the study completes"
+
+# --task-time-limit: the long task fails with CUP_ERR_TIME_LIMIT, the short
+# one and the reference (never limited) finish
+cat > "$WORK/limit.yaml" <<YAML
+base: $SRC/examples/paper-fig2.yaml
+grid: {n: [10, 4000000]}
+variants: [{name: case1}]
+reference: {samples: 11, n: 100}
+YAML
+run 0 "$WORK/limit.yaml" -o "$WORK/limit.h5" --task-time-limit 0.02 --quiet
+got=$("$CHECK" failed "$WORK/limit.h5")
+[ "$got" = "1:CUP_ERR_TIME_LIMIT" ] || fail "time limit: failed rows '$got'"
+echo "failures: --task-time-limit fails the long task only"
