@@ -716,7 +716,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   char err[CUP_ERRMSG_LEN] = "";
   r->status = cup_integrator_create(&I, cup_scene_lcs(v->scene), cup_scene_input(v->scene), &o, err);
   if (r->status < 0) {
-    snprintf(r->message, sizeof r->message, "set-up: %s", err);
+    snprintf(r->message, sizeof r->message, "set-up: %.240s", err);
     r->wall += now_seconds() - t0;
     r->cpu += clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - c0;
     return;
