@@ -119,6 +119,17 @@ static void test_zip_groups_and_defaults(void **state) {
   assert_int_equal(s->var[0].n_ref, 400);
   assert_int_equal(s->var[1].n_ref, 30);
   sw_free(&s);
+  /* set values of every shape: a mapping, a list, a quoted string */
+  s = load_text("base: paper-fig2.yaml\nvariants:\n"
+                "  - name: c\n"
+                "    set:\n"
+                "      circuit: {R1: 1, R2: 2, R3: 1, L2: 1, L3: 4, C4: 1}\n"
+                "      x0: [0, 0.5, 0]\n"
+                "      eps: \"n^-3\"\n");
+  assert_non_null(strstr(s->var[0].scene_text, "L3: 4"));
+  assert_true(cup_scene_x0(s->var[0].scene)[1] == 0.5);
+  expect_task(s, 0, 0, 100, "n^-3", "n^-1.05", CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO);
+  sw_free(&s);
 }
 
 /* The shipped study: both paper cases, three circuit variants, n up to 10^6. */
