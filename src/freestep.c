@@ -220,8 +220,33 @@ static int implicit_init(cup_freestep *fs, char *errmsg) {
   return CUP_OK;
 }
 
+/* W = (I - h theta A)^-1 as an explicit dense matrix (the theta step
+ * multiplies by it twice: the free step and H = h W B). */
+static int theta_init(cup_freestep *fs, double theta, char *errmsg) {
+  int n = fs->n, fail = 0;
+  if (n > CUP_EXPONENTIAL_MAX_DIM)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "theta scheme: state dimension %d exceeds the dense limit %d", n, CUP_EXPONENTIAL_MAX_DIM);
+  fs->lu = zalloc((size_t)n * n, sizeof(double), &fail);
+  fs->piv = zalloc((size_t)n, sizeof(int), &fail);
+  fs->W = zalloc((size_t)n * n, sizeof(double), &fail);
+  fs->rhs = zalloc((size_t)n, sizeof(double), &fail);
+  if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
+  dense_A(fs->L, fs->lu);
+  for (size_t q = 0; q < (size_t)n * n; q++) fs->lu[q] *= -fs->h * theta;
+  for (int i = 0; i < n; i++) fs->lu[i + (size_t)i * n] += 1;
+  int bad = cup_dense_lu(fs->lu, n, fs->piv);
+  if (bad) return cup_fail(errmsg, CUP_ERR_LINALG, "theta scheme: I - h theta A is singular (column %d)", bad - 1);
+  for (int j = 0; j < n; j++) {
+    double *col = fs->W + (size_t)j * n;
+    col[j] = 1;
+    cup_dense_lu_solve(fs->lu, n, fs->piv, col, fs->work);
+  }
+  return CUP_OK;
+}
+
 int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
-                      double h, int f_order, char *errmsg) {
+                      double theta, double h, int f_order, char *errmsg) {
   memset(fs, 0, sizeof *fs);
   fs->scheme = scheme;
   fs->n = L->n;
@@ -266,6 +291,7 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
   }
   if (scheme == CUP_SCHEME_IMPLICIT) return implicit_init(fs, errmsg);
   if (scheme == CUP_SCHEME_EXPONENTIAL) return exp_init(fs, errmsg);
+  if (scheme == CUP_SCHEME_THETA) return theta_init(fs, theta, errmsg);
   if (scheme != CUP_SCHEME_EXPLICIT) return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", scheme);
   return CUP_OK;
 }
@@ -273,7 +299,7 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
 void cup_freestep_free(cup_freestep *fs) {
   free(fs->eu_const); free(fs->term_h); free(fs->ubuf); free(fs->fsum); free(fs->fbuf); free(fs->work);
   cup_quad_ws_free(&fs->qws);
-  free(fs->lu); free(fs->piv);
+  free(fs->lu); free(fs->piv); free(fs->W); free(fs->rhs);
   free(fs->gen_of_term); free(fs->M); free(fs->Eh); free(fs->Es); free(fs->ework);
   free(fs->wgen); free(fs->xa); free(fs->xa2); free(fs->Q);
   memset(fs, 0, sizeof *fs);
@@ -363,6 +389,22 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
       for (int i = 0; i < n; i++) xf[i] = x[i] + (f ? fs->fsum[i] : 0);
       if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
       cup_dense_lu_solve(fs->lu, n, fs->piv, xf, fs->work);
+      return st;
+    case CUP_SCHEME_THETA:                  /* x + W (h A x + E int u + int f) */
+      cup_zero(fs->rhs, n);
+      if (L->has_A)
+        for (int j = 0; j < n; j++) {
+          double hx = fs->h * x[j];
+          for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) fs->rhs[L->A.i[k]] += L->A.x[k] * hx;
+        }
+      if (f)
+        for (int i = 0; i < n; i++) fs->rhs[i] += fs->fsum[i];
+      if ((st = cup_status_merge(st, add_input(fs, t0, t1, fs->rhs))) < 0) return st;
+      for (int i = 0; i < n; i++) {
+        double acc = x[i];
+        for (int j = 0; j < n; j++) acc += fs->W[i + (size_t)j * n] * fs->rhs[j];
+        xf[i] = acc;
+      }
       return st;
     case CUP_SCHEME_EXPONENTIAL:
       exp_step(fs, t0, t1, x, xf);
