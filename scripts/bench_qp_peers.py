@@ -42,7 +42,11 @@ remaining reps are only spent on the reported level.
 Budget: --max-seconds S per (problem, solver): warm mode must finish its ladder
 by start + S/2, cold mode by start + S; a level is not started after its
 deadline, a sequence that runs past it is cut (points_done < K, truncated=true)
-and the accuracy is computed over the points done.
+and the accuracy is computed over the points done.  OSQP and DAQP get the
+remaining time as their own time_limit; ProxQP and PIQP have none, so on
+problems with dim + m >= 1e4 every sequence runs in a forked child that is
+killed --grace-seconds after the deadline (the points already finished are
+streamed back and kept).
 
 Reference: ref.txt if present (unless --recompute-ref).  Otherwise
 (--ref-method auto): if dim + m <= 1e5, PIQP at eps = 1e-12 (looser if it
@@ -58,6 +62,7 @@ Usage:
   python bench_qp_peers.py PROBLEM_DIR [PROBLEM_DIR...] [--solvers osqp,daqp,proxqp,piqp]
       [--acc 1e-8] [--reps 5] [--max-seconds 300] [--max-points K]
       [--ladder 1e-7,1e-8,...] [--modes warm,cold] [--recompute-ref]
+      [--ref-method auto|piqp|pdas|daqp] [--fork auto|always|never] [--grace-seconds 10]
 """
 import os
 

@@ -16,6 +16,9 @@
 #define CUP_IMPLICIT_MAX_DIM 512
 #define CUP_EXPONENTIAL_MAX_DIM 256
 #define CUP_GL_MAX 16
+/* Up to this dimension the explicit, implicit and theta free steps are one
+ * dense affine map x_free = Phi x + Gam int u (+ the f term). */
+#define CUP_AFFINE_MAX_DIM 32
 
 typedef struct cup_freestep {
   int scheme, n, p;
@@ -38,6 +41,10 @@ typedef struct cup_freestep {
   int *piv;
   /* theta: W = (I - h theta A)^-1 (n x n) */
   double *W, *rhs;
+  /* small systems: x_free = Phi x + Gam int u + Fmap int f */
+  int affine;
+  double *Phi, *Gam;        /* n x n, n x p (column-major) */
+  const double *Fmap;       /* n x n applied to int f, or NULL for the identity */
   /* exponential */
   int nw, na;               /* generator states, n + nw */
   int *gen_of_term;         /* first generator state of each input term */
