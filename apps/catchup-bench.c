@@ -6,6 +6,7 @@
  *                           [--max-points K] [--verbose]
  *   catchup-bench integrate [--n N] [--reps R]
  *   catchup-bench memory [--n N]...
+ *   catchup-bench circuit --ref-dir DIR [--n N]... [--reps R]
  *
  * One JSON line per measurement on stdout; a table on stderr. */
 #define _POSIX_C_SOURCE 200809L
@@ -286,8 +287,9 @@ static void bench_integrate(int argc, char **argv) {
   double *t = malloc(sizeof(double) * (size_t)reps);
   fprintf(stderr, "%-5s %-11s %-9s %10s %12s %8s\n", "case", "scheme", "projector", "steps/s", "ns/step", "status");
   for (int cas = 1; cas <= 2; cas++)
-    for (int scheme = 0; scheme < 3; scheme++)
+    for (int scheme = 0; scheme <= CUP_SCHEME_THETA; scheme++)
       for (int method = 0; method < 4; method++) {
+        if (scheme == CUP_SCHEME_THETA && method != CUP_PROJ_AUTO) continue;   /* its own LCP solver */
         cup_run_info info;
         for (int r = 0; r < reps; r++) t[r] = run_circuit(cas, n, scheme, method, CUP_OUTPUT_NONE, &info);
         double med = median(t, reps);
@@ -302,6 +304,110 @@ static void bench_integrate(int argc, char **argv) {
                info.dual_iterations, info.max_eps_cert, info.max_eta_cert);
         fflush(stdout);
       }
+  free(t);
+}
+
+/* ---- run time against error on the paper's circuit (for bench-vs-siconos) ---- */
+
+typedef struct { const double *ref; long n, stride; double err; } circ_err;
+
+static int circ_sink(long k, double t, const double *x, void *vp) {
+  (void)t;
+  circ_err *c = vp;
+  long j = c->n >= 1000 ? k / c->stride : k * (1000 / c->n);
+  for (int i = 0; i < 3; i++) c->err = fmax(c->err, fabs(x[i] - c->ref[3 * j + i]));
+  return 0;
+}
+
+static double *load_reference(const char *path) {
+  FILE *f = fopen(path, "r");
+  if (!f) die("cannot open %s", path);
+  double *ref = malloc(sizeof(double) * 3 * 1001);
+  char line[512];
+  if (!fgets(line, sizeof line, f)) die("empty reference %s", path);
+  for (int j = 0; j <= 1000; j++) {
+    double t;
+    if (!fgets(line, sizeof line, f) ||
+        sscanf(line, "%lf,%lf,%lf,%lf", &t, &ref[3 * j], &ref[3 * j + 1], &ref[3 * j + 2]) != 4)
+      die("bad reference line in %s", path);
+  }
+  fclose(f);
+  return ref;
+}
+
+/* Every scheme x projector (theta: 1/2 and 1) at each n: median wall time of
+ * cup_integrator_run alone (the sink sees 1001 samples) and the max-norm
+ * error against the reference limit at t = j/1000. n must divide 1000 or be
+ * a multiple of it. */
+static void bench_circuit(int argc, char **argv) {
+  const char *refdir = NULL;
+  long ns[32];
+  int nn = 0, reps = 3;
+  for (int a = 0; a < argc; a++) {
+    if (!strcmp(argv[a], "--ref-dir") && a + 1 < argc) refdir = argv[++a];
+    else if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
+    else if (!strcmp(argv[a], "--n") && a + 1 < argc && nn < 32) ns[nn++] = atol(argv[++a]);
+    else die("circuit: unknown argument %s", argv[a]);
+  }
+  if (!refdir) die("%s", "circuit: --ref-dir DIR (with ref_case1_limit_richardson.csv) is required");
+  if (!nn) { for (long n = 100; n <= 10000000; n *= 10) ns[nn++] = n; }
+  struct { int scheme, method; double theta; const char *name; } cfg[] = {
+    {CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, 0, "explicit/auto"},
+    {CUP_SCHEME_EXPLICIT, CUP_PROJ_PG, 0, "explicit/pg"},
+    {CUP_SCHEME_EXPLICIT, CUP_PROJ_FISTA, 0, "explicit/fista"},
+    {CUP_SCHEME_IMPLICIT, CUP_PROJ_AUTO, 0, "implicit/auto"},
+    {CUP_SCHEME_EXPONENTIAL, CUP_PROJ_AUTO, 0, "exponential/auto"},
+    {CUP_SCHEME_THETA, CUP_PROJ_AUTO, 0.5, "theta0.5"},
+    {CUP_SCHEME_THETA, CUP_PROJ_AUTO, 1.0, "theta1"},
+  };
+  double *t = malloc(sizeof(double) * (size_t)reps);
+  for (int cas = 1; cas <= 2; cas++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/ref_case%d_limit_richardson.csv", refdir, cas);
+    double *ref = load_reference(path);
+    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
+    cup_lcs *L = NULL;
+    char msg[CUP_ERRMSG_LEN];
+    if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+    cup_input *u = paper_input(cas);
+    for (size_t q = 0; q < sizeof cfg / sizeof cfg[0]; q++)
+      for (int k = 0; k < nn; k++) {
+        long n = ns[k];
+        if (n < 1 || !(n % 1000 == 0 || 1000 % n == 0)) die("%s", "circuit: each n must divide 1000 or be a multiple of it");
+        cup_integrator_options o;
+        cup_integrator_options_default(&o);          /* the paper's tolerances */
+        o.n = n;
+        o.scheme = cfg[q].scheme;
+        o.theta = cfg[q].theta;
+        o.proj.method = cfg[q].method;
+        o.output = CUP_OUTPUT_EVERY;
+        o.output_every = n >= 1000 ? n / 1000 : 1;
+        cup_integrator *I = NULL;
+        if (cup_integrator_create(&I, L, u, &o, msg)) die("%s", msg);
+        circ_err ce = {ref, n, n >= 1000 ? n / 1000 : 1, 0};
+        cup_run_info info;
+        double x0[3] = {0, 0, 0};
+        for (int r = 0; r < reps; r++) {
+          ce.err = 0;
+          double a = now();
+          cup_integrator_run(I, x0, circ_sink, &ce, &info);
+          t[r] = now() - a;
+        }
+        double med = median(t, reps);
+        fprintf(stderr, "case %d %-17s n %9ld: %10.4g s %8.1f ns/step error %.4e %s\n", cas, cfg[q].name,
+                n, med, med / n * 1e9, ce.err, cup_status_name(info.status));
+        printf("{\"bench\": \"circuit\", \"tool\": \"catchup\", \"case\": %d, \"config\": \"%s\", "
+               "\"n\": %ld, \"reps\": %d, \"median_s\": %.6g, \"ns_per_step\": %.4g, \"err_max\": %.6e, "
+               "\"status\": \"%s\", \"max_eps_cert\": %.3e, \"max_eta_cert\": %.3e}\n",
+               cas, cfg[q].name, n, reps, med, med / n * 1e9, ce.err, cup_status_name(info.status),
+               info.max_eps_cert, info.max_eta_cert);
+        fflush(stdout);
+        cup_integrator_free(&I);
+      }
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+    free(ref);
+  }
   free(t);
 }
 
@@ -353,12 +459,14 @@ int main(int argc, char **argv) {
   if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
     fprintf(stderr, "usage: catchup-bench projector DIR... [--reps R] [--methods auto,pg,fista] [--eps-rel E] [--eta-rel E]\n"
                     "       catchup-bench integrate [--n N] [--reps R]\n"
-                    "       catchup-bench memory [--n N]...\n");
+                    "       catchup-bench memory [--n N]...\n"
+                    "       catchup-bench circuit --ref-dir DIR [--n N]... [--reps R]\n");
     return argc < 2 ? 2 : 0;
   }
   if (!strcmp(argv[1], "projector")) bench_projector(argc - 2, argv + 2);
   else if (!strcmp(argv[1], "integrate")) bench_integrate(argc - 2, argv + 2);
   else if (!strcmp(argv[1], "memory")) bench_memory(argc - 2, argv + 2);
-  else die("unknown benchmark '%s' (projector, integrate, memory)", argv[1]);
+  else if (!strcmp(argv[1], "circuit")) bench_circuit(argc - 2, argv + 2);
+  else die("unknown benchmark '%s' (projector, integrate, memory, circuit)", argv[1]);
   return 0;
 }

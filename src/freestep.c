@@ -220,8 +220,108 @@ static int implicit_init(cup_freestep *fs, char *errmsg) {
   return CUP_OK;
 }
 
+/* W = (I - h theta A)^-1 as an explicit dense matrix (the theta step
+ * multiplies by it twice: the free step and H = h W B). */
+static int theta_init(cup_freestep *fs, double theta, char *errmsg) {
+  int n = fs->n, fail = 0;
+  if (n > CUP_EXPONENTIAL_MAX_DIM)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "theta scheme: state dimension %d exceeds the dense limit %d", n, CUP_EXPONENTIAL_MAX_DIM);
+  fs->lu = zalloc((size_t)n * n, sizeof(double), &fail);
+  fs->piv = zalloc((size_t)n, sizeof(int), &fail);
+  fs->W = zalloc((size_t)n * n, sizeof(double), &fail);
+  fs->rhs = zalloc((size_t)n, sizeof(double), &fail);
+  if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
+  dense_A(fs->L, fs->lu);
+  for (size_t q = 0; q < (size_t)n * n; q++) fs->lu[q] *= -fs->h * theta;
+  for (int i = 0; i < n; i++) fs->lu[i + (size_t)i * n] += 1;
+  int bad = cup_dense_lu(fs->lu, n, fs->piv);
+  if (bad) return cup_fail(errmsg, CUP_ERR_LINALG, "theta scheme: I - h theta A is singular (column %d)", bad - 1);
+  for (int j = 0; j < n; j++) {
+    double *col = fs->W + (size_t)j * n;
+    col[j] = 1;
+    cup_dense_lu_solve(fs->lu, n, fs->piv, col, fs->work);
+  }
+  return CUP_OK;
+}
+
+/* The free step of a small system as one dense affine map:
+ *   explicit  Phi = I + h A,           Gam = E,       f term as is
+ *   implicit  Phi = (I - h A)^-1,      Gam = Phi E,   f term through Phi
+ *   theta     Phi = I + h W A,         Gam = W E,     f term through W */
+static int affine_init(cup_freestep *fs, char *errmsg) {
+  const cup_lcs *L = fs->L;
+  int n = fs->n, p = fs->p, fail = 0;
+  fs->Phi = zalloc((size_t)n * n, sizeof(double), &fail);
+  fs->Gam = zalloc((size_t)n * (p ? p : 1), sizeof(double), &fail);
+  double *A = zalloc((size_t)n * n, sizeof(double), &fail);
+  if (fail) { free(A); return cup_fail(errmsg, CUP_ERR_NOMEM, "free step: out of memory"); }
+  dense_A(L, A);
+  const double *M = NULL;                 /* the map applied after h A x + E u */
+  if (fs->scheme == CUP_SCHEME_IMPLICIT) {
+    for (int j = 0; j < n; j++) {         /* Phi = (I - h A)^-1, column by column */
+      double *col = fs->Phi + (size_t)j * n;
+      col[j] = 1;
+      cup_dense_lu_solve(fs->lu, n, fs->piv, col, fs->work);
+    }
+    M = fs->Phi;
+  } else {
+    if (fs->scheme == CUP_SCHEME_THETA) M = fs->W;
+    for (int j = 0; j < n; j++)           /* Phi = I + h M A */
+      for (int i = 0; i < n; i++) {
+        double acc = 0;
+        for (int k = 0; k < n; k++) acc += (M ? M[i + (size_t)k * n] : (i == k)) * A[k + (size_t)j * n];
+        fs->Phi[i + (size_t)j * n] = (i == j) + fs->h * acc;
+      }
+  }
+  if (L->has_E)                           /* Gam = M E */
+    for (int c = 0; c < p; c++)
+      for (int k = L->E.p[c]; k < L->E.p[c + 1]; k++)
+        for (int i = 0; i < n; i++)
+          fs->Gam[i + (size_t)c * n] += (M ? M[i + (size_t)L->E.i[k] * n] : (i == L->E.i[k])) * L->E.x[k];
+  fs->Fmap = M;
+  free(A);
+  fs->affine = 1;
+  return CUP_OK;
+}
+
+static void waveform_step_integral(cup_freestep *fs, double t0, double t1);
+
+/* int u over the step into fs->ubuf (p entries); *has = 0 without input. */
+static int step_input(cup_freestep *fs, double t0, double t1, int *has) {
+  *has = fs->u && fs->L->has_E;
+  if (!*has || fs->const_input) return CUP_OK;   /* a constant input: ubuf holds h u */
+  if (fs->u->fn) return cup_input_integral_ws(fs->u, t0, t1, fs->ubuf, &fs->qws);
+  waveform_step_integral(fs, t0, t1);
+  return CUP_OK;
+}
+
+static int affine_apply(cup_freestep *fs, double t0, double t1, const double *restrict x,
+                        double *restrict xf, int with_f) {
+  int n = fs->n, p = fs->p, has;
+  const double *restrict Phi = fs->Phi, *restrict Gam = fs->Gam;
+  int st = step_input(fs, t0, t1, &has);
+  if (st < 0) return st;
+  for (int i = 0; i < n; i++) xf[i] = 0;
+  for (int j = 0; j < n; j++) {
+    double xj = x[j];
+    for (int i = 0; i < n; i++) xf[i] += Phi[i + (size_t)j * n] * xj;
+  }
+  if (has)
+    for (int c = 0; c < p; c++) {
+      double uc = fs->ubuf[c];
+      for (int i = 0; i < n; i++) xf[i] += Gam[i + (size_t)c * n] * uc;
+    }
+  if (with_f) {
+    const double *restrict F = fs->Fmap, *restrict fsum = fs->fsum;
+    for (int j = 0; j < n; j++)
+      for (int i = 0; i < n; i++) xf[i] += (F ? F[i + (size_t)j * n] : (i == j)) * fsum[j];
+  }
+  return st;
+}
+
 int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
-                      double h, int f_order, char *errmsg) {
+                      double theta, double h, int f_order, char *errmsg) {
   memset(fs, 0, sizeof *fs);
   fs->scheme = scheme;
   fs->n = L->n;
@@ -260,20 +360,23 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
   }
   /* a constant input is integrated once */
   fs->const_input = !fs->u || cup_input_is_constant(fs->u);
-  if (fs->u && fs->const_input && L->has_E) {
+  if (fs->u && fs->const_input && L->has_E) {   /* ubuf keeps h u for the affine path */
     cup_input_integral_ws(fs->u, 0, h, fs->ubuf, NULL);
     cup_sparse_gaxpy(&L->E, fs->ubuf, fs->eu_const);
   }
-  if (scheme == CUP_SCHEME_IMPLICIT) return implicit_init(fs, errmsg);
-  if (scheme == CUP_SCHEME_EXPONENTIAL) return exp_init(fs, errmsg);
-  if (scheme != CUP_SCHEME_EXPLICIT) return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", scheme);
-  return CUP_OK;
+  int st = CUP_OK;
+  if (scheme == CUP_SCHEME_IMPLICIT) st = implicit_init(fs, errmsg);
+  else if (scheme == CUP_SCHEME_EXPONENTIAL) return exp_init(fs, errmsg);
+  else if (scheme == CUP_SCHEME_THETA) st = theta_init(fs, theta, errmsg);
+  else if (scheme != CUP_SCHEME_EXPLICIT) return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", scheme);
+  if (!st && n <= CUP_AFFINE_MAX_DIM) st = affine_init(fs, errmsg);
+  return st;
 }
 
 void cup_freestep_free(cup_freestep *fs) {
   free(fs->eu_const); free(fs->term_h); free(fs->ubuf); free(fs->fsum); free(fs->fbuf); free(fs->work);
   cup_quad_ws_free(&fs->qws);
-  free(fs->lu); free(fs->piv);
+  free(fs->lu); free(fs->piv); free(fs->W); free(fs->rhs); free(fs->Phi); free(fs->Gam);
   free(fs->gen_of_term); free(fs->M); free(fs->Eh); free(fs->Es); free(fs->ework);
   free(fs->wgen); free(fs->xa); free(fs->xa2); free(fs->Q);
   memset(fs, 0, sizeof *fs);
@@ -349,6 +452,7 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
   const cup_lcs *L = fs->L;
   int n = fs->n, st = CUP_OK;
   if (f && (st = rhs_term(fs, t0, x, f, fctx)) < 0) return st;
+  if (fs->affine) return cup_merge(st, affine_apply(fs, t0, t1, x, xf, f != NULL));
   switch (fs->scheme) {
     case CUP_SCHEME_EXPLICIT:
       cup_copy(xf, x, n);
@@ -357,12 +461,28 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
           double hx = fs->h * x[j];
           for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) xf[L->A.i[k]] += L->A.x[k] * hx;
         }
-      if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
+      if ((st = cup_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
       break;
     case CUP_SCHEME_IMPLICIT:
       for (int i = 0; i < n; i++) xf[i] = x[i] + (f ? fs->fsum[i] : 0);
-      if ((st = cup_status_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
+      if ((st = cup_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
       cup_dense_lu_solve(fs->lu, n, fs->piv, xf, fs->work);
+      return st;
+    case CUP_SCHEME_THETA:                  /* x + W (h A x + E int u + int f) */
+      cup_zero(fs->rhs, n);
+      if (L->has_A)
+        for (int j = 0; j < n; j++) {
+          double hx = fs->h * x[j];
+          for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) fs->rhs[L->A.i[k]] += L->A.x[k] * hx;
+        }
+      if (f)
+        for (int i = 0; i < n; i++) fs->rhs[i] += fs->fsum[i];
+      if ((st = cup_merge(st, add_input(fs, t0, t1, fs->rhs))) < 0) return st;
+      for (int i = 0; i < n; i++) {
+        double acc = x[i];
+        for (int j = 0; j < n; j++) acc += fs->W[i + (size_t)j * n] * fs->rhs[j];
+        xf[i] = acc;
+      }
       return st;
     case CUP_SCHEME_EXPONENTIAL:
       exp_step(fs, t0, t1, x, xf);

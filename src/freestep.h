@@ -2,6 +2,7 @@
  *   explicit:    x_k + h A x_k + E int u + int f
  *   implicit:    (I - h A)^-1 (x_k + E int u + int f)
  *   exponential: e^{hA} x_k + int e^{A(t_{k+1}-s)} E u(s) ds + int f
+ *   theta:       x_k + W (h A x_k + E int u + int f),  W = (I - h theta A)^-1
  * with f(s, x_k) frozen at x_k as in the paper. */
 #ifndef CUP_FREESTEP_H
 #define CUP_FREESTEP_H
@@ -15,6 +16,9 @@
 #define CUP_IMPLICIT_MAX_DIM 512
 #define CUP_EXPONENTIAL_MAX_DIM 256
 #define CUP_GL_MAX 16
+/* Up to this dimension the explicit, implicit and theta free steps are one
+ * dense affine map x_free = Phi x + Gam int u (+ the f term). */
+#define CUP_AFFINE_MAX_DIM 32
 
 typedef struct cup_freestep {
   int scheme, n, p;
@@ -35,6 +39,12 @@ typedef struct cup_freestep {
   /* implicit: LU of I - h A */
   double *lu;
   int *piv;
+  /* theta: W = (I - h theta A)^-1 (n x n) */
+  double *W, *rhs;
+  /* small systems: x_free = Phi x + Gam int u + Fmap int f */
+  int affine;
+  double *Phi, *Gam;        /* n x n, n x p (column-major) */
+  const double *Fmap;       /* n x n applied to int f, or NULL for the identity */
   /* exponential */
   int nw, na;               /* generator states, n + nw */
   int *gen_of_term;         /* first generator state of each input term */
@@ -46,7 +56,7 @@ typedef struct cup_freestep {
 } cup_freestep;
 
 int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
-                      double h, int f_order, char *errmsg);
+                      double theta, double h, int f_order, char *errmsg);
 void cup_freestep_free(cup_freestep *fs);
 /* xf from x over [t0, t1] (t1 - t0 = h). Returns CUP_OK, CUP_ERR_CALLBACK,
  * or CUP_WARN_QUADRATURE. */

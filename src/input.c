@@ -226,7 +226,7 @@ int cup_input_integral_ws(const cup_input *u, double a, double b, double *out,
     int rc = gsl_integration_qag(&F, a, b, u->abs_tol, u->rel_tol, ws->limit,
                                  GSL_INTEG_GAUSS21, ws->w, &out[j], &err);
     if (q.failed) { st = CUP_ERR_CALLBACK; break; }
-    if (rc) st = cup_status_merge(st, CUP_WARN_QUADRATURE);
+    if (rc) st = cup_merge(st, CUP_WARN_QUADRATURE);
   }
   gsl_set_error_handler(old);
   return st;

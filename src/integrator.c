@@ -12,6 +12,7 @@
 #include <time.h>
 #include "catchup.h"
 #include "freestep.h"
+#include "theta.h"
 #include "lcs_impl.h"
 #include "polyset_impl.h"
 
@@ -23,6 +24,8 @@ struct cup_integrator {
   double h, eps_n, eta_n, h_rho;
   cup_freestep fs;
   cup_projector *proj;
+  cup_theta th;             /* the theta scheme's LCP step (used instead of the projector) */
+  int use_theta;
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -97,12 +100,13 @@ const char *cup_scheme_name(int scheme) {
     case CUP_SCHEME_EXPLICIT: return "explicit";
     case CUP_SCHEME_IMPLICIT: return "implicit";
     case CUP_SCHEME_EXPONENTIAL: return "exponential";
+    case CUP_SCHEME_THETA: return "theta";
   }
   return "unknown";
 }
 
 int cup_scheme_parse(const char *name) {
-  for (int k = 0; k < 3; k++)
+  for (int k = 0; k <= CUP_SCHEME_THETA; k++)
     if (name && strcmp(name, cup_scheme_name(k)) == 0) return k;
   return -1;
 }
@@ -120,6 +124,7 @@ void cup_integrator_options_default(cup_integrator_options *o) {
   o->output_every = 1;
   o->output_samples = 0;
   o->f_order = 3;
+  o->theta = 0.5;
 }
 
 /* ---- set-up --------------------------------------------------------------------- */
@@ -128,8 +133,10 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   if (!(o->T > 0) || !isfinite(o->T))
     return cup_fail(errmsg, CUP_ERR_ARG, "T = %g must be finite and > 0", o->T);
   if (o->n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "n = %ld must be >= 1", o->n);
-  if (o->scheme < CUP_SCHEME_EXPLICIT || o->scheme > CUP_SCHEME_EXPONENTIAL)
+  if (o->scheme < CUP_SCHEME_EXPLICIT || o->scheme > CUP_SCHEME_THETA)
     return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", (int)o->scheme);
+  if (o->scheme == CUP_SCHEME_THETA && !(o->theta >= 0 && o->theta <= 1))
+    return cup_fail(errmsg, CUP_ERR_ARG, "theta = %g must be in [0, 1]", o->theta);
   double e = cup_schedule_value(&o->eps, o->n), t = cup_schedule_value(&o->eta, o->n);
   if (!(e >= 0) || !isfinite(e) || !(t >= 0) || !isfinite(t))
     return cup_fail(errmsg, CUP_ERR_ARG, "tolerances eps_n = %g, eta_n = %g must be finite and >= 0", e, t);
@@ -181,7 +188,9 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
     cup_integrator_free(&I);
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   }
-  st = cup_freestep_init(&I->fs, L, u, o.scheme, I->h, o.f_order, errmsg);
+  st = cup_freestep_init(&I->fs, L, u, o.scheme, o.theta, I->h, o.f_order, errmsg);
+  I->use_theta = o.scheme == CUP_SCHEME_THETA;
+  if (!st && I->use_theta) st = cup_theta_init(&I->th, L, I->fs.W, I->h, errmsg);
   /* the paper's tolerances are absolute; a zero schedule asks for the exact
    * projection, certified relative to the problem's scale */
   cup_projector_options po = o.proj;
@@ -201,6 +210,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_integrator *I = *Ip;
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
+  if (I->use_theta) cup_theta_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0);
   free(I);
   *Ip = NULL;
@@ -270,6 +280,9 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
              pi->farkas_residual > 0 ? -pi->farkas_gap / pi->farkas_residual : INFINITY);
   else if (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)
     snprintf(buf, size, "the free step produced NaN or Inf, or overflowed (the scheme diverged)");
+  else if (st == CUP_ERR_LINALG)
+    snprintf(buf, size, "the step's LCP has a singular principal block (M = h C W B is not a "
+             "P-matrix at this step size)");
   else
     snprintf(buf, size, "projection failed: %s", cup_status_string(st));
 }
@@ -330,7 +343,14 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
                      "the input u(t) that moves K failed or returned NaN/Inf");
     cup_proj_info pi;
-    st = cup_project(I->proj, I->xf, I->xnew, &pi);
+    if (I->use_theta) {
+      double S = cup_polyset_norm(I->L->K, I->xf);
+      st = cup_theta_step(&I->th, fixed ? I->L->F : I->g, I->xf, I->xnew,
+                          I->eps_n > 0 ? I->eps_n : 1e-12 * S * S,
+                          I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
+    } else {
+      st = cup_project(I->proj, I->xf, I->xnew, &pi);
+    }
     if (st < 0) {
       char what[200];
       describe_projection_error(what, sizeof what, st, &pi);

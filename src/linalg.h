@@ -60,6 +60,14 @@ static inline void cup_zero(double *dst, int n) {
   for (int k = 0; k < n; k++) dst[k] = 0;
 }
 
+/* cup_status_merge for the library's own hot paths (the exported function
+ * is the same rule). */
+static inline int cup_merge(int first, int second) {
+  if (first < 0) return first;
+  if (second < 0) return second;
+  return first > 0 ? first : second;
+}
+
 static inline double cup_dot(const double *a, const double *b, int n) {
   double s = 0;
   for (int k = 0; k < n; k++) s += a[k] * b[k];

@@ -159,8 +159,9 @@ static int dual_activeset_dense(cup_projector *p, const double *b, const unsigne
 /* Iterative refinement on A with the primal residual: s_A(z) computed from
  * z = x + P^-1 C^T lambda is accurate to rounding even when M_AA is
  * ill-conditioned (thin wedges square the conditioning of C_A), so
- * M_AA dlam = -s_A(z) restores z to working accuracy in a step or two. */
-static int refine_dense(cup_projector *p, const double *x) {
+ * M_AA dlam = tau_A - s_A(z) restores z to working accuracy in a step or
+ * two (tau: the slack targets, or 0). */
+static int refine_dense(cup_projector *p, const double *x, const double *tau) {
   int m = p->m;
   uint64_t mask = mask_of(p->act, m);
   if (!mask) return 0;
@@ -169,8 +170,9 @@ static int refine_dense(cup_projector *p, const double *x) {
     cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
     int small = 1, nonneg = 1;
     for (int i = 0; i < m; i++) {
-      rhs[i] = p->act[i] ? -p->s[i] : 0;
-      if (p->act[i] && fabs(p->s[i]) > 2 * p->gam[i]) small = 0;
+      double target = tau ? tau[i] : 0;
+      rhs[i] = p->act[i] ? target - p->s[i] : 0;
+      if (p->act[i] && fabs(p->s[i] - target) > 2 * p->gam[i]) small = 0;
       nonneg &= p->lam[i] >= 0;
     }
     if (small) return nonneg;              /* y, s, gam are those of lam */
@@ -236,10 +238,22 @@ int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *i
     p->act[i] = p->opt.warm_start && p->lam_warm[i] > 0;
     p->lam[i] = 0;
   }
-  int st = dual_activeset_dense(p, p->b, NULL, p->act, p->lam, tolA);
+  /* First aim the active rows' slack at tau = 16 gam (the projection onto
+   * K shrunk by a few ulps): then the answer is certainly feasible and
+   * certifies itself. A set without interior makes the shrunk problem
+   * infeasible: then solve the exact one. */
+  double *bs = p->sv, *tau = p->s_inward;
+  for (int i = 0; i < m; i++) {
+    tau[i] = 16 * p->gam[i] + DBL_MIN;
+    bs[i] = p->b[i] - tau[i];
+  }
+  int st = dual_activeset_dense(p, bs, NULL, p->act, p->lam, tolA);
+  if (st == 1 && finish(p, x, info, inward_dense, refine_dense(p, x, tau))) return CUP_OK;
+  for (int i = 0; i < m; i++) p->lam[i] = 0;
+  st = dual_activeset_dense(p, p->b, NULL, p->act, p->lam, tolA);
   if (st < 0 && cup_farkas_test(p, p->dwork + 4 * (size_t)m, info)) return CUP_ERR_EMPTY_SET;
   if (st == 1) {
-    if (finish(p, x, info, inward_dense, refine_dense(p, x))) return CUP_OK;
+    if (finish(p, x, info, inward_dense, refine_dense(p, x, NULL))) return CUP_OK;
     /* The exact optimum, certified only to what rounding allows (a set
      * without interior, or a thin wedge): iterating cannot do better. */
     return CUP_WARN_NOT_CERTIFIED;
@@ -255,7 +269,7 @@ int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *i
     for (int i = 0; i < m; i++) { p->act[i] = p->lam[i] > 0; p->lam[i] = 0; }
     entry_tolerances(p, info->scale, tolA);
     if (dual_activeset_dense(p, p->b, NULL, p->act, p->lam, tolA) == 1 &&
-        finish(p, x, info, inward_dense, refine_dense(p, x)))
+        finish(p, x, info, inward_dense, refine_dense(p, x, NULL)))
       return CUP_OK;
     memcpy(p->lam, p->wm4, sizeof(double) * (size_t)m);
   }

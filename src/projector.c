@@ -413,8 +413,7 @@ int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
 int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info_out) {
   cup_proj_info local;
   cup_proj_info *info = info_out ? info_out : &local;
-  memset(info, 0, sizeof *info);
-  info->eta_cert = INFINITY;
+  *info = (cup_proj_info){.eta_cert = INFINITY};
   if (!p || !x || !z) return info->status = CUP_ERR_ARG;
   const cup_polyset *K = p->K;
   int n = p->n, m = p->m;

@@ -173,6 +173,78 @@ static void test_paper_tolerances(void **state) {
     }
 }
 
+/* The theta scheme: theta = 0 is the explicit catching-up step (the LCP of
+ * a symmetric M is the P-projection), and theta = 1/2 reproduces Siconos
+ * 4.4's Moreau-Jean values on case 1 (measured with EulerMoreauOSI,
+ * theta = 0.5, Lemke: 8.737e-6 at n = 10^3, 1.444e-7 at 10^4, 9.965e-10 at
+ * 10^5). */
+static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta,
+                      double *X) {
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = n;
+  o.scheme = scheme;
+  o.theta = theta;
+  o.eps = (cup_schedule){0, 0};
+  o.eta = (cup_schedule){0, 0};
+  cup_integrator *I = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
+  double x0[3] = {0, 0, 0};
+  store_ctx sc = {X};
+  cup_run_info info;
+  if (cup_integrator_run(I, x0, store_sink, &sc, &info) < 0) fail_msg("run: %s", info.message);
+  cup_integrator_free(&I);
+}
+
+static void test_theta_scheme(void **state) {
+  (void)state;
+  for (int cas = 1; cas <= 2; cas++) {
+    cup_lcs *L = paper_lcs(cas);
+    cup_input *u = paper_input(cas);
+    long n = 1000;
+    double *X0 = malloc(sizeof(double) * 3 * (size_t)(n + 1)), *Xe = malloc(sizeof(double) * 3 * (size_t)(n + 1));
+    run_store(L, u, n, CUP_SCHEME_THETA, 0, X0);
+    run_store(L, u, n, CUP_SCHEME_EXPLICIT, 0, Xe);
+    double d = 0;
+    for (long q = 0; q < 3 * (n + 1); q++) d = fmax(d, fabs(X0[q] - Xe[q]));
+    print_message("case %d: theta = 0 vs explicit projection: max difference %.3e\n", cas, d);
+    assert_true(d <= 1e-12);
+    free(X0); free(Xe);
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+  }
+  cup_lcs *L = paper_lcs(1);
+  cup_input *u = paper_input(1);
+  static const double siconos[3] = {8.737e-6, 1.444e-7, 9.965e-10};
+  double e[3];
+  for (int k = 0; k < 3; k++) {
+    long n = 1000 * (long)pow(10, k);
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.n = n;
+    o.scheme = CUP_SCHEME_THETA;
+    o.theta = 0.5;
+    o.eps = (cup_schedule){0, 0};
+    o.eta = (cup_schedule){0, 0};
+    o.output = CUP_OUTPUT_EVERY;
+    o.output_every = n / 1000;
+    cup_integrator *I = NULL;
+    assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
+    err_ctx c = {NULL, NULL, ref1, 3, n, 0, 0};
+    double x0[3] = {0, 0, 0};
+    cup_run_info info;
+    assert_true(cup_integrator_run(I, x0, err_sink, &c, &info) >= 0);
+    e[k] = c.err;
+    print_message("theta = 1/2, case 1, n %7ld: error %.4e (Siconos %.4e)\n", n, e[k], siconos[k]);
+    assert_true(fabs(e[k] - siconos[k]) <= 0.01 * siconos[k]);
+    cup_integrator_free(&I);
+  }
+  assert_true(order_of(e[1], e[2]) > 1.9);        /* second order once the kinks resolve */
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+}
+
 /* ---- closed forms --------------------------------------------------------------- */
 
 /* A small LCS from dense row-major matrices (absent ones: NULL). */
@@ -572,6 +644,7 @@ static void test_schedules(void **state) {
     assert_non_null(strstr(msg, "schedule"));
   }
   assert_int_equal(cup_scheme_parse("implicit"), CUP_SCHEME_IMPLICIT);
+  assert_int_equal(cup_scheme_parse("theta"), CUP_SCHEME_THETA);
   assert_int_equal(cup_scheme_parse("rk4"), -1);
 }
 
@@ -655,6 +728,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_paper_cases_exact_projection),
     cmocka_unit_test(test_paper_tolerances),
+    cmocka_unit_test(test_theta_scheme),
     cmocka_unit_test(test_closed_form_moving_interval),
     cmocka_unit_test(test_closed_form_interval_with_relaxation),
     cmocka_unit_test(test_closed_form_cone),

@@ -18,7 +18,11 @@ typedef struct cup_integrator cup_integrator;
 typedef enum cup_scheme {
   CUP_SCHEME_EXPLICIT = 0,    /**< the paper: x_k + h A x_k + E int u + int f */
   CUP_SCHEME_IMPLICIT = 1,    /**< (I - h A)^-1 (x_k + E int u + int f), then project */
-  CUP_SCHEME_EXPONENTIAL = 2  /**< exact flow of A with the exact input convolution */
+  CUP_SCHEME_EXPONENTIAL = 2, /**< exact flow of A with the exact input convolution */
+  CUP_SCHEME_THETA = 3        /**< Moreau-Jean theta-method: W = (I - h theta A)^-1, then the
+                                   exact LCP of the step (not a projection for theta > 0;
+                                   theta = 1/2 is second order where the solution is smooth);
+                                   small dense systems (m <= 64, n <= 256) */
 } cup_scheme;
 
 /** A tolerance schedule: value(n) = coef * n^power ("n^-2.1": coef 1,
@@ -73,6 +77,7 @@ typedef struct cup_integrator_options {
   void *f_ctx;                /**< passed to f */
   int f_order;                /**< Gauss-Legendre points for int f (default 3) */
   double max_wall_seconds;    /**< stop with CUP_ERR_TIME_LIMIT after this (0: none) */
+  double theta;               /**< THETA: in [0, 1]; default 0.5 */
   cup_step_fn on_step;        /**< per-step projector statistics, or NULL */
   void *step_ctx;             /**< passed to on_step */
   const volatile int *interrupt; /**< polled every 1024 steps: nonzero stops the run with
@@ -117,7 +122,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
 const double *cup_integrator_state(const cup_integrator *I);
 
 const char *cup_scheme_name(int scheme);
-/** "explicit", "implicit", "exponential"; -1 if unknown. */
+/** "explicit", "implicit", "exponential", "theta"; -1 if unknown. */
 int cup_scheme_parse(const char *name);
 
 #ifdef __cplusplus

@@ -131,6 +131,7 @@ module catchup_types
     type(c_ptr) :: f_ctx = c_null_ptr
     integer(c_int) :: f_order = 0
     real(c_double) :: max_wall_seconds = 0
+    real(c_double) :: theta = 0                  !< THETA scheme: in [0, 1]
     type(c_funptr) :: on_step = c_null_funptr   !< c_funloc of a procedure(cup_step_fn)
     type(c_ptr) :: step_ctx = c_null_ptr
     type(c_ptr) :: interrupt = c_null_ptr   !< c_loc of an integer(c_int) flag polled every 1024 steps

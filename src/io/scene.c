@@ -750,7 +750,7 @@ static int read_schedule(rd *r, const st_node *root, const char *key, const char
   return *spec ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-static const char *const scheme_names[] = {"explicit", "implicit", "exponential", NULL};
+static const char *const scheme_names[] = {"explicit", "implicit", "exponential", "theta", NULL};
 static const char *const method_names[] = {"auto", "pg", "fista", "activeset", NULL};
 
 /* A word from a list, parsed by the library's own parser. */
@@ -817,6 +817,10 @@ static int read_method(rd *r, const st_node *root, cup_integrator_options *o) {
   if ((nd = opt(root, "scheme")) &&
       !(st = read_word(r, nd, "scheme", "scheme", scheme_names, cup_scheme_parse, &scheme)))
     o->scheme = (cup_scheme)scheme;
+  if (!st && (nd = opt(root, "theta"))) {
+    st = number_min(r, nd, "theta", 0, 0, &o->theta);
+    if (!st && !(o->theta <= 1)) st = fail(r, CUP_ERR_PARSE, nd, "theta", "must be in [0, 1] (got %g)", o->theta);
+  }
   if (!st && (nd = opt(root, "projector"))) st = read_projector(r, nd, &o->proj);
   if (!st && (nd = opt(root, "output"))) st = read_output(r, nd, o);
   return st;
@@ -863,7 +867,7 @@ static int read_name(rd *r, const st_node *root, cup_scene *S) {
 
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "input", "x0", "T", "n", "eps", "eta",
-                                      "scheme", "projector", "output", NULL};
+                                      "scheme", "theta", "projector", "output", NULL};
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
   if (!st) st = read_model(r, root, &S->lcs);

@@ -69,7 +69,7 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_integrator_options, output_every), OFF(cup_integrator_options, output_samples),
         OFF(cup_integrator_options, f), OFF(cup_integrator_options, f_ctx),
         OFF(cup_integrator_options, f_order), OFF(cup_integrator_options, max_wall_seconds),
-        OFF(cup_integrator_options, on_step), OFF(cup_integrator_options, step_ctx),
+        OFF(cup_integrator_options, theta), OFF(cup_integrator_options, on_step), OFF(cup_integrator_options, step_ctx),
         OFF(cup_integrator_options, interrupt));
   if (!strcmp(name, "cup_run_info"))
     PUT(sizeof(cup_run_info), OFF(cup_run_info, status), OFF(cup_run_info, step),

@@ -96,7 +96,8 @@ contains
       off(b, c_loc(o%T)), off(b, c_loc(o%n)), off(b, c_loc(o%eps)), off(b, c_loc(o%eta)), &
       off(b, c_loc(o%proj)), off(b, c_loc(o%output)), off(b, c_loc(o%output_every)), &
       off(b, c_loc(o%output_samples)), off(b, c_loc(o%f)), off(b, c_loc(o%f_ctx)), &
-      off(b, c_loc(o%f_order)), off(b, c_loc(o%max_wall_seconds)), off(b, c_loc(o%on_step)), &
+      off(b, c_loc(o%f_order)), off(b, c_loc(o%max_wall_seconds)), off(b, c_loc(o%theta)), &
+      off(b, c_loc(o%on_step)), &
       off(b, c_loc(o%step_ctx)), off(b, c_loc(o%interrupt))])
     b = c_loc(r)
     call compare('cup_run_info', [int(c_sizeof(r), c_long), off(b, c_loc(r%status)), off(b, c_loc(r%step)), &

@@ -1,0 +1,172 @@
+/* theta — see theta.h. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "theta.h"
+
+int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg) {
+  memset(th, 0, sizeof *th);
+  const cup_polyset *K = L->K;
+  int n = th->n = L->n, m = th->m = L->m;
+  th->K = K;
+  if (!K->dense)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
+                    "use the explicit, implicit or exponential scheme", m, n, CUP_DENSE_MAX_ROWS,
+                    CUP_DENSE_MAX_DIM);
+  size_t N = (size_t)n, M = (size_t)m + 1;
+  th->H = calloc(N * M, sizeof(double));
+  th->M = calloc(M * M, sizeof(double));
+  th->lam = calloc(M, sizeof(double)); th->w = calloc(M, sizeof(double));
+  th->rhs = calloc(M, sizeof(double)); th->sol = calloc(M, sizeof(double));
+  th->lu = calloc(M * M, sizeof(double)); th->work = calloc(M + N, sizeof(double));
+  th->s = calloc(M, sizeof(double)); th->gam = calloc(M, sizeof(double));
+  th->v = calloc(N, sizeof(double));
+  th->piv = calloc(M, sizeof(int)); th->idx = calloc(M, sizeof(int));
+  th->act = calloc(M, 1); th->prev = calloc(M, 1);
+  if (!th->H || !th->M || !th->lam || !th->w || !th->rhs || !th->sol || !th->lu || !th->work ||
+      !th->s || !th->gam || !th->v || !th->piv || !th->idx || !th->act || !th->prev)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
+  /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T) */
+  for (int i = 0; i < m; i++)
+    for (int r = 0; r < n; r++) {
+      double acc = 0;
+      for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * K->Bt[(size_t)i * n + c];
+      th->H[r + (size_t)i * n] = h * acc;
+    }
+  for (int j = 0; j < m; j++)                      /* M = C H */
+    for (int i = 0; i < m; i++) {
+      double acc = 0;
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * th->H[K->Ct.i[k] + (size_t)j * n];
+      th->M[i + (size_t)j * m] = acc;
+    }
+  return CUP_OK;
+}
+
+void cup_theta_free(cup_theta *th) {
+  free(th->H); free(th->M); free(th->lam); free(th->w); free(th->rhs); free(th->sol);
+  free(th->lu); free(th->work); free(th->s); free(th->gam); free(th->v); free(th->piv);
+  free(th->idx); free(th->act); free(th->prev);
+  memset(th, 0, sizeof *th);
+}
+
+/* lambda on A from M_AA lambda_A = -q_A (LU with partial pivoting; M is not
+ * symmetric), w = q + M lambda. Returns nonzero for a singular block. */
+static int solve_on(cup_theta *th, const double *q) {
+  int m = th->m, k = 0;
+  for (int i = 0; i < m; i++) if (th->act[i]) th->idx[k++] = i;
+  for (int i = 0; i < m; i++) th->lam[i] = 0;
+  if (k) {
+    for (int b = 0; b < k; b++) {
+      th->rhs[b] = -q[th->idx[b]];
+      for (int a = 0; a < k; a++) th->lu[a + (size_t)b * k] = th->M[th->idx[a] + (size_t)th->idx[b] * m];
+    }
+    if (cup_dense_lu(th->lu, k, th->piv)) return 1;
+    cup_dense_lu_solve(th->lu, k, th->piv, th->rhs, th->work);
+    for (int b = 0; b < k; b++) th->lam[th->idx[b]] = th->rhs[b];
+  }
+  for (int i = 0; i < m; i++) {
+    double acc = q[i];
+    for (int b = 0; b < k; b++) acc += th->M[i + (size_t)th->idx[b] * m] * th->lam[th->idx[b]];
+    th->w[i] = acc;
+  }
+  return 0;
+}
+
+/* Murty's least-index principal pivoting: finite for a P-matrix. */
+static int lcp(cup_theta *th, const double *q, int *pivots) {
+  int m = th->m;
+  double scale = 0;
+  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
+  for (int it = 0; it < 16 * m + 64; it++) {
+    if (solve_on(th, q)) return CUP_ERR_LINALG;
+    double lmax = 0;
+    for (int i = 0; i < m; i++) lmax = cup_max(lmax, fabs(th->lam[i]));
+    double tol_l = 64 * DBL_EPSILON * lmax, tol_w = 64 * DBL_EPSILON * scale;
+    int flip = -1;
+    for (int i = 0; i < m && flip < 0; i++)
+      if ((th->act[i] && th->lam[i] < -tol_l) || (!th->act[i] && th->w[i] < -tol_w)) flip = i;
+    if (flip < 0) return CUP_OK;
+    th->act[flip] = !th->act[flip];
+    (*pivots)++;
+  }
+  return CUP_ERR_LINALG;                          /* cycling: not a P-matrix */
+}
+
+/* A certified distance of z to K from its slack s (with rounding bounds
+ * gam): 0 when z is certainly in K, else a push along the polyset's
+ * direction into K, verified; INFINITY when neither works. */
+static double certified_eta(cup_theta *th, const double *g, const double *z) {
+  const cup_polyset *K = th->K;
+  int n = th->n, m = th->m;
+  double worst = INFINITY;
+  for (int i = 0; i < m; i++) worst = cup_min(worst, th->s[i] - th->gam[i]);
+  if (worst >= 0) return 0;
+  if (!K->rdir) return INFINITY;
+  double t = 0;
+  for (int i = 0; i < m; i++)
+    if (th->s[i] - th->gam[i] < 0) {
+      if (!(K->Crdir[i] > 0)) return INFINITY;
+      t = cup_max(t, (3 * th->gam[i] - th->s[i]) / K->Crdir[i]);
+    }
+  for (int j = 0; j < n; j++) th->v[j] = z[j] + t * K->rdir[j];
+  return cup_slack(K, g, th->v, th->w, th->work) >= 0 ? t * K->rdir_norm * (1 + 8 * DBL_EPSILON)
+                                                      : INFINITY;
+}
+
+int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z,
+                   double eps_target, double eta_target, cup_proj_info *info) {
+  const cup_polyset *K = th->K;
+  int n = th->n, m = th->m;
+  memset(info, 0, sizeof *info);
+  info->eps_target = eps_target;
+  info->eta_target = eta_target;
+  info->method = CUP_PROJ_ACTIVESET;
+  for (int j = 0; j < n; j++)
+    if (!isfinite(xf[j])) return info->status = CUP_ERR_NONFINITE;
+  double *q = th->s;                              /* q = C x_free + g */
+  cup_slack(K, g, xf, q, th->gam);
+  info->scale = cup_polyset_norm(K, xf);
+  double qmin = INFINITY;
+  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
+  if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
+    cup_copy(z, xf, n);
+    cup_zero(th->lam, m);
+    info->skipped = 1;
+    info->eta_cert = certified_eta(th, g, z);
+    return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  }
+  memcpy(th->act, th->prev, (size_t)m);           /* warm start: the last active set */
+  int pivots = 0;
+  int st = lcp(th, q, &pivots);
+  if (st == CUP_ERR_LINALG) {                     /* retry cold before giving up */
+    memset(th->act, 0, (size_t)m);
+    st = lcp(th, q, &pivots);
+  }
+  info->iterations = pivots + 1;
+  if (st) return info->status = st;
+  memcpy(th->prev, th->act, (size_t)m);
+  for (int i = 0; i < m; i++) th->lam[i] = cup_max(th->lam[i], 0);
+  cup_copy(z, xf, n);
+  for (int i = 0; i < m; i++) {
+    if (th->lam[i] == 0) continue;
+    for (int r = 0; r < n; r++) z[r] += th->H[r + (size_t)i * n] * th->lam[i];
+  }
+  /* certificates from the slack of z itself */
+  cup_slack(K, g, z, th->s, th->gam);
+  double gap = 0, viol = 0;
+  int active = 0;
+  for (int i = 0; i < m; i++) {
+    gap += 2 * th->lam[i] * (th->s[i] + th->gam[i]);
+    viol = cup_max(viol, -th->s[i]);
+    active += th->lam[i] > 0;
+  }
+  info->active = active;
+  info->violation = viol;
+  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
+  info->eta_cert = certified_eta(th, g, z);
+  return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
+                            ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+}

@@ -1,0 +1,38 @@
+/* theta — the theta-method step of a small LCS (Moreau-Jean time stepping,
+ * as in Siconos's EulerMoreauOSI):
+ *     W = (I - h theta A)^-1,   x_free = x_k + W (h A x_k + E int u + int f),
+ *     x_{k+1} = x_free + H lambda,  H = h W B,  B = P^-1 C^T,
+ *     0 <= lambda  _|_  w = C x_{k+1} + g >= 0,   an LCP with M = C H.
+ * theta = 0 is the explicit catching-up step (M symmetric: the P-projection);
+ * theta = 1/2 is second order where the solution is smooth. The LCP is
+ * solved exactly by least-index principal pivoting (Murty), warm-started
+ * from the previous active set; dense, for m <= 64 rows and n <= 256. */
+#ifndef CUP_THETA_H
+#define CUP_THETA_H
+
+#include "catchup/projector.h"
+#include "lcs_impl.h"
+#include "polyset_impl.h"
+
+typedef struct cup_theta {
+  int n, m;
+  const cup_polyset *K;
+  double *H;        /* n x m, column-major */
+  double *M;        /* m x m, column-major */
+  double *lam, *w, *rhs, *sol, *lu, *work, *s, *gam, *v;
+  int *piv, *idx;
+  unsigned char *act, *prev;
+} cup_theta;
+
+/* W (n x n, column-major) from the free step; builds H and M. */
+int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg);
+void cup_theta_free(cup_theta *th);
+/* z from the free point xf for the offset g; certificates in info:
+ * eps_cert = 2 lambda^T (s + gam) (the complementarity gap; for theta = 0 the
+ * projector's weak-duality certificate), eta_cert a certified distance of z
+ * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a
+ * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */
+int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z,
+                   double eps_target, double eta_target, cup_proj_info *info);
+
+#endif
