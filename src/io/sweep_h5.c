@@ -290,8 +290,6 @@ static const char *const reference_method =
   "term; /references/summary 'correction' = max |x(2 n_ref) - x(n_ref)| bounds what it removed.";
 
 static int write_grid_attrs(hid_t root, const cup_sweep *s) {
-  static const char *const sch[] = {"explicit", "implicit", "exponential"};
-  static const char *const prj[] = {"auto", "pg", "fista", "activeset"};
   int r = 0;
   if (s->len[SW_AXIS_N]) {
     int64_t *n = malloc(sizeof *n * (size_t)s->len[SW_AXIS_N]);
@@ -302,13 +300,14 @@ static int write_grid_attrs(hid_t root, const cup_sweep *s) {
   }
   if (s->len[SW_AXIS_EPS]) r |= attr_strs(root, "grid_eps", (const char *const *)s->eps, s->len[SW_AXIS_EPS]);
   if (s->len[SW_AXIS_ETA]) r |= attr_strs(root, "grid_eta", (const char *const *)s->eta, s->len[SW_AXIS_ETA]);
-  const char *w[16];
-  int ls = s->len[SW_AXIS_SCHEME] < 16 ? s->len[SW_AXIS_SCHEME] : 16;
-  for (int k = 0; k < ls; k++) w[k] = sch[s->scheme[k]];
+  int ls = s->len[SW_AXIS_SCHEME], lp = s->len[SW_AXIS_PROJECTOR];
+  const char **w = malloc(sizeof *w * (size_t)(ls > lp ? ls : lp) + 1);
+  if (!w) return -1;
+  for (int k = 0; k < ls; k++) w[k] = cup_scheme_name(s->scheme[k]);
   if (ls) r |= attr_strs(root, "grid_scheme", w, ls);
-  int lp = s->len[SW_AXIS_PROJECTOR] < 16 ? s->len[SW_AXIS_PROJECTOR] : 16;
-  for (int k = 0; k < lp; k++) w[k] = prj[s->projector[k]];
+  for (int k = 0; k < lp; k++) w[k] = cup_proj_method_name(s->projector[k]);
   if (lp) r |= attr_strs(root, "grid_projector", w, lp);
+  free(w);
   char *g = sw_grid_text(s);
   r |= g ? attr_str(root, "grid", g) : -1;
   free(g);
