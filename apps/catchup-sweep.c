@@ -51,6 +51,7 @@ enum { AHEAD = 2, MAX_BATCH = 256 };
 #define BATCH_COST 50000.0
 #define FLUSH_SECONDS 1.0
 #define PROGRESS_SECONDS 0.25
+#define PROGRESS_LOG_SECONDS 10.0
 #define STOP_GRACE_SECONDS 10.0
 
 static const char usage_text[] =
@@ -502,17 +503,25 @@ static void fmt_seconds(char *buf, size_t n, double s) {
   else snprintf(buf, n, "%.0f h %02.0f min", floor(s / 3600), fmod(floor(s / 60), 60));
 }
 
+/* The progress line: rewritten in place every PROGRESS_SECONDS on a
+ * terminal; on a log (neither stdout nor stderr a terminal: mpirun makes
+ * stderr a pipe even interactively, so stdout decides) one full line every
+ * PROGRESS_LOG_SECONDS. */
 static void progress(manager_t *m, int final) {
+  static int live = -1;
+  if (live < 0) live = isatty(STDOUT_FILENO) || isatty(STDERR_FILENO);
   double now = now_seconds();
-  if (m->args->quiet || (!final && now - m->last_progress < PROGRESS_SECONDS)) return;
+  double every = live ? PROGRESS_SECONDS : PROGRESS_LOG_SECONDS;
+  if (m->args->quiet || (!final && now - m->last_progress < every)) return;
   m->last_progress = now;
   char el[32], eta[32];
   double elapsed = now - m->t_start;
   fmt_seconds(el, sizeof el, elapsed);
   fmt_seconds(eta, sizeof eta, m->cost_done > 0 ? elapsed * m->cost_left / m->cost_done : NAN);
-  fprintf(stderr, "\rcatchup-sweep: %ld/%ld done, %ld failed, %s elapsed, ETA %s   ",
-          m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, el, m->cost_left <= 0 ? "0 s" : eta);
-  if (final) fputc('\n', stderr);
+  fprintf(stderr, "%scatchup-sweep: %ld/%ld done, %ld failed, %s elapsed, ETA %s%s",
+          live ? "\r" : "", m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, el,
+          m->cost_left <= 0 ? "0 s" : eta, live ? "   " : "\n");
+  if (final && live) fputc('\n', stderr);
   fflush(stderr);
 }
 
