@@ -280,6 +280,19 @@ static int affine_init(cup_freestep *fs, char *errmsg) {
         for (int i = 0; i < n; i++)
           fs->Gam[i + (size_t)c * n] += (M ? M[i + (size_t)L->E.i[k] * n] : (i == L->E.i[k])) * L->E.x[k];
   fs->Fmap = M;
+  /* row-major for the step: each entry of x_free is one dot product kept
+   * in a register (column sweeps chain every update through memory) */
+  for (size_t q = 0; q < (size_t)n * n; q++) A[q] = fs->Phi[q];
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++) fs->Phi[(size_t)i * n + j] = A[i + (size_t)j * n];
+  if (p) {
+    double *GamR = zalloc((size_t)n * p, sizeof(double), &fail);
+    if (fail) { free(A); return cup_fail(errmsg, CUP_ERR_NOMEM, "free step: out of memory"); }
+    for (int i = 0; i < n; i++)
+      for (int c = 0; c < p; c++) GamR[(size_t)i * p + c] = fs->Gam[i + (size_t)c * n];
+    free(fs->Gam);
+    fs->Gam = GamR;
+  }
   free(A);
   fs->affine = 1;
   return CUP_OK;
@@ -302,16 +315,17 @@ static int affine_apply(cup_freestep *fs, double t0, double t1, const double *re
   const double *restrict Phi = fs->Phi, *restrict Gam = fs->Gam;
   int st = step_input(fs, t0, t1, &has);
   if (st < 0) return st;
-  for (int i = 0; i < n; i++) xf[i] = 0;
-  for (int j = 0; j < n; j++) {
-    double xj = x[j];
-    for (int i = 0; i < n; i++) xf[i] += Phi[i + (size_t)j * n] * xj;
-  }
-  if (has)
-    for (int c = 0; c < p; c++) {
-      double uc = fs->ubuf[c];
-      for (int i = 0; i < n; i++) xf[i] += Gam[i + (size_t)c * n] * uc;
+  const double *restrict u = fs->ubuf;
+  for (int i = 0; i < n; i++) {
+    const double *restrict row = Phi + (size_t)i * n;
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += row[j] * x[j];
+    if (has) {
+      const double *restrict grow = Gam + (size_t)i * p;
+      for (int c = 0; c < p; c++) acc += grow[c] * u[c];
     }
+    xf[i] = acc;
+  }
   if (with_f) {
     const double *restrict F = fs->Fmap, *restrict fsum = fs->fsum;
     for (int j = 0; j < n; j++)

@@ -43,7 +43,7 @@ typedef struct cup_freestep {
   double *W, *rhs;
   /* small systems: x_free = Phi x + Gam int u + Fmap int f */
   int affine;
-  double *Phi, *Gam;        /* n x n, n x p (column-major) */
+  double *Phi, *Gam;        /* n x n, n x p (row-major) */
   const double *Fmap;       /* n x n applied to int f, or NULL for the identity */
   /* exponential */
   int nw, na;               /* generator states, n + nw */

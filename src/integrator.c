@@ -261,7 +261,10 @@ static int moving_offset(cup_integrator *I, double t) {
   if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
   memcpy(I->g, L->F, sizeof(double) * (size_t)I->m);
   cup_sparse_gaxpy(&L->G, I->ut, I->g);
-  return cup_projector_set_offset(I->proj, I->g);
+  if (!I->use_theta) return cup_projector_set_offset(I->proj, I->g);
+  for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
+    if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
+  return CUP_OK;
 }
 
 static void tally(cup_run_info *info, const cup_proj_info *pi) {
@@ -345,7 +348,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     cup_proj_info pi;
     if (I->use_theta) {
       double S = cup_polyset_norm(I->L->K, I->xf);
-      st = cup_theta_step(&I->th, fixed ? I->L->F : I->g, I->xf, I->xnew,
+      st = cup_theta_step(&I->th, fixed ? I->L->F : I->g, I->xf, I->xnew, S,
                           I->eps_n > 0 ? I->eps_n : 1e-12 * S * S,
                           I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
     } else {

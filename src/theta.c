@@ -52,16 +52,32 @@ void cup_theta_free(cup_theta *th) {
   memset(th, 0, sizeof *th);
 }
 
-/* lambda on A from M_AA lambda_A = -q_A (LU with partial pivoting; M is not
- * symmetric), w = q + M lambda. Returns nonzero for a singular block. */
+/* lambda on A from M_AA lambda_A = -q_A (closed form for one or two active
+ * rows: Cramer's rule is forward stable for 2 x 2; else LU with partial
+ * pivoting, M is not symmetric), w = q + M lambda. Returns nonzero for a
+ * singular block. */
 static int solve_on(cup_theta *th, const double *q) {
   int m = th->m, k = 0;
+  const double *M = th->M;
   for (int i = 0; i < m; i++) if (th->act[i]) th->idx[k++] = i;
   for (int i = 0; i < m; i++) th->lam[i] = 0;
-  if (k) {
+  if (k == 1) {
+    int a = th->idx[0];
+    double d = M[a + (size_t)a * m];
+    if (!(d != 0)) return 1;
+    th->lam[a] = -q[a] / d;
+  } else if (k == 2) {
+    int a = th->idx[0], b = th->idx[1];
+    double maa = M[a + (size_t)a * m], mab = M[a + (size_t)b * m];
+    double mba = M[b + (size_t)a * m], mbb = M[b + (size_t)b * m];
+    double det = maa * mbb - mab * mba;
+    if (!(det != 0)) return 1;
+    th->lam[a] = (-q[a] * mbb + q[b] * mab) / det;
+    th->lam[b] = (-q[b] * maa + q[a] * mba) / det;
+  } else if (k) {
     for (int b = 0; b < k; b++) {
       th->rhs[b] = -q[th->idx[b]];
-      for (int a = 0; a < k; a++) th->lu[a + (size_t)b * k] = th->M[th->idx[a] + (size_t)th->idx[b] * m];
+      for (int a = 0; a < k; a++) th->lu[a + (size_t)b * k] = M[th->idx[a] + (size_t)th->idx[b] * m];
     }
     if (cup_dense_lu(th->lu, k, th->piv)) return 1;
     cup_dense_lu_solve(th->lu, k, th->piv, th->rhs, th->work);
@@ -69,7 +85,7 @@ static int solve_on(cup_theta *th, const double *q) {
   }
   for (int i = 0; i < m; i++) {
     double acc = q[i];
-    for (int b = 0; b < k; b++) acc += th->M[i + (size_t)th->idx[b] * m] * th->lam[th->idx[b]];
+    for (int b = 0; b < k; b++) acc += M[i + (size_t)th->idx[b] * m] * th->lam[th->idx[b]];
     th->w[i] = acc;
   }
   return 0;
@@ -116,7 +132,7 @@ static double certified_eta(cup_theta *th, const double *g, const double *z) {
                                                       : INFINITY;
 }
 
-int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z,
+int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, double scale,
                    double eps_target, double eta_target, cup_proj_info *info) {
   const cup_polyset *K = th->K;
   int n = th->n, m = th->m;
@@ -128,7 +144,7 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z,
     if (!isfinite(xf[j])) return info->status = CUP_ERR_NONFINITE;
   double *q = th->s;                              /* q = C x_free + g */
   cup_slack(K, g, xf, q, th->gam);
-  info->scale = cup_polyset_norm(K, xf);
+  info->scale = scale;
   double qmin = INFINITY;
   for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */

@@ -27,12 +27,13 @@ typedef struct cup_theta {
 /* W (n x n, column-major) from the free step; builds H and M. */
 int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg);
 void cup_theta_free(cup_theta *th);
-/* z from the free point xf for the offset g; certificates in info:
+/* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
+ * reported in info->scale); certificates in info:
  * eps_cert = 2 lambda^T (s + gam) (the complementarity gap; for theta = 0 the
  * projector's weak-duality certificate), eta_cert a certified distance of z
  * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a
  * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */
-int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z,
+int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, double scale,
                    double eps_target, double eta_target, cup_proj_info *info);
 
 #endif
