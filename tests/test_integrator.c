@@ -276,6 +276,99 @@ static void unbuild(lcs_built *b) {
   if (b->G.p) tcsc_free(&b->G);
 }
 
+/* The theta step's LCP with up to four rows active at once (the paper's
+ * circuit has two rows, so this is what exercises the LU path): a 4-state
+ * system whose rows x1 >= 0, x1 + x2 >= 0, x2 + x3 >= 0, x3 + x4 >= 0 are
+ * pushed on together by E u. theta = 0 must equal the explicit step with the
+ * exact projection (the projector's dense active-set method: an independent
+ * solver), theta = 1/2 must certify complementarity at every step. */
+typedef struct { int max_active; double max_eps; int bad; } rows_ctx;
+static int rows_step(long k, double t, const cup_proj_info *pi, void *vp) {
+  (void)k; (void)t;
+  rows_ctx *c = vp;
+  if (pi->active > c->max_active) c->max_active = pi->active;
+  if (pi->eps_cert > c->max_eps) c->max_eps = pi->eps_cert;
+  if (pi->status != CUP_OK) c->bad++;
+  return 0;
+}
+typedef struct { double *X; } rows_store;
+static int rows_sink(long k, double t, const double *x, void *vp) {
+  (void)t;
+  memcpy(((rows_store *)vp)->X + 4 * k, x, 4 * sizeof(double));
+  return 0;
+}
+
+static void run_rows(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta,
+                     double *X, rows_ctx *rc) {
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = n;
+  o.scheme = scheme;
+  o.theta = theta;
+  o.eps = (cup_schedule){1e-14, 0};             /* absolute: the state passes near 0, */
+  o.eta = (cup_schedule){1e-12, 0};             /* where relative targets fall below rounding */
+  o.on_step = rows_step;
+  o.step_ctx = rc;
+  cup_integrator *I = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
+  double x0[4] = {1, 0, 0, 0};
+  rows_store sc = {X};
+  cup_run_info info;
+  if (cup_integrator_run(I, x0, rows_sink, &sc, &info) < 0) fail_msg("run: %s", info.message);
+  cup_integrator_free(&I);
+}
+
+static void test_theta_many_rows(void **state) {
+  (void)state;
+  const double A[16] = {-1, 2, 0, 0,  -2, -1, 1, 0,  0, -1, -0.5, 3,  0, 0, -3, -0.2};
+  const double C[16] = {1, 0, 0, 0,  1, 1, 0, 0,  0, 1, 1, 0,  0, 0, 1, 1};
+  const double Pd[4] = {2, 1, 2, 1};
+  double B[16];                                   /* B = P^-1 C^T */
+  for (int r = 0; r < 4; r++)
+    for (int i = 0; i < 4; i++) B[r * 4 + i] = C[i * 4 + r] / Pd[r];
+  const double E[4] = {-1, -1, -1.5, -1};
+  lcs_built b;
+  build(&b, 4, 4, 1, A, B, C, E, NULL, NULL, Pd);
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 3, .frequency = 1.5};
+  cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = 1};
+  cup_input_add(u, 0, &s, NULL);
+  cup_input_add(u, 0, &c, NULL);
+  long n = 2000;
+  size_t len = 4 * (size_t)(n + 1);
+  double *Xt = malloc(sizeof(double) * len), *Xe = malloc(sizeof(double) * len);
+  rows_ctx rt = {0, 0, 0}, re = {0, 0, 0};
+  run_rows(b.L, u, n, CUP_SCHEME_THETA, 0, Xt, &rt);
+  run_rows(b.L, u, n, CUP_SCHEME_EXPLICIT, 0, Xe, &re);
+  double d = 0;
+  for (size_t q = 0; q < len; q++) d = fmax(d, fabs(Xt[q] - Xe[q]));
+  print_message("4 rows: theta = 0 vs explicit projection: max difference %.3e, "
+                "at most %d rows active\n", d, rt.max_active);
+  assert_true(rt.max_active >= 3);
+  assert_int_equal(rt.bad + re.bad, 0);
+  assert_true(d <= 1e-12);
+  rows_ctx rh = {0, 0, 0};
+  run_rows(b.L, u, n, CUP_SCHEME_THETA, 0.5, Xt, &rh);
+  print_message("4 rows: theta = 1/2: at most %d rows active, largest gap %.3e, %d uncertified\n",
+                rh.max_active, rh.max_eps, rh.bad);
+  assert_true(rh.max_active >= 3);
+  assert_int_equal(rh.bad, 0);
+  for (size_t q = 0; q < len; q += 4) {           /* every state in K */
+    const double *x = Xt + q;
+    assert_true(x[0] >= -1e-13 && x[0] + x[1] >= -1e-13 && x[1] + x[2] >= -1e-13 && x[2] + x[3] >= -1e-13);
+  }
+  /* theta = 1/2 and the explicit step converge to one solution */
+  double dt = 0;
+  for (size_t q = 0; q < len; q++) dt = fmax(dt, fabs(Xt[q] - Xe[q]));
+  print_message("4 rows: theta = 1/2 vs explicit at n = %ld: %.3e\n", n, dt);
+  assert_true(dt > 0 && dt <= 2e-2);
+  free(Xt); free(Xe);
+  cup_input_free(&u);
+  unbuild(&b);
+}
+
 static cup_input *const_input(double v) {
   cup_input *u = NULL;
   cup_input_create(&u, 1, NULL);
@@ -729,6 +822,7 @@ int main(void) {
     cmocka_unit_test(test_paper_cases_exact_projection),
     cmocka_unit_test(test_paper_tolerances),
     cmocka_unit_test(test_theta_scheme),
+    cmocka_unit_test(test_theta_many_rows),
     cmocka_unit_test(test_closed_form_moving_interval),
     cmocka_unit_test(test_closed_form_interval_with_relaxation),
     cmocka_unit_test(test_closed_form_cone),
