@@ -27,10 +27,16 @@ static const char *const overrides[4][4] = {
   {"projector={method: pg, max_iter: 5}", "output={samples: 3}", "x0={file: f.mtx}", "lcs.P=identity"},
 };
 
+static void cleanup(void) {
+  unlink(mtx_path);
+  rmdir(dir);
+}
+
 int LLVMFuzzerInitialize(int *argc, char ***argv) {
   (void)argc; (void)argv;
   if (!mkdtemp(dir)) abort();
   snprintf(mtx_path, sizeof mtx_path, "%s/f.mtx", dir);
+  atexit(cleanup);
   return 0;
 }
 
@@ -94,9 +100,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   st = cup_scene_load_string(&s, text, "fuzz.yaml", d, overrides[sel], 4, err);
   check_message(st, err);
   cup_scene_free(&s);
-  /* SWEEP FILES: when the sweep parser lands, fuzz it here from the same
-   * input, e.g. `cup_sweep_free_(load_sweep_string(text, ...))` — see the
-   * stress report; one call, no second harness. */
+  /* SWEEP FILES: when the sweep-file parser lands, fuzz it here, on the
+   * same input, with one line (adapt the names to its API):
+   *   { cup_sweep *w = NULL; check_message(cup_sweep_load_string(&w, text, "fuzz.yaml", d, NULL, 0, err), err); cup_sweep_free(&w); }
+   * and add its example files to the seeds (fuzz/CMakeLists.txt). */
   free(text);
   return 0;
 }
