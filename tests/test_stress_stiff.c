@@ -226,6 +226,27 @@ static void test_clamp_rlc(void **state) {
   }
 }
 
+/* Mildly stiff (h*rho = 2.5): the explicit step amplifies the fast mode by
+ * 1.5 per step, too little to overflow in 100 steps; the run finishes and
+ * says CUP_WARN_STIFF with h*rho in its message. */
+static void test_explicit_flagged(void **state) {
+  (void)state;
+  circ c = {.kind = CLAMP, .R = 1e3, .L = 1e-6, .C = 1e-6, .V = 10, .f = 1e5, .T = 2.5e-7};
+  circ_setup(&c);
+  cup_run_info info;
+  circ_run(&c, CUP_SCHEME_EXPLICIT, 100, &info);
+  print_message("explicit, h = 2.5e-9 s, tau_fast = 1e-9 s: %s, h*rho %.4g: %s\n",
+                cup_status_name(info.status), info.h_rho, info.message);
+  assert_int_equal(info.status, CUP_WARN_STIFF);
+  assert_int_equal(info.step, 100);
+  assert_close(info.h_rho, 2.5e-9 / (-1 / (double)c.lf), 1e-9);
+  assert_non_null(strstr(info.message, "h*rho(A) = 2.5 > 2"));
+  for (int scheme = CUP_SCHEME_IMPLICIT; scheme <= CUP_SCHEME_EXPONENTIAL; scheme++) {
+    circ_run(&c, scheme, 100, &info);
+    assert_int_equal(info.status, CUP_OK);           /* only the explicit scheme is flagged */
+  }
+}
+
 /* The series diode (a peak detector) in the stiff regime h >> L/R: the
  * capacitor holds its charge while the diode blocks. KNOWN ISSUE: the
  * implicit and exponential schemes project the stiff free step along
@@ -291,6 +312,7 @@ static void test_series_rlc_resolved(void **state) {
 int main(int argc, char **argv) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_clamp_rlc),
+    cmocka_unit_test(test_explicit_flagged),
     cmocka_unit_test(test_series_rlc_resolved),
   };
   const struct CMUnitTest known[] = {
