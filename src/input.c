@@ -51,6 +51,9 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
                         w->amplitude, w->frequency, w->phase);
       if (w->frequency < 0)
         return cup_fail(errmsg, CUP_ERR_ARG, "input: frequency %g must be >= 0", w->frequency);
+      if (!isfinite(TWO_PI * w->frequency))
+        return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: frequency %g overflows (2 pi frequency is not finite)",
+                        w->frequency);
       t.amp = w->amplitude;
       t.omega = TWO_PI * w->frequency;
       t.phase = w->phase;

@@ -319,7 +319,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     snprintf(info->message, sizeof info->message,
              "step 0 (t = 0): x0 is outside K(0); the first step projects it");
   }
-  if (o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2) {
+  int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
+  if (stiff) {
     info->status = CUP_WARN_STIFF;
     snprintf(info->message, sizeof info->message,
              "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; "
@@ -355,8 +356,12 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
     }
     if (st < 0) {
-      char what[200];
+      char what[224];
       describe_projection_error(what, sizeof what, st, &pi);
+      if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
+        size_t len = strlen(what);
+        snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+      }
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
     }
     double *t = I->x; I->x = I->xnew; I->xnew = t;

@@ -250,7 +250,7 @@ double cup_polyset_norm(const cup_polyset *K, const double *v) {
   } else {
     for (int j = 0; j < K->n; j++) s += K->pd[j] * v[j] * v[j];
   }
-  return sqrt(fmax(s, 0));
+  return isnan(s) ? NAN : sqrt(fmax(s, 0));   /* rounding may make s < 0; NaN must show */
 }
 
 double cup_slack(const cup_polyset *K, const double *g, const double *x,
@@ -269,7 +269,7 @@ double cup_slack(const cup_polyset *K, const double *g, const double *x,
     double margin = gam ? rg[i] * mag : 0;
     if (gam) gam[i] = margin;
     double slack = acc - margin;
-    if (!(slack >= worst)) worst = slack;      /* NaN propagates as the minimum */
+    if (isnan(slack) || slack < worst) worst = slack;   /* a NaN row stays the minimum */
   }
   return worst;
 }

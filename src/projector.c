@@ -329,7 +329,7 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
     eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
     viol = cup_max(viol, -p->s[i]);
     double sl = p->s[i] - p->gam[i];
-    if (!(sl >= worst)) worst = sl;
+    if (isnan(sl) || sl < worst) worst = sl;   /* a NaN row stays the minimum */
     dq -= 2 * lam[i] * p->b[i];
   }
   info->violation = viol;
@@ -471,11 +471,13 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
   info->row_updates = p->updates;
   info->status = st;
   if (st < 0) return st;
+  const double *res = (p->opt.return_feasible && p->has_v) ? p->v : p->y;
+  for (int j = 0; j < n; j++)              /* an overflowed iterate is an error, never an answer */
+    if (!isfinite(res[j])) return info->status = CUP_ERR_DIVERGED;
   int active = 0;
   for (int i = 0; i < m; i++) active += p->lam[i] > 0;
   info->active = active;
   if (p->opt.warm_start) memcpy(p->lam_warm, p->lam, sizeof(double) * (size_t)m);
-  const double *res = (p->opt.return_feasible && p->has_v) ? p->v : p->y;
   memcpy(z, res, sizeof(double) * (size_t)n);
   return st;
 }

@@ -260,7 +260,9 @@ static int mm_fail(const mm_ctx *c, const char *fmt, ...) {
 
 static int mm_banner(mm_ctx *c, const char *line, mm_head *h) {
   char obj[16], fmt[16], field[16], sym[16];
-  if (strncasecmp(line, "%%MatrixMarket", 14) != 0 ||
+  /* the banner is case-sensitive (the format's spec; CHOLMOD's reader fails
+   * on "%%matrixmarket" and leaks a block), the keywords are not */
+  if (strncmp(line, "%%MatrixMarket", 14) != 0 ||
       sscanf(line + 14, "%15s %15s %15s %15s", obj, fmt, field, sym) != 4)
     return mm_fail(c, "not a Matrix Market file (the first line must be "
                       "'%%%%MatrixMarket matrix coordinate real general' or similar)");

@@ -1,0 +1,73 @@
+/* Helpers shared by the stress tests (tests/test_stress_*.c): a small LCS
+ * from dense matrices, sinks that keep a whole trajectory, and a constant
+ * or sine input. Include after cmocka.h and testutil.h. */
+#ifndef CUP_STRESS_UTIL_H
+#define CUP_STRESS_UTIL_H
+
+#include <stdio.h>
+#include "testutil.h"
+
+/* An LCS from dense row-major matrices (absent ones: NULL). P: NULL for the
+ * identity, Pdiag for a diagonal metric, or Pfull (n x n row-major, SPD). */
+typedef struct { tcsc A, B, C, E, G, P; cup_lcs *L; } lcs_built;
+
+static inline int build_lcs(lcs_built *b, int n, int m, int p, const double *A, const double *B,
+                            const double *C, const double *E, const double *F, const double *G,
+                            const double *Pdiag, const double *Pfull, char *msg) {
+  memset(b, 0, sizeof *b);
+  cup_lcs_desc d;
+  memset(&d, 0, sizeof d);
+  d.n = n; d.m = m; d.p = p;
+  if (A) { tcsc_from_dense(&b->A, A, n, n); d.A = b->A.view; }
+  if (B) { tcsc_from_dense(&b->B, B, n, m); d.B = b->B.view; }
+  tcsc_from_dense(&b->C, C, m, n); d.C = b->C.view;
+  if (E) { tcsc_from_dense(&b->E, E, n, p); d.E = b->E.view; }
+  if (G) { tcsc_from_dense(&b->G, G, m, p); d.G = b->G.view; }
+  d.F = F;
+  if (Pdiag) d.P = (cup_metric){CUP_METRIC_DIAGONAL, Pdiag, {0}, 0};
+  if (Pfull) {
+    tcsc_from_dense(&b->P, Pfull, n, n);
+    d.P = (cup_metric){CUP_METRIC_SPARSE, NULL, b->P.view, 0};
+  }
+  return cup_lcs_create(&b->L, &d, msg);
+}
+
+static inline void unbuild_lcs(lcs_built *b) {
+  cup_lcs_free(&b->L);
+  if (b->A.p) tcsc_free(&b->A);
+  if (b->B.p) tcsc_free(&b->B);
+  if (b->C.p) tcsc_free(&b->C);
+  if (b->E.p) tcsc_free(&b->E);
+  if (b->G.p) tcsc_free(&b->G);
+  if (b->P.p) tcsc_free(&b->P);
+}
+
+/* A whole trajectory: rows k = 0..n of dim entries, and the times. */
+typedef struct { int dim; long rows, cap; double *t, *X; } traj;
+
+static inline void traj_init(traj *tr, int dim, long cap) {
+  tr->dim = dim; tr->rows = 0; tr->cap = cap;
+  tr->t = malloc(sizeof(double) * (size_t)cap);
+  tr->X = malloc(sizeof(double) * (size_t)cap * (size_t)dim);
+}
+static inline void traj_free(traj *tr) { free(tr->t); free(tr->X); tr->t = tr->X = NULL; }
+
+static inline int traj_sink(long k, double t, const double *x, void *ctx) {
+  traj *tr = ctx;
+  (void)k;
+  if (tr->rows >= tr->cap) return 1;
+  tr->t[tr->rows] = t;
+  memcpy(tr->X + (size_t)tr->rows * (size_t)tr->dim, x, sizeof(double) * (size_t)tr->dim);
+  tr->rows++;
+  return 0;
+}
+
+static inline cup_input *input_terms(int nterm, const cup_wave *w) {
+  cup_input *u = NULL;
+  if (cup_input_create(&u, 1, NULL)) return NULL;
+  for (int k = 0; k < nterm; k++)
+    if (cup_input_add(u, 0, &w[k], NULL)) { cup_input_free(&u); return NULL; }
+  return u;
+}
+
+#endif

@@ -1,0 +1,345 @@
+/* Stress: NaN and Inf never pass silently. Each case here is one the other
+ * tests do not already cover (their list is in the stress report; scene
+ * files are in tests/scenes/bad): NaN/Inf in every matrix of an LCS; user
+ * callbacks (input u(t) under each scheme and moving K, perturbation f)
+ * that start returning NaN/Inf mid-run stop the run with CUP_ERR_CALLBACK at
+ * the right step and time, after delivering every state before it; overflow
+ * during a run stops it with CUP_ERR_DIVERGED; the projector never reports a
+ * non-finite answer as converged or feasible; options and overrides. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <float.h>
+#include <cmocka.h>
+#include "stress_util.h"
+
+static void assert_contains(const char *msg, const char *want) {
+  if (!strstr(msg, want)) fail_msg("message\n  %s\ndoes not contain\n  %s", msg, want);
+}
+
+/* ---- the LCS refuses NaN/Inf in every matrix, naming it ------------------------- */
+
+static void test_lcs_matrices(void **state) {
+  (void)state;
+  const char *names[] = {"A", "B", "C", "E", "G", "F", "P", "P"};
+  for (int which = 0; which < 8; which++)
+    for (int inf = 0; inf < 2; inf++) {
+      double A[4] = {-1, 0, 0, -2}, B[2] = {1, 0}, C[2] = {1, 0}, E[2] = {0, 1}, G[1] = {1};
+      double F[1] = {0}, Pd[2] = {1, 1}, Pf[4] = {2, 0.5, 0.5, 1};
+      double bad = inf ? -INFINITY : NAN;
+      double *slot[] = {&A[3], &B[0], &C[0], &E[1], &G[0], &F[0], &Pd[1], &Pf[3]};
+      /* P B = C^T holds for the finite data (P = I, B = C^T); the dense P
+       * case is given without B */
+      *slot[which] = bad;
+      lcs_built b;
+      char msg[CUP_ERRMSG_LEN] = "";
+      int st = build_lcs(&b, 2, 1, 1, A, which == 7 ? NULL : B, C, E, F, G,
+                         which == 7 ? NULL : Pd, which == 7 ? Pf : NULL, msg);
+      if (st != CUP_ERR_NONFINITE)
+        fail_msg("%s with %s: status %s (%s)", names[which], inf ? "-inf" : "nan", cup_status_name(st), msg);
+      assert_null(b.L);
+      assert_contains(msg, names[which]);
+      assert_contains(msg, inf ? "inf" : "nan");
+      unbuild_lcs(&b);
+    }
+}
+
+/* ---- callbacks that turn non-finite mid-run ---------------------------------------- */
+
+typedef struct { int mode; double t_bad; long calls; } cb_ctx;   /* mode 0: NaN, 1: +Inf, 2: return 1 */
+
+static int bad_input(double t, double *u, void *vp) {
+  cb_ctx *c = vp;
+  c->calls++;
+  u[0] = sin(2 * M_PI * t);
+  if (t > c->t_bad) {
+    if (c->mode == 2) return 1;
+    u[0] = c->mode == 0 ? NAN : INFINITY;
+  }
+  return 0;
+}
+
+static int bad_rhs(double t, const double *x, double *f, void *vp) {
+  cb_ctx *c = vp;
+  c->calls++;
+  f[0] = -x[0];
+  f[1] = 0.5;
+  if (t > c->t_bad) {
+    if (c->mode == 2) return 1;
+    f[1] = c->mode == 0 ? NAN : -INFINITY;
+  }
+  return 0;
+}
+
+typedef struct { long count, last_k; int all_finite; } seen;
+static int seen_sink(long k, double t, const double *x, void *vp) {
+  seen *s = vp;
+  s->count++;
+  s->last_k = k;
+  if (!isfinite(t) || !isfinite(x[0]) || !isfinite(x[1])) s->all_finite = 0;
+  return 0;
+}
+
+/* Run a 2-state system with K = {x1 >= -0.2 + g u} for n = 100, T = 1; the
+ * callback goes bad for t > 0.5, so the step [0.5, 0.51] (step 51) is the
+ * first that evaluates it there: the run must stop at step 51, t = 0.51. */
+static void expect_callback_stop(const char *what, int scheme, int moving, int via_rhs, int mode) {
+  double A[4] = {-1, 3, -3, -1}, C[2] = {1, 0}, F[1] = {0.2}, E[2] = {0, 1}, G[1] = {-0.1};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 2, 1, 1, A, NULL, C, moving ? NULL : E, F, moving ? G : NULL, NULL, NULL, msg))
+    fail_msg("lcs: %s", msg);
+  cb_ctx c = {mode, 0.5, 0};
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+  if (via_rhs) {
+    cup_wave k = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1};
+    assert_int_equal(cup_input_add(u, 0, &k, NULL), CUP_OK);
+  } else {
+    assert_int_equal(cup_input_set_callback(u, bad_input, &c, 1e-12, 1e-10), CUP_OK);
+  }
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 100;
+  o.scheme = scheme;
+  if (via_rhs) { o.f = bad_rhs; o.f_ctx = &c; }
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("%s: create: %s", what, msg);
+  seen s = {0, -1, 1};
+  cup_run_info info;
+  double x0[2] = {0.3, 0};
+  int st = cup_integrator_run(I, x0, seen_sink, &s, &info);
+  if (st != CUP_ERR_CALLBACK) fail_msg("%s: status %s (%s)", what, cup_status_name(st), info.message);
+  assert_int_equal(info.step, 50);                  /* steps 1..50 completed */
+  assert_true(info.t == 0.5);
+  assert_contains(info.message, "step 51 (t = 0.51");
+  assert_contains(info.message, "failed or returned NaN/Inf");
+  assert_int_equal(s.count, 51);                    /* states 0..50, all finite */
+  assert_int_equal(s.last_k, 50);
+  assert_true(s.all_finite);
+  assert_true(c.calls > 0);
+  const double *xf = cup_integrator_state(I);       /* the state kept is the last good one */
+  assert_true(isfinite(xf[0]) && isfinite(xf[1]));
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+}
+
+static void test_callbacks_mid_run(void **state) {
+  (void)state;
+  const char *modes[] = {"NaN", "Inf", "failure"};
+  char what[96];
+  for (int mode = 0; mode < 3; mode++)
+    for (int scheme = 0; scheme < 3; scheme++) {
+      snprintf(what, sizeof what, "input u(t) %s, %s, E", modes[mode], cup_scheme_name(scheme));
+      expect_callback_stop(what, scheme, 0, 0, mode);
+      snprintf(what, sizeof what, "input u(t) %s, %s, moving K (G)", modes[mode], cup_scheme_name(scheme));
+      expect_callback_stop(what, scheme, 1, 0, mode);
+      snprintf(what, sizeof what, "perturbation f %s, %s", modes[mode], cup_scheme_name(scheme));
+      expect_callback_stop(what, scheme, 0, 1, mode);
+    }
+}
+
+/* ---- overflow during a run ---------------------------------------------------------- */
+
+/* x' = 1000 x with h = 0.01: the explicit step multiplies by 11, and the
+ * state passes ~1e154, where ||x||_P^2 overflows, after ~148 steps. The
+ * run stops with CUP_ERR_DIVERGED at that step, says where and why, and
+ * every state before it was delivered, finite. */
+static void test_overflow_mid_run(void **state) {
+  (void)state;
+  double A[4] = {1000, 0, 0, -1}, C[2] = {1, 0}, F[1] = {1};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 2, 1, 0, A, NULL, C, NULL, F, NULL, NULL, NULL, msg)) fail_msg("lcs: %s", msg);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 1000;
+  o.T = 10;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, b.L, NULL, &o, msg), CUP_OK);
+  seen s = {0, -1, 1};
+  cup_run_info info;
+  double x0[2] = {1, 1};
+  int st = cup_integrator_run(I, x0, seen_sink, &s, &info);
+  print_message("x' = 1000 x, explicit, h = 0.01: %s: %s\n", cup_status_name(st), info.message);
+  assert_int_equal(st, CUP_ERR_DIVERGED);
+  char want[64];
+  snprintf(want, sizeof want, "step %ld (t = ", info.step + 1);
+  assert_contains(info.message, want);
+  assert_contains(info.message, "h*rho(A)");
+  assert_int_equal(s.count, info.step + 1);
+  assert_true(s.all_finite);
+  /* independently: x_k = 11^k while it is finite; the library stops no
+   * later than the step at which 11^k overflows, and not before 1e150 */
+  long k_inf = 0;
+  for (double x = 1; isfinite(x); x = x + 1000 * (0.01 * x)) k_inf++;
+  assert_true(info.step + 1 <= k_inf);
+  const double *xl = cup_integrator_state(I);
+  assert_true(xl[0] > 1e150 && isfinite(xl[0]));
+  cup_integrator_free(&I);
+  unbuild_lcs(&b);
+}
+
+/* ---- the projector ------------------------------------------------------------------- */
+
+/* A non-finite x, a huge x whose norm overflows, and a problem whose dual
+ * multiplier overflows: an error, z untouched, never a NaN/Inf answer with
+ * CUP_OK or a warning. */
+static void test_projector_never_returns_nonfinite(void **state) {
+  (void)state;
+  /* K = {x1 >= 1e10}, P = diag(1e300, 1): lambda = 1e10 / ||c||^2_{P^-1} = 1e310 */
+  double C[2] = {1, 0}, g[1] = {-1e10}, Pd[2] = {1e300, 1};
+  tcsc Ct;
+  tcsc_from_dense(&Ct, C, 1, 2);
+  cup_metric P = {CUP_METRIC_DIAGONAL, Pd, {0}, 0};
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &Ct.view, g, &P, NULL), CUP_OK);
+  for (int method = 0; method < 4; method++) {
+    cup_projector_options o;
+    cup_projector_options_default(&o);
+    o.method = method;
+    o.max_iter = 1000;
+    cup_projector *pr = NULL;
+    assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+    const double xs[][2] = {{0, 0}, {NAN, 0}, {0, INFINITY}, {1e200, 1e200}};
+    for (int c = 0; c < 4; c++) {
+      double z[2] = {7, 7};
+      cup_proj_info info;
+      int st = cup_project(pr, xs[c], z, &info);
+      if (st >= 0) {
+        /* an answer: finite and truly what it claims (here z1 >= 1e10 is K) */
+        if (!isfinite(z[0]) || !isfinite(z[1]))
+          fail_msg("%s, x = (%g, %g): %s with z = (%g, %g)", cup_proj_method_name(method), xs[c][0],
+                   xs[c][1], cup_status_name(st), z[0], z[1]);
+        assert_false(isnan(info.eps_cert) || isnan(info.eta_cert));
+        if (st == CUP_OK) assert_true(z[0] >= 1e10 * (1 - 1e-12));
+      } else {
+        assert_true(z[0] == 7 && z[1] == 7);          /* untouched on an error */
+        assert_true(st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED);
+      }
+      if (c == 1 || c == 2) assert_int_equal(st, CUP_ERR_NONFINITE);
+      if (getenv("CUP_TEST_VERBOSE"))
+        fprintf(stderr, "%s x=(%g,%g): %s z=(%g,%g) eps %g eta %g\n", cup_proj_method_name(method),
+                xs[c][0], xs[c][1], cup_status_name(st), z[0], z[1], info.eps_cert, info.eta_cert);
+    }
+    cup_projector_free(&pr);
+  }
+  cup_polyset_free(&K);
+  tcsc_free(&Ct);
+}
+
+/* NaN never counts as inside; a refused offset leaves the previous one. */
+static void test_nan_is_never_feasible(void **state) {
+  (void)state;
+  double C[4] = {1, 0, 0, 1}, g[2] = {0, 0};
+  tcsc Ct;
+  tcsc_from_dense(&Ct, C, 2, 2);
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &Ct.view, g, NULL, NULL), CUP_OK);
+  double in[2] = {1, 1}, gn[2] = {0, NAN}, gi[2] = {INFINITY, 0};
+  assert_int_equal(cup_polyset_contains(K, NULL, in), 1);
+  assert_int_equal(cup_polyset_contains(K, gn, in), 0);     /* NaN offset: not inside */
+  double xinf[2] = {INFINITY, 1};
+  assert_int_equal(cup_polyset_contains(K, NULL, xinf), 0);
+  cup_projector *pr = NULL;
+  assert_int_equal(cup_projector_create(&pr, K, NULL, NULL), CUP_OK);
+  double x[2] = {-1, 2}, z1[2], z2[2];
+  assert_int_equal(cup_project(pr, x, z1, NULL), CUP_OK);
+  /* the quadrant: exact but for the few ulps by which the dense exact path
+   * aims inside (16 rounding bounds of the row at x: certainly feasible) */
+  assert_true(z1[0] >= 0 && z1[0] <= 16 * 3 * DBL_EPSILON * 1 && z1[1] == 2);
+  assert_int_equal(cup_projector_set_offset(pr, gn), CUP_ERR_NONFINITE);
+  assert_int_equal(cup_projector_set_offset(pr, gi), CUP_ERR_NONFINITE);
+  assert_int_equal(cup_project(pr, x, z2, NULL), CUP_OK);
+  assert_memory_equal(z1, z2, sizeof z1);                    /* the old offset still holds */
+  assert_int_equal(cup_projector_offer_feasible(pr, xinf), 0);
+  assert_int_equal(cup_projector_set_tolerances(pr, NAN, 0, 0, 0), CUP_ERR_ARG);
+  assert_int_equal(cup_projector_set_tolerances(pr, 0, 0, 0, NAN), CUP_ERR_ARG);
+  cup_projector_free(&pr);
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  double fp[2] = {1, NAN};
+  o.feasible_point = fp;
+  char msg[CUP_ERRMSG_LEN];
+  assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_ERR_NONFINITE);
+  assert_null(pr);
+  assert_contains(msg, "feasible_point[1]");
+  cup_projector_options_default(&o);
+  o.lipschitz = NAN;
+  assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_ERR_ARG);
+  cup_polyset_free(&K);
+  tcsc_free(&Ct);
+}
+
+/* ---- options and overrides --------------------------------------------------------- */
+
+static void test_options_and_overrides(void **state) {
+  (void)state;
+  cup_lcs *L = NULL;
+  cup_circuit circ = {1, 2, 1, 1, 2, 1, {0, 0}};
+  assert_int_equal(cup_lcs_circuit(&L, &circ, NULL), CUP_OK);
+  cup_input *u = NULL;
+  cup_input_create(&u, 1, NULL);
+  cup_integrator *I = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  for (int c = 0; c < 6; c++) {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    switch (c) {
+      case 0: o.T = NAN; break;
+      case 1: o.T = INFINITY; break;
+      case 2: o.eps.coef = NAN; break;
+      case 3: o.eta.power = NAN; break;
+      case 4: o.max_wall_seconds = NAN; break;
+      case 5: o.eps = (cup_schedule){1e300, 2}; break;   /* eps_n = 1e304: finite, fine */
+    }
+    int st = cup_integrator_create(&I, L, u, &o, msg);
+    if (c < 5) {
+      if (st != CUP_ERR_ARG) fail_msg("case %d: %s", c, cup_status_name(st));
+      assert_null(I);
+    } else {
+      assert_int_equal(st, CUP_OK);
+      cup_integrator_free(&I);
+    }
+  }
+  {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.eps = (cup_schedule){1e300, 10};                  /* eps_n = 1e320: overflows */
+    assert_int_equal(cup_integrator_create(&I, L, u, &o, msg), CUP_ERR_ARG);
+    assert_contains(msg, "eps_n = inf");
+  }
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+  /* overrides carry NaN/Inf too: the message cites the override */
+  const char *text = "circuit: {R1: 1, R2: 2, R3: 1, L2: 1, L3: 2, C4: 1}\n"
+                     "input: [{type: sine, amplitude: 16, frequency: 3}, -0.5]\nT: 1\nn: 100\n";
+  struct { const char *ovr, *want; } cases[] = {
+    {"x0=[0, .nan, 0]", "override 'x0=[0, .nan, 0]': x0.1: must be finite (got nan)"},
+    {"input.0.amplitude=.inf", "override 'input.0.amplitude=.inf': input.0.amplitude: must be finite (got inf)"},
+    {"circuit.C4=-.Inf", "circuit.C4: must be finite (got -inf)"},
+    {"T=1e400", "T: must be finite (got inf)"},
+    {"input.1=.NAN", "input.1: must be finite (got nan)"},
+  };
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    cup_scene *s = NULL;
+    const char *ov[1] = {cases[k].ovr};
+    int st = cup_scene_load_string(&s, text, "nan.yaml", NULL, ov, 1, msg);
+    if (st != CUP_ERR_NONFINITE) fail_msg("override %s: status %s (%s)", cases[k].ovr, cup_status_name(st), msg);
+    assert_null(s);
+    assert_contains(msg, cases[k].want);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_lcs_matrices),
+    cmocka_unit_test(test_callbacks_mid_run),
+    cmocka_unit_test(test_overflow_mid_run),
+    cmocka_unit_test(test_projector_never_returns_nonfinite),
+    cmocka_unit_test(test_nan_is_never_feasible),
+    cmocka_unit_test(test_options_and_overrides),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
