@@ -8,6 +8,7 @@
 #include <gsl/gsl_integration.h>
 #include "catchup.h"
 #include "freestep.h"
+#include "polyset_impl.h"
 
 static void *zalloc(size_t count, size_t size, int *fail) {
   void *q = calloc(count ? count : 1, size);
@@ -506,4 +507,51 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
   if (f)
     for (int i = 0; i < n; i++) xf[i] += fs->fsum[i];
   return st;
+}
+
+/* v <- (W - I) v for the linear part W of the implicit ((I - h A)^-1) or
+ * exponential (e^{hA}) free step; work: n. */
+static void linear_minus_identity(const cup_freestep *fs, double *v, double *work) {
+  int n = fs->n;
+  if (fs->scheme == CUP_SCHEME_EXPONENTIAL) {
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int j = 0; j < n; j++) acc += fs->Eh[i + (size_t)j * fs->na] * v[j];
+      work[i] = acc - v[i];
+    }
+  } else {
+    for (int i = 0; i < n; i++) work[i] = v[i];
+    cup_dense_lu_solve(fs->lu, n, fs->piv, work, work + n);
+    for (int i = 0; i < n; i++) work[i] -= v[i];
+  }
+  for (int i = 0; i < n; i++) v[i] = work[i];
+}
+
+double cup_freestep_splitting(const cup_freestep *fs, int *row) {
+  const cup_polyset *K = fs->L->K;
+  if (row) *row = -1;
+  if ((fs->scheme != CUP_SCHEME_IMPLICIT && fs->scheme != CUP_SCHEME_EXPONENTIAL) || !K->dense ||
+      K->m == 0)
+    return 0;
+  int n = fs->n;
+  double *b = malloc(sizeof(double) * 4 * (size_t)n);
+  if (!b) return NAN;
+  double *d = b + n, *work = b + 2 * (size_t)n, worst = 0;
+  for (int i = 0; i < K->m; i++) {
+    const double *Bi = K->Bt + (size_t)i * n;   /* b_i = P^-1 c_i, so <v, b_i>_P = c_i^T v */
+    double bb = 0;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) bb += K->Ct.x[k] * Bi[K->Ct.i[k]];
+    if (!(bb > 0)) continue;
+    for (int j = 0; j < n; j++) d[j] = Bi[j];
+    linear_minus_identity(fs, d, work);
+    double db = 0;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) db += K->Ct.x[k] * d[K->Ct.i[k]];
+    double alpha = -db / bb;                     /* the part of b_i relaxed in one step */
+    for (int j = 0; j < n; j++) d[j] -= db / bb * Bi[j];
+    double leak = cup_polyset_norm(K, d) / sqrt(bb);   /* what that relaxation moved elsewhere */
+    if (!(leak > CUP_SPLIT_LEAK_MIN)) continue;
+    if (!(alpha <= worst)) { worst = alpha; if (row) *row = i; }   /* NaN stays */
+  }
+  free(b);
+  return worst;
 }

@@ -58,6 +58,27 @@ typedef struct cup_freestep {
 int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
                       double theta, double h, int f_order, char *errmsg);
 void cup_freestep_free(cup_freestep *fs);
+/* The splitting defect of the implicit and exponential schemes. They move
+ * by the free step W = (I - h A)^-1 or e^{hA} and then project along
+ * B = P^-1 C^T. When the dynamics along a constraint direction b_i is fast
+ * (time constant below h), the free step relaxes it within the step and
+ * the relaxation moves the other states too; the projection along b_i
+ * restores b_i's part but not that motion, at every step where row i is
+ * active: an O(alpha_i) relative error that does not vanish until h is
+ * well below the fast time constant (the consistent step, the theta scheme,
+ * corrects along W B instead). Returns
+ *     max_i alpha_i,  alpha_i = -<(W - I) b_i, b_i>_P / <b_i, b_i>_P
+ * (the fraction of b_i relaxed in one step: about h / tau_i while small,
+ * 1 when h >> tau_i) over the rows whose relaxation moves other states,
+ * ||(I - Pi_i)(W - I) b_i||_P > CUP_SPLIT_LEAK_MIN ||b_i||_P; *row (may be
+ * NULL) is that row, or -1. 0 for other schemes and for polysets without
+ * their dense form; NaN without memory. */
+#define CUP_SPLIT_LEAK_MIN 1e-9
+/* The integrator warns (CUP_WARN_SPLITTING) above this alpha: h above the
+ * direction's time constant, where the limit as n grows is wrong until h
+ * falls below it. */
+#define CUP_SPLIT_WARN 0.5
+double cup_freestep_splitting(const cup_freestep *fs, int *row);
 /* xf from x over [t0, t1] (t1 - t0 = h). Returns CUP_OK, CUP_ERR_CALLBACK,
  * or CUP_WARN_QUADRATURE. */
 int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf,

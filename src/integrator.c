@@ -21,7 +21,8 @@ struct cup_integrator {
   const cup_input *u;
   cup_integrator_options o;
   int n, m, p;
-  double h, eps_n, eta_n, h_rho;
+  double h, eps_n, eta_n, h_rho, split;
+  int split_row;
   cup_freestep fs;
   cup_projector *proj;
   cup_theta th;             /* the theta scheme's LCP step (used instead of the projector) */
@@ -201,6 +202,7 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   if (!st) st = cup_projector_create(&I->proj, L->K, &po, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   I->h_rho = cup_freestep_h_rho(L, I->h);
+  I->split = cup_freestep_splitting(&I->fs, &I->split_row);
   *out = I;
   return CUP_OK;
 }
@@ -323,8 +325,16 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   if (stiff) {
     info->status = CUP_WARN_STIFF;
     snprintf(info->message, sizeof info->message,
-             "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; "
-             "use the implicit or exponential scheme", I->h_rho);
+             "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; use the theta "
+             "scheme, or implicit/exponential if no constraint acts on the fast states", I->h_rho);
+  }
+  if (!(I->split <= CUP_SPLIT_WARN)) {
+    info->status = CUP_WARN_SPLITTING;
+    snprintf(info->message, sizeof info->message,
+             "%s scheme: one step relaxes a fraction %.4g of constraint direction %d (h above its "
+             "time constant); projecting along B loses what that relaxation moved, an error of "
+             "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
+             I->split, I->split_row);
   }
   sampler sp = {0};
   if (sink && selected(I, &sp, 0)) {
@@ -350,7 +360,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     if (I->use_theta) {
       double S = cup_polyset_norm(I->L->K, I->xf);
       st = cup_theta_step(&I->th, fixed ? I->L->F : I->g, I->xf, I->xnew, S,
-                          I->eps_n > 0 ? I->eps_n : 1e-12 * S * S,
+                          I->eps_n > 0 ? I->eps_n : -1,
                           I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);

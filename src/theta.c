@@ -137,7 +137,7 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
   const cup_polyset *K = th->K;
   int n = th->n, m = th->m;
   memset(info, 0, sizeof *info);
-  info->eps_target = eps_target;
+  info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
   info->eta_target = eta_target;
   info->method = CUP_PROJ_ACTIVESET;
   for (int j = 0; j < n; j++)
@@ -182,6 +182,23 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
   info->active = active;
   info->violation = viol;
   info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
+  if (eps_target < 0) {
+    /* exact: the active slacks are zero up to the rounding of forming
+     * z = xf + H lambda and its slack: rowgam_i (|g_i| + |c_i| (|xf| + |H| lambda)),
+     * with a factor 2 for the LU residual of lambda itself */
+    double *zmag = th->v, floor = 0;
+    for (int r = 0; r < n; r++) zmag[r] = fabs(xf[r]);
+    for (int i = 0; i < m; i++)
+      if (th->lam[i] > 0)
+        for (int r = 0; r < n; r++) zmag[r] += fabs(th->H[r + (size_t)i * n]) * th->lam[i];
+    for (int i = 0; i < m; i++) {
+      if (!(th->lam[i] > 0)) continue;
+      double mag = fabs(g[i]);
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) mag += fabs(K->Ct.x[k]) * zmag[K->Ct.i[k]];
+      floor += 2 * th->lam[i] * (th->gam[i] + 2 * K->rowgam[i] * mag);
+    }
+    info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
+  }
   info->eta_cert = certified_eta(th, g, z);
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;

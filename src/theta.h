@@ -28,7 +28,12 @@ typedef struct cup_theta {
 int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg);
 void cup_theta_free(cup_theta *th);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
- * reported in info->scale); certificates in info:
+ * reported in info->scale); eps_target < 0 asks for the exact solution:
+ * certified when the gap is below max(1e-12 scale^2, floor), the floor
+ * being the gap of slacks at the rounding bound of forming z = xf + H lambda
+ * and its slack, i.e. when the active rows' slacks are zero to rounding (a
+ * relative target alone fails whenever lambda is large: stiff steps, jumps);
+ * certificates in info:
  * eps_cert = 2 lambda^T (s + gam) (the complementarity gap; for theta = 0 the
  * projector's weak-duality certificate), eta_cert a certified distance of z
  * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a

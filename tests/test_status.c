@@ -16,6 +16,7 @@ static const struct { int value; const char *name; } documented[] = {
   {-13, "CUP_ERR_TIME_LIMIT"}, {-14, "CUP_ERR_INTERRUPTED"},
   {-15, "CUP_ERR_UNSUPPORTED"}, {1, "CUP_WARN_NOT_CERTIFIED"},
   {2, "CUP_WARN_STIFF"}, {3, "CUP_WARN_QUADRATURE"}, {4, "CUP_WARN_X0_OUTSIDE"},
+  {5, "CUP_WARN_SPLITTING"},
 };
 #define NDOC (sizeof documented / sizeof documented[0])
 

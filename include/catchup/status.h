@@ -28,7 +28,8 @@ extern "C" {
   X(CUP_WARN_NOT_CERTIFIED,  1, "requested (eps, eta) not certified within the iteration limit; bounds reached are in info") \
   X(CUP_WARN_STIFF,          2, "explicit scheme with h*rho(A) > 2: the free step is unstable") \
   X(CUP_WARN_QUADRATURE,     3, "input quadrature did not reach its tolerance") \
-  X(CUP_WARN_X0_OUTSIDE,     4, "x0 is outside K(0): the first step projects it")
+  X(CUP_WARN_X0_OUTSIDE,     4, "x0 is outside K(0): the first step projects it") \
+  X(CUP_WARN_SPLITTING,      5, "implicit/exponential scheme with h above the time constant of a constraint direction: the projection along B loses what the step moved")
 
 typedef enum cup_status {
 #define CUP_STATUS_ENUM_(name, value, text) name = value,
