@@ -57,27 +57,14 @@ static const char *joini(char *buf, const char *parent, int i) {
   return buf;
 }
 
-/* How a node looks, for "expected X (got Y)". */
-static const char *looks(const st_node *nd, char *buf, size_t n) {
-  if (st_is_null(nd)) return "nothing";
-  if (nd->kind == ST_SEQ) return nd->len ? "a list" : "an empty list";
-  if (nd->kind == ST_MAP) return "a mapping";
-  snprintf(buf, n, "'%.40s'", nd->text);
-  return buf;
-}
-
 /* ---- keys ---------------------------------------------------------------- */
 
 static int check_keys(rd *r, const st_node *map, const char *mkey, const char *const *known) {
-  for (int k = 0; k < map->len; k++) {
-    int ok = 0;
-    for (int j = 0; known[j] && !ok; j++) ok = strcmp(map->key[k]->text, known[j]) == 0;
-    if (ok) continue;
-    char key[KEY_LEN], hint[160];
-    return fail(r, CUP_ERR_PARSE, map->key[k], join(key, mkey, map->key[k]->text), "unknown key (%s)",
-                st_suggest(hint, sizeof hint, map->key[k]->text, known));
-  }
-  return CUP_OK;
+  const st_node *bad = st_unknown_key(map, known);
+  if (!bad) return CUP_OK;
+  char key[KEY_LEN], hint[160];
+  return fail(r, CUP_ERR_PARSE, bad, join(key, mkey, bad->text), "unknown key (%s)",
+              st_suggest(hint, sizeof hint, bad->text, known));
 }
 
 /* The value of an optional key (NULL if absent or null). */
@@ -97,13 +84,13 @@ static int need(rd *r, const st_node *map, const char *mkey, const char *k, cons
 static int need_map(rd *r, const st_node *nd, const char *key, const char *what) {
   char b[64];
   if (nd->kind == ST_MAP) return CUP_OK;
-  return fail(r, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, looks(nd, b, sizeof b));
+  return fail(r, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, st_looks(nd, b, sizeof b));
 }
 
 static int string(rd *r, const st_node *nd, const char *key, const char **out) {
   char b[64];
   if (nd->kind != ST_SCALAR || st_is_null(nd))
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", looks(nd, b, sizeof b));
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", st_looks(nd, b, sizeof b));
   *out = nd->text;
   return CUP_OK;
 }
@@ -116,7 +103,7 @@ static int number(rd *r, const st_node *nd, const char *key, double *out) {
     return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got the string \"%.40s\": write numbers without quotes)",
                 nd->text);
   if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, out))
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", looks(nd, b, sizeof b));
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", st_looks(nd, b, sizeof b));
   if (!isfinite(*out)) return fail(r, CUP_ERR_NONFINITE, nd, key, "must be finite (got %g)", *out);
   return CUP_OK;
 }
@@ -197,7 +184,7 @@ static int matrix_inline(rd *r, const st_node *nd, const char *key, mat *M) {
     const st_node *row = nd->item[i];
     if (row->kind != ST_SEQ)
       return fail(r, CUP_ERR_PARSE, row, joini(k1, key, i), "expected a row: a list of numbers (got %s)",
-                  looks(row, b, sizeof b));
+                  st_looks(row, b, sizeof b));
     if (row->len != nc)
       return fail(r, CUP_ERR_DIM, row, joini(k1, key, i), "row %d has %d entries but row 0 has %d", i,
                   row->len, nc);
@@ -220,7 +207,7 @@ static int matrix(rd *r, const st_node *nd, const char *key, mat *M) {
   M->at = nd;
   if (nd->kind == ST_MAP && st_get(nd, "file", NULL)) return matrix_file(r, nd, key, M);
   if (nd->kind == ST_SEQ) return matrix_inline(r, nd, key, M);
-  return fail(r, CUP_ERR_PARSE, nd, key, "expected a matrix: " MATRIX_FORMS " (got %s)", looks(nd, b, sizeof b));
+  return fail(r, CUP_ERR_PARSE, nd, key, "expected a matrix: " MATRIX_FORMS " (got %s)", st_looks(nd, b, sizeof b));
 }
 
 static int matrix_dims(rd *r, const mat *M, const char *key, int nr, int nc, const char *why) {
@@ -464,7 +451,7 @@ static int vector(rd *r, const st_node *nd, const char *key, int want, const cha
   }
   if (nd->kind != ST_SEQ)
     return fail(r, CUP_ERR_PARSE, nd, key, "expected a list of %d numbers or {file: name.mtx} (got %s)", want,
-                looks(nd, b, sizeof b));
+                st_looks(nd, b, sizeof b));
   if (nd->len != want)
     return fail(r, CUP_ERR_DIM, nd, key, "expected %d numbers (%s), got %d", want, why, nd->len);
   double *v = calloc((size_t)want + 1, sizeof(double));
@@ -621,7 +608,7 @@ static const char *const wave_names[] = {"constant", "sine", "square", "pwl", NU
 static int read_points(rd *r, const st_node *nd, const char *key, cup_wave *w, double **buf) {
   char k1[KEY_LEN], k2[KEY_LEN], b[64];
   if (nd->kind != ST_SEQ || nd->len == 0)
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a list of [t, value] points (got %s)", looks(nd, b, sizeof b));
+    return fail(r, CUP_ERR_PARSE, nd, key, "expected a list of [t, value] points (got %s)", st_looks(nd, b, sizeof b));
   *buf = malloc(sizeof(double) * 2 * (size_t)nd->len);
   if (!*buf) return CUP_ERR_NOMEM;
   double *t = *buf, *v = *buf + nd->len;
@@ -629,7 +616,7 @@ static int read_points(rd *r, const st_node *nd, const char *key, cup_wave *w, d
     const st_node *pt = nd->item[k];
     joini(k1, key, k);
     if (pt->kind != ST_SEQ || pt->len != 2)
-      return fail(r, CUP_ERR_PARSE, pt, k1, "expected a point [t, value] (got %s)", looks(pt, b, sizeof b));
+      return fail(r, CUP_ERR_PARSE, pt, k1, "expected a point [t, value] (got %s)", st_looks(pt, b, sizeof b));
     int st = number(r, pt->item[0], joini(k2, k1, 0), &t[k]);
     if (!st) st = number(r, pt->item[1], joini(k2, k1, 1), &v[k]);
     if (st) return st;
@@ -701,7 +688,7 @@ static int read_term(rd *r, const st_node *nd, const char *key, cup_input *u, in
     return st;
   }
   return fail(r, CUP_ERR_PARSE, nd, key, "expected an input term: a number or a mapping with a type "
-              "(constant, sine, square, pwl) (got %s)", looks(nd, b, sizeof b));
+              "(constant, sine, square, pwl) (got %s)", st_looks(nd, b, sizeof b));
 }
 
 /* One component u_j: a term, or a list of terms (their sum). */
@@ -728,7 +715,7 @@ static int read_input(rd *r, const st_node *root, int p, cup_input **u) {
   if (p == 1) return read_component(r, nd, "input", *u, 0);
   if (nd->kind != ST_SEQ)
     return fail(r, CUP_ERR_DIM, nd, "input", "expected a list of %d components, one per input (got %s)", p,
-                looks(nd, b, sizeof b));
+                st_looks(nd, b, sizeof b));
   if (nd->len != p)
     return fail(r, CUP_ERR_DIM, nd, "input", "expected %d components, one per input (p = %d from E/G), got %d",
                 p, p, nd->len);
@@ -744,7 +731,7 @@ static int read_schedule(rd *r, const st_node *root, const char *key, const char
   const st_node *nd = opt(root, key);
   if (nd && nd->kind != ST_SCALAR)
     return fail(r, CUP_ERR_PARSE, nd, key, "expected a schedule like \"n^-2.1\" or a number (got %s)",
-                looks(nd, b, sizeof b));
+                st_looks(nd, b, sizeof b));
   const char *text = nd ? nd->text : dflt;
   int st = cup_schedule_parse(text, s, lib);
   if (st) return fail(r, st, nd, key, "%s", lib);
@@ -799,7 +786,7 @@ static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
   }
   if (nd->kind != ST_MAP || nd->len != 1)
     return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got %s)",
-                nd->kind == ST_MAP ? "a mapping with more than one key" : looks(nd, b, sizeof b));
+                nd->kind == ST_MAP ? "a mapping with more than one key" : st_looks(nd, b, sizeof b));
   int st = check_keys(r, nd, "output", known);
   const st_node *v = nd->item[0];
   if (!st && !strcmp(nd->key[0]->text, "every")) {

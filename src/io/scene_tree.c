@@ -174,6 +174,23 @@ static const char *closest(const char *word, const char *const *known) {
   return best;
 }
 
+const st_node *st_unknown_key(const st_node *map, const char *const *known) {
+  for (int k = 0; k < map->len; k++) {
+    int ok = 0;
+    for (int j = 0; known[j] && !ok; j++) ok = strcmp(map->key[k]->text, known[j]) == 0;
+    if (!ok) return map->key[k];
+  }
+  return NULL;
+}
+
+const char *st_looks(const st_node *nd, char *buf, size_t n) {
+  if (st_is_null(nd)) return "nothing";
+  if (nd->kind == ST_SEQ) return nd->len ? "a list" : "an empty list";
+  if (nd->kind == ST_MAP) return "a mapping";
+  snprintf(buf, n, "'%.40s'", nd->text);
+  return buf;
+}
+
 const char *st_suggest(char *buf, size_t n, const char *word, const char *const *known) {
   const char *c = closest(word, known);
   if (c) { snprintf(buf, n, "did you mean '%s'?", c); return buf; }

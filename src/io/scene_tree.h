@@ -60,6 +60,12 @@ int st_is_null(const st_node *nd);
 /* "did you mean 'x'?" when word is a likely typo of one of the NULL-terminated
  * known words, else "expected one of a, b, c"; into buf (n bytes). */
 const char *st_suggest(char *buf, size_t n, const char *word, const char *const *known);
+/* The first key of a mapping that is not among the NULL-terminated known
+ * words, or NULL when all are known. */
+const st_node *st_unknown_key(const st_node *map, const char *const *known);
+/* How a node looks, for "expected X (got Y)": "nothing", "a list", "an empty
+ * list", "a mapping" or the scalar quoted (up to 40 characters, into buf). */
+const char *st_looks(const st_node *nd, char *buf, size_t n);
 /* Parse a plain scalar as a YAML number (decimal, exponent, .inf, .nan). */
 int st_number(const char *s, double *out);
 

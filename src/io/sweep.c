@@ -43,25 +43,12 @@ static int fail(prs *p, int status, const st_node *at, const char *key, const ch
   return status;
 }
 
-static const char *looks(const st_node *nd, char *buf, size_t n) {
-  if (st_is_null(nd)) return "nothing";
-  if (nd->kind == ST_SEQ) return nd->len ? "a list" : "an empty list";
-  if (nd->kind == ST_MAP) return "a mapping";
-  snprintf(buf, n, "'%.40s'", nd->text);
-  return buf;
-}
-
 static int check_keys(prs *p, const st_node *map, const char *mkey, const char *const *known) {
-  for (int k = 0; k < map->len; k++) {
-    int ok = 0;
-    for (int j = 0; known[j] && !ok; j++) ok = strcmp(map->key[k]->text, known[j]) == 0;
-    if (ok) continue;
-    char key[128], hint[160];
-    snprintf(key, sizeof key, "%s%s%s", mkey, *mkey ? "." : "", map->key[k]->text);
-    return fail(p, CUP_ERR_PARSE, map->key[k], key, "unknown key (%s)",
-                st_suggest(hint, sizeof hint, map->key[k]->text, known));
-  }
-  return CUP_OK;
+  const st_node *bad = st_unknown_key(map, known);
+  if (!bad) return CUP_OK;
+  char key[128], hint[160];
+  snprintf(key, sizeof key, "%s%s%s", mkey, *mkey ? "." : "", bad->text);
+  return fail(p, CUP_ERR_PARSE, bad, key, "unknown key (%s)", st_suggest(hint, sizeof hint, bad->text, known));
 }
 
 static const st_node *opt(const st_node *map, const char *k) {
@@ -72,13 +59,13 @@ static const st_node *opt(const st_node *map, const char *k) {
 static int need_map(prs *p, const st_node *nd, const char *key, const char *what) {
   char b[64];
   if (nd->kind == ST_MAP) return CUP_OK;
-  return fail(p, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, looks(nd, b, sizeof b));
+  return fail(p, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, st_looks(nd, b, sizeof b));
 }
 
 static int string(prs *p, const st_node *nd, const char *key, const char **out) {
   char b[64];
   if (nd->kind != ST_SCALAR || st_is_null(nd) || !nd->text[0])
-    return fail(p, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", looks(nd, b, sizeof b));
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", st_looks(nd, b, sizeof b));
   *out = nd->text;
   return CUP_OK;
 }
@@ -88,7 +75,7 @@ static int integer(prs *p, const st_node *nd, const char *key, long lo, long hi,
   char b[64];
   double v;
   if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, &v) || !isfinite(v))
-    return fail(p, CUP_ERR_PARSE, nd, key, "expected an integer (got %s)", looks(nd, b, sizeof b));
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected an integer (got %s)", st_looks(nd, b, sizeof b));
   if (v != floor(v)) return fail(p, CUP_ERR_PARSE, nd, key, "must be an integer (got %g)", v);
   if (v < (double)lo) return fail(p, CUP_ERR_PARSE, nd, key, "must be >= %ld (got %g)", lo, v);
   if (v > (double)hi) return fail(p, CUP_ERR_PARSE, nd, key, "must be <= %ld (got %g)", hi, v);
@@ -127,7 +114,7 @@ static int read_word_item(prs *p, const st_node *nd, const char *key, const char
                           const char *const *names, int *out) {
   char hint[160], b[64];
   if (nd->kind != ST_SCALAR || st_is_null(nd))
-    return fail(p, CUP_ERR_PARSE, nd, key, "expected a %s name (got %s)", what, looks(nd, b, sizeof b));
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a %s name (got %s)", what, st_looks(nd, b, sizeof b));
   for (int k = 0; names[k]; k++)
     if (!strcmp(nd->text, names[k])) { *out = k; return CUP_OK; }
   return fail(p, CUP_ERR_PARSE, nd, key, "unknown %s '%.40s' (%s)", what, nd->text,
@@ -139,7 +126,7 @@ static int read_schedule_item(prs *p, const st_node *nd, const char *key, char *
   cup_schedule sch;
   if (nd->kind != ST_SCALAR || st_is_null(nd))
     return fail(p, CUP_ERR_PARSE, nd, key, "expected a schedule like \"n^-2.1\" or a number (got %s)",
-                looks(nd, b, sizeof b));
+                st_looks(nd, b, sizeof b));
   if (cup_schedule_parse(nd->text, &sch, lib) != CUP_OK) return fail(p, CUP_ERR_PARSE, nd, key, "%s", lib);
   if (strlen(nd->text) >= SW_SPEC_LEN)
     return fail(p, CUP_ERR_PARSE, nd, key, "schedule text longer than %d characters", SW_SPEC_LEN - 1);
