@@ -11,6 +11,7 @@ int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, c
   const cup_polyset *K = L->K;
   int n = th->n = L->n, m = th->m = L->m;
   th->K = K;
+  th->h = h;
   if (!K->dense)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
@@ -24,10 +25,11 @@ int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, c
   th->lu = calloc(M * M, sizeof(double)); th->work = calloc(M + N, sizeof(double));
   th->s = calloc(M, sizeof(double)); th->gam = calloc(M, sizeof(double));
   th->v = calloc(N, sizeof(double));
+  th->tau = calloc(M, sizeof(double)); th->qs = calloc(M, sizeof(double));
   th->piv = calloc(M, sizeof(int)); th->idx = calloc(M, sizeof(int));
   th->act = calloc(M, 1); th->prev = calloc(M, 1);
   if (!th->H || !th->M || !th->lam || !th->w || !th->rhs || !th->sol || !th->lu || !th->work ||
-      !th->s || !th->gam || !th->v || !th->piv || !th->idx || !th->act || !th->prev)
+      !th->s || !th->gam || !th->v || !th->tau || !th->qs || !th->piv || !th->idx || !th->act || !th->prev)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
   /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T) */
   for (int i = 0; i < m; i++)
@@ -48,7 +50,7 @@ int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, c
 void cup_theta_free(cup_theta *th) {
   free(th->H); free(th->M); free(th->lam); free(th->w); free(th->rhs); free(th->sol);
   free(th->lu); free(th->work); free(th->s); free(th->gam); free(th->v); free(th->piv);
-  free(th->idx); free(th->act); free(th->prev);
+  free(th->idx); free(th->act); free(th->prev); free(th->tau); free(th->qs);
   memset(th, 0, sizeof *th);
 }
 
@@ -154,12 +156,24 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
     info->eta_cert = certified_eta(th, g, z);
     return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   }
-  memcpy(th->act, th->prev, (size_t)m);           /* warm start: the last active set */
-  int pivots = 0;
-  int st = lcp(th, q, &pivots);
-  if (st == CUP_ERR_LINALG) {                     /* retry cold before giving up */
-    memset(th->act, 0, (size_t)m);
-    st = lcp(th, q, &pivots);
+  /* Aim the rows at slack tau = 16 gam (K shrunk by a few ulps): then z is
+   * certainly in K and certifies itself, as the projector's dense path does.
+   * A set without interior makes the shrunk problem unsolvable: then solve
+   * the exact one. Each try is warm-started, then retried cold. */
+  double *tau = th->tau, *qs = th->qs;
+  for (int i = 0; i < m; i++) {
+    tau[i] = 16 * th->gam[i] + DBL_MIN;
+    qs[i] = q[i] - tau[i];
+  }
+  int pivots = 0, st = CUP_ERR_LINALG;
+  for (int aim = 1; aim >= 0 && st == CUP_ERR_LINALG; aim--) {
+    if (!aim) cup_zero(tau, m);
+    memcpy(th->act, th->prev, (size_t)m);         /* warm start: the last active set */
+    st = lcp(th, aim ? qs : q, &pivots);
+    if (st == CUP_ERR_LINALG) {
+      memset(th->act, 0, (size_t)m);
+      st = lcp(th, aim ? qs : q, &pivots);
+    }
   }
   info->iterations = pivots + 1;
   if (st) return info->status = st;
@@ -175,7 +189,7 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {
-    gap += 2 * th->lam[i] * (th->s[i] + th->gam[i]);
+    gap += 2 * th->h * th->lam[i] * (th->s[i] + th->gam[i]);   /* impulse mu = h lambda */
     viol = cup_max(viol, -th->s[i]);
     active += th->lam[i] > 0;
   }
@@ -195,7 +209,7 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
       if (!(th->lam[i] > 0)) continue;
       double mag = fabs(g[i]);
       for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) mag += fabs(K->Ct.x[k]) * zmag[K->Ct.i[k]];
-      floor += 2 * th->lam[i] * (th->gam[i] + 2 * K->rowgam[i] * mag);
+      floor += 2 * th->h * th->lam[i] * (th->gam[i] + 2 * K->rowgam[i] * mag + tau[i]);
     }
     info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
   }

@@ -6,7 +6,9 @@
  * theta = 0 is the explicit catching-up step (M symmetric: the P-projection);
  * theta = 1/2 is second order where the solution is smooth. The LCP is
  * solved exactly by least-index principal pivoting (Murty), warm-started
- * from the previous active set; dense, for m <= 64 rows and n <= 256. */
+ * from the previous active set, aiming the rows a few ulps inside K so
+ * that the answer is certainly feasible; dense, for m <= 64 rows and
+ * n <= 256. */
 #ifndef CUP_THETA_H
 #define CUP_THETA_H
 
@@ -16,10 +18,11 @@
 
 typedef struct cup_theta {
   int n, m;
+  double h;
   const cup_polyset *K;
   double *H;        /* n x m, column-major */
   double *M;        /* m x m, column-major */
-  double *lam, *w, *rhs, *sol, *lu, *work, *s, *gam, *v;
+  double *lam, *w, *rhs, *sol, *lu, *work, *s, *gam, *v, *tau, *qs;
   int *piv, *idx;
   unsigned char *act, *prev;
 } cup_theta;
@@ -34,7 +37,8 @@ void cup_theta_free(cup_theta *th);
  * and its slack, i.e. when the active rows' slacks are zero to rounding (a
  * relative target alone fails whenever lambda is large: stiff steps, jumps);
  * certificates in info:
- * eps_cert = 2 lambda^T (s + gam) (the complementarity gap; for theta = 0 the
+ * eps_cert = 2 mu^T (s + gam) with the impulse mu = h lambda (the
+ * complementarity gap, z = xf + W P^-1 C^T mu; for theta = 0 exactly the
  * projector's weak-duality certificate), eta_cert a certified distance of z
  * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a
  * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */

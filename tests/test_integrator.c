@@ -138,35 +138,48 @@ static int store_sink(long k, double t, const double *x, void *vp) {
 /* The paper's tolerances eps_n = n^-2.1, eta_n = n^-1.05 with the default
  * projector: the trajectory differs from the exact-projection run by <= 1%
  * of the discretization error. */
+/* The paper's tolerances with the default projector (auto: on this small
+ * set the step's dual by principal pivoting) against the exact projection
+ * by the projector's dense active set (an independent path). The methods
+ * that stop as soon as (eps_n, eta_n) are certified (pg, fista) drift by
+ * 24-39% of the error over the run: documented in docs/closed-forms.md. */
 static void test_paper_tolerances(void **state) {
   (void)state;
+  static const int methods[] = {CUP_PROJ_AUTO};
   for (int cas = 1; cas <= 2; cas++)
     for (long n = 1000; n <= 10000; n *= 10) {
       cup_lcs *L = paper_lcs(cas);
       cup_input *u = paper_input(cas);
       double *X[2];
-      for (int pass = 0; pass < 2; pass++) {
-        X[pass] = malloc(sizeof(double) * 3 * (size_t)(n + 1));
+      for (int q = 0; q < 2; q++) X[q] = malloc(sizeof(double) * 3 * (size_t)(n + 1));
+      for (int pass = -1; pass < 1; pass++) {     /* -1: the exact reference */
         cup_integrator_options o;
         cup_integrator_options_default(&o);           /* n^-2.1, n^-1.05 */
         o.n = n;
-        if (pass == 0) { o.eps = (cup_schedule){0, 0}; o.eta = (cup_schedule){0, 0}; }
+        if (pass < 0) {
+          o.eps = (cup_schedule){0, 0};
+          o.eta = (cup_schedule){0, 0};
+          o.proj.method = CUP_PROJ_ACTIVESET;
+        } else {
+          o.proj.method = methods[pass];
+        }
         cup_integrator *I = NULL;
         assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
         double x0[3] = {0, 0, 0};
-        store_ctx sc = {X[pass]};
+        store_ctx sc = {X[pass < 0 ? 0 : 1]};
         cup_run_info info;
         assert_int_equal(cup_integrator_run(I, x0, store_sink, &sc, &info), CUP_OK);
-        if (pass == 1) {
-          assert_true(info.max_eps_cert <= pow((double)n, -2.1));
-          assert_true(info.max_eta_cert <= pow((double)n, -1.05));
-        }
         cup_integrator_free(&I);
+        if (pass < 0) continue;
+        assert_true(info.max_eps_cert <= pow((double)n, -2.1));
+        assert_true(info.max_eta_cert <= pow((double)n, -1.05));
+        double d = 0;
+        for (long q = 0; q < 3 * (n + 1); q++) d = fmax(d, fabs(X[0][q] - X[1][q]));
+        double err = (cas == 1 ? 1.52 : 1.79) / n;
+        print_message("case %d n %5ld, paper tolerances, %-5s: %.3e from the exact run (%.2f%% of the error)\n",
+                      cas, n, cup_proj_method_name(methods[pass]), d, 100 * d / err);
+        assert_true(d <= 0.01 * err);
       }
-      double d = 0;
-      for (long q = 0; q < 3 * (n + 1); q++) d = fmax(d, fabs(X[0][q] - X[1][q]));
-      double err = (cas == 1 ? 1.52 : 1.79) / n;
-      assert_true(d <= 0.01 * err);
       free(X[0]); free(X[1]);
       cup_input_free(&u);
       cup_lcs_free(&L);
@@ -185,6 +198,7 @@ static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, 
   o.n = n;
   o.scheme = scheme;
   o.theta = theta;
+  o.proj.method = CUP_PROJ_ACTIVESET;      /* explicit: the projector, not the theta path */
   o.eps = (cup_schedule){0, 0};
   o.eta = (cup_schedule){0, 0};
   cup_integrator *I = NULL;
@@ -305,6 +319,7 @@ static void run_rows(const cup_lcs *L, const cup_input *u, long n, int scheme, d
   o.n = n;
   o.scheme = scheme;
   o.theta = theta;
+  o.proj.method = CUP_PROJ_ACTIVESET;      /* explicit: the projector, not the theta path */
   o.eps = (cup_schedule){1e-14, 0};             /* absolute: the state passes near 0, */
   o.eta = (cup_schedule){1e-12, 0};             /* where relative targets fall below rounding */
   o.on_step = rows_step;

@@ -69,7 +69,13 @@ typedef struct cup_integrator_options {
                                    (certified to 1e-12 relative) */
   cup_schedule eta;           /**< eta_n (absolute, length); default n^-1.05;
                                    zero: 1e-10 relative */
-  cup_projector_options proj; /**< method and limits; its eps/eta are replaced by the schedules */
+  cup_projector_options proj; /**< method and limits; its eps/eta are replaced by the schedules.
+                                   The explicit scheme with method AUTO on a small set in
+                                   dense form (and no feasible_point) solves each step's
+                                   projection exactly by principal pivoting on its m x m
+                                   dual (the theta step with W = I), certified as the
+                                   projector certifies; the projector takes over if that
+                                   fails (an empty K(t) gets its Farkas certificate) */
   cup_output_kind output;     /**< CUP_OUTPUT_EVERY */
   long output_every;          /**< EVERY: stride (default 1) */
   long output_samples;        /**< SAMPLES: N >= 2 */
