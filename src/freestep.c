@@ -310,23 +310,39 @@ static int step_input(cup_freestep *fs, double t0, double t1, int *has) {
   return CUP_OK;
 }
 
+/* xf = Phi x + Gam u (u NULL: no input), Phi n x n and Gam n x p row-major;
+ * inlined with a constant n for small systems. */
+static inline __attribute__((always_inline)) void
+affine_rows(int n, int p, const double *restrict Phi, const double *restrict Gam,
+            const double *restrict x, const double *restrict u, double *restrict xf) {
+  for (int i = 0; i < n; i++) {
+    const double *restrict row = Phi + (size_t)i * n;
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += row[j] * x[j];
+    if (u) {
+      const double *restrict grow = Gam + (size_t)i * p;
+      for (int c = 0; c < p; c++) acc += grow[c] * u[c];
+    }
+    xf[i] = acc;
+  }
+}
+
 static int affine_apply(cup_freestep *fs, double t0, double t1, const double *restrict x,
                         double *restrict xf, int with_f) {
   int n = fs->n, p = fs->p, has;
   const double *restrict Phi = fs->Phi, *restrict Gam = fs->Gam;
   int st = step_input(fs, t0, t1, &has);
   if (st < 0) return st;
-  const double *restrict u = fs->ubuf;
-  for (int i = 0; i < n; i++) {
-    const double *restrict row = Phi + (size_t)i * n;
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += row[j] * x[j];
-    if (has) {
-      const double *restrict grow = Gam + (size_t)i * p;
-      for (int c = 0; c < p; c++) acc += grow[c] * u[c];
-    }
-    xf[i] = acc;
+  const double *restrict u = has ? fs->ubuf : NULL;
+  /* fixed small sizes (one input is the common case) unroll completely */
+#define CUP_AFFINE_CASE(N) \
+  case N: if (p == 1) affine_rows(N, 1, Phi, Gam, x, u, xf); else affine_rows(N, p, Phi, Gam, x, u, xf); break;
+  switch (n) {
+    CUP_AFFINE_CASE(1) CUP_AFFINE_CASE(2) CUP_AFFINE_CASE(3)
+    CUP_AFFINE_CASE(4) CUP_AFFINE_CASE(5) CUP_AFFINE_CASE(6)
+    default: affine_rows(n, p, Phi, Gam, x, u, xf); break;
   }
+#undef CUP_AFFINE_CASE
   if (with_f) {
     const double *restrict F = fs->Fmap, *restrict fsum = fs->fsum;
     for (int j = 0; j < n; j++)

@@ -250,7 +250,7 @@ double cup_polyset_norm(const cup_polyset *K, const double *v) {
   } else {
     for (int j = 0; j < K->n; j++) s += K->pd[j] * v[j] * v[j];
   }
-  return isnan(s) ? NAN : sqrt(fmax(s, 0));   /* rounding may make s < 0; NaN must show */
+  return isnan(s) ? NAN : s > 0 ? sqrt(s) : 0;   /* rounding may make s < 0; NaN must show */
 }
 
 double cup_slack(const cup_polyset *K, const double *g, const double *x,

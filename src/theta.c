@@ -138,12 +138,13 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
                    double eps_target, double eta_target, cup_proj_info *info) {
   const cup_polyset *K = th->K;
   int n = th->n, m = th->m;
-  memset(info, 0, sizeof *info);
+  *info = (cup_proj_info){0};
   info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
   info->eta_target = eta_target;
   info->method = CUP_PROJ_ACTIVESET;
-  for (int j = 0; j < n; j++)
-    if (!isfinite(xf[j])) return info->status = CUP_ERR_NONFINITE;
+  double probe = 0;                               /* NaN iff some entry is NaN or Inf */
+  for (int j = 0; j < n; j++) probe += 0 * xf[j];
+  if (isnan(probe)) return info->status = CUP_ERR_NONFINITE;
   double *q = th->s;                              /* q = C x_free + g */
   cup_slack(K, g, xf, q, th->gam);
   info->scale = scale;
