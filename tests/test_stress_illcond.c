@@ -77,7 +77,7 @@ static int check_projection(const char *what, const prob *q, const cup_projector
   if (ref_project(&r, x, zr) != 0) fail_msg("%s: the reference found no feasible point", what);
   double S = info.scale, d = pdist(q, x, zr), dz = pdist(q, x, z);
   double rt = fmax(q->reftol, 1e-13);
-  double excess = dz * dz - d * d, allow = 8e-15 * S * S + 1e-14 * d * d + 2 * rt * S * (d + dz);
+  double excess = ref_excess(&r, x, z, zr), allow = 8e-15 * S * S + 1e-14 * d * d + 2 * rt * S * (d + dz);
   if (!(info.eps_cert >= excess - allow))
     fail_msg("%s: eps_cert %.3e < true excess %.3e", what, info.eps_cert, excess);
   if (ref_project(&r, z, zz) != 0) fail_msg("%s: the reference could not project z", what);
