@@ -7,9 +7,13 @@
 #include "theta.h"
 
 int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg) {
+  return cup_theta_init_set(th, L->K, W, h, errmsg);
+}
+
+int cup_theta_init_set(cup_theta *th, const cup_polyset *K, const double *W, double h,
+                       char *errmsg) {
   memset(th, 0, sizeof *th);
-  const cup_polyset *K = L->K;
-  int n = th->n = L->n, m = th->m = L->m;
+  int n = th->n = K->n, m = th->m = K->m;
   th->K = K;
   th->h = h;
   if (!K->dense)
@@ -35,7 +39,10 @@ int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, c
   for (int i = 0; i < m; i++)
     for (int r = 0; r < n; r++) {
       double acc = 0;
-      for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * K->Bt[(size_t)i * n + c];
+      if (W)
+        for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * K->Bt[(size_t)i * n + c];
+      else
+        acc = K->Bt[(size_t)i * n + r];
       th->H[r + (size_t)i * n] = h * acc;
     }
   for (int j = 0; j < m; j++)                      /* M = C H */
@@ -153,6 +160,7 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
     cup_copy(z, xf, n);
     cup_zero(th->lam, m);
+    th->lq = 0;
     info->skipped = 1;
     info->eta_cert = certified_eta(th, g, z);
     return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
@@ -179,7 +187,12 @@ int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, 
   info->iterations = pivots + 1;
   if (st) return info->status = st;
   memcpy(th->prev, th->act, (size_t)m);
-  for (int i = 0; i < m; i++) th->lam[i] = cup_max(th->lam[i], 0);
+  double lq = 0;
+  for (int i = 0; i < m; i++) {
+    th->lam[i] = cup_max(th->lam[i], 0);
+    lq += th->lam[i] * q[i];
+  }
+  th->lq = lq;
   cup_copy(z, xf, n);
   for (int i = 0; i < m; i++) {
     if (th->lam[i] == 0) continue;

@@ -23,12 +23,17 @@ typedef struct cup_theta {
   double *H;        /* n x m, column-major */
   double *M;        /* m x m, column-major */
   double *lam, *w, *rhs, *sol, *lu, *work, *s, *gam, *v, *tau, *qs;
+  double lq;        /* lambda^T q of the last step (q: the free point's slack) */
   int *piv, *idx;
   unsigned char *act, *prev;
 } cup_theta;
 
 /* W (n x n, column-major) from the free step; builds H and M. */
 int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg);
+/* The same on the set K alone; W = NULL is the identity (with h = 1: the
+ * P-projection onto K, lambda the projector's multipliers). */
+int cup_theta_init_set(cup_theta *th, const cup_polyset *K, const double *W, double h,
+                       char *errmsg);
 void cup_theta_free(cup_theta *th);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:

@@ -20,7 +20,10 @@ extern "C" {
 typedef struct cup_projector cup_projector;
 
 typedef enum cup_proj_method {
-  CUP_PROJ_AUTO = 0,      /**< fastest method that certifies the tolerances */
+  CUP_PROJ_AUTO = 0,      /**< fastest method that certifies the tolerances: on small dense
+                               sets (m <= 64, dim <= 256) the dual LCP by principal pivoting
+                               (closed form for 1 or 2 active rows), falling back to the
+                               active set; on sparse sets the active-set Newton method */
   CUP_PROJ_PG = 1,        /**< the paper's dual projected gradient, step 1/L */
   CUP_PROJ_FISTA = 2,     /**< accelerated dual gradient with adaptive restart */
   CUP_PROJ_ACTIVESET = 3  /**< exact: active-set Newton on the dual (dense or CHOLMOD) */
