@@ -60,12 +60,16 @@ static const char usage_text[] =
   "  -o, --output FILE      results file (HDF5); replaced unless --resume\n"
   "  --resume               continue FILE: run only the tasks not done yet\n"
   "  --quiet                no progress line and no summary line\n"
+  "  --log-progress         a full progress line every 10 s instead of one rewritten in\n"
+  "                         place (the default only when neither stdout nor stderr is a\n"
+  "                         terminal; mpirun gives stdout a pseudo-terminal even when\n"
+  "                         its output goes to a file)\n"
   "  --task-time-limit S    stop a task after S seconds (status CUP_ERR_TIME_LIMIT)\n"
   "  -h, --help             this text;  --version  the library versions\n";
 
 typedef struct {
   const char *sweep, *out;
-  int resume, quiet;
+  int resume, quiet, log_progress;
   double time_limit;
 } args_t;
 
@@ -137,6 +141,8 @@ static int parse_args(args_t *a, int argc, char **argv) {
       a->resume = 1;
     } else if (!strcmp(arg, "--quiet") || !strcmp(arg, "-q")) {
       a->quiet = 1;
+    } else if (!strcmp(arg, "--log-progress")) {
+      a->log_progress = 1;
     } else if (arg[0] == '-' && arg[1]) {
       return usage_error("unknown option '%s'", arg);
     } else if (a->sweep) {
@@ -504,12 +510,14 @@ static void fmt_seconds(char *buf, size_t n, double s) {
 }
 
 /* The progress line: rewritten in place every PROGRESS_SECONDS on a
- * terminal; on a log (neither stdout nor stderr a terminal: mpirun makes
- * stderr a pipe even interactively, so stdout decides) one full line every
- * PROGRESS_LOG_SECONDS. */
+ * terminal; on a log (--log-progress, or neither stdout nor stderr a
+ * terminal: mpirun makes stderr a pipe even interactively, so stdout
+ * decides, but it also makes stdout a pseudo-terminal when its own output
+ * is a file) one full line every PROGRESS_LOG_SECONDS. */
 static void progress(manager_t *m, int final) {
   static int live = -1;
-  if (live < 0) live = isatty(STDOUT_FILENO) || isatty(STDERR_FILENO);
+  if (live < 0)
+    live = !m->args->log_progress && (isatty(STDOUT_FILENO) || isatty(STDERR_FILENO));
   double now = now_seconds();
   double every = live ? PROGRESS_SECONDS : PROGRESS_LOG_SECONDS;
   if (m->args->quiet || (!final && now - m->last_progress < every)) return;

@@ -33,4 +33,10 @@ expect 1 "made from a different sweep file (stored SHA-256" run 0 "$WORK/other.y
 cp "$WORK/a.h5" "$WORK/b.h5"
 CATCHUP_SWEEP_DONE_LIST="$WORK/done.txt" run 2 "$SMOKE" -o "$WORK/b.h5" --resume --quiet
 "$CHECK" compare "$WORK/a.h5" "$WORK/b.h5" > /dev/null
-echo "cli: one-line errors, hash check, idle resume"
+# --log-progress: whole lines, no carriage returns, even under mpirun (whose
+# stdout is a pseudo-terminal)
+run 2 "$SMOKE" -o "$WORK/c.h5" --log-progress 2> "$WORK/progress.txt" > /dev/null
+if grep -q $'\r' "$WORK/progress.txt"; then fail "--log-progress wrote a carriage return"; fi
+grep -qE '^catchup-sweep: ([0-9]+)/\1 done, 0 failed' "$WORK/progress.txt" ||
+  fail "--log-progress: no final progress line: $(cat "$WORK/progress.txt")"
+echo "cli: one-line errors, hash check, idle resume, log progress"
