@@ -24,80 +24,11 @@
 
 #define SCENES CUP_SOURCE_DIR "/tests/scenes"
 
-static char tmpdir[] = "/tmp/cup_stress_cli_XXXXXX";
-
-static const char *tmp_path(const char *name) {
-  static char buf[4][256];
-  static int next;
-  char *p = buf[next++ % 4];
-  snprintf(p, 256, "%s/%s", tmpdir, name);
-  return p;
-}
-
-typedef struct { int code, lines; char err[4096]; } result;
-
-static result run_cli(const char *const *args) {
-  result r;
-  memset(&r, 0, sizeof r);
-  const char *errfile = tmp_path("stderr.txt");
-  const char *argv[32] = {CUP_CATCHUP_RUN};
-  for (int i = 0; args[i] && i < 30; i++) argv[i + 1] = args[i];
-  fflush(NULL);
-  pid_t pid = fork();
-  if (pid < 0) skip();
-  if (pid == 0) {
-    int fd = open(errfile, O_WRONLY | O_CREAT | O_TRUNC, 0600), nul = open("/dev/null", O_WRONLY);
-    dup2(fd, 2);
-    dup2(nul, 1);
-    execv(CUP_CATCHUP_RUN, (char *const *)argv);
-    _exit(127);
-  }
-  int st = 0;
-  assert_int_equal(waitpid(pid, &st, 0), pid);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  FILE *f = fopen(errfile, "r");
-  assert_non_null(f);
-  size_t n = fread(r.err, 1, sizeof r.err - 1, f);
-  r.err[n] = '\0';
-  fclose(f);
-  for (size_t i = 0; i < n; i++) r.lines += r.err[i] == '\n';
-  return r;
-}
+#define CLI_TMPDIR_TEMPLATE "/tmp/cup_stress_cli_XXXXXX"
+#include "cliutil.h"
 
 static void expect_in(const char *text, const char *want) {
   if (!strstr(text, want)) fail_msg("'%s' not in:\n%s", want, text);
-}
-
-static hsize_t read_rows(hid_t f, const char *name, hsize_t cols, double **out) {
-  hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
-  assert_true(d >= 0);
-  hid_t s = H5Dget_space(d);
-  hsize_t dims[2] = {0, 0};
-  H5Sget_simple_extent_dims(s, dims, NULL);
-  if (cols > 1) assert_true(dims[1] == cols);
-  *out = malloc(sizeof(double) * (dims[0] * cols + 1));
-  if (dims[0] > 0) assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, *out) >= 0);
-  H5Sclose(s);
-  H5Dclose(d);
-  return dims[0];
-}
-
-static int64_t attr_i64(hid_t f, const char *name) {
-  int64_t v = 0;
-  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
-  if (a < 0) fail_msg("attribute %s missing", name);
-  assert_true(H5Aread(a, H5T_NATIVE_INT64, &v) >= 0);
-  H5Aclose(a);
-  return v;
-}
-
-static double attr_f64(hid_t f, const char *name) {
-  double v = 0;
-  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
-  if (a < 0) fail_msg("attribute %s missing", name);
-  assert_true(H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0);
-  H5Aclose(a);
-  return v;
 }
 
 static void attr_str(hid_t f, const char *name, char *out, size_t size) {
@@ -117,8 +48,8 @@ typedef struct { hsize_t rows; double *t, *x; int64_t status, stopped_step; doub
 static void load(const char *path, int dim, h5file *o) {
   hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) fail_msg("cannot open %s", path);
-  o->rows = read_rows(f, "t", 1, &o->t);
-  assert_true(read_rows(f, "x", (hsize_t)dim, &o->x) == o->rows);
+  o->rows = read_rows(f, "t", 1, 1, &o->t);
+  assert_true(read_rows(f, "x", 2, (hsize_t)dim, &o->x) == o->rows);
   o->status = attr_i64(f, "status");
   o->stopped_step = attr_i64(f, "stopped_step");
   o->stopped_t = attr_f64(f, "stopped_t");
@@ -137,7 +68,7 @@ static void test_empty_set_keeps_prefix(void **state) {
   const char *scene = SCENES "/stress/empty-at-step.yaml";
   const char *out = tmp_path("empty.h5"), *ref = tmp_path("truncated.h5");
   const char *a1[] = {scene, "-o", out, NULL};
-  result r = run_cli(a1);
+  result r = run_cli(a1, 0, 0);
   if (r.code != 1 || r.lines != 1) fail_msg("exit %d with %d lines:\n%s", r.code, r.lines, r.err);
   expect_in(r.err, scene);
   expect_in(r.err, "CUP_ERR_EMPTY_SET");
@@ -153,7 +84,7 @@ static void test_empty_set_keeps_prefix(void **state) {
   expect_in(a.msg, "step 110");
   expect_in(a.msg, "Farkas");
   const char *a2[] = {scene, "-o", ref, "--set", "T=0.8515625", "--n", "109", "--quiet", NULL};
-  r = run_cli(a2);
+  r = run_cli(a2, 0, 0);
   if (r.code != 0) fail_msg("truncated run: exit %d:\n%s", r.code, r.err);
   load(ref, 2, &b);
   assert_int_equal(b.status, CUP_OK);
@@ -177,7 +108,7 @@ static void test_divergence_keeps_prefix(void **state) {
   const char *scene = SCENES "/stress/stiff-clamp-rlc.yaml";
   const char *out = tmp_path("stiff.h5");
   const char *args[] = {scene, "-o", out, NULL};
-  result r = run_cli(args);
+  result r = run_cli(args, 0, 0);
   if (r.code != 1 || r.lines != 1) fail_msg("exit %d with %d lines:\n%s", r.code, r.lines, r.err);
   expect_in(r.err, "CUP_ERR_DIVERGED");
   expect_in(r.err, "h*rho(A) = 1e+04 > 2");
@@ -196,7 +127,7 @@ static void test_divergence_keeps_prefix(void **state) {
   unload(&a);
   /* the implicit scheme runs it through */
   const char *args2[] = {scene, "-o", out, "--scheme", "implicit", "--quiet", NULL};
-  r = run_cli(args2);
+  r = run_cli(args2, 0, 0);
   if (r.code != 0 || r.lines != 0) fail_msg("implicit: exit %d:\n%s", r.code, r.err);
   load(out, 2, &a);
   assert_int_equal(a.rows, 2001);
@@ -209,30 +140,18 @@ static void test_nonfinite_scene_values(void **state) {
   (void)state;
   const char *out = tmp_path("nan.h5");
   const char *a1[] = {SCENES "/bad/x0-nan.yaml", "-o", out, NULL};
-  result r = run_cli(a1);
+  result r = run_cli(a1, 0, 0);
   if (r.code != 1 || r.lines != 1) fail_msg("exit %d with %d lines:\n%s", r.code, r.lines, r.err);
   expect_in(r.err, "x0-nan.yaml:11:9: x0.1: must be finite (got nan)");
   const char *a2[] = {CUP_SOURCE_DIR "/examples/paper-fig2.yaml", "-o", out, "--set",
                       "input.0.amplitude=-.inf", NULL};
-  r = run_cli(a2);
+  r = run_cli(a2, 0, 0);
   if (r.code != 1 || r.lines != 1) fail_msg("exit %d with %d lines:\n%s", r.code, r.lines, r.err);
   expect_in(r.err, "override 'input.0.amplitude=-.inf': input.0.amplitude: must be finite (got -inf)");
   const char *a3[] = {SCENES "/bad/x0-mtx-inf.yaml", "-o", out, NULL};
-  r = run_cli(a3);
+  r = run_cli(a3, 0, 0);
   if (r.code != 1 || r.lines != 1) fail_msg("exit %d with %d lines:\n%s", r.code, r.lines, r.err);
   expect_in(r.err, "x0-mtx-inf.yaml:8:12: x0.file: inf.mtx: entry (2,1) is -inf");
-}
-
-static int make_tmpdir(void **state) {
-  (void)state;
-  return mkdtemp(tmpdir) ? 0 : -1;
-}
-
-static int remove_tmpdir(void **state) {
-  (void)state;
-  char cmd[300];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-  return system(cmd) == 0 ? 0 : -1;
 }
 
 int main(void) {

@@ -1,0 +1,127 @@
+/* Helpers of the tests that run catchup-run as a program and read its HDF5
+ * file back (test_catchup_run.c, test_stress_cli.c). The includer defines
+ * CLI_TMPDIR_TEMPLATE (a mkdtemp template) and CUP_CATCHUP_RUN, and
+ * includes cmocka.h and hdf5.h first; make_tmpdir/remove_tmpdir are the
+ * group set-up and tear-down. */
+#ifndef CUP_TEST_CLIUTIL_H
+#define CUP_TEST_CLIUTIL_H
+
+#include <fcntl.h>
+#include <signal.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+
+static char tmpdir[] = CLI_TMPDIR_TEMPLATE;
+
+static const char *tmp_path(const char *name) {
+  static char buf[4][256];
+  static int next;
+  char *p = buf[next++ % 4];
+  snprintf(p, 256, "%s/%s", tmpdir, name);
+  return p;
+}
+
+/* ---- running the program ---- */
+
+typedef struct {
+  int exited, code, sig;     /* exit code, or the signal that ended it */
+  char err[4096];            /* its stderr */
+  int lines;                 /* lines on stderr */
+} result;
+
+static void sleep_s(double s) {
+  struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+  while (nanosleep(&ts, &ts) != 0) {}
+}
+
+/* Run catchup-run with the NULL-terminated arguments; if signal_after > 0,
+ * send sig after that many seconds. */
+static result run_cli(const char *const *args, double signal_after, int sig) {
+  result r;
+  memset(&r, 0, sizeof r);
+  const char *errfile = tmp_path("stderr.txt");
+  const char *argv[32] = {CUP_CATCHUP_RUN};
+  for (int i = 0; args[i] && i < 30; i++) argv[i + 1] = args[i];
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid < 0) skip();
+  if (pid == 0) {
+    int fd = open(errfile, O_WRONLY | O_CREAT | O_TRUNC, 0600), nul = open("/dev/null", O_WRONLY);
+    dup2(fd, 2);
+    dup2(nul, 1);
+    execv(CUP_CATCHUP_RUN, (char *const *)argv);
+    _exit(127);
+  }
+  if (signal_after > 0) {
+    sleep_s(signal_after);
+    kill(pid, sig);
+  }
+  int st = 0;
+  assert_int_equal(waitpid(pid, &st, 0), pid);
+  r.exited = WIFEXITED(st);
+  r.code = r.exited ? WEXITSTATUS(st) : -1;
+  r.sig = WIFSIGNALED(st) ? WTERMSIG(st) : 0;
+  FILE *f = fopen(errfile, "r");
+  assert_non_null(f);
+  size_t n = fread(r.err, 1, sizeof r.err - 1, f);
+  r.err[n] = '\0';
+  fclose(f);
+  for (size_t i = 0; i < n; i++) r.lines += r.err[i] == '\n';
+  return r;
+}
+
+/* ---- reading the file ---- */
+
+static hsize_t read_rows(hid_t f, const char *name, int rank, hsize_t cols, double **out) {
+  hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+  assert_true(d >= 0);
+  hid_t s = H5Dget_space(d);
+  hsize_t dims[2] = {0, 0};
+  assert_int_equal(H5Sget_simple_extent_ndims(s), rank);
+  H5Sget_simple_extent_dims(s, dims, NULL);
+  if (rank == 2) assert_true(dims[1] == cols);
+  *out = malloc(sizeof(double) * (dims[0] * cols + 1));
+  if (dims[0] > 0)
+    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, *out) >= 0);
+  H5Sclose(s);
+  H5Dclose(d);
+  return dims[0];
+}
+
+static int64_t attr_i64(hid_t f, const char *name) {
+  int64_t v = 0;
+  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+  if (a < 0) fail_msg("attribute %s missing", name);
+  assert_true(H5Aread(a, H5T_NATIVE_INT64, &v) >= 0);
+  H5Aclose(a);
+  return v;
+}
+
+static double attr_f64(hid_t f, const char *name) {
+  double v = 0;
+  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+  if (a < 0) fail_msg("attribute %s missing", name);
+  assert_true(H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0);
+  H5Aclose(a);
+  return v;
+}
+
+static int make_tmpdir(void **state) {
+  (void)state;
+  return mkdtemp(tmpdir) ? 0 : -1;
+}
+
+static int remove_tmpdir(void **state) {
+  (void)state;
+  char cmd[300];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+  return system(cmd) == 0 ? 0 : -1;
+}
+
+#endif
