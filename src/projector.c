@@ -321,6 +321,19 @@ static void keep_candidate(cup_projector *p, double dist, double *best) {
   }
 }
 
+/* A bound on ||z - y(lam)||_P for z = fl(x + u): a few ulps of ||x||_P <= scale
+ * and of ||u||_P = un, times P's condition for a sparse metric (its solve is
+ * backward stable). */
+static double z_rounding(const cup_polyset *K, double scale, double un) {
+  return 8 * U * (scale + K->solve_amp * un);
+}
+
+/* ||z - x||_P (scratch p->wn2). */
+static double step_norm(cup_projector *p, const double *z, const double *x) {
+  for (int j = 0; j < p->n; j++) p->wn2[j] = z[j] - x[j];
+  return cup_polyset_norm(p->K, p->wn2);
+}
+
 int cup_certify(cup_projector *p, const double *x, const double *lam,
                 const double *z, cup_proj_info *info) {
   const cup_polyset *K = p->K;
@@ -328,12 +341,8 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
   /* z = fl(x + u): the exact y(lam) = x + P^-1 C^T lam differs from z by e,
    * bounded elementwise by a few ulps of |x| + |u| (times P's condition for
    * a sparse metric, whose solve is backward stable). */
-  double un = 0;                           /* ||z - x||_P = ||u||_P */
-  if (z != x) {
-    for (int j = 0; j < n; j++) p->wn2[j] = z[j] - x[j];
-    un = cup_polyset_norm(K, p->wn2);
-  }
-  double ebound = 8 * U * (info->scale + K->solve_amp * un);   /* scale >= ||x||_P */
+  double un = z != x ? step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
+  double ebound = z_rounding(K, info->scale, un);
   double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0;
   for (int i = 0; i < m; i++) {
     eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
@@ -434,12 +443,8 @@ static int project_small(cup_projector *p, const double *x, double *z, cup_proj_
   cup_proj_info ti;
   if (cup_theta_step(p->th, p->g, x, p->y, info->scale, info->eps_target, info->eta_target, &ti))
     return 0;
-  double un = 0;                                  /* ||z - x||_P */
-  if (!ti.skipped) {
-    for (int j = 0; j < n; j++) p->wn2[j] = p->y[j] - x[j];
-    un = cup_polyset_norm(K, p->wn2);
-  }
-  double ebound = ti.skipped ? 0 : 8 * U * (info->scale + K->solve_amp * un);
+  double un = ti.skipped ? 0 : step_norm(p, p->y, x);   /* ||z - x||_P */
+  double ebound = ti.skipped ? 0 : z_rounding(K, info->scale, un);
   double eps = ti.eps_cert + ebound * ebound;
   if (!(eps <= info->eps_target)) return 0;
   info->eps_cert = eps;
