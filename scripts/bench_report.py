@@ -217,7 +217,8 @@ def main():
              "`python3-siconos`; Moreau–Jean `EulerMoreauOSI` with θ = ½ and 1, LCP by Lemke and "
              "by enumeration; the input enters each step as its exact average; only the time loop "
              "is timed on both sides). Errors are max-norm against "
-             "`../shared/reference/ref_case{1,2}_limit_richardson.csv` at t = j/1000.", ""]
+             "`tests/data/ref_case{1,2}_limit_richardson.csv` at t = j/1000 (Richardson limits, "
+             "accurate to about 1e-10: `tests/data/README.md`).", ""]
     circuit_section(outdir, lines)
     lines += ["## The projector against QP solvers", "",
               "Command: `bash scripts/bench-projector` (OSQP, DAQP, ProxQP, PIQP through their "

@@ -52,8 +52,8 @@ E = np.array([0.0, 1.0 / L3, 1.0 / L2])
 P = np.diag([1.0, L3, L2])
 assert np.allclose(P @ B, C.T)
 G = {1: np.zeros(2), 2: np.array([0.0, 1.0])}
-# the shared reference limits sit beside the repository: ../shared/reference
-REF_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "reference")
+# the reference limits of the paper's cases ship in the repository (tests/data/README.md)
+REF_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "data")
 
 
 def input_tables(case, n):
@@ -199,9 +199,6 @@ def main():
     a = ap.parse_args()
 
     ref_path = a.ref or os.path.join(REF_DIR, f"ref_case{a.case}_limit_richardson.csv")
-    if not os.path.exists(ref_path):          # fallback: ../shared relative to the working directory
-        ref_path = os.path.join(os.getcwd(), "..", "shared", "reference",
-                                os.path.basename(ref_path))
     ref = np.loadtxt(ref_path, delimiter=",", skiprows=1)
 
     times, X = [], None

@@ -70,7 +70,7 @@ static void test_paper_case1_file(void **state) {
   assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
   assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
   double h = 1.0 / 1000, ref[4], err = 0;
-  FILE *csv = fopen(CUP_SHARED_DIR "/reference/ref_case1_limit_richardson.csv", "r");
+  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
   char line[512];
   assert_non_null(csv);
   assert_non_null(fgets(line, sizeof line, csv));

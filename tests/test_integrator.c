@@ -1,4 +1,4 @@
-/* integrator: the paper's two circuits against the shared reference limits,
+/* integrator: the paper's two circuits against the reference limits (tests/data),
  * five closed-form sweeping processes / LCS (derived in the comments, and in
  * docs/closed-forms.md), the stiff rectifier, output modes, and errors that
  * say where they happened without losing the states before. */
@@ -70,7 +70,7 @@ static double ref1[1001 * 3], ref2[1001 * 3];
 
 static void load_ref(const char *name, double *ref) {
   char path[512];
-  snprintf(path, sizeof path, "%s/reference/%s", CUP_SHARED_DIR, name);
+  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
   FILE *f = fopen(path, "r");
   if (!f) fail_msg("cannot open %s", path);
   char line[512];

@@ -5,7 +5,7 @@
  *
  * For each n: the run succeeds; the sample times are the grid's, t = k h
  * with k = round(j n / 1000) and the last exactly T (compared also with the
- * correctly rounded k T / n); the max-norm error against the shared
+ * correctly rounded k T / n); the max-norm error against the
  * reference limit (ref_case1_limit_richardson.csv, t = j/1000) is 1.52/n
  * within 2%; and the peak RSS of the catchup-run process (wait4) does not
  * grow from N1 to N2 steps by more than 1 MiB: memory is flat in n. */
@@ -34,8 +34,8 @@ static double ref[1001][3];
 typedef struct { long n; double wall, maxrss_mb; double err; long t_mismatch_kTn; } outcome;
 
 static void load_ref(void) {
-  FILE *f = fopen(CUP_SHARED_DIR "/reference/ref_case1_limit_richardson.csv", "r");
-  if (!f) fail_msg("cannot open the reference %s", CUP_SHARED_DIR "/reference/ref_case1_limit_richardson.csv");
+  FILE *f = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
+  if (!f) fail_msg("cannot open the reference %s", CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv");
   char line[512];
   assert_non_null(fgets(line, sizeof line, f));
   for (int j = 0; j <= 1000; j++) {

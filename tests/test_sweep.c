@@ -1,6 +1,6 @@
 /* sweep (src/io/sweep.c, sha256.c): the sweep file, task order, the
  * sampling of n that are not multiples of samples - 1, and the Richardson
- * reference against the shared reference of the paper's case 1.
+ * reference against the reference limit (tests/data) of the paper's case 1.
  * tests/sweeps/bad names its expected error in a "# expect: ..." first line. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
@@ -226,11 +226,11 @@ static void test_nearest_samples(void **state) {
 }
 
 /* The reference of the paper's case 1 (n_ref auto = 4 x 10^4 for n up to
- * 10^4) against the shared Richardson reference on t = k/1000. */
-static void test_reference_vs_shared(void **state) {
+ * 10^4) against the reference limit in tests/data on t = k/1000. */
+static void test_reference_vs_data(void **state) {
   (void)state;
-  FILE *csv = fopen(CUP_SHARED_DIR "/reference/ref_case1_limit_richardson.csv", "r");
-  if (!csv) skip();
+  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
+  if (!csv) fail_msg("cannot open %s", CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv");
   cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
   assert_int_equal(s->var[0].n_ref, 40000);
   double *x = malloc(sizeof(double) * 1001 * 3);
@@ -246,7 +246,7 @@ static void test_reference_vs_shared(void **state) {
     for (int i = 0; i < 3; i++) err = fmax(err, fabs(x[3 * j + i] - ref[i + 1]));
   }
   fclose(csv);
-  printf("# reference (Richardson, n_ref = 40000) vs shared case-1 reference: max |diff| = %.3g; "
+  printf("# reference (Richardson, n_ref = 40000) vs tests/data case-1 reference: max |diff| = %.3g; "
          "correction removed %.3g\n", err, r.correction);
   assert_true(err < 1e-6);
   assert_true(r.correction > 1e-5 && r.correction < 1e-4);   /* ~1.9e-5: x(2 n_ref) alone is off by that */
@@ -262,7 +262,7 @@ int main(void) {
     cmocka_unit_test(test_paper_sweep),
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_nearest_samples),
-    cmocka_unit_test(test_reference_vs_shared),
+    cmocka_unit_test(test_reference_vs_data),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

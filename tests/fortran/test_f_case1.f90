@@ -2,12 +2,12 @@
 !  * the trajectory equals the one the C API gives for the same problem (a C
 !    helper linked into this test calls the C functions directly), every
 !    sample to 1e-14, for the paper's tolerances and exact projections;
-!  * with exact projections at n = 10^3 the max-norm error against the shared
-!    Richardson reference is within 2% of 1.52/n (DESIGN.md);
+!  * with exact projections at n = 10^3 the max-norm error against the
+!    Richardson reference (tests/data) is within 2% of 1.52/n (DESIGN.md);
 !  * the paper's tolerances eps_n = n^-2.1, eta_n = n^-1.05 are certified and
 !    change the trajectory by < 1% of the discretization error.
 !
-!   test_f_case1 SHARED_DIR      (the directory holding reference/)
+!   test_f_case1 DATA_DIR      (tests/data: the reference limits)
 program test_f_case1
   use, intrinsic :: iso_c_binding
   use catchup
@@ -25,7 +25,7 @@ program test_f_case1
     end function cupt_case1_c
   end interface
 
-  character(len=1024) :: shared
+  character(len=1024) :: datadir
   real(c_double) :: ref(3, 0:1000)
   real(c_double), allocatable :: te(:), Xe(:, :), tp(:), Xp(:, :)
   type(cup_run_info) :: info
@@ -33,10 +33,10 @@ program test_f_case1
   integer :: ierr, ns, n
 
   if (command_argument_count() < 1) then
-    write(*, '(a)') 'usage: test_f_case1 SHARED_DIR'
+    write(*, '(a)') 'usage: test_f_case1 DATA_DIR'
     stop 2
   end if
-  call get_command_argument(1, shared)
+  call get_command_argument(1, datadir)
 
   call section('Fortran API = C API, sample by sample')
   call compare_with_c(100, 'n^-2.1', 'n^-1.05')
@@ -44,7 +44,7 @@ program test_f_case1
   call compare_with_c(1000, '0', '0')
 
   call section('error against the Richardson reference at n = 1000')
-  call load_reference(trim(shared) // '/reference/ref_case1_limit_richardson.csv', ref)
+  call load_reference(trim(datadir) // '/ref_case1_limit_richardson.csv', ref)
   n = 1000
   call run_case1(n, '0', '0', te, Xe, ns, ierr, info)          ! exact projections
   call check(ierr == CUP_OK .and. ns == n + 1, 'exact-projection run')

@@ -7,7 +7,7 @@ shift 5
 rm -rf "$WORK"
 mkdir -p "$WORK"
 SMOKE=$SRC/examples/sweep-smoke.yaml
-SHARED=$SRC/../shared
+DATA=$SRC/tests/data
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
