@@ -25,18 +25,31 @@
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { MSG_LEN = CUP_ERRMSG_LEN + 768 };   /* room for a path before a library message */
 
-static const char usage_text[] =
-  "usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
-  "                   [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]\n"
-  "  -o, --output OUT.h5  HDF5 file to write (/t, /x and attributes); replaced\n"
-  "  --n N                number of steps (scene key n)\n"
-  "  --eps SPEC           eps_n schedule, e.g. n^-2.1 or 1e-8 (scene key eps)\n"
-  "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
-  "  --scheme NAME        explicit, implicit or exponential (scene key scheme)\n"
-  "  --projector NAME     auto, pg, fista or activeset (scene key projector)\n"
-  "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
-  "  --quiet              no summary line (warnings and errors are still printed)\n"
-  "  -h, --help           this text;  --version  the library versions\n";
+/* "a, b, c or d" from a choice list of the library (CUP_*_LIST). */
+static const char *names_or(char *buf, size_t size, const char *(*name)(int), int count) {
+  size_t len = 0;
+  buf[0] = '\0';
+  for (int k = 0; k < count && len < size; k++)
+    len += (size_t)snprintf(buf + len, size - len, "%s%s", k == 0 ? "" : k + 1 < count ? ", " : " or ", name(k));
+  return buf;
+}
+
+static void print_usage(void) {
+  char schemes[160], methods[160];
+  printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
+         "                   [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]\n"
+         "  -o, --output OUT.h5  HDF5 file to write (/t, /x and attributes); replaced\n"
+         "  --n N                number of steps (scene key n)\n"
+         "  --eps SPEC           eps_n schedule, e.g. n^-2.1 or 1e-8 (scene key eps)\n"
+         "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
+         "  --scheme NAME        %s (scene key scheme)\n"
+         "  --projector NAME     %s (scene key projector.method)\n"
+         "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
+         "  --quiet              no summary line (warnings and errors are still printed)\n"
+         "  -h, --help           this text;  --version  the library versions\n",
+         names_or(schemes, sizeof schemes, cup_scheme_name, CUP_SCHEME_COUNT),
+         names_or(methods, sizeof methods, cup_proj_method_name, CUP_PROJ_METHOD_COUNT));
+}
 
 /* ---- command line ---- */
 
@@ -82,10 +95,12 @@ static int check_value(const char *flag, const char *v) {
     if (cup_schedule_parse(v, &sch, err) != CUP_OK) return usage_error("%s: %s", flag, err);
   } else if (strcmp(flag, "--scheme") == 0) {
     if (cup_scheme_parse(v) < 0)
-      return usage_error("--scheme '%s': unknown scheme (explicit, implicit, exponential)", v);
+      return usage_error("--scheme '%s': unknown scheme (%s)", v,
+                         names_or(err, sizeof err, cup_scheme_name, CUP_SCHEME_COUNT));
   } else if (strcmp(flag, "--projector") == 0) {
     if (cup_proj_method_parse(v) < 0)
-      return usage_error("--projector '%s': unknown projector (auto, pg, fista, activeset)", v);
+      return usage_error("--projector '%s': unknown projector (%s)", v,
+                         names_or(err, sizeof err, cup_proj_method_name, CUP_PROJ_METHOD_COUNT));
   } else if (strcmp(flag, "--set") == 0) {
     const char *eq = strchr(v, '=');
     if (!eq || eq == v) return usage_error("--set '%s': expected key=value", v);
@@ -96,7 +111,7 @@ static int check_value(const char *flag, const char *v) {
 /* The scene key each value flag sets; --set passes key=value through. */
 static const struct { const char *flag, *key; } value_flags[] = {
   {"--n", "n="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
-  {"--projector", "projector="}, {"--set", ""}, {"-o", NULL}, {"--output", NULL},
+  {"--projector", "projector.method="}, {"--set", ""}, {"-o", NULL}, {"--output", NULL},
 };
 
 /* Split "--flag=value" or take the value from the next argument. */
@@ -150,7 +165,7 @@ static int parse_args(args_t *a, int argc, char **argv) {
   if (!a->overrides) return usage_error("out of memory");
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) {
-      fputs(usage_text, stdout);
+      print_usage();
       return 0;
     }
     if (strcmp(argv[i], "--version") == 0) return print_versions();

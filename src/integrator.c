@@ -96,22 +96,6 @@ int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size) {
   return snprintf(buf, size, "%s*n^%s", c, p);
 }
 
-const char *cup_scheme_name(int scheme) {
-  switch (scheme) {
-    case CUP_SCHEME_EXPLICIT: return "explicit";
-    case CUP_SCHEME_IMPLICIT: return "implicit";
-    case CUP_SCHEME_EXPONENTIAL: return "exponential";
-    case CUP_SCHEME_THETA: return "theta";
-  }
-  return "unknown";
-}
-
-int cup_scheme_parse(const char *name) {
-  for (int k = 0; k <= CUP_SCHEME_THETA; k++)
-    if (name && strcmp(name, cup_scheme_name(k)) == 0) return k;
-  return -1;
-}
-
 void cup_integrator_options_default(cup_integrator_options *o) {
   if (!o) return;
   memset(o, 0, sizeof *o);

@@ -28,24 +28,6 @@ void cup_projector_options_default(cup_projector_options *o) {
   o->factor_updates = 1;
 }
 
-const char *cup_proj_method_name(int method) {
-  switch (method) {
-    case CUP_PROJ_AUTO: return "auto";
-    case CUP_PROJ_PG: return "pg";
-    case CUP_PROJ_FISTA: return "fista";
-    case CUP_PROJ_ACTIVESET: return "activeset";
-  }
-  return "unknown";
-}
-
-int cup_proj_method_parse(const char *name) {
-  static const char *names[] = {"auto", "pg", "fista", "activeset"};
-  if (!name) return -1;
-  for (int k = 0; k < 4; k++)
-    if (strcmp(name, names[k]) == 0) return k;
-  return -1;
-}
-
 static void offset_changed(cup_projector *p) {
   const cup_polyset *K = p->K;
   p->gscale = 0;

@@ -32,6 +32,7 @@ static const char *tmp_path(const char *name) {
 typedef struct {
   int exited, code, sig;     /* exit code, or the signal that ended it */
   char err[4096];            /* its stderr */
+  char out[4096];            /* its stdout */
   int lines;                 /* lines on stderr */
 } result;
 
@@ -45,16 +46,18 @@ static void sleep_s(double s) {
 static result run_cli(const char *const *args, double signal_after, int sig) {
   result r;
   memset(&r, 0, sizeof r);
-  const char *errfile = tmp_path("stderr.txt");
+  char errfile[256], outfile[256];             /* not tmp_path's ring: callers hold its paths */
+  snprintf(errfile, sizeof errfile, "%s/stderr.txt", tmpdir);
+  snprintf(outfile, sizeof outfile, "%s/stdout.txt", tmpdir);
   const char *argv[32] = {CUP_CATCHUP_RUN};
   for (int i = 0; args[i] && i < 30; i++) argv[i + 1] = args[i];
   fflush(NULL);
   pid_t pid = fork();
   if (pid < 0) skip();
   if (pid == 0) {
-    int fd = open(errfile, O_WRONLY | O_CREAT | O_TRUNC, 0600), nul = open("/dev/null", O_WRONLY);
+    int fd = open(errfile, O_WRONLY | O_CREAT | O_TRUNC, 0600), fo = open(outfile, O_WRONLY | O_CREAT | O_TRUNC, 0600);
     dup2(fd, 2);
-    dup2(nul, 1);
+    dup2(fo, 1);
     execv(CUP_CATCHUP_RUN, (char *const *)argv);
     _exit(127);
   }
@@ -73,6 +76,11 @@ static result run_cli(const char *const *args, double signal_after, int sig) {
   r.err[n] = '\0';
   fclose(f);
   for (size_t i = 0; i < n; i++) r.lines += r.err[i] == '\n';
+  f = fopen(outfile, "r");
+  assert_non_null(f);
+  n = fread(r.out, 1, sizeof r.out - 1, f);
+  r.out[n] = '\0';
+  fclose(f);
   return r;
 }
 

@@ -128,6 +128,40 @@ static void test_summary_line_and_overrides(void **state) {
   H5Fclose(f);
 }
 
+/* --help and the flags' messages name every scheme and projector method of
+ * the library's lists; --set output.samples=N replaces the scene's mode. */
+static void test_help_lists_and_output_override(void **state) {
+  (void)state;
+  const char *help[] = {"--help", NULL};
+  result r = run_cli(help, 0, 0);
+  expect_exit(&r, 0, 0);
+  char line[128];
+  for (int k = 0; k < CUP_SCHEME_COUNT; k++) {
+    snprintf(line, sizeof line, "%s%s", k == 0 ? "--scheme NAME        " : k + 1 < CUP_SCHEME_COUNT ? ", " : " or ",
+             cup_scheme_name(k));
+    if (!strstr(r.out, line)) fail_msg("--help lacks '%s':\n%s", line, r.out);
+  }
+  assert_non_null(strstr(r.out, "theta"));
+  for (int k = 0; k < CUP_PROJ_METHOD_COUNT; k++)
+    if (!strstr(r.out, cup_proj_method_name(k))) fail_msg("--help lacks method %s", cup_proj_method_name(k));
+  const char *bad[] = {fig2, "-o", tmp_path("x.h5"), "--scheme", "thet", NULL};
+  r = run_cli(bad, 0, 0);
+  expect_exit(&r, 2, 1);
+  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential or theta)");
+
+  const char *out = tmp_path("samples.h5");
+  const char *args[] = {fig2, "-o", out, "--set", "output.samples=2", "--quiet", NULL};
+  r = run_cli(args, 0, 0);
+  expect_exit(&r, 0, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t;
+  assert_int_equal(read_rows(f, "t", 1, 1, &t), 2);
+  assert_true(t[0] == 0 && t[1] == 1);
+  free(t);
+  H5Fclose(f);
+}
+
 /* Each failure: the exit code and exactly one stderr line naming the thing. */
 static void test_errors_are_one_line(void **state) {
   (void)state;
@@ -229,6 +263,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_paper_case1_file),
     cmocka_unit_test(test_summary_line_and_overrides),
+    cmocka_unit_test(test_help_lists_and_output_override),
     cmocka_unit_test(test_errors_are_one_line),
     cmocka_unit_test(test_warning_exits_zero),
     cmocka_unit_test(test_sigint_stops_cleanly),

@@ -369,6 +369,61 @@ static void test_overrides_add_keys(void **state) {
   cup_scene_free(&s);
 }
 
+/* An override that names another shape of a value replaces the scene's
+ * shape, as its user means it (docs/scene-format.md, Overrides). */
+static void test_overrides_replace_shapes(void **state) {
+  (void)state;
+  /* output: one mode at a time */
+  const char *o1[] = {"output.samples=2"};                      /* the file has {every: 1} */
+  cup_scene *s = load_ok(EX "/paper-fig2.yaml", o1, 1);
+  assert_int_equal(cup_scene_options(s)->output, CUP_OUTPUT_SAMPLES);
+  assert_int_equal(cup_scene_options(s)->output_samples, 2);
+  cup_scene_free(&s);
+  const char *o2[] = {"output=final", "output.every=5"};
+  s = load_ok(EX "/paper-fig2.yaml", o2, 2);
+  assert_int_equal(cup_scene_options(s)->output, CUP_OUTPUT_EVERY);
+  assert_int_equal(cup_scene_options(s)->output_every, 5);
+  cup_scene_free(&s);
+  /* projector: a word is {method: word} */
+  const char *o3[] = {"projector=fista", "projector.max_iter=7"};
+  s = load_ok(EX "/paper-fig2.yaml", o3, 2);
+  assert_int_equal(cup_scene_options(s)->proj.method, CUP_PROJ_FISTA);
+  assert_int_equal(cup_scene_options(s)->proj.max_iter, 7);
+  cup_scene_free(&s);
+  const char *o4[] = {"projector.method=pg"};                   /* the file has {method: activeset, max_iter: 200} */
+  s = load_ok(EX "/sparse-mtx/scene.yaml", o4, 1);
+  assert_int_equal(cup_scene_options(s)->proj.method, CUP_PROJ_PG);
+  assert_int_equal(cup_scene_options(s)->proj.max_iter, 200);
+  cup_scene_free(&s);
+  /* a matrix: inline rows or {file: ...}; back to the file gives the original */
+  const char *o5[] = {"lcs.A=[[1, 0, 0, 0, 0], [0, 1, 0, 0, 0], [0, 0, 1, 0, 0], [0, 0, 0, 1, 0], [0, 0, 0, 0, 1]]",
+                      "lcs.A.file=A.mtx"};
+  cup_scene *a = load_ok(EX "/sparse-mtx/scene.yaml", NULL, 0), *b = load_ok(EX "/sparse-mtx/scene.yaml", o5, 2);
+  dense_lcs da, db;
+  dense_lcs_of(a, &da);
+  dense_lcs_of(b, &db);
+  assert_array_close(db.A, da.A, 25, 0, "A");
+  assert_close(db.A[0], -2, 0);
+  cup_scene_free(&a);
+  cup_scene_free(&b);
+  /* circuit and lcs replace each other */
+  const char *o6[] = {"circuit={R1: 1, R2: 2, R3: 1, L2: 1, L3: 4, C4: 1}"};
+  s = load_ok(EX "/lcs-generic.yaml", o6, 1);
+  dense_lcs_of(s, &da);
+  double A[9];
+  paper_A(1, 2, 1, 1, 4, 1, A);
+  assert_array_close(da.A, A, 9, TOL, "A");
+  cup_scene_free(&s);
+  /* an input term's type: the old waveform's fields that the new one does not take go */
+  const char *o7[] = {"input.0.type=square", "input.1.type=sine", "input.1.amplitude=2", "input.1.frequency=1"};
+  s = load_ok(EX "/paper-fig2.yaml", o7, 4);
+  /* int_0^0.1 16 sign(sin 6 pi t) + 2 sin(2 pi t) dt = 1.6 + (1 - cos 0.2 pi) / pi */
+  assert_close(integral(s, 0, 0, 0.1), 1.6 + (1 - cos(0.2 * M_PI)) / M_PI, 1e-13);
+  cup_scene_free(&s);
+  const char *o8[] = {"input.1.type=sine"};                     /* value goes; amplitude is needed */
+  assert_contains(load_bad(EX "/paper-fig2.yaml", o8, 1), "input.1.amplitude: missing");
+}
+
 static void test_overrides_errors(void **state) {
   (void)state;
   const char *o1[] = {"circuit.R1=-1"};
@@ -644,6 +699,7 @@ int main(void) {
     cmocka_unit_test(test_multi_input_and_pwl),
     cmocka_unit_test(test_overrides_change_values),
     cmocka_unit_test(test_overrides_add_keys),
+    cmocka_unit_test(test_overrides_replace_shapes),
     cmocka_unit_test(test_overrides_errors),
     cmocka_unit_test(test_round_trip),
     cmocka_unit_test(test_bad_corpus),

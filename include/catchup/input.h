@@ -9,12 +9,23 @@ extern "C" {
 
 typedef struct cup_input cup_input;
 
+/* One list of the waveforms: X(enumerator, value, name (the scene's `type`),
+ * what it is). Values are part of the ABI: append, never renumber. */
+#define CUP_WAVE_LIST(X)                                                                \
+  X(CUP_WAVE_CONSTANT, 0, "constant", "value")                                          \
+  X(CUP_WAVE_SINE, 1, "sine", "amplitude * sin(2 pi frequency t + phase)")              \
+  X(CUP_WAVE_SQUARE, 2, "square", "amplitude * sign(sin(2 pi frequency t + phase)), sign(0) = 0") \
+  X(CUP_WAVE_PWL, 3, "pwl", "piecewise linear through (t_k, v_k); constant outside")
+
 typedef enum cup_wave_kind {
-  CUP_WAVE_CONSTANT = 0, /**< value */
-  CUP_WAVE_SINE = 1,     /**< amplitude * sin(2 pi frequency t + phase) */
-  CUP_WAVE_SQUARE = 2,   /**< amplitude * sign(sin(2 pi frequency t + phase)), sign(0) = 0 */
-  CUP_WAVE_PWL = 3       /**< piecewise linear through (t_k, v_k); constant outside */
+#define CUP_WAVE_ENUM_(e, v, name, doc) e = v,
+  CUP_WAVE_LIST(CUP_WAVE_ENUM_)
+#undef CUP_WAVE_ENUM_
 } cup_wave_kind;
+#define CUP_WAVE_ONE_(e, v, name, doc) +1
+/** The number of waveforms: values 0 .. CUP_WAVE_COUNT - 1. */
+enum { CUP_WAVE_COUNT = 0 CUP_WAVE_LIST(CUP_WAVE_ONE_) };
+#undef CUP_WAVE_ONE_
 
 /** One waveform term; u_j(t) is the sum of the terms added to component j. */
 typedef struct cup_wave {
@@ -31,6 +42,11 @@ typedef struct cup_wave {
 /** User input: write u(t) (p entries) into u; return 0, or nonzero to stop
  *  the run with CUP_ERR_CALLBACK. Must be callable from Fortran (bind(C)). */
 typedef int (*cup_input_fn)(double t, double *u, void *ctx);
+
+/** The name of a waveform in CUP_WAVE_LIST ("sine", ...); "unknown" otherwise. */
+const char *cup_wave_name(int kind);
+/** A name of CUP_WAVE_LIST -> its value; -1 if unknown. */
+int cup_wave_parse(const char *name);
 
 /** An input with p components, all zero until terms are added. */
 int cup_input_create(cup_input **u, int p, char *errmsg);

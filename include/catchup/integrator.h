@@ -15,15 +15,30 @@ extern "C" {
 
 typedef struct cup_integrator cup_integrator;
 
+/* One list of the schemes: X(enumerator, value, name, what it is). The enum,
+ * cup_scheme_name/parse, catchup-run --help, the scene reader's messages,
+ * the Fortran constants and the docs tables are all made from it. Values
+ * are part of the ABI: append, never renumber. */
+#define CUP_SCHEME_LIST(X)                                                              \
+  X(CUP_SCHEME_EXPLICIT, 0, "explicit",                                                 \
+    "the paper's scheme: x_k + h A x_k + E int u + int f, then project")              \
+  X(CUP_SCHEME_IMPLICIT, 1, "implicit",                                                 \
+    "(I - h A)^-1 (x_k + E int u + int f), then project (stable for stiff A)")        \
+  X(CUP_SCHEME_EXPONENTIAL, 2, "exponential",                                           \
+    "exact flow of A with the exact input convolution, then project")                 \
+  X(CUP_SCHEME_THETA, 3, "theta",                                                       \
+    "Moreau-Jean theta-method: W = (I - h theta A)^-1 and the step's exact LCP "       \
+    "(theta = 1/2: second order where the solution is smooth; small dense systems)")
+
 typedef enum cup_scheme {
-  CUP_SCHEME_EXPLICIT = 0,    /**< the paper: x_k + h A x_k + E int u + int f */
-  CUP_SCHEME_IMPLICIT = 1,    /**< (I - h A)^-1 (x_k + E int u + int f), then project */
-  CUP_SCHEME_EXPONENTIAL = 2, /**< exact flow of A with the exact input convolution */
-  CUP_SCHEME_THETA = 3        /**< Moreau-Jean theta-method: W = (I - h theta A)^-1, then the
-                                   exact LCP of the step (not a projection for theta > 0;
-                                   theta = 1/2 is second order where the solution is smooth);
-                                   small dense systems (m <= 64, n <= 256) */
+#define CUP_SCHEME_ENUM_(e, v, name, doc) e = v,
+  CUP_SCHEME_LIST(CUP_SCHEME_ENUM_)
+#undef CUP_SCHEME_ENUM_
 } cup_scheme;
+#define CUP_SCHEME_ONE_(e, v, name, doc) +1
+/** The number of schemes: values 0 .. CUP_SCHEME_COUNT - 1. */
+enum { CUP_SCHEME_COUNT = 0 CUP_SCHEME_LIST(CUP_SCHEME_ONE_) };
+#undef CUP_SCHEME_ONE_
 
 /** A tolerance schedule: value(n) = coef * n^power ("n^-2.1": coef 1,
  *  power -2.1; "1e-6": coef 1e-6, power 0; "0.5*n^-1.05"). */
@@ -38,12 +53,24 @@ double cup_schedule_value(const cup_schedule *s, long n);
 /** Format back as the canonical text ("n^-2.1", "1e-06", "0.5*n^-1.05"). */
 int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size);
 
+/* One list of the output modes: X(enumerator, value, name, as written in a
+ * scene, what is kept). Values are part of the ABI: append, never renumber. */
+#define CUP_OUTPUT_LIST(X)                                                              \
+  X(CUP_OUTPUT_EVERY, 0, "every", "{every: K}", "steps 0, K, 2K, ... and always the last") \
+  X(CUP_OUTPUT_SAMPLES, 1, "samples", "{samples: N}",                                   \
+    "N >= 2 states at steps round(j n / (N - 1)), j = 0..N-1")                        \
+  X(CUP_OUTPUT_FINAL, 2, "final", "final", "the final state only")                      \
+  X(CUP_OUTPUT_NONE, 3, "none", "none", "nothing: statistics only")
+
 typedef enum cup_output_kind {
-  CUP_OUTPUT_EVERY = 0,   /**< steps 0, k, 2k, ... and always the last */
-  CUP_OUTPUT_SAMPLES = 1, /**< N samples at steps round(j n / (N - 1)), j = 0..N-1 */
-  CUP_OUTPUT_FINAL = 2,   /**< the final state only */
-  CUP_OUTPUT_NONE = 3     /**< statistics only */
+#define CUP_OUTPUT_ENUM_(e, v, name, form, doc) e = v,
+  CUP_OUTPUT_LIST(CUP_OUTPUT_ENUM_)
+#undef CUP_OUTPUT_ENUM_
 } cup_output_kind;
+#define CUP_OUTPUT_ONE_(e, v, name, form, doc) +1
+/** The number of output modes: values 0 .. CUP_OUTPUT_COUNT - 1. */
+enum { CUP_OUTPUT_COUNT = 0 CUP_OUTPUT_LIST(CUP_OUTPUT_ONE_) };
+#undef CUP_OUTPUT_ONE_
 
 /** Perturbation f(t, x) (n entries into f); return nonzero to stop the run
  *  with CUP_ERR_CALLBACK. Its integral over a step, x frozen at x_k, uses
@@ -127,9 +154,14 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
 /** The final state of the last run (n entries). */
 const double *cup_integrator_state(const cup_integrator *I);
 
+/** The name of a scheme in CUP_SCHEME_LIST ("explicit", ...); "unknown" otherwise. */
 const char *cup_scheme_name(int scheme);
-/** "explicit", "implicit", "exponential", "theta"; -1 if unknown. */
+/** A name of CUP_SCHEME_LIST -> its value; -1 if unknown. */
 int cup_scheme_parse(const char *name);
+/** The name of an output mode in CUP_OUTPUT_LIST ("every", ...); "unknown" otherwise. */
+const char *cup_output_name(int output);
+/** A name of CUP_OUTPUT_LIST -> its value; -1 if unknown. */
+int cup_output_parse(const char *name);
 
 #ifdef __cplusplus
 }

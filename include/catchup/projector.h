@@ -19,15 +19,28 @@ extern "C" {
 
 typedef struct cup_projector cup_projector;
 
+/* One list of the projector methods: X(enumerator, value, name, what it is).
+ * The enum, cup_proj_method_name/parse, --help texts, the scene reader's
+ * messages, the Fortran constants and the docs tables are all made from it.
+ * Values are part of the ABI: append, never renumber. */
+#define CUP_PROJ_METHOD_LIST(X)                                                         \
+  X(CUP_PROJ_AUTO, 0, "auto",                                                           \
+    "fastest method that certifies the tolerances: on small dense sets (m <= 64, "     \
+    "dim <= 256) the dual LCP by principal pivoting (closed form for 1 or 2 active "   \
+    "rows), falling back to the active set; on sparse sets the active-set Newton method") \
+  X(CUP_PROJ_PG, 1, "pg", "the paper's dual projected gradient, step 1/L")              \
+  X(CUP_PROJ_FISTA, 2, "fista", "accelerated dual gradient with adaptive restart")      \
+  X(CUP_PROJ_ACTIVESET, 3, "activeset", "exact: active-set Newton on the dual (dense or CHOLMOD)")
+
 typedef enum cup_proj_method {
-  CUP_PROJ_AUTO = 0,      /**< fastest method that certifies the tolerances: on small dense
-                               sets (m <= 64, dim <= 256) the dual LCP by principal pivoting
-                               (closed form for 1 or 2 active rows), falling back to the
-                               active set; on sparse sets the active-set Newton method */
-  CUP_PROJ_PG = 1,        /**< the paper's dual projected gradient, step 1/L */
-  CUP_PROJ_FISTA = 2,     /**< accelerated dual gradient with adaptive restart */
-  CUP_PROJ_ACTIVESET = 3  /**< exact: active-set Newton on the dual (dense or CHOLMOD) */
+#define CUP_PROJ_ENUM_(e, v, name, doc) e = v,
+  CUP_PROJ_METHOD_LIST(CUP_PROJ_ENUM_)
+#undef CUP_PROJ_ENUM_
 } cup_proj_method;
+#define CUP_PROJ_ONE_(e, v, name, doc) +1
+/** The number of methods: values 0 .. CUP_PROJ_METHOD_COUNT - 1. */
+enum { CUP_PROJ_METHOD_COUNT = 0 CUP_PROJ_METHOD_LIST(CUP_PROJ_ONE_) };
+#undef CUP_PROJ_ONE_
 
 /** Options; fill with cup_projector_options_default() and change fields. */
 typedef struct cup_projector_options {
@@ -105,8 +118,9 @@ const double *cup_projector_feasible(const cup_projector *p);
 /** After CUP_ERR_EMPTY_SET: y >= 0 (m entries) with C^T y ~ 0 and g^T y < 0. */
 const double *cup_projector_farkas(const cup_projector *p);
 
+/** The name of a method in CUP_PROJ_METHOD_LIST ("auto", ...); "unknown" otherwise. */
 const char *cup_proj_method_name(int method);
-/** Parse "auto", "pg", "fista", "activeset"; returns -1 if unknown. */
+/** A name of CUP_PROJ_METHOD_LIST -> its value; -1 if unknown. */
 int cup_proj_method_parse(const char *name);
 
 #ifdef __cplusplus

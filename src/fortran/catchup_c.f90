@@ -31,7 +31,8 @@ module catchup_c
     c_cup_lcs_polyset, c_cup_lcs_fixed_set, c_cup_lcs_circuit
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
     c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_free, &
-    c_cup_integrator_run, c_cup_integrator_state, c_cup_scheme_name, c_cup_scheme_parse
+    c_cup_integrator_run, c_cup_integrator_state, c_cup_scheme_name, c_cup_scheme_parse, &
+    c_cup_output_name, c_cup_output_parse, c_cup_wave_name, c_cup_wave_parse
 
   interface
     ! ---- libc -----------------------------------------------------------------
@@ -351,5 +352,25 @@ module catchup_c
       character(kind=c_char), intent(in) :: name(*)
       integer(c_int) :: scheme
     end function c_cup_scheme_parse
+    function c_cup_output_name(output) bind(C, name="cup_output_name") result(s)
+      import :: c_int, c_ptr
+      integer(c_int), value :: output
+      type(c_ptr) :: s
+    end function c_cup_output_name
+    function c_cup_output_parse(name) bind(C, name="cup_output_parse") result(v)
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_int) :: v
+    end function c_cup_output_parse
+    function c_cup_wave_name(kind) bind(C, name="cup_wave_name") result(s)
+      import :: c_int, c_ptr
+      integer(c_int), value :: kind
+      type(c_ptr) :: s
+    end function c_cup_wave_name
+    function c_cup_wave_parse(name) bind(C, name="cup_wave_parse") result(v)
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_int) :: v
+    end function c_cup_wave_parse
   end interface
 end module catchup_c

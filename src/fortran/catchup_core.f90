@@ -27,7 +27,8 @@ module catchup_core
   public :: cup_schedule_parse, cup_schedule_value, cup_schedule_format, &
     cup_integrator_options_default, cup_integrator_create, cup_integrator_free, &
     cup_integrator_run, cup_integrator_run_store, cup_integrator_state, &
-    cup_scheme_name, cup_scheme_parse, cup_run_info_message
+    cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_wave_name, &
+    cup_wave_parse, cup_run_info_message
 
   !> value(n) = coef * n^power, for a default-kind or a c_long n
   interface cup_schedule_value
@@ -900,11 +901,36 @@ contains
     s = cup_c_string(c_cup_scheme_name(int(scheme, c_int)))
   end function cup_scheme_name
 
-  !> "explicit", "implicit", "exponential" -> CUP_SCHEME_*; -1 if unknown.
+  !> A name of CUP_SCHEME_LIST ("explicit", "implicit", "exponential", "theta") -> CUP_SCHEME_*;
+  !> -1 if unknown.
   integer function cup_scheme_parse(name)
     character(len=*), intent(in) :: name
     cup_scheme_parse = int(c_cup_scheme_parse(cup_f_c_string(name)))
   end function cup_scheme_parse
+
+  function cup_output_name(output) result(s)
+    integer, intent(in) :: output
+    character(len=:), allocatable :: s
+    s = cup_c_string(c_cup_output_name(int(output, c_int)))
+  end function cup_output_name
+
+  !> "every", "samples", "final", "none" -> CUP_OUTPUT_*; -1 if unknown.
+  integer function cup_output_parse(name)
+    character(len=*), intent(in) :: name
+    cup_output_parse = int(c_cup_output_parse(cup_f_c_string(name)))
+  end function cup_output_parse
+
+  function cup_wave_name(kind) result(s)
+    integer, intent(in) :: kind
+    character(len=:), allocatable :: s
+    s = cup_c_string(c_cup_wave_name(int(kind, c_int)))
+  end function cup_wave_name
+
+  !> "constant", "sine", "square", "pwl" -> CUP_WAVE_*; -1 if unknown.
+  integer function cup_wave_parse(name)
+    character(len=*), intent(in) :: name
+    cup_wave_parse = int(c_cup_wave_parse(cup_f_c_string(name)))
+  end function cup_wave_parse
 
   !> info%message as a Fortran string.
   function cup_run_info_message(info) result(s)

@@ -1,7 +1,9 @@
 /* gen_constants — writes catchup_constants.f90, the Fortran named constants
  * of the C headers, at build time: the status codes come from the one
- * CUP_STATUS_LIST X-macro and every enum value from its C enumerator, so the
- * Fortran numbers are the compiler's and cannot drift from the headers.
+ * CUP_STATUS_LIST X-macro, the choice enums from theirs (CUP_SCHEME_LIST,
+ * CUP_PROJ_METHOD_LIST, CUP_WAVE_LIST, CUP_OUTPUT_LIST), the rest from their
+ * C enumerators, so the Fortran numbers are the compiler's and cannot drift
+ * from the headers.
  *
  *   gen_constants OUT.f90 */
 #include <stdio.h>
@@ -71,25 +73,23 @@ int main(int argc, char **argv) {
   CONST(f, CUP_METRIC_IDENTITY);
   CONST(f, CUP_METRIC_DIAGONAL);
   CONST(f, CUP_METRIC_SPARSE);
-  fprintf(f, "\n  ! enum cup_proj_method (projector.h)\n");
-  CONST(f, CUP_PROJ_AUTO);
-  CONST(f, CUP_PROJ_PG);
-  CONST(f, CUP_PROJ_FISTA);
-  CONST(f, CUP_PROJ_ACTIVESET);
-  fprintf(f, "\n  ! enum cup_wave_kind (input.h)\n");
-  CONST(f, CUP_WAVE_CONSTANT);
-  CONST(f, CUP_WAVE_SINE);
-  CONST(f, CUP_WAVE_SQUARE);
-  CONST(f, CUP_WAVE_PWL);
-  fprintf(f, "\n  ! enum cup_scheme (integrator.h)\n");
-  CONST(f, CUP_SCHEME_EXPLICIT);
-  CONST(f, CUP_SCHEME_IMPLICIT);
-  CONST(f, CUP_SCHEME_EXPONENTIAL);
-  fprintf(f, "\n  ! enum cup_output_kind (integrator.h)\n");
-  CONST(f, CUP_OUTPUT_EVERY);
-  CONST(f, CUP_OUTPUT_SAMPLES);
-  CONST(f, CUP_OUTPUT_FINAL);
-  CONST(f, CUP_OUTPUT_NONE);
+  /* the choice lists: every enumerator and the count, from the one list */
+#define CONST4_(e, v, name, doc) CONST(f, e);
+#define CONST5_(e, v, name, form, doc) CONST(f, e);
+  fprintf(f, "\n  ! enum cup_proj_method (projector.h, CUP_PROJ_METHOD_LIST)\n");
+  CUP_PROJ_METHOD_LIST(CONST4_)
+  CONST(f, CUP_PROJ_METHOD_COUNT);
+  fprintf(f, "\n  ! enum cup_wave_kind (input.h, CUP_WAVE_LIST)\n");
+  CUP_WAVE_LIST(CONST4_)
+  CONST(f, CUP_WAVE_COUNT);
+  fprintf(f, "\n  ! enum cup_scheme (integrator.h, CUP_SCHEME_LIST)\n");
+  CUP_SCHEME_LIST(CONST4_)
+  CONST(f, CUP_SCHEME_COUNT);
+  fprintf(f, "\n  ! enum cup_output_kind (integrator.h, CUP_OUTPUT_LIST)\n");
+  CUP_OUTPUT_LIST(CONST5_)
+  CONST(f, CUP_OUTPUT_COUNT);
+#undef CONST4_
+#undef CONST5_
 
   fprintf(f, "end module catchup_constants\n");
   if (fclose(f) != 0) {

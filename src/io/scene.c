@@ -14,6 +14,7 @@
 #include <strings.h>
 #include "catchup.h"
 #include "linalg.h"
+#include "names.h"
 #include "scene_tree.h"
 
 struct cup_scene {
@@ -34,6 +35,16 @@ typedef struct rd {
 } rd;
 
 #define KEY_LEN 128              /* dotted keys ("input.1.0.amplitude") */
+
+/* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
+#define WORD4_(e, v, name, doc) name,
+#define WORD5_(e, v, name, form, doc) name,
+static const char *const scheme_names[] = {CUP_SCHEME_LIST(WORD4_) NULL};
+static const char *const method_names[] = {CUP_PROJ_METHOD_LIST(WORD4_) NULL};
+static const char *const output_names[] = {CUP_OUTPUT_LIST(WORD5_) NULL};
+static const char *const wave_names[] = {CUP_WAVE_LIST(WORD4_) NULL};
+#undef WORD4_
+#undef WORD5_
 
 static int fail(rd *r, int status, const st_node *at, const char *key, const char *fmt, ...)
   __attribute__((format(printf, 5, 6)));
@@ -603,7 +614,6 @@ static int read_model(rd *r, const st_node *root, cup_lcs **L) {
 
 /* ---- the input u(t) ------------------------------------------------------ */
 
-static const char *const wave_names[] = {"constant", "sine", "square", "pwl", NULL};
 
 static int read_points(rd *r, const st_node *nd, const char *key, cup_wave *w, double **buf) {
   char k1[KEY_LEN], k2[KEY_LEN], b[64];
@@ -629,6 +639,12 @@ static int read_points(rd *r, const st_node *nd, const char *key, cup_wave *w, d
   return CUP_OK;
 }
 
+/* The keys of a term mapping, by waveform (CUP_WAVE_LIST order). */
+static const char *const wave_keys[CUP_WAVE_COUNT][5] = {{"type", "value", NULL},
+                                                         {"type", "amplitude", "frequency", "phase", NULL},
+                                                         {"type", "amplitude", "frequency", "phase", NULL},
+                                                         {"type", "points", NULL}};
+
 /* The fields of a sine or square term. */
 static int read_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
   char k1[KEY_LEN];
@@ -642,25 +658,20 @@ static int read_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
 }
 
 static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *u, int j) {
-  static const char *const keys[4][5] = {{"type", "value", NULL},
-                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                         {"type", "points", NULL}};
   char k1[KEY_LEN], hint[160], lib[CUP_ERRMSG_LEN];
   const st_node *tn = NULL, *nd = NULL;
   const char *type = "";
   int st = need(r, map, key, "type", &tn);
   if (!st) st = string(r, tn, join(k1, key, "type"), &type);
   if (st) return st;
-  int kind = 0;
-  while (wave_names[kind] && strcmp(wave_names[kind], type)) kind++;
-  if (!wave_names[kind])
+  int kind = cup_wave_parse(type);
+  if (kind < 0)
     return fail(r, CUP_ERR_PARSE, tn, k1, "unknown input type '%.40s' (%s)", type,
                 st_suggest(hint, sizeof hint, type, wave_names));
   cup_wave w = {0};
   double *buf = NULL;
   w.kind = (cup_wave_kind)kind;
-  st = check_keys(r, map, key, keys[kind]);
+  st = check_keys(r, map, key, wave_keys[kind]);
   if (!st && kind == CUP_WAVE_CONSTANT) {
     st = need(r, map, key, "value", &nd);
     if (!st) st = number(r, nd, join(k1, key, "value"), &w.value);
@@ -739,8 +750,6 @@ static int read_schedule(rd *r, const st_node *root, const char *key, const char
   return *spec ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-static const char *const scheme_names[] = {"explicit", "implicit", "exponential", "theta", NULL};
-static const char *const method_names[] = {"auto", "pg", "fista", "activeset", NULL};
 
 /* A word from a list, parsed by the library's own parser. */
 static int read_word(rd *r, const st_node *nd, const char *key, const char *what, const char *const *names,
@@ -774,22 +783,33 @@ static int read_projector(rd *r, const st_node *nd, cup_projector_options *po) {
   return st;
 }
 
+/* output: one of CUP_OUTPUT_LIST's forms, a word ("final") or a mapping with
+ * one key ("{every: K}"). */
 static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
-  static const char *const known[] = {"every", "samples", NULL};
-  static const char *const words[] = {"final", "none", NULL};
-  char b[64], hint[160];
-  if (nd->kind == ST_SCALAR) {
-    if (!nd->quoted && !strcmp(nd->text, "final")) { o->output = CUP_OUTPUT_FINAL; return CUP_OK; }
-    if (!nd->quoted && !strcmp(nd->text, "none")) { o->output = CUP_OUTPUT_NONE; return CUP_OK; }
-    return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got '%.40s'; %s)",
-                nd->text, st_suggest(hint, sizeof hint, nd->text, words));
+#define FORM_(e, v, name, form, doc) form,
+  static const char *const forms[] = {CUP_OUTPUT_LIST(FORM_) NULL};
+#undef FORM_
+  const char *words[CUP_OUTPUT_COUNT + 1], *keys[CUP_OUTPUT_COUNT + 1];
+  int nw = 0, nk = 0;
+  for (int k = 0; k < CUP_OUTPUT_COUNT; k++) {
+    if (forms[k][0] == '{') keys[nk++] = output_names[k];
+    else words[nw++] = output_names[k];
   }
+  words[nw] = keys[nk] = NULL;
+  char b[64], hint[160], expected[160];
+  cup_words_join(expected, sizeof expected, forms, "or");
+  int kind = nd->kind == ST_SCALAR && !nd->quoted ? cup_output_parse(nd->text) : -1;
+  if (kind >= 0 && forms[kind][0] != '{') { o->output = (cup_output_kind)kind; return CUP_OK; }
+  if (nd->kind == ST_SCALAR)
+    return fail(r, CUP_ERR_PARSE, nd, "output", "expected %s (got '%.40s'; %s)", expected, nd->text,
+                st_suggest(hint, sizeof hint, nd->text, words));
   if (nd->kind != ST_MAP || nd->len != 1)
-    return fail(r, CUP_ERR_PARSE, nd, "output", "expected final, none, {every: K} or {samples: N} (got %s)",
+    return fail(r, CUP_ERR_PARSE, nd, "output", "expected %s (got %s)", expected,
                 nd->kind == ST_MAP ? "a mapping with more than one key" : st_looks(nd, b, sizeof b));
-  int st = check_keys(r, nd, "output", known);
+  int st = check_keys(r, nd, "output", keys);
   const st_node *v = nd->item[0];
-  if (!st && !strcmp(nd->key[0]->text, "every")) {
+  kind = cup_output_parse(nd->key[0]->text);
+  if (!st && kind == CUP_OUTPUT_EVERY) {
     o->output = CUP_OUTPUT_EVERY;
     st = integer(r, v, "output.every", 1, LONG_MAX, &o->output_every);
   } else if (!st) {
@@ -868,6 +888,56 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   return st;
 }
 
+/* ---- overrides that change a value's shape ------------------------------- */
+
+/* Keys whose value is a matrix or a vector: inline numbers or {file: ...}. */
+static int inline_or_file(const char *path) {
+  static const char *const keys[] = {"x0", "lcs.A", "lcs.B", "lcs.C", "lcs.E", "lcs.F", "lcs.G", "lcs.P", NULL};
+  for (int k = 0; keys[k]; k++)
+    if (!strcmp(path, keys[k])) return 1;
+  return 0;
+}
+
+static int replace_by_map(st_node **slot, int k) {
+  st_node *m = st_new_map(k);
+  if (!m) return CUP_ERR_NOMEM;
+  st_free(*slot);
+  *slot = m;
+  return CUP_OK;
+}
+
+/* A KEY=VALUE override names the shape its user wants; the scene's value of
+ * another shape gives way (st_reshape_fn): `circuit` and `lcs` replace each
+ * other; output.samples=2 replaces output: {every: 1} (one mode at a time);
+ * projector.max_iter=50 turns projector: fista into {method: fista,
+ * max_iter: 50}; lcs.A.file=a.mtx replaces an inline A (and x0.file, lcs.P.file
+ * the same); input....type=pwl drops the fields the old waveform had and
+ * the new one does not take. */
+static int reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k) {
+  st_node *nd = *slot;
+  if (!*path && nd->kind == ST_MAP) {
+    if (!strcmp(seg, "circuit")) st_map_remove(nd, "lcs");
+    if (!strcmp(seg, "lcs")) st_map_remove(nd, "circuit");
+    return CUP_OK;
+  }
+  if (!strcmp(path, "output") && (nd->kind != ST_MAP || nd->len != 1 || strcmp(nd->key[0]->text, seg)))
+    return replace_by_map(slot, k);
+  if (!strcmp(path, "projector") && nd->kind == ST_SCALAR) {
+    st_node *m = st_new_map(k);
+    if (!m || st_map_put(m, "method", nd, k)) { st_free(m); return CUP_ERR_NOMEM; }
+    *slot = m;
+    return CUP_OK;
+  }
+  if (inline_or_file(path) && nd->kind != ST_MAP && !isdigit((unsigned char)seg[0]))
+    return replace_by_map(slot, k);
+  int wave = val && val->kind == ST_SCALAR ? cup_wave_parse(val->text) : -1;
+  if (!strncmp(path, "input", 5) && nd->kind == ST_MAP && !strcmp(seg, "type") && wave >= 0) {
+    const st_node *bad;
+    while ((bad = st_unknown_key(nd, wave_keys[wave]))) st_map_remove(nd, bad->text);
+  }
+  return CUP_OK;
+}
+
 /* ---- public -------------------------------------------------------------- */
 
 static int load(cup_scene **s, const char *text, size_t len, const char *name, const char *dir,
@@ -876,7 +946,7 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
   st_node *root = NULL;
   cup_scene *S = NULL;
   int st = st_parse(&root, text, len, &r.src, -1, NULL, errmsg);
-  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, errmsg);
+  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, reshape, errmsg);
   if (!st && !(S = calloc(1, sizeof *S))) st = CUP_ERR_NOMEM;
   if (!st) st = read_scene(&r, root, S);
   if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;

@@ -377,6 +377,26 @@ static int ovr_fail(char *errmsg, const st_src *src, int k, const char *path, co
   return CUP_ERR_PARSE;
 }
 
+st_node *st_new_map(int origin) { return node_new(ST_MAP, 0, 0, origin); }
+
+int st_map_put(st_node *map, const char *key, st_node *val, int origin) {
+  st_node *k = scalar_new(key, strlen(key), 0, 0, 0, origin);
+  if (!k || node_push(map, k, val)) { st_free(k); return CUP_ERR_NOMEM; }
+  return CUP_OK;
+}
+
+void st_map_remove(st_node *map, const char *key) {
+  int k = map_find(map, key);
+  if (k < 0) return;
+  st_free(map->key[k]);
+  st_free(map->item[k]);
+  for (int j = k + 1; j < map->len; j++) {
+    map->key[j - 1] = map->key[j];
+    map->item[j - 1] = map->item[j];
+  }
+  map->len--;
+}
+
 /* Put `val` at `seg` of `parent`: a mapping gets the key (added if absent),
  * a sequence must already have the index. *slot receives the node now there
  * (for walking on). val NULL walks: it creates an empty mapping when the key
@@ -412,7 +432,7 @@ static int put(st_node *parent, const char *seg, st_node *val, int k_ovr, st_nod
 /* Split "a.b.0=value" at the first '=' and walk the dotted key, splicing the
  * parsed value in at the end. Intermediate mapping keys that are absent are
  * created, so "output.every=10" works when the file has no output. */
-int st_apply_override(st_node **root, const st_src *src, int k, char *errmsg) {
+int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn reshape, char *errmsg) {
   const char *o = src->ovr[k];
   st_node at = {0};
   at.origin = k;
@@ -431,16 +451,21 @@ int st_apply_override(st_node **root, const st_src *src, int k, char *errmsg) {
   int st = st_parse(&val, eq + 1, strlen(eq + 1), src, k, key, errmsg);
   if (!st && (*root)->kind != ST_MAP)
     st = st_error(errmsg, CUP_ERR_PARSE, src, &at, key, "the document is not a mapping");
-  st_node *cur = *root;
+  st_node **slot = root;                     /* where the node we are in hangs */
   char *seg = walk;
   while (!st) {
     char *dot = strchr(seg, '.');
     if (dot) *dot = '\0';
     if (!*seg) { st = st_error(errmsg, CUP_ERR_PARSE, src, &at, key, "empty part in the dotted key"); break; }
+    char here[CUP_ERRMSG_LEN];                 /* the key of *slot ("" for the document) */
+    snprintf(here, sizeof here, "%.*s", seg > walk ? (int)(seg - walk - 1) : 0, key);
+    if (reshape && (st = reshape(slot, here, seg, dot ? NULL : val, k))) break;
     char path[CUP_ERRMSG_LEN];                 /* the key up to here, for messages */
     snprintf(path, sizeof path, "%.*s", (int)(seg + strlen(seg) - walk), key);
-    st = put(cur, seg, dot ? NULL : val, k, &cur, src, path, errmsg);
+    st_node *cur = *slot, *next = NULL;
+    st = put(cur, seg, dot ? NULL : val, k, &next, src, path, errmsg);
     if (st || !dot) break;
+    slot = cur->kind == ST_MAP ? &cur->item[map_find(cur, seg)] : &cur->item[parse_index(seg)];
     seg = dot + 1;
   }
   if (!st) val = NULL;                       /* now owned by the tree */

@@ -43,8 +43,21 @@ int st_verror(char *errmsg, int status, const st_src *src, const st_node *at,
 int st_parse(st_node **root, const char *text, size_t len, const st_src *src, int origin,
              const char *key, char *errmsg);
 
-/* Apply src->ovr[k] ("dotted.key=value") to the document. */
-int st_apply_override(st_node **root, const st_src *src, int k, char *errmsg);
+/* An override names the shape its user wants: before it walks into `seg`
+ * of the node at *slot (whose dotted key is `path`, "" for the document;
+ * `val` is the new value when seg is the last part, else NULL), the reader
+ * may replace *slot or edit it (output: {every: 1} with output.samples=2
+ * becomes {samples: 2}). Nodes it adds get origin k. Returns a status. */
+typedef int (*st_reshape_fn)(st_node **slot, const char *path, const char *seg, const st_node *val, int k);
+
+/* Apply src->ovr[k] ("dotted.key=value") to the document; reshape may be NULL. */
+int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn reshape, char *errmsg);
+
+/* Building blocks for a reshape: an empty mapping; append key: val to a
+ * mapping (val is then owned by it); drop a key (absent: nothing). */
+st_node *st_new_map(int origin);
+int st_map_put(st_node *map, const char *key, st_node *val, int origin);
+void st_map_remove(st_node *map, const char *key);
 
 /* The document as block-style YAML (numeric rows in flow style); NULL when
  * out of memory. Reparsing gives the same tree up to positions. */
