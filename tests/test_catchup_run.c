@@ -259,6 +259,28 @@ static void test_kill9_file_readable(void **state) {
   H5Fclose(f);
 }
 
+/* An output file another process holds open (HDF5 locks it) is not
+ * truncated: one line says it is in use, and the file keeps its rows. */
+static void test_output_in_use(void **state) {
+  (void)state;
+  const char *out = tmp_path("held.h5");
+  const char *first[] = {fig2, "-o", out, "--quiet", NULL};
+  result r = run_cli(first, 0, 0);
+  expect_exit(&r, 0, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);      /* this process now holds it */
+  assert_true(f >= 0);
+  const char *again[] = {fig2, "-o", out, "--n", "10", NULL};
+  r = run_cli(again, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "is in use by another process (HDF5 file locking)");
+  expect_in_err(&r, out);
+  double *t;
+  assert_int_equal(read_rows(f, "t", 1, 1, &t), 101);        /* the first run's rows, intact */
+  assert_true(t[100] == 1);
+  free(t);
+  H5Fclose(f);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_paper_case1_file),
@@ -268,6 +290,7 @@ int main(void) {
     cmocka_unit_test(test_warning_exits_zero),
     cmocka_unit_test(test_sigint_stops_cleanly),
     cmocka_unit_test(test_kill9_file_readable),
+    cmocka_unit_test(test_output_in_use),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }

@@ -22,6 +22,7 @@
 #include <hdf5.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
+#include "file_in_use.h"
 
 enum { MAX_CHUNK_ROWS = 4096 };
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
@@ -161,6 +162,12 @@ static int dir_space_low(const char *path) {
 }
 
 static int open_file(cup_h5run *w) {
+  if (cup_file_in_use(w->path)) {
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': the file is in use by another "
+             "process (HDF5 file locking): close it there or wait for that run to end; the file is "
+             "left as it was", w->path);
+    return CUP_ERR_IO;
+  }
   if (dir_space_low(w->path)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': less than %u MiB "
              "left on its device", w->path, SPACE_MARGIN >> 20);

@@ -32,6 +32,7 @@
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <hdf5.h>
+#include "file_in_use.h"
 #include "sweep.h"
 
 #define FORMAT_NAME "catchup-sweep 1"
@@ -105,16 +106,27 @@ static quiet_t quiet_begin(void) {
 
 static void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
 
+#define IN_USE_FMT "%s: cannot %s: the file is in use by another process (HDF5 file locking; another " \
+  "catchup-sweep may be writing it): wait for that run to end, or stop it, then --resume; the file is " \
+  "left as it was"
+
+typedef struct { char desc[160]; int locked; } h5_err;
+
 static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
-  if (n == 0 && e->desc) snprintf((char *)out, 160, "%s", e->desc);
+  h5_err *r = out;
+  if (n == 0 && e->desc) snprintf(r->desc, sizeof r->desc, "%s", e->desc);
+  if (e->min_num == H5E_CANTLOCKFILE) r->locked = 1;
   return 0;
 }
 
+/* Call right after the failed HDF5 call: any later API call (even
+ * H5Pclose) clears the error stack that says why. */
 static int h5_fail(sw_file *f, const char *op) {
-  char detail[160] = "";
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, detail);
-  if (!detail[0]) snprintf(detail, sizeof detail, "HDF5 call failed");
-  if (!f->errmsg[0]) snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot %s: %s", f->path, op, detail);
+  h5_err e = {"", 0};
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, &e);
+  if (!e.desc[0]) snprintf(e.desc, sizeof e.desc, "HDF5 call failed");
+  if (!f->errmsg[0] && e.locked) snprintf(f->errmsg, sizeof f->errmsg, IN_USE_FMT, f->path, op);
+  if (!f->errmsg[0]) snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot %s: %s", f->path, op, e.desc);
   f->failed = 1;
   H5Eclear2(H5E_DEFAULT);
   return CUP_ERR_IO;
@@ -555,6 +567,10 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
     snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: not a regular file", path);
     return CUP_ERR_IO;
   }
+  if (cup_file_in_use(path)) {
+    snprintf(errmsg, SW_ERR_LEN, IN_USE_FMT, path, "create");
+    return CUP_ERR_IO;
+  }
   char *copy = strdup(path);
   struct statvfs v;
   double need = file_bytes(s);
@@ -710,8 +726,9 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
   quiet_t q = quiet_begin();
   hid_t fapl = file_access();
   f->file = H5Fopen(path, H5F_ACC_RDWR, fapl);
+  int st = f->file < 0 ? h5_fail(f, "open") : CUP_OK;
   H5Pclose(fapl);
-  int st = f->file < 0 ? h5_fail(f, "open") : check_layout(f, errmsg);
+  if (!st) st = check_layout(f, errmsg);
   if (!st) {
     f->summary = H5Dopen2(f->file, "summary", H5P_DEFAULT);
     f->ref_x = H5Dopen2(f->file, "references/x", H5P_DEFAULT);
