@@ -14,11 +14,14 @@ writes
   PREFIX-certificates.png    the largest certified eps and eta of each run
                              against n, per tolerance schedule, with the
                              targets eps_n and eta_n as dashed lines.
-Only rows with done = 1, no error status and a finite error are drawn.
+The theta scheme is labelled with its theta ("theta 0.5"), read from each
+variant's scene in /variants. Only rows with done = 1, no error status and
+a finite error are drawn.
 Needs h5py, numpy and matplotlib (scripts/setup --python makes .venv).
 """
 import argparse
 import math
+import re
 import sys
 
 import h5py
@@ -35,10 +38,17 @@ def text(v):
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
+def theta_of(scene_text):
+    """The scene's theta (the theta scheme's parameter; 0.5 when absent)."""
+    m = re.search(r"^theta:\s*([-+0-9.eE]+)\s*$", scene_text, re.M)
+    return float(m.group(1)) if m else 0.5
+
+
 def load(path):
     with h5py.File(path, "r") as f:
         s = f["summary"][:]
         name = f.attrs.get("sweep_name", path)
+        thetas = {text(v["name"]): theta_of(text(v["scene"])) for v in f["variants"][:]}
     rows = []
     for r in s:
         rows.append({
@@ -48,6 +58,8 @@ def load(path):
             "error_code": int(r["error_code"]), "error": float(r["error"]), "wall": float(r["wall_time_s"]),
             "eps_cert": float(r["max_eps_cert"]), "eta_cert": float(r["max_eta_cert"]),
         })
+        if rows[-1]["scheme"] == "theta":   # the legend says which theta ran
+            rows[-1]["scheme"] = f"theta {thetas.get(rows[-1]['variant'], 0.5):g}"
     return text(name), rows
 
 
