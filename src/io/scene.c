@@ -13,7 +13,7 @@
 #include <string.h>
 #include <strings.h>
 #include "catchup.h"
-#include "linalg.h"
+#include "util/linalg.h"
 #include "scene_tree.h"
 
 struct cup_scene {

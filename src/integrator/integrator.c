@@ -13,8 +13,8 @@
 #include "catchup.h"
 #include "freestep.h"
 #include "theta.h"
-#include "lcs_impl.h"
-#include "polyset_impl.h"
+#include "model/lcs_impl.h"
+#include "set/polyset_impl.h"
 
 struct cup_integrator {
   const cup_lcs *L;

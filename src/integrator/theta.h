@@ -13,8 +13,8 @@
 #define CUP_THETA_H
 
 #include "catchup/projector.h"
-#include "lcs_impl.h"
-#include "polyset_impl.h"
+#include "model/lcs_impl.h"
+#include "set/polyset_impl.h"
 
 typedef struct cup_theta {
   int n, m;

@@ -1,12 +1,12 @@
 /* Internal layout of cup_projector, shared by projector.c (set-up, skip,
- * certificates), proj_firstorder.c (pg, fista) and proj_activeset.c. */
+ * certificates), firstorder.c (pg, fista) and activeset.c. */
 #ifndef CUP_PROJECTOR_IMPL_H
 #define CUP_PROJECTOR_IMPL_H
 
 #include <stdint.h>
 #include <cholmod.h>
 #include "catchup/projector.h"
-#include "polyset_impl.h"
+#include "set/polyset_impl.h"
 
 #define CUP_DENSE_CACHE 4
 
@@ -20,7 +20,7 @@ typedef struct dense_fact {
   unsigned stamp;     /* for least-recently-used replacement */
 } dense_fact;
 
-/* Iterate and scratch of one projected-Newton solve (proj_newton.c). */
+/* Iterate and scratch of one projected-Newton solve (newton.c). */
 typedef struct pn_ws {
   double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
   double *y2, *s2, *gam2;           /* line-search trial */
@@ -28,7 +28,7 @@ typedef struct pn_ws {
   unsigned char *act, *prev;        /* free set, and the previous one */
 } pn_ws;
 
-/* The sparse exact path (proj_newton.c): the dual factor and the iterates
+/* The sparse exact path (newton.c): the dual factor and the iterates
  * of the main and the inward-anchor solves. */
 typedef struct newton_ws {
   struct cup_dfact *df;

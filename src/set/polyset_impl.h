@@ -4,7 +4,7 @@
 
 #include <cholmod.h>
 #include "catchup/polyset.h"
-#include "linalg.h"
+#include "util/linalg.h"
 
 /* Sets with at most this many rows (and CUP_DENSE_MAX_DIM columns) keep
  * M = C P^-1 C^T and P^-1 C^T dense: the exact active-set path. */

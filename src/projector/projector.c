@@ -8,7 +8,7 @@
 #include "catchup.h"
 #include "catchup/projector.h"
 #include "projector_impl.h"
-#include "theta.h"
+#include "integrator/theta.h"
 
 #define U DBL_EPSILON
 
