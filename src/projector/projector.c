@@ -8,7 +8,7 @@
 #include "catchup.h"
 #include "catchup/projector.h"
 #include "projector_impl.h"
-#include "integrator/theta.h"
+#include "lcp/step.h"
 
 #define U DBL_EPSILON
 
@@ -155,7 +155,7 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
   }
   if (K->dense && m > 0 && o.method == CUP_PROJ_AUTO) {
     p->th = calloc(1, sizeof *p->th);
-    int st = p->th ? cup_theta_init_set(p->th, K, NULL, 1.0, errmsg)
+    int st = p->th ? cup_lcp_step_init(p->th, K, NULL, 1.0, errmsg)
                    : cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
     if (st) { cup_projector_free(&p); return st; }
   }
@@ -167,7 +167,7 @@ void cup_projector_free(cup_projector **pp) {
   if (!pp || !*pp) return;
   cup_projector *p = *pp;
   cup_newton_free(p);
-  if (p->th) cup_theta_free(p->th);
+  if (p->th) cup_lcp_step_free(p->th);
   free(p->th);
   free(p->g); free(p->lam); free(p->lam_warm); free(p->lam_fista); free(p->b); free(p->s); free(p->gam);
   free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->s_v); free(p->anchor);
@@ -431,7 +431,7 @@ int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
 
 /* Small dense sets, auto method: the dual LCP solved exactly by principal
  * pivoting (closed form on one or two active rows), the rows aimed a few
- * ulps inside K, as the theta scheme's step with W = I and h = 1. z is then
+ * ulps inside K: the LCP step (lcp/step.h) with W = I and h = 1. z is then
  * certainly in K (eta = 0) and eps is the weak-duality gap, as cup_certify
  * computes it. Returns 1 with z and info filled when that certifies the
  * targets; 0 leaves everything to the general path (a singular block, a
@@ -441,7 +441,8 @@ static int project_small(cup_projector *p, const double *x, double *z, cup_proj_
   int n = p->n, m = p->m;
   if (!p->opt.warm_start) memset(p->th->prev, 0, (size_t)m);
   cup_proj_info ti;
-  if (cup_theta_step(p->th, p->g, x, p->y, info->scale, info->eps_target, info->eta_target, &ti))
+  if (cup_lcp_step_solve(p->th, p->g, x, p->y, info->scale, info->eps_target, info->eta_target,
+                         &ti))
     return 0;
   double un = ti.skipped ? 0 : step_norm(p, p->y, x);   /* ||z - x||_P */
   double ebound = ti.skipped ? 0 : z_rounding(K, info->scale, un);

@@ -1,17 +1,13 @@
-/* theta — see theta.h. */
+/* step — see step.h. */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
-#include "theta.h"
+#include "step.h"
 
-int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg) {
-  return cup_theta_init_set(th, L->K, W, h, errmsg);
-}
-
-int cup_theta_init_set(cup_theta *th, const cup_polyset *K, const double *W, double h,
-                       char *errmsg) {
+int cup_lcp_step_init(cup_lcp_step *th, const cup_polyset *K, const double *W, double h,
+                      char *errmsg) {
   memset(th, 0, sizeof *th);
   int n = th->n = K->n, m = th->m = K->m;
   th->K = K;
@@ -54,7 +50,7 @@ int cup_theta_init_set(cup_theta *th, const cup_polyset *K, const double *W, dou
   return CUP_OK;
 }
 
-void cup_theta_free(cup_theta *th) {
+void cup_lcp_step_free(cup_lcp_step *th) {
   free(th->H); free(th->M); free(th->lam); free(th->w); free(th->rhs); free(th->sol);
   free(th->lu); free(th->work); free(th->s); free(th->gam); free(th->v); free(th->piv);
   free(th->idx); free(th->act); free(th->prev); free(th->tau); free(th->qs);
@@ -65,7 +61,7 @@ void cup_theta_free(cup_theta *th) {
  * rows: Cramer's rule is forward stable for 2 x 2; else LU with partial
  * pivoting, M is not symmetric), w = q + M lambda. Returns nonzero for a
  * singular block. */
-static int solve_on(cup_theta *th, const double *q) {
+static int solve_on(cup_lcp_step *th, const double *q) {
   int m = th->m, k = 0;
   const double *M = th->M;
   for (int i = 0; i < m; i++) if (th->act[i]) th->idx[k++] = i;
@@ -101,7 +97,7 @@ static int solve_on(cup_theta *th, const double *q) {
 }
 
 /* Murty's least-index principal pivoting: finite for a P-matrix. */
-static int lcp(cup_theta *th, const double *q, int *pivots) {
+static int lcp(cup_lcp_step *th, const double *q, int *pivots) {
   int m = th->m;
   double scale = 0;
   for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
@@ -123,7 +119,7 @@ static int lcp(cup_theta *th, const double *q, int *pivots) {
 /* A certified distance of z to K from its slack s (with rounding bounds
  * gam): 0 when z is certainly in K, else a push along the polyset's
  * direction into K, verified; INFINITY when neither works. */
-static double certified_eta(cup_theta *th, const double *g, const double *z) {
+static double certified_eta(cup_lcp_step *th, const double *g, const double *z) {
   const cup_polyset *K = th->K;
   int n = th->n, m = th->m;
   double worst = INFINITY;
@@ -141,8 +137,8 @@ static double certified_eta(cup_theta *th, const double *g, const double *z) {
                                                       : INFINITY;
 }
 
-int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, double scale,
-                   double eps_target, double eta_target, cup_proj_info *info) {
+int cup_lcp_step_solve(cup_lcp_step *th, const double *g, const double *xf, double *z,
+                       double scale, double eps_target, double eta_target, cup_proj_info *info) {
   const cup_polyset *K = th->K;
   int n = th->n, m = th->m;
   *info = (cup_proj_info){0};

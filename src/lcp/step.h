@@ -1,5 +1,5 @@
-/* theta — the theta-method step of a small LCS (Moreau-Jean time stepping,
- * as in Siconos's EulerMoreauOSI):
+/* step — the LCP step onto a small polyset, as the theta method takes it
+ * (Moreau-Jean time stepping, as in Siconos's EulerMoreauOSI):
  *     W = (I - h theta A)^-1,   x_free = x_k + W (h A x_k + E int u + int f),
  *     x_{k+1} = x_free + H lambda,  H = h W B,  B = P^-1 C^T,
  *     0 <= lambda  _|_  w = C x_{k+1} + g >= 0,   an LCP with M = C H.
@@ -9,14 +9,13 @@
  * from the previous active set, aiming the rows a few ulps inside K so
  * that the answer is certainly feasible; dense, for m <= 64 rows and
  * n <= 256. */
-#ifndef CUP_THETA_H
-#define CUP_THETA_H
+#ifndef CUP_LCP_STEP_H
+#define CUP_LCP_STEP_H
 
 #include "catchup/projector.h"
-#include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 
-typedef struct cup_theta {
+typedef struct cup_lcp_step {
   int n, m;
   double h;
   const cup_polyset *K;
@@ -26,15 +25,14 @@ typedef struct cup_theta {
   double lq;        /* lambda^T q of the last step (q: the free point's slack) */
   int *piv, *idx;
   unsigned char *act, *prev;
-} cup_theta;
+} cup_lcp_step;
 
-/* W (n x n, column-major) from the free step; builds H and M. */
-int cup_theta_init(cup_theta *th, const cup_lcs *L, const double *W, double h, char *errmsg);
-/* The same on the set K alone; W = NULL is the identity (with h = 1: the
- * P-projection onto K, lambda the projector's multipliers). */
-int cup_theta_init_set(cup_theta *th, const cup_polyset *K, const double *W, double h,
-                       char *errmsg);
-void cup_theta_free(cup_theta *th);
+/* W (n x n, column-major) from the free step builds H and M; W = NULL is
+ * the identity (with h = 1: the P-projection onto K, lambda the projector's
+ * multipliers). */
+int cup_lcp_step_init(cup_lcp_step *th, const cup_polyset *K, const double *W, double h,
+                      char *errmsg);
+void cup_lcp_step_free(cup_lcp_step *th);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:
  * certified when the gap is below max(1e-12 scale^2, floor), the floor
@@ -47,7 +45,7 @@ void cup_theta_free(cup_theta *th);
  * projector's weak-duality certificate), eta_cert a certified distance of z
  * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a
  * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */
-int cup_theta_step(cup_theta *th, const double *g, const double *xf, double *z, double scale,
-                   double eps_target, double eta_target, cup_proj_info *info);
+int cup_lcp_step_solve(cup_lcp_step *th, const double *g, const double *xf, double *z,
+                       double scale, double eps_target, double eta_target, cup_proj_info *info);
 
 #endif
