@@ -198,6 +198,11 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->use_theta = o.scheme == CUP_SCHEME_THETA ||
                  (o.scheme == CUP_SCHEME_EXPLICIT && o.proj.method == CUP_PROJ_AUTO && L->K->dense &&
                   !o.proj.feasible_point);
+  if (!st && I->use_theta && !L->K->dense)
+    st = cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                  "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
+                  "use the explicit, implicit or exponential scheme", L->K->m, L->K->n, CUP_DENSE_MAX_ROWS,
+                  CUP_DENSE_MAX_DIM);
   if (!st && I->use_theta) {
     double *W = I->fs.W, *eye = NULL;
     if (!W) {
@@ -206,7 +211,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
       for (int j = 0; eye && j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
       W = eye;
     }
-    if (!st) st = cup_lcp_step_init(&I->th, L->K, W, I->h, errmsg);
+    if (!st && cup_lcp_step_init(&I->th, L->K, W, I->h))
+      st = cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
     free(eye);
   }
   /* the paper's tolerances are absolute; a zero schedule asks for the exact

@@ -154,10 +154,9 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
     if (st) { cup_projector_free(&p); return st; }
   }
   if (K->dense && m > 0 && o.method == CUP_PROJ_AUTO) {
-    p->th = calloc(1, sizeof *p->th);
-    int st = p->th ? cup_lcp_step_init(p->th, K, NULL, 1.0, errmsg)
-                   : cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
-    if (st) { cup_projector_free(&p); return st; }
+    p->small = calloc(1, sizeof *p->small);
+    int st = p->small ? cup_lcp_step_init(p->small, K, NULL, 1.0) : CUP_ERR_NOMEM;
+    if (st) { cup_projector_free(&p); return cup_fail(errmsg, st, "projector: out of memory"); }
   }
   *out = p;
   return CUP_OK;
@@ -167,8 +166,8 @@ void cup_projector_free(cup_projector **pp) {
   if (!pp || !*pp) return;
   cup_projector *p = *pp;
   cup_newton_free(p);
-  if (p->th) cup_lcp_step_free(p->th);
-  free(p->th);
+  if (p->small) cup_lcp_step_free(p->small);
+  free(p->small);
   free(p->g); free(p->lam); free(p->lam_warm); free(p->lam_fista); free(p->b); free(p->s); free(p->gam);
   free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->s_v); free(p->anchor);
   free(p->s_anchor); free(p->user_pt); free(p->s_user); free(p->inward); free(p->s_inward); free(p->farkas);
@@ -212,7 +211,7 @@ int cup_projector_offer_feasible(cup_projector *p, const double *w) {
 
 void cup_projector_reset(cup_projector *p) {
   if (p && p->m) memset(p->lam_warm, 0, sizeof(double) * (size_t)p->m);
-  if (p && p->th) memset(p->th->prev, 0, (size_t)p->m);
+  if (p && p->small) cup_lcp_forget(&p->small->lcp);
 }
 
 const double *cup_projector_lambda(const cup_projector *p) { return p ? p->lam : NULL; }
@@ -439,9 +438,9 @@ int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
 static int project_small(cup_projector *p, const double *x, double *z, cup_proj_info *info) {
   const cup_polyset *K = p->K;
   int n = p->n, m = p->m;
-  if (!p->opt.warm_start) memset(p->th->prev, 0, (size_t)m);
+  if (!p->opt.warm_start) cup_lcp_forget(&p->small->lcp);
   cup_proj_info ti;
-  if (cup_lcp_step_solve(p->th, p->g, x, p->y, info->scale, info->eps_target, info->eta_target,
+  if (cup_lcp_step_solve(p->small, p->g, x, p->y, info->scale, info->eps_target, info->eta_target,
                          &ti))
     return 0;
   double un = ti.skipped ? 0 : step_norm(p, p->y, x);   /* ||z - x||_P */
@@ -451,12 +450,12 @@ static int project_small(cup_projector *p, const double *x, double *z, cup_proj_
   info->eps_cert = eps;
   info->eta_cert = ti.eta_cert;
   info->violation = ti.violation;
-  info->dual_value = -2 * p->th->lq - un * un;
+  info->dual_value = -2 * p->small->lq - un * un;
   info->skipped = ti.skipped;
   info->iterations = ti.iterations;
   info->active = ti.active;
   info->method = ti.skipped ? p->opt.method : CUP_PROJ_ACTIVESET;
-  memcpy(p->lam, p->th->lam, sizeof(double) * (size_t)m);
+  memcpy(p->lam, p->small->lcp.lam, sizeof(double) * (size_t)m);
   if (p->opt.warm_start && !ti.skipped) memcpy(p->lam_warm, p->lam, sizeof(double) * (size_t)m);
   memcpy(z, p->y, sizeof(double) * (size_t)n);
   info->status = CUP_OK;
@@ -489,7 +488,7 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
     info->farkas_residual = 0;
     return info->status = CUP_ERR_EMPTY_SET;
   }
-  if (p->th && !p->user_pt && !p->opt.return_feasible && project_small(p, x, z, info))
+  if (p->small && !p->user_pt && !p->opt.return_feasible && project_small(p, x, z, info))
     return CUP_OK;
   cup_slack(K, p->g, x, p->b, p->gam);
   double worst_raw = INFINITY;

@@ -72,8 +72,8 @@ struct cup_projector {
   dense_fact cache[CUP_DENSE_CACHE];
   unsigned stamp;
   double *dwork;        /* m*m + m scratch */
-  /* small dense sets, auto: exact principal pivoting on the dual (lcp/step.c) */
-  struct cup_lcp_step *th;
+  /* small dense sets, auto: the dual LCP solved exactly (lcp/step.c, W = I, h = 1) */
+  struct cup_lcp_step *small;
   /* sparse Newton */
   newton_ws *nw;
   /* statistics of the current call */
