@@ -8,7 +8,9 @@
 #include <math.h>
 #include <string.h>
 #include "catchup.h"
-#include "projector_impl.h"
+#include "certify.h"
+#include "activeset.h"
+#include "firstorder.h"
 
 #define U DBL_EPSILON
 

@@ -37,7 +37,7 @@ struct cup_polyset {
 /* P v into out (n entries). */
 void cup_metric_apply(const cup_polyset *K, const double *v, double *out);
 /* In place P^-1 v for IDENTITY/DIAGONAL metrics. SPARSE metrics go through
- * the projector's CHOLMOD workspace (cup_metric_solve in projector_impl.h). */
+ * the projector's CHOLMOD workspace (cup_metric_solve in projector/certify.h). */
 static inline void cup_metric_solve_diag(const cup_polyset *K, double *v) {
   if (K->pkind == CUP_METRIC_IDENTITY) return;
   for (int j = 0; j < K->n; j++) v[j] *= K->pdinv[j];

@@ -1,7 +1,9 @@
-/* Internal layout of cup_projector, shared by projector.c (set-up, skip,
- * certificates), firstorder.c (pg, fista) and activeset.c. */
-#ifndef CUP_PROJECTOR_IMPL_H
-#define CUP_PROJECTOR_IMPL_H
+/* proj_ws — the internal layout of cup_projector and the workspaces of its
+ * methods: types only, the lowest header of the projector, included by the
+ * certificates (certify.h) and through them by every method and the
+ * dispatcher. */
+#ifndef CUP_PROJ_WS_H
+#define CUP_PROJ_WS_H
 
 #include <stdint.h>
 #include <cholmod.h>
@@ -79,29 +81,5 @@ struct cup_projector {
   /* statistics of the current call */
   int iters, facts, updates;
 };
-
-/* u = P^-1 v in place (any metric), allocation-free. */
-void cup_metric_solve(cup_projector *p, double *v);
-/* y = x + P^-1 C^T lam, s = C y + g with rounding bounds gam. */
-void cup_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
-                     double *y, double *s, double *gam);
-/* Certificates for candidate (lam, z) with slack s, gam at z; fills info's
- * eps_cert, eta_cert, violation, dual_value; sets p->v/has_v. Returns 1 when
- * both targets are met. */
-int cup_certify(cup_projector *p, const double *x, const double *lam,
-                const double *z, cup_proj_info *info);
-/* Farkas test on a direction dlam >= 0 (copied into p->farkas when it
- * certifies emptiness); returns 1 if K is declared empty. */
-int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info);
-
-/* Methods: each fills p->lam (>= 0) and p->y = z with certificates in info,
- * and returns a status. b = s(x) is in p->b. The first-order methods start
- * from p->lam and stop after `budget` iterations. */
-int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
-                        int budget, cup_proj_info *info);
-int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *info);
-int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *info);
-int cup_newton_create(cup_projector *p, char *errmsg);
-void cup_newton_free(cup_projector *p);
 
 #endif
