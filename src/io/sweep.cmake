@@ -5,6 +5,7 @@
 # the scene loader's YAML tree (scene_tree.c), which libcatchup exports.
 add_library(catchup_sweep STATIC
   ${CMAKE_CURRENT_LIST_DIR}/sweep.c
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_run.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5_create.c
   ${CMAKE_CURRENT_LIST_DIR}/sha256.c)

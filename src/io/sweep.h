@@ -107,7 +107,7 @@ void sw_schedule(const cup_sweep *s, long *out);
 /* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
 char *sw_grid_text(const cup_sweep *s);
 
-/* ---- one job ---- */
+/* ---- one job (sweep_run.c) ---- */
 
 typedef struct sw_run_opts {
   const volatile int *interrupt;  /* the integrator's interrupt flag (signals) */
