@@ -5,7 +5,8 @@
  * the projector's multipliers (its exact path for small dense sets); the
  * theta scheme (Moreau-Jean time stepping, as in Siconos's EulerMoreauOSI)
  * takes W = (I - h theta A)^-1 from its free step, theta = 0 being the
- * explicit catching-up step (M symmetric: the P-projection). The LCP is
+ * explicit catching-up step (M symmetric: the P-projection) and theta = 1/2
+ * second order where the solution is smooth. The LCP is
  * solved exactly (lcp.h), warm-started from the previous active set, aiming
  * the rows a few ulps inside K so that the answer is certainly feasible;
  * dense, for sets with K->dense (m <= 64 rows and n <= 256). */
