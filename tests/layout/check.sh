@@ -87,6 +87,7 @@ for a in "$@"; do IFS=';' read -ra parts <<< "$a"; objects+=("${parts[@]}"); don
 if [ ${#objects[@]} -gt 0 ]; then
   declare -A owner=() omod=()
   for o in "${objects[@]}"; do
+    [ -f "$o" ] || { say "$o: no such object (build first)"; continue; }
     base=$(basename "$o" .c.o); dir=$(basename "$(dirname "$o")")
     if [ -z "${level[$dir]+x}" ]; then say "$o: object outside the layer folders"; continue; fi
     omod[$o]="src/$dir/$base"

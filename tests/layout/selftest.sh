@@ -62,6 +62,7 @@ obj set f 'void f(void) {}'
 fresh
 bash "$here/check.sh" "$t" "$o/projector/e.c.o;$o/set/f.c.o" > /dev/null ||
   fail "a call down the chain fails the check"
+expect_fail "missing object" "no such object" "$o/set/none.c.o"
 expect_fail "call up the chain" "calls b of src/projector/b" "$o/set/a.c.o" "$o/projector/b.c.o"
 expect_fail "circle of calls" "cycle: src/projector/c -> src/projector/d -> src/projector/c" \
   "$o/projector/c.c.o;$o/projector/d.c.o"
