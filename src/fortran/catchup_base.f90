@@ -19,7 +19,7 @@ module catchup_base
   public :: cup_version, cup_dependency_versions
   public :: cup_csc_from_fortran, cup_csc_from_dense, cup_csc_view, cup_csc_free
   ! for the other modules of the binding (not part of the documented API)
-  public :: cup_finish_, cup_fail_, cup_errbuf_
+  public :: cup_finish_, cup_fail_, cup_errbuf_, cup_size_fail_, cup_null_fail_, cup_copy_out_
 
 contains
 
@@ -272,4 +272,54 @@ contains
     csc%nrow = 0
     csc%ncol = 0
   end subroutine cup_csc_free
+
+  ! ---- checks shared by the wrappers (catchup_projector, _model, _integrator) -
+
+  !> ierr = CUP_ERR_DIM with "<what> has <got> entries, expected <want>".
+  subroutine cup_size_fail_(what, got, want, ierr, errmsg)
+    character(len=*), intent(in) :: what
+    integer, intent(in) :: got, want
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(len=200) :: msg
+    write(msg, '(a,a,i0,a,i0)') what, ' has ', got, ' entries, expected ', want
+    call cup_fail_(CUP_ERR_DIM, trim(msg), ierr, errmsg)
+  end subroutine cup_size_fail_
+
+  logical function cup_null_fail_(p, what, ierr, errmsg)
+    type(c_ptr), intent(in) :: p
+    character(len=*), intent(in) :: what
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    cup_null_fail_ = .not. c_associated(p)
+    if (cup_null_fail_) then
+      call cup_fail_(CUP_ERR_ARG, what // ' handle is null', ierr, errmsg)
+    else
+      ierr = CUP_OK
+    end if
+  end function cup_null_fail_
+
+  !> Copy n doubles from a C pointer (null: found = .false.).
+  subroutine cup_copy_out_(p, n, out, found, ierr)
+    type(c_ptr), intent(in) :: p
+    integer, intent(in) :: n
+    real(c_double), intent(inout) :: out(:)
+    logical, intent(out) :: found
+    integer, intent(out) :: ierr
+    real(c_double), pointer :: v(:)
+    found = c_associated(p)
+    ierr = CUP_OK
+    if (size(out) < n) then
+      ierr = CUP_ERR_DIM
+      return
+    end if
+    if (.not. found) return
+    call c_f_pointer(p, v, [n])
+    out(1:n) = v
+  end subroutine cup_copy_out_
+
+  ! Optional array arguments are copied into local allocatables before their
+  ! address goes to C (creation-time data, copied by C anyway): gfortran 12
+  ! at -O2 crashes when an absent optional assumed-shape actual is forwarded
+  ! to an OPTIONAL, CONTIGUOUS dummy, and users do forward optionals.
 end module catchup_base

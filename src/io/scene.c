@@ -11,10 +11,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include "catchup.h"
-#include "linalg.h"
-#include "names.h"
+#include "util/linalg.h"
+#include "util/names.h"
+#include "mtx.h"
+#include "scene_shape.h"
 #include "scene_tree.h"
 
 struct cup_scene {
@@ -141,45 +142,22 @@ static int integer(rd *r, const st_node *nd, const char *key, long lo, long hi, 
 
 /* ---- matrices ------------------------------------------------------------ */
 
-/* An owned CSC matrix and where it was written. */
+/* An owned CSC matrix (inline or from a Matrix Market file, mtx.c) and
+ * where it was written. */
 typedef struct mat {
-  int nrow, ncol;
-  int *p, *i;
-  double *x;
+  mtx_csc a;
   const st_node *at;
 } mat;
 
 static void mat_free(mat *M) {
-  free(M->p); free(M->i); free(M->x);
-  memset(M, 0, sizeof *M);
+  mtx_free(&M->a);
+  M->at = NULL;
 }
 
 static cup_csc mat_view(const mat *M) {
   cup_csc v = {0};
-  if (M->p) v = (cup_csc){M->nrow, M->ncol, M->p, M->i, M->x};
+  if (M->a.p) v = (cup_csc){M->a.nrow, M->a.ncol, M->a.p, M->a.i, M->a.x};
   return v;
-}
-
-/* CSC of a dense matrix with entry (i, j) at a[i*rs + j*cs]; zeros dropped. */
-static int mat_from_dense(mat *M, int nr, int nc, const double *a, size_t rs, size_t cs) {
-  size_t nnz = 0;
-  for (int j = 0; j < nc; j++)
-    for (int i = 0; i < nr; i++) nnz += a[i * rs + j * cs] != 0;
-  M->nrow = nr; M->ncol = nc;
-  M->p = malloc(sizeof(int) * ((size_t)nc + 1));
-  M->i = malloc(sizeof(int) * (nnz + 1));
-  M->x = malloc(sizeof(double) * (nnz + 1));
-  if (!M->p || !M->i || !M->x) return CUP_ERR_NOMEM;
-  int q = 0;
-  M->p[0] = 0;
-  for (int j = 0; j < nc; j++) {
-    for (int i = 0; i < nr; i++) {
-      double v = a[i * rs + j * cs];
-      if (v != 0) { M->i[q] = i; M->x[q++] = v; }
-    }
-    M->p[j + 1] = q;
-  }
-  return CUP_OK;
 }
 
 #define MATRIX_FORMS "a list of rows like [[1, 0], [0, 1]], or {file: name.mtx}"
@@ -206,7 +184,7 @@ static int matrix_inline(rd *r, const st_node *nd, const char *key, mat *M) {
   for (int i = 0; i < nr && !st; i++)
     for (int j = 0; j < nc && !st; j++)
       st = number(r, nd->item[i]->item[j], joini(k2, joini(k1, key, i), j), &a[(size_t)i * nc + j]);
-  if (!st) st = mat_from_dense(M, nr, nc, a, (size_t)nc, 1);
+  if (!st) st = mtx_from_dense(&M->a, nr, nc, a, (size_t)nc, 1);
   free(a);
   return st;
 }
@@ -222,188 +200,9 @@ static int matrix(rd *r, const st_node *nd, const char *key, mat *M) {
 }
 
 static int matrix_dims(rd *r, const mat *M, const char *key, int nr, int nc, const char *why) {
-  if (M->nrow == nr && M->ncol == nc) return CUP_OK;
-  return fail(r, CUP_ERR_DIM, M->at, key, "must be %d x %d (%s), got %d x %d", nr, nc, why, M->nrow, M->ncol);
-}
-
-/* ---- Matrix Market files ------------------------------------------------- */
-
-/* CHOLMOD's reader takes "1 1 abc" as a pattern entry of value 1 and stops
- * quietly after the declared count, so each file is checked line by line
- * first: the banner, the size line, every entry's indices and value, and
- * the count. Then CHOLMOD builds the matrix (symmetric files expanded to
- * both triangles, duplicates summed). */
-typedef struct mm_head {
-  int array, symmetric;
-  long nrow, ncol, nnz;
-} mm_head;
-
-typedef struct mm_ctx {
-  rd *r;
-  const st_node *at;
-  const char *key, *name;
-  long line;
-} mm_ctx;
-
-static int mm_fail(const mm_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static int mm_fail(const mm_ctx *c, const char *fmt, ...) {
-  char msg[CUP_ERRMSG_LEN];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  if (c->line > 0) return fail(c->r, CUP_ERR_PARSE, c->at, c->key, "%s:%ld: %s", c->name, c->line, msg);
-  return fail(c->r, CUP_ERR_PARSE, c->at, c->key, "%s: %s", c->name, msg);
-}
-
-static int mm_banner(mm_ctx *c, const char *line, mm_head *h) {
-  char obj[16], fmt[16], field[16], sym[16];
-  /* the banner is case-sensitive (the format's spec; CHOLMOD's reader fails
-   * on "%%matrixmarket" and leaks a block), the keywords are not */
-  if (strncmp(line, "%%MatrixMarket", 14) != 0 ||
-      sscanf(line + 14, "%15s %15s %15s %15s", obj, fmt, field, sym) != 4)
-    return mm_fail(c, "not a Matrix Market file (the first line must be "
-                      "'%%%%MatrixMarket matrix coordinate real general' or similar)");
-  if (strcasecmp(obj, "matrix") != 0) return mm_fail(c, "object '%s' is not 'matrix'", obj);
-  if (strcasecmp(fmt, "coordinate") && strcasecmp(fmt, "array"))
-    return mm_fail(c, "format '%s': expected coordinate or array", fmt);
-  if (strcasecmp(field, "real") && strcasecmp(field, "integer"))
-    return mm_fail(c, "field '%s': only real or integer matrices are supported", field);
-  if (strcasecmp(sym, "general") && strcasecmp(sym, "symmetric"))
-    return mm_fail(c, "symmetry '%s': only general or symmetric matrices are supported", sym);
-  h->array = strcasecmp(fmt, "array") == 0;
-  h->symmetric = strcasecmp(sym, "symmetric") == 0;
-  return CUP_OK;
-}
-
-/* Whitespace-separated tokens of a line (at most max). */
-static int tokens(char *line, char **tok, int max) {
-  int n = 0;
-  char *save = NULL;
-  for (char *s = strtok_r(line, " \t\r\n", &save); s; s = strtok_r(NULL, " \t\r\n", &save)) {
-    if (n < max) tok[n] = s;
-    n++;
-  }
-  return n;
-}
-
-static int mm_long(const char *s, long *v) {
-  char *end;
-  errno = 0;
-  *v = strtol(s, &end, 10);
-  return !errno && end != s && !*end;
-}
-
-static int mm_size(mm_ctx *c, char *line, mm_head *h) {
-  char *t[3];
-  int want = h->array ? 2 : 3, n = tokens(line, t, 3);
-  if (n != want || !mm_long(t[0], &h->nrow) || !mm_long(t[1], &h->ncol) || (!h->array && !mm_long(t[2], &h->nnz)))
-    return mm_fail(c, "expected the size line '%s'", h->array ? "ROWS COLS" : "ROWS COLS ENTRIES");
-  if (h->nrow < 1 || h->ncol < 1 || h->nrow > INT_MAX / 2 || h->ncol > INT_MAX / 2 || (!h->array && h->nnz < 0))
-    return mm_fail(c, "size %ld x %ld is out of range", h->nrow, h->ncol);
-  if (h->symmetric && h->nrow != h->ncol)
-    return mm_fail(c, "a symmetric matrix must be square (got %ld x %ld)", h->nrow, h->ncol);
-  if (h->array) h->nnz = h->symmetric ? h->nrow * (h->nrow + 1) / 2 : h->nrow * h->ncol;
-  return CUP_OK;
-}
-
-/* (i, j), 1-based, of the k-th value of an array file (column-major; the
- * lower triangle only when symmetric). */
-static void mm_array_pos(const mm_head *h, long k, long *i, long *j) {
-  long col = 0, len = h->nrow;
-  while (h->symmetric && k >= len) { k -= len; col++; len--; }
-  if (h->symmetric) { *i = col + k + 1; *j = col + 1; return; }
-  *i = k % h->nrow + 1;
-  *j = k / h->nrow + 1;
-}
-
-static int mm_value(mm_ctx *c, const char *tok, long i, long j) {
-  char *end;
-  double v = strtod(tok, &end);
-  if (end == tok || *end) return mm_fail(c, "entry (%ld,%ld): '%.30s' is not a number", i, j, tok);
-  if (!isfinite(v)) {
-    c->line = 0;                               /* the spec's "file.mtx: entry (i,j) is nan" */
-    return mm_fail(c, "entry (%ld,%ld) is %s", i, j, isnan(v) ? "nan" : v > 0 ? "inf" : "-inf");
-  }
-  return CUP_OK;
-}
-
-static int mm_entry(mm_ctx *c, char *line, const mm_head *h, long *count) {
-  char *t[3];
-  int n = tokens(line, t, 3);
-  long i, j;
-  if (h->array) {
-    if (n != 1) return mm_fail(c, "expected one value per line");
-    if (*count >= h->nnz) return mm_fail(c, "more values than the %ld the size line declares", h->nnz);
-    mm_array_pos(h, (*count)++, &i, &j);
-    return mm_value(c, t[0], i, j);
-  }
-  if (n != 3 || !mm_long(t[0], &i) || !mm_long(t[1], &j))
-    return mm_fail(c, "expected an entry 'ROW COL VALUE'");
-  if (i < 1 || i > h->nrow || j < 1 || j > h->ncol)
-    return mm_fail(c, "entry (%ld,%ld) is outside the %ld x %ld matrix", i, j, h->nrow, h->ncol);
-  if (++*count > h->nnz) return mm_fail(c, "more entries than the %ld the size line declares", h->nnz);
-  return mm_value(c, t[2], i, j);
-}
-
-static int mm_check(mm_ctx *c, FILE *f, mm_head *h) {
-  char *line = NULL;
-  size_t cap = 0;
-  long count = 0;
-  int st = CUP_OK, have_size = 0;
-  c->line = 0;
-  while (!st && getline(&line, &cap, f) >= 0) {
-    c->line++;
-    if (c->line == 1) { st = mm_banner(c, line, h); continue; }
-    const char *s = line + strspn(line, " \t\r\n");
-    if (!*s || *s == '%') continue;
-    if (!have_size) { st = mm_size(c, line, h); have_size = 1; continue; }
-    st = mm_entry(c, line, h, &count);
-  }
-  free(line);
-  if (st) return st;
-  if (c->line == 0) return mm_fail(c, "empty file, not a Matrix Market file");
-  c->line = 0;
-  if (!have_size) return mm_fail(c, "no size line");
-  if (count != h->nnz) return mm_fail(c, "the size line declares %ld entries but the file has %ld", h->nnz, count);
-  return CUP_OK;
-}
-
-static int mat_from_cholmod(mat *M, cholmod_sparse *A) {
-  size_t nc = A->ncol, nnz = (size_t)((int *)A->p)[nc];
-  M->nrow = (int)A->nrow; M->ncol = (int)nc;
-  M->p = malloc(sizeof(int) * (nc + 1));
-  M->i = malloc(sizeof(int) * (nnz + 1));
-  M->x = malloc(sizeof(double) * (nnz + 1));
-  if (!M->p || !M->i || !M->x) return CUP_ERR_NOMEM;
-  memcpy(M->p, A->p, sizeof(int) * (nc + 1));
-  memcpy(M->i, A->i, sizeof(int) * nnz);
-  memcpy(M->x, A->x, sizeof(double) * nnz);
-  return CUP_OK;
-}
-
-/* CHOLMOD reads the checked file: sparse with both triangles, or dense. */
-static int mm_read(mm_ctx *c, FILE *f, mat *M) {
-  cholmod_common cm;
-  if (cup_cholmod_start(&cm)) return mm_fail(c, "CHOLMOD start failed");
-  int mtype = -1, st = CUP_OK;
-  void *X = cholmod_read_matrix(f, 1, &mtype, &cm);
-  if (X && mtype == CHOLMOD_SPARSE) {
-    cholmod_sparse *A = X;
-    if (!A->sorted) cholmod_sort(A, &cm);
-    st = A->packed && A->stype == 0 && A->xtype == CHOLMOD_REAL ? mat_from_cholmod(M, A)
-                                                                 : mm_fail(c, "unexpected CHOLMOD matrix layout");
-    cholmod_free_sparse(&A, &cm);
-  } else if (X && mtype == CHOLMOD_DENSE) {
-    cholmod_dense *D = X;
-    st = mat_from_dense(M, (int)D->nrow, (int)D->ncol, D->x, 1, D->d);
-    cholmod_free_dense(&D, &cm);
-  } else {
-    if (X && mtype == CHOLMOD_TRIPLET) cholmod_free_triplet((cholmod_triplet **)&X, &cm);
-    st = mm_fail(c, "CHOLMOD could not read it (status %d)", cm.status);
-  }
-  cholmod_finish(&cm);
-  return st;
+  if (M->a.nrow == nr && M->a.ncol == nc) return CUP_OK;
+  return fail(r, CUP_ERR_DIM, M->at, key, "must be %d x %d (%s), got %d x %d", nr, nc, why, M->a.nrow,
+              M->a.ncol);
 }
 
 static char *resolve(const char *dir, const char *name) {
@@ -431,16 +230,11 @@ static int matrix_file(rd *r, const st_node *nd, const char *key, mat *M) {
     free(full);
     return st;
   }
-  mm_ctx c = {r, fn, k1, name, 0};
-  mm_head h = {0};
-  st = mm_check(&c, f, &h);
-  if (!st) {
-    rewind(f);
-    st = mm_read(&c, f, M);
-  }
+  char msg[CUP_ERRMSG_LEN];
+  st = mtx_read(f, name, &M->a, msg);
   fclose(f);
   free(full);
-  return st;
+  return st == CUP_ERR_PARSE ? fail(r, st, fn, k1, "%s", msg) : st;
 }
 
 /* ---- vectors ------------------------------------------------------------- */
@@ -453,10 +247,11 @@ static int vector(rd *r, const st_node *nd, const char *key, int want, const cha
   if (nd->kind == ST_MAP && st_get(nd, "file", NULL)) {
     mat M = {0};
     int st = matrix(r, nd, key, &M);
-    if (!st && (M.ncol != 1 || M.nrow != want))
-      st = fail(r, CUP_ERR_DIM, nd, key, "expected a %d x 1 matrix (%s), got %d x %d", want, why, M.nrow, M.ncol);
+    if (!st && (M.a.ncol != 1 || M.a.nrow != want))
+      st = fail(r, CUP_ERR_DIM, nd, key, "expected a %d x 1 matrix (%s), got %d x %d", want, why, M.a.nrow,
+                M.a.ncol);
     if (!st && !(*out = calloc((size_t)want, sizeof(double)))) st = CUP_ERR_NOMEM;
-    for (int k = 0; !st && k < M.p[1]; k++) (*out)[M.i[k]] = M.x[k];
+    for (int k = 0; !st && k < M.a.p[1]; k++) (*out)[M.a.i[k]] = M.a.x[k];
     mat_free(&M);
     return st;
   }
@@ -549,11 +344,11 @@ static int lcs_matrix(rd *r, const st_node *map, const char *k, mat *M) {
 /* p is the number of columns of E or G; both given must agree. */
 static int input_dim(rd *r, const lcs_parts *q, int n, int m, int *p) {
   char why[48];
-  *p = q->E.p ? q->E.ncol : q->G.p ? q->G.ncol : 0;
+  *p = q->E.a.p ? q->E.a.ncol : q->G.a.p ? q->G.a.ncol : 0;
   snprintf(why, sizeof why, "n = %d from C's columns, p = %d", n, *p);
-  if (q->E.p && q->E.nrow != n) return matrix_dims(r, &q->E, "lcs.E", n, *p, why);
-  snprintf(why, sizeof why, "m = %d from C's rows, p = %d from %s", m, *p, q->E.p ? "E's columns" : "G");
-  if (q->G.p) return matrix_dims(r, &q->G, "lcs.G", m, *p, why);
+  if (q->E.a.p && q->E.a.nrow != n) return matrix_dims(r, &q->E, "lcs.E", n, *p, why);
+  snprintf(why, sizeof why, "m = %d from C's rows, p = %d from %s", m, *p, q->E.a.p ? "E's columns" : "G");
+  if (q->G.a.p) return matrix_dims(r, &q->G, "lcs.G", m, *p, why);
   return CUP_OK;
 }
 
@@ -576,12 +371,12 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
   if (!st) st = check_keys(r, map, "lcs", known);
   if (!st) st = need(r, map, "lcs", "C", &nd);
   if (!st) st = matrix(r, nd, "lcs.C", &q.C);
-  if (!st) { n = q.C.ncol; m = q.C.nrow; snprintf(why, sizeof why, "n x n, n = %d from C's columns", n); }
+  if (!st) { n = q.C.a.ncol; m = q.C.a.nrow; snprintf(why, sizeof why, "n x n, n = %d from C's columns", n); }
   if (!st) st = lcs_matrix(r, map, "A", &q.A);
-  if (!st && q.A.p) st = matrix_dims(r, &q.A, "lcs.A", n, n, why);
+  if (!st && q.A.a.p) st = matrix_dims(r, &q.A, "lcs.A", n, n, why);
   if (!st) st = lcs_matrix(r, map, "B", &q.B);
-  if (!st && q.B.p) snprintf(why, sizeof why, "n x m = C's columns x C's rows");
-  if (!st && q.B.p) st = matrix_dims(r, &q.B, "lcs.B", n, m, why);
+  if (!st && q.B.a.p) snprintf(why, sizeof why, "n x m = C's columns x C's rows");
+  if (!st && q.B.a.p) st = matrix_dims(r, &q.B, "lcs.B", n, m, why);
   if (!st) st = lcs_matrix(r, map, "E", &q.E);
   if (!st) st = lcs_matrix(r, map, "G", &q.G);
   if (!st) st = input_dim(r, &q, n, m, &d.p);
@@ -639,12 +434,6 @@ static int read_points(rd *r, const st_node *nd, const char *key, cup_wave *w, d
   return CUP_OK;
 }
 
-/* The keys of a term mapping, by waveform (CUP_WAVE_LIST order). */
-static const char *const wave_keys[CUP_WAVE_COUNT][5] = {{"type", "value", NULL},
-                                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                                         {"type", "points", NULL}};
-
 /* The fields of a sine or square term. */
 static int read_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
   char k1[KEY_LEN];
@@ -671,7 +460,7 @@ static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *
   cup_wave w = {0};
   double *buf = NULL;
   w.kind = (cup_wave_kind)kind;
-  st = check_keys(r, map, key, wave_keys[kind]);
+  st = check_keys(r, map, key, scene_wave_keys[kind]);
   if (!st && kind == CUP_WAVE_CONSTANT) {
     st = need(r, map, key, "value", &nd);
     if (!st) st = number(r, nd, join(k1, key, "value"), &w.value);
@@ -888,56 +677,6 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   return st;
 }
 
-/* ---- overrides that change a value's shape ------------------------------- */
-
-/* Keys whose value is a matrix or a vector: inline numbers or {file: ...}. */
-static int inline_or_file(const char *path) {
-  static const char *const keys[] = {"x0", "lcs.A", "lcs.B", "lcs.C", "lcs.E", "lcs.F", "lcs.G", "lcs.P", NULL};
-  for (int k = 0; keys[k]; k++)
-    if (!strcmp(path, keys[k])) return 1;
-  return 0;
-}
-
-static int replace_by_map(st_node **slot, int k) {
-  st_node *m = st_new_map(k);
-  if (!m) return CUP_ERR_NOMEM;
-  st_free(*slot);
-  *slot = m;
-  return CUP_OK;
-}
-
-/* A KEY=VALUE override names the shape its user wants; the scene's value of
- * another shape gives way (st_reshape_fn): `circuit` and `lcs` replace each
- * other; output.samples=2 replaces output: {every: 1} (one mode at a time);
- * projector.max_iter=50 turns projector: fista into {method: fista,
- * max_iter: 50}; lcs.A.file=a.mtx replaces an inline A (and x0.file, lcs.P.file
- * the same); input....type=pwl drops the fields the old waveform had and
- * the new one does not take. */
-static int reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k) {
-  st_node *nd = *slot;
-  if (!*path && nd->kind == ST_MAP) {
-    if (!strcmp(seg, "circuit")) st_map_remove(nd, "lcs");
-    if (!strcmp(seg, "lcs")) st_map_remove(nd, "circuit");
-    return CUP_OK;
-  }
-  if (!strcmp(path, "output") && (nd->kind != ST_MAP || nd->len != 1 || strcmp(nd->key[0]->text, seg)))
-    return replace_by_map(slot, k);
-  if (!strcmp(path, "projector") && nd->kind == ST_SCALAR) {
-    st_node *m = st_new_map(k);
-    if (!m || st_map_put(m, "method", nd, k)) { st_free(m); return CUP_ERR_NOMEM; }
-    *slot = m;
-    return CUP_OK;
-  }
-  if (inline_or_file(path) && nd->kind != ST_MAP && !isdigit((unsigned char)seg[0]))
-    return replace_by_map(slot, k);
-  int wave = val && val->kind == ST_SCALAR ? cup_wave_parse(val->text) : -1;
-  if (!strncmp(path, "input", 5) && nd->kind == ST_MAP && !strcmp(seg, "type") && wave >= 0) {
-    const st_node *bad;
-    while ((bad = st_unknown_key(nd, wave_keys[wave]))) st_map_remove(nd, bad->text);
-  }
-  return CUP_OK;
-}
-
 /* ---- public -------------------------------------------------------------- */
 
 static int load(cup_scene **s, const char *text, size_t len, const char *name, const char *dir,
@@ -946,7 +685,7 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
   st_node *root = NULL;
   cup_scene *S = NULL;
   int st = st_parse(&root, text, len, &r.src, -1, NULL, errmsg);
-  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, reshape, errmsg);
+  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, scene_reshape, errmsg);
   if (!st && !(S = calloc(1, sizeof *S))) st = CUP_ERR_NOMEM;
   if (!st) st = read_scene(&r, root, S);
   if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;

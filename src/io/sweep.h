@@ -1,7 +1,7 @@
 /* sweep — parameter studies for catchup-sweep (docs/sweep-format.md): the
  * sweep file (YAML, read with the scene loader's tree so that every error
  * names FILE:LINE:COL and the key), its tasks in a fixed order, one task's
- * computation, and the HDF5 results file (sweep_h5.c). No MPI here: the
+ * computation, and the HDF5 results file (sweep_h5*.c). No MPI here: the
  * driver (apps/catchup-sweep.c) moves job numbers and results between ranks.
  *
  * Jobs: 0 .. V-1 are the variants' references, V .. V+N-1 the tasks (task
@@ -107,7 +107,7 @@ void sw_schedule(const cup_sweep *s, long *out);
 /* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
 char *sw_grid_text(const cup_sweep *s);
 
-/* ---- one job ---- */
+/* ---- one job (sweep_run.c) ---- */
 
 typedef struct sw_run_opts {
   const volatile int *interrupt;  /* the integrator's interrupt flag (signals) */
@@ -122,7 +122,7 @@ void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *o, sw_result *r
 /* Max-norm of traj - ref over times and components; NaN if any entry is NaN. */
 double sw_max_error(const double *traj, const double *ref, long count);
 
-/* ---- the results file (sweep_h5.c) ---- */
+/* ---- the results file (sweep_h5.c, created by sweep_h5_create.c) ---- */
 
 typedef struct sw_file sw_file;
 

@@ -8,7 +8,7 @@
 #include <gsl/gsl_integration.h>
 #include "catchup.h"
 #include "freestep.h"
-#include "polyset_impl.h"
+#include "set/polyset_impl.h"
 
 static void *zalloc(size_t count, size_t size, int *fail) {
   void *q = calloc(count ? count : 1, size);

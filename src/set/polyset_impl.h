@@ -4,7 +4,7 @@
 
 #include <cholmod.h>
 #include "catchup/polyset.h"
-#include "linalg.h"
+#include "util/linalg.h"
 
 /* Sets with at most this many rows (and CUP_DENSE_MAX_DIM columns) keep
  * M = C P^-1 C^T and P^-1 C^T dense: the exact active-set path. */
@@ -37,7 +37,7 @@ struct cup_polyset {
 /* P v into out (n entries). */
 void cup_metric_apply(const cup_polyset *K, const double *v, double *out);
 /* In place P^-1 v for IDENTITY/DIAGONAL metrics. SPARSE metrics go through
- * the projector's CHOLMOD workspace (cup_metric_solve in projector_impl.h). */
+ * the projector's CHOLMOD workspace (cup_metric_solve in projector/certify.h). */
 static inline void cup_metric_solve_diag(const cup_polyset *K, double *v) {
   if (K->pkind == CUP_METRIC_IDENTITY) return;
   for (int j = 0; j < K->n; j++) v[j] *= K->pdinv[j];

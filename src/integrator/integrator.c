@@ -12,9 +12,9 @@
 #include <time.h>
 #include "catchup.h"
 #include "freestep.h"
-#include "theta.h"
-#include "lcs_impl.h"
-#include "polyset_impl.h"
+#include "lcp/step.h"
+#include "model/lcs_impl.h"
+#include "set/polyset_impl.h"
 
 struct cup_integrator {
   const cup_lcs *L;
@@ -25,7 +25,7 @@ struct cup_integrator {
   int split_row;
   cup_freestep fs;
   cup_projector *proj;
-  cup_theta th;             /* the theta scheme's LCP step (used instead of the projector) */
+  cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
@@ -182,6 +182,11 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->use_theta = o.scheme == CUP_SCHEME_THETA ||
                  (o.scheme == CUP_SCHEME_EXPLICIT && o.proj.method == CUP_PROJ_AUTO && L->K->dense &&
                   !o.proj.feasible_point);
+  if (!st && I->use_theta && !L->K->dense)
+    st = cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                  "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
+                  "use the explicit, implicit or exponential scheme", L->K->m, L->K->n, CUP_DENSE_MAX_ROWS,
+                  CUP_DENSE_MAX_DIM);
   if (!st && I->use_theta) {
     double *W = I->fs.W, *eye = NULL;
     if (!W) {
@@ -190,7 +195,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
       for (int j = 0; eye && j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
       W = eye;
     }
-    if (!st) st = cup_theta_init(&I->th, L, W, I->h, errmsg);
+    if (!st && cup_lcp_step_init(&I->th, L->K, W, I->h))
+      st = cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
     free(eye);
   }
   /* the paper's tolerances are absolute; a zero schedule asks for the exact
@@ -213,7 +219,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_integrator *I = *Ip;
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
-  if (I->use_theta) cup_theta_free(&I->th);
+  if (I->use_theta) cup_lcp_step_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0);
   free(I);
   *Ip = NULL;
@@ -361,8 +367,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     if (I->use_theta) {
       double S = cup_polyset_norm(I->L->K, I->xf);
       const double *g = fixed ? I->L->F : I->g;
-      st = cup_theta_step(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
-                          I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
+      st = cup_lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
+                              I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
       if (st == CUP_ERR_LINALG) {
         /* pivoting failed: an empty K(t) (the projector proves it with a
          * Farkas certificate) or, for theta > 0, M not a P-matrix; for the

@@ -12,7 +12,7 @@
 #ifndef CUP_DUAL_FACTOR_H
 #define CUP_DUAL_FACTOR_H
 
-#include "polyset_impl.h"
+#include "set/polyset_impl.h"
 
 typedef struct cup_dfact cup_dfact;
 

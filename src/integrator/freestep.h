@@ -8,8 +8,8 @@
 #define CUP_FREESTEP_H
 
 #include "catchup/integrator.h"
-#include "input_impl.h"
-#include "lcs_impl.h"
+#include "model/input_impl.h"
+#include "model/lcs_impl.h"
 
 /* Dense limits of the implicit and exponential schemes (the explicit scheme
  * has none: A stays sparse). */

@@ -8,7 +8,7 @@
 #include <gsl/gsl_integration.h>
 #include "catchup.h"
 #include "input_impl.h"
-#include "linalg.h"
+#include "util/linalg.h"
 
 #define TWO_PI 6.283185307179586476925286766559
 

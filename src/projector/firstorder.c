@@ -8,7 +8,8 @@
 #include <math.h>
 #include <string.h>
 #include "catchup.h"
-#include "projector_impl.h"
+#include "certify.h"
+#include "firstorder.h"
 
 #define SWAP(a, b) do { double *t_ = (a); (a) = (b); (b) = t_; } while (0)
 

@@ -12,8 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
+#include "certify.h"
 #include "dual_factor.h"
-#include "projector_impl.h"
+#include "newton.h"
 
 /* One dual problem: project xc onto {C y + g >= 0}, rows outside `rows`
  * ignored (NULL: all rows); the finishing solve aims the free rows' slack at

@@ -1,12 +1,14 @@
-/* Internal layout of cup_projector, shared by projector.c (set-up, skip,
- * certificates), proj_firstorder.c (pg, fista) and proj_activeset.c. */
-#ifndef CUP_PROJECTOR_IMPL_H
-#define CUP_PROJECTOR_IMPL_H
+/* proj_ws — the internal layout of cup_projector and the workspaces of its
+ * methods: types only, the lowest header of the projector, included by the
+ * certificates (certify.h) and through them by every method and the
+ * dispatcher. */
+#ifndef CUP_PROJ_WS_H
+#define CUP_PROJ_WS_H
 
 #include <stdint.h>
 #include <cholmod.h>
 #include "catchup/projector.h"
-#include "polyset_impl.h"
+#include "set/polyset_impl.h"
 
 #define CUP_DENSE_CACHE 4
 
@@ -20,7 +22,7 @@ typedef struct dense_fact {
   unsigned stamp;     /* for least-recently-used replacement */
 } dense_fact;
 
-/* Iterate and scratch of one projected-Newton solve (proj_newton.c). */
+/* Iterate and scratch of one projected-Newton solve (newton.c). */
 typedef struct pn_ws {
   double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
   double *y2, *s2, *gam2;           /* line-search trial */
@@ -28,7 +30,7 @@ typedef struct pn_ws {
   unsigned char *act, *prev;        /* free set, and the previous one */
 } pn_ws;
 
-/* The sparse exact path (proj_newton.c): the dual factor and the iterates
+/* The sparse exact path (newton.c): the dual factor and the iterates
  * of the main and the inward-anchor solves. */
 typedef struct newton_ws {
   struct cup_dfact *df;
@@ -72,36 +74,12 @@ struct cup_projector {
   dense_fact cache[CUP_DENSE_CACHE];
   unsigned stamp;
   double *dwork;        /* m*m + m scratch */
-  /* small dense sets, auto: exact principal pivoting on the dual (theta.c) */
-  struct cup_theta *th;
+  /* small dense sets, auto: the dual LCP solved exactly (lcp/step.c, W = I, h = 1) */
+  struct cup_lcp_step *small;
   /* sparse Newton */
   newton_ws *nw;
   /* statistics of the current call */
   int iters, facts, updates;
 };
-
-/* u = P^-1 v in place (any metric), allocation-free. */
-void cup_metric_solve(cup_projector *p, double *v);
-/* y = x + P^-1 C^T lam, s = C y + g with rounding bounds gam. */
-void cup_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
-                     double *y, double *s, double *gam);
-/* Certificates for candidate (lam, z) with slack s, gam at z; fills info's
- * eps_cert, eta_cert, violation, dual_value; sets p->v/has_v. Returns 1 when
- * both targets are met. */
-int cup_certify(cup_projector *p, const double *x, const double *lam,
-                const double *z, cup_proj_info *info);
-/* Farkas test on a direction dlam >= 0 (copied into p->farkas when it
- * certifies emptiness); returns 1 if K is declared empty. */
-int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info);
-
-/* Methods: each fills p->lam (>= 0) and p->y = z with certificates in info,
- * and returns a status. b = s(x) is in p->b. The first-order methods start
- * from p->lam and stop after `budget` iterations. */
-int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
-                        int budget, cup_proj_info *info);
-int cup_proj_dense_activeset(cup_projector *p, const double *x, cup_proj_info *info);
-int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *info);
-int cup_newton_create(cup_projector *p, char *errmsg);
-void cup_newton_free(cup_projector *p);
 
 #endif

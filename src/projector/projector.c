@@ -1,16 +1,17 @@
 /* projector — certified (eps, eta)-approximate projections onto a polyset
  * (paper, Sec. 2 definition; Sec. 7 dual method). This file: set-up, the
- * skip path, and the certificates every method returns through. */
-#include <float.h>
+ * skip path, and the choice of method; the certificates every method
+ * returns through are in certify.c, below the methods. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
 #include "catchup/projector.h"
-#include "projector_impl.h"
-#include "theta.h"
-
-#define U DBL_EPSILON
+#include "certify.h"
+#include "firstorder.h"
+#include "activeset.h"
+#include "newton.h"
+#include "lcp/step.h"
 
 void cup_projector_options_default(cup_projector_options *o) {
   if (!o) return;
@@ -136,10 +137,9 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
     if (st) { cup_projector_free(&p); return st; }
   }
   if (K->dense && m > 0 && o.method == CUP_PROJ_AUTO) {
-    p->th = calloc(1, sizeof *p->th);
-    int st = p->th ? cup_theta_init_set(p->th, K, NULL, 1.0, errmsg)
-                   : cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
-    if (st) { cup_projector_free(&p); return st; }
+    p->small = calloc(1, sizeof *p->small);
+    int st = p->small ? cup_lcp_step_init(p->small, K, NULL, 1.0) : CUP_ERR_NOMEM;
+    if (st) { cup_projector_free(&p); return cup_fail(errmsg, st, "projector: out of memory"); }
   }
   *out = p;
   return CUP_OK;
@@ -149,8 +149,8 @@ void cup_projector_free(cup_projector **pp) {
   if (!pp || !*pp) return;
   cup_projector *p = *pp;
   cup_newton_free(p);
-  if (p->th) cup_theta_free(p->th);
-  free(p->th);
+  if (p->small) cup_lcp_step_free(p->small);
+  free(p->small);
   free(p->g); free(p->lam); free(p->lam_warm); free(p->lam_fista); free(p->b); free(p->s); free(p->gam);
   free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->s_v); free(p->anchor);
   free(p->s_anchor); free(p->user_pt); free(p->s_user); free(p->inward); free(p->s_inward); free(p->farkas);
@@ -194,7 +194,7 @@ int cup_projector_offer_feasible(cup_projector *p, const double *w) {
 
 void cup_projector_reset(cup_projector *p) {
   if (p && p->m) memset(p->lam_warm, 0, sizeof(double) * (size_t)p->m);
-  if (p && p->th) memset(p->th->prev, 0, (size_t)p->m);
+  if (p && p->small) cup_lcp_forget(&p->small->lcp);
 }
 
 const double *cup_projector_lambda(const cup_projector *p) { return p ? p->lam : NULL; }
@@ -203,217 +203,11 @@ const double *cup_projector_feasible(const cup_projector *p) {
 }
 const double *cup_projector_farkas(const cup_projector *p) { return p ? p->farkas : NULL; }
 
-/* ---- linear algebra on the projector's workspace ------------------------------ */
-
-void cup_metric_solve(cup_projector *p, double *v) {
-  const cup_polyset *K = p->K;
-  if (K->pkind == CUP_METRIC_SPARSE) cup_simplicial_solve(K->LP, v, p->wn2);
-  else cup_metric_solve_diag(K, v);
-}
-
-void cup_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
-                     double *y, double *s, double *gam) {
-  const cup_polyset *K = p->K;
-  int n = p->n;
-  if (K->dense) {
-    memset(p->u, 0, sizeof(double) * (size_t)n);
-    for (int i = 0; i < p->m; i++) {
-      double li = lam[i];
-      if (li == 0) continue;
-      const double *bt = K->Bt + (size_t)i * n;
-      for (int j = 0; j < n; j++) p->u[j] += bt[j] * li;
-    }
-  } else {
-    cup_sparse_gatxy(&K->C, lam, p->u);     /* C^T lam by column gathers */
-    cup_metric_solve(p, p->u);
-  }
-  for (int j = 0; j < n; j++) y[j] = x[j] + p->u[j];
-  cup_slack(K, g, y, s, gam);
-}
-
-/* ---- certificates ------------------------------------------------------------- */
-
-/* Check a trial point: slack and rounding bound into sv/gamv; 1 if certainly
- * feasible. */
-static int verify_feasible(cup_projector *p, const double *w) {
-  return cup_slack(p->K, p->g, w, p->sv, p->gamv) >= 0;
-}
-
-/* Is a stored anchor (user point or last feasible point) valid for the
- * current offset? Checks lazily after the offset changed. */
-static int anchor_valid(cup_projector *p, const double *w, double *sw, int *state) {
-  if (*state == -1) {
-    double *gw = p->gamv;
-    *state = cup_slack(p->K, p->g, w, sw, gw) >= 0 ? 1 : 0;
-  }
-  return *state == 1;
-}
-
-/* Segment z -> w (w certainly feasible with slack sw): the first point whose
- * slack beats its rounding bound. Writes the trial into p->wn; returns the
- * distance ||z - trial||_P, or INFINITY. */
-static double segment_to(cup_projector *p, const double *z, const double *w,
-                         const double *sw) {
-  double t = 0;
-  for (int i = 0; i < p->m; i++) {
-    double si = p->s[i], gi = p->gam[i];
-    if (si - gi >= 0) continue;
-    if (sw[i] > 3 * gi) t = fmax(t, (3 * gi - si) / (sw[i] - si));
-    else t = 1;
-  }
-  if (!(t <= 1)) t = 1;
-  for (int j = 0; j < p->n; j++) p->wn[j] = z[j] + t * (w[j] - z[j]);
-  if (t < 1 && !verify_feasible(p, p->wn)) {
-    t = 1;
-    memcpy(p->wn, w, sizeof(double) * (size_t)p->n);
-    if (!verify_feasible(p, p->wn)) return INFINITY;
-  } else if (t == 1 && !verify_feasible(p, p->wn)) {
-    return INFINITY;
-  }
-  for (int j = 0; j < p->n; j++) p->wn2[j] = p->wn[j] - z[j];
-  return cup_polyset_norm(p->K, p->wn2);
-}
-
-/* Push along the interior direction d (C d > 0): v = z + theta d. */
-static double push_along_direction(cup_projector *p, const double *z) {
-  const cup_polyset *K = p->K;
-  if (!K->rdir) return INFINITY;
-  double theta = 0;
-  for (int i = 0; i < p->m; i++) {
-    double si = p->s[i], gi = p->gam[i];
-    if (si - gi >= 0) continue;
-    if (!(K->Crdir[i] > 0)) return INFINITY;
-    theta = fmax(theta, (3 * gi - si) / K->Crdir[i]);
-  }
-  for (int attempt = 0; attempt < 4; attempt++) {
-    for (int j = 0; j < p->n; j++) p->wn[j] = z[j] + theta * K->rdir[j];
-    if (verify_feasible(p, p->wn)) return theta * K->rdir_norm * (1 + 8 * U);
-    theta = 2 * theta + DBL_MIN;
-  }
-  return INFINITY;
-}
-
-/* Keep the trial point in p->wn (slack in p->sv) if it is the nearest yet. */
-static void keep_candidate(cup_projector *p, double dist, double *best) {
-  if (dist < *best) {
-    *best = dist;
-    cup_copy(p->v, p->wn, p->n);
-    cup_copy(p->s_v, p->sv, p->m);
-    p->has_v = 1;
-  }
-}
-
-/* A bound on ||z - y(lam)||_P for z = fl(x + u): a few ulps of ||x||_P <= scale
- * and of ||u||_P = un, times P's condition for a sparse metric (its solve is
- * backward stable). */
-static double z_rounding(const cup_polyset *K, double scale, double un) {
-  return 8 * U * (scale + K->solve_amp * un);
-}
-
-/* ||z - x||_P (scratch p->wn2). */
-static double step_norm(cup_projector *p, const double *z, const double *x) {
-  for (int j = 0; j < p->n; j++) p->wn2[j] = z[j] - x[j];
-  return cup_polyset_norm(p->K, p->wn2);
-}
-
-int cup_certify(cup_projector *p, const double *x, const double *lam,
-                const double *z, cup_proj_info *info) {
-  const cup_polyset *K = p->K;
-  int n = p->n, m = p->m;
-  /* z = fl(x + u): the exact y(lam) = x + P^-1 C^T lam differs from z by e,
-   * bounded elementwise by a few ulps of |x| + |u| (times P's condition for
-   * a sparse metric, whose solve is backward stable). */
-  double un = z != x ? step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
-  double ebound = z_rounding(K, info->scale, un);
-  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0;
-  for (int i = 0; i < m; i++) {
-    eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
-    viol = cup_max(viol, -p->s[i]);
-    double sl = p->s[i] - p->gam[i];
-    if (isnan(sl) || sl < worst) worst = sl;   /* a NaN row stays the minimum */
-    dq -= 2 * lam[i] * p->b[i];
-  }
-  info->violation = viol;
-  info->eps_cert = isnan(eps_z) ? NAN : cup_max(eps_z, 0);
-  /* 2 q(lambda) = -||u||_P^2 - 2 lam^T b, reported as a lower bound on d^2. */
-  info->dual_value = dq - un * un;
-
-  p->has_v = 0;
-  double eta = INFINITY;
-  /* d_K(z) >= max_i violation_i / ||c_i||_{P^-1} (each halfspace contains K):
-   * when that already exceeds the target, no anchor can help */
-  double dlow = 0;
-  for (int i = 0; i < m; i++)
-    if (p->s[i] < 0 && K->rownorm[i] > 0) dlow = cup_max(dlow, -p->s[i] / K->rownorm[i]);
-  if (worst >= 0) {
-    eta = 0;
-  } else if (dlow > info->eta_target) {
-    eta = INFINITY;
-  } else {
-    double best = INFINITY;
-    keep_candidate(p, push_along_direction(p, z), &best);
-    if (!(best <= info->eta_target) && p->make_inward && !p->has_inward) {
-      int it = p->iters;
-      p->make_inward(p);               /* certification work, not dual iterations */
-      p->iters = it;
-    }
-    if (!(best <= info->eta_target) && p->has_inward &&
-        cup_slack(K, p->g, p->inward, p->s_inward, p->gamv) >= 0)
-      keep_candidate(p, segment_to(p, z, p->inward, p->s_inward), &best);
-    if (!(best <= info->eta_target) && p->user_pt &&
-        anchor_valid(p, p->user_pt, p->s_user, &p->user_ok))
-      keep_candidate(p, segment_to(p, z, p->user_pt, p->s_user), &best);
-    if (!(best <= info->eta_target) &&
-        anchor_valid(p, p->anchor, p->s_anchor, &p->anchor_ok))
-      keep_candidate(p, segment_to(p, z, p->anchor, p->s_anchor), &best);
-    eta = best;
-  }
-  info->eta_cert = eta;
-  if (p->opt.return_feasible && p->has_v) {
-    /* eps for v: 2 lam^T s(v) + ||v - y||_P^2, no cancellation; s(v) is
-     * at most s_v plus its rounding bound */
-    verify_feasible(p, p->v);
-    double ev = 0;
-    for (int i = 0; i < m; i++) ev += 2 * lam[i] * (p->sv[i] + p->gamv[i]);
-    double dv = eta + ebound;
-    info->eps_cert = fmax(ev + dv * dv, 0);
-    info->eta_cert = 0;
-  }
-  /* Remember a certainly feasible point as the next anchor. */
-  if (worst >= 0 || p->has_v) {
-    cup_copy(p->anchor, worst >= 0 ? z : p->v, n);
-    cup_copy(p->s_anchor, worst >= 0 ? p->s : p->s_v, m);
-    p->anchor_ok = 1;
-  }
-  return info->eps_cert <= info->eps_target && info->eta_cert <= info->eta_target;
-}
-
-int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
-  const cup_polyset *K = p->K;
-  double sum = 0, gy = 0;
-  for (int i = 0; i < p->m; i++) {
-    if (dlam[i] < 0) return 0;
-    sum += dlam[i];
-    gy += p->g[i] * dlam[i];
-  }
-  if (!(sum > 0) || !(gy < 0)) return 0;
-  cup_sparse_gatxy(&K->C, dlam, p->wn);          /* r = C^T y */
-  memcpy(p->u, p->wn, sizeof(double) * (size_t)p->n);
-  cup_metric_solve(p, p->u);                     /* ||r||_{P^-1}^2 = r^T P^-1 r */
-  double rr = sqrt(fmax(cup_dot(p->wn, p->u, p->n), 0));
-  double radius = rr > 0 ? -gy / rr : INFINITY;
-  if (!(radius > 1e6 * fmax(info->scale, DBL_MIN))) return 0;
-  for (int i = 0; i < p->m; i++) p->farkas[i] = dlam[i] / sum;
-  info->farkas_gap = gy / sum;
-  info->farkas_residual = rr / sum;
-  return 1;
-}
-
 /* ---- the projection ----------------------------------------------------------- */
 
 /* Small dense sets, auto method: the dual LCP solved exactly by principal
  * pivoting (closed form on one or two active rows), the rows aimed a few
- * ulps inside K, as the theta scheme's step with W = I and h = 1. z is then
+ * ulps inside K: the LCP step (lcp/step.h) with W = I and h = 1. z is then
  * certainly in K (eta = 0) and eps is the weak-duality gap, as cup_certify
  * computes it. Returns 1 with z and info filled when that certifies the
  * targets; 0 leaves everything to the general path (a singular block, a
@@ -421,23 +215,24 @@ int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
 static int project_small(cup_projector *p, const double *x, double *z, cup_proj_info *info) {
   const cup_polyset *K = p->K;
   int n = p->n, m = p->m;
-  if (!p->opt.warm_start) memset(p->th->prev, 0, (size_t)m);
+  if (!p->opt.warm_start) cup_lcp_forget(&p->small->lcp);
   cup_proj_info ti;
-  if (cup_theta_step(p->th, p->g, x, p->y, info->scale, info->eps_target, info->eta_target, &ti))
+  if (cup_lcp_step_solve(p->small, p->g, x, p->y, info->scale, info->eps_target, info->eta_target,
+                         &ti))
     return 0;
-  double un = ti.skipped ? 0 : step_norm(p, p->y, x);   /* ||z - x||_P */
-  double ebound = ti.skipped ? 0 : z_rounding(K, info->scale, un);
+  double un = ti.skipped ? 0 : cup_step_norm(p, p->y, x);   /* ||z - x||_P */
+  double ebound = ti.skipped ? 0 : cup_z_rounding(K, info->scale, un);
   double eps = ti.eps_cert + ebound * ebound;
   if (!(eps <= info->eps_target)) return 0;
   info->eps_cert = eps;
   info->eta_cert = ti.eta_cert;
   info->violation = ti.violation;
-  info->dual_value = -2 * p->th->lq - un * un;
+  info->dual_value = -2 * p->small->lq - un * un;
   info->skipped = ti.skipped;
   info->iterations = ti.iterations;
   info->active = ti.active;
   info->method = ti.skipped ? p->opt.method : CUP_PROJ_ACTIVESET;
-  memcpy(p->lam, p->th->lam, sizeof(double) * (size_t)m);
+  memcpy(p->lam, p->small->lcp.lam, sizeof(double) * (size_t)m);
   if (p->opt.warm_start && !ti.skipped) memcpy(p->lam_warm, p->lam, sizeof(double) * (size_t)m);
   memcpy(z, p->y, sizeof(double) * (size_t)n);
   info->status = CUP_OK;
@@ -470,7 +265,7 @@ int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *inf
     info->farkas_residual = 0;
     return info->status = CUP_ERR_EMPTY_SET;
   }
-  if (p->th && !p->user_pt && !p->opt.return_feasible && project_small(p, x, z, info))
+  if (p->small && !p->user_pt && !p->opt.return_feasible && project_small(p, x, z, info))
     return CUP_OK;
   cup_slack(K, p->g, x, p->b, p->gam);
   double worst_raw = INFINITY;

@@ -1,14 +1,16 @@
 /* Exact projection for small sets (m <= 64): an active-set method on the dual
  *   min_{lambda >= 0}  1/2 lambda' M lambda + lambda' b,  M = C P^-1 C^T,
  * b = C x + g, with a dense M and cached pivoted Cholesky factors of M_FF;
- * the sparse path is in proj_newton.c. The dense path falls back to FISTA
+ * the sparse path is in newton.c. The dense path falls back to FISTA
  * (which also detects an empty K) and restarts from its support, so the
  * method always ends certified or with the bounds reached. */
 #include <float.h>
 #include <math.h>
 #include <string.h>
 #include "catchup.h"
-#include "projector_impl.h"
+#include "certify.h"
+#include "activeset.h"
+#include "firstorder.h"
 
 #define U DBL_EPSILON
 

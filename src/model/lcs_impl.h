@@ -3,7 +3,7 @@
 #define CUP_LCS_IMPL_H
 
 #include "catchup/lcs.h"
-#include "linalg.h"
+#include "util/linalg.h"
 
 struct cup_lcs {
   int n, m, p;

@@ -6,7 +6,7 @@
 #include <string.h>
 #include "catchup.h"
 #include "lcs_impl.h"
-#include "polyset_impl.h"
+#include "set/polyset_impl.h"
 
 static int present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
 

@@ -1,0 +1,62 @@
+/* sweep_manager — what rank 0 of catchup-sweep does with jobs and results,
+ * MPI aside: the queue of jobs, each result into the results file
+ * (src/io/sweep_h5.c), the tasks' errors against their variant's reference
+ * (held in memory until it is known when no trajectories are stored), the
+ * regular flush and the progress line. The MPI protocol that brings the
+ * results, and the run itself, are in catchup-sweep.c. */
+#ifndef CUP_SWEEP_MANAGER_H
+#define CUP_SWEEP_MANAGER_H
+
+#include <stddef.h>
+#include <time.h>
+#include "sweep.h"
+
+enum { MAX_BATCH = 256 };    /* jobs per batch, at most */
+
+typedef struct held { long task; sw_result r; double *traj; struct held *next; } held;
+
+typedef struct {
+  int quiet, log_progress;   /* the command line's --quiet, --log-progress */
+  const cup_sweep *s;
+  sw_file *f;
+  long count;                /* samples * dim */
+  size_t one;                /* bytes of one job's answer: sw_result + trajectory */
+  int max_batch;             /* jobs per batch: MAX_BATCH, fewer for long trajectories */
+  long *queue;               /* jobs to dispatch, in order */
+  long qhead, qlen;
+  double *cost;              /* per job */
+  double cost_left, cost_done;
+  long jobs_total, jobs_done, jobs_skipped, failures;
+  double t_start, last_flush, last_progress, busy, work_sum, cpu_sum;
+  held **held;               /* per variant: results waiting for the reference (no /runs/x) */
+  double *scratch;           /* samples * dim */
+  int io_status;
+  char io_msg[SW_ERR_LEN];
+} manager_t;
+
+static inline double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The queue (jobs not done yet, in sw_schedule's order) and its costs;
+ * CUP_OK or CUP_ERR_NOMEM. free_manager releases what the manager holds. */
+int setup_queue(manager_t *m);
+void free_manager(manager_t *m);
+/* Keep the first failure of the results file (or st, out of memory). */
+void io_fail(manager_t *m, int st);
+/* The reference of variant k is known: fill in its tasks' errors. */
+void fill_errors(manager_t *m, int k);
+/* One job's result (and trajectory, samples * dim) into the file. */
+void take_result(manager_t *m, const sw_result *r, const double *traj);
+/* Every result of one worker's message. */
+void take_message(manager_t *m, const char *buf, size_t size);
+/* The next batch for one of `workers` workers into ids; its length. */
+int next_batch(manager_t *m, int workers, long *ids);
+/* The progress line (final: the last one, always printed unless quiet). */
+void progress(manager_t *m, int final);
+/* Flush the results file every FLUSH_SECONDS (force: now). */
+void maybe_flush(manager_t *m, int force);
+
+#endif

@@ -1,0 +1,20 @@
+/* scene_shape — a KEY=VALUE override names the shape its user wants, so
+ * the scene's value of another shape gives way (an st_reshape_fn for
+ * st_apply_override): `circuit` and `lcs` replace each other; output.samples=2
+ * replaces output: {every: 1} (one mode at a time); projector.max_iter=50
+ * turns projector: fista into {method: fista, max_iter: 50}; lcs.A.file=a.mtx
+ * replaces an inline A (and every matrix, F and x0 the same); input....type=pwl
+ * drops the fields the old waveform had and the new one does not take.
+ * Internal to the library. */
+#ifndef CUP_SCENE_SHAPE_H
+#define CUP_SCENE_SHAPE_H
+
+#include "catchup/input.h"
+#include "scene_tree.h"
+
+/* The keys of an input term mapping, by waveform (CUP_WAVE_LIST order). */
+extern const char *const scene_wave_keys[CUP_WAVE_COUNT][5];
+
+int scene_reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k);
+
+#endif

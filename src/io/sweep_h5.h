@@ -1,0 +1,114 @@
+/* sweep_h5 — what sweep_h5.c and sweep_h5_create.c share: the results file
+ * of a sweep (docs/sweep-format.md, "Output").
+ *
+ * Crash safety by a fixed layout instead of SWMR. Everything that is
+ * metadata — every group, dataset, attribute, the /variants table with its
+ * variable-length strings, the task parameters in /summary — is written when
+ * the file is created, followed by one H5Fflush. Every dataset is contiguous
+ * and allocated early (at its full size, filled with NaN or the pending
+ * rows), and object modification times are not tracked, so afterwards a
+ * result only overwrites raw bytes at fixed offsets: no B-tree, heap or
+ * object header changes ever again. The file uses the 1.8 format (superblock
+ * version 0: no "open for writing" flag, so no h5clear after a kill; the
+ * same lesson as h5run.c). HDF5's sieve buffer is switched off so that every
+ * H5Dwrite reaches the operating system when it returns, in our order: a
+ * task's trajectory first, then its /summary row with done = 1. A process
+ * killed at any point therefore leaves a file that opens as is, with every
+ * row whose done flag is 1 complete (strace shows two pwrites per task after
+ * the first flush, and H5Fclose rewriting an identical superblock). H5Fflush
+ * still runs regularly (it
+ * writes nothing here but is what HDF5 promises consistency for), and does
+ * not fsync: a machine crash may lose what the OS had not written.
+ *
+ * The full allocation at creation also means the disk cannot fill up during
+ * the run (HDF5 1.10 cannot close a file after a failed write, h5run.c). */
+#ifndef CUP_SWEEP_H5_H
+#define CUP_SWEEP_H5_H
+
+#include <stdint.h>
+#include <hdf5.h>
+#include "sweep.h"
+
+#define FORMAT_NAME "catchup-sweep 1"
+
+/* One /summary row in memory (the file type is the same, packed). */
+typedef struct sw_row {
+  int64_t task_id;
+  int32_t variant;
+  char variant_name[SW_NAME_LEN];
+  int64_t n;
+  char eps[SW_SPEC_LEN];
+  double eps_value;
+  char eta[SW_SPEC_LEN];
+  double eta_value;
+  char scheme[SW_WORD_LEN];
+  char projector[SW_WORD_LEN];
+  int32_t status;
+  char status_name[SW_STATUS_LEN];
+  char message[SW_MSG_LEN];
+  int32_t error_code;
+  double wall_time_s, error, max_eps_cert, max_eta_cert;
+  int64_t projected, skipped, not_certified, dual_iterations, factorizations, stopped_step;
+  int8_t done;
+} sw_row;
+
+typedef struct sw_refrow {
+  int32_t variant;
+  char variant_name[SW_NAME_LEN];
+  int64_t n_ref;
+  int32_t status;
+  char status_name[SW_STATUS_LEN];
+  char message[SW_MSG_LEN];
+  double wall_time_s, correction, max_eps_cert, max_eta_cert;
+  int64_t dual_iterations;
+  int8_t done;
+} sw_refrow;
+
+struct sw_file {
+  const cup_sweep *s;
+  char *path;
+  hid_t file, summary, runs_x, ref_x, ref_summary;
+  hid_t row_t, refrow_t;           /* memory types */
+  hid_t dxpl;                      /* small conversion buffers (see file_new) */
+  int failed;                      /* an HDF5 call failed: only close is attempted */
+  int8_t *done;                    /* per task */
+  int32_t *status;
+  double *error;
+  int8_t *ref_done;                /* per variant */
+  double **xref;                   /* per variant, samples * dim, NULL while unknown */
+  char errmsg[SW_ERR_LEN];
+};
+
+typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
+
+static inline quiet_t quiet_begin(void) {
+  quiet_t q = {NULL, NULL};
+  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+  return q;
+}
+
+static inline void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
+
+/* Keep the innermost HDF5 error as "PATH: cannot OP: detail" (the first
+ * one only); the file is then failed: only close is attempted. */
+int sw_h5_fail(sw_file *f, const char *op);
+/* The message for a file another process holds (path, what we tried). */
+#define SW_IN_USE_FMT "%s: cannot %s: the file is in use by another process (HDF5 file locking; another " \
+  "catchup-sweep may be writing it): wait for that run to end, or stop it, then --resume; the file is " \
+  "left as it was"
+/* Fixed-length (NUL-terminated) and variable-length (UTF-8) string types. */
+hid_t sw_h5_str(size_t size);
+hid_t sw_h5_vlen_str(void);
+/* Format 1.8, no sieve buffer: raw writes go out at once, in order. */
+hid_t sw_h5_access(void);
+void sw_copy_str(char *dst, size_t size, const char *src);
+/* A task's row before it ran: its parameters, status "pending". */
+void sw_pending_row(const cup_sweep *s, long id, sw_row *r);
+/* Rows at..at+count-1 of a one-dimensional compound dataset. */
+int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const void *buf, hid_t dxpl);
+/* The state in memory (no file yet), or NULL; sw_h5_file_free closes what is open. */
+sw_file *sw_h5_file_new(const cup_sweep *s, const char *path);
+void sw_h5_file_free(sw_file *f);
+
+#endif

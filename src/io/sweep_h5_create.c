@@ -1,0 +1,328 @@
+/* sweep_h5_create — creating the results file of a sweep: every group,
+ * dataset and attribute, the /variants table and the pending /summary rows
+ * are written here, up front, then flushed once; afterwards sweep_h5.c
+ * only overwrites raw bytes (the design is in sweep_h5.h). */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <libgen.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <hdf5.h>
+#include "file_in_use.h"
+#include "sweep_h5.h"
+
+#define SPACE_MARGIN (8.0 * 1048576)
+
+typedef struct sw_varrow {
+  int32_t variant;
+  char name[SW_NAME_LEN];
+  char *scene_file, *overrides, *scene;
+  int64_t n_ref;
+} sw_varrow;
+
+
+static hid_t varrow_type(void) {
+  hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_varrow));
+  hid_t sname = sw_h5_str(SW_NAME_LEN), vs = sw_h5_vlen_str();
+  H5Tinsert(T, "variant", HOFFSET(sw_varrow, variant), H5T_NATIVE_INT32);
+  H5Tinsert(T, "name", HOFFSET(sw_varrow, name), sname);
+  H5Tinsert(T, "scene_file", HOFFSET(sw_varrow, scene_file), vs);
+  H5Tinsert(T, "overrides", HOFFSET(sw_varrow, overrides), vs);
+  H5Tinsert(T, "scene", HOFFSET(sw_varrow, scene), vs);
+  H5Tinsert(T, "n_ref", HOFFSET(sw_varrow, n_ref), H5T_NATIVE_INT64);
+  H5Tclose(sname);
+  H5Tclose(vs);
+  return T;
+}
+
+/* Contiguous, allocated (and filled) at creation, no modification times. */
+static hid_t fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
+                           hid_t fill_type, const void *fill) {
+  hid_t space = H5Screate_simple(rank, dims, NULL);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_layout(dcpl, H5D_CONTIGUOUS);
+  H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_EARLY);
+  H5Pset_obj_track_times(dcpl, 0);
+  if (fill) {
+    H5Pset_fill_value(dcpl, fill_type, fill);
+    H5Pset_fill_time(dcpl, H5D_FILL_TIME_ALLOC);
+  }
+  hid_t d = H5Dcreate2(loc, name, ftype, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  H5Pclose(dcpl);
+  H5Sclose(space);
+  return d;
+}
+
+static hid_t fixed_group(hid_t loc, const char *name) {
+  hid_t gcpl = H5Pcreate(H5P_GROUP_CREATE);
+  H5Pset_obj_track_times(gcpl, 0);
+  hid_t g = H5Gcreate2(loc, name, H5P_DEFAULT, gcpl, H5P_DEFAULT);
+  H5Pclose(gcpl);
+  return g;
+}
+
+static int attr_write(hid_t loc, const char *name, hid_t type, int rank, hsize_t len, const void *buf) {
+  hid_t space = rank ? H5Screate_simple(1, &len, NULL) : H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+  int ok = a >= 0 && H5Awrite(a, type, buf) >= 0;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  return ok ? 0 : -1;
+}
+
+static int attr_str(hid_t loc, const char *name, const char *v) {
+  hid_t t = sw_h5_vlen_str();
+  int r = attr_write(loc, name, t, 0, 0, &v);
+  H5Tclose(t);
+  return r;
+}
+
+static int attr_i64(hid_t loc, const char *name, int64_t v) {
+  return attr_write(loc, name, H5T_NATIVE_INT64, 0, 0, &v);
+}
+
+static int attr_f64(hid_t loc, const char *name, double v) {
+  return attr_write(loc, name, H5T_NATIVE_DOUBLE, 0, 0, &v);
+}
+
+static int attr_strs(hid_t loc, const char *name, const char *const *v, int len) {
+  hid_t t = sw_h5_vlen_str();
+  int r = attr_write(loc, name, t, 1, (hsize_t)len, v);
+  H5Tclose(t);
+  return r;
+}
+
+static const char *const reference_method =
+  "per variant: Richardson extrapolation x_ref = 2 x(2 n_ref) - x(n_ref) of two exact-projection "
+  "(eps = eta = 0, certified to rounding) explicit catching-up runs, at the common sample times "
+  "t_j = j T / (samples - 1); n_ref is a multiple of samples - 1 (auto: the smallest one >= 4 x the "
+  "largest n of the variant's tasks). The scheme is first order, so the extrapolation removes the 1/n "
+  "term; /references/summary 'correction' = max |x(2 n_ref) - x(n_ref)| bounds what it removed.";
+
+static int write_grid_attrs(hid_t root, const cup_sweep *s) {
+  int r = 0;
+  if (s->len[SW_AXIS_N]) {
+    int64_t *n = malloc(sizeof *n * (size_t)s->len[SW_AXIS_N]);
+    if (!n) return -1;
+    for (int k = 0; k < s->len[SW_AXIS_N]; k++) n[k] = s->n[k];
+    r |= attr_write(root, "grid_n", H5T_NATIVE_INT64, 1, (hsize_t)s->len[SW_AXIS_N], n);
+    free(n);
+  }
+  if (s->len[SW_AXIS_EPS]) r |= attr_strs(root, "grid_eps", (const char *const *)s->eps, s->len[SW_AXIS_EPS]);
+  if (s->len[SW_AXIS_ETA]) r |= attr_strs(root, "grid_eta", (const char *const *)s->eta, s->len[SW_AXIS_ETA]);
+  int ls = s->len[SW_AXIS_SCHEME], lp = s->len[SW_AXIS_PROJECTOR];
+  const char **w = malloc(sizeof *w * (size_t)(ls > lp ? ls : lp) + 1);
+  if (!w) return -1;
+  for (int k = 0; k < ls; k++) w[k] = cup_scheme_name(s->scheme[k]);
+  if (ls) r |= attr_strs(root, "grid_scheme", w, ls);
+  for (int k = 0; k < lp; k++) w[k] = cup_proj_method_name(s->projector[k]);
+  if (lp) r |= attr_strs(root, "grid_projector", w, lp);
+  free(w);
+  char *g = sw_grid_text(s);
+  r |= g ? attr_str(root, "grid", g) : -1;
+  free(g);
+  return r;
+}
+
+static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance *p) {
+  char created[64];
+  time_t now = time(NULL);
+  struct tm tm;
+  gmtime_r(&now, &tm);
+  strftime(created, sizeof created, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  int r = attr_str(root, "format", FORMAT_NAME);
+  r |= attr_str(root, "catchup_version", p->catchup_version);
+  r |= attr_str(root, "dependency_versions", p->dependency_versions);
+  r |= attr_str(root, "git_revision", p->git_revision);
+  r |= attr_str(root, "command", p->command ? p->command : "");
+  r |= attr_str(root, "created", created);
+  r |= attr_str(root, "sweep_name", s->name);
+  r |= attr_str(root, "sweep_file", s->path);
+  r |= attr_str(root, "sweep_text", s->text);
+  r |= attr_str(root, "sweep_sha256", s->sha256);
+  r |= attr_str(root, "reference_method", reference_method);
+  r |= attr_i64(root, "samples", s->samples);
+  r |= attr_i64(root, "output_samples", s->out_samples);
+  r |= attr_f64(root, "T", s->T);
+  r |= attr_i64(root, "dim", s->dim);
+  r |= attr_i64(root, "n_variants", s->n_variants);
+  r |= attr_i64(root, "n_tasks", s->n_tasks);
+  return r | write_grid_attrs(root, s);
+}
+
+static int create_summary(sw_file *f) {
+  const cup_sweep *s = f->s;
+  hsize_t N = (hsize_t)s->n_tasks;
+  hid_t ft = H5Tcopy(f->row_t);
+  H5Tpack(ft);
+  f->summary = fixed_dataset(f->file, "summary", ft, 1, &N, 0, NULL);
+  H5Tclose(ft);
+  if (f->summary < 0) return sw_h5_fail(f, "create /summary in");
+  enum { BLOCK = 1024 };
+  sw_row *rows = malloc(sizeof *rows * BLOCK);
+  if (!rows) return CUP_ERR_NOMEM;
+  int st = CUP_OK;
+  for (hsize_t at = 0; at < N && !st; at += BLOCK) {
+    hsize_t cnt = N - at < BLOCK ? N - at : BLOCK;
+    for (hsize_t k = 0; k < cnt; k++) sw_pending_row(s, (long)(at + k), &rows[k]);
+    if (sw_h5_write_rows(f->summary, f->row_t, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, "write /summary in");
+  }
+  free(rows);
+  return st;
+}
+
+static int create_references(sw_file *f, hid_t g) {
+  const cup_sweep *s = f->s;
+  double nan = NAN;
+  hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
+  f->ref_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
+  if (f->ref_x < 0) return sw_h5_fail(f, "create /references/x in");
+  hid_t ft = H5Tcopy(f->refrow_t);
+  H5Tpack(ft);
+  f->ref_summary = fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
+  H5Tclose(ft);
+  if (f->ref_summary < 0) return sw_h5_fail(f, "create /references/summary in");
+  sw_refrow *rows = calloc(V, sizeof *rows);
+  if (!rows) return CUP_ERR_NOMEM;
+  for (hsize_t k = 0; k < V; k++) {
+    rows[k].variant = (int32_t)k;
+    sw_copy_str(rows[k].variant_name, sizeof rows[k].variant_name, s->var[k].name);
+    rows[k].n_ref = s->var[k].n_ref;
+    rows[k].status = CUP_ERR_INTERRUPTED;
+    sw_copy_str(rows[k].status_name, sizeof rows[k].status_name, "pending");
+    rows[k].wall_time_s = rows[k].correction = rows[k].max_eps_cert = rows[k].max_eta_cert = NAN;
+  }
+  int st = sw_h5_write_rows(f->ref_summary, f->refrow_t, 0, V, rows, H5P_DEFAULT) ? sw_h5_fail(f, "write /references/summary in") : 0;
+  free(rows);
+  return st;
+}
+
+static char *join_overrides(const sw_variant *v) {
+  size_t len = 1;
+  for (int j = 0; j < v->n_set; j++) len += strlen(v->set[j]) + 2;
+  char *s = malloc(len);
+  if (!s) return NULL;
+  s[0] = '\0';
+  for (int j = 0; j < v->n_set; j++) {
+    if (j) strcat(s, "; ");
+    strcat(s, v->set[j]);
+  }
+  return s;
+}
+
+static int create_variants(sw_file *f) {
+  const cup_sweep *s = f->s;
+  hsize_t V = (hsize_t)s->n_variants;
+  hid_t mt = varrow_type();
+  f->failed |= mt < 0;
+  sw_varrow *rows = calloc(V, sizeof *rows);
+  int st = rows ? CUP_OK : CUP_ERR_NOMEM;
+  for (hsize_t k = 0; k < V && !st; k++) {
+    const sw_variant *v = &s->var[k];
+    rows[k].variant = (int32_t)k;
+    sw_copy_str(rows[k].name, sizeof rows[k].name, v->name);
+    rows[k].scene_file = v->scene_file;
+    rows[k].scene = v->scene_text;
+    rows[k].n_ref = v->n_ref;
+    if (!(rows[k].overrides = join_overrides(v))) st = CUP_ERR_NOMEM;
+  }
+  hid_t d = -1;
+  if (!st) {
+    hid_t ft = H5Tcopy(mt);
+    H5Tpack(ft);
+    d = fixed_dataset(f->file, "variants", ft, 1, &V, 0, NULL);
+    H5Tclose(ft);
+    if (d < 0 || sw_h5_write_rows(d, mt, 0, V, rows, H5P_DEFAULT)) st = sw_h5_fail(f, "write /variants in");
+  }
+  if (d >= 0) H5Dclose(d);
+  for (hsize_t k = 0; rows && k < V; k++) free(rows[k].overrides);
+  free(rows);
+  H5Tclose(mt);
+  return st;
+}
+
+static int create_layout(sw_file *f, const sw_provenance *p) {
+  const cup_sweep *s = f->s;
+  if (write_root_attrs(f->file, s, p)) return sw_h5_fail(f, "write attributes in");
+  int st = create_variants(f);
+  if (!st) st = create_summary(f);
+  hid_t g = st ? -1 : fixed_group(f->file, "runs");
+  if (!st && g < 0) st = sw_h5_fail(f, "create /runs in");
+  if (!st) {
+    hsize_t S = (hsize_t)s->samples;
+    double *t = malloc(sizeof(double) * S);
+    if (!t) st = CUP_ERR_NOMEM;
+    for (hsize_t j = 0; t && j < S; j++)    /* t_j = j T / (S - 1), t_{S-1} = T exactly */
+      t[j] = j + 1 == S ? s->T : (double)j * (s->T / (double)(S - 1));
+    hid_t d = st ? -1 : fixed_dataset(g, "t", H5T_IEEE_F64LE, 1, &S, 0, NULL);
+    if (!st && (d < 0 || H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t) < 0))
+      st = sw_h5_fail(f, "write /runs/t in");
+    if (d >= 0) H5Dclose(d);
+    free(t);
+  }
+  if (!st && s->out_samples > 0) {
+    double nan = NAN;
+    hsize_t dims[3] = {(hsize_t)s->n_tasks, (hsize_t)s->samples, (hsize_t)s->dim};
+    f->runs_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
+    if (f->runs_x < 0) st = sw_h5_fail(f, "create /runs/x in");
+  }
+  if (g >= 0) H5Gclose(g);
+  g = st ? -1 : fixed_group(f->file, "references");
+  if (!st && g < 0) st = sw_h5_fail(f, "create /references in");
+  if (!st) st = create_references(f, g);
+  if (g >= 0) H5Gclose(g);
+  if (!st && H5Fflush(f->file, H5F_SCOPE_LOCAL) < 0) st = sw_h5_fail(f, "flush");
+  return st;
+}
+
+static double file_bytes(const cup_sweep *s) {
+  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16);
+  double traj = (double)s->samples * s->dim * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
+  return rows + traj + 65536.0 + 2.0 * strlen(s->text);
+}
+
+int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw_provenance *p, char *errmsg) {
+  *out = NULL;
+  struct stat sb;
+  if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode)) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: not a regular file", path);
+    return CUP_ERR_IO;
+  }
+  if (cup_file_in_use(path)) {
+    snprintf(errmsg, SW_ERR_LEN, SW_IN_USE_FMT, path, "create");
+    return CUP_ERR_IO;
+  }
+  char *copy = strdup(path);
+  struct statvfs v;
+  double need = file_bytes(s);
+  if (copy && statvfs(dirname(copy), &v) == 0 && v.f_blocks &&
+      (double)v.f_bavail * (double)v.f_frsize < need + SPACE_MARGIN) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.0f MiB and its device has %.0f MiB free "
+             "(store fewer samples: output.samples)", path, need / 1048576,
+             (double)v.f_bavail * (double)v.f_frsize / 1048576);
+    free(copy);
+    return CUP_ERR_IO;
+  }
+  free(copy);
+  sw_file *f = sw_h5_file_new(s, path);
+  if (!f) { snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
+  quiet_t q = quiet_begin();
+  hid_t fapl = sw_h5_access();
+  f->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  int st = f->file < 0 ? sw_h5_fail(f, "create") : create_layout(f, p);
+  H5Pclose(fapl);
+  quiet_end(q);
+  if (st) {
+    snprintf(errmsg, SW_ERR_LEN, "%s", f->errmsg[0] ? f->errmsg : "out of memory");
+    sw_h5_file_free(f);
+    return st;
+  }
+  *out = f;
+  return CUP_OK;
+}
+

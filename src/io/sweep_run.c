@@ -1,0 +1,160 @@
+/* sweep_run — one job of a sweep (sweep.h): a task, or a variant's
+ * reference (Richardson extrapolation of two exact runs), run by the
+ * integrator on the variant's scene and sampled at the common times. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "sweep.h"
+
+static double clock_seconds(clockid_t id) {
+  struct timespec ts;
+  clock_gettime(id, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double now_seconds(void) { return clock_seconds(CLOCK_MONOTONIC); }
+
+/* Step nearest to t_j = j T / (S - 1) on the grid t_k = k T / n: round(j n / (S - 1)),
+ * halves rounded up, in integers. */
+static long nearest_step(long j, long n, long S1) {
+  return (long)((2 * (long long)j * n + S1) / (2 * (long long)S1));
+}
+
+typedef struct {
+  long S, n, next;
+  int dim;
+  double *traj;
+} sampler;
+
+static int sample_sink(long k, double t, const double *x, void *ctx) {
+  (void)t;
+  sampler *sp = ctx;
+  while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) < k) sp->next++;
+  while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) {
+    memcpy(sp->traj + sp->next * sp->dim, x, sizeof(double) * (size_t)sp->dim);
+    sp->next++;
+  }
+  return 0;
+}
+
+/* Fails once t reaches T/2: exercises a real mid-run failure (tests). */
+typedef struct { double half; int dim; } failing;
+
+static int failing_rhs(double t, const double *x, double *f, void *ctx) {
+  (void)x;
+  const failing *fc = ctx;
+  for (int i = 0; i < fc->dim; i++) f[i] = 0;
+  return t >= fc->half;
+}
+
+typedef struct {
+  long n;
+  cup_schedule eps, eta;
+  int scheme, projector;
+  double time_limit;
+  int inject;
+} run_params;
+
+static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *rp, const sw_run_opts *ro,
+                    sw_result *r, double *traj) {
+  long S = s->samples, S1 = S - 1;
+  int dim = s->dim;
+  for (long j = 0; j < S * dim; j++) traj[j] = NAN;
+  cup_integrator_options o = *cup_scene_options(v->scene);
+  o.n = rp->n;
+  o.eps = rp->eps;
+  o.eta = rp->eta;
+  o.scheme = (cup_scheme)rp->scheme;
+  o.proj.method = (cup_proj_method)rp->projector;
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = rp->n % S1 == 0 ? rp->n / S1 : 1;
+  o.max_wall_seconds = rp->time_limit;
+  o.interrupt = ro ? ro->interrupt : NULL;
+  o.on_step = ro ? ro->on_step : NULL;
+  o.step_ctx = ro ? ro->step_ctx : NULL;
+  failing fc = {0.5 * o.T, dim};
+  if (rp->inject) { o.f = failing_rhs; o.f_ctx = &fc; }
+  double t0 = now_seconds(), c0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
+  cup_integrator *I = NULL;
+  char err[CUP_ERRMSG_LEN] = "";
+  r->status = cup_integrator_create(&I, cup_scene_lcs(v->scene), cup_scene_input(v->scene), &o, err);
+  if (r->status < 0) {
+    snprintf(r->message, sizeof r->message, "set-up: %.240s", err);
+    r->wall += now_seconds() - t0;
+    r->cpu += clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - c0;
+    return;
+  }
+  sampler sp = {S, rp->n, 0, dim, traj};
+  cup_run_info info;
+  r->status = cup_integrator_run(I, cup_scene_x0(v->scene), sample_sink, &sp, &info);
+  cup_integrator_free(&I);
+  r->wall += now_seconds() - t0;
+  r->cpu += clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - c0;
+  r->max_eps_cert = fmax(r->max_eps_cert, info.max_eps_cert);
+  r->max_eta_cert = fmax(r->max_eta_cert, info.max_eta_cert);
+  r->projected += info.projected;
+  r->skipped += info.skipped;
+  r->not_certified += info.not_certified;
+  r->dual_iterations += info.dual_iterations;
+  r->factorizations += info.factorizations;
+  r->stopped_step = info.step;
+  if (rp->inject && r->status == CUP_ERR_CALLBACK)
+    snprintf(r->message, sizeof r->message, "injected failure (CATCHUP_SWEEP_INJECT_FAIL): %.200s",
+             info.message);
+  else
+    snprintf(r->message, sizeof r->message, "%s", info.message);
+}
+
+double sw_max_error(const double *traj, const double *ref, long count) {
+  double e = 0;
+  for (long j = 0; j < count; j++) {
+    double d = fabs(traj[j] - ref[j]);
+    if (isnan(d)) return NAN;
+    if (d > e) e = d;
+  }
+  return e;
+}
+
+/* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection explicit
+ * runs; the scheme is first order, so this removes the 1/n term. */
+static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
+  const sw_variant *v = &s->var[k];
+  long count = s->samples * s->dim;
+  double *coarse = malloc(sizeof(double) * (size_t)count);
+  if (!coarse) {
+    r->status = CUP_ERR_NOMEM;
+    snprintf(r->message, sizeof r->message, "reference: out of memory");
+    return;
+  }
+  run_params rp = {v->n_ref, {0, 0}, {0, 0}, CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, 0, 0};
+  run_one(s, v, &rp, ro, r, coarse);
+  if (r->status >= 0) {
+    rp.n = 2 * v->n_ref;
+    run_one(s, v, &rp, ro, r, traj);
+  }
+  if (r->status >= 0) {
+    r->correction = sw_max_error(traj, coarse, count);
+    for (long j = 0; j < count; j++) traj[j] = 2 * traj[j] - coarse[j];
+  } else {
+    for (long j = 0; j < count; j++) traj[j] = NAN;
+  }
+  free(coarse);
+}
+
+void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {
+  memset(r, 0, sizeof *r);
+  r->job = job;
+  if (job < s->n_variants) { run_reference(s, (int)job, ro, r, traj); return; }
+  sw_task t;
+  if (sw_task_get(s, job - s->n_variants, &t)) {
+    r->status = CUP_ERR_ARG;
+    snprintf(r->message, sizeof r->message, "no such task %ld", (long)(job - s->n_variants));
+    return;
+  }
+  run_params rp = {t.n, t.eps_s, t.eta_s, t.scheme, t.projector, ro ? ro->task_time_limit : 0,
+                   ro ? ro->inject_fail : 0};
+  run_one(s, &s->var[t.variant], &rp, ro, r, traj);
+}

@@ -1,0 +1,94 @@
+/* lcp — see lcp.h. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "util/linalg.h"
+#include "lcp.h"
+
+int cup_lcp_init(cup_lcp *s, int m) {
+  memset(s, 0, sizeof *s);
+  s->m = m;
+  size_t M = (size_t)m + 1;
+  s->lam = calloc(M, sizeof(double)); s->w = calloc(M, sizeof(double));
+  s->rhs = calloc(M, sizeof(double)); s->lu = calloc(M * M, sizeof(double));
+  s->work = calloc(M, sizeof(double));
+  s->piv = calloc(M, sizeof(int)); s->idx = calloc(M, sizeof(int));
+  s->act = calloc(M, 1); s->prev = calloc(M, 1);
+  if (!s->lam || !s->w || !s->rhs || !s->lu || !s->work || !s->piv || !s->idx || !s->act || !s->prev)
+    return CUP_ERR_NOMEM;
+  return CUP_OK;
+}
+
+void cup_lcp_free(cup_lcp *s) {
+  free(s->lam); free(s->w); free(s->rhs); free(s->lu); free(s->work);
+  free(s->piv); free(s->idx); free(s->act); free(s->prev);
+  memset(s, 0, sizeof *s);
+}
+
+/* lambda on A from M_AA lambda_A = -q_A, 0 elsewhere, and w = q + M lambda.
+ * Returns nonzero for a singular block. */
+static int solve_on(cup_lcp *s, const double *M, const double *q) {
+  int m = s->m, k = 0;
+  for (int i = 0; i < m; i++) if (s->act[i]) s->idx[k++] = i;
+  for (int i = 0; i < m; i++) s->lam[i] = 0;
+  if (k == 1) {
+    int a = s->idx[0];
+    double d = M[a + (size_t)a * m];
+    if (!(d != 0)) return 1;
+    s->lam[a] = -q[a] / d;
+  } else if (k == 2) {
+    int a = s->idx[0], b = s->idx[1];
+    double maa = M[a + (size_t)a * m], mab = M[a + (size_t)b * m];
+    double mba = M[b + (size_t)a * m], mbb = M[b + (size_t)b * m];
+    double det = maa * mbb - mab * mba;
+    if (!(det != 0)) return 1;
+    s->lam[a] = (-q[a] * mbb + q[b] * mab) / det;
+    s->lam[b] = (-q[b] * maa + q[a] * mba) / det;
+  } else if (k) {
+    for (int b = 0; b < k; b++) {
+      s->rhs[b] = -q[s->idx[b]];
+      for (int a = 0; a < k; a++) s->lu[a + (size_t)b * k] = M[s->idx[a] + (size_t)s->idx[b] * m];
+    }
+    if (cup_dense_lu(s->lu, k, s->piv)) return 1;
+    cup_dense_lu_solve(s->lu, k, s->piv, s->rhs, s->work);
+    for (int b = 0; b < k; b++) s->lam[s->idx[b]] = s->rhs[b];
+  }
+  for (int i = 0; i < m; i++) {
+    double acc = q[i];
+    for (int b = 0; b < k; b++) acc += M[i + (size_t)s->idx[b] * m] * s->lam[s->idx[b]];
+    s->w[i] = acc;
+  }
+  return 0;
+}
+
+/* Murty's least-index principal pivoting from the active set in s->act. */
+static int murty(cup_lcp *s, const double *M, const double *q, int *pivots) {
+  int m = s->m;
+  double scale = 0;
+  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
+  for (int it = 0; it < 16 * m + 64; it++) {
+    if (solve_on(s, M, q)) return CUP_ERR_LINALG;
+    double lmax = 0;
+    for (int i = 0; i < m; i++) lmax = cup_max(lmax, fabs(s->lam[i]));
+    double tol_l = 64 * DBL_EPSILON * lmax, tol_w = 64 * DBL_EPSILON * scale;
+    int flip = -1;
+    for (int i = 0; i < m && flip < 0; i++)
+      if ((s->act[i] && s->lam[i] < -tol_l) || (!s->act[i] && s->w[i] < -tol_w)) flip = i;
+    if (flip < 0) return CUP_OK;
+    s->act[flip] = !s->act[flip];
+    (*pivots)++;
+  }
+  return CUP_ERR_LINALG;                          /* cycling: not a P-matrix */
+}
+
+int cup_lcp_solve(cup_lcp *s, const double *M, const double *q, int *pivots) {
+  memcpy(s->act, s->prev, (size_t)s->m);
+  for (int cold = 0;; cold++) {                   /* one call site: murty is inlined */
+    int st = murty(s, M, q, pivots);
+    if (st == CUP_OK) memcpy(s->prev, s->act, (size_t)s->m);
+    if (st != CUP_ERR_LINALG || cold) return st;
+    memset(s->act, 0, (size_t)s->m);
+  }
+}

@@ -1,0 +1,33 @@
+/* lcp — a small dense linear complementarity problem
+ *     0 <= lambda  _|_  w = q + M lambda >= 0,   M m x m, column-major,
+ * solved exactly by Murty's least-index principal pivoting (finite for a
+ * P-matrix). On the active set A, M_AA lambda_A = -q_A is solved in closed
+ * form for one or two rows (Cramer's rule is forward stable for 2 x 2), else
+ * by LU with partial pivoting (M need not be symmetric). Each solve starts
+ * from the active set of the last solution and is retried cold. Dense, for
+ * the few rows of circuit models; allocation-free after cup_lcp_init. */
+#ifndef CUP_LCP_H
+#define CUP_LCP_H
+
+#include <string.h>
+
+typedef struct cup_lcp {
+  int m;
+  double *lam, *w;          /* the solution and its slack w = q + M lambda */
+  double *rhs, *lu, *work;  /* scratch of the block solves */
+  int *piv, *idx;
+  unsigned char *act;       /* active set of the current solve */
+  unsigned char *prev;      /* active set of the last solution: the warm start */
+} cup_lcp;
+
+/* CUP_OK or CUP_ERR_NOMEM (then cup_lcp_free releases what was taken). */
+int cup_lcp_init(cup_lcp *s, int m);
+void cup_lcp_free(cup_lcp *s);
+/* lambda and w into s->lam, s->w; adds the pivots to *pivots. Returns CUP_OK,
+ * or CUP_ERR_LINALG for a singular principal block or cycling (M is not a
+ * P-matrix), leaving the warm start as it was. */
+int cup_lcp_solve(cup_lcp *s, const double *M, const double *q, int *pivots);
+/* The next solve starts cold. */
+static inline void cup_lcp_forget(cup_lcp *s) { memset(s->prev, 0, (size_t)s->m); }
+
+#endif

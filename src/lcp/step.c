@@ -1,0 +1,157 @@
+/* step — see step.h. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "step.h"
+
+int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h) {
+  memset(ls, 0, sizeof *ls);
+  if (!K->dense) return CUP_ERR_UNSUPPORTED;
+  int n = ls->n = K->n, m = ls->m = K->m;
+  ls->K = K;
+  ls->h = h;
+  size_t N = (size_t)n, M = (size_t)m + 1;
+  ls->H = calloc(N * M, sizeof(double));
+  ls->M = calloc(M * M, sizeof(double));
+  ls->s = calloc(M, sizeof(double)); ls->gam = calloc(M, sizeof(double));
+  ls->v = calloc(N, sizeof(double));
+  ls->tau = calloc(M, sizeof(double)); ls->qs = calloc(M, sizeof(double));
+  ls->sv = calloc(M, sizeof(double)); ls->gamv = calloc(M, sizeof(double));
+  int fail = cup_lcp_init(&ls->lcp, m);
+  if (fail || !ls->H || !ls->M || !ls->s || !ls->gam || !ls->v || !ls->tau || !ls->qs || !ls->sv ||
+      !ls->gamv)
+    return CUP_ERR_NOMEM;
+  /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T) */
+  for (int i = 0; i < m; i++)
+    for (int r = 0; r < n; r++) {
+      double acc = 0;
+      if (W)
+        for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * K->Bt[(size_t)i * n + c];
+      else
+        acc = K->Bt[(size_t)i * n + r];
+      ls->H[r + (size_t)i * n] = h * acc;
+    }
+  for (int j = 0; j < m; j++)                      /* M = C H */
+    for (int i = 0; i < m; i++) {
+      double acc = 0;
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * ls->H[K->Ct.i[k] + (size_t)j * n];
+      ls->M[i + (size_t)j * m] = acc;
+    }
+  return CUP_OK;
+}
+
+void cup_lcp_step_free(cup_lcp_step *ls) {
+  free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
+  free(ls->sv); free(ls->gamv);
+  cup_lcp_free(&ls->lcp);
+  memset(ls, 0, sizeof *ls);
+}
+
+/* A certified distance of z to K from its slack s (with rounding bounds
+ * gam): 0 when z is certainly in K, else a push along the polyset's
+ * direction into K, verified; INFINITY when neither works. */
+static double certified_eta(cup_lcp_step *ls, const double *g, const double *z) {
+  const cup_polyset *K = ls->K;
+  int n = ls->n, m = ls->m;
+  double worst = INFINITY;
+  for (int i = 0; i < m; i++) worst = cup_min(worst, ls->s[i] - ls->gam[i]);
+  if (worst >= 0) return 0;
+  if (!K->rdir) return INFINITY;
+  double t = 0;
+  for (int i = 0; i < m; i++)
+    if (ls->s[i] - ls->gam[i] < 0) {
+      if (!(K->Crdir[i] > 0)) return INFINITY;
+      t = cup_max(t, (3 * ls->gam[i] - ls->s[i]) / K->Crdir[i]);
+    }
+  for (int j = 0; j < n; j++) ls->v[j] = z[j] + t * K->rdir[j];
+  return cup_slack(K, g, ls->v, ls->sv, ls->gamv) >= 0 ? t * K->rdir_norm * (1 + 8 * DBL_EPSILON)
+                                                        : INFINITY;
+}
+
+int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
+                       double scale, double eps_target, double eta_target, cup_proj_info *info) {
+  const cup_polyset *K = ls->K;
+  int n = ls->n, m = ls->m;
+  double *lam = ls->lcp.lam;
+  *info = (cup_proj_info){0};
+  info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
+  info->eta_target = eta_target;
+  info->method = CUP_PROJ_ACTIVESET;
+  double probe = 0;                               /* NaN iff some entry is NaN or Inf */
+  for (int j = 0; j < n; j++) probe += 0 * xf[j];
+  if (isnan(probe)) return info->status = CUP_ERR_NONFINITE;
+  double *q = ls->s;                              /* q = C x_free + g */
+  cup_slack(K, g, xf, q, ls->gam);
+  info->scale = scale;
+  double qmin = INFINITY;
+  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
+  if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
+    cup_copy(z, xf, n);
+    cup_zero(lam, m);
+    ls->lq = 0;
+    info->skipped = 1;
+    info->eta_cert = certified_eta(ls, g, z);
+    return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  }
+  /* Aim the rows at slack tau = 16 gam (K shrunk by a few ulps): then z is
+   * certainly in K and certifies itself, as the projector's dense path does.
+   * A set without interior makes the shrunk problem unsolvable: then solve
+   * the exact one. Each try is warm-started, then retried cold. */
+  double *tau = ls->tau, *qs = ls->qs;
+  for (int i = 0; i < m; i++) {
+    tau[i] = 16 * ls->gam[i] + DBL_MIN;
+    qs[i] = q[i] - tau[i];
+  }
+  int pivots = 0, st = CUP_ERR_LINALG;
+  for (int aim = 1; aim >= 0 && st == CUP_ERR_LINALG; aim--) {
+    if (!aim) cup_zero(tau, m);
+    st = cup_lcp_solve(&ls->lcp, ls->M, aim ? qs : q, &pivots);
+  }
+  info->iterations = pivots + 1;
+  if (st) return info->status = st;
+  double lq = 0;
+  for (int i = 0; i < m; i++) {
+    lam[i] = cup_max(lam[i], 0);
+    lq += lam[i] * q[i];
+  }
+  ls->lq = lq;
+  cup_copy(z, xf, n);
+  for (int i = 0; i < m; i++) {
+    if (lam[i] == 0) continue;
+    for (int r = 0; r < n; r++) z[r] += ls->H[r + (size_t)i * n] * lam[i];
+  }
+  /* certificates from the slack of z itself */
+  cup_slack(K, g, z, ls->s, ls->gam);
+  double gap = 0, viol = 0;
+  int active = 0;
+  for (int i = 0; i < m; i++) {
+    gap += 2 * ls->h * lam[i] * (ls->s[i] + ls->gam[i]);   /* impulse mu = h lambda */
+    viol = cup_max(viol, -ls->s[i]);
+    active += lam[i] > 0;
+  }
+  info->active = active;
+  info->violation = viol;
+  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
+  if (eps_target < 0) {
+    /* exact: the active slacks are zero up to the rounding of forming
+     * z = xf + H lambda and its slack: rowgam_i (|g_i| + |c_i| (|xf| + |H| lambda)),
+     * with a factor 2 for the LU residual of lambda itself */
+    double *zmag = ls->v, floor = 0;
+    for (int r = 0; r < n; r++) zmag[r] = fabs(xf[r]);
+    for (int i = 0; i < m; i++)
+      if (lam[i] > 0)
+        for (int r = 0; r < n; r++) zmag[r] += fabs(ls->H[r + (size_t)i * n]) * lam[i];
+    for (int i = 0; i < m; i++) {
+      if (!(lam[i] > 0)) continue;
+      double mag = fabs(g[i]);
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) mag += fabs(K->Ct.x[k]) * zmag[K->Ct.i[k]];
+      floor += 2 * ls->h * lam[i] * (ls->gam[i] + 2 * K->rowgam[i] * mag + tau[i]);
+    }
+    info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
+  }
+  info->eta_cert = certified_eta(ls, g, z);
+  return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
+                            ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+}

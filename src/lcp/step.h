@@ -1,0 +1,51 @@
+/* step — the LCP of one step onto a polyset K = {x : C x + g >= 0}:
+ *     z = x_free + H lambda,  H = h W B,  B = P^-1 C^T,
+ *     0 <= lambda  _|_  w = C z + g >= 0,   an LCP with M = C H.
+ * With W = I and h = 1, z is the P-projection of x_free onto K and lambda
+ * the projector's multipliers (its exact path for small dense sets); the
+ * theta scheme (Moreau-Jean time stepping, as in Siconos's EulerMoreauOSI)
+ * takes W = (I - h theta A)^-1 from its free step, theta = 0 being the
+ * explicit catching-up step (M symmetric: the P-projection) and theta = 1/2
+ * second order where the solution is smooth. The LCP is
+ * solved exactly (lcp.h), warm-started from the previous active set, aiming
+ * the rows a few ulps inside K so that the answer is certainly feasible;
+ * dense, for sets with K->dense (m <= 64 rows and n <= 256). */
+#ifndef CUP_LCP_STEP_H
+#define CUP_LCP_STEP_H
+
+#include "catchup/projector.h"
+#include "set/polyset_impl.h"
+#include "lcp.h"
+
+typedef struct cup_lcp_step {
+  int n, m;
+  double h;
+  const cup_polyset *K;
+  double *H;        /* n x m, column-major */
+  double *M;        /* m x m, column-major */
+  cup_lcp lcp;      /* lambda of the last step in lcp.lam */
+  double *s, *gam, *v, *tau, *qs, *sv, *gamv;
+  double lq;        /* lambda^T q of the last step (q: the free point's slack) */
+} cup_lcp_step;
+
+/* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
+ * CUP_OK, CUP_ERR_UNSUPPORTED (K is not dense) or CUP_ERR_NOMEM; callers
+ * write the message, in their own name. */
+int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h);
+void cup_lcp_step_free(cup_lcp_step *ls);
+/* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
+ * reported in info->scale); eps_target < 0 asks for the exact solution:
+ * certified when the gap is below max(1e-12 scale^2, floor), the floor
+ * being the gap of slacks at the rounding bound of forming z = xf + H lambda
+ * and its slack, i.e. when the active rows' slacks are zero to rounding (a
+ * relative target alone fails whenever lambda is large: stiff steps, jumps);
+ * certificates in info:
+ * eps_cert = 2 mu^T (s + gam) with the impulse mu = h lambda (the
+ * complementarity gap, z = xf + W P^-1 C^T mu; for theta = 0 exactly the
+ * projector's weak-duality certificate), eta_cert a certified distance of z
+ * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a
+ * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */
+int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
+                       double scale, double eps_target, double eta_target, cup_proj_info *info);
+
+#endif

@@ -1,0 +1,206 @@
+/* certify — what every projection method returns through: the primal point
+ * of a dual iterate, the certificates of a candidate (paper, Sec. 2: eps by
+ * weak duality, eta by a certainly feasible point nearby) and the Farkas
+ * test of an empty K. Below the methods (firstorder.c, activeset.c,
+ * newton.c) and the dispatcher (projector.c), which all call it. */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include "catchup.h"
+#include "certify.h"
+
+#define U DBL_EPSILON
+
+/* ---- linear algebra on the projector's workspace ------------------------------ */
+
+void cup_metric_solve(cup_projector *p, double *v) {
+  const cup_polyset *K = p->K;
+  if (K->pkind == CUP_METRIC_SPARSE) cup_simplicial_solve(K->LP, v, p->wn2);
+  else cup_metric_solve_diag(K, v);
+}
+
+void cup_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
+                     double *y, double *s, double *gam) {
+  const cup_polyset *K = p->K;
+  int n = p->n;
+  if (K->dense) {
+    memset(p->u, 0, sizeof(double) * (size_t)n);
+    for (int i = 0; i < p->m; i++) {
+      double li = lam[i];
+      if (li == 0) continue;
+      const double *bt = K->Bt + (size_t)i * n;
+      for (int j = 0; j < n; j++) p->u[j] += bt[j] * li;
+    }
+  } else {
+    cup_sparse_gatxy(&K->C, lam, p->u);     /* C^T lam by column gathers */
+    cup_metric_solve(p, p->u);
+  }
+  for (int j = 0; j < n; j++) y[j] = x[j] + p->u[j];
+  cup_slack(K, g, y, s, gam);
+}
+
+/* ---- certificates ------------------------------------------------------------- */
+
+/* Check a trial point: slack and rounding bound into sv/gamv; 1 if certainly
+ * feasible. */
+static int verify_feasible(cup_projector *p, const double *w) {
+  return cup_slack(p->K, p->g, w, p->sv, p->gamv) >= 0;
+}
+
+/* Is a stored anchor (user point or last feasible point) valid for the
+ * current offset? Checks lazily after the offset changed. */
+static int anchor_valid(cup_projector *p, const double *w, double *sw, int *state) {
+  if (*state == -1) {
+    double *gw = p->gamv;
+    *state = cup_slack(p->K, p->g, w, sw, gw) >= 0 ? 1 : 0;
+  }
+  return *state == 1;
+}
+
+/* Segment z -> w (w certainly feasible with slack sw): the first point whose
+ * slack beats its rounding bound. Writes the trial into p->wn; returns the
+ * distance ||z - trial||_P, or INFINITY. */
+static double segment_to(cup_projector *p, const double *z, const double *w,
+                         const double *sw) {
+  double t = 0;
+  for (int i = 0; i < p->m; i++) {
+    double si = p->s[i], gi = p->gam[i];
+    if (si - gi >= 0) continue;
+    if (sw[i] > 3 * gi) t = fmax(t, (3 * gi - si) / (sw[i] - si));
+    else t = 1;
+  }
+  if (!(t <= 1)) t = 1;
+  for (int j = 0; j < p->n; j++) p->wn[j] = z[j] + t * (w[j] - z[j]);
+  if (t < 1 && !verify_feasible(p, p->wn)) {
+    t = 1;
+    memcpy(p->wn, w, sizeof(double) * (size_t)p->n);
+    if (!verify_feasible(p, p->wn)) return INFINITY;
+  } else if (t == 1 && !verify_feasible(p, p->wn)) {
+    return INFINITY;
+  }
+  for (int j = 0; j < p->n; j++) p->wn2[j] = p->wn[j] - z[j];
+  return cup_polyset_norm(p->K, p->wn2);
+}
+
+/* Push along the interior direction d (C d > 0): v = z + theta d. */
+static double push_along_direction(cup_projector *p, const double *z) {
+  const cup_polyset *K = p->K;
+  if (!K->rdir) return INFINITY;
+  double theta = 0;
+  for (int i = 0; i < p->m; i++) {
+    double si = p->s[i], gi = p->gam[i];
+    if (si - gi >= 0) continue;
+    if (!(K->Crdir[i] > 0)) return INFINITY;
+    theta = fmax(theta, (3 * gi - si) / K->Crdir[i]);
+  }
+  for (int attempt = 0; attempt < 4; attempt++) {
+    for (int j = 0; j < p->n; j++) p->wn[j] = z[j] + theta * K->rdir[j];
+    if (verify_feasible(p, p->wn)) return theta * K->rdir_norm * (1 + 8 * U);
+    theta = 2 * theta + DBL_MIN;
+  }
+  return INFINITY;
+}
+
+/* Keep the trial point in p->wn (slack in p->sv) if it is the nearest yet. */
+static void keep_candidate(cup_projector *p, double dist, double *best) {
+  if (dist < *best) {
+    *best = dist;
+    cup_copy(p->v, p->wn, p->n);
+    cup_copy(p->s_v, p->sv, p->m);
+    p->has_v = 1;
+  }
+}
+
+int cup_certify(cup_projector *p, const double *x, const double *lam,
+                const double *z, cup_proj_info *info) {
+  const cup_polyset *K = p->K;
+  int n = p->n, m = p->m;
+  /* z = fl(x + u): the exact y(lam) = x + P^-1 C^T lam differs from z by e,
+   * bounded elementwise by a few ulps of |x| + |u| (times P's condition for
+   * a sparse metric, whose solve is backward stable). */
+  double un = z != x ? cup_step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
+  double ebound = cup_z_rounding(K, info->scale, un);
+  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0;
+  for (int i = 0; i < m; i++) {
+    eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
+    viol = cup_max(viol, -p->s[i]);
+    double sl = p->s[i] - p->gam[i];
+    if (isnan(sl) || sl < worst) worst = sl;   /* a NaN row stays the minimum */
+    dq -= 2 * lam[i] * p->b[i];
+  }
+  info->violation = viol;
+  info->eps_cert = isnan(eps_z) ? NAN : cup_max(eps_z, 0);
+  /* 2 q(lambda) = -||u||_P^2 - 2 lam^T b, reported as a lower bound on d^2. */
+  info->dual_value = dq - un * un;
+
+  p->has_v = 0;
+  double eta = INFINITY;
+  /* d_K(z) >= max_i violation_i / ||c_i||_{P^-1} (each halfspace contains K):
+   * when that already exceeds the target, no anchor can help */
+  double dlow = 0;
+  for (int i = 0; i < m; i++)
+    if (p->s[i] < 0 && K->rownorm[i] > 0) dlow = cup_max(dlow, -p->s[i] / K->rownorm[i]);
+  if (worst >= 0) {
+    eta = 0;
+  } else if (dlow > info->eta_target) {
+    eta = INFINITY;
+  } else {
+    double best = INFINITY;
+    keep_candidate(p, push_along_direction(p, z), &best);
+    if (!(best <= info->eta_target) && p->make_inward && !p->has_inward) {
+      int it = p->iters;
+      p->make_inward(p);               /* certification work, not dual iterations */
+      p->iters = it;
+    }
+    if (!(best <= info->eta_target) && p->has_inward &&
+        cup_slack(K, p->g, p->inward, p->s_inward, p->gamv) >= 0)
+      keep_candidate(p, segment_to(p, z, p->inward, p->s_inward), &best);
+    if (!(best <= info->eta_target) && p->user_pt &&
+        anchor_valid(p, p->user_pt, p->s_user, &p->user_ok))
+      keep_candidate(p, segment_to(p, z, p->user_pt, p->s_user), &best);
+    if (!(best <= info->eta_target) &&
+        anchor_valid(p, p->anchor, p->s_anchor, &p->anchor_ok))
+      keep_candidate(p, segment_to(p, z, p->anchor, p->s_anchor), &best);
+    eta = best;
+  }
+  info->eta_cert = eta;
+  if (p->opt.return_feasible && p->has_v) {
+    /* eps for v: 2 lam^T s(v) + ||v - y||_P^2, no cancellation; s(v) is
+     * at most s_v plus its rounding bound */
+    verify_feasible(p, p->v);
+    double ev = 0;
+    for (int i = 0; i < m; i++) ev += 2 * lam[i] * (p->sv[i] + p->gamv[i]);
+    double dv = eta + ebound;
+    info->eps_cert = fmax(ev + dv * dv, 0);
+    info->eta_cert = 0;
+  }
+  /* Remember a certainly feasible point as the next anchor. */
+  if (worst >= 0 || p->has_v) {
+    cup_copy(p->anchor, worst >= 0 ? z : p->v, n);
+    cup_copy(p->s_anchor, worst >= 0 ? p->s : p->s_v, m);
+    p->anchor_ok = 1;
+  }
+  return info->eps_cert <= info->eps_target && info->eta_cert <= info->eta_target;
+}
+
+int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
+  const cup_polyset *K = p->K;
+  double sum = 0, gy = 0;
+  for (int i = 0; i < p->m; i++) {
+    if (dlam[i] < 0) return 0;
+    sum += dlam[i];
+    gy += p->g[i] * dlam[i];
+  }
+  if (!(sum > 0) || !(gy < 0)) return 0;
+  cup_sparse_gatxy(&K->C, dlam, p->wn);          /* r = C^T y */
+  memcpy(p->u, p->wn, sizeof(double) * (size_t)p->n);
+  cup_metric_solve(p, p->u);                     /* ||r||_{P^-1}^2 = r^T P^-1 r */
+  double rr = sqrt(fmax(cup_dot(p->wn, p->u, p->n), 0));
+  double radius = rr > 0 ? -gy / rr : INFINITY;
+  if (!(radius > 1e6 * fmax(info->scale, DBL_MIN))) return 0;
+  for (int i = 0; i < p->m; i++) p->farkas[i] = dlam[i] / sum;
+  info->farkas_gap = gy / sum;
+  info->farkas_residual = rr / sum;
+  return 1;
+}
+

@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# The layout check itself: on copies of the tree it must pass as the tree is
+# and fail, naming the culprit, on each injected violation: an include up the
+# chain, a cycle inside a folder, a public header reaching into src/, a file
+# outside the layers, src/ including apps/; and with objects, a call up the
+# chain and a circle of calls behind includes that look innocent.
+#
+#   selftest.sh SRCDIR [CC]
+set -u
+here=$(cd "$(dirname "$0")" && pwd)
+src=$1
+cc=${2:-cc}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+t=$work/t
+
+fail() { echo "selftest: $*"; exit 1; }
+fresh() { rm -rf "$t"; mkdir -p "$t"; cp -r "$src/src" "$src/apps" "$src/include" "$t/"; }
+expect_fail() {   # expect_fail WHAT TEXT [OBJECT...]
+  local what=$1 text=$2 out
+  shift 2
+  out=$(bash "$here/check.sh" "$t" "$@" 2>&1) && fail "$what: the check passed, expected a failure"
+  grep -qF -- "$text" <<< "$out" || fail "$what: the check failed without naming '$text': $out"
+  echo "selftest: $what: caught"
+}
+
+fresh
+bash "$here/check.sh" "$t" > /dev/null || fail "the tree as it is does not pass: $(bash "$here/check.sh" "$t")"
+
+fresh
+echo '#include "integrator/freestep.h"' >> "$t/src/set/polyset.c"
+expect_fail "include up the chain" "src/set/polyset.c:"
+
+fresh
+sed -i 's|^#include "proj_ws.h"|#include "proj_ws.h"\n#include "firstorder.h"|' "$t/src/projector/certify.h"
+expect_fail "cycle inside a folder" "cycle: "
+
+fresh
+echo '#include "set/polyset_impl.h"' >> "$t/include/catchup/polyset.h"
+expect_fail "public header reaching into src/" "include/catchup/polyset.h:"
+
+fresh
+touch "$t/src/stray.c"
+expect_fail "file outside the layers" "src/stray.c: not in a layer folder"
+
+fresh
+echo 'int app_helper(void);' > "$t/apps/app_helper.h"
+echo '#include "../../apps/app_helper.h"' >> "$t/src/io/scene.c"
+expect_fail "src/ including apps/" "src/io/scene.c:"
+
+# Objects: set/a calls projector/b (upward); projector/c and projector/d call
+# each other (a circle); projector/e calls set/f (fine).
+o=$work/obj
+mkdir -p "$o/set" "$o/projector"
+obj() { printf '%s\n' "$3" > "$work/$2.c" && "$cc" -c "$work/$2.c" -o "$o/$1/$2.c.o" || fail "cannot compile with $cc"; }
+obj set a 'void b(void); void a(void) { b(); }'
+obj projector b 'void b(void) {}'
+obj projector c 'void d(void); void c(void) { d(); }'
+obj projector d 'void c(void); void d(void) { c(); }'
+obj projector e 'void f(void); void e(void) { f(); }'
+obj set f 'void f(void) {}'
+fresh
+bash "$here/check.sh" "$t" "$o/projector/e.c.o;$o/set/f.c.o" > /dev/null ||
+  fail "a call down the chain fails the check"
+expect_fail "missing object" "no such object" "$o/set/none.c.o"
+expect_fail "call up the chain" "calls b of src/projector/b" "$o/set/a.c.o" "$o/projector/b.c.o"
+expect_fail "circle of calls" "cycle: src/projector/c -> src/projector/d -> src/projector/c" \
+  "$o/projector/c.c.o;$o/projector/d.c.o"
+echo "selftest: the layout check catches every injected violation"
