@@ -22,7 +22,8 @@ Schemes (--scheme):
                     x_{k+1} = argmin_{C y + G u(t_{k+1}) >= 0} (y - x_free)^T P (y - x_free),
                     solved exactly by enumerating the 4 active sets.
 
-Only the time loop is timed (time.perf_counter).  The input averages and e values are
+Only the time loop is timed (time.perf_counter).  The same model driven from C++, with
+no Python in the loop, is siconos_circuit.cpp; this driver cross-checks it.  The input averages and e values are
 tabulated with numpy before the loop (closed forms; see input_tables).  The state is
 stored only at times common to the grid k/n and the reference grid j/1000.
 
@@ -40,7 +41,13 @@ import subprocess
 import sys
 import time
 
-import numpy as np
+# Siconos calls BLAS on 2x2 and 3x3 blocks; a threaded OpenBLAS wakes its pool on
+# every call and doubles the cost of a step on a 2-core machine. OpenBLAS reads
+# this when it loads (numpy's import loads it), hence before the import; a value
+# the caller chose is kept. The C++ driver (siconos_circuit.cpp) does the same.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
 
 R1, R2, R3, L2, L3, C4 = 1.0, 2.0, 1.0, 1.0, 2.0, 1.0
 A = np.array([[0.0, 1.0, 0.0],
@@ -218,11 +225,12 @@ def main():
         np.savetxt(a.out_traj, np.column_stack([tt, X]), delimiter=",",
                    header="t,x1,x2,x3", comments="", fmt="%.17g")
     med = statistics.median(times)
-    res = {"case": a.case, "n": a.n, "scheme": a.scheme,
+    res = {"case": a.case, "n": a.n, "scheme": a.scheme, "driver": "python",
            "theta": a.theta if a.scheme == "siconos" else 0.0,
            "solver": a.solver if a.scheme == "siconos" else "active-set-enum",
            "reps": a.reps, "median_s": med, "times": times,
            "per_step_us": med / a.n * 1e6, "err_max": err, "n_compared": int(X.shape[0]),
+           "openblas_num_threads": os.environ["OPENBLAS_NUM_THREADS"],
            "siconos_version": siconos_version()}
     print(json.dumps(res))
 
