@@ -34,6 +34,16 @@ struct cup_polyset {
   double rdir_norm;    /* ||d||_P */
 };
 
+/* cup_polyset_create, with the dense form (Md, Bt, the interior direction)
+ * only when dense_ok: a polyset whose values change in place has none. */
+int cup_polyset_create_ex(cup_polyset **K, const cup_csc *C, const double *g,
+                          const cup_metric *P, int dense_ok, char *errmsg);
+/* The values of C (C.x and Ct.x, the pattern unchanged) were rewritten:
+ * recompute the row norms and the Lipschitz bound. Only for a polyset
+ * without the dense form and with a diagonal metric; work: 2 m + n doubles.
+ * Allocates nothing. */
+void cup_polyset_revalue(cup_polyset *K, double *work);
+
 /* P v into out (n entries). */
 void cup_metric_apply(const cup_polyset *K, const double *v, double *out);
 /* In place P^-1 v for IDENTITY/DIAGONAL metrics. SPARSE metrics go through
