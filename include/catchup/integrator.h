@@ -142,8 +142,9 @@ typedef struct cup_run_info {
   long samples;               /**< states passed to the sink */
   char message[256];          /**< what went wrong, with step and time */
   /* general sets (cup_integrator_create_process) */
-  long set_rebuilds;          /**< state polyset: steps whose new row patterns forced a new
-                                   symbolic analysis (and its allocations) */
+  long set_rebuilds;          /**< state polyset: symbolic analyses of the run (and their
+                                   allocations): the one at t = 0, then one per step whose rows
+                                   brought a pattern not in the pool */
   long max_rows;              /**< state polyset: the most rows of one step */
 } cup_run_info;
 
