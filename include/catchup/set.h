@@ -71,14 +71,21 @@ typedef struct cup_rowbuf cup_rowbuf;
  *  Returns CUP_OK, CUP_ERR_ARG (a column out of range or not increasing:
  *  the row is not added), CUP_ERR_NONFINITE or CUP_ERR_NOMEM. */
 int cup_rowbuf_add(cup_rowbuf *rows, int nnz, const int *cols, const double *vals, double offset);
+/** Announce a row pattern that may become a row soon (a contact just beyond
+ *  the margin): no constraint now. Such patterns join the factorization's
+ *  pool whenever a new row forces a new analysis anyway, so that the rows
+ *  they announce need none when they come. Columns as for cup_rowbuf_add. */
+int cup_rowbuf_expect(cup_rowbuf *rows, int nnz, const int *cols);
 /** Rows appended so far. */
 int cup_rowbuf_rows(const cup_rowbuf *rows);
 
 /** The rows of C(t, x): append them with cup_rowbuf_add (the buffer is
  *  empty on entry). Return 0, or nonzero to stop with CUP_ERR_CALLBACK.
- *  A row whose column pattern was seen before reuses that row's slot of the
- *  sparse factor; emitting rows for contacts about to form (a margin) keeps
- *  the patterns repeating. Callable from Fortran (bind(C)). */
+ *  A row whose column pattern was seen in the last steps reuses that row's
+ *  slot of the sparse factor (no allocation, no new symbolic analysis); a
+ *  new pattern costs a new analysis. Rows for contacts about to form (a
+ *  margin) and cup_rowbuf_expect for those a little farther keep the
+ *  patterns repeating. Callable from Fortran (bind(C)). */
 typedef int (*cup_rows_fn)(double t, const double *x, cup_rowbuf *rows, void *ctx);
 
 /** What a set is. A matrix with ncol = 0 is absent. Everything is copied,

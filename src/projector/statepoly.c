@@ -56,7 +56,7 @@ static int pool_polyset(cup_setproj *sp, cup_polyset **K, char *errmsg) {
     }
     cup_metric metric = {sp->S->K->pkind, sp->S->K->pd, {0}, 0};
     cup_csc view = {m, n, cp, ri, vx};
-    st = cup_polyset_create_ex(K, &view, g, &metric, 0, errmsg);
+    st = cup_polyset_create_ex(K, &view, g, &metric, 1, errmsg);
   }
   free(cp); free(ri); free(vx); free(g);
   return st;

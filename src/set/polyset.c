@@ -17,11 +17,11 @@ static void find_interior_direction(cup_polyset *K);
 
 int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
                        const cup_metric *P, char *errmsg) {
-  return cup_polyset_create_ex(out, C, g, P, 1, errmsg);
+  return cup_polyset_create_ex(out, C, g, P, 0, errmsg);
 }
 
 int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
-                          const cup_metric *P, int dense_ok, char *errmsg) {
+                          const cup_metric *P, int mutable_values, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: output pointer is NULL");
   *out = NULL;
   if (!C) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: C is NULL");
@@ -32,6 +32,10 @@ int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
   if (!K) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   K->n = C->ncol;
   K->m = C->nrow;
+  /* a bound recomputed at every step gets a few iterations (it is valid
+   * after any number; more only tighten it) */
+  K->mutable_values = mutable_values;
+  K->cw_iters = mutable_values ? 6 : 40;
   int st = cup_sparse_copy(&K->C, C, "C", K->m, K->n, errmsg);
   if (!st) st = cup_sparse_transpose(&K->Ct, &K->C);
   if (!st) {
@@ -57,7 +61,7 @@ int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
     K->solve_amp = r > 0 ? 1 / r : 1e16;
   }
   if (!st) st = row_norms_and_lipschitz(K, NULL, errmsg);
-  if (!st && dense_ok && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
+  if (!st && !mutable_values && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
     st = dense_setup(K, errmsg);
   if (st) { cup_polyset_free(&K); return st; }
   if (K->dense) find_interior_direction(K);
@@ -329,7 +333,7 @@ static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
 static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
                                double *v, double *w, double *tmp) {
   for (int i = 0; i < K->m; i++) v[i] = 1.0;
-  for (int it = 0; it < 40; it++) {
+  for (int it = 0; it < K->cw_iters; it++) {
     apply(K, W, v, w, tmp);
     double wmax = 0;
     for (int i = 0; i < K->m; i++) wmax = fmax(wmax, w[i]);

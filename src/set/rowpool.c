@@ -51,12 +51,12 @@ int cup_rowbuf_init(cup_rowbuf *rb, int n, int rows, int nnz) {
 }
 
 void cup_rowbuf_free(cup_rowbuf *rb) {
-  free(rb->ptr); free(rb->off); free(rb->col); free(rb->val);
+  free(rb->ptr); free(rb->off); free(rb->col); free(rb->val); free(rb->eptr); free(rb->ecol);
   memset(rb, 0, sizeof *rb);
 }
 
 void cup_rowbuf_clear(cup_rowbuf *rb) {
-  rb->m = rb->nnz = 0;
+  rb->m = rb->nnz = rb->me = rb->enz = 0;
   rb->ptr[0] = 0;
   rb->status = CUP_OK;
   rb->message[0] = '\0';
@@ -78,19 +78,26 @@ static int reject(cup_rowbuf *rb, int status, const char *fmt, ...) {
   return status;
 }
 
-int cup_rowbuf_add(cup_rowbuf *rb, int nnz, const int *cols, const double *vals, double offset) {
-  if (!rb) return CUP_ERR_ARG;
-  if (nnz < 0 || (nnz > 0 && (!cols || !vals)))
-    return reject(rb, CUP_ERR_ARG, "%d entries without columns or values", nnz);
-  if (!isfinite(offset)) return reject(rb, CUP_ERR_NONFINITE, "the offset is %g", offset);
+static int check_columns(cup_rowbuf *rb, int nnz, const int *cols) {
+  if (nnz < 0 || (nnz > 0 && !cols)) return reject(rb, CUP_ERR_ARG, "%d entries without columns", nnz);
   for (int k = 0; k < nnz; k++) {
     if (cols[k] < 0 || cols[k] >= rb->n)
       return reject(rb, CUP_ERR_ARG, "column %d is outside 0..%d", cols[k], rb->n - 1);
     if (k > 0 && cols[k] <= cols[k - 1])
       return reject(rb, CUP_ERR_ARG, "column %d after column %d (columns must increase)", cols[k], cols[k - 1]);
+  }
+  return CUP_OK;
+}
+
+int cup_rowbuf_add(cup_rowbuf *rb, int nnz, const int *cols, const double *vals, double offset) {
+  if (!rb) return CUP_ERR_ARG;
+  int st = check_columns(rb, nnz, cols);
+  if (st) return st;
+  if (nnz > 0 && !vals) return reject(rb, CUP_ERR_ARG, "%d entries without values", nnz);
+  if (!isfinite(offset)) return reject(rb, CUP_ERR_NONFINITE, "the offset is %g", offset);
+  for (int k = 0; k < nnz; k++)
     if (!isfinite(vals[k]))
       return reject(rb, CUP_ERR_NONFINITE, "the value in column %d is %g", cols[k], vals[k]);
-  }
   if (grow_rows(rb, rb->m + 1) || grow_entries(rb, rb->nnz + nnz))
     return reject(rb, CUP_ERR_NOMEM, "out of memory");
   if (nnz) {
@@ -100,6 +107,31 @@ int cup_rowbuf_add(cup_rowbuf *rb, int nnz, const int *cols, const double *vals,
   rb->off[rb->m] = offset;
   rb->nnz += nnz;
   rb->ptr[++rb->m] = rb->nnz;
+  return CUP_OK;
+}
+
+int cup_rowbuf_expect(cup_rowbuf *rb, int nnz, const int *cols) {
+  if (!rb) return CUP_ERR_ARG;
+  int st = check_columns(rb, nnz, cols);
+  if (st) return st;
+  if (rb->me + 2 > rb->ecap) {
+    int c = next_cap(rb->ecap, rb->me + 2);
+    int *p = realloc(rb->eptr, sizeof(int) * (size_t)c);
+    if (!p) return reject(rb, CUP_ERR_NOMEM, "out of memory");
+    rb->eptr = p;
+    rb->ecap = c;
+  }
+  if (rb->enz + nnz > rb->enzcap) {
+    int c = next_cap(rb->enzcap, rb->enz + nnz);
+    int *p = realloc(rb->ecol, sizeof(int) * (size_t)c);
+    if (!p) return reject(rb, CUP_ERR_NOMEM, "out of memory");
+    rb->ecol = p;
+    rb->enzcap = c;
+  }
+  if (rb->me == 0) rb->eptr[0] = 0;
+  if (nnz) memcpy(rb->ecol + rb->enz, cols, sizeof(int) * (size_t)nnz);
+  rb->enz += nnz;
+  rb->eptr[++rb->me] = rb->enz;
   return CUP_OK;
 }
 
@@ -127,10 +159,15 @@ void cup_rowpool_free(cup_rowpool *P) {
   memset(P, 0, sizeof *P);
 }
 
-static int same_pattern(const cup_rowpool *P, int s, const cup_rowbuf *rb, int r) {
-  int len = P->ptr[s + 1] - P->ptr[s];
-  if (len != rb->ptr[r + 1] - rb->ptr[r]) return 0;
-  return !memcmp(P->col + P->ptr[s], rb->col + rb->ptr[r], sizeof(int) * (size_t)len);
+/* A slot with this pattern (holding no row this step, if free_only), or -1. */
+static int find_slot(const cup_rowpool *P, const int *col, int len, int free_only) {
+  if (!P->m) return -1;
+  unsigned h = pattern_hash(col, len);
+  for (int s = P->head[h & (unsigned)(P->hsize - 1)]; s >= 0; s = P->next[s])
+    if (P->hash[s] == h && (!free_only || P->row_of[s] < 0) && P->ptr[s + 1] - P->ptr[s] == len &&
+        !memcmp(P->col + P->ptr[s], col, sizeof(int) * (size_t)len))
+      return s;
+  return -1;
 }
 
 int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
@@ -143,15 +180,14 @@ int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
   for (int s = 0; s < P->m; s++) P->row_of[s] = -1;
   int missing = 0;
   for (int r = 0; r < rb->m; r++) {
-    int s = -1;
-    if (P->m) {
-      unsigned h = pattern_hash(rb->col + rb->ptr[r], rb->ptr[r + 1] - rb->ptr[r]);
-      for (s = P->head[h & (unsigned)(P->hsize - 1)]; s >= 0; s = P->next[s])
-        if (P->hash[s] == h && P->row_of[s] < 0 && same_pattern(P, s, rb, r)) break;
-    }
+    int s = find_slot(P, rb->col + rb->ptr[r], rb->ptr[r + 1] - rb->ptr[r], 1);
     P->slot_of[r] = s;
     if (s >= 0) { P->row_of[s] = r; P->used[s] = step; }
     else missing++;
+  }
+  for (int e = 0; e < rb->me; e++) {        /* an expected pattern keeps its slot alive */
+    int s = find_slot(P, rb->ecol + rb->eptr[e], rb->eptr[e + 1] - rb->eptr[e], 0);
+    if (s >= 0) P->used[s] = step;
   }
   return missing;
 }
@@ -192,12 +228,27 @@ static int reserve(cup_rowpool *P, int m, int nnz) {
   return CUP_OK;
 }
 
+/* Append a slot of this pattern (room reserved) and hash it. */
+static void append_slot(cup_rowpool *P, const int *col, int len, long used, int old) {
+  int s = P->m++;
+  memcpy(P->col + P->nnz, col, sizeof(int) * (size_t)len);
+  P->nnz += len;
+  P->ptr[s + 1] = P->nnz;
+  unsigned h = pattern_hash(col, len);
+  P->hash[s] = h;
+  P->next[s] = P->head[h & (unsigned)(P->hsize - 1)];
+  P->head[h & (unsigned)(P->hsize - 1)] = s;
+  P->row_of[s] = -1;
+  P->used[s] = used;
+  P->old_of[s] = old;
+}
+
 int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
   /* the old slots to keep, and their patterns, before they are overwritten */
   int keep = 0, keep_nnz = 0;
   for (int s = 0; s < P->m; s++)
     if (P->row_of[s] < 0 && step - P->used[s] <= CUP_POOL_KEEP) { keep++; keep_nnz += P->ptr[s + 1] - P->ptr[s]; }
-  int m = rb->m + keep, nnz = rb->nnz + keep_nnz;
+  int m = rb->m + keep + rb->me, nnz = rb->nnz + keep_nnz + rb->enz;
   int *kptr = malloc(sizeof(int) * ((size_t)keep + 1)), *kcol = malloc(sizeof(int) * ((size_t)keep_nnz + 1));
   int *kold = malloc(sizeof(int) * ((size_t)keep + 1)), *rold = malloc(sizeof(int) * ((size_t)rb->m + 1));
   long *kused = malloc(sizeof(long) * ((size_t)keep + 1));
@@ -218,31 +269,19 @@ int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
     st = reserve(P, m, nnz);
   }
   if (!st) {
-    memcpy(P->ptr, rb->ptr, sizeof(int) * ((size_t)rb->m + 1));
-    memcpy(P->col, rb->col, sizeof(int) * (size_t)rb->nnz);
-    for (int q = 0; q < keep; q++) {
-      P->ptr[rb->m + q + 1] = rb->nnz + kptr[q + 1];
-      memcpy(P->col + rb->nnz + kptr[q], kcol + kptr[q], sizeof(int) * (size_t)(kptr[q + 1] - kptr[q]));
-    }
-    P->m = m;
-    P->nnz = nnz;
+    P->m = P->nnz = 0;
+    P->ptr[0] = 0;
     for (int k = 0; k < P->hsize; k++) P->head[k] = -1;
-    for (int s = m - 1; s >= 0; s--) {          /* chains in slot order */
-      unsigned h = pattern_hash(P->col + P->ptr[s], P->ptr[s + 1] - P->ptr[s]);
-      P->hash[s] = h;
-      P->next[s] = P->head[h & (unsigned)(P->hsize - 1)];
-      P->head[h & (unsigned)(P->hsize - 1)] = s;
-    }
     for (int r = 0; r < rb->m; r++) {
+      append_slot(P, rb->col + rb->ptr[r], rb->ptr[r + 1] - rb->ptr[r], step, rold[r]);
       P->row_of[r] = r;
-      P->used[r] = step;
-      P->old_of[r] = rold[r];
       P->slot_of[r] = r;
     }
-    for (int q = 0; q < keep; q++) {
-      P->row_of[rb->m + q] = -1;
-      P->used[rb->m + q] = kused[q];
-      P->old_of[rb->m + q] = kold[q];
+    for (int q = 0; q < keep; q++) append_slot(P, kcol + kptr[q], kptr[q + 1] - kptr[q], kused[q], kold[q]);
+    for (int e = 0; e < rb->me; e++) {
+      const int *col = rb->ecol + rb->eptr[e];
+      int len = rb->eptr[e + 1] - rb->eptr[e];
+      if (find_slot(P, col, len, 0) < 0) append_slot(P, col, len, step, -1);
     }
   }
   free(kptr); free(kcol); free(kold); free(rold); free(kused);

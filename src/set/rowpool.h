@@ -8,14 +8,16 @@
  * symbolic analysis of its dual matrix C P^-1 C^T is reused while every row
  * finds a slot. A pattern not in the pool rebuilds it (the one place that
  * allocates once the buffers have grown): the slots in use, the new rows,
- * and the slots used within the last CUP_POOL_KEEP steps. */
+ * the slots used within the last CUP_POOL_KEEP steps, and the patterns the
+ * callback expects soon (cup_rowbuf_expect), which then need no rebuild
+ * when they arrive. */
 #ifndef CUP_ROWPOOL_H
 #define CUP_ROWPOOL_H
 
 #include "catchup/set.h"
 
 /* Slots unused for more than this many steps are dropped at a rebuild. */
-#define CUP_POOL_KEEP 16
+#define CUP_POOL_KEEP 32
 
 struct cup_rowbuf {
   int n;                 /* columns */
@@ -25,6 +27,8 @@ struct cup_rowbuf {
   int *col;              /* nzcap */
   double *val;           /* nzcap */
   double *off;           /* cap: offsets */
+  int me, ecap, enz, enzcap;   /* expected patterns (cup_rowbuf_expect): count, capacities */
+  int *eptr, *ecol;
   int status;            /* first failed cup_rowbuf_add since the clear (CUP_OK if none) */
   char message[128];     /* what was wrong with it */
 };
@@ -56,7 +60,8 @@ void cup_rowpool_free(cup_rowpool *P);
  * CUP_ERR_NOMEM. */
 int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step);
 /* New slots: the rows of rb first (in order), then the slots used within
- * CUP_POOL_KEEP steps that hold no row now. Fills old_of and the matches. */
+ * CUP_POOL_KEEP steps that hold no row now, then the expected patterns not
+ * among them. Fills old_of and the matches. */
 int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step);
 
 #endif
