@@ -12,7 +12,8 @@ module catchup_integrator
   private
 
   public :: cup_schedule_parse, cup_schedule_value, cup_schedule_format, &
-    cup_integrator_options_default, cup_integrator_create, cup_integrator_free, &
+    cup_integrator_options_default, cup_integrator_create, cup_integrator_create_process, &
+    cup_integrator_free, &
     cup_integrator_run, cup_integrator_run_store, cup_integrator_state, &
     cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_run_info_message
 
@@ -108,6 +109,60 @@ contains
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_integrator_create
+
+  !> A general sweeping process x' in -N(S(t); x) + f(t, x) on the set S,
+  !> f = A x + E u(t) + f(t, x) (c_funloc of a procedure(cup_rhs_fn), with
+  !> f_ctx) + a term given by its exact integral (procedure(cup_rhs_integral_fn)).
+  !> A (n x n) and E (n x p) are dense and optional; u moves the set (its p
+  !> parameters) and drives E. S and u must outlive integ.
+  subroutine cup_integrator_create_process(integ, S, ierr, u, A, E, f, f_ctx, f_integral, &
+                                           f_integral_ctx, opt, errmsg)
+    type(cup_integrator_t), intent(out) :: integ
+    type(cup_set_t), intent(in) :: S
+    integer, intent(out) :: ierr
+    type(cup_input_t), intent(in), optional :: u
+    real(c_double), intent(in), optional :: A(:, :), E(:, :)
+    type(c_funptr), intent(in), optional :: f, f_integral
+    type(c_ptr), intent(in), optional :: f_ctx, f_integral_ctx
+    type(cup_integrator_options), intent(in), optional :: opt
+    character(len=*), intent(out), optional :: errmsg
+    type(cup_process_desc) :: d
+    type(cup_integrator_options) :: o
+    type(cup_csc_matrix), target :: cA, cE
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(S%ptr, 'integrator: set', ierr, errmsg)) return
+    if (present(opt)) then
+      o = opt
+    else
+      call c_cup_integrator_options_default(o)
+    end if
+    d%n = int(S%dim, c_int)
+    d%C = S%ptr
+    if (present(u)) then
+      d%u = u%ptr
+      d%p = c_cup_input_dim(u%ptr)
+    end if
+    if (present(A)) then
+      call cup_csc_from_dense(A, cA, ierr)
+      d%A = cup_csc_view(cA)
+    end if
+    if (present(E)) then
+      call cup_csc_from_dense(E, cE, ierr)
+      d%E = cup_csc_view(cE)
+    end if
+    if (present(f)) d%f = f
+    if (present(f_ctx)) d%f_ctx = f_ctx
+    if (present(f_integral)) d%f_integral = f_integral
+    if (present(f_integral_ctx)) d%f_integral_ctx = f_integral_ctx
+    cmsg = cup_errbuf_()
+    st = c_cup_integrator_create_process(integ%ptr, d, o, cmsg)
+    if (st == CUP_OK) then
+      integ%dim = S%dim
+      integ%expected = expected_samples(o)
+    end if
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_integrator_create_process
 
   !> Samples a complete run passes to the sink (integrator.h, output kinds).
   pure integer(c_long) function expected_samples(o) result(ns)
