@@ -286,8 +286,8 @@ contains
   subroutine cup_set_oracle_create(S, n, oracle, ctx, ierr, Pdiag, errmsg)
     type(cup_set_t), intent(out) :: S
     integer, intent(in) :: n
-    type(c_funptr), intent(in) :: oracle
-    type(c_ptr), intent(in) :: ctx
+    type(c_funptr), value :: oracle        ! VALUE: a c_funloc(...) actual needs no static temporary
+    type(c_ptr), value :: ctx
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional :: Pdiag(:)
     character(len=*), intent(out), optional :: errmsg
@@ -305,8 +305,8 @@ contains
   subroutine cup_set_state_polyset_create(S, n, rows, ctx, ierr, Pdiag, errmsg)
     type(cup_set_t), intent(out) :: S
     integer, intent(in) :: n
-    type(c_funptr), intent(in) :: rows
-    type(c_ptr), intent(in) :: ctx
+    type(c_funptr), value :: rows          ! VALUE, as the oracle
+    type(c_ptr), value :: ctx
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional :: Pdiag(:)
     character(len=*), intent(out), optional :: errmsg
