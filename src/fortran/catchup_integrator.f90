@@ -16,6 +16,8 @@ module catchup_integrator
     cup_integrator_free, &
     cup_integrator_run, cup_integrator_run_store, cup_integrator_state, &
     cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_run_info_message
+  ! for the other modules of the binding (not part of the documented API)
+  public :: cup_expected_samples_
 
   !> value(n) = coef * n^power, for a default-kind or a c_long n
   interface cup_schedule_value
@@ -105,7 +107,7 @@ contains
     st = c_cup_integrator_create(integ%ptr, L%ptr, up, o, cmsg)
     if (st == CUP_OK) then
       integ%dim = int(c_cup_lcs_dim(L%ptr))
-      integ%expected = expected_samples(o)
+      integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_integrator_create
@@ -159,13 +161,13 @@ contains
     st = c_cup_integrator_create_process(integ%ptr, d, o, cmsg)
     if (st == CUP_OK) then
       integ%dim = S%dim
-      integ%expected = expected_samples(o)
+      integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_integrator_create_process
 
   !> Samples a complete run passes to the sink (integrator.h, output kinds).
-  pure integer(c_long) function expected_samples(o) result(ns)
+  pure integer(c_long) function cup_expected_samples_(o) result(ns)
     type(cup_integrator_options), intent(in) :: o
     select case (o%output)
     case (CUP_OUTPUT_EVERY)
@@ -178,7 +180,7 @@ contains
     case default
       ns = 0
     end select
-  end function expected_samples
+  end function cup_expected_samples_
 
   subroutine cup_integrator_free(integ)
     type(cup_integrator_t), intent(inout) :: integ
