@@ -28,7 +28,7 @@ typedef struct cup_set cup_set;
   X(CUP_SET_POLYSET, 0, "polyset",                                                      \
     "{x : C x + F + G u(t) >= 0}: the dual projector (as for an LCS)")                  \
   X(CUP_SET_BALL, 1, "ball",                                                            \
-    "{x : ||x - c(t)||_P <= r(t)}: closed form")                                        \
+    "{x : dist_P(x, c(t)) <= r(t)}: closed form")                                        \
   X(CUP_SET_ELLIPSOID, 2, "ellipsoid",                                                  \
     "{x : (x - c(t))^T Q (x - c(t)) <= r(t)^2}: 1-D root find in the eigenbasis of (Q, P)") \
   X(CUP_SET_HALFSPACE, 3, "halfspace",                                                  \
