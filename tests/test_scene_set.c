@@ -89,12 +89,14 @@ static void test_rotating_disc_scene(void **state) {
 
 /* The same moving interval as an LCS: C = [1; -1], F = [1/2; 1/2],
  * G = [-1; 1] (K(t) = {|x - sin t| <= 1/2}), A = -1, P = 1. */
-static void test_interval_scene_is_the_lcs(void **state) {
-  (void)state;
+static void interval_against_lcs(const char *scheme) {
   long n;
   int dim;
   cup_run_info info;
-  double *x = run_scene(EX "/interval-relaxation.yaml", NULL, 0, &n, &dim, &info);
+  char ovr[64];
+  snprintf(ovr, sizeof ovr, "scheme=%s", scheme);
+  const char *ovrs[1] = {ovr};
+  double *x = run_scene(EX "/interval-relaxation.yaml", ovrs, 1, &n, &dim, &info);
   double A[1] = {-1}, C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};
   tcsc As, Cs, Gs;
   tcsc_from_dense(&As, A, 1, 1);
@@ -112,13 +114,14 @@ static void test_interval_scene_is_the_lcs(void **state) {
   cup_integrator_options_default(&o);
   o.T = 4 * M_PI;
   o.n = n;
+  o.scheme = (cup_scheme)cup_scheme_parse(scheme);
   cup_integrator *I;
   assert_int_equal(cup_integrator_create(&I, L, u, &o, err), CUP_OK);
   traj_ctx c = {n, 1, calloc((size_t)n + 1, sizeof(double))};
   assert_true(cup_integrator_run(I, (double[]){0}, keep, &c, &info) >= 0);
   double diff = 0;
   for (long k = 0; k <= n; k++) diff = fmax(diff, fabs(x[k] - c.traj[k]));
-  printf("  interval-relaxation.yaml against the LCS: max difference %.3g\n", diff);
+  printf("  interval-relaxation.yaml (%s) against the LCS: max difference %.3g\n", scheme, diff);
   assert_true(diff <= 1e-14);
   free(c.traj);
   free(x);
@@ -126,6 +129,14 @@ static void test_interval_scene_is_the_lcs(void **state) {
   cup_input_free(&u);
   cup_lcs_free(&L);
   tcsc_free(&As); tcsc_free(&Cs); tcsc_free(&Gs);
+}
+
+/* The free step of each scheme, then the ball's projection or the LCS's. */
+static void test_interval_scene_is_the_lcs(void **state) {
+  (void)state;
+  interval_against_lcs("explicit");
+  interval_against_lcs("implicit");
+  interval_against_lcs("exponential");
 }
 
 /* The walker's f, written here: speed (target - x)/max(|target - x|, slow). */

@@ -11,27 +11,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 
-/* ---- a counting allocator (glibc interposition; off under ASan) -------------- */
-#if defined(__SANITIZE_ADDRESS__)
-#define CUP_COUNTING 0
-#else
-#define CUP_COUNTING 1
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-extern void *__libc_memalign(size_t, size_t);
-static volatile long alloc_count = 0;
-static volatile int counting = 0;
-void *malloc(size_t n) { if (counting) alloc_count++; return __libc_malloc(n); }
-void *calloc(size_t a, size_t b) { if (counting) alloc_count++; return __libc_calloc(a, b); }
-void *realloc(void *q, size_t n) { if (counting) alloc_count++; return __libc_realloc(q, n); }
-void *aligned_alloc(size_t al, size_t n) { if (counting) alloc_count++; return __libc_memalign(al, n); }
-int posix_memalign(void **q, size_t al, size_t n) {
-  if (counting) alloc_count++;
-  *q = __libc_memalign(al, n);
-  return *q ? 0 : 12;
-}
-#endif
+#include "alloc_count.h"
 
 /* ---- dense metrics in long double ------------------------------------------------ */
 
@@ -474,6 +454,14 @@ static int tangent_rows(double t, const double *x, cup_rowbuf *rows, void *vp) {
   return 0 * st;
 }
 
+/* A state polyset of tangent_rows and its projector. */
+static void tangent_setproj(rows_ctx *c, cup_set **S, cup_setproj **sp) {
+  cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = c};
+  char err[CUP_ERRMSG_LEN];
+  assert_int_equal(cup_set_create(S, &d, err), CUP_OK);
+  assert_int_equal(cup_setproj_create(sp, *S, NULL, err), CUP_OK);
+}
+
 /* The same rows, in a fresh polyset and projector. */
 static void fresh_projection(double t, const double *xk, const double *x, double *z, int mode) {
   double nx = hypot(xk[0], xk[1]);
@@ -498,12 +486,9 @@ static void fresh_projection(double t, const double *xk, const double *x, double
 static void test_state_polyset_reuse_and_rebuild(void **state) {
   (void)state;
   rows_ctx c = {1, 0};
-  cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = &c};
   cup_set *S;
   cup_setproj *sp;
-  char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-  assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+  tangent_setproj(&c, &S, &sp);
   double xk[2] = {0.3, 0.2}, x[2], z[2], zr[2];
   long rebuilds_at[6];
   for (int k = 0; k < 6; k++) {
@@ -533,12 +518,9 @@ static void test_state_polyset_reuse_and_rebuild(void **state) {
 static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) {
   (void)state;
   rows_ctx c = {0, 0};
-  cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = &c};
   cup_set *S;
   cup_setproj *sp;
-  char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-  assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+  tangent_setproj(&c, &S, &sp);
   double xk[2], x[2], z[2];
   long allocs = 0;
   for (int k = 0; k < 50; k++) {
@@ -569,12 +551,9 @@ static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) 
 static void test_state_polyset_bad_row(void **state) {
   (void)state;
   rows_ctx c = {2, 0};
-  cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = &c};
   cup_set *S;
   cup_setproj *sp;
-  char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-  assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+  tangent_setproj(&c, &S, &sp);
   double xk[2] = {1, 0};
   assert_int_equal(cup_setproj_move(sp, 0, NULL, xk), CUP_ERR_CALLBACK);
   assert_non_null(strstr(cup_setproj_message(sp), "row 1: column 0 after column 1"));

@@ -291,13 +291,7 @@ contains
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional :: Pdiag(:)
     character(len=*), intent(out), optional :: errmsg
-    type(cup_set_desc) :: d
-    type(desc_store), target :: keep
-    d%kind = CUP_SET_ORACLE
-    d%oracle = oracle
-    d%oracle_ctx = ctx
-    call describe(d, keep, n, ierr, Pdiag=Pdiag)
-    call cup_set_create(S, d, ierr, errmsg)
+    call callback_set(S, CUP_SET_ORACLE, n, oracle, ctx, ierr, Pdiag, errmsg)
   end subroutine cup_set_oracle_create
 
   !> A state-dependent polyset: rows = c_funloc of a bind(C)
@@ -310,14 +304,32 @@ contains
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional :: Pdiag(:)
     character(len=*), intent(out), optional :: errmsg
+    call callback_set(S, CUP_SET_STATE_POLYSET, n, rows, ctx, ierr, Pdiag, errmsg)
+  end subroutine cup_set_state_polyset_create
+
+  ! A set of a callback: the oracle's or the rows'.
+  subroutine callback_set(S, kind, n, fn, ctx, ierr, Pdiag, errmsg)
+    type(cup_set_t), intent(out) :: S
+    integer(c_int), intent(in) :: kind
+    integer, intent(in) :: n
+    type(c_funptr), value :: fn
+    type(c_ptr), value :: ctx
+    integer, intent(out) :: ierr
+    real(c_double), intent(in), optional :: Pdiag(:)
+    character(len=*), intent(out), optional :: errmsg
     type(cup_set_desc) :: d
     type(desc_store), target :: keep
-    d%kind = CUP_SET_STATE_POLYSET
-    d%rows = rows
-    d%rows_ctx = ctx
+    d%kind = kind
+    if (kind == CUP_SET_ORACLE) then
+      d%oracle = fn
+      d%oracle_ctx = ctx
+    else
+      d%rows = fn
+      d%rows_ctx = ctx
+    end if
     call describe(d, keep, n, ierr, Pdiag=Pdiag)
     call cup_set_create(S, d, ierr, errmsg)
-  end subroutine cup_set_state_polyset_create
+  end subroutine callback_set
 
   subroutine cup_set_free(S)
     type(cup_set_t), intent(inout) :: S

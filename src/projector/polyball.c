@@ -31,10 +31,7 @@ static int in_rows(cup_setproj *sp, const double *y) {
 
 /* ||a - b||_P from above (and below, lo may be NULL); scratch: work + 2n. */
 static double dist_hi(cup_setproj *sp, const double *a, const double *b, double *lo) {
-  double *w = sp->work + 2 * (size_t)sp->n, hi;
-  for (int j = 0; j < sp->n; j++) w[j] = a[j] - b[j];
-  cup_metric_norm_bounds(sp->S->K, w, lo, &hi);
-  return hi;
+  return cup_metric_dist_hi(sp->S->K, a, b, lo, sp->work + 2 * (size_t)sp->n);
 }
 
 static int in_ball(cup_setproj *sp, const double *y) { return dist_hi(sp, y, sp->c, NULL) <= sp->r; }

@@ -26,14 +26,6 @@ static int keep_x(const double *x, double *z, int n, double eta, cup_proj_info *
   return settle(info);
 }
 
-/* An upper bound on ||a - b||_P (scratch w, n entries). */
-static double dist_hi(const cup_polyset *K, const double *a, const double *b, double *w) {
-  for (int j = 0; j < K->n; j++) w[j] = a[j] - b[j];
-  double hi;
-  cup_metric_norm_bounds(K, w, NULL, &hi);
-  return hi;
-}
-
 int cup_ball_project(const cup_set *S, const double *c, double r, const double *x, double *z,
                      double *work, cup_proj_info *info) {
   const cup_polyset *K = S->K;
@@ -49,7 +41,7 @@ int cup_ball_project(const cup_set *S, const double *c, double r, const double *
   cup_copy(xs, x, n);                       /* z may alias x */
   double s = r * (1 - 4 * (n + 8) * U) / d;
   for (int j = 0; j < n; j++) z[j] = c[j] + s * v[j];
-  double zc = dist_hi(K, z, c, w), xz = dist_hi(K, xs, z, w);
+  double zc = cup_metric_dist_hi(K, z, c, NULL, w), xz = cup_metric_dist_hi(K, xs, z, NULL, w);
   double dlo = fmax(0, lo - r);             /* d(x) = ||x - c||_P - r exactly */
   info->active = 1;
   info->iterations = 1;
@@ -81,7 +73,7 @@ int cup_halfspace_project(const cup_set *S, const double *g, const double *x, do
   double lam = (16 * gam + DBL_MIN - s) / (a * a);
   for (int j = 0; j < n; j++) z[j] = xs[j] + lam * S->pa[j];
   cup_slack(K, g, z, &s2, &gam2);
-  double xz = dist_hi(K, xs, z, w);
+  double xz = cup_metric_dist_hi(K, xs, z, NULL, w);
   double dlo = fmax(0, (-s - gam) / (a * (1 + arel)));   /* d(x) = -(a^T x + b) / ||a||_{P^-1} */
   info->active = 1;
   info->iterations = 1;

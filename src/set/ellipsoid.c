@@ -60,13 +60,6 @@ static double secular_root(const cup_set *S, const double *y, double r, int *ite
   return mu;
 }
 
-/* An upper bound on ||v||_P. */
-static double norm_hi(const cup_polyset *K, const double *v) {
-  double hi;
-  cup_metric_norm_bounds(K, v, NULL, &hi);
-  return hi;
-}
-
 int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const double *x, double *z,
                           double *work, cup_proj_info *info) {
   const cup_polyset *K = S->K;
@@ -98,7 +91,9 @@ int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const dou
   /* eta: q(z) from above; else shrink towards c until certainly inside */
   for (int j = 0; j < n; j++) v[j] = z[j] - c[j];
   double qz_abs, qz = quad_form(S, v, t, &qz_abs), qz_hi = qz + gq * qz_abs;
-  info->eta_cert = qz_hi <= r * r ? 0 : (1 - r / sqrt(qz_hi) * (1 - 4 * U)) * norm_hi(K, v);
+  double vz_hi;
+  cup_metric_norm_bounds(K, v, NULL, &vz_hi);
+  info->eta_cert = qz_hi <= r * r ? 0 : (1 - r / sqrt(qz_hi) * (1 - 4 * U)) * vz_hi;
   for (int j = 0; j < n; j++) w[j] = z[j] - xs[j];
   double zx_lo, zx_hi, zx = cup_metric_norm_bounds(K, w, &zx_lo, &zx_hi);
   if (info->skipped) {

@@ -327,3 +327,10 @@ double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo,
   if (hi) *hi = sqrt(s + err) * (1 + 2 * DBL_EPSILON);
   return isnan(s) ? NAN : val;
 }
+
+double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w) {
+  for (int j = 0; j < K->n; j++) w[j] = a[j] - b[j];
+  double hi;
+  cup_metric_norm_bounds(K, w, lo, &hi);
+  return hi;
+}

@@ -66,5 +66,8 @@ int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, d
  * rounding of the sum (and of forming v from one subtraction). Returns the
  * computed value. */
 double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi);
+/* An upper bound on ||a - b||_P (and a lower one into *lo, may be NULL);
+ * scratch w: n entries. */
+double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w);
 
 #endif
