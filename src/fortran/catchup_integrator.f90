@@ -124,8 +124,10 @@ contains
     integer, intent(out) :: ierr
     type(cup_input_t), intent(in), optional :: u
     real(c_double), intent(in), optional :: A(:, :), E(:, :)
-    type(c_funptr), value, optional :: f, f_integral   ! VALUE: c_funloc(...) actuals need no static temporary
-    type(c_ptr), value, optional :: f_ctx, f_integral_ctx
+    ! not VALUE: gfortran 12 reads an absent OPTIONAL VALUE of derived type; a
+    ! c_funloc(...) actual may then become a constant in the caller's image
+    type(c_funptr), intent(in), optional :: f, f_integral
+    type(c_ptr), intent(in), optional :: f_ctx, f_integral_ctx
     type(cup_integrator_options), intent(in), optional :: opt
     character(len=*), intent(out), optional :: errmsg
     type(cup_process_desc) :: d

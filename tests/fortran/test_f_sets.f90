@@ -58,6 +58,18 @@ contains
     stat = int(ierr, c_int)
     if (c_associated(ctx)) stat = 1
   end function halfline_rows
+
+  !> f(t, x) = -x^3 (x' = -x^3: x = 1/sqrt(1 + 2t) from x = 1).
+  function cubic_f(t, x, f, ctx) result(stat) bind(C)
+    real(c_double), value :: t
+    real(c_double), intent(in) :: x(*)
+    real(c_double), intent(inout) :: f(*)
+    type(c_ptr), value :: ctx
+    integer(c_int) :: stat
+    f(1) = -x(1)**3
+    stat = 0
+    if (t < 0 .or. c_associated(ctx)) stat = 1
+  end function cubic_f
 end module sets_cb
 
 program test_f_sets
@@ -123,6 +135,24 @@ program test_f_sets
   call check_close(abs(X(1, ns) - 2) * 1000, 2d0, 1d-6, 'error*n = 2 at the end')
   call check(info%set_rebuilds == 1 .and. info%max_rows == 1, 'one analysis, one row')
   call cup_integrator_free(integ)
+
+  call section('a nonlinear f from Fortran: x'' = -x^3 in a ball it never reaches')
+  block
+    type(cup_set_t) :: big
+    type(c_funptr) :: fp
+    real(c_double), allocatable :: tc(:), Xc(:, :)
+    integer :: nc
+    call cup_set_ball_create(big, [0d0], 10d0, ierr)
+    opt%T = 2
+    fp = c_funloc(cubic_f)          ! a variable: c_funloc in the call would be a constant in .rodata
+    call cup_integrator_create_process(integ, big, ierr, f=fp, opt=opt, errmsg=msg)
+    call check_int(ierr, CUP_OK, 'process with f: ' // trim(msg))
+    call cup_integrator_run_store(integ, [1d0], tc, Xc, nc, ierr)
+    call check_close(abs(Xc(1, nc) - 1 / sqrt(5d0)) * 1000, 0.0d0, 0.37d0, 'Euler''s error*n at t = 2')
+    call cup_integrator_free(integ)
+    call cup_set_free(big)
+    deallocate(tc, Xc)
+  end block
 
   call section('cup_setproj: an ellipsoid, an empty intersection')
   Q = reshape([4d0, 0d0, 0d0, 1d0], [2, 2])                       ! 4 x^2 + y^2 <= 1
