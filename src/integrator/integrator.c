@@ -419,7 +419,12 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
     snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
   }
-  if (st == CUP_OK) st = cup_setproj_project(I->sp, xf, z, pi);
+  if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
+    char what[200];                      /* as on the polyset path: the state overflowed */
+    snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
+             cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+  }
   if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
   long rows = cup_setproj_rows(I->sp);
   if (rows > info->max_rows) info->max_rows = rows;
