@@ -398,6 +398,27 @@ static void test_radius_turning_negative_stops_the_run(void **state) {
   o.scheme = CUP_SCHEME_THETA;
   assert_int_equal(cup_integrator_create_process(&I, &d, &o, err), CUP_ERR_UNSUPPORTED);
   assert_non_null(strstr(err, "the set is a ball"));
+  /* {x_1 >= 0} and the unit disc at (-u(t), 0), u = t: apart once t > 1 */
+  double C[2] = {1, 0}, Gc[2] = {-1, 0};
+  tcsc Cs, Gcs;
+  tcsc_from_dense(&Cs, C, 1, 2);
+  tcsc_from_dense(&Gcs, Gc, 2, 1);
+  cup_set_desc bd = {.kind = CUP_SET_INTERSECTION, .n = 2, .p = 1, .C = Cs.view, .center = c,
+                     .Gc = Gcs.view, .radius = 1};
+  cup_set *B;
+  assert_int_equal(cup_set_create(&B, &bd, err), CUP_OK);
+  cup_process_desc db = {.n = 2, .p = 1, .C = B, .u = u};
+  o.scheme = CUP_SCHEME_EXPLICIT;
+  assert_int_equal(cup_integrator_create_process(&I, &db, &o, err), CUP_OK);
+  double y0[2] = {0.25, 0};
+  assert_int_equal(cup_integrator_run(I, y0, count_sink, &last, &info), CUP_ERR_EMPTY_SET);
+  assert_non_null(strstr(info.message, "step 5 (t = 1.25)"));
+  assert_non_null(strstr(info.message, "do not meet"));
+  assert_int_equal(last, 4);
+  cup_integrator_free(&I);
+  cup_set_free(&B);
+  tcsc_free(&Cs);
+  tcsc_free(&Gcs);
   cup_input_free(&u);
   cup_set_free(&S);
 }
