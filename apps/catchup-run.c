@@ -314,13 +314,12 @@ static int setup(run_t *r, char *err) {
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   r->opts.interrupt = (const volatile int *)&stop_signal;
-  const cup_lcs *L = cup_scene_lcs(r->scene);
   char e2[CUP_ERRMSG_LEN];
-  if (cup_integrator_create(&r->I, L, cup_scene_input(r->scene), &r->opts, e2)) {
+  if (cup_scene_integrator(r->scene, &r->opts, &r->I, e2)) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }
-  if (cup_h5run_create(&r->w, a->out, cup_lcs_dim(L), err)) return EXIT_RUN;
+  if (cup_h5run_create(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
   if (write_provenance(r)) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
     return EXIT_RUN;

@@ -23,11 +23,12 @@
 static char dir[] = "/tmp/cup_fuzz_XXXXXX";
 static char mtx_path[64];
 
-static const char *const overrides[4][4] = {
+static const char *const overrides[5][4] = {
   {"n=7", "x0=[0, 1, 0]", "circuit.R1=2", "output.every=3"},
   {"input.0.amplitude=8", "eps=1e-6", "lcs.A.1.2=0.25", "scheme = implicit"},
   {"lcs.F=[.nan]", "T.x=1", "name='x: \"y\"'", "input=[1, 2]"},
   {"projector={method: pg, max_iter: 5}", "output={samples: 3}", "x0={file: f.mtx}", "lcs.P=identity"},
+  {"set.ball.radius=-1", "f.A=[[1]]", "set.ball.center.0={type: pwl, points: [[0, 0]]}", "f.towards.speed=2"},
 };
 
 static void cleanup(void) {
@@ -56,9 +57,9 @@ static void run_briefly(const char *text, const char *d) {
   char err[CUP_ERRMSG_LEN] = "";
   if (cup_scene_load_string(&s, text, "run.yaml", d, cap, 4, err) != CUP_OK) return;
   const cup_lcs *L = cup_scene_lcs(s);
-  if (cup_lcs_dim(L) <= 16 && cup_lcs_rows(L) <= 16) {
+  if (cup_scene_dim(s) <= 16 && (!L || cup_lcs_rows(L) <= 16)) {   /* an LCS or a set: scene */
     cup_integrator *I = NULL;
-    if (cup_integrator_create(&I, L, cup_scene_input(s), cup_scene_options(s), err) == CUP_OK) {
+    if (cup_scene_integrator(s, NULL, &I, err) == CUP_OK) {
       cup_run_info info;
       cup_integrator_run(I, cup_scene_x0(s), NULL, NULL, &info);
       if (info.status < 0 && !info.message[0]) abort();
@@ -99,7 +100,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     run_briefly(text, d);
   }
   if (s) abort();                                  /* a failed load leaves NULL */
-  unsigned sel = size ? data[size / 2] % 4 : 0;
+  unsigned sel = size ? data[size / 2] % 5 : 0;
   st = cup_scene_load_string(&s, text, "fuzz.yaml", d, overrides[sel], 4, err);
   check_message(st, err);
   cup_scene_free(&s);

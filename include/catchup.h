@@ -13,6 +13,7 @@
 #include "catchup/sparse.h"
 #include "catchup/polyset.h"
 #include "catchup/projector.h"
+#include "catchup/set.h"
 #include "catchup/input.h"
 #include "catchup/lcs.h"
 #include "catchup/integrator.h"

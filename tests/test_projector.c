@@ -9,27 +9,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 
-/* ---- a counting allocator (glibc interposition; off under ASan) -------------- */
-#if defined(__SANITIZE_ADDRESS__)
-#define CUP_COUNTING 0
-#else
-#define CUP_COUNTING 1
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-extern void *__libc_memalign(size_t, size_t);
-static volatile long alloc_count = 0;
-static volatile int counting = 0;
-void *malloc(size_t n) { if (counting) alloc_count++; return __libc_malloc(n); }
-void *calloc(size_t a, size_t b) { if (counting) alloc_count++; return __libc_calloc(a, b); }
-void *realloc(void *q, size_t n) { if (counting) alloc_count++; return __libc_realloc(q, n); }
-void *aligned_alloc(size_t al, size_t n) { if (counting) alloc_count++; return __libc_memalign(al, n); }
-int posix_memalign(void **q, size_t al, size_t n) {
-  if (counting) alloc_count++;
-  *q = __libc_memalign(al, n);
-  return *q ? 0 : 12;
-}
-#endif
+#include "alloc_count.h"
 
 /* ---- random polyhedra ---------------------------------------------------------- */
 

@@ -8,6 +8,7 @@
 #include "catchup/lcs.h"
 #include "catchup/input.h"
 #include "catchup/projector.h"
+#include "catchup/set.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -78,6 +79,12 @@ enum { CUP_OUTPUT_COUNT = 0 CUP_OUTPUT_LIST(CUP_OUTPUT_ONE_) };
  *  of degree 2 order - 1). Callable from Fortran (bind(C)). */
 typedef int (*cup_rhs_fn)(double t, const double *x, double *f, void *ctx);
 
+/** A term of f whose integral over a step the user computes exactly: write
+ *  int_{t0}^{t1} f(s, x) ds (x frozen at x_k, as in the paper; n entries)
+ *  into F; return nonzero to stop the run with CUP_ERR_CALLBACK. Callable
+ *  from Fortran (bind(C)). */
+typedef int (*cup_rhs_integral_fn)(double t0, double t1, const double *x, double *F, void *ctx);
+
 /** Receives the selected states: step k, time t_k = k h, state x (n entries,
  *  original x coordinates). Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
 typedef int (*cup_sample_fn)(long k, double t, const double *x, void *ctx);
@@ -134,6 +141,11 @@ typedef struct cup_run_info {
   double h_rho;               /**< h * spectral radius of A */
   long samples;               /**< states passed to the sink */
   char message[256];          /**< what went wrong, with step and time */
+  /* general sets (cup_integrator_create_process) */
+  long set_rebuilds;          /**< state polyset: symbolic analyses of the run (and their
+                                   allocations): the one at t = 0, then one per step whose rows
+                                   brought a pattern not in the pool */
+  long max_rows;              /**< state polyset: the most rows of one step */
 } cup_run_info;
 
 void cup_integrator_options_default(cup_integrator_options *o);
@@ -145,6 +157,38 @@ void cup_integrator_options_default(cup_integrator_options *o);
 int cup_integrator_create(cup_integrator **I, const cup_lcs *L, const cup_input *u,
                           const cup_integrator_options *o, char *errmsg);
 void cup_integrator_free(cup_integrator **I);
+
+/** A general sweeping process (paper, Sec. 3)
+ *      x'(t) in -N(C(t); x(t)) + f(t, x(t)),
+ *  f(t, x) = A x + E u(t) + f_cb(t, x) + (a term given by its exact integral),
+ *  stepped by x_{k+1} in proj^{eps_n, eta_n}_{C(t_{k+1})}(free step from x_k),
+ *  in the set's metric P; a state-dependent set is taken at (t_{k+1}, x_k).
+ *  The affine part has the schemes of an LCS (explicit, implicit,
+ *  exponential; theta needs a polyset, whose step it solves as an LCP with
+ *  B = P^-1 C^T); the other terms are added to the free step. Everything
+ *  but the set and u is copied; both must outlive the integrator. */
+typedef struct cup_process_desc {
+  int n;                      /**< state dimension: the set's */
+  int p;                      /**< input dimension: u(t) moves the set (its p parameters, if any)
+                                   and enters f through E */
+  const cup_set *C;           /**< the moving set (borrowed) */
+  const cup_input *u;         /**< u(t), p components (borrowed); NULL when p = 0 */
+  cup_csc A;                  /**< n x n; absent (ncol = 0): no A x */
+  cup_csc E;                  /**< n x p; absent: no E u */
+  cup_rhs_fn f;               /**< f_cb(t, x), integrated by Gauss-Legendre of order
+                                   options.f_order (added to options.f), or NULL */
+  void *f_ctx;                /**< passed to f */
+  cup_rhs_integral_fn f_integral; /**< a term given by its exact integral over a step, or NULL */
+  void *f_integral_ctx;       /**< passed to f_integral */
+} cup_process_desc;
+
+/** Set up an integrator for a general sweeping process; the same options,
+ *  run, state and free as an LCS's. A polyset is stepped exactly as an LCS
+ *  with that set (the same code and the same trajectory); other sets go
+ *  through their cup_setproj. Errors name the field ("A is 2 x 3, expected
+ *  3 x 3"). */
+int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
+                                  const cup_integrator_options *o, char *errmsg);
 
 /** Run from x0 (n entries) over [0, T], passing the selected states to sink
  *  (may be NULL). Allocates nothing per step. Returns info->status. */

@@ -1,7 +1,8 @@
 /* catchup/scene.h — scene files (YAML): an LCS (or the paper's circuit as a
- * parameterised family), its input, x0, T, n, tolerances, scheme, projector
- * and output. The format is documented in docs/scene-format.md. Every error
- * names file:line:column and the key. */
+ * parameterised family) and its input, or a general sweeping process (a
+ * moving set and f), x0, T, n, tolerances, scheme, projector and output.
+ * The format is documented in docs/scene-format.md. Every error names
+ * file:line:column and the key. */
 #ifndef CATCHUP_SCENE_H
 #define CATCHUP_SCENE_H
 
@@ -26,8 +27,17 @@ int cup_scene_load_string(cup_scene **s, const char *text, const char *name, con
 void cup_scene_free(cup_scene **s);
 
 const char *cup_scene_name(const cup_scene *s);          /**< the `name` key, or the file stem */
-const cup_lcs *cup_scene_lcs(const cup_scene *s);
-const cup_input *cup_scene_input(const cup_scene *s);    /**< NULL when p = 0 */
+const cup_lcs *cup_scene_lcs(const cup_scene *s);           /**< NULL for a set: scene */
+/** The general process of a set: scene (set and f; NULL for an LCS scene). */
+const cup_process_desc *cup_scene_process(const cup_scene *s);
+/** The state dimension, for either kind of scene. */
+int cup_scene_dim(const cup_scene *s);
+/** An integrator for the scene's model, an LCS or a process, with options o
+ *  (NULL: the scene's). One integrator of a set: scene with f: towards at a
+ *  time (its f keeps a buffer in the scene). */
+int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
+                         char *errmsg);
+const cup_input *cup_scene_input(const cup_scene *s);    /**< NULL when p = 0; a set: scene's signals */
 const double *cup_scene_x0(const cup_scene *s);          /**< n entries */
 /** T, n, eps, eta, scheme, projector, output from the file. */
 const cup_integrator_options *cup_scene_options(const cup_scene *s);

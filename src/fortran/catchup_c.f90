@@ -30,7 +30,8 @@ module catchup_c
   public :: c_cup_lcs_create, c_cup_lcs_free, c_cup_lcs_dim, c_cup_lcs_rows, c_cup_lcs_inputs, &
     c_cup_lcs_polyset, c_cup_lcs_fixed_set, c_cup_lcs_circuit
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
-    c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_free, &
+    c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_create_process, &
+    c_cup_integrator_free, &
     c_cup_integrator_run, c_cup_integrator_state, c_cup_scheme_name, c_cup_scheme_parse, &
     c_cup_output_name, c_cup_output_parse, c_cup_wave_name, c_cup_wave_parse
 
@@ -324,6 +325,15 @@ module catchup_c
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_integrator_create
+    function c_cup_integrator_create_process(I, d, o, errmsg) bind(C, name="cup_integrator_create_process") &
+        result(st)
+      import :: c_int, c_ptr, c_char, cup_process_desc, cup_integrator_options
+      type(c_ptr), intent(out) :: I
+      type(cup_process_desc), intent(in) :: d
+      type(cup_integrator_options), intent(in) :: o
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_integrator_create_process
     subroutine c_cup_integrator_free(I) bind(C, name="cup_integrator_free")
       import :: c_ptr
       type(c_ptr), intent(inout) :: I

@@ -12,9 +12,12 @@ module catchup_integrator
   private
 
   public :: cup_schedule_parse, cup_schedule_value, cup_schedule_format, &
-    cup_integrator_options_default, cup_integrator_create, cup_integrator_free, &
+    cup_integrator_options_default, cup_integrator_create, cup_integrator_create_process, &
+    cup_integrator_free, &
     cup_integrator_run, cup_integrator_run_store, cup_integrator_state, &
     cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_run_info_message
+  ! for the other modules of the binding (not part of the documented API)
+  public :: cup_expected_samples_
 
   !> value(n) = coef * n^power, for a default-kind or a c_long n
   interface cup_schedule_value
@@ -104,13 +107,69 @@ contains
     st = c_cup_integrator_create(integ%ptr, L%ptr, up, o, cmsg)
     if (st == CUP_OK) then
       integ%dim = int(c_cup_lcs_dim(L%ptr))
-      integ%expected = expected_samples(o)
+      integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_integrator_create
 
+  !> A general sweeping process x' in -N(S(t); x) + f(t, x) on the set S,
+  !> f = A x + E u(t) + f(t, x) (c_funloc of a procedure(cup_rhs_fn), with
+  !> f_ctx) + a term given by its exact integral (procedure(cup_rhs_integral_fn)).
+  !> A (n x n) and E (n x p) are dense and optional; u moves the set (its p
+  !> parameters) and drives E. S and u must outlive integ.
+  subroutine cup_integrator_create_process(integ, S, ierr, u, A, E, f, f_ctx, f_integral, &
+                                           f_integral_ctx, opt, errmsg)
+    type(cup_integrator_t), intent(out) :: integ
+    type(cup_set_t), intent(in) :: S
+    integer, intent(out) :: ierr
+    type(cup_input_t), intent(in), optional :: u
+    real(c_double), intent(in), optional :: A(:, :), E(:, :)
+    ! not VALUE: gfortran 12 reads an absent OPTIONAL VALUE of derived type; a
+    ! c_funloc(...) actual may then become a constant in the caller's image
+    type(c_funptr), intent(in), optional :: f, f_integral
+    type(c_ptr), intent(in), optional :: f_ctx, f_integral_ctx
+    type(cup_integrator_options), intent(in), optional :: opt
+    character(len=*), intent(out), optional :: errmsg
+    type(cup_process_desc) :: d
+    type(cup_integrator_options) :: o
+    type(cup_csc_matrix), target :: cA, cE
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(S%ptr, 'integrator: set', ierr, errmsg)) return
+    if (present(opt)) then
+      o = opt
+    else
+      call c_cup_integrator_options_default(o)
+    end if
+    d%n = int(S%dim, c_int)
+    d%C = S%ptr
+    if (present(u)) then
+      d%u = u%ptr
+      d%p = c_cup_input_dim(u%ptr)
+    end if
+    if (present(A)) then
+      call cup_csc_from_dense(A, cA, ierr)
+      d%A = cup_csc_view(cA)
+    end if
+    if (present(E)) then
+      call cup_csc_from_dense(E, cE, ierr)
+      d%E = cup_csc_view(cE)
+    end if
+    if (present(f)) d%f = f
+    if (present(f_ctx)) d%f_ctx = f_ctx
+    if (present(f_integral)) d%f_integral = f_integral
+    if (present(f_integral_ctx)) d%f_integral_ctx = f_integral_ctx
+    cmsg = cup_errbuf_()
+    st = c_cup_integrator_create_process(integ%ptr, d, o, cmsg)
+    if (st == CUP_OK) then
+      integ%dim = S%dim
+      integ%expected = cup_expected_samples_(o)
+    end if
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_integrator_create_process
+
   !> Samples a complete run passes to the sink (integrator.h, output kinds).
-  pure integer(c_long) function expected_samples(o) result(ns)
+  pure integer(c_long) function cup_expected_samples_(o) result(ns)
     type(cup_integrator_options), intent(in) :: o
     select case (o%output)
     case (CUP_OUTPUT_EVERY)
@@ -123,7 +182,7 @@ contains
     case default
       ns = 0
     end select
-  end function expected_samples
+  end function cup_expected_samples_
 
   subroutine cup_integrator_free(integ)
     type(cup_integrator_t), intent(inout) :: integ

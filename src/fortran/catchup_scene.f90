@@ -6,16 +6,17 @@ module catchup_scene
     c_null_char, c_associated, c_f_pointer, c_loc
   use catchup_constants
   use catchup_types
-  use catchup_c, only: c_cup_lcs_dim
   use catchup_base
+  use catchup_integrator, only: cup_expected_samples_
   implicit none
   private
   public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
-    cup_scene_eta_spec, cup_scene_text
+    cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
-    c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text
+    c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
+    c_cup_scene_dim, c_cup_scene_integrator
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -53,6 +54,24 @@ module catchup_scene
       type(c_ptr), value :: s
       type(c_ptr) :: p
     end function c_cup_scene_lcs
+    function c_cup_scene_process(s) bind(C, name="cup_scene_process") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_process
+    function c_cup_scene_dim(s) bind(C, name="cup_scene_dim") result(n)
+      import :: c_ptr, c_int
+      type(c_ptr), value :: s
+      integer(c_int) :: n
+    end function c_cup_scene_dim
+    function c_cup_scene_integrator(s, o, I, errmsg) bind(C, name="cup_scene_integrator") result(st)
+      import :: c_ptr, c_int, c_char, cup_integrator_options
+      type(c_ptr), value :: s
+      type(cup_integrator_options), intent(in) :: o
+      type(c_ptr), intent(out) :: I
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_integrator
     function c_cup_scene_input(s) bind(C, name="cup_scene_input") result(p)
       import :: c_ptr
       type(c_ptr), value :: s
@@ -207,13 +226,63 @@ contains
     allocate(x0(0))
     ierr = CUP_ERR_ARG
     if (.not. c_associated(s%ptr)) return
-    n = int(c_cup_lcs_dim(c_cup_scene_lcs(s%ptr)))
+    n = int(c_cup_scene_dim(s%ptr))
     p = c_cup_scene_x0(s%ptr)
     if (.not. c_associated(p)) return
     call c_f_pointer(p, v, [n])
     x0 = v
     ierr = CUP_OK
   end subroutine cup_scene_x0
+
+  !> The state dimension, for an LCS scene or a set: scene.
+  integer function cup_scene_dim(s)
+    type(cup_scene_t), intent(in) :: s
+    cup_scene_dim = 0
+    if (c_associated(s%ptr)) cup_scene_dim = int(c_cup_scene_dim(s%ptr))
+  end function cup_scene_dim
+
+  !> A set: scene's process (its set and input are the scene's: use them while
+  !> the scene lives); found = .false. for an LCS scene.
+  subroutine cup_scene_process(s, d, found)
+    type(cup_scene_t), intent(in) :: s
+    type(cup_process_desc), intent(out) :: d
+    logical, intent(out) :: found
+    type(cup_process_desc), pointer :: dp
+    type(c_ptr) :: p
+    found = .false.
+    if (.not. c_associated(s%ptr)) return
+    p = c_cup_scene_process(s%ptr)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, dp)
+    d = dp
+    found = .true.
+  end subroutine cup_scene_process
+
+  !> An integrator for the scene's model (an LCS or a process), with the
+  !> scene's options or opt.
+  subroutine cup_scene_integrator(s, integ, ierr, opt, errmsg)
+    type(cup_scene_t), intent(in) :: s
+    type(cup_integrator_t), intent(out) :: integ
+    integer, intent(out) :: ierr
+    type(cup_integrator_options), intent(in), optional :: opt
+    character(len=*), intent(out), optional :: errmsg
+    type(cup_integrator_options) :: o
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(s%ptr, 'scene', ierr, errmsg)) return
+    if (present(opt)) then
+      o = opt
+    else
+      call cup_scene_options(s, o, ierr)
+    end if
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_integrator(s%ptr, o, integ%ptr, cmsg)
+    if (st == CUP_OK) then
+      integ%dim = int(c_cup_scene_dim(s%ptr))
+      integ%expected = cup_expected_samples_(o)
+    end if
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_integrator
 
   !> The integrator options of the scene (T, n, eps, eta, scheme, ...), a copy.
   subroutine cup_scene_options(s, o, ierr)

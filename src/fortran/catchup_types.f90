@@ -153,7 +153,46 @@ module catchup_types
     real(c_double) :: h_rho = 0
     integer(c_long) :: samples = 0
     character(kind=c_char) :: message(256) = c_null_char   !< use cup_run_info_message(info)
+    integer(c_long) :: set_rebuilds = 0   !< state polyset: symbolic analyses of the run
+    integer(c_long) :: max_rows = 0       !< state polyset: the most rows of one step
   end type cup_run_info
+
+  ! ---- set.h, and the process of integrator.h ---------------------------------
+  !> A moving set (cup_set_desc): each field says in set.h which kinds read it.
+  !> C's member `P` is `metric` here (Fortran is case-insensitive: `p` is the
+  !> number of parameters).
+  type, bind(C), public :: cup_set_desc
+    integer(c_int) :: kind = CUP_SET_POLYSET   !< cup_set_kind
+    integer(c_int) :: n = 0
+    integer(c_int) :: p = 0                    !< parameters u that move the set
+    type(cup_metric) :: metric
+    type(cup_csc) :: C                         !< POLYSET, INTERSECTION: m x n; HALFSPACE: 1 x n
+    type(c_ptr) :: F = c_null_ptr              !< m entries (HALFSPACE: b), or null for 0
+    type(cup_csc) :: G                         !< m x p, the offset's motion
+    type(c_ptr) :: center = c_null_ptr         !< n entries, or null for 0
+    type(cup_csc) :: Gc                        !< n x p, the centre's motion
+    real(c_double) :: radius = 0
+    type(c_ptr) :: gr = c_null_ptr             !< p entries: r = radius + gr . u, or null
+    type(cup_csc) :: Q                         !< ELLIPSOID: n x n SPD
+    type(c_funptr) :: oracle = c_null_funptr   !< c_funloc of a procedure(cup_oracle_fn)
+    type(c_ptr) :: oracle_ctx = c_null_ptr
+    type(c_funptr) :: rows = c_null_funptr     !< c_funloc of a procedure(cup_rows_fn)
+    type(c_ptr) :: rows_ctx = c_null_ptr
+  end type cup_set_desc
+
+  !> A general sweeping process (cup_process_desc); the set and u are borrowed.
+  type, bind(C), public :: cup_process_desc
+    integer(c_int) :: n = 0
+    integer(c_int) :: p = 0
+    type(c_ptr) :: C = c_null_ptr              !< the cup_set (cup_set_t%ptr)
+    type(c_ptr) :: u = c_null_ptr              !< the cup_input (cup_input_t%ptr), or null
+    type(cup_csc) :: A                         !< n x n, absent: no A x
+    type(cup_csc) :: E                         !< n x p, absent: no E u
+    type(c_funptr) :: f = c_null_funptr        !< c_funloc of a procedure(cup_rhs_fn), or null
+    type(c_ptr) :: f_ctx = c_null_ptr
+    type(c_funptr) :: f_integral = c_null_funptr   !< procedure(cup_rhs_integral_fn), or null
+    type(c_ptr) :: f_integral_ctx = c_null_ptr
+  end type cup_process_desc
 
   ! ---- handles --------------------------------------------------------------
   ! `ptr` is the C pointer (pass it to the raw interfaces of catchup_c);
@@ -186,6 +225,16 @@ module catchup_types
     integer :: dim = 0                 !< state dimension (cached at creation)
     integer(c_long) :: expected = 0    !< samples a full run passes to a sink
   end type cup_integrator_t
+
+  type, public :: cup_set_t
+    type(c_ptr) :: ptr = c_null_ptr
+    integer :: dim = 0   !< n (cached at creation)
+  end type cup_set_t
+
+  type, public :: cup_setproj_t
+    type(c_ptr) :: ptr = c_null_ptr
+    integer :: dim = 0   !< n of its set
+  end type cup_setproj_t
 
   type, public :: cup_scene_t
     type(c_ptr) :: ptr = c_null_ptr
@@ -238,6 +287,40 @@ module catchup_types
       type(c_ptr), value :: ctx
       integer(c_int) :: stat
     end function cup_step_fn
+
+    !> A term of f by its exact integral over [t0, t1], x frozen: write the n
+    !> entries of F; nonzero stops the run.
+    function cup_rhs_integral_fn(t0, t1, x, F, ctx) result(stat) bind(C)
+      import :: c_double, c_ptr, c_int
+      real(c_double), value :: t0, t1
+      real(c_double), intent(in) :: x(*)
+      real(c_double), intent(inout) :: F(*)
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_rhs_integral_fn
+
+    !> A projection oracle: z, an (eps, eta)-approximate projection of x onto
+    !> C(t), and what it certifies; nonzero stops the run (CUP_ERR_CALLBACK).
+    function cup_oracle_fn(t, x, eps, eta, z, eps_cert, eta_cert, ctx) result(stat) bind(C)
+      import :: c_double, c_ptr, c_int
+      real(c_double), value :: t, eps, eta
+      real(c_double), intent(in) :: x(*)
+      real(c_double), intent(inout) :: z(*)
+      real(c_double), intent(out) :: eps_cert, eta_cert
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_oracle_fn
+
+    !> The rows of a state-dependent polyset at (t, x): append them with
+    !> cup_rowbuf_add(rows, ...); nonzero stops the run.
+    function cup_rows_fn(t, x, rows, ctx) result(stat) bind(C)
+      import :: c_double, c_ptr, c_int
+      real(c_double), value :: t
+      real(c_double), intent(in) :: x(*)
+      type(c_ptr), value :: rows, ctx
+      integer(c_int) :: stat
+    end function cup_rows_fn
   end interface
-  public :: cup_input_fn, cup_rhs_fn, cup_sample_fn, cup_step_fn
+  public :: cup_input_fn, cup_rhs_fn, cup_sample_fn, cup_step_fn, cup_rhs_integral_fn, &
+    cup_oracle_fn, cup_rows_fn
 end module catchup_types

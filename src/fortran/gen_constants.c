@@ -1,7 +1,7 @@
 /* gen_constants — writes catchup_constants.f90, the Fortran named constants
  * of the C headers, at build time: the status codes come from the one
  * CUP_STATUS_LIST X-macro, the choice enums from theirs (CUP_SCHEME_LIST,
- * CUP_PROJ_METHOD_LIST, CUP_WAVE_LIST, CUP_OUTPUT_LIST), the rest from their
+ * CUP_PROJ_METHOD_LIST, CUP_WAVE_LIST, CUP_OUTPUT_LIST, CUP_SET_LIST), the rest from their
  * C enumerators, so the Fortran numbers are the compiler's and cannot drift
  * from the headers.
  *
@@ -88,6 +88,9 @@ int main(int argc, char **argv) {
   fprintf(f, "\n  ! enum cup_output_kind (integrator.h, CUP_OUTPUT_LIST)\n");
   CUP_OUTPUT_LIST(CONST5_)
   CONST(f, CUP_OUTPUT_COUNT);
+  fprintf(f, "\n  ! enum cup_set_kind (set.h, CUP_SET_LIST)\n");
+  CUP_SET_LIST(CONST4_)
+  CONST(f, CUP_SET_COUNT);
 #undef CONST4_
 #undef CONST5_
 

@@ -25,22 +25,22 @@ static int gl_nodes(int order, double *node, double *weight) {
   return CUP_OK;
 }
 
-static void dense_A(const cup_lcs *L, double *a) {
-  int n = L->n;
+static void dense_A(const cup_drift *D, double *a) {
+  int n = D->n;
   memset(a, 0, sizeof(double) * (size_t)n * n);
-  if (!L->has_A) return;
+  if (!D->has_A) return;
   for (int j = 0; j < n; j++)
-    for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) a[L->A.i[k] + (size_t)j * n] = L->A.x[k];
+    for (int k = D->A.p[j]; k < D->A.p[j + 1]; k++) a[D->A.i[k] + (size_t)j * n] = D->A.x[k];
 }
 
-double cup_freestep_h_rho(const cup_lcs *L, double h) {
-  int n = L->n;
-  if (!L->has_A) return 0;
+double cup_freestep_h_rho(const cup_drift *D, double h) {
+  int n = D->n;
+  if (!D->has_A) return 0;
   if (n > CUP_IMPLICIT_MAX_DIM) {            /* Gershgorin: rho <= max row sum of |A| */
     double *row = calloc((size_t)n, sizeof(double)), r = 0;
     if (!row) return INFINITY;
     for (int j = 0; j < n; j++)
-      for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) row[L->A.i[k]] += fabs(L->A.x[k]);
+      for (int k = D->A.p[j]; k < D->A.p[j + 1]; k++) row[D->A.i[k]] += fabs(D->A.x[k]);
     for (int i = 0; i < n; i++) r = fmax(r, row[i]);
     free(row);
     return h * r;
@@ -51,7 +51,7 @@ double cup_freestep_h_rho(const cup_lcs *L, double h) {
   double rho = INFINITY;
   if (a && ev && w) {
     for (int j = 0; j < n; j++)
-      for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) gsl_matrix_set(a, (size_t)L->A.i[k], (size_t)j, L->A.x[k]);
+      for (int k = D->A.p[j]; k < D->A.p[j + 1]; k++) gsl_matrix_set(a, (size_t)D->A.i[k], (size_t)j, D->A.x[k]);
     gsl_error_handler_t *old = gsl_set_error_handler_off();
     if (gsl_eigen_nonsymm(a, ev, w) == 0) {
       rho = 0;
@@ -74,7 +74,7 @@ static int gen_states(const cup_term *t) {
 }
 
 static int exp_init(cup_freestep *fs, char *errmsg) {
-  const cup_lcs *L = fs->L;
+  const cup_drift *D = &fs->d;
   const cup_input *u = fs->u;
   int n = fs->n, fail = 0;
   int nterms = u && !u->fn ? u->nterms : 0;
@@ -96,14 +96,14 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
   fs->xa2 = zalloc((size_t)na, sizeof(double), &fail);
   if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "exponential scheme: out of memory");
   /* M = [A  E_coupling; 0  W] */
-  if (L->has_A)
+  if (D->has_A)
     for (int j = 0; j < n; j++)
-      for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) fs->M[L->A.i[k] + (size_t)j * na] = L->A.x[k];
+      for (int k = D->A.p[j]; k < D->A.p[j + 1]; k++) fs->M[D->A.i[k] + (size_t)j * na] = D->A.x[k];
   for (int k = 0; k < nterms; k++) {
     const cup_term *t = &u->terms[k];
     int g = n + fs->gen_of_term[k];
-    if (L->has_E)                            /* x' += E(:, comp) * (first generator state) */
-      for (int q = L->E.p[t->comp]; q < L->E.p[t->comp + 1]; q++) fs->M[L->E.i[q] + (size_t)g * na] = L->E.x[q];
+    if (D->has_E)                            /* x' += E(:, comp) * (first generator state) */
+      for (int q = D->E.p[t->comp]; q < D->E.p[t->comp + 1]; q++) fs->M[D->E.i[q] + (size_t)g * na] = D->E.x[q];
     if (t->kind == CUP_WAVE_SINE) {
       fs->M[g + (size_t)(g + 1) * na] = t->omega;     /* s' = om c */
       fs->M[(g + 1) + (size_t)g * na] = -t->omega;    /* c' = -om s */
@@ -115,14 +115,14 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
   for (size_t q = 0; q < NA; q++) hM[q] = fs->h * fs->M[q];
   cup_dense_expm(hM, na, fs->Eh, fs->ework);
   /* callback input: Gauss-Legendre convolution with e^{A h (1 - tau)} E */
-  if (u && u->fn && L->has_E) {
+  if (u && u->fn && D->has_E) {
     fs->nu = 8;
     if (gl_nodes(fs->nu, fs->unode, fs->uweight)) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
     fs->Q = zalloc((size_t)fs->nu * n * fs->p, sizeof(double), &fail);
     double *expA = zalloc((size_t)n * n, sizeof(double), &fail), *hA = zalloc((size_t)n * n, sizeof(double), &fail);
     double *w3 = zalloc(3 * (size_t)n * n, sizeof(double), &fail);
     if (fail) { free(expA); free(hA); free(w3); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
-    dense_A(L, hA);
+    dense_A(D, hA);
     for (int q = 0; q < fs->nu; q++) {
       double tau = fs->h * (1 - fs->unode[q]);
       double *sc = fs->Es;                   /* tau A, then exp */
@@ -132,7 +132,7 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
       for (int c = 0; c < fs->p; c++)
         for (int r = 0; r < n; r++) {
           double s = 0;
-          for (int k = L->E.p[c]; k < L->E.p[c + 1]; k++) s += expA[r + (size_t)L->E.i[k] * n] * L->E.x[k];
+          for (int k = D->E.p[c]; k < D->E.p[c + 1]; k++) s += expA[r + (size_t)D->E.i[k] * n] * D->E.x[k];
           Qq[r + (size_t)c * n] = s;
         }
     }
@@ -212,7 +212,7 @@ static int implicit_init(cup_freestep *fs, char *errmsg) {
   fs->lu = zalloc((size_t)n * n, sizeof(double), &fail);
   fs->piv = zalloc((size_t)n, sizeof(int), &fail);
   if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "implicit scheme: out of memory");
-  dense_A(fs->L, fs->lu);
+  dense_A(&fs->d, fs->lu);
   for (size_t q = 0; q < (size_t)n * n; q++) fs->lu[q] *= -fs->h;
   for (int i = 0; i < n; i++) fs->lu[i + (size_t)i * n] += 1;
   int bad = cup_dense_lu(fs->lu, n, fs->piv);
@@ -233,7 +233,7 @@ static int theta_init(cup_freestep *fs, double theta, char *errmsg) {
   fs->W = zalloc((size_t)n * n, sizeof(double), &fail);
   fs->rhs = zalloc((size_t)n, sizeof(double), &fail);
   if (fail) return cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
-  dense_A(fs->L, fs->lu);
+  dense_A(&fs->d, fs->lu);
   for (size_t q = 0; q < (size_t)n * n; q++) fs->lu[q] *= -fs->h * theta;
   for (int i = 0; i < n; i++) fs->lu[i + (size_t)i * n] += 1;
   int bad = cup_dense_lu(fs->lu, n, fs->piv);
@@ -251,13 +251,13 @@ static int theta_init(cup_freestep *fs, double theta, char *errmsg) {
  *   implicit  Phi = (I - h A)^-1,      Gam = Phi E,   f term through Phi
  *   theta     Phi = I + h W A,         Gam = W E,     f term through W */
 static int affine_init(cup_freestep *fs, char *errmsg) {
-  const cup_lcs *L = fs->L;
+  const cup_drift *D = &fs->d;
   int n = fs->n, p = fs->p, fail = 0;
   fs->Phi = zalloc((size_t)n * n, sizeof(double), &fail);
   fs->Gam = zalloc((size_t)n * (p ? p : 1), sizeof(double), &fail);
   double *A = zalloc((size_t)n * n, sizeof(double), &fail);
   if (fail) { free(A); return cup_fail(errmsg, CUP_ERR_NOMEM, "free step: out of memory"); }
-  dense_A(L, A);
+  dense_A(D, A);
   const double *M = NULL;                 /* the map applied after h A x + E u */
   if (fs->scheme == CUP_SCHEME_IMPLICIT) {
     for (int j = 0; j < n; j++) {         /* Phi = (I - h A)^-1, column by column */
@@ -275,11 +275,11 @@ static int affine_init(cup_freestep *fs, char *errmsg) {
         fs->Phi[i + (size_t)j * n] = (i == j) + fs->h * acc;
       }
   }
-  if (L->has_E)                           /* Gam = M E */
+  if (D->has_E)                           /* Gam = M E */
     for (int c = 0; c < p; c++)
-      for (int k = L->E.p[c]; k < L->E.p[c + 1]; k++)
+      for (int k = D->E.p[c]; k < D->E.p[c + 1]; k++)
         for (int i = 0; i < n; i++)
-          fs->Gam[i + (size_t)c * n] += (M ? M[i + (size_t)L->E.i[k] * n] : (i == L->E.i[k])) * L->E.x[k];
+          fs->Gam[i + (size_t)c * n] += (M ? M[i + (size_t)D->E.i[k] * n] : (i == D->E.i[k])) * D->E.x[k];
   fs->Fmap = M;
   /* row-major for the step: each entry of x_free is one dot product kept
    * in a register (column sweeps chain every update through memory) */
@@ -303,7 +303,7 @@ static void waveform_step_integral(cup_freestep *fs, double t0, double t1);
 
 /* int u over the step into fs->ubuf (p entries); *has = 0 without input. */
 static int step_input(cup_freestep *fs, double t0, double t1, int *has) {
-  *has = fs->u && fs->L->has_E;
+  *has = fs->u && fs->d.has_E;
   if (!*has || fs->const_input) return CUP_OK;   /* a constant input: ubuf holds h u */
   if (fs->u->fn) return cup_input_integral_ws(fs->u, t0, t1, fs->ubuf, &fs->qws);
   waveform_step_integral(fs, t0, t1);
@@ -351,21 +351,23 @@ static int affine_apply(cup_freestep *fs, double t0, double t1, const double *re
   return st;
 }
 
-int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
-                      double theta, double h, int f_order, char *errmsg) {
+int cup_freestep_init(cup_freestep *fs, const cup_drift *D, const cup_polyset *K, const cup_input *u,
+                      int scheme, double theta, double h, int f_order, char *errmsg) {
   memset(fs, 0, sizeof *fs);
   fs->scheme = scheme;
-  fs->n = L->n;
-  fs->p = L->p;
+  fs->n = D->n;
+  fs->p = D->p;
   fs->h = h;
-  fs->L = L;
-  fs->u = L->p > 0 ? u : NULL;
+  fs->d = *D;
+  fs->K = K;
+  fs->u = D->p > 0 ? u : NULL;
   int n = fs->n, p = fs->p, fail = 0;
   if (p > 0 && !u)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the LCS has %d input(s) but no input u(t) was given", p);
-  if (u && L->p > 0 && cup_input_dim(u) != p)
-    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the LCS expects %d",
-                    cup_input_dim(u), p);
+    return cup_fail(errmsg, CUP_ERR_ARG, "the %s has %d input(s) but no input u(t) was given",
+                    D->what, p);
+  if (u && D->p > 0 && cup_input_dim(u) != p)
+    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the %s expects %d",
+                    cup_input_dim(u), D->what, p);
   fs->ubuf = zalloc((size_t)p + 1, sizeof(double), &fail);
   fs->eu_const = zalloc((size_t)n, sizeof(double), &fail);
   fs->fsum = zalloc((size_t)n, sizeof(double), &fail);
@@ -391,9 +393,9 @@ int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, in
   }
   /* a constant input is integrated once */
   fs->const_input = !fs->u || cup_input_is_constant(fs->u);
-  if (fs->u && fs->const_input && L->has_E) {   /* ubuf keeps h u for the affine path */
+  if (fs->u && fs->const_input && D->has_E) {   /* ubuf keeps h u for the affine path */
     cup_input_integral_ws(fs->u, 0, h, fs->ubuf, NULL);
-    cup_sparse_gaxpy(&L->E, fs->ubuf, fs->eu_const);
+    cup_sparse_gaxpy(&D->E, fs->ubuf, fs->eu_const);
   }
   int st = CUP_OK;
   if (scheme == CUP_SCHEME_IMPLICIT) st = implicit_init(fs, errmsg);
@@ -435,8 +437,8 @@ static void waveform_step_integral(cup_freestep *fs, double t0, double t1) {
 /* xf += E int_{t0}^{t1} u (nothing without input; the precomputed h E u
  * for a constant one). */
 static int add_input(cup_freestep *fs, double t0, double t1, double *xf) {
-  const cup_lcs *L = fs->L;
-  if (!fs->u || !L->has_E) return CUP_OK;
+  const cup_drift *D = &fs->d;
+  if (!fs->u || !D->has_E) return CUP_OK;
   if (fs->const_input) {
     for (int i = 0; i < fs->n; i++) xf[i] += fs->eu_const[i];
     return CUP_OK;
@@ -445,19 +447,43 @@ static int add_input(cup_freestep *fs, double t0, double t1, double *xf) {
   if (fs->u->fn) st = cup_input_integral_ws(fs->u, t0, t1, fs->ubuf, &fs->qws);
   else waveform_step_integral(fs, t0, t1);
   if (st < 0) return st;
-  cup_sparse_gaxpy(&L->E, fs->ubuf, xf);
+  cup_sparse_gaxpy(&D->E, fs->ubuf, xf);
   return st;
 }
 
-/* int_{t0}^{t1} f(s, x) ds by Gauss-Legendre, x frozen (paper, Sec. 3). */
-static int rhs_term(cup_freestep *fs, double t0, const double *x, cup_rhs_fn f, void *ctx) {
+int cup_freestep_add_rhs(cup_freestep *fs, cup_rhs_fn f, void *ctx) {
+  if (!f) return CUP_OK;
+  if (fs->nrhs == CUP_RHS_MAX) return CUP_ERR_ARG;
+  fs->fcb[fs->nrhs] = f;
+  fs->fcb_ctx[fs->nrhs++] = ctx;
+  fs->has_f = 1;
+  return CUP_OK;
+}
+
+void cup_freestep_set_rhs_integral(cup_freestep *fs, cup_rhs_integral_fn F, void *ctx) {
+  fs->rhs_int = F;
+  fs->rhs_int_ctx = ctx;
+  fs->has_f = fs->nrhs > 0 || F;
+}
+
+/* int_{t0}^{t1} f(s, x) ds, x frozen (paper, Sec. 3): Gauss-Legendre for the
+ * pointwise callbacks, the user's own integral for the other. */
+static int rhs_term(cup_freestep *fs, double t0, double t1, const double *x) {
   int n = fs->n;
   memset(fs->fsum, 0, sizeof(double) * (size_t)n);
-  for (int q = 0; q < fs->nf; q++) {
-    if (f(t0 + fs->fnode[q] * fs->h, x, fs->fbuf, ctx) != 0) return CUP_ERR_CALLBACK;
+  for (int c = 0; c < fs->nrhs; c++)
+    for (int q = 0; q < fs->nf; q++) {
+      if (fs->fcb[c](t0 + fs->fnode[q] * fs->h, x, fs->fbuf, fs->fcb_ctx[c]) != 0) return CUP_ERR_CALLBACK;
+      for (int i = 0; i < n; i++) {
+        if (!isfinite(fs->fbuf[i])) return CUP_ERR_CALLBACK;
+        fs->fsum[i] += fs->h * fs->fweight[q] * fs->fbuf[i];
+      }
+    }
+  if (fs->rhs_int) {
+    if (fs->rhs_int(t0, t1, x, fs->fbuf, fs->rhs_int_ctx) != 0) return CUP_ERR_CALLBACK;
     for (int i = 0; i < n; i++) {
       if (!isfinite(fs->fbuf[i])) return CUP_ERR_CALLBACK;
-      fs->fsum[i] += fs->h * fs->fweight[q] * fs->fbuf[i];
+      fs->fsum[i] += fs->fbuf[i];
     }
   }
   return CUP_OK;
@@ -478,19 +504,18 @@ static int exp_callback_input(cup_freestep *fs, double t0, double *xf) {
   return CUP_OK;
 }
 
-int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf,
-                       cup_rhs_fn f, void *fctx) {
-  const cup_lcs *L = fs->L;
-  int n = fs->n, st = CUP_OK;
-  if (f && (st = rhs_term(fs, t0, x, f, fctx)) < 0) return st;
-  if (fs->affine) return cup_merge(st, affine_apply(fs, t0, t1, x, xf, f != NULL));
+int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf) {
+  const cup_drift *D = &fs->d;
+  int n = fs->n, st = CUP_OK, f = fs->has_f;
+  if (f && (st = rhs_term(fs, t0, t1, x)) < 0) return st;
+  if (fs->affine) return cup_merge(st, affine_apply(fs, t0, t1, x, xf, f));
   switch (fs->scheme) {
     case CUP_SCHEME_EXPLICIT:
       cup_copy(xf, x, n);
-      if (L->has_A)                          /* + h A x */
+      if (D->has_A)                          /* + h A x */
         for (int j = 0; j < n; j++) {
           double hx = fs->h * x[j];
-          for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) xf[L->A.i[k]] += L->A.x[k] * hx;
+          for (int k = D->A.p[j]; k < D->A.p[j + 1]; k++) xf[D->A.i[k]] += D->A.x[k] * hx;
         }
       if ((st = cup_merge(st, add_input(fs, t0, t1, xf))) < 0) return st;
       break;
@@ -501,10 +526,10 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
       return st;
     case CUP_SCHEME_THETA:                  /* x + W (h A x + E int u + int f) */
       cup_zero(fs->rhs, n);
-      if (L->has_A)
+      if (D->has_A)
         for (int j = 0; j < n; j++) {
           double hx = fs->h * x[j];
-          for (int k = L->A.p[j]; k < L->A.p[j + 1]; k++) fs->rhs[L->A.i[k]] += L->A.x[k] * hx;
+          for (int k = D->A.p[j]; k < D->A.p[j + 1]; k++) fs->rhs[D->A.i[k]] += D->A.x[k] * hx;
         }
       if (f)
         for (int i = 0; i < n; i++) fs->rhs[i] += fs->fsum[i];
@@ -517,7 +542,7 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
       return st;
     case CUP_SCHEME_EXPONENTIAL:
       exp_step(fs, t0, t1, x, xf);
-      if (fs->u && fs->u->fn && L->has_E && exp_callback_input(fs, t0, xf)) return CUP_ERR_CALLBACK;
+      if (fs->u && fs->u->fn && D->has_E && exp_callback_input(fs, t0, xf)) return CUP_ERR_CALLBACK;
       break;
   }
   if (f)
@@ -544,9 +569,9 @@ static void linear_minus_identity(const cup_freestep *fs, double *v, double *wor
 }
 
 double cup_freestep_splitting(const cup_freestep *fs, int *row) {
-  const cup_polyset *K = fs->L->K;
+  const cup_polyset *K = fs->K;
   if (row) *row = -1;
-  if ((fs->scheme != CUP_SCHEME_IMPLICIT && fs->scheme != CUP_SCHEME_EXPONENTIAL) || !K->dense ||
+  if ((fs->scheme != CUP_SCHEME_IMPLICIT && fs->scheme != CUP_SCHEME_EXPONENTIAL) || !K || !K->dense ||
       K->m == 0)
     return 0;
   int n = fs->n;

@@ -9,7 +9,7 @@
 
 #include "catchup/integrator.h"
 #include "model/input_impl.h"
-#include "model/lcs_impl.h"
+#include "set/polyset_impl.h"
 
 /* Dense limits of the implicit and exponential schemes (the explicit scheme
  * has none: A stays sparse). */
@@ -20,11 +20,30 @@
  * dense affine map x_free = Phi x + Gam int u (+ the f term). */
 #define CUP_AFFINE_MAX_DIM 32
 
+/* The affine part of f, A x + E u(t) (an LCS's, or a general process's);
+ * the matrices are shared, not owned. */
+typedef struct cup_drift {
+  int n, p;
+  int has_A, has_E;
+  cup_sparse A, E;          /* n x n, n x p when present */
+  const char *what;         /* "LCS", "process": for messages */
+} cup_drift;
+
+/* Pointwise callbacks f(t, x) a free step sums (an LCS's perturbation and a
+ * process's f). */
+#define CUP_RHS_MAX 2
+
 typedef struct cup_freestep {
   int scheme, n, p;
   double h;
-  const cup_lcs *L;
+  cup_drift d;
+  const cup_polyset *K;     /* the rows the splitting check looks at, or NULL */
   const cup_input *u;
+  int has_f, nrhs;          /* f: pointwise callbacks and/or an exact integral */
+  cup_rhs_fn fcb[CUP_RHS_MAX];
+  void *fcb_ctx[CUP_RHS_MAX];
+  cup_rhs_integral_fn rhs_int;
+  void *rhs_int_ctx;
   int const_input;          /* u constant: E int u = h E u precomputed */
   double *eu_const;         /* n */
   double *ubuf, *fsum, *fbuf, *work;       /* p, n, n, 2 n scratch */
@@ -55,8 +74,14 @@ typedef struct cup_freestep {
   double *Q;                /* callback input: e^{A h (1 - tau_q)} E, n x p per node */
 } cup_freestep;
 
-int cup_freestep_init(cup_freestep *fs, const cup_lcs *L, const cup_input *u, int scheme,
-                      double theta, double h, int f_order, char *errmsg);
+/* K (may be NULL) is the polyset of the splitting check. */
+int cup_freestep_init(cup_freestep *fs, const cup_drift *D, const cup_polyset *K, const cup_input *u,
+                      int scheme, double theta, double h, int f_order, char *errmsg);
+/* Add f(t, x) (NULL: nothing), integrated by Gauss-Legendre; CUP_ERR_ARG
+ * beyond CUP_RHS_MAX. */
+int cup_freestep_add_rhs(cup_freestep *fs, cup_rhs_fn f, void *ctx);
+/* Add a term given by its exact integral over a step (NULL: none). */
+void cup_freestep_set_rhs_integral(cup_freestep *fs, cup_rhs_integral_fn F, void *ctx);
 void cup_freestep_free(cup_freestep *fs);
 /* The splitting defect of the implicit and exponential schemes. They move
  * by the free step W = (I - h A)^-1 or e^{hA} and then project along
@@ -71,8 +96,8 @@ void cup_freestep_free(cup_freestep *fs);
  * (the fraction of b_i relaxed in one step: about h / tau_i while small,
  * 1 when h >> tau_i) over the rows whose relaxation moves other states,
  * ||(I - Pi_i)(W - I) b_i||_P > CUP_SPLIT_LEAK_MIN ||b_i||_P; *row (may be
- * NULL) is that row, or -1. 0 for other schemes and for polysets without
- * their dense form; NaN without memory. */
+ * NULL) is that row, or -1. 0 for other schemes, without a polyset, and
+ * for polysets without their dense form; NaN without memory. */
 #define CUP_SPLIT_LEAK_MIN 1e-9
 /* The integrator warns (CUP_WARN_SPLITTING) above this alpha: h above the
  * direction's time constant, where the limit as n grows is wrong until h
@@ -81,10 +106,9 @@ void cup_freestep_free(cup_freestep *fs);
 double cup_freestep_splitting(const cup_freestep *fs, int *row);
 /* xf from x over [t0, t1] (t1 - t0 = h). Returns CUP_OK, CUP_ERR_CALLBACK,
  * or CUP_WARN_QUADRATURE. */
-int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf,
-                       cup_rhs_fn f, void *fctx);
+int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf);
 /* h * spectral radius of A (dense eigenvalues up to CUP_IMPLICIT_MAX_DIM,
  * a Gershgorin upper bound beyond). */
-double cup_freestep_h_rho(const cup_lcs *L, double h);
+double cup_freestep_h_rho(const cup_drift *D, double h);
 
 #endif

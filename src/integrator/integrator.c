@@ -15,14 +15,23 @@
 #include "lcp/step.h"
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
+#include "set/set_impl.h"
 
 struct cup_integrator {
-  const cup_lcs *L;
   const cup_input *u;
   cup_integrator_options o;
   int n, m, p;
   double h, eps_n, eta_n, h_rho, split;
   int split_row;
+  /* the set: a polyset is stepped here (K, G, the projector or the LCP
+   * step), any other set through its cup_setproj */
+  const cup_set *S;
+  cup_set *S_own;           /* an LCS's polyset, wrapped */
+  const cup_polyset *K;     /* the polyset's rows, or NULL */
+  const cup_sparse *G;      /* the offset's motion, or NULL */
+  int fixed;                /* the polyset does not move */
+  cup_setproj *sp;          /* other sets */
+  cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
   cup_freestep fs;
   cup_projector *proj;
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
@@ -146,22 +155,44 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   return CUP_OK;
 }
 
-int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
-                          const cup_integrator_options *opt, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
-  *out = NULL;
-  if (!L) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
-  cup_integrator_options o;
-  if (opt) o = *opt; else cup_integrator_options_default(&o);
-  int st = validate(&o, errmsg);
-  if (st) return st;
-  cup_integrator *I = calloc(1, sizeof *I);
-  if (!I) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-  I->L = L; I->u = u; I->o = o;
-  I->n = L->n; I->m = L->m; I->p = L->p;
-  I->h = o.T / (double)o.n;
-  I->eps_n = cup_schedule_value(&o.eps, o.n);
-  I->eta_n = cup_schedule_value(&o.eta, o.n);
+/* The polyset path: the projector, and the exact LCP step where it is
+ * cheaper or the scheme needs it. */
+static int polyset_setup(cup_integrator *I, char *errmsg) {
+  const cup_integrator_options *o = &I->o;
+  int st = CUP_OK;
+  /* The theta step with W = I is the P-projection of the explicit free
+   * point, solved exactly by principal pivoting on the m x m dual: for a
+   * small dense set that is what the auto projector would do, certified the
+   * same way, in fewer operations (70 against 107 ns a step on the paper's
+   * circuit). A user's feasible point keeps the projector. */
+  I->use_theta = o->scheme == CUP_SCHEME_THETA ||
+                 (o->scheme == CUP_SCHEME_EXPLICIT && o->proj.method == CUP_PROJ_AUTO && I->K->dense &&
+                  !o->proj.feasible_point);
+  if (I->use_theta && !I->K->dense)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
+                    "use the explicit, implicit or exponential scheme", I->K->m, I->K->n, CUP_DENSE_MAX_ROWS,
+                    CUP_DENSE_MAX_DIM);
+  if (I->use_theta) {
+    double *W = I->fs.W, *eye = NULL;
+    if (!W) {
+      eye = calloc((size_t)I->n * (size_t)I->n, sizeof(double));
+      if (!eye) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+      for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
+      W = eye;
+    }
+    if (cup_lcp_step_init(&I->th, I->K, W, I->h)) st = cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
+    free(eye);
+  }
+  return st;
+}
+
+/* Everything but the model: buffers, the free step, the projection. */
+static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+  const cup_integrator_options *o = &I->o;
+  I->h = o->T / (double)o->n;
+  I->eps_n = cup_schedule_value(&o->eps, o->n);
+  I->eta_n = cup_schedule_value(&o->eta, o->n);
   size_t N = (size_t)I->n, M = (size_t)I->m + 1, P = (size_t)I->p + 1;
   I->x = calloc(N, sizeof(double));
   I->xnew = calloc(N, sizeof(double));
@@ -169,47 +200,111 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->g = calloc(M, sizeof(double));
   I->ut = calloc(P, sizeof(double));
   I->s0 = calloc(M, sizeof(double));
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0) {
-    cup_integrator_free(&I);
+  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-  }
-  st = cup_freestep_init(&I->fs, L, u, o.scheme, o.theta, I->h, o.f_order, errmsg);
-  /* The theta step with W = I is the P-projection of the explicit free
-   * point, solved exactly by principal pivoting on the m x m dual: for a
-   * small dense set that is what the auto projector would do, certified the
-   * same way, in fewer operations (70 against 107 ns a step on the paper's
-   * circuit). A user's feasible point keeps the projector. */
-  I->use_theta = o.scheme == CUP_SCHEME_THETA ||
-                 (o.scheme == CUP_SCHEME_EXPLICIT && o.proj.method == CUP_PROJ_AUTO && L->K->dense &&
-                  !o.proj.feasible_point);
-  if (!st && I->use_theta && !L->K->dense)
-    st = cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
-                  "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
-                  "use the explicit, implicit or exponential scheme", L->K->m, L->K->n, CUP_DENSE_MAX_ROWS,
-                  CUP_DENSE_MAX_DIM);
-  if (!st && I->use_theta) {
-    double *W = I->fs.W, *eye = NULL;
-    if (!W) {
-      eye = calloc((size_t)I->n * (size_t)I->n, sizeof(double));
-      if (!eye) st = cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-      for (int j = 0; eye && j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
-      W = eye;
-    }
-    if (!st && cup_lcp_step_init(&I->th, L->K, W, I->h))
-      st = cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
-    free(eye);
-  }
+  if (o->scheme == CUP_SCHEME_THETA && !I->K)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "theta scheme: the set is a %s; the theta step solves an LCP on a polyset's rows "
+                    "(use the explicit, implicit or exponential scheme)", cup_set_kind_name(I->S->kind));
+  int st = cup_freestep_init(&I->fs, D, I->K, I->u, o->scheme, o->theta, I->h, o->f_order, errmsg);
+  if (!st) st = cup_freestep_add_rhs(&I->fs, o->f, o->f_ctx);
+  if (!st && pd) st = cup_freestep_add_rhs(&I->fs, pd->f, pd->f_ctx);
+  if (!st && pd) cup_freestep_set_rhs_integral(&I->fs, pd->f_integral, pd->f_integral_ctx);
+  if (!st && I->K) st = polyset_setup(I, errmsg);
   /* the paper's tolerances are absolute; a zero schedule asks for the exact
    * projection, certified relative to the problem's scale */
-  cup_projector_options po = o.proj;
+  cup_projector_options po = o->proj;
   po.eps_abs = I->eps_n;
   po.eps_rel = I->eps_n > 0 ? 0 : 1e-12;
   po.eta_abs = I->eta_n;
   po.eta_rel = I->eta_n > 0 ? 0 : 1e-10;
-  if (!st) st = cup_projector_create(&I->proj, L->K, &po, errmsg);
-  if (st) { cup_integrator_free(&I); return st; }
-  I->h_rho = cup_freestep_h_rho(L, I->h);
+  if (!st && I->K) st = cup_projector_create(&I->proj, I->K, &po, errmsg);
+  if (!st && !I->K) st = cup_setproj_create(&I->sp, I->S, &po, errmsg);
+  if (st) return st;
+  I->h_rho = cup_freestep_h_rho(D, I->h);
   I->split = cup_freestep_splitting(&I->fs, &I->split_row);
+  return CUP_OK;
+}
+
+static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st) {
+  cup_integrator_options o;
+  if (opt) o = *opt; else cup_integrator_options_default(&o);
+  *st = validate(&o, errmsg);
+  if (*st) return NULL;
+  cup_integrator *I = calloc(1, sizeof *I);
+  if (!I) *st = cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  else I->o = o;
+  return I;
+}
+
+int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
+                          const cup_integrator_options *opt, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
+  *out = NULL;
+  if (!L) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
+  int st;
+  cup_integrator *I = integrator_new(opt, errmsg, &st);
+  if (!I) return st;
+  I->u = u;
+  I->n = L->n; I->m = L->m; I->p = L->p;
+  I->K = L->K;
+  I->G = L->has_G ? &L->G : NULL;
+  I->fixed = L->fixed;
+  st = cup_set_wrap_polyset(&I->S_own, L->K, I->G, L->p, errmsg);
+  I->S = I->S_own;
+  cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
+  if (!st) st = setup(I, &D, NULL, errmsg);
+  if (st) { cup_integrator_free(&I); return st; }
+  *out = I;
+  return CUP_OK;
+}
+
+static int present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
+
+static int process_model(cup_integrator *I, const cup_process_desc *d, cup_drift *D, char *errmsg) {
+  const cup_set *S = d->C;
+  if (!S) return cup_fail(errmsg, CUP_ERR_ARG, "process: the set C is NULL");
+  if (d->n != S->n)
+    return cup_fail(errmsg, CUP_ERR_DIM, "process: n = %d but the set has dimension %d", d->n, S->n);
+  if (d->p < 0) return cup_fail(errmsg, CUP_ERR_DIM, "process: p = %d must be >= 0", d->p);
+  if (S->p > 0 && S->p != d->p)
+    return cup_fail(errmsg, CUP_ERR_DIM, "process: the set moves with %d parameters but p = %d", S->p, d->p);
+  int st = CUP_OK;
+  *D = (cup_drift){d->n, d->p, present(&d->A), present(&d->E), {0}, {0}, "process"};
+  if (D->has_A) st = cup_sparse_copy(&I->A_own, &d->A, "A", d->n, d->n, errmsg);
+  if (!st && D->has_E) {
+    if (d->p == 0) return cup_fail(errmsg, CUP_ERR_DIM, "process: E is given but p = 0");
+    st = cup_sparse_copy(&I->E_own, &d->E, "E", d->n, d->p, errmsg);
+  }
+  D->A = I->A_own;
+  D->E = I->E_own;
+  I->S = S;
+  I->u = d->u;
+  I->n = d->n;
+  I->p = d->p;
+  if (S->kind == CUP_SET_POLYSET) {
+    I->K = S->K;
+    I->m = S->K->m;
+    I->G = S->has_G ? &S->G : NULL;
+    I->fixed = 1;
+    for (int k = 0; I->G && k < I->G->nnz; k++)
+      if (I->G->x[k] != 0) I->fixed = 0;
+  }
+  return st;
+}
+
+int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *d,
+                                  const cup_integrator_options *opt, char *errmsg) {
+  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
+  *out = NULL;
+  if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: process description is NULL");
+  int st;
+  cup_integrator *I = integrator_new(opt, errmsg, &st);
+  if (!I) return st;
+  cup_drift D;
+  st = process_model(I, d, &D, errmsg);
+  if (!st) st = setup(I, &D, d, errmsg);
+  if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
 }
@@ -219,6 +314,10 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_integrator *I = *Ip;
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
+  cup_setproj_free(&I->sp);
+  cup_set_free(&I->S_own);
+  cup_sparse_free(&I->A_own);
+  cup_sparse_free(&I->E_own);
   if (I->use_theta) cup_lcp_step_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0);
   free(I);
@@ -264,12 +363,11 @@ static int stop_at(cup_run_info *info, int status, long k, double t, const char 
   return status;
 }
 
-/* g = F + G u(t) for a moving set. */
+/* g = F + G u(t) for a moving polyset. */
 static int moving_offset(cup_integrator *I, double t) {
-  const cup_lcs *L = I->L;
   if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
-  memcpy(I->g, L->F, sizeof(double) * (size_t)I->m);
-  cup_sparse_gaxpy(&L->G, I->ut, I->g);
+  memcpy(I->g, I->K->g0, sizeof(double) * (size_t)I->m);
+  cup_sparse_gaxpy(I->G, I->ut, I->g);
   if (!I->use_theta) return cup_projector_set_offset(I->proj, I->g);
   for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
     if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
@@ -299,6 +397,53 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
     snprintf(buf, size, "projection failed: %s", cup_status_string(st));
 }
 
+/* The paper assumes x0 in K(0); say so when it is not (the first step
+ * projects it), by the raw slack so that a point on the boundary passes. */
+static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
+  const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
+  if (cup_slack(I->K, g0, I->x, I->s0, NULL) < 0) {
+    info->status = CUP_WARN_X0_OUTSIDE;
+    snprintf(info->message, sizeof info->message,
+             "step 0 (t = 0): x0 is outside K(0); the first step projects it");
+  }
+}
+
+/* The set at t_{k+1} (and x_k), then the projection of the free point. */
+static int general_step(cup_integrator *I, long k, double t, const double *xk, const double *xf,
+                        double *z, cup_proj_info *pi, cup_run_info *info) {
+  if (I->p > 0 && I->u && cup_input_eval(I->u, t, I->ut))
+    return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
+  int st = cup_setproj_move(I->sp, t, I->ut, xk);
+  if (st == CUP_ERR_NONFINITE) {
+    char what[200];
+    snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
+  }
+  if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
+    char what[200];                      /* as on the polyset path: the state overflowed */
+    snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
+             cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+  }
+  if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
+  long rows = cup_setproj_rows(I->sp);
+  if (rows > info->max_rows) info->max_rows = rows;
+  return st;
+}
+
+/* x0 against C(0, x0), by its projection: warn when it moves. */
+static int general_x0(cup_integrator *I, cup_run_info *info) {
+  cup_proj_info pi;
+  int st = general_step(I, 0, 0, I->x, I->x, I->xf, &pi, info);
+  if (st < 0) return st;
+  if (!pi.skipped) {
+    info->status = CUP_WARN_X0_OUTSIDE;
+    snprintf(info->message, sizeof info->message,
+             "step 0 (t = 0): x0 is outside C(0); the first step projects it");
+  }
+  return CUP_OK;
+}
+
 int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx,
                        cup_run_info *info_out) {
   cup_run_info local;
@@ -318,16 +463,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
   memcpy(I->x, x0, sizeof(double) * (size_t)n);
   cup_projector_reset(I->proj);
-  int fixed = I->L->fixed || !I->u;
-  if (fixed) cup_projector_set_offset(I->proj, I->L->F);
-  /* the paper assumes x0 in K(0); say so when it is not (the first step
-   * projects it), by the raw slack so that a point on the boundary passes */
-  const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->L->F;
-  if (cup_slack(I->L->K, g0, I->x, I->s0, NULL) < 0) {
-    info->status = CUP_WARN_X0_OUTSIDE;
-    snprintf(info->message, sizeof info->message,
-             "step 0 (t = 0): x0 is outside K(0); the first step projects it");
-  }
+  int fixed = I->fixed || !I->u;
+  long rebuilds0 = cup_setproj_rebuilds(I->sp);
+  if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
+  if (I->K) polyset_x0(I, fixed, info);
+  else if (general_x0(I, info) < 0) return info->status;
   int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   if (stiff) {
     info->status = CUP_WARN_STIFF;
@@ -351,7 +491,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
   for (long k = 0; k < o->n; k++) {
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
-    int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf, o->f, o->f_ctx);
+    int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
     if (st < 0)
       return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
                      ? "a user callback (input or perturbation) failed or returned NaN/Inf"
@@ -360,13 +500,17 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       info->status = st;
       snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k + 1, t1, cup_status_string(st));
     }
-    if (!fixed && (st = moving_offset(I, t1)) != CUP_OK)
+    cup_proj_info pi;
+    if (I->sp) {
+      st = general_step(I, k + 1, t1, I->x, I->xf, I->xnew, &pi, info);
+      info->set_rebuilds = cup_setproj_rebuilds(I->sp) - rebuilds0;
+      if (st < 0) return st;
+    } else if (!fixed && (st = moving_offset(I, t1)) != CUP_OK) {
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
                      "the input u(t) that moves K failed or returned NaN/Inf");
-    cup_proj_info pi;
-    if (I->use_theta) {
-      double S = cup_polyset_norm(I->L->K, I->xf);
-      const double *g = fixed ? I->L->F : I->g;
+    } else if (I->use_theta) {
+      double S = cup_polyset_norm(I->K, I->xf);
+      const double *g = fixed ? I->K->g0 : I->g;
       st = cup_lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
                               I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
       if (st == CUP_ERR_LINALG) {
@@ -381,7 +525,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
     }
-    if (st < 0) {
+    if (st < 0) {                        /* the polyset path's errors */
       char what[224];
       describe_projection_error(what, sizeof what, st, &pi);
       if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */

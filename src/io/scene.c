@@ -15,27 +15,21 @@
 #include "util/linalg.h"
 #include "util/names.h"
 #include "mtx.h"
+#include "scene_read.h"
+#include "scene_set.h"
 #include "scene_shape.h"
 #include "scene_tree.h"
 
 struct cup_scene {
   char *name;
   cup_lcs *lcs;
+  scene_process *proc;          /* a general process (set:, f:) instead of an LCS */
   cup_input *u;                 /* NULL when p = 0 */
   double *x0;
   cup_integrator_options opt;
   char *eps_spec, *eta_spec;    /* as written */
   char *text;                   /* the document after overrides */
 };
-
-/* What every reader needs: names for messages, the directory of the file. */
-typedef struct rd {
-  st_src src;
-  const char *dir;
-  char *errmsg;
-} rd;
-
-#define KEY_LEN 128              /* dotted keys ("input.1.0.amplitude") */
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
 #define WORD4_(e, v, name, doc) name,
@@ -46,229 +40,6 @@ static const char *const output_names[] = {CUP_OUTPUT_LIST(WORD5_) NULL};
 static const char *const wave_names[] = {CUP_WAVE_LIST(WORD4_) NULL};
 #undef WORD4_
 #undef WORD5_
-
-static int fail(rd *r, int status, const st_node *at, const char *key, const char *fmt, ...)
-  __attribute__((format(printf, 5, 6)));
-static int fail(rd *r, int status, const st_node *at, const char *key, const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  st_verror(r->errmsg, status, &r->src, at, key, fmt, ap);
-  va_end(ap);
-  return status;
-}
-
-/* Dotted keys; a key too long for the buffer ends in "..." */
-static const char *join(char *buf, const char *parent, const char *k) {
-  if (snprintf(buf, KEY_LEN, "%s%s%s", parent, *parent ? "." : "", k) >= KEY_LEN)
-    strcpy(buf + KEY_LEN - 4, "...");
-  return buf;
-}
-
-static const char *joini(char *buf, const char *parent, int i) {
-  if (snprintf(buf, KEY_LEN, "%s.%d", parent, i) >= KEY_LEN) strcpy(buf + KEY_LEN - 4, "...");
-  return buf;
-}
-
-/* ---- keys ---------------------------------------------------------------- */
-
-static int check_keys(rd *r, const st_node *map, const char *mkey, const char *const *known) {
-  const st_node *bad = st_unknown_key(map, known);
-  if (!bad) return CUP_OK;
-  char key[KEY_LEN], hint[160];
-  return fail(r, CUP_ERR_PARSE, bad, join(key, mkey, bad->text), "unknown key (%s)",
-              st_suggest(hint, sizeof hint, bad->text, known));
-}
-
-/* The value of an optional key (NULL if absent or null). */
-static const st_node *opt(const st_node *map, const char *k) {
-  const st_node *v = st_get(map, k, NULL);
-  return st_is_null(v) ? NULL : v;
-}
-
-/* The value of a required key, or an error at the mapping. */
-static int need(rd *r, const st_node *map, const char *mkey, const char *k, const st_node **out) {
-  char key[KEY_LEN];
-  *out = opt(map, k);
-  if (*out) return CUP_OK;
-  return fail(r, CUP_ERR_PARSE, map, join(key, mkey, k), "missing (required)");
-}
-
-static int need_map(rd *r, const st_node *nd, const char *key, const char *what) {
-  char b[64];
-  if (nd->kind == ST_MAP) return CUP_OK;
-  return fail(r, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, st_looks(nd, b, sizeof b));
-}
-
-static int string(rd *r, const st_node *nd, const char *key, const char **out) {
-  char b[64];
-  if (nd->kind != ST_SCALAR || st_is_null(nd))
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", st_looks(nd, b, sizeof b));
-  *out = nd->text;
-  return CUP_OK;
-}
-
-/* ---- numbers ------------------------------------------------------------- */
-
-static int number(rd *r, const st_node *nd, const char *key, double *out) {
-  char b[64];
-  if (nd->kind == ST_SCALAR && nd->quoted && st_number(nd->text, out))
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got the string \"%.40s\": write numbers without quotes)",
-                nd->text);
-  if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, out))
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", st_looks(nd, b, sizeof b));
-  if (!isfinite(*out)) return fail(r, CUP_ERR_NONFINITE, nd, key, "must be finite (got %g)", *out);
-  return CUP_OK;
-}
-
-/* A number >= lo (strict: > lo). */
-static int number_min(rd *r, const st_node *nd, const char *key, double lo, int strict, double *out) {
-  int st = number(r, nd, key, out);
-  if (st) return st;
-  if (strict ? *out > lo : *out >= lo) return CUP_OK;
-  return fail(r, CUP_ERR_PARSE, nd, key, "must be %s %g (got %g)", strict ? ">" : ">=", lo, *out);
-}
-
-/* An integer in [lo, hi]; 1e6 is accepted (an exact integer in a float). */
-static int integer(rd *r, const st_node *nd, const char *key, long lo, long hi, long *out) {
-  double v;
-  int st = number(r, nd, key, &v);
-  if (st) return st;
-  if (v != floor(v)) return fail(r, CUP_ERR_PARSE, nd, key, "must be an integer (got %g)", v);
-  if (v < (double)lo) return fail(r, CUP_ERR_PARSE, nd, key, "must be >= %ld (got %g)", lo, v);
-  if (v > (double)hi) return fail(r, CUP_ERR_PARSE, nd, key, "must be <= %ld (got %g)", hi, v);
-  *out = (long)v;
-  return CUP_OK;
-}
-
-/* ---- matrices ------------------------------------------------------------ */
-
-/* An owned CSC matrix (inline or from a Matrix Market file, mtx.c) and
- * where it was written. */
-typedef struct mat {
-  mtx_csc a;
-  const st_node *at;
-} mat;
-
-static void mat_free(mat *M) {
-  mtx_free(&M->a);
-  M->at = NULL;
-}
-
-static cup_csc mat_view(const mat *M) {
-  cup_csc v = {0};
-  if (M->a.p) v = (cup_csc){M->a.nrow, M->a.ncol, M->a.p, M->a.i, M->a.x};
-  return v;
-}
-
-#define MATRIX_FORMS "a list of rows like [[1, 0], [0, 1]], or {file: name.mtx}"
-
-static int matrix_inline(rd *r, const st_node *nd, const char *key, mat *M) {
-  char k1[KEY_LEN], k2[KEY_LEN], b[64];
-  if (nd->len == 0 || nd->item[0]->kind != ST_SEQ)
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a matrix: " MATRIX_FORMS " (got %s)",
-                nd->len ? "a list of numbers" : "an empty list");
-  int nr = nd->len, nc = nd->item[0]->len;
-  if (nc == 0) return fail(r, CUP_ERR_PARSE, nd->item[0], joini(k1, key, 0), "a row needs at least one entry");
-  for (int i = 0; i < nr; i++) {
-    const st_node *row = nd->item[i];
-    if (row->kind != ST_SEQ)
-      return fail(r, CUP_ERR_PARSE, row, joini(k1, key, i), "expected a row: a list of numbers (got %s)",
-                  st_looks(row, b, sizeof b));
-    if (row->len != nc)
-      return fail(r, CUP_ERR_DIM, row, joini(k1, key, i), "row %d has %d entries but row 0 has %d", i,
-                  row->len, nc);
-  }
-  double *a = malloc(sizeof(double) * (size_t)nr * (size_t)nc);
-  if (!a) return CUP_ERR_NOMEM;
-  int st = CUP_OK;
-  for (int i = 0; i < nr && !st; i++)
-    for (int j = 0; j < nc && !st; j++)
-      st = number(r, nd->item[i]->item[j], joini(k2, joini(k1, key, i), j), &a[(size_t)i * nc + j]);
-  if (!st) st = mtx_from_dense(&M->a, nr, nc, a, (size_t)nc, 1);
-  free(a);
-  return st;
-}
-
-static int matrix_file(rd *r, const st_node *nd, const char *key, mat *M);
-
-static int matrix(rd *r, const st_node *nd, const char *key, mat *M) {
-  char b[64];
-  M->at = nd;
-  if (nd->kind == ST_MAP && st_get(nd, "file", NULL)) return matrix_file(r, nd, key, M);
-  if (nd->kind == ST_SEQ) return matrix_inline(r, nd, key, M);
-  return fail(r, CUP_ERR_PARSE, nd, key, "expected a matrix: " MATRIX_FORMS " (got %s)", st_looks(nd, b, sizeof b));
-}
-
-static int matrix_dims(rd *r, const mat *M, const char *key, int nr, int nc, const char *why) {
-  if (M->a.nrow == nr && M->a.ncol == nc) return CUP_OK;
-  return fail(r, CUP_ERR_DIM, M->at, key, "must be %d x %d (%s), got %d x %d", nr, nc, why, M->a.nrow,
-              M->a.ncol);
-}
-
-static char *resolve(const char *dir, const char *name) {
-  if (name[0] == '/' || !dir || !*dir) return strdup(name);
-  size_t n = strlen(dir) + strlen(name) + 2;
-  char *s = malloc(n);
-  if (s) snprintf(s, n, "%s/%s", dir, name);
-  return s;
-}
-
-static int matrix_file(rd *r, const st_node *nd, const char *key, mat *M) {
-  static const char *const known[] = {"file", NULL};
-  char k1[KEY_LEN];
-  const st_node *fn = NULL;
-  const char *name = "";
-  int st = check_keys(r, nd, key, known);
-  if (!st) st = need(r, nd, key, "file", &fn);
-  if (!st) st = string(r, fn, join(k1, key, "file"), &name);
-  if (st) return st;
-  char *full = resolve(r->dir, name);
-  if (!full) return CUP_ERR_NOMEM;
-  FILE *f = fopen(full, "r");
-  if (!f) {
-    st = fail(r, CUP_ERR_IO, fn, k1, "cannot open '%s': %s", full, strerror(errno));
-    free(full);
-    return st;
-  }
-  char msg[CUP_ERRMSG_LEN];
-  st = mtx_read(f, name, &M->a, msg);
-  fclose(f);
-  free(full);
-  return st == CUP_ERR_PARSE ? fail(r, st, fn, k1, "%s", msg) : st;
-}
-
-/* ---- vectors ------------------------------------------------------------- */
-
-/* `want` numbers: an inline list or a single-column Matrix Market file.
- * `why` says where want comes from ("n = 3"). */
-static int vector(rd *r, const st_node *nd, const char *key, int want, const char *why, double **out) {
-  char k1[KEY_LEN], b[64];
-  *out = NULL;
-  if (nd->kind == ST_MAP && st_get(nd, "file", NULL)) {
-    mat M = {0};
-    int st = matrix(r, nd, key, &M);
-    if (!st && (M.a.ncol != 1 || M.a.nrow != want))
-      st = fail(r, CUP_ERR_DIM, nd, key, "expected a %d x 1 matrix (%s), got %d x %d", want, why, M.a.nrow,
-                M.a.ncol);
-    if (!st && !(*out = calloc((size_t)want, sizeof(double)))) st = CUP_ERR_NOMEM;
-    for (int k = 0; !st && k < M.a.p[1]; k++) (*out)[M.a.i[k]] = M.a.x[k];
-    mat_free(&M);
-    return st;
-  }
-  if (nd->kind != ST_SEQ)
-    return fail(r, CUP_ERR_PARSE, nd, key, "expected a list of %d numbers or {file: name.mtx} (got %s)", want,
-                st_looks(nd, b, sizeof b));
-  if (nd->len != want)
-    return fail(r, CUP_ERR_DIM, nd, key, "expected %d numbers (%s), got %d", want, why, nd->len);
-  double *v = calloc((size_t)want + 1, sizeof(double));
-  if (!v) return CUP_ERR_NOMEM;
-  for (int k = 0; k < want; k++) {
-    int st = number(r, nd->item[k], joini(k1, key, k), &v[k]);
-    if (st) { free(v); return st; }
-  }
-  *out = v;
-  return CUP_OK;
-}
 
 /* ---- the model: circuit or lcs ------------------------------------------- */
 
@@ -305,33 +76,6 @@ static void parts_free(lcs_parts *q) {
   mat_free(&q->A); mat_free(&q->B); mat_free(&q->C);
   mat_free(&q->E); mat_free(&q->G); mat_free(&q->P);
   free(q->F); free(q->Pdiag);
-}
-
-/* P: identity (default), a list of n positive numbers (the diagonal), or an
- * n x n SPD matrix (inline or a file; symmetric files are expanded). */
-static int read_metric(rd *r, const st_node *nd, int n, lcs_parts *q, cup_metric *P) {
-  char k1[KEY_LEN], why[48];
-  *P = (cup_metric){CUP_METRIC_IDENTITY, NULL, {0}, 0};
-  q->Pnode = nd;
-  if (!nd) return CUP_OK;
-  snprintf(why, sizeof why, "n = %d from C's columns", n);
-  if (nd->kind == ST_SCALAR) {
-    if (!nd->quoted && !strcmp(nd->text, "identity")) return CUP_OK;
-    return fail(r, CUP_ERR_PARSE, nd, "lcs.P", "expected identity, a list of %d positive numbers (the diagonal) "
-                "or a %d x %d SPD matrix (got '%.40s')", n, n, n, nd->text);
-  }
-  if (nd->kind == ST_SEQ && nd->len && nd->item[0]->kind == ST_SCALAR) {
-    int st = vector(r, nd, "lcs.P", n, why, &q->Pdiag);
-    for (int k = 0; !st && k < n; k++)
-      if (!(q->Pdiag[k] > 0))
-        st = fail(r, CUP_ERR_NOT_SPD, nd->item[k], joini(k1, "lcs.P", k), "must be > 0 (got %g)", q->Pdiag[k]);
-    if (!st) *P = (cup_metric){CUP_METRIC_DIAGONAL, q->Pdiag, {0}, 0};
-    return st;
-  }
-  int st = matrix(r, nd, "lcs.P", &q->P);
-  if (!st) st = matrix_dims(r, &q->P, "lcs.P", n, n, why);
-  if (!st) *P = (cup_metric){CUP_METRIC_SPARSE, NULL, mat_view(&q->P), 0};
-  return st;
 }
 
 /* An optional matrix key of the lcs mapping, with its expected rows. */
@@ -384,7 +128,11 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
     snprintf(why, sizeof why, "m = %d from C's rows", m);
     st = vector(r, nd, "lcs.F", m, why, &q.F);
   }
-  if (!st) st = read_metric(r, opt(map, "P"), n, &q, &d.P);
+  if (!st) {
+    snprintf(why, sizeof why, "n = %d from C's columns", n);
+    q.Pnode = opt(map, "P");
+    st = read_metric(r, q.Pnode, "lcs.P", n, why, &q.P, &q.Pdiag, &d.P);
+  }
   if (!st && (nd = opt(map, "pb_tol"))) st = number_min(r, nd, "lcs.pb_tol", 0, 0, &d.pb_tol);
   if (!st) {
     d.n = n; d.m = m; d.F = q.F;
@@ -566,7 +314,7 @@ static int read_projector(rd *r, const st_node *nd, cup_projector_options *po) {
     st = read_word(r, v, "projector.method", "projector method", method_names, cup_proj_method_parse, &method);
     po->method = (cup_proj_method)method;
   }
-  long it;
+  long it = 0;
   if (!st && (v = opt(nd, "max_iter")) && !(st = integer(r, v, "projector.max_iter", 1, INT_MAX, &it)))
     po->max_iter = (int)it;
   return st;
@@ -663,15 +411,35 @@ static int read_name(rd *r, const st_node *root, cup_scene *S) {
   return S->name ? CUP_OK : CUP_ERR_NOMEM;
 }
 
+/* set: (and f:) instead of circuit: or lcs:, whose motion is written in
+ * place: no input: key. */
+static int read_general(rd *r, const st_node *root, cup_scene *S) {
+  const st_node *kset, *kin = NULL, *set = st_get(root, "set", &kset);
+  const char *other = opt(root, "circuit") ? "circuit" : opt(root, "lcs") ? "lcs" : NULL;
+  if (other)
+    return fail(r, CUP_ERR_PARSE, kset, "set", "give one model, %s or set, not both", other);
+  if (opt(root, "input") && st_get(root, "input", &kin))
+    return fail(r, CUP_ERR_PARSE, kin, "input", "a set: scene writes its signals in place (the set's centre, "
+                "radius, offsets; f's b and target); input: is for circuit: or lcs:");
+  return scene_read_process(r, root, kset, set, read_component, &S->proc);
+}
+
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
-  static const char *const known[] = {"name", "circuit", "lcs", "input", "x0", "T", "n", "eps", "eta",
-                                      "scheme", "theta", "projector", "output", NULL};
+  static const char *const known[] = {"name", "circuit", "lcs", "set", "f", "input", "x0", "T", "n", "eps",
+                                      "eta", "scheme", "theta", "projector", "output", NULL};
+  const st_node *kf;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
-  if (!st) st = read_model(r, root, &S->lcs);
-  if (!st) st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
+  if (!st && opt(root, "set")) {
+    st = read_general(r, root, S);
+  } else if (!st && opt(root, "f") && st_get(root, "f", &kf)) {
+    st = fail(r, CUP_ERR_PARSE, kf, "f", "f: goes with set: (an LCS's f is A x + E u, in lcs:)");
+  } else if (!st) {
+    st = read_model(r, root, &S->lcs);
+    if (!st) st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
+  }
   cup_integrator_options_default(&S->opt);
-  if (!st) st = read_run(r, root, cup_lcs_dim(S->lcs), S);
+  if (!st) st = read_run(r, root, cup_scene_dim(S), S);
   if (!st) st = read_method(r, root, &S->opt);
   if (!st) st = read_name(r, root, S);
   return st;
@@ -755,6 +523,7 @@ void cup_scene_free(cup_scene **s) {
   cup_scene *S = *s;
   free(S->name);
   cup_lcs_free(&S->lcs);
+  scene_process_free(&S->proc);
   cup_input_free(&S->u);
   free(S->x0);
   free(S->eps_spec);
@@ -766,7 +535,23 @@ void cup_scene_free(cup_scene **s) {
 
 const char *cup_scene_name(const cup_scene *s) { return s ? s->name : NULL; }
 const cup_lcs *cup_scene_lcs(const cup_scene *s) { return s ? s->lcs : NULL; }
-const cup_input *cup_scene_input(const cup_scene *s) { return s ? s->u : NULL; }
+const cup_input *cup_scene_input(const cup_scene *s) {
+  return !s ? NULL : s->proc ? scene_process_input(s->proc) : s->u;
+}
+const cup_process_desc *cup_scene_process(const cup_scene *s) { return s ? scene_process_desc(s->proc) : NULL; }
+int cup_scene_dim(const cup_scene *s) {
+  return !s ? 0 : s->proc ? scene_process_desc(s->proc)->n : cup_lcs_dim(s->lcs);
+}
+
+int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
+                         char *errmsg) {
+  if (!I) return cup_fail(errmsg, CUP_ERR_ARG, "scene: output pointer is NULL");
+  *I = NULL;
+  if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
+  if (!o) o = &s->opt;
+  if (s->proc) return cup_integrator_create_process(I, scene_process_desc(s->proc), o, errmsg);
+  return cup_integrator_create(I, s->lcs, s->u, o, errmsg);
+}
 const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }
 const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ? &s->opt : NULL; }
 const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }

@@ -484,7 +484,7 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
     int st = cup_scene_load_string(&v->scene, v->scene_text, v->scene_file, v->scene_dir, NULL, 0, err);
     if (st) return variant_fail(s, k, st, errmsg, "%s", err);
     const cup_integrator_options *o = cup_scene_options(v->scene);
-    int dim = cup_lcs_dim(cup_scene_lcs(v->scene));
+    int dim = cup_scene_dim(v->scene);
     if (k == 0) { s->T = o->T; s->dim = dim; }
     if (o->T != s->T)
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "T = %.17g differs from variants.0's T = %.17g: "

@@ -80,7 +80,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   double t0 = now_seconds(), c0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
   cup_integrator *I = NULL;
   char err[CUP_ERRMSG_LEN] = "";
-  r->status = cup_integrator_create(&I, cup_scene_lcs(v->scene), cup_scene_input(v->scene), &o, err);
+  r->status = cup_scene_integrator(v->scene, &o, &I, err);
   if (r->status < 0) {
     snprintf(r->message, sizeof r->message, "set-up: %.240s", err);
     r->wall += now_seconds() - t0;

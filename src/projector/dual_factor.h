@@ -24,6 +24,10 @@ int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
                      int *refactorizations, int *row_updates);
 /* v <- M~^-1 v (m entries; rows outside F come back unchanged). */
 void cup_dfact_solve(cup_dfact *f, double *v);
+/* The values of K's C changed in place (same pattern; diagonal metric, the
+ * M form): recompute M's values, so that the next cup_dfact_factor is a
+ * numeric factorization on the same symbolic analysis. Allocation-free. */
+void cup_dfact_revalue(cup_dfact *f);
 /* The smallest regularization, relative to the scale of M. */
 double cup_dfact_delta_min(const cup_dfact *f);
 

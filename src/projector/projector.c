@@ -11,6 +11,8 @@
 #include "firstorder.h"
 #include "activeset.h"
 #include "newton.h"
+#include "dual_factor.h"
+#include "projector.h"
 #include "lcp/step.h"
 
 void cup_projector_options_default(cup_projector_options *o) {
@@ -195,6 +197,15 @@ int cup_projector_offer_feasible(cup_projector *p, const double *w) {
 void cup_projector_reset(cup_projector *p) {
   if (p && p->m) memset(p->lam_warm, 0, sizeof(double) * (size_t)p->m);
   if (p && p->small) cup_lcp_forget(&p->small->lcp);
+}
+
+void cup_projector_revalue(cup_projector *p) {
+  offset_changed(p);                      /* row norms changed: scale, empty rows, anchors */
+  for (int i = 0; i < p->m; i++)
+    if (!(p->K->rownorm[i] > 0)) p->lam_warm[i] = 0;   /* a row that is off holds nothing */
+  p->has_fista = 0;
+  for (int c = 0; c < CUP_DENSE_CACHE; c++) p->cache[c].mask = 0;
+  if (p->nw) cup_dfact_revalue(p->nw->df);
 }
 
 const double *cup_projector_lambda(const cup_projector *p) { return p ? p->lam : NULL; }

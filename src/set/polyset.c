@@ -11,12 +11,17 @@
 #include "polyset_impl.h"
 
 static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg);
-static int row_norms_and_lipschitz(cup_polyset *K, char *errmsg);
+static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg);
 static int dense_setup(cup_polyset *K, char *errmsg);
 static void find_interior_direction(cup_polyset *K);
 
 int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
                        const cup_metric *P, char *errmsg) {
+  return cup_polyset_create_ex(out, C, g, P, 0, errmsg);
+}
+
+int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
+                          const cup_metric *P, int mutable_values, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: output pointer is NULL");
   *out = NULL;
   if (!C) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: C is NULL");
@@ -27,6 +32,10 @@ int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
   if (!K) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   K->n = C->ncol;
   K->m = C->nrow;
+  /* a bound recomputed at every step gets a few iterations (it is valid
+   * after any number; more only tighten it) */
+  K->mutable_values = mutable_values;
+  K->cw_iters = mutable_values ? 6 : 40;
   int st = cup_sparse_copy(&K->C, C, "C", K->m, K->n, errmsg);
   if (!st) st = cup_sparse_transpose(&K->Ct, &K->C);
   if (!st) {
@@ -51,8 +60,8 @@ int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
     double r = cholmod_rcond(K->LP, &K->cm);
     K->solve_amp = r > 0 ? 1 / r : 1e16;
   }
-  if (!st) st = row_norms_and_lipschitz(K, errmsg);
-  if (!st && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
+  if (!st) st = row_norms_and_lipschitz(K, NULL, errmsg);
+  if (!st && !mutable_values && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
     st = dense_setup(K, errmsg);
   if (st) { cup_polyset_free(&K); return st; }
   if (K->dense) find_interior_direction(K);
@@ -324,7 +333,7 @@ static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
 static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
                                double *v, double *w, double *tmp) {
   for (int i = 0; i < K->m; i++) v[i] = 1.0;
-  for (int it = 0; it < 40; it++) {
+  for (int it = 0; it < K->cw_iters; it++) {
     apply(K, W, v, w, tmp);
     double wmax = 0;
     for (int i = 0; i < K->m; i++) wmax = fmax(wmax, w[i]);
@@ -337,9 +346,10 @@ static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const v
   return bound * (1 + 1e-12);
 }
 
-static int row_norms_and_lipschitz(cup_polyset *K, char *errmsg) {
+/* work: 2 m + n doubles, or NULL to allocate them. */
+static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
   if (K->m == 0) { K->lip = 0; return CUP_OK; }
-  double *v = malloc(sizeof(double) * (2 * (size_t)K->m + (size_t)K->n));
+  double *v = work ? work : malloc(sizeof(double) * (2 * (size_t)K->m + (size_t)K->n));
   if (!v) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   double *w = v + K->m, *tmp = w + K->m;
   if (K->pkind != CUP_METRIC_SPARSE) {
@@ -362,7 +372,10 @@ static int row_norms_and_lipschitz(cup_polyset *K, char *errmsg) {
     cholmod_sparse *PC = cholmod_spsolve(CHOLMOD_P, K->LP, &Ct, &K->cm);
     cholmod_sparse *W = PC ? cholmod_spsolve(CHOLMOD_L, K->LP, PC, &K->cm) : NULL;
     cholmod_free_sparse(&PC, &K->cm);
-    if (!W) { free(v); return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed"); }
+    if (!W) {
+      if (!work) free(v);
+      return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed");
+    }
     const int *p = W->p;
     const double *x = W->x;
     for (int i = 0; i < K->m; i++) {
@@ -373,8 +386,12 @@ static int row_norms_and_lipschitz(cup_polyset *K, char *errmsg) {
     K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp);
     cholmod_free_sparse(&W, &K->cm);
   }
-  free(v);
+  if (!work) free(v);
   return CUP_OK;
+}
+
+void cup_polyset_revalue(cup_polyset *K, double *work) {
+  row_norms_and_lipschitz(K, work, NULL);   /* diagonal metric: allocation-free, cannot fail */
 }
 
 /* ---- small sets: dense M and P^-1 C^T ------------------------------------------- */

@@ -25,6 +25,8 @@ struct cup_polyset {
   int *rownnz;         /* nonzeros per row of C */
   double *rowgam;      /* (rownnz + 2) eps: the rounding bound of a row's slack per unit magnitude */
   double lip;          /* guaranteed L >= lambda_max(M) */
+  int cw_iters;        /* Collatz-Wielandt iterations of that bound */
+  int mutable_values;  /* values rewritten in place at every step (cup_polyset_revalue) */
   double solve_amp;    /* bound on the relative error amplification of P^-1 (1, or 1/rcond) */
   int dense;           /* small set: Md and Bt below are valid */
   double *Md;          /* m x m, column-major, M = C P^-1 C^T */
@@ -33,6 +35,17 @@ struct cup_polyset {
   double *Crdir;       /* C d */
   double rdir_norm;    /* ||d||_P */
 };
+
+/* cup_polyset_create; with mutable_values, for a polyset whose values
+ * change in place (cup_polyset_revalue), without the dense form (Md, Bt,
+ * the interior direction) and with a quicker Lipschitz bound. */
+int cup_polyset_create_ex(cup_polyset **K, const cup_csc *C, const double *g,
+                          const cup_metric *P, int mutable_values, char *errmsg);
+/* The values of C (C.x and Ct.x, the pattern unchanged) were rewritten:
+ * recompute the row norms and the Lipschitz bound. Only for a polyset
+ * without the dense form and with a diagonal metric; work: 2 m + n doubles.
+ * Allocates nothing. */
+void cup_polyset_revalue(cup_polyset *K, double *work);
 
 /* P v into out (n entries). */
 void cup_metric_apply(const cup_polyset *K, const double *v, double *out);

@@ -14,6 +14,7 @@ _Static_assert(sizeof(cup_proj_method) == sizeof(int), "enum size");
 _Static_assert(sizeof(cup_wave_kind) == sizeof(int), "enum size");
 _Static_assert(sizeof(cup_scheme) == sizeof(int), "enum size");
 _Static_assert(sizeof(cup_output_kind) == sizeof(int), "enum size");
+_Static_assert(sizeof(cup_set_kind) == sizeof(int), "enum size");
 
 static int put(long *out, int cap, const long *v, int n) {
   for (int i = 0; i < n && i < cap; i++) out[i] = v[i];
@@ -78,7 +79,18 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_run_info, factorizations), OFF(cup_run_info, max_eps_cert),
         OFF(cup_run_info, max_eta_cert), OFF(cup_run_info, eps_target),
         OFF(cup_run_info, eta_target), OFF(cup_run_info, h_rho), OFF(cup_run_info, samples),
-        OFF(cup_run_info, message));
+        OFF(cup_run_info, message), OFF(cup_run_info, set_rebuilds), OFF(cup_run_info, max_rows));
+  if (!strcmp(name, "cup_set_desc"))
+    PUT(sizeof(cup_set_desc), OFF(cup_set_desc, kind), OFF(cup_set_desc, n), OFF(cup_set_desc, p),
+        OFF(cup_set_desc, P), OFF(cup_set_desc, C), OFF(cup_set_desc, F), OFF(cup_set_desc, G),
+        OFF(cup_set_desc, center), OFF(cup_set_desc, Gc), OFF(cup_set_desc, radius),
+        OFF(cup_set_desc, gr), OFF(cup_set_desc, Q), OFF(cup_set_desc, oracle),
+        OFF(cup_set_desc, oracle_ctx), OFF(cup_set_desc, rows), OFF(cup_set_desc, rows_ctx));
+  if (!strcmp(name, "cup_process_desc"))
+    PUT(sizeof(cup_process_desc), OFF(cup_process_desc, n), OFF(cup_process_desc, p),
+        OFF(cup_process_desc, C), OFF(cup_process_desc, u), OFF(cup_process_desc, A),
+        OFF(cup_process_desc, E), OFF(cup_process_desc, f), OFF(cup_process_desc, f_ctx),
+        OFF(cup_process_desc, f_integral), OFF(cup_process_desc, f_integral_ctx));
   return 0;
 }
 

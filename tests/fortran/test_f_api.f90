@@ -55,6 +55,8 @@ contains
     type(cup_schedule), target :: s
     type(cup_integrator_options), target :: o
     type(cup_run_info), target :: r
+    type(cup_set_desc), target :: sd
+    type(cup_process_desc), target :: pd
     type(c_ptr) :: b
     call section('struct layouts against the C compiler')
     b = c_loc(a)
@@ -105,8 +107,19 @@ contains
       off(b, c_loc(r%not_certified)), off(b, c_loc(r%dual_iterations)), off(b, c_loc(r%factorizations)), &
       off(b, c_loc(r%max_eps_cert)), off(b, c_loc(r%max_eta_cert)), off(b, c_loc(r%eps_target)), &
       off(b, c_loc(r%eta_target)), off(b, c_loc(r%h_rho)), off(b, c_loc(r%samples)), &
-      off(b, c_loc(r%message))])
+      off(b, c_loc(r%message)), off(b, c_loc(r%set_rebuilds)), off(b, c_loc(r%max_rows))])
     call check_int(size(r%message), 256, 'cup_run_info%message has 256 chars')
+    b = c_loc(sd)
+    call compare('cup_set_desc', [int(c_sizeof(sd), c_long), off(b, c_loc(sd%kind)), off(b, c_loc(sd%n)), &
+      off(b, c_loc(sd%p)), off(b, c_loc(sd%metric)), off(b, c_loc(sd%C)), off(b, c_loc(sd%F)), &
+      off(b, c_loc(sd%G)), off(b, c_loc(sd%center)), off(b, c_loc(sd%Gc)), off(b, c_loc(sd%radius)), &
+      off(b, c_loc(sd%gr)), off(b, c_loc(sd%Q)), off(b, c_loc(sd%oracle)), off(b, c_loc(sd%oracle_ctx)), &
+      off(b, c_loc(sd%rows)), off(b, c_loc(sd%rows_ctx))])
+    b = c_loc(pd)
+    call compare('cup_process_desc', [int(c_sizeof(pd), c_long), off(b, c_loc(pd%n)), off(b, c_loc(pd%p)), &
+      off(b, c_loc(pd%C)), off(b, c_loc(pd%u)), off(b, c_loc(pd%A)), off(b, c_loc(pd%E)), &
+      off(b, c_loc(pd%f)), off(b, c_loc(pd%f_ctx)), off(b, c_loc(pd%f_integral)), &
+      off(b, c_loc(pd%f_integral_ctx))])
   end subroutine test_layouts
 end module layout_check
 

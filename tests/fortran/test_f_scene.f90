@@ -60,6 +60,32 @@ program test_f_scene
   call check(ierr == CUP_OK .and. o%n >= 1, 'options of the file')
   call cup_scene_free(s)
 
+  call section('a set: scene, examples/tractrix.yaml')
+  call cup_scene_load(s, trim(srcdir) // '/examples/tractrix.yaml', ierr, errmsg=msg)
+  call check_int(ierr, CUP_OK, 'load: ' // trim(msg))
+  call check_int(cup_scene_dim(s), 2, 'dimension from the ball')
+  L = cup_scene_lcs(s)
+  call check(.not. c_associated(L%ptr), 'no LCS')
+  block
+    type(cup_process_desc) :: d
+    type(cup_integrator_t) :: integ
+    logical :: found
+    real(c_double), allocatable :: ts(:), Xs(:, :)
+    integer :: ns
+    call cup_scene_process(s, d, found)
+    call check(found .and. d%n == 2 .and. d%p == 1, 'its process: n = 2, one signal (the centre)')
+    call cup_scene_x0(s, x0, ierr)
+    call cup_scene_integrator(s, integ, ierr, errmsg=msg)
+    call check_int(ierr, CUP_OK, 'integrator: ' // trim(msg))
+    call cup_integrator_run_store(integ, x0, ts, Xs, ns, ierr)
+    call check(ierr == CUP_OK .and. ns == 1001, 'run: 1001 samples')
+    call check(abs(Xs(2, ns) - 1 / cosh(5d0)) < 1d-3 .and. abs(Xs(1, ns) - (5 - tanh(5d0))) < 1d-3, &
+      'the tractrix at t = 5')
+    call cup_integrator_free(integ)
+    deallocate(ts, Xs)
+  end block
+  call cup_scene_free(s)
+
   call section('errors')
   call cup_scene_load_string(s, 'circuit: {R1: 1' // nl, 'broken.yaml', ierr, errmsg=msg)
   call check_int(ierr, CUP_ERR_PARSE, 'YAML syntax error')

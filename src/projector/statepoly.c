@@ -1,0 +1,141 @@
+/* statepoly — the state-dependent polyset C(t, x_k) = {y : C y + g >= 0}
+ * with rows from the user's callback at every step (set/rowpool.h).
+ *
+ * While every row finds a slot of its pattern in the pool, the step writes
+ * the new values in place: the polyset's C and C^T, its row norms and
+ * Lipschitz bound, the projector's dual matrix C P^-1 C^T on the same
+ * symbolic analysis (the next factorization is numeric only), the warm start
+ * of the rows that persist (a row that went off drops its multiplier). No
+ * allocation. A row of a new pattern rebuilds the pool, its polyset and its
+ * projector (a new symbolic analysis, allocations), carrying the warm start
+ * over slot by slot. */
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "setproj_impl.h"
+
+int cup_statepoly_init(cup_setproj *sp, char *errmsg) {
+  if (cup_rowbuf_init(&sp->rb, sp->n, 64, 256) || cup_rowpool_init(&sp->pool, sp->n))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
+  return CUP_OK;
+}
+
+void cup_statepoly_free(cup_setproj *sp) {
+  cup_rowbuf_free(&sp->rb);
+  cup_rowpool_free(&sp->pool);
+  cup_projector_free(&sp->proj);
+  cup_polyset_free(&sp->PK);
+  free(sp->cpos);
+  free(sp->rework);
+  sp->cpos = NULL;
+  sp->rework = NULL;
+}
+
+/* The pool's pattern as CSC with this step's values (0 for slots not in use)
+ * and offsets (1: never active). */
+static int pool_polyset(cup_setproj *sp, cup_polyset **K, char *errmsg) {
+  const cup_rowpool *P = &sp->pool;
+  const cup_rowbuf *rb = &sp->rb;
+  int n = sp->n, m = P->m, nnz = P->nnz;
+  int *cp = calloc((size_t)n + 1, sizeof(int)), *ri = malloc(sizeof(int) * ((size_t)nnz + 1));
+  double *vx = malloc(sizeof(double) * ((size_t)nnz + 1)), *g = malloc(sizeof(double) * ((size_t)m + 1));
+  int st = cp && ri && vx && g ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
+  if (!st) {
+    for (int e = 0; e < nnz; e++) cp[P->col[e] + 1]++;
+    for (int j = 0; j < n; j++) cp[j + 1] += cp[j];
+    int *next = sp->cpos;                    /* cursor per column, then the positions */
+    for (int s = 0; s < m; s++) {
+      int r = P->row_of[s];
+      g[s] = r >= 0 ? rb->off[r] : 1;
+      for (int e = P->ptr[s]; e < P->ptr[s + 1]; e++) {
+        int j = P->col[e], q = cp[j] + next[j]++;
+        ri[q] = s;
+        vx[q] = r >= 0 ? rb->val[rb->ptr[r] + e - P->ptr[s]] : 0;
+        sp->cpos[n + e] = q;
+      }
+    }
+    cup_metric metric = {sp->S->K->pkind, sp->S->K->pd, {0}, 0};
+    cup_csc view = {m, n, cp, ri, vx};
+    st = cup_polyset_create_ex(K, &view, g, &metric, 1, errmsg);
+  }
+  free(cp); free(ri); free(vx); free(g);
+  return st;
+}
+
+/* A new pool: polyset, projector, warm start slot by slot. Allocates. */
+static int rebuild(cup_setproj *sp) {
+  char err[CUP_ERRMSG_LEN] = "";
+  cup_rowpool *P = &sp->pool;
+  int old_m = sp->PK ? sp->PK->m : 0;
+  if (cup_rowpool_rebuild(P, &sp->rb, sp->step)) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  int n = sp->n, m = P->m;
+  /* cpos holds n column cursors, then one position per pool entry */
+  int *cpos = realloc(sp->cpos, sizeof(int) * ((size_t)n + (size_t)P->nnz + 1));
+  double *g = realloc(sp->g, sizeof(double) * ((size_t)m + 1));
+  double *rw = realloc(sp->rework, sizeof(double) * (2 * (size_t)m + (size_t)n + 1));
+  if (cpos) sp->cpos = cpos;
+  if (g) sp->g = g;
+  if (rw) sp->rework = rw;
+  if (!cpos || !g || !rw) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  memset(sp->cpos, 0, sizeof(int) * (size_t)n);
+  cup_polyset *K = NULL;
+  cup_projector *p = NULL;
+  int st = pool_polyset(sp, &K, err);
+  if (!st) st = cup_projector_create(&p, K, &sp->opt, err);
+  if (st) {
+    cup_projector_free(&p);
+    cup_polyset_free(&K);
+    return cup_setproj_fail(sp, st, "state polyset: %s", err);
+  }
+  for (int s = 0; s < m && sp->proj; s++) {
+    int o = P->old_of[s];
+    if (o >= 0 && o < old_m && K->rownorm[s] > 0) p->lam_warm[s] = sp->proj->lam_warm[o];
+  }
+  cup_projector_free(&sp->proj);
+  cup_polyset_free(&sp->PK);
+  sp->proj = p;
+  sp->PK = K;
+  sp->m = m;
+  sp->rebuilds++;
+  for (int s = 0; s < m; s++) sp->g[s] = K->g0[s];
+  return CUP_OK;
+}
+
+/* Same slots: this step's values in place. */
+static void revalue(cup_setproj *sp) {
+  const cup_rowpool *P = &sp->pool;
+  const cup_rowbuf *rb = &sp->rb;
+  cup_polyset *K = sp->PK;
+  const int *pos = sp->cpos + sp->n;
+  for (int s = 0; s < P->m; s++) {
+    int r = P->row_of[s], base = K->Ct.p[s];
+    for (int e = P->ptr[s], k = 0; e < P->ptr[s + 1]; e++, k++) {
+      double v = r >= 0 ? rb->val[rb->ptr[r] + k] : 0;
+      K->C.x[pos[e]] = v;
+      K->Ct.x[base + k] = v;
+    }
+    sp->g[s] = r >= 0 ? rb->off[r] : 1;
+  }
+  cup_polyset_revalue(K, sp->rework);
+  cup_projector_revalue(sp->proj);
+}
+
+int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
+  const cup_set *S = sp->S;
+  sp->step++;
+  cup_rowbuf_clear(&sp->rb);
+  int rc = S->rows(t, x, &sp->rb, S->rows_ctx);
+  if (rc) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback failed (returned %d)", rc);
+  if (sp->rb.status == CUP_ERR_NOMEM) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "rows: %s", sp->rb.message);
+  if (sp->rb.status) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback gave a bad %s", sp->rb.message);
+  sp->rows_now = sp->rb.m;
+  int missing = cup_rowpool_match(&sp->pool, &sp->rb, sp->step);
+  if (missing < 0) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  if (missing > 0 || !sp->proj) {
+    int st = rebuild(sp);
+    if (st) return st;
+  } else {
+    revalue(sp);
+  }
+  return cup_projector_set_offset(sp->proj, sp->g);
+}
