@@ -13,6 +13,7 @@
  * the file, closed cleanly with the status attributes. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <math.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -87,9 +88,9 @@ static int check_value(const char *flag, const char *v) {
   cup_schedule sch;
   char *end = NULL;
   if (strcmp(flag, "--n") == 0) {
-    errno = 0;
-    long n = strtol(v, &end, 10);
-    if (errno || end == v || *end || n < 1)
+    /* as the scene's n: "1e7" is accepted when it is an exact integer */
+    double n = strtod(v, &end);
+    if (end == v || *end || !(n >= 1) || n > 9007199254740992.0 || n != floor(n))
       return usage_error("--n '%s': not a positive integer", v);
   } else if (strcmp(flag, "--eps") == 0 || strcmp(flag, "--eta") == 0) {
     if (cup_schedule_parse(v, &sch, err) != CUP_OK) return usage_error("%s: %s", flag, err);

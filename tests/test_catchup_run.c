@@ -61,7 +61,7 @@ static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; 
 static void test_paper_case1_file(void **state) {
   (void)state;
   const char *out = tmp_path("case1.h5");
-  const char *args[] = {fig2, "-o", out, "--n", "1000", "--quiet", NULL};
+  const char *args[] = {fig2, "-o", out, "--n", "1e3", "--quiet", NULL};
   result r = run_cli(args, 0, 0);
   expect_exit(&r, 0, 0);
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -170,6 +170,7 @@ static void test_errors_are_one_line(void **state) {
     {{fig2, NULL}, 2, "-o OUT.h5"},
     {{"-o", out, NULL}, 2, "no scene"},
     {{fig2, "-o", out, "--n", "12x", NULL}, 2, "--n '12x'"},
+    {{fig2, "-o", out, "--n", "2.5", NULL}, 2, "--n '2.5': not a positive integer"},
     {{fig2, "-o", out, "--eps", "banana", NULL}, 2, "banana"},
     {{fig2, "-o", out, "--scheme", "rk4", NULL}, 2, "rk4"},
     {{fig2, "-o", out, "--projector", "nope", NULL}, 2, "nope"},
