@@ -5,6 +5,7 @@
  * nothing and a run keeps only the current state. */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,6 +17,7 @@
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 #include "set/set_impl.h"
+#include "adaptive.h"
 
 struct cup_integrator {
   const cup_input *u;
@@ -36,6 +38,7 @@ struct cup_integrator {
   cup_projector *proj;
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
+  cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -119,18 +122,40 @@ void cup_integrator_options_default(cup_integrator_options *o) {
   o->output_samples = 0;
   o->f_order = 3;
   o->theta = 0.5;
+  o->tol_abs = 1e-6;
+  o->tol_rel = 1e-6;
 }
 
 /* ---- set-up --------------------------------------------------------------------- */
+
+/* tol of the adaptive scheme, the event rate cap, the step-doubling estimate. */
+static int validate_tolerances(const cup_integrator_options *o, char *errmsg) {
+  if (o->scheme == CUP_SCHEME_ADAPTIVE) {
+    if (!(o->tol_abs >= 0) || !isfinite(o->tol_abs))
+      return cup_fail(errmsg, CUP_ERR_ARG, "tol_abs = %g must be finite and >= 0", o->tol_abs);
+    if (!(o->tol_rel >= 0) || !isfinite(o->tol_rel))
+      return cup_fail(errmsg, CUP_ERR_ARG, "tol_rel = %g must be finite and >= 0", o->tol_rel);
+    if (o->tol_abs == 0 && !(o->tol_rel >= 16 * DBL_EPSILON))
+      return cup_fail(errmsg, CUP_ERR_ARG, "tol_rel = %g with tol_abs = 0 is below what double precision "
+                      "can deliver (16 eps = %.2g): raise tol_rel or give tol_abs", o->tol_rel, 16 * DBL_EPSILON);
+    if (!(o->max_event_rate >= 0) || !isfinite(o->max_event_rate))
+      return cup_fail(errmsg, CUP_ERR_ARG, "max_event_rate = %g must be finite and >= 0", o->max_event_rate);
+  } else if (o->estimate && (o->n < 2 || o->n % 2))
+    return cup_fail(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
+                    "must be even", o->n);
+  return CUP_OK;
+}
 
 static int validate(const cup_integrator_options *o, char *errmsg) {
   if (!(o->T > 0) || !isfinite(o->T))
     return cup_fail(errmsg, CUP_ERR_ARG, "T = %g must be finite and > 0", o->T);
   if (o->n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "n = %ld must be >= 1", o->n);
-  if (o->scheme < CUP_SCHEME_EXPLICIT || o->scheme > CUP_SCHEME_THETA)
+  if ((int)o->scheme < 0 || (int)o->scheme >= (int)CUP_SCHEME_COUNT)
     return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", (int)o->scheme);
   if (o->scheme == CUP_SCHEME_THETA && !(o->theta >= 0 && o->theta <= 1))
     return cup_fail(errmsg, CUP_ERR_ARG, "theta = %g must be in [0, 1]", o->theta);
+  int st = validate_tolerances(o, errmsg);
+  if (st) return st;
   double e = cup_schedule_value(&o->eps, o->n), t = cup_schedule_value(&o->eta, o->n);
   if (!(e >= 0) || !isfinite(e) || !(t >= 0) || !isfinite(t))
     return cup_fail(errmsg, CUP_ERR_ARG, "tolerances eps_n = %g, eta_n = %g must be finite and >= 0", e, t);
@@ -140,7 +165,7 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
         return cup_fail(errmsg, CUP_ERR_ARG, "output every %ld: the stride must be >= 1", o->output_every);
       break;
     case CUP_OUTPUT_SAMPLES:
-      if (o->output_samples < 2 || o->output_samples - 1 > o->n)
+      if (o->output_samples < 2 || (o->scheme != CUP_SCHEME_ADAPTIVE && o->output_samples - 1 > o->n))
         return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be in [2, n + 1 = %ld]",
                         o->output_samples, o->n + 1);
       break;
@@ -246,6 +271,12 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
   I->u = u;
+  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
+    st = cup_adaptive_create(&I->ad, L, u, &I->o, errmsg);
+    if (st) { cup_integrator_free(&I); return st; }
+    *out = I;
+    return CUP_OK;
+  }
   I->n = L->n; I->m = L->m; I->p = L->p;
   I->K = L->K;
   I->G = L->has_G ? &L->G : NULL;
@@ -301,6 +332,11 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
   int st;
   cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
+  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
+    cup_integrator_free(&I);
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS (cup_integrator_create); "
+                    "a general process is stepped by the explicit, implicit or exponential scheme");
+  }
   cup_drift D;
   st = process_model(I, d, &D, errmsg);
   if (!st) st = setup(I, &D, d, errmsg);
@@ -312,6 +348,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
 void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
+  cup_adaptive_free(&I->ad);
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
   cup_setproj_free(&I->sp);
@@ -324,7 +361,9 @@ void cup_integrator_free(cup_integrator **Ip) {
   *Ip = NULL;
 }
 
-const double *cup_integrator_state(const cup_integrator *I) { return I ? I->x : NULL; }
+const double *cup_integrator_state(const cup_integrator *I) {
+  return !I ? NULL : I->ad ? cup_adaptive_state(I->ad) : I->x;
+}
 
 /* ---- the run ---------------------------------------------------------------------- */
 
@@ -448,6 +487,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
                        cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
+  if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
   if (!I || !x0) return info->status = CUP_ERR_ARG;
   const cup_integrator_options *o = &I->o;
