@@ -155,11 +155,14 @@ void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev) {
     /* The effect of switching a time delta late is (c / 2) delta^2 in x:
      * c = |zeta_k'| ||B_k|| when row k turns off, |s_k'| ||A B_k|| / S_kk
      * when it turns on (docs/adaptive.md). */
-    double c = ev->cfac * fabs(A->db[k]) * (md->is_zeta[k] ? A->cz[k] : A->cs[k]);
+    double slope = fmax(fabs(A->db[k]), (A->ga[k] - A->gb[k]) / (hi - lo));
+    double c = ev->cfac * slope * (md->is_zeta[k] ? A->cz[k] : A->cs[k]);
     double need = c > 0 ? sqrt(2 * AD_EVENT_SHARE * tolw / c) : INFINITY;
     need = fmax(need, floor_);
-    if (hi - est <= need || hi - lo <= floor_) break;
-    double s = est + 0.5 * need;               /* close the bracket from the right */
+    if (hi - lo <= need) break;
+    /* close the bracket around the estimate: from the right first (the
+     * switch is at hi), then from the left (which proves the estimate) */
+    double s = hi - est > 0.5 * need ? est + 0.5 * need : est - 0.5 * need;
     if (stalls >= 2 || !(s > lo && s < hi)) s = 0.5 * (lo + hi), stalls = 0;
     probe(A, md, s, A->gt, A->dt, A->tt, ev);
     double before = hi - lo;
