@@ -255,6 +255,49 @@ ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
   return oldest;
 }
 
+/* out = exp(a) (k x k, column-major) as cup_dense_expm does it (Taylor to
+ * degree 18 on a / 2^s, then s squarings) but in long double when s is
+ * large: each squaring adds the rounding of the last, so a stiff generator
+ * (|lambda| h ~ 1e5, s ~ 17) loses 2^s eps ~ 1e-11 in double, and the run
+ * reuses that exponential on every step. Rounded once to double at the end. */
+static void expm(cup_adaptive *A, const double *a, int k, double *out) {
+  size_t K2 = (size_t)k * k;
+  double norm = 0;
+  for (int i = 0; i < k; i++) {
+    double r = 0;
+    for (int j = 0; j < k; j++) r += fabs(a[i + (size_t)j * k]);
+    norm = fmax(norm, r);
+  }
+  int sq = 0;
+  while (norm > 0.5 && sq < 1000) { norm *= 0.5; sq++; }
+  if (sq < 8) { cup_dense_expm(a, k, out, A->ework); return; }
+  long double *s = A->lwork, *sum = s + K2, *term = sum + K2, *tmp = term + K2;
+  long double scale = ldexpl(1.0L, -sq);
+  for (size_t q = 0; q < K2; q++) { s[q] = a[q] * scale; sum[q] = term[q] = 0; }
+  for (int i = 0; i < k; i++) sum[i + (size_t)i * k] = term[i + (size_t)i * k] = 1;
+  long double *x = term, *y = tmp;
+  for (int d = 1; d <= 18; d++) {                /* term <- term s / d; sum += term */
+    for (int j = 0; j < k; j++)
+      for (int i = 0; i < k; i++) {
+        long double acc = 0;
+        for (int l = 0; l < k; l++) acc += x[i + (size_t)l * k] * s[l + (size_t)j * k];
+        y[i + (size_t)j * k] = acc / d;
+      }
+    long double *t = x; x = y; y = t;
+    for (size_t q = 0; q < K2; q++) sum[q] += x[q];
+  }
+  for (int r = 0; r < sq; r++) {
+    for (int j = 0; j < k; j++)
+      for (int i = 0; i < k; i++) {
+        long double acc = 0;
+        for (int l = 0; l < k; l++) acc += sum[i + (size_t)l * k] * sum[l + (size_t)j * k];
+        y[i + (size_t)j * k] = acc;
+      }
+    for (size_t q = 0; q < K2; q++) sum[q] = y[q];
+  }
+  for (size_t q = 0; q < K2; q++) out[q] = (double)sum[q];
+}
+
 const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
   int slot = 0;
   for (int c = 0; c < AD_CACHE; c++) {
@@ -264,7 +307,7 @@ const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
   size_t NA = (size_t)A->na * A->na;
   double *hM = A->ework + 3 * NA;
   for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
-  cup_dense_expm(hM, A->na, md->Ec[slot], A->ework);
+  expm(A, hM, A->na, md->Ec[slot]);
   md->hc[slot] = h;
   md->cstamp[slot] = ++A->clock;
   return md->Ec[slot];
@@ -290,7 +333,7 @@ void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, doubl
     size_t NA = (size_t)na * na;
     double *hM = A->ework + 3 * NA, *Et = A->ework + 4 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
-    cup_dense_expm(hM, na, Et, A->ework);
+    expm(A, hM, na, Et);
     matvec(na, Et, y_in, y_out);
     return;
   }

@@ -74,6 +74,10 @@ static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim) {
   return R->t + hlim < s ? R->t + hlim : s;
 }
 
+static double estimate_now(const cup_adaptive *A, const ad_run *R) {
+  return inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2);
+}
+
 static int emit(cup_adaptive *A, ad_run *R) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
@@ -88,15 +92,20 @@ static int emit(cup_adaptive *A, ad_run *R) {
     case CUP_OUTPUT_FINAL: out = last; break;
     case CUP_OUTPUT_NONE: break;
   }
-  if (!out || !R->sink) return CUP_OK;
+  if (!out) return CUP_OK;
+  R->est_max = fmax(R->est_max, estimate_now(A, R));
+  if (!R->sink) return CUP_OK;
   R->info->samples++;
   if (R->sink(R->steps, R->t, A->x, R->sink_ctx))
     return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
   return CUP_OK;
 }
 
-/* The end of a step: statistics, the error estimate, the step callback. */
-static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
+/* The end of a step: statistics, the error estimate (not at the switch
+ * instant of an event: there the error is the event's time localisation,
+ * which decays with the new flow; at the output times after it counts),
+ * the step callback. */
+static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at_event) {
   cup_run_info *info = R->info;
   R->steps++;
   info->step = R->steps;
@@ -104,7 +113,7 @@ static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
   if (pi->skipped) info->skipped++; else info->projected++;
   double xn = inf_norm(A->x, A->n);
   R->r2 += (8 * DBL_EPSILON * xn) * (8 * DBL_EPSILON * xn);   /* rounding, as a random walk */
-  R->est_max = fmax(R->est_max, inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2));
+  if (!at_event) R->est_max = fmax(R->est_max, estimate_now(A, R));
   double tw = tolw(A, A->x);
   if (!R->floor_warned && tw < 16 * DBL_EPSILON * xn) {
     R->floor_warned = 1;
@@ -321,14 +330,14 @@ static double interp_error(const cup_adaptive *A, const double *E) {
 
 /* The end of a step at R->t: a breakpoint's projection, the output, the
  * next piece. */
-static int end_of_step(cup_adaptive *A, ad_run *R, cup_proj_info *pi) {
+static int end_of_step(cup_adaptive *A, ad_run *R, cup_proj_info *pi, int at_event) {
   int at_tb = R->t == R->tb, st;
   if (at_tb) {
     cup_proj_info pb;
     if ((st = at_break(A, R, 0, &pb)) < 0) return st;
     if (!pb.skipped) *pi = pb;
   }
-  if ((st = step_done(A, R, pi)) < 0 || (st = emit(A, R)) < 0) return st;
+  if ((st = step_done(A, R, pi, at_event && !at_tb)) < 0 || (st = emit(A, R)) < 0) return st;
   if (at_tb && R->t < A->o.T && (st = start_piece(A, R)) < 0) return st;
   return CUP_OK;
 }
@@ -445,7 +454,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   double t0 = R->t;
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
-  return end_of_step(A, R, &pi);
+  return end_of_step(A, R, &pi, 1);
 }
 
 static int take_step(cup_adaptive *A, ad_run *R) {
@@ -458,7 +467,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
   if (!E) {
     if (!snap) return R->info->status;
     R->t = t1;
-    return end_of_step(A, R, &pi);
+    return end_of_step(A, R, &pi, 0);
   }
   ad_lift(A, md, A->x, A->wa, A->ya);
   ad_events_eval(A, md, A->ya, A->ga, A->ta);
@@ -489,7 +498,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
   }
   cup_copy(A->e, A->et, n);
   R->t = t1;
-  return end_of_step(A, R, &pi);
+  return end_of_step(A, R, &pi, 0);
 }
 
 /* ---- accumulating events: catching-up steps across them --------------------------- */
@@ -539,7 +548,7 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
     error_onto(A, active, A->e);
     R->t = t1;
     int at_tb = R->t == R->tb;
-    if ((st = end_of_step(A, R, &pi)) < 0) return st;
+    if ((st = end_of_step(A, R, &pi, 0)) < 0) return st;
     if (at_tb) return CUP_OK;                    /* start_piece chose the active set */
   }
   if (R->t >= A->o.T) return CUP_OK;
