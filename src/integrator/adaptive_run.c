@@ -110,7 +110,7 @@ static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at
   R->steps++;
   info->step = R->steps;
   info->t = R->t;
-  if (pi->skipped) info->skipped++; else info->projected++;
+  if (pi->skipped) info->skipped++;           /* projections are counted where they are made */
   double xn = inf_norm(A->x, A->n);
   R->r2 += (8 * DBL_EPSILON * xn) * (8 * DBL_EPSILON * xn);   /* rounding, as a random walk */
   if (!at_event) R->est_max = fmax(R->est_max, estimate_now(A, R));
@@ -209,6 +209,7 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
                                      : "the state became NaN or Inf");
   }
   cup_run_info *info = R->info;
+  info->projected++;
   info->dual_iterations += pi->iterations;
   if (!(pi->eps_cert <= info->max_eps_cert)) info->max_eps_cert = pi->eps_cert;
   if (!(pi->eta_cert <= info->max_eta_cert)) info->max_eta_cert = pi->eta_cert;

@@ -18,6 +18,7 @@
 #include "set/polyset_impl.h"
 #include "set/set_impl.h"
 #include "adaptive.h"
+#include "estimate.h"
 
 struct cup_integrator {
   const cup_input *u;
@@ -39,6 +40,7 @@ struct cup_integrator {
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
   cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
+  cup_estimate est;         /* the step-doubling estimate (est.half set when asked for) */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -285,6 +287,7 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->S = I->S_own;
   cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   if (!st) st = setup(I, &D, NULL, errmsg);
+  if (!st && I->o.estimate) st = cup_estimate_init(&I->est, L, u, &I->o, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -349,6 +352,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
   cup_adaptive_free(&I->ad);
+  cup_estimate_free(&I->est);
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
   cup_setproj_free(&I->sp);
@@ -489,6 +493,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   cup_run_info *info = info_out ? info_out : &local;
   if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
+  info->err_est = NAN;
   if (!I || !x0) return info->status = CUP_ERR_ARG;
   const cup_integrator_options *o = &I->o;
   int n = I->n;
@@ -522,6 +527,10 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
              "time constant); projecting along B loses what that relaxation moved, an error of "
              "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
              I->split, I->split_row);
+  }
+  if (I->est.half) {
+    cup_estimate_prepare(&I->est, x0);
+    info->err_est = cup_estimate_value(&I->est);
   }
   sampler sp = {0};
   if (sink && selected(I, &sp, 0)) {
@@ -575,6 +584,10 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
     }
     double *t = I->x; I->x = I->xnew; I->xnew = t;
+    if (I->est.half) {
+      cup_estimate_compare(&I->est, k + 1, I->x);
+      info->err_est = cup_estimate_value(&I->est);
+    }
     info->step = k + 1;
     info->t = t1;
     tally(info, &pi);
