@@ -29,7 +29,7 @@
 #include <hdf5.h>
 #include "sweep.h"
 
-#define FORMAT_NAME "catchup-sweep 1"
+#define FORMAT_NAME "catchup-sweep 2"   /* 2: /summary has tol_abs, tol_rel, err_est, events */
 
 /* One /summary row in memory (the file type is the same, packed). */
 typedef struct sw_row {
@@ -49,6 +49,8 @@ typedef struct sw_row {
   int32_t error_code;
   double wall_time_s, error, max_eps_cert, max_eta_cert;
   int64_t projected, skipped, not_certified, dual_iterations, factorizations, stopped_step;
+  double tol_abs, tol_rel, err_est;
+  int64_t events;
   int8_t done;
 } sw_row;
 
