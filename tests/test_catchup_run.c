@@ -147,7 +147,7 @@ static void test_help_lists_and_output_override(void **state) {
   const char *bad[] = {fig2, "-o", tmp_path("x.h5"), "--scheme", "thet", NULL};
   r = run_cli(bad, 0, 0);
   expect_exit(&r, 2, 1);
-  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential or theta)");
+  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential, theta or adaptive)");
 
   const char *out = tmp_path("samples.h5");
   const char *args[] = {fig2, "-o", out, "--set", "output.samples=2", "--quiet", NULL};

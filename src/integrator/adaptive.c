@@ -10,6 +10,7 @@
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_errno.h>
 #include "catchup.h"
+#include "adaptive.h"
 #include "adaptive_impl.h"
 #include "freestep.h"
 

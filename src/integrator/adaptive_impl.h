@@ -19,7 +19,7 @@
 
 #include <stdint.h>
 #include <gsl/gsl_eigen.h>
-#include "adaptive.h"
+#include "catchup/integrator.h"
 #include "model/lcs_impl.h"
 #include "model/input_impl.h"
 #include "set/polyset_impl.h"
@@ -49,6 +49,8 @@ typedef struct ad_mode {
   double *Ec[AD_CACHE];
   long cstamp[AD_CACHE];
 } ad_mode;
+
+typedef struct cup_adaptive cup_adaptive;   /* as in adaptive.h, which the run's API is in */
 
 struct cup_adaptive {
   const cup_lcs *L;

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <time.h>
 #include "catchup.h"
+#include "adaptive.h"
 #include "adaptive_impl.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of

@@ -40,7 +40,8 @@ struct cup_integrator {
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
   cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
-  cup_estimate est;         /* the step-doubling estimate (est.half set when asked for) */
+  cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
+  cup_estimate est;         /* ... and the comparison with it */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -253,6 +254,28 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   return CUP_OK;
 }
 
+static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st);
+
+/* The step-doubling estimate: the same model and scheme at n/2 (borrowing
+ * this integrator's model), keeping its states where the two grids meet
+ * (estimate.h). */
+static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+  cup_integrator_options h = I->o;
+  h.n = I->o.n / 2;
+  h.estimate = 0;
+  h.on_step = NULL;
+  if (cup_estimate_init(&I->est, I->o.n, I->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  h.output = CUP_OUTPUT_EVERY;
+  h.output_every = cup_estimate_stride(&I->est);
+  int st;
+  cup_integrator *H = I->half = integrator_new(&h, errmsg, &st);
+  if (!H) return st;
+  H->u = I->u;
+  H->n = I->n; H->m = I->m; H->p = I->p;
+  H->S = I->S; H->K = I->K; H->G = I->G; H->fixed = I->fixed;
+  return setup(H, D, pd, errmsg);
+}
+
 static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st) {
   cup_integrator_options o;
   if (opt) o = *opt; else cup_integrator_options_default(&o);
@@ -287,7 +310,7 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->S = I->S_own;
   cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   if (!st) st = setup(I, &D, NULL, errmsg);
-  if (!st && I->o.estimate) st = cup_estimate_init(&I->est, L, u, &I->o, errmsg);
+  if (!st && I->o.estimate) st = create_half(I, &D, NULL, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -343,6 +366,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
   cup_drift D;
   st = process_model(I, d, &D, errmsg);
   if (!st) st = setup(I, &D, d, errmsg);
+  if (!st && I->o.estimate) st = create_half(I, &D, d, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -352,6 +376,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
   cup_adaptive_free(&I->ad);
+  cup_integrator_free(&I->half);
   cup_estimate_free(&I->est);
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
@@ -528,8 +553,9 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
              "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
              I->split, I->split_row);
   }
-  if (I->est.half) {
-    cup_estimate_prepare(&I->est, x0);
+  if (I->half) {
+    cup_run_info hi;
+    cup_estimate_start(&I->est, cup_integrator_run(I->half, x0, cup_estimate_keep, &I->est, &hi) >= 0);
     info->err_est = cup_estimate_value(&I->est);
   }
   sampler sp = {0};
@@ -584,7 +610,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
     }
     double *t = I->x; I->x = I->xnew; I->xnew = t;
-    if (I->est.half) {
+    if (I->half) {
       cup_estimate_compare(&I->est, k + 1, I->x);
       info->err_est = cup_estimate_value(&I->est);
     }

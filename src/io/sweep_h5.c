@@ -88,10 +88,6 @@ static hid_t row_type(void) {
   INS(T, "tol_rel", tol_rel, H5T_NATIVE_DOUBLE);
   INS(T, "err_est", err_est, H5T_NATIVE_DOUBLE);
   INS(T, "events", events, H5T_NATIVE_INT64);
-  INS(T, "tol_abs", tol_abs, H5T_NATIVE_DOUBLE);
-  INS(T, "tol_rel", tol_rel, H5T_NATIVE_DOUBLE);
-  INS(T, "err_est", err_est, H5T_NATIVE_DOUBLE);
-  INS(T, "events", events, H5T_NATIVE_INT64);
   INS(T, "done", done, H5T_NATIVE_INT8);
   H5Tclose(sname); H5Tclose(sspec); H5Tclose(sword); H5Tclose(sstat); H5Tclose(smsg);
   return T;
@@ -397,8 +393,6 @@ static void result_row(const sw_file *f, long task, const sw_result *r, double e
   row->dual_iterations = r->dual_iterations;
   row->factorizations = r->factorizations;
   row->stopped_step = r->stopped_step;
-  row->err_est = r->err_est;
-  row->events = r->events;
   row->err_est = r->err_est;
   row->events = r->events;
   row->done = 1;

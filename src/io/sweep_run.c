@@ -1,6 +1,7 @@
 /* sweep_run — one job of a sweep (sweep.h): a task, or a variant's
- * reference (Richardson extrapolation of two exact runs, or an adaptive run at tol 1e-13), run by the
- * integrator on the variant's scene and sampled at the common times. */
+ * reference (Richardson extrapolation of two exact runs, or an adaptive run
+ * at tol 1e-13), run by the integrator on the variant's scene and sampled at
+ * the common times. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
