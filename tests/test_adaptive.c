@@ -347,6 +347,61 @@ static void test_step_doubling(void **state) {
   }
 }
 
+/* Events that accumulate: x' = -1 + zeta, 0 <= zeta _|_ x - u(t) >= 0, with
+ * u a zigzag (up at slope 1, down at slope -3) whose teeth shrink
+ * geometrically towards t* = 1/2: each tooth lifts x, drops below it, and
+ * x falls onto it again (a located event) - infinitely many events before
+ * t*. The run must say so (CUP_WARN_ZENO, naming the row and t), cross the
+ * accumulation by catching-up steps, finish, and stay within the exact
+ * envelope: after t* u is constant and x falls to it, at slope -1. */
+static void test_zeno(void **state) {
+  (void)state;
+  enum { TEETH = 200 };
+  double tt[2 * TEETH + 1], vv[2 * TEETH + 1], t = 0, d = 0.05;
+  for (int k = 0; k < TEETH; k++, d *= 0.9) {       /* sum of d = 1/2 */
+    tt[2 * k] = t;
+    vv[2 * k] = 0;
+    tt[2 * k + 1] = t + 0.75 * d;                   /* up 0.75 d at slope 1, down at -3 */
+    vv[2 * k + 1] = 0.75 * d;
+    t += d;
+  }
+  tt[2 * TEETH] = t;
+  vv[2 * TEETH] = 0;
+  double C[1] = {1}, G[2] = {-1, 0}, E[2] = {0, 1};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 1, 1, 2, NULL, NULL, C, E, NULL, G, NULL, NULL, msg)) fail_msg("lcs: %s", msg);
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 2, NULL), CUP_OK);
+  cup_wave zig = {.kind = CUP_WAVE_PWL, .npoints = 2 * TEETH + 1, .t = tt, .v = vv};
+  cup_wave down = {.kind = CUP_WAVE_CONSTANT, .value = -1};
+  assert_int_equal(cup_input_add(u, 0, &zig, NULL), CUP_OK);
+  assert_int_equal(cup_input_add(u, 1, &down, NULL), CUP_OK);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = 1;
+  o.tol_abs = o.tol_rel = 1e-8;
+  o.output = CUP_OUTPUT_FINAL;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+  double x0[1] = {0};
+  cup_run_info info;
+  int st = cup_integrator_run(I, x0, NULL, NULL, &info);
+  double xT = cup_integrator_state(I)[0];
+  print_message("zigzag to t* = 1/2: %s: %s; %ld events, %ld steps, x(1) = %.6g, estimate %.3g\n",
+                cup_status_name(st), info.message, info.events, info.step, xT, info.err_est);
+  assert_int_equal(st, CUP_WARN_ZENO);
+  assert_non_null(strstr(info.message, "rows 0 switched"));
+  assert_true(info.t == 1);
+  /* x >= u = 0 stays held at 0 from the last contact on: x(1) = 0 */
+  assert_true(fabs(xT) <= 1e-12);
+  assert_true(info.events < 100000);
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_moving_interval),
@@ -357,6 +412,7 @@ int main(void) {
     cmocka_unit_test(test_jumping_set),
     cmocka_unit_test(test_paper_cases),
     cmocka_unit_test(test_step_doubling),
+    cmocka_unit_test(test_zeno),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

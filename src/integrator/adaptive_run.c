@@ -507,7 +507,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
 
 static int catch_up(cup_adaptive *A, ad_run *R) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
-  double window = AD_ZENO_RING / rate, tend = fmin(fmin(A->o.T, R->tb), R->t + window);
+  double window = AD_ZENO_RING / rate, tend = fmin(A->o.T, R->t + window);
   char rows[96] = "";
   size_t len = 0;
   for (int k = 0, shown = 0; k < AD_ZENO_RING && shown < 8; k++) {
@@ -520,13 +520,14 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
   warn(R, CUP_WARN_ZENO, "rows %s switched %d times within %.3g (over max_event_rate = %.3g per unit "
        "time): catching-up steps across [%.17g, %.17g]", rows, AD_ZENO_RING,
        R->t - A->zeno[A->nzeno % AD_ZENO_RING], rate, R->t, tend);
-  A->nzeno = 0;
-  ad_mode *md0 = ad_mode_get(A, 0);
-  A->pinned[0] = R->md = md0;
-  int n = A->n, na = A->na, st;
+  int n = A->n, na = A->na, st, at_tb = 0;
   while (R->t < tend) {
-    double t1 = next_stop(A, R, fmin(md0->hmax, window / 16));
-    t1 = fmin(t1, tend);
+    /* the free system's flow, then the certified projection: the paper's
+     * scheme with an exact free step, through breakpoints too (which pick
+     * an active set that this loop does not use) */
+    ad_mode *md0 = ad_mode_get(A, 0);
+    A->pinned[1] = md0;
+    double t1 = fmin(next_stop(A, R, fmin(md0->hmax, window / 16)), tend);
     if (!(t1 > R->t)) break;
     if (inputs_on(A, R->t, t1, A->wa, A->uerr))
       return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
@@ -549,12 +550,13 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
     error_flow(A, md0, t1 - R->t);
     error_onto(A, active, A->e);
     R->t = t1;
-    int at_tb = R->t == R->tb;
+    at_tb = R->t == R->tb;
     if ((st = end_of_step(A, R, &pi, 0)) < 0) return st;
-    if (at_tb) return CUP_OK;                    /* start_piece chose the active set */
   }
-  if (R->t >= A->o.T) return CUP_OK;
-  if (inputs_on(A, R->t, fmin(R->tb, R->t + md0->hmax), A->wt, A->uerr))
+  A->pinned[1] = NULL;
+  A->nzeno = 0;
+  if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
+  if (inputs_on(A, R->t, fmin(R->tb, R->t + R->md->hmax), A->wt, A->uerr))
     return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   return choose_mode(A, R, A->wt, 0, R->t);
 }
