@@ -126,7 +126,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_lcs *L, const cup_input *u
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), &fail);
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
-                       &A->cz, &A->cs, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
+                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++) *vecs_m[k] = take((size_t)m, sizeof(double), &fail);
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et};
   for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++) *vecs_n[k] = take((size_t)n, sizeof(double), &fail);
@@ -164,6 +164,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_lcs *L, const cup_input *u
       abn = fmax(abn, fabs(acc));
     }
     A->cz[i] = bn;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) A->c1[i] += fabs(K->Ct.x[k]);
     A->cs[i] = K->Md[i + (size_t)i * m] > 0 ? abn / K->Md[i + (size_t)i * m] : 0;
   }
   *out = A;
@@ -179,7 +180,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework); free(A->lwork);
   free(A->ya); free(A->yb); free(A->yt); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
-  free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs);
+  free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et);
   free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->lcpM); free(A->touch);

@@ -8,12 +8,17 @@
 
 void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, double *g, double *thr) {
   int m = A->m, na = A->na;
+  double vmax = 0;                         /* the state's scale: v = x + K U w */
+  for (int j = 0; j < A->n; j++) vmax = fmax(vmax, fabs(y[j]));
   for (int i = 0; i < m; i++) {
-    const double *Li = md->L + (size_t)i * na;
+    const double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
-    for (int j = 0; j < na; j++) { acc += Li[j] * y[j]; mag += fabs(Li[j] * y[j]); }
+    for (int j = 0; j < na; j++) { acc += Li[j] * y[j]; mag += Lmi[j] * fabs(y[j]); }
     g[i] = acc;
-    thr[i] = 64 * DBL_EPSILON * mag;       /* a few ulps of the terms summed */
+    /* a few ulps of the terms summed; a slack also of the state's scale,
+     * to which the held rows are kept (a row that depends on them sits at
+     * zero with that rounding) */
+    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
   }
 }
 

@@ -39,6 +39,9 @@ typedef struct ad_mode {
   double *M;                /* na x na generator, column-major */
   double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
   double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */
+  double *Lm;               /* m x na, row-major: magnitudes of the terms an event value is
+                               computed from (|C_i| |X| for a slack: a row that depends on
+                               the active ones has a tiny L_i, but its slack rounds at that) */
   unsigned char *is_zeta;   /* m */
   double *X;                /* n x na, row-major: x = X y */
   double *R;                /* n x nj, column-major: B_J S_J^-1 (the manifold correction) */
@@ -79,6 +82,7 @@ struct cup_adaptive {
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
   double *cz, *cs;          /* per row: ||B_i||_inf and ||A B_i||_inf / S_ii (the late-switch error, docs/adaptive.md) */
+  double *c1;               /* per row: ||c_i||_1 */
   double *x, *xs, *xr, *xf, *s, *gam, *g, *ut, *udot, *uerr, *wa, *wt;
   double *e, *et;           /* the propagated error estimate, n */
   double *zero;             /* m zeros */

@@ -27,6 +27,7 @@ int ad_modes_init(cup_adaptive *A) {
     md->rows = take((size_t)m + 1, sizeof(int), &fail);
     md->M = take(NA, sizeof(double), &fail);
     md->L = take((size_t)m * na, sizeof(double), &fail);
+    md->Lm = take((size_t)m * na, sizeof(double), &fail);
     md->Lc = take((size_t)m, sizeof(double), &fail);
     md->is_zeta = take((size_t)m, 1, &fail);
     md->X = take((size_t)n * na, sizeof(double), &fail);
@@ -52,7 +53,7 @@ int ad_modes_init(cup_adaptive *A) {
 void ad_modes_free(cup_adaptive *A) {
   for (int s = 0; s < AD_MODES; s++) {
     ad_mode *md = &A->modes[s];
-    free(md->rows); free(md->M); free(md->L); free(md->Lc); free(md->is_zeta);
+    free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
     free(md->X); free(md->R); free(md->KU);
     for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
   }
@@ -196,7 +197,7 @@ static void mode_build(cup_adaptive *A, ad_mode *md, uint64_t mask) {
       CQ[(size_t)k * na + j] = acc;
     }
   for (int i = 0; i < m; i++) {
-    double *Li = md->L + (size_t)i * na;
+    double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
     int k = -1;
     for (int a = 0; a < nj; a++) if (J[a] == i) k = a;
     md->is_zeta[i] = k >= 0;
@@ -205,16 +206,25 @@ static void mode_build(cup_adaptive *A, ad_mode *md, uint64_t mask) {
         double acc = 0;
         for (int l = 0; l < nj; l++) acc -= A->Sinv[k + (size_t)l * nj] * CQ[(size_t)l * na + j];
         Li[j] = acc;
+        Lmi[j] = fabs(acc);
       }
       md->Lc[i] = 0;
     } else {
       row_of_C(K, i, crow);
       for (int j = 0; j < na; j++) {
-        double acc = 0;
-        for (int l = 0; l < n; l++) acc += crow[l] * md->X[(size_t)l * na + j];
+        double acc = 0, mag = 0;
+        for (int l = 0; l < n; l++) {
+          acc += crow[l] * md->X[(size_t)l * na + j];
+          mag += fabs(crow[l] * md->X[(size_t)l * na + j]);
+        }
         if (j >= n)
-          for (int q = 0; q < p; q++) acc += A->G[i + (size_t)q * m] * A->U[q + (size_t)(j - n) * p];
+          for (int q = 0; q < p; q++) {
+            double gu = A->G[i + (size_t)q * m] * A->U[q + (size_t)(j - n) * p];
+            acc += gu;
+            mag += fabs(gu);
+          }
         Li[j] = acc;
+        Lmi[j] = mag;
       }
       md->Lc[i] = A->L->F[i];
     }
