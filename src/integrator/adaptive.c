@@ -121,8 +121,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_lcs *L, const cup_input *u
   A->G = take((size_t)m * p, sizeof(double), &fail);
   A->U = take((size_t)p * nw, sizeof(double), &fail);
   A->W = take((size_t)nw * nw, sizeof(double), &fail);
-  A->ework = take(5 * NA, sizeof(double), &fail);
-  A->lwork = take(4 * NA, sizeof(long double), &fail);
+  A->ework = take(6 * NA, sizeof(double), &fail);
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), &fail);
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
@@ -177,7 +176,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   ad_modes_free(A);
   cup_lcp_free(&A->lcp);
   cup_lcp_step_free(&A->proj);
-  free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework); free(A->lwork);
+  free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
   free(A->ya); free(A->yb); free(A->yt); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);

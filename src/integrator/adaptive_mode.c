@@ -265,11 +265,13 @@ ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
   return oldest;
 }
 
-/* out = exp(a) (k x k, column-major) as cup_dense_expm does it (Taylor to
- * degree 18 on a / 2^s, then s squarings) but in long double when s is
- * large: each squaring adds the rounding of the last, so a stiff generator
- * (|lambda| h ~ 1e5, s ~ 17) loses 2^s eps ~ 1e-11 in double, and the run
- * reuses that exponential on every step. Rounded once to double at the end. */
+/* out = exp(a) (k x k, column-major) by scaling and squaring of a degree-18
+ * Taylor polynomial, as cup_dense_expm does, but carrying X = exp(a / 2^s) - I
+ * through the squarings, (I + X)^2 = I + (2 X + X^2): forming I + X first
+ * loses the small entries of X to the rounding of 1, and each squaring
+ * doubles that loss, 2^s eps in all: about 1e-11 on a stiff generator
+ * (|lambda| h ~ 1e5, s ~ 17), which the run compounds by reusing the
+ * exponential on every step. */
 static void expm(cup_adaptive *A, const double *a, int k, double *out) {
   size_t K2 = (size_t)k * k;
   double norm = 0;
@@ -280,32 +282,29 @@ static void expm(cup_adaptive *A, const double *a, int k, double *out) {
   }
   int sq = 0;
   while (norm > 0.5 && sq < 1000) { norm *= 0.5; sq++; }
-  if (sq < 8) { cup_dense_expm(a, k, out, A->ework); return; }
-  long double *s = A->lwork, *sum = s + K2, *term = sum + K2, *tmp = term + K2;
-  long double scale = ldexpl(1.0L, -sq);
-  for (size_t q = 0; q < K2; q++) { s[q] = a[q] * scale; sum[q] = term[q] = 0; }
-  for (int i = 0; i < k; i++) sum[i + (size_t)i * k] = term[i + (size_t)i * k] = 1;
-  long double *x = term, *y = tmp;
-  for (int d = 1; d <= 18; d++) {                /* term <- term s / d; sum += term */
+  double *s = A->ework, *x = s + K2, *term = x + K2, *tmp = A->ework + 5 * K2;
+  double scale = ldexp(1.0, -sq);
+  for (size_t q = 0; q < K2; q++) x[q] = term[q] = s[q] = a[q] * scale;
+  for (int d = 2; d <= 18; d++) {                /* X = sum_{d >= 1} s^d / d! */
     for (int j = 0; j < k; j++)
       for (int i = 0; i < k; i++) {
-        long double acc = 0;
-        for (int l = 0; l < k; l++) acc += x[i + (size_t)l * k] * s[l + (size_t)j * k];
-        y[i + (size_t)j * k] = acc / d;
+        double acc = 0;
+        for (int l = 0; l < k; l++) acc += term[i + (size_t)l * k] * s[l + (size_t)j * k];
+        tmp[i + (size_t)j * k] = acc / d;
       }
-    long double *t = x; x = y; y = t;
-    for (size_t q = 0; q < K2; q++) sum[q] += x[q];
+    for (size_t q = 0; q < K2; q++) { term[q] = tmp[q]; x[q] += tmp[q]; }
   }
-  for (int r = 0; r < sq; r++) {
+  for (int r = 0; r < sq; r++) {                 /* X <- 2 X + X^2 */
     for (int j = 0; j < k; j++)
       for (int i = 0; i < k; i++) {
-        long double acc = 0;
-        for (int l = 0; l < k; l++) acc += sum[i + (size_t)l * k] * sum[l + (size_t)j * k];
-        y[i + (size_t)j * k] = acc;
+        double acc = 0;
+        for (int l = 0; l < k; l++) acc += x[i + (size_t)l * k] * x[l + (size_t)j * k];
+        tmp[i + (size_t)j * k] = 2 * x[i + (size_t)j * k] + acc;
       }
-    for (size_t q = 0; q < K2; q++) sum[q] = y[q];
+    for (size_t q = 0; q < K2; q++) x[q] = tmp[q];
   }
-  for (size_t q = 0; q < K2; q++) out[q] = (double)sum[q];
+  for (size_t q = 0; q < K2; q++) out[q] = x[q];
+  for (int i = 0; i < k; i++) out[i + (size_t)i * k] += 1;
 }
 
 const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
