@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-LEVELS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
+LEVELS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
 
 
 def load(path):
@@ -115,9 +115,41 @@ def merge_rounds(rows, key):
     return out
 
 
+def adaptive_error(r):
+    """The adaptive rows' error: against the adaptive reference (tol 1e-13); where
+    that is this very computation (case 2: no event between breakpoints, the run
+    is exact to rounding) against the Richardson limit, i.e. that limit's error."""
+    return r["err_max"] if r["err_max"] > 0 else r["err_richardson"]
+
+
+def adaptive_curve(rows):
+    """tol from loose to tight, as (index, error, seconds)."""
+    rows = sorted(rows, key=lambda r: -r["tol"])
+    return [(k, adaptive_error(r), r["median_s"]) for k, r in enumerate(rows)]
+
+
+def adaptive_table(rows, case, lines):
+    rows = sorted((r for r in rows if r["case"] == case), key=lambda r: -r["tol"])
+    if not rows:
+        return
+    lines.append(f"The adaptive scheme on case {case}, tol by tol (`catchup-bench adaptive`; error "
+                 "against `ref_case{case}_adaptive.csv`" + (", or where that is exact, against the "
+                 "Richardson limit" if any(r["err_max"] == 0 for r in rows) else "") + "):\n")
+    lines.append("| tol | time loop | steps | events | error | its estimate | estimate / error |")
+    lines.append("|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        e = adaptive_error(r)
+        note = " (Richardson)" if r["err_max"] == 0 else ""
+        lines.append(f"| {r['tol']:.0e} | {r['median_s'] * 1e6:.0f} µs | {r['n']} | {r['events']} | "
+                     f"{e:.2e}{note} | {r['err_est']:.2e} | {r['err_est'] / e:.2f} |")
+    lines.append("")
+
+
 def circuit_section(outdir, lines):
     cat = merge_rounds(load(os.path.join(outdir, "catchup_circuit.jsonl")),
                        lambda r: (r["case"], r["config"], r["n"]))
+    ada = merge_rounds(load(os.path.join(outdir, "catchup_adaptive.jsonl")),
+                       lambda r: (r["case"], r["tol"]))
     sic = merge_rounds(load(os.path.join(outdir, "siconos.jsonl")),
                        lambda r: (r["case"], r.get("driver", "python"), r["theta"], r["solver"], r["n"]))
     if not cat or not sic:
@@ -135,11 +167,15 @@ def circuit_section(outdir, lines):
         sic_main, sic_label = sic_py, "Siconos (Python)"
     for case in (1, 2):
         cc = curves([r for r in cat if r["case"] == case], lambda r: r["config"])
+        if any(r["case"] == case for r in ada):
+            cc["adaptive"] = adaptive_curve([r for r in ada if r["case"] == case])
         sc = curves([r for r in sic_main if r["case"] == case],
                     lambda r: f"theta{r['theta']:g}/{r['solver']}")
         fig, ax = plt.subplots(figsize=(7, 5))
         for cfg, c in sorted(cc.items()):
-            ax.loglog([p[1] for p in c], [p[2] for p in c], "o-", label=f"catchup {cfg}")
+            style, lw = ("D-", 2.5) if cfg == "adaptive" else ("o-", 1.5)
+            label = "catchup adaptive (tol 1e-3 .. 1e-10)" if cfg == "adaptive" else f"catchup {cfg}"
+            ax.loglog([p[1] for p in c], [p[2] for p in c], style, lw=lw, label=label)
         for cfg, c in sorted(sc.items()):
             ax.loglog([p[1] for p in c], [p[2] for p in c], "s--", label=f"{sic_label} {cfg}")
         ax.set_xlabel("max-norm error against the reference limit")
@@ -163,6 +199,7 @@ def circuit_section(outdir, lines):
             ratio = f"{b[0] / a[0]:.0f}x" if a and b else "—"
             lines.append(f"| {lev:.0e} | {fa} | {fb} | {ratio} |")
         lines.append("")
+        adaptive_table(ada, case, lines)
         lines.append("Per step at equal n (fastest configuration of each tool; "
                      f"{sic_label} is its time loop with no Python in it):\n")
         lines.append(f"| n | catchup ns/step | {sic_label} µs/step | ratio |")
@@ -282,7 +319,11 @@ def main():
              "(`scripts/siconos_circuit.py`, Debian's `python3-siconos`) is a cross-check: same "
              "trajectory, Python's cost per step added. Errors are max-norm against "
              "`tests/data/ref_case{1,2}_limit_richardson.csv` at t = j/1000 (Richardson limits, "
-             "accurate to about 1e-10: `tests/data/README.md`).", ""]
+             "accurate to about 1e-10: `tests/data/README.md`); the adaptive scheme's "
+             "(`catchup-bench adaptive`, tol = 1e-3 .. 1e-10, in the same rounds, its dense "
+             "output at the same times) against `ref_case{1,2}_adaptive.csv` (its own run at "
+             "tol = 1e-13, which agrees with the Richardson limits to their accuracy), since "
+             "its errors go below theirs.", ""]
     circuit_section(outdir, lines)
     lines += ["## The projector against QP solvers", "",
               "Command: `bash scripts/bench-projector` (OSQP, DAQP, ProxQP, PIQP through their "
