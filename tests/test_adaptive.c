@@ -78,12 +78,15 @@ static void check_run(const char *name, const ad_ctx *c, const cup_run_info *inf
 
 /* Each exact switching time has an event of that row within tol of it. */
 static void check_events(const char *name, const ad_ctx *c, int n, const double *t, const int *row, double tol) {
+  double worst = 0;
   for (int k = 0; k < n; k++) {
     double best = INFINITY;
     for (int e = 0; e < c->nev; e++)
       if (c->row[e] == row[k]) best = fmin(best, fabs(c->tev[e] - t[k]));
     if (!(best <= tol)) fail_msg("%s: switching time %.17g (row %d): nearest event %.3g away", name, t[k], row[k], best);
+    worst = fmax(worst, best);
   }
+  print_message("%-30s tol %.0e: %d switching times, events at most %.2g away\n", name, tol, n, worst);
 }
 
 static cup_input *sine(double amp, double f) {
