@@ -334,34 +334,47 @@ static void test_options_and_overrides(void **state) {
 
 /* ---- the adaptive scheme ---------------------------------------------------------- */
 
+/* The 2-state system above by the adaptive scheme with a callback input
+ * fn (on E, or on a moving K through G), its states at t = j/100 counted in
+ * sn; returns the status. */
+static int run_adaptive_callback(int moving, cup_input_fn fn, void *ctx, seen *sn, cup_run_info *info) {
+  double A[4] = {-1, 3, -3, -1}, C[2] = {1, 0}, F[1] = {0.2}, E[2] = {0, 1}, G[1] = {-0.1};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 2, 1, 1, A, NULL, C, moving ? NULL : E, F, moving ? G : NULL, NULL, NULL, msg))
+    fail_msg("lcs: %s", msg);
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+  assert_int_equal(cup_input_set_callback(u, fn, ctx, 1e-12, 1e-10), CUP_OK);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 101;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+  double x0[2] = {0.3, 0};
+  int st = cup_integrator_run(I, x0, seen_sink, sn, info);
+  const double *xl = cup_integrator_state(I);      /* the state kept is the last good one */
+  assert_true(isfinite(xl[0]) && isfinite(xl[1]));
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+  return st;
+}
+
 /* A callback input that goes bad after t = 0.5 (NaN, Inf, a failure), on
  * E and on a moving K: the adaptive run stops with CUP_ERR_CALLBACK at the
  * step that first samples it there, names that time, and has delivered
  * every output time before it, all finite. */
 static void test_adaptive_callbacks(void **state) {
   (void)state;
-  double A[4] = {-1, 3, -3, -1}, C[2] = {1, 0}, F[1] = {0.2}, E[2] = {0, 1}, G[1] = {-0.1};
   for (int mode = 0; mode < 3; mode++)
     for (int moving = 0; moving < 2; moving++) {
-      lcs_built b;
-      char msg[CUP_ERRMSG_LEN];
-      if (build_lcs(&b, 2, 1, 1, A, NULL, C, moving ? NULL : E, F, moving ? G : NULL, NULL, NULL, msg))
-        fail_msg("lcs: %s", msg);
       cb_ctx c = {mode, 0.5, 0};
-      cup_input *u = NULL;
-      assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
-      assert_int_equal(cup_input_set_callback(u, bad_input, &c, 1e-12, 1e-10), CUP_OK);
-      cup_integrator_options o;
-      cup_integrator_options_default(&o);
-      o.scheme = CUP_SCHEME_ADAPTIVE;
-      o.output = CUP_OUTPUT_SAMPLES;
-      o.output_samples = 101;
-      cup_integrator *I = NULL;
-      if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
       seen sn = {0, -1, 1};
       cup_run_info info;
-      double x0[2] = {0.3, 0};
-      int st = cup_integrator_run(I, x0, seen_sink, &sn, &info);
+      int st = run_adaptive_callback(moving, bad_input, &c, &sn, &info);
       print_message("adaptive, input %s%s: %s: %s (%ld samples)\n", mode == 0 ? "NaN" : mode == 1 ? "Inf" : "fails",
                     moving ? ", moving K" : "", cup_status_name(st), info.message, sn.count);
       assert_int_equal(st, CUP_ERR_CALLBACK);
@@ -369,11 +382,6 @@ static void test_adaptive_callbacks(void **state) {
       assert_true(info.t <= 0.5 && info.t > 0.4);
       assert_true(sn.count >= 41 && sn.count <= 51);  /* t = 0 .. t_stop, on the grid j / 100 */
       assert_true(sn.all_finite);
-      const double *xl = cup_integrator_state(I);
-      assert_true(isfinite(xl[0]) && isfinite(xl[1]));
-      cup_integrator_free(&I);
-      cup_input_free(&u);
-      unbuild_lcs(&b);
     }
 }
 
@@ -388,24 +396,9 @@ static int pole_input(double t, double *u, void *vp) {
 
 static void test_adaptive_step_underflow(void **state) {
   (void)state;
-  double A[4] = {-1, 3, -3, -1}, C[2] = {1, 0}, F[1] = {0.2}, E[2] = {0, 1};
-  lcs_built b;
-  char msg[CUP_ERRMSG_LEN];
-  if (build_lcs(&b, 2, 1, 1, A, NULL, C, E, F, NULL, NULL, NULL, msg)) fail_msg("lcs: %s", msg);
-  cup_input *u = NULL;
-  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
-  assert_int_equal(cup_input_set_callback(u, pole_input, NULL, 1e-12, 1e-10), CUP_OK);
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.output = CUP_OUTPUT_SAMPLES;
-  o.output_samples = 101;
-  cup_integrator *I = NULL;
-  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
   seen sn = {0, -1, 1};
   cup_run_info info;
-  double x0[2] = {0.3, 0};
-  int st = cup_integrator_run(I, x0, seen_sink, &sn, &info);
+  int st = run_adaptive_callback(0, pole_input, NULL, &sn, &info);
   print_message("adaptive, u = 1/(1/2 - t): %s: %s (%ld samples, %ld rejected steps)\n", cup_status_name(st),
                 info.message, sn.count, info.rejected);
   assert_int_equal(st, CUP_ERR_STEP_SIZE);
@@ -413,9 +406,6 @@ static void test_adaptive_step_underflow(void **state) {
   assert_true(info.t > 0.49 && info.t < 0.5);
   assert_int_equal(sn.count, 50);                    /* t = 0, 0.01, ..., 0.49 */
   assert_true(sn.all_finite);
-  cup_integrator_free(&I);
-  cup_input_free(&u);
-  unbuild_lcs(&b);
 }
 
 /* Bad tolerances are refused at creation, naming the value; one below

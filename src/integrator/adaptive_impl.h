@@ -77,7 +77,7 @@ struct cup_adaptive {
   gsl_matrix *eigA;
   gsl_vector_complex *eigv;
   /* scratch of the run */
-  double *ework;            /* 6 na^2: exponentials (3 work, the scaled M, one out, 1 work) */
+  double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
   double *cz, *cs;          /* per row: ||B_i||_inf and ||A B_i||_inf / S_ii (the late-switch error, docs/adaptive.md) */

@@ -265,48 +265,6 @@ ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
   return oldest;
 }
 
-/* out = exp(a) (k x k, column-major) by scaling and squaring of a degree-18
- * Taylor polynomial, as cup_dense_expm does, but carrying X = exp(a / 2^s) - I
- * through the squarings, (I + X)^2 = I + (2 X + X^2): forming I + X first
- * loses the small entries of X to the rounding of 1, and each squaring
- * doubles that loss, 2^s eps in all: about 1e-11 on a stiff generator
- * (|lambda| h ~ 1e5, s ~ 17), which the run compounds by reusing the
- * exponential on every step. */
-static void expm(cup_adaptive *A, const double *a, int k, double *out) {
-  size_t K2 = (size_t)k * k;
-  double norm = 0;
-  for (int i = 0; i < k; i++) {
-    double r = 0;
-    for (int j = 0; j < k; j++) r += fabs(a[i + (size_t)j * k]);
-    norm = fmax(norm, r);
-  }
-  int sq = 0;
-  while (norm > 0.5 && sq < 1000) { norm *= 0.5; sq++; }
-  double *s = A->ework, *x = s + K2, *term = x + K2, *tmp = A->ework + 5 * K2;
-  double scale = ldexp(1.0, -sq);
-  for (size_t q = 0; q < K2; q++) x[q] = term[q] = s[q] = a[q] * scale;
-  for (int d = 2; d <= 18; d++) {                /* X = sum_{d >= 1} s^d / d! */
-    for (int j = 0; j < k; j++)
-      for (int i = 0; i < k; i++) {
-        double acc = 0;
-        for (int l = 0; l < k; l++) acc += term[i + (size_t)l * k] * s[l + (size_t)j * k];
-        tmp[i + (size_t)j * k] = acc / d;
-      }
-    for (size_t q = 0; q < K2; q++) { term[q] = tmp[q]; x[q] += tmp[q]; }
-  }
-  for (int r = 0; r < sq; r++) {                 /* X <- 2 X + X^2 */
-    for (int j = 0; j < k; j++)
-      for (int i = 0; i < k; i++) {
-        double acc = 0;
-        for (int l = 0; l < k; l++) acc += x[i + (size_t)l * k] * x[l + (size_t)j * k];
-        tmp[i + (size_t)j * k] = 2 * x[i + (size_t)j * k] + acc;
-      }
-    for (size_t q = 0; q < K2; q++) x[q] = tmp[q];
-  }
-  for (size_t q = 0; q < K2; q++) out[q] = x[q];
-  for (int i = 0; i < k; i++) out[i + (size_t)i * k] += 1;
-}
-
 const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
   int slot = 0;
   for (int c = 0; c < AD_CACHE; c++) {
@@ -314,9 +272,11 @@ const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
     if (md->cstamp[c] < md->cstamp[slot]) slot = c;
   }
   size_t NA = (size_t)A->na * A->na;
-  double *hM = A->ework + 3 * NA;
+  double *hM = A->ework + 4 * NA;
   for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
-  expm(A, hM, A->na, md->Ec[slot]);
+  /* a stiff generator needs the small entries of exp - I kept (linalg.h):
+   * the run reuses this exponential on every step */
+  cup_dense_expm_stiff(hM, A->na, md->Ec[slot], A->ework);
   md->hc[slot] = h;
   md->cstamp[slot] = ++A->clock;
   return md->Ec[slot];
@@ -340,9 +300,9 @@ void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, doubl
   double norm = fabs(tau) * md->mnorm;
   if (norm > 4) {                                /* stiff or long: the full exponential */
     size_t NA = (size_t)na * na;
-    double *hM = A->ework + 3 * NA, *Et = A->ework + 4 * NA;
+    double *hM = A->ework + 4 * NA, *Et = A->ework + 5 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
-    expm(A, hM, na, Et);
+    cup_dense_expm_stiff(hM, na, Et, A->ework);
     matvec(na, Et, y_in, y_out);
     return;
   }

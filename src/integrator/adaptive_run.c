@@ -24,29 +24,31 @@ static double wall_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-__attribute__((format(printf, 3, 4)))
-static int stop(ad_run *R, int status, const char *fmt, ...) {
+/* "step k (t = ...): " and the text into info->message. */
+static void say(ad_run *R, const char *fmt, va_list ap) {
   cup_run_info *info = R->info;
   int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
-  va_list ap;
-  va_start(ap, fmt);
   if (len >= 0 && (size_t)len < sizeof info->message)
     vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
+}
+
+__attribute__((format(printf, 3, 4)))
+static int stop(ad_run *R, int status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  say(R, fmt, ap);
   va_end(ap);
-  return info->status = status;
+  return R->info->status = status;
 }
 
 /* The first warning is kept (status and message), as in the fixed-step run. */
 __attribute__((format(printf, 3, 4)))
 static void warn(ad_run *R, int status, const char *fmt, ...) {
-  cup_run_info *info = R->info;
-  if (info->status != CUP_OK) return;
-  info->status = status;
-  int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
+  if (R->info->status != CUP_OK) return;
+  R->info->status = status;
   va_list ap;
   va_start(ap, fmt);
-  if (len >= 0 && (size_t)len < sizeof info->message)
-    vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
+  say(R, fmt, ap);
   va_end(ap);
 }
 
