@@ -53,6 +53,26 @@ static void expect_attr_str(hid_t f, const char *name, const char *expect) {
 
 static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; }
 
+/* max |x - ref| over the 1001 rows of tests/data/NAME (t = k/1000), checking
+ * that t holds those times exactly. */
+static double diff_to_data(const char *name, const double *t, const double *x) {
+  char path[512], line[512];
+  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
+  FILE *csv = fopen(path, "r");
+  if (!csv) fail_msg("cannot open %s", path);
+  double ref[4], err = 0;
+  assert_non_null(fgets(line, sizeof line, csv));
+  for (int k = 0; k <= 1000; k++) {
+    /* the grid k h of a fixed-step run, or the output times j T / (N - 1) of an adaptive one */
+    assert_true(t[k] == (double)k * (1.0 / 1000) || t[k] == (double)k / 1000);
+    assert_non_null(fgets(line, sizeof line, csv));
+    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
+    for (int j = 0; j < 3; j++) err = fmax(err, fabs(x[3 * k + j] - ref[j + 1]));
+  }
+  fclose(csv);
+  return err;
+}
+
 /* ---- tests ---- */
 
 /* The paper's case 1 at n = 1000: the grid is t_k = k h exactly, the rows are
@@ -69,18 +89,7 @@ static void test_paper_case1_file(void **state) {
   double *t, *x;
   assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
   assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
-  double h = 1.0 / 1000, ref[4], err = 0;
-  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
-  char line[512];
-  assert_non_null(csv);
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int k = 0; k <= 1000; k++) {
-    assert_true(t[k] == (double)k * h);
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
-    for (int j = 0; j < 3; j++) err = fmax(err, fabs(x[3 * k + j] - ref[j + 1]));
-  }
-  fclose(csv);
+  double err = diff_to_data("ref_case1_limit_richardson.csv", t, x);
   if (!(err > 1.0e-3 && err < 2.0e-3)) fail_msg("max error %.3g, expected ~1.52e-3", err);
   assert_true(attr_i64(f, "n") == 1000);
   assert_true(attr_f64(f, "T") == 1.0);
@@ -124,18 +133,7 @@ static void test_adaptive_file(void **state) {
   double *t, *x;
   assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
   assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
-  double ref[4], err = 0;
-  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_adaptive.csv", "r");
-  char line[512];
-  assert_non_null(csv);
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int k = 0; k <= 1000; k++) {
-    assert_true(t[k] == (k == 1000 ? 1.0 : k / 1000.0));
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
-    for (int j = 0; j < 3; j++) err = fmax(err, fabs(x[3 * k + j] - ref[j + 1]));
-  }
-  fclose(csv);
+  double err = diff_to_data("ref_case1_adaptive.csv", t, x);
   double est = attr_f64(f, "err_est");
   print_message("catchup-run --scheme adaptive --tol 1e-8: error %.3e, err_est %.3e, %ld events\n", err, est,
                 (long)attr_i64(f, "events"));

@@ -225,19 +225,12 @@ static void test_nearest_samples(void **state) {
   sw_free(&s);
 }
 
-/* The reference of the paper's case 1 (n_ref auto = 4 x 10^4 for n up to
- * 10^4) against the reference limit in tests/data on t = k/1000. */
-static void test_reference_vs_data(void **state) {
-  (void)state;
-  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
-  if (!csv) fail_msg("cannot open %s", CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv");
-  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
-  assert_int_equal(s->var[0].n_ref, 40000);
-  double *x = malloc(sizeof(double) * 1001 * 3);
-  sw_result r;
-  sw_run_job(s, 0, NULL, &r, x);
-  assert_int_equal(r.status, CUP_OK);
-  char line[512];
+/* max |x - ref| over t = j/1000 against tests/data/NAME (x: 1001 x 3). */
+static double diff_to_data(const char *name, const double *x) {
+  char path[512], line[512];
+  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
+  FILE *csv = fopen(path, "r");
+  if (!csv) fail_msg("cannot open %s", path);
   double ref[4], err = 0;
   assert_non_null(fgets(line, sizeof line, csv));
   for (int j = 0; j <= 1000; j++) {
@@ -246,6 +239,20 @@ static void test_reference_vs_data(void **state) {
     for (int i = 0; i < 3; i++) err = fmax(err, fabs(x[3 * j + i] - ref[i + 1]));
   }
   fclose(csv);
+  return err;
+}
+
+/* The reference of the paper's case 1 (n_ref auto = 4 x 10^4 for n up to
+ * 10^4) against the reference limit in tests/data on t = k/1000. */
+static void test_reference_vs_data(void **state) {
+  (void)state;
+  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
+  assert_int_equal(s->var[0].n_ref, 40000);
+  double *x = malloc(sizeof(double) * 1001 * 3);
+  sw_result r;
+  sw_run_job(s, 0, NULL, &r, x);
+  assert_int_equal(r.status, CUP_OK);
+  double err = diff_to_data("ref_case1_limit_richardson.csv", x);
   printf("# reference (Richardson, n_ref = 40000) vs tests/data case-1 reference: max |diff| = %.3g; "
          "correction removed %.3g\n", err, r.correction);
   assert_true(err < 1e-6);
@@ -274,18 +281,7 @@ static void test_tol_axis_adaptive_reference(void **state) {
   sw_result r;
   sw_run_job(s, 0, NULL, &r, ref);
   assert_int_equal(r.status, CUP_OK);
-  double ref_est = r.correction;
-  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
-  if (!csv) fail_msg("cannot open the case-1 reference");
-  char line[512];
-  double row[4], diff = 0;
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int j = 0; j <= 1000; j++) {
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &row[0], &row[1], &row[2], &row[3]), 4);
-    for (int i = 0; i < 3; i++) diff = fmax(diff, fabs(ref[3 * j + i] - row[i + 1]));
-  }
-  fclose(csv);
+  double ref_est = r.correction, diff = diff_to_data("ref_case1_limit_richardson.csv", ref);
   sw_run_job(s, s->n_variants + 3, NULL, &r, x);
   double err = sw_max_error(x, ref, 1001 * 3);
   printf("# adaptive reference vs Richardson limit: %.3g (estimate %.3g); adaptive task at tol 1e-9: "
