@@ -10,6 +10,7 @@
 #include <cmocka.h>
 #include "stress_util.h"
 #include "closed_forms.h"
+#include "refdata.h"
 
 typedef double (*exact_fn)(double t, int i, const void *par);
 
@@ -236,20 +237,6 @@ static void test_jumping_set(void **state) {
 
 static double ref_rows[2][1001 * 3];
 
-static void load_csv(const char *name, double *ref) {
-  char path[512], line[512];
-  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
-  FILE *f = fopen(path, "r");
-  if (!f) fail_msg("cannot open %s", path);
-  assert_non_null(fgets(line, sizeof line, f));
-  for (int j = 0; j <= 1000; j++) {
-    double t;
-    assert_non_null(fgets(line, sizeof line, f));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &t, &ref[3 * j], &ref[3 * j + 1], &ref[3 * j + 2]), 4);
-  }
-  fclose(f);
-}
-
 static double paper_ref(double t, int i, const void *par) {
   const double *ref = par;
   long j = lround(t * 1000);
@@ -281,11 +268,10 @@ static void test_paper_cases(void **state) {
   for (int cas = 1; cas <= 2; cas++) {
     char name[64];
     snprintf(name, sizeof name, "ref_case%d_adaptive.csv", cas);
-    load_csv(name, ref_rows[cas - 1]);
+    ref_load(name, ref_rows[cas - 1]);
     snprintf(name, sizeof name, "ref_case%d_limit_richardson.csv", cas);
-    load_csv(name, rich[cas - 1]);
-    double d = 0;
-    for (int k = 0; k < 1001 * 3; k++) d = fmax(d, fabs(rich[cas - 1][k] - ref_rows[cas - 1][k]));
+    ref_load(name, rich[cas - 1]);
+    double d = ref_diff(rich[cas - 1], ref_rows[cas - 1]);
     print_message("case %d: adaptive reference vs Richardson limit: %.3g\n", cas, d);
     assert_true(d < 2e-10);
   }

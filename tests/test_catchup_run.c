@@ -23,6 +23,7 @@
 
 #define CLI_TMPDIR_TEMPLATE "/tmp/cup_cli_XXXXXX"
 #include "cliutil.h"
+#include "refdata.h"
 
 static const char *fig2 = CUP_EXAMPLES_DIR "/paper-fig2.yaml";
 
@@ -53,24 +54,14 @@ static void expect_attr_str(hid_t f, const char *name, const char *expect) {
 
 static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; }
 
-/* max |x - ref| over the 1001 rows of tests/data/NAME (t = k/1000), checking
- * that t holds those times exactly. */
+/* max |x - ref| against tests/data/NAME, checking that t holds the times
+ * k/1000 exactly: the grid k h of a fixed-step run, or the output times
+ * j T / (N - 1) of an adaptive one. */
 static double diff_to_data(const char *name, const double *t, const double *x) {
-  char path[512], line[512];
-  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
-  FILE *csv = fopen(path, "r");
-  if (!csv) fail_msg("cannot open %s", path);
-  double ref[4], err = 0;
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int k = 0; k <= 1000; k++) {
-    /* the grid k h of a fixed-step run, or the output times j T / (N - 1) of an adaptive one */
-    assert_true(t[k] == (double)k * (1.0 / 1000) || t[k] == (double)k / 1000);
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
-    for (int j = 0; j < 3; j++) err = fmax(err, fabs(x[3 * k + j] - ref[j + 1]));
-  }
-  fclose(csv);
-  return err;
+  static double ref[1001 * 3];
+  ref_load(name, ref);
+  for (int k = 0; k <= 1000; k++) assert_true(t[k] == (double)k * (1.0 / 1000) || t[k] == (double)k / 1000);
+  return ref_diff(x, ref);
 }
 
 /* ---- tests ---- */

@@ -9,6 +9,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 #include "closed_forms.h"
+#include "refdata.h"
 
 /* ---- helpers --------------------------------------------------------------------- */
 
@@ -69,22 +70,6 @@ static double order_of(double e1, double e2) { return log10(e1 / e2); }   /* n x
 
 static double ref1[1001 * 3], ref2[1001 * 3];
 
-static void load_ref(const char *name, double *ref) {
-  char path[512];
-  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
-  FILE *f = fopen(path, "r");
-  if (!f) fail_msg("cannot open %s", path);
-  char line[512];
-  assert_non_null(fgets(line, sizeof line, f));
-  for (int j = 0; j <= 1000; j++) {
-    double t;
-    assert_non_null(fgets(line, sizeof line, f));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &t, &ref[3 * j], &ref[3 * j + 1], &ref[3 * j + 2]), 4);
-    assert_close(t, j / 1000.0, 1e-15);
-  }
-  fclose(f);
-}
-
 static cup_input *paper_input(int cas) {
   cup_input *u = NULL;
   assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
@@ -111,8 +96,8 @@ static cup_lcs *paper_lcs(int cas) {
  * and 1.79/n (case 2) at n = 10^3 and 10^4 (DESIGN.md, measured). */
 static void test_paper_cases_exact_projection(void **state) {
   (void)state;
-  load_ref("ref_case1_limit_richardson.csv", ref1);
-  load_ref("ref_case2_limit_richardson.csv", ref2);
+  ref_load("ref_case1_limit_richardson.csv", ref1);
+  ref_load("ref_case2_limit_richardson.csv", ref2);
   static const double C[3] = {0, 1.52, 1.79};
   for (int cas = 1; cas <= 2; cas++) {
     cup_lcs *L = paper_lcs(cas);

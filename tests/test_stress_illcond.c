@@ -11,6 +11,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 #include "stress_util.h"
+#include "refdata.h"
 
 /* ---- a dense problem and the checks ----------------------------------------------- */
 
@@ -513,17 +514,7 @@ static int dup_sink(long k, double t, const double *x, void *vp) {
 
 static void test_adaptive_dependent_rows(void **state) {
   (void)state;
-  FILE *f = fopen(CUP_TEST_DATA_DIR "/ref_case1_adaptive.csv", "r");
-  if (!f) fail_msg("cannot open ref_case1_adaptive.csv");
-  char line[512];
-  assert_non_null(fgets(line, sizeof line, f));
-  for (int j = 0; j <= 1000; j++) {
-    double t;
-    assert_non_null(fgets(line, sizeof line, f));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &t, &ref_case1[3 * j], &ref_case1[3 * j + 1],
-                            &ref_case1[3 * j + 2]), 4);
-  }
-  fclose(f);
+  ref_load("ref_case1_adaptive.csv", ref_case1);
   const double R1 = 1, R2 = 2, R3 = 1, L2 = 1, L3 = 2, C4 = 1;
   double A[9] = {0, 1, 0, -1 / (L3 * C4), -(R1 + R3) / L3, R1 / L3, 0, R1 / L2, -(R1 + R2) / L2};
   double E[3] = {0, 1 / L3, 1 / L2}, P[3] = {1, L3, L2};

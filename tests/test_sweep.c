@@ -15,6 +15,7 @@
 #include "catchup.h"
 #include "sha256.h"
 #include "sweep.h"
+#include "refdata.h"
 
 #define EX CUP_EXAMPLES_DIR
 
@@ -225,23 +226,6 @@ static void test_nearest_samples(void **state) {
   sw_free(&s);
 }
 
-/* max |x - ref| over t = j/1000 against tests/data/NAME (x: 1001 x 3). */
-static double diff_to_data(const char *name, const double *x) {
-  char path[512], line[512];
-  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
-  FILE *csv = fopen(path, "r");
-  if (!csv) fail_msg("cannot open %s", path);
-  double ref[4], err = 0;
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int j = 0; j <= 1000; j++) {
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
-    for (int i = 0; i < 3; i++) err = fmax(err, fabs(x[3 * j + i] - ref[i + 1]));
-  }
-  fclose(csv);
-  return err;
-}
-
 /* The reference of the paper's case 1 (n_ref auto = 4 x 10^4 for n up to
  * 10^4) against the reference limit in tests/data on t = k/1000. */
 static void test_reference_vs_data(void **state) {
@@ -252,7 +236,9 @@ static void test_reference_vs_data(void **state) {
   sw_result r;
   sw_run_job(s, 0, NULL, &r, x);
   assert_int_equal(r.status, CUP_OK);
-  double err = diff_to_data("ref_case1_limit_richardson.csv", x);
+  static double data[1001 * 3];
+  ref_load("ref_case1_limit_richardson.csv", data);
+  double err = ref_diff(x, data);
   printf("# reference (Richardson, n_ref = 40000) vs tests/data case-1 reference: max |diff| = %.3g; "
          "correction removed %.3g\n", err, r.correction);
   assert_true(err < 1e-6);
@@ -281,7 +267,9 @@ static void test_tol_axis_adaptive_reference(void **state) {
   sw_result r;
   sw_run_job(s, 0, NULL, &r, ref);
   assert_int_equal(r.status, CUP_OK);
-  double ref_est = r.correction, diff = diff_to_data("ref_case1_limit_richardson.csv", ref);
+  static double data[1001 * 3];
+  ref_load("ref_case1_limit_richardson.csv", data);
+  double ref_est = r.correction, diff = ref_diff(ref, data);
   sw_run_job(s, s->n_variants + 3, NULL, &r, x);
   double err = sw_max_error(x, ref, 1001 * 3);
   printf("# adaptive reference vs Richardson limit: %.3g (estimate %.3g); adaptive task at tol 1e-9: "
