@@ -12,6 +12,7 @@
 #include <cmocka.h>
 #include "stress_util.h"
 #include "refdata.h"
+#include "alloc_count.h"
 
 /* ---- a dense problem and the checks ----------------------------------------------- */
 
@@ -548,15 +549,76 @@ static void test_adaptive_dependent_rows(void **state) {
     assert_true(info.err_est <= 10 * e.err && info.err_est >= 0.1 * e.err);
     assert_true(fabs(info.err_est - est0) <= 0.01 * est0);
     assert_true(info.step < 1100);                  /* no event at every step */
+
     cup_integrator_free(&I);
     unbuild_lcs(&b);
   }
   cup_input_free(&u);
 }
 
+/* An adaptive run allocates nothing (its active sets, their exponentials,
+ * the LCPs and GSL's eigenvalue workspace are taken by
+ * cup_integrator_create): paper case 1 (events), case 2 (the set jumps at
+ * breakpoints), case 1 with a callback input (rejected steps), counted from
+ * the first run of a fresh integrator. */
+static int sine_cb(double t, double *u, void *ctx) {
+  (void)ctx;
+  u[0] = 16 * sin(6 * M_PI * t) - 0.5;
+  return 0;
+}
+
+static void test_adaptive_allocates_nothing(void **state) {
+  (void)state;
+#if CUP_COUNTING
+  for (int k = 0; k < 3; k++) {
+    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, k == 1 ? 1 : 0}};
+    cup_lcs *L = NULL;
+    assert_int_equal(cup_lcs_circuit(&L, &c, NULL), CUP_OK);
+    cup_input *u = NULL;
+    if (k == 0) {
+      cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
+                       {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
+      u = input_terms(2, w);
+    } else if (k == 1) {
+      cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
+      u = input_terms(1, &q);
+    } else {
+      assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+      assert_int_equal(cup_input_set_callback(u, sine_cb, NULL, 1e-12, 1e-12), CUP_OK);
+    }
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_ADAPTIVE;
+    o.tol_abs = o.tol_rel = 1e-9;
+    o.output = CUP_OUTPUT_SAMPLES;
+    o.output_samples = 11;
+    cup_integrator *I = NULL;
+    char msg[CUP_ERRMSG_LEN];
+    if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
+    double x0[3] = {0, 0, 0};
+    cup_run_info info;
+    alloc_count = 0;
+    counting = 1;
+    int st = cup_integrator_run(I, x0, NULL, NULL, &info);
+    counting = 0;
+    print_message("adaptive run %d: %s, %ld events, %ld rejected steps, %ld allocations\n", k,
+                  cup_status_name(st), info.events, info.rejected, alloc_count);
+    assert_int_equal(st, CUP_OK);
+    assert_true(info.events >= 5);
+    assert_int_equal(alloc_count, 0);
+    cup_integrator_free(&I);
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+  }
+#else
+  skip();
+#endif
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_adaptive_dependent_rows),
+    cmocka_unit_test(test_adaptive_allocates_nothing),
     cmocka_unit_test(test_thin_wedges),
     cmocka_unit_test(test_distance_not_violation),
     cmocka_unit_test(test_degenerate_rows),

@@ -1,7 +1,8 @@
 /* adaptive — the event-driven scheme (docs/adaptive.md). Internal layout
- * shared by adaptive.c (the run), adaptive_mode.c (one active set's linear
- * system and its exact flow) and adaptive_event.c (detection, location and
- * the local error of an event).
+ * shared by adaptive.c (set-up), adaptive_mode.c (one active set's linear
+ * system, its exact flow, the velocity LCP), adaptive_event.c (the event
+ * functions, detection and location of a crossing) and adaptive_run.c (the
+ * run: steps, breakpoints, switches and the error estimate).
  *
  * Between events the active set J is fixed and, with B = P^-1 C^T, the LCS is
  * a linear ODE on the manifold C_J x + g_J(t) = 0 with zeta_J eliminated.
@@ -65,7 +66,7 @@ struct cup_adaptive {
   int *first_state;         /* built-in waveforms: first exosystem state of each term */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
   double *U, *W;            /* p x nw, nw x nw, column-major */
-  double hmax_input;        /* a quarter period of the fastest sine, T / 8 otherwise */
+  double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
   ad_mode modes[AD_MODES];
   long clock;
