@@ -146,6 +146,12 @@ int cup_adaptive_create(cup_adaptive **out, const cup_lcs *L, const cup_input *u
     cup_adaptive_free(&A);
     return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
+  cup_projector_options po = o->proj;             /* exact, certified relative to the scale */
+  po.eps_abs = po.eta_abs = 0;
+  po.eps_rel = 1e-12;
+  po.eta_rel = 1e-10;
+  int st = cup_projector_create(&A->projector, K, &po, errmsg);
+  if (st) { cup_adaptive_free(&A); return st; }
   dense_of(&L->A, L->has_A, A->A, n);
   dense_of(&L->E, L->has_E, A->E, n);
   dense_of(&L->G, L->has_G, A->G, m);
@@ -176,6 +182,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   ad_modes_free(A);
   cup_lcp_free(&A->lcp);
   cup_lcp_step_free(&A->proj);
+  cup_projector_free(&A->projector);
   free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
   free(A->ya); free(A->yb); free(A->yt); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);

@@ -413,6 +413,19 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
       A->lcpM[i + (size_t)j * m] = touch[i] && touch[j] ? Md[i + (size_t)j * m] : (i == j);
   }
   int st = m ? cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots) : CUP_OK;
+  if (st) {
+    /* More touching rows than independent directions (a degenerate corner)
+     * make M singular, and pivoting may find no nonsingular block. The
+     * velocity, a projection onto the tangent cone, is unique all the same:
+     * a shift of 1e-10 of the diagonal picks one set of multipliers for it
+     * (the mode then keeps an independent subset of their rows). */
+    double dmax = 0;
+    for (int i = 0; i < m; i++) dmax = fmax(dmax, A->lcpM[i + (size_t)i * m]);
+    for (int i = 0; i < m; i++)
+      if (touch[i]) A->lcpM[i + (size_t)i * m] += 1e-10 * dmax;
+    cup_lcp_forget(&A->lcp);
+    st = cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots);
+  }
   if (st) return st;
   uint64_t J = 0;
   for (int i = 0; i < m; i++)

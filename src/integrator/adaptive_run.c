@@ -204,12 +204,21 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
   double S = cup_polyset_norm(A->K, x);
   cup_copy(A->xr, x, A->n);
   int st = cup_lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
+  const double *lam = A->proj.lcp.lam;
+  if (st == CUP_ERR_LINALG) {
+    /* pivoting found no nonsingular block (nearly dependent rows) or K(t)
+     * is empty: the projector decides, as for the explicit scheme's step,
+     * and proves an empty K(t) with a Farkas certificate */
+    st = cup_projector_set_offset(A->projector, g);
+    if (st == CUP_OK) st = cup_project(A->projector, A->xr, x, pi);
+    lam = cup_projector_lambda(A->projector);
+  }
   if (st < 0) {
     cup_copy(x, A->xr, A->n);
-    return stop(R, st == CUP_ERR_LINALG ? CUP_ERR_EMPTY_SET : st,
-                st == CUP_ERR_LINALG ? "the projection onto K(t) has no solution (K(t) is empty or "
-                                       "its rows are degenerate)"
-                                     : "the state became NaN or Inf");
+    if (st == CUP_ERR_EMPTY_SET)
+      return stop(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
+                  pi->farkas_gap, pi->farkas_residual);
+    return stop(R, st, "the projection onto K(t) failed: %s", cup_status_string(st));
   }
   cup_run_info *info = R->info;
   info->projected++;
@@ -225,7 +234,7 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
    * bound of 1e-7 for an answer right to 1e-16) */
   R->rloc += 8 * DBL_EPSILON * inf_norm(x, A->n) + (isfinite(pi->eta_cert) ? A->pinf * pi->eta_cert : 0);
   for (int i = 0; i < A->m; i++)
-    if (A->proj.lcp.lam[i] > 0) *active |= (uint64_t)1 << i;
+    if (lam[i] > 0) *active |= (uint64_t)1 << i;
   return CUP_OK;
 }
 
