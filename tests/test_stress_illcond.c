@@ -513,12 +513,28 @@ static int dup_sink(long k, double t, const double *x, void *vp) {
   return 0;
 }
 
-static void test_adaptive_dependent_rows(void **state) {
-  (void)state;
-  ref_load("ref_case1_adaptive.csv", ref_case1);
+/* The paper's circuit with its own rows replaced by C (m x 3, row-major). */
+static void paper_rows(lcs_built *b, int m, const double *C) {
   const double R1 = 1, R2 = 2, R3 = 1, L2 = 1, L3 = 2, C4 = 1;
   double A[9] = {0, 1, 0, -1 / (L3 * C4), -(R1 + R3) / L3, R1 / L3, 0, R1 / L2, -(R1 + R2) / L2};
   double E[3] = {0, 1 / L3, 1 / L2}, P[3] = {1, L3, L2};
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(b, 3, m, 1, A, NULL, C, E, NULL, NULL, P, NULL, msg)) fail_msg("lcs: %s", msg);
+}
+
+static cup_integrator_options adaptive_options(double tol, long samples) {
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = tol;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = samples;
+  return o;
+}
+
+static void test_adaptive_dependent_rows(void **state) {
+  (void)state;
+  ref_load("ref_case1_adaptive.csv", ref_case1);
   cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
                    {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
   cup_input *u = input_terms(2, w);
@@ -529,13 +545,8 @@ static void test_adaptive_dependent_rows(void **state) {
     double C[9] = {0, 1, -1, 0, 1, 0, 0, copies[k], 0};   /* x2 - x3 >= 0, x2 >= 0, c x2 >= 0 */
     lcs_built b;
     char msg[CUP_ERRMSG_LEN];
-    if (build_lcs(&b, 3, m, 1, A, NULL, C, E, NULL, NULL, P, NULL, msg)) fail_msg("lcs: %s", msg);
-    cup_integrator_options o;
-    cup_integrator_options_default(&o);
-    o.scheme = CUP_SCHEME_ADAPTIVE;
-    o.tol_abs = o.tol_rel = 1e-8;
-    o.output = CUP_OUTPUT_SAMPLES;
-    o.output_samples = 1001;
+    paper_rows(&b, m, C);
+    cup_integrator_options o = adaptive_options(1e-8, 1001);
     cup_integrator *I = NULL;
     if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
     dup_err e = {0};
@@ -573,9 +584,6 @@ static int store_sink(long k, double t, const double *x, void *vp) {
 
 static void test_adaptive_degenerate_rows(void **state) {
   (void)state;
-  const double R1 = 1, R2 = 2, R3 = 1, L2 = 1, L3 = 2, C4 = 1;
-  double A[9] = {0, 1, 0, -1 / (L3 * C4), -(R1 + R3) / L3, R1 / L3, 0, R1 / L2, -(R1 + R2) / L2};
-  double E[3] = {0, 1 / L3, 1 / L2}, P[3] = {1, L3, L2};
   cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
                    {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
   cup_input *u = input_terms(2, w);
@@ -585,16 +593,11 @@ static void test_adaptive_degenerate_rows(void **state) {
     double c = k ? 1e-12 : 1e-2, C[9] = {0, 1, -1, 0, 1, 0, 0, 1, c};
     lcs_built b;
     char msg[CUP_ERRMSG_LEN];
-    if (build_lcs(&b, 3, 3, 1, A, NULL, C, E, NULL, NULL, P, NULL, msg)) fail_msg("lcs: %s", msg);
+    paper_rows(&b, 3, C);
     for (int scheme = 0; scheme < 2; scheme++) {
-      cup_integrator_options o;
-      cup_integrator_options_default(&o);
-      o.output = CUP_OUTPUT_SAMPLES;
-      o.output_samples = 1001;
-      if (scheme == 0) {
-        o.scheme = CUP_SCHEME_ADAPTIVE;
-        o.tol_abs = o.tol_rel = 1e-8;
-      } else {
+      cup_integrator_options o = adaptive_options(1e-8, 1001);
+      if (scheme == 1) {                            /* the explicit scheme, exact projections */
+        o.scheme = CUP_SCHEME_EXPLICIT;
         o.n = 100000;
         o.eps = o.eta = (cup_schedule){0, 0};
       }
@@ -646,12 +649,7 @@ static void test_adaptive_allocates_nothing(void **state) {
       assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
       assert_int_equal(cup_input_set_callback(u, sine_cb, NULL, 1e-12, 1e-12), CUP_OK);
     }
-    cup_integrator_options o;
-    cup_integrator_options_default(&o);
-    o.scheme = CUP_SCHEME_ADAPTIVE;
-    o.tol_abs = o.tol_rel = 1e-9;
-    o.output = CUP_OUTPUT_SAMPLES;
-    o.output_samples = 11;
+    cup_integrator_options o = adaptive_options(1e-9, 11);
     cup_integrator *I = NULL;
     char msg[CUP_ERRMSG_LEN];
     if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
