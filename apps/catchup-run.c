@@ -41,7 +41,7 @@ static void print_usage(void) {
   printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
          "                   [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]\n"
          "                   [--set key=value]... [--quiet]\n"
-         "  -o, --output OUT.h5  HDF5 file to write (/t, /x and attributes); replaced\n"
+         "  -o, --output OUT.h5  HDF5 file to write (/t, /x, /events and attributes); replaced\n"
          "  --n N                number of steps (scene key n)\n"
          "  --eps SPEC           eps_n schedule, e.g. n^-2.1 or 1e-8 (scene key eps)\n"
          "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
