@@ -6,7 +6,8 @@
 Reads whatever is in OUTDIR: catchup_circuit.jsonl + siconos.jsonl (from
 scripts/bench-vs-siconos) and catchup_projector.jsonl + peers.jsonl (from
 scripts/bench-projector). Writes docs/bench/*.png and BENCHMARKS.md (the
-sections whose data are missing say which command produces them).
+sections whose data are missing say which command produces them; the projector's
+results of an earlier run are kept, marked as such, when only the circuit was rerun).
 """
 import datetime
 import json
@@ -133,15 +134,18 @@ def adaptive_table(rows, case, lines):
     if not rows:
         return
     lines.append(f"The adaptive scheme on case {case}, tol by tol (`catchup-bench adaptive`; error "
-                 "against `ref_case{case}_adaptive.csv`" + (", or where that is exact, against the "
+                 f"against `ref_case{case}_adaptive.csv`" + (", or where that is exact, against the "
                  "Richardson limit" if any(r["err_max"] == 0 for r in rows) else "") + "):\n")
     lines.append("| tol | time loop | steps | events | error | its estimate | estimate / error |")
     lines.append("|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
         e = adaptive_error(r)
-        note = " (Richardson)" if r["err_max"] == 0 else ""
+        exact = r["err_max"] == 0
+        # Where the run is exact, the error against Richardson is that limit's own error: no
+        # ratio to state.
         lines.append(f"| {r['tol']:.0e} | {r['median_s'] * 1e6:.0f} µs | {r['n']} | {r['events']} | "
-                     f"{e:.2e}{note} | {r['err_est']:.2e} | {r['err_est'] / e:.2f} |")
+                     f"{e:.2e}{' (Richardson)' if exact else ''} | {r['err_est']:.2e} | "
+                     f"{'—' if exact else format(r['err_est'] / e, '.2f')} |")
     lines.append("")
 
 
@@ -171,7 +175,7 @@ def circuit_section(outdir, lines):
             cc["adaptive"] = adaptive_curve([r for r in ada if r["case"] == case])
         sc = curves([r for r in sic_main if r["case"] == case],
                     lambda r: f"theta{r['theta']:g}/{r['solver']}")
-        fig, ax = plt.subplots(figsize=(7, 5))
+        fig, ax = plt.subplots(figsize=(9, 5))
         for cfg, c in sorted(cc.items()):
             style, lw = ("D-", 2.5) if cfg == "adaptive" else ("o-", 1.5)
             label = "catchup adaptive (tol 1e-3 .. 1e-10)" if cfg == "adaptive" else f"catchup {cfg}"
@@ -183,7 +187,7 @@ def circuit_section(outdir, lines):
         ax.set_title(f"paper circuit, case {case}: run time against error")
         ax.invert_xaxis()
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1))
         fig.tight_layout()
         png = os.path.join("docs", "bench", f"work_precision_case{case}.png")
         fig.savefig(os.path.join(ROOT, png), dpi=110)
@@ -261,11 +265,34 @@ def circuit_section(outdir, lines):
 
 # ---- projector -----------------------------------------------------------------------
 
-def projector_section(outdir, lines):
+def earlier_projector(old):
+    """The projector section's results in the BENCHMARKS.md being replaced, with a note naming
+    the run they came from (a run of bench-vs-siconos alone must not drop them); None when it
+    has none."""
+    head = "## The projector against QP solvers"
+    if head not in old:
+        return None
+    body = old.split(head, 1)[1].split("\n## ", 1)[0]
+    at = body.find("\n_From an earlier run")
+    if at < 0:
+        at = body.find("\n| problem |")
+    if at < 0:
+        return None
+    body = body[at + 1:].rstrip("\n")
+    if body.startswith("_From an earlier run"):
+        return body + "\n"
+    rev = next((l.split(": ", 1)[1] for l in old.splitlines() if l.startswith("- catchup revision: ")), "?")
+    when = next((l.split(": ", 1)[1] for l in old.splitlines() if l.startswith("- Generated: ")), "?")
+    return (f"_From an earlier run (catchup revision {rev}, {when}, same machine); "
+            f"`bash scripts/bench-projector` was not rerun with this one._\n\n" + body + "\n")
+
+
+def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
     peers = load(os.path.join(outdir, "peers.jsonl"))
     if not cat:
-        lines.append("_Not run here yet: `bash scripts/bench-projector`._\n")
+        kept = earlier_projector(old)
+        lines.append(kept if kept else "_Not run here yet: `bash scripts/bench-projector`._\n")
         return
     lines.append("| problem | mode | catchup auto | its certified | its error | fastest peer at 1e-8 | ratio |")
     lines.append("|---|---|---:|---:|---:|---|---:|")
@@ -331,7 +358,8 @@ def main():
               "P-norm against the reference; catchup's `auto` method certifies (ε, η) = "
               "(1e-12·S², 1e-8·S) and its measured error is shown). Times per projection: "
               "`cold` without warm start, `warm` along a sequence of slowly drifting points.", ""]
-    projector_section(outdir, lines)
+    path = os.path.join(ROOT, "BENCHMARKS.md")
+    projector_section(outdir, lines, open(path).read() if os.path.exists(path) else "")
     with open(os.path.join(ROOT, "BENCHMARKS.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     print(f"bench_report: wrote BENCHMARKS.md and docs/bench/*.png from {outdir}", file=sys.stderr)
