@@ -391,6 +391,50 @@ static void test_zeno(void **state) {
   unbuild_lcs(&b);
 }
 
+static int f_zero(double t, const double *x, double *f, void *ctx) {
+  (void)t; (void)x; (void)ctx;
+  f[0] = 0;
+  return 0;
+}
+
+/* cup_integrator_create_process: a polyset with f = A x + E u is an LCS
+ * (test_process checks the trajectory bit for bit); other sets and f terms
+ * are refused, by name. */
+static void test_general_process(void **state) {
+  (void)state;
+  char msg[CUP_ERRMSG_LEN];
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  cup_set *ball = NULL, *half = NULL;
+  cup_set_desc bd = {.kind = CUP_SET_BALL, .n = 1, .radius = 1};
+  assert_int_equal(cup_set_create(&ball, &bd, msg), CUP_OK);
+  cup_integrator *I = NULL;
+  cup_process_desc d = {.n = 1, .C = ball};
+  assert_int_equal(cup_integrator_create_process(&I, &d, &o, msg), CUP_ERR_UNSUPPORTED);
+  print_message("a ball: %s\n", msg);
+  assert_non_null(strstr(msg, "another set"));
+  /* x >= 1/2, x' = 0 + f: refused for f, stepped without it */
+  int cp[2] = {0, 1}, ci[1] = {0};
+  double cx[1] = {1}, F[1] = {-0.5};
+  cup_set_desc hd = {.kind = CUP_SET_POLYSET, .n = 1, .C = {1, 1, cp, ci, cx}, .F = F};
+  assert_int_equal(cup_set_create(&half, &hd, msg), CUP_OK);
+  d.C = half;
+  d.f = f_zero;
+  assert_int_equal(cup_integrator_create_process(&I, &d, &o, msg), CUP_ERR_UNSUPPORTED);
+  assert_non_null(strstr(msg, "a callback f"));
+  d.f = NULL;
+  assert_int_equal(cup_integrator_create_process(&I, &d, &o, msg), CUP_OK);
+  double x0[1] = {0};
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, x0, NULL, NULL, &info), CUP_WARN_X0_OUTSIDE);
+  print_message("x >= 1/2 from x0 = 0: %s, x(T) = %.17g\n", info.message, cup_integrator_state(I)[0]);
+  assert_true(fabs(cup_integrator_state(I)[0] - 0.5) <= 1e-13);   /* a certified projection */
+  cup_integrator_free(&I);
+  cup_set_free(&ball);
+  cup_set_free(&half);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_moving_interval),
@@ -402,6 +446,7 @@ int main(void) {
     cmocka_unit_test(test_paper_cases),
     cmocka_unit_test(test_step_doubling),
     cmocka_unit_test(test_zeno),
+    cmocka_unit_test(test_general_process),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

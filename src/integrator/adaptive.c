@@ -79,30 +79,29 @@ static void exosystem(cup_adaptive *A) {
       A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
 }
 
-int cup_adaptive_create(cup_adaptive **out, const cup_lcs *L, const cup_input *u,
-                        const cup_integrator_options *o, char *errmsg) {
+int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
+                        const cup_input *u, const cup_integrator_options *o, char *errmsg) {
   *out = NULL;
-  const cup_polyset *K = L->K;
   if (!K->dense)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
-                    "use a fixed-step scheme", L->m, L->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM);
+                    "use a fixed-step scheme", K->m, K->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM);
   if (o->f)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: a perturbation f(t, x) is not supported (the scheme integrates "
                     "each active set's linear system exactly); use a fixed-step scheme");
-  if (L->p > 0 && !u)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the LCS has %d input(s) but no input u(t) was given", L->p);
-  if (u && L->p > 0 && cup_input_dim(u) != L->p)
-    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the LCS expects %d",
-                    cup_input_dim(u), L->p);
+  if (D->p > 0 && !u)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the %s has %d input(s) but no input u(t) was given", D->what, D->p);
+  if (u && D->p > 0 && cup_input_dim(u) != D->p)
+    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the %s expects %d",
+                    cup_input_dim(u), D->what, D->p);
   cup_adaptive *A = calloc(1, sizeof *A);
   if (!A) return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
-  A->L = L;
-  A->u = L->p > 0 ? u : NULL;
+  A->F = K->g0;
+  A->u = D->p > 0 ? u : NULL;
   A->K = K;
   A->o = *o;
-  A->n = L->n; A->m = L->m; A->p = L->p;
+  A->n = D->n; A->m = K->m; A->p = D->p;
   A->callback = A->u && A->u->fn;
   int fail = 0, n = A->n, m = A->m, p = A->p;
   int nterms = A->u && !A->callback ? A->u->nterms : 0;
@@ -152,9 +151,9 @@ int cup_adaptive_create(cup_adaptive **out, const cup_lcs *L, const cup_input *u
   po.eta_rel = 1e-10;
   int st = cup_projector_create(&A->projector, K, &po, errmsg);
   if (st) { cup_adaptive_free(&A); return st; }
-  dense_of(&L->A, L->has_A, A->A, n);
-  dense_of(&L->E, L->has_E, A->E, n);
-  dense_of(&L->G, L->has_G, A->G, m);
+  dense_of(&D->A, D->has_A, A->A, n);
+  dense_of(&D->E, D->has_E, A->E, n);
+  if (G) dense_of(G, 1, A->G, m);
   A->hmax_input = o->T / 8;
   exosystem(A);
   for (int j = 0; j <= AD_DEGREE; j++) A->node[j] = 0.5 * (1 - cos(M_PI * j / AD_DEGREE));

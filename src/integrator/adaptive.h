@@ -4,14 +4,18 @@
 #define CUP_ADAPTIVE_H
 
 #include "catchup/integrator.h"
+#include "freestep.h"
 
 typedef struct cup_adaptive cup_adaptive;
 
-/* Requires a small dense set (K in dense form), no perturbation f, and
+/* x' = A x + E u + B zeta, 0 <= zeta _|_ C x + g0 + G u(t) >= 0 (D's
+ * drift; K's rows, offset g0 and metric P, B = P^-1 C^T; G m x p or NULL):
+ * an LCS's, or a general process's with a polyset and no other term.
+ * Requires a small dense set (K in dense form), no perturbation f, and
  * state plus input generators within the dense limit; errmsg says which
- * does not hold. */
-int cup_adaptive_create(cup_adaptive **A, const cup_lcs *L, const cup_input *u,
-                        const cup_integrator_options *o, char *errmsg);
+ * does not hold. Copies what it uses. */
+int cup_adaptive_create(cup_adaptive **A, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
+                        const cup_input *u, const cup_integrator_options *o, char *errmsg);
 void cup_adaptive_free(cup_adaptive **A);
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info);

@@ -21,7 +21,6 @@
 #include <stdint.h>
 #include <gsl/gsl_eigen.h>
 #include "catchup/integrator.h"
-#include "model/lcs_impl.h"
 #include "model/input_impl.h"
 #include "set/polyset_impl.h"
 #include "lcp/lcp.h"
@@ -57,7 +56,7 @@ typedef struct ad_mode {
 typedef struct cup_adaptive cup_adaptive;   /* as in adaptive.h, which the run's API is in */
 
 struct cup_adaptive {
-  const cup_lcs *L;
+  const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
   const cup_polyset *K;
   cup_integrator_options o;

@@ -226,7 +226,7 @@ static void mode_build(cup_adaptive *A, ad_mode *md, uint64_t mask) {
         Li[j] = acc;
         Lmi[j] = mag;
       }
-      md->Lc[i] = A->L->F[i];
+      md->Lc[i] = A->F[i];
     }
   }
   md->mnorm = 0;
@@ -346,7 +346,7 @@ void ad_offset(const cup_adaptive *A, const double *w, double *g) {
   for (int c = 0; c < nw; c++)
     for (int q = 0; q < p; q++) A->ut[q] += A->U[q + (size_t)c * p] * w[c];
   for (int i = 0; i < m; i++) {
-    double acc = A->L->F[i];
+    double acc = A->F[i];
     for (int q = 0; q < p; q++) acc += A->G[i + (size_t)q * m] * A->ut[q];
     g[i] = acc;
   }

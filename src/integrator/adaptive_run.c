@@ -290,10 +290,9 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
 /* At a breakpoint t (or 0): the state onto K(t) with u(t) itself (a square
  * wave is 0 there), which is what the catching-up limit holds at t. */
 static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
-  const cup_lcs *L = A->L;
   if (A->u && cup_input_eval(A->u, R->t, A->ut))
     return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-  cup_copy(A->g, L->F, A->m);
+  cup_copy(A->g, A->F, A->m);
   for (int i = 0; i < A->m; i++)
     for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
   uint64_t active;

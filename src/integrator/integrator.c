@@ -296,19 +296,19 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
   I->u = u;
-  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
-    st = cup_adaptive_create(&I->ad, L, u, &I->o, errmsg);
-    if (st) { cup_integrator_free(&I); return st; }
-    *out = I;
-    return CUP_OK;
-  }
   I->n = L->n; I->m = L->m; I->p = L->p;
   I->K = L->K;
   I->G = L->has_G ? &L->G : NULL;
   I->fixed = L->fixed;
+  cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
+  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
+    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, u, &I->o, errmsg);
+    if (st) { cup_integrator_free(&I); return st; }
+    *out = I;
+    return CUP_OK;
+  }
   st = cup_set_wrap_polyset(&I->S_own, L->K, I->G, L->p, errmsg);
   I->S = I->S_own;
-  cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   if (!st) st = setup(I, &D, NULL, errmsg);
   if (!st && I->o.estimate) st = create_half(I, &D, NULL, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
@@ -358,13 +358,19 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
   int st;
   cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
-  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
-    cup_integrator_free(&I);
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS (cup_integrator_create); "
-                    "a general process is stepped by the explicit, implicit or exponential scheme");
-  }
   cup_drift D;
   st = process_model(I, d, &D, errmsg);
+  if (!st && I->o.scheme == CUP_SCHEME_ADAPTIVE) {   /* an LCS written as a process */
+    if (!I->K || d->f || d->f_integral)
+      st = cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS, a polyset with f = A x + E u "
+                    "(this process has %s); use the explicit, implicit or exponential scheme",
+                    !I->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
+    else
+      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, I->u, &I->o, errmsg);
+    if (st) { cup_integrator_free(&I); return st; }
+    *out = I;
+    return CUP_OK;
+  }
   if (!st) st = setup(I, &D, d, errmsg);
   if (!st && I->o.estimate) st = create_half(I, &D, d, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
