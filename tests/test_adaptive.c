@@ -435,6 +435,37 @@ static void test_general_process(void **state) {
   cup_set_free(&half);
 }
 
+static double tractrix(double t, int i, const void *par) {
+  (void)par;
+  return i == 0 ? t - tanh(t) : 1 / cosh(t);
+}
+
+/* The step-doubling estimate of a general process (its coarse run borrows
+ * the process's set and drift): examples/tractrix.yaml, a unit disc dragged
+ * at unit speed, against x(t) = (t - tanh t, sech t) (closed-forms.md).
+ * The explicit scheme is first order: the estimate is the error. */
+static void test_step_doubling_process(void **state) {
+  (void)state;
+  const char *ov[] = {"estimate=true", "output={samples: 501}"};
+  for (long n = 1000; n <= 10000; n *= 10) {
+    char msg[CUP_ERRMSG_LEN], nn[32];
+    snprintf(nn, sizeof nn, "n=%ld", n);
+    const char *ovn[] = {ov[0], ov[1], nn};
+    cup_scene *sc = NULL;
+    if (cup_scene_load(&sc, CUP_SOURCE_DIR "/examples/tractrix.yaml", ovn, 3, msg)) fail_msg("scene: %s", msg);
+    cup_integrator *I = NULL;
+    if (cup_scene_integrator(sc, cup_scene_options(sc), &I, msg)) fail_msg("create: %s", msg);
+    ad_ctx c = {.exact = tractrix, .dim = 2};
+    cup_run_info info;
+    assert_int_equal(cup_integrator_run(I, cup_scene_x0(sc), ad_sink, &c, &info), CUP_OK);
+    print_message("tractrix, explicit, n %5ld: error %.3e, step-doubling estimate %.3e (%.2f)\n", n, c.err,
+                  info.err_est, info.err_est / c.err);
+    assert_true(info.err_est <= 1.25 * c.err && info.err_est >= 0.8 * c.err);
+    cup_integrator_free(&I);
+    cup_scene_free(&sc);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_moving_interval),
@@ -447,6 +478,7 @@ int main(void) {
     cmocka_unit_test(test_step_doubling),
     cmocka_unit_test(test_zeno),
     cmocka_unit_test(test_general_process),
+    cmocka_unit_test(test_step_doubling_process),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
