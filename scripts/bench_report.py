@@ -7,7 +7,8 @@ Reads whatever is in OUTDIR: catchup_circuit.jsonl + siconos.jsonl (from
 scripts/bench-vs-siconos) and catchup_projector.jsonl + peers.jsonl (from
 scripts/bench-projector). Writes docs/bench/*.png and BENCHMARKS.md (the
 sections whose data are missing say which command produces them; the projector's
-results of an earlier run are kept, marked as such, when only the circuit was rerun).
+results of an earlier run are kept, marked as such, when only the circuit was rerun, and
+sections written by hand, such as the general process's, are kept as they are).
 """
 import datetime
 import json
@@ -287,6 +288,18 @@ def earlier_projector(old):
             f"`bash scripts/bench-projector` was not rerun with this one._\n\n" + body + "\n")
 
 
+def kept_sections(old, lines):
+    """The sections of the BENCHMARKS.md being replaced that this script does not write
+    (written by hand from other scripts' figures, e.g. scripts/bench-general), verbatim."""
+    ours = {l for l in lines if l.startswith("## ")}
+    kept = []
+    for sec in ("\n" + old).split("\n## ")[1:]:
+        head = "## " + sec.split("\n", 1)[0]
+        if head not in ours:
+            kept += ["## " + sec.rstrip("\n"), ""]
+    return kept
+
+
 def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
     peers = load(os.path.join(outdir, "peers.jsonl"))
@@ -359,9 +372,11 @@ def main():
               "(1e-12·S², 1e-8·S) and its measured error is shown). Times per projection: "
               "`cold` without warm start, `warm` along a sequence of slowly drifting points.", ""]
     path = os.path.join(ROOT, "BENCHMARKS.md")
-    projector_section(outdir, lines, open(path).read() if os.path.exists(path) else "")
+    old = open(path).read() if os.path.exists(path) else ""
+    projector_section(outdir, lines, old)
+    lines += kept_sections(old, lines)
     with open(os.path.join(ROOT, "BENCHMARKS.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
+        f.write("\n".join(lines).rstrip("\n") + "\n")
     print(f"bench_report: wrote BENCHMARKS.md and docs/bench/*.png from {outdir}", file=sys.stderr)
 
 
