@@ -254,7 +254,16 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   return CUP_OK;
 }
 
-static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st);
+static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st) {
+  cup_integrator_options o;
+  if (opt) o = *opt; else cup_integrator_options_default(&o);
+  *st = validate(&o, errmsg);
+  if (*st) return NULL;
+  cup_integrator *I = calloc(1, sizeof *I);
+  if (!I) *st = cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  else I->o = o;
+  return I;
+}
 
 /* The step-doubling estimate: the same model and scheme at n/2 (borrowing
  * this integrator's model), keeping its states where the two grids meet
@@ -274,17 +283,6 @@ static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_
   H->n = I->n; H->m = I->m; H->p = I->p;
   H->S = I->S; H->K = I->K; H->G = I->G; H->fixed = I->fixed;
   return setup(H, D, pd, errmsg);
-}
-
-static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st) {
-  cup_integrator_options o;
-  if (opt) o = *opt; else cup_integrator_options_default(&o);
-  *st = validate(&o, errmsg);
-  if (*st) return NULL;
-  cup_integrator *I = calloc(1, sizeof *I);
-  if (!I) *st = cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-  else I->o = o;
-  return I;
 }
 
 int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
