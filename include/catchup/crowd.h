@@ -78,6 +78,8 @@ int cup_crowd_inside(const cup_crowd *c);
  *  last step's rows were built, found while building them: the overlap the
  *  step before left (at most about sqrt 2 eta of that step). */
 double cup_crowd_gap(const cup_crowd *c);
+/** The rows (contacts and walls within the margin) of the last step. */
+int cup_crowd_rows(const cup_crowd *c);
 /** The distance to the nearest door around the walls (bilinear on the
  *  grid; INFINITY where no door can be reached). */
 double cup_crowd_door_distance(const cup_crowd *c, double x, double y);

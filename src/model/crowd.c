@@ -244,6 +244,7 @@ static int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc) {
   mark_exits(c, q, t > 0 ? t - c->h : 0);
   c->gap = INFINITY;
   each_pair(c, q, add_row, rows);
+  c->rows = cup_rowbuf_rows(rows);
   return 0;                                   /* a bad row is reported by the buffer */
 }
 
@@ -509,6 +510,7 @@ const cup_process_desc *cup_crowd_process(const cup_crowd *c) { return c ? &c->p
 const double *cup_crowd_exit_times(const cup_crowd *c) { return c ? c->exit_time : NULL; }
 int cup_crowd_inside(const cup_crowd *c) { return c ? c->inside : 0; }
 double cup_crowd_gap(const cup_crowd *c) { return c ? c->gap : NAN; }
+int cup_crowd_rows(const cup_crowd *c) { return c ? c->rows : 0; }
 const double *cup_crowd_q0(const cup_crowd *c) { return c ? c->q0 : NULL; }
 const double *cup_crowd_radii(const cup_crowd *c) { return c ? c->r : NULL; }
 

@@ -63,6 +63,7 @@ struct cup_crowd {
   double *exit_time;
   int inside;
   double gap;                       /* the smallest gap at the state the rows were built from */
+  int rows;                         /* rows of the last step */
   cup_set *S;
   cup_process_desc proc;
 };
