@@ -16,6 +16,7 @@ seconds of every step (the projection's alone too) as JSON.
 """
 import argparse
 import json
+import os
 import time
 
 import h5py
@@ -51,6 +52,8 @@ def main():
     ps = a.pixel
     lo, hi = room.min(axis=0) - 1, room.max(axis=0) + 1
     width, height = int(np.ceil((hi[0] - lo[0]) / ps)), int(np.ceil((hi[1] - lo[1]) / ps))
+    out_path = os.path.abspath(a.out)
+    os.chdir(os.path.dirname(out_path))      # cromosim saves its domain's image in the working directory
     dom = Domain(name="catchup_scene", pixel_size=ps, xmin=lo[0], ymin=lo[1], width=width, height=height)
     black, red = [0, 0, 0], [255, 0, 0]
     # the domain draws in pixel units from its own origin: shift by (xmin, ymin)
@@ -90,7 +93,7 @@ def main():
     res = {"N": N, "dt": dt, "steps": len(step_s), "pixel": ps, "method": a.method, "margin": margin,
            "exit_time": [None if np.isnan(e) else e for e in exit_time], "step_seconds": step_s,
            "projection_seconds": proj_s, "contacts": contacts_n}
-    with open(a.out, "w") as f:
+    with open(out_path, "w") as f:
         json.dump(res, f)
     print(f"cromosim: {N} agents, {len(step_s)} steps, median {np.median(step_s):.4g} s a step "
           f"(projection {np.median(proj_s):.4g} s), {int(np.isfinite(exit_time).sum())} out")
