@@ -22,6 +22,7 @@
 #include <time.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
+#include "crowd_log.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { MSG_LEN = CUP_ERRMSG_LEN + 768 };   /* room for a path before a library message */
@@ -210,6 +211,7 @@ typedef struct {
   cup_integrator_options opts;
   cup_integrator *I;
   cup_h5run *w;
+  crowd_log *crowd;          /* a crowd scene's per-step log, or NULL */
   cup_run_info info;
   double wall;               /* seconds in cup_integrator_run */
   int status;
@@ -315,13 +317,21 @@ static int setup(run_t *r, char *err) {
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   r->opts.interrupt = (const volatile int *)&stop_signal;
+  if (cup_scene_crowd(r->scene)) {
+    if (!(r->crowd = crowd_log_create(cup_scene_crowd(r->scene), r->opts.n))) {
+      snprintf(err, MSG_LEN, "%s: out of memory for the crowd's per-step log", a->scene);
+      return EXIT_RUN;
+    }
+    r->opts.on_step = crowd_log_step;
+    r->opts.step_ctx = r->crowd;
+  }
   char e2[CUP_ERRMSG_LEN];
   if (cup_scene_integrator(r->scene, &r->opts, &r->I, e2)) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }
   if (cup_h5run_create(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
-  if (write_provenance(r)) {
+  if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w))) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
     return EXIT_RUN;
   }
@@ -341,6 +351,8 @@ static void run(run_t *r) {
 static void finish_file(run_t *r) {
   char err[CUP_ERRMSG_LEN] = "";
   int wst = write_results(r);
+  if (r->crowd)
+    wst = cup_status_merge(wst, crowd_log_write(r->crowd, r->w, r->info.step, cup_integrator_state(r->I)));
   if (wst != CUP_OK && r->status >= 0) {
     r->status = CUP_ERR_IO;
     snprintf(r->message, sizeof r->message, "%s", cup_h5run_errmsg(r->w));
@@ -374,11 +386,17 @@ static void report(const run_t *r) {
             a->scene, a->out, r->opts.n, cup_scheme_name(r->opts.scheme), i->samples,
             i->projected, i->skipped, i->dual_iterations, i->max_eps_cert, i->max_eta_cert,
             r->wall, cup_status_name(r->status));
+  if (!a->quiet && r->crowd) {
+    char line[160];
+    crowd_log_summary(r->crowd, line, sizeof line);
+    fprintf(stderr, "catchup-run: %s: %s\n", a->scene, line);
+  }
 }
 
 static void cleanup(run_t *r) {
   if (r->w) cup_h5run_close(&r->w, NULL);
   cup_integrator_free(&r->I);
+  crowd_log_free(&r->crowd);
   cup_scene_free(&r->scene);
 }
 

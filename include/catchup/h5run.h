@@ -43,6 +43,10 @@ int cup_h5run_sink(long k, double t, const double *x, void *ctx);
 int cup_h5run_attr_double(cup_h5run *w, const char *name, double v);
 int cup_h5run_attr_long(cup_h5run *w, const char *name, long v);
 int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v);
+/** A whole float64 dataset (rank 1: dims[0]; rank 2: dims[0] x dims[1]),
+ *  row-major, created with its groups ("crowd/exit_time"); an existing name
+ *  is an error. For what a run knows at its set-up or its end. */
+int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, const double *data);
 /** Write what is buffered and flush the file to the OS. */
 int cup_h5run_flush(cup_h5run *w);
 /** Flush, close, free, set *w = NULL. Returns the first failure of the data

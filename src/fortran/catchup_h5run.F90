@@ -25,7 +25,7 @@ module catchup_h5run
   public :: cup_h5run_sink
   public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
     c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
-    c_cup_h5_version
+    c_cup_h5_version, c_cup_h5run_array
 
   !> Root attribute: real(c_double), integer (stored as long) or string.
   interface cup_h5run_attr
@@ -56,6 +56,15 @@ module catchup_h5run
       real(c_double), value :: v
       integer(c_int) :: st
     end function c_cup_h5run_attr_double
+    function c_cup_h5run_array(w, name, rank, dims, data) bind(C, name="cup_h5run_array") result(st)
+      import :: c_int, c_ptr, c_char, c_long, c_double
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_int), value :: rank
+      integer(c_long), intent(in) :: dims(*)
+      real(c_double), intent(in) :: data(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_array
     function c_cup_h5run_attr_long(w, name, v) bind(C, name="cup_h5run_attr_long") result(st)
       import :: c_int, c_long, c_ptr, c_char
       type(c_ptr), value :: w

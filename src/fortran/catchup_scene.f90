@@ -16,7 +16,7 @@ module catchup_scene
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
-    c_cup_scene_dim, c_cup_scene_integrator
+    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -59,6 +59,11 @@ module catchup_scene
       type(c_ptr), value :: s
       type(c_ptr) :: p
     end function c_cup_scene_process
+    function c_cup_scene_crowd(s) bind(C, name="cup_scene_crowd") result(c)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: c
+    end function c_cup_scene_crowd
     function c_cup_scene_dim(s) bind(C, name="cup_scene_dim") result(n)
       import :: c_ptr, c_int
       type(c_ptr), value :: s

@@ -396,6 +396,35 @@ int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v) {
   return st;
 }
 
+/* A whole float64 array at once (rank 1 or 2), in a group made as needed:
+ * "crowd/radius". For what a run knows only at its end or from its set-up. */
+int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, const double *data) {
+  if (!w || !name || !name[0] || rank < 1 || rank > 2 || !dims || (!data && dims[0] * (rank == 2 ? dims[1] : 1) > 0))
+    return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
+  hsize_t hd[2] = {(hsize_t)dims[0], rank == 2 ? (hsize_t)dims[1] : 1};
+  quiet_t q = quiet_begin();
+  hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  int ok = lcpl >= 0 && H5Pset_create_intermediate_group(lcpl, 1) >= 0;
+  hid_t space = ok ? H5Screate_simple(rank, hd, NULL) : H5I_INVALID_HID;
+  hid_t d = space >= 0 ? H5Dcreate2(w->file, name, H5T_IEEE_F64LE, space, lcpl, H5P_DEFAULT, H5P_DEFAULT)
+                       : H5I_INVALID_HID;
+  ok = d >= 0 && (hd[0] * hd[1] == 0 || H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
+  hid_t err = keep_stack(!ok);
+  if (d >= 0) H5Dclose(d);
+  if (space >= 0) H5Sclose(space);
+  if (lcpl >= 0) H5Pclose(lcpl);
+  restore_stack(err);
+  int st = CUP_OK;
+  if (!ok) {
+    char op[160];
+    snprintf(op, sizeof op, "write dataset '%s' in", name);
+    st = set_error(w, CUP_ERR_IO, op);
+  }
+  quiet_end(q);
+  return st;
+}
+
 /* ---- close ---- */
 
 int cup_h5run_close(cup_h5run **pw, char *errmsg) {

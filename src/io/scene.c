@@ -17,6 +17,7 @@
 #include "mtx.h"
 #include "scene_read.h"
 #include "scene_set.h"
+#include "scene_crowd.h"
 #include "scene_shape.h"
 #include "scene_tree.h"
 
@@ -24,6 +25,7 @@ struct cup_scene {
   char *name;
   cup_lcs *lcs;
   scene_process *proc;          /* a general process (set:, f:) instead of an LCS */
+  cup_crowd *crowd;             /* or a crowd (crowd:) */
   cup_input *u;                 /* NULL when p = 0 */
   double *x0;
   cup_integrator_options opt;
@@ -372,9 +374,8 @@ static int read_method(rd *r, const st_node *root, cup_integrator_options *o) {
   return st;
 }
 
-/* T, n, x0 and the tolerance schedules. */
-static int read_run(rd *r, const st_node *root, int dim, cup_scene *S) {
-  char why[48];
+/* T, n and the tolerance schedules. */
+static int read_times(rd *r, const st_node *root, cup_scene *S) {
   const st_node *nd;
   cup_integrator_options *o = &S->opt;
   int st = need(r, root, "", "T", &nd);
@@ -384,6 +385,14 @@ static int read_run(rd *r, const st_node *root, int dim, cup_scene *S) {
   if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
   if (!st) st = read_schedule(r, root, "eps", "n^-2.1", &o->eps, &S->eps_spec);
   if (!st) st = read_schedule(r, root, "eta", "n^-1.05", &o->eta, &S->eta_spec);
+  return st;
+}
+
+/* T, n, the schedules and x0. */
+static int read_run(rd *r, const st_node *root, int dim, cup_scene *S) {
+  char why[48];
+  const st_node *nd;
+  int st = read_times(r, root, S);
   if (!st && (nd = opt(root, "x0"))) {
     snprintf(why, sizeof why, "n = %d, the state dimension", dim);
     st = vector(r, nd, "x0", dim, why, &S->x0);
@@ -424,12 +433,35 @@ static int read_general(rd *r, const st_node *root, cup_scene *S) {
   return scene_read_process(r, root, kset, set, read_component, &S->proc);
 }
 
+/* crowd: instead of a model; the agents give x0. */
+static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
+  static const char *const others[] = {"circuit", "lcs", "set", "f", "input", "x0", NULL};
+  const st_node *kc, *k, *map = st_get(root, "crowd", &kc);
+  for (int i = 0; others[i]; i++)
+    if (opt(root, others[i]) && st_get(root, others[i], &k))
+      return fail(r, CUP_ERR_PARSE, k, others[i], "a crowd: scene has no %s: (the agents give x0; "
+                  "the desired velocity is f)", others[i]);
+  int st = read_times(r, root, S);
+  if (!st) st = scene_read_crowd(r, map, S->opt.T / (double)S->opt.n, &S->crowd);
+  int n = st ? 0 : 2 * cup_crowd_agents(S->crowd);
+  if (!st && !(S->x0 = malloc(sizeof(double) * (size_t)n))) st = CUP_ERR_NOMEM;
+  if (!st) memcpy(S->x0, cup_crowd_q0(S->crowd), sizeof(double) * (size_t)n);
+  return st;
+}
+
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
-  static const char *const known[] = {"name", "circuit", "lcs", "set", "f", "input", "x0", "T", "n", "eps",
-                                      "eta", "scheme", "theta", "projector", "output", NULL};
+  static const char *const known[] = {"name", "circuit", "lcs", "set", "f", "crowd", "input", "x0", "T", "n",
+                                      "eps", "eta", "scheme", "theta", "projector", "output", NULL};
   const st_node *kf;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
+  cup_integrator_options_default(&S->opt);
+  if (!st && opt(root, "crowd")) {
+    st = read_crowd(r, root, S);
+    if (!st) st = read_method(r, root, &S->opt);
+    if (!st) st = read_name(r, root, S);
+    return st;
+  }
   if (!st && opt(root, "set")) {
     st = read_general(r, root, S);
   } else if (!st && opt(root, "f") && st_get(root, "f", &kf)) {
@@ -438,7 +470,6 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
     st = read_model(r, root, &S->lcs);
     if (!st) st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
   }
-  cup_integrator_options_default(&S->opt);
   if (!st) st = read_run(r, root, cup_scene_dim(S), S);
   if (!st) st = read_method(r, root, &S->opt);
   if (!st) st = read_name(r, root, S);
@@ -524,6 +555,7 @@ void cup_scene_free(cup_scene **s) {
   free(S->name);
   cup_lcs_free(&S->lcs);
   scene_process_free(&S->proc);
+  cup_crowd_free(&S->crowd);
   cup_input_free(&S->u);
   free(S->x0);
   free(S->eps_spec);
@@ -538,9 +570,13 @@ const cup_lcs *cup_scene_lcs(const cup_scene *s) { return s ? s->lcs : NULL; }
 const cup_input *cup_scene_input(const cup_scene *s) {
   return !s ? NULL : s->proc ? scene_process_input(s->proc) : s->u;
 }
-const cup_process_desc *cup_scene_process(const cup_scene *s) { return s ? scene_process_desc(s->proc) : NULL; }
+const cup_process_desc *cup_scene_process(const cup_scene *s) {
+  return !s ? NULL : s->crowd ? cup_crowd_process(s->crowd) : scene_process_desc(s->proc);
+}
+cup_crowd *cup_scene_crowd(const cup_scene *s) { return s ? s->crowd : NULL; }
 int cup_scene_dim(const cup_scene *s) {
-  return !s ? 0 : s->proc ? scene_process_desc(s->proc)->n : cup_lcs_dim(s->lcs);
+  return !s ? 0 : s->crowd ? 2 * cup_crowd_agents(s->crowd) : s->proc ? scene_process_desc(s->proc)->n
+                                                                     : cup_lcs_dim(s->lcs);
 }
 
 int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
@@ -549,7 +585,7 @@ int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cu
   *I = NULL;
   if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
   if (!o) o = &s->opt;
-  if (s->proc) return cup_integrator_create_process(I, scene_process_desc(s->proc), o, errmsg);
+  if (s->proc || s->crowd) return cup_integrator_create_process(I, cup_scene_process(s), o, errmsg);
   return cup_integrator_create(I, s->lcs, s->u, o, errmsg);
 }
 const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }

@@ -60,6 +60,13 @@ int cupt_layout(const char *name, long *out, int cap) {
   if (!strcmp(name, "cup_circuit"))
     PUT(sizeof(cup_circuit), OFF(cup_circuit, R1), OFF(cup_circuit, R2), OFF(cup_circuit, R3),
         OFF(cup_circuit, L2), OFF(cup_circuit, L3), OFF(cup_circuit, C4), OFF(cup_circuit, G));
+  if (!strcmp(name, "cup_crowd_desc"))
+    PUT(sizeof(cup_crowd_desc), OFF(cup_crowd_desc, agents), OFF(cup_crowd_desc, q0), OFF(cup_crowd_desc, radius),
+        OFF(cup_crowd_desc, room_points), OFF(cup_crowd_desc, room), OFF(cup_crowd_desc, doors),
+        OFF(cup_crowd_desc, door), OFF(cup_crowd_desc, obstacles), OFF(cup_crowd_desc, obstacle_points),
+        OFF(cup_crowd_desc, obstacle), OFF(cup_crowd_desc, walls), OFF(cup_crowd_desc, wall),
+        OFF(cup_crowd_desc, speed), OFF(cup_crowd_desc, grid), OFF(cup_crowd_desc, margin),
+        OFF(cup_crowd_desc, reach));
   if (!strcmp(name, "cup_schedule"))
     PUT(sizeof(cup_schedule), OFF(cup_schedule, coef), OFF(cup_schedule, power));
   if (!strcmp(name, "cup_integrator_options"))

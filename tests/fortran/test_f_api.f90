@@ -57,6 +57,7 @@ contains
     type(cup_run_info), target :: r
     type(cup_set_desc), target :: sd
     type(cup_process_desc), target :: pd
+    type(cup_crowd_desc), target :: cd
     type(c_ptr) :: b
     call section('struct layouts against the C compiler')
     b = c_loc(a)
@@ -120,6 +121,12 @@ contains
       off(b, c_loc(pd%C)), off(b, c_loc(pd%u)), off(b, c_loc(pd%A)), off(b, c_loc(pd%E)), &
       off(b, c_loc(pd%f)), off(b, c_loc(pd%f_ctx)), off(b, c_loc(pd%f_integral)), &
       off(b, c_loc(pd%f_integral_ctx))])
+    b = c_loc(cd)
+    call compare('cup_crowd_desc', [int(c_sizeof(cd), c_long), off(b, c_loc(cd%agents)), off(b, c_loc(cd%q0)), &
+      off(b, c_loc(cd%radius)), off(b, c_loc(cd%room_points)), off(b, c_loc(cd%room)), off(b, c_loc(cd%doors)), &
+      off(b, c_loc(cd%door)), off(b, c_loc(cd%obstacles)), off(b, c_loc(cd%obstacle_points)), &
+      off(b, c_loc(cd%obstacle)), off(b, c_loc(cd%walls)), off(b, c_loc(cd%wall)), off(b, c_loc(cd%speed)), &
+      off(b, c_loc(cd%grid)), off(b, c_loc(cd%margin)), off(b, c_loc(cd%reach))])
   end subroutine test_layouts
 end module layout_check
 
