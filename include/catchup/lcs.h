@@ -28,6 +28,12 @@ typedef struct cup_lcs_desc {
   cup_csc G;       /**< m x p: K moves with u when nonzero */
   cup_metric P;    /**< the metric (kind IDENTITY: P = I) */
   double pb_tol;   /**< relative tolerance of ||P B - C^T||; 0 means 1e-12 */
+  /* D != 0 (netlist diodes whose current the state does not fix): */
+  cup_csc D;       /**< m x m: 0 <= zeta _|_ C x + D zeta + G u + F >= 0; absent or
+                        zero: D = 0. With D != 0, B is required and is not checked
+                        against P B = C^T (P is then only the norm of certificates),
+                        and only the theta scheme runs the LCS */
+  const char *const *row_names; /**< m names of the rows for messages (the diodes), or NULL */
 } cup_lcs_desc;
 
 /** Validate and copy. Fails with CUP_ERR_PB_CT and a message naming the
