@@ -155,6 +155,25 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   return CUP_OK;
 }
 
+/* Only the theta scheme's LCP takes D: the catching-up schemes project
+ * onto K(t) = {C x + G u + F >= 0}, which exists only when D = 0. */
+static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
+  if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
+  int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
+  unsigned char *used = calloc((size_t)L->m + 1, 1);
+  if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
+  for (int j = 0; j < L->m; j++)
+    for (int q = L->D.p[j]; q < L->D.p[j + 1]; q++)
+      if (L->D.x[q] != 0) used[L->D.i[q]] = used[j] = 1;
+  for (int i = 0; i < L->m; i++) if (used[i]) rows[k++] = i;
+  char text[128];
+  cup_lcs_rows_text(L, rows, k, text, sizeof text);
+  free(rows); free(used);
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
+                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state "
+                  "does not fix): use the theta scheme", cup_scheme_name(scheme), text, k == 1 ? "has" : "have");
+}
+
 /* The polyset path: the projector, and the exact LCP step where it is
  * cheaper or the scheme needs it. */
 static int polyset_setup(cup_integrator *I, char *errmsg) {
@@ -245,6 +264,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   int st;
   cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
+  st = needs_theta(L, I->o.scheme, errmsg);
+  if (st) { cup_integrator_free(&I); return st; }
   I->u = u;
   I->n = L->n; I->m = L->m; I->p = L->p;
   I->K = L->K;

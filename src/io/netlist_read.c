@@ -425,8 +425,8 @@ static int read_probes(rd *r, int card) {
     const nx_tok *t = TOK(r, card, k);
     if (k == 1 && nx_is(t, "tran")) { k++; continue; }
     if (nx_is(t, "all")) { r->c->probe_all = 1; k++; continue; }
-    int two = k + 5 < n && TOK(r, card, k + 4)->kind == NX_WORD && TOK(r, card, k + 5)->kind == NX_RP;
-    int len = two ? 6 : 4;
+    int two = k + 4 < n && TOK(r, card, k + 3)->kind == NX_WORD && TOK(r, card, k + 4)->kind == NX_RP;
+    int len = two ? 5 : 4;                        /* v ( a [b] ): the comma is a blank */
     if (!(nx_is(t, "v") || nx_is(t, "i")) || k + len > n || TOK(r, card, k + 1)->kind != NX_LP ||
         TOK(r, card, k + 2)->kind != NX_WORD || TOK(r, card, k + len - 1)->kind != NX_RP ||
         (two && nx_is(t, "i")))
@@ -434,7 +434,7 @@ static int read_probes(rd *r, int card) {
                      "v(NODE1,NODE2), i(ELEMENT) or all)", t->s);
     char text[256];
     if (two)
-      snprintf(text, sizeof text, "%s(%s,%s)", t->s, TOK(r, card, k + 2)->s, TOK(r, card, k + 4)->s);
+      snprintf(text, sizeof text, "%s(%s,%s)", t->s, TOK(r, card, k + 2)->s, TOK(r, card, k + 3)->s);
     else
       snprintf(text, sizeof text, "%s(%s)", t->s, TOK(r, card, k + 2)->s);
     int st = add_probe(r, t, text);

@@ -1,9 +1,13 @@
+#define _POSIX_C_SOURCE 200809L
 /* lcs — linear complementarity systems x' = A x + B zeta + E u,
  * 0 <= zeta _|_ C x + G u + F >= 0 (paper, Sec. 7), as a sweeping process
  * in the P-metric: P B = C^T makes B zeta a P-normal to K(t). */
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
 #include "catchup.h"
 #include "lcs_impl.h"
 #include "set/polyset_impl.h"
@@ -46,6 +50,94 @@ static int check_pb(const cup_polyset *K, const cup_sparse *B, double tol, char 
   return CUP_OK;
 }
 
+static int has_nonzero(const cup_csc *c) {
+  if (!present(c)) return 0;
+  for (int k = 0; k < c->colptr[c->ncol]; k++)
+    if (c->values && c->values[k] != 0) return 1;
+  return 0;
+}
+
+/* All principal minors positive (m small: 2^m determinants by LU). */
+static int p_matrix(const double *D, int m, double *work, int *piv) {
+  for (unsigned mask = 1; mask < (1u << m); mask++) {
+    int k = 0, idx[16];
+    for (int i = 0; i < m; i++) if (mask >> i & 1u) idx[k++] = i;
+    for (int a = 0; a < k; a++)
+      for (int b = 0; b < k; b++) work[a + b * k] = D[idx[a] + idx[b] * m];
+    if (cup_dense_lu(work, k, piv)) return 0;
+    double det = 1;
+    unsigned char seen[16] = {0};
+    for (int a = 0; a < k; a++) {
+      det *= work[a + a * k];
+      int len = 0;                                 /* the row permutation's sign: its cycles */
+      for (int b = a; !seen[b]; b = piv[b]) { seen[b] = 1; len++; }
+      if (len && len % 2 == 0) det = -det;
+    }
+    if (!(det > 0)) return 0;
+  }
+  return 1;
+}
+
+/* D must make each step's LCP solvable with a unique answer: positive
+ * semidefinite (x^T D x >= 0, checked on (D + D^T)/2 by its eigenvalues,
+ * to rounding) or, for a few rows, a P-matrix. */
+static int check_D(const cup_sparse *Ds, char *errmsg) {
+  int m = Ds->nrow;
+  if (m > 1024) return CUP_OK;               /* too big to check densely: the LCP solver will tell */
+  double *D = calloc((size_t)m * m, sizeof(double)), *S = malloc(sizeof(double) * (size_t)m * m);
+  gsl_vector *ev = gsl_vector_alloc((size_t)m);
+  gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc((size_t)m);
+  int st = D && S && ev && w ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  double lmin = 0, norm = 0;
+  if (!st) {
+    for (int j = 0; j < m; j++)
+      for (int k = Ds->p[j]; k < Ds->p[j + 1]; k++) D[Ds->i[k] + (size_t)j * m] = Ds->x[k];
+    for (int j = 0; j < m; j++)
+      for (int i = 0; i < m; i++) {
+        S[i + (size_t)j * m] = 0.5 * (D[i + (size_t)j * m] + D[j + (size_t)i * m]);
+        norm = cup_max(norm, fabs(D[i + (size_t)j * m]));
+      }
+    gsl_matrix_view Sv = gsl_matrix_view_array(S, (size_t)m, (size_t)m);
+    gsl_error_handler_t *old = gsl_set_error_handler_off();
+    if (gsl_eigen_symm(&Sv.matrix, ev, w)) st = cup_fail(errmsg, CUP_ERR_LINALG, "LCS: eigenvalues of D failed");
+    gsl_set_error_handler(old);
+    for (int i = 0; !st && i < m; i++) lmin = cup_min(lmin, gsl_vector_get(ev, i));
+  }
+  if (!st && lmin < -1e-12 * m * norm) {
+    double *work = malloc(sizeof(double) * 16 * 16);
+    int piv[16];
+    int ok = m <= 12 && work && p_matrix(D, m, work, piv);
+    free(work);
+    if (!ok)
+      st = cup_fail(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
+                    "and not a P-matrix: the LCP of a step may have no or several solutions", lmin);
+  }
+  free(D); free(S);
+  if (ev) gsl_vector_free(ev);
+  if (w) gsl_eigen_symm_free(w);
+  return st;
+}
+
+static int copy_names(cup_lcs *L, const char *const *names, char *errmsg) {
+  if (!names) return CUP_OK;
+  L->row_names = calloc((size_t)L->m + 1, sizeof(char *));
+  if (!L->row_names) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  for (int i = 0; i < L->m; i++)
+    if (!(L->row_names[i] = strdup(names[i] ? names[i] : "?"))) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  return CUP_OK;
+}
+
+void cup_lcs_rows_text(const cup_lcs *L, const int *rows, int k, char *buf, unsigned long size) {
+  size_t len = (size_t)snprintf(buf, size, "%s", k == 1 ? "row" : "rows");
+  for (int a = 0; a < k && len < size; a++) {
+    if (len > size / 2) { snprintf(buf + len, size - len, ", ..."); return; }
+    if (L->row_names)
+      len += (size_t)snprintf(buf + len, size - len, "%s%s", a ? ", " : " ", L->row_names[rows[a]]);
+    else
+      len += (size_t)snprintf(buf + len, size - len, "%s%d", a ? ", " : " ", rows[a]);
+  }
+}
+
 int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: output pointer is NULL");
   *out = NULL;
@@ -74,7 +166,14 @@ int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
     }
   }
   if (!st) st = cup_polyset_create(&L->K, &d->C, L->F, &d->P, errmsg);
-  if (!st && present(&d->B)) {
+  if (!st) st = copy_names(L, d->row_names, errmsg);
+  L->has_D = !st && has_nonzero(&d->D);
+  if (L->has_D) {                            /* not a sweeping process: keep B and D as given */
+    if (!present(&d->B)) st = cup_fail(errmsg, CUP_ERR_ARG, "D != 0 needs B (it is not P^-1 C^T then)");
+    if (!st) st = cup_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
+    if (!st) st = cup_sparse_copy(&L->D, &d->D, "D", d->m, d->m, errmsg);
+    if (!st) st = check_D(&L->D, errmsg);
+  } else if (!st && present(&d->B)) {
     cup_sparse B;
     st = cup_sparse_copy(&B, &d->B, "B", d->n, d->m, errmsg);
     if (!st) {
@@ -98,6 +197,10 @@ void cup_lcs_free(cup_lcs **Lp) {
   cup_sparse_free(&L->G);
   free(L->F);
   cup_polyset_free(&L->K);
+  cup_sparse_free(&L->B);
+  cup_sparse_free(&L->D);
+  for (int i = 0; L->row_names && i < L->m; i++) free(L->row_names[i]);
+  free(L->row_names);
   free(L);
   *Lp = NULL;
 }
