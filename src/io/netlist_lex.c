@@ -156,7 +156,7 @@ static int lex_tokens(nx *x, const char *s, size_t len, size_t c0, int line, int
       i = j;
     }
     if (st) return nx_fail(x, st, NULL, NULL, "out of memory");
-    if (x->ncard) x->card[x->ncard - 1].n = x->ntok - x->card[x->ncard - 1].first;
+    if (origin < 0 && x->ncard) x->card[x->ncard - 1].n = x->ntok - x->card[x->ncard - 1].first;
   }
   return CUP_OK;
 }
