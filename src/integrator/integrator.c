@@ -32,10 +32,12 @@ struct cup_integrator {
   int fixed;                /* the polyset does not move */
   cup_setproj *sp;          /* other sets */
   cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
+  const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
   cup_freestep fs;
   cup_projector *proj;
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
+  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -174,6 +176,26 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
                   "does not fix): use the theta scheme", cup_scheme_name(scheme), text, k == 1 ? "has" : "have");
 }
 
+/* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
+static int theta_step_init(cup_integrator *I, const double *W, char *errmsg) {
+  const cup_lcs *L = I->L;
+  int n = I->n, m = I->m, st = CUP_OK;
+  double *B = NULL, *D = NULL;
+  if (L && L->has_D) {
+    B = calloc((size_t)n * m + 1, sizeof(double));
+    D = calloc((size_t)m * m + 1, sizeof(double));
+    if (!B || !D) st = CUP_ERR_NOMEM;
+    for (int j = 0; !st && j < m; j++) {
+      for (int k = L->B.p[j]; k < L->B.p[j + 1]; k++) B[L->B.i[k] + (size_t)j * n] = L->B.x[k];
+      for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
+    }
+  }
+  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D);
+  free(B);
+  free(D);
+  return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
+}
+
 /* The polyset path: the projector, and the exact LCP step where it is
  * cheaper or the scheme needs it. */
 static int polyset_setup(cup_integrator *I, char *errmsg) {
@@ -200,7 +222,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
       for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
       W = eye;
     }
-    if (cup_lcp_step_init(&I->th, I->K, W, I->h)) st = cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
+    st = theta_step_init(I, W, errmsg);
     free(eye);
   }
   return st;
@@ -267,6 +289,7 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   st = needs_theta(L, I->o.scheme, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   I->u = u;
+  I->L = L;
   I->n = L->n; I->m = L->m; I->p = L->p;
   I->K = L->K;
   I->G = L->has_G ? &L->G : NULL;
@@ -346,6 +369,16 @@ void cup_integrator_free(cup_integrator **Ip) {
 }
 
 const double *cup_integrator_state(const cup_integrator *I) { return I ? I->x : NULL; }
+
+/* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
+ * are the impulse of the step, h zeta. */
+int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
+  if (!I || !zeta) return CUP_ERR_ARG;
+  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
+  double s = I->zeta_from == 2 ? 1 / I->h : 1;
+  for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
+  return CUP_OK;
+}
 
 /* ---- the run ---------------------------------------------------------------------- */
 
@@ -484,6 +517,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
   memcpy(I->x, x0, sizeof(double) * (size_t)n);
   cup_projector_reset(I->proj);
+  I->zeta_from = 0;
   int fixed = I->fixed || !I->u;
   long rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
@@ -541,10 +575,13 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
         cup_proj_info pp = {0};
         int ps = cup_projector_set_offset(I->proj, g);
         if (ps == CUP_OK) ps = cup_project(I->proj, I->xf, I->xnew, &pp);
-        if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; }
+        if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; I->zeta_from = 2; }
+      } else {
+        I->zeta_from = 1;
       }
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
+      I->zeta_from = 2;
     }
     if (st < 0) {                        /* the polyset path's errors */
       char what[224];

@@ -26,12 +26,22 @@ typedef struct cup_lcp_step {
   cup_lcp lcp;      /* lambda of the last step in lcp.lam */
   double *s, *gam, *v, *tau, *qs, *sv, *gamv;
   double lq;        /* lambda^T q of the last step (q: the free point's slack) */
+  /* D != 0 (cup_lcp_step_init_bd): w = C z + D lambda + g */
+  double *D;        /* m x m, column-major, or NULL */
+  double *geff;     /* g + D lambda: the offset the step's z must satisfy */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
  * CUP_OK, CUP_ERR_UNSUPPORTED (K is not dense) or CUP_ERR_NOMEM; callers
  * write the message, in their own name. */
 int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h);
+/* The same for an LCS with D != 0 (Siconos's EulerMoreauOSI): B (n x m,
+ * column-major) replaces P^-1 C^T in H = h W B, M = C H + D (D m x m,
+ * column-major); z satisfies C z + D lambda + g >= 0 and the certificates
+ * below use g + D lambda; an M that is not a P-matrix (a monotone LCP) is
+ * solved by Lemke's method. B NULL: P^-1 C^T; D NULL: cup_lcp_step_init. */
+int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
+                         const double *B, const double *D);
 void cup_lcp_step_free(cup_lcp_step *ls);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:
