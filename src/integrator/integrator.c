@@ -177,7 +177,7 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
 }
 
 /* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
-static int theta_step_init(cup_integrator *I, const double *W, char *errmsg) {
+static int theta_step_init(cup_integrator *I, const double *W, double theta, char *errmsg) {
   const cup_lcs *L = I->L;
   int n = I->n, m = I->m, st = CUP_OK;
   double *B = NULL, *D = NULL;
@@ -190,7 +190,7 @@ static int theta_step_init(cup_integrator *I, const double *W, char *errmsg) {
       for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
     }
   }
-  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D);
+  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D, theta);
   free(B);
   free(D);
   return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
@@ -222,7 +222,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
       for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
       W = eye;
     }
-    st = theta_step_init(I, W, errmsg);
+    st = theta_step_init(I, W, o->scheme == CUP_SCHEME_THETA ? o->theta : 0, errmsg);
     free(eye);
   }
   return st;
@@ -455,6 +455,7 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
  * projects it), by the raw slack so that a point on the boundary passes. */
 static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
+  if (I->use_theta) cup_lcp_step_start(&I->th, I->x, g0);
   if (cup_slack(I->K, g0, I->x, I->s0, NULL) < 0) {
     info->status = CUP_WARN_X0_OUTSIDE;
     snprintf(info->message, sizeof info->message,

@@ -7,11 +7,11 @@
 #include "step.h"
 
 int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h) {
-  return cup_lcp_step_init_bd(ls, K, W, h, NULL, NULL);
+  return cup_lcp_step_init_bd(ls, K, W, h, NULL, NULL, 1);
 }
 
 int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
-                         const double *B, const double *D) {
+                         const double *B, const double *D, double theta) {
   memset(ls, 0, sizeof *ls);
   if (!K->dense) return CUP_ERR_UNSUPPORTED;
   int n = ls->n = K->n, m = ls->m = K->m;
@@ -31,8 +31,15 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
   if (D) {
     ls->D = malloc(sizeof(double) * M * M);
     ls->geff = calloc(M, sizeof(double));
-    if (!ls->D || !ls->geff || cup_lcp_monotone(&ls->lcp)) return CUP_ERR_NOMEM;
+    ls->drow = calloc(M, 1);
+    ls->Hprev = calloc(N * M, sizeof(double));
+    ls->xpred = calloc(N, sizeof(double));
+    if (!ls->D || !ls->geff || !ls->drow || !ls->Hprev || !ls->xpred || cup_lcp_monotone(&ls->lcp))
+      return CUP_ERR_NOMEM;
     memcpy(ls->D, D, sizeof(double) * (size_t)m * m);
+    for (int i = 0; i < m; i++)
+      for (int j = 0; j < m; j++)
+        if (D[i + (size_t)j * m] != 0) ls->drow[i] = ls->drow[j] = 1;
   }
   /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T), or
    * the B given */
@@ -44,7 +51,9 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
         for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * b[c];
       else
         acc = b[r];
-      ls->H[r + (size_t)i * n] = h * acc;
+      int trap = ls->drow && ls->drow[i];
+      ls->H[r + (size_t)i * n] = h * (trap ? theta : 1) * acc;
+      if (trap) ls->Hprev[r + (size_t)i * n] = h * (1 - theta) * acc;
     }
   for (int j = 0; j < m; j++)                      /* M = C H (+ D) */
     for (int i = 0; i < m; i++) {
@@ -57,7 +66,8 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
 
 void cup_lcp_step_free(cup_lcp_step *ls) {
   free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
-  free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff);
+  free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->drow); free(ls->Hprev);
+  free(ls->xpred);
   cup_lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
@@ -81,6 +91,17 @@ static double certified_eta(cup_lcp_step *ls, const double *g, const double *z) 
   for (int j = 0; j < n; j++) ls->v[j] = z[j] + t * K->rdir[j];
   return cup_slack(K, g, ls->v, ls->sv, ls->gamv) >= 0 ? t * K->rdir_norm * (1 + 8 * DBL_EPSILON)
                                                         : INFINITY;
+}
+
+void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
+  int m = ls->m, pivots = 0;
+  double *lam = ls->lcp.lam;
+  cup_zero(lam, m);
+  if (!ls->D) return;
+  cup_slack(ls->K, g, x0, ls->qs, NULL);          /* q = C x0 + g, M = D */
+  if (cup_lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) != CUP_OK) cup_zero(lam, m);
+  for (int i = 0; i < m; i++)
+    if (!ls->drow[i]) lam[i] = 0;
 }
 
 /* With D, a row of w may not depend on z at all (a diode fixed by the
@@ -129,6 +150,13 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
   info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
   info->eta_target = eta_target;
   info->method = CUP_PROJ_ACTIVESET;
+  if (ls->D) {                                    /* the trapezoid's old half: h (1 - theta) W B zeta_k */
+    cup_copy(ls->xpred, xf, n);
+    for (int i = 0; i < m; i++)
+      if (lam[i] != 0)
+        for (int r = 0; r < n; r++) ls->xpred[r] += ls->Hprev[r + (size_t)i * n] * lam[i];
+    xf = ls->xpred;
+  }
   double probe = 0;                               /* NaN iff some entry is NaN or Inf */
   for (int j = 0; j < n; j++) probe += 0 * xf[j];
   if (isnan(probe)) return info->status = CUP_ERR_NONFINITE;
