@@ -196,6 +196,28 @@ static int read_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
   return st;
 }
 
+/* A pulse's values (required) and times, a damped sine's delay and damping
+ * (each 0 unless given; times >= 0). */
+static int read_spice_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
+  char k1[KEY_LEN];
+  const st_node *nd;
+  int pulse = w->kind == CUP_WAVE_PULSE, st = CUP_OK;
+  const char *const pk[] = {"value", "value2", "delay", "rise", "fall", "width", "period"};
+  double *pv[] = {&w->value, &w->value2, &w->delay, &w->rise, &w->fall, &w->width, &w->period};
+  const char *const dk[] = {"delay", "damping"};
+  double *dv[] = {&w->delay, &w->damping};
+  int count = pulse ? 7 : 2;
+  for (int k = 0; k < count && !st; k++) {
+    const char *name = pulse ? pk[k] : dk[k];
+    double *v = pulse ? pv[k] : dv[k];
+    int required = pulse && k < 2, any_sign = required || (!pulse && k == 1);
+    if (required) st = need(r, map, key, name, &nd);
+    else if (!(nd = opt(map, name))) continue;
+    if (!st) st = any_sign ? number(r, nd, join(k1, key, name), v) : number_min(r, nd, join(k1, key, name), 0, 0, v);
+  }
+  return st;
+}
+
 static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *u, int j) {
   char k1[KEY_LEN], hint[160], lib[CUP_ERRMSG_LEN];
   const st_node *tn = NULL, *nd = NULL;
@@ -215,7 +237,9 @@ static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *
     st = need(r, map, key, "value", &nd);
     if (!st) st = number(r, nd, join(k1, key, "value"), &w.value);
   }
-  if (!st && (kind == CUP_WAVE_SINE || kind == CUP_WAVE_SQUARE)) st = read_wave(r, map, key, &w);
+  if (!st && (kind == CUP_WAVE_SINE || kind == CUP_WAVE_SQUARE || kind == CUP_WAVE_DAMPED_SINE))
+    st = read_wave(r, map, key, &w);
+  if (!st && (kind == CUP_WAVE_PULSE || kind == CUP_WAVE_DAMPED_SINE)) st = read_spice_wave(r, map, key, &w);
   if (!st && kind == CUP_WAVE_PWL) {
     st = need(r, map, key, "points", &nd);
     if (!st) st = read_points(r, nd, join(k1, key, "points"), &w, &buf);
@@ -238,7 +262,7 @@ static int read_term(rd *r, const st_node *nd, const char *key, cup_input *u, in
     return st;
   }
   return fail(r, CUP_ERR_PARSE, nd, key, "expected an input term: a number or a mapping with a type "
-              "(constant, sine, square, pwl) (got %s)", st_looks(nd, b, sizeof b));
+              "(constant, sine, square, pwl, pulse, damped_sine) (got %s)", st_looks(nd, b, sizeof b));
 }
 
 /* One component u_j: a term, or a list of terms (their sum). */

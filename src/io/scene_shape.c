@@ -6,10 +6,13 @@
 #include "scene_shape.h"
 
 /* The keys of a term mapping, by waveform (CUP_WAVE_LIST order). */
-const char *const scene_wave_keys[CUP_WAVE_COUNT][5] = {{"type", "value", NULL},
-                                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                                         {"type", "points", NULL}};
+const char *const scene_wave_keys[CUP_WAVE_COUNT][SCENE_WAVE_KEYS] = {
+  {"type", "value", NULL},
+  {"type", "amplitude", "frequency", "phase", NULL},
+  {"type", "amplitude", "frequency", "phase", NULL},
+  {"type", "points", NULL},
+  {"type", "value", "value2", "delay", "rise", "fall", "width", "period", NULL},
+  {"type", "amplitude", "frequency", "phase", "delay", "damping", NULL}};
 
 /* Keys whose value is a matrix or a vector: inline numbers or {file: ...}. */
 static int inline_or_file(const char *path) {

@@ -123,6 +123,12 @@ static int add_wave(cup_input *u, int j, const cup_wave *w, const nl_circuit *c,
   return st ? nl_fail(c, e, errmsg, st, "%s", lib) : CUP_OK;
 }
 
+/* Parameter k of a SIN or PULSE, or SPICE's default when it is omitted or 0
+ * (as SPICE reads them: a 0 rise time is TSTEP, not a jump). */
+static double spice_param(const nl_source *s, int k, double dflt) {
+  return s->np > k && s->p[k] != 0 ? s->p[k] : dflt;
+}
+
 /* SPICE's transient functions as exact waveform terms. */
 static int source_terms(cup_netlist *nl, const nl_circuit *c, int e, char *errmsg) {
   const nl_source *s = &c->elem[e].src;
@@ -130,21 +136,29 @@ static int source_terms(cup_netlist *nl, const nl_circuit *c, int e, char *errms
   if (s->fn == NL_FN_DC) return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_CONSTANT, .value = s->dc}, c, e, errmsg);
   if (s->fn == NL_FN_PWL)
     return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_PWL, .npoints = s->npts, .t = s->t, .v = s->v}, c, e, errmsg);
+  double tstep = nl->has_tran ? nl->tstep : NAN, tstop = nl->has_tran ? nl->tstop : NAN;
   if (s->fn == NL_FN_SIN) {
-    double freq = s->np > NL_SIN_FREQ ? s->p[NL_SIN_FREQ] : nl->has_tran ? 1 / nl->tstop : NAN;
+    double freq = spice_param(s, NL_SIN_FREQ, 1 / tstop), td = spice_param(s, NL_SIN_TD, 0);
+    double theta = spice_param(s, NL_SIN_THETA, 0), phase = spice_param(s, NL_SIN_PHASE, 0) * (TWO_PI / 360);
     if (isnan(freq))
       return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "SIN without FREQ needs .tran (FREQ defaults to 1/TSTOP)");
-    double td = s->np > NL_SIN_TD ? s->p[NL_SIN_TD] : 0, theta = s->np > NL_SIN_THETA ? s->p[NL_SIN_THETA] : 0;
-    double phase = s->np > NL_SIN_PHASE ? s->p[NL_SIN_PHASE] * (TWO_PI / 360) : 0;
-    if (td != 0 || theta != 0)
-      return nl_fail(c, e, errmsg, CUP_ERR_UNSUPPORTED, "SIN with a delay or damping is not supported yet");
     int st = add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_CONSTANT, .value = s->p[NL_SIN_VO]}, c, e, errmsg);
-    if (!st)
-      st = add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_SINE, .amplitude = s->p[NL_SIN_VA],
-                                          .frequency = freq, .phase = phase}, c, e, errmsg);
-    return st;
+    if (st) return st;
+    if (td == 0 && theta == 0)
+      return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_SINE, .amplitude = s->p[NL_SIN_VA], .frequency = freq,
+                                            .phase = phase}, c, e, errmsg);
+    return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_DAMPED_SINE, .amplitude = s->p[NL_SIN_VA],
+                                          .frequency = freq, .phase = phase, .delay = td, .damping = theta},
+                    c, e, errmsg);
   }
-  return nl_fail(c, e, errmsg, CUP_ERR_UNSUPPORTED, "PULSE is not supported yet");
+  cup_wave w = {.kind = CUP_WAVE_PULSE, .value = s->p[NL_PULSE_V1], .value2 = s->p[NL_PULSE_V2],
+                .delay = spice_param(s, NL_PULSE_TD, 0), .rise = spice_param(s, NL_PULSE_TR, tstep),
+                .fall = spice_param(s, NL_PULSE_TF, tstep), .width = spice_param(s, NL_PULSE_PW, tstop),
+                .period = spice_param(s, NL_PULSE_PER, tstop)};
+  if (isnan(w.rise) || isnan(w.fall) || isnan(w.width) || isnan(w.period))
+    return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "PULSE without TR, TF, PW or PER needs .tran (they default to "
+                   "TSTEP and TSTOP)");
+  return add_wave(nl->u, j, &w, c, e, errmsg);
 }
 
 static int build_input(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
