@@ -14,6 +14,7 @@
 #include <strings.h>
 #include "catchup.h"
 #include "netlist_lex.h"
+#include "read_text.h"
 #include "model/netlist_desc.h"
 #include "model/netlist_impl.h"
 
@@ -646,22 +647,10 @@ int cup_netlist_load_string(cup_netlist **out, const char *text, const char *nam
 
 int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
   int st = check_args(out, path, sets, nsets, errmsg);
-  if (st) return st;
-  FILE *f = fopen(path, "rb");
-  if (!f) return cup_fail(errmsg, CUP_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-  size_t cap = 4096, n = 0, got;
-  char *buf = malloc(cap);
-  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0)
-    if ((n += got) == cap) {
-      char *nb = realloc(buf, cap *= 2);
-      if (!nb) free(buf);
-      buf = nb;
-    }
-  int err = ferror(f);
-  fclose(f);
-  if (!buf) return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path);
-  if (err) { free(buf); return cup_fail(errmsg, CUP_ERR_IO, "%s: read error", path); }
-  st = load(out, buf, n, path, sets, nsets, errmsg);
-  free(buf);
+  char *text = NULL;
+  size_t len = 0;
+  if (!st) st = cup_read_text(path, &text, &len, errmsg);
+  if (!st) st = load(out, text, len, path, sets, nsets, errmsg);
+  free(text);
   return st;
 }

@@ -20,12 +20,15 @@
 #include "scene_crowd.h"
 #include "scene_shape.h"
 #include "scene_tree.h"
+#include "read_text.h"
+#include "scene_netlist.h"
 
 struct cup_scene {
   char *name;
   cup_lcs *lcs;
   scene_process *proc;          /* a general process (set:, f:) instead of an LCS */
   cup_crowd *crowd;             /* or a crowd (crowd:) */
+  cup_netlist *nl;              /* netlist: the model (its LCS and input) */
   cup_input *u;                 /* NULL when p = 0 */
   double *x0;
   cup_integrator_options opt;
@@ -146,15 +149,18 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
   return st;
 }
 
-static int read_model(rd *r, const st_node *root, cup_lcs **L) {
-  const st_node *kc, *kl;
-  const st_node *c = st_get(root, "circuit", &kc), *l = st_get(root, "lcs", &kl);
-  if (c && l)
-    return fail(r, CUP_ERR_PARSE, kc->line > kl->line ? kc : kl, kc->line > kl->line ? "circuit" : "lcs",
-                "give one model, circuit or lcs, not both");
-  if (c) return read_circuit(r, kc, c, L);
-  if (l) return read_lcs(r, kl, l, L);
-  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs", "missing: the scene needs a model, circuit: or lcs:");
+static int read_model(rd *r, const st_node *root, cup_scene *S) {
+  const st_node *kc, *kl, *kn;
+  const st_node *c = st_get(root, "circuit", &kc), *l = st_get(root, "lcs", &kl), *nl = st_get(root, "netlist", &kn);
+  if (!!c + !!l + !!nl > 1) {
+    const st_node *k2 = c && l ? (kc->line > kl->line ? kc : kl) : nl && (c || l) ? kn : kc;
+    return fail(r, CUP_ERR_PARSE, k2, k2->text, "give one model, circuit, lcs or netlist, not two");
+  }
+  if (c) return read_circuit(r, kc, c, &S->lcs);
+  if (l) return read_lcs(r, kl, l, &S->lcs);
+  if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
+  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist", "missing: the scene needs a model, circuit:, lcs: "
+              "or netlist:");
 }
 
 /* ---- the input u(t) ------------------------------------------------------ */
@@ -402,11 +408,17 @@ static int read_method(rd *r, const st_node *root, cup_integrator_options *o) {
 static int read_times(rd *r, const st_node *root, cup_scene *S) {
   const st_node *nd;
   cup_integrator_options *o = &S->opt;
-  int st = need(r, root, "", "T", &nd);
-  if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
-  if (!st) st = need(r, root, "", "n", &nd);
-  /* 2^53: every integer up to it is exact in a double */
-  if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
+  int tran = S->nl && cup_netlist_tran(S->nl, NULL, NULL);   /* .tran gives T and n */
+  int st = CUP_OK;
+  if (!tran || opt(root, "T")) {
+    st = need(r, root, "", "T", &nd);
+    if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
+  }
+  if (!st && (!tran || opt(root, "n"))) {
+    st = need(r, root, "", "n", &nd);
+    /* 2^53: every integer up to it is exact in a double */
+    if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
+  }
   if (!st) st = read_schedule(r, root, "eps", "n^-2.1", &o->eps, &S->eps_spec);
   if (!st) st = read_schedule(r, root, "eta", "n^-1.05", &o->eta, &S->eta_spec);
   return st;
@@ -422,6 +434,8 @@ static int read_run(rd *r, const st_node *root, int dim, cup_scene *S) {
     st = vector(r, nd, "x0", dim, why, &S->x0);
   } else if (!st && !(S->x0 = calloc((size_t)dim, sizeof(double)))) {
     st = CUP_ERR_NOMEM;
+  } else if (!st && S->nl) {
+    memcpy(S->x0, cup_netlist_x0(S->nl), sizeof(double) * (size_t)dim);
   }
   return st;
 }
@@ -448,7 +462,8 @@ static int read_name(rd *r, const st_node *root, cup_scene *S) {
  * place: no input: key. */
 static int read_general(rd *r, const st_node *root, cup_scene *S) {
   const st_node *kset, *kin = NULL, *set = st_get(root, "set", &kset);
-  const char *other = opt(root, "circuit") ? "circuit" : opt(root, "lcs") ? "lcs" : NULL;
+  const char *other = opt(root, "circuit") ? "circuit" : opt(root, "lcs") ? "lcs"
+                    : opt(root, "netlist") ? "netlist" : NULL;
   if (other)
     return fail(r, CUP_ERR_PARSE, kset, "set", "give one model, %s or set, not both", other);
   if (opt(root, "input") && st_get(root, "input", &kin))
@@ -459,7 +474,7 @@ static int read_general(rd *r, const st_node *root, cup_scene *S) {
 
 /* crowd: instead of a model; the agents give x0. */
 static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
-  static const char *const others[] = {"circuit", "lcs", "set", "f", "input", "x0", NULL};
+  static const char *const others[] = {"circuit", "lcs", "netlist", "set", "f", "input", "x0", NULL};
   const st_node *kc, *k, *map = st_get(root, "crowd", &kc);
   for (int i = 0; others[i]; i++)
     if (opt(root, others[i]) && st_get(root, others[i], &k))
@@ -474,9 +489,9 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 }
 
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
-  static const char *const known[] = {"name", "circuit", "lcs", "set", "f", "crowd", "input", "x0", "T", "n",
-                                      "eps", "eta", "scheme", "theta", "projector", "output", NULL};
-  const st_node *kf;
+  static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
+                                      "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", NULL};
+  const st_node *kf, *ki;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
   cup_integrator_options_default(&S->opt);
@@ -491,9 +506,14 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   } else if (!st && opt(root, "f") && st_get(root, "f", &kf)) {
     st = fail(r, CUP_ERR_PARSE, kf, "f", "f: goes with set: (an LCS's f is A x + E u, in lcs:)");
   } else if (!st) {
-    st = read_model(r, root, &S->lcs);
-    if (!st) st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
+    st = read_model(r, root, S);
+    if (!st && S->nl && st_get(root, "input", &ki))
+      st = fail(r, CUP_ERR_PARSE, ki, "input", "a netlist's sources are its input: set them in the netlist "
+                "(netlist.V1: 'SIN(0 5 50)')");
+    else if (!st && !S->nl)
+      st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
   }
+  if (!st && S->nl) scene_netlist_options(S->nl, &S->opt);
   if (!st) st = read_run(r, root, cup_scene_dim(S), S);
   if (!st) st = read_method(r, root, &S->opt);
   if (!st) st = read_name(r, root, S);
@@ -537,34 +557,12 @@ int cup_scene_load_string(cup_scene **s, const char *text, const char *name, con
   return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, errmsg);
 }
 
-static int slurp(const char *path, char **text, size_t *len, char *errmsg) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return cup_fail(errmsg, CUP_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-  size_t cap = 4096, n = 0, got;
-  char *buf = malloc(cap);
-  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0) {
-    n += got;
-    if (n == cap) {
-      char *nb = realloc(buf, cap *= 2);
-      if (!nb) { free(buf); buf = NULL; }
-      buf = nb;
-    }
-  }
-  int err = ferror(f);
-  fclose(f);
-  if (!buf) return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path);
-  if (err) { free(buf); return cup_fail(errmsg, CUP_ERR_IO, "%s: read error", path); }
-  *text = buf;
-  *len = n;
-  return CUP_OK;
-}
-
 int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides, int n_overrides,
                    char *errmsg) {
   int st = check_args(s, path, overrides, n_overrides, errmsg);
   char *text = NULL, *dir = NULL;
   size_t len = 0;
-  if (!st) st = slurp(path, &text, &len, errmsg);
+  if (!st) st = cup_read_text(path, &text, &len, errmsg);
   const char *slash = path ? strrchr(path, '/') : NULL;
   if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
   if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, errmsg);
@@ -581,6 +579,7 @@ void cup_scene_free(cup_scene **s) {
   scene_process_free(&S->proc);
   cup_crowd_free(&S->crowd);
   cup_input_free(&S->u);
+  cup_netlist_free(&S->nl);
   free(S->x0);
   free(S->eps_spec);
   free(S->eta_spec);
@@ -590,17 +589,18 @@ void cup_scene_free(cup_scene **s) {
 }
 
 const char *cup_scene_name(const cup_scene *s) { return s ? s->name : NULL; }
-const cup_lcs *cup_scene_lcs(const cup_scene *s) { return s ? s->lcs : NULL; }
+const cup_lcs *cup_scene_lcs(const cup_scene *s) { return !s ? NULL : s->nl ? cup_netlist_lcs(s->nl) : s->lcs; }
 const cup_input *cup_scene_input(const cup_scene *s) {
-  return !s ? NULL : s->proc ? scene_process_input(s->proc) : s->u;
+  return !s ? NULL : s->proc ? scene_process_input(s->proc) : s->nl ? cup_netlist_input(s->nl) : s->u;
 }
+cup_netlist *cup_scene_netlist(const cup_scene *s) { return s ? s->nl : NULL; }
 const cup_process_desc *cup_scene_process(const cup_scene *s) {
   return !s ? NULL : s->crowd ? cup_crowd_process(s->crowd) : scene_process_desc(s->proc);
 }
 cup_crowd *cup_scene_crowd(const cup_scene *s) { return s ? s->crowd : NULL; }
 int cup_scene_dim(const cup_scene *s) {
   return !s ? 0 : s->crowd ? 2 * cup_crowd_agents(s->crowd) : s->proc ? scene_process_desc(s->proc)->n
-                                                                     : cup_lcs_dim(s->lcs);
+                                                                     : cup_lcs_dim(cup_scene_lcs(s));
 }
 
 int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
@@ -610,7 +610,7 @@ int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cu
   if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
   if (!o) o = &s->opt;
   if (s->proc || s->crowd) return cup_integrator_create_process(I, cup_scene_process(s), o, errmsg);
-  return cup_integrator_create(I, s->lcs, s->u, o, errmsg);
+  return cup_integrator_create(I, cup_scene_lcs(s), cup_scene_input(s), o, errmsg);
 }
 const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }
 const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ? &s->opt : NULL; }

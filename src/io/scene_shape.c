@@ -33,8 +33,16 @@ static int replace_by_map(st_node **slot, int k) {
 int scene_reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k) {
   st_node *nd = *slot;
   if (!*path && nd->kind == ST_MAP) {
-    if (!strcmp(seg, "circuit")) st_map_remove(nd, "lcs");
-    if (!strcmp(seg, "lcs")) st_map_remove(nd, "circuit");
+    static const char *const models[] = {"circuit", "lcs", "netlist"};
+    for (int a = 0; a < 3; a++)
+      for (int b = 0; b < 3; b++)
+        if (a != b && !strcmp(seg, models[a])) st_map_remove(nd, models[b]);
+    return CUP_OK;
+  }
+  if (!strcmp(path, "netlist") && nd->kind == ST_SCALAR) {   /* netlist.R1=2: {file: ..., R1: 2} */
+    st_node *m = st_new_map(k);
+    if (!m || st_map_put(m, "file", nd, k)) { st_free(m); return CUP_ERR_NOMEM; }
+    *slot = m;
     return CUP_OK;
   }
   if (!strcmp(path, "output") && (nd->kind != ST_MAP || nd->len != 1 || strcmp(nd->key[0]->text, seg)))
