@@ -72,14 +72,14 @@ static int read_circuit(rd *r, const st_node *knode, const st_node *map, cup_lcs
 
 /* The matrices of an lcs, owned until the LCS has copied them. */
 typedef struct lcs_parts {
-  mat A, B, C, E, G, P;
+  mat A, B, C, D, E, G, P;
   double *F, *Pdiag;
   const st_node *Pnode;
 } lcs_parts;
 
 static void parts_free(lcs_parts *q) {
   mat_free(&q->A); mat_free(&q->B); mat_free(&q->C);
-  mat_free(&q->E); mat_free(&q->G); mat_free(&q->P);
+  mat_free(&q->D); mat_free(&q->E); mat_free(&q->G); mat_free(&q->P);
   free(q->F); free(q->Pdiag);
 }
 
@@ -106,17 +106,18 @@ static int lcs_fail(rd *r, int st, const char *lib, const st_node *knode, const 
   if ((st == CUP_ERR_NOT_SPD || st == CUP_ERR_LINALG) && q->Pnode)
     return fail(r, st, q->Pnode, "lcs.P", "%s", lib);
   if (st == CUP_ERR_PB_CT && q->B.at) return fail(r, st, q->B.at, "lcs.B", "%s", lib);
+  if (q->D.at && !strncmp(lib, "D ", 2)) return fail(r, st, q->D.at, "lcs.D", "%s", lib);
   return fail(r, st, knode, "lcs", "%s", lib);
 }
 
 static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L) {
-  static const char *const known[] = {"A", "B", "C", "E", "F", "G", "P", "pb_tol", NULL};
+  static const char *const known[] = {"A", "B", "C", "D", "E", "F", "G", "P", "pb_tol", NULL};
   char why[64], lib[CUP_ERRMSG_LEN];
   lcs_parts q = {0};
   cup_lcs_desc d = {0};
   const st_node *nd;
   int n = 0, m = 0;
-  int st = need_map(r, map, "lcs", "a mapping with the matrices A, B, C, E, F, G, P");
+  int st = need_map(r, map, "lcs", "a mapping with the matrices A, B, C, D, E, F, G, P");
   if (!st) st = check_keys(r, map, "lcs", known);
   if (!st) st = need(r, map, "lcs", "C", &nd);
   if (!st) st = matrix(r, nd, "lcs.C", &q.C);
@@ -128,6 +129,8 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
   if (!st && q.B.a.p) st = matrix_dims(r, &q.B, "lcs.B", n, m, why);
   if (!st) st = lcs_matrix(r, map, "E", &q.E);
   if (!st) st = lcs_matrix(r, map, "G", &q.G);
+  if (!st) st = lcs_matrix(r, map, "D", &q.D);
+  if (!st && q.D.a.p) st = matrix_dims(r, &q.D, "lcs.D", m, m, "m x m, m = C's rows");
   if (!st) st = input_dim(r, &q, n, m, &d.p);
   if (!st && (nd = opt(map, "F"))) {
     snprintf(why, sizeof why, "m = %d from C's rows", m);
@@ -142,7 +145,7 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
   if (!st) {
     d.n = n; d.m = m; d.F = q.F;
     d.A = mat_view(&q.A); d.B = mat_view(&q.B); d.C = mat_view(&q.C);
-    d.E = mat_view(&q.E); d.G = mat_view(&q.G);
+    d.E = mat_view(&q.E); d.G = mat_view(&q.G); d.D = mat_view(&q.D);
     if ((st = cup_lcs_create(L, &d, lib))) st = lcs_fail(r, st, lib, knode, &q);
   }
   parts_free(&q);

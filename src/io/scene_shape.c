@@ -16,7 +16,7 @@ const char *const scene_wave_keys[CUP_WAVE_COUNT][SCENE_WAVE_KEYS] = {
 
 /* Keys whose value is a matrix or a vector: inline numbers or {file: ...}. */
 static int inline_or_file(const char *path) {
-  static const char *const keys[] = {"x0", "lcs.A", "lcs.B", "lcs.C", "lcs.E", "lcs.F", "lcs.G", "lcs.P", NULL};
+  static const char *const keys[] = {"x0", "lcs.A", "lcs.B", "lcs.C", "lcs.D", "lcs.E", "lcs.F", "lcs.G", "lcs.P", NULL};
   for (int k = 0; keys[k]; k++)
     if (!strcmp(path, keys[k])) return 1;
   return 0;
