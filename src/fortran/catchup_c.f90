@@ -32,7 +32,7 @@ module catchup_c
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
     c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_create_process, &
     c_cup_integrator_free, &
-    c_cup_integrator_run, c_cup_integrator_state, c_cup_scheme_name, c_cup_scheme_parse, &
+    c_cup_integrator_run, c_cup_integrator_state, c_cup_integrator_zeta, c_cup_scheme_name, c_cup_scheme_parse, &
     c_cup_output_name, c_cup_output_parse, c_cup_wave_name, c_cup_wave_parse
 
   interface
@@ -347,6 +347,12 @@ module catchup_c
       type(cup_run_info), intent(inout) :: info
       integer(c_int) :: st
     end function c_cup_integrator_run
+    function c_cup_integrator_zeta(I, zeta) bind(C, name="cup_integrator_zeta") result(st)
+      import :: c_ptr, c_int, c_double
+      type(c_ptr), value :: I
+      real(c_double), intent(out) :: zeta(*)
+      integer(c_int) :: st
+    end function c_cup_integrator_zeta
     function c_cup_integrator_state(I) bind(C, name="cup_integrator_state") result(x)
       import :: c_ptr
       type(c_ptr), value :: I
