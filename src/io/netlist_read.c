@@ -204,19 +204,18 @@ static int source_spec(rd *r, const nx_tok *t, int n, const char *elem, nl_sourc
   for (int k = 0; k < n && !st;) {
     const nx_tok *w = &t[k];
     if (nx_is(w, "dc")) {
-      if (++k >= n) return nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "DC needs a value");
+      if (++k >= n) { st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "DC needs a value"); break; }
       st = nx_value(&r->x, &t[k++], elem, &s->dc);
       have_dc = 1;
     } else if (nx_is(w, "ac")) {                   /* small-signal only: no effect on .tran */
       k++;
       for (int j = 0; j < 2 && k < n && looks_value(r, &t[k]); j++) k++;
     } else if (nx_is(w, "sin") || nx_is(w, "pulse") || nx_is(w, "pwl")) {
-      if (have_fn) return nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "more than one transient function");
+      if (have_fn) { st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "more than one transient function"); break; }
       have_fn = 1;
       s->fn = nx_is(w, "sin") ? NL_FN_SIN : nx_is(w, "pulse") ? NL_FN_PULSE : NL_FN_PWL;
       int max = s->fn == NL_FN_SIN ? 6 : s->fn == NL_FN_PULSE ? 7 : n, count = 0;
-      free(v);
-      if (!(v = malloc(sizeof(double) * (size_t)(max + 1)))) return nomem(r);
+      if (!(v = malloc(sizeof(double) * (size_t)(max + 1)))) { st = nomem(r); break; }
       k++;
       st = fn_args(r, t, n, &k, elem, w->s, v, max, &count);
       if (!st && s->fn == NL_FN_PWL) st = read_pwl(r, w, elem, s, v, count);
