@@ -21,28 +21,53 @@ static int copy_opt(cup_sparse *dst, int *has, const cup_csc *src, const char *n
   return cup_sparse_copy(dst, src, name, nrow, ncol, errmsg);
 }
 
-/* P B = C^T, compared column by column of B: (P b_j) against row j of C.
- * The message names the largest mismatch. */
+/* P B = C^T, compared column by column of B: (P b_j) against row j of C,
+ * on the entries either can have (a netlist's LCS has 10^4 columns: a
+ * dense sweep per column would be quadratic). The message names the
+ * largest mismatch (the first, by column then row, among equal ones). */
 static int check_pb(const cup_polyset *K, const cup_sparse *B, double tol, char *errmsg) {
   int n = K->n, m = K->m;
-  double *b = calloc((size_t)n, sizeof(double)), *pb = malloc(sizeof(double) * (size_t)n);
-  double *ct = calloc((size_t)n, sizeof(double));
-  if (!b || !pb || !ct) { free(b); free(pb); free(ct); return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory"); }
+  double *pb = calloc((size_t)n + 1, sizeof(double)), *ct = calloc((size_t)n + 1, sizeof(double));
+  int *rows = malloc(sizeof(int) * ((size_t)n + 1));
+  unsigned char *seen = calloc((size_t)n + 1, 1);
+  if (!pb || !ct || !rows || !seen) {
+    free(pb); free(ct); free(rows); free(seen);
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  }
   double worst = 0, scale = 0, pbv = 0, ctv = 0;
   int wi = -1, wj = -1;
   for (int j = 0; j < m; j++) {
-    memset(b, 0, sizeof(double) * (size_t)n);
-    for (int k = B->p[j]; k < B->p[j + 1]; k++) b[B->i[k]] = B->x[k];
-    cup_metric_apply(K, b, pb);
-    memset(ct, 0, sizeof(double) * (size_t)n);
-    for (int k = K->Ct.p[j]; k < K->Ct.p[j + 1]; k++) ct[K->Ct.i[k]] = K->Ct.x[k];
-    for (int i = 0; i < n; i++) {
+    int nr = 0;
+#define TOUCH(r) do { if (!seen[r]) { seen[r] = 1; rows[nr++] = (r); } } while (0)
+    for (int k = B->p[j]; k < B->p[j + 1]; k++) {          /* P b_j */
+      int i = B->i[k];
+      if (K->pkind == CUP_METRIC_SPARSE) {
+        for (int q = K->Pfull.p[i]; q < K->Pfull.p[i + 1]; q++) {
+          TOUCH(K->Pfull.i[q]);
+          pb[K->Pfull.i[q]] += K->Pfull.x[q] * B->x[k];
+        }
+      } else {
+        TOUCH(i);
+        pb[i] += (K->pkind == CUP_METRIC_DIAGONAL ? K->pd[i] : 1) * B->x[k];
+      }
+    }
+    for (int k = K->Ct.p[j]; k < K->Ct.p[j + 1]; k++) {
+      TOUCH(K->Ct.i[k]);
+      ct[K->Ct.i[k]] = K->Ct.x[k];
+    }
+#undef TOUCH
+    for (int a = 1; a < nr; a++)                             /* rows in order: short lists */
+      for (int b = a; b > 0 && rows[b - 1] > rows[b]; b--) { int t = rows[b]; rows[b] = rows[b - 1]; rows[b - 1] = t; }
+    for (int a = 0; a < nr; a++) {
+      int i = rows[a];
       scale = fmax(scale, fmax(fabs(pb[i]), fabs(ct[i])));
       double d = fabs(pb[i] - ct[i]);
       if (d > worst || isnan(d)) { worst = d; wi = i; wj = j; pbv = pb[i]; ctv = ct[i]; }
+      pb[i] = ct[i] = 0;
+      seen[i] = 0;
     }
   }
-  free(b); free(pb); free(ct);
+  free(pb); free(ct); free(rows); free(seen);
   if (wi >= 0 && !(worst <= tol * scale))
     return cup_fail(errmsg, CUP_ERR_PB_CT,
                     "P B differs from C^T: largest mismatch at (%d,%d): (P B) = %.17g but C^T = %.17g "
