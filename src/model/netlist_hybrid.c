@@ -136,9 +136,11 @@ static cholmod_sparse *to_cholmod(cup_netlist *nl, const nl_coo *t, int nrow, in
   cholmod_triplet *T = cholmod_allocate_triplet((size_t)nrow, (size_t)ncol, (size_t)t->n + 1, stype,
                                                 CHOLMOD_REAL, &nl->cm);
   if (!T) return NULL;
-  memcpy(T->i, t->i, sizeof(int) * (size_t)t->n);
-  memcpy(T->j, t->j, sizeof(int) * (size_t)t->n);
-  memcpy(T->x, t->x, sizeof(double) * (size_t)t->n);
+  if (t->n) {                                     /* no triplets: t's arrays are NULL */
+    memcpy(T->i, t->i, sizeof(int) * (size_t)t->n);
+    memcpy(T->j, t->j, sizeof(int) * (size_t)t->n);
+    memcpy(T->x, t->x, sizeof(double) * (size_t)t->n);
+  }
   T->nnz = (size_t)t->n;
   cholmod_sparse *A = cholmod_triplet_to_sparse(T, (size_t)t->n + 1, &nl->cm);
   cholmod_free_triplet(&T, &nl->cm);
