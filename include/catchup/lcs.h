@@ -48,6 +48,9 @@ int cup_lcs_inputs(const cup_lcs *L);
 const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
 /** 1 if G is absent or zero: K does not move. */
 int cup_lcs_fixed_set(const cup_lcs *L);
+/** 1 if D has a nonzero entry: not a sweeping process, only the theta
+ *  scheme runs it. */
+int cup_lcs_has_D(const cup_lcs *L);
 
 /** The paper's circuit (Sec. 7, after Acary-Brogliato Ex. 2.52): R1, R2, R3
  *  >= 0, L2, L3, C4 > 0, and g = G (2 entries, NULL for 0). Builds A, B, C,

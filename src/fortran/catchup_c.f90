@@ -27,7 +27,7 @@ module catchup_c
   public :: c_cup_input_create, c_cup_input_free, c_cup_input_add, c_cup_input_set_callback, &
     c_cup_input_dim, c_cup_input_is_constant, c_cup_input_eval, c_cup_input_integral, &
     c_cup_input_next_break
-  public :: c_cup_lcs_create, c_cup_lcs_free, c_cup_lcs_dim, c_cup_lcs_rows, c_cup_lcs_inputs, &
+  public :: c_cup_lcs_create, c_cup_lcs_free, c_cup_lcs_dim, c_cup_lcs_rows, c_cup_lcs_inputs, c_cup_lcs_has_D, &
     c_cup_lcs_polyset, c_cup_lcs_fixed_set, c_cup_lcs_circuit
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
     c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_create_process, &
@@ -264,6 +264,11 @@ module catchup_c
       type(c_ptr), value :: L
       integer(c_int) :: n
     end function c_cup_lcs_dim
+    function c_cup_lcs_has_D(L) bind(C, name="cup_lcs_has_D") result(f)
+      import :: c_ptr, c_int
+      type(c_ptr), value :: L
+      integer(c_int) :: f
+    end function c_cup_lcs_has_D
     function c_cup_lcs_rows(L) bind(C, name="cup_lcs_rows") result(n)
       import :: c_int, c_ptr
       type(c_ptr), value :: L

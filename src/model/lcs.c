@@ -235,6 +235,7 @@ int cup_lcs_rows(const cup_lcs *L) { return L ? L->m : 0; }
 int cup_lcs_inputs(const cup_lcs *L) { return L ? L->p : 0; }
 const cup_polyset *cup_lcs_polyset(const cup_lcs *L) { return L ? L->K : NULL; }
 int cup_lcs_fixed_set(const cup_lcs *L) { return L ? L->fixed : 1; }
+int cup_lcs_has_D(const cup_lcs *L) { return L ? L->has_D : 0; }
 
 /* A dense row-major r x c matrix as a CSC view into caller storage. */
 static cup_csc dense_view(int r, int c, const double *a, int *cp, int *ri, double *vx) {

@@ -24,6 +24,7 @@ program test_f_netlist
   call check(cup_netlist_row_name(nl, 1) == 'D1', 'row 1 is D1')
   call check(cup_netlist_input_name(nl, 1) == 'V1', 'input 1 is V1')
   call check(.not. cup_netlist_row_fixed(nl, 1), 'D1 is free (zeta is its current)')
+  call check(cup_lcs_has_D(cup_netlist_lcs(nl)), 'its LCS has D /= 0')
   block
     real(c_double) :: tstep, tstop
     call check(cup_netlist_tran(nl, tstep, tstop), '.tran given')
