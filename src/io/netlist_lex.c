@@ -7,6 +7,7 @@
 #include <string.h>
 #include <strings.h>
 #include "catchup.h"
+#include "util/linalg.h"
 #include "netlist_lex.h"
 
 /* ---- errors ------------------------------------------------------------------ */
@@ -25,10 +26,8 @@ int nx_fail(nx *x, int status, const nx_tok *at, const char *what, const char *f
   if (w >= 0 && (size_t)w < cap && what) w += snprintf(buf + w, cap - (size_t)w, "%s: ", what);
   va_list ap;
   va_start(ap, fmt);
-  if (w >= 0 && (size_t)w < cap) vsnprintf(buf + w, cap - (size_t)w, fmt, ap);
+  cup_vfail_at(buf, w, status, fmt, ap);
   va_end(ap);
-  for (char *p = buf; *p; p++)                  /* one line, always */
-    if (*p == '\n' || *p == '\r') *p = ' ';
   return status;
 }
 
@@ -94,13 +93,7 @@ int nx_is(const nx_tok *t, const char *w) { return t->kind == NX_WORD && !strcas
 /* ---- lines into tokens ------------------------------------------------------- */
 
 static int push_tok(nx *x, nx_kind kind, const char *s, size_t len, int line, int col, int origin) {
-  if (x->ntok == x->captok) {
-    int cap = x->captok ? 2 * x->captok : 256;
-    nx_tok *t = realloc(x->tok, sizeof *t * (size_t)cap);
-    if (!t) return CUP_ERR_NOMEM;
-    x->tok = t;
-    x->captok = cap;
-  }
+  if (cup_grow(&x->tok, &x->captok, x->ntok, sizeof *x->tok, 256)) return CUP_ERR_NOMEM;
   char *copy = strndup(s, len);
   if (!copy) return CUP_ERR_NOMEM;
   x->tok[x->ntok++] = (nx_tok){kind, copy, line, col, origin};
@@ -108,13 +101,7 @@ static int push_tok(nx *x, nx_kind kind, const char *s, size_t len, int line, in
 }
 
 static int push_card(nx *x) {
-  if (x->ncard == x->capcard) {
-    int cap = x->capcard ? 2 * x->capcard : 64;
-    nx_card *c = realloc(x->card, sizeof *c * (size_t)cap);
-    if (!c) return CUP_ERR_NOMEM;
-    x->card = c;
-    x->capcard = cap;
-  }
+  if (cup_grow(&x->card, &x->capcard, x->ncard, sizeof *x->card, 64)) return CUP_ERR_NOMEM;
   x->card[x->ncard++] = (nx_card){x->ntok, 0};
   return CUP_OK;
 }

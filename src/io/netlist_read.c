@@ -75,13 +75,7 @@ static int new_elem(rd *r, nl_kind kind, const nx_tok *name, nl_elem **out) {
   if (prev >= 0)
     return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate element name (first at line %d)",
                    c->elem[prev].line);
-  if (c->nelem == r->capelem) {
-    int cap = r->capelem ? 2 * r->capelem : 32;
-    nl_elem *e = realloc(c->elem, sizeof *e * (size_t)cap);
-    if (!e) return nomem(r);
-    c->elem = e;
-    r->capelem = cap;
-  }
+  if (cup_grow(&c->elem, &r->capelem, c->nelem, sizeof *c->elem, 32)) return nomem(r);
   nl_elem *e = &c->elem[c->nelem];
   memset(e, 0, sizeof *e);
   e->kind = kind;
@@ -91,6 +85,18 @@ static int new_elem(rd *r, nl_kind kind, const nx_tok *name, nl_elem **out) {
   c->nelem++;
   *out = e;
   return CUP_OK;
+}
+
+/* A new two-terminal element from card's first three tokens (name, nodes),
+ * the card holding at least min_n tokens ("expected 'NAME operands'"). */
+static int open_elem(rd *r, int card, nl_kind kind, int min_n, const char *operands, nl_elem **out) {
+  const nx_tok *name = TOK(r, card, 0);
+  int st = new_elem(r, kind, name, out);
+  if (!st && r->x.card[card].n < min_n)
+    return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s %s'", name->s, operands);
+  if (!st) st = node_of(r, TOK(r, card, 1), name->s, &(*out)->a);
+  if (!st) st = node_of(r, TOK(r, card, 2), name->s, &(*out)->b);
+  return st;
 }
 
 /* The set that replaces this element's value, if any: 1 and its tokens. */
@@ -114,11 +120,7 @@ static int read_passive(rd *r, int card, nl_kind kind) {
   int n = r->x.card[card].n;
   const nx_tok *name = TOK(r, card, 0);
   nl_elem *e;
-  int st = new_elem(r, kind, name, &e);
-  if (!st && n < 4)
-    return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s NODE1 NODE2 VALUE'", name->s);
-  if (!st) st = node_of(r, TOK(r, card, 1), name->s, &e->a);
-  if (!st) st = node_of(r, TOK(r, card, 2), name->s, &e->b);
+  int st = open_elem(r, card, kind, 4, "NODE1 NODE2 VALUE", &e);
   if (st) return st;
   int sfirst, sn, k = 4;
   int set = set_tokens(r, name->s, &sfirst, &sn);
@@ -252,10 +254,7 @@ static int read_source(rd *r, int card, nl_kind kind) {
   int n = r->x.card[card].n;
   const nx_tok *name = TOK(r, card, 0);
   nl_elem *e;
-  int st = new_elem(r, kind, name, &e);
-  if (!st && n < 3) return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s N+ N- [spec]'", name->s);
-  if (!st) st = node_of(r, TOK(r, card, 1), name->s, &e->a);
-  if (!st) st = node_of(r, TOK(r, card, 2), name->s, &e->b);
+  int st = open_elem(r, card, kind, 3, "N+ N- [spec]", &e);
   if (st) return st;
   int sfirst, sn;
   int set = set_tokens(r, name->s, &sfirst, &sn);
@@ -269,10 +268,7 @@ static int read_diode(rd *r, int card) {
   int n = r->x.card[card].n;
   const nx_tok *name = TOK(r, card, 0);
   nl_elem *e;
-  int st = new_elem(r, NL_D, name, &e);
-  if (!st && n < 3) return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s ANODE CATHODE [MODEL]'", name->s);
-  if (!st) st = node_of(r, TOK(r, card, 1), name->s, &e->a);
-  if (!st) st = node_of(r, TOK(r, card, 2), name->s, &e->b);
+  int st = open_elem(r, card, NL_D, 3, "ANODE CATHODE [MODEL]", &e);
   if (st) return st;
   int sfirst, sn;
   int set = set_tokens(r, name->s, &sfirst, &sn);
@@ -322,13 +318,7 @@ static int read_param(rd *r, int card) {
       return nx_fail(x, CUP_ERR_PARSE, name, name->s, "expected %s=VALUE", name->s);
     if (nx_hash_get(&x->parh, name->s) >= 0)
       return nx_fail(x, CUP_ERR_PARSE, name, name->s, "parameter defined twice");
-    if (x->npar == x->cappar) {
-      int cap = x->cappar ? 2 * x->cappar : 16;
-      nx_param *p = realloc(x->par, sizeof *p * (size_t)cap);
-      if (!p) return nomem(r);
-      x->par = p;
-      x->cappar = cap;
-    }
+    if (cup_grow(&x->par, &x->cappar, x->npar, sizeof *x->par, 16)) return nomem(r);
     nx_param *p = &x->par[x->npar];
     memset(p, 0, sizeof *p);
     if (!(p->name = strdup(name->s))) return nomem(r);
@@ -381,13 +371,7 @@ static int read_ic(rd *r, int card) {
     if (!nx_is(t, "v") || TOK(r, card, k + 1)->kind != NX_LP || TOK(r, card, k + 2)->kind != NX_WORD ||
         TOK(r, card, k + 3)->kind != NX_RP || TOK(r, card, k + 4)->kind != NX_EQ)
       return nx_fail(&r->x, CUP_ERR_PARSE, t, ".ic", "expected v(NODE)=VALUE (got '%.40s')", t->s);
-    if (c->nic == r->capic) {
-      int cap = r->capic ? 2 * r->capic : 8;
-      nl_ic *ic = realloc(c->ic, sizeof *ic * (size_t)cap);
-      if (!ic) return nomem(r);
-      c->ic = ic;
-      r->capic = cap;
-    }
+    if (cup_grow(&c->ic, &r->capic, c->nic, sizeof *c->ic, 8)) return nomem(r);
     nl_ic *ic = &c->ic[c->nic];
     const nx_tok *nd = TOK(r, card, k + 2);
     ic->line = nd->line;
@@ -402,13 +386,7 @@ static int read_ic(rd *r, int card) {
 
 static int add_probe(rd *r, const nx_tok *at, const char *text) {
   nl_circuit *c = r->c;
-  if (c->nprobe == r->capprobe) {
-    int cap = r->capprobe ? 2 * r->capprobe : 8;
-    nl_probe *p = realloc(c->probe, sizeof *p * (size_t)cap);
-    if (!p) return nomem(r);
-    c->probe = p;
-    r->capprobe = cap;
-  }
+  if (cup_grow(&c->probe, &r->capprobe, c->nprobe, sizeof *c->probe, 8)) return nomem(r);
   nl_probe *p = &c->probe[c->nprobe];
   if (!(p->text = strdup(text))) return nomem(r);
   p->line = at->line;
@@ -627,15 +605,9 @@ static int load(cup_netlist **out, const char *text, size_t len, const char *nam
   return st;
 }
 
-static int check_args(cup_netlist **out, const void *src, const char *const *sets, int nsets, char *errmsg) {
-  if (errmsg) errmsg[0] = '\0';
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "netlist: output pointer is NULL");
-  *out = NULL;
-  if (!src) return cup_fail(errmsg, CUP_ERR_ARG, "netlist: path or text is NULL");
-  if (nsets < 0 || (nsets > 0 && !sets)) return cup_fail(errmsg, CUP_ERR_ARG, "netlist: %d sets but no list", nsets);
-  for (int k = 0; k < nsets; k++)
-    if (!sets[k]) return cup_fail(errmsg, CUP_ERR_ARG, "netlist: set %d is NULL", k);
-  return CUP_OK;
+static int check_args(cup_netlist **out, const void *src, const char *const *list, int n, char *errmsg) {
+  if (out) *out = NULL;
+  return cup_load_args("netlist", "set", out != NULL, src, list, n, errmsg);
 }
 
 int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,

@@ -28,3 +28,14 @@ int cup_read_text(const char *path, char **text, size_t *len, char *errmsg) {
   *len = n;
   return CUP_OK;
 }
+
+int cup_load_args(const char *what, const char *item, int has_out, const void *src,
+                  const char *const *list, int n, char *errmsg) {
+  if (errmsg) errmsg[0] = '\0';
+  if (!has_out) return cup_fail(errmsg, CUP_ERR_ARG, "%s: output pointer is NULL", what);
+  if (!src) return cup_fail(errmsg, CUP_ERR_ARG, "%s: path or text is NULL", what);
+  if (n < 0 || (n > 0 && !list)) return cup_fail(errmsg, CUP_ERR_ARG, "%s: %d %ss but no list", what, n, item);
+  for (int k = 0; k < n; k++)
+    if (!list[k]) return cup_fail(errmsg, CUP_ERR_ARG, "%s: %s %d is NULL", what, item, k);
+  return CUP_OK;
+}

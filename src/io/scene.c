@@ -542,15 +542,9 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
   return CUP_OK;
 }
 
-static int check_args(cup_scene **s, const void *src, const char *const *ovr, int nov, char *errmsg) {
-  if (errmsg) errmsg[0] = '\0';
-  if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: output pointer is NULL");
-  *s = NULL;
-  if (!src) return cup_fail(errmsg, CUP_ERR_ARG, "scene: path or text is NULL");
-  if (nov < 0 || (nov > 0 && !ovr)) return cup_fail(errmsg, CUP_ERR_ARG, "scene: %d overrides but no list", nov);
-  for (int k = 0; k < nov; k++)
-    if (!ovr[k]) return cup_fail(errmsg, CUP_ERR_ARG, "scene: override %d is NULL", k);
-  return CUP_OK;
+static int check_args(cup_scene **s, const void *src, const char *const *list, int n, char *errmsg) {
+  if (s) *s = NULL;
+  return cup_load_args("scene", "override", s != NULL, src, list, n, errmsg);
 }
 
 int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,

@@ -21,10 +21,8 @@ int nl_fail(const nl_circuit *c, int e, char *errmsg, int status, const char *fm
                  : snprintf(errmsg, cap, "%s: ", c->file);
   va_list ap;
   va_start(ap, fmt);
-  if (w >= 0 && (size_t)w < cap) vsnprintf(errmsg + w, cap - (size_t)w, fmt, ap);
+  cup_vfail_at(errmsg, w, status, fmt, ap);
   va_end(ap);
-  for (char *p = errmsg; *p; p++)               /* one line, always */
-    if (*p == '\n' || *p == '\r') *p = ' ';
   return status;
 }
 
