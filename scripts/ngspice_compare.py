@@ -139,7 +139,11 @@ def run_ngspice(src, tstep, tstop, probes, options, tmp, model):
         raise RuntimeError("ngspice failed: %s" % (r.stdout + r.stderr)[-400:])
     d = np.loadtxt(out, ndmin=2)
     os.remove(out)
-    return {"run_s": float(m.group(1)), "wall_s": wall, "t": d[:, 0], "x": d[:, 1::2].T}
+    stop = re.search(r"Timestep too small; time = ([0-9.e+-]+)", r.stdout + r.stderr)
+    failed = None
+    if stop or "aborted" in r.stdout + r.stderr or d[-1, 0] < tstop * (1 - 1e-9):
+        failed = "stopped at t = %.3g s (timestep too small)" % (float(stop.group(1)) if stop else d[-1, 0])
+    return {"run_s": float(m.group(1)), "wall_s": wall, "t": d[:, 0], "x": d[:, 1::2].T, "failed": failed}
 
 
 def errors(ref_t, ref_x, t, x, probes):
@@ -150,6 +154,7 @@ def errors(ref_t, ref_x, t, x, probes):
     currents, and a sampled waveform misplaces a jump by up to a sample,
     an O(1) difference whatever the step."""
     ev = ei = 0.0
+    where = None                                    # (signal, time) of the worst voltage
     for k, p in enumerate(probes):
         peak = max(np.max(np.abs(ref_x[k])), 1e-300)
         jump = np.abs(np.diff(ref_x[k])) > 0.05 * peak
@@ -159,10 +164,12 @@ def errors(ref_t, ref_x, t, x, probes):
         d = np.abs(np.interp(ref_t, t, x[k]) - ref_x[k])[~near]
         e = np.max(d) / peak if np.all(np.isfinite(d)) else math.inf
         if p[0].lower() == "v":
+            if e > ev and np.isfinite(e):
+                where = (p, float(ref_t[~near][np.argmax(d)]))
             ev = max(ev, e)
         else:
             ei = max(ei, e)
-    return ev, ei
+    return ev, ei, where
 
 
 def compare_circuit(name, a, tmp, log):
@@ -171,7 +178,7 @@ def compare_circuit(name, a, tmp, log):
     base = int(round(tstop / tstep))
     ref = run_catchup(a.build, cir, 64 * base, base + 1, probes, tmp)
     half = run_catchup(a.build, cir, 32 * base, base + 1, probes, tmp)
-    ref_err = errors(ref["t"], ref["x"], half["t"], half["x"], probes)
+    ref_err = errors(ref["t"], ref["x"], half["t"], half["x"], probes)[:2]
     print("%s: reference n = %d (against n/2: %.1e V, %.1e A of the peaks)" % (name, 64 * base, *ref_err),
           file=sys.stderr)
     runs = []
@@ -185,18 +192,21 @@ def compare_circuit(name, a, tmp, log):
     rows = []
     for tool, label in dict.fromkeys((t, l) for t, l, _ in runs):
         rs = [r for t, l, r in runs if t == tool and l == label]
-        ev, ei = errors(ref["t"], ref["x"], rs[0]["t"], rs[0]["x"], probes)
-        rows.append({"circuit": name, "tool": tool, "config": label, "model": MODEL_FOR.get(name, MODEL), "run_s": statistics.median(r["run_s"] for r in rs),
+        failed = rs[0].get("failed")
+        ev, ei, where = (math.inf, math.inf, None) if failed else errors(ref["t"], ref["x"], rs[0]["t"],
+                                                                          rs[0]["x"], probes)
+        rows.append({"circuit": name, "tool": tool, "config": label, "model": MODEL_FOR.get(name, MODEL),
+                     "failed": failed, "worst_v_at": where, "run_s": statistics.median(r["run_s"] for r in rs),
                      "wall_s": statistics.median(r["wall_s"] for r in rs), "err_v": ev, "err_i": ei,
                      "ref_err_v": ref_err[0], "ref_err_i": ref_err[1], "reps": len(rs)})
         log.write(json.dumps(rows[-1]) + "\n")
     ng_best = min((r for r in rows if r["tool"] == "ngspice"), key=lambda r: r["err_v"])
     ng_plot = [r for t, l, r in runs if t == "ngspice" and l == ng_best["config"]][0]
-    plot(name, probes, ref, ng_plot, MODEL_FOR.get(name, MODEL))
+    plot(name, probes, ref, ng_plot, MODEL_FOR.get(name, MODEL), ng_best["config"])
     return rows
 
 
-def plot(name, probes, ref, ng, model):
+def plot(name, probes, ref, ng, model, setting):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -214,7 +224,8 @@ def plot(name, probes, ref, ng, model):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, ncol=2, loc="upper right")
     axes[-1, 0].set_xlabel("t (%s)" % unit)
-    axes[0, 0].set_title("%s: catchup (ideal diodes) and ngspice (%s, dashed)" % (name, model), fontsize=10)
+    axes[0, 0].set_title("%s: catchup (ideal diodes) and ngspice (%s, %s, dashed)" % (name, model, setting),
+                         fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.join(ROOT, "docs", "figures"), exist_ok=True)
     fig.savefig(os.path.join(ROOT, "docs", "figures", "circuit-%s.png" % name), dpi=110)
@@ -235,7 +246,8 @@ def section(rows):
            "Times are medians of interleaved rounds "
            "in one run: `run` is each tool's own count (ngspice's transient analysis time, 1 ms "
            "resolution; catchup-run's time in the integrator, with the signals and HDF5 writes), `process` "
-           "the whole command." % (ngspice_version(), MODEL), ""]
+           "the whole command (on circuits this small mostly each program's start-up: loading its libraries, "
+           "for catchup-run creating the HDF5 file)." % (ngspice_version(), MODEL), ""]
     for name in CIRCUITS:
         rs = [r for r in rows if r["circuit"] == name]
         if not rs:
@@ -245,8 +257,17 @@ def section(rows):
                 "| tool | setting | voltage error | current error | run | process |",
                 "|---|---|---:|---:|---:|---:|"]
         for r in rs:
-            out.append("| %s | %s | %.1e | %.1e | %.3g s | %.3g s |" % (r["tool"], r["config"], r["err_v"],
-                                                                         r["err_i"], r["run_s"], r["wall_s"]))
+            if r.get("failed"):
+                out.append("| %s | %s | %s | | %.3g s | %.3g s |" % (r["tool"], r["config"], r["failed"],
+                                                                    r["run_s"], r["wall_s"]))
+            else:
+                out.append("| %s | %s | %.1e | %.1e | %.3g s | %.3g s |" % (
+                    r["tool"], r["config"], r["err_v"], r["err_i"], r["run_s"], r["wall_s"]))
+        for r in rs:
+            if r["tool"] == "ngspice" and r.get("worst_v_at") and r["err_v"] >= 0.1:
+                out += ["", "ngspice %s: its worst voltage difference, %.2g times the peak, is in %s at t = "
+                        "%.4g s." % (
+                            r["config"], r["err_v"], r["worst_v_at"][0], r["worst_v_at"][1])]
         ng = min((r for r in rs if r["tool"] == "ngspice"), key=lambda r: r["err_v"])
         target = ng["err_v"]
         tol = VOLT_TOL * float(re.search(r"N=([0-9.e-]+)", ng["model"]).group(1)) / 0.01
