@@ -162,8 +162,8 @@ static int read_model(rd *r, const st_node *root, cup_scene *S) {
   if (c) return read_circuit(r, kc, c, &S->lcs);
   if (l) return read_lcs(r, kl, l, &S->lcs);
   if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
-  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist", "missing: the scene needs a model, circuit:, lcs: "
-              "or netlist:");
+  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist/set", "missing: the scene needs a model, circuit:, "
+              "lcs:, netlist: or set:");
 }
 
 /* ---- the input u(t) ------------------------------------------------------ */
