@@ -104,15 +104,20 @@ void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
     if (!ls->drow[i]) lam[i] = 0;
 }
 
+/* (m + 2) eps sum_j |A_ij| lambda_j: the rounding of row i of A lambda. */
+static double row_rounding(const cup_lcp_step *ls, const double *A, int i) {
+  double mag = 0;
+  for (int j = 0; j < ls->m; j++) mag += fabs(A[i + (size_t)j * ls->m]) * ls->lcp.lam[j];
+  return (ls->m + 2) * DBL_EPSILON * mag;
+}
+
 /* With D, a row of w may not depend on z at all (a diode fixed by the
  * other diodes' currents): aim it beyond the rounding of (M lambda)_i too,
  * known only once lambda is; 1 if some tau_i grew. */
 static int widen_aim(cup_lcp_step *ls, const double *q) {
   int m = ls->m, more = 0;
   for (int i = 0; i < m; i++) {
-    double mag = 0;
-    for (int j = 0; j < m; j++) mag += fabs(ls->M[i + (size_t)j * m]) * fabs(ls->lcp.lam[j]);
-    double want = 16 * (m + 2) * DBL_EPSILON * mag;
+    double want = 16 * row_rounding(ls, ls->M, i);
     if (want > ls->tau[i]) {
       ls->tau[i] += want;
       ls->qs[i] = q[i] - ls->tau[i];
@@ -132,13 +137,6 @@ static const double *effective_offset(cup_lcp_step *ls, const double *g) {
     ls->geff[i] = acc;
   }
   return ls->geff;
-}
-
-/* (m + 2) eps sum_j |A_ij| lambda_j: the rounding of row i of A lambda. */
-static double row_rounding(const cup_lcp_step *ls, const double *A, int i) {
-  double mag = 0;
-  for (int j = 0; j < ls->m; j++) mag += fabs(A[i + (size_t)j * ls->m]) * ls->lcp.lam[j];
-  return (ls->m + 2) * DBL_EPSILON * mag;
 }
 
 int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
