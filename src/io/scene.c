@@ -163,7 +163,7 @@ static int read_model(rd *r, const st_node *root, cup_scene *S) {
   if (l) return read_lcs(r, kl, l, &S->lcs);
   if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
   return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist/set", "missing: the scene needs a model, circuit:, "
-              "lcs:, netlist: or set:");
+              "lcs:, netlist:, set: or crowd:");
 }
 
 /* ---- the input u(t) ------------------------------------------------------ */
