@@ -19,5 +19,6 @@
 #include "catchup/integrator.h"
 #include "catchup/crowd.h"
 #include "catchup/scene.h"
+#include "catchup/netlist.h"
 
 #endif

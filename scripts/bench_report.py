@@ -13,6 +13,7 @@ import json
 import math
 import os
 import platform
+import re
 import subprocess
 import sys
 
@@ -291,8 +292,12 @@ def main():
               "(1e-12·S², 1e-8·S) and its measured error is shown). Times per projection: "
               "`cold` without warm start, `warm` along a sequence of slowly drifting points.", ""]
     projector_section(outdir, lines)
-    with open(os.path.join(ROOT, "BENCHMARKS.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
+    # sections other scripts generate between their markers (scripts/bench-vs-ngspice) stay
+    path = os.path.join(ROOT, "BENCHMARKS.md")
+    kept = re.findall(r"<!-- BEGIN (?!status)[^\n]*-->.*?<!-- END [^\n]*-->",
+                      open(path).read() if os.path.exists(path) else "", re.S)
+    with open(path, "w") as f:
+        f.write("\n".join(lines + [""] + kept) + "\n")
     print(f"bench_report: wrote BENCHMARKS.md and docs/bench/*.png from {outdir}", file=sys.stderr)
 
 

@@ -254,6 +254,42 @@ static void test_reference_vs_data(void **state) {
   sw_free(&s);
 }
 
+/* A netlist sweep (examples/circuits/rectifier-sweep.yaml): the variant
+ * RL-250 sets the load of the half-wave rectifier, whose D != 0 puts its
+ * reference on the theta scheme (second-order Richardson); that reference
+ * against an independent RK4 of C v' = max(0, (V - v)/Rs) - v/RL. */
+static double rect_rhs(double t, double v) {
+  return (fmax(0, (10 * sin(100 * 3.14159265358979323846 * t) - v) / 1) - v / 250) / 100e-6;
+}
+
+static void test_netlist_variants(void **state) {
+  (void)state;
+  cup_sweep *s = load_file(EX "/circuits/rectifier-sweep.yaml");
+  assert_int_equal(s->n_variants, 3);
+  assert_true(cup_lcs_has_D(cup_scene_lcs(s->var[1].scene)));
+  long S = s->samples;
+  double *x = malloc(sizeof(double) * (size_t)S);
+  sw_result r;
+  sw_run_job(s, 1, NULL, &r, x);
+  assert_int_equal(r.status, CUP_OK);
+  double T = cup_scene_options(s->var[1].scene)->T, h = T / ((double)(S - 1) * 200), v = 0, err = 0;
+  for (long j = 0; j + 1 < S; j++) {
+    err = fmax(err, fabs(x[j] - v));
+    for (int k = 0; k < 200; k++) {
+      double t = ((double)j * 200 + k) * h;
+      double k1 = rect_rhs(t, v), k2 = rect_rhs(t + h / 2, v + h / 2 * k1);
+      double k3 = rect_rhs(t + h / 2, v + h / 2 * k2), k4 = rect_rhs(t + h, v + h * k3);
+      v += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  }
+  err = fmax(err, fabs(x[S - 1] - v));
+  printf("# netlist variant RL-250: theta reference (n_ref = %ld) vs RK4: max |diff| = %.3g V\n",
+         s->var[1].n_ref, err);
+  assert_true(err < 1e-5);
+  free(x);
+  sw_free(&s);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_sha256_vectors),
@@ -263,6 +299,7 @@ int main(void) {
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_nearest_samples),
     cmocka_unit_test(test_reference_vs_data),
+    cmocka_unit_test(test_netlist_variants),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

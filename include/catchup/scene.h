@@ -9,6 +9,7 @@
 
 #include "catchup/integrator.h"
 #include "catchup/crowd.h"
+#include "catchup/netlist.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -50,6 +51,10 @@ const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "
 const char *cup_scene_eta_spec(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
 const char *cup_scene_text(const cup_scene *s);
+/** The scene's netlist when its model is `netlist:` (NULL otherwise), owned
+ *  by the scene; its LCS and input are the scene's. Signals are added to it
+ *  (cup_netlist_probe), so it is not const. */
+cup_netlist *cup_scene_netlist(const cup_scene *s);
 
 #ifdef __cplusplus
 }

@@ -4,13 +4,13 @@
  * FILE:LINE:COL and the dotted key; a variant's scene is loaded by the scene
  * loader itself, with the variant's `set` entries as overrides. */
 #define _POSIX_C_SOURCE 200809L
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "scene_tree.h"
+#include "read_text.h"
 #include "sha256.h"
 #include "sweep.h"
 
@@ -396,28 +396,10 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
 
 int sw_load(cup_sweep **s, const char *path, char *errmsg) {
   *s = NULL;
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: cannot open: %s", path, strerror(errno));
-    return CUP_ERR_IO;
-  }
-  size_t cap = 4096, n = 0, got;
-  char *buf = malloc(cap);
-  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0) {
-    n += got;
-    if (n == cap) {
-      char *nb = realloc(buf, cap *= 2);
-      if (!nb) free(buf);
-      buf = nb;
-    }
-  }
-  int err = ferror(f);
-  fclose(f);
-  if (!buf || err) {
-    free(buf);
-    snprintf(errmsg, SW_ERR_LEN, "%s: %s", path, err ? "read error" : "out of memory");
-    return err ? CUP_ERR_IO : CUP_ERR_NOMEM;
-  }
+  char *buf = NULL;
+  size_t n = 0;
+  int rt = cup_read_text(path, &buf, &n, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
+  if (rt) return rt;
   int st = sw_parse(s, buf, n, path, errmsg);
   free(buf);
   return st;

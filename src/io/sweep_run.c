@@ -119,7 +119,10 @@ double sw_max_error(const double *traj, const double *ref, long count) {
 }
 
 /* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection explicit
- * runs; the scheme is first order, so this removes the 1/n term. */
+ * runs; the scheme is first order, so this removes the 1/n term. An LCS
+ * with D != 0 (a netlist's diode behind a resistance) runs on the theta
+ * scheme only; at theta = 1/2 it is second order there (docs/netlist.md):
+ * x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3. */
 static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
   const sw_variant *v = &s->var[k];
   long count = s->samples * s->dim;
@@ -129,7 +132,8 @@ static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_r
     snprintf(r->message, sizeof r->message, "reference: out of memory");
     return;
   }
-  run_params rp = {v->n_ref, {0, 0}, {0, 0}, CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, 0, 0};
+  int theta = cup_lcs_has_D(cup_scene_lcs(v->scene)), order2 = theta && cup_scene_options(v->scene)->theta == 0.5;
+  run_params rp = {v->n_ref, {0, 0}, {0, 0}, theta ? CUP_SCHEME_THETA : CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, 0, 0};
   run_one(s, v, &rp, ro, r, coarse);
   if (r->status >= 0) {
     rp.n = 2 * v->n_ref;
@@ -137,7 +141,8 @@ static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_r
   }
   if (r->status >= 0) {
     r->correction = sw_max_error(traj, coarse, count);
-    for (long j = 0; j < count; j++) traj[j] = 2 * traj[j] - coarse[j];
+    for (long j = 0; j < count; j++)
+      traj[j] = order2 ? traj[j] + (traj[j] - coarse[j]) / 3 : 2 * traj[j] - coarse[j];
   } else {
     for (long j = 0; j < count; j++) traj[j] = NAN;
   }
