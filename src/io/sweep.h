@@ -101,8 +101,11 @@ void sw_free(cup_sweep **s);
 int sw_task_get(const cup_sweep *s, long id, sw_task *t);
 /* Relative cost of a job (references first: they are the costliest). */
 double sw_job_cost(const cup_sweep *s, long job);
-/* Jobs in the order to dispatch: references, then tasks by decreasing cost
- * (ties by task id). out: n_variants + n_tasks entries. */
+/* Jobs in the order to dispatch: references by decreasing cost, then the
+ * tasks in blocks of consecutive ids whose costs are within SW_BLOCK_SPREAD
+ * of each other, blocks by decreasing largest cost (ties: the lower ids).
+ * out: n_variants + n_tasks entries. */
+#define SW_BLOCK_SPREAD 4.0
 void sw_schedule(const cup_sweep *s, long *out);
 /* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
 char *sw_grid_text(const cup_sweep *s);
