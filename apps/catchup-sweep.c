@@ -48,7 +48,8 @@ enum { AHEAD = 2 };
 #define MAX_MESSAGE (1u << 20)   /* bytes of a batch's answer, unless one job needs more: it
                                   * arrives in ~10 rounds of fragments (see manager_mpi) */
 #define STOP_GRACE_SECONDS 10.0
-#define SHORT_POLL_US 50           /* the sleep between tests while an answer is in transit */
+#define SHORT_POLL_US 50           /* the sleep between tests while an answer is in transit, */
+#define SHORT_POLL_MAX_US 500      /* growing by 1/4 up to this on rank 0 (a descheduled worker) */
 
 static const char usage_text[] =
   "usage: mpirun -n K catchup-sweep SWEEP.yaml -o RESULTS.h5 [--resume] [--quiet]\n"
@@ -302,22 +303,45 @@ static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
 
 /* ---- computing a job (workers, or rank 0 alone) ---- */
 
+typedef struct {             /* a worker's answer to a batch, and its send */
+  char *buf;
+  size_t cap;
+  MPI_Request req;
+} outbuf;
+
 typedef struct {
   const cup_sweep *s;
   const hooks_t *hooks;
   double time_limit;
   size_t one;                /* bytes of a job's answer: sw_result + trajectory */
+  outbuf *out;               /* AHEAD answers (workers; NULL on rank 0 alone) */
+  int sending;               /* one of them is in transit */
   long steps;                /* for polling a stop message */
   int stop_msg;              /* the manager said stop */
 } computer;
 
-/* Every 1024 steps (~0.2 ms on the paper's circuit): has the manager asked
- * to stop? The probe also moves MPI along, so that a result sent earlier
- * reaches the manager while this rank computes. (Workers only.) */
+/* Test the answers in transit, which moves them along; whether one still is. */
+static int move_sends(outbuf *out) {
+  int pending = 0;
+  for (int b = 0; out && b < AHEAD; b++)
+    if (out[b].req != MPI_REQUEST_NULL) {
+      int done = 0;
+      MPI_Test(&out[b].req, &done, MPI_STATUS_IGNORE);
+      pending |= !done;
+    }
+  return pending;
+}
+
+/* Every 1024 steps (~0.1 ms on the paper's circuit): has the manager asked
+ * to stop? Every 128 while an answer is in transit, move it along: it moves
+ * only when this rank calls MPI, a round of calls on both sides per few
+ * fragments, and rank 0 tests for it every 50 us meanwhile. (Workers only.) */
 static int poll_stop(long k, double t, const cup_proj_info *pi, void *ctx) {
   (void)k; (void)t; (void)pi;
   computer *c = ctx;
-  if (++c->steps & 1023) return 0;
+  long step = ++c->steps;
+  if (c->sending && !(step & 127)) c->sending = move_sends(c->out);
+  if (step & 1023) return 0;
   int flag = 0;
   MPI_Iprobe(0, TAG_STOP, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
   if (flag) c->stop_msg = 1;
@@ -340,27 +364,18 @@ static void compute(computer *c, long job, sw_result *r, double *traj) {
 
 /* ---- worker ---- */
 
-typedef struct {
-  char *buf;
-  size_t cap;
-  MPI_Request req;
-} outbuf;
-
 /* Jobs ids[0..count) into buf as the manager takes them (msg_head, then
  * each result followed by its trajectory). Returns the count, short of
  * `count` when a stop interrupted a job (that is not a result). Between
- * jobs, the sends of earlier answers (out, when given) move along. */
-static int64_t run_batch(computer *c, const long *ids, int count, char *buf, outbuf *out) {
+ * jobs, the answers in transit move along. */
+static int64_t run_batch(computer *c, const long *ids, int count, char *buf) {
   msg_head h = {0, cpu_seconds(CLOCK_THREAD_CPUTIME_ID)};
   for (int j = 0; j < count && !c->stop_msg && !stop_signal; j++) {
     sw_result *r = (sw_result *)(void *)(buf + sizeof h + c->one * (size_t)h.count);
     compute(c, ids[j], r, (double *)(void *)(r + 1));
     if (r->status == CUP_ERR_INTERRUPTED && (c->stop_msg || stop_signal)) break;
     h.count++;
-    for (int b = 0; out && b < AHEAD; b++) {
-      int done = 0;
-      if (out[b].req != MPI_REQUEST_NULL) MPI_Test(&out[b].req, &done, MPI_STATUS_IGNORE);
-    }
+    if (c->sending) c->sending = move_sends(c->out);
   }
   h.cpu = cpu_seconds(CLOCK_THREAD_CPUTIME_ID) - h.cpu;
   memcpy(buf, &h, sizeof h);
@@ -375,13 +390,7 @@ static void wait_message(MPI_Status *status, outbuf *out) {
   for (long us = 50;; us = us < 1000 ? 2 * us : us) {
     MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, status);
     if (flag) return;
-    int sending = 0, done = 0;
-    for (int b = 0; b < AHEAD; b++)
-      if (out[b].req != MPI_REQUEST_NULL) {
-        MPI_Test(&out[b].req, &done, MPI_STATUS_IGNORE);
-        sending |= !done;
-      }
-    sleep_us(sending ? SHORT_POLL_US : us);
+    sleep_us(move_sends(out) ? SHORT_POLL_US : us);
   }
 }
 
@@ -389,7 +398,7 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
   size_t one = sizeof(sw_result) + sizeof(double) * (size_t)(s->samples * s->dim);
   outbuf out[AHEAD];
   for (int b = 0; b < AHEAD; b++) out[b] = (outbuf){NULL, 0, MPI_REQUEST_NULL};
-  computer c = {s, hooks, time_limit, one, 0, 0};
+  computer c = {s, hooks, time_limit, one, out, 0, 0, 0};
   long ids[MAX_BATCH];
   int next = 0;
   double cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
@@ -411,10 +420,11 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
       free(ob->buf);
       if (!(ob->buf = malloc(ob->cap = need))) MPI_Abort(MPI_COMM_WORLD, 1);
     }
-    int64_t n = run_batch(&c, ids, count, ob->buf, out);
+    int64_t n = run_batch(&c, ids, count, ob->buf);
     if (c.stop_msg || stop_signal) break;      /* a partial batch is not sent: the manager re-queues it */
     MPI_Isend(ob->buf, (int)(sizeof(msg_head) + one * (size_t)n), MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD,
               &ob->req);
+    c.sending = 1;
   }
   for (int b = 0; b < AHEAD; b++) wait_request(&out[b].req, SHORT_POLL_US);
   double cpu = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;   /* for the manager's account of the CPU time */
@@ -440,6 +450,7 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
 typedef struct {
   long ids[AHEAD][MAX_BATCH];
   int len[AHEAD];
+  double cost[AHEAD];        /* the batches' estimated costs */
   MPI_Request sent[AHEAD];   /* the sends of the batches */
   int head, out;             /* FIFO of batches sent and not answered */
   int alive;
@@ -460,6 +471,8 @@ static int feed(manager_t *m, wstate *ws, int workers) {
       wait_request(&w->sent[slot], 1000);
       int n = next_batch(m, workers, w->ids[slot]);
       w->len[slot] = n;
+      w->cost[slot] = 0;
+      for (int j = 0; j < n; j++) w->cost[slot] += m->cost[w->ids[slot][j]];
       w->out++;
       MPI_Isend(w->ids[slot], n, MPI_LONG, dest, TAG_WORK, MPI_COMM_WORLD, &w->sent[slot]);
     }
@@ -477,14 +490,30 @@ static void requeue(manager_t *m, wstate *w) {
   w->out = 0;
 }
 
+/* The longest rank 0 sleeps between probes while no answer is coming in:
+ * a quarter of the shortest batch under way, by the seconds per cost unit
+ * seen so far (a worker that finishes a batch has the next one, so its
+ * answer may wait that long), 1 ms before any job is done, within 1-20 ms.
+ * Each wake-up costs ~15 us of CPU time in a virtual machine. */
+static long idle_sleep_us(const manager_t *m, const wstate *ws) {
+  double shortest = INFINITY;
+  for (int w = 1; w < nranks; w++)
+    for (int b = 0; b < ws[w].out; b++) shortest = fmin(shortest, ws[w].cost[(ws[w].head + b) % AHEAD]);
+  double s = m->cost_done > 0 && isfinite(shortest) ? 0.25 * shortest * m->work_sum / m->cost_done : 1e-3;
+  return (long)(1e6 * fmin(20e-3, fmax(1e-3, s)));
+}
+
 /* Rank 0 waits for answers without spinning: when a probe shows that a
  * message has come, it posts a receive for it (one per worker at a time),
- * tests the receives under way, and sleeps in between — 200 us to 1 ms
- * while none is under way (a blocking receive would spin), SHORT_POLL_US
- * while one is: a large answer flows a few fragments at a time, each round
- * needing MPI calls on both sides, and long sleeps would stretch it until
- * the worker runs out of work. Returns 0 when every worker said goodbye,
- * -1 when some did not within the grace time after a stop. */
+ * tests the receives under way, and sleeps in between — from 200 us up to
+ * idle_sleep_us while none is under way (a blocking receive would spin),
+ * SHORT_POLL_US while one is: a large answer flows a few fragments at a
+ * time, each round needing MPI calls on both sides, and long sleeps would
+ * stretch it until the worker runs out of work. That sleep grows while
+ * nothing completes: on a loaded machine the worker may not be running,
+ * and each wake-up costs ~15 us of CPU time in a VM. Returns 0 when every
+ * worker said goodbye, -1 when some did not within the grace time after a
+ * stop. */
 static int manager_mpi(manager_t *m) {
   int workers = nranks - 1, live = workers, receiving = 0;
   wstate *ws = calloc((size_t)nranks, sizeof *ws);
@@ -500,7 +529,7 @@ static int manager_mpi(manager_t *m) {
     if (!(buf[w] = malloc(cap))) MPI_Abort(MPI_COMM_WORLD, 1);
   }
   int outstanding = feed(m, ws, workers), stopping = 0;
-  long us = 200;
+  long us = 200, fast = SHORT_POLL_US;     /* the sleeps: none, or some receive under way */
   double stop_t0 = 0;
   while (live > 0) {
     if (!stopping && (stop_signal || m->io_status || outstanding == 0)) {
@@ -526,11 +555,17 @@ static int manager_mpi(manager_t *m) {
     if (!flag || idx == MPI_UNDEFINED) {
       progress(m, 0);
       maybe_flush(m, 0);
-      sleep_us(receiving ? SHORT_POLL_US : us);
-      if (us < 1000) us = us * 3 / 2;
+      if (receiving) {
+        sleep_us(fast);
+        fast = fast < SHORT_POLL_MAX_US ? fast * 5 / 4 : fast;
+      } else {
+        sleep_us(us);
+        us = (long)fmin(1.5 * (double)us, (double)idle_sleep_us(m, ws));
+      }
       continue;
     }
     us = 200;
+    fast = SHORT_POLL_US;
     receiving--;
     double t0 = now_seconds();
     int src = idx;
@@ -566,13 +601,13 @@ static int manager_mpi(manager_t *m) {
 /* ---- manager: alone ---- */
 
 static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit) {
-  computer c = {m->s, hooks, time_limit, m->one, 0, 0};
+  computer c = {m->s, hooks, time_limit, m->one, NULL, 0, 0, 0};
   char *buf = malloc(sizeof(msg_head) + m->one * (size_t)m->max_batch);
   long ids[MAX_BATCH];
   if (!buf) { io_fail(m, CUP_ERR_NOMEM); return; }
   while (m->qhead < m->qlen && !stop_signal && !m->io_status) {
     int count = next_batch(m, 1, ids);
-    int64_t n = run_batch(&c, ids, count, buf, NULL);
+    int64_t n = run_batch(&c, ids, count, buf);
     double t0 = now_seconds();
     take_message(m, buf, sizeof(msg_head) + m->one * (size_t)n);
     maybe_flush(m, 0);
