@@ -10,8 +10,8 @@
 
 /* Batches hold about this much work (cost units ~ steps, ~0.1 us each on
  * the paper's circuit: a few ms): with two batches ahead, longer than the
- * manager's reply latency (its sleep is at most 1 ms, and an answer of
- * ~1 MB takes about ten rounds of its short polls to arrive). */
+ * manager's reply latency (it sleeps at most a quarter of a batch, and an
+ * answer of ~1 MB takes about ten rounds of its short polls to arrive). */
 #define BATCH_COST 50000.0
 #define FLUSH_SECONDS 1.0
 #define PROGRESS_SECONDS 0.25

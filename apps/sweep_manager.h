@@ -1,6 +1,7 @@
 /* sweep_manager — what rank 0 of catchup-sweep does with jobs and results,
- * MPI aside: the queue of jobs, each result into the results file
- * (src/io/sweep_h5.c), the tasks' errors against their variant's reference
+ * MPI aside: the queue of jobs and its batches, the results of a message
+ * into the results file at once (src/io/sweep_h5.c), the tasks' errors
+ * against their variant's reference
  * (held in memory until it is known when no trajectories are stored), the
  * regular flush and the progress line. The MPI protocol that brings the
  * results, and the run itself, are in catchup-sweep.c. */

@@ -313,6 +313,7 @@ static void test_batched_writes(void **state) {
   }
   sw_task_out swapped[2] = {out[1], out[0]};
   assert_int_equal(sw_file_write_tasks(f, swapped, 2), CUP_ERR_ARG);     /* not in order: nothing written */
+  assert_non_null(strstr(sw_file_errmsg(f), "cannot write task 1 (after task 2)"));
   assert_int_equal(sw_file_write_tasks(f, out, W), CUP_OK);
   double xref[K];
   for (int k = 0; k < K; k++) xref[k] = k;

@@ -442,7 +442,11 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   if (st || count <= 0) return st;
   long per = f->s->samples * f->s->dim;
   for (long j = 0; j < count; j++) {
-    if (t[j].task < 0 || t[j].task >= f->s->n_tasks || (j && t[j].task <= t[j - 1].task)) return CUP_ERR_ARG;
+    if (t[j].task < 0 || t[j].task >= f->s->n_tasks || (j && t[j].task <= t[j - 1].task)) {
+      snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot write task %ld (after task %ld): tasks go in increasing "
+               "order, each once", f->path, t[j].task, j ? t[j - 1].task : -1L);
+      return CUP_ERR_ARG;
+    }
     f->ids[j] = t[j].task;
     result_row(f, t[j].task, t[j].r, t[j].error, &f->rows[j]);
     if (f->runs_x >= 0) memcpy(f->x + per * j, t[j].traj, sizeof(double) * (size_t)per);
