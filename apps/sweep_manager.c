@@ -9,10 +9,13 @@
 #include "sweep_manager.h"
 
 /* Batches hold about this much work (cost units ~ steps, ~0.1 us each on
- * the paper's circuit: a few ms): with two batches ahead, longer than the
+ * the paper's circuit: ~20 ms): with two batches ahead, longer than the
  * manager's reply latency (it sleeps at most a quarter of a batch, and an
- * answer of ~1 MB takes about ten rounds of its short polls to arrive). */
-#define BATCH_COST 50000.0
+ * answer of ~1 MB takes about ten rounds of its short polls to arrive);
+ * each message costs rank 0 a few wake-ups, ~15 us of CPU time each in a
+ * VM (measured: 50,000 units gave rank 0 5 % of the CPU time on tasks of
+ * ~100 us, this 3.5 %). */
+#define BATCH_COST 200000.0
 #define FLUSH_SECONDS 1.0
 #define PROGRESS_SECONDS 0.25
 #define PROGRESS_LOG_SECONDS 10.0
