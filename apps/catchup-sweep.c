@@ -429,17 +429,20 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
   for (int b = 0; b < AHEAD; b++) wait_request(&out[b].req, SHORT_POLL_US);
   double cpu = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;   /* for the manager's account of the CPU time */
   MPI_Send(&cpu, 1, MPI_DOUBLE, 0, TAG_BYE, MPI_COMM_WORLD);
-  if (c.stop_msg || stop_signal) {             /* drain: the STOP (and batches sent ahead) */
-    double t0 = now_seconds();
-    int flag = 1;
-    while (flag && now_seconds() - t0 < 0.5) {
-      MPI_Status st;
-      MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
-      if (flag) {
-        MPI_Recv(ids, MAX_BATCH, MPI_LONG, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-        if (st.MPI_TAG == TAG_STOP) break;
-      }
+  /* After a stop, take what rank 0 sent until its STOP (for half a second at
+   * most: it sends none to a worker that left first), so that its sends of
+   * batches ahead complete: one of many ids is a rendezvous, which stays
+   * open until the receive. */
+  for (double t0 = now_seconds(); (c.stop_msg || stop_signal) && now_seconds() - t0 < 0.5;) {
+    int flag = 0;
+    MPI_Status st;
+    MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+    if (!flag) {
+      sleep_us(200);
+      continue;
     }
+    MPI_Recv(ids, MAX_BATCH, MPI_LONG, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (st.MPI_TAG == TAG_STOP) break;
   }
   for (int b = 0; b < AHEAD; b++) free(out[b].buf);
   return 0;
@@ -488,6 +491,27 @@ static void requeue(manager_t *m, wstate *w) {
     for (int j = w->len[slot] - 1; j >= 0; j--) m->queue[--m->qhead] = w->ids[slot][j];
   }
   w->out = 0;
+}
+
+/* Wait, within the grace time, for the sends of the batches to complete: a
+ * worker takes its batches before it leaves (after a stop, until the STOP).
+ * Should one not, its send is let go; returns whether one was. */
+static int finish_sends(wstate *ws) {
+  int abandoned = 0;
+  double t0 = now_seconds();
+  for (int w = 1; w < nranks; w++)
+    for (int b = 0; b < AHEAD; b++) {
+      int done = 0;
+      while (!done && ws[w].sent[b] != MPI_REQUEST_NULL && now_seconds() - t0 < STOP_GRACE_SECONDS) {
+        MPI_Test(&ws[w].sent[b], &done, MPI_STATUS_IGNORE);
+        if (!done) sleep_us(1000);
+      }
+      if (ws[w].sent[b] != MPI_REQUEST_NULL) {
+        MPI_Request_free(&ws[w].sent[b]);
+        abandoned = 1;
+      }
+    }
+  return abandoned;
 }
 
 /* The longest rank 0 sleeps between probes while no answer is coming in:
@@ -589,12 +613,11 @@ static int manager_mpi(manager_t *m) {
     progress(m, 0);
   }
   if (live > 0) return -1;   /* MPI_Abort follows: a receive under way keeps its buffer */
-  for (int w = 1; w < nranks; w++)   /* every worker received its batches before its goodbye */
-    for (int b = 0; b < AHEAD; b++) wait_request(&ws[w].sent[b], 1000);
+  int abandoned = finish_sends(ws);
   for (int w = 1; w < nranks; w++) free(buf[w]);
   free(buf);
   free(req);
-  free(ws);
+  if (!abandoned) free(ws);                   /* else MPI may still read a batch's ids */
   return 0;
 }
 
