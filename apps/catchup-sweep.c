@@ -488,7 +488,10 @@ static int feed(manager_t *m, wstate *ws, int workers) {
 static void requeue(manager_t *m, wstate *w) {
   for (int b = w->out - 1; b >= 0; b--) {
     int slot = (w->head + b) % AHEAD;
-    for (int j = w->len[slot] - 1; j >= 0; j--) m->queue[--m->qhead] = w->ids[slot][j];
+    for (int j = w->len[slot] - 1; j >= 0; j--) {
+      m->queue[--m->qhead] = w->ids[slot][j];
+      m->cost_queued += m->cost[w->ids[slot][j]];
+    }
   }
   w->out = 0;
 }

@@ -167,15 +167,19 @@ static int cmp_job(const void *a, const void *b) {
 }
 
 /* The next batch: jobs in queue order until the batch holds BATCH_COST of
- * work, fewer near the end so that the last batches spread over the workers;
- * sorted, so that its results come back in task order. */
+ * work, and at most 1/(2 x workers) of the work still in the queue, so that
+ * the last batches shrink and spread over the workers (guided scheduling:
+ * by the queue, not by the work still to finish, which counts the batches
+ * out, or a slow worker's batches ahead could be a large tail); sorted, so
+ * that its results come back in task order. */
 int next_batch(manager_t *m, int workers, long *ids) {
-  double target = fmin(BATCH_COST, m->cost_left / (2.0 * workers)), sum = 0;
+  double target = fmin(BATCH_COST, m->cost_queued / (2.0 * workers)), sum = 0;
   int n = 0;
   while (m->qhead < m->qlen && n < m->max_batch && (n == 0 || sum + m->cost[m->queue[m->qhead]] <= target)) {
     ids[n] = m->queue[m->qhead++];
     sum += m->cost[ids[n++]];
   }
+  m->cost_queued -= sum;
   qsort(ids, (size_t)n, sizeof *ids, cmp_job);
   return n;
 }
@@ -199,6 +203,7 @@ int setup_queue(manager_t *m) {
     if (done) { m->jobs_skipped++; continue; }
     m->queue[m->qlen++] = job;
     m->cost_left += m->cost[job];
+    m->cost_queued += m->cost[job];
   }
   free(order);
   return CUP_OK;

@@ -34,7 +34,8 @@ typedef struct {
   long *queue;               /* jobs to dispatch, in order */
   long qhead, qlen;
   double *cost;              /* per job */
-  double cost_left, cost_done;
+  double cost_left, cost_done;  /* work not done yet (queued or out), done */
+  double cost_queued;        /* work still in the queue */
   long jobs_total, jobs_done, jobs_skipped, failures;
   double t_start, last_flush, last_progress, busy;
   double work_sum;           /* seconds of the jobs done, each on its rank's clock */
