@@ -720,12 +720,6 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
 }
 
 int main(int argc, char **argv) {
-  /* Once ranks outnumber cores, Open MPI yields the core (sched_yield) in
-   * every test that finds nothing to do. These ranks never wait inside MPI
-   * (they test, then sleep), so that only adds a system call and a context
-   * switch to each test: a few percent of rank 0 on tiny tasks. A user's
-   * own setting wins. */
-  setenv("OMPI_MCA_mpi_yield_when_idle", "0", 0);
   MPI_Init(&argc, &argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &nranks);
