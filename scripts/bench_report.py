@@ -297,7 +297,8 @@ def sweep_section(outdir, lines):
               "instead of 3.6 s); the CPU shares and the speedup say what oversubscription costs.",
               "- This machine is shared with other sessions: wall times and the CPU time one "
               "process gets per second vary by 2-4x within minutes (the `by job CPU` column shows "
-              "how much of its 2 cores a run got). The CPU shares hold best under that noise.", ""]
+              "the share of its wall time a worker actually ran). The CPU shares hold best under "
+              "that noise.", ""]
     if os.path.exists(kept):
         lines += [open(kept).read().strip(), ""]
     else:
