@@ -559,18 +559,44 @@ static int by_cost(const void *a, const void *b) {
   return (x->job > y->job) - (x->job < y->job);
 }
 
+/* Tasks go out in blocks of consecutive ids, largest first: a block grows
+ * along the ids while its costs stay within SW_BLOCK_SPREAD of each other,
+ * and the blocks are ordered by their largest cost. The big tasks still
+ * start first and the small ones make the tail, as with a plain sort by cost
+ * (the estimates are rougher than that factor anyway), but a batch of small
+ * tasks is then mostly one range of ids, which rank 0 writes at once. */
 void sw_schedule(const cup_sweep *s, long *out) {
-  long V = s->n_variants, N = s->n_tasks;
+  long V = s->n_variants, N = s->n_tasks, nb = 0;
   keyed *k = malloc(sizeof *k * (size_t)(V + N));
-  if (!k) {                                  /* order only affects speed */
+  keyed *block = malloc(sizeof *block * (size_t)(N + 1));
+  long *first = malloc(sizeof *first * (size_t)(N + 1));
+  if (!k || !block || !first) {              /* order only affects speed */
     for (long j = 0; j < V + N; j++) out[j] = j;
+    free(k); free(block); free(first);
     return;
   }
   for (long j = 0; j < V + N; j++) k[j] = (keyed){sw_job_cost(s, j), j};
   qsort(k, (size_t)V, sizeof *k, by_cost);
-  qsort(k + V, (size_t)N, sizeof *k, by_cost);
-  for (long j = 0; j < V + N; j++) out[j] = k[j].job;
+  for (long j = 0; j < V; j++) out[j] = k[j].job;
+  for (long t = 0; t < N; nb++) {           /* block nb: its largest cost, its index */
+    double lo = k[V + t].cost, hi = lo;
+    first[nb] = t;
+    for (t++; t < N; t++) {
+      double c = k[V + t].cost, l = fmin(lo, c), h = fmax(hi, c);
+      if (h > SW_BLOCK_SPREAD * l) break;
+      lo = l;
+      hi = h;
+    }
+    block[nb] = (keyed){hi, nb};
+  }
+  first[nb] = N;
+  qsort(block, (size_t)nb, sizeof *block, by_cost);
+  long at = V;
+  for (long b = 0; b < nb; b++)
+    for (long t = first[block[b].job]; t < first[block[b].job + 1]; t++) out[at++] = V + t;
   free(k);
+  free(block);
+  free(first);
 }
 
 /* ---- grid text ---------------------------------------------------------------- */
