@@ -75,7 +75,8 @@ static void exosystem(cup_adaptive *A) {
   for (int k = 0; k < u->nterms; k++) A->U[u->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
   cup_input_gen_dynamics(u, A->first_state, A->W, nw);
   for (int k = 0; k < u->nterms; k++)
-    if (u->terms[k].kind == CUP_WAVE_SINE && u->terms[k].omega > 0)
+    if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
+        u->terms[k].omega > 0)
       A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
 }
 
@@ -95,6 +96,10 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   if (u && D->p > 0 && cup_input_dim(u) != D->p)
     return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the %s expects %d",
                     cup_input_dim(u), D->what, D->p);
+  if (D->p > 0) {
+    int st = cup_input_gen_check(u, "adaptive", errmsg);
+    if (st) return st;
+  }
   cup_adaptive *A = calloc(1, sizeof *A);
   if (!A) return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   A->F = K->g0;

@@ -76,6 +76,10 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
   fs->nw = 0;
   fs->gen_of_term = zalloc((size_t)nterms + 1, sizeof(int), &fail);
   if (!fail) fs->nw = cup_input_gen_dim(u, fs->gen_of_term);
+  if (!fail) {
+    int st = cup_input_gen_check(u, "exponential", errmsg);
+    if (st) return st;
+  }
   int na = fs->na = n + fs->nw;
   if (na > CUP_EXPONENTIAL_MAX_DIM)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,

@@ -75,6 +75,12 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
       memcpy(t.t, w->t, sizeof(double) * (size_t)t.np);
       memcpy(t.v, w->v, sizeof(double) * (size_t)t.np);
       break;
+    case CUP_WAVE_PULSE:
+    case CUP_WAVE_DAMPED_SINE: {
+      int st = cup_spice_term_init(&t, w, errmsg);
+      if (st) return st;
+      break;
+    }
     default:
       return cup_fail(errmsg, CUP_ERR_ARG, "input: unknown waveform kind %d", (int)w->kind);
   }
@@ -104,6 +110,7 @@ int cup_input_is_constant(const cup_input *u) {
     const cup_term *t = &u->terms[k];
     if ((t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_SQUARE) && t->amp != 0 && t->omega != 0) return 0;
     if (t->kind == CUP_WAVE_PWL && t->np > 1) return 0;
+    if ((t->kind == CUP_WAVE_PULSE || t->kind == CUP_WAVE_DAMPED_SINE) && !cup_spice_term_constant(t)) return 0;
   }
   return 1;
 }
@@ -169,6 +176,7 @@ double cup_term_value(const cup_term *w, double t) {
     case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
     case CUP_WAVE_SQUARE: return w->amp * sign_sin_q(square_q(w, t));
     case CUP_WAVE_PWL: return pwl_value(w, t);
+    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_value(w, t);
   }
   return 0;
 }
@@ -186,6 +194,7 @@ double cup_term_integral(const cup_term *w, double a, double b) {
       return w->amp * M_PI / w->omega * (sign_sin_q_integral(square_q(w, b)) -
                                          sign_sin_q_integral(square_q(w, a)));
     case CUP_WAVE_PWL: return pwl_integral(w, a, b);
+    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_integral(w, a, b);
   }
   return 0;
 }
@@ -205,7 +214,18 @@ int cup_input_eval(const cup_input *u, double t, double *out) {
 /* ---- exosystem ------------------------------------------------------------------ */
 
 int cup_term_gen_states(const cup_term *t) {
-  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL ? 2 : 1;
+  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE ||
+         t->kind == CUP_WAVE_DAMPED_SINE ? 2 : 1;
+}
+
+/* Before its delay a damped sine is constant, which its generator (a damped
+ * rotation) cannot hold. */
+int cup_input_gen_check(const cup_input *u, const char *scheme, char *errmsg) {
+  for (int k = 0; u && !u->fn && k < u->nterms; k++)
+    if (u->terms[k].kind == CUP_WAVE_DAMPED_SINE && u->terms[k].delay > 0)
+      return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "%s scheme: a damped sine with a delay (input "
+                      "term %d) is not supported; use the theta or implicit scheme", scheme, k);
+  return CUP_OK;
 }
 
 int cup_input_gen_dim(const cup_input *u, int *first_state) {
@@ -222,10 +242,12 @@ void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *
   for (int k = 0; u && !u->fn && k < u->nterms; k++) {
     const cup_term *t = &u->terms[k];
     int g = first_state[k];
-    if (t->kind == CUP_WAVE_SINE) {
-      W[g + (size_t)(g + 1) * ld] = t->omega;     /* s' = om c */
-      W[(g + 1) + (size_t)g * ld] = -t->omega;    /* c' = -om s */
-    } else if (t->kind == CUP_WAVE_PWL) {
+    if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) {
+      double d = t->kind == CUP_WAVE_DAMPED_SINE ? t->damping : 0;
+      W[g + (size_t)(g + 1) * ld] = t->omega;     /* s' = om c - d s */
+      W[(g + 1) + (size_t)g * ld] = -t->omega;    /* c' = -om s - d c */
+      W[g + (size_t)g * ld] = W[(g + 1) + (size_t)(g + 1) * ld] = -d;
+    } else if (t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE) {
       W[g + (size_t)(g + 1) * ld] = 1;             /* v' = slope */
     }
   }
@@ -243,6 +265,13 @@ void cup_input_gen_values(const cup_input *u, const int *first_state, double a, 
         wk[1] = t->amp * cos(t->omega * a + t->phase);
         break;
       case CUP_WAVE_SQUARE: wk[0] = cup_term_value(t, mid); break;
+      case CUP_WAVE_DAMPED_SINE: {                   /* no delay (cup_input_gen_check) */
+        double e = t->amp * exp(-t->damping * a);
+        wk[0] = e * sin(t->omega * a + t->phase);
+        wk[1] = e * cos(t->omega * a + t->phase);
+        break;
+      }
+      case CUP_WAVE_PULSE:
       case CUP_WAVE_PWL: {
         double va = cup_term_value(t, a);
         wk[0] = va;
@@ -325,6 +354,8 @@ double cup_input_next_break(const cup_input *u, double t) {
     } else if (w->kind == CUP_WAVE_PWL) {
       for (int i = 0; i < w->np; i++)
         if (w->t[i] > t) { next = fmin(next, w->t[i]); break; }
+    } else if (w->kind == CUP_WAVE_PULSE || w->kind == CUP_WAVE_DAMPED_SINE) {
+      next = fmin(next, cup_spice_term_break(w, t));
     }
   }
   return next;

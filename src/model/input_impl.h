@@ -12,6 +12,8 @@ typedef struct cup_term {
   double value, amp, omega, phase;  /* omega = 2 pi frequency */
   int np;
   double *t, *v;
+  double delay, damping;                    /* PULSE, DAMPED_SINE */
+  double value2, rise, fall, width, period; /* PULSE */
 } cup_term;
 
 struct cup_input {
@@ -29,6 +31,13 @@ typedef struct cup_quad_ws {
   double *buf;          /* p entries for the callback */
 } cup_quad_ws;
 
+/* The SPICE source functions (input_spice.c): PULSE and DAMPED_SINE. */
+int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg);
+double cup_spice_term_value(const cup_term *t, double tt);
+double cup_spice_term_integral(const cup_term *t, double a, double b);
+double cup_spice_term_break(const cup_term *t, double tt);   /* the next corner after tt, or INFINITY */
+int cup_spice_term_constant(const cup_term *t);
+
 /* One term's value at t (its component's share of u(t)). */
 double cup_term_value(const cup_term *w, double t);
 /* One term's exact integral over [a, b]. */
@@ -36,10 +45,13 @@ double cup_term_integral(const cup_term *w, double a, double b);
 
 /* The built-in waveforms as the output of a linear exosystem on each interval
  * without breakpoints: w' = W w, u = U w. States per term: constant 1
- * (w' = 0), sine 2 (s' = om c, c' = -om s, the input is s), square 1
- * (piecewise constant), table 2 (v' = slope). Used by the exponential free
+ * (w' = 0), sine 2 (s' = om c, c' = -om s, the input is s; damped: minus
+ * d s, d c), square 1 (piecewise constant), table and pulse 2 (v' = slope). Used by the exponential free
  * step and the adaptive scheme; callbacks have no exosystem. */
 int cup_term_gen_states(const cup_term *t);
+/* CUP_ERR_UNSUPPORTED (naming the scheme and the term) for a waveform the
+ * exosystem cannot hold: a damped sine with a delay. */
+int cup_input_gen_check(const cup_input *u, const char *scheme, char *errmsg);
 /* Total exosystem states of u (0 for a callback or NULL); first_state[k]
  * (if not NULL, nterms entries) gets the first state of term k. */
 int cup_input_gen_dim(const cup_input *u, int *first_state);
