@@ -199,9 +199,13 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   char text[128];
   cup_lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
-                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state "
-                  "does not fix): use the theta scheme", cup_scheme_name(scheme), text, k == 1 ? "has" : "have");
+  const char *why = scheme == CUP_SCHEME_ADAPTIVE
+                        ? "its active sets' manifolds C_J x + G_J u + F_J = 0 leave out D zeta_J, which it does "
+                          "not integrate yet"
+                        : "it projects onto K(t) = {C x + G u + F >= 0}, which D != 0 does not define";
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (%s); %s %s D != 0 (a diode whose "
+                  "current the state does not fix): use the theta scheme", cup_scheme_name(scheme), why, text,
+                  k == 1 ? "has" : "have");
 }
 
 /* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
