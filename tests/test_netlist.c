@@ -378,6 +378,61 @@ static void test_rl_closed_form(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* The adaptive scheme's zeta (cup_integrator_zeta in the sink) gives the
+ * RL rectifier's diode voltage: v(in,a) = 0 while it conducts, the source
+ * 10 sin(w t) while it blocks (i = 0, so v(a) = R i + L i' = 0); and v(a)
+ * the other way round. Samples within 1e-6 s of a switch are left out. */
+typedef struct sig_run { cup_netlist *nl; const cup_integrator *I; double t[1001], s[1001][2]; long n; } sig_run;
+
+static int keep_signals(long k, double t, const double *x, void *ctx) {
+  (void)k;
+  sig_run *r = ctx;
+  double z[4], out[2];
+  if (r->n > 1000 || cup_integrator_zeta(r->I, z) || cup_netlist_signals(r->nl, t, x, z, out)) return 1;
+  r->t[r->n] = t;
+  memcpy(r->s[r->n++], out, sizeof out);
+  return 0;
+}
+
+static void test_rl_adaptive_signals(void **state) {
+  (void)state;
+  rl q = rl_example();
+  static sig_run r;
+  char err[CUP_ERRMSG_LEN];
+  r.nl = load_ok(CIR "/rl-halfwave.cir", NULL, 0);
+  assert_int_equal(cup_netlist_probe(r.nl, "v(in,a)", err), 0);
+  assert_int_equal(cup_netlist_probe(r.nl, "v(a)", err), 1);
+  assert_int_equal(cup_lcs_rows(cup_netlist_lcs(r.nl)), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.T = 0.04;
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = 1e-9;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 1001;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, cup_netlist_lcs(r.nl), cup_netlist_input(r.nl), &o, err), CUP_OK);
+  r.I = I;
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(r.nl), keep_signals, &r, &info), CUP_OK);
+  assert_int_equal(r.n, 1001);
+  double worst = 0, Tp = 2 * M_PI / q.w;
+  long blocking = 0;
+  for (long k = 1; k < r.n; k++) {
+    double t = r.t[k], s = fmod(t, Tp), V = q.V * sin(q.w * t);
+    if (fabs(s - q.toff) < 1e-6 || s < 1e-6 || Tp - s < 1e-6) continue;
+    int on = s < q.toff;
+    blocking += !on;
+    worst = fmax(worst, fmax(fabs(r.s[k][0] - (on ? 0 : V)), fabs(r.s[k][1] - (on ? V : 0))));
+  }
+  print_message("RL rectifier, adaptive: v(in,a) and v(a) against the closed form: max error %.3g V "
+                "(%ld blocking samples)\n", worst, blocking);
+  assert_true(blocking > 100);
+  assert_true(worst <= 1e-6);
+  cup_integrator_free(&I);
+  cup_netlist_free(&r.nl);
+}
+
 /* ---- D != 0: the rectifiers against an independent integration ------------------------ */
 
 /* With ideal diodes and a source resistance the RC rectifiers are ODEs with
@@ -539,6 +594,7 @@ int main(void) {
     cmocka_unit_test(test_doubler),
     cmocka_unit_test(test_signals),
     cmocka_unit_test(test_rl_closed_form),
+    cmocka_unit_test(test_rl_adaptive_signals),
     cmocka_unit_test(test_rectifiers_with_D),
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_mutations),

@@ -226,7 +226,10 @@ const double *cup_integrator_state(const cup_integrator *I);
  *  the theta step's LCP solution, or the projection's multipliers divided
  *  by h (the impulse of the step over its length); 0 before the first step.
  *  Valid inside the sink, for the state it receives (a netlist's diode
- *  currents and voltages, cup_netlist_signals). CUP_ERR_UNSUPPORTED for an
+ *  currents and voltages, cup_netlist_signals). The adaptive scheme gives
+ *  the multipliers of the active set that holds from the sample's time on
+ *  (at an event, the one chosen there), and zeros at t = 0 and on its
+ *  catching-up steps across accumulating events. CUP_ERR_UNSUPPORTED for an
  *  integrator from cup_integrator_create_process. */
 int cup_integrator_zeta(const cup_integrator *I, double *zeta);
 

@@ -138,6 +138,8 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->uerr = take((size_t)p, sizeof(double), &fail);
   A->wa = take((size_t)nw, sizeof(double), &fail);
   A->wt = take((size_t)nw, sizeof(double), &fail);
+  A->zw = take((size_t)nw, sizeof(double), &fail);
+  A->zy = take((size_t)na, sizeof(double), &fail);
   A->lcpM = take((size_t)m * m, sizeof(double), &fail);
   A->touch = take((size_t)m, 1, &fail);
   A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), &fail);
@@ -194,7 +196,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et);
   free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->lcpM); free(A->touch);
-  free(A->samp); free(A->coef);
+  free(A->samp); free(A->coef); free(A->zw); free(A->zy);
   free(A);
   *Ap = NULL;
 }

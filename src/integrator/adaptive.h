@@ -20,5 +20,10 @@ void cup_adaptive_free(cup_adaptive **A);
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info);
 const double *cup_adaptive_state(const cup_adaptive *A);
+/* Inside the sink: zeta at the output time (m entries), the multipliers of
+ * the active set that holds from there (at an event or a breakpoint, the one
+ * chosen there; zeros at t = 0 and on catching-up steps across accumulating
+ * events, whose multipliers are the projections' impulses). */
+int cup_adaptive_zeta(cup_adaptive *A, double *zeta);
 
 #endif

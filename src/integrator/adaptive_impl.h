@@ -95,6 +95,10 @@ struct cup_adaptive {
   double zeno[AD_ZENO_RING]; /* times and rows of the last changes of the active set */
   int zeno_row[AD_ZENO_RING];
   long nzeno;
+  /* the multipliers at an output time (cup_adaptive_zeta, inside the sink) */
+  const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
+  double zt;
+  double *zw, *zy;          /* nw, na */
 };
 
 /* One run's progress (adaptive_run.c). */

@@ -99,8 +99,11 @@ static int emit(cup_adaptive *A, ad_run *R) {
   R->est_max = fmax(R->est_max, estimate_now(A, R));
   if (!R->sink) return CUP_OK;
   R->info->samples++;
-  if (R->sink(R->steps, R->t, A->x, R->sink_ctx))
-    return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
+  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
+  A->zt = R->t;
+  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
+  A->zmd = NULL;
+  if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
   return CUP_OK;
 }
 
@@ -184,6 +187,23 @@ static int inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *e
   if (!A->nw) return CUP_OK;
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
   cup_input_gen_values(A->u, A->first_state, t0, t1, w);
+  return CUP_OK;
+}
+
+/* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
+ * state and the input's states from the output time on. */
+int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
+  const ad_mode *md = A->zmd;
+  for (int i = 0; i < A->m; i++) zeta[i] = 0;
+  if (!md) return CUP_OK;
+  double t = A->zt, tb = cup_input_next_break(A->u, t);
+  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
+  if (A->nw && A->callback && poly_input(A, t, t < A->o.T ? h : -h, A->zw, A->uerr))
+    return CUP_ERR_CALLBACK;
+  if (A->nw && !A->callback) cup_input_gen_values(A->u, A->first_state, t, t + h, A->zw);
+  ad_lift(A, md, A->x, A->zw, A->zy);
+  for (int i = 0; i < A->m; i++)
+    if (md->is_zeta[i]) zeta[i] = cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
   return CUP_OK;
 }
 

@@ -451,6 +451,7 @@ const double *cup_integrator_state(const cup_integrator *I) {
 int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I || !zeta) return CUP_ERR_ARG;
   if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
+  if (I->ad) return cup_adaptive_zeta(I->ad, zeta);
   const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
   for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
