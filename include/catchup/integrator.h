@@ -89,7 +89,8 @@ typedef int (*cup_rhs_fn)(double t, const double *x, double *f, void *ctx);
  *  from Fortran (bind(C)). */
 typedef int (*cup_rhs_integral_fn)(double t0, double t1, const double *x, double *F, void *ctx);
 /** A change of the active set (adaptive scheme): row (0-based) turns on
- *  (on = 1: its diode conducts, the constraint holds with zeta >= 0) or
+ *  (on = 1: the constraint holds with zeta >= 0; a diode of the paper's
+ *  circuit conducts; a netlist row whose current the state fixes blocks) or
  *  off (on = 0) at time t (the located root; for a breakpoint, its time).
  *  Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
 typedef int (*cup_event_fn)(double t, int row, int on, void *ctx);
