@@ -465,7 +465,8 @@ static void rc_reference(const rc *q, double T, long n, double *out) {   /* out[
 }
 
 /* v(out) (state 0) by the theta scheme at n = 3000 and 30000 against the
- * reference at the 1001 samples; returns the two errors. */
+ * reference at the 1001 samples; returns the two errors. The step-doubling
+ * estimate (a run at n/2 with the same D) is within 10x of them. */
 static void rc_errors(const char *file, const rc *q, double err[2]) {
   cup_netlist *nl = load_ok(file, NULL, 0);
   char msg[CUP_ERRMSG_LEN];
@@ -481,6 +482,7 @@ static void rc_errors(const char *file, const rc *q, double err[2]) {
     o.eps = o.eta = (cup_schedule){0, 0};
     o.output = CUP_OUTPUT_SAMPLES;
     o.output_samples = 1001;
+    o.estimate = 1;
     cup_integrator *I = NULL;
     cup_run_info info;
     static traj a;
@@ -491,7 +493,9 @@ static void rc_errors(const char *file, const rc *q, double err[2]) {
     cup_integrator_free(&I);
     err[r] = 0;
     for (long k = 0; k < a.n; k++) err[r] = fmax(err[r], fabs(a.x[k][0] - ref[k]));
-    print_message("%s theta n %5ld: max |v - v_ref| = %.3e V\n", strrchr(file, '/') + 1, o.n, err[r]);
+    print_message("%s theta n %5ld: max |v - v_ref| = %.3e V, step-doubling estimate %.3e V\n",
+                  strrchr(file, '/') + 1, o.n, err[r], info.err_est);
+    assert_true(info.err_est >= 0.1 * err[r] && info.err_est <= 10 * err[r]);
   }
   free(ref);
   cup_netlist_free(&nl);

@@ -325,6 +325,7 @@ static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_
   cup_integrator *H = I->half = integrator_new(&h, errmsg, &st);
   if (!H) return st;
   H->u = I->u;
+  H->L = I->L;                                   /* the theta step takes D from it */
   H->n = I->n; H->m = I->m; H->p = I->p;
   H->S = I->S; H->K = I->K; H->G = I->G; H->fixed = I->fixed;
   return setup(H, D, pd, errmsg);
