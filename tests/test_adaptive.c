@@ -466,6 +466,61 @@ static void test_step_doubling_process(void **state) {
   }
 }
 
+/* SPICE sources through the exosystem (input.c: a pulse as a table's value
+ * and slope between its corners, which are breakpoints; a damped sine as a
+ * damped rotation): x' = -500 x + u(t) with a row that never acts, against
+ * classical RK4 at 1 us, whose grid holds the pulse's corners (every 250
+ * us), at the 201 output times t = k 1e-4. */
+typedef struct { const cup_input *u; double ref[201]; } spice_ref;
+
+static double spice_rhs(const cup_input *u, double t, double x) {
+  double v = 0;
+  assert_int_equal(cup_input_eval(u, t, &v), CUP_OK);
+  return -500 * x + v;
+}
+
+static double spice_exact(double t, int i, const void *par) {
+  (void)i;
+  const spice_ref *r = par;
+  long k = lround(t / 1e-4);
+  assert_true(k >= 0 && k <= 200 && fabs(t - (double)k * 1e-4) < 1e-15);
+  return r->ref[k];
+}
+
+static void test_spice_sources(void **state) {
+  (void)state;
+  const cup_wave waves[2] = {
+      {.kind = CUP_WAVE_PULSE, .value = -1, .value2 = 5, .delay = 1e-3, .rise = 0.5e-3, .fall = 0.25e-3,
+       .width = 2e-3, .period = 5e-3},
+      {.kind = CUP_WAVE_DAMPED_SINE, .amplitude = 3, .frequency = 200, .phase = 0.3, .damping = 150},
+  };
+  const double A[1] = {-500}, B[1] = {1}, C[1] = {1}, E[1] = {1}, F[1] = {100}, x0[1] = {0};
+  static spice_ref r;
+  for (int w = 0; w < 2; w++) {
+    lcs_built b;
+    char msg[CUP_ERRMSG_LEN];
+    assert_int_equal(build_lcs(&b, 1, 1, 1, A, B, C, E, F, NULL, NULL, NULL, msg), CUP_OK);
+    cup_input *u = NULL;
+    assert_int_equal(cup_input_create(&u, 1, msg), CUP_OK);
+    assert_int_equal(cup_input_add(u, 0, &waves[w], msg), CUP_OK);
+    double x = 0, h = 1e-6;
+    r.ref[0] = 0;
+    for (long k = 0; k < 20000; k++) {
+      double t = (double)k * h;
+      double k1 = spice_rhs(u, t, x), k2 = spice_rhs(u, t + h / 2, x + h / 2 * k1);
+      double k3 = spice_rhs(u, t + h / 2, x + h / 2 * k2), k4 = spice_rhs(u, t + h, x + h * k3);
+      x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      if ((k + 1) % 100 == 0) r.ref[(k + 1) / 100] = x;
+    }
+    cup_run_info info;
+    ad_ctx c = run_adaptive(b.L, u, x0, 0.02, 1e-10, 201, spice_exact, &r, &info);
+    check_run(w ? "damped sine source" : "pulse source", &c, &info, 1e-10);
+    assert_int_equal(info.events, 0);
+    cup_input_free(&u);
+    unbuild_lcs(&b);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_moving_interval),
@@ -479,6 +534,7 @@ int main(void) {
     cmocka_unit_test(test_zeno),
     cmocka_unit_test(test_general_process),
     cmocka_unit_test(test_step_doubling_process),
+    cmocka_unit_test(test_spice_sources),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
