@@ -519,6 +519,28 @@ static void test_spice_sources(void **state) {
     cup_input_free(&u);
     unbuild_lcs(&b);
   }
+  /* before its delay a damped sine is constant, which a damped rotation
+   * cannot hold: refused by name (as the exponential scheme does) */
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  assert_int_equal(build_lcs(&b, 1, 1, 1, A, B, C, E, F, NULL, NULL, NULL, msg), CUP_OK);
+  cup_input *u = NULL;
+  cup_wave late = waves[1];
+  late.delay = 1e-3;
+  assert_int_equal(cup_input_create(&u, 1, msg), CUP_OK);
+  assert_int_equal(cup_input_add(u, 0, &late, msg), CUP_OK);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  cup_integrator *I = NULL;
+  const cup_scheme generator_schemes[2] = {CUP_SCHEME_EXPONENTIAL, CUP_SCHEME_ADAPTIVE};
+  for (int k = 0; k < 2; k++) {
+    o.scheme = generator_schemes[k];
+    assert_int_equal(cup_integrator_create(&I, b.L, u, &o, msg), CUP_ERR_UNSUPPORTED);
+    assert_non_null(strstr(msg, "scheme: a damped sine with a delay (input term 0) is not supported"));
+    assert_non_null(strstr(msg, cup_scheme_name(o.scheme)));
+  }
+  cup_input_free(&u);
+  unbuild_lcs(&b);
 }
 
 int main(void) {
