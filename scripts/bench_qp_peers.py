@@ -31,6 +31,12 @@ Timing: time.perf_counter around the solver calls only (no file reading, no
 result copying beyond what the wrapper's solve() itself does).
 time_per_proj_s = median over reps of (total timed sequence time / K).
 
+Memory: every reported sequence also runs in a forked child (the timed runs
+themselves on large problems, one more untimed run otherwise), which reports
+its peak resident set (getrusage ru_maxrss): peak_rss_kb, and solver_rss_kb =
+that peak minus the child's resident size when it started (the interpreter
+and the problem data it shares with the parent), i.e. the solver's own memory.
+
 Accuracy: rel_err = max_k ||y_k - ref_k||_P / max(||ref_k||_P, ||x_k||_P, 1e-300).
 "At equal accuracy": the solver's tolerances walk down a ladder (default
 eps = 1e-7 ... 1e-13, eps_abs = eps_rel = eps; OSQP: each eps without then with
@@ -505,7 +511,18 @@ def iter_sequence(prob, solver, level, mode, deadline):
         yield rec
 
 
+def resident_kb():
+    """resident set size of this process now (kB), from /proc/self/statm"""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * (os.sysconf("SC_PAGE_SIZE") // 1024)
+
+
 def _child_main(conn, prob, solver, level, mode, deadline):
+    # the solver's memory: this child's peak resident set minus what it held
+    # when it started (the problem data and the interpreter, shared with the
+    # parent); getrusage's ru_maxrss is in kB on Linux
+    import resource
+    base = resident_kb()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -521,6 +538,7 @@ def _child_main(conn, prob, solver, level, mode, deadline):
                     buf, last = [], time.perf_counter()
             if buf:
                 conn.send(("points", buf))
+        conn.send(("rss", (base, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)))
         conn.send(("end", None))
     except BaseException as e:  # report, never hang the parent
         try:
@@ -567,7 +585,7 @@ def _records(prob, solver, level, mode, deadline, hard_deadline, use_fork):
                 yield "error", f"child died (exit code {proc.exitcode})"
                 return
             yield kind, val
-            if kind != "points":
+            if kind not in ("points", "rss"):
                 return
     finally:
         proc.join(5)
@@ -577,8 +595,9 @@ def _records(prob, solver, level, mode, deadline, hard_deadline, use_fork):
         rd.close()
 
 
-def run_sequence(prob, solver, level, mode, deadline, args):
-    """Solve the K points in the given mode. Returns a dict."""
+def run_sequence(prob, solver, level, mode, deadline, args, force_fork=False):
+    """Solve the K points in the given mode. Returns a dict (with the
+    solver's peak memory, "rss": (base kB, peak kB), when it ran in a child)."""
     K = prob.K
     Y = np.full((K, prob.dim), np.nan)
     iters = np.zeros(K, dtype=np.int64)
@@ -590,9 +609,13 @@ def run_sequence(prob, solver, level, mode, deadline, args):
     end = None
     t_start = time.perf_counter()
     hard = deadline + max(args.grace_seconds, 0.0)
-    use_fork = args.fork == "always" or (args.fork == "auto"
-                                         and prob.dim + prob.m >= args.fork_min_size)
+    use_fork = force_fork or args.fork == "always" or (args.fork == "auto"
+                                                       and prob.dim + prob.m >= args.fork_min_size)
+    rss = None
     for kind, val in _records(prob, solver, level, mode, deadline, hard, use_fork):
+        if kind == "rss":
+            rss = val
+            continue
         if kind != "points":
             end = None if kind == "end" else f"{kind}: {val}"
             break
@@ -609,7 +632,7 @@ def run_sequence(prob, solver, level, mode, deadline, args):
             done = k + 1
     return {"Y": Y, "iters": iters[:done], "statuses": dict(statuses), "timed": timed,
             "setup_total": setup_total, "setup_warm": setup_warm, "done": done,
-            "wall": time.perf_counter() - t_start, "end": end}
+            "wall": time.perf_counter() - t_start, "end": end, "rss": rss}
 
 
 def bench(prob, solver, ref, ref_info, args):
@@ -693,6 +716,19 @@ def bench(prob, solver, ref, ref_info, args):
                 times.append(rr["timed"] / prob.K)
                 setups.append(rr["setup_warm"] if mode == "warm" else rr["setup_total"] / prob.K)
         tpp = float(np.median(times))
+        # peak memory: from the timed runs if they ran in a child process,
+        # else from one more (untimed) run of the sequence in a child
+        rss = res["rss"]
+        if rss is None:
+            rss = run_sequence(prob, solver, rep["level"], mode,
+                               time.perf_counter() + max(args.max_seconds, 60.0), args,
+                               force_fork=True)["rss"]
+        if rss is not None:
+            out["peak_rss_kb"] = int(rss[1])
+            out["solver_rss_kb"] = int(max(rss[1] - rss[0], 0))
+            out["rss_meaning"] = ("peak resident set of the child process that ran the sequence "
+                                  "(peak_rss_kb) and that minus its size at the start "
+                                  "(solver_rss_kb: the solver's own memory)")
         out.update({
             "setting": rep["level"],
             "time_per_proj_s": tpp,
