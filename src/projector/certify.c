@@ -147,6 +147,10 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
   } else {
     double best = INFINITY;
     keep_candidate(p, push_along_direction(p, z), &best);
+    /* the origin, when g > 0 puts it inside K: free, unlike the inward
+     * anchor below (a second solve; ladders of diodes: a sixth of the work) */
+    if (!(best <= info->eta_target) && p->origin_ok)
+      keep_candidate(p, segment_to(p, z, p->origin, p->g), &best);
     if (!(best <= info->eta_target) && p->make_inward && !p->has_inward) {
       int it = p->iters;
       p->make_inward(p);               /* certification work, not dual iterations */
