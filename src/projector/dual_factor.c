@@ -347,6 +347,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
     if (!(d > 0)) {                  /* not positive definite: leave a valid factor (I) */
       for (int i = 0; i < m; i++) { y[i] = 0; Lnz[i] = 1; Li[Lp[i]] = i; Lx[Lp[i]] = 1; }
       memset(f->fact_act, 0, (size_t)m);
+      memset(pact, 0, (size_t)m);
       f->refactor_ops = 0;
       return CUP_ERR_LINALG;
     }
@@ -387,6 +388,7 @@ static int mform_rowadd(cup_dfact *f, int i, double delta) {
   Rp[1] = nz;
   if (!cholmod_rowadd((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
   f->fact_act[i] = 1;
+  f->pact[k] = 1;
   return CUP_OK;
 }
 
@@ -411,15 +413,34 @@ static int mform_rowdel(cup_dfact *f, int i) {
   ((int *)f->R->p)[1] = nz;
   if (!cholmod_rowdel((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
   f->fact_act[i] = 0;
+  f->pact[k] = 0;
   return CUP_OK;
 }
 
+/* L D L^T t = t on the free rows only, in the permuted order (the other
+ * rows are identity and come back unchanged); D folded into the backward
+ * sweep. */
 static void mform_solve(cup_dfact *f, double *v) {
-  int m = f->m;
-  double *t = f->work, *scratch = f->work + m;
-  for (int k = 0; k < m; k++) t[k] = v[f->pperm[k]];
-  cup_simplicial_solve(f->L, t, scratch);
-  for (int k = 0; k < m; k++) v[f->pperm[k]] = t[k];
+  int m = f->m, nf = 0;
+  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz, *pp = f->pperm;
+  const double *Lx = f->L->x;
+  const unsigned char *pact = f->pact;
+  int *cols = f->stack;
+  double *t = f->work;
+  for (int k = 0; k < m; k++)
+    if (pact[k]) { cols[nf++] = k; t[k] = v[pp[k]]; }
+  for (int c = 0; c < nf; c++) {
+    int j = cols[c], p0 = Lp[j], p1 = p0 + Lnz[j];
+    double tj = t[j];
+    for (int p = p0 + 1; p < p1; p++) t[Li[p]] -= Lx[p] * tj;
+  }
+  for (int c = nf - 1; c >= 0; c--) {
+    int j = cols[c], p0 = Lp[j], p1 = p0 + Lnz[j];
+    double tj = t[j] / Lx[p0];
+    for (int p = p0 + 1; p < p1; p++) tj -= Lx[p] * t[Li[p]];
+    t[j] = tj;
+    v[pp[j]] = tj;
+  }
 }
 
 /* Row updates when their estimated work stays below a refactorization's
@@ -453,7 +474,7 @@ int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *e
   int st = cup_cholmod_start(&f->cm) ? cup_fail(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
   if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, errmsg);
   if (!st) {
-    f->work = malloc(sizeof(double) * 2 * (size_t)f->N);
+    f->work = calloc(2 * (size_t)f->N, sizeof(double));   /* M form: rows outside F stay finite */
     f->fact_act = calloc((size_t)f->m + 1, 1);
     if (!f->work || !f->fact_act) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   }
