@@ -30,6 +30,7 @@ struct cup_dfact {
   int *etree;                 /* elimination tree of all of M: bounds rows of any factor */
   unsigned stamp;             /* marks in flag for row patterns (rowdel) */
   double refactor_ops;        /* work of the last refactorization; 0: none yet */
+  int *lp0, *next0, *prev0;   /* L's first layout: each column with room for all of M */
 };
 
 double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
@@ -281,6 +282,19 @@ static int mform_create(cup_dfact *f, char *errmsg) {
                   "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
     goto done;
   }
+  /* CHOLMOD's row updates may move a column whose room looks short to them;
+   * restricted_ldl goes back to this layout, every column's room its count in
+   * the factor of all of M, which holds any factor of free rows */
+  f->lp0 = malloc(sizeof(int) * M1);
+  f->next0 = malloc(sizeof(int) * (M1 + 1));
+  f->prev0 = malloc(sizeof(int) * (M1 + 1));
+  if (!f->lp0 || !f->next0 || !f->prev0) {
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    goto done;
+  }
+  memcpy(f->lp0, f->L->p, sizeof(int) * M1);
+  memcpy(f->next0, f->L->next, sizeof(int) * (M1 + 1));
+  memcpy(f->prev0, f->L->prev, sizeof(int) * (M1 + 1));
   /* rowadd/rowdel need 2m of CHOLMOD workspace: take it now, not in a projection */
   if (!cholmod_allocate_work((size_t)m, 2 * (size_t)m, 2 * (size_t)m, &f->cm))
     st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
@@ -308,6 +322,12 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
   int *par = f->par, *flag = f->flag, *stack = f->stack;
   unsigned char *pact = f->pact;
   double ops = 0;
+  if (!f->L->is_monotonic) {         /* columns moved by row updates: the first layout again */
+    memcpy(Lp, f->lp0, sizeof(int) * ((size_t)m + 1));
+    memcpy(f->L->next, f->next0, sizeof(int) * ((size_t)m + 2));
+    memcpy(f->L->prev, f->prev0, sizeof(int) * ((size_t)m + 2));
+    f->L->is_monotonic = 1;
+  }
   for (int k = 0; k < m; k++) pact[k] = act[f->pperm[k]];
   for (int k = 0; k < m; k++) {
     int p0 = Lp[k];
@@ -497,6 +517,7 @@ void cup_dfact_free(cup_dfact **fp) {
   free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
   free(f->work); free(f->fact_act);
   free(f->pact); free(f->par); free(f->flag); free(f->stack); free(f->etree); free(f->yrow);
+  free(f->lp0); free(f->next0); free(f->prev0);
   free(f);
   *fp = NULL;
 }
