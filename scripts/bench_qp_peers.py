@@ -31,11 +31,14 @@ Timing: time.perf_counter around the solver calls only (no file reading, no
 result copying beyond what the wrapper's solve() itself does).
 time_per_proj_s = median over reps of (total timed sequence time / K).
 
-Memory: every reported sequence also runs in a forked child (the timed runs
-themselves on large problems, one more untimed run otherwise), which reports
-its peak resident set (getrusage ru_maxrss): peak_rss_kb, and solver_rss_kb =
-that peak minus the child's resident size when it started (the interpreter
-and the problem data it shares with the parent), i.e. the solver's own memory.
+Memory: the first --memory-points points of every reported sequence run
+again in a fresh (spawned) interpreter which, once the problem is loaded,
+restarts the kernel's peak-RSS record (/proc/self/clear_refs) and reports the
+peak resident set after the run (VmHWM): peak_rss_kb, and solver_rss_kb = that
+peak minus its resident size after loading and minus the library code paged
+in on first use (the growth of RssFile), i.e. the solver's own data. (A
+forked child would reuse the parent's freed heap and hide the solver's
+allocations.) --memory-only PEERS.jsonl does this alone for an earlier run.
 
 Accuracy: rel_err = max_k ||y_k - ref_k||_P / max(||ref_k||_P, ||x_k||_P, 1e-300).
 "At equal accuracy": the solver's tolerances walk down a ladder (default
@@ -517,12 +520,88 @@ def resident_kb():
         return int(f.read().split()[1]) * (os.sysconf("SC_PAGE_SIZE") // 1024)
 
 
-def _child_main(conn, prob, solver, level, mode, deadline):
-    # the solver's memory: this child's peak resident set minus what it held
-    # when it started (the problem data and the interpreter, shared with the
-    # parent); getrusage's ru_maxrss is in kB on Linux
+def reset_peak():
+    """restart the kernel's peak-RSS record (VmHWM) at the current size, so that
+    the peak measured later is the solver's, not the file loading's"""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+        return True
+    except OSError:
+        return False
+
+
+def rss_file_kb():
+    """RssFile (kB): resident pages mapped from files, the libraries' code among them"""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("RssFile:"):
+                return int(line.split()[1])
+    return 0
+
+
+def peak_kb():
+    """VmHWM (kB): the peak resident set since reset_peak()"""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
     import resource
-    base = resident_kb()
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
+def _memory_main(conn, path, solver_name, args, level, mode, npts):
+    """A fresh interpreter (spawned, not forked: a forked child reuses the
+    parent's freed heap and hides the solver's allocations): load the problem,
+    note the resident size, run the first npts points of the sequence, report
+    (resident before, peak)."""
+    import gc
+    try:
+        prob = Problem(path, npts)
+        solver = SOLVERS[solver_name](args)
+        solver.prepare(prob)
+        gc.collect()
+        reset_peak()
+        base, code = resident_kb(), rss_file_kb()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for _ in iter_sequence(prob, solver, level, mode,
+                                   time.perf_counter() + args.memory_seconds):
+                pass
+        # library code paged in on first use is not the solver's data
+        conn.send(("rss", (base + rss_file_kb() - code, peak_kb())))
+    except BaseException as e:
+        conn.send(("error", f"{type(e).__name__}: {e}"))
+    finally:
+        conn.close()
+
+
+def measure_memory(prob, solver_name, args, level, mode):
+    """(resident kB before the solver, peak kB) of one sequence in a fresh
+    process, on the first --memory-points points, or None."""
+    import multiprocessing as mp
+    ctx = mp.get_context("spawn")
+    rd, wr = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_memory_main, args=(wr, prob.path, solver_name, args, level, mode,
+                                                  min(prob.K, args.memory_points)))
+    proc.start()
+    wr.close()
+    kind, val = "error", "no answer within --memory-seconds + 60 s: killed"
+    try:
+        if rd.poll(args.memory_seconds + 60):
+            kind, val = rd.recv()
+    except EOFError:
+        kind, val = "error", "child died"
+    if proc.is_alive():
+        proc.kill()
+    proc.join()
+    if kind != "rss":
+        log(f"[{prob.name}/{solver_name}/{mode}] memory probe failed: {val}")
+        return None
+    return val
+
+
+def _child_main(conn, prob, solver, level, mode, deadline):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -538,7 +617,6 @@ def _child_main(conn, prob, solver, level, mode, deadline):
                     buf, last = [], time.perf_counter()
             if buf:
                 conn.send(("points", buf))
-        conn.send(("rss", (base, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)))
         conn.send(("end", None))
     except BaseException as e:  # report, never hang the parent
         try:
@@ -585,7 +663,7 @@ def _records(prob, solver, level, mode, deadline, hard_deadline, use_fork):
                 yield "error", f"child died (exit code {proc.exitcode})"
                 return
             yield kind, val
-            if kind not in ("points", "rss"):
+            if kind != "points":
                 return
     finally:
         proc.join(5)
@@ -595,9 +673,8 @@ def _records(prob, solver, level, mode, deadline, hard_deadline, use_fork):
         rd.close()
 
 
-def run_sequence(prob, solver, level, mode, deadline, args, force_fork=False):
-    """Solve the K points in the given mode. Returns a dict (with the
-    solver's peak memory, "rss": (base kB, peak kB), when it ran in a child)."""
+def run_sequence(prob, solver, level, mode, deadline, args):
+    """Solve the K points in the given mode. Returns a dict."""
     K = prob.K
     Y = np.full((K, prob.dim), np.nan)
     iters = np.zeros(K, dtype=np.int64)
@@ -609,13 +686,9 @@ def run_sequence(prob, solver, level, mode, deadline, args, force_fork=False):
     end = None
     t_start = time.perf_counter()
     hard = deadline + max(args.grace_seconds, 0.0)
-    use_fork = force_fork or args.fork == "always" or (args.fork == "auto"
-                                                       and prob.dim + prob.m >= args.fork_min_size)
-    rss = None
+    use_fork = args.fork == "always" or (args.fork == "auto"
+                                         and prob.dim + prob.m >= args.fork_min_size)
     for kind, val in _records(prob, solver, level, mode, deadline, hard, use_fork):
-        if kind == "rss":
-            rss = val
-            continue
         if kind != "points":
             end = None if kind == "end" else f"{kind}: {val}"
             break
@@ -632,7 +705,37 @@ def run_sequence(prob, solver, level, mode, deadline, args, force_fork=False):
             done = k + 1
     return {"Y": Y, "iters": iters[:done], "statuses": dict(statuses), "timed": timed,
             "setup_total": setup_total, "setup_warm": setup_warm, "done": done,
-            "wall": time.perf_counter() - t_start, "end": end, "rss": rss}
+            "wall": time.perf_counter() - t_start, "end": end}
+
+
+def add_memory(out, prob, solver_name, args, level, mode):
+    rss = measure_memory(prob, solver_name, args, level, mode)
+    if rss is not None:
+        out["peak_rss_kb"] = int(rss[1])
+        out["solver_rss_kb"] = int(max(rss[1] - rss[0], 0))
+        out["rss_meaning"] = (f"a fresh process ran the first {min(prob.K, args.memory_points)} "
+                              "points at this setting: its peak resident set (peak_rss_kb) and "
+                              "that minus its size after loading the problem (solver_rss_kb)")
+
+
+def memory_only(path, args):
+    """--memory-only PEERS.jsonl: measure (again) the memory of every reported
+    sequence of an earlier run, timings untouched; the lines go to stdout."""
+    probs = {}
+    for line in open(path):
+        d = json.loads(line)
+        if d.get("problem") and not d.get("skipped") and d.get("setting") is not None:
+            key = d["problem"]
+            if key not in probs:
+                dirs = [p for p in args.problems if os.path.basename(p.rstrip("/")) == key]
+                probs[key] = Problem(dirs[0]) if dirs else None
+            if probs[key] is not None:
+                for k in ("peak_rss_kb", "solver_rss_kb", "rss_meaning"):
+                    d.pop(k, None)
+                add_memory(d, probs[key], d["solver"], args, d["setting"], d["mode"])
+                log(f"[{key}/{d['solver']}/{d['mode']}] memory {d.get('solver_rss_kb')} kB")
+        JSON_OUT.write(json.dumps(_clean(d), allow_nan=False) + "\n")
+        JSON_OUT.flush()
 
 
 def bench(prob, solver, ref, ref_info, args):
@@ -718,17 +821,7 @@ def bench(prob, solver, ref, ref_info, args):
         tpp = float(np.median(times))
         # peak memory: from the timed runs if they ran in a child process,
         # else from one more (untimed) run of the sequence in a child
-        rss = res["rss"]
-        if rss is None:
-            rss = run_sequence(prob, solver, rep["level"], mode,
-                               time.perf_counter() + max(args.max_seconds, 60.0), args,
-                               force_fork=True)["rss"]
-        if rss is not None:
-            out["peak_rss_kb"] = int(rss[1])
-            out["solver_rss_kb"] = int(max(rss[1] - rss[0], 0))
-            out["rss_meaning"] = ("peak resident set of the child process that ran the sequence "
-                                  "(peak_rss_kb) and that minus its size at the start "
-                                  "(solver_rss_kb: the solver's own memory)")
+        add_memory(out, prob, solver.name, args, rep["level"], mode)
         out.update({
             "setting": rep["level"],
             "time_per_proj_s": tpp,
@@ -1013,8 +1106,20 @@ def main():
                          "(so that other tools are measured against the same one)")
     ap.add_argument("--recompute-ref", action="store_true",
                     help="ignore ref.txt, compute the reference (reports the difference to ref.txt)")
+    ap.add_argument("--memory-points", type=int, default=2,
+                    help="points of the sequence run again in a fresh process for its memory")
+    ap.add_argument("--memory-seconds", type=float, default=120.0,
+                    help="time limit of that run (solvers with a time limit get it; "
+                         "the others are killed a minute after it)")
+    ap.add_argument("--memory-only", metavar="PEERS_JSONL",
+                    help="measure only the memory of the sequences an earlier run reported "
+                         "(the problem directories are the positional arguments)")
     args = ap.parse_args()
     protect_stdout()
+    if args.memory_only:
+        args.ladder = []
+        memory_only(args.memory_only, args)
+        return
     args.ladder = [float(e) for e in args.ladder.split(",")]
     args.modes = args.modes.split(",")
 
