@@ -2,6 +2,11 @@
  *
  *   catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]
  *               [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]
+ *   catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]
+ *
+ * A netlist (.cir, .sp, .spi, .spice, .net, .ckt) runs as the scene
+ * `netlist: CIRCUIT.cir`; its signals (node voltages, branch currents) go
+ * to /signals/<name>.
  *
  * Exit status: 0 success (a warning status is reported in one stderr line),
  * 1 scene, run or I/O error, 2 usage error; every failure is one stderr line
@@ -19,9 +24,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
+#include "crowd_log.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { MSG_LEN = CUP_ERRMSG_LEN + 768 };   /* room for a path before a library message */
@@ -39,7 +46,11 @@ static void print_usage(void) {
   char schemes[160], methods[160];
   printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
          "                   [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]\n"
+         "       catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]\n"
          "  -o, --output OUT.h5  HDF5 file to write (/t, /x and attributes); replaced\n"
+         "  --probe SIGNAL       a netlist's v(NODE), v(NODE1,NODE2), i(ELEMENT) or all, into\n"
+         "                       /signals (repeatable; default: the netlist's .probe lines, or\n"
+         "                       every signal of a circuit with at most 256)\n"
          "  --n N                number of steps (scene key n)\n"
          "  --eps SPEC           eps_n schedule, e.g. n^-2.1 or 1e-8 (scene key eps)\n"
          "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
@@ -58,6 +69,8 @@ typedef struct {
   const char *scene, *out;
   char **overrides;          /* "key=value", owned, in command-line order */
   int n_overrides;
+  const char **probes;       /* --probe values (argv's) */
+  int n_probes;
   int quiet;
 } args_t;
 
@@ -139,6 +152,12 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
     if (!value_flags[f].key) { a->out = v; return 0; }
     return add_override(a, value_flags[f].key, v);
   }
+  if (strncmp(arg, "--probe", 7) == 0 && (arg[7] == '\0' || arg[7] == '=')) {
+    const char *v = NULL;
+    int rc = flag_value(argc, argv, i, "--probe", &v);
+    if (!rc) a->probes[a->n_probes++] = v;
+    return rc;
+  }
   if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) { a->quiet = 1; return 0; }
   if (arg[0] == '-' && arg[1]) return usage_error("unknown option '%s'", arg);
   if (a->scene) return usage_error("one scene per run: '%s' after '%s'", arg, a->scene);
@@ -149,6 +168,7 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
 static void free_args(args_t *a) {
   for (int i = 0; i < a->n_overrides; i++) free(a->overrides[i]);
   free(a->overrides);
+  free(a->probes);
 }
 
 static int print_versions(void) {
@@ -163,7 +183,8 @@ static int print_versions(void) {
 static int parse_args(args_t *a, int argc, char **argv) {
   memset(a, 0, sizeof *a);
   a->overrides = calloc((size_t)argc + 1, sizeof *a->overrides);
-  if (!a->overrides) return usage_error("out of memory");
+  a->probes = calloc((size_t)argc + 1, sizeof *a->probes);
+  if (!a->overrides || !a->probes) return usage_error("out of memory");
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) {
       print_usage();
@@ -197,9 +218,22 @@ static void install_handlers(void) {
   sigaction(SIGTERM, &sa, NULL);
 }
 
+/* A netlist's signals need zeta of the step that reached x (the diodes'
+ * currents and voltages) and u(t): computed here, written beside x. */
+typedef struct {
+  cup_h5run *w;
+  cup_netlist *nl;           /* NULL: no signals */
+  const cup_integrator *I;
+  double *zeta, *sig;
+} sink_t;
+
 static int sink(long k, double t, const double *x, void *ctx) {
   if (stop_signal) return 1;
-  return cup_h5run_sink(k, t, x, ctx);
+  sink_t *c = ctx;
+  if (!c->nl) return cup_h5run_sink(k, t, x, c->w);
+  cup_integrator_zeta(c->I, c->zeta);
+  if (cup_netlist_signals(c->nl, t, x, c->zeta, c->sig) != CUP_OK) return CUP_ERR_CALLBACK;
+  return cup_h5run_append(c->w, t, x, c->sig);
 }
 
 /* ---- the run ---- */
@@ -210,7 +244,9 @@ typedef struct {
   cup_integrator_options opts;
   cup_integrator *I;
   cup_h5run *w;
+  crowd_log *crowd;          /* a crowd scene's per-step log, or NULL */
   cup_run_info info;
+  sink_t sk;
   double wall;               /* seconds in cup_integrator_run */
   int status;
   char message[MSG_LEN];
@@ -232,6 +268,22 @@ static const char *spec_text(const char *spec, const cup_schedule *s, char *buf,
   if (spec && spec[0]) return spec;
   cup_schedule_format(s, buf, size);
   return buf;
+}
+
+/* A netlist's state, named: "i(L1), v(C1)" for the columns of /x. */
+static int state_names(run_t *r) {
+  const cup_netlist *nl = cup_scene_netlist(r->scene);
+  int n = nl ? cup_lcs_dim(cup_netlist_lcs(nl)) : 0;
+  size_t len = 1;
+  for (int j = 0; j < n; j++) len += strlen(cup_netlist_state_name(nl, j)) + 2;
+  if (!n) return CUP_OK;
+  char *s = malloc(len);
+  if (!s) return CUP_ERR_NOMEM;
+  s[0] = '\0';
+  for (int j = 0, w = 0; j < n; j++) w += snprintf(s + w, len - (size_t)w, "%s%s", j ? ", " : "", cup_netlist_state_name(nl, j));
+  int st = cup_h5run_attr_string(r->w, "state_names", s);
+  free(s);
+  return st;
 }
 
 /* What ran: written before the run so that even a killed run's file says it.
@@ -260,6 +312,7 @@ static int write_provenance(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene", cup_scene_text(r->scene)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_file", r->args->scene));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_name", cup_scene_name(r->scene)));
+  st = cup_status_merge(st, state_names(r));
   /* Overwritten at the end; what a reader finds if the process was killed. */
   st = cup_status_merge(st, cup_h5run_attr_long(w, "status", CUP_ERR_INTERRUPTED));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "status_name", "running"));
@@ -307,21 +360,94 @@ static void settle_status(run_t *r, int st) {
   }
 }
 
+static int is_netlist(const char *path) {
+  static const char *const ext[] = {".cir", ".sp", ".spi", ".spice", ".net", ".ckt"};
+  const char *dot = strrchr(path, '.');
+  for (size_t k = 0; dot && k < sizeof ext / sizeof ext[0]; k++)
+    if (!strcasecmp(dot, ext[k])) return 1;
+  return 0;
+}
+
+/* A netlist runs as the scene `netlist: {file: NAME}` beside it. */
+static int load_scene(run_t *r, char *err) {
+  const args_t *a = r->args;
+  const char *const *ovr = (const char *const *)a->overrides;
+  if (!is_netlist(a->scene)) return cup_scene_load(&r->scene, a->scene, ovr, a->n_overrides, err);
+  const char *slash = strrchr(a->scene, '/'), *base = slash ? slash + 1 : a->scene;
+  size_t len = 2 * strlen(base) + 32;
+  char *text = malloc(len), *dir = slash ? strndup(a->scene, slash == a->scene ? 1 : (size_t)(slash - a->scene)) : NULL;
+  if (!text || (slash && !dir)) { free(text); free(dir); return snprintf(err, MSG_LEN, "out of memory"), CUP_ERR_NOMEM; }
+  size_t w = (size_t)snprintf(text, len, "netlist: {file: \"");
+  for (const char *p = base; *p; p++) {          /* a YAML double-quoted scalar */
+    if (*p == '"' || *p == '\\') text[w++] = '\\';
+    text[w++] = *p;
+  }
+  snprintf(text + w, len - w, "\"}\n");
+  int st = cup_scene_load_string(&r->scene, text, a->scene, dir, ovr, a->n_overrides, err);
+  free(text);
+  free(dir);
+  return st;
+}
+
+/* --probe signals, or the netlist's defaults; written to /signals. */
+static int setup_signals(run_t *r, char *err) {
+  const args_t *a = r->args;
+  cup_netlist *nl = cup_scene_netlist(r->scene);
+  char e2[CUP_ERRMSG_LEN];
+  if (!nl) {
+    if (a->n_probes) snprintf(err, MSG_LEN, "%s: --probe: the scene has no netlist", a->scene);
+    return a->n_probes ? EXIT_RUN : 0;
+  }
+  for (int k = 0; k < a->n_probes; k++)
+    if (cup_netlist_probe(nl, a->probes[k], e2) < 0) {
+      snprintf(err, MSG_LEN, "%s: --probe: %s", a->scene, e2);
+      return EXIT_RUN;
+    }
+  if (cup_netlist_signal_count(nl) == 0 && cup_netlist_probe_default(nl, 256, e2)) {
+    snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
+    return EXIT_RUN;
+  }
+  int ns = cup_netlist_signal_count(nl), m = cup_lcs_rows(cup_scene_lcs(r->scene));
+  const char **names = calloc((size_t)ns + 1, sizeof *names);
+  r->sk.zeta = calloc((size_t)m + 1, sizeof(double));
+  r->sk.sig = calloc((size_t)ns + 1, sizeof(double));
+  if (!names || !r->sk.zeta || !r->sk.sig) { free(names); snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
+  for (int k = 0; k < ns; k++) names[k] = cup_netlist_signal_name(nl, k);
+  int st = cup_h5run_signals(r->w, ns, names);
+  free(names);
+  if (st) {
+    snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w)[0] ? cup_h5run_errmsg(r->w) : cup_status_string(st));
+    return EXIT_RUN;
+  }
+  r->sk.nl = nl;
+  return 0;
+}
+
 static int setup(run_t *r, char *err) {
   const args_t *a = r->args;
-  if (cup_scene_load(&r->scene, a->scene, (const char *const *)a->overrides, a->n_overrides, err))
-    return EXIT_RUN;             /* the message names file:line:column and key */
+  if (load_scene(r, err)) return EXIT_RUN;       /* the message names file:line:column and key */
   r->opts = *cup_scene_options(r->scene);
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   r->opts.interrupt = (const volatile int *)&stop_signal;
+  if (cup_scene_crowd(r->scene)) {
+    if (!(r->crowd = crowd_log_create(cup_scene_crowd(r->scene), r->opts.n))) {
+      snprintf(err, MSG_LEN, "%s: out of memory for the crowd's per-step log", a->scene);
+      return EXIT_RUN;
+    }
+    r->opts.on_step = crowd_log_step;
+    r->opts.step_ctx = r->crowd;
+  }
   char e2[CUP_ERRMSG_LEN];
   if (cup_scene_integrator(r->scene, &r->opts, &r->I, e2)) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }
   if (cup_h5run_create(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
-  if (write_provenance(r)) {
+  r->sk.w = r->w;
+  r->sk.I = r->I;
+  if (setup_signals(r, err)) return EXIT_RUN;
+  if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w))) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
     return EXIT_RUN;
   }
@@ -331,7 +457,7 @@ static int setup(run_t *r, char *err) {
 static void run(run_t *r) {
   install_handlers();
   double t0 = now_seconds();
-  int st = cup_integrator_run(r->I, cup_scene_x0(r->scene), sink, r->w, &r->info);
+  int st = cup_integrator_run(r->I, cup_scene_x0(r->scene), sink, &r->sk, &r->info);
   r->wall = now_seconds() - t0;
   settle_status(r, st);
 }
@@ -341,6 +467,8 @@ static void run(run_t *r) {
 static void finish_file(run_t *r) {
   char err[CUP_ERRMSG_LEN] = "";
   int wst = write_results(r);
+  if (r->crowd)
+    wst = cup_status_merge(wst, crowd_log_write(r->crowd, r->w, r->info.step, cup_integrator_state(r->I)));
   if (wst != CUP_OK && r->status >= 0) {
     r->status = CUP_ERR_IO;
     snprintf(r->message, sizeof r->message, "%s", cup_h5run_errmsg(r->w));
@@ -374,11 +502,19 @@ static void report(const run_t *r) {
             a->scene, a->out, r->opts.n, cup_scheme_name(r->opts.scheme), i->samples,
             i->projected, i->skipped, i->dual_iterations, i->max_eps_cert, i->max_eta_cert,
             r->wall, cup_status_name(r->status));
+  if (!a->quiet && r->crowd) {
+    char line[160];
+    crowd_log_summary(r->crowd, line, sizeof line);
+    fprintf(stderr, "catchup-run: %s: %s\n", a->scene, line);
+  }
 }
 
 static void cleanup(run_t *r) {
   if (r->w) cup_h5run_close(&r->w, NULL);
+  free(r->sk.zeta);
+  free(r->sk.sig);
   cup_integrator_free(&r->I);
+  crowd_log_free(&r->crowd);
   cup_scene_free(&r->scene);
 }
 

@@ -8,10 +8,14 @@
 #include <unistd.h>
 #include "sweep_manager.h"
 
-/* Batches hold about this much work (cost units ~ steps, ~0.2 us each on
- * the paper's circuit, ~10 ms here): with two batches ahead, much longer
- * than the manager's reply latency (its sleep is at most 1 ms). */
-#define BATCH_COST 50000.0
+/* Batches hold about this much work (cost units ~ steps, ~0.1 us each on
+ * the paper's circuit: ~20 ms): with two batches ahead, longer than the
+ * manager's reply latency (it sleeps at most a quarter of a batch, and an
+ * answer of ~1 MB takes about ten rounds of its short polls to arrive);
+ * each message costs rank 0 a few wake-ups, ~15 us of CPU time each in a
+ * VM (measured: 50,000 units gave rank 0 5 % of the CPU time on tasks of
+ * ~100 us, this 3.5 %). */
+#define BATCH_COST 200000.0
 #define FLUSH_SECONDS 1.0
 #define PROGRESS_SECONDS 0.25
 #define PROGRESS_LOG_SECONDS 10.0
@@ -28,61 +32,71 @@ static double task_error(manager_t *m, int status, const double *traj, const dou
   return sw_max_error(traj, xref, m->count);
 }
 
+static int by_task(const void *a, const void *b) {
+  long x = ((const sw_task_out *)a)->task, y = ((const sw_task_out *)b)->task;
+  return (x > y) - (x < y);
+}
+
 /* The reference of variant k is known: fill the errors of its tasks that
  * were written without one (read back from /runs/x), then write the tasks
- * held in memory (no /runs/x to read back from). */
+ * held in memory (no /runs/x to read back from), all at once. */
 void fill_errors(manager_t *m, int k) {
-  const cup_sweep *s = m->s;
   const double *xref = sw_file_reference(m->f, k);
-  if (xref && s->out_samples > 0)
-    for (long t = k * s->per_variant; t < (k + 1) * s->per_variant && !m->io_status; t++) {
-      if (!sw_file_task_done(m->f, t) || sw_file_task_status(m->f, t) < 0 || !isnan(sw_file_task_error(m->f, t)))
-        continue;
-      int st = sw_file_read_traj(m->f, t, m->scratch);
-      if (!st) {
-        double e = task_error(m, CUP_OK, m->scratch, xref);
-        if (!isnan(e)) st = sw_file_set_error(m->f, t, e);
-      }
-      io_fail(m, st);
-    }
+  io_fail(m, sw_file_fill_errors(m->f, k));
+  long n = 0;
+  for (held *h = m->held[k]; h; h = h->next) n++;
+  sw_task_out *t = n ? malloc(sizeof *t * (size_t)n) : NULL;
+  if (n && !t) io_fail(m, CUP_ERR_NOMEM);
+  n = 0;
+  for (held *h = m->held[k]; h && t; h = h->next)
+    t[n++] = (sw_task_out){h->task, &h->r, h->traj, task_error(m, h->r.status, h->traj, xref)};
+  if (n) qsort(t, (size_t)n, sizeof *t, by_task);
+  if (n && !m->io_status) io_fail(m, sw_file_write_tasks(m->f, t, n));
+  free(t);
   for (held *h = m->held[k], *nx; h; h = nx) {
     nx = h->next;
-    if (!m->io_status)
-      io_fail(m, sw_file_write_task(m->f, h->task, &h->r, h->traj, task_error(m, h->r.status, h->traj, xref)));
     free(h->traj);
     free(h);
   }
   m->held[k] = NULL;
 }
 
-void take_result(manager_t *m, const sw_result *r, const double *traj) {
-  const cup_sweep *s = m->s;
-  long job = r->job;
+static void count_result(manager_t *m, const sw_result *r) {
   m->jobs_done++;
-  m->cost_done += m->cost[job];
-  m->cost_left -= m->cost[job];
+  m->cost_done += m->cost[r->job];
+  m->cost_left -= m->cost[r->job];
   m->work_sum += r->wall;
-  m->cpu_sum += r->cpu;
   if (r->status < 0) m->failures++;
+}
+
+static void take_reference(manager_t *m, const sw_result *r, const double *traj) {
+  count_result(m, r);
   if (m->io_status) return;
-  if (job < s->n_variants) {
-    io_fail(m, sw_file_write_reference(m->f, (int)job, r, traj));
-    if (!m->io_status) fill_errors(m, (int)job);
-    return;
-  }
-  long task = job - s->n_variants;
+  io_fail(m, sw_file_write_reference(m->f, (int)r->job, r, traj));
+  if (!m->io_status) fill_errors(m, (int)r->job);
+}
+
+/* A task's result: into t (to be written) with its error when its reference
+ * is known or trajectories are stored; otherwise held until it is. Returns
+ * whether t was filled. */
+static int take_task(manager_t *m, const sw_result *r, const double *traj, sw_task_out *t) {
+  const cup_sweep *s = m->s;
+  count_result(m, r);
+  if (m->io_status) return 0;
+  long task = r->job - s->n_variants;
   int k = (int)(task / s->per_variant);
   const double *xref = sw_file_reference(m->f, k);
   if (!xref && s->out_samples == 0 && !sw_file_reference_done(m->f, k)) {
     held *h = malloc(sizeof *h);
     double *copy = malloc(sizeof(double) * (size_t)m->count);
-    if (!h || !copy) { free(h); free(copy); io_fail(m, CUP_ERR_NOMEM); return; }
+    if (!h || !copy) { free(h); free(copy); io_fail(m, CUP_ERR_NOMEM); return 0; }
     memcpy(copy, traj, sizeof(double) * (size_t)m->count);
     *h = (held){task, *r, copy, m->held[k]};
     m->held[k] = h;
-    return;
+    return 0;
   }
-  io_fail(m, sw_file_write_task(m->f, task, r, traj, task_error(m, r->status, traj, xref)));
+  *t = (sw_task_out){task, r, traj, task_error(m, r->status, traj, xref)};
+  return 1;
 }
 
 static void fmt_seconds(char *buf, size_t n, double s) {
@@ -123,28 +137,50 @@ void maybe_flush(manager_t *m, int force) {
   m->last_flush = now;
 }
 
-/* Unpack one result message (a count, then results with trajectories). */
+/* One result message: the references first, so that the message's tasks
+ * find theirs, then every task in one write. */
 void take_message(manager_t *m, const char *buf, size_t size) {
-  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)m->count;
-  int64_t n = 0;
-  if (size >= sizeof n) memcpy(&n, buf, sizeof n);
-  for (int64_t j = 0; j < n && sizeof n + one * (size_t)(j + 1) <= size; j++) {
-    const char *at = buf + sizeof n + one * (size_t)j;
-    sw_result r;
-    memcpy(&r, at, sizeof r);
-    take_result(m, &r, (const double *)(const void *)(at + sizeof r));
+  _Static_assert(sizeof(msg_head) % sizeof(double) == 0 && sizeof(sw_result) % sizeof(double) == 0,
+                 "trajectories in a message are aligned");
+  const cup_sweep *s = m->s;
+  msg_head h = {0, 0};
+  int64_t fits = size >= sizeof h ? (int64_t)((size - sizeof h) / m->one) : 0;
+  if (size >= sizeof h) memcpy(&h, buf, sizeof h);
+  if (h.count < 0 || h.count > fits) h.count = fits;     /* not what a worker sends */
+  m->cpu_sum += h.cpu;
+  const char *at = buf + sizeof h;
+  long w = 0;
+  for (int64_t j = 0; j < h.count; j++) {
+    const sw_result *r = (const sw_result *)(const void *)(at + m->one * (size_t)j);
+    if (r->job < s->n_variants) take_reference(m, r, (const double *)(const void *)(r + 1));
   }
+  for (int64_t j = 0; j < h.count; j++) {
+    const sw_result *r = (const sw_result *)(const void *)(at + m->one * (size_t)j);
+    if (r->job >= s->n_variants) w += take_task(m, r, (const double *)(const void *)(r + 1), &m->out[w]);
+  }
+  if (w && !m->io_status) io_fail(m, sw_file_write_tasks(m->f, m->out, w));
+}
+
+static int cmp_job(const void *a, const void *b) {
+  long x = *(const long *)a, y = *(const long *)b;
+  return (x > y) - (x < y);
 }
 
 /* The next batch: jobs in queue order until the batch holds BATCH_COST of
- * work, fewer near the end so that the last batches spread over the workers. */
+ * work, and at most 1/(2 x workers) of the work still in the queue, so that
+ * the last batches shrink and spread over the workers (guided scheduling:
+ * by the queue, not by the work still to finish, which counts the batches
+ * out, or a slow worker's batches ahead could be a large tail); sorted, so
+ * that its results come back in task order. */
 int next_batch(manager_t *m, int workers, long *ids) {
-  double target = fmin(BATCH_COST, m->cost_left / (2.0 * workers)), sum = 0;
+  double target = fmin(BATCH_COST, m->cost_queued / (2.0 * workers)), sum = 0;
   int n = 0;
   while (m->qhead < m->qlen && n < m->max_batch && (n == 0 || sum + m->cost[m->queue[m->qhead]] <= target)) {
     ids[n] = m->queue[m->qhead++];
     sum += m->cost[ids[n++]];
   }
+  m->cost_queued -= sum;
+  qsort(ids, (size_t)n, sizeof *ids, cmp_job);
   return n;
 }
 
@@ -155,8 +191,8 @@ int setup_queue(manager_t *m) {
   m->queue = malloc(sizeof(long) * (size_t)J);
   m->cost = malloc(sizeof(double) * (size_t)J);
   m->held = calloc((size_t)s->n_variants, sizeof *m->held);
-  m->scratch = malloc(sizeof(double) * (size_t)m->count);
-  if (!order || !m->queue || !m->cost || !m->held || !m->scratch) { free(order); return CUP_ERR_NOMEM; }
+  m->out = malloc(sizeof *m->out * MAX_BATCH);
+  if (!order || !m->queue || !m->cost || !m->held || !m->out) { free(order); return CUP_ERR_NOMEM; }
   sw_schedule(s, order);
   m->jobs_total = J;
   for (long j = 0; j < J; j++) {
@@ -167,6 +203,7 @@ int setup_queue(manager_t *m) {
     if (done) { m->jobs_skipped++; continue; }
     m->queue[m->qlen++] = job;
     m->cost_left += m->cost[job];
+    m->cost_queued += m->cost[job];
   }
   free(order);
   return CUP_OK;
@@ -178,5 +215,5 @@ void free_manager(manager_t *m) {
   free(m->held);
   free(m->queue);
   free(m->cost);
-  free(m->scratch);
+  free(m->out);
 }

@@ -1,6 +1,7 @@
 /* sweep_manager — what rank 0 of catchup-sweep does with jobs and results,
- * MPI aside: the queue of jobs, each result into the results file
- * (src/io/sweep_h5.c), the tasks' errors against their variant's reference
+ * MPI aside: the queue of jobs and its batches, the results of a message
+ * into the results file at once (src/io/sweep_h5.c), the tasks' errors
+ * against their variant's reference
  * (held in memory until it is known when no trajectories are stored), the
  * regular flush and the progress line. The MPI protocol that brings the
  * results, and the run itself, are in catchup-sweep.c. */
@@ -11,7 +12,15 @@
 #include <time.h>
 #include "sweep.h"
 
-enum { MAX_BATCH = 256 };    /* jobs per batch, at most */
+enum { MAX_BATCH = 1024 };   /* jobs per batch, at most */
+
+/* A result message, from a worker or from rank 0 computing alone: this
+ * header, then `count` results (sw_result), each followed by its trajectory
+ * (samples * dim doubles), in increasing job order. */
+typedef struct {
+  int64_t count;
+  double cpu;                /* CPU seconds the computing rank spent on these jobs */
+} msg_head;
 
 typedef struct held { long task; sw_result r; double *traj; struct held *next; } held;
 
@@ -25,11 +34,15 @@ typedef struct {
   long *queue;               /* jobs to dispatch, in order */
   long qhead, qlen;
   double *cost;              /* per job */
-  double cost_left, cost_done;
+  double cost_left, cost_done;  /* work not done yet (queued or out), done */
+  double cost_queued;        /* work still in the queue */
   long jobs_total, jobs_done, jobs_skipped, failures;
-  double t_start, last_flush, last_progress, busy, work_sum, cpu_sum;
+  double t_start, last_flush, last_progress, busy;
+  double work_sum;           /* seconds of the jobs done, each on its rank's clock */
+  double cpu_sum;            /* CPU seconds of the computing ranks in those jobs (msg_head.cpu) */
+  double rank_cpu;           /* CPU seconds of every rank in the dispatch (workers' own count) */
   held **held;               /* per variant: results waiting for the reference (no /runs/x) */
-  double *scratch;           /* samples * dim */
+  sw_task_out *out;          /* MAX_BATCH: the tasks of a message, written at once */
   int io_status;
   char io_msg[SW_ERR_LEN];
 } manager_t;
@@ -48,9 +61,7 @@ void free_manager(manager_t *m);
 void io_fail(manager_t *m, int st);
 /* The reference of variant k is known: fill in its tasks' errors. */
 void fill_errors(manager_t *m, int k);
-/* One job's result (and trajectory, samples * dim) into the file. */
-void take_result(manager_t *m, const sw_result *r, const double *traj);
-/* Every result of one worker's message. */
+/* Every result of one message (msg_head and what follows) into the file. */
 void take_message(manager_t *m, const char *buf, size_t size);
 /* The next batch for one of `workers` workers into ids; its length. */
 int next_batch(manager_t *m, int workers, long *ids);

@@ -17,6 +17,8 @@
 #include "catchup/input.h"
 #include "catchup/lcs.h"
 #include "catchup/integrator.h"
+#include "catchup/crowd.h"
 #include "catchup/scene.h"
+#include "catchup/netlist.h"
 
 #endif

@@ -282,8 +282,59 @@ static void test_output_in_use(void **state) {
   H5Fclose(f);
 }
 
+/* A netlist runs directly: /signals/<name> in the probes' order (their
+ * `names` attribute), each row Kirchhoff's laws on the state and the
+ * source (v(out) the capacitor's voltage, v(in) the sine), the state's
+ * names; --set changes an element, --probe on a scene without a netlist
+ * and an unknown signal are one-line errors. */
+static void test_netlist_signals(void **state) {
+  (void)state;
+  const char *cir = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.cir", *out = tmp_path("netlist.h5");
+  const char *args[] = {cir, "-o", out, "--probe", "v(out)", "--probe", "V(IN)", "--set", "netlist.RL=500", NULL};
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=3000 theta, 3001 samples");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  expect_attr_str(f, "state_names", "v(C1)");
+  double *t, *x, *vout, *vin;
+  hsize_t n = read_rows(f, "t", 1, 1, &t);
+  assert_int_equal(n, 3001);
+  assert_int_equal(read_rows(f, "x", 2, 1, &x), n);
+  assert_int_equal(read_rows(f, "signals/v(out)", 1, 1, &vout), n);
+  assert_int_equal(read_rows(f, "signals/v(in)", 1, 1, &vin), n);
+  for (hsize_t k = 0; k < n; k++) {
+    assert_true(vout[k] == x[k]);
+    assert_true(fabs(vin[k] - 10 * sin(100 * 3.14159265358979323846 * t[k])) <= 1e-12);
+  }
+  hid_t g = H5Gopen2(f, "signals", H5P_DEFAULT), a = H5Aopen(g, "names", H5P_DEFAULT);
+  hid_t type = H5Aget_type(a);
+  char *names[2] = {NULL, NULL};
+  assert_true(H5Aread(a, type, names) >= 0);
+  assert_string_equal(names[0], "v(out)");
+  assert_string_equal(names[1], "v(in)");
+  H5free_memory(names[0]);
+  H5free_memory(names[1]);
+  H5Tclose(type); H5Aclose(a); H5Gclose(g);
+  H5Fclose(f);
+  free(t); free(x); free(vout); free(vin);
+  const char *noprobe[] = {fig2, "-o", out, "--probe", "v(a)", NULL};
+  r = run_cli(noprobe, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "--probe: the scene has no netlist");
+  const char *unknown[] = {cir, "-o", out, "--probe", "i(R9)", NULL};
+  r = run_cli(unknown, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "probe 'i(R9)': no element named 'R9'");
+  const char *bad[] = {CUP_SOURCE_DIR "/tests/netlists/bad/inductor-cutset.cir", "-o", out, NULL};
+  r = run_cli(bad, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_netlist_signals),
     cmocka_unit_test(test_paper_case1_file),
     cmocka_unit_test(test_summary_line_and_overrides),
     cmocka_unit_test(test_help_lists_and_output_override),

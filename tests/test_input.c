@@ -202,6 +202,89 @@ static void test_validation(void **state) {
   cup_input_free(&u);
 }
 
+/* SPICE's PULSE(0 5 1m 0.5m 0.25m 2m 5m): values by hand, the period's
+ * integral in closed form (flat parts and trapezoids), integrals across
+ * periods against long-double sums of the same pieces, breakpoints. */
+static void test_pulse(void **state) {
+  (void)state;
+  cup_input *u = make(1);
+  cup_wave w = {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 5, .delay = 1e-3, .rise = 0.5e-3, .fall = 0.25e-3,
+                .width = 2e-3, .period = 5e-3};
+  assert_int_equal(cup_input_add(u, 0, &w, NULL), CUP_OK);
+  assert_int_equal(cup_input_is_constant(u), 0);
+  const double t[] = {0, 1e-3, 1.25e-3, 2e-3, 3.5e-3, 3.625e-3, 4e-3, 6.25e-3, 11e-3 + 0.1e-3};
+  const double v[] = {0, 0, 2.5, 5, 5, 2.5, 0, 2.5, 1};
+  for (size_t k = 0; k < sizeof t / sizeof t[0]; k++) {
+    double out;
+    cup_input_eval(u, t[k], &out);
+    assert_close(out, v[k], 1e-12);
+  }
+  /* one period: 5 (2m) + 2.5 (0.5m + 0.25m) */
+  double per = 5 * 2e-3 + 2.5 * 0.75e-3, out;
+  cup_input_integral(u, 1e-3, 6e-3, &out);
+  assert_close(out, per, 1e-15);
+  cup_input_integral(u, 1e-3, 1e-3 + 7 * 5e-3, &out);
+  assert_close(out, 7 * per, 1e-14);
+  /* [0.5m, 2m]: 0 until 1m, the ramp to 5 (0.5m), 5 for 0.5m */
+  cup_input_integral(u, 0.5e-3, 2e-3, &out);
+  assert_close(out, 2.5 * 0.5e-3 + 5 * 0.5e-3, 1e-15);
+  const double brk[][2] = {{0, 1e-3}, {1e-3, 1.5e-3}, {1.6e-3, 3.5e-3}, {3.5e-3, 3.75e-3}, {3.8e-3, 6e-3},
+                           {6e-3, 6.5e-3}};
+  for (size_t k = 0; k < sizeof brk / sizeof brk[0]; k++)
+    assert_close(cup_input_next_break(u, brk[k][0]), brk[k][1], 1e-15);
+  cup_input_free(&u);
+  /* a one-shot pulse (period 0) with a jump up (rise 0) */
+  u = make(1);
+  cup_wave one = {.kind = CUP_WAVE_PULSE, .value = 1, .value2 = 3, .delay = 1, .width = 2, .fall = 1};
+  assert_int_equal(cup_input_add(u, 0, &one, NULL), CUP_OK);
+  cup_input_eval(u, 1, &out);
+  assert_close(out, 3, 0);                      /* right-continuous at the jump */
+  cup_input_integral(u, 0, 10, &out);
+  assert_close(out, 1 * 1 + 3 * 2 + 2 * 1 + 1 * 6, 1e-14);
+  assert_true(isinf(cup_input_next_break(u, 4.5)));
+  cup_input_free(&u);
+  cup_wave bad = w;
+  bad.period = 2e-3;                            /* shorter than rise + width + fall */
+  char msg[CUP_ERRMSG_LEN];
+  u = make(1);
+  assert_int_equal(cup_input_add(u, 0, &bad, msg), CUP_ERR_ARG);
+  assert_non_null(strstr(msg, "period"));
+  cup_input_free(&u);
+}
+
+/* SPICE's SIN with delay and damping: values by hand; integrals against the
+ * antiderivative A e^{-d s} (-d sin - w cos)(w s + p)/(d^2 + w^2) evaluated
+ * in long double, over long and very short intervals. */
+static long double damped_F(long double A, long double d, long double w, long double p, long double s) {
+  return A * expl(-d * s) * (-d * sinl(w * s + p) - w * cosl(w * s + p)) / (d * d + w * w);
+}
+
+static void test_damped_sine(void **state) {
+  (void)state;
+  double A = 2, f = 50, d = 30, p = 0.4, td = 3e-3;
+  cup_input *u = make(1);
+  cup_wave w = {.kind = CUP_WAVE_DAMPED_SINE, .amplitude = A, .frequency = f, .phase = p, .delay = td,
+                .damping = d};
+  assert_int_equal(cup_input_add(u, 0, &w, NULL), CUP_OK);
+  double out;
+  cup_input_eval(u, 1e-3, &out);
+  assert_close(out, A * sin(p), 1e-15);
+  cup_input_eval(u, 10e-3, &out);
+  assert_close(out, A * exp(-d * 7e-3) * sin(2 * M_PI * f * 7e-3 + p), 1e-14);
+  long double om = 2 * M_PIl * f;
+  const double iv[][2] = {{td, td + 0.1}, {0.02, 0.02 + 1e-9}, {0.011, 0.037}};
+  for (size_t k = 0; k < sizeof iv / sizeof iv[0]; k++) {
+    long double ref = damped_F(A, d, om, p, iv[k][1] - td) - damped_F(A, d, om, p, iv[k][0] - td);
+    cup_input_integral(u, iv[k][0], iv[k][1], &out);
+    assert_close(out, (double)ref, 1e-14 * fabs((double)ref) + 1e-17);
+  }
+  cup_input_integral(u, 0, td, &out);                    /* before the delay: A sin(p) */
+  assert_close(out, A * sin(p) * td, 1e-17);
+  assert_close(cup_input_next_break(u, 0), td, 0);
+  assert_true(isinf(cup_input_next_break(u, td)));
+  cup_input_free(&u);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_case1_values_and_integrals),
@@ -211,6 +294,8 @@ int main(void) {
     cmocka_unit_test(test_breaks_of_the_square_wave),
     cmocka_unit_test(test_callback),
     cmocka_unit_test(test_validation),
+    cmocka_unit_test(test_pulse),
+    cmocka_unit_test(test_damped_sine),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -13,6 +13,7 @@
 #include <dirent.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "badcorpus.h"
 #include "lcs_impl.h"
 #include "polyset_impl.h"
 
@@ -517,52 +518,18 @@ static void test_round_trip(void **state) {
 
 /* ---- malformed scenes ------------------------------------------------------ */
 
-static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
-
-/* The text after "# expect: " on the first line, or NULL. */
-static char *expected_error(const char *path) {
-  FILE *f = fopen(path, "r");
-  if (!f) return NULL;
-  char line[512] = "";
-  char *ok = fgets(line, sizeof line, f);
-  fclose(f);
-  if (!ok || strncmp(line, "# expect: ", 10) != 0) return NULL;
-  size_t n = strlen(line);
-  while (n > 10 && (line[n - 1] == '\n' || line[n - 1] == '\r' || line[n - 1] == ' ')) line[--n] = '\0';
-  return strdup(line + 10);
+static int load_scene(const char *path, char err[CUP_ERRMSG_LEN], int *out_null) {
+  cup_scene *s = (cup_scene *)err;
+  int st = cup_scene_load(&s, path, NULL, 0, err);
+  *out_null = s == NULL;
+  if (st == CUP_OK && s) cup_scene_free(&s);
+  return st;
 }
 
 static void test_bad_corpus(void **state) {
   (void)state;
-  DIR *dir = opendir(BAD);
-  assert_non_null(dir);
-  char *names[256];
-  int count = 0, failures = 0;
-  for (struct dirent *e; (e = readdir(dir)) != NULL;) {
-    size_t n = strlen(e->d_name);
-    if (n > 5 && !strcmp(e->d_name + n - 5, ".yaml") && count < 256) names[count++] = strdup(e->d_name);
-  }
-  closedir(dir);
-  qsort(names, (size_t)count, sizeof names[0], cmp_str);
-  for (int k = 0; k < count; k++) {
-    char path[1024], err[CUP_ERRMSG_LEN] = "";
-    snprintf(path, sizeof path, "%s/%s", BAD, names[k]);
-    char *want = expected_error(path);
-    cup_scene *s = (cup_scene *)&err;
-    int st = cup_scene_load(&s, path, NULL, 0, err);
-    const char *why = !want ? "no '# expect: ' first line"
-                    : st == CUP_OK ? "loaded without error"
-                    : s != NULL ? "*s not NULL after a failure"
-                    : strchr(err, '\n') ? "message has a newline"
-                    : !strstr(err, want) ? "message differs" : NULL;
-    if (why) {
-      print_error("%s: %s\n  expected: %s\n  got:      %s\n", names[k], why, want ? want : "", err);
-      failures++;
-    }
-    if (st == CUP_OK && s) cup_scene_free(&s);
-    free(want);
-    free(names[k]);
-  }
+  int failures;
+  int count = bad_corpus_check(BAD, ".yaml", "# expect: ", load_scene, &failures);
   print_message("%d malformed scenes checked\n", count);
   assert_int_equal(failures, 0);
   assert_true(count >= 25);

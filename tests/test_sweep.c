@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
+#include <hdf5.h>
 #include "catchup.h"
 #include "sha256.h"
 #include "sweep.h"
@@ -83,11 +84,16 @@ static void test_smoke_task_order(void **state) {
   expect_task(s, 47, 1, 1000, "0", "0", CUP_SCHEME_IMPLICIT, CUP_PROJ_PG);
   sw_task t;
   assert_int_equal(sw_task_get(s, 48, &t), CUP_ERR_ARG);
-  /* references first, then tasks by non-increasing cost */
-  long order[50];
+  /* References first, then blocks of consecutive tasks whose costs (n + 100
+   * here: both schemes and projectors count 1) stay within a factor 4:
+   * per variant, n = 100 and 250 (ids 0-15, cost 200 and 350) and n = 1000
+   * (ids 16-23, cost 1100); the blocks of cost 1100 go first. */
+  long order[50], at = 2;
   sw_schedule(s, order);
-  assert_true(order[0] < 2 && order[1] < 2);
-  for (int j = 3; j < 50; j++) assert_true(sw_job_cost(s, order[j - 1]) >= sw_job_cost(s, order[j]));
+  assert_true(order[0] < 2 && order[1] < 2 && order[0] != order[1]);
+  const long blocks[][2] = {{16, 24}, {40, 48}, {0, 16}, {24, 40}};
+  for (int b = 0; b < 4; b++)
+    for (long id = blocks[b][0]; id < blocks[b][1]; id++) assert_int_equal(order[at++], 2 + id);
   sw_free(&s);
   assert_null(s);
 }
@@ -254,6 +260,127 @@ static void test_reference_vs_data(void **state) {
   sw_free(&s);
 }
 
+/* A netlist sweep (examples/circuits/rectifier-sweep.yaml): the variant
+ * RL-250 sets the load of the half-wave rectifier, whose D != 0 puts its
+ * reference on the theta scheme (second-order Richardson); that reference
+ * against an independent RK4 of C v' = max(0, (V - v)/Rs) - v/RL. */
+static double rect_rhs(double t, double v) {
+  return (fmax(0, (10 * sin(100 * 3.14159265358979323846 * t) - v) / 1) - v / 250) / 100e-6;
+}
+
+static void test_netlist_variants(void **state) {
+  (void)state;
+  cup_sweep *s = load_file(EX "/circuits/rectifier-sweep.yaml");
+  assert_int_equal(s->n_variants, 3);
+  assert_true(cup_lcs_has_D(cup_scene_lcs(s->var[1].scene)));
+  long S = s->samples;
+  double *x = malloc(sizeof(double) * (size_t)S);
+  sw_result r;
+  sw_run_job(s, 1, NULL, &r, x);
+  assert_int_equal(r.status, CUP_OK);
+  double T = cup_scene_options(s->var[1].scene)->T, h = T / ((double)(S - 1) * 200), v = 0, err = 0;
+  for (long j = 0; j + 1 < S; j++) {
+    err = fmax(err, fabs(x[j] - v));
+    for (int k = 0; k < 200; k++) {
+      double t = ((double)j * 200 + k) * h;
+      double k1 = rect_rhs(t, v), k2 = rect_rhs(t + h / 2, v + h / 2 * k1);
+      double k3 = rect_rhs(t + h / 2, v + h / 2 * k2), k4 = rect_rhs(t + h, v + h * k3);
+      v += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  }
+  err = fmax(err, fabs(x[S - 1] - v));
+  printf("# netlist variant RL-250: theta reference (n_ref = %ld) vs RK4: max |diff| = %.3g V\n",
+         s->var[1].n_ref, err);
+  assert_true(err < 1e-5);
+  free(x);
+  sw_free(&s);
+}
+
+/* /summary columns read back through HDF5 (names as documented). */
+typedef struct { int64_t task_id; int8_t done; int32_t status; double error; int64_t stopped_step; } row_view;
+
+static void read_back(const char *path, row_view *rows, double *x) {
+  hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(file >= 0);
+  hid_t t = H5Tcreate(H5T_COMPOUND, sizeof(row_view));
+  H5Tinsert(t, "task_id", HOFFSET(row_view, task_id), H5T_NATIVE_INT64);
+  H5Tinsert(t, "done", HOFFSET(row_view, done), H5T_NATIVE_INT8);
+  H5Tinsert(t, "status", HOFFSET(row_view, status), H5T_NATIVE_INT32);
+  H5Tinsert(t, "error", HOFFSET(row_view, error), H5T_NATIVE_DOUBLE);
+  H5Tinsert(t, "stopped_step", HOFFSET(row_view, stopped_step), H5T_NATIVE_INT64);
+  hid_t d = H5Dopen2(file, "summary", H5P_DEFAULT), dx = H5Dopen2(file, "runs/x", H5P_DEFAULT);
+  assert_true(H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows) >= 0);
+  assert_true(H5Dread(dx, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, x) >= 0);
+  H5Dclose(dx);
+  H5Dclose(d);
+  H5Tclose(t);
+  H5Fclose(file);
+}
+
+/* Tasks written in one call, in runs of consecutive ids (1-3, 7, 9-10), land
+ * in their own rows of /summary and /runs/x and nowhere else; a reference
+ * that comes later fills the errors of its variant's tasks written without
+ * one: with x = 100 id + k and x_ref = k the error is 100 id, failures
+ * keep NaN. */
+static void test_batched_writes(void **state) {
+  (void)state;
+  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [10, 20, 30, 40, 50, 60]}\n"
+                           "variants: [{name: a}, {name: b, set: {circuit.R1: 2}}]\nreference: {samples: 3}\n");
+  enum { N = 12, K = 9, W = 6 };                  /* tasks; samples x dim; tasks written */
+  assert_int_equal(s->n_tasks, N);
+  assert_int_equal(s->samples * s->dim, K);
+  const char *path = CUP_TEST_OUT_DIR "/batched_writes.h5";
+  char err[SW_ERR_LEN] = "";
+  sw_file *f = NULL;
+  sw_provenance p = {"test", "test", "test", "test"};
+  assert_int_equal(sw_file_create(&f, path, s, &p, err), CUP_OK);
+  const long task[W] = {1, 2, 3, 7, 9, 10};
+  const int status[W] = {CUP_OK, CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_DIVERGED, CUP_OK, CUP_OK};
+  sw_result r[W];
+  double x[W][K];
+  sw_task_out out[W];
+  for (int j = 0; j < W; j++) {
+    memset(&r[j], 0, sizeof r[j]);
+    r[j].job = s->n_variants + task[j];
+    r[j].status = status[j];
+    r[j].stopped_step = 1000 + task[j];
+    for (int k = 0; k < K; k++) x[j][k] = 100.0 * (double)task[j] + k;
+    out[j] = (sw_task_out){task[j], &r[j], x[j], task[j] < 6 ? 0.5 * (double)task[j] : NAN};
+  }
+  sw_task_out swapped[2] = {out[1], out[0]};
+  assert_int_equal(sw_file_write_tasks(f, swapped, 2), CUP_ERR_ARG);     /* not in order: nothing written */
+  assert_non_null(strstr(sw_file_errmsg(f), "cannot write task 1 (after task 2)"));
+  assert_int_equal(sw_file_write_tasks(f, out, W), CUP_OK);
+  double xref[K];
+  for (int k = 0; k < K; k++) xref[k] = k;
+  sw_result rr;
+  memset(&rr, 0, sizeof rr);
+  rr.job = 1;
+  assert_int_equal(sw_file_write_reference(f, 1, &rr, xref), CUP_OK);
+  assert_int_equal(sw_file_fill_errors(f, 1), CUP_OK);
+  assert_int_equal(sw_file_close(&f, err), CUP_OK);
+
+  row_view rows[N];
+  double back[N * K];
+  read_back(path, rows, back);
+  for (long t = 0, j = 0; t < N; t++) {
+    int written = j < W && task[j] == t;
+    assert_int_equal(rows[t].task_id, t);
+    assert_int_equal(rows[t].done, written);
+    assert_int_equal(rows[t].status, written ? status[j] : CUP_ERR_INTERRUPTED);
+    assert_int_equal(rows[t].stopped_step, written ? 1000 + t : 0);
+    double e = !written || status[j] < 0 ? NAN : t < 6 ? 0.5 * (double)t : 100.0 * (double)t;
+    if (isnan(e) ? !isnan(rows[t].error) : rows[t].error != e)
+      fail_msg("task %ld: error %g, expected %g", t, rows[t].error, e);
+    for (int k = 0; k < K; k++)
+      if (written ? back[t * K + k] != x[j][k] : !isnan(back[t * K + k]))
+        fail_msg("task %ld: /runs/x entry %d is %g", t, k, back[t * K + k]);
+    j += written;
+  }
+  remove(path);
+  sw_free(&s);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_sha256_vectors),
@@ -263,6 +390,8 @@ int main(void) {
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_nearest_samples),
     cmocka_unit_test(test_reference_vs_data),
+    cmocka_unit_test(test_netlist_variants),
+    cmocka_unit_test(test_batched_writes),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -37,12 +37,25 @@ int cup_h5run_create(cup_h5run **w, const char *path, int dim, char *errmsg);
  *  stored). Returns nonzero (the status) once writing has failed or space
  *  ran short, so that a run stops instead of computing what cannot be saved. */
 int cup_h5run_sink(long k, double t, const double *x, void *ctx);
+/** Declare named signals (a netlist's node voltages and branch currents):
+ *  the group /signals gets one dataset per name, [N] float64, appended
+ *  with /t by cup_h5run_append. Call once, before the first sample; names
+ *  must be distinct and hold no '/'. The group's attribute `names` lists
+ *  them in the order given (h5py lists a group's members sorted). */
+int cup_h5run_signals(cup_h5run *w, int nsig, const char *const *names);
+/** Append one sample: t, x (dim entries) and the signals (nsig entries;
+ *  NULL when none were declared). cup_h5run_sink is this with no signals. */
+int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig);
 /** Scalar attributes on the root group, replacing one of the same name:
  *  float64, int64, and variable-length UTF-8 string (h5py reads it as str).
  *  They reach the disk at the next flush or close. */
 int cup_h5run_attr_double(cup_h5run *w, const char *name, double v);
 int cup_h5run_attr_long(cup_h5run *w, const char *name, long v);
 int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v);
+/** A whole float64 dataset (rank 1: dims[0]; rank 2: dims[0] x dims[1]),
+ *  row-major, created with its groups ("crowd/exit_time"); an existing name
+ *  is an error. For what a run knows at its set-up or its end. */
+int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, const double *data);
 /** Write what is buffered and flush the file to the OS. */
 int cup_h5run_flush(cup_h5run *w);
 /** Flush, close, free, set *w = NULL. Returns the first failure of the data

@@ -15,7 +15,11 @@ typedef struct cup_input cup_input;
   X(CUP_WAVE_CONSTANT, 0, "constant", "value")                                          \
   X(CUP_WAVE_SINE, 1, "sine", "amplitude * sin(2 pi frequency t + phase)")              \
   X(CUP_WAVE_SQUARE, 2, "square", "amplitude * sign(sin(2 pi frequency t + phase)), sign(0) = 0") \
-  X(CUP_WAVE_PWL, 3, "pwl", "piecewise linear through (t_k, v_k); constant outside")
+  X(CUP_WAVE_PWL, 3, "pwl", "piecewise linear through (t_k, v_k); constant outside")            \
+  X(CUP_WAVE_PULSE, 4, "pulse", "SPICE PULSE: value until delay, a ramp to value2 in rise, value2 for " \
+    "width, a ramp back in fall, value until period repeats it (period 0: once)")                \
+  X(CUP_WAVE_DAMPED_SINE, 5, "damped_sine", "SPICE SIN: amplitude e^(-damping (t - delay)) "  \
+    "sin(2 pi frequency (t - delay) + phase) after delay, amplitude sin(phase) before")
 
 typedef enum cup_wave_kind {
 #define CUP_WAVE_ENUM_(e, v, name, doc) e = v,
@@ -37,6 +41,12 @@ typedef struct cup_wave {
   int npoints;           /**< PWL: number of points (>= 1), times strictly increasing */
   const double *t;       /**< PWL: times (copied) */
   const double *v;       /**< PWL: values (copied) */
+  /* SPICE sources (netlists): */
+  double delay;          /**< PULSE, DAMPED_SINE: the waveform starts at t = delay >= 0 */
+  double damping;        /**< DAMPED_SINE: decay rate (1/time) after the delay */
+  double value2;         /**< PULSE: the pulsed value (value is the initial one) */
+  double rise, fall;     /**< PULSE: ramp times >= 0 (0: a jump) */
+  double width, period;  /**< PULSE: time at value2; period >= rise + width + fall, or 0: one pulse */
 } cup_wave;
 
 /** User input: write u(t) (p entries) into u; return 0, or nonzero to stop

@@ -197,6 +197,13 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
 
 /** The final state of the last run (n entries). */
 const double *cup_integrator_state(const cup_integrator *I);
+/** zeta of the last step taken (m entries into zeta, m the LCS's rows):
+ *  the theta step's LCP solution, or the projection's multipliers divided
+ *  by h (the impulse of the step over its length); 0 before the first step.
+ *  Valid inside the sink, for the state it receives (a netlist's diode
+ *  currents and voltages, cup_netlist_signals). CUP_ERR_UNSUPPORTED for an
+ *  integrator from cup_integrator_create_process. */
+int cup_integrator_zeta(const cup_integrator *I, double *zeta);
 
 /** The name of a scheme in CUP_SCHEME_LIST ("explicit", ...); "unknown" otherwise. */
 const char *cup_scheme_name(int scheme);

@@ -28,6 +28,12 @@ typedef struct cup_lcs_desc {
   cup_csc G;       /**< m x p: K moves with u when nonzero */
   cup_metric P;    /**< the metric (kind IDENTITY: P = I) */
   double pb_tol;   /**< relative tolerance of ||P B - C^T||; 0 means 1e-12 */
+  /* D != 0 (netlist diodes whose current the state does not fix): */
+  cup_csc D;       /**< m x m: 0 <= zeta _|_ C x + D zeta + G u + F >= 0; absent or
+                        zero: D = 0. With D != 0, B is required and is not checked
+                        against P B = C^T (P is then only the norm of certificates),
+                        and only the theta scheme runs the LCS */
+  const char *const *row_names; /**< m names of the rows for messages (the diodes), or NULL */
 } cup_lcs_desc;
 
 /** Validate and copy. Fails with CUP_ERR_PB_CT and a message naming the
@@ -42,6 +48,9 @@ int cup_lcs_inputs(const cup_lcs *L);
 const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
 /** 1 if G is absent or zero: K does not move. */
 int cup_lcs_fixed_set(const cup_lcs *L);
+/** 1 if D has a nonzero entry: not a sweeping process, only the theta
+ *  scheme runs it. */
+int cup_lcs_has_D(const cup_lcs *L);
 
 /** The paper's circuit (Sec. 7, after Acary-Brogliato Ex. 2.52): R1, R2, R3
  *  >= 0, L2, L3, C4 > 0, and g = G (2 entries, NULL for 0). Builds A, B, C,

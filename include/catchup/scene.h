@@ -1,12 +1,15 @@
 /* catchup/scene.h — scene files (YAML): an LCS (or the paper's circuit as a
- * parameterised family) and its input, or a general sweeping process (a
- * moving set and f), x0, T, n, tolerances, scheme, projector and output.
- * The format is documented in docs/scene-format.md. Every error names
+ * parameterised family) and its input, a general sweeping process (a moving
+ * set and f) or a crowd (catchup/crowd.h); x0, T, n, tolerances, scheme,
+ * projector and output. The format is documented in docs/scene-format.md
+ * (crowds: docs/crowd.md). Every error names
  * file:line:column and the key. */
 #ifndef CATCHUP_SCENE_H
 #define CATCHUP_SCENE_H
 
 #include "catchup/integrator.h"
+#include "catchup/crowd.h"
+#include "catchup/netlist.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -30,6 +33,9 @@ const char *cup_scene_name(const cup_scene *s);          /**< the `name` key, or
 const cup_lcs *cup_scene_lcs(const cup_scene *s);           /**< NULL for a set: scene */
 /** The general process of a set: scene (set and f; NULL for an LCS scene). */
 const cup_process_desc *cup_scene_process(const cup_scene *s);
+/** The crowd of a crowd: scene (NULL otherwise); it belongs to the scene.
+ *  Its process is cup_scene_process's, its x0 the agents' centres. */
+cup_crowd *cup_scene_crowd(const cup_scene *s);
 /** The state dimension, for either kind of scene. */
 int cup_scene_dim(const cup_scene *s);
 /** An integrator for the scene's model, an LCS or a process, with options o
@@ -45,6 +51,10 @@ const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "
 const char *cup_scene_eta_spec(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
 const char *cup_scene_text(const cup_scene *s);
+/** The scene's netlist when its model is `netlist:` (NULL otherwise), owned
+ *  by the scene; its LCS and input are the scene's. Signals are added to it
+ *  (cup_netlist_probe), so it is not const. */
+cup_netlist *cup_scene_netlist(const cup_scene *s);
 
 #ifdef __cplusplus
 }

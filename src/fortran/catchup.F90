@@ -12,8 +12,9 @@ module catchup
     cup_status_string, cup_status_name, cup_status_merge, cup_version, cup_dependency_versions, &
     cup_csc_from_fortran, cup_csc_from_dense, cup_csc_view, cup_csc_free
   use catchup_core
+  use catchup_netlist
 #ifdef CATCHUP_HAVE_SCENE
-  use catchup_scene, only: cup_scene_load, cup_scene_load_string, cup_scene_free, &
+  use catchup_scene, only: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_netlist, &
     cup_scene_name, cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, &
     cup_scene_eps_spec, cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, &
     cup_scene_integrator

@@ -19,7 +19,8 @@ module catchup_base
   public :: cup_version, cup_dependency_versions
   public :: cup_csc_from_fortran, cup_csc_from_dense, cup_csc_view, cup_csc_free
   ! for the other modules of the binding (not part of the documented API)
-  public :: cup_finish_, cup_fail_, cup_errbuf_, cup_size_fail_, cup_null_fail_, cup_copy_out_
+  public :: cup_finish_, cup_fail_, cup_errbuf_, cup_size_fail_, cup_null_fail_, cup_copy_out_, &
+    cup_pack_strings_
 
 contains
 
@@ -318,8 +319,28 @@ contains
     out(1:n) = v
   end subroutine cup_copy_out_
 
+  !> NUL-terminated copies of the trimmed strings (scene overrides, netlist
+  !> sets), one per column of buf, and the array of pointers to them
+  !> (const char *const *).
+  subroutine cup_pack_strings_(overrides, buf, ptrs)
+    character(len=*), intent(in) :: overrides(:)
+    character(kind=c_char), allocatable, target, intent(out) :: buf(:, :)
+    type(c_ptr), allocatable, target, intent(out) :: ptrs(:)
+    integer :: i, k, n
+    allocate(buf(len(overrides) + 1, size(overrides)), ptrs(size(overrides)))
+    buf = c_null_char
+    do i = 1, size(overrides)
+      n = len_trim(overrides(i))
+      do k = 1, n
+        buf(k, i) = overrides(i)(k:k)
+      end do
+      ptrs(i) = c_loc(buf(1, i))
+    end do
+  end subroutine cup_pack_strings_
+
   ! Optional array arguments are copied into local allocatables before their
   ! address goes to C (creation-time data, copied by C anyway): gfortran 12
   ! at -O2 crashes when an absent optional assumed-shape actual is forwarded
   ! to an OPTIONAL, CONTIGUOUS dummy, and users do forward optionals.
+
 end module catchup_base

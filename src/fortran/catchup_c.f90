@@ -27,12 +27,12 @@ module catchup_c
   public :: c_cup_input_create, c_cup_input_free, c_cup_input_add, c_cup_input_set_callback, &
     c_cup_input_dim, c_cup_input_is_constant, c_cup_input_eval, c_cup_input_integral, &
     c_cup_input_next_break
-  public :: c_cup_lcs_create, c_cup_lcs_free, c_cup_lcs_dim, c_cup_lcs_rows, c_cup_lcs_inputs, &
+  public :: c_cup_lcs_create, c_cup_lcs_free, c_cup_lcs_dim, c_cup_lcs_rows, c_cup_lcs_inputs, c_cup_lcs_has_D, &
     c_cup_lcs_polyset, c_cup_lcs_fixed_set, c_cup_lcs_circuit
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
     c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_create_process, &
     c_cup_integrator_free, &
-    c_cup_integrator_run, c_cup_integrator_state, c_cup_scheme_name, c_cup_scheme_parse, &
+    c_cup_integrator_run, c_cup_integrator_state, c_cup_integrator_zeta, c_cup_scheme_name, c_cup_scheme_parse, &
     c_cup_output_name, c_cup_output_parse, c_cup_wave_name, c_cup_wave_parse
 
   interface
@@ -264,6 +264,11 @@ module catchup_c
       type(c_ptr), value :: L
       integer(c_int) :: n
     end function c_cup_lcs_dim
+    function c_cup_lcs_has_D(L) bind(C, name="cup_lcs_has_D") result(f)
+      import :: c_ptr, c_int
+      type(c_ptr), value :: L
+      integer(c_int) :: f
+    end function c_cup_lcs_has_D
     function c_cup_lcs_rows(L) bind(C, name="cup_lcs_rows") result(n)
       import :: c_int, c_ptr
       type(c_ptr), value :: L
@@ -347,6 +352,12 @@ module catchup_c
       type(cup_run_info), intent(inout) :: info
       integer(c_int) :: st
     end function c_cup_integrator_run
+    function c_cup_integrator_zeta(I, zeta) bind(C, name="cup_integrator_zeta") result(st)
+      import :: c_ptr, c_int, c_double
+      type(c_ptr), value :: I
+      real(c_double), intent(out) :: zeta(*)
+      integer(c_int) :: st
+    end function c_cup_integrator_zeta
     function c_cup_integrator_state(I) bind(C, name="cup_integrator_state") result(x)
       import :: c_ptr
       type(c_ptr), value :: I

@@ -8,7 +8,7 @@
 ! cup_h5run_errmsg (CMake reads the header).
 module catchup_h5run
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
-    c_associated, c_funloc
+    c_associated, c_funloc, c_loc
   use catchup_constants
   use catchup_types
   use catchup_base
@@ -17,7 +17,7 @@ module catchup_h5run
   private
   public :: cup_h5run_create, cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
     cup_h5run_attr_double, cup_h5run_attr_long, cup_h5run_attr_string, cup_h5run_flush, &
-    cup_h5run_count, cup_h5_version, cup_integrator_run_h5
+    cup_h5run_count, cup_h5_version, cup_integrator_run_h5, cup_h5run_signals, cup_h5run_append
 #ifdef CATCHUP_H5RUN_ERRMSG
   public :: cup_h5run_errmsg, c_cup_h5run_errmsg
 #endif
@@ -25,7 +25,7 @@ module catchup_h5run
   public :: cup_h5run_sink
   public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
     c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
-    c_cup_h5_version
+    c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append
 
   !> Root attribute: real(c_double), integer (stored as long) or string.
   interface cup_h5run_attr
@@ -56,6 +56,15 @@ module catchup_h5run
       real(c_double), value :: v
       integer(c_int) :: st
     end function c_cup_h5run_attr_double
+    function c_cup_h5run_array(w, name, rank, dims, data) bind(C, name="cup_h5run_array") result(st)
+      import :: c_int, c_ptr, c_char, c_long, c_double
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_int), value :: rank
+      integer(c_long), intent(in) :: dims(*)
+      real(c_double), intent(in) :: data(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_array
     function c_cup_h5run_attr_long(w, name, v) bind(C, name="cup_h5run_attr_long") result(st)
       import :: c_int, c_long, c_ptr, c_char
       type(c_ptr), value :: w
@@ -80,6 +89,21 @@ module catchup_h5run
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_h5run_close
+    function c_cup_h5run_signals(w, nsig, names) bind(C, name="cup_h5run_signals") result(st)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: w
+      integer(c_int), value :: nsig
+      type(c_ptr), value :: names            ! const char *const *
+      integer(c_int) :: st
+    end function c_cup_h5run_signals
+    function c_cup_h5run_append(w, t, x, sig) bind(C, name="cup_h5run_append") result(st)
+      import :: c_int, c_ptr, c_double
+      type(c_ptr), value :: w
+      real(c_double), value :: t
+      real(c_double), intent(in) :: x(*)
+      type(c_ptr), value :: sig              ! nsig entries, or NULL without signals
+      integer(c_int) :: st
+    end function c_cup_h5run_append
     function c_cup_h5run_count(w) bind(C, name="cup_h5run_count") result(n)
       import :: c_long, c_ptr
       type(c_ptr), value :: w
@@ -177,6 +201,39 @@ contains
     integer, intent(out) :: ierr
     ierr = int(c_cup_h5run_flush(w%ptr))
   end subroutine cup_h5run_flush
+
+  !> Declare named signals (/signals/<name>, appended with /t by
+  !> cup_h5run_append); before the first sample.
+  subroutine cup_h5run_signals(w, names, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: names(:)
+    integer, intent(out) :: ierr
+    character(kind=c_char), allocatable, target :: buf(:, :)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    if (size(names) == 0) then
+      ierr = CUP_OK
+      return
+    end if
+    call cup_pack_strings_(names, buf, ptrs)
+    ierr = int(c_cup_h5run_signals(w%ptr, int(size(names), c_int), c_loc(ptrs)))
+  end subroutine cup_h5run_signals
+
+  !> Append one sample: t, x (dim entries) and the declared signals.
+  subroutine cup_h5run_append(w, t, x, ierr, sig)
+    type(cup_h5run_t), intent(in) :: w
+    real(c_double), intent(in) :: t
+    real(c_double), intent(in) :: x(:)
+    integer, intent(out) :: ierr
+    real(c_double), intent(in), optional, target :: sig(:)
+    real(c_double), allocatable, target :: s(:)
+    type(c_ptr) :: sp
+    sp = c_null_ptr
+    if (present(sig)) then
+      s = sig
+      sp = c_loc(s)
+    end if
+    ierr = int(c_cup_h5run_append(w%ptr, t, x, sp))
+  end subroutine cup_h5run_append
 
   !> Samples written so far.
   integer(c_long) function cup_h5run_count(w)

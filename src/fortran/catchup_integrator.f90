@@ -14,7 +14,7 @@ module catchup_integrator
   public :: cup_schedule_parse, cup_schedule_value, cup_schedule_format, &
     cup_integrator_options_default, cup_integrator_create, cup_integrator_create_process, &
     cup_integrator_free, &
-    cup_integrator_run, cup_integrator_run_store, cup_integrator_state, &
+    cup_integrator_run, cup_integrator_run_store, cup_integrator_state, cup_integrator_zeta, &
     cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_run_info_message
   ! for the other modules of the binding (not part of the documented API)
   public :: cup_expected_samples_
@@ -107,6 +107,7 @@ contains
     st = c_cup_integrator_create(integ%ptr, L%ptr, up, o, cmsg)
     if (st == CUP_OK) then
       integ%dim = int(c_cup_lcs_dim(L%ptr))
+      integ%rows = int(c_cup_lcs_rows(L%ptr))
       integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
@@ -189,6 +190,7 @@ contains
     call c_cup_integrator_free(integ%ptr)
     integ%ptr = c_null_ptr
     integ%dim = 0
+    integ%rows = 0
     integ%expected = 0
   end subroutine cup_integrator_free
 
@@ -319,6 +321,23 @@ contains
     end if
     call cup_copy_out_(c_cup_integrator_state(integ%ptr), integ%dim, x, found, ierr)
   end subroutine cup_integrator_state
+
+  !> zeta of the last step (rows entries): the diodes' currents and reverse
+  !> voltages of a netlist, for cup_netlist_signals (0 before the first step).
+  !> An integrator from an LCS only (ierr = CUP_ERR_UNSUPPORTED for a process).
+  subroutine cup_integrator_zeta(integ, zeta, ierr)
+    type(cup_integrator_t), intent(in) :: integ
+    real(c_double), intent(out) :: zeta(:)
+    integer, intent(out) :: ierr
+    real(c_double) :: buf(integ%rows + 1)
+    if (cup_null_fail_(integ%ptr, 'integrator', ierr)) return
+    if (size(zeta) /= integ%rows) then
+      call cup_size_fail_('zeta', size(zeta), integ%rows, ierr)
+      return
+    end if
+    ierr = int(c_cup_integrator_zeta(integ%ptr, buf))
+    zeta = buf(1:integ%rows)
+  end subroutine cup_integrator_zeta
 
   function cup_scheme_name(scheme) result(s)
     integer, intent(in) :: scheme

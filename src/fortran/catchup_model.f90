@@ -17,7 +17,7 @@ module catchup_model
     cup_input_dim, cup_input_is_constant, cup_input_eval, cup_input_integral, cup_input_next_break, &
     cup_wave_name, cup_wave_parse
   public :: cup_lcs_create, cup_lcs_create_dense, cup_lcs_circuit, cup_lcs_free, cup_lcs_dim, &
-    cup_lcs_rows, cup_lcs_inputs, cup_lcs_polyset, cup_lcs_fixed_set
+    cup_lcs_rows, cup_lcs_inputs, cup_lcs_polyset, cup_lcs_fixed_set, cup_lcs_has_D
 
 contains
 
@@ -335,5 +335,11 @@ contains
     type(cup_lcs_t), intent(in) :: L
     cup_lcs_fixed_set = c_cup_lcs_fixed_set(L%ptr) /= 0
   end function cup_lcs_fixed_set
+
+  !> .true. when D has a nonzero entry (only the theta scheme runs the LCS).
+  logical function cup_lcs_has_D(L)
+    type(cup_lcs_t), intent(in) :: L
+    cup_lcs_has_D = c_cup_lcs_has_D(L%ptr) /= 0
+  end function cup_lcs_has_D
 
 end module catchup_model

@@ -10,13 +10,13 @@ module catchup_scene
   use catchup_integrator, only: cup_expected_samples_
   implicit none
   private
-  public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, &
+  public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, cup_scene_netlist, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
     cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator
-  public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, &
+  public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
-    c_cup_scene_dim, c_cup_scene_integrator
+    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -49,6 +49,11 @@ module catchup_scene
       type(c_ptr), value :: s
       type(c_ptr) :: p
     end function c_cup_scene_name
+    function c_cup_scene_netlist(s) bind(C, name="cup_scene_netlist") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: p
+    end function c_cup_scene_netlist
     function c_cup_scene_lcs(s) bind(C, name="cup_scene_lcs") result(p)
       import :: c_ptr
       type(c_ptr), value :: s
@@ -59,6 +64,11 @@ module catchup_scene
       type(c_ptr), value :: s
       type(c_ptr) :: p
     end function c_cup_scene_process
+    function c_cup_scene_crowd(s) bind(C, name="cup_scene_crowd") result(c)
+      import :: c_ptr
+      type(c_ptr), value :: s
+      type(c_ptr) :: c
+    end function c_cup_scene_crowd
     function c_cup_scene_dim(s) bind(C, name="cup_scene_dim") result(n)
       import :: c_ptr, c_int
       type(c_ptr), value :: s
@@ -106,23 +116,6 @@ module catchup_scene
 
 contains
 
-  !> NUL-terminated copies of the trimmed overrides, one per column of buf,
-  !> and the array of pointers to them (const char *const *).
-  subroutine pack_overrides(overrides, buf, ptrs)
-    character(len=*), intent(in) :: overrides(:)
-    character(kind=c_char), allocatable, target, intent(out) :: buf(:, :)
-    type(c_ptr), allocatable, target, intent(out) :: ptrs(:)
-    integer :: i, k, n
-    allocate(buf(len(overrides) + 1, size(overrides)), ptrs(size(overrides)))
-    buf = c_null_char
-    do i = 1, size(overrides)
-      n = len_trim(overrides(i))
-      do k = 1, n
-        buf(k, i) = overrides(i)(k:k)
-      end do
-      ptrs(i) = c_loc(buf(1, i))
-    end do
-  end subroutine pack_overrides
 
   !> Load the scene file `path`; overrides are "dotted.key=value" strings
   !> ("circuit.R1=2", "n=1000") applied before the document is read.
@@ -141,7 +134,7 @@ contains
     nov = 0
     if (present(overrides)) then
       if (size(overrides) > 0) then
-        call pack_overrides(overrides, buf, ptrs)
+        call cup_pack_strings_(overrides, buf, ptrs)
         op = c_loc(ptrs)
         nov = int(size(overrides), c_int)
       end if
@@ -170,7 +163,7 @@ contains
     nov = 0
     if (present(overrides)) then
       if (size(overrides) > 0) then
-        call pack_overrides(overrides, buf, ptrs)
+        call cup_pack_strings_(overrides, buf, ptrs)
         op = c_loc(ptrs)
         nov = int(size(overrides), c_int)
       end if
@@ -198,6 +191,15 @@ contains
     text = ''
     if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_name(s%ptr))
   end function cup_scene_name
+
+  !> The scene's netlist when its model is `netlist:` (a null handle
+  !> otherwise), owned by the scene (a borrowed handle).
+  function cup_scene_netlist(s) result(nl)
+    type(cup_scene_t), intent(in) :: s
+    type(cup_netlist_t) :: nl
+    if (c_associated(s%ptr)) nl%ptr = c_cup_scene_netlist(s%ptr)
+    nl%borrowed = .true.
+  end function cup_scene_netlist
 
   !> The scene's LCS, owned by the scene (a borrowed handle).
   function cup_scene_lcs(s) result(L)

@@ -89,6 +89,12 @@ module catchup_types
     integer(c_int) :: npoints = 0
     type(c_ptr) :: t = c_null_ptr
     type(c_ptr) :: v = c_null_ptr
+    ! SPICE sources (netlists): PULSE and DAMPED_SINE
+    real(c_double) :: delay = 0         !< PULSE, DAMPED_SINE: start time
+    real(c_double) :: damping = 0       !< DAMPED_SINE: decay rate after the delay
+    real(c_double) :: value2 = 0        !< PULSE: the pulsed value
+    real(c_double) :: rise = 0, fall = 0          !< PULSE: ramp times (0: a jump)
+    real(c_double) :: width = 0, period = 0       !< PULSE: time at value2; period (0: once)
   end type cup_wave
 
   ! ---- lcs.h ----------------------------------------------------------------
@@ -104,6 +110,9 @@ module catchup_types
     type(cup_csc) :: G
     type(cup_metric) :: metric       !< C's member `P` (renamed: Fortran is case-insensitive)
     real(c_double) :: pb_tol = 0
+    ! D != 0 (netlist diodes whose current the state does not fix)
+    type(cup_csc) :: D                   !< m x m; absent or zero: D = 0 (only theta runs D != 0)
+    type(c_ptr) :: row_names = c_null_ptr   !< const char *const *: m names for messages, or null
   end type cup_lcs_desc
 
   type, bind(C), public :: cup_circuit
@@ -223,6 +232,7 @@ module catchup_types
   type, public :: cup_integrator_t
     type(c_ptr) :: ptr = c_null_ptr
     integer :: dim = 0                 !< state dimension (cached at creation)
+    integer :: rows = 0                !< complementarity rows m (cached at creation)
     integer(c_long) :: expected = 0    !< samples a full run passes to a sink
   end type cup_integrator_t
 
@@ -239,6 +249,11 @@ module catchup_types
   type, public :: cup_scene_t
     type(c_ptr) :: ptr = c_null_ptr
   end type cup_scene_t
+
+  type, public :: cup_netlist_t
+    type(c_ptr) :: ptr = c_null_ptr
+    logical :: borrowed = .false.
+  end type cup_netlist_t
 
   type, public :: cup_h5run_t
     type(c_ptr) :: ptr = c_null_ptr

@@ -70,7 +70,8 @@ double cup_freestep_h_rho(const cup_drift *D, double h) {
 /* States per term: constant 1 (w' = 0), sine 2 (s' = om c, c' = -om s, the
  * input is s), square 1 (piecewise constant), table 2 (v' = slope). */
 static int gen_states(const cup_term *t) {
-  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL ? 2 : 1;
+  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE ||
+         t->kind == CUP_WAVE_DAMPED_SINE ? 2 : 1;
 }
 
 static int exp_init(cup_freestep *fs, char *errmsg) {
@@ -80,7 +81,15 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
   int nterms = u && !u->fn ? u->nterms : 0;
   fs->nw = 0;
   fs->gen_of_term = zalloc((size_t)nterms + 1, sizeof(int), &fail);
-  for (int k = 0; k < nterms && !fail; k++) { fs->gen_of_term[k] = fs->nw; fs->nw += gen_states(&u->terms[k]); }
+  for (int k = 0; k < nterms && !fail; k++) {
+    fs->gen_of_term[k] = fs->nw;
+    fs->nw += gen_states(&u->terms[k]);
+    /* before its delay a damped sine is constant, which its generator (a
+     * damped rotation) cannot hold */
+    if (u->terms[k].kind == CUP_WAVE_DAMPED_SINE && u->terms[k].delay > 0)
+      return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "exponential scheme: a damped sine with a delay (input "
+                      "term %d) is not supported; use the theta or implicit scheme", k);
+  }
   int na = fs->na = n + fs->nw;
   if (na > CUP_EXPONENTIAL_MAX_DIM)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
@@ -104,10 +113,12 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
     int g = n + fs->gen_of_term[k];
     if (D->has_E)                            /* x' += E(:, comp) * (first generator state) */
       for (int q = D->E.p[t->comp]; q < D->E.p[t->comp + 1]; q++) fs->M[D->E.i[q] + (size_t)g * na] = D->E.x[q];
-    if (t->kind == CUP_WAVE_SINE) {
-      fs->M[g + (size_t)(g + 1) * na] = t->omega;     /* s' = om c */
-      fs->M[(g + 1) + (size_t)g * na] = -t->omega;    /* c' = -om s */
-    } else if (t->kind == CUP_WAVE_PWL) {
+    if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) {
+      double d = t->kind == CUP_WAVE_DAMPED_SINE ? t->damping : 0;
+      fs->M[g + (size_t)(g + 1) * na] = t->omega;     /* s' = om c - d s */
+      fs->M[(g + 1) + (size_t)g * na] = -t->omega;    /* c' = -om s - d c */
+      fs->M[g + (size_t)g * na] = fs->M[(g + 1) + (size_t)(g + 1) * na] = -d;
+    } else if (t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE) {
       fs->M[g + (size_t)(g + 1) * na] = 1;             /* v' = slope */
     }
   }
@@ -158,6 +169,13 @@ static void gen_values(const cup_freestep *fs, double a, double b) {
         w[1] = t->amp * cos(t->omega * a + t->phase);
         break;
       case CUP_WAVE_SQUARE: w[0] = cup_term_value(t, mid); break;
+      case CUP_WAVE_DAMPED_SINE: {                   /* no delay here (exp_init) */
+        double e = t->amp * exp(-t->damping * a);
+        w[0] = e * sin(t->omega * a + t->phase);
+        w[1] = e * cos(t->omega * a + t->phase);
+        break;
+      }
+      case CUP_WAVE_PULSE:
       case CUP_WAVE_PWL: {
         double va = cup_term_value(t, a);
         w[0] = va;

@@ -32,10 +32,12 @@ struct cup_integrator {
   int fixed;                /* the polyset does not move */
   cup_setproj *sp;          /* other sets */
   cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
+  const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
   cup_freestep fs;
   cup_projector *proj;
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
+  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -155,6 +157,45 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   return CUP_OK;
 }
 
+/* Only the theta scheme's LCP takes D: the catching-up schemes project
+ * onto K(t) = {C x + G u + F >= 0}, which exists only when D = 0. */
+static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
+  if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
+  int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
+  unsigned char *used = calloc((size_t)L->m + 1, 1);
+  if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
+  for (int j = 0; j < L->m; j++)
+    for (int q = L->D.p[j]; q < L->D.p[j + 1]; q++)
+      if (L->D.x[q] != 0) used[L->D.i[q]] = used[j] = 1;
+  for (int i = 0; i < L->m; i++) if (used[i]) rows[k++] = i;
+  char text[128];
+  cup_lcs_rows_text(L, rows, k, text, sizeof text);
+  free(rows); free(used);
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
+                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state "
+                  "does not fix): use the theta scheme", cup_scheme_name(scheme), text, k == 1 ? "has" : "have");
+}
+
+/* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
+static int theta_step_init(cup_integrator *I, const double *W, double theta, char *errmsg) {
+  const cup_lcs *L = I->L;
+  int n = I->n, m = I->m, st = CUP_OK;
+  double *B = NULL, *D = NULL;
+  if (L && L->has_D) {
+    B = calloc((size_t)n * m + 1, sizeof(double));
+    D = calloc((size_t)m * m + 1, sizeof(double));
+    if (!B || !D) st = CUP_ERR_NOMEM;
+    for (int j = 0; !st && j < m; j++) {
+      for (int k = L->B.p[j]; k < L->B.p[j + 1]; k++) B[L->B.i[k] + (size_t)j * n] = L->B.x[k];
+      for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
+    }
+  }
+  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D, theta);
+  free(B);
+  free(D);
+  return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
+}
+
 /* The polyset path: the projector, and the exact LCP step where it is
  * cheaper or the scheme needs it. */
 static int polyset_setup(cup_integrator *I, char *errmsg) {
@@ -181,7 +222,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
       for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
       W = eye;
     }
-    if (cup_lcp_step_init(&I->th, I->K, W, I->h)) st = cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory");
+    st = theta_step_init(I, W, o->scheme == CUP_SCHEME_THETA ? o->theta : 0, errmsg);
     free(eye);
   }
   return st;
@@ -245,7 +286,10 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   int st;
   cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
+  st = needs_theta(L, I->o.scheme, errmsg);
+  if (st) { cup_integrator_free(&I); return st; }
   I->u = u;
+  I->L = L;
   I->n = L->n; I->m = L->m; I->p = L->p;
   I->K = L->K;
   I->G = L->has_G ? &L->G : NULL;
@@ -326,6 +370,17 @@ void cup_integrator_free(cup_integrator **Ip) {
 
 const double *cup_integrator_state(const cup_integrator *I) { return I ? I->x : NULL; }
 
+/* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
+ * are the impulse of the step, h zeta. */
+int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
+  if (!I || !zeta) return CUP_ERR_ARG;
+  if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
+  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
+  double s = I->zeta_from == 2 ? 1 / I->h : 1;
+  for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
+  return CUP_OK;
+}
+
 /* ---- the run ---------------------------------------------------------------------- */
 
 /* t_k = k T / n computed from k alone: no accumulation, and t_n = T. */
@@ -401,6 +456,7 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
  * projects it), by the raw slack so that a point on the boundary passes. */
 static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
+  if (I->use_theta) cup_lcp_step_start(&I->th, I->x, g0);
   if (cup_slack(I->K, g0, I->x, I->s0, NULL) < 0) {
     info->status = CUP_WARN_X0_OUTSIDE;
     snprintf(info->message, sizeof info->message,
@@ -463,6 +519,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
   memcpy(I->x, x0, sizeof(double) * (size_t)n);
   cup_projector_reset(I->proj);
+  I->zeta_from = 0;
   int fixed = I->fixed || !I->u;
   long rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
@@ -520,10 +577,13 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
         cup_proj_info pp = {0};
         int ps = cup_projector_set_offset(I->proj, g);
         if (ps == CUP_OK) ps = cup_project(I->proj, I->xf, I->xnew, &pp);
-        if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; }
+        if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; I->zeta_from = 2; }
+      } else {
+        I->zeta_from = 1;
       }
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
+      I->zeta_from = 2;
     }
     if (st < 0) {                        /* the polyset path's errors */
       char what[224];

@@ -42,6 +42,10 @@ struct cup_h5run {
   hsize_t written;        /* rows already handed to HDF5 */
   hsize_t nbuf;           /* rows waiting in the buffer */
   double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
+  int nsig;               /* named signals: /signals/<name> */
+  hid_t group;
+  hid_t *dset_s;
+  double *sbuf;           /* chunk_rows * nsig entries, one signal after another */
   double last_flush;      /* monotonic seconds */
   int data_status;        /* first failure of the data path; sticky */
   int h5_failed;          /* an HDF5 call failed: only close is attempted */
@@ -200,8 +204,17 @@ static hsize_t chunk_rows_for(int dim) {
   return rows;
 }
 
+static void close_signals(cup_h5run *w) {
+  for (int k = 0; k < w->nsig; k++)
+    if (w->dset_s[k] >= 0) H5Dclose(w->dset_s[k]);
+  if (w->group >= 0) H5Gclose(w->group);
+  w->group = H5I_INVALID_HID;
+  w->nsig = 0;
+}
+
 static void free_writer(cup_h5run *w) {
   quiet_t q = quiet_begin();
+  close_signals(w);
   if (w->dset_x >= 0) H5Dclose(w->dset_x);
   if (w->dset_t >= 0) H5Dclose(w->dset_t);
   if (w->file >= 0) H5Fclose(w->file);
@@ -209,6 +222,8 @@ static void free_writer(cup_h5run *w) {
   quiet_end(q);
   free(w->tbuf);
   free(w->xbuf);
+  free(w->dset_s);
+  free(w->sbuf);
   free(w->path);
   free(w);
 }
@@ -227,7 +242,7 @@ int cup_h5run_create(cup_h5run **out, const char *path, int dim, char *errmsg) {
     return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
   cup_h5run *w = calloc(1, sizeof *w);
   if (!w) return fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
-  w->file = w->dset_t = w->dset_x = H5I_INVALID_HID;
+  w->file = w->dset_t = w->dset_x = w->group = H5I_INVALID_HID;
   w->dim = dim;
   w->chunk_rows = chunk_rows_for(dim);
   w->tbuf = malloc(sizeof(double) * w->chunk_rows);
@@ -277,7 +292,10 @@ static int write_buffer(cup_h5run *w) {
   quiet_t q = quiet_begin();
   if (append(w->dset_x, 2, w->written, w->nbuf, (hsize_t)w->dim, w->xbuf) < 0)
     set_error(w, CUP_ERR_IO, "append rows to /x in");
-  else if (append(w->dset_t, 1, w->written, w->nbuf, 1, w->tbuf) < 0)
+  for (int k = 0; k < w->nsig && !w->h5_failed; k++)     /* before /t: a reader takes len(/t) rows */
+    if (append(w->dset_s[k], 1, w->written, w->nbuf, 1, w->sbuf + (size_t)k * w->chunk_rows) < 0)
+      set_error(w, CUP_ERR_IO, "append rows to /signals in");
+  if (!w->h5_failed && append(w->dset_t, 1, w->written, w->nbuf, 1, w->tbuf) < 0)
     set_error(w, CUP_ERR_IO, "append rows to /t in");
   quiet_end(q);
   if (w->h5_failed) return w->data_status;
@@ -320,17 +338,73 @@ static hsize_t room(const cup_h5run *w) {
  * kills left /t and /x of different lengths); once a second keeps it to a
  * fraction of a millisecond per second, and rows reach a reader through a
  * completed H5Fflush either way. */
-int cup_h5run_sink(long k, double t, const double *x, void *ctx) {
-  (void)k;
-  cup_h5run *w = ctx;
-  if (!w || !x) return CUP_ERR_ARG;
+int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig) {
+  if (!w || !x || (w->nsig && !sig)) return CUP_ERR_ARG;
   if (w->data_status != CUP_OK) return w->data_status;
   w->tbuf[w->nbuf] = t;
   memcpy(w->xbuf + w->nbuf * (hsize_t)w->dim, x, sizeof(double) * (size_t)w->dim);
+  for (int k = 0; k < w->nsig; k++) w->sbuf[(size_t)k * w->chunk_rows + w->nbuf] = sig[k];
   w->nbuf++;
   if (now_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
   if (w->nbuf >= room(w)) return write_buffer(w);
   return CUP_OK;
+}
+
+int cup_h5run_sink(long k, double t, const double *x, void *ctx) {
+  (void)k;
+  return cup_h5run_append(ctx, t, x, NULL);
+}
+
+/* The names, in order, as a variable-length string array attribute. */
+static int names_attr(cup_h5run *w, int nsig, const char *const *names) {
+  hsize_t n = (hsize_t)nsig;
+  hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate_simple(1, &n, NULL), a = H5I_INVALID_HID;
+  int ok = type >= 0 && space >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
+           H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
+  if (ok) a = H5Acreate2(w->group, "names", type, space, H5P_DEFAULT, H5P_DEFAULT);
+  ok = a >= 0 && H5Awrite(a, type, names) >= 0;
+  hid_t err = keep_stack(!ok);
+  if (a >= 0) H5Aclose(a);
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  restore_stack(err);
+  return ok;
+}
+
+int cup_h5run_signals(cup_h5run *w, int nsig, const char *const *names) {
+  if (!w || nsig < 0 || (nsig && !names)) return CUP_ERR_ARG;
+  if (w->nsig || w->written + w->nbuf > 0 || w->h5_failed) return CUP_ERR_ARG;
+  if (nsig == 0) return CUP_OK;
+  if ((double)nsig * (double)w->chunk_rows * sizeof(double) > (double)(64u << 20)) {
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: '%s': %d signals are too many to buffer (at most %u)",
+             w->path, nsig, (unsigned)((64u << 20) / (w->chunk_rows * sizeof(double))));
+    return CUP_ERR_ARG;
+  }
+  for (int k = 0; k < nsig; k++)
+    if (!names[k] || !names[k][0] || strchr(names[k], '/') || !strcmp(names[k], ".")) {
+      snprintf(w->errmsg, sizeof w->errmsg, "h5run: signal %d: '%.60s' is not a dataset name", k,
+               names[k] ? names[k] : "(null)");
+      return CUP_ERR_ARG;
+    }
+  w->dset_s = malloc(sizeof(hid_t) * (size_t)nsig);
+  w->sbuf = malloc(sizeof(double) * (size_t)nsig * w->chunk_rows);
+  if (!w->dset_s || !w->sbuf) return CUP_ERR_NOMEM;
+  quiet_t q = quiet_begin();
+  w->group = H5Gcreate2(w->file, "signals", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  int st = w->group >= 0 ? CUP_OK : set_error(w, CUP_ERR_IO, "create group /signals in");
+  for (int k = 0; k < nsig && !st; k++) {
+    w->dset_s[k] = create_dataset(w->group, names[k], 1, 1, w->chunk_rows);
+    w->nsig = k + 1;
+    if (w->dset_s[k] < 0) {
+      char op[128];
+      snprintf(op, sizeof op, "create dataset /signals/%.60s (a repeated name?) in", names[k]);
+      st = set_error(w, CUP_ERR_IO, op);
+    }
+  }
+  if (!st && !names_attr(w, nsig, names)) st = set_error(w, CUP_ERR_IO, "write /signals's names in");
+  if (!st && H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) st = set_error(w, CUP_ERR_IO, "flush");
+  quiet_end(q);
+  return st;
 }
 
 long cup_h5run_count(const cup_h5run *w) {
@@ -396,6 +470,35 @@ int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v) {
   return st;
 }
 
+/* A whole float64 array at once (rank 1 or 2), in a group made as needed:
+ * "crowd/radius". For what a run knows only at its end or from its set-up. */
+int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, const double *data) {
+  if (!w || !name || !name[0] || rank < 1 || rank > 2 || !dims || (!data && dims[0] * (rank == 2 ? dims[1] : 1) > 0))
+    return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
+  hsize_t hd[2] = {(hsize_t)dims[0], rank == 2 ? (hsize_t)dims[1] : 1};
+  quiet_t q = quiet_begin();
+  hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  int ok = lcpl >= 0 && H5Pset_create_intermediate_group(lcpl, 1) >= 0;
+  hid_t space = ok ? H5Screate_simple(rank, hd, NULL) : H5I_INVALID_HID;
+  hid_t d = space >= 0 ? H5Dcreate2(w->file, name, H5T_IEEE_F64LE, space, lcpl, H5P_DEFAULT, H5P_DEFAULT)
+                       : H5I_INVALID_HID;
+  ok = d >= 0 && (hd[0] * hd[1] == 0 || H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
+  hid_t err = keep_stack(!ok);
+  if (d >= 0) H5Dclose(d);
+  if (space >= 0) H5Sclose(space);
+  if (lcpl >= 0) H5Pclose(lcpl);
+  restore_stack(err);
+  int st = CUP_OK;
+  if (!ok) {
+    char op[160];
+    snprintf(op, sizeof op, "write dataset '%s' in", name);
+    st = set_error(w, CUP_ERR_IO, op);
+  }
+  quiet_end(q);
+  return st;
+}
+
 /* ---- close ---- */
 
 int cup_h5run_close(cup_h5run **pw, char *errmsg) {
@@ -403,6 +506,7 @@ int cup_h5run_close(cup_h5run **pw, char *errmsg) {
   cup_h5run *w = *pw;
   int st = cup_h5run_flush(w);   /* returns the earlier data failure, if any */
   quiet_t q = quiet_begin();
+  close_signals(w);
   herr_t r = H5Dclose(w->dset_x);
   r = H5Dclose(w->dset_t) < 0 ? -1 : r;
   r = H5Fclose(w->file) < 0 ? -1 : r;

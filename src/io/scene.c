@@ -17,13 +17,18 @@
 #include "mtx.h"
 #include "scene_read.h"
 #include "scene_set.h"
+#include "scene_crowd.h"
 #include "scene_shape.h"
 #include "scene_tree.h"
+#include "read_text.h"
+#include "scene_netlist.h"
 
 struct cup_scene {
   char *name;
   cup_lcs *lcs;
   scene_process *proc;          /* a general process (set:, f:) instead of an LCS */
+  cup_crowd *crowd;             /* or a crowd (crowd:) */
+  cup_netlist *nl;              /* netlist: the model (its LCS and input) */
   cup_input *u;                 /* NULL when p = 0 */
   double *x0;
   cup_integrator_options opt;
@@ -67,14 +72,14 @@ static int read_circuit(rd *r, const st_node *knode, const st_node *map, cup_lcs
 
 /* The matrices of an lcs, owned until the LCS has copied them. */
 typedef struct lcs_parts {
-  mat A, B, C, E, G, P;
+  mat A, B, C, D, E, G, P;
   double *F, *Pdiag;
   const st_node *Pnode;
 } lcs_parts;
 
 static void parts_free(lcs_parts *q) {
   mat_free(&q->A); mat_free(&q->B); mat_free(&q->C);
-  mat_free(&q->E); mat_free(&q->G); mat_free(&q->P);
+  mat_free(&q->D); mat_free(&q->E); mat_free(&q->G); mat_free(&q->P);
   free(q->F); free(q->Pdiag);
 }
 
@@ -101,17 +106,18 @@ static int lcs_fail(rd *r, int st, const char *lib, const st_node *knode, const 
   if ((st == CUP_ERR_NOT_SPD || st == CUP_ERR_LINALG) && q->Pnode)
     return fail(r, st, q->Pnode, "lcs.P", "%s", lib);
   if (st == CUP_ERR_PB_CT && q->B.at) return fail(r, st, q->B.at, "lcs.B", "%s", lib);
+  if (q->D.at && !strncmp(lib, "D ", 2)) return fail(r, st, q->D.at, "lcs.D", "%s", lib);
   return fail(r, st, knode, "lcs", "%s", lib);
 }
 
 static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L) {
-  static const char *const known[] = {"A", "B", "C", "E", "F", "G", "P", "pb_tol", NULL};
+  static const char *const known[] = {"A", "B", "C", "D", "E", "F", "G", "P", "pb_tol", NULL};
   char why[64], lib[CUP_ERRMSG_LEN];
   lcs_parts q = {0};
   cup_lcs_desc d = {0};
   const st_node *nd;
   int n = 0, m = 0;
-  int st = need_map(r, map, "lcs", "a mapping with the matrices A, B, C, E, F, G, P");
+  int st = need_map(r, map, "lcs", "a mapping with the matrices A, B, C, D, E, F, G, P");
   if (!st) st = check_keys(r, map, "lcs", known);
   if (!st) st = need(r, map, "lcs", "C", &nd);
   if (!st) st = matrix(r, nd, "lcs.C", &q.C);
@@ -123,6 +129,8 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
   if (!st && q.B.a.p) st = matrix_dims(r, &q.B, "lcs.B", n, m, why);
   if (!st) st = lcs_matrix(r, map, "E", &q.E);
   if (!st) st = lcs_matrix(r, map, "G", &q.G);
+  if (!st) st = lcs_matrix(r, map, "D", &q.D);
+  if (!st && q.D.a.p) st = matrix_dims(r, &q.D, "lcs.D", m, m, "m x m, m = C's rows");
   if (!st) st = input_dim(r, &q, n, m, &d.p);
   if (!st && (nd = opt(map, "F"))) {
     snprintf(why, sizeof why, "m = %d from C's rows", m);
@@ -137,22 +145,25 @@ static int read_lcs(rd *r, const st_node *knode, const st_node *map, cup_lcs **L
   if (!st) {
     d.n = n; d.m = m; d.F = q.F;
     d.A = mat_view(&q.A); d.B = mat_view(&q.B); d.C = mat_view(&q.C);
-    d.E = mat_view(&q.E); d.G = mat_view(&q.G);
+    d.E = mat_view(&q.E); d.G = mat_view(&q.G); d.D = mat_view(&q.D);
     if ((st = cup_lcs_create(L, &d, lib))) st = lcs_fail(r, st, lib, knode, &q);
   }
   parts_free(&q);
   return st;
 }
 
-static int read_model(rd *r, const st_node *root, cup_lcs **L) {
-  const st_node *kc, *kl;
-  const st_node *c = st_get(root, "circuit", &kc), *l = st_get(root, "lcs", &kl);
-  if (c && l)
-    return fail(r, CUP_ERR_PARSE, kc->line > kl->line ? kc : kl, kc->line > kl->line ? "circuit" : "lcs",
-                "give one model, circuit or lcs, not both");
-  if (c) return read_circuit(r, kc, c, L);
-  if (l) return read_lcs(r, kl, l, L);
-  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs", "missing: the scene needs a model, circuit: or lcs:");
+static int read_model(rd *r, const st_node *root, cup_scene *S) {
+  const st_node *kc, *kl, *kn;
+  const st_node *c = st_get(root, "circuit", &kc), *l = st_get(root, "lcs", &kl), *nl = st_get(root, "netlist", &kn);
+  if (!!c + !!l + !!nl > 1) {
+    const st_node *k2 = c && l ? (kc->line > kl->line ? kc : kl) : nl && (c || l) ? kn : kc;
+    return fail(r, CUP_ERR_PARSE, k2, k2->text, "give one model, circuit, lcs or netlist, not two");
+  }
+  if (c) return read_circuit(r, kc, c, &S->lcs);
+  if (l) return read_lcs(r, kl, l, &S->lcs);
+  if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
+  return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist/set", "missing: the scene needs a model, circuit:, "
+              "lcs:, netlist:, set: or crowd:");
 }
 
 /* ---- the input u(t) ------------------------------------------------------ */
@@ -194,6 +205,28 @@ static int read_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
   return st;
 }
 
+/* A pulse's values (required) and times, a damped sine's delay and damping
+ * (each 0 unless given; times >= 0). */
+static int read_spice_wave(rd *r, const st_node *map, const char *key, cup_wave *w) {
+  char k1[KEY_LEN];
+  const st_node *nd;
+  int pulse = w->kind == CUP_WAVE_PULSE, st = CUP_OK;
+  const char *const pk[] = {"value", "value2", "delay", "rise", "fall", "width", "period"};
+  double *pv[] = {&w->value, &w->value2, &w->delay, &w->rise, &w->fall, &w->width, &w->period};
+  const char *const dk[] = {"delay", "damping"};
+  double *dv[] = {&w->delay, &w->damping};
+  int count = pulse ? 7 : 2;
+  for (int k = 0; k < count && !st; k++) {
+    const char *name = pulse ? pk[k] : dk[k];
+    double *v = pulse ? pv[k] : dv[k];
+    int required = pulse && k < 2, any_sign = required || (!pulse && k == 1);
+    if (required) st = need(r, map, key, name, &nd);
+    else if (!(nd = opt(map, name))) continue;
+    if (!st) st = any_sign ? number(r, nd, join(k1, key, name), v) : number_min(r, nd, join(k1, key, name), 0, 0, v);
+  }
+  return st;
+}
+
 static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *u, int j) {
   char k1[KEY_LEN], hint[160], lib[CUP_ERRMSG_LEN];
   const st_node *tn = NULL, *nd = NULL;
@@ -213,7 +246,9 @@ static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *
     st = need(r, map, key, "value", &nd);
     if (!st) st = number(r, nd, join(k1, key, "value"), &w.value);
   }
-  if (!st && (kind == CUP_WAVE_SINE || kind == CUP_WAVE_SQUARE)) st = read_wave(r, map, key, &w);
+  if (!st && (kind == CUP_WAVE_SINE || kind == CUP_WAVE_SQUARE || kind == CUP_WAVE_DAMPED_SINE))
+    st = read_wave(r, map, key, &w);
+  if (!st && (kind == CUP_WAVE_PULSE || kind == CUP_WAVE_DAMPED_SINE)) st = read_spice_wave(r, map, key, &w);
   if (!st && kind == CUP_WAVE_PWL) {
     st = need(r, map, key, "points", &nd);
     if (!st) st = read_points(r, nd, join(k1, key, "points"), &w, &buf);
@@ -236,7 +271,7 @@ static int read_term(rd *r, const st_node *nd, const char *key, cup_input *u, in
     return st;
   }
   return fail(r, CUP_ERR_PARSE, nd, key, "expected an input term: a number or a mapping with a type "
-              "(constant, sine, square, pwl) (got %s)", st_looks(nd, b, sizeof b));
+              "(constant, sine, square, pwl, pulse, damped_sine) (got %s)", st_looks(nd, b, sizeof b));
 }
 
 /* One component u_j: a term, or a list of terms (their sum). */
@@ -372,23 +407,38 @@ static int read_method(rd *r, const st_node *root, cup_integrator_options *o) {
   return st;
 }
 
-/* T, n, x0 and the tolerance schedules. */
+/* T, n and the tolerance schedules. */
+static int read_times(rd *r, const st_node *root, cup_scene *S) {
+  const st_node *nd;
+  cup_integrator_options *o = &S->opt;
+  int tran = S->nl && cup_netlist_tran(S->nl, NULL, NULL);   /* .tran gives T and n */
+  int st = CUP_OK;
+  if (!tran || opt(root, "T")) {
+    st = need(r, root, "", "T", &nd);
+    if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
+  }
+  if (!st && (!tran || opt(root, "n"))) {
+    st = need(r, root, "", "n", &nd);
+    /* 2^53: every integer up to it is exact in a double */
+    if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
+  }
+  if (!st) st = read_schedule(r, root, "eps", "n^-2.1", &o->eps, &S->eps_spec);
+  if (!st) st = read_schedule(r, root, "eta", "n^-1.05", &o->eta, &S->eta_spec);
+  return st;
+}
+
+/* T, n, the schedules and x0. */
 static int read_run(rd *r, const st_node *root, int dim, cup_scene *S) {
   char why[48];
   const st_node *nd;
-  cup_integrator_options *o = &S->opt;
-  int st = need(r, root, "", "T", &nd);
-  if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
-  if (!st) st = need(r, root, "", "n", &nd);
-  /* 2^53: every integer up to it is exact in a double */
-  if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
-  if (!st) st = read_schedule(r, root, "eps", "n^-2.1", &o->eps, &S->eps_spec);
-  if (!st) st = read_schedule(r, root, "eta", "n^-1.05", &o->eta, &S->eta_spec);
+  int st = read_times(r, root, S);
   if (!st && (nd = opt(root, "x0"))) {
     snprintf(why, sizeof why, "n = %d, the state dimension", dim);
     st = vector(r, nd, "x0", dim, why, &S->x0);
   } else if (!st && !(S->x0 = calloc((size_t)dim, sizeof(double)))) {
     st = CUP_ERR_NOMEM;
+  } else if (!st && S->nl) {
+    memcpy(S->x0, cup_netlist_x0(S->nl), sizeof(double) * (size_t)dim);
   }
   return st;
 }
@@ -415,7 +465,8 @@ static int read_name(rd *r, const st_node *root, cup_scene *S) {
  * place: no input: key. */
 static int read_general(rd *r, const st_node *root, cup_scene *S) {
   const st_node *kset, *kin = NULL, *set = st_get(root, "set", &kset);
-  const char *other = opt(root, "circuit") ? "circuit" : opt(root, "lcs") ? "lcs" : NULL;
+  const char *other = opt(root, "circuit") ? "circuit" : opt(root, "lcs") ? "lcs"
+                    : opt(root, "netlist") ? "netlist" : NULL;
   if (other)
     return fail(r, CUP_ERR_PARSE, kset, "set", "give one model, %s or set, not both", other);
   if (opt(root, "input") && st_get(root, "input", &kin))
@@ -424,21 +475,48 @@ static int read_general(rd *r, const st_node *root, cup_scene *S) {
   return scene_read_process(r, root, kset, set, read_component, &S->proc);
 }
 
+/* crowd: instead of a model; the agents give x0. */
+static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
+  static const char *const others[] = {"circuit", "lcs", "netlist", "set", "f", "input", "x0", NULL};
+  const st_node *kc, *k, *map = st_get(root, "crowd", &kc);
+  for (int i = 0; others[i]; i++)
+    if (opt(root, others[i]) && st_get(root, others[i], &k))
+      return fail(r, CUP_ERR_PARSE, k, others[i], "a crowd: scene has no %s: (the agents give x0; "
+                  "the desired velocity is f)", others[i]);
+  int st = read_times(r, root, S);
+  if (!st) st = scene_read_crowd(r, map, S->opt.T / (double)S->opt.n, &S->crowd);
+  int n = st ? 0 : 2 * cup_crowd_agents(S->crowd);
+  if (!st && !(S->x0 = malloc(sizeof(double) * (size_t)n))) st = CUP_ERR_NOMEM;
+  if (!st) memcpy(S->x0, cup_crowd_q0(S->crowd), sizeof(double) * (size_t)n);
+  return st;
+}
+
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
-  static const char *const known[] = {"name", "circuit", "lcs", "set", "f", "input", "x0", "T", "n", "eps",
-                                      "eta", "scheme", "theta", "projector", "output", NULL};
-  const st_node *kf;
+  static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
+                                      "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", NULL};
+  const st_node *kf, *ki;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
+  cup_integrator_options_default(&S->opt);
+  if (!st && opt(root, "crowd")) {
+    st = read_crowd(r, root, S);
+    if (!st) st = read_method(r, root, &S->opt);
+    if (!st) st = read_name(r, root, S);
+    return st;
+  }
   if (!st && opt(root, "set")) {
     st = read_general(r, root, S);
   } else if (!st && opt(root, "f") && st_get(root, "f", &kf)) {
     st = fail(r, CUP_ERR_PARSE, kf, "f", "f: goes with set: (an LCS's f is A x + E u, in lcs:)");
   } else if (!st) {
-    st = read_model(r, root, &S->lcs);
-    if (!st) st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
+    st = read_model(r, root, S);
+    if (!st && S->nl && st_get(root, "input", &ki))
+      st = fail(r, CUP_ERR_PARSE, ki, "input", "a netlist's sources are its input: set them in the netlist "
+                "(netlist.V1: 'SIN(0 5 50)')");
+    else if (!st && !S->nl)
+      st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
   }
-  cup_integrator_options_default(&S->opt);
+  if (!st && S->nl) scene_netlist_options(S->nl, &S->opt);
   if (!st) st = read_run(r, root, cup_scene_dim(S), S);
   if (!st) st = read_method(r, root, &S->opt);
   if (!st) st = read_name(r, root, S);
@@ -464,15 +542,9 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
   return CUP_OK;
 }
 
-static int check_args(cup_scene **s, const void *src, const char *const *ovr, int nov, char *errmsg) {
-  if (errmsg) errmsg[0] = '\0';
-  if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: output pointer is NULL");
-  *s = NULL;
-  if (!src) return cup_fail(errmsg, CUP_ERR_ARG, "scene: path or text is NULL");
-  if (nov < 0 || (nov > 0 && !ovr)) return cup_fail(errmsg, CUP_ERR_ARG, "scene: %d overrides but no list", nov);
-  for (int k = 0; k < nov; k++)
-    if (!ovr[k]) return cup_fail(errmsg, CUP_ERR_ARG, "scene: override %d is NULL", k);
-  return CUP_OK;
+static int check_args(cup_scene **s, const void *src, const char *const *list, int n, char *errmsg) {
+  if (s) *s = NULL;
+  return cup_load_args("scene", "override", s != NULL, src, list, n, errmsg);
 }
 
 int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,
@@ -482,34 +554,12 @@ int cup_scene_load_string(cup_scene **s, const char *text, const char *name, con
   return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, errmsg);
 }
 
-static int slurp(const char *path, char **text, size_t *len, char *errmsg) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return cup_fail(errmsg, CUP_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-  size_t cap = 4096, n = 0, got;
-  char *buf = malloc(cap);
-  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0) {
-    n += got;
-    if (n == cap) {
-      char *nb = realloc(buf, cap *= 2);
-      if (!nb) { free(buf); buf = NULL; }
-      buf = nb;
-    }
-  }
-  int err = ferror(f);
-  fclose(f);
-  if (!buf) return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path);
-  if (err) { free(buf); return cup_fail(errmsg, CUP_ERR_IO, "%s: read error", path); }
-  *text = buf;
-  *len = n;
-  return CUP_OK;
-}
-
 int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides, int n_overrides,
                    char *errmsg) {
   int st = check_args(s, path, overrides, n_overrides, errmsg);
   char *text = NULL, *dir = NULL;
   size_t len = 0;
-  if (!st) st = slurp(path, &text, &len, errmsg);
+  if (!st) st = cup_read_text(path, &text, &len, errmsg);
   const char *slash = path ? strrchr(path, '/') : NULL;
   if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
   if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, errmsg);
@@ -524,7 +574,9 @@ void cup_scene_free(cup_scene **s) {
   free(S->name);
   cup_lcs_free(&S->lcs);
   scene_process_free(&S->proc);
+  cup_crowd_free(&S->crowd);
   cup_input_free(&S->u);
+  cup_netlist_free(&S->nl);
   free(S->x0);
   free(S->eps_spec);
   free(S->eta_spec);
@@ -534,13 +586,18 @@ void cup_scene_free(cup_scene **s) {
 }
 
 const char *cup_scene_name(const cup_scene *s) { return s ? s->name : NULL; }
-const cup_lcs *cup_scene_lcs(const cup_scene *s) { return s ? s->lcs : NULL; }
+const cup_lcs *cup_scene_lcs(const cup_scene *s) { return !s ? NULL : s->nl ? cup_netlist_lcs(s->nl) : s->lcs; }
 const cup_input *cup_scene_input(const cup_scene *s) {
-  return !s ? NULL : s->proc ? scene_process_input(s->proc) : s->u;
+  return !s ? NULL : s->proc ? scene_process_input(s->proc) : s->nl ? cup_netlist_input(s->nl) : s->u;
 }
-const cup_process_desc *cup_scene_process(const cup_scene *s) { return s ? scene_process_desc(s->proc) : NULL; }
+cup_netlist *cup_scene_netlist(const cup_scene *s) { return s ? s->nl : NULL; }
+const cup_process_desc *cup_scene_process(const cup_scene *s) {
+  return !s ? NULL : s->crowd ? cup_crowd_process(s->crowd) : scene_process_desc(s->proc);
+}
+cup_crowd *cup_scene_crowd(const cup_scene *s) { return s ? s->crowd : NULL; }
 int cup_scene_dim(const cup_scene *s) {
-  return !s ? 0 : s->proc ? scene_process_desc(s->proc)->n : cup_lcs_dim(s->lcs);
+  return !s ? 0 : s->crowd ? 2 * cup_crowd_agents(s->crowd) : s->proc ? scene_process_desc(s->proc)->n
+                                                                     : cup_lcs_dim(cup_scene_lcs(s));
 }
 
 int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
@@ -549,8 +606,8 @@ int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cu
   *I = NULL;
   if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
   if (!o) o = &s->opt;
-  if (s->proc) return cup_integrator_create_process(I, scene_process_desc(s->proc), o, errmsg);
-  return cup_integrator_create(I, s->lcs, s->u, o, errmsg);
+  if (s->proc || s->crowd) return cup_integrator_create_process(I, cup_scene_process(s), o, errmsg);
+  return cup_integrator_create(I, cup_scene_lcs(s), cup_scene_input(s), o, errmsg);
 }
 const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }
 const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ? &s->opt : NULL; }

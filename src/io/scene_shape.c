@@ -6,14 +6,17 @@
 #include "scene_shape.h"
 
 /* The keys of a term mapping, by waveform (CUP_WAVE_LIST order). */
-const char *const scene_wave_keys[CUP_WAVE_COUNT][5] = {{"type", "value", NULL},
-                                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                                         {"type", "amplitude", "frequency", "phase", NULL},
-                                                         {"type", "points", NULL}};
+const char *const scene_wave_keys[CUP_WAVE_COUNT][SCENE_WAVE_KEYS] = {
+  {"type", "value", NULL},
+  {"type", "amplitude", "frequency", "phase", NULL},
+  {"type", "amplitude", "frequency", "phase", NULL},
+  {"type", "points", NULL},
+  {"type", "value", "value2", "delay", "rise", "fall", "width", "period", NULL},
+  {"type", "amplitude", "frequency", "phase", "delay", "damping", NULL}};
 
 /* Keys whose value is a matrix or a vector: inline numbers or {file: ...}. */
 static int inline_or_file(const char *path) {
-  static const char *const keys[] = {"x0", "lcs.A", "lcs.B", "lcs.C", "lcs.E", "lcs.F", "lcs.G", "lcs.P", NULL};
+  static const char *const keys[] = {"x0", "lcs.A", "lcs.B", "lcs.C", "lcs.D", "lcs.E", "lcs.F", "lcs.G", "lcs.P", NULL};
   for (int k = 0; keys[k]; k++)
     if (!strcmp(path, keys[k])) return 1;
   return 0;
@@ -30,8 +33,16 @@ static int replace_by_map(st_node **slot, int k) {
 int scene_reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k) {
   st_node *nd = *slot;
   if (!*path && nd->kind == ST_MAP) {
-    if (!strcmp(seg, "circuit")) st_map_remove(nd, "lcs");
-    if (!strcmp(seg, "lcs")) st_map_remove(nd, "circuit");
+    static const char *const models[] = {"circuit", "lcs", "netlist"};
+    for (int a = 0; a < 3; a++)
+      for (int b = 0; b < 3; b++)
+        if (a != b && !strcmp(seg, models[a])) st_map_remove(nd, models[b]);
+    return CUP_OK;
+  }
+  if (!strcmp(path, "netlist") && nd->kind == ST_SCALAR) {   /* netlist.R1=2: {file: ..., R1: 2} */
+    st_node *m = st_new_map(k);
+    if (!m || st_map_put(m, "file", nd, k)) { st_free(m); return CUP_ERR_NOMEM; }
+    *slot = m;
     return CUP_OK;
   }
   if (!strcmp(path, "output") && (nd->kind != ST_MAP || nd->len != 1 || strcmp(nd->key[0]->text, seg)))

@@ -13,7 +13,8 @@
 #include "scene_tree.h"
 
 /* The keys of an input term mapping, by waveform (CUP_WAVE_LIST order). */
-extern const char *const scene_wave_keys[CUP_WAVE_COUNT][5];
+#define SCENE_WAVE_KEYS 9
+extern const char *const scene_wave_keys[CUP_WAVE_COUNT][SCENE_WAVE_KEYS];
 
 int scene_reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k);
 

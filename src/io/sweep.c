@@ -4,13 +4,13 @@
  * FILE:LINE:COL and the dotted key; a variant's scene is loaded by the scene
  * loader itself, with the variant's `set` entries as overrides. */
 #define _POSIX_C_SOURCE 200809L
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "scene_tree.h"
+#include "read_text.h"
 #include "sha256.h"
 #include "sweep.h"
 
@@ -396,28 +396,10 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
 
 int sw_load(cup_sweep **s, const char *path, char *errmsg) {
   *s = NULL;
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: cannot open: %s", path, strerror(errno));
-    return CUP_ERR_IO;
-  }
-  size_t cap = 4096, n = 0, got;
-  char *buf = malloc(cap);
-  while (buf && (got = fread(buf + n, 1, cap - n, f)) > 0) {
-    n += got;
-    if (n == cap) {
-      char *nb = realloc(buf, cap *= 2);
-      if (!nb) free(buf);
-      buf = nb;
-    }
-  }
-  int err = ferror(f);
-  fclose(f);
-  if (!buf || err) {
-    free(buf);
-    snprintf(errmsg, SW_ERR_LEN, "%s: %s", path, err ? "read error" : "out of memory");
-    return err ? CUP_ERR_IO : CUP_ERR_NOMEM;
-  }
+  char *buf = NULL;
+  size_t n = 0;
+  int rt = cup_read_text(path, &buf, &n, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
+  if (rt) return rt;
   int st = sw_parse(s, buf, n, path, errmsg);
   free(buf);
   return st;
@@ -577,18 +559,44 @@ static int by_cost(const void *a, const void *b) {
   return (x->job > y->job) - (x->job < y->job);
 }
 
+/* Tasks go out in blocks of consecutive ids, largest first: a block grows
+ * along the ids while its costs stay within SW_BLOCK_SPREAD of each other,
+ * and the blocks are ordered by their largest cost. The big tasks still
+ * start first and the small ones make the tail, as with a plain sort by cost
+ * (the estimates are rougher than that factor anyway), but a batch of small
+ * tasks is then mostly one range of ids, which rank 0 writes at once. */
 void sw_schedule(const cup_sweep *s, long *out) {
-  long V = s->n_variants, N = s->n_tasks;
+  long V = s->n_variants, N = s->n_tasks, nb = 0;
   keyed *k = malloc(sizeof *k * (size_t)(V + N));
-  if (!k) {                                  /* order only affects speed */
+  keyed *block = malloc(sizeof *block * (size_t)(N + 1));
+  long *first = malloc(sizeof *first * (size_t)(N + 1));
+  if (!k || !block || !first) {              /* order only affects speed */
     for (long j = 0; j < V + N; j++) out[j] = j;
+    free(k); free(block); free(first);
     return;
   }
   for (long j = 0; j < V + N; j++) k[j] = (keyed){sw_job_cost(s, j), j};
   qsort(k, (size_t)V, sizeof *k, by_cost);
-  qsort(k + V, (size_t)N, sizeof *k, by_cost);
-  for (long j = 0; j < V + N; j++) out[j] = k[j].job;
+  for (long j = 0; j < V; j++) out[j] = k[j].job;
+  for (long t = 0; t < N; nb++) {           /* block nb: its largest cost, its index */
+    double lo = k[V + t].cost, hi = lo;
+    first[nb] = t;
+    for (t++; t < N; t++) {
+      double c = k[V + t].cost, l = fmin(lo, c), h = fmax(hi, c);
+      if (h > SW_BLOCK_SPREAD * l) break;
+      lo = l;
+      hi = h;
+    }
+    block[nb] = (keyed){hi, nb};
+  }
+  first[nb] = N;
+  qsort(block, (size_t)nb, sizeof *block, by_cost);
+  long at = V;
+  for (long b = 0; b < nb; b++)
+    for (long t = first[block[b].job]; t < first[block[b].job + 1]; t++) out[at++] = V + t;
   free(k);
+  free(block);
+  free(first);
 }
 
 /* ---- grid text ---------------------------------------------------------------- */

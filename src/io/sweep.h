@@ -75,7 +75,6 @@ typedef struct sw_result {
   int32_t status;            /* cup status of the run */
   int32_t pad_;
   double wall;               /* seconds: integrator set-up + run (+ the second run of a reference) */
-  double cpu;                /* CPU seconds of the same (the benchmark's second measure) */
   double max_eps_cert, max_eta_cert;
   int64_t projected, skipped, not_certified, dual_iterations, factorizations;
   int64_t stopped_step;      /* steps completed */
@@ -101,8 +100,11 @@ void sw_free(cup_sweep **s);
 int sw_task_get(const cup_sweep *s, long id, sw_task *t);
 /* Relative cost of a job (references first: they are the costliest). */
 double sw_job_cost(const cup_sweep *s, long job);
-/* Jobs in the order to dispatch: references, then tasks by decreasing cost
- * (ties by task id). out: n_variants + n_tasks entries. */
+/* Jobs in the order to dispatch: references by decreasing cost, then the
+ * tasks in blocks of consecutive ids whose costs are within SW_BLOCK_SPREAD
+ * of each other, blocks by decreasing largest cost (ties: the lower ids).
+ * out: n_variants + n_tasks entries. */
+#define SW_BLOCK_SPREAD 4.0
 void sw_schedule(const cup_sweep *s, long *out);
 /* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
 char *sw_grid_text(const cup_sweep *s);
@@ -148,13 +150,23 @@ const double *sw_file_reference(const sw_file *f, int variant);
 /* 1 once the variant's reference job finished (even if it failed). */
 int sw_file_reference_done(const sw_file *f, int variant);
 
-/* Write a task's trajectory (when stored) and then its /summary row with
- * done = 1; error may be NaN (not known yet). */
-int sw_file_write_task(sw_file *f, long task, const sw_result *r, const double *traj, double error);
-/* Set the error of a row already written. */
-int sw_file_set_error(sw_file *f, long task, double error);
-/* Read back a stored trajectory (samples * dim); CUP_ERR_ARG if none is stored. */
-int sw_file_read_traj(sw_file *f, long task, double *traj);
+/* One task's result for sw_file_write_tasks. */
+typedef struct sw_task_out {
+  long task;
+  const sw_result *r;
+  const double *traj;        /* samples * dim; unused when no trajectories are stored */
+  double error;              /* against the variant's reference; NaN while not known */
+} sw_task_out;
+
+/* Write tasks given in increasing task order: first every trajectory (when
+ * stored), then every /summary row with done = 1 — two HDF5 writes whatever
+ * the count, each run of consecutive tasks one piece of the file — so that a
+ * row marked done is complete wherever a kill stops the writes. */
+int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count);
+/* The reference of a variant is now known: set the error of its tasks that
+ * were written without one, from their trajectories in /runs/x (reads and
+ * writes by runs of consecutive tasks, as above). */
+int sw_file_fill_errors(sw_file *f, int variant);
 int sw_file_write_reference(sw_file *f, int variant, const sw_result *r, const double *xref);
 const char *sw_file_errmsg(const sw_file *f);
 

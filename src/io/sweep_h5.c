@@ -126,7 +126,13 @@ hid_t sw_h5_access(void) {
   return fapl;
 }
 
-void sw_copy_str(char *dst, size_t size, const char *src) { snprintf(dst, size, "%s", src ? src : ""); }
+/* snprintf(dst, size, "%s", src), zero-padded, at a fraction of its cost
+ * (rank 0 fills a row's strings for every result it writes). */
+void sw_copy_str(char *dst, size_t size, const char *src) {
+  size_t n = src ? strnlen(src, size - 1) : 0;
+  if (n) memcpy(dst, src, n);
+  memset(dst + n, 0, size - n);
+}
 
 void sw_pending_row(const cup_sweep *s, long id, sw_row *r) {
   sw_task t;
@@ -172,10 +178,11 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   f->xref = calloc(V, sizeof *f->xref);
   f->row_t = row_type();
   f->refrow_t = refrow_type();
-  /* A row write converts a compound type (to the packed file type): HDF5
-   * would otherwise allocate and clear a 1 MiB conversion buffer each time. */
+  /* A reference row's write converts a compound type (to the packed file
+   * type): HDF5 would otherwise allocate and clear a 1 MiB conversion
+   * buffer each time. */
   f->dxpl = H5Pcreate(H5P_DATASET_XFER);
-  H5Pset_buffer(f->dxpl, 4 * sizeof(sw_row), NULL, NULL);
+  H5Pset_buffer(f->dxpl, 4 * sizeof(sw_refrow), NULL, NULL);
   if (!f->path || !f->done || !f->status || !f->error || !f->ref_done || !f->xref) {
     free(f->path); free(f->done); free(f->status); free(f->error); free(f->ref_done); free(f->xref);
     H5Tclose(f->row_t); H5Tclose(f->refrow_t); H5Pclose(f->dxpl);
@@ -198,6 +205,7 @@ void sw_h5_file_free(sw_file *f) {
   H5Eclear2(H5E_DEFAULT);
   quiet_end(q);
   for (int k = 0; k < f->s->n_variants; k++) free(f->xref[k]);
+  free(f->ids); free(f->rows); free(f->x);
   free(f->xref); free(f->ref_done); free(f->done); free(f->status); free(f->error); free(f->path);
   free(f);
 }
@@ -389,54 +397,100 @@ static void result_row(const sw_file *f, long task, const sw_result *r, double e
   row->done = 1;
 }
 
-int sw_file_write_task(sw_file *f, long task, const sw_result *r, const double *traj, double error) {
+/* Room for count tasks in the staging buffers. */
+static int reserve(sw_file *f, long count) {
+  if (count <= f->cap) return CUP_OK;
+  long cap = count > 2 * f->cap ? count : 2 * f->cap;
+  size_t traj = (size_t)(f->s->samples * f->s->dim);
+  long *ids = realloc(f->ids, sizeof *ids * (size_t)cap);
+  if (ids) f->ids = ids;
+  sw_row *rows = realloc(f->rows, sizeof *rows * (size_t)cap);
+  if (rows) f->rows = rows;
+  double *x = f->s->out_samples > 0 ? realloc(f->x, sizeof *x * traj * (size_t)cap) : NULL;
+  if (x) f->x = x;
+  if (!ids || !rows || (f->s->out_samples > 0 && !x)) return CUP_ERR_NOMEM;
+  f->cap = cap;
+  return CUP_OK;
+}
+
+/* Read or write, between buf (count entries in a row) and dataset d whose
+ * first dimension is the task, the entries of tasks ids[0..count), which
+ * increase: one hyperslab per run of consecutive tasks. */
+static int task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
+                   const char *op) {
+  hsize_t dims[3] = {0, 1, 1}, start[3] = {0, 0, 0};
+  hid_t fs = H5Dget_space(d), ms = -1;
+  int rank = fs < 0 ? -1 : H5Sget_simple_extent_dims(fs, dims, NULL), ok = rank >= 1 && rank <= 3;
+  for (long j = 0, e; j < count && ok; j = e) {
+    for (e = j + 1; e < count && f->ids[e] == f->ids[e - 1] + 1; e++) {}
+    start[0] = (hsize_t)f->ids[j];
+    dims[0] = (hsize_t)(e - j);
+    ok = H5Sselect_hyperslab(fs, j ? H5S_SELECT_OR : H5S_SELECT_SET, start, NULL, dims, NULL) >= 0;
+  }
+  dims[0] = (hsize_t)count;
+  if (ok) ok = (ms = H5Screate_simple(rank, dims, NULL)) >= 0;
+  if (ok) ok = (writing ? H5Dwrite(d, memtype, ms, fs, dxpl, buf) : H5Dread(d, memtype, ms, fs, dxpl, buf)) >= 0;
+  int st = ok ? CUP_OK : sw_h5_fail(f, op);
+  if (ms >= 0) H5Sclose(ms);
+  if (fs >= 0) H5Sclose(fs);
+  return st;
+}
+
+int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   if (f->failed) return CUP_ERR_IO;
+  int st = count > 0 ? reserve(f, count) : CUP_OK;
+  if (st || count <= 0) return st;
+  long per = f->s->samples * f->s->dim;
+  for (long j = 0; j < count; j++) {
+    if (t[j].task < 0 || t[j].task >= f->s->n_tasks || (j && t[j].task <= t[j - 1].task)) {
+      snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot write task %ld (after task %ld): tasks go in increasing "
+               "order, each once", f->path, t[j].task, j ? t[j - 1].task : -1L);
+      return CUP_ERR_ARG;
+    }
+    f->ids[j] = t[j].task;
+    result_row(f, t[j].task, t[j].r, t[j].error, &f->rows[j]);
+    if (f->runs_x >= 0) memcpy(f->x + per * j, t[j].traj, sizeof(double) * (size_t)per);
+  }
   quiet_t q = quiet_begin();
-  sw_row row;
-  result_row(f, task, r, error, &row);
-  int st = CUP_OK;
-  if (f->runs_x >= 0 && write_traj(f, f->runs_x, (hsize_t)task, traj)) st = sw_h5_fail(f, "write /runs/x in");
-  if (!st && sw_h5_write_rows(f->summary, f->row_t, (hsize_t)task, 1, &row, f->dxpl)) st = sw_h5_fail(f, "write /summary in");
+  if (f->runs_x >= 0) st = task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 1, "write /runs/x in");
+  if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
-  if (!st) {
-    f->done[task] = 1;
-    f->status[task] = r->status;
-    f->error[task] = error;
+  for (long j = 0; j < count && !st; j++) {
+    f->done[t[j].task] = 1;
+    f->status[t[j].task] = t[j].r->status;
+    f->error[t[j].task] = t[j].error;
   }
   return st;
 }
 
-int sw_file_set_error(sw_file *f, long task, double error) {
-  if (f->failed) return CUP_ERR_IO;
+/* The tasks in f->ids[0..count): their trajectories and rows read back,
+ * the rows written again with their error. */
+static int fill_chunk(sw_file *f, const double *xref, long count) {
+  long per = f->s->samples * f->s->dim;
   quiet_t q = quiet_begin();
-  hsize_t at = (hsize_t)task, one = 1;
-  sw_row row;
-  hid_t fs = H5Dget_space(f->summary), ms = H5Screate_simple(1, &one, NULL);
-  int ok = H5Sselect_hyperslab(fs, H5S_SELECT_SET, &at, NULL, &one, NULL) >= 0 &&
-           H5Dread(f->summary, f->row_t, ms, fs, f->dxpl, &row) >= 0;
-  H5Sclose(ms);
-  H5Sclose(fs);
-  int st = ok ? CUP_OK : sw_h5_fail(f, "read /summary in");
-  row.error = error;
-  if (!st && sw_h5_write_rows(f->summary, f->row_t, at, 1, &row, f->dxpl)) st = sw_h5_fail(f, "write /summary in");
+  int st = task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 0, "read /runs/x in");
+  if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 0, "read /summary in");
+  for (long j = 0; j < count && !st; j++) f->rows[j].error = sw_max_error(f->x + per * j, xref, per);
+  if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
-  if (!st) f->error[task] = error;
+  for (long j = 0; j < count && !st; j++) f->error[f->ids[j]] = f->rows[j].error;
   return st;
 }
 
-int sw_file_read_traj(sw_file *f, long task, double *traj) {
-  if (f->runs_x < 0) return CUP_ERR_ARG;
-  if (f->failed) return CUP_ERR_IO;
+int sw_file_fill_errors(sw_file *f, int k) {
+  enum { CHUNK = 256 };
   const cup_sweep *s = f->s;
-  quiet_t q = quiet_begin();
-  hsize_t start[3] = {(hsize_t)task, 0, 0}, cnt[3] = {1, (hsize_t)s->samples, (hsize_t)s->dim};
-  hid_t fs = H5Dget_space(f->runs_x), ms = H5Screate_simple(3, cnt, NULL);
-  int ok = H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, cnt, NULL) >= 0 &&
-           H5Dread(f->runs_x, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, traj) >= 0;
-  H5Sclose(ms);
-  H5Sclose(fs);
-  int st = ok ? CUP_OK : sw_h5_fail(f, "read /runs/x in");
-  quiet_end(q);
+  if (!f->xref[k] || f->runs_x < 0) return CUP_OK;
+  if (f->failed) return CUP_ERR_IO;
+  int st = reserve(f, CHUNK);
+  long n = 0, end = (k + 1) * s->per_variant;
+  for (long t = k * s->per_variant; t < end && !st; t++) {
+    if (f->done[t] && f->status[t] >= 0 && isnan(f->error[t])) f->ids[n++] = t;
+    if (n == CHUNK || (n && t + 1 == end)) {
+      st = fill_chunk(f, f->xref[k], n);
+      n = 0;
+    }
+  }
   return st;
 }
 

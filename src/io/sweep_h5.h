@@ -11,28 +11,33 @@
  * object header changes ever again. The file uses the 1.8 format (superblock
  * version 0: no "open for writing" flag, so no h5clear after a kill; the
  * same lesson as h5run.c). HDF5's sieve buffer is switched off so that every
- * H5Dwrite reaches the operating system when it returns, in our order: a
- * task's trajectory first, then its /summary row with done = 1. A process
+ * H5Dwrite reaches the operating system when it returns, in our order: the
+ * trajectories of a batch of tasks first, then their /summary rows with
+ * done = 1, each row in one piece with done as its last byte. A process
  * killed at any point therefore leaves a file that opens as is, with every
- * row whose done flag is 1 complete (strace shows two pwrites per task after
- * the first flush, and H5Fclose rewriting an identical superblock). H5Fflush
- * still runs regularly (it
- * writes nothing here but is what HDF5 promises consistency for), and does
- * not fsync: a machine crash may lose what the OS had not written.
+ * row whose done flag is 1 complete (strace shows, after the first flush,
+ * two pwrites per run of consecutive tasks in a batch — mostly one run —
+ * and H5Fclose rewriting an identical superblock). H5Fflush still runs
+ * regularly (it writes nothing here but is what HDF5 promises consistency
+ * for), and does not fsync: a machine crash may lose what the OS had not
+ * written.
  *
  * The full allocation at creation also means the disk cannot fill up during
  * the run (HDF5 1.10 cannot close a file after a failed write, h5run.c). */
 #ifndef CUP_SWEEP_H5_H
 #define CUP_SWEEP_H5_H
 
+#include <stddef.h>
 #include <stdint.h>
 #include <hdf5.h>
 #include "sweep.h"
 
 #define FORMAT_NAME "catchup-sweep 1"
 
-/* One /summary row in memory (the file type is the same, packed). */
-typedef struct sw_row {
+/* One /summary row, packed as it is in the file: HDF5 then writes rows
+ * as they are, where a conversion to the file's layout would first read
+ * the rows it overwrites (its background buffer) and cost ~50 us a call. */
+typedef struct __attribute__((packed)) sw_row {
   int64_t task_id;
   int32_t variant;
   char variant_name[SW_NAME_LEN];
@@ -51,6 +56,9 @@ typedef struct sw_row {
   int64_t projected, skipped, not_certified, dual_iterations, factorizations, stopped_step;
   int8_t done;
 } sw_row;
+/* A write cut short by a kill stops between pages, in address order: a row
+ * whose last byte says done is whole. */
+_Static_assert(offsetof(sw_row, done) + sizeof(int8_t) == sizeof(sw_row), "done is the last byte of a row");
 
 typedef struct sw_refrow {
   int32_t variant;
@@ -77,6 +85,10 @@ struct sw_file {
   int8_t *ref_done;                /* per variant */
   double **xref;                   /* per variant, samples * dim, NULL while unknown */
   char errmsg[SW_ERR_LEN];
+  long cap;                        /* batched writes: room for cap tasks' ids, rows, trajectories */
+  long *ids;
+  sw_row *rows;
+  double *x;
 };
 
 typedef struct { H5E_auto2_t fn; void *data; } quiet_t;

@@ -24,7 +24,14 @@ int cup_lcp_init(cup_lcp *s, int m) {
 void cup_lcp_free(cup_lcp *s) {
   free(s->lam); free(s->w); free(s->rhs); free(s->lu); free(s->work);
   free(s->piv); free(s->idx); free(s->act); free(s->prev);
+  cup_lemke_free(&s->lemke);
   memset(s, 0, sizeof *s);
+}
+
+int cup_lcp_monotone(cup_lcp *s) {
+  if (!s->monotone && cup_lemke_init(&s->lemke, s->m)) return CUP_ERR_NOMEM;
+  s->monotone = 1;
+  return CUP_OK;
 }
 
 /* lambda on A from M_AA lambda_A = -q_A, 0 elsewhere, and w = q + M lambda.
@@ -83,12 +90,21 @@ static int murty(cup_lcp *s, const double *M, const double *q, int *pivots) {
   return CUP_ERR_LINALG;                          /* cycling: not a P-matrix */
 }
 
+static int lemke(cup_lcp *s, const double *M, const double *q, int *pivots) {
+  int st = cup_lemke_solve(&s->lemke, M, q, s->lam, s->w, pivots);
+  if (st) return st;
+  for (int i = 0; i < s->m; i++) s->act[i] = s->lam[i] > 0;
+  memcpy(s->prev, s->act, (size_t)s->m);
+  return CUP_OK;
+}
+
 int cup_lcp_solve(cup_lcp *s, const double *M, const double *q, int *pivots) {
   memcpy(s->act, s->prev, (size_t)s->m);
   for (int cold = 0;; cold++) {                   /* one call site: murty is inlined */
     int st = murty(s, M, q, pivots);
     if (st == CUP_OK) memcpy(s->prev, s->act, (size_t)s->m);
-    if (st != CUP_ERR_LINALG || cold) return st;
+    if (st != CUP_ERR_LINALG) return st;
+    if (cold) return s->monotone ? lemke(s, M, q, pivots) : st;
     memset(s->act, 0, (size_t)s->m);
   }
 }

@@ -10,6 +10,7 @@
 #define CUP_LCP_H
 
 #include <string.h>
+#include "lemke.h"
 
 typedef struct cup_lcp {
   int m;
@@ -18,14 +19,22 @@ typedef struct cup_lcp {
   int *piv, *idx;
   unsigned char *act;       /* active set of the current solve */
   unsigned char *prev;      /* active set of the last solution: the warm start */
+  int monotone;             /* cup_lcp_monotone: Lemke's method where pivoting fails */
+  cup_lemke lemke;
 } cup_lcp;
 
 /* CUP_OK or CUP_ERR_NOMEM (then cup_lcp_free releases what was taken). */
 int cup_lcp_init(cup_lcp *s, int m);
 void cup_lcp_free(cup_lcp *s);
+/* For monotone LCPs (M + M^T positive semidefinite, as a passive circuit's
+ * with D != 0) whose M need not be a P-matrix: when principal pivoting meets
+ * a singular block, Lemke's method (lemke.h) solves the LCP instead.
+ * CUP_OK or CUP_ERR_NOMEM. */
+int cup_lcp_monotone(cup_lcp *s);
 /* lambda and w into s->lam, s->w; adds the pivots to *pivots. Returns CUP_OK,
  * or CUP_ERR_LINALG for a singular principal block or cycling (M is not a
- * P-matrix), leaving the warm start as it was. */
+ * P-matrix; after cup_lcp_monotone: Lemke's method found no solution
+ * either), leaving the warm start as it was. */
 int cup_lcp_solve(cup_lcp *s, const double *M, const double *q, int *pivots);
 /* The next solve starts cold. */
 static inline void cup_lcp_forget(cup_lcp *s) { memset(s->prev, 0, (size_t)s->m); }

@@ -7,6 +7,11 @@
 #include "step.h"
 
 int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h) {
+  return cup_lcp_step_init_bd(ls, K, W, h, NULL, NULL, 1);
+}
+
+int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
+                         const double *B, const double *D, double theta) {
   memset(ls, 0, sizeof *ls);
   if (!K->dense) return CUP_ERR_UNSUPPORTED;
   int n = ls->n = K->n, m = ls->m = K->m;
@@ -23,19 +28,36 @@ int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, d
   if (fail || !ls->H || !ls->M || !ls->s || !ls->gam || !ls->v || !ls->tau || !ls->qs || !ls->sv ||
       !ls->gamv)
     return CUP_ERR_NOMEM;
-  /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T) */
+  if (D) {
+    ls->D = malloc(sizeof(double) * M * M);
+    ls->geff = calloc(M, sizeof(double));
+    ls->drow = calloc(M, 1);
+    ls->Hprev = calloc(N * M, sizeof(double));
+    ls->xpred = calloc(N, sizeof(double));
+    if (!ls->D || !ls->geff || !ls->drow || !ls->Hprev || !ls->xpred || cup_lcp_monotone(&ls->lcp))
+      return CUP_ERR_NOMEM;
+    memcpy(ls->D, D, sizeof(double) * (size_t)m * m);
+    for (int i = 0; i < m; i++)
+      for (int j = 0; j < m; j++)
+        if (D[i + (size_t)j * m] != 0) ls->drow[i] = ls->drow[j] = 1;
+  }
+  /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T), or
+   * the B given */
   for (int i = 0; i < m; i++)
     for (int r = 0; r < n; r++) {
+      const double *b = B ? B + (size_t)i * n : K->Bt + (size_t)i * n;
       double acc = 0;
       if (W)
-        for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * K->Bt[(size_t)i * n + c];
+        for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * b[c];
       else
-        acc = K->Bt[(size_t)i * n + r];
-      ls->H[r + (size_t)i * n] = h * acc;
+        acc = b[r];
+      int trap = ls->drow && ls->drow[i];
+      ls->H[r + (size_t)i * n] = h * (trap ? theta : 1) * acc;
+      if (trap) ls->Hprev[r + (size_t)i * n] = h * (1 - theta) * acc;
     }
-  for (int j = 0; j < m; j++)                      /* M = C H */
+  for (int j = 0; j < m; j++)                      /* M = C H (+ D) */
     for (int i = 0; i < m; i++) {
-      double acc = 0;
+      double acc = D ? D[i + (size_t)j * m] : 0;
       for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * ls->H[K->Ct.i[k] + (size_t)j * n];
       ls->M[i + (size_t)j * m] = acc;
     }
@@ -44,7 +66,8 @@ int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, d
 
 void cup_lcp_step_free(cup_lcp_step *ls) {
   free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
-  free(ls->sv); free(ls->gamv);
+  free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->drow); free(ls->Hprev);
+  free(ls->xpred);
   cup_lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
@@ -70,6 +93,52 @@ static double certified_eta(cup_lcp_step *ls, const double *g, const double *z) 
                                                         : INFINITY;
 }
 
+void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
+  int m = ls->m, pivots = 0;
+  double *lam = ls->lcp.lam;
+  cup_zero(lam, m);
+  if (!ls->D) return;
+  cup_slack(ls->K, g, x0, ls->qs, NULL);          /* q = C x0 + g, M = D */
+  if (cup_lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) != CUP_OK) cup_zero(lam, m);
+  for (int i = 0; i < m; i++)
+    if (!ls->drow[i]) lam[i] = 0;
+}
+
+/* (m + 2) eps sum_j |A_ij| lambda_j: the rounding of row i of A lambda. */
+static double row_rounding(const cup_lcp_step *ls, const double *A, int i) {
+  double mag = 0;
+  for (int j = 0; j < ls->m; j++) mag += fabs(A[i + (size_t)j * ls->m]) * ls->lcp.lam[j];
+  return (ls->m + 2) * DBL_EPSILON * mag;
+}
+
+/* With D, a row of w may not depend on z at all (a diode fixed by the
+ * other diodes' currents): aim it beyond the rounding of (M lambda)_i too,
+ * known only once lambda is; 1 if some tau_i grew. */
+static int widen_aim(cup_lcp_step *ls, const double *q) {
+  int m = ls->m, more = 0;
+  for (int i = 0; i < m; i++) {
+    double want = 16 * row_rounding(ls, ls->M, i);
+    if (want > ls->tau[i]) {
+      ls->tau[i] += want;
+      ls->qs[i] = q[i] - ls->tau[i];
+      more = 1;
+    }
+  }
+  return more;
+}
+
+/* g + D lambda (D != 0), else g itself. */
+static const double *effective_offset(cup_lcp_step *ls, const double *g) {
+  if (!ls->D) return g;
+  int m = ls->m;
+  for (int i = 0; i < m; i++) {
+    double acc = g[i];
+    for (int j = 0; j < m; j++) acc += ls->D[i + (size_t)j * m] * ls->lcp.lam[j];
+    ls->geff[i] = acc;
+  }
+  return ls->geff;
+}
+
 int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
                        double scale, double eps_target, double eta_target, cup_proj_info *info) {
   const cup_polyset *K = ls->K;
@@ -79,6 +148,13 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
   info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
   info->eta_target = eta_target;
   info->method = CUP_PROJ_ACTIVESET;
+  if (ls->D) {                                    /* the trapezoid's old half: h (1 - theta) W B zeta_k */
+    cup_copy(ls->xpred, xf, n);
+    for (int i = 0; i < m; i++)
+      if (lam[i] != 0)
+        for (int r = 0; r < n; r++) ls->xpred[r] += ls->Hprev[r + (size_t)i * n] * lam[i];
+    xf = ls->xpred;
+  }
   double probe = 0;                               /* NaN iff some entry is NaN or Inf */
   for (int j = 0; j < n; j++) probe += 0 * xf[j];
   if (isnan(probe)) return info->status = CUP_ERR_NONFINITE;
@@ -104,10 +180,15 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     tau[i] = 16 * ls->gam[i] + DBL_MIN;
     qs[i] = q[i] - tau[i];
   }
-  int pivots = 0, st = CUP_ERR_LINALG;
+  int pivots = 0, st = CUP_ERR_LINALG, aimed = 0;
   for (int aim = 1; aim >= 0 && st == CUP_ERR_LINALG; aim--) {
     if (!aim) cup_zero(tau, m);
     st = cup_lcp_solve(&ls->lcp, ls->M, aim ? qs : q, &pivots);
+    aimed = aim && !st;
+  }
+  if (aimed && ls->D && widen_aim(ls, q) && cup_lcp_solve(&ls->lcp, ls->M, qs, &pivots) != CUP_OK) {
+    cup_zero(tau, m);
+    st = cup_lcp_solve(&ls->lcp, ls->M, q, &pivots);
   }
   info->iterations = pivots + 1;
   if (st) return info->status = st;
@@ -122,8 +203,10 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     if (lam[i] == 0) continue;
     for (int r = 0; r < n; r++) z[r] += ls->H[r + (size_t)i * n] * lam[i];
   }
-  /* certificates from the slack of z itself */
+  /* certificates from the slack of z itself; with D, in K shifted by D lambda */
+  g = effective_offset(ls, g);
   cup_slack(K, g, z, ls->s, ls->gam);
+  for (int i = 0; ls->D && i < m; i++) ls->gam[i] += row_rounding(ls, ls->D, i);
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {
@@ -147,7 +230,8 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
       if (!(lam[i] > 0)) continue;
       double mag = fabs(g[i]);
       for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) mag += fabs(K->Ct.x[k]) * zmag[K->Ct.i[k]];
-      floor += 2 * ls->h * lam[i] * (ls->gam[i] + 2 * K->rowgam[i] * mag + tau[i]);
+      double lcp_round = ls->D ? row_rounding(ls, ls->M, i) : 0;   /* with D: the LCP's own */
+      floor += 2 * ls->h * lam[i] * (ls->gam[i] + 2 * K->rowgam[i] * mag + tau[i] + lcp_round);
     }
     info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
   }

@@ -26,12 +26,33 @@ typedef struct cup_lcp_step {
   cup_lcp lcp;      /* lambda of the last step in lcp.lam */
   double *s, *gam, *v, *tau, *qs, *sv, *gamv;
   double lq;        /* lambda^T q of the last step (q: the free point's slack) */
+  /* D != 0 (cup_lcp_step_init_bd): w = C z + D lambda + g */
+  double *D;        /* m x m, column-major, or NULL */
+  double *geff;     /* g + D lambda: the offset the step's z must satisfy */
+  unsigned char *drow; /* rows with D != 0 in their row or column: zeta is a function there */
+  double *Hprev;    /* n x m: h (1 - theta) W B on those rows (the trapezoid's old half), else 0 */
+  double *xpred;    /* xf + Hprev lambda_k */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
  * CUP_OK, CUP_ERR_UNSUPPORTED (K is not dense) or CUP_ERR_NOMEM; callers
  * write the message, in their own name. */
 int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h);
+/* The same for an LCS with D != 0 (Siconos's EulerMoreauOSI): B (n x m,
+ * column-major) replaces P^-1 C^T in H = h W B, M = C H + D (D m x m,
+ * column-major); z satisfies C z + D lambda + g >= 0 and the certificates
+ * below use g + D lambda; an M that is not a P-matrix (a monotone LCP) is
+ * solved by Lemke's method. B NULL: P^-1 C^T; D NULL: cup_lcp_step_init.
+ * On a row where D vanishes zeta is an impulse (a measure), taken whole at
+ * t_{k+1} as Moreau-Jean does; on a row with D != 0 it is a function of the
+ * state, and the trapezoid's weights keep theta = 1/2 second order there:
+ * h theta W B in H, and h (1 - theta) W B lambda_k added to the free point
+ * (lambda_0 from cup_lcp_step_start). */
+int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
+                         const double *B, const double *D, double theta);
+/* Before a run from x0 with offset g: lambda_0 on the rows with D != 0 from
+ * the LCP 0 <= zeta _|_ C x0 + D zeta + g >= 0 (0 where it has none). */
+void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g);
 void cup_lcp_step_free(cup_lcp_step *ls);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:

@@ -75,6 +75,12 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
       memcpy(t.t, w->t, sizeof(double) * (size_t)t.np);
       memcpy(t.v, w->v, sizeof(double) * (size_t)t.np);
       break;
+    case CUP_WAVE_PULSE:
+    case CUP_WAVE_DAMPED_SINE: {
+      int st = cup_spice_term_init(&t, w, errmsg);
+      if (st) return st;
+      break;
+    }
     default:
       return cup_fail(errmsg, CUP_ERR_ARG, "input: unknown waveform kind %d", (int)w->kind);
   }
@@ -104,6 +110,7 @@ int cup_input_is_constant(const cup_input *u) {
     const cup_term *t = &u->terms[k];
     if ((t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_SQUARE) && t->amp != 0 && t->omega != 0) return 0;
     if (t->kind == CUP_WAVE_PWL && t->np > 1) return 0;
+    if ((t->kind == CUP_WAVE_PULSE || t->kind == CUP_WAVE_DAMPED_SINE) && !cup_spice_term_constant(t)) return 0;
   }
   return 1;
 }
@@ -169,6 +176,7 @@ double cup_term_value(const cup_term *w, double t) {
     case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
     case CUP_WAVE_SQUARE: return w->amp * sign_sin_q(square_q(w, t));
     case CUP_WAVE_PWL: return pwl_value(w, t);
+    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_value(w, t);
   }
   return 0;
 }
@@ -186,6 +194,7 @@ double cup_term_integral(const cup_term *w, double a, double b) {
       return w->amp * M_PI / w->omega * (sign_sin_q_integral(square_q(w, b)) -
                                          sign_sin_q_integral(square_q(w, a)));
     case CUP_WAVE_PWL: return pwl_integral(w, a, b);
+    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_integral(w, a, b);
   }
   return 0;
 }
@@ -274,6 +283,8 @@ double cup_input_next_break(const cup_input *u, double t) {
     } else if (w->kind == CUP_WAVE_PWL) {
       for (int i = 0; i < w->np; i++)
         if (w->t[i] > t) { next = fmin(next, w->t[i]); break; }
+    } else if (w->kind == CUP_WAVE_PULSE || w->kind == CUP_WAVE_DAMPED_SINE) {
+      next = fmin(next, cup_spice_term_break(w, t));
     }
   }
   return next;

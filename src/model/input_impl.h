@@ -12,6 +12,8 @@ typedef struct cup_term {
   double value, amp, omega, phase;  /* omega = 2 pi frequency */
   int np;
   double *t, *v;
+  double delay, damping;                    /* PULSE, DAMPED_SINE */
+  double value2, rise, fall, width, period; /* PULSE */
 } cup_term;
 
 struct cup_input {
@@ -28,6 +30,13 @@ typedef struct cup_quad_ws {
   size_t limit;
   double *buf;          /* p entries for the callback */
 } cup_quad_ws;
+
+/* The SPICE source functions (input_spice.c): PULSE and DAMPED_SINE. */
+int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg);
+double cup_spice_term_value(const cup_term *t, double tt);
+double cup_spice_term_integral(const cup_term *t, double a, double b);
+double cup_spice_term_break(const cup_term *t, double tt);   /* the next corner after tt, or INFINITY */
+int cup_spice_term_constant(const cup_term *t);
 
 /* One term's value at t (its component's share of u(t)). */
 double cup_term_value(const cup_term *w, double t);

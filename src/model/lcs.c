@@ -1,9 +1,13 @@
+#define _POSIX_C_SOURCE 200809L
 /* lcs — linear complementarity systems x' = A x + B zeta + E u,
  * 0 <= zeta _|_ C x + G u + F >= 0 (paper, Sec. 7), as a sweeping process
  * in the P-metric: P B = C^T makes B zeta a P-normal to K(t). */
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
 #include "catchup.h"
 #include "lcs_impl.h"
 #include "set/polyset_impl.h"
@@ -17,33 +21,146 @@ static int copy_opt(cup_sparse *dst, int *has, const cup_csc *src, const char *n
   return cup_sparse_copy(dst, src, name, nrow, ncol, errmsg);
 }
 
-/* P B = C^T, compared column by column of B: (P b_j) against row j of C.
- * The message names the largest mismatch. */
+/* P B = C^T, compared column by column of B: (P b_j) against row j of C,
+ * on the entries either can have (a netlist's LCS has 10^4 columns: a
+ * dense sweep per column would be quadratic). The message names the
+ * largest mismatch (the first, by column then row, among equal ones). */
 static int check_pb(const cup_polyset *K, const cup_sparse *B, double tol, char *errmsg) {
   int n = K->n, m = K->m;
-  double *b = calloc((size_t)n, sizeof(double)), *pb = malloc(sizeof(double) * (size_t)n);
-  double *ct = calloc((size_t)n, sizeof(double));
-  if (!b || !pb || !ct) { free(b); free(pb); free(ct); return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory"); }
+  double *pb = calloc((size_t)n + 1, sizeof(double)), *ct = calloc((size_t)n + 1, sizeof(double));
+  int *rows = malloc(sizeof(int) * ((size_t)n + 1));
+  unsigned char *seen = calloc((size_t)n + 1, 1);
+  if (!pb || !ct || !rows || !seen) {
+    free(pb); free(ct); free(rows); free(seen);
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  }
   double worst = 0, scale = 0, pbv = 0, ctv = 0;
   int wi = -1, wj = -1;
   for (int j = 0; j < m; j++) {
-    memset(b, 0, sizeof(double) * (size_t)n);
-    for (int k = B->p[j]; k < B->p[j + 1]; k++) b[B->i[k]] = B->x[k];
-    cup_metric_apply(K, b, pb);
-    memset(ct, 0, sizeof(double) * (size_t)n);
-    for (int k = K->Ct.p[j]; k < K->Ct.p[j + 1]; k++) ct[K->Ct.i[k]] = K->Ct.x[k];
-    for (int i = 0; i < n; i++) {
+    int nr = 0;
+#define TOUCH(r) do { if (!seen[r]) { seen[r] = 1; rows[nr++] = (r); } } while (0)
+    for (int k = B->p[j]; k < B->p[j + 1]; k++) {          /* P b_j */
+      int i = B->i[k];
+      if (K->pkind == CUP_METRIC_SPARSE) {
+        for (int q = K->Pfull.p[i]; q < K->Pfull.p[i + 1]; q++) {
+          TOUCH(K->Pfull.i[q]);
+          pb[K->Pfull.i[q]] += K->Pfull.x[q] * B->x[k];
+        }
+      } else {
+        TOUCH(i);
+        pb[i] += (K->pkind == CUP_METRIC_DIAGONAL ? K->pd[i] : 1) * B->x[k];
+      }
+    }
+    for (int k = K->Ct.p[j]; k < K->Ct.p[j + 1]; k++) {
+      TOUCH(K->Ct.i[k]);
+      ct[K->Ct.i[k]] = K->Ct.x[k];
+    }
+#undef TOUCH
+    for (int a = 1; a < nr; a++)                             /* rows in order: short lists */
+      for (int b = a; b > 0 && rows[b - 1] > rows[b]; b--) { int t = rows[b]; rows[b] = rows[b - 1]; rows[b - 1] = t; }
+    for (int a = 0; a < nr; a++) {
+      int i = rows[a];
       scale = fmax(scale, fmax(fabs(pb[i]), fabs(ct[i])));
       double d = fabs(pb[i] - ct[i]);
       if (d > worst || isnan(d)) { worst = d; wi = i; wj = j; pbv = pb[i]; ctv = ct[i]; }
+      pb[i] = ct[i] = 0;
+      seen[i] = 0;
     }
   }
-  free(b); free(pb); free(ct);
+  free(pb); free(ct); free(rows); free(seen);
   if (wi >= 0 && !(worst <= tol * scale))
     return cup_fail(errmsg, CUP_ERR_PB_CT,
                     "P B differs from C^T: largest mismatch at (%d,%d): (P B) = %.17g but C^T = %.17g "
                     "(relative %.3g > tolerance %.3g)", wi, wj, pbv, ctv, worst / (scale > 0 ? scale : 1), tol);
   return CUP_OK;
+}
+
+static int has_nonzero(const cup_csc *c) {
+  if (!present(c)) return 0;
+  for (int k = 0; k < c->colptr[c->ncol]; k++)
+    if (c->values && c->values[k] != 0) return 1;
+  return 0;
+}
+
+/* All principal minors positive (m small: 2^m determinants by LU). */
+static int p_matrix(const double *D, int m, double *work, int *piv) {
+  for (unsigned mask = 1; mask < (1u << m); mask++) {
+    int k = 0, idx[16];
+    for (int i = 0; i < m; i++) if (mask >> i & 1u) idx[k++] = i;
+    for (int a = 0; a < k; a++)
+      for (int b = 0; b < k; b++) work[a + b * k] = D[idx[a] + idx[b] * m];
+    if (cup_dense_lu(work, k, piv)) return 0;
+    double det = 1;
+    unsigned char seen[16] = {0};
+    for (int a = 0; a < k; a++) {
+      det *= work[a + a * k];
+      int len = 0;                                 /* the row permutation's sign: its cycles */
+      for (int b = a; !seen[b]; b = piv[b]) { seen[b] = 1; len++; }
+      if (len && len % 2 == 0) det = -det;
+    }
+    if (!(det > 0)) return 0;
+  }
+  return 1;
+}
+
+/* D must make each step's LCP solvable with a unique answer: positive
+ * semidefinite (x^T D x >= 0, checked on (D + D^T)/2 by its eigenvalues,
+ * to rounding) or, for a few rows, a P-matrix. */
+static int check_D(const cup_sparse *Ds, char *errmsg) {
+  int m = Ds->nrow;
+  if (m > 1024) return CUP_OK;               /* too big to check densely: the LCP solver will tell */
+  double *D = calloc((size_t)m * m, sizeof(double)), *S = malloc(sizeof(double) * (size_t)m * m);
+  gsl_vector *ev = gsl_vector_alloc((size_t)m);
+  gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc((size_t)m);
+  int st = D && S && ev && w ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  double lmin = 0, norm = 0;
+  if (!st) {
+    for (int j = 0; j < m; j++)
+      for (int k = Ds->p[j]; k < Ds->p[j + 1]; k++) D[Ds->i[k] + (size_t)j * m] = Ds->x[k];
+    for (int j = 0; j < m; j++)
+      for (int i = 0; i < m; i++) {
+        S[i + (size_t)j * m] = 0.5 * (D[i + (size_t)j * m] + D[j + (size_t)i * m]);
+        norm = cup_max(norm, fabs(D[i + (size_t)j * m]));
+      }
+    gsl_matrix_view Sv = gsl_matrix_view_array(S, (size_t)m, (size_t)m);
+    gsl_error_handler_t *old = gsl_set_error_handler_off();
+    if (gsl_eigen_symm(&Sv.matrix, ev, w)) st = cup_fail(errmsg, CUP_ERR_LINALG, "LCS: eigenvalues of D failed");
+    gsl_set_error_handler(old);
+    for (int i = 0; !st && i < m; i++) lmin = cup_min(lmin, gsl_vector_get(ev, i));
+  }
+  if (!st && lmin < -1e-12 * m * norm) {
+    double *work = malloc(sizeof(double) * 16 * 16);
+    int piv[16];
+    int ok = m <= 12 && work && p_matrix(D, m, work, piv);
+    free(work);
+    if (!ok)
+      st = cup_fail(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
+                    "and not a P-matrix: the LCP of a step may have no or several solutions", lmin);
+  }
+  free(D); free(S);
+  if (ev) gsl_vector_free(ev);
+  if (w) gsl_eigen_symm_free(w);
+  return st;
+}
+
+static int copy_names(cup_lcs *L, const char *const *names, char *errmsg) {
+  if (!names) return CUP_OK;
+  L->row_names = calloc((size_t)L->m + 1, sizeof(char *));
+  if (!L->row_names) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  for (int i = 0; i < L->m; i++)
+    if (!(L->row_names[i] = strdup(names[i] ? names[i] : "?"))) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  return CUP_OK;
+}
+
+void cup_lcs_rows_text(const cup_lcs *L, const int *rows, int k, char *buf, unsigned long size) {
+  size_t len = (size_t)snprintf(buf, size, "%s", k == 1 ? "row" : "rows");
+  for (int a = 0; a < k && len < size; a++) {
+    if (len > size / 2) { snprintf(buf + len, size - len, ", ..."); return; }
+    if (L->row_names)
+      len += (size_t)snprintf(buf + len, size - len, "%s%s", a ? ", " : " ", L->row_names[rows[a]]);
+    else
+      len += (size_t)snprintf(buf + len, size - len, "%s%d", a ? ", " : " ", rows[a]);
+  }
 }
 
 int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
@@ -74,7 +191,14 @@ int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
     }
   }
   if (!st) st = cup_polyset_create(&L->K, &d->C, L->F, &d->P, errmsg);
-  if (!st && present(&d->B)) {
+  if (!st) st = copy_names(L, d->row_names, errmsg);
+  L->has_D = !st && has_nonzero(&d->D);
+  if (L->has_D) {                            /* not a sweeping process: keep B and D as given */
+    if (!present(&d->B)) st = cup_fail(errmsg, CUP_ERR_ARG, "D != 0 needs B (it is not P^-1 C^T then)");
+    if (!st) st = cup_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
+    if (!st) st = cup_sparse_copy(&L->D, &d->D, "D", d->m, d->m, errmsg);
+    if (!st) st = check_D(&L->D, errmsg);
+  } else if (!st && present(&d->B)) {
     cup_sparse B;
     st = cup_sparse_copy(&B, &d->B, "B", d->n, d->m, errmsg);
     if (!st) {
@@ -98,6 +222,10 @@ void cup_lcs_free(cup_lcs **Lp) {
   cup_sparse_free(&L->G);
   free(L->F);
   cup_polyset_free(&L->K);
+  cup_sparse_free(&L->B);
+  cup_sparse_free(&L->D);
+  for (int i = 0; L->row_names && i < L->m; i++) free(L->row_names[i]);
+  free(L->row_names);
   free(L);
   *Lp = NULL;
 }
@@ -107,6 +235,7 @@ int cup_lcs_rows(const cup_lcs *L) { return L ? L->m : 0; }
 int cup_lcs_inputs(const cup_lcs *L) { return L ? L->p : 0; }
 const cup_polyset *cup_lcs_polyset(const cup_lcs *L) { return L ? L->K : NULL; }
 int cup_lcs_fixed_set(const cup_lcs *L) { return L ? L->fixed : 1; }
+int cup_lcs_has_D(const cup_lcs *L) { return L ? L->has_D : 0; }
 
 /* A dense row-major r x c matrix as a CSC view into caller storage. */
 static cup_csc dense_view(int r, int c, const double *a, int *cp, int *ri, double *vx) {

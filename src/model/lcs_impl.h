@@ -5,6 +5,9 @@
 #include "catchup/lcs.h"
 #include "util/linalg.h"
 
+/* "rows D1, D3" (or "rows 0, 2" without names) for messages, into buf. */
+void cup_lcs_rows_text(const struct cup_lcs *L, const int *rows, int k, char *buf, unsigned long size);
+
 struct cup_lcs {
   int n, m, p;
   int has_A, has_E, has_G;
@@ -12,6 +15,10 @@ struct cup_lcs {
   double *F;            /* m */
   cup_polyset *K;       /* {x : C x + F >= 0}, metric P */
   int fixed;            /* G absent or zero */
+  /* D != 0: the LCS is not a sweeping process; only the theta scheme runs it */
+  int has_D;            /* D given with a nonzero entry */
+  cup_sparse B, D;      /* has_D: n x m and m x m as given */
+  char **row_names;     /* m names for messages, or NULL */
 };
 
 #endif

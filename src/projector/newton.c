@@ -89,6 +89,9 @@ static double dual_eval(cup_projector *p, const pn_problem *q, const double *lam
   return 0.5 * f;
 }
 
+/* Consecutive short steps before the Levenberg parameter grows. */
+#define LM_PATIENCE 8
+
 typedef int (*pn_stop_fn)(cup_projector *p, const pn_problem *q, cup_proj_info *info);
 
 /* The finishing solve on the current free set F (already factored):
@@ -173,7 +176,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
   double f = dual_eval(p, q, w->lam, w->y, w->s, w->gam);
   double tau = K->lip > 0 ? 1 / K->lip : 0;
   double dmin = cup_dfact_delta_min(p->nw->df), delta = dmin;
-  int settled = 0;
+  int settled = 0, short_steps = 0;
   memcpy(w->snap, w->lam, msz);
   memset(w->prev, 0, (size_t)m);
   for (int it = 0;; it++) {
@@ -234,10 +237,16 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     if (!accepted)                          /* no decrease above rounding */
       return pn_correct(p, q, stop, info);
     settled = alpha == 1;
-    /* Levenberg: short steps that still change f mean the model is poor:
-     * trust it less (steps cut short by rounding say nothing) */
+    /* Levenberg: short steps that still change f, again and again, mean the
+     * model is poor: trust it less (steps cut short by rounding say
+     * nothing). Every change of delta costs a refactorization where a
+     * change of F costs row updates, so one short step (a bound met along
+     * the way, a few rows changing) leaves delta alone, and one full step
+     * brings it back to its minimum. */
     int measurable = f - ft > 1e3 * DBL_EPSILON * fabs(f);
-    delta = alpha < 0.1 && measurable ? fmin(delta * 100, 1e-2 * K->lip) : fmax(delta * 0.1, dmin);
+    short_steps = alpha < 0.1 && measurable ? short_steps + 1 : 0;
+    if (short_steps >= LM_PATIENCE) delta = fmin(delta * 100, 1e-2 * K->lip);
+    else if (alpha == 1) delta = dmin;
     memcpy(w->lam, w->lt, msz);
     double *t;
     t = w->y; w->y = w->y2; w->y2 = t;

@@ -1,4 +1,5 @@
-/* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up. */
+/* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up; error messages, growing arrays. */
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -15,6 +16,28 @@ int cup_fail(char *buf, int status, const char *fmt, ...) {
     va_end(ap);
   }
   return status;
+}
+
+int cup_vfail_at(char *buf, int w, int status, const char *fmt, va_list ap) {
+  if (!buf) return status;
+  size_t cap = CUP_ERRMSG_LEN;
+  if (w >= 0 && (size_t)w < cap) vsnprintf(buf + w, cap - (size_t)w, fmt, ap);
+  for (char *p = buf; *p; p++)                  /* one line, always */
+    if (*p == '\n' || *p == '\r') *p = ' ';
+  return status;
+}
+
+int cup_grow(void *arr, int *cap, int n, size_t size, int first) {
+  if (n < *cap) return CUP_OK;
+  if (*cap > INT_MAX / 2) return CUP_ERR_NOMEM;
+  int nc = *cap ? 2 * *cap : first;
+  void *p;
+  memcpy(&p, arr, sizeof p);
+  void *q = realloc(p, size * (size_t)nc);
+  if (!q) return CUP_ERR_NOMEM;
+  memcpy(arr, &q, sizeof q);
+  *cap = nc;
+  return CUP_OK;
 }
 
 int cup_sparse_alloc(cup_sparse *A, int nrow, int ncol, int nnz) {

@@ -51,15 +51,23 @@ int cupt_layout(const char *name, long *out, int cap) {
   if (!strcmp(name, "cup_wave"))
     PUT(sizeof(cup_wave), OFF(cup_wave, kind), OFF(cup_wave, value), OFF(cup_wave, amplitude),
         OFF(cup_wave, frequency), OFF(cup_wave, phase), OFF(cup_wave, npoints), OFF(cup_wave, t),
-        OFF(cup_wave, v));
+        OFF(cup_wave, v), OFF(cup_wave, delay), OFF(cup_wave, damping), OFF(cup_wave, value2),
+        OFF(cup_wave, rise), OFF(cup_wave, fall), OFF(cup_wave, width), OFF(cup_wave, period));
   if (!strcmp(name, "cup_lcs_desc"))
     PUT(sizeof(cup_lcs_desc), OFF(cup_lcs_desc, n), OFF(cup_lcs_desc, m), OFF(cup_lcs_desc, p),
         OFF(cup_lcs_desc, A), OFF(cup_lcs_desc, B), OFF(cup_lcs_desc, C), OFF(cup_lcs_desc, E),
         OFF(cup_lcs_desc, F), OFF(cup_lcs_desc, G), OFF(cup_lcs_desc, P),
-        OFF(cup_lcs_desc, pb_tol));
+        OFF(cup_lcs_desc, pb_tol), OFF(cup_lcs_desc, D), OFF(cup_lcs_desc, row_names));
   if (!strcmp(name, "cup_circuit"))
     PUT(sizeof(cup_circuit), OFF(cup_circuit, R1), OFF(cup_circuit, R2), OFF(cup_circuit, R3),
         OFF(cup_circuit, L2), OFF(cup_circuit, L3), OFF(cup_circuit, C4), OFF(cup_circuit, G));
+  if (!strcmp(name, "cup_crowd_desc"))
+    PUT(sizeof(cup_crowd_desc), OFF(cup_crowd_desc, agents), OFF(cup_crowd_desc, q0), OFF(cup_crowd_desc, radius),
+        OFF(cup_crowd_desc, room_points), OFF(cup_crowd_desc, room), OFF(cup_crowd_desc, doors),
+        OFF(cup_crowd_desc, door), OFF(cup_crowd_desc, obstacles), OFF(cup_crowd_desc, obstacle_points),
+        OFF(cup_crowd_desc, obstacle), OFF(cup_crowd_desc, walls), OFF(cup_crowd_desc, wall),
+        OFF(cup_crowd_desc, speed), OFF(cup_crowd_desc, grid), OFF(cup_crowd_desc, margin),
+        OFF(cup_crowd_desc, reach));
   if (!strcmp(name, "cup_schedule"))
     PUT(sizeof(cup_schedule), OFF(cup_schedule, coef), OFF(cup_schedule, power));
   if (!strcmp(name, "cup_integrator_options"))

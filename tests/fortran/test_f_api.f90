@@ -57,6 +57,7 @@ contains
     type(cup_run_info), target :: r
     type(cup_set_desc), target :: sd
     type(cup_process_desc), target :: pd
+    type(cup_crowd_desc), target :: cd
     type(c_ptr) :: b
     call section('struct layouts against the C compiler')
     b = c_loc(a)
@@ -81,12 +82,14 @@ contains
     b = c_loc(w)
     call compare('cup_wave', [int(c_sizeof(w), c_long), off(b, c_loc(w%kind)), off(b, c_loc(w%value)), &
       off(b, c_loc(w%amplitude)), off(b, c_loc(w%frequency)), off(b, c_loc(w%phase)), &
-      off(b, c_loc(w%npoints)), off(b, c_loc(w%t)), off(b, c_loc(w%v))])
+      off(b, c_loc(w%npoints)), off(b, c_loc(w%t)), off(b, c_loc(w%v)), off(b, c_loc(w%delay)), &
+      off(b, c_loc(w%damping)), off(b, c_loc(w%value2)), off(b, c_loc(w%rise)), off(b, c_loc(w%fall)), &
+      off(b, c_loc(w%width)), off(b, c_loc(w%period))])
     b = c_loc(d)
     call compare('cup_lcs_desc', [int(c_sizeof(d), c_long), off(b, c_loc(d%n)), off(b, c_loc(d%m)), &
       off(b, c_loc(d%p)), off(b, c_loc(d%A)), off(b, c_loc(d%B)), off(b, c_loc(d%C)), &
       off(b, c_loc(d%E)), off(b, c_loc(d%F)), off(b, c_loc(d%G)), off(b, c_loc(d%metric)), &
-      off(b, c_loc(d%pb_tol))])
+      off(b, c_loc(d%pb_tol)), off(b, c_loc(d%D)), off(b, c_loc(d%row_names))])
     b = c_loc(ci)
     call compare('cup_circuit', [int(c_sizeof(ci), c_long), off(b, c_loc(ci%R1)), off(b, c_loc(ci%R2)), &
       off(b, c_loc(ci%R3)), off(b, c_loc(ci%L2)), off(b, c_loc(ci%L3)), off(b, c_loc(ci%C4)), &
@@ -120,6 +123,12 @@ contains
       off(b, c_loc(pd%C)), off(b, c_loc(pd%u)), off(b, c_loc(pd%A)), off(b, c_loc(pd%E)), &
       off(b, c_loc(pd%f)), off(b, c_loc(pd%f_ctx)), off(b, c_loc(pd%f_integral)), &
       off(b, c_loc(pd%f_integral_ctx))])
+    b = c_loc(cd)
+    call compare('cup_crowd_desc', [int(c_sizeof(cd), c_long), off(b, c_loc(cd%agents)), off(b, c_loc(cd%q0)), &
+      off(b, c_loc(cd%radius)), off(b, c_loc(cd%room_points)), off(b, c_loc(cd%room)), off(b, c_loc(cd%doors)), &
+      off(b, c_loc(cd%door)), off(b, c_loc(cd%obstacles)), off(b, c_loc(cd%obstacle_points)), &
+      off(b, c_loc(cd%obstacle)), off(b, c_loc(cd%walls)), off(b, c_loc(cd%wall)), off(b, c_loc(cd%speed)), &
+      off(b, c_loc(cd%grid)), off(b, c_loc(cd%margin)), off(b, c_loc(cd%reach))])
   end subroutine test_layouts
 end module layout_check
 

@@ -1,0 +1,90 @@
+/* crowd_log — see crowd_log.h. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "crowd_log.h"
+
+enum { COLS = 10 };
+static const char *const names[COLS] = {"t", "inside", "rows", "active", "eps_cert", "eta_cert", "gap",
+                                        "iterations", "factorizations", "seconds"};
+
+struct crowd_log {
+  cup_crowd *c;
+  long n;
+  double *col[COLS];            /* n + 1 entries each; step 0 is the start */
+  double last_clock;
+};
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+crowd_log *crowd_log_create(cup_crowd *c, long n) {
+  crowd_log *L = calloc(1, sizeof *L);
+  if (!L) return NULL;
+  L->c = c;
+  L->n = n;
+  int fail = 0;
+  for (int k = 0; k < COLS; k++) fail |= !(L->col[k] = calloc((size_t)n + 1, sizeof(double)));
+  if (fail) { crowd_log_free(&L); return NULL; }
+  L->col[1][0] = cup_crowd_agents(c);
+  L->last_clock = now();
+  return L;
+}
+
+void crowd_log_free(crowd_log **L) {
+  if (!L || !*L) return;
+  for (int k = 0; k < COLS; k++) free((*L)->col[k]);
+  free(*L);
+  *L = NULL;
+}
+
+int crowd_log_step(long k, double t, const cup_proj_info *pi, void *ctx) {
+  crowd_log *L = ctx;
+  if (k < 1 || k > L->n) return 0;
+  double clock = now();
+  double v[COLS] = {t, cup_crowd_inside(L->c), cup_crowd_rows(L->c), pi->active, pi->eps_cert, pi->eta_cert,
+                    NAN, pi->iterations, pi->factorizations, clock - L->last_clock};
+  L->last_clock = clock;
+  for (int c = 0; c < COLS; c++) if (c != 6) L->col[c][k] = v[c];
+  L->col[6][k - 1] = cup_crowd_gap(L->c);    /* the gap of x_{k-1}, seen while building step k */
+  return 0;
+}
+
+int crowd_log_write(crowd_log *L, cup_h5run *w, long last, const double *q) {
+  char name[64];
+  int N = cup_crowd_agents(L->c);
+  L->col[6][last] = cup_crowd_min_gap(L->c, q);
+  long len = last + 1, dn = N;
+  int st = CUP_OK;
+  for (int c = 0; c < COLS; c++) {
+    snprintf(name, sizeof name, "steps/%s", names[c]);
+    st = cup_status_merge(st, cup_h5run_array(w, name, 1, &len, L->col[c]));
+  }
+  st = cup_status_merge(st, cup_h5run_array(w, "crowd/exit_time", 1, &dn, cup_crowd_exit_times(L->c)));
+  return cup_status_merge(st, cup_h5run_attr_long(w, "agents_out", N - cup_crowd_inside(L->c)));
+}
+
+int crowd_log_begin(crowd_log *L, cup_h5run *w) {
+  long dn = cup_crowd_agents(L->c), dims2[2];
+  const double *seg;
+  int st = cup_h5run_array(w, "crowd/radius", 1, &dn, cup_crowd_radii(L->c));
+  dims2[0] = cup_crowd_walls(L->c, &seg);
+  dims2[1] = 4;
+  st = cup_status_merge(st, cup_h5run_array(w, "crowd/walls", 2, dims2, seg));
+  return cup_status_merge(st, cup_h5run_attr_long(w, "agents", dn));
+}
+
+void crowd_log_summary(const crowd_log *L, char *buf, size_t size) {
+  int N = cup_crowd_agents(L->c), out = 0;
+  const double *et = cup_crowd_exit_times(L->c);
+  double lastexit = NAN;
+  for (int i = 0; i < N; i++)
+    if (!isnan(et[i])) { out++; lastexit = isnan(lastexit) ? et[i] : fmax(lastexit, et[i]); }
+  snprintf(buf, size, "%d agents, %d out (the last at t = %.4g)", N, out, lastexit);
+}

@@ -1,0 +1,79 @@
+/* netlist_lex — the SPICE netlist reader's tokens, names and values:
+ * physical lines into cards (title line, '*' comments, ';' and ' $ '
+ * comments, '+' continuations), cards into tokens with their place, names
+ * hashed case-insensitively, numbers with engineering suffixes, and .param
+ * expressions. Internal to io/netlist_read.c. */
+#ifndef CUP_NETLIST_LEX_H
+#define CUP_NETLIST_LEX_H
+
+#include <stdarg.h>
+#include <stddef.h>
+
+typedef enum nx_kind { NX_WORD, NX_LP, NX_RP, NX_EQ, NX_EXPR } nx_kind;
+
+typedef struct nx_tok {
+  nx_kind kind;
+  char *s;            /* WORD: the text; EXPR: the expression inside {} or '' */
+  int line, col;      /* 1-based; line 0: a value given by a set (origin >= 0) */
+  int origin;         /* -1: the file; k >= 0: set k ("NAME=VALUE") */
+} nx_tok;
+
+typedef struct nx_card {
+  int first, n;       /* tokens first .. first + n - 1 */
+} nx_card;
+
+/* Case-insensitive name -> index table (open addressing). */
+typedef struct nx_hash {
+  int cap, used;
+  char **key;         /* lowercase copies */
+  int *val;
+} nx_hash;
+
+int nx_hash_get(const nx_hash *h, const char *name);          /* -1 if absent */
+int nx_hash_put(nx_hash *h, const char *name, int val);       /* CUP_OK or CUP_ERR_NOMEM */
+void nx_hash_free(nx_hash *h);
+
+typedef struct nx_param {
+  char *name;
+  nx_tok value;       /* WORD or EXPR */
+  int state;          /* 0 unevaluated, 1 evaluating, 2 done */
+  double v;
+} nx_param;
+
+/* Everything the reader keeps while it works. */
+typedef struct nx {
+  const char *file;
+  const char *const *sets;   /* "NAME=VALUE" */
+  int nsets;
+  char *errmsg;
+  nx_tok *tok;
+  int ntok, captok;
+  nx_card *card;
+  int ncard, capcard;
+  nx_param *par;
+  int npar, cappar;
+  nx_hash parh;
+} nx;
+
+/* "FILE:LINE:COL: WHAT: message" (or "FILE: set 'S': WHAT: message" for a
+ * token from a set) into x->errmsg; returns status. `at` may be NULL (then
+ * FILE: WHAT: message), `what` may be NULL. */
+int nx_fail(nx *x, int status, const nx_tok *at, const char *what, const char *fmt, ...)
+  __attribute__((format(printf, 5, 6)));
+
+/* Split text (len bytes) into cards; line 1 is the title and is skipped. */
+int nx_lex_file(nx *x, const char *text, size_t len);
+/* Tokens of a set's value (set k), appended; *first and *n receive them. */
+int nx_lex_value(nx *x, int k, const char *text, int *first, int *n);
+void nx_free(nx *x);
+
+/* 1 if the token is the word w (case-insensitive). */
+int nx_is(const nx_tok *t, const char *w);
+/* A value: a number with an engineering suffix (f p n u m k meg g t, mil;
+ * trailing unit letters ignored: "10uF"), a .param name, or an expression
+ * ({...} or '...'). Finite or an error naming what. */
+int nx_value(nx *x, const nx_tok *t, const char *what, double *v);
+/* The same for a plain number only (no parameters): 1 if t is one. */
+int nx_number(const char *s, double *v);
+
+#endif

@@ -1,0 +1,627 @@
+/* netlist_read — SPICE-subset netlists (.cir/.sp) into the circuit
+ * description of model/netlist_desc.h, then into an LCS (model/netlist.c).
+ * The subset and its errors are documented in docs/netlist.md: R, L, C,
+ * independent V and I sources (DC, SIN, PULSE, PWL), ideal diodes,
+ * .tran, .param, .ic, .model NAME D, .probe/.save/.print, .end; anything
+ * else is refused by name ("not supported"), never guessed. */
+#define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include "catchup.h"
+#include "netlist_lex.h"
+#include "read_text.h"
+#include "model/netlist_desc.h"
+#include "model/netlist_impl.h"
+
+typedef struct rd {
+  nx x;
+  nl_circuit *c;
+  nx_hash nodes, elems, models, setnames;
+  int end;                  /* cards 0 .. end-1 are read (.end stops) */
+  unsigned char *skip;      /* cards inside .control ... .endc */
+  int *set_used, *set_first, *set_n;   /* per set: used, its value's tokens */
+  int capelem, capic, capprobe;
+} rd;
+
+#define TOK(r_, c_, k_) (&(r_)->x.tok[(r_)->x.card[c_].first + (k_)])
+
+static int nomem(rd *r) { return nx_fail(&r->x, CUP_ERR_NOMEM, NULL, NULL, "out of memory"); }
+
+/* ---- nodes and elements ------------------------------------------------------ */
+
+static int is_ground(const char *s) { return !strcmp(s, "0") || !strcasecmp(s, "gnd"); }
+
+static int node_of(rd *r, const nx_tok *t, const char *elem, int *out) {
+  nl_circuit *c = r->c;
+  if (t->kind != NX_WORD) return nx_fail(&r->x, CUP_ERR_PARSE, t, elem, "expected a node name (got '%s')", t->s);
+  if (strchr(t->s, '/'))
+    return nx_fail(&r->x, CUP_ERR_PARSE, t, elem, "node name '%.40s': '/' is not allowed (it would split "
+                   "the HDF5 signal name)", t->s);
+  if (is_ground(t->s)) {
+    if (!c->node[0] && !(c->node[0] = strdup(t->s))) return nomem(r);
+    if (!c->node_line[0]) { c->node_line[0] = t->line; c->node_col[0] = t->col; }
+    *out = 0;
+    return CUP_OK;
+  }
+  int k = nx_hash_get(&r->nodes, t->s);
+  if (k >= 0) { *out = k; return CUP_OK; }
+  k = c->nnodes;
+  if ((k & (k - 1)) == 0) {                        /* grow at powers of two */
+    size_t cap = 2 * (size_t)k;
+    char **nn = realloc(c->node, cap * sizeof *nn);
+    if (nn) c->node = nn;
+    int *nl = realloc(c->node_line, cap * sizeof *nl);
+    if (nl) c->node_line = nl;
+    int *nc = realloc(c->node_col, cap * sizeof *nc);
+    if (nc) c->node_col = nc;
+    if (!nn || !nl || !nc) return nomem(r);
+  }
+  if (!(c->node[k] = strdup(t->s)) || nx_hash_put(&r->nodes, t->s, k)) return nomem(r);
+  c->node_line[k] = t->line;
+  c->node_col[k] = t->col;
+  c->nnodes++;
+  *out = k;
+  return CUP_OK;
+}
+
+static int new_elem(rd *r, nl_kind kind, const nx_tok *name, nl_elem **out) {
+  nl_circuit *c = r->c;
+  int prev = nx_hash_get(&r->elems, name->s);
+  if (prev >= 0)
+    return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate element name (first at line %d)",
+                   c->elem[prev].line);
+  if (cup_grow(&c->elem, &r->capelem, c->nelem, sizeof *c->elem, 32)) return nomem(r);
+  nl_elem *e = &c->elem[c->nelem];
+  memset(e, 0, sizeof *e);
+  e->kind = kind;
+  e->line = name->line;
+  e->col = name->col;
+  if (!(e->name = strdup(name->s)) || nx_hash_put(&r->elems, name->s, c->nelem)) { free(e->name); return nomem(r); }
+  c->nelem++;
+  *out = e;
+  return CUP_OK;
+}
+
+/* A new two-terminal element from card's first three tokens (name, nodes),
+ * the card holding at least min_n tokens ("expected 'NAME operands'"). */
+static int open_elem(rd *r, int card, nl_kind kind, int min_n, const char *operands, nl_elem **out) {
+  const nx_tok *name = TOK(r, card, 0);
+  int st = new_elem(r, kind, name, out);
+  if (!st && r->x.card[card].n < min_n)
+    return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s %s'", name->s, operands);
+  if (!st) st = node_of(r, TOK(r, card, 1), name->s, &(*out)->a);
+  if (!st) st = node_of(r, TOK(r, card, 2), name->s, &(*out)->b);
+  return st;
+}
+
+/* The set that replaces this element's value, if any: 1 and its tokens. */
+static int set_tokens(rd *r, const char *name, int *first, int *n) {
+  int k = nx_hash_get(&r->setnames, name);
+  if (k < 0) return 0;
+  r->set_used[k] = 1;
+  *first = r->set_first[k];
+  *n = r->set_n[k];
+  return 1;
+}
+
+/* ---- R, L, C ----------------------------------------------------------------- */
+
+static const char *kind_word(nl_kind k) {
+  static const char *const w[] = {"resistance", "inductance", "capacitance"};
+  return k <= NL_C ? w[k] : "value";
+}
+
+static int read_passive(rd *r, int card, nl_kind kind) {
+  int n = r->x.card[card].n;
+  const nx_tok *name = TOK(r, card, 0);
+  nl_elem *e;
+  int st = open_elem(r, card, kind, 4, "NODE1 NODE2 VALUE", &e);
+  if (st) return st;
+  int sfirst, sn, k = 4;
+  int set = set_tokens(r, name->s, &sfirst, &sn);
+  const nx_tok *vt = TOK(r, card, 3);
+  if (set) {
+    if (sn != 1) return nx_fail(&r->x, CUP_ERR_PARSE, sn ? &r->x.tok[sfirst] : name, name->s, "expected one value");
+    vt = &r->x.tok[sfirst];
+  }
+  st = nx_value(&r->x, vt, name->s, &e->value);
+  if (!st && !(e->value > 0))
+    return nx_fail(&r->x, CUP_ERR_PARSE, vt, name->s, "bad value: %s must be > 0 (got %g)", kind_word(kind), e->value);
+  while (!st && k < n) {
+    const nx_tok *t = TOK(r, card, k);
+    if (kind != NL_R && nx_is(t, "ic")) {
+      if (k + 2 >= n || TOK(r, card, k + 1)->kind != NX_EQ)
+        return nx_fail(&r->x, CUP_ERR_PARSE, t, name->s, "expected IC=VALUE");
+      st = nx_value(&r->x, TOK(r, card, k + 2), name->s, &e->ic);
+      e->has_ic = 1;
+      k += 3;
+    } else {
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, name->s, "'%.40s' is not supported here (%s)", t->s,
+                     kind == NL_R ? "a resistor takes NODE1 NODE2 VALUE" : "only IC=value may follow the value");
+    }
+  }
+  return st;
+}
+
+/* ---- sources ----------------------------------------------------------------- */
+
+static int looks_value(rd *r, const nx_tok *t) {
+  double v;
+  return t->kind == NX_EXPR || (t->kind == NX_WORD && (nx_number(t->s, &v) || nx_hash_get(&r->x.parh, t->s) >= 0));
+}
+
+/* The arguments of SIN/PULSE/PWL: "(a b c)" or "a b c" up to the next word
+ * that is not a value. */
+static int fn_args(rd *r, const nx_tok *t, int n, int *k, const char *elem, const char *fn, double *v,
+                   int max, int *count) {
+  int paren = *k < n && t[*k].kind == NX_LP;
+  if (paren) (*k)++;
+  *count = 0;
+  while (*k < n && t[*k].kind != NX_RP && (paren || looks_value(r, &t[*k]))) {
+    if (*count == max)
+      return nx_fail(&r->x, CUP_ERR_PARSE, &t[*k], elem, "%s takes at most %d values", fn, max);
+    if (t[*k].kind == NX_EQ || (t[*k].kind == NX_WORD && !looks_value(r, &t[*k])))
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, &t[*k], elem, "%s: '%.40s' is not supported (only values)", fn, t[*k].s);
+    int st = nx_value(&r->x, &t[*k], elem, &v[(*count)++]);
+    if (st) return st;
+    (*k)++;
+  }
+  if (paren) {
+    if (*k >= n) return nx_fail(&r->x, CUP_ERR_PARSE, &t[n - 1], elem, "%s( is not closed", fn);
+    (*k)++;
+  }
+  return CUP_OK;
+}
+
+static int read_pwl(rd *r, const nx_tok *at, const char *elem, nl_source *s, const double *v, int count) {
+  if (count < 2 || count % 2)
+    return nx_fail(&r->x, CUP_ERR_PARSE, at, elem, "PWL needs pairs of time and value (got %d values)", count);
+  s->npts = count / 2;
+  s->t = malloc(sizeof(double) * (size_t)s->npts);
+  s->v = malloc(sizeof(double) * (size_t)s->npts);
+  if (!s->t || !s->v) return nomem(r);
+  for (int i = 0; i < s->npts; i++) {
+    s->t[i] = v[2 * i];
+    s->v[i] = v[2 * i + 1];
+    if (i > 0 && !(s->t[i] > s->t[i - 1]))
+      return nx_fail(&r->x, CUP_ERR_PARSE, at, elem, "PWL times must increase (point %d: %g after %g)",
+                     i + 1, s->t[i], s->t[i - 1]);
+    if (s->t[i] < 0) return nx_fail(&r->x, CUP_ERR_PARSE, at, elem, "PWL time %g is negative", s->t[i]);
+  }
+  return CUP_OK;
+}
+
+/* V or I: [[DC] value] [AC mag [phase]] [SIN(...) | PULSE(...) | PWL(...)]. */
+static int source_spec(rd *r, const nx_tok *t, int n, const char *elem, nl_source *s) {
+  static const char *const unsupported[] = {"exp", "sffm", "am", "trnoise", "trrandom", "external",
+                                            "distof1", "distof2", "portnum", "z0", NULL};
+  int have_dc = 0, have_fn = 0;
+  double *v = NULL;
+  int st = CUP_OK;
+  for (int k = 0; k < n && !st;) {
+    const nx_tok *w = &t[k];
+    if (nx_is(w, "dc")) {
+      if (++k >= n) { st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "DC needs a value"); break; }
+      st = nx_value(&r->x, &t[k++], elem, &s->dc);
+      have_dc = 1;
+    } else if (nx_is(w, "ac")) {                   /* small-signal only: no effect on .tran */
+      k++;
+      for (int j = 0; j < 2 && k < n && looks_value(r, &t[k]); j++) k++;
+    } else if (nx_is(w, "sin") || nx_is(w, "pulse") || nx_is(w, "pwl")) {
+      if (have_fn) { st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "more than one transient function"); break; }
+      have_fn = 1;
+      s->fn = nx_is(w, "sin") ? NL_FN_SIN : nx_is(w, "pulse") ? NL_FN_PULSE : NL_FN_PWL;
+      int max = s->fn == NL_FN_SIN ? 6 : s->fn == NL_FN_PULSE ? 7 : n, count = 0;
+      if (!(v = malloc(sizeof(double) * (size_t)(max + 1)))) { st = nomem(r); break; }
+      k++;
+      st = fn_args(r, t, n, &k, elem, w->s, v, max, &count);
+      if (!st && s->fn == NL_FN_PWL) st = read_pwl(r, w, elem, s, v, count);
+      if (!st && s->fn != NL_FN_PWL) {
+        if (count < 2)
+          st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "%s needs at least 2 values (got %d)", w->s, count);
+        memcpy(s->p, v, sizeof(double) * (size_t)count);
+        s->np = count;
+      }
+    } else if (w->kind == NX_WORD) {
+      for (int j = 0; unsupported[j]; j++)
+        if (nx_is(w, unsupported[j]))
+          st = nx_fail(&r->x, CUP_ERR_UNSUPPORTED, w, elem, "source function %s is not supported "
+                       "(DC, SIN, PULSE and PWL are)", w->s);
+      if (st) break;
+      if (!looks_value(r, w) || have_dc)
+        st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "unexpected '%.40s' (expected DC, AC, SIN, PULSE, PWL "
+                     "or a value)", w->s);
+      else
+        st = nx_value(&r->x, &t[k++], elem, &s->dc);
+      have_dc = 1;
+    } else if (w->kind == NX_EXPR && !have_dc) {
+      st = nx_value(&r->x, &t[k++], elem, &s->dc);
+      have_dc = 1;
+    } else {
+      st = nx_fail(&r->x, CUP_ERR_PARSE, w, elem, "unexpected '%.40s'", w->s);
+    }
+  }
+  free(v);
+  return st;
+}
+
+static int read_source(rd *r, int card, nl_kind kind) {
+  int n = r->x.card[card].n;
+  const nx_tok *name = TOK(r, card, 0);
+  nl_elem *e;
+  int st = open_elem(r, card, kind, 3, "N+ N- [spec]", &e);
+  if (st) return st;
+  int sfirst, sn;
+  int set = set_tokens(r, name->s, &sfirst, &sn);
+  if (set) return source_spec(r, &r->x.tok[sfirst], sn, name->s, &e->src);
+  return source_spec(r, TOK(r, card, 3), n - 3, name->s, &e->src);
+}
+
+/* ---- diodes and models ------------------------------------------------------- */
+
+static int read_diode(rd *r, int card) {
+  int n = r->x.card[card].n;
+  const nx_tok *name = TOK(r, card, 0);
+  nl_elem *e;
+  int st = open_elem(r, card, NL_D, 3, "ANODE CATHODE [MODEL]", &e);
+  if (st) return st;
+  int sfirst, sn;
+  int set = set_tokens(r, name->s, &sfirst, &sn);
+  if (set) return nx_fail(&r->x, CUP_ERR_ARG, NULL, name->s, "a diode is ideal: it has no value to set");
+  if (n >= 4) {
+    const nx_tok *m = TOK(r, card, 3);
+    if (m->kind != NX_WORD || looks_value(r, m))
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, m, name->s, "'%.40s' is not supported (a diode takes ANODE "
+                     "CATHODE [MODEL]; area factors are not)", m->s);
+    if (nx_hash_get(&r->models, m->s) < 0)
+      return nx_fail(&r->x, CUP_ERR_PARSE, m, name->s, "model '%.40s' is not defined (an ideal diode needs "
+                     "'.model %.40s D' or no model)", m->s, m->s);
+  }
+  if (n >= 5)
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, 4), name->s, "'%.40s' is not supported (a diode "
+                   "takes ANODE CATHODE [MODEL])", TOK(r, card, 4)->s);
+  return CUP_OK;
+}
+
+static int read_model(rd *r, int card) {
+  int n = r->x.card[card].n;
+  const nx_tok *cmd = TOK(r, card, 0);
+  if (n < 3) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".model", "expected '.model NAME D'");
+  const nx_tok *name = TOK(r, card, 1), *type = TOK(r, card, 2);
+  if (name->kind != NX_WORD) return nx_fail(&r->x, CUP_ERR_PARSE, name, ".model", "expected a model name");
+  if (!nx_is(type, "d"))
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, type, name->s, "model type '%.20s' is not supported (only ideal "
+                   "diodes: '.model %.40s D')", type->s, name->s);
+  for (int k = 3; k < n; k++)
+    if (TOK(r, card, k)->kind != NX_LP && TOK(r, card, k)->kind != NX_RP)
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, k), name->s, "diode model parameters are not "
+                     "supported ('%.20s'): catchup's diodes are ideal; write '.model %.40s D'",
+                     TOK(r, card, k)->s, name->s);
+  if (nx_hash_get(&r->models, name->s) >= 0)
+    return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "model defined twice");
+  return nx_hash_put(&r->models, name->s, card) ? nomem(r) : CUP_OK;
+}
+
+static int read_param(rd *r, int card) {
+  int n = r->x.card[card].n;
+  nx *x = &r->x;
+  for (int k = 1; k < n;) {
+    const nx_tok *name = TOK(r, card, k);
+    if (name->kind != NX_WORD || !(isalpha((unsigned char)name->s[0]) || name->s[0] == '_'))
+      return nx_fail(x, CUP_ERR_PARSE, name, ".param", "expected NAME=VALUE (got '%.40s')", name->s);
+    if (k + 2 >= n || TOK(r, card, k + 1)->kind != NX_EQ)
+      return nx_fail(x, CUP_ERR_PARSE, name, name->s, "expected %s=VALUE", name->s);
+    if (nx_hash_get(&x->parh, name->s) >= 0)
+      return nx_fail(x, CUP_ERR_PARSE, name, name->s, "parameter defined twice");
+    if (cup_grow(&x->par, &x->cappar, x->npar, sizeof *x->par, 16)) return nomem(r);
+    nx_param *p = &x->par[x->npar];
+    memset(p, 0, sizeof *p);
+    if (!(p->name = strdup(name->s))) return nomem(r);
+    p->value = *TOK(r, card, k + 2);
+    if (nx_hash_put(&x->parh, name->s, x->npar++)) return nomem(r);
+    k += 3;
+  }
+  return CUP_OK;
+}
+
+/* ---- control lines ----------------------------------------------------------- */
+
+static int read_tran(rd *r, int card) {
+  int n = r->x.card[card].n;
+  const nx_tok *cmd = TOK(r, card, 0);
+  nl_circuit *c = r->c;
+  if (c->has_tran) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "given twice (line %d)", c->tran_line);
+  if (n < 3) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "expected '.tran TSTEP TSTOP'");
+  double v[4] = {0, 0, 0, 0};
+  int nv = 0, st = CUP_OK;
+  for (int k = 1; k < n && !st; k++) {
+    const nx_tok *t = TOK(r, card, k);
+    if (nx_is(t, "uic")) continue;               /* initial conditions are always used */
+    if (nv == 4) return nx_fail(&r->x, CUP_ERR_PARSE, t, ".tran", "too many values");
+    st = nx_value(&r->x, t, ".tran", &v[nv++]);
+  }
+  if (st) return st;
+  if (nv < 2) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "expected '.tran TSTEP TSTOP'");
+  if (!(v[0] > 0) || !(v[1] > 0))
+    return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "TSTEP = %g and TSTOP = %g must be > 0", v[0], v[1]);
+  if (v[2] != 0)
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, 3), ".tran", "TSTART = %g is not supported "
+                   "(the run starts at t = 0)", v[2]);
+  c->has_tran = 1;
+  c->tstep = v[0];
+  c->tstop = v[1];
+  c->tran_line = cmd->line;
+  c->tran_col = cmd->col;
+  return CUP_OK;
+}
+
+/* .ic v(NODE)=VALUE ...: nodes are looked up once every element is read. */
+static int read_ic(rd *r, int card) {
+  int n = r->x.card[card].n;
+  nl_circuit *c = r->c;
+  for (int k = 1; k < n; k += 6) {
+    const nx_tok *t = TOK(r, card, k);
+    if (k + 5 >= n)
+      return nx_fail(&r->x, CUP_ERR_PARSE, t, ".ic", "expected v(NODE)=VALUE");
+    if (!nx_is(t, "v") || TOK(r, card, k + 1)->kind != NX_LP || TOK(r, card, k + 2)->kind != NX_WORD ||
+        TOK(r, card, k + 3)->kind != NX_RP || TOK(r, card, k + 4)->kind != NX_EQ)
+      return nx_fail(&r->x, CUP_ERR_PARSE, t, ".ic", "expected v(NODE)=VALUE (got '%.40s')", t->s);
+    if (cup_grow(&c->ic, &r->capic, c->nic, sizeof *c->ic, 8)) return nomem(r);
+    nl_ic *ic = &c->ic[c->nic];
+    const nx_tok *nd = TOK(r, card, k + 2);
+    ic->line = nd->line;
+    ic->col = nd->col;
+    ic->node = is_ground(nd->s) ? 0 : -1 - (int)(nd - r->x.tok);   /* resolved later */
+    int st = nx_value(&r->x, TOK(r, card, k + 5), ".ic", &ic->v);
+    if (st) return st;
+    c->nic++;
+  }
+  return CUP_OK;
+}
+
+static int add_probe(rd *r, const nx_tok *at, const char *text) {
+  nl_circuit *c = r->c;
+  if (cup_grow(&c->probe, &r->capprobe, c->nprobe, sizeof *c->probe, 8)) return nomem(r);
+  nl_probe *p = &c->probe[c->nprobe];
+  if (!(p->text = strdup(text))) return nomem(r);
+  p->line = at->line;
+  p->col = at->col;
+  c->nprobe++;
+  return CUP_OK;
+}
+
+/* .probe/.save/.print/.plot [tran] v(N) v(N1,N2) i(ELEM) ... | all */
+static int read_probes(rd *r, int card) {
+  int n = r->x.card[card].n;
+  const nx_tok *cmd = TOK(r, card, 0);
+  for (int k = 1; k < n;) {
+    const nx_tok *t = TOK(r, card, k);
+    if (k == 1 && nx_is(t, "tran")) { k++; continue; }
+    if (nx_is(t, "all")) { r->c->probe_all = 1; k++; continue; }
+    int two = k + 4 < n && TOK(r, card, k + 3)->kind == NX_WORD && TOK(r, card, k + 4)->kind == NX_RP;
+    int len = two ? 5 : 4;                        /* v ( a [b] ): the comma is a blank */
+    if (!(nx_is(t, "v") || nx_is(t, "i")) || k + len > n || TOK(r, card, k + 1)->kind != NX_LP ||
+        TOK(r, card, k + 2)->kind != NX_WORD || TOK(r, card, k + len - 1)->kind != NX_RP ||
+        (two && nx_is(t, "i")))
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, cmd->s, "'%.40s' is not supported (expected v(NODE), "
+                     "v(NODE1,NODE2), i(ELEMENT) or all)", t->s);
+    char text[256];
+    if (two)
+      snprintf(text, sizeof text, "%s(%s,%s)", t->s, TOK(r, card, k + 2)->s, TOK(r, card, k + 3)->s);
+    else
+      snprintf(text, sizeof text, "%s(%s)", t->s, TOK(r, card, k + 2)->s);
+    int st = add_probe(r, t, text);
+    if (st) return st;
+    k += len;
+  }
+  return CUP_OK;
+}
+
+static int read_control(rd *r, int card) {
+  static const char *const ignored[] = {".options", ".option", ".opt", ".title", ".temp", ".width", NULL};
+  static const char *const refused[] = {".include", ".inc", ".lib", ".subckt", ".ends", ".func", ".global",
+                                        ".ac", ".dc", ".op", ".noise", ".tf", ".four", ".meas", ".measure",
+                                        ".sens", ".pz", ".disto", ".nodeset", ".csparam", ".if", ".else",
+                                        ".elseif", ".endif", ".savecurrents", ".model_x", NULL};
+  const nx_tok *cmd = TOK(r, card, 0);
+  const char *w = cmd->s;
+  if (!strcasecmp(w, ".tran")) return read_tran(r, card);
+  if (!strcasecmp(w, ".ic")) return read_ic(r, card);
+  if (!strcasecmp(w, ".probe") || !strcasecmp(w, ".save") || !strcasecmp(w, ".print") || !strcasecmp(w, ".plot"))
+    return read_probes(r, card);
+  if (!strcasecmp(w, ".param") || !strcasecmp(w, ".model")) return CUP_OK;   /* read first */
+  for (int k = 0; ignored[k]; k++)
+    if (!strcasecmp(w, ignored[k])) return CUP_OK;
+  for (int k = 0; refused[k]; k++)
+    if (!strcasecmp(w, refused[k]))
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, cmd, w, "not supported (catchup reads R, L, C, V, I, D, "
+                     ".tran, .param, .ic, .model NAME D, .probe/.save/.print, .options and .end)");
+  return nx_fail(&r->x, CUP_ERR_PARSE, cmd, w, "unknown control line");
+}
+
+/* ---- the cards --------------------------------------------------------------- */
+
+static int read_element(rd *r, int card) {
+  static const char *const what[26] = {
+    ['a' - 'a'] = "XSPICE code models (A)", ['b' - 'a'] = "behavioural sources (B)",
+    ['e' - 'a'] = "controlled sources (E)", ['f' - 'a'] = "controlled sources (F)",
+    ['g' - 'a'] = "controlled sources (G)", ['h' - 'a'] = "controlled sources (H)",
+    ['j' - 'a'] = "JFETs (J)", ['k' - 'a'] = "coupled inductors (K)", ['m' - 'a'] = "MOSFETs (M)",
+    ['o' - 'a'] = "transmission lines (O)", ['q' - 'a'] = "bipolar transistors (Q)",
+    ['s' - 'a'] = "switches (S)", ['t' - 'a'] = "transmission lines (T)",
+    ['u' - 'a'] = "RC lines (U)", ['w' - 'a'] = "switches (W)", ['x' - 'a'] = "subcircuits (X)",
+    ['y' - 'a'] = "transmission lines (Y)", ['z' - 'a'] = "MESFETs (Z)"};
+  const nx_tok *t = TOK(r, card, 0);
+  if (t->kind != NX_WORD)
+    return nx_fail(&r->x, CUP_ERR_PARSE, t, NULL, "expected an element or a control line (got '%s')", t->s);
+  int c = tolower((unsigned char)t->s[0]);
+  switch (c) {
+    case 'r': return read_passive(r, card, NL_R);
+    case 'l': return read_passive(r, card, NL_L);
+    case 'c': return read_passive(r, card, NL_C);
+    case 'v': return read_source(r, card, NL_V);
+    case 'i': return read_source(r, card, NL_I);
+    case 'd': return read_diode(r, card);
+    case '.': return read_control(r, card);
+  }
+  if (c >= 'a' && c <= 'z' && what[c - 'a'])
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, t->s, "%s are not supported (R, L, C, V, I and ideal diodes D are)",
+                   what[c - 'a']);
+  return nx_fail(&r->x, CUP_ERR_PARSE, t, t->s, "unknown element type '%c' (R, L, C, V, I and D are supported)",
+                 t->s[0]);
+}
+
+/* First pass: .end, .control blocks, .param and .model (used anywhere). */
+static int first_pass(rd *r) {
+  nx *x = &r->x;
+  r->end = x->ncard;
+  if (!(r->skip = calloc((size_t)x->ncard + 1, 1))) return nomem(r);
+  for (int k = 0; k < x->ncard; k++) {
+    const nx_tok *t = TOK(r, k, 0);
+    if (nx_is(t, ".end")) { r->end = k; break; }
+    if (nx_is(t, ".control")) {
+      int j = k + 1;
+      while (j < x->ncard && !nx_is(TOK(r, j, 0), ".endc")) j++;
+      if (j == x->ncard) return nx_fail(x, CUP_ERR_PARSE, t, ".control", "no .endc closes it");
+      memset(r->skip + k, 1, (size_t)(j - k + 1));
+      k = j;
+      continue;
+    }
+    int st = nx_is(t, ".param") ? read_param(r, k) : nx_is(t, ".model") ? read_model(r, k) : CUP_OK;
+    if (st) return st;
+  }
+  return CUP_OK;
+}
+
+/* Sets: NAME=VALUE for a .param (replaced now) or an element (later).
+ * Every value is split into tokens here, before any element is read, so
+ * that no token moves while the elements point at them. */
+static int apply_sets(rd *r) {
+  nx *x = &r->x;
+  size_t ns = (size_t)x->nsets + 1;
+  if (!(r->set_used = calloc(ns, sizeof(int))) || !(r->set_first = calloc(ns, sizeof(int))) ||
+      !(r->set_n = calloc(ns, sizeof(int))))
+    return nomem(r);
+  for (int k = 0; k < x->nsets; k++) {
+    nx_tok at = {NX_WORD, NULL, 0, 0, k};
+    const char *s = x->sets[k], *eq = strchr(s, '=');
+    if (!eq || eq == s) return nx_fail(x, CUP_ERR_ARG, &at, NULL, "expected NAME=VALUE");
+    char name[128];
+    size_t n = (size_t)(eq - s);
+    while (n && isspace((unsigned char)s[n - 1])) n--;
+    if (n >= sizeof name) return nx_fail(x, CUP_ERR_ARG, &at, NULL, "name too long");
+    memcpy(name, s, n);
+    name[n] = '\0';
+    int st = nx_lex_value(x, k, eq + 1, &r->set_first[k], &r->set_n[k]);
+    if (st) return st;
+    int p = nx_hash_get(&x->parh, name);
+    if (p >= 0) {
+      if (r->set_n[k] != 1) return nx_fail(x, CUP_ERR_PARSE, &at, name, "expected one value");
+      x->par[p].value = x->tok[r->set_first[k]];
+      r->set_used[k] = 1;
+    } else if (nx_hash_put(&r->setnames, name, k)) {
+      return nomem(r);
+    }
+  }
+  return CUP_OK;
+}
+
+static int resolve_ic(rd *r) {
+  nl_circuit *c = r->c;
+  for (int k = 0; k < c->nic; k++) {
+    if (c->ic[k].node >= 0) continue;
+    const nx_tok *t = &r->x.tok[-1 - c->ic[k].node];
+    int node = nx_hash_get(&r->nodes, t->s);
+    if (node < 0) return nx_fail(&r->x, CUP_ERR_PARSE, t, ".ic", "no node named '%.40s'", t->s);
+    c->ic[k].node = node;
+  }
+  return CUP_OK;
+}
+
+static int read_cards(rd *r) {
+  nl_circuit *c = r->c;
+  if (!(c->node = calloc(1, sizeof *c->node)) || !(c->node_line = calloc(1, sizeof(int))) ||
+      !(c->node_col = calloc(1, sizeof(int))))
+    return nomem(r);
+  c->nnodes = 1;                                   /* ground */
+  int st = first_pass(r);
+  if (!st) st = apply_sets(r);
+  for (int k = 0; k < r->end && !st; k++)
+    if (!r->skip[k]) st = read_element(r, k);
+  if (!st) st = resolve_ic(r);
+  for (int k = 0; k < r->x.nsets && !st; k++)
+    if (!r->set_used[k]) {
+      nx_tok at = {NX_WORD, NULL, 0, 0, k};
+      st = nx_fail(&r->x, CUP_ERR_ARG, &at, NULL, "no element or .param of that name");
+    }
+  if (!st && c->nelem == 0) st = nx_fail(&r->x, CUP_ERR_PARSE, NULL, NULL, "no elements (line 1 is the title)");
+  if (!st && !c->node[0])
+    st = nx_fail(&r->x, CUP_ERR_PARSE, NULL, NULL, "no ground: no element connects to node 0 (or gnd)");
+  return st;
+}
+
+void nl_circuit_free(nl_circuit *c) {
+  if (!c) return;
+  for (int k = 0; k < c->nnodes; k++) free(c->node[k]);
+  free(c->node); free(c->node_line); free(c->node_col);
+  for (int k = 0; k < c->nelem; k++) {
+    free(c->elem[k].name);
+    free(c->elem[k].src.t);
+    free(c->elem[k].src.v);
+  }
+  free(c->elem);
+  free(c->ic);
+  for (int k = 0; k < c->nprobe; k++) free(c->probe[k].text);
+  free(c->probe);
+  free(c->file);
+  memset(c, 0, sizeof *c);
+}
+
+/* ---- public ------------------------------------------------------------------ */
+
+static int load(cup_netlist **out, const char *text, size_t len, const char *name,
+                const char *const *sets, int nsets, char *errmsg) {
+  nl_circuit c = {0};
+  rd r = {0};
+  r.x.file = name;
+  r.x.sets = sets;
+  r.x.nsets = nsets;
+  r.x.errmsg = errmsg;
+  r.c = &c;
+  int st = (c.file = strdup(name)) ? CUP_OK : nomem(&r);
+  if (!st) st = nx_lex_file(&r.x, text, len);
+  if (!st) st = read_cards(&r);
+  if (!st) st = cup_netlist_formulate(out, &c, errmsg);
+  nl_circuit_free(&c);
+  nx_free(&r.x);
+  nx_hash_free(&r.nodes); nx_hash_free(&r.elems); nx_hash_free(&r.models); nx_hash_free(&r.setnames);
+  free(r.skip);
+  free(r.set_used); free(r.set_first); free(r.set_n);
+  return st;
+}
+
+static int check_args(cup_netlist **out, const void *src, const char *const *list, int n, char *errmsg) {
+  if (out) *out = NULL;
+  return cup_load_args("netlist", "set", out != NULL, src, list, n, errmsg);
+}
+
+int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
+                            const char *const *sets, int nsets, char *errmsg) {
+  int st = check_args(out, text, sets, nsets, errmsg);
+  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, errmsg);
+}
+
+int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
+  int st = check_args(out, path, sets, nsets, errmsg);
+  char *text = NULL;
+  size_t len = 0;
+  if (!st) st = cup_read_text(path, &text, &len, errmsg);
+  if (!st) st = load(out, text, len, path, sets, nsets, errmsg);
+  free(text);
+  return st;
+}

@@ -1,0 +1,104 @@
+/* lemke — see lemke.h. The scheme of Cottle, Pang and Stone (The Linear
+ * Complementarity Problem, Sec. 4.4): the tableau w - M z - e z0 = q starts
+ * from the basis w; z0 enters at the row of the most negative q, and then
+ * the complement of each leaving variable enters, until z0 leaves. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "lemke.h"
+
+int cup_lemke_init(cup_lemke *s, int m) {
+  memset(s, 0, sizeof *s);
+  s->m = m;
+  size_t M = (size_t)m + 1;
+  s->T = calloc(M * (2 * M + 2), sizeof(double));
+  s->basis = calloc(M, sizeof(int));
+  if (!s->T || !s->basis) { cup_lemke_free(s); return CUP_ERR_NOMEM; }
+  return CUP_OK;
+}
+
+void cup_lemke_free(cup_lemke *s) {
+  free(s->T);
+  free(s->basis);
+  memset(s, 0, sizeof *s);
+}
+
+#define TAB(s, i, j) ((s)->T[(i) + (size_t)(j) * (s)->m])
+
+/* The leaving row for entering column e: the least ratio q_i / a_ie over
+ * a_ie > tol, ties broken lexicographically by the rows of B^-1 (the w
+ * columns) over a_ie: a strict order, so no basis repeats. -1: a ray. */
+static int ratio_test(const cup_lemke *s, int e, double tol) {
+  int m = s->m, qc = 2 * m + 1, best = -1;
+  for (int i = 0; i < m; i++) {
+    double a = TAB(s, i, e);
+    if (!(a > tol)) continue;
+    if (best < 0) { best = i; continue; }
+    double ab = TAB(s, best, e);
+    double d = TAB(s, i, qc) / a - TAB(s, best, qc) / ab;
+    for (int j = 0; d == 0 && j < m; j++) d = TAB(s, i, j) / a - TAB(s, best, j) / ab;
+    if (d < 0) best = i;
+  }
+  return best;
+}
+
+static void pivot(cup_lemke *s, int r, int e) {
+  int m = s->m, nc = 2 * m + 2;
+  double p = TAB(s, r, e);
+  for (int j = 0; j < nc; j++) TAB(s, r, j) /= p;
+  for (int i = 0; i < m; i++) {
+    if (i == r) continue;
+    double f = TAB(s, i, e);
+    if (f == 0) continue;
+    for (int j = 0; j < nc; j++) TAB(s, i, j) -= f * TAB(s, r, j);
+    TAB(s, i, e) = 0;
+  }
+  TAB(s, r, e) = 1;
+  s->basis[r] = e;
+}
+
+int cup_lemke_solve(cup_lemke *s, const double *M, const double *q, double *z, double *w, int *pivots) {
+  int m = s->m, z0 = 2 * m, qc = 2 * m + 1;
+  double scale = 0, qmin = 0;
+  int r = -1;
+  for (int i = 0; i < m; i++) {
+    if (q[i] < 0 && q[i] <= qmin) { qmin = q[i]; r = i; }   /* ties: the last row, lexicographically least */
+    for (int j = 0; j < m; j++) scale = fmax(scale, fabs(M[i + (size_t)j * m]));
+  }
+  for (int i = 0; i < m; i++) z[i] = 0;
+  if (r < 0) {                                     /* q >= 0: z = 0 */
+    for (int i = 0; i < m; i++) w[i] = q[i];
+    return CUP_OK;
+  }
+  memset(s->T, 0, sizeof(double) * (size_t)m * (size_t)(2 * m + 2));
+  for (int i = 0; i < m; i++) {
+    TAB(s, i, i) = 1;
+    for (int j = 0; j < m; j++) TAB(s, i, m + j) = -M[i + (size_t)j * m];
+    TAB(s, i, z0) = -1;
+    TAB(s, i, qc) = q[i];
+    s->basis[i] = i;
+  }
+  double tol = 64 * DBL_EPSILON * fmax(scale, 1);
+  int e = z0;
+  for (int it = 0; it < 50 * m + 100; it++) {
+    int leaving = it == 0 ? r : ratio_test(s, e, tol);
+    if (leaving < 0) return CUP_ERR_LINALG;        /* a secondary ray */
+    int out = s->basis[leaving];
+    pivot(s, leaving, e);
+    (*pivots)++;
+    if (out == z0) {
+      for (int i = 0; i < m; i++)
+        if (s->basis[i] >= m && s->basis[i] < z0) z[s->basis[i] - m] = fmax(TAB(s, i, qc), 0);
+      for (int i = 0; i < m; i++) {
+        double acc = q[i];
+        for (int j = 0; j < m; j++) acc += M[i + (size_t)j * m] * z[j];
+        w[i] = acc;
+      }
+      return CUP_OK;
+    }
+    e = out < m ? out + m : out - m;               /* the complement enters */
+  }
+  return CUP_ERR_LINALG;
+}

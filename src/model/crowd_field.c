@@ -1,0 +1,245 @@
+/* crowd_field — the distance to the doors around walls and obstacles, by
+ * Sethian's fast marching method (first-order upwind solution of
+ * |grad D| = 1 on a grid, nodes accepted in increasing order from a binary
+ * heap), and the desired direction -grad D / |grad D| at every node. Set-up
+ * only: built once when the crowd is created. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "util/linalg.h"
+#include "crowd_impl.h"
+
+double crowd_seg_nearest(const double *s, double x, double y, double *px, double *py) {
+  double dx = s[2] - s[0], dy = s[3] - s[1], L2 = dx * dx + dy * dy;
+  double t = L2 > 0 ? ((x - s[0]) * dx + (y - s[1]) * dy) / L2 : 0;
+  t = t < 0 ? 0 : t > 1 ? 1 : t;
+  *px = s[0] + t * dx;
+  *py = s[1] + t * dy;
+  return hypot(x - *px, y - *py);
+}
+
+int crowd_in_polygon(const double *v, int np, double x, double y) {
+  int in = 0;
+  for (int a = 0, b = np - 1; a < np; b = a++) {
+    double xa = v[2 * a], ya = v[2 * a + 1], xb = v[2 * b], yb = v[2 * b + 1];
+    if ((ya > y) != (yb > y) && x < xa + (y - ya) * (xb - xa) / (yb - ya)) in = !in;
+  }
+  return in;
+}
+
+/* ---- a binary heap of nodes keyed by D, with positions for decrease-key ---- */
+
+typedef struct heap {
+  int *a, *pos, len;      /* pos[node] = index in a, or -1 */
+  const double *D;
+} heap;
+
+static void heap_swap(heap *H, int i, int j) {
+  int t = H->a[i];
+  H->a[i] = H->a[j];
+  H->a[j] = t;
+  H->pos[H->a[i]] = i;
+  H->pos[H->a[j]] = j;
+}
+
+static void heap_up(heap *H, int i) {
+  while (i > 0 && H->D[H->a[(i - 1) / 2]] > H->D[H->a[i]]) {
+    heap_swap(H, i, (i - 1) / 2);
+    i = (i - 1) / 2;
+  }
+}
+
+static void heap_down(heap *H, int i) {
+  for (;;) {
+    int l = 2 * i + 1, r = l + 1, m = i;
+    if (l < H->len && H->D[H->a[l]] < H->D[H->a[m]]) m = l;
+    if (r < H->len && H->D[H->a[r]] < H->D[H->a[m]]) m = r;
+    if (m == i) return;
+    heap_swap(H, i, m);
+    i = m;
+  }
+}
+
+static void heap_push(heap *H, int node) {
+  if (H->pos[node] >= 0) { heap_up(H, H->pos[node]); return; }   /* D decreased */
+  H->a[H->len] = node;
+  H->pos[node] = H->len++;
+  heap_up(H, H->len - 1);
+}
+
+static int heap_pop(heap *H) {
+  int top = H->a[0];
+  H->pos[top] = -1;
+  if (--H->len > 0) {
+    H->a[0] = H->a[H->len];
+    H->pos[H->a[0]] = 0;
+    heap_down(H, 0);
+  }
+  return top;
+}
+
+/* ---- the march ------------------------------------------------------------------ */
+
+/* Mark the nodes within h of a wall (rasterized segment by segment). */
+static void block_walls(crowd_field *F, unsigned char *state, const double *seg, int nseg) {
+  double h = F->h;
+  for (int s = 0; s < nseg; s++) {
+    const double *w = seg + 4 * s;
+    int i0 = (int)floor((fmin(w[0], w[2]) - h - F->x0) / h), i1 = (int)ceil((fmax(w[0], w[2]) + h - F->x0) / h);
+    int j0 = (int)floor((fmin(w[1], w[3]) - h - F->y0) / h), j1 = (int)ceil((fmax(w[1], w[3]) + h - F->y0) / h);
+    for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < F->ny; j++)
+      for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < F->nx; i++) {
+        double px, py;
+        if (crowd_seg_nearest(w, F->x0 + i * h, F->y0 + j * h, &px, &py) < h) state[i + F->nx * j] = 3;
+      }
+  }
+}
+
+/* The first-order upwind value at node k from its accepted neighbours. */
+static double upwind(const crowd_field *F, const unsigned char *state, int k) {
+  int i = k % F->nx, j = k / F->nx;
+  double a = INFINITY, b = INFINITY, h = F->h;
+  if (i > 0 && state[k - 1] == 2) a = F->D[k - 1];
+  if (i + 1 < F->nx && state[k + 1] == 2) a = fmin(a, F->D[k + 1]);
+  if (j > 0 && state[k - F->nx] == 2) b = F->D[k - F->nx];
+  if (j + 1 < F->ny && state[k + F->nx] == 2) b = fmin(b, F->D[k + F->nx]);
+  if (isinf(a) && isinf(b)) return INFINITY;
+  if (fabs(a - b) >= h) return fmin(a, b) + h;
+  return 0.5 * (a + b + sqrt(2 * h * h - (a - b) * (a - b)));
+}
+
+/* The descent direction at every node: central differences where both
+ * neighbours are finite, one-sided where one is. */
+static void directions(crowd_field *F) {
+  int nx = F->nx, ny = F->ny;
+  for (int j = 0; j < ny; j++)
+    for (int i = 0; i < nx; i++) {
+      int k = i + nx * j;
+      F->ux[k] = F->uy[k] = 0;
+      if (!isfinite(F->D[k])) continue;
+      double g[2];
+      for (int a = 0; a < 2; a++) {
+        int lo = a == 0 ? i > 0 : j > 0, hi = a == 0 ? i + 1 < nx : j + 1 < ny, step = a == 0 ? 1 : nx;
+        double dm = lo ? F->D[k - step] : INFINITY, dp = hi ? F->D[k + step] : INFINITY;
+        if (isfinite(dm) && isfinite(dp)) g[a] = (dp - dm) / (2 * F->h);
+        else if (isfinite(dp)) g[a] = (dp - F->D[k]) / F->h;
+        else if (isfinite(dm)) g[a] = (F->D[k] - dm) / F->h;
+        else g[a] = 0;
+      }
+      double nrm = hypot(g[0], g[1]);
+      if (nrm > 0) { F->ux[k] = (float)(-g[0] / nrm); F->uy[k] = (float)(-g[1] / nrm); }
+    }
+}
+
+int crowd_field_build(crowd_field *F, const double *room, int nroom, const double *seg, int nseg,
+                      const double *door, int ndoor, const double box[4], double h, char *errmsg) {
+  memset(F, 0, sizeof *F);
+  F->h = h;
+  F->x0 = box[0] - 2 * h;
+  F->y0 = box[1] - 2 * h;
+  F->nx = (int)ceil((box[2] - box[0]) / h) + 5;
+  F->ny = (int)ceil((box[3] - box[1]) / h) + 5;
+  if ((double)F->nx * F->ny > 1e8)
+    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the distance grid would have %.3g nodes (step %g): "
+                    "make the grid step larger", (double)F->nx * F->ny, h);
+  size_t nn = (size_t)F->nx * (size_t)F->ny;
+  F->D = malloc(sizeof(double) * nn);
+  F->ux = malloc(sizeof(float) * nn);
+  F->uy = malloc(sizeof(float) * nn);
+  unsigned char *state = calloc(nn, 1);      /* 0 far, 1 trial, 2 accepted, 3 blocked */
+  heap H = {malloc(sizeof(int) * nn), malloc(sizeof(int) * nn), 0, F->D};
+  int st = F->D && F->ux && F->uy && state && H.a && H.pos ? CUP_OK
+           : cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory for the distance grid");
+  if (!st) {
+    for (size_t k = 0; k < nn; k++) { F->D[k] = INFINITY; H.pos[k] = -1; }
+    block_walls(F, state, seg, nseg);
+    for (int j = 0; j < F->ny; j++)            /* the front stays in the room */
+      for (int i = 0; i < F->nx; i++)
+        if (!crowd_in_polygon(room, nroom, F->x0 + i * h, F->y0 + j * h)) state[i + F->nx * j] = 3;
+    for (int d = 0; d < ndoor && !st; d++) {   /* seeds: exact distances near each door */
+      const double *s = door + 4 * d;
+      int seeds = 0;
+      int i0 = (int)floor((fmin(s[0], s[2]) - 2 * h - F->x0) / h), i1 = (int)ceil((fmax(s[0], s[2]) + 2 * h - F->x0) / h);
+      int j0 = (int)floor((fmin(s[1], s[3]) - 2 * h - F->y0) / h), j1 = (int)ceil((fmax(s[1], s[3]) + 2 * h - F->y0) / h);
+      for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < F->ny; j++)
+        for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < F->nx; i++) {
+          int k = i + F->nx * j;
+          double px, py, dist = crowd_seg_nearest(s, F->x0 + i * h, F->y0 + j * h, &px, &py);
+          if (state[k] == 3 || dist > 1.5 * h) continue;
+          seeds++;
+          if (dist < F->D[k]) { F->D[k] = dist; state[k] = 1; heap_push(&H, k); }
+        }
+      if (!seeds)
+        st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is too narrow for the distance "
+                      "grid (step %g): every grid node near it is within one step of a wall; make the grid "
+                      "step smaller", d, s[0], s[1], s[2], s[3], h);
+    }
+  }
+  while (!st && H.len > 0) {
+    int k = heap_pop(&H);
+    state[k] = 2;
+    int i = k % F->nx, j = k / F->nx;
+    int nb[4] = {i > 0 ? k - 1 : -1, i + 1 < F->nx ? k + 1 : -1, j > 0 ? k - F->nx : -1,
+                 j + 1 < F->ny ? k + F->nx : -1};
+    for (int e = 0; e < 4; e++) {
+      int q = nb[e];
+      if (q < 0 || state[q] >= 2) continue;
+      double v = upwind(F, state, q);
+      if (v < F->D[q]) { F->D[q] = v; state[q] = 1; heap_push(&H, q); }
+    }
+  }
+  if (!st) directions(F);
+  free(state);
+  free(H.a);
+  free(H.pos);
+  if (st) crowd_field_free(F);
+  return st;
+}
+
+void crowd_field_free(crowd_field *F) {
+  free(F->D);
+  free(F->ux);
+  free(F->uy);
+  memset(F, 0, sizeof *F);
+}
+
+int crowd_field_node(const crowd_field *F, double x, double y) {
+  int i = (int)lround((x - F->x0) / F->h), j = (int)lround((y - F->y0) / F->h);
+  i = i < 0 ? 0 : i >= F->nx ? F->nx - 1 : i;
+  j = j < 0 ? 0 : j >= F->ny ? F->ny - 1 : j;
+  return i + F->nx * j;
+}
+
+/* The four nodes around (x, y) and their bilinear weights (0 off the grid). */
+static void corners(const crowd_field *F, double x, double y, int k[4], double w[4]) {
+  double fx = (x - F->x0) / F->h, fy = (y - F->y0) / F->h;
+  int i = (int)floor(fx), j = (int)floor(fy);
+  double ax = fx - i, ay = fy - j;
+  for (int c = 0; c < 4; c++) {
+    int ii = i + (c & 1), jj = j + (c >> 1);
+    w[c] = (c & 1 ? ax : 1 - ax) * (c >> 1 ? ay : 1 - ay);
+    k[c] = ii >= 0 && jj >= 0 && ii < F->nx && jj < F->ny ? ii + F->nx * jj : -1;
+  }
+}
+
+double crowd_field_distance(const crowd_field *F, double x, double y) {
+  int k[4];
+  double w[4], sum = 0, wsum = 0;
+  corners(F, x, y, k, w);
+  for (int c = 0; c < 4; c++)
+    if (k[c] >= 0 && isfinite(F->D[k[c]]) && w[c] > 0) { sum += w[c] * F->D[k[c]]; wsum += w[c]; }
+  return wsum > 0 ? sum / wsum : INFINITY;
+}
+
+void crowd_field_direction(const crowd_field *F, double x, double y, double *u) {
+  int k[4];
+  double w[4], ux = 0, uy = 0;
+  corners(F, x, y, k, w);
+  for (int c = 0; c < 4; c++)
+    if (k[c] >= 0) { ux += w[c] * F->ux[k[c]]; uy += w[c] * F->uy[k[c]]; }
+  double nrm = hypot(ux, uy);
+  u[0] = nrm > 0 ? ux / nrm : 0;
+  u[1] = nrm > 0 ? uy / nrm : 0;
+}

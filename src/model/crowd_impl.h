@@ -1,0 +1,71 @@
+/* crowd_impl — the inside of a crowd (catchup/crowd.h): its geometry, the
+ * distance grid (crowd_field.c) and the cell list. Internal to the library. */
+#ifndef CUP_CROWD_IMPL_H
+#define CUP_CROWD_IMPL_H
+
+#include "catchup/crowd.h"
+
+/* The geodesic distance to the doors on a grid of nodes (x0 + i h, y0 + j h),
+ * by fast marching around the walls, and the unit direction that descends
+ * it at every node. */
+typedef struct crowd_field {
+  int nx, ny;
+  double x0, y0, h;
+  double *D;            /* nx ny distances; INFINITY: blocked by a wall or unreachable */
+  float *ux, *uy;       /* nx ny unit descent directions (0, 0 where undefined) */
+} crowd_field;
+
+/* Build the field over [x0, x1] x [y0, y1]: nodes outside the room (a
+ * polygon of nroom vertices) or within h of a wall are blocked (so that no
+ * step of the front crosses one), free nodes within 1.5 h of a door start at
+ * their exact distance to it. On failure errmsg names the door that has no
+ * free node. */
+int crowd_field_build(crowd_field *F, const double *room, int nroom, const double *seg, int nseg,
+                      const double *door, int ndoor, const double box[4], double h, char *errmsg);
+/* Crossing number: (x, y) inside the polygon of np vertices (2 each)? */
+int crowd_in_polygon(const double *v, int np, double x, double y);
+void crowd_field_free(crowd_field *F);
+/* Bilinear on the free nodes around (x, y); INFINITY where none is finite. */
+double crowd_field_distance(const crowd_field *F, double x, double y);
+/* The interpolated unit direction (0, 0 where undefined). */
+void crowd_field_direction(const crowd_field *F, double x, double y, double *u);
+/* The nearest node of (x, y), clamped to the grid. */
+int crowd_field_node(const crowd_field *F, double x, double y);
+
+/* Point-segment distance and the nearest point. */
+double crowd_seg_nearest(const double *s, double x, double y, double *px, double *py);
+
+/* Where a wall segment comes from, for messages. */
+enum { WALL_ROOM = 0, WALL_OBSTACLE = 1, WALL_EXTRA = 2 };
+
+struct cup_crowd {
+  int N;
+  double *q0, *r;
+  double speed, h, margin, reach, rmax;
+  int nroom;
+  double *room;                     /* 2 nroom */
+  int nobs;
+  int *obs_ptr;                     /* nobs + 1 vertex starts */
+  double *obs;                      /* 2 per vertex */
+  int ndoor;
+  double *door;                     /* 4 per door */
+  int nseg;
+  double *seg;                      /* 4 per wall segment */
+  int *seg_kind, *seg_of, *seg_part;/* WALL_*, which room edge / obstacle / wall, which edge */
+  crowd_field F;
+  /* cell list over the room's box: cells of side >= 2 rmax + reach */
+  double cx0, cy0, cell;
+  int gx, gy;
+  int *head, *next;                 /* gx gy heads, N links */
+  int *wptr, *widx;                 /* per cell: the walls within rmax + reach of it */
+  /* the run */
+  unsigned char *out;               /* evacuated */
+  double *exit_time;
+  int inside;
+  double gap;                       /* the smallest gap at the state the rows were built from */
+  int rows;                         /* rows of the last step */
+  cup_set *S;
+  cup_process_desc proc;
+};
+
+#endif

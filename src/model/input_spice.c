@@ -1,0 +1,174 @@
+/* input_spice — the SPICE source functions as input terms: PULSE (a
+ * periodic trapezoid) and SIN with a delay and a damping, with exact values,
+ * exact integrals and their breakpoints. */
+#include <float.h>
+#include <math.h>
+#include "catchup.h"
+#include "input_impl.h"
+#include "util/linalg.h"
+
+#define TWO_PI 6.283185307179586476925286766559
+
+int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg) {
+  if (w->kind == CUP_WAVE_DAMPED_SINE) {
+    if (!isfinite(w->amplitude) || !isfinite(w->frequency) || !isfinite(w->phase) || !isfinite(w->delay) ||
+        !isfinite(w->damping))
+      return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: damped sine amplitude %g, frequency %g, phase %g, "
+                      "delay %g, damping %g must be finite", w->amplitude, w->frequency, w->phase, w->delay,
+                      w->damping);
+    if (w->frequency < 0 || w->delay < 0)
+      return cup_fail(errmsg, CUP_ERR_ARG, "input: damped sine frequency %g and delay %g must be >= 0",
+                      w->frequency, w->delay);
+    if (!isfinite(TWO_PI * w->frequency))
+      return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: frequency %g overflows", w->frequency);
+    t->amp = w->amplitude;
+    t->omega = TWO_PI * w->frequency;
+    t->phase = w->phase;
+    t->delay = w->delay;
+    t->damping = w->damping;
+    return CUP_OK;
+  }
+  const double v[7] = {w->value, w->value2, w->delay, w->rise, w->fall, w->width, w->period};
+  for (int k = 0; k < 7; k++)
+    if (!isfinite(v[k]))
+      return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: pulse value %g, value2 %g, delay %g, rise %g, fall %g, "
+                      "width %g, period %g must be finite", v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+  for (int k = 2; k < 7; k++)
+    if (v[k] < 0)
+      return cup_fail(errmsg, CUP_ERR_ARG, "input: pulse delay %g, rise %g, fall %g, width %g and period %g "
+                      "must be >= 0", v[2], v[3], v[4], v[5], v[6]);
+  if (w->period > 0 && !(w->period >= w->rise + w->width + w->fall))
+    return cup_fail(errmsg, CUP_ERR_ARG, "input: pulse period %g is shorter than rise + width + fall = %g",
+                    w->period, w->rise + w->width + w->fall);
+  t->value = w->value;
+  t->value2 = w->value2;
+  t->delay = w->delay;
+  t->rise = w->rise;
+  t->fall = w->fall;
+  t->width = w->width;
+  t->period = w->period;
+  return CUP_OK;
+}
+
+/* ---- PULSE: one period, shape(s) for s in [0, period) ------------------------ */
+
+/* Value at s >= 0 after the delay; right-continuous at a jump (rise or fall 0). */
+static double shape(const cup_term *t, double s) {
+  if (s < t->rise) return t->value + (t->value2 - t->value) * (s / t->rise);
+  s -= t->rise;
+  if (s < t->width) return t->value2;
+  s -= t->width;
+  if (s < t->fall) return t->value2 + (t->value - t->value2) * (s / t->fall);
+  return t->value;
+}
+
+/* int_a^b shape, 0 <= a <= b (within one period when periodic): trapezoids
+ * of the ramps, rectangles of the flat parts. */
+static double shape_integral(const cup_term *t, double a, double b) {
+  const double knot[4] = {0, t->rise, t->rise + t->width, t->rise + t->width + t->fall};
+  double sum = 0;
+  for (int k = 0; k < 4; k++) {
+    double lo = fmax(a, knot[k]), hi = k < 3 ? fmin(b, knot[k + 1]) : b;
+    if (!(hi > lo)) continue;
+    /* linear on [knot k, knot k+1]: the trapezoid of its end values (at
+     * hi, the limit from the left) */
+    double vlo = shape(t, lo), vhi;
+    if (k == 0) vhi = t->value + (t->value2 - t->value) * (hi / t->rise);
+    else if (k == 1 || k == 3) vhi = vlo;
+    else vhi = t->value2 + (t->value - t->value2) * ((hi - knot[2]) / t->fall);
+    sum += 0.5 * (vlo + vhi) * (hi - lo);
+  }
+  return sum;
+}
+
+static double pulse_value(const cup_term *t, double tt) {
+  double s = tt - t->delay;
+  if (s < 0) return t->value;
+  if (t->period > 0) s -= t->period * floor(s / t->period);
+  return shape(t, s);
+}
+
+static double pulse_integral(const cup_term *t, double a, double b) {
+  double sum = 0;
+  if (a < t->delay) {
+    double e = fmin(b, t->delay);
+    sum += t->value * (e - a);
+    a = e;
+  }
+  if (!(b > a)) return sum;
+  double sa = a - t->delay, sb = b - t->delay;
+  if (!(t->period > 0)) return sum + shape_integral(t, sa, sb);
+  double P = t->period, ka = floor(sa / P), kb = floor(sb / P);
+  double ra = sa - ka * P, rb = sb - kb * P;
+  if (ka == kb) return sum + shape_integral(t, ra, rb);
+  return sum + shape_integral(t, ra, P) + (kb - ka - 1) * shape_integral(t, 0, P) + shape_integral(t, 0, rb);
+}
+
+/* The next corner after tt: the delay, then rise/width/fall knots of each period. */
+static double pulse_break(const cup_term *t, double tt) {
+  if (tt < t->delay) return t->delay;
+  double s = tt - t->delay, P = t->period, base = 0;
+  if (P > 0) {
+    base = P * floor(s / P);
+    s -= base;
+  }
+  const double knot[4] = {t->rise, t->rise + t->width, t->rise + t->width + t->fall, P};
+  for (int k = 0; k < 4; k++)
+    if (knot[k] > s && (k < 3 || P > 0)) {
+      double b = t->delay + base + knot[k];
+      if (b > tt) return b;
+    }
+  return P > 0 ? t->delay + base + 2 * P : INFINITY;   /* only when rounding skipped this period's end */
+}
+
+/* ---- SIN with delay and damping ------------------------------------------------ */
+
+static double damped_value(const cup_term *t, double tt) {
+  double s = tt - t->delay;
+  if (s < 0) return t->amp * sin(t->phase);
+  return t->amp * exp(-t->damping * s) * sin(t->omega * s + t->phase);
+}
+
+/* int_s0^s1 e^{-d s} sin(w s + p) ds = Im[e^{i p} e^{z s0} (e^{z h} - 1)/z],
+ * z = -d + i w, h = s1 - s0, with e^{z h} - 1 from expm1 and half-angle
+ * sines so that a short interval loses no digits. */
+static double damped_integral_after(const cup_term *t, double s0, double s1) {
+  double d = t->damping, w = t->omega, h = s1 - s0;
+  if (d == 0 && w == 0) return sin(t->phase) * h;
+  double e0 = exp(-d * s0), c0 = cos(w * s0 + t->phase), n0 = sin(w * s0 + t->phase);
+  double sh = sin(0.5 * w * h);
+  double dr = expm1(-d * h) * cos(w * h) - 2 * sh * sh, di = exp(-d * h) * sin(w * h);
+  double nr = c0 * dr - n0 * di, ni = c0 * di + n0 * dr;
+  return e0 * (-w * nr - d * ni) / (d * d + w * w);
+}
+
+static double damped_integral(const cup_term *t, double a, double b) {
+  double sum = 0;
+  if (a < t->delay) {
+    double e = fmin(b, t->delay);
+    sum += t->amp * sin(t->phase) * (e - a);
+    a = e;
+  }
+  if (b > a) sum += t->amp * damped_integral_after(t, a - t->delay, b - t->delay);
+  return sum;
+}
+
+/* ---- dispatch ---------------------------------------------------------------------- */
+
+double cup_spice_term_value(const cup_term *t, double tt) {
+  return t->kind == CUP_WAVE_PULSE ? pulse_value(t, tt) : damped_value(t, tt);
+}
+
+double cup_spice_term_integral(const cup_term *t, double a, double b) {
+  return t->kind == CUP_WAVE_PULSE ? pulse_integral(t, a, b) : damped_integral(t, a, b);
+}
+
+double cup_spice_term_break(const cup_term *t, double tt) {
+  if (t->kind == CUP_WAVE_PULSE) return t->value2 == t->value ? INFINITY : pulse_break(t, tt);
+  return tt < t->delay && t->amp != 0 ? t->delay : INFINITY;
+}
+
+int cup_spice_term_constant(const cup_term *t) {
+  if (t->kind == CUP_WAVE_PULSE) return t->value2 == t->value;
+  return t->amp == 0 || (t->omega == 0 && t->damping == 0);
+}

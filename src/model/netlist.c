@@ -1,0 +1,318 @@
+/* netlist — a parsed circuit into an LCS (see netlist_impl.h and
+ * docs/netlist.md): the topology and the hybrid matrix H come from
+ * netlist_graph.c and netlist_hybrid.c; here H's rows become
+ *     P x' = H_x (x, u, zeta),  w = S' H_d (x, u, zeta),
+ * P = diag(L, C), w = i for a fixed diode, -v for a free one, and the
+ * sources become the input u(t). */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "catchup/netlist.h"
+#include "netlist_impl.h"
+
+#define TWO_PI 6.283185307179586476925286766559
+
+/* ---- the LCS ------------------------------------------------------------------ */
+
+typedef struct parts {
+  nl_coo A, B, C, D, E, G;
+  cup_sparse sA, sB, sC, sD, sE, sG;
+} parts;
+
+static void parts_free(parts *q) {
+  nl_coo_free(&q->A); nl_coo_free(&q->B); nl_coo_free(&q->C);
+  nl_coo_free(&q->D); nl_coo_free(&q->E); nl_coo_free(&q->G);
+  cup_sparse_free(&q->sA); cup_sparse_free(&q->sB); cup_sparse_free(&q->sC);
+  cup_sparse_free(&q->sD); cup_sparse_free(&q->sE); cup_sparse_free(&q->sG);
+}
+
+static cup_csc view(const cup_sparse *s) {
+  return s->nnz || s->ncol ? (cup_csc){s->nrow, s->ncol, s->p, s->i, s->x} : (cup_csc){0, 0, NULL, NULL, NULL};
+}
+
+/* H's entry (row port i, column port j) into the LCS matrix it belongs to. */
+static int distribute(cup_netlist *nl, parts *q, const double *pdiag, int i, int j, double h) {
+  const nl_port *pi = &nl->port[i], *pj = &nl->port[j];
+  double v = h * pj->sign;
+  if (pi->var == NL_VAR_X) {
+    nl_coo *t = pj->var == NL_VAR_X ? &q->A : pj->var == NL_VAR_U ? &q->E : &q->B;
+    return nl_coo_add(t, pi->index, pj->index, v / pdiag[pi->index], 0);
+  }
+  if (pi->var == NL_VAR_Z) {                      /* w = i (fixed: a voltage port) or -v (free) */
+    double s = i < nl->nv ? 1 : -1;
+    nl_coo *t = pj->var == NL_VAR_X ? &q->C : pj->var == NL_VAR_U ? &q->G : &q->D;
+    return nl_coo_add(t, pi->index, pj->index, s * v, 0);
+  }
+  return CUP_OK;                                  /* a source's current or voltage: signals only */
+}
+
+/* A diode row that depends on neither the state nor another diode is
+ * fixed by the sources alone: an index problem, named with them. */
+static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const parts *q, char *errmsg) {
+  int *used = calloc((size_t)nl->m + 1, sizeof(int));
+  if (!used) return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
+  for (int k = 0; k < q->sC.nnz; k++) used[q->sC.i[k]] = 1;
+  for (int j = 0; j < q->sD.ncol; j++)
+    for (int k = q->sD.p[j]; k < q->sD.p[j + 1]; k++) used[q->sD.i[k]] = used[j] = 1;
+  int st = CUP_OK;
+  for (int e = 0; e < c->nelem && !st; e++) {
+    if (c->elem[e].kind != NL_D || used[nl->evar[e]]) continue;
+    int r = nl->evar[e];
+    char names[160] = "";
+    size_t len = 0;
+    for (int j = 0; j < q->sG.ncol && len < 120; j++)
+      for (int k = q->sG.p[j]; k < q->sG.p[j + 1]; k++)
+        if (q->sG.i[k] == r)
+          len += (size_t)snprintf(names + len, sizeof names - len, "%s%s", len ? ", " : "",
+                                  c->elem[nl->input_elem[j]].name);
+    st = nl->row_fixed[r]
+      ? nl_fail(c, e, errmsg, CUP_ERR_PARSE, "no path: the diode's current is set by %s alone (a cutset of "
+                "current sources and diodes): put a resistor or capacitor across it", len ? names : "nothing")
+      : nl_fail(c, e, errmsg, CUP_ERR_PARSE, "no path: the diode's voltage is set by %s alone (a loop of "
+                "voltage sources and the diode): when it conducts its current is unbounded; put a resistor "
+                "or inductor in the loop", len ? names : "nothing");
+  }
+  free(used);
+  return st;
+}
+
+static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
+  if (nl->n == 0)
+    return nl_fail(c, -1, errmsg, CUP_ERR_UNSUPPORTED, "the circuit has no inductor or capacitor: there is no "
+                   "state to integrate (resistive circuits are not supported)");
+  parts q = {0};
+  double *pdiag = malloc(sizeof(double) * (size_t)nl->n);
+  int st = pdiag ? CUP_OK : CUP_ERR_NOMEM;
+  for (int e = 0; e < c->nelem && !st; e++)
+    if (c->elem[e].kind == NL_L || c->elem[e].kind == NL_C) pdiag[nl->evar[e]] = c->elem[e].value;
+  for (int j = 0; j < nl->H.ncol && !st; j++)
+    for (int k = nl->H.p[j]; k < nl->H.p[j + 1] && !st; k++) st = distribute(nl, &q, pdiag, nl->H.i[k], j, nl->H.x[k]);
+  int n = nl->n, m = nl->m, p = nl->p;
+  if (!st) st = nl_coo_to_csc(&q.A, n, n, &q.sA);
+  if (!st) st = nl_coo_to_csc(&q.B, n, m, &q.sB);
+  if (!st) st = nl_coo_to_csc(&q.C, m, n, &q.sC);
+  if (!st) st = nl_coo_to_csc(&q.D, m, m, &q.sD);
+  if (!st) st = nl_coo_to_csc(&q.E, n, p, &q.sE);
+  if (!st) st = nl_coo_to_csc(&q.G, m, p, &q.sG);
+  if (st) { free(pdiag); parts_free(&q); return nl_fail(c, -1, errmsg, st, "out of memory"); }
+  st = decoupled_rows(nl, c, &q, errmsg);
+  if (!st) {
+    cup_lcs_desc d = {0};
+    d.n = n; d.m = m; d.p = p;
+    d.A = view(&q.sA); d.C = view(&q.sC); d.E = view(&q.sE); d.G = view(&q.sG);
+    d.B = view(&q.sB);
+    if (q.sD.nnz) d.D = view(&q.sD);
+    d.P = (cup_metric){CUP_METRIC_DIAGONAL, pdiag, {0}, 0};
+    d.row_names = (const char *const *)nl->row_name;
+    char lib[CUP_ERRMSG_LEN];
+    if ((st = cup_lcs_create(&nl->L, &d, lib))) st = nl_fail(c, -1, errmsg, st, "%s", lib);
+  }
+  free(pdiag);
+  parts_free(&q);
+  return st;
+}
+
+/* ---- the input and x0 ------------------------------------------------------------ */
+
+static int add_wave(cup_input *u, int j, const cup_wave *w, const nl_circuit *c, int e, char *errmsg) {
+  char lib[CUP_ERRMSG_LEN];
+  int st = cup_input_add(u, j, w, lib);
+  return st ? nl_fail(c, e, errmsg, st, "%s", lib) : CUP_OK;
+}
+
+/* Parameter k of a SIN or PULSE, or SPICE's default when it is omitted or 0
+ * (as SPICE reads them: a 0 rise time is TSTEP, not a jump). */
+static double spice_param(const nl_source *s, int k, double dflt) {
+  return s->np > k && s->p[k] != 0 ? s->p[k] : dflt;
+}
+
+/* SPICE's transient functions as exact waveform terms. */
+static int source_terms(cup_netlist *nl, const nl_circuit *c, int e, char *errmsg) {
+  const nl_source *s = &c->elem[e].src;
+  int j = nl->evar[e];
+  if (s->fn == NL_FN_DC) return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_CONSTANT, .value = s->dc}, c, e, errmsg);
+  if (s->fn == NL_FN_PWL)
+    return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_PWL, .npoints = s->npts, .t = s->t, .v = s->v}, c, e, errmsg);
+  double tstep = nl->has_tran ? nl->tstep : NAN, tstop = nl->has_tran ? nl->tstop : NAN;
+  if (s->fn == NL_FN_SIN) {
+    double freq = spice_param(s, NL_SIN_FREQ, 1 / tstop), td = spice_param(s, NL_SIN_TD, 0);
+    double theta = spice_param(s, NL_SIN_THETA, 0), phase = spice_param(s, NL_SIN_PHASE, 0) * (TWO_PI / 360);
+    if (isnan(freq))
+      return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "SIN without FREQ needs .tran (FREQ defaults to 1/TSTOP)");
+    int st = add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_CONSTANT, .value = s->p[NL_SIN_VO]}, c, e, errmsg);
+    if (st) return st;
+    if (td == 0 && theta == 0)
+      return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_SINE, .amplitude = s->p[NL_SIN_VA], .frequency = freq,
+                                            .phase = phase}, c, e, errmsg);
+    return add_wave(nl->u, j, &(cup_wave){.kind = CUP_WAVE_DAMPED_SINE, .amplitude = s->p[NL_SIN_VA],
+                                          .frequency = freq, .phase = phase, .delay = td, .damping = theta},
+                    c, e, errmsg);
+  }
+  cup_wave w = {.kind = CUP_WAVE_PULSE, .value = s->p[NL_PULSE_V1], .value2 = s->p[NL_PULSE_V2],
+                .delay = spice_param(s, NL_PULSE_TD, 0), .rise = spice_param(s, NL_PULSE_TR, tstep),
+                .fall = spice_param(s, NL_PULSE_TF, tstep), .width = spice_param(s, NL_PULSE_PW, tstop),
+                .period = spice_param(s, NL_PULSE_PER, tstop)};
+  if (isnan(w.rise) || isnan(w.fall) || isnan(w.width) || isnan(w.period))
+    return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "PULSE without TR, TF, PW or PER needs .tran (they default to "
+                   "TSTEP and TSTOP)");
+  return add_wave(nl->u, j, &w, c, e, errmsg);
+}
+
+static int build_input(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
+  if (nl->p == 0) return CUP_OK;
+  char lib[CUP_ERRMSG_LEN];
+  int st = cup_input_create(&nl->u, nl->p, lib);
+  if (st) return nl_fail(c, -1, errmsg, st, "%s", lib);
+  for (int e = 0; e < c->nelem && !st; e++)
+    if (c->elem[e].kind == NL_V || c->elem[e].kind == NL_I) st = source_terms(nl, c, e, errmsg);
+  return st;
+}
+
+/* IC= on L and C; else a capacitor takes .ic v(a) - v(b), nodes without
+ * .ic counting as 0. */
+static void build_x0(cup_netlist *nl, const nl_circuit *c, double *vic) {
+  for (int k = 0; k < c->nic; k++) vic[c->ic[k].node] = c->ic[k].v;
+  vic[0] = 0;
+  for (int e = 0; e < c->nelem; e++) {
+    const nl_elem *el = &c->elem[e];
+    if (el->kind == NL_L) nl->x0[nl->evar[e]] = el->has_ic ? el->ic : 0;
+    if (el->kind == NL_C) nl->x0[nl->evar[e]] = el->has_ic ? el->ic : vic[el->a] - vic[el->b];
+  }
+}
+
+/* ---- names ------------------------------------------------------------------------ */
+
+static char *fmt_name(const char *pre, const char *name) {
+  size_t len = strlen(pre) + strlen(name) + 2;
+  char *s = malloc(len + 1);
+  if (s) snprintf(s, len + 1, "%s(%s)", pre, name);
+  return s;
+}
+
+static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
+  nl->nnodes = c->nnodes;
+  nl->nelem = c->nelem;
+  nl->has_tran = c->has_tran;
+  nl->tstep = c->tstep;
+  nl->tstop = c->tstop;
+  if (!(nl->file = strdup(c->file))) return CUP_ERR_NOMEM;
+  nl->node = calloc((size_t)c->nnodes, sizeof(char *));
+  nl->elem = calloc((size_t)c->nelem, sizeof(nl_elem));
+  if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
+  for (int v = 0; v < c->nnodes; v++)
+    if (!(nl->node[v] = strdup(c->node[v] ? c->node[v] : "0"))) return CUP_ERR_NOMEM;
+  nl->probe_all = c->probe_all;
+  if (c->nprobe && !(nl->probe_text = calloc((size_t)c->nprobe, sizeof(char *)))) return CUP_ERR_NOMEM;
+  for (int k = 0; k < c->nprobe; k++, nl->nprobe++)
+    if (!(nl->probe_text[k] = strdup(c->probe[k].text))) return CUP_ERR_NOMEM;
+  for (int e = 0; e < c->nelem; e++) {
+    nl->elem[e] = c->elem[e];
+    memset(&nl->elem[e].src, 0, sizeof nl->elem[e].src);
+    if (!(nl->elem[e].name = strdup(c->elem[e].name))) return CUP_ERR_NOMEM;
+  }
+  return CUP_OK;
+}
+
+static int name_variables(cup_netlist *nl, const nl_circuit *c) {
+  nl->state_name = calloc((size_t)nl->n + 1, sizeof(char *));
+  nl->row_name = calloc((size_t)nl->m + 1, sizeof(char *));
+  nl->row_fixed = calloc((size_t)nl->m + 1, sizeof(int));
+  nl->input_elem = calloc((size_t)nl->p + 1, sizeof(int));
+  if (!nl->state_name || !nl->row_name || !nl->row_fixed || !nl->input_elem) return CUP_ERR_NOMEM;
+  for (int e = 0; e < c->nelem; e++) {
+    const nl_elem *el = &c->elem[e];
+    int j = nl->evar[e];
+    if (el->kind == NL_L && !(nl->state_name[j] = fmt_name("i", el->name))) return CUP_ERR_NOMEM;
+    if (el->kind == NL_C && !(nl->state_name[j] = fmt_name("v", el->name))) return CUP_ERR_NOMEM;
+    if (el->kind == NL_D) {
+      if (!(nl->row_name[j] = strdup(el->name))) return CUP_ERR_NOMEM;
+      nl->row_fixed[j] = nl->eport[e] < nl->nv;
+    }
+    if (el->kind == NL_V || el->kind == NL_I) nl->input_elem[j] = e;
+  }
+  return CUP_OK;
+}
+
+int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) {
+  cup_netlist *nl = calloc(1, sizeof *nl);
+  int st = nl ? copy_circuit(nl, c) : CUP_ERR_NOMEM;
+  if (!st) st = nl_topology(nl, c, errmsg);
+  else st = nl_fail(c, -1, errmsg, st, "out of memory");
+  if (!st && (st = name_variables(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
+  if (!st) st = nl_hybrid(nl, c, errmsg);
+  if (!st) st = build_lcs(nl, c, errmsg);
+  if (!st) st = build_input(nl, c, errmsg);
+  double *vic = NULL;
+  if (!st && (!(nl->x0 = calloc((size_t)nl->n + 1, sizeof(double))) ||
+              !(vic = calloc((size_t)c->nnodes, sizeof(double)))))
+    st = nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
+  if (!st) build_x0(nl, c, vic);
+  free(vic);
+  char msg[160];
+  for (int k = 0; k < c->nprobe && !st; k++)
+    if (nl_probe_check(nl, c->probe[k].text, msg, sizeof msg))
+      st = cup_fail(errmsg, CUP_ERR_PARSE, "%s:%d:%d: %s", c->file, c->probe[k].line, c->probe[k].col, msg);
+  if (st) { cup_netlist_free(&nl); return st; }
+  *out = nl;
+  return CUP_OK;
+}
+
+/* ---- public ------------------------------------------------------------------------ */
+
+void cup_netlist_free(cup_netlist **p) {
+  if (!p || !*p) return;
+  cup_netlist *nl = *p;
+  cup_lcs_free(&nl->L);
+  cup_input_free(&nl->u);
+  free(nl->x0);
+  for (int v = 0; nl->node && v < nl->nnodes; v++) free(nl->node[v]);
+  free(nl->node);
+  for (int e = 0; nl->elem && e < nl->nelem; e++) free(nl->elem[e].name);
+  free(nl->elem);
+  for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);
+  for (int j = 0; nl->row_name && j < nl->m; j++) free(nl->row_name[j]);
+  free(nl->state_name); free(nl->row_name); free(nl->row_fixed); free(nl->input_elem);
+  free(nl->eport); free(nl->evar); free(nl->port);
+  free(nl->parent); free(nl->pport); free(nl->depth); free(nl->snode); free(nl->psign);
+  if (nl->cm_started) {
+    cholmod_free_factor(&nl->Lf, &nl->cm);
+    cholmod_free_sparse(&nl->K, &nl->cm);
+    cholmod_finish(&nl->cm);
+  }
+  cup_sparse_free(&nl->H);
+  for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
+  free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
+  free(nl->ubuf); free(nl->dense);
+  for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
+  free(nl->probe_text);
+  free(nl->file);
+  free(nl);
+  *p = NULL;
+}
+
+const cup_lcs *cup_netlist_lcs(const cup_netlist *nl) { return nl ? nl->L : NULL; }
+const cup_input *cup_netlist_input(const cup_netlist *nl) { return nl ? nl->u : NULL; }
+const double *cup_netlist_x0(const cup_netlist *nl) { return nl ? nl->x0 : NULL; }
+
+int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop) {
+  if (!nl || !nl->has_tran) return 0;
+  if (tstep) *tstep = nl->tstep;
+  if (tstop) *tstop = nl->tstop;
+  return 1;
+}
+
+const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
+  return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
+}
+const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
+  return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
+}
+const char *cup_netlist_input_name(const cup_netlist *nl, int j) {
+  return nl && j >= 0 && j < nl->p ? nl->elem[nl->input_elem[j]].name : NULL;
+}
+int cup_netlist_row_fixed(const cup_netlist *nl, int i) {
+  return nl && i >= 0 && i < nl->m ? nl->row_fixed[i] : 0;
+}

@@ -1,0 +1,68 @@
+/* netlist_desc — a circuit as the netlist reader (io/netlist_read.c) hands
+ * it to the formulation (netlist.c): nodes, elements with their values
+ * already evaluated, sources, initial conditions, .tran and probes, each
+ * with the place it was written, so that the formulation's errors can name
+ * file, line, column and element. Internal to the library. */
+#ifndef CUP_NETLIST_DESC_H
+#define CUP_NETLIST_DESC_H
+
+/* Element kinds, in the order the formulation groups them. */
+typedef enum nl_kind { NL_R, NL_L, NL_C, NL_V, NL_I, NL_D } nl_kind;
+
+/* An independent source's transient function (SPICE syntax). */
+typedef enum nl_fn { NL_FN_DC, NL_FN_SIN, NL_FN_PULSE, NL_FN_PWL } nl_fn;
+
+enum { NL_SIN_VO, NL_SIN_VA, NL_SIN_FREQ, NL_SIN_TD, NL_SIN_THETA, NL_SIN_PHASE };
+enum { NL_PULSE_V1, NL_PULSE_V2, NL_PULSE_TD, NL_PULSE_TR, NL_PULSE_TF, NL_PULSE_PW, NL_PULSE_PER };
+
+typedef struct nl_source {
+  nl_fn fn;
+  double dc;          /* DC value: the source's value for NL_FN_DC */
+  double p[7];        /* SIN: VO VA FREQ TD THETA PHASE(degrees); PULSE: V1 V2 TD TR TF PW PER */
+  int np;             /* number of parameters written (SPICE defaults fill the rest) */
+  int npts;           /* PWL: points */
+  double *t, *v;      /* PWL: times (strictly increasing) and values */
+} nl_source;
+
+typedef struct nl_elem {
+  nl_kind kind;
+  char *name;         /* as written ("R1"); names compare case-insensitively */
+  int a, b;           /* nodes (0: ground): R, L, C, D from a to b; V, I: a = n+, b = n- */
+  double value;       /* R: ohms, L: henries, C: farads */
+  int has_ic;         /* L, C: IC= given */
+  double ic;          /* L: initial current, C: initial voltage */
+  nl_source src;      /* V, I */
+  int line, col;      /* where the element's name is written */
+} nl_elem;
+
+typedef struct nl_ic {
+  int node;
+  double v;
+  int line, col;
+} nl_ic;
+
+typedef struct nl_probe {
+  char *text;         /* "v(out)", "i(D1)", "v(a,b)", as written */
+  int line, col;
+} nl_probe;
+
+typedef struct nl_circuit {
+  char *file;         /* name used in messages */
+  int nnodes;         /* nodes 0 .. nnodes-1; 0 is ground ("0" or "gnd") */
+  char **node;        /* names as first written */
+  int *node_line, *node_col;   /* first place each node is written */
+  int nelem;
+  nl_elem *elem;
+  int has_tran;
+  double tstep, tstop;
+  int tran_line, tran_col;
+  int nic;
+  nl_ic *ic;          /* .ic v(node)=value */
+  int nprobe;
+  nl_probe *probe;    /* .probe/.save/.print lines, in order */
+  int probe_all;      /* .save all / .probe all */
+} nl_circuit;
+
+void nl_circuit_free(nl_circuit *c);
+
+#endif

@@ -1,0 +1,282 @@
+/* netlist_graph — the circuit's topology and its hybrid matrix (see
+ * netlist_impl.h for the formulation): which diodes are fixed by the state,
+ * index problems named by their elements, the forest of voltage ports, and
+ * H from one sparse Cholesky factorization of the resistors' Laplacian
+ * over the supernodes (CHOLMOD: analyze, factorize, two sparse solves and
+ * one sparse product). */
+#define _POSIX_C_SOURCE 200809L
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "netlist_impl.h"
+
+int nl_fail(const nl_circuit *c, int e, char *errmsg, int status, const char *fmt, ...) {
+  if (!errmsg) return status;
+  size_t cap = CUP_ERRMSG_LEN;
+  int w = e >= 0 ? snprintf(errmsg, cap, "%s:%d:%d: %s: ", c->file, c->elem[e].line, c->elem[e].col, c->elem[e].name)
+                 : snprintf(errmsg, cap, "%s: ", c->file);
+  va_list ap;
+  va_start(ap, fmt);
+  cup_vfail_at(errmsg, w, status, fmt, ap);
+  va_end(ap);
+  return status;
+}
+
+static int nomem(const nl_circuit *c, char *errmsg) {
+  return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory while formulating the circuit");
+}
+
+/* ---- union-find ------------------------------------------------------------- */
+
+static int find(int *uf, int v) {
+  while (uf[v] != v) v = uf[v] = uf[uf[v]];
+  return v;
+}
+
+static void unite(int *uf, int a, int b) { uf[find(uf, a)] = find(uf, b); }
+
+/* "A, B and C" (up to about 160 characters, then "..."). */
+static void join_names(char *buf, size_t size, const nl_circuit *c, const int *e, int n) {
+  size_t len = 0;
+  buf[0] = '\0';
+  for (int k = 0; k < n && len + 1 < size; k++) {
+    if (len > 160) { snprintf(buf + len, size - len, ", ..."); return; }
+    len += (size_t)snprintf(buf + len, size - len, "%s%s", k == 0 ? "" : k + 1 < n ? ", " : " and ",
+                            c->elem[e[k]].name);
+  }
+}
+
+/* The path from a to b through the forest made of the elements before
+ * `upto` whose kinds are in `kinds` (a bit mask); into path, its length
+ * returned (0 if none, -1 out of memory). */
+static int forest_path(const nl_circuit *c, unsigned kinds, int upto, int a, int b, int *path) {
+  int nn = c->nnodes, len = 0;
+  int *prev = malloc(sizeof(int) * (size_t)nn), *via = malloc(sizeof(int) * (size_t)nn);
+  int *queue = malloc(sizeof(int) * (size_t)nn);
+  if (!prev || !via || !queue) { free(prev); free(via); free(queue); return -1; }
+  for (int v = 0; v < nn; v++) prev[v] = -1;
+  prev[a] = a;
+  int head = 0, tail = 0;
+  queue[tail++] = a;
+  while (head < tail && prev[b] < 0) {           /* breadth first: small circuits, one error */
+    int v = queue[head++];
+    for (int e = 0; e < upto; e++) {
+      const nl_elem *el = &c->elem[e];
+      if (!(kinds >> el->kind & 1u) || el->a == el->b) continue;
+      int w = el->a == v ? el->b : el->b == v ? el->a : -1;
+      if (w < 0 || prev[w] >= 0) continue;
+      prev[w] = v;
+      via[w] = e;
+      queue[tail++] = w;
+    }
+  }
+  for (int v = b; prev[b] >= 0 && v != a; v = prev[v]) path[len++] = via[v];
+  free(prev); free(via); free(queue);
+  return len;
+}
+
+/* ---- topology --------------------------------------------------------------- */
+
+static int check_elements(const nl_circuit *c, char *errmsg) {
+  int *deg = calloc((size_t)c->nnodes, sizeof(int)), *who = calloc((size_t)c->nnodes, sizeof(int));
+  if (!deg || !who) { free(deg); free(who); return nomem(c, errmsg); }
+  int st = CUP_OK;
+  for (int e = 0; e < c->nelem && !st; e++) {
+    const nl_elem *el = &c->elem[e];
+    deg[el->a]++; deg[el->b]++;
+    who[el->a] = who[el->b] = e;
+    if (el->a != el->b) continue;
+    if (el->kind == NL_V)
+      st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, "short-circuited voltage source: both terminals on node '%s'",
+                   c->node[el->a]);
+    else if (el->kind == NL_C)
+      st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, "both terminals on node '%s': the capacitor's voltage is held "
+                   "at 0 (an index problem)", c->node[el->a]);
+    else if (el->kind == NL_D)
+      st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, "both terminals on node '%s': the diode is shorted",
+                   c->node[el->a]);
+  }
+  for (int v = 1; v < c->nnodes && !st; v++)
+    if (deg[v] == 1)
+      st = nl_fail(c, who[v], errmsg, CUP_ERR_PARSE, "node '%s' is connected to %s only (a dangling node)",
+                   c->node[v], c->elem[who[v]].name);
+  free(deg); free(who);
+  return st;
+}
+
+/* Capacitors and voltage sources: a loop of them is an index problem. */
+static int voltage_loops(const nl_circuit *c, int *uf, char *errmsg) {
+  for (int e = 0; e < c->nelem; e++) {
+    const nl_elem *el = &c->elem[e];
+    if (el->kind != NL_C && el->kind != NL_V) continue;
+    if (find(uf, el->a) != find(uf, el->b)) { unite(uf, el->a, el->b); continue; }
+    int *path = malloc(sizeof(int) * ((size_t)c->nelem + 1));
+    if (!path) return nomem(c, errmsg);
+    int len = forest_path(c, 1u << NL_C | 1u << NL_V, e, el->a, el->b, path);
+    if (len < 0) { free(path); return nomem(c, errmsg); }
+    path[len++] = e;
+    int caps = 0;
+    for (int k = 0; k < len; k++) caps += c->elem[path[k]].kind == NL_C;
+    char names[CUP_ERRMSG_LEN];
+    join_names(names, sizeof names, c, path, len);
+    free(path);
+    return caps ? nl_fail(c, e, errmsg, CUP_ERR_PARSE, "%s form a loop of capacitors and voltage sources "
+                          "(an index problem: their voltages are not independent)", names)
+                : nl_fail(c, e, errmsg, CUP_ERR_PARSE, "short-circuited voltage sources: %s form a loop", names);
+  }
+  return CUP_OK;
+}
+
+/* Every part of the circuit must reach ground through resistors, voltage
+ * ports and fixed diodes; what else joins a part that does not is a cutset
+ * of inductors and current sources. */
+static int cutsets(const nl_circuit *c, int *uf, char *errmsg) {
+  int bad = -1;
+  for (int v = 1; v < c->nnodes && bad < 0; v++)
+    if (find(uf, v) != find(uf, 0)) bad = v;
+  if (bad < 0) return CUP_OK;
+  int root = find(uf, bad), n = 0, first = -1;
+  int *cut = malloc(sizeof(int) * ((size_t)c->nelem + 1));
+  if (!cut) return nomem(c, errmsg);
+  for (int e = 0; e < c->nelem; e++) {
+    const nl_elem *el = &c->elem[e];
+    if ((find(uf, el->a) == root) != (find(uf, el->b) == root)) cut[n++] = e;
+    if (first < 0 && (find(uf, el->a) == root || find(uf, el->b) == root)) first = e;
+  }
+  char names[CUP_ERRMSG_LEN];
+  join_names(names, sizeof names, c, cut, n);
+  int st = n ? nl_fail(c, cut[0], errmsg, CUP_ERR_PARSE, "%s form a cutset of inductors and current sources "
+                       "(they alone join node '%s' to the rest of the circuit): their currents are not "
+                       "independent (an index problem)", names, c->node[bad])
+             : nl_fail(c, first, errmsg, CUP_ERR_PARSE, "node '%s' has no path to ground: its part of the "
+                       "circuit is floating", c->node[bad]);
+  free(cut);
+  return st;
+}
+
+/* Breadth-first trees of the voltage ports; ground's tree is supernode -1. */
+static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned char *vport, char *errmsg) {
+  int nn = c->nnodes;
+  int *start = calloc((size_t)nn + 1, sizeof(int)), *adj = malloc(sizeof(int) * (2 * (size_t)c->nelem + 1));
+  int *queue = malloc(sizeof(int) * ((size_t)nn + 1));
+  if (!start || !adj || !queue) { free(start); free(adj); free(queue); return nomem(c, errmsg); }
+  for (int e = 0; e < c->nelem; e++)
+    if (vport[e]) { start[c->elem[e].a + 1]++; start[c->elem[e].b + 1]++; }
+  for (int v = 0; v < nn; v++) start[v + 1] += start[v];
+  for (int e = 0; e < c->nelem; e++)
+    if (vport[e]) { adj[start[c->elem[e].a]++] = e; adj[start[c->elem[e].b]++] = e; }
+  for (int v = nn; v > 0; v--) start[v] = start[v - 1];
+  start[0] = 0;
+  for (int v = 0; v < nn; v++) nl->parent[v] = -2;
+  nl->ns = 0;
+  for (int r = 0; r < nn; r++) {
+    if (nl->parent[r] != -2) continue;
+    int sn = r == 0 ? -1 : nl->ns++, head = 0, tail = 0;
+    nl->parent[r] = -1; nl->pport[r] = -1; nl->depth[r] = 0; nl->snode[r] = sn; nl->psign[r] = 0;
+    queue[tail++] = r;
+    while (head < tail) {
+      int v = queue[head++];
+      for (int k = start[v]; k < start[v + 1]; k++) {
+        const nl_elem *el = &c->elem[adj[k]];
+        int w = el->a == v ? el->b : el->a;
+        if (nl->parent[w] != -2) continue;
+        nl->parent[w] = v;
+        nl->pport[w] = nl->eport[adj[k]];
+        nl->psign[w] = (signed char)(w == el->a ? 1 : -1);   /* v(port) = phi(a) - phi(b) */
+        nl->depth[w] = nl->depth[v] + 1;
+        nl->snode[w] = sn;
+        queue[tail++] = w;
+      }
+    }
+  }
+  free(start); free(adj); free(queue);
+  return CUP_OK;
+}
+
+/* Ports and variables: voltage ports (capacitors, voltage sources, fixed
+ * diodes), then current ports (inductors, current sources, free diodes),
+ * each group in netlist order; x = (inductor currents, capacitor voltages),
+ * u = the sources, zeta = the diodes, in netlist order. */
+static void number_ports(cup_netlist *nl, const nl_circuit *c, const unsigned char *fixed) {
+  static const nl_kind vorder[3] = {NL_C, NL_V, NL_D}, iorder[3] = {NL_L, NL_I, NL_D};
+  int nx_l = 0, nx_c = 0, nu = 0, nz = 0;
+  for (int e = 0; e < c->nelem; e++) {
+    nl_kind k = c->elem[e].kind;
+    if (k == NL_L) nl->nL++;
+    if (k == NL_C) nl->nC++;
+  }
+  for (int e = 0; e < c->nelem; e++) {
+    nl_kind k = c->elem[e].kind;
+    nl->evar[e] = k == NL_L ? nx_l++ : k == NL_C ? nl->nL + nx_c++ : k == NL_V || k == NL_I ? nu++ : k == NL_D ? nz++ : -1;
+    nl->eport[e] = -1;
+  }
+  int q = 0;
+  for (int g = 0; g < 6; g++) {
+    nl_kind want = g < 3 ? vorder[g] : iorder[g - 3];
+    for (int e = 0; e < c->nelem; e++) {
+      nl_kind k = c->elem[e].kind;
+      if (k != want || (k == NL_D && (g < 3) != (fixed[e] != 0))) continue;
+      nl->eport[e] = q;
+      int var = k == NL_L || k == NL_C ? NL_VAR_X : k == NL_D ? NL_VAR_Z : NL_VAR_U;
+      nl->port[q++] = (nl_port){e, var, nl->evar[e], k == NL_D && g < 3 ? -1 : 1};
+    }
+    if (g == 2) nl->nv = q;
+  }
+  nl->ni = q - nl->nv;
+  nl->n = nl->nL + nl->nC;
+  nl->p = nu;
+  nl->m = nz;
+}
+
+int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
+  int nn = c->nnodes, ne = c->nelem;
+  int st = check_elements(c, errmsg);
+  if (st) return st;
+  int *uf = malloc(sizeof(int) * (size_t)nn);
+  unsigned char *fixed = calloc((size_t)ne + 1, 1), *vport = calloc((size_t)ne + 1, 1);
+  nl->eport = malloc(sizeof(int) * ((size_t)ne + 1));
+  nl->evar = malloc(sizeof(int) * ((size_t)ne + 1));
+  nl->port = malloc(sizeof(nl_port) * ((size_t)ne + 1));
+  nl->parent = malloc(sizeof(int) * (size_t)nn);
+  nl->pport = malloc(sizeof(int) * (size_t)nn);
+  nl->depth = malloc(sizeof(int) * (size_t)nn);
+  nl->snode = malloc(sizeof(int) * (size_t)nn);
+  nl->psign = malloc((size_t)nn);
+  if (!uf || !fixed || !vport || !nl->eport || !nl->evar || !nl->port || !nl->parent || !nl->pport ||
+      !nl->depth || !nl->snode || !nl->psign)
+    st = nomem(c, errmsg);
+  for (int v = 0; !st && v < nn; v++) uf[v] = v;
+  if (!st) st = voltage_loops(c, uf, errmsg);
+  for (int e = 0; !st && e < ne; e++)
+    if (c->elem[e].kind == NL_R) unite(uf, c->elem[e].a, c->elem[e].b);
+  for (int e = 0; !st && e < ne; e++) {          /* a diode joining two parts is fixed */
+    const nl_elem *el = &c->elem[e];
+    if (el->kind != NL_D || find(uf, el->a) == find(uf, el->b)) continue;
+    fixed[e] = 1;
+    unite(uf, el->a, el->b);
+  }
+  if (!st) st = cutsets(c, uf, errmsg);
+  if (!st) {
+    number_ports(nl, c, fixed);
+    for (int e = 0; e < ne; e++) vport[e] = nl->eport[e] >= 0 && nl->eport[e] < nl->nv;
+    st = build_forest(nl, c, vport, errmsg);
+  }
+  free(uf); free(fixed); free(vport);
+  return st;
+}
+
+int nl_path(const cup_netlist *nl, int a, int b, int *port, double *coef) {
+  int len = 0;
+  while (a != b && !(nl->parent[a] < 0 && nl->parent[b] < 0)) {
+    if (nl->depth[a] >= nl->depth[b]) {
+      port[len] = nl->pport[a]; coef[len++] = nl->psign[a]; a = nl->parent[a];
+    } else {
+      port[len] = nl->pport[b]; coef[len++] = -nl->psign[b]; b = nl->parent[b];
+    }
+  }
+  return len;
+}

@@ -1,0 +1,109 @@
+/* Internal layout of cup_netlist and the formulation's steps (netlist.c,
+ * netlist_graph.c, netlist_signal.c). The formulation (docs/netlist.md):
+ *
+ * Ports. Capacitors, voltage sources and the diodes whose current the state
+ * fixes ("fixed" diodes) are voltage ports; inductors, current sources and
+ * the other ("free") diodes are current ports; resistors are the network
+ * between them. A diode is fixed when it alone joins two parts of the
+ * circuit that capacitors, voltage sources, resistors and the diodes fixed
+ * before it leave apart (it sits in a cutset of current ports).
+ *
+ * The hybrid matrix. Voltage ports form a forest (a loop of them is an index
+ * problem); each tree is a supernode whose node potentials are its root's
+ * plus port voltages along the tree (tau). With Lap the resistors'
+ * Laplacian over the supernodes (ground's removed; it is SPD exactly when no
+ * cutset of current ports exists), K = [Z_V, A_I] their coupling to the
+ * ports and T_R, T_I the tree paths of resistors and current ports,
+ *     (i_V, v_I) = H (v_V, j_I),   X = L^-1 Pi K  (L L^T = Pi Lap Pi^T),
+ *     H = [ -T_R G T_R^T + X_V^T X_V    -T_I + X_V^T X_I ]
+ *         [  T_I^T - X_I^T X_V          -X_I^T X_I       ],
+ * in the element convention (v and i of a port both from its first node to
+ * its second). Then P = diag(L, C) and P x' = H's state rows, and a diode's
+ * row is w = i (fixed: zeta = -v) or w = -v (free: zeta = i). */
+#ifndef CUP_NETLIST_IMPL_H
+#define CUP_NETLIST_IMPL_H
+
+#include <cholmod.h>
+#include "catchup/netlist.h"
+#include "util/linalg.h"
+#include "netlist_desc.h"
+
+/* Which LCS variable a port's value is: the state, an input or a zeta. */
+enum { NL_VAR_X, NL_VAR_U, NL_VAR_Z };
+
+typedef struct nl_port {
+  int elem;           /* the element */
+  int var, index;     /* NL_VAR_* and its index in x, u or zeta */
+  int sign;           /* port value = sign * that variable (-1: a fixed diode's -zeta) */
+} nl_port;
+
+struct cup_netlist {
+  cup_lcs *L;
+  cup_input *u;       /* NULL when p = 0 */
+  double *x0;
+  int has_tran;
+  double tstep, tstop;
+  int n, m, p, nL, nC;
+  /* the circuit, for names and signals */
+  char *file;
+  int nnodes, nelem;
+  char **node;
+  nl_elem *elem;      /* copies (names owned; no sources) */
+  int *eport;         /* element -> port, -1 for resistors */
+  int *evar;          /* element -> index in x (L, C), u (V, I) or zeta (D) */
+  char **state_name, **row_name;
+  int *row_fixed;     /* per diode row */
+  int *input_elem;    /* per input: its source element */
+  int nprobe, probe_all;
+  char **probe_text;  /* the netlist's .probe/.save/.print signals */
+  /* ports and the voltage-port forest */
+  int nv, ni;         /* voltage ports 0..nv-1, current ports nv..nv+ni-1 */
+  nl_port *port;
+  int *parent, *pport, *depth, *snode;   /* per node; snode -1: ground's tree */
+  signed char *psign; /* phi(node) = phi(parent) + psign * v(pport) */
+  int ns;             /* supernodes other than ground's */
+  cholmod_common cm;
+  int cm_started;
+  cholmod_factor *Lf; /* Lap = L L^T (ns > 0) */
+  cholmod_sparse *K;  /* ns x (nv + ni) */
+  cup_sparse H;       /* (nv + ni) x (nv + ni), CSC */
+  /* signals: sparse rows over (x, u, zeta) */
+  int nsig, capsig, signnz, capnnz;
+  char **sig_name;
+  int *sig_ptr, *sig_idx;
+  double *sig_val;
+  double *ubuf, *dense;   /* p, and n + p + m + supernodes of scratch */
+};
+
+/* Triplets, each with a bound on the magnitude of what was summed into it. */
+typedef struct nl_coo {
+  int n, cap;
+  int *i, *j;
+  double *x, *mag;
+} nl_coo;
+int nl_coo_add(nl_coo *t, int i, int j, double x, double mag);
+/* CSC with duplicates summed; an entry at or below 256 eps times its
+ * magnitude bound is dropped (it cancelled to rounding; mag 0: exact zeros). */
+int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, cup_sparse *out);
+void nl_coo_free(nl_coo *t);
+
+/* "FILE:LINE:COL: ELEM: message" for element e (-1: FILE: message). */
+int nl_fail(const nl_circuit *c, int e, char *errmsg, int status, const char *fmt, ...)
+  __attribute__((format(printf, 5, 6)));
+
+/* Classify the diodes, build the forest and the ports; index problems,
+ * dangling nodes and shorted elements are errors here. */
+int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg);
+/* The hybrid matrix H (and Lap's factor and K, kept for signals). */
+int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg);
+/* tau(a) - tau(b) as (port, coefficient) pairs into buf (at most
+ * depth(a) + depth(b) of them); returns their number. */
+int nl_path(const cup_netlist *nl, int a, int b, int *port, double *coef);
+
+/* 0 if text is a valid probe of this circuit, else a message into msg. */
+int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t size);
+
+/* The formulation of a parsed circuit (netlist.c); the reader calls it. */
+int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg);
+
+#endif

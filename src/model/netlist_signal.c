@@ -1,0 +1,259 @@
+/* netlist_signal — node voltages and element currents as linear functions
+ * of (x, u, zeta), built once per probe (one solve with the resistors'
+ * factor per node) and evaluated per sample without allocating. A node's
+ * potential is its supernode's, phi_S = -(Lap^-1 K e)_S, plus the port
+ * voltages along its tree (tau); a voltage or current port's other
+ * quantity is its row of H. */
+#define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include "catchup.h"
+#include "catchup/netlist.h"
+#include "netlist_impl.h"
+
+static int nvar(const cup_netlist *nl) { return nl->n + nl->p + nl->m; }
+
+/* Port q's value (times coef) into the dense row over (x, u, zeta). */
+static void add_port(const cup_netlist *nl, int q, double coef, double *row) {
+  const nl_port *pt = &nl->port[q];
+  int off = pt->var == NL_VAR_X ? 0 : pt->var == NL_VAR_U ? nl->n : nl->n + nl->p;
+  row[off + pt->index] += coef * pt->sign;
+}
+
+/* Row q of H (port q's current if a voltage port, voltage if a current port). */
+static void add_h_row(const cup_netlist *nl, int q, double coef, double *row) {
+  for (int j = 0; j < nl->H.ncol; j++)
+    for (int k = nl->H.p[j]; k < nl->H.p[j + 1]; k++)
+      if (nl->H.i[k] == q) add_port(nl, j, coef * nl->H.x[k], row);
+}
+
+static int add_node(cup_netlist *nl, int v, double coef, double *row) {
+  for (int w = v; nl->parent[w] >= 0; w = nl->parent[w]) add_port(nl, nl->pport[w], coef * nl->psign[w], row);
+  int s = nl->snode[v];
+  if (s < 0) return CUP_OK;
+  cholmod_dense *b = cholmod_zeros((size_t)nl->ns, 1, CHOLMOD_REAL, &nl->cm);
+  if (!b) return CUP_ERR_NOMEM;
+  ((double *)b->x)[s] = 1;
+  cholmod_dense *y = cholmod_solve(CHOLMOD_A, nl->Lf, b, &nl->cm);
+  cholmod_free_dense(&b, &nl->cm);
+  if (!y) return CUP_ERR_NOMEM;
+  const double *yv = y->x;
+  const int *Kp = nl->K->p, *Ki = nl->K->i;
+  const double *Kx = nl->K->x;
+  for (int j = 0; j < (int)nl->K->ncol; j++) {
+    double acc = 0;
+    for (int k = Kp[j]; k < Kp[j + 1]; k++) acc += yv[Ki[k]] * Kx[k];
+    if (acc != 0) add_port(nl, j, -coef * acc, row);
+  }
+  cholmod_free_dense(&y, &nl->cm);
+  return CUP_OK;
+}
+
+static int add_current(cup_netlist *nl, int e, double *row) {
+  const nl_elem *el = &nl->elem[e];
+  int q = nl->eport[e];
+  switch (el->kind) {
+    case NL_R: {
+      int st = add_node(nl, el->a, 1 / el->value, row);
+      return st ? st : add_node(nl, el->b, -1 / el->value, row);
+    }
+    case NL_L: case NL_I:
+      add_port(nl, q, 1, row);                    /* the port's own value */
+      return CUP_OK;
+    case NL_D:
+      if (q >= nl->nv) { add_port(nl, q, 1, row); return CUP_OK; }
+      add_h_row(nl, q, 1, row);
+      return CUP_OK;
+    case NL_C: case NL_V:
+      add_h_row(nl, q, 1, row);
+      return CUP_OK;
+  }
+  return CUP_OK;
+}
+
+/* ---- the table of signals ----------------------------------------------------- */
+
+static int append(cup_netlist *nl, char *name, const double *row) {
+  int nv = nvar(nl), nz = 0;
+  for (int k = 0; k < nv; k++) nz += row[k] != 0;
+  if (nl->nsig + 1 >= nl->capsig) {
+    int cap = nl->capsig ? 2 * nl->capsig : 16;
+    char **nn = realloc(nl->sig_name, sizeof *nn * (size_t)cap);
+    if (nn) nl->sig_name = nn;
+    int *np = realloc(nl->sig_ptr, sizeof *np * ((size_t)cap + 1));
+    if (np) nl->sig_ptr = np;
+    if (!nn || !np) return CUP_ERR_NOMEM;
+    if (!nl->capsig) nl->sig_ptr[0] = 0;
+    nl->capsig = cap;
+  }
+  if (nl->signnz + nz > nl->capnnz) {
+    int cap = 2 * (nl->signnz + nz) + 64;
+    int *ni = realloc(nl->sig_idx, sizeof *ni * (size_t)cap);
+    if (ni) nl->sig_idx = ni;
+    double *nx = realloc(nl->sig_val, sizeof *nx * (size_t)cap);
+    if (nx) nl->sig_val = nx;
+    if (!ni || !nx) return CUP_ERR_NOMEM;
+    nl->capnnz = cap;
+  }
+  for (int k = 0; k < nv; k++)
+    if (row[k] != 0) { nl->sig_idx[nl->signnz] = k; nl->sig_val[nl->signnz++] = row[k]; }
+  nl->sig_name[nl->nsig++] = name;
+  nl->sig_ptr[nl->nsig] = nl->signnz;
+  return CUP_OK;
+}
+
+static int find_node(const cup_netlist *nl, const char *s, size_t len) {
+  for (int v = 0; v < nl->nnodes; v++)
+    if (strlen(nl->node[v]) == len && !strncasecmp(nl->node[v], s, len)) return v;
+  if ((len == 1 && s[0] == '0') || (len == 3 && !strncasecmp(s, "gnd", 3))) return 0;
+  return -1;
+}
+
+static int find_elem(const cup_netlist *nl, const char *s, size_t len) {
+  for (int e = 0; e < nl->nelem; e++)
+    if (strlen(nl->elem[e].name) == len && !strncasecmp(nl->elem[e].name, s, len)) return e;
+  return -1;
+}
+
+/* "v(a)", "v(a,b)" or "i(e)" into its parts; 0 if it is none of them. */
+static int split(const char *s, char *kind, const char **a, size_t *la, const char **b, size_t *lb) {
+  while (isspace((unsigned char)*s)) s++;
+  *kind = (char)tolower((unsigned char)*s);
+  if ((*kind != 'v' && *kind != 'i')) return 0;
+  s++;
+  while (isspace((unsigned char)*s)) s++;
+  if (*s++ != '(') return 0;
+  const char *close = strchr(s, ')');
+  if (!close) return 0;
+  for (const char *t = close + 1; *t; t++)
+    if (!isspace((unsigned char)*t)) return 0;
+  const char *comma = memchr(s, ',', (size_t)(close - s));
+  const char *end1 = comma ? comma : close;
+  while (s < end1 && isspace((unsigned char)*s)) s++;
+  const char *e1 = end1;
+  while (e1 > s && isspace((unsigned char)e1[-1])) e1--;
+  *a = s; *la = (size_t)(e1 - s);
+  *b = NULL; *lb = 0;
+  if (comma) {
+    const char *s2 = comma + 1;
+    while (s2 < close && isspace((unsigned char)*s2)) s2++;
+    const char *e2 = close;
+    while (e2 > s2 && isspace((unsigned char)e2[-1])) e2--;
+    *b = s2; *lb = (size_t)(e2 - s2);
+    if (!*lb) return 0;
+  }
+  return *la > 0 && !(*kind == 'i' && comma);
+}
+
+static char *canonical(char kind, const char *a, const char *b) {
+  size_t len = strlen(a) + (b ? strlen(b) + 1 : 0) + 4;
+  char *s = malloc(len);
+  if (!s) return NULL;
+  if (b) snprintf(s, len, "%c(%s,%s)", kind, a, b);
+  else snprintf(s, len, "%c(%s)", kind, a);
+  return s;
+}
+
+static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
+  const char *a = kind == 'i' ? nl->elem[x].name : nl->node[x], *b = y >= 0 ? nl->node[y] : NULL;
+  char *name = canonical(kind, a, b);
+  if (!name) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  for (int k = 0; k < nl->nsig; k++)
+    if (!strcmp(nl->sig_name[k], name)) { free(name); return k; }
+  double *row = nl->dense;
+  memset(row, 0, sizeof(double) * (size_t)nvar(nl));
+  int st = kind == 'i' ? add_current(nl, x, row) : add_node(nl, x, 1, row);
+  if (!st && y >= 0) st = add_node(nl, y, -1, row);
+  if (!st) st = append(nl, name, row);
+  if (st) { free(name); return cup_fail(errmsg, st, "out of memory"); }
+  return nl->nsig - 1;
+}
+
+static int scratch(cup_netlist *nl, char *errmsg) {
+  if (!nl->dense && !(nl->dense = calloc((size_t)nvar(nl) + 1, sizeof(double))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  if (!nl->ubuf && !(nl->ubuf = calloc((size_t)nl->p + 1, sizeof(double))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  return CUP_OK;
+}
+
+static int probe_all(cup_netlist *nl, char *errmsg) {
+  int st = CUP_OK;
+  for (int v = 1; v < nl->nnodes && st >= 0; v++) st = probe_one(nl, 'v', v, -1, errmsg);
+  for (int e = 0; e < nl->nelem && st >= 0; e++) st = probe_one(nl, 'i', e, -1, errmsg);
+  return st < 0 ? st : CUP_OK;
+}
+
+int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t size) {
+  char kind;
+  const char *a, *b;
+  size_t la, lb;
+  if (!split(text, &kind, &a, &la, &b, &lb))
+    return snprintf(msg, size, "'%.60s' is not a signal (expected v(NODE), v(NODE1,NODE2) or i(ELEMENT))", text), 1;
+  if ((kind == 'i' ? find_elem(nl, a, la) : find_node(nl, a, la)) < 0)
+    return snprintf(msg, size, "'%.60s': no %s named '%.*s'", text, kind == 'i' ? "element" : "node",
+                    (int)(la < 60 ? la : 60), a), 1;
+  if (b && find_node(nl, b, lb) < 0)
+    return snprintf(msg, size, "'%.60s': no node named '%.*s'", text, (int)(lb < 60 ? lb : 60), b), 1;
+  return 0;
+}
+
+int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg) {
+  if (!nl || !signal) return cup_fail(errmsg, CUP_ERR_ARG, "netlist probe: NULL argument");
+  int st = scratch(nl, errmsg);
+  if (st) return st;
+  const char *t = signal;
+  while (isspace((unsigned char)*t)) t++;
+  if (!strcasecmp(t, "all")) return probe_all(nl, errmsg);
+  char kind;
+  const char *a, *b;
+  size_t la, lb;
+  if (!split(signal, &kind, &a, &la, &b, &lb))
+    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': expected v(NODE), v(NODE1,NODE2), i(ELEMENT) or all",
+                    signal);
+  int x = kind == 'i' ? find_elem(nl, a, la) : find_node(nl, a, la), y = b ? find_node(nl, b, lb) : -1;
+  if (x < 0)
+    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no %s named '%.*s' in %s", signal,
+                    kind == 'i' ? "element" : "node", (int)(la < 60 ? la : 60), a, nl->file);
+  if (b && y < 0)
+    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no node named '%.*s' in %s", signal,
+                    (int)(lb < 60 ? lb : 60), b, nl->file);
+  return probe_one(nl, kind, x, y, errmsg);
+}
+
+int cup_netlist_probe_default(cup_netlist *nl, int limit, char *errmsg) {
+  if (!nl) return cup_fail(errmsg, CUP_ERR_ARG, "netlist probe: NULL netlist");
+  int st = scratch(nl, errmsg);
+  for (int k = 0; k < nl->nprobe && !st; k++) {
+    int r = cup_netlist_probe(nl, nl->probe_text[k], errmsg);
+    st = r < 0 ? r : CUP_OK;
+  }
+  if (!st && (nl->probe_all || (!nl->nprobe && nl->nnodes - 1 + nl->nelem <= limit))) st = probe_all(nl, errmsg);
+  return st;
+}
+
+int cup_netlist_signal_count(const cup_netlist *nl) { return nl ? nl->nsig : 0; }
+
+const char *cup_netlist_signal_name(const cup_netlist *nl, int k) {
+  return nl && k >= 0 && k < nl->nsig ? nl->sig_name[k] : NULL;
+}
+
+int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out) {
+  if (!nl || !x || (!out && nl->nsig)) return CUP_ERR_ARG;
+  if (!nl->nsig) return CUP_OK;
+  if (nl->p && cup_input_eval(nl->u, t, nl->ubuf)) return CUP_ERR_CALLBACK;
+  int n = nl->n, p = nl->p;
+  for (int k = 0; k < nl->nsig; k++) {
+    double acc = 0;
+    for (int q = nl->sig_ptr[k]; q < nl->sig_ptr[k + 1]; q++) {
+      int i = nl->sig_idx[q];
+      double v = i < n ? x[i] : i < n + p ? nl->ubuf[i - n] : zeta ? zeta[i - n - p] : 0;
+      acc += nl->sig_val[q] * v;
+    }
+    out[k] = acc;
+  }
+  return CUP_OK;
+}

@@ -1,0 +1,112 @@
+! test_f_netlist -- the netlist API from Fortran (module catchup):
+!  * the half-wave rectifier's names, .tran and row kind;
+!  * its theta run against an independent RK4 of its ODE
+!    C v' = max(0, (V - v)/Rs) - v/RL (docs/netlist.md): v(60 ms) to 1e-3 V;
+!  * signals against Kirchhoff's laws at a given (t, x, zeta), and zeta of
+!    the last step equal to the diode current (V - v)/Rs of the final state;
+!  * sets, and errors with their messages (a bad value, an X element).
+program test_f_netlist
+  use, intrinsic :: iso_c_binding
+  use catchup
+  use cup_testing
+  implicit none
+  real(c_double), parameter :: pi = 3.14159265358979323846264338327950288_c_double
+  character(len=512) :: dir
+  type(cup_netlist_t) :: nl
+  integer :: ierr, k
+  character(len=256) :: msg
+
+  call get_command_argument(1, dir)
+  call section('netlist: names, .tran, rows')
+  call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, errmsg=msg)
+  call check_int(ierr, CUP_OK, 'load halfwave-rc.cir: ' // trim(msg))
+  call check(cup_netlist_state_name(nl, 1) == 'v(C1)', 'state 1 is v(C1)')
+  call check(cup_netlist_row_name(nl, 1) == 'D1', 'row 1 is D1')
+  call check(cup_netlist_input_name(nl, 1) == 'V1', 'input 1 is V1')
+  call check(.not. cup_netlist_row_fixed(nl, 1), 'D1 is free (zeta is its current)')
+  call check(cup_lcs_has_D(cup_netlist_lcs(nl)), 'its LCS has D /= 0')
+  block
+    real(c_double) :: tstep, tstop
+    call check(cup_netlist_tran(nl, tstep, tstop), '.tran given')
+    call check_close(tstep, 20d-6, 1d-20, 'TSTEP (20u)')
+    call check_close(tstop, 60d-3, 1d-17, 'TSTOP (60m)')
+  end block
+
+  call section('netlist: theta against RK4, zeta and signals')
+  block
+    type(cup_integrator_options) :: o
+    type(cup_integrator_t) :: integ
+    real(c_double), allocatable :: t(:), X(:, :), x0(:)
+    real(c_double) :: zeta(1), sig(3), vref
+    integer :: ns
+    call cup_integrator_options_default(o)
+    o%scheme = CUP_SCHEME_THETA
+    o%T = 60d-3
+    o%n = 3000
+    o%eps = cup_schedule(0, 0)
+    o%eta = cup_schedule(0, 0)
+    o%output = CUP_OUTPUT_FINAL
+    call cup_integrator_create(integ, cup_netlist_lcs(nl), ierr, u=cup_netlist_input(nl), opt=o)
+    call check_int(ierr, CUP_OK, 'integrator (theta)')
+    call cup_netlist_x0(nl, x0, ierr)
+    call cup_integrator_run_store(integ, x0, t, X, ns, ierr)
+    call check_int(ierr, CUP_OK, 'run')
+    vref = rk4_rectifier(60d-3, 300000)
+    call check_close(X(1, ns), vref, 1d-3, 'v(out) at 60 ms against RK4')
+    call cup_integrator_zeta(integ, zeta, ierr)
+    call check_close(zeta(1), max(0d0, (10 * sin(2 * pi * 50 * 60d-3) - X(1, ns)) / 1), 1d-9, &
+                     'zeta of the last step: the diode current (V - v)/Rs')
+    call cup_netlist_probe(nl, 'v(in)', ierr, index=k)
+    call check_int(k, 1, 'first probe')
+    call cup_netlist_probe(nl, 'I(D1)', ierr)
+    call cup_netlist_probe(nl, 'v(a,out)', ierr, index=k)
+    call check_int(k, 3, 'third probe')
+    call check(cup_netlist_signal_name(nl, 2) == 'i(D1)', 'canonical name i(D1)')
+    call cup_netlist_probe(nl, 'v(nowhere)', ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, 'unknown node')
+    call check_contains(msg, "no node named 'nowhere'", 'its message')
+    call cup_netlist_signals(nl, 0.004d0, [3.5d0], sig, ierr, zeta=[2.25d0])
+    call check_int(ierr, CUP_OK, 'signals')
+    call check_close(sig(1), 10 * sin(2 * pi * 50 * 0.004d0), 1d-13, 'v(in) = V(t)')
+    call check_close(sig(2), 2.25d0, 1d-15, 'i(D1) = zeta')
+    call check_close(sig(3), 10 * sin(2 * pi * 50 * 0.004d0) - 2.25d0 - 3.5d0, 1d-13, 'v(a,out) = V - Rs i - v')
+    call cup_integrator_free(integ)
+  end block
+  call cup_netlist_free(nl)
+  call cup_netlist_free(nl)                   ! a second free is harmless
+
+  call section('netlist: sets and errors')
+  call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, sets=['RL=-1'], errmsg=msg)
+  call check_int(ierr, CUP_ERR_PARSE, 'a negative resistance set')
+  call check_contains(msg, "set 'RL=-1': RL: bad value: resistance must be > 0", 'its message')
+  call cup_netlist_load_string(nl, 'title' // new_line('a') // 'X1 a 0 amp' // new_line('a'), 'x.cir', ierr, &
+                               errmsg=msg)
+  call check_int(ierr, CUP_ERR_UNSUPPORTED, 'an X element')
+  call check_contains(msg, 'x.cir:2:1: X1: subcircuits (X) are not supported', 'its message')
+  call finish()
+
+contains
+
+  !> C v' = max(0, (V - v)/Rs) - v/RL, V = 10 sin(100 pi t), by RK4.
+  real(c_double) function rk4_rectifier(T, n) result(v)
+    real(c_double), intent(in) :: T
+    integer, intent(in) :: n
+    real(c_double) :: h, s, k1, k2, k3, k4
+    integer :: i
+    h = T / n
+    v = 0
+    do i = 0, n - 1
+      s = i * h
+      k1 = f(s, v)
+      k2 = f(s + h / 2, v + h / 2 * k1)
+      k3 = f(s + h / 2, v + h / 2 * k2)
+      k4 = f(s + h, v + h * k3)
+      v = v + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    end do
+  end function rk4_rectifier
+
+  real(c_double) function f(t, v)
+    real(c_double), intent(in) :: t, v
+    f = (max(0d0, (10 * sin(2 * pi * 50 * t) - v) / 1) - v / 1000) / 100d-6
+  end function f
+end program test_f_netlist

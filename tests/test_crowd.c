@@ -1,0 +1,306 @@
+/* test_crowd — the crowd model (catchup/crowd.h) against what is known
+ * without it: the distance to a door by elementary geometry (straight, and
+ * around the end of a wall), an agent alone walking at the desired speed and
+ * leaving at the time its distance takes, two agents pushed head-on stopping
+ * at contact, and an evacuation in which every step is checked for overlaps
+ * (against the step's certified eta) and for agents crossing walls; and the
+ * errors for bad scenes. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "testutil.h"
+
+/* A 10 x 10 room with a door from (10, 4) to (10, 6); an extra wall
+ * from (7, 1) to (7, 9) when walled; one agent somewhere harmless. */
+static cup_crowd *square_room(int walled, double grid, char *err) {
+  static const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10}, door[4] = {10, 4, 10, 6};
+  static const double wall[4] = {7, 1, 7, 9}, q[2] = {1, 1}, r[1] = {0.25};
+  cup_crowd_desc d = {.agents = 1, .q0 = q, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .walls = walled, .wall = wall, .speed = 1, .grid = grid};
+  cup_crowd *c = NULL;
+  cup_crowd_create(&c, &d, 0.05, err);
+  return c;
+}
+
+/* Do segments p-q and a-b cross? */
+static int crosses(double px, double py, double qx, double qy, double ax, double ay, double bx, double by) {
+  double d1 = (bx - ax) * (py - ay) - (by - ay) * (px - ax), d2 = (bx - ax) * (qy - ay) - (by - ay) * (qx - ax);
+  double d3 = (qx - px) * (ay - py) - (qy - py) * (ax - px), d4 = (qx - px) * (by - py) - (qy - py) * (bx - px);
+  return d1 * d2 < 0 && d3 * d4 < 0;
+}
+
+/* The geodesic distance from (x, y) to the door (10, 4)-(10, 6), around the
+ * wall (7, 1)-(7, 9) when walled: the nearest of 2001 door points, reached
+ * straight when the wall does not hide it, else around one of its ends. */
+static double door_geodesic(double x, double y, int walled) {
+  double best = INFINITY;
+  for (int k = 0; k <= 2000; k++) {
+    double dy = 4 + 2 * k / 2000.0;
+    double d = hypot(10 - x, dy - y);
+    if (walled && crosses(x, y, 10, dy, 7, 1, 7, 9))
+      d = fmin(hypot(x - 7, y - 9) + hypot(3, dy - 9), hypot(x - 7, y - 1) + hypot(3, dy - 1));
+    best = fmin(best, d);
+  }
+  return best;
+}
+
+/* The largest error of the grid distance over points at least 0.5 from the
+ * walls, against the exact geodesic distance. */
+static double field_error(cup_crowd *c, int walled) {
+  double worst = 0;
+  for (double y = 0.55; y < 9.5; y += 0.3)
+    for (double x = 0.55; x < 9.5; x += 0.3) {
+      if (walled && fabs(x - 7) < 0.5 && y > 0.5 && y < 9.5) continue;
+      worst = fmax(worst, fabs(cup_crowd_door_distance(c, x, y) - door_geodesic(x, y, walled)));
+    }
+  return worst;
+}
+
+/* First-order fast marching: error O(h log 1/h), largest in the fan behind
+ * a wall's end (a point source); it must shrink with h. */
+static void test_distance_field(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  for (int walled = 0; walled <= 1; walled++) {
+    cup_crowd *c1 = square_room(walled, 0.1, err), *c2 = square_room(walled, 0.05, err);
+    assert_non_null(c1);
+    assert_non_null(c2);
+    double e1 = field_error(c1, walled), e2 = field_error(c2, walled);
+    printf("distance error, %s: %.4f (h = 0.1), %.4f (h = 0.05)\n", walled ? "around a wall" : "open room", e1, e2);
+    assert_true(e1 < (walled ? 0.9 : 0.35));   /* measured 0.80 and 0.29 */
+    assert_true(e2 < 0.6 * e1);
+    /* the direction at a point in the open points at the door's nearest part */
+    double u[2];
+    cup_crowd_desired_velocity(c2, 3, 5, u);
+    if (!walled) {
+      assert_close(u[0], 1, 1e-3);
+      assert_close(u[1], 0, 3e-2);
+    } else {                                 /* behind the wall: towards one of its ends */
+      double a = atan2(9 - 5, 7 - 3), b = atan2(1 - 5, 7 - 3), g = atan2(u[1], u[0]);
+      assert_true(fmin(fabs(g - a), fabs(g - b)) < 0.05);
+    }
+    cup_crowd_free(&c1);
+    cup_crowd_free(&c2);
+  }
+}
+
+/* ---- runs ------------------------------------------------------------------ */
+
+typedef struct run_check {
+  cup_crowd *c;
+  long nsteps;
+  double *gap, *eta;        /* per step: smallest gap of x_k, certified eta of step k */
+  const double *prev;       /* not owned */
+  double *last;             /* the state before */
+  int N;
+  int crossed;              /* an agent that left elsewhere than through the door */
+  const double *door;
+} run_check;
+
+static int sink_gaps(long k, double t, const double *q, void *ctx) {
+  (void)t;
+  run_check *rc = ctx;
+  rc->gap[k] = cup_crowd_min_gap(rc->c, q);
+  const double *et = cup_crowd_exit_times(rc->c);
+  for (int i = 0; k > 0 && i < rc->N; i++) {
+    /* an agent out at x_k (not yet marked: marks come with the next step)
+     * crossed the door segment x = door[0], door[1] <= y <= door[3] */
+    double x0 = rc->last[2 * i], y0 = rc->last[2 * i + 1], x1 = q[2 * i], y1 = q[2 * i + 1];
+    if (isnan(et[i]) && x0 <= rc->door[0] && x1 > rc->door[0]) {
+      double y = y0 + (y1 - y0) * (rc->door[0] - x0) / (x1 - x0);
+      if (y < rc->door[1] || y > rc->door[3]) rc->crossed = 1;
+    }
+    if (isnan(et[i]) && (x1 < 0 || y1 < 0 || y1 > 10)) rc->crossed = 1;
+  }
+  memcpy(rc->last, q, sizeof(double) * 2 * (size_t)rc->N);
+  return 0;
+}
+
+static int step_eta(long k, double t, const cup_proj_info *pi, void *ctx) {
+  (void)t;
+  run_check *rc = ctx;
+  rc->eta[k] = pi->eta_cert;
+  return 0;
+}
+
+/* An agent alone in a corridor 20 x 4 walks to the door at the far end
+ * (centred on its line) at the desired speed, and leaves after 18 / v. */
+static void test_alone(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 20, 0, 20, 4, 0, 4}, door[4] = {20, 1, 20, 3}, q0[2] = {2, 2}, r[1] = {0.3};
+  const double v = 1.3, dt = 0.01;
+  cup_crowd_desc d = {.agents = 1, .q0 = q0, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .speed = v, .grid = 0.05};
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c;
+  assert_int_equal(cup_crowd_create(&c, &d, dt, err), CUP_OK);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 1500;
+  o.T = o.n * dt;
+  o.output = CUP_OUTPUT_EVERY;
+  cup_integrator *I;
+  assert_int_equal(cup_integrator_create_process(&I, cup_crowd_process(c), &o, err), CUP_OK);
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, q0, NULL, NULL, &info), CUP_OK);
+  const double *q = cup_integrator_state(I);
+  /* 1500 steps of v dt: x = 2 + 19.5 had it not left; it left at the first
+   * t_k with 2 + v t_k > 20, t = 13.85 (k = 1385), and stopped there */
+  double t_exit = cup_crowd_exit_times(c)[0];
+  assert_close(t_exit, 1385 * dt, 1e-9);
+  assert_close(q[0], 2 + v * t_exit, 1e-9);
+  assert_close(q[1], 2, 1e-9);
+  assert_int_equal(cup_crowd_inside(c), 0);
+  cup_integrator_free(&I);
+  cup_crowd_free(&c);
+}
+
+/* Two agents pushed towards each other at speed 1 in the open stop at contact:
+ * centres 0.5 apart from t = 1.75 on. The test's own desired velocity
+ * replaces the crowd's (the crowd's set builds the contact rows). */
+static int head_on(double t0, double t1, const double *q, double *F, void *ctx) {
+  (void)q; (void)ctx;
+  F[0] = t1 - t0; F[1] = 0; F[2] = -(t1 - t0); F[3] = 0;
+  return 0;
+}
+
+static void test_head_on(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 20, 0, 20, 4, 0, 4}, door[4] = {20, 1, 20, 3};
+  const double q0[4] = {8, 2, 12, 2}, r[2] = {0.25, 0.25};
+  cup_crowd_desc d = {.agents = 2, .q0 = q0, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .speed = 1};
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c;
+  assert_int_equal(cup_crowd_create(&c, &d, 0.01, err), CUP_OK);
+  cup_process_desc pd = *cup_crowd_process(c);
+  pd.f_integral = head_on;
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 300;
+  o.T = 3;
+  o.eps = (cup_schedule){0, 0};
+  o.eta = (cup_schedule){0, 0};
+  cup_integrator *I;
+  assert_int_equal(cup_integrator_create_process(&I, &pd, &o, err), CUP_OK);
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, q0, NULL, NULL, &info), CUP_OK);
+  const double *q = cup_integrator_state(I);
+  assert_close(q[0], 9.75, 1e-9);
+  assert_close(q[2], 10.25, 1e-9);
+  assert_close(q[1], 2, 1e-12);
+  assert_close(q[3], 2, 1e-12);
+  assert_true(info.max_eta_cert <= 1e-9);
+  cup_integrator_free(&I);
+  cup_crowd_free(&c);
+}
+
+/* 150 agents of radii 0.2 .. 0.3 in the 10 x 10 room with a square column
+ * before the door: at every step the smallest gap (pairs and walls) is at
+ * least -sqrt 2 eta of the step that made it, and no agent leaves but
+ * through the door. */
+static void test_evacuation_checked(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10}, door[4] = {10, 4, 10, 6};
+  const double column[8] = {7.5, 4.7, 8.1, 4.7, 8.1, 5.3, 7.5, 5.3};
+  const int cpts[1] = {4};
+  enum { N = 150 };
+  double q0[2 * N], r[N];
+  rng_t g = {7};
+  for (int i = 0; i < N; i++) {              /* a jittered grid on the left 6 m */
+    r[i] = 0.2 + 0.07 * rng_unif(&g);
+    q0[2 * i] = 0.5 + 0.7 * (i % 9) + 0.1 * (rng_unif(&g) - 0.5);
+    q0[2 * i + 1] = 0.5 + 0.55 * (i / 9);
+  }
+  cup_crowd_desc d = {.agents = N, .q0 = q0, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .obstacles = 1, .obstacle_points = cpts, .obstacle = column, .speed = 1.2};
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c;
+  int st = cup_crowd_create(&c, &d, 0.05, err);
+  if (st) fail_msg("%s", err);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = 400;
+  o.T = 20;
+  o.eta = (cup_schedule){1e-6, 0};
+  run_check rc = {c, o.n, calloc((size_t)o.n + 1, sizeof(double)), calloc((size_t)o.n + 1, sizeof(double)),
+                  NULL, malloc(sizeof(double) * 2 * N), N, 0, door};
+  o.on_step = step_eta;
+  o.step_ctx = &rc;
+  cup_integrator *I;
+  assert_int_equal(cup_integrator_create_process(&I, cup_crowd_process(c), &o, err), CUP_OK);
+  cup_run_info info;
+  st = cup_integrator_run(I, q0, sink_gaps, &rc, &info);
+  if (st) fail_msg("%s: %s", cup_status_name(st), info.message);
+  double worst = INFINITY;
+  for (long k = 1; k <= o.n; k++) {
+    if (rc.gap[k] < -M_SQRT2 * rc.eta[k] - 1e-12)
+      fail_msg("step %ld: gap %.3g below -sqrt 2 eta = %.3g", k, rc.gap[k], -M_SQRT2 * rc.eta[k]);
+    worst = fmin(worst, rc.gap[k]);
+  }
+  printf("evacuation: %d of %d out, smallest gap %.3g, largest eta %.3g\n", N - cup_crowd_inside(c), N,
+         worst, info.max_eta_cert);
+  assert_int_equal(rc.crossed, 0);
+  assert_true(N - cup_crowd_inside(c) > N / 3);  /* a flow through the door, past the column */
+  free(rc.gap); free(rc.eta); free(rc.last);
+  cup_integrator_free(&I);
+  cup_crowd_free(&c);
+}
+
+/* ---- errors ----------------------------------------------------------------- */
+
+static void expect_error(const cup_crowd_desc *d, const char *what) {
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c = (cup_crowd *)d;    /* must come back NULL */
+  int st = cup_crowd_create(&c, d, 0.05, err);
+  if (st >= 0) fail_msg("expected an error with '%s'", what);
+  assert_null(c);
+  if (!strstr(err, what)) fail_msg("expected '%s' in: %s", what, err);
+}
+
+static void test_errors(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10}, door[4] = {10, 4, 10, 6};
+  double q[4] = {2, 2, 5, 5}, r[2] = {0.25, 0.25};
+  cup_crowd_desc d = {.agents = 2, .q0 = q, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .speed = 1};
+  q[2] = 2.3; q[3] = 2.1;
+  expect_error(&d, "agents 0 and 1 overlap by");
+  q[2] = 11; q[3] = 5;
+  expect_error(&d, "agent 1 at (11, 5) is outside the room");
+  q[2] = 9.9; q[3] = 8;
+  expect_error(&d, "agent 1 at (9.9, 8), radius 0.25, overlaps wall 2 (the room's edge 1, from (10, 6) to (10, 10)) by 0.15");
+  q[2] = 5; q[3] = 5;
+  const double off[4] = {9, 4, 9, 6};
+  d.door = off;
+  expect_error(&d, "door 0 (from (9, 4) to (9, 6)) does not lie on an edge of the room");
+  d.door = door;
+  const double box[8] = {4, 4, 6, 4, 6, 6, 4, 6};
+  const int bp[1] = {4};
+  d.obstacles = 1; d.obstacle_points = bp; d.obstacle = box;
+  expect_error(&d, "agent 1 at (5, 5) is inside obstacle 0");
+  d.obstacles = 0;
+  /* a wall closing the room's right part: the door behind it is unreachable */
+  const double shut[4] = {8, 0, 8, 10};
+  d.walls = 1; d.wall = shut;
+  expect_error(&d, "cannot reach any door");
+  const double doors2[8] = {10, 4, 10, 6, 0, 4, 0, 6};
+  d.doors = 2; d.door = doors2;
+  expect_error(&d, "door 0 (from (10, 4) to (10, 6)) cannot be reached by any agent");
+  d.walls = 0; d.doors = 1; d.door = door;
+  d.speed = 0;
+  expect_error(&d, "desired speed");
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_distance_field),
+    cmocka_unit_test(test_alone),
+    cmocka_unit_test(test_head_on),
+    cmocka_unit_test(test_evacuation_checked),
+    cmocka_unit_test(test_errors),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
