@@ -276,6 +276,11 @@ static int mform_create(cup_dfact *f, char *errmsg) {
   f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_NATURAL;
   f->cm.postorder = 0;
+  /* each column's room is its count in the factor of all of M and no more
+   * (CHOLMOD's default adds a fifth and 5 entries a column): restricted_ldl
+   * fills no more, and a column CHOLMOD's row updates move is moved back */
+  f->cm.grow1 = 1;
+  f->cm.grow2 = 0;
   f->L = cholmod_analyze(f->Ku, &f->cm);
   if (!f->L || !cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm)) {
     st = cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
