@@ -9,8 +9,15 @@
  *   catchup-bench circuit --ref-dir DIR [--n N]... [--reps R]
  *   catchup-bench adaptive --ref-dir DIR [--tol T]... [--reps R]
  *
- * One JSON line per measurement on stdout; a table on stderr. */
+ * One JSON line per measurement on stdout; a table on stderr. The projector
+ * runs each (problem, method, mode) in a child process that makes the
+ * polyset and the projector (both timed as set-up) and reports its peak
+ * resident set from the set-up on (VmHWM after /proc/self/clear_refs), and
+ * that minus its size before the set-up and minus the library code paged in
+ * on first use (the projector's own data, beside the QP peers' in
+ * scripts/bench_qp_peers.py). */
 #define _POSIX_C_SOURCE 200809L
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -116,13 +123,62 @@ static void load_problem(problem *pb, const char *dir, cholmod_common *cm) {
   pb->g = read_numbers(dir, "g.txt", pb->m, 0);
   pb->x = read_numbers(dir, "points.txt", (long)pb->K * pb->n, 0);
   pb->ref = read_numbers(dir, "ref.txt", (long)pb->K * pb->n, 1);
+  fprintf(stderr, "%s: n %d, m %d, %d points\n", pb->name, pb->n, pb->m, pb->K);
+}
+
+/* The polyset is catchup's own structure: made in the process that is
+ * measured, timed as set-up. */
+static double make_set(problem *pb) {
   cup_csc C = view(pb->C);
   cup_metric P = {CUP_METRIC_SPARSE, NULL, view(pb->P), 0};
   char msg[CUP_ERRMSG_LEN];
   double t0 = now();
   if (cup_polyset_create(&pb->set, &C, pb->g, &P, msg)) die("%s", msg);
-  fprintf(stderr, "%s: n %d, m %d, %d points, polyset set-up %.3f s\n", pb->name, pb->n, pb->m,
-          pb->K, now() - t0);
+  return now() - t0;
+}
+
+/* Restart the kernel's peak-RSS record (VmHWM) at the current size. */
+static void reset_peak(void) {
+  FILE *f = fopen("/proc/self/clear_refs", "w");
+  if (f) { fputs("5", f); fclose(f); }
+}
+
+/* VmHWM, kB: the peak resident set since reset_peak (getrusage if unreadable). */
+static long peak_kb(void) {
+  FILE *f = fopen("/proc/self/status", "r");
+  char line[256];
+  long kb = -1;
+  while (f && fgets(line, sizeof line, f))
+    if (!strncmp(line, "VmHWM:", 6)) kb = atol(line + 6);
+  if (f) fclose(f);
+  if (kb < 0) {
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    kb = ru.ru_maxrss;
+  }
+  return kb;
+}
+
+/* RssFile, kB: resident pages mapped from files, the libraries' code among them. */
+static long rss_file_kb(void) {
+  FILE *f = fopen("/proc/self/status", "r");
+  char line[256];
+  long kb = 0;
+  while (f && fgets(line, sizeof line, f))
+    if (!strncmp(line, "RssFile:", 8)) kb = atol(line + 8);
+  if (f) fclose(f);
+  return kb;
+}
+
+/* Resident set size now, kB (/proc/self/statm). */
+static long resident_kb(void) {
+  FILE *f = fopen("/proc/self/statm", "r");
+  long size = 0, res = 0;
+  if (f) {
+    if (fscanf(f, "%ld %ld", &size, &res) != 2) res = 0;
+    fclose(f);
+  }
+  return res * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
 static void free_problem(problem *pb, cholmod_common *cm) {
@@ -139,6 +195,87 @@ static double rel_error(const problem *pb, const double *z, int k, double *tmp) 
   double e = cup_polyset_norm(pb->set, tmp);
   double s = fmax(cup_polyset_norm(pb->set, r), cup_polyset_norm(pb->set, x));
   return e / (s > 0 ? s : 1);
+}
+
+/* One (method, mode) on a problem, in a child process: set-up, the timed
+ * sequence, the untimed one for statistics and errors, and the memory. */
+static void run_sequence(problem *pb, const char *tok, int method, int warm, int reps,
+                         double eps_rel, double eta_rel, int verbose) {
+  reset_peak();
+  long base_kb = resident_kb(), code_kb = rss_file_kb();
+  double set_setup = make_set(pb);
+  double *z = malloc(sizeof(double) * (size_t)pb->n), *tmp = malloc(sizeof(double) * (size_t)pb->n);
+  double *times = malloc(sizeof(double) * (size_t)reps);
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.method = method;
+  o.warm_start = warm;
+  o.eps_rel = eps_rel;
+  o.eta_rel = eta_rel;
+  o.max_iter = 200000;
+  cup_projector *pr = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  double t0 = now();
+  if (cup_projector_create(&pr, pb->set, &o, msg)) die("%s", msg);
+  double setup = now() - t0;
+  /* timed: the whole sequence, one clock read before and after (a clock read per
+   * projection would cost about as much as the projection on small sets); cold
+   * mode resets the warm start between points, inside the timing */
+  long inner = 1;                    /* sequences per timing: at least 20 ms */
+  for (int r = -1; r < reps; r++) {
+    double a = now();
+    for (long q = 0; q < inner; q++) {
+      cup_projector_reset(pr);
+      for (int k = 0; k < pb->K; k++) {
+        cup_project(pr, pb->x + (size_t)k * pb->n, z, NULL);
+        if (!warm) cup_projector_reset(pr);
+      }
+    }
+    double el = now() - a;
+    if (r < 0) inner = el < 0.02 ? (long)ceil(0.02 / fmax(el, 1e-9)) : 1;   /* calibration */
+    else times[r] = el / ((double)inner * pb->K);
+  }
+  /* untimed: the same sequence again for the statistics and the errors */
+  long iters = 0, certified = 0, proj = 0, facts = 0;
+  double maxerr = 0, eps_max = 0, eta_max = 0;
+  cup_projector_reset(pr);
+  for (int k = 0; k < pb->K; k++) {
+    cup_proj_info info;
+    double a = now();
+    int st = cup_project(pr, pb->x + (size_t)k * pb->n, z, &info);
+    if (!warm) cup_projector_reset(pr);
+    if (verbose)
+      fprintf(stderr, "  point %d: %s, %d iterations, %d factorizations, %d row updates, "
+              "eps %.3g (target %.3g), eta %.3g (target %.3g), %.3g s\n", k, cup_status_name(st),
+              info.iterations, info.factorizations, info.row_updates, info.eps_cert,
+              info.eps_target, info.eta_cert, info.eta_target, now() - a);
+    iters += info.iterations;
+    facts += info.factorizations;
+    certified += st == CUP_OK;
+    proj++;
+    /* the certified bounds relative to the targets' scale, as the options give them */
+    eps_max = fmax(eps_max, info.eps_cert / fmax(info.scale * info.scale, DBL_MIN));
+    eta_max = fmax(eta_max, info.eta_cert / fmax(info.scale, DBL_MIN));
+    if (pb->ref) maxerr = fmax(maxerr, rel_error(pb, z, k, tmp));
+  }
+  long peak = peak_kb();
+  base_kb += rss_file_kb() - code_kb;   /* library code paged in on first use is not data */
+  double med = median(times, reps);
+  fprintf(stderr, "%-16s %-6s %-5s %10.3g s %8.1f %6.1f %4ld/%-3ld %10.2e %9.3f %9ld\n", pb->name, tok,
+          warm ? "warm" : "cold", med, (double)iters / proj, (double)facts / proj, certified, proj,
+          pb->ref ? maxerr : NAN, set_setup + setup, peak);
+  printf("{\"bench\": \"projector\", \"problem\": \"%s\", \"solver\": \"catchup-%s\", "
+         "\"mode\": \"%s\", \"n\": %d, \"m\": %d, \"K\": %d, \"reps\": %d, "
+         "\"median_s_per_projection\": %.6g, \"iterations_mean\": %.3f, \"factorizations_mean\": %.3f, "
+         "\"certified\": %ld, \"eps_rel\": %.3g, \"eta_rel\": %.3g, \"max_eps_cert_rel\": %.3e, "
+         "\"max_eta_cert_rel\": %.3e, \"max_rel_err\": %.3e, \"setup_s\": %.4g, \"polyset_setup_s\": %.4g, "
+         "\"peak_rss_kb\": %ld, \"solver_rss_kb\": %ld}\n",
+         pb->name, tok, warm ? "warm" : "cold", pb->n, pb->m, pb->K, reps, med,
+         (double)iters / proj, (double)facts / proj, certified, eps_rel, eta_rel, eps_max, eta_max,
+         pb->ref ? maxerr : -1.0, setup, set_setup, peak, peak > base_kb ? peak - base_kb : 0);
+  cup_projector_free(&pr);
+  cup_polyset_free(&pb->set);
+  free(z); free(tmp); free(times);
 }
 
 static void bench_projector(int argc, char **argv) {
@@ -160,85 +297,34 @@ static void bench_projector(int argc, char **argv) {
   cholmod_common cm;
   cholmod_start(&cm);
   cm.print = 0;
-  fprintf(stderr, "%-16s %-6s %-5s %12s %8s %6s %8s %10s %9s\n", "problem", "method", "mode",
-          "median/proj", "iters", "facts", "cert", "max rel err", "setup s");
+  fprintf(stderr, "%-16s %-6s %-5s %12s %8s %6s %8s %10s %9s %9s\n", "problem", "method", "mode",
+          "median/proj", "iters", "facts", "cert", "max rel err", "setup s", "peak kB");
   for (int d = 0; d < ndirs; d++) {
     problem pb;
     load_problem(&pb, dirs[d], &cm);
     if (max_points > 0 && pb.K > max_points) pb.K = max_points;
-    double *z = malloc(sizeof(double) * (size_t)pb.n), *tmp = malloc(sizeof(double) * (size_t)pb.n);
-    double *times = malloc(sizeof(double) * (size_t)reps);
     char mlist[256];
     snprintf(mlist, sizeof mlist, "%s", methods);
     for (char *tok = strtok(mlist, ","); tok; tok = strtok(NULL, ",")) {
       int method = cup_proj_method_parse(tok);
       if (method < 0) die("unknown method %s", tok);
       for (int warm = 0; warm <= 1; warm++) {
-        cup_projector_options o;
-        cup_projector_options_default(&o);
-        o.method = method;
-        o.warm_start = warm;
-        o.eps_rel = eps_rel;
-        o.eta_rel = eta_rel;
-        o.max_iter = 200000;
-        cup_projector *pr = NULL;
-        char msg[CUP_ERRMSG_LEN];
-        double t0 = now();
-        if (cup_projector_create(&pr, pb.set, &o, msg)) die("%s", msg);
-        double setup = now() - t0;
-        /* timed: the whole sequence, one clock read before and after (a clock read per
-         * projection would cost about as much as the projection on small sets); cold
-         * mode resets the warm start between points, inside the timing */
-        long inner = 1;                    /* sequences per timing: at least 20 ms */
-        for (int r = -1; r < reps; r++) {
-          double a = now();
-          for (long q = 0; q < inner; q++) {
-            cup_projector_reset(pr);
-            for (int k = 0; k < pb.K; k++) {
-              cup_project(pr, pb.x + (size_t)k * pb.n, z, NULL);
-              if (!warm) cup_projector_reset(pr);
-            }
-          }
-          double el = now() - a;
-          if (r < 0) inner = el < 0.02 ? (long)ceil(0.02 / fmax(el, 1e-9)) : 1;   /* calibration */
-          else times[r] = el / ((double)inner * pb.K);
-        }
-        /* untimed: the same sequence again for the statistics and the errors */
-        long iters = 0, certified = 0, proj = 0, facts = 0;
-        double maxerr = 0;
-        cup_projector_reset(pr);
-        for (int k = 0; k < pb.K; k++) {
-          cup_proj_info info;
-          double a = now();
-          int st = cup_project(pr, pb.x + (size_t)k * pb.n, z, &info);
-          if (!warm) cup_projector_reset(pr);
-          if (verbose)
-            fprintf(stderr, "  point %d: %s, %d iterations, %d factorizations, %d row updates, "
-                    "eps %.3g (target %.3g), eta %.3g (target %.3g), %.3g s\n", k, cup_status_name(st),
-                    info.iterations, info.factorizations, info.row_updates, info.eps_cert,
-                    info.eps_target, info.eta_cert, info.eta_target, now() - a);
-          iters += info.iterations;
-          facts += info.factorizations;
-          certified += st == CUP_OK;
-          proj++;
-          if (pb.ref) maxerr = fmax(maxerr, rel_error(&pb, z, k, tmp));
-        }
-        double med = median(times, reps);
-        fprintf(stderr, "%-16s %-6s %-5s %10.3g s %8.1f %6.1f %4ld/%-3ld %10.2e %9.3f\n", pb.name, tok,
-                warm ? "warm" : "cold", med, (double)iters / proj, (double)facts / proj, certified, proj,
-                pb.ref ? maxerr : NAN, setup);
-        printf("{\"bench\": \"projector\", \"problem\": \"%s\", \"solver\": \"catchup-%s\", "
-               "\"mode\": \"%s\", \"n\": %d, \"m\": %d, \"K\": %d, \"reps\": %d, "
-               "\"median_s_per_projection\": %.6g, \"iterations_mean\": %.3f, \"factorizations_mean\": %.3f, "
-               "\"certified\": %ld, \"eps_rel\": %.3g, \"eta_rel\": %.3g, \"max_rel_err\": %.3e, "
-               "\"setup_s\": %.4g}\n",
-               pb.name, tok, warm ? "warm" : "cold", pb.n, pb.m, pb.K, reps, med,
-               (double)iters / proj, (double)facts / proj, certified, eps_rel, eta_rel, pb.ref ? maxerr : -1.0, setup);
+        /* each (method, mode) in its own process: its peak memory is its own */
         fflush(stdout);
-        cup_projector_free(&pr);
+        fflush(stderr);
+        pid_t pid = fork();
+        if (pid < 0) die("%s", "fork failed");
+        if (pid == 0) {
+          run_sequence(&pb, tok, method, warm, reps, eps_rel, eta_rel, verbose);
+          fflush(stdout);
+          fflush(stderr);
+          _exit(0);
+        }
+        int wst;
+        if (waitpid(pid, &wst, 0) < 0 || !WIFEXITED(wst) || WEXITSTATUS(wst) != 0)
+          die("projector: the run on %s failed", pb.name);
       }
     }
-    free(z); free(tmp); free(times);
     free_problem(&pb, &cm);
   }
   cholmod_finish(&cm);

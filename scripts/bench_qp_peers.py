@@ -31,6 +31,15 @@ Timing: time.perf_counter around the solver calls only (no file reading, no
 result copying beyond what the wrapper's solve() itself does).
 time_per_proj_s = median over reps of (total timed sequence time / K).
 
+Memory: the first --memory-points points of every reported sequence run
+again in a fresh (spawned) interpreter which, once the problem is loaded,
+restarts the kernel's peak-RSS record (/proc/self/clear_refs) and reports the
+peak resident set after the run (VmHWM): peak_rss_kb, and solver_rss_kb = that
+peak minus its resident size after loading and minus the library code paged
+in on first use (the growth of RssFile), i.e. the solver's own data. (A
+forked child would reuse the parent's freed heap and hide the solver's
+allocations.) --memory-only PEERS.jsonl does this alone for an earlier run.
+
 Accuracy: rel_err = max_k ||y_k - ref_k||_P / max(||ref_k||_P, ||x_k||_P, 1e-300).
 "At equal accuracy": the solver's tolerances walk down a ladder (default
 eps = 1e-7 ... 1e-13, eps_abs = eps_rel = eps; OSQP: each eps without then with
@@ -505,6 +514,93 @@ def iter_sequence(prob, solver, level, mode, deadline):
         yield rec
 
 
+def resident_kb():
+    """resident set size of this process now (kB), from /proc/self/statm"""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * (os.sysconf("SC_PAGE_SIZE") // 1024)
+
+
+def reset_peak():
+    """restart the kernel's peak-RSS record (VmHWM) at the current size, so that
+    the peak measured later is the solver's, not the file loading's"""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+        return True
+    except OSError:
+        return False
+
+
+def rss_file_kb():
+    """RssFile (kB): resident pages mapped from files, the libraries' code among them"""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("RssFile:"):
+                return int(line.split()[1])
+    return 0
+
+
+def peak_kb():
+    """VmHWM (kB): the peak resident set since reset_peak()"""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
+def _memory_main(conn, path, solver_name, args, level, mode, npts):
+    """A fresh interpreter (spawned, not forked: a forked child reuses the
+    parent's freed heap and hides the solver's allocations): load the problem,
+    note the resident size, run the first npts points of the sequence, report
+    (resident before, peak)."""
+    import gc
+    try:
+        prob = Problem(path, npts)
+        solver = SOLVERS[solver_name](args)
+        solver.prepare(prob)
+        gc.collect()
+        reset_peak()
+        base, code = resident_kb(), rss_file_kb()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for _ in iter_sequence(prob, solver, level, mode,
+                                   time.perf_counter() + args.memory_seconds):
+                pass
+        # library code paged in on first use is not the solver's data
+        conn.send(("rss", (base + rss_file_kb() - code, peak_kb())))
+    except BaseException as e:
+        conn.send(("error", f"{type(e).__name__}: {e}"))
+    finally:
+        conn.close()
+
+
+def measure_memory(prob, solver_name, args, level, mode):
+    """(resident kB before the solver, peak kB) of one sequence in a fresh
+    process, on the first --memory-points points, or None."""
+    import multiprocessing as mp
+    ctx = mp.get_context("spawn")
+    rd, wr = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_memory_main, args=(wr, prob.path, solver_name, args, level, mode,
+                                                  min(prob.K, args.memory_points)))
+    proc.start()
+    wr.close()
+    kind, val = "error", "no answer within --memory-seconds + 60 s: killed"
+    try:
+        if rd.poll(args.memory_seconds + 60):
+            kind, val = rd.recv()
+    except EOFError:
+        kind, val = "error", "child died"
+    if proc.is_alive():
+        proc.kill()
+    proc.join()
+    if kind != "rss":
+        log(f"[{prob.name}/{solver_name}/{mode}] memory probe failed: {val}")
+        return None
+    return val
+
+
 def _child_main(conn, prob, solver, level, mode, deadline):
     try:
         with warnings.catch_warnings():
@@ -612,6 +708,36 @@ def run_sequence(prob, solver, level, mode, deadline, args):
             "wall": time.perf_counter() - t_start, "end": end}
 
 
+def add_memory(out, prob, solver_name, args, level, mode):
+    rss = measure_memory(prob, solver_name, args, level, mode)
+    if rss is not None:
+        out["peak_rss_kb"] = int(rss[1])
+        out["solver_rss_kb"] = int(max(rss[1] - rss[0], 0))
+        out["rss_meaning"] = (f"a fresh process ran the first {min(prob.K, args.memory_points)} "
+                              "points at this setting: its peak resident set (peak_rss_kb) and "
+                              "that minus its size after loading the problem (solver_rss_kb)")
+
+
+def memory_only(path, args):
+    """--memory-only PEERS.jsonl: measure (again) the memory of every reported
+    sequence of an earlier run, timings untouched; the lines go to stdout."""
+    probs = {}
+    for line in open(path):
+        d = json.loads(line)
+        if d.get("problem") and not d.get("skipped") and d.get("setting") is not None:
+            key = d["problem"]
+            if key not in probs:
+                dirs = [p for p in args.problems if os.path.basename(p.rstrip("/")) == key]
+                probs[key] = Problem(dirs[0]) if dirs else None
+            if probs[key] is not None:
+                for k in ("peak_rss_kb", "solver_rss_kb", "rss_meaning"):
+                    d.pop(k, None)
+                add_memory(d, probs[key], d["solver"], args, d["setting"], d["mode"])
+                log(f"[{key}/{d['solver']}/{d['mode']}] memory {d.get('solver_rss_kb')} kB")
+        JSON_OUT.write(json.dumps(_clean(d), allow_nan=False) + "\n")
+        JSON_OUT.flush()
+
+
 def bench(prob, solver, ref, ref_info, args):
     ok, why = solver.applicable(prob)
     base = {"problem": prob.name, "dim": prob.dim, "m": prob.m, "nnz_C": int(prob.C.nnz),
@@ -693,6 +819,9 @@ def bench(prob, solver, ref, ref_info, args):
                 times.append(rr["timed"] / prob.K)
                 setups.append(rr["setup_warm"] if mode == "warm" else rr["setup_total"] / prob.K)
         tpp = float(np.median(times))
+        # peak memory: from the timed runs if they ran in a child process,
+        # else from one more (untimed) run of the sequence in a child
+        add_memory(out, prob, solver.name, args, rep["level"], mode)
         out.update({
             "setting": rep["level"],
             "time_per_proj_s": tpp,
@@ -977,8 +1106,20 @@ def main():
                          "(so that other tools are measured against the same one)")
     ap.add_argument("--recompute-ref", action="store_true",
                     help="ignore ref.txt, compute the reference (reports the difference to ref.txt)")
+    ap.add_argument("--memory-points", type=int, default=2,
+                    help="points of the sequence run again in a fresh process for its memory")
+    ap.add_argument("--memory-seconds", type=float, default=120.0,
+                    help="time limit of that run (solvers with a time limit get it; "
+                         "the others are killed a minute after it)")
+    ap.add_argument("--memory-only", metavar="PEERS_JSONL",
+                    help="measure only the memory of the sequences an earlier run reported "
+                         "(the problem directories are the positional arguments)")
     args = ap.parse_args()
     protect_stdout()
+    if args.memory_only:
+        args.ladder = []
+        memory_only(args.memory_only, args)
+        return
     args.ladder = [float(e) for e in args.ladder.split(",")]
     args.modes = args.modes.split(",")
 

@@ -2,6 +2,8 @@
 """Turn benchmark JSON lines into plots and BENCHMARKS.md.
 
     python scripts/bench_report.py OUTDIR
+    python scripts/bench_report.py OUTDIR --projector-only   (only that section, in place;
+                                    $CATCHUP_BENCH_NOTE is added to its first line)
 
 Reads whatever is in OUTDIR: catchup_circuit.jsonl + siconos.jsonl (from
 scripts/bench-vs-siconos), catchup_projector.jsonl + peers.jsonl (from
@@ -278,14 +280,14 @@ def earlier_projector(old):
     if head not in old:
         return None
     body = old.split(head, 1)[1].split("\n## ", 1)[0]
-    at = body.find("\n_From an earlier run")
-    if at < 0:
-        at = body.find("\n| problem |")
+    for mark in ("\n_From an earlier run", "\nMeasured on "):   # it says which run it is from
+        at = body.find(mark)
+        if at >= 0:
+            return body[at + 1:].rstrip("\n") + "\n"
+    at = body.find("\n| problem |")
     if at < 0:
         return None
     body = body[at + 1:].rstrip("\n")
-    if body.startswith("_From an earlier run"):
-        return body + "\n"
     rev = next((l.split(": ", 1)[1] for l in old.splitlines() if l.startswith("- catchup revision: ")), "?")
     when = next((l.split(": ", 1)[1] for l in old.splitlines() if l.startswith("- Generated: ")), "?")
     return (f"_From an earlier run (catchup revision {rev}, {when}, same machine); "
@@ -304,30 +306,80 @@ def kept_sections(old, lines):
     return kept
 
 
+def peer_cell(p):
+    """one peer's figure: its time at 1e-8, or how close it came"""
+    if p is None:
+        return "not run"
+    if p.get("skipped"):
+        return "skipped"
+    if p.get("met"):
+        return f"{p['time_per_proj_s']:.3g} s"
+    e = p.get("rel_err")
+    return f"not reached (best {e:.0e})" if isinstance(e, (int, float)) else "not reached"
+
+
+def mb(kb):
+    return f"{kb / 1024:.0f} MB" if kb >= 10240 else f"{kb / 1024:.1f} MB"
+
+
 def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
-    peers = load(os.path.join(outdir, "peers.jsonl"))
+    peers = [p for p in load(os.path.join(outdir, "peers.jsonl")) if p.get("problem")]
     if not cat:
         kept = earlier_projector(old)
         lines.append(kept if kept else "_Not run here yet: `bash scripts/bench-projector`._\n")
         return
-    lines.append("| problem | mode | catchup auto | its certified | its error | fastest peer at 1e-8 | ratio |")
-    lines.append("|---|---|---:|---:|---:|---|---:|")
-    for r in cat:
-        if r.get("solver") != "catchup-auto":
-            continue
+    auto = [r for r in cat if r.get("solver") == "catchup-auto"]
+    lines.append("| problem | mode | catchup auto | certified | largest ε/S², η/S certified | its error "
+                 "| fastest peer at 1e-8 | ratio |")
+    lines.append("|---|---|---:|---:|---:|---:|---|---:|")
+    for r in auto:
         prob, mode = r["problem"], r["mode"]
-        met = [p for p in peers if p.get("problem") == prob and p.get("mode") == mode and p.get("met")]
+        met = [p for p in peers if p["problem"] == prob and p.get("mode") == mode and p.get("met")]
         best = min(met, key=lambda p: p["time_per_proj_s"]) if met else None
         t = r["median_s_per_projection"]
         peer = (f"{best['solver']} {best['time_per_proj_s']:.3g} s (err {best['rel_err']:.1e})"
                 if best else "none reached 1e-8" if peers else "not run")
         ratio = f"{best['time_per_proj_s'] / t:.1f}x" if best else "—"
         err = r.get("max_rel_err", -1)
-        lines.append(f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | "
+        cert = (f"{r['max_eps_cert_rel']:.1e}, {r['max_eta_cert_rel']:.1e}"
+                if "max_eps_cert_rel" in r else "—")
+        lines.append(f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | {cert} | "
                      f"{err:.1e} | {peer} | {ratio} |" if err >= 0 else
-                     f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | — | {peer} | {ratio} |")
+                     f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | {cert} | — "
+                     f"| {peer} | {ratio} |")
     lines.append("")
+    names = [n for n in ("osqp", "daqp", "proxqp", "piqp") if any(p["solver"] == n for p in peers)]
+    if names:
+        lines.append("Every peer, at the loosest tolerance that reached 1e-8 (else the best error it "
+                     "reached within its budget of the run):\n")
+        lines.append("| problem | mode | " + " | ".join(names) + " |")
+        lines.append("|---|---|" + "---:|" * len(names))
+        for r in auto:
+            cells = []
+            for n in names:
+                q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
+                     and p["solver"] == n]
+                cells.append(peer_cell(q[0] if q else None))
+            lines.append(f"| {r['problem']} | {r['mode']} | " + " | ".join(cells) + " |")
+        lines.append("")
+        lines.append("Peak memory, each (problem, solver, mode) in its own process: the process's "
+                     "peak resident set less its size before the solver's set-up (the problem data "
+                     "and, for the peers, the Python interpreter), i.e. the solver's own memory; "
+                     "catchup's set-up (polyset and projector) beside it:\n")
+        lines.append("| problem | mode | catchup set-up | catchup | " + " | ".join(names) + " |")
+        lines.append("|---|---|---:|---:|" + "---:|" * len(names))
+        for r in auto:
+            cells = []
+            for n in names:
+                q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
+                     and p["solver"] == n and "solver_rss_kb" in p]
+                cells.append(mb(q[0]["solver_rss_kb"]) + ("" if q[0].get("met") else " (not at 1e-8)")
+                             if q else "—")
+            setup = r.get("setup_s", 0) + r.get("polyset_setup_s", 0)
+            own = mb(r["solver_rss_kb"]) if "solver_rss_kb" in r else "—"
+            lines.append(f"| {r['problem']} | {r['mode']} | {setup:.3g} s | {own} | " + " | ".join(cells) + " |")
+        lines.append("")
     others = [r for r in cat if r.get("solver") in ("catchup-pg", "catchup-fista")]
     if others:
         lines.append("catchup's first-order methods on the small sets:\n")
@@ -341,6 +393,35 @@ def projector_section(outdir, lines, old=""):
     vers = sorted({f"{p['solver']} {p.get('version', '?')}" for p in peers if p.get("version")})
     if vers:
         lines.append("Peers (pip, Python wrappers): " + ", ".join(vers) + ".\n")
+
+
+PROJECTOR_INTRO = (
+    "Command: `bash scripts/bench-projector` (OSQP, DAQP, ProxQP, PIQP through their "
+    "Python wrappers, each tightened until its answers reach 1e-8 relative error in the "
+    "P-norm against the reference; catchup's `auto` method certifies (ε, η) = "
+    "(1e-12·S², 1e-8·S), S the scale of the point and the offset, and its certified bounds "
+    "and measured error are shown). Times per projection: `cold` without warm start (the "
+    "peers' cold times include their set-up for each point, catchup's do not: its set-up "
+    "for the set is in the memory table), `warm` along a sequence of slowly drifting points.")
+
+
+def replace_projector(outdir, note):
+    """--projector-only: rewrite the projector section of BENCHMARKS.md in place
+    (everything from its heading to the next level-2 heading), the rest kept."""
+    path = os.path.join(ROOT, "BENCHMARKS.md")
+    text = open(path).read()
+    head = "## The projector against QP solvers"
+    a = text.index(head)
+    b = text.find("\n## ", a + len(head))
+    desc, rev = machine()
+    lines = [head, "", PROJECTOR_INTRO, "",
+             f"Measured on {desc}, catchup revision {rev}, "
+             f"{datetime.datetime.now().strftime('%Y-%m-%d %H:%M')}." + (f" {note}" if note else ""), ""]
+    projector_section(outdir, lines)
+    text = text[:a] + "\n".join(lines) + ("\n" + text[b:] if b >= 0 else "")
+    with open(path, "w") as f:
+        f.write(text if text.endswith("\n") else text + "\n")
+    print(f"bench_report: rewrote the projector section of BENCHMARKS.md from {outdir}", file=sys.stderr)
 
 
 def sweep_section(outdir, lines):
@@ -386,6 +467,11 @@ def sweep_section(outdir, lines):
 
 
 def main():
+    if "--projector-only" in sys.argv:
+        args = [a for a in sys.argv[1:] if a != "--projector-only"]
+        note = os.environ.get("CATCHUP_BENCH_NOTE", "")
+        replace_projector(args[0] if args else "bench-out", note)
+        return
     outdir = sys.argv[1] if len(sys.argv) > 1 else "bench-out"
     desc, rev = machine()
     lines = ["# Benchmarks", "",
@@ -411,12 +497,7 @@ def main():
              "tol = 1e-13, which agrees with the Richardson limits to their accuracy), since "
              "its errors go below theirs.", ""]
     circuit_section(outdir, lines)
-    lines += ["## The projector against QP solvers", "",
-              "Command: `bash scripts/bench-projector` (OSQP, DAQP, ProxQP, PIQP through their "
-              "Python wrappers, each tightened until its answers reach 1e-8 relative error in the "
-              "P-norm against the reference; catchup's `auto` method certifies (ε, η) = "
-              "(1e-12·S², 1e-8·S) and its measured error is shown). Times per projection: "
-              "`cold` without warm start, `warm` along a sequence of slowly drifting points.", ""]
+    lines += ["## The projector against QP solvers", "", PROJECTOR_INTRO, ""]
     path = os.path.join(ROOT, "BENCHMARKS.md")
     old = open(path).read() if os.path.exists(path) else ""
     projector_section(outdir, lines, old)

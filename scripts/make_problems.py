@@ -40,8 +40,8 @@ crowd_N  (N = 1000, 10000, 100000)
     slowly with k so more and more constraints become active.
     K defaults: 50 (N=1000), 20 (N=10000), 10 (N=100000).  No ref.txt.
 
-ladder_100000
-    A chain ("diode ladder") with n = 100000 diodes and dim = n + 1 node
+ladder_N  (N = 100000, 1000000)
+    A chain ("diode ladder") with n = N diodes and dim = n + 1 node
     potentials y_0..y_n.  Row i (i = 0..n-1):  y_{i+1} - y_i + g_i >= 0,
     i.e. the potential may drop by at most the diode's forward voltage
     g_i ~ U[0.002, 0.006] across diode i.  P = diag(p), p_i ~ U[1, 10].
@@ -50,7 +50,7 @@ ladder_100000
     weighted isotonic regression of x + G with weights p: ref.txt is EXACT
     (pool-adjacent-violators, scipy.optimize.isotonic_regression, then y = z - G).
     Points: x_{k,i} = sin(2 pi i / 1000 + 0.02 k) + 0.005 xi_i,
-    xi ~ N(0,1) fixed, k = 0..K-1 (K = 10 by default).  The mean drop allowed
+    xi ~ N(0,1) fixed, k = 0..K-1 (K = 10 by default, 5 for N = 10^6).  The mean drop allowed
     per diode (0.004) is smaller than the steepest descent of the sine
     (2 pi/1000), so every falling stretch pools: ~55-60 % of the constraints
     are active at the projections.
@@ -262,9 +262,9 @@ def make_randsp(outdir, n, K, rng):
 
 
 ALL = ["circuit", "crowd_1000", "crowd_10000", "crowd_100000", "ladder_100000",
-       "randsp_300"]
+       "ladder_1000000", "randsp_300"]
 DEFAULT_K = {"circuit": 100, "crowd_1000": 50, "crowd_10000": 20,
-             "crowd_100000": 10, "ladder_100000": 10, "randsp_300": 30}
+             "crowd_100000": 10, "ladder_100000": 10, "ladder_1000000": 5, "randsp_300": 30}
 
 
 def main():

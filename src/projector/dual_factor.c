@@ -1,5 +1,6 @@
 /* dual_factor — see dual_factor.h. */
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,23 +13,27 @@ struct cup_dfact {
   int n, m, N;                /* N: order of the factored matrix (n + m or m) */
   int updates;                /* M form: row updates allowed */
   cholmod_common cm;
-  cholmod_sparse *Ku;         /* permuted upper matrix; values rewritten */
-  double *orig;               /* its unmasked values (M form) */
+  cholmod_sparse *Ku;         /* permuted upper matrix (KKT form: values rewritten; M form: M) */
   cholmod_sparse *Mp;         /* M form: permuted full M, for rowadd columns */
-  cholmod_sparse *R;          /* M form: one column for rowadd */
-  cholmod_factor *L;          /* simplicial LDL^T */
+  cholmod_sparse *R;          /* M form: one column for rowadd, one row pattern for rowdel */
+  cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M */
   int *pperm, *iperm;         /* permuted <-> natural (KKT order for the KKT form) */
   int *cpos, *dpos;           /* KKT form: positions of C's entries and of row diagonals */
   double *work;               /* 2 N */
   unsigned char *fact_act;    /* rows free in the current factor (natural order) */
   double fact_delta, delta_min;
   int has_fact;
-  long update_limit;          /* M form: row changes beyond which refactoring is cheaper */
+  /* M form, the factorization restricted to the free rows (restricted_ldl) */
+  unsigned char *pact;        /* free flags in the permuted order */
+  int *par, *flag, *stack;    /* etree of the factor being built, marks, reach */
+  double *yrow;               /* the row being built, scattered (zero between rows) */
+  int *etree;                 /* elimination tree of all of M: bounds rows of any factor */
+  unsigned stamp;             /* marks in flag for row patterns (rowdel) */
+  double refactor_ops;        /* work of the last refactorization; 0: none yet */
+  int *lp0, *next0, *prev0;   /* L's first layout: each column with room for all of M */
 };
 
 double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
-
-static int update_limit(cup_dfact *f, char *errmsg);
 
 /* ---- permutation and upper storage (shared) ---------------------------------- */
 
@@ -45,14 +50,13 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
   A.sorted = 1; A.packed = 1;
   f->cm.supernodal = CHOLMOD_SIMPLICIAL;
   f->cm.final_ll = 0;
-  /* the fewest entries of AMD, METIS and nested dissection: set-up time is
-   * paid once, every update and solve is proportional to nnz(L) (crowds of
-   * disks: 15% fewer entries, 40% fewer flops than AMD alone); a set whose
-   * rows change with the state is analysed again when they do: AMD alone */
-  f->cm.nmethods = N > 2000 && !f->K->mutable_values ? 3 : 1;
+  /* AMD alone: the factors are of the free rows only (restricted_ldl), whose
+   * fill an ordering of all of M hardly changes; METIS and nested dissection
+   * saved 3-5% of the room for all of M on crowds of 10^5 disks and took 15
+   * times AMD's time (8.5 s against 0.25 s); a set whose rows change with
+   * the state is analysed again when they do */
+  f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_AMD;
-  f->cm.method[1].ordering = CHOLMOD_METIS;
-  f->cm.method[2].ordering = CHOLMOD_NESDIS;
   cholmod_factor *L0 = cholmod_analyze(&A, &f->cm);   /* fill-reducing order */
   if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
   f->pperm = malloc(sizeof(int) * (size_t)N);
@@ -187,6 +191,26 @@ static void kkt_solve(cup_dfact *f, double *v) {
 
 /* ---- the M form (diagonal P) ------------------------------------------------------ */
 
+/* The elimination tree of all of M (Liu's algorithm with path compression):
+ * every factor of a principal submatrix in this order has its pattern
+ * inside the factor of M, so a row of the full factor, found from this tree,
+ * bounds the row of any factor (what rowdel needs). */
+static void full_etree(cup_dfact *f) {
+  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  int *anc = f->flag;
+  for (int k = 0; k < f->m; k++) {
+    f->etree[k] = -1;
+    anc[k] = -1;
+    for (int e = Kp[k]; e < Kp[k + 1]; e++)
+      for (int i = Ki[e], next; i != -1 && i < k; i = next) {
+        next = anc[i];
+        anc[i] = k;
+        if (next == -1) f->etree[i] = k;
+      }
+  }
+  memset(f->flag, 0, sizeof(int) * (size_t)f->m);
+}
+
 static int mform_create(cup_dfact *f, char *errmsg) {
   const cup_polyset *K = f->K;
   int m = f->m, N = f->N = m;
@@ -233,20 +257,51 @@ static int mform_create(cup_dfact *f, char *errmsg) {
   }
   st = permuted_upper(f, N, Ap, Ai, Ax, map, errmsg);
   if (st) goto done;
-  f->orig = malloc(sizeof(double) * ((size_t)nnzl + 1));
   f->Mp = cholmod_submatrix(Mz, f->pperm, m, f->pperm, m, 1, 1, &f->cm);   /* permuted, full */
   f->R = cholmod_allocate_sparse((size_t)m, 1, (size_t)m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
-  if (!f->orig || !f->Mp || !f->R) { st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory"); goto done; }
-  memcpy(f->orig, f->Ku->x, sizeof(double) * (size_t)nnzl);
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
-  /* start from M~ = I (nothing free) */
-  double *Kx = f->Ku->x;
-  for (int j = 0; j < m; j++)
-    for (int k = Kp[j]; k < Kp[j + 1]; k++) Kx[k] = Ki[k] == j ? 1 : 0;
-  st = symbolic(f, errmsg);
-  if (!st) st = update_limit(f, errmsg);
+  size_t M1 = (size_t)m + 1;
+  f->pact = calloc(M1, 1);
+  f->par = malloc(sizeof(int) * M1);
+  f->flag = malloc(sizeof(int) * M1);
+  f->stack = malloc(sizeof(int) * M1);
+  f->etree = malloc(sizeof(int) * M1);
+  f->yrow = calloc(M1, sizeof(double));
+  if (!f->Mp || !f->R || !f->pact || !f->par || !f->flag || !f->stack || !f->etree || !f->yrow) {
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    goto done;
+  }
+  full_etree(f);
+  /* Room for the factor of all of M, held as L = I until the first
+   * factorization: no numeric work here, and none of a size of all of M later */
+  f->cm.nmethods = 1;
+  f->cm.method[0].ordering = CHOLMOD_NATURAL;
+  f->cm.postorder = 0;
+  /* each column's room is its count in the factor of all of M and no more
+   * (CHOLMOD's default adds a fifth and 5 entries a column): restricted_ldl
+   * fills no more, and a column CHOLMOD's row updates move is moved back */
+  f->cm.grow1 = 1;
+  f->cm.grow2 = 0;
+  f->L = cholmod_analyze(f->Ku, &f->cm);
+  if (!f->L || !cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm)) {
+    st = cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
+                  "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+    goto done;
+  }
+  /* CHOLMOD's row updates may move a column whose room looks short to them;
+   * restricted_ldl goes back to this layout, every column's room its count in
+   * the factor of all of M, which holds any factor of free rows */
+  f->lp0 = malloc(sizeof(int) * M1);
+  f->next0 = malloc(sizeof(int) * (M1 + 1));
+  f->prev0 = malloc(sizeof(int) * (M1 + 1));
+  if (!f->lp0 || !f->next0 || !f->prev0) {
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    goto done;
+  }
+  memcpy(f->lp0, f->L->p, sizeof(int) * M1);
+  memcpy(f->next0, f->L->next, sizeof(int) * (M1 + 1));
+  memcpy(f->prev0, f->L->prev, sizeof(int) * (M1 + 1));
   /* rowadd/rowdel need 2m of CHOLMOD workspace: take it now, not in a projection */
-  if (!st && !cholmod_allocate_work((size_t)m, 2 * (size_t)m, 2 * (size_t)m, &f->cm))
+  if (!cholmod_allocate_work((size_t)m, 2 * (size_t)m, 2 * (size_t)m, &f->cm))
     st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
 done:
   cholmod_free_sparse(&Mz, &f->cm);
@@ -254,46 +309,91 @@ done:
   return st;
 }
 
-/* When do row updates beat a refactorization? A row update walks the
- * elimination tree from its row to the root, touching each column on the
- * way; a refactorization costs about sum_j c_j^2 (c_j: entries of column j).
- * Averaged over rows, an update costs sum_j c_j |subtree(j)| / m. A chain
- * (a path-shaped tree) makes updates as dear as refactoring; a crowd of
- * disks makes them ~100x cheaper. With the natural order, parent(j) is the
- * first row below the diagonal in column j of L. */
-static int update_limit(cup_dfact *f, char *errmsg) {
+/* LDL^T of M~ = M_FF + delta I on the free rows F, identity elsewhere, by
+ * rows (up-looking, Davis' LDL): row k of L solves with the rows above it on
+ * the reach of M(F, k) in the elimination tree, which is built on the way
+ * (a row's parent is the first later row that reaches it). The work is that
+ * of the factor of M_FF alone, whatever the size of M: a crowd with a tenth
+ * of its contacts active, or half a ladder, costs a fraction of M's factor.
+ * Written into CHOLMOD's simplicial factor (diagonal first in each column),
+ * whose room for all of M holds any such factor, so that row updates and
+ * solves work on it as on CHOLMOD's own. */
+static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) {
   int m = f->m;
-  const cholmod_factor *L = f->L;
-  const int *Lp = L->p, *Li = L->i, *Lnz = L->nz;
-  double *sub = malloc(sizeof(double) * (size_t)m);
-  if (!sub) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  for (int j = 0; j < m; j++) sub[j] = 1;
-  double refactor = 0, update = 0;
-  for (int j = 0; j < m; j++) {            /* children precede parents in this order */
-    double c = Lnz[j];
-    refactor += c * c;
-    update += c * sub[j];
-    if (Lnz[j] > 1) sub[Li[Lp[j] + 1]] += sub[j];
+  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  const double *Kx = f->Ku->x;
+  int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
+  double *Lx = f->L->x, *y = f->yrow;
+  int *par = f->par, *flag = f->flag, *stack = f->stack;
+  unsigned char *pact = f->pact;
+  double ops = 0;
+  if (!f->L->is_monotonic) {         /* columns moved by row updates: the first layout again */
+    memcpy(Lp, f->lp0, sizeof(int) * ((size_t)m + 1));
+    memcpy(f->L->next, f->next0, sizeof(int) * ((size_t)m + 2));
+    memcpy(f->L->prev, f->prev0, sizeof(int) * ((size_t)m + 2));
+    f->L->is_monotonic = 1;
   }
-  free(sub);
-  double ratio = update > 0 ? refactor / (update / m) : m;
-  f->update_limit = (long)(0.5 * ratio);   /* margin for the updates' overhead */
+  for (int k = 0; k < m; k++) pact[k] = act[f->pperm[k]];
+  for (int k = 0; k < m; k++) {
+    int p0 = Lp[k];
+    Li[p0] = k;
+    Lnz[k] = 1;
+    if (!pact[k]) { Lx[p0] = 1; continue; }
+    par[k] = -1;
+    flag[k] = k;                     /* rows above k carry flags < k: no reset needed */
+    int top = m;
+    for (int e = Kp[k]; e < Kp[k + 1]; e++) {
+      int i = Ki[e];
+      if (i == k) { y[k] += Kx[e] + delta; continue; }
+      if (!pact[i]) continue;
+      y[i] += Kx[e];
+      int len = 0;
+      for (; flag[i] != k; i = par[i]) {
+        if (par[i] < 0) par[i] = k;
+        stack[len++] = i;
+        flag[i] = k;
+      }
+      while (len > 0) stack[--top] = stack[--len];
+    }
+    double d = y[k];
+    y[k] = 0;
+    ops += Kp[k + 1] - Kp[k] + m - top;
+    for (; top < m; top++) {
+      int i = stack[top], q0 = Lp[i], q1 = q0 + Lnz[i];
+      double yi = y[i], lki = yi / Lx[q0];
+      y[i] = 0;
+      for (int q = q0 + 1; q < q1; q++) y[Li[q]] -= Lx[q] * yi;
+      d -= lki * yi;
+      Li[q1] = k;
+      Lx[q1] = lki;
+      Lnz[i]++;
+      ops += q1 - q0;
+    }
+    if (!(d > 0)) {                  /* not positive definite: leave a valid factor (I) */
+      for (int i = 0; i < m; i++) { y[i] = 0; Lnz[i] = 1; Li[Lp[i]] = i; Lx[Lp[i]] = 1; }
+      memset(f->fact_act, 0, (size_t)m);
+      memset(pact, 0, (size_t)m);
+      f->refactor_ops = 0;
+      return CUP_ERR_LINALG;
+    }
+    Lx[p0] = d;
+  }
+  f->refactor_ops = ops;
   return CUP_OK;
 }
 
-static int mform_refactor(cup_dfact *f, const unsigned char *act, double delta) {
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
-  double *Kx = f->Ku->x;
-  for (int j = 0; j < f->m; j++) {
-    int aj = act[f->pperm[j]];
-    for (int k = Kp[j]; k < Kp[j + 1]; k++) {
-      int i = Ki[k];
-      if (i == j) Kx[k] = aj ? f->orig[k] + delta : 1;
-      else Kx[k] = aj && act[f->pperm[i]] ? f->orig[k] : 0;
-    }
+/* A row update's work, estimated by the path it walks up the current
+ * factor's tree: from row k if it is free, else from each free neighbour. */
+static double update_cost(const cup_dfact *f, int k) {
+  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  double cost = 0;
+  for (int e = Mp[k]; e < Mp[k + 1]; e++) {
+    int i = Mi[e];
+    if (i != k && !f->fact_act[f->pperm[i]]) continue;
+    for (int j = i; j >= 0; j = Lnz[j] > 1 ? Li[Lp[j] + 1] : -1) cost += Lnz[j];
   }
-  cholmod_factorize(f->Ku, f->L, &f->cm);
-  return f->cm.status < 0 || f->cm.status == CHOLMOD_NOT_POSDEF ? CUP_ERR_LINALG : CUP_OK;
+  return cost;
 }
 
 /* Free row i (natural) joins: its column of M~ against the rows free now. */
@@ -313,21 +413,76 @@ static int mform_rowadd(cup_dfact *f, int i, double delta) {
   Rp[1] = nz;
   if (!cholmod_rowadd((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
   f->fact_act[i] = 1;
+  f->pact[k] = 1;
   return CUP_OK;
 }
 
+/* Free row i (natural) leaves. CHOLMOD finds row k of L by searching every
+ * column before k unless told where it can be: the row of the full factor
+ * (the reach of M(:, k) in the full tree) bounds it. */
 static int mform_rowdel(cup_dfact *f, int i) {
-  if (!cholmod_rowdel((size_t)f->iperm[i], NULL, f->L, &f->cm)) return CUP_ERR_LINALG;
+  int k = f->iperm[i];
+  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  int *Ri = f->R->i, *flag = f->flag, nz = 0;
+  if (++f->stamp == 0 || f->stamp > (unsigned)INT_MAX) {
+    memset(flag, 0, sizeof(int) * (size_t)f->m);
+    f->stamp = 1;
+  }
+  int mark = -(int)f->stamp;         /* negative: never a row index of restricted_ldl */
+  for (int e = Kp[k]; e < Kp[k + 1]; e++)
+    for (int j = Ki[e]; j >= 0 && j < k && flag[j] != mark; j = f->etree[j]) {
+      flag[j] = mark;
+      Ri[nz++] = j;
+    }
+  ((int *)f->R->p)[0] = 0;
+  ((int *)f->R->p)[1] = nz;
+  if (!cholmod_rowdel((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
   f->fact_act[i] = 0;
+  f->pact[k] = 0;
   return CUP_OK;
 }
 
+/* L D L^T t = t on the free rows only, in the permuted order (the other
+ * rows are identity and come back unchanged); D folded into the backward
+ * sweep. */
 static void mform_solve(cup_dfact *f, double *v) {
+  int m = f->m, nf = 0;
+  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz, *pp = f->pperm;
+  const double *Lx = f->L->x;
+  const unsigned char *pact = f->pact;
+  int *cols = f->stack;
+  double *t = f->work;
+  for (int k = 0; k < m; k++)
+    if (pact[k]) { cols[nf++] = k; t[k] = v[pp[k]]; }
+  for (int c = 0; c < nf; c++) {
+    int j = cols[c], p0 = Lp[j], p1 = p0 + Lnz[j];
+    double tj = t[j];
+    for (int p = p0 + 1; p < p1; p++) t[Li[p]] -= Lx[p] * tj;
+  }
+  for (int c = nf - 1; c >= 0; c--) {
+    int j = cols[c], p0 = Lp[j], p1 = p0 + Lnz[j];
+    double tj = t[j] / Lx[p0];
+    for (int p = p0 + 1; p < p1; p++) tj -= Lx[p] * t[Li[p]];
+    t[j] = tj;
+    v[pp[j]] = tj;
+  }
+}
+
+/* Row updates when their estimated work stays below a refactorization's
+ * (CHOLMOD's updates cost a few times more per entry than restricted_ldl).
+ * Rows leave first, so that each joining row sees the final free set. */
+static int mform_update(cup_dfact *f, const unsigned char *act, double delta, long *changes) {
   int m = f->m;
-  double *t = f->work, *scratch = f->work + m;
-  for (int k = 0; k < m; k++) t[k] = v[f->pperm[k]];
-  cup_simplicial_solve(f->L, t, scratch);
-  for (int k = 0; k < m; k++) v[f->pperm[k]] = t[k];
+  double budget = f->refactor_ops / 4, cost = 0;
+  for (int i = 0; i < m && cost <= budget; i++)
+    if (act[i] != f->fact_act[i]) cost += update_cost(f, f->iperm[i]);
+  if (!(cost <= budget)) return 1;
+  int st = CUP_OK;
+  for (int i = 0; i < m && !st; i++)
+    if (f->fact_act[i] && !act[i]) { st = mform_rowdel(f, i); ++*changes; }
+  for (int i = 0; i < m && !st; i++)
+    if (!f->fact_act[i] && act[i]) { st = mform_rowadd(f, i, delta); ++*changes; }
+  return st;
 }
 
 /* ---- the interface ------------------------------------------------------------------- */
@@ -344,7 +499,7 @@ int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *e
   int st = cup_cholmod_start(&f->cm) ? cup_fail(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
   if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, errmsg);
   if (!st) {
-    f->work = malloc(sizeof(double) * 2 * (size_t)f->N);
+    f->work = calloc(2 * (size_t)f->N, sizeof(double));   /* M form: rows outside F stay finite */
     f->fact_act = calloc((size_t)f->m + 1, 1);
     if (!f->work || !f->fact_act) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   }
@@ -364,8 +519,10 @@ void cup_dfact_free(cup_dfact **fp) {
   if (f->Mp) cholmod_free_sparse(&f->Mp, &f->cm);
   if (f->R) cholmod_free_sparse(&f->R, &f->cm);
   cholmod_finish(&f->cm);
-  free(f->orig); free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
+  free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
   free(f->work); free(f->fact_act);
+  free(f->pact); free(f->par); free(f->flag); free(f->stack); free(f->etree); free(f->yrow);
+  free(f->lp0); free(f->next0); free(f->prev0);
   free(f);
   *fp = NULL;
 }
@@ -373,22 +530,19 @@ void cup_dfact_free(cup_dfact **fp) {
 int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
                      int *refactorizations, int *row_updates) {
   int m = f->m;
-  long changes = 0;
-  for (int i = 0; i < m; i++) changes += act[i] != f->fact_act[i];
-  if (f->has_fact && f->fact_delta == delta && changes == 0) return CUP_OK;
+  int same = f->has_fact && f->fact_delta == delta;
+  if (same && memcmp(act, f->fact_act, (size_t)m) == 0) return CUP_OK;
   int st;
-  if (f->updates && f->has_fact && f->fact_delta == delta && changes <= f->update_limit) {
-    /* rows leave first, so that each joining row sees the final free set */
-    st = CUP_OK;
-    for (int i = 0; i < m && !st; i++)
-      if (f->fact_act[i] && !act[i]) st = mform_rowdel(f, i);
-    for (int i = 0; i < m && !st; i++)
-      if (!f->fact_act[i] && act[i]) st = mform_rowadd(f, i, delta);
+  if (!f->kkt && f->updates && same && f->refactor_ops > 0) {
+    long changes = 0;
+    st = mform_update(f, act, delta, &changes);
     *row_updates += (int)changes;
-    if (st) f->has_fact = 0;
-    return st;
+    if (st <= 0) {                     /* 1: refactoring is cheaper */
+      if (st) f->has_fact = 0;
+      return st;
+    }
   }
-  st = f->kkt ? kkt_factor(f, act, delta) : mform_refactor(f, act, delta);
+  st = f->kkt ? kkt_factor(f, act, delta) : restricted_ldl(f, act, delta);
   (*refactorizations)++;
   if (st) { f->has_fact = 0; return st; }
   memcpy(f->fact_act, act, (size_t)m);
@@ -401,7 +555,7 @@ void cup_dfact_revalue(cup_dfact *f) {
   const cup_polyset *K = f->K;
   int m = f->m;
   const int *Mp = f->Mp->p, *Mi = f->Mp->i, *Kp = f->Ku->p;
-  double *Mx = f->Mp->x, *wv = f->work, mmax = 0;
+  double *Mx = f->Mp->x, *Kx = f->Ku->x, *wv = f->work, mmax = 0;
   for (int i = 0; i < m; i++) wv[i] = 0;
   for (int c = 0; c < m; c++) {
     int i = f->pperm[c];
@@ -417,7 +571,7 @@ void cup_dfact_revalue(cup_dfact *f) {
       int r = Mi[e];
       double v = wv[f->pperm[r]];
       Mx[e] = v;
-      if (r <= c) f->orig[q++] = v;
+      if (r <= c) Kx[q++] = v;
       if (r == c) mmax = fmax(mmax, v);
     }
     for (int a = K->Ct.p[i]; a < K->Ct.p[i + 1]; a++) {

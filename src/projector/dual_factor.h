@@ -2,13 +2,14 @@
  *     M~(F, delta) = M_FF + delta I on the free rows F, identity elsewhere,
  *     M = C P^-1 C^T,
  * factored and solved without allocating. Two forms:
- *  - diagonal P: M itself (sparse, formed once), simplicial LDL^T updated
- *    row by row (CHOLMOD rowadd/rowdel) when few rows change, refactored
- *    otherwise;
+ *  - diagonal P: M itself (sparse, formed once); the LDL^T of M_FF alone,
+ *    in room sized for all of M, at a cost set by the free rows rather than
+ *    by M; updated row by row (CHOLMOD rowadd/rowdel) when the rows that
+ *    change would cost less than refactoring;
  *  - sparse P: the quasi-definite KKT matrix [P C_F^T; C_F -delta I],
- *    refactored (M would be dense).
- * Both are symmetrically permuted once (AMD/METIS) and stored upper, so that
- * CHOLMOD refactorizes with the natural ordering without allocating. */
+ *    refactored by CHOLMOD (M would be dense).
+ * Both are symmetrically permuted once (AMD) and stored upper, so that
+ * factors use the natural ordering without allocating. */
 #ifndef CUP_DUAL_FACTOR_H
 #define CUP_DUAL_FACTOR_H
 

@@ -184,31 +184,34 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     if (stop(p, q, info)) return CUP_OK;
     if (it >= max_iter) return CUP_WARN_NOT_CERTIFIED;
     if (it % 8 == 7 && !q->rows) {          /* an empty K: lam grows along a Farkas ray */
-      for (int i = 0; i < m; i++) w->d[i] = fmax(0, w->lam[i] - w->snap[i]);
+      for (int i = 0; i < m; i++) w->d[i] = cup_max(w->lam[i] - w->snap[i], 0);
       if (cup_farkas_test(p, w->d, info)) return CUP_ERR_EMPTY_SET;
       memcpy(w->snap, w->lam, msz);
     }
     double resid = 0, lmax = 0;
     for (int i = 0; i < m; i++) {
-      resid = fmax(resid, fabs(w->lam[i] - fmax(0, w->lam[i] - tau * w->s[i])));
-      lmax = fmax(lmax, w->lam[i]);
+      /* cup_max(v, 0) is fmax(0, v) (0 for a NaN v) without a libm call */
+      resid = cup_max(fabs(w->lam[i] - cup_max(w->lam[i] - tau * w->s[i], 0)), resid);
+      lmax = cup_max(w->lam[i], lmax);
     }
     double epsk = fmin(resid, 1e-3 * lmax);
-    for (int i = 0; i < m; i++)
+    double *rhs = p->nw->rhs;               /* and the right side s_F of the direction */
+    for (int i = 0; i < m; i++) {
       w->act[i] = K->rownorm[i] > 0 && (!q->rows || q->rows[i]) &&
                   !(w->lam[i] <= epsk && w->s[i] > 0);
+      rhs[i] = w->act[i] ? w->s[i] : 0;
+    }
     int st = factor(p, w->act, delta);
     if (st) return st;
     /* finish once F repeats after a full step, or once the iterate is
      * stationary to rounding (then steps shrink for reasons of rounding) */
     int stationary = resid <= 64 * DBL_EPSILON * (lmax + DBL_MIN);
-    if ((settled || stationary) && memcmp(w->act, w->prev, (size_t)m) == 0 &&
-        pn_finish(p, q, stop, info))
-      return CUP_OK;
+    if ((settled || stationary) && memcmp(w->act, w->prev, (size_t)m) == 0) {
+      if (pn_finish(p, q, stop, info)) return CUP_OK;
+      for (int i = 0; i < m; i++) rhs[i] = w->act[i] ? w->s[i] : 0;   /* pn_finish used rhs */
+    }
     memcpy(w->prev, w->act, (size_t)m);
-    double *rhs = p->nw->rhs;               /* d_F = -(M_FF + delta I)^-1 s_F */
-    for (int i = 0; i < m; i++) rhs[i] = w->act[i] ? w->s[i] : 0;
-    cup_dfact_solve(p->nw->df, rhs);
+    cup_dfact_solve(p->nw->df, rhs);        /* d_F = -(M_FF + delta I)^-1 s_F */
     p->iters++;
     double slope = 0;
     for (int i = 0; i < m; i++) {
@@ -221,11 +224,14 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     for (int ls = 0; ls < 40 && !accepted; ls++) {
       double bound = 0;
       for (int i = 0; i < m; i++) {
-        w->lt[i] = fmax(0, w->lam[i] + alpha * w->d[i]);
+        w->lt[i] = cup_max(w->lam[i] + alpha * w->d[i], 0);
         if (!w->act[i]) bound += w->s[i] * (w->lam[i] - w->lt[i]);
       }
       ft = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
       accepted = f - ft >= 1e-4 * (-alpha * slope + bound);
+      /* a short trial that no longer moves f above its rounding: shorter
+       * ones cannot either (each costs a primal evaluation) */
+      if (!accepted && alpha < 0.1 && !(fabs(f - ft) > 1e3 * DBL_EPSILON * fabs(f))) break;
       if (!accepted) alpha *= 0.5;
     }
     if (!accepted)                          /* no decrease above rounding */

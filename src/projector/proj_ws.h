@@ -62,6 +62,8 @@ struct cup_projector {
   int anchor_ok;        /* anchor is feasible for the current offset */
   double *user_pt, *s_user;    /* options.feasible_point, its slack */
   int user_ok;
+  double *origin;       /* zeros (n): an anchor with slack g whenever g > 0 */
+  int origin_ok;        /* every g_i > 0 */
   double *inward, *s_inward;   /* inward point from the exact method, its slack */
   int has_inward;
   void (*make_inward)(cup_projector *);  /* builds it on demand, or NULL */

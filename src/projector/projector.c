@@ -42,6 +42,8 @@ static void offset_changed(cup_projector *p) {
       p->empty_row = i;              /* 0 >= -g_i > 0 is impossible */
     }
   }
+  p->origin_ok = p->m > 0;
+  for (int i = 0; i < p->m; i++) p->origin_ok &= p->g[i] > 0;
   p->anchor_ok = -1;                 /* -1: to be rechecked against the new g */
   p->user_ok = p->user_pt ? -1 : 0;
 }
@@ -96,6 +98,7 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
   p->s_anchor = xalloc(M, sizeof(double), &fail);
   p->inward = xalloc(N, sizeof(double), &fail);
   p->s_inward = xalloc(M, sizeof(double), &fail);
+  p->origin = xalloc(N, sizeof(double), &fail);
   p->farkas = xalloc(M, sizeof(double), &fail);
   p->wn = xalloc(N, sizeof(double), &fail);
   p->wn2 = xalloc(N, sizeof(double), &fail);
@@ -155,7 +158,7 @@ void cup_projector_free(cup_projector **pp) {
   free(p->small);
   free(p->g); free(p->lam); free(p->lam_warm); free(p->lam_fista); free(p->b); free(p->s); free(p->gam);
   free(p->sv); free(p->gamv); free(p->y); free(p->u); free(p->y2); free(p->s2); free(p->gam2); free(p->v); free(p->s_v); free(p->anchor);
-  free(p->s_anchor); free(p->user_pt); free(p->s_user); free(p->inward); free(p->s_inward); free(p->farkas);
+  free(p->s_anchor); free(p->user_pt); free(p->s_user); free(p->inward); free(p->s_inward); free(p->origin); free(p->farkas);
   free(p->wn); free(p->wn2); free(p->wm); free(p->wm2); free(p->wm3); free(p->wm4);
   free(p->iwm); free(p->act); free(p->act2); free(p->dwork);
   for (int c = 0; c < CUP_DENSE_CACHE; c++) {
