@@ -7,6 +7,7 @@
  *   catchup-bench integrate [--n N] [--reps R]
  *   catchup-bench memory [--n N]...
  *   catchup-bench circuit --ref-dir DIR [--n N]... [--reps R]
+ *   catchup-bench adaptive --ref-dir DIR [--tol T]... [--reps R]
  *
  * One JSON line per measurement on stdout; a table on stderr. The projector
  * runs each (problem, method, mode) in a child process that makes the
@@ -508,6 +509,87 @@ static void bench_circuit(int argc, char **argv) {
   free(t);
 }
 
+/* The adaptive scheme on the paper's circuit at each tol: median wall time
+ * of cup_integrator_run (its dense output at t = j/1000 goes to the sink),
+ * the max-norm error against ref_case{1,2}_adaptive.csv (tol 1e-13: the
+ * Richardson limits' 1e-10 is too coarse here) and against the Richardson
+ * limit (an independent method; on case 2, where the scheme is exact and
+ * the first reference is this very computation, that is the figure), and
+ * the run's own estimate. */
+typedef struct { const double *ref, *rich; double err, err_rich; } ad_err;
+
+static int adaptive_sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  ad_err *c = vp;
+  long j = lround(t * 1000);
+  for (int i = 0; i < 3; i++) {
+    c->err = fmax(c->err, fabs(x[i] - c->ref[3 * j + i]));
+    c->err_rich = fmax(c->err_rich, fabs(x[i] - c->rich[3 * j + i]));
+  }
+  return 0;
+}
+
+static void bench_adaptive(int argc, char **argv) {
+  const char *refdir = NULL;
+  double tols[32];
+  int nt = 0, reps = 5;
+  for (int a = 0; a < argc; a++) {
+    if (!strcmp(argv[a], "--ref-dir") && a + 1 < argc) refdir = argv[++a];
+    else if (!strcmp(argv[a], "--reps") && a + 1 < argc) reps = atoi(argv[++a]);
+    else if (!strcmp(argv[a], "--tol") && a + 1 < argc && nt < 32) tols[nt++] = atof(argv[++a]);
+    else die("adaptive: unknown argument %s", argv[a]);
+  }
+  if (!refdir) die("%s", "adaptive: --ref-dir DIR (with ref_case1_adaptive.csv) is required");
+  if (reps < 1) die("%s", "adaptive: --reps must be >= 1");
+  if (!nt) for (double tol = 1e-3; tol >= 1e-10 * 0.99; tol *= 0.1) tols[nt++] = tol;
+  double *t = malloc(sizeof(double) * (size_t)reps);
+  for (int cas = 1; cas <= 2; cas++) {
+    char path[1024], msg[CUP_ERRMSG_LEN];
+    snprintf(path, sizeof path, "%s/ref_case%d_adaptive.csv", refdir, cas);
+    double *ref = load_reference(path);
+    snprintf(path, sizeof path, "%s/ref_case%d_limit_richardson.csv", refdir, cas);
+    double *rich = load_reference(path);
+    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
+    cup_lcs *L = NULL;
+    if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+    cup_input *u = paper_input(cas);
+    for (int k = 0; k < nt; k++) {
+      cup_integrator_options o;
+      cup_integrator_options_default(&o);
+      o.scheme = CUP_SCHEME_ADAPTIVE;
+      o.tol_abs = o.tol_rel = tols[k];
+      o.output = CUP_OUTPUT_SAMPLES;
+      o.output_samples = 1001;
+      cup_integrator *I = NULL;
+      if (cup_integrator_create(&I, L, u, &o, msg)) die("%s", msg);
+      ad_err ce = {ref, rich, 0, 0};
+      cup_run_info info;
+      double x0[3] = {0, 0, 0};
+      for (int r = 0; r < reps; r++) {
+        ce.err = ce.err_rich = 0;
+        double a = now();
+        cup_integrator_run(I, x0, adaptive_sink, &ce, &info);
+        t[r] = now() - a;
+      }
+      double med = median(t, reps);
+      fprintf(stderr, "case %d adaptive tol %8.0e: %10.4g s, %5ld steps, %3ld events, error %.4e, estimate %.4e %s\n",
+              cas, tols[k], med, info.step, info.events, ce.err, info.err_est, cup_status_name(info.status));
+      printf("{\"bench\": \"adaptive\", \"tool\": \"catchup\", \"case\": %d, \"config\": \"adaptive\", "
+             "\"tol\": %.3g, \"n\": %ld, \"reps\": %d, \"median_s\": %.6g, \"err_max\": %.6e, "
+             "\"err_richardson\": %.6e, \"err_est\": %.6e, \"events\": %ld, \"status\": \"%s\"}\n",
+             cas, tols[k], info.step, reps, med, ce.err, ce.err_rich, info.err_est, info.events,
+             cup_status_name(info.status));
+      fflush(stdout);
+      cup_integrator_free(&I);
+    }
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+    free(ref);
+    free(rich);
+  }
+  free(t);
+}
+
 /* Peak resident memory of a run with decimated output, each n in a fresh
  * process so that the high-water marks do not mix. */
 static void bench_memory(int argc, char **argv) {
@@ -557,13 +639,15 @@ int main(int argc, char **argv) {
     fprintf(stderr, "usage: catchup-bench projector DIR... [--reps R] [--methods auto,pg,fista] [--eps-rel E] [--eta-rel E]\n"
                     "       catchup-bench integrate [--n N] [--reps R]\n"
                     "       catchup-bench memory [--n N]...\n"
-                    "       catchup-bench circuit --ref-dir DIR [--n N]... [--reps R]\n");
+                    "       catchup-bench circuit --ref-dir DIR [--n N]... [--reps R]\n"
+                    "       catchup-bench adaptive --ref-dir DIR [--tol T]... [--reps R]\n");
     return argc < 2 ? 2 : 0;
   }
   if (!strcmp(argv[1], "projector")) bench_projector(argc - 2, argv + 2);
   else if (!strcmp(argv[1], "integrate")) bench_integrate(argc - 2, argv + 2);
   else if (!strcmp(argv[1], "memory")) bench_memory(argc - 2, argv + 2);
   else if (!strcmp(argv[1], "circuit")) bench_circuit(argc - 2, argv + 2);
-  else die("unknown benchmark '%s' (projector, integrate, memory, circuit)", argv[1]);
+  else if (!strcmp(argv[1], "adaptive")) bench_adaptive(argc - 2, argv + 2);
+  else die("unknown benchmark '%s' (projector, integrate, memory, circuit, adaptive)", argv[1]);
   return 0;
 }

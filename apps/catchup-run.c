@@ -1,7 +1,8 @@
 /* catchup-run — run one scene; write its trajectory and what ran to HDF5.
  *
  *   catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]
- *               [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]
+ *               [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]
+ *               [--set key=value]... [--quiet]
  *   catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]
  *
  * A netlist (.cir, .sp, .spi, .spice, .net, .ckt) runs as the scene
@@ -45,9 +46,10 @@ static const char *names_or(char *buf, size_t size, const char *(*name)(int), in
 static void print_usage(void) {
   char schemes[160], methods[160];
   printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
-         "                   [--scheme NAME] [--projector NAME] [--set key=value]... [--quiet]\n"
+         "                   [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]\n"
+         "                   [--set key=value]... [--quiet]\n"
          "       catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]\n"
-         "  -o, --output OUT.h5  HDF5 file to write (/t, /x and attributes); replaced\n"
+         "  -o, --output OUT.h5  HDF5 file to write (/t, /x, /events and attributes); replaced\n"
          "  --probe SIGNAL       a netlist's v(NODE), v(NODE1,NODE2), i(ELEMENT) or all, into\n"
          "                       /signals (repeatable; default: the netlist's .probe lines, or\n"
          "                       every signal of a circuit with at most 256)\n"
@@ -56,6 +58,8 @@ static void print_usage(void) {
          "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
          "  --scheme NAME        %s (scene key scheme)\n"
          "  --projector NAME     %s (scene key projector.method)\n"
+         "  --tol TOL            adaptive scheme: error target on x, absolute and relative (scene key tol)\n"
+         "  --estimate           fixed-step schemes: estimate the error by step doubling (scene key estimate)\n"
          "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
          "  --quiet              no summary line (warnings and errors are still printed)\n"
          "  -h, --help           this text;  --version  the library versions\n",
@@ -115,6 +119,10 @@ static int check_value(const char *flag, const char *v) {
     if (cup_proj_method_parse(v) < 0)
       return usage_error("--projector '%s': unknown projector (%s)", v,
                          names_or(err, sizeof err, cup_proj_method_name, CUP_PROJ_METHOD_COUNT));
+  } else if (strcmp(flag, "--tol") == 0) {
+    double tol = strtod(v, &end);
+    if (end == v || *end || !(tol > 0) || !(tol < 1e300))
+      return usage_error("--tol '%s': not a positive number", v);
   } else if (strcmp(flag, "--set") == 0) {
     const char *eq = strchr(v, '=');
     if (!eq || eq == v) return usage_error("--set '%s': expected key=value", v);
@@ -125,7 +133,8 @@ static int check_value(const char *flag, const char *v) {
 /* The scene key each value flag sets; --set passes key=value through. */
 static const struct { const char *flag, *key; } value_flags[] = {
   {"--n", "n="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
-  {"--projector", "projector.method="}, {"--set", ""}, {"-o", NULL}, {"--output", NULL},
+  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--set", ""}, {"-o", NULL},
+  {"--output", NULL},
 };
 
 /* Split "--flag=value" or take the value from the next argument. */
@@ -159,6 +168,7 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
     return rc;
   }
   if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) { a->quiet = 1; return 0; }
+  if (strcmp(arg, "--estimate") == 0) return add_override(a, "estimate=", "true");
   if (arg[0] == '-' && arg[1]) return usage_error("unknown option '%s'", arg);
   if (a->scene) return usage_error("one scene per run: '%s' after '%s'", arg, a->scene);
   a->scene = arg;
@@ -252,6 +262,13 @@ typedef struct {
   char message[MSG_LEN];
 } run_t;
 
+/* The writer is created after the integrator (a scene that cannot run must
+ * not replace the output file): events reach it through the run. */
+static int event_sink(double t, int row, int on, void *ctx) {
+  const run_t *r = ctx;
+  return r->w ? cup_h5run_event(t, row, on, r->w) : 0;
+}
+
 static double now_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -305,6 +322,9 @@ static int write_provenance(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_double(w, "eps_value", cup_schedule_value(&o->eps, o->n)));
   st = cup_status_merge(st, cup_h5run_attr_double(w, "eta_value", cup_schedule_value(&o->eta, o->n)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scheme", cup_scheme_name(o->scheme)));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "tol_abs", o->tol_abs));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "tol_rel", o->tol_rel));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "estimate", o->estimate || o->scheme == CUP_SCHEME_ADAPTIVE));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "projector", cup_proj_method_name(o->proj.method)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "output", output_name(o->output)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "catchup_version", cup_version()));
@@ -334,6 +354,9 @@ static int write_results(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_double(w, "max_eps_cert", i->max_eps_cert));
   st = cup_status_merge(st, cup_h5run_attr_double(w, "max_eta_cert", i->max_eta_cert));
   st = cup_status_merge(st, cup_h5run_attr_double(w, "h_rho", i->h_rho));
+  st = cup_status_merge(st, cup_h5run_attr_double(w, "err_est", i->err_est));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "events", i->events));
+  st = cup_status_merge(st, cup_h5run_attr_long(w, "rejected", i->rejected));
   st = cup_status_merge(st, cup_h5run_attr_long(w, "samples", cup_h5run_count(w)));
   st = cup_status_merge(st, cup_h5run_attr_long(w, "stopped_step", i->step));
   st = cup_status_merge(st, cup_h5run_attr_double(w, "stopped_t", i->t));
@@ -430,6 +453,8 @@ static int setup(run_t *r, char *err) {
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   r->opts.interrupt = (const volatile int *)&stop_signal;
+  r->opts.on_event = event_sink;
+  r->opts.event_ctx = r;
   if (cup_scene_crowd(r->scene)) {
     if (!(r->crowd = crowd_log_create(cup_scene_crowd(r->scene), r->opts.n))) {
       snprintf(err, MSG_LEN, "%s: out of memory for the crowd's per-step log", a->scene);
@@ -496,13 +521,19 @@ static void report(const run_t *r) {
   if (r->status > 0)
     fprintf(stderr, "catchup-run: warning: %s: %s: %s\n", a->scene, cup_status_name(r->status),
             r->message);
-  if (!a->quiet)
-    fprintf(stderr, "catchup-run: %s -> %s: n=%ld %s, %ld samples, %ld projected, %ld skipped, "
-            "%lld dual iterations, max eps_cert %.3g, max eta_cert %.3g, %.3g s: %s\n",
-            a->scene, a->out, r->opts.n, cup_scheme_name(r->opts.scheme), i->samples,
-            i->projected, i->skipped, i->dual_iterations, i->max_eps_cert, i->max_eta_cert,
-            r->wall, cup_status_name(r->status));
-  if (!a->quiet && r->crowd) {
+  if (a->quiet) return;
+  char how[96], est[48] = "";
+  if (r->opts.scheme == CUP_SCHEME_ADAPTIVE)
+    snprintf(how, sizeof how, "tol=%.3g/%.3g adaptive, %ld steps, %ld events", r->opts.tol_abs,
+             r->opts.tol_rel, i->step, i->events);
+  else
+    snprintf(how, sizeof how, "n=%ld %s", r->opts.n, cup_scheme_name(r->opts.scheme));
+  if (!isnan(i->err_est)) snprintf(est, sizeof est, ", error estimate %.3g", i->err_est);
+  fprintf(stderr, "catchup-run: %s -> %s: %s, %ld samples, %ld projected, %ld skipped, "
+          "%lld dual iterations, max eps_cert %.3g, max eta_cert %.3g%s, %.3g s: %s\n",
+          a->scene, a->out, how, i->samples, i->projected, i->skipped, i->dual_iterations,
+          i->max_eps_cert, i->max_eta_cert, est, r->wall, cup_status_name(r->status));
+  if (r->crowd) {
     char line[160];
     crowd_log_summary(r->crowd, line, sizeof line);
     fprintf(stderr, "catchup-run: %s: %s\n", a->scene, line);

@@ -9,7 +9,11 @@ Reads whatever is in OUTDIR: catchup_circuit.jsonl + siconos.jsonl (from
 scripts/bench-vs-siconos), catchup_projector.jsonl + peers.jsonl (from
 scripts/bench-projector) and sweep.md (the table of scripts/bench-sweep,
 kept as docs/bench/sweep.md). Writes docs/bench/*.png and BENCHMARKS.md
-(the sections whose data are missing say which command produces them).
+(the sections whose data are missing say which command produces them; the
+projector's results of an earlier run are kept, marked as such, when only the
+circuit was rerun; sections written by hand, such as the general process's,
+and those other scripts generate between markers, such as scripts/bench-vs-ngspice's,
+are kept as they are).
 """
 import datetime
 import json
@@ -25,7 +29,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-LEVELS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
+LEVELS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
 
 
 def load(path):
@@ -119,9 +123,44 @@ def merge_rounds(rows, key):
     return out
 
 
+def adaptive_error(r):
+    """The adaptive rows' error: against the adaptive reference (tol 1e-13); where
+    that is this very computation (case 2: no event between breakpoints, the run
+    is exact to rounding) against the Richardson limit, i.e. that limit's error."""
+    return r["err_max"] if r["err_max"] > 0 else r["err_richardson"]
+
+
+def adaptive_curve(rows):
+    """tol from loose to tight, as (index, error, seconds)."""
+    rows = sorted(rows, key=lambda r: -r["tol"])
+    return [(k, adaptive_error(r), r["median_s"]) for k, r in enumerate(rows)]
+
+
+def adaptive_table(rows, case, lines):
+    rows = sorted((r for r in rows if r["case"] == case), key=lambda r: -r["tol"])
+    if not rows:
+        return
+    lines.append(f"The adaptive scheme on case {case}, tol by tol (`catchup-bench adaptive`; error "
+                 f"against `ref_case{case}_adaptive.csv`" + (", or where that is exact, against the "
+                 "Richardson limit" if any(r["err_max"] == 0 for r in rows) else "") + "):\n")
+    lines.append("| tol | time loop | steps | events | error | its estimate | estimate / error |")
+    lines.append("|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        e = adaptive_error(r)
+        exact = r["err_max"] == 0
+        # Where the run is exact, the error against Richardson is that limit's own error: no
+        # ratio to state.
+        lines.append(f"| {r['tol']:.0e} | {r['median_s'] * 1e6:.0f} µs | {r['n']} | {r['events']} | "
+                     f"{e:.2e}{' (Richardson)' if exact else ''} | {r['err_est']:.2e} | "
+                     f"{'—' if exact else format(r['err_est'] / e, '.2f')} |")
+    lines.append("")
+
+
 def circuit_section(outdir, lines):
     cat = merge_rounds(load(os.path.join(outdir, "catchup_circuit.jsonl")),
                        lambda r: (r["case"], r["config"], r["n"]))
+    ada = merge_rounds(load(os.path.join(outdir, "catchup_adaptive.jsonl")),
+                       lambda r: (r["case"], r["tol"]))
     sic = merge_rounds(load(os.path.join(outdir, "siconos.jsonl")),
                        lambda r: (r["case"], r.get("driver", "python"), r["theta"], r["solver"], r["n"]))
     if not cat or not sic:
@@ -139,11 +178,15 @@ def circuit_section(outdir, lines):
         sic_main, sic_label = sic_py, "Siconos (Python)"
     for case in (1, 2):
         cc = curves([r for r in cat if r["case"] == case], lambda r: r["config"])
+        if any(r["case"] == case for r in ada):
+            cc["adaptive"] = adaptive_curve([r for r in ada if r["case"] == case])
         sc = curves([r for r in sic_main if r["case"] == case],
                     lambda r: f"theta{r['theta']:g}/{r['solver']}")
-        fig, ax = plt.subplots(figsize=(7, 5))
+        fig, ax = plt.subplots(figsize=(9, 5))
         for cfg, c in sorted(cc.items()):
-            ax.loglog([p[1] for p in c], [p[2] for p in c], "o-", label=f"catchup {cfg}")
+            style, lw = ("D-", 2.5) if cfg == "adaptive" else ("o-", 1.5)
+            label = "catchup adaptive (tol 1e-3 .. 1e-10)" if cfg == "adaptive" else f"catchup {cfg}"
+            ax.loglog([p[1] for p in c], [p[2] for p in c], style, lw=lw, label=label)
         for cfg, c in sorted(sc.items()):
             ax.loglog([p[1] for p in c], [p[2] for p in c], "s--", label=f"{sic_label} {cfg}")
         ax.set_xlabel("max-norm error against the reference limit")
@@ -151,7 +194,7 @@ def circuit_section(outdir, lines):
         ax.set_title(f"paper circuit, case {case}: run time against error")
         ax.invert_xaxis()
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1))
         fig.tight_layout()
         png = os.path.join("docs", "bench", f"work_precision_case{case}.png")
         fig.savefig(os.path.join(ROOT, png), dpi=110)
@@ -167,6 +210,7 @@ def circuit_section(outdir, lines):
             ratio = f"{b[0] / a[0]:.0f}x" if a and b else "—"
             lines.append(f"| {lev:.0e} | {fa} | {fb} | {ratio} |")
         lines.append("")
+        adaptive_table(ada, case, lines)
         lines.append("Per step at equal n (fastest configuration of each tool; "
                      f"{sic_label} is its time loop with no Python in it):\n")
         lines.append(f"| n | catchup ns/step | {sic_label} µs/step | ratio |")
@@ -228,6 +272,40 @@ def circuit_section(outdir, lines):
 
 # ---- projector -----------------------------------------------------------------------
 
+def earlier_projector(old):
+    """The projector section's results in the BENCHMARKS.md being replaced, with a note naming
+    the run they came from (a run of bench-vs-siconos alone must not drop them); None when it
+    has none."""
+    head = "## The projector against QP solvers"
+    if head not in old:
+        return None
+    body = old.split(head, 1)[1].split("\n## ", 1)[0]
+    for mark in ("\n_From an earlier run", "\nMeasured on "):   # it says which run it is from
+        at = body.find(mark)
+        if at >= 0:
+            return body[at + 1:].rstrip("\n") + "\n"
+    at = body.find("\n| problem |")
+    if at < 0:
+        return None
+    body = body[at + 1:].rstrip("\n")
+    rev = next((l.split(": ", 1)[1] for l in old.splitlines() if l.startswith("- catchup revision: ")), "?")
+    when = next((l.split(": ", 1)[1] for l in old.splitlines() if l.startswith("- Generated: ")), "?")
+    return (f"_From an earlier run (catchup revision {rev}, {when}, same machine); "
+            f"`bash scripts/bench-projector` was not rerun with this one._\n\n" + body + "\n")
+
+
+def kept_sections(old, lines):
+    """The sections of the BENCHMARKS.md being replaced that this script does not write
+    (written by hand from other scripts' figures, e.g. scripts/bench-general), verbatim."""
+    ours = {l for l in lines if l.startswith("## ")}
+    kept = []
+    for sec in ("\n" + old).split("\n## ")[1:]:
+        head = "## " + sec.split("\n", 1)[0]
+        if head not in ours:
+            kept += ["## " + sec.rstrip("\n"), ""]
+    return kept
+
+
 def peer_cell(p):
     """one peer's figure: its time at 1e-8, or how close it came"""
     if p is None:
@@ -244,11 +322,12 @@ def mb(kb):
     return f"{kb / 1024:.0f} MB" if kb >= 10240 else f"{kb / 1024:.1f} MB"
 
 
-def projector_section(outdir, lines):
+def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
     peers = [p for p in load(os.path.join(outdir, "peers.jsonl")) if p.get("problem")]
     if not cat:
-        lines.append("_Not run here yet: `bash scripts/bench-projector`._\n")
+        kept = earlier_projector(old)
+        lines.append(kept if kept else "_Not run here yet: `bash scripts/bench-projector`._\n")
         return
     auto = [r for r in cat if r.get("solver") == "catchup-auto"]
     lines.append("| problem | mode | catchup auto | certified | largest ε/S², η/S certified | its error "
@@ -412,17 +491,25 @@ def main():
              "(`scripts/siconos_circuit.py`, Debian's `python3-siconos`) is a cross-check: same "
              "trajectory, Python's cost per step added. Errors are max-norm against "
              "`tests/data/ref_case{1,2}_limit_richardson.csv` at t = j/1000 (Richardson limits, "
-             "accurate to about 1e-10: `tests/data/README.md`).", ""]
+             "accurate to about 1e-10: `tests/data/README.md`); the adaptive scheme's "
+             "(`catchup-bench adaptive`, tol = 1e-3 .. 1e-10, in the same rounds, its dense "
+             "output at the same times) against `ref_case{1,2}_adaptive.csv` (its own run at "
+             "tol = 1e-13, which agrees with the Richardson limits to their accuracy), since "
+             "its errors go below theirs.", ""]
     circuit_section(outdir, lines)
     lines += ["## The projector against QP solvers", "", PROJECTOR_INTRO, ""]
-    projector_section(outdir, lines)
-    sweep_section(outdir, lines)
-    # sections other scripts generate between their markers (scripts/bench-vs-ngspice) stay
     path = os.path.join(ROOT, "BENCHMARKS.md")
-    kept = re.findall(r"<!-- BEGIN (?!status)[^\n]*-->.*?<!-- END [^\n]*-->",
-                      open(path).read() if os.path.exists(path) else "", re.S)
+    old = open(path).read() if os.path.exists(path) else ""
+    projector_section(outdir, lines, old)
+    sweep_section(outdir, lines)
+    # sections other scripts generate between their markers (scripts/bench-vs-ngspice) stay,
+    # at the end; the hand-written ones (no markers) stay too, after ours
+    marked = re.findall(r"<!-- BEGIN (?!status)[^\n]*-->.*?<!-- END [^\n]*-->", old, re.S)
+    for m in marked:
+        old = old.replace(m, "")
+    lines += kept_sections(old, lines)
     with open(path, "w") as f:
-        f.write("\n".join(lines + [""] + kept) + "\n")
+        f.write("\n".join(lines + [""] + marked).rstrip("\n") + "\n")
     print(f"bench_report: wrote BENCHMARKS.md and docs/bench/*.png from {outdir}", file=sys.stderr)
 
 

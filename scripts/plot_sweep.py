@@ -10,7 +10,8 @@ writes
   PREFIX-order.png           error against n per variant and scheme (median
                              over schedules and projectors at each n), with the
                              order fitted by least squares on log-log in the
-                             legend;
+                             legend (the adaptive scheme has no n: it is in
+                             the work-precision figure, one point per tol);
   PREFIX-certificates.png    the largest certified eps and eta of each run
                              against n, per tolerance schedule, with the
                              targets eps_n and eta_n as dashed lines.
@@ -125,6 +126,8 @@ def error_order(rows, variants, schemes, title, out):
     colors = {s: plt.cm.tab10(i) for i, s in enumerate(schemes)}
     for ax, v in zip(axes.flat, variants):
         for s in schemes:
+            if s == "adaptive":
+                continue
             pts = [r for r in rows if r["variant"] == v and r["scheme"] == s and r["error"] > 0]
             ns = sorted(set(r["n"] for r in pts))
             med = [float(np.median([r["error"] for r in pts if r["n"] == n])) for n in ns]

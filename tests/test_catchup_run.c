@@ -23,6 +23,7 @@
 
 #define CLI_TMPDIR_TEMPLATE "/tmp/cup_cli_XXXXXX"
 #include "cliutil.h"
+#include "refdata.h"
 
 static const char *fig2 = CUP_EXAMPLES_DIR "/paper-fig2.yaml";
 
@@ -53,6 +54,16 @@ static void expect_attr_str(hid_t f, const char *name, const char *expect) {
 
 static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; }
 
+/* max |x - ref| against tests/data/NAME, checking that t holds the times
+ * k/1000 exactly: the grid k h of a fixed-step run, or the output times
+ * j T / (N - 1) of an adaptive one. */
+static double diff_to_data(const char *name, const double *t, const double *x) {
+  static double ref[1001 * 3];
+  ref_load(name, ref);
+  for (int k = 0; k <= 1000; k++) assert_true(t[k] == (double)k * (1.0 / 1000) || t[k] == (double)k / 1000);
+  return ref_diff(x, ref);
+}
+
 /* ---- tests ---- */
 
 /* The paper's case 1 at n = 1000: the grid is t_k = k h exactly, the rows are
@@ -69,18 +80,7 @@ static void test_paper_case1_file(void **state) {
   double *t, *x;
   assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
   assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
-  double h = 1.0 / 1000, ref[4], err = 0;
-  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
-  char line[512];
-  assert_non_null(csv);
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int k = 0; k <= 1000; k++) {
-    assert_true(t[k] == (double)k * h);
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
-    for (int j = 0; j < 3; j++) err = fmax(err, fabs(x[3 * k + j] - ref[j + 1]));
-  }
-  fclose(csv);
+  double err = diff_to_data("ref_case1_limit_richardson.csv", t, x);
   if (!(err > 1.0e-3 && err < 2.0e-3)) fail_msg("max error %.3g, expected ~1.52e-3", err);
   assert_true(attr_i64(f, "n") == 1000);
   assert_true(attr_f64(f, "T") == 1.0);
@@ -104,6 +104,62 @@ static void test_paper_case1_file(void **state) {
   H5Fclose(f);
   free(t);
   free(x);
+}
+
+/* The adaptive scheme through the command line: --tol, the summary line
+ * with the estimate, /events with one row per change of the active set
+ * (the attribute events), in time order, and the trajectory against the
+ * adaptive reference within the estimate's 10x. */
+static void test_adaptive_file(void **state) {
+  (void)state;
+  const char *out = tmp_path("adaptive.h5");
+  const char *args[] = {fig2, "-o", out, "--scheme", "adaptive", "--tol", "1e-8", "--set",
+                        "output={samples: 1001}", NULL};
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "tol=1e-08/1e-08 adaptive");
+  expect_in_err(&r, "error estimate");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t, *x;
+  assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
+  assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
+  double err = diff_to_data("ref_case1_adaptive.csv", t, x);
+  double est = attr_f64(f, "err_est");
+  print_message("catchup-run --scheme adaptive --tol 1e-8: error %.3e, err_est %.3e, %ld events\n", err, est,
+                (long)attr_i64(f, "events"));
+  assert_true(err <= 3e-8 && est <= 10 * err && est >= 0.1 * err);
+  assert_true(attr_f64(f, "tol_abs") == 1e-8 && attr_f64(f, "tol_rel") == 1e-8);
+  expect_attr_str(f, "scheme", "adaptive");
+  /* /events: (t, row, on) */
+  typedef struct { double t; int32_t row; int8_t on; } ev;
+  hid_t d = H5Dopen2(f, "events", H5P_DEFAULT), mt = H5Tcreate(H5T_COMPOUND, sizeof(ev));
+  H5Tinsert(mt, "t", HOFFSET(ev, t), H5T_NATIVE_DOUBLE);
+  H5Tinsert(mt, "row", HOFFSET(ev, row), H5T_NATIVE_INT32);
+  H5Tinsert(mt, "on", HOFFSET(ev, on), H5T_NATIVE_INT8);
+  hid_t sp = H5Dget_space(d);
+  hsize_t ne = 0;
+  H5Sget_simple_extent_dims(sp, &ne, NULL);
+  assert_true((long)ne == attr_i64(f, "events") && ne >= 8);
+  ev *e = malloc(sizeof(ev) * ne);
+  assert_true(H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, e) >= 0);
+  for (hsize_t k = 0; k < ne; k++) {
+    assert_true(e[k].row >= 0 && e[k].row < 2 && (e[k].on == 0 || e[k].on == 1));
+    if (k) assert_true(e[k].t >= e[k - 1].t);
+  }
+  /* case 1 starts with row 1 (x2 >= 0) pushed on at t = 0 */
+  assert_true(e[0].t == 0 && e[0].row == 1 && e[0].on == 1);
+  free(e);
+  H5Sclose(sp);
+  H5Tclose(mt);
+  H5Dclose(d);
+  H5Fclose(f);
+  free(t);
+  free(x);
+  const char *bad[] = {fig2, "-o", out, "--tol", "-1e-8", NULL};
+  r = run_cli(bad, 0, 0);
+  expect_exit(&r, 2, 1);
+  expect_in_err(&r, "--tol '-1e-8': not a positive number");
 }
 
 static void test_summary_line_and_overrides(void **state) {
@@ -147,7 +203,7 @@ static void test_help_lists_and_output_override(void **state) {
   const char *bad[] = {fig2, "-o", tmp_path("x.h5"), "--scheme", "thet", NULL};
   r = run_cli(bad, 0, 0);
   expect_exit(&r, 2, 1);
-  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential or theta)");
+  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential, theta or adaptive)");
 
   const char *out = tmp_path("samples.h5");
   const char *args[] = {fig2, "-o", out, "--set", "output.samples=2", "--quiet", NULL};
@@ -332,10 +388,26 @@ static void test_netlist_signals(void **state) {
   expect_in_err(&r, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
 }
 
+/* A rectifier whose diode has D != 0 (behind the source's resistance) is
+ * refused by the adaptive scheme with one line naming the diode, and the
+ * file keeps nothing computed (there was nothing). */
+static void test_adaptive_refuses_D(void **state) {
+  (void)state;
+  const char *scene = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.yaml", *out = tmp_path("adaptive-D.h5");
+  const char *args[] = {scene, "-o", out, "--scheme", "adaptive", NULL};
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "halfwave-rc.yaml: the adaptive scheme needs D = 0");
+  expect_in_err(&r, "row D1 has D != 0");
+  expect_in_err(&r, "use the theta scheme");
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_netlist_signals),
+    cmocka_unit_test(test_adaptive_refuses_D),
     cmocka_unit_test(test_paper_case1_file),
+    cmocka_unit_test(test_adaptive_file),
     cmocka_unit_test(test_summary_line_and_overrides),
     cmocka_unit_test(test_help_lists_and_output_override),
     cmocka_unit_test(test_errors_are_one_line),

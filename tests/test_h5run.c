@@ -492,6 +492,45 @@ static const crash_case crashes[] = {
 
 /* ---- fixture: one scratch directory for the whole program ---- */
 
+/* /events: every event written (2.5 buffers' worth, interleaved with
+ * samples) reads back in order, with its time, row and flag; a file with
+ * none has the dataset, empty. */
+static void test_events(void **state) {
+  (void)state;
+  char path[512];
+  path_in_tmp(path, sizeof path, "events.h5");
+  for (int count = 0; count <= 2500; count += 2500) {
+    cup_h5run *w = NULL;
+    assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+    double x[2] = {0, 0};
+    for (int k = 0; k < count; k++) {
+      assert_int_equal(cup_h5run_event(0.5 * k, k % 7, k % 3 == 0, w), CUP_OK);
+      if (k % 10 == 0) assert_int_equal(cup_h5run_sink(k, k, x, w), CUP_OK);
+    }
+    assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
+    typedef struct { int8_t on; double t; int32_t row; } ev;   /* another order than the writer's */
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT), d = H5Dopen2(f, "events", H5P_DEFAULT);
+    hid_t mt = H5Tcreate(H5T_COMPOUND, sizeof(ev));
+    H5Tinsert(mt, "t", HOFFSET(ev, t), H5T_NATIVE_DOUBLE);
+    H5Tinsert(mt, "row", HOFFSET(ev, row), H5T_NATIVE_INT32);
+    H5Tinsert(mt, "on", HOFFSET(ev, on), H5T_NATIVE_INT8);
+    hid_t sp = H5Dget_space(d);
+    hsize_t n = 0;
+    H5Sget_simple_extent_dims(sp, &n, NULL);
+    assert_int_equal((long)n, count);
+    ev *e = malloc(sizeof(ev) * (n + 1));
+    if (n) assert_true(H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, e) >= 0);
+    for (int k = 0; k < count; k++)
+      if (e[k].t != 0.5 * k || e[k].row != k % 7 || e[k].on != (k % 3 == 0))
+        fail_msg("event %d read back as (%g, %d, %d)", k, e[k].t, e[k].row, e[k].on);
+    free(e);
+    H5Sclose(sp);
+    H5Tclose(mt);
+    H5Dclose(d);
+    H5Fclose(f);
+  }
+}
+
 static int make_tmpdir(void **state) {
   (void)state;
   return mkdtemp(tmpdir) ? 0 : -1;
@@ -512,6 +551,7 @@ int main(void) {
     ROUNDTRIP(0), ROUNDTRIP(1), ROUNDTRIP(2), ROUNDTRIP(3),
     ROUNDTRIP(4), ROUNDTRIP(5), ROUNDTRIP(6), ROUNDTRIP(7),
     cmocka_unit_test(test_flushes_in_between),
+    cmocka_unit_test(test_events),
     cmocka_unit_test(test_attributes_roundtrip),
     cmocka_unit_test(test_h5dump_reads_attributes),
     cmocka_unit_test(test_unwritable_path_names_path),

@@ -232,6 +232,17 @@ static void test_pulse(void **state) {
                            {6e-3, 6.5e-3}};
   for (size_t k = 0; k < sizeof brk / sizeof brk[0]; k++)
     assert_close(cup_input_next_break(u, brk[k][0]), brk[k][1], 1e-15);
+  /* walked from break to break, every corner of 20 periods in turn: 1m +
+   * 5m j + (0, 0.5m, 2.5m, 2.75m) (a period's end that rounds onto the
+   * next period, 11m, once skipped that whole period) */
+  double tb = 0;
+  for (int j = 0; j < 20; j++)
+    for (int k = 0; k < 4; k++) {
+      const double knot[4] = {0, 0.5e-3, 2.5e-3, 2.75e-3};
+      tb = cup_input_next_break(u, tb);
+      if (fabs(tb - (1e-3 + 5e-3 * j + knot[k])) > 1e-15)
+        fail_msg("period %d, corner %d: break at %.17g", j, k, tb);
+    }
   cup_input_free(&u);
   /* a one-shot pulse (period 0) with a jump up (rise 0) */
   u = make(1);

@@ -8,6 +8,8 @@
 #include <stdio.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "closed_forms.h"
+#include "refdata.h"
 
 /* ---- helpers --------------------------------------------------------------------- */
 
@@ -68,22 +70,6 @@ static double order_of(double e1, double e2) { return log10(e1 / e2); }   /* n x
 
 static double ref1[1001 * 3], ref2[1001 * 3];
 
-static void load_ref(const char *name, double *ref) {
-  char path[512];
-  snprintf(path, sizeof path, "%s/%s", CUP_TEST_DATA_DIR, name);
-  FILE *f = fopen(path, "r");
-  if (!f) fail_msg("cannot open %s", path);
-  char line[512];
-  assert_non_null(fgets(line, sizeof line, f));
-  for (int j = 0; j <= 1000; j++) {
-    double t;
-    assert_non_null(fgets(line, sizeof line, f));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &t, &ref[3 * j], &ref[3 * j + 1], &ref[3 * j + 2]), 4);
-    assert_close(t, j / 1000.0, 1e-15);
-  }
-  fclose(f);
-}
-
 static cup_input *paper_input(int cas) {
   cup_input *u = NULL;
   assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
@@ -110,8 +96,8 @@ static cup_lcs *paper_lcs(int cas) {
  * and 1.79/n (case 2) at n = 10^3 and 10^4 (DESIGN.md, measured). */
 static void test_paper_cases_exact_projection(void **state) {
   (void)state;
-  load_ref("ref_case1_limit_richardson.csv", ref1);
-  load_ref("ref_case2_limit_richardson.csv", ref2);
+  ref_load("ref_case1_limit_richardson.csv", ref1);
+  ref_load("ref_case2_limit_richardson.csv", ref2);
   static const double C[3] = {0, 1.52, 1.79};
   for (int cas = 1; cas <= 2; cas++) {
     cup_lcs *L = paper_lcs(cas);
@@ -402,23 +388,6 @@ static void check_order(const char *name, const lcs_built *b, const cup_input *u
   assert_true(p >= 0.9 && p <= 1.15);
 }
 
-/* (a) An interval of half-width r = 1/2 moving with sin t:
- *     x' in -N_[sin t - r, sin t + r](x), x(0) = 0  (the play operator).
- *   x = 0 until sin t - r reaches it at pi/6; then pushed: sin t - r up to
- *   pi/2; rests at r until the upper edge sin t + r comes down at pi; pushed
- *   down: sin t + r until 3 pi/2; rests at -r until 2 pi; and so on. */
-static double interval_exact(double t, int i, const void *par) {
-  (void)i; (void)par;
-  double r = 0.5;
-  if (t <= M_PI / 6) return 0;
-  if (t <= M_PI / 2) return sin(t) - r;
-  double tau = fmod(t - M_PI / 2, 2 * M_PI);
-  if (tau <= M_PI / 2) return r;
-  if (tau <= M_PI) return sin(t) + r;
-  if (tau <= 1.5 * M_PI) return -r;
-  return sin(t) - r;
-}
-
 static void test_closed_form_moving_interval(void **state) {
   (void)state;
   double C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};   /* x - sin t + r >= 0, -x + sin t + r >= 0 */
@@ -441,61 +410,6 @@ static void test_closed_form_moving_interval(void **state) {
   unbuild(&b);
 }
 
-/* (a') The same interval with relaxation, x' in -N(x) - x, x(0) = 0. Phases:
- *   free:  x = x_d e^{-(t - t_d)}, until it meets an edge sin t -/+ r;
- *   lower: x = sin t - r while the edge outruns the drift, cos t > -(sin t - r);
- *   upper: x = sin t + r while cos t < -(sin t + r).
- * Event times by bracketing and bisection in long double. */
-#define RELAX_MAX 64
-typedef struct { int nev; long double t[RELAX_MAX], xd[RELAX_MAX]; int phase[RELAX_MAX]; } relax_par;
-
-static long double relax_free(long double xd, long double td, long double t) { return xd * expl(-(t - td)); }
-
-static long double relax_event(int phase, long double xd, long double td, long double t) {
-  switch (phase) {
-    case 0: {                                     /* free: distance to the nearer edge */
-      long double x = relax_free(xd, td, t);
-      return fminl(x - (sinl(t) - 0.5L), (sinl(t) + 0.5L) - x);
-    }
-    case 1: return cosl(t) + sinl(t) - 0.5L;      /* lower: detach when < 0 */
-    default: return -(cosl(t) + sinl(t) + 0.5L);  /* upper: detach when < 0 */
-  }
-}
-
-static void relax_setup(relax_par *q, double T) {
-  q->nev = 1;
-  q->t[0] = 0; q->xd[0] = 0; q->phase[0] = 0;
-  long double t = 0;
-  while (q->nev < RELAX_MAX) {
-    int k = q->nev - 1, ph = q->phase[k];
-    long double td = q->t[k], xd = q->xd[k], a = t, dt = 1e-3L, b = a + dt;
-    while (b < T + 1 && relax_event(ph, xd, td, b) > 0) { a = b; b += dt; }
-    if (b >= T + 1) break;
-    for (int it = 0; it < 200; it++) {
-      long double mid = 0.5L * (a + b);
-      if (relax_event(ph, xd, td, mid) > 0) a = mid; else b = mid;
-    }
-    t = 0.5L * (a + b);
-    long double x = ph == 0 ? relax_free(xd, td, t) : ph == 1 ? sinl(t) - 0.5L : sinl(t) + 0.5L;
-    int next = ph != 0 ? 0 : (fabsl(x - (sinl(t) - 0.5L)) < fabsl(x - (sinl(t) + 0.5L)) ? 1 : 2);
-    q->t[q->nev] = t; q->xd[q->nev] = x; q->phase[q->nev] = next;
-    q->nev++;
-    t += 1e-9L;
-  }
-}
-
-static double relax_exact(double t, int i, const void *vp) {
-  (void)i;
-  const relax_par *q = vp;
-  int k = 0;
-  while (k + 1 < q->nev && q->t[k + 1] <= t) k++;
-  switch (q->phase[k]) {
-    case 0: return (double)relax_free(q->xd[k], q->t[k], t);
-    case 1: return sin(t) - 0.5;
-    default: return sin(t) + 0.5;
-  }
-}
-
 static void test_closed_form_interval_with_relaxation(void **state) {
   (void)state;
   double A[1] = {-1}, C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};
@@ -514,15 +428,6 @@ static void test_closed_form_interval_with_relaxation(void **state) {
   unbuild(&b);
 }
 
-/* (b) The quadrant cone with f = -x + c, c = (1, -1), x(0) = (0, 1):
- *   x1 = 1 - e^-t (inside); x2 = 2 e^-t - 1 until it reaches 0 at ln 2, then
- *   held at 0 since the free drift -1 points out. */
-static double cone_exact(double t, int i, const void *par) {
-  (void)par;
-  if (i == 0) return 1 - exp(-t);
-  return t <= log(2) ? 2 * exp(-t) - 1 : 0;
-}
-
 static void test_closed_form_cone(void **state) {
   (void)state;
   double A[4] = {-1, 0, 0, -1}, C[4] = {1, 0, 0, 1}, E[2] = {1, -1};
@@ -533,39 +438,6 @@ static void test_closed_form_cone(void **state) {
   check_order("cone, f = -x + c", &b, u, x0, 2, cone_exact, NULL, 1000);
   cup_input_free(&u);
   unbuild(&b);
-}
-
-/* (c) RL half-wave rectifier: L i' = -R i + V sin(w t) + zeta,
- *   0 <= zeta _|_ i >= 0 (zeta = -v_diode); as an LCS A = -R/L, B = 1/L,
- *   C = 1, E = V/L, P = L (P B = C^T). From i(0) = 0 it conducts:
- *     i(t) = V/Z (sin(w t - phi) + sin(phi) e^{-t R/L}),
- *   Z = sqrt(R^2 + w^2 L^2), phi = atan(w L / R), until i returns to 0 at
- *   t_off in (pi/w, 2 pi/w) (found by bisection in long double); then
- *   i = 0 until the source turns positive at 2 pi/w, and the period repeats. */
-typedef struct { double R, L, V, w; long double toff; } rect_par;
-
-static long double rect_cond(const rect_par *q, long double t) {
-  long double Z = sqrtl((long double)q->R * q->R + (long double)q->w * q->w * q->L * q->L);
-  long double phi = atanl((long double)q->w * q->L / q->R);
-  return q->V / Z * (sinl(q->w * t - phi) + sinl(phi) * expl(-t * q->R / q->L));
-}
-
-static void rect_setup(rect_par *q) {
-  long double lo = M_PIl / q->w, hi = 2 * M_PIl / q->w;
-  for (int k = 0; k < 200; k++) {
-    long double mid = 0.5L * (lo + hi);
-    if (rect_cond(q, mid) > 0) lo = mid; else hi = mid;
-  }
-  q->toff = 0.5L * (lo + hi);
-}
-
-static double rect_exact(double t, int i, const void *vp) {
-  (void)i;
-  const rect_par *q = vp;
-  double period = 2 * M_PI / q->w;
-  double tau = fmod(t, period);
-  if (t > 0 && tau == 0) tau = 0;
-  return tau <= q->toff ? (double)rect_cond(q, tau) : 0;
 }
 
 static void rect_build(lcs_built *b, const rect_par *q, double *P) {
@@ -596,16 +468,6 @@ static void test_closed_form_rectifier(void **state) {
   unbuild(&b);
 }
 
-/* (d) The quadrant with its corner active: x' = diag(-1, -2) x + (-1, -1),
- *   x(0) = (1, 1), metric P = diag(2, 3) (axis-aligned rows: the same
- *   normals). x1 = 2 e^-t - 1 until ln 2; x2 = 1.5 e^-2t - 0.5 until
- *   ln(3)/2; each then held at 0, both after ln 2. */
-static double corner_exact(double t, int i, const void *par) {
-  (void)par;
-  if (i == 0) return t <= log(2) ? 2 * exp(-t) - 1 : 0;
-  return t <= 0.5 * log(3) ? 1.5 * exp(-2 * t) - 0.5 : 0;
-}
-
 static void test_closed_form_corner(void **state) {
   (void)state;
   double A[4] = {-1, 0, 0, -2}, C[4] = {1, 0, 0, 1}, E[2] = {-1, -1}, P[2] = {2, 3};
@@ -616,19 +478,6 @@ static void test_closed_form_corner(void **state) {
   check_order("corner of a quadrant", &b, u, x0, 1.5, corner_exact, NULL, 1000);
   cup_input_free(&u);
   unbuild(&b);
-}
-
-/* (e) A set that jumps: x' = -x, K(t) = {x >= s(t)}, s = sign(sin 2 pi t),
- *   x(0) = 1. On (0, 1/2) s = 1 holds x at 1; on (1/2, 1) s = -1 frees it:
- *   x = e^{-(t - 1/2)}; at t = 1 s(1) = 0 keeps it; just after, s = 1 throws
- *   x up to 1 (a jump), held until 3/2, then free again. The error is
- *   bounded by C h on the grid (n a multiple of 4 puts the jumps on it). */
-static double jump_exact(double t, int i, const void *par) {
-  (void)i; (void)par;
-  double tau = fmod(t, 1.0);
-  if (t == 0) return 1;
-  if (tau == 0) return exp(-0.5);              /* t = 1: K(1) = {x >= 0} */
-  return tau <= 0.5 ? 1 : exp(-(tau - 0.5));
 }
 
 static void test_closed_form_jumping_set(void **state) {

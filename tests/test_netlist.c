@@ -126,6 +126,10 @@ static void test_paper_trajectory(void **state) {
   for (int scheme = 0; scheme < CUP_SCHEME_COUNT; scheme++) {
     cup_integrator_options o = *cup_scene_options(sc);
     o.scheme = (cup_scheme)scheme;
+    if (scheme == CUP_SCHEME_ADAPTIVE) {           /* it chooses its steps: sample the grid */
+      o.output = CUP_OUTPUT_SAMPLES;
+      o.output_samples = 1001;
+    }
     cup_integrator *I = NULL;
     cup_run_info info;
     assert_int_equal(cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err), CUP_OK);
@@ -196,12 +200,13 @@ static void test_free_diode(void **state) {
   assert_close(at(&L->A, 0, 0), -1 / (RL * C), 1e-12);
   assert_close(at(&L->K->C, 0, 0), 1, 1e-15);
   assert_close(at(&L->G, 0, 0), -1, 1e-15);
-  /* the catching-up schemes refuse it, naming the diode */
+  /* the catching-up schemes and the adaptive one refuse it, naming the diode */
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   cup_integrator *I = NULL;
   char err[CUP_ERRMSG_LEN];
-  for (int scheme = CUP_SCHEME_EXPLICIT; scheme <= CUP_SCHEME_EXPONENTIAL; scheme++) {
+  for (int scheme = CUP_SCHEME_EXPLICIT; scheme < CUP_SCHEME_COUNT; scheme++) {
+    if (scheme == CUP_SCHEME_THETA) continue;
     o.scheme = (cup_scheme)scheme;
     assert_int_equal(cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err), CUP_ERR_UNSUPPORTED);
     assert_contains(err, "needs D = 0");
@@ -312,8 +317,8 @@ static double rl_exact(const rl *q, double t) {
   return s <= q->toff ? rl_on(q, s) : 0;
 }
 
-static void test_rl_closed_form(void **state) {
-  (void)state;
+/* examples/circuits/rl-halfwave.cir's values and its switch-off time. */
+static rl rl_example(void) {
   rl q = {10, 2 * M_PI * 50, 10, 50e-3, 0, 0, 0, 0};
   q.Z = sqrt(q.R * q.R + q.w * q.w * q.L * q.L);
   q.phi = atan(q.w * q.L / q.R);
@@ -325,6 +330,12 @@ static void test_rl_closed_form(void **state) {
     if (rl_on(&q, mid) > 0) lo = mid; else hi = mid;
   }
   q.toff = lo;
+  return q;
+}
+
+static void test_rl_closed_form(void **state) {
+  (void)state;
+  rl q = rl_example();
   print_message("RL rectifier: Z = %.6g ohm, phi = %.6g rad, t_off = %.9g s\n", q.Z, q.phi, q.toff);
   cup_netlist *nl = load_ok(CIR "/rl-halfwave.cir", NULL, 0);
   char err[CUP_ERRMSG_LEN];
@@ -359,11 +370,67 @@ static void test_rl_closed_form(void **state) {
       if (scheme <= CUP_SCHEME_IMPLICIT) assert_true(worst >= 33 * h && worst <= 36 * h);
       if (scheme == CUP_SCHEME_EXPONENTIAL) assert_true(worst <= 1e-12);
       if (scheme == CUP_SCHEME_THETA) assert_true(worst <= 2300 * h * h);
+      if (scheme == CUP_SCHEME_ADAPTIVE) assert_true(worst <= o.tol_abs);   /* measured 2.4e-15 */
       if (scheme == CUP_SCHEME_EXPLICIT && prev > 0) assert_true(worst / prev < 0.101);
       if (scheme == CUP_SCHEME_EXPLICIT) prev = worst;
     }
   }
   cup_netlist_free(&nl);
+}
+
+/* The adaptive scheme's zeta (cup_integrator_zeta in the sink) gives the
+ * RL rectifier's diode voltage: v(in,a) = 0 while it conducts, the source
+ * 10 sin(w t) while it blocks (i = 0, so v(a) = R i + L i' = 0); and v(a)
+ * the other way round. Samples within 1e-6 s of a switch are left out. */
+typedef struct sig_run { cup_netlist *nl; const cup_integrator *I; double t[1001], s[1001][2]; long n; } sig_run;
+
+static int keep_signals(long k, double t, const double *x, void *ctx) {
+  (void)k;
+  sig_run *r = ctx;
+  double z[4], out[2];
+  if (r->n > 1000 || cup_integrator_zeta(r->I, z) || cup_netlist_signals(r->nl, t, x, z, out)) return 1;
+  r->t[r->n] = t;
+  memcpy(r->s[r->n++], out, sizeof out);
+  return 0;
+}
+
+static void test_rl_adaptive_signals(void **state) {
+  (void)state;
+  rl q = rl_example();
+  static sig_run r;
+  char err[CUP_ERRMSG_LEN];
+  r.nl = load_ok(CIR "/rl-halfwave.cir", NULL, 0);
+  assert_int_equal(cup_netlist_probe(r.nl, "v(in,a)", err), 0);
+  assert_int_equal(cup_netlist_probe(r.nl, "v(a)", err), 1);
+  assert_int_equal(cup_lcs_rows(cup_netlist_lcs(r.nl)), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.T = 0.04;
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = 1e-9;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 1001;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, cup_netlist_lcs(r.nl), cup_netlist_input(r.nl), &o, err), CUP_OK);
+  r.I = I;
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(r.nl), keep_signals, &r, &info), CUP_OK);
+  assert_int_equal(r.n, 1001);
+  double worst = 0, Tp = 2 * M_PI / q.w;
+  long blocking = 0;
+  for (long k = 1; k < r.n; k++) {
+    double t = r.t[k], s = fmod(t, Tp), V = q.V * sin(q.w * t);
+    if (fabs(s - q.toff) < 1e-6 || s < 1e-6 || Tp - s < 1e-6) continue;
+    int on = s < q.toff;
+    blocking += !on;
+    worst = fmax(worst, fmax(fabs(r.s[k][0] - (on ? 0 : V)), fabs(r.s[k][1] - (on ? V : 0))));
+  }
+  print_message("RL rectifier, adaptive: v(in,a) and v(a) against the closed form: max error %.3g V "
+                "(%ld blocking samples)\n", worst, blocking);
+  assert_true(blocking > 100);
+  assert_true(worst <= 1e-6);
+  cup_integrator_free(&I);
+  cup_netlist_free(&r.nl);
 }
 
 /* ---- D != 0: the rectifiers against an independent integration ------------------------ */
@@ -398,7 +465,8 @@ static void rc_reference(const rc *q, double T, long n, double *out) {   /* out[
 }
 
 /* v(out) (state 0) by the theta scheme at n = 3000 and 30000 against the
- * reference at the 1001 samples; returns the two errors. */
+ * reference at the 1001 samples; returns the two errors. The step-doubling
+ * estimate (a run at n/2 with the same D) is within 10x of them. */
 static void rc_errors(const char *file, const rc *q, double err[2]) {
   cup_netlist *nl = load_ok(file, NULL, 0);
   char msg[CUP_ERRMSG_LEN];
@@ -414,6 +482,7 @@ static void rc_errors(const char *file, const rc *q, double err[2]) {
     o.eps = o.eta = (cup_schedule){0, 0};
     o.output = CUP_OUTPUT_SAMPLES;
     o.output_samples = 1001;
+    o.estimate = 1;
     cup_integrator *I = NULL;
     cup_run_info info;
     static traj a;
@@ -424,7 +493,9 @@ static void rc_errors(const char *file, const rc *q, double err[2]) {
     cup_integrator_free(&I);
     err[r] = 0;
     for (long k = 0; k < a.n; k++) err[r] = fmax(err[r], fabs(a.x[k][0] - ref[k]));
-    print_message("%s theta n %5ld: max |v - v_ref| = %.3e V\n", strrchr(file, '/') + 1, o.n, err[r]);
+    print_message("%s theta n %5ld: max |v - v_ref| = %.3e V, step-doubling estimate %.3e V\n",
+                  strrchr(file, '/') + 1, o.n, err[r], info.err_est);
+    assert_true(info.err_est >= 0.1 * err[r] && info.err_est <= 10 * err[r]);
   }
   free(ref);
   cup_netlist_free(&nl);
@@ -527,6 +598,7 @@ int main(void) {
     cmocka_unit_test(test_doubler),
     cmocka_unit_test(test_signals),
     cmocka_unit_test(test_rl_closed_form),
+    cmocka_unit_test(test_rl_adaptive_signals),
     cmocka_unit_test(test_rectifiers_with_D),
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_mutations),

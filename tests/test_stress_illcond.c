@@ -11,6 +11,8 @@
 #include <setjmp.h>
 #include <cmocka.h>
 #include "stress_util.h"
+#include "refdata.h"
+#include "alloc_count.h"
 
 /* ---- a dense problem and the checks ----------------------------------------------- */
 
@@ -496,8 +498,188 @@ static void test_integrator_ill_conditioned(void **state) {
   }
 }
 
+/* Rows that depend on each other (a diode written twice, once scaled):
+ * the adaptive scheme keeps an independent subset active, does not take
+ * the rounding of a dependent row's slack for events, and gives the
+ * trajectory of the circuit without the copy, against the adaptive
+ * reference of tests/data, with the same estimate. */
+static double ref_case1[1001 * 3];
+typedef struct { double err; } dup_err;
+static int dup_sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  dup_err *e = vp;
+  long j = lround(t * 1000);
+  for (int i = 0; i < 3; i++) e->err = fmax(e->err, fabs(x[i] - ref_case1[3 * j + i]));
+  return 0;
+}
+
+/* The paper's circuit with its own rows replaced by C (m x 3, row-major). */
+static void paper_rows(lcs_built *b, int m, const double *C) {
+  const double R1 = 1, R2 = 2, R3 = 1, L2 = 1, L3 = 2, C4 = 1;
+  double A[9] = {0, 1, 0, -1 / (L3 * C4), -(R1 + R3) / L3, R1 / L3, 0, R1 / L2, -(R1 + R2) / L2};
+  double E[3] = {0, 1 / L3, 1 / L2}, P[3] = {1, L3, L2};
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(b, 3, m, 1, A, NULL, C, E, NULL, NULL, P, NULL, msg)) fail_msg("lcs: %s", msg);
+}
+
+static cup_integrator_options adaptive_options(double tol, long samples) {
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = tol;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = samples;
+  return o;
+}
+
+static void test_adaptive_dependent_rows(void **state) {
+  (void)state;
+  ref_load("ref_case1_adaptive.csv", ref_case1);
+  cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
+                   {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
+  cup_input *u = input_terms(2, w);
+  static const double copies[] = {0, 1, 2, 1e-6};
+  double est0 = 0;
+  for (int k = 0; k < 4; k++) {
+    int m = k ? 3 : 2;
+    double C[9] = {0, 1, -1, 0, 1, 0, 0, copies[k], 0};   /* x2 - x3 >= 0, x2 >= 0, c x2 >= 0 */
+    lcs_built b;
+    char msg[CUP_ERRMSG_LEN];
+    paper_rows(&b, m, C);
+    cup_integrator_options o = adaptive_options(1e-8, 1001);
+    cup_integrator *I = NULL;
+    if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+    dup_err e = {0};
+    double x0[3] = {0, 0, 0};
+    cup_run_info info;
+    assert_int_equal(cup_integrator_run(I, x0, dup_sink, &e, &info), CUP_OK);
+    print_message("paper case 1%s: error %.3e, estimate %.3e, %ld events, %ld steps\n",
+                  k ? ", x2 >= 0 written twice" : "", e.err, info.err_est, info.events, info.step);
+    if (k == 0) est0 = info.err_est;
+    assert_true(e.err <= 2e-8);
+    assert_true(info.err_est <= 10 * e.err && info.err_est >= 0.1 * e.err);
+    assert_true(fabs(info.err_est - est0) <= 0.01 * est0);
+    assert_true(info.step < 1100);                  /* no event at every step */
+
+    cup_integrator_free(&I);
+    unbuild_lcs(&b);
+  }
+  cup_input_free(&u);
+}
+
+/* Rows that meet at a degenerate corner or are nearly parallel: the paper
+ * circuit with a third row x2 + c x3 >= 0. With c = 1e-2 three rows touch
+ * at x = 0 in a two-dimensional subspace (the velocity LCP's matrix is
+ * singular): the trajectory agrees with the explicit scheme's at n = 1e5
+ * to that scheme's accuracy (1.5/n). With c = 1e-12 the third row is x2 >= 0
+ * again to 1e-12 (pivoting on the nearly singular blocks fails, the
+ * projector takes over): the paper's trajectory to tol. */
+typedef struct { double *X; long rows; } store;
+static int store_sink(long k, double t, const double *x, void *vp) {
+  (void)k; (void)t;
+  store *s = vp;
+  memcpy(s->X + 3 * s->rows++, x, sizeof(double) * 3);
+  return 0;
+}
+
+static void test_adaptive_degenerate_rows(void **state) {
+  (void)state;
+  cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
+                   {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
+  cup_input *u = input_terms(2, w);
+  static double Xa[1001 * 3], Xe[1001 * 3];
+  ref_load("ref_case1_adaptive.csv", ref_case1);
+  for (int k = 0; k < 2; k++) {
+    double c = k ? 1e-12 : 1e-2, C[9] = {0, 1, -1, 0, 1, 0, 0, 1, c};
+    lcs_built b;
+    char msg[CUP_ERRMSG_LEN];
+    paper_rows(&b, 3, C);
+    for (int scheme = 0; scheme < 2; scheme++) {
+      cup_integrator_options o = adaptive_options(1e-8, 1001);
+      if (scheme == 1) {                            /* the explicit scheme, exact projections */
+        o.scheme = CUP_SCHEME_EXPLICIT;
+        o.n = 100000;
+        o.eps = o.eta = (cup_schedule){0, 0};
+      }
+      cup_integrator *I = NULL;
+      if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+      store st = {scheme == 0 ? Xa : Xe, 0};
+      double x0[3] = {0, 0, 0};
+      cup_run_info info;
+      int rc = cup_integrator_run(I, x0, store_sink, &st, &info);
+      if (rc != CUP_OK) fail_msg("c = %g %s: %s: %s", c, cup_scheme_name(o.scheme), cup_status_name(rc), info.message);
+      cup_integrator_free(&I);
+    }
+    double d = ref_diff(Xa, k ? ref_case1 : Xe);
+    print_message("third row x2 + %g x3 >= 0: adaptive vs %s: %.3e\n", c,
+                  k ? "the paper's case 1 (adaptive reference)" : "explicit n = 1e5", d);
+    assert_true(k ? d <= 2e-8 : d <= 3e-5);
+    unbuild_lcs(&b);
+  }
+  cup_input_free(&u);
+}
+
+/* An adaptive run allocates nothing (its active sets, their exponentials,
+ * the LCPs and GSL's eigenvalue workspace are taken by
+ * cup_integrator_create): paper case 1 (events), case 2 (the set jumps at
+ * breakpoints), case 1 with a callback input (rejected steps), counted from
+ * the first run of a fresh integrator. */
+#if CUP_COUNTING
+static int sine_cb(double t, double *u, void *ctx) {
+  (void)ctx;
+  u[0] = 16 * sin(6 * M_PI * t) - 0.5;
+  return 0;
+}
+#endif
+
+static void test_adaptive_allocates_nothing(void **state) {
+  (void)state;
+#if CUP_COUNTING
+  for (int k = 0; k < 3; k++) {
+    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, k == 1 ? 1 : 0}};
+    cup_lcs *L = NULL;
+    assert_int_equal(cup_lcs_circuit(&L, &c, NULL), CUP_OK);
+    cup_input *u = NULL;
+    if (k == 0) {
+      cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
+                       {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
+      u = input_terms(2, w);
+    } else if (k == 1) {
+      cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
+      u = input_terms(1, &q);
+    } else {
+      assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+      assert_int_equal(cup_input_set_callback(u, sine_cb, NULL, 1e-12, 1e-12), CUP_OK);
+    }
+    cup_integrator_options o = adaptive_options(1e-9, 11);
+    cup_integrator *I = NULL;
+    char msg[CUP_ERRMSG_LEN];
+    if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
+    double x0[3] = {0, 0, 0};
+    cup_run_info info;
+    alloc_count = 0;
+    counting = 1;
+    int st = cup_integrator_run(I, x0, NULL, NULL, &info);
+    counting = 0;
+    print_message("adaptive run %d: %s, %ld events, %ld rejected steps, %ld allocations\n", k,
+                  cup_status_name(st), info.events, info.rejected, alloc_count);
+    assert_int_equal(st, CUP_OK);
+    assert_true(info.events >= 5);
+    assert_int_equal(alloc_count, 0);
+    cup_integrator_free(&I);
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+  }
+#else
+  skip();
+#endif
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_adaptive_dependent_rows),
+    cmocka_unit_test(test_adaptive_degenerate_rows),
+    cmocka_unit_test(test_adaptive_allocates_nothing),
     cmocka_unit_test(test_thin_wedges),
     cmocka_unit_test(test_distance_not_violation),
     cmocka_unit_test(test_degenerate_rows),

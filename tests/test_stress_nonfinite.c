@@ -332,6 +332,131 @@ static void test_options_and_overrides(void **state) {
   }
 }
 
+/* ---- the adaptive scheme ---------------------------------------------------------- */
+
+/* The 2-state system above by the adaptive scheme with a callback input
+ * fn (on E, or on a moving K through G), its states at t = j/100 counted in
+ * sn; returns the status. */
+static int run_adaptive_callback(int moving, cup_input_fn fn, void *ctx, seen *sn, cup_run_info *info) {
+  double A[4] = {-1, 3, -3, -1}, C[2] = {1, 0}, F[1] = {0.2}, E[2] = {0, 1}, G[1] = {-0.1};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 2, 1, 1, A, NULL, C, moving ? NULL : E, F, moving ? G : NULL, NULL, NULL, msg))
+    fail_msg("lcs: %s", msg);
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+  assert_int_equal(cup_input_set_callback(u, fn, ctx, 1e-12, 1e-10), CUP_OK);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 101;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+  double x0[2] = {0.3, 0};
+  int st = cup_integrator_run(I, x0, seen_sink, sn, info);
+  const double *xl = cup_integrator_state(I);      /* the state kept is the last good one */
+  assert_true(isfinite(xl[0]) && isfinite(xl[1]));
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+  return st;
+}
+
+/* A callback input that goes bad after t = 0.5 (NaN, Inf, a failure), on
+ * E and on a moving K: the adaptive run stops with CUP_ERR_CALLBACK at the
+ * step that first samples it there, names that time, and has delivered
+ * every output time before it, all finite. */
+static void test_adaptive_callbacks(void **state) {
+  (void)state;
+  for (int mode = 0; mode < 3; mode++)
+    for (int moving = 0; moving < 2; moving++) {
+      cb_ctx c = {mode, 0.5, 0};
+      seen sn = {0, -1, 1};
+      cup_run_info info;
+      int st = run_adaptive_callback(moving, bad_input, &c, &sn, &info);
+      print_message("adaptive, input %s%s: %s: %s (%ld samples)\n", mode == 0 ? "NaN" : mode == 1 ? "Inf" : "fails",
+                    moving ? ", moving K" : "", cup_status_name(st), info.message, sn.count);
+      assert_int_equal(st, CUP_ERR_CALLBACK);
+      assert_contains(info.message, "the input u(t) failed or returned NaN/Inf");
+      assert_true(info.t <= 0.5 && info.t > 0.4);
+      assert_true(sn.count >= 41 && sn.count <= 51);  /* t = 0 .. t_stop, on the grid j / 100 */
+      assert_true(sn.all_finite);
+    }
+}
+
+/* u(t) = 1 / (1/2 - t) has no polynomial approximation near 1/2: the
+ * callback's steps shrink until they underflow, and the run says so with
+ * the time, keeping what it computed. */
+static int pole_input(double t, double *u, void *vp) {
+  (void)vp;
+  u[0] = 1 / (0.5 - t);
+  return 0;
+}
+
+static void test_adaptive_step_underflow(void **state) {
+  (void)state;
+  seen sn = {0, -1, 1};
+  cup_run_info info;
+  int st = run_adaptive_callback(0, pole_input, NULL, &sn, &info);
+  print_message("adaptive, u = 1/(1/2 - t): %s: %s (%ld samples, %ld rejected steps)\n", cup_status_name(st),
+                info.message, sn.count, info.rejected);
+  assert_int_equal(st, CUP_ERR_STEP_SIZE);
+  assert_contains(info.message, "underflows");
+  assert_true(info.t > 0.49 && info.t < 0.5);
+  assert_int_equal(sn.count, 50);                    /* t = 0, 0.01, ..., 0.49 */
+  assert_true(sn.all_finite);
+}
+
+/* Bad tolerances are refused at creation, naming the value; one below
+ * double precision at the state's scale is a warning that names it. */
+static void test_adaptive_tolerances(void **state) {
+  (void)state;
+  cup_lcs *L = NULL;
+  cup_circuit circ = {1, 2, 1, 1, 2, 1, {0, 0}};
+  assert_int_equal(cup_lcs_circuit(&L, &circ, NULL), CUP_OK);
+  cup_wave w[2] = {{.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3},
+                   {.kind = CUP_WAVE_CONSTANT, .value = -0.5}};
+  cup_input *u = input_terms(2, w);
+  struct { double abs, rel, rate; const char *want; } bad[] = {
+    {NAN, 1e-6, 0, "tol_abs = nan"}, {1e-6, -1, 0, "tol_rel = -1"}, {INFINITY, 1e-6, 0, "tol_abs = inf"},
+    {0, 0, 0, "tol_rel = 0 with tol_abs = 0"}, {0, 1e-17, 0, "below what double precision"},
+    {1e-6, 1e-6, NAN, "max_event_rate = nan"},
+  };
+  char msg[CUP_ERRMSG_LEN];
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_ADAPTIVE;
+    o.tol_abs = bad[k].abs;
+    o.tol_rel = bad[k].rel;
+    o.max_event_rate = bad[k].rate;
+    cup_integrator *I = NULL;
+    assert_int_equal(cup_integrator_create(&I, L, u, &o, msg), CUP_ERR_ARG);
+    assert_null(I);
+    assert_contains(msg, bad[k].want);
+  }
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = 1e-300;
+  o.tol_rel = 1e-15;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create(&I, L, u, &o, msg), CUP_OK);
+  double x0[3] = {0, 0, 0}, xnan[3] = {0, NAN, 0};
+  cup_run_info info;
+  int st = cup_integrator_run(I, x0, NULL, NULL, &info);
+  print_message("adaptive, tol_rel = 1e-15: %s: %s\n", cup_status_name(st), info.message);
+  assert_int_equal(st, CUP_WARN_TOL_FLOOR);
+  assert_contains(info.message, "rel 1e-15");
+  assert_int_equal(info.step > 0 && info.t == 1, 1);
+  assert_int_equal(cup_integrator_run(I, xnan, NULL, NULL, &info), CUP_ERR_NONFINITE);
+  assert_contains(info.message, "x0[1] is nan");
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_lcs_matrices),
@@ -340,6 +465,9 @@ int main(void) {
     cmocka_unit_test(test_projector_never_returns_nonfinite),
     cmocka_unit_test(test_nan_is_never_feasible),
     cmocka_unit_test(test_options_and_overrides),
+    cmocka_unit_test(test_adaptive_callbacks),
+    cmocka_unit_test(test_adaptive_step_underflow),
+    cmocka_unit_test(test_adaptive_tolerances),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

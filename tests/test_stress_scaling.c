@@ -135,9 +135,62 @@ static void test_scaling(void **state) {
       }
 }
 
+/* The adaptive scheme with tol_abs scaled by s (tol_rel is scale-free):
+ * its decisions (rounding thresholds, the events' time tolerance, the step
+ * limits) do not depend on s, so the trajectory is s times the unscaled
+ * one to rounding, and so is its error estimate. */
+static void run_adaptive(int c, double s, traj *tr, cup_run_info *info) {
+  sys S;
+  make_sys(&S, c, s);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = c == INTERVAL ? 2.5 * M_PI : 1;
+  o.tol_abs = 1e-8 * s;
+  o.tol_rel = 1e-8;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 1001;
+  cup_integrator *I = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&I, S.L, S.u, &o, msg)) fail_msg("create: %s", msg);
+  traj_init(tr, S.dim, 1001);
+  int st = cup_integrator_run(I, S.x0, traj_sink, tr, info);
+  if (st != CUP_OK) fail_msg("%s s %g: %s: %s", case_name[c], s, cup_status_name(st), info->message);
+  assert_int_equal(tr->rows, 1001);
+  cup_integrator_free(&I);
+  free_sys(&S, c);
+}
+
+static void test_adaptive_scaling(void **state) {
+  (void)state;
+  static const double scales[] = {1e-9, 1e9};
+  for (int c = 0; c < NCASE; c++) {
+    traj ref;
+    cup_run_info i1;
+    run_adaptive(c, 1, &ref, &i1);
+    for (int k = 0; k < 2; k++) {
+      double s = scales[k];
+      traj tr;
+      cup_run_info info;
+      run_adaptive(c, s, &tr, &info);
+      double dev = deviation(&ref, &tr, s);
+      print_message("adaptive %-32s s = %.0e: max |x_s/s - x|/max|x| = %.2e, estimate/s %.4e (s = 1: %.4e), "
+                    "%ld events (%ld)\n", case_name[c], s, dev, info.err_est / s, i1.err_est, info.events,
+                    i1.events);
+      for (long q = 0; q < tr.rows; q++) assert_true(tr.t[q] == ref.t[q]);
+      assert_int_equal(info.events, i1.events);
+      if (!(dev <= 1e-10)) fail_msg("deviation %.3e > 1e-10", dev);
+      assert_true(fabs(info.err_est / s - i1.err_est) <= 0.01 * i1.err_est);
+      traj_free(&tr);
+    }
+    traj_free(&ref);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_scaling),
+    cmocka_unit_test(test_adaptive_scaling),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

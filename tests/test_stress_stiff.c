@@ -341,8 +341,70 @@ static void test_series_rlc_resolved(void **state) {
   assert_true(e2.ev <= 0.2 * e1.ev && e2.ei <= 0.2 * e1.ei);
 }
 
+/* The adaptive scheme on both circuits over the whole range of time
+ * constants: each active set's flow is exact however stiff, so the error
+ * is the events' and follows tol, the estimate within 10x of it. */
+typedef struct { const circ *c; double err, xmax; } ad_err;
+
+static int ad_sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  ad_err *e = vp;
+  double ex[2];
+  circ_exact(e->c, t, ex);
+  e->err = fmax(e->err, fmax(fabs(x[0] - ex[0]), fabs(x[1] - ex[1])));
+  e->xmax = fmax(e->xmax, fmax(fabs(x[0]), fabs(x[1])));
+  return 0;
+}
+
+static void test_adaptive_stiff(void **state) {
+  (void)state;
+  static const struct { int kind; circ_case cc; } cases[] = {
+    {CLAMP, {"clamp 1uH 1k 1uF", 1e3, 1e-6, 1e-6, 100, 0.02, 0}},
+    {CLAMP, {"clamp 1mH 1k 1uF", 1e3, 1e-3, 1e-6, 100, 0.02, 0}},
+    {CLAMP, {"clamp 1uH 1k 100nF", 1e3, 1e-6, 1e-7, 2000, 1e-3, 0}},
+    {SERIES, {"series 1uH 1k 1uF", 1e3, 1e-6, 1e-6, 100, 0.02, 0}},
+    {SERIES, {"series 1mH 1k 1uF", 1e3, 1e-3, 1e-6, 1000, 2e-3, 0}},
+  };
+  for (size_t q = 0; q < sizeof cases / sizeof cases[0]; q++) {
+    const circ_case *cc = &cases[q].cc;
+    circ c = {.kind = cases[q].kind, .R = cc->R, .L = cc->L, .C = cc->C, .V = 10, .f = cc->f, .T = cc->T};
+    circ_setup(&c);
+    lcs_built b;
+    circ_lcs(&c, &b);
+    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = c.f};
+    cup_input *u = input_terms(1, &s);
+    for (double tol = 1e-4; tol >= 1e-10; tol *= 1e-3) {
+      cup_integrator_options o;
+      cup_integrator_options_default(&o);
+      o.scheme = CUP_SCHEME_ADAPTIVE;
+      o.T = c.T;
+      o.tol_abs = o.tol_rel = tol;
+      o.output = CUP_OUTPUT_SAMPLES;
+      o.output_samples = 401;
+      cup_integrator *I = NULL;
+      char msg[CUP_ERRMSG_LEN];
+      if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+      ad_err e = {&c, 0, 0};
+      double x0[2] = {0, 0};
+      cup_run_info info;
+      int st = cup_integrator_run(I, x0, ad_sink, &e, &info);
+      cup_integrator_free(&I);
+      double target = tol * (1 + e.xmax);
+      print_message("adaptive %-20s tol %.0e: %s, error %.3e (%.2f tol), estimate %.3e, %ld steps, %ld events\n",
+                    cc->name, tol, cup_status_name(st), e.err, e.err / target, info.err_est, info.step,
+                    info.events);
+      assert_int_equal(st, CUP_OK);
+      assert_true(e.err <= target);
+      if (e.err > 1e-13 * (1 + e.xmax)) assert_true(info.err_est <= 10 * e.err && info.err_est >= 0.1 * e.err);
+    }
+    cup_input_free(&u);
+    unbuild_lcs(&b);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_adaptive_stiff),
     cmocka_unit_test(test_clamp_rlc),
     cmocka_unit_test(test_explicit_flagged),
     cmocka_unit_test(test_series_rlc_resolved),

@@ -16,6 +16,7 @@
 #include "catchup.h"
 #include "sha256.h"
 #include "sweep.h"
+#include "refdata.h"
 
 #define EX CUP_EXAMPLES_DIR
 
@@ -235,27 +236,55 @@ static void test_nearest_samples(void **state) {
  * 10^4) against the reference limit in tests/data on t = k/1000. */
 static void test_reference_vs_data(void **state) {
   (void)state;
-  FILE *csv = fopen(CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv", "r");
-  if (!csv) fail_msg("cannot open %s", CUP_TEST_DATA_DIR "/ref_case1_limit_richardson.csv");
   cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
   assert_int_equal(s->var[0].n_ref, 40000);
   double *x = malloc(sizeof(double) * 1001 * 3);
   sw_result r;
   sw_run_job(s, 0, NULL, &r, x);
   assert_int_equal(r.status, CUP_OK);
-  char line[512];
-  double ref[4], err = 0;
-  assert_non_null(fgets(line, sizeof line, csv));
-  for (int j = 0; j <= 1000; j++) {
-    assert_non_null(fgets(line, sizeof line, csv));
-    assert_int_equal(sscanf(line, "%lf,%lf,%lf,%lf", &ref[0], &ref[1], &ref[2], &ref[3]), 4);
-    for (int i = 0; i < 3; i++) err = fmax(err, fabs(x[3 * j + i] - ref[i + 1]));
-  }
-  fclose(csv);
+  static double data[1001 * 3];
+  ref_load("ref_case1_limit_richardson.csv", data);
+  double err = ref_diff(x, data);
   printf("# reference (Richardson, n_ref = 40000) vs tests/data case-1 reference: max |diff| = %.3g; "
          "correction removed %.3g\n", err, r.correction);
   assert_true(err < 1e-6);
   assert_true(r.correction > 1e-5 && r.correction < 1e-4);   /* ~1.9e-5: x(2 n_ref) alone is off by that */
+  free(x);
+  sw_free(&s);
+}
+
+/* The tol axis and the adaptive reference: tasks vary tol last; the
+ * reference (the adaptive scheme at tol 1e-13) agrees with the Richardson
+ * limit in tests/data to that file's accuracy (about 1e-10), and an adaptive
+ * task at tol 1e-9 measured against it has an error below tol with its
+ * estimate within 10x. */
+static void test_tol_axis_adaptive_reference(void **state) {
+  (void)state;
+  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {scheme: [explicit, adaptive], tol: [1e-6, 1e-9]}\n"
+                           "variants: [{name: case1}]\nreference: {method: adaptive}\n");
+  assert_int_equal(s->n_tasks, 4);
+  sw_task t;
+  assert_int_equal(sw_task_get(s, 3, &t), CUP_OK);
+  assert_int_equal(t.scheme, CUP_SCHEME_ADAPTIVE);
+  assert_true(t.tol_abs == 1e-9 && t.tol_rel == 1e-9);
+  assert_int_equal(sw_task_get(s, 0, &t), CUP_OK);
+  assert_true(t.scheme == CUP_SCHEME_EXPLICIT && t.tol_abs == 1e-6);
+  double *ref = malloc(sizeof(double) * 1001 * 3), *x = malloc(sizeof(double) * 1001 * 3);
+  sw_result r;
+  sw_run_job(s, 0, NULL, &r, ref);
+  assert_int_equal(r.status, CUP_OK);
+  static double data[1001 * 3];
+  ref_load("ref_case1_limit_richardson.csv", data);
+  double ref_est = r.correction, diff = ref_diff(ref, data);
+  sw_run_job(s, s->n_variants + 3, NULL, &r, x);
+  double err = sw_max_error(x, ref, 1001 * 3);
+  printf("# adaptive reference vs Richardson limit: %.3g (estimate %.3g); adaptive task at tol 1e-9: "
+         "error %.3g, estimate %.3g, %ld events\n", diff, ref_est, err, r.err_est, (long)r.events);
+  assert_true(diff < 2e-10 && ref_est < 1e-12);
+  assert_int_equal(r.status, CUP_OK);
+  assert_true(err <= 1e-9 * 4 && r.err_est <= 10 * err && r.err_est >= 0.1 * err);
+  assert_true(r.events >= 8);
+  free(ref);
   free(x);
   sw_free(&s);
 }
@@ -390,6 +419,7 @@ int main(void) {
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_nearest_samples),
     cmocka_unit_test(test_reference_vs_data),
+    cmocka_unit_test(test_tol_axis_adaptive_reference),
     cmocka_unit_test(test_netlist_variants),
     cmocka_unit_test(test_batched_writes),
   };

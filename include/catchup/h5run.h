@@ -1,6 +1,7 @@
 /* catchup/h5run.h — HDF5 output of one run (library catchup_h5, built with
  * the apps): datasets /t [N] and /x [N, dim] (original x coordinates),
- * float64, chunked and extendable, appended as samples arrive and flushed so
+ * float64, and /events (the adaptive scheme's changes of the active set),
+ * chunked and extendable, appended as samples arrive and flushed so
  * that an interrupted run keeps every sample written before the interruption.
  *
  * Memory is one chunk of rows (at most 4096 rows and about 1 MiB), however
@@ -37,6 +38,13 @@ int cup_h5run_create(cup_h5run **w, const char *path, int dim, char *errmsg);
  *  stored). Returns nonzero (the status) once writing has failed or space
  *  ran short, so that a run stops instead of computing what cannot be saved. */
 int cup_h5run_sink(long k, double t, const double *x, void *ctx);
+/** A cup_event_fn: append one change of the active set (adaptive scheme)
+ *  to /events through ctx = the cup_h5run. /events exists in every file
+ *  (empty for fixed-step runs): one row per event, a compound of t (float64,
+ *  the event time), row (int32, 0-based) and on (int8: 1 the row turns on,
+ *  0 off), which h5py reads as a structured array (f["events"]["t"]).
+ *  Buffered like the samples (1024 rows, flushed with them). */
+int cup_h5run_event(double t, int row, int on, void *ctx);
 /** Declare named signals (a netlist's node voltages and branch currents):
  *  the group /signals gets one dataset per name, [N] float64, appended
  *  with /t by cup_h5run_append. Call once, before the first sample; names

@@ -29,7 +29,11 @@ typedef struct cup_integrator cup_integrator;
     "exact flow of A with the exact input convolution, then project")                 \
   X(CUP_SCHEME_THETA, 3, "theta",                                                       \
     "Moreau-Jean theta-method: W = (I - h theta A)^-1 and the step's exact LCP "       \
-    "(theta = 1/2: second order where the solution is smooth; small dense systems)")
+    "(theta = 1/2: second order where the solution is smooth; small dense systems)")  \
+  X(CUP_SCHEME_ADAPTIVE, 4, "adaptive",                                                 \
+    "event-driven: the exact flow of each active set's linear system, events located "  \
+    "by root finding and the next active set by the velocity LCP; steps end on the "    \
+    "input's breakpoints; tol sets the error, which is estimated (small dense systems)")
 
 typedef enum cup_scheme {
 #define CUP_SCHEME_ENUM_(e, v, name, doc) e = v,
@@ -84,6 +88,12 @@ typedef int (*cup_rhs_fn)(double t, const double *x, double *f, void *ctx);
  *  into F; return nonzero to stop the run with CUP_ERR_CALLBACK. Callable
  *  from Fortran (bind(C)). */
 typedef int (*cup_rhs_integral_fn)(double t0, double t1, const double *x, double *F, void *ctx);
+/** A change of the active set (adaptive scheme): row (0-based) turns on
+ *  (on = 1: the constraint holds with zeta >= 0; a diode of the paper's
+ *  circuit conducts; a netlist row whose current the state fixes blocks) or
+ *  off (on = 0) at time t (the located root; for a breakpoint, its time).
+ *  Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
+typedef int (*cup_event_fn)(double t, int row, int on, void *ctx);
 
 /** Receives the selected states: step k, time t_k = k h, state x (n entries,
  *  original x coordinates). Return nonzero to stop the run (CUP_ERR_INTERRUPTED). */
@@ -122,6 +132,17 @@ typedef struct cup_integrator_options {
   void *step_ctx;             /**< passed to on_step */
   const volatile int *interrupt; /**< polled every 1024 steps: nonzero stops the run with
                                       CUP_ERR_INTERRUPTED (e.g. set by a signal handler) */
+  /* the adaptive scheme and error estimates */
+  double tol_abs;             /**< ADAPTIVE: absolute error target on x (max norm); default 1e-6 */
+  double tol_rel;             /**< ADAPTIVE: error target relative to ||x(t)||_inf; default 1e-6 */
+  double max_event_rate;      /**< ADAPTIVE: events per unit time beyond which they are taken for an
+                                   accumulation (Zeno, chattering): CUP_WARN_ZENO, and catching-up
+                                   steps across it; 0: 1e5 / T */
+  cup_event_fn on_event;      /**< ADAPTIVE: each change of the active set, or NULL */
+  void *event_ctx;            /**< passed to on_event */
+  int estimate;               /**< fixed-step schemes: 1 estimates the error by step doubling, from a
+                                   second run at n/2 in step (half again the work; n even); the
+                                   adaptive scheme always estimates */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */
@@ -146,6 +167,11 @@ typedef struct cup_run_info {
                                    allocations): the one at t = 0, then one per step whose rows
                                    brought a pattern not in the pool */
   long max_rows;              /**< state polyset: the most rows of one step */
+  /* the adaptive scheme and error estimates */
+  double err_est;             /**< a posteriori estimate of max over t of ||x(t) - x_exact(t)||_inf
+                                   (adaptive scheme, or estimate = 1); NaN when not estimated */
+  long events;                /**< ADAPTIVE: changes of the active set (rows switched) */
+  long rejected;              /**< ADAPTIVE: steps rejected by the error test (callback inputs) */
 } cup_run_info;
 
 void cup_integrator_options_default(cup_integrator_options *o);
@@ -201,7 +227,10 @@ const double *cup_integrator_state(const cup_integrator *I);
  *  the theta step's LCP solution, or the projection's multipliers divided
  *  by h (the impulse of the step over its length); 0 before the first step.
  *  Valid inside the sink, for the state it receives (a netlist's diode
- *  currents and voltages, cup_netlist_signals). CUP_ERR_UNSUPPORTED for an
+ *  currents and voltages, cup_netlist_signals). The adaptive scheme gives
+ *  the multipliers of the active set that holds from the sample's time on
+ *  (at an event, the one chosen there), and zeros at t = 0 and on its
+ *  catching-up steps across accumulating events. CUP_ERR_UNSUPPORTED for an
  *  integrator from cup_integrator_create_process. */
 int cup_integrator_zeta(const cup_integrator *I, double *zeta);
 

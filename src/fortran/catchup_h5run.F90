@@ -21,8 +21,9 @@ module catchup_h5run
 #ifdef CATCHUP_H5RUN_ERRMSG
   public :: cup_h5run_errmsg, c_cup_h5run_errmsg
 #endif
-  ! the C sink itself: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...)
-  public :: cup_h5run_sink
+  ! the C sinks themselves: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...);
+  ! o%on_event = c_funloc(cup_h5run_event), o%event_ctx = w%ptr (adaptive scheme: /events)
+  public :: cup_h5run_sink, cup_h5run_event
   public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
     c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
     c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append
@@ -49,6 +50,14 @@ module catchup_h5run
       type(c_ptr), value :: ctx
       integer(c_int) :: st
     end function cup_h5run_sink
+    function cup_h5run_event(t, row, on, ctx) bind(C, name="cup_h5run_event") result(st)
+      import :: c_int, c_double, c_ptr
+      real(c_double), value :: t
+      integer(c_int), value :: row
+      integer(c_int), value :: on
+      type(c_ptr), value :: ctx
+      integer(c_int) :: st
+    end function cup_h5run_event
     function c_cup_h5run_attr_double(w, name, v) bind(C, name="cup_h5run_attr_double") result(st)
       import :: c_int, c_double, c_ptr, c_char
       type(c_ptr), value :: w

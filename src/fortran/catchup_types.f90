@@ -144,6 +144,13 @@ module catchup_types
     type(c_funptr) :: on_step = c_null_funptr   !< c_funloc of a procedure(cup_step_fn)
     type(c_ptr) :: step_ctx = c_null_ptr
     type(c_ptr) :: interrupt = c_null_ptr   !< c_loc of an integer(c_int) flag polled every 1024 steps
+    ! the adaptive scheme and error estimates
+    real(c_double) :: tol_abs = 0               !< ADAPTIVE: absolute error target on x (max norm)
+    real(c_double) :: tol_rel = 0               !< ADAPTIVE: error target relative to max |x(t)|
+    real(c_double) :: max_event_rate = 0        !< ADAPTIVE: events per unit time taken for Zeno; 0: 1e5 / T
+    type(c_funptr) :: on_event = c_null_funptr  !< c_funloc of a procedure(cup_event_fn), or null
+    type(c_ptr) :: event_ctx = c_null_ptr
+    integer(c_int) :: estimate = 0              !< fixed-step schemes: 1 = step-doubling error estimate
   end type cup_integrator_options
 
   type, bind(C), public :: cup_run_info
@@ -164,6 +171,10 @@ module catchup_types
     character(kind=c_char) :: message(256) = c_null_char   !< use cup_run_info_message(info)
     integer(c_long) :: set_rebuilds = 0   !< state polyset: symbolic analyses of the run
     integer(c_long) :: max_rows = 0       !< state polyset: the most rows of one step
+    ! the adaptive scheme and error estimates
+    real(c_double) :: err_est = 0      !< estimate of max_t |x(t) - x_exact(t)|_inf; NaN when not estimated
+    integer(c_long) :: events = 0      !< ADAPTIVE: changes of the active set
+    integer(c_long) :: rejected = 0    !< ADAPTIVE: steps rejected by the error test
   end type cup_run_info
 
   ! ---- set.h, and the process of integrator.h ---------------------------------
@@ -335,7 +346,18 @@ module catchup_types
       type(c_ptr), value :: rows, ctx
       integer(c_int) :: stat
     end function cup_rows_fn
+
+    !> Adaptive scheme: row (0-based) turns on (on = 1) or off (0) at time t;
+    !> nonzero stops the run (CUP_ERR_INTERRUPTED).
+    function cup_event_fn(t, row, on, ctx) result(stat) bind(C)
+      import :: c_double, c_ptr, c_int
+      real(c_double), value :: t
+      integer(c_int), value :: row
+      integer(c_int), value :: on
+      type(c_ptr), value :: ctx
+      integer(c_int) :: stat
+    end function cup_event_fn
   end interface
   public :: cup_input_fn, cup_rhs_fn, cup_sample_fn, cup_step_fn, cup_rhs_integral_fn, &
-    cup_oracle_fn, cup_rows_fn
+    cup_oracle_fn, cup_rows_fn, cup_event_fn
 end module catchup_types

@@ -67,13 +67,7 @@ double cup_freestep_h_rho(const cup_drift *D, double h) {
 
 /* ---- exponential scheme: inputs as outputs of small linear generators -------- */
 
-/* States per term: constant 1 (w' = 0), sine 2 (s' = om c, c' = -om s, the
- * input is s), square 1 (piecewise constant), table 2 (v' = slope). */
-static int gen_states(const cup_term *t) {
-  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE ||
-         t->kind == CUP_WAVE_DAMPED_SINE ? 2 : 1;
-}
-
+/* The input's exosystem (input_impl.h): one generator block per term. */
 static int exp_init(cup_freestep *fs, char *errmsg) {
   const cup_drift *D = &fs->d;
   const cup_input *u = fs->u;
@@ -81,14 +75,10 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
   int nterms = u && !u->fn ? u->nterms : 0;
   fs->nw = 0;
   fs->gen_of_term = zalloc((size_t)nterms + 1, sizeof(int), &fail);
-  for (int k = 0; k < nterms && !fail; k++) {
-    fs->gen_of_term[k] = fs->nw;
-    fs->nw += gen_states(&u->terms[k]);
-    /* before its delay a damped sine is constant, which its generator (a
-     * damped rotation) cannot hold */
-    if (u->terms[k].kind == CUP_WAVE_DAMPED_SINE && u->terms[k].delay > 0)
-      return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "exponential scheme: a damped sine with a delay (input "
-                      "term %d) is not supported; use the theta or implicit scheme", k);
+  if (!fail) fs->nw = cup_input_gen_dim(u, fs->gen_of_term);
+  if (!fail) {
+    int st = cup_input_gen_check(u, "exponential", errmsg);
+    if (st) return st;
   }
   int na = fs->na = n + fs->nw;
   if (na > CUP_EXPONENTIAL_MAX_DIM)
@@ -113,15 +103,8 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
     int g = n + fs->gen_of_term[k];
     if (D->has_E)                            /* x' += E(:, comp) * (first generator state) */
       for (int q = D->E.p[t->comp]; q < D->E.p[t->comp + 1]; q++) fs->M[D->E.i[q] + (size_t)g * na] = D->E.x[q];
-    if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) {
-      double d = t->kind == CUP_WAVE_DAMPED_SINE ? t->damping : 0;
-      fs->M[g + (size_t)(g + 1) * na] = t->omega;     /* s' = om c - d s */
-      fs->M[(g + 1) + (size_t)g * na] = -t->omega;    /* c' = -om s - d c */
-      fs->M[g + (size_t)g * na] = fs->M[(g + 1) + (size_t)(g + 1) * na] = -d;
-    } else if (t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE) {
-      fs->M[g + (size_t)(g + 1) * na] = 1;             /* v' = slope */
-    }
   }
+  if (nterms) cup_input_gen_dynamics(u, fs->gen_of_term, fs->M + n + (size_t)n * na, na);
   double *hM = fs->Es;
   for (size_t q = 0; q < NA; q++) hM[q] = fs->h * fs->M[q];
   cup_dense_expm(hM, na, fs->Eh, fs->ework);
@@ -152,44 +135,10 @@ static int exp_init(cup_freestep *fs, char *errmsg) {
   return CUP_OK;
 }
 
-/* Generator states on (a, b), from the waveform itself (not propagated, so
- * nothing drifts): constants, sin/cos at a, the square's value on the open
- * interval (at its midpoint: the jump instants carry no weight), the
- * table's value at a and its slope on (a, b). */
-static void gen_values(const cup_freestep *fs, double a, double b) {
-  const cup_input *u = fs->u;
-  double mid = 0.5 * (a + b);
-  for (int k = 0; k < u->nterms; k++) {
-    const cup_term *t = &u->terms[k];
-    double *w = fs->wgen + fs->gen_of_term[k];
-    switch (t->kind) {
-      case CUP_WAVE_CONSTANT: w[0] = t->value; break;
-      case CUP_WAVE_SINE:
-        w[0] = t->amp * sin(t->omega * a + t->phase);
-        w[1] = t->amp * cos(t->omega * a + t->phase);
-        break;
-      case CUP_WAVE_SQUARE: w[0] = cup_term_value(t, mid); break;
-      case CUP_WAVE_DAMPED_SINE: {                   /* no delay here (exp_init) */
-        double e = t->amp * exp(-t->damping * a);
-        w[0] = e * sin(t->omega * a + t->phase);
-        w[1] = e * cos(t->omega * a + t->phase);
-        break;
-      }
-      case CUP_WAVE_PULSE:
-      case CUP_WAVE_PWL: {
-        double va = cup_term_value(t, a);
-        w[0] = va;
-        w[1] = mid > a ? (cup_term_value(t, mid) - va) / (mid - a) : 0;
-        break;
-      }
-    }
-  }
-}
-
 /* x <- top block of E [x; w(a..b)], E = exp((b - a) M). */
 static void exp_propagate(cup_freestep *fs, const double *E, double *x, double a, double b) {
   int n = fs->n, na = fs->na;
-  if (fs->nw) gen_values(fs, a, b);
+  if (fs->nw) cup_input_gen_values(fs->u, fs->gen_of_term, a, b, fs->wgen);
   memcpy(fs->xa, x, sizeof(double) * (size_t)n);
   memcpy(fs->xa + n, fs->wgen, sizeof(double) * (size_t)fs->nw);
   for (int i = 0; i < n; i++) {

@@ -5,6 +5,7 @@
  * nothing and a run keeps only the current state. */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,6 +17,8 @@
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 #include "set/set_impl.h"
+#include "adaptive.h"
+#include "estimate.h"
 
 struct cup_integrator {
   const cup_input *u;
@@ -37,6 +40,9 @@ struct cup_integrator {
   cup_projector *proj;
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
+  cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
+  cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
+  cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
@@ -121,18 +127,40 @@ void cup_integrator_options_default(cup_integrator_options *o) {
   o->output_samples = 0;
   o->f_order = 3;
   o->theta = 0.5;
+  o->tol_abs = 1e-6;
+  o->tol_rel = 1e-6;
 }
 
 /* ---- set-up --------------------------------------------------------------------- */
+
+/* tol of the adaptive scheme, the event rate cap, the step-doubling estimate. */
+static int validate_tolerances(const cup_integrator_options *o, char *errmsg) {
+  if (o->scheme == CUP_SCHEME_ADAPTIVE) {
+    if (!(o->tol_abs >= 0) || !isfinite(o->tol_abs))
+      return cup_fail(errmsg, CUP_ERR_ARG, "tol_abs = %g must be finite and >= 0", o->tol_abs);
+    if (!(o->tol_rel >= 0) || !isfinite(o->tol_rel))
+      return cup_fail(errmsg, CUP_ERR_ARG, "tol_rel = %g must be finite and >= 0", o->tol_rel);
+    if (o->tol_abs == 0 && !(o->tol_rel >= 16 * DBL_EPSILON))
+      return cup_fail(errmsg, CUP_ERR_ARG, "tol_rel = %g with tol_abs = 0 is below what double precision "
+                      "can deliver (16 eps = %.2g): raise tol_rel or give tol_abs", o->tol_rel, 16 * DBL_EPSILON);
+    if (!(o->max_event_rate >= 0) || !isfinite(o->max_event_rate))
+      return cup_fail(errmsg, CUP_ERR_ARG, "max_event_rate = %g must be finite and >= 0", o->max_event_rate);
+  } else if (o->estimate && (o->n < 2 || o->n % 2))
+    return cup_fail(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
+                    "must be even", o->n);
+  return CUP_OK;
+}
 
 static int validate(const cup_integrator_options *o, char *errmsg) {
   if (!(o->T > 0) || !isfinite(o->T))
     return cup_fail(errmsg, CUP_ERR_ARG, "T = %g must be finite and > 0", o->T);
   if (o->n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "n = %ld must be >= 1", o->n);
-  if (o->scheme < CUP_SCHEME_EXPLICIT || o->scheme > CUP_SCHEME_THETA)
+  if ((int)o->scheme < 0 || (int)o->scheme >= (int)CUP_SCHEME_COUNT)
     return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", (int)o->scheme);
   if (o->scheme == CUP_SCHEME_THETA && !(o->theta >= 0 && o->theta <= 1))
     return cup_fail(errmsg, CUP_ERR_ARG, "theta = %g must be in [0, 1]", o->theta);
+  int st = validate_tolerances(o, errmsg);
+  if (st) return st;
   double e = cup_schedule_value(&o->eps, o->n), t = cup_schedule_value(&o->eta, o->n);
   if (!(e >= 0) || !isfinite(e) || !(t >= 0) || !isfinite(t))
     return cup_fail(errmsg, CUP_ERR_ARG, "tolerances eps_n = %g, eta_n = %g must be finite and >= 0", e, t);
@@ -142,7 +170,7 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
         return cup_fail(errmsg, CUP_ERR_ARG, "output every %ld: the stride must be >= 1", o->output_every);
       break;
     case CUP_OUTPUT_SAMPLES:
-      if (o->output_samples < 2 || o->output_samples - 1 > o->n)
+      if (o->output_samples < 2 || (o->scheme != CUP_SCHEME_ADAPTIVE && o->output_samples - 1 > o->n))
         return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be in [2, n + 1 = %ld]",
                         o->output_samples, o->n + 1);
       break;
@@ -171,9 +199,13 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   char text[128];
   cup_lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
-                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state "
-                  "does not fix): use the theta scheme", cup_scheme_name(scheme), text, k == 1 ? "has" : "have");
+  const char *why = scheme == CUP_SCHEME_ADAPTIVE
+                        ? "its active sets' manifolds C_J x + G_J u + F_J = 0 leave out D zeta_J, which it does "
+                          "not integrate yet"
+                        : "it projects onto K(t) = {C x + G u + F >= 0}, which D != 0 does not define";
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (%s); %s %s D != 0 (a diode whose "
+                  "current the state does not fix): use the theta scheme", cup_scheme_name(scheme), why, text,
+                  k == 1 ? "has" : "have");
 }
 
 /* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
@@ -278,6 +310,27 @@ static cup_integrator *integrator_new(const cup_integrator_options *opt, char *e
   return I;
 }
 
+/* The step-doubling estimate: the same model and scheme at n/2 (borrowing
+ * this integrator's model), keeping its states where the two grids meet
+ * (estimate.h). */
+static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+  cup_integrator_options h = I->o;
+  h.n = I->o.n / 2;
+  h.estimate = 0;
+  h.on_step = NULL;
+  if (cup_estimate_init(&I->est, I->o.n, I->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  h.output = CUP_OUTPUT_EVERY;
+  h.output_every = cup_estimate_stride(&I->est);
+  int st;
+  cup_integrator *H = I->half = integrator_new(&h, errmsg, &st);
+  if (!H) return st;
+  H->u = I->u;
+  H->L = I->L;                                   /* the theta step takes D from it */
+  H->n = I->n; H->m = I->m; H->p = I->p;
+  H->S = I->S; H->K = I->K; H->G = I->G; H->fixed = I->fixed;
+  return setup(H, D, pd, errmsg);
+}
+
 int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
                           const cup_integrator_options *opt, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
@@ -294,10 +347,17 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->K = L->K;
   I->G = L->has_G ? &L->G : NULL;
   I->fixed = L->fixed;
+  cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
+  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
+    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, u, &I->o, errmsg);
+    if (st) { cup_integrator_free(&I); return st; }
+    *out = I;
+    return CUP_OK;
+  }
   st = cup_set_wrap_polyset(&I->S_own, L->K, I->G, L->p, errmsg);
   I->S = I->S_own;
-  cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   if (!st) st = setup(I, &D, NULL, errmsg);
+  if (!st && I->o.estimate) st = create_half(I, &D, NULL, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -347,7 +407,19 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
   if (!I) return st;
   cup_drift D;
   st = process_model(I, d, &D, errmsg);
+  if (!st && I->o.scheme == CUP_SCHEME_ADAPTIVE) {   /* an LCS written as a process */
+    if (!I->K || d->f || d->f_integral)
+      st = cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS, a polyset with f = A x + E u "
+                    "(this process has %s); use the explicit, implicit or exponential scheme",
+                    !I->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
+    else
+      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, I->u, &I->o, errmsg);
+    if (st) { cup_integrator_free(&I); return st; }
+    *out = I;
+    return CUP_OK;
+  }
   if (!st) st = setup(I, &D, d, errmsg);
+  if (!st && I->o.estimate) st = create_half(I, &D, d, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -356,6 +428,9 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
 void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
+  cup_adaptive_free(&I->ad);
+  cup_integrator_free(&I->half);
+  cup_estimate_free(&I->est);
   cup_freestep_free(&I->fs);
   cup_projector_free(&I->proj);
   cup_setproj_free(&I->sp);
@@ -368,13 +443,16 @@ void cup_integrator_free(cup_integrator **Ip) {
   *Ip = NULL;
 }
 
-const double *cup_integrator_state(const cup_integrator *I) { return I ? I->x : NULL; }
+const double *cup_integrator_state(const cup_integrator *I) {
+  return !I ? NULL : I->ad ? cup_adaptive_state(I->ad) : I->x;
+}
 
 /* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
  * are the impulse of the step, h zeta. */
 int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I || !zeta) return CUP_ERR_ARG;
   if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
+  if (I->ad) return cup_adaptive_zeta(I->ad, zeta);
   const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
   for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
@@ -504,7 +582,9 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
                        cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
+  if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
+  info->err_est = NAN;
   if (!I || !x0) return info->status = CUP_ERR_ARG;
   const cup_integrator_options *o = &I->o;
   int n = I->n;
@@ -539,6 +619,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
              "time constant); projecting along B loses what that relaxation moved, an error of "
              "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
              I->split, I->split_row);
+  }
+  if (I->half) {
+    cup_run_info hi;
+    cup_estimate_start(&I->est, cup_integrator_run(I->half, x0, cup_estimate_keep, &I->est, &hi) >= 0);
+    info->err_est = cup_estimate_value(&I->est);
   }
   sampler sp = {0};
   if (sink && selected(I, &sp, 0)) {
@@ -595,6 +680,10 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
     }
     double *t = I->x; I->x = I->xnew; I->xnew = t;
+    if (I->half) {
+      cup_estimate_compare(&I->est, k + 1, I->x);
+      info->err_est = cup_estimate_value(&I->est);
+    }
     info->step = k + 1;
     info->t = t1;
     tally(info, &pi);

@@ -35,8 +35,15 @@ enum { MAX_CHUNK_ROWS = 4096 };
 /* A chunk must stay under HDF5's 4 GiB limit even when it holds one row. */
 #define MAX_DIM ((int)(UINT32_MAX / sizeof(double)))
 
+/* One row of /events, in memory. */
+typedef struct { double t; int32_t row; int8_t on; } h5_event;
+enum { EVENT_ROWS = 1024 };     /* chunk and buffer of /events */
+
 struct cup_h5run {
-  hid_t file, dset_t, dset_x;
+  hid_t file, dset_t, dset_x, dset_e;
+  hid_t etype_file, etype_mem;  /* /events' compound types */
+  hsize_t ewritten, enbuf;      /* events handed to HDF5, buffered */
+  h5_event ebuf[EVENT_ROWS];
   int dim;
   hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
   hsize_t written;        /* rows already handed to HDF5 */
@@ -157,6 +164,32 @@ static hid_t create_dataset(hid_t file, const char *name, int rank, hsize_t dim,
   return d;
 }
 
+/* /events: (t float64, row int32, on int8) rows, chunked, extendable; the
+ * file type is packed (13 bytes), the memory type follows the struct. */
+static hid_t create_events(cup_h5run *w) {
+  w->etype_file = H5Tcreate(H5T_COMPOUND, 13);
+  w->etype_mem = H5Tcreate(H5T_COMPOUND, sizeof(h5_event));
+  if (w->etype_file < 0 || w->etype_mem < 0 ||
+      H5Tinsert(w->etype_file, "t", 0, H5T_IEEE_F64LE) < 0 ||
+      H5Tinsert(w->etype_file, "row", 8, H5T_STD_I32LE) < 0 ||
+      H5Tinsert(w->etype_file, "on", 12, H5T_STD_I8LE) < 0 ||
+      H5Tinsert(w->etype_mem, "t", HOFFSET(h5_event, t), H5T_NATIVE_DOUBLE) < 0 ||
+      H5Tinsert(w->etype_mem, "row", HOFFSET(h5_event, row), H5T_NATIVE_INT32) < 0 ||
+      H5Tinsert(w->etype_mem, "on", HOFFSET(h5_event, on), H5T_NATIVE_INT8) < 0)
+    return H5I_INVALID_HID;
+  hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {EVENT_ROWS};
+  hid_t space = H5Screate_simple(1, dims, maxdims);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  hid_t d = H5I_INVALID_HID;
+  if (space >= 0 && dcpl >= 0 && H5Pset_chunk(dcpl, 1, chunk) >= 0)
+    d = H5Dcreate2(w->file, "events", w->etype_file, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  hid_t err = keep_stack(d < 0);
+  if (dcpl >= 0) H5Pclose(dcpl);
+  if (space >= 0) H5Sclose(space);
+  restore_stack(err);
+  return d;
+}
+
 /* The directory the file goes into (the file may not exist yet). */
 static int dir_space_low(const char *path) {
   char *copy = strdup(path);
@@ -192,6 +225,8 @@ static int open_file(cup_h5run *w) {
   if (w->dset_t < 0) return set_error(w, CUP_ERR_IO, "create dataset /t in");
   w->dset_x = create_dataset(w->file, "x", 2, (hsize_t)w->dim, w->chunk_rows);
   if (w->dset_x < 0) return set_error(w, CUP_ERR_IO, "create dataset /x in");
+  w->dset_e = create_events(w);
+  if (w->dset_e < 0) return set_error(w, CUP_ERR_IO, "create dataset /events in");
   /* On disk and readable (with N = 0) before the first sample arrives. */
   if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) return set_error(w, CUP_ERR_IO, "flush");
   return CUP_OK;
@@ -215,6 +250,9 @@ static void close_signals(cup_h5run *w) {
 static void free_writer(cup_h5run *w) {
   quiet_t q = quiet_begin();
   close_signals(w);
+  if (w->dset_e >= 0) H5Dclose(w->dset_e);
+  if (w->etype_file >= 0) H5Tclose(w->etype_file);
+  if (w->etype_mem >= 0) H5Tclose(w->etype_mem);
   if (w->dset_x >= 0) H5Dclose(w->dset_x);
   if (w->dset_t >= 0) H5Dclose(w->dset_t);
   if (w->file >= 0) H5Fclose(w->file);
@@ -242,7 +280,7 @@ int cup_h5run_create(cup_h5run **out, const char *path, int dim, char *errmsg) {
     return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
   cup_h5run *w = calloc(1, sizeof *w);
   if (!w) return fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
-  w->file = w->dset_t = w->dset_x = w->group = H5I_INVALID_HID;
+  w->file = w->dset_t = w->dset_x = w->dset_e = w->etype_file = w->etype_mem = w->group = H5I_INVALID_HID;
   w->dim = dim;
   w->chunk_rows = chunk_rows_for(dim);
   w->tbuf = malloc(sizeof(double) * w->chunk_rows);
@@ -284,11 +322,35 @@ static herr_t append(hid_t d, int rank, hsize_t at, hsize_t rows, hsize_t cols,
   return r;
 }
 
+/* Append the buffered events to /events. */
+static herr_t append_events(cup_h5run *w) {
+  hsize_t ext[1] = {w->ewritten + w->enbuf}, start[1] = {w->ewritten}, count[1] = {w->enbuf};
+  if (H5Dset_extent(w->dset_e, ext) < 0) return -1;
+  hid_t fs = H5Dget_space(w->dset_e);
+  hid_t ms = H5Screate_simple(1, count, NULL);
+  herr_t r = -1;
+  if (fs >= 0 && ms >= 0 && H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL) >= 0)
+    r = H5Dwrite(w->dset_e, w->etype_mem, ms, fs, H5P_DEFAULT, w->ebuf);
+  hid_t err = keep_stack(r < 0);
+  if (ms >= 0) H5Sclose(ms);
+  if (fs >= 0) H5Sclose(fs);
+  restore_stack(err);
+  if (r >= 0) { w->ewritten += w->enbuf; w->enbuf = 0; }
+  return r;
+}
+
 /* Hand the buffered rows to HDF5 (no flush). Any failure is sticky: the sink
  * then refuses samples so that the run stops. Running short of space stops
  * the data after these rows, with HDF5 still able to flush and close. */
 static int write_buffer(cup_h5run *w) {
-  if (w->nbuf == 0 || w->data_status != CUP_OK) return w->data_status;
+  if (w->data_status != CUP_OK) return w->data_status;
+  if (w->enbuf) {
+    quiet_t q = quiet_begin();
+    if (append_events(w) < 0) set_error(w, CUP_ERR_IO, "append rows to /events in");
+    quiet_end(q);
+    if (w->h5_failed) return w->data_status;
+  }
+  if (w->nbuf == 0) return w->data_status;
   quiet_t q = quiet_begin();
   if (append(w->dset_x, 2, w->written, w->nbuf, (hsize_t)w->dim, w->xbuf) < 0)
     set_error(w, CUP_ERR_IO, "append rows to /x in");
@@ -347,6 +409,15 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
   w->nbuf++;
   if (now_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
   if (w->nbuf >= room(w)) return write_buffer(w);
+  return CUP_OK;
+}
+
+int cup_h5run_event(double t, int row, int on, void *ctx) {
+  cup_h5run *w = ctx;
+  if (!w) return CUP_ERR_ARG;
+  if (w->data_status != CUP_OK) return w->data_status;
+  w->ebuf[w->enbuf++] = (h5_event){t, (int32_t)row, (int8_t)(on != 0)};
+  if (w->enbuf == EVENT_ROWS || now_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
   return CUP_OK;
 }
 
@@ -508,9 +579,12 @@ int cup_h5run_close(cup_h5run **pw, char *errmsg) {
   quiet_t q = quiet_begin();
   close_signals(w);
   herr_t r = H5Dclose(w->dset_x);
+  r = H5Dclose(w->dset_e) < 0 ? -1 : r;
+  H5Tclose(w->etype_file);
+  H5Tclose(w->etype_mem);
   r = H5Dclose(w->dset_t) < 0 ? -1 : r;
   r = H5Fclose(w->file) < 0 ? -1 : r;
-  w->dset_x = w->dset_t = w->file = H5I_INVALID_HID;
+  w->dset_x = w->dset_t = w->dset_e = w->etype_file = w->etype_mem = w->file = H5I_INVALID_HID;
   if (r < 0 && st == CUP_OK) st = set_error(w, CUP_ERR_IO, "close");
   quiet_end(q);
   if (st != CUP_OK && errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);

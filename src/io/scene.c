@@ -5,6 +5,7 @@
  * (or the override it came from). Nothing heavy is computed. */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
+#include <float.h>
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -407,6 +408,38 @@ static int read_method(rd *r, const st_node *root, cup_integrator_options *o) {
   return st;
 }
 
+/* The adaptive scheme's keys: tol (its error target on x: one number for
+ * both the absolute and the relative part, or {abs, rel}) and
+ * max_event_rate; and estimate (the fixed-step schemes' step doubling). */
+static int read_tolerance(rd *r, const st_node *root, cup_integrator_options *o) {
+  static const char *const known[] = {"abs", "rel", NULL};
+  const st_node *nd, *v;
+  int st = CUP_OK;
+  if ((nd = opt(root, "tol")) && nd->kind == ST_MAP) {
+    st = check_keys(r, nd, "tol", known);
+    o->tol_abs = o->tol_rel = 0;
+    if (!st && (v = opt(nd, "abs"))) st = number_min(r, v, "tol.abs", 0, 0, &o->tol_abs);
+    if (!st && (v = opt(nd, "rel"))) st = number_min(r, v, "tol.rel", 0, 0, &o->tol_rel);
+    if (!st && !(o->tol_abs > 0 || o->tol_rel > 0))
+      st = fail(r, CUP_ERR_PARSE, nd, "tol", "abs or rel must be > 0");
+  } else if (nd && !(st = number_min(r, nd, "tol", 0, 1, &o->tol_abs))) {
+    o->tol_rel = o->tol_abs;
+  }
+  if (!st && nd && o->tol_abs == 0 && o->tol_rel < 16 * DBL_EPSILON)
+    st = fail(r, CUP_ERR_PARSE, nd, "tol", "rel = %g with abs = 0 is below what double precision can "
+              "deliver (16 eps = %.2g)", o->tol_rel, 16 * DBL_EPSILON);
+  if (!st && (nd = opt(root, "max_event_rate")))
+    st = number_min(r, nd, "max_event_rate", 0, 1, &o->max_event_rate);
+  if (!st && (nd = opt(root, "estimate"))) st = boolean(r, nd, "estimate", &o->estimate);
+  return st;
+}
+
+/* The adaptive scheme chooses its own steps: n is optional for it. */
+static int is_adaptive(const st_node *root) {
+  const st_node *nd = opt(root, "scheme");
+  return nd && nd->kind == ST_SCALAR && cup_scheme_parse(nd->text) == CUP_SCHEME_ADAPTIVE;
+}
+
 /* T, n and the tolerance schedules. */
 static int read_times(rd *r, const st_node *root, cup_scene *S) {
   const st_node *nd;
@@ -417,7 +450,7 @@ static int read_times(rd *r, const st_node *root, cup_scene *S) {
     st = need(r, root, "", "T", &nd);
     if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
   }
-  if (!st && (!tran || opt(root, "n"))) {
+  if (!st && (!tran || opt(root, "n")) && !(is_adaptive(root) && !opt(root, "n"))) {
     st = need(r, root, "", "n", &nd);
     /* 2^53: every integer up to it is exact in a double */
     if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
@@ -493,7 +526,8 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
-                                      "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", NULL};
+                                      "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
+                                      "max_event_rate", "estimate", NULL};
   const st_node *kf, *ki;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
@@ -501,6 +535,7 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   if (!st && opt(root, "crowd")) {
     st = read_crowd(r, root, S);
     if (!st) st = read_method(r, root, &S->opt);
+    if (!st) st = read_tolerance(r, root, &S->opt);
     if (!st) st = read_name(r, root, S);
     return st;
   }
@@ -519,6 +554,7 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   if (!st && S->nl) scene_netlist_options(S->nl, &S->opt);
   if (!st) st = read_run(r, root, cup_scene_dim(S), S);
   if (!st) st = read_method(r, root, &S->opt);
+  if (!st) st = read_tolerance(r, root, &S->opt);
   if (!st) st = read_name(r, root, S);
   return st;
 }

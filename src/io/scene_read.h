@@ -120,6 +120,17 @@ static inline int integer(rd *r, const st_node *nd, const char *key, long lo, lo
   return CUP_OK;
 }
 
+/* true or false (YAML 1.2's core schema spellings). */
+static inline int boolean(rd *r, const st_node *nd, const char *key, int *out) {
+  static const char *const yes[] = {"true", "True", "TRUE", NULL}, *const no[] = {"false", "False", "FALSE", NULL};
+  char b[64];
+  for (int k = 0; nd->kind == ST_SCALAR && !nd->quoted && yes[k]; k++) {
+    if (!strcmp(nd->text, yes[k])) { *out = 1; return CUP_OK; }
+    if (!strcmp(nd->text, no[k])) { *out = 0; return CUP_OK; }
+  }
+  return fail(r, CUP_ERR_PARSE, nd, key, "expected true or false (got %s)", st_looks(nd, b, sizeof b));
+}
+
 /* ---- matrices ------------------------------------------------------------ */
 
 /* An owned CSC matrix (inline or from a Matrix Market file, mtx.c) and

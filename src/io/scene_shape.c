@@ -47,6 +47,7 @@ int scene_reshape(st_node **slot, const char *path, const char *seg, const st_no
   }
   if (!strcmp(path, "output") && (nd->kind != ST_MAP || nd->len != 1 || strcmp(nd->key[0]->text, seg)))
     return replace_by_map(slot, k);
+  if (!strcmp(path, "tol") && nd->kind != ST_MAP) return replace_by_map(slot, k);
   if (!strcmp(path, "projector") && nd->kind == ST_SCALAR) {
     st_node *m = st_new_map(k);
     if (!m || st_map_put(m, "method", nd, k)) { st_free(m); return CUP_ERR_NOMEM; }

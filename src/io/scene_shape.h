@@ -2,7 +2,8 @@
  * the scene's value of another shape gives way (an st_reshape_fn for
  * st_apply_override): `circuit` and `lcs` replace each other; output.samples=2
  * replaces output: {every: 1} (one mode at a time); projector.max_iter=50
- * turns projector: fista into {method: fista, max_iter: 50}; lcs.A.file=a.mtx
+ * turns projector: fista into {method: fista, max_iter: 50}; tol.abs=1e-9
+ * replaces tol: 1e-6 (tol.rel is then 0 unless set too); lcs.A.file=a.mtx
  * replaces an inline A (and every matrix, F and x0 the same); input....type=pwl
  * drops the fields the old waveform had and the new one does not take.
  * Internal to the library. */

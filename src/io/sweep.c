@@ -14,7 +14,7 @@
 #include "sha256.h"
 #include "sweep.h"
 
-static const char *const axis_names[SW_NAXES + 1] = {"n", "eps", "eta", "scheme", "projector", NULL};
+static const char *const axis_names[SW_NAXES + 1] = {"n", "eps", "eta", "scheme", "projector", "tol", NULL};
 enum { MAX_WORDS = 16 };
 
 /* The library's names, NULL-terminated ("explicit", "implicit", ...): a
@@ -82,6 +82,15 @@ static int integer(prs *p, const st_node *nd, const char *key, long lo, long hi,
   return CUP_OK;
 }
 
+/* A number > 0 (the adaptive scheme's tol). */
+static int positive(prs *p, const st_node *nd, const char *key, double *out) {
+  char b[64];
+  if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, out) || !isfinite(*out))
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", st_looks(nd, b, sizeof b));
+  if (!(*out > 0)) return fail(p, CUP_ERR_PARSE, nd, key, "must be > 0 (got %g)", *out);
+  return CUP_OK;
+}
+
 static char *path_join(const char *dir, const char *name) {
   if (!dir || name[0] == '/') return strdup(name);
   size_t len = strlen(dir) + strlen(name) + 2;
@@ -144,6 +153,7 @@ static int read_axis(prs *p, cup_sweep *s, int a, const st_node *nd) {
   else if (a == SW_AXIS_EPS) s->eps = calloc((size_t)len, sizeof *s->eps);
   else if (a == SW_AXIS_ETA) s->eta = calloc((size_t)len, sizeof *s->eta);
   else if (a == SW_AXIS_SCHEME) s->scheme = calloc((size_t)len, sizeof *s->scheme);
+  else if (a == SW_AXIS_TOL) s->tol = calloc((size_t)len, sizeof *s->tol);
   else s->projector = calloc((size_t)len, sizeof *s->projector);
   for (int k = 0; k < len && !st; k++) {
     if (nd->kind == ST_SEQ) snprintf(key, sizeof key, "grid.%s.%d", axis_names[a], k);
@@ -161,6 +171,9 @@ static int read_axis(prs *p, cup_sweep *s, int a, const st_node *nd) {
       case SW_AXIS_SCHEME:
         st = s->scheme ? read_word_item(p, items[k], key, "scheme", names_of(cup_scheme_name, words),
                                         &s->scheme[k]) : CUP_ERR_NOMEM;
+        break;
+      case SW_AXIS_TOL:
+        st = s->tol ? positive(p, items[k], key, &s->tol[k]) : CUP_ERR_NOMEM;
         break;
       default:
         st = s->projector ? read_word_item(p, items[k], key, "projector", names_of(cup_proj_method_name, words),
@@ -205,11 +218,11 @@ static int read_zip(prs *p, cup_sweep *s, const st_node *nd) {
 }
 
 static int read_grid(prs *p, cup_sweep *s, const st_node *root) {
-  static const char *const known[] = {"n", "eps", "eta", "scheme", "projector", "zip", NULL};
+  static const char *const known[] = {"n", "eps", "eta", "scheme", "projector", "tol", "zip", NULL};
   for (int a = 0; a < SW_NAXES; a++) s->zip[a] = -1;
   const st_node *g = opt(root, "grid"), *nd;
   if (!g) return CUP_OK;
-  int st = need_map(p, g, "grid", "a mapping of axes (n, eps, eta, scheme, projector, zip)");
+  int st = need_map(p, g, "grid", "a mapping of axes (n, eps, eta, scheme, projector, tol, zip)");
   if (!st) st = check_keys(p, g, "grid", known);
   for (int a = 0; a < SW_NAXES && !st; a++)
     if ((nd = opt(g, axis_names[a]))) st = read_axis(p, s, a, nd);
@@ -313,14 +326,18 @@ static int read_variants(prs *p, cup_sweep *s, const st_node *root) {
 /* ---- reference and output -------------------------------------------------- */
 
 static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
-  static const char *const known[] = {"samples", "n", NULL};
+  static const char *const known[] = {"samples", "n", "method", NULL};
+  static const char *const methods[] = {"richardson", "adaptive", NULL};
   const st_node *r = opt(root, "reference"), *x;
   s->samples = 1001;
   s->ref_n = 0;
+  s->ref_method = SW_REF_RICHARDSON;
   int st = CUP_OK;
   if (!r) return st;
-  if ((st = need_map(p, r, "reference", "a mapping with samples and n"))) return st;
+  if ((st = need_map(p, r, "reference", "a mapping with samples, n and method"))) return st;
   if ((st = check_keys(p, r, "reference", known))) return st;
+  if ((x = opt(r, "method")) && (st = read_word_item(p, x, "reference.method", "reference method", methods,
+                                                     &s->ref_method))) return st;
   if ((x = opt(r, "samples")) && (st = integer(p, x, "reference.samples", 2, 1000001, &s->samples))) return st;
   if ((x = opt(r, "n")) && !(x->kind == ST_SCALAR && !x->quoted && !strcmp(x->text, "auto"))) {
     if ((st = integer(p, x, "reference.n", 1, 4503599627370496L, &s->ref_n))) return st;
@@ -475,7 +492,8 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
       return variant_fail(s, k, CUP_ERR_DIM, errmsg, "state dimension %d differs from variants.0's %d",
                           dim, s->dim);
     long S1 = s->samples - 1;
-    if (s->ref_n) v->n_ref = s->ref_n;
+    if (s->ref_method == SW_REF_ADAPTIVE) v->n_ref = 0;   /* it chooses its own steps */
+    else if (s->ref_n) v->n_ref = s->ref_n;
     else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
   }
   s->per_variant = 1;
@@ -501,7 +519,7 @@ void sw_free(cup_sweep **ps) {
   free(s->var);
   for (int k = 0; k < s->len[SW_AXIS_EPS]; k++) free(s->eps[k]);
   for (int k = 0; k < s->len[SW_AXIS_ETA]; k++) free(s->eta[k]);
-  free(s->n); free(s->eps); free(s->eta); free(s->scheme); free(s->projector);
+  free(s->n); free(s->eps); free(s->eta); free(s->scheme); free(s->projector); free(s->tol);
   free(s->path); free(s->dir); free(s->text); free(s->name);
   free(s);
   *ps = NULL;
@@ -532,6 +550,8 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
   t->eta = s->len[SW_AXIS_ETA] ? s->eta[d[SW_AXIS_ETA]] : cup_scene_eta_spec(sc);
   t->scheme = s->len[SW_AXIS_SCHEME] ? s->scheme[d[SW_AXIS_SCHEME]] : (int)o->scheme;
   t->projector = s->len[SW_AXIS_PROJECTOR] ? s->projector[d[SW_AXIS_PROJECTOR]] : (int)o->proj.method;
+  t->tol_abs = s->len[SW_AXIS_TOL] ? s->tol[d[SW_AXIS_TOL]] : o->tol_abs;
+  t->tol_rel = s->len[SW_AXIS_TOL] ? s->tol[d[SW_AXIS_TOL]] : o->tol_rel;
   if (cup_schedule_parse(t->eps, &t->eps_s, NULL) || cup_schedule_parse(t->eta, &t->eta_s, NULL))
     return CUP_ERR_PARSE;
   return CUP_OK;
@@ -543,11 +563,14 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
 double sw_job_cost(const cup_sweep *s, long job) {
   static const double scheme_f[] = {1.0, 1.0, 1.1, 0.8}, proj_f[] = {1.0, 1.0, 1.3, 1.2};
   const double setup = 100;
+  if (job < s->n_variants && s->ref_method == SW_REF_ADAPTIVE) return 8.0 * (double)s->samples + 10 * setup;
   if (job < s->n_variants) return 3.0 * ((double)s->var[job].n_ref + setup);
   sw_task t;
   if (sw_task_get(s, job - s->n_variants, &t)) return 0;
   double fs = t.scheme >= 0 && t.scheme < (int)(sizeof scheme_f / sizeof *scheme_f) ? scheme_f[t.scheme] : 1;
   double fp = t.projector >= 0 && t.projector < (int)(sizeof proj_f / sizeof *proj_f) ? proj_f[t.projector] : 1;
+  /* the adaptive scheme takes about one step per sample time, ~4 units each */
+  if (t.scheme == CUP_SCHEME_ADAPTIVE) return 4.0 * (double)s->samples + 10 * setup;
   return ((double)t.n + setup) * fs * fp;
 }
 
@@ -632,6 +655,7 @@ char *sw_grid_text(const cup_sweep *s) {
       else if (a == SW_AXIS_EPS) sb_printf(&b, "%s\"%s\"", sep, s->eps[k]);
       else if (a == SW_AXIS_ETA) sb_printf(&b, "%s\"%s\"", sep, s->eta[k]);
       else if (a == SW_AXIS_SCHEME) sb_printf(&b, "%s%s", sep, cup_scheme_name(s->scheme[k]));
+      else if (a == SW_AXIS_TOL) sb_printf(&b, "%s%g", sep, s->tol[k]);
       else sb_printf(&b, "%s%s", sep, cup_proj_method_name(s->projector[k]));
     }
     sb_printf(&b, "]");
@@ -642,7 +666,7 @@ char *sw_grid_text(const cup_sweep *s) {
       if (s->zip[a] == g) { sb_printf(&b, "%s%s", first ? "; zip: [" : ", ", axis_names[a]); first = 0; }
     if (!first) sb_printf(&b, "]");
   }
-  sb_printf(&b, "; tasks: %ld variants x %ld = %ld (variant-major, then n, eps, eta, scheme, projector; "
+  sb_printf(&b, "; tasks: %ld variants x %ld = %ld (variant-major, then n, eps, eta, scheme, projector, tol; "
             "the last varies fastest)", (long)s->n_variants, s->per_variant, s->n_tasks);
   return b.s;
 }

@@ -14,7 +14,11 @@
 
 #define SW_ERR_LEN 1024          /* messages: a scene's message inside a sweep's */
 
-enum { SW_AXIS_N, SW_AXIS_EPS, SW_AXIS_ETA, SW_AXIS_SCHEME, SW_AXIS_PROJECTOR, SW_NAXES };
+enum { SW_AXIS_N, SW_AXIS_EPS, SW_AXIS_ETA, SW_AXIS_SCHEME, SW_AXIS_PROJECTOR, SW_AXIS_TOL, SW_NAXES };
+
+/* How the variants' references are made (reference.method). */
+enum { SW_REF_RICHARDSON, SW_REF_ADAPTIVE };
+#define SW_REF_ADAPTIVE_TOL 1e-13  /* the adaptive reference's tol (absolute and relative) */
 
 /* String sizes of the /summary fields (fixed-length, NUL-terminated). */
 enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = 256 };
@@ -46,9 +50,11 @@ typedef struct cup_sweep {
   long *n;
   char **eps, **eta;         /* schedules as written ("n^-2.1", "0") */
   int *scheme, *projector;
+  double *tol;               /* the adaptive scheme's tol (absolute and relative) */
   int zip[SW_NAXES];         /* zip group of each axis, -1 when not zipped */
   long samples;              /* common sample times t_j = j T / (samples - 1) */
   long ref_n;                /* reference.n as written; 0 = auto */
+  int ref_method;            /* SW_REF_RICHARDSON or SW_REF_ADAPTIVE */
   long out_samples;          /* trajectories stored per task: samples or 0 */
   /* After sw_resolve: */
   double T;                  /* every variant's final time (they must agree) */
@@ -65,6 +71,7 @@ typedef struct sw_task {
   const char *eps, *eta;     /* specs as written */
   cup_schedule eps_s, eta_s;
   int scheme, projector;
+  double tol_abs, tol_rel;   /* the adaptive scheme's */
 } sw_task;
 
 /* What a job sends back, followed by samples * dim doubles (the trajectory
@@ -80,6 +87,8 @@ typedef struct sw_result {
   int64_t stopped_step;      /* steps completed */
   double correction;         /* references: max |x(2 n_ref) - x(n_ref)| at the common times */
   char message[SW_MSG_LEN];
+  double err_est;            /* the run's a posteriori error estimate (NaN: none) */
+  int64_t events;            /* the adaptive scheme's changes of the active set */
 } sw_result;
 
 /* ---- the sweep file ---- */

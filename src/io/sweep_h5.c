@@ -84,6 +84,10 @@ static hid_t row_type(void) {
   INS(T, "dual_iterations", dual_iterations, H5T_NATIVE_INT64);
   INS(T, "factorizations", factorizations, H5T_NATIVE_INT64);
   INS(T, "stopped_step", stopped_step, H5T_NATIVE_INT64);
+  INS(T, "tol_abs", tol_abs, H5T_NATIVE_DOUBLE);
+  INS(T, "tol_rel", tol_rel, H5T_NATIVE_DOUBLE);
+  INS(T, "err_est", err_est, H5T_NATIVE_DOUBLE);
+  INS(T, "events", events, H5T_NATIVE_INT64);
   INS(T, "done", done, H5T_NATIVE_INT8);
   H5Tclose(sname); H5Tclose(sspec); H5Tclose(sword); H5Tclose(sstat); H5Tclose(smsg);
   return T;
@@ -148,6 +152,9 @@ void sw_pending_row(const cup_sweep *s, long id, sw_row *r) {
   r->eta_value = cup_schedule_value(&t.eta_s, t.n);
   sw_copy_str(r->scheme, sizeof r->scheme, cup_scheme_name(t.scheme));
   sw_copy_str(r->projector, sizeof r->projector, cup_proj_method_name(t.projector));
+  r->tol_abs = t.scheme == CUP_SCHEME_ADAPTIVE ? t.tol_abs : NAN;
+  r->tol_rel = t.scheme == CUP_SCHEME_ADAPTIVE ? t.tol_rel : NAN;
+  r->err_est = NAN;
   r->status = r->error_code = CUP_ERR_INTERRUPTED;
   sw_copy_str(r->status_name, sizeof r->status_name, "pending");
   r->wall_time_s = r->error = r->max_eps_cert = r->max_eta_cert = NAN;
@@ -394,6 +401,8 @@ static void result_row(const sw_file *f, long task, const sw_result *r, double e
   row->dual_iterations = r->dual_iterations;
   row->factorizations = r->factorizations;
   row->stopped_step = r->stopped_step;
+  row->err_est = r->err_est;
+  row->events = r->events;
   row->done = 1;
 }
 

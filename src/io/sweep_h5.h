@@ -32,7 +32,7 @@
 #include <hdf5.h>
 #include "sweep.h"
 
-#define FORMAT_NAME "catchup-sweep 1"
+#define FORMAT_NAME "catchup-sweep 2"   /* 2: /summary has tol_abs, tol_rel, err_est, events */
 
 /* One /summary row, packed as it is in the file: HDF5 then writes rows
  * as they are, where a conversion to the file's layout would first read
@@ -54,6 +54,8 @@ typedef struct __attribute__((packed)) sw_row {
   int32_t error_code;
   double wall_time_s, error, max_eps_cert, max_eta_cert;
   int64_t projected, skipped, not_certified, dual_iterations, factorizations, stopped_step;
+  double tol_abs, tol_rel, err_est;
+  int64_t events;
   int8_t done;
 } sw_row;
 /* A write cut short by a kill stops between pages, in address order: a row

@@ -97,6 +97,11 @@ static int attr_strs(hid_t loc, const char *name, const char *const *v, int len)
   return r;
 }
 
+static const char *const reference_adaptive =
+  "per variant: the adaptive scheme at tol = 1e-13 (absolute and relative), at the common sample times "
+  "t_j = j T / (samples - 1) (exact flow between events located by root finding; docs/adaptive.md); "
+  "/references/summary 'correction' holds that run's a posteriori error estimate.";
+
 static const char *const reference_method =
   "per variant: Richardson extrapolation x_ref = 2 x(2 n_ref) - x(n_ref) of two exact-projection "
   "(eps = eta = 0, certified to rounding) explicit catching-up runs, at the common sample times "
@@ -115,6 +120,8 @@ static int write_grid_attrs(hid_t root, const cup_sweep *s) {
   }
   if (s->len[SW_AXIS_EPS]) r |= attr_strs(root, "grid_eps", (const char *const *)s->eps, s->len[SW_AXIS_EPS]);
   if (s->len[SW_AXIS_ETA]) r |= attr_strs(root, "grid_eta", (const char *const *)s->eta, s->len[SW_AXIS_ETA]);
+  if (s->len[SW_AXIS_TOL])
+    r |= attr_write(root, "grid_tol", H5T_NATIVE_DOUBLE, 1, (hsize_t)s->len[SW_AXIS_TOL], s->tol);
   int ls = s->len[SW_AXIS_SCHEME], lp = s->len[SW_AXIS_PROJECTOR];
   const char **w = malloc(sizeof *w * (size_t)(ls > lp ? ls : lp) + 1);
   if (!w) return -1;
@@ -145,7 +152,8 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_file", s->path);
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
-  r |= attr_str(root, "reference_method", reference_method);
+  r |= attr_str(root, "reference_method",
+                s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
   r |= attr_i64(root, "samples", s->samples);
   r |= attr_i64(root, "output_samples", s->out_samples);
   r |= attr_f64(root, "T", s->T);

@@ -1,6 +1,7 @@
 /* sweep_run — one job of a sweep (sweep.h): a task, or a variant's
- * reference (Richardson extrapolation of two exact runs), run by the
- * integrator on the variant's scene and sampled at the common times. */
+ * reference (Richardson extrapolation of two exact runs, or an adaptive run
+ * at tol 1e-13), run by the integrator on the variant's scene and sampled at
+ * the common times. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -23,13 +24,17 @@ static long nearest_step(long j, long n, long S1) {
 
 typedef struct {
   long S, n, next;
-  int dim;
+  int dim, at_times;         /* at_times: the run gives exactly t_j, in order (adaptive) */
   double *traj;
 } sampler;
 
 static int sample_sink(long k, double t, const double *x, void *ctx) {
   (void)t;
   sampler *sp = ctx;
+  if (sp->at_times) {
+    if (sp->next < sp->S) memcpy(sp->traj + sp->next++ * sp->dim, x, sizeof(double) * (size_t)sp->dim);
+    return 0;
+  }
   while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) < k) sp->next++;
   while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) {
     memcpy(sp->traj + sp->next * sp->dim, x, sizeof(double) * (size_t)sp->dim);
@@ -54,6 +59,7 @@ typedef struct {
   int scheme, projector;
   double time_limit;
   int inject;
+  double tol_abs, tol_rel;
 } run_params;
 
 static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *rp, const sw_run_opts *ro,
@@ -69,6 +75,13 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   o.proj.method = (cup_proj_method)rp->projector;
   o.output = CUP_OUTPUT_EVERY;
   o.output_every = rp->n % S1 == 0 ? rp->n / S1 : 1;
+  o.tol_abs = rp->tol_abs;
+  o.tol_rel = rp->tol_rel;
+  int adaptive = rp->scheme == CUP_SCHEME_ADAPTIVE;
+  if (adaptive) {                  /* its dense output lands on the sample times themselves */
+    o.output = CUP_OUTPUT_SAMPLES;
+    o.output_samples = S;
+  }
   o.max_wall_seconds = rp->time_limit;
   o.interrupt = ro ? ro->interrupt : NULL;
   o.on_step = ro ? ro->on_step : NULL;
@@ -84,7 +97,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
     r->wall += now_seconds() - t0;
     return;
   }
-  sampler sp = {S, rp->n, 0, dim, traj};
+  sampler sp = {S, rp->n, 0, dim, adaptive, traj};
   cup_run_info info;
   r->status = cup_integrator_run(I, cup_scene_x0(v->scene), sample_sink, &sp, &info);
   cup_integrator_free(&I);
@@ -97,6 +110,8 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   r->dual_iterations += info.dual_iterations;
   r->factorizations += info.factorizations;
   r->stopped_step = info.step;
+  r->err_est = info.err_est;
+  r->events = info.events;
   if (rp->inject && r->status == CUP_ERR_CALLBACK)
     snprintf(r->message, sizeof r->message, "injected failure (CATCHUP_SWEEP_INJECT_FAIL): %.200s",
              info.message);
@@ -118,7 +133,8 @@ double sw_max_error(const double *traj, const double *ref, long count) {
  * runs; the scheme is first order, so this removes the 1/n term. An LCS
  * with D != 0 (a netlist's diode behind a resistance) runs on the theta
  * scheme only; at theta = 1/2 it is second order there (docs/netlist.md):
- * x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3. */
+ * x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3. Or (reference.method:
+ * adaptive) the adaptive scheme at tol 1e-13. */
 static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
   const sw_variant *v = &s->var[k];
   long count = s->samples * s->dim;
@@ -129,7 +145,17 @@ static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_r
     return;
   }
   int theta = cup_lcs_has_D(cup_scene_lcs(v->scene)), order2 = theta && cup_scene_options(v->scene)->theta == 0.5;
-  run_params rp = {v->n_ref, {0, 0}, {0, 0}, theta ? CUP_SCHEME_THETA : CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO, 0, 0};
+  run_params rp = {v->n_ref, {0, 0}, {0, 0}, theta ? CUP_SCHEME_THETA : CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO,
+                   0, 0, 0, 0};
+  if (s->ref_method == SW_REF_ADAPTIVE) {
+    rp.scheme = CUP_SCHEME_ADAPTIVE;
+    rp.n = s->samples - 1;         /* unused by the scheme */
+    rp.tol_abs = rp.tol_rel = SW_REF_ADAPTIVE_TOL;
+    run_one(s, v, &rp, ro, r, traj);
+    r->correction = r->err_est;    /* the run's own estimate of its error */
+    free(coarse);
+    return;
+  }
   run_one(s, v, &rp, ro, r, coarse);
   if (r->status >= 0) {
     rp.n = 2 * v->n_ref;
@@ -156,6 +182,6 @@ void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *
     return;
   }
   run_params rp = {t.n, t.eps_s, t.eta_s, t.scheme, t.projector, ro ? ro->task_time_limit : 0,
-                   ro ? ro->inject_fail : 0};
+                   ro ? ro->inject_fail : 0, t.tol_abs, t.tol_rel};
   run_one(s, &s->var[t.variant], &rp, ro, r, traj);
 }

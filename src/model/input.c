@@ -211,6 +211,77 @@ int cup_input_eval(const cup_input *u, double t, double *out) {
   return CUP_OK;
 }
 
+/* ---- exosystem ------------------------------------------------------------------ */
+
+int cup_term_gen_states(const cup_term *t) {
+  return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE ||
+         t->kind == CUP_WAVE_DAMPED_SINE ? 2 : 1;
+}
+
+/* Before its delay a damped sine is constant, which its generator (a damped
+ * rotation) cannot hold. */
+int cup_input_gen_check(const cup_input *u, const char *scheme, char *errmsg) {
+  for (int k = 0; u && !u->fn && k < u->nterms; k++)
+    if (u->terms[k].kind == CUP_WAVE_DAMPED_SINE && u->terms[k].delay > 0)
+      return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "%s scheme: a damped sine with a delay (input "
+                      "term %d) is not supported; use the theta or implicit scheme", scheme, k);
+  return CUP_OK;
+}
+
+int cup_input_gen_dim(const cup_input *u, int *first_state) {
+  int nw = 0;
+  if (!u || u->fn) return 0;
+  for (int k = 0; k < u->nterms; k++) {
+    if (first_state) first_state[k] = nw;
+    nw += cup_term_gen_states(&u->terms[k]);
+  }
+  return nw;
+}
+
+void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld) {
+  for (int k = 0; u && !u->fn && k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    int g = first_state[k];
+    if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) {
+      double d = t->kind == CUP_WAVE_DAMPED_SINE ? t->damping : 0;
+      W[g + (size_t)(g + 1) * ld] = t->omega;     /* s' = om c - d s */
+      W[(g + 1) + (size_t)g * ld] = -t->omega;    /* c' = -om s - d c */
+      W[g + (size_t)g * ld] = W[(g + 1) + (size_t)(g + 1) * ld] = -d;
+    } else if (t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE) {
+      W[g + (size_t)(g + 1) * ld] = 1;             /* v' = slope */
+    }
+  }
+}
+
+void cup_input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w) {
+  double mid = 0.5 * (a + b);
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    double *wk = w + first_state[k];
+    switch (t->kind) {
+      case CUP_WAVE_CONSTANT: wk[0] = t->value; break;
+      case CUP_WAVE_SINE:
+        wk[0] = t->amp * sin(t->omega * a + t->phase);
+        wk[1] = t->amp * cos(t->omega * a + t->phase);
+        break;
+      case CUP_WAVE_SQUARE: wk[0] = cup_term_value(t, mid); break;
+      case CUP_WAVE_DAMPED_SINE: {                   /* no delay (cup_input_gen_check) */
+        double e = t->amp * exp(-t->damping * a);
+        wk[0] = e * sin(t->omega * a + t->phase);
+        wk[1] = e * cos(t->omega * a + t->phase);
+        break;
+      }
+      case CUP_WAVE_PULSE:
+      case CUP_WAVE_PWL: {
+        double va = cup_term_value(t, a);
+        wk[0] = va;
+        wk[1] = mid > a ? (cup_term_value(t, mid) - va) / (mid - a) : 0;
+        break;
+      }
+    }
+  }
+}
+
 /* ---- callback quadrature ------------------------------------------------------ */
 
 typedef struct { const cup_input *u; int comp; double *buf; int failed; } quad_ctx;

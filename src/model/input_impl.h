@@ -43,6 +43,27 @@ double cup_term_value(const cup_term *w, double t);
 /* One term's exact integral over [a, b]. */
 double cup_term_integral(const cup_term *w, double a, double b);
 
+/* The built-in waveforms as the output of a linear exosystem on each interval
+ * without breakpoints: w' = W w, u = U w. States per term: constant 1
+ * (w' = 0), sine 2 (s' = om c, c' = -om s, the input is s; damped: minus
+ * d s, d c), square 1 (piecewise constant), table and pulse 2 (v' = slope). Used by the exponential free
+ * step and the adaptive scheme; callbacks have no exosystem. */
+int cup_term_gen_states(const cup_term *t);
+/* CUP_ERR_UNSUPPORTED (naming the scheme and the term) for a waveform the
+ * exosystem cannot hold: a damped sine with a delay. */
+int cup_input_gen_check(const cup_input *u, const char *scheme, char *errmsg);
+/* Total exosystem states of u (0 for a callback or NULL); first_state[k]
+ * (if not NULL, nterms entries) gets the first state of term k. */
+int cup_input_gen_dim(const cup_input *u, int *first_state);
+/* W into the nw x nw block at W (column-major, leading dimension ld),
+ * added to what is there: the sine rotations and the table slopes. */
+void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld);
+/* The states on the interval (a, b) (no breakpoint inside), at a: constants,
+ * sin/cos at a, the square's value on the open interval (at its midpoint:
+ * the jump instants carry no weight), the table's value at a and its slope
+ * on (a, b). Taken from the waveform itself, so nothing drifts. */
+void cup_input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w);
+
 int cup_quad_ws_init(cup_quad_ws *ws, int p);
 void cup_quad_ws_free(cup_quad_ws *ws);
 /* Integral with a caller-owned workspace (needed only for callbacks). */

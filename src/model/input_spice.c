@@ -107,18 +107,23 @@ static double pulse_integral(const cup_term *t, double a, double b) {
 /* The next corner after tt: the delay, then rise/width/fall knots of each period. */
 static double pulse_break(const cup_term *t, double tt) {
   if (tt < t->delay) return t->delay;
-  double s = tt - t->delay, P = t->period, base = 0;
-  if (P > 0) {
-    base = P * floor(s / P);
-    s -= base;
-  }
+  double P = t->period;
   const double knot[4] = {t->rise, t->rise + t->width, t->rise + t->width + t->fall, P};
-  for (int k = 0; k < 4; k++)
-    if (knot[k] > s && (k < 3 || P > 0)) {
-      double b = t->delay + base + knot[k];
+  if (!(P > 0)) {
+    for (int k = 0; k < 3; k++)
+      if (t->delay + knot[k] > tt) return t->delay + knot[k];
+    return INFINITY;
+  }
+  /* the knots from the period before tt's on: floor(s / P) rounds either way
+   * at a period's end (a break returned as delay + j P + P reads back as
+   * period j + 1 or j), and a knot is compared as the time it is returned as */
+  double j0 = floor((tt - t->delay) / P) - 1;
+  for (int j = 0; j < 3; j++)
+    for (int k = 0; k < 4; k++) {
+      double b = t->delay + P * (j0 + j) + knot[k];
       if (b > tt) return b;
     }
-  return P > 0 ? t->delay + base + 2 * P : INFINITY;   /* only when rounding skipped this period's end */
+  return INFINITY;                                    /* not reached: 3 periods span tt */
 }
 
 /* ---- SIN with delay and damping ------------------------------------------------ */

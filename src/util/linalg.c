@@ -270,8 +270,9 @@ static void dense_mul(const double *a, const double *b, int k, double *c) {
     }
 }
 
-void cup_dense_expm(const double *a, int k, double *out, double *work) {
-  double *s = work, *term = work + (size_t)k * k, *tmp = term + (size_t)k * k;
+/* s = a / 2^sq with ||s||_inf <= 1/2: the scaling of both exponentials;
+ * returns sq. */
+static int expm_scale(const double *a, int k, double *s) {
   double norm = 0;                          /* infinity norm */
   for (int i = 0; i < k; i++) {
     double r = 0;
@@ -282,6 +283,31 @@ void cup_dense_expm(const double *a, int k, double *out, double *work) {
   while (norm > 0.5 && sq < 1000) { norm *= 0.5; sq++; }
   double scale = ldexp(1.0, -sq);
   for (size_t q = 0; q < (size_t)k * k; q++) s[q] = a[q] * scale;
+  return sq;
+}
+
+/* The same Taylor polynomial, carrying X = exp(s) - I through the
+ * squarings as (I + X)^2 = I + (2 X + X^2). */
+void cup_dense_expm_stiff(const double *a, int k, double *out, double *work) {
+  size_t K2 = (size_t)k * k;
+  double *s = work, *x = s + K2, *term = x + K2, *tmp = term + K2;
+  int sq = expm_scale(a, k, s);
+  for (size_t q = 0; q < K2; q++) x[q] = term[q] = s[q];
+  for (int d = 2; d <= 18; d++) {           /* X = sum_{d >= 1} s^d / d! */
+    dense_mul(term, s, k, tmp);
+    for (size_t q = 0; q < K2; q++) { term[q] = tmp[q] / d; x[q] += term[q]; }
+  }
+  for (int r = 0; r < sq; r++) {            /* X <- 2 X + X^2 */
+    dense_mul(x, x, k, tmp);
+    for (size_t q = 0; q < K2; q++) x[q] = 2 * x[q] + tmp[q];
+  }
+  for (size_t q = 0; q < K2; q++) out[q] = x[q];
+  for (int i = 0; i < k; i++) out[i + (size_t)i * k] += 1;
+}
+
+void cup_dense_expm(const double *a, int k, double *out, double *work) {
+  double *s = work, *term = work + (size_t)k * k, *tmp = term + (size_t)k * k;
+  int sq = expm_scale(a, k, s);
   /* Taylor to degree 18: remainder < 0.5^19 / 19! relative */
   memset(out, 0, sizeof(double) * (size_t)k * k);
   for (int i = 0; i < k; i++) out[i + (size_t)i * k] = 1;

@@ -103,3 +103,8 @@ void cup_dense_lu_solve(const double *lu, int k, const int *piv, double *b, doub
 /* out = exp(a) by scaling and squaring of a degree-18 Taylor polynomial;
  * work holds 3 k*k doubles. a and out must differ. */
 void cup_dense_expm(const double *a, int k, double *out, double *work);
+/* The same polynomial with X = exp(a/2^s) - I carried through the squarings,
+ * (I + X)^2 = I + (2 X + X^2): forming I + X rounds X's small entries
+ * against 1 and each squaring doubles that, 2^s eps in all (1e-11 on a
+ * generator with |lambda| ~ 1e5); this keeps them. work: 4 k*k doubles. */
+void cup_dense_expm_stiff(const double *a, int k, double *out, double *work);

@@ -79,7 +79,10 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_integrator_options, f), OFF(cup_integrator_options, f_ctx),
         OFF(cup_integrator_options, f_order), OFF(cup_integrator_options, max_wall_seconds),
         OFF(cup_integrator_options, theta), OFF(cup_integrator_options, on_step), OFF(cup_integrator_options, step_ctx),
-        OFF(cup_integrator_options, interrupt));
+        OFF(cup_integrator_options, interrupt), OFF(cup_integrator_options, tol_abs),
+        OFF(cup_integrator_options, tol_rel), OFF(cup_integrator_options, max_event_rate),
+        OFF(cup_integrator_options, on_event), OFF(cup_integrator_options, event_ctx),
+        OFF(cup_integrator_options, estimate));
   if (!strcmp(name, "cup_run_info"))
     PUT(sizeof(cup_run_info), OFF(cup_run_info, status), OFF(cup_run_info, step),
         OFF(cup_run_info, t), OFF(cup_run_info, projected), OFF(cup_run_info, skipped),
@@ -87,7 +90,8 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_run_info, factorizations), OFF(cup_run_info, max_eps_cert),
         OFF(cup_run_info, max_eta_cert), OFF(cup_run_info, eps_target),
         OFF(cup_run_info, eta_target), OFF(cup_run_info, h_rho), OFF(cup_run_info, samples),
-        OFF(cup_run_info, message), OFF(cup_run_info, set_rebuilds), OFF(cup_run_info, max_rows));
+        OFF(cup_run_info, message), OFF(cup_run_info, set_rebuilds), OFF(cup_run_info, max_rows),
+        OFF(cup_run_info, err_est), OFF(cup_run_info, events), OFF(cup_run_info, rejected));
   if (!strcmp(name, "cup_set_desc"))
     PUT(sizeof(cup_set_desc), OFF(cup_set_desc, kind), OFF(cup_set_desc, n), OFF(cup_set_desc, p),
         OFF(cup_set_desc, P), OFF(cup_set_desc, C), OFF(cup_set_desc, F), OFF(cup_set_desc, G),

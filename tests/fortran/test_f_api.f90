@@ -103,14 +103,17 @@ contains
       off(b, c_loc(o%output_samples)), off(b, c_loc(o%f)), off(b, c_loc(o%f_ctx)), &
       off(b, c_loc(o%f_order)), off(b, c_loc(o%max_wall_seconds)), off(b, c_loc(o%theta)), &
       off(b, c_loc(o%on_step)), &
-      off(b, c_loc(o%step_ctx)), off(b, c_loc(o%interrupt))])
+      off(b, c_loc(o%step_ctx)), off(b, c_loc(o%interrupt)), off(b, c_loc(o%tol_abs)), &
+      off(b, c_loc(o%tol_rel)), off(b, c_loc(o%max_event_rate)), off(b, c_loc(o%on_event)), &
+      off(b, c_loc(o%event_ctx)), off(b, c_loc(o%estimate))])
     b = c_loc(r)
     call compare('cup_run_info', [int(c_sizeof(r), c_long), off(b, c_loc(r%status)), off(b, c_loc(r%step)), &
       off(b, c_loc(r%t)), off(b, c_loc(r%projected)), off(b, c_loc(r%skipped)), &
       off(b, c_loc(r%not_certified)), off(b, c_loc(r%dual_iterations)), off(b, c_loc(r%factorizations)), &
       off(b, c_loc(r%max_eps_cert)), off(b, c_loc(r%max_eta_cert)), off(b, c_loc(r%eps_target)), &
       off(b, c_loc(r%eta_target)), off(b, c_loc(r%h_rho)), off(b, c_loc(r%samples)), &
-      off(b, c_loc(r%message)), off(b, c_loc(r%set_rebuilds)), off(b, c_loc(r%max_rows))])
+      off(b, c_loc(r%message)), off(b, c_loc(r%set_rebuilds)), off(b, c_loc(r%max_rows)), &
+      off(b, c_loc(r%err_est)), off(b, c_loc(r%events)), off(b, c_loc(r%rejected))])
     call check_int(size(r%message), 256, 'cup_run_info%message has 256 chars')
     b = c_loc(sd)
     call compare('cup_set_desc', [int(c_sizeof(sd), c_long), off(b, c_loc(sd%kind)), off(b, c_loc(sd%n)), &
@@ -535,7 +538,9 @@ contains
     call check(.not. c_associated(o%f) .and. .not. c_associated(o%on_step), 'no callbacks by default')
     call check(cup_scheme_name(CUP_SCHEME_EXPONENTIAL) == 'exponential', 'scheme name')
     call check_int(cup_scheme_parse('implicit'), CUP_SCHEME_IMPLICIT, 'scheme parse')
-    call check(CUP_SCHEME_COUNT == 4 .and. cup_scheme_name(CUP_SCHEME_THETA) == 'theta', 'theta in the list')
+    call check(CUP_SCHEME_COUNT == 5 .and. cup_scheme_name(CUP_SCHEME_THETA) == 'theta', 'theta in the list')
+    call check(cup_scheme_name(CUP_SCHEME_ADAPTIVE) == 'adaptive' .and. o%tol_abs == 1d-6 .and. &
+      o%tol_rel == 1d-6 .and. o%estimate == 0, 'adaptive scheme and its defaults')
     call check_int(cup_scheme_parse('theta'), 3, 'theta parse')
     call check(cup_scheme_name(CUP_SCHEME_COUNT) == 'unknown', 'past the list')
     call check_int(cup_output_parse('samples'), CUP_OUTPUT_SAMPLES, 'output parse')

@@ -7,7 +7,10 @@
 !  * an f that fails for t > 0.5 stops the run with CUP_ERR_CALLBACK after 500
 !    completed steps (n = 1000, f_order = 1: f is evaluated at midpoints),
 !    keeping the 501 samples before;
-!  * the per-step callback, a user sink, and a sink that stops the run.
+!  * the per-step callback, a user sink, and a sink that stops the run;
+!  * the adaptive scheme with a Fortran event callback: its events are the
+!    run's, in time order, and the callback input (interpolated per step)
+!    gives the built-in waveform's trajectory within tol.
 module callbacks
   use, intrinsic :: iso_c_binding
   use catchup, only: cup_proj_info
@@ -31,6 +34,12 @@ module callbacks
     integer :: bad = 0
   end type step_par
 
+  type :: event_par
+    integer :: count = 0
+    integer :: bad = 0                       ! out of order, or a row or flag out of range
+    real(c_double) :: last_t = -1
+  end type event_par
+
   type :: sink_par
     integer :: count = 0
     integer(c_long) :: stop_at = -1
@@ -38,6 +47,19 @@ module callbacks
   end type sink_par
 
 contains
+
+  function on_event(t, row, on, ctx) result(stat) bind(C)
+    real(c_double), value :: t
+    integer(c_int), value :: row, on
+    type(c_ptr), value :: ctx
+    integer(c_int) :: stat
+    type(event_par), pointer :: p
+    call c_f_pointer(ctx, p)
+    p%count = p%count + 1
+    if (t < p%last_t .or. row < 0 .or. row > 1 .or. (on /= 0 .and. on /= 1)) p%bad = p%bad + 1
+    p%last_t = t
+    stat = 0
+  end function on_event
 
   function sine_u(t, u, ctx) result(stat) bind(C)
     real(c_double), value :: t
@@ -107,6 +129,7 @@ program test_f_callbacks
   type(f_par), target :: fpar
   type(step_par), target :: stpar
   type(sink_par), target :: skpar
+  type(event_par), target :: evpar
   real(c_double), allocatable :: t0(:), X0(:, :), t1(:), X1(:, :)
   real(c_double) :: d
   integer :: ierr, ns0, ns1
@@ -176,6 +199,36 @@ program test_f_callbacks
   call run_sink(opt, ierr, info)
   call check_int(ierr, CUP_ERR_INTERRUPTED, 'a sink returning nonzero interrupts')
   call check_int(int(info%step), 10, 'interrupted at step 10')
+
+  call section('adaptive scheme: event callback, callback input')
+  spar = sine_par()
+  fpar = f_par()
+  opt%f = c_null_funptr
+  opt%f_order = 3
+  opt%scheme = CUP_SCHEME_ADAPTIVE
+  opt%tol_abs = 1d-8
+  opt%tol_rel = 1d-8
+  opt%output = CUP_OUTPUT_SAMPLES
+  opt%output_samples = 101
+  opt%on_event = c_funloc(on_event)
+  opt%event_ctx = c_loc(evpar)
+  call run(u_builtin, opt, t0, X0, ns0, ierr, info)
+  call check(ierr == CUP_OK .and. ns0 == 101, 'adaptive run, built-in input')
+  call check(evpar%count == info%events .and. evpar%count >= 8 .and. evpar%bad == 0, &
+    'the event callback saw the run''s events, in time order')
+  call check(info%err_est > 0 .and. info%err_est < 1d-7, 'the run estimates its error below 10 tol')
+  opt%on_event = c_null_funptr
+  call run(u_callback, opt, t1, X1, ns1, ierr, info)
+  call check(ierr == CUP_OK .and. ns1 == 101, 'adaptive run, Fortran callback input')
+  if (ns0 == ns1) then
+    d = maxval(abs(X1 - X0))
+    write(*, '(a,es10.3,a,i0,a,es10.3)') 'adaptive: max |X_callback - X_builtin| = ', d, ' (', spar%calls, &
+      ' calls), estimate ', info%err_est
+    call check(d <= 2d-7 .and. info%err_est <= 2d-7, 'the two inputs agree within tol (1 + max |x|)')
+  end if
+  opt%scheme = CUP_SCHEME_EXPLICIT
+  opt%output = CUP_OUTPUT_EVERY
+  opt%f_order = 1
 
   call section('failing input callback')
   spar%fail = .true.

@@ -1,0 +1,204 @@
+/* adaptive — the event-driven scheme (adaptive_impl.h, docs/adaptive.md):
+ * set-up, and the run from breakpoint to breakpoint, event to event. */
+#define _POSIX_C_SOURCE 200809L
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
+#include "catchup.h"
+#include "adaptive.h"
+#include "adaptive_impl.h"
+#include "freestep.h"
+
+static void *take(size_t count, size_t size, int *fail) {
+  void *q = calloc(count ? count : 1, size);
+  if (!q) *fail = 1;
+  return q;
+}
+
+/* ||v||_inf <= pinf ||v||_P with pinf = 1 / sqrt(lambda_min(P)). */
+static double p_to_inf(const cup_polyset *K) {
+  int n = K->n;
+  if (K->pkind == CUP_METRIC_IDENTITY) return 1;
+  if (K->pkind == CUP_METRIC_DIAGONAL) {
+    double dmin = INFINITY;
+    for (int j = 0; j < n; j++) dmin = fmin(dmin, K->pd[j]);
+    return 1 / sqrt(dmin);
+  }
+  gsl_matrix *P = gsl_matrix_calloc((size_t)n, (size_t)n);
+  gsl_vector *ev = gsl_vector_alloc((size_t)n), *col = gsl_vector_alloc((size_t)n);
+  gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc((size_t)n);
+  double r = INFINITY;
+  if (P && ev && col && w) {
+    for (int j = 0; j < n; j++) {
+      gsl_vector_set_zero(col);
+      gsl_vector_set(col, (size_t)j, 1);
+      cup_metric_apply(K, col->data, ev->data);
+      for (int i = 0; i < n; i++) gsl_matrix_set(P, (size_t)i, (size_t)j, ev->data[i]);
+    }
+    gsl_error_handler_t *old = gsl_set_error_handler_off();
+    if (gsl_eigen_symm(P, ev, w) == 0) r = 1 / sqrt(gsl_vector_min(ev));
+    gsl_set_error_handler(old);
+  }
+  if (w) gsl_eigen_symm_free(w);
+  if (col) gsl_vector_free(col);
+  if (ev) gsl_vector_free(ev);
+  if (P) gsl_matrix_free(P);
+  return r;
+}
+
+static void dense_of(const cup_sparse *S, int has, double *out, int ld) {
+  if (!has) return;
+  for (int j = 0; j < S->ncol; j++)
+    for (int k = S->p[j]; k < S->p[j + 1]; k++) out[S->i[k] + (size_t)j * ld] = S->x[k];
+}
+
+/* The input's exosystem: the waveforms' (input_impl.h), or for a callback
+ * per component the Taylor states (u, u', ..., u^(q)) of the step's
+ * interpolating polynomial, w_j' = w_{j+1}. */
+static void exosystem(cup_adaptive *A) {
+  int p = A->p, nw = A->nw;
+  const cup_input *u = A->u;
+  if (!nw) return;
+  if (A->callback) {
+    for (int c = 0; c < p; c++) {
+      int g = c * (AD_DEGREE + 1);
+      A->U[c + (size_t)g * p] = 1;
+      for (int j = 0; j < AD_DEGREE; j++) A->W[(g + j) + (size_t)(g + j + 1) * nw] = 1;
+    }
+    return;
+  }
+  for (int k = 0; k < u->nterms; k++) A->U[u->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
+  cup_input_gen_dynamics(u, A->first_state, A->W, nw);
+  for (int k = 0; k < u->nterms; k++)
+    if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
+        u->terms[k].omega > 0)
+      A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
+}
+
+int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
+                        const cup_input *u, const cup_integrator_options *o, char *errmsg) {
+  *out = NULL;
+  if (!K->dense)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "adaptive scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
+                    "use a fixed-step scheme", K->m, K->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM);
+  if (o->f)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "adaptive scheme: a perturbation f(t, x) is not supported (the scheme integrates "
+                    "each active set's linear system exactly); use a fixed-step scheme");
+  if (D->p > 0 && !u)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the %s has %d input(s) but no input u(t) was given", D->what, D->p);
+  if (u && D->p > 0 && cup_input_dim(u) != D->p)
+    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the %s expects %d",
+                    cup_input_dim(u), D->what, D->p);
+  if (D->p > 0) {
+    int st = cup_input_gen_check(u, "adaptive", errmsg);
+    if (st) return st;
+  }
+  cup_adaptive *A = calloc(1, sizeof *A);
+  if (!A) return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  A->F = K->g0;
+  A->u = D->p > 0 ? u : NULL;
+  A->K = K;
+  A->o = *o;
+  A->n = D->n; A->m = K->m; A->p = D->p;
+  A->callback = A->u && A->u->fn;
+  int fail = 0, n = A->n, m = A->m, p = A->p;
+  int nterms = A->u && !A->callback ? A->u->nterms : 0;
+  A->first_state = take((size_t)nterms + 1, sizeof(int), &fail);
+  if (!fail) A->nw = A->callback ? p * (AD_DEGREE + 1) : cup_input_gen_dim(A->u, A->first_state);
+  int nw = A->nw, na = A->na = n + nw;
+  if (!fail && na > CUP_EXPONENTIAL_MAX_DIM) {
+    cup_adaptive_free(&A);
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
+                    "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
+  }
+  size_t NA = (size_t)na * na;
+  A->A = take((size_t)n * n, sizeof(double), &fail);
+  A->E = take((size_t)n * p, sizeof(double), &fail);
+  A->G = take((size_t)m * p, sizeof(double), &fail);
+  A->U = take((size_t)p * nw, sizeof(double), &fail);
+  A->W = take((size_t)nw * nw, sizeof(double), &fail);
+  A->ework = take(6 * NA, sizeof(double), &fail);
+  double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
+  for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), &fail);
+  double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
+                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
+  for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++) *vecs_m[k] = take((size_t)m, sizeof(double), &fail);
+  double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et};
+  for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++) *vecs_n[k] = take((size_t)n, sizeof(double), &fail);
+  A->ut = take((size_t)p, sizeof(double), &fail);
+  A->udot = take((size_t)p, sizeof(double), &fail);
+  A->uerr = take((size_t)p, sizeof(double), &fail);
+  A->wa = take((size_t)nw, sizeof(double), &fail);
+  A->wt = take((size_t)nw, sizeof(double), &fail);
+  A->zw = take((size_t)nw, sizeof(double), &fail);
+  A->zy = take((size_t)na, sizeof(double), &fail);
+  A->lcpM = take((size_t)m * m, sizeof(double), &fail);
+  A->touch = take((size_t)m, 1, &fail);
+  A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), &fail);
+  A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), &fail);
+  if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m)) {
+    cup_adaptive_free(&A);
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  }
+  if (cup_lcp_step_init(&A->proj, K, NULL, 1)) {   /* K is dense: only memory can fail */
+    cup_adaptive_free(&A);
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  }
+  cup_projector_options po = o->proj;             /* exact, certified relative to the scale */
+  po.eps_abs = po.eta_abs = 0;
+  po.eps_rel = 1e-12;
+  po.eta_rel = 1e-10;
+  int st = cup_projector_create(&A->projector, K, &po, errmsg);
+  if (st) { cup_adaptive_free(&A); return st; }
+  dense_of(&D->A, D->has_A, A->A, n);
+  dense_of(&D->E, D->has_E, A->E, n);
+  if (G) dense_of(G, 1, A->G, m);
+  A->hmax_input = o->T / 8;
+  exosystem(A);
+  for (int j = 0; j <= AD_DEGREE; j++) A->node[j] = 0.5 * (1 - cos(M_PI * j / AD_DEGREE));
+  A->pinf = p_to_inf(K);
+  for (int i = 0; i < m; i++) {                  /* the late-switch error model, per row */
+    const double *b = K->Bt + (size_t)i * n;
+    double bn = 0, abn = 0;
+    for (int r = 0; r < n; r++) {
+      bn = fmax(bn, fabs(b[r]));
+      double acc = 0;
+      for (int c = 0; c < n; c++) acc += A->A[r + (size_t)c * n] * b[c];
+      abn = fmax(abn, fabs(acc));
+    }
+    A->cz[i] = bn;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) A->c1[i] += fabs(K->Ct.x[k]);
+    A->cs[i] = K->Md[i + (size_t)i * m] > 0 ? abn / K->Md[i + (size_t)i * m] : 0;
+  }
+  *out = A;
+  return CUP_OK;
+}
+
+void cup_adaptive_free(cup_adaptive **Ap) {
+  if (!Ap || !*Ap) return;
+  cup_adaptive *A = *Ap;
+  ad_modes_free(A);
+  cup_lcp_free(&A->lcp);
+  cup_lcp_step_free(&A->proj);
+  cup_projector_free(&A->projector);
+  free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
+  free(A->ya); free(A->yb); free(A->yt); free(A->yr); free(A->My); free(A->fa); free(A->fb);
+  free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
+  free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
+  free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
+  free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et);
+  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->lcpM); free(A->touch);
+  free(A->samp); free(A->coef); free(A->zw); free(A->zy);
+  free(A);
+  *Ap = NULL;
+}
+
+const double *cup_adaptive_state(const cup_adaptive *A) { return A ? A->x : NULL; }

@@ -1,0 +1,29 @@
+/* adaptive — the event-driven scheme CUP_SCHEME_ADAPTIVE behind
+ * cup_integrator_create/run (integrator.c dispatches here). */
+#ifndef CUP_ADAPTIVE_H
+#define CUP_ADAPTIVE_H
+
+#include "catchup/integrator.h"
+#include "freestep.h"
+
+typedef struct cup_adaptive cup_adaptive;
+
+/* x' = A x + E u + B zeta, 0 <= zeta _|_ C x + g0 + G u(t) >= 0 (D's
+ * drift; K's rows, offset g0 and metric P, B = P^-1 C^T; G m x p or NULL):
+ * an LCS's, or a general process's with a polyset and no other term.
+ * Requires a small dense set (K in dense form), no perturbation f, and
+ * state plus input generators within the dense limit; errmsg says which
+ * does not hold. Copies what it uses. */
+int cup_adaptive_create(cup_adaptive **A, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
+                        const cup_input *u, const cup_integrator_options *o, char *errmsg);
+void cup_adaptive_free(cup_adaptive **A);
+int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
+                     cup_run_info *info);
+const double *cup_adaptive_state(const cup_adaptive *A);
+/* Inside the sink: zeta at the output time (m entries), the multipliers of
+ * the active set that holds from there (at an event or a breakpoint, the one
+ * chosen there; zeros at t = 0 and on catching-up steps across accumulating
+ * events, whose multipliers are the projections' impulses). */
+int cup_adaptive_zeta(cup_adaptive *A, double *zeta);
+
+#endif

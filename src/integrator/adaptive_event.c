@@ -1,0 +1,189 @@
+/* adaptive_event — event functions of an active set, their sign changes on
+ * a step and the location of the earliest one (adaptive_impl.h). */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include "catchup.h"
+#include "adaptive_impl.h"
+
+void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, double *g, double *thr) {
+  int m = A->m, na = A->na;
+  double vmax = 0;                         /* the state's scale: v = x + K U w */
+  for (int j = 0; j < A->n; j++) vmax = fmax(vmax, fabs(y[j]));
+  for (int i = 0; i < m; i++) {
+    const double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
+    double acc = md->Lc[i], mag = fabs(md->Lc[i]);
+    for (int j = 0; j < na; j++) { acc += Li[j] * y[j]; mag += Lmi[j] * fabs(y[j]); }
+    g[i] = acc;
+    /* a few ulps of the terms summed; a slack also of the state's scale,
+     * to which the held rows are kept (a row that depends on them sits at
+     * zero with that rounding) */
+    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+  }
+}
+
+void ad_events_deriv(cup_adaptive *A, const ad_mode *md, const double *y, double *d) {
+  int m = A->m, na = A->na;
+  double *My = A->My;
+  for (int i = 0; i < na; i++) My[i] = 0;
+  for (int j = 0; j < na; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    const double *col = md->M + (size_t)j * na;
+    for (int i = 0; i < na; i++) My[i] += col[i] * yj;
+  }
+  for (int i = 0; i < m; i++) d[i] = cup_dot(md->L + (size_t)i * na, My, na);
+}
+
+/* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */
+static void probe(cup_adaptive *A, ad_mode *md, double tau, double *g, double *d, double *thr,
+                  ad_event *ev) {
+  ad_flow(A, md, tau, A->ya, A->yt);
+  ad_events_eval(A, md, A->yt, g, thr);
+  ad_events_deriv(A, md, A->yt, d);
+  ev->evals++;
+}
+
+static int crossed(double glo, double tlo, double ghi, double thi) { return glo >= -tlo && ghi < -thi; }
+
+/* Any row crossing between the bracket's start (ga, ta) and (g, thr)? */
+static int any_crossed(const cup_adaptive *A, const double *g, const double *thr) {
+  for (int i = 0; i < A->m; i++)
+    if (crossed(A->ga[i], A->ta[i], g[i], thr[i])) return 1;
+  return 0;
+}
+
+static void keep(cup_adaptive *A, double *g, double *d, double *t, const double *gs, const double *ds,
+                 const double *ts) {
+  int m = A->m;
+  memcpy(g, gs, sizeof(double) * (size_t)m);
+  memcpy(d, ds, sizeof(double) * (size_t)m);
+  memcpy(t, ts, sizeof(double) * (size_t)m);
+}
+
+/* The lowest point of the cubic Hermite interpolant of (g0, d0) at 0 and
+ * (g1, d1) at h, over [0, h]. */
+static double hermite_min(double g0, double d0, double g1, double d1, double h, double *at) {
+  /* p(s) = g0 + d0 s + c2 s^2 + c3 s^3 */
+  double c2 = (3 * (g1 - g0) / h - 2 * d0 - d1) / h;
+  double c3 = (d0 + d1 - 2 * (g1 - g0) / h) / (h * h);
+  double best = fmin(g0, g1);
+  *at = g0 <= g1 ? 0 : h;
+  /* p'(s) = d0 + 2 c2 s + 3 c3 s^2 */
+  double a = 3 * c3, b = 2 * c2, c = d0, r[2];
+  int nr = 0;
+  if (fabs(a) < 1e-300) {
+    if (b != 0) r[nr++] = -c / b;
+  } else {
+    double disc = b * b - 4 * a * c;
+    if (disc >= 0) {
+      double q = -0.5 * (b + copysign(sqrt(disc), b));
+      if (q != 0) r[nr++] = c / q;
+      r[nr++] = q / a;
+    }
+  }
+  for (int k = 0; k < nr; k++)
+    if (r[k] > 0 && r[k] < h) {
+      double s = r[k], v = g0 + s * (d0 + s * (c2 + s * c3));
+      if (v < best) { best = v; *at = s; }
+    }
+  return best;
+}
+
+/* A dip of row i inside the step (slope down at the start, up at the end):
+ * find the lowest point of the true function by safeguarded secant steps on
+ * its slope; 1 with the bracket end in ev if it goes below zero there (or
+ * any row crossed at a probe). */
+static int find_dip(cup_adaptive *A, ad_mode *md, int i, double h, ad_event *ev) {
+  double lo = 0, hi = h, dlo = A->da[i], dhi = A->db[i];
+  for (int it = 0; it < 40 && hi - lo > 1e-3 * h; it++) {
+    double s = lo + (hi - lo) * dlo / (dlo - dhi);
+    if (!(s > lo + 0.05 * (hi - lo) && s < hi - 0.05 * (hi - lo))) s = 0.5 * (lo + hi);
+    probe(A, md, s, A->gt, A->dt, A->tt, ev);
+    if (any_crossed(A, A->gt, A->tt)) {
+      keep(A, A->gb, A->db, A->tb, A->gt, A->dt, A->tt);
+      ev->tau_lo = 0;
+      ev->tau_sw = s;
+      return 1;
+    }
+    if (A->dt[i] < 0) { lo = s; dlo = A->dt[i]; } else { hi = s; dhi = A->dt[i]; }
+  }
+  return 0;
+}
+
+int ad_detect(cup_adaptive *A, ad_mode *md, double h, ad_event *ev) {
+  int m = A->m;
+  ev->tau_lo = 0;
+  ev->tau_sw = h;
+  if (any_crossed(A, A->gb, A->tb)) return 1;
+  for (int i = 0; i < m; i++) {
+    if (!(A->da[i] < 0 && A->db[i] > 0)) continue;
+    double at, low = hermite_min(A->ga[i], A->da[i], A->gb[i], A->db[i], h, &at);
+    /* the interpolant is only a guide: look closer when it comes down to a
+     * quarter of the end values */
+    if (low < 0.25 * fmin(A->ga[i], A->gb[i]) && find_dip(A, md, i, h, ev)) return 1;
+  }
+  return 0;
+}
+
+/* The row crossing first: of those crossed at the bracket's end, the one
+ * whose secant root comes earliest. */
+static int leading(const cup_adaptive *A) {
+  int best = -1;
+  double tbest = INFINITY;
+  for (int i = 0; i < A->m; i++) {
+    if (!crossed(A->ga[i], A->ta[i], A->gb[i], A->tb[i])) continue;
+    double frac = A->ga[i] / (A->ga[i] - A->gb[i]);
+    if (frac < tbest) { tbest = frac; best = i; }
+  }
+  return best;
+}
+
+/* The root of row k from the bracket: a Newton step from the end nearer
+ * the secant root when it stays inside, the secant root otherwise. */
+static double root_estimate(const cup_adaptive *A, int k, double lo, double hi) {
+  double gl = A->ga[k], gh = A->gb[k];
+  double sec = lo + (hi - lo) * gl / (gl - gh);
+  double nl = A->da[k] < 0 ? lo - gl / A->da[k] : NAN;
+  double nh = A->db[k] < 0 ? hi - gh / A->db[k] : NAN;
+  double nt = sec - lo < hi - sec ? nl : nh;
+  return nt > lo && nt < hi ? nt : sec;
+}
+
+void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev) {
+  double lo = ev->tau_lo, hi = ev->tau_sw;
+  double floor_ = 16 * DBL_EPSILON * (fabs(ev->t0) + hi);
+  int k = leading(A), stalls = 0;
+  double est = hi;
+  for (int it = 0; it < 200 && k >= 0; it++) {
+    est = root_estimate(A, k, lo, hi);
+    /* The effect of switching a time delta late is (c / 2) delta^2 in x:
+     * c = |zeta_k'| ||B_k|| when row k turns off, |s_k'| ||A B_k|| / S_kk
+     * when it turns on (docs/adaptive.md). */
+    double slope = fmax(fabs(A->db[k]), (A->ga[k] - A->gb[k]) / (hi - lo));
+    double c = ev->cfac * slope * (md->is_zeta[k] ? A->cz[k] : A->cs[k]);
+    double need = c > 0 ? sqrt(2 * AD_EVENT_SHARE * tolw / c) : INFINITY;
+    need = fmax(need, floor_);
+    if (hi - lo <= need) break;
+    /* close the bracket around the estimate: from the right first (the
+     * switch is at hi), then from the left (which proves the estimate) */
+    double s = hi - est > 0.5 * need ? est + 0.5 * need : est - 0.5 * need;
+    if (stalls >= 2 || !(s > lo && s < hi)) s = 0.5 * (lo + hi), stalls = 0;
+    probe(A, md, s, A->gt, A->dt, A->tt, ev);
+    double before = hi - lo;
+    if (any_crossed(A, A->gt, A->tt)) {
+      hi = s;
+      keep(A, A->gb, A->db, A->tb, A->gt, A->dt, A->tt);
+      k = leading(A);
+    } else {
+      lo = s;
+      keep(A, A->ga, A->da, A->ta, A->gt, A->dt, A->tt);
+      if (!crossed(A->ga[k], A->ta[k], A->gb[k], A->tb[k])) k = leading(A);
+    }
+    stalls = hi - lo > 0.5 * before ? stalls + 1 : 0;
+  }
+  ev->tau_lo = lo;
+  ev->tau_sw = hi;
+  ev->row = k;
+  ev->tau_est = k >= 0 ? est : hi;
+}

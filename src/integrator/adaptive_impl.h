@@ -1,0 +1,175 @@
+/* adaptive — the event-driven scheme (docs/adaptive.md). Internal layout
+ * shared by adaptive.c (set-up), adaptive_mode.c (one active set's linear
+ * system, its exact flow, the velocity LCP), adaptive_event.c (the event
+ * functions, detection and location of a crossing) and adaptive_run.c (the
+ * run: steps, breakpoints, switches and the error estimate).
+ *
+ * Between events the active set J is fixed and, with B = P^-1 C^T, the LCS is
+ * a linear ODE on the manifold C_J x + g_J(t) = 0 with zeta_J eliminated.
+ * In v = x + K_J u (K_J = B_J S_J^-1 G_J, S_J = C_J B_J) it reads
+ *     v' = Pi_J A v + Pi_J (E - A K_J) u,   Pi_J = I - B_J S_J^-1 C_J,
+ * and the input is the output of a small exosystem w' = W w, u = U w (the
+ * built-in waveforms between breakpoints; for a callback, the Taylor form of
+ * its interpolating polynomial on each step), so y = (v, w) obeys y' = M_J y
+ * and one matrix exponential is its exact flow and dense output. The
+ * multipliers zeta_J and the slacks of the other rows are linear in y: the
+ * event functions, whose sign changes are located by root finding on the
+ * exact flow. */
+#ifndef CUP_ADAPTIVE_IMPL_H
+#define CUP_ADAPTIVE_IMPL_H
+
+#include <stdint.h>
+#include <gsl/gsl_eigen.h>
+#include "catchup/integrator.h"
+#include "model/input_impl.h"
+#include "set/polyset_impl.h"
+#include "lcp/lcp.h"
+#include "lcp/step.h"
+
+#define AD_MODES 4          /* active sets kept with their matrices (least recently used goes) */
+#define AD_CACHE 3          /* exponentials kept per active set, by step length */
+#define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
+#define AD_ZENO_RING 64     /* events counted for the rate cap */
+
+typedef struct ad_mode {
+  uint64_t mask;            /* the active rows J */
+  long stamp;               /* last use (0: empty) */
+  int nj;
+  int *rows;                /* J, m entries */
+  double *M;                /* na x na generator, column-major */
+  double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
+  double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */
+  double *Lm;               /* m x na, row-major: magnitudes of the terms an event value is
+                               computed from (|C_i| |X| for a slack: a row that depends on
+                               the active ones has a tiny L_i, but its slack rounds at that) */
+  unsigned char *is_zeta;   /* m */
+  double *X;                /* n x na, row-major: x = X y */
+  double *R;                /* n x nj, column-major: B_J S_J^-1 (the manifold correction) */
+  double *KU;               /* n x nw, column-major: v = x + K_J U w */
+  double mnorm;             /* ||M||_inf */
+  double hmax;              /* step limit for event detection */
+  double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
+  double *Ec[AD_CACHE];
+  long cstamp[AD_CACHE];
+} ad_mode;
+
+typedef struct cup_adaptive cup_adaptive;   /* as in adaptive.h, which the run's API is in */
+
+struct cup_adaptive {
+  const double *F;          /* the offset at u = 0: K's g0 */
+  const cup_input *u;
+  const cup_polyset *K;
+  cup_integrator_options o;
+  int n, m, p, nw, na;
+  int callback;             /* u is a callback: polynomial exosystem of degree AD_DEGREE */
+  int *first_state;         /* built-in waveforms: first exosystem state of each term */
+  double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
+  double *U, *W;            /* p x nw, nw x nw, column-major */
+  double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
+  double pinf;              /* ||v||_inf <= pinf ||v||_P */
+  ad_mode modes[AD_MODES];
+  long clock;
+  const ad_mode *pinned[2]; /* in use by the run: never evicted */
+  /* scratch of the mode construction */
+  double *S, *Sl, *Sinv, *T1, *T2, *T3;
+  int *perm;
+  gsl_eigen_nonsymm_workspace *eig;
+  gsl_matrix *eigA;
+  gsl_vector_complex *eigv;
+  /* scratch of the run */
+  double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
+  double *ya, *yb, *yt, *yr, *My, *fa, *fb;
+  double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
+  double *cz, *cs;          /* per row: ||B_i||_inf and ||A B_i||_inf / S_ii (the late-switch error, docs/adaptive.md) */
+  double *c1;               /* per row: ||c_i||_1 */
+  double *x, *xs, *xr, *xf, *s, *gam, *g, *ut, *udot, *uerr, *wa, *wt;
+  double *e, *et;           /* the propagated error estimate, n */
+  double *zero;             /* m zeros */
+  cup_lcp lcp;
+  double *lcpM, *lcpq;
+  unsigned char *touch;
+  cup_lcp_step proj;        /* W = I, h = 1: the certified P-projection onto K(t) */
+  cup_projector *projector; /* ... and the projector where pivoting fails (degenerate rows, empty K) */
+  /* callback inputs: Chebyshev-Lobatto nodes on [0, 1], samples, coefficients */
+  double node[AD_DEGREE + 1], *samp, *coef;
+  double zeno[AD_ZENO_RING]; /* times and rows of the last changes of the active set */
+  int zeno_row[AD_ZENO_RING];
+  long nzeno;
+  /* the multipliers at an output time (cup_adaptive_zeta, inside the sink) */
+  const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
+  double zt;
+  double *zw, *zy;          /* nw, na */
+};
+
+/* One run's progress (adaptive_run.c). */
+typedef struct ad_run {
+  cup_run_info *info;
+  cup_sample_fn sink;
+  void *sink_ctx;
+  double t, tb;             /* now; the next breakpoint of the input (or T) */
+  ad_mode *md;              /* the active set's system */
+  long steps, next_sample;
+  double est_max;           /* the largest error estimate so far */
+  double r2, rloc;          /* rounding (sum of squares), unsigned local contributions */
+  double h_cb;              /* callback inputs: the next step size */
+  int floor_warned;
+  double wall0;
+} ad_run;
+
+/* ---- adaptive_mode.c ---- */
+/* The active set with rows `mask` (built, or found among the kept ones). A
+ * set whose rows are linearly dependent keeps an independent subset (the
+ * mode's mask says which). NULL only without memory (none is allocated
+ * here: the slots are set up by ad_modes_init). */
+ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask);
+int ad_modes_init(cup_adaptive *A);
+void ad_modes_free(cup_adaptive *A);
+/* exp(h M_J), cached by h (NULL: h = 0 needs none). */
+const double *ad_expm(cup_adaptive *A, ad_mode *md, double h);
+/* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
+void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, double *y_out);
+/* y = (x + K_J U w, w) and back: x = X_J y. */
+void ad_lift(const cup_adaptive *A, const ad_mode *md, const double *x, const double *w, double *y);
+void ad_state(const cup_adaptive *A, const ad_mode *md, const double *y, double *x);
+/* x onto C_J x + g_J = 0 along B_J (P-orthogonal): removes rounding drift. */
+void ad_manifold(const cup_adaptive *A, const ad_mode *md, const double *g, double *x);
+/* The active set that continues from (x, t): the velocity LCP on the rows
+ * that touch (slack at rounding level, or in hint: rows held until now,
+ * active in a projection just made, or whose event it is), given u = U w
+ * and u' = U W w. Returns CUP_OK or CUP_ERR_LINALG; pivots are added to
+ * *pivots. */
+int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+              int *pivots);
+/* g = F + G U w. */
+void ad_offset(const cup_adaptive *A, const double *w, double *g);
+
+/* ---- adaptive_event.c ---- */
+/* g = L y + Lc and the rounding thresholds thr. */
+void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, double *g, double *thr);
+/* d = L M y (the event functions' time derivatives). */
+void ad_events_deriv(cup_adaptive *A, const ad_mode *md, const double *y, double *d);
+
+typedef struct ad_event {
+  double t0;                /* the step's start time (for rounding floors) */
+  double tau_lo, tau_sw;    /* the bracket from the step start: no crossing at tau_lo, one at tau_sw */
+  double tau_est;           /* best estimate of the root */
+  double cfac;              /* multiplies the late-switch error model (1; more after an underestimate) */
+  int row;                  /* the row whose function crosses first */
+  int evals;                /* flow evaluations spent */
+} ad_event;
+/* After a step of length h from ya (values ga, slopes da, thresholds ta at
+ * the start; gb, db, tb at the end): 1 if an event function crosses zero
+ * downwards (an interior dip below zero included), with the bracket
+ * (tau_lo, tau_sw] and the values at its ends in ga.. and gb..; 0 if none. */
+int ad_detect(cup_adaptive *A, ad_mode *md, double h, ad_event *ev);
+/* Shrink the bracket around the earliest crossing until the switch at its
+ * right end, tau_sw, lies past the root by no more than the time accuracy
+ * at which the late switch's effect on x, second order in that delay
+ * (docs/adaptive.md), is a fixed fraction of tolw (the absolute error
+ * target at this state). tau_est: the root, refined by Newton steps on the
+ * exact flow. */
+void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev);
+/* The late-switch error model's fraction of tol per event. */
+#define AD_EVENT_SHARE 0.4
+
+#endif

@@ -1,0 +1,435 @@
+/* adaptive_mode — one active set's linear system and its exact flow, and
+ * the choice of the active set by the velocity LCP (adaptive_impl.h). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <gsl/gsl_complex_math.h>
+#include <gsl/gsl_errno.h>
+#include "catchup.h"
+#include "adaptive_impl.h"
+
+/* Pivots of S_J below this share of its largest diagonal mark a row that
+ * depends on the others: it is dropped from J (it holds when they do). */
+#define AD_RANK_TOL 1e-12
+
+static void *take(size_t count, size_t size, int *fail) {
+  void *q = calloc(count ? count : 1, size);
+  if (!q) *fail = 1;
+  return q;
+}
+
+int ad_modes_init(cup_adaptive *A) {
+  int n = A->n, m = A->m, na = A->na, nw = A->nw, fail = 0;
+  size_t NA = (size_t)na * na;
+  for (int s = 0; s < AD_MODES; s++) {
+    ad_mode *md = &A->modes[s];
+    md->rows = take((size_t)m + 1, sizeof(int), &fail);
+    md->M = take(NA, sizeof(double), &fail);
+    md->L = take((size_t)m * na, sizeof(double), &fail);
+    md->Lm = take((size_t)m * na, sizeof(double), &fail);
+    md->Lc = take((size_t)m, sizeof(double), &fail);
+    md->is_zeta = take((size_t)m, 1, &fail);
+    md->X = take((size_t)n * na, sizeof(double), &fail);
+    md->R = take((size_t)n * m, sizeof(double), &fail);
+    md->KU = take((size_t)n * nw, sizeof(double), &fail);
+    for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = take(NA, sizeof(double), &fail);
+  }
+  size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
+  A->S = take((size_t)m * m, sizeof(double), &fail);
+  A->Sl = take((size_t)m * m, sizeof(double), &fail);
+  A->Sinv = take((size_t)m * m, sizeof(double), &fail);
+  A->T1 = take(big, sizeof(double), &fail);
+  A->T2 = take(big, sizeof(double), &fail);
+  A->T3 = take(big, sizeof(double), &fail);
+  A->perm = take((size_t)m + 1, sizeof(int), &fail);
+  if (fail) return CUP_ERR_NOMEM;
+  A->eig = gsl_eigen_nonsymm_alloc((size_t)n);
+  A->eigA = gsl_matrix_alloc((size_t)n, (size_t)n);
+  A->eigv = gsl_vector_complex_alloc((size_t)n);
+  return A->eig && A->eigA && A->eigv ? CUP_OK : CUP_ERR_NOMEM;
+}
+
+void ad_modes_free(cup_adaptive *A) {
+  for (int s = 0; s < AD_MODES; s++) {
+    ad_mode *md = &A->modes[s];
+    free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
+    free(md->X); free(md->R); free(md->KU);
+    for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
+  }
+  free(A->S); free(A->Sl); free(A->Sinv); free(A->T1); free(A->T2); free(A->T3); free(A->perm);
+  if (A->eig) gsl_eigen_nonsymm_free(A->eig);
+  if (A->eigA) gsl_matrix_free(A->eigA);
+  if (A->eigv) gsl_vector_complex_free(A->eigv);
+}
+
+/* S = C_J P^-1 C_J^T from the set's dense M, and its pivoted Cholesky
+ * factor in Sl; returns the rank. */
+static int factor_S(cup_adaptive *A, const int *rows, int nj) {
+  const double *Md = A->K->Md;
+  int m = A->m;
+  for (int b = 0; b < nj; b++)
+    for (int a = 0; a < nj; a++) A->S[a + (size_t)b * nj] = Md[rows[a] + (size_t)rows[b] * m];
+  memcpy(A->Sl, A->S, sizeof(double) * (size_t)nj * nj);
+  return nj ? cup_dense_pchol(A->Sl, nj, A->perm, AD_RANK_TOL) : 0;
+}
+
+/* Row i of C, dense, into out (n entries). */
+static void row_of_C(const cup_polyset *K, int i, double *out) {
+  cup_zero(out, K->n);
+  for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) out[K->Ct.i[k]] = K->Ct.x[k];
+}
+
+/* The step limit of event detection for this active set: an eighth of the
+ * period of its fastest oscillation (and of the input's), and the time an
+ * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL. */
+static double mode_hmax(cup_adaptive *A, const double *AJ) {
+  int n = A->n;
+  double h = A->hmax_input;
+  if (n == 0) return h;
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < n; i++) gsl_matrix_set(A->eigA, (size_t)i, (size_t)j, AJ[i + (size_t)j * n]);
+  gsl_error_handler_t *old = gsl_set_error_handler_off();
+  int bad = gsl_eigen_nonsymm(A->eigA, A->eigv, A->eig);
+  gsl_set_error_handler(old);
+  if (bad) return h;
+  for (int i = 0; i < n; i++) {
+    gsl_complex z = gsl_vector_complex_get(A->eigv, (size_t)i);
+    double im = fabs(GSL_IMAG(z)), re = GSL_REAL(z);
+    if (im > 0) h = fmin(h, M_PI / 4 / im);
+    if (re > 0) h = fmin(h, 1 / re);
+  }
+  return h;
+}
+
+static void mode_build(cup_adaptive *A, ad_mode *md, uint64_t mask) {
+  const cup_polyset *K = A->K;
+  int n = A->n, m = A->m, nw = A->nw, na = A->na, p = A->p;
+  int nj = 0;
+  for (int i = 0; i < m; i++)
+    if (mask >> i & 1) md->rows[nj++] = i;
+  int r = factor_S(A, md->rows, nj);
+  if (r < nj) {                                  /* keep an independent subset */
+    int keep[CUP_DENSE_MAX_ROWS];
+    for (int a = 0; a < r; a++) keep[a] = md->rows[A->perm[a]];
+    mask = 0;
+    for (int a = 0; a < r; a++) mask |= (uint64_t)1 << keep[a];
+    nj = 0;
+    for (int i = 0; i < m; i++)
+      if (mask >> i & 1) md->rows[nj++] = i;
+    factor_S(A, md->rows, nj);
+  }
+  md->mask = mask;
+  md->nj = nj;
+  const int *J = md->rows;
+  double *work = A->T3;
+  for (int k = 0; k < nj; k++) {                 /* S^-1, column by column */
+    double *col = A->Sinv + (size_t)k * nj, *ek = work + nj;
+    cup_zero(ek, nj);
+    ek[k] = 1;
+    cup_dense_pchol_solve(A->Sl, nj, nj, A->perm, ek, col, work);
+  }
+  for (int k = 0; k < nj; k++)                   /* R = B_J S^-1 */
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int l = 0; l < nj; l++) acc += K->Bt[(size_t)J[l] * n + i] * A->Sinv[l + (size_t)k * nj];
+      md->R[i + (size_t)k * n] = acc;
+    }
+  double *CJ = A->T1, *Pi = A->T2;               /* C_J (nj x n, row-major), Pi = I - R C_J */
+  for (int k = 0; k < nj; k++) row_of_C(K, J[k], CJ + (size_t)k * n);
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < n; i++) {
+      double acc = i == j;
+      for (int k = 0; k < nj; k++) acc -= md->R[i + (size_t)k * n] * CJ[(size_t)k * n + j];
+      Pi[i + (size_t)j * n] = acc;
+    }
+  for (int c = 0; c < nw; c++)                   /* KU = R G_J U */
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int k = 0; k < nj; k++) {
+        double gu = 0;
+        for (int q = 0; q < p; q++) gu += A->G[J[k] + (size_t)q * m] * A->U[q + (size_t)c * p];
+        acc += md->R[i + (size_t)k * n] * gu;
+      }
+      md->KU[i + (size_t)c * n] = acc;
+    }
+  /* Q = [A, E U - A K U]: the free field A x + E u in terms of y = (v, w) */
+  double *Q = A->T3;
+  for (int j = 0; j < na; j++)
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      if (j < n) {
+        acc = A->A[i + (size_t)j * n];
+      } else {
+        int c = j - n;
+        for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->U[q + (size_t)c * p];
+        for (int k = 0; k < n; k++) acc -= A->A[i + (size_t)k * n] * md->KU[k + (size_t)c * n];
+      }
+      Q[i + (size_t)j * n] = acc;
+    }
+  memset(md->M, 0, sizeof(double) * (size_t)na * na);   /* M = [Pi Q; 0 W] */
+  for (int j = 0; j < na; j++)
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int k = 0; k < n; k++) acc += Pi[i + (size_t)k * n] * Q[k + (size_t)j * n];
+      md->M[i + (size_t)j * na] = acc;
+    }
+  for (int j = 0; j < nw; j++)
+    for (int i = 0; i < nw; i++) md->M[(n + i) + (size_t)(n + j) * na] = A->W[i + (size_t)j * nw];
+  for (int i = 0; i < n; i++)                    /* X = [I, -KU], row-major */
+    for (int j = 0; j < na; j++)
+      md->X[(size_t)i * na + j] = j < n ? (i == j) : -md->KU[i + (size_t)(j - n) * n];
+  /* event rows: zeta_J = -S^-1 (C_J Q y + G_J U W w) for the active rows,
+   * slack_i = C_i X y + G_i U w + F_i for the others */
+  double *crow = A->T1 + (size_t)nj * n, *CQ = A->T2;          /* nj x na, row-major */
+  for (int k = 0; k < nj; k++)
+    for (int j = 0; j < na; j++) {
+      double acc = 0;
+      for (int l = 0; l < n; l++) acc += CJ[(size_t)k * n + l] * Q[l + (size_t)j * n];
+      if (j >= n) {
+        int c = j - n;
+        for (int q = 0; q < p; q++) {
+          double uw = 0;
+          for (int d = 0; d < nw; d++) uw += A->U[q + (size_t)d * p] * A->W[d + (size_t)c * nw];
+          acc += A->G[J[k] + (size_t)q * m] * uw;
+        }
+      }
+      CQ[(size_t)k * na + j] = acc;
+    }
+  for (int i = 0; i < m; i++) {
+    double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
+    int k = -1;
+    for (int a = 0; a < nj; a++) if (J[a] == i) k = a;
+    md->is_zeta[i] = k >= 0;
+    if (k >= 0) {
+      for (int j = 0; j < na; j++) {
+        double acc = 0;
+        for (int l = 0; l < nj; l++) acc -= A->Sinv[k + (size_t)l * nj] * CQ[(size_t)l * na + j];
+        Li[j] = acc;
+        Lmi[j] = fabs(acc);
+      }
+      md->Lc[i] = 0;
+    } else {
+      row_of_C(K, i, crow);
+      for (int j = 0; j < na; j++) {
+        double acc = 0, mag = 0;
+        for (int l = 0; l < n; l++) {
+          acc += crow[l] * md->X[(size_t)l * na + j];
+          mag += fabs(crow[l] * md->X[(size_t)l * na + j]);
+        }
+        if (j >= n)
+          for (int q = 0; q < p; q++) {
+            double gu = A->G[i + (size_t)q * m] * A->U[q + (size_t)(j - n) * p];
+            acc += gu;
+            mag += fabs(gu);
+          }
+        Li[j] = acc;
+        Lmi[j] = mag;
+      }
+      md->Lc[i] = A->F[i];
+    }
+  }
+  md->mnorm = 0;
+  for (int i = 0; i < na; i++) {
+    double r_ = 0;
+    for (int j = 0; j < na; j++) r_ += fabs(md->M[i + (size_t)j * na]);
+    md->mnorm = fmax(md->mnorm, r_);
+  }
+  double *AJ = A->T1;                            /* Pi A, compact, for the step limit */
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < n; i++) AJ[i + (size_t)j * n] = md->M[i + (size_t)j * na];
+  md->hmax = mode_hmax(A, AJ);
+  for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
+}
+
+ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
+  ad_mode *oldest = &A->modes[0];
+  for (int s = 0; s < AD_MODES; s++) {   /* AD_MODES > 2: a slot that is not pinned exists */
+    ad_mode *md = &A->modes[s];
+    if (md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
+    if (md != A->pinned[0] && md != A->pinned[1] &&
+        (oldest == A->pinned[0] || oldest == A->pinned[1] || md->stamp < oldest->stamp))
+      oldest = md;
+  }
+  mode_build(A, oldest, mask);
+  /* a dependent row dropped: the reduced set may be kept already */
+  for (int s = 0; s < AD_MODES; s++) {
+    ad_mode *md = &A->modes[s];
+    if (md != oldest && md->stamp && md->mask == oldest->mask) {
+      oldest->stamp = 0;
+      md->stamp = ++A->clock;
+      return md;
+    }
+  }
+  oldest->stamp = ++A->clock;
+  return oldest;
+}
+
+const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
+  int slot = 0;
+  for (int c = 0; c < AD_CACHE; c++) {
+    if (md->hc[c] == h) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
+    if (md->cstamp[c] < md->cstamp[slot]) slot = c;
+  }
+  size_t NA = (size_t)A->na * A->na;
+  double *hM = A->ework + 4 * NA;
+  for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
+  /* a stiff generator needs the small entries of exp - I kept (linalg.h):
+   * the run reuses this exponential on every step */
+  cup_dense_expm_stiff(hM, A->na, md->Ec[slot], A->ework);
+  md->hc[slot] = h;
+  md->cstamp[slot] = ++A->clock;
+  return md->Ec[slot];
+}
+
+/* y_out = E y_in for a column-major na x na E. */
+static void matvec(int na, const double *E, const double *y, double *out) {
+  for (int i = 0; i < na; i++) out[i] = 0;
+  for (int j = 0; j < na; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    const double *col = E + (size_t)j * na;
+    for (int i = 0; i < na; i++) out[i] += col[i] * yj;
+  }
+}
+
+void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, double *y_out) {
+  int na = A->na;
+  for (int c = 0; c < AD_CACHE; c++)
+    if (md->hc[c] == tau) { matvec(na, md->Ec[c], y_in, y_out); return; }
+  double norm = fabs(tau) * md->mnorm;
+  if (norm > 4) {                                /* stiff or long: the full exponential */
+    size_t NA = (size_t)na * na;
+    double *hM = A->ework + 4 * NA, *Et = A->ework + 5 * NA;
+    for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
+    cup_dense_expm_stiff(hM, na, Et, A->ework);
+    matvec(na, Et, y_in, y_out);
+    return;
+  }
+  /* substeps of norm <= 1/2, each a Taylor series to its last term below
+   * eps: na^2 per term instead of na^3 per matrix product */
+  int sub = norm > 0.5 ? (int)ceil(norm / 0.5) : 1;
+  double dt = tau / sub, *term = A->fa, *tmp = A->fb;
+  cup_copy(y_out, y_in, na);
+  for (int s = 0; s < sub; s++) {
+    cup_copy(term, y_out, na);
+    double size = 0;
+    for (int i = 0; i < na; i++) size = fmax(size, fabs(y_out[i]));
+    for (int k = 1; k <= 30; k++) {
+      matvec(na, md->M, term, tmp);
+      double tmax = 0;
+      for (int i = 0; i < na; i++) { term[i] = tmp[i] * dt / k; y_out[i] += term[i]; tmax = fmax(tmax, fabs(term[i])); }
+      if (tmax <= 0.25 * DBL_EPSILON * size) break;
+    }
+  }
+}
+
+void ad_lift(const cup_adaptive *A, const ad_mode *md, const double *x, const double *w, double *y) {
+  int n = A->n, nw = A->nw;
+  cup_copy(y, x, n);
+  for (int c = 0; c < nw; c++) {
+    double wc = w[c];
+    if (wc == 0) continue;
+    for (int i = 0; i < n; i++) y[i] += md->KU[i + (size_t)c * n] * wc;
+  }
+  cup_copy(y + n, w, nw);
+}
+
+void ad_state(const cup_adaptive *A, const ad_mode *md, const double *y, double *x) {
+  int n = A->n, na = A->na;
+  for (int i = 0; i < n; i++) x[i] = cup_dot(md->X + (size_t)i * na, y, na);
+}
+
+void ad_offset(const cup_adaptive *A, const double *w, double *g) {
+  int m = A->m, p = A->p, nw = A->nw;
+  for (int q = 0; q < p; q++) A->ut[q] = 0;
+  for (int c = 0; c < nw; c++)
+    for (int q = 0; q < p; q++) A->ut[q] += A->U[q + (size_t)c * p] * w[c];
+  for (int i = 0; i < m; i++) {
+    double acc = A->F[i];
+    for (int q = 0; q < p; q++) acc += A->G[i + (size_t)q * m] * A->ut[q];
+    g[i] = acc;
+  }
+}
+
+void ad_manifold(const cup_adaptive *A, const ad_mode *md, const double *g, double *x) {
+  const cup_polyset *K = A->K;
+  int n = A->n;
+  for (int k = 0; k < md->nj; k++) {
+    int i = md->rows[k];
+    double r_ = g[i];
+    for (int q = K->Ct.p[i]; q < K->Ct.p[i + 1]; q++) r_ += K->Ct.x[q] * x[K->Ct.i[q]];
+    A->s[k] = r_;
+  }
+  for (int k = 0; k < md->nj; k++)
+    for (int i = 0; i < n; i++) x[i] -= md->R[i + (size_t)k * n] * A->s[k];
+}
+
+int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+              int *pivots) {
+  const cup_polyset *K = A->K;
+  int n = A->n, m = A->m, p = A->p, nw = A->nw;
+  /* u, u' and the free velocity f = A x + E u */
+  ad_offset(A, w, A->g);                         /* also leaves u in A->ut */
+  for (int q = 0; q < p; q++) {
+    double acc = 0;
+    for (int c = 0; c < nw; c++) {
+      double wd = 0;
+      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
+      acc += A->U[q + (size_t)c * p] * wd;
+    }
+    A->udot[q] = acc;
+  }
+  double *f = A->xf;
+  for (int i = 0; i < n; i++) {
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += A->A[i + (size_t)j * n] * x[j];
+    for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->ut[q];
+    f[i] = acc;
+  }
+  cup_slack(K, A->g, x, A->s, NULL);
+  /* touching rows: slack at the level a certified projection leaves (it
+   * aims a few rounding bounds inside), on the scale of the whole state (a
+   * row whose own terms vanish still rounds at that scale) */
+  double xn = 0;
+  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  const double *Md = K->Md;
+  unsigned char *touch = A->touch;
+  for (int i = 0; i < m; i++) {
+    double c1 = 0;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) c1 += fabs(K->Ct.x[k]);
+    touch[i] = (hint >> i & 1) || A->s[i] <= 64 * DBL_EPSILON * (fabs(A->g[i]) + c1 * xn);
+  }
+  for (int i = 0; i < m; i++) {
+    double qi = 1;
+    if (touch[i]) {
+      qi = 0;
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) qi += K->Ct.x[k] * f[K->Ct.i[k]];
+      for (int q = 0; q < p; q++) qi += A->G[i + (size_t)q * m] * A->udot[q];
+    }
+    A->lcpq[i] = qi;
+    /* rows that do not touch are decoupled (identity, q = 1: lambda = 0) */
+    for (int j = 0; j < m; j++)
+      A->lcpM[i + (size_t)j * m] = touch[i] && touch[j] ? Md[i + (size_t)j * m] : (i == j);
+  }
+  int st = m ? cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots) : CUP_OK;
+  if (st) {
+    /* More touching rows than independent directions (a degenerate corner)
+     * make M singular, and pivoting may find no nonsingular block. The
+     * velocity, a projection onto the tangent cone, is unique all the same:
+     * a shift of 1e-10 of the diagonal picks one set of multipliers for it
+     * (the mode then keeps an independent subset of their rows). */
+    double dmax = 0;
+    for (int i = 0; i < m; i++) dmax = fmax(dmax, A->lcpM[i + (size_t)i * m]);
+    for (int i = 0; i < m; i++)
+      if (touch[i]) A->lcpM[i + (size_t)i * m] += 1e-10 * dmax;
+    cup_lcp_forget(&A->lcp);
+    st = cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots);
+  }
+  if (st) return st;
+  uint64_t J = 0;
+  for (int i = 0; i < m; i++)
+    if (A->lcp.lam[i] > 0) J |= (uint64_t)1 << i;
+  *mask = J;
+  return CUP_OK;
+}

@@ -1,0 +1,626 @@
+/* adaptive_run — the run of the event-driven scheme (adaptive_impl.h,
+ * docs/adaptive.md): steps of the exact flow that end on the input's
+ * breakpoints and the output times, events located inside them, the
+ * certified projection where the state is inconsistent, and the error
+ * estimate carried along. Allocates nothing. */
+#define _POSIX_C_SOURCE 200809L
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include "catchup.h"
+#include "adaptive.h"
+#include "adaptive_impl.h"
+
+/* Callback inputs: the interpolation error of a step may take this share of
+ * tol (the exact flow has none of its own). */
+#define AD_STEP_SHARE 0.1
+
+static double wall_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* "step k (t = ...): " and the text into info->message. */
+static void say(ad_run *R, const char *fmt, va_list ap) {
+  cup_run_info *info = R->info;
+  int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
+  if (len >= 0 && (size_t)len < sizeof info->message)
+    vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
+}
+
+__attribute__((format(printf, 3, 4)))
+static int stop(ad_run *R, int status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  say(R, fmt, ap);
+  va_end(ap);
+  return R->info->status = status;
+}
+
+/* The first warning is kept (status and message), as in the fixed-step run. */
+__attribute__((format(printf, 3, 4)))
+static void warn(ad_run *R, int status, const char *fmt, ...) {
+  if (R->info->status != CUP_OK) return;
+  R->info->status = status;
+  va_list ap;
+  va_start(ap, fmt);
+  say(R, fmt, ap);
+  va_end(ap);
+}
+
+static double inf_norm(const double *v, int n) {
+  double r = 0;
+  for (int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
+  return r;
+}
+
+/* The absolute error target at the state x. */
+static double tolw(const cup_adaptive *A, const double *x) {
+  return A->o.tol_abs + A->o.tol_rel * inf_norm(x, A->n);
+}
+
+static double sample_time(const cup_adaptive *A, long j) {
+  long last = A->o.output_samples - 1;
+  return j >= last ? A->o.T : A->o.T * (double)j / (double)last;
+}
+
+/* Where the next step must end at the latest: a breakpoint, T, an output
+ * time, or t + hlim. */
+static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim) {
+  double s = fmin(R->tb, A->o.T);
+  if (A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
+    s = fmin(s, sample_time(A, R->next_sample));
+  return R->t + hlim < s ? R->t + hlim : s;
+}
+
+static double estimate_now(const cup_adaptive *A, const ad_run *R) {
+  return inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2);
+}
+
+static int emit(cup_adaptive *A, ad_run *R) {
+  const cup_integrator_options *o = &A->o;
+  int out = 0, last = R->t == o->T;
+  switch (o->output) {
+    case CUP_OUTPUT_EVERY: out = R->steps % o->output_every == 0 || last; break;
+    case CUP_OUTPUT_SAMPLES:
+      if (R->next_sample < o->output_samples && R->t == sample_time(A, R->next_sample)) {
+        out = 1;
+        R->next_sample++;
+      }
+      break;
+    case CUP_OUTPUT_FINAL: out = last; break;
+    case CUP_OUTPUT_NONE: break;
+  }
+  if (!out) return CUP_OK;
+  R->est_max = fmax(R->est_max, estimate_now(A, R));
+  if (!R->sink) return CUP_OK;
+  R->info->samples++;
+  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
+  A->zt = R->t;
+  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
+  A->zmd = NULL;
+  if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
+  return CUP_OK;
+}
+
+/* The end of a step: statistics, the error estimate (not at the switch
+ * instant of an event: there the error is the event's time localisation,
+ * which decays with the new flow; at the output times after it counts),
+ * the step callback. */
+static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at_event) {
+  cup_run_info *info = R->info;
+  R->steps++;
+  info->step = R->steps;
+  info->t = R->t;
+  if (pi->skipped) info->skipped++;           /* projections are counted where they are made */
+  double xn = inf_norm(A->x, A->n);
+  R->r2 += (8 * DBL_EPSILON * xn) * (8 * DBL_EPSILON * xn);   /* rounding, as a random walk */
+  if (!at_event) R->est_max = fmax(R->est_max, estimate_now(A, R));
+  double tw = tolw(A, A->x);
+  if (!R->floor_warned && tw < 16 * DBL_EPSILON * xn) {
+    R->floor_warned = 1;
+    warn(R, CUP_WARN_TOL_FLOOR, "tol (abs %.3g, rel %.3g) gives %.3g at |x| = %.3g, below what double "
+         "precision can deliver there (about %.3g)", A->o.tol_abs, A->o.tol_rel, tw, xn,
+         16 * DBL_EPSILON * xn);
+  }
+  if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
+    return stop(R, CUP_ERR_INTERRUPTED, "stopped by the step callback");
+  if ((R->steps & 1023) == 0) {
+    if (A->o.interrupt && *A->o.interrupt) return stop(R, CUP_ERR_INTERRUPTED, "interrupted");
+    if (A->o.max_wall_seconds > 0 && wall_now() - R->wall0 > A->o.max_wall_seconds)
+      return stop(R, CUP_ERR_TIME_LIMIT, "wall-time limit reached");
+  }
+  return CUP_OK;
+}
+
+/* ---- the input on a step ------------------------------------------------------------ */
+
+/* A callback input on [t0, t0 + h]: its interpolant at Chebyshev-Lobatto
+ * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
+ * (p entries) estimates the interpolation error from the last Chebyshev
+ * coefficients (geometric decay assumed). */
+static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *err) {
+  enum { q = AD_DEGREE };
+  int p = A->p;
+  double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
+  for (int j = 0; j <= q; j++) {
+    tau[j] = h * A->node[j];
+    if (cup_input_eval(A->u, j == q ? t0 + h : t0 + tau[j], A->ut)) return CUP_ERR_CALLBACK;
+    for (int k = 0; k < p; k++) A->samp[k * (q + 1) + j] = A->ut[k];
+  }
+  for (int k = 0; k < p; k++) {
+    const double *f = A->samp + k * (q + 1);
+    double aq = 0, aq1 = 0, fmag = 0;          /* Chebyshev coefficients q and q - 1 */
+    for (int j = 0; j <= q; j++) {
+      double wj = j == 0 || j == q ? 0.5 : 1;
+      aq += wj * f[j] * cos(M_PI * j * q / q) * ((q & 1) ? -1 : 1);
+      aq1 += wj * f[j] * cos(M_PI * j * (q - 1) / q) * (((q - 1) & 1) ? -1 : 1);
+      fmag = fmax(fmag, fabs(f[j]));
+    }
+    aq = fabs(aq) / q;                            /* the last coefficient is halved */
+    aq1 = 2 * fabs(aq1) / q;
+    err[k] = (aq1 > 0 ? aq * fmin(1, aq / aq1) : aq) + 4 * DBL_EPSILON * fmag;
+    for (int j = 0; j <= q; j++) d[j] = f[j];    /* Newton's divided differences */
+    for (int l = 1; l <= q; l++)
+      for (int j = q; j >= l; j--) d[j] = (d[j] - d[j - 1]) / (tau[j] - tau[j - l]);
+    for (int j = 0; j <= q; j++) c[j] = 0;       /* to monomials: Horner from the top */
+    c[0] = d[q];
+    for (int l = q - 1; l >= 0; l--) {
+      for (int j = q - l; j >= 1; j--) c[j] = c[j - 1] - tau[l] * c[j];
+      c[0] = d[l] - tau[l] * c[0];
+    }
+    double fact = 1;
+    for (int j = 0; j <= q; j++) {
+      if (j > 0) fact *= j;
+      w[k * (q + 1) + j] = fact * c[j];
+    }
+  }
+  return CUP_OK;
+}
+
+/* The exosystem's states for a step [t0, t1] inside a piece. */
+static int inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) {
+  if (!A->nw) return CUP_OK;
+  if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
+  cup_input_gen_values(A->u, A->first_state, t0, t1, w);
+  return CUP_OK;
+}
+
+/* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
+ * state and the input's states from the output time on. */
+int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
+  const ad_mode *md = A->zmd;
+  for (int i = 0; i < A->m; i++) zeta[i] = 0;
+  if (!md) return CUP_OK;
+  double t = A->zt, tb = cup_input_next_break(A->u, t);
+  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
+  if (A->nw && A->callback && poly_input(A, t, t < A->o.T ? h : -h, A->zw, A->uerr))
+    return CUP_ERR_CALLBACK;
+  if (A->nw && !A->callback) cup_input_gen_values(A->u, A->first_state, t, t + h, A->zw);
+  ad_lift(A, md, A->x, A->zw, A->zy);
+  for (int i = 0; i < A->m; i++)
+    if (md->is_zeta[i]) zeta[i] = cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+  return CUP_OK;
+}
+
+/* ---- projection, active sets, events ------------------------------------------------- */
+
+/* If x is outside {C x + g >= 0}, its certified P-projection (the exact
+ * small-set LCP, as the explicit scheme's step); *active gets its active
+ * rows (0 when nothing moved). */
+static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t *active,
+                           cup_proj_info *pi) {
+  *active = 0;
+  *pi = (cup_proj_info){0};
+  pi->skipped = 1;
+  cup_slack(A->K, g, x, A->s, A->gam);
+  int outside = 0;                               /* beyond rounding: a held row is at 0 */
+  for (int i = 0; i < A->m; i++) outside |= A->s[i] < -A->gam[i];
+  if (!outside) return CUP_OK;
+  double S = cup_polyset_norm(A->K, x);
+  cup_copy(A->xr, x, A->n);
+  int st = cup_lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
+  const double *lam = A->proj.lcp.lam;
+  if (st == CUP_ERR_LINALG) {
+    /* pivoting found no nonsingular block (nearly dependent rows) or K(t)
+     * is empty: the projector decides, as for the explicit scheme's step,
+     * and proves an empty K(t) with a Farkas certificate */
+    st = cup_projector_set_offset(A->projector, g);
+    if (st == CUP_OK) st = cup_project(A->projector, A->xr, x, pi);
+    lam = cup_projector_lambda(A->projector);
+  }
+  if (st < 0) {
+    cup_copy(x, A->xr, A->n);
+    if (st == CUP_ERR_EMPTY_SET)
+      return stop(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
+                  pi->farkas_gap, pi->farkas_residual);
+    return stop(R, st, "the projection onto K(t) failed: %s", cup_status_string(st));
+  }
+  cup_run_info *info = R->info;
+  info->projected++;
+  info->dual_iterations += pi->iterations;
+  if (!(pi->eps_cert <= info->max_eps_cert)) info->max_eps_cert = pi->eps_cert;
+  if (!(pi->eta_cert <= info->max_eta_cert)) info->max_eta_cert = pi->eta_cert;
+  if (st == CUP_WARN_NOT_CERTIFIED && info->not_certified++ == 0)
+    warn(R, st, "projection not certified: eps %.3g (target %.3g), eta %.3g (target %.3g)",
+         pi->eps_cert, pi->eps_target, pi->eta_cert, pi->eta_target);
+  /* what the projection may be off by, in the max norm: it is exact (the
+   * LCP solved by pivoting) up to rounding, and eta_cert from K; its eps
+   * certificate bounds the squared distance only (sqrt(eps) would be a
+   * bound of 1e-7 for an answer right to 1e-16) */
+  R->rloc += 8 * DBL_EPSILON * inf_norm(x, A->n) + (isfinite(pi->eta_cert) ? A->pinf * pi->eta_cert : 0);
+  for (int i = 0; i < A->m; i++)
+    if (lam[i] > 0) *active |= (uint64_t)1 << i;
+  return CUP_OK;
+}
+
+/* e <- its P-orthogonal projection onto ker C_J (a perturbation of a state
+ * held on C_J x + g = 0, or of one projected onto a face with rows J). */
+static void error_onto(cup_adaptive *A, uint64_t mask, double *e) {
+  if (!mask) return;
+  ad_mode *md = ad_mode_get(A, mask);
+  ad_manifold(A, md, A->zero, e);
+}
+
+/* e <- its propagation by the exact flow of md over tau (w = 0: the
+ * homogeneous part). */
+static void error_flow(cup_adaptive *A, ad_mode *md, double tau) {
+  if (!(tau > 0)) return;
+  cup_zero(A->yr, A->na);
+  cup_copy(A->yr, A->e, A->n);
+  ad_flow(A, md, tau, A->yr, A->yt);
+  cup_copy(A->e, A->yt, A->n);
+}
+
+static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, double t) {
+  for (int i = 0; i < A->m; i++) {
+    int was = before >> i & 1, now = after >> i & 1;
+    if (was == now) continue;
+    R->info->events++;
+    A->zeno[A->nzeno % AD_ZENO_RING] = t;
+    A->zeno_row[A->nzeno % AD_ZENO_RING] = i;
+    A->nzeno++;
+    if (A->o.on_event && A->o.on_event(t, i, now, A->o.event_ctx))
+      return stop(R, CUP_ERR_INTERRUPTED, "stopped by the event callback");
+  }
+  return CUP_OK;
+}
+
+/* The active set that continues from (x, w) at R->t, made current, x put
+ * on its manifold; changes reported at time t_event. */
+static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
+  uint64_t mask = 0, before = R->md ? R->md->mask : 0;
+  int piv = 0, st = ad_select(A, A->x, w, hint, &mask, &piv);
+  R->info->dual_iterations += piv;
+  if (st) return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set has no "
+                      "solution by pivoting (dependent rows?)");
+  A->pinned[0] = R->md = ad_mode_get(A, mask);
+  ad_offset(A, w, A->g);
+  ad_manifold(A, R->md, A->g, A->x);
+  error_onto(A, R->md->mask, A->e);
+  return report(A, R, before, R->md->mask, t_event);
+}
+
+/* ---- breakpoints ------------------------------------------------------------------- */
+
+/* At a breakpoint t (or 0): the state onto K(t) with u(t) itself (a square
+ * wave is 0 there), which is what the catching-up limit holds at t. */
+static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
+  if (A->u && cup_input_eval(A->u, R->t, A->ut))
+    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  cup_copy(A->g, A->F, A->m);
+  for (int i = 0; i < A->m; i++)
+    for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
+  uint64_t active;
+  double x0n = inf_norm(A->x, A->n);
+  int st = make_consistent(A, R, A->g, A->x, &active, pi);
+  if (st < 0) return st;
+  if (first && !pi->skipped)
+    warn(R, CUP_WARN_X0_OUTSIDE, "x0 is outside K(0) (|x0| = %.3g); it is projected", x0n);
+  error_onto(A, active, A->e);
+  return CUP_OK;
+}
+
+/* The piece after a breakpoint: its exosystem states, the jump of K onto
+ * K(t+) (a projection, certified), and the active set by the velocity LCP. */
+static int start_piece(cup_adaptive *A, ad_run *R) {
+  double tb = cup_input_next_break(A->u, R->t);
+  R->tb = tb < A->o.T ? tb : A->o.T;
+  /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
+  double h = A->callback ? fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
+  if (inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
+    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  ad_offset(A, A->wt, A->g);
+  uint64_t active;
+  cup_proj_info pi;
+  int st = make_consistent(A, R, A->g, A->x, &active, &pi);
+  if (st < 0) return st;
+  error_onto(A, active, A->e);
+  return choose_mode(A, R, A->wt, active, R->t);
+}
+
+/* ---- steps ------------------------------------------------------------------------ */
+
+/* Callback inputs: the step's interpolation error carried to x through the
+ * flow: E's column of a component's constant state is the response to a
+ * unit step of that input. */
+static double interp_error(const cup_adaptive *A, const double *E) {
+  int n = A->n, na = A->na;
+  double worst = 0;
+  for (int i = 0; i < n; i++) {
+    double acc = 0;
+    for (int c = 0; c < A->p; c++)
+      acc += fabs(E[i + (size_t)(n + c * (AD_DEGREE + 1)) * na]) * A->uerr[c];
+    worst = fmax(worst, acc);
+  }
+  return worst;
+}
+
+/* The end of a step at R->t: a breakpoint's projection, the output, the
+ * next piece. */
+static int end_of_step(cup_adaptive *A, ad_run *R, cup_proj_info *pi, int at_event) {
+  int at_tb = R->t == R->tb, st;
+  if (at_tb) {
+    cup_proj_info pb;
+    if ((st = at_break(A, R, 0, &pb)) < 0) return st;
+    if (!pb.skipped) *pi = pb;
+  }
+  if ((st = step_done(A, R, pi, at_event && !at_tb)) < 0 || (st = emit(A, R)) < 0) return st;
+  if (at_tb && R->t < A->o.T && (st = start_piece(A, R)) < 0) return st;
+  return CUP_OK;
+}
+
+/* The step's end t1 (a breakpoint, an output time, T, or the mode's step
+ * limit), the input's states, and exp(h M). Callback inputs: the step
+ * shrinks until the interpolation error is within its share of tol.
+ * NULL with *t1 set when t1 is within rounding of t (nothing to flow), or
+ * with the status set on an error. */
+static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *snap) {
+  ad_mode *md = R->md;
+  *snap = 0;
+  for (;;) {
+    double hl = A->callback ? fmin(md->hmax, R->h_cb) : md->hmax;
+    *t1 = next_stop(A, R, hl);
+    double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * fmax(fabs(R->t), DBL_MIN);
+    if (!(h > tiny)) {
+      if (*t1 < R->t + hl) { *snap = 1; return NULL; }   /* a stop point a rounding away */
+      stop(R, CUP_ERR_STEP_SIZE, "the step size %.3g underflows", h);
+      return NULL;
+    }
+    if (inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
+      stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
+      return NULL;
+    }
+    const double *E = ad_expm(A, md, h);
+    if (!A->callback) return E;
+    double ie = interp_error(A, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
+    double fac = errn > 0 ? 0.9 * pow(errn, -1.0 / (AD_DEGREE + 2)) : 5;
+    if (errn <= 1) {
+      R->h_cb = h * fmin(5, fac);
+      R->rloc += ie;
+      return E;
+    }
+    R->info->rejected++;
+    R->h_cb = h * fmax(0.2, fmin(0.9, fac));
+  }
+}
+
+static int any_negative(const cup_adaptive *A) {
+  for (int i = 0; i < A->m; i++)
+    if (A->ga[i] < -A->ta[i]) return 1;
+  return 0;
+}
+
+/* The reported time of the event of row k: Newton steps on its function
+ * along the old flow from tau (the state at the last one in A->yr). */
+static double refine_root(cup_adaptive *A, ad_mode *md, int k, double tau, double tmax) {
+  for (int it = 0; it < 4; it++) {
+    ad_flow(A, md, tau, A->ya, A->yr);
+    if (k < 0) break;
+    double g = md->Lc[k] + cup_dot(md->L + (size_t)k * A->na, A->yr, A->na);
+    ad_events_deriv(A, md, A->yr, A->dt);
+    double d = A->dt[k], next = d != 0 ? tau - g / d : tau;
+    if (!(next >= 0 && next <= tmax) || fabs(next - tau) <= 4 * DBL_EPSILON * fabs(tau)) break;
+    tau = next;
+  }
+  return tau;
+}
+
+/* An event inside the step from R->t (bracketed by ad_detect): locate it,
+ * switch past it (state made consistent, the next active set by the
+ * velocity LCP), and estimate what switching there rather than at the root
+ * changed in x: the same switch done at the root estimate, carried to the
+ * switch time by the new flow (docs/adaptive.md). A model that underrates
+ * that error has its factor raised and the location resumed. */
+static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) {
+  int n = A->n, nw = A->nw, st;
+  ad_mode *old = R->md, *nm = NULL;
+  A->pinned[1] = old;
+  double tw = tolw(A, A->x), tau_rep = 0;
+  uint64_t before = old->mask, active = 0;
+  cup_proj_info pi = {0};
+  for (int attempt = 0;; attempt++) {
+    ad_locate(A, old, tw, ev);
+    double tsw = ev->tau_sw;
+    ad_flow(A, old, tsw, A->ya, A->yb);          /* the run's path */
+    ad_state(A, old, A->yb, A->xs);
+    cup_copy(A->wt, A->yb + n, nw);
+    ad_offset(A, A->wt, A->g);
+    ad_manifold(A, old, A->g, A->xs);
+    if ((st = make_consistent(A, R, A->g, A->xs, &active, &pi)) < 0) return st;
+    uint64_t mask = 0;
+    int piv = 0;
+    uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
+    if (ad_select(A, A->xs, A->wt, hint, &mask, &piv))
+      return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set after the event of "
+                  "row %d has no solution by pivoting (dependent rows?)", ev->row);
+    R->info->dual_iterations += piv;
+    nm = ad_mode_get(A, mask);
+    A->pinned[0] = nm;
+    ad_offset(A, A->wt, A->g);
+    ad_manifold(A, nm, A->g, A->xs);
+    tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw);   /* the reference path */
+    ad_state(A, old, A->yr, A->xr);
+    cup_copy(A->wa, A->yr + n, nw);
+    ad_offset(A, A->wa, A->g);
+    ad_manifold(A, nm, A->g, A->xr);
+    ad_lift(A, nm, A->xr, A->wa, A->yt);
+    ad_flow(A, nm, tsw - tau_rep, A->yt, A->yr);
+    ad_state(A, nm, A->yr, A->xr);
+    for (int i = 0; i < n; i++) A->et[i] = A->xs[i] - A->xr[i];
+    double err = inf_norm(A->et, n);
+    if (err <= 4 * AD_EVENT_SHARE * tw || attempt >= 3 || nm->mask == before) break;
+    ev->cfac *= fmax(4, err / (0.25 * AD_EVENT_SHARE * tw));
+  }
+  error_flow(A, old, ev->tau_sw);
+  A->pinned[0] = R->md = nm;
+  A->pinned[1] = NULL;
+  error_onto(A, nm->mask, A->e);
+  if (nm->mask != before)
+    for (int i = 0; i < n; i++) A->e[i] += A->et[i];
+  cup_copy(A->x, A->xs, n);
+  double t0 = R->t;
+  R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
+  if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
+  return end_of_step(A, R, &pi, 1);
+}
+
+static int take_step(cup_adaptive *A, ad_run *R) {
+  ad_mode *md = R->md;
+  int n = A->n, na = A->na, snap;
+  double t1;
+  const double *E = begin_step(A, R, &t1, &snap);
+  cup_proj_info pi = {0};
+  pi.skipped = 1;
+  if (!E) {
+    if (!snap) return R->info->status;
+    R->t = t1;
+    return end_of_step(A, R, &pi, 0);
+  }
+  ad_lift(A, md, A->x, A->wa, A->ya);
+  ad_events_eval(A, md, A->ya, A->ga, A->ta);
+  if (any_negative(A)) {                         /* an inconsistent start: choose again */
+    uint64_t was = md->mask;
+    int st = choose_mode(A, R, A->wa, 0, R->t);
+    if (st < 0 || R->md->mask != was) return st;
+  }
+  ad_events_deriv(A, md, A->ya, A->da);
+  for (int i = 0; i < na; i++) A->yb[i] = 0;
+  for (int j = 0; j < na; j++) {
+    double yj = A->ya[j];
+    if (yj == 0) continue;
+    for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
+  }
+  ad_events_eval(A, md, A->yb, A->gb, A->tb);
+  ad_events_deriv(A, md, A->yb, A->db);
+  double h = t1 - R->t;
+  ad_event ev = {.t0 = R->t, .cfac = 1, .row = -1};
+  if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
+  ad_state(A, md, A->yb, A->x);
+  ad_offset(A, A->yb + n, A->g);
+  ad_manifold(A, md, A->g, A->x);
+  for (int i = 0; i < n; i++) {
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
+    A->et[i] = acc;
+  }
+  cup_copy(A->e, A->et, n);
+  R->t = t1;
+  return end_of_step(A, R, &pi, 0);
+}
+
+/* ---- accumulating events: catching-up steps across them --------------------------- */
+
+static int catch_up(cup_adaptive *A, ad_run *R) {
+  double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
+  double window = AD_ZENO_RING / rate, tend = fmin(A->o.T, R->t + window);
+  char rows[96] = "";
+  size_t len = 0;
+  for (int k = 0, shown = 0; k < AD_ZENO_RING && shown < 8; k++) {
+    int r = A->zeno_row[k], seen = 0;
+    for (int j = 0; j < k; j++) seen |= A->zeno_row[j] == r;
+    if (seen) continue;
+    int w = snprintf(rows + len, sizeof rows - len, "%s%d", shown++ ? ", " : "", r);
+    if (w > 0 && len + (size_t)w < sizeof rows) len += (size_t)w;
+  }
+  warn(R, CUP_WARN_ZENO, "rows %s switched %d times within %.3g (over max_event_rate = %.3g per unit "
+       "time): catching-up steps across [%.17g, %.17g]", rows, AD_ZENO_RING,
+       R->t - A->zeno[A->nzeno % AD_ZENO_RING], rate, R->t, tend);
+  int n = A->n, na = A->na, st, at_tb = 0;
+  while (R->t < tend) {
+    /* the free system's flow, then the certified projection: the paper's
+     * scheme with an exact free step, through breakpoints too (which pick
+     * an active set that this loop does not use) */
+    ad_mode *md0 = ad_mode_get(A, 0);
+    A->pinned[1] = md0;
+    double t1 = fmin(next_stop(A, R, fmin(md0->hmax, window / 16)), tend);
+    if (!(t1 > R->t)) break;
+    if (inputs_on(A, R->t, t1, A->wa, A->uerr))
+      return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    const double *E = ad_expm(A, md0, t1 - R->t);
+    ad_lift(A, md0, A->x, A->wa, A->ya);
+    for (int i = 0; i < na; i++) {
+      double acc = 0;
+      for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * A->ya[j];
+      A->yb[i] = acc;
+    }
+    ad_state(A, md0, A->yb, A->x);
+    cup_copy(A->xf, A->x, n);
+    ad_offset(A, A->yb + n, A->g);
+    uint64_t active;
+    cup_proj_info pi;
+    if ((st = make_consistent(A, R, A->g, A->x, &active, &pi)) < 0) return st;
+    double moved = 0;
+    for (int i = 0; i < n; i++) moved = fmax(moved, fabs(A->x[i] - A->xf[i]));
+    R->rloc += 0.5 * moved;                      /* a catching-up step's error is below its move */
+    error_flow(A, md0, t1 - R->t);
+    error_onto(A, active, A->e);
+    R->t = t1;
+    at_tb = R->t == R->tb;
+    if ((st = end_of_step(A, R, &pi, 0)) < 0) return st;
+  }
+  A->pinned[1] = NULL;
+  A->nzeno = 0;
+  if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
+  if (inputs_on(A, R->t, fmin(R->tb, R->t + R->md->hmax), A->wt, A->uerr))
+    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  return choose_mode(A, R, A->wt, 0, R->t);
+}
+
+static int zeno_check(cup_adaptive *A, ad_run *R) {
+  if (A->nzeno < AD_ZENO_RING) return CUP_OK;
+  double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
+  double oldest = A->zeno[A->nzeno % AD_ZENO_RING];
+  return R->t - oldest < AD_ZENO_RING / rate ? catch_up(A, R) : CUP_OK;
+}
+
+/* ---- the run ----------------------------------------------------------------------- */
+
+int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
+                     cup_run_info *info) {
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
+  for (int j = 0; j < A->n; j++)
+    if (!isfinite(x0[j])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", j, x0[j]);
+  cup_copy(A->x, x0, A->n);
+  cup_zero(A->e, A->n);
+  A->nzeno = 0;
+  A->pinned[0] = A->pinned[1] = NULL;
+  cup_lcp_forget(&A->lcp);
+  int st = emit(A, &R);                          /* x0 as given, like the fixed-step schemes */
+  cup_proj_info pi;
+  if (st >= 0) st = at_break(A, &R, 1, &pi);
+  if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
+  while (st >= 0 && R.t < A->o.T) {
+    long events = info->events;
+    st = take_step(A, &R);
+    if (st >= 0 && info->events > events) st = zeno_check(A, &R);
+  }
+  info->err_est = R.est_max;
+  return info->status;
+}
