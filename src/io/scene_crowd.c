@@ -271,6 +271,7 @@ static const st_node *culprit(const crowd_parts *c, const st_node *map, const ch
     strcpy(key, "crowd.agents");
     return c->agents_at;
   }
+  if (!strncmp(msg, "the room", 8)) { strcpy(key, "crowd.room"); return c->room_at; }
   if (sscanf(msg, "door %d", &i) == 1 && i >= 0 && i < c->ndoor) { joini(key, "crowd.doors", i); return c->doors_at->item[i]; }
   const char *o = strstr(msg, "obstacle ");
   if (o && sscanf(o, "obstacle %d", &i) == 1 && i >= 0 && i < c->nobs) { joini(key, "crowd.obstacles", i); return c->obs_at->item[i]; }
@@ -313,8 +314,9 @@ int scene_read_crowd(rd *r, const st_node *map, double h, cup_crowd **out) {
     d.walls = c.nwall; d.wall = c.wall;
     st = cup_crowd_create(out, &d, h, lib);
     if (st && st != CUP_ERR_NOMEM) {
-      const st_node *at = culprit(&c, map, lib, key);
-      st = fail(r, st == CUP_ERR_ARG ? CUP_ERR_PARSE : st, at, key, "%s", lib);
+      const char *msg = strncmp(lib, "crowd: ", 7) ? lib : lib + 7;   /* the key says crowd already */
+      const st_node *at = culprit(&c, map, msg, key);
+      st = fail(r, st == CUP_ERR_ARG ? CUP_ERR_PARSE : st, at, key, "%s", msg);
     }
   }
   parts_free(&c);

@@ -446,11 +446,13 @@ static int set_scales(cup_crowd *c, const cup_crowd_desc *d, double h, double bo
   c->cell = 2 * c->rmax + c->reach;
   c->cx0 = box[0];
   c->cy0 = box[1];
-  c->gx = (int)((box[2] - box[0]) / c->cell) + 1;
-  c->gy = (int)((box[3] - box[1]) / c->cell) + 1;
-  if ((double)c->gx * c->gy > 5e7)
+  /* counted in double first: a huge room's count does not fit an int */
+  double gx = floor((box[2] - box[0]) / c->cell) + 1, gy = floor((box[3] - box[1]) / c->cell) + 1;
+  if (!(gx * gy <= 5e7))
     return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the room (%g x %g) needs %.3g cells of side %g: too many",
-                    box[2] - box[0], box[3] - box[1], (double)c->gx * c->gy, c->cell);
+                    box[2] - box[0], box[3] - box[1], gx * gy, c->cell);
+  c->gx = (int)gx;
+  c->gy = (int)gy;
   c->head = malloc(sizeof(int) * (size_t)c->gx * (size_t)c->gy);
   if (!c->head) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   return CUP_OK;

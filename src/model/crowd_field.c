@@ -139,11 +139,12 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
   F->h = h;
   F->x0 = box[0] - 2 * h;
   F->y0 = box[1] - 2 * h;
-  F->nx = (int)ceil((box[2] - box[0]) / h) + 5;
-  F->ny = (int)ceil((box[3] - box[1]) / h) + 5;
-  if ((double)F->nx * F->ny > 1e8)
+  double nx = ceil((box[2] - box[0]) / h) + 5, ny = ceil((box[3] - box[1]) / h) + 5;  /* may not fit an int */
+  if (!(nx * ny <= 1e8))
     return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the distance grid would have %.3g nodes (step %g): "
-                    "make the grid step larger", (double)F->nx * F->ny, h);
+                    "make the grid step larger", nx * ny, h);
+  F->nx = (int)nx;
+  F->ny = (int)ny;
   size_t nn = (size_t)F->nx * (size_t)F->ny;
   F->D = malloc(sizeof(double) * nn);
   F->ux = malloc(sizeof(float) * nn);
