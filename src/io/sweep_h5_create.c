@@ -109,6 +109,11 @@ static const char *const reference_method =
   "largest n of the variant's tasks). The scheme is first order, so the extrapolation removes the 1/n "
   "term; /references/summary 'correction' = max |x(2 n_ref) - x(n_ref)| bounds what it removed.";
 
+hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
+                          hid_t fill_type, const void *fill) {
+  return fixed_dataset(loc, name, ftype, rank, dims, fill_type, fill);
+}
+
 static int write_grid_attrs(hid_t root, const cup_sweep *s) {
   int r = 0;
   if (s->len[SW_AXIS_N]) {
@@ -163,25 +168,35 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   return r | write_grid_attrs(root, s);
 }
 
-static int create_summary(sw_file *f) {
+int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,
+                     hid_t *d) {
   const cup_sweep *s = f->s;
   hsize_t N = (hsize_t)s->n_tasks;
-  hid_t ft = H5Tcopy(f->row_t);
+  char op[64];
+  hid_t ft = H5Tcopy(memtype);
   H5Tpack(ft);
-  f->summary = fixed_dataset(f->file, "summary", ft, 1, &N, 0, NULL);
+  *d = fixed_dataset(f->file, name, ft, 1, &N, 0, NULL);
   H5Tclose(ft);
-  if (f->summary < 0) return sw_h5_fail(f, "create /summary in");
+  snprintf(op, sizeof op, "create /%s in", name);
+  if (*d < 0) return sw_h5_fail(f, op);
   enum { BLOCK = 1024 };
-  sw_row *rows = malloc(sizeof *rows * BLOCK);
+  char *rows = malloc(row_size * BLOCK);
   if (!rows) return CUP_ERR_NOMEM;
   int st = CUP_OK;
+  snprintf(op, sizeof op, "write /%s in", name);
   for (hsize_t at = 0; at < N && !st; at += BLOCK) {
     hsize_t cnt = N - at < BLOCK ? N - at : BLOCK;
-    for (hsize_t k = 0; k < cnt; k++) sw_pending_row(s, (long)(at + k), &rows[k]);
-    if (sw_h5_write_rows(f->summary, f->row_t, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, "write /summary in");
+    for (hsize_t k = 0; k < cnt; k++) pending(s, (long)(at + k), rows + row_size * k);
+    if (sw_h5_write_rows(*d, memtype, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, op);
   }
   free(rows);
   return st;
+}
+
+static void pending_summary_row(const cup_sweep *s, long id, void *row) { sw_pending_row(s, id, row); }
+
+static int create_summary(sw_file *f) {
+  return sw_h5_task_table(f, "summary", f->row_t, sizeof(sw_row), pending_summary_row, &f->summary);
 }
 
 static int create_references(sw_file *f, hid_t g) {
@@ -259,6 +274,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   if (write_root_attrs(f->file, s, p)) return sw_h5_fail(f, "write attributes in");
   int st = create_variants(f);
   if (!st) st = create_summary(f);
+  if (!st && s->crowd) st = sw_crowd_create(f);
   hid_t g = st ? -1 : fixed_group(f->file, "runs");
   if (!st && g < 0) st = sw_h5_fail(f, "create /runs in");
   if (!st) {
