@@ -24,7 +24,7 @@ void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < s->samples * s->dim; j++) traj[j] = NAN;
   r->status = CUP_OK;
   r->correction = r->max_eps_cert = r->max_eta_cert = NAN;
-  snprintf(r->message, sizeof r->message, "none: a crowd's tasks report their evacuation in /crowd");
+  snprintf(r->message, sizeof r->message, "%s", SW_CROWD_REFERENCE);
 }
 
 /* cup_crowd_gap is the gap of x_{k-1}, measured while step k built its rows. */

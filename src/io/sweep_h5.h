@@ -151,6 +151,7 @@ int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid
 
 /* /crowd (sweep_crowd.c): its memory type; create it with pending rows;
  * write the rows of tasks t[0..count) (staged in f->crows, ids in f->ids). */
+#define SW_CROWD_REFERENCE "none: the variants are crowds; each task's evacuation is in /crowd"
 hid_t sw_crowd_row_type(void);
 int sw_crowd_create(sw_file *f);
 int sw_crowd_write(sw_file *f, const sw_task_out *t, long count);

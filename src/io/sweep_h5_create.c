@@ -157,8 +157,8 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_file", s->path);
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
-  r |= attr_str(root, "reference_method",
-                s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
+  r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE
+                : s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
   r |= attr_i64(root, "samples", s->samples);
   r |= attr_i64(root, "output_samples", s->out_samples);
   r |= attr_f64(root, "T", s->T);
