@@ -86,9 +86,11 @@ int sw_crowd_write(sw_file *f, const sw_task_out *t, long count) {
   for (long j = 0; j < count; j++) {
     pending(f->s, t[j].task, &rows[j]);
     const struct sw_crowd_result *c = &t[j].r->crowd;
-    rows[j].agents_out = c->agents_out;
-    rows[j].evacuation_time = c->evacuation_time;
-    rows[j].min_gap = c->min_gap;
+    if (c->agents > 0) {                /* 0: the run never started (its set-up failed) */
+      rows[j].agents_out = c->agents_out;
+      rows[j].evacuation_time = c->evacuation_time;
+      rows[j].min_gap = c->min_gap;
+    }
     rows[j].done = 1;
   }
   return sw_h5_task_io(f, f->crowd, f->crowd_row_t, count, rows, H5P_DEFAULT, 1, "write /crowd in");
