@@ -135,9 +135,6 @@ int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const vo
 /* The state in memory (no file yet), or NULL; sw_h5_file_free closes what is open. */
 sw_file *sw_h5_file_new(const cup_sweep *s, const char *path);
 void sw_h5_file_free(sw_file *f);
-/* Contiguous, allocated (and filled, when fill is given) at creation, no modification times. */
-hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
-                          hid_t fill_type, const void *fill);
 /* A task's row before it ran, into row (row_size bytes). */
 typedef void (*sw_pending_fn)(const cup_sweep *s, long id, void *row);
 /* Create the one-row-per-task dataset name (memtype packed), filled with

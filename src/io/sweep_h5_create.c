@@ -109,11 +109,6 @@ static const char *const reference_method =
   "largest n of the variant's tasks). The scheme is first order, so the extrapolation removes the 1/n "
   "term; /references/summary 'correction' = max |x(2 n_ref) - x(n_ref)| bounds what it removed.";
 
-hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
-                          hid_t fill_type, const void *fill) {
-  return fixed_dataset(loc, name, ftype, rank, dims, fill_type, fill);
-}
-
 static int write_grid_attrs(hid_t root, const cup_sweep *s) {
   int r = 0;
   if (s->len[SW_AXIS_N]) {
@@ -305,7 +300,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
 }
 
 static double file_bytes(const cup_sweep *s) {
-  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16);
+  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0));
   double traj = (double)s->samples * s->dim * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
   return rows + traj + 65536.0 + 2.0 * strlen(s->text);
 }
