@@ -12,6 +12,12 @@
  *   sweep_check forget-reference FILE V  make reference V not done and its tasks' errors NaN, as if
  *                                    they had finished before it (for --resume to fill them)
  *   compare A B nox                  the same without /runs/x (a sweep with output.samples 0)
+ *   crowd-vs-run FILE TASK RUN.h5    a crowd sweep's task against catchup-run's file of the same
+ *                                    scene: /crowd's agents, agents out, evacuation time (the
+ *                                    largest /crowd/exit_time), smallest gap (of /steps/gap) and
+ *                                    /summary's steps and certified (eps, eta), all exactly equal;
+ *                                    /runs/x (if stored): the run's /x, NaN beyond its 2N
+ *   crowd-forget FILE TASK           task TASK not done, its /crowd row spoilt (for --resume)
  *
  * Exit status 0 on success, 1 on a difference or failed check (one line
  * saying which), 2 on usage. */
@@ -113,7 +119,8 @@ static int cmd_compare(const char *pa, const char *pb, int with_x) {
            (!with_x || compare_dataset(fa, fb, "runs/x", NULL, 1)) &&
            compare_dataset(fa, fb, "references/x", NULL, 0) &&
            compare_dataset(fa, fb, "references/summary", "wall_time_s", 0) &&
-           compare_dataset(fa, fb, "variants", NULL, 0);
+           compare_dataset(fa, fb, "variants", NULL, 0) &&
+           compare_dataset(fa, fb, "crowd", NULL, 1);
   H5Fclose(fa);
   H5Fclose(fb);
   if (ok) printf("sweep_check: %s and %s hold the same results\n", pa, pb);
@@ -302,6 +309,101 @@ static int cmd_forget_reference(const char *path, int v) {
   return bad ? 1 : 0;
 }
 
+/* ---- crowd sweeps ---- */
+
+static int read_doubles(hid_t f, const char *name, table *t) {
+  int r = read_all(f, name, t);
+  return r || H5Tget_class(t->type) != H5T_FLOAT || t->size != 8 ? -1 : 0;
+}
+
+static double attr_double(hid_t f, const char *name) {
+  double v = NAN;
+  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+  if (a >= 0) { H5Aread(a, H5T_NATIVE_DOUBLE, &v); H5Aclose(a); }
+  return v;
+}
+
+static int differs(const char *what, double sweep, double run) {
+  if (sweep == run || (isnan(sweep) && isnan(run))) return 0;
+  printf("sweep_check: %s: %.17g in the sweep, %.17g in the run\n", what, sweep, run);
+  return 1;
+}
+
+static int cmd_crowd_vs_run(const char *path, long task, const char *runpath) {
+  hid_t f = open_file(path), r = open_file(runpath);
+  if (f < 0 || r < 0) return 1;
+  hsize_t n = 0;
+  double *evac = column(f, "crowd", "evacuation_time", H5T_NATIVE_DOUBLE, &n);
+  double *gap = column(f, "crowd", "min_gap", H5T_NATIVE_DOUBLE, &n);
+  int *agents = column(f, "crowd", "agents", H5T_NATIVE_INT, &n);
+  int *out = column(f, "crowd", "agents_out", H5T_NATIVE_INT, &n);
+  long long *steps = column(f, "summary", "stopped_step", H5T_NATIVE_LLONG, &n);
+  double *eps = column(f, "summary", "max_eps_cert", H5T_NATIVE_DOUBLE, &n);
+  double *eta = column(f, "summary", "max_eta_cert", H5T_NATIVE_DOUBLE, &n);
+  table exit_t, gaps;
+  if (!evac || !gap || !agents || !out || !steps || !eps || !eta || task < 0 || (hsize_t)task >= n ||
+      read_doubles(r, "crowd/exit_time", &exit_t) || read_doubles(r, "steps/gap", &gaps)) {
+    printf("sweep_check: cannot read task %ld of %s's /crowd and /summary, or %s's /crowd and /steps\n", task,
+           path, runpath);
+    return 1;
+  }
+  const double *et = exit_t.buf, *g = gaps.buf;
+  double last = -INFINITY, min_gap = INFINITY;
+  long gone = 0;
+  for (hsize_t i = 0; i < exit_t.n; i++)
+    if (!isnan(et[i])) { gone++; last = fmax(last, et[i]); }
+  for (hsize_t i = 0; i < gaps.n; i++) min_gap = fmin(min_gap, g[i]);
+  int bad = differs("agents", agents[task], (double)exit_t.n) + differs("agents out", out[task], (double)gone) +
+            differs("evacuation time", evac[task], gone == (long)exit_t.n ? last : NAN) +
+            differs("smallest gap", gap[task], min_gap) +
+            differs("steps", (double)steps[task], (double)(gaps.n - 1)) +
+            differs("max eps_cert", eps[task], attr_double(r, "max_eps_cert")) +
+            differs("max eta_cert", eta[task], attr_double(r, "max_eta_cert"));
+  table xs, xr;
+  if (!read_doubles(f, "runs/x", &xs)) {
+    if (read_doubles(r, "x", &xr)) return 1;
+    hsize_t dim2 = 2 * exit_t.n, samples = xr.n / dim2, dim = xs.n / n / samples;
+    const double *a = (const double *)xs.buf + task * samples * dim, *b = xr.buf;
+    for (hsize_t j = 0; j < samples * dim && !bad; j++)
+      bad = differs("/runs/x", a[j], j % dim < dim2 ? b[j / dim * dim2 + j % dim] : NAN);
+    free_table(&xs);
+    free_table(&xr);
+  }
+  if (!bad)
+    printf("sweep_check: task %ld: %d agents, %d out, evacuation %.4g s, smallest gap %.3g, as in %s\n", task,
+           agents[task], out[task], evac[task], gap[task], runpath);
+  free(evac); free(gap); free(agents); free(out); free(steps); free(eps); free(eta);
+  free_table(&exit_t);
+  free_table(&gaps);
+  H5Fclose(f);
+  H5Fclose(r);
+  return bad ? 1 : 0;
+}
+
+static int cmd_crowd_forget(const char *path, long task) {
+  hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+  if (f < 0) { printf("sweep_check: %s: cannot open for writing\n", path); return 1; }
+  hsize_t n = 0;
+  int *variant = column(f, "crowd", "variant", H5T_NATIVE_INT, &n);
+  if (!variant || task < 0 || (hsize_t)task >= n) { printf("sweep_check: no task %ld in /crowd\n", task); return 1; }
+  int *pick = calloc(n, sizeof *pick);
+  pick[task] = 1;
+  signed char zero = 0;
+  double spoilt = -1;
+  int minus = -1;
+  hid_t s = H5Dopen2(f, "summary", H5P_DEFAULT), c = H5Dopen2(f, "crowd", H5P_DEFAULT);
+  int bad = write_field(s, "done", H5T_NATIVE_SCHAR, &zero, pick, n) ||
+            write_field(c, "done", H5T_NATIVE_SCHAR, &zero, pick, n) ||
+            write_field(c, "evacuation_time", H5T_NATIVE_DOUBLE, &spoilt, pick, n) ||
+            write_field(c, "min_gap", H5T_NATIVE_DOUBLE, &spoilt, pick, n) ||
+            write_field(c, "agents_out", H5T_NATIVE_INT, &minus, pick, n);
+  H5Dclose(s); H5Dclose(c);
+  free(pick); free(variant);
+  H5Fclose(f);
+  if (bad) printf("sweep_check: %s: cannot write\n", path);
+  return bad ? 1 : 0;
+}
+
 int main(int argc, char **argv) {
   H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
   if (argc == 3 && !strcmp(argv[1], "open")) return cmd_open(argv[2]);
@@ -312,6 +414,9 @@ int main(int argc, char **argv) {
   if (argc == 3 && !strcmp(argv[1], "failed")) return cmd_failed(argv[2]);
   if (argc == 3 && !strcmp(argv[1], "complete")) return cmd_complete(argv[2]);
   if (argc == 6 && !strcmp(argv[1], "refdiff")) return cmd_refdiff(argv[2], atoi(argv[3]), argv[4], atof(argv[5]));
-  fprintf(stderr, "usage: sweep_check open|compare|donelist|failed|complete|refdiff|forget-reference ...\n");
+  if (argc == 5 && !strcmp(argv[1], "crowd-vs-run")) return cmd_crowd_vs_run(argv[2], atol(argv[3]), argv[4]);
+  if (argc == 4 && !strcmp(argv[1], "crowd-forget")) return cmd_crowd_forget(argv[2], atol(argv[3]));
+  fprintf(stderr, "usage: sweep_check open|compare|donelist|failed|complete|refdiff|forget-reference|"
+          "crowd-vs-run|crowd-forget ...\n");
   return 2;
 }

@@ -356,6 +356,7 @@ static int read_output(prs *p, cup_sweep *s, const st_node *root) {
   if (!o) return st;
   if ((st = need_map(p, o, "output", "a mapping with samples"))) return st;
   if ((st = check_keys(p, o, "output", known))) return st;
+  s->out_given = opt(o, "samples") != NULL;
   if ((x = opt(o, "samples")) && !(st = integer(p, x, "output.samples", 0, 1000001, &s->out_samples)) &&
       s->out_samples != 0 && s->out_samples != s->samples)
     return fail(p, CUP_ERR_PARSE, x, "output.samples", "must be 0 (no trajectories) or reference.samples = %ld "
@@ -483,18 +484,26 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
     int st = cup_scene_load_string(&v->scene, v->scene_text, v->scene_file, v->scene_dir, NULL, 0, err);
     if (st) return variant_fail(s, k, st, errmsg, "%s", err);
     const cup_integrator_options *o = cup_scene_options(v->scene);
-    int dim = cup_scene_dim(v->scene);
-    if (k == 0) { s->T = o->T; s->dim = dim; }
+    int dim = cup_scene_dim(v->scene), crowd = cup_scene_crowd(v->scene) != NULL;
+    if (k == 0) { s->T = o->T; s->dim = dim; s->crowd = crowd; }
+    if (crowd != s->crowd)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s, and variants.0 %s: a sweep's variants are all "
+                          "crowds or none", crowd ? "a crowd" : "not a crowd", s->crowd ? "is one" : "is not");
     if (o->T != s->T)
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "T = %.17g differs from variants.0's T = %.17g: "
                           "the variants share the sample times", o->T, s->T);
-    if (dim != s->dim)
+    if (dim != s->dim && !crowd)
       return variant_fail(s, k, CUP_ERR_DIM, errmsg, "state dimension %d differs from variants.0's %d",
                           dim, s->dim);
+    if (dim > s->dim) s->dim = dim;     /* crowds of N agents: positions padded to the largest */
     long S1 = s->samples - 1;
-    if (s->ref_method == SW_REF_ADAPTIVE) v->n_ref = 0;   /* it chooses its own steps */
+    if (crowd || s->ref_method == SW_REF_ADAPTIVE) v->n_ref = 0;   /* none, or it chooses its own steps */
     else if (s->ref_n) v->n_ref = s->ref_n;
     else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
+  }
+  if (s->crowd) {
+    int st = sw_crowd_resolve(s, errmsg);
+    if (st) return st;
   }
   s->per_variant = 1;
   for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */

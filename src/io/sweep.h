@@ -61,6 +61,9 @@ typedef struct cup_sweep {
   int dim;                   /* every variant's state dimension */
   long per_variant;          /* tasks per variant */
   long n_tasks;              /* n_variants * per_variant */
+  /* crowd sweeps (sweep_crowd.c): */
+  int out_given;             /* output.samples is written in the file */
+  int crowd;                 /* the variants are crowd: scenes (then dim is the largest 2N) */
 } cup_sweep;
 
 /* One task's parameters (sw_task_get). */
@@ -89,6 +92,12 @@ typedef struct sw_result {
   char message[SW_MSG_LEN];
   double err_est;            /* the run's a posteriori error estimate (NaN: none) */
   int64_t events;            /* the adaptive scheme's changes of the active set */
+  /* crowd sweeps: a task's evacuation (/crowd, sweep_crowd.c) */
+  struct sw_crowd_result {
+    int32_t agents, agents_out;
+    double evacuation_time;  /* the last agent's exit time if all left, else NaN */
+    double min_gap;          /* smallest gap of the run's states (negative: overlap) */
+  } crowd;
 } sw_result;
 
 /* ---- the sweep file ---- */
@@ -178,5 +187,25 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count);
 int sw_file_fill_errors(sw_file *f, int variant);
 int sw_file_write_reference(sw_file *f, int variant, const sw_result *r, const double *xref);
 const char *sw_file_errmsg(const sw_file *f);
+
+/* ---- crowd sweeps (sweep_crowd.c): variants that are crowd: scenes ---- */
+
+/* After the variants' scenes are loaded: crowd sweeps take no n axis (the
+ * crowd is built for its scene's step), store no positions unless
+ * output.samples says so, and have no reference. */
+int sw_crowd_resolve(cup_sweep *s, char *errmsg);
+/* A crowd variant's reference job: nothing to compute (NaN, CUP_OK). */
+void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj);
+
+/* Watches a crowd task's run: the smallest gap of its states (the step
+ * callback, chained to the one already in o), then its evacuation. */
+typedef struct sw_crowd_watch {
+  cup_crowd *c;
+  double min_gap;
+  cup_step_fn next;
+  void *next_ctx;
+} sw_crowd_watch;
+void sw_crowd_watch_begin(sw_crowd_watch *w, cup_crowd *c, cup_integrator_options *o);
+void sw_crowd_watch_end(sw_crowd_watch *w, const double *q_end, sw_result *r);
 
 #endif

@@ -175,7 +175,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   sw_file *f = calloc(1, sizeof *f);
   if (!f) return NULL;
   f->s = s;
-  f->file = f->summary = f->runs_x = f->ref_x = f->ref_summary = H5I_INVALID_HID;
+  f->file = f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = H5I_INVALID_HID;
   f->path = strdup(path);
   size_t N = (size_t)s->n_tasks, V = (size_t)s->n_variants;
   f->done = calloc(N, 1);
@@ -185,6 +185,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   f->xref = calloc(V, sizeof *f->xref);
   f->row_t = row_type();
   f->refrow_t = refrow_type();
+  f->crowd_row_t = sw_crowd_row_type();
   /* A reference row's write converts a compound type (to the packed file
    * type): HDF5 would otherwise allocate and clear a 1 MiB conversion
    * buffer each time. */
@@ -192,7 +193,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   H5Pset_buffer(f->dxpl, 4 * sizeof(sw_refrow), NULL, NULL);
   if (!f->path || !f->done || !f->status || !f->error || !f->ref_done || !f->xref) {
     free(f->path); free(f->done); free(f->status); free(f->error); free(f->ref_done); free(f->xref);
-    H5Tclose(f->row_t); H5Tclose(f->refrow_t); H5Pclose(f->dxpl);
+    H5Tclose(f->row_t); H5Tclose(f->refrow_t); H5Tclose(f->crowd_row_t); H5Pclose(f->dxpl);
     free(f);
     return NULL;
   }
@@ -202,17 +203,18 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
 
 void sw_h5_file_free(sw_file *f) {
   quiet_t q = quiet_begin();
-  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary};
+  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd};
   for (size_t k = 0; k < sizeof h / sizeof h[0]; k++)
     if (h[k] >= 0) H5Dclose(h[k]);
   if (f->file >= 0) H5Fclose(f->file);
   H5Tclose(f->row_t);
   H5Tclose(f->refrow_t);
+  H5Tclose(f->crowd_row_t);
   H5Pclose(f->dxpl);
   H5Eclear2(H5E_DEFAULT);
   quiet_end(q);
   for (int k = 0; k < f->s->n_variants; k++) free(f->xref[k]);
-  free(f->ids); free(f->rows); free(f->x);
+  free(f->ids); free(f->rows); free(f->x); free(f->crows);
   free(f->xref); free(f->ref_done); free(f->done); free(f->status); free(f->error); free(f->path);
   free(f);
 }
@@ -351,7 +353,9 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
     f->ref_x = H5Dopen2(f->file, "references/x", H5P_DEFAULT);
     f->ref_summary = H5Dopen2(f->file, "references/summary", H5P_DEFAULT);
     if (s->out_samples > 0) f->runs_x = H5Dopen2(f->file, "runs/x", H5P_DEFAULT);
-    if (f->summary < 0 || f->ref_x < 0 || f->ref_summary < 0 || (s->out_samples > 0 && f->runs_x < 0))
+    if (s->crowd) f->crowd = H5Dopen2(f->file, "crowd", H5P_DEFAULT);
+    if (f->summary < 0 || f->ref_x < 0 || f->ref_summary < 0 || (s->out_samples > 0 && f->runs_x < 0) ||
+        (s->crowd && f->crowd < 0))
       st = sw_h5_fail(f, "open the datasets of");
   }
   if (!st) st = check_scenes(f, errmsg);
@@ -417,7 +421,9 @@ static int reserve(sw_file *f, long count) {
   if (rows) f->rows = rows;
   double *x = f->s->out_samples > 0 ? realloc(f->x, sizeof *x * traj * (size_t)cap) : NULL;
   if (x) f->x = x;
-  if (!ids || !rows || (f->s->out_samples > 0 && !x)) return CUP_ERR_NOMEM;
+  sw_crowd_row *crows = f->s->crowd ? realloc(f->crows, sizeof *crows * (size_t)cap) : NULL;
+  if (crows) f->crows = crows;
+  if (!ids || !rows || (f->s->out_samples > 0 && !x) || (f->s->crowd && !crows)) return CUP_ERR_NOMEM;
   f->cap = cap;
   return CUP_OK;
 }
@@ -445,6 +451,11 @@ static int task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hi
   return st;
 }
 
+int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
+                  const char *op) {
+  return task_io(f, d, memtype, count, buf, dxpl, writing, op);
+}
+
 int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   if (f->failed) return CUP_ERR_IO;
   int st = count > 0 ? reserve(f, count) : CUP_OK;
@@ -462,6 +473,7 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   }
   quiet_t q = quiet_begin();
   if (f->runs_x >= 0) st = task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 1, "write /runs/x in");
+  if (!st && f->crowd >= 0) st = sw_crowd_write(f, t, count);
   if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
   for (long j = 0; j < count && !st; j++) {
@@ -548,10 +560,10 @@ int sw_file_close(sw_file **pf, char *errmsg) {
   sw_file *f = *pf;
   int st = f->failed ? CUP_ERR_IO : sw_file_flush(f);
   quiet_t q = quiet_begin();
-  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary};
+  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd};
   for (size_t k = 0; k < sizeof h / sizeof h[0]; k++)
     if (h[k] >= 0 && H5Dclose(h[k]) < 0 && !st) st = sw_h5_fail(f, "close a dataset of");
-  f->summary = f->runs_x = f->ref_x = f->ref_summary = H5I_INVALID_HID;
+  f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = H5I_INVALID_HID;
   if (H5Fclose(f->file) < 0 && !st) st = sw_h5_fail(f, "close");
   f->file = H5I_INVALID_HID;
   quiet_end(q);

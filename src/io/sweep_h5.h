@@ -62,6 +62,14 @@ typedef struct __attribute__((packed)) sw_row {
  * whose last byte says done is whole. */
 _Static_assert(offsetof(sw_row, done) + sizeof(int8_t) == sizeof(sw_row), "done is the last byte of a row");
 
+/* One /crowd row (crowd sweeps, sweep_crowd.c), packed like sw_row. */
+typedef struct __attribute__((packed)) sw_crowd_row {
+  int64_t task_id;
+  int32_t variant, agents, agents_out;
+  double evacuation_time, min_gap;
+  int8_t done;
+} sw_crowd_row;
+
 typedef struct sw_refrow {
   int32_t variant;
   char variant_name[SW_NAME_LEN];
@@ -91,6 +99,9 @@ struct sw_file {
   long *ids;
   sw_row *rows;
   double *x;
+  /* crowd sweeps: /crowd, its memory type and staging rows (cap of them) */
+  hid_t crowd, crowd_row_t;
+  sw_crowd_row *crows;
 };
 
 typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
@@ -124,5 +135,22 @@ int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const vo
 /* The state in memory (no file yet), or NULL; sw_h5_file_free closes what is open. */
 sw_file *sw_h5_file_new(const cup_sweep *s, const char *path);
 void sw_h5_file_free(sw_file *f);
+/* A task's row before it ran, into row (row_size bytes). */
+typedef void (*sw_pending_fn)(const cup_sweep *s, long id, void *row);
+/* Create the one-row-per-task dataset name (memtype packed), filled with
+ * every task's pending row. */
+int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,
+                     hid_t *d);
+/* Read or write, between buf (count entries) and dataset d whose first
+ * dimension is the task, the entries of tasks f->ids[0..count). */
+int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
+                  const char *op);
+
+/* /crowd (sweep_crowd.c): its memory type; create it with pending rows;
+ * write the rows of tasks t[0..count) (staged in f->crows, ids in f->ids). */
+#define SW_CROWD_REFERENCE "none: the variants are crowds; each task's evacuation is in /crowd"
+hid_t sw_crowd_row_type(void);
+int sw_crowd_create(sw_file *f);
+int sw_crowd_write(sw_file *f, const sw_task_out *t, long count);
 
 #endif

@@ -152,8 +152,8 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_file", s->path);
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
-  r |= attr_str(root, "reference_method",
-                s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
+  r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE
+                : s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
   r |= attr_i64(root, "samples", s->samples);
   r |= attr_i64(root, "output_samples", s->out_samples);
   r |= attr_f64(root, "T", s->T);
@@ -163,25 +163,35 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   return r | write_grid_attrs(root, s);
 }
 
-static int create_summary(sw_file *f) {
+int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,
+                     hid_t *d) {
   const cup_sweep *s = f->s;
   hsize_t N = (hsize_t)s->n_tasks;
-  hid_t ft = H5Tcopy(f->row_t);
+  char op[64];
+  hid_t ft = H5Tcopy(memtype);
   H5Tpack(ft);
-  f->summary = fixed_dataset(f->file, "summary", ft, 1, &N, 0, NULL);
+  *d = fixed_dataset(f->file, name, ft, 1, &N, 0, NULL);
   H5Tclose(ft);
-  if (f->summary < 0) return sw_h5_fail(f, "create /summary in");
+  snprintf(op, sizeof op, "create /%s in", name);
+  if (*d < 0) return sw_h5_fail(f, op);
   enum { BLOCK = 1024 };
-  sw_row *rows = malloc(sizeof *rows * BLOCK);
+  char *rows = malloc(row_size * BLOCK);
   if (!rows) return CUP_ERR_NOMEM;
   int st = CUP_OK;
+  snprintf(op, sizeof op, "write /%s in", name);
   for (hsize_t at = 0; at < N && !st; at += BLOCK) {
     hsize_t cnt = N - at < BLOCK ? N - at : BLOCK;
-    for (hsize_t k = 0; k < cnt; k++) sw_pending_row(s, (long)(at + k), &rows[k]);
-    if (sw_h5_write_rows(f->summary, f->row_t, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, "write /summary in");
+    for (hsize_t k = 0; k < cnt; k++) pending(s, (long)(at + k), rows + row_size * k);
+    if (sw_h5_write_rows(*d, memtype, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, op);
   }
   free(rows);
   return st;
+}
+
+static void pending_summary_row(const cup_sweep *s, long id, void *row) { sw_pending_row(s, id, row); }
+
+static int create_summary(sw_file *f) {
+  return sw_h5_task_table(f, "summary", f->row_t, sizeof(sw_row), pending_summary_row, &f->summary);
 }
 
 static int create_references(sw_file *f, hid_t g) {
@@ -259,6 +269,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   if (write_root_attrs(f->file, s, p)) return sw_h5_fail(f, "write attributes in");
   int st = create_variants(f);
   if (!st) st = create_summary(f);
+  if (!st && s->crowd) st = sw_crowd_create(f);
   hid_t g = st ? -1 : fixed_group(f->file, "runs");
   if (!st && g < 0) st = sw_h5_fail(f, "create /runs in");
   if (!st) {
@@ -289,7 +300,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
 }
 
 static double file_bytes(const cup_sweep *s) {
-  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16);
+  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0));
   double traj = (double)s->samples * s->dim * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
   return rows + traj + 65536.0 + 2.0 * strlen(s->text);
 }

@@ -24,7 +24,8 @@ static long nearest_step(long j, long n, long S1) {
 
 typedef struct {
   long S, n, next;
-  int dim, at_times;         /* at_times: the run gives exactly t_j, in order (adaptive) */
+  int dim, stride;           /* the task's state, a sample's room (crowds: the sweep's largest 2N) */
+  int at_times;              /* the run gives exactly t_j, in order (adaptive) */
   double *traj;
 } sampler;
 
@@ -32,12 +33,12 @@ static int sample_sink(long k, double t, const double *x, void *ctx) {
   (void)t;
   sampler *sp = ctx;
   if (sp->at_times) {
-    if (sp->next < sp->S) memcpy(sp->traj + sp->next++ * sp->dim, x, sizeof(double) * (size_t)sp->dim);
+    if (sp->next < sp->S) memcpy(sp->traj + sp->next++ * sp->stride, x, sizeof(double) * (size_t)sp->dim);
     return 0;
   }
   while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) < k) sp->next++;
   while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) {
-    memcpy(sp->traj + sp->next * sp->dim, x, sizeof(double) * (size_t)sp->dim);
+    memcpy(sp->traj + sp->next * sp->stride, x, sizeof(double) * (size_t)sp->dim);
     sp->next++;
   }
   return 0;
@@ -86,8 +87,10 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   o.interrupt = ro ? ro->interrupt : NULL;
   o.on_step = ro ? ro->on_step : NULL;
   o.step_ctx = ro ? ro->step_ctx : NULL;
-  failing fc = {0.5 * o.T, dim};
+  failing fc = {0.5 * o.T, cup_scene_dim(v->scene)};
   if (rp->inject) { o.f = failing_rhs; o.f_ctx = &fc; }
+  sw_crowd_watch cw;
+  if (s->crowd) sw_crowd_watch_begin(&cw, cup_scene_crowd(v->scene), &o);
   double t0 = now_seconds();
   cup_integrator *I = NULL;
   char err[CUP_ERRMSG_LEN] = "";
@@ -97,9 +100,10 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
     r->wall += now_seconds() - t0;
     return;
   }
-  sampler sp = {S, rp->n, 0, dim, adaptive, traj};
+  sampler sp = {S, rp->n, 0, cup_scene_dim(v->scene), dim, adaptive, traj};
   cup_run_info info;
   r->status = cup_integrator_run(I, cup_scene_x0(v->scene), sample_sink, &sp, &info);
+  if (s->crowd) sw_crowd_watch_end(&cw, cup_integrator_state(I), r);
   cup_integrator_free(&I);
   r->wall += now_seconds() - t0;
   r->max_eps_cert = fmax(r->max_eps_cert, info.max_eps_cert);
@@ -174,6 +178,7 @@ static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_r
 void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {
   memset(r, 0, sizeof *r);
   r->job = job;
+  if (job < s->n_variants && s->crowd) { sw_crowd_no_reference(s, r, traj); return; }
   if (job < s->n_variants) { run_reference(s, (int)job, ro, r, traj); return; }
   sw_task t;
   if (sw_task_get(s, job - s->n_variants, &t)) {
