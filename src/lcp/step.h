@@ -17,6 +17,15 @@
 #include "set/polyset_impl.h"
 #include "lcp.h"
 
+/* Up to this many states and rows, without D, a step is first tried by code
+ * unrolled for its sizes (the circuits' common case: a few ns instead of a
+ * loop over sparse rows and a general pivoting solver); it does the same
+ * arithmetic in the same order, so z, lambda and the certificates are those
+ * of the general path, which takes over for anything unusual (a singular
+ * block, NaN, the exact mode eps_target < 0). */
+#define CUP_STEP_SMALL_N 4
+#define CUP_STEP_SMALL_M 2
+
 typedef struct cup_lcp_step {
   int n, m;
   double h;
@@ -32,6 +41,9 @@ typedef struct cup_lcp_step {
   unsigned char *drow; /* rows with D != 0 in their row or column: zeta is a function there */
   double *Hprev;    /* n x m: h (1 - theta) W B on those rows (the trapezoid's old half), else 0 */
   double *xpred;    /* xf + Hprev lambda_k */
+  /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
+  int small;        /* 1: cup_lcp_step_solve tries the unrolled step first */
+  double Cd[CUP_STEP_SMALL_M * CUP_STEP_SMALL_N];   /* row-major, zeros included */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
