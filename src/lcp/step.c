@@ -75,10 +75,7 @@ void cup_lcp_step_free(cup_lcp_step *ls) {
   memset(ls, 0, sizeof *ls);
 }
 
-/* A certified distance of z to K from its slack s (with rounding bounds
- * gam): 0 when z is certainly in K, else a push along the polyset's
- * direction into K, verified; INFINITY when neither works. */
-static double certified_eta(cup_lcp_step *ls, const double *g, const double *z) {
+double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z) {
   const cup_polyset *K = ls->K;
   int n = ls->n, m = ls->m;
   double worst = INFINITY;
@@ -142,146 +139,10 @@ static const double *effective_offset(cup_lcp_step *ls, const double *g) {
   return ls->geff;
 }
 
-/* ---- the unrolled step of a small set -------------------------------------------- */
-
-#define CUP_INLINE static inline __attribute__((always_inline))
-
-/* cup_slack on the dense rows Cd, term by term in the same order (a zero
- * entry adds an exact zero to finite sums). */
-CUP_INLINE void small_slack(const cup_lcp_step *ls, const double *g, const double *x, double *s,
-                            double *gam, const int n, const int m) {
-  const double *rg = ls->K->rowgam;
-  for (int i = 0; i < m; i++) {
-    const double *c = ls->Cd + i * CUP_STEP_SMALL_N;
-    double acc = g[i], mag = fabs(g[i]);
-    for (int j = 0; j < n; j++) {
-      double t = c[j] * x[j];
-      acc += t;
-      mag += fabs(t);
-    }
-    s[i] = acc;
-    gam[i] = rg[i] * mag;
-  }
-}
-
-/* certified_eta's common case, z certainly in K, without a call. */
-CUP_INLINE double small_eta(cup_lcp_step *ls, const double *g, const double *z, const int m) {
-  double worst = INFINITY;
-  for (int i = 0; i < m; i++) worst = cup_min(worst, ls->s[i] - ls->gam[i]);
-  return worst >= 0 ? 0 : certified_eta(ls, g, z);
-}
-
-/* lcp.c's Murty pivoting from the warm start for m <= 2 rows (the active
- * set a bit mask, each block solved by the same closed forms, the same
- * tolerances, the same least index). 0 with lam, w and the warm start
- * written; 1, touching nothing, where lcp.c would meet a singular block or
- * cycle (and then retry cold): the general path takes the step over. */
-CUP_INLINE int small_murty(cup_lcp *s, const double *M, const double *q, int *pivots, const int m) {
-  double scale = 0;
-  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
-  double tol_w = 64 * DBL_EPSILON * scale;
-  unsigned act = 0;
-  for (int i = 0; i < m; i++) act |= (unsigned)(s->prev[i] != 0) << i;
-  for (int it = 0; it < 16 * m + 64; it++) {
-    double lam[2] = {0, 0}, w[2];
-    if (act == 3) {
-      double det = M[0] * M[3] - M[2] * M[1];
-      if (!(det != 0)) return 1;
-      lam[0] = (-q[0] * M[3] + q[1] * M[2]) / det;
-      lam[1] = (-q[1] * M[0] + q[0] * M[1]) / det;
-    } else if (act) {
-      int a = act - 1;
-      double d = M[a + a * m];
-      if (!(d != 0)) return 1;
-      lam[a] = -q[a] / d;
-    }
-    double lmax = 0;
-    for (int i = 0; i < m; i++) {
-      double acc = q[i];
-      if (act & 1) acc += M[i] * lam[0];
-      if (act & 2) acc += M[i + m] * lam[1];
-      w[i] = acc;
-      lmax = cup_max(lmax, fabs(lam[i]));
-    }
-    double tol_l = 64 * DBL_EPSILON * lmax;
-    int flip = -1;
-    for (int i = 0; i < m && flip < 0; i++)
-      if (((act >> i) & 1) ? lam[i] < -tol_l : w[i] < -tol_w) flip = i;
-    if (flip < 0) {
-      for (int i = 0; i < m; i++) {
-        s->lam[i] = lam[i];
-        s->w[i] = w[i];
-        s->prev[i] = (act >> i) & 1;
-      }
-      return 0;
-    }
-    act ^= 1u << flip;
-    (*pivots)++;
-  }
-  return 1;
-}
-
-/* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
- * >= 0 and no D: 1 when it took the step (info->status set), 0 when the
- * general path must (NaN in xf, a singular block), having changed nothing
- * but scratch. */
-CUP_INLINE int small_step(cup_lcp_step *ls, const double *g, const double *restrict xf, double *restrict z,
-                          double scale, double eps_target, double eta_target, cup_proj_info *info,
-                          const int n, const int m) {
-  double probe = 0;                               /* NaN iff some entry is NaN or Inf */
-  for (int j = 0; j < n; j++) probe += 0 * xf[j];
-  if (isnan(probe)) return 0;
-  double *q = ls->s, *lam = ls->lcp.lam;          /* q = C x_free + g */
-  small_slack(ls, g, xf, q, ls->gam, n, m);
-  double qmin = INFINITY;
-  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
-  *info = (cup_proj_info){.method = CUP_PROJ_ACTIVESET, .scale = scale, .eps_target = eps_target,
-                          .eta_target = eta_target};
-  if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
-    for (int j = 0; j < n; j++) z[j] = xf[j];
-    for (int i = 0; i < m; i++) lam[i] = 0;
-    ls->lq = 0;
-    info->skipped = 1;
-    info->eta_cert = small_eta(ls, g, z, m);
-    info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
-    return 1;
-  }
-  double qs[CUP_STEP_SMALL_M];                    /* aimed a few ulps inside K, as below */
-  for (int i = 0; i < m; i++) qs[i] = q[i] - (16 * ls->gam[i] + DBL_MIN);
-  int pivots = 0;
-  if (small_murty(&ls->lcp, ls->M, qs, &pivots, m)) return 0;
-  info->iterations = pivots + 1;
-  double lq = 0;
-  for (int i = 0; i < m; i++) {
-    lam[i] = cup_max(lam[i], 0);
-    lq += lam[i] * q[i];
-  }
-  ls->lq = lq;
-  for (int r = 0; r < n; r++) z[r] = xf[r];
-  for (int i = 0; i < m; i++) {
-    if (lam[i] == 0) continue;
-    for (int r = 0; r < n; r++) z[r] += ls->H[r + i * n] * lam[i];
-  }
-  small_slack(ls, g, z, ls->s, ls->gam, n, m);
-  double gap = 0, viol = 0;
-  int active = 0;
-  for (int i = 0; i < m; i++) {
-    gap += 2 * ls->h * lam[i] * (ls->s[i] + ls->gam[i]);
-    viol = cup_max(viol, -ls->s[i]);
-    active += lam[i] > 0;
-  }
-  info->active = active;
-  info->violation = viol;
-  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
-  info->eta_cert = small_eta(ls, g, z, m);
-  info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
-  return 1;
-}
-
 static int small_dispatch(cup_lcp_step *ls, const double *g, const double *xf, double *z, double scale,
                           double eps_target, double eta_target, cup_proj_info *info) {
 #define CUP_SMALL_CASE(N, M) \
-  case (N) * 8 + (M): return small_step(ls, g, xf, z, scale, eps_target, eta_target, info, N, M);
+  case (N) * 8 + (M): return cup_small_step(ls, g, xf, z, scale, eps_target, eta_target, info, N, M);
   switch (ls->n * 8 + ls->m) {
     CUP_SMALL_CASE(1, 1) CUP_SMALL_CASE(2, 1) CUP_SMALL_CASE(3, 1) CUP_SMALL_CASE(4, 1)
     CUP_SMALL_CASE(1, 2) CUP_SMALL_CASE(2, 2) CUP_SMALL_CASE(3, 2) CUP_SMALL_CASE(4, 2)
@@ -335,7 +196,7 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     cup_zero(lam, m);
     ls->lq = 0;
     info->skipped = 1;
-    info->eta_cert = certified_eta(ls, g, z);
+    info->eta_cert = cup_lcp_step_eta(ls, g, z);
     return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   }
   /* Aim the rows at slack tau = 16 gam (K shrunk by a few ulps): then z is
@@ -402,7 +263,7 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     }
     info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
   }
-  info->eta_cert = certified_eta(ls, g, z);
+  info->eta_cert = cup_lcp_step_eta(ls, g, z);
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
 }

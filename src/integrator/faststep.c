@@ -1,0 +1,149 @@
+/* faststep — see faststep.h. Each piece below names the general code whose
+ * arithmetic it repeats; tests/test_integrator.c compares the two. */
+#include <math.h>
+#include "catchup.h"
+#include "faststep.h"
+#include "lcp/step.h"
+#include "tally.h"
+
+void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
+                       const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
+                       double T) {
+  *f = (cup_faststep){.th = th, .g0 = K->g0, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T,
+                      .h = fs->h, .last_t = NAN};
+  const cup_input *u = fs->u;
+  if (!use_theta || !th->small || !fs->affine || fs->has_f || fs->p > 1 || !(eps_n > 0) || !(eta_n > 0) ||
+      (u && (u->fn || u->nterms > CUP_FAST_TERMS)))
+    return;
+  int n = fs->n;
+  for (int q = 0; q < n * n; q++) f->Phi[q] = fs->Phi[q];
+  f->has = u && fs->d.has_E;                /* freestep.c's step_input */
+  f->integrate = f->has && !fs->const_input;
+  f->uconst = f->has ? fs->ubuf[0] : 0;
+  for (int i = 0; i < n && f->has; i++) f->Gam[i] = fs->Gam[i];
+  f->nterms = u ? u->nterms : 0;
+  for (int k = 0; k < f->nterms; k++) {
+    f->term[k] = &u->terms[k];
+    f->term_h[k] = fs->term_h[k];
+    cup_wave_kind kind = u->terms[k].kind;
+    if (kind != CUP_WAVE_CONSTANT && kind != CUP_WAVE_SINE && kind != CUP_WAVE_SQUARE) return;
+  }
+  f->moving = G && u;
+  if (f->moving) {
+    if (G->ncol != 1 || G->nnz > CUP_STEP_SMALL_M) return;
+    for (int q = G->p[0]; q < G->p[1]; q++) {
+      f->grow[f->gnnz] = G->i[q];
+      f->gval[f->gnnz++] = G->x[q];
+    }
+  }
+  f->on = 1;
+}
+
+/* int u over [t0, t1] (cup_freestep_term_integral summed as freestep.c's
+ * waveform_step_integral sums one input) and, for a moving set, u(t1)
+ * (cup_input_eval); a square wave's position q(t1) serves both, and its
+ * antiderivative at t0 is the last step's at t1. */
+static inline __attribute__((always_inline)) void input_step(cup_faststep *f, double t0, double t1, double *uint, double *u1) {
+  double tmid = 0.5 * (t0 + t1), acc = 0, val = 0;
+  int cached = t0 == f->last_t;
+  for (int k = 0; k < f->nterms; k++) {
+    const cup_term *w = f->term[k];
+    if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
+      double q1 = cup_square_q(w, t1), tri1 = cup_sign_sin_q_integral(q1);
+      double tri0 = cached ? f->last_tri[k] : cup_sign_sin_q_integral(cup_square_q(w, t0));
+      acc += w->amp * M_PI / w->omega * (tri1 - tri0);       /* cup_term_integral */
+      f->last_tri[k] = tri1;
+      if (f->moving) val += w->amp * cup_sign_sin_q(q1);     /* cup_term_value */
+      continue;
+    }
+    if (w->kind == CUP_WAVE_CONSTANT) acc += f->term_h[k];
+    else if (w->kind == CUP_WAVE_SINE && w->omega > 0) acc += f->term_h[k] * cup_sin(w->omega * tmid + w->phase);
+    else if (w->kind == CUP_WAVE_SINE) acc += f->term_h[k];
+    else acc += cup_term_integral(w, t0, t1);
+    if (f->moving) val += cup_term_value(w, t1);
+  }
+  f->last_t = t1;
+  *uint = acc;
+  *u1 = val;
+}
+
+/* The input of the step [t0, t1]: uint its integral, u1 = u(t1). */
+static inline __attribute__((always_inline)) void input(cup_faststep *f, double t0, double t1, double *uint,
+                                                        double *u1) {
+  *uint = f->uconst;
+  *u1 = 0;
+  if (f->integrate || f->moving) input_step(f, t0, t1, uint, u1);
+  if (f->has && !f->integrate) *uint = f->uconst;
+}
+
+/* One step from x into z (xf: the free point), its input given: the
+ * status, or CUP_FAST_DECLINED with nothing but scratch changed. */
+static inline __attribute__((always_inline)) int
+fast_step(cup_faststep *f, double uint, double u1, const double *restrict x, double *restrict xf,
+          double *restrict z, cup_proj_info *pi, const int n, const int m) {
+  for (int i = 0; i < n; i++) {                             /* freestep.c's affine_rows */
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += f->Phi[i * n + j] * x[j];
+    if (f->has) acc += f->Gam[i] * uint;
+    xf[i] = acc;
+  }
+  const double *g = f->g0;
+  if (f->moving) {                                          /* integrator.c's moving_offset */
+    for (int i = 0; i < m; i++) f->g[i] = f->g0[i];
+    if (u1 != 0)
+      for (int q = 0; q < f->gnnz; q++) f->g[f->grow[q]] += f->gval[q] * u1;
+    for (int i = 0; i < m; i++)
+      if (!isfinite(f->g[i])) return CUP_FAST_DECLINED;
+    g = f->g;
+  }
+  /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
+  return cup_small_step(f->th, g, xf, z, NAN, f->eps_n, f->eta_n, pi, n, m) ? pi->status : CUP_FAST_DECLINED;
+}
+
+/* integrator.c's loop from step k, the state in registers: each step that
+ * ends CUP_OK before stop is booked as the loop books it; the first other
+ * one, or step stop, is left pending. The next step's input (a sine: some
+ * 60 cycles of latency) is computed before this step's chain from x to z,
+ * so that the two overlap; the one computed past the last step is dropped. */
+static inline __attribute__((always_inline)) long
+run(cup_faststep *f, long k, long stop, double **xp, double **xnewp, cup_proj_info *pi, int *st,
+    cup_run_info *info, const int n, const int m) {
+  double x[CUP_STEP_SMALL_N], xf[CUP_STEP_SMALL_N], z[CUP_STEP_SMALL_N];
+  for (int j = 0; j < n; j++) x[j] = (*xp)[j];
+  cup_proj_info p;
+  double t1 = cup_grid_time(k + 1, f->steps, f->T, f->h), uint, u1;
+  input(f, cup_grid_time(k, f->steps, f->T, f->h), t1, &uint, &u1);
+  for (;; k++) {
+    double t2 = cup_grid_time(k + 2, f->steps, f->T, f->h), uint2, u12;
+    input(f, t1, t2, &uint2, &u12);
+    int s = fast_step(f, uint, u1, x, xf, z, &p, n, m);
+    if (k == stop || s != CUP_OK) {
+      for (int j = 0; j < n; j++) (*xp)[j] = x[j];
+      for (int j = 0; j < n && s != CUP_FAST_DECLINED; j++) (*xnewp)[j] = z[j];
+      *pi = p;
+      *st = s;
+      return k;
+    }
+    for (int j = 0; j < n; j++) x[j] = z[j];
+    info->step = k + 1;
+    info->t = t1;
+    cup_tally(info, &p);
+    t1 = t2;
+    uint = uint2;
+    u1 = u12;
+  }
+}
+
+long cup_faststep_run(cup_faststep *f, long k, long stop, double **x, double **xnew, double *xf,
+                      cup_proj_info *pi, int *st, cup_run_info *info) {
+  (void)xf;
+#define CUP_FAST_CASE(N, M) \
+  case (N) * 8 + (M): return run(f, k, stop, x, xnew, pi, st, info, N, M);
+  switch (f->th->n * 8 + f->th->m) {
+    CUP_FAST_CASE(1, 1) CUP_FAST_CASE(2, 1) CUP_FAST_CASE(3, 1) CUP_FAST_CASE(4, 1)
+    CUP_FAST_CASE(1, 2) CUP_FAST_CASE(2, 2) CUP_FAST_CASE(3, 2) CUP_FAST_CASE(4, 2)
+  }
+#undef CUP_FAST_CASE
+  *st = CUP_FAST_DECLINED;
+  return k;
+}
