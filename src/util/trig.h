@@ -10,7 +10,9 @@
 #include <math.h>
 
 static inline double cup_sin(double x) {
-  if (!(fabs(x) < 65536.0)) return sin(x);
+  double ax = fabs(x);
+  if (!(ax < 65536.0)) return sin(x);
+  if (ax < 0x1p-26) return x;                       /* sin x rounds to x (and keeps the sign of 0) */
   const double round = 0x1.8p52;                    /* adding it rounds to an integer */
   double k = (x * 0x1.45f306dc9c883p-1 + round) - round;   /* nearest integer to x 2/pi */
   double r = ((x - k * 0x1.921fb544p+0) - k * 0x1.0b4611a6p-34) - k * 0x1.3198a2e037073p-69;
