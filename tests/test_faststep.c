@@ -4,7 +4,8 @@
  * the unrolled step against the general pivoting path on random small sets,
  * bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
- * the fused steps off), bit for bit, states and statistics. */
+ * the fused steps off), bit for bit, states and statistics; cup_floor
+ * against libm's floor. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -48,9 +49,24 @@ static void test_sin_within_two_ulps(void **state) {
   assert_true(cup_sin(0.0) == 0 && !signbit(cup_sin(0.0)) && signbit(cup_sin(-0.0)));
 }
 
-/* ---- the unrolled LCP step against the general path ---------------------------- */
-
 static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* cup_floor (the square wave's, util/linalg.h) is libm's floor bit for bit. */
+static void test_floor_is_libm(void **state) {
+  (void)state;
+  rng_t r = {3};
+  double special[] = {0.0, -0.0, 0.5, -0.5, 1, -1, 0x1p52, -0x1p52, 0x1p52 - 0.5, -0x1p52 + 0.5, 1e300, -1e300,
+                      DBL_TRUE_MIN, -DBL_TRUE_MIN, INFINITY, -INFINITY};
+  for (size_t k = 0; k < sizeof special / sizeof special[0]; k++)
+    assert_true(same(cup_floor(special[k]), floor(special[k])));
+  assert_true(isnan(cup_floor(NAN)));
+  for (int k = 0; k < 1000000; k++) {
+    double x = ldexp(rng_normal(&r), rng_int(&r, -60, 60));
+    if (!same(cup_floor(x), floor(x))) fail_msg("cup_floor(%.17g) = %.17g, floor %.17g", x, cup_floor(x), floor(x));
+  }
+}
+
+/* ---- the unrolled LCP step against the general path ---------------------------- */
 
 static void assert_same_info(const cup_proj_info *a, const cup_proj_info *b) {
   assert_int_equal(a->status, b->status);
@@ -221,6 +237,7 @@ static void test_fused_steps_are_the_loop(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_sin_within_two_ulps),
+    cmocka_unit_test(test_floor_is_libm),
     cmocka_unit_test(test_unrolled_step_is_the_general_one),
     cmocka_unit_test(test_fused_steps_are_the_loop),
   };

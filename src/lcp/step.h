@@ -100,13 +100,13 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
  * meet anything unusual they decline, having changed only scratch. */
 #define CUP_ALWAYS_INLINE static inline __attribute__((always_inline))
 
-/* cup_slack on the dense rows Cd, term by term in the same order (a zero
- * entry adds an exact zero to finite sums). */
-CUP_ALWAYS_INLINE void cup_small_slack(const cup_lcp_step *ls, const double *g, const double *x, double *s,
-                            double *gam, const int n, const int m) {
-  const double *rg = ls->K->rowgam;
+/* cup_slack on the dense rows C (row-major, CUP_STEP_SMALL_N apart), term
+ * by term in the same order (a zero entry adds an exact zero to finite
+ * sums). */
+CUP_ALWAYS_INLINE void cup_small_slack(const double *C, const double *rg, const double *g, const double *x,
+                                       double *s, double *gam, const int n, const int m) {
   for (int i = 0; i < m; i++) {
-    const double *c = ls->Cd + i * CUP_STEP_SMALL_N;
+    const double *c = C + i * CUP_STEP_SMALL_N;
     double acc = g[i], mag = fabs(g[i]);
     for (int j = 0; j < n; j++) {
       double t = c[j] * x[j];
@@ -118,24 +118,33 @@ CUP_ALWAYS_INLINE void cup_small_slack(const cup_lcp_step *ls, const double *g, 
   }
 }
 
-/* cup_lcp_step_eta's common case, z certainly in K, without a call. */
-CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, const double *g, const double *z, const int m) {
+/* cup_lcp_step_eta for the slack s, gam of z: its common case, z certainly
+ * in K, without a call. */
+CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, const double *g, const double *z, const double *s,
+                                       const double *gam, const int m) {
   double worst = INFINITY;
-  for (int i = 0; i < m; i++) worst = cup_min(worst, ls->s[i] - ls->gam[i]);
-  return worst >= 0 ? 0 : cup_lcp_step_eta(ls, g, z);
+  for (int i = 0; i < m; i++) worst = cup_min(worst, s[i] - gam[i]);
+  if (worst >= 0) return 0;
+  for (int i = 0; i < m; i++) {
+    ls->s[i] = s[i];
+    ls->gam[i] = gam[i];
+  }
+  return cup_lcp_step_eta(ls, g, z);
 }
 
-/* lcp.c's Murty pivoting from the warm start for m <= 2 rows (the active
- * set a bit mask, each block solved by the same closed forms, the same
- * tolerances, the same least index). 0 with lam, w and the warm start
- * written; 1, touching nothing, where lcp.c would meet a singular block or
- * cycle (and then retry cold): the general path takes the step over. */
-CUP_ALWAYS_INLINE int cup_small_murty(cup_lcp *s, const double *M, const double *q, int *pivots, const int m) {
+/* lcp.c's Murty pivoting from the warm start prev for m <= 2 rows (the
+ * active set a bit mask, each block solved by the same closed forms, the
+ * same tolerances, the same least index). 0 with lam and the warm start
+ * written (lcp.c's w is scratch nobody reads); 1, touching nothing, where
+ * lcp.c would meet a singular block or cycle (and then retry cold): the
+ * general path takes the step over. */
+CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, const double *q, double *lam_out,
+                                      int *pivots, const int m) {
   double scale = 0;
   for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
   double tol_w = 64 * DBL_EPSILON * scale;
   unsigned act = 0;
-  for (int i = 0; i < m; i++) act |= (unsigned)(s->prev[i] != 0) << i;
+  for (int i = 0; i < m; i++) act |= (unsigned)(prev[i] != 0) << i;
   for (int it = 0; it < 16 * m + 64; it++) {
     double lam[2] = {0, 0}, w[2];
     if (act == 3) {
@@ -163,9 +172,8 @@ CUP_ALWAYS_INLINE int cup_small_murty(cup_lcp *s, const double *M, const double 
       if (((act >> i) & 1) ? lam[i] < -tol_l : w[i] < -tol_w) flip = i;
     if (flip < 0) {
       for (int i = 0; i < m; i++) {
-        s->lam[i] = lam[i];
-        s->w[i] = w[i];
-        s->prev[i] = (act >> i) & 1;
+        lam_out[i] = lam[i];
+        prev[i] = (act >> i) & 1;
       }
       return 0;
     }
@@ -178,56 +186,60 @@ CUP_ALWAYS_INLINE int cup_small_murty(cup_lcp *s, const double *M, const double 
 /* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
  * >= 0 and no D: 1 when it took the step (info->status set), 0 when the
  * general path must (NaN in xf, a singular block), having changed nothing
- * but scratch. */
-CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf, double *restrict z,
-                          double scale, double eps_target, double eta_target, cup_proj_info *info,
-                          const int n, const int m) {
+ * but scratch. The set's data are read once into locals, the slacks stay
+ * in registers. */
+CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
+                                     double *restrict z, double scale, double eps_target, double eta_target,
+                                     cup_proj_info *info, const int n, const int m) {
   double probe = 0;                               /* NaN iff some entry is NaN or Inf */
   for (int j = 0; j < n; j++) probe += 0 * xf[j];
   if (isnan(probe)) return 0;
-  double *q = ls->s, *lam = ls->lcp.lam;          /* q = C x_free + g */
-  cup_small_slack(ls, g, xf, q, ls->gam, n, m);
+  const double *C = ls->Cd, *rg = ls->K->rowgam, *H = ls->H, h = ls->h;
+  double *lamv = ls->lcp.lam;
+  double q[CUP_STEP_SMALL_M], gam[CUP_STEP_SMALL_M], s[CUP_STEP_SMALL_M], sg[CUP_STEP_SMALL_M];
+  cup_small_slack(C, rg, g, xf, q, gam, n, m);    /* q = C x_free + g */
   double qmin = INFINITY;
   for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
   *info = (cup_proj_info){.method = CUP_PROJ_ACTIVESET, .scale = scale, .eps_target = eps_target,
                           .eta_target = eta_target};
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
     for (int j = 0; j < n; j++) z[j] = xf[j];
-    for (int i = 0; i < m; i++) lam[i] = 0;
+    for (int i = 0; i < m; i++) lamv[i] = 0;
     ls->lq = 0;
     info->skipped = 1;
-    info->eta_cert = cup_small_eta(ls, g, z, m);
+    info->eta_cert = cup_small_eta(ls, g, z, q, gam, m);
     info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
     return 1;
   }
-  double qs[CUP_STEP_SMALL_M];                    /* aimed a few ulps inside K, as below */
-  for (int i = 0; i < m; i++) qs[i] = q[i] - (16 * ls->gam[i] + DBL_MIN);
+  double qs[CUP_STEP_SMALL_M], lam[CUP_STEP_SMALL_M];   /* aimed a few ulps inside K, as step.c */
+  for (int i = 0; i < m; i++) qs[i] = q[i] - (16 * gam[i] + DBL_MIN);
   int pivots = 0;
-  if (cup_small_murty(&ls->lcp, ls->M, qs, &pivots, m)) return 0;
+  if (cup_small_murty(ls->lcp.prev, ls->M, qs, lam, &pivots, m)) return 0;
   info->iterations = pivots + 1;
   double lq = 0;
   for (int i = 0; i < m; i++) {
     lam[i] = cup_max(lam[i], 0);
+    lamv[i] = lam[i];
     lq += lam[i] * q[i];
   }
   ls->lq = lq;
   for (int r = 0; r < n; r++) z[r] = xf[r];
   for (int i = 0; i < m; i++) {
     if (lam[i] == 0) continue;
-    for (int r = 0; r < n; r++) z[r] += ls->H[r + i * n] * lam[i];
+    for (int r = 0; r < n; r++) z[r] += H[r + i * n] * lam[i];
   }
-  cup_small_slack(ls, g, z, ls->s, ls->gam, n, m);
+  cup_small_slack(C, rg, g, z, s, sg, n, m);
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {
-    gap += 2 * ls->h * lam[i] * (ls->s[i] + ls->gam[i]);
-    viol = cup_max(viol, -ls->s[i]);
+    gap += 2 * h * lam[i] * (s[i] + sg[i]);
+    viol = cup_max(viol, -s[i]);
     active += lam[i] > 0;
   }
   info->active = active;
   info->violation = viol;
   info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
-  info->eta_cert = cup_small_eta(ls, g, z, m);
+  info->eta_cert = cup_small_eta(ls, g, z, s, sg, m);
   info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   return 1;
 }

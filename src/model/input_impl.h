@@ -7,6 +7,7 @@
 #include <math.h>
 #include <gsl/gsl_integration.h>
 #include "catchup/input.h"
+#include "util/linalg.h"
 
 typedef struct cup_term {
   int comp;
@@ -47,11 +48,11 @@ int cup_spice_term_constant(const cup_term *t);
 static inline double cup_square_q(const cup_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
 
 /* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
-static inline double cup_mod2(double q) { return q - 2.0 * floor(0.5 * q); }
+static inline double cup_mod2(double q) { return q - 2.0 * cup_floor(0.5 * q); }
 
 static inline double cup_sign_sin_q(double q) {
   double r = cup_mod2(q);
-  double tol = 4 * DBL_EPSILON * fmax(1.0, fabs(q));
+  double tol = 4 * DBL_EPSILON * (fabs(q) > 1 ? fabs(q) : 1.0);   /* fmax(1, |q|), NaN giving 1 */
   if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
   return r < 1 ? 1 : -1;
 }
