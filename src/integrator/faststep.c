@@ -100,23 +100,37 @@ fast_step(cup_faststep *f, double uint, double u1, const double *restrict x, dou
   return cup_small_step(f->th, g, xf, z, NAN, f->eps_n, f->eta_n, pi, n, m) ? pi->status : CUP_FAST_DECLINED;
 }
 
+/* The inputs of steps k, k + 1, ..., at most CUP_FAST_AHEAD and none past
+ * stop, into t1 (each step's end), ui (its integral), u1 (u at its end);
+ * returns how many. Computed apart from the steps, the sines (some 60
+ * cycles of latency each) overlap one another and the steps' chains. */
+static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *ui, double *u1) {
+  int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
+  double ta = cup_grid_time(k, f->steps, f->T, f->h);
+  for (int j = 0; j < cnt; j++) {
+    t1[j] = cup_grid_time(k + j + 1, f->steps, f->T, f->h);
+    input(f, ta, t1[j], &ui[j], &u1[j]);
+    ta = t1[j];
+  }
+  return cnt;
+}
+
 /* integrator.c's loop from step k, the state in registers: each step that
  * ends CUP_OK before stop is booked as the loop books it; the first other
- * one, or step stop, is left pending. The next step's input (a sine: some
- * 60 cycles of latency) is computed before this step's chain from x to z,
- * so that the two overlap; the one computed past the last step is dropped. */
+ * one, or step stop, is left pending. */
 static inline __attribute__((always_inline)) long
 run(cup_faststep *f, long k, long stop, double **xp, double **xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
   double x[CUP_STEP_SMALL_N], xf[CUP_STEP_SMALL_N], z[CUP_STEP_SMALL_N];
+  double t1[CUP_FAST_AHEAD], ui[CUP_FAST_AHEAD], u1[CUP_FAST_AHEAD];
   for (int j = 0; j < n; j++) x[j] = (*xp)[j];
   cup_proj_info p;
-  double t1 = cup_grid_time(k + 1, f->steps, f->T, f->h), uint, u1;
-  input(f, cup_grid_time(k, f->steps, f->T, f->h), t1, &uint, &u1);
-  for (;; k++) {
-    double t2 = cup_grid_time(k + 2, f->steps, f->T, f->h), uint2, u12;
-    input(f, t1, t2, &uint2, &u12);
-    int s = fast_step(f, uint, u1, x, xf, z, &p, n, m);
+  for (int have = 0, a = 0;; k++, a++) {
+    if (a == have) {
+      have = inputs_ahead(f, k, stop, t1, ui, u1);
+      a = 0;
+    }
+    int s = fast_step(f, ui[a], u1[a], x, xf, z, &p, n, m);
     if (k == stop || s != CUP_OK) {
       for (int j = 0; j < n; j++) (*xp)[j] = x[j];
       for (int j = 0; j < n && s != CUP_FAST_DECLINED; j++) (*xnewp)[j] = z[j];
@@ -126,11 +140,8 @@ run(cup_faststep *f, long k, long stop, double **xp, double **xnewp, cup_proj_in
     }
     for (int j = 0; j < n; j++) x[j] = z[j];
     info->step = k + 1;
-    info->t = t1;
+    info->t = t1[a];
     cup_tally(info, &p);
-    t1 = t2;
-    uint = uint2;
-    u1 = u12;
   }
 }
 

@@ -22,6 +22,7 @@
 #include "model/input_impl.h"
 
 #define CUP_FAST_TERMS 8
+#define CUP_FAST_AHEAD 16        /* steps whose inputs are computed together */
 #define CUP_FAST_DECLINED 1000   /* not a status: the general loop takes the step */
 
 typedef struct cup_faststep {
