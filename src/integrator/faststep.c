@@ -119,11 +119,11 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *
  * ends CUP_OK before stop is booked as the loop books it; the first other
  * one, or step stop, is left pending. */
 static inline __attribute__((always_inline)) long
-run(cup_faststep *f, long k, long stop, double **xp, double **xnewp, cup_proj_info *pi, int *st,
+run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
   double x[CUP_STEP_SMALL_N], xf[CUP_STEP_SMALL_N], z[CUP_STEP_SMALL_N];
   double t1[CUP_FAST_AHEAD], ui[CUP_FAST_AHEAD], u1[CUP_FAST_AHEAD];
-  for (int j = 0; j < n; j++) x[j] = (*xp)[j];
+  for (int j = 0; j < n; j++) x[j] = xp[j];
   cup_proj_info p;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
@@ -132,8 +132,8 @@ run(cup_faststep *f, long k, long stop, double **xp, double **xnewp, cup_proj_in
     }
     int s = fast_step(f, ui[a], u1[a], x, xf, z, &p, n, m);
     if (k == stop || s != CUP_OK) {
-      for (int j = 0; j < n; j++) (*xp)[j] = x[j];
-      for (int j = 0; j < n && s != CUP_FAST_DECLINED; j++) (*xnewp)[j] = z[j];
+      for (int j = 0; j < n; j++) xp[j] = x[j];
+      for (int j = 0; j < n && s != CUP_FAST_DECLINED; j++) xnewp[j] = z[j];
       *pi = p;
       *st = s;
       return k;
@@ -145,9 +145,8 @@ run(cup_faststep *f, long k, long stop, double **xp, double **xnewp, cup_proj_in
   }
 }
 
-long cup_faststep_run(cup_faststep *f, long k, long stop, double **x, double **xnew, double *xf,
-                      cup_proj_info *pi, int *st, cup_run_info *info) {
-  (void)xf;
+long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                      cup_run_info *info) {
 #define CUP_FAST_CASE(N, M) \
   case (N) * 8 + (M): return run(f, k, stop, x, xnew, pi, st, info, N, M);
   switch (f->th->n * 8 + f->th->m) {

@@ -56,13 +56,12 @@ typedef struct cup_faststep {
 void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
                        const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
                        double T);
-/* Steps k, k + 1, ... from *x (xf: scratch): each one before stop that
- * ends CUP_OK is booked in info as cup_integrator_run books it (tally, step,
- * t) and swapped into *x; the first one that does not, or step stop, is
- * left pending: its state in *xnew, its status in *st and *pi (not booked,
- * not swapped), or *st = CUP_FAST_DECLINED, nothing taken. Returns the
- * pending step's index. */
-long cup_faststep_run(cup_faststep *f, long k, long stop, double **x, double **xnew, double *xf,
-                      cup_proj_info *pi, int *st, cup_run_info *info);
+/* Steps k, k + 1, ... from x: each one before stop that ends CUP_OK is
+ * booked in info as cup_integrator_run books it (tally, step, t), its state
+ * written into x; the first one that does not, or step stop, is left
+ * pending: its state in xnew, its status in *st and *pi (not booked), or
+ * *st = CUP_FAST_DECLINED, nothing taken. Returns the pending step's index. */
+long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                      cup_run_info *info);
 
 #endif

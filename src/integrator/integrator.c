@@ -647,8 +647,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
-    if (fast) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), &I->x, &I->xnew, I->xf, &pi, &st,
-                                   info);
+    if (fast) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
     if (st != CUP_FAST_DECLINED) {
       I->zeta_from = 1;
