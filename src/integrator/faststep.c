@@ -39,41 +39,52 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
   f->on = 1;
 }
 
-/* int u over [t0, t1] (cup_freestep_term_integral summed as freestep.c's
- * waveform_step_integral sums one input) and, for a moving set, u(t1)
- * (cup_input_eval); a square wave's position q(t1) serves both, and its
- * antiderivative at t0 is the last step's at t1. */
-static inline __attribute__((always_inline)) void input_step(cup_faststep *f, double t0, double t1, double *uint, double *u1) {
-  double tmid = 0.5 * (t0 + t1), acc = 0, val = 0;
-  int cached = t0 == f->last_t;
-  for (int k = 0; k < f->nterms; k++) {
-    const cup_term *w = f->term[k];
+/* The inputs of steps k, k + 1, ..., at most CUP_FAST_AHEAD and none past
+ * stop, into t1 (each step's end), ui (the integral of u over it: freestep.c's
+ * cup_freestep_term_integral summed term by term as waveform_step_integral
+ * sums one input) and u1 (u at its end, for a moving set: cup_input_eval);
+ * returns how many. Term by term over the steps, so that a term's kind is
+ * looked at once, and apart from the steps, so that the sines (some 60
+ * cycles of latency each) overlap one another and the steps' chains. A
+ * square wave's position q(t) serves both its integral and its value, and
+ * its antiderivative at a step's start is the one at the last step's end. */
+static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *ui, double *u1) {
+  int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
+  double t0[CUP_FAST_AHEAD], tmid[CUP_FAST_AHEAD];
+  for (int j = 0; j < cnt; j++) {
+    t0[j] = j ? t1[j - 1] : cup_grid_time(k, f->steps, f->T, f->h);
+    t1[j] = cup_grid_time(k + j + 1, f->steps, f->T, f->h);
+    tmid[j] = 0.5 * (t0[j] + t1[j]);
+    ui[j] = u1[j] = 0;
+  }
+  int integrate = f->integrate, moving = f->moving;
+  for (int q = 0; q < f->nterms && (integrate || moving); q++) {
+    const cup_term *w = f->term[q];
+    double th = f->term_h[q];
     if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
-      double q1 = cup_square_q(w, t1), tri1 = cup_sign_sin_q_integral(q1);
-      double tri0 = cached ? f->last_tri[k] : cup_sign_sin_q_integral(cup_square_q(w, t0));
-      acc += w->amp * M_PI / w->omega * (tri1 - tri0);       /* cup_term_integral */
-      f->last_tri[k] = tri1;
-      if (f->moving) val += w->amp * cup_sign_sin_q(q1);     /* cup_term_value */
+      double tri0 = t0[0] == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0[0]));
+      for (int j = 0; j < cnt; j++) {
+        double q1 = cup_square_q(w, t1[j]), tri1 = cup_sign_sin_q_integral(q1);
+        ui[j] += w->amp * M_PI / w->omega * (tri1 - tri0);    /* cup_term_integral */
+        if (moving) u1[j] += w->amp * cup_sign_sin_q(q1);      /* cup_term_value */
+        tri0 = tri1;
+      }
+      f->last_tri[q] = tri0;
       continue;
     }
-    if (w->kind == CUP_WAVE_CONSTANT) acc += f->term_h[k];
-    else if (w->kind == CUP_WAVE_SINE && w->omega > 0) acc += f->term_h[k] * cup_sin(w->omega * tmid + w->phase);
-    else if (w->kind == CUP_WAVE_SINE) acc += f->term_h[k];
-    else acc += cup_term_integral(w, t0, t1);
-    if (f->moving) val += cup_term_value(w, t1);
+    if (w->kind == CUP_WAVE_CONSTANT)
+      for (int j = 0; j < cnt; j++) ui[j] += th;
+    else if (w->kind == CUP_WAVE_SINE && w->omega > 0)
+      for (int j = 0; j < cnt; j++) ui[j] += th * cup_sin(w->omega * tmid[j] + w->phase);
+    else if (w->kind == CUP_WAVE_SINE)
+      for (int j = 0; j < cnt; j++) ui[j] += th;
+    else
+      for (int j = 0; j < cnt; j++) ui[j] += cup_term_integral(w, t0[j], t1[j]);
+    for (int j = 0; j < cnt && moving; j++) u1[j] += cup_term_value(w, t1[j]);
   }
-  f->last_t = t1;
-  *uint = acc;
-  *u1 = val;
-}
-
-/* The input of the step [t0, t1]: uint its integral, u1 = u(t1). */
-static inline __attribute__((always_inline)) void input(cup_faststep *f, double t0, double t1, double *uint,
-                                                        double *u1) {
-  *uint = f->uconst;
-  *u1 = 0;
-  if (f->integrate || f->moving) input_step(f, t0, t1, uint, u1);
-  if (f->has && !f->integrate) *uint = f->uconst;
+  if (cnt) f->last_t = t1[cnt - 1];
+  for (int j = 0; j < cnt && !integrate; j++) ui[j] = f->uconst;   /* a constant input's h u, or none */
+  return cnt;
 }
 
 /* One step from x into z (xf: the free point), its input given: the
@@ -98,21 +109,6 @@ fast_step(cup_faststep *f, double uint, double u1, const double *restrict x, dou
   }
   /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
   return cup_small_step(f->th, g, xf, z, NAN, f->eps_n, f->eta_n, pi, n, m) ? pi->status : CUP_FAST_DECLINED;
-}
-
-/* The inputs of steps k, k + 1, ..., at most CUP_FAST_AHEAD and none past
- * stop, into t1 (each step's end), ui (its integral), u1 (u at its end);
- * returns how many. Computed apart from the steps, the sines (some 60
- * cycles of latency each) overlap one another and the steps' chains. */
-static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *ui, double *u1) {
-  int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
-  double ta = cup_grid_time(k, f->steps, f->T, f->h);
-  for (int j = 0; j < cnt; j++) {
-    t1[j] = cup_grid_time(k + j + 1, f->steps, f->T, f->h);
-    input(f, ta, t1[j], &ui[j], &u1[j]);
-    ta = t1[j];
-  }
-  return cnt;
 }
 
 /* integrator.c's loop from step k, the state in registers: each step that
