@@ -1,5 +1,5 @@
 /* faststep — see faststep.h. Each piece below names the general code whose
- * arithmetic it repeats; tests/test_integrator.c compares the two. */
+ * arithmetic it repeats; tests/test_faststep.c compares the two. */
 #include <math.h>
 #include "catchup.h"
 #include "faststep.h"

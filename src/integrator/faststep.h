@@ -1,6 +1,6 @@
 /* faststep — one whole fixed step of a small LCS in one function: the free
- * step's affine map with its input integral, the moving offset g = F + G u,
- * the scale and the LCP step (lcp/step.h), each unrolled for the
+ * step's affine map with its input integral, the moving offset g = F + G u
+ * and the LCP step with its certificates (lcp/step.h), each unrolled for the
  * sizes, which are known at set-up. It is what integrator.c's loop would do
  * for that step, the same arithmetic in the same order (the states, lambda
  * and the certificates are bit for bit the loop's), without the calls,
@@ -10,7 +10,8 @@
  * when the theta step (or the explicit step solved as one) runs on a set of
  * up to CUP_STEP_SMALL_N states and CUP_STEP_SMALL_M rows without D, with
  * no f term, the paper's tolerances (eps_n, eta_n > 0), no step callback
- * (the only reader of pi.scale, which is not computed here), and an input
+ * (the only reader of pi.scale, which is not computed here) nor step-doubling
+ * estimate (which compares every step; integrator.c checks both), and an input
  * of at most one component built from constant, sine and square terms. A
  * step it cannot take as the loop would (NaN, a singular block, an offset
  * that is not finite) it declines, and the loop takes it. */
