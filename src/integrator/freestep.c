@@ -382,23 +382,19 @@ void cup_freestep_free(cup_freestep *fs) {
   memset(fs, 0, sizeof *fs);
 }
 
-/* int_{t0}^{t1} u over a full step of the grid, with the step-length
- * factors of constants and sines cached (one sin per sine term and step:
- * int A sin(w s + p) = 2A/w sin(w h/2) sin(w t_mid + p)). */
+/* int_{t0}^{t1} u over a full step of the grid, term by term
+ * (cup_freestep_term_integral); one input is summed in a register. */
 static void waveform_step_integral(cup_freestep *fs, double t0, double t1) {
   const cup_input *u = fs->u;
   double tmid = 0.5 * (t0 + t1);
-  for (int j = 0; j < fs->p; j++) fs->ubuf[j] = 0;
-  for (int k = 0; k < u->nterms; k++) {
-    const cup_term *t = &u->terms[k];
-    double v;
-    switch (t->kind) {
-      case CUP_WAVE_CONSTANT: v = fs->term_h[k]; break;
-      case CUP_WAVE_SINE: v = t->omega > 0 ? fs->term_h[k] * sin(t->omega * tmid + t->phase) : fs->term_h[k]; break;
-      default: v = cup_term_integral(t, t0, t1); break;
-    }
-    fs->ubuf[t->comp] += v;
+  if (fs->p == 1) {
+    double acc = 0;
+    for (int k = 0; k < u->nterms; k++) acc += cup_freestep_term_integral(fs, k, t0, t1, tmid);
+    fs->ubuf[0] = acc;
+    return;
   }
+  for (int j = 0; j < fs->p; j++) fs->ubuf[j] = 0;
+  for (int k = 0; k < u->nterms; k++) fs->ubuf[u->terms[k].comp] += cup_freestep_term_integral(fs, k, t0, t1, tmid);
 }
 
 /* xf += E int_{t0}^{t1} u (nothing without input; the precomputed h E u

@@ -10,6 +10,7 @@
 #include "catchup/integrator.h"
 #include "model/input_impl.h"
 #include "set/polyset_impl.h"
+#include "util/trig.h"
 
 /* Dense limits of the implicit and exponential schemes (the explicit scheme
  * has none: A stays sparse). */
@@ -110,5 +111,18 @@ int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, 
 /* h * spectral radius of A (dense eigenvalues up to CUP_IMPLICIT_MAX_DIM,
  * a Gershgorin upper bound beyond). */
 double cup_freestep_h_rho(const cup_drift *D, double h);
+
+/* One waveform term's integral over a full grid step [t0, t1], tmid its
+ * midpoint, with the step-length factors of constants and sines cached in
+ * term_h (one sin per sine term and step:
+ * int A sin(w s + p) = 2A/w sin(w h/2) sin(w t_mid + p)). */
+static inline double cup_freestep_term_integral(const cup_freestep *fs, int k, double t0, double t1, double tmid) {
+  const cup_term *t = &fs->u->terms[k];
+  switch (t->kind) {
+    case CUP_WAVE_CONSTANT: return fs->term_h[k];
+    case CUP_WAVE_SINE: return t->omega > 0 ? fs->term_h[k] * cup_sin(t->omega * tmid + t->phase) : fs->term_h[k];
+    default: return cup_term_integral(t, t0, t1);
+  }
+}
 
 #endif

@@ -6,13 +6,16 @@
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include "catchup.h"
+#include "faststep.h"
 #include "freestep.h"
+#include "tally.h"
 #include "lcp/step.h"
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
@@ -44,6 +47,7 @@ struct cup_integrator {
   cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
+  cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
 
@@ -296,6 +300,9 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   if (st) return st;
   I->h_rho = cup_freestep_h_rho(D, I->h);
   I->split = cup_freestep_splitting(&I->fs, &I->split_row);
+  if (I->K)
+    cup_faststep_init(&I->fast, &I->fs, &I->th, I->K, I->fixed || !I->u ? NULL : I->G, I->g, I->use_theta,
+                      I->eps_n, I->eta_n, o->n, o->T);
   return CUP_OK;
 }
 
@@ -461,10 +468,7 @@ int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
 
 /* ---- the run ---------------------------------------------------------------------- */
 
-/* t_k = k T / n computed from k alone: no accumulation, and t_n = T. */
-static double grid_time(const cup_integrator *I, long k) {
-  return k == I->o.n ? I->o.T : (double)k * I->h;
-}
+static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
 
 typedef struct { long next_j; } sampler;
 
@@ -484,6 +488,21 @@ static int selected(const cup_integrator *I, sampler *sp, long k) {
   return 0;
 }
 
+/* The first step j >= k whose end the loop must see itself: a sample, the
+ * interrupt check after each 1024th step, the last step (faststep.c runs
+ * the ones before it). */
+static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
+  const cup_integrator_options *o = &I->o;
+  long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
+  if (stop > o->n - 1) stop = o->n - 1;
+  if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->next_j < o->output_samples) {
+    next = (long)llround((double)sp->next_j * (double)o->n / (double)(o->output_samples - 1));
+    if (next <= k) next = k + 1;
+  }
+  return next - 1 < stop ? next - 1 : stop;
+}
+
 static double wall_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -492,7 +511,8 @@ static double wall_seconds(void) {
 
 static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
   info->status = status;
-  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
+  /* the cause cut where the message would be: "step ", 20 digits, " (t = ", 24, "): " */
+  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %.190s", k, t, what);
   return status;
 }
 
@@ -505,14 +525,6 @@ static int moving_offset(cup_integrator *I, double t) {
   for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
     if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
   return CUP_OK;
-}
-
-static void tally(cup_run_info *info, const cup_proj_info *pi) {
-  if (pi->skipped) info->skipped++; else info->projected++;
-  info->dual_iterations += pi->iterations;
-  info->factorizations += pi->factorizations;
-  if (!(pi->eps_cert <= info->max_eps_cert)) info->max_eps_cert = pi->eps_cert;
-  if (!(pi->eta_cert <= info->max_eta_cert)) info->max_eta_cert = pi->eta_cert;
 }
 
 static void describe_projection_error(char *buf, size_t size, int st, const cup_proj_info *pi) {
@@ -631,9 +643,17 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   }
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
+  int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
   for (long k = 0; k < o->n; k++) {
+    cup_proj_info pi;
+    int st = CUP_FAST_DECLINED;
+    if (fast) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
-    int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
+    if (st != CUP_FAST_DECLINED) {
+      I->zeta_from = 1;
+      goto stepped;                      /* all that follows up to there, done by faststep.c */
+    }
+    st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
     if (st < 0)
       return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
                      ? "a user callback (input or perturbation) failed or returned NaN/Inf"
@@ -642,7 +662,6 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       info->status = st;
       snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k + 1, t1, cup_status_string(st));
     }
-    cup_proj_info pi;
     if (I->sp) {
       st = general_step(I, k + 1, t1, I->x, I->xf, I->xnew, &pi, info);
       info->set_rebuilds = cup_setproj_rebuilds(I->sp) - rebuilds0;
@@ -670,6 +689,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
       I->zeta_from = 2;
     }
+  stepped:
     if (st < 0) {                        /* the polyset path's errors */
       char what[224];
       describe_projection_error(what, sizeof what, st, &pi);
@@ -686,7 +706,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
     info->step = k + 1;
     info->t = t1;
-    tally(info, &pi);
+    cup_tally(info, &pi);
     if (st == CUP_WARN_NOT_CERTIFIED) {
       if (info->not_certified++ == 0 && info->status == CUP_OK) {
         info->status = st;

@@ -6,6 +6,8 @@
 #include "catchup.h"
 #include "step.h"
 
+static void small_init(cup_lcp_step *ls);
+
 int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h) {
   return cup_lcp_step_init_bd(ls, K, W, h, NULL, NULL, 1);
 }
@@ -61,6 +63,7 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
       for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * ls->H[K->Ct.i[k] + (size_t)j * n];
       ls->M[i + (size_t)j * m] = acc;
     }
+  small_init(ls);
   return CUP_OK;
 }
 
@@ -72,10 +75,7 @@ void cup_lcp_step_free(cup_lcp_step *ls) {
   memset(ls, 0, sizeof *ls);
 }
 
-/* A certified distance of z to K from its slack s (with rounding bounds
- * gam): 0 when z is certainly in K, else a push along the polyset's
- * direction into K, verified; INFINITY when neither works. */
-static double certified_eta(cup_lcp_step *ls, const double *g, const double *z) {
+double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z) {
   const cup_polyset *K = ls->K;
   int n = ls->n, m = ls->m;
   double worst = INFINITY;
@@ -139,8 +139,36 @@ static const double *effective_offset(cup_lcp_step *ls, const double *g) {
   return ls->geff;
 }
 
+static int small_dispatch(cup_lcp_step *ls, const double *g, const double *xf, double *z, double scale,
+                          double eps_target, double eta_target, cup_proj_info *info) {
+#define CUP_SMALL_CASE(N, M) \
+  case (N) * 8 + (M): return cup_small_step(ls, g, xf, z, scale, eps_target, eta_target, info, N, M);
+  switch (ls->n * 8 + ls->m) {
+    CUP_SMALL_CASE(1, 1) CUP_SMALL_CASE(2, 1) CUP_SMALL_CASE(3, 1) CUP_SMALL_CASE(4, 1)
+    CUP_SMALL_CASE(1, 2) CUP_SMALL_CASE(2, 2) CUP_SMALL_CASE(3, 2) CUP_SMALL_CASE(4, 2)
+  }
+#undef CUP_SMALL_CASE
+  return 0;
+}
+
+/* The dense rows of a small set without D; small stays 0 otherwise (or
+ * where a row repeats a column, whose sparse sum would round differently). */
+static void small_init(cup_lcp_step *ls) {
+  const cup_polyset *K = ls->K;
+  if (ls->D || ls->n > CUP_STEP_SMALL_N || ls->m > CUP_STEP_SMALL_M || ls->m < 1) return;
+  for (int i = 0; i < ls->m; i++)
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) {
+      double *c = &ls->Cd[i * CUP_STEP_SMALL_N + K->Ct.i[k]];
+      if (k > K->Ct.p[i] && K->Ct.i[k] <= K->Ct.i[k - 1]) return;
+      *c = K->Ct.x[k];
+    }
+  ls->small = 1;
+}
+
 int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
                        double scale, double eps_target, double eta_target, cup_proj_info *info) {
+  if (ls->small && eps_target >= 0 && small_dispatch(ls, g, xf, z, scale, eps_target, eta_target, info))
+    return info->status;
   const cup_polyset *K = ls->K;
   int n = ls->n, m = ls->m;
   double *lam = ls->lcp.lam;
@@ -168,7 +196,7 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     cup_zero(lam, m);
     ls->lq = 0;
     info->skipped = 1;
-    info->eta_cert = certified_eta(ls, g, z);
+    info->eta_cert = cup_lcp_step_eta(ls, g, z);
     return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   }
   /* Aim the rows at slack tau = 16 gam (K shrunk by a few ulps): then z is
@@ -235,7 +263,7 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     }
     info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
   }
-  info->eta_cert = certified_eta(ls, g, z);
+  info->eta_cert = cup_lcp_step_eta(ls, g, z);
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
 }

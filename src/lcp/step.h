@@ -13,9 +13,22 @@
 #ifndef CUP_LCP_STEP_H
 #define CUP_LCP_STEP_H
 
+#include <float.h>
+#include <math.h>
 #include "catchup/projector.h"
+#include "catchup/status.h"
+#include "util/linalg.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
+
+/* Up to this many states and rows, without D, a step is first tried by code
+ * unrolled for its sizes (the circuits' common case: a few ns instead of a
+ * loop over sparse rows and a general pivoting solver); it does the same
+ * arithmetic in the same order, so z, lambda and the certificates are those
+ * of the general path, which takes over for anything unusual (a singular
+ * block, NaN, the exact mode eps_target < 0). */
+#define CUP_STEP_SMALL_N 4
+#define CUP_STEP_SMALL_M 2
 
 typedef struct cup_lcp_step {
   int n, m;
@@ -32,6 +45,9 @@ typedef struct cup_lcp_step {
   unsigned char *drow; /* rows with D != 0 in their row or column: zeta is a function there */
   double *Hprev;    /* n x m: h (1 - theta) W B on those rows (the trapezoid's old half), else 0 */
   double *xpred;    /* xf + Hprev lambda_k */
+  /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
+  int small;        /* 1: cup_lcp_step_solve tries the unrolled step first */
+  double Cd[CUP_STEP_SMALL_M * CUP_STEP_SMALL_N];   /* row-major, zeros included */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
@@ -68,5 +84,164 @@ void cup_lcp_step_free(cup_lcp_step *ls);
  * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */
 int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
                        double scale, double eps_target, double eta_target, cup_proj_info *info);
+/* A certified distance of z to K for the offset g, from the slack of z in
+ * ls->s with rounding bounds ls->gam: 0 when z is certainly in K, else a
+ * push along the polyset's direction into K, verified; INFINITY when
+ * neither works. */
+double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
+
+/* ---- cup_lcp_step_solve unrolled for a small set (CUP_STEP_SMALL_N
+ * states, CUP_STEP_SMALL_M rows, no D), as always-inline
+ * functions of compile-time sizes: step.c dispatches to them, and the
+ * integrator's fused step (integrator/faststep.c) inlines them behind its
+ * free step. They do the general path's arithmetic in the same order (a
+ * zero entry of the dense rows adds an exact zero to finite sums), so z,
+ * lambda and the certificates are the general path's; where that path would
+ * meet anything unusual they decline, having changed only scratch. */
+#define CUP_ALWAYS_INLINE static inline __attribute__((always_inline))
+
+/* cup_slack on the dense rows C (row-major, CUP_STEP_SMALL_N apart), term
+ * by term in the same order (a zero entry adds an exact zero to finite
+ * sums). */
+CUP_ALWAYS_INLINE void cup_small_slack(const double *C, const double *rg, const double *g, const double *x,
+                                       double *s, double *gam, const int n, const int m) {
+  for (int i = 0; i < m; i++) {
+    const double *c = C + i * CUP_STEP_SMALL_N;
+    double acc = g[i], mag = fabs(g[i]);
+    for (int j = 0; j < n; j++) {
+      double t = c[j] * x[j];
+      acc += t;
+      mag += fabs(t);
+    }
+    s[i] = acc;
+    gam[i] = rg[i] * mag;
+  }
+}
+
+/* cup_lcp_step_eta for the slack s, gam of z: its common case, z certainly
+ * in K, without a call. */
+CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, const double *g, const double *z, const double *s,
+                                       const double *gam, const int m) {
+  double worst = INFINITY;
+  for (int i = 0; i < m; i++) worst = cup_min(worst, s[i] - gam[i]);
+  if (worst >= 0) return 0;
+  for (int i = 0; i < m; i++) {
+    ls->s[i] = s[i];
+    ls->gam[i] = gam[i];
+  }
+  return cup_lcp_step_eta(ls, g, z);
+}
+
+/* lcp.c's Murty pivoting from the warm start prev for m <= 2 rows (the
+ * active set a bit mask, each block solved by the same closed forms, the
+ * same tolerances, the same least index). 0 with lam and the warm start
+ * written (lcp.c's w is scratch nobody reads); 1, touching nothing, where
+ * lcp.c would meet a singular block or cycle (and then retry cold): the
+ * general path takes the step over. */
+CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, const double *q, double *lam_out,
+                                      int *pivots, const int m) {
+  double scale = 0;
+  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
+  double tol_w = 64 * DBL_EPSILON * scale;
+  unsigned act = 0;
+  for (int i = 0; i < m; i++) act |= (unsigned)(prev[i] != 0) << i;
+  for (int it = 0; it < 16 * m + 64; it++) {
+    double lam[2] = {0, 0}, w[2];
+    if (act == 3) {
+      double det = M[0] * M[3] - M[2] * M[1];
+      if (!(det != 0)) return 1;
+      lam[0] = (-q[0] * M[3] + q[1] * M[2]) / det;
+      lam[1] = (-q[1] * M[0] + q[0] * M[1]) / det;
+    } else if (act) {
+      int a = act - 1;
+      double d = M[a + a * m];
+      if (!(d != 0)) return 1;
+      lam[a] = -q[a] / d;
+    }
+    double lmax = 0;
+    for (int i = 0; i < m; i++) {
+      double acc = q[i];
+      if (act & 1) acc += M[i] * lam[0];
+      if (act & 2) acc += M[i + m] * lam[1];
+      w[i] = acc;
+      lmax = cup_max(lmax, fabs(lam[i]));
+    }
+    double tol_l = 64 * DBL_EPSILON * lmax;
+    int flip = -1;
+    for (int i = 0; i < m && flip < 0; i++)
+      if (((act >> i) & 1) ? lam[i] < -tol_l : w[i] < -tol_w) flip = i;
+    if (flip < 0) {
+      for (int i = 0; i < m; i++) {
+        lam_out[i] = lam[i];
+        prev[i] = (act >> i) & 1;
+      }
+      return 0;
+    }
+    act ^= 1u << flip;
+    (*pivots)++;
+  }
+  return 1;
+}
+
+/* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
+ * >= 0 and no D: 1 when it took the step (info->status set), 0 when the
+ * general path must (NaN in xf, a singular block), having changed nothing
+ * but scratch. The set's data are read once into locals, the slacks stay
+ * in registers. */
+CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
+                                     double *restrict z, double scale, double eps_target, double eta_target,
+                                     cup_proj_info *info, const int n, const int m) {
+  double probe = 0;                               /* NaN iff some entry is NaN or Inf */
+  for (int j = 0; j < n; j++) probe += 0 * xf[j];
+  if (isnan(probe)) return 0;
+  const double *C = ls->Cd, *rg = ls->K->rowgam, *H = ls->H, h = ls->h;
+  double *lamv = ls->lcp.lam;
+  double q[CUP_STEP_SMALL_M], gam[CUP_STEP_SMALL_M], s[CUP_STEP_SMALL_M], sg[CUP_STEP_SMALL_M];
+  cup_small_slack(C, rg, g, xf, q, gam, n, m);    /* q = C x_free + g */
+  double qmin = INFINITY;
+  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
+  *info = (cup_proj_info){.method = CUP_PROJ_ACTIVESET, .scale = scale, .eps_target = eps_target,
+                          .eta_target = eta_target};
+  if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
+    for (int j = 0; j < n; j++) z[j] = xf[j];
+    for (int i = 0; i < m; i++) lamv[i] = 0;
+    ls->lq = 0;
+    info->skipped = 1;
+    info->eta_cert = cup_small_eta(ls, g, z, q, gam, m);
+    info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+    return 1;
+  }
+  double qs[CUP_STEP_SMALL_M], lam[CUP_STEP_SMALL_M];   /* aimed a few ulps inside K, as step.c */
+  for (int i = 0; i < m; i++) qs[i] = q[i] - (16 * gam[i] + DBL_MIN);
+  int pivots = 0;
+  if (cup_small_murty(ls->lcp.prev, ls->M, qs, lam, &pivots, m)) return 0;
+  info->iterations = pivots + 1;
+  double lq = 0;
+  for (int i = 0; i < m; i++) {
+    lam[i] = cup_max(lam[i], 0);
+    lamv[i] = lam[i];
+    lq += lam[i] * q[i];
+  }
+  ls->lq = lq;
+  for (int r = 0; r < n; r++) z[r] = xf[r];
+  for (int i = 0; i < m; i++) {
+    if (lam[i] == 0) continue;
+    for (int r = 0; r < n; r++) z[r] += H[r + i * n] * lam[i];
+  }
+  cup_small_slack(C, rg, g, z, s, sg, n, m);
+  double gap = 0, viol = 0;
+  int active = 0;
+  for (int i = 0; i < m; i++) {
+    gap += 2 * h * lam[i] * (s[i] + sg[i]);
+    viol = cup_max(viol, -s[i]);
+    active += lam[i] > 0;
+  }
+  info->active = active;
+  info->violation = viol;
+  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
+  info->eta_cert = cup_small_eta(ls, g, z, s, sg, m);
+  info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  return 1;
+}
 
 #endif

@@ -115,28 +115,6 @@ int cup_input_is_constant(const cup_input *u) {
   return 1;
 }
 
-/* The square wave in units of pi: q = omega t / pi + phase / pi, so that
- * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from
- * sin) makes the jump instants exact: sign(0) = 0 there, as in the paper,
- * even where sin(pi q) evaluates to 1e-16. */
-static double square_q(const cup_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
-
-/* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
-static double mod2(double q) { return q - 2.0 * floor(0.5 * q); }
-
-static double sign_sin_q(double q) {
-  double r = mod2(q);
-  double tol = 4 * DBL_EPSILON * fmax(1.0, fabs(q));
-  if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
-  return r < 1 ? 1 : -1;
-}
-
-/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1. */
-static double sign_sin_q_integral(double q) {
-  double r = mod2(q);
-  return r <= 1 ? r : 2 - r;
-}
-
 /* Index of the PWL segment [t_k, t_{k+1}] holding t (binary search). */
 static int pwl_segment(const cup_term *w, double t) {
   int lo = 0, hi = w->np - 1;
@@ -174,7 +152,7 @@ double cup_term_value(const cup_term *w, double t) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value;
     case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
-    case CUP_WAVE_SQUARE: return w->amp * sign_sin_q(square_q(w, t));
+    case CUP_WAVE_SQUARE: return w->amp * cup_sign_sin_q(cup_square_q(w, t));
     case CUP_WAVE_PWL: return pwl_value(w, t);
     case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_value(w, t);
   }
@@ -190,9 +168,9 @@ double cup_term_integral(const cup_term *w, double a, double b) {
       return 2 * w->amp / w->omega * sin(0.5 * w->omega * (a + b) + w->phase) *
              sin(0.5 * w->omega * (b - a));
     case CUP_WAVE_SQUARE:
-      if (w->omega == 0) return w->amp * sign_sin_q(w->phase / M_PI) * (b - a);
-      return w->amp * M_PI / w->omega * (sign_sin_q_integral(square_q(w, b)) -
-                                         sign_sin_q_integral(square_q(w, a)));
+      if (w->omega == 0) return w->amp * cup_sign_sin_q(w->phase / M_PI) * (b - a);
+      return w->amp * M_PI / w->omega * (cup_sign_sin_q_integral(cup_square_q(w, b)) -
+                                         cup_sign_sin_q_integral(cup_square_q(w, a)));
     case CUP_WAVE_PWL: return pwl_integral(w, a, b);
     case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_integral(w, a, b);
   }
@@ -347,7 +325,7 @@ double cup_input_next_break(const cup_input *u, double t) {
     const cup_term *w = &u->terms[k];
     if (w->kind == CUP_WAVE_SQUARE && w->omega > 0 && w->amp != 0) {
       /* jumps at integer q */
-      double j = floor(square_q(w, t)) + 1;
+      double j = floor(cup_square_q(w, t)) + 1;
       double tb = (j * M_PI - w->phase) / w->omega;
       if (!(tb > t)) tb = ((j + 1) * M_PI - w->phase) / w->omega;
       next = fmin(next, tb);

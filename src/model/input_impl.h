@@ -3,8 +3,11 @@
 #ifndef CUP_INPUT_IMPL_H
 #define CUP_INPUT_IMPL_H
 
+#include <float.h>
+#include <math.h>
 #include <gsl/gsl_integration.h>
 #include "catchup/input.h"
+#include "util/linalg.h"
 
 typedef struct cup_term {
   int comp;
@@ -37,6 +40,28 @@ double cup_spice_term_value(const cup_term *t, double tt);
 double cup_spice_term_integral(const cup_term *t, double a, double b);
 double cup_spice_term_break(const cup_term *t, double tt);   /* the next corner after tt, or INFINITY */
 int cup_spice_term_constant(const cup_term *t);
+
+/* The square wave in units of pi: q = omega t / pi + phase / pi, so that
+ * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from
+ * sin) makes the jump instants exact: sign(0) = 0 there, as in the paper,
+ * even where sin(pi q) evaluates to 1e-16. */
+static inline double cup_square_q(const cup_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
+
+/* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
+static inline double cup_mod2(double q) { return q - 2.0 * cup_floor(0.5 * q); }
+
+static inline double cup_sign_sin_q(double q) {
+  double r = cup_mod2(q);
+  double tol = 4 * DBL_EPSILON * (fabs(q) > 1 ? fabs(q) : 1.0);   /* fmax(1, |q|), NaN giving 1 */
+  if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
+  return r < 1 ? 1 : -1;
+}
+
+/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1. */
+static inline double cup_sign_sin_q_integral(double q) {
+  double r = cup_mod2(q);
+  return r <= 1 ? r : 2 - r;
+}
 
 /* One term's value at t (its component's share of u(t)). */
 double cup_term_value(const cup_term *w, double t);

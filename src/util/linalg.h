@@ -5,6 +5,7 @@
 
 #include <stdarg.h>
 #include <stddef.h>
+#include <math.h>
 #include <cholmod.h>
 #include "catchup/sparse.h"
 
@@ -62,6 +63,13 @@ int cup_cholmod_start(cholmod_common *c);
  * NaN through use explicit comparisons instead. */
 static inline double cup_max(double a, double b) { return a > b ? a : b; }
 static inline double cup_min(double a, double b) { return a < b ? a : b; }
+/* floor(x) without a libm call (x86-64's baseline has no rounding
+ * instruction): the same value, zeros, Inf and NaN included. */
+static inline double cup_floor(double x) {
+  if (!(fabs(x) < 0x1p52) || x == 0) return x;   /* already an integer, or NaN */
+  double t = (double)(long long)x;               /* x truncated toward 0, exact */
+  return t > x ? t - 1 : t;
+}
 
 /* Copies and fills of short vectors: loops beat a libc call for the tiny
  * sizes of circuit models and are no worse for long ones. */

@@ -1,0 +1,68 @@
+/* faststep — one whole fixed step of a small LCS in one function: the free
+ * step's affine map with its input integral, the moving offset g = F + G u
+ * and the LCP step with its certificates (lcp/step.h), each unrolled for the
+ * sizes, which are known at set-up. It is what integrator.c's loop would do
+ * for that step, the same arithmetic in the same order (the states, lambda
+ * and the certificates are bit for bit the loop's), without the calls,
+ * switches and passes through memory between them, and many steps per
+ * call: the loop hands over the stretch of steps up to the next one whose
+ * end it must see (a sample, its interrupt check, the last step). Taken
+ * when the theta step (or the explicit step solved as one) runs on a set of
+ * up to CUP_STEP_SMALL_N states and CUP_STEP_SMALL_M rows without D, with
+ * no f term, the paper's tolerances (eps_n, eta_n > 0), no step callback
+ * (the only reader of pi.scale, which is not computed here) nor step-doubling
+ * estimate (which compares every step; integrator.c checks both), and an input
+ * of at most one component built from constant, sine and square terms. A
+ * step it cannot take as the loop would (NaN, a singular block, an offset
+ * that is not finite) it declines, and the loop takes it. */
+#ifndef CUP_FASTSTEP_H
+#define CUP_FASTSTEP_H
+
+#include "freestep.h"
+#include "lcp/step.h"
+#include "model/input_impl.h"
+
+#define CUP_FAST_TERMS 8
+#define CUP_FAST_AHEAD 16        /* steps whose inputs are computed together */
+#define CUP_FAST_DECLINED 1000   /* not a status: the general loop takes the step */
+
+typedef struct cup_faststep {
+  int on;
+  cup_lcp_step *th;
+  /* the free step xf = Phi x + Gam int u, copied from freestep.c's */
+  double Phi[CUP_STEP_SMALL_N * CUP_STEP_SMALL_N], Gam[CUP_STEP_SMALL_N];
+  int has;                  /* an input enters through E */
+  int integrate;            /* ... and is integrated at every step (not constant) */
+  double uconst;            /* a constant input's h u */
+  /* the input's terms (one component) */
+  int nterms;
+  const cup_term *term[CUP_FAST_TERMS];
+  double term_h[CUP_FAST_TERMS];   /* freestep.c's step-length factors */
+  /* the moving offset g = F + G u(t_{k+1}) */
+  const double *g0;         /* F */
+  double *g;                /* the integrator's offset buffer */
+  int moving;
+  int gnnz, grow[CUP_STEP_SMALL_M];
+  double gval[CUP_STEP_SMALL_M];   /* G's one column, in cup_sparse_gaxpy's order */
+  double eps_n, eta_n;
+  long steps;               /* the grid: t_k = k T / steps, step h */
+  double T, h;
+  /* the square terms' antiderivatives at the last step's end (its start now) */
+  double last_t;
+  double last_tri[CUP_FAST_TERMS];
+} cup_faststep;
+
+/* on = 1 when the steps qualify (the caller checks for a step callback);
+ * G: the set's motion, NULL for a fixed set; allocates nothing. */
+void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
+                       const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
+                       double T);
+/* Steps k, k + 1, ... from x: each one before stop that ends CUP_OK is
+ * booked in info as cup_integrator_run books it (tally, step, t), its state
+ * written into x; the first one that does not, or step stop, is left
+ * pending: its state in xnew, its status in *st and *pi (not booked), or
+ * *st = CUP_FAST_DECLINED, nothing taken. Returns the pending step's index. */
+long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                      cup_run_info *info);
+
+#endif

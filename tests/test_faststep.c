@@ -1,0 +1,245 @@
+/* The fast paths of the time loop against the general ones they stand in
+ * for (src/util/trig.h, the unrolled LCP step of src/lcp/step.h, the fused
+ * steps of src/integrator/faststep.c): cup_sin against libm's sin in ulps;
+ * the unrolled step against the general pivoting path on random small sets,
+ * bit for bit; whole runs of the paper's circuits and variants through the
+ * fused steps against the same runs through the loop (a step callback turns
+ * the fused steps off), bit for bit, states and statistics; cup_floor
+ * against libm's floor. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <float.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "testutil.h"
+#include "lcp/step.h"
+#include "set/polyset_impl.h"
+#include "util/trig.h"
+
+/* ---- cup_sin ------------------------------------------------------------------- */
+
+static double ulps(double got, double want) {
+  double u = nextafter(fabs(want), INFINITY) - fabs(want);
+  return fabs(got - want) / fmax(u, DBL_TRUE_MIN);
+}
+
+static void test_sin_within_two_ulps(void **state) {
+  (void)state;
+  rng_t r = {42};
+  double worst = 0, at = 0;
+  for (int k = 0; k < 2000000; k++) {
+    double x;
+    switch (k % 4) {
+      case 0: x = 200 * rng_unif(&r) - 100; break;                          /* the inputs' range */
+      case 1: x = (rng_int(&r, -40000, 40000)) * (M_PI / 2) * (1 + 1e-15 * rng_normal(&r)); break;
+      case 2: x = 131072 * rng_unif(&r) - 65536; break;                    /* up to the fallback */
+      default: x = 6 * M_PI * (k / 4 + 0.5) * 1e-6 + 0.3; break;          /* case 1's w t_mid + phase */
+    }
+    double e = ulps(cup_sin(x), sin(x));
+    if (e > worst) { worst = e; at = x; }
+  }
+  if (!(worst <= 2)) fail_msg("cup_sin is %.3g ulp from sin at x = %.17g", worst, at);
+  double big[] = {65536, -65536, 1e10, -3e200, INFINITY, -INFINITY};   /* libm's, bit for bit */
+  for (size_t k = 0; k < sizeof big / sizeof big[0]; k++) {
+    double a = cup_sin(big[k]), b = sin(big[k]);
+    assert_true(memcmp(&a, &b, sizeof a) == 0 || (isnan(a) && isnan(b)));
+  }
+  assert_true(isnan(cup_sin(NAN)));
+  assert_true(cup_sin(0.0) == 0 && !signbit(cup_sin(0.0)) && signbit(cup_sin(-0.0)));
+}
+
+static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* cup_floor (the square wave's, util/linalg.h) is libm's floor bit for bit. */
+static void test_floor_is_libm(void **state) {
+  (void)state;
+  rng_t r = {3};
+  double special[] = {0.0, -0.0, 0.5, -0.5, 1, -1, 0x1p52, -0x1p52, 0x1p52 - 0.5, -0x1p52 + 0.5, 1e300, -1e300,
+                      DBL_TRUE_MIN, -DBL_TRUE_MIN, INFINITY, -INFINITY};
+  for (size_t k = 0; k < sizeof special / sizeof special[0]; k++)
+    assert_true(same(cup_floor(special[k]), floor(special[k])));
+  assert_true(isnan(cup_floor(NAN)));
+  for (int k = 0; k < 1000000; k++) {
+    double x = ldexp(rng_normal(&r), rng_int(&r, -60, 60));
+    if (!same(cup_floor(x), floor(x))) fail_msg("cup_floor(%.17g) = %.17g, floor %.17g", x, cup_floor(x), floor(x));
+  }
+}
+
+/* ---- the unrolled LCP step against the general path ---------------------------- */
+
+static void assert_same_info(const cup_proj_info *a, const cup_proj_info *b) {
+  assert_int_equal(a->status, b->status);
+  assert_int_equal(a->iterations, b->iterations);
+  assert_int_equal(a->skipped, b->skipped);
+  assert_int_equal(a->active, b->active);
+  assert_true(same(a->eps_cert, b->eps_cert));
+  assert_true(same(a->eta_cert, b->eta_cert));
+  assert_true(same(a->violation, b->violation));
+  assert_true(same(a->eps_target, b->eps_target));
+  assert_true(same(a->scale, b->scale));
+}
+
+/* Random sets of 1..4 states and 1..2 rows (zeros in C, a diagonal P, a W
+ * near I as the theta scheme's), stepped along a random walk of free points
+ * in and out of K, once unrolled and once by the general path: z, lambda,
+ * the warm start and every certificate agree bit for bit. */
+static void test_unrolled_step_is_the_general_one(void **state) {
+  (void)state;
+  rng_t r = {7};
+  long unrolled = 0, projected = 0;
+  for (int trial = 0; trial < 400; trial++) {
+    int n = rng_int(&r, 1, 4), m = rng_int(&r, 1, 2);
+    double C[8] = {0}, g[2], pd[4], W[16], h = 0.001 * (1 + rng_unif(&r));
+    for (int q = 0; q < m * n; q++) C[q] = rng_unif(&r) < 0.3 ? 0 : rng_normal(&r);
+    for (int i = 0; i < m; i++) { C[i * n + rng_int(&r, 0, n - 1)] = 1 + rng_unif(&r); g[i] = rng_normal(&r); }
+    for (int j = 0; j < n; j++) pd[j] = 0.5 + rng_unif(&r);
+    for (int i = 0; i < n; i++)
+      for (int j = 0; j < n; j++) W[i + j * n] = (i == j) + 0.01 * rng_normal(&r);
+    tcsc Cc;
+    tcsc_from_dense(&Cc, C, m, n);
+    cup_metric P = {.kind = CUP_METRIC_DIAGONAL, .diag = pd};
+    cup_polyset *K = NULL;
+    assert_int_equal(cup_polyset_create(&K, &Cc.view, g, &P, NULL), CUP_OK);
+    cup_lcp_step fast, slow;
+    int use_w = trial % 2;
+    assert_int_equal(cup_lcp_step_init(&fast, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
+    assert_int_equal(cup_lcp_step_init(&slow, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
+    assert_int_equal(fast.small, 1);
+    slow.small = 0;
+    double x[4], za[4], zb[4];
+    for (int j = 0; j < n; j++) x[j] = rng_normal(&r);
+    for (int step = 0; step < 50; step++) {
+      for (int j = 0; j < n; j++) x[j] += 0.3 * rng_normal(&r);
+      double S = cup_polyset_norm(K, x), eps = step % 5 ? 1e-20 : 1e-9, eta = 1e-9;
+      cup_proj_info ia, ib;
+      int sa = cup_lcp_step_solve(&fast, g, x, za, S, eps, eta, &ia);
+      int sb = cup_lcp_step_solve(&slow, g, x, zb, S, eps, eta, &ib);
+      assert_int_equal(sa, sb);
+      assert_same_info(&ia, &ib);
+      for (int j = 0; j < n; j++) assert_true(same(za[j], zb[j]));
+      for (int i = 0; i < m; i++) {
+        assert_true(same(fast.lcp.lam[i], slow.lcp.lam[i]));
+        assert_int_equal(fast.lcp.prev[i], slow.lcp.prev[i]);
+      }
+      assert_true(same(fast.lq, slow.lq));
+      unrolled++;
+      projected += !ia.skipped;
+      if (step % 3 == 0) for (int j = 0; j < n; j++) x[j] = za[j];   /* walk on from z now and then */
+    }
+    cup_lcp_step_free(&fast);
+    cup_lcp_step_free(&slow);
+    cup_polyset_free(&K);
+    tcsc_free(&Cc);
+  }
+  if (!(projected > unrolled / 10 && projected < unrolled * 9 / 10))  /* both branches were exercised */
+    fail_msg("%ld of %ld steps projected", projected, unrolled);
+}
+
+/* ---- fused steps against the loop ----------------------------------------------- */
+
+typedef struct { double *x; long count, cap; int dim; } keep;
+
+static int keep_sink(long k, double t, const double *x, void *vp) {
+  (void)k; (void)t;
+  keep *c = vp;
+  if (c->count < c->cap) memcpy(c->x + c->count * c->dim, x, sizeof(double) * (size_t)c->dim);
+  c->count++;
+  return 0;
+}
+
+static int quiet_step(long k, double t, const cup_proj_info *pi, void *ctx) {
+  (void)k; (void)t; (void)pi; (void)ctx;
+  return 0;
+}
+
+static cup_run_info run(const cup_lcs *L, const cup_input *u, const cup_integrator_options *o, int loop,
+                        keep *c) {
+  cup_integrator_options oo = *o;
+  if (loop) oo.on_step = quiet_step;       /* the fused steps stay off with a step callback */
+  cup_integrator *I = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&I, L, u, &oo, msg)) fail_msg("create: %s", msg);
+  double x0[3] = {0, 0, 0};
+  cup_run_info info;
+  c->count = 0;
+  cup_integrator_run(I, x0, c->dim ? keep_sink : NULL, c, &info);
+  cup_integrator_free(&I);
+  return info;
+}
+
+static cup_input *input_of(int kind) {
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
+  cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
+  cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
+  if (kind == 0) { cup_input_add(u, 0, &s, NULL); cup_input_add(u, 0, &c, NULL); }   /* case 1 */
+  if (kind == 1) cup_input_add(u, 0, &q, NULL);                                      /* case 2 */
+  if (kind == 2) { cup_input_add(u, 0, &q, NULL); cup_input_add(u, 0, &s, NULL); }
+  if (kind == 3) cup_input_add(u, 0, &c, NULL);                                      /* constant */
+  return u;
+}
+
+/* The paper's circuit with each input on a fixed and on a moving set (case
+ * 1 and case 2 among them), the explicit step and theta 1/2 and 1, every
+ * output mode, n across several 1024-step stretches: the same states at
+ * every sample and the same statistics, bit for bit, with the fused steps
+ * and without. */
+static void test_fused_steps_are_the_loop(void **state) {
+  (void)state;
+  struct { int kind; double g2; } model[] = {{0, 0}, {1, 1}, {2, 1}, {0, 1}, {3, 1}, {3, 0}};
+  struct { cup_output_kind out; long every, samples; } outs[] = {
+    {CUP_OUTPUT_EVERY, 1, 0}, {CUP_OUTPUT_EVERY, 7, 0}, {CUP_OUTPUT_SAMPLES, 0, 13}, {CUP_OUTPUT_FINAL, 0, 0},
+    {CUP_OUTPUT_NONE, 0, 0}};
+  long n = 3000, projected = 0, skipped = 0;
+  keep a = {malloc(sizeof(double) * 3 * (n + 1)), 0, n + 1, 3}, b = {malloc(sizeof(double) * 3 * (n + 1)), 0, n + 1, 3};
+  for (size_t q = 0; q < sizeof model / sizeof model[0]; q++) {
+    cup_circuit cc = {1, 2, 1, 1, 2, 1, {0, model[q].g2}};
+    cup_lcs *L = NULL;
+    assert_int_equal(cup_lcs_circuit(&L, &cc, NULL), CUP_OK);
+    cup_input *u = input_of(model[q].kind);
+    for (int sch = 0; sch < 3; sch++)
+      for (size_t oi = 0; oi < sizeof outs / sizeof outs[0]; oi++) {
+        cup_integrator_options o;
+        cup_integrator_options_default(&o);
+        o.n = n;
+        o.scheme = sch ? CUP_SCHEME_THETA : CUP_SCHEME_EXPLICIT;
+        o.theta = sch == 1 ? 0.5 : 1;
+        o.output = outs[oi].out;
+        o.output_every = outs[oi].every;
+        o.output_samples = outs[oi].samples;
+        cup_run_info ia = run(L, u, &o, 0, &a), ib = run(L, u, &o, 1, &b);
+        assert_int_equal(ia.status, ib.status);
+        assert_int_equal(ia.step, ib.step);
+        assert_true(same(ia.t, ib.t));
+        assert_int_equal(ia.projected, ib.projected);
+        assert_int_equal(ia.skipped, ib.skipped);
+        assert_int_equal(ia.not_certified, ib.not_certified);
+        assert_true(ia.dual_iterations == ib.dual_iterations);
+        assert_true(same(ia.max_eps_cert, ib.max_eps_cert));
+        assert_true(same(ia.max_eta_cert, ib.max_eta_cert));
+        assert_string_equal(ia.message, ib.message);
+        assert_int_equal(ia.samples, ib.samples);
+        assert_int_equal(a.count, b.count);
+        assert_true(memcmp(a.x, b.x, sizeof(double) * 3 * (size_t)(a.count < a.cap ? a.count : a.cap)) == 0);
+        projected += ia.projected;
+        skipped += ia.skipped;
+      }
+    cup_input_free(&u);
+    cup_lcs_free(&L);
+  }
+  free(a.x);
+  free(b.x);
+  assert_true(projected > 0 && skipped > 0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_sin_within_two_ulps),
+    cmocka_unit_test(test_floor_is_libm),
+    cmocka_unit_test(test_unrolled_step_is_the_general_one),
+    cmocka_unit_test(test_fused_steps_are_the_loop),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
