@@ -578,6 +578,122 @@ static void test_warm_start_sequence(void **state) {
   cup_polyset_free(&K);
 }
 
+/* The identity-metric projection by Hildreth's dual coordinate ascent
+ * alone (the polish of ref_project_hildreth needs independent active rows,
+ * which a jam has not): z = x + C^T lam, swept until no row moves; then
+ * ||z - z*||^2 <= 2 sum lam_i s_i when z is feasible, which the caller
+ * checks. Rows given sparse (ptr/idx/val). */
+static void hildreth_identity(int n, int m, const int *ptr, const int *idx, const double *val,
+                              const double *g, const double *x, double *z, double *lam) {
+  for (int a = 0; a < n; a++) z[a] = x[a];
+  for (int i = 0; i < m; i++) lam[i] = 0;
+  for (int sweep = 0; sweep < 2000000; sweep++) {
+    double moved = 0;
+    for (int i = 0; i < m; i++) {
+      double s = g[i], nn = 0;
+      for (int e = ptr[i]; e < ptr[i + 1]; e++) { s += val[e] * z[idx[e]]; nn += val[e] * val[e]; }
+      double d = fmax(-lam[i], -s / nn);
+      lam[i] += d;
+      for (int e = ptr[i]; e < ptr[i + 1]; e++) z[idx[e]] += d * val[e];
+      moved = fmax(moved, fabs(d) * sqrt(nn));
+    }
+    if (moved < 1e-15) break;
+  }
+}
+
+/* A jammed packing, the degenerate case of crowds: K x K disks of diameter
+ * 1 touching on a hexagonal lattice in a corner (floor and right wall),
+ * about 3 contacts a disk for 2 coordinates, so M_FF is singular on the
+ * free rows. Each disk is pushed towards the corner with its own speed; a
+ * drifting sequence of such points, warm-started, each answer against
+ * Hildreth's coordinate ascent and its certificates checked true. */
+static void test_jammed_packing_against_hildreth(void **state) {
+  (void)state;
+  enum { K = 7, N = K * K, n = 2 * N, MMAX = 4 * N };
+  static double q[n], C[MMAX * n], g[MMAX], P[n * n], x[n], z[n], zr[n], dir[n];
+  int m = 0;
+  double h = sqrt(3) / 2;
+  for (int r = 0; r < K; r++)
+    for (int c = 0; c < K; c++) {
+      q[2 * (r * K + c)] = c + 0.5 * (r % 2) - K;     /* right wall at x = 0.5 (row 1) */
+      q[2 * (r * K + c) + 1] = 0.5 + r * h;           /* floor at y = 0 */
+    }
+  for (int i = 0; i < N; i++) {
+    for (int j = i + 1; j < N; j++) {
+      double ex = q[2 * i] - q[2 * j], ey = q[2 * i + 1] - q[2 * j + 1], d = hypot(ex, ey);
+      if (d > 1 + 1e-9) continue;
+      double *row = C + (size_t)m * n;                 /* e . (y_i - y_j) - 1 >= 0 */
+      row[2 * i] = ex / d; row[2 * i + 1] = ey / d;
+      row[2 * j] = -ex / d; row[2 * j + 1] = -ey / d;
+      g[m++] = -1;
+    }
+    if (i < K) { C[(size_t)m * n + 2 * i + 1] = 1; g[m++] = -0.5; }           /* floor */
+    if (q[2 * i] > -0.6) { C[(size_t)m * n + 2 * i] = -1; g[m++] = 0.5 + 0.5 * ((i / K) % 2); }
+  }
+  assert_true(m > n && m <= MMAX && m > 64);           /* redundant, and the sparse path */
+  for (int a = 0; a < n; a++) P[a * n + a] = 1;
+  tcsc Ct;
+  tcsc_from_dense(&Ct, C, m, n);
+  cup_metric Pm = {CUP_METRIC_IDENTITY, NULL, {0}, 0};
+  cup_polyset *Kset = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_polyset_create(&Kset, &Ct.view, g, &Pm, msg)) fail_msg("create: %s", msg);
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.eps_rel = 1e-11;
+  o.eta_rel = 1e-9;
+  cup_projector *pr = NULL;
+  assert_int_equal(cup_projector_create(&pr, Kset, &o, msg), CUP_OK);
+  ref_problem rq = {n, m, C, g, P};
+  static int rp[MMAX + 1], ri[MMAX * n];
+  static double rv[MMAX * n], lr[MMAX];
+  rp[0] = 0;
+  for (int i = 0; i < m; i++) {
+    rp[i + 1] = rp[i];
+    for (int a = 0; a < n; a++)
+      if (C[(size_t)i * n + a] != 0) { ri[rp[i + 1]] = a; rv[rp[i + 1]++] = C[(size_t)i * n + a]; }
+  }
+  rng_t r = {4242};
+  for (int i = 0; i < N; i++) {                        /* towards the corner (0.5, 0) */
+    double dx = 0.5 - q[2 * i], dy = -q[2 * i + 1], d = hypot(dx, dy), v = 0.05 + 0.05 * rng_unif(&r);
+    dir[2 * i] = v * dx / d;
+    dir[2 * i + 1] = v * dy / d;
+  }
+  double worst = 0;
+  int total_it = 0;
+  for (int k = 0; k < 12; k++) {
+    for (int a = 0; a < n; a++) x[a] = q[a] + (1 + 0.1 * k) * dir[a] + 1e-3 * rng_normal(&r);
+    cup_proj_info info;
+    assert_int_equal(cup_project(pr, x, z, &info), CUP_OK);
+    hildreth_identity(n, m, rp, ri, rv, g, x, zr, lr);
+    double err = 0, S = sqrt(ref_pnorm2(&rq, x)), gap = 0;
+    for (int i = 0; i < m; i++) {                      /* the reference's own accuracy */
+      double s = g[i];
+      for (int e = rp[i]; e < rp[i + 1]; e++) s += rv[e] * zr[ri[e]];
+      assert_true(s >= -1e-13 * S);
+      gap += lr[i] * fabs(s);
+    }
+    assert_true(sqrt(2 * gap) <= 1e-7 * S);
+    for (int a = 0; a < n; a++) err = fmax(err, fabs(z[a] - zr[a]));
+    worst = fmax(worst, err / S);
+    assert_true(err <= sqrt(2 * gap) + 1e-9 * S);
+    assert_true(info.eps_cert >= ref_excess(&rq, x, z, zr) - 1e-12 * S * S);
+    for (int i = 0; i < m; i++) {                      /* d_K(z) >= each row's violation */
+      double s = g[i];
+      for (int a = 0; a < n; a++) s += C[(size_t)i * n + a] * z[a];
+      double rn = 0;
+      for (int a = 0; a < n; a++) rn += C[(size_t)i * n + a] * C[(size_t)i * n + a];
+      assert_true(info.eta_cert >= -s / sqrt(rn) - 1e-12 * S);
+    }
+    total_it += info.iterations;
+  }
+  print_message("jammed packing: %d disks, %d rows, 12 projections, %d Newton iterations, "
+                "worst ||z - z*||/S %.2e\n", N, m, total_it, worst);
+  cup_projector_free(&pr);
+  cup_polyset_free(&Kset);
+  tcsc_free(&Ct);
+}
+
 /* Weighted isotonic regression by pool-adjacent-violators: argmin
  * sum_j w_j (z_j - a_j)^2 over nondecreasing z (an exact answer in O(n)). */
 static void pava(const double *a, const double *w, int n, double *z) {
@@ -739,6 +855,7 @@ int main(void) {
     cmocka_unit_test(test_bad_input),
     cmocka_unit_test(test_warm_start_sequence),
     cmocka_unit_test(test_ladder_against_pava),
+    cmocka_unit_test(test_jammed_packing_against_hildreth),
     cmocka_unit_test(test_no_allocation),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -89,8 +89,37 @@ static double dual_eval(cup_projector *p, const pn_problem *q, const double *lam
   return 0.5 * f;
 }
 
-/* Consecutive short steps before the Levenberg parameter grows. */
-#define LM_PATIENCE 8
+/* f at a line-search trial lt, from f and s at lam: with D = lt - lam,
+ * f(lt) = f + s'D + |C^T D|^2_{P^-1} / 2, over the rows D moves (a few
+ * hundred of 10^5 on a crowd) instead of a primal evaluation of all of
+ * them; u (n entries) comes in zero and goes back zero. Diagonal metrics
+ * only (the KKT form would need a solve with P). */
+static double trial_value(const cup_projector *p, const pn_ws *w, double f, double *u) {
+  const cup_sparse *Ct = &p->K->Ct;
+  const double *pdinv = p->K->pdinv;
+  double lin = 0, quad = 0;
+  for (int i = 0; i < p->m; i++) {
+    double di = w->lt[i] - w->lam[i];
+    if (di == 0) continue;
+    lin += w->s[i] * di;
+    for (int k = Ct->p[i]; k < Ct->p[i + 1]; k++) u[Ct->i[k]] += Ct->x[k] * di;
+  }
+  for (int i = 0; i < p->m; i++) {
+    if (w->lt[i] == w->lam[i]) continue;
+    for (int k = Ct->p[i]; k < Ct->p[i + 1]; k++) {
+      int j = Ct->i[k];
+      quad += u[j] * u[j] * pdinv[j];   /* each coordinate once: */
+      u[j] = 0;                         /* a second visit adds 0 */
+    }
+  }
+  return f + (lin + 0.5 * quad);
+}
+
+/* The Levenberg schedule: a step shorter than LM_SHORT that still changes
+ * f multiplies delta by LM_UP, a full step divides it by LM_DOWN. */
+#define LM_SHORT 1e-2
+#define LM_UP 100
+#define LM_DOWN 10
 
 typedef int (*pn_stop_fn)(cup_projector *p, const pn_problem *q, cup_proj_info *info);
 
@@ -175,8 +204,11 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
   pn_ws *w = q->w;
   double f = dual_eval(p, q, w->lam, w->y, w->s, w->gam);
   double tau = K->lip > 0 ? 1 / K->lip : 0;
-  double dmin = cup_dfact_delta_min(p->nw->df), delta = dmin;
-  int settled = 0, short_steps = 0;
+  /* the main solve starts from a hundredth of the largest delta the last
+   * projection needed (a jam stays degenerate from one step to the next) */
+  double dmin = cup_dfact_delta_min(p->nw->df), dmax = 1e-2 * K->lip;
+  double delta = q->rows ? dmin : fmin(fmax(dmin, 1e-2 * p->nw->delta_peak), dmax), peak = delta;
+  int settled = 0;
   memcpy(w->snap, w->lam, msz);
   memset(w->prev, 0, (size_t)m);
   for (int it = 0;; it++) {
@@ -220,33 +252,46 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
       if (w->act[i]) slope += w->s[i] * w->d[i];
     }
     double alpha = 1, ft = f;
-    int accepted = 0;
+    int accepted = 0, cheap = K->pdinv != NULL;
+    if (cheap) memset(w->y2, 0, sizeof(double) * (size_t)p->n);   /* trial_value's u */
     for (int ls = 0; ls < 40 && !accepted; ls++) {
       double bound = 0;
       for (int i = 0; i < m; i++) {
         w->lt[i] = cup_max(w->lam[i] + alpha * w->d[i], 0);
         if (!w->act[i]) bound += w->s[i] * (w->lam[i] - w->lt[i]);
       }
-      ft = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
+      ft = cheap ? trial_value(p, w, f, w->y2) : dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
       accepted = f - ft >= 1e-4 * (-alpha * slope + bound);
       /* a short trial that no longer moves f above its rounding: shorter
-       * ones cannot either (each costs a primal evaluation) */
+       * ones cannot either) */
       if (!accepted && alpha < 0.1 && !(fabs(f - ft) > 1e3 * DBL_EPSILON * fabs(f))) break;
       if (!accepted) alpha *= 0.5;
     }
+    if (!accepted && delta > dmin) {        /* a regularized direction stalls near the */
+      delta = dmin;                         /* answer: the exact one first */
+      settled = 0;
+      continue;
+    }
     if (!accepted)                          /* no decrease above rounding */
       return pn_correct(p, q, stop, info);
-    settled = alpha == 1;
-    /* Levenberg: short steps that still change f, again and again, mean the
-     * model is poor: trust it less (steps cut short by rounding say
-     * nothing). Every change of delta costs a refactorization where a
-     * change of F costs row updates, so one short step (a bound met along
-     * the way, a few rows changing) leaves delta alone, and one full step
-     * brings it back to its minimum. */
+    if (cheap) ft = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);   /* y, s, gam at the step */
+    /* a full step settles F only at the least regularization: a full
+     * damped step is short of the answer, and a finishing solve on a wrong
+     * F returns a point outside K (certified, but not exact) */
+    settled = alpha == 1 && delta == dmin;
+    /* Levenberg: a very short step that still changes f means the model is
+     * poor: trust it less at once (steps cut short by rounding say
+     * nothing); a full step trusts it more, a tenth at a time. On the
+     * redundant contacts of a jam (more free rows than coordinates, M_FF
+     * singular) the direction at the smallest delta is huge along M_FF's
+     * kernel and steps of 1e-9 follow; waiting for 8 of them, or falling
+     * back to the smallest delta after one full step, cost a third of the
+     * iterations there (docs/crowd.md). */
     int measurable = f - ft > 1e3 * DBL_EPSILON * fabs(f);
-    short_steps = alpha < 0.1 && measurable ? short_steps + 1 : 0;
-    if (short_steps >= LM_PATIENCE) delta = fmin(delta * 100, 1e-2 * K->lip);
-    else if (alpha == 1) delta = dmin;
+    if (alpha < LM_SHORT && measurable) delta = fmin(delta * LM_UP, dmax);
+    else if (alpha == 1) delta = fmax(delta / LM_DOWN, dmin);
+    peak = fmax(peak, delta);
+    if (!q->rows) p->nw->delta_peak = peak;
     memcpy(w->lam, w->lt, msz);
     double *t;
     t = w->y; w->y = w->y2; w->y2 = t;

@@ -38,6 +38,7 @@ typedef struct newton_ws {
   pn_ws pin;            /* the inward anchor's solve */
   double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
   double *tau, *rhs;    /* slack targets of the finishing solve; a dual vector */
+  double delta_peak;    /* largest Levenberg parameter of the last projection's steps */
 } newton_ws;
 
 struct cup_projector {
