@@ -91,6 +91,13 @@ def grid(n):
     return (n + cols - 1) // cols, cols
 
 
+def finish(fig, suptitle, out):
+    fig.suptitle(suptitle)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
 def pareto(points):
     """Lower-left front of (time, error) points."""
     front, best = [], math.inf
@@ -120,10 +127,7 @@ def work_precision(rows, variants, schemes, title, out):
         ax.legend(fontsize=7)
     for ax in list(axes.flat)[len(variants):]:
         ax.axis("off")
-    fig.suptitle(f"{title}: work-precision (lines: Pareto front per scheme)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: work-precision (lines: Pareto front per scheme)", out)
 
 
 def fitted_order(ns, errs):
@@ -157,10 +161,7 @@ def error_order(rows, variants, schemes, title, out):
         ax.legend(fontsize=8)
     for ax in list(axes.flat)[len(variants):]:
         ax.axis("off")
-    fig.suptitle(f"{title}: error against n (median over schedules and projectors; band: min-max)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: error against n (median over schedules and projectors; band: min-max)", out)
 
 
 def certificates(rows, title, out):
@@ -182,10 +183,7 @@ def certificates(rows, title, out):
     for ax in axes:
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(f"{title}: certified bounds and their targets (schedule 0: exact projection, no target line)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: certified bounds and their targets (schedule 0: exact projection, no target line)", out)
 
 
 # ---- crowd sweeps ----------------------------------------------------------------------
@@ -325,10 +323,7 @@ def evacuation(tasks, title, out):
         ax.axhline(n, color="k", lw=0.8, ls="--")
         ax.set(ylabel="agents out by the end", ylim=(0, 1.05 * n),
                title=f"agents out ({len(stuck)} of {len(tasks)} tasks kept some inside)")
-    fig.suptitle(f"{title}: evacuation against the parameters")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: evacuation against the parameters", out)
 
 
 def crowd_certificates(tasks, title, out):
@@ -350,10 +345,7 @@ def crowd_certificates(tasks, title, out):
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7)
     gap = min(t["gap"] for t in tasks)
-    fig.suptitle(f"{title}: certified bounds per task; smallest gap between agents over all tasks {gap:.2g} m")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: certified bounds per task; smallest gap between agents over all tasks {gap:.2g} m", out)
 
 
 def crowd_main(path, prefix):
