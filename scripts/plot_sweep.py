@@ -36,6 +36,7 @@ Needs h5py, numpy and matplotlib (scripts/setup --python makes .venv).
 """
 import argparse
 import math
+import os
 import re
 import sys
 
@@ -239,6 +240,10 @@ def variant_params(variants):
         if doors:
             p["door width"] = round(door_width(scene), 9)
         params[i] = p
+    # variants that differ by their scene file alone would otherwise be taken for one
+    if len({tuple(sorted(p.items(), key=str)) for p in params.values()}) < len(params):
+        for v in variants:
+            params[int(v["variant"])]["scene"] = os.path.basename(text(v["scene_file"]))
     return params
 
 
