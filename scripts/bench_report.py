@@ -8,12 +8,17 @@
 Reads whatever is in OUTDIR: catchup_circuit.jsonl + siconos.jsonl (from
 scripts/bench-vs-siconos), catchup_projector.jsonl + peers.jsonl (from
 scripts/bench-projector) and sweep.md (the table of scripts/bench-sweep,
-kept as docs/bench/sweep.md). Writes docs/bench/*.png and BENCHMARKS.md
-(the sections whose data are missing say which command produces them; the
-projector's results of an earlier run are kept, marked as such, when only the
-circuit was rerun; sections written by hand, such as the general process's,
-and those other scripts generate between markers, such as scripts/bench-vs-ngspice's,
-are kept as they are).
+kept as docs/bench/sweep.md). Writes docs/bench/*.png and BENCHMARKS.md,
+replacing its header and its sections in place (a section whose data are
+missing keeps its earlier figures: the circuit's as they were, the
+projector's marked as from an earlier run, the sweep's from docs/bench/; with
+no earlier figures it says which command produces them). Everything else
+stays as it is, where it is: sections written by hand, such as the general
+process's, those other scripts generate between markers, such as
+scripts/bench-vs-ngspice's, and notes written by hand under a generated
+table between "<!-- BEGIN notes: NAME -->" and "<!-- END notes: NAME -->",
+such as the reading of the sweep table. A rerun with no new data changes
+only the header's revision and date.
 """
 import datetime
 import json
@@ -165,7 +170,7 @@ def circuit_section(outdir, lines):
                        lambda r: (r["case"], r.get("driver", "python"), r["theta"], r["solver"], r["n"]))
     if not cat or not sic:
         lines.append("_Not run here yet: `bash scripts/bench-vs-siconos`._\n")
-        return
+        return False
     os.makedirs(os.path.join(ROOT, "docs", "bench"), exist_ok=True)
     # Rows without a "driver" field predate the C++ driver: they are the Python one's.
     sic_cpp = [r for r in sic if r.get("driver") == "c++" and r.get("theta", 0) > 0]
@@ -268,6 +273,7 @@ def circuit_section(outdir, lines):
                 lines.append(f"- case {r['case']}: Siconos ({drv} driver) θ = 0 {r['err_max']:.12e}, "
                              f"catchup {c[0]['err_max']:.6e}")
         lines.append("")
+    return True
 
 
 # ---- projector -----------------------------------------------------------------------
@@ -294,16 +300,25 @@ def earlier_projector(old):
             f"`bash scripts/bench-projector` was not rerun with this one._\n\n" + body + "\n")
 
 
-def kept_sections(old, lines):
-    """The sections of the BENCHMARKS.md being replaced that this script does not write
-    (written by hand from other scripts' figures, e.g. scripts/bench-general), verbatim."""
-    ours = {l for l in lines if l.startswith("## ")}
-    kept = []
-    for sec in ("\n" + old).split("\n## ")[1:]:
-        head = "## " + sec.split("\n", 1)[0]
-        if head not in ours:
-            kept += ["## " + sec.rstrip("\n"), ""]
-    return kept
+def splice(old, lines):
+    """The old BENCHMARKS.md with its header and the sections in `lines` replaced in place,
+    each from its heading to the next level-2 heading or marked block ("<!-- BEGIN ..."):
+    hand-written sections, other scripts' marked blocks and notes kept in a marked block
+    under a generated table ("<!-- BEGIN notes: ...") stay verbatim, in their order."""
+    parts = re.split(r"^(?=## )", "\n".join(lines), flags=re.M)
+    first = re.search(r"^## ", old, re.M)
+    if not first:
+        return "".join(parts)
+    text = parts[0] + old[first.start():]
+    boundary = re.compile(r"^(## |<!-- BEGIN )", re.M)
+    for sec in parts[1:]:
+        m = re.search("^" + re.escape(sec.split("\n", 1)[0]) + "$", text, re.M)
+        if not m:
+            text = text.rstrip("\n") + "\n\n" + sec
+            continue
+        end = boundary.search(text, m.end())
+        text = text[:m.start()] + sec.rstrip("\n") + "\n\n" + (text[end.start():] if end else "")
+    return text
 
 
 def peer_cell(p):
@@ -424,11 +439,15 @@ def replace_projector(outdir, note):
     print(f"bench_report: rewrote the projector section of BENCHMARKS.md from {outdir}", file=sys.stderr)
 
 
-def sweep_section(outdir, lines):
-    """scripts/bench-sweep's table: from OUTDIR when it has one, else the last one kept."""
+def sweep_section(outdir, lines, old=""):
+    """scripts/bench-sweep's table: from OUTDIR when it has one, else the last one kept. The
+    reading of it written under it by hand, in a marked block, stays (splice)."""
     kept = os.path.join(ROOT, "docs", "bench", "sweep.md")
     fresh = os.path.join(outdir, "sweep.md")
     if os.path.exists(fresh):
+        if "<!-- BEGIN notes: sweep" in old:
+            print("bench_report: new sweep figures: the notes under their table in BENCHMARKS.md "
+                  "describe the previous run; read them again", file=sys.stderr)
         with open(fresh) as src, open(kept, "w") as dst:
             dst.write(src.read())
     lines += ["## Sweeps of tiny tasks: `catchup-sweep` against task size", "",
@@ -466,6 +485,9 @@ def sweep_section(outdir, lines):
         lines += ["(no figures yet: run the command above)", ""]
 
 
+CIRCUIT_HEAD = "## Run time against error: catchup and Siconos on the paper's circuit"
+
+
 def main():
     if "--projector-only" in sys.argv:
         args = [a for a in sys.argv[1:] if a != "--projector-only"]
@@ -474,13 +496,15 @@ def main():
         return
     outdir = sys.argv[1] if len(sys.argv) > 1 else "bench-out"
     desc, rev = machine()
+    path = os.path.join(ROOT, "BENCHMARKS.md")
+    old = open(path).read() if os.path.exists(path) else ""
     lines = ["# Benchmarks", "",
              "Figures, not tests: produced by the commands below on the machine named here, "
              "in one run, medians of repeated timings. This machine is shared and noisy "
              "(2 cores); ratios measured side by side are more reliable than absolute times.", "",
              f"- Machine: {desc}", f"- catchup revision: {rev}",
              f"- Generated: {datetime.datetime.now().strftime('%Y-%m-%d %H:%M')}", "",
-             "## Run time against error: catchup and Siconos on the paper's circuit", "",
+             CIRCUIT_HEAD, "",
              "Command: `bash scripts/bench-vs-siconos` (Siconos 4.4 through its C++ time loop, "
              "`scripts/siconos_circuit.cpp` built against Debian's `libsiconos-kernel-dev`, with no "
              "Python in the loop; Moreau–Jean `EulerMoreauOSI` with θ = ½ and 1, LCP by Lemke and "
@@ -496,20 +520,14 @@ def main():
              "output at the same times) against `ref_case{1,2}_adaptive.csv` (its own run at "
              "tol = 1e-13, which agrees with the Richardson limits to their accuracy), since "
              "its errors go below theirs.", ""]
-    circuit_section(outdir, lines)
+    if not circuit_section(outdir, lines) and CIRCUIT_HEAD in old:
+        del lines[lines.index(CIRCUIT_HEAD):]    # no new figures: the old section stays as it is
     lines += ["## The projector against QP solvers", "", PROJECTOR_INTRO, ""]
-    path = os.path.join(ROOT, "BENCHMARKS.md")
-    old = open(path).read() if os.path.exists(path) else ""
     projector_section(outdir, lines, old)
-    sweep_section(outdir, lines)
-    # sections other scripts generate between their markers (scripts/bench-vs-ngspice) stay,
-    # at the end; the hand-written ones (no markers) stay too, after ours
-    marked = re.findall(r"<!-- BEGIN (?!status)[^\n]*-->.*?<!-- END [^\n]*-->", old, re.S)
-    for m in marked:
-        old = old.replace(m, "")
-    lines += kept_sections(old, lines)
+    sweep_section(outdir, lines, old)
+    text = splice(old, lines)
     with open(path, "w") as f:
-        f.write("\n".join(lines + [""] + marked).rstrip("\n") + "\n")
+        f.write(text.rstrip("\n") + "\n")
     print(f"bench_report: wrote BENCHMARKS.md and docs/bench/*.png from {outdir}", file=sys.stderr)
 
 

@@ -18,10 +18,25 @@ writes
 The theta scheme is labelled with its theta ("theta 0.5"), read from each
 variant's scene in /variants. Only rows with done = 1, no error status and
 a finite error are drawn.
+
+A crowd sweep (one with /crowd, docs/sweep-format.md "Crowd sweeps") has no
+error: it writes instead
+  PREFIX-evacuation.png      the evacuation time against the varied
+                             parameter (the one with the most values; one
+                             line per value of the others), mean and standard
+                             deviation over the seeds (`crowd.agents.seed`)
+                             with each seed's point, and, where some agents
+                             never left, the agents out the same way;
+  PREFIX-certificates.png    each task's largest certified eps and eta with
+                             its targets eps_n and eta_n, and the smallest gap.
+The parameters are the variants' overrides (/variants) and the grid axes
+that differ between tasks; the door overrides (`crowd.doors...`) are shown
+as the doors' total width, read from each variant's scene.
 Needs h5py, numpy and matplotlib (scripts/setup --python makes .venv).
 """
 import argparse
 import math
+import os
 import re
 import sys
 
@@ -77,6 +92,13 @@ def grid(n):
     return (n + cols - 1) // cols, cols
 
 
+def finish(fig, suptitle, out):
+    fig.suptitle(suptitle)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
 def pareto(points):
     """Lower-left front of (time, error) points."""
     front, best = [], math.inf
@@ -106,10 +128,7 @@ def work_precision(rows, variants, schemes, title, out):
         ax.legend(fontsize=7)
     for ax in list(axes.flat)[len(variants):]:
         ax.axis("off")
-    fig.suptitle(f"{title}: work-precision (lines: Pareto front per scheme)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: work-precision (lines: Pareto front per scheme)", out)
 
 
 def fitted_order(ns, errs):
@@ -143,10 +162,7 @@ def error_order(rows, variants, schemes, title, out):
         ax.legend(fontsize=8)
     for ax in list(axes.flat)[len(variants):]:
         ax.axis("off")
-    fig.suptitle(f"{title}: error against n (median over schedules and projectors; band: min-max)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: error against n (median over schedules and projectors; band: min-max)", out)
 
 
 def certificates(rows, title, out):
@@ -168,10 +184,184 @@ def certificates(rows, title, out):
     for ax in axes:
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(f"{title}: certified bounds and their targets (schedule 0: exact projection, no target line)")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    finish(fig, f"{title}: certified bounds and their targets (schedule 0: exact projection, no target line)", out)
+
+
+# ---- crowd sweeps ----------------------------------------------------------------------
+
+SEED = "crowd.agents.seed"
+LABELS = {"door width": "door width [m]", "crowd.speed": "desired speed [m/s]",
+          "crowd.agents.count": "agents", "crowd.agents.radius": "radius [m]"}
+
+
+def number(v):
+    try:
+        return float(v)
+    except ValueError:
+        return v
+
+
+def door_width(scene):
+    """Total width of the scene's doors: the pairs of points listed under `crowd.doors`
+    (block or flow YAML, as cup_scene_text writes it), two points a door."""
+    m = re.search(r"^( *)doors:(.*?)(?=^\1[\w.]+:|^\S|\Z)", scene, re.M | re.S)
+    if not m:
+        return float("nan")
+    pts = [(float(x), float(y)) for x, y in
+           re.findall(r"\[\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*\]", m.group(2))]
+    return sum(math.dist(pts[i], pts[i + 1]) for i in range(0, len(pts) - 1, 2))
+
+
+def scene_value(scene, key):
+    """The scalar at a dotted key of a scene as cup_scene_text writes it (block mappings
+    indented by two), or None."""
+    at, indent = 0, ""
+    for part in key.split("."):
+        m = re.compile(f"^{indent}{re.escape(part)}:[ ]*(.*)$", re.M).search(scene, at)
+        if not m:
+            return None
+        at, indent = m.end(), indent + "  "
+    return number(m.group(1).strip()) if m.group(1).strip() else None
+
+
+def variant_params(variants):
+    """Each variant's parameters: its overrides, with the keys that another variant overrides
+    read from its own scene, and the door overrides replaced by the doors' total width."""
+    over = {}
+    for v in variants:
+        p = dict(kv.strip().split("=", 1) for kv in text(v["overrides"]).split(";") if "=" in kv)
+        over[int(v["variant"])] = {k.strip(): number(x.strip()) for k, x in p.items()}
+    keys = ordered(k for p in over.values() for k in p if not k.startswith("crowd.doors"))
+    doors = any(k.startswith("crowd.doors") for p in over.values() for k in p)
+    params = {}
+    for v in variants:
+        i, scene = int(v["variant"]), text(v["scene"])
+        p = {k: over[i][k] if k in over[i] else scene_value(scene, k) for k in keys}
+        if doors:
+            p["door width"] = round(door_width(scene), 9)
+        params[i] = p
+    # variants that differ by their scene file alone would otherwise be taken for one
+    if len({tuple(sorted(p.items(), key=str)) for p in params.values()}) < len(params):
+        for v in variants:
+            params[int(v["variant"])]["scene"] = os.path.basename(text(v["scene_file"]))
+    return params
+
+
+def load_crowd(path):
+    """One dict a finished task: its /crowd row, its certificates and targets, its seed and
+    its parameters (what may differ between tasks besides the seed), in task order."""
+    with h5py.File(path, "r") as f:
+        name = text(f.attrs.get("sweep_name", path))
+        crowd, summ = f["crowd"][:], f["summary"][:]
+        params = variant_params(f["variants"][:])
+    tasks = []
+    for c, r in zip(crowd, summ):
+        if not (c["done"] == 1 and r["done"] == 1 and int(r["error_code"]) == 0):
+            continue
+        p = dict(params[int(r["variant"])])
+        for axis in ("n", "eps", "eta", "scheme", "projector"):
+            p[axis] = int(r[axis]) if axis == "n" else text(r[axis])
+        tasks.append({"params": p, "seed": p.pop(SEED, None), "agents": int(c["agents"]),
+                      "out": int(c["agents_out"]), "evac": float(c["evacuation_time"]),
+                      "gap": float(c["min_gap"]), "eps_cert": float(r["max_eps_cert"]),
+                      "eta_cert": float(r["max_eta_cert"]), "eps_value": float(r["eps_value"]),
+                      "eta_value": float(r["eta_value"]), "task": int(c["task_id"])})
+    return name, tasks
+
+
+def varied(tasks):
+    """The parameters that take more than one value, the one with the most values first."""
+    keys = ordered(k for t in tasks for k in t["params"])
+    vals = {k: ordered(t["params"].get(k) for t in tasks) for k in keys}
+    keys = [k for k in keys if len(vals[k]) > 1]
+    return sorted(keys, key=lambda k: -len(vals[k])), vals
+
+
+def x_axis(tasks, key, vals):
+    """positions and tick labels along the x parameter (numbers where they all are)"""
+    if key is None:
+        return (lambda t: 0.0), None, ""
+    v = vals[key]
+    if all(isinstance(x, float) or isinstance(x, int) for x in v):
+        return (lambda t: float(t["params"][key])), None, LABELS.get(key, key)
+    return (lambda t: float(v.index(t["params"][key]))), [str(x) for x in v], LABELS.get(key, key)
+
+
+def spread_plot(ax, tasks, xkey, others, vals, value, keep):
+    """value(t) against the x parameter, one line per combination of the other parameters:
+    each seed's point, the mean over the seeds and its standard deviation as error bars."""
+    xof, ticks, xlabel = x_axis(tasks, xkey, vals)
+    groups = ordered(tuple(t["params"].get(k) for k in others) for t in tasks)
+    for i, g in enumerate(groups):
+        c = plt.cm.tab10(i % 10)
+        mine = [t for t in tasks if tuple(t["params"].get(k) for k in others) == g and keep(t)]
+        xs = sorted(set(xof(t) for t in mine))
+        if not xs:
+            continue
+        ax.plot([xof(t) for t in mine], [value(t) for t in mine], ".", color=c, alpha=0.35, ms=5)
+        ys = [[value(t) for t in mine if xof(t) == x] for x in xs]
+        label = ", ".join(f"{LABELS.get(k, k).split(' [')[0]} {x}" for k, x in zip(others, g)) or None
+        ax.errorbar(xs, [np.mean(y) for y in ys], yerr=[np.std(y) for y in ys], fmt="o-", color=c,
+                    capsize=3, label=label)
+    if ticks:
+        ax.set_xticks(range(len(ticks)), ticks, rotation=30, fontsize=7)
+    ax.set_xlabel(xlabel)
+    ax.grid(True, alpha=0.3)
+    if groups != [()]:
+        ax.legend(fontsize=7)
+
+
+def evacuation(tasks, title, out):
+    keys, vals = varied(tasks)
+    xkey, others = (keys[0] if keys else None), keys[1:]
+    seeds = len(ordered(t["seed"] for t in tasks))
+    stuck = [t for t in tasks if t["out"] < t["agents"]]
+    fig, axes = plt.subplots(1, 2 if stuck else 1, figsize=(11 if stuck else 6, 4.3), squeeze=False)
+    ax = axes[0][0]
+    spread_plot(ax, tasks, xkey, others, vals, lambda t: t["evac"], lambda t: math.isfinite(t["evac"]))
+    ax.set(ylabel="evacuation time [s]",
+           title="evacuation time (tasks where all left)" + (f"; mean, sd over {seeds} seeds" if seeds > 1 else ""))
+    if stuck:
+        ax = axes[0][1]
+        spread_plot(ax, tasks, xkey, others, vals, lambda t: t["out"], lambda t: True)
+        n = max(t["agents"] for t in tasks)
+        ax.axhline(n, color="k", lw=0.8, ls="--")
+        ax.set(ylabel="agents out by the end", ylim=(0, 1.05 * n),
+               title=f"agents out ({len(stuck)} of {len(tasks)} tasks kept some inside)")
+    finish(fig, f"{title}: evacuation against the parameters", out)
+
+
+def crowd_certificates(tasks, title, out):
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    ids = [t["task"] for t in tasks]
+    for ax, key, target, name in ((axes[0], "eps_cert", "eps_value", "eps"), (axes[1], "eta_cert", "eta_value", "eta")):
+        pos = [t[key] for t in tasks if t[key] > 0] + [t[target] for t in tasks if t[target] > 0]
+        floor = min(pos) / 100 if pos else 1e-16   # where a bound certified 0 is drawn
+        nz = [t for t in tasks if t[key] > 0]
+        ax.semilogy([t["task"] for t in nz], [t[key] for t in nz], "o", ms=4, label=f"largest certified {name} of the run")
+        zeros = [t["task"] for t in tasks if t[key] == 0]
+        if zeros:
+            ax.semilogy(zeros, [floor] * len(zeros), "v", ms=4, color="gray",
+                        label=f"certified 0 ({len(zeros)} tasks; drawn at {floor:.0e})")
+        if any(t[target] > 0 for t in tasks):
+            ax.semilogy(ids, [t[target] if t[target] > 0 else np.nan for t in tasks], "_", ms=10, color="k",
+                        label=f"target {name}_n")
+        ax.set(xlabel="task", ylabel=name, title=f"{name}: certified bound and target")
+        ax.grid(True, which="major", alpha=0.3)
+        ax.legend(fontsize=7)
+    gap = min(t["gap"] for t in tasks)
+    finish(fig, f"{title}: certified bounds per task; smallest gap between agents over all tasks {gap:.2g} m", out)
+
+
+def crowd_main(path, prefix):
+    title, tasks = load_crowd(path)
+    if not tasks:
+        sys.exit(f"plot_sweep: {path}: no finished crowd task yet")
+    outs = [f"{prefix}-evacuation.png", f"{prefix}-certificates.png"]
+    evacuation(tasks, title, outs[0])
+    crowd_certificates(tasks, title, outs[1])
+    for o in outs:
+        print(o)
 
 
 def main():
@@ -179,6 +369,11 @@ def main():
     ap.add_argument("results")
     ap.add_argument("-o", "--output", required=True, help="prefix of the PNG files")
     a = ap.parse_args()
+    with h5py.File(a.results, "r") as f:
+        is_crowd = "crowd" in f
+    if is_crowd:
+        crowd_main(a.results, a.output)
+        return
     title, rows = load(a.results)
     rows = [r for r in rows if r["done"] == 1 and r["error_code"] == 0 and math.isfinite(r["error"])]
     if not rows:
