@@ -480,7 +480,9 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
     for (int i = 0; i < c->N; i++) rmin = fmin(rmin, c->r[i]);
     grid = fmax(0.5 * rmin, sqrt((box[2] - box[0] + 1) * (box[3] - box[1] + 1) / 4e6));
   }
-  if (!st) st = crowd_field_build(&c->F, c->room, c->nroom, c->seg, c->nseg, c->door, c->ndoor, box, grid, errmsg);
+  /* exact distances around the doors, where agents queue (four diameters) */
+  if (!st) st = crowd_field_build(&c->F, c->room, c->nroom, c->seg, c->nseg, c->door, c->ndoor, box, grid,
+                                  8 * c->rmax, errmsg);
   if (!st) st = check_reach(c, d, errmsg);
   if (!st) {
     cup_set_desc sd = {.kind = CUP_SET_STATE_POLYSET, .n = 2 * c->N, .rows = crowd_rows, .rows_ctx = c};
