@@ -149,8 +149,8 @@ static int crosses(const double *a, const double *b, const double *c, const doub
  * each end of the door as a point source, where a first-order scheme is
  * worst: the directions around the door's ends, the ones agents follow into
  * the door, were off by up to 50 degrees at h = 0.1 and 30 at 0.05
- * (pointing into the door instead of at its end), which made the
- * evacuation time depend on h (docs/crowd.md). Returns the nodes seeded
+ * (pointing into the door instead of at its end), which made the flow
+ * through the door depend on h (docs/crowd.md). Returns the nodes seeded
  * within 1.5 h of the door (none: the grid is too coarse for it). */
 static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double *s, const double *seg, int nseg,
                      double R) {
