@@ -121,6 +121,62 @@ static void test_door_ends(void **state) {
   cup_crowd_free(&c2);
 }
 
+/* The shortest path for a centre kept c from the walls, from P to the
+ * door (12, 4)-(12, 6) of a 12 x 10 room, round the door's edge J (a disc
+ * of radius c): the tangent from P to the disc, then the arc to the point
+ * where the centre crosses the door's line (J + (0, +-c)). */
+static double jamb_path(double px, double py, double c) {
+  double jy = py < 4 ? 4 : 6, s = py < 4 ? 1 : -1;          /* s: the way round */
+  double dx = px - 12, dy = py - jy, L = hypot(dx, dy);
+  double t = atan2(dy, dx) - s * acos(c / L);                 /* angle of the tangent point */
+  double end = s * M_PI / 2;                                  /* angle of the crossing point */
+  double arc = fabs(remainder(t - end, 2 * M_PI));
+  return sqrt(L * L - c * c) + c * arc;
+}
+
+/* An agent of radius 0.25 beside the wall of a door (or farther off) with a
+ * clearance of 0.25: it leaves at the time its shortest path around the
+ * door's edge takes at the desired speed (a step or two later: steps round
+ * the edge cut the corner of the linearized wall row), on every grid. With
+ * the point-agent field (clearance 0) the direction beside the edge points
+ * at the edge itself, the wall row removes its normal part and the agent
+ * slows down to a stop: from (11.75, 3), 2.65 s for a 1.16 s path. */
+static void test_clearance_round_the_edge(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 12, 0, 12, 10, 0, 10}, door[4] = {12, 4, 12, 6}, r[1] = {0.25};
+  const double start[4][2] = {{11.75, 3}, {11.75, 1}, {6, 1}, {1, 9}}, grids[2] = {0.05, 0.025};
+  const double v = 1.2, dt = 0.05;
+  for (int g = 0; g < 2; g++)
+    for (int a = 0; a < 4; a++)
+      for (int point = 0; point <= 1; point++) {
+        cup_crowd_desc d = {.agents = 1, .q0 = start[a], .radius = r, .room_points = 4, .room = room,
+                            .doors = 1, .door = door, .speed = v, .grid = grids[g], .clearance = point ? 0 : 0.25};
+        char err[CUP_ERRMSG_LEN];
+        cup_crowd *c;
+        assert_int_equal(cup_crowd_create(&c, &d, dt, err), CUP_OK);
+        cup_integrator_options o;
+        cup_integrator_options_default(&o);
+        o.n = 400;
+        o.T = o.n * dt;
+        o.output = CUP_OUTPUT_FINAL;
+        cup_integrator *I;
+        assert_int_equal(cup_integrator_create_process(&I, cup_crowd_process(c), &o, err), CUP_OK);
+        cup_run_info info;
+        assert_int_equal(cup_integrator_run(I, start[a], NULL, NULL, &info), CUP_OK);
+        double t = cup_crowd_exit_times(c)[0], ideal = jamb_path(start[a][0], start[a][1], 0.25) / v;
+        printf("from (%g, %g), grid %g, clearance %s: out at %.2f s, its shortest path takes %.4f s\n",
+               start[a][0], start[a][1], grids[g], point ? "0" : "0.25", t, ideal);
+        if (!point) {
+          assert_true(t >= ideal - 1e-9);
+          assert_true(t <= ideal + 2 * dt + 1e-9);
+        } else if (a == 0) {
+          assert_true(t > ideal + 1);                         /* the stall this clearance removes */
+        }
+        cup_integrator_free(&I);
+        cup_crowd_free(&c);
+      }
+}
+
 /* ---- runs ------------------------------------------------------------------ */
 
 typedef struct run_check {
@@ -325,6 +381,13 @@ static void test_errors(void **state) {
   d.doors = 2; d.door = doors2;
   expect_error(&d, "door 0 (from (10, 4) to (10, 6)) cannot be reached by any agent");
   d.walls = 0; d.doors = 1; d.door = door;
+  d.clearance = 0.3;
+  expect_error(&d, "the clearance 0.3 exceeds agent 0's radius 0.25");
+  d.clearance = 0.25;
+  const double narrow[4] = {10, 4, 10, 4.5};
+  d.door = narrow;
+  expect_error(&d, "door 0 (from (10, 4) to (10, 4.5)) is 0.5 wide: no wider than twice the clearance 0.25");
+  d.door = door; d.clearance = 0;
   d.speed = 0;
   expect_error(&d, "desired speed");
 }
@@ -334,6 +397,7 @@ int main(void) {
     cmocka_unit_test(test_distance_field),
     cmocka_unit_test(test_door_ends),
     cmocka_unit_test(test_alone),
+    cmocka_unit_test(test_clearance_round_the_edge),
     cmocka_unit_test(test_head_on),
     cmocka_unit_test(test_evacuation_checked),
     cmocka_unit_test(test_errors),

@@ -82,17 +82,17 @@ static int heap_pop(heap *H) {
 
 /* ---- the march ------------------------------------------------------------------ */
 
-/* Mark the nodes within h of a wall (rasterized segment by segment). */
-static void block_walls(crowd_field *F, unsigned char *state, const double *seg, int nseg) {
+/* Mark the nodes within `width` of a wall (rasterized segment by segment). */
+static void block_walls(crowd_field *F, unsigned char *state, const double *seg, int nseg, double width) {
   double h = F->h;
   for (int s = 0; s < nseg; s++) {
     const double *w = seg + 4 * s;
-    int i0 = (int)floor((fmin(w[0], w[2]) - h - F->x0) / h), i1 = (int)ceil((fmax(w[0], w[2]) + h - F->x0) / h);
-    int j0 = (int)floor((fmin(w[1], w[3]) - h - F->y0) / h), j1 = (int)ceil((fmax(w[1], w[3]) + h - F->y0) / h);
+    int i0 = (int)floor((fmin(w[0], w[2]) - width - F->x0) / h), i1 = (int)ceil((fmax(w[0], w[2]) + width - F->x0) / h);
+    int j0 = (int)floor((fmin(w[1], w[3]) - width - F->y0) / h), j1 = (int)ceil((fmax(w[1], w[3]) + width - F->y0) / h);
     for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < F->ny; j++)
       for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < F->nx; i++) {
         double px, py;
-        if (crowd_seg_nearest(w, F->x0 + i * h, F->y0 + j * h, &px, &py) < h) state[i + F->nx * j] = 3;
+        if (crowd_seg_nearest(w, F->x0 + i * h, F->y0 + j * h, &px, &py) < width) state[i + F->nx * j] = 3;
       }
   }
 }
@@ -143,6 +143,16 @@ static int crosses(const double *a, const double *b, const double *c, const doub
   return d1 * d2 < 0 && d3 * d4 < 0;
 }
 
+/* Does the segment a-b keep a clearance c > 0 from the segment w? Two
+ * segments that do not cross are nearest at an end of one of them. */
+static int keeps_clear(const double *a, const double *b, const double *w, double c) {
+  if (crosses(a, b, w, w + 2)) return 0;
+  double p[2], ab[4] = {a[0], a[1], b[0], b[1]};
+  double d = fmin(crowd_seg_nearest(w, a[0], a[1], &p[0], &p[1]), crowd_seg_nearest(w, b[0], b[1], &p[0], &p[1]));
+  d = fmin(d, fmin(crowd_seg_nearest(ab, w[0], w[1], &p[0], &p[1]), crowd_seg_nearest(ab, w[2], w[3], &p[0], &p[1])));
+  return d >= c * (1 - 1e-9);
+}
+
 /* Start the march at the free nodes within R of door s that see their
  * nearest door point (no wall crosses the line to it), at their exact
  * distance. Started from the nodes next to the door only, the march treats
@@ -153,7 +163,7 @@ static int crosses(const double *a, const double *b, const double *c, const doub
  * through the door depend on h (docs/crowd.md). Returns the nodes seeded
  * within 1.5 h of the door (none: the grid is too coarse for it). */
 static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double *s, const double *seg, int nseg,
-                     double R) {
+                     double R, double clearance) {
   double h = F->h;
   int seeds = 0;
   R = fmax(R, 1.5 * h);
@@ -165,7 +175,8 @@ static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double
       double node[2] = {F->x0 + i * h, F->y0 + j * h}, p[2];
       double dist = crowd_seg_nearest(s, node[0], node[1], &p[0], &p[1]);
       if (state[k] == 3 || dist > R) continue;
-      for (int w = 0; w < nseg && seen; w++) seen = !crosses(node, p, seg + 4 * w, seg + 4 * w + 2);
+      for (int w = 0; w < nseg && seen; w++)
+        seen = clearance > 0 ? keeps_clear(node, p, seg + 4 * w, clearance) : !crosses(node, p, seg + 4 * w, seg + 4 * w + 2);
       if (!seen) continue;
       seeds += dist <= 1.5 * h;
       if (dist < F->D[k]) { F->D[k] = dist; state[k] = 4; heap_push(H, k); }
@@ -175,7 +186,7 @@ static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double
 
 int crowd_field_build(crowd_field *F, const double *room, int nroom, const double *seg, int nseg,
                       const double *door, int ndoor, const double box[4], double h, double seed_radius,
-                      char *errmsg) {
+                      double clearance, char *errmsg) {
   memset(F, 0, sizeof *F);
   F->h = h;
   F->x0 = box[0] - 2 * h;
@@ -196,13 +207,22 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
            : cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory for the distance grid");
   if (!st) {
     for (size_t k = 0; k < nn; k++) { F->D[k] = INFINITY; H.pos[k] = -1; }
-    block_walls(F, state, seg, nseg);
+    block_walls(F, state, seg, nseg, fmax(h, clearance));
     for (int j = 0; j < F->ny; j++)            /* the front stays in the room */
       for (int i = 0; i < F->nx; i++)
         if (!crowd_in_polygon(room, nroom, F->x0 + i * h, F->y0 + j * h)) state[i + F->nx * j] = 3;
     for (int d = 0; d < ndoor && !st; d++) {
       const double *s = door + 4 * d;
-      if (!seed_door(F, state, &H, s, seg, nseg, fmax(seed_radius, hypot(s[2] - s[0], s[3] - s[1]))))
+      double len = hypot(s[2] - s[0], s[3] - s[1]), t = clearance / len;
+      if (!(len > 2 * clearance)) {
+        st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is %g wide: no wider than twice "
+                      "the clearance %g, no centre can pass it", d, s[0], s[1], s[2], s[3], len, clearance);
+        break;
+      }
+      /* the part of the door a centre keeping the clearance can cross */
+      double shrunk[4] = {s[0] + t * (s[2] - s[0]), s[1] + t * (s[3] - s[1]), s[2] - t * (s[2] - s[0]),
+                          s[3] - t * (s[3] - s[1])};
+      if (!seed_door(F, state, &H, shrunk, seg, nseg, fmax(seed_radius, len), clearance))
         st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is too narrow for the distance "
                       "grid (step %g): every grid node near it is within one step of a wall; make the grid "
                       "step smaller", d, s[0], s[1], s[2], s[3], h);
