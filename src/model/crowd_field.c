@@ -11,6 +11,10 @@
 #include "util/linalg.h"
 #include "crowd_impl.h"
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 double crowd_seg_nearest(const double *s, double x, double y, double *px, double *py) {
   double dx = s[2] - s[0], dy = s[3] - s[1], L2 = dx * dx + dy * dy;
   double t = L2 > 0 ? ((x - s[0]) * dx + (y - s[1]) * dy) / L2 : 0;
@@ -112,11 +116,12 @@ static double upwind(const crowd_field *F, const unsigned char *state, int k) {
 
 /* The descent direction at every node: central differences where both
  * neighbours are finite, one-sided where one is. */
-static void directions(crowd_field *F) {
+static void directions(crowd_field *F, const unsigned char *exact) {
   int nx = F->nx, ny = F->ny;
   for (int j = 0; j < ny; j++)
     for (int i = 0; i < nx; i++) {
       int k = i + nx * j;
+      if (exact[k]) continue;
       F->ux[k] = F->uy[k] = 0;
       if (!isfinite(F->D[k])) continue;
       double g[2];
@@ -153,33 +158,120 @@ static int keeps_clear(const double *a, const double *b, const double *w, double
   return d >= c * (1 - 1e-9);
 }
 
-/* Start the march at the free nodes within R of door s that see their
- * nearest door point (no wall crosses the line to it), at their exact
- * distance. Started from the nodes next to the door only, the march treats
- * each end of the door as a point source, where a first-order scheme is
- * worst: the directions around the door's ends, the ones agents follow into
- * the door, were off by up to 50 degrees at h = 0.1 and 30 at 0.05
- * (pointing into the door instead of at its end), which made the flow
- * through the door depend on h (docs/crowd.md). Returns the nodes seeded
- * within 1.5 h of the door (none: the grid is too coarse for it). */
-static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double *s, const double *seg, int nseg,
-                     double R, double clearance) {
-  double h = F->h;
+/* The length of the way from P round the disc (J, c) to E on its rim: the
+ * tangent from P, then the shorter arc, on the side that stays in the room
+ * and keeps c from every wall; INFINITY if neither side does. u: the unit
+ * direction P heads in (along the rim where P is on it). */
+static double round_jamb(const double *P, const double *J, const double *E, double c, const double *seg, int nseg,
+                         const double *room, int nroom, double *u) {
+  double L = hypot(P[0] - J[0], P[1] - J[1]), best = INFINITY;
+  if (!(L > c * (1 - 1e-9))) return best;
+  double phi = atan2(P[1] - J[1], P[0] - J[0]), alpha = acos(fmin(1, c / L)), psi = atan2(E[1] - J[1], E[0] - J[0]);
+  double tl = sqrt(fmax(0, L * L - c * c));
+  for (int side = -1; side <= 1; side += 2) {
+    double th = phi + side * alpha, turn = remainder(psi - th, 2 * M_PI), mid = th + turn / 2;
+    double T[2] = {J[0] + c * cos(th), J[1] + c * sin(th)};
+    if (!crowd_in_polygon(room, nroom, J[0] + c * cos(mid), J[1] + c * sin(mid))) continue;
+    int clear = 1;
+    for (int w = 0; w < nseg && clear && tl > 1e-9 * c; w++) clear = keeps_clear(P, T, seg + 4 * w, c);
+    double d = tl + c * fabs(turn);
+    if (!clear || !(d < best)) continue;
+    best = d;
+    if (tl > 1e-9 * c) { u[0] = (T[0] - P[0]) / tl; u[1] = (T[1] - P[1]) / tl; }
+    else { u[0] = -sin(th) * (turn > 0 ? 1 : -1); u[1] = cos(th) * (turn > 0 ? 1 : -1); }
+  }
+  return best;
+}
+
+/* The direction at a node whose own clearance cw (its distance to the
+ * nearest wall) is less than the field's: towards the door shrunk by cw,
+ * straight or round the disc (end of the door, cw). */
+static void band_direction(crowd_field *F, unsigned char *exact, int k, const double *node, const double *door,
+                           const double *seg, int nseg, const double *room, int nroom, double cw) {
+  double len = hypot(door[2] - door[0], door[3] - door[1]), t = cw / len, p[2], u[2];
+  double s[4] = {door[0] + t * (door[2] - door[0]), door[1] + t * (door[3] - door[1]),
+                 door[2] - t * (door[2] - door[0]), door[3] - t * (door[3] - door[1])};
+  double dist = crowd_seg_nearest(s, node[0], node[1], &p[0], &p[1]);
+  int seen = dist > 0;
+  for (int w = 0; w < nseg && seen; w++) seen = keeps_clear(node, p, seg + 4 * w, cw);
+  if (seen) {
+    u[0] = (p[0] - node[0]) / dist;
+    u[1] = (p[1] - node[1]) / dist;
+  } else {
+    double u2[2], d2 = round_jamb(node, door + 2, s + 2, cw, seg, nseg, room, nroom, u2);
+    dist = round_jamb(node, door, s, cw, seg, nseg, room, nroom, u);
+    if (d2 < dist) { dist = d2; u[0] = u2[0]; u[1] = u2[1]; }
+    if (!isfinite(dist)) return;
+  }
+  exact[k] = 1;
+  F->ux[k] = (float)u[0];
+  F->uy[k] = (float)u[1];
+}
+
+/* Start the march near door s. With a clearance c > 0: at the free nodes
+ * within R of the door, at their exact distance to the door shrunk by c at
+ * both ends, for a centre keeping c from the walls (straight to the nearest
+ * point of the shrunk door if that line keeps c from every wall, else round
+ * the disc (end of the door, c) that the line cut), and with their exact
+ * direction. Started from the nodes next to the door only, the march
+ * treats each end of the door as a point source, where a first-order
+ * scheme is worst: the directions around the door's ends, the ones agents
+ * follow into the door, were off by up to 50 degrees at h = 0.1 and 30 at
+ * 0.05 (pointing into the door instead of at its end); marched round the
+ * discs from exact values elsewhere they were off by 35 degrees at both
+ * steps (the march's O(h) error against exact values across a line is an
+ * O(1) error of the differences there); and beside a door's edge the
+ * direction turns round the disc like the square root of the distance to
+ * its rim, which differences tilt into the wall. Without a clearance (0:
+ * cromosim's field computed as cromosim computes it, so that the two can be
+ * compared): at the nodes within 1.5 h of the door, which the march may
+ * still lower. Returns the nodes seeded within 1.5 h of the door (none: the
+ * grid is too coarse for it). */
+static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double *door, const double *seg, int nseg,
+                     const double *room, int nroom, double R, double c, unsigned char *exact) {
+  double h = F->h, len = hypot(door[2] - door[0], door[3] - door[1]), t = c / len;
+  double s[4] = {door[0] + t * (door[2] - door[0]), door[1] + t * (door[3] - door[1]),
+                 door[2] - t * (door[2] - door[0]), door[3] - t * (door[3] - door[1])};
   int seeds = 0;
-  R = fmax(R, 1.5 * h);
+  R = c > 0 ? fmax(R, 1.5 * h) : 1.5 * h;
   int i0 = (int)floor((fmin(s[0], s[2]) - R - F->x0) / h), i1 = (int)ceil((fmax(s[0], s[2]) + R - F->x0) / h);
   int j0 = (int)floor((fmin(s[1], s[3]) - R - F->y0) / h), j1 = (int)ceil((fmax(s[1], s[3]) + R - F->y0) / h);
   for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < F->ny; j++)
     for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < F->nx; i++) {
       int k = i + F->nx * j, seen = 1;
-      double node[2] = {F->x0 + i * h, F->y0 + j * h}, p[2];
+      double node[2] = {F->x0 + i * h, F->y0 + j * h}, p[2], cw = c;
       double dist = crowd_seg_nearest(s, node[0], node[1], &p[0], &p[1]);
-      if (state[k] == 3 || dist > R) continue;
-      for (int w = 0; w < nseg && seen; w++)
-        seen = clearance > 0 ? keeps_clear(node, p, seg + 4 * w, clearance) : !crosses(node, p, seg + 4 * w, seg + 4 * w + 2);
-      if (!seen) continue;
+      if (dist > R || (state[k] == 3 && !(c > 0 && crowd_in_polygon(room, nroom, node[0], node[1])))) continue;
+      if (state[k] == 3) {
+        /* a node in the band along the walls: no distance (the march keeps
+         * out), but the direction of the clearance it has, so that the
+         * directions interpolated between it and the free nodes turn round
+         * the door's edges as the exact ones do */
+        for (int w = 0; w < nseg; w++) cw = fmin(cw, crowd_seg_nearest(seg + 4 * w, node[0], node[1], &p[0], &p[1]));
+        cw *= 1 - 1e-9;
+        if (!(cw > 0)) continue;
+        band_direction(F, exact, k, node, door, seg, nseg, room, nroom, cw);
+        continue;
+      }
+      for (int w = 0; w < nseg && seen && c > 0; w++) seen = keeps_clear(node, p, seg + 4 * w, c);
+      double u[2] = {p[0] - node[0], p[1] - node[1]}, nrm = hypot(u[0], u[1]);
+      if (nrm > 0) { u[0] /= nrm; u[1] /= nrm; }
+      if (!seen) {
+        double u2[2], d2 = round_jamb(node, door + 2, s + 2, c, seg, nseg, room, nroom, u2);
+        dist = round_jamb(node, door, s, c, seg, nseg, room, nroom, u);
+        if (d2 < dist) { dist = d2; u[0] = u2[0]; u[1] = u2[1]; }
+      }
+      if (!(dist <= R)) continue;
       seeds += dist <= 1.5 * h;
-      if (dist < F->D[k]) { F->D[k] = dist; state[k] = 4; heap_push(H, k); }
+      if (!(dist < F->D[k])) continue;
+      F->D[k] = dist;
+      state[k] = c > 0 ? 4 : 1;
+      heap_push(H, k);
+      if (c > 0 && (u[0] != 0 || u[1] != 0)) {
+        exact[k] = 1;
+        F->ux[k] = (float)u[0];
+        F->uy[k] = (float)u[1];
+      }
     }
   return seeds;
 }
@@ -202,8 +294,9 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
   F->ux = malloc(sizeof(float) * nn);
   F->uy = malloc(sizeof(float) * nn);
   unsigned char *state = calloc(nn, 1);      /* 0 far, 1 trial, 2 accepted, 3 blocked, 4 exact trial */
+  unsigned char *exact = calloc(nn, 1);      /* 1: the direction is known exactly */
   heap H = {malloc(sizeof(int) * nn), malloc(sizeof(int) * nn), 0, F->D};
-  int st = F->D && F->ux && F->uy && state && H.a && H.pos ? CUP_OK
+  int st = F->D && F->ux && F->uy && state && exact && H.a && H.pos ? CUP_OK
            : cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory for the distance grid");
   if (!st) {
     for (size_t k = 0; k < nn; k++) { F->D[k] = INFINITY; H.pos[k] = -1; }
@@ -213,16 +306,13 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
         if (!crowd_in_polygon(room, nroom, F->x0 + i * h, F->y0 + j * h)) state[i + F->nx * j] = 3;
     for (int d = 0; d < ndoor && !st; d++) {
       const double *s = door + 4 * d;
-      double len = hypot(s[2] - s[0], s[3] - s[1]), t = clearance / len;
+      double len = hypot(s[2] - s[0], s[3] - s[1]);
       if (!(len > 2 * clearance)) {
         st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is %g wide: no wider than twice "
                       "the clearance %g, no centre can pass it", d, s[0], s[1], s[2], s[3], len, clearance);
         break;
       }
-      /* the part of the door a centre keeping the clearance can cross */
-      double shrunk[4] = {s[0] + t * (s[2] - s[0]), s[1] + t * (s[3] - s[1]), s[2] - t * (s[2] - s[0]),
-                          s[3] - t * (s[3] - s[1])};
-      if (!seed_door(F, state, &H, shrunk, seg, nseg, fmax(seed_radius, len), clearance))
+      if (!seed_door(F, state, &H, s, seg, nseg, room, nroom, fmax(seed_radius, len), clearance, exact))
         st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is too narrow for the distance "
                       "grid (step %g): every grid node near it is within one step of a wall; make the grid "
                       "step smaller", d, s[0], s[1], s[2], s[3], h);
@@ -241,8 +331,9 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
       if (v < F->D[q]) { F->D[q] = v; state[q] = 1; heap_push(&H, q); }
     }
   }
-  if (!st) directions(F);
+  if (!st) directions(F, exact);
   free(state);
+  free(exact);
   free(H.a);
   free(H.pos);
   if (st) crowd_field_free(F);
