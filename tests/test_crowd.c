@@ -14,11 +14,12 @@
 
 /* A 10 x 10 room with a door from (10, 4) to (10, 6); an extra wall
  * from (7, 1) to (7, 9) when walled; one agent somewhere harmless. */
-static cup_crowd *square_room(int walled, double grid, char *err) {
+static cup_crowd *square_room(int walled, double grid, double clearance, char *err) {
   static const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10}, door[4] = {10, 4, 10, 6};
   static const double wall[4] = {7, 1, 7, 9}, q[2] = {1, 1}, r[1] = {0.25};
   cup_crowd_desc d = {.agents = 1, .q0 = q, .radius = r, .room_points = 4, .room = room, .doors = 1,
-                      .door = door, .walls = walled, .wall = wall, .speed = 1, .grid = grid};
+                      .door = door, .walls = walled, .wall = wall, .speed = 1, .grid = grid,
+                      .clearance = clearance};
   cup_crowd *c = NULL;
   cup_crowd_create(&c, &d, 0.05, err);
   return c;
@@ -64,7 +65,7 @@ static void test_distance_field(void **state) {
   (void)state;
   char err[CUP_ERRMSG_LEN];
   for (int walled = 0; walled <= 1; walled++) {
-    cup_crowd *c1 = square_room(walled, 0.1, err), *c2 = square_room(walled, 0.05, err);
+    cup_crowd *c1 = square_room(walled, 0.1, 0, err), *c2 = square_room(walled, 0.05, 0, err);
     assert_non_null(c1);
     assert_non_null(c2);
     double e1 = field_error(c1, walled), e2 = field_error(c2, walled);
@@ -84,6 +85,131 @@ static void test_distance_field(void **state) {
     cup_crowd_free(&c1);
     cup_crowd_free(&c2);
   }
+}
+
+/* The distance from (x, y) to the segment s. */
+static double seg_distance(const double *s, double x, double y) {
+  double dx = s[2] - s[0], dy = s[3] - s[1], t = ((x - s[0]) * dx + (y - s[1]) * dy) / (dx * dx + dy * dy);
+  t = t < 0 ? 0 : t > 1 ? 1 : t;
+  return hypot(x - s[0] - t * dx, y - s[1] - t * dy);
+}
+
+/* The exact direction of the shortest way out of the open square room for
+ * a centre kept c from the walls: towards the nearest point of the shrunk
+ * door (10, 4 + c)-(10, 6 - c) if the straight line to it keeps c from the
+ * door's edges J, else along the tangent to the disc (J, c) on the door's
+ * side. */
+static void exact_direction(double x, double y, double c, double e[2]) {
+  double ey = y < 4 + c ? 4 + c : y > 6 - c ? 6 - c : y, jy = y < 5 ? 4 : 6, s = y < 5 ? 1 : -1;
+  double seg[4] = {x, y, 10, ey};
+  e[0] = 10 - x;
+  e[1] = ey - y;
+  if (c > 0 && seg_distance(seg, 10, jy) < c * (1 - 1e-12)) {
+    double L = hypot(x - 10, y - jy), t = atan2(y - jy, x - 10) - s * acos(c / L);
+    e[0] = 10 + c * cos(t) - x;
+    e[1] = jy + c * sin(t) - y;
+  }
+}
+
+/* The largest angle, in degrees, between the desired direction and the
+ * exact one over points within 1 m of the door's ends that an agent of
+ * radius 0.25 can reach: where agents queue and squeeze past the door's
+ * edges. */
+static double door_end_angle(cup_crowd *c, double clearance) {
+  double worst = 0;
+  for (double y = 2.9; y <= 7.1; y += 0.01)
+    for (double x = 8.9; x <= 9.75; x += 0.01) {
+      double e[2], u[2], ey = y < 4 ? 4 : y > 6 ? 6 : y;
+      if (fmin(hypot(10 - x, 4 - y), hypot(10 - x, 6 - y)) > 1 || hypot(10 - x, ey - y) < 0.25) continue;
+      exact_direction(x, y, clearance, e);
+      cup_crowd_desired_velocity(c, x, y, u);
+      worst = fmax(worst, fabs(atan2(u[0] * e[1] - u[1] * e[0], u[0] * e[0] + u[1] * e[1])));
+    }
+  return worst * 180 / M_PI;
+}
+
+/* Each end of a door is a point source of the distance, where first-order
+ * fast marching is worst: marched from the door's nodes only (clearance 0,
+ * as cromosim does), the directions there point into the door by up to 50
+ * degrees at h = 0.1 (30 at 0.05). With a clearance the march starts from
+ * exact distances and directions around the (shrunk) door: what is left is
+ * the interpolation's on the rim of the disc round each edge, where the
+ * direction turns like the square root of the distance (measured 16.8 and
+ * 9.4 degrees). */
+static void test_door_ends(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  for (int k = 0; k < 2; k++) {
+    double cl = k ? 0.25 : 0;
+    cup_crowd *c1 = square_room(0, 0.1, cl, err), *c2 = square_room(0, 0.05, cl, err);
+    assert_non_null(c1);
+    assert_non_null(c2);
+    double a1 = door_end_angle(c1, cl), a2 = door_end_angle(c2, cl);
+    printf("direction error near the door's ends, clearance %g: %.2f deg (h = 0.1), %.2f deg (h = 0.05)\n", cl,
+           a1, a2);
+    assert_true(k ? a1 < 20 : a1 > 40);
+    assert_true(a2 < 0.7 * a1);
+    cup_crowd_free(&c1);
+    cup_crowd_free(&c2);
+  }
+}
+
+/* The shortest path for a centre kept c from the walls, from P to the
+ * door (12, 4)-(12, 6) of a 12 x 10 room, round the door's edge J (a disc
+ * of radius c): the tangent from P to the disc, then the arc to the point
+ * where the centre crosses the door's line (J + (0, +-c)). */
+static double jamb_path(double px, double py, double c) {
+  double jy = py < 4 ? 4 : 6, s = py < 4 ? 1 : -1;          /* s: the way round */
+  double dx = px - 12, dy = py - jy, L = hypot(dx, dy);
+  double t = atan2(dy, dx) - s * acos(c / L);                 /* angle of the tangent point */
+  double end = s * M_PI / 2;                                  /* angle of the crossing point */
+  double arc = fabs(remainder(t - end, 2 * M_PI));
+  return sqrt(L * L - c * c) + c * arc;
+}
+
+/* An agent of radius 0.25 beside the wall of a door (or farther off) with a
+ * clearance of 0.25: it leaves at the first step at or after the time its
+ * shortest path around the door's edge takes at the desired speed, on
+ * every grid. With
+ * the point-agent field (clearance 0) the direction beside the edge points
+ * at the edge itself, the wall row removes its normal part and the agent
+ * slows down to a stop: from (11.75, 3), 2.65 s for a 1.16 s path. */
+static void test_clearance_round_the_edge(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 12, 0, 12, 10, 0, 10}, door[4] = {12, 4, 12, 6}, r[1] = {0.25};
+  const double start[4][2] = {{11.75, 3}, {11.75, 1}, {6, 1}, {1, 9}}, grids[2] = {0.05, 0.025};
+  const double v = 1.2, dt = 0.05;
+  int late = 0;
+  for (int g = 0; g < 2; g++)
+    for (int a = 0; a < 4; a++)
+      for (int point = 0; point <= 1; point++) {
+        cup_crowd_desc d = {.agents = 1, .q0 = start[a], .radius = r, .room_points = 4, .room = room,
+                            .doors = 1, .door = door, .speed = v, .grid = grids[g], .clearance = point ? 0 : 0.25};
+        char err[CUP_ERRMSG_LEN];
+        cup_crowd *c;
+        assert_int_equal(cup_crowd_create(&c, &d, dt, err), CUP_OK);
+        cup_integrator_options o;
+        cup_integrator_options_default(&o);
+        o.n = 400;
+        o.T = o.n * dt;
+        o.output = CUP_OUTPUT_FINAL;
+        cup_integrator *I;
+        assert_int_equal(cup_integrator_create_process(&I, cup_crowd_process(c), &o, err), CUP_OK);
+        cup_run_info info;
+        assert_int_equal(cup_integrator_run(I, start[a], NULL, NULL, &info), CUP_OK);
+        double t = cup_crowd_exit_times(c)[0], ideal = jamb_path(start[a][0], start[a][1], 0.25) / v;
+        printf("from (%g, %g), grid %g, clearance %s: out at %.2f s, its shortest path takes %.4f s\n",
+               start[a][0], start[a][1], grids[g], point ? "0" : "0.25", t, ideal);
+        if (!point) {
+          assert_true(t >= ideal - 1e-9);
+          assert_true(t <= ideal + dt + 1e-9);
+        } else {
+          late += t > ideal + 2 * dt + 1e-9;                  /* the stall the clearance removes */
+        }
+        cup_integrator_free(&I);
+        cup_crowd_free(&c);
+      }
+  assert_true(late >= 4);
 }
 
 /* ---- runs ------------------------------------------------------------------ */
@@ -290,6 +416,13 @@ static void test_errors(void **state) {
   d.doors = 2; d.door = doors2;
   expect_error(&d, "door 0 (from (10, 4) to (10, 6)) cannot be reached by any agent");
   d.walls = 0; d.doors = 1; d.door = door;
+  d.clearance = 0.3;
+  expect_error(&d, "the clearance 0.3 exceeds agent 0's radius 0.25");
+  d.clearance = 0.25;
+  const double narrow[4] = {10, 4, 10, 4.5};
+  d.door = narrow;
+  expect_error(&d, "door 0 (from (10, 4) to (10, 4.5)) is 0.5 wide: no wider than twice the clearance 0.25");
+  d.door = door; d.clearance = 0;
   d.speed = 0;
   expect_error(&d, "desired speed");
 }
@@ -297,7 +430,9 @@ static void test_errors(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_distance_field),
+    cmocka_unit_test(test_door_ends),
     cmocka_unit_test(test_alone),
+    cmocka_unit_test(test_clearance_round_the_edge),
     cmocka_unit_test(test_head_on),
     cmocka_unit_test(test_evacuation_checked),
     cmocka_unit_test(test_errors),

@@ -351,6 +351,14 @@ static void test_crowd_sweep_example(void **state) {
   }
   for (int seed = 2; seed <= 6; seed++)
     assert_true(memcmp(q0_of_seed[1], q0_of_seed[seed], sizeof(double) * 300) != 0);
+  /* a crowd task's cost counts its agents: a step of 150 agents takes about
+   * 0.7 us each (BENCHMARKS.md, "Crowds"), 1000 times the circuit's 0.1 us
+   * unit; counted as a circuit step, 180 of them made one 20 ms batch */
+  for (long j = s->n_variants; j < s->n_variants + s->n_tasks; j++) {
+    sw_task t;
+    assert_int_equal(sw_task_get(s, j - s->n_variants, &t), CUP_OK);
+    assert_true(sw_job_cost(s, j) >= 0.7 / 0.1 * 150 * (double)t.n);
+  }
   sw_free(&s);
 }
 

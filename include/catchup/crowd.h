@@ -48,6 +48,13 @@ typedef struct cup_crowd_desc {
                                   agents pushed by others move faster than speed) */
   double reach;              /**< pairs with a gap below this are announced as patterns
                                   to come (cup_rowbuf_expect; 0: 1.5 margin) */
+  /* clearance (issue 17): the desired direction of an agent's centre */
+  double clearance;          /**< the desired direction is the shortest way out for a centre
+                                  kept this far from walls and obstacles (walls grown by it,
+                                  doors shrunk by it at each end); at most the smallest
+                                  radius. 0: the point-agent field of Maury and Venel (and
+                                  cromosim), where an agent sliding along the wall beside a
+                                  door slows to a stop at the door's edge (docs/crowd.md) */
 } cup_crowd_desc;
 
 /** Check and build: the walls (room edges less the doors, obstacle edges,

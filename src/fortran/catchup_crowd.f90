@@ -34,6 +34,7 @@ module catchup_crowd
     real(c_double) :: grid = 0
     real(c_double) :: margin = 0
     real(c_double) :: reach = 0
+    real(c_double) :: clearance = 0
   end type cup_crowd_desc
 
   !> A crowd (C: cup_crowd *).
@@ -133,7 +134,7 @@ contains
   !> A crowd: q0 and room are 2 x N and 2 x V arrays of points, radius N
   !> radii, doors 4 x D (x0, y0, x1, y1), walls 4 x W; h is the time step
   !> T / n of the run (for the default margin).
-  subroutine cup_crowd_create(c, q0, radius, room, doors, speed, h, ierr, walls, grid, errmsg)
+  subroutine cup_crowd_create(c, q0, radius, room, doors, speed, h, ierr, walls, grid, errmsg, clearance)
     type(cup_crowd_t), intent(out) :: c
     real(c_double), intent(in), target, contiguous :: q0(:, :), radius(:), room(:, :), doors(:, :)
     real(c_double), intent(in) :: speed, h
@@ -141,6 +142,7 @@ contains
     real(c_double), intent(in), target, contiguous, optional :: walls(:, :)
     real(c_double), intent(in), optional :: grid
     character(len=*), intent(out), optional :: errmsg
+    real(c_double), intent(in), optional :: clearance
     type(cup_crowd_desc) :: d
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
@@ -162,6 +164,7 @@ contains
       d%wall = c_loc(walls)
     end if
     if (present(grid)) d%grid = grid
+    if (present(clearance)) d%clearance = clearance
     cmsg = cup_errbuf_()
     st = c_cup_crowd_create(c%ptr, d, h, cmsg)
     if (st == CUP_OK) c%agents = size(radius)

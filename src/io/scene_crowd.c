@@ -272,6 +272,7 @@ static const st_node *culprit(const crowd_parts *c, const st_node *map, const ch
     return c->agents_at;
   }
   if (!strncmp(msg, "the room", 8)) { strcpy(key, "crowd.room"); return c->room_at; }
+  if (!strncmp(msg, "the clearance", 13) && opt(map, "clearance")) { strcpy(key, "crowd.clearance"); return opt(map, "clearance"); }
   if (sscanf(msg, "door %d", &i) == 1 && i >= 0 && i < c->ndoor) { joini(key, "crowd.doors", i); return c->doors_at->item[i]; }
   const char *o = strstr(msg, "obstacle ");
   if (o && sscanf(o, "obstacle %d", &i) == 1 && i >= 0 && i < c->nobs) { joini(key, "crowd.obstacles", i); return c->obs_at->item[i]; }
@@ -281,7 +282,7 @@ static const st_node *culprit(const crowd_parts *c, const st_node *map, const ch
 
 int scene_read_crowd(rd *r, const st_node *map, double h, cup_crowd **out) {
   static const char *const known[] = {"room", "doors", "obstacles", "walls", "agents", "speed", "grid",
-                                      "margin", "reach", NULL};
+                                      "margin", "reach", "clearance", NULL};
   crowd_parts c = {0};
   cup_crowd_desc d = {.speed = 1};
   const st_node *nd;
@@ -302,10 +303,10 @@ int scene_read_crowd(rd *r, const st_node *map, double h, cup_crowd **out) {
     else st = fail(r, CUP_ERR_PARSE, c.agents_at, "crowd.agents", "expected a list of agents [x, y, radius] or "
                    "{count: N, radius: r, spread: d, region: [xmin, ymin, xmax, ymax], seed: s}");
   }
-  double *num[4] = {&d.speed, &d.grid, &d.margin, &d.reach};
-  static const char *const nk[4] = {"speed", "grid", "margin", "reach"};
-  for (int k = 0; k < 4 && !st; k++)
-    if ((nd = opt(map, nk[k]))) st = number_min(r, nd, join(key, "crowd", nk[k]), 0, 1, num[k]);
+  double *num[5] = {&d.speed, &d.grid, &d.margin, &d.reach, &d.clearance};
+  static const char *const nk[5] = {"speed", "grid", "margin", "reach", "clearance"};
+  for (int k = 0; k < 5 && !st; k++)           /* a clearance of 0 is the point-agent field */
+    if ((nd = opt(map, nk[k]))) st = number_min(r, nd, join(key, "crowd", nk[k]), 0, k < 4, num[k]);
   if (!st) {
     d.agents = c.N; d.q0 = c.q; d.radius = c.r;
     d.room_points = c.nroom; d.room = c.room;

@@ -568,7 +568,8 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
 
 /* Seconds per step relative to the explicit scheme with the default
  * projector, measured on the paper's circuit (~0.12 us a step), and a fixed
- * part for set-up (~10 us). Schemes and projectors not listed count 1. */
+ * part for set-up (~10 us). Schemes and projectors not listed count 1;
+ * crowds count by their agents. */
 double sw_job_cost(const cup_sweep *s, long job) {
   static const double scheme_f[] = {1.0, 1.0, 1.1, 0.8}, proj_f[] = {1.0, 1.0, 1.3, 1.2};
   const double setup = 100;
@@ -580,6 +581,10 @@ double sw_job_cost(const cup_sweep *s, long job) {
   double fp = t.projector >= 0 && t.projector < (int)(sizeof proj_f / sizeof *proj_f) ? proj_f[t.projector] : 1;
   /* the adaptive scheme takes about one step per sample time, ~4 units each */
   if (t.scheme == CUP_SCHEME_ADAPTIVE) return 4.0 * (double)s->samples + 10 * setup;
+  /* a crowd's step costs about 0.7 us an agent (BENCHMARKS.md, "Crowds"):
+   * counted as the circuit's, 1000 agents made a 20 ms batch of 180 tasks
+   * of a second each, sent to one rank */
+  if (s->crowd) return ((double)t.n + setup) * 3.5 * (double)cup_scene_dim(s->var[t.variant].scene);
   return ((double)t.n + setup) * fs * fp;
 }
 

@@ -276,14 +276,19 @@ static int check_numbers(const cup_crowd_desc *d, char *errmsg) {
     return cup_fail(errmsg, CUP_ERR_ARG, "crowd: %d walls without their segments", d->walls);
   if (!(d->speed > 0) || !isfinite(d->speed))
     return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the desired speed is %g (must be > 0)", d->speed);
-  if (!(d->grid >= 0) || !(d->margin >= 0) || !(d->reach >= 0) || !isfinite(d->grid + d->margin + d->reach))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: grid %g, margin %g, reach %g (must be finite and >= 0)",
-                    d->grid, d->margin, d->reach);
+  if (!(d->grid >= 0) || !(d->margin >= 0) || !(d->reach >= 0) || !(d->clearance >= 0) ||
+      !isfinite(d->grid + d->margin + d->reach + d->clearance))
+    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: grid %g, margin %g, reach %g, clearance %g (must be finite and >= 0)",
+                    d->grid, d->margin, d->reach, d->clearance);
   for (int i = 0; i < d->agents; i++) {
     if (!isfinite(d->q0[2 * i]) || !isfinite(d->q0[2 * i + 1]))
       return cup_fail(errmsg, CUP_ERR_NONFINITE, "agent %d: position (%g, %g) is not finite", i, d->q0[2 * i], d->q0[2 * i + 1]);
     if (!(d->radius[i] > 0) || !isfinite(d->radius[i]))
       return cup_fail(errmsg, CUP_ERR_ARG, "agent %d: radius %g (must be > 0)", i, d->radius[i]);
+    /* a centre closer to a wall than the clearance would find no direction */
+    if (d->clearance > d->radius[i])
+      return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the clearance %g exceeds agent %d's radius %g (it must be at "
+                      "most the smallest radius)", d->clearance, i, d->radius[i]);
   }
   for (int o = 0; o < d->obstacles; o++)
     if (d->obstacle_points[o] < 3)
@@ -480,7 +485,9 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
     for (int i = 0; i < c->N; i++) rmin = fmin(rmin, c->r[i]);
     grid = fmax(0.5 * rmin, sqrt((box[2] - box[0] + 1) * (box[3] - box[1] + 1) / 4e6));
   }
-  if (!st) st = crowd_field_build(&c->F, c->room, c->nroom, c->seg, c->nseg, c->door, c->ndoor, box, grid, errmsg);
+  /* exact distances around the doors, where agents queue (four diameters) */
+  if (!st) st = crowd_field_build(&c->F, c->room, c->nroom, c->seg, c->nseg, c->door, c->ndoor, box, grid,
+                                  8 * c->rmax, d->clearance, errmsg);
   if (!st) st = check_reach(c, d, errmsg);
   if (!st) {
     cup_set_desc sd = {.kind = CUP_SET_STATE_POLYSET, .n = 2 * c->N, .rows = crowd_rows, .rows_ctx = c};

@@ -16,12 +16,16 @@ typedef struct crowd_field {
 } crowd_field;
 
 /* Build the field over [x0, x1] x [y0, y1]: nodes outside the room (a
- * polygon of nroom vertices) or within h of a wall are blocked (so that no
- * step of the front crosses one), free nodes within 1.5 h of a door start at
- * their exact distance to it. On failure errmsg names the door that has no
- * free node. */
+ * polygon of nroom vertices) or within max(h, clearance) of a wall are
+ * blocked (so that no step of the front crosses one, and the distance is a
+ * centre's that keeps the clearance); each door is shrunk by the clearance
+ * at both ends; free nodes within seed_radius (at least the door's width
+ * and 1.5 h) of a door whose straight line to their nearest door point
+ * keeps the clearance from every wall start at their exact distance to it.
+ * On failure errmsg names the door that has no free node within 1.5 h. */
 int crowd_field_build(crowd_field *F, const double *room, int nroom, const double *seg, int nseg,
-                      const double *door, int ndoor, const double box[4], double h, char *errmsg);
+                      const double *door, int ndoor, const double box[4], double h, double seed_radius,
+                      double clearance, char *errmsg);
 /* Crossing number: (x, y) inside the polygon of np vertices (2 each)? */
 int crowd_in_polygon(const double *v, int np, double x, double y);
 void crowd_field_free(crowd_field *F);

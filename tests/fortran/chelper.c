@@ -67,7 +67,7 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_crowd_desc, door), OFF(cup_crowd_desc, obstacles), OFF(cup_crowd_desc, obstacle_points),
         OFF(cup_crowd_desc, obstacle), OFF(cup_crowd_desc, walls), OFF(cup_crowd_desc, wall),
         OFF(cup_crowd_desc, speed), OFF(cup_crowd_desc, grid), OFF(cup_crowd_desc, margin),
-        OFF(cup_crowd_desc, reach));
+        OFF(cup_crowd_desc, reach), OFF(cup_crowd_desc, clearance));
   if (!strcmp(name, "cup_schedule"))
     PUT(sizeof(cup_schedule), OFF(cup_schedule, coef), OFF(cup_schedule, power));
   if (!strcmp(name, "cup_integrator_options"))

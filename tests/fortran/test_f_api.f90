@@ -131,7 +131,8 @@ contains
       off(b, c_loc(cd%radius)), off(b, c_loc(cd%room_points)), off(b, c_loc(cd%room)), off(b, c_loc(cd%doors)), &
       off(b, c_loc(cd%door)), off(b, c_loc(cd%obstacles)), off(b, c_loc(cd%obstacle_points)), &
       off(b, c_loc(cd%obstacle)), off(b, c_loc(cd%walls)), off(b, c_loc(cd%wall)), off(b, c_loc(cd%speed)), &
-      off(b, c_loc(cd%grid)), off(b, c_loc(cd%margin)), off(b, c_loc(cd%reach))])
+      off(b, c_loc(cd%grid)), off(b, c_loc(cd%margin)), off(b, c_loc(cd%reach)), &
+      off(b, c_loc(cd%clearance))])
   end subroutine test_layouts
 end module layout_check
 
