@@ -9,18 +9,20 @@
 void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
                        const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
                        double T) {
-  *f = (cup_faststep){.th = th, .g0 = K->g0, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T,
-                      .h = fs->h, .last_t = NAN};
+  *f = (cup_faststep){.th = th, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T, .h = fs->h,
+                      .last_t = NAN};
   const cup_input *u = fs->u;
   if (!use_theta || !th->small || !fs->affine || fs->has_f || fs->p > 1 || !(eps_n > 0) || !(eta_n > 0) ||
       (u && (u->fn || u->nterms > CUP_FAST_TERMS)))
     return;
   int n = fs->n;
-  for (int q = 0; q < n * n; q++) f->Phi[q] = fs->Phi[q];
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++) f->Phi[j][i >> 1][i & 1] = fs->Phi[i * n + j];
   f->has = u && fs->d.has_E;                /* freestep.c's step_input */
   f->integrate = f->has && !fs->const_input;
   f->uconst = f->has ? fs->ubuf[0] : 0;
-  for (int i = 0; i < n && f->has; i++) f->Gam[i] = fs->Gam[i];
+  for (int i = 0; i < n && f->has; i++) f->Gam[i >> 1][i & 1] = fs->Gam[i];
+  for (int i = 0; i < K->m; i++) f->g0[i] = K->g0[i];
   f->nterms = u ? u->nterms : 0;
   for (int k = 0; k < f->nterms; k++) {
     f->term[k] = &u->terms[k];
@@ -30,10 +32,11 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
   }
   f->moving = G && u;
   if (f->moving) {
-    if (G->ncol != 1 || G->nnz > CUP_STEP_SMALL_M) return;
+    if (G->ncol != 1) return;
     for (int q = G->p[0]; q < G->p[1]; q++) {
-      f->grow[f->gnnz] = G->i[q];
-      f->gval[f->gnnz++] = G->x[q];
+      if (f->grows[G->i[q]]) return;        /* a repeated row: cup_sparse_gaxpy adds twice */
+      f->grows[G->i[q]] = -1;
+      f->gdir[G->i[q]] = G->x[q];
     }
   }
   f->on = 1;
@@ -87,57 +90,77 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *
   return cnt;
 }
 
-/* One step from x into z (xf: the free point), its input given: the
- * status, or CUP_FAST_DECLINED with nothing but scratch changed. */
+/* One step from x into z (xf: the free point, g: the offset), its input
+ * given: the status, or CUP_FAST_DECLINED with nothing but scratch changed. */
 static inline __attribute__((always_inline)) int
-fast_step(cup_faststep *f, double uint, double u1, const double *restrict x, double *restrict xf,
-          double *restrict z, cup_proj_info *pi, const int n, const int m) {
-  for (int i = 0; i < n; i++) {                             /* freestep.c's affine_rows */
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += f->Phi[i * n + j] * x[j];
-    if (f->has) acc += f->Gam[i] * uint;
-    xf[i] = acc;
+fast_step(const cup_faststep *f, cup_small_carry *c, double uint, double u1, const cup_v2d *restrict x,
+          cup_v2d *restrict xf, cup_v2d *restrict z, cup_v2d *g, cup_small_out *o, const int n, const int m) {
+  for (int r = 0; r < (n + 1) / 2; r++) {                 /* freestep.c's affine_rows */
+    cup_v2d acc = {0, 0};
+    for (int j = 0; j < n; j++) acc += f->Phi[j][r] * cup_lane(x, j);
+    if (f->has) acc += f->Gam[r] * uint;
+    xf[r] = acc;
   }
-  const double *g = f->g0;
-  if (f->moving) {                                          /* integrator.c's moving_offset */
-    for (int i = 0; i < m; i++) f->g[i] = f->g0[i];
-    if (u1 != 0)
-      for (int q = 0; q < f->gnnz; q++) f->g[f->grow[q]] += f->gval[q] * u1;
-    for (int i = 0; i < m; i++)
-      if (!isfinite(f->g[i])) return CUP_FAST_DECLINED;
-    g = f->g;
+  *g = f->g0;
+  if (f->moving && u1 != 0) {                             /* integrator.c's moving_offset */
+    cup_v2d moved = f->g0 + f->gdir * u1, nan_if_not_finite;
+    *g = (cup_v2d)(((cup_v2l)moved & f->grows) | ((cup_v2l)f->g0 & ~f->grows));
+    nan_if_not_finite = 0 * *g;
+    if (isnan(nan_if_not_finite[0] + nan_if_not_finite[1])) return CUP_FAST_DECLINED;
   }
   /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
-  return cup_small_step(f->th, g, xf, z, NAN, f->eps_n, f->eta_n, pi, n, m) ? pi->status : CUP_FAST_DECLINED;
+  return cup_small_core(f->th, c, *g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
 
-/* integrator.c's loop from step k, the state in registers: each step that
- * ends CUP_OK before stop is booked as the loop books it; the first other
- * one, or step stop, is left pending. */
+/* integrator.c's loop from step k, the state, the LCP's warm start and the
+ * statistics in registers: each step that ends CUP_OK before stop is booked
+ * as the loop books it (cup_tally, step, t: added up here, written into
+ * info at the end); the first other one, or step stop, is left pending. */
 static inline __attribute__((always_inline)) long
 run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
-  double x[CUP_STEP_SMALL_N], xf[CUP_STEP_SMALL_N], z[CUP_STEP_SMALL_N];
+  cup_v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
   double t1[CUP_FAST_AHEAD], ui[CUP_FAST_AHEAD], u1[CUP_FAST_AHEAD];
-  for (int j = 0; j < n; j++) x[j] = xp[j];
-  cup_proj_info p;
+  for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
+  cup_small_carry c = cup_small_load(f->th, m);
+  cup_small_out o;
+  long booked = 0, skipped = 0;
+  long long iterations = 0;
+  double max_eps = info->max_eps_cert, max_eta = info->max_eta_cert, t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
       have = inputs_ahead(f, k, stop, t1, ui, u1);
       a = 0;
     }
-    int s = fast_step(f, ui[a], u1[a], x, xf, z, &p, n, m);
+    int s = fast_step(f, &c, ui[a], u1[a], x, xf, z, &g, &o, n, m);
     if (k == stop || s != CUP_OK) {
-      for (int j = 0; j < n; j++) xp[j] = x[j];
-      for (int j = 0; j < n && s != CUP_FAST_DECLINED; j++) xnewp[j] = z[j];
-      *pi = p;
+      for (int j = 0; j < n; j++) xp[j] = cup_lane(x, j);
+      if (s != CUP_FAST_DECLINED) {
+        for (int j = 0; j < n; j++) xnewp[j] = cup_lane(z, j);
+        cup_small_info(pi, &o, NAN, f->eps_n, f->eta_n);
+      }
+      cup_small_store(f->th, &c, m);
+      for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
+      if (booked) {
+        info->step = k;
+        info->t = t;
+        info->skipped += skipped;
+        info->projected += booked - skipped;
+        info->dual_iterations += iterations;
+        info->max_eps_cert = max_eps;
+        info->max_eta_cert = max_eta;
+      }
       *st = s;
       return k;
     }
-    for (int j = 0; j < n; j++) x[j] = z[j];
-    info->step = k + 1;
-    info->t = t1[a];
-    cup_tally(info, &p);
+    x[0] = z[0];
+    x[1] = z[1];
+    t = t1[a];
+    booked++;
+    skipped += o.skipped;                                 /* cup_tally, per step */
+    iterations += o.iterations;
+    if (!(o.eps_cert <= max_eps)) max_eps = o.eps_cert;
+    if (!(o.eta_cert <= max_eta)) max_eta = o.eta_cert;
   }
 }
 

@@ -30,6 +30,13 @@
 #define CUP_STEP_SMALL_N 4
 #define CUP_STEP_SMALL_M 2
 
+/* Two doubles side by side (SSE2, in any x86-64): the small step keeps its
+ * rows, and the fused steps their states, in lanes, each lane doing a
+ * scalar's arithmetic in the scalar's order, so that the results are those
+ * of the one-at-a-time code bit for bit, in fewer instructions. */
+typedef double cup_v2d __attribute__((vector_size(16)));
+typedef long long cup_v2l __attribute__((vector_size(16)));
+
 typedef struct cup_lcp_step {
   int n, m;
   double h;
@@ -47,7 +54,9 @@ typedef struct cup_lcp_step {
   double *xpred;    /* xf + Hprev lambda_k */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
   int small;        /* 1: cup_lcp_step_solve tries the unrolled step first */
-  double Cd[CUP_STEP_SMALL_M * CUP_STEP_SMALL_N];   /* row-major, zeros included */
+  cup_v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
+  cup_v2d rowgam;                      /* K->rowgam, the rows in lanes */
+  cup_v2d Hcol[CUP_STEP_SMALL_M][2];   /* H's columns, the states in lanes (two pairs) */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
@@ -97,54 +106,97 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
  * free step. They do the general path's arithmetic in the same order (a
  * zero entry of the dense rows adds an exact zero to finite sums), so z,
  * lambda and the certificates are the general path's; where that path would
- * meet anything unusual they decline, having changed only scratch. */
+ * meet anything unusual they decline, having changed only scratch. States
+ * x_0..x_3 are the lanes of two cup_v2d, (x_0, x_1) and (x_2, x_3); rows
+ * the lanes of one; unused lanes hold zeros and are never read. */
 #define CUP_ALWAYS_INLINE static inline __attribute__((always_inline))
 
-/* cup_slack on the dense rows C (row-major, CUP_STEP_SMALL_N apart), term
- * by term in the same order (a zero entry adds an exact zero to finite
- * sums). */
-CUP_ALWAYS_INLINE void cup_small_slack(const double *C, const double *rg, const double *g, const double *x,
-                                       double *s, double *gam, const int n, const int m) {
+CUP_ALWAYS_INLINE double cup_lane(const cup_v2d *v, int j) { return v[j >> 1][j & 1]; }
+
+CUP_ALWAYS_INLINE cup_v2d cup_v2_abs(cup_v2d v) {
+  return (cup_v2d)((cup_v2l)v & (cup_v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
+}
+
+/* What the unrolled step carries from one step to the next: lcp.lam, lq and
+ * lcp.prev (as a bit mask), in registers while the fused steps run. */
+typedef struct cup_small_carry {
+  cup_v2d lam;
+  double lq;
+  unsigned act;
+} cup_small_carry;
+
+/* A step's outcome: cup_proj_info's fields of the same names. */
+typedef struct cup_small_out {
+  int status, skipped, iterations, active;
+  double eps_cert, eta_cert, violation;
+} cup_small_out;
+
+CUP_ALWAYS_INLINE cup_small_carry cup_small_load(const cup_lcp_step *ls, const int m) {
+  cup_small_carry c = {.lam = {ls->lcp.lam[0], m > 1 ? ls->lcp.lam[1] : 0}, .lq = ls->lq};
+  for (int i = 0; i < m; i++) c.act |= (unsigned)(ls->lcp.prev[i] != 0) << i;
+  return c;
+}
+
+CUP_ALWAYS_INLINE void cup_small_store(cup_lcp_step *ls, const cup_small_carry *c, const int m) {
   for (int i = 0; i < m; i++) {
-    const double *c = C + i * CUP_STEP_SMALL_N;
-    double acc = g[i], mag = fabs(g[i]);
-    for (int j = 0; j < n; j++) {
-      double t = c[j] * x[j];
-      acc += t;
-      mag += fabs(t);
-    }
-    s[i] = acc;
-    gam[i] = rg[i] * mag;
+    ls->lcp.lam[i] = c->lam[i];
+    ls->lcp.prev[i] = (c->act >> i) & 1;
   }
+  ls->lq = c->lq;
+}
+
+CUP_ALWAYS_INLINE void cup_small_info(cup_proj_info *info, const cup_small_out *o, double scale, double eps_target,
+                                      double eta_target) {
+  *info = (cup_proj_info){.status = o->status, .method = CUP_PROJ_ACTIVESET, .iterations = o->iterations,
+                          .skipped = o->skipped, .active = o->active, .scale = scale, .eps_target = eps_target,
+                          .eta_target = eta_target, .eps_cert = o->eps_cert, .eta_cert = o->eta_cert,
+                          .violation = o->violation};
+}
+
+/* cup_slack of the rows (lanes) at x, term by term in the same order (a
+ * zero entry adds an exact zero to finite sums). */
+CUP_ALWAYS_INLINE void cup_small_slack(const cup_lcp_step *ls, cup_v2d g, const cup_v2d *x, cup_v2d *s,
+                                       cup_v2d *gam, const int n) {
+  cup_v2d acc = g, mag = cup_v2_abs(g);
+  for (int j = 0; j < n; j++) {
+    cup_v2d t = ls->Ccol[j] * cup_lane(x, j);
+    acc += t;
+    mag += cup_v2_abs(t);
+  }
+  *s = acc;
+  *gam = ls->rowgam * mag;
 }
 
 /* cup_lcp_step_eta for the slack s, gam of z: its common case, z certainly
  * in K, without a call. */
-CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, const double *g, const double *z, const double *s,
-                                       const double *gam, const int m) {
-  double worst = INFINITY;
-  for (int i = 0; i < m; i++) worst = cup_min(worst, s[i] - gam[i]);
+CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2d *z, cup_v2d s, cup_v2d gam,
+                                       const int n, const int m) {
+  cup_v2d d = s - gam;
+  double worst = d[0];                            /* the general path's min from INFINITY */
+  if (m > 1) worst = cup_min(worst, d[1]);
   if (worst >= 0) return 0;
+  double gm[CUP_STEP_SMALL_M], zm[CUP_STEP_SMALL_N];
   for (int i = 0; i < m; i++) {
     ls->s[i] = s[i];
     ls->gam[i] = gam[i];
+    gm[i] = g[i];
   }
-  return cup_lcp_step_eta(ls, g, z);
+  for (int j = 0; j < n; j++) zm[j] = cup_lane(z, j);
+  return cup_lcp_step_eta(ls, gm, zm);
 }
 
-/* lcp.c's Murty pivoting from the warm start prev for m <= 2 rows (the
+/* lcp.c's Murty pivoting from the warm start *act for m <= 2 rows (the
  * active set a bit mask, each block solved by the same closed forms, the
- * same tolerances, the same least index). 0 with lam and the warm start
- * written (lcp.c's w is scratch nobody reads); 1, touching nothing, where
- * lcp.c would meet a singular block or cycle (and then retry cold): the
- * general path takes the step over. */
-CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, const double *q, double *lam_out,
-                                      int *pivots, const int m) {
-  double scale = 0;
-  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
+ * same tolerances, the same least index). 0 with lam and *act written; 1,
+ * touching nothing, where lcp.c would meet a singular block or cycle (and
+ * then retry cold): the general path takes the step over. */
+CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, cup_v2d qv, cup_v2d *lam_out, int *pivots,
+                                      const int m) {
+  double q[2] = {qv[0], qv[1]};
+  double scale = fabs(q[0]);                      /* cup_max from 0 */
+  if (m > 1) scale = cup_max(scale, fabs(q[1]));
   double tol_w = 64 * DBL_EPSILON * scale;
-  unsigned act = 0;
-  for (int i = 0; i < m; i++) act |= (unsigned)(prev[i] != 0) << i;
+  unsigned act = *actp;
   for (int it = 0; it < 16 * m + 64; it++) {
     double lam[2] = {0, 0}, w[2];
     if (act == 3) {
@@ -171,10 +223,8 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, cons
     for (int i = 0; i < m && flip < 0; i++)
       if (((act >> i) & 1) ? lam[i] < -tol_l : w[i] < -tol_w) flip = i;
     if (flip < 0) {
-      for (int i = 0; i < m; i++) {
-        lam_out[i] = lam[i];
-        prev[i] = (act >> i) & 1;
-      }
+      *lam_out = (cup_v2d){lam[0], lam[1]};
+      *actp = act;
       return 0;
     }
     act ^= 1u << flip;
@@ -184,63 +234,75 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, cons
 }
 
 /* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
- * >= 0 and no D: 1 when it took the step (info->status set), 0 when the
- * general path must (NaN in xf, a singular block), having changed nothing
- * but scratch. The set's data are read once into locals, the slacks stay
- * in registers. */
-CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
-                                     double *restrict z, double scale, double eps_target, double eta_target,
-                                     cup_proj_info *info, const int n, const int m) {
+ * >= 0 and no D, from the free point xf for the offset g (lanes), carrying
+ * c from the last step: 1 when it took the step (z, *c and *o written), 0
+ * when the general path must (NaN in xf, a singular block), having changed
+ * nothing but scratch. */
+CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g, const cup_v2d *restrict xf,
+                                     cup_v2d *restrict z, double eps_target, double eta_target,
+                                     cup_small_out *o, const int n, const int m) {
   double probe = 0;                               /* NaN iff some entry is NaN or Inf */
-  for (int j = 0; j < n; j++) probe += 0 * xf[j];
+  for (int j = 0; j < n; j++) probe += 0 * cup_lane(xf, j);
   if (isnan(probe)) return 0;
-  const double *C = ls->Cd, *rg = ls->K->rowgam, *H = ls->H, h = ls->h;
-  double *lamv = ls->lcp.lam;
-  double q[CUP_STEP_SMALL_M], gam[CUP_STEP_SMALL_M], s[CUP_STEP_SMALL_M], sg[CUP_STEP_SMALL_M];
-  cup_small_slack(C, rg, g, xf, q, gam, n, m);    /* q = C x_free + g */
-  double qmin = INFINITY;
-  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
-  *info = (cup_proj_info){.method = CUP_PROJ_ACTIVESET, .scale = scale, .eps_target = eps_target,
-                          .eta_target = eta_target};
+  const int halves = (n + 1) / 2;
+  cup_v2d q, gam;
+  cup_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */
+  double qmin = q[0];                             /* the general path's min from INFINITY */
+  if (m > 1) qmin = cup_min(qmin, q[1]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
-    for (int j = 0; j < n; j++) z[j] = xf[j];
-    for (int i = 0; i < m; i++) lamv[i] = 0;
-    ls->lq = 0;
-    info->skipped = 1;
-    info->eta_cert = cup_small_eta(ls, g, z, q, gam, m);
-    info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+    for (int r = 0; r < halves; r++) z[r] = xf[r];
+    c->lam = (cup_v2d){0, 0};
+    c->lq = 0;
+    *o = (cup_small_out){.skipped = 1, .eta_cert = cup_small_eta(ls, g, z, q, gam, n, m)};
+    o->status = o->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
     return 1;
   }
-  double qs[CUP_STEP_SMALL_M], lam[CUP_STEP_SMALL_M];   /* aimed a few ulps inside K, as step.c */
-  for (int i = 0; i < m; i++) qs[i] = q[i] - (16 * gam[i] + DBL_MIN);
+  cup_v2d qs = q - (16 * gam + DBL_MIN), lam;     /* aimed a few ulps inside K, as step.c */
   int pivots = 0;
-  if (cup_small_murty(ls->lcp.prev, ls->M, qs, lam, &pivots, m)) return 0;
-  info->iterations = pivots + 1;
+  if (cup_small_murty(&c->act, ls->M, qs, &lam, &pivots, m)) return 0;
   double lq = 0;
   for (int i = 0; i < m; i++) {
     lam[i] = cup_max(lam[i], 0);
-    lamv[i] = lam[i];
     lq += lam[i] * q[i];
   }
-  ls->lq = lq;
-  for (int r = 0; r < n; r++) z[r] = xf[r];
+  c->lam = lam;
+  c->lq = lq;
+  for (int r = 0; r < halves; r++) z[r] = xf[r];
   for (int i = 0; i < m; i++) {
     if (lam[i] == 0) continue;
-    for (int r = 0; r < n; r++) z[r] += H[r + i * n] * lam[i];
+    for (int r = 0; r < halves; r++) z[r] += ls->Hcol[i][r] * lam[i];
   }
-  cup_small_slack(C, rg, g, z, s, sg, n, m);
+  cup_v2d s, sg;
+  cup_small_slack(ls, g, z, &s, &sg, n);
+  cup_v2d gapi = 2 * ls->h * lam * (s + sg);      /* impulse mu = h lambda */
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {
-    gap += 2 * h * lam[i] * (s[i] + sg[i]);
+    gap += gapi[i];
     viol = cup_max(viol, -s[i]);
     active += lam[i] > 0;
   }
-  info->active = active;
-  info->violation = viol;
-  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
-  info->eta_cert = cup_small_eta(ls, g, z, s, sg, m);
-  info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  *o = (cup_small_out){.iterations = pivots + 1, .active = active, .violation = viol,
+                       .eps_cert = isnan(gap) ? NAN : cup_max(gap, 0),
+                       .eta_cert = cup_small_eta(ls, g, z, s, sg, n, m)};
+  o->status = o->eps_cert <= eps_target && o->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  return 1;
+}
+
+/* cup_small_core from and to step.c's arrays: 1 when it took the step
+ * (info->status set), 0 when the general path must. */
+CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
+                                     double *restrict z, double scale, double eps_target, double eta_target,
+                                     cup_proj_info *info, const int n, const int m) {
+  cup_v2d xv[2] = {{0, 0}, {0, 0}}, zv[2];
+  for (int j = 0; j < n; j++) xv[j >> 1][j & 1] = xf[j];
+  cup_v2d gv = {g[0], m > 1 ? g[1] : 0};
+  cup_small_carry c = cup_small_load(ls, m);
+  cup_small_out o;
+  if (!cup_small_core(ls, &c, gv, xv, zv, eps_target, eta_target, &o, n, m)) return 0;
+  cup_small_store(ls, &c, m);
+  for (int j = 0; j < n; j++) z[j] = cup_lane(zv, j);
+  cup_small_info(info, &o, scale, eps_target, eta_target);
   return 1;
 }
 
