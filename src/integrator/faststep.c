@@ -42,51 +42,73 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
   f->on = 1;
 }
 
-/* The inputs of steps k, k + 1, ..., at most CUP_FAST_AHEAD and none past
- * stop, into t1 (each step's end), ui (the integral of u over it: freestep.c's
- * cup_freestep_term_integral summed term by term as waveform_step_integral
- * sums one input) and u1 (u at its end, for a moving set: cup_input_eval);
- * returns how many. Term by term over the steps, so that a term's kind is
- * looked at once, and apart from the steps, so that the sines (some 60
- * cycles of latency each) overlap one another and the steps' chains. A
- * square wave's position q(t) serves both its integral and its value, and
- * its antiderivative at a step's start is the one at the last step's end. */
-static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *ui, double *u1) {
+/* One square wave's share of ui and u1 (inputs_ahead), from the grid times
+ * t (CUP_FAST_AHEAD + 1 of them): its position q(t) serves both its integral
+ * and its value, and its antiderivative at a step's start is the one at
+ * the last step's end. */
+static void square_ahead(cup_faststep *f, int q, const double *t, int cnt, cup_v2d *ui, cup_v2d *u1) {
+  const cup_term *w = f->term[q];
+  double tri[CUP_FAST_AHEAD + 1], sgn[CUP_FAST_AHEAD + 1];
+  double ph = w->phase / M_PI, height = w->amp * M_PI / w->omega;   /* cup_square_q, cup_term_integral */
+  tri[0] = t[0] == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t[0]));
+  for (int j = 1; j <= CUP_FAST_AHEAD; j++) {
+    double qj = w->omega * t[j] / M_PI + ph, r = cup_mod2(qj);
+    tri[j] = cup_triangle_r(r);
+    sgn[j] = cup_sign_sin_qr(qj, r);
+  }
+  for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
+    cup_v2d t0 = {tri[2 * p], tri[2 * p + 1]}, t1 = {tri[2 * p + 1], tri[2 * p + 2]};
+    ui[p] += height * (t1 - t0);
+    if (f->moving) u1[p] += w->amp * (cup_v2d){sgn[2 * p + 1], sgn[2 * p + 2]};   /* cup_term_value */
+  }
+  f->last_tri[q] = tri[cnt];
+}
+
+/* The inputs of steps k, k + 1, ..., k + CUP_FAST_AHEAD - 1, step k + j in
+ * lane j & 1 of entry j >> 1: t1 (each step's end), ui (the integral of u
+ * over it: freestep.c's cup_freestep_term_integral summed term by term as
+ * waveform_step_integral sums one input) and u1 (u at its end, for a moving
+ * set: cup_input_eval); returns how many of them to take, none past stop.
+ * Term by term over the steps, so that a term's kind is looked at once, and
+ * apart from the steps, so that the sines (some 60 cycles of latency each)
+ * overlap one another and the steps' chains; two steps at a time, and always
+ * all of them (a few wasted at the end of a stretch) so that the loops have
+ * no exits. */
+static int inputs_ahead(cup_faststep *f, long k, long stop, cup_v2d *t1, cup_v2d *ui, cup_v2d *u1) {
+  enum { P = CUP_FAST_AHEAD / 2 };
   int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
-  double t0[CUP_FAST_AHEAD], tmid[CUP_FAST_AHEAD];
-  for (int j = 0; j < cnt; j++) {
-    t0[j] = j ? t1[j - 1] : cup_grid_time(k, f->steps, f->T, f->h);
-    t1[j] = cup_grid_time(k + j + 1, f->steps, f->T, f->h);
-    tmid[j] = 0.5 * (t0[j] + t1[j]);
-    ui[j] = u1[j] = 0;
+  double t[CUP_FAST_AHEAD + 2];                  /* t[j] = t_{k+j} as cup_grid_time gives it */
+  cup_v2d kk = {(double)k, (double)k + 1}, t0[P], tmid[P];
+  for (int p = 0; p <= P; p++) {
+    cup_v2d tp = (kk + 2 * p) * f->h;            /* (double)(k + j) exactly: k < 2^53 */
+    t[2 * p] = tp[0];
+    t[2 * p + 1] = tp[1];
+  }
+  if (k <= f->steps && f->steps - k <= CUP_FAST_AHEAD) t[f->steps - k] = f->T;
+  for (int p = 0; p < P; p++) {
+    t0[p] = (cup_v2d){t[2 * p], t[2 * p + 1]};
+    t1[p] = (cup_v2d){t[2 * p + 1], t[2 * p + 2]};
+    tmid[p] = 0.5 * (t0[p] + t1[p]);
+    ui[p] = u1[p] = (cup_v2d){0, 0};
   }
   int integrate = f->integrate, moving = f->moving;
   for (int q = 0; q < f->nterms && (integrate || moving); q++) {
     const cup_term *w = f->term[q];
     double th = f->term_h[q];
     if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
-      double tri0 = t0[0] == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0[0]));
-      for (int j = 0; j < cnt; j++) {
-        double q1 = cup_square_q(w, t1[j]), tri1 = cup_sign_sin_q_integral(q1);
-        ui[j] += w->amp * M_PI / w->omega * (tri1 - tri0);    /* cup_term_integral */
-        if (moving) u1[j] += w->amp * cup_sign_sin_q(q1);      /* cup_term_value */
-        tri0 = tri1;
-      }
-      f->last_tri[q] = tri0;
+      square_ahead(f, q, t, cnt, ui, u1);
       continue;
     }
-    if (w->kind == CUP_WAVE_CONSTANT)
-      for (int j = 0; j < cnt; j++) ui[j] += th;
-    else if (w->kind == CUP_WAVE_SINE && w->omega > 0)
-      for (int j = 0; j < cnt; j++) ui[j] += th * cup_sin(w->omega * tmid[j] + w->phase);
+    if (w->kind == CUP_WAVE_CONSTANT || (w->kind == CUP_WAVE_SINE && !(w->omega > 0)))
+      for (int p = 0; p < P; p++) ui[p] += th;
     else if (w->kind == CUP_WAVE_SINE)
-      for (int j = 0; j < cnt; j++) ui[j] += th;
+      for (int p = 0; p < P; p++) ui[p] += th * cup_sin2(w->omega * tmid[p] + w->phase);
     else
-      for (int j = 0; j < cnt; j++) ui[j] += cup_term_integral(w, t0[j], t1[j]);
-    for (int j = 0; j < cnt && moving; j++) u1[j] += cup_term_value(w, t1[j]);
+      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui[j >> 1][j & 1] += cup_term_integral(w, t[j], t[j + 1]);
+    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1[j >> 1][j & 1] += cup_term_value(w, t[j + 1]);
   }
-  if (cnt) f->last_t = t1[cnt - 1];
-  for (int j = 0; j < cnt && !integrate; j++) ui[j] = f->uconst;   /* a constant input's h u, or none */
+  if (cnt) f->last_t = t[cnt];
+  for (int p = 0; p < P && !integrate; p++) ui[p] = (cup_v2d){f->uconst, f->uconst};   /* a constant input's h u, or none */
   return cnt;
 }
 
@@ -104,7 +126,7 @@ fast_step(const cup_faststep *f, cup_small_carry *c, double uint, double u1, con
   *g = f->g0;
   if (f->moving && u1 != 0) {                             /* integrator.c's moving_offset */
     cup_v2d moved = f->g0 + f->gdir * u1, nan_if_not_finite;
-    *g = (cup_v2d)(((cup_v2l)moved & f->grows) | ((cup_v2l)f->g0 & ~f->grows));
+    *g = cup_v2_select(f->grows, moved, f->g0);
     nan_if_not_finite = 0 * *g;
     if (isnan(nan_if_not_finite[0] + nan_if_not_finite[1])) return CUP_FAST_DECLINED;
   }
@@ -120,7 +142,7 @@ static inline __attribute__((always_inline)) long
 run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
   cup_v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
-  double t1[CUP_FAST_AHEAD], ui[CUP_FAST_AHEAD], u1[CUP_FAST_AHEAD];
+  cup_v2d t1[CUP_FAST_AHEAD / 2], ui[CUP_FAST_AHEAD / 2], u1[CUP_FAST_AHEAD / 2];
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
   cup_small_carry c = cup_small_load(f->th, m);
   cup_small_out o;
@@ -132,7 +154,7 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
       have = inputs_ahead(f, k, stop, t1, ui, u1);
       a = 0;
     }
-    int s = fast_step(f, &c, ui[a], u1[a], x, xf, z, &g, &o, n, m);
+    int s = fast_step(f, &c, cup_lane(ui, a), cup_lane(u1, a), x, xf, z, &g, &o, n, m);
     if (k == stop || s != CUP_OK) {
       for (int j = 0; j < n; j++) xp[j] = cup_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
@@ -155,7 +177,7 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
     }
     x[0] = z[0];
     x[1] = z[1];
-    t = t1[a];
+    t = cup_lane(t1, a);
     booked++;
     skipped += o.skipped;                                 /* cup_tally, per step */
     iterations += o.iterations;

@@ -17,6 +17,7 @@
 #include <math.h>
 #include "catchup/projector.h"
 #include "catchup/status.h"
+#include "util/lanes.h"
 #include "util/linalg.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
@@ -29,13 +30,6 @@
  * block, NaN, the exact mode eps_target < 0). */
 #define CUP_STEP_SMALL_N 4
 #define CUP_STEP_SMALL_M 2
-
-/* Two doubles side by side (SSE2, in any x86-64): the small step keeps its
- * rows, and the fused steps their states, in lanes, each lane doing a
- * scalar's arithmetic in the scalar's order, so that the results are those
- * of the one-at-a-time code bit for bit, in fewer instructions. */
-typedef double cup_v2d __attribute__((vector_size(16)));
-typedef long long cup_v2l __attribute__((vector_size(16)));
 
 typedef struct cup_lcp_step {
   int n, m;
@@ -111,12 +105,6 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
  * the lanes of one; unused lanes hold zeros and are never read. */
 #define CUP_ALWAYS_INLINE static inline __attribute__((always_inline))
 
-CUP_ALWAYS_INLINE double cup_lane(const cup_v2d *v, int j) { return v[j >> 1][j & 1]; }
-
-CUP_ALWAYS_INLINE cup_v2d cup_v2_abs(cup_v2d v) {
-  return (cup_v2d)((cup_v2l)v & (cup_v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
-}
-
 /* What the unrolled step carries from one step to the next: lcp.lam, lq and
  * lcp.prev (as a bit mask), in registers while the fused steps run. */
 typedef struct cup_small_carry {
@@ -189,41 +177,42 @@ CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2
  * active set a bit mask, each block solved by the same closed forms, the
  * same tolerances, the same least index). 0 with lam and *act written; 1,
  * touching nothing, where lcp.c would meet a singular block or cycle (and
- * then retry cold): the general path takes the step over. */
-CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, cup_v2d qv, cup_v2d *lam_out, int *pivots,
+ * then retry cold): the general path takes the step over. Scalars, not
+ * arrays indexed by the active set, so that nothing goes through memory. */
+CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, cup_v2d q, cup_v2d *lam, int *pivots,
                                       const int m) {
-  double q[2] = {qv[0], qv[1]};
-  double scale = fabs(q[0]);                      /* cup_max from 0 */
-  if (m > 1) scale = cup_max(scale, fabs(q[1]));
+  const double q0 = q[0], q1 = q[1];
+  double scale = fabs(q0);                        /* cup_max from 0 */
+  if (m > 1) scale = cup_max(scale, fabs(q1));
   double tol_w = 64 * DBL_EPSILON * scale;
   unsigned act = *actp;
   for (int it = 0; it < 16 * m + 64; it++) {
-    double lam[2] = {0, 0}, w[2];
+    double l0 = 0, l1 = 0;
     if (act == 3) {
       double det = M[0] * M[3] - M[2] * M[1];
       if (!(det != 0)) return 1;
-      lam[0] = (-q[0] * M[3] + q[1] * M[2]) / det;
-      lam[1] = (-q[1] * M[0] + q[0] * M[1]) / det;
-    } else if (act) {
-      int a = act - 1;
-      double d = M[a + a * m];
-      if (!(d != 0)) return 1;
-      lam[a] = -q[a] / d;
+      l0 = (-q0 * M[3] + q1 * M[2]) / det;
+      l1 = (-q1 * M[0] + q0 * M[1]) / det;
+    } else if (act == 1) {
+      if (!(M[0] != 0)) return 1;
+      l0 = -q0 / M[0];
+    } else if (act == 2) {                        /* m = 2 */
+      if (!(M[3] != 0)) return 1;
+      l1 = -q1 / M[3];
     }
-    double lmax = 0;
-    for (int i = 0; i < m; i++) {
-      double acc = q[i];
-      if (act & 1) acc += M[i] * lam[0];
-      if (act & 2) acc += M[i + m] * lam[1];
-      w[i] = acc;
-      lmax = cup_max(lmax, fabs(lam[i]));
-    }
+    double w0 = q0, w1 = q1;                      /* w = q + M lam on the active columns */
+    if (act & 1) w0 += M[0] * l0;
+    if (act & 2) w0 += M[m] * l1;
+    if (m > 1 && (act & 1)) w1 += M[1] * l0;
+    if (m > 1 && (act & 2)) w1 += M[1 + m] * l1;
+    double lmax = fabs(l0);                       /* cup_max from 0 */
+    if (m > 1) lmax = cup_max(lmax, fabs(l1));
     double tol_l = 64 * DBL_EPSILON * lmax;
     int flip = -1;
-    for (int i = 0; i < m && flip < 0; i++)
-      if (((act >> i) & 1) ? lam[i] < -tol_l : w[i] < -tol_w) flip = i;
+    if ((act & 1) ? l0 < -tol_l : w0 < -tol_w) flip = 0;
+    else if (m > 1 && ((act & 2) ? l1 < -tol_l : w1 < -tol_w)) flip = 1;
     if (flip < 0) {
-      *lam_out = (cup_v2d){lam[0], lam[1]};
+      *lam = (cup_v2d){l0, l1};
       *actp = act;
       return 0;
     }
@@ -260,18 +249,14 @@ CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v
   cup_v2d qs = q - (16 * gam + DBL_MIN), lam;     /* aimed a few ulps inside K, as step.c */
   int pivots = 0;
   if (cup_small_murty(&c->act, ls->M, qs, &lam, &pivots, m)) return 0;
-  double lq = 0;
-  for (int i = 0; i < m; i++) {
-    lam[i] = cup_max(lam[i], 0);
-    lq += lam[i] * q[i];
-  }
-  c->lam = lam;
+  double l0 = cup_max(lam[0], 0), l1 = m > 1 ? cup_max(lam[1], 0) : 0, lq = 0;
+  lq += l0 * q[0];
+  if (m > 1) lq += l1 * q[1];
+  c->lam = lam = (cup_v2d){l0, l1};
   c->lq = lq;
   for (int r = 0; r < halves; r++) z[r] = xf[r];
-  for (int i = 0; i < m; i++) {
-    if (lam[i] == 0) continue;
-    for (int r = 0; r < halves; r++) z[r] += ls->Hcol[i][r] * lam[i];
-  }
+  for (int r = 0; r < halves && l0 != 0; r++) z[r] += ls->Hcol[0][r] * l0;
+  for (int r = 0; r < halves && m > 1 && l1 != 0; r++) z[r] += ls->Hcol[1][r] * l1;
   cup_v2d s, sg;
   cup_small_slack(ls, g, z, &s, &sg, n);
   cup_v2d gapi = 2 * ls->h * lam * (s + sg);      /* impulse mu = h lambda */

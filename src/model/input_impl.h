@@ -50,18 +50,20 @@ static inline double cup_square_q(const cup_term *w, double t) { return w->omega
 /* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
 static inline double cup_mod2(double q) { return q - 2.0 * cup_floor(0.5 * q); }
 
-static inline double cup_sign_sin_q(double q) {
-  double r = cup_mod2(q);
+/* sign(sin(pi q)) from q and r = cup_mod2(q) */
+static inline double cup_sign_sin_qr(double q, double r) {
   double tol = 4 * DBL_EPSILON * (fabs(q) > 1 ? fabs(q) : 1.0);   /* fmax(1, |q|), NaN giving 1 */
   if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
   return r < 1 ? 1 : -1;
 }
 
-/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1. */
-static inline double cup_sign_sin_q_integral(double q) {
-  double r = cup_mod2(q);
-  return r <= 1 ? r : 2 - r;
-}
+static inline double cup_sign_sin_q(double q) { return cup_sign_sin_qr(q, cup_mod2(q)); }
+
+/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1,
+ * from r = cup_mod2(q). */
+static inline double cup_triangle_r(double r) { return r <= 1 ? r : 2 - r; }
+
+static inline double cup_sign_sin_q_integral(double q) { return cup_triangle_r(cup_mod2(q)); }
 
 /* One term's value at t (its component's share of u(t)). */
 double cup_term_value(const cup_term *w, double t);
