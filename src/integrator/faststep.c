@@ -42,26 +42,32 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
   f->on = 1;
 }
 
-/* One square wave's share of ui and u1 (inputs_ahead), from the grid times
- * t (CUP_FAST_AHEAD + 1 of them): its position q(t) serves both its integral
- * and its value, and its antiderivative at a step's start is the one at
- * the last step's end. */
-static void square_ahead(cup_faststep *f, int q, const double *t, int cnt, cup_v2d *ui, cup_v2d *u1) {
+/* The values of CUP_FAST_AHEAD steps: written two at a time, read one at a
+ * time (a lane picked by a variable costs a few instructions, an element
+ * one). */
+typedef union cup_ahead {
+  cup_v2d v[CUP_FAST_AHEAD / 2];
+  double d[CUP_FAST_AHEAD];
+} cup_ahead;
+
+/* One square wave's share of ui and u1 (inputs_ahead) for the steps
+ * ending at t1: its position q(t) serves both its integral and its value,
+ * and its antiderivative at a step's start is the one at the last step's
+ * end. */
+static void square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, int cnt, cup_ahead *ui,
+                         cup_ahead *u1) {
   const cup_term *w = f->term[q];
-  double tri[CUP_FAST_AHEAD + 1], sgn[CUP_FAST_AHEAD + 1];
   double ph = w->phase / M_PI, height = w->amp * M_PI / w->omega;   /* cup_square_q, cup_term_integral */
-  tri[0] = t[0] == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t[0]));
-  for (int j = 1; j <= CUP_FAST_AHEAD; j++) {
-    double qj = w->omega * t[j] / M_PI + ph, r = cup_mod2(qj);
-    tri[j] = cup_triangle_r(r);
-    sgn[j] = cup_sign_sin_qr(qj, r);
-  }
+  double tri0 = t0 == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0)), fl = NAN;
+  cup_v2d before = {0, tri0};
   for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
-    cup_v2d t0 = {tri[2 * p], tri[2 * p + 1]}, t1 = {tri[2 * p + 1], tri[2 * p + 2]};
-    ui[p] += height * (t1 - t0);
-    if (f->moving) u1[p] += w->amp * (cup_v2d){sgn[2 * p + 1], sgn[2 * p + 2]};   /* cup_term_value */
+    cup_v2d qp = w->omega * t1->v[p] / M_PI + ph, r = cup_mod2_2(qp, &fl), tri = cup_triangle_r2(r);
+    cup_v2d start = __builtin_shuffle(before, tri, (cup_v2l){1, 2});
+    ui->v[p] += height * (tri - start);
+    if (f->moving) u1->v[p] += w->amp * cup_sign_sin_qr2(qp, r);   /* cup_term_value */
+    before = tri;
+    if (p == (cnt - 1) >> 1) f->last_tri[q] = tri[(cnt - 1) & 1];
   }
-  f->last_tri[q] = tri[cnt];
 }
 
 /* The inputs of steps k, k + 1, ..., k + CUP_FAST_AHEAD - 1, step k + j in
@@ -74,7 +80,7 @@ static void square_ahead(cup_faststep *f, int q, const double *t, int cnt, cup_v
  * overlap one another and the steps' chains; two steps at a time, and always
  * all of them (a few wasted at the end of a stretch) so that the loops have
  * no exits. */
-static int inputs_ahead(cup_faststep *f, long k, long stop, cup_v2d *t1, cup_v2d *ui, cup_v2d *u1) {
+static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_ahead *ui, cup_ahead *u1) {
   enum { P = CUP_FAST_AHEAD / 2 };
   int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
   double t[CUP_FAST_AHEAD + 2];                  /* t[j] = t_{k+j} as cup_grid_time gives it */
@@ -87,28 +93,28 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, cup_v2d *t1, cup_v2d
   if (k <= f->steps && f->steps - k <= CUP_FAST_AHEAD) t[f->steps - k] = f->T;
   for (int p = 0; p < P; p++) {
     t0[p] = (cup_v2d){t[2 * p], t[2 * p + 1]};
-    t1[p] = (cup_v2d){t[2 * p + 1], t[2 * p + 2]};
-    tmid[p] = 0.5 * (t0[p] + t1[p]);
-    ui[p] = u1[p] = (cup_v2d){0, 0};
+    t1->v[p] = (cup_v2d){t[2 * p + 1], t[2 * p + 2]};
+    tmid[p] = 0.5 * (t0[p] + t1->v[p]);
+    ui->v[p] = u1->v[p] = (cup_v2d){0, 0};
   }
   int integrate = f->integrate, moving = f->moving;
   for (int q = 0; q < f->nterms && (integrate || moving); q++) {
     const cup_term *w = f->term[q];
     double th = f->term_h[q];
     if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
-      square_ahead(f, q, t, cnt, ui, u1);
+      square_ahead(f, q, t[0], t1, cnt, ui, u1);
       continue;
     }
     if (w->kind == CUP_WAVE_CONSTANT || (w->kind == CUP_WAVE_SINE && !(w->omega > 0)))
-      for (int p = 0; p < P; p++) ui[p] += th;
+      for (int p = 0; p < P; p++) ui->v[p] += th;
     else if (w->kind == CUP_WAVE_SINE)
-      for (int p = 0; p < P; p++) ui[p] += th * cup_sin2(w->omega * tmid[p] + w->phase);
+      for (int p = 0; p < P; p++) ui->v[p] += th * cup_sin2(w->omega * tmid[p] + w->phase);
     else
-      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui[j >> 1][j & 1] += cup_term_integral(w, t[j], t[j + 1]);
-    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1[j >> 1][j & 1] += cup_term_value(w, t[j + 1]);
+      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui->d[j] += cup_term_integral(w, t[j], t[j + 1]);
+    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1->d[j] += cup_term_value(w, t[j + 1]);
   }
   if (cnt) f->last_t = t[cnt];
-  for (int p = 0; p < P && !integrate; p++) ui[p] = (cup_v2d){f->uconst, f->uconst};   /* a constant input's h u, or none */
+  for (int p = 0; p < P && !integrate; p++) ui->v[p] = (cup_v2d){f->uconst, f->uconst};   /* a constant input's h u, or none */
   return cnt;
 }
 
@@ -123,13 +129,9 @@ fast_step(const cup_faststep *f, cup_small_carry *c, double uint, double u1, con
     if (f->has) acc += f->Gam[r] * uint;
     xf[r] = acc;
   }
-  *g = f->g0;
-  if (f->moving && u1 != 0) {                             /* integrator.c's moving_offset */
-    cup_v2d moved = f->g0 + f->gdir * u1, nan_if_not_finite;
-    *g = cup_v2_select(f->grows, moved, f->g0);
-    nan_if_not_finite = 0 * *g;
-    if (isnan(nan_if_not_finite[0] + nan_if_not_finite[1])) return CUP_FAST_DECLINED;
-  }
+  /* integrator.c's moving_offset (g0 where u1 = 0, as cup_sparse_gaxpy
+   * skips a zero); cup_small_core declines an offset that is not finite */
+  *g = cup_v2_select(u1 != 0 ? f->grows : (cup_v2l){0, 0}, f->g0 + f->gdir * u1, f->g0);
   /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
   return cup_small_core(f->th, c, *g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
@@ -142,7 +144,7 @@ static inline __attribute__((always_inline)) long
 run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
   cup_v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
-  cup_v2d t1[CUP_FAST_AHEAD / 2], ui[CUP_FAST_AHEAD / 2], u1[CUP_FAST_AHEAD / 2];
+  cup_ahead t1, ui, u1;
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
   cup_small_carry c = cup_small_load(f->th, m);
   cup_small_out o;
@@ -151,10 +153,10 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
   double max_eps = info->max_eps_cert, max_eta = info->max_eta_cert, t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
-      have = inputs_ahead(f, k, stop, t1, ui, u1);
+      have = inputs_ahead(f, k, stop, &t1, &ui, &u1);
       a = 0;
     }
-    int s = fast_step(f, &c, cup_lane(ui, a), cup_lane(u1, a), x, xf, z, &g, &o, n, m);
+    int s = fast_step(f, &c, ui.d[a], u1.d[a], x, xf, z, &g, &o, n, m);
     if (k == stop || s != CUP_OK) {
       for (int j = 0; j < n; j++) xp[j] = cup_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
@@ -177,7 +179,7 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
     }
     x[0] = z[0];
     x[1] = z[1];
-    t = cup_lane(t1, a);
+    t = t1.d[a];
     booked++;
     skipped += o.skipped;                                 /* cup_tally, per step */
     iterations += o.iterations;

@@ -225,14 +225,14 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, cup_v2d q
 /* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
  * >= 0 and no D, from the free point xf for the offset g (lanes), carrying
  * c from the last step: 1 when it took the step (z, *c and *o written), 0
- * when the general path must (NaN in xf, a singular block), having changed
- * nothing but scratch. */
+ * when the general path must (NaN or Inf in xf or g, a singular block),
+ * having changed nothing but scratch. */
 CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g, const cup_v2d *restrict xf,
                                      cup_v2d *restrict z, double eps_target, double eta_target,
                                      cup_small_out *o, const int n, const int m) {
-  double probe = 0;                               /* NaN iff some entry is NaN or Inf */
-  for (int j = 0; j < n; j++) probe += 0 * cup_lane(xf, j);
-  if (isnan(probe)) return 0;
+  cup_v2d probe = 0 * g + 0 * cup_v2_first(xf[0], n);   /* NaN iff some entry is NaN or Inf */
+  if (n > 2) probe += 0 * cup_v2_first(xf[1], n - 2);
+  if (isnan(probe[0] + probe[1])) return 0;
   const int halves = (n + 1) / 2;
   cup_v2d q, gam;
   cup_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */

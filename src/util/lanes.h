@@ -16,6 +16,11 @@ static inline cup_v2d cup_v2_abs(cup_v2d v) {
   return (cup_v2d)((cup_v2l)v & (cup_v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
 }
 
+/* v's first k lanes (k >= 2: v), the others 0 */
+static inline __attribute__((always_inline)) cup_v2d cup_v2_first(cup_v2d v, int k) {
+  return k >= 2 ? v : (cup_v2d)((cup_v2l)v & (cup_v2l){-1, 0});
+}
+
 /* mask ? a : b, lane by lane (mask lanes all ones or zero) */
 static inline cup_v2d cup_v2_select(cup_v2l mask, cup_v2d a, cup_v2d b) {
   return (cup_v2d)(((cup_v2l)a & mask) | ((cup_v2l)b & ~mask));
