@@ -126,8 +126,7 @@ fast_step(const cup_faststep *f, cup_small_carry *c, double uint, double u1, con
   for (int r = 0; r < (n + 1) / 2; r++) {                 /* freestep.c's affine_rows */
     cup_v2d acc = {0, 0};
     for (int j = 0; j < n; j++) acc += f->Phi[j][r] * cup_lane(x, j);
-    if (f->has) acc += f->Gam[r] * uint;
-    xf[r] = acc;
+    xf[r] = acc + f->Gam[r] * uint;   /* without input 0 * 0: + 0 changes no sum but -0, never a 0 + ... */
   }
   /* integrator.c's moving_offset (g0 where u1 = 0, as cup_sparse_gaxpy
    * skips a zero); cup_small_core declines an offset that is not finite */

@@ -164,6 +164,7 @@ static void small_init(cup_lcp_step *ls) {
     ls->rowgam[i] = K->rowgam[i];
     for (int r = 0; r < ls->n; r++) ls->Hcol[i][r >> 1][r & 1] = ls->H[r + (size_t)i * ls->n];
   }
+  if (ls->m == 2) ls->det = ls->M[0] * ls->M[3] - ls->M[2] * ls->M[1];
   ls->small = 1;
 }
 

@@ -51,6 +51,7 @@ typedef struct cup_lcp_step {
   cup_v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
   cup_v2d rowgam;                      /* K->rowgam, the rows in lanes */
   cup_v2d Hcol[CUP_STEP_SMALL_M][2];   /* H's columns, the states in lanes (two pairs) */
+  double det;                          /* M's determinant for m = 2, as the pivoting forms it */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
@@ -178,9 +179,10 @@ CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2
  * same tolerances, the same least index). 0 with lam and *act written; 1,
  * touching nothing, where lcp.c would meet a singular block or cycle (and
  * then retry cold): the general path takes the step over. Scalars, not
- * arrays indexed by the active set, so that nothing goes through memory. */
-CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, cup_v2d q, cup_v2d *lam, int *pivots,
-                                      const int m) {
+ * arrays indexed by the active set, so that nothing goes through memory;
+ * det = M[0] M[3] - M[2] M[1], formed once. */
+CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double det, cup_v2d q, cup_v2d *lam,
+                                      int *pivots, const int m) {
   const double q0 = q[0], q1 = q[1];
   double scale = fabs(q0);                        /* cup_max from 0 */
   if (m > 1) scale = cup_max(scale, fabs(q1));
@@ -189,7 +191,6 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, cup_v2d q
   for (int it = 0; it < 16 * m + 64; it++) {
     double l0 = 0, l1 = 0;
     if (act == 3) {
-      double det = M[0] * M[3] - M[2] * M[1];
       if (!(det != 0)) return 1;
       l0 = (-q0 * M[3] + q1 * M[2]) / det;
       l1 = (-q1 * M[0] + q0 * M[1]) / det;
@@ -248,7 +249,7 @@ CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v
   }
   cup_v2d qs = q - (16 * gam + DBL_MIN), lam;     /* aimed a few ulps inside K, as step.c */
   int pivots = 0;
-  if (cup_small_murty(&c->act, ls->M, qs, &lam, &pivots, m)) return 0;
+  if (cup_small_murty(&c->act, ls->M, ls->det, qs, &lam, &pivots, m)) return 0;
   double l0 = cup_max(lam[0], 0), l1 = m > 1 ? cup_max(lam[1], 0) : 0, lq = 0;
   lq += l0 * q[0];
   if (m > 1) lq += l1 * q[1];
@@ -258,6 +259,7 @@ CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v
   for (int r = 0; r < halves && l0 != 0; r++) z[r] += ls->Hcol[0][r] * l0;
   for (int r = 0; r < halves && m > 1 && l1 != 0; r++) z[r] += ls->Hcol[1][r] * l1;
   cup_v2d s, sg;
+  __asm__("" : "+r"(ls));   /* read C's columns again rather than keep them live across the step (spilled) */
   cup_small_slack(ls, g, z, &s, &sg, n);
   cup_v2d gapi = 2 * ls->h * lam * (s + sg);      /* impulse mu = h lambda */
   double gap = 0, viol = 0;
