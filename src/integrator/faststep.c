@@ -57,17 +57,21 @@ typedef union cup_ahead {
 static void square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, int cnt, cup_ahead *ui,
                          cup_ahead *u1) {
   const cup_term *w = f->term[q];
-  double ph = w->phase / M_PI, height = w->amp * M_PI / w->omega;   /* cup_square_q, cup_term_integral */
-  double tri0 = t0 == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0)), fl = NAN;
-  cup_v2d before = {0, tri0};
+  const double omega = w->omega, ph = w->phase / M_PI;        /* cup_square_q */
+  const double height = w->amp * M_PI / w->omega, amp = w->amp;   /* cup_term_integral, cup_term_value */
+  double fl = NAN;
+  cup_v2d qs[CUP_FAST_AHEAD / 2], r[CUP_FAST_AHEAD / 2];
+  cup_ahead tri;
+  cup_v2d before = {0, t0 == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0))};
   for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
-    cup_v2d qp = w->omega * t1->v[p] / M_PI + ph, r = cup_mod2_2(qp, &fl), tri = cup_triangle_r2(r);
-    cup_v2d start = __builtin_shuffle(before, tri, (cup_v2l){1, 2});
-    ui->v[p] += height * (tri - start);
-    if (f->moving) u1->v[p] += w->amp * cup_sign_sin_qr2(qp, r);   /* cup_term_value */
-    before = tri;
-    if (p == (cnt - 1) >> 1) f->last_tri[q] = tri[(cnt - 1) & 1];
+    qs[p] = omega * t1->v[p] / M_PI + ph;
+    r[p] = cup_mod2_2(qs[p], &fl);
+    tri.v[p] = cup_triangle_r2(r[p]);
+    ui->v[p] += height * (tri.v[p] - __builtin_shuffle(before, tri.v[p], (cup_v2l){1, 2}));
+    before = tri.v[p];
   }
+  if (cnt) f->last_tri[q] = tri.d[cnt - 1];
+  for (int p = 0; p < CUP_FAST_AHEAD / 2 && f->moving; p++) u1->v[p] += amp * cup_sign_sin_qr2(qs[p], r[p]);
 }
 
 /* The inputs of steps k, k + 1, ..., k + CUP_FAST_AHEAD - 1, step k + j in

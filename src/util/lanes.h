@@ -21,6 +21,33 @@ static inline __attribute__((always_inline)) cup_v2d cup_v2_first(cup_v2d v, int
   return k >= 2 ? v : (cup_v2d)((cup_v2l)v & (cup_v2l){-1, 0});
 }
 
+/* a > b ? a : b and a < b ? a : b, lane by lane (b where unordered: SSE2's
+ * maxpd and minpd exactly) */
+static inline cup_v2d cup_v2_max(cup_v2d a, cup_v2d b) {
+#ifdef __SSE2__
+  return __builtin_ia32_maxpd(a, b);
+#else
+  return (cup_v2d){a[0] > b[0] ? a[0] : b[0], a[1] > b[1] ? a[1] : b[1]};
+#endif
+}
+
+static inline cup_v2d cup_v2_min(cup_v2d a, cup_v2d b) {
+#ifdef __SSE2__
+  return __builtin_ia32_minpd(a, b);
+#else
+  return (cup_v2d){a[0] < b[0] ? a[0] : b[0], a[1] < b[1] ? a[1] : b[1]};
+#endif
+}
+
+/* mask ? 0 : v, lane by lane (mask lanes all ones or zero) */
+static inline cup_v2d cup_v2_clear(cup_v2l mask, cup_v2d v) {
+#ifdef __SSE2__
+  return __builtin_ia32_andnpd((cup_v2d)mask, v);
+#else
+  return (cup_v2d)(~mask & (cup_v2l)v);
+#endif
+}
+
 /* mask ? a : b, lane by lane (mask lanes all ones or zero) */
 static inline cup_v2d cup_v2_select(cup_v2l mask, cup_v2d a, cup_v2d b) {
   return (cup_v2d)(((cup_v2l)a & mask) | ((cup_v2l)b & ~mask));
