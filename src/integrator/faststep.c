@@ -118,7 +118,8 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_a
     for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1->d[j] += cup_term_value(w, t[j + 1]);
   }
   if (cnt) f->last_t = t[cnt];
-  for (int p = 0; p < P && !integrate; p++) ui->v[p] = (cup_v2d){f->uconst, f->uconst};   /* a constant input's h u, or none */
+  for (int p = 0; p < P && !integrate; p++)   /* a constant input's h u, or none */
+    ui->v[p] = (cup_v2d){f->uconst, f->uconst};
   return cnt;
 }
 

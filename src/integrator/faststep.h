@@ -30,7 +30,7 @@ typedef struct cup_faststep {
   int on;
   cup_lcp_step *th;
   /* the free step xf = Phi x + Gam int u, copied from freestep.c's, the
-   * states in lanes (lcp/step.h): Phi[j] column j */
+   * states in lanes (util/lanes.h): Phi[j] column j */
   cup_v2d Phi[CUP_STEP_SMALL_N][2], Gam[2];
   int has;                  /* an input enters through E */
   int integrate;            /* ... and is integrated at every step (not constant) */

@@ -134,8 +134,8 @@ CUP_ALWAYS_INLINE void cup_small_store(cup_lcp_step *ls, const cup_small_carry *
   ls->lq = c->lq;
 }
 
-CUP_ALWAYS_INLINE void cup_small_info(cup_proj_info *info, const cup_small_out *o, double scale, double eps_target,
-                                      double eta_target) {
+CUP_ALWAYS_INLINE void cup_small_info(cup_proj_info *info, const cup_small_out *o, double scale,
+                                      double eps_target, double eta_target) {
   *info = (cup_proj_info){.status = o->status, .method = CUP_PROJ_ACTIVESET, .iterations = o->iterations,
                           .skipped = o->skipped, .active = o->active, .scale = scale, .eps_target = eps_target,
                           .eta_target = eta_target, .eps_cert = o->eps_cert, .eta_cert = o->eta_cert,
@@ -228,9 +228,9 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double de
  * c from the last step: 1 when it took the step (z, *c and *o written), 0
  * when the general path must (NaN or Inf in xf or g, a singular block),
  * having changed nothing but scratch. */
-CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g, const cup_v2d *restrict xf,
-                                     cup_v2d *restrict z, double eps_target, double eta_target,
-                                     cup_small_out *o, const int n, const int m) {
+CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g,
+                                     const cup_v2d *restrict xf, cup_v2d *restrict z, double eps_target,
+                                     double eta_target, cup_small_out *o, const int n, const int m) {
   cup_v2d probe = 0 * g + 0 * cup_v2_first(xf[0], n);   /* NaN iff some entry is NaN or Inf */
   if (n > 2) probe += 0 * cup_v2_first(xf[1], n - 2);
   if (isnan(probe[0] + probe[1])) return 0;

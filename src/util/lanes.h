@@ -10,7 +10,9 @@ typedef double cup_v2d __attribute__((vector_size(16)));
 typedef long long cup_v2l __attribute__((vector_size(16)));
 
 /* Entry j of the values v[0][0], v[0][1], v[1][0], ... */
-static inline __attribute__((always_inline)) double cup_lane(const cup_v2d *v, int j) { return v[j >> 1][j & 1]; }
+static inline __attribute__((always_inline)) double cup_lane(const cup_v2d *v, int j) {
+  return v[j >> 1][j & 1];
+}
 
 static inline cup_v2d cup_v2_abs(cup_v2d v) {
   return (cup_v2d)((cup_v2l)v & (cup_v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
