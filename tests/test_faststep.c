@@ -1,6 +1,8 @@
 /* The fast paths of the time loop against the general ones they stand in
  * for (src/util/trig.h, the unrolled LCP step of src/lcp/step.h, the fused
- * steps of src/integrator/faststep.c): cup_sin against libm's sin in ulps;
+ * steps of src/integrator/faststep.c): cup_sin against libm's sin in ulps,
+ * its two-lane form and the square wave's lane helpers against the scalar
+ * ones bit for bit;
  * the unrolled step against the general pivoting path on random small sets,
  * bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
@@ -15,6 +17,7 @@
 #include "testutil.h"
 #include "lcp/step.h"
 #include "set/polyset_impl.h"
+#include "model/input_impl.h"
 #include "util/trig.h"
 
 /* ---- cup_sin ------------------------------------------------------------------- */
@@ -50,6 +53,60 @@ static void test_sin_within_two_ulps(void **state) {
 }
 
 static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* cup_sin2 is cup_sin in each lane, bit for bit: the inputs' range, near
+ * multiples of pi/2, tiny and zero arguments, and pairs where one lane goes
+ * to libm (65536 and beyond, Inf, NaN) and the other does not. */
+static void test_sin2_is_sin(void **state) {
+  (void)state;
+  rng_t r = {11};
+  double special[] = {0.0, -0.0, 1e-300, -1e-9, 0x1p-26, -0x1p-27, 65535.9, 65536, -1e10, INFINITY, NAN,
+                      M_PI / 2, -M_PI, 3 * M_PI / 2};
+  int ns = sizeof special / sizeof special[0];
+  for (int k = 0; k < 500000; k++) {
+    double a[2];
+    for (int l = 0; l < 2; l++) {
+      int pick = rng_int(&r, 0, 9);
+      a[l] = pick == 0 ? special[rng_int(&r, 0, ns - 1)]
+           : pick == 1 ? rng_int(&r, -40000, 40000) * (M_PI / 2) * (1 + 1e-15 * rng_normal(&r))
+           : 200 * rng_unif(&r) - 100;
+    }
+    cup_v2d s = cup_sin2((cup_v2d){a[0], a[1]});
+    for (int l = 0; l < 2; l++) {
+      double want = cup_sin(a[l]);
+      if (!same(s[l], want) && !(isnan(s[l]) && isnan(want)))
+        fail_msg("cup_sin2 lane %d at %.17g: %.17g, cup_sin %.17g", l, a[l], s[l], want);
+    }
+  }
+}
+
+/* The square wave's lane helpers (model/input_impl.h) against the scalar
+ * ones, bit for bit, along increasing positions q as the fused steps meet
+ * them (steps across the jumps at integers, exact integers, negative
+ * phases, a huge q) with the floor carried from pair to pair, and on
+ * unordered pairs and NaN. */
+static void test_square_lanes_are_scalar(void **state) {
+  (void)state;
+  rng_t r = {5};
+  double starts[] = {-3.0, -0.25, 0.0, 0.999999999, 1e6 + 0.5, 0x1p52};
+  for (size_t c = 0; c < sizeof starts / sizeof starts[0]; c++)
+    for (int trial = 0; trial < 200; trial++) {
+      double fl = NAN, d = ldexp(rng_unif(&r), -rng_int(&r, 1, 30)), q0 = starts[c];
+      for (int k = 0; k < 400; k++) {
+        double qa = q0 + (2 * k) * d, qb = q0 + (2 * k + 1) * d;
+        if (k % 37 == 5) qa = qb = floor(qa) + 1;                /* on a jump, twice */
+        if (trial == 7 && k == 9) { qa = 2.5; qb = 1.5; }       /* not increasing */
+        if (trial == 8 && k == 3) qb = NAN;
+        cup_v2d q = {qa, qb}, rr = cup_mod2_2(q, &fl), tri = cup_triangle_r2(rr), sg = cup_sign_sin_qr2(q, rr);
+        for (int l = 0; l < 2; l++) {
+          double want = cup_mod2(q[l]);
+          assert_true(same(rr[l], want) || (isnan(rr[l]) && isnan(want)));
+          assert_true(same(tri[l], cup_triangle_r(want)) || (isnan(tri[l]) && isnan(want)));
+          assert_true(same(sg[l], cup_sign_sin_qr(q[l], want)));
+        }
+      }
+    }
+}
 
 /* cup_floor (the square wave's, util/linalg.h) is libm's floor bit for bit. */
 static void test_floor_is_libm(void **state) {
@@ -237,6 +294,8 @@ static void test_fused_steps_are_the_loop(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_sin_within_two_ulps),
+    cmocka_unit_test(test_sin2_is_sin),
+    cmocka_unit_test(test_square_lanes_are_scalar),
     cmocka_unit_test(test_floor_is_libm),
     cmocka_unit_test(test_unrolled_step_is_the_general_one),
     cmocka_unit_test(test_fused_steps_are_the_loop),

@@ -9,18 +9,20 @@
 void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
                        const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
                        double T) {
-  *f = (cup_faststep){.th = th, .g0 = K->g0, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T,
-                      .h = fs->h, .last_t = NAN};
+  *f = (cup_faststep){.th = th, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T, .h = fs->h,
+                      .last_t = NAN};
   const cup_input *u = fs->u;
   if (!use_theta || !th->small || !fs->affine || fs->has_f || fs->p > 1 || !(eps_n > 0) || !(eta_n > 0) ||
       (u && (u->fn || u->nterms > CUP_FAST_TERMS)))
     return;
   int n = fs->n;
-  for (int q = 0; q < n * n; q++) f->Phi[q] = fs->Phi[q];
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < n; j++) f->Phi[j][i >> 1][i & 1] = fs->Phi[i * n + j];
   f->has = u && fs->d.has_E;                /* freestep.c's step_input */
   f->integrate = f->has && !fs->const_input;
   f->uconst = f->has ? fs->ubuf[0] : 0;
-  for (int i = 0; i < n && f->has; i++) f->Gam[i] = fs->Gam[i];
+  for (int i = 0; i < n && f->has; i++) f->Gam[i >> 1][i & 1] = fs->Gam[i];
+  for (int i = 0; i < K->m; i++) f->g0[i] = K->g0[i];
   f->nterms = u ? u->nterms : 0;
   for (int k = 0; k < f->nterms; k++) {
     f->term[k] = &u->terms[k];
@@ -30,114 +32,163 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
   }
   f->moving = G && u;
   if (f->moving) {
-    if (G->ncol != 1 || G->nnz > CUP_STEP_SMALL_M) return;
+    if (G->ncol != 1) return;
     for (int q = G->p[0]; q < G->p[1]; q++) {
-      f->grow[f->gnnz] = G->i[q];
-      f->gval[f->gnnz++] = G->x[q];
+      if (f->grows[G->i[q]]) return;        /* a repeated row: cup_sparse_gaxpy adds twice */
+      f->grows[G->i[q]] = -1;
+      f->gdir[G->i[q]] = G->x[q];
     }
   }
   f->on = 1;
 }
 
-/* The inputs of steps k, k + 1, ..., at most CUP_FAST_AHEAD and none past
- * stop, into t1 (each step's end), ui (the integral of u over it: freestep.c's
- * cup_freestep_term_integral summed term by term as waveform_step_integral
- * sums one input) and u1 (u at its end, for a moving set: cup_input_eval);
- * returns how many. Term by term over the steps, so that a term's kind is
- * looked at once, and apart from the steps, so that the sines (some 60
- * cycles of latency each) overlap one another and the steps' chains. A
- * square wave's position q(t) serves both its integral and its value, and
- * its antiderivative at a step's start is the one at the last step's end. */
-static int inputs_ahead(cup_faststep *f, long k, long stop, double *t1, double *ui, double *u1) {
+/* The values of CUP_FAST_AHEAD steps: written two at a time, read one at a
+ * time (a lane picked by a variable costs a few instructions, an element
+ * one). */
+typedef union cup_ahead {
+  cup_v2d v[CUP_FAST_AHEAD / 2];
+  double d[CUP_FAST_AHEAD];
+} cup_ahead;
+
+/* One square wave's share of ui and u1 (inputs_ahead) for the steps
+ * ending at t1: its position q(t) serves both its integral and its value,
+ * and its antiderivative at a step's start is the one at the last step's
+ * end. */
+static void square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, int cnt, cup_ahead *ui,
+                         cup_ahead *u1) {
+  const cup_term *w = f->term[q];
+  const double omega = w->omega, ph = w->phase / M_PI;        /* cup_square_q */
+  const double height = w->amp * M_PI / w->omega, amp = w->amp;   /* cup_term_integral, cup_term_value */
+  double fl = NAN;
+  cup_v2d qs[CUP_FAST_AHEAD / 2], r[CUP_FAST_AHEAD / 2];
+  cup_ahead tri;
+  cup_v2d before = {0, t0 == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0))};
+  for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
+    qs[p] = omega * t1->v[p] / M_PI + ph;
+    r[p] = cup_mod2_2(qs[p], &fl);
+    tri.v[p] = cup_triangle_r2(r[p]);
+    ui->v[p] += height * (tri.v[p] - __builtin_shuffle(before, tri.v[p], (cup_v2l){1, 2}));
+    before = tri.v[p];
+  }
+  if (cnt) f->last_tri[q] = tri.d[cnt - 1];
+  for (int p = 0; p < CUP_FAST_AHEAD / 2 && f->moving; p++) u1->v[p] += amp * cup_sign_sin_qr2(qs[p], r[p]);
+}
+
+/* The inputs of steps k, k + 1, ..., k + CUP_FAST_AHEAD - 1, step k + j in
+ * lane j & 1 of entry j >> 1: t1 (each step's end), ui (the integral of u
+ * over it: freestep.c's cup_freestep_term_integral summed term by term as
+ * waveform_step_integral sums one input) and u1 (u at its end, for a moving
+ * set: cup_input_eval); returns how many of them to take, none past stop.
+ * Term by term over the steps, so that a term's kind is looked at once, and
+ * apart from the steps, so that the sines (some 60 cycles of latency each)
+ * overlap one another and the steps' chains; two steps at a time, and always
+ * all of them (a few wasted at the end of a stretch) so that the loops have
+ * no exits. */
+static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_ahead *ui, cup_ahead *u1) {
+  enum { P = CUP_FAST_AHEAD / 2 };
   int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
-  double t0[CUP_FAST_AHEAD], tmid[CUP_FAST_AHEAD];
-  for (int j = 0; j < cnt; j++) {
-    t0[j] = j ? t1[j - 1] : cup_grid_time(k, f->steps, f->T, f->h);
-    t1[j] = cup_grid_time(k + j + 1, f->steps, f->T, f->h);
-    tmid[j] = 0.5 * (t0[j] + t1[j]);
-    ui[j] = u1[j] = 0;
+  double t[CUP_FAST_AHEAD + 2];                  /* t[j] = t_{k+j} as cup_grid_time gives it */
+  cup_v2d kk = {(double)k, (double)k + 1}, t0[P], tmid[P];
+  for (int p = 0; p <= P; p++) {
+    cup_v2d tp = (kk + 2 * p) * f->h;            /* (double)(k + j) exactly: k < 2^53 */
+    t[2 * p] = tp[0];
+    t[2 * p + 1] = tp[1];
+  }
+  if (k <= f->steps && f->steps - k <= CUP_FAST_AHEAD) t[f->steps - k] = f->T;
+  for (int p = 0; p < P; p++) {
+    t0[p] = (cup_v2d){t[2 * p], t[2 * p + 1]};
+    t1->v[p] = (cup_v2d){t[2 * p + 1], t[2 * p + 2]};
+    tmid[p] = 0.5 * (t0[p] + t1->v[p]);
+    ui->v[p] = u1->v[p] = (cup_v2d){0, 0};
   }
   int integrate = f->integrate, moving = f->moving;
   for (int q = 0; q < f->nterms && (integrate || moving); q++) {
     const cup_term *w = f->term[q];
     double th = f->term_h[q];
     if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
-      double tri0 = t0[0] == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0[0]));
-      for (int j = 0; j < cnt; j++) {
-        double q1 = cup_square_q(w, t1[j]), tri1 = cup_sign_sin_q_integral(q1);
-        ui[j] += w->amp * M_PI / w->omega * (tri1 - tri0);    /* cup_term_integral */
-        if (moving) u1[j] += w->amp * cup_sign_sin_q(q1);      /* cup_term_value */
-        tri0 = tri1;
-      }
-      f->last_tri[q] = tri0;
+      square_ahead(f, q, t[0], t1, cnt, ui, u1);
       continue;
     }
-    if (w->kind == CUP_WAVE_CONSTANT)
-      for (int j = 0; j < cnt; j++) ui[j] += th;
-    else if (w->kind == CUP_WAVE_SINE && w->omega > 0)
-      for (int j = 0; j < cnt; j++) ui[j] += th * cup_sin(w->omega * tmid[j] + w->phase);
+    if (w->kind == CUP_WAVE_CONSTANT || (w->kind == CUP_WAVE_SINE && !(w->omega > 0)))
+      for (int p = 0; p < P; p++) ui->v[p] += th;
     else if (w->kind == CUP_WAVE_SINE)
-      for (int j = 0; j < cnt; j++) ui[j] += th;
+      for (int p = 0; p < P; p++) ui->v[p] += th * cup_sin2(w->omega * tmid[p] + w->phase);
     else
-      for (int j = 0; j < cnt; j++) ui[j] += cup_term_integral(w, t0[j], t1[j]);
-    for (int j = 0; j < cnt && moving; j++) u1[j] += cup_term_value(w, t1[j]);
+      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui->d[j] += cup_term_integral(w, t[j], t[j + 1]);
+    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1->d[j] += cup_term_value(w, t[j + 1]);
   }
-  if (cnt) f->last_t = t1[cnt - 1];
-  for (int j = 0; j < cnt && !integrate; j++) ui[j] = f->uconst;   /* a constant input's h u, or none */
+  if (cnt) f->last_t = t[cnt];
+  for (int p = 0; p < P && !integrate; p++)   /* a constant input's h u, or none */
+    ui->v[p] = (cup_v2d){f->uconst, f->uconst};
   return cnt;
 }
 
-/* One step from x into z (xf: the free point), its input given: the
- * status, or CUP_FAST_DECLINED with nothing but scratch changed. */
+/* One step from x into z (xf: the free point, g: the offset), its input
+ * given: the status, or CUP_FAST_DECLINED with nothing but scratch changed. */
 static inline __attribute__((always_inline)) int
-fast_step(cup_faststep *f, double uint, double u1, const double *restrict x, double *restrict xf,
-          double *restrict z, cup_proj_info *pi, const int n, const int m) {
-  for (int i = 0; i < n; i++) {                             /* freestep.c's affine_rows */
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += f->Phi[i * n + j] * x[j];
-    if (f->has) acc += f->Gam[i] * uint;
-    xf[i] = acc;
+fast_step(const cup_faststep *f, cup_small_carry *c, double uint, double u1, const cup_v2d *restrict x,
+          cup_v2d *restrict xf, cup_v2d *restrict z, cup_v2d *g, cup_small_out *o, const int n, const int m) {
+  for (int r = 0; r < (n + 1) / 2; r++) {                 /* freestep.c's affine_rows */
+    cup_v2d acc = {0, 0};
+    for (int j = 0; j < n; j++) acc += f->Phi[j][r] * cup_lane(x, j);
+    xf[r] = acc + f->Gam[r] * uint;   /* without input 0 * 0: + 0 changes no sum but -0, never a 0 + ... */
   }
-  const double *g = f->g0;
-  if (f->moving) {                                          /* integrator.c's moving_offset */
-    for (int i = 0; i < m; i++) f->g[i] = f->g0[i];
-    if (u1 != 0)
-      for (int q = 0; q < f->gnnz; q++) f->g[f->grow[q]] += f->gval[q] * u1;
-    for (int i = 0; i < m; i++)
-      if (!isfinite(f->g[i])) return CUP_FAST_DECLINED;
-    g = f->g;
-  }
+  /* integrator.c's moving_offset (g0 where u1 = 0, as cup_sparse_gaxpy
+   * skips a zero); cup_small_core declines an offset that is not finite */
+  *g = cup_v2_select(u1 != 0 ? f->grows : (cup_v2l){0, 0}, f->g0 + f->gdir * u1, f->g0);
   /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
-  return cup_small_step(f->th, g, xf, z, NAN, f->eps_n, f->eta_n, pi, n, m) ? pi->status : CUP_FAST_DECLINED;
+  return cup_small_core(f->th, c, *g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
 
-/* integrator.c's loop from step k, the state in registers: each step that
- * ends CUP_OK before stop is booked as the loop books it; the first other
- * one, or step stop, is left pending. */
+/* integrator.c's loop from step k, the state, the LCP's warm start and the
+ * statistics in registers: each step that ends CUP_OK before stop is booked
+ * as the loop books it (cup_tally, step, t: added up here, written into
+ * info at the end); the first other one, or step stop, is left pending. */
 static inline __attribute__((always_inline)) long
 run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
-  double x[CUP_STEP_SMALL_N], xf[CUP_STEP_SMALL_N], z[CUP_STEP_SMALL_N];
-  double t1[CUP_FAST_AHEAD], ui[CUP_FAST_AHEAD], u1[CUP_FAST_AHEAD];
-  for (int j = 0; j < n; j++) x[j] = xp[j];
-  cup_proj_info p;
+  cup_v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
+  cup_ahead t1, ui, u1;
+  for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
+  cup_small_carry c = cup_small_load(f->th, m);
+  cup_small_out o;
+  long booked = 0, skipped = 0;
+  long long iterations = 0;
+  double max_eps = info->max_eps_cert, max_eta = info->max_eta_cert, t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
-      have = inputs_ahead(f, k, stop, t1, ui, u1);
+      have = inputs_ahead(f, k, stop, &t1, &ui, &u1);
       a = 0;
     }
-    int s = fast_step(f, ui[a], u1[a], x, xf, z, &p, n, m);
+    int s = fast_step(f, &c, ui.d[a], u1.d[a], x, xf, z, &g, &o, n, m);
     if (k == stop || s != CUP_OK) {
-      for (int j = 0; j < n; j++) xp[j] = x[j];
-      for (int j = 0; j < n && s != CUP_FAST_DECLINED; j++) xnewp[j] = z[j];
-      *pi = p;
+      for (int j = 0; j < n; j++) xp[j] = cup_lane(x, j);
+      if (s != CUP_FAST_DECLINED) {
+        for (int j = 0; j < n; j++) xnewp[j] = cup_lane(z, j);
+        cup_small_info(pi, &o, NAN, f->eps_n, f->eta_n);
+      }
+      cup_small_store(f->th, &c, m);
+      for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
+      if (booked) {
+        info->step = k;
+        info->t = t;
+        info->skipped += skipped;
+        info->projected += booked - skipped;
+        info->dual_iterations += iterations;
+        info->max_eps_cert = max_eps;
+        info->max_eta_cert = max_eta;
+      }
       *st = s;
       return k;
     }
-    for (int j = 0; j < n; j++) x[j] = z[j];
-    info->step = k + 1;
-    info->t = t1[a];
-    cup_tally(info, &p);
+    x[0] = z[0];
+    x[1] = z[1];
+    t = t1.d[a];
+    booked++;
+    skipped += o.skipped;                                 /* cup_tally, per step */
+    iterations += o.iterations;
+    if (!(o.eps_cert <= max_eps)) max_eps = o.eps_cert;
+    if (!(o.eta_cert <= max_eta)) max_eta = o.eta_cert;
   }
 }
 

@@ -29,8 +29,9 @@
 typedef struct cup_faststep {
   int on;
   cup_lcp_step *th;
-  /* the free step xf = Phi x + Gam int u, copied from freestep.c's */
-  double Phi[CUP_STEP_SMALL_N * CUP_STEP_SMALL_N], Gam[CUP_STEP_SMALL_N];
+  /* the free step xf = Phi x + Gam int u, copied from freestep.c's, the
+   * states in lanes (util/lanes.h): Phi[j] column j */
+  cup_v2d Phi[CUP_STEP_SMALL_N][2], Gam[2];
   int has;                  /* an input enters through E */
   int integrate;            /* ... and is integrated at every step (not constant) */
   double uconst;            /* a constant input's h u */
@@ -38,12 +39,11 @@ typedef struct cup_faststep {
   int nterms;
   const cup_term *term[CUP_FAST_TERMS];
   double term_h[CUP_FAST_TERMS];   /* freestep.c's step-length factors */
-  /* the moving offset g = F + G u(t_{k+1}) */
-  const double *g0;         /* F */
-  double *g;                /* the integrator's offset buffer */
+  /* the moving offset g = F + G u(t_{k+1}), the rows in lanes */
+  cup_v2d g0, gdir;         /* F and G's one column */
+  cup_v2l grows;            /* all ones in the lanes of G's rows */
+  double *g;                /* the integrator's offset buffer, written at the end of a run */
   int moving;
-  int gnnz, grow[CUP_STEP_SMALL_M];
-  double gval[CUP_STEP_SMALL_M];   /* G's one column, in cup_sparse_gaxpy's order */
   double eps_n, eta_n;
   long steps;               /* the grid: t_k = k T / steps, step h */
   double T, h;

@@ -156,12 +156,15 @@ static int small_dispatch(cup_lcp_step *ls, const double *g, const double *xf, d
 static void small_init(cup_lcp_step *ls) {
   const cup_polyset *K = ls->K;
   if (ls->D || ls->n > CUP_STEP_SMALL_N || ls->m > CUP_STEP_SMALL_M || ls->m < 1) return;
-  for (int i = 0; i < ls->m; i++)
+  for (int i = 0; i < ls->m; i++) {
     for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) {
-      double *c = &ls->Cd[i * CUP_STEP_SMALL_N + K->Ct.i[k]];
       if (k > K->Ct.p[i] && K->Ct.i[k] <= K->Ct.i[k - 1]) return;
-      *c = K->Ct.x[k];
+      ls->Ccol[K->Ct.i[k]][i] = K->Ct.x[k];
     }
+    ls->rowgam[i] = K->rowgam[i];
+    for (int r = 0; r < ls->n; r++) ls->Hcol[i][r >> 1][r & 1] = ls->H[r + (size_t)i * ls->n];
+  }
+  if (ls->m == 2) ls->det = ls->M[0] * ls->M[3] - ls->M[2] * ls->M[1];
   ls->small = 1;
 }
 

@@ -17,6 +17,7 @@
 #include <math.h>
 #include "catchup/projector.h"
 #include "catchup/status.h"
+#include "util/lanes.h"
 #include "util/linalg.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
@@ -47,7 +48,10 @@ typedef struct cup_lcp_step {
   double *xpred;    /* xf + Hprev lambda_k */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
   int small;        /* 1: cup_lcp_step_solve tries the unrolled step first */
-  double Cd[CUP_STEP_SMALL_M * CUP_STEP_SMALL_N];   /* row-major, zeros included */
+  cup_v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
+  cup_v2d rowgam;                      /* K->rowgam, the rows in lanes */
+  cup_v2d Hcol[CUP_STEP_SMALL_M][2];   /* H's columns, the states in lanes (two pairs) */
+  double det;                          /* M's determinant for m = 2, as the pivoting forms it */
 } cup_lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
@@ -97,84 +101,120 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
  * free step. They do the general path's arithmetic in the same order (a
  * zero entry of the dense rows adds an exact zero to finite sums), so z,
  * lambda and the certificates are the general path's; where that path would
- * meet anything unusual they decline, having changed only scratch. */
+ * meet anything unusual they decline, having changed only scratch. States
+ * x_0..x_3 are the lanes of two cup_v2d, (x_0, x_1) and (x_2, x_3); rows
+ * the lanes of one; unused lanes hold zeros and are never read. */
 #define CUP_ALWAYS_INLINE static inline __attribute__((always_inline))
 
-/* cup_slack on the dense rows C (row-major, CUP_STEP_SMALL_N apart), term
- * by term in the same order (a zero entry adds an exact zero to finite
- * sums). */
-CUP_ALWAYS_INLINE void cup_small_slack(const double *C, const double *rg, const double *g, const double *x,
-                                       double *s, double *gam, const int n, const int m) {
+/* What the unrolled step carries from one step to the next: lcp.lam, lq and
+ * lcp.prev (as a bit mask), in registers while the fused steps run. */
+typedef struct cup_small_carry {
+  cup_v2d lam;
+  double lq;
+  unsigned act;
+} cup_small_carry;
+
+/* A step's outcome: cup_proj_info's fields of the same names. */
+typedef struct cup_small_out {
+  int status, skipped, iterations, active;
+  double eps_cert, eta_cert, violation;
+} cup_small_out;
+
+CUP_ALWAYS_INLINE cup_small_carry cup_small_load(const cup_lcp_step *ls, const int m) {
+  cup_small_carry c = {.lam = {ls->lcp.lam[0], m > 1 ? ls->lcp.lam[1] : 0}, .lq = ls->lq};
+  for (int i = 0; i < m; i++) c.act |= (unsigned)(ls->lcp.prev[i] != 0) << i;
+  return c;
+}
+
+CUP_ALWAYS_INLINE void cup_small_store(cup_lcp_step *ls, const cup_small_carry *c, const int m) {
   for (int i = 0; i < m; i++) {
-    const double *c = C + i * CUP_STEP_SMALL_N;
-    double acc = g[i], mag = fabs(g[i]);
-    for (int j = 0; j < n; j++) {
-      double t = c[j] * x[j];
-      acc += t;
-      mag += fabs(t);
-    }
-    s[i] = acc;
-    gam[i] = rg[i] * mag;
+    ls->lcp.lam[i] = c->lam[i];
+    ls->lcp.prev[i] = (c->act >> i) & 1;
   }
+  ls->lq = c->lq;
+}
+
+CUP_ALWAYS_INLINE void cup_small_info(cup_proj_info *info, const cup_small_out *o, double scale,
+                                      double eps_target, double eta_target) {
+  *info = (cup_proj_info){.status = o->status, .method = CUP_PROJ_ACTIVESET, .iterations = o->iterations,
+                          .skipped = o->skipped, .active = o->active, .scale = scale, .eps_target = eps_target,
+                          .eta_target = eta_target, .eps_cert = o->eps_cert, .eta_cert = o->eta_cert,
+                          .violation = o->violation};
+}
+
+/* cup_slack of the rows (lanes) at x, term by term in the same order (a
+ * zero entry adds an exact zero to finite sums). */
+CUP_ALWAYS_INLINE void cup_small_slack(const cup_lcp_step *ls, cup_v2d g, const cup_v2d *x, cup_v2d *s,
+                                       cup_v2d *gam, const int n) {
+  cup_v2d acc = g, mag = cup_v2_abs(g);
+  for (int j = 0; j < n; j++) {
+    cup_v2d t = ls->Ccol[j] * cup_lane(x, j);
+    acc += t;
+    mag += cup_v2_abs(t);
+  }
+  *s = acc;
+  *gam = ls->rowgam * mag;
 }
 
 /* cup_lcp_step_eta for the slack s, gam of z: its common case, z certainly
  * in K, without a call. */
-CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, const double *g, const double *z, const double *s,
-                                       const double *gam, const int m) {
-  double worst = INFINITY;
-  for (int i = 0; i < m; i++) worst = cup_min(worst, s[i] - gam[i]);
+CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2d *z, cup_v2d s, cup_v2d gam,
+                                       const int n, const int m) {
+  cup_v2d d = s - gam;
+  double worst = d[0];                            /* the general path's min from INFINITY */
+  if (m > 1) worst = cup_min(worst, d[1]);
   if (worst >= 0) return 0;
+  double gm[CUP_STEP_SMALL_M], zm[CUP_STEP_SMALL_N];
   for (int i = 0; i < m; i++) {
     ls->s[i] = s[i];
     ls->gam[i] = gam[i];
+    gm[i] = g[i];
   }
-  return cup_lcp_step_eta(ls, g, z);
+  for (int j = 0; j < n; j++) zm[j] = cup_lane(z, j);
+  return cup_lcp_step_eta(ls, gm, zm);
 }
 
-/* lcp.c's Murty pivoting from the warm start prev for m <= 2 rows (the
+/* lcp.c's Murty pivoting from the warm start *act for m <= 2 rows (the
  * active set a bit mask, each block solved by the same closed forms, the
- * same tolerances, the same least index). 0 with lam and the warm start
- * written (lcp.c's w is scratch nobody reads); 1, touching nothing, where
- * lcp.c would meet a singular block or cycle (and then retry cold): the
- * general path takes the step over. */
-CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, const double *q, double *lam_out,
+ * same tolerances, the same least index). 0 with lam and *act written; 1,
+ * touching nothing, where lcp.c would meet a singular block or cycle (and
+ * then retry cold): the general path takes the step over. Scalars, not
+ * arrays indexed by the active set, so that nothing goes through memory;
+ * det = M[0] M[3] - M[2] M[1], formed once. */
+CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double det, cup_v2d q, cup_v2d *lam,
                                       int *pivots, const int m) {
-  double scale = 0;
-  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
+  const double q0 = q[0], q1 = q[1];
+  double scale = fabs(q0);                        /* cup_max from 0 */
+  if (m > 1) scale = cup_max(scale, fabs(q1));
   double tol_w = 64 * DBL_EPSILON * scale;
-  unsigned act = 0;
-  for (int i = 0; i < m; i++) act |= (unsigned)(prev[i] != 0) << i;
+  unsigned act = *actp;
   for (int it = 0; it < 16 * m + 64; it++) {
-    double lam[2] = {0, 0}, w[2];
+    double l0 = 0, l1 = 0;
     if (act == 3) {
-      double det = M[0] * M[3] - M[2] * M[1];
       if (!(det != 0)) return 1;
-      lam[0] = (-q[0] * M[3] + q[1] * M[2]) / det;
-      lam[1] = (-q[1] * M[0] + q[0] * M[1]) / det;
-    } else if (act) {
-      int a = act - 1;
-      double d = M[a + a * m];
-      if (!(d != 0)) return 1;
-      lam[a] = -q[a] / d;
+      l0 = (-q0 * M[3] + q1 * M[2]) / det;
+      l1 = (-q1 * M[0] + q0 * M[1]) / det;
+    } else if (act == 1) {
+      if (!(M[0] != 0)) return 1;
+      l0 = -q0 / M[0];
+    } else if (act == 2) {                        /* m = 2 */
+      if (!(M[3] != 0)) return 1;
+      l1 = -q1 / M[3];
     }
-    double lmax = 0;
-    for (int i = 0; i < m; i++) {
-      double acc = q[i];
-      if (act & 1) acc += M[i] * lam[0];
-      if (act & 2) acc += M[i + m] * lam[1];
-      w[i] = acc;
-      lmax = cup_max(lmax, fabs(lam[i]));
-    }
+    double w0 = q0, w1 = q1;                      /* w = q + M lam on the active columns */
+    if (act & 1) w0 += M[0] * l0;
+    if (act & 2) w0 += M[m] * l1;
+    if (m > 1 && (act & 1)) w1 += M[1] * l0;
+    if (m > 1 && (act & 2)) w1 += M[1 + m] * l1;
+    double lmax = fabs(l0);                       /* cup_max from 0 */
+    if (m > 1) lmax = cup_max(lmax, fabs(l1));
     double tol_l = 64 * DBL_EPSILON * lmax;
     int flip = -1;
-    for (int i = 0; i < m && flip < 0; i++)
-      if (((act >> i) & 1) ? lam[i] < -tol_l : w[i] < -tol_w) flip = i;
+    if ((act & 1) ? l0 < -tol_l : w0 < -tol_w) flip = 0;
+    else if (m > 1 && ((act & 2) ? l1 < -tol_l : w1 < -tol_w)) flip = 1;
     if (flip < 0) {
-      for (int i = 0; i < m; i++) {
-        lam_out[i] = lam[i];
-        prev[i] = (act >> i) & 1;
-      }
+      *lam = (cup_v2d){l0, l1};
+      *actp = act;
       return 0;
     }
     act ^= 1u << flip;
@@ -184,63 +224,72 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned char *prev, const double *M, cons
 }
 
 /* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
- * >= 0 and no D: 1 when it took the step (info->status set), 0 when the
- * general path must (NaN in xf, a singular block), having changed nothing
- * but scratch. The set's data are read once into locals, the slacks stay
- * in registers. */
-CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
-                                     double *restrict z, double scale, double eps_target, double eta_target,
-                                     cup_proj_info *info, const int n, const int m) {
-  double probe = 0;                               /* NaN iff some entry is NaN or Inf */
-  for (int j = 0; j < n; j++) probe += 0 * xf[j];
-  if (isnan(probe)) return 0;
-  const double *C = ls->Cd, *rg = ls->K->rowgam, *H = ls->H, h = ls->h;
-  double *lamv = ls->lcp.lam;
-  double q[CUP_STEP_SMALL_M], gam[CUP_STEP_SMALL_M], s[CUP_STEP_SMALL_M], sg[CUP_STEP_SMALL_M];
-  cup_small_slack(C, rg, g, xf, q, gam, n, m);    /* q = C x_free + g */
-  double qmin = INFINITY;
-  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
-  *info = (cup_proj_info){.method = CUP_PROJ_ACTIVESET, .scale = scale, .eps_target = eps_target,
-                          .eta_target = eta_target};
+ * >= 0 and no D, from the free point xf for the offset g (lanes), carrying
+ * c from the last step: 1 when it took the step (z, *c and *o written), 0
+ * when the general path must (NaN or Inf in xf or g, a singular block),
+ * having changed nothing but scratch. */
+CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g,
+                                     const cup_v2d *restrict xf, cup_v2d *restrict z, double eps_target,
+                                     double eta_target, cup_small_out *o, const int n, const int m) {
+  cup_v2d probe = 0 * g + 0 * cup_v2_first(xf[0], n);   /* NaN iff some entry is NaN or Inf */
+  if (n > 2) probe += 0 * cup_v2_first(xf[1], n - 2);
+  if (isnan(probe[0] + probe[1])) return 0;
+  const int halves = (n + 1) / 2;
+  cup_v2d q, gam;
+  cup_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */
+  double qmin = q[0];                             /* the general path's min from INFINITY */
+  if (m > 1) qmin = cup_min(qmin, q[1]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
-    for (int j = 0; j < n; j++) z[j] = xf[j];
-    for (int i = 0; i < m; i++) lamv[i] = 0;
-    ls->lq = 0;
-    info->skipped = 1;
-    info->eta_cert = cup_small_eta(ls, g, z, q, gam, m);
-    info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+    for (int r = 0; r < halves; r++) z[r] = xf[r];
+    c->lam = (cup_v2d){0, 0};
+    c->lq = 0;
+    *o = (cup_small_out){.skipped = 1, .eta_cert = cup_small_eta(ls, g, z, q, gam, n, m)};
+    o->status = o->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
     return 1;
   }
-  double qs[CUP_STEP_SMALL_M], lam[CUP_STEP_SMALL_M];   /* aimed a few ulps inside K, as step.c */
-  for (int i = 0; i < m; i++) qs[i] = q[i] - (16 * gam[i] + DBL_MIN);
+  cup_v2d qs = q - (16 * gam + DBL_MIN), lam;     /* aimed a few ulps inside K, as step.c */
   int pivots = 0;
-  if (cup_small_murty(ls->lcp.prev, ls->M, qs, lam, &pivots, m)) return 0;
-  info->iterations = pivots + 1;
-  double lq = 0;
-  for (int i = 0; i < m; i++) {
-    lam[i] = cup_max(lam[i], 0);
-    lamv[i] = lam[i];
-    lq += lam[i] * q[i];
-  }
-  ls->lq = lq;
-  for (int r = 0; r < n; r++) z[r] = xf[r];
-  for (int i = 0; i < m; i++) {
-    if (lam[i] == 0) continue;
-    for (int r = 0; r < n; r++) z[r] += H[r + i * n] * lam[i];
-  }
-  cup_small_slack(C, rg, g, z, s, sg, n, m);
+  if (cup_small_murty(&c->act, ls->M, ls->det, qs, &lam, &pivots, m)) return 0;
+  double l0 = cup_max(lam[0], 0), l1 = m > 1 ? cup_max(lam[1], 0) : 0, lq = 0;
+  lq += l0 * q[0];
+  if (m > 1) lq += l1 * q[1];
+  c->lam = lam = (cup_v2d){l0, l1};
+  c->lq = lq;
+  for (int r = 0; r < halves; r++) z[r] = xf[r];
+  for (int r = 0; r < halves && l0 != 0; r++) z[r] += ls->Hcol[0][r] * l0;
+  for (int r = 0; r < halves && m > 1 && l1 != 0; r++) z[r] += ls->Hcol[1][r] * l1;
+  cup_v2d s, sg;
+  __asm__("" : "+r"(ls));   /* read C's columns again rather than keep them live across the step (spilled) */
+  cup_small_slack(ls, g, z, &s, &sg, n);
+  cup_v2d gapi = 2 * ls->h * lam * (s + sg);      /* impulse mu = h lambda */
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {
-    gap += 2 * h * lam[i] * (s[i] + sg[i]);
+    gap += gapi[i];
     viol = cup_max(viol, -s[i]);
     active += lam[i] > 0;
   }
-  info->active = active;
-  info->violation = viol;
-  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
-  info->eta_cert = cup_small_eta(ls, g, z, s, sg, m);
-  info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  *o = (cup_small_out){.iterations = pivots + 1, .active = active, .violation = viol,
+                       .eps_cert = isnan(gap) ? NAN : cup_max(gap, 0),
+                       .eta_cert = cup_small_eta(ls, g, z, s, sg, n, m)};
+  o->status = o->eps_cert <= eps_target && o->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  return 1;
+}
+
+/* cup_small_core from and to step.c's arrays: 1 when it took the step
+ * (info->status set), 0 when the general path must. */
+CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
+                                     double *restrict z, double scale, double eps_target, double eta_target,
+                                     cup_proj_info *info, const int n, const int m) {
+  cup_v2d xv[2] = {{0, 0}, {0, 0}}, zv[2];
+  for (int j = 0; j < n; j++) xv[j >> 1][j & 1] = xf[j];
+  cup_v2d gv = {g[0], m > 1 ? g[1] : 0};
+  cup_small_carry c = cup_small_load(ls, m);
+  cup_small_out o;
+  if (!cup_small_core(ls, &c, gv, xv, zv, eps_target, eta_target, &o, n, m)) return 0;
+  cup_small_store(ls, &c, m);
+  for (int j = 0; j < n; j++) z[j] = cup_lane(zv, j);
+  cup_small_info(info, &o, scale, eps_target, eta_target);
   return 1;
 }
 

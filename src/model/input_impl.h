@@ -7,6 +7,7 @@
 #include <math.h>
 #include <gsl/gsl_integration.h>
 #include "catchup/input.h"
+#include "util/lanes.h"
 #include "util/linalg.h"
 
 typedef struct cup_term {
@@ -50,18 +51,46 @@ static inline double cup_square_q(const cup_term *w, double t) { return w->omega
 /* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
 static inline double cup_mod2(double q) { return q - 2.0 * cup_floor(0.5 * q); }
 
-static inline double cup_sign_sin_q(double q) {
-  double r = cup_mod2(q);
+/* sign(sin(pi q)) from q and r = cup_mod2(q) */
+static inline double cup_sign_sin_qr(double q, double r) {
   double tol = 4 * DBL_EPSILON * (fabs(q) > 1 ? fabs(q) : 1.0);   /* fmax(1, |q|), NaN giving 1 */
   if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
   return r < 1 ? 1 : -1;
 }
 
-/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1. */
-static inline double cup_sign_sin_q_integral(double q) {
-  double r = cup_mod2(q);
-  return r <= 1 ? r : 2 - r;
+static inline double cup_sign_sin_q(double q) { return cup_sign_sin_qr(q, cup_mod2(q)); }
+
+/* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1,
+ * from r = cup_mod2(q). */
+static inline double cup_triangle_r(double r) { return r <= 1 ? r : 2 - r; }
+
+static inline double cup_sign_sin_q_integral(double q) { return cup_triangle_r(cup_mod2(q)); }
+
+/* The same three, two positions q at a time, bit for bit: r = cup_mod2(q)
+ * taking floor(q / 2) = *fl when *fl <= q0 / 2 <= q1 / 2 < *fl + 1 (a
+ * square wave's floor changes twice a period; q / 2 = 0 goes to cup_floor,
+ * which keeps the sign of a zero), *fl the last lane's floor after. */
+static inline cup_v2d cup_mod2_2(cup_v2d q, double *fl) {
+  cup_v2d half = 0.5 * q;
+  double f = *fl, h0 = half[0], h1 = half[1];
+  cup_v2d fv = {f, f};
+  if (!(h0 >= f && h0 <= h1 && h1 < f + 1 && h0 != 0)) fv = (cup_v2d){cup_floor(h0), cup_floor(h1)};
+  *fl = fv[1];
+  return q - 2.0 * fv;
 }
+
+static inline cup_v2d cup_sign_sin_qr2(cup_v2d q, cup_v2d r) {
+  const cup_v2d one = {1, 1}, two = {2, 2};
+  const cup_v2l sign = {(long long)0x8000000000000000ULL, (long long)0x8000000000000000ULL};
+  cup_v2d tol = 4 * DBL_EPSILON * cup_v2_max(cup_v2_abs(q), one);
+  cup_v2l zero = (r <= tol) | (cup_v2_abs(r - one) <= tol) | (two - r <= tol);
+  cup_v2d s = (cup_v2d)((cup_v2l)one | (sign & ~(r < one)));   /* r < 1 ? 1 : -1 */
+  return cup_v2_clear(zero, s);
+}
+
+/* r <= 1 ? r : 2 - r as min(r, 2 - r): the same for r in [0, 2) (2 - r is
+ * exact above 1) and NaN */
+static inline cup_v2d cup_triangle_r2(cup_v2d r) { return cup_v2_min(r, (cup_v2d){2, 2} - r); }
 
 /* One term's value at t (its component's share of u(t)). */
 double cup_term_value(const cup_term *w, double t);
