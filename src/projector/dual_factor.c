@@ -31,11 +31,50 @@ struct cup_dfact {
   unsigned stamp;             /* marks in flag for row patterns (rowdel) */
   double refactor_ops;        /* work of the last refactorization; 0: none yet */
   int *lp0, *next0, *prev0;   /* L's first layout: each column with room for all of M */
+  int *mup;                   /* M form: one past the diagonal in each column of Mp */
+  /* M form, packed: the factor of the free rows alone in a room smaller than
+   * the factor of all of M (no row updates); when it does not fit, solves by
+   * conjugate gradients on M~ instead (cg_solve) */
+  int packed, by_cg;
+  size_t room;                /* entries of pk_i / pk_x */
+  int *pk_p, *pk_nz, *pk_i;
+  double *pk_x;
+  double *cg_z, *cg_p, *cg_q, *cg_u;   /* m, m, m, n */
 };
 
 double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
+int cup_dfact_by_cg(const cup_dfact *f) { return f->by_cg; }
 
 /* ---- permutation and upper storage (shared) ---------------------------------- */
+
+/* AMD order of a symmetric matrix (CHOLMOD reads the triangle its stype
+ * names) into pperm/iperm; the analysis' workspace is let go at once. */
+static int amd_order(cup_dfact *f, cholmod_sparse *A, char *errmsg) {
+  int N = (int)A->nrow;
+  f->cm.supernodal = CHOLMOD_SIMPLICIAL;
+  f->cm.final_ll = 0;
+  /* AMD alone: the factors are of the free rows only (restricted_ldl), whose
+   * fill an ordering of all of M hardly changes; METIS and nested dissection
+   * saved 3-5% of the room for all of M on crowds of 10^5 disks and took 15
+   * times AMD's time (8.5 s against 0.25 s); a set whose rows change with
+   * the state is analysed again when they do */
+  f->cm.nmethods = 1;
+  f->cm.method[0].ordering = CHOLMOD_AMD;
+  cholmod_factor *L0 = cholmod_analyze(A, &f->cm);
+  if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  f->pperm = malloc(sizeof(int) * (size_t)N);
+  f->iperm = malloc(sizeof(int) * (size_t)N);
+  if (f->pperm && f->iperm)
+    for (int k = 0; k < N; k++) {
+      int orig = L0->Perm ? ((int *)L0->Perm)[k] : k;
+      f->pperm[k] = orig;
+      f->iperm[orig] = k;
+    }
+  cholmod_free_factor(&L0, &f->cm);
+  cholmod_free_work(&f->cm);
+  if (!f->pperm || !f->iperm) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  return CUP_OK;
+}
 
 /* From a symmetric matrix given by its lower triangle (natural order; each
  * entry tagged), build the permuted upper triangle with a map from every
@@ -48,31 +87,14 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
   A.p = (void *)Ap; A.i = (void *)Ai; A.x = (void *)Ax; A.stype = -1;
   A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
   A.sorted = 1; A.packed = 1;
-  f->cm.supernodal = CHOLMOD_SIMPLICIAL;
-  f->cm.final_ll = 0;
-  /* AMD alone: the factors are of the free rows only (restricted_ldl), whose
-   * fill an ordering of all of M hardly changes; METIS and nested dissection
-   * saved 3-5% of the room for all of M on crowds of 10^5 disks and took 15
-   * times AMD's time (8.5 s against 0.25 s); a set whose rows change with
-   * the state is analysed again when they do */
-  f->cm.nmethods = 1;
-  f->cm.method[0].ordering = CHOLMOD_AMD;
-  cholmod_factor *L0 = cholmod_analyze(&A, &f->cm);   /* fill-reducing order */
-  if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-  f->pperm = malloc(sizeof(int) * (size_t)N);
-  f->iperm = malloc(sizeof(int) * (size_t)N);
+  int st = amd_order(f, &A, errmsg);
+  if (st) return st;
   int *rowcnt = calloc((size_t)N + 1, sizeof(int)), *colcnt = calloc((size_t)N + 1, sizeof(int));
   int *order = malloc(sizeof(int) * ((size_t)nnz + 1)), *colof = malloc(sizeof(int) * ((size_t)nnz + 1));
   f->Ku = cholmod_allocate_sparse((size_t)N, (size_t)N, (size_t)nnz, 1, 1, 1, CHOLMOD_REAL, &f->cm);
-  int st = CUP_OK;
-  if (!f->pperm || !f->iperm || !rowcnt || !colcnt || !order || !colof || !f->Ku) {
+  if (!rowcnt || !colcnt || !order || !colof || !f->Ku) {
     st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
     goto done;
-  }
-  for (int k = 0; k < N; k++) {
-    int orig = L0->Perm ? ((int *)L0->Perm)[k] : k;
-    f->pperm[k] = orig;
-    f->iperm[orig] = k;
   }
   for (int c = 0; c < N; c++)
     for (int e = Ap[c]; e < Ap[c + 1]; e++) {
@@ -99,7 +121,6 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
     map[e] = pos;
   }
 done:
-  cholmod_free_factor(&L0, &f->cm);
   free(rowcnt); free(colcnt); free(order); free(colof);
   return st;
 }
@@ -194,15 +215,16 @@ static void kkt_solve(cup_dfact *f, double *v) {
 /* The elimination tree of all of M (Liu's algorithm with path compression):
  * every factor of a principal submatrix in this order has its pattern
  * inside the factor of M, so a row of the full factor, found from this tree,
- * bounds the row of any factor (what rowdel needs). */
+ * bounds the row of any factor (what rowdel needs). Column k of Mp up to
+ * its diagonal (mup) is column k of M's upper triangle. */
 static void full_etree(cup_dfact *f) {
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
   int *anc = f->flag;
   for (int k = 0; k < f->m; k++) {
     f->etree[k] = -1;
     anc[k] = -1;
-    for (int e = Kp[k]; e < Kp[k + 1]; e++)
-      for (int i = Ki[e], next; i != -1 && i < k; i = next) {
+    for (int e = Mp[k]; e < f->mup[k]; e++)
+      for (int i = Mi[e], next; i != -1 && i < k; i = next) {
         next = anc[i];
         anc[i] = k;
         if (next == -1) f->etree[i] = k;
@@ -211,13 +233,15 @@ static void full_etree(cup_dfact *f) {
   memset(f->flag, 0, sizeof(int) * (size_t)f->m);
 }
 
-static int mform_create(cup_dfact *f, char *errmsg) {
+/* M = C P^-1 C^T with every diagonal present (a zero row of C gives an
+ * empty column), full and sorted. */
+static cholmod_sparse *form_m(cup_dfact *f) {
   const cup_polyset *K = f->K;
-  int m = f->m, N = f->N = m;
+  int m = f->m;
   /* S = C D^-1/2 (m x n), M = S S^T */
   cholmod_sparse *S = cholmod_allocate_sparse((size_t)m, (size_t)f->n, (size_t)K->C.nnz, 1, 1, 0,
                                               CHOLMOD_REAL, &f->cm);
-  if (!S) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  if (!S) return NULL;
   memcpy(S->p, K->C.p, sizeof(int) * ((size_t)f->n + 1));
   memcpy(S->i, K->C.i, sizeof(int) * (size_t)K->C.nnz);
   for (int j = 0; j < f->n; j++)
@@ -225,88 +249,160 @@ static int mform_create(cup_dfact *f, char *errmsg) {
       ((double *)S->x)[k] = K->C.x[k] * sqrt(K->pdinv[j]);
   cholmod_sparse *M = cholmod_aat(S, NULL, 0, 1, &f->cm);
   cholmod_free_sparse(&S, &f->cm);
-  if (!M || !cholmod_sort(M, &f->cm)) {
-    cholmod_free_sparse(&M, &f->cm);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
-  }
-  /* rows of C that are zero give an empty column in M: give every row a diagonal */
-  cholmod_sparse *I = cholmod_speye((size_t)m, (size_t)m, CHOLMOD_REAL, &f->cm);
+  cholmod_sparse *I = M ? cholmod_speye((size_t)m, (size_t)m, CHOLMOD_REAL, &f->cm) : NULL;
   double zero[2] = {0, 0}, one[2] = {1, 0};
   cholmod_sparse *Mz = I ? cholmod_add(M, I, one, zero, 1, 1, &f->cm) : NULL;
   cholmod_free_sparse(&I, &f->cm);
   cholmod_free_sparse(&M, &f->cm);
-  if (!Mz) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  cholmod_sort(Mz, &f->cm);
-  /* lower triangle for the ordering */
-  const int *Mp = Mz->p, *Mi = Mz->i;
-  const double *Mx = Mz->x;
-  int nnzl = 0;
-  for (int j = 0; j < m; j++)
-    for (int k = Mp[j]; k < Mp[j + 1]; k++) nnzl += Mi[k] >= j;
-  int *Ap = malloc(sizeof(int) * ((size_t)m + 1)), *Ai = malloc(sizeof(int) * ((size_t)nnzl + 1));
-  int *map = malloc(sizeof(int) * ((size_t)nnzl + 1));
-  double *Ax = malloc(sizeof(double) * ((size_t)nnzl + 1));
-  int st = CUP_OK;
-  if (!Ap || !Ai || !map || !Ax) { st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory"); goto done; }
-  int q = 0;
-  Ap[0] = 0;
-  for (int j = 0; j < m; j++) {
-    for (int k = Mp[j]; k < Mp[j + 1]; k++)
-      if (Mi[k] >= j) { Ai[q] = Mi[k]; Ax[q++] = Mx[k]; }
-    Ap[j + 1] = q;
-  }
-  st = permuted_upper(f, N, Ap, Ai, Ax, map, errmsg);
-  if (st) goto done;
-  f->Mp = cholmod_submatrix(Mz, f->pperm, m, f->pperm, m, 1, 1, &f->cm);   /* permuted, full */
-  f->R = cholmod_allocate_sparse((size_t)m, 1, (size_t)m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
-  size_t M1 = (size_t)m + 1;
-  f->pact = calloc(M1, 1);
-  f->par = malloc(sizeof(int) * M1);
-  f->flag = malloc(sizeof(int) * M1);
-  f->stack = malloc(sizeof(int) * M1);
-  f->etree = malloc(sizeof(int) * M1);
-  f->yrow = calloc(M1, sizeof(double));
-  if (!f->Mp || !f->R || !f->pact || !f->par || !f->flag || !f->stack || !f->etree || !f->yrow) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-    goto done;
-  }
-  full_etree(f);
-  /* Room for the factor of all of M, held as L = I until the first
-   * factorization: no numeric work here, and none of a size of all of M later */
-  f->cm.nmethods = 1;
-  f->cm.method[0].ordering = CHOLMOD_NATURAL;
-  f->cm.postorder = 0;
+  if (Mz && !cholmod_sort(Mz, &f->cm)) cholmod_free_sparse(&Mz, &f->cm);
+  return Mz;
+}
+
+/* The room of the factor: all of M's factor, with row updates, unless that
+ * is more than twice M itself and more than half a million entries (6 MB):
+ * then packed, twice M or that, whichever is more. The free rows of a crowd
+ * are a few in a hundred of its contacts, and the factor of all of M 5-6
+ * times M (10^4-10^5 disks), most of the projector's memory; the factor of
+ * a jam's free rows that outgrows the packed room is solved by CG. */
+static long auto_room(long full, long nnz_m) {
+  long packed = 2 * nnz_m > (1L << 19) ? 2 * nnz_m : (1L << 19);
+  return full > packed ? packed : -1;
+}
+
+/* Room for the factor of all of M, held as L = I until the first
+ * factorization: no numeric work here, and none of a size of all of M
+ * later; CHOLMOD's workspace for row updates taken now, not in a projection. */
+static int full_room(cup_dfact *f, char *errmsg) {
+  size_t M1 = (size_t)f->m + 1;
   /* each column's room is its count in the factor of all of M and no more
    * (CHOLMOD's default adds a fifth and 5 entries a column): restricted_ldl
    * fills no more, and a column CHOLMOD's row updates move is moved back */
   f->cm.grow1 = 1;
   f->cm.grow2 = 0;
-  f->L = cholmod_analyze(f->Ku, &f->cm);
-  if (!f->L || !cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm)) {
-    st = cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
-                  "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-    goto done;
-  }
+  if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm))
+    return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
+                    "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
   /* CHOLMOD's row updates may move a column whose room looks short to them;
    * restricted_ldl goes back to this layout, every column's room its count in
    * the factor of all of M, which holds any factor of free rows */
   f->lp0 = malloc(sizeof(int) * M1);
   f->next0 = malloc(sizeof(int) * (M1 + 1));
   f->prev0 = malloc(sizeof(int) * (M1 + 1));
-  if (!f->lp0 || !f->next0 || !f->prev0) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-    goto done;
-  }
+  if (!f->lp0 || !f->next0 || !f->prev0) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   memcpy(f->lp0, f->L->p, sizeof(int) * M1);
   memcpy(f->next0, f->L->next, sizeof(int) * (M1 + 1));
   memcpy(f->prev0, f->L->prev, sizeof(int) * (M1 + 1));
-  /* rowadd/rowdel need 2m of CHOLMOD workspace: take it now, not in a projection */
-  if (!cholmod_allocate_work((size_t)m, 2 * (size_t)m, 2 * (size_t)m, &f->cm))
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
-done:
+  /* rowadd/rowdel need 2m of CHOLMOD workspace */
+  if (!cholmod_allocate_work((size_t)f->m, 2 * (size_t)f->m, 2 * (size_t)f->m, &f->cm))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
+  return CUP_OK;
+}
+
+static int packed_room(cup_dfact *f, long room, char *errmsg) {
+  size_t M1 = (size_t)f->m + 1, R = (size_t)(room > f->m ? room : f->m);
+  cholmod_free_factor(&f->L, &f->cm);
+  f->packed = 1;
+  f->updates = 0;
+  f->room = R;
+  f->pk_p = calloc(M1, sizeof(int));
+  f->pk_nz = malloc(sizeof(int) * M1);
+  f->pk_i = malloc(sizeof(int) * R);
+  f->pk_x = malloc(sizeof(double) * R);
+  f->cg_z = malloc(sizeof(double) * M1);
+  f->cg_p = malloc(sizeof(double) * M1);
+  f->cg_q = malloc(sizeof(double) * M1);
+  f->cg_u = calloc((size_t)f->n + 1, sizeof(double));
+  if (!f->pk_p || !f->pk_nz || !f->pk_i || !f->pk_x || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  for (int k = 0; k < f->m; k++) {     /* L = I until the first factorization */
+    f->pk_p[k + 1] = k + 1;
+    f->pk_nz[k] = 1;
+    f->pk_i[k] = k;
+    f->pk_x[k] = 1;
+  }
+  return CUP_OK;
+}
+
+/* room < 0: automatic (auto_room); else the packed room, in entries. */
+static int mform_create(cup_dfact *f, long room, char *errmsg) {
+  int m = f->m;
+  f->N = m;
+  cholmod_sparse *Mz = form_m(f);
+  if (!Mz) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+  Mz->stype = -1;                          /* AMD on its lower triangle */
+  int st = amd_order(f, Mz, errmsg);
+  Mz->stype = 0;
+  if (!st) {
+    f->Mp = cholmod_submatrix(Mz, f->pperm, m, f->pperm, m, 1, 1, &f->cm);   /* permuted, full */
+    if (!f->Mp) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  }
   cholmod_free_sparse(&Mz, &f->cm);
-  free(Ap); free(Ai); free(map); free(Ax);
-  return st;
+  if (st) return st;
+  size_t M1 = (size_t)m + 1;
+  f->R = cholmod_allocate_sparse((size_t)m, 1, (size_t)m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
+  f->mup = malloc(sizeof(int) * M1);
+  f->pact = calloc(M1, 1);
+  f->par = malloc(sizeof(int) * M1);
+  f->flag = malloc(sizeof(int) * M1);
+  f->stack = malloc(sizeof(int) * M1);
+  f->etree = malloc(sizeof(int) * M1);
+  f->yrow = calloc(M1, sizeof(double));
+  if (!f->R || !f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->etree || !f->yrow)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  for (int k = 0; k < m; k++) {
+    int e = Mp[k];
+    while (e < Mp[k + 1] && Mi[e] <= k) e++;
+    f->mup[k] = e;
+  }
+  full_etree(f);
+  /* the symbolic factor of all of M in the stored order (its upper triangle) */
+  f->cm.nmethods = 1;
+  f->cm.method[0].ordering = CHOLMOD_NATURAL;
+  f->cm.postorder = 0;
+  f->Mp->stype = 1;
+  f->L = cholmod_analyze(f->Mp, &f->cm);
+  f->Mp->stype = 0;
+  cholmod_free_work(&f->cm);
+  if (!f->L)
+    return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
+                    "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  long full = 0;
+  for (int k = 0; k < m; k++) full += ((int *)f->L->ColCount)[k];
+  if (room < 0) room = auto_room(full, (long)Mp[m]);
+  return room < 0 ? full_room(f, errmsg) : packed_room(f, room, errmsg);
+}
+
+/* The factor's arrays: CHOLMOD's simplicial factor, or the packed room. */
+typedef struct lview { int *p, *nz, *i; double *x; } lview;
+static lview factor_view(const cup_dfact *f) {
+  if (f->packed) return (lview){f->pk_p, f->pk_nz, f->pk_i, f->pk_x};
+  return (lview){f->L->p, f->L->nz, f->L->i, f->L->x};
+}
+
+/* The column counts of the factor of M_FF (the reach of each row, as
+ * restricted_ldl walks it) laid out packed in p; returns the entries. */
+static long packed_layout(cup_dfact *f, int *p) {
+  int m = f->m;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  int *par = f->par, *flag = f->flag;
+  const unsigned char *pact = f->pact;
+  for (int k = 0; k < m; k++) p[k + 1] = 1;
+  for (int k = 0; k < m; k++) {
+    if (!pact[k]) continue;
+    par[k] = -1;
+    flag[k] = k;
+    for (int e = Mp[k]; e < f->mup[k]; e++)
+      for (int i = Mi[e]; i < k && pact[i] && flag[i] != k; i = par[i]) {
+        if (par[i] < 0) par[i] = k;
+        flag[i] = k;
+        p[i + 1]++;
+      }
+  }
+  for (int k = 0; k < m; k++) flag[k] = k;   /* below any row that looks at k */
+  p[0] = 0;
+  for (int k = 0; k < m; k++) p[k + 1] += p[k];
+  return p[m];
 }
 
 /* LDL^T of M~ = M_FF + delta I on the free rows F, identity elsewhere, by
@@ -317,23 +413,31 @@ done:
  * of its contacts active, or half a ladder, costs a fraction of M's factor.
  * Written into CHOLMOD's simplicial factor (diagonal first in each column),
  * whose room for all of M holds any such factor, so that row updates and
- * solves work on it as on CHOLMOD's own. */
+ * solves work on it as on CHOLMOD's own; or into the packed room, laid out
+ * for this F first (1: it does not fit). */
 static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) {
   int m = f->m;
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
-  const double *Kx = f->Ku->x;
-  int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
-  double *Lx = f->L->x, *y = f->yrow;
+  const int *Kp = f->Mp->p, *Ki = f->Mp->i, *Kend = f->mup;
+  const double *Kx = f->Mp->x;
+  lview L = factor_view(f);
+  int *Lp = L.p, *Li = L.i, *Lnz = L.nz;
+  double *Lx = L.x, *y = f->yrow;
   int *par = f->par, *flag = f->flag, *stack = f->stack;
   unsigned char *pact = f->pact;
   double ops = 0;
-  if (!f->L->is_monotonic) {         /* columns moved by row updates: the first layout again */
+  if (!f->packed && !f->L->is_monotonic) {   /* columns moved by row updates: the first layout again */
     memcpy(Lp, f->lp0, sizeof(int) * ((size_t)m + 1));
     memcpy(f->L->next, f->next0, sizeof(int) * ((size_t)m + 2));
     memcpy(f->L->prev, f->prev0, sizeof(int) * ((size_t)m + 2));
     f->L->is_monotonic = 1;
   }
   for (int k = 0; k < m; k++) pact[k] = act[f->pperm[k]];
+  f->by_cg = f->packed && packed_layout(f, Lp) > (long)f->room;
+  if (f->by_cg) {
+    for (int k = 0; k < m; k++) { Lp[k + 1] = k + 1; Lnz[k] = 1; Li[k] = k; Lx[k] = 1; }
+    f->refactor_ops = 0;
+    return CUP_OK;
+  }
   for (int k = 0; k < m; k++) {
     int p0 = Lp[k];
     Li[p0] = k;
@@ -342,7 +446,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
     par[k] = -1;
     flag[k] = k;                     /* rows above k carry flags < k: no reset needed */
     int top = m;
-    for (int e = Kp[k]; e < Kp[k + 1]; e++) {
+    for (int e = Kp[k]; e < Kend[k]; e++) {
       int i = Ki[e];
       if (i == k) { y[k] += Kx[e] + delta; continue; }
       if (!pact[i]) continue;
@@ -357,7 +461,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
     }
     double d = y[k];
     y[k] = 0;
-    ops += Kp[k + 1] - Kp[k] + m - top;
+    ops += Kend[k] - Kp[k] + m - top;
     for (; top < m; top++) {
       int i = stack[top], q0 = Lp[i], q1 = q0 + Lnz[i];
       double yi = y[i], lki = yi / Lx[q0];
@@ -422,14 +526,14 @@ static int mform_rowadd(cup_dfact *f, int i, double delta) {
  * (the reach of M(:, k) in the full tree) bounds it. */
 static int mform_rowdel(cup_dfact *f, int i) {
   int k = f->iperm[i];
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  const int *Kp = f->Mp->p, *Ki = f->Mp->i;
   int *Ri = f->R->i, *flag = f->flag, nz = 0;
   if (++f->stamp == 0 || f->stamp > (unsigned)INT_MAX) {
     memset(flag, 0, sizeof(int) * (size_t)f->m);
     f->stamp = 1;
   }
   int mark = -(int)f->stamp;         /* negative: never a row index of restricted_ldl */
-  for (int e = Kp[k]; e < Kp[k + 1]; e++)
+  for (int e = Kp[k]; e < f->mup[k]; e++)
     for (int j = Ki[e]; j >= 0 && j < k && flag[j] != mark; j = f->etree[j]) {
       flag[j] = mark;
       Ri[nz++] = j;
@@ -442,13 +546,75 @@ static int mform_rowdel(cup_dfact *f, int i) {
   return CUP_OK;
 }
 
+/* out = (M_FF + delta I) w on the free rows (natural order), M = C P^-1 C^T
+ * applied through the rows of C without forming it. */
+static void cg_apply(const cup_dfact *f, const double *w, double *out) {
+  const cup_sparse *Ct = &f->K->Ct;
+  const double *pdinv = f->K->pdinv;
+  const unsigned char *act = f->fact_act;
+  double *u = f->cg_u;
+  for (int i = 0; i < f->m; i++)
+    if (act[i])
+      for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) u[Ct->i[a]] += Ct->x[a] * w[i];
+  for (int i = 0; i < f->m; i++) {
+    if (!act[i]) continue;
+    double t = f->fact_delta * w[i];
+    for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) t += Ct->x[a] * pdinv[Ct->i[a]] * u[Ct->i[a]];
+    out[i] = t;
+  }
+  for (int i = 0; i < f->m; i++)
+    if (act[i])
+      for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) u[Ct->i[a]] = 0;
+}
+
+/* v <- M~^-1 v when the factor of the free rows outgrew the packed room:
+ * conjugate gradients with M~'s diagonal (||c_i||^2_{P^-1} + delta) as
+ * preconditioner, to a residual at rounding or a few thousand iterations
+ * (the projected-Newton steps and the finishing refinement need no more
+ * than a descent direction and a contraction). */
+#define CG_MAX_ITER 4000
+static void cg_solve(cup_dfact *f, double *v) {
+  int m = f->m;
+  const unsigned char *act = f->fact_act;
+  const double *rn = f->K->rownorm;
+  double *x = f->work, *r = f->work + m, *z = f->cg_z, *p = f->cg_p, *q = f->cg_q;
+  double rz = 0, bb = 0;
+  for (int i = 0; i < m; i++) {
+    x[i] = 0;
+    r[i] = act[i] ? v[i] : 0;
+    z[i] = p[i] = r[i] / (rn[i] * rn[i] + f->fact_delta);
+    rz += r[i] * z[i];
+    bb += r[i] * r[i];
+  }
+  for (int it = 0; it < CG_MAX_ITER && rz > 0; it++) {
+    cg_apply(f, p, q);
+    double pq = 0, rr = 0, rz1 = 0;
+    for (int i = 0; i < m; i++) if (act[i]) pq += p[i] * q[i];
+    if (!(pq > 0)) break;
+    double alpha = rz / pq;
+    for (int i = 0; i < m; i++) {
+      if (!act[i]) continue;
+      x[i] += alpha * p[i];
+      r[i] -= alpha * q[i];
+      z[i] = r[i] / (rn[i] * rn[i] + f->fact_delta);
+      rr += r[i] * r[i];
+      rz1 += r[i] * z[i];
+    }
+    if (rr <= 1e-28 * bb) break;
+    for (int i = 0; i < m; i++) if (act[i]) p[i] = z[i] + (rz1 / rz) * p[i];
+    rz = rz1;
+  }
+  for (int i = 0; i < m; i++) if (act[i]) v[i] = x[i];
+}
+
 /* L D L^T t = t on the free rows only, in the permuted order (the other
  * rows are identity and come back unchanged); D folded into the backward
  * sweep. */
 static void mform_solve(cup_dfact *f, double *v) {
   int m = f->m, nf = 0;
-  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz, *pp = f->pperm;
-  const double *Lx = f->L->x;
+  lview L = factor_view(f);
+  const int *Lp = L.p, *Li = L.i, *Lnz = L.nz, *pp = f->pperm;
+  const double *Lx = L.x;
   const unsigned char *pact = f->pact;
   int *cols = f->stack;
   double *t = f->work;
@@ -487,7 +653,7 @@ static int mform_update(cup_dfact *f, const unsigned char *act, double delta, lo
 
 /* ---- the interface ------------------------------------------------------------------- */
 
-int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *errmsg) {
+int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, long room, char *errmsg) {
   *out = NULL;
   cup_dfact *f = calloc(1, sizeof *f);
   if (!f) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
@@ -497,7 +663,7 @@ int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *e
   f->kkt = K->pkind == CUP_METRIC_SPARSE;
   f->updates = updates && !f->kkt;
   int st = cup_cholmod_start(&f->cm) ? cup_fail(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
-  if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, errmsg);
+  if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, room, errmsg);
   if (!st) {
     f->work = calloc(2 * (size_t)f->N, sizeof(double));   /* M form: rows outside F stay finite */
     f->fact_act = calloc((size_t)f->m + 1, 1);
@@ -522,7 +688,9 @@ void cup_dfact_free(cup_dfact **fp) {
   free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
   free(f->work); free(f->fact_act);
   free(f->pact); free(f->par); free(f->flag); free(f->stack); free(f->etree); free(f->yrow);
-  free(f->lp0); free(f->next0); free(f->prev0);
+  free(f->lp0); free(f->next0); free(f->prev0); free(f->mup);
+  free(f->pk_p); free(f->pk_nz); free(f->pk_i); free(f->pk_x);
+  free(f->cg_z); free(f->cg_p); free(f->cg_q); free(f->cg_u);
   free(f);
   *fp = NULL;
 }
@@ -554,8 +722,8 @@ int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
 void cup_dfact_revalue(cup_dfact *f) {
   const cup_polyset *K = f->K;
   int m = f->m;
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i, *Kp = f->Ku->p;
-  double *Mx = f->Mp->x, *Kx = f->Ku->x, *wv = f->work, mmax = 0;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  double *Mx = f->Mp->x, *wv = f->work, mmax = 0;
   for (int i = 0; i < m; i++) wv[i] = 0;
   for (int c = 0; c < m; c++) {
     int i = f->pperm[c];
@@ -565,13 +733,10 @@ void cup_dfact_revalue(cup_dfact *f) {
       double cij = K->Ct.x[a] * K->pdinv[j];
       for (int b = K->C.p[j]; b < K->C.p[j + 1]; b++) wv[K->C.i[b]] += K->C.x[b] * cij;
     }
-    /* Mp's column c (sorted), whose upper part is Ku's column c in order */
-    int q = Kp[c];
     for (int e = Mp[c]; e < Mp[c + 1]; e++) {
       int r = Mi[e];
       double v = wv[f->pperm[r]];
       Mx[e] = v;
-      if (r <= c) Kx[q++] = v;
       if (r == c) mmax = fmax(mmax, v);
     }
     for (int a = K->Ct.p[i]; a < K->Ct.p[i + 1]; a++) {
@@ -585,5 +750,6 @@ void cup_dfact_revalue(cup_dfact *f) {
 
 void cup_dfact_solve(cup_dfact *f, double *v) {
   if (f->kkt) kkt_solve(f, v);
+  else if (f->by_cg) cg_solve(f, v);
   else mform_solve(f, v);
 }

@@ -17,7 +17,10 @@
 
 typedef struct cup_dfact cup_dfact;
 
-int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, char *errmsg);
+/* room: -1 automatic; else the M form's factor of the free rows packed in
+ * room entries (no row updates), solves by CG on free sets whose factor
+ * does not fit (tests use it to run both). */
+int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, long room, char *errmsg);
 void cup_dfact_free(cup_dfact **f);
 /* Make the factor that of M~(act, delta); counts refactorizations and row
  * updates. Returns CUP_OK or CUP_ERR_LINALG. */
@@ -29,6 +32,8 @@ void cup_dfact_solve(cup_dfact *f, double *v);
  * M form): recompute M's values, so that the next cup_dfact_factor is a
  * numeric factorization on the same symbolic analysis. Allocation-free. */
 void cup_dfact_revalue(cup_dfact *f);
+/* 1: the current factor is solved by CG (it outgrew the packed room). */
+int cup_dfact_by_cg(const cup_dfact *f);
 /* The smallest regularization, relative to the scale of M. */
 double cup_dfact_delta_min(const cup_dfact *f);
 

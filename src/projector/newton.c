@@ -55,7 +55,7 @@ int cup_newton_create(cup_projector *p, char *errmsg) {
   newton_ws *w = calloc(1, sizeof *w);
   if (!w) return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
   p->nw = w;
-  int st = cup_dfact_create(&w->df, p->K, p->opt.factor_updates, errmsg);
+  int st = cup_dfact_create(&w->df, p->K, p->opt.factor_updates, -1, errmsg);
   if (st) return st;
   size_t M = (size_t)m + 1;
   if (pn_alloc(&w->pmain, n, m, 0) || pn_alloc(&w->pin, n, m, 1) ||
