@@ -26,7 +26,7 @@ typedef struct dense_fact {
 typedef struct pn_ws {
   double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
   double *y2, *s2, *gam2;           /* line-search trial */
-  double *d, *lt, *snap, *r, *keep; /* m each */
+  double *d, *lt, *snap, *keep;     /* m each (snap: the main solve's only) */
   unsigned char *act, *prev;        /* free set, and the previous one */
 } pn_ws;
 
