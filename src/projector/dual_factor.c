@@ -13,10 +13,10 @@ struct cup_dfact {
   int n, m, N;                /* N: order of the factored matrix (n + m or m) */
   int updates;                /* M form: row updates allowed */
   cholmod_common cm;
-  cholmod_sparse *Ku;         /* permuted upper matrix (KKT form: values rewritten; M form: M) */
-  cholmod_sparse *Mp;         /* M form: permuted full M, for rowadd columns */
+  cholmod_sparse *Ku;         /* KKT form: permuted upper matrix, values rewritten */
+  cholmod_sparse *Mp;         /* M form: permuted full M (sorted; its upper part up to mup) */
   cholmod_sparse *R;          /* M form: one column for rowadd, one row pattern for rowdel */
-  cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M */
+  cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M, or NULL (packed) */
   int *pperm, *iperm;         /* permuted <-> natural (KKT order for the KKT form) */
   int *cpos, *dpos;           /* KKT form: positions of C's entries and of row diagonals */
   double *work;               /* 2 N */

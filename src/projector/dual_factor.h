@@ -2,14 +2,17 @@
  *     M~(F, delta) = M_FF + delta I on the free rows F, identity elsewhere,
  *     M = C P^-1 C^T,
  * factored and solved without allocating. Two forms:
- *  - diagonal P: M itself (sparse, formed once); the LDL^T of M_FF alone,
- *    in room sized for all of M, at a cost set by the free rows rather than
- *    by M; updated row by row (CHOLMOD rowadd/rowdel) when the rows that
- *    change would cost less than refactoring;
+ *  - diagonal P: M itself (sparse, formed once, stored full); the LDL^T of
+ *    M_FF alone, at a cost set by the free rows rather than by M, either in
+ *    room sized for the factor of all of M, updated row by row (CHOLMOD
+ *    rowadd/rowdel) when the rows that change would cost less than
+ *    refactoring, or, where that room would be large (crowds of 10^4
+ *    disks and more), packed in a room of twice M and refactored, with CG
+ *    for a free set whose factor does not fit;
  *  - sparse P: the quasi-definite KKT matrix [P C_F^T; C_F -delta I],
- *    refactored by CHOLMOD (M would be dense).
- * Both are symmetrically permuted once (AMD) and stored upper, so that
- * factors use the natural ordering without allocating. */
+ *    refactored by CHOLMOD (M would be dense), stored upper.
+ * Both are symmetrically permuted once (AMD), so that factors use the
+ * natural ordering without allocating. */
 #ifndef CUP_DUAL_FACTOR_H
 #define CUP_DUAL_FACTOR_H
 
