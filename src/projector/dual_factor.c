@@ -271,9 +271,14 @@ static long auto_room(long full, long nnz_m) {
 
 /* Room for the factor of all of M, held as L = I until the first
  * factorization: no numeric work here, and none of a size of all of M
- * later; CHOLMOD's workspace for row updates taken now, not in a projection. */
+ * later; what row updates need (CHOLMOD's workspace, a column, the tree of
+ * all of M) taken now, not in a projection. */
 static int full_room(cup_dfact *f, char *errmsg) {
   size_t M1 = (size_t)f->m + 1;
+  f->R = cholmod_allocate_sparse((size_t)f->m, 1, (size_t)f->m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
+  f->etree = malloc(sizeof(int) * M1);
+  if (!f->R || !f->etree) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  full_etree(f);
   /* each column's room is its count in the factor of all of M and no more
    * (CHOLMOD's default adds a fifth and 5 entries a column): restricted_ldl
    * fills no more, and a column CHOLMOD's row updates move is moved back */
@@ -339,15 +344,13 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
   cholmod_free_sparse(&Mz, &f->cm);
   if (st) return st;
   size_t M1 = (size_t)m + 1;
-  f->R = cholmod_allocate_sparse((size_t)m, 1, (size_t)m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
   f->mup = malloc(sizeof(int) * M1);
   f->pact = calloc(M1, 1);
   f->par = malloc(sizeof(int) * M1);
-  f->flag = malloc(sizeof(int) * M1);
+  f->flag = calloc(M1, sizeof(int));
   f->stack = malloc(sizeof(int) * M1);
-  f->etree = malloc(sizeof(int) * M1);
   f->yrow = calloc(M1, sizeof(double));
-  if (!f->R || !f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->etree || !f->yrow)
+  if (!f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   const int *Mp = f->Mp->p, *Mi = f->Mp->i;
   for (int k = 0; k < m; k++) {
@@ -355,7 +358,6 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
     while (e < Mp[k + 1] && Mi[e] <= k) e++;
     f->mup[k] = e;
   }
-  full_etree(f);
   /* the symbolic factor of all of M in the stored order (its upper triangle) */
   f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_NATURAL;
