@@ -37,6 +37,8 @@ struct cup_dfact {
    * conjugate gradients on M~ instead (cg_solve) */
   int packed, by_cg;
   size_t room;                /* entries of pk_i / pk_x */
+  unsigned char *lay_act;     /* the free set the packed layout was made for */
+  int lay_ok;
   int *pk_p, *pk_nz, *pk_i;
   double *pk_x;
   double *cg_z, *cg_p, *cg_q, *cg_u;   /* m, m, m, n */
@@ -317,7 +319,8 @@ static int packed_room(cup_dfact *f, long room, char *errmsg) {
   f->cg_p = malloc(sizeof(double) * M1);
   f->cg_q = malloc(sizeof(double) * M1);
   f->cg_u = calloc((size_t)f->n + 1, sizeof(double));
-  if (!f->pk_p || !f->pk_nz || !f->pk_i || !f->pk_x || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
+  f->lay_act = calloc(M1, 1);
+  if (!f->lay_act || !f->pk_p || !f->pk_nz || !f->pk_i || !f->pk_x || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   for (int k = 0; k < f->m; k++) {     /* L = I until the first factorization */
     f->pk_p[k + 1] = k + 1;
@@ -407,6 +410,22 @@ static long packed_layout(cup_dfact *f, int *p) {
   return p[m];
 }
 
+/* The packed layout of the last free set that fitted holds the factor of
+ * any subset of it (the filled graph of a principal submatrix, eliminated in
+ * the same order, is a subgraph): a new delta, or rows leaving, keep it. */
+static int fits_layout(const cup_dfact *f) {
+  if (!f->lay_ok) return 0;
+  for (int k = 0; k < f->m; k++)
+    if (f->pact[k] > f->lay_act[k]) return 0;
+  return 1;
+}
+
+static int new_layout(cup_dfact *f, int *Lp) {
+  f->lay_ok = packed_layout(f, Lp) <= (long)f->room;
+  if (f->lay_ok) memcpy(f->lay_act, f->pact, (size_t)f->m);
+  return f->lay_ok;
+}
+
 /* LDL^T of M~ = M_FF + delta I on the free rows F, identity elsewhere, by
  * rows (up-looking, Davis' LDL): row k of L solves with the rows above it on
  * the reach of M(F, k) in the elimination tree, which is built on the way
@@ -434,7 +453,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
     f->L->is_monotonic = 1;
   }
   for (int k = 0; k < m; k++) pact[k] = act[f->pperm[k]];
-  f->by_cg = f->packed && packed_layout(f, Lp) > (long)f->room;
+  if (f->packed && !fits_layout(f)) f->by_cg = !new_layout(f, Lp);
   if (f->by_cg) {
     for (int k = 0; k < m; k++) { Lp[k + 1] = k + 1; Lnz[k] = 1; Li[k] = k; Lx[k] = 1; }
     f->refactor_ops = 0;
@@ -692,7 +711,7 @@ void cup_dfact_free(cup_dfact **fp) {
   free(f->pact); free(f->par); free(f->flag); free(f->stack); free(f->etree); free(f->yrow);
   free(f->lp0); free(f->next0); free(f->prev0); free(f->mup);
   free(f->pk_p); free(f->pk_nz); free(f->pk_i); free(f->pk_x);
-  free(f->cg_z); free(f->cg_p); free(f->cg_q); free(f->cg_u);
+  free(f->cg_z); free(f->cg_p); free(f->cg_q); free(f->cg_u); free(f->lay_act);
   free(f);
   *fp = NULL;
 }
