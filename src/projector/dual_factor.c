@@ -14,7 +14,7 @@ struct cup_dfact {
   int updates;                /* M form: row updates allowed */
   cholmod_common cm;
   cholmod_sparse *Ku;         /* KKT form: permuted upper matrix, values rewritten */
-  cholmod_sparse *Mp;         /* M form: permuted full M (sorted; its upper part up to mup) */
+  cholmod_sparse *Mp;         /* M form: permuted M, sorted, full (packed: upper); its upper part up to mup */
   cholmod_sparse *R;          /* M form: one column for rowadd, one row pattern for rowdel */
   cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M, or NULL (packed) */
   int *pperm, *iperm;         /* permuted <-> natural (KKT order for the KKT form) */
@@ -235,29 +235,59 @@ static void full_etree(cup_dfact *f) {
   memset(f->flag, 0, sizeof(int) * (size_t)f->m);
 }
 
-/* M = C P^-1 C^T with every diagonal present (a zero row of C gives an
- * empty column), full and sorted. */
-static cholmod_sparse *form_m(cup_dfact *f) {
-  const cup_polyset *K = f->K;
+static int cmp_int(const void *a, const void *b) {
+  int x = *(const int *)a, y = *(const int *)b;
+  return (x > y) - (x < y);
+}
+
+/* M = C P^-1 C^T in the permuted order, sorted, every diagonal present (a
+ * zero row of C has M_ii = 0): its upper triangle, or all of it. Column by
+ * column from the rows of C, M_ri = sum_j c_rj c_ij / p_j, so that no
+ * copy of M is made on the way (CHOLMOD's product, sum and sort made four). */
+static cholmod_sparse *build_m(cup_dfact *f, int upper) {
+  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+  const double *pdinv = f->K->pdinv;
   int m = f->m;
-  /* S = C D^-1/2 (m x n), M = S S^T */
-  cholmod_sparse *S = cholmod_allocate_sparse((size_t)m, (size_t)f->n, (size_t)K->C.nnz, 1, 1, 0,
-                                              CHOLMOD_REAL, &f->cm);
-  if (!S) return NULL;
-  memcpy(S->p, K->C.p, sizeof(int) * ((size_t)f->n + 1));
-  memcpy(S->i, K->C.i, sizeof(int) * (size_t)K->C.nnz);
-  for (int j = 0; j < f->n; j++)
-    for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++)
-      ((double *)S->x)[k] = K->C.x[k] * sqrt(K->pdinv[j]);
-  cholmod_sparse *M = cholmod_aat(S, NULL, 0, 1, &f->cm);
-  cholmod_free_sparse(&S, &f->cm);
-  cholmod_sparse *I = M ? cholmod_speye((size_t)m, (size_t)m, CHOLMOD_REAL, &f->cm) : NULL;
-  double zero[2] = {0, 0}, one[2] = {1, 0};
-  cholmod_sparse *Mz = I ? cholmod_add(M, I, one, zero, 1, 1, &f->cm) : NULL;
-  cholmod_free_sparse(&I, &f->cm);
-  cholmod_free_sparse(&M, &f->cm);
-  if (Mz && !cholmod_sort(Mz, &f->cm)) cholmod_free_sparse(&Mz, &f->cm);
-  return Mz;
+  int *mark = malloc(sizeof(int) * ((size_t)m + 1)), *list = malloc(sizeof(int) * ((size_t)m + 1));
+  double *val = calloc((size_t)m + 1, sizeof(double));
+  cholmod_sparse *M = NULL;
+  if (!mark || !list || !val) goto done;
+  for (int pass = 0; pass < 2; pass++) {
+    size_t nnz = 0;
+    for (int k = 0; k < m; k++) mark[k] = -1;
+    for (int k = 0; k < m; k++) {
+      int i = f->pperm[k], len = 0;
+      mark[k] = k;
+      list[len++] = k;
+      for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) {
+        int j = Ct->i[a];
+        double cij = Ct->x[a] * pdinv[j];
+        for (int b = C->p[j]; b < C->p[j + 1]; b++) {
+          int r = f->iperm[C->i[b]];
+          if (upper && r > k) continue;
+          if (mark[r] != k) { mark[r] = k; list[len++] = r; }
+          val[r] += C->x[b] * cij;
+        }
+      }
+      if (pass == 1) {
+        int *Mp = M->p, *Mi = M->i;
+        double *Mx = M->x;
+        qsort(list, (size_t)len, sizeof(int), cmp_int);
+        for (int t = 0; t < len; t++) { Mi[Mp[k] + t] = list[t]; Mx[Mp[k] + t] = val[list[t]]; }
+        Mp[k + 1] = Mp[k] + len;
+      }
+      for (int t = 0; t < len; t++) val[list[t]] = 0;
+      nnz += (size_t)len;
+    }
+    if (pass == 0) {
+      M = cholmod_allocate_sparse((size_t)m, (size_t)m, nnz, 1, 1, 0, CHOLMOD_REAL, &f->cm);
+      if (!M) goto done;
+      ((int *)M->p)[0] = 0;
+    }
+  }
+done:
+  free(mark); free(list); free(val);
+  return M;
 }
 
 /* The room of the factor: all of M's factor, with row updates, unless that
@@ -331,37 +361,41 @@ static int packed_room(cup_dfact *f, long room, char *errmsg) {
   return CUP_OK;
 }
 
+/* Where the column of Mp ends its upper part (one past the diagonal). */
+static void upper_ends(cup_dfact *f) {
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  for (int k = 0; k < f->m; k++) {
+    int e = Mp[k];
+    while (e < Mp[k + 1] && Mi[e] <= k) e++;
+    f->mup[k] = e;
+  }
+}
+
 /* room < 0: automatic (auto_room); else the packed room, in entries. */
 static int mform_create(cup_dfact *f, long room, char *errmsg) {
+  const cup_sparse *C = &f->K->C;
   int m = f->m;
   f->N = m;
-  cholmod_sparse *Mz = form_m(f);
-  if (!Mz) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
-  Mz->stype = -1;                          /* AMD on its lower triangle */
-  int st = amd_order(f, Mz, errmsg);
-  Mz->stype = 0;
-  if (!st) {
-    f->Mp = cholmod_submatrix(Mz, f->pperm, m, f->pperm, m, 1, 1, &f->cm);   /* permuted, full */
-    if (!f->Mp) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  }
-  cholmod_free_sparse(&Mz, &f->cm);
+  /* AMD of M = C P^-1 C^T from C's pattern (CHOLMOD orders C C^T) */
+  cholmod_sparse Cv = {0};
+  Cv.nrow = (size_t)m; Cv.ncol = (size_t)f->n; Cv.nzmax = (size_t)C->nnz;
+  Cv.p = C->p; Cv.i = C->i; Cv.x = C->x; Cv.stype = 0;
+  Cv.itype = CHOLMOD_INT; Cv.xtype = CHOLMOD_REAL; Cv.dtype = CHOLMOD_DOUBLE;
+  Cv.sorted = 1; Cv.packed = 1;
+  int st = amd_order(f, &Cv, errmsg);
   if (st) return st;
   size_t M1 = (size_t)m + 1;
+  f->Mp = build_m(f, 1);
   f->mup = malloc(sizeof(int) * M1);
   f->pact = calloc(M1, 1);
   f->par = malloc(sizeof(int) * M1);
   f->flag = calloc(M1, sizeof(int));
   f->stack = malloc(sizeof(int) * M1);
   f->yrow = calloc(M1, sizeof(double));
-  if (!f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
-  for (int k = 0; k < m; k++) {
-    int e = Mp[k];
-    while (e < Mp[k + 1] && Mi[e] <= k) e++;
-    f->mup[k] = e;
-  }
-  /* the symbolic factor of all of M in the stored order (its upper triangle) */
+  if (!f->Mp || !f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+  upper_ends(f);
+  /* the symbolic factor of all of M in the stored order */
   f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_NATURAL;
   f->cm.postorder = 0;
@@ -372,10 +406,16 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
   if (!f->L)
     return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
                     "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-  long full = 0;
+  long full = 0, nnz_m = 2L * ((int *)f->Mp->p)[m] - m;
   for (int k = 0; k < m; k++) full += ((int *)f->L->ColCount)[k];
-  if (room < 0) room = auto_room(full, (long)Mp[m]);
-  return room < 0 ? full_room(f, errmsg) : packed_room(f, room, errmsg);
+  if (room < 0) room = auto_room(full, nnz_m);
+  if (room >= 0) return packed_room(f, room, errmsg);   /* no row updates: the upper part will do */
+  cholmod_sparse *Mu = f->Mp;
+  f->Mp = build_m(f, 0);                   /* row updates read whole columns */
+  cholmod_free_sparse(&Mu, &f->cm);
+  if (!f->Mp) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+  upper_ends(f);
+  return full_room(f, errmsg);
 }
 
 /* The factor's arrays: CHOLMOD's simplicial factor, or the packed room. */
