@@ -291,14 +291,14 @@ done:
 }
 
 /* The room of the factor: all of M's factor, with row updates, unless that
- * is more than twice M itself and more than half a million entries (6 MB):
- * then packed, twice M or that, whichever is more. The free rows of a crowd
- * are a few in a hundred of its contacts, and the factor of all of M 5-6
- * times M (10^4-10^5 disks), most of the projector's memory; the factor of
- * a jam's free rows that outgrows the packed room is solved by CG. */
+ * is more than twice M itself: then packed in twice M. The free rows of a
+ * crowd are a few in a hundred of its contacts, and the factor of all of M
+ * 3-6 times M (10^3-10^5 disks), most of the projector's memory; a chain
+ * (a ladder) fills less than M and keeps its row updates. The free rows of
+ * a jam (1000 disks, 600 steps) never outgrew the packed room; a free set
+ * that does is solved by CG. */
 static long auto_room(long full, long nnz_m) {
-  long packed = 2 * nnz_m > (1L << 19) ? 2 * nnz_m : (1L << 19);
-  return full > packed ? packed : -1;
+  return full > 2 * nnz_m ? 2 * nnz_m : -1;
 }
 
 /* Room for the factor of all of M, held as L = I until the first
