@@ -6,6 +6,7 @@
 #include <string.h>
 #include "catchup.h"
 #include "dual_factor.h"
+#include "dual_cg.h"
 
 struct cup_dfact {
   const cup_polyset *K;
@@ -34,7 +35,7 @@ struct cup_dfact {
   int *mup;                   /* M form: one past the diagonal in each column of Mp */
   /* M form, packed: the factor of the free rows alone in a room smaller than
    * the factor of all of M (no row updates); when it does not fit, solves by
-   * conjugate gradients on M~ instead (cg_solve) */
+   * conjugate gradients on M~ instead (dual_cg.c) */
   int packed, by_cg;
   size_t room;                /* entries of pk_i / pk_x */
   unsigned char *lay_act;     /* the free set the packed layout was made for */
@@ -607,67 +608,6 @@ static int mform_rowdel(cup_dfact *f, int i) {
   return CUP_OK;
 }
 
-/* out = (M_FF + delta I) w on the free rows (natural order), M = C P^-1 C^T
- * applied through the rows of C without forming it. */
-static void cg_apply(const cup_dfact *f, const double *w, double *out) {
-  const cup_sparse *Ct = &f->K->Ct;
-  const double *pdinv = f->K->pdinv;
-  const unsigned char *act = f->fact_act;
-  double *u = f->cg_u;
-  for (int i = 0; i < f->m; i++)
-    if (act[i])
-      for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) u[Ct->i[a]] += Ct->x[a] * w[i];
-  for (int i = 0; i < f->m; i++) {
-    if (!act[i]) continue;
-    double t = f->fact_delta * w[i];
-    for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) t += Ct->x[a] * pdinv[Ct->i[a]] * u[Ct->i[a]];
-    out[i] = t;
-  }
-  for (int i = 0; i < f->m; i++)
-    if (act[i])
-      for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) u[Ct->i[a]] = 0;
-}
-
-/* v <- M~^-1 v when the factor of the free rows outgrew the packed room:
- * conjugate gradients with M~'s diagonal (||c_i||^2_{P^-1} + delta) as
- * preconditioner, to a residual at rounding or a few thousand iterations
- * (the projected-Newton steps and the finishing refinement need no more
- * than a descent direction and a contraction). */
-#define CG_MAX_ITER 4000
-static void cg_solve(cup_dfact *f, double *v) {
-  int m = f->m;
-  const unsigned char *act = f->fact_act;
-  const double *rn = f->K->rownorm;
-  double *x = f->work, *r = f->work + m, *z = f->cg_z, *p = f->cg_p, *q = f->cg_q;
-  double rz = 0, bb = 0;
-  for (int i = 0; i < m; i++) {
-    x[i] = 0;
-    r[i] = act[i] ? v[i] : 0;
-    z[i] = p[i] = r[i] / (rn[i] * rn[i] + f->fact_delta);
-    rz += r[i] * z[i];
-    bb += r[i] * r[i];
-  }
-  for (int it = 0; it < CG_MAX_ITER && rz > 0; it++) {
-    cg_apply(f, p, q);
-    double pq = 0, rr = 0, rz1 = 0;
-    for (int i = 0; i < m; i++) if (act[i]) pq += p[i] * q[i];
-    if (!(pq > 0)) break;
-    double alpha = rz / pq;
-    for (int i = 0; i < m; i++) {
-      if (!act[i]) continue;
-      x[i] += alpha * p[i];
-      r[i] -= alpha * q[i];
-      z[i] = r[i] / (rn[i] * rn[i] + f->fact_delta);
-      rr += r[i] * r[i];
-      rz1 += r[i] * z[i];
-    }
-    if (rr <= 1e-28 * bb) break;
-    for (int i = 0; i < m; i++) if (act[i]) p[i] = z[i] + (rz1 / rz) * p[i];
-    rz = rz1;
-  }
-  for (int i = 0; i < m; i++) if (act[i]) v[i] = x[i];
-}
-
 /* L D L^T t = t on the free rows only, in the permuted order (the other
  * rows are identity and come back unchanged); D folded into the backward
  * sweep. */
@@ -811,6 +751,9 @@ void cup_dfact_revalue(cup_dfact *f) {
 
 void cup_dfact_solve(cup_dfact *f, double *v) {
   if (f->kkt) kkt_solve(f, v);
-  else if (f->by_cg) cg_solve(f, v);
+  else if (f->by_cg) {
+    double *w[5] = {f->work, f->work + f->m, f->cg_z, f->cg_p, f->cg_q};
+    cup_dual_cg(f->K, f->fact_act, f->fact_delta, v, w, f->cg_u);
+  }
   else mform_solve(f, v);
 }
