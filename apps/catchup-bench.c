@@ -12,12 +12,13 @@
  * One JSON line per measurement on stdout; a table on stderr. The projector
  * runs each (problem, method, mode) in a child process that makes the
  * polyset and the projector (both timed as set-up) and reports its peak
- * resident set from the set-up on (VmHWM after /proc/self/clear_refs), and
- * that minus its size before the set-up and minus the library code paged in
- * on first use (the projector's own data, beside the QP peers' in
- * scripts/bench_qp_peers.py). */
+ * resident set from the set-up on (VmHWM after malloc_trim and
+ * /proc/self/clear_refs), and that minus its size before the set-up and
+ * minus the library code paged in on first use (the projector's own data,
+ * beside the QP peers' in scripts/bench_qp_peers.py). */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
+#include <malloc.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -137,8 +138,12 @@ static double make_set(problem *pb) {
   return now() - t0;
 }
 
-/* Restart the kernel's peak-RSS record (VmHWM) at the current size. */
+/* Restart the kernel's peak-RSS record (VmHWM) at the current size, the
+ * heap's free memory given back first: memory freed before (the loading's)
+ * and reused by what is measured would not count (scripts/bench_qp_peers.py
+ * does the same). */
 static void reset_peak(void) {
+  malloc_trim(0);
   FILE *f = fopen("/proc/self/clear_refs", "w");
   if (f) { fputs("5", f); fclose(f); }
 }
