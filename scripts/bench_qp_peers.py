@@ -33,7 +33,8 @@ time_per_proj_s = median over reps of (total timed sequence time / K).
 
 Memory: the first --memory-points points of every reported sequence run
 again in a fresh (spawned) interpreter which, once the problem is loaded,
-restarts the kernel's peak-RSS record (/proc/self/clear_refs) and reports the
+gives the C heap's free memory back (malloc_trim) and restarts the kernel's
+peak-RSS record (/proc/self/clear_refs) and reports the
 peak resident set after the run (VmHWM): peak_rss_kb, and solver_rss_kb = that
 peak minus its resident size after loading and minus the library code paged
 in on first use (the growth of RssFile), i.e. the solver's own data. (A
@@ -522,7 +523,14 @@ def resident_kb():
 
 def reset_peak():
     """restart the kernel's peak-RSS record (VmHWM) at the current size, so that
-    the peak measured later is the solver's, not the file loading's"""
+    the peak measured later is the solver's, not the file loading's; the C
+    heap's free memory is given back first (malloc_trim), so that memory the
+    loading freed and the solver reuses counts (catchup-bench does the same)"""
+    try:
+        import ctypes
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
     try:
         with open("/proc/self/clear_refs", "w") as f:
             f.write("5")

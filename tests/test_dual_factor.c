@@ -49,9 +49,13 @@ static void random_rows(rng_t *r, double *C, int m, int n) {
   }
 }
 
-static void test_solves_against_dense(void **state) {
-  (void)state;
+/* room: -1 the automatic room (all of M's factor here, row updates on);
+ * large: the packed room, every factor fits; small: the packed room, most
+ * free sets' factors do not fit and are solved by CG (a larger delta keeps
+ * M~ well conditioned enough for CG to reach the dense answer to 1e-8). */
+static void solves_against_dense(long room) {
   rng_t r = {2026};
+  int cg_solves = 0;
   for (int trial = 0; trial < 6; trial++) {
     int n = rng_int(&r, 40, 120), m = rng_int(&r, n / 2, 2 * n);
     double *C = calloc((size_t)m * n, sizeof(double)), *d = malloc(sizeof(double) * n);
@@ -63,12 +67,13 @@ static void test_solves_against_dense(void **state) {
     cup_polyset *K = NULL;
     assert_int_equal(cup_polyset_create(&K, &Ct.view, NULL, &P, NULL), CUP_OK);
     cup_dfact *f = NULL;
-    assert_int_equal(cup_dfact_create(&f, K, 1, NULL), CUP_OK);
+    assert_int_equal(cup_dfact_create(&f, K, 1, room, NULL), CUP_OK);
     unsigned char *act = calloc((size_t)m, 1);
     double *v = malloc(sizeof(double) * m), *w = malloc(sizeof(double) * m);
     double *ref = malloc(sizeof(double) * m);
     int facts = 0, updates = 0;
-    double delta = cup_dfact_delta_min(f) * 1e4;   /* M_FF may be singular: keep M~ well posed */
+    /* M_FF may be singular: keep M~ well posed */
+    double delta = cup_dfact_delta_min(f) * (room >= 0 && room < 1000 ? 1e7 : 1e4);
     for (int step = 0; step < 40; step++) {
       /* mostly a few rows change; every 8th step a new free set; delta changes twice */
       if (step % 8 == 0) for (int i = 0; i < m; i++) act[i] = rng_unif(&r) < 0.4;
@@ -78,6 +83,7 @@ static void test_solves_against_dense(void **state) {
       for (int i = 0; i < m; i++) v[i] = rng_normal(&r);
       memcpy(w, v, sizeof(double) * m);
       cup_dfact_solve(f, w);
+      cg_solves += cup_dfact_by_cg(f);
       dense_reference(C, d, m, n, act, delta, v, ref);
       double err = 0, scale = 0;
       for (int i = 0; i < m; i++) {
@@ -88,19 +94,38 @@ static void test_solves_against_dense(void **state) {
       if (err > 1e-8 * scale)
         fail_msg("trial %d step %d: |solve - dense| = %.3e (scale %.3e)", trial, step, err, scale);
     }
-    assert_true(facts >= 5);       /* both paths ran */
-    assert_true(updates > 0);
+    assert_true(facts >= 5);       /* both paths ran (row updates with the automatic room) */
+    assert_true(room < 0 ? updates > 0 : updates == 0);
     cup_dfact_free(&f);
     assert_null(f);
     cup_polyset_free(&K);
     tcsc_free(&Ct);
     free(C); free(d); free(act); free(v); free(w); free(ref);
   }
+  if (room < 0 || room >= 1000) assert_int_equal(cg_solves, 0);
+  else assert_true(cg_solves > 100);
+}
+
+static void test_solves_against_dense(void **state) {
+  (void)state;
+  solves_against_dense(-1);
+}
+
+static void test_packed_room(void **state) {
+  (void)state;
+  solves_against_dense(1L << 20);
+}
+
+static void test_packed_room_too_small(void **state) {
+  (void)state;
+  solves_against_dense(0);       /* at least m: the diagonal alone fits */
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_solves_against_dense),
+    cmocka_unit_test(test_packed_room),
+    cmocka_unit_test(test_packed_room_too_small),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

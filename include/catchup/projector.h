@@ -57,7 +57,11 @@ typedef struct cup_projector_options {
   int factor_updates;     /**< sparse exact path with a diagonal P: update the factorization
                                row by row when few rows change (1, default), or always
                                refactor (0: strictly allocation-free; with 1, CHOLMOD's row
-                               update may allocate a temporary on factors of ~10^4+ rows) */
+                               update may allocate a temporary on factors of ~10^4+ rows).
+                               Only where the factor of all of C P^-1 C^T is at most twice
+                               that matrix (chains, small sets); otherwise (crowds) the
+                               factor of the free rows is packed in that much room and
+                               always refactored */
 } cup_projector_options;
 
 /** What one projection did and what it certifies. */

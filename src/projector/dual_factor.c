@@ -6,6 +6,7 @@
 #include <string.h>
 #include "catchup.h"
 #include "dual_factor.h"
+#include "dual_cg.h"
 
 struct cup_dfact {
   const cup_polyset *K;
@@ -13,10 +14,10 @@ struct cup_dfact {
   int n, m, N;                /* N: order of the factored matrix (n + m or m) */
   int updates;                /* M form: row updates allowed */
   cholmod_common cm;
-  cholmod_sparse *Ku;         /* permuted upper matrix (KKT form: values rewritten; M form: M) */
-  cholmod_sparse *Mp;         /* M form: permuted full M, for rowadd columns */
+  cholmod_sparse *Ku;         /* KKT form: permuted upper matrix, values rewritten */
+  cholmod_sparse *Mp;         /* M form: permuted M, sorted, full (packed: upper); its upper part up to mup */
   cholmod_sparse *R;          /* M form: one column for rowadd, one row pattern for rowdel */
-  cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M */
+  cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M, or NULL (packed) */
   int *pperm, *iperm;         /* permuted <-> natural (KKT order for the KKT form) */
   int *cpos, *dpos;           /* KKT form: positions of C's entries and of row diagonals */
   double *work;               /* 2 N */
@@ -31,11 +32,52 @@ struct cup_dfact {
   unsigned stamp;             /* marks in flag for row patterns (rowdel) */
   double refactor_ops;        /* work of the last refactorization; 0: none yet */
   int *lp0, *next0, *prev0;   /* L's first layout: each column with room for all of M */
+  int *mup;                   /* M form: one past the diagonal in each column of Mp */
+  /* M form, packed: the factor of the free rows alone in a room smaller than
+   * the factor of all of M (no row updates); when it does not fit, solves by
+   * conjugate gradients on M~ instead (dual_cg.c) */
+  int packed, by_cg;
+  size_t room;                /* entries of pk_i / pk_x */
+  unsigned char *lay_act;     /* the free set the packed layout was made for */
+  int lay_ok;
+  int *pk_p, *pk_nz, *pk_i;
+  double *pk_x;
+  double *cg_z, *cg_p, *cg_q, *cg_u;   /* m, m, m, n */
 };
 
 double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
+int cup_dfact_by_cg(const cup_dfact *f) { return f->by_cg; }
 
 /* ---- permutation and upper storage (shared) ---------------------------------- */
+
+/* AMD order of a symmetric matrix (CHOLMOD reads the triangle its stype
+ * names) into pperm/iperm; the analysis' workspace is let go at once. */
+static int amd_order(cup_dfact *f, cholmod_sparse *A, char *errmsg) {
+  int N = (int)A->nrow;
+  f->cm.supernodal = CHOLMOD_SIMPLICIAL;
+  f->cm.final_ll = 0;
+  /* AMD alone: the factors are of the free rows only (restricted_ldl), whose
+   * fill an ordering of all of M hardly changes; METIS and nested dissection
+   * saved 3-5% of the room for all of M on crowds of 10^5 disks and took 15
+   * times AMD's time (8.5 s against 0.25 s); a set whose rows change with
+   * the state is analysed again when they do */
+  f->cm.nmethods = 1;
+  f->cm.method[0].ordering = CHOLMOD_AMD;
+  cholmod_factor *L0 = cholmod_analyze(A, &f->cm);
+  if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  f->pperm = malloc(sizeof(int) * (size_t)N);
+  f->iperm = malloc(sizeof(int) * (size_t)N);
+  if (f->pperm && f->iperm)
+    for (int k = 0; k < N; k++) {
+      int orig = L0->Perm ? ((int *)L0->Perm)[k] : k;
+      f->pperm[k] = orig;
+      f->iperm[orig] = k;
+    }
+  cholmod_free_factor(&L0, &f->cm);
+  cholmod_free_work(&f->cm);
+  if (!f->pperm || !f->iperm) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  return CUP_OK;
+}
 
 /* From a symmetric matrix given by its lower triangle (natural order; each
  * entry tagged), build the permuted upper triangle with a map from every
@@ -48,31 +90,14 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
   A.p = (void *)Ap; A.i = (void *)Ai; A.x = (void *)Ax; A.stype = -1;
   A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
   A.sorted = 1; A.packed = 1;
-  f->cm.supernodal = CHOLMOD_SIMPLICIAL;
-  f->cm.final_ll = 0;
-  /* AMD alone: the factors are of the free rows only (restricted_ldl), whose
-   * fill an ordering of all of M hardly changes; METIS and nested dissection
-   * saved 3-5% of the room for all of M on crowds of 10^5 disks and took 15
-   * times AMD's time (8.5 s against 0.25 s); a set whose rows change with
-   * the state is analysed again when they do */
-  f->cm.nmethods = 1;
-  f->cm.method[0].ordering = CHOLMOD_AMD;
-  cholmod_factor *L0 = cholmod_analyze(&A, &f->cm);   /* fill-reducing order */
-  if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-  f->pperm = malloc(sizeof(int) * (size_t)N);
-  f->iperm = malloc(sizeof(int) * (size_t)N);
+  int st = amd_order(f, &A, errmsg);
+  if (st) return st;
   int *rowcnt = calloc((size_t)N + 1, sizeof(int)), *colcnt = calloc((size_t)N + 1, sizeof(int));
   int *order = malloc(sizeof(int) * ((size_t)nnz + 1)), *colof = malloc(sizeof(int) * ((size_t)nnz + 1));
   f->Ku = cholmod_allocate_sparse((size_t)N, (size_t)N, (size_t)nnz, 1, 1, 1, CHOLMOD_REAL, &f->cm);
-  int st = CUP_OK;
-  if (!f->pperm || !f->iperm || !rowcnt || !colcnt || !order || !colof || !f->Ku) {
+  if (!rowcnt || !colcnt || !order || !colof || !f->Ku) {
     st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
     goto done;
-  }
-  for (int k = 0; k < N; k++) {
-    int orig = L0->Perm ? ((int *)L0->Perm)[k] : k;
-    f->pperm[k] = orig;
-    f->iperm[orig] = k;
   }
   for (int c = 0; c < N; c++)
     for (int e = Ap[c]; e < Ap[c + 1]; e++) {
@@ -99,7 +124,6 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
     map[e] = pos;
   }
 done:
-  cholmod_free_factor(&L0, &f->cm);
   free(rowcnt); free(colcnt); free(order); free(colof);
   return st;
 }
@@ -194,15 +218,16 @@ static void kkt_solve(cup_dfact *f, double *v) {
 /* The elimination tree of all of M (Liu's algorithm with path compression):
  * every factor of a principal submatrix in this order has its pattern
  * inside the factor of M, so a row of the full factor, found from this tree,
- * bounds the row of any factor (what rowdel needs). */
+ * bounds the row of any factor (what rowdel needs). Column k of Mp up to
+ * its diagonal (mup) is column k of M's upper triangle. */
 static void full_etree(cup_dfact *f) {
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
   int *anc = f->flag;
   for (int k = 0; k < f->m; k++) {
     f->etree[k] = -1;
     anc[k] = -1;
-    for (int e = Kp[k]; e < Kp[k + 1]; e++)
-      for (int i = Ki[e], next; i != -1 && i < k; i = next) {
+    for (int e = Mp[k]; e < f->mup[k]; e++)
+      for (int i = Mi[e], next; i != -1 && i < k; i = next) {
         next = anc[i];
         anc[i] = k;
         if (next == -1) f->etree[i] = k;
@@ -211,102 +236,235 @@ static void full_etree(cup_dfact *f) {
   memset(f->flag, 0, sizeof(int) * (size_t)f->m);
 }
 
-static int mform_create(cup_dfact *f, char *errmsg) {
-  const cup_polyset *K = f->K;
-  int m = f->m, N = f->N = m;
-  /* S = C D^-1/2 (m x n), M = S S^T */
-  cholmod_sparse *S = cholmod_allocate_sparse((size_t)m, (size_t)f->n, (size_t)K->C.nnz, 1, 1, 0,
-                                              CHOLMOD_REAL, &f->cm);
-  if (!S) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  memcpy(S->p, K->C.p, sizeof(int) * ((size_t)f->n + 1));
-  memcpy(S->i, K->C.i, sizeof(int) * (size_t)K->C.nnz);
-  for (int j = 0; j < f->n; j++)
-    for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++)
-      ((double *)S->x)[k] = K->C.x[k] * sqrt(K->pdinv[j]);
-  cholmod_sparse *M = cholmod_aat(S, NULL, 0, 1, &f->cm);
-  cholmod_free_sparse(&S, &f->cm);
-  if (!M || !cholmod_sort(M, &f->cm)) {
-    cholmod_free_sparse(&M, &f->cm);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+static int cmp_int(const void *a, const void *b) {
+  int x = *(const int *)a, y = *(const int *)b;
+  return (x > y) - (x < y);
+}
+
+/* M = C P^-1 C^T in the permuted order, sorted, every diagonal present (a
+ * zero row of C has M_ii = 0): its upper triangle, or all of it. Column by
+ * column from the rows of C, M_ri = sum_j c_rj c_ij / p_j, so that no
+ * copy of M is made on the way (CHOLMOD's product, sum and sort made four). */
+static cholmod_sparse *build_m(cup_dfact *f, int upper) {
+  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+  const double *pdinv = f->K->pdinv;
+  int m = f->m;
+  int *mark = malloc(sizeof(int) * ((size_t)m + 1)), *list = malloc(sizeof(int) * ((size_t)m + 1));
+  double *val = calloc((size_t)m + 1, sizeof(double));
+  cholmod_sparse *M = NULL;
+  if (!mark || !list || !val) goto done;
+  for (int pass = 0; pass < 2; pass++) {
+    size_t nnz = 0;
+    for (int k = 0; k < m; k++) mark[k] = -1;
+    for (int k = 0; k < m; k++) {
+      int i = f->pperm[k], len = 0;
+      mark[k] = k;
+      list[len++] = k;
+      for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) {
+        int j = Ct->i[a];
+        double cij = Ct->x[a] * pdinv[j];
+        for (int b = C->p[j]; b < C->p[j + 1]; b++) {
+          int r = f->iperm[C->i[b]];
+          if (upper && r > k) continue;
+          if (mark[r] != k) { mark[r] = k; list[len++] = r; }
+          val[r] += C->x[b] * cij;
+        }
+      }
+      if (pass == 1) {
+        int *Mp = M->p, *Mi = M->i;
+        double *Mx = M->x;
+        qsort(list, (size_t)len, sizeof(int), cmp_int);
+        for (int t = 0; t < len; t++) { Mi[Mp[k] + t] = list[t]; Mx[Mp[k] + t] = val[list[t]]; }
+        Mp[k + 1] = Mp[k] + len;
+      }
+      for (int t = 0; t < len; t++) val[list[t]] = 0;
+      nnz += (size_t)len;
+    }
+    if (pass == 0) {
+      M = cholmod_allocate_sparse((size_t)m, (size_t)m, nnz, 1, 1, 0, CHOLMOD_REAL, &f->cm);
+      if (!M) goto done;
+      ((int *)M->p)[0] = 0;
+    }
   }
-  /* rows of C that are zero give an empty column in M: give every row a diagonal */
-  cholmod_sparse *I = cholmod_speye((size_t)m, (size_t)m, CHOLMOD_REAL, &f->cm);
-  double zero[2] = {0, 0}, one[2] = {1, 0};
-  cholmod_sparse *Mz = I ? cholmod_add(M, I, one, zero, 1, 1, &f->cm) : NULL;
-  cholmod_free_sparse(&I, &f->cm);
-  cholmod_free_sparse(&M, &f->cm);
-  if (!Mz) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  cholmod_sort(Mz, &f->cm);
-  /* lower triangle for the ordering */
-  const int *Mp = Mz->p, *Mi = Mz->i;
-  const double *Mx = Mz->x;
-  int nnzl = 0;
-  for (int j = 0; j < m; j++)
-    for (int k = Mp[j]; k < Mp[j + 1]; k++) nnzl += Mi[k] >= j;
-  int *Ap = malloc(sizeof(int) * ((size_t)m + 1)), *Ai = malloc(sizeof(int) * ((size_t)nnzl + 1));
-  int *map = malloc(sizeof(int) * ((size_t)nnzl + 1));
-  double *Ax = malloc(sizeof(double) * ((size_t)nnzl + 1));
-  int st = CUP_OK;
-  if (!Ap || !Ai || !map || !Ax) { st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory"); goto done; }
-  int q = 0;
-  Ap[0] = 0;
-  for (int j = 0; j < m; j++) {
-    for (int k = Mp[j]; k < Mp[j + 1]; k++)
-      if (Mi[k] >= j) { Ai[q] = Mi[k]; Ax[q++] = Mx[k]; }
-    Ap[j + 1] = q;
-  }
-  st = permuted_upper(f, N, Ap, Ai, Ax, map, errmsg);
-  if (st) goto done;
-  f->Mp = cholmod_submatrix(Mz, f->pperm, m, f->pperm, m, 1, 1, &f->cm);   /* permuted, full */
-  f->R = cholmod_allocate_sparse((size_t)m, 1, (size_t)m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
-  size_t M1 = (size_t)m + 1;
-  f->pact = calloc(M1, 1);
-  f->par = malloc(sizeof(int) * M1);
-  f->flag = malloc(sizeof(int) * M1);
-  f->stack = malloc(sizeof(int) * M1);
+done:
+  free(mark); free(list); free(val);
+  return M;
+}
+
+/* The room of the factor: all of M's factor, with row updates, unless that
+ * is more than twice M itself: then packed in twice M. The free rows of a
+ * crowd are a few in a hundred of its contacts, and the factor of all of M
+ * 3-6 times M (10^3-10^5 disks), most of the projector's memory; a chain
+ * (a ladder) fills less than M and keeps its row updates. The free rows of
+ * a jam (1000 disks, 600 steps) never outgrew the packed room; a free set
+ * that does is solved by CG. */
+static long auto_room(long full, long nnz_m) {
+  return full > 2 * nnz_m ? 2 * nnz_m : -1;
+}
+
+/* Room for the factor of all of M, held as L = I until the first
+ * factorization: no numeric work here, and none of a size of all of M
+ * later; what row updates need (CHOLMOD's workspace, a column, the tree of
+ * all of M) taken now, not in a projection. */
+static int full_room(cup_dfact *f, char *errmsg) {
+  size_t M1 = (size_t)f->m + 1;
+  f->R = cholmod_allocate_sparse((size_t)f->m, 1, (size_t)f->m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
   f->etree = malloc(sizeof(int) * M1);
-  f->yrow = calloc(M1, sizeof(double));
-  if (!f->Mp || !f->R || !f->pact || !f->par || !f->flag || !f->stack || !f->etree || !f->yrow) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-    goto done;
-  }
+  if (!f->R || !f->etree) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   full_etree(f);
-  /* Room for the factor of all of M, held as L = I until the first
-   * factorization: no numeric work here, and none of a size of all of M later */
-  f->cm.nmethods = 1;
-  f->cm.method[0].ordering = CHOLMOD_NATURAL;
-  f->cm.postorder = 0;
   /* each column's room is its count in the factor of all of M and no more
    * (CHOLMOD's default adds a fifth and 5 entries a column): restricted_ldl
    * fills no more, and a column CHOLMOD's row updates move is moved back */
   f->cm.grow1 = 1;
   f->cm.grow2 = 0;
-  f->L = cholmod_analyze(f->Ku, &f->cm);
-  if (!f->L || !cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm)) {
-    st = cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
-                  "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-    goto done;
-  }
+  if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm))
+    return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
+                    "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
   /* CHOLMOD's row updates may move a column whose room looks short to them;
    * restricted_ldl goes back to this layout, every column's room its count in
    * the factor of all of M, which holds any factor of free rows */
   f->lp0 = malloc(sizeof(int) * M1);
   f->next0 = malloc(sizeof(int) * (M1 + 1));
   f->prev0 = malloc(sizeof(int) * (M1 + 1));
-  if (!f->lp0 || !f->next0 || !f->prev0) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-    goto done;
-  }
+  if (!f->lp0 || !f->next0 || !f->prev0) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   memcpy(f->lp0, f->L->p, sizeof(int) * M1);
   memcpy(f->next0, f->L->next, sizeof(int) * (M1 + 1));
   memcpy(f->prev0, f->L->prev, sizeof(int) * (M1 + 1));
-  /* rowadd/rowdel need 2m of CHOLMOD workspace: take it now, not in a projection */
-  if (!cholmod_allocate_work((size_t)m, 2 * (size_t)m, 2 * (size_t)m, &f->cm))
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
-done:
-  cholmod_free_sparse(&Mz, &f->cm);
-  free(Ap); free(Ai); free(map); free(Ax);
-  return st;
+  /* rowadd/rowdel need 2m of CHOLMOD workspace */
+  if (!cholmod_allocate_work((size_t)f->m, 2 * (size_t)f->m, 2 * (size_t)f->m, &f->cm))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
+  return CUP_OK;
+}
+
+static int packed_room(cup_dfact *f, long room, char *errmsg) {
+  size_t M1 = (size_t)f->m + 1, R = (size_t)(room > f->m ? room : f->m);
+  cholmod_free_factor(&f->L, &f->cm);
+  f->packed = 1;
+  f->updates = 0;
+  f->room = R;
+  f->pk_p = calloc(M1, sizeof(int));
+  f->pk_nz = malloc(sizeof(int) * M1);
+  f->pk_i = malloc(sizeof(int) * R);
+  f->pk_x = malloc(sizeof(double) * R);
+  f->cg_z = malloc(sizeof(double) * M1);
+  f->cg_p = malloc(sizeof(double) * M1);
+  f->cg_q = malloc(sizeof(double) * M1);
+  f->cg_u = calloc((size_t)f->n + 1, sizeof(double));
+  f->lay_act = calloc(M1, 1);
+  if (!f->lay_act || !f->pk_p || !f->pk_nz || !f->pk_i || !f->pk_x || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  for (int k = 0; k < f->m; k++) {     /* L = I until the first factorization */
+    f->pk_p[k + 1] = k + 1;
+    f->pk_nz[k] = 1;
+    f->pk_i[k] = k;
+    f->pk_x[k] = 1;
+  }
+  return CUP_OK;
+}
+
+/* Where the column of Mp ends its upper part (one past the diagonal). */
+static void upper_ends(cup_dfact *f) {
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  for (int k = 0; k < f->m; k++) {
+    int e = Mp[k];
+    while (e < Mp[k + 1] && Mi[e] <= k) e++;
+    f->mup[k] = e;
+  }
+}
+
+/* room < 0: automatic (auto_room); else the packed room, in entries. */
+static int mform_create(cup_dfact *f, long room, char *errmsg) {
+  const cup_sparse *C = &f->K->C;
+  int m = f->m;
+  f->N = m;
+  /* AMD of M = C P^-1 C^T from C's pattern (CHOLMOD orders C C^T) */
+  cholmod_sparse Cv = {0};
+  Cv.nrow = (size_t)m; Cv.ncol = (size_t)f->n; Cv.nzmax = (size_t)C->nnz;
+  Cv.p = C->p; Cv.i = C->i; Cv.x = C->x; Cv.stype = 0;
+  Cv.itype = CHOLMOD_INT; Cv.xtype = CHOLMOD_REAL; Cv.dtype = CHOLMOD_DOUBLE;
+  Cv.sorted = 1; Cv.packed = 1;
+  int st = amd_order(f, &Cv, errmsg);
+  if (st) return st;
+  size_t M1 = (size_t)m + 1;
+  f->Mp = build_m(f, 1);
+  f->mup = malloc(sizeof(int) * M1);
+  f->pact = calloc(M1, 1);
+  f->par = malloc(sizeof(int) * M1);
+  f->flag = calloc(M1, sizeof(int));
+  f->stack = malloc(sizeof(int) * M1);
+  f->yrow = calloc(M1, sizeof(double));
+  if (!f->Mp || !f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+  upper_ends(f);
+  /* the symbolic factor of all of M in the stored order */
+  f->cm.nmethods = 1;
+  f->cm.method[0].ordering = CHOLMOD_NATURAL;
+  f->cm.postorder = 0;
+  f->Mp->stype = 1;
+  f->L = cholmod_analyze(f->Mp, &f->cm);
+  f->Mp->stype = 0;
+  cholmod_free_work(&f->cm);
+  if (!f->L)
+    return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
+                    "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  long full = 0, nnz_m = 2L * ((int *)f->Mp->p)[m] - m;
+  for (int k = 0; k < m; k++) full += ((int *)f->L->ColCount)[k];
+  if (room < 0) room = auto_room(full, nnz_m);
+  if (room >= 0) return packed_room(f, room, errmsg);   /* no row updates: the upper part will do */
+  cholmod_sparse *Mu = f->Mp;
+  f->Mp = build_m(f, 0);                   /* row updates read whole columns */
+  cholmod_free_sparse(&Mu, &f->cm);
+  if (!f->Mp) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+  upper_ends(f);
+  return full_room(f, errmsg);
+}
+
+/* The factor's arrays: CHOLMOD's simplicial factor, or the packed room. */
+typedef struct lview { int *p, *nz, *i; double *x; } lview;
+static lview factor_view(const cup_dfact *f) {
+  if (f->packed) return (lview){f->pk_p, f->pk_nz, f->pk_i, f->pk_x};
+  return (lview){f->L->p, f->L->nz, f->L->i, f->L->x};
+}
+
+/* The column counts of the factor of M_FF (the reach of each row, as
+ * restricted_ldl walks it) laid out packed in p; returns the entries. */
+static long packed_layout(cup_dfact *f, int *p) {
+  int m = f->m;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  int *par = f->par, *flag = f->flag;
+  const unsigned char *pact = f->pact;
+  for (int k = 0; k < m; k++) p[k + 1] = 1;
+  for (int k = 0; k < m; k++) {
+    if (!pact[k]) continue;
+    par[k] = -1;
+    flag[k] = k;
+    for (int e = Mp[k]; e < f->mup[k]; e++)
+      for (int i = Mi[e]; i < k && pact[i] && flag[i] != k; i = par[i]) {
+        if (par[i] < 0) par[i] = k;
+        flag[i] = k;
+        p[i + 1]++;
+      }
+  }
+  for (int k = 0; k < m; k++) flag[k] = k;   /* below any row that looks at k */
+  p[0] = 0;
+  for (int k = 0; k < m; k++) p[k + 1] += p[k];
+  return p[m];
+}
+
+/* The packed layout of the last free set that fitted holds the factor of
+ * any subset of it (the filled graph of a principal submatrix, eliminated in
+ * the same order, is a subgraph): a new delta, or rows leaving, keep it. */
+static int fits_layout(const cup_dfact *f) {
+  if (!f->lay_ok) return 0;
+  for (int k = 0; k < f->m; k++)
+    if (f->pact[k] > f->lay_act[k]) return 0;
+  return 1;
+}
+
+static int new_layout(cup_dfact *f, int *Lp) {
+  f->lay_ok = packed_layout(f, Lp) <= (long)f->room;
+  if (f->lay_ok) memcpy(f->lay_act, f->pact, (size_t)f->m);
+  return f->lay_ok;
 }
 
 /* LDL^T of M~ = M_FF + delta I on the free rows F, identity elsewhere, by
@@ -317,23 +475,31 @@ done:
  * of its contacts active, or half a ladder, costs a fraction of M's factor.
  * Written into CHOLMOD's simplicial factor (diagonal first in each column),
  * whose room for all of M holds any such factor, so that row updates and
- * solves work on it as on CHOLMOD's own. */
+ * solves work on it as on CHOLMOD's own; or into the packed room, laid out
+ * for this F first (1: it does not fit). */
 static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) {
   int m = f->m;
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
-  const double *Kx = f->Ku->x;
-  int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
-  double *Lx = f->L->x, *y = f->yrow;
+  const int *Kp = f->Mp->p, *Ki = f->Mp->i, *Kend = f->mup;
+  const double *Kx = f->Mp->x;
+  lview L = factor_view(f);
+  int *Lp = L.p, *Li = L.i, *Lnz = L.nz;
+  double *Lx = L.x, *y = f->yrow;
   int *par = f->par, *flag = f->flag, *stack = f->stack;
   unsigned char *pact = f->pact;
   double ops = 0;
-  if (!f->L->is_monotonic) {         /* columns moved by row updates: the first layout again */
+  if (!f->packed && !f->L->is_monotonic) {   /* columns moved by row updates: the first layout again */
     memcpy(Lp, f->lp0, sizeof(int) * ((size_t)m + 1));
     memcpy(f->L->next, f->next0, sizeof(int) * ((size_t)m + 2));
     memcpy(f->L->prev, f->prev0, sizeof(int) * ((size_t)m + 2));
     f->L->is_monotonic = 1;
   }
   for (int k = 0; k < m; k++) pact[k] = act[f->pperm[k]];
+  if (f->packed && !fits_layout(f)) f->by_cg = !new_layout(f, Lp);
+  if (f->by_cg) {
+    for (int k = 0; k < m; k++) { Lp[k + 1] = k + 1; Lnz[k] = 1; Li[k] = k; Lx[k] = 1; }
+    f->refactor_ops = 0;
+    return CUP_OK;
+  }
   for (int k = 0; k < m; k++) {
     int p0 = Lp[k];
     Li[p0] = k;
@@ -342,7 +508,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
     par[k] = -1;
     flag[k] = k;                     /* rows above k carry flags < k: no reset needed */
     int top = m;
-    for (int e = Kp[k]; e < Kp[k + 1]; e++) {
+    for (int e = Kp[k]; e < Kend[k]; e++) {
       int i = Ki[e];
       if (i == k) { y[k] += Kx[e] + delta; continue; }
       if (!pact[i]) continue;
@@ -357,7 +523,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
     }
     double d = y[k];
     y[k] = 0;
-    ops += Kp[k + 1] - Kp[k] + m - top;
+    ops += Kend[k] - Kp[k] + m - top;
     for (; top < m; top++) {
       int i = stack[top], q0 = Lp[i], q1 = q0 + Lnz[i];
       double yi = y[i], lki = yi / Lx[q0];
@@ -422,14 +588,14 @@ static int mform_rowadd(cup_dfact *f, int i, double delta) {
  * (the reach of M(:, k) in the full tree) bounds it. */
 static int mform_rowdel(cup_dfact *f, int i) {
   int k = f->iperm[i];
-  const int *Kp = f->Ku->p, *Ki = f->Ku->i;
+  const int *Kp = f->Mp->p, *Ki = f->Mp->i;
   int *Ri = f->R->i, *flag = f->flag, nz = 0;
   if (++f->stamp == 0 || f->stamp > (unsigned)INT_MAX) {
     memset(flag, 0, sizeof(int) * (size_t)f->m);
     f->stamp = 1;
   }
   int mark = -(int)f->stamp;         /* negative: never a row index of restricted_ldl */
-  for (int e = Kp[k]; e < Kp[k + 1]; e++)
+  for (int e = Kp[k]; e < f->mup[k]; e++)
     for (int j = Ki[e]; j >= 0 && j < k && flag[j] != mark; j = f->etree[j]) {
       flag[j] = mark;
       Ri[nz++] = j;
@@ -447,8 +613,9 @@ static int mform_rowdel(cup_dfact *f, int i) {
  * sweep. */
 static void mform_solve(cup_dfact *f, double *v) {
   int m = f->m, nf = 0;
-  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz, *pp = f->pperm;
-  const double *Lx = f->L->x;
+  lview L = factor_view(f);
+  const int *Lp = L.p, *Li = L.i, *Lnz = L.nz, *pp = f->pperm;
+  const double *Lx = L.x;
   const unsigned char *pact = f->pact;
   int *cols = f->stack;
   double *t = f->work;
@@ -487,7 +654,7 @@ static int mform_update(cup_dfact *f, const unsigned char *act, double delta, lo
 
 /* ---- the interface ------------------------------------------------------------------- */
 
-int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *errmsg) {
+int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, long room, char *errmsg) {
   *out = NULL;
   cup_dfact *f = calloc(1, sizeof *f);
   if (!f) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
@@ -497,7 +664,7 @@ int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, char *e
   f->kkt = K->pkind == CUP_METRIC_SPARSE;
   f->updates = updates && !f->kkt;
   int st = cup_cholmod_start(&f->cm) ? cup_fail(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
-  if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, errmsg);
+  if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, room, errmsg);
   if (!st) {
     f->work = calloc(2 * (size_t)f->N, sizeof(double));   /* M form: rows outside F stay finite */
     f->fact_act = calloc((size_t)f->m + 1, 1);
@@ -522,7 +689,9 @@ void cup_dfact_free(cup_dfact **fp) {
   free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
   free(f->work); free(f->fact_act);
   free(f->pact); free(f->par); free(f->flag); free(f->stack); free(f->etree); free(f->yrow);
-  free(f->lp0); free(f->next0); free(f->prev0);
+  free(f->lp0); free(f->next0); free(f->prev0); free(f->mup);
+  free(f->pk_p); free(f->pk_nz); free(f->pk_i); free(f->pk_x);
+  free(f->cg_z); free(f->cg_p); free(f->cg_q); free(f->cg_u); free(f->lay_act);
   free(f);
   *fp = NULL;
 }
@@ -554,8 +723,8 @@ int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
 void cup_dfact_revalue(cup_dfact *f) {
   const cup_polyset *K = f->K;
   int m = f->m;
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i, *Kp = f->Ku->p;
-  double *Mx = f->Mp->x, *Kx = f->Ku->x, *wv = f->work, mmax = 0;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  double *Mx = f->Mp->x, *wv = f->work, mmax = 0;
   for (int i = 0; i < m; i++) wv[i] = 0;
   for (int c = 0; c < m; c++) {
     int i = f->pperm[c];
@@ -565,13 +734,10 @@ void cup_dfact_revalue(cup_dfact *f) {
       double cij = K->Ct.x[a] * K->pdinv[j];
       for (int b = K->C.p[j]; b < K->C.p[j + 1]; b++) wv[K->C.i[b]] += K->C.x[b] * cij;
     }
-    /* Mp's column c (sorted), whose upper part is Ku's column c in order */
-    int q = Kp[c];
     for (int e = Mp[c]; e < Mp[c + 1]; e++) {
       int r = Mi[e];
       double v = wv[f->pperm[r]];
       Mx[e] = v;
-      if (r <= c) Kx[q++] = v;
       if (r == c) mmax = fmax(mmax, v);
     }
     for (int a = K->Ct.p[i]; a < K->Ct.p[i + 1]; a++) {
@@ -585,5 +751,9 @@ void cup_dfact_revalue(cup_dfact *f) {
 
 void cup_dfact_solve(cup_dfact *f, double *v) {
   if (f->kkt) kkt_solve(f, v);
+  else if (f->by_cg) {
+    double *w[5] = {f->work, f->work + f->m, f->cg_z, f->cg_p, f->cg_q};
+    cup_dual_cg(f->K, f->fact_act, f->fact_delta, v, w, f->cg_u);
+  }
   else mform_solve(f, v);
 }

@@ -2,14 +2,17 @@
  *     M~(F, delta) = M_FF + delta I on the free rows F, identity elsewhere,
  *     M = C P^-1 C^T,
  * factored and solved without allocating. Two forms:
- *  - diagonal P: M itself (sparse, formed once); the LDL^T of M_FF alone,
- *    in room sized for all of M, at a cost set by the free rows rather than
- *    by M; updated row by row (CHOLMOD rowadd/rowdel) when the rows that
- *    change would cost less than refactoring;
+ *  - diagonal P: M itself (sparse, formed once, stored full); the LDL^T of
+ *    M_FF alone, at a cost set by the free rows rather than by M, either in
+ *    room sized for the factor of all of M, updated row by row (CHOLMOD
+ *    rowadd/rowdel) when the rows that change would cost less than
+ *    refactoring, or, where that room would be large (crowds of 10^4
+ *    disks and more), packed in a room of twice M and refactored, with CG
+ *    for a free set whose factor does not fit;
  *  - sparse P: the quasi-definite KKT matrix [P C_F^T; C_F -delta I],
- *    refactored by CHOLMOD (M would be dense).
- * Both are symmetrically permuted once (AMD) and stored upper, so that
- * factors use the natural ordering without allocating. */
+ *    refactored by CHOLMOD (M would be dense), stored upper.
+ * Both are symmetrically permuted once (AMD), so that factors use the
+ * natural ordering without allocating. */
 #ifndef CUP_DUAL_FACTOR_H
 #define CUP_DUAL_FACTOR_H
 
@@ -17,7 +20,10 @@
 
 typedef struct cup_dfact cup_dfact;
 
-int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, char *errmsg);
+/* room: -1 automatic; else the M form's factor of the free rows packed in
+ * room entries (no row updates), solves by CG on free sets whose factor
+ * does not fit (tests use it to run both). */
+int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, long room, char *errmsg);
 void cup_dfact_free(cup_dfact **f);
 /* Make the factor that of M~(act, delta); counts refactorizations and row
  * updates. Returns CUP_OK or CUP_ERR_LINALG. */
@@ -29,6 +35,8 @@ void cup_dfact_solve(cup_dfact *f, double *v);
  * M form): recompute M's values, so that the next cup_dfact_factor is a
  * numeric factorization on the same symbolic analysis. Allocation-free. */
 void cup_dfact_revalue(cup_dfact *f);
+/* 1: the current factor is solved by CG (it outgrew the packed room). */
+int cup_dfact_by_cg(const cup_dfact *f);
 /* The smallest regularization, relative to the scale of M. */
 double cup_dfact_delta_min(const cup_dfact *f);
 

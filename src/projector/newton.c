@@ -28,13 +28,16 @@ typedef struct pn_problem {
   int finishing;                 /* inside the finishing solve */
 } pn_problem;
 
-/* Scratch of a solve; with own = 0 the iterate buffers are the projector's
- * (attached per call), so only the scratch is allocated. */
+/* Scratch of a solve; with own = 0 (the main solve) the iterate buffers
+ * are the projector's (attached per call), so only the scratch is
+ * allocated, and the snapshot of the Farkas test, which only the main solve
+ * (on all rows) makes. */
 static int pn_alloc(pn_ws *w, int n, int m, int own) {
   size_t N = (size_t)n, M = (size_t)m + 1;
   int fail = 0;
-  double **mv[] = {&w->d, &w->lt, &w->snap, &w->r, &w->keep, &w->lam, &w->s, &w->gam, &w->s2, &w->gam2};
-  for (int k = 0; k < (own ? 10 : 5); k++) fail |= !(*mv[k] = calloc(M, sizeof(double)));
+  double **mv[] = {&w->d, &w->lt, &w->keep, &w->lam, &w->s, &w->gam, &w->s2, &w->gam2};
+  for (int k = 0; k < (own ? 8 : 3); k++) fail |= !(*mv[k] = calloc(M, sizeof(double)));
+  if (!own) fail |= !(w->snap = calloc(M, sizeof(double)));
   if (own) {
     fail |= !(w->y = calloc(N, sizeof(double)));
     fail |= !(w->y2 = calloc(N, sizeof(double)));
@@ -45,7 +48,7 @@ static int pn_alloc(pn_ws *w, int n, int m, int own) {
 }
 
 static void pn_free(pn_ws *w, int own) {
-  free(w->d); free(w->lt); free(w->snap); free(w->r); free(w->keep);
+  free(w->d); free(w->lt); free(w->snap); free(w->keep);
   if (own) { free(w->lam); free(w->s); free(w->gam); free(w->s2); free(w->gam2); free(w->y); free(w->y2); }
   free(w->act); free(w->prev);
 }
@@ -55,7 +58,7 @@ int cup_newton_create(cup_projector *p, char *errmsg) {
   newton_ws *w = calloc(1, sizeof *w);
   if (!w) return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
   p->nw = w;
-  int st = cup_dfact_create(&w->df, p->K, p->opt.factor_updates, errmsg);
+  int st = cup_dfact_create(&w->df, p->K, p->opt.factor_updates, -1, errmsg);
   if (st) return st;
   size_t M = (size_t)m + 1;
   if (pn_alloc(&w->pmain, n, m, 0) || pn_alloc(&w->pin, n, m, 1) ||
@@ -209,7 +212,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
   double dmin = cup_dfact_delta_min(p->nw->df), dmax = 1e-2 * K->lip;
   double delta = q->rows ? dmin : fmin(fmax(dmin, 1e-2 * p->nw->delta_peak), dmax), peak = delta;
   int settled = 0;
-  memcpy(w->snap, w->lam, msz);
+  if (!q->rows) memcpy(w->snap, w->lam, msz);
   memset(w->prev, 0, (size_t)m);
   for (int it = 0;; it++) {
     if (!isfinite(f)) return CUP_ERR_DIVERGED;

@@ -26,7 +26,7 @@ typedef struct dense_fact {
 typedef struct pn_ws {
   double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
   double *y2, *s2, *gam2;           /* line-search trial */
-  double *d, *lt, *snap, *r, *keep; /* m each */
+  double *d, *lt, *snap, *keep;     /* m each (snap: the main solve's only) */
   unsigned char *act, *prev;        /* free set, and the previous one */
 } pn_ws;
 
@@ -50,7 +50,8 @@ struct cup_projector {
   int empty_row;        /* a zero row of C with g_i < 0 (K empty), or -1 */
   double *lam;          /* multipliers of the last projection */
   double *lam_warm;     /* warm start (kept across skips) */
-  double *lam_fista;    /* FISTA's own iterate across bursts of a fallback */
+  double *lam_fista;    /* FISTA's own iterate across bursts of a fallback; this and the */
+                        /* m scratch below (to act): dense sets and first-order methods only */
   int has_fista;
   double *b;            /* s(x) = C x + g at the point being projected */
   double *s, *gam;      /* slack and its rounding bound at the candidate z */

@@ -81,7 +81,6 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
   p->g = xalloc(M, sizeof(double), &fail);
   p->lam = xalloc(M, sizeof(double), &fail);
   p->lam_warm = xalloc(M, sizeof(double), &fail);
-  p->lam_fista = xalloc(M, sizeof(double), &fail);
   p->b = xalloc(M, sizeof(double), &fail);
   p->s = xalloc(M, sizeof(double), &fail);
   p->gam = xalloc(M, sizeof(double), &fail);
@@ -102,13 +101,19 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
   p->farkas = xalloc(M, sizeof(double), &fail);
   p->wn = xalloc(N, sizeof(double), &fail);
   p->wn2 = xalloc(N, sizeof(double), &fail);
-  p->wm = xalloc(M, sizeof(double), &fail);
-  p->wm2 = xalloc(M, sizeof(double), &fail);
-  p->wm3 = xalloc(M, sizeof(double), &fail);
-  p->wm4 = xalloc(M, sizeof(double), &fail);
-  p->iwm = xalloc(M, sizeof(int), &fail);
-  p->act = xalloc(M, 1, &fail);
   p->act2 = xalloc(M, 1, &fail);
+  /* the first-order methods' and the dense active set's (with its FISTA
+   * fallback): the sparse exact path never touches them (a tenth of the
+   * projector's vectors) */
+  if (K->dense || (o.method != CUP_PROJ_AUTO && o.method != CUP_PROJ_ACTIVESET)) {
+    p->lam_fista = xalloc(M, sizeof(double), &fail);
+    p->wm = xalloc(M, sizeof(double), &fail);
+    p->wm2 = xalloc(M, sizeof(double), &fail);
+    p->wm3 = xalloc(M, sizeof(double), &fail);
+    p->wm4 = xalloc(M, sizeof(double), &fail);
+    p->iwm = xalloc(M, sizeof(int), &fail);
+    p->act = xalloc(M, 1, &fail);
+  }
   if (opt && opt->feasible_point) {
     p->user_pt = xalloc(N, sizeof(double), &fail);
     p->s_user = xalloc(M, sizeof(double), &fail);
