@@ -487,9 +487,11 @@ int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *inf
   attach(p, w);
   if (p->opt.warm_start) memcpy(w->lam, p->lam_warm, sizeof(double) * (size_t)m);
   else memset(w->lam, 0, sizeof(double) * (size_t)m);
-  int cold = 1;
-  for (int i = 0; i < m && cold; i++) cold = w->lam[i] == 0;
-  if (cold && nw->stieltjes) grow_start(p, x, w);
+  if (nw->stieltjes) {                      /* the scan only where the start applies */
+    int cold = 1;
+    for (int i = 0; i < m && cold; i++) cold = w->lam[i] == 0;
+    if (cold) grow_start(p, x, w);
+  }
   /* finishing target: a slack well above its rounding bound (the bound at x
    * is a fair estimate of the one at the answer) */
   for (int i = 0; i < m; i++) nw->tau[i] = 16 * p->gam[i] + DBL_MIN;
