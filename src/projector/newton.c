@@ -431,9 +431,9 @@ static void sor_sweeps(cup_projector *p, double omega, double *lam, double *y) {
  * some lam_F is active at the answer: the proved rows only grow. The next F
  * is the proved rows and the support of a few over-relaxed Gauss-Seidel
  * sweeps from lam_F, which carry each active run along the chain much
- * further than a solve does (omega = 1.9: 15 solves instead of 23 at
- * omega = 1 on the ladder). Stops when F repeats; the projected Newton
- * finishes from the last lam_F, clipped at 0. */
+ * further than a solve does (on ladder_100000, 10 refactorizations at
+ * omega = 1.9 against 23 at omega = 1). Stops when F repeats; the projected
+ * Newton finishes from the last lam_F, clipped at 0. */
 #define GROW_ROUNDS 30
 #define GROW_OMEGA 1.9
 static void grow_start(cup_projector *p, const double *x, pn_ws *w) {
