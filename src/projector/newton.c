@@ -78,12 +78,13 @@ void cup_newton_free(cup_projector *p) {
 }
 
 /* Whether M = C P^-1 C^T (diagonal P) has no positive off-diagonal entry:
- * row by row, M(i, k) summed in the scratch acc (m entries, zero in and
- * out). Sums that cancel to rounding count as zero. */
+ * row by row, M(i, k) summed in the scratch acc (m entries, left zero).
+ * Sums that cancel to rounding count as zero. */
 static int stieltjes(const cup_polyset *K, double *acc) {
   if (!K->pdinv || K->pkind == CUP_METRIC_SPARSE) return 0;
   const cup_sparse *C = &K->C, *Ct = &K->Ct;
   int ok = 1;
+  memset(acc, 0, sizeof(double) * (size_t)K->m);   /* the scratch holds a method's leftovers */
   for (int i = 0; i < K->m; i++) {
     for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) {
       int j = Ct->i[a];
