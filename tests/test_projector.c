@@ -10,6 +10,7 @@
 #include "testutil.h"
 
 #include "alloc_count.h"
+#include "projector/newton.h"
 
 /* ---- random polyhedra ---------------------------------------------------------- */
 
@@ -716,32 +717,62 @@ static void pava(const double *a, const double *w, int n, double *z) {
 
 /* A ladder of diodes, y_{i+1} - y_i + g_i >= 0 with a diagonal P: the
  * P-projection is a weighted isotonic regression of x + G (G_i = g_0 + ...
- * + g_{i-1}), computed exactly by PAVA. About half the rows end active in
- * long blocks, which an active-set method reaches row by row: the sparse
- * exact path, its restricted factors and row updates, cold and warm. */
+ * + g_{i-1}), computed exactly by PAVA. */
+typedef struct ladder {
+  int m, n;
+  int *cp, *ci;
+  double *cx, *g, *p, *G, *a;
+  cup_polyset *K;
+  double noise;
+} ladder;
+
+static void ladder_make(ladder *L, rng_t *r, int m) {
+  int n = m + 1, q = 0;
+  L->m = m; L->n = n; L->noise = 0;
+  L->cp = malloc(sizeof(int) * (n + 1)); L->ci = malloc(sizeof(int) * 2 * m);
+  L->cx = malloc(sizeof(double) * 2 * m); L->g = malloc(sizeof(double) * m);
+  L->p = malloc(sizeof(double) * n); L->G = malloc(sizeof(double) * n); L->a = malloc(sizeof(double) * n);
+  for (int j = 0; j < n; j++) {           /* column j: row j-1 (+1) and row j (-1) */
+    L->cp[j] = q;
+    if (j > 0) { L->ci[q] = j - 1; L->cx[q++] = 1; }
+    if (j < m) { L->ci[q] = j; L->cx[q++] = -1; }
+  }
+  L->cp[n] = q;
+  L->G[0] = 0;
+  for (int i = 0; i < m; i++) { L->g[i] = 0.002 + 0.004 * rng_unif(r); L->G[i + 1] = L->G[i] + L->g[i]; }
+  for (int j = 0; j < n; j++) L->p[j] = 1 + 9 * rng_unif(r);
+  cup_csc C = {m, n, L->cp, L->ci, L->cx};
+  cup_metric P = {CUP_METRIC_DIAGONAL, L->p, {0}, 0};
+  L->K = NULL;
+  assert_int_equal(cup_polyset_create(&L->K, &C, L->g, &P, NULL), CUP_OK);
+}
+
+/* Point k of a drifting noisy sine, and its projection zr by PAVA. */
+static void ladder_point(ladder *L, rng_t *r, int k, double *x, double *zr) {
+  for (int j = 0; j < L->n; j++) {
+    L->noise = 0.5 * L->noise + 0.004 * rng_normal(r);
+    x[j] = sin(2 * M_PI * j / 400.0 + 0.05 * k) + L->noise;
+    L->a[j] = x[j] + L->G[j];
+  }
+  pava(L->a, L->p, L->n, zr);
+  for (int j = 0; j < L->n; j++) zr[j] -= L->G[j];
+}
+
+static void ladder_free(ladder *L) {
+  cup_polyset_free(&L->K);
+  free(L->cp); free(L->ci); free(L->cx); free(L->g); free(L->p); free(L->G); free(L->a);
+}
+
+/* About half the rows end active in long blocks, which an active-set method
+ * reaches row by row: the sparse exact path, its cold start, its restricted
+ * factors and row updates, cold and warm. */
 static void test_ladder_against_pava(void **state) {
   (void)state;
   rng_t r = {1855};
-  int m = 3000, n = m + 1;
-  int *cp = malloc(sizeof(int) * (n + 1)), *ci = malloc(sizeof(int) * 2 * m);
-  double *cx = malloc(sizeof(double) * 2 * m), *g = malloc(sizeof(double) * m);
-  double *p = malloc(sizeof(double) * n), *G = malloc(sizeof(double) * n);
-  double *x = malloc(sizeof(double) * n), *a = malloc(sizeof(double) * n);
-  double *zr = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
-  int q = 0;
-  for (int j = 0; j < n; j++) {           /* column j: row j-1 (+1) and row j (-1) */
-    cp[j] = q;
-    if (j > 0) { ci[q] = j - 1; cx[q++] = 1; }
-    if (j < m) { ci[q] = j; cx[q++] = -1; }
-  }
-  cp[n] = q;
-  G[0] = 0;
-  for (int i = 0; i < m; i++) { g[i] = 0.002 + 0.004 * rng_unif(&r); G[i + 1] = G[i] + g[i]; }
-  for (int j = 0; j < n; j++) p[j] = 1 + 9 * rng_unif(&r);
-  cup_csc C = {m, n, cp, ci, cx};
-  cup_metric P = {CUP_METRIC_DIAGONAL, p, {0}, 0};
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &C, g, &P, NULL), CUP_OK);
+  ladder L;
+  ladder_make(&L, &r, 3000);
+  int m = L.m, n = L.n;
+  double *x = malloc(sizeof(double) * n), *zr = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
   for (int warm = 0; warm <= 1; warm++) {
     cup_projector_options o;
     cup_projector_options_default(&o);
@@ -752,16 +783,9 @@ static void test_ladder_against_pava(void **state) {
     o.eps_rel = 1e-11;
     o.eta_rel = 1e-8;
     cup_projector *pr = NULL;
-    assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
-    double noise = 0;
+    assert_int_equal(cup_projector_create(&pr, L.K, &o, NULL), CUP_OK);
     for (int k = 0; k < 6; k++) {
-      for (int j = 0; j < n; j++) {
-        noise = 0.5 * noise + 0.004 * rng_normal(&r);
-        x[j] = sin(2 * M_PI * j / 400.0 + 0.05 * k) + noise;
-        a[j] = x[j] + G[j];
-      }
-      pava(a, p, n, zr);
-      for (int j = 0; j < n; j++) zr[j] -= G[j];
+      ladder_point(&L, &r, k, x, zr);
       cup_proj_info info;
       int st = cup_project(pr, x, z, &info);
       if (st != CUP_OK)
@@ -770,10 +794,10 @@ static void test_ladder_against_pava(void **state) {
                  info.eps_target, info.eta_cert, info.eta_target);
       double e2 = 0, r2 = 0, active = 0;
       for (int j = 0; j < n; j++) {
-        e2 += p[j] * (z[j] - zr[j]) * (z[j] - zr[j]);
-        r2 += p[j] * zr[j] * zr[j];
+        e2 += L.p[j] * (z[j] - zr[j]) * (z[j] - zr[j]);
+        r2 += L.p[j] * zr[j] * zr[j];
       }
-      for (int i = 0; i < m; i++) active += fabs(zr[i + 1] - zr[i] + g[i]) < 1e-12;
+      for (int i = 0; i < m; i++) active += fabs(zr[i + 1] - zr[i] + L.g[i]) < 1e-12;
       assert_true(active > 0.3 * m);     /* long blocks: the hard case for active sets */
       if (!(sqrt(e2 / r2) < 1e-9))
         fail_msg("%s point %d: ||z - PAVA||_P / ||PAVA||_P = %.3e", warm ? "warm" : "cold", k,
@@ -782,8 +806,73 @@ static void test_ladder_against_pava(void **state) {
     }
     cup_projector_free(&pr);
   }
-  cup_polyset_free(&K);
-  free(cp); free(ci); free(cx); free(g); free(p); free(G); free(x); free(a); free(zr); free(z);
+  ladder_free(&L);
+  free(x); free(zr); free(z);
+}
+
+/* The cold start for a Stieltjes M (newton.c, grow_start) against the
+ * ladder's exact multipliers: P (z* - x) = C^T lam*, i.e. lam*_j =
+ * lam*_{j-1} - p_j (z*_j - x_j) from PAVA's z*. Every multiplier it returns
+ * is below lam* (the proof that its rows are active rests on it), and its
+ * free set settles on the active set (the multipliers there are lam* up to
+ * the regularization of the solves), so the projected Newton after it has no
+ * rows left to find. A set whose M has a positive off-diagonal
+ * does not take this start. */
+static void test_ladder_cold_start(void **state) {
+  (void)state;
+  rng_t r = {1856};
+  ladder L;
+  ladder_make(&L, &r, 3000);
+  int m = L.m, n = L.n;
+  double *x = malloc(sizeof(double) * n), *zr = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
+  double *lam = malloc(sizeof(double) * m), *ls = malloc(sizeof(double) * m);
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.warm_start = 0;
+  o.eps_rel = 1e-11;
+  o.eta_rel = 1e-8;
+  cup_projector *pr = NULL;
+  assert_int_equal(cup_projector_create(&pr, L.K, &o, NULL), CUP_OK);
+  for (int k = 0; k < 4; k++) {
+    ladder_point(&L, &r, k, x, zr);
+    double prev = 0, lmax = 0;
+    for (int i = 0; i < m; i++) {
+      ls[i] = prev - L.p[i] * (zr[i] - x[i]);
+      prev = ls[i];
+      lmax = fmax(lmax, ls[i]);
+    }
+    int solves = cup_newton_cold_start(pr, x, lam);
+    assert_true(solves >= 1);
+    double above = 0;
+    int wrong = 0;
+    for (int i = 0; i < m; i++) {
+      above = fmax(above, lam[i] - ls[i]);
+      /* the free set it ends on is PAVA's active set (rows with lam* at
+       * rounding either way) */
+      if (fabs(ls[i]) > 1e-9 * lmax) wrong += (lam[i] > 0) != (ls[i] > 0);
+    }
+    if (!(above <= 1e-10 * lmax) || wrong)
+      fail_msg("point %d: cold start above lam* by %.3e (max lam* %.3e), %d rows on the wrong side",
+               k, above, lmax, wrong);
+    cup_proj_info info;
+    assert_int_equal(cup_project(pr, x, z, &info), CUP_OK);
+    if (info.iterations > solves + 2)
+      fail_msg("point %d: %d Newton iterations after the cold start's %d solves", k,
+               info.iterations - solves, solves);
+  }
+  cup_projector_free(&pr);
+  L.cx[0] = -L.cx[0];                     /* row 0 turned round: M(0, 1) > 0 */
+  L.cx[1] = -L.cx[1];
+  cup_csc C2 = {m, n, L.cp, L.ci, L.cx};
+  cup_metric P2 = {CUP_METRIC_DIAGONAL, L.p, {0}, 0};
+  cup_polyset *K2 = NULL;
+  assert_int_equal(cup_polyset_create(&K2, &C2, L.g, &P2, NULL), CUP_OK);
+  assert_int_equal(cup_projector_create(&pr, K2, &o, NULL), CUP_OK);
+  assert_int_equal(cup_newton_cold_start(pr, x, lam), 0);
+  cup_projector_free(&pr);
+  cup_polyset_free(&K2);
+  ladder_free(&L);
+  free(x); free(zr); free(z); free(lam); free(ls);
 }
 
 /* No allocation in cup_project: 10^4 projections per configuration. */
@@ -855,6 +944,7 @@ int main(void) {
     cmocka_unit_test(test_bad_input),
     cmocka_unit_test(test_warm_start_sequence),
     cmocka_unit_test(test_ladder_against_pava),
+    cmocka_unit_test(test_ladder_cold_start),
     cmocka_unit_test(test_jammed_packing_against_hildreth),
     cmocka_unit_test(test_no_allocation),
   };

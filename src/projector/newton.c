@@ -65,6 +65,7 @@ int cup_newton_create(cup_projector *p, char *errmsg) {
       !(w->gin = malloc(sizeof(double) * M)) || !(w->bin = malloc(sizeof(double) * M)) ||
       !(w->tau = malloc(sizeof(double) * M)) || !(w->rhs = malloc(sizeof(double) * M)))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
+  cup_newton_revalue(p);
   return CUP_OK;
 }
 
@@ -77,6 +78,38 @@ void cup_newton_free(cup_projector *p) {
   free(w->gin); free(w->bin); free(w->tau); free(w->rhs);
   free(w);
   p->nw = NULL;
+}
+
+/* Whether M = C P^-1 C^T (diagonal P) has no positive off-diagonal entry:
+ * row by row, M(i, k) summed in the scratch acc (m entries, left zero).
+ * Sums that cancel to rounding count as zero. */
+static int stieltjes(const cup_polyset *K, double *acc) {
+  if (!K->pdinv || K->pkind == CUP_METRIC_SPARSE) return 0;
+  const cup_sparse *C = &K->C, *Ct = &K->Ct;
+  int ok = 1;
+  memset(acc, 0, sizeof(double) * (size_t)K->m);   /* the scratch holds a solve's leftovers */
+  for (int i = 0; i < K->m; i++) {
+    for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) {
+      int j = Ct->i[a];
+      double cij = Ct->x[a] * K->pdinv[j];
+      for (int b = C->p[j]; b < C->p[j + 1]; b++) acc[C->i[b]] += C->x[b] * cij;
+    }
+    for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) {
+      int j = Ct->i[a];
+      for (int b = C->p[j]; b < C->p[j + 1]; b++) {
+        int k = C->i[b];
+        if (k != i && acc[k] > 64 * DBL_EPSILON * K->rownorm[i] * K->rownorm[k]) ok = 0;
+        acc[k] = 0;
+      }
+    }
+  }
+  return ok;
+}
+
+void cup_newton_revalue(cup_projector *p) {
+  /* the dual scratch rhs: free between projections (p->wm exists only for
+   * dense sets and the first-order methods) */
+  if (p->nw) p->nw->stieltjes = stieltjes(p->K, p->nw->rhs);
 }
 
 static int factor(cup_projector *p, const unsigned char *act, double delta) {
@@ -371,6 +404,87 @@ static int main_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info)
   return ok;
 }
 
+/* A forward and a backward sweep of projected SOR on the dual, exact
+ * minimization along one row at a time, over-relaxed by omega; y = x +
+ * P^-1 C^T lam kept along (a row costs its nonzeros twice; M is never
+ * formed). */
+static void sor_sweeps(cup_projector *p, double omega, double *lam, double *y) {
+  const cup_polyset *K = p->K;
+  const cup_sparse *Ct = &K->Ct;
+  const double *pdinv = K->pdinv, *g = p->g;
+  int m = p->m;
+  for (int t = 0; t < 2 * m; t++) {
+    int i = t < m ? t : 2 * m - 1 - t;
+    double mii = K->rownorm[i] * K->rownorm[i];
+    if (!(mii > 0)) continue;
+    double si = g[i];
+    for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) si += Ct->x[a] * y[Ct->i[a]];
+    double li = cup_max(lam[i] - omega * si / mii, 0), dl = li - lam[i];
+    if (dl == 0) continue;
+    lam[i] = li;
+    for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) y[Ct->i[a]] += pdinv[Ct->i[a]] * Ct->x[a] * dl;
+  }
+}
+
+/* A cold start for a Stieltjes M (an M-matrix: a chain of diodes). From
+ * lam = 0 the projected Newton finds the active runs of a chain a row or
+ * two at each of their ends per factorization (70 of them on a ladder of
+ * 10^5 diodes). For an M-matrix, the solution lam_F of
+ * (M_FF + delta I) lam_F = -b_F on ANY set of rows F (zero elsewhere) is
+ * below lam* (each row has lam_i <= 0 or s_i <= 0, and such a point cannot
+ * exceed the least feasible point lam* anywhere: on the rows where it did,
+ * M_DD (lam - lam*)_D <= 0 with M_DD^-1 >= 0), so every row positive in
+ * some lam_F is active at the answer: the proved rows only grow. The next F
+ * is the proved rows and the support of a few over-relaxed Gauss-Seidel
+ * sweeps from lam_F, which carry each active run along the chain much
+ * further than a solve does (on ladder_100000, 10 refactorizations at
+ * omega = 1.9 against 23 at omega = 1). Stops when F repeats; the projected
+ * Newton finishes from the last lam_F, clipped at 0. */
+#define GROW_ROUNDS 30
+#define GROW_OMEGA 1.9
+static void grow_start(cup_projector *p, const double *x, pn_ws *w) {
+  int m = p->m;
+  double *lam = w->lam, *lamF = w->keep, *rhs = p->nw->rhs;
+  unsigned char *F = w->act, *proved = w->prev;
+  const double *rn = p->K->rownorm;
+  for (int i = 0; i < m; i++) {
+    lamF[i] = 0;
+    proved[i] = 0;
+    F[i] = rn[i] > 0 && p->b[i] < 0;
+  }
+  for (int round = 0; round < GROW_ROUNDS; round++) {
+    if (factor(p, F, cup_dfact_delta_min(p->nw->df))) { memset(lamF, 0, sizeof(double) * (size_t)m); break; }
+    for (int i = 0; i < m; i++) rhs[i] = F[i] ? -p->b[i] : 0;
+    cup_dfact_solve(p->nw->df, rhs);
+    p->iters++;                             /* a solve on a free set, as a Newton step */
+    for (int i = 0; i < m; i++) lam[i] = lamF[i] = F[i] ? rhs[i] : 0;
+    cup_sparse_gatxy(&p->K->C, lam, w->y);
+    for (int j = 0; j < p->n; j++) w->y[j] = x[j] + w->y[j] * p->K->pdinv[j];
+    sor_sweeps(p, GROW_OMEGA, lam, w->y);
+    int changed = 0;
+    for (int i = 0; i < m; i++) {
+      proved[i] |= lamF[i] > 0;
+      unsigned char next = rn[i] > 0 && (proved[i] || lam[i] > 0);
+      changed += next != F[i];
+      F[i] = next;
+    }
+    if (!changed) break;
+  }
+  for (int i = 0; i < m; i++) lam[i] = cup_max(lamF[i], 0);
+}
+
+int cup_newton_cold_start(cup_projector *p, const double *x, double *lam) {
+  if (!p->nw || !p->nw->stieltjes) return 0;
+  pn_ws *w = &p->nw->pmain;
+  attach(p, w);
+  cup_slack(p->K, p->g, x, p->b, p->gam);
+  p->iters = p->facts = p->updates = 0;
+  grow_start(p, x, w);
+  memcpy(lam, w->lam, sizeof(double) * (size_t)p->m);
+  detach(p, w);
+  return p->iters;
+}
+
 int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *info) {
   int m = p->m;
   newton_ws *nw = p->nw;
@@ -379,6 +493,11 @@ int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *inf
   attach(p, w);
   if (p->opt.warm_start) memcpy(w->lam, p->lam_warm, sizeof(double) * (size_t)m);
   else memset(w->lam, 0, sizeof(double) * (size_t)m);
+  if (nw->stieltjes) {                      /* the scan only where the start applies */
+    int cold = 1;
+    for (int i = 0; i < m && cold; i++) cold = w->lam[i] == 0;
+    if (cold) grow_start(p, x, w);
+  }
   /* finishing target: a slack well above its rounding bound (the bound at x
    * is a fair estimate of the one at the answer) */
   for (int i = 0; i < m; i++) nw->tau[i] = 16 * p->gam[i] + DBL_MIN;

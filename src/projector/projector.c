@@ -213,7 +213,10 @@ void cup_projector_revalue(cup_projector *p) {
     if (!(p->K->rownorm[i] > 0)) p->lam_warm[i] = 0;   /* a row that is off holds nothing */
   p->has_fista = 0;
   for (int c = 0; c < CUP_DENSE_CACHE; c++) p->cache[c].mask = 0;
-  if (p->nw) cup_dfact_revalue(p->nw->df);
+  if (p->nw) {
+    cup_dfact_revalue(p->nw->df);
+    cup_newton_revalue(p);
+  }
 }
 
 const double *cup_projector_lambda(const cup_projector *p) { return p ? p->lam : NULL; }
