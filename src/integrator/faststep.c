@@ -159,7 +159,8 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
   cup_small_out o;
   long booked = 0, skipped = 0;
   long long iterations = 0;
-  double max_eps = info->max_eps_cert, max_eta = info->max_eta_cert, t = info->t;
+  cup_v2d max_cert = {info->max_eps_cert, info->max_eta_cert};
+  double t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
       have = inputs_ahead(f, k, stop, &t1, &ui, gs);
@@ -181,8 +182,8 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
         info->skipped += skipped;
         info->projected += booked - skipped;
         info->dual_iterations += iterations;
-        info->max_eps_cert = max_eps;
-        info->max_eta_cert = max_eta;
+        info->max_eps_cert = max_cert[0];
+        info->max_eta_cert = max_cert[1];
       }
       *st = s;
       return k;
@@ -193,8 +194,10 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
     booked++;
     skipped += o.skipped;                                 /* cup_tally, per step */
     iterations += o.iterations;
-    if (!(o.eps_cert <= max_eps)) max_eps = o.eps_cert;
-    if (!(o.eta_cert <= max_eta)) max_eta = o.eta_cert;
+    /* the tally's !(cert <= max) ? cert : max as max > cert ? max : cert
+     * (SSE2's maxpd): the same but for zeros of opposite signs, and the
+     * certificates are never -0 (max(gap, 0), a distance) */
+    max_cert = cup_v2_max(max_cert, (cup_v2d){o.eps_cert, o.eta_cert});
   }
 }
 

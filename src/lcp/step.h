@@ -257,12 +257,13 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double de
 CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g,
                                      const cup_v2d *restrict xf, cup_v2d *restrict z, double eps_target,
                                      double eta_target, cup_small_out *o, const int n, const int m) {
-  cup_v2d probe = 0 * g + 0 * cup_v2_first(xf[0], n);   /* NaN iff some entry is NaN or Inf */
-  if (n > 2) probe += 0 * cup_v2_first(xf[1], n - 2);
-  if (isnan(probe[0] + probe[1])) return 0;
   const int halves = (n + 1) / 2;
   cup_v2d q, gam;
   cup_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */
+  /* NaN or Inf in xf or g makes q so (every row takes every state, zeros
+   * included, and 0 Inf is NaN); so does an overflow of q, declined too */
+  cup_v2d probe = 0 * q;
+  if (isnan(probe[0] + probe[1])) return 0;
   double qmin = q[0];                             /* the general path's min from INFINITY */
   if (m > 1) qmin = cup_min(qmin, q[1]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
