@@ -209,31 +209,16 @@ CUP_ALWAYS_INLINE int cup_small_pass(unsigned act, const double *M, double det, 
   return -1;
 }
 
-/* lcp.c's Murty pivoting from the warm start *act, pass after pass: 0 with
- * lam and *act written; 1, touching nothing, where lcp.c would meet a
- * singular block or cycle (and then retry cold): the general path takes the
- * step over. */
-static __attribute__((noinline, unused)) int
-cup_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w, cup_v2d *lam,
-                     int *pivots, const int m) {
-  unsigned act = *actp;
-  for (int it = 0; it < 16 * m + 64; it++) {
-    double l0, l1;
-    int flip = cup_small_pass(act, M, det, q0, q1, tol_w, &l0, &l1, m);
-    if (flip == -2) return 1;
-    if (flip < 0) {
-      *lam = (cup_v2d){l0, l1};
-      *actp = act;
-      return 0;
-    }
-    act ^= 1u << flip;
-    (*pivots)++;
-  }
-  return 1;
-}
+/* lcp.c's Murty pivoting from the warm start *act, pass after pass
+ * (step.c): 0 with lam and *act written; 1, leaving them, where lcp.c would
+ * meet a singular block or cycle (and then retry cold): the general path
+ * takes the step over. */
+int cup_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
+                         cup_v2d *lam, int *pivots, int m);
 
 /* cup_small_murty_loop, its first pass inlined: the warm start is right at
- * almost every step, and the loop, kept apart, holds no registers there. */
+ * almost every step, and the loop, kept out of line, holds no registers
+ * there (GCC spilled the fused steps' states around it). */
 CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double det, cup_v2d q, cup_v2d *lam,
                                       int *pivots, const int m) {
   const double q0 = q[0], q1 = q[1];

@@ -102,10 +102,10 @@ static inline cup_v2d cup_triangle_r2(cup_v2d r) { return cup_v2_min(r, (cup_v2d
  * per block rather than per position where the block allows: floor, the
  * roundings and fabs on either side of 1 are monotone, so when q / 2 has one
  * floor at both ends (q[0] != 0, so that no zero's sign is in question) it
- * has it throughout, and when both ends' r are clear of the sign's zeros by
- * the block's largest tolerance and on one side of 1, every r between is
- * too (cup_square_near_zero). Returns 1 when one sign holds for the whole block (the wave has no
- * jump in it). */
+ * has it throughout, and when both ends' r are clear of the sign's zeros
+ * (cup_square_near_zero) by the block's largest tolerance and on one side
+ * of 1, every r between is too. Returns 1 when one sign holds for the whole
+ * block (no jump in it). */
 static inline int cup_square_block(const cup_v2d *q, int np, cup_v2d *r, cup_v2d *sg) {
   const double first = q[0][0], last = q[np - 1][1], fl = cup_floor(0.5 * first);
   if (first != 0 && fl == cup_floor(0.5 * last)) {        /* NaN compares unequal */
