@@ -1,8 +1,8 @@
 /* The fast paths of the time loop against the general ones they stand in
  * for (src/util/trig.h, the unrolled LCP step of src/lcp/step.h, the fused
  * steps of src/integrator/faststep.c): cup_sin against libm's sin in ulps,
- * its two-lane form and the square wave's lane helpers against the scalar
- * ones bit for bit;
+ * its two-lane form, the square wave's lane helpers and its blocks
+ * (cup_square_block) against the scalar ones bit for bit;
  * the unrolled step against the general pivoting path on random small sets,
  * bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
