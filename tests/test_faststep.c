@@ -1,8 +1,8 @@
 /* The fast paths of the time loop against the general ones they stand in
  * for (src/util/trig.h, the unrolled LCP step of src/lcp/step.h, the fused
  * steps of src/integrator/faststep.c): cup_sin against libm's sin in ulps,
- * its two-lane form and the square wave's lane helpers against the scalar
- * ones bit for bit;
+ * its two-lane form, the square wave's lane helpers and its blocks
+ * (cup_square_block) against the scalar ones bit for bit;
  * the unrolled step against the general pivoting path on random small sets,
  * bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
@@ -106,6 +106,74 @@ static void test_square_lanes_are_scalar(void **state) {
         }
       }
     }
+}
+
+enum { BLOCK = 16 };   /* positions in a block, as faststep.c's CUP_FAST_AHEAD */
+
+/* One block of cup_square_block against the scalar cup_mod2 and
+ * cup_sign_sin_qr, position by position, bit for bit; a block it calls
+ * jump-free must have one sign throughout. Returns what it returned. */
+static int check_square_block(const double *q, int np) {
+  cup_v2d qv[BLOCK / 2], r[BLOCK / 2], sg[BLOCK / 2];
+  for (int p = 0; p < np; p++) qv[p] = (cup_v2d){q[2 * p], q[2 * p + 1]};
+  int one_sign = cup_square_block(qv, np, r, sg);
+  for (int j = 0; j < 2 * np; j++) {
+    double want = cup_mod2(q[j]), got = r[j >> 1][j & 1], s = sg[j >> 1][j & 1];
+    if (!(same(got, want) || (isnan(got) && isnan(want))))
+      fail_msg("cup_square_block: r = %.17g at q = %.17g, cup_mod2 %.17g", got, q[j], want);
+    if (!same(s, cup_sign_sin_qr(q[j], want)))
+      fail_msg("cup_square_block: sign %g at q = %.17g (block from %.17g), cup_sign_sin_qr %g", s, q[j], q[0],
+               cup_sign_sin_qr(q[j], want));
+    if (one_sign && !same(s, sg[0][0])) fail_msg("cup_square_block: one sign claimed, %g and %g", s, sg[0][0]);
+  }
+  return one_sign;
+}
+
+/* The square wave's blocks (cup_square_block, model/input_impl.h) against
+ * the scalar functions: the positions q = omega t / pi + phase / pi of 16
+ * steps t = (k + j) h as the fused steps form them, for frequencies, steps
+ * and phases (negative ones too) that put jumps inside blocks, at their ends
+ * and on exact integers, from k = 0 to k near 2^50 (where q is huge and the
+ * tolerance coarse); then rising sequences with ties, signed zeros, jumps
+ * at the first or last position, huge q and Inf. Both ways through it must
+ * be taken often. */
+static void test_square_block_is_scalar(void **state) {
+  (void)state;
+  rng_t r = {19};
+  long blocks = 0, jump_free = 0;
+  double q[BLOCK];
+  for (int trial = 0; trial < 20000; trial++) {
+    double freq = trial % 3 == 0 ? 2 : ldexp(1 + rng_unif(&r), rng_int(&r, -4, 8));
+    double omega = 2 * M_PI * freq, h = 1.0 / (trial % 5 == 0 ? 100 : rng_int(&r, 10, 100000000));
+    double phase = trial % 4 == 0 ? 0 : (trial % 4 == 1 ? -M_PI * rng_int(&r, 1, 9) : 20 * rng_unif(&r) - 10);
+    long k = trial % 7 == 0 ? (long)ldexp(rng_unif(&r), rng_int(&r, 20, 50)) : rng_int(&r, 0, 200000);
+    if (trial % 11 == 0) {                    /* a block starting or ending on a jump: q an integer there */
+      double tj = (rng_int(&r, 1, 40) * M_PI - phase) / omega;
+      k = (long)fmax(0, floor(tj / h) - (trial % 2 ? 0 : BLOCK - 1));
+    }
+    for (int j = 0; j < BLOCK; j++) q[j] = omega * ((double)(k + j + 1) * h) / M_PI + phase / M_PI;
+    jump_free += check_square_block(q, BLOCK / 2);
+    blocks++;
+  }
+  double special[] = {0.0, -0.0, 1.0, 2.0, 0x1p52, 0x1p53 + 2, INFINITY};
+  for (int trial = 0; trial < 20000; trial++) {
+    int np = rng_int(&r, 1, BLOCK / 2);
+    double v = trial % 3 ? 8 * rng_unif(&r) - 4 : special[rng_int(&r, 0, 6)] - (trial % 2 ? 0 : 1e-300);
+    for (int j = 0; j < 2 * np; j++) {
+      q[j] = v;
+      int pick = rng_int(&r, 0, 5);           /* ties, ulps, small steps, onto the next integer */
+      v = pick == 0 ? v : pick == 1 ? nextafter(v, INFINITY) : pick == 2 ? v + 1e-3 * rng_unif(&r)
+        : pick == 3 ? floor(v) + 1 : v + rng_unif(&r) * 0.2;
+    }
+    if (trial % 13 == 0) { q[0] = trial % 2 ? -0.0 : 0.0; q[1] = trial % 2 ? 0.0 : -0.0; }   /* equal zeros */
+    if (trial % 17 == 0) q[2 * np - 1] = INFINITY;
+    if (trial % 19 == 0)               /* ending within the last position's tolerance of 2, not the first's */
+      for (int j = 0; j < 2 * np; j++) q[j] = j == 2 * np - 1 ? 2 - 6 * DBL_EPSILON : 1.1 + 0.05 * j;
+    jump_free += check_square_block(q, np);
+    blocks++;
+  }
+  if (!(jump_free > blocks / 4 && jump_free < blocks * 3 / 4))
+    fail_msg("%ld of %ld blocks jump-free: one way through is hardly tested", jump_free, blocks);
 }
 
 /* cup_floor (the square wave's, util/linalg.h) is libm's floor bit for bit. */
@@ -296,6 +364,7 @@ int main(void) {
     cmocka_unit_test(test_sin_within_two_ulps),
     cmocka_unit_test(test_sin2_is_sin),
     cmocka_unit_test(test_square_lanes_are_scalar),
+    cmocka_unit_test(test_square_block_is_scalar),
     cmocka_unit_test(test_floor_is_libm),
     cmocka_unit_test(test_unrolled_step_is_the_general_one),
     cmocka_unit_test(test_fused_steps_are_the_loop),

@@ -53,60 +53,60 @@ typedef union cup_ahead {
 /* One square wave's share of ui and u1 (inputs_ahead) for the steps
  * ending at t1: its position q(t) serves both its integral and its value,
  * and its antiderivative at a step's start is the one at the last step's
- * end. */
-static void square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, int cnt, cup_ahead *ui,
-                         cup_ahead *u1) {
+ * end. Returns 1 when its value is the same at all these steps. */
+static int square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, int cnt, cup_ahead *ui,
+                        cup_ahead *u1) {
   const cup_term *w = f->term[q];
   const double omega = w->omega, ph = w->phase / M_PI;        /* cup_square_q */
   const double height = w->amp * M_PI / w->omega, amp = w->amp;   /* cup_term_integral, cup_term_value */
-  double fl = NAN;
-  cup_v2d qs[CUP_FAST_AHEAD / 2], r[CUP_FAST_AHEAD / 2];
+  cup_v2d qs[CUP_FAST_AHEAD / 2], r[CUP_FAST_AHEAD / 2], sg[CUP_FAST_AHEAD / 2];
   cup_ahead tri;
   cup_v2d before = {0, t0 == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0))};
+  for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) qs[p] = omega * t1->v[p] / M_PI + ph;
+  int same = cup_square_block(qs, CUP_FAST_AHEAD / 2, r, sg);   /* omega > 0: q rises with t */
   for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
-    qs[p] = omega * t1->v[p] / M_PI + ph;
-    r[p] = cup_mod2_2(qs[p], &fl);
     tri.v[p] = cup_triangle_r2(r[p]);
     ui->v[p] += height * (tri.v[p] - __builtin_shuffle(before, tri.v[p], (cup_v2l){1, 2}));
     before = tri.v[p];
   }
   if (cnt) f->last_tri[q] = tri.d[cnt - 1];
-  for (int p = 0; p < CUP_FAST_AHEAD / 2 && f->moving; p++) u1->v[p] += amp * cup_sign_sin_qr2(qs[p], r[p]);
+  for (int p = 0; p < CUP_FAST_AHEAD / 2 && f->moving; p++) u1->v[p] += amp * sg[p];
+  return same;
 }
 
 /* The inputs of steps k, k + 1, ..., k + CUP_FAST_AHEAD - 1, step k + j in
  * lane j & 1 of entry j >> 1: t1 (each step's end), ui (the integral of u
  * over it: freestep.c's cup_freestep_term_integral summed term by term as
- * waveform_step_integral sums one input) and u1 (u at its end, for a moving
- * set: cup_input_eval); returns how many of them to take, none past stop.
+ * waveform_step_integral sums one input) and, for a moving set, g (the
+ * offset at its end: integrator.c's moving_offset of cup_input_eval's u,
+ * once for the stretch when u is the same at all its steps); returns how
+ * many of them to take, none past stop.
  * Term by term over the steps, so that a term's kind is looked at once, and
  * apart from the steps, so that the sines (some 60 cycles of latency each)
  * overlap one another and the steps' chains; two steps at a time, and always
  * all of them (a few wasted at the end of a stretch) so that the loops have
  * no exits. */
-static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_ahead *ui, cup_ahead *u1) {
+static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_ahead *ui, cup_v2d *g) {
   enum { P = CUP_FAST_AHEAD / 2 };
   int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
-  double t[CUP_FAST_AHEAD + 2];                  /* t[j] = t_{k+j} as cup_grid_time gives it */
-  cup_v2d kk = {(double)k, (double)k + 1}, t0[P], tmid[P];
-  for (int p = 0; p <= P; p++) {
-    cup_v2d tp = (kk + 2 * p) * f->h;            /* (double)(k + j) exactly: k < 2^53 */
-    t[2 * p] = tp[0];
-    t[2 * p + 1] = tp[1];
+  cup_ahead t0, u1;                              /* t0: each step's start */
+  cup_v2d kk = {(double)k, (double)k + 1}, tmid[P];
+  for (int p = 0; p < P; p++) {                  /* t_{k+j} as cup_grid_time gives it: */
+    t0.v[p] = (kk + 2 * p) * f->h;               /* (double)(k + j) exactly: k < 2^53 */
+    t1->v[p] = (kk + (2 * p + 1)) * f->h;
+    ui->v[p] = u1.v[p] = (cup_v2d){0, 0};
   }
-  if (k <= f->steps && f->steps - k <= CUP_FAST_AHEAD) t[f->steps - k] = f->T;
-  for (int p = 0; p < P; p++) {
-    t0[p] = (cup_v2d){t[2 * p], t[2 * p + 1]};
-    t1->v[p] = (cup_v2d){t[2 * p + 1], t[2 * p + 2]};
-    tmid[p] = 0.5 * (t0[p] + t1->v[p]);
-    ui->v[p] = u1->v[p] = (cup_v2d){0, 0};
+  if (k <= f->steps && f->steps - k <= CUP_FAST_AHEAD) {   /* t_steps = T */
+    if (f->steps - k < CUP_FAST_AHEAD) t0.d[f->steps - k] = f->T;
+    if (f->steps > k) t1->d[f->steps - k - 1] = f->T;
   }
-  int integrate = f->integrate, moving = f->moving;
+  for (int p = 0; p < P; p++) tmid[p] = 0.5 * (t0.v[p] + t1->v[p]);
+  int integrate = f->integrate, moving = f->moving, same = 1;
   for (int q = 0; q < f->nterms && (integrate || moving); q++) {
     const cup_term *w = f->term[q];
     double th = f->term_h[q];
     if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
-      square_ahead(f, q, t[0], t1, cnt, ui, u1);
+      same &= square_ahead(f, q, t0.d[0], t1, cnt, ui, &u1);
       continue;
     }
     if (w->kind == CUP_WAVE_CONSTANT || (w->kind == CUP_WAVE_SINE && !(w->omega > 0)))
@@ -114,30 +114,34 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_a
     else if (w->kind == CUP_WAVE_SINE)
       for (int p = 0; p < P; p++) ui->v[p] += th * cup_sin2(w->omega * tmid[p] + w->phase);
     else
-      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui->d[j] += cup_term_integral(w, t[j], t[j + 1]);
-    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1->d[j] += cup_term_value(w, t[j + 1]);
+      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui->d[j] += cup_term_integral(w, t0.d[j], t1->d[j]);
+    same &= w->kind == CUP_WAVE_CONSTANT;
+    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1.d[j] += cup_term_value(w, t1->d[j]);
   }
-  if (cnt) f->last_t = t[cnt];
+  if (cnt) f->last_t = t1->d[cnt - 1];
   for (int p = 0; p < P && !integrate; p++)   /* a constant input's h u, or none */
     ui->v[p] = (cup_v2d){f->uconst, f->uconst};
+  /* moving_offset: g0 where u = 0, as cup_sparse_gaxpy skips a zero;
+   * cup_small_core declines an offset that is not finite */
+  for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) {
+    double u = u1.d[same ? 0 : j];
+    g[j] = same && j ? g[0] : cup_v2_select(u != 0 ? f->grows : (cup_v2l){0, 0}, f->g0 + f->gdir * u, f->g0);
+  }
   return cnt;
 }
 
 /* One step from x into z (xf: the free point, g: the offset), its input
  * given: the status, or CUP_FAST_DECLINED with nothing but scratch changed. */
 static inline __attribute__((always_inline)) int
-fast_step(const cup_faststep *f, cup_small_carry *c, double uint, double u1, const cup_v2d *restrict x,
-          cup_v2d *restrict xf, cup_v2d *restrict z, cup_v2d *g, cup_small_out *o, const int n, const int m) {
+fast_step(const cup_faststep *f, cup_small_carry *c, double uint, cup_v2d g, const cup_v2d *restrict x,
+          cup_v2d *restrict xf, cup_v2d *restrict z, cup_small_out *o, const int n, const int m) {
   for (int r = 0; r < (n + 1) / 2; r++) {                 /* freestep.c's affine_rows */
     cup_v2d acc = {0, 0};
     for (int j = 0; j < n; j++) acc += f->Phi[j][r] * cup_lane(x, j);
     xf[r] = acc + f->Gam[r] * uint;   /* without input 0 * 0: + 0 changes no sum but -0, never a 0 + ... */
   }
-  /* integrator.c's moving_offset (g0 where u1 = 0, as cup_sparse_gaxpy
-   * skips a zero); cup_small_core declines an offset that is not finite */
-  *g = cup_v2_select(u1 != 0 ? f->grows : (cup_v2l){0, 0}, f->g0 + f->gdir * u1, f->g0);
   /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
-  return cup_small_core(f->th, c, *g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
+  return cup_small_core(f->th, c, g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
 
 /* integrator.c's loop from step k, the state, the LCP's warm start and the
@@ -148,19 +152,22 @@ static inline __attribute__((always_inline)) long
 run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
   cup_v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
-  cup_ahead t1, ui, u1;
+  cup_ahead t1, ui;
+  cup_v2d gs[CUP_FAST_AHEAD];
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
   cup_small_carry c = cup_small_load(f->th, m);
   cup_small_out o;
   long booked = 0, skipped = 0;
   long long iterations = 0;
-  double max_eps = info->max_eps_cert, max_eta = info->max_eta_cert, t = info->t;
+  cup_v2d max_cert = {info->max_eps_cert, info->max_eta_cert};
+  double t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
-      have = inputs_ahead(f, k, stop, &t1, &ui, &u1);
+      have = inputs_ahead(f, k, stop, &t1, &ui, gs);
       a = 0;
     }
-    int s = fast_step(f, &c, ui.d[a], u1.d[a], x, xf, z, &g, &o, n, m);
+    if (f->moving) g = gs[a];
+    int s = fast_step(f, &c, ui.d[a], g, x, xf, z, &o, n, m);
     if (k == stop || s != CUP_OK) {
       for (int j = 0; j < n; j++) xp[j] = cup_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
@@ -175,8 +182,8 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
         info->skipped += skipped;
         info->projected += booked - skipped;
         info->dual_iterations += iterations;
-        info->max_eps_cert = max_eps;
-        info->max_eta_cert = max_eta;
+        info->max_eps_cert = max_cert[0];
+        info->max_eta_cert = max_cert[1];
       }
       *st = s;
       return k;
@@ -187,8 +194,10 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
     booked++;
     skipped += o.skipped;                                 /* cup_tally, per step */
     iterations += o.iterations;
-    if (!(o.eps_cert <= max_eps)) max_eps = o.eps_cert;
-    if (!(o.eta_cert <= max_eta)) max_eta = o.eta_cert;
+    /* the tally's !(cert <= max) ? cert : max as max > cert ? max : cert
+     * (SSE2's maxpd): the same but for zeros of opposite signs, and the
+     * certificates are never -0 (max(gap, 0), a distance) */
+    max_cert = cup_v2_max(max_cert, (cup_v2d){o.eps_cert, o.eta_cert});
   }
 }
 

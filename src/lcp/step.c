@@ -270,3 +270,23 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
 }
+
+/* step.h's cup_small_pass until no index flips */
+int cup_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
+                         cup_v2d *lam, int *pivots, int m) {
+  unsigned act = *actp;
+  for (int it = 0; it < 16 * m + 64; it++) {
+    double l0, l1;
+    int flip = cup_small_pass(act, M, det, q0, q1, tol_w, &l0, &l1, m);
+    if (flip == -2) return 1;
+    if (flip < 0) {
+      *lam = (cup_v2d){l0, l1};
+      *actp = act;
+      return 0;
+    }
+    act ^= 1u << flip;
+    (*pivots)++;
+  }
+  return 1;
+}
+

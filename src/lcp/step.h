@@ -174,53 +174,64 @@ CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2
   return cup_lcp_step_eta(ls, gm, zm);
 }
 
-/* lcp.c's Murty pivoting from the warm start *act for m <= 2 rows (the
- * active set a bit mask, each block solved by the same closed forms, the
- * same tolerances, the same least index). 0 with lam and *act written; 1,
- * touching nothing, where lcp.c would meet a singular block or cycle (and
- * then retry cold): the general path takes the step over. Scalars, not
- * arrays indexed by the active set, so that nothing goes through memory;
- * det = M[0] M[3] - M[2] M[1], formed once. */
+/* One pass of lcp.c's Murty pivoting for m <= 2 rows at the active set act
+ * (a bit mask; each block solved by the same closed forms, the same
+ * tolerances, the same least index): the block's solution in *l0, *l1 and
+ * -1 when no index flips, else the index to flip, or -2 at a singular
+ * block. Scalars, not arrays indexed by the active set, so that nothing
+ * goes through memory; det = M[0] M[3] - M[2] M[1], formed once. */
+CUP_ALWAYS_INLINE int cup_small_pass(unsigned act, const double *M, double det, double q0, double q1,
+                                     double tol_w, double *l0p, double *l1p, const int m) {
+  double l0 = 0, l1 = 0;
+  if (act == 3) {
+    if (!(det != 0)) return -2;
+    l0 = (-q0 * M[3] + q1 * M[2]) / det;
+    l1 = (-q1 * M[0] + q0 * M[1]) / det;
+  } else if (act == 1) {
+    if (!(M[0] != 0)) return -2;
+    l0 = -q0 / M[0];
+  } else if (act == 2) {                          /* m = 2 */
+    if (!(M[3] != 0)) return -2;
+    l1 = -q1 / M[3];
+  }
+  double w0 = q0, w1 = q1;                        /* w = q + M lam on the active columns */
+  if (act & 1) w0 += M[0] * l0;
+  if (act & 2) w0 += M[m] * l1;
+  if (m > 1 && (act & 1)) w1 += M[1] * l0;
+  if (m > 1 && (act & 2)) w1 += M[1 + m] * l1;
+  double lmax = fabs(l0);                         /* cup_max from 0 */
+  if (m > 1) lmax = cup_max(lmax, fabs(l1));
+  double tol_l = 64 * DBL_EPSILON * lmax;
+  *l0p = l0;
+  *l1p = l1;
+  if ((act & 1) ? l0 < -tol_l : w0 < -tol_w) return 0;
+  if (m > 1 && ((act & 2) ? l1 < -tol_l : w1 < -tol_w)) return 1;
+  return -1;
+}
+
+/* lcp.c's Murty pivoting from the warm start *act, pass after pass
+ * (step.c): 0 with lam and *act written; 1, leaving them, where lcp.c would
+ * meet a singular block or cycle (and then retry cold): the general path
+ * takes the step over. */
+int cup_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
+                         cup_v2d *lam, int *pivots, int m);
+
+/* cup_small_murty_loop, its first pass inlined: the warm start is right at
+ * almost every step, and the loop, kept out of line, holds no registers
+ * there (GCC spilled the fused steps' states around it). */
 CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double det, cup_v2d q, cup_v2d *lam,
                                       int *pivots, const int m) {
   const double q0 = q[0], q1 = q[1];
   double scale = fabs(q0);                        /* cup_max from 0 */
   if (m > 1) scale = cup_max(scale, fabs(q1));
-  double tol_w = 64 * DBL_EPSILON * scale;
-  unsigned act = *actp;
-  for (int it = 0; it < 16 * m + 64; it++) {
-    double l0 = 0, l1 = 0;
-    if (act == 3) {
-      if (!(det != 0)) return 1;
-      l0 = (-q0 * M[3] + q1 * M[2]) / det;
-      l1 = (-q1 * M[0] + q0 * M[1]) / det;
-    } else if (act == 1) {
-      if (!(M[0] != 0)) return 1;
-      l0 = -q0 / M[0];
-    } else if (act == 2) {                        /* m = 2 */
-      if (!(M[3] != 0)) return 1;
-      l1 = -q1 / M[3];
-    }
-    double w0 = q0, w1 = q1;                      /* w = q + M lam on the active columns */
-    if (act & 1) w0 += M[0] * l0;
-    if (act & 2) w0 += M[m] * l1;
-    if (m > 1 && (act & 1)) w1 += M[1] * l0;
-    if (m > 1 && (act & 2)) w1 += M[1 + m] * l1;
-    double lmax = fabs(l0);                       /* cup_max from 0 */
-    if (m > 1) lmax = cup_max(lmax, fabs(l1));
-    double tol_l = 64 * DBL_EPSILON * lmax;
-    int flip = -1;
-    if ((act & 1) ? l0 < -tol_l : w0 < -tol_w) flip = 0;
-    else if (m > 1 && ((act & 2) ? l1 < -tol_l : w1 < -tol_w)) flip = 1;
-    if (flip < 0) {
-      *lam = (cup_v2d){l0, l1};
-      *actp = act;
-      return 0;
-    }
-    act ^= 1u << flip;
-    (*pivots)++;
+  double tol_w = 64 * DBL_EPSILON * scale, l0, l1;
+  int flip = cup_small_pass(*actp, M, det, q0, q1, tol_w, &l0, &l1, m);
+  if (flip == -1) {
+    *lam = (cup_v2d){l0, l1};
+    return 0;
   }
-  return 1;
+  if (flip == -2) return 1;
+  return cup_small_murty_loop(actp, M, det, q0, q1, tol_w, lam, pivots, m);
 }
 
 /* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
@@ -231,12 +242,13 @@ CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double de
 CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g,
                                      const cup_v2d *restrict xf, cup_v2d *restrict z, double eps_target,
                                      double eta_target, cup_small_out *o, const int n, const int m) {
-  cup_v2d probe = 0 * g + 0 * cup_v2_first(xf[0], n);   /* NaN iff some entry is NaN or Inf */
-  if (n > 2) probe += 0 * cup_v2_first(xf[1], n - 2);
-  if (isnan(probe[0] + probe[1])) return 0;
   const int halves = (n + 1) / 2;
   cup_v2d q, gam;
   cup_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */
+  /* NaN or Inf in xf or g makes q so (every row takes every state, zeros
+   * included, and 0 Inf is NaN); so does an overflow of q, declined too */
+  cup_v2d probe = 0 * q;
+  if (isnan(probe[0] + probe[1])) return 0;
   double qmin = q[0];                             /* the general path's min from INFINITY */
   if (m > 1) qmin = cup_min(qmin, q[1]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */

@@ -51,10 +51,15 @@ static inline double cup_square_q(const cup_term *w, double t) { return w->omega
 /* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
 static inline double cup_mod2(double q) { return q - 2.0 * cup_floor(0.5 * q); }
 
+/* r = cup_mod2(q) within tol of a zero of sin(pi q) */
+static inline int cup_square_near_zero(double r, double tol) {
+  return r <= tol || fabs(r - 1) <= tol || 2 - r <= tol;
+}
+
 /* sign(sin(pi q)) from q and r = cup_mod2(q) */
 static inline double cup_sign_sin_qr(double q, double r) {
   double tol = 4 * DBL_EPSILON * (fabs(q) > 1 ? fabs(q) : 1.0);   /* fmax(1, |q|), NaN giving 1 */
-  if (r <= tol || fabs(r - 1) <= tol || 2 - r <= tol) return 0;
+  if (cup_square_near_zero(r, tol)) return 0;
   return r < 1 ? 1 : -1;
 }
 
@@ -91,6 +96,35 @@ static inline cup_v2d cup_sign_sin_qr2(cup_v2d q, cup_v2d r) {
 /* r <= 1 ? r : 2 - r as min(r, 2 - r): the same for r in [0, 2) (2 - r is
  * exact above 1) and NaN */
 static inline cup_v2d cup_triangle_r2(cup_v2d r) { return cup_v2_min(r, (cup_v2d){2, 2} - r); }
+
+/* cup_mod2 and cup_sign_sin_qr of np pairs of positions q that never
+ * decrease (a square wave's q at increasing times: omega > 0), bit for bit,
+ * per block rather than per position where the block allows: floor, the
+ * roundings and fabs on either side of 1 are monotone, so when q / 2 has one
+ * floor at both ends (q[0] != 0, so that no zero's sign is in question) it
+ * has it throughout, and when both ends' r are clear of the sign's zeros
+ * (cup_square_near_zero) by the block's largest tolerance and on one side
+ * of 1, every r between is too. Returns 1 when one sign holds for the whole
+ * block (no jump in it). */
+static inline int cup_square_block(const cup_v2d *q, int np, cup_v2d *r, cup_v2d *sg) {
+  const double first = q[0][0], last = q[np - 1][1], fl = cup_floor(0.5 * first);
+  if (first != 0 && fl == cup_floor(0.5 * last)) {        /* NaN compares unequal */
+    const cup_v2d two_fl = 2.0 * (cup_v2d){fl, fl};
+    for (int p = 0; p < np; p++) r[p] = q[p] - two_fl;
+    const double r0 = r[0][0], r1 = r[np - 1][1];
+    const double tol = 4 * DBL_EPSILON * cup_max(cup_max(fabs(first), fabs(last)), 1.0);
+    if (!cup_square_near_zero(r0, tol) && !cup_square_near_zero(r1, tol) && (r0 < 1) == (r1 < 1)) {
+      const double s = r0 < 1 ? 1 : -1;
+      for (int p = 0; p < np; p++) sg[p] = (cup_v2d){s, s};
+      return 1;
+    }
+  } else {
+    double f = NAN;
+    for (int p = 0; p < np; p++) r[p] = cup_mod2_2(q[p], &f);
+  }
+  for (int p = 0; p < np; p++) sg[p] = cup_sign_sin_qr2(q[p], r[p]);
+  return 0;
+}
 
 /* One term's value at t (its component's share of u(t)). */
 double cup_term_value(const cup_term *w, double t);

@@ -18,11 +18,6 @@ static inline cup_v2d cup_v2_abs(cup_v2d v) {
   return (cup_v2d)((cup_v2l)v & (cup_v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
 }
 
-/* v's first k lanes (k >= 2: v), the others 0 */
-static inline __attribute__((always_inline)) cup_v2d cup_v2_first(cup_v2d v, int k) {
-  return k >= 2 ? v : (cup_v2d)((cup_v2l)v & (cup_v2l){-1, 0});
-}
-
 /* a > b ? a : b and a < b ? a : b, lane by lane (b where unordered: SSE2's
  * maxpd and minpd exactly) */
 static inline cup_v2d cup_v2_max(cup_v2d a, cup_v2d b) {
