@@ -60,8 +60,15 @@ struct cup_crowd {
   /* cell list over the room's box: cells of side >= 2 rmax + reach */
   double cx0, cy0, cell;
   int gx, gy;
-  int *head, *next;                 /* gx gy heads, N links */
+  int *head;                        /* gx gy: per-cell cursors */
   int *wptr, *widx;                 /* per cell: the walls within rmax + reach of it */
+  /* the agents inside binned by cell (crowd.c, bin_agents) */
+  int *cell_ptr;                    /* gx gy + 1: each cell's agents in order[] */
+  int *order;                       /* N: agent of each binned position (those inside by
+                                       cell, then the evacuated): a permutation */
+  int *kcell;                       /* N: each agent's cell (-1: evacuated) */
+  double *qs, *rs;                  /* 2 N, N: positions and radii in binned order */
+  double bound;                     /* a visit skips pairs whose gap is surely >= this */
   /* the run */
   unsigned char *out;               /* evacuated */
   double *exit_time;
