@@ -119,11 +119,10 @@ static int cell_of(const cup_crowd *c, double x, double y) {
 
 /* The agents inside sorted by cell (row-major), contiguous per cell and in
  * increasing index within one (a counting sort), with their positions and
- * radii copied in that order; the evacuated agents follow. Every pass over
- * the pairs then reads memory in the order of space, and the rows come out
- * in that order too: the rows of neighbours sit near each other in C, in
- * the pool and in the dual matrix, which keeps a step's working set in
- * cache at 10^5 agents (BENCHMARKS.md, "Crowds"). */
+ * radii copied in that order; the evacuated agents follow. An agent's
+ * neighbours are then three runs of memory (three rows of cells) instead of
+ * a linked list through the whole crowd: at 10^5 agents the list's every
+ * link was a cache miss. */
 static void bin_agents(cup_crowd *c, const double *q) {
   int ncell = c->gx * c->gy, nin = 0;
   memset(c->cell_ptr, 0, sizeof(int) * ((size_t)ncell + 1));
@@ -136,6 +135,7 @@ static void bin_agents(cup_crowd *c, const double *q) {
   for (int i = 0, tail = nin; i < c->N; i++) {
     int a = c->kcell[i] >= 0 ? c->head[c->kcell[i]]++ : tail++;
     c->order[a] = i;
+    c->pos[i] = a;
     c->qs[2 * a] = q[2 * i];
     c->qs[2 * a + 1] = q[2 * i + 1];
     c->rs[a] = c->r[i];
@@ -173,40 +173,39 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
   return CUP_OK;
 }
 
-/* Visit, in the binned order (bin_agents), every agent inside with the walls
- * of its cell, fn(c, a, -1 - s, ctx) for wall s, and every pair of agents
- * inside in neighbouring cells once, fn(c, a, b, ctx) with order[a] <
- * order[b] (a, b positions in the binned order). Pairs whose gap is
- * certainly at least c->bound (which fn may lower) are skipped without a
- * square root: the visit stays exactly the one over all pairs. Stops at the
- * first nonzero return. */
+/* Visit every agent inside with the walls of its cell, fn(c, a, -1 - s,
+ * ctx) for wall s, and every pair of agents inside in neighbouring cells
+ * once, fn(c, a, b, ctx) with order[a] < order[b] (a, b positions in the
+ * binned order; bin_agents). Agents go in increasing index, each with its
+ * walls, then its pairs cell by cell (rows of cells from below, cells from
+ * the left): the order of the rows, hence of every sum in the projection,
+ * is the one of the index, whatever the binning (a crowd evacuation is
+ * chaotic: a change at rounding grows to metres in a few hundred steps).
+ * Pairs whose gap is certainly at least c->bound (which fn may lower) are
+ * skipped without a square root, so the visit stays exactly the one over
+ * all pairs. Stops at the first nonzero return. */
 typedef int (*pair_fn)(cup_crowd *c, int a, int b, void *ctx);
 
-static int visit_pair(cup_crowd *c, int a, int b, pair_fn fn, void *ctx) {
-  double dx = c->qs[2 * a] - c->qs[2 * b], dy = c->qs[2 * a + 1] - c->qs[2 * b + 1];
-  double t = c->bound + c->rs[a] + c->rs[b];
-  /* 1e-12 covers the rounding of the squares, of hypot and of the gap */
-  if (dx * dx + dy * dy > t * t * (1 + 1e-12)) return 0;
-  return c->order[a] < c->order[b] ? fn(c, a, b, ctx) : fn(c, b, a, ctx);
-}
-
 static int each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx) {
-  /* the cell itself and the neighbours after it in row-major order */
-  static const int fwd[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
   bin_agents(c, q);
-  for (int k = 0; k < c->gx * c->gy; k++) {
-    int ci = k % c->gx, cj = k / c->gx, st;
-    for (int a = c->cell_ptr[k]; a < c->cell_ptr[k + 1]; a++) {
-      for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++)
-        if ((st = fn(c, a, -1 - c->widx[e], ctx))) return st;
-      for (int b = a + 1; b < c->cell_ptr[k + 1]; b++)
-        if ((st = visit_pair(c, a, b, fn, ctx))) return st;
-      for (int f = 0; f < 4; f++) {
-        int u = ci + fwd[f][0], v = cj + fwd[f][1];
-        if (u < 0 || u >= c->gx || v >= c->gy) continue;
-        for (int b = c->cell_ptr[u + c->gx * v]; b < c->cell_ptr[u + c->gx * v + 1]; b++)
-          if ((st = visit_pair(c, a, b, fn, ctx))) return st;
-      }
+  for (int i = 0; i < c->N; i++) {
+    int k = c->kcell[i], a = c->pos[i], st;
+    if (k < 0) continue;
+    for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++)
+      if ((st = fn(c, a, -1 - c->widx[e], ctx))) return st;
+    int ci = k % c->gx, cj = k / c->gx;
+    for (int v = cj - 1; v <= cj + 1; v++) {
+      if (v < 0 || v >= c->gy) continue;
+      int u0 = ci > 0 ? ci - 1 : 0, u1 = ci + 1 < c->gx ? ci + 1 : ci;
+      for (int u = u0; u <= u1; u++)
+        for (int b = c->cell_ptr[u + c->gx * v]; b < c->cell_ptr[u + c->gx * v + 1]; b++) {
+          if (c->order[b] <= i) continue;
+          double dx = c->qs[2 * a] - c->qs[2 * b], dy = c->qs[2 * a + 1] - c->qs[2 * b + 1];
+          double t = c->bound + c->rs[a] + c->rs[b];
+          /* 1e-12 covers the rounding of the squares, of hypot and of the gap */
+          if (dx * dx + dy * dy > t * t * (1 + 1e-12)) continue;
+          if ((st = fn(c, a, b, ctx))) return st;
+        }
     }
   }
   return 0;
@@ -459,10 +458,11 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->exit_time = malloc(sizeof(double) * (size_t)N);
   c->order = malloc(sizeof(int) * (size_t)N);
   c->kcell = malloc(sizeof(int) * (size_t)N);
+  c->pos = malloc(sizeof(int) * (size_t)N);
   c->qs = malloc(sizeof(double) * 2 * (size_t)N);
   c->rs = malloc(sizeof(double) * (size_t)N);
   if (!c->q0 || !c->r || !c->room || !c->door || !c->obs_ptr || !c->obs || !c->out || !c->exit_time ||
-      !c->order || !c->kcell || !c->qs || !c->rs)
+      !c->order || !c->kcell || !c->pos || !c->qs || !c->rs)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int i = 0; i < N; i++) c->order[i] = i;
   memcpy(c->q0, d->q0, sizeof(double) * 2 * (size_t)N);
@@ -558,7 +558,7 @@ void cup_crowd_free(cup_crowd **cp) {
   free(c->q0); free(c->r); free(c->room); free(c->door); free(c->obs_ptr); free(c->obs);
   free(c->seg); free(c->seg_kind); free(c->seg_of); free(c->seg_part);
   free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx);
-  free(c->order); free(c->kcell); free(c->qs); free(c->rs);
+  free(c->order); free(c->kcell); free(c->pos); free(c->qs); free(c->rs);
   free(c->out); free(c->exit_time);
   free(c);
   *cp = NULL;

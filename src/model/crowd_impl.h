@@ -66,6 +66,7 @@ struct cup_crowd {
   int *cell_ptr;                    /* gx gy + 1: each cell's agents in order[] */
   int *order;                       /* N: agent of each binned position (those inside by
                                        cell, then the evacuated): a permutation */
+  int *pos;                         /* N: each agent's binned position (order's inverse) */
   int *kcell;                       /* N: each agent's cell (-1: evacuated) */
   double *qs, *rs;                  /* 2 N, N: positions and radii in binned order */
   double bound;                     /* a visit skips pairs whose gap is surely >= this */
