@@ -135,7 +135,6 @@ static void bin_agents(cup_crowd *c, const double *q) {
   for (int i = 0, tail = nin; i < c->N; i++) {
     int a = c->kcell[i] >= 0 ? c->head[c->kcell[i]]++ : tail++;
     c->order[a] = i;
-    c->pos[i] = a;
     c->qs[2 * a] = q[2 * i];
     c->qs[2 * a + 1] = q[2 * i + 1];
     c->rs[a] = c->r[i];
@@ -176,29 +175,25 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
 /* Visit every agent inside with the walls of its cell, fn(c, a, -1 - s,
  * ctx) for wall s, and every pair of agents inside in neighbouring cells
  * once, fn(c, a, b, ctx) with order[a] < order[b] (a, b positions in the
- * binned order; bin_agents). Agents go in increasing index, each with its
+ * binned order; bin_agents). Agents go in the binned order, each with its
  * walls, then its pairs cell by cell (rows of cells from below, cells from
- * the left): the order of the rows, hence of every sum in the projection,
- * is the one of the index, whatever the binning (a crowd evacuation is
- * chaotic: a change at rounding grows to metres in a few hundred steps).
- * Pairs whose gap is certainly at least c->bound (which fn may lower) are
- * skipped without a square root, so the visit stays exactly the one over
- * all pairs. Stops at the first nonzero return. */
+ * the left), with the agents of a cell in increasing index: the calls of
+ * one agent come together, in the order a visit by increasing index would
+ * make them. Pairs whose gap is certainly at least c->bound (which fn may
+ * lower) are skipped without a square root, so the visit stays exactly the
+ * one over all pairs. Stops at the first nonzero return. */
 typedef int (*pair_fn)(cup_crowd *c, int a, int b, void *ctx);
 
 static int each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx) {
   bin_agents(c, q);
-  for (int i = 0; i < c->N; i++) {
-    int k = c->kcell[i], a = c->pos[i], st;
-    if (k < 0) continue;
-    for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++)
-      if ((st = fn(c, a, -1 - c->widx[e], ctx))) return st;
-    int ci = k % c->gx, cj = k / c->gx;
-    for (int v = cj - 1; v <= cj + 1; v++) {
-      if (v < 0 || v >= c->gy) continue;
-      int u0 = ci > 0 ? ci - 1 : 0, u1 = ci + 1 < c->gx ? ci + 1 : ci;
-      for (int u = u0; u <= u1; u++)
-        for (int b = c->cell_ptr[u + c->gx * v]; b < c->cell_ptr[u + c->gx * v + 1]; b++) {
+  for (int k = 0; k < c->gx * c->gy; k++) {
+    int ci = k % c->gx, cj = k / c->gx, u0 = ci > 0 ? ci - 1 : 0, u1 = ci + 1 < c->gx ? ci + 1 : ci, st;
+    for (int a = c->cell_ptr[k]; a < c->cell_ptr[k + 1]; a++) {
+      int i = c->order[a];
+      for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++)
+        if ((st = fn(c, a, -1 - c->widx[e], ctx))) return st;
+      for (int v = cj > 0 ? cj - 1 : 0; v <= cj + 1 && v < c->gy; v++)
+        for (int b = c->cell_ptr[u0 + c->gx * v]; b < c->cell_ptr[u1 + c->gx * v + 1]; b++) {
           if (c->order[b] <= i) continue;
           double dx = c->qs[2 * a] - c->qs[2 * b], dy = c->qs[2 * a + 1] - c->qs[2 * b + 1];
           double t = c->bound + c->rs[a] + c->rs[b];
@@ -247,36 +242,60 @@ static void mark_exits(cup_crowd *c, const double *q, double tk) {
 }
 
 /* The row of agent a and wall -1 - b, or of the pair (a, b), when its gap
- * is within the margin; its pattern only (to come soon) within reach. */
-static int add_row(cup_crowd *c, int a, int b, void *vrb) {
-  cup_rowbuf *rb = vrb;
+ * is within the margin, its pattern only (to come soon) within reach: kept
+ * in the stage, agent by agent (each_pair makes an agent's calls together). */
+static int stage_row(cup_crowd *c, int a, int b, void *ctx) {
+  (void)ctx;
   double nx, ny, px, py, gap = gap_of(c, a, b, &nx, &ny, &px, &py);
   if (gap < c->gap) {                        /* pairs farther than this add nothing now */
     c->gap = gap;
     c->bound = fmax(c->reach, gap);
   }
   if (!(gap < c->reach) || (nx == 0 && ny == 0)) return 0;
-  int i = c->order[a];
-  if (b < 0) {                               /* n . (y_i - p) >= r_i */
-    int cols[2] = {2 * i, 2 * i + 1};
-    double vals[2] = {nx, ny};
-    if (gap < c->margin) return cup_rowbuf_add(rb, 2, cols, vals, -(c->rs[a] + nx * px + ny * py));
-    return cup_rowbuf_expect(rb, 2, cols);
+  if (c->nstage == c->stage_cap) {           /* more rows than any step before */
+    int cap = 2 * c->stage_cap;
+    crowd_entry *s = realloc(c->stage, sizeof *s * (size_t)cap);
+    if (!s) return CUP_ERR_NOMEM;
+    c->stage = s;
+    c->stage_cap = cap;
   }
-  int j = c->order[b];
-  int cols[4] = {2 * i, 2 * i + 1, 2 * j, 2 * j + 1};   /* e . (y_i - y_j) >= r_i + r_j */
-  double vals[4] = {nx, ny, -nx, -ny};
-  if (gap < c->margin) return cup_rowbuf_add(rb, 4, cols, vals, -(c->rs[a] + c->rs[b]));
-  return cup_rowbuf_expect(rb, 4, cols);
+  int i = c->order[a];
+  if (!c->run_len[i]) c->run_start[i] = c->nstage;
+  c->run_len[i]++;
+  /* n . (y_i - p) >= r_i;  e . (y_i - y_j) >= r_i + r_j */
+  c->stage[c->nstage++] = (crowd_entry){b < 0 ? b : c->order[b], gap < c->margin, nx, ny,
+                                        b < 0 ? -(c->rs[a] + nx * px + ny * py) : -(c->rs[a] + c->rs[b])};
+  return 0;
+}
+
+/* The staged rows into the buffer by increasing agent index: the order of
+ * the rows, hence of every sum in the projection, is the index's, whatever
+ * the binning (a crowd evacuation is chaotic: rows in another order moved
+ * agents of examples/crowd-room.yaml by metres within 200 steps). */
+static int emit_rows(const cup_crowd *c, cup_rowbuf *rb) {
+  for (int i = 0; i < c->N; i++)
+    for (int e = c->run_start[i]; e < c->run_start[i] + c->run_len[i]; e++) {
+      const crowd_entry *w = c->stage + e;
+      int pair = w->j >= 0, nnz = pair ? 4 : 2, st;
+      int cols[4] = {2 * i, 2 * i + 1, 2 * w->j, 2 * w->j + 1};
+      double vals[4] = {w->nx, w->ny, -w->nx, -w->ny};
+      st = w->row ? cup_rowbuf_add(rb, nnz, cols, vals, w->off) : cup_rowbuf_expect(rb, nnz, cols);
+      if (st) return st;
+    }
+  return 0;
 }
 
 static int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc) {
   cup_crowd *c = vc;
   mark_exits(c, q, t > 0 ? t - c->h : 0);
   c->gap = c->bound = INFINITY;
-  each_pair(c, q, add_row, rows);
+  c->nstage = 0;
+  memset(c->run_len, 0, sizeof(int) * (size_t)c->N);
+  int st = each_pair(c, q, stage_row, NULL);
+  if (st) return st;                          /* out of memory */
+  emit_rows(c, rows);                         /* a bad row is reported by the buffer */
   c->rows = cup_rowbuf_rows(rows);
-  return 0;                                   /* a bad row is reported by the buffer */
+  return 0;
 }
 
 /* The exact integral over a step at frozen q: h U(q_k), agent by agent in
@@ -458,11 +477,14 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->exit_time = malloc(sizeof(double) * (size_t)N);
   c->order = malloc(sizeof(int) * (size_t)N);
   c->kcell = malloc(sizeof(int) * (size_t)N);
-  c->pos = malloc(sizeof(int) * (size_t)N);
+  c->run_start = malloc(sizeof(int) * (size_t)N);
+  c->run_len = malloc(sizeof(int) * (size_t)N);
+  c->stage_cap = 2 * N + 64;                 /* a crowd has about 1.5 N rows and patterns to come */
+  c->stage = malloc(sizeof(crowd_entry) * (size_t)c->stage_cap);
   c->qs = malloc(sizeof(double) * 2 * (size_t)N);
   c->rs = malloc(sizeof(double) * (size_t)N);
   if (!c->q0 || !c->r || !c->room || !c->door || !c->obs_ptr || !c->obs || !c->out || !c->exit_time ||
-      !c->order || !c->kcell || !c->pos || !c->qs || !c->rs)
+      !c->order || !c->kcell || !c->run_start || !c->run_len || !c->stage || !c->qs || !c->rs)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int i = 0; i < N; i++) c->order[i] = i;
   memcpy(c->q0, d->q0, sizeof(double) * 2 * (size_t)N);
@@ -558,7 +580,7 @@ void cup_crowd_free(cup_crowd **cp) {
   free(c->q0); free(c->r); free(c->room); free(c->door); free(c->obs_ptr); free(c->obs);
   free(c->seg); free(c->seg_kind); free(c->seg_of); free(c->seg_part);
   free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx);
-  free(c->order); free(c->kcell); free(c->pos); free(c->qs); free(c->rs);
+  free(c->order); free(c->kcell); free(c->run_start); free(c->run_len); free(c->stage); free(c->qs); free(c->rs);
   free(c->out); free(c->exit_time);
   free(c);
   *cp = NULL;
