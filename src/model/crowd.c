@@ -134,10 +134,7 @@ static void bin_agents(cup_crowd *c, const double *q) {
   memcpy(c->head, c->cell_ptr, sizeof(int) * (size_t)ncell);   /* head as per-cell cursors */
   for (int i = 0, tail = nin; i < c->N; i++) {
     int a = c->kcell[i] >= 0 ? c->head[c->kcell[i]]++ : tail++;
-    c->order[a] = i;
-    c->qs[2 * a] = q[2 * i];
-    c->qs[2 * a + 1] = q[2 * i + 1];
-    c->rs[a] = c->r[i];
+    c->bin[a] = (crowd_agent){q[2 * i], q[2 * i + 1], c->r[i], i};
   }
 }
 
@@ -174,7 +171,7 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
 
 /* Visit every agent inside with the walls of its cell, fn(c, a, -1 - s,
  * ctx) for wall s, and every pair of agents inside in neighbouring cells
- * once, fn(c, a, b, ctx) with order[a] < order[b] (a, b positions in the
+ * once, fn(c, a, b, ctx) with bin[a].i < bin[b].i (a, b positions in the
  * binned order; bin_agents). Agents go in the binned order, each with its
  * walls, then its pairs cell by cell (rows of cells from below, cells from
  * the left), with the agents of a cell in increasing index: the calls of
@@ -189,14 +186,13 @@ static int each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx) {
   for (int k = 0; k < c->gx * c->gy; k++) {
     int ci = k % c->gx, cj = k / c->gx, u0 = ci > 0 ? ci - 1 : 0, u1 = ci + 1 < c->gx ? ci + 1 : ci, st;
     for (int a = c->cell_ptr[k]; a < c->cell_ptr[k + 1]; a++) {
-      int i = c->order[a];
+      const crowd_agent *A = c->bin + a, *B;
       for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++)
         if ((st = fn(c, a, -1 - c->widx[e], ctx))) return st;
       for (int v = cj > 0 ? cj - 1 : 0; v <= cj + 1 && v < c->gy; v++)
         for (int b = c->cell_ptr[u0 + c->gx * v]; b < c->cell_ptr[u1 + c->gx * v + 1]; b++) {
-          if (c->order[b] <= i) continue;
-          double dx = c->qs[2 * a] - c->qs[2 * b], dy = c->qs[2 * a + 1] - c->qs[2 * b + 1];
-          double t = c->bound + c->rs[a] + c->rs[b];
+          if ((B = c->bin + b)->i <= A->i) continue;
+          double dx = A->x - B->x, dy = A->y - B->y, t = c->bound + A->r + B->r;
           /* 1e-12 covers the rounding of the squares, of hypot and of the gap */
           if (dx * dx + dy * dy > t * t * (1 + 1e-12)) continue;
           if ((st = fn(c, a, b, ctx))) return st;
@@ -210,17 +206,17 @@ static int each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx) {
  * binned order), with the unit normal pushing a away and the point of
  * contact on the wall. */
 static double gap_of(const cup_crowd *c, int a, int b, double *nx, double *ny, double *px, double *py) {
-  double x = c->qs[2 * a], y = c->qs[2 * a + 1], d;
+  double x = c->bin[a].x, y = c->bin[a].y, d;
   if (b >= 0) {
-    *px = c->qs[2 * b];
-    *py = c->qs[2 * b + 1];
+    *px = c->bin[b].x;
+    *py = c->bin[b].y;
     d = hypot(x - *px, y - *py);
   } else {
     d = crowd_seg_nearest(c->seg + 4 * (-1 - b), x, y, px, py);
   }
   *nx = d > 0 ? (x - *px) / d : 0;
   *ny = d > 0 ? (y - *py) / d : 0;
-  return d - c->rs[a] - (b >= 0 ? c->rs[b] : 0);
+  return d - c->bin[a].r - (b >= 0 ? c->bin[b].r : 0);
 }
 
 /* ---- the process: rows of C(q_k) and the desired velocity ------------------------ */
@@ -259,12 +255,13 @@ static int stage_row(cup_crowd *c, int a, int b, void *ctx) {
     c->stage = s;
     c->stage_cap = cap;
   }
-  int i = c->order[a];
+  int i = c->bin[a].i;
   if (!c->run_len[i]) c->run_start[i] = c->nstage;
   c->run_len[i]++;
   /* n . (y_i - p) >= r_i;  e . (y_i - y_j) >= r_i + r_j */
-  c->stage[c->nstage++] = (crowd_entry){b < 0 ? b : c->order[b], gap < c->margin, nx, ny,
-                                        b < 0 ? -(c->rs[a] + nx * px + ny * py) : -(c->rs[a] + c->rs[b])};
+  double ra = c->bin[a].r;
+  c->stage[c->nstage++] = (crowd_entry){b < 0 ? b : c->bin[b].i, gap < c->margin, nx, ny,
+                                        b < 0 ? -(ra + nx * px + ny * py) : -(ra + c->bin[b].r)};
   return 0;
 }
 
@@ -306,7 +303,7 @@ static int crowd_walk(double t0, double t1, const double *q, double *F, void *vc
   mark_exits(c, q, t0);
   double dt = t1 - t0;
   for (int a = 0; a < c->N; a++) {
-    int i = c->order[a];
+    int i = c->bin[a].i;
     double u[2] = {0, 0};
     if (!c->out[i]) crowd_field_direction(&c->F, q[2 * i], q[2 * i + 1], u);
     F[2 * i] = dt * c->speed * u[0];
@@ -327,7 +324,7 @@ static int note_worst(cup_crowd *c, int a, int b, void *ctx) {
   worst_pair *w = ctx;
   if (b < 0 && w->pairs_only) return 0;
   double nx, ny, px, py, g = gap_of(c, a, b, &nx, &ny, &px, &py);
-  int i = c->order[a], j = b >= 0 ? c->order[b] : b;
+  int i = c->bin[a].i, j = b >= 0 ? c->bin[b].i : b;
   if (g < w->gap || (g == w->gap && (i < w->i || (i == w->i && j < w->j)))) {
     w->gap = c->bound = g;
     w->i = i;
@@ -475,18 +472,16 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->obs = malloc(sizeof(double) * (2 * (size_t)nv + 1));
   c->out = calloc((size_t)N, 1);
   c->exit_time = malloc(sizeof(double) * (size_t)N);
-  c->order = malloc(sizeof(int) * (size_t)N);
   c->kcell = malloc(sizeof(int) * (size_t)N);
   c->run_start = malloc(sizeof(int) * (size_t)N);
   c->run_len = malloc(sizeof(int) * (size_t)N);
   c->stage_cap = 2 * N + 64;                 /* a crowd has about 1.5 N rows and patterns to come */
   c->stage = malloc(sizeof(crowd_entry) * (size_t)c->stage_cap);
-  c->qs = malloc(sizeof(double) * 2 * (size_t)N);
-  c->rs = malloc(sizeof(double) * (size_t)N);
+  c->bin = malloc(sizeof(crowd_agent) * (size_t)N);
   if (!c->q0 || !c->r || !c->room || !c->door || !c->obs_ptr || !c->obs || !c->out || !c->exit_time ||
-      !c->order || !c->kcell || !c->run_start || !c->run_len || !c->stage || !c->qs || !c->rs)
+      !c->bin || !c->kcell || !c->run_start || !c->run_len || !c->stage)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
-  for (int i = 0; i < N; i++) c->order[i] = i;
+  for (int i = 0; i < N; i++) c->bin[i].i = i;
   memcpy(c->q0, d->q0, sizeof(double) * 2 * (size_t)N);
   memcpy(c->r, d->radius, sizeof(double) * (size_t)N);
   memcpy(c->room, d->room, sizeof(double) * 2 * (size_t)c->nroom);
@@ -580,7 +575,7 @@ void cup_crowd_free(cup_crowd **cp) {
   free(c->q0); free(c->r); free(c->room); free(c->door); free(c->obs_ptr); free(c->obs);
   free(c->seg); free(c->seg_kind); free(c->seg_of); free(c->seg_part);
   free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx);
-  free(c->order); free(c->kcell); free(c->run_start); free(c->run_len); free(c->stage); free(c->qs); free(c->rs);
+  free(c->bin); free(c->kcell); free(c->run_start); free(c->run_len); free(c->stage);
   free(c->out); free(c->exit_time);
   free(c);
   *cp = NULL;

@@ -42,6 +42,12 @@ double crowd_seg_nearest(const double *s, double x, double y, double *px, double
 /* Where a wall segment comes from, for messages. */
 enum { WALL_ROOM = 0, WALL_OBSTACLE = 1, WALL_EXTRA = 2 };
 
+/* An agent as binned: position, radius, index (one cache line holds two). */
+typedef struct crowd_agent {
+  double x, y, r;
+  int i;
+} crowd_agent;
+
 /* A row of agent i staged by the cell list: wall -1 - j or agent j > i. */
 typedef struct crowd_entry {
   int j;
@@ -70,11 +76,9 @@ struct cup_crowd {
   int *head;                        /* gx gy: per-cell cursors */
   int *wptr, *widx;                 /* per cell: the walls within rmax + reach of it */
   /* the agents inside binned by cell (crowd.c, bin_agents) */
-  int *cell_ptr;                    /* gx gy + 1: each cell's agents in order[] */
-  int *order;                       /* N: agent of each binned position (those inside by
-                                       cell, then the evacuated): a permutation */
+  int *cell_ptr;                    /* gx gy + 1: each cell's agents in bin[] */
+  crowd_agent *bin;                 /* N: the agents inside by cell, then the evacuated */
   int *kcell;                       /* N: each agent's cell (-1: evacuated) */
-  double *qs, *rs;                  /* 2 N, N: positions and radii in binned order */
   double bound;                     /* a visit skips pairs whose gap is surely >= this */
   /* a step's rows, found in the binned order, kept until they are put in
      the index order (crowd.c, emit_rows) */
