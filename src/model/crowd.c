@@ -1,8 +1,10 @@
 /* crowd — Maury and Venel's crowd motion on the state-dependent polyset
  * (catchup/crowd.h): the room's walls, the checks of a scene's agents, the
  * cell list that finds the pairs near contact in O(N) a step, the rows of
- * C(q_k) and the desired velocity. Allocation happens in cup_crowd_create
- * only; the callbacks of a step allocate nothing. */
+ * C(q_k) and the desired velocity. Allocation happens in cup_crowd_create,
+ * and in a step only when it has more rows and patterns to come than every
+ * step before and than the 2 N + 64 the stage starts with (the stage
+ * doubles, as the row buffer does). */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
