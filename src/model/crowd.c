@@ -1,8 +1,10 @@
 /* crowd — Maury and Venel's crowd motion on the state-dependent polyset
  * (catchup/crowd.h): the room's walls, the checks of a scene's agents, the
  * cell list that finds the pairs near contact in O(N) a step, the rows of
- * C(q_k) and the desired velocity. Allocation happens in cup_crowd_create
- * only; the callbacks of a step allocate nothing. */
+ * C(q_k) and the desired velocity. Allocation happens in cup_crowd_create,
+ * and in a step only when it has more rows and patterns to come than every
+ * step before and than the 2 N + 64 the stage starts with (the stage
+ * doubles, as the row buffer does). */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -117,14 +119,24 @@ static int cell_of(const cup_crowd *c, double x, double y) {
   return i + c->gx * j;
 }
 
-/* The agents inside, binned (in decreasing index within a cell's list). */
+/* The agents inside sorted by cell (row-major), contiguous per cell and in
+ * increasing index within one (a counting sort), with their positions and
+ * radii copied in that order; the evacuated agents follow. An agent's
+ * neighbours are then three runs of memory (three rows of cells) instead of
+ * a linked list through the whole crowd: at 10^5 agents the list's every
+ * link was a cache miss. */
 static void bin_agents(cup_crowd *c, const double *q) {
-  for (int k = 0; k < c->gx * c->gy; k++) c->head[k] = -1;
-  for (int i = c->N - 1; i >= 0; i--) {
-    if (c->out[i]) continue;
-    int k = cell_of(c, q[2 * i], q[2 * i + 1]);
-    c->next[i] = c->head[k];
-    c->head[k] = i;
+  int ncell = c->gx * c->gy, nin = 0;
+  memset(c->cell_ptr, 0, sizeof(int) * ((size_t)ncell + 1));
+  for (int i = 0; i < c->N; i++) {
+    c->kcell[i] = c->out[i] ? -1 : cell_of(c, q[2 * i], q[2 * i + 1]);
+    if (c->kcell[i] >= 0) { c->cell_ptr[c->kcell[i] + 1]++; nin++; }
+  }
+  for (int k = 0; k < ncell; k++) c->cell_ptr[k + 1] += c->cell_ptr[k];
+  memcpy(c->head, c->cell_ptr, sizeof(int) * (size_t)ncell);   /* head as per-cell cursors */
+  for (int i = 0, tail = nin; i < c->N; i++) {
+    int a = c->kcell[i] >= 0 ? c->head[c->kcell[i]]++ : tail++;
+    c->bin[a] = (crowd_agent){q[2 * i], q[2 * i + 1], c->r[i], i};
   }
 }
 
@@ -159,49 +171,54 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
   return CUP_OK;
 }
 
-/* Visit every pair i < j of agents inside in neighbouring cells, and every
- * agent with the walls of its cell: fn(c, i, j, ctx) with j >= 0 an agent,
- * j = -1 - s wall s. Stops at the first nonzero return. */
-typedef int (*pair_fn)(cup_crowd *c, const double *q, int i, int j, void *ctx);
+/* Visit every agent inside with the walls of its cell, fn(c, a, -1 - s,
+ * ctx) for wall s, and every pair of agents inside in neighbouring cells
+ * once, fn(c, a, b, ctx) with bin[a].i < bin[b].i (a, b positions in the
+ * binned order; bin_agents). Agents go in the binned order, each with its
+ * walls, then its pairs cell by cell (rows of cells from below, cells from
+ * the left), with the agents of a cell in increasing index: the calls of
+ * one agent come together, in the order a visit by increasing index would
+ * make them. Pairs whose gap is certainly at least c->bound (which fn may
+ * lower) are skipped without a square root, so the visit stays exactly the
+ * one over all pairs. Stops at the first nonzero return. */
+typedef int (*pair_fn)(cup_crowd *c, int a, int b, void *ctx);
 
 static int each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx) {
   bin_agents(c, q);
-  for (int i = 0; i < c->N; i++) {
-    if (c->out[i]) continue;
-    int k = cell_of(c, q[2 * i], q[2 * i + 1]), ci = k % c->gx, cj = k / c->gx;
-    for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++) {
-      int st = fn(c, q, i, -1 - c->widx[e], ctx);
-      if (st) return st;
-    }
-    for (int dj = -1; dj <= 1; dj++)
-      for (int di = -1; di <= 1; di++) {
-        int a = ci + di, b = cj + dj;
-        if (a < 0 || b < 0 || a >= c->gx || b >= c->gy) continue;
-        for (int j = c->head[a + c->gx * b]; j >= 0; j = c->next[j]) {
-          if (j <= i) continue;
-          int st = fn(c, q, i, j, ctx);
-          if (st) return st;
+  for (int k = 0; k < c->gx * c->gy; k++) {
+    int ci = k % c->gx, cj = k / c->gx, u0 = ci > 0 ? ci - 1 : 0, u1 = ci + 1 < c->gx ? ci + 1 : ci, st;
+    for (int a = c->cell_ptr[k]; a < c->cell_ptr[k + 1]; a++) {
+      const crowd_agent *A = c->bin + a, *B;
+      for (int e = c->wptr[k]; e < c->wptr[k + 1]; e++)
+        if ((st = fn(c, a, -1 - c->widx[e], ctx))) return st;
+      for (int v = cj > 0 ? cj - 1 : 0; v <= cj + 1 && v < c->gy; v++)
+        for (int b = c->cell_ptr[u0 + c->gx * v]; b < c->cell_ptr[u1 + c->gx * v + 1]; b++) {
+          if ((B = c->bin + b)->i <= A->i) continue;
+          double dx = A->x - B->x, dy = A->y - B->y, t = c->bound + A->r + B->r;
+          /* 1e-12 covers the rounding of the squares, of hypot and of the gap */
+          if (dx * dx + dy * dy > t * t * (1 + 1e-12)) continue;
+          if ((st = fn(c, a, b, ctx))) return st;
         }
-      }
+    }
   }
   return 0;
 }
 
-/* The gap of a pair (j >= 0) or of agent i and wall -1 - j, with the unit
- * normal pushing i away and the point of contact on the wall. */
-static double gap_of(const cup_crowd *c, const double *q, int i, int j, double *nx, double *ny,
-                     double *px, double *py) {
-  double x = q[2 * i], y = q[2 * i + 1], d;
-  if (j >= 0) {
-    *px = q[2 * j];
-    *py = q[2 * j + 1];
+/* The gap of a pair (b >= 0) or of agent a and wall -1 - b (positions in the
+ * binned order), with the unit normal pushing a away and the point of
+ * contact on the wall. */
+static double gap_of(const cup_crowd *c, int a, int b, double *nx, double *ny, double *px, double *py) {
+  double x = c->bin[a].x, y = c->bin[a].y, d;
+  if (b >= 0) {
+    *px = c->bin[b].x;
+    *py = c->bin[b].y;
     d = hypot(x - *px, y - *py);
   } else {
-    d = crowd_seg_nearest(c->seg + 4 * (-1 - j), x, y, px, py);
+    d = crowd_seg_nearest(c->seg + 4 * (-1 - b), x, y, px, py);
   }
   *nx = d > 0 ? (x - *px) / d : 0;
   *ny = d > 0 ? (y - *py) / d : 0;
-  return d - c->r[i] - (j >= 0 ? c->r[j] : 0);
+  return d - c->bin[a].r - (b >= 0 ? c->bin[b].r : 0);
 }
 
 /* ---- the process: rows of C(q_k) and the desired velocity ------------------------ */
@@ -222,42 +239,98 @@ static void mark_exits(cup_crowd *c, const double *q, double tk) {
     }
 }
 
-static int add_row(cup_crowd *c, const double *q, int i, int j, void *vrb) {
-  cup_rowbuf *rb = vrb;
-  double nx, ny, px, py, gap = gap_of(c, q, i, j, &nx, &ny, &px, &py);
-  if (gap < c->gap) c->gap = gap;
-  if (!(gap < c->reach) || (nx == 0 && ny == 0)) return 0;
-  if (j < 0) {                               /* n . (y_i - p) >= r_i */
-    int cols[2] = {2 * i, 2 * i + 1};
-    double vals[2] = {nx, ny};
-    if (gap < c->margin) return cup_rowbuf_add(rb, 2, cols, vals, -(c->r[i] + nx * px + ny * py));
-    return cup_rowbuf_expect(rb, 2, cols);
+/* The row of agent a and wall -1 - b, or of the pair (a, b), when its gap
+ * is within the margin, its pattern only (to come soon) within reach: kept
+ * in the stage, agent by agent (each_pair makes an agent's calls together). */
+static int stage_row(cup_crowd *c, int a, int b, void *ctx) {
+  (void)ctx;
+  double nx, ny, px, py, gap = gap_of(c, a, b, &nx, &ny, &px, &py);
+  if (gap < c->gap) {                        /* pairs farther than this add nothing now */
+    c->gap = gap;
+    c->bound = fmax(c->reach, gap);
   }
-  int cols[4] = {2 * i, 2 * i + 1, 2 * j, 2 * j + 1};   /* e . (y_i - y_j) >= r_i + r_j */
-  double vals[4] = {nx, ny, -nx, -ny};
-  if (gap < c->margin) return cup_rowbuf_add(rb, 4, cols, vals, -(c->r[i] + c->r[j]));
-  return cup_rowbuf_expect(rb, 4, cols);
+  if (!(gap < c->reach) || (nx == 0 && ny == 0)) return 0;
+  if (c->nstage == c->stage_cap) {           /* more rows than any step before */
+    int cap = 2 * c->stage_cap;
+    crowd_entry *s = realloc(c->stage, sizeof *s * (size_t)cap);
+    if (!s) return CUP_ERR_NOMEM;
+    c->stage = s;
+    c->stage_cap = cap;
+  }
+  int i = c->bin[a].i;
+  if (!c->run_len[i]) c->run_start[i] = c->nstage;
+  c->run_len[i]++;
+  /* n . (y_i - p) >= r_i;  e . (y_i - y_j) >= r_i + r_j */
+  double ra = c->bin[a].r;
+  c->stage[c->nstage++] = (crowd_entry){b < 0 ? b : c->bin[b].i, gap < c->margin, nx, ny,
+                                        b < 0 ? -(ra + nx * px + ny * py) : -(ra + c->bin[b].r)};
+  return 0;
+}
+
+/* The staged rows into the buffer by increasing agent index: the order of
+ * the rows, hence of every sum in the projection, is the index's, whatever
+ * the binning (a crowd evacuation is chaotic: rows in another order moved
+ * agents of examples/crowd-room.yaml by metres within 200 steps). */
+static int emit_rows(const cup_crowd *c, cup_rowbuf *rb) {
+  for (int i = 0; i < c->N; i++)
+    for (int e = c->run_start[i]; e < c->run_start[i] + c->run_len[i]; e++) {
+      const crowd_entry *w = c->stage + e;
+      int pair = w->j >= 0, nnz = pair ? 4 : 2, st;
+      int cols[4] = {2 * i, 2 * i + 1, 2 * w->j, 2 * w->j + 1};
+      double vals[4] = {w->nx, w->ny, -w->nx, -w->ny};
+      st = w->row ? cup_rowbuf_add(rb, nnz, cols, vals, w->off) : cup_rowbuf_expect(rb, nnz, cols);
+      if (st) return st;
+    }
+  return 0;
 }
 
 static int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc) {
   cup_crowd *c = vc;
   mark_exits(c, q, t > 0 ? t - c->h : 0);
-  c->gap = INFINITY;
-  each_pair(c, q, add_row, rows);
+  c->gap = c->bound = INFINITY;
+  c->nstage = 0;
+  memset(c->run_len, 0, sizeof(int) * (size_t)c->N);
+  int st = each_pair(c, q, stage_row, NULL);
+  if (st) return st;                          /* out of memory */
+  emit_rows(c, rows);                         /* a bad row is reported by the buffer */
   c->rows = cup_rowbuf_rows(rows);
-  return 0;                                   /* a bad row is reported by the buffer */
+  return 0;
 }
 
-/* The exact integral over a step at frozen q: h U(q_k). */
+/* The exact integral over a step at frozen q: h U(q_k), agent by agent in
+ * the last binned order, in which neighbours read neighbouring nodes of
+ * the distance grid (any order gives the same numbers). */
 static int crowd_walk(double t0, double t1, const double *q, double *F, void *vc) {
   cup_crowd *c = vc;
   mark_exits(c, q, t0);
   double dt = t1 - t0;
-  for (int i = 0; i < c->N; i++) {
+  for (int a = 0; a < c->N; a++) {
+    int i = c->bin[a].i;
     double u[2] = {0, 0};
     if (!c->out[i]) crowd_field_direction(&c->F, q[2 * i], q[2 * i + 1], u);
     F[2 * i] = dt * c->speed * u[0];
     F[2 * i + 1] = dt * c->speed * u[1];
+  }
+  return 0;
+}
+
+/* The smallest gap of a visit (each_pair) and where it is: agents i < j,
+ * or agent i and wall -1 - j; the first pair (i, j) among equals. */
+typedef struct worst_pair {
+  double gap;
+  int i, j;
+  int pairs_only;                  /* leave the walls out */
+} worst_pair;
+
+static int note_worst(cup_crowd *c, int a, int b, void *ctx) {
+  worst_pair *w = ctx;
+  if (b < 0 && w->pairs_only) return 0;
+  double nx, ny, px, py, g = gap_of(c, a, b, &nx, &ny, &px, &py);
+  int i = c->bin[a].i, j = b >= 0 ? c->bin[b].i : b;
+  if (g < w->gap || (g == w->gap && (i < w->i || (i == w->i && j < w->j)))) {
+    w->gap = c->bound = g;
+    w->i = i;
+    w->j = j;
   }
   return 0;
 }
@@ -314,22 +387,11 @@ static int check_agents(cup_crowd *c, double tol, char *errmsg) {
                         c->r[i], wall_name(c, s, wb, sizeof wb), c->r[i] - d);
     }
   }
-  double worst = INFINITY;
-  int wi = -1, wj = -1;
-  bin_agents(c, c->q0);
-  for (int i = 0; i < c->N; i++) {
-    int k = cell_of(c, c->q0[2 * i], c->q0[2 * i + 1]), ci = k % c->gx, cj = k / c->gx;
-    for (int dj = -1; dj <= 1; dj++)
-      for (int di = -1; di <= 1; di++) {
-        int a = ci + di, b = cj + dj;
-        if (a < 0 || b < 0 || a >= c->gx || b >= c->gy) continue;
-        for (int j = c->head[a + c->gx * b]; j >= 0; j = c->next[j]) {
-          if (j <= i) continue;
-          double nx, ny, px, py, g = gap_of(c, c->q0, i, j, &nx, &ny, &px, &py);
-          if (g < worst) { worst = g; wi = i; wj = j; }
-        }
-      }
-  }
+  worst_pair w = {INFINITY, -1, -1, 1};
+  c->bound = INFINITY;
+  each_pair(c, c->q0, note_worst, &w);
+  double worst = w.gap;
+  int wi = w.i, wj = w.j;
   if (worst < -tol)
     return cup_fail(errmsg, CUP_ERR_ARG, "agents %d and %d overlap by %.3g (centres (%g, %g) and (%g, %g), radii %g and %g)",
                     wi, wj, -worst, c->q0[2 * wi], c->q0[2 * wi + 1], c->q0[2 * wj], c->q0[2 * wj + 1], c->r[wi], c->r[wj]);
@@ -412,9 +474,16 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->obs = malloc(sizeof(double) * (2 * (size_t)nv + 1));
   c->out = calloc((size_t)N, 1);
   c->exit_time = malloc(sizeof(double) * (size_t)N);
-  c->next = malloc(sizeof(int) * (size_t)N);
-  if (!c->q0 || !c->r || !c->room || !c->door || !c->obs_ptr || !c->obs || !c->out || !c->exit_time || !c->next)
+  c->kcell = malloc(sizeof(int) * (size_t)N);
+  c->run_start = malloc(sizeof(int) * (size_t)N);
+  c->run_len = malloc(sizeof(int) * (size_t)N);
+  c->stage_cap = 2 * N + 64;                 /* a crowd has about 1.5 N rows and patterns to come */
+  c->stage = malloc(sizeof(crowd_entry) * (size_t)c->stage_cap);
+  c->bin = malloc(sizeof(crowd_agent) * (size_t)N);
+  if (!c->q0 || !c->r || !c->room || !c->door || !c->obs_ptr || !c->obs || !c->out || !c->exit_time ||
+      !c->bin || !c->kcell || !c->run_start || !c->run_len || !c->stage)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  for (int i = 0; i < N; i++) c->bin[i].i = i;
   memcpy(c->q0, d->q0, sizeof(double) * 2 * (size_t)N);
   memcpy(c->r, d->radius, sizeof(double) * (size_t)N);
   memcpy(c->room, d->room, sizeof(double) * 2 * (size_t)c->nroom);
@@ -459,7 +528,8 @@ static int set_scales(cup_crowd *c, const cup_crowd_desc *d, double h, double bo
   c->gx = (int)gx;
   c->gy = (int)gy;
   c->head = malloc(sizeof(int) * (size_t)c->gx * (size_t)c->gy);
-  if (!c->head) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  c->cell_ptr = malloc(sizeof(int) * ((size_t)c->gx * (size_t)c->gy + 1));
+  if (!c->head || !c->cell_ptr) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   return CUP_OK;
 }
 
@@ -506,7 +576,8 @@ void cup_crowd_free(cup_crowd **cp) {
   crowd_field_free(&c->F);
   free(c->q0); free(c->r); free(c->room); free(c->door); free(c->obs_ptr); free(c->obs);
   free(c->seg); free(c->seg_kind); free(c->seg_of); free(c->seg_part);
-  free(c->head); free(c->next); free(c->wptr); free(c->widx);
+  free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx);
+  free(c->bin); free(c->kcell); free(c->run_start); free(c->run_len); free(c->stage);
   free(c->out); free(c->exit_time);
   free(c);
   *cp = NULL;
@@ -540,16 +611,10 @@ int cup_crowd_walls(const cup_crowd *c, const double **seg) {
   return c->nseg;
 }
 
-static int worst_gap(cup_crowd *c, const double *q, int i, int j, void *ctx) {
-  double nx, ny, px, py, g = gap_of(c, q, i, j, &nx, &ny, &px, &py);
-  double *worst = ctx;
-  if (g < *worst) *worst = g;
-  return 0;
-}
-
 double cup_crowd_min_gap(cup_crowd *c, const double *q) {
   if (!c || !q) return NAN;
-  double worst = INFINITY;
-  each_pair(c, q, worst_gap, &worst);
-  return worst;
+  worst_pair w = {INFINITY, -1, -1, 0};
+  c->bound = INFINITY;
+  each_pair(c, q, note_worst, &w);
+  return w.gap;
 }

@@ -42,6 +42,19 @@ double crowd_seg_nearest(const double *s, double x, double y, double *px, double
 /* Where a wall segment comes from, for messages. */
 enum { WALL_ROOM = 0, WALL_OBSTACLE = 1, WALL_EXTRA = 2 };
 
+/* An agent as binned: position, radius, index (one cache line holds two). */
+typedef struct crowd_agent {
+  double x, y, r;
+  int i;
+} crowd_agent;
+
+/* A row of agent i staged by the cell list: wall -1 - j or agent j > i. */
+typedef struct crowd_entry {
+  int j;
+  int row;                          /* 1: a row (within the margin); 0: a pattern to come */
+  double nx, ny, off;               /* the normal (e for a pair) and the row's offset */
+} crowd_entry;
+
 struct cup_crowd {
   int N;
   double *q0, *r;
@@ -60,8 +73,18 @@ struct cup_crowd {
   /* cell list over the room's box: cells of side >= 2 rmax + reach */
   double cx0, cy0, cell;
   int gx, gy;
-  int *head, *next;                 /* gx gy heads, N links */
+  int *head;                        /* gx gy: per-cell cursors */
   int *wptr, *widx;                 /* per cell: the walls within rmax + reach of it */
+  /* the agents inside binned by cell (crowd.c, bin_agents) */
+  int *cell_ptr;                    /* gx gy + 1: each cell's agents in bin[] */
+  crowd_agent *bin;                 /* N: the agents inside by cell, then the evacuated */
+  int *kcell;                       /* N: each agent's cell (-1: evacuated) */
+  double bound;                     /* a visit skips pairs whose gap is surely >= this */
+  /* a step's rows, found in the binned order, kept until they are put in
+     the index order (crowd.c, emit_rows) */
+  crowd_entry *stage;               /* stage_cap entries, nstage in use */
+  int nstage, stage_cap;
+  int *run_start, *run_len;         /* N: each agent's entries in the stage (as the lower index) */
   /* the run */
   unsigned char *out;               /* evacuated */
   double *exit_time;

@@ -149,6 +149,7 @@ static unsigned pattern_hash(const int *col, int len) {
 int cup_rowpool_init(cup_rowpool *P, int n) {
   memset(P, 0, sizeof *P);
   P->n = n;
+  P->unique = 1;
   P->ptr = calloc(1, sizeof(int));
   return P->ptr ? CUP_OK : CUP_ERR_NOMEM;
 }
@@ -170,6 +171,22 @@ static int find_slot(const cup_rowpool *P, const int *col, int len, int free_onl
   return -1;
 }
 
+/* Does slot s hold this pattern? */
+static int same_pattern(const cup_rowpool *P, int s, const int *col, int len) {
+  return s >= 0 && s < P->m && P->ptr[s + 1] - P->ptr[s] == len &&
+         !memcmp(P->col + P->ptr[s], col, sizeof(int) * (size_t)len);
+}
+
+/* The slot find_slot would give, tried first at `guess` (the slot after the
+ * previous row's: the rows of a step mostly come in the order of the last
+ * rebuild's, and the guess reads the pool in order where a hash lookup
+ * reads it at random). When no pattern is in the pool twice, a slot with
+ * the pattern is the only one, so the guess gives the same slot. */
+static int slot_for(const cup_rowpool *P, const int *col, int len, int free_only, int guess) {
+  if (P->unique && same_pattern(P, guess, col, len) && (!free_only || P->row_of[guess] < 0)) return guess;
+  return find_slot(P, col, len, free_only);
+}
+
 int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
   if (rb->m > P->rcap) {
     int *q = realloc(P->slot_of, sizeof(int) * ((size_t)rb->m + 1));
@@ -178,16 +195,16 @@ int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
     P->rcap = rb->m;
   }
   for (int s = 0; s < P->m; s++) P->row_of[s] = -1;
-  int missing = 0;
+  int missing = 0, guess = 0;
   for (int r = 0; r < rb->m; r++) {
-    int s = find_slot(P, rb->col + rb->ptr[r], rb->ptr[r + 1] - rb->ptr[r], 1);
+    int s = slot_for(P, rb->col + rb->ptr[r], rb->ptr[r + 1] - rb->ptr[r], 1, guess);
     P->slot_of[r] = s;
-    if (s >= 0) { P->row_of[s] = r; P->used[s] = step; }
+    if (s >= 0) { P->row_of[s] = r; P->used[s] = step; guess = s + 1; }
     else missing++;
   }
   for (int e = 0; e < rb->me; e++) {        /* an expected pattern keeps its slot alive */
-    int s = find_slot(P, rb->ecol + rb->eptr[e], rb->eptr[e + 1] - rb->eptr[e], 0);
-    if (s >= 0) P->used[s] = step;
+    int s = slot_for(P, rb->ecol + rb->eptr[e], rb->eptr[e + 1] - rb->eptr[e], 0, guess);
+    if (s >= 0) { P->used[s] = step; guess = s + 1; }
   }
   return missing;
 }
@@ -272,12 +289,19 @@ int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
     P->m = P->nnz = 0;
     P->ptr[0] = 0;
     for (int k = 0; k < P->hsize; k++) P->head[k] = -1;
+    P->unique = 1;
     for (int r = 0; r < rb->m; r++) {
-      append_slot(P, rb->col + rb->ptr[r], rb->ptr[r + 1] - rb->ptr[r], step, rold[r]);
+      const int *col = rb->col + rb->ptr[r];
+      int len = rb->ptr[r + 1] - rb->ptr[r];
+      if (find_slot(P, col, len, 0) >= 0) P->unique = 0;
+      append_slot(P, col, len, step, rold[r]);
       P->row_of[r] = r;
       P->slot_of[r] = r;
     }
-    for (int q = 0; q < keep; q++) append_slot(P, kcol + kptr[q], kptr[q + 1] - kptr[q], kused[q], kold[q]);
+    for (int q = 0; q < keep; q++) {
+      if (find_slot(P, kcol + kptr[q], kptr[q + 1] - kptr[q], 0) >= 0) P->unique = 0;
+      append_slot(P, kcol + kptr[q], kptr[q + 1] - kptr[q], kused[q], kold[q]);
+    }
     for (int e = 0; e < rb->me; e++) {
       const int *col = rb->ecol + rb->eptr[e];
       int len = rb->eptr[e + 1] - rb->eptr[e];

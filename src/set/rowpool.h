@@ -51,6 +51,7 @@ typedef struct cup_rowpool {
   int *slot_of;          /* per buffer row (rcap): its slot, or -1 */
   int rcap;
   int *old_of;           /* after a rebuild: per new slot, the old slot or -1 */
+  int unique;            /* no pattern holds two slots (then a slot found is the slot) */
 } cup_rowpool;
 
 int cup_rowpool_init(cup_rowpool *P, int n);
