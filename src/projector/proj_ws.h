@@ -39,7 +39,7 @@ typedef struct newton_ws {
   double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
   double *tau, *rhs;    /* slack targets of the finishing solve; a dual vector */
   double delta_peak;    /* largest Levenberg parameter of the last projection's steps */
-  int stieltjes;        /* M = C P^-1 C^T has no positive off-diagonal (diagonal P) */
+  int stieltjes;        /* M = C P^-1 C^T has no positive off-diagonal (diagonal P); -1 unknown */
 } newton_ws;
 
 struct cup_projector {
