@@ -183,26 +183,42 @@ static double round_jamb(const double *P, const double *J, const double *E, doub
   return best;
 }
 
+/* The door shrunk by c at both ends. */
+static void shrink_door(const double *door, double c, double s[4]) {
+  double t = c / hypot(door[2] - door[0], door[3] - door[1]);
+  s[0] = door[0] + t * (door[2] - door[0]);
+  s[1] = door[1] + t * (door[3] - door[1]);
+  s[2] = door[2] - t * (door[2] - door[0]);
+  s[3] = door[3] - t * (door[3] - door[1]);
+}
+
+/* The shortest way from node to the door shrunk by c (s) for a centre
+ * keeping c from the walls: straight to the nearest point of s if that line
+ * keeps c from every wall (and, with off_door, the node is not on s), else
+ * round the disc (an end of the door, c) that the line cut. Returns its
+ * length, INFINITY if there is none; u its unit direction (0 on s). */
+static double way_out(const double *node, const double *door, const double *s, double c, int off_door,
+                      const double *seg, int nseg, const double *room, int nroom, double *u) {
+  double p[2], dist = crowd_seg_nearest(s, node[0], node[1], &p[0], &p[1]);
+  int seen = !off_door || dist > 0;
+  for (int w = 0; w < nseg && seen && c > 0; w++) seen = keeps_clear(node, p, seg + 4 * w, c);
+  u[0] = dist > 0 ? (p[0] - node[0]) / dist : 0;
+  u[1] = dist > 0 ? (p[1] - node[1]) / dist : 0;
+  if (seen) return dist;
+  double u2[2], d2 = round_jamb(node, door + 2, s + 2, c, seg, nseg, room, nroom, u2);
+  dist = round_jamb(node, door, s, c, seg, nseg, room, nroom, u);
+  if (d2 < dist) { dist = d2; u[0] = u2[0]; u[1] = u2[1]; }
+  return dist;
+}
+
 /* The direction at a node whose own clearance cw (its distance to the
- * nearest wall) is less than the field's: towards the door shrunk by cw,
- * straight or round the disc (end of the door, cw). */
+ * nearest wall) is less than the field's: its way out for a centre
+ * keeping cw. */
 static void band_direction(crowd_field *F, unsigned char *exact, int k, const double *node, const double *door,
                            const double *seg, int nseg, const double *room, int nroom, double cw) {
-  double len = hypot(door[2] - door[0], door[3] - door[1]), t = cw / len, p[2], u[2];
-  double s[4] = {door[0] + t * (door[2] - door[0]), door[1] + t * (door[3] - door[1]),
-                 door[2] - t * (door[2] - door[0]), door[3] - t * (door[3] - door[1])};
-  double dist = crowd_seg_nearest(s, node[0], node[1], &p[0], &p[1]);
-  int seen = dist > 0;
-  for (int w = 0; w < nseg && seen; w++) seen = keeps_clear(node, p, seg + 4 * w, cw);
-  if (seen) {
-    u[0] = (p[0] - node[0]) / dist;
-    u[1] = (p[1] - node[1]) / dist;
-  } else {
-    double u2[2], d2 = round_jamb(node, door + 2, s + 2, cw, seg, nseg, room, nroom, u2);
-    dist = round_jamb(node, door, s, cw, seg, nseg, room, nroom, u);
-    if (d2 < dist) { dist = d2; u[0] = u2[0]; u[1] = u2[1]; }
-    if (!isfinite(dist)) return;
-  }
+  double s[4], u[2];
+  shrink_door(door, cw, s);
+  if (!isfinite(way_out(node, door, s, cw, 1, seg, nseg, room, nroom, u))) return;
   exact[k] = 1;
   F->ux[k] = (float)u[0];
   F->uy[k] = (float)u[1];
@@ -229,16 +245,15 @@ static void band_direction(crowd_field *F, unsigned char *exact, int k, const do
  * grid is too coarse for it). */
 static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double *door, const double *seg, int nseg,
                      const double *room, int nroom, double R, double c, unsigned char *exact) {
-  double h = F->h, len = hypot(door[2] - door[0], door[3] - door[1]), t = c / len;
-  double s[4] = {door[0] + t * (door[2] - door[0]), door[1] + t * (door[3] - door[1]),
-                 door[2] - t * (door[2] - door[0]), door[3] - t * (door[3] - door[1])};
+  double h = F->h, s[4];
   int seeds = 0;
+  shrink_door(door, c, s);
   R = c > 0 ? fmax(R, 1.5 * h) : 1.5 * h;
   int i0 = (int)floor((fmin(s[0], s[2]) - R - F->x0) / h), i1 = (int)ceil((fmax(s[0], s[2]) + R - F->x0) / h);
   int j0 = (int)floor((fmin(s[1], s[3]) - R - F->y0) / h), j1 = (int)ceil((fmax(s[1], s[3]) + R - F->y0) / h);
   for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < F->ny; j++)
     for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < F->nx; i++) {
-      int k = i + F->nx * j, seen = 1;
+      int k = i + F->nx * j;
       double node[2] = {F->x0 + i * h, F->y0 + j * h}, p[2], cw = c;
       double dist = crowd_seg_nearest(s, node[0], node[1], &p[0], &p[1]);
       if (dist > R || (state[k] == 3 && !(c > 0 && crowd_in_polygon(room, nroom, node[0], node[1])))) continue;
@@ -253,14 +268,8 @@ static int seed_door(crowd_field *F, unsigned char *state, heap *H, const double
         band_direction(F, exact, k, node, door, seg, nseg, room, nroom, cw);
         continue;
       }
-      for (int w = 0; w < nseg && seen && c > 0; w++) seen = keeps_clear(node, p, seg + 4 * w, c);
-      double u[2] = {p[0] - node[0], p[1] - node[1]}, nrm = hypot(u[0], u[1]);
-      if (nrm > 0) { u[0] /= nrm; u[1] /= nrm; }
-      if (!seen) {
-        double u2[2], d2 = round_jamb(node, door + 2, s + 2, c, seg, nseg, room, nroom, u2);
-        dist = round_jamb(node, door, s, c, seg, nseg, room, nroom, u);
-        if (d2 < dist) { dist = d2; u[0] = u2[0]; u[1] = u2[1]; }
-      }
+      double u[2];
+      dist = way_out(node, door, s, c, 0, seg, nseg, room, nroom, u);
       if (!(dist <= R)) continue;
       seeds += dist <= 1.5 * h;
       if (!(dist < F->D[k])) continue;
