@@ -41,6 +41,13 @@ static int cmp_double(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* A number for JSON, which has no inf or nan: those are null. */
+static const char *json_num(char buf[32], double v) {
+  if (!isfinite(v)) return "null";
+  snprintf(buf, 32, "%.3e", v);
+  return buf;
+}
+
 static double median(double *v, int n) {
   qsort(v, (size_t)n, sizeof *v, cmp_double);
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
@@ -270,15 +277,17 @@ static void run_sequence(problem *pb, const char *tok, int method, int warm, int
   fprintf(stderr, "%-16s %-6s %-5s %10.3g s %8.1f %6.1f %4ld/%-3ld %10.2e %9.3f %9ld\n", pb->name, tok,
           warm ? "warm" : "cold", med, (double)iters / proj, (double)facts / proj, certified, proj,
           pb->ref ? maxerr : NAN, set_setup + setup, peak);
+  char je[32], jt[32], jr[32];   /* a bound never certified is inf: null in JSON */
   printf("{\"bench\": \"projector\", \"problem\": \"%s\", \"solver\": \"catchup-%s\", "
          "\"mode\": \"%s\", \"n\": %d, \"m\": %d, \"K\": %d, \"reps\": %d, "
          "\"median_s_per_projection\": %.6g, \"iterations_mean\": %.3f, \"factorizations_mean\": %.3f, "
-         "\"certified\": %ld, \"eps_rel\": %.3g, \"eta_rel\": %.3g, \"max_eps_cert_rel\": %.3e, "
-         "\"max_eta_cert_rel\": %.3e, \"max_rel_err\": %.3e, \"setup_s\": %.4g, \"polyset_setup_s\": %.4g, "
+         "\"certified\": %ld, \"eps_rel\": %.3g, \"eta_rel\": %.3g, \"max_eps_cert_rel\": %s, "
+         "\"max_eta_cert_rel\": %s, \"max_rel_err\": %s, \"setup_s\": %.4g, \"polyset_setup_s\": %.4g, "
          "\"peak_rss_kb\": %ld, \"solver_rss_kb\": %ld}\n",
          pb->name, tok, warm ? "warm" : "cold", pb->n, pb->m, pb->K, reps, med,
-         (double)iters / proj, (double)facts / proj, certified, eps_rel, eta_rel, eps_max, eta_max,
-         pb->ref ? maxerr : -1.0, setup, set_setup, peak, peak > base_kb ? peak - base_kb : 0);
+         (double)iters / proj, (double)facts / proj, certified, eps_rel, eta_rel, json_num(je, eps_max),
+         json_num(jt, eta_max), json_num(jr, pb->ref ? maxerr : -1.0), setup, set_setup, peak,
+         peak > base_kb ? peak - base_kb : 0);
   cup_projector_free(&pr);
   cup_polyset_free(&pb->set);
   free(z); free(tmp); free(times);

@@ -356,8 +356,10 @@ def projector_section(outdir, lines, old=""):
         peer = (f"{best['solver']} {best['time_per_proj_s']:.3g} s (err {best['rel_err']:.1e})"
                 if best else "none reached 1e-8" if peers else "not run")
         ratio = f"{best['time_per_proj_s'] / t:.1f}x" if best else "—"
-        err = r.get("max_rel_err", -1)
-        cert = (f"{r['max_eps_cert_rel']:.1e}, {r['max_eta_cert_rel']:.1e}"
+        err = r.get("max_rel_err")
+        err = -1 if err is None else err          # null: no reference, or never certified
+        cert = (", ".join("inf" if r[k] is None else f"{r[k]:.1e}"
+                          for k in ("max_eps_cert_rel", "max_eta_cert_rel"))
                 if "max_eps_cert_rel" in r else "—")
         lines.append(f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | {cert} | "
                      f"{err:.1e} | {peer} | {ratio} |" if err >= 0 else
