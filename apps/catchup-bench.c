@@ -15,8 +15,12 @@
  * resident set from the set-up on (VmHWM after malloc_trim and
  * /proc/self/clear_refs), and that minus its size before the set-up and
  * minus the library code paged in on first use (the projector's own data,
- * beside the QP peers' in scripts/bench_qp_peers.py). */
-#define _POSIX_C_SOURCE 200809L
+ * beside the QP peers' in scripts/bench_qp_peers.py). With the heapcount
+ * shim preloaded (LD_PRELOAD=build/apps/libcatchup_heapcount.so, as
+ * scripts/bench-projector does for both harnesses) it also reports the most
+ * heap bytes the set-up and the projections held at once: resident pages are
+ * too coarse a measure for sets of a few rows. */
+#define _GNU_SOURCE   /* RTLD_DEFAULT */
 #include <float.h>
 #include <malloc.h>
 #include <math.h>
@@ -27,6 +31,7 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
+#include <dlfcn.h>
 #include <cholmod.h>
 #include "catchup.h"
 
@@ -155,42 +160,45 @@ static void reset_peak(void) {
   if (f) { fputs("5", f); fclose(f); }
 }
 
-/* VmHWM, kB: the peak resident set since reset_peak (getrusage if unreadable). */
-static long peak_kb(void) {
+/* Restart the heapcount shim's record, if it is preloaded; after the last
+ * file read before the measure (a FILE and its buffer are 4.5 kB). */
+static void reset_heap(void) {
+  void (*reset)(void) = (void (*)(void))dlsym(RTLD_DEFAULT, "cup_heapcount_reset");
+  if (reset) reset();
+}
+
+/* Heap bytes held at most since reset_heap, above what was held then: -1
+ * without the heapcount shim. */
+static long heap_peak_bytes(void) {
+  long (*peak)(void) = (long (*)(void))dlsym(RTLD_DEFAULT, "cup_heapcount_peak");
+  return peak ? peak() : -1;
+}
+
+/* The resident set's figures, kB, from one read of /proc/self/status: its
+ * peak since reset_peak (VmHWM), its size now (VmRSS) and the part mapped
+ * from files (RssFile, the libraries' code among them). One read, so that the
+ * code the reading itself pages in falls on one side of it, not between two
+ * figures (two reads counted libc's parsing code as the solver's data). */
+typedef struct { long hwm, rss, file; } rss_figures;
+
+static rss_figures rss_now(void) {
+  rss_figures r = {-1, 0, 0};
+  char buf[4096];
   FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (!strncmp(line, "VmHWM:", 6)) kb = atol(line + 6);
+  size_t len = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
   if (f) fclose(f);
-  if (kb < 0) {
+  buf[len] = 0;
+  for (char *line = buf; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+    if (!strncmp(line, "VmHWM:", 6)) r.hwm = atol(line + 6);
+    else if (!strncmp(line, "VmRSS:", 6)) r.rss = atol(line + 6);
+    else if (!strncmp(line, "RssFile:", 8)) r.file = atol(line + 8);
+  }
+  if (r.hwm < 0) {          /* no /proc: the peak since the process began */
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
-    kb = ru.ru_maxrss;
+    r.hwm = ru.ru_maxrss;
   }
-  return kb;
-}
-
-/* RssFile, kB: resident pages mapped from files, the libraries' code among them. */
-static long rss_file_kb(void) {
-  FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = 0;
-  while (f && fgets(line, sizeof line, f))
-    if (!strncmp(line, "RssFile:", 8)) kb = atol(line + 8);
-  if (f) fclose(f);
-  return kb;
-}
-
-/* Resident set size now, kB (/proc/self/statm). */
-static long resident_kb(void) {
-  FILE *f = fopen("/proc/self/statm", "r");
-  long size = 0, res = 0;
-  if (f) {
-    if (fscanf(f, "%ld %ld", &size, &res) != 2) res = 0;
-    fclose(f);
-  }
-  return res * (sysconf(_SC_PAGESIZE) / 1024);
+  return r;
 }
 
 static void free_problem(problem *pb, cholmod_common *cm) {
@@ -214,7 +222,8 @@ static double rel_error(const problem *pb, const double *z, int k, double *tmp) 
 static void run_sequence(problem *pb, const char *tok, int method, int warm, int reps,
                          double eps_rel, double eta_rel, int verbose, int updates) {
   reset_peak();
-  long base_kb = resident_kb(), code_kb = rss_file_kb();
+  rss_figures before = rss_now();
+  reset_heap();
   double set_setup = make_set(pb);
   double *z = malloc(sizeof(double) * (size_t)pb->n), *tmp = malloc(sizeof(double) * (size_t)pb->n);
   double *times = malloc(sizeof(double) * (size_t)reps);
@@ -271,23 +280,28 @@ static void run_sequence(problem *pb, const char *tok, int method, int warm, int
     eta_max = fmax(eta_max, info.eta_cert / fmax(info.scale, DBL_MIN));
     if (pb->ref) maxerr = fmax(maxerr, rel_error(pb, z, k, tmp));
   }
-  long peak = peak_kb();
-  base_kb += rss_file_kb() - code_kb;   /* library code paged in on first use is not data */
+  long heap = heap_peak_bytes();
+  rss_figures after = rss_now();
+  long peak = after.hwm;
+  /* library code paged in on first use is not data */
+  long base_kb = before.rss + (after.file - before.file);
   double med = median(times, reps);
   fprintf(stderr, "%-16s %-6s %-5s %10.3g s %8.1f %6.1f %4ld/%-3ld %10.2e %9.3f %9ld\n", pb->name, tok,
           warm ? "warm" : "cold", med, (double)iters / proj, (double)facts / proj, certified, proj,
           pb->ref ? maxerr : NAN, set_setup + setup, peak);
   char je[32], jt[32], jr[32];   /* a bound never certified is inf: null in JSON */
+  char jh[32] = "null";          /* no heap figure without the shim */
+  if (heap >= 0) snprintf(jh, sizeof jh, "%ld", heap);
   printf("{\"bench\": \"projector\", \"problem\": \"%s\", \"solver\": \"catchup-%s\", "
          "\"mode\": \"%s\", \"n\": %d, \"m\": %d, \"K\": %d, \"reps\": %d, "
          "\"median_s_per_projection\": %.6g, \"iterations_mean\": %.3f, \"factorizations_mean\": %.3f, "
          "\"certified\": %ld, \"eps_rel\": %.3g, \"eta_rel\": %.3g, \"max_eps_cert_rel\": %s, "
          "\"max_eta_cert_rel\": %s, \"max_rel_err\": %s, \"setup_s\": %.4g, \"polyset_setup_s\": %.4g, "
-         "\"peak_rss_kb\": %ld, \"solver_rss_kb\": %ld}\n",
+         "\"peak_rss_kb\": %ld, \"solver_rss_kb\": %ld, \"solver_heap_bytes\": %s}\n",
          pb->name, tok, warm ? "warm" : "cold", pb->n, pb->m, pb->K, reps, med,
          (double)iters / proj, (double)facts / proj, certified, eps_rel, eta_rel, json_num(je, eps_max),
          json_num(jt, eta_max), json_num(jr, pb->ref ? maxerr : -1.0), setup, set_setup, peak,
-         peak > base_kb ? peak - base_kb : 0);
+         peak > base_kb ? peak - base_kb : 0, jh);
   cup_projector_free(&pr);
   cup_polyset_free(&pb->set);
   free(z); free(tmp); free(times);

@@ -39,7 +39,12 @@ peak resident set after the run (VmHWM): peak_rss_kb, and solver_rss_kb = that
 peak minus its resident size after loading and minus the library code paged
 in on first use (the growth of RssFile), i.e. the solver's own data. (A
 forked child would reuse the parent's freed heap and hide the solver's
-allocations.) --memory-only PEERS.jsonl does this alone for an earlier run.
+allocations.) The resident figures come from one read of /proc/self/status
+each. With --heapcount SO (apps/heapcount.c, preloaded) it also reports
+solver_heap_bytes: the most bytes malloc held at once during the run above
+what it held before (catchup-bench reports the same with the same shim);
+pages are too coarse for sets of a few rows. --memory-only PEERS.jsonl does
+this alone for an earlier run.
 
 Accuracy: rel_err = max_k ||y_k - ref_k||_P / max(||ref_k||_P, ||x_k||_P, 1e-300).
 "At equal accuracy": the solver's tolerances walk down a ladder (default
@@ -515,12 +520,6 @@ def iter_sequence(prob, solver, level, mode, deadline):
         yield rec
 
 
-def resident_kb():
-    """resident set size of this process now (kB), from /proc/self/statm"""
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * (os.sysconf("SC_PAGE_SIZE") // 1024)
-
-
 def reset_peak():
     """restart the kernel's peak-RSS record (VmHWM) at the current size, so that
     the peak measured later is the solver's, not the file loading's; the C
@@ -539,45 +538,62 @@ def reset_peak():
         return False
 
 
-def rss_file_kb():
-    """RssFile (kB): resident pages mapped from files, the libraries' code among them"""
+def rss_now():
+    """(VmHWM, VmRSS, RssFile) in kB from one read of /proc/self/status: the
+    peak resident set since reset_peak(), the resident set now and its part
+    mapped from files (the libraries' code among them). One read, so that code
+    paged in by the reading falls on one side of it, not between two figures
+    (catchup-bench does the same)."""
+    fig = {}
     with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("RssFile:"):
-                return int(line.split()[1])
-    return 0
+        text = f.read()
+    for line in text.splitlines():
+        key, _, val = line.partition(":")
+        if key in ("VmHWM", "VmRSS", "RssFile"):
+            fig[key] = int(val.split()[0])
+    if "VmHWM" not in fig:
+        import resource
+        fig["VmHWM"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return fig["VmHWM"], fig.get("VmRSS", 0), fig.get("RssFile", 0)
 
 
-def peak_kb():
-    """VmHWM (kB): the peak resident set since reset_peak()"""
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1])
-    import resource
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+def heapcount(name):
+    """the heapcount shim's function `name` (apps/heapcount.c, preloaded by
+    --heapcount), or None"""
+    import ctypes
+    try:
+        fn = getattr(ctypes.CDLL(None), name)
+    except (OSError, AttributeError):
+        return None
+    fn.restype = ctypes.c_long
+    return fn
 
 
 def _memory_main(conn, path, solver_name, args, level, mode, npts):
     """A fresh interpreter (spawned, not forked: a forked child reuses the
     parent's freed heap and hides the solver's allocations): load the problem,
     note the resident size, run the first npts points of the sequence, report
-    (resident before, peak)."""
+    (resident before, peak, heap bytes held at most or None)."""
     import gc
     try:
         prob = Problem(path, npts)
         solver = SOLVERS[solver_name](args)
         solver.prepare(prob)
         gc.collect()
+        heap_reset, heap_peak = heapcount("cup_heapcount_reset"), heapcount("cup_heapcount_peak")
         reset_peak()
-        base, code = resident_kb(), rss_file_kb()
+        _, base, code = rss_now()
+        if heap_reset:   # after the last file read before the run (its 8 kB buffer)
+            heap_reset()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             for _ in iter_sequence(prob, solver, level, mode,
                                    time.perf_counter() + args.memory_seconds):
                 pass
+        heap = heap_peak() if heap_peak else None
+        peak, _, code_after = rss_now()
         # library code paged in on first use is not the solver's data
-        conn.send(("rss", (base + rss_file_kb() - code, peak_kb())))
+        conn.send(("rss", (base + code_after - code, peak, heap)))
     except BaseException as e:
         conn.send(("error", f"{type(e).__name__}: {e}"))
     finally:
@@ -585,14 +601,25 @@ def _memory_main(conn, path, solver_name, args, level, mode, npts):
 
 
 def measure_memory(prob, solver_name, args, level, mode):
-    """(resident kB before the solver, peak kB) of one sequence in a fresh
-    process, on the first --memory-points points, or None."""
+    """(resident kB before the solver, peak kB, heap bytes or None) of one
+    sequence in a fresh process, on the first --memory-points points, or None;
+    with --heapcount, that process has the shim preloaded."""
     import multiprocessing as mp
     ctx = mp.get_context("spawn")
     rd, wr = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_memory_main, args=(wr, prob.path, solver_name, args, level, mode,
                                                   min(prob.K, args.memory_points)))
-    proc.start()
+    preload = os.environ.get("LD_PRELOAD")
+    if args.heapcount:
+        os.environ["LD_PRELOAD"] = os.path.abspath(args.heapcount)
+    try:
+        proc.start()
+    finally:
+        if args.heapcount:
+            if preload is None:
+                del os.environ["LD_PRELOAD"]
+            else:
+                os.environ["LD_PRELOAD"] = preload
     wr.close()
     kind, val = "error", "no answer within --memory-seconds + 60 s: killed"
     try:
@@ -721,6 +748,8 @@ def add_memory(out, prob, solver_name, args, level, mode):
     if rss is not None:
         out["peak_rss_kb"] = int(rss[1])
         out["solver_rss_kb"] = int(max(rss[1] - rss[0], 0))
+        if rss[2] is not None:
+            out["solver_heap_bytes"] = int(rss[2])
         out["rss_meaning"] = (f"a fresh process ran the first {min(prob.K, args.memory_points)} "
                               "points at this setting: its peak resident set (peak_rss_kb) and "
                               "that minus its size after loading the problem (solver_rss_kb)")
@@ -738,7 +767,7 @@ def memory_only(path, args):
                 dirs = [p for p in args.problems if os.path.basename(p.rstrip("/")) == key]
                 probs[key] = Problem(dirs[0]) if dirs else None
             if probs[key] is not None:
-                for k in ("peak_rss_kb", "solver_rss_kb", "rss_meaning"):
+                for k in ("peak_rss_kb", "solver_rss_kb", "solver_heap_bytes", "rss_meaning"):
                     d.pop(k, None)
                 add_memory(d, probs[key], d["solver"], args, d["setting"], d["mode"])
                 log(f"[{key}/{d['solver']}/{d['mode']}] memory {d.get('solver_rss_kb')} kB")
@@ -1119,6 +1148,9 @@ def main():
     ap.add_argument("--memory-seconds", type=float, default=120.0,
                     help="time limit of that run (solvers with a time limit get it; "
                          "the others are killed a minute after it)")
+    ap.add_argument("--heapcount", metavar="SO",
+                    help="preload this heapcount shim (build/apps/libcatchup_heapcount.so) into "
+                         "the memory probe: solver_heap_bytes, the most heap bytes held at once")
     ap.add_argument("--memory-only", metavar="PEERS_JSONL",
                     help="measure only the memory of the sequences an earlier run reported "
                          "(the problem directories are the positional arguments)")
