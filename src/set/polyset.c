@@ -57,7 +57,7 @@ int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
   if (!st) st = metric_setup(K, P, errmsg);
   K->solve_amp = 1;
   if (!st && K->pkind == CUP_METRIC_SPARSE) {
-    double r = cholmod_rcond(K->LP, &K->cm);
+    double r = cholmod_rcond(K->LP, K->cm);
     K->solve_amp = r > 0 ? 1 / r : 1e16;
   }
   if (!st) st = row_norms_and_lipschitz(K, NULL, errmsg);
@@ -75,9 +75,10 @@ void cup_polyset_free(cup_polyset **Kp) {
   cup_sparse_free(&K->C);
   cup_sparse_free(&K->Ct);
   cup_sparse_free(&K->Pfull);
-  if (K->pkind == CUP_METRIC_SPARSE) {   /* started: holds workspace even if analysis failed */
-    if (K->LP) cholmod_free_factor(&K->LP, &K->cm);
-    cholmod_finish(&K->cm);
+  if (K->cm) {   /* started: holds workspace even if analysis failed */
+    if (K->LP) cholmod_free_factor(&K->LP, K->cm);
+    cholmod_finish(K->cm);
+    free(K->cm);
   }
   free(K->g0); free(K->pd); free(K->pdinv); free(K->rownorm); free(K->rownnz); free(K->rowgam);
   free(K->Md); free(K->Bt); free(K->rdir); free(K->Crdir);
@@ -215,9 +216,15 @@ static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg) {
     return st;
   }
   K->pkind = CUP_METRIC_SPARSE;
-  if (cup_cholmod_start(&K->cm)) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD start failed");
-  K->cm.final_ll = 1;               /* L L^T so that ||L^-1 Pi c|| = ||c||_{P^-1} */
-  K->cm.supernodal = CHOLMOD_SIMPLICIAL;  /* solved by cup_simplicial_solve, no allocation */
+  K->cm = malloc(sizeof *K->cm);
+  if (!K->cm) return cup_fail(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+  if (cup_cholmod_start(K->cm)) {
+    free(K->cm);
+    K->cm = NULL;
+    return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD start failed");
+  }
+  K->cm->final_ll = 1;               /* L L^T so that ||L^-1 Pi c|| = ||c||_{P^-1} */
+  K->cm->supernodal = CHOLMOD_SIMPLICIAL;  /* solved by cup_simplicial_solve, no allocation */
   cholmod_sparse A = {0};
   A.nrow = A.ncol = (size_t)K->n;
   A.nzmax = (size_t)K->Pfull.nnz;
@@ -225,17 +232,17 @@ static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg) {
   A.stype = 1;                      /* use the upper triangle of the full matrix */
   A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
   A.sorted = 1; A.packed = 1;
-  K->LP = cholmod_analyze(&A, &K->cm);
-  if (!K->LP) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD analysis failed (status %d)", K->cm.status);
-  cholmod_factorize(&A, K->LP, &K->cm);
-  if (K->cm.status == CHOLMOD_NOT_POSDEF) {
+  K->LP = cholmod_analyze(&A, K->cm);
+  if (!K->LP) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD analysis failed (status %d)", K->cm->status);
+  cholmod_factorize(&A, K->LP, K->cm);
+  if (K->cm->status == CHOLMOD_NOT_POSDEF) {
     int bad = (int)K->LP->minor;
     int col = K->LP->Perm ? ((int *)K->LP->Perm)[bad] : bad;
     return cup_fail(errmsg, CUP_ERR_NOT_SPD,
                     "P is not positive definite: the Cholesky factorization breaks down at column %d", col);
   }
-  if (K->cm.status < 0)
-    return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD factorization failed (status %d)", K->cm.status);
+  if (K->cm->status < 0)
+    return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD factorization failed (status %d)", K->cm->status);
   return CUP_OK;
 }
 
@@ -369,9 +376,9 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
     Ct.p = K->Ct.p; Ct.i = K->Ct.i; Ct.x = K->Ct.x;
     Ct.stype = 0; Ct.itype = CHOLMOD_INT; Ct.xtype = CHOLMOD_REAL;
     Ct.dtype = CHOLMOD_DOUBLE; Ct.sorted = 1; Ct.packed = 1;
-    cholmod_sparse *PC = cholmod_spsolve(CHOLMOD_P, K->LP, &Ct, &K->cm);
-    cholmod_sparse *W = PC ? cholmod_spsolve(CHOLMOD_L, K->LP, PC, &K->cm) : NULL;
-    cholmod_free_sparse(&PC, &K->cm);
+    cholmod_sparse *PC = cholmod_spsolve(CHOLMOD_P, K->LP, &Ct, K->cm);
+    cholmod_sparse *W = PC ? cholmod_spsolve(CHOLMOD_L, K->LP, PC, K->cm) : NULL;
+    cholmod_free_sparse(&PC, K->cm);
     if (!W) {
       if (!work) free(v);
       return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed");
@@ -384,7 +391,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
       K->rownorm[i] = sqrt(s);
     }
     K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp);
-    cholmod_free_sparse(&W, &K->cm);
+    cholmod_free_sparse(&W, K->cm);
   }
   if (!work) free(v);
   return CUP_OK;
@@ -409,10 +416,10 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
     cholmod_dense B = {0};
     B.nrow = (size_t)n; B.ncol = (size_t)m; B.nzmax = (size_t)n * m; B.d = (size_t)n;
     B.x = K->Bt; B.xtype = CHOLMOD_REAL; B.dtype = CHOLMOD_DOUBLE;
-    cholmod_dense *X = cholmod_solve(CHOLMOD_A, K->LP, &B, &K->cm);
+    cholmod_dense *X = cholmod_solve(CHOLMOD_A, K->LP, &B, K->cm);
     if (!X) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve failed");
     memcpy(K->Bt, X->x, sizeof(double) * (size_t)n * m);
-    cholmod_free_dense(&X, &K->cm);
+    cholmod_free_dense(&X, K->cm);
   } else {
     for (int i = 0; i < m; i++) cup_metric_solve_diag(K, K->Bt + (size_t)i * n);
   }

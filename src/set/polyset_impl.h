@@ -19,7 +19,7 @@ struct cup_polyset {
   int pkind;           /* CUP_METRIC_* after simplification */
   double *pd, *pdinv;  /* IDENTITY/DIAGONAL: P's diagonal and its inverse */
   cup_sparse Pfull;    /* SPARSE: both triangles, for products P v */
-  cholmod_common cm;   /* SPARSE: owns LP; used only at creation and free */
+  cholmod_common *cm;  /* SPARSE only (2.9 kB): owns LP; used only at creation and free */
   cholmod_factor *LP;  /* SPARSE: L L^T = Pi P Pi^T (read-only after creation) */
   double *rownorm;     /* ||c_i||_{P^-1} = sqrt(M_ii) */
   int *rownnz;         /* nonzeros per row of C */
