@@ -46,6 +46,8 @@ struct cup_projector {
   const cup_polyset *K;
   cup_projector_options opt;
   int n, m;
+  void *block;          /* every vector below, in one allocation (projector.c: lay_out) */
+  size_t block_bytes;
   double *g;            /* current offset */
   double gscale;        /* max_i |g_i| / ||c_i||_{P^-1} */
   int empty_row;        /* a zero row of C with g_i < 0 (K empty), or -1 */
