@@ -337,6 +337,13 @@ def mb(kb):
     return f"{kb / 1024:.0f} MB" if kb >= 10240 else f"{kb / 1024:.1f} MB"
 
 
+def heap(b):
+    """bytes as kB below 10 MB (the circuit's sets hold a few kB), else MB"""
+    if b < 10240:
+        return f"{b / 1024:.1f} kB"
+    return f"{b / 1024:.0f} kB" if b < 10 << 20 else f"{b / 1048576:.0f} MB"
+
+
 def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
     peers = [p for p in load(os.path.join(outdir, "peers.jsonl")) if p.get("problem")]
@@ -397,6 +404,23 @@ def projector_section(outdir, lines, old=""):
             own = mb(r["solver_rss_kb"]) if "solver_rss_kb" in r else "—"
             lines.append(f"| {r['problem']} | {r['mode']} | {setup:.3g} s | {own} | " + " | ".join(cells) + " |")
         lines.append("")
+        if any(r.get("solver_heap_bytes") is not None for r in auto):
+            lines.append("Heap held at most, bytes by the heapcount shim (`apps/heapcount.c`, preloaded "
+                         "into both harnesses): the most bytes malloc held at once during the run above "
+                         "what it held before the set-up, resident pages being too coarse for a set of "
+                         "a few rows; the peers' include what their Python wrappers allocate through "
+                         "malloc (numpy's buffers), not Python's own small objects:\n")
+            lines.append("| problem | mode | catchup | " + " | ".join(names) + " |")
+            lines.append("|---|---|---:|" + "---:|" * len(names))
+            for r in auto:
+                cells = []
+                for n in names:
+                    q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
+                         and p["solver"] == n and p.get("solver_heap_bytes") is not None]
+                    cells.append(heap(q[0]["solver_heap_bytes"]) if q else "—")
+                own = heap(r["solver_heap_bytes"]) if r.get("solver_heap_bytes") is not None else "—"
+                lines.append(f"| {r['problem']} | {r['mode']} | {own} | " + " | ".join(cells) + " |")
+            lines.append("")
     others = [r for r in cat if r.get("solver") in ("catchup-pg", "catchup-fista")]
     if others:
         lines.append("catchup's first-order methods on the small sets:\n")
