@@ -338,10 +338,10 @@ def mb(kb):
 
 
 def heap(b):
-    """bytes as kB below 10 MB (the circuit's sets hold a few kB), else MB"""
-    if b < 10240:
-        return f"{b / 1024:.1f} kB"
-    return f"{b / 1024:.0f} kB" if b < 10 << 20 else f"{b / 1048576:.0f} MB"
+    """bytes in kB below 1 MB (the circuit's sets hold a few kB), else in MB"""
+    if b < 1 << 20:
+        return f"{b / 1024:.1f} kB" if b < 10240 else f"{b / 1024:.0f} kB"
+    return f"{b / 1048576:.1f} MB" if b < 10 << 20 else f"{b / 1048576:.0f} MB"
 
 
 def projector_section(outdir, lines, old=""):
