@@ -344,6 +344,17 @@ def heap(b):
     return f"{b / 1048576:.1f} MB" if b < 10 << 20 else f"{b / 1048576:.0f} MB"
 
 
+def peer_row(peers, r, names, cell, key=None, missing="—"):
+    """one cell per peer name for catchup's row r: cell(record), or `missing`
+    when that peer has no record for the row (or none with `key`)"""
+    cells = []
+    for n in names:
+        q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
+             and p["solver"] == n and (key is None or p.get(key) is not None)]
+        cells.append(cell(q[0]) if q else missing)
+    return " | ".join(cells)
+
+
 def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
     peers = [p for p in load(os.path.join(outdir, "peers.jsonl")) if p.get("problem")]
@@ -380,12 +391,8 @@ def projector_section(outdir, lines, old=""):
         lines.append("| problem | mode | " + " | ".join(names) + " |")
         lines.append("|---|---|" + "---:|" * len(names))
         for r in auto:
-            cells = []
-            for n in names:
-                q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
-                     and p["solver"] == n]
-                cells.append(peer_cell(q[0] if q else None))
-            lines.append(f"| {r['problem']} | {r['mode']} | " + " | ".join(cells) + " |")
+            cells = peer_row(peers, r, names, peer_cell, missing="not run")
+            lines.append(f"| {r['problem']} | {r['mode']} | {cells} |")
         lines.append("")
         lines.append("Peak memory, each (problem, solver, mode) in its own process: the process's "
                      "peak resident set less its size before the solver's set-up (the problem data "
@@ -394,15 +401,11 @@ def projector_section(outdir, lines, old=""):
         lines.append("| problem | mode | catchup set-up | catchup | " + " | ".join(names) + " |")
         lines.append("|---|---|---:|---:|" + "---:|" * len(names))
         for r in auto:
-            cells = []
-            for n in names:
-                q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
-                     and p["solver"] == n and "solver_rss_kb" in p]
-                cells.append(mb(q[0]["solver_rss_kb"]) + ("" if q[0].get("met") else " (not at 1e-8)")
-                             if q else "—")
+            cells = peer_row(peers, r, names, key="solver_rss_kb",
+                             cell=lambda p: mb(p["solver_rss_kb"]) + ("" if p.get("met") else " (not at 1e-8)"))
             setup = r.get("setup_s", 0) + r.get("polyset_setup_s", 0)
             own = mb(r["solver_rss_kb"]) if "solver_rss_kb" in r else "—"
-            lines.append(f"| {r['problem']} | {r['mode']} | {setup:.3g} s | {own} | " + " | ".join(cells) + " |")
+            lines.append(f"| {r['problem']} | {r['mode']} | {setup:.3g} s | {own} | {cells} |")
         lines.append("")
         if any(r.get("solver_heap_bytes") is not None for r in auto):
             lines.append("Heap held at most, bytes by the heapcount shim (`apps/heapcount.c`, preloaded "
@@ -413,13 +416,10 @@ def projector_section(outdir, lines, old=""):
             lines.append("| problem | mode | catchup | " + " | ".join(names) + " |")
             lines.append("|---|---|---:|" + "---:|" * len(names))
             for r in auto:
-                cells = []
-                for n in names:
-                    q = [p for p in peers if p["problem"] == r["problem"] and p.get("mode") == r["mode"]
-                         and p["solver"] == n and p.get("solver_heap_bytes") is not None]
-                    cells.append(heap(q[0]["solver_heap_bytes"]) if q else "—")
+                cells = peer_row(peers, r, names, key="solver_heap_bytes",
+                                 cell=lambda p: heap(p["solver_heap_bytes"]))
                 own = heap(r["solver_heap_bytes"]) if r.get("solver_heap_bytes") is not None else "—"
-                lines.append(f"| {r['problem']} | {r['mode']} | {own} | " + " | ".join(cells) + " |")
+                lines.append(f"| {r['problem']} | {r['mode']} | {own} | {cells} |")
             lines.append("")
     others = [r for r in cat if r.get("solver") in ("catchup-pg", "catchup-fista")]
     if others:
