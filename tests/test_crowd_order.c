@@ -117,6 +117,60 @@ static void test_order_invisible(void **state) {
   free(X1);
 }
 
+/* Exit times and positions come in the user's numbering, whatever the
+ * crowd's: with the user's agents shuffled against space, each agent's exit
+ * time is the first t_k at which its own reported centre is past the door's
+ * wall (x > 10), NaN if none. */
+static void test_exits_match_positions(void **state) {
+  (void)state;
+  int shuf[N];
+  rng_t g = {17};
+  for (int k = 0; k < N; k++) shuf[k] = k;
+  for (int k = N - 1; k > 0; k--) {
+    int j = (int)(rng_unif(&g) * (k + 1)), t = shuf[k];
+    shuf[k] = shuf[j];
+    shuf[j] = t;
+  }
+  double *X = malloc(sizeof(double) * (size_t)(STEPS + 1) * 2 * N), e[N];
+  run(shuf, X, e);
+  int left = 0;
+  for (int a = 0; a < N; a++) {
+    int first = -1;
+    for (int k = 0; k <= STEPS && first < 0; k++)
+      if (X[(size_t)k * 2 * N + 2 * a] > 10) first = k;
+    if (first < 0) assert_true(isnan(e[a]));
+    else { assert_true(fabs(e[a] - 0.05 * first) < 1e-12); left++; }
+  }
+  assert_true(left > N / 8);
+  free(X);
+}
+
+/* An input error names the user's agents: two agents overlapping by 0.1 in
+ * a shuffled grid are "agents 7 and 31" whichever lies first in space. */
+static void test_overlap_names_user_index(void **state) {
+  (void)state;
+  enum { M = 40 };
+  double q0[2 * M], r[M];
+  for (int side = 0; side < 2; side++) {
+    for (int i = 0; i < M; i++) {
+      int cell = (i * 17 + 5) % M;           /* the user's numbering, scattered over the grid */
+      q0[2 * i] = 1.5 + (cell % 8);
+      q0[2 * i + 1] = 1.5 + (cell / 8);
+      r[i] = 0.25;
+    }
+    q0[2 * 31] = q0[2 * 7] + (side ? 0.4 : -0.4);   /* 0.1 of overlap, on either side of agent 7 */
+    q0[2 * 31 + 1] = q0[2 * 7 + 1];
+    cup_crowd_desc d = {.agents = M, .q0 = q0, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                        .door = door, .speed = 1.2};
+    char err[CUP_ERRMSG_LEN] = "";
+    cup_crowd *c = NULL;
+    assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_ERR_ARG);
+    assert_null(c);
+    printf("%s\n", err);
+    assert_non_null(strstr(err, "agents 7 and 31 overlap by 0.1"));
+  }
+}
+
 /* A step's rows and desired velocity allocate nothing once the pool knows
  * the patterns: the rows (cup_setproj_move at the same state) and the walk
  * (the process's f_integral), counted by the interposed allocator. */
@@ -271,6 +325,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_rows_against_all_pairs),
     cmocka_unit_test(test_order_invisible),
+    cmocka_unit_test(test_exits_match_positions),
+    cmocka_unit_test(test_overlap_names_user_index),
     cmocka_unit_test(test_step_allocates_nothing),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -35,6 +35,7 @@ static int cmp_key(const void *a, const void *b) {
 }
 
 int crowd_order_init(cup_crowd *c, const double *q, char *errmsg) {
+  c->order_gen = 0;
   int ncell = c->gx * c->gy, n = 1;
   while (n < c->gx || n < c->gy) n *= 2;
   c->ord = malloc(sizeof(int) * (size_t)c->N);
@@ -82,11 +83,14 @@ void crowd_renumber(cup_crowd *c, const double *q) {
       for (; b > start[k] && before(q, i, c->ord[b - 1]); b--) c->ord[b] = c->ord[b - 1];
       c->ord[b] = i;
     }
+  int same = c->order_gen > 0;               /* the numbering it had (rank is still the old one) */
+  for (int k = 0; k < c->N && same; k++) same = c->rank[c->ord[k]] == k;
+  c->far_base = -1;
+  if (same) return;                           /* no new generation: the pool stays as it is */
   for (int k = 0; k < c->N; k++) {
     c->rank[c->ord[k]] = k;
     c->colmap[2 * k] = 2 * c->ord[k];
     c->colmap[2 * k + 1] = 2 * c->ord[k] + 1;
   }
   c->order_gen++;
-  c->far_base = -1;
 }
