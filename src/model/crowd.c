@@ -115,10 +115,10 @@ static const char *wall_name(const cup_crowd *c, int k, char *buf, size_t size) 
 
 /* The agents inside sorted by cell (row-major), contiguous per cell and in
  * increasing internal index within one (a counting sort), with their
- * positions and radii copied in that order; the evacuated agents follow. An agent's
- * neighbours are then three runs of memory (three rows of cells) instead of
- * a linked list through the whole crowd: at 10^5 agents the list's every
- * link was a cache miss. */
+ * positions and radii copied in that order; the evacuated agents follow.
+ * An agent's neighbours are then three runs of memory (three rows of
+ * cells) instead of a linked list through the whole crowd: at 10^5 agents
+ * the list's every link was a cache miss. */
 static void bin_agents(cup_crowd *c, const double *q) {
   int ncell = c->gx * c->gy, nin = 0;
   memset(c->cell_ptr, 0, sizeof(int) * ((size_t)ncell + 1));
@@ -173,9 +173,9 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
  * walls, then its pairs cell by cell (rows of cells from below, cells from
  * the left), with the agents of a cell in increasing internal index: the
  * calls of one agent come together, in the order a visit by increasing
- * index would make them. Pairs whose gap is certainly at least c->bound (which fn may
- * lower) are skipped without a square root, so the visit stays exactly the
- * one over all pairs. Stops at the first nonzero return. */
+ * index would make them. Pairs whose gap is certainly at least c->bound
+ * (which fn may lower) are skipped without a square root, so the visit
+ * stays exactly the one over all pairs. Stops at the first nonzero return. */
 typedef int (*pair_fn)(cup_crowd *c, int a, int b, void *ctx);
 
 static int each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx) {

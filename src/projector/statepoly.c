@@ -99,7 +99,8 @@ static int rebuild(cup_setproj *sp) {
   double *fp = NULL;                         /* the user's feasible point in the pool's numbering */
   if (sp->ordered && po.feasible_point && (fp = malloc(sizeof(double) * (size_t)n)))
     for (int k = 0; k < n; k++) fp[k] = po.feasible_point[sp->perm[k]];
-  int st = sp->ordered && po.feasible_point && !fp ? CUP_ERR_NOMEM : pool_polyset(sp, &K, err);
+  int st = sp->ordered && po.feasible_point && !fp ? cup_fail(err, CUP_ERR_NOMEM, "out of memory")
+                                                   : pool_polyset(sp, &K, err);
   if (fp) po.feasible_point = fp;
   if (!st) st = cup_projector_create(&p, K, &po, err);
   free(fp);
@@ -190,6 +191,7 @@ int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
   if (missing < 0) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
   if (missing > 0 || !sp->proj || renumbered) {
     int st = rebuild(sp);
+    if (st && renumbered) cup_projector_free(&sp->proj);   /* in the old numbering: rebuild next time */
     if (st) return st;
   } else {
     revalue(sp);
