@@ -81,16 +81,22 @@ static void run(const int *perm, double *X, double *exit_time) {
   cup_crowd_free(&c);
 }
 
+/* A random numbering of the N agents (Fisher-Yates). */
+static void shuffle(int *perm, uint64_t seed) {
+  rng_t g = {seed};
+  for (int k = 0; k < N; k++) perm[k] = k;
+  for (int k = N - 1; k > 0; k--) {
+    int j = (int)(rng_unif(&g) * (k + 1)), t = perm[k];
+    perm[k] = perm[j];
+    perm[j] = t;
+  }
+}
+
 static void test_order_invisible(void **state) {
   (void)state;
   int id[N], rev[N], shuf[N];
-  rng_t g = {5};
-  for (int k = 0; k < N; k++) id[k] = shuf[k] = k, rev[k] = N - 1 - k;
-  for (int k = N - 1; k > 0; k--) {          /* Fisher-Yates */
-    int j = (int)(rng_unif(&g) * (k + 1)), t = shuf[k];
-    shuf[k] = shuf[j];
-    shuf[j] = t;
-  }
+  for (int k = 0; k < N; k++) id[k] = k, rev[k] = N - 1 - k;
+  shuffle(shuf, 5);
   const int *perms[2] = {rev, shuf};
   size_t sz = (size_t)(STEPS + 1) * 2 * N;
   double *X0 = malloc(sizeof(double) * sz), *X1 = malloc(sizeof(double) * sz), e0[N], e1[N];
@@ -124,13 +130,7 @@ static void test_order_invisible(void **state) {
 static void test_exits_match_positions(void **state) {
   (void)state;
   int shuf[N];
-  rng_t g = {17};
-  for (int k = 0; k < N; k++) shuf[k] = k;
-  for (int k = N - 1; k > 0; k--) {
-    int j = (int)(rng_unif(&g) * (k + 1)), t = shuf[k];
-    shuf[k] = shuf[j];
-    shuf[j] = t;
-  }
+  shuffle(shuf, 17);
   double *X = malloc(sizeof(double) * (size_t)(STEPS + 1) * 2 * N), e[N];
   run(shuf, X, e);
   int left = 0;
