@@ -1,11 +1,13 @@
-/* test_crowd_order — the crowd's internal order (agents binned by cell,
- * src/model/crowd.c) is invisible: a step's rows are those of an O(N^2)
- * enumeration of all pairs and walls, in the order of the agents' index;
- * the same agents numbered in another order walk the same trajectories, to
- * rounding, and leave at the same steps (the reference is the run in the
- * other numbering); and a step's callbacks (rows, desired velocity)
- * allocate nothing. The rows callback is read through the set's insides
- * (src/set/set_impl.h). */
+/* test_crowd_order — the crowd's internal orders (agents binned by cell,
+ * src/model/crowd.c; numbered along a Hilbert curve, crowd_order.c) are
+ * invisible: a step's rows are those of an O(N^2) enumeration of all pairs
+ * and walls, mapped back to the user's numbering, in the order of the
+ * internal index; the same agents numbered in another order by the user
+ * walk the same trajectories bit for bit (the internal numbering depends on
+ * the positions alone) and leave at the same steps (the reference is the
+ * run in the other numbering); and a step's callbacks (rows, desired
+ * velocity) allocate nothing. The rows callback is read through the set's
+ * insides (src/set/set_impl.h). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -16,10 +18,10 @@
 #include "set/rowpool.h"
 #include "set/set_impl.h"
 
-/* Rounding differences grow about tenfold in 8 steps once agents queue at
- * the door (measured: 1e-14 m at step 20, 4e-10 at 60, 6e-7 at 80, 0.6 m at
- * 300, from the sums of the projection taken in another order): the
- * comparison stops at step 60. */
+/* Before the internal numbering, the user's order was the order of the
+ * projection's sums and rounding differences grew about tenfold in 8 steps
+ * once agents queued at the door (1e-14 m at step 20, 4e-10 at 60, 0.6 m at
+ * 300); now the runs are the same bit for bit, compared over 60 steps. */
 enum { N = 160, STEPS = 60 };
 
 static const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10}, door[4] = {10, 4, 10, 6};
@@ -79,16 +81,22 @@ static void run(const int *perm, double *X, double *exit_time) {
   cup_crowd_free(&c);
 }
 
+/* A random numbering of the N agents (Fisher-Yates). */
+static void shuffle(int *perm, uint64_t seed) {
+  rng_t g = {seed};
+  for (int k = 0; k < N; k++) perm[k] = k;
+  for (int k = N - 1; k > 0; k--) {
+    int j = (int)(rng_unif(&g) * (k + 1)), t = perm[k];
+    perm[k] = perm[j];
+    perm[j] = t;
+  }
+}
+
 static void test_order_invisible(void **state) {
   (void)state;
   int id[N], rev[N], shuf[N];
-  rng_t g = {5};
-  for (int k = 0; k < N; k++) id[k] = shuf[k] = k, rev[k] = N - 1 - k;
-  for (int k = N - 1; k > 0; k--) {          /* Fisher-Yates */
-    int j = (int)(rng_unif(&g) * (k + 1)), t = shuf[k];
-    shuf[k] = shuf[j];
-    shuf[j] = t;
-  }
+  for (int k = 0; k < N; k++) id[k] = k, rev[k] = N - 1 - k;
+  shuffle(shuf, 5);
   const int *perms[2] = {rev, shuf};
   size_t sz = (size_t)(STEPS + 1) * 2 * N;
   double *X0 = malloc(sizeof(double) * sz), *X1 = malloc(sizeof(double) * sz), e0[N], e1[N];
@@ -108,11 +116,59 @@ static void test_order_invisible(void **state) {
       same += (isnan(e1[a]) && isnan(e0[perms[p][a]])) || e1[a] == e0[perms[p][a]];
     printf("%s order: %d of %d left; largest difference of a position over %d steps %.3g m; "
            "exit times equal for %d of %d agents\n", p ? "shuffled" : "reversed", left, N, STEPS, worst, same, N);
-    assert_true(worst < 1e-8);               /* rounding, grown through the steps */
+    assert_true(worst == 0);                 /* the same sums in the same order */
     assert_int_equal(same, N);
   }
   free(X0);
   free(X1);
+}
+
+/* Exit times and positions come in the user's numbering, whatever the
+ * crowd's: with the user's agents shuffled against space, each agent's exit
+ * time is the first t_k at which its own reported centre is past the door's
+ * wall (x > 10), NaN if none. */
+static void test_exits_match_positions(void **state) {
+  (void)state;
+  int shuf[N];
+  shuffle(shuf, 17);
+  double *X = malloc(sizeof(double) * (size_t)(STEPS + 1) * 2 * N), e[N];
+  run(shuf, X, e);
+  int left = 0;
+  for (int a = 0; a < N; a++) {
+    int first = -1;
+    for (int k = 0; k <= STEPS && first < 0; k++)
+      if (X[(size_t)k * 2 * N + 2 * a] > 10) first = k;
+    if (first < 0) assert_true(isnan(e[a]));
+    else { assert_true(fabs(e[a] - 0.05 * first) < 1e-12); left++; }
+  }
+  assert_true(left > N / 8);
+  free(X);
+}
+
+/* An input error names the user's agents: two agents overlapping by 0.1 in
+ * a shuffled grid are "agents 7 and 31" whichever lies first in space. */
+static void test_overlap_names_user_index(void **state) {
+  (void)state;
+  enum { M = 40 };
+  double q0[2 * M], r[M];
+  for (int side = 0; side < 2; side++) {
+    for (int i = 0; i < M; i++) {
+      int cell = (i * 17 + 5) % M;           /* the user's numbering, scattered over the grid */
+      q0[2 * i] = 1.5 + (cell % 8);
+      q0[2 * i + 1] = 1.5 + (cell / 8);
+      r[i] = 0.25;
+    }
+    q0[2 * 31] = q0[2 * 7] + (side ? 0.4 : -0.4);   /* 0.1 of overlap, on either side of agent 7 */
+    q0[2 * 31 + 1] = q0[2 * 7 + 1];
+    cup_crowd_desc d = {.agents = M, .q0 = q0, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                        .door = door, .speed = 1.2};
+    char err[CUP_ERRMSG_LEN] = "";
+    cup_crowd *c = NULL;
+    assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_ERR_ARG);
+    assert_null(c);
+    printf("%s\n", err);
+    assert_non_null(strstr(err, "agents 7 and 31 overlap by 0.1"));
+  }
 }
 
 /* A step's rows and desired velocity allocate nothing once the pool knows
@@ -200,9 +256,23 @@ static void reference_rows(const cup_crowd *c, const double *q, const double *r,
   qsort(exp, (size_t)*me, sizeof *exp, cmp_pattern);
 }
 
+/* A row in the crowd's numbering (column k is x[perm[k]]) in the user's:
+ * its columns mapped and sorted, the values with them. */
+static void user_row(ref_row *w, int nnz, const int *col, const double *val, const int *perm) {
+  w->nnz = nnz;
+  for (int e = 0; e < nnz; e++) {
+    int c = perm[col[e]], q = e;
+    double v = val ? val[e] : 0;
+    for (; q > 0 && w->col[q - 1] > c; q--) { w->col[q] = w->col[q - 1]; w->val[q] = w->val[q - 1]; }
+    w->col[q] = c;
+    w->val[q] = v;
+  }
+}
+
 /* The rows of a step from the cell list against the reference, at the start
  * and at a state shaken by up to 0.15 m (gaps on both sides of the margin
- * and of reach); and in the order of the agents' index. */
+ * and of reach), mapped from the crowd's numbering to the user's; and in
+ * the order of the internal index. */
 static void test_rows_against_all_pairs(void **state) {
   (void)state;
   int id[N];
@@ -227,19 +297,16 @@ static void test_rows_against_all_pairs(void **state) {
     assert_int_equal(rb.m, m);
     assert_int_equal(rb.me, me);
     assert_true(m > N);
+    assert_non_null(rb.perm);                /* the crowd's own numbering, a permutation */
+    int seen[2 * N] = {0};
+    for (int k = 0; k < 2 * N; k++) seen[rb.perm[k]]++;
+    for (int k = 0; k < 2 * N; k++) assert_int_equal(seen[k], 1);
     for (int k = 0; k < rb.m; k++) {
-      got[k].nnz = rb.ptr[k + 1] - rb.ptr[k];
-      for (int e = 0; e < got[k].nnz; e++) {
-        got[k].col[e] = rb.col[rb.ptr[k] + e];
-        got[k].val[e] = rb.val[rb.ptr[k] + e];
-      }
+      if (k > 0) assert_true(rb.col[rb.ptr[k]] >= rb.col[rb.ptr[k - 1]]);   /* by the internal index */
+      user_row(&got[k], rb.ptr[k + 1] - rb.ptr[k], rb.col + rb.ptr[k], rb.val + rb.ptr[k], rb.perm);
       got[k].off = rb.off[k];
-      if (k > 0) assert_true(got[k].col[0] >= got[k - 1].col[0]);   /* by the agents' index */
     }
-    for (int k = 0; k < rb.me; k++) {
-      gexp[k].nnz = rb.eptr[k + 1] - rb.eptr[k];
-      for (int e = 0; e < gexp[k].nnz; e++) gexp[k].col[e] = rb.ecol[rb.eptr[k] + e];
-    }
+    for (int k = 0; k < rb.me; k++) user_row(&gexp[k], rb.eptr[k + 1] - rb.eptr[k], rb.ecol + rb.eptr[k], NULL, rb.perm);
     qsort(got, (size_t)m, sizeof *got, cmp_pattern);
     qsort(gexp, (size_t)me, sizeof *gexp, cmp_pattern);
     for (int k = 0; k < m; k++) {
@@ -258,6 +325,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_rows_against_all_pairs),
     cmocka_unit_test(test_order_invisible),
+    cmocka_unit_test(test_exits_match_positions),
+    cmocka_unit_test(test_overlap_names_user_index),
     cmocka_unit_test(test_step_allocates_nothing),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -8,6 +8,7 @@
 #include <cmocka.h>
 #include <gsl/gsl_eigen.h>
 #include "testutil.h"
+#include "set/polyset_impl.h"
 
 /* The paper circuit: P = diag(1, L3, L2) = diag(1, 2, 1), C = [[0,1,-1],[0,1,0]]. */
 static const int circ_p[4] = {0, 0, 2, 3};
@@ -171,6 +172,61 @@ static void test_lipschitz_bound_is_guaranteed(void **state) {
   }
 }
 
+/* The bound a state polyset recomputes at every step (cup_polyset_revalue,
+ * started from the last step's vector) stays above lambda_max(C C^T) (GSL's
+ * symmetric eigensolver) while the rows' values change and rows go off and
+ * on again, and within 15 % of the bound of a fresh polyset of the same
+ * values (6 iterations from the ones vector). */
+static void test_revalued_lipschitz_bound(void **state) {
+  (void)state;
+  enum { M = 80, N = 60, STEPS = 12 };
+  rng_t r = {777};
+  double *C0 = calloc(M * N, sizeof(double)), *C = calloc(M * N, sizeof(double));
+  for (int i = 0; i < M; i++)                /* contact-like rows: 2 or 4 entries */
+    for (int e = 0; e < (i % 3 ? 4 : 2); e++) C0[i * N + rng_int(&r, 0, N - 1)] = rng_normal(&r);
+  tcsc Cs;
+  tcsc_from_dense(&Cs, C0, M, N);            /* the pattern (every entry of C0) */
+  char msg[CUP_ERRMSG_LEN];
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, msg), CUP_OK);
+  double *work = malloc(sizeof(double) * (2 * M + N)), f[M];
+  gsl_matrix *A = gsl_matrix_alloc(M, M);
+  gsl_vector *ev = gsl_vector_alloc(M);
+  gsl_eigen_symm_workspace *ws = gsl_eigen_symm_alloc(M);
+  for (int step = 0; step < STEPS; step++) {
+    for (int i = 0; i < M; i++) f[i] = (i + step) % 7 == 0 ? 0 : 0.5 + rng_unif(&r);   /* some rows off */
+    for (int i = 0; i < M; i++)
+      for (int j = 0; j < N; j++) C[i * N + j] = f[i] * C0[i * N + j];
+    for (int j = 0; j < N; j++)              /* the new values in place, C and C^T */
+      for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++) K->C.x[k] = C[K->C.i[k] * N + j];
+    for (int i = 0; i < M; i++)
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) K->Ct.x[k] = C[i * N + K->Ct.i[k]];
+    cup_polyset_revalue(K, work);
+    for (int i = 0; i < M; i++)
+      for (int j = 0; j < M; j++) {
+        double s = 0;
+        for (int k = 0; k < N; k++) s += C[i * N + k] * C[j * N + k];
+        gsl_matrix_set(A, i, j, s);
+      }
+    gsl_eigen_symm(A, ev, ws);
+    double lmax = gsl_vector_max(ev);
+    tcsc Cf;
+    tcsc_from_dense(&Cf, C, M, N);
+    cup_polyset *F = NULL;
+    assert_int_equal(cup_polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, msg), CUP_OK);
+    printf("step %d: lambda_max %.6g, revalued bound %.6g, fresh bound %.6g\n", step, lmax, K->lip, F->lip);
+    assert_true(K->lip >= lmax * (1 - 1e-13));
+    assert_true(K->lip <= 1.15 * F->lip);
+    assert_int_equal(K->cw_warm, 1);
+    cup_polyset_free(&F);
+    tcsc_free(&Cf);
+  }
+  gsl_eigen_symm_free(ws); gsl_vector_free(ev); gsl_matrix_free(A);
+  cup_polyset_free(&K);
+  tcsc_free(&Cs);
+  free(C0); free(C); free(work);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_circuit_lipschitz_is_exact_eigenvalue),
@@ -178,6 +234,7 @@ int main(void) {
     cmocka_unit_test(test_interior_direction_enters_the_set),
     cmocka_unit_test(test_validation_messages),
     cmocka_unit_test(test_lipschitz_bound_is_guaranteed),
+    cmocka_unit_test(test_revalued_lipschitz_bound),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

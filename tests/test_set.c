@@ -12,6 +12,7 @@
 #include "testutil.h"
 
 #include "alloc_count.h"
+#include "set/rowpool.h"
 
 /* ---- dense metrics in long double ------------------------------------------------ */
 
@@ -515,6 +516,80 @@ static void test_state_polyset_reuse_and_rebuild(void **state) {
   cup_set_free(&S);
 }
 
+/* Three points in the plane (x: 6 coordinates) kept 1 apart in pairs (0, 1)
+ * and (1, 2) along the directions at x_k, and point 2 left of the line
+ * x = 1; given in the numbering of perms[gen] (column k is the user's
+ * coordinate of point perm[k / 2]) when numbered, else in the user's. */
+typedef struct { int numbered, gen; } trio_ctx;
+static const int trio_perms[3][3] = {{0, 1, 2}, {2, 0, 1}, {1, 2, 0}};
+
+static int trio_rows(double t, const double *x, cup_rowbuf *rows, void *vp) {
+  (void)t;
+  trio_ctx *c = vp;
+  const int *perm = trio_perms[c->gen % 3];
+  static int colmap[3][6];
+  int inv[3];
+  for (int k = 0; k < 3; k++) {
+    inv[perm[k]] = k;
+    colmap[c->gen % 3][2 * k] = 2 * perm[k];
+    colmap[c->gen % 3][2 * k + 1] = 2 * perm[k] + 1;
+  }
+  if (c->numbered) cup_rowbuf_order(rows, colmap[c->gen % 3], c->gen);
+  for (int p = 0; p < 2; p++) {
+    int i = p, j = p + 1;
+    double dx = x[2 * i] - x[2 * j], dy = x[2 * i + 1] - x[2 * j + 1], d = hypot(dx, dy);
+    int a = c->numbered ? inv[i] : i, b = c->numbered ? inv[j] : j;
+    double e = a < b ? 1 : -1;                /* the lower column first */
+    int lo = a < b ? a : b, hi = a < b ? b : a;
+    int cols[4] = {2 * lo, 2 * lo + 1, 2 * hi, 2 * hi + 1};
+    double v[4] = {e * dx / d, e * dy / d, -e * dx / d, -e * dy / d};
+    cup_rowbuf_add(rows, 4, cols, v, -1);
+  }
+  int w = c->numbered ? inv[2] : 2, cw[1] = {2 * w};
+  double vw[1] = {-1};
+  cup_rowbuf_add(rows, 1, cw, vw, 1);
+  return 0;
+}
+
+/* The same set numbered the callback's way, renumbered every other step,
+ * projects as in the user's numbering (answers in the user's order); a
+ * renumbering costs one rebuild, a step in the same numbering none. */
+static void test_state_polyset_own_numbering(void **state) {
+  (void)state;
+  trio_ctx cn = {1, 0}, cp = {0, 0};
+  cup_set_desc dn = {.kind = CUP_SET_STATE_POLYSET, .n = 6, .rows = trio_rows, .rows_ctx = &cn};
+  cup_set_desc dp = dn;
+  dp.rows_ctx = &cp;
+  cup_set *Sn, *Sp;
+  cup_setproj *spn, *spp;
+  char err[CUP_ERRMSG_LEN];
+  assert_int_equal(cup_set_create(&Sn, &dn, err), CUP_OK);
+  assert_int_equal(cup_set_create(&Sp, &dp, err), CUP_OK);
+  assert_int_equal(cup_setproj_create(&spn, Sn, NULL, err), CUP_OK);
+  assert_int_equal(cup_setproj_create(&spp, Sp, NULL, err), CUP_OK);
+  for (int k = 0; k < 8; k++) {
+    cn.gen = k / 2;                          /* a new numbering every other step */
+    double xk[6] = {0, 0, 1.1, 0.1 * k, 2.2, -0.05 * k}, x[6], zn[6], zp[6];
+    for (int j = 0; j < 6; j++) x[j] = xk[j] + (j % 2 ? 0.3 : -0.4) * (j / 2 == 1 ? -1 : 1);
+    x[4] += 0.6;                             /* point 2 pushed past the line */
+    cup_proj_info pn, pp;
+    assert_int_equal(cup_setproj_move(spn, 0.1 * k, NULL, xk), CUP_OK);
+    assert_int_equal(cup_setproj_move(spp, 0.1 * k, NULL, xk), CUP_OK);
+    assert_int_equal(cup_setproj_project(spn, x, zn, &pn), CUP_OK);
+    assert_int_equal(cup_setproj_project(spp, x, zp, &pp), CUP_OK);
+    assert_true(pn.active > 0);
+    double tol = sqrt(pn.eps_cert) + pn.eta_cert + sqrt(pp.eps_cert) + pp.eta_cert + 1e-13;
+    for (int j = 0; j < 6; j++) assert_close(zn[j], zp[j], tol);
+    assert_true(zn[4] <= 1 + 1e-12);         /* point 2 back left of the line */
+    assert_int_equal(cup_setproj_rebuilds(spn), 1 + k / 2);
+  }
+  assert_int_equal(cup_setproj_rebuilds(spp), 1);
+  cup_setproj_free(&spn);
+  cup_setproj_free(&spp);
+  cup_set_free(&Sn);
+  cup_set_free(&Sp);
+}
+
 static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) {
   (void)state;
   rows_ctx c = {0, 0};
@@ -593,6 +668,7 @@ int main(void) {
     cmocka_unit_test(test_intersection_against_reference),
     cmocka_unit_test(test_intersection_empty),
     cmocka_unit_test(test_oracle_checks),
+    cmocka_unit_test(test_state_polyset_own_numbering),
     cmocka_unit_test(test_state_polyset_reuse_and_rebuild),
     cmocka_unit_test(test_state_polyset_no_allocation_when_patterns_repeat),
     cmocka_unit_test(test_state_polyset_bad_row),

@@ -77,14 +77,25 @@ struct cup_crowd {
   int *wptr, *widx;                 /* per cell: the walls within rmax + reach of it */
   /* the agents inside binned by cell (crowd.c, bin_agents) */
   int *cell_ptr;                    /* gx gy + 1: each cell's agents in bin[] */
-  crowd_agent *bin;                 /* N: the agents inside by cell, then the evacuated */
-  int *kcell;                       /* N: each agent's cell (-1: evacuated) */
+  crowd_agent *bin;                 /* N: the agents inside by cell, then the evacuated (i: the
+                                       internal index) */
+  int *kcell;                       /* N: each agent's cell (-1: evacuated), by internal index */
   double bound;                     /* a visit skips pairs whose gap is surely >= this */
   /* a step's rows, found in the binned order, kept until they are put in
      the index order (crowd.c, emit_rows) */
   crowd_entry *stage;               /* stage_cap entries, nstage in use */
   int nstage, stage_cap;
-  int *run_start, *run_len;         /* N: each agent's entries in the stage (as the lower index) */
+  int *run_start, *run_len;         /* N: each agent's entries in the stage (as the lower
+                                       internal index) */
+  /* the internal numbering (crowd_order.c): the agents along a Hilbert
+     curve over the cells, the user's index everywhere outside */
+  int *ord;                         /* N: internal agent k is the user's agent ord[k] */
+  int *rank;                        /* N: the user's agent i is internal rank[i] */
+  int *colmap;                      /* 2N: column k of the rows is q[colmap[k]] */
+  int *hpos;                        /* gx gy: each cell's place along the curve */
+  long order_gen;                   /* renumberings so far */
+  double far, far_base;             /* pair rows far apart in the numbering, now and after the
+                                       last renumbering (-1: not measured yet) */
   /* the run */
   unsigned char *out;               /* evacuated */
   double *exit_time;
@@ -94,5 +105,21 @@ struct cup_crowd {
   cup_set *S;
   cup_process_desc proc;
 };
+
+/* The cell of (x, y), clamped to the grid. */
+static inline int crowd_cell_of(const cup_crowd *c, double x, double y) {
+  int i = (int)((x - c->cx0) / c->cell), j = (int)((y - c->cy0) / c->cell);
+  i = i < 0 ? 0 : i >= c->gx ? c->gx - 1 : i;
+  j = j < 0 ? 0 : j >= c->gy ? c->gy - 1 : j;
+  return i + c->gx * j;
+}
+
+/* Allocate the numbering and number the agents at q (crowd_order.c). */
+int crowd_order_init(cup_crowd *c, const double *q, char *errmsg);
+/* Number the agents at q along the curve: by cell, then by position within
+ * one, so that the numbering depends on the positions alone, never on the
+ * user's. No allocation. */
+void crowd_renumber(cup_crowd *c, const double *q);
+void crowd_order_free(cup_crowd *c);
 
 #endif

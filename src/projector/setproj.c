@@ -146,7 +146,8 @@ int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_in
   switch (sp->kind) {
     case CUP_SET_POLYSET:
     case CUP_SET_STATE_POLYSET:
-      st = cup_project(sp->proj, x, z, info);
+      st = sp->kind == CUP_SET_STATE_POLYSET ? cup_statepoly_project(sp, x, z, info)
+                                             : cup_project(sp->proj, x, z, info);
       if (st == CUP_ERR_EMPTY_SET)
         cup_setproj_fail(sp, st, "the polyset is empty: Farkas certificate y >= 0 with g^T y = %.3g, "
                          "||C^T y||_{P^-1} = %.3g", info->farkas_gap, info->farkas_residual);

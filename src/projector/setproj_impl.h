@@ -34,6 +34,10 @@ struct cup_setproj {
   double *rework;              /* 2 m + n doubles for cup_polyset_revalue */
   long step, rebuilds;
   int rows_now;
+  /* the callback's numbering of the state (cup_rowbuf_order) */
+  int ordered;                 /* 1: the pool, PK and proj are in perm's numbering */
+  int *perm, *pmap;            /* n: column k is x[perm[k]]; workspace of a renumbering */
+  long perm_gen;
   char message[CUP_SETPROJ_MSG];
 };
 
@@ -62,5 +66,7 @@ int cup_statepoly_init(cup_setproj *sp, char *errmsg);
 void cup_statepoly_free(cup_setproj *sp);
 /* Rows at (t, x) from the callback, into the pool's polyset and projector. */
 int cup_statepoly_move(cup_setproj *sp, double t, const double *x);
+/* The projection, in the callback's numbering if it gave one. */
+int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
 
 #endif

@@ -8,7 +8,13 @@
  * of the rows that persist (a row that went off drops its multiplier). No
  * allocation. A row of a new pattern rebuilds the pool, its polyset and its
  * projector (a new symbolic analysis, allocations), carrying the warm start
- * over slot by slot. */
+ * over slot by slot.
+ *
+ * A callback may number the state its own way (cup_rowbuf_order: a crowd
+ * along a space-filling curve): the pool, its polyset and projector are
+ * then in that numbering, a projection gathers x into it and scatters the
+ * answer back, and a new numbering renumbers the pool's patterns and
+ * rebuilds (the warm start follows the patterns, hence the contacts). */
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
@@ -27,8 +33,11 @@ void cup_statepoly_free(cup_setproj *sp) {
   cup_polyset_free(&sp->PK);
   free(sp->cpos);
   free(sp->rework);
+  free(sp->perm);
+  free(sp->pmap);
   sp->cpos = NULL;
   sp->rework = NULL;
+  sp->perm = sp->pmap = NULL;
 }
 
 /* The pool's pattern as CSC with this step's values (0 for slots not in use)
@@ -38,7 +47,7 @@ static int pool_polyset(cup_setproj *sp, cup_polyset **K, char *errmsg) {
   const cup_rowbuf *rb = &sp->rb;
   int n = sp->n, m = P->m, nnz = P->nnz;
   int *cp = calloc((size_t)n + 1, sizeof(int)), *ri = malloc(sizeof(int) * ((size_t)nnz + 1));
-  double *vx = malloc(sizeof(double) * ((size_t)nnz + 1)), *g = malloc(sizeof(double) * ((size_t)m + 1));
+  double *vx = malloc(sizeof(double) * ((size_t)nnz + 1)), *g = malloc(sizeof(double) * ((size_t)m + 1)), *pd = NULL;
   int st = cp && ri && vx && g ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
   if (!st) {
     for (int e = 0; e < nnz; e++) cp[P->col[e] + 1]++;
@@ -55,10 +64,16 @@ static int pool_polyset(cup_setproj *sp, cup_polyset **K, char *errmsg) {
       }
     }
     cup_metric metric = {sp->S->K->pkind, sp->S->K->pd, {0}, 0};
+    if (sp->ordered && metric.kind == CUP_METRIC_DIAGONAL) {   /* P's diagonal in the pool's numbering */
+      pd = malloc(sizeof(double) * (size_t)n);
+      if (!pd) st = cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
+      for (int k = 0; !st && k < n; k++) pd[k] = sp->S->K->pd[sp->perm[k]];
+      metric.diag = pd;
+    }
     cup_csc view = {m, n, cp, ri, vx};
-    st = cup_polyset_create_ex(K, &view, g, &metric, 1, errmsg);
+    if (!st) st = cup_polyset_create_ex(K, &view, g, &metric, 1, errmsg);
   }
-  free(cp); free(ri); free(vx); free(g);
+  free(cp); free(ri); free(vx); free(g); free(pd);
   return st;
 }
 
@@ -80,8 +95,15 @@ static int rebuild(cup_setproj *sp) {
   memset(sp->cpos, 0, sizeof(int) * (size_t)n);
   cup_polyset *K = NULL;
   cup_projector *p = NULL;
-  int st = pool_polyset(sp, &K, err);
-  if (!st) st = cup_projector_create(&p, K, &sp->opt, err);
+  cup_projector_options po = sp->opt;
+  double *fp = NULL;                         /* the user's feasible point in the pool's numbering */
+  if (sp->ordered && po.feasible_point && (fp = malloc(sizeof(double) * (size_t)n)))
+    for (int k = 0; k < n; k++) fp[k] = po.feasible_point[sp->perm[k]];
+  int st = sp->ordered && po.feasible_point && !fp ? cup_fail(err, CUP_ERR_NOMEM, "out of memory")
+                                                   : pool_polyset(sp, &K, err);
+  if (fp) po.feasible_point = fp;
+  if (!st) st = cup_projector_create(&p, K, &po, err);
+  free(fp);
   if (st) {
     cup_projector_free(&p);
     cup_polyset_free(&K);
@@ -120,6 +142,37 @@ static void revalue(cup_setproj *sp) {
   cup_projector_revalue(sp->proj);
 }
 
+/* The callback's new numbering (NULL: the state's): the pool's patterns
+ * follow it (column k, x[perm_old[k]], becomes the new numbering's column
+ * for the same coordinate). Allocates the first time only. */
+static int renumber(cup_setproj *sp) {
+  int n = sp->n;
+  const int *pnew = sp->rb.perm;
+  if (!sp->perm) {
+    sp->perm = malloc(sizeof(int) * (size_t)n);
+    sp->pmap = malloc(sizeof(int) * (size_t)n);
+    if (!sp->perm || !sp->pmap) return CUP_ERR_NOMEM;
+    for (int k = 0; k < n; k++) sp->perm[k] = k;
+  }
+  for (int k = 0; k < n; k++) sp->pmap[pnew ? pnew[k] : k] = k;         /* the new inverse */
+  for (int k = 0; k < n; k++) sp->perm[k] = sp->pmap[sp->perm[k]];     /* old column -> new */
+  cup_rowpool_renumber(&sp->pool, sp->perm);
+  for (int k = 0; k < n; k++) sp->perm[k] = pnew ? pnew[k] : k;
+  sp->ordered = pnew != NULL;
+  sp->perm_gen = sp->rb.perm_gen;
+  return CUP_OK;
+}
+
+int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
+  if (!sp->ordered || !sp->proj) return cup_project(sp->proj, x, z, info);
+  const int *perm = sp->perm;
+  for (int k = 0; k < sp->n; k++) sp->xs[k] = x[perm[k]];
+  int st = cup_project(sp->proj, sp->xs, sp->zk, info);
+  if (st >= 0)                               /* on an error z is unchanged */
+    for (int k = 0; k < sp->n; k++) z[perm[k]] = sp->zk[k];
+  return st;
+}
+
 int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
   const cup_set *S = sp->S;
   sp->step++;
@@ -129,10 +182,16 @@ int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
   if (sp->rb.status == CUP_ERR_NOMEM) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "rows: %s", sp->rb.message);
   if (sp->rb.status) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback gave a bad %s", sp->rb.message);
   sp->rows_now = sp->rb.m;
+  int renumbered = 0;
+  if (sp->rb.perm ? !sp->ordered || sp->rb.perm_gen != sp->perm_gen : sp->ordered) {
+    if (renumber(sp)) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+    renumbered = 1;
+  }
   int missing = cup_rowpool_match(&sp->pool, &sp->rb, sp->step);
   if (missing < 0) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
-  if (missing > 0 || !sp->proj) {
+  if (missing > 0 || !sp->proj || renumbered) {
     int st = rebuild(sp);
+    if (st && renumbered) cup_projector_free(&sp->proj);   /* in the old numbering: rebuild next time */
     if (st) return st;
   } else {
     revalue(sp);

@@ -337,10 +337,19 @@ static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
   }
 }
 
+/* A bound started from the last one's vector (revalue; its largest entry
+ * is 1): any positive vector gives a valid bound, and the last one's is
+ * nearly the Perron vector of this step's |M| but for the rows that came
+ * on since (near 0: their ratio would be huge), hence the floor. On crowds
+ * of 10^3 and 10^4 agents, 2 iterations from it gave 0.985 to 1.09 times
+ * the bound of 6 from the ones vector (median 1.000). */
+enum { CW_WARM_ITERS = 2 };
+#define CW_WARM_FLOOR 0.25
+
 static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
-                               double *v, double *w, double *tmp) {
-  for (int i = 0; i < K->m; i++) v[i] = 1.0;
-  for (int it = 0; it < K->cw_iters; it++) {
+                               double *v, double *w, double *tmp, int warm) {
+  for (int i = 0; i < K->m; i++) v[i] = warm ? fmax(v[i], CW_WARM_FLOOR) : 1.0;
+  for (int it = 0; it < (warm ? CW_WARM_ITERS : K->cw_iters); it++) {
     apply(K, W, v, w, tmp);
     double wmax = 0;
     for (int i = 0; i < K->m; i++) wmax = fmax(wmax, w[i]);
@@ -368,7 +377,8 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
       }
       K->rownorm[i] = sqrt(s);
     }
-    K->lip = collatz_wielandt(K, abs_apply_diag, NULL, v, w, tmp);
+    K->lip = collatz_wielandt(K, abs_apply_diag, NULL, v, w, tmp, work && K->cw_warm);
+    if (work) K->cw_warm = 1;
   } else {
     /* W = L^-1 Pi C^T, so that M = W^T W and ||W(:,i)|| = ||c_i||_{P^-1}. */
     cholmod_sparse Ct = {0};
@@ -390,7 +400,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
       for (int k = p[i]; k < p[i + 1]; k++) s += x[k] * x[k];
       K->rownorm[i] = sqrt(s);
     }
-    K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp);
+    K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp, 0);
     cholmod_free_sparse(&W, K->cm);
   }
   if (!work) free(v);

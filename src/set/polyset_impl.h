@@ -26,6 +26,7 @@ struct cup_polyset {
   double *rowgam;      /* (rownnz + 2) eps: the rounding bound of a row's slack per unit magnitude */
   double lip;          /* guaranteed L >= lambda_max(M) */
   int cw_iters;        /* Collatz-Wielandt iterations of that bound */
+  int cw_warm;         /* revalue: work's first m entries hold the last bound's vector (> 0) */
   int mutable_values;  /* values rewritten in place at every step (cup_polyset_revalue) */
   double solve_amp;    /* bound on the relative error amplification of P^-1 (1, or 1/rcond) */
   int dense;           /* small set: Md and Bt below are valid */
@@ -43,8 +44,10 @@ int cup_polyset_create_ex(cup_polyset **K, const cup_csc *C, const double *g,
                           const cup_metric *P, int mutable_values, char *errmsg);
 /* The values of C (C.x and Ct.x, the pattern unchanged) were rewritten:
  * recompute the row norms and the Lipschitz bound. Only for a polyset
- * without the dense form and with a diagonal metric; work: 2 m + n doubles.
- * Allocates nothing. */
+ * without the dense form and with a diagonal metric; work: 2 m + n doubles,
+ * the same from one call to the next and untouched between them: its first
+ * m entries keep the bound's vector, from which the next bound starts (the
+ * values change little from a step to the next). Allocates nothing. */
 void cup_polyset_revalue(cup_polyset *K, double *work);
 
 /* P v into out (n entries). */

@@ -62,6 +62,11 @@ void cup_rowbuf_clear(cup_rowbuf *rb) {
   rb->message[0] = '\0';
 }
 
+void cup_rowbuf_order(cup_rowbuf *rb, const int *perm, long generation) {
+  rb->perm = perm;
+  rb->perm_gen = generation;
+}
+
 int cup_rowbuf_rows(const cup_rowbuf *rb) { return rb ? rb->m : 0; }
 
 /* Remember the first bad row (the callback may not check every return). */
@@ -258,6 +263,28 @@ static void append_slot(cup_rowpool *P, const int *col, int len, long used, int 
   P->row_of[s] = -1;
   P->used[s] = used;
   P->old_of[s] = old;
+}
+
+/* The chains of the hash table over slots 0..m-1. */
+static void rehash(cup_rowpool *P) {
+  for (int k = 0; k < P->hsize; k++) P->head[k] = -1;
+  for (int s = 0; s < P->m; s++) {
+    unsigned h = P->hash[s] = pattern_hash(P->col + P->ptr[s], P->ptr[s + 1] - P->ptr[s]);
+    P->next[s] = P->head[h & (unsigned)(P->hsize - 1)];
+    P->head[h & (unsigned)(P->hsize - 1)] = s;
+  }
+}
+
+void cup_rowpool_renumber(cup_rowpool *P, const int *map) {
+  for (int s = 0; s < P->m; s++) {
+    int *col = P->col + P->ptr[s], len = P->ptr[s + 1] - P->ptr[s];
+    for (int k = 0; k < len; k++) {          /* insertion sort: a pattern has a few columns */
+      int c = map[col[k]], q = k;
+      for (; q > 0 && col[q - 1] > c; q--) col[q] = col[q - 1];
+      col[q] = c;
+    }
+  }
+  if (P->m) rehash(P);
 }
 
 int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
