@@ -129,18 +129,29 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
    * a sparse metric, whose solve is backward stable). */
   double un = z != x ? cup_step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
   double ebound = cup_z_rounding(K, info->scale, un);
-  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0;
+  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0, clip = 0;
   for (int i = 0; i < m; i++) {
-    eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
+    double lp = cup_max(lam[i], 0);
+    eps_z += 2 * lp * (p->s[i] + p->gam[i]);
+    clip += cup_max(-lam[i], 0) * K->rownorm[i];
     viol = cup_max(viol, -p->s[i]);
     double sl = p->s[i] - p->gam[i];
     if (isnan(sl) || sl < worst) worst = sl;   /* a NaN row stays the minimum */
-    dq -= 2 * lam[i] * p->b[i];
+    dq -= 2 * lp * p->b[i];
   }
+  /* Weak duality holds for lam+ = max(lam, 0) only. With z = y(lam) and
+   * dl = lam+ - lam, ||x - z||_P^2 - 2 q(lam+) = 2 lam+^T s(z) + dl^T M dl,
+   * and dl^T M dl = ||C^T dl||_{P^-1}^2 <= (sum_i dl_i ||c_i||_{P^-1})^2 (a
+   * finishing solve leaves rounding-sized negative multipliers on the
+   * degenerate rows of a jam; clipping them would move z). The factor
+   * covers the rounding of the row norms and of the sum. */
+  clip *= 1 + 64 * U * K->solve_amp + 2 * m * U;
+  eps_z += clip * clip;
   info->violation = viol;
   info->eps_cert = isnan(eps_z) ? NAN : cup_max(eps_z, 0);
-  /* 2 q(lambda) = -||u||_P^2 - 2 lam^T b, reported as a lower bound on d^2. */
-  info->dual_value = dq - un * un;
+  /* 2 q(lam+) = -||u(lam+)||_P^2 - 2 lam+^T b with ||u(lam+)||_P <= un + clip,
+   * reported as a lower bound on d^2. */
+  info->dual_value = dq - (un + clip) * (un + clip);
 
   p->has_v = 0;
   double eta = INFINITY;
@@ -178,12 +189,12 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
   }
   info->eta_cert = eta;
   if (p->opt.return_feasible && p->has_v) {
-    /* eps for v: 2 lam^T s(v) + ||v - y||_P^2, no cancellation; s(v) is
-     * at most s_v plus its rounding bound */
+    /* eps for v: 2 lam+^T s(v) + ||v - y(lam+)||_P^2, no cancellation;
+     * s(v) is at most s_v plus its rounding bound */
     verify_feasible(p, p->v);
     double ev = 0;
-    for (int i = 0; i < m; i++) ev += 2 * lam[i] * (p->sv[i] + p->gamv[i]);
-    double dv = eta + ebound;
+    for (int i = 0; i < m; i++) ev += 2 * cup_max(lam[i], 0) * (p->sv[i] + p->gamv[i]);
+    double dv = eta + ebound + clip;
     info->eps_cert = fmax(ev + dv * dv, 0);
     info->eta_cert = 0;
   }

@@ -197,14 +197,19 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
     cup_dfact_solve(p->nw->df, rhs);
     for (int i = 0; i < m; i++) if (w->act[i]) w->lam[i] += rhs[i];
   }
-  int neg = 0;
-  for (int i = 0; i < m; i++)
-    if (w->lam[i] < 0) { w->lam[i] = 0; neg = 1; w->d[i] = -1; } else w->d[i] = 0;   /* d marks rows to drop */
-  if (neg) cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
+  /* Multipliers left slightly negative (degenerate rows of a jam, where
+   * lam* is 0 and rounding picks the sign) stay in z = y(lam): clipping
+   * them first would move z off those rows by |lam_i| ||c_i||, above eta's
+   * target, and the corrections below would cycle on them. The
+   * certificate takes lam's positive part (cup_certify). */
   ((pn_problem *)q)->finishing = 1;
   int ok = stop(p, q, info);
   ((pn_problem *)q)->finishing = 0;
+  int neg = 0;
+  for (int i = 0; i < m; i++)
+    if (w->lam[i] < 0) { w->lam[i] = 0; neg = 1; w->d[i] = -1; } else w->d[i] = 0;   /* d marks rows to drop */
   if (ok) return 1;
+  if (neg) cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
   memcpy(w->s2, w->s, sizeof(double) * (size_t)m);      /* the finished point's slack, */
   memcpy(w->gam2, w->gam, sizeof(double) * (size_t)m);  /* for pn_correct */
   memcpy(w->lam, w->keep, sizeof(double) * (size_t)m);
