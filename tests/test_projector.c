@@ -732,6 +732,15 @@ static void test_jammed_packing_door_in_floor(void **state) {
   jammed_packing(&(jam_case){3, 3, -3, -3, 2, CUP_PROJ_AUTO, 3, 50000});
 }
 
+/* The first-order methods on the jam: their iterates approach the answer
+ * from outside K and no feasible point anchors eta (g < 0: the origin is
+ * outside), so they certified nothing before they aimed inside. */
+static void test_jammed_packing_first_order(void **state) {
+  (void)state;
+  for (int method = CUP_PROJ_PG; method <= CUP_PROJ_FISTA; method++)
+    jammed_packing(&(jam_case){0, 0, 0.5, 0, 4242, method, 3, 50000});
+}
+
 /* Weighted isotonic regression by pool-adjacent-violators: argmin
  * sum_j w_j (z_j - a_j)^2 over nondecreasing z (an exact answer in O(n)). */
 static void pava(const double *a, const double *w, int n, double *z) {
@@ -984,6 +993,7 @@ int main(void) {
     cmocka_unit_test(test_ladder_cold_start),
     cmocka_unit_test(test_jammed_packing_against_hildreth),
     cmocka_unit_test(test_jammed_packing_door_in_floor),
+    cmocka_unit_test(test_jammed_packing_first_order),
     cmocka_unit_test(test_no_allocation),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -11,6 +11,17 @@
 #include "certify.h"
 #include "firstorder.h"
 
+/* The iteration aims each row's slack at AIM times its rounding bound
+ * (gam at the current iterate) instead of 0: a dual iterate's primal point
+ * approaches the projection from outside K, so on the rows active at the
+ * answer its slack stays within rounding of 0 and never certainly >= 0;
+ * with no feasible point to anchor eta (a jam: g < 0 puts the origin
+ * outside K, no interior direction is known for a sparse set) eta would
+ * stay infinite. Aimed inside, the iterate becomes certainly feasible once
+ * it converges to within (AIM - 1) gam, as the Newton path's finishing
+ * solve does; eps pays 2 sum lam_i AIM gam_i, a few ulps of S^2. */
+#define AIM 16
+
 #define SWAP(a, b) do { double *t_ = (a); (a) = (b); (b) = t_; } while (0)
 
 int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
@@ -44,7 +55,7 @@ int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
     const double *src = accelerated ? mu : p->lam;
     const double *gsrc = accelerated ? smu : p->s;
     double *lnew = p->wm;
-    for (int i = 0; i < m; i++) lnew[i] = fmax(0, src[i] - tau * gsrc[i]);
+    for (int i = 0; i < m; i++) lnew[i] = fmax(0, src[i] - tau * (gsrc[i] - AIM * p->gam[i]));
     cup_eval_primal(p, x, p->g, lnew, p->y2, p->s2, p->gam2);
     p->iters++;
     if (accelerated) {
