@@ -120,6 +120,27 @@ static void keep_candidate(cup_projector *p, double dist, double *best) {
   }
 }
 
+/* Weak duality holds for lam+ = max(lam, 0) only. With z = y(lam) and
+ * dl = lam+ - lam, ||x - z||_P^2 - 2 q(lam+) = 2 lam+^T s(z) + dl^T M dl,
+ * and dl^T M dl = ||C^T dl||_{P^-1}^2 <= (sum_i dl_i ||c_i||_{P^-1})^2: a
+ * finishing solve leaves rounding-sized negative multipliers on the
+ * degenerate rows of a jam, and clipping them would move z. Recomputes
+ * eps's and q's sums (eps from e0) at lam+; returns that sum of dl_i
+ * ||c_i||, rounded up for the row norms' and its own rounding. */
+static double positive_part(const cup_projector *p, const double *lam, double e0,
+                            double *eps_z, double *dq) {
+  double e = e0, q = 0, clip = 0;
+  for (int i = 0; i < p->m; i++) {
+    double lp = cup_max(lam[i], 0);
+    e += 2 * lp * (p->s[i] + p->gam[i]);
+    q -= 2 * lp * p->b[i];
+    clip += (lp - lam[i]) * p->K->rownorm[i];
+  }
+  *eps_z = e;
+  *dq = q;
+  return clip * (1 + 64 * U * p->K->solve_amp + 2 * p->m * U);
+}
+
 int cup_certify(cup_projector *p, const double *x, const double *lam,
                 const double *z, cup_proj_info *info) {
   const cup_polyset *K = p->K;
@@ -129,28 +150,21 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
    * a sparse metric, whose solve is backward stable). */
   double un = z != x ? cup_step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
   double ebound = cup_z_rounding(K, info->scale, un);
-  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0, clip = 0;
+  double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0, lmin = 0;
   for (int i = 0; i < m; i++) {
-    double lp = cup_max(lam[i], 0);
-    eps_z += 2 * lp * (p->s[i] + p->gam[i]);
-    clip += cup_max(-lam[i], 0) * K->rownorm[i];
+    eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
     viol = cup_max(viol, -p->s[i]);
     double sl = p->s[i] - p->gam[i];
     if (isnan(sl) || sl < worst) worst = sl;   /* a NaN row stays the minimum */
-    dq -= 2 * lp * p->b[i];
+    dq -= 2 * lam[i] * p->b[i];
+    lmin = cup_min(lmin, lam[i]);
   }
-  /* Weak duality holds for lam+ = max(lam, 0) only. With z = y(lam) and
-   * dl = lam+ - lam, ||x - z||_P^2 - 2 q(lam+) = 2 lam+^T s(z) + dl^T M dl,
-   * and dl^T M dl = ||C^T dl||_{P^-1}^2 <= (sum_i dl_i ||c_i||_{P^-1})^2 (a
-   * finishing solve leaves rounding-sized negative multipliers on the
-   * degenerate rows of a jam; clipping them would move z). The factor
-   * covers the rounding of the row norms and of the sum. */
-  clip *= 1 + 64 * U * K->solve_amp + 2 * m * U;
+  double clip = lmin < 0 ? positive_part(p, lam, ebound * ebound, &eps_z, &dq) : 0;
   eps_z += clip * clip;
   info->violation = viol;
   info->eps_cert = isnan(eps_z) ? NAN : cup_max(eps_z, 0);
-  /* 2 q(lam+) = -||u(lam+)||_P^2 - 2 lam+^T b with ||u(lam+)||_P <= un + clip,
-   * reported as a lower bound on d^2. */
+  /* 2 q(lam+) = -||u(lam+)||_P^2 - 2 lam+^T b with ||u(lam+)||_P <= un + clip
+   * (= ||u||_P for lam >= 0), reported as a lower bound on d^2. */
   info->dual_value = dq - (un + clip) * (un + clip);
 
   p->has_v = 0;
