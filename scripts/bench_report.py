@@ -355,6 +355,15 @@ def peer_row(peers, r, names, cell, key=None, missing="—"):
     return " | ".join(cells)
 
 
+def certified_bounds(r):
+    """The largest certified eps/S^2 and eta/S of a row; JSON has no inf, so a
+    bound some point never certified is null: said in words."""
+    if "max_eps_cert_rel" not in r:
+        return "—"
+    return ", ".join("not certified" if r[k] is None else f"{r[k]:.1e}"
+                     for k in ("max_eps_cert_rel", "max_eta_cert_rel"))
+
+
 def projector_section(outdir, lines, old=""):
     cat = load(os.path.join(outdir, "catchup_projector.jsonl"))
     peers = [p for p in load(os.path.join(outdir, "peers.jsonl")) if p.get("problem")]
@@ -376,9 +385,7 @@ def projector_section(outdir, lines, old=""):
         ratio = f"{best['time_per_proj_s'] / t:.1f}x" if best else "—"
         err = r.get("max_rel_err")
         err = -1 if err is None else err          # null: no reference, or never certified
-        cert = (", ".join("inf" if r[k] is None else f"{r[k]:.1e}"
-                          for k in ("max_eps_cert_rel", "max_eta_cert_rel"))
-                if "max_eps_cert_rel" in r else "—")
+        cert = certified_bounds(r)
         lines.append(f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | {cert} | "
                      f"{err:.1e} | {peer} | {ratio} |" if err >= 0 else
                      f"| {prob} | {mode} | {t:.3g} s | {r['certified']}/{r['K']} | {cert} | — "
@@ -424,12 +431,15 @@ def projector_section(outdir, lines, old=""):
     others = [r for r in cat if r.get("solver") in ("catchup-pg", "catchup-fista")]
     if others:
         lines.append("catchup's first-order methods on the small sets:\n")
-        lines.append("| problem | method | mode | per projection | iterations | certified |")
-        lines.append("|---|---|---|---:|---:|---:|")
+        lines.append("| problem | method | mode | per projection | iterations | certified "
+                     "| largest ε/S², η/S certified | its error |")
+        lines.append("|---|---|---|---:|---:|---:|---:|---:|")
         for r in others:
+            err = r.get("max_rel_err")
             lines.append(f"| {r['problem']} | {r['solver'][8:]} | {r['mode']} | "
                          f"{r['median_s_per_projection']:.3g} s | {r['iterations_mean']:.1f} | "
-                         f"{r['certified']}/{r['K']} |")
+                         f"{r['certified']}/{r['K']} | {certified_bounds(r)} | "
+                         + ("—" if err is None or err < 0 else f"{err:.1e}") + " |")
         lines.append("")
     vers = sorted({f"{p['solver']} {p.get('version', '?')}" for p in peers if p.get("version")})
     if vers:
