@@ -197,8 +197,10 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
     cup_dfact_solve(p->nw->df, rhs);
     for (int i = 0; i < m; i++) if (w->act[i]) w->lam[i] += rhs[i];
   }
-  /* Multipliers left slightly negative (degenerate rows of a jam, where
-   * lam* is 0 and rounding picks the sign) stay in z = y(lam): clipping
+  /* Multipliers left slightly negative stay in z = y(lam): on a singular
+   * M_FF (a jam's redundant contacts) the refinement moves lam along its
+   * kernel by the residual's rounding over delta (1e-7 on the door test),
+   * which changes no slack but turns small multipliers negative; clipping
    * them first would move z off those rows by |lam_i| ||c_i||, above eta's
    * target, and the corrections below would cycle on them. The
    * certificate takes lam's positive part (cup_certify). */
