@@ -723,10 +723,10 @@ static void test_jammed_packing_against_hildreth(void **state) {
 }
 
 /* A door in the floor under the bottom row's disks 3..5, the disks pushed
- * towards and through it: the finishing solve's multipliers on the
- * degenerate rows come out negative by rounding (to 1e-6 on M_FF's kernel),
- * and clipping them moved z out of K by more than eta's target: main
- * returned CUP_WARN_NOT_CERTIFIED at the third projection. */
+ * towards and through it: the finishing solve's refinement drifts along
+ * the kernel of the singular M_FF and leaves small multipliers negative
+ * (1e-7 to 1e-6), and clipping them moved z out of K by more than eta's
+ * target: main returned CUP_WARN_NOT_CERTIFIED at the third projection. */
 static void test_jammed_packing_door_in_floor(void **state) {
   (void)state;
   jammed_packing(&(jam_case){3, 3, -3, -3, 2, CUP_PROJ_AUTO, 3, 50000});
