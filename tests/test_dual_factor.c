@@ -10,6 +10,7 @@
 #include <cmocka.h>
 #include <gsl/gsl_linalg.h>
 #include "testutil.h"
+#include "alloc_count.h"
 #include "projector/dual_factor.h"
 
 /* M~ v by a dense GSL Cholesky of M~ built from C (dense, row-major) and d. */
@@ -49,15 +50,20 @@ static void random_rows(rng_t *r, double *C, int m, int n) {
   }
 }
 
-/* room: -1 the automatic room (all of M's factor here, row updates on);
- * large: the packed room, every factor fits; small: the packed room, most
- * free sets' factors do not fit and are solved by CG (a larger delta keeps
- * M~ well conditioned enough for CG to reach the dense answer to 1e-8). */
-static void solves_against_dense(long room) {
+/* room: -1 the automatic room (all of M's factor here); large: every
+ * factor fits; small: most free sets' factors do not fit and are solved by
+ * CG (a larger delta keeps M~ well conditioned enough for CG to reach the
+ * dense answer to 1e-8); per_row > 0: room = per_row * m, where layouts for
+ * all rows do not fit and those for the free set and the last layout's rows
+ * do (rows outside the layout refactor, rows inside are row updates).
+ * Returns the row updates made. */
+static long solves_against_dense(long room, double per_row) {
   rng_t r = {2026};
   int cg_solves = 0;
+  long all_updates = 0;
   for (int trial = 0; trial < 6; trial++) {
     int n = rng_int(&r, 40, 120), m = rng_int(&r, n / 2, 2 * n);
+    if (per_row > 0) room = (long)(per_row * m);
     double *C = calloc((size_t)m * n, sizeof(double)), *d = malloc(sizeof(double) * n);
     random_rows(&r, C, m, n);
     for (int j = 0; j < n; j++) d[j] = 0.5 + 4 * rng_unif(&r);
@@ -79,10 +85,18 @@ static void solves_against_dense(long room) {
       if (step % 8 == 0) for (int i = 0; i < m; i++) act[i] = rng_unif(&r) < 0.4;
       else for (int c = rng_int(&r, 1, 4); c > 0; c--) act[rng_int(&r, 0, m - 1)] ^= 1;
       if (step == 13 || step == 29) delta *= 10;
-      assert_int_equal(cup_dfact_factor(f, act, delta, &facts, &updates), CUP_OK);
       for (int i = 0; i < m; i++) v[i] = rng_normal(&r);
       memcpy(w, v, sizeof(double) * m);
+#if CUP_COUNTING
+      long before = alloc_count;     /* nothing allocated: CHOLMOD's row updates */
+      counting = 1;                  /* never outgrow the layout's room */
+#endif
+      assert_int_equal(cup_dfact_factor(f, act, delta, &facts, &updates), CUP_OK);
       cup_dfact_solve(f, w);
+#if CUP_COUNTING
+      counting = 0;
+      assert_int_equal(alloc_count - before, 0);
+#endif
       cg_solves += cup_dfact_by_cg(f);
       dense_reference(C, d, m, n, act, delta, v, ref);
       double err = 0, scale = 0;
@@ -94,8 +108,8 @@ static void solves_against_dense(long room) {
       if (err > 1e-8 * scale)
         fail_msg("trial %d step %d: |solve - dense| = %.3e (scale %.3e)", trial, step, err, scale);
     }
-    assert_true(facts >= 5);       /* both paths ran (row updates with the automatic room) */
-    assert_true(room < 0 ? updates > 0 : updates == 0);
+    assert_true(facts >= 5);       /* both paths ran */
+    all_updates += updates;
     cup_dfact_free(&f);
     assert_null(f);
     cup_polyset_free(&K);
@@ -103,22 +117,28 @@ static void solves_against_dense(long room) {
     free(C); free(d); free(act); free(v); free(w); free(ref);
   }
   if (room < 0 || room >= 1000) assert_int_equal(cg_solves, 0);
-  else assert_true(cg_solves > 100);
+  else if (per_row == 0) assert_true(cg_solves > 100);
+  return all_updates;
 }
 
 static void test_solves_against_dense(void **state) {
   (void)state;
-  solves_against_dense(-1);
+  assert_true(solves_against_dense(-1, 0) > 50);
 }
 
 static void test_packed_room(void **state) {
   (void)state;
-  solves_against_dense(1L << 20);
+  assert_true(solves_against_dense(1L << 20, 0) > 50);
 }
 
 static void test_packed_room_too_small(void **state) {
   (void)state;
-  solves_against_dense(0);       /* at least m: the diagonal alone fits */
+  solves_against_dense(0, 0);    /* at least m: the diagonal alone fits */
+}
+
+static void test_room_for_some_layouts(void **state) {
+  (void)state;
+  assert_true(solves_against_dense(0, 4) > 20);
 }
 
 int main(void) {
@@ -126,6 +146,7 @@ int main(void) {
     cmocka_unit_test(test_solves_against_dense),
     cmocka_unit_test(test_packed_room),
     cmocka_unit_test(test_packed_room_too_small),
+    cmocka_unit_test(test_room_for_some_layouts),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -15,9 +15,10 @@ struct cup_dfact {
   int updates;                /* M form: row updates allowed */
   cholmod_common cm;
   cholmod_sparse *Ku;         /* KKT form: permuted upper matrix, values rewritten */
-  cholmod_sparse *Mp;         /* M form: permuted M, sorted, full (packed: upper); its upper part up to mup */
-  cholmod_sparse *R;          /* M form: one column for rowadd, one row pattern for rowdel */
-  cholmod_factor *L;          /* simplicial LDL^T; M form: room for the factor of all of M, or NULL (packed) */
+  cholmod_sparse *Mp;         /* M form: permuted upper triangle of M, sorted */
+  cholmod_sparse R;           /* M form: one column for rowadd, one row pattern for rowdel */
+  int Rp[2];
+  cholmod_factor *L;          /* simplicial LDL^T; M form: in `room` entries, laid out by new_layout */
   int *pperm, *iperm;         /* permuted <-> natural (KKT order for the KKT form) */
   int *cpos, *dpos;           /* KKT form: positions of C's entries and of row diagonals */
   double *work;               /* 2 N */
@@ -29,19 +30,20 @@ struct cup_dfact {
   int *par, *flag, *stack;    /* etree of the factor being built, marks, reach */
   double *yrow;               /* the row being built, scattered (zero between rows) */
   int *etree;                 /* elimination tree of all of M: bounds rows of any factor */
-  unsigned stamp;             /* marks in flag for row patterns (rowdel) */
+  unsigned stamp;             /* marks in flag for row patterns (row updates, their cost) */
   double refactor_ops;        /* work of the last refactorization; 0: none yet */
-  int *lp0, *next0, *prev0;   /* L's first layout: each column with room for all of M */
-  int *mup;                   /* M form: one past the diagonal in each column of Mp */
-  /* M form, packed: the factor of the free rows alone in a room smaller than
-   * the factor of all of M (no row updates); when it does not fit, solves by
-   * conjugate gradients on M~ instead (dual_cg.c) */
-  int packed, by_cg;
-  size_t room;                /* entries of pk_i / pk_x */
-  unsigned char *lay_act;     /* the free set the packed layout was made for */
+  /* M form: the factor of the free rows alone, laid out for a set of rows
+   * that holds them (row updates inside it); when no layout fits the room,
+   * solves by conjugate gradients on M~ instead (dual_cg.c) */
+  size_t room;                /* entries of L */
+  int *lp0;                   /* the layout: each column's room its count in the factor of
+                               * lay_act's rows and a spare entry */
+  unsigned char *lay_act;     /* the rows the layout was made for (permuted order) */
   int lay_ok;
-  int *pk_p, *pk_nz, *pk_i;
-  double *pk_x;
+  int lay_all;                /* the layout holds every row of nonzero norm */
+  int all_fit;                /* 0: a layout for every row of nonzero norm did not fit */
+  int lp_stale;               /* L->p is not the layout */
+  int by_cg;
   double *cg_z, *cg_p, *cg_q, *cg_u;   /* m, m, m, n */
 };
 
@@ -218,15 +220,14 @@ static void kkt_solve(cup_dfact *f, double *v) {
 /* The elimination tree of all of M (Liu's algorithm with path compression):
  * every factor of a principal submatrix in this order has its pattern
  * inside the factor of M, so a row of the full factor, found from this tree,
- * bounds the row of any factor (what rowdel needs). Column k of Mp up to
- * its diagonal (mup) is column k of M's upper triangle. */
+ * bounds the row of any factor (what rowdel needs). */
 static void full_etree(cup_dfact *f) {
   const int *Mp = f->Mp->p, *Mi = f->Mp->i;
   int *anc = f->flag;
   for (int k = 0; k < f->m; k++) {
     f->etree[k] = -1;
     anc[k] = -1;
-    for (int e = Mp[k]; e < f->mup[k]; e++)
+    for (int e = Mp[k]; e < Mp[k + 1]; e++)
       for (int i = Mi[e], next; i != -1 && i < k; i = next) {
         next = anc[i];
         anc[i] = k;
@@ -242,10 +243,10 @@ static int cmp_int(const void *a, const void *b) {
 }
 
 /* M = C P^-1 C^T in the permuted order, sorted, every diagonal present (a
- * zero row of C has M_ii = 0): its upper triangle, or all of it. Column by
+ * zero row of C has M_ii = 0): its upper triangle. Column by
  * column from the rows of C, M_ri = sum_j c_rj c_ij / p_j, so that no
  * copy of M is made on the way (CHOLMOD's product, sum and sort made four). */
-static cholmod_sparse *build_m(cup_dfact *f, int upper) {
+static cholmod_sparse *build_m(cup_dfact *f) {
   const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
   const double *pdinv = f->K->pdinv;
   int m = f->m;
@@ -265,7 +266,7 @@ static cholmod_sparse *build_m(cup_dfact *f, int upper) {
         double cij = Ct->x[a] * pdinv[j];
         for (int b = C->p[j]; b < C->p[j + 1]; b++) {
           int r = f->iperm[C->i[b]];
-          if (upper && r > k) continue;
+          if (r > k) continue;
           if (mark[r] != k) { mark[r] = k; list[len++] = r; }
           val[r] += C->x[b] * cij;
         }
@@ -291,88 +292,128 @@ done:
   return M;
 }
 
-/* The room of the factor: all of M's factor, with row updates, unless that
- * is more than twice M itself: then packed in twice M. The free rows of a
- * crowd are a few in a hundred of its contacts, and the factor of all of M
- * 3-6 times M (10^3-10^5 disks), most of the projector's memory; a chain
- * (a ladder) fills less than M and keeps its row updates. The free rows of
- * a jam (1000 disks, 600 steps) never outgrew the packed room; a free set
- * that does is solved by CG. */
-static long auto_room(long full, long nnz_m) {
-  return full > 2 * nnz_m ? 2 * nnz_m : -1;
+/* The column counts of the factor of M_FF, F = pact (permuted order; the
+ * reach of each row, as restricted_ldl walks it) laid out packed in p;
+ * returns the entries. */
+static long packed_layout(cup_dfact *f, const unsigned char *pact, int *p) {
+  int m = f->m;
+  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
+  int *par = f->par, *flag = f->flag;
+  for (int k = 0; k < m; k++) p[k + 1] = 1 + pact[k];   /* a free row's column: one spare entry */
+  for (int k = 0; k < m; k++) {
+    if (!pact[k]) continue;
+    par[k] = -1;
+    flag[k] = k;
+    for (int e = Mp[k]; e < Mp[k + 1]; e++)
+      for (int i = Mi[e]; i < k && pact[i] && flag[i] != k; i = par[i]) {
+        if (par[i] < 0) par[i] = k;
+        flag[i] = k;
+        p[i + 1]++;
+      }
+  }
+  for (int k = 0; k < m; k++) flag[k] = k;   /* below any row that looks at k */
+  p[0] = 0;
+  for (int k = 0; k < m; k++) p[k + 1] += p[k];
+  return p[m];
 }
 
-/* Room for the factor of all of M, held as L = I until the first
- * factorization: no numeric work here, and none of a size of all of M
- * later; what row updates need (CHOLMOD's workspace, a column, the tree of
- * all of M) taken now, not in a projection. */
-static int full_room(cup_dfact *f, char *errmsg) {
+/* A layout holds the factor of any subset of the rows it was made for (the
+ * filled graph of a principal submatrix, eliminated in the same order, is a
+ * subgraph): a new delta, or rows leaving, keep it. */
+static int fits_layout(const cup_dfact *f) {
+  if (!f->lay_ok) return 0;
+  for (int k = 0; k < f->m; k++)
+    if (f->pact[k] > f->lay_act[k]) return 0;
+  return 1;
+}
+
+/* A layout for every row of nonzero norm if that fits the room (then every
+ * free set fits it); else for the free set and the last layout's rows (the
+ * free set of a jam wanders among the same rows); else for the free set. */
+static int new_layout(cup_dfact *f) {
+  f->lp_stale = 1;
+  f->lay_all = 0;
+  if (f->all_fit) {
+    for (int k = 0; k < f->m; k++) f->lay_act[k] = f->K->rownorm[f->pperm[k]] > 0;
+    if (packed_layout(f, f->lay_act, f->lp0) <= (long)f->room) return f->lay_ok = f->lay_all = 1;
+    f->all_fit = 0;
+    f->lay_ok = 0;
+  }
+  if (f->lay_ok) {
+    for (int k = 0; k < f->m; k++) f->lay_act[k] |= f->pact[k];
+    if (packed_layout(f, f->lay_act, f->lp0) <= (long)f->room) return 1;
+  }
+  f->lay_ok = packed_layout(f, f->pact, f->lp0) <= (long)f->room;
+  if (f->lay_ok) memcpy(f->lay_act, f->pact, (size_t)f->m);
+  return f->lay_ok;
+}
+
+/* The room of the factor: all of M's factor with a spare entry a column,
+ * unless that is more than twice M itself: then twice M. The free rows of a
+ * crowd are a few in a hundred of its contacts, and the factor of all of M
+ * 3-6 times M (10^3-10^5 disks), most of the projector's memory; a chain (a
+ * ladder) fills less than M. The free rows of a jam (1000 disks, 600 steps)
+ * never outgrew twice M; a free set that does is solved by CG. */
+static long auto_room(long full, long nnz_m, int m) {
+  return full > 2 * nnz_m ? 2 * nnz_m : full + m;
+}
+
+/* L's columns in order, linked as CHOLMOD links a monotonic simplicial
+ * factor (head m + 1, tail m). */
+static void columns_in_order(cholmod_factor *L, int m) {
+  int *next = L->next, *prev = L->prev;
+  for (int j = 0; j < m; j++) {
+    next[j] = j + 1;
+    prev[j] = j - 1;
+  }
+  prev[0] = m + 1;
+  next[m] = -1;
+  prev[m] = m - 1;
+  next[m + 1] = 0;
+  prev[m + 1] = -1;
+  L->is_monotonic = 1;
+}
+
+/* L = I in room for `room` entries (at least the diagonal), a CHOLMOD factor
+ * object so that CHOLMOD's row updates work on it; restricted_ldl lays each
+ * factor out in it (new_layout). What row updates need (CHOLMOD's
+ * workspace, a column, the tree of all of M) is taken now, not in a
+ * projection. */
+static int factor_room(cup_dfact *f, long room, char *errmsg) {
   size_t M1 = (size_t)f->m + 1;
-  f->R = cholmod_allocate_sparse((size_t)f->m, 1, (size_t)f->m, 1, 1, 0, CHOLMOD_REAL, &f->cm);
-  f->etree = malloc(sizeof(int) * M1);
-  if (!f->R || !f->etree) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  full_etree(f);
-  /* each column's room is its count in the factor of all of M and no more
-   * (CHOLMOD's default adds a fifth and 5 entries a column): restricted_ldl
-   * fills no more, and a column CHOLMOD's row updates move is moved back */
-  f->cm.grow1 = 1;
-  f->cm.grow2 = 0;
-  if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 0, 1, f->L, &f->cm))
-    return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
-                    "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-  /* CHOLMOD's row updates may move a column whose room looks short to them;
-   * restricted_ldl goes back to this layout, every column's room its count in
-   * the factor of all of M, which holds any factor of free rows */
+  f->room = (size_t)(room > f->m ? room : f->m);
+  f->L = cholmod_allocate_factor((size_t)f->m, &f->cm);
+  if (!f->L || !cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, f->L, &f->cm) ||
+      !cholmod_reallocate_factor(f->room, f->L, &f->cm))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for the factor");
   f->lp0 = malloc(sizeof(int) * M1);
-  f->next0 = malloc(sizeof(int) * (M1 + 1));
-  f->prev0 = malloc(sizeof(int) * (M1 + 1));
-  if (!f->lp0 || !f->next0 || !f->prev0) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  memcpy(f->lp0, f->L->p, sizeof(int) * M1);
-  memcpy(f->next0, f->L->next, sizeof(int) * (M1 + 1));
-  memcpy(f->prev0, f->L->prev, sizeof(int) * (M1 + 1));
+  f->lay_act = calloc(M1, 1);
+  f->cg_z = malloc(sizeof(double) * M1);
+  f->cg_p = malloc(sizeof(double) * M1);
+  f->cg_q = malloc(sizeof(double) * M1);
+  f->cg_u = calloc((size_t)f->n + 1, sizeof(double));
+  if (!f->lp0 || !f->lay_act || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  f->all_fit = f->lp_stale = 1;
+  new_layout(f);
+  /* row updates where the layout holds every row of nonzero norm, so that
+   * every free set fits it and rows join it by updates (a ladder, the jam
+   * of 1000 disks); not where free rows are a few in a hundred of rows
+   * whose factor is many times M (crowds of 10^4 disks and more): there
+   * they save nothing measurable, and their workspace (3 m ints and 2 m
+   * doubles) would be a tenth of the projector's memory */
+  f->updates &= f->lay_all;
+  if (!f->updates) return CUP_OK;
+  f->etree = malloc(sizeof(int) * M1);
+  if (!f->etree) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  full_etree(f);
   /* rowadd/rowdel need 2m of CHOLMOD workspace */
   if (!cholmod_allocate_work((size_t)f->m, 2 * (size_t)f->m, 2 * (size_t)f->m, &f->cm))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
   return CUP_OK;
 }
 
-static int packed_room(cup_dfact *f, long room, char *errmsg) {
-  size_t M1 = (size_t)f->m + 1, R = (size_t)(room > f->m ? room : f->m);
-  cholmod_free_factor(&f->L, &f->cm);
-  f->packed = 1;
-  f->updates = 0;
-  f->room = R;
-  f->pk_p = calloc(M1, sizeof(int));
-  f->pk_nz = malloc(sizeof(int) * M1);
-  f->pk_i = malloc(sizeof(int) * R);
-  f->pk_x = malloc(sizeof(double) * R);
-  f->cg_z = malloc(sizeof(double) * M1);
-  f->cg_p = malloc(sizeof(double) * M1);
-  f->cg_q = malloc(sizeof(double) * M1);
-  f->cg_u = calloc((size_t)f->n + 1, sizeof(double));
-  f->lay_act = calloc(M1, 1);
-  if (!f->lay_act || !f->pk_p || !f->pk_nz || !f->pk_i || !f->pk_x || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
-  for (int k = 0; k < f->m; k++) {     /* L = I until the first factorization */
-    f->pk_p[k + 1] = k + 1;
-    f->pk_nz[k] = 1;
-    f->pk_i[k] = k;
-    f->pk_x[k] = 1;
-  }
-  return CUP_OK;
-}
-
-/* Where the column of Mp ends its upper part (one past the diagonal). */
-static void upper_ends(cup_dfact *f) {
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
-  for (int k = 0; k < f->m; k++) {
-    int e = Mp[k];
-    while (e < Mp[k + 1] && Mi[e] <= k) e++;
-    f->mup[k] = e;
-  }
-}
-
-/* room < 0: automatic (auto_room); else the packed room, in entries. */
+/* room < 0: automatic (auto_room); else the room, in entries. */
 static int mform_create(cup_dfact *f, long room, char *errmsg) {
   const cup_sparse *C = &f->K->C;
   int m = f->m;
@@ -386,85 +427,33 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
   int st = amd_order(f, &Cv, errmsg);
   if (st) return st;
   size_t M1 = (size_t)m + 1;
-  f->Mp = build_m(f, 1);
-  f->mup = malloc(sizeof(int) * M1);
+  f->Mp = build_m(f);
   f->pact = calloc(M1, 1);
   f->par = malloc(sizeof(int) * M1);
   f->flag = calloc(M1, sizeof(int));
   f->stack = malloc(sizeof(int) * M1);
   f->yrow = calloc(M1, sizeof(double));
-  if (!f->Mp || !f->mup || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
+  if (!f->Mp || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
-  upper_ends(f);
-  /* the symbolic factor of all of M in the stored order */
+  /* the size of the factor of all of M in the stored order */
   f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_NATURAL;
   f->cm.postorder = 0;
   f->Mp->stype = 1;
-  f->L = cholmod_analyze(f->Mp, &f->cm);
+  cholmod_factor *L0 = cholmod_analyze(f->Mp, &f->cm);
   f->Mp->stype = 0;
   cholmod_free_work(&f->cm);
-  if (!f->L)
+  if (!L0)
     return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
                     "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
   long full = 0, nnz_m = 2L * ((int *)f->Mp->p)[m] - m;
-  for (int k = 0; k < m; k++) full += ((int *)f->L->ColCount)[k];
-  if (room < 0) room = auto_room(full, nnz_m);
-  if (room >= 0) return packed_room(f, room, errmsg);   /* no row updates: the upper part will do */
-  cholmod_sparse *Mu = f->Mp;
-  f->Mp = build_m(f, 0);                   /* row updates read whole columns */
-  cholmod_free_sparse(&Mu, &f->cm);
-  if (!f->Mp) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
-  upper_ends(f);
-  return full_room(f, errmsg);
-}
-
-/* The factor's arrays: CHOLMOD's simplicial factor, or the packed room. */
-typedef struct lview { int *p, *nz, *i; double *x; } lview;
-static lview factor_view(const cup_dfact *f) {
-  if (f->packed) return (lview){f->pk_p, f->pk_nz, f->pk_i, f->pk_x};
-  return (lview){f->L->p, f->L->nz, f->L->i, f->L->x};
-}
-
-/* The column counts of the factor of M_FF (the reach of each row, as
- * restricted_ldl walks it) laid out packed in p; returns the entries. */
-static long packed_layout(cup_dfact *f, int *p) {
-  int m = f->m;
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
-  int *par = f->par, *flag = f->flag;
-  const unsigned char *pact = f->pact;
-  for (int k = 0; k < m; k++) p[k + 1] = 1;
-  for (int k = 0; k < m; k++) {
-    if (!pact[k]) continue;
-    par[k] = -1;
-    flag[k] = k;
-    for (int e = Mp[k]; e < f->mup[k]; e++)
-      for (int i = Mi[e]; i < k && pact[i] && flag[i] != k; i = par[i]) {
-        if (par[i] < 0) par[i] = k;
-        flag[i] = k;
-        p[i + 1]++;
-      }
-  }
-  for (int k = 0; k < m; k++) flag[k] = k;   /* below any row that looks at k */
-  p[0] = 0;
-  for (int k = 0; k < m; k++) p[k + 1] += p[k];
-  return p[m];
-}
-
-/* The packed layout of the last free set that fitted holds the factor of
- * any subset of it (the filled graph of a principal submatrix, eliminated in
- * the same order, is a subgraph): a new delta, or rows leaving, keep it. */
-static int fits_layout(const cup_dfact *f) {
-  if (!f->lay_ok) return 0;
-  for (int k = 0; k < f->m; k++)
-    if (f->pact[k] > f->lay_act[k]) return 0;
-  return 1;
-}
-
-static int new_layout(cup_dfact *f, int *Lp) {
-  f->lay_ok = packed_layout(f, Lp) <= (long)f->room;
-  if (f->lay_ok) memcpy(f->lay_act, f->pact, (size_t)f->m);
-  return f->lay_ok;
+  for (int k = 0; k < m; k++) full += ((int *)L0->ColCount)[k];
+  cholmod_free_factor(&L0, &f->cm);
+  /* a column CHOLMOD's row updates would move (none should: new_layout
+   * leaves a spare entry in each) gets no more room than it needs */
+  f->cm.grow1 = 1;
+  f->cm.grow2 = 0;
+  return factor_room(f, room < 0 ? auto_room(full, nnz_m, m) : room, errmsg);
 }
 
 /* LDL^T of M~ = M_FF + delta I on the free rows F, identity elsewhere, by
@@ -474,32 +463,31 @@ static int new_layout(cup_dfact *f, int *Lp) {
  * of the factor of M_FF alone, whatever the size of M: a crowd with a tenth
  * of its contacts active, or half a ladder, costs a fraction of M's factor.
  * Written into CHOLMOD's simplicial factor (diagonal first in each column),
- * whose room for all of M holds any such factor, so that row updates and
- * solves work on it as on CHOLMOD's own; or into the packed room, laid out
- * for this F first (1: it does not fit). */
+ * in a layout for a set of rows that holds F (made first if the last one
+ * does not), so that row updates and solves work on it as on CHOLMOD's own;
+ * by_cg when no layout for F fits the room. */
 static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) {
   int m = f->m;
-  const int *Kp = f->Mp->p, *Ki = f->Mp->i, *Kend = f->mup;
+  const int *Kp = f->Mp->p, *Ki = f->Mp->i, *Kend = Kp + 1;
   const double *Kx = f->Mp->x;
-  lview L = factor_view(f);
-  int *Lp = L.p, *Li = L.i, *Lnz = L.nz;
-  double *Lx = L.x, *y = f->yrow;
+  int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
+  double *Lx = f->L->x, *y = f->yrow;
   int *par = f->par, *flag = f->flag, *stack = f->stack;
   unsigned char *pact = f->pact;
   double ops = 0;
-  if (!f->packed && !f->L->is_monotonic) {   /* columns moved by row updates: the first layout again */
-    memcpy(Lp, f->lp0, sizeof(int) * ((size_t)m + 1));
-    memcpy(f->L->next, f->next0, sizeof(int) * ((size_t)m + 2));
-    memcpy(f->L->prev, f->prev0, sizeof(int) * ((size_t)m + 2));
-    f->L->is_monotonic = 1;
+  if (!f->L->is_monotonic) {                 /* columns moved by row updates */
+    columns_in_order(f->L, m);
+    f->lp_stale = 1;
   }
   for (int k = 0; k < m; k++) pact[k] = act[f->pperm[k]];
-  if (f->packed && !fits_layout(f)) f->by_cg = !new_layout(f, Lp);
+  if (!fits_layout(f)) f->by_cg = !new_layout(f);
   if (f->by_cg) {
     for (int k = 0; k < m; k++) { Lp[k + 1] = k + 1; Lnz[k] = 1; Li[k] = k; Lx[k] = 1; }
     f->refactor_ops = 0;
     return CUP_OK;
   }
+  if (f->lp_stale) memcpy(Lp, f->lp0, sizeof(int) * ((size_t)m + 1));
+  f->lp_stale = 0;
   for (int k = 0; k < m; k++) {
     int p0 = Lp[k];
     Li[p0] = k;
@@ -548,36 +536,76 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
   return CUP_OK;
 }
 
-/* A row update's work, estimated by the path it walks up the current
- * factor's tree: from row k if it is free, else from each free neighbour. */
-static double update_cost(const cup_dfact *f, int k) {
-  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
-  double cost = 0;
-  for (int e = Mp[k]; e < Mp[k + 1]; e++) {
-    int i = Mi[e];
-    if (i != k && !f->fact_act[f->pperm[i]]) continue;
-    for (int j = i; j >= 0; j = Lnz[j] > 1 ? Li[Lp[j] + 1] : -1) cost += Lnz[j];
+/* A fresh mark for flag: negative, never a row index of restricted_ldl. */
+static int new_mark(cup_dfact *f) {
+  if (++f->stamp == 0 || f->stamp > (unsigned)INT_MAX) {
+    memset(f->flag, 0, sizeof(int) * (size_t)f->m);
+    f->stamp = 1;
   }
+  return -(int)f->stamp;
+}
+
+/* A row update's work, estimated by the columns on the paths up the current
+ * factor's tree from row i and from its free neighbours, each column once
+ * (CHOLMOD's solve for a joining row, and the update of the rows below it
+ * along the path from its new column's first entry, which starts at a
+ * neighbour or on the path of one). */
+static double update_cost(cup_dfact *f, int i) {
+  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
+  int mark = new_mark(f);
+  double cost = 0;
+  for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++)
+    for (int b = C->p[Ct->i[a]]; b < C->p[Ct->i[a] + 1]; b++) {
+      int r = C->i[b];
+      if (r != i && !f->fact_act[r]) continue;
+      for (int j = f->iperm[r]; j >= 0 && f->flag[j] != mark; j = Lnz[j] > 1 ? Li[Lp[j] + 1] : -1) {
+        f->flag[j] = mark;
+        cost += Lnz[j];
+      }
+    }
   return cost;
 }
 
-/* Free row i (natural) joins: its column of M~ against the rows free now. */
+/* The column (rowadd) or row pattern (rowdel) handed to CHOLMOD, held in
+ * scratch that is free during row updates: the reach stack and the solves'
+ * work. */
+static cholmod_sparse *update_vector(cup_dfact *f, int nz) {
+  cholmod_sparse *R = &f->R;
+  memset(R, 0, sizeof *R);
+  R->nrow = R->nzmax = (size_t)f->m;
+  R->ncol = 1;
+  f->Rp[0] = 0;
+  f->Rp[1] = nz;
+  R->p = f->Rp; R->i = f->stack; R->x = f->work;
+  R->packed = 1;
+  R->itype = CHOLMOD_INT; R->xtype = CHOLMOD_REAL; R->dtype = CHOLMOD_DOUBLE;
+  return R;
+}
+
+/* Free row i (natural) joins: its column of M~ against the rows free now,
+ * M(:, i) = C P^-1 c_i summed as build_m does (the packed form keeps only
+ * M's upper part). */
 static int mform_rowadd(cup_dfact *f, int i, double delta) {
-  int k = f->iperm[i];
-  const int *Mp = f->Mp->p, *Mi = f->Mp->i;
-  const double *Mx = f->Mp->x;
-  int *Rp = f->R->p, *Ri = f->R->i;
-  double *Rx = f->R->x;
-  int nz = 0;
-  for (int e = Mp[k]; e < Mp[k + 1]; e++) {
-    int r = Mi[e];
-    if (r == k) { Ri[nz] = r; Rx[nz++] = Mx[e] + delta; }
-    else if (f->fact_act[f->pperm[r]]) { Ri[nz] = r; Rx[nz++] = Mx[e]; }
+  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+  int k = f->iperm[i], mark = new_mark(f), nz = 0;
+  int *Ri = f->stack, *flag = f->flag;
+  double *Rx = f->work, *y = f->yrow;
+  for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) {
+    int j = Ct->i[a];
+    double cij = Ct->x[a] * f->K->pdinv[j];
+    for (int b = C->p[j]; b < C->p[j + 1]; b++) {
+      int r = C->i[b], pr = f->iperm[r];
+      if (r != i && !f->fact_act[r]) continue;
+      if (flag[pr] != mark) { flag[pr] = mark; Ri[nz++] = pr; }
+      y[pr] += C->x[b] * cij;
+    }
   }
-  Rp[0] = 0;
-  Rp[1] = nz;
-  if (!cholmod_rowadd((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
+  for (int t = 0; t < nz; t++) {
+    Rx[t] = y[Ri[t]] + (Ri[t] == k ? delta : 0);
+    y[Ri[t]] = 0;
+  }
+  if (!cholmod_rowadd((size_t)k, update_vector(f, nz), f->L, &f->cm)) return CUP_ERR_LINALG;
   f->fact_act[i] = 1;
   f->pact[k] = 1;
   return CUP_OK;
@@ -589,20 +617,13 @@ static int mform_rowadd(cup_dfact *f, int i, double delta) {
 static int mform_rowdel(cup_dfact *f, int i) {
   int k = f->iperm[i];
   const int *Kp = f->Mp->p, *Ki = f->Mp->i;
-  int *Ri = f->R->i, *flag = f->flag, nz = 0;
-  if (++f->stamp == 0 || f->stamp > (unsigned)INT_MAX) {
-    memset(flag, 0, sizeof(int) * (size_t)f->m);
-    f->stamp = 1;
-  }
-  int mark = -(int)f->stamp;         /* negative: never a row index of restricted_ldl */
-  for (int e = Kp[k]; e < f->mup[k]; e++)
+  int *Ri = f->stack, *flag = f->flag, nz = 0, mark = new_mark(f);
+  for (int e = Kp[k]; e < Kp[k + 1]; e++)
     for (int j = Ki[e]; j >= 0 && j < k && flag[j] != mark; j = f->etree[j]) {
       flag[j] = mark;
       Ri[nz++] = j;
     }
-  ((int *)f->R->p)[0] = 0;
-  ((int *)f->R->p)[1] = nz;
-  if (!cholmod_rowdel((size_t)k, f->R, f->L, &f->cm)) return CUP_ERR_LINALG;
+  if (!cholmod_rowdel((size_t)k, update_vector(f, nz), f->L, &f->cm)) return CUP_ERR_LINALG;
   f->fact_act[i] = 0;
   f->pact[k] = 0;
   return CUP_OK;
@@ -613,9 +634,8 @@ static int mform_rowdel(cup_dfact *f, int i) {
  * sweep. */
 static void mform_solve(cup_dfact *f, double *v) {
   int m = f->m, nf = 0;
-  lview L = factor_view(f);
-  const int *Lp = L.p, *Li = L.i, *Lnz = L.nz, *pp = f->pperm;
-  const double *Lx = L.x;
+  const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz, *pp = f->pperm;
+  const double *Lx = f->L->x;
   const unsigned char *pact = f->pact;
   int *cols = f->stack;
   double *t = f->work;
@@ -636,13 +656,21 @@ static void mform_solve(cup_dfact *f, double *v) {
 }
 
 /* Row updates when their estimated work stays below a refactorization's
- * (CHOLMOD's updates cost a few times more per entry than restricted_ldl).
- * Rows leave first, so that each joining row sees the final free set. */
+ * (CHOLMOD's updates cost a few times more per entry than restricted_ldl),
+ * for rows inside the layout only: there no column outgrows its room (the
+ * factors of subsets of the layout's rows, and the explicit zeros CHOLMOD
+ * leaves behind, keep to that of the whole set), and the spare entry of each
+ * keeps CHOLMOD from moving a full one before it looks; CHOLMOD would
+ * otherwise reallocate L. Rows leave first, so that each joining row sees
+ * the final free set. */
 static int mform_update(cup_dfact *f, const unsigned char *act, double delta, long *changes) {
   int m = f->m;
   double budget = f->refactor_ops / 4, cost = 0;
-  for (int i = 0; i < m && cost <= budget; i++)
-    if (act[i] != f->fact_act[i]) cost += update_cost(f, f->iperm[i]);
+  for (int i = 0; i < m && cost <= budget; i++) {
+    if (act[i] == f->fact_act[i]) continue;
+    if (act[i] && !f->lay_act[f->iperm[i]]) return 1;     /* outside the layout */
+    cost += update_cost(f, i);
+  }
   if (!(cost <= budget)) return 1;
   int st = CUP_OK;
   for (int i = 0; i < m && !st; i++)
@@ -684,13 +712,11 @@ void cup_dfact_free(cup_dfact **fp) {
   if (f->L) cholmod_free_factor(&f->L, &f->cm);
   if (f->Ku) cholmod_free_sparse(&f->Ku, &f->cm);
   if (f->Mp) cholmod_free_sparse(&f->Mp, &f->cm);
-  if (f->R) cholmod_free_sparse(&f->R, &f->cm);
   cholmod_finish(&f->cm);
   free(f->pperm); free(f->iperm); free(f->cpos); free(f->dpos);
   free(f->work); free(f->fact_act);
   free(f->pact); free(f->par); free(f->flag); free(f->stack); free(f->etree); free(f->yrow);
-  free(f->lp0); free(f->next0); free(f->prev0); free(f->mup);
-  free(f->pk_p); free(f->pk_nz); free(f->pk_i); free(f->pk_x);
+  free(f->lp0);
   free(f->cg_z); free(f->cg_p); free(f->cg_q); free(f->cg_u); free(f->lay_act);
   free(f);
   *fp = NULL;

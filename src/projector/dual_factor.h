@@ -2,13 +2,14 @@
  *     M~(F, delta) = M_FF + delta I on the free rows F, identity elsewhere,
  *     M = C P^-1 C^T,
  * factored and solved without allocating. Two forms:
- *  - diagonal P: M itself (sparse, formed once, stored full); the LDL^T of
- *    M_FF alone, at a cost set by the free rows rather than by M, either in
- *    room sized for the factor of all of M, updated row by row (CHOLMOD
- *    rowadd/rowdel) when the rows that change would cost less than
- *    refactoring, or, where that room would be large (crowds of 10^4
- *    disks and more), packed in a room of twice M and refactored, with CG
- *    for a free set whose factor does not fit;
+ *  - diagonal P: M itself (sparse, formed once, its upper triangle); the
+ *    LDL^T of M_FF alone, at a cost set by the free rows rather than by M,
+ *    in a room for the factor of all of M, or where that would be large
+ *    (crowds of 10^3 disks and more) of twice M, laid out for a set of
+ *    rows that holds F: every row when that fits (then updated row by row,
+ *    CHOLMOD rowadd/rowdel, when the rows that change would cost less than
+ *    refactoring), else F and the last layout's rows, else F alone, with
+ *    CG for a free set whose factor does not fit;
  *  - sparse P: the quasi-definite KKT matrix [P C_F^T; C_F -delta I],
  *    refactored by CHOLMOD (M would be dense), stored upper.
  * Both are symmetrically permuted once (AMD), so that factors use the
@@ -20,9 +21,9 @@
 
 typedef struct cup_dfact cup_dfact;
 
-/* room: -1 automatic; else the M form's factor of the free rows packed in
- * room entries (no row updates), solves by CG on free sets whose factor
- * does not fit (tests use it to run both). */
+/* room: -1 automatic; else the room of the M form's factor in entries,
+ * solves by CG on free sets whose factor does not fit (tests use it to run
+ * every path). */
 int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, long room, char *errmsg);
 void cup_dfact_free(cup_dfact **f);
 /* Make the factor that of M~(act, delta); counts refactorizations and row
