@@ -25,7 +25,7 @@ typedef struct pn_problem {
   double *b;                     /* C xc + g */
   const double *tau;
   pn_ws *w;                      /* iterate and scratch */
-  int finishing;                 /* inside the finishing solve */
+  int finishing;                 /* inside the finishing solve (2: an early one) */
 } pn_problem;
 
 /* Scratch of a solve; with own = 0 (the main solve) the iterate buffers
@@ -171,10 +171,11 @@ typedef int (*pn_stop_fn)(cup_projector *p, const pn_problem *q, cup_proj_info *
 /* The finishing solve on the current free set F (already factored):
  * multipliers with s_F(lambda) = tau_F, by iterative refinement on the
  * primal slack (s computed from y = xc + P^-1 C^T lambda stays accurate when
- * M_FF is ill-conditioned); accepted if `stop` says so, else the iterate
- * stays. */
+ * M_FF is ill-conditioned); accepted if `stop` says so (an early one, before
+ * the Levenberg parameter is back at its least, only if certainly feasible),
+ * else the iterate stays. */
 static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
-                     cup_proj_info *info) {
+                     cup_proj_info *info, int early) {
   int m = p->m;
   pn_ws *w = q->w;
   double *rhs = p->nw->rhs;
@@ -204,7 +205,7 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
    * them first would move z off those rows by |lam_i| ||c_i||, above eta's
    * target, and the corrections below would cycle on them. The
    * certificate takes lam's positive part (cup_certify). */
-  ((pn_problem *)q)->finishing = 1;
+  ((pn_problem *)q)->finishing = early ? 2 : 1;
   int ok = stop(p, q, info);
   ((pn_problem *)q)->finishing = 0;
   int neg = 0;
@@ -227,7 +228,7 @@ static int pn_correct(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
                       cup_proj_info *info) {
   pn_ws *w = q->w;
   for (int round = 0; round < 8; round++) {
-    if (pn_finish(p, q, stop, info)) return CUP_OK;
+    if (pn_finish(p, q, stop, info, 0)) return CUP_OK;
     /* pn_finish left the finished point's signs in d and slack in s2/gam2 */
     int changed = 0;
     for (int i = 0; i < p->m; i++) {
@@ -260,7 +261,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
    * projection needed (a jam stays degenerate from one step to the next) */
   double dmin = cup_dfact_delta_min(p->nw->df), dmax = 1e-2 * K->lip;
   double delta = q->rows ? dmin : fmin(fmax(dmin, 1e-2 * p->nw->delta_peak), dmax), peak = delta;
-  int settled = 0;
+  int settled = 0, early = 0;
   if (!q->rows) memcpy(w->snap, w->lam, msz);
   memset(w->prev, 0, (size_t)m);
   for (int it = 0;; it++) {
@@ -290,8 +291,8 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     /* finish once F repeats after a full step, or once the iterate is
      * stationary to rounding (then steps shrink for reasons of rounding) */
     int stationary = resid <= 64 * DBL_EPSILON * (lmax + DBL_MIN);
-    if ((settled || stationary) && memcmp(w->act, w->prev, (size_t)m) == 0) {
-      if (pn_finish(p, q, stop, info)) return CUP_OK;
+    if ((settled || stationary || early) && memcmp(w->act, w->prev, (size_t)m) == 0) {
+      if (pn_finish(p, q, stop, info, !(settled || stationary))) return CUP_OK;
       for (int i = 0; i < m; i++) rhs[i] = w->act[i] ? w->s[i] : 0;   /* pn_finish used rhs */
     }
     memcpy(w->prev, w->act, (size_t)m);
@@ -331,6 +332,12 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
      * damped step is short of the answer, and a finishing solve on a wrong
      * F returns a point outside K (certified, but not exact) */
     settled = alpha == 1 && delta == dmin;
+    /* ... but the Levenberg parameter comes down a tenth a full step, with a
+     * refactorization each (4-5 in a jam's projection): an early finishing
+     * solve once a full damped step leaves F as it was, kept only if its
+     * answer is certainly feasible (then as exact as an iterate main_stop
+     * takes: F was right) */
+    early = !q->rows && alpha == 1 && delta > dmin;
     /* Levenberg: a very short step that still changes f means the model is
      * poor: trust it less at once (steps cut short by rounding say
      * nothing); a full step trusts it more, a tenth at a time. On the
@@ -411,7 +418,7 @@ static int main_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info)
     eq += 2 * w->lam[i] * (w->s[i] + w->gam[i]);
     worst = cup_min(worst, w->s[i] - w->gam[i]);
   }
-  if (!(eq <= info->eps_target) || !(q->finishing || worst >= 0)) return 0;
+  if (!(eq <= info->eps_target) || !(q->finishing == 1 || worst >= 0)) return 0;
   detach(p, w);                             /* cup_certify reads p->y, p->s, p->gam */
   p->has_inward = 0;                        /* an anchor belongs to one candidate */
   p->make_inward = inward_sparse;
