@@ -37,7 +37,7 @@ struct cup_dfact {
    * solves by conjugate gradients on M~ instead (dual_cg.c) */
   size_t room;                /* entries of L */
   int *lp0;                   /* the layout: each column's room its count in the factor of
-                               * lay_act's rows and a spare entry */
+                               * lay_act's rows, and a spare entry for those rows */
   unsigned char *lay_act;     /* the rows the layout was made for (permuted order) */
   int lay_ok;
   int lay_all;                /* the layout holds every row of nonzero norm */
