@@ -504,8 +504,9 @@ static void finish_file(run_t *r) {
   }
 }
 
-/* An error is one line (plus nothing); a warning is one line before the
- * summary; the summary is one line unless --quiet. */
+/* An error is one line (plus nothing); a warning (the status, a crowd's
+ * overlap beyond eta) is one line each before the summary; the summary is
+ * one line unless --quiet. */
 static void report(const run_t *r) {
   const args_t *a = r->args;
   const cup_run_info *i = &r->info;
@@ -521,6 +522,9 @@ static void report(const run_t *r) {
   if (r->status > 0)
     fprintf(stderr, "catchup-run: warning: %s: %s: %s\n", a->scene, cup_status_name(r->status),
             r->message);
+  char overlap[320];
+  if (r->crowd && crowd_log_overlap(r->crowd, overlap, sizeof overlap))
+    fprintf(stderr, "catchup-run: warning: %s: %s\n", a->scene, overlap);
   if (a->quiet) return;
   char how[96], est[48] = "";
   if (r->opts.scheme == CUP_SCHEME_ADAPTIVE)

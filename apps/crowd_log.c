@@ -16,6 +16,7 @@ struct crowd_log {
   long n;
   double *col[COLS];            /* n + 1 entries each; step 0 is the start */
   double last_clock;
+  long last;                    /* the steps written (crowd_log_write), -1 before */
 };
 
 static double now(void) {
@@ -34,6 +35,7 @@ crowd_log *crowd_log_create(cup_crowd *c, long n) {
   if (fail) { crowd_log_free(&L); return NULL; }
   L->col[1][0] = cup_crowd_agents(c);
   L->last_clock = now();
+  L->last = -1;
   return L;
 }
 
@@ -60,6 +62,7 @@ int crowd_log_write(crowd_log *L, cup_h5run *w, long last, const double *q) {
   char name[64];
   int N = cup_crowd_agents(L->c);
   L->col[6][last] = cup_crowd_min_gap(L->c, q);
+  L->last = last;
   long len = last + 1, dn = N;
   int st = CUP_OK;
   for (int c = 0; c < COLS; c++) {
@@ -87,4 +90,28 @@ void crowd_log_summary(const crowd_log *L, char *buf, size_t size) {
   for (int i = 0; i < N; i++)
     if (!isnan(et[i])) { out++; lastexit = isnan(lastexit) ? et[i] : fmax(lastexit, et[i]); }
   snprintf(buf, size, "%d agents, %d out (the last at t = %.4g)", N, out, lastexit);
+}
+
+int crowd_log_overlap(const crowd_log *L, char *buf, size_t size) {
+  /* The state x_k's gap against the eta of the step k that made it: below
+   * -sqrt(2) eta the projection is not the cause (it is exact for the rows
+   * it had), but an agent that was farther than the contact margin from
+   * another or from a wall at x_{k-1} and closed it within one step, with
+   * no row to stop it. A gap's rounding is a few ulps of the positions:
+   * a billionth of the largest radius is far above it. */
+  const double *r = cup_crowd_radii(L->c);
+  double rmax = 0;
+  for (int i = 0; i < cup_crowd_agents(L->c); i++) rmax = fmax(rmax, r[i]);
+  long worst = -1;
+  double excess = 1e-9 * rmax;
+  for (long k = 1; k <= L->last; k++) {
+    double e = -L->col[6][k] - sqrt(2) * L->col[5][k];
+    if (e > excess) { excess = e; worst = k; }
+  }
+  if (worst < 0) return 0;
+  snprintf(buf, size, "overlap of %.3g m at t = %.6g (step %ld), beyond the certified eta %.3g: an "
+           "agent closed more than the contact margin on another or on a wall within one step "
+           "(raise crowd.margin, or take smaller steps); /steps/gap has every step's",
+           -L->col[6][worst], L->col[0][worst], worst, L->col[5][worst]);
+  return 1;
 }

@@ -22,5 +22,9 @@ int crowd_log_begin(crowd_log *L, cup_h5run *w);
 int crowd_log_write(crowd_log *L, cup_h5run *w, long last, const double *q);
 /* "1000 agents, 1000 out (last at t = 201.3), ..." into buf. */
 void crowd_log_summary(const crowd_log *L, char *buf, size_t size);
+/* 1 and a message naming the step, its time and the overlap when a state
+ * written overlaps beyond the eta certified by the step that made it (the
+ * worst one), else 0. */
+int crowd_log_overlap(const crowd_log *L, char *buf, size_t size);
 
 #endif

@@ -260,6 +260,52 @@ static void test_warning_exits_zero(void **state) {
   H5Fclose(f);
 }
 
+/* A crowd whose contact margin is next to nothing (crowd.margin = 1e-9):
+ * agents get rows only once they overlap, so states overlap far beyond
+ * the certified eta, and catchup-run says so in one warning line naming
+ * the worst step of the file's /steps/gap and /steps/eta_cert, with exit
+ * 0 (the samples are right for the rows the steps had). With the default
+ * margin the same crowd gives no such line, and its file has no such step. */
+static void test_crowd_overlap_warning(void **state) {
+  (void)state;
+  const char *scene = tmp_path("jam.yaml"), *out = tmp_path("jam.h5");
+  FILE *y = fopen(scene, "w");
+  assert_non_null(y);
+  fputs("crowd:\n"
+        "  room: [[0, 0], [6, 0], [6, 4], [0, 4]]\n"
+        "  doors: [[[6, 1.7], [6, 2.3]]]\n"
+        "  agents: {count: 25, radius: 0.25, spread: 0.0, region: [0.5, 0.5, 4, 3.5], seed: 3}\n"
+        "  speed: 1.5\n"
+        "T: 4\nn: 80\noutput: {every: 10}\n", y);
+  fclose(y);
+  for (int tiny = 0; tiny <= 1; tiny++) {
+    const char *args[] = {scene, "-o", out, "--set", tiny ? "crowd.margin=1e-9" : "crowd.grid=0.1", NULL};
+    result r = run_cli(args, 0, 0);
+    expect_exit(&r, 0, tiny ? 3 : 2);
+    hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(f >= 0);
+    double *gap, *eta, worst = 1e-9 * 0.25;       /* the app's rounding allowance */
+    hsize_t n = read_rows(f, "steps/gap", 1, 1, &gap);
+    assert_true(read_rows(f, "steps/eta_cert", 1, 1, &eta) == n && n == 81);
+    long at = -1;
+    for (hsize_t k = 1; k < n; k++)
+      if (-gap[k] - sqrt(2) * eta[k] > worst) { worst = -gap[k] - sqrt(2) * eta[k]; at = (long)k; }
+    if (!tiny) {
+      assert_true(at < 0);
+      assert_null(strstr(r.err, "overlap"));
+    } else {
+      assert_true(at > 0 && -gap[at] > 0.1);
+      char line[128];
+      snprintf(line, sizeof line, "warning: %s: overlap of %.3g m at t = %.6g (step %ld)", scene, -gap[at],
+               4.0 * at / 80, at);
+      expect_in_err(&r, line);
+    }
+    free(gap);
+    free(eta);
+    H5Fclose(f);
+  }
+}
+
 /* Rows k = 0, 1000, 2000, ... of a run too long to finish. */
 static void check_prefix(hid_t f, hsize_t *rows) {
   double *t, *x;
@@ -415,6 +461,7 @@ int main(void) {
     cmocka_unit_test(test_sigint_stops_cleanly),
     cmocka_unit_test(test_kill9_file_readable),
     cmocka_unit_test(test_output_in_use),
+    cmocka_unit_test(test_crowd_overlap_warning),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }
