@@ -188,7 +188,7 @@ static rss_figures rss_now(void) {
   size_t len = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
   if (f) fclose(f);
   buf[len] = 0;
-  for (char *line = buf; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+  for (char *line = buf, *nl; line; line = (nl = strchr(line, '\n')) ? nl + 1 : NULL) {
     if (!strncmp(line, "VmHWM:", 6)) r.hwm = atol(line + 6);
     else if (!strncmp(line, "VmRSS:", 6)) r.rss = atol(line + 6);
     else if (!strncmp(line, "RssFile:", 8)) r.file = atol(line + 8);
