@@ -7,9 +7,9 @@
 #include <time.h>
 #include "crowd_log.h"
 
-enum { COLS = 10 };
+enum { COLS = 11 };
 static const char *const names[COLS] = {"t", "inside", "rows", "active", "eps_cert", "eta_cert", "gap",
-                                        "iterations", "factorizations", "seconds"};
+                                        "iterations", "factorizations", "seconds", "added"};
 
 struct crowd_log {
   cup_crowd *c;
@@ -51,7 +51,7 @@ int crowd_log_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   if (k < 1 || k > L->n) return 0;
   double clock = now();
   double v[COLS] = {t, cup_crowd_inside(L->c), cup_crowd_rows(L->c), pi->active, pi->eps_cert, pi->eta_cert,
-                    NAN, pi->iterations, pi->factorizations, clock - L->last_clock};
+                    NAN, pi->iterations, pi->factorizations, clock - L->last_clock, cup_crowd_added(L->c)};
   L->last_clock = clock;
   for (int c = 0; c < COLS; c++) if (c != 6) L->col[c][k] = v[c];
   L->col[6][k - 1] = cup_crowd_gap(L->c);    /* the gap of x_{k-1}, seen while building step k */
@@ -95,10 +95,12 @@ void crowd_log_summary(const crowd_log *L, char *buf, size_t size) {
 int crowd_log_overlap(const crowd_log *L, char *buf, size_t size) {
   /* The state x_k's gap against the eta of the step k that made it: below
    * -sqrt(2) eta the projection is not the cause (it is exact for the rows
-   * it had), but an agent that was farther than the contact margin from
-   * another or from a wall at x_{k-1} and closed it within one step, with
-   * no row to stop it. A gap's rounding is a few ulps of the positions:
-   * a billionth of the largest radius is far above it. */
+   * it had), but a contact the step's rows missed that its rechecks (the
+   * step projected again with the contacts its answer overlapped, at most
+   * 8 times) did not all catch: an agent that was farther than the contact
+   * margin from another or from a wall at x_{k-1} and closed it within one
+   * step. A gap's rounding is a few ulps of the positions: a billionth of
+   * the largest radius is far above it. */
   const double *r = cup_crowd_radii(L->c);
   double rmax = 0;
   for (int i = 0; i < cup_crowd_agents(L->c); i++) rmax = fmax(rmax, r[i]);
@@ -109,9 +111,9 @@ int crowd_log_overlap(const crowd_log *L, char *buf, size_t size) {
     if (e > excess) { excess = e; worst = k; }
   }
   if (worst < 0) return 0;
-  snprintf(buf, size, "overlap of %.3g m at t = %.6g (step %ld), beyond the certified eta %.3g: an "
-           "agent closed more than the contact margin on another or on a wall within one step "
-           "(raise crowd.margin, or take smaller steps); /steps/gap has every step's",
+  snprintf(buf, size, "overlap of %.3g m at t = %.6g (step %ld), beyond the certified eta %.3g: "
+           "agents closed more than the contact margin within one step, more than the step's "
+           "rechecks caught (raise crowd.margin, or take smaller steps); /steps/gap has every step's",
            -L->col[6][worst], L->col[0][worst], worst, L->col[5][worst]);
   return 1;
 }

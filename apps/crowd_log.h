@@ -1,7 +1,8 @@
 /* crowd_log — what catchup-run keeps of a crowd scene's run besides /t and
  * /x: per step the agents inside, the rows and active contacts, the
- * certified (eps, eta), the smallest gap, the projector's work and the
- * seconds; at the end the exit times, radii and walls (docs/crowd.md). */
+ * certified (eps, eta), the smallest gap, the projector's work, the
+ * seconds and the contacts the rows missed (added, then projected again);
+ * at the end the exit times, radii and walls (docs/crowd.md). */
 #ifndef CUP_CROWD_LOG_H
 #define CUP_CROWD_LOG_H
 

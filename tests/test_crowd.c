@@ -2,7 +2,8 @@
  * without it: the distance to a door by elementary geometry (straight, and
  * around the end of a wall), an agent alone walking at the desired speed and
  * leaving at the time its distance takes, two agents pushed head-on stopping
- * at contact, and an evacuation in which every step is checked for overlaps
+ * at contact (also when one step would take them through each other, or an
+ * agent through a wall, from beyond the contact margin), and an evacuation in which every step is checked for overlaps
  * (against the step's certified eta) and for agents crossing walls; and the
  * errors for bad scenes. */
 #include <setjmp.h>
@@ -323,6 +324,71 @@ static void test_head_on(void **state) {
   cup_crowd_free(&c);
 }
 
+/* A push of *ctx metres a step: agent 0 along +x and agent 1 along -x
+ * (two agents), or agent 0 along -y (one). */
+static int push(double t0, double t1, const double *q, double *F, void *ctx) {
+  (void)q; (void)t0; (void)t1;
+  F[0] = 0; F[1] = -*(const double *)ctx;
+  return 0;
+}
+
+static int push_pair(double t0, double t1, const double *q, double *F, void *ctx) {
+  (void)q; (void)t0; (void)t1;
+  double v = *(const double *)ctx;
+  F[0] = v; F[1] = 0; F[2] = -v; F[3] = 0;
+  return 0;
+}
+
+/* Pushed 1.8 m a step with a contact margin of 0.01 m, the agents of a pair
+ * 3.5 m apart (or an agent 1.75 m from a wall) get no row from the step's
+ * rows; the step's first answer overlaps (passes through), the crowd finds
+ * the contact it missed, and the step projected again with its row (made at
+ * x_k) stops them at contact: the exact projection onto e . (y_1 - y_0) >=
+ * 0.5 puts the pair at 9.75 and 10.25 (the midpoint 10 of the free points
+ * 9.8 and 10.2, half a diameter each side), the agent at y = r = 0.25 on the
+ * wall y = 0, and there they stay. */
+static void test_missed_contacts(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 20, 0, 20, 4, 0, 4}, door[4] = {20, 1, 20, 3};
+  const double pair0[4] = {8, 2, 12, 2}, one0[2] = {5, 2}, r[2] = {0.25, 0.25}, v = 1.8;
+  for (int pair = 0; pair <= 1; pair++) {
+    cup_crowd_desc d = {.agents = pair ? 2 : 1, .q0 = pair ? pair0 : one0, .radius = r, .room_points = 4,
+                        .room = room, .doors = 1, .door = door, .speed = 1, .margin = 0.01};
+    char err[CUP_ERRMSG_LEN];
+    cup_crowd *c;
+    assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+    cup_process_desc pd = *cup_crowd_process(c);
+    pd.f_integral = pair ? push_pair : push;
+    pd.f_integral_ctx = (void *)&v;
+    for (int n = 1; n <= 4; n += 3) {
+      cup_integrator_options o;
+      cup_integrator_options_default(&o);
+      o.n = n;
+      o.T = 0.05 * n;
+      o.eps = (cup_schedule){0, 0};
+      o.eta = (cup_schedule){0, 0};
+      cup_integrator *I;
+      assert_int_equal(cup_integrator_create_process(&I, &pd, &o, err), CUP_OK);
+      cup_run_info info;
+      assert_int_equal(cup_integrator_run(I, d.q0, NULL, NULL, &info), CUP_OK);
+      const double *q = cup_integrator_state(I);
+      if (pair) {
+        assert_close(q[0], 9.75, 1e-12);
+        assert_close(q[2], 10.25, 1e-12);
+        assert_close(q[1], 2, 1e-12);
+        assert_close(q[3], 2, 1e-12);
+      } else {
+        assert_close(q[0], 5, 1e-12);
+        assert_close(q[1], 0.25, 1e-12);
+      }
+      assert_int_equal(cup_crowd_added(c), n == 1);   /* later steps have the row from the margin */
+      assert_true(info.max_eta_cert <= 1e-9);
+      cup_integrator_free(&I);
+    }
+    cup_crowd_free(&c);
+  }
+}
+
 /* 150 agents of radii 0.2 .. 0.3 in the 10 x 10 room with a square column
  * before the door: at every step the smallest gap (pairs and walls) is at
  * least -sqrt 2 eta of the step that made it, and no agent leaves but
@@ -434,6 +500,7 @@ int main(void) {
     cmocka_unit_test(test_alone),
     cmocka_unit_test(test_clearance_round_the_edge),
     cmocka_unit_test(test_head_on),
+    cmocka_unit_test(test_missed_contacts),
     cmocka_unit_test(test_evacuation_checked),
     cmocka_unit_test(test_errors),
   };

@@ -87,6 +87,11 @@ int cup_crowd_inside(const cup_crowd *c);
 double cup_crowd_gap(const cup_crowd *c);
 /** The rows (contacts and walls within the margin) of the last step. */
 int cup_crowd_rows(const cup_crowd *c);
+/** Contacts (pairs and agent-wall) the last step's rows missed: beyond the
+ *  margin at x_k, overlapping at the step's first answer (an agent closed
+ *  more than the margin in one step). The step added their rows and was
+ *  projected again; 0 in a step that missed none. */
+int cup_crowd_added(const cup_crowd *c);
 /** The distance to the nearest door around the walls (bilinear on the
  *  grid; INFINITY where no door can be reached). */
 double cup_crowd_door_distance(const cup_crowd *c, double x, double y);

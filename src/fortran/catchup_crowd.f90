@@ -45,8 +45,8 @@ module catchup_crowd
 
   public :: c_cup_crowd_create, c_cup_crowd_free, c_cup_crowd_agents, c_cup_crowd_q0, &
     c_cup_crowd_radii, c_cup_crowd_process, c_cup_crowd_exit_times, c_cup_crowd_inside, &
-    c_cup_crowd_gap, c_cup_crowd_rows, c_cup_crowd_door_distance, c_cup_crowd_desired_velocity, &
-    c_cup_crowd_walls, c_cup_crowd_min_gap
+    c_cup_crowd_gap, c_cup_crowd_rows, c_cup_crowd_added, c_cup_crowd_door_distance, &
+    c_cup_crowd_desired_velocity, c_cup_crowd_walls, c_cup_crowd_min_gap
   public :: cup_crowd_create, cup_crowd_free, cup_crowd_integrator, cup_crowd_exit_times, &
     cup_crowd_inside, cup_crowd_door_distance, cup_crowd_min_gap
 
@@ -103,6 +103,11 @@ module catchup_crowd
       type(c_ptr), value :: c
       integer(c_int) :: n
     end function c_cup_crowd_rows
+    function c_cup_crowd_added(c) bind(C, name="cup_crowd_added") result(n)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: c
+      integer(c_int) :: n
+    end function c_cup_crowd_added
     function c_cup_crowd_door_distance(c, x, y) bind(C, name="cup_crowd_door_distance") result(d)
       import :: c_double, c_ptr
       type(c_ptr), value :: c

@@ -20,6 +20,7 @@
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 #include "set/set_impl.h"
+#include "projector/projector.h"
 #include "adaptive.h"
 #include "estimate.h"
 
@@ -554,6 +555,10 @@ static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   }
 }
 
+/* Projections of one step again after rows were found missing (each adds
+ * at least one row; a crowd needs one in the jams seen). */
+enum { RECHECKS = 8 };
+
 /* The set at t_{k+1} (and x_k), then the projection of the free point. */
 static int general_step(cup_integrator *I, long k, double t, const double *xk, const double *xf,
                         double *z, cup_proj_info *pi, cup_run_info *info) {
@@ -570,6 +575,22 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
     snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
              cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+  }
+  /* a state-dependent set may find that the step's rows missed a
+   * constraint its answer violates (a crowd: a pair that closed more than
+   * the contact margin in one step); the step is then projected again, warm,
+   * with that row, its work added to the step's */
+  for (int again = 0; st >= 0 && again < RECHECKS; again++) {
+    int rc = cup_setproj_recheck(I->sp, t, xk, z);
+    if (rc <= 0) {
+      if (rc < 0) st = rc;
+      break;
+    }
+    cup_proj_info first = *pi;
+    st = cup_setproj_project(I->sp, xf, z, pi);
+    pi->iterations += first.iterations;
+    pi->factorizations += first.factorizations;
+    pi->row_updates += first.row_updates;
   }
   if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
   long rows = cup_setproj_rows(I->sp);

@@ -12,6 +12,7 @@
 #include "catchup.h"
 #include "util/linalg.h"
 #include "set/rowpool.h"
+#include "set/set_impl.h"
 #include "crowd_impl.h"
 
 /* ---- geometry ----------------------------------------------------------------- */
@@ -271,23 +272,47 @@ enum { FAR_APART = 64 };
 #define RENUMBER_DECAY 0.05
 enum { RENUMBER_PAIRS = 256 };
 
+/* One staged row into the buffer: a row, or a pattern to come. */
+static int emit_row(cup_rowbuf *rb, int i, const crowd_entry *w, int row) {
+  int pair = w->j >= 0, nnz = pair ? 4 : 2;
+  int cols[4] = {2 * i, 2 * i + 1, 2 * w->j, 2 * w->j + 1};
+  double vals[4] = {w->nx, w->ny, -w->nx, -w->ny};
+  return row ? cup_rowbuf_add(rb, nnz, cols, vals, w->off) : cup_rowbuf_expect(rb, nnz, cols);
+}
+
+/* Agent i's forced entry for wall or agent j, searching from forced[f]
+ * (the forced entries are sorted by owner), or NULL. */
+static const crowd_entry *forced_of(const cup_crowd *c, int f, int i, int j) {
+  for (; f < c->nforced && c->forced[f].owner == i; f++)
+    if (c->forced[f].e.j == j) return &c->forced[f].e;
+  return NULL;
+}
+
 /* The staged rows into the buffer by increasing internal index, in the
  * internal numbering's columns: the order of the rows, hence of every sum
  * in the projection, is the numbering's, whatever the binning (a crowd
  * evacuation is chaotic: rows in another order moved agents of
  * examples/crowd-room.yaml by metres within 200 steps). */
 static int emit_rows(cup_crowd *c, cup_rowbuf *rb) {
-  int pairs = 0, far = 0;
-  for (int i = 0; i < c->N; i++)
-    for (int e = c->run_start[i]; e < c->run_start[i] + c->run_len[i]; e++) {
+  /* the contacts a recheck forced join their owner's rows: a pattern to
+   * come becomes a row, one beyond reach follows the owner's staged rows */
+  int pairs = 0, far = 0, f = 0, st;
+  for (int i = 0; i < c->N; i++) {
+    int r0 = c->run_start[i], r1 = r0 + c->run_len[i];
+    while (f < c->nforced && c->forced[f].owner < i) f++;
+    for (int e = r0; e < r1; e++) {
       const crowd_entry *w = c->stage + e;
-      int pair = w->j >= 0, nnz = pair ? 4 : 2, st;
-      int cols[4] = {2 * i, 2 * i + 1, 2 * w->j, 2 * w->j + 1};
-      if (pair && w->row) { pairs++; far += w->j - i > FAR_APART; }
-      double vals[4] = {w->nx, w->ny, -w->nx, -w->ny};
-      st = w->row ? cup_rowbuf_add(rb, nnz, cols, vals, w->off) : cup_rowbuf_expect(rb, nnz, cols);
-      if (st) return st;
+      int row = w->row || (f < c->nforced && forced_of(c, f, i, w->j));   /* a pattern to come, forced */
+      if (w->j >= 0 && row) { pairs++; far += w->j - i > FAR_APART; }
+      if ((st = emit_row(rb, i, w, row))) return st;
     }
+    for (; f < c->nforced && c->forced[f].owner == i; f++) {      /* forced, beyond reach */
+      const crowd_entry *w = &c->forced[f].e;
+      int staged = 0;
+      for (int e = r0; e < r1 && !staged; e++) staged = c->stage[e].j == w->j;
+      if (!staged && (st = emit_row(rb, i, w, 1))) return st;
+    }
+  }
   if (pairs >= RENUMBER_PAIRS) {             /* fewer: too few to judge, and all in cache anyway */
     c->far = (double)far / pairs;
     if (c->far_base < 0) c->far_base = c->far;
@@ -298,10 +323,13 @@ static int emit_rows(cup_crowd *c, cup_rowbuf *rb) {
 static int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc) {
   cup_crowd *c = vc;
   double tk = t > 0 ? t - c->h : 0;
+  int again = c->redo;          /* the same step again, with the contacts it missed (kept) */
+  c->redo = 0;
+  if (!again) c->nforced = 0;
   mark_exits(c, q, tk);
   /* a run starts numbered from its start alone, then renumbers when the
      agents have moved enough for the pairs' columns to spread out */
-  if (tk <= 0 || (c->far_base >= 0 && c->far > c->far_base + RENUMBER_DECAY)) crowd_renumber(c, q);
+  if (!again && (tk <= 0 || (c->far_base >= 0 && c->far > c->far_base + RENUMBER_DECAY))) crowd_renumber(c, q);
   cup_rowbuf_order(rows, c->colmap, c->order_gen);
   c->gap = c->bound = INFINITY;
   c->nstage = 0;
@@ -311,6 +339,93 @@ static int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc) {
   emit_rows(c, rows);                         /* a bad row is reported by the buffer */
   c->rows = cup_rowbuf_rows(rows);
   return 0;
+}
+
+/* A contact the step's rows missed: agent (internal) owner and wall -1 - j
+ * or agent j > owner, its row at q as stage_row makes it. Once a step. */
+static int force_row(cup_crowd *c, int owner, crowd_entry e) {
+  for (int f = 0; f < c->nforced; f++)
+    if (c->forced[f].owner == owner && c->forced[f].e.j == e.j) return 0;
+  if (c->nforced == c->forced_cap) {
+    int cap = c->forced_cap ? 2 * c->forced_cap : 16;
+    struct crowd_forced *fc = realloc(c->forced, sizeof *fc * (size_t)cap);
+    if (!fc) return CUP_ERR_NOMEM;
+    c->forced = fc;
+    c->forced_cap = cap;
+  }
+  c->forced[c->nforced++] = (struct crowd_forced){owner, e};
+  return 1;
+}
+
+static int cmp_forced(const void *a, const void *b) {
+  const struct crowd_forced *x = a, *y = b;
+  if (x->owner != y->owner) return (x->owner > y->owner) - (x->owner < y->owner);
+  return (x->e.j > y->e.j) - (x->e.j < y->e.j);
+}
+
+/* The walls and agents near agent a (binned at q, displaced by da to z)
+ * that had no row (a gap of at least the margin at q) and overlap it at z:
+ * forced. dmax bounds every agent's displacement. Returns how many are new. */
+static int missed_by(cup_crowd *c, int a, double da, double dmax, const double *z) {
+  const crowd_agent *A = c->bin + a;
+  int i = c->ord[A->i], found = 0, st;
+  double zx = z[2 * i], zy = z[2 * i + 1], px, py;
+  for (int s = 0; s < c->nseg && da > c->margin; s++) {
+    const double *w = c->seg + 4 * s;
+    double d = crowd_seg_nearest(w, A->x, A->y, &px, &py), qx, qy;
+    if (!(d - A->r >= c->margin) || !(crowd_seg_nearest(w, zx, zy, &qx, &qy) < A->r)) continue;
+    double nx = (A->x - px) / d, ny = (A->y - py) / d;
+    if ((st = force_row(c, A->i, (crowd_entry){-1 - s, 1, nx, ny, -(A->r + nx * px + ny * py)})) < 0) return st;
+    found += st;
+  }
+  /* a partner b overlaps at z only within 2 rmax + da + dmax of a at q */
+  double R = 2 * c->rmax + da + dmax;
+  int i0 = (int)floor((A->x - R - c->cx0) / c->cell), i1 = (int)floor((A->x + R - c->cx0) / c->cell);
+  int j0 = (int)floor((A->y - R - c->cy0) / c->cell), j1 = (int)floor((A->y + R - c->cy0) / c->cell);
+  for (int v = j0 < 0 ? 0 : j0; v <= j1 && v < c->gy; v++)
+    for (int u = i0 < 0 ? 0 : i0; u <= i1 && u < c->gx; u++)
+      for (int b = c->cell_ptr[u + c->gx * v]; b < c->cell_ptr[u + c->gx * v + 1]; b++) {
+        const crowd_agent *B = c->bin + b, *lo = A->i < B->i ? A : B, *hi = lo == A ? B : A;
+        if (B == A) continue;
+        int j = c->ord[B->i];
+        double d = hypot(lo->x - hi->x, lo->y - hi->y);
+        if (!(d - A->r - B->r >= c->margin) || !(hypot(zx - z[2 * j], zy - z[2 * j + 1]) < A->r + B->r)) continue;
+        double nx = (lo->x - hi->x) / d, ny = (lo->y - hi->y) / d;
+        if ((st = force_row(c, lo->i, (crowd_entry){hi->i, 1, nx, ny, -(A->r + B->r)})) < 0) return st;
+        found += st;
+      }
+  return found;
+}
+
+/* After the step from q (t_k) answered z: the contacts its rows missed. A
+ * pair without a row was at least the margin apart at q, so it overlaps at
+ * z only if its agents moved more than the margin between them (a wall:
+ * its agent more than the margin), which in a jam an agent squeezed out
+ * does (0.32 m in one step of 0.05 s was seen); such contacts get their row
+ * (linearized at q like every other) and the step is projected again. */
+static int crowd_recheck(double t, const double *q, const double *z, void *vc) {
+  cup_crowd *c = vc;
+  (void)t;
+  double d2 = 0;                                /* the largest displacement, squared */
+  for (int i = 0; i < c->N; i++) {
+    double dx = z[2 * i] - q[2 * i], dy = z[2 * i + 1] - q[2 * i + 1];
+    if (!c->out[i]) d2 = fmax(d2, dx * dx + dy * dy);
+  }
+  if (!(d2 > 0.25 * c->margin * c->margin)) return 0;   /* no agent moved enough to miss anything */
+  double dmax = sqrt(d2);
+  bin_agents(c, q);                             /* the cell list at q (a query may have moved it) */
+  int found = 0, nin = c->cell_ptr[c->gx * c->gy];
+  for (int a = 0; a < nin; a++) {
+    int i = c->ord[c->bin[a].i];
+    double da = hypot(z[2 * i] - q[2 * i], z[2 * i + 1] - q[2 * i + 1]);
+    if (!(da > c->margin - dmax)) continue;     /* neither it nor a partner moved enough */
+    int st = missed_by(c, a, da, dmax, z);
+    if (st < 0) return st;                      /* out of memory */
+    found += st;
+  }
+  if (found) qsort(c->forced, (size_t)c->nforced, sizeof *c->forced, cmp_forced);
+  c->redo = found > 0;
+  return found;
 }
 
 /* The exact integral over a step at frozen q: h U(q_k), agent by agent in
@@ -581,6 +696,7 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
   if (!st) {
     cup_set_desc sd = {.kind = CUP_SET_STATE_POLYSET, .n = 2 * c->N, .rows = crowd_rows, .rows_ctx = c};
     st = cup_set_create(&c->S, &sd, errmsg);
+    if (!st) c->S->recheck = crowd_recheck;
   }
   if (st) { cup_crowd_free(&c); return st; }
   c->proc = (cup_process_desc){.n = 2 * c->N, .C = c->S, .f_integral = crowd_walk, .f_integral_ctx = c};
@@ -597,7 +713,7 @@ void cup_crowd_free(cup_crowd **cp) {
   free(c->seg); free(c->seg_kind); free(c->seg_of); free(c->seg_part);
   free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx);
   free(c->bin); free(c->kcell); free(c->run_start); free(c->run_len); free(c->stage);
-  free(c->out); free(c->exit_time);
+  free(c->out); free(c->exit_time); free(c->forced);
   crowd_order_free(c);
   free(c);
   *cp = NULL;
@@ -611,6 +727,7 @@ const double *cup_crowd_exit_times(const cup_crowd *c) { return c ? c->exit_time
 int cup_crowd_inside(const cup_crowd *c) { return c ? c->inside : 0; }
 double cup_crowd_gap(const cup_crowd *c) { return c ? c->gap : NAN; }
 int cup_crowd_rows(const cup_crowd *c) { return c ? c->rows : 0; }
+int cup_crowd_added(const cup_crowd *c) { return c ? c->nforced : 0; }
 const double *cup_crowd_q0(const cup_crowd *c) { return c ? c->q0 : NULL; }
 const double *cup_crowd_radii(const cup_crowd *c) { return c ? c->r : NULL; }
 

@@ -102,6 +102,12 @@ struct cup_crowd {
   int inside;
   double gap;                       /* the smallest gap at the state the rows were built from */
   int rows;                         /* rows of the last step */
+  /* contacts the step's rows missed (beyond the margin at q_k, overlapping
+     at its answer: crowd_recheck), forced into its rows; the owner is the
+     agent whose run the row joins (the lower internal index of a pair) */
+  struct crowd_forced { int owner; crowd_entry e; } *forced;
+  int nforced, forced_cap;
+  int redo;                         /* 1: the next rows are the same step's again */
   cup_set *S;
   cup_process_desc proc;
 };

@@ -5,10 +5,18 @@
 #define CUP_PROJECTOR_INTERNAL_H
 
 #include "proj_ws.h"
+#include "catchup/set.h"
 
 /* The values of the (sparse, diagonal-metric) polyset changed in place:
  * forget what depended on them, keep the warm start of rows still on.
  * Allocation-free. */
 void cup_projector_revalue(cup_projector *p);
+
+/* After the projection z of a step from the state x at t onto a
+ * state-dependent set whose rows can be rechecked (a crowd's): 1 when the
+ * rows missed a constraint z violates and were built again at (t, x) with
+ * it (project the step again), 0 when they missed none (every other kind of
+ * set), or an error status (cup_setproj_message says what). */
+int cup_setproj_recheck(cup_setproj *sp, double t, const double *x, const double *z);
 
 #endif

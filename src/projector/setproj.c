@@ -131,6 +131,12 @@ static int closed_form(cup_setproj *sp, const double *x, double *z, cup_proj_inf
   return cup_ellipsoid_project(S, sp->c, sp->r, x, z, sp->work, info);
 }
 
+int cup_setproj_recheck(cup_setproj *sp, double t, const double *x, const double *z) {
+  if (!sp || sp->kind != CUP_SET_STATE_POLYSET || !x || !z) return 0;
+  sp->message[0] = '\0';
+  return cup_statepoly_recheck(sp, t, x, z);
+}
+
 int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info_out) {
   cup_proj_info local;
   cup_proj_info *info = info_out ? info_out : &local;

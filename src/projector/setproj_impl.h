@@ -68,5 +68,9 @@ void cup_statepoly_free(cup_setproj *sp);
 int cup_statepoly_move(cup_setproj *sp, double t, const double *x);
 /* The projection, in the callback's numbering if it gave one. */
 int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
+/* The set's recheck of the answer z of the step from x at t (set_impl.h): 1
+ * when it missed rows, which are then built again at (t, x) within the same
+ * step; 0 when it missed none (or has no recheck); an error status. */
+int cup_statepoly_recheck(cup_setproj *sp, double t, const double *x, const double *z);
 
 #endif

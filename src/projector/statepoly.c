@@ -173,9 +173,11 @@ int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_
   return st;
 }
 
-int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
+/* The rows at (t, x) into the pool: a new step (advance) or the same one
+ * again (a recheck added rows; the pool's patterns do not age). */
+static int place_rows(cup_setproj *sp, double t, const double *x, int advance) {
   const cup_set *S = sp->S;
-  sp->step++;
+  sp->step += advance;
   cup_rowbuf_clear(&sp->rb);
   int rc = S->rows(t, x, &sp->rb, S->rows_ctx);
   if (rc) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback failed (returned %d)", rc);
@@ -197,4 +199,19 @@ int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
     revalue(sp);
   }
   return cup_projector_set_offset(sp->proj, sp->g);
+}
+
+int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
+  return place_rows(sp, t, x, 1);
+}
+
+int cup_statepoly_recheck(cup_setproj *sp, double t, const double *x, const double *z) {
+  const cup_set *S = sp->S;
+  if (!S->recheck || !sp->proj) return 0;
+  int rc = S->recheck(t, x, z, S->rows_ctx);
+  if (rc == CUP_ERR_NOMEM) return cup_setproj_fail(sp, rc, "state polyset: out of memory rechecking the rows");
+  if (rc < 0) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the recheck of the rows failed (returned %d)", rc);
+  if (rc == 0) return 0;
+  int st = place_rows(sp, t, x, 0);
+  return st ? st : 1;
 }

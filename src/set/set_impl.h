@@ -30,6 +30,11 @@ struct cup_set {
   void *oracle_ctx;
   cup_rows_fn rows;
   void *rows_ctx;
+  /* STATE_POLYSET, internal (a crowd's): given the answer z of the step
+   * from x at t, > 0 when the rows missed a constraint that z violates (the
+   * rows callback, called again at the same (t, x), then adds it), 0 when
+   * they missed none, < 0 on failure. Called with rows_ctx. */
+  int (*recheck)(double t, const double *x, const double *z, void *ctx);
 };
 
 /* A set over a polyset that is not copied (an LCS's): g = F + G u with the
