@@ -28,6 +28,7 @@ typedef struct pn_ws {
   double *y2, *s2, *gam2;           /* line-search trial */
   double *d, *lt, *snap, *keep;     /* m each (snap: the main solve's only) */
   unsigned char *act, *prev;        /* free set, and the previous one */
+  int *idx;                         /* m: the line search's rows that can reach their bound */
 } pn_ws;
 
 /* The sparse exact path (newton.c): the dual factor and the iterates
