@@ -695,7 +695,7 @@ int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, long ro
     if (!f->work || !f->fact_act) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   }
   double mmax = 0;
-  for (int i = 0; i < f->m; i++) mmax = fmax(mmax, K->rownorm[i] * K->rownorm[i]);
+  for (int i = 0; i < f->m; i++) mmax = cup_max(K->rownorm[i] * K->rownorm[i], mmax);
   f->delta_min = 1e-10 * (mmax > 0 ? mmax : 1);
   if (st) { cup_dfact_free(&f); return st; }
   *out = f;
@@ -760,7 +760,7 @@ void cup_dfact_revalue(cup_dfact *f) {
       int r = Mi[e];
       double v = wv[f->pperm[r]];
       Mx[e] = v;
-      if (r == c) mmax = fmax(mmax, v);
+      if (r == c) mmax = cup_max(v, mmax);   /* NaN passed over, as by fmax */
     }
     for (int a = K->Ct.p[i]; a < K->Ct.p[i + 1]; a++) {
       int j = K->Ct.i[a];

@@ -348,19 +348,21 @@ static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
 enum { CW_WARM_ITERS = 2 };
 #define CW_WARM_FLOOR 0.25
 
+/* cup_max, not fmax (a libm call), with the new value first: a NaN one is
+ * passed over, as fmax would. */
 static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
                                double *v, double *w, double *tmp, int warm) {
-  for (int i = 0; i < K->m; i++) v[i] = warm ? fmax(v[i], CW_WARM_FLOOR) : 1.0;
+  for (int i = 0; i < K->m; i++) v[i] = warm ? cup_max(v[i], CW_WARM_FLOOR) : 1.0;
   for (int it = 0; it < (warm ? CW_WARM_ITERS : K->cw_iters); it++) {
     apply(K, W, v, w, tmp);
     double wmax = 0;
-    for (int i = 0; i < K->m; i++) wmax = fmax(wmax, w[i]);
+    for (int i = 0; i < K->m; i++) wmax = cup_max(w[i], wmax);
     if (!(wmax > 0)) return 0;
-    for (int i = 0; i < K->m; i++) v[i] = fmax(w[i] / wmax, 1e-12);
+    for (int i = 0; i < K->m; i++) v[i] = cup_max(w[i] / wmax, 1e-12);
   }
   apply(K, W, v, w, tmp);
   double bound = 0;
-  for (int i = 0; i < K->m; i++) bound = fmax(bound, w[i] / v[i]);
+  for (int i = 0; i < K->m; i++) bound = cup_max(w[i] / v[i], bound);
   return bound * (1 + 1e-12);
 }
 
