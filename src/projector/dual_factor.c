@@ -248,10 +248,26 @@ static int cmp_int(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* A column's rows in order: by insertion when they are a few (a crowd's
+ * columns of M hold about five), where qsort's calls cost more than the
+ * sort. */
+static void sort_rows(int *a, int len) {
+  if (len > 32) {
+    qsort(a, (size_t)len, sizeof(int), cmp_int);
+    return;
+  }
+  for (int t = 1; t < len; t++) {
+    int v = a[t], u = t;
+    for (; u > 0 && a[u - 1] > v; u--) a[u] = a[u - 1];
+    a[u] = v;
+  }
+}
+
 /* M = C P^-1 C^T in the permuted order, sorted, every diagonal present (a
  * zero row of C has M_ii = 0): its upper triangle. Column by
  * column from the rows of C, M_ri = sum_j c_rj c_ij / p_j, so that no
- * copy of M is made on the way (CHOLMOD's product, sum and sort made four). */
+ * copy of M is made on the way (CHOLMOD's product, sum and sort made four);
+ * a first pass counts the entries (the pattern alone), the second sums. */
 static cholmod_sparse *build_m(cup_dfact *f) {
   const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
   const double *pdinv = f->K->pdinv;
@@ -274,17 +290,20 @@ static cholmod_sparse *build_m(cup_dfact *f) {
           int r = f->iperm[C->i[b]];
           if (r > k) continue;
           if (mark[r] != k) { mark[r] = k; list[len++] = r; }
-          val[r] += C->x[b] * cij;
+          if (pass == 1) val[r] += C->x[b] * cij;
         }
       }
       if (pass == 1) {
         int *Mp = M->p, *Mi = M->i;
         double *Mx = M->x;
-        qsort(list, (size_t)len, sizeof(int), cmp_int);
-        for (int t = 0; t < len; t++) { Mi[Mp[k] + t] = list[t]; Mx[Mp[k] + t] = val[list[t]]; }
+        sort_rows(list, len);
+        for (int t = 0; t < len; t++) {
+          Mi[Mp[k] + t] = list[t];
+          Mx[Mp[k] + t] = val[list[t]];
+          val[list[t]] = 0;
+        }
         Mp[k + 1] = Mp[k] + len;
       }
-      for (int t = 0; t < len; t++) val[list[t]] = 0;
       nnz += (size_t)len;
     }
     if (pass == 0) {
