@@ -441,6 +441,50 @@ static void test_evacuation_checked(void **state) {
   cup_crowd_free(&c);
 }
 
+/* Who has left an L-shaped room (its notch is outside), at points spread
+ * over and around it: the crowd's exit marks (the desired velocity's step
+ * marks them, from t = 0 afresh) against membership of one of the L's two
+ * rectangles. The edges cut cells of the crowd's grid (side 0.4 m here)
+ * whose centres are inside: there the crowd's answer must be the crossing
+ * test's, elsewhere it may be its cell's. */
+static void test_exits_notched_room(void **state) {
+  (void)state;
+  const double room[12] = {0, 0, 20.3, 0, 20.3, 8.3, 8.3, 8.3, 8.3, 20.3, 0, 20.3};
+  const double door[4] = {20.3, 2, 20.3, 4};
+  enum { N = 1500 };
+  double q0[2 * N], r[N], q[2 * N], F[2 * N];
+  for (int i = 0; i < N; i++) {              /* a grid in the L's upright */
+    r[i] = 0.05;
+    q0[2 * i] = 0.5 + 0.25 * (i % 30);
+    q0[2 * i + 1] = 0.5 + 0.38 * (i / 30);
+  }
+  cup_crowd_desc d = {.agents = N, .q0 = q0, .radius = r, .room_points = 6, .room = room, .doors = 1,
+                      .door = door, .speed = 1};
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c;
+  int st = cup_crowd_create(&c, &d, 0.05, err);
+  if (st) fail_msg("%s", err);
+  const cup_process_desc *pd = cup_crowd_process(c);
+  rng_t g = {11};
+  int out = 0;
+  for (int i = 0; i < N; i++) {
+    double x = -2 + 24 * rng_unif(&g), y = -2 + 24 * rng_unif(&g);
+    q[2 * i] = x;
+    q[2 * i + 1] = y;
+    out += !((x > 0 && x < 20.3 && y > 0 && y < 8.3) || (x > 0 && x < 8.3 && y > 0 && y < 20.3));
+  }
+  assert_int_equal(pd->f_integral(0, 0.05, q, F, pd->f_integral_ctx), 0);
+  const double *te = cup_crowd_exit_times(c);
+  for (int i = 0; i < N; i++) {
+    double x = q[2 * i], y = q[2 * i + 1];
+    int in = (x > 0 && x < 20.3 && y > 0 && y < 8.3) || (x > 0 && x < 8.3 && y > 0 && y < 20.3);
+    if (in != isnan(te[i])) fail_msg("agent %d at (%.6f, %.6f): %s, exit time %g", i, x, y, in ? "in" : "out", te[i]);
+  }
+  assert_int_equal(cup_crowd_inside(c), N - out);
+  assert_true(out > N / 3 && out < 2 * N / 3);  /* the L is 268 of the 576 m^2 */
+  cup_crowd_free(&c);
+}
+
 /* ---- errors ----------------------------------------------------------------- */
 
 static void expect_error(const cup_crowd_desc *d, const char *what) {
@@ -502,6 +546,7 @@ int main(void) {
     cmocka_unit_test(test_head_on),
     cmocka_unit_test(test_missed_contacts),
     cmocka_unit_test(test_evacuation_checked),
+    cmocka_unit_test(test_exits_notched_room),
     cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,6 +1,6 @@
 /* polyset: validation with messages that name the problem, the guaranteed
- * Lipschitz bound against eigenvalues computed by GSL, membership, norms and
- * the interior direction. */
+ * Lipschitz bound against eigenvalues computed by GSL (cold, revalued and
+ * rebuilt warm), membership, norms and the interior direction. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -188,7 +188,7 @@ static void test_revalued_lipschitz_bound(void **state) {
   tcsc_from_dense(&Cs, C0, M, N);            /* the pattern (every entry of C0) */
   char msg[CUP_ERRMSG_LEN];
   cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, msg), CUP_OK);
+  assert_int_equal(cup_polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, NULL, msg), CUP_OK);
   double *work = malloc(sizeof(double) * (2 * M + N)), f[M];
   gsl_matrix *A = gsl_matrix_alloc(M, M);
   gsl_vector *ev = gsl_vector_alloc(M);
@@ -213,7 +213,7 @@ static void test_revalued_lipschitz_bound(void **state) {
     tcsc Cf;
     tcsc_from_dense(&Cf, C, M, N);
     cup_polyset *F = NULL;
-    assert_int_equal(cup_polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, msg), CUP_OK);
+    assert_int_equal(cup_polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, NULL, msg), CUP_OK);
     printf("step %d: lambda_max %.6g, revalued bound %.6g, fresh bound %.6g\n", step, lmax, K->lip, F->lip);
     assert_true(K->lip >= lmax * (1 - 1e-13));
     assert_true(K->lip <= 1.15 * F->lip);
@@ -227,6 +227,71 @@ static void test_revalued_lipschitz_bound(void **state) {
   free(C0); free(C); free(work);
 }
 
+/* The largest eigenvalue of C C^T (C dense, m x n, by rows), by GSL. */
+static double lambda_max_cct(const double *C, int m, int n) {
+  gsl_matrix *A = gsl_matrix_alloc((size_t)m, (size_t)m);
+  gsl_vector *ev = gsl_vector_alloc((size_t)m);
+  gsl_eigen_symm_workspace *ws = gsl_eigen_symm_alloc((size_t)m);
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < m; j++) {
+      double s = 0;
+      for (int k = 0; k < n; k++) s += C[i * n + k] * C[j * n + k];
+      gsl_matrix_set(A, (size_t)i, (size_t)j, s);
+    }
+  gsl_eigen_symm(A, ev, ws);
+  double lmax = gsl_vector_max(ev);
+  gsl_eigen_symm_free(ws); gsl_vector_free(ev); gsl_matrix_free(A);
+  return lmax;
+}
+
+/* A state polyset rebuilt with rows of the last one (some gone, the rest
+ * in another order, new ones) starts its bound from the last one's vector,
+ * row by row, 0 for the new rows: the bound stays above lambda_max(C C^T)
+ * (GSL) and within 15 % of a cold one's, and the set revalues warm. */
+static void test_rebuilt_lipschitz_bound(void **state) {
+  (void)state;
+  enum { M = 80, N = 60, KEEP = 60 };
+  rng_t r = {4242};
+  double *C = calloc(M * N, sizeof(double)), *Cn = calloc(M * N, sizeof(double));
+  for (int i = 0; i < M; i++)
+    for (int e = 0; e < (i % 3 ? 4 : 2); e++) C[i * N + rng_int(&r, 0, N - 1)] = rng_normal(&r);
+  tcsc Cs;
+  tcsc_from_dense(&Cs, C, M, N);
+  char msg[CUP_ERRMSG_LEN];
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, NULL, msg), CUP_OK);
+  assert_int_equal(K->cw_warm, 0);
+  double *work = malloc(sizeof(double) * (2 * M + N)), *wnew = malloc(sizeof(double) * (2 * M + N));
+  cup_polyset_revalue(K, work);               /* the last set's vector, in work */
+  int old_of[M];
+  for (int s = 0; s < M; s++) old_of[s] = s < KEEP ? (7 * s + 3) % M : -1;   /* 60 of the 80 rows */
+  for (int s = 0; s < M; s++) {
+    for (int k = 0; k < N; k++)
+      Cn[s * N + k] = old_of[s] >= 0 ? (0.8 + 0.4 * rng_unif(&r)) * C[old_of[s] * N + k] : 0;
+    if (old_of[s] < 0)
+      for (int e = 0; e < 4; e++) Cn[s * N + rng_int(&r, 0, N - 1)] = rng_normal(&r);
+    wnew[s] = old_of[s] >= 0 ? work[old_of[s]] : 0;
+  }
+  tcsc Cf;
+  tcsc_from_dense(&Cf, Cn, M, N);
+  cup_polyset *W = NULL, *F = NULL;
+  assert_int_equal(cup_polyset_create_ex(&W, &Cf.view, NULL, NULL, 1, wnew, msg), CUP_OK);
+  assert_int_equal(cup_polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, NULL, msg), CUP_OK);
+  double lmax = lambda_max_cct(Cn, M, N);
+  printf("rebuilt: lambda_max %.6g, warm bound %.6g, cold bound %.6g\n", lmax, W->lip, F->lip);
+  assert_true(W->lip >= lmax * (1 - 1e-13));
+  assert_true(W->lip <= 1.15 * F->lip);
+  assert_int_equal(W->cw_warm, 1);
+  for (int k = 0; k < W->Ct.nnz; k++) W->Ct.x[k] *= 1.1;   /* the next step: revalued warm */
+  for (int k = 0; k < W->C.nnz; k++) W->C.x[k] *= 1.1;
+  cup_polyset_revalue(W, wnew);
+  assert_true(W->lip >= 1.21 * lmax * (1 - 1e-13));
+  assert_true(W->lip <= 1.21 * 1.15 * F->lip);
+  cup_polyset_free(&K); cup_polyset_free(&W); cup_polyset_free(&F);
+  tcsc_free(&Cs); tcsc_free(&Cf);
+  free(C); free(Cn); free(work); free(wnew);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_circuit_lipschitz_is_exact_eigenvalue),
@@ -235,6 +300,7 @@ int main(void) {
     cmocka_unit_test(test_validation_messages),
     cmocka_unit_test(test_lipschitz_bound_is_guaranteed),
     cmocka_unit_test(test_revalued_lipschitz_bound),
+    cmocka_unit_test(test_rebuilt_lipschitz_bound),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -167,6 +167,31 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
   return CUP_OK;
 }
 
+/* The cells inside the room and clear of its edges: a cell whose centre
+ * the crossing test finds inside and that no edge's box, widened by tol,
+ * meets. Any point of such a cell is inside, and crowd_in_polygon says so
+ * as for the centre: a crossing of a horizontal ray from it lies at least
+ * tol from it, far beyond the rounding of the crossing's abscissa. */
+static int inside_cells(cup_crowd *c, double tol, char *errmsg) {
+  int ncell = c->gx * c->gy;
+  c->cin = malloc((size_t)ncell);
+  if (!c->cin) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  for (int j = 0; j < c->gy; j++)
+    for (int i = 0; i < c->gx; i++)
+      c->cin[i + c->gx * j] = (unsigned char)crowd_in_polygon(c->room, c->nroom, c->cx0 + (i + 0.5) * c->cell,
+                                                              c->cy0 + (j + 0.5) * c->cell);
+  for (int a = 0, b = c->nroom - 1; a < c->nroom; b = a++) {
+    const double *va = c->room + 2 * a, *vb = c->room + 2 * b;
+    int i0 = (int)floor((fmin(va[0], vb[0]) - tol - c->cx0) / c->cell);
+    int i1 = (int)floor((fmax(va[0], vb[0]) + tol - c->cx0) / c->cell);
+    int j0 = (int)floor((fmin(va[1], vb[1]) - tol - c->cy0) / c->cell);
+    int j1 = (int)floor((fmax(va[1], vb[1]) + tol - c->cy0) / c->cell);
+    for (int j = j0 < 0 ? 0 : j0; j <= j1 && j < c->gy; j++)
+      for (int i = i0 < 0 ? 0 : i0; i <= i1 && i < c->gx; i++) c->cin[i + c->gx * j] = 0;
+  }
+  return CUP_OK;
+}
+
 /* Visit every agent inside with the walls of its cell, fn(c, a, -1 - s,
  * ctx) for wall s, and every pair of agents inside in neighbouring cells
  * once, fn(c, a, b, ctx) with bin[a].i < bin[b].i (a, b positions in the
@@ -219,6 +244,14 @@ static double gap_of(const cup_crowd *c, int a, int b, double *nx, double *ny, d
 
 /* ---- the process: rows of C(q_k) and the desired velocity ------------------------ */
 
+/* Whether (x, y) is in the room, as crowd_in_polygon says, by its cell
+ * where the cell is clear of the room's edges (cin). */
+static int in_room(const cup_crowd *c, double x, double y) {
+  double u = (x - c->cx0) / c->cell, v = (y - c->cy0) / c->cell;
+  if (u >= 0 && v >= 0 && u < c->gx && v < c->gy && c->cin[(int)u + c->gx * (int)v]) return 1;
+  return crowd_in_polygon(c->room, c->nroom, x, y);
+}
+
 /* Agents whose centre left the room at the state of step k have evacuated
  * (at t_k); the first step of a run (t_k = 0) starts afresh. */
 static void mark_exits(cup_crowd *c, const double *q, double tk) {
@@ -228,7 +261,7 @@ static void mark_exits(cup_crowd *c, const double *q, double tk) {
     c->inside = c->N;
   }
   for (int i = 0; i < c->N; i++)
-    if (!c->out[i] && !crowd_in_polygon(c->room, c->nroom, q[2 * i], q[2 * i + 1])) {
+    if (!c->out[i] && !in_room(c, q[2 * i], q[2 * i + 1])) {
       c->out[i] = 1;
       c->exit_time[i] = tk;
       c->inside--;
@@ -681,6 +714,7 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
   double size = fmax(box[2] - box[0], box[3] - box[1]), tol = 1e-9 * size;
   if (!st) st = build_walls(c, d, tol, errmsg);
   if (!st) st = bin_walls(c, errmsg);
+  if (!st) st = inside_cells(c, tol, errmsg);
   if (!st) st = crowd_order_init(c, c->q0, errmsg);
   if (!st) st = check_agents(c, 1e-12 * size, errmsg);
   double grid = d->grid;
@@ -711,7 +745,7 @@ void cup_crowd_free(cup_crowd **cp) {
   crowd_field_free(&c->F);
   free(c->q0); free(c->r); free(c->room); free(c->door); free(c->obs_ptr); free(c->obs);
   free(c->seg); free(c->seg_kind); free(c->seg_of); free(c->seg_part);
-  free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx);
+  free(c->head); free(c->cell_ptr); free(c->wptr); free(c->widx); free(c->cin);
   free(c->bin); free(c->kcell); free(c->run_start); free(c->run_len); free(c->stage);
   free(c->out); free(c->exit_time); free(c->forced);
   crowd_order_free(c);

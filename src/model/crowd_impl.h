@@ -75,6 +75,8 @@ struct cup_crowd {
   int gx, gy;
   int *head;                        /* gx gy: per-cell cursors */
   int *wptr, *widx;                 /* per cell: the walls within rmax + reach of it */
+  unsigned char *cin;               /* gx gy: 1 where the cell lies inside the room, clear of
+                                       its edges (mark_exits tests a point there by its cell) */
   /* the agents inside binned by cell (crowd.c, bin_agents) */
   int *cell_ptr;                    /* gx gy + 1: each cell's agents in bin[] */
   crowd_agent *bin;                 /* N: the agents inside by cell, then the evacuated (i: the

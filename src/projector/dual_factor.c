@@ -53,8 +53,10 @@ int cup_dfact_by_cg(const cup_dfact *f) { return f->by_cg; }
 /* ---- permutation and upper storage (shared) ---------------------------------- */
 
 /* AMD order of a symmetric matrix (CHOLMOD reads the triangle its stype
- * names) into pperm/iperm; the analysis' workspace is let go at once. */
-static int amd_order(cup_dfact *f, cholmod_sparse *A, char *errmsg) {
+ * names) into pperm/iperm; the analysis' workspace is let go at once. With
+ * full, the entries of the factor of all of it in that order (the analysis
+ * counts them anyway). */
+static int amd_order(cup_dfact *f, cholmod_sparse *A, long *full, char *errmsg) {
   int N = (int)A->nrow;
   f->cm.supernodal = CHOLMOD_SIMPLICIAL;
   f->cm.final_ll = 0;
@@ -75,6 +77,10 @@ static int amd_order(cup_dfact *f, cholmod_sparse *A, char *errmsg) {
       f->pperm[k] = orig;
       f->iperm[orig] = k;
     }
+  if (full) {
+    *full = 0;
+    for (int k = 0; k < N; k++) *full += ((int *)L0->ColCount)[k];
+  }
   cholmod_free_factor(&L0, &f->cm);
   cholmod_free_work(&f->cm);
   if (!f->pperm || !f->iperm) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
@@ -92,7 +98,7 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
   A.p = (void *)Ap; A.i = (void *)Ai; A.x = (void *)Ax; A.stype = -1;
   A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
   A.sorted = 1; A.packed = 1;
-  int st = amd_order(f, &A, errmsg);
+  int st = amd_order(f, &A, NULL, errmsg);
   if (st) return st;
   int *rowcnt = calloc((size_t)N + 1, sizeof(int)), *colcnt = calloc((size_t)N + 1, sizeof(int));
   int *order = malloc(sizeof(int) * ((size_t)nnz + 1)), *colof = malloc(sizeof(int) * ((size_t)nnz + 1));
@@ -242,10 +248,26 @@ static int cmp_int(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* A column's rows in order: by insertion when they are a few (a crowd's
+ * columns of M hold about five), where qsort's calls cost more than the
+ * sort. */
+static void sort_rows(int *a, int len) {
+  if (len > 32) {
+    qsort(a, (size_t)len, sizeof(int), cmp_int);
+    return;
+  }
+  for (int t = 1; t < len; t++) {
+    int v = a[t], u = t;
+    for (; u > 0 && a[u - 1] > v; u--) a[u] = a[u - 1];
+    a[u] = v;
+  }
+}
+
 /* M = C P^-1 C^T in the permuted order, sorted, every diagonal present (a
  * zero row of C has M_ii = 0): its upper triangle. Column by
  * column from the rows of C, M_ri = sum_j c_rj c_ij / p_j, so that no
- * copy of M is made on the way (CHOLMOD's product, sum and sort made four). */
+ * copy of M is made on the way (CHOLMOD's product, sum and sort made four);
+ * a first pass counts the entries (the pattern alone), the second sums. */
 static cholmod_sparse *build_m(cup_dfact *f) {
   const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
   const double *pdinv = f->K->pdinv;
@@ -268,17 +290,20 @@ static cholmod_sparse *build_m(cup_dfact *f) {
           int r = f->iperm[C->i[b]];
           if (r > k) continue;
           if (mark[r] != k) { mark[r] = k; list[len++] = r; }
-          val[r] += C->x[b] * cij;
+          if (pass == 1) val[r] += C->x[b] * cij;
         }
       }
       if (pass == 1) {
         int *Mp = M->p, *Mi = M->i;
         double *Mx = M->x;
-        qsort(list, (size_t)len, sizeof(int), cmp_int);
-        for (int t = 0; t < len; t++) { Mi[Mp[k] + t] = list[t]; Mx[Mp[k] + t] = val[list[t]]; }
+        sort_rows(list, len);
+        for (int t = 0; t < len; t++) {
+          Mi[Mp[k] + t] = list[t];
+          Mx[Mp[k] + t] = val[list[t]];
+          val[list[t]] = 0;
+        }
         Mp[k + 1] = Mp[k] + len;
       }
-      for (int t = 0; t < len; t++) val[list[t]] = 0;
       nnz += (size_t)len;
     }
     if (pass == 0) {
@@ -418,13 +443,16 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
   const cup_sparse *C = &f->K->C;
   int m = f->m;
   f->N = m;
-  /* AMD of M = C P^-1 C^T from C's pattern (CHOLMOD orders C C^T) */
+  /* AMD of M = C P^-1 C^T from C's pattern (CHOLMOD orders C C^T), and the
+   * size of the factor of all of M in that order: C C^T has M's pattern
+   * (build_m keeps every product, and every row of the pool has entries) */
   cholmod_sparse Cv = {0};
   Cv.nrow = (size_t)m; Cv.ncol = (size_t)f->n; Cv.nzmax = (size_t)C->nnz;
   Cv.p = C->p; Cv.i = C->i; Cv.x = C->x; Cv.stype = 0;
   Cv.itype = CHOLMOD_INT; Cv.xtype = CHOLMOD_REAL; Cv.dtype = CHOLMOD_DOUBLE;
   Cv.sorted = 1; Cv.packed = 1;
-  int st = amd_order(f, &Cv, errmsg);
+  long full = 0;
+  int st = amd_order(f, &Cv, &full, errmsg);
   if (st) return st;
   size_t M1 = (size_t)m + 1;
   f->Mp = build_m(f);
@@ -435,20 +463,7 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
   f->yrow = calloc(M1, sizeof(double));
   if (!f->Mp || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
-  /* the size of the factor of all of M in the stored order */
-  f->cm.nmethods = 1;
-  f->cm.method[0].ordering = CHOLMOD_NATURAL;
-  f->cm.postorder = 0;
-  f->Mp->stype = 1;
-  cholmod_factor *L0 = cholmod_analyze(f->Mp, &f->cm);
-  f->Mp->stype = 0;
-  cholmod_free_work(&f->cm);
-  if (!L0)
-    return cup_fail(errmsg, f->cm.status == CHOLMOD_OUT_OF_MEMORY ? CUP_ERR_NOMEM : CUP_ERR_LINALG,
-                    "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
-  long full = 0, nnz_m = 2L * ((int *)f->Mp->p)[m] - m;
-  for (int k = 0; k < m; k++) full += ((int *)L0->ColCount)[k];
-  cholmod_free_factor(&L0, &f->cm);
+  long nnz_m = 2L * ((int *)f->Mp->p)[m] - m;
   /* a column CHOLMOD's row updates would move (none should: new_layout
    * leaves a spare entry in each) gets no more room than it needs */
   f->cm.grow1 = 1;
@@ -699,7 +714,7 @@ int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, long ro
     if (!f->work || !f->fact_act) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   }
   double mmax = 0;
-  for (int i = 0; i < f->m; i++) mmax = fmax(mmax, K->rownorm[i] * K->rownorm[i]);
+  for (int i = 0; i < f->m; i++) mmax = cup_max(K->rownorm[i] * K->rownorm[i], mmax);
   f->delta_min = 1e-10 * (mmax > 0 ? mmax : 1);
   if (st) { cup_dfact_free(&f); return st; }
   *out = f;
@@ -764,7 +779,7 @@ void cup_dfact_revalue(cup_dfact *f) {
       int r = Mi[e];
       double v = wv[f->pperm[r]];
       Mx[e] = v;
-      if (r == c) mmax = fmax(mmax, v);
+      if (r == c) mmax = cup_max(v, mmax);   /* NaN passed over, as by fmax */
     }
     for (int a = K->Ct.p[i]; a < K->Ct.p[i + 1]; a++) {
       int j = K->Ct.i[a];

@@ -43,7 +43,7 @@ static void offset_changed(cup_projector *p) {
   p->empty_row = -1;
   for (int i = 0; i < p->m; i++) {
     if (K->rownorm[i] > 0) {
-      p->gscale = fmax(p->gscale, fabs(p->g[i]) / K->rownorm[i]);
+      p->gscale = cup_max(fabs(p->g[i]) / K->rownorm[i], p->gscale);   /* NaN passed over */
     } else if (p->g[i] < 0 && p->empty_row < 0) {
       p->empty_row = i;              /* 0 >= -g_i > 0 is impossible */
     }

@@ -41,8 +41,9 @@ void cup_statepoly_free(cup_setproj *sp) {
 }
 
 /* The pool's pattern as CSC with this step's values (0 for slots not in use)
- * and offsets (1: never active). */
-static int pool_polyset(cup_setproj *sp, cup_polyset **K, char *errmsg) {
+ * and offsets (1: never active); work: NULL, or revalue's work holding a
+ * vector to start the Lipschitz bound from (cup_polyset_create_ex). */
+static int pool_polyset(cup_setproj *sp, cup_polyset **K, double *work, char *errmsg) {
   const cup_rowpool *P = &sp->pool;
   const cup_rowbuf *rb = &sp->rb;
   int n = sp->n, m = P->m, nnz = P->nnz;
@@ -71,7 +72,7 @@ static int pool_polyset(cup_setproj *sp, cup_polyset **K, char *errmsg) {
       metric.diag = pd;
     }
     cup_csc view = {m, n, cp, ri, vx};
-    if (!st) st = cup_polyset_create_ex(K, &view, g, &metric, 1, errmsg);
+    if (!st) st = cup_polyset_create_ex(K, &view, g, &metric, 1, work, errmsg);
   }
   free(cp); free(ri); free(vx); free(g); free(pd);
   return st;
@@ -87,11 +88,23 @@ static int rebuild(cup_setproj *sp) {
   /* cpos holds n column cursors, then one position per pool entry */
   int *cpos = realloc(sp->cpos, sizeof(int) * ((size_t)n + (size_t)P->nnz + 1));
   double *g = realloc(sp->g, sizeof(double) * ((size_t)m + 1));
-  double *rw = realloc(sp->rework, sizeof(double) * (2 * (size_t)m + (size_t)n + 1));
+  double *rw = malloc(sizeof(double) * (2 * (size_t)m + (size_t)n + 1));
   if (cpos) sp->cpos = cpos;
   if (g) sp->g = g;
-  if (rw) sp->rework = rw;
-  if (!cpos || !g || !rw) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  if (!cpos || !g || !rw) {
+    free(rw);
+    return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  }
+  /* the last bound's vector slot by slot (0 for a new slot), to start the
+   * new set's bound from: a set built cold bounds twice cold, at its
+   * creation and at its first revalue */
+  int warm = sp->PK && sp->PK->cw_warm;
+  for (int s = 0; warm && s < m; s++) {
+    int o = P->old_of[s];
+    rw[s] = o >= 0 && o < old_m ? sp->rework[o] : 0;
+  }
+  free(sp->rework);
+  sp->rework = rw;
   memset(sp->cpos, 0, sizeof(int) * (size_t)n);
   cup_polyset *K = NULL;
   cup_projector *p = NULL;
@@ -100,7 +113,7 @@ static int rebuild(cup_setproj *sp) {
   if (sp->ordered && po.feasible_point && (fp = malloc(sizeof(double) * (size_t)n)))
     for (int k = 0; k < n; k++) fp[k] = po.feasible_point[sp->perm[k]];
   int st = sp->ordered && po.feasible_point && !fp ? cup_fail(err, CUP_ERR_NOMEM, "out of memory")
-                                                   : pool_polyset(sp, &K, err);
+                                                   : pool_polyset(sp, &K, warm ? rw : NULL, err);
   if (fp) po.feasible_point = fp;
   if (!st) st = cup_projector_create(&p, K, &po, err);
   free(fp);

@@ -17,11 +17,11 @@ static void find_interior_direction(cup_polyset *K);
 
 int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
                        const cup_metric *P, char *errmsg) {
-  return cup_polyset_create_ex(out, C, g, P, 0, errmsg);
+  return cup_polyset_create_ex(out, C, g, P, 0, NULL, errmsg);
 }
 
 int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
-                          const cup_metric *P, int mutable_values, char *errmsg) {
+                          const cup_metric *P, int mutable_values, double *work, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: output pointer is NULL");
   *out = NULL;
   if (!C) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: C is NULL");
@@ -60,7 +60,8 @@ int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
     double r = cholmod_rcond(K->LP, K->cm);
     K->solve_amp = r > 0 ? 1 / r : 1e16;
   }
-  if (!st) st = row_norms_and_lipschitz(K, NULL, errmsg);
+  K->cw_warm = work != NULL;
+  if (!st) st = row_norms_and_lipschitz(K, work, errmsg);
   if (!st && !mutable_values && K->m <= CUP_DENSE_MAX_ROWS && K->n <= CUP_DENSE_MAX_DIM)
     st = dense_setup(K, errmsg);
   if (st) { cup_polyset_free(&K); return st; }
@@ -337,28 +338,31 @@ static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
   }
 }
 
-/* A bound started from the last one's vector (revalue; its largest entry
- * is 1): any positive vector gives a valid bound, and the last one's is
- * nearly the Perron vector of this step's |M| but for the rows that came
- * on since (near 0: their ratio would be huge), hence the floor. On crowds
- * of 10^3 and 10^4 agents, 2 iterations from it gave 0.985 to 1.09 times
- * the bound of 6 from the ones vector (median 1.000). */
+/* A bound started from the last one's vector (revalue, or a set rebuilt
+ * with the last one's rows; its largest entry is 1): any positive vector
+ * gives a valid bound, and the last one's is nearly the Perron vector of
+ * this step's |M| but for the rows that came on since (near 0: their ratio
+ * would be huge), hence the floor. On crowds of 10^3 and 10^4 agents, 2
+ * iterations from it gave 0.985 to 1.09 times the bound of 6 from the ones
+ * vector (median 1.000). */
 enum { CW_WARM_ITERS = 2 };
 #define CW_WARM_FLOOR 0.25
 
+/* cup_max, not fmax (a libm call), with the new value first: a NaN one is
+ * passed over, as fmax would. */
 static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
                                double *v, double *w, double *tmp, int warm) {
-  for (int i = 0; i < K->m; i++) v[i] = warm ? fmax(v[i], CW_WARM_FLOOR) : 1.0;
+  for (int i = 0; i < K->m; i++) v[i] = warm ? cup_max(v[i], CW_WARM_FLOOR) : 1.0;
   for (int it = 0; it < (warm ? CW_WARM_ITERS : K->cw_iters); it++) {
     apply(K, W, v, w, tmp);
     double wmax = 0;
-    for (int i = 0; i < K->m; i++) wmax = fmax(wmax, w[i]);
+    for (int i = 0; i < K->m; i++) wmax = cup_max(w[i], wmax);
     if (!(wmax > 0)) return 0;
-    for (int i = 0; i < K->m; i++) v[i] = fmax(w[i] / wmax, 1e-12);
+    for (int i = 0; i < K->m; i++) v[i] = cup_max(w[i] / wmax, 1e-12);
   }
   apply(K, W, v, w, tmp);
   double bound = 0;
-  for (int i = 0; i < K->m; i++) bound = fmax(bound, w[i] / v[i]);
+  for (int i = 0; i < K->m; i++) bound = cup_max(w[i] / v[i], bound);
   return bound * (1 + 1e-12);
 }
 

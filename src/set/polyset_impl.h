@@ -39,9 +39,14 @@ struct cup_polyset {
 
 /* cup_polyset_create; with mutable_values, for a polyset whose values
  * change in place (cup_polyset_revalue), without the dense form (Md, Bt,
- * the interior direction) and with a quicker Lipschitz bound. */
+ * the interior direction) and with a quicker Lipschitz bound. work: NULL,
+ * or the 2 m + n doubles that cup_polyset_revalue will be given, its first
+ * m entries a vector to start the bound from as revalue does (a set rebuilt
+ * with rows of the last one: their entries of its last vector, 0 for new
+ * rows); the bound and the first revalue are then warm (a sparse metric's
+ * bound is always cold). */
 int cup_polyset_create_ex(cup_polyset **K, const cup_csc *C, const double *g,
-                          const cup_metric *P, int mutable_values, char *errmsg);
+                          const cup_metric *P, int mutable_values, double *work, char *errmsg);
 /* The values of C (C.x and Ct.x, the pattern unchanged) were rewritten:
  * recompute the row norms and the Lipschitz bound. Only for a polyset
  * without the dense form and with a diagonal metric; work: 2 m + n doubles,
