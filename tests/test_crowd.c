@@ -3,9 +3,10 @@
  * around the end of a wall), an agent alone walking at the desired speed and
  * leaving at the time its distance takes, two agents pushed head-on stopping
  * at contact (also when one step would take them through each other, or an
- * agent through a wall, from beyond the contact margin), and an evacuation in which every step is checked for overlaps
- * (against the step's certified eta) and for agents crossing walls; and the
- * errors for bad scenes. */
+ * agent through a wall, from beyond the contact margin), an evacuation in
+ * which every step is checked for overlaps (against the step's certified
+ * eta) and for agents crossing walls, who has left an L-shaped room against
+ * its two rectangles; and the errors for bad scenes. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
