@@ -268,6 +268,16 @@ static void mark_exits(cup_crowd *c, const double *q, double tk) {
     }
 }
 
+/* The row of agent a and wall -1 - b, or of the pair (a, b) (binned, a's
+ * internal index below b's), from gap_of's normal and point of contact:
+ *   n . (y_i - p) >= r_i;  e . (y_i - y_j) >= r_i + r_j. */
+static crowd_entry row_entry(const cup_crowd *c, int a, int b, int row, double nx, double ny, double px,
+                             double py) {
+  double ra = c->bin[a].r;
+  return (crowd_entry){b < 0 ? b : c->bin[b].i, row, nx, ny,
+                       b < 0 ? -(ra + nx * px + ny * py) : -(ra + c->bin[b].r)};
+}
+
 /* The row of agent a and wall -1 - b, or of the pair (a, b), when its gap
  * is within the margin, its pattern only (to come soon) within reach: kept
  * in the stage, agent by agent (each_pair makes an agent's calls together). */
@@ -289,10 +299,7 @@ static int stage_row(cup_crowd *c, int a, int b, void *ctx) {
   int i = c->bin[a].i;
   if (!c->run_len[i]) c->run_start[i] = c->nstage;
   c->run_len[i]++;
-  /* n . (y_i - p) >= r_i;  e . (y_i - y_j) >= r_i + r_j */
-  double ra = c->bin[a].r;
-  c->stage[c->nstage++] = (crowd_entry){b < 0 ? b : c->bin[b].i, gap < c->margin, nx, ny,
-                                        b < 0 ? -(ra + nx * px + ny * py) : -(ra + c->bin[b].r)};
+  c->stage[c->nstage++] = row_entry(c, a, b, gap < c->margin, nx, ny, px, py);
   return 0;
 }
 
@@ -402,13 +409,12 @@ static int cmp_forced(const void *a, const void *b) {
 static int missed_by(cup_crowd *c, int a, double da, double dmax, const double *z) {
   const crowd_agent *A = c->bin + a;
   int i = c->ord[A->i], found = 0, st;
-  double zx = z[2 * i], zy = z[2 * i + 1], px, py;
+  double zx = z[2 * i], zy = z[2 * i + 1], nx, ny, px, py, qx, qy;
   for (int s = 0; s < c->nseg && da > c->margin; s++) {
-    const double *w = c->seg + 4 * s;
-    double d = crowd_seg_nearest(w, A->x, A->y, &px, &py), qx, qy;
-    if (!(d - A->r >= c->margin) || !(crowd_seg_nearest(w, zx, zy, &qx, &qy) < A->r)) continue;
-    double nx = (A->x - px) / d, ny = (A->y - py) / d;
-    if ((st = force_row(c, A->i, (crowd_entry){-1 - s, 1, nx, ny, -(A->r + nx * px + ny * py)})) < 0) return st;
+    if (!(gap_of(c, a, -1 - s, &nx, &ny, &px, &py) >= c->margin) ||
+        !(crowd_seg_nearest(c->seg + 4 * s, zx, zy, &qx, &qy) < A->r))
+      continue;
+    if ((st = force_row(c, A->i, row_entry(c, a, -1 - s, 1, nx, ny, px, py))) < 0) return st;
     found += st;
   }
   /* a partner b overlaps at z only within 2 rmax + da + dmax of a at q */
@@ -418,13 +424,13 @@ static int missed_by(cup_crowd *c, int a, double da, double dmax, const double *
   for (int v = j0 < 0 ? 0 : j0; v <= j1 && v < c->gy; v++)
     for (int u = i0 < 0 ? 0 : i0; u <= i1 && u < c->gx; u++)
       for (int b = c->cell_ptr[u + c->gx * v]; b < c->cell_ptr[u + c->gx * v + 1]; b++) {
-        const crowd_agent *B = c->bin + b, *lo = A->i < B->i ? A : B, *hi = lo == A ? B : A;
-        if (B == A) continue;
-        int j = c->ord[B->i];
-        double d = hypot(lo->x - hi->x, lo->y - hi->y);
-        if (!(d - A->r - B->r >= c->margin) || !(hypot(zx - z[2 * j], zy - z[2 * j + 1]) < A->r + B->r)) continue;
-        double nx = (lo->x - hi->x) / d, ny = (lo->y - hi->y) / d;
-        if ((st = force_row(c, lo->i, (crowd_entry){hi->i, 1, nx, ny, -(A->r + B->r)})) < 0) return st;
+        const crowd_agent *B = c->bin + b;
+        if (b == a) continue;
+        int j = c->ord[B->i], lo = A->i < B->i ? a : b, hi = lo == a ? b : a;
+        if (!(gap_of(c, lo, hi, &nx, &ny, &px, &py) >= c->margin) ||
+            !(hypot(zx - z[2 * j], zy - z[2 * j + 1]) < A->r + B->r))
+          continue;
+        if ((st = force_row(c, c->bin[lo].i, row_entry(c, lo, hi, 1, nx, ny, px, py))) < 0) return st;
         found += st;
       }
   return found;
