@@ -6,10 +6,10 @@
  *    LDL^T of M_FF alone, at a cost set by the free rows rather than by M,
  *    in a room for the factor of all of M, or where that would be large
  *    (crowds of 10^3 disks and more) of twice M, laid out for a set of
- *    rows that holds F: every row when that fits (then updated row by row,
- *    CHOLMOD rowadd/rowdel, when the rows that change would cost less than
- *    refactoring), else F and the last layout's rows, else F alone, with
- *    CG for a free set whose factor does not fit;
+ *    rows that holds F: every row when that fits, else F and the last
+ *    layout's rows, else F alone, with CG for a free set whose factor does
+ *    not fit; rows inside the layout join and leave F row by row (CHOLMOD
+ *    rowadd/rowdel) when that costs less than refactoring;
  *  - sparse P: the quasi-definite KKT matrix [P C_F^T; C_F -delta I],
  *    refactored by CHOLMOD (M would be dense), stored upper.
  * Both are symmetrically permuted once (AMD), so that factors use the
