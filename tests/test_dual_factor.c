@@ -136,9 +136,11 @@ static void test_packed_room_too_small(void **state) {
   solves_against_dense(0, 0);    /* at least m: the diagonal alone fits */
 }
 
+/* Row updates in layouts that do not hold every row as well: 96 here, 35
+ * when only layouts for all rows were updated (those trials where they fit). */
 static void test_room_for_some_layouts(void **state) {
   (void)state;
-  assert_true(solves_against_dense(0, 4) > 20);
+  assert_true(solves_against_dense(0, 4) > 60);
 }
 
 int main(void) {
