@@ -448,7 +448,7 @@ static int crowd_recheck(double t, const double *q, const double *z, void *vc) {
   double d2 = 0;                                /* the largest displacement, squared */
   for (int i = 0; i < c->N; i++) {
     double dx = z[2 * i] - q[2 * i], dy = z[2 * i + 1] - q[2 * i + 1];
-    if (!c->out[i]) d2 = fmax(d2, dx * dx + dy * dy);
+    if (!c->out[i]) d2 = cup_max(dx * dx + dy * dy, d2);   /* as fmax, without a libm call */
   }
   if (!(d2 > 0.25 * c->margin * c->margin)) return 0;   /* no agent moved enough to miss anything */
   double dmax = sqrt(d2);
