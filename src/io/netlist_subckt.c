@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include "catchup.h"
 #include "util/linalg.h"
 #include "netlist_lex.h"
@@ -67,6 +68,9 @@ static int lex_included(nx *x, const nx_tok *t, int depth, int *c0, int *c1) {
       return nx_fail(x, CUP_ERR_PARSE, t, path, "the file includes itself (through %s)", x->files[t->file].path);
   char *text = NULL;
   size_t len = 0;
+  struct stat sb;
+  if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))   /* /dev/zero, a FIFO, a folder: never read */
+    return nx_fail(x, CUP_ERR_IO, t, NULL, "cannot read '%s' (%s): not a regular file", t->s, path);
   if (cup_read_text(path, &text, &len, why)) {
     const char *reason = strstr(why, ": ");       /* "PATH: cannot open: why" */
     return nx_fail(x, CUP_ERR_IO, t, NULL, "cannot read '%s' (%s)%s", t->s, path, reason ? reason : "");
