@@ -11,6 +11,7 @@
 #ifndef CATCHUP_PROJECTOR_H
 #define CATCHUP_PROJECTOR_H
 
+#include "catchup/export.h"
 #include "catchup/polyset.h"
 
 #ifdef __cplusplus
@@ -85,26 +86,26 @@ typedef struct cup_proj_info {
   int row_updates;        /**< rows added to or removed from the sparse factor */
 } cup_proj_info;
 
-void cup_projector_options_default(cup_projector_options *opt);
+CUP_API void cup_projector_options_default(cup_projector_options *opt);
 
 /** Create a projector onto K; allocates all workspace (cup_project does not
  *  allocate). The projector keeps a pointer to K, which must outlive it. */
-int cup_projector_create(cup_projector **p, const cup_polyset *K,
-                         const cup_projector_options *opt, char *errmsg);
-void cup_projector_free(cup_projector **p);
+CUP_API int cup_projector_create(cup_projector **p, const cup_polyset *K,
+                                 const cup_projector_options *opt, char *errmsg);
+CUP_API void cup_projector_free(cup_projector **p);
 
 /** Replace the offset g (m entries, copied) for the following projections:
  *  K(t) = {x : C x + g(t) >= 0} with g(t) = G u(t) + F. */
-int cup_projector_set_offset(cup_projector *p, const double *g);
+CUP_API int cup_projector_set_offset(cup_projector *p, const double *g);
 /** Change the absolute/relative tolerances for the following projections. */
-int cup_projector_set_tolerances(cup_projector *p, double eps_abs, double eps_rel,
-                                 double eta_abs, double eta_rel);
+CUP_API int cup_projector_set_tolerances(cup_projector *p, double eps_abs, double eps_rel,
+                                         double eta_abs, double eta_rel);
 /** Offer a point believed to be in K(current offset); it is checked (with a
  *  rounding bound) and used as an anchor for eta certificates if feasible.
  *  Returns 1 if accepted. */
-int cup_projector_offer_feasible(cup_projector *p, const double *w);
+CUP_API int cup_projector_offer_feasible(cup_projector *p, const double *w);
 /** Forget the warm start. */
-void cup_projector_reset(cup_projector *p);
+CUP_API void cup_projector_reset(cup_projector *p);
 
 /** Project x onto K in the P-metric: z (dim entries; may alias x) and info
  *  (may be NULL). Returns CUP_OK when (eps_target, eta_target) are certified,
@@ -112,20 +113,20 @@ void cup_projector_reset(cup_projector *p);
  *  CUP_ERR_EMPTY_SET with a Farkas certificate (cup_projector_farkas),
  *  CUP_ERR_NONFINITE for a NaN/Inf in x, CUP_ERR_DIVERGED if an iterate
  *  became non-finite. On an error z is left unchanged. */
-int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info);
+CUP_API int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info);
 
 /** Multipliers lambda (m entries) of the last projection (0 after a skip). */
-const double *cup_projector_lambda(const cup_projector *p);
+CUP_API const double *cup_projector_lambda(const cup_projector *p);
 /** An exactly feasible point v of K found while certifying the last
  *  projection (eta_cert = ||z - v||_P), or NULL if none was needed/found. */
-const double *cup_projector_feasible(const cup_projector *p);
+CUP_API const double *cup_projector_feasible(const cup_projector *p);
 /** After CUP_ERR_EMPTY_SET: y >= 0 (m entries) with C^T y ~ 0 and g^T y < 0. */
-const double *cup_projector_farkas(const cup_projector *p);
+CUP_API const double *cup_projector_farkas(const cup_projector *p);
 
 /** The name of a method in CUP_PROJ_METHOD_LIST ("auto", ...); "unknown" otherwise. */
-const char *cup_proj_method_name(int method);
+CUP_API const char *cup_proj_method_name(int method);
 /** A name of CUP_PROJ_METHOD_LIST -> its value; -1 if unknown. */
-int cup_proj_method_parse(const char *name);
+CUP_API int cup_proj_method_parse(const char *name);
 
 #ifdef __cplusplus
 }
