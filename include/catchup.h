@@ -12,6 +12,7 @@
 #include "catchup/status.h"
 #include "catchup/sparse.h"
 #include "catchup/polyset.h"
+#include "catchup/projection.h"
 #include "catchup/projector.h"
 #include "catchup/set.h"
 #include "catchup/input.h"
