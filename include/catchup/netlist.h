@@ -44,6 +44,8 @@ int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop);
 /** Names of the state ("i(L1)", "v(C1)"), the rows (the diodes, "D1") and
  *  the inputs (the sources, "V1"); NULL out of range. */
 const char *cup_netlist_state_name(const cup_netlist *nl, int j);
+/** The netlist's text as it was read (before any `sets`), for provenance. */
+const char *cup_netlist_source(const cup_netlist *nl);
 const char *cup_netlist_row_name(const cup_netlist *nl, int i);
 const char *cup_netlist_input_name(const cup_netlist *nl, int j);
 /** 1 if the current of diode row i is fixed by the state (zeta_i is its

@@ -289,6 +289,7 @@ void cup_netlist_free(cup_netlist **p) {
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
   free(nl->file);
+  free(nl->source);
   free(nl);
   *p = NULL;
 }
@@ -307,6 +308,7 @@ int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop) {
 const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
 }
+const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source : NULL; }
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
 }

@@ -46,6 +46,7 @@ struct cup_netlist {
   int n, m, p, nL, nC;
   /* the circuit, for names and signals */
   char *file;
+  char *source;       /* the netlist text as read (before sets), for provenance */
   int nnodes, nelem;
   char **node;
   nl_elem *elem;      /* copies (names owned; no sources) */

@@ -21,6 +21,7 @@ program test_f_netlist
   call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, errmsg=msg)
   call check_int(ierr, CUP_OK, 'load halfwave-rc.cir: ' // trim(msg))
   call check(cup_netlist_state_name(nl, 1) == 'v(C1)', 'state 1 is v(C1)')
+  call check(index(cup_netlist_source(nl), 'C1 out 0 100u') > 0, 'the source text is the file')
   call check(cup_netlist_row_name(nl, 1) == 'D1', 'row 1 is D1')
   call check(cup_netlist_input_name(nl, 1) == 'V1', 'input 1 is V1')
   call check(.not. cup_netlist_row_fixed(nl, 1), 'D1 is free (zeta is its current)')
