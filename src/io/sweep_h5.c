@@ -45,6 +45,7 @@ hid_t sw_h5_str(size_t size) {
   hid_t t = H5Tcopy(H5T_C_S1);
   H5Tset_size(t, size);
   H5Tset_strpad(t, H5T_STR_NULLTERM);
+  H5Tset_cset(t, H5T_CSET_UTF8);
   return t;
 }
 

@@ -32,7 +32,9 @@
 #include <hdf5.h>
 #include "sweep.h"
 
-#define FORMAT_NAME "catchup-sweep 2"   /* 2: /summary has tol_abs, tol_rel, err_est, events */
+/* 2: /summary has tol_abs, tol_rel, err_est, events; 3: the tables' strings
+ * are UTF-8, the datasets have CF attributes and dimension scales */
+#define FORMAT_NAME "catchup-sweep 3"
 
 /* One /summary row, packed as it is in the file: HDF5 then writes rows
  * as they are, where a conversion to the file's layout would first read

@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <hdf5.h>
+#include <hdf5_hl.h>
 #include "file_in_use.h"
 #include "sweep_h5.h"
 
@@ -264,6 +265,108 @@ static int create_variants(sw_file *f) {
   return st;
 }
 
+/* ---- description: CF attributes and netCDF-4 dimensions ---- */
+
+static int describe(hid_t d, const char *units, const char *long_name) {
+  return (units ? attr_str(d, "units", units) : 0) | attr_str(d, "long_name", long_name);
+}
+
+static int describe_path(hid_t file, const char *path, const char *units, const char *long_name) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  int r = d < 0 ? -1 : describe(d, units, long_name);
+  if (d >= 0) H5Dclose(d);
+  return r;
+}
+
+/* A dimension without a coordinate, netCDF-4's way (see h5run.c). */
+static int pure_dim(hid_t loc, const char *name, hsize_t len) {
+  char nc[80];
+  snprintf(nc, sizeof nc, "This is a netCDF dimension but not a netCDF variable.%10llu", (unsigned long long)len);
+  hid_t d = fixed_dataset(loc, name, H5T_IEEE_F32LE, 1, &len, 0, NULL);
+  int r = d < 0 || H5DSset_scale(d, nc) < 0 ? -1 : 0;
+  if (d >= 0) H5Dclose(d);
+  return r;
+}
+
+/* Attach the scales at the paths dims[k] (NULL: none) to path's axes. */
+static int attach(hid_t file, const char *path, int rank, const char *const *dims) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  int r = d < 0 ? -1 : 0;
+  for (int k = 0; k < rank && !r; k++) {
+    if (!dims[k]) continue;
+    hid_t s = H5Dopen2(file, dims[k], H5P_DEFAULT);
+    r = s < 0 || H5DSattach_scale(d, s, (unsigned)k) < 0 ? -1 : 0;
+    if (s >= 0) H5Dclose(s);
+  }
+  if (d >= 0) H5Dclose(d);
+  return r;
+}
+
+/* /runs/state: the names of the state's components (variant 0's; a
+ * crowd's x0, y0, ... up to the largest), and the unit of /runs/x: the
+ * components' one unit, or their units in order. */
+static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size) {
+  hsize_t n = (hsize_t)s->dim;
+  char **names = calloc(n, sizeof *names);
+  int r = names ? 0 : -1, same = 1;
+  const char *first = NULL;
+  size_t w = 0;
+  units[0] = '\0';
+  for (hsize_t j = 0; j < n && !r; j++) {
+    char buf[128];
+    const char *u = "m";
+    if (s->crowd) snprintf(buf, sizeof buf, "%c%llu", j % 2 ? 'y' : 'x', (unsigned long long)(j / 2));
+    else cup_scene_state_label(s->var[0].scene, (int)j, buf, sizeof buf, &u);
+    if (!(names[j] = strdup(buf))) r = -1;
+    if (!first) first = u;
+    same &= !strcmp(u, first);
+    if (w + strlen(u) + 3 < size) w += (size_t)snprintf(units + w, size - w, "%s%s", j ? ", " : "", u);
+  }
+  if (same && first) snprintf(units, size, "%s", first);
+  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL), d = -1;
+  if (!r) d = H5Dcreate2(file, "runs/state", t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (!r && (d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, "state") < 0 ||
+             describe(d, NULL, "state component: the last axis of /runs/x and /references/x")))
+    r = -1;
+  if (d >= 0) H5Dclose(d);
+  H5Sclose(sp);
+  H5Tclose(t);
+  for (hsize_t j = 0; names && j < n; j++) free(names[j]);
+  free(names);
+  return r;
+}
+
+/* Units, long names and dimensions (task, variant, t, state) of every
+ * dataset, written with the rest of the metadata at creation. */
+static int describe_layout(sw_file *f) {
+  const cup_sweep *s = f->s;
+  hid_t file = f->file;
+  char xunits[256];
+  int r = pure_dim(file, "task", (hsize_t)s->n_tasks) | pure_dim(file, "variant", (hsize_t)s->n_variants);
+  r |= write_state(file, s, xunits, sizeof xunits);
+  r |= describe_path(file, "runs/t", "s", "common sample time t_j = j T / (samples - 1)");
+  hid_t t = H5Dopen2(file, "runs/t", H5P_DEFAULT);
+  r |= t < 0 || H5DSset_scale(t, "t") < 0 ? -1 : 0;
+  if (t >= 0) H5Dclose(t);
+  r |= describe(f->summary, NULL, "one row per task: its parameters, status, error and certificates (docs/sweep-format.md)");
+  r |= attach(file, "summary", 1, (const char *const[]){"task"});
+  r |= describe_path(file, "variants", NULL, "the variants: name, scene file, overrides, scene text");
+  r |= attach(file, "variants", 1, (const char *const[]){"variant"});
+  r |= describe(f->ref_summary, NULL, "each variant's reference: method, status, correction");
+  r |= attach(file, "references/summary", 1, (const char *const[]){"variant"});
+  r |= describe(f->ref_x, xunits, "each variant's reference trajectory at the sample times");
+  r |= attach(file, "references/x", 3, (const char *const[]){"variant", "runs/t", "runs/state"});
+  if (f->runs_x >= 0) {
+    r |= describe(f->runs_x, xunits, "each task's state at the sample times (NaN where not reached)");
+    r |= attach(file, "runs/x", 3, (const char *const[]){"task", "runs/t", "runs/state"});
+  }
+  if (s->crowd) {
+    r |= describe(f->crowd, NULL, "one row per task: agents, agents out, evacuation time [s], smallest gap [m]");
+    r |= attach(file, "crowd", 1, (const char *const[]){"task"});
+  }
+  return r;
+}
+
 static int create_layout(sw_file *f, const sw_provenance *p) {
   const cup_sweep *s = f->s;
   if (write_root_attrs(f->file, s, p)) return sw_h5_fail(f, "write attributes in");
@@ -295,6 +398,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   if (!st && g < 0) st = sw_h5_fail(f, "create /references in");
   if (!st) st = create_references(f, g);
   if (g >= 0) H5Gclose(g);
+  if (!st && describe_layout(f)) st = sw_h5_fail(f, "describe the datasets in");
   if (!st && H5Fflush(f->file, H5F_SCOPE_LOCAL) < 0) st = sw_h5_fail(f, "flush");
   return st;
 }
