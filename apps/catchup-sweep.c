@@ -664,6 +664,7 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   memset(&m, 0, sizeof m);
   m.quiet = a->quiet;
   m.log_progress = a->log_progress;
+  m.workers = nranks > 1 ? nranks - 1 : 1;
   m.s = s;
   m.f = f;
   m.count = s->samples * s->dim;
@@ -681,6 +682,8 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   double wall = now_seconds() - m.t_start, cpu_manager = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
   m.rank_cpu += cpu_manager;
   progress(&m, 1);
+  sw_tally tally;
+  sw_file_tally(f, &tally);
   char err[SW_ERR_LEN] = "";
   sw_file *ff = f;
   int cst = sw_file_close(&ff, err);
@@ -704,6 +707,11 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
     char share[64] = "";
     if (nranks > 1) snprintf(share, sizeof share, ", rank 0 %.1f%%", 100 * cpu_manager / m.rank_cpu);
     double per_job = m.jobs_done ? 1e6 / (double)m.jobs_done : 0.0;
+    char adaptive[48] = "";
+    if (tally.adaptive) snprintf(adaptive, sizeof adaptive, " (of %ld adaptive)", tally.adaptive);
+    say("%s -> %s: %ld tasks: %ld ok, %ld failed, %ld not certified, %ld tolerance missed%s, %ld other "
+        "warnings (/summary's status_name and error say which)", a->sweep, a->out, s->n_tasks, tally.ok,
+        tally.failed, tally.not_certified, tally.tol_missed, adaptive, tally.warned);
     say("%s -> %s: %ld tasks + %d references (%ld done before), %ld failed, %.3g s on %d rank%s; "
         "jobs of %.3g us on average; parallel efficiency %.2f (job wall time / (workers x wall); "
         "%.2f by job CPU time); jobs took %.1f%% of the CPU time of all ranks%s; manager %.1f us per job",

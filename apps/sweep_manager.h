@@ -36,7 +36,10 @@ typedef struct {
   double *cost;              /* per job */
   double cost_left, cost_done;  /* work not done yet (queued or out), done */
   double cost_queued;        /* work still in the queue */
-  long jobs_total, jobs_done, jobs_skipped, failures;
+  long jobs_total, jobs_done, jobs_skipped, failures, not_certified;
+  int workers;               /* ranks computing jobs */
+  long rate_jobs;            /* jobs done that the cost model prices (cost > 0) */
+  double rate_work, rate_cost;  /* their seconds (each on its rank) and cost units: the ETA's rate */
   double t_start, last_flush, last_progress, busy;
   double work_sum;           /* seconds of the jobs done, each on its rank's clock */
   double cpu_sum;            /* CPU seconds of the computing ranks in those jobs (msg_head.cpu) */

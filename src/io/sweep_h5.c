@@ -107,6 +107,7 @@ static hid_t refrow_type(void) {
   INS(T, "message", message, smsg);
   INS(T, "wall_time_s", wall_time_s, H5T_NATIVE_DOUBLE);
   INS(T, "correction", correction, H5T_NATIVE_DOUBLE);
+  INS(T, "cross_check", cross_check, H5T_NATIVE_DOUBLE);
   INS(T, "max_eps_cert", max_eps_cert, H5T_NATIVE_DOUBLE);
   INS(T, "max_eta_cert", max_eta_cert, H5T_NATIVE_DOUBLE);
   INS(T, "dual_iterations", dual_iterations, H5T_NATIVE_INT64);
@@ -457,6 +458,32 @@ int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid
   return task_io(f, d, memtype, count, buf, dxpl, writing, op);
 }
 
+void sw_file_tally(const sw_file *f, sw_tally *out) {
+  const cup_sweep *s = f->s;
+  sw_tally c = {0};
+  double *scale = calloc((size_t)s->n_variants, sizeof *scale);
+  long per = s->samples * s->dim;
+  for (int k = 0; scale && k < s->n_variants; k++)
+    for (long j = 0; f->xref[k] && j < per; j++) scale[k] = fmax(scale[k], fabs(f->xref[k][j]));
+  for (long i = 0; i < s->n_tasks; i++) {
+    if (!f->done[i]) continue;
+    c.done++;
+    int st = f->status[i], missed = 0;
+    sw_task t;
+    if (!sw_task_get(s, i, &t) && t.scheme == CUP_SCHEME_ADAPTIVE) {
+      c.adaptive++;
+      missed = scale && f->error[i] > t.tol_abs + t.tol_rel * scale[t.variant];
+    }
+    if (st < 0) c.failed++;
+    else if (st == CUP_WARN_NOT_CERTIFIED) c.not_certified++;
+    else if (st > 0) c.warned++;
+    if (st >= 0 && missed) c.tol_missed++;
+    if (st == CUP_OK && !missed) c.ok++;
+  }
+  free(scale);
+  *out = c;
+}
+
 int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   if (f->failed) return CUP_ERR_IO;
   int st = count > 0 ? reserve(f, count) : CUP_OK;
@@ -529,6 +556,7 @@ int sw_file_write_reference(sw_file *f, int k, const sw_result *r, const double 
   sw_copy_str(row.message, sizeof row.message, r->message);
   row.wall_time_s = r->wall;
   row.correction = r->correction;
+  row.cross_check = r->cross_check;
   row.max_eps_cert = r->max_eps_cert;
   row.max_eta_cert = r->max_eta_cert;
   row.dual_iterations = r->dual_iterations;

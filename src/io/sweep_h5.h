@@ -80,6 +80,7 @@ typedef struct sw_refrow {
   char status_name[SW_STATUS_LEN];
   char message[SW_MSG_LEN];
   double wall_time_s, correction, max_eps_cert, max_eta_cert;
+  double cross_check;
   int64_t dual_iterations;
   int8_t done;
 } sw_refrow;

@@ -103,6 +103,12 @@ static const char *const reference_adaptive =
   "t_j = j T / (samples - 1) (exact flow between events located by root finding; docs/adaptive.md); "
   "/references/summary 'correction' holds that run's a posteriori error estimate.";
 
+static const char *const reference_checked =
+  "per variant: the adaptive scheme at tol = 1e-13 (absolute and relative), at the common sample times "
+  "t_j = j T / (samples - 1) (exact flow between events located by root finding; docs/adaptive.md); "
+  "/references/summary 'correction' holds that run's a posteriori error estimate, 'cross_check' its max-norm "
+  "difference from the Richardson limit 2 x(2 n_ref) - x(n_ref) of two exact-projection explicit runs.";
+
 static const char *const reference_method =
   "per variant: Richardson extrapolation x_ref = 2 x(2 n_ref) - x(n_ref) of two exact-projection "
   "(eps = eta = 0, certified to rounding) explicit catching-up runs, at the common sample times "
@@ -154,7 +160,8 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
   r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE
-                : s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
+                : s->ref_method == SW_REF_ADAPTIVE ? (s->ref_check ? reference_checked : reference_adaptive)
+                : reference_method);
   r |= attr_i64(root, "samples", s->samples);
   r |= attr_i64(root, "output_samples", s->out_samples);
   r |= attr_f64(root, "T", s->T);
@@ -214,7 +221,7 @@ static int create_references(sw_file *f, hid_t g) {
     rows[k].n_ref = s->var[k].n_ref;
     rows[k].status = CUP_ERR_INTERRUPTED;
     sw_copy_str(rows[k].status_name, sizeof rows[k].status_name, "pending");
-    rows[k].wall_time_s = rows[k].correction = rows[k].max_eps_cert = rows[k].max_eta_cert = NAN;
+    rows[k].wall_time_s = rows[k].correction = rows[k].cross_check = rows[k].max_eps_cert = rows[k].max_eta_cert = NAN;
   }
   int st = sw_h5_write_rows(f->ref_summary, f->refrow_t, 0, V, rows, H5P_DEFAULT) ? sw_h5_fail(f, "write /references/summary in") : 0;
   free(rows);
