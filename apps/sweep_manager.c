@@ -66,6 +66,7 @@ static void count_result(manager_t *m, const sw_result *r) {
   m->cost_done += m->cost[r->job];
   m->cost_left -= m->cost[r->job];
   m->work_sum += r->wall;
+  m->last_done = now_seconds();
   if (m->cost[r->job] > 0) {
     m->rate_jobs++;
     m->rate_work += r->wall;
@@ -133,7 +134,7 @@ void progress(manager_t *m, int final) {
    * a job on average (one job, or the elapsed time while jobs that cost
    * nothing went first, says little about the rest). */
   double rate = m->rate_jobs >= m->workers && m->rate_cost > 0 ? m->rate_work / m->rate_cost : NAN;
-  fmt_seconds(eta, sizeof eta, rate * m->cost_left / m->workers);
+  fmt_seconds(eta, sizeof eta, fmax(0, rate * m->cost_left / m->workers - (now - m->last_done)));
   fprintf(stderr, "%scatchup-sweep: %ld/%ld done, %ld failed, %ld not certified, %s elapsed, ETA %s%s",
           live ? "\r" : "", m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, m->not_certified, el,
           m->cost_left <= 0 ? "0 s" : eta, live ? "   " : "\n");

@@ -40,6 +40,7 @@ typedef struct {
   int workers;               /* ranks computing jobs */
   long rate_jobs;            /* jobs done that the cost model prices (cost > 0) */
   double rate_work, rate_cost;  /* their seconds (each on its rank) and cost units: the ETA's rate */
+  double last_done;          /* when the last job came back (the ETA counts down from there) */
   double t_start, last_flush, last_progress, busy;
   double work_sum;           /* seconds of the jobs done, each on its rank's clock */
   double cpu_sum;            /* CPU seconds of the computing ranks in those jobs (msg_head.cpu) */

@@ -418,10 +418,37 @@ def crowd_certificates(tasks, title, out):
     finish(fig, f"{title}: certified bounds per task; smallest gap between agents over all tasks {gap:.2g} m", out)
 
 
-def crowd_main(path, prefix):
+def crowd_table(tasks):
+    """The evacuation over the seeds, one Markdown row per combination of the
+    other parameters: agents out per seed, and the evacuation time's median,
+    range, mean and standard deviation over the seeds where all left (the
+    table docs/crowd.md quotes; a chaotic result is a distribution)."""
+    keys, vals = varied(tasks)
+    heads = [LABELS.get(k, k) for k in keys]
+    print("| " + " | ".join(heads + ["agents out (per seed)", "evacuation time [s]: median, range; mean ± sd"]) + " |")
+    print("|" + "---:|" * len(heads) + "---|---|")
+    for g in ordered(tuple(t["params"].get(k) for k in keys) for t in tasks):
+        mine = sorted((t for t in tasks if tuple(t["params"].get(k) for k in keys) == g),
+                      key=lambda t: (t["seed"] is None, t["seed"]))
+        n = mine[0]["agents"]
+        outs = [t["out"] for t in mine]
+        out = "all" if all(o == n for o in outs) else ", ".join(str(o) for o in outs)
+        ev = [t["evac"] for t in mine if math.isfinite(t["evac"])]
+        if ev:
+            sd = f" ± {np.std(ev):.2f}" if len(ev) > 1 else ""
+            time = (f"{np.median(ev):.2f}, {min(ev):.2f}–{max(ev):.2f}; {np.mean(ev):.2f}{sd} "
+                    f"({len(ev)} of {len(mine)} seeds)")
+        else:
+            time = f"– (no seed of {len(mine)} got all out)"
+        print("| " + " | ".join([str(x) for x in g] + [out, time]) + " |")
+
+
+def crowd_main(path, prefix, table=False):
     title, tasks = load_crowd(path)
     if not tasks:
         sys.exit(f"plot_sweep: {path}: no finished crowd task yet")
+    if table:
+        crowd_table(tasks)
     outs = [f"{prefix}-evacuation.png", f"{prefix}-certificates.png"]
     evacuation(tasks, title, outs[0])
     crowd_certificates(tasks, title, outs[1])
@@ -433,11 +460,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("results")
     ap.add_argument("-o", "--output", required=True, help="prefix of the PNG files")
+    ap.add_argument("--table", action="store_true",
+                    help="crowd sweeps: also print the evacuation over the seeds as a Markdown table")
     a = ap.parse_args()
     with h5py.File(a.results, "r") as f:
         is_crowd = "crowd" in f
     if is_crowd:
-        crowd_main(a.results, a.output)
+        crowd_main(a.results, a.output, a.table)
         return
     title, rows = load(a.results)
     rows = [r for r in rows if r["done"] == 1 and r["error_code"] == 0 and math.isfinite(r["error"])]
