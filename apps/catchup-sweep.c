@@ -395,7 +395,7 @@ static void wait_message(MPI_Status *status, outbuf *out) {
 }
 
 static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
-  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)(s->samples * s->dim);
+  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   outbuf out[AHEAD];
   for (int b = 0; b < AHEAD; b++) out[b] = (outbuf){NULL, 0, MPI_REQUEST_NULL};
   computer c = {s, hooks, time_limit, one, out, 0, 0, 0};
@@ -668,7 +668,7 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   m.s = s;
   m.f = f;
   m.count = s->samples * s->dim;
-  m.one = sizeof(sw_result) + sizeof(double) * (size_t)m.count;
+  m.one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   m.max_batch = (int)fmax(1, fmin(MAX_BATCH, (double)(MAX_MESSAGE - sizeof(msg_head)) / (double)m.one));
   if (setup_queue(&m)) { free_manager(&m); say("%s: out of memory", a->out); return EXIT_RUN; }
   m.t_start = m.last_flush = now_seconds();

@@ -95,9 +95,10 @@ static int take_task(manager_t *m, const sw_result *r, const double *traj, sw_ta
   const double *xref = sw_file_reference(m->f, k);
   if (!xref && s->out_samples == 0 && !sw_file_reference_done(m->f, k)) {
     held *h = malloc(sizeof *h);
-    double *copy = malloc(sizeof(double) * (size_t)m->count);
+    size_t bytes = sizeof(double) * (size_t)sw_traj_len(s);     /* the states and the signals */
+    double *copy = malloc(bytes);
     if (!h || !copy) { free(h); free(copy); io_fail(m, CUP_ERR_NOMEM); return 0; }
-    memcpy(copy, traj, sizeof(double) * (size_t)m->count);
+    memcpy(copy, traj, bytes);
     *h = (held){task, *r, copy, m->held[k]};
     m->held[k] = h;
     return 0;

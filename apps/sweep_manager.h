@@ -28,7 +28,7 @@ typedef struct {
   int quiet, log_progress;   /* the command line's --quiet, --log-progress */
   const cup_sweep *s;
   sw_file *f;
-  long count;                /* samples * dim */
+  long count;                /* samples * dim: the states, what the error measures */
   size_t one;                /* bytes of one job's answer: sw_result + trajectory */
   int max_batch;             /* jobs per batch: MAX_BATCH, fewer for long trajectories */
   long *queue;               /* jobs to dispatch, in order */

@@ -94,7 +94,7 @@ def load(path):
         global REFERENCE, UNITS
         REFERENCE = reference_info(f)
         UNITS = text(f["runs/x"].attrs.get("units", "")) if "runs/x" in f else ""
-    print(f"plot_sweep: {path}: {tally(s)}")
+    print(f"plot_sweep: {path}: {tally(s)}; errors against the {REFERENCE}")
     rows = []
     for r in s:
         rows.append({

@@ -343,10 +343,16 @@ static void test_netlist_variants(void **state) {
   assert_int_equal(s->n_variants, 3);
   assert_true(cup_lcs_has_D(cup_scene_lcs(s->var[1].scene)));
   long S = s->samples;
-  double *x = malloc(sizeof(double) * (size_t)S);
+  double *x = malloc(sizeof(double) * (size_t)sw_traj_len(s));
   sw_result r;
   sw_run_job(s, 1, NULL, &r, x);
   assert_int_equal(r.status, CUP_OK);
+  /* the probes of halfwave-rc.yaml follow the states: v(out) is C1's voltage, the state */
+  assert_int_equal(s->nsig, 2);
+  assert_string_equal(sw_signal_name(s, 0), "v(out)");
+  assert_string_equal(sw_signal_name(s, 1), "i(D1)");
+  for (long j = 0; j < S; j++)
+    if (x[S + 2 * j] != x[j]) fail_msg("sample %ld: reference v(out) %.17g, v(C1) %.17g", j, x[S + 2 * j], x[j]);
   double T = cup_scene_options(s->var[1].scene)->T, h = T / ((double)(S - 1) * 200), v = 0, err = 0;
   for (long j = 0; j + 1 < S; j++) {
     err = fmax(err, fabs(x[j] - v));

@@ -480,6 +480,38 @@ static long variant_max_n(const cup_sweep *s, const sw_variant *v) {
   return m;
 }
 
+const char *sw_signal_name(const cup_sweep *s, int k) {
+  return k >= 0 && k < s->nsig ? cup_netlist_signal_name(cup_scene_netlist(s->var[0].scene), k) : NULL;
+}
+
+/* A netlist sweep records the signals catchup-run would (the scene's or
+ * netlist's probes, else every node voltage and element current when at
+ * most 256), the same in every variant: they share /runs/signals. */
+static int resolve_signals(cup_sweep *s, char *errmsg) {
+  s->nsig = 0;
+  for (int k = 0; k < s->n_variants; k++) {
+    cup_netlist *nl = cup_scene_netlist(s->var[k].scene);
+    char err[CUP_ERRMSG_LEN];
+    if (!nl) {
+      if (k > 0 && s->nsig)
+        return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "has no netlist, and variants.0 has: the variants "
+                            "share /runs/signals");
+      continue;
+    }
+    if (cup_netlist_signal_count(nl) == 0 && cup_netlist_probe_default(nl, 256, err))
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s", err);
+    int n = cup_netlist_signal_count(nl);
+    if (k == 0) s->nsig = n;
+    int same = n == s->nsig;
+    for (int j = 0; same && j < n; j++) same = !strcmp(cup_netlist_signal_name(nl, j), sw_signal_name(s, j));
+    if (!same)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "its netlist's signals (%d, from %s) differ from "
+                          "variants.0's (%d): the variants share /runs/signals", n,
+                          n ? cup_netlist_signal_name(nl, 0) : "none", s->nsig);
+  }
+  return CUP_OK;
+}
+
 int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
   for (int k = 0; k < s->n_variants; k++) {
     sw_variant *v = &s->var[k];
@@ -512,6 +544,8 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
     int st = sw_crowd_resolve(s, errmsg);
     if (st) return st;
   }
+  int st = resolve_signals(s, errmsg);
+  if (st) return st;
   s->per_variant = 1;
   for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */
     if (s->len[a] && leads(s, a)) s->per_variant *= s->len[a];

@@ -65,7 +65,15 @@ typedef struct cup_sweep {
   /* crowd sweeps (sweep_crowd.c): */
   int out_given;             /* output.samples is written in the file */
   int crowd;                 /* the variants are crowd: scenes (then dim is the largest 2N) */
+  /* netlist sweeps: the signals every task records (variants.0's netlist's
+   * probes, or its defaults; every variant's must be the same) */
+  int nsig;
 } cup_sweep;
+
+/* A job's trajectory: samples * dim states, then samples * nsig signals. */
+static inline long sw_traj_len(const cup_sweep *s) { return s->samples * (s->dim + s->nsig); }
+/* Signal k's name (a netlist sweep's), e.g. "v(out)". */
+const char *sw_signal_name(const cup_sweep *s, int k);
 
 /* One task's parameters (sw_task_get). */
 typedef struct sw_task {
@@ -78,8 +86,8 @@ typedef struct sw_task {
   double tol_abs, tol_rel;   /* the adaptive scheme's */
 } sw_task;
 
-/* What a job sends back, followed by samples * dim doubles (the trajectory
- * at the common times; NaN where not reached). Plain data: it travels as
+/* What a job sends back, followed by sw_traj_len doubles (the trajectory
+ * at the common times, then its signals; NaN where not reached). Plain data: it travels as
  * bytes between ranks of one machine type. */
 typedef struct sw_result {
   int64_t job;

@@ -105,6 +105,9 @@ struct sw_file {
   /* crowd sweeps: /crowd, its memory type and staging rows (cap of them) */
   hid_t crowd, crowd_row_t;
   sw_crowd_row *crows;
+  /* netlist sweeps: /runs/signals, /references/signals, staging (cap tasks' signals) */
+  hid_t runs_sig, ref_sig;
+  double *sig;
 };
 
 typedef struct { H5E_auto2_t fn; void *data; } quiet_t;

@@ -208,6 +208,9 @@ static int create_references(sw_file *f, hid_t g) {
   hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
   f->ref_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
   if (f->ref_x < 0) return sw_h5_fail(f, "create /references/x in");
+  dims[2] = (hsize_t)s->nsig;
+  if (s->nsig && (f->ref_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
+    return sw_h5_fail(f, "create /references/signals in");
   hid_t ft = H5Tcopy(f->refrow_t);
   H5Tpack(ft);
   f->ref_summary = fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
@@ -343,6 +346,39 @@ static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size)
   return r;
 }
 
+/* A netlist sweep's signals: /runs/signal (their names, the scale
+ * "signal"), units as catchup-run's /signals (v(...) V, i(...) A), in order. */
+static int describe_signals(sw_file *f) {
+  const cup_sweep *s = f->s;
+  hsize_t n = (hsize_t)s->nsig;
+  const char **names = malloc(sizeof *names * n);
+  char units[512];
+  size_t w = 0;
+  int r = names ? 0 : -1;
+  units[0] = '\0';
+  for (hsize_t k = 0; names && k < n; k++) {
+    names[k] = sw_signal_name(s, (int)k);
+    const char *u = names[k][0] == 'v' ? "V" : names[k][0] == 'i' ? "A" : "1";
+    if (w + 4 < sizeof units) w += (size_t)snprintf(units + w, sizeof units - w, "%s%s", k ? ", " : "", u);
+  }
+  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL), d = -1;
+  if (!r) d = H5Dcreate2(f->file, "runs/signal", t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (!r && (d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, "signal") < 0 ||
+             describe(d, NULL, "a netlist's signal: the last axis of /runs/signals and /references/signals")))
+    r = -1;
+  if (d >= 0) H5Dclose(d);
+  H5Sclose(sp);
+  H5Tclose(t);
+  free(names);
+  r |= describe(f->ref_sig, units, "each variant's reference signals at the sample times");
+  r |= attach(f->file, "references/signals", 3, (const char *const[]){"variant", "runs/t", "runs/signal"});
+  if (f->runs_sig >= 0) {
+    r |= describe(f->runs_sig, units, "each task's signals (node voltages, branch currents) at the sample times");
+    r |= attach(f->file, "runs/signals", 3, (const char *const[]){"task", "runs/t", "runs/signal"});
+  }
+  return r;
+}
+
 /* Units, long names and dimensions (task, variant, t, state) of every
  * dataset, written with the rest of the metadata at creation. */
 static int describe_layout(sw_file *f) {
@@ -367,6 +403,7 @@ static int describe_layout(sw_file *f) {
     r |= describe(f->runs_x, xunits, "each task's state at the sample times (NaN where not reached)");
     r |= attach(file, "runs/x", 3, (const char *const[]){"task", "runs/t", "runs/state"});
   }
+  if (s->nsig) r |= describe_signals(f);
   if (s->crowd) {
     r |= describe(f->crowd, NULL, "one row per task: agents, agents out, evacuation time [s], smallest gap [m]");
     r |= attach(file, "crowd", 1, (const char *const[]){"task"});
@@ -399,6 +436,10 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
     hsize_t dims[3] = {(hsize_t)s->n_tasks, (hsize_t)s->samples, (hsize_t)s->dim};
     f->runs_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
     if (f->runs_x < 0) st = sw_h5_fail(f, "create /runs/x in");
+    dims[2] = (hsize_t)s->nsig;
+    if (!st && s->nsig && (f->runs_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE,
+                                                       &nan)) < 0)
+      st = sw_h5_fail(f, "create /runs/signals in");
   }
   if (g >= 0) H5Gclose(g);
   g = st ? -1 : fixed_group(f->file, "references");
@@ -412,7 +453,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
 
 static double file_bytes(const cup_sweep *s) {
   double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0));
-  double traj = (double)s->samples * s->dim * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
+  double traj = (double)sw_traj_len(s) * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
   return rows + traj + 65536.0 + 2.0 * strlen(s->text);
 }
 

@@ -5,7 +5,10 @@ every dataset with CF `units`/`long_name`, /runs/x with named dimensions
 same rows, and each task's `error` against max |/runs/x - /references/x|
 recomputed here.
 
-    test_sweep_file.py CATCHUP_SWEEP SOURCE_DIR
+A netlist sweep keeps its probes: /runs/signals equals, sample for sample,
+what catchup-run writes to /signals for the same variant and n.
+
+    test_sweep_file.py CATCHUP_SWEEP SOURCE_DIR CATCHUP_RUN
 """
 import os
 import subprocess
@@ -18,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 warnings.simplefilter("error")
-SWEEP, SRC = sys.argv[1], sys.argv[2]
+SWEEP, SRC, RUN = sys.argv[1], sys.argv[2], sys.argv[3]
 TMP = tempfile.mkdtemp(prefix="cup_pysweep_")
 
 SWEEP_FILE = """name: small
@@ -63,6 +66,25 @@ def test_summary_in_pandas():
         assert [n.decode() if isinstance(n, bytes) else n for n in f["runs/state"][:]] == ["q(C4)", "i(L3)", "i(L2)"]
         for k, v in f.attrs.items():
             assert not isinstance(v, bytes), "root attribute %s is bytes" % k
+
+
+def test_netlist_sweep_keeps_probes():
+    out = os.path.join(TMP, "rect.h5")
+    subprocess.run([SWEEP, os.path.join(SRC, "examples/circuits/rectifier-sweep.yaml"), "-o", out, "--quiet"],
+                   check=True)
+    run = os.path.join(TMP, "rect250.h5")
+    subprocess.run([RUN, os.path.join(SRC, "examples/circuits/halfwave-rc.yaml"), "-o", run, "--quiet",
+                    "--set", "netlist.RL=250", "--n", "3000", "--eps", "0", "--eta", "0"], check=True)
+    with h5py.File(out, "r") as f, h5py.File(run, "r") as g:
+        names = [n.decode() if isinstance(n, bytes) else n for n in f["runs/signal"][:]]
+        assert names == list(g["signals"].attrs["names"]), (names, g["signals"].attrs["names"])
+        assert f["runs/signals"].attrs["units"] == ", ".join(g["signals"][n].attrs["units"] for n in names)
+        s = f["summary"][:]
+        i = int(np.flatnonzero((s["variant_name"] == b"RL-250") & (s["n"] == 3000))[0])
+        every = 3000 // (f["runs/t"].size - 1)            # samples fall on every 10th step
+        for k, n in enumerate(names):
+            assert np.array_equal(f["runs/signals"][i, :, k], g["signals"][n][::every]), n
+        assert np.isfinite(f["references/signals"][:]).all()
 
 
 if __name__ == "__main__":
