@@ -287,13 +287,6 @@ static const char *spec_text(const char *spec, const cup_schedule *s, char *buf,
   return buf;
 }
 
-/* A signal's unit and description from its name: v(...) volts, i(...) amperes. */
-static const char *signal_unit(const char *name, char *what, size_t size) {
-  int v = name[0] == 'v', i = name[0] == 'i';
-  snprintf(what, size, "%s %s", v ? "voltage" : i ? "current" : "signal", name);
-  return v ? "V" : i ? "A" : "1";
-}
-
 /* Joins n strings with ", " (NULL when out of memory). */
 static char *join(int n, char *const *v) {
   size_t len = 1;
@@ -352,8 +345,9 @@ static int describe_run(run_t *r) {
   const cup_netlist *nl = r->sk.nl;
   for (int k = 0; nl && k < cup_netlist_signal_count(nl); k++) {
     char path[300], what[300];
-    const char *name = cup_netlist_signal_name(nl, k), *unit = signal_unit(name, what, sizeof what);
+    const char *name = cup_netlist_signal_name(nl, k), *unit = cup_netlist_signal_unit(nl, k);
     snprintf(path, sizeof path, "signals/%.250s", name);
+    snprintf(what, sizeof what, "%s %.250s", !strcmp(unit, "V") ? "voltage" : "current", name);
     st = cup_status_merge(st, cup_h5run_dims(w, path, (const char *const[]){"t"}));
     st = cup_status_merge(st, cup_h5run_describe(w, path, unit, what));
   }

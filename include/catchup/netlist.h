@@ -64,6 +64,8 @@ int cup_netlist_signal_count(const cup_netlist *nl);
 /** Canonical name: "v(out)", "v(a,b)", "i(D1)" (node and element names as
  *  first written in the netlist). */
 const char *cup_netlist_signal_name(const cup_netlist *nl, int k);
+/** Its unit: "V" for a voltage v(...), "A" for a current i(...). */
+const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
 /** The recorded signals at time t for state x and complementarity
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */

@@ -662,7 +662,7 @@ int cup_scene_state_label(const cup_scene *s, int j, char *name, unsigned long s
   if (s->nl) {
     const char *nm = cup_netlist_state_name(s->nl, j);
     snprintf(name, size, "%s", nm);
-    u = nm[0] == 'i' ? "A" : nm[0] == 'v' ? "V" : "1";
+    u = nm[0] == 'i' ? "A" : "V";      /* a netlist's states: inductor currents, capacitor voltages */
   } else if (s->crowd) {
     snprintf(name, size, "%c%d", j % 2 ? 'y' : 'x', j / 2);
     u = "m";

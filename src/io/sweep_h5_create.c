@@ -358,7 +358,7 @@ static int describe_signals(sw_file *f) {
   units[0] = '\0';
   for (hsize_t k = 0; names && k < n; k++) {
     names[k] = sw_signal_name(s, (int)k);
-    const char *u = names[k][0] == 'v' ? "V" : names[k][0] == 'i' ? "A" : "1";
+    const char *u = cup_netlist_signal_unit(cup_scene_netlist(s->var[0].scene), (int)k);
     if (w + 4 < sizeof units) w += (size_t)snprintf(units + w, sizeof units - w, "%s%s", k ? ", " : "", u);
   }
   hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL), d = -1;

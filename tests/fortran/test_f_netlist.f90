@@ -63,6 +63,7 @@ program test_f_netlist
     call cup_netlist_probe(nl, 'v(a,out)', ierr, index=k)
     call check_int(k, 3, 'third probe')
     call check(cup_netlist_signal_name(nl, 2) == 'i(D1)', 'canonical name i(D1)')
+    call check(cup_netlist_signal_unit(nl, 2) == 'A' .and. cup_netlist_signal_unit(nl, 1) == 'V', 'units A, V')
     call cup_netlist_probe(nl, 'v(nowhere)', ierr, errmsg=msg)
     call check_int(ierr, CUP_ERR_ARG, 'unknown node')
     call check_contains(msg, "no node named 'nowhere'", 'its message')
