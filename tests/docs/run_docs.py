@@ -81,7 +81,6 @@ def parse(path):
             continue
         if ln.startswith("    ") and ln.strip() and (i == 0 or not lines[i - 1].strip()) and \
                 not re.match(r"^\s*([-*+]|\d+\.)\s", lines[i - 1] if i else ""):
-            start = i
             while i < len(lines) and (lines[i].startswith("    ") or not lines[i].strip()):
                 cmd = lines[i].strip()
                 if COMMANDISH.match(cmd) and not marks_skip(marks):
@@ -91,7 +90,6 @@ def parse(path):
                 i += 1
             while i < len(lines) and (lines[i].startswith("    ") or not lines[i].strip()):
                 i += 1
-            del start
             marks = []
             continue
         if ln.strip():
@@ -191,7 +189,7 @@ def main():
                 print("  " + script.replace("\n", "\n  "))
                 print("  output:\n    " + out[-3000:].replace("\n", "\n    "))
     print(f"docs: {ran} blocks ran, {skipped} skipped")
-    print(f"{ran + skipped - failed if failed <= ran + skipped else 0} passed, {failed} failed")
+    print(f"{max(0, ran + skipped - failed)} passed, {failed} failed")
     return 1 if failed else 0
 
 
