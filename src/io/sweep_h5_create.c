@@ -312,11 +312,34 @@ static int attach(hid_t file, const char *path, int rank, const char *const *dim
   return r;
 }
 
-/* /runs/state: the names of the state's components (variant 0's; a
- * crowd's x0, y0, ... up to the largest), and the unit of /runs/x: the
- * components' one unit, or their units in order. */
+/* Labels: n variable-length strings at path, made the dimension scale `scale`. */
+static int label_scale(hid_t file, const char *path, const char *scale, const char *const *names, hsize_t n,
+                       const char *long_name) {
+  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL);
+  hid_t d = H5Dcreate2(file, path, t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  int r = d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, scale) < 0 ||
+          describe(d, NULL, long_name) ? -1 : 0;
+  if (d >= 0) H5Dclose(d);
+  H5Sclose(sp);
+  H5Tclose(t);
+  return r;
+}
+
+/* Appends unit to the list "u1, u2, ..." in units (size bytes); returns the
+ * bytes written so far. */
+static size_t add_unit(char *units, size_t size, size_t w, const char *unit) {
+  if (w + strlen(unit) + 3 < size) w += (size_t)snprintf(units + w, size - w, "%s%s", w ? ", " : "", unit);
+  return w;
+}
+
+/* /runs/state: the names of the state's components (the variant with the
+ * largest state's: a crowd's x0, y0, ... up to the largest N), and the unit
+ * of /runs/x: the components' one unit, or their units in order. */
 static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size) {
   hsize_t n = (hsize_t)s->dim;
+  const cup_scene *sc = s->var[0].scene;
+  for (int k = 0; k < s->n_variants; k++)
+    if (cup_scene_dim(s->var[k].scene) == s->dim) { sc = s->var[k].scene; break; }
   char **names = calloc(n, sizeof *names);
   int r = names ? 0 : -1, same = 1;
   const char *first = NULL;
@@ -324,51 +347,36 @@ static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size)
   units[0] = '\0';
   for (hsize_t j = 0; j < n && !r; j++) {
     char buf[128];
-    const char *u = "m";
-    if (s->crowd) snprintf(buf, sizeof buf, "%c%llu", j % 2 ? 'y' : 'x', (unsigned long long)(j / 2));
-    else cup_scene_state_label(s->var[0].scene, (int)j, buf, sizeof buf, &u);
+    const char *u = "1";
+    cup_scene_state_label(sc, (int)j, buf, sizeof buf, &u);
     if (!(names[j] = strdup(buf))) r = -1;
     if (!first) first = u;
     same &= !strcmp(u, first);
-    if (w + strlen(u) + 3 < size) w += (size_t)snprintf(units + w, size - w, "%s%s", j ? ", " : "", u);
+    w = add_unit(units, size, w, u);
   }
   if (same && first) snprintf(units, size, "%s", first);
-  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL), d = -1;
-  if (!r) d = H5Dcreate2(file, "runs/state", t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (!r && (d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, "state") < 0 ||
-             describe(d, NULL, "state component: the last axis of /runs/x and /references/x")))
-    r = -1;
-  if (d >= 0) H5Dclose(d);
-  H5Sclose(sp);
-  H5Tclose(t);
+  if (!r) r = label_scale(file, "runs/state", "state", (const char *const *)names, n,
+                          "state component: the last axis of /runs/x and /references/x");
   for (hsize_t j = 0; names && j < n; j++) free(names[j]);
   free(names);
   return r;
 }
 
 /* A netlist sweep's signals: /runs/signal (their names, the scale
- * "signal"), units as catchup-run's /signals (v(...) V, i(...) A), in order. */
+ * "signal"), and their units, in order, as catchup-run's /signals. */
 static int describe_signals(sw_file *f) {
   const cup_sweep *s = f->s;
+  const cup_netlist *nl = cup_scene_netlist(s->var[0].scene);
   hsize_t n = (hsize_t)s->nsig;
   const char **names = malloc(sizeof *names * n);
-  char units[512];
+  char units[512] = "";
   size_t w = 0;
-  int r = names ? 0 : -1;
-  units[0] = '\0';
   for (hsize_t k = 0; names && k < n; k++) {
     names[k] = sw_signal_name(s, (int)k);
-    const char *u = cup_netlist_signal_unit(cup_scene_netlist(s->var[0].scene), (int)k);
-    if (w + 4 < sizeof units) w += (size_t)snprintf(units + w, sizeof units - w, "%s%s", k ? ", " : "", u);
+    w = add_unit(units, sizeof units, w, cup_netlist_signal_unit(nl, (int)k));
   }
-  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL), d = -1;
-  if (!r) d = H5Dcreate2(f->file, "runs/signal", t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (!r && (d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, "signal") < 0 ||
-             describe(d, NULL, "a netlist's signal: the last axis of /runs/signals and /references/signals")))
-    r = -1;
-  if (d >= 0) H5Dclose(d);
-  H5Sclose(sp);
-  H5Tclose(t);
+  int r = names ? label_scale(f->file, "runs/signal", "signal", names, n,
+                              "a netlist's signal: the last axis of /runs/signals and /references/signals") : -1;
   free(names);
   r |= describe(f->ref_sig, units, "each variant's reference signals at the sample times");
   r |= attach(f->file, "references/signals", 3, (const char *const[]){"variant", "runs/t", "runs/signal"});
