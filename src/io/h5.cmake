@@ -14,16 +14,16 @@ add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c)
 set_target_properties(catchup_h5_objects PROPERTIES C_VISIBILITY_PRESET hidden)
 target_include_directories(catchup_h5_objects PRIVATE
   ${PROJECT_SOURCE_DIR}/include ${PROJECT_BINARY_DIR}/include)
-target_link_libraries(catchup_h5_objects PRIVATE hdf5::hdf5 MPI::MPI_C catchup_warnings)
+target_link_libraries(catchup_h5_objects PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C catchup_warnings)
 add_library(catchup_h5_static STATIC $<TARGET_OBJECTS:catchup_h5_objects>)
-target_link_libraries(catchup_h5_static PUBLIC catchup_static PRIVATE hdf5::hdf5 MPI::MPI_C)
+target_link_libraries(catchup_h5_static PUBLIC catchup_static PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C)
 add_library(catchup_h5 SHARED $<TARGET_OBJECTS:catchup_h5_objects>)
 set_target_properties(catchup_h5 PROPERTIES
   VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}
   EXPORT_NAME catchup_h5
   INSTALL_RPATH "$ORIGIN")   # finds libcatchup beside it, wherever installed
 target_link_libraries(catchup_h5 PUBLIC catchup
-                      PRIVATE hdf5::hdf5 MPI::MPI_C catchup_warnings)
+                      PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C catchup_warnings)
 add_library(catchup::catchup_h5 ALIAS catchup_h5)
 
 install(TARGETS catchup_h5 EXPORT catchupTargets
