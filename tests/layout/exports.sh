@@ -8,7 +8,7 @@
 # build tree's, which has the generated catchup/version.h). Each LIB is
 # followed by the headers whose functions it must export (an argument
 # LIB=H1:H2:...). The functions a header declares come from the compiler
-# itself (gcc -aux-info on the header alone, `static inline` ones left out);
+# itself (declared.sh: gcc -aux-info on the header alone);
 # the exports from `nm -D --defined-only LIB`. Fails, naming the symbol and
 # what to do, on
 #   * an exported symbol that no header of its library declares: an internal
@@ -26,25 +26,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 bad=0
 say() { echo "exports: $*"; bad=1; }
-
-iflags=()
-IFS=: read -ra dirs <<< "$incs"
-for d in "${dirs[@]}"; do iflags+=("-I$d"); done
-
-# "NAME HEADER:LINE" for each function a header declares itself.
-declared() {
-  local h=$1 real
-  real=$(realpath "$h")
-  "$cc" -fsyntax-only -aux-info "$work/aux" "${iflags[@]}" -x c "$h" ||
-    { say "$h: does not compile alone"; return; }
-  while IFS= read -r line; do
-    [[ $line =~ ^/\*\ ([^:]+):([0-9]+):[^*]*\*/\ (.*)$ ]] || continue
-    local file=${BASH_REMATCH[1]} at=${BASH_REMATCH[2]} decl=${BASH_REMATCH[3]}
-    [ "$(realpath "$file")" = "$real" ] || continue
-    [[ ${decl%%(*} == *static* ]] && continue
-    [[ $decl =~ ([A-Za-z_][A-Za-z0-9_]*)\ \( ]] && echo "${BASH_REMATCH[1]} $h:$at"
-  done < "$work/aux"
-}
+here=$(cd "$(dirname "$0")" && pwd)
 
 total=0
 for arg in "$@"; do
@@ -52,8 +34,8 @@ for arg in "$@"; do
   name=$(basename "$lib")
   [ -f "$lib" ] || { say "$lib: no such library (build first)"; continue; }
   IFS=: read -ra headers <<< "${arg#*=}"
-  : > "$work/decl"
-  for h in "${headers[@]}"; do declared "$h" >> "$work/decl"; done
+  bash "$here/declared.sh" "$cc" "$incs" "${headers[@]}" > "$work/decl" ||
+    say "${headers[*]}: cannot list their declarations"
   sort -u -k1,1 "$work/decl" > "$work/decl.sorted"
   nm -D --defined-only "$lib" | awk 'NF == 3 {print $3}' | sort -u > "$work/exp"
   while read -r sym; do
