@@ -135,6 +135,45 @@ static void test_divergence_keeps_prefix(void **state) {
   unload(&a);
 }
 
+/* The paper's circuit with L2 = 1e-9 (diverging-paper.yaml) under the
+ * explicit scheme: the fused steps of a small LCS, every state stored or
+ * only the last, and the projector pg: each exits 1 with CUP_ERR_DIVERGED
+ * at the same step, the first whose state has ||x||_1 > 1e150, the rows
+ * before it in the file and within that range. */
+static void test_divergence_every_stride(void **state) {
+  (void)state;
+  const char *scene = SCENES "/stress/diverging-paper.yaml";
+  const char *out = tmp_path("diverging.h5");
+  long named = -1;
+  const char *extra[][4] = {{"--quiet", NULL}, {"--set", "output=final", "--quiet", NULL},
+                            {"--set", "output.every=7", "--quiet", NULL}, {"--projector", "pg", "--quiet", NULL}};
+  for (int v = 0; v < 4; v++) {
+    const char *args[8] = {scene, "-o", out};
+    for (int j = 0; extra[v][j]; j++) args[3 + j] = extra[v][j];
+    result r = run_cli(args, 0, 0);
+    if (r.code != 1 || r.lines != 1) fail_msg("variant %d: exit %d with %d lines:\n%s", v, r.code, r.lines, r.err);
+    expect_in(r.err, "CUP_ERR_DIVERGED");
+    expect_in(r.err, "the state left its range ||x||_1 <= 1e+150");
+    expect_in(r.err, "h*rho(A) = 3e+07 > 2");
+    h5file a;
+    load(out, 3, &a);
+    assert_int_equal(a.status, CUP_ERR_DIVERGED);
+    if (v == 0) named = (long)a.stopped_step + 1;
+    assert_int_equal(a.stopped_step + 1, named);
+    char want[64];
+    snprintf(want, sizeof want, "step %ld (t = ", named);
+    expect_in(r.err, want);
+    expect_in(a.msg, want);
+    for (hsize_t k = 0; k < a.rows; k++) {
+      double n1 = fabs(a.x[3 * k]) + fabs(a.x[3 * k + 1]) + fabs(a.x[3 * k + 2]);
+      if (!(n1 <= 1e150)) fail_msg("variant %d: row %llu has ||x||_1 = %g", v, (unsigned long long)k, n1);
+    }
+    assert_int_equal(a.rows, v == 0 || v == 3 ? named : v == 1 ? 0 : (named - 1) / 7 + 1);
+    unload(&a);
+  }
+  assert_int_equal(named, 71);
+}
+
 /* NaN in a scene file and in an override: exit 1, one line, the place. */
 static void test_nonfinite_scene_values(void **state) {
   (void)state;
@@ -158,6 +197,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_empty_set_keeps_prefix),
     cmocka_unit_test(test_divergence_keeps_prefix),
+    cmocka_unit_test(test_divergence_every_stride),
     cmocka_unit_test(test_nonfinite_scene_values),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

@@ -543,6 +543,17 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
     snprintf(buf, size, "projection failed: %s", cup_status_string(st));
 }
 
+/* A step's state beyond its range (tally.h): the scheme diverged. */
+static int diverged(const cup_integrator *I, cup_run_info *info, long k, double t, const double *x) {
+  char what[200];
+  int j = cup_state_worst(x, I->n);
+  int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
+                     "diverged", CUP_STATE_MAX, j, x[j]);
+  if (I->o.scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
+    snprintf(what + len, sizeof what - (size_t)len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+  return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+}
+
 /* The paper assumes x0 in K(0); say so when it is not (the first step
  * projects it), by the raw slack so that a point on the boundary passes. */
 static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
@@ -624,12 +635,14 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   info->eps_target = I->eps_n;
   info->eta_target = I->eta_n;
   info->h_rho = I->h_rho;
-  for (int j = 0; j < n; j++)
-    if (!isfinite(x0[j])) {
-      char what[96];
-      snprintf(what, sizeof what, "x0[%d] is %g", j, x0[j]);
-      return stop_at(info, CUP_ERR_NONFINITE, 0, 0, what);
-    }
+  if (cup_state_beyond(x0, n)) {
+    int w = cup_state_worst(x0, n);
+    char what[160];
+    if (isfinite(x0[w])) snprintf(what, sizeof what, "x0 is beyond the range of a state, ||x||_1 <= %g "
+                                  "(CUP_STATE_MAX): x0[%d] = %g", CUP_STATE_MAX, w, x0[w]);
+    else snprintf(what, sizeof what, "x0[%d] is %g", w, x0[w]);
+    return stop_at(info, isfinite(x0[w]) ? CUP_ERR_ARG : CUP_ERR_NONFINITE, 0, 0, what);
+  }
   memcpy(I->x, x0, sizeof(double) * (size_t)n);
   cup_projector_reset(I->proj);
   I->zeta_from = 0;
@@ -665,10 +678,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   }
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
   int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
+  I->fast.hold = 0;
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
-    if (fast) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
+    if (fast && k >= I->fast.hold) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
     if (st != CUP_FAST_DECLINED) {
       I->zeta_from = 1;
@@ -720,6 +734,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       }
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
     }
+    if (cup_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
     double *t = I->x; I->x = I->xnew; I->xnew = t;
     if (I->half) {
       cup_estimate_compare(&I->est, k + 1, I->x);
