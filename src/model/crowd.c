@@ -647,7 +647,7 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->out = calloc((size_t)N, 1);
   c->exit_time = malloc(sizeof(double) * (size_t)N);
   c->kcell = malloc(sizeof(int) * (size_t)N);
-  c->run_start = malloc(sizeof(int) * (size_t)N);
+  c->run_start = calloc((size_t)N, sizeof(int));   /* emit_rows reads it for agents with no rows, too */
   c->run_len = malloc(sizeof(int) * (size_t)N);
   c->stage_cap = 2 * N + 64;                 /* a crowd has about 1.5 N rows and patterns to come */
   c->stage = malloc(sizeof(crowd_entry) * (size_t)c->stage_cap);
