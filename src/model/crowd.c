@@ -509,6 +509,19 @@ static int note_worst(cup_crowd *c, int a, int b, void *ctx) {
 
 /* ---- creation and its checks -------------------------------------------------------- */
 
+/* A polygon (the room, obstacle o) must be simple: its inside, the walls
+ * and the distance field are those of a region only then. */
+static int simple(const double *v, int np, const char *what, int o, char *errmsg) {
+  int a, b;
+  if (!crowd_polygon_crossing(v, np, &a, &b)) return 1;
+  const double *p = v + 2 * a, *q = v + 2 * b, *p1 = v + 2 * ((a + 1) % np), *q1 = v + 2 * ((b + 1) % np);
+  char name[32];
+  snprintf(name, sizeof name, o < 0 ? "%s" : "%s %d", what, o);
+  cup_fail(errmsg, CUP_ERR_ARG, "%s is not a simple polygon: its edges %d, from (%g, %g) to (%g, %g), and %d, "
+           "from (%g, %g) to (%g, %g), cross", name, a, p[0], p[1], p1[0], p1[1], b, q[0], q[1], q1[0], q1[1]);
+  return 0;
+}
+
 static int check_numbers(const cup_crowd_desc *d, char *errmsg) {
   if (d->agents < 1) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: %d agents (at least 1)", d->agents);
   if (!d->q0 || !d->radius) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: no positions or no radii");
@@ -535,10 +548,12 @@ static int check_numbers(const cup_crowd_desc *d, char *errmsg) {
       return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the clearance %g exceeds agent %d's radius %g (it must be at "
                       "most the smallest radius)", d->clearance, i, d->radius[i]);
   }
-  for (int o = 0; o < d->obstacles; o++)
+  for (int o = 0, v0 = 0; o < d->obstacles; v0 += d->obstacle_points[o++])
     if (d->obstacle_points[o] < 3)
       return cup_fail(errmsg, CUP_ERR_ARG, "obstacle %d has %d vertices (at least 3)", o, d->obstacle_points[o]);
-  return CUP_OK;
+    else if (!simple(d->obstacle + 2 * v0, d->obstacle_points[o], "obstacle", o, errmsg))
+      return CUP_ERR_ARG;
+  return simple(d->room, d->room_points, "the room", -1, errmsg) ? CUP_OK : CUP_ERR_ARG;
 }
 
 /* Every agent in the room, out of the obstacles, clear of the walls and of
