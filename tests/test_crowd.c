@@ -562,6 +562,37 @@ static void test_errors(void **state) {
   char err[CUP_ERRMSG_LEN];
   cup_crowd *c = NULL;
   assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);   /* the same with a square obstacle */
+  assert_null(cup_crowd_warning(c));
+  cup_crowd_free(&c);
+}
+
+/* A door passes a disk of radius r exactly when it is at least 2 r wide:
+ * one narrower than the smallest agent's diameter is warned of, naming the
+ * door and that agent; at 2 r_min it is not (issue 27). */
+static void test_impassable_door(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10};
+  double q[4] = {2, 2, 5, 5}, r[2] = {0.3, 0.25}, door[8] = {10, 4, 10, 4.49, 0, 4, 0, 6};
+  cup_crowd_desc d = {.agents = 2, .q0 = q, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .speed = 1};
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c = NULL;
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+  assert_non_null(cup_crowd_warning(c));
+  assert_string_equal(cup_crowd_warning(c), "door 0 (from (10, 4) to (10, 4.49)) is 0.49 wide, narrower than the "
+                      "smallest agent (agent 1, diameter 0.5): no agent can pass it; it is the only door: no agent "
+                      "can leave");
+  cup_crowd_free(&c);
+  door[3] = 4.5;                                   /* 2 r_min: passable */
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+  assert_null(cup_crowd_warning(c));
+  cup_crowd_free(&c);
+  door[3] = 4.3;                                   /* a second door, wide enough */
+  d.doors = 2;
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+  assert_non_null(cup_crowd_warning(c));
+  assert_non_null(strstr(cup_crowd_warning(c), "door 0 (from (10, 4) to (10, 4.3)) is 0.3 wide"));
+  assert_null(strstr(cup_crowd_warning(c), "no agent can leave"));
   cup_crowd_free(&c);
 }
 
@@ -576,6 +607,7 @@ int main(void) {
     cmocka_unit_test(test_evacuation_checked),
     cmocka_unit_test(test_exits_notched_room),
     cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_impassable_door),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -174,6 +174,48 @@ static void test_divergence_every_stride(void **state) {
   assert_int_equal(named, 71);
 }
 
+/* What the model allows but warns of (issue 27): a loop of ideal diodes
+ * (tests/netlists/warn) and a door no agent can pass: exit 0, the warning
+ * on one stderr line before the run's, and in the attribute `warnings`. */
+static void test_model_warnings(void **state) {
+  (void)state;
+  const char *out = tmp_path("warn.h5");
+  const char *cir = CUP_SOURCE_DIR "/tests/netlists/warn/antiparallel.cir";
+  const char *a1[] = {cir, "-o", out, "--quiet", NULL};
+  result r = run_cli(a1, 0, 0);
+  if (r.code != 0) fail_msg("diode loop: exit %d:\n%s", r.code, r.err);
+  const char *want = "antiparallel.cir:7:1: D1: D1 and D2 are ideal diodes in anti-parallel between nodes 'a' and "
+                     "'b', a loop with no resistance: a current around it is not unique; the run takes one";
+  expect_in(r.err, "catchup-run: warning: ");
+  expect_in(r.err, want);
+  char text[512];
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  attr_str(f, "warnings", text, sizeof text);
+  H5Fclose(f);
+  expect_in(text, want);
+  const char *room = SCENES "/crowd/narrow-door.yaml";
+  const char *a2[] = {room, "-o", out, NULL};
+  r = run_cli(a2, 0, 0);
+  if (r.code != 0) fail_msg("narrow door: exit %d:\n%s", r.code, r.err);
+  want = "door 0 (from (6, 1.8) to (6, 2.2)) is 0.4 wide, narrower than the smallest agent (agent 1, diameter "
+         "0.5): no agent can pass it; it is the only door: no agent can leave";
+  expect_in(r.err, want);
+  assert_true(strstr(r.err, want) < strstr(r.err, "-> "));   /* before the run's summary */
+  expect_in(r.err, "0 out");
+  f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  attr_str(f, "warnings", text, sizeof text);
+  H5Fclose(f);
+  expect_in(text, want);
+  const char *a3[] = {CUP_SOURCE_DIR "/examples/paper-fig2.yaml", "-o", out, "--quiet", NULL};
+  r = run_cli(a3, 0, 0);                             /* no warning: the attribute is empty */
+  if (r.code != 0 || r.lines != 0) fail_msg("paper-fig2: exit %d:\n%s", r.code, r.err);
+  f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  attr_str(f, "warnings", text, sizeof text);
+  H5Fclose(f);
+  assert_string_equal(text, "");
+}
+
 /* NaN in a scene file and in an override: exit 1, one line, the place. */
 static void test_nonfinite_scene_values(void **state) {
   (void)state;
@@ -198,6 +240,7 @@ int main(void) {
     cmocka_unit_test(test_empty_set_keeps_prefix),
     cmocka_unit_test(test_divergence_keeps_prefix),
     cmocka_unit_test(test_divergence_every_stride),
+    cmocka_unit_test(test_model_warnings),
     cmocka_unit_test(test_nonfinite_scene_values),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

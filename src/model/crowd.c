@@ -720,6 +720,31 @@ static int set_scales(cup_crowd *c, const cup_crowd_desc *d, double h, double bo
   return CUP_OK;
 }
 
+/* A door narrower than the smallest agent's diameter lets no one out (a
+ * run ends with every agent inside): warned, not refused (the room may
+ * have other doors, or the user may want the jam). */
+static void door_warning(cup_crowd *c) {
+  int small = 0, shut = 0, first = -1;
+  for (int i = 1; i < c->N; i++)
+    if (c->r[i] < c->r[small]) small = i;
+  for (int k = 0; k < c->ndoor; k++) {
+    const double *s = c->door + 4 * k;
+    if (hypot(s[2] - s[0], s[3] - s[1]) < 2 * c->r[small] && shut++ == 0) first = k;
+  }
+  if (!shut) return;
+  const double *s = c->door + 4 * first;
+  int len = snprintf(c->warning, sizeof c->warning, "door %d (from (%g, %g) to (%g, %g)) is %.6g wide, narrower "
+                     "than the smallest agent (agent %d, diameter %.6g): no agent can pass it", first, s[0], s[1],
+                     s[2], s[3], hypot(s[2] - s[0], s[3] - s[1]), small, 2 * c->r[small]);
+  if (shut > 1 && len > 0 && (size_t)len < sizeof c->warning)
+    snprintf(c->warning + len, sizeof c->warning - (size_t)len, "%s (%d of the %d doors are so)",
+             shut == c->ndoor ? "; nor any other door: no agent can leave" : "", shut, c->ndoor);
+  else if (shut == c->ndoor && len > 0 && (size_t)len < sizeof c->warning)
+    snprintf(c->warning + len, sizeof c->warning - (size_t)len, "; it is the only door: no agent can leave");
+}
+
+const char *cup_crowd_warning(const cup_crowd *c) { return c && c->warning[0] ? c->warning : NULL; }
+
 int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: output pointer is NULL");
   *out = NULL;
@@ -754,6 +779,7 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
     if (!st) c->S->recheck = crowd_recheck;
   }
   if (st) { cup_crowd_free(&c); return st; }
+  door_warning(c);
   c->proc = (cup_process_desc){.n = 2 * c->N, .C = c->S, .f_integral = crowd_walk, .f_integral_ctx = c};
   *out = c;
   return CUP_OK;

@@ -60,6 +60,7 @@ typedef struct crowd_entry {
 } crowd_entry;
 
 struct cup_crowd {
+  char warning[CUP_ERRMSG_LEN];     /* a door no agent can pass, or "" */
   int N;
   double *q0, *r;
   double speed, h, margin, reach, rmax;
