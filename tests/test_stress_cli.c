@@ -174,6 +174,37 @@ static void test_divergence_every_stride(void **state) {
   assert_int_equal(named, 71);
 }
 
+/* A polyset and a ball with x0 on a face of the polyset
+ * (intersection-face.yaml): the drift presses the point into the face and
+ * slides it up to the corner of the face and the circle; the closed form
+ * x(t) = (0.5, min(0.5 + t, 1.5)) holds at every step, each certified
+ * (eta 0). Main stored a stale point at step 100 (eta = inf). Without the
+ * drift the point stays at x0, on the face (main stored (0, 0) at step 1). */
+static void test_intersection_on_a_face(void **state) {
+  (void)state;
+  const char *scene = SCENES "/stress/intersection-face.yaml";
+  const char *out = tmp_path("face.h5");
+  for (int drift = 1; drift >= 0; drift--) {
+    const char *args[] = {scene, "-o", out, "--quiet", drift ? NULL : "--set", "f.b=[0, 0]", NULL};
+    result r = run_cli(args, 0, 0);
+    if (r.code != 0 || r.lines != 0) fail_msg("drift %d: exit %d:\n%s", drift, r.code, r.err);
+    h5file a;
+    load(out, 2, &a);
+    assert_int_equal(a.status, CUP_OK);
+    assert_int_equal(a.rows, 201);
+    for (hsize_t k = 0; k < a.rows; k++) {
+      double y = drift ? fmin(0.5 + (double)k / 100, 1.5) : 0.5;
+      if (fabs(a.x[2 * k] - 0.5) > 1e-12 || fabs(a.x[2 * k + 1] - y) > 1e-12)
+        fail_msg("drift %d, row %llu: (%.17g, %.17g), expected (0.5, %.17g)", drift, (unsigned long long)k,
+                 a.x[2 * k], a.x[2 * k + 1], y);
+    }
+    hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(attr_f64(f, "max_eta_cert") == 0);
+    H5Fclose(f);
+    unload(&a);
+  }
+}
+
 /* What the model allows but warns of (issue 27): a loop of ideal diodes
  * (tests/netlists/warn) and a door no agent can pass: exit 0, the warning
  * on one stderr line before the run's, and in the attribute `warnings`. */
@@ -241,6 +272,7 @@ int main(void) {
     cmocka_unit_test(test_divergence_keeps_prefix),
     cmocka_unit_test(test_divergence_every_stride),
     cmocka_unit_test(test_model_warnings),
+    cmocka_unit_test(test_intersection_on_a_face),
     cmocka_unit_test(test_nonfinite_scene_values),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
