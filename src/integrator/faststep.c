@@ -260,9 +260,9 @@ static __attribute__((noinline)) long dispatch(cup_faststep *f, long k, long sto
   return k;
 }
 
-long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
-                      cup_run_info *info) {
-  if (stop == k) return dispatch(f, k, stop, x, xnew, pi, st, info);   /* one step alone books nothing */
+/* A run of more than one step, its last booked state checked. */
+static __attribute__((noinline)) long run_checked(cup_faststep *f, long k, long stop, double *x, double *xnew,
+                                                  cup_proj_info *pi, int *st, cup_run_info *info) {
   fast_undo u;
   undo_save(&u, f, x, info);
   long pending = dispatch(f, k, stop, x, xnew, pi, st, info);
@@ -275,4 +275,10 @@ long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xne
     return k;
   }
   return pending;
+}
+
+long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                      cup_run_info *info) {
+  return stop == k ? dispatch(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
+                   : run_checked(f, k, stop, x, xnew, pi, st, info);
 }

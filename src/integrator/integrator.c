@@ -547,7 +547,8 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
 }
 
 /* A step's state beyond its range (tally.h): the scheme diverged. */
-static int diverged(const cup_integrator *I, cup_run_info *info, long k, double t, const double *x) {
+static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup_run_info *info, long k, double t,
+                                                    const double *x) {
   char what[200];
   int j = cup_state_worst(x, I->n);
   int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
@@ -569,7 +570,8 @@ static int diverged(const cup_integrator *I, cup_run_info *info, long k, double 
  * and set) when z is provably farther than eta_n from K(t) and nothing
  * certifies. xf: the step's free point (recomputed by the caller when the
  * fused steps kept it in registers). */
-static int certify_or_stop(cup_integrator *I, long k, double t, const double *g, cup_proj_info *pi, int st,
+static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, long k, double t, const double *g,
+                                                           cup_proj_info *pi, int st,
                            cup_run_info *info) {
   cup_proj_info pp = {0}, first = *pi;
   int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
