@@ -18,7 +18,7 @@ extern "C" {
   X(CUP_ERR_EMPTY_SET,      -6, "the set is empty (Farkas certificate in info)") \
   X(CUP_ERR_PB_CT,          -7, "P B differs from C^T")                       \
   X(CUP_ERR_CALLBACK,       -8, "a user callback failed or returned NaN/Inf") \
-  X(CUP_ERR_DIVERGED,       -9, "an iterate or the state became NaN or Inf, or the state left its range (CUP_STATE_MAX)") \
+  X(CUP_ERR_DIVERGED,       -9, "an iterate or the state became NaN or Inf, or left its range (CUP_STATE_MAX)") \
   X(CUP_ERR_IO,            -10, "file input/output failed")                   \
   X(CUP_ERR_PARSE,         -11, "syntax or schema error in an input file")    \
   X(CUP_ERR_LINALG,        -12, "sparse factorization failed")                \

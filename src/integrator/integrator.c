@@ -575,8 +575,7 @@ static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup
  * certifies. xf: the step's free point (recomputed by the caller when the
  * fused steps kept it in registers). */
 static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, long k, double t, const double *g,
-                                                           cup_proj_info *pi, int st,
-                           cup_run_info *info) {
+                                                           cup_proj_info *pi, int st, cup_run_info *info) {
   cup_proj_info pp = {0}, first = *pi;
   int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
   double own = INFINITY;
@@ -760,9 +759,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
-    if (fast && k >= I->fast.hold) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
+    if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
+      k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
-    if (st != CUP_FAST_DECLINED) {
+    int fused = st != CUP_FAST_DECLINED;   /* its free point stayed in registers */
+    if (fused) {
       I->zeta_from = 1;
       goto stepped;                      /* all that follows up to there, done by faststep.c */
     }
@@ -804,7 +805,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
   stepped:
     if (st >= 0 && I->K && !(pi.eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
-      if (I->zeta_from == 1 && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
+      if (fused && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
       else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, &pi, st, info)) < 0) return st;
     }
     if (st < 0) {                        /* the polyset path's errors */

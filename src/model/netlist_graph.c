@@ -361,7 +361,8 @@ int nl_diode_loops(cup_netlist *nl, const nl_circuit *c) {
     join_names(names, sizeof names, c, two, 2);
     nl_fail(c, two[0], nl->warning, CUP_OK, "%s are ideal diodes %s between nodes '%s' and '%s', a loop with no "
             "resistance: %s is not unique; the run takes one", names, same ? "in parallel" : "in anti-parallel",
-            c->node[d0->a], c->node[d0->b], same ? "how their current splits when they conduct" : "a current around it");
+            c->node[d0->a], c->node[d0->b],
+            same ? "how their current splits when they conduct" : "a current around it");
   } else if (len > 0) {
     join_names(names, sizeof names, c, loop, len);
     nl_fail(c, loop[0], nl->warning, CUP_OK, "%s form a loop of ideal diodes, all in one direction around it, "
