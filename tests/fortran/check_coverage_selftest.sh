@@ -11,15 +11,10 @@ cc=$1 src=$2 binc=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 t=$work/t
-fail() { echo "check_coverage_selftest: $*"; exit 1; }
+self=check_coverage_selftest
+. "$here/../layout/expect.sh"
 fresh() { rm -rf "$t"; mkdir -p "$t/src"; cp -r "$src/include" "$t/"; cp -r "$src/src/fortran" "$t/src/"; }
 check() { bash "$here/check_coverage.sh" "$cc" "$t/include:$binc" "$t"; }
-expect_fail() {   # expect_fail WHAT TEXT
-  local out
-  out=$(check 2>&1) && fail "$1: the check passed, expected a failure"
-  grep -qF -- "$2" <<< "$out" || fail "$1: the check failed without naming '$2': $out"
-  echo "check_coverage_selftest: $1: caught"
-}
 
 fresh
 check > /dev/null || fail "the tree as it is fails: $(check)"

@@ -11,7 +11,8 @@ src=$1
 cc=${2:-cc}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-fail() { echo "exports_selftest: $*"; exit 1; }
+self=exports_selftest
+. "$here/expect.sh"
 
 mkdir -p "$work/inc/catchup"
 cp "$src/include/catchup/export.h" "$work/inc/catchup/"
@@ -32,22 +33,16 @@ lib() {   # lib NAME EXTRA_SOURCE [CFLAGS...]: the library defining the header's
   "$cc" -shared -fPIC "$@" -I"$work/inc" "$work/$name.c" -o "$work/$name.so" ||
     fail "cannot build $name.so with $cc"
 }
-check() { bash "$here/exports.sh" "$cc" "$work/inc" "$work/$1.so=$work/inc/catchup/fake.h"; }
-expect_fail() {   # expect_fail WHAT LIB TEXT
-  local out
-  out=$(check "$2" 2>&1) && fail "$1: the check passed, expected a failure"
-  grep -qF -- "$3" <<< "$out" || fail "$1: the check failed without naming '$3': $out"
-  echo "exports_selftest: $1: caught"
-}
+check() { bash "$here/exports.sh" "$cc" "$work/inc" "$work/$1.so=$work/inc/catchup/fake.h"; }   # check LIB
 
 header CUP_API
 lib good 'int cup_internal(void) { return 2; }' -fvisibility=hidden
 check good > /dev/null || fail "a clean library fails the check: $(check good)"
 lib leaky '' 
-expect_fail "helper exported outside cup_ (no -fvisibility=hidden)" leaky "exports st_helper, outside the cup_ prefix"
+expect_fail "helper exported outside cup_ (no -fvisibility=hidden)" "exports st_helper, outside the cup_ prefix" leaky
 lib internal 'CUP_API int cup_rowpool_init(void) { return 2; }' -fvisibility=hidden
-expect_fail "internal cup_ function with CUP_API" internal "exports cup_rowpool_init, which no public header"
+expect_fail "internal cup_ function with CUP_API" "exports cup_rowpool_init, which no public header" internal
 header ''
 lib nomacro '' -fvisibility=hidden
-expect_fail "public declaration without CUP_API" nomacro "fake.h:3: cup_beta is declared but nomacro.so does not export it: write CUP_API"
+expect_fail "public declaration without CUP_API" "fake.h:3: cup_beta is declared but nomacro.so does not export it: write CUP_API" nomacro
 echo "exports_selftest: the exports check catches every injected violation"

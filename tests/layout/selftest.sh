@@ -15,15 +15,10 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 t=$work/t
 
-fail() { echo "selftest: $*"; exit 1; }
+self=selftest
+. "$here/expect.sh"
 fresh() { rm -rf "$t"; mkdir -p "$t"; cp -r "$src/src" "$src/apps" "$src/bench" "$src/include" "$t/"; }
-expect_fail() {   # expect_fail WHAT TEXT [OBJECT...]
-  local what=$1 text=$2 out
-  shift 2
-  out=$(bash "$here/check.sh" "$t" "$@" 2>&1) && fail "$what: the check passed, expected a failure"
-  grep -qF -- "$text" <<< "$out" || fail "$what: the check failed without naming '$text': $out"
-  echo "selftest: $what: caught"
-}
+check() { bash "$here/check.sh" "$t" "$@"; }   # check [OBJECT...]
 
 fresh
 bash "$here/check.sh" "$t" > /dev/null || fail "the tree as it is does not pass: $(bash "$here/check.sh" "$t")"
