@@ -23,9 +23,14 @@
 #ifndef CUP_BENCH_HEAP_H
 #define CUP_BENCH_HEAP_H
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__)                 /* GCC */
 #define HEAP_INTERPOSED 0
-#else
+#elif defined(__has_feature)                      /* clang */
+#if __has_feature(address_sanitizer)
+#define HEAP_INTERPOSED 0
+#endif
+#endif
+#ifndef HEAP_INTERPOSED
 #define HEAP_INTERPOSED 1
 #endif
 
