@@ -544,15 +544,33 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
 }
 
 /* The paper assumes x0 in K(0); say so when it is not (the first step
- * projects it), by the raw slack so that a point on the boundary passes. */
-static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
+ * projects it), by the raw slack so that a point on the boundary passes.
+ * With D != 0 the state is consistent when some zeta >= 0 makes
+ * C x0 + D zeta + g >= 0 (the theta step's LCP at x0): a rectifier's
+ * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
+ * is not: the first step jumps (jump_size tells by how much). */
+static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
-  if (I->use_theta) cup_lcp_step_start(&I->th, I->x, g0);
-  if (cup_slack(I->K, g0, I->x, I->s0, NULL) < 0) {
-    info->status = CUP_WARN_X0_OUTSIDE;
-    snprintf(info->message, sizeof info->message,
-             "step 0 (t = 0): x0 is outside K(0); the first step projects it");
-  }
+  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
+                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
+  if (consistent) return 0;
+  info->status = CUP_WARN_X0_OUTSIDE;
+  snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
+           I->L && I->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
+  return 1;
+}
+
+/* After the first step from an x0 that was not consistent: the jump's size,
+ * as far as the first step moved x beyond its free step (the jump itself,
+ * to O(h)), into the warning's message if it is still the run's status. */
+static void jump_size(const cup_integrator *I, const double *xf, const double *x1, cup_run_info *info) {
+  double big = 0;
+  int at = 0;
+  for (int j = 0; j < I->n; j++)
+    if (fabs(x1[j] - xf[j]) > big) big = fabs(x1[j] - xf[j]), at = j;
+  if (info->status != CUP_WARN_X0_OUTSIDE) return;
+  size_t len = strlen(info->message);
+  snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
 }
 
 /* Projections of one step again after rows were found missing (each adds
@@ -636,8 +654,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   int fixed = I->fixed || !I->u;
   long rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-  if (I->K) polyset_x0(I, fixed, info);
-  else if (general_x0(I, info) < 0) return info->status;
+  int jump = I->K && polyset_x0(I, fixed, info);
+  if (!I->K && general_x0(I, info) < 0) return info->status;
   int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   if (stiff) {
     info->status = CUP_WARN_STIFF;
@@ -664,7 +682,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   }
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
-  int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
+  int fast_ok = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
+  int fast = fast_ok && !jump;                            /* a jump's first step is measured below */
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
@@ -719,6 +738,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
         snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
       }
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
+    }
+    if (jump) {                          /* k = 0, never the fused path */
+      jump_size(I, I->xf, I->xnew, info);
+      jump = 0;
+      fast = fast_ok;
     }
     double *t = I->x; I->x = I->xnew; I->xnew = t;
     if (I->half) {
