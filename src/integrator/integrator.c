@@ -48,6 +48,7 @@ struct cup_integrator {
   cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
+  int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0;
 };
@@ -560,15 +561,19 @@ static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   return 1;
 }
 
-/* After the first step from an x0 that was not consistent: the jump's size,
- * as far as the first step moved x beyond its free step (the jump itself,
- * to O(h)), into the warning's message if it is still the run's status. */
-static void jump_size(const cup_integrator *I, const double *xf, const double *x1, cup_run_info *info) {
+/* After the first step (status st) from an x0 that was not consistent: the
+ * jump's size, as far as that step moved x beyond its free step (the jump
+ * itself, to O(h)), into the warning's message if it is still the run's
+ * status. Such a run takes the general path (bit for bit the fused one's),
+ * where this is called; out of line and cold, since inlined it cost the
+ * fused loop an instruction a step (callgrind, paper-fig2, n = 1e5). */
+__attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st, cup_run_info *info) {
+  I->jump = 0;
   double big = 0;
   int at = 0;
   for (int j = 0; j < I->n; j++)
-    if (fabs(x1[j] - xf[j]) > big) big = fabs(x1[j] - xf[j]), at = j;
-  if (info->status != CUP_WARN_X0_OUTSIDE) return;
+    if (fabs(I->xnew[j] - I->xf[j]) > big) big = fabs(I->xnew[j] - I->xf[j]), at = j;
+  if (st < 0 || info->status != CUP_WARN_X0_OUTSIDE) return;
   size_t len = strlen(info->message);
   snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
 }
@@ -654,7 +659,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   int fixed = I->fixed || !I->u;
   long rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-  int jump = I->K && polyset_x0(I, fixed, info);
+  I->jump = I->K && polyset_x0(I, fixed, info);
   if (!I->K && general_x0(I, info) < 0) return info->status;
   int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   if (stiff) {
@@ -682,8 +687,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   }
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
-  int fast_ok = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
-  int fast = fast_ok && !jump;                            /* a jump's first step is measured below */
+  int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
@@ -724,10 +728,12 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
         if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; I->zeta_from = 2; }
       } else {
         I->zeta_from = 1;
+        if (I->jump) jump_size(I, st, info);
       }
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
       I->zeta_from = 2;
+      if (I->jump) jump_size(I, st, info);
     }
   stepped:
     if (st < 0) {                        /* the polyset path's errors */
@@ -738,11 +744,6 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
         snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
       }
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
-    }
-    if (jump) {                          /* k = 0, never the fused path */
-      jump_size(I, I->xf, I->xnew, info);
-      jump = 0;
-      fast = fast_ok;
     }
     double *t = I->x; I->x = I->xnew; I->xnew = t;
     if (I->half) {
