@@ -406,9 +406,11 @@ enum { MODE_PASSES = 4, AIM_PASSES = 3 };
 
 static int mode_solve(cup_lcp_step *ls, const double *q, int *pivots) {
   for (int pass = 0;; pass++) {
-    for (int i = 0; i < ls->m; i++) ls->qs[i] = q[i] - ls->tau[i];
+    if (pass)
+      for (int i = 0; i < ls->m; i++) ls->qs[i] = q[i] - ls->tau[i];
     int st = aimed_solve(ls, q, pivots);
-    if (st || pass == MODE_PASSES || !set_mode(ls, support(ls))) return st;
+    unsigned long long J = support(ls);
+    if (st || J == ls->mode || pass == MODE_PASSES || !set_mode(ls, J)) return st;
   }
 }
 
