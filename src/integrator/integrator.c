@@ -732,8 +732,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
         if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; I->zeta_from = 2; }
       } else {
         I->zeta_from = 1;
-        if (I->jump) jump_size(I, st, info);
       }
+      if (I->jump) jump_size(I, st, info);
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
       I->zeta_from = 2;

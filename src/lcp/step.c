@@ -432,18 +432,60 @@ static int reaim(cup_lcp_step *ls, const double *q) {
   return more;
 }
 
-/* The step with D: the mode's weights, then aims refined until z certainly
- * satisfies every row (a row that z does not move, a bridge's diode fixed
- * by the others' currents, cannot be pushed into K afterwards), keeping the
- * last solution if a refinement fails; the trapezoid's carry. Returns the
- * offset of z's certificates. */
+/* One step of iterative refinement of lambda on its support J: the aimed,
+ * scaled LCP's rows on J, (R qs)_J + (Ms lambda)_J, should be 0. LU on a
+ * nearly singular block (an op-amp's loop gain in D) leaves them at
+ * cond(Ms_JJ) eps, which an aim could only cover by moving the answer by
+ * cond times the aim; one correction in working precision brings them to
+ * the rounding of the block's entries. */
+static void refine(cup_lcp_step *ls) {
+  int m = ls->m, p = 0;
+  int *idx = ls->kwork, *piv = idx + m;
+  double *A = ls->work, *r = A + (size_t)m * m, *w = r + m, *lam = ls->lcp.lam;
+  const double *sqs = ls->rsc + 2 * (size_t)m;    /* R (q - tau), as aimed_solve left it */
+  for (int i = 0; i < m; i++)
+    if (lam[i] > 0) idx[p++] = i;
+  for (int a = 0; a < p; a++) {
+    double acc = sqs[idx[a]];
+    for (int j = 0; j < m; j++) acc += ls->Ms[idx[a] + (size_t)j * m] * lam[j];
+    r[a] = -acc;
+    for (int b = 0; b < p; b++) A[a + (size_t)b * p] = ls->Ms[idx[a] + (size_t)idx[b] * m];
+  }
+  if (!p || cup_dense_lu(A, p, piv)) return;
+  cup_dense_lu_solve(A, p, piv, r, w);
+  for (int a = 0; a < p; a++) lam[idx[a]] += r[a];
+}
+
+/* 1 when some row's slack at z is below its rounding bound; *active: one
+ * of them has lambda > 0. */
+static int short_rows(const cup_lcp_step *ls, int *active) {
+  int any = 0;
+  *active = 0;
+  for (int i = 0; i < ls->m; i++)
+    if (ls->s[i] < ls->gam[i]) {
+      any = 1;
+      *active |= ls->lcp.lam[i] > 0;
+    }
+  return any;
+}
+
+/* The step with D: the mode's weights, then until z certainly satisfies
+ * every row (a row that z does not move, a bridge's diode fixed by the
+ * others' currents, cannot be pushed into K afterwards): first lambda
+ * refined on its support if an active row falls short, then aims moved
+ * further in (reaim), keeping the last solution if a solve fails; the
+ * trapezoid's carry. *g: the offset of z's certificates. */
 static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const double *xf, double *z,
                    int *pivots) {
-  int st = mode_solve(ls, q, pivots), m = ls->m;
+  int st = mode_solve(ls, q, pivots), m = ls->m, active;
   if (st) return st;
   const double *g0 = *g;
   *g = finish(ls, q, g0, xf, z);
-  for (int r = 0; r < AIM_PASSES && reaim(ls, q); r++) {
+  if (short_rows(ls, &active) && active) {
+    refine(ls);
+    *g = finish(ls, q, g0, xf, z);
+  }
+  for (int r = 0; r < AIM_PASSES && short_rows(ls, &active) && reaim(ls, q); r++) {
     cup_copy(ls->sv, ls->lcp.lam, m);
     int ok = aimed_solve(ls, q, pivots) == CUP_OK;
     if (!ok) cup_copy(ls->lcp.lam, ls->sv, m);
