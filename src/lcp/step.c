@@ -400,9 +400,12 @@ static const double *finish(cup_lcp_step *ls, const double *q, const double *g, 
   return g;
 }
 
-/* Solves again while the solution's support asks for other weights than
- * those it was solved with (set_mode), at most MODE_PASSES times. */
+/* The most solves again for a new support's weights (mode_solve), and for
+ * rows aimed further in (solve_d). */
 enum { MODE_PASSES = 4, AIM_PASSES = 3 };
+
+/* Solves again while the solution's support asks for other weights than
+ * those it was solved with (set_mode). */
 
 static int mode_solve(cup_lcp_step *ls, const double *q, int *pivots) {
   for (int pass = 0;; pass++) {
@@ -438,15 +441,15 @@ static int reaim(cup_lcp_step *ls, const double *q) {
  * cond(Ms_JJ) eps, which an aim could only cover by moving the answer by
  * cond times the aim; one correction in working precision brings them to
  * the rounding of the block's entries. */
-static void refine(cup_lcp_step *ls) {
+static void refine(cup_lcp_step *ls, const double *q) {
   int m = ls->m, p = 0;
   int *idx = ls->kwork, *piv = idx + m;
   double *A = ls->work, *r = A + (size_t)m * m, *w = r + m, *lam = ls->lcp.lam;
-  const double *sqs = ls->rsc + 2 * (size_t)m;    /* R (q - tau), as aimed_solve left it */
   for (int i = 0; i < m; i++)
     if (lam[i] > 0) idx[p++] = i;
   for (int a = 0; a < p; a++) {
-    double acc = sqs[idx[a]];
+    int i = idx[a];
+    double acc = ls->rsc[i] * (q[i] - ls->tau[i]);  /* R (q - tau): tau is 0 if the aim gave way */
     for (int j = 0; j < m; j++) acc += ls->Ms[idx[a] + (size_t)j * m] * lam[j];
     r[a] = -acc;
     for (int b = 0; b < p; b++) A[a + (size_t)b * p] = ls->Ms[idx[a] + (size_t)idx[b] * m];
@@ -482,7 +485,7 @@ static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const do
   const double *g0 = *g;
   *g = finish(ls, q, g0, xf, z);
   if (short_rows(ls, &active) && active) {
-    refine(ls);
+    refine(ls, q);
     *g = finish(ls, q, g0, xf, z);
   }
   for (int r = 0; r < AIM_PASSES && short_rows(ls, &active) && reaim(ls, q); r++) {
