@@ -484,16 +484,19 @@ static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const do
   if (st) return st;
   const double *g0 = *g;
   *g = finish(ls, q, g0, xf, z);
-  if (short_rows(ls, &active) && active) {
+  int short_ = short_rows(ls, &active);
+  if (short_ && active) {
     refine(ls, q);
     *g = finish(ls, q, g0, xf, z);
+    short_ = short_rows(ls, &active);
   }
-  for (int r = 0; r < AIM_PASSES && short_rows(ls, &active) && reaim(ls, q); r++) {
+  for (int r = 0; r < AIM_PASSES && short_ && reaim(ls, q); r++) {
     cup_copy(ls->sv, ls->lcp.lam, m);
     int ok = aimed_solve(ls, q, pivots) == CUP_OK;
     if (!ok) cup_copy(ls->lcp.lam, ls->sv, m);
     *g = finish(ls, q, g0, xf, z);
     if (!ok) break;
+    short_ = short_rows(ls, &active);
   }
   carry_of(ls);
   return CUP_OK;
