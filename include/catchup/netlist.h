@@ -53,6 +53,8 @@ const char *cup_netlist_file(const cup_netlist *nl, int k);
 /** Names of the state ("i(L1)", "v(C1)"), the rows (the diodes, "D1") and
  *  the inputs (the sources, "V1"); NULL out of range. */
 const char *cup_netlist_state_name(const cup_netlist *nl, int j);
+/** The netlist's text as it was read (before any `sets`), for provenance. */
+const char *cup_netlist_source(const cup_netlist *nl);
 const char *cup_netlist_row_name(const cup_netlist *nl, int i);
 const char *cup_netlist_input_name(const cup_netlist *nl, int j);
 /** 1 if the current of diode row i is fixed by the state (zeta_i is its
@@ -71,6 +73,8 @@ int cup_netlist_signal_count(const cup_netlist *nl);
 /** Canonical name: "v(out)", "v(a,b)", "i(D1)" (node and element names as
  *  first written in the netlist). */
 const char *cup_netlist_signal_name(const cup_netlist *nl, int k);
+/** Its unit: "V" for a voltage v(...), "A" for a current i(...). */
+const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
 /** The recorded signals at time t for state x and complementarity
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */

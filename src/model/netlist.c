@@ -337,6 +337,7 @@ void cup_netlist_free(cup_netlist **p) {
   for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);
   free(nl->files);
   free(nl->file);
+  free(nl->source);
   free(nl);
   *p = NULL;
 }
@@ -355,6 +356,7 @@ int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop) {
 const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
 }
+const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source : NULL; }
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
 }

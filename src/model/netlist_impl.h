@@ -48,6 +48,7 @@ struct cup_netlist {
   int n, m, p, nL, nC;
   /* the circuit, for names and signals */
   char *file;
+  char *source;       /* the netlist text as read (before sets), for provenance */
   int nfiles;
   char **files;       /* every file read, each once */
   int nnodes, nelem;
