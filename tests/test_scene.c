@@ -391,6 +391,29 @@ static void test_overrides_replace_shapes(void **state) {
   assert_contains(load_bad(EX "/paper-fig2.yaml", o8, 1), "input.1.amplitude: missing");
 }
 
+/* netlist.NAME=VALUE takes VALUE as SPICE text, as the netlist would:
+ * {100/13} is an expression, not a YAML mapping (which failed), and a
+ * source's whole specification keeps its parentheses and blanks. */
+static void test_overrides_netlist_spice(void **state) {
+  (void)state;
+  const char *o1[] = {"netlist.RL={100/13}", "netlist.V1 = SIN(0 5 50) "};
+  cup_scene *s = load_ok(EX "/circuits/halfwave-rc.yaml", o1, 2);
+  dense_lcs d;
+  dense_lcs_of(s, &d);
+  assert_close(d.A[0], -1 / (100.0 / 13 * 100e-6), 1e-12 / (100.0 / 13 * 100e-6));   /* -1 / (RL C1) */
+  double u;
+  assert_int_equal(cup_input_eval(cup_scene_input(s), 0.005, &u), CUP_OK);       /* a quarter period */
+  assert_close(u, 5, 1e-14);
+  cup_scene_free(&s);
+  const char *o2[] = {"netlist.RL={100/}"};                    /* SPICE's message, at the override */
+  assert_contains(load_bad(EX "/circuits/halfwave-rc.yaml", o2, 1),
+                  "override 'netlist.RL={100/}': netlist: ");
+  assert_contains(load_bad(EX "/circuits/halfwave-rc.yaml", o2, 1), "RL: the expression ends too early");
+  const char *o3[] = {"netlist.probe=[v(out)]"};               /* the scene's own keys stay YAML */
+  s = load_ok(EX "/circuits/halfwave-rc.yaml", o3, 1);
+  cup_scene_free(&s);
+}
+
 static void test_overrides_errors(void **state) {
   (void)state;
   const char *o1[] = {"circuit.R1=-1"};
@@ -637,6 +660,7 @@ int main(void) {
     cmocka_unit_test(test_overrides_change_values),
     cmocka_unit_test(test_overrides_add_keys),
     cmocka_unit_test(test_overrides_replace_shapes),
+    cmocka_unit_test(test_overrides_netlist_spice),
     cmocka_unit_test(test_overrides_errors),
     cmocka_unit_test(test_round_trip),
     cmocka_unit_test(test_bad_corpus),

@@ -48,6 +48,7 @@ struct cup_integrator {
   cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
+  int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0, *sg;
   double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
@@ -557,15 +558,37 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
 }
 
 /* The paper assumes x0 in K(0); say so when it is not (the first step
- * projects it), by the raw slack so that a point on the boundary passes. */
-static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
+ * projects it), by the raw slack so that a point on the boundary passes.
+ * With D != 0 the state is consistent when some zeta >= 0 makes
+ * C x0 + D zeta + g >= 0 (the theta step's LCP at x0): a rectifier's
+ * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
+ * is not: the first step jumps (jump_size tells by how much). */
+static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
-  if (I->use_theta) cup_lcp_step_start(&I->th, I->x, g0);
-  if (cup_slack(I->K, g0, I->x, I->s0, NULL) < 0) {
-    info->status = CUP_WARN_X0_OUTSIDE;
-    snprintf(info->message, sizeof info->message,
-             "step 0 (t = 0): x0 is outside K(0); the first step projects it");
-  }
+  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
+                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
+  if (consistent) return 0;
+  info->status = CUP_WARN_X0_OUTSIDE;
+  snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
+           I->L && I->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
+  return 1;
+}
+
+/* After the first step (status st) from an x0 that was not consistent: the
+ * jump's size, as far as that step moved x beyond its free step (the jump
+ * itself, to O(h)), into the warning's message if it is still the run's
+ * status. Such a run takes the general path (bit for bit the fused one's),
+ * where this is called; out of line and cold, since inlined it cost the
+ * fused loop an instruction a step (callgrind, paper-fig2, n = 1e5). */
+__attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st, cup_run_info *info) {
+  I->jump = 0;
+  double big = 0;
+  int at = 0;
+  for (int j = 0; j < I->n; j++)
+    if (fabs(I->xnew[j] - I->xf[j]) > big) big = fabs(I->xnew[j] - I->xf[j]), at = j;
+  if (st < 0 || info->status != CUP_WARN_X0_OUTSIDE) return;
+  size_t len = strlen(info->message);
+  snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
 }
 
 /* Projections of one step again after rows were found missing (each adds
@@ -660,8 +683,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   int fixed = I->fixed || !I->u;
   long rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-  if (I->K) polyset_x0(I, fixed, info);
-  else if (general_x0(I, info) < 0) return info->status;
+  I->jump = I->K && polyset_x0(I, fixed, info);
+  if (!I->K && general_x0(I, info) < 0) return info->status;
   int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   if (stiff) {
     info->status = CUP_WARN_STIFF;
@@ -688,7 +711,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   }
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
-  int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
+  int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
   I->fast.hold = 0;
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
@@ -733,9 +756,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       } else {
         I->zeta_from = 1;
       }
+      if (I->jump) jump_size(I, st, info);
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
       I->zeta_from = 2;
+      if (I->jump) jump_size(I, st, info);
     }
   stepped:
     if (st >= 0 && I->K && !(pi.eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */

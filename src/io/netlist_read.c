@@ -157,16 +157,32 @@ static int looks_value(rd *r, const nx_tok *t) {
   return t->kind == NX_EXPR || (t->kind == NX_WORD && (nx_number(t->s, &v) || nx_param_find(&r->x, t, t->s) >= 0));
 }
 
+/* PULSE's TR or TF written `jump` (not a .param of that name): an edge of
+ * no duration, where SPICE reads 0 as TSTEP. */
+static int is_jump(rd *r, const nx_tok *t) {
+  return t->kind == NX_WORD && nx_is(t, "jump") && !looks_value(r, t);
+}
+
 /* The arguments of SIN/PULSE/PWL: "(a b c)" or "a b c" up to the next word
- * that is not a value. */
+ * that is not a value; for PULSE (jumps not NULL) TR and TF may be `jump`,
+ * a bit each in *jumps (by position) with the value 0. */
 static int fn_args(rd *r, const nx_tok *t, int n, int *k, const char *elem, const char *fn, double *v,
-                   int max, int *count) {
+                   int max, int *count, unsigned *jumps) {
   int paren = *k < n && t[*k].kind == NX_LP;
   if (paren) (*k)++;
   *count = 0;
-  while (*k < n && t[*k].kind != NX_RP && (paren || looks_value(r, &t[*k]))) {
+  while (*k < n && t[*k].kind != NX_RP && (paren || looks_value(r, &t[*k]) || (jumps && is_jump(r, &t[*k])))) {
     if (*count == max)
       return nx_fail(&r->x, CUP_ERR_PARSE, &t[*k], elem, "%s takes at most %d values", fn, max);
+    if (is_jump(r, &t[*k])) {
+      if (!jumps || (*count != NL_PULSE_TR && *count != NL_PULSE_TF))
+        return nx_fail(&r->x, CUP_ERR_PARSE, &t[*k], elem, "%s: 'jump' stands only for PULSE's rise or fall "
+                       "time TR, TF (an edge of no duration)", fn);
+      *jumps |= 1u << *count;
+      v[(*count)++] = 0;
+      (*k)++;
+      continue;
+    }
     if (t[*k].kind == NX_EQ || (t[*k].kind == NX_WORD && !looks_value(r, &t[*k])))
       return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, &t[*k], elem, "%s: '%.40s' is not supported (only values)", fn, t[*k].s);
     int st = nx_value(&r->x, &t[*k], elem, &v[(*count)++]);
@@ -221,7 +237,7 @@ static int source_spec(rd *r, const nx_tok *t, int n, const char *elem, nl_sourc
       int max = s->fn == NL_FN_SIN ? 6 : s->fn == NL_FN_PULSE ? 7 : n, count = 0;
       if (!(v = malloc(sizeof(double) * (size_t)(max + 1)))) { st = nomem(r); break; }
       k++;
-      st = fn_args(r, t, n, &k, elem, w->s, v, max, &count);
+      st = fn_args(r, t, n, &k, elem, w->s, v, max, &count, s->fn == NL_FN_PULSE ? &s->jumps : NULL);
       if (!st && s->fn == NL_FN_PWL) st = read_pwl(r, w, elem, s, v, count);
       if (!st && s->fn != NL_FN_PWL) {
         if (count < 2)

@@ -569,7 +569,7 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
   st_node *root = NULL;
   cup_scene *S = NULL;
   int st = st_parse(&root, text, len, &r.src, -1, NULL, errmsg);
-  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, scene_reshape, errmsg);
+  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, scene_reshape, scene_verbatim, errmsg);
   if (!st && !(S = calloc(1, sizeof *S))) st = CUP_ERR_NOMEM;
   if (!st) st = read_scene(&r, root, S);
   if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;
