@@ -32,7 +32,7 @@
 #include "crowd_log.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
-enum { MSG_LEN = CUP_ERRMSG_LEN + 768 };   /* room for a path before a library message */
+enum { MSG_LEN = 2 * CUP_ERRMSG_LEN };     /* a path, then a library message, whole */
 
 /* "a, b, c or d" from a choice list of the library (CUP_*_LIST). */
 static const char *names_or(char *buf, size_t size, const char *(*name)(int), int count) {

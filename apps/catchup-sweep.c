@@ -648,15 +648,20 @@ static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit)
 
 static int open_results(const args_t *a, const cup_sweep *s, int argc, char **argv, sw_file **f, char *err) {
   if (a->resume) return sw_file_open(f, a->out, s, err);
-  char deps[512], h5[64], cmd[2048] = "";
+  char deps[512], h5[64];
   int n = cup_dependency_versions(deps, sizeof deps);
   cup_h5_version(h5, sizeof h5);
   if (n >= 0 && (size_t)n < sizeof deps) snprintf(deps + n, sizeof deps - (size_t)n, "; %s", h5);
-  size_t w = 0;
-  for (int i = 0; i < argc && w < sizeof cmd; i++)
-    w += (size_t)snprintf(cmd + w, sizeof cmd - w, "%s%s", i ? " " : "", argv[i]);
+  size_t len = 1, w = 0;                       /* the command line, whole */
+  for (int i = 0; i < argc; i++) len += strlen(argv[i]) + 1;
+  char *cmd = malloc(len);
+  if (!cmd) return snprintf(err, SW_ERR_LEN, "%s: out of memory", a->out), CUP_ERR_NOMEM;
+  cmd[0] = '\0';
+  for (int i = 0; i < argc; i++) w += (size_t)snprintf(cmd + w, len - w, "%s%s", i ? " " : "", argv[i]);
   sw_provenance p = {cup_version(), deps, CATCHUP_GIT_REVISION, cmd};
-  return sw_file_create(f, a->out, s, &p, err);
+  int st = sw_file_create(f, a->out, s, &p, err);
+  free(cmd);
+  return st;
 }
 
 static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const hooks_t *hooks) {

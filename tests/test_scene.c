@@ -11,6 +11,7 @@
 #include <setjmp.h>
 #include <stdio.h>
 #include <dirent.h>
+#include <sys/stat.h>
 #include <cmocka.h>
 #include "testutil.h"
 #include "badcorpus.h"
@@ -641,6 +642,75 @@ static void test_message_layout(void **state) {
   assert_null(s);
 }
 
+/* A folder `len` characters deep (folders of at most 200 characters) under
+ * a fresh temporary one, made; *top is that temporary folder. */
+static char *deep_dir(size_t len, char **top) {
+  char tmpl[] = "/tmp/cup_deepXXXXXX";
+  assert_non_null(mkdtemp(tmpl));
+  *top = strdup(tmpl);
+  char *d = malloc(len + 256);
+  assert_non_null(d);
+  size_t w = (size_t)snprintf(d, len + 256, "%s", tmpl);
+  while (w < len) {
+    size_t seg = len - w - 1 < 200 ? len - w - 1 : 200;
+    if (seg == 0) seg = 1;
+    d[w++] = '/';
+    memset(d + w, 'd', seg);
+    w += seg;
+    d[w] = '\0';
+    assert_int_equal(mkdir(d, 0700), 0);
+  }
+  return d;
+}
+
+static char *write_in(const char *dir, const char *name, const char *text) {
+  size_t n = strlen(dir) + strlen(name) + 2;
+  char *path = malloc(n);
+  assert_non_null(path);
+  snprintf(path, n, "%s/%s", dir, name);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+  return path;
+}
+
+/* Messages are never cut (CUP_ERRMSG_LEN): through a path of 250
+ * characters, and of 4000 (near PATH_MAX), a scene's error, a Matrix Market
+ * file's that it names (two paths in one message) and a netlist's read
+ * through the scene end as they do through a short path. */
+static void test_long_path_messages(void **state) {
+  (void)state;
+  static const size_t lens[] = {250, 4000};
+  for (size_t k = 0; k < sizeof lens / sizeof lens[0]; k++) {
+    char *top, *dir = deep_dir(lens[k] - strlen("/bad.yaml"), &top), err[CUP_ERRMSG_LEN], want[CUP_ERRMSG_LEN];
+    char *bad = write_in(dir, "bad.yaml", "circuit:\n  R1: 1\n  R2: 2\n  L3:   -1\n  R3: 1\n  L2: 1\n"
+                                           "  C4: 1\nT: 1\nn: 100\n");
+    assert_true(strlen(bad) >= lens[k]);
+    cup_scene *s = NULL;
+    assert_int_equal(cup_scene_load(&s, bad, NULL, 0, err), CUP_ERR_PARSE);
+    snprintf(want, sizeof want, "%s:4:9: circuit.L3: must be > 0 (got -1)", bad);
+    assert_string_equal(err, want);
+    char *mtx = write_in(dir, "m.yaml", "lcs:\n  C: [[1]]\n  E: [[1]]\n  G: {file: missing.mtx}\ninput: 1\nT: 1\n");
+    assert_int_equal(cup_scene_load(&s, mtx, NULL, 0, err), CUP_ERR_IO);
+    snprintf(want, sizeof want, "%s:4:13: lcs.G.file: cannot open '%s/missing.mtx': No such file or directory",
+             mtx, dir);
+    assert_string_equal(err, want);
+    char *cir = write_in(dir, "c.cir", "* rc\nV1 in 0 DC 1\nR1 in out 1k\nC1 out 0 1u\nD1 out 0 nomodel\n.tran 1u 1m\n");
+    char *sc = write_in(dir, "n.yaml", "netlist: c.cir\n");
+    assert_int_equal(cup_scene_load(&s, sc, NULL, 0, err), CUP_ERR_PARSE);
+    assert_contains(err, cir);
+    assert_contains(err, "model 'nomodel' is not defined (an ideal diode needs '.model nomodel D' or no model)");
+    assert_null(s);
+    free(bad); free(mtx); free(cir); free(sc);
+    char cmd[64 + sizeof "/tmp/cup_deepXXXXXX"];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", top);
+    assert_int_equal(system(cmd), 0);
+    free(dir);
+    free(top);
+  }
+}
+
 static void test_api_edges(void **state) {
   (void)state;
   char err[CUP_ERRMSG_LEN];
@@ -679,6 +749,7 @@ int main(void) {
     cmocka_unit_test(test_mutations),
     cmocka_unit_test(test_allocation_failures),
     cmocka_unit_test(test_message_layout),
+    cmocka_unit_test(test_long_path_messages),
     cmocka_unit_test(test_api_edges),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

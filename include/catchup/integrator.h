@@ -161,7 +161,7 @@ typedef struct cup_run_info {
   double eta_target;          /**< eta_n used */
   double h_rho;               /**< h * spectral radius of A */
   long samples;               /**< states passed to the sink */
-  char message[256];          /**< what went wrong, with step and time */
+  char message[CUP_RUN_MSG_LEN]; /**< what went wrong, with step and time (never cut) */
   /* general sets (cup_integrator_create_process) */
   long set_rebuilds;          /**< state polyset: symbolic analyses of the run (and their
                                    allocations): the one at t = 0, then one per step whose rows

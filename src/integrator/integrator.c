@@ -510,10 +510,14 @@ static double wall_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
+ * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
+ * the cause's (what[WHAT_LEN] buffers below). */
+enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
+
 static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
   info->status = status;
-  /* the cause cut where the message would be: "step ", 20 digits, " (t = ", 24, "): " */
-  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %.190s", k, t, what);
+  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
   return status;
 }
 
@@ -566,12 +570,12 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
     return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
   int st = cup_setproj_move(I->sp, t, I->ut, xk);
   if (st == CUP_ERR_NONFINITE) {
-    char what[200];
+    char what[WHAT_LEN];
     snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
   }
   if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
-    char what[200];                      /* as on the polyset path: the state overflowed */
+    char what[WHAT_LEN];                 /* as on the polyset path: the state overflowed */
     snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
              cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
@@ -712,7 +716,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
   stepped:
     if (st < 0) {                        /* the polyset path's errors */
-      char what[224];
+      char what[WHAT_LEN];
       describe_projection_error(what, sizeof what, st, &pi);
       if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
         size_t len = strlen(what);

@@ -76,8 +76,10 @@ static void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
 /* The innermost description on the error stack is the most specific one;
  * for a failed open() it carries the system's message, which is all a user
  * needs ("No such file or directory"). */
+enum { DETAIL_LEN = CUP_ERRMSG_LEN / 2 };   /* a description names the file: whole */
+
 static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
-  if (n == 0 && e->desc) snprintf((char *)out, 160, "%s", e->desc);
+  if (n == 0 && e->desc) snprintf((char *)out, DETAIL_LEN, "%s", e->desc);
   return 0;
 }
 
@@ -92,7 +94,7 @@ static void h5_detail(char *buf) {
     if (end) *end = '\0';
     memmove(buf, s, strlen(s) + 1);
   }
-  if (!buf[0]) snprintf(buf, 160, "HDF5 call failed");
+  if (!buf[0]) snprintf(buf, DETAIL_LEN, "HDF5 call failed");
 }
 
 /* An HDF5 call failed. Record "h5run: cannot <op> '<path>': <detail>" unless
@@ -103,7 +105,7 @@ static int set_error(cup_h5run *w, int status, const char *op) {
   w->h5_failed = 1;
   if (w->data_status == CUP_OK) w->data_status = status;
   if (!w->errmsg[0]) {
-    char detail[160];
+    char detail[DETAIL_LEN];
     h5_detail(detail);
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot %s '%s': %s", op, w->path, detail);
   }

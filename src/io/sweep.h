@@ -12,7 +12,7 @@
 #include <stdint.h>
 #include "catchup.h"
 
-#define SW_ERR_LEN 1024          /* messages: a scene's message inside a sweep's */
+#define SW_ERR_LEN (2 * CUP_ERRMSG_LEN)   /* messages: a scene's message, whole, inside a sweep's */
 
 enum { SW_AXIS_N, SW_AXIS_EPS, SW_AXIS_ETA, SW_AXIS_SCHEME, SW_AXIS_PROJECTOR, SW_AXIS_TOL, SW_NAXES };
 
@@ -21,7 +21,9 @@ enum { SW_REF_RICHARDSON, SW_REF_ADAPTIVE };
 #define SW_REF_ADAPTIVE_TOL 1e-13  /* the adaptive reference's tol (absolute and relative) */
 
 /* String sizes of the /summary fields (fixed-length, NUL-terminated). */
-enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = 256 };
+/* SW_MSG_LEN: a task's message is its run's (cup_run_info.message), whole,
+ * after a prefix of at most 64 characters ("set-up: ", "injected failure"). */
+enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = CUP_RUN_MSG_LEN + 64 };
 
 typedef struct sw_variant {
   char *name;

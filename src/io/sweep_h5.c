@@ -15,7 +15,7 @@
 
 /* ---- HDF5 errors: never printed; the innermost description is kept ---- */
 
-typedef struct { char desc[160]; int locked; } h5_err;
+typedef struct { char desc[CUP_ERRMSG_LEN / 2]; int locked; } h5_err;   /* names the file: whole */
 
 static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
   h5_err *r = out;

@@ -114,7 +114,7 @@ contains
       off(b, c_loc(r%eta_target)), off(b, c_loc(r%h_rho)), off(b, c_loc(r%samples)), &
       off(b, c_loc(r%message)), off(b, c_loc(r%set_rebuilds)), off(b, c_loc(r%max_rows)), &
       off(b, c_loc(r%err_est)), off(b, c_loc(r%events)), off(b, c_loc(r%rejected))])
-    call check_int(size(r%message), 256, 'cup_run_info%message has 256 chars')
+    call check_int(size(r%message), CUP_RUN_MSG_LEN, 'cup_run_info%message has CUP_RUN_MSG_LEN chars')
     b = c_loc(sd)
     call compare('cup_set_desc', [int(c_sizeof(sd), c_long), off(b, c_loc(sd%kind)), off(b, c_loc(sd%n)), &
       off(b, c_loc(sd%p)), off(b, c_loc(sd%metric)), off(b, c_loc(sd%C)), off(b, c_loc(sd%F)), &
