@@ -642,6 +642,59 @@ static void test_message_layout(void **state) {
   assert_null(s);
 }
 
+/* The SHA-256 of a file by the system's sha256sum (an independent
+ * reference for the scene's own hash), into hex[65]. */
+static void sha256sum(const char *path, char hex[65]) {
+  char cmd[1024];
+  snprintf(cmd, sizeof cmd, "sha256sum '%s'", path);
+  FILE *p = popen(cmd, "r");
+  assert_non_null(p);
+  assert_int_equal(fscanf(p, "%64s", hex), 1);
+  pclose(p);
+}
+
+/* The files a scene was read from: each once, in the order read, with the
+ * SHA-256 of its bytes (against sha256sum); a netlist's through the scene;
+ * none for a scene from text that names no file. */
+static void test_files_read(void **state) {
+  (void)state;
+  cup_scene *s = load_ok(EX "/sparse-mtx/scene.yaml", NULL, 0);
+  static const char *const names[] = {"scene.yaml", "A.mtx", "C.mtx", "P.mtx", "x0.mtx"};
+  assert_int_equal(cup_scene_file_count(s), 5);
+  assert_string_equal(cup_scene_file(s, 0), EX "/sparse-mtx/scene.yaml");   /* then as the keys are read */
+  for (int k = 0; k < 5; k++) {
+    char want[256], hex[65];
+    snprintf(want, sizeof want, EX "/sparse-mtx/%s", names[k]);
+    int at = -1;
+    for (int j = 0; j < 5; j++) at = !strcmp(cup_scene_file(s, j), want) ? j : at;
+    assert_true(at >= 0);
+    sha256sum(want, hex);
+    assert_string_equal(cup_scene_file_sha256(s, at), hex);
+  }
+  assert_null(cup_scene_file(s, 5));
+  assert_null(cup_scene_file(s, -1));
+  cup_scene_free(&s);
+  /* the same file named twice is one file */
+  char err[CUP_ERRMSG_LEN];
+  const char *same = "lcs:\n  C: {file: C.mtx}\n  A: {file: A.mtx}\n  P: {file: P.mtx}\n  E: {file: x0.mtx}\n"
+                     "  G: [[0], [0], [0], [0]]\nx0: {file: x0.mtx}\ninput: 1\nT: 1\nn: 10\n";
+  assert_int_equal(cup_scene_load_string(&s, same, "same.yaml", EX "/sparse-mtx", NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 4);             /* C, A, P, x0 (for E and for x0) */
+  int x0_seen = 0;
+  for (int j = 0; j < 4; j++) x0_seen += !strcmp(cup_scene_file(s, j), EX "/sparse-mtx/x0.mtx");
+  assert_int_equal(x0_seen, 1);
+  cup_scene_free(&s);
+  s = load_ok(EX "/paper-fig2.yaml", NULL, 0);
+  assert_int_equal(cup_scene_file_count(s), 1);
+  cup_scene_free(&s);
+  assert_int_equal(cup_scene_load_string(&s, "netlist: halfwave-rc.cir\n", "n.yaml", EX "/circuits", NULL, 0, err),
+                   CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 1);
+  assert_string_equal(cup_scene_file(s, 0), EX "/circuits/halfwave-rc.cir");
+  cup_scene_free(&s);
+  assert_int_equal(cup_scene_file_count(NULL), 0);
+}
+
 /* A folder `len` characters deep (folders of at most 200 characters) under
  * a fresh temporary one, made; *top is that temporary folder. */
 static char *deep_dir(size_t len, char **top) {
@@ -750,6 +803,7 @@ int main(void) {
     cmocka_unit_test(test_allocation_failures),
     cmocka_unit_test(test_message_layout),
     cmocka_unit_test(test_long_path_messages),
+    cmocka_unit_test(test_files_read),
     cmocka_unit_test(test_api_edges),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -51,6 +51,15 @@ const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "
 const char *cup_scene_eta_spec(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
 const char *cup_scene_text(const cup_scene *s);
+/** The files the scene was read from, in the order first read, each once:
+ *  the scene file (none for cup_scene_load_string), the Matrix Market
+ *  files it names, its netlist and what that includes. k in [0, count). */
+int cup_scene_file_count(const cup_scene *s);
+/** File k's path as it was opened (NULL for k out of range). */
+const char *cup_scene_file(const cup_scene *s, int k);
+/** The SHA-256 (64 lowercase hex digits) of the bytes of file k that were
+ *  read: what the scene holds, whatever the file says now. */
+const char *cup_scene_file_sha256(const cup_scene *s, int k);
 /** The scene's netlist when its model is `netlist:` (NULL otherwise), owned
  *  by the scene; its LCS and input are the scene's. Signals are added to it
  *  (cup_netlist_probe), so it is not const. */

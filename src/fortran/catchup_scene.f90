@@ -12,11 +12,13 @@ module catchup_scene
   private
   public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, cup_scene_netlist, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
-    cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator
+    cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator, &
+    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
-    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd
+    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_file_count, c_cup_scene_file, &
+    c_cup_scene_file_sha256
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -112,6 +114,23 @@ module catchup_scene
       type(c_ptr), value :: s
       type(c_ptr) :: p
     end function c_cup_scene_text
+    function c_cup_scene_file_count(s) bind(C, name="cup_scene_file_count") result(n)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: s
+      integer(c_int) :: n
+    end function c_cup_scene_file_count
+    function c_cup_scene_file(s, k) bind(C, name="cup_scene_file") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: s
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_scene_file
+    function c_cup_scene_file_sha256(s, k) bind(C, name="cup_scene_file_sha256") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: s
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_scene_file_sha256
   end interface
 
 contains
@@ -324,4 +343,30 @@ contains
     text = ''
     if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_text(s%ptr))
   end function cup_scene_text
+
+  !> How many files the scene was read from (the scene file, its Matrix
+  !> Market files, its netlist and what that includes).
+  integer function cup_scene_file_count(s) result(n)
+    type(cup_scene_t), intent(in) :: s
+    n = 0
+    if (c_associated(s%ptr)) n = int(c_cup_scene_file_count(s%ptr))
+  end function cup_scene_file_count
+
+  !> File k (1-based) as it was opened ('' out of range).
+  function cup_scene_file(s, k) result(text)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: k
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_file(s%ptr, int(k - 1, c_int)))
+  end function cup_scene_file
+
+  !> The SHA-256 (hex) of the bytes of file k (1-based) that were read.
+  function cup_scene_file_sha256(s, k) result(text)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: k
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_file_sha256(s%ptr, int(k - 1, c_int)))
+  end function cup_scene_file_sha256
 end module catchup_scene

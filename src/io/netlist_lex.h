@@ -9,6 +9,13 @@
 #include <stdarg.h>
 #include <stddef.h>
 
+struct cup_file_list;
+struct cup_netlist;
+/* cup_netlist_load recording the files it reads in files (read_text.h; may
+ * be NULL): the scene's netlist: key loads through this. */
+int cup_netlist_load_files(struct cup_netlist **out, const char *path, const char *const *sets, int nsets,
+                           struct cup_file_list *files, char *errmsg);
+
 typedef enum nx_kind { NX_WORD, NX_LP, NX_RP, NX_EQ, NX_EXPR } nx_kind;
 
 typedef struct nx_tok {
@@ -43,6 +50,8 @@ typedef struct nx_param {
 /* Everything the reader keeps while it works. */
 typedef struct nx {
   const char *file;
+  struct cup_file_list *files;  /* the load's files read (read_text.h), or NULL: a file this
+                                   reader opens (an .include) goes through cup_read_text with it */
   const char *const *sets;   /* "NAME=VALUE" */
   int nsets;
   char *errmsg;

@@ -35,6 +35,7 @@ struct cup_scene {
   cup_integrator_options opt;
   char *eps_spec, *eta_spec;    /* as written */
   char *text;                   /* the document after overrides */
+  cup_file_list files;          /* every file read: the scene's, its Matrix Market files, its netlist's */
 };
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
@@ -162,7 +163,7 @@ static int read_model(rd *r, const st_node *root, cup_scene *S) {
   }
   if (c) return read_circuit(r, kc, c, &S->lcs);
   if (l) return read_lcs(r, kl, l, &S->lcs);
-  if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
+  if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->files, r->errmsg);
   return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist/set", "missing: the scene needs a model, circuit:, "
               "lcs:, netlist:, set: or crowd:");
 }
@@ -561,15 +562,22 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
 
 /* ---- public -------------------------------------------------------------- */
 
+/* files: what was read so far (the scene file itself), moved into the
+ * scene, or freed. */
 static int load(cup_scene **s, const char *text, size_t len, const char *name, const char *dir,
-                const char *const *ovr, int nov, char *errmsg) {
-  rd r = {{name, ovr}, dir, errmsg};
+                const char *const *ovr, int nov, cup_file_list *files, char *errmsg) {
+  rd r = {{name, ovr}, dir, errmsg, files};
   st_node *root = NULL;
   cup_scene *S = NULL;
   int st = st_parse(&root, text, len, &r.src, -1, NULL, errmsg);
   for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, scene_reshape, errmsg);
   if (!st && !(S = calloc(1, sizeof *S))) st = CUP_ERR_NOMEM;
   if (!st) st = read_scene(&r, root, S);
+  if (S) {
+    S->files = *files;
+    memset(files, 0, sizeof *files);
+  }
+  cup_file_list_free(files);
   if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;
   st_free(root);
   if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "%s: out of memory while loading the scene", name);
@@ -587,7 +595,8 @@ int cup_scene_load_string(cup_scene **s, const char *text, const char *name, con
                           const char *const *overrides, int n_overrides, char *errmsg) {
   int st = check_args(s, text, overrides, n_overrides, errmsg);
   if (st) return st;
-  return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, errmsg);
+  cup_file_list files = {0};
+  return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, &files, errmsg);
 }
 
 int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides, int n_overrides,
@@ -595,10 +604,12 @@ int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides
   int st = check_args(s, path, overrides, n_overrides, errmsg);
   char *text = NULL, *dir = NULL;
   size_t len = 0;
-  if (!st) st = cup_read_text(path, &text, &len, errmsg);
+  cup_file_list files = {0};
+  if (!st) st = cup_read_text(path, &text, &len, &files, errmsg);
   const char *slash = path ? strrchr(path, '/') : NULL;
   if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
-  if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, errmsg);
+  if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, &files, errmsg);
+  cup_file_list_free(&files);
   free(text);
   free(dir);
   return st;
@@ -617,6 +628,7 @@ void cup_scene_free(cup_scene **s) {
   free(S->eps_spec);
   free(S->eta_spec);
   free(S->text);
+  cup_file_list_free(&S->files);
   free(S);
   *s = NULL;
 }
@@ -650,3 +662,11 @@ const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ?
 const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }
 const char *cup_scene_eta_spec(const cup_scene *s) { return s ? s->eta_spec : NULL; }
 const char *cup_scene_text(const cup_scene *s) { return s ? s->text : NULL; }
+const cup_file_list *cup_scene_file_list(const cup_scene *s) { return s ? &s->files : NULL; }
+int cup_scene_file_count(const cup_scene *s) { return s ? s->files.n : 0; }
+const char *cup_scene_file(const cup_scene *s, int k) {
+  return s && k >= 0 && k < s->files.n ? s->files.e[k].path : NULL;
+}
+const char *cup_scene_file_sha256(const cup_scene *s, int k) {
+  return s && k >= 0 && k < s->files.n ? s->files.e[k].sha256 : NULL;
+}

@@ -416,9 +416,12 @@ int sw_load(cup_sweep **s, const char *path, char *errmsg) {
   *s = NULL;
   char *buf = NULL;
   size_t n = 0;
-  int rt = cup_read_text(path, &buf, &n, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
+  cup_file_list files = {0};
+  int rt = cup_read_text(path, &buf, &n, &files, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
   if (rt) return rt;
   int st = sw_parse(s, buf, n, path, errmsg);
+  if (!st) (*s)->files = files;
+  else cup_file_list_free(&files);
   free(buf);
   return st;
 }
@@ -451,6 +454,7 @@ int sw_resolve_files(cup_sweep *s, char *errmsg) {
     }
     if (st) { variant_fail(s, k, st, errmsg, "%s", err); break; }
     if (!(texts[k] = strdup(cup_scene_text(sc)))) st = CUP_ERR_NOMEM;
+    if (!st) st = cup_file_list_merge(&s->files, cup_scene_file_list(sc));   /* its files join the sweep's */
     cup_scene_free(&sc);
   }
   if (!st) st = sw_resolve_texts(s, texts, errmsg);
@@ -530,6 +534,7 @@ void sw_free(cup_sweep **ps) {
   for (int k = 0; k < s->len[SW_AXIS_ETA]; k++) free(s->eta[k]);
   free(s->n); free(s->eps); free(s->eta); free(s->scheme); free(s->projector); free(s->tol);
   free(s->path); free(s->dir); free(s->text); free(s->name);
+  cup_file_list_free(&s->files);
   free(s);
   *ps = NULL;
 }

@@ -11,6 +11,7 @@
 
 #include <stdint.h>
 #include "catchup.h"
+#include "read_text.h"
 
 #define SW_ERR_LEN (2 * CUP_ERRMSG_LEN)   /* messages: a scene's message, whole, inside a sweep's */
 
@@ -43,6 +44,8 @@ typedef struct cup_sweep {
   char *dir;                 /* its directory, or NULL */
   char *text;                /* its full text (hashed, stored) */
   char sha256[65];
+  cup_file_list files;       /* rank 0, after sw_resolve_files: every file read (the sweep
+                                file, its scenes and theirs: read_text.h), hashed */
   char *name;
   int base_line, base_col;   /* where base: is written, for messages */
   int n_variants;

@@ -58,6 +58,9 @@ program test_f_scene
   call check_int(ierr, CUP_OK, 'load: ' // trim(msg))
   call cup_scene_options(s, o, ierr)
   call check(ierr == CUP_OK .and. o%n >= 1, 'options of the file')
+  call check_int(cup_scene_file_count(s), 1, 'one file read')
+  call check(cup_scene_file(s, 1) == trim(srcdir) // '/examples/paper-fig2.yaml', 'the file read: ' // cup_scene_file(s, 1))
+  call check(len(cup_scene_file_sha256(s, 1)) == 64 .and. cup_scene_file(s, 2) == '', 'its SHA-256; nothing beyond')
   call cup_scene_free(s)
 
   call section('a set: scene, examples/tractrix.yaml')
