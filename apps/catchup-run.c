@@ -412,8 +412,9 @@ static int load_scene(run_t *r, char *err) {
   return st;
 }
 
-/* --probe signals, or the netlist's defaults; written to /signals. */
-static int setup_signals(run_t *r, char *err) {
+/* --probe signals, or the netlist's defaults: checked before the output is
+ * touched (declared in /signals by declare_signals). */
+static int check_probes(run_t *r, char *err) {
   const args_t *a = r->args;
   cup_netlist *nl = cup_scene_netlist(r->scene);
   char e2[CUP_ERRMSG_LEN];
@@ -431,10 +432,20 @@ static int setup_signals(run_t *r, char *err) {
     return EXIT_RUN;
   }
   int ns = cup_netlist_signal_count(nl), m = cup_lcs_rows(cup_scene_lcs(r->scene));
-  const char **names = calloc((size_t)ns + 1, sizeof *names);
   r->sk.zeta = calloc((size_t)m + 1, sizeof(double));
   r->sk.sig = calloc((size_t)ns + 1, sizeof(double));
-  if (!names || !r->sk.zeta || !r->sk.sig) { free(names); snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
+  if (!r->sk.zeta || !r->sk.sig) { snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
+  r->sk.nl = nl;
+  return 0;
+}
+
+/* The signals' datasets in the output, in the order asked. */
+static int declare_signals(run_t *r, char *err) {
+  cup_netlist *nl = r->sk.nl;
+  if (!nl) return 0;
+  int ns = cup_netlist_signal_count(nl);
+  const char **names = calloc((size_t)ns + 1, sizeof *names);
+  if (!names) { snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
   for (int k = 0; k < ns; k++) names[k] = cup_netlist_signal_name(nl, k);
   int st = cup_h5run_signals(r->w, ns, names);
   free(names);
@@ -442,13 +453,22 @@ static int setup_signals(run_t *r, char *err) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w)[0] ? cup_h5run_errmsg(r->w) : cup_status_string(st));
     return EXIT_RUN;
   }
-  r->sk.nl = nl;
   return 0;
 }
 
+/* Every argument and input is checked before the output is touched; the
+ * file is written beside it and replaces it (cup_h5run_commit) only once
+ * the run got past its checks: a run that fails them leaves an earlier
+ * result as it was. */
 static int setup(run_t *r, char *err) {
   const args_t *a = r->args;
+  char e2[CUP_ERRMSG_LEN];
   if (load_scene(r, err)) return EXIT_RUN;       /* the message names file:line:column and key */
+  if (cup_scene_check_output(r->scene, a->out, e2)) {
+    snprintf(err, MSG_LEN, "%s", e2);
+    return EXIT_RUN;
+  }
+  if (check_probes(r, err)) return EXIT_RUN;
   r->opts = *cup_scene_options(r->scene);
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
@@ -463,16 +483,15 @@ static int setup(run_t *r, char *err) {
     r->opts.on_step = crowd_log_step;
     r->opts.step_ctx = r->crowd;
   }
-  char e2[CUP_ERRMSG_LEN];
   if (cup_scene_integrator(r->scene, &r->opts, &r->I, e2)) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }
-  if (cup_h5run_create(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
+  if (cup_h5run_begin(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
   r->sk.w = r->w;
   r->sk.I = r->I;
-  if (setup_signals(r, err)) return EXIT_RUN;
-  if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w))) {
+  if (declare_signals(r, err)) return EXIT_RUN;
+  if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w)) || cup_h5run_commit(r->w)) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
     return EXIT_RUN;
   }

@@ -647,6 +647,7 @@ static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit)
 /* ---- the run on rank 0 ---- */
 
 static int open_results(const args_t *a, const cup_sweep *s, int argc, char **argv, sw_file **f, char *err) {
+  if (cup_file_list_check_output(&s->files, a->out, err)) return CUP_ERR_ARG;   /* an input is never an output */
   if (a->resume) return sw_file_open(f, a->out, s, err);
   char deps[512], h5[64];
   int n = cup_dependency_versions(deps, sizeof deps);

@@ -60,6 +60,11 @@ const char *cup_scene_file(const cup_scene *s, int k);
 /** The SHA-256 (64 lowercase hex digits) of the bytes of file k that were
  *  read: what the scene holds, whatever the file says now. */
 const char *cup_scene_file_sha256(const cup_scene *s, int k);
+/** CUP_ERR_ARG, with a message naming both, when the output path names one
+ *  of the scene's files: the same path once resolved (path need not exist),
+ *  or the same file (device and inode, now or when it was read: hard links,
+ *  symbolic links). CUP_OK otherwise. For a program's -o, before it writes. */
+int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg);
 /** The scene's netlist when its model is `netlist:` (NULL otherwise), owned
  *  by the scene; its LCS and input are the scene's. Signals are added to it
  *  (cup_netlist_probe), so it is not const. */

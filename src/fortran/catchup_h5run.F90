@@ -15,7 +15,8 @@ module catchup_h5run
   use catchup_core, only: cup_integrator_run
   implicit none
   private
-  public :: cup_h5run_create, cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
+  public :: cup_h5run_create, cup_h5run_begin, cup_h5run_commit, cup_h5run_discard, &
+    cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
     cup_h5run_attr_double, cup_h5run_attr_long, cup_h5run_attr_string, cup_h5run_flush, &
     cup_h5run_count, cup_h5_version, cup_integrator_run_h5, cup_h5run_signals, cup_h5run_append
 #ifdef CATCHUP_H5RUN_ERRMSG
@@ -24,7 +25,8 @@ module catchup_h5run
   ! the C sinks themselves: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...);
   ! o%on_event = c_funloc(cup_h5run_event), o%event_ctx = w%ptr (adaptive scheme: /events)
   public :: cup_h5run_sink, cup_h5run_event
-  public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
+  public :: c_cup_h5run_create, c_cup_h5run_begin, c_cup_h5run_commit, c_cup_h5run_discard, &
+    c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
     c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
     c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append
 
@@ -42,6 +44,23 @@ module catchup_h5run
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_h5run_create
+    function c_cup_h5run_begin(w, path, dim, errmsg) bind(C, name="cup_h5run_begin") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(out) :: w
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: dim
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_begin
+    function c_cup_h5run_commit(w) bind(C, name="cup_h5run_commit") result(st)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: w
+      integer(c_int) :: st
+    end function c_cup_h5run_commit
+    subroutine c_cup_h5run_discard(w) bind(C, name="cup_h5run_discard")
+      import :: c_ptr
+      type(c_ptr), intent(inout) :: w
+    end subroutine c_cup_h5run_discard
     function cup_h5run_sink(k, t, x, ctx) bind(C, name="cup_h5run_sink") result(st)
       import :: c_int, c_long, c_double, c_ptr
       integer(c_long), value :: k
@@ -149,6 +168,37 @@ contains
     if (st == CUP_OK) w%dim = dim
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_h5run_create
+
+  !> The same, written to a new sibling of path (PATH.partXXXXXX) that
+  !> cup_h5run_commit renames over path: an earlier file stays until then.
+  subroutine cup_h5run_begin(w, path, dim, ierr, errmsg)
+    type(cup_h5run_t), intent(out) :: w
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: dim
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    cmsg = cup_errbuf_()
+    st = c_cup_h5run_begin(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    if (st == CUP_OK) w%dim = dim
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_h5run_begin
+
+  !> Rename the staged file over its path (after cup_h5run_begin).
+  subroutine cup_h5run_commit(w, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_commit(w%ptr))
+  end subroutine cup_h5run_commit
+
+  !> Close and free without a word, removing a file not committed.
+  subroutine cup_h5run_discard(w)
+    type(cup_h5run_t), intent(inout) :: w
+    if (c_associated(w%ptr)) call c_cup_h5run_discard(w%ptr)
+    w%ptr = c_null_ptr
+    w%dim = 0
+  end subroutine cup_h5run_discard
 
   !> Flush, close, free; w%ptr becomes null (closing a null handle is CUP_OK).
   subroutine cup_h5run_close(w, ierr, errmsg)

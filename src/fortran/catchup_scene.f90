@@ -13,12 +13,12 @@ module catchup_scene
   public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, cup_scene_netlist, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
     cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator, &
-    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256
+    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256, cup_scene_check_output
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
     c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_file_count, c_cup_scene_file, &
-    c_cup_scene_file_sha256
+    c_cup_scene_file_sha256, c_cup_scene_check_output
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -131,6 +131,13 @@ module catchup_scene
       integer(c_int), value :: k
       type(c_ptr) :: p
     end function c_cup_scene_file_sha256
+    function c_cup_scene_check_output(s, path, errmsg) bind(C, name="cup_scene_check_output") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: s
+      character(kind=c_char), intent(in) :: path(*)
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_check_output
   end interface
 
 contains
@@ -369,4 +376,17 @@ contains
     text = ''
     if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_file_sha256(s%ptr, int(k - 1, c_int)))
   end function cup_scene_file_sha256
+
+  !> ierr = CUP_ERR_ARG (errmsg names both) when `path` is one of the files
+  !> the scene was read from (the same path resolved, or the same file).
+  subroutine cup_scene_check_output(s, path, ierr, errmsg)
+    type(cup_scene_t), intent(in) :: s
+    character(len=*), intent(in) :: path
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    cmsg = c_null_char
+    ierr = int(c_cup_scene_check_output(s%ptr, cup_f_c_string(path), cmsg))
+    if (present(errmsg)) errmsg = cup_chars_to_string(cmsg)
+  end subroutine cup_scene_check_output
 end module catchup_scene

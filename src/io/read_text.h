@@ -33,6 +33,25 @@ const cup_file_list *cup_scene_file_list(const struct cup_scene *s);
  * not hold yet. CUP_OK or CUP_ERR_NOMEM. */
 int cup_file_list_merge(cup_file_list *l, const cup_file_list *src);
 
+/* CUP_ERR_ARG with "OUT is FILE, which the run reads (...)" in errmsg when
+ * the output path out names one of l's files: the same path once resolved
+ * (realpath of its folder, then its name: out need not exist), or the same
+ * file (st_dev, st_ino) now or when it was read (hard links, a file renamed
+ * over). CUP_OK otherwise. Call before anything is written to out. */
+int cup_file_list_check_output(const cup_file_list *l, const char *out, char *errmsg);
+
+/* The list as text, one line per file in sha256sum's format ("HASH  PATH",
+ * a newline or backslash in a path escaped as \n, \\), for a results
+ * file's attribute `inputs_sha256` (sha256sum -c checks the files against
+ * it). malloc'd; NULL without memory. */
+char *cup_file_list_text(const cup_file_list *l);
+/* The files of l against `stored` (cup_file_list_text of the files an
+ * earlier run read), file by file in the order read: CUP_ERR_ARG with
+ * "FILE changed since WHAT was made (SHA-256 ... then, ... now)" (or a file
+ * read now and not then, or one then and not now) in errmsg (size bytes). */
+int cup_file_list_compare(const cup_file_list *l, const char *stored, const char *what, char *errmsg,
+                          size_t size);
+
 /* The bytes of path into *text (malloc'd; not NUL-terminated beyond len)
  * and *len, recorded in files (may be NULL). CUP_ERR_IO ("PATH: cannot
  * open: reason") or CUP_ERR_NOMEM with the message in errmsg

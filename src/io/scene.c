@@ -663,6 +663,10 @@ const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NU
 const char *cup_scene_eta_spec(const cup_scene *s) { return s ? s->eta_spec : NULL; }
 const char *cup_scene_text(const cup_scene *s) { return s ? s->text : NULL; }
 const cup_file_list *cup_scene_file_list(const cup_scene *s) { return s ? &s->files : NULL; }
+int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg) {
+  if (!s || !path) return cup_fail(errmsg, CUP_ERR_ARG, "scene: NULL argument");
+  return cup_file_list_check_output(&s->files, path, errmsg);
+}
 int cup_scene_file_count(const cup_scene *s) { return s ? s->files.n : 0; }
 const char *cup_scene_file(const cup_scene *s, int k) {
   return s && k >= 0 && k < s->files.n ? s->files.e[k].path : NULL;

@@ -1,0 +1,132 @@
+#!/usr/bin/env bash
+# The chaos label: hostile cases against the guarantees of README.md
+# ("What catchup guarantees") and docs/run-output.md, each checked by what a
+# user sees: the exit status, the one stderr line, and the bytes of every
+# file before and after (an input, an earlier good result).
+#   chaos.sh CATCHUP-RUN CATCHUP-SWEEP MPIEXEC SOURCE-DIR WORK-DIR [CASE...]
+set -uo pipefail
+RUN=$1 SWEEP=$2 MPIEXEC=$3 SRC=$4 WORK=$5
+shift 5
+. "$SRC/scripts/mpi-env"
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK" || exit 1
+EX=$SRC/examples
+failures=0
+fail() { echo "FAIL [$case]: $*" >&2; failures=$((failures + 1)); }
+ok() { echo "ok   [$case]: $*"; }
+
+# expect CODE TEXT cmd...: the exit status, one stderr line, holding TEXT
+expect() {
+  local code=$1 text=$2
+  shift 2
+  "$@" > out.txt 2> err.txt
+  local rc=$? lines
+  lines=$(grep -c '' err.txt)
+  if [ "$rc" -ne "$code" ]; then fail "exit $rc, expected $code: $* ($(cat err.txt))"; return 1; fi
+  if [ "$lines" -ne 1 ]; then fail "$lines stderr lines, expected 1: $* ($(cat err.txt))"; return 1; fi
+  if ! grep -qF -- "$text" err.txt; then fail "stderr lacks '$text': $(cat err.txt)"; return 1; fi
+  return 0
+}
+# keep FILE...: remember the bytes; kept FILE...: they are the same, and no
+# staged sibling (FILE.part*) is left beside them
+keep() { sha256sum "$@" > "keep.$case.sum"; }
+kept() {
+  if ! sha256sum --quiet -c "keep.$case.sum" > /dev/null 2>&1; then fail "bytes changed: $(sha256sum -c "keep.$case.sum" 2>&1 | grep -v ': OK')"; return 1; fi
+  local f
+  for f in "$@"; do
+    if compgen -G "$f.part*" > /dev/null; then fail "a staged file is left: $(ls "$f".part*)"; return 1; fi
+  done
+  return 0
+}
+# attr FILE NAME: a root attribute's value, as h5dump prints it
+attr() { h5dump -a "$2" "$1" 2>/dev/null | sed -n 's/^ *(0): //p' | head -1; }
+
+# ---- "It destroys files": an input is never an output ----------------------
+case_input_output() {
+  mkdir -p io/sub && cp "$EX/paper-fig2.yaml" io/s.yaml && cp -r "$EX/sparse-mtx" io/mtx &&
+    cp "$EX/circuits/clamp.cir" io/c.cir && cp "$EX/sweep-smoke.yaml" io/sw.yaml &&
+    cp "$EX/paper-fig2.yaml" "$EX/paper-fig3.yaml" io/ || return
+  ln -sf s.yaml io/link.h5
+  ln -f io/s.yaml io/hard.h5
+  printf 'netlist: c.cir\n' > io/n.yaml
+  keep io/s.yaml io/mtx/* io/c.cir io/sw.yaml io/n.yaml
+  expect 1 "the output io/s.yaml is io/s.yaml, which the run reads" "$RUN" io/s.yaml -o io/s.yaml &&
+  expect 1 "is io/s.yaml, which the run reads (the same path)" "$RUN" io/s.yaml -o io/link.h5 &&
+  expect 1 "is io/s.yaml, which the run reads (the same file)" "$RUN" io/s.yaml -o io/hard.h5 &&
+  expect 1 "which the run reads" "$RUN" io/s.yaml -o io/sub/../s.yaml &&
+  expect 1 "the output io/mtx/C.mtx is io/mtx/C.mtx" "$RUN" io/mtx/scene.yaml -o io/mtx/C.mtx &&
+  expect 1 "the output io/c.cir is io/c.cir" "$RUN" io/c.cir -o io/c.cir &&
+  expect 1 "the output io/c.cir is io/c.cir" "$RUN" io/n.yaml -o io/c.cir &&
+  expect 1 "the output io/sw.yaml is io/sw.yaml" "$SWEEP" io/sw.yaml -o io/sw.yaml &&
+  expect 1 "the output io/paper-fig3.yaml is io/paper-fig3.yaml" "$SWEEP" io/sw.yaml -o io/paper-fig3.yaml &&
+  expect 1 "which the run reads" "$SWEEP" io/sw.yaml -o io/sw.yaml --resume &&
+  kept io/s.yaml io/mtx/C.mtx io/c.cir io/sw.yaml && ok "-o naming an input (path, symlink, hard link, netlist, .mtx, sweep file, a sweep's scene) is refused; every input intact"
+}
+
+# ---- "It destroys files": a failed run never destroys an earlier result -----
+case_earlier_result() {
+  mkdir -p er && "$RUN" "$EX/circuits/clamp.cir" -o er/k.h5 --quiet || { fail "the first run failed"; return; }
+  cp "$EX/sweep-smoke.yaml" "$EX/paper-fig2.yaml" "$EX/paper-fig3.yaml" er/ &&
+    "$SWEEP" er/sweep-smoke.yaml -o er/sw.h5 --quiet || { fail "the first sweep failed"; return; }
+  keep er/k.h5 er/sw.h5
+  expect 1 "no node named 'nowhere'" "$RUN" "$EX/circuits/clamp.cir" -o er/k.h5 --probe 'v(nowhere)' &&
+  expect 1 "--probe: the scene has no netlist" "$RUN" "$EX/paper-fig2.yaml" -o er/k.h5 --probe 'v(a)' &&
+  expect 1 "circuit.R1" "$RUN" "$EX/paper-fig2.yaml" -o er/k.h5 --set circuit.R1=-1 &&
+  expect 1 "needs D = 0" "$RUN" "$EX/circuits/halfwave-rc.cir" -o er/k.h5 --scheme adaptive &&
+  expect 1 "cannot open" "$RUN" er/missing.yaml -o er/k.h5 &&
+  expect 1 "variants" "$SWEEP" /dev/null -o er/sw.h5 &&
+  kept er/k.h5 er/sw.h5 && ok "a run or a sweep that fails its checks leaves the earlier result byte for byte"
+}
+
+# ---- a read-only output folder ------------------------------------------------
+case_readonly() {
+  mkdir -p ro && "$RUN" "$EX/paper-fig2.yaml" -o ro/k.h5 --quiet || { fail "the first run failed"; return; }
+  keep ro/k.h5
+  if [ "$(id -u)" -ne 0 ]; then
+    chmod 555 ro
+    expect 1 "cannot create a file beside it" "$RUN" "$EX/paper-fig2.yaml" -o ro/k.h5
+    chmod 755 ro
+  elif unshare --mount true 2> /dev/null; then      # root ignores modes: a read-only bind mount
+    unshare --mount bash -c "mount --bind ro ro && mount -o remount,bind,ro ro && \
+      '$RUN' '$EX/paper-fig2.yaml' -o ro/k.h5 > out.txt 2> err.txt; echo \$? > rc.txt"
+    [ "$(cat rc.txt)" = 1 ] && [ "$(grep -c '' err.txt)" = 1 ] && grep -q "Read-only file system" err.txt ||
+      { fail "read-only folder: exit $(cat rc.txt): $(cat err.txt)"; return; }
+  else
+    echo "skip [$case]: root, and no mount namespace for a read-only folder"; return
+  fi
+  kept ro/k.h5 && ok "a read-only output folder: one line, the earlier file intact"
+}
+
+# ---- "--resume mixes inputs" -----------------------------------------------
+case_resume_inputs() {
+  mkdir -p ri && cp "$EX/circuits/halfwave-rc.cir" "$EX/circuits/halfwave-rc.yaml" ri/ &&
+    sed 's/n: \[600, 1500, 3000\]/n: [600, 1500]/' "$EX/circuits/rectifier-sweep.yaml" > ri/sweep.yaml || return
+  # stopped after its first jobs (SIGTERM from the task callback's poll is
+  # timing-dependent; a finished file is refused the same way)
+  "$SWEEP" ri/sweep.yaml -o ri/r.h5 --quiet || { fail "the sweep failed"; return; }
+  keep ri/r.h5
+  sed -i 's/C1 out 0 100u/C1 out 0 10u/' ri/halfwave-rc.cir
+  expect 1 "ri/halfwave-rc.cir changed since the file was made" "$SWEEP" ri/sweep.yaml -o ri/r.h5 --resume &&
+  kept ri/r.h5 && ok "--resume after the netlist was edited is refused, naming it; the results file intact"
+}
+
+# ---- "Messages are cut" ----------------------------------------------------
+case_deep_path() {
+  local d=deep
+  while [ ${#d} -lt 250 ]; do d=$d/$(printf 'p%.0s' $(seq 1 50)); done
+  mkdir -p "$d" && sed 's/L3: 2/L3: -2/' "$EX/paper-fig2.yaml" > "$d/s.yaml" || return
+  expect 1 "$d/s.yaml:" "$RUN" "$d/s.yaml" -o "$d/o.h5" &&
+  grep -qE "circuit.L3: must be > 0 \(got -2\)$" err.txt || { fail "cut: $(cat err.txt)"; return; }
+  printf 'base: s.yaml\ngrid: {n: [10]}\nvariants:\n  - name: a\n    set: {circuit.L3: -3}\n' > "$d/sw.yaml"
+  expect 1 "$d/sw.yaml:4:5: variants.0 (a)" "$SWEEP" "$d/sw.yaml" -o "$d/o.h5" &&
+  grep -qE "circuit.L3: must be > 0 \(got -3\)$" err.txt || { fail "cut: $(cat err.txt)"; return; }
+  ok "through a ${#d}-character folder, catchup-run's and catchup-sweep's messages end whole"
+}
+
+cases=("$@")
+[ ${#cases[@]} -gt 0 ] || cases=(input_output earlier_result readonly resume_inputs deep_path)
+t0=$SECONDS
+for case in "${cases[@]}"; do "case_$case"; done
+echo "chaos: ${#cases[@]} cases, $failures failures, $((SECONDS - t0)) s"
+[ "$failures" -eq 0 ]
