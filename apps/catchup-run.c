@@ -30,6 +30,7 @@
 #include "catchup.h"
 #include "catchup/h5run.h"
 #include "crowd_log.h"
+#include "run_plan.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { MSG_LEN = 2 * CUP_ERRMSG_LEN };     /* a path, then a library message, whole */
@@ -47,7 +48,7 @@ static void print_usage(void) {
   char schemes[160], methods[160];
   printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
          "                   [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]\n"
-         "                   [--set key=value]... [--quiet]\n"
+         "                   [--max-steps N] [--set key=value]... [--quiet]\n"
          "       catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]\n"
          "  -o, --output OUT.h5  HDF5 file to write (/t, /x, /events and attributes); replaced\n"
          "  --probe SIGNAL       a netlist's v(NODE), v(NODE1,NODE2), i(ELEMENT) or all, into\n"
@@ -60,11 +61,13 @@ static void print_usage(void) {
          "  --projector NAME     %s (scene key projector.method)\n"
          "  --tol TOL            adaptive scheme: error target on x, absolute and relative (scene key tol)\n"
          "  --estimate           fixed-step schemes: estimate the error by step doubling (scene key estimate)\n"
+         "  --max-steps N        refuse a fixed-step run of more than N steps (scene key max_steps;\n"
+         "                       default %ld)\n"
          "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
          "  --quiet              no summary line (warnings and errors are still printed)\n"
          "  -h, --help           this text;  --version  the library versions\n",
          names_or(schemes, sizeof schemes, cup_scheme_name, CUP_SCHEME_COUNT),
-         names_or(methods, sizeof methods, cup_proj_method_name, CUP_PROJ_METHOD_COUNT));
+         names_or(methods, sizeof methods, cup_proj_method_name, CUP_PROJ_METHOD_COUNT), CUP_MAX_STEPS_DEFAULT);
 }
 
 /* ---- command line ---- */
@@ -123,6 +126,10 @@ static int check_value(const char *flag, const char *v) {
     double tol = strtod(v, &end);
     if (end == v || *end || !(tol > 0) || !(tol < 1e300))
       return usage_error("--tol '%s': not a positive number", v);
+  } else if (strcmp(flag, "--max-steps") == 0) {
+    double n = strtod(v, &end);
+    if (end == v || *end || !(n >= 1) || n > 9.2e18 || n != floor(n))
+      return usage_error("--max-steps '%s': not a positive integer", v);
   } else if (strcmp(flag, "--set") == 0) {
     const char *eq = strchr(v, '=');
     if (!eq || eq == v) return usage_error("--set '%s': expected key=value", v);
@@ -133,7 +140,7 @@ static int check_value(const char *flag, const char *v) {
 /* The scene key each value flag sets; --set passes key=value through. */
 static const struct { const char *flag, *key; } value_flags[] = {
   {"--n", "n="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
-  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--set", ""}, {"-o", NULL},
+  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--max-steps", "max_steps="}, {"--set", ""}, {"-o", NULL},
   {"--output", NULL},
 };
 
@@ -153,7 +160,7 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
     if (strlen(value_flags[f].flag) != flen || strncmp(arg, value_flags[f].flag, flen) != 0)
       continue;
     const char *v = NULL;
-    char flag[16];
+    char flag[24];
     snprintf(flag, sizeof flag, "%.*s", (int)flen, arg);
     int rc = flag_value(argc, argv, i, flag, &v);
     if (!rc && value_flags[f].key) rc = check_value(flag, v);
@@ -456,6 +463,38 @@ static int declare_signals(run_t *r, char *err) {
   return 0;
 }
 
+/* Where n came from, for the step limit's message: a netlist's .tran
+ * (unless --n or --set n= replaced it), else the scene's n. */
+static void n_source(const run_t *r, char *buf, size_t size) {
+  const args_t *a = r->args;
+  const cup_netlist *nl = cup_scene_netlist(r->scene);
+  double tstep, tstop;
+  int overridden = 0;
+  for (int k = 0; k < a->n_overrides; k++) overridden |= !strncmp(a->overrides[k], "n=", 2);
+  if (nl && !overridden && cup_netlist_tran(nl, &tstep, &tstop))
+    snprintf(buf, size, ".tran %g %g asks for T / TSTEP = %.4g", tstep, tstop, tstop / tstep);
+  else
+    snprintf(buf, size, "%s", overridden ? "--n" : "the scene's n");
+}
+
+/* The run's steps and output are known before its first step: refuse one
+ * beyond the step limit or the free space, naming the numbers. */
+static int check_plan(run_t *r, char *err) {
+  const args_t *a = r->args;
+  run_plan p;
+  char from[96], msg[MSG_LEN / 2];
+  int nsig = r->sk.nl ? cup_netlist_signal_count(r->sk.nl) : 0;
+  run_plan_make(&p, &r->opts, cup_scene_dim(r->scene), nsig, cup_scene_crowd(r->scene) ? CROWD_LOG_STEP_BYTES : 0);
+  n_source(r, from, sizeof from);
+  if (run_plan_too_long(&p, &r->opts, cup_scene_max_steps(r->scene), from, "--scheme adaptive --tol 1e-6", msg,
+                        sizeof msg) ||
+      run_plan_no_room(p.bytes, a->out, msg, sizeof msg)) {
+    snprintf(err, MSG_LEN, "%s: %s", a->scene, msg);
+    return EXIT_RUN;
+  }
+  return 0;
+}
+
 /* Every argument and input is checked before the output is touched; the
  * file is written beside it and replaces it (cup_h5run_commit) only once
  * the run got past its checks: a run that fails them leaves an earlier
@@ -470,6 +509,7 @@ static int setup(run_t *r, char *err) {
   }
   if (check_probes(r, err)) return EXIT_RUN;
   r->opts = *cup_scene_options(r->scene);
+  if (check_plan(r, err)) return EXIT_RUN;
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   r->opts.interrupt = (const volatile int *)&stop_signal;

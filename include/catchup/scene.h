@@ -49,6 +49,14 @@ const double *cup_scene_x0(const cup_scene *s);          /**< n entries */
 const cup_integrator_options *cup_scene_options(const cup_scene *s);
 const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "n^-2.1" */
 const char *cup_scene_eta_spec(const cup_scene *s);
+/** The default of the scene key max_steps: a fixed-step run of more steps
+ *  is refused by catchup-run and catchup-sweep before its first step (a
+ *  netlist's `.tran 1f 1k` asks for 10^18). 10^9 steps take under a minute
+ *  on the paper's circuit, the cheapest there is (10^8: 4.2-5.1 s, output:
+ *  final, on a shared 2-core machine), and hours on most others. */
+#define CUP_MAX_STEPS_DEFAULT 1000000000L
+/** The scene's max_steps (CUP_MAX_STEPS_DEFAULT when it has none). */
+long cup_scene_max_steps(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
 const char *cup_scene_text(const cup_scene *s);
 /** The files the scene was read from, in the order first read, each once:

@@ -2,7 +2,7 @@
 ! implemented in libcatchup by src/io/scene.c). Re-exported by module
 ! `catchup` whenever the C library is built with the scene loader.
 module catchup_scene
-  use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_ptr, c_null_ptr, &
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
     c_null_char, c_associated, c_f_pointer, c_loc
   use catchup_constants
   use catchup_types
@@ -13,12 +13,12 @@ module catchup_scene
   public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, cup_scene_netlist, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
     cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator, &
-    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256, cup_scene_check_output
+    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256, cup_scene_check_output, cup_scene_max_steps
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
     c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_file_count, c_cup_scene_file, &
-    c_cup_scene_file_sha256, c_cup_scene_check_output
+    c_cup_scene_file_sha256, c_cup_scene_check_output, c_cup_scene_max_steps
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -138,6 +138,11 @@ module catchup_scene
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_scene_check_output
+    function c_cup_scene_max_steps(s) bind(C, name="cup_scene_max_steps") result(n)
+      import :: c_ptr, c_long
+      type(c_ptr), value :: s
+      integer(c_long) :: n
+    end function c_cup_scene_max_steps
   end interface
 
 contains
@@ -389,4 +394,11 @@ contains
     ierr = int(c_cup_scene_check_output(s%ptr, cup_f_c_string(path), cmsg))
     if (present(errmsg)) errmsg = cup_chars_to_string(cmsg)
   end subroutine cup_scene_check_output
+
+  !> The scene's max_steps: the most steps a fixed-step run of it may take.
+  function cup_scene_max_steps(s) result(n)
+    type(cup_scene_t), intent(in) :: s
+    integer(c_long) :: n
+    n = c_cup_scene_max_steps(s%ptr)
+  end function cup_scene_max_steps
 end module catchup_scene

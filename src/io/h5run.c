@@ -27,6 +27,7 @@
 
 enum { MAX_CHUNK_ROWS = 4096 };
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
+#define CACHE_BYTES (1u << 20)  /* HDF5's default chunk cache, per dataset */
 #define FLUSH_SECONDS 1.0
 /* A chunk must stay under HDF5's 4 GiB limit even when it holds one row. */
 #define MAX_DIM ((int)(UINT32_MAX / sizeof(double)))
@@ -411,7 +412,9 @@ static int write_buffer(cup_h5run *w) {
   w->written += w->nbuf;
   w->unflushed += 8.0 * (double)w->nbuf * (double)(w->dim + 1 + w->nsig);
   w->nbuf = 0;
-  if (space_low(w->path, w->unflushed)) {
+  /* at most a chunk cache per dataset holds what the disk has not seen */
+  double cached = (double)CACHE_BYTES * (3 + w->nsig);
+  if (space_low(w->path, w->unflushed < cached ? w->unflushed : cached)) {
     if (!w->errmsg[0])
       snprintf(w->errmsg, sizeof w->errmsg, "h5run: stopped writing '%s' after %llu rows: "
                "less than %u MiB left on its device", w->path,

@@ -36,6 +36,7 @@ struct cup_scene {
   char *eps_spec, *eta_spec;    /* as written */
   char *text;                   /* the document after overrides */
   cup_file_list files;          /* every file read: the scene's, its Matrix Market files, its netlist's */
+  long max_steps;               /* the key max_steps: the most steps a fixed-step run may take */
 };
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
@@ -230,7 +231,7 @@ static int read_spice_wave(rd *r, const st_node *map, const char *key, cup_wave 
 }
 
 static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *u, int j) {
-  char k1[KEY_LEN], hint[160], lib[CUP_ERRMSG_LEN];
+  char k1[KEY_LEN], hint[ST_HINT_LEN], lib[CUP_ERRMSG_LEN];
   const st_node *tn = NULL, *nd = NULL;
   const char *type = "";
   int st = need(r, map, key, "type", &tn);
@@ -328,7 +329,7 @@ static int read_schedule(rd *r, const st_node *root, const char *key, const char
 /* A word from a list, parsed by the library's own parser. */
 static int read_word(rd *r, const st_node *nd, const char *key, const char *what, const char *const *names,
                      int (*parse)(const char *), int *out) {
-  char hint[160];
+  char hint[ST_HINT_LEN];
   const char *w = "";
   int st = string(r, nd, key, &w);
   if (st) return st;
@@ -370,7 +371,7 @@ static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
     else words[nw++] = output_names[k];
   }
   words[nw] = keys[nk] = NULL;
-  char b[64], hint[160], expected[160];
+  char b[64], hint[ST_HINT_LEN], expected[160];
   cup_words_join(expected, sizeof expected, forms, "or");
   int kind = nd->kind == ST_SCALAR && !nd->quoted ? cup_output_parse(nd->text) : -1;
   if (kind >= 0 && forms[kind][0] != '{') { o->output = (cup_output_kind)kind; return CUP_OK; }
@@ -528,11 +529,13 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
                                       "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
-                                      "max_event_rate", "estimate", NULL};
-  const st_node *kf, *ki;
+                                      "max_event_rate", "estimate", "max_steps", NULL};
+  const st_node *kf, *ki, *nd;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
   cup_integrator_options_default(&S->opt);
+  S->max_steps = CUP_MAX_STEPS_DEFAULT;
+  if (!st && (nd = opt(root, "max_steps"))) st = integer(r, nd, "max_steps", 1, LONG_MAX, &S->max_steps);
   if (!st && opt(root, "crowd")) {
     st = read_crowd(r, root, S);
     if (!st) st = read_method(r, root, &S->opt);
@@ -668,6 +671,7 @@ int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg) {
   return cup_file_list_check_output(&s->files, path, errmsg);
 }
 int cup_scene_file_count(const cup_scene *s) { return s ? s->files.n : 0; }
+long cup_scene_max_steps(const cup_scene *s) { return s ? s->max_steps : CUP_MAX_STEPS_DEFAULT; }
 const char *cup_scene_file(const cup_scene *s, int k) {
   return s && k >= 0 && k < s->files.n ? s->files.e[k].path : NULL;
 }

@@ -45,7 +45,7 @@ static int fail(prs *p, int status, const st_node *at, const char *key, const ch
 static int check_keys(prs *p, const st_node *map, const char *mkey, const char *const *known) {
   const st_node *bad = st_unknown_key(map, known);
   if (!bad) return CUP_OK;
-  char key[128], hint[160];
+  char key[128], hint[ST_HINT_LEN];
   snprintf(key, sizeof key, "%s%s%s", mkey, *mkey ? "." : "", bad->text);
   return fail(p, CUP_ERR_PARSE, bad, key, "unknown key (%s)", st_suggest(hint, sizeof hint, bad->text, known));
 }
@@ -120,7 +120,7 @@ static int axis_items(prs *p, const st_node *nd, const char *key, const st_node 
 
 static int read_word_item(prs *p, const st_node *nd, const char *key, const char *what,
                           const char *const *names, int *out) {
-  char hint[160], b[64];
+  char hint[ST_HINT_LEN], b[64];
   if (nd->kind != ST_SCALAR || st_is_null(nd))
     return fail(p, CUP_ERR_PARSE, nd, key, "expected a %s name (got %s)", what, st_looks(nd, b, sizeof b));
   for (int k = 0; names[k]; k++)

@@ -323,8 +323,8 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
   double need = file_bytes(s);
   if (copy && statvfs(dirname(copy), &v) == 0 && v.f_blocks &&
       (double)v.f_bavail * (double)v.f_frsize < need + CUP_H5_SPACE_MARGIN) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.0f MiB and %u MiB kept free beside it, and "
-             "its device has %.0f MiB free (store fewer samples: output.samples)", path, need / 1048576,
+    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.3g MiB and %u MiB kept free beside it, and "
+             "its device has %.3g MiB free (store fewer samples: output.samples)", path, need / 1048576,
              CUP_H5_SPACE_MARGIN >> 20, (double)v.f_bavail * (double)v.f_frsize / 1048576);
     free(copy);
     return CUP_ERR_IO;

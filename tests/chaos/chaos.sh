@@ -2,45 +2,11 @@
 # The chaos label: hostile cases against the guarantees of README.md
 # ("What catchup guarantees") and docs/run-output.md, each checked by what a
 # user sees: the exit status, the one stderr line, and the bytes of every
-# file before and after (an input, an earlier good result).
+# file before and after (an input, an earlier good result). The full-disk
+# cases, which need a small tmpfs, are in disk.sh.
 #   chaos.sh CATCHUP-RUN CATCHUP-SWEEP MPIEXEC SOURCE-DIR WORK-DIR [CASE...]
-set -uo pipefail
-RUN=$1 SWEEP=$2 MPIEXEC=$3 SRC=$4 WORK=$5
-shift 5
-. "$SRC/scripts/mpi-env"
-rm -rf "$WORK"
-mkdir -p "$WORK"
-cd "$WORK" || exit 1
-EX=$SRC/examples
-failures=0
-fail() { echo "FAIL [$case]: $*" >&2; failures=$((failures + 1)); }
-ok() { echo "ok   [$case]: $*"; }
-
-# expect CODE TEXT cmd...: the exit status, one stderr line, holding TEXT
-expect() {
-  local code=$1 text=$2
-  shift 2
-  "$@" > out.txt 2> err.txt
-  local rc=$? lines
-  lines=$(grep -c '' err.txt)
-  if [ "$rc" -ne "$code" ]; then fail "exit $rc, expected $code: $* ($(cat err.txt))"; return 1; fi
-  if [ "$lines" -ne 1 ]; then fail "$lines stderr lines, expected 1: $* ($(cat err.txt))"; return 1; fi
-  if ! grep -qF -- "$text" err.txt; then fail "stderr lacks '$text': $(cat err.txt)"; return 1; fi
-  return 0
-}
-# keep FILE...: remember the bytes; kept FILE...: they are the same, and no
-# staged sibling (FILE.part*) is left beside them
-keep() { sha256sum "$@" > "keep.$case.sum"; }
-kept() {
-  if ! sha256sum --quiet -c "keep.$case.sum" > /dev/null 2>&1; then fail "bytes changed: $(sha256sum -c "keep.$case.sum" 2>&1 | grep -v ': OK')"; return 1; fi
-  local f
-  for f in "$@"; do
-    if compgen -G "$f.part*" > /dev/null; then fail "a staged file is left: $(ls "$f".part*)"; return 1; fi
-  done
-  return 0
-}
-# attr FILE NAME: a root attribute's value, as h5dump prints it
-attr() { h5dump -a "$2" "$1" 2>/dev/null | sed -n 's/^ *(0): //p' | head -1; }
+rm -rf "$5"
+. "$(dirname "$0")/common.sh"
 
 # ---- "It destroys files": an input is never an output ----------------------
 case_input_output() {
@@ -124,9 +90,22 @@ case_deep_path() {
   ok "through a ${#d}-character folder, catchup-run's and catchup-sweep's messages end whole"
 }
 
-cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(input_output earlier_result readonly resume_inputs deep_path)
-t0=$SECONDS
-for case in "${cases[@]}"; do "case_$case"; done
-echo "chaos: ${#cases[@]} cases, $failures failures, $((SECONDS - t0)) s"
-[ "$failures" -eq 0 ]
+# ---- "No bound" -------------------------------------------------------------
+case_no_bound() {
+  mkdir -p nb && printf 'a clamp asking for 10^18 steps\nV1 in 0 SIN(0 5 50)\nR1 in out 1k\nC1 out 0 1u\nD1 out 0\n.tran 1f 1k\n.end\n' > nb/huge.cir &&
+    "$RUN" "$EX/paper-fig2.yaml" -o nb/k.h5 --quiet || { fail "the first run failed"; return; }
+  keep nb/k.h5
+  local t0=$SECONDS
+  expect 1 "(.tran 1e-15 1000 asks for T / TSTEP = 1e+18) exceed the limit of 1000000000 (--max-steps, the scene key max_steps): take fewer steps, or the adaptive scheme with an error target (--scheme adaptive --tol 1e-6), and store fewer samples (output.samples)" \
+    "$RUN" nb/huge.cir -o nb/k.h5 &&
+  expect 1 "n = 100 steps (the scene's n) exceed the limit of 50" "$RUN" "$EX/paper-fig2.yaml" -o nb/k.h5 --max-steps 50 &&
+  expect 1 "n = 100 steps (the scene's n) exceed the limit of 50" "$RUN" "$EX/paper-fig2.yaml" -o nb/k.h5 --set max_steps=50 &&
+  expect 1 "n = 2e+09 steps (--n) exceed the limit" "$RUN" "$EX/paper-fig2.yaml" -o nb/k.h5 --n 2e9 &&
+  printf 'base: %s\ngrid: {n: [100, 2000000000]}\nvariants:\n  - name: a\n' "$EX/paper-fig2.yaml" > nb/sw.yaml &&
+  expect 1 "n = 2e+09 steps (task 1, variant a: grid.n) exceed the limit" "$SWEEP" nb/sw.yaml -o nb/k.h5 &&
+  kept nb/k.h5 || return
+  [ $((SECONDS - t0)) -le 5 ] || { fail "the refusals took $((SECONDS - t0)) s"; return; }
+  [ ! -e nb/huge.h5 ] && ok "absurd step counts refused at once, naming .tran / n and the alternatives; the earlier file intact"
+}
+
+run_cases input_output earlier_result readonly resume_inputs deep_path no_bound
