@@ -693,6 +693,29 @@ static void test_files_read(void **state) {
   assert_string_equal(cup_scene_file(s, 0), EX "/circuits/halfwave-rc.cir");
   cup_scene_free(&s);
   assert_int_equal(cup_scene_file_count(NULL), 0);
+  /* what a netlist includes is read through the same list */
+  char dir[] = "/tmp/cup_incXXXXXX", path[64], hex[65];
+  assert_non_null(mkdtemp(dir));
+  snprintf(path, sizeof path, "%s/rc.cir", dir);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs("rc\nV1 in 0 DC 1\n.include parts.inc\n.tran 1u 1m\n.end\n", f);
+  fclose(f);
+  snprintf(path, sizeof path, "%s/parts.inc", dir);
+  assert_non_null(f = fopen(path, "w"));
+  fputs("R1 in out 1k\nC1 out 0 1u\n", f);
+  fclose(f);
+  assert_int_equal(cup_scene_load_string(&s, "netlist: rc.cir\n", "inc.yaml", dir, NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 2);
+  assert_string_equal(cup_scene_file(s, 1), path);
+  sha256sum(path, hex);
+  assert_string_equal(cup_scene_file_sha256(s, 1), hex);
+  assert_int_equal(cup_scene_check_output(s, path, err), CUP_ERR_ARG);      /* the included file */
+  assert_contains(err, "which the run reads");
+  cup_scene_free(&s);
+  char cmd[64];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  assert_int_equal(system(cmd), 0);
 }
 
 /* A folder `len` characters deep (folders of at most 200 characters) under

@@ -194,6 +194,10 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
  * onto K(t) = {C x + G u + F >= 0}, which exists only when D = 0. */
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
+  if (L->keep_B)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: it projects "
+                    "in the energy metric P, and B is not P^-1 C^T here: controlled sources drive the diodes' "
+                    "rows): use the theta scheme", cup_scheme_name(scheme));
   int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
   if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }

@@ -478,6 +478,20 @@ static long variant_max_n(const cup_sweep *s, const sw_variant *v) {
   return m;
 }
 
+/* After the variants' scenes are loaded: crowd sweeps take no n axis (the
+ * crowd is built for its scene's step), store no positions unless
+ * output.samples says so, and have no reference (sweep_crowd.c runs them).
+ * Here, not there, so that the sweep file's parser needs no HDF5. */
+static int crowd_resolve(cup_sweep *s, char *errmsg) {
+  if (s->len[SW_AXIS_N]) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: grid.n: a crowd is built for its scene's step T/n (its margins and "
+             "exit times): vary n in a variant's set ({n: 4000}) instead", s->path);
+    return CUP_ERR_PARSE;
+  }
+  if (!s->out_given) s->out_samples = 0;     /* positions only when asked: 2N per sample */
+  return CUP_OK;
+}
+
 int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
   for (int k = 0; k < s->n_variants; k++) {
     sw_variant *v = &s->var[k];
@@ -506,7 +520,7 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
     else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
   }
   if (s->crowd) {
-    int st = sw_crowd_resolve(s, errmsg);
+    int st = crowd_resolve(s, errmsg);
     if (st) return st;
   }
   s->per_variant = 1;

@@ -195,10 +195,6 @@ const char *sw_file_errmsg(const sw_file *f);
 
 /* ---- crowd sweeps (sweep_crowd.c): variants that are crowd: scenes ---- */
 
-/* After the variants' scenes are loaded: crowd sweeps take no n axis (the
- * crowd is built for its scene's step), store no positions unless
- * output.samples says so, and have no reference. */
-int sw_crowd_resolve(cup_sweep *s, char *errmsg);
 /* A crowd variant's reference job: nothing to compute (NaN, CUP_OK). */
 void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj);
 

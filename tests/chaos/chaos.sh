@@ -16,7 +16,9 @@ case_input_output() {
   ln -sf s.yaml io/link.h5
   ln -f io/s.yaml io/hard.h5
   printf 'netlist: c.cir\n' > io/n.yaml
-  keep io/s.yaml io/mtx/* io/c.cir io/sw.yaml io/n.yaml
+  printf 'rc\nV1 in 0 SIN(0 5 50)\n.include parts.inc\n.tran 20u 20m\n.end\n' > io/i.cir
+  printf 'R1 in out 1k\nC1 out 0 1u\nD1 0 out\n' > io/parts.inc
+  keep io/s.yaml io/mtx/* io/c.cir io/sw.yaml io/n.yaml io/i.cir io/parts.inc
   expect 1 "the output io/s.yaml is io/s.yaml, which the run reads" "$RUN" io/s.yaml -o io/s.yaml &&
   expect 1 "is io/s.yaml, which the run reads (the same path)" "$RUN" io/s.yaml -o io/link.h5 &&
   expect 1 "is io/s.yaml, which the run reads (the same file)" "$RUN" io/s.yaml -o io/hard.h5 &&
@@ -24,10 +26,12 @@ case_input_output() {
   expect 1 "the output io/mtx/C.mtx is io/mtx/C.mtx" "$RUN" io/mtx/scene.yaml -o io/mtx/C.mtx &&
   expect 1 "the output io/c.cir is io/c.cir" "$RUN" io/c.cir -o io/c.cir &&
   expect 1 "the output io/c.cir is io/c.cir" "$RUN" io/n.yaml -o io/c.cir &&
+  expect 1 "the output io/parts.inc is io/parts.inc" "$RUN" io/i.cir -o io/parts.inc &&
   expect 1 "the output io/sw.yaml is io/sw.yaml" "$SWEEP" io/sw.yaml -o io/sw.yaml &&
   expect 1 "the output io/paper-fig3.yaml is io/paper-fig3.yaml" "$SWEEP" io/sw.yaml -o io/paper-fig3.yaml &&
   expect 1 "which the run reads" "$SWEEP" io/sw.yaml -o io/sw.yaml --resume &&
-  kept io/s.yaml io/mtx/C.mtx io/c.cir io/sw.yaml && ok "-o naming an input (path, symlink, hard link, netlist, .mtx, sweep file, a sweep's scene) is refused; every input intact"
+  kept io/s.yaml io/mtx/C.mtx io/c.cir io/sw.yaml io/parts.inc &&
+    ok "-o naming an input (path, symlink, hard link, netlist, .include, .mtx, sweep file, a sweep's scene) is refused; every input intact"
 }
 
 # ---- "It destroys files": a failed run never destroys an earlier result -----
@@ -74,7 +78,19 @@ case_resume_inputs() {
   keep ri/r.h5
   sed -i 's/C1 out 0 100u/C1 out 0 10u/' ri/halfwave-rc.cir
   expect 1 "ri/halfwave-rc.cir changed since the file was made" "$SWEEP" ri/sweep.yaml -o ri/r.h5 --resume &&
-  kept ri/r.h5 && ok "--resume after the netlist was edited is refused, naming it; the results file intact"
+  kept ri/r.h5 || return
+  # what a netlist includes, and a Matrix Market file, are hashed too
+  printf 'rc\nV1 in 0 SIN(0 5 50)\n.include parts.inc\n.tran 20u 20m\n.end\n' > ri/i.cir
+  printf 'R1 in out 1k\nC1 out 0 1u\nD1 0 out\n' > ri/parts.inc
+  printf 'name: inc\nbase: i.cir.yaml\ngrid: {n: [100]}\nvariants:\n  - name: a\n' > ri/inc.yaml
+  printf 'netlist: i.cir\n' > ri/i.cir.yaml
+  cp -r "$EX/sparse-mtx" ri/mtx && printf 'base: mtx/scene.yaml\ngrid: {n: [100]}\nvariants:\n  - name: a\n' > ri/mtx.yaml
+  "$SWEEP" ri/inc.yaml -o ri/i.h5 --quiet && "$SWEEP" ri/mtx.yaml -o ri/m.h5 --quiet || { fail "the sweeps failed"; return; }
+  keep ri/i.h5 ri/m.h5
+  sed -i 's/1u/2u/' ri/parts.inc && sed -i '$ s/0/1/' ri/mtx/x0.mtx
+  expect 1 "ri/parts.inc changed since the file was made" "$SWEEP" ri/inc.yaml -o ri/i.h5 --resume &&
+  expect 1 "ri/mtx/x0.mtx changed since the file was made" "$SWEEP" ri/mtx.yaml -o ri/m.h5 --resume &&
+  kept ri/i.h5 ri/m.h5 && ok "--resume after a netlist, an included file or a .mtx was edited is refused, naming it; the results files intact"
 }
 
 # ---- "Messages are cut" ----------------------------------------------------

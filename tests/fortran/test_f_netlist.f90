@@ -4,7 +4,8 @@
 !    C v' = max(0, (V - v)/Rs) - v/RL (docs/netlist.md): v(60 ms) to 1e-3 V;
 !  * signals against Kirchhoff's laws at a given (t, x, zeta), and zeta of
 !    the last step equal to the diode current (V - v)/Rs of the final state;
-!  * sets, and errors with their messages (a bad value, an X element).
+!  * sets, errors with their messages (a bad value, an undefined subcircuit),
+!    and the list of files read.
 program test_f_netlist
   use, intrinsic :: iso_c_binding
   use catchup
@@ -81,8 +82,12 @@ program test_f_netlist
   call check_contains(msg, "set 'RL=-1': RL: bad value: resistance must be > 0", 'its message')
   call cup_netlist_load_string(nl, 'title' // new_line('a') // 'X1 a 0 amp' // new_line('a'), 'x.cir', ierr, &
                                errmsg=msg)
-  call check_int(ierr, CUP_ERR_UNSUPPORTED, 'an X element')
-  call check_contains(msg, 'x.cir:2:1: X1: subcircuits (X) are not supported', 'its message')
+  call check_int(ierr, CUP_ERR_PARSE, 'an X element of no subcircuit')
+  call check_contains(msg, "x.cir:2:8: X1: subcircuit 'amp' is not defined", 'its message')
+  call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr)
+  call check_int(cup_netlist_file_count(nl), 1, 'files read')
+  call check_contains(cup_netlist_file(nl, 1), 'halfwave-rc.cir', 'the netlist is file 1')
+  call cup_netlist_free(nl)
   call finish()
 
 contains
