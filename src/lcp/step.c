@@ -93,6 +93,12 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z) {
                                                         : INFINITY;
 }
 
+void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c) {
+  cup_ckpt_io(c, ls->lcp.lam, sizeof(double) * (size_t)ls->m);
+  cup_ckpt_io(c, ls->lcp.prev, (size_t)ls->m);
+  CUP_CKPT_IO(c, ls->lq);
+}
+
 void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
   int m = ls->m, pivots = 0;
   double *lam = ls->lcp.lam;
