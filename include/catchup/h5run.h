@@ -94,6 +94,30 @@ int cup_h5run_flush(cup_h5run *w);
  *  path during the writer's life (samples were lost) or of the close, with
  *  its message in errmsg (may be NULL). */
 int cup_h5run_close(cup_h5run **w, char *errmsg);
+/** A stopped run's file, continued (catchup-run --resume).
+ *
+ *  Reopen path, written by this writer for states of dimension dim with
+ *  the nsig signals `names` (in /signals, in that order): refused, naming
+ *  what differs, when it is not such a file; appending goes on after its
+ *  rows (the file is not staged: it is the run's own). */
+int cup_h5run_open(cup_h5run **w, const char *path, int dim, int nsig, const char *const *names, char *errmsg);
+/** Cut /t, /x and /signals back to `rows` rows and /events to `events`. */
+int cup_h5run_truncate(cup_h5run *w, long rows, long events);
+/** Store a checkpoint (cup_integrator_checkpoint_save's bytes) as the
+ *  dataset /checkpoint (uint8), replacing one, with the rows and events
+ *  written so far as its attributes `rows` and `events`; flushed. */
+int cup_h5run_put_checkpoint(cup_h5run *w, const void *blob, unsigned long size);
+/** The stored checkpoint (malloc'd into *blob, size bytes) and the rows and
+ *  events it covers; CUP_ERR_ARG when the file has none. */
+int cup_h5run_get_checkpoint(cup_h5run *w, void **blob, unsigned long *size, long *rows, long *events);
+/** Remove /checkpoint (nothing when there is none). */
+int cup_h5run_drop_checkpoint(cup_h5run *w);
+/** A root attribute read back: a string (malloc'd into *value) or a float64;
+ *  CUP_ERR_ARG when there is no such attribute of that type. */
+int cup_h5run_get_string(cup_h5run *w, const char *name, char **value);
+int cup_h5run_get_double(cup_h5run *w, const char *name, double *v);
+/** Remove a root attribute (nothing when there is none). */
+int cup_h5run_drop_attr(cup_h5run *w, const char *name);
 /** Samples accepted so far (written or buffered). */
 long cup_h5run_count(const cup_h5run *w);
 /** Message of the first failure ("" if none): a sink cannot return one. */

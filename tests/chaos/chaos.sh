@@ -124,4 +124,98 @@ case_no_bound() {
   [ ! -e nb/huge.h5 ] && ok "absurd step counts refused at once, naming .tran / n and the alternatives; the earlier file intact"
 }
 
-run_cases input_output earlier_result readonly resume_inputs deep_path no_bound
+# ---- "Interrupts lose the state" --------------------------------------------
+# same A B: /t, /x, /signals and /events of two files equal, value for value
+same() { h5diff -q "$1" "$2" /t /t && h5diff -q "$1" "$2" /x /x && { ! h5ls "$1/signals" > /dev/null 2>&1 || h5diff -q "$1" "$2" /signals /signals; } && { [ "$(h5ls "$1/events" | grep -o '{[0-9]*')" = "{0" ] || h5diff -q "$1" "$2" /events /events; }; }
+
+case_interrupts() {
+  mkdir -p it
+  local args=("$EX/paper-fig2.yaml" --n 300000 --set output=final --quiet)
+  "$RUN" "${args[@]}" -o it/whole.h5 || { fail "the whole run failed"; return; }
+  # a final-output run stopped by SIGINT keeps the state, flagged; SIGTERM too
+  CATCHUP_RUN_TEST_SIGNAL=0 "$RUN" "${args[@]}" -o it/final.h5 2> err.txt
+  local rc=$?
+  [ $rc = 130 ] && grep -q "stopped by SIGINT at step 1024 .*it/final.h5 holds the samples before it and, as its last row (stop_row), the state there: continue with --resume" err.txt ||
+    { fail "SIGINT: exit $rc: $(cat err.txt)"; return; }
+  [ "$(attr it/final.h5 stop_row)" = 0 ] && [ "$(attr it/final.h5 samples)" = 1 ] && [ "$(attr it/final.h5 status)" = -14 ] &&
+    [ "$(h5dump -d t it/final.h5 | sed -n 's/^ *(0): //p')" = "0.00341333" ] || { fail "the stop's row: $(h5dump -d t it/final.h5)"; return; }
+  local k
+  for k in 1 2 3; do CATCHUP_RUN_TEST_SIGNAL=0 "$RUN" "${args[@]}" -o it/final.h5 --resume 2> /dev/null; done
+  "$RUN" "${args[@]}" -o it/final.h5 --resume || { fail "the last resume failed"; return; }
+  same it/whole.h5 it/final.h5 || { fail "final output: the resumed run differs"; return; }
+  [ -z "$(attr it/final.h5 stop_row)" ] && ! h5ls it/final.h5/checkpoint > /dev/null 2>&1 || { fail "flag or checkpoint left"; return; }
+  # a netlist's signals, theta (the exact LCP step), stopped at samples by SIGTERM-like hooks and a real signal
+  "$RUN" "$EX/circuits/halfwave-rc.cir" -o it/w.h5 --quiet || { fail "the netlist run failed"; return; }
+  CATCHUP_RUN_TEST_SIGNAL=700 "$RUN" "$EX/circuits/halfwave-rc.cir" -o it/r.h5 --quiet 2> /dev/null
+  for k in 1 2; do CATCHUP_RUN_TEST_SIGNAL=1000 "$RUN" "$EX/circuits/halfwave-rc.cir" -o it/r.h5 --quiet --resume 2> /dev/null; done
+  "$RUN" "$EX/circuits/halfwave-rc.cir" -o it/r.h5 --quiet --resume && same it/w.h5 it/r.h5 || { fail "netlist: differs"; return; }
+  ok "SIGINT keeps the state as a flagged last row (output: final too); --resume, stopped again and again, ends bit for bit as a run never stopped"
+}
+
+# Signals at whatever step they land, SIGINT and SIGTERM, for the explicit
+# scheme's projector path, theta and the adaptive scheme.
+case_signals() {
+  mkdir -p sg
+  local sc=0 args name
+  for name in activeset theta adaptive; do
+    case $name in
+      activeset) args=("$EX/paper-fig2.yaml" --n 6000000 --projector activeset --set output.every=100 --quiet) ;;
+      theta) args=("$EX/paper-fig3.yaml" --n 3000000 --eps 1e-12 --scheme theta --set output.every=100 --quiet) ;;
+      adaptive) args=("$EX/paper-fig2.yaml" --scheme adaptive --tol 1e-10 --set T=5000 --set max_event_rate=1000 --set output.every=3 --quiet) ;;
+    esac
+    "$RUN" "${args[@]}" -o "sg/$name-whole.h5" || { fail "$name: the whole run failed"; return; }
+    local sig=INT stops=0 rc=130 tries=0
+    rm -f "sg/$name.h5"
+    timeout --preserve-status -s INT 0.2 "$RUN" "${args[@]}" -o "sg/$name.h5" 2> /dev/null; rc=$?
+    while [ $rc -ne 0 ] && [ $tries -lt 40 ]; do
+      [ $rc = 130 ] || [ $rc = 143 ] || { fail "$name: exit $rc"; return; }
+      stops=$((stops + 1)) tries=$((tries + 1))
+      sig=$([ $sig = INT ] && echo TERM || echo INT)
+      timeout --preserve-status -s $sig 0.$((RANDOM % 3 + 1)) "$RUN" "${args[@]}" -o "sg/$name.h5" --resume 2> /dev/null; rc=$?
+    done
+    same "sg/$name-whole.h5" "sg/$name.h5" || { fail "$name: resumed after $stops signals, differs"; return; }
+    sc=$((sc + stops))
+  done
+  ok "$sc SIGINT/SIGTERM at random steps, each run resumed: the projector path, theta and adaptive end bit for bit"
+}
+
+# --resume continues only the same run.
+case_resume_refusals() {
+  mkdir -p rr && cp -r "$EX/sparse-mtx" rr/m && cp "$EX/circuits/halfwave-rc.cir" rr/ || return
+  CATCHUP_RUN_TEST_SIGNAL=10 "$RUN" rr/m/scene.yaml -o rr/m.h5 2> /dev/null
+  CATCHUP_RUN_TEST_SIGNAL=10 "$RUN" rr/halfwave-rc.cir -o rr/c.h5 2> /dev/null
+  keep rr/m.h5 rr/c.h5
+  expect 1 "rr/m.h5: cannot resume: it ran another scene" "$RUN" rr/m/scene.yaml -o rr/m.h5 --resume --n 999 &&
+  expect 1 "it records other signals than this run" "$RUN" rr/halfwave-rc.cir -o rr/c.h5 --resume --probe 'v(out)' &&
+  sed -i '$ s/0$/1/' rr/m/x0.mtx &&
+  expect 1 "rr/m.h5: cannot resume: rr/m/x0.mtx changed since the file was made" "$RUN" rr/m/scene.yaml -o rr/m.h5 --resume &&
+  sed -i 's/C1 out 0 100u/C1 out 0 10u/' rr/halfwave-rc.cir &&
+  expect 1 "rr/c.h5: cannot resume: rr/halfwave-rc.cir changed since the file was made" "$RUN" rr/halfwave-rc.cir -o rr/c.h5 --resume &&
+  expect 1 "cannot continue 'rr/none.h5': no such file" "$RUN" rr/halfwave-rc.cir -o rr/none.h5 --resume &&
+  kept rr/m.h5 rr/c.h5 || return
+  "$RUN" "$EX/paper-fig2.yaml" -o rr/done.h5 --quiet &&
+  expect 1 "rr/done.h5: cannot resume: it has no checkpoint" "$RUN" "$EX/paper-fig2.yaml" -o rr/done.h5 --resume &&
+  ok "--resume refuses another scene, other overrides or signals, an edited .mtx or netlist, a finished file; the files intact"
+}
+
+# kill -9 between rows: the file opens as it is, with the rows of its last
+# flush; one killed during a resume resumes again to the same end.
+case_kill9() {
+  mkdir -p k9
+  local args=("$EX/paper-fig2.yaml" --n 20000000 --set output.every=10 --quiet)
+  "$RUN" "${args[@]}" -o k9/whole.h5 || { fail "the whole run failed"; return; }
+  "$RUN" "${args[@]}" -o k9/k.h5 & local pid=$!
+  sleep 1.2; kill -9 $pid; wait $pid 2> /dev/null
+  local rows
+  rows=$(h5ls k9/k.h5/t | grep -o '{[0-9]*' | tr -d '{')
+  [ "$(attr k9/k.h5 status_name)" = '"running"' ] && [ "${rows:-0}" -gt 0 ] && h5dump -d x k9/k.h5 > /dev/null ||
+    { fail "kill -9: status $(attr k9/k.h5 status_name), ${rows:-no} rows"; return; }
+  CATCHUP_RUN_TEST_SIGNAL=30000 "$RUN" "${args[@]}" -o k9/r.h5 2> /dev/null
+  "$RUN" "${args[@]}" -o k9/r.h5 --resume & pid=$!
+  sleep 0.6; kill -9 $pid; wait $pid 2> /dev/null
+  "$RUN" "${args[@]}" -o k9/r.h5 --resume && same k9/whole.h5 k9/r.h5 ||
+    { fail "a resume killed by kill -9, resumed again, differs"; return; }
+  ok "kill -9 between rows leaves a readable file ($rows rows, status running); a killed resume resumes to the same end"
+}
+
+run_cases input_output earlier_result readonly resume_inputs deep_path no_bound interrupts signals resume_refusals kill9
