@@ -204,15 +204,15 @@ case_kill9() {
   mkdir -p k9
   local args=("$EX/paper-fig2.yaml" --n 20000000 --set output.every=10 --quiet)
   "$RUN" "${args[@]}" -o k9/whole.h5 || { fail "the whole run failed"; return; }
-  "$RUN" "${args[@]}" -o k9/k.h5 & local pid=$!
-  sleep 1.2; kill -9 $pid; wait $pid 2> /dev/null
+  "$RUN" "$EX/paper-fig2.yaml" --n 1000000000 --set output.every=100 --quiet -o k9/k.h5 & local pid=$!
+  sleep 1.2; kill -9 $pid 2> /dev/null; wait $pid 2> /dev/null
   local rows
   rows=$(h5ls k9/k.h5/t | grep -o '{[0-9]*' | tr -d '{')
   [ "$(attr k9/k.h5 status_name)" = '"running"' ] && [ "${rows:-0}" -gt 0 ] && h5dump -d x k9/k.h5 > /dev/null ||
     { fail "kill -9: status $(attr k9/k.h5 status_name), ${rows:-no} rows"; return; }
   CATCHUP_RUN_TEST_SIGNAL=30000 "$RUN" "${args[@]}" -o k9/r.h5 2> /dev/null
   "$RUN" "${args[@]}" -o k9/r.h5 --resume & pid=$!
-  sleep 0.6; kill -9 $pid; wait $pid 2> /dev/null
+  sleep 0.15; kill -9 $pid 2> /dev/null; wait $pid 2> /dev/null
   "$RUN" "${args[@]}" -o k9/r.h5 --resume && same k9/whole.h5 k9/r.h5 ||
     { fail "a resume killed by kill -9, resumed again, differs"; return; }
   ok "kill -9 between rows leaves a readable file ($rows rows, status running); a killed resume resumes to the same end"
