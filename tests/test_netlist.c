@@ -270,6 +270,9 @@ static void test_signals(void **state) {
   assert_string_equal(cup_netlist_signal_name(nl, 3), "i(Rs)");
   assert_int_equal(cup_netlist_probe(nl, "v(A, out)", err), 4);
   assert_string_equal(cup_netlist_signal_name(nl, 4), "v(a,out)");
+  assert_string_equal(cup_netlist_signal_unit(nl, 4), "V");         /* the units files carry */
+  assert_string_equal(cup_netlist_signal_unit(nl, 3), "A");
+  assert_null(cup_netlist_signal_unit(nl, 5));
   assert_int_equal(cup_netlist_probe(nl, "i(C1)", err), 5);
   assert_int_equal(cup_netlist_probe(nl, "i(RL)", err), 6);
   assert_int_equal(cup_netlist_probe(nl, "v(out)", err), 0);     /* again: the same index */
@@ -535,6 +538,35 @@ static void test_bad_corpus(void **state) {
   assert_true(count >= 40);
 }
 
+/* Loops of ideal diodes with no resistance (issue 27): each netlist of
+ * tests/netlists/warn loads, with the warning its first line expects,
+ * naming the loop's elements; the example circuits (a bridge among them:
+ * a loop of diodes in both directions, whose current is unique) have none. */
+static void test_diode_loops(void **state) {
+  (void)state;
+  static const char *const warn[] = {"antiparallel", "parallel", "diode-ring"};
+  for (int k = 0; k < 3; k++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/../warn/%s.cir", BAD, warn[k]);
+    char *want = bad_expected_error(path, "* expect-warning: ");
+    assert_non_null(want);
+    cup_netlist *nl = load_ok(path, NULL, 0);
+    const char *got = cup_netlist_warning(nl);
+    if (!got || !strstr(got, want)) fail_msg("%s: warning\n  %s\nexpected\n  %s", warn[k], got ? got : "(none)", want);
+    free(want);
+    cup_netlist_free(&nl);
+  }
+  static const char *const clean[] = {"bridge", "clamp", "doubler", "halfwave-rc", "ladder", "paper-fig2",
+                                      "rl-halfwave"};
+  for (int k = 0; k < 7; k++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.cir", CIR, clean[k]);
+    cup_netlist *nl = load_ok(path, NULL, 0);
+    if (cup_netlist_warning(nl)) fail_msg("%s: unexpected warning %s", clean[k], cup_netlist_warning(nl));
+    cup_netlist_free(&nl);
+  }
+}
+
 static char *slurp_text(const char *path) {
   FILE *f = fopen(path, "rb");
   assert_non_null(f);
@@ -601,6 +633,7 @@ int main(void) {
     cmocka_unit_test(test_rl_adaptive_signals),
     cmocka_unit_test(test_rectifiers_with_D),
     cmocka_unit_test(test_bad_corpus),
+    cmocka_unit_test(test_diode_loops),
     cmocka_unit_test(test_mutations),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -32,6 +32,14 @@ int cup_netlist_load(cup_netlist **nl, const char *path, const char *const *sets
 int cup_netlist_load_string(cup_netlist **nl, const char *text, const char *name,
                             const char *const *sets, int nsets, char *errmsg);
 void cup_netlist_free(cup_netlist **nl);
+/** What the formulation found suspect but allowed, or NULL: a loop of
+ *  ideal diodes with no resistance, whose current is not unique (two
+ *  diodes between the same two nodes, or diodes all in one direction around
+ *  a loop), named with file:line:column of its first element ("c.cir:3:1:
+ *  D1: D1 and D2 are ideal diodes in anti-parallel between nodes 'a' and
+ *  'b', ..."). The run takes one of the solutions. catchup-run prints it
+ *  before the run and keeps it in the file's attribute `warnings`. */
+const char *cup_netlist_warning(const cup_netlist *nl);
 
 /** The LCS (owned by the netlist). */
 const cup_lcs *cup_netlist_lcs(const cup_netlist *nl);
@@ -53,6 +61,8 @@ const char *cup_netlist_file(const cup_netlist *nl, int k);
 /** Names of the state ("i(L1)", "v(C1)"), the rows (the diodes, "D1") and
  *  the inputs (the sources, "V1"); NULL out of range. */
 const char *cup_netlist_state_name(const cup_netlist *nl, int j);
+/** The netlist's text as it was read (before any `sets`), for provenance. */
+const char *cup_netlist_source(const cup_netlist *nl);
 const char *cup_netlist_row_name(const cup_netlist *nl, int i);
 const char *cup_netlist_input_name(const cup_netlist *nl, int j);
 /** 1 if the current of diode row i is fixed by the state (zeta_i is its
@@ -71,6 +81,8 @@ int cup_netlist_signal_count(const cup_netlist *nl);
 /** Canonical name: "v(out)", "v(a,b)", "i(D1)" (node and element names as
  *  first written in the netlist). */
 const char *cup_netlist_signal_name(const cup_netlist *nl, int k);
+/** Its unit: "V" for a voltage v(...), "A" for a current i(...). */
+const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
 /** The recorded signals at time t for state x and complementarity
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */

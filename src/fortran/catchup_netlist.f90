@@ -12,14 +12,16 @@ module catchup_netlist
   implicit none
   private
   public :: cup_netlist_load, cup_netlist_load_string, cup_netlist_free, cup_netlist_lcs, cup_netlist_input, &
-    cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_row_name, cup_netlist_input_name, &
+    cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_source, cup_netlist_row_name, cup_netlist_input_name, &
     cup_netlist_row_fixed, cup_netlist_probe, cup_netlist_probe_default, cup_netlist_signal_count, &
-    cup_netlist_signal_name, cup_netlist_signals, cup_netlist_file_count, cup_netlist_file
-  public :: c_cup_netlist_file_count, c_cup_netlist_file
+    cup_netlist_signal_name, cup_netlist_signal_unit, cup_netlist_signals, cup_netlist_file_count, cup_netlist_file, &
+    cup_netlist_warning
+  public :: c_cup_netlist_file_count, c_cup_netlist_file, c_cup_netlist_warning
   public :: c_cup_netlist_load, c_cup_netlist_load_string, c_cup_netlist_free, c_cup_netlist_lcs, &
-    c_cup_netlist_input, c_cup_netlist_x0, c_cup_netlist_tran, c_cup_netlist_state_name, &
+    c_cup_netlist_input, c_cup_netlist_x0, c_cup_netlist_tran, c_cup_netlist_state_name, c_cup_netlist_source, &
     c_cup_netlist_row_name, c_cup_netlist_input_name, c_cup_netlist_row_fixed, c_cup_netlist_probe, &
-    c_cup_netlist_probe_default, c_cup_netlist_signal_count, c_cup_netlist_signal_name, c_cup_netlist_signals
+    c_cup_netlist_probe_default, c_cup_netlist_signal_count, c_cup_netlist_signal_name, &
+    c_cup_netlist_signal_unit, c_cup_netlist_signals
 
   interface
     function c_cup_netlist_load(nl, path, sets, nsets, errmsg) bind(C, name="cup_netlist_load") result(st)
@@ -83,6 +85,16 @@ module catchup_netlist
       integer(c_int), value :: j
       type(c_ptr) :: p
     end function c_cup_netlist_state_name
+    function c_cup_netlist_source(nl) bind(C, name="cup_netlist_source") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: nl
+      type(c_ptr) :: p
+    end function c_cup_netlist_source
+    function c_cup_netlist_warning(nl) bind(C, name="cup_netlist_warning") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: nl
+      type(c_ptr) :: p
+    end function c_cup_netlist_warning
     function c_cup_netlist_row_name(nl, i) bind(C, name="cup_netlist_row_name") result(p)
       import :: c_int, c_ptr
       type(c_ptr), value :: nl
@@ -126,6 +138,12 @@ module catchup_netlist
       integer(c_int), value :: k
       type(c_ptr) :: p
     end function c_cup_netlist_signal_name
+    function c_cup_netlist_signal_unit(nl, k) bind(C, name="cup_netlist_signal_unit") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: nl
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_netlist_signal_unit
     function c_cup_netlist_signals(nl, t, x, zeta, out) bind(C, name="cup_netlist_signals") result(st)
       import :: c_int, c_ptr, c_double
       type(c_ptr), value :: nl
@@ -266,6 +284,23 @@ contains
     if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_state_name(nl%ptr, int(j - 1, c_int)))
   end function cup_netlist_state_name
 
+  !> The netlist's text as it was read (before any sets); '' for a null handle.
+  function cup_netlist_source(nl) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_source(nl%ptr))
+  end function cup_netlist_source
+
+  !> What the formulation allows but warns of (a loop of ideal diodes with
+  !> no resistance, named), or '' when nothing.
+  function cup_netlist_warning(nl) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_warning(nl%ptr))
+  end function cup_netlist_warning
+
   !> Name of complementarity row i (1-based): the diode.
   function cup_netlist_row_name(nl, i) result(s)
     type(cup_netlist_t), intent(in) :: nl
@@ -337,6 +372,15 @@ contains
     s = ''
     if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_signal_name(nl%ptr, int(k - 1, c_int)))
   end function cup_netlist_signal_name
+
+  !> Unit of signal k (1-based): "V" for a voltage, "A" for a current.
+  function cup_netlist_signal_unit(nl, k) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    integer, intent(in) :: k
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_signal_unit(nl%ptr, int(k - 1, c_int)))
+  end function cup_netlist_signal_unit
 
   !> The signals at time t for state x and, optionally, zeta (m entries,
   !> cup_integrator_zeta; 0 when absent), into out (signal_count entries).

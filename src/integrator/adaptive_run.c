@@ -14,6 +14,7 @@
 #include "adaptive.h"
 #include "adaptive_impl.h"
 #include "projector/projector.h"
+#include "tally.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of
  * tol (the exact flow has none of its own). */
@@ -131,6 +132,14 @@ static int emit(cup_adaptive *A, ad_run *R) {
  * the step callback. */
 static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at_event) {
   cup_run_info *info = R->info;
+  if (cup_state_beyond(A->x, A->n)) {          /* before the sink sees it, and the state stays the last good one */
+    int w = cup_state_worst(A->x, A->n);
+    snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): the state left its range ||x||_1 <= "
+             "%g (x[%d] = %.3g): the scheme diverged", R->steps + 1, R->t, CUP_STATE_MAX, w, A->x[w]);
+    cup_copy(A->x, A->xok, A->n);
+    return info->status = CUP_ERR_DIVERGED;
+  }
+  cup_copy(A->xok, A->x, A->n);
   R->steps++;
   info->step = R->steps;
   info->t = R->t;
@@ -646,9 +655,14 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
-  for (int j = 0; j < A->n; j++)
-    if (!isfinite(x0[j])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", j, x0[j]);
+  if (cup_state_beyond(x0, A->n)) {
+    int w = cup_state_worst(x0, A->n);
+    if (!isfinite(x0[w])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
+    return stop(&R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
+                CUP_STATE_MAX, w, x0[w]);
+  }
   cup_copy(A->x, x0, A->n);
+  cup_copy(A->xok, x0, A->n);
   cup_zero(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
@@ -718,6 +732,7 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
   int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
   s->phase = AD_STOP_NONE;
+  cup_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
   if (phase == AD_STOP_SAMPLE) {
     info->samples--;                             /* counted when the sink refused it */
     if (sink) st = offer(A, &R);

@@ -56,7 +56,8 @@ struct cup_integrator {
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
-  double *x, *xnew, *xf, *g, *ut, *s0;
+  double *x, *xnew, *xf, *g, *ut, *s0, *sg;
+  double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
   long rebuilds0;           /* a state polyset's rebuilds before the run */
   double *x0;               /* the estimate's: x0 of the run, for a resumed run's coarse one */
   /* where the last run stopped, for a checkpoint (checkpoint.c) */

@@ -747,6 +747,10 @@ static int load(cup_netlist **out, const char *text, size_t len, const char *nam
   if (!st) st = nx_lex_file(&r.x, 0, text, len, 1);
   if (!st) st = read_cards(&r);
   if (!st) st = cup_netlist_formulate(out, &c, errmsg);
+  if (!st && !((*out)->source = strndup(text, len))) {
+    cup_netlist_free(out);
+    st = nomem(&r);
+  }
   nl_circuit_free(&c);
   nx_free(&r.x);
   nx_hash_free(&r.nodes); nx_hash_free(&r.elems); nx_hash_free(&r.models); nx_hash_free(&r.setnames);

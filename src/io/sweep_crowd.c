@@ -13,7 +13,7 @@
 void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < s->samples * s->dim; j++) traj[j] = NAN;
   r->status = CUP_OK;
-  r->correction = r->max_eps_cert = r->max_eta_cert = NAN;
+  r->correction = r->cross_check = r->max_eps_cert = r->max_eta_cert = NAN;
   snprintf(r->message, sizeof r->message, "%s", SW_CROWD_REFERENCE);
 }
 

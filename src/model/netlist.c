@@ -282,6 +282,7 @@ int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) 
   int st = nl ? copy_circuit(nl, c) : CUP_ERR_NOMEM;
   if (!st) st = nl_topology(nl, c, errmsg);
   else st = nl_fail(c, -1, errmsg, st, "out of memory");
+  if (!st && (st = nl_diode_loops(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st && (st = name_variables(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st) st = nl_hybrid(nl, c, errmsg);
   if (!st) st = nl_controlled(nl, c, errmsg);
@@ -335,6 +336,7 @@ void cup_netlist_free(cup_netlist **p) {
   for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);
   free(nl->files);
   free(nl->file);
+  free(nl->source);
   free(nl);
   *p = NULL;
 }
@@ -353,6 +355,9 @@ int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop) {
 const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
 }
+const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source : NULL; }
+const char *cup_netlist_warning(const cup_netlist *nl) { return nl && nl->warning[0] ? nl->warning : NULL; }
+
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
 }

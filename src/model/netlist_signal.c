@@ -254,6 +254,11 @@ const char *cup_netlist_signal_name(const cup_netlist *nl, int k) {
   return nl && k >= 0 && k < nl->nsig ? nl->sig_name[k] : NULL;
 }
 
+const char *cup_netlist_signal_unit(const cup_netlist *nl, int k) {
+  const char *name = cup_netlist_signal_name(nl, k);
+  return !name ? NULL : name[0] == 'v' ? "V" : name[0] == 'i' ? "A" : "1";
+}
+
 int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out) {
   if (!nl || !x || (!out && nl->nsig)) return CUP_ERR_ARG;
   if (!nl->nsig) return CUP_OK;

@@ -138,7 +138,7 @@ case_interrupts() {
   [ $rc = 130 ] && grep -q "stopped by SIGINT at step 1024 .*it/final.h5 holds the samples before it and, as its last row (stop_row), the state there: continue with --resume" err.txt ||
     { fail "SIGINT: exit $rc: $(cat err.txt)"; return; }
   [ "$(attr it/final.h5 stop_row)" = 0 ] && [ "$(attr it/final.h5 samples)" = 1 ] && [ "$(attr it/final.h5 status)" = -14 ] &&
-    [ "$(h5dump -d t it/final.h5 | sed -n 's/^ *(0): //p')" = "0.00341333" ] || { fail "the stop's row: $(h5dump -d t it/final.h5)"; return; }
+    [ "$(h5dump -d t it/final.h5 | sed -n 's/^ *(0): //p' | head -1)" = "0.00341333" ] || { fail "the stop's row: $(h5dump -d t it/final.h5)"; return; }
   local k
   for k in 1 2 3; do CATCHUP_RUN_TEST_SIGNAL=0 "$RUN" "${args[@]}" -o it/final.h5 --resume 2> /dev/null; done
   "$RUN" "${args[@]}" -o it/final.h5 --resume || { fail "the last resume failed"; return; }

@@ -61,6 +61,10 @@ program test_f_scene
   call check_int(cup_scene_file_count(s), 1, 'one file read')
   call check(cup_scene_file(s, 1) == trim(srcdir) // '/examples/paper-fig2.yaml', 'the file read: ' // cup_scene_file(s, 1))
   call check(len(cup_scene_file_sha256(s, 1)) == 64 .and. cup_scene_file(s, 2) == '', 'its SHA-256; nothing beyond')
+  call check(cup_scene_state_name(s, 1) == 'q(C4)' .and. cup_scene_state_unit(s, 1) == 'C', &
+    'state 1 is the charge q(C4), in C')
+  call check(cup_scene_state_name(s, 3) == 'i(L2)' .and. cup_scene_state_unit(s, 3) == 'A', 'state 3 is i(L2), in A')
+  call check(cup_scene_state_name(s, 4) == '' .and. cup_scene_state_unit(s, 4) == '', 'no state 4 of 3')
   call cup_scene_free(s)
 
   call section('a set: scene, examples/tractrix.yaml')
