@@ -671,7 +671,7 @@ static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
     run_plan p;
     run_plan_make(&p, &o, s->dim, 0, 0);
     long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(v->scene);
-    char from[160], msg[1024];
+    char from[SW_ERR_LEN / 4], msg[SW_ERR_LEN / 2];  /* a variant's name, whole */
     snprintf(from, sizeof from, "task %ld, variant %s%s", id, v->name, s->len[SW_AXIS_N] ? ": grid.n" : "");
     if (run_plan_too_long(&p, &o, limit, from, "grid: {scheme: [adaptive], tol: [1e-6]}", msg, sizeof msg)) {
       snprintf(err, SW_ERR_LEN, "%s: %s", s->path, msg);

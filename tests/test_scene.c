@@ -713,6 +713,12 @@ static void test_files_read(void **state) {
   assert_int_equal(cup_scene_check_output(s, path, err), CUP_ERR_ARG);      /* the included file */
   assert_contains(err, "which the run reads");
   cup_scene_free(&s);
+  char text[256];
+  snprintf(text, sizeof text, "netlist: {text: \"rc\\nV1 in 0 DC 1\\n.include %s\\n.tran 1u 1m\\n.end\\n\"}\n", path);
+  assert_int_equal(cup_scene_load_string(&s, text, "text.yaml", dir, NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 1);                             /* a netlist given as text: its include */
+  assert_string_equal(cup_scene_file(s, 0), path);
+  cup_scene_free(&s);
   char cmd[64];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   assert_int_equal(system(cmd), 0);

@@ -11,10 +11,12 @@
 
 struct cup_file_list;
 struct cup_netlist;
-/* cup_netlist_load recording the files it reads in files (read_text.h; may
- * be NULL): the scene's netlist: key loads through this. */
+/* cup_netlist_load and _load_string recording the files they read in files
+ * (read_text.h; may be NULL): the scene's netlist: key loads through these. */
 int cup_netlist_load_files(struct cup_netlist **out, const char *path, const char *const *sets, int nsets,
                            struct cup_file_list *files, char *errmsg);
+int cup_netlist_load_string_files(struct cup_netlist **out, const char *text, const char *name,
+                                  const char *const *sets, int nsets, struct cup_file_list *files, char *errmsg);
 
 typedef enum nx_kind { NX_WORD, NX_LP, NX_RP, NX_EQ, NX_EXPR } nx_kind;
 typedef struct nx nx;

@@ -764,10 +764,15 @@ static int check_args(cup_netlist **out, const void *src, const char *const *lis
   return cup_load_args("netlist", "set", out != NULL, src, list, n, errmsg);
 }
 
+int cup_netlist_load_string_files(cup_netlist **out, const char *text, const char *name, const char *const *sets,
+                                  int nsets, cup_file_list *files, char *errmsg) {
+  int st = check_args(out, text, sets, nsets, errmsg);
+  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, files, errmsg);
+}
+
 int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
                             const char *const *sets, int nsets, char *errmsg) {
-  int st = check_args(out, text, sets, nsets, errmsg);
-  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, NULL, errmsg);
+  return cup_netlist_load_string_files(out, text, name, sets, nsets, NULL, errmsg);
 }
 
 int cup_netlist_load_files(cup_netlist **out, const char *path, const char *const *sets, int nsets,

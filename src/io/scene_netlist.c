@@ -122,7 +122,7 @@ int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode,
   if (!st) {
     const char *shown = path ? path : name ? name : "netlist";
     st = path ? cup_netlist_load_files(out, path, (const char *const *)sets, nsets, files, lib)
-              : cup_netlist_load_string(out, text, shown, (const char *const *)sets, nsets, lib);
+              : cup_netlist_load_string_files(out, text, shown, (const char *const *)sets, nsets, files, lib);
     if (st) st = netlist_fail(src, fnode ? fnode : knode, val, st, lib, shown, errmsg);
   }
   if (!st && pnode) st = read_probes(src, pnode, *out, errmsg);
