@@ -652,6 +652,7 @@ static int run_to_end(cup_adaptive *A, ad_run *R, int st) {
 
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info) {
+  A->stop.phase = AD_STOP_NONE;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
@@ -666,7 +667,6 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   cup_zero(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
-  A->stop.phase = AD_STOP_NONE;
   cup_lcp_forget(&A->lcp);
   int st = emit(A, &R);                          /* x0 as given, like the fixed-step schemes */
   cup_proj_info pi;

@@ -728,7 +728,6 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   I->zeta_from = 0;
   int fixed = I->fixed || !I->u;
   I->stop.phase = CUP_STOP_NONE;
-  I->stop.restored = 0;
   I->rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
   if (I->K) polyset_x0(I, fixed, info);
