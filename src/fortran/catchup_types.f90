@@ -169,7 +169,7 @@ module catchup_types
     real(c_double) :: eta_target = 0
     real(c_double) :: h_rho = 0
     integer(c_long) :: samples = 0
-    character(kind=c_char) :: message(256) = c_null_char   !< use cup_run_info_message(info)
+    character(kind=c_char) :: message(CUP_RUN_MSG_LEN) = c_null_char   !< use cup_run_info_message(info)
     integer(c_long) :: set_rebuilds = 0   !< state polyset: symbolic analyses of the run
     integer(c_long) :: max_rows = 0       !< state polyset: the most rows of one step
     ! the adaptive scheme and error estimates

@@ -55,6 +55,34 @@ typedef struct ad_mode {
 
 typedef struct cup_adaptive cup_adaptive;   /* as in adaptive.h, which the run's API is in */
 
+/* One run's progress (adaptive_run.c). */
+typedef struct ad_run {
+  cup_run_info *info;
+  cup_sample_fn sink;
+  void *sink_ctx;
+  double t, tb;             /* now; the next breakpoint of the input (or T) */
+  struct ad_mode *md;       /* the active set's system */
+  long steps, next_sample;
+  double est_max;           /* the largest error estimate so far */
+  double r2, rloc;          /* rounding (sum of squares), unsigned local contributions */
+  double h_cb;              /* callback inputs: the next step size */
+  int floor_warned;
+  double wall0;
+  double tend;              /* catching-up steps across accumulating events until tend (0: none) */
+  long ev0;                 /* the events before the step under way (the accumulation check after it) */
+} ad_run;
+
+/* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
+enum { AD_STOP_NONE, AD_STOP_STEP, AD_STOP_SAMPLE };
+typedef struct ad_stop {
+  int phase;                /* AD_STOP_STEP: the step's sample and what follows it are next;
+                               AD_STOP_SAMPLE: the sink refused that sample */
+  ad_run R;                 /* the run's scalars (its pointers are set again on resume) */
+  int md, pinned1;          /* slots of R.md and of the other set in use (-1: none) */
+  int status;               /* the run's status and message before the stop replaced them */
+  char message[CUP_RUN_MSG_LEN];
+} ad_stop;
+
 struct cup_adaptive {
   const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
@@ -100,22 +128,8 @@ struct cup_adaptive {
   const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
   double zt;
   double *zw, *zy;          /* nw, na */
+  ad_stop stop;             /* where the last run stopped */
 };
-
-/* One run's progress (adaptive_run.c). */
-typedef struct ad_run {
-  cup_run_info *info;
-  cup_sample_fn sink;
-  void *sink_ctx;
-  double t, tb;             /* now; the next breakpoint of the input (or T) */
-  ad_mode *md;              /* the active set's system */
-  long steps, next_sample;
-  double est_max;           /* the largest error estimate so far */
-  double r2, rloc;          /* rounding (sum of squares), unsigned local contributions */
-  double h_cb;              /* callback inputs: the next step size */
-  int floor_warned;
-  double wall0;
-} ad_run;
 
 /* ---- adaptive_mode.c ---- */
 /* The active set with rows `mask` (built, or found among the kept ones). A
@@ -125,6 +139,10 @@ typedef struct ad_run {
 ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask);
 int ad_modes_init(cup_adaptive *A);
 void ad_modes_free(cup_adaptive *A);
+/* A checkpoint's kept active set in slot s: its rows (mask), built again,
+ * its exponentials for the step lengths hc (< 0: none) computed again (the
+ * same bits: the same function of the same h M) and its stamps of use. */
+void ad_mode_restore(cup_adaptive *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);
 /* exp(h M_J), cached by h (NULL: h = 0 needs none). */
 const double *ad_expm(cup_adaptive *A, ad_mode *md, double h);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */

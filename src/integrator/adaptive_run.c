@@ -13,6 +13,7 @@
 #include "catchup.h"
 #include "adaptive.h"
 #include "adaptive_impl.h"
+#include "projector/projector.h"
 #include "tally.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of
@@ -82,6 +83,30 @@ static double estimate_now(const cup_adaptive *A, const ad_run *R) {
   return inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2);
 }
 
+/* A stop at a step's end that a checkpoint can resume from: the run's
+ * place, and the status and message the stop replaces (adaptive.h). */
+static int halt(cup_adaptive *A, ad_run *R, int status, int phase, const char *what) {
+  ad_stop *s = &A->stop;
+  s->phase = phase;
+  s->R = *R;
+  s->md = R->md ? (int)(R->md - A->modes) : -1;
+  s->pinned1 = A->pinned[1] ? (int)(A->pinned[1] - A->modes) : -1;
+  s->status = R->info->status;
+  memcpy(s->message, R->info->message, sizeof s->message);
+  return stop(R, status, "%s", what);
+}
+
+/* The sample at R->t to the sink. */
+static int offer(cup_adaptive *A, ad_run *R) {
+  R->info->samples++;
+  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
+  A->zt = R->t;
+  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
+  A->zmd = NULL;
+  if (stopped) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_SAMPLE, "stopped by the output sink");
+  return CUP_OK;
+}
+
 static int emit(cup_adaptive *A, ad_run *R) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
@@ -98,14 +123,7 @@ static int emit(cup_adaptive *A, ad_run *R) {
   }
   if (!out) return CUP_OK;
   R->est_max = fmax(R->est_max, estimate_now(A, R));
-  if (!R->sink) return CUP_OK;
-  R->info->samples++;
-  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
-  A->zt = R->t;
-  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
-  A->zmd = NULL;
-  if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
-  return CUP_OK;
+  return R->sink ? offer(A, R) : CUP_OK;
 }
 
 /* The end of a step: statistics, the error estimate (not at the switch
@@ -137,11 +155,11 @@ static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at
          16 * DBL_EPSILON * xn);
   }
   if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
-    return stop(R, CUP_ERR_INTERRUPTED, "stopped by the step callback");
+    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
   if ((R->steps & 1023) == 0) {
-    if (A->o.interrupt && *A->o.interrupt) return stop(R, CUP_ERR_INTERRUPTED, "interrupted");
+    if (A->o.interrupt && *A->o.interrupt) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "interrupted");
     if (A->o.max_wall_seconds > 0 && wall_now() - R->wall0 > A->o.max_wall_seconds)
-      return stop(R, CUP_ERR_TIME_LIMIT, "wall-time limit reached");
+      return halt(A, R, CUP_ERR_TIME_LIMIT, AD_STOP_STEP, "wall-time limit reached");
   }
   return CUP_OK;
 }
@@ -544,6 +562,8 @@ static int take_step(cup_adaptive *A, ad_run *R) {
 
 /* ---- accumulating events: catching-up steps across them --------------------------- */
 
+static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb);
+
 static int catch_up(cup_adaptive *A, ad_run *R) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
   double window = AD_ZENO_RING / rate, tend = fmin(A->o.T, R->t + window);
@@ -559,7 +579,16 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
   warn(R, CUP_WARN_ZENO, "rows %s switched %d times within %.3g (over max_event_rate = %.3g per unit "
        "time): catching-up steps across [%.17g, %.17g]", rows, AD_ZENO_RING,
        R->t - A->zeno[A->nzeno % AD_ZENO_RING], rate, R->t, tend);
-  int n = A->n, na = A->na, st, at_tb = 0;
+  R->tend = tend;
+  return catch_up_from(A, R, 0);
+}
+
+/* The catching-up steps until R->tend (a resumed run may start inside
+ * them; at_tb: its last step ended on a breakpoint). */
+static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
+  double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
+  double window = AD_ZENO_RING / rate, tend = R->tend;
+  int n = A->n, na = A->na, st;
   while (R->t < tend) {
     /* the free system's flow, then the certified projection: the paper's
      * scheme with an exact free step, through breakpoints too (which pick
@@ -592,6 +621,7 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
     at_tb = R->t == R->tb;
     if ((st = end_of_step(A, R, &pi, 0)) < 0) return st;
   }
+  R->tend = 0;
   A->pinned[1] = NULL;
   A->nzeno = 0;
   if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
@@ -609,8 +639,20 @@ static int zeno_check(cup_adaptive *A, ad_run *R) {
 
 /* ---- the run ----------------------------------------------------------------------- */
 
+/* From where a run is (its start, or a resumed stop) to T. */
+static int run_to_end(cup_adaptive *A, ad_run *R, int st) {
+  while (st >= 0 && R->t < A->o.T) {
+    R->ev0 = R->info->events;
+    st = take_step(A, R);
+    if (st >= 0 && R->info->events > R->ev0) st = zeno_check(A, R);
+  }
+  R->info->err_est = R->est_max;
+  return R->info->status;
+}
+
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info) {
+  A->stop.phase = AD_STOP_NONE;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
@@ -630,11 +672,81 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, &R, 1, &pi);
   if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
-  while (st >= 0 && R.t < A->o.T) {
-    long events = info->events;
-    st = take_step(A, &R);
-    if (st >= 0 && info->events > events) st = zeno_check(A, &R);
+  return run_to_end(A, &R, st);
+}
+
+/* ---- checkpoints (integrator.h) ----------------------------------------------------- */
+
+int cup_adaptive_stopped(const cup_adaptive *A) { return A->stop.phase != AD_STOP_NONE; }
+
+void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info) {
+  info->status = A->stop.status;
+  memcpy(info->message, A->stop.message, sizeof info->message);
+}
+
+/* Everything a step carries to the next: the stopped run's scalars, x and
+ * its error, the accumulation ring, the LCPs' and the projector's warm
+ * starts, and the kept active sets with their exponentials' step lengths
+ * (which ad_flow takes from the cache, or computes another way). */
+void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
+  ad_stop *s = &A->stop;
+  ad_run *R = &s->R;
+  size_t N = sizeof(double) * (size_t)A->n, M = (size_t)A->m;
+  CUP_CKPT_IO(c, s->phase); CUP_CKPT_IO(c, s->md); CUP_CKPT_IO(c, s->pinned1);
+  CUP_CKPT_IO(c, R->t); CUP_CKPT_IO(c, R->tb); CUP_CKPT_IO(c, R->steps); CUP_CKPT_IO(c, R->next_sample);
+  CUP_CKPT_IO(c, R->est_max); CUP_CKPT_IO(c, R->r2); CUP_CKPT_IO(c, R->rloc); CUP_CKPT_IO(c, R->h_cb);
+  CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0);
+  cup_ckpt_io(c, A->x, N);
+  cup_ckpt_io(c, A->e, N);
+  CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
+  cup_ckpt_io(c, A->lcp.lam, sizeof(double) * M);
+  cup_ckpt_io(c, A->lcp.prev, M);
+  cup_lcp_step_checkpoint(&A->proj, c);
+  cup_projector_checkpoint(A->projector, c);
+  for (int k = 0; k < AD_MODES; k++) {
+    ad_mode *md = &A->modes[k];
+    uint64_t mask = md->mask;
+    long stamp = md->stamp, cstamp[AD_CACHE];
+    double hc[AD_CACHE];
+    memcpy(hc, md->hc, sizeof hc);
+    memcpy(cstamp, md->cstamp, sizeof cstamp);
+    CUP_CKPT_IO(c, mask); CUP_CKPT_IO(c, stamp); CUP_CKPT_IO(c, hc); CUP_CKPT_IO(c, cstamp);
+    if (!c->saving && !c->bad) ad_mode_restore(A, k, mask, stamp, hc, cstamp);
   }
-  info->err_est = R.est_max;
-  return info->status;
+}
+
+/* A restored stop goes on: the stopped step's sample (again, when the sink
+ * refused it) and what followed it in its step (the next piece at a
+ * breakpoint, the catching-up steps under way, the accumulation check),
+ * then the steps to T. */
+int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  ad_stop *s = &A->stop;
+  if (s->phase == AD_STOP_NONE) return info->status = CUP_ERR_ARG;
+  ad_run R = s->R;
+  R.info = info;
+  R.sink = sink;
+  R.sink_ctx = sink_ctx;
+  R.wall0 = wall_now();
+  R.md = s->md >= 0 ? &A->modes[s->md] : NULL;
+  A->pinned[0] = R.md;
+  A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
+  int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
+  s->phase = AD_STOP_NONE;
+  cup_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
+  if (phase == AD_STOP_SAMPLE) {
+    info->samples--;                             /* counted when the sink refused it */
+    if (sink) st = offer(A, &R);
+  } else {
+    st = emit(A, &R);
+  }
+  cup_proj_info pi;
+  if (R.steps == 0) {                            /* stopped at x0's sample: the start goes on */
+    if (st >= 0) st = at_break(A, &R, 1, &pi);
+    if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
+    return run_to_end(A, &R, st);
+  }
+  if (st >= 0 && at_tb && R.t < A->o.T) st = start_piece(A, &R);
+  if (st >= 0 && R.tend > 0) st = catch_up_from(A, &R, at_tb);
+  else if (st >= 0 && info->events > R.ev0) st = zeno_check(A, &R);
+  return run_to_end(A, &R, st);
 }

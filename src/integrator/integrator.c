@@ -23,36 +23,7 @@
 #include "projector/projector.h"
 #include "adaptive.h"
 #include "estimate.h"
-
-struct cup_integrator {
-  const cup_input *u;
-  cup_integrator_options o;
-  int n, m, p;
-  double h, eps_n, eta_n, h_rho, split;
-  int split_row;
-  /* the set: a polyset is stepped here (K, G, the projector or the LCP
-   * step), any other set through its cup_setproj */
-  const cup_set *S;
-  cup_set *S_own;           /* an LCS's polyset, wrapped */
-  const cup_polyset *K;     /* the polyset's rows, or NULL */
-  const cup_sparse *G;      /* the offset's motion, or NULL */
-  int fixed;                /* the polyset does not move */
-  cup_setproj *sp;          /* other sets */
-  cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
-  const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
-  cup_freestep fs;
-  cup_projector *proj;
-  cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
-  int use_theta;
-  cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
-  cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
-  cup_estimate est;         /* ... and the comparison with it */
-  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
-  int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
-  cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
-  double *x, *xnew, *xf, *g, *ut, *s0, *sg;
-  double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
-};
+#include "integrator_impl.h"
 
 void cup_integrator_options_default(cup_integrator_options *o) {
   if (!o) return;
@@ -268,7 +239,8 @@ static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_
   h.n = I->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
-  if (cup_estimate_init(&I->est, I->o.n, I->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  if (cup_estimate_init(&I->est, I->o.n, I->n) || !(I->x0 = calloc((size_t)I->n, sizeof(double))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   h.output = CUP_OUTPUT_EVERY;
   h.output_every = cup_estimate_stride(&I->est);
   int st;
@@ -389,6 +361,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_sparse_free(&I->E_own);
   if (I->use_theta) cup_lcp_step_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
+  free(I->x0);
   free(I);
   *Ip = NULL;
 }
@@ -452,11 +425,39 @@ static double wall_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
+ * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
+ * the cause's (what[WHAT_LEN] buffers below). */
+enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
+
 static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
   info->status = status;
-  /* the cause cut where the message would be: "step ", 20 digits, " (t = ", 24, "): " */
-  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %.190s", k, t, what);
+  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
   return status;
+}
+
+/* The estimate's run at n/2 from I->x0 (its states kept for the
+ * comparisons). CUP_ERR_INTERRUPTED when the interrupt flag stopped it:
+ * the run it serves stops too (a signal is not to wait for half the work). */
+static int coarse_run(cup_integrator *I, cup_run_info *info) {
+  cup_run_info hi;
+  int st = cup_integrator_run(I->half, I->x0, cup_estimate_keep, &I->est, &hi);
+  cup_estimate_start(&I->est, st >= 0);
+  info->err_est = cup_estimate_value(&I->est);
+  return st == CUP_ERR_INTERRUPTED && I->o.interrupt && *I->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
+}
+
+/* A stop at the end of step k that a checkpoint can resume from: where,
+ * the output schedule's place, and the status and message it replaces
+ * (a warning met before it is the resumed run's, as the whole run's). */
+static int halt(cup_integrator *I, cup_run_info *info, int status, long k, double t, const char *what, int phase,
+                const sampler *sp) {
+  I->stop.phase = phase;
+  I->stop.k = k;
+  I->stop.next_j = sp->next_j;
+  I->stop.status = info->status;
+  memcpy(I->stop.message, info->message, sizeof I->stop.message);
+  return stop_at(info, status, k, t, what);
 }
 
 /* g = F + G u(t) for a moving polyset. */
@@ -602,12 +603,12 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
     return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
   int st = cup_setproj_move(I->sp, t, I->ut, xk);
   if (st == CUP_ERR_NONFINITE) {
-    char what[200];
+    char what[WHAT_LEN];
     snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
   }
   if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
-    char what[200];                      /* as on the polyset path: the state overflowed */
+    char what[WHAT_LEN];                 /* as on the polyset path: the state overflowed */
     snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
              cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
@@ -660,6 +661,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
                        cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
+  if (I) I->stop.restored = 0;
   if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
@@ -681,7 +683,8 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   cup_projector_reset(I->proj);
   I->zeta_from = 0;
   int fixed = I->fixed || !I->u;
-  long rebuilds0 = cup_setproj_rebuilds(I->sp);
+  I->stop.phase = CUP_STOP_NONE;
+  I->rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
   I->jump = I->K && polyset_x0(I, fixed, info);
   if (!I->K && general_x0(I, info) < 0) return info->status;
@@ -700,20 +703,31 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
              "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
              I->split, I->split_row);
   }
-  if (I->half) {
-    cup_run_info hi;
-    cup_estimate_start(&I->est, cup_integrator_run(I->half, x0, cup_estimate_keep, &I->est, &hi) >= 0);
-    info->err_est = cup_estimate_value(&I->est);
-  }
   sampler sp = {0};
+  if (I->half) {
+    memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
+    if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
+      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
+                  CUP_STOP_SAMPLE_DUE, &sp);
+  }
   if (sink && selected(I, &sp, 0)) {
     info->samples++;
-    if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
+    if (sink(0, 0.0, I->x, sink_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
   }
+  return cup_integrator_steps_(I, 0, sp.next_j, sink, sink_ctx, info);
+}
+
+int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx,
+                          cup_run_info *info) {
+  const cup_integrator_options *o = &I->o;
+  sampler sp = {next_j};
+  int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
+  long rebuilds0 = I->rebuilds0;
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
   int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
   I->fast.hold = 0;
-  for (long k = 0; k < o->n; k++) {
+  for (long k = k0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
     if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
@@ -768,7 +782,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, &pi, st, info)) < 0) return st;
     }
     if (st < 0) {                        /* the polyset path's errors */
-      char what[224];
+      char what[WHAT_LEN];
       describe_projection_error(what, sizeof what, st, &pi);
       if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
         size_t len = strlen(what);
@@ -794,18 +808,57 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       }
     }
     if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
-      return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback");
+      return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
     if (sink && selected(I, &sp, k + 1)) {
       info->samples++;
       if (sink(k + 1, t1, I->x, sink_ctx))
-        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
     }
     if ((k & 1023) == 1023) {
       if (o->interrupt && *o->interrupt)
-        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted");
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
       if (start > 0 && wall_seconds() - start > o->max_wall_seconds)
-        return stop_at(info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached");
+        return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
     }
   }
   return info->status;
+}
+
+/* A restored checkpoint (checkpoint.c) goes on from the step it stopped
+ * after: the coarse run of the estimate again (the same states), the
+ * stopped step's sample when it was still due or the sink refused it, then
+ * the steps as cup_integrator_run takes them. */
+int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info_out) {
+  cup_run_info local;
+  cup_run_info *info = info_out ? info_out : &local;
+  if (!I || !I->stop.restored) {
+    memset(info, 0, sizeof *info);
+    info->err_est = NAN;
+    return info->status = CUP_ERR_ARG;
+  }
+  *info = I->stop.info;
+  I->stop.restored = 0;
+  if (I->ad) return cup_adaptive_resume(I->ad, sink, sink_ctx, info);
+  int phase = I->stop.phase;
+  long k = I->stop.k;
+  sampler sp = {I->stop.next_j};
+  if (I->half) {
+    double err = I->est.err;                     /* the comparisons made before the stop */
+    int cst = coarse_run(I, info);
+    I->est.err = err;
+    info->err_est = cup_estimate_value(&I->est);
+    if (cst == CUP_ERR_INTERRUPTED)
+      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "interrupted (in the estimate's run at n/2)",
+                  phase, &sp);
+  }
+  I->stop.phase = CUP_STOP_NONE;
+  if (phase == CUP_STOP_SAMPLE_REFUSED) info->samples--;          /* counted when it was refused */
+  int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(I, &sp, k));
+  if (sink && offer) {
+    info->samples++;
+    if (sink(k, grid_time(I, k), I->x, sink_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+                  CUP_STOP_SAMPLE_REFUSED, &sp);
+  }
+  return cup_integrator_steps_(I, k, sp.next_j, sink, sink_ctx, info);
 }

@@ -10,7 +10,7 @@
 # library and into catchup_h5_static, an internal archive over catchup_static
 # for programs that also call the library's internal functions (catchup-sweep):
 # linking the shared catchup_h5 would load a second copy of libcatchup there.
-add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c)
+add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c)
 set_target_properties(catchup_h5_objects PROPERTIES C_VISIBILITY_PRESET hidden)
 target_include_directories(catchup_h5_objects PRIVATE
   ${PROJECT_SOURCE_DIR}/include ${PROJECT_BINARY_DIR}/include)

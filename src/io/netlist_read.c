@@ -749,10 +749,11 @@ void nl_circuit_free(nl_circuit *c) {
 /* ---- public ------------------------------------------------------------------ */
 
 static int load(cup_netlist **out, const char *text, size_t len, const char *name,
-                const char *const *sets, int nsets, char *errmsg) {
+                const char *const *sets, int nsets, cup_file_list *files, char *errmsg) {
   nl_circuit c = {0};
   rd r = {0};
   r.x.file = name;
+  r.x.read_list = files;
   r.x.sets = sets;
   r.x.nsets = nsets;
   r.x.errmsg = errmsg;
@@ -779,18 +780,28 @@ static int check_args(cup_netlist **out, const void *src, const char *const *lis
   return cup_load_args("netlist", "set", out != NULL, src, list, n, errmsg);
 }
 
-int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
-                            const char *const *sets, int nsets, char *errmsg) {
+int cup_netlist_load_string_files(cup_netlist **out, const char *text, const char *name, const char *const *sets,
+                                  int nsets, cup_file_list *files, char *errmsg) {
   int st = check_args(out, text, sets, nsets, errmsg);
-  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, errmsg);
+  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, files, errmsg);
 }
 
-int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
+int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
+                            const char *const *sets, int nsets, char *errmsg) {
+  return cup_netlist_load_string_files(out, text, name, sets, nsets, NULL, errmsg);
+}
+
+int cup_netlist_load_files(cup_netlist **out, const char *path, const char *const *sets, int nsets,
+                           cup_file_list *files, char *errmsg) {
   int st = check_args(out, path, sets, nsets, errmsg);
   char *text = NULL;
   size_t len = 0;
-  if (!st) st = cup_read_text(path, &text, &len, errmsg);
-  if (!st) st = load(out, text, len, path, sets, nsets, errmsg);
+  if (!st) st = cup_read_text(path, &text, &len, files, errmsg);
+  if (!st) st = load(out, text, len, path, sets, nsets, files, errmsg);
   free(text);
   return st;
+}
+
+int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
+  return cup_netlist_load_files(out, path, sets, nsets, NULL, errmsg);
 }

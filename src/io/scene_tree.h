@@ -80,6 +80,9 @@ int st_is_null(const st_node *nd);
 /* "did you mean 'x'?" when word is a likely typo of one of the NULL-terminated
  * known words, else "expected one of a, b, c"; into buf (n bytes). */
 const char *st_suggest(char *buf, size_t n, const char *word, const char *const *known);
+/* Room for st_suggest's "expected one of" and a list of the library's own
+ * words (the scene's 22 keys take about 200 characters), whole. */
+#define ST_HINT_LEN 512
 /* The first key of a mapping that is not among the NULL-terminated known
  * words, or NULL when all are known. */
 const st_node *st_unknown_key(const st_node *map, const char *const *known);

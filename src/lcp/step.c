@@ -270,6 +270,19 @@ static void carry_of(cup_lcp_step *ls) {
   }
 }
 
+/* With D, a step carries the weights in force (the support they were set
+ * for: its kernel makes H and M) and Pi zeta to the next as well. */
+void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c) {
+  cup_ckpt_io(c, ls->lcp.lam, sizeof(double) * (size_t)ls->m);
+  cup_ckpt_io(c, ls->lcp.prev, (size_t)ls->m);
+  CUP_CKPT_IO(c, ls->lq);
+  if (!ls->D) return;
+  unsigned long long mode = ls->mode;
+  CUP_CKPT_IO(c, mode);
+  cup_ckpt_io(c, ls->carry, sizeof(double) * (size_t)ls->m);
+  if (!c->saving && c->buf && !c->bad) set_mode(ls, mode);
+}
+
 int cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
   int m = ls->m, pivots = 0;
   double *lam = ls->lcp.lam;

@@ -19,6 +19,7 @@
 #include "catchup/status.h"
 #include "util/lanes.h"
 #include "util/linalg.h"
+#include "util/ckpt.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
 
@@ -97,6 +98,9 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
  * it is not (the state jumps at t = 0, in the first step). */
 int cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g);
 void cup_lcp_step_free(cup_lcp_step *ls);
+/* What a step carries to the next (lambda, its warm start, lambda^T q), to
+ * or from a checkpoint (util/ckpt.h). */
+void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:
  * certified when the gap is below max(1e-12 scale^2, floor), the floor
