@@ -435,23 +435,24 @@ static void test_netlist_signals(void **state) {
 }
 
 /* A rectifier whose diode has D != 0 (behind the source's resistance) is
- * refused by the adaptive scheme with one line naming the diode, and the
- * file keeps nothing computed (there was nothing). */
-static void test_adaptive_refuses_D(void **state) {
+ * refused by the explicit scheme with one line naming the diode and the
+ * schemes that run it, and the file keeps nothing computed (there was
+ * nothing). */
+static void test_explicit_refuses_D(void **state) {
   (void)state;
-  const char *scene = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.yaml", *out = tmp_path("adaptive-D.h5");
-  const char *args[] = {scene, "-o", out, "--scheme", "adaptive", NULL};
+  const char *scene = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.yaml", *out = tmp_path("explicit-D.h5");
+  const char *args[] = {scene, "-o", out, "--scheme", "explicit", NULL};
   result r = run_cli(args, 0, 0);
   expect_exit(&r, 1, 1);
-  expect_in_err(&r, "halfwave-rc.yaml: the adaptive scheme needs D = 0");
+  expect_in_err(&r, "halfwave-rc.yaml: the explicit scheme needs D = 0");
   expect_in_err(&r, "row D1 has D != 0");
-  expect_in_err(&r, "use the theta scheme");
+  expect_in_err(&r, "use the theta or the adaptive scheme");
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_netlist_signals),
-    cmocka_unit_test(test_adaptive_refuses_D),
+    cmocka_unit_test(test_explicit_refuses_D),
     cmocka_unit_test(test_paper_case1_file),
     cmocka_unit_test(test_adaptive_file),
     cmocka_unit_test(test_summary_line_and_overrides),

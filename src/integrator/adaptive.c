@@ -63,7 +63,7 @@ static void dense_of(const cup_sparse *S, int has, double *out, int ld) {
 static void exosystem(cup_adaptive *A) {
   int p = A->p, nw = A->nw;
   const cup_input *u = A->u;
-  if (!nw) return;
+  if (!A->nwu) return;
   if (A->callback) {
     for (int c = 0; c < p; c++) {
       int g = c * (AD_DEGREE + 1);
@@ -80,8 +80,54 @@ static void exosystem(cup_adaptive *A) {
       A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
 }
 
+/* D != 0: B and D dense, C B, the rows D couples; the late-switch model of
+ * a row whose D_ii > 0 (its multiplier is a function, no impulse: switched
+ * on late by delta it misses (1/2) delta^2 |s'| B_i / D_ii). */
+static void dae_setup(cup_adaptive *A, const cup_sparse *B, const cup_sparse *Dm) {
+  int n = A->n, m = A->m;
+  dense_of(B, 1, A->Bd, n);
+  dense_of(Dm, 1, A->Dd, m);
+  for (int j = 0; j < m; j++)
+    for (int i = 0; i < m; i++) {
+      double acc = 0;
+      for (int k = A->K->Ct.p[i]; k < A->K->Ct.p[i + 1]; k++) acc += A->K->Ct.x[k] * A->Bd[A->K->Ct.i[k] + (size_t)j * n];
+      A->CB[i + (size_t)j * m] = acc;
+      if (A->Dd[i + (size_t)j * m] != 0) A->dcpl[i] = A->dcpl[j] = 1;
+    }
+}
+
+double ad_energy_bound(const cup_adaptive *A, const double *v, double *scratch) {
+  cup_metric_apply(A->K, v, scratch);
+  return A->pinf * sqrt(fmax(0, cup_dot(v, scratch, A->n)));
+}
+
+/* The late-switch error model per row (docs/adaptive.md), in the energy
+ * bound: B_i, and A B_i / (C B)_ii (B_i / D_ii where D_ii > 0). */
+static void switch_model(cup_adaptive *A) {
+  const cup_polyset *K = A->K;
+  int n = A->n, m = A->m;
+  for (int i = 0; i < m; i++) {
+    const double *b = A->has_D ? A->Bd + (size_t)i * n : K->Bt + (size_t)i * n;
+    for (int r = 0; r < n; r++) {
+      double acc = 0;
+      for (int c = 0; c < n; c++) acc += A->A[r + (size_t)c * n] * b[c];
+      A->xr[r] = acc;
+    }
+    double bn = ad_energy_bound(A, b, A->xf), abn = ad_energy_bound(A, A->xr, A->xf);
+    A->cz[i] = bn;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) A->c1[i] += fabs(K->Ct.x[k]);
+    if (!A->has_D) {
+      A->cs[i] = K->Md[i + (size_t)i * m] > 0 ? abn / K->Md[i + (size_t)i * m] : 0;
+      continue;
+    }
+    double dii = A->Dd[i + (size_t)i * m], cb = A->CB[i + (size_t)i * m];
+    A->cs[i] = dii > 0 ? bn / dii : cb > 0 ? abn / cb : 0;
+  }
+}
+
 int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
-                        const cup_input *u, const cup_integrator_options *o, char *errmsg) {
+                        const cup_sparse *B, const cup_sparse *Dm, const cup_input *u,
+                        const cup_integrator_options *o, char *errmsg) {
   *out = NULL;
   if (!K->dense)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
@@ -108,10 +154,14 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->o = *o;
   A->n = D->n; A->m = K->m; A->p = D->p;
   A->callback = A->u && A->u->fn;
+  A->has_D = Dm != NULL;
   int fail = 0, n = A->n, m = A->m, p = A->p;
   int nterms = A->u && !A->callback ? A->u->nterms : 0;
   A->first_state = take((size_t)nterms + 1, sizeof(int), &fail);
-  if (!fail) A->nw = A->callback ? p * (AD_DEGREE + 1) : cup_input_gen_dim(A->u, A->first_state);
+  if (!fail) A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : cup_input_gen_dim(A->u, A->first_state);
+  A->one = -1;
+  for (int i = 0; A->has_D && i < m && A->one < 0; i++)
+    if (K->g0[i] != 0) A->one = A->nw++;         /* F reaches the multipliers through D: a constant state */
   int nw = A->nw, na = A->na = n + nw;
   if (!fail && na > CUP_EXPONENTIAL_MAX_DIM) {
     cup_adaptive_free(&A);
@@ -142,9 +192,15 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->zy = take((size_t)na, sizeof(double), &fail);
   A->lcpM = take((size_t)m * m, sizeof(double), &fail);
   A->touch = take((size_t)m, 1, &fail);
+  if (A->has_D) {
+    A->Bd = take((size_t)n * m, sizeof(double), &fail);
+    A->Dd = take((size_t)m * m, sizeof(double), &fail);
+    A->CB = take((size_t)m * m, sizeof(double), &fail);
+    A->dcpl = take((size_t)m, 1, &fail);
+  }
   A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), &fail);
   A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), &fail);
-  if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m)) {
+  if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     cup_adaptive_free(&A);
     return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
@@ -165,19 +221,8 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   exosystem(A);
   for (int j = 0; j <= AD_DEGREE; j++) A->node[j] = 0.5 * (1 - cos(M_PI * j / AD_DEGREE));
   A->pinf = p_to_inf(K);
-  for (int i = 0; i < m; i++) {                  /* the late-switch error model, per row */
-    const double *b = K->Bt + (size_t)i * n;
-    double bn = 0, abn = 0;
-    for (int r = 0; r < n; r++) {
-      bn = fmax(bn, fabs(b[r]));
-      double acc = 0;
-      for (int c = 0; c < n; c++) acc += A->A[r + (size_t)c * n] * b[c];
-      abn = fmax(abn, fabs(acc));
-    }
-    A->cz[i] = bn;
-    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) A->c1[i] += fabs(K->Ct.x[k]);
-    A->cs[i] = K->Md[i + (size_t)i * m] > 0 ? abn / K->Md[i + (size_t)i * m] : 0;
-  }
+  if (A->has_D) dae_setup(A, B, Dm);
+  switch_model(A);
   *out = A;
   return CUP_OK;
 }
@@ -186,6 +231,8 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   if (!Ap || !*Ap) return;
   cup_adaptive *A = *Ap;
   ad_modes_free(A);
+  if (A->has_D) ad_dae_free(A);
+  free(A->Bd); free(A->Dd); free(A->CB); free(A->dcpl);
   cup_lcp_free(&A->lcp);
   cup_lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);

@@ -182,11 +182,13 @@ static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *e
   return CUP_OK;
 }
 
-/* The exosystem's states for a step [t0, t1] inside a piece. */
+/* The exosystem's states for a step [t0, t1] inside a piece (and the
+ * constant state, with D). */
 static int inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) {
-  if (!A->nw) return CUP_OK;
+  if (A->one >= 0) w[A->one] = 1;
+  if (!A->nwu) return CUP_OK;
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
-  cup_input_gen_values(A->u, A->first_state, t0, t1, w);
+  cup_input_gen_piece(A->u, A->first_state, t0, t1, w);
   return CUP_OK;
 }
 
@@ -198,16 +200,30 @@ int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
   if (!md) return CUP_OK;
   double t = A->zt, tb = cup_input_next_break(A->u, t);
   double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
-  if (A->nw && A->callback && poly_input(A, t, t < A->o.T ? h : -h, A->zw, A->uerr))
-    return CUP_ERR_CALLBACK;
-  if (A->nw && !A->callback) cup_input_gen_values(A->u, A->first_state, t, t + h, A->zw);
+  if (inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
   for (int i = 0; i < A->m; i++)
-    if (md->is_zeta[i]) zeta[i] = cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+    if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
   return CUP_OK;
 }
 
 /* ---- projection, active sets, events ------------------------------------------------- */
+
+/* With D: x onto the consistent states Q(t) (adaptive_dae.c), exact up to
+ * rounding (the LCP solved by pivoting); not certified by a projector. */
+static int jump(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t *active, cup_proj_info *pi) {
+  int piv = 0, st = ad_dae_jump(A, g, x, active, &piv);
+  R->info->dual_iterations += piv;
+  if (st < 0)
+    return stop(R, CUP_ERR_EMPTY_SET, "no state is consistent with the rows at this time: the jump's LCP "
+                "(x + B mu with 0 <= mu _|_ C x + D zeta + g >= 0) has no solution");
+  if (st == 0) return CUP_OK;
+  pi->skipped = 0;
+  pi->iterations = piv;
+  R->info->projected++;
+  R->rloc += 8 * DBL_EPSILON * inf_norm(x, A->n);
+  return CUP_OK;
+}
 
 /* If x is outside {C x + g >= 0}, its certified P-projection (the exact
  * small-set LCP, as the explicit scheme's step); *active gets its active
@@ -217,6 +233,7 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
   *active = 0;
   *pi = (cup_proj_info){0};
   pi->skipped = 1;
+  if (A->has_D) return jump(A, R, g, x, active, pi);
   cup_slack(A->K, g, x, A->s, A->gam);
   int outside = 0;                               /* beyond rounding: a held row is at 0 */
   for (int i = 0; i < A->m; i++) outside |= A->s[i] < -A->gam[i];
@@ -290,11 +307,18 @@ static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, d
   return CUP_OK;
 }
 
+/* The time scale of the choice of an active set with D (its LCP is a step
+ * of a millionth of it): the current mode's step limit, or the input's. */
+static double time_scale(cup_adaptive *A, ad_run *R) {
+  return fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);
+}
+
 /* The active set that continues from (x, w) at R->t, made current, x put
  * on its manifold; changes reported at time t_event. */
 static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0;
-  int piv = 0, st = ad_select(A, A->x, w, hint, &mask, &piv);
+  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R), &mask, &piv)
+                             : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set has no "
                       "solution by pivoting (dependent rows?)");
@@ -383,7 +407,7 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
   ad_mode *md = R->md;
   *snap = 0;
   for (;;) {
-    double hl = A->callback ? fmin(md->hmax, R->h_cb) : md->hmax;
+    double hm = ad_mode_hmax(A, md), hl = A->callback ? fmin(hm, R->h_cb) : hm;
     *t1 = next_stop(A, R, hl);
     double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * fmax(fabs(R->t), DBL_MIN);
     if (!(h > tiny)) {
@@ -415,6 +439,15 @@ static int any_negative(const cup_adaptive *A) {
   return 0;
 }
 
+/* The tolerance an event's local error is held to: tolw at the state, less
+ * as the estimate of what the run has already spent of it grows past half
+ * (events accumulate: a resonant converter switches 86 times in 200 us),
+ * down to 1/16 of it. */
+static double event_budget(const cup_adaptive *A, const ad_run *R) {
+  double tw = tolw(A, A->x), left = tw - estimate_now(A, R);
+  return left >= 0.5 * tw ? tw : tw * fmax(1.0 / 16, left / (0.5 * tw));
+}
+
 /* The reported time of the event of row k: Newton steps on its function
  * along the old flow from tau (the state at the last one in A->yr). */
 static double refine_root(cup_adaptive *A, ad_mode *md, int k, double tau, double tmax) {
@@ -440,7 +473,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   int n = A->n, nw = A->nw, st;
   ad_mode *old = R->md, *nm = NULL;
   A->pinned[1] = old;
-  double tw = tolw(A, A->x), tau_rep = 0;
+  double tw = event_budget(A, R), tau_rep = 0;
   uint64_t before = old->mask, active = 0;
   cup_proj_info pi = {0};
   for (int attempt = 0;; attempt++) {
@@ -455,7 +488,8 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     uint64_t mask = 0;
     int piv = 0;
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
-    if (ad_select(A, A->xs, A->wt, hint, &mask, &piv))
+    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R), &mask, &piv)
+                 : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
       return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set after the event of "
                   "row %d has no solution by pivoting (dependent rows?)", ev->row);
     R->info->dual_iterations += piv;
@@ -472,9 +506,13 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     ad_flow(A, nm, tsw - tau_rep, A->yt, A->yr);
     ad_state(A, nm, A->yr, A->xr);
     for (int i = 0; i < n; i++) A->et[i] = A->xs[i] - A->xr[i];
-    double err = inf_norm(A->et, n);
+    double err = ad_energy_bound(A, A->et, A->xf);
     if (err <= 4 * AD_EVENT_SHARE * tw || attempt >= 3 || nm->mask == before) break;
     ev->cfac *= fmax(4, err / (0.25 * AD_EVENT_SHARE * tw));
+    /* a model of 0 (another row switching with this one, D's coupling) is
+     * raised by nothing: the measured error over the delay is a floor */
+    double delay = tsw - tau_rep;
+    if (delay > 0) ev->cmin = fmax(ev->cmin, 4 * err / (delay * delay));
   }
   error_flow(A, old, ev->tau_sw);
   A->pinned[0] = R->md = nm;
@@ -535,6 +573,23 @@ static int take_step(cup_adaptive *A, ad_run *R) {
 
 /* ---- accumulating events: catching-up steps across them --------------------------- */
 
+/* With D, a catching-up step's active set: the one that continues from the
+ * step's start (NULL with the status set on an error). */
+static ad_mode *catch_up_mode(cup_adaptive *A, ad_run *R, double h) {
+  uint64_t mask;
+  int piv = 0;
+  if (inputs_on(A, R->t, fmin(R->tb, R->t + h), A->wt, A->uerr)) {
+    stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    return NULL;
+  }
+  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, time_scale(A, R), &mask, &piv)) {
+    stop(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
+    return NULL;
+  }
+  R->info->dual_iterations += piv;
+  return ad_mode_get(A, mask);
+}
+
 static int catch_up(cup_adaptive *A, ad_run *R) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
   double window = AD_ZENO_RING / rate, tend = fmin(A->o.T, R->t + window);
@@ -554,10 +609,12 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
   while (R->t < tend) {
     /* the free system's flow, then the certified projection: the paper's
      * scheme with an exact free step, through breakpoints too (which pick
-     * an active set that this loop does not use) */
-    ad_mode *md0 = ad_mode_get(A, 0);
+     * an active set that this loop does not use); with D, whose multipliers
+     * act through the step, the flow of the active set chosen at its start */
+    ad_mode *md0 = A->has_D ? catch_up_mode(A, R, fmin(window / 16, tend - R->t)) : ad_mode_get(A, 0);
+    if (!md0) return R->info->status;
     A->pinned[1] = md0;
-    double t1 = fmin(next_stop(A, R, fmin(md0->hmax, window / 16)), tend);
+    double t1 = fmin(next_stop(A, R, fmin(ad_mode_hmax(A, md0), window / 16)), tend);
     if (!(t1 > R->t)) break;
     if (inputs_on(A, R->t, t1, A->wa, A->uerr))
       return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
@@ -586,7 +643,7 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
   A->pinned[1] = NULL;
   A->nzeno = 0;
   if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
-  if (inputs_on(A, R->t, fmin(R->tb, R->t + R->md->hmax), A->wt, A->uerr))
+  if (inputs_on(A, R->t, fmin(R->tb, R->t + ad_mode_hmax(A, R->md)), A->wt, A->uerr))
     return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   return choose_mode(A, R, A->wt, 0, R->t);
 }

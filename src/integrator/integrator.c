@@ -190,10 +190,11 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   return CUP_OK;
 }
 
-/* Only the theta scheme's LCP takes D: the catching-up schemes project
- * onto K(t) = {C x + G u + F >= 0}, which exists only when D = 0. */
+/* Only the theta scheme's LCP and the adaptive scheme take D: the
+ * catching-up schemes project onto K(t) = {C x + G u + F >= 0}, which
+ * exists only when D = 0. */
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
-  if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
+  if (!L->has_D || scheme == CUP_SCHEME_THETA || scheme == CUP_SCHEME_ADAPTIVE) return CUP_OK;
   int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
   if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
@@ -204,12 +205,9 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   char text[128];
   cup_lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
-  const char *why = scheme == CUP_SCHEME_ADAPTIVE
-                        ? "its active sets' manifolds C_J x + G_J u + F_J = 0 leave out D zeta_J, which it does "
-                          "not integrate yet"
-                        : "it projects onto K(t) = {C x + G u + F >= 0}, which D != 0 does not define";
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (%s); %s %s D != 0 (a diode whose "
-                  "current the state does not fix): use the theta scheme", cup_scheme_name(scheme), why, text,
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
+                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state does "
+                  "not fix): use the theta or the adaptive scheme", cup_scheme_name(scheme), text,
                   k == 1 ? "has" : "have");
 }
 
@@ -357,7 +355,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->fixed = L->fixed;
   cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
-    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, u, &I->o, errmsg);
+    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, L->has_D ? &L->B : NULL, L->has_D ? &L->D : NULL, u,
+                             &I->o, errmsg);
     if (st) { cup_integrator_free(&I); return st; }
     *out = I;
     return CUP_OK;
@@ -421,7 +420,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
                     "(this process has %s); use the explicit, implicit or exponential scheme",
                     !I->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
     else
-      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, I->u, &I->o, errmsg);
+      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, NULL, NULL, I->u, &I->o, errmsg);
     if (st) { cup_integrator_free(&I); return st; }
     *out = I;
     return CUP_OK;
