@@ -143,6 +143,12 @@ typedef struct cup_integrator_options {
   int estimate;               /**< fixed-step schemes: 1 estimates the error by step doubling, from a
                                    second run at n/2 in step (half again the work; n even); the
                                    adaptive scheme always estimates */
+  double max_step;            /**< ADAPTIVE: no step longer than this (SPICE's TMAX); 0: none */
+  double output_t0;           /**< SAMPLES: the first sample's time (SPICE's TSTART), in [0, T);
+                                   the samples are at output_t0 + j (T - output_t0) / (N - 1),
+                                   the adaptive scheme's from its exact flow, the fixed-step
+                                   schemes' interpolated linearly between the steps around
+                                   them (a sample on a step is that step's state); default 0 */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */

@@ -190,6 +190,11 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->wt = take((size_t)nw, sizeof(double), &fail);
   A->zw = take((size_t)nw, sizeof(double), &fail);
   A->zy = take((size_t)na, sizeof(double), &fail);
+  A->xo = take((size_t)n, sizeof(double), &fail);
+  A->dy = take((size_t)na, sizeof(double), &fail);
+  A->de = take((size_t)na, sizeof(double), &fail);
+  A->de2 = take((size_t)na, sizeof(double), &fail);
+  A->ed = take((size_t)n, sizeof(double), &fail);
   A->lcpM = take((size_t)m * m, sizeof(double), &fail);
   A->touch = take((size_t)m, 1, &fail);
   if (A->has_D) {
@@ -243,7 +248,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et);
   free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->lcpM); free(A->touch);
-  free(A->samp); free(A->coef); free(A->zw); free(A->zy);
+  free(A->samp); free(A->coef); free(A->zw); free(A->zy); free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
   free(A);
   *Ap = NULL;
 }

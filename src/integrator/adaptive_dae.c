@@ -183,38 +183,51 @@ static int lcp_rows(cup_adaptive *A, const double *x, uint64_t hint, double h, u
   return CUP_OK;
 }
 
+/* The mode of J if it continues from (x, w); else, when J's rows are
+ * dependent (the mode keeps the first independent ones: two rows of a
+ * bridge alike, their multipliers split evenly by the LCP's least norm),
+ * the kept rows with one exchanged for a dropped one. */
+static ad_mode *try_rows(cup_adaptive *A, uint64_t J, const double *x, const double *w) {
+  ad_mode *md = ad_mode_get(A, J);
+  if (!md) return NULL;
+  if (mode_fits(A, md, x, w)) return md;
+  uint64_t kept = md->mask, dropped = J & ~kept;
+  for (int r = 0; r < A->m; r++) {
+    if (!(dropped >> r & 1)) continue;
+    for (int k = 0; k < A->m; k++)
+      if ((kept >> k & 1) && (md = try_mode(A, (kept & ~((uint64_t)1 << k)) | (uint64_t)1 << r, x, w))) return md;
+  }
+  return NULL;
+}
+
 int ad_dae_select(cup_adaptive *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   double tscale, uint64_t *mask, int *pivots) {
   int m = A->m;
   ad_mode *md;
-  if (row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w))) {   /* the event row alone */
+  if ((row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w))) ||   /* the event row alone */
+      (row < 0 && (md = try_mode(A, cur, x, w)))) {                         /* the same set, still right */
     *mask = md->mask;
     return CUP_OK;
   }
-  uint64_t first = 0;
-  int have = 0;
   for (int level = 0; level < 3; level++) {
     uint64_t J, degen;
     slack_and_velocity(A, x, w);
     int st = lcp_rows(A, x, hint | cur, 1e-6 * pow(1e-3, level) * tscale, &J, &degen, pivots);
     if (st) continue;
-    if (!have) { first = J; have = 1; }
-    if ((md = try_mode(A, J, x, w))) { *mask = md->mask; return CUP_OK; }
+    if ((md = try_rows(A, J, x, w))) { *mask = md->mask; return CUP_OK; }
     for (int i = 0; i < m; i++)                  /* a degenerate row in or out */
-      if ((degen >> i & 1) && (md = try_mode(A, J ^ (uint64_t)1 << i, x, w))) { *mask = md->mask; return CUP_OK; }
+      if ((degen >> i & 1) && (md = try_rows(A, J ^ (uint64_t)1 << i, x, w))) { *mask = md->mask; return CUP_OK; }
     for (int i = 0; i < m; i++)
       for (int k = i + 1; k < m; k++)
         if ((degen >> i & 1) && (degen >> k & 1) &&
-            (md = try_mode(A, J ^ (uint64_t)1 << i ^ (uint64_t)1 << k, x, w))) {
+            (md = try_rows(A, J ^ (uint64_t)1 << i ^ (uint64_t)1 << k, x, w))) {
           *mask = md->mask;
           return CUP_OK;
         }
   }
-  if (!have) return CUP_ERR_LINALG;
-  /* none checks out (a tangential touch, rounding): the LCP's answer; the
-   * next step sees a crossing if it is wrong */
-  *mask = ad_mode_get(A, first)->mask;
-  return CUP_OK;
+  /* none checks out: going on with a mode whose multipliers or slacks are
+   * negative would be a wrong answer that nothing detects later */
+  return CUP_ERR_LINALG;
 }
 
 /* ---- the state jump --------------------------------------------------------------- */

@@ -124,6 +124,8 @@ struct cup_adaptive {
   const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
   double zt;
   double *zw, *zy;          /* nw, na */
+  int zy_ready;             /* a sample inside a step: zy is its y already */
+  double *xo, *dy, *de, *de2, *ed; /* n, na, na, na, n: a sample inside a step (dense output), its error */
 };
 
 /* One run's progress (adaptive_run.c). */
@@ -188,9 +190,11 @@ int ad_dae_factor(cup_adaptive *A, int *rows, int nj, double *Zt, int *nz);
 int ad_dae_init(cup_adaptive *A);
 void ad_dae_free(cup_adaptive *A);
 /* The active set that continues from (x, w) at a time: the mode cur with
- * the event row flipped when that fits, else the finite-h LCP with D
- * (docs/adaptive.md), each candidate checked on the mode's own flow.
- * CUP_OK or CUP_ERR_LINALG. */
+ * the event row flipped (with no event, cur itself) when that fits, else
+ * the finite-h LCP with D (docs/adaptive.md), each candidate checked on
+ * the mode's own flow.
+ * CUP_OK, or CUP_ERR_LINALG when no candidate continues (or the LCP has no
+ * solution). */
 int ad_dae_select(cup_adaptive *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   double tscale, uint64_t *mask, int *pivots);
 /* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some

@@ -65,15 +65,18 @@ static double tolw(const cup_adaptive *A, const double *x) {
 
 static double sample_time(const cup_adaptive *A, long j) {
   long last = A->o.output_samples - 1;
-  return j >= last ? A->o.T : A->o.T * (double)j / (double)last;
+  double t0 = A->o.output_t0;
+  return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
 }
 
-/* Where the next step must end at the latest: a breakpoint, T, an output
- * time, or t + hlim. */
-static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim) {
+/* Where the next step must end at the latest: a breakpoint, T, or t + hlim
+ * (hlim within max_step); with to_samples, an output time too (catching-up
+ * steps: the other steps' samples come from their exact flow, emit_dense). */
+static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim, int to_samples) {
   double s = fmin(R->tb, A->o.T);
-  if (A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
+  if (to_samples && A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
     s = fmin(s, sample_time(A, R->next_sample));
+  if (A->o.max_step > 0) hlim = fmin(hlim, A->o.max_step);
   return R->t + hlim < s ? R->t + hlim : s;
 }
 
@@ -104,6 +107,57 @@ static int emit(cup_adaptive *A, ad_run *R) {
   int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
   A->zmd = NULL;
   if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
+  return CUP_OK;
+}
+
+/* E y in place (na x na, column-major; tmp: na). */
+static void times(int na, const double *E, double *y, double *tmp) {
+  cup_copy(tmp, y, na);
+  for (int i = 0; i < na; i++) {
+    double acc = 0;
+    for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * tmp[j];
+    y[i] = acc;
+  }
+}
+
+/* The samples due before t1 on the flow of md from (t0, ya), exact: the
+ * first by exp((t_j - t0) M), the next ones each by the cached exp(dt M) of
+ * the output spacing dt (one product a sample: asking 10^5 samples adds no
+ * steps); the error estimate there is e0's (the error at t0) carried along
+ * by the same flow. */
+static int emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                      double t1) {
+  const cup_integrator_options *o = &A->o;
+  if (o->output != CUP_OUTPUT_SAMPLES) return CUP_OK;
+  int n = A->n, na = A->na, first = 1;
+  double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
+  while (R->next_sample < o->output_samples) {
+    double ts = sample_time(A, R->next_sample);
+    if (!(ts < t1)) break;
+    R->next_sample++;
+    if (first) {
+      ad_flow(A, md, ts - t0, ya, A->zy);
+      cup_zero(A->de2, na);
+      cup_copy(A->de2, e0, n);
+      ad_flow(A, md, ts - t0, A->de2, A->de);
+      first = 0;
+    } else {
+      const double *E = ad_expm(A, md, dt);
+      times(na, E, A->zy, A->dy);
+      times(na, E, A->de, A->dy);
+    }
+    R->est_max = fmax(R->est_max, inf_norm(A->de, n) + R->rloc + sqrt(R->r2));
+    if (!R->sink) continue;
+    ad_state(A, md, A->zy, A->xo);
+    R->info->samples++;
+    A->zmd = md;
+    A->zt = ts;
+    A->zy_ready = 1;
+    int stopped = R->sink(R->steps + 1, ts, A->xo, R->sink_ctx);   /* inside the step in progress */
+    A->zmd = NULL;
+    A->zy_ready = 0;
+    if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
+  }
   return CUP_OK;
 }
 
@@ -198,6 +252,11 @@ int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
   const ad_mode *md = A->zmd;
   for (int i = 0; i < A->m; i++) zeta[i] = 0;
   if (!md) return CUP_OK;
+  if (A->zy_ready) {                             /* a sample inside a step: its y is known */
+    for (int i = 0; i < A->m; i++)
+      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+    return CUP_OK;
+  }
   double t = A->zt, tb = cup_input_next_break(A->u, t);
   double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
   if (inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
@@ -320,8 +379,9 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R), &mask, &piv)
                              : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
-  if (st) return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set has no "
-                      "solution by pivoting (dependent rows?)");
+  if (st) return stop(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
+                      "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
+                      : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   A->pinned[0] = R->md = ad_mode_get(A, mask);
   ad_offset(A, w, A->g);
   ad_manifold(A, R->md, A->g, A->x);
@@ -408,7 +468,7 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
   *snap = 0;
   for (;;) {
     double hm = ad_mode_hmax(A, md), hl = A->callback ? fmin(hm, R->h_cb) : hm;
-    *t1 = next_stop(A, R, hl);
+    *t1 = next_stop(A, R, hl, 0);
     double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * fmax(fabs(R->t), DBL_MIN);
     if (!(h > tiny)) {
       if (*t1 < R->t + hl) { *snap = 1; return NULL; }   /* a stop point a rounding away */
@@ -490,8 +550,10 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
     if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R), &mask, &piv)
                  : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
-      return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set after the event of "
-                  "row %d has no solution by pivoting (dependent rows?)", ev->row);
+      return stop(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
+                  "the LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
+                  : "the velocity LCP that chooses the active set after the event of row %d has no solution by "
+                  "pivoting (dependent rows?)", ev->row);
     R->info->dual_iterations += piv;
     nm = ad_mode_get(A, mask);
     A->pinned[0] = nm;
@@ -507,13 +569,38 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     ad_state(A, nm, A->yr, A->xr);
     for (int i = 0; i < n; i++) A->et[i] = A->xs[i] - A->xr[i];
     double err = ad_energy_bound(A, A->et, A->xf);
-    if (err <= 4 * AD_EVENT_SHARE * tw || attempt >= 3 || nm->mask == before) break;
+    /* A switch that leaves the active set as it was, although a row
+     * crossed well before it, has stepped over the row's whole excursion
+     * (a diode that conducts for a moment inside a long step: the error is
+     * its charge, first order): the bracket is closed further, 16x a try. */
+    double width = ev->tau_sw - ev->tau_lo;
+    if (nm->mask == before) {
+      if (width <= ldexp(h, -20) || attempt >= 8) break;
+      ev->cmin = fmax(ev->cmin, 2 * AD_EVENT_SHARE * tw * 256 / (width * width));
+      continue;
+    }
+    if (err <= 4 * AD_EVENT_SHARE * tw || attempt >= 3) break;
     ev->cfac *= fmax(4, err / (0.25 * AD_EVENT_SHARE * tw));
     /* a model of 0 (another row switching with this one, D's coupling) is
      * raised by nothing: the measured error over the delay is a floor */
     double delay = tsw - tau_rep;
     if (delay > 0) ev->cmin = fmax(ev->cmin, 4 * err / (delay * delay));
   }
+  /* samples before the root on the old flow, after it on the new one from
+   * the root's state made consistent (A->yt, what the local error was
+   * measured against): the run's own path there would show the violation
+   * the late switch lets through, first order in its delay */
+  double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
+  if ((st = emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
+  cup_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  if (troot > t0) {
+    cup_zero(A->de2, A->na);
+    cup_copy(A->de2, A->e, n);
+    ad_flow(A, old, troot - t0, A->de2, A->de);
+    cup_copy(A->ed, A->de, n);
+  }
+  ad_manifold(A, nm, A->zero, A->ed);
+  if ((st = emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   error_flow(A, old, ev->tau_sw);
   A->pinned[0] = R->md = nm;
   A->pinned[1] = NULL;
@@ -521,7 +608,6 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   if (nm->mask != before)
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
   cup_copy(A->x, A->xs, n);
-  double t0 = R->t;
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
   return end_of_step(A, R, &pi, 1);
@@ -558,6 +644,8 @@ static int take_step(cup_adaptive *A, ad_run *R) {
   double h = t1 - R->t;
   ad_event ev = {.t0 = R->t, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
+  int st = emit_dense(A, R, md, A->ya, A->e, R->t, t1);
+  if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
   ad_offset(A, A->yb + n, A->g);
   ad_manifold(A, md, A->g, A->x);
@@ -614,7 +702,7 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
     ad_mode *md0 = A->has_D ? catch_up_mode(A, R, fmin(window / 16, tend - R->t)) : ad_mode_get(A, 0);
     if (!md0) return R->info->status;
     A->pinned[1] = md0;
-    double t1 = fmin(next_stop(A, R, fmin(ad_mode_hmax(A, md0), window / 16)), tend);
+    double t1 = fmin(next_stop(A, R, fmin(ad_mode_hmax(A, md0), window / 16), 1), tend);
     if (!(t1 > R->t)) break;
     if (inputs_on(A, R->t, t1, A->wa, A->uerr))
       return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");

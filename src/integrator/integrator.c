@@ -50,6 +50,8 @@ struct cup_integrator {
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0;
+  double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */
+  double zs;                /* ... and its place between them (1: on a step) */
 };
 
 /* ---- schedules ---------------------------------------------------------------- */
@@ -175,9 +177,10 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
         return cup_fail(errmsg, CUP_ERR_ARG, "output every %ld: the stride must be >= 1", o->output_every);
       break;
     case CUP_OUTPUT_SAMPLES:
-      if (o->output_samples < 2 || (o->scheme != CUP_SCHEME_ADAPTIVE && o->output_samples - 1 > o->n))
-        return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be in [2, n + 1 = %ld]",
-                        o->output_samples, o->n + 1);
+      if (o->output_samples < 2)
+        return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be >= 2", o->output_samples);
+      if (!(o->output_t0 >= 0 && o->output_t0 < o->T))
+        return cup_fail(errmsg, CUP_ERR_ARG, "output_t0 = %g must be in [0, T = %g)", o->output_t0, o->T);
       break;
     case CUP_OUTPUT_FINAL:
     case CUP_OUTPUT_NONE:
@@ -187,6 +190,8 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   }
   if (!(o->max_wall_seconds >= 0))
     return cup_fail(errmsg, CUP_ERR_ARG, "max_wall_seconds = %g must be >= 0", o->max_wall_seconds);
+  if (!(o->max_step >= 0) || !isfinite(o->max_step))
+    return cup_fail(errmsg, CUP_ERR_ARG, "max_step = %g must be finite and >= 0", o->max_step);
   return CUP_OK;
 }
 
@@ -276,7 +281,10 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   I->g = calloc(M, sizeof(double));
   I->ut = calloc(P, sizeof(double));
   I->s0 = calloc(M, sizeof(double));
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0)
+  I->xs = calloc(N, sizeof(double));
+  I->zprev = calloc(M, sizeof(double));
+  I->zs = 1;
+  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->xs || !I->zprev)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   if (o->scheme == CUP_SCHEME_THETA && !I->K)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
@@ -445,7 +453,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_sparse_free(&I->A_own);
   cup_sparse_free(&I->E_own);
   if (I->use_theta) cup_lcp_step_free(&I->th);
-  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0);
+  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->xs); free(I->zprev);
   free(I);
   *Ip = NULL;
 }
@@ -463,6 +471,8 @@ int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
   for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
+  if (I->zs < 1 && I->zprev)                     /* a sample between two steps */
+    for (int i = 0; i < I->m; i++) zeta[i] = I->zprev[i] + I->zs * (zeta[i] - I->zprev[i]);
   return CUP_OK;
 }
 
@@ -470,7 +480,27 @@ int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
 
 static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
 
-typedef struct { long next_j; } sampler;
+/* The output: every k-th step, the last, none; or samples at
+ * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
+ * first step that reaches it: on a step (aligned: that step's state, as it
+ * always was) or between two (interpolated linearly, the scheme's own
+ * order at most two: x and zeta both). */
+typedef struct { long next_j, kdue; int aligned; double tau; } sampler;
+
+static void sampler_next(const cup_integrator *I, sampler *sp) {
+  const cup_integrator_options *o = &I->o;
+  long S = o->output_samples, n = o->n, j = sp->next_j;
+  if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
+  double t0 = o->output_t0;
+  sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
+  long k = (long)llround(sp->tau / I->h);
+  if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
+  else sp->aligned = grid_time(I, k) == sp->tau;
+  if (!sp->aligned) k = (long)ceil(sp->tau / I->h);
+  if (k < 0) k = 0;
+  if (k > n) k = n;
+  sp->kdue = k;
+}
 
 static int selected(const cup_integrator *I, sampler *sp, long k) {
   const cup_integrator_options *o = &I->o;
@@ -478,29 +508,50 @@ static int selected(const cup_integrator *I, sampler *sp, long k) {
     case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
     case CUP_OUTPUT_FINAL: return k == o->n;
     case CUP_OUTPUT_NONE: return 0;
-    case CUP_OUTPUT_SAMPLES: {
-      long S = o->output_samples;
-      long step = (long)llround((double)sp->next_j * (double)o->n / (double)(S - 1));
-      if (sp->next_j < S && k == step) { sp->next_j++; return 1; }
-      return 0;
-    }
+    case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
   }
   return 0;
 }
 
-/* The first step j >= k whose end the loop must see itself: a sample, the
- * interrupt check after each 1024th step, the last step (faststep.c runs
- * the ones before it). */
+/* The first step j >= k whose end the loop must see itself: a sample (and
+ * the step before an interpolated one, whose zeta it keeps), the interrupt
+ * check after each 1024th step, the last step (faststep.c runs the ones
+ * before it). */
 static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
   const cup_integrator_options *o = &I->o;
   long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
   if (stop > o->n - 1) stop = o->n - 1;
   if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
-  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->next_j < o->output_samples) {
-    next = (long)llround((double)sp->next_j * (double)o->n / (double)(o->output_samples - 1));
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
+    next = sp->aligned ? sp->kdue : sp->kdue - 1;
     if (next <= k) next = k + 1;
   }
   return next - 1 < stop ? next - 1 : stop;
+}
+
+/* The samples due at step k (x_k in I->x, x_{k-1} in I->xnew): on the step,
+ * or interpolated between the two. */
+static int emit_samples(cup_integrator *I, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
+  while (selected(I, sp, k)) {
+    const double *x = I->x;
+    double t = grid_time(I, k);
+    if (!sp->aligned && k > 0) {
+      double t_prev = grid_time(I, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
+      if (s < 1) {
+        for (int i = 0; i < I->n; i++) I->xs[i] = I->xnew[i] + s * (I->x[i] - I->xnew[i]);
+        x = I->xs;
+        I->zs = s;
+      }
+      t = sp->tau;
+    }
+    info->samples++;
+    int stopped = sink(k, t, x, ctx);
+    I->zs = 1;
+    if (stopped) return 1;
+    sp->next_j++;
+    sampler_next(I, sp);
+  }
+  return 0;
 }
 
 static double wall_seconds(void) {
@@ -658,10 +709,15 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     info->err_est = cup_estimate_value(&I->est);
   }
   sampler sp = {0};
-  if (sink && selected(I, &sp, 0)) {
+  sampler_next(I, &sp);
+  I->zs = 1;
+  if (I->zprev) cup_zero(I->zprev, I->m);
+  if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(I, &sp, 0)) {
     info->samples++;
     if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   }
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(I, &sp, 0, sink, sink_ctx, info))
+    return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
   int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
   for (long k = 0; k < o->n; k++) {
@@ -737,7 +793,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     }
     if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
       return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback");
-    if (sink && selected(I, &sp, k + 1)) {
+    if (sink && o->output == CUP_OUTPUT_SAMPLES) {
+      if (emit_samples(I, &sp, k + 1, sink, sink_ctx, info))
+        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");
+      if (!sp.aligned && k + 2 == sp.kdue && I->zprev) cup_integrator_zeta(I, I->zprev);  /* zeta_{k+1} */
+    } else if (sink && selected(I, &sp, k + 1)) {
       info->samples++;
       if (sink(k + 1, t1, I->x, sink_ctx))
         return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");

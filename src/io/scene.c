@@ -430,6 +430,7 @@ static int read_tolerance(rd *r, const st_node *root, cup_integrator_options *o)
               "deliver (16 eps = %.2g)", o->tol_rel, 16 * DBL_EPSILON);
   if (!st && (nd = opt(root, "max_event_rate")))
     st = number_min(r, nd, "max_event_rate", 0, 1, &o->max_event_rate);
+  if (!st && (nd = opt(root, "max_step"))) st = number_min(r, nd, "max_step", 0, 1, &o->max_step);
   if (!st && (nd = opt(root, "estimate"))) st = boolean(r, nd, "estimate", &o->estimate);
   return st;
 }
@@ -527,7 +528,7 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
                                       "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
-                                      "max_event_rate", "estimate", NULL};
+                                      "max_event_rate", "max_step", "estimate", NULL};
   const st_node *kf, *ki;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);

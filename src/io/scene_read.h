@@ -54,7 +54,7 @@ static inline const char *joini(char *buf, const char *parent, int i) {
 static inline int check_keys(rd *r, const st_node *map, const char *mkey, const char *const *known) {
   const st_node *bad = st_unknown_key(map, known);
   if (!bad) return CUP_OK;
-  char key[KEY_LEN], hint[160];
+  char key[KEY_LEN], hint[320];                  /* the scene's 21 top-level keys fit */
   return fail(r, CUP_ERR_PARSE, bad, join(key, mkey, bad->text), "unknown key (%s)",
               st_suggest(hint, sizeof hint, bad->text, known));
 }

@@ -143,7 +143,7 @@ void cup_spice_pulse_line(const cup_term *t, double mid, double *t0, double *v0,
       double jj = j0 + j, c = t->delay + P * jj + knot[k];
       if (!(P > 0)) c = t->delay + knot[k];
       if (!(c <= mid && c > start)) continue;
-      start = c;
+      start = jj + 1 == 0 && k == 3 ? t->delay : c;   /* the first period's start is the delay */
       piece = (k + 1) % 4;
       end = k < 2 ? t->delay + P * jj + knot[k + 1] : k == 3 ? t->delay + P * (jj + 1) + knot[0] : INFINITY;
       if (!(P > 0) && k < 2) end = t->delay + knot[k + 1];
