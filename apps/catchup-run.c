@@ -287,19 +287,72 @@ static const char *spec_text(const char *spec, const cup_schedule *s, char *buf,
   return buf;
 }
 
-/* A netlist's state, named: "i(L1), v(C1)" for the columns of /x. */
-static int state_names(run_t *r) {
-  const cup_netlist *nl = cup_scene_netlist(r->scene);
-  int n = nl ? cup_lcs_dim(cup_netlist_lcs(nl)) : 0;
+/* Joins n strings with ", " (NULL when out of memory). */
+static char *join(int n, char *const *v) {
   size_t len = 1;
-  for (int j = 0; j < n; j++) len += strlen(cup_netlist_state_name(nl, j)) + 2;
-  if (!n) return CUP_OK;
+  for (int j = 0; j < n; j++) len += strlen(v[j]) + 2;
   char *s = malloc(len);
-  if (!s) return CUP_ERR_NOMEM;
+  if (!s) return NULL;
   s[0] = '\0';
-  for (int j = 0, w = 0; j < n; j++) w += snprintf(s + w, len - (size_t)w, "%s%s", j ? ", " : "", cup_netlist_state_name(nl, j));
-  int st = cup_h5run_attr_string(r->w, "state_names", s);
-  free(s);
+  for (int j = 0, w = 0; j < n; j++) w += snprintf(s + w, len - (size_t)w, "%s%s", j ? ", " : "", v[j]);
+  return s;
+}
+
+/* /x's columns: /state (the names, /x's second dimension), the attribute
+ * state_names ("q(C4), i(L3), i(L2)") and /x's units: the one unit of
+ * every column, or the columns' units in order ("C, A, A"). */
+static int describe_state(run_t *r) {
+  cup_h5run *w = r->w;
+  int n = cup_scene_dim(r->scene), same = 1, st = CUP_ERR_NOMEM;
+  char **names = calloc((size_t)n, sizeof *names), **units = calloc((size_t)n, sizeof *units), *joined = NULL;
+  for (int j = 0; names && units && j < n; j++) {
+    char buf[128];
+    const char *u = "1";
+    cup_scene_state_label(r->scene, j, buf, sizeof buf, &u);
+    names[j] = strdup(buf);
+    units[j] = (char *)u;
+    same &= !strcmp(u, units[0]);
+    if (!names[j]) goto done;
+  }
+  if (!names || !units || !(joined = join(n, names))) goto done;
+  st = cup_h5run_attr_string(w, "state_names", joined);
+  st = cup_status_merge(st, cup_h5run_strings(w, "state", n, (const char *const *)names));
+  st = cup_status_merge(st, cup_h5run_describe(w, "state", NULL, "state component: the columns of /x"));
+  free(joined);
+  joined = same ? NULL : join(n, units);
+  if (!same && !joined) { st = CUP_ERR_NOMEM; goto done; }
+  st = cup_status_merge(st, cup_h5run_describe(w, "x", same ? units[0] : joined, "state x(t)"));
+  st = cup_status_merge(st, cup_h5run_dims(w, "x", (const char *const[]){"t", "state"}));
+done:
+  for (int j = 0; names && j < n; j++) free(names[j]);
+  free(names);
+  free(units);
+  free(joined);
+  return st;
+}
+
+/* Self-describing output, in the conventions of netCDF-4 and CF: every
+ * dataset has `units` and `long_name`, and /t is the dimension scale of
+ * /x's and every signal's first dimension, so that xarray opens the file
+ * (engine="h5netcdf") with named dimensions. A netlist's text is kept. */
+static int describe_run(run_t *r) {
+  cup_h5run *w = r->w;
+  int st = cup_h5run_describe(w, "t", "s", "time");
+  st = cup_status_merge(st, describe_state(r));
+  st = cup_status_merge(st, cup_h5run_dims(w, "events", (const char *const[]){"event"}));
+  st = cup_status_merge(st, cup_h5run_describe(w, "events", NULL,
+         "changes of the active set (adaptive scheme): t [s], row (0-based), on (1: becomes active)"));
+  const cup_netlist *nl = r->sk.nl;
+  for (int k = 0; nl && k < cup_netlist_signal_count(nl); k++) {
+    char path[300], what[300];
+    const char *name = cup_netlist_signal_name(nl, k), *unit = cup_netlist_signal_unit(nl, k);
+    snprintf(path, sizeof path, "signals/%.250s", name);
+    snprintf(what, sizeof what, "%s %.250s", !strcmp(unit, "V") ? "voltage" : "current", name);
+    st = cup_status_merge(st, cup_h5run_dims(w, path, (const char *const[]){"t"}));
+    st = cup_status_merge(st, cup_h5run_describe(w, path, unit, what));
+  }
+  if (cup_scene_netlist(r->scene))
+    st = cup_status_merge(st, cup_h5run_attr_string(w, "netlist", cup_netlist_source(cup_scene_netlist(r->scene))));
   return st;
 }
 
@@ -332,7 +385,7 @@ static int write_provenance(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene", cup_scene_text(r->scene)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_file", r->args->scene));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_name", cup_scene_name(r->scene)));
-  st = cup_status_merge(st, state_names(r));
+  st = cup_status_merge(st, describe_run(r));
   /* Overwritten at the end; what a reader finds if the process was killed. */
   st = cup_status_merge(st, cup_h5run_attr_long(w, "status", CUP_ERR_INTERRUPTED));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "status_name", "running"));

@@ -395,7 +395,7 @@ static void wait_message(MPI_Status *status, outbuf *out) {
 }
 
 static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
-  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)(s->samples * s->dim);
+  size_t one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   outbuf out[AHEAD];
   for (int b = 0; b < AHEAD; b++) out[b] = (outbuf){NULL, 0, MPI_REQUEST_NULL};
   computer c = {s, hooks, time_limit, one, out, 0, 0, 0};
@@ -664,10 +664,11 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   memset(&m, 0, sizeof m);
   m.quiet = a->quiet;
   m.log_progress = a->log_progress;
+  m.workers = nranks > 1 ? nranks - 1 : 1;
   m.s = s;
   m.f = f;
   m.count = s->samples * s->dim;
-  m.one = sizeof(sw_result) + sizeof(double) * (size_t)m.count;
+  m.one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   m.max_batch = (int)fmax(1, fmin(MAX_BATCH, (double)(MAX_MESSAGE - sizeof(msg_head)) / (double)m.one));
   if (setup_queue(&m)) { free_manager(&m); say("%s: out of memory", a->out); return EXIT_RUN; }
   m.t_start = m.last_flush = now_seconds();
@@ -681,6 +682,8 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   double wall = now_seconds() - m.t_start, cpu_manager = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
   m.rank_cpu += cpu_manager;
   progress(&m, 1);
+  sw_tally tally;
+  sw_file_tally(f, &tally);
   char err[SW_ERR_LEN] = "";
   sw_file *ff = f;
   int cst = sw_file_close(&ff, err);
@@ -704,6 +707,11 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
     char share[64] = "";
     if (nranks > 1) snprintf(share, sizeof share, ", rank 0 %.1f%%", 100 * cpu_manager / m.rank_cpu);
     double per_job = m.jobs_done ? 1e6 / (double)m.jobs_done : 0.0;
+    char adaptive[48] = "";
+    if (tally.adaptive) snprintf(adaptive, sizeof adaptive, " (of %ld adaptive)", tally.adaptive);
+    say("%s -> %s: %ld tasks: %ld ok, %ld failed, %ld not certified, %ld tolerance missed%s, %ld other "
+        "warnings (/summary's status_name and error say which)", a->sweep, a->out, s->n_tasks, tally.ok,
+        tally.failed, tally.not_certified, tally.tol_missed, adaptive, tally.warned);
     say("%s -> %s: %ld tasks + %d references (%ld done before), %ld failed, %.3g s on %d rank%s; "
         "jobs of %.3g us on average; parallel efficiency %.2f (job wall time / (workers x wall); "
         "%.2f by job CPU time); jobs took %.1f%% of the CPU time of all ranks%s; manager %.1f us per job",

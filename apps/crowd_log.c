@@ -10,6 +10,15 @@
 enum { COLS = 11 };
 static const char *const names[COLS] = {"t", "inside", "rows", "active", "eps_cert", "eta_cert", "gap",
                                         "iterations", "factorizations", "seconds", "added"};
+/* CF units and long names of the columns (/steps/<name>); eps bounds a
+ * squared distance, eta a distance. */
+static const char *const units[COLS] = {"s", "1", "1", "1", "m2", "m", "m", "1", "1", "s", "1"};
+static const char *const what[COLS] = {
+  "time of the state after the step", "agents inside the room after the step",
+  "rows of the step's set (contacts and walls within the margin)", "rows active at the step's answer",
+  "certified eps of the step's projection", "certified eta of the step's projection",
+  "smallest gap of the state (negative: overlap)", "projector iterations of the step",
+  "factorizations of the step", "wall time of the step", "contacts the step's rows missed, added"};
 
 struct crowd_log {
   cup_crowd *c;
@@ -68,18 +77,33 @@ int crowd_log_write(crowd_log *L, cup_h5run *w, long last, const double *q) {
   for (int c = 0; c < COLS; c++) {
     snprintf(name, sizeof name, "steps/%s", names[c]);
     st = cup_status_merge(st, cup_h5run_array(w, name, 1, &len, L->col[c]));
+    st = cup_status_merge(st, cup_h5run_describe(w, name, units[c], what[c]));
+  }
+  for (int c = 0; c < COLS; c++) {     /* once /steps/t exists: the scale of them all */
+    snprintf(name, sizeof name, "steps/%s", names[c]);
+    st = cup_status_merge(st, cup_h5run_dims(w, name, (const char *const[]){"t"}));
   }
   st = cup_status_merge(st, cup_h5run_array(w, "crowd/exit_time", 1, &dn, cup_crowd_exit_times(L->c)));
+  st = cup_status_merge(st, cup_h5run_describe(w, "crowd/exit_time", "s", "the agent's exit time (NaN: inside)"));
+  st = cup_status_merge(st, cup_h5run_dims(w, "crowd/exit_time", (const char *const[]){"agent"}));
   return cup_status_merge(st, cup_h5run_attr_long(w, "agents_out", N - cup_crowd_inside(L->c)));
 }
 
 int crowd_log_begin(crowd_log *L, cup_h5run *w) {
   long dn = cup_crowd_agents(L->c), dims2[2];
   const double *seg;
+  static const char *const ends[4] = {"x0", "y0", "x1", "y1"};
   int st = cup_h5run_array(w, "crowd/radius", 1, &dn, cup_crowd_radii(L->c));
+  st = cup_status_merge(st, cup_h5run_describe(w, "crowd/radius", "m", "the agent's radius"));
+  st = cup_status_merge(st, cup_h5run_dims(w, "crowd/radius", (const char *const[]){"agent"}));
   dims2[0] = cup_crowd_walls(L->c, &seg);
   dims2[1] = 4;
   st = cup_status_merge(st, cup_h5run_array(w, "crowd/walls", 2, dims2, seg));
+  /* the columns labelled: a segment from (x0, y0) to (x1, y1) */
+  st = cup_status_merge(st, cup_h5run_strings(w, "crowd/wall_column", 4, ends));
+  st = cup_status_merge(st, cup_h5run_describe(w, "crowd/wall_column", NULL, "a wall segment's end points"));
+  st = cup_status_merge(st, cup_h5run_describe(w, "crowd/walls", "m", "wall segments from (x0, y0) to (x1, y1)"));
+  st = cup_status_merge(st, cup_h5run_dims(w, "crowd/walls", (const char *const[]){"wall", "wall_column"}));
   return cup_status_merge(st, cup_h5run_attr_long(w, "agents", dn));
 }
 

@@ -66,7 +66,14 @@ static void count_result(manager_t *m, const sw_result *r) {
   m->cost_done += m->cost[r->job];
   m->cost_left -= m->cost[r->job];
   m->work_sum += r->wall;
+  m->last_done = now_seconds();
+  if (m->cost[r->job] > 0) {
+    m->rate_jobs++;
+    m->rate_work += r->wall;
+    m->rate_cost += m->cost[r->job];
+  }
   if (r->status < 0) m->failures++;
+  if (r->status == CUP_WARN_NOT_CERTIFIED) m->not_certified++;
 }
 
 static void take_reference(manager_t *m, const sw_result *r, const double *traj) {
@@ -88,9 +95,10 @@ static int take_task(manager_t *m, const sw_result *r, const double *traj, sw_ta
   const double *xref = sw_file_reference(m->f, k);
   if (!xref && s->out_samples == 0 && !sw_file_reference_done(m->f, k)) {
     held *h = malloc(sizeof *h);
-    double *copy = malloc(sizeof(double) * (size_t)m->count);
+    size_t bytes = sizeof(double) * (size_t)sw_traj_len(s);     /* the states and the signals */
+    double *copy = malloc(bytes);
     if (!h || !copy) { free(h); free(copy); io_fail(m, CUP_ERR_NOMEM); return 0; }
-    memcpy(copy, traj, sizeof(double) * (size_t)m->count);
+    memcpy(copy, traj, bytes);
     *h = (held){task, *r, copy, m->held[k]};
     m->held[k] = h;
     return 0;
@@ -122,9 +130,14 @@ void progress(manager_t *m, int final) {
   char el[32], eta[32];
   double elapsed = now - m->t_start;
   fmt_seconds(el, sizeof el, elapsed);
-  fmt_seconds(eta, sizeof eta, m->cost_done > 0 ? elapsed * m->cost_left / m->cost_done : NAN);
-  fprintf(stderr, "%scatchup-sweep: %ld/%ld done, %ld failed, %s elapsed, ETA %s%s",
-          live ? "\r" : "", m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, el,
+  /* The work left at the seconds per cost unit that the jobs done took on
+   * their ranks, spread over the workers; "?" until each worker has done
+   * a job on average (one job, or the elapsed time while jobs that cost
+   * nothing went first, says little about the rest). */
+  double rate = m->rate_jobs >= m->workers && m->rate_cost > 0 ? m->rate_work / m->rate_cost : NAN;
+  fmt_seconds(eta, sizeof eta, fmax(0, rate * m->cost_left / m->workers - (now - m->last_done)));
+  fprintf(stderr, "%scatchup-sweep: %ld/%ld done, %ld failed, %ld not certified, %s elapsed, ETA %s%s",
+          live ? "\r" : "", m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, m->not_certified, el,
           m->cost_left <= 0 ? "0 s" : eta, live ? "   " : "\n");
   if (final && live) fputc('\n', stderr);
   fflush(stderr);

@@ -28,7 +28,7 @@ typedef struct {
   int quiet, log_progress;   /* the command line's --quiet, --log-progress */
   const cup_sweep *s;
   sw_file *f;
-  long count;                /* samples * dim */
+  long count;                /* samples * dim: the states, what the error measures */
   size_t one;                /* bytes of one job's answer: sw_result + trajectory */
   int max_batch;             /* jobs per batch: MAX_BATCH, fewer for long trajectories */
   long *queue;               /* jobs to dispatch, in order */
@@ -36,7 +36,11 @@ typedef struct {
   double *cost;              /* per job */
   double cost_left, cost_done;  /* work not done yet (queued or out), done */
   double cost_queued;        /* work still in the queue */
-  long jobs_total, jobs_done, jobs_skipped, failures;
+  long jobs_total, jobs_done, jobs_skipped, failures, not_certified;
+  int workers;               /* ranks computing jobs */
+  long rate_jobs;            /* jobs done that the cost model prices (cost > 0) */
+  double rate_work, rate_cost;  /* their seconds (each on its rank) and cost units: the ETA's rate */
+  double last_done;          /* when the last job came back (the ETA counts down from there) */
   double t_start, last_flush, last_progress, busy;
   double work_sum;           /* seconds of the jobs done, each on its rank's clock */
   double cpu_sum;            /* CPU seconds of the computing ranks in those jobs (msg_head.cpu) */

@@ -66,15 +66,20 @@ if(CATCHUP_BUILD_APPS)
   # Parallel and serial HDF5 sit side by side on Debian; a plain find may pick
   # the serial one. We need the build that matches our MPI.
   set(HDF5_PREFER_PARALLEL TRUE)
-  find_package(HDF5 QUIET COMPONENTS C)
-  if(NOT HDF5_FOUND)
-    catchup_missing("HDF5 (parallel build)" "libhdf5-openmpi-dev hdf5-tools")
+  # HL: the dimension scales (H5DS) that tie /x to /t for netCDF readers.
+  find_package(HDF5 QUIET COMPONENTS C HL)
+  if(NOT HDF5_FOUND OR NOT HDF5_HL_FOUND)
+    catchup_missing("HDF5 with its high-level library (parallel build)" "libhdf5-openmpi-dev hdf5-tools")
   endif()
   if(NOT TARGET hdf5::hdf5)
     add_library(hdf5::hdf5 INTERFACE IMPORTED)
     target_include_directories(hdf5::hdf5 INTERFACE ${HDF5_C_INCLUDE_DIRS} ${HDF5_INCLUDE_DIRS})
     target_link_libraries(hdf5::hdf5 INTERFACE ${HDF5_C_LIBRARIES} ${HDF5_LIBRARIES})
     target_compile_definitions(hdf5::hdf5 INTERFACE ${HDF5_C_DEFINITIONS} ${HDF5_DEFINITIONS})
+  endif()
+  if(NOT TARGET hdf5::hdf5_hl)
+    add_library(hdf5::hdf5_hl INTERFACE IMPORTED)
+    target_link_libraries(hdf5::hdf5_hl INTERFACE ${HDF5_C_HL_LIBRARIES} ${HDF5_HL_LIBRARIES} hdf5::hdf5)
   endif()
 endif()
 

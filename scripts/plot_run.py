@@ -81,7 +81,21 @@ def read_run(path):
         else:
             t, x = t_ds[:n], x_ds[:n, :]
         attrs = {k: f.attrs[k] for k in f.attrs}
+        # the axes' names and units, as the file states them (docs/run-output.md)
+        dim = x_ds.shape[1]
+        names = [text_attr({"v": v}, "v") for v in f["state"][:]] if "state" in f else []
+        units = [u.strip() for u in text_attr(x_ds.attrs, "units").split(",")] if "units" in x_ds.attrs else []
+        if len(units) == 1:
+            units = units * dim
+        attrs["_names"] = names if len(names) == dim else ["" for _ in range(dim)]
+        attrs["_units"] = units if len(units) == dim else ["" for _ in range(dim)]
+        attrs["_t_unit"] = text_attr(t_ds.attrs, "units")
     return t, x, n, attrs
+
+
+def axis_label(symbol, name, unit):
+    """"$x_1$ = q(C4) [C]" from what the file says; the bare symbol without it."""
+    return symbol + (f" = {name}" if name else "") + (f" [{unit}]" if unit and unit != "1" else "")
 
 
 def caption(attrs, n_rows):
@@ -108,20 +122,28 @@ def plot(t, x, n_rows, attrs, out, title):
     import matplotlib.pyplot as plt
 
     dim = x.shape[1]
+    names, units = attrs.get("_names", [""] * dim), attrs.get("_units", [""] * dim)
+    tlabel = axis_label("t", "", attrs.get("_t_unit", ""))
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     left.plot(t, x[:, 0], color="black", linewidth=1)
-    left.set_xlabel("t")
-    left.set_ylabel("$x_1$")
+    left.set_xlabel(tlabel)
+    left.set_ylabel(axis_label("$x_1$", names[0], units[0]))
     if dim == 3:
         right.plot(t, x[:, 1], color="black", linewidth=1, label="$x_2$")
         right.plot(t, x[:, 2], color="blue", linewidth=1, label="$x_3$")
-        right.set_ylabel("$x_2$ (black), $x_3$ (blue)")
+        if units[1] == units[2]:
+            right.set_ylabel(axis_label("$x_2$ (black), $x_3$ (blue)", "", units[1]))
+            if names[1]:
+                right.set_title(f"$x_2$ = {names[1]}, $x_3$ = {names[2]}", fontsize=9)
+        else:
+            right.set_ylabel("%s (black), %s (blue)" % (axis_label("$x_2$", names[1], units[1]),
+                                                        axis_label("$x_3$", names[2], units[2])))
     else:
         for j in range(dim):
-            right.plot(t, x[:, j], linewidth=1, label="$x_{%d}$" % (j + 1))
+            right.plot(t, x[:, j], linewidth=1, label=axis_label("$x_{%d}$" % (j + 1), names[j], units[j]))
         right.set_ylabel("x")
         right.legend(fontsize="small", ncol=max(1, dim // 8))
-    right.set_xlabel("t")
+    right.set_xlabel(tlabel)
     for ax in (left, right):
         ax.grid(True, linewidth=0.3, alpha=0.5)
     fig.suptitle(title)

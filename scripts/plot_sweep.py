@@ -9,7 +9,10 @@ writes
                              Pareto front;
   PREFIX-order.png           error against n per variant and scheme (median
                              over schedules and projectors at each n), with the
-                             order fitted by least squares on log-log in the
+                             order fitted by least squares on log-log over the
+                             n where the local slope has settled (the largest
+                             n and the smaller ones whose segment slopes stay
+                             within SETTLED of each other), that range in the
                              legend (the adaptive scheme has no n: it is in
                              the work-precision figure, one point per tol);
   PREFIX-certificates.png    the largest certified eps and eta of each run
@@ -48,6 +51,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 MARKERS = {"auto": "o", "pg": "s", "fista": "^", "activeset": "D"}
+SETTLED = 0.1     # local slopes within this of each other count as settled
 
 
 def text(v):
@@ -60,11 +64,37 @@ def theta_of(scene_text):
     return float(m.group(1)) if m else 0.5
 
 
+def reference_info(f):
+    """What the errors are measured against, in words, for the figures."""
+    method = text(f.attrs.get("reference_method", ""))
+    cc = [float(c) for c in f["references/summary"]["cross_check"]] if "cross_check" in \
+        (f["references/summary"].dtype.names or ()) else []
+    cc = [c for c in cc if math.isfinite(c)]
+    if "adaptive scheme at tol = 1e-13" in method:
+        words = "reference: adaptive scheme at tol 1e-13"
+        if cc:
+            words += f" (Richardson limit within {max(cc):.2g})"
+        return words
+    return "reference: Richardson limit" if method else "reference"
+
+
+def tally(s):
+    """One line: how the tasks ended, every kind counted."""
+    done = s[s["done"] == 1]
+    names = [text(v) for v in done["status_name"]]
+    kinds = {k: names.count(k) for k in ordered(names)}
+    return f"{len(done)} of {len(s)} tasks done: " + ", ".join(f"{v} {k}" for k, v in kinds.items())
+
+
 def load(path):
     with h5py.File(path, "r") as f:
         s = f["summary"][:]
         name = f.attrs.get("sweep_name", path)
         thetas = {text(v["name"]): theta_of(text(v["scene"])) for v in f["variants"][:]}
+        global REFERENCE, UNITS
+        REFERENCE = reference_info(f)
+        UNITS = text(f["runs/x"].attrs.get("units", "")) if "runs/x" in f else ""
+    print(f"plot_sweep: {path}: {tally(s)}; errors against the {REFERENCE}")
     rows = []
     for r in s:
         rows.append({
@@ -92,9 +122,9 @@ def grid(n):
     return (n + cols - 1) // cols, cols
 
 
-def finish(fig, suptitle, out):
+def finish(fig, suptitle, out, bottom=0.0):
     fig.suptitle(suptitle)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, bottom, 1, 1))
     fig.savefig(out, dpi=110)
     plt.close(fig)
 
@@ -107,6 +137,22 @@ def pareto(points):
             front.append((t, e))
             best = e
     return front
+
+
+REFERENCE, UNITS = "reference", ""
+
+
+def error_label():
+    return "max-norm error" + (f" [{UNITS}]" if UNITS else "")
+
+
+def one_legend(fig, axes, **kw):
+    """A single legend for the figure: every label once, from all panels."""
+    seen = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(lab, h)
+    fig.legend(list(seen.values()), list(seen.keys()), **kw)
 
 
 def work_precision(rows, variants, schemes, title, out):
@@ -123,20 +169,37 @@ def work_precision(rows, variants, schemes, title, out):
             front = pareto([(r["wall"], r["error"]) for r in pts])
             if len(front) > 1:
                 ax.plot(*zip(*front), color=colors[s], lw=1)
-        ax.set(xscale="log", yscale="log", title=v, xlabel="wall time per task [s]", ylabel="max-norm error")
+        ax.set(xscale="log", yscale="log", title=v, xlabel="wall time per task [s]", ylabel=error_label())
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=7)
-    for ax in list(axes.flat)[len(variants):]:
+    spare = list(axes.flat)[len(variants):]
+    for ax in spare:
         ax.axis("off")
-    finish(fig, f"{title}: work-precision (lines: Pareto front per scheme)", out)
+    if spare:           # the legend in the empty panel
+        one_legend(fig, axes.flat, loc="center", bbox_to_anchor=spare[0].get_position(), fontsize=8)
+    else:
+        one_legend(fig, axes.flat, loc="lower center", ncol=4, fontsize=8)
+    finish(fig, f"{title}: work-precision (lines: Pareto front per scheme; {REFERENCE})", out,
+           bottom=0 if spare else 0.12)
 
 
 def fitted_order(ns, errs):
+    """The order fitted where the local slope has settled: from the largest n
+    down, the segments whose slopes stay within SETTLED of each other (at least
+    the last one); least squares on log-log over their points. Returns the
+    order and the first index of the points used."""
     x, y = np.log(np.asarray(ns, float)), np.log(np.asarray(errs, float))
     if len(x) < 2 or np.ptp(x) == 0:
-        return float("nan")
-    slope = np.polyfit(x, y, 1)[0]
-    return -slope
+        return float("nan"), 0
+    slopes = np.diff(y) / np.diff(x)
+    first = len(slopes) - 1
+    while first > 0 and np.ptp(slopes[first - 1:]) <= SETTLED:
+        first -= 1
+    return -np.polyfit(x[first:], y[first:], 1)[0], first
+
+
+def power10(n):
+    e = math.log10(n)
+    return f"10^{e:.0f}" if abs(e - round(e)) < 1e-9 else f"{n:g}"
 
 
 def error_order(rows, variants, schemes, title, out):
@@ -152,17 +215,19 @@ def error_order(rows, variants, schemes, title, out):
             med = [float(np.median([r["error"] for r in pts if r["n"] == n])) for n in ns]
             if not ns:
                 continue
-            p = fitted_order(ns, med)
-            ax.loglog(ns, med, "o-", color=colors[s], label=f"{s}: order {p:.2f}")
+            p, first = fitted_order(ns, med)
+            ax.loglog(ns, med, "o-", color=colors[s],
+                      label=f"{s}: order {p:.2f} (n = {power10(ns[first])}..{power10(ns[-1])})")
             lo = [min(r["error"] for r in pts if r["n"] == n) for n in ns]
             hi = [max(r["error"] for r in pts if r["n"] == n) for n in ns]
             ax.fill_between(ns, lo, hi, color=colors[s], alpha=0.12)
-        ax.set(title=v, xlabel="n (steps)", ylabel="max-norm error vs reference")
+        ax.set(title=v, xlabel="n (steps)", ylabel=error_label())
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
     for ax in list(axes.flat)[len(variants):]:
         ax.axis("off")
-    finish(fig, f"{title}: error against n (median over schedules and projectors; band: min-max)", out)
+    finish(fig, f"{title}: error against n (median over schedules and projectors; band: min-max;\n"
+           f"order fitted where the slope has settled; {REFERENCE})", out)
 
 
 def certificates(rows, title, out):
@@ -353,10 +418,37 @@ def crowd_certificates(tasks, title, out):
     finish(fig, f"{title}: certified bounds per task; smallest gap between agents over all tasks {gap:.2g} m", out)
 
 
-def crowd_main(path, prefix):
+def crowd_table(tasks):
+    """The evacuation over the seeds, one Markdown row per combination of the
+    other parameters: agents out per seed, and the evacuation time's median,
+    range, mean and standard deviation over the seeds where all left (the
+    table docs/crowd.md quotes; a chaotic result is a distribution)."""
+    keys, vals = varied(tasks)
+    heads = [LABELS.get(k, k) for k in keys]
+    print("| " + " | ".join(heads + ["agents out (per seed)", "evacuation time [s]: median, range; mean ± sd"]) + " |")
+    print("|" + "---:|" * len(heads) + "---|---|")
+    for g in ordered(tuple(t["params"].get(k) for k in keys) for t in tasks):
+        mine = sorted((t for t in tasks if tuple(t["params"].get(k) for k in keys) == g),
+                      key=lambda t: (t["seed"] is None, t["seed"]))
+        n = mine[0]["agents"]
+        outs = [t["out"] for t in mine]
+        out = "all" if all(o == n for o in outs) else ", ".join(str(o) for o in outs)
+        ev = [t["evac"] for t in mine if math.isfinite(t["evac"])]
+        if ev:
+            sd = f" ± {np.std(ev):.2f}" if len(ev) > 1 else ""
+            time = (f"{np.median(ev):.2f}, {min(ev):.2f}–{max(ev):.2f}; {np.mean(ev):.2f}{sd} "
+                    f"({len(ev)} of {len(mine)} seeds)")
+        else:
+            time = f"– (no seed of {len(mine)} got all out)"
+        print("| " + " | ".join([str(x) for x in g] + [out, time]) + " |")
+
+
+def crowd_main(path, prefix, table=False):
     title, tasks = load_crowd(path)
     if not tasks:
         sys.exit(f"plot_sweep: {path}: no finished crowd task yet")
+    if table:
+        crowd_table(tasks)
     outs = [f"{prefix}-evacuation.png", f"{prefix}-certificates.png"]
     evacuation(tasks, title, outs[0])
     crowd_certificates(tasks, title, outs[1])
@@ -368,11 +460,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("results")
     ap.add_argument("-o", "--output", required=True, help="prefix of the PNG files")
+    ap.add_argument("--table", action="store_true",
+                    help="crowd sweeps: also print the evacuation over the seeds as a Markdown table")
     a = ap.parse_args()
     with h5py.File(a.results, "r") as f:
         is_crowd = "crowd" in f
     if is_crowd:
-        crowd_main(a.results, a.output)
+        crowd_main(a.results, a.output, a.table)
         return
     title, rows = load(a.results)
     rows = [r for r in rows if r["done"] == 1 and r["error_code"] == 0 and math.isfinite(r["error"])]

@@ -186,6 +186,7 @@ static int cmd_failed(const char *path) {
   int *status = column(f, "summary", "status", H5T_NATIVE_INT, &n2);
   hid_t st = H5Tcopy(H5T_C_S1);
   H5Tset_size(st, 32);
+  H5Tset_cset(st, H5T_CSET_UTF8);         /* the file's strings are UTF-8 (format 3) */
   char *names = column(f, "summary", "status_name", st, &n2);
   H5Tclose(st);
   if (!done || !status || !names) { printf("sweep_check: %s: cannot read /summary\n", path); return 1; }

@@ -22,6 +22,7 @@
 #include <sys/wait.h>
 #include <cmocka.h>
 #include <hdf5.h>
+#include <hdf5_hl.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
 
@@ -531,6 +532,79 @@ static void test_events(void **state) {
   }
 }
 
+/* A string attribute of an object, read through HDF5 (not the writer). */
+static void read_str_attr(hid_t obj, const char *name, char *out, size_t size) {
+  hid_t a = H5Aopen(obj, name, H5P_DEFAULT), t = H5Aget_type(a);
+  assert_true(a >= 0 && H5Tis_variable_str(t) > 0 && H5Tget_cset(t) == H5T_CSET_UTF8);
+  char *v = NULL;
+  assert_true(H5Aread(a, t, &v) >= 0);
+  snprintf(out, size, "%s", v);
+  H5free_memory(v);
+  H5Tclose(t);
+  H5Aclose(a);
+}
+
+/* Dimension scales and CF attributes, read back with the H5DS API: /x's
+ * dimensions are /t and /state (labels), /events' a dimension without a
+ * coordinate (netCDF-4's NAME), a group's dataset finds /t at the root and
+ * a dataset named as its dimension is its own scale. */
+static void test_dimension_scales(void **state) {
+  (void)state;
+  char path[512], buf[128];
+  path_in_tmp(path, sizeof path, "dims.h5");
+  cup_h5run *w = NULL;
+  assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+  const char *names[2] = {"q(C4)", "i(L3)"};
+  assert_int_equal(cup_h5run_strings(w, "state", 2, names), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "x", (const char *const[]){"t", "state"}), CUP_OK);
+  assert_int_equal(cup_h5run_describe(w, "x", "C, A", "state x(t)"), CUP_OK);
+  assert_int_equal(cup_h5run_describe(w, "t", "s", "time"), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "events", (const char *const[]){"event"}), CUP_OK);
+  long n = 3;
+  double v[3] = {0, 1, 2};
+  assert_int_equal(cup_h5run_array(w, "steps/t", 1, &n, v), CUP_OK);
+  assert_int_equal(cup_h5run_array(w, "steps/gap", 1, &n, v), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "steps/t", (const char *const[]){"t"}), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "steps/gap", (const char *const[]){"t"}), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "nope", (const char *const[]){"t"}), CUP_ERR_IO);
+  assert_int_equal(cup_h5run_close(&w, NULL), CUP_ERR_IO);       /* the failed call is sticky */
+
+  assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+  assert_int_equal(cup_h5run_strings(w, "state", 2, names), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "x", (const char *const[]){"t", "state"}), CUP_OK);
+  assert_int_equal(cup_h5run_describe(w, "x", "C, A", "state x(t)"), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "events", (const char *const[]){"event"}), CUP_OK);
+  assert_int_equal(cup_h5run_array(w, "steps/t", 1, &n, v), CUP_OK);
+  assert_int_equal(cup_h5run_array(w, "steps/gap", 1, &n, v), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "steps/t", (const char *const[]){"t"}), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "steps/gap", (const char *const[]){"t"}), CUP_OK);
+  assert_int_equal(cup_h5run_signals(w, 1, (const char *const[]){"v(out)"}), CUP_OK);
+  assert_int_equal(cup_h5run_dims(w, "signals/v(out)", (const char *const[]){"t"}), CUP_OK);
+  assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
+
+  hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  hid_t x = H5Dopen2(f, "x", H5P_DEFAULT), t = H5Dopen2(f, "t", H5P_DEFAULT), st = H5Dopen2(f, "state", H5P_DEFAULT);
+  assert_true(H5DSis_scale(t) > 0 && H5DSis_scale(st) > 0);
+  assert_true(H5DSis_attached(x, t, 0) > 0 && H5DSis_attached(x, st, 1) > 0 && H5DSis_attached(x, t, 1) == 0);
+  assert_true(H5DSget_scale_name(t, buf, sizeof buf) > 0);
+  assert_string_equal(buf, "t");
+  read_str_attr(x, "units", buf, sizeof buf);
+  assert_string_equal(buf, "C, A");
+  read_str_attr(x, "long_name", buf, sizeof buf);
+  assert_string_equal(buf, "state x(t)");
+  hid_t e = H5Dopen2(f, "events", H5P_DEFAULT), ev = H5Dopen2(f, "event", H5P_DEFAULT);
+  assert_true(H5DSis_attached(e, ev, 0) > 0);
+  assert_true(H5DSget_scale_name(ev, buf, sizeof buf) > 0);
+  assert_true(strncmp(buf, "This is a netCDF dimension but not a netCDF variable.", 53) == 0);
+  hid_t s = H5Dopen2(f, "signals/v(out)", H5P_DEFAULT), gt = H5Dopen2(f, "steps/t", H5P_DEFAULT),
+        gg = H5Dopen2(f, "steps/gap", H5P_DEFAULT);
+  assert_true(H5DSis_attached(s, t, 0) > 0);
+  assert_true(H5DSis_scale(gt) > 0 && H5DSis_attached(gg, gt, 0) > 0 && H5DSis_attached(gg, t, 0) == 0);
+  hid_t types[] = {x, t, st, e, ev, s, gt, gg};
+  for (size_t k = 0; k < sizeof types / sizeof types[0]; k++) H5Dclose(types[k]);
+  H5Fclose(f);
+}
+
 static int make_tmpdir(void **state) {
   (void)state;
   return mkdtemp(tmpdir) ? 0 : -1;
@@ -552,6 +626,7 @@ int main(void) {
     ROUNDTRIP(4), ROUNDTRIP(5), ROUNDTRIP(6), ROUNDTRIP(7),
     cmocka_unit_test(test_flushes_in_between),
     cmocka_unit_test(test_events),
+    cmocka_unit_test(test_dimension_scales),
     cmocka_unit_test(test_attributes_roundtrip),
     cmocka_unit_test(test_h5dump_reads_attributes),
     cmocka_unit_test(test_unwritable_path_names_path),

@@ -271,6 +271,9 @@ static void test_signals(void **state) {
   assert_string_equal(cup_netlist_signal_name(nl, 3), "i(Rs)");
   assert_int_equal(cup_netlist_probe(nl, "v(A, out)", err), 4);
   assert_string_equal(cup_netlist_signal_name(nl, 4), "v(a,out)");
+  assert_string_equal(cup_netlist_signal_unit(nl, 4), "V");         /* the units files carry */
+  assert_string_equal(cup_netlist_signal_unit(nl, 3), "A");
+  assert_null(cup_netlist_signal_unit(nl, 5));
   assert_int_equal(cup_netlist_probe(nl, "i(C1)", err), 5);
   assert_int_equal(cup_netlist_probe(nl, "i(RL)", err), 6);
   assert_int_equal(cup_netlist_probe(nl, "v(out)", err), 0);     /* again: the same index */

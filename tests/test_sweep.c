@@ -319,6 +319,46 @@ static void test_tol_axis_adaptive_reference(void **state) {
   sw_free(&s);
 }
 
+/* reference: {method: adaptive, check: richardson}: the reference is the
+ * adaptive run's, bit for bit, and cross_check is max |adaptive - Richardson|
+ * recomputed from the two methods' own reference jobs (n_ref 40000: about
+ * 5e-9 apart, the Richardson limit's own error there). check without
+ * method: adaptive is refused. */
+static void test_checked_adaptive_reference(void **state) {
+  (void)state;
+  const char *common = "base: paper-fig2.yaml\nvariants: [{name: case1}]\n";
+  char text[256];
+  snprintf(text, sizeof text, "%sreference: {method: adaptive, check: richardson, n: 40000}\n", common);
+  cup_sweep *s = load_text(text);
+  snprintf(text, sizeof text, "%sreference: {method: adaptive}\n", common);
+  cup_sweep *sa = load_text(text);
+  snprintf(text, sizeof text, "%sreference: {n: 40000}\n", common);
+  cup_sweep *sr = load_text(text);
+  assert_int_equal(s->var[0].n_ref, 40000);
+  long count = 1001 * 3;
+  double *x = malloc(sizeof(double) * (size_t)count * 3), *xa = x + count, *xr = xa + count;
+  sw_result r, ra, rr;
+  sw_run_job(s, 0, NULL, &r, x);
+  sw_run_job(sa, 0, NULL, &ra, xa);
+  sw_run_job(sr, 0, NULL, &rr, xr);
+  assert_int_equal(r.status, CUP_OK);
+  assert_memory_equal(x, xa, sizeof(double) * (size_t)count);
+  double d = sw_max_error(xa, xr, count);
+  printf("# adaptive reference vs Richardson (n_ref 40000): cross_check %.3g, recomputed %.3g\n", r.cross_check, d);
+  assert_true(r.cross_check == d && d > 1e-10 && d < 1e-8);
+  assert_true(isnan(rr.cross_check) && isnan(ra.cross_check));
+  sw_free(&s);
+  sw_free(&sa);
+  sw_free(&sr);
+  free(x);
+  cup_sweep *bad = NULL;
+  char err[SW_ERR_LEN] = "";
+  snprintf(text, sizeof text, "%sreference: {check: richardson}\n", common);
+  assert_int_equal(sw_parse(&bad, text, strlen(text), EX "/inline-sweep.yaml", err), CUP_ERR_PARSE);
+  assert_non_null(strstr(err, "reference.check"));
+  assert_non_null(strstr(err, "needs method: adaptive"));
+}
+
 /* A netlist sweep (examples/circuits/rectifier-sweep.yaml): the variant
  * RL-250 sets the load of the half-wave rectifier, whose D != 0 puts its
  * reference on the theta scheme (second-order Richardson); that reference
@@ -333,10 +373,16 @@ static void test_netlist_variants(void **state) {
   assert_int_equal(s->n_variants, 3);
   assert_true(cup_lcs_has_D(cup_scene_lcs(s->var[1].scene)));
   long S = s->samples;
-  double *x = malloc(sizeof(double) * (size_t)S);
+  double *x = malloc(sizeof(double) * (size_t)sw_traj_len(s));
   sw_result r;
   sw_run_job(s, 1, NULL, &r, x);
   assert_int_equal(r.status, CUP_OK);
+  /* the probes of halfwave-rc.yaml follow the states: v(out) is C1's voltage, the state */
+  assert_int_equal(s->nsig, 2);
+  assert_string_equal(sw_signal_name(s, 0), "v(out)");
+  assert_string_equal(sw_signal_name(s, 1), "i(D1)");
+  for (long j = 0; j < S; j++)
+    if (x[S + 2 * j] != x[j]) fail_msg("sample %ld: reference v(out) %.17g, v(C1) %.17g", j, x[S + 2 * j], x[j]);
   double T = cup_scene_options(s->var[1].scene)->T, h = T / ((double)(S - 1) * 200), v = 0, err = 0;
   for (long j = 0; j + 1 < S; j++) {
     err = fmax(err, fabs(x[j] - v));
@@ -487,6 +533,7 @@ int main(void) {
     cmocka_unit_test(test_samples_between_steps),
     cmocka_unit_test(test_reference_vs_data),
     cmocka_unit_test(test_tol_axis_adaptive_reference),
+    cmocka_unit_test(test_checked_adaptive_reference),
     cmocka_unit_test(test_netlist_variants),
     cmocka_unit_test(test_crowd_sweep_example),
     cmocka_unit_test(test_batched_writes),

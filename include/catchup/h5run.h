@@ -64,6 +64,19 @@ int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v);
  *  row-major, created with its groups ("crowd/exit_time"); an existing name
  *  is an error. For what a run knows at its set-up or its end. */
 int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, const double *data);
+/** Describe a dataset (or group) the CF way, as xarray and netCDF tools
+ *  read it: string attributes `units` and `long_name` (either may be NULL:
+ *  not written). dataset is a path: "x", "signals/v(out)". */
+int cup_h5run_describe(cup_h5run *w, const char *dataset, const char *units, const char *long_name);
+/** A dataset of n variable-length UTF-8 strings (a coordinate of labels:
+ *  "state", "crowd/wall_column"), created with its groups. */
+int cup_h5run_strings(cup_h5run *w, const char *name, long n, const char *const *v);
+/** Name a dataset's dimensions (rank entries) by HDF5 dimension scales, as
+ *  netCDF-4 does: for each axis, the 1-D dataset of that name beside the
+ *  dataset, else at the root ("t"), becomes the scale (the coordinate); if
+ *  there is none, a dimension without coordinates is made beside it. A
+ *  1-D dataset named as its own dimension ("steps/t") becomes the scale. */
+int cup_h5run_dims(cup_h5run *w, const char *dataset, const char *const *dims);
 /** Write what is buffered and flush the file to the OS. */
 int cup_h5run_flush(cup_h5run *w);
 /** Flush, close, free, set *w = NULL. Returns the first failure of the data

@@ -34,6 +34,13 @@ typedef struct cup_lcs_desc {
                         against P B = C^T (P is then only the norm of certificates),
                         and only the theta scheme runs the LCS */
   const char *const *row_names; /**< m names of the rows for messages (the diodes), or NULL */
+  int keep_B;      /**< 1: B is kept as given and not checked against P B = C^T,
+                        D = 0 or not: a nonreciprocal network (a circuit with
+                        controlled sources) whose B is not P^-1 C^T in the metric
+                        P. Not a sweeping process, as with D != 0; D is then not
+                        checked positive semidefinite either (an active network's
+                        need not be): each theta step's LCP, M = h C W B + D,
+                        is solved or its failure reported */
 } cup_lcs_desc;
 
 /** Validate and copy. Fails with CUP_ERR_PB_CT and a message naming the
@@ -48,8 +55,8 @@ int cup_lcs_inputs(const cup_lcs *L);
 const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
 /** 1 if G is absent or zero: K does not move. */
 int cup_lcs_fixed_set(const cup_lcs *L);
-/** 1 if D has a nonzero entry: not a sweeping process, only the theta
- *  scheme runs it. */
+/** 1 if the LCS is not a sweeping process, only the theta scheme runs
+ *  it: D has a nonzero entry, or B was kept as given (keep_B). */
 int cup_lcs_has_D(const cup_lcs *L);
 
 /** The paper's circuit (Sec. 7, after Acary-Brogliato Ex. 2.52): R1, R2, R3

@@ -1,6 +1,7 @@
 /* catchup/netlist.h — circuits from SPICE-subset netlists (.cir/.sp):
- * R, L, C, independent V and I sources (DC, SIN, PULSE, PWL) and ideal
- * diodes, formulated by modified nodal analysis as an LCS
+ * R, L, C, independent V and I sources (DC, SIN, PULSE, PWL), ideal
+ * diodes, linear controlled sources (E, F, G, H), coupled inductors (K),
+ * subcircuits (X, .subckt) and .include/.lib, formulated by modified nodal analysis as an LCS
  *     x' = A x + B zeta + E u(t),   0 <= zeta _|_ C x + D zeta + G u(t) >= 0
  * with x = (inductor currents, capacitor voltages) in netlist order, u the
  * sources' values in netlist order, one complementarity row per diode, and
@@ -41,9 +42,19 @@ const double *cup_netlist_x0(const cup_netlist *nl);
 /** .tran TSTEP TSTOP: 1 and the values if the netlist has one, else 0. */
 int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop);
 
+/** The files the netlist was read from: 0 is the netlist itself, then each
+ *  file its .include and .lib cards read (paths joined to the including
+ *  file's folder, each once, in the order first read); NULL out of range.
+ *  Tools that write outputs can refuse to overwrite any of them, and hash
+ *  them all to know what a run read. */
+int cup_netlist_file_count(const cup_netlist *nl);
+const char *cup_netlist_file(const cup_netlist *nl, int k);
+
 /** Names of the state ("i(L1)", "v(C1)"), the rows (the diodes, "D1") and
  *  the inputs (the sources, "V1"); NULL out of range. */
 const char *cup_netlist_state_name(const cup_netlist *nl, int j);
+/** The netlist's text as it was read (before any `sets`), for provenance. */
+const char *cup_netlist_source(const cup_netlist *nl);
 const char *cup_netlist_row_name(const cup_netlist *nl, int i);
 const char *cup_netlist_input_name(const cup_netlist *nl, int j);
 /** 1 if the current of diode row i is fixed by the state (zeta_i is its
@@ -62,6 +73,8 @@ int cup_netlist_signal_count(const cup_netlist *nl);
 /** Canonical name: "v(out)", "v(a,b)", "i(D1)" (node and element names as
  *  first written in the netlist). */
 const char *cup_netlist_signal_name(const cup_netlist *nl, int k);
+/** Its unit: "V" for a voltage v(...), "A" for a current i(...). */
+const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
 /** The recorded signals at time t for state x and complementarity
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */

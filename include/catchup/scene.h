@@ -51,6 +51,11 @@ const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "
 const char *cup_scene_eta_spec(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
 const char *cup_scene_text(const cup_scene *s);
+/** The name and unit of state component j (0-based), for files and plots:
+ *  the paper's circuit "q(C4)" (C), "i(L3)", "i(L2)" (A); a netlist's
+ *  "i(L1)" (A), "v(C1)" (V); a crowd's "x0", "y0", "x1", ... (m); any other
+ *  model "x1", "x2", ... with unit "1" (the model's own units). */
+int cup_scene_state_label(const cup_scene *s, int j, char *name, unsigned long size, const char **unit);
 /** The scene's netlist when its model is `netlist:` (NULL otherwise), owned
  *  by the scene; its LCS and input are the scene's. Signals are added to it
  *  (cup_netlist_probe), so it is not const. */

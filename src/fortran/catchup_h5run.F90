@@ -17,7 +17,8 @@ module catchup_h5run
   private
   public :: cup_h5run_create, cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
     cup_h5run_attr_double, cup_h5run_attr_long, cup_h5run_attr_string, cup_h5run_flush, &
-    cup_h5run_count, cup_h5_version, cup_integrator_run_h5, cup_h5run_signals, cup_h5run_append
+    cup_h5run_count, cup_h5_version, cup_integrator_run_h5, cup_h5run_signals, cup_h5run_append, &
+    cup_h5run_describe, cup_h5run_strings, cup_h5run_dims
 #ifdef CATCHUP_H5RUN_ERRMSG
   public :: cup_h5run_errmsg, c_cup_h5run_errmsg
 #endif
@@ -26,7 +27,8 @@ module catchup_h5run
   public :: cup_h5run_sink, cup_h5run_event
   public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
     c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
-    c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append
+    c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append, &
+    c_cup_h5run_describe, c_cup_h5run_strings, c_cup_h5run_dims
 
   !> Root attribute: real(c_double), integer (stored as long) or string.
   interface cup_h5run_attr
@@ -105,6 +107,28 @@ module catchup_h5run
       type(c_ptr), value :: names            ! const char *const *
       integer(c_int) :: st
     end function c_cup_h5run_signals
+    function c_cup_h5run_describe(w, dataset, units, long_name) bind(C, name="cup_h5run_describe") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: dataset(*)
+      type(c_ptr), value :: units, long_name   ! strings, or NULL: not written
+      integer(c_int) :: st
+    end function c_cup_h5run_describe
+    function c_cup_h5run_strings(w, name, n, v) bind(C, name="cup_h5run_strings") result(st)
+      import :: c_int, c_ptr, c_char, c_long
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_long), value :: n
+      type(c_ptr), value :: v                  ! const char *const *
+      integer(c_int) :: st
+    end function c_cup_h5run_strings
+    function c_cup_h5run_dims(w, dataset, dims) bind(C, name="cup_h5run_dims") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: dataset(*)
+      type(c_ptr), value :: dims               ! const char *const *, one per axis
+      integer(c_int) :: st
+    end function c_cup_h5run_dims
     function c_cup_h5run_append(w, t, x, sig) bind(C, name="cup_h5run_append") result(st)
       import :: c_int, c_ptr, c_double
       type(c_ptr), value :: w
@@ -226,6 +250,57 @@ contains
     call cup_pack_strings_(names, buf, ptrs)
     ierr = int(c_cup_h5run_signals(w%ptr, int(size(names), c_int), c_loc(ptrs)))
   end subroutine cup_h5run_signals
+
+  !> CF attributes of a dataset (path "x", "signals/v(out)"): units and
+  !> long_name, each written when present.
+  subroutine cup_h5run_describe(w, dataset, ierr, units, long_name)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: dataset
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: units, long_name
+    character(kind=c_char, len=:), allocatable, target :: u, l
+    type(c_ptr) :: up, lp
+    u = cup_f_c_string('')
+    l = cup_f_c_string('')
+    up = c_null_ptr
+    lp = c_null_ptr
+    if (present(units)) u = cup_f_c_string(units)
+    if (present(long_name)) l = cup_f_c_string(long_name)
+    if (present(units)) up = c_loc(u)
+    if (present(long_name)) lp = c_loc(l)
+    ierr = int(c_cup_h5run_describe(w%ptr, cup_f_c_string(dataset), up, lp))
+  end subroutine cup_h5run_describe
+
+  !> A dataset of variable-length UTF-8 strings (labels: a coordinate).
+  subroutine cup_h5run_strings(w, name, values, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name, values(:)
+    integer, intent(out) :: ierr
+    character(kind=c_char), allocatable, target :: buf(:, :)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    if (size(values) == 0) then
+      ierr = CUP_ERR_ARG
+      return
+    end if
+    call cup_pack_strings_(values, buf, ptrs)
+    ierr = int(c_cup_h5run_strings(w%ptr, cup_f_c_string(name), int(size(values), c_long), c_loc(ptrs)))
+  end subroutine cup_h5run_strings
+
+  !> Name a dataset's dimensions by dimension scales (one name per axis, in
+  !> C order: /x is ['t    ', 'state']).
+  subroutine cup_h5run_dims(w, dataset, dims, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: dataset, dims(:)
+    integer, intent(out) :: ierr
+    character(kind=c_char), allocatable, target :: buf(:, :)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    if (size(dims) == 0) then
+      ierr = CUP_ERR_ARG
+      return
+    end if
+    call cup_pack_strings_(dims, buf, ptrs)
+    ierr = int(c_cup_h5run_dims(w%ptr, cup_f_c_string(dataset), c_loc(ptrs)))
+  end subroutine cup_h5run_dims
 
   !> Append one sample: t, x (dim entries) and the declared signals.
   subroutine cup_h5run_append(w, t, x, ierr, sig)

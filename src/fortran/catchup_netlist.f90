@@ -12,13 +12,15 @@ module catchup_netlist
   implicit none
   private
   public :: cup_netlist_load, cup_netlist_load_string, cup_netlist_free, cup_netlist_lcs, cup_netlist_input, &
-    cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_row_name, cup_netlist_input_name, &
+    cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_source, cup_netlist_row_name, cup_netlist_input_name, &
     cup_netlist_row_fixed, cup_netlist_probe, cup_netlist_probe_default, cup_netlist_signal_count, &
-    cup_netlist_signal_name, cup_netlist_signals
+    cup_netlist_signal_name, cup_netlist_signal_unit, cup_netlist_signals, cup_netlist_file_count, cup_netlist_file
+  public :: c_cup_netlist_file_count, c_cup_netlist_file
   public :: c_cup_netlist_load, c_cup_netlist_load_string, c_cup_netlist_free, c_cup_netlist_lcs, &
-    c_cup_netlist_input, c_cup_netlist_x0, c_cup_netlist_tran, c_cup_netlist_state_name, &
+    c_cup_netlist_input, c_cup_netlist_x0, c_cup_netlist_tran, c_cup_netlist_state_name, c_cup_netlist_source, &
     c_cup_netlist_row_name, c_cup_netlist_input_name, c_cup_netlist_row_fixed, c_cup_netlist_probe, &
-    c_cup_netlist_probe_default, c_cup_netlist_signal_count, c_cup_netlist_signal_name, c_cup_netlist_signals
+    c_cup_netlist_probe_default, c_cup_netlist_signal_count, c_cup_netlist_signal_name, &
+    c_cup_netlist_signal_unit, c_cup_netlist_signals
 
   interface
     function c_cup_netlist_load(nl, path, sets, nsets, errmsg) bind(C, name="cup_netlist_load") result(st)
@@ -65,12 +67,28 @@ module catchup_netlist
       real(c_double), intent(out) :: tstep, tstop
       integer(c_int) :: has
     end function c_cup_netlist_tran
+    function c_cup_netlist_file_count(nl) bind(C, name="cup_netlist_file_count") result(n)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: nl
+      integer(c_int) :: n
+    end function c_cup_netlist_file_count
+    function c_cup_netlist_file(nl, k) bind(C, name="cup_netlist_file") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: nl
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_netlist_file
     function c_cup_netlist_state_name(nl, j) bind(C, name="cup_netlist_state_name") result(p)
       import :: c_int, c_ptr
       type(c_ptr), value :: nl
       integer(c_int), value :: j
       type(c_ptr) :: p
     end function c_cup_netlist_state_name
+    function c_cup_netlist_source(nl) bind(C, name="cup_netlist_source") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: nl
+      type(c_ptr) :: p
+    end function c_cup_netlist_source
     function c_cup_netlist_row_name(nl, i) bind(C, name="cup_netlist_row_name") result(p)
       import :: c_int, c_ptr
       type(c_ptr), value :: nl
@@ -114,6 +132,12 @@ module catchup_netlist
       integer(c_int), value :: k
       type(c_ptr) :: p
     end function c_cup_netlist_signal_name
+    function c_cup_netlist_signal_unit(nl, k) bind(C, name="cup_netlist_signal_unit") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: nl
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_netlist_signal_unit
     function c_cup_netlist_signals(nl, t, x, zeta, out) bind(C, name="cup_netlist_signals") result(st)
       import :: c_int, c_ptr, c_double
       type(c_ptr), value :: nl
@@ -229,6 +253,22 @@ contains
     if (c_associated(nl%ptr)) has = c_cup_netlist_tran(nl%ptr, tstep, tstop) /= 0
   end function cup_netlist_tran
 
+  !> The number of files the netlist was read from (itself, then its .include/.lib files).
+  integer function cup_netlist_file_count(nl) result(n)
+    type(cup_netlist_t), intent(in) :: nl
+    n = 0
+    if (c_associated(nl%ptr)) n = int(c_cup_netlist_file_count(nl%ptr))
+  end function cup_netlist_file_count
+
+  !> File k (1-based; 1 is the netlist itself); '' out of range.
+  function cup_netlist_file(nl, k) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    integer, intent(in) :: k
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_file(nl%ptr, int(k - 1, c_int)))
+  end function cup_netlist_file
+
   !> Name of state j (1-based): "i(L1)", "v(C1)"; '' out of range.
   function cup_netlist_state_name(nl, j) result(s)
     type(cup_netlist_t), intent(in) :: nl
@@ -237,6 +277,14 @@ contains
     s = ''
     if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_state_name(nl%ptr, int(j - 1, c_int)))
   end function cup_netlist_state_name
+
+  !> The netlist's text as it was read (before any sets); '' for a null handle.
+  function cup_netlist_source(nl) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_source(nl%ptr))
+  end function cup_netlist_source
 
   !> Name of complementarity row i (1-based): the diode.
   function cup_netlist_row_name(nl, i) result(s)
@@ -309,6 +357,15 @@ contains
     s = ''
     if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_signal_name(nl%ptr, int(k - 1, c_int)))
   end function cup_netlist_signal_name
+
+  !> Unit of signal k (1-based): "V" for a voltage, "A" for a current.
+  function cup_netlist_signal_unit(nl, k) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    integer, intent(in) :: k
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_signal_unit(nl%ptr, int(k - 1, c_int)))
+  end function cup_netlist_signal_unit
 
   !> The signals at time t for state x and, optionally, zeta (m entries,
   !> cup_integrator_zeta; 0 when absent), into out (signal_count entries).

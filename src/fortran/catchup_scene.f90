@@ -2,7 +2,7 @@
 ! implemented in libcatchup by src/io/scene.c). Re-exported by module
 ! `catchup` whenever the C library is built with the scene loader.
 module catchup_scene
-  use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_ptr, c_null_ptr, &
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
     c_null_char, c_associated, c_f_pointer, c_loc
   use catchup_constants
   use catchup_types
@@ -12,11 +12,12 @@ module catchup_scene
   private
   public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, cup_scene_netlist, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
-    cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator
+    cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator, &
+    cup_scene_state_name, cup_scene_state_unit
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
-    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd
+    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_state_label
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -74,6 +75,15 @@ module catchup_scene
       type(c_ptr), value :: s
       integer(c_int) :: n
     end function c_cup_scene_dim
+    function c_cup_scene_state_label(s, j, name, size, unit) bind(C, name="cup_scene_state_label") result(st)
+      import :: c_ptr, c_int, c_char, c_long
+      type(c_ptr), value :: s
+      integer(c_int), value :: j
+      character(kind=c_char), intent(inout) :: name(*)
+      integer(c_long), value :: size
+      type(c_ptr), intent(out) :: unit
+      integer(c_int) :: st
+    end function c_cup_scene_state_label
     function c_cup_scene_integrator(s, o, I, errmsg) bind(C, name="cup_scene_integrator") result(st)
       import :: c_ptr, c_int, c_char, cup_integrator_options
       type(c_ptr), value :: s
@@ -242,6 +252,42 @@ contains
     cup_scene_dim = 0
     if (c_associated(s%ptr)) cup_scene_dim = int(c_cup_scene_dim(s%ptr))
   end function cup_scene_dim
+
+  !> The name of state component j (1-based): "q(C4)" for the paper's
+  !> circuit, a netlist's "v(C1)", a crowd's "x0", else "x1"; '' out of range.
+  function cup_scene_state_name(s, j) result(name)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: j
+    character(len=:), allocatable :: name
+    character(len=:), allocatable :: unit
+    call state_label(s, j, name, unit)
+  end function cup_scene_state_name
+
+  !> The unit of state component j (1-based): "C", "A", "V", "m", or "1"
+  !> (the model's own units); '' out of range.
+  function cup_scene_state_unit(s, j) result(unit)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: j
+    character(len=:), allocatable :: unit
+    character(len=:), allocatable :: name
+    call state_label(s, j, name, unit)
+  end function cup_scene_state_unit
+
+  subroutine state_label(s, j, name, unit)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: j
+    character(len=:), allocatable, intent(inout) :: name, unit
+    character(kind=c_char) :: buf(256)
+    type(c_ptr) :: up
+    buf = c_null_char
+    up = c_null_ptr
+    name = ''
+    unit = ''
+    if (.not. c_associated(s%ptr)) return
+    if (c_cup_scene_state_label(s%ptr, int(j - 1, c_int), buf, int(size(buf), c_long), up) /= CUP_OK) return
+    name = cup_chars_to_string(buf)
+    unit = cup_c_string(up)
+  end subroutine state_label
 
   !> A set: scene's process (its set and input are the scene's: use them while
   !> the scene lives); found = .false. for an LCS scene.

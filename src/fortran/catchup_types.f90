@@ -113,6 +113,7 @@ module catchup_types
     ! D != 0 (netlist diodes whose current the state does not fix)
     type(cup_csc) :: D                   !< m x m; absent or zero: D = 0 (only theta runs D != 0)
     type(c_ptr) :: row_names = c_null_ptr   !< const char *const *: m names for messages, or null
+    integer(c_int) :: keep_B = 0            !< 1: B kept as given, not checked against P B = C^T (theta only)
   end type cup_lcs_desc
 
   type, bind(C), public :: cup_circuit

@@ -66,7 +66,7 @@ static int square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, 
   int same = cup_square_block(qs, CUP_FAST_AHEAD / 2, r, sg);   /* omega > 0: q rises with t */
   for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
     tri.v[p] = cup_triangle_r2(r[p]);
-    ui->v[p] += height * (tri.v[p] - __builtin_shuffle(before, tri.v[p], (cup_v2l){1, 2}));
+    ui->v[p] += height * (tri.v[p] - cup_v2_shuffle(before, tri.v[p], 1, 2));
     before = tri.v[p];
   }
   if (cnt) f->last_tri[q] = tri.d[cnt - 1];

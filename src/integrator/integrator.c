@@ -197,9 +197,17 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
 
 /* Only the theta scheme's LCP and the adaptive scheme take D: the
  * catching-up schemes project onto K(t) = {C x + G u + F >= 0}, which
- * exists only when D = 0. */
+ * exists only when D = 0; an active network (B kept as given) only theta. */
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
-  if (!L->has_D || scheme == CUP_SCHEME_THETA || scheme == CUP_SCHEME_ADAPTIVE) return CUP_OK;
+  if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
+  if (L->keep_B)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
+                    "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
+                    cup_scheme_name(scheme), scheme == CUP_SCHEME_ADAPTIVE
+                    ? "its state jumps are projections in the energy metric P and its choice of the active set "
+                      "takes the network as passive"
+                    : "it projects in the energy metric P");
+  if (scheme == CUP_SCHEME_ADAPTIVE) return CUP_OK;
   int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
   if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }

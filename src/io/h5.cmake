@@ -11,7 +11,7 @@ set_target_properties(catchup_h5 PROPERTIES
   EXPORT_NAME catchup_h5
   INSTALL_RPATH "$ORIGIN")   # finds libcatchup beside it, wherever installed
 target_link_libraries(catchup_h5 PUBLIC catchup
-                      PRIVATE hdf5::hdf5 MPI::MPI_C catchup_warnings)
+                      PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C catchup_warnings)
 add_library(catchup::catchup_h5 ALIAS catchup_h5)
 
 install(TARGETS catchup_h5 EXPORT catchupTargets

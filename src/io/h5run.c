@@ -20,6 +20,7 @@
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <hdf5.h>
+#include <hdf5_hl.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
 #include "file_in_use.h"
@@ -566,6 +567,135 @@ int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, 
     snprintf(op, sizeof op, "write dataset '%s' in", name);
     st = set_error(w, CUP_ERR_IO, op);
   }
+  quiet_end(q);
+  return st;
+}
+
+/* ---- describing datasets (CF attributes, dimension scales) ---- */
+
+/* A string attribute on an object (dataset or group) by path, replaced. */
+static int obj_string_attr(hid_t obj, const char *name, const char *v) {
+  hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR), a = H5I_INVALID_HID;
+  int ok = type >= 0 && space >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
+           H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
+  htri_t exists = ok ? H5Aexists(obj, name) : -1;
+  ok = exists >= 0 && (exists == 0 || H5Adelete(obj, name) >= 0);
+  if (ok) a = H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+  ok = a >= 0 && H5Awrite(a, type, &v) >= 0;
+  hid_t err = keep_stack(!ok);
+  if (a >= 0) H5Aclose(a);
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  restore_stack(err);
+  return ok;
+}
+
+static int fail_op(cup_h5run *w, const char *what, const char *name) {
+  char op[200];
+  snprintf(op, sizeof op, "%s '%.120s' in", what, name);
+  return set_error(w, CUP_ERR_IO, op);
+}
+
+int cup_h5run_describe(cup_h5run *w, const char *dataset, const char *units, const char *long_name) {
+  if (!w || !dataset || !dataset[0]) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
+  quiet_t q = quiet_begin();
+  hid_t d = H5Oopen(w->file, dataset, H5P_DEFAULT);
+  int ok = d >= 0 && (!units || obj_string_attr(d, "units", units)) &&
+           (!long_name || obj_string_attr(d, "long_name", long_name));
+  hid_t err = keep_stack(!ok);
+  if (d >= 0) H5Oclose(d);
+  restore_stack(err);
+  int st = ok ? CUP_OK : fail_op(w, "describe", dataset);
+  quiet_end(q);
+  return st;
+}
+
+int cup_h5run_strings(cup_h5run *w, const char *name, long n, const char *const *v) {
+  if (!w || !name || !name[0] || n < 1 || !v) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
+  for (long k = 0; k < n; k++) if (!v[k]) return CUP_ERR_ARG;
+  hsize_t hn = (hsize_t)n;
+  quiet_t q = quiet_begin();
+  hid_t type = H5Tcopy(H5T_C_S1), lcpl = H5Pcreate(H5P_LINK_CREATE);
+  hid_t space = H5Screate_simple(1, &hn, NULL), d = H5I_INVALID_HID;
+  int ok = type >= 0 && lcpl >= 0 && space >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
+           H5Tset_cset(type, H5T_CSET_UTF8) >= 0 && H5Pset_create_intermediate_group(lcpl, 1) >= 0;
+  if (ok) d = H5Dcreate2(w->file, name, type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+  ok = d >= 0 && H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0;
+  hid_t err = keep_stack(!ok);
+  if (d >= 0) H5Dclose(d);
+  if (space >= 0) H5Sclose(space);
+  if (lcpl >= 0) H5Pclose(lcpl);
+  if (type >= 0) H5Tclose(type);
+  restore_stack(err);
+  int st = ok ? CUP_OK : fail_op(w, "write dataset", name);
+  quiet_end(q);
+  return st;
+}
+
+/* netCDF-4's way of a dimension without a coordinate variable: an empty
+ * dataset of the dimension's size that is a scale with this NAME. */
+#define NC_DIM_ONLY "This is a netCDF dimension but not a netCDF variable."
+
+/* The scale for dimension `dim` of a dataset in group `group` ("" = root),
+ * axis length len (unlimited when grows): the dataset group/dim, else /dim,
+ * made a scale if it is not one; else a new dimension-only dataset group/dim. */
+static hid_t scale_for(cup_h5run *w, const char *group, const char *dim, hsize_t len, int grows,
+                       const char *self) {
+  char path[256];
+  for (int pass = 0; pass < 2; pass++) {
+    if (pass && !group[0]) break;
+    int n = snprintf(path, sizeof path, "%s%s%s", pass ? "" : group, pass || !group[0] ? "" : "/", dim);
+    if (n < 0 || (size_t)n >= sizeof path) return H5I_INVALID_HID;
+    if (H5Lexists(w->file, path, H5P_DEFAULT) > 0) {
+      hid_t s = H5Dopen2(w->file, path, H5P_DEFAULT);
+      if (s >= 0 && H5DSis_scale(s) <= 0 && H5DSset_scale(s, dim) < 0) { H5Dclose(s); return H5I_INVALID_HID; }
+      if (s >= 0 && !strcmp(path, self)) { H5Dclose(s); return 0; }   /* the coordinate itself */
+      return s;
+    }
+  }
+  int n = snprintf(path, sizeof path, "%s%s%s", group, group[0] ? "/" : "", dim);
+  if (n < 0 || (size_t)n >= sizeof path) return H5I_INVALID_HID;
+  hsize_t dims[1] = {grows ? 0 : len}, maxdims[1] = {grows ? H5S_UNLIMITED : len}, chunk[1] = {1024};
+  hid_t space = H5Screate_simple(1, dims, maxdims), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  hid_t s = H5I_INVALID_HID;
+  char name[80];
+  snprintf(name, sizeof name, "%s%10llu", NC_DIM_ONLY, (unsigned long long)len);
+  if (space >= 0 && dcpl >= 0 && (!grows || H5Pset_chunk(dcpl, 1, chunk) >= 0))
+    s = H5Dcreate2(w->file, path, H5T_IEEE_F32LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  if (s >= 0 && H5DSset_scale(s, name) < 0) { H5Dclose(s); s = H5I_INVALID_HID; }
+  hid_t err = keep_stack(s < 0);
+  if (dcpl >= 0) H5Pclose(dcpl);
+  if (space >= 0) H5Sclose(space);
+  restore_stack(err);
+  return s;
+}
+
+int cup_h5run_dims(cup_h5run *w, const char *dataset, const char *const *dims) {
+  if (!w || !dataset || !dataset[0] || !dims) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;
+  char group[256];
+  const char *slash = strrchr(dataset, '/');
+  snprintf(group, sizeof group, "%.*s", slash ? (int)(slash - dataset) : 0, dataset);
+  quiet_t q = quiet_begin();
+  hid_t d = H5Dopen2(w->file, dataset, H5P_DEFAULT), space = d >= 0 ? H5Dget_space(d) : H5I_INVALID_HID;
+  hsize_t cur[2] = {0, 0}, max[2] = {0, 0};
+  int rank = space >= 0 ? H5Sget_simple_extent_dims(space, cur, max) : -1;
+  int ok = rank >= 1 && rank <= 2;
+  for (int k = 0; ok && k < rank; k++) {
+    if (!dims[k]) { ok = 0; break; }
+    hid_t s = scale_for(w, group, dims[k], cur[k], max[k] == H5S_UNLIMITED, dataset);
+    ok = s == 0 || (s > 0 && H5DSattach_scale(d, s, (unsigned)k) >= 0);
+    hid_t err = keep_stack(!ok);
+    if (s > 0) H5Dclose(s);
+    restore_stack(err);
+  }
+  hid_t err = keep_stack(!ok);
+  if (space >= 0) H5Sclose(space);
+  if (d >= 0) H5Dclose(d);
+  restore_stack(err);
+  int st = ok ? CUP_OK : fail_op(w, "attach dimension scales to", dataset);
   quiet_end(q);
   return st;
 }

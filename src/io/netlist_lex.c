@@ -12,6 +12,9 @@
 
 /* ---- errors ------------------------------------------------------------------ */
 
+static const char *file_name(const nx *x, int f);
+static void where_from(const nx *x, const nx_tok *at, char *buf, size_t cap);
+
 int nx_fail(nx *x, int status, const nx_tok *at, const char *what, const char *fmt, ...) {
   char *buf = x->errmsg;
   if (!buf) return status;
@@ -22,13 +25,35 @@ int nx_fail(nx *x, int status, const nx_tok *at, const char *what, const char *f
   else if (at->origin >= 0 && at->origin < x->nsets)
     w = snprintf(buf, cap, "%s: set '%.60s': ", x->file, x->sets[at->origin]);
   else
-    w = snprintf(buf, cap, "%s:%d:%d: ", x->file, at->line, at->col);
+    w = snprintf(buf, cap, "%s:%d:%d: ", file_name(x, at->file), at->line, at->col);
   if (w >= 0 && (size_t)w < cap && what) w += snprintf(buf + w, cap - (size_t)w, "%s: ", what);
   va_list ap;
   va_start(ap, fmt);
   cup_vfail_at(buf, w, status, fmt, ap);
   va_end(ap);
+  if (at && at->origin < 0) where_from(x, at, buf, cap);
   return status;
+}
+
+static const char *file_name(const nx *x, int f) { return f > 0 && f < x->nfiles ? x->files[f].path : x->file; }
+
+/* " (in instance X1.X2 of rc, X2 at sub.lib:4:1, X1 at main.cir:7:1;
+ * included from main.cir:3)": how the token came to be read. */
+static void where_from(const nx *x, const nx_tok *at, char *buf, size_t cap) {
+  size_t len = strlen(buf);
+  int inst = at->inst, file = at->file, first = 1;
+  for (int i = inst; i > 0 && i <= x->ninst && len + 1 < cap; i = x->inst[i - 1].parent) {
+    const nx_inst *in = &x->inst[i - 1];
+    const char *leaf = strrchr(in->path, '.');
+    len += (size_t)snprintf(buf + len, cap - len, "%s%s at %s:%d:%d", first ? " (in instance " : ", ",
+                            leaf ? leaf + 1 : in->path, file_name(x, in->file), in->line, in->col);
+    first = 0;
+    file = in->file;
+  }
+  if (len + 1 < cap && file > 0 && file < x->nfiles && x->files[file].from_file >= 0)
+    len += (size_t)snprintf(buf + len, cap - len, "%sincluded from %s:%d", first ? " (" : "; ",
+                            file_name(x, x->files[file].from_file), x->files[file].from_line), first = 0;
+  if (!first && len + 1 < cap) snprintf(buf + len, cap - len, ")");
 }
 
 /* ---- names ------------------------------------------------------------------- */
@@ -88,6 +113,10 @@ void nx_hash_free(nx_hash *h) {
   memset(h, 0, sizeof *h);
 }
 
+int nx_card_type(const nx *x, nx_card c) {
+  return c.type ? c.type : c.n ? tolower((unsigned char)x->tok[c.first].s[0]) : 0;
+}
+
 int nx_is(const nx_tok *t, const char *w) { return t->kind == NX_WORD && !strcasecmp(t->s, w); }
 
 /* ---- lines into tokens ------------------------------------------------------- */
@@ -96,13 +125,13 @@ static int push_tok(nx *x, nx_kind kind, const char *s, size_t len, int line, in
   if (cup_grow(&x->tok, &x->captok, x->ntok, sizeof *x->tok, 256)) return CUP_ERR_NOMEM;
   char *copy = strndup(s, len);
   if (!copy) return CUP_ERR_NOMEM;
-  x->tok[x->ntok++] = (nx_tok){kind, copy, line, col, origin};
+  x->tok[x->ntok++] = (nx_tok){kind, copy, line, col, origin, x->cur_file, 0};
   return CUP_OK;
 }
 
 static int push_card(nx *x) {
   if (cup_grow(&x->card, &x->capcard, x->ncard, sizeof *x->card, 64)) return CUP_ERR_NOMEM;
-  x->card[x->ncard++] = (nx_card){x->ntok, 0};
+  x->card[x->ncard++] = (nx_card){x->ntok, 0, 0};
   return CUP_OK;
 }
 
@@ -112,7 +141,7 @@ static int is_special(int c) { return c == '(' || c == ')' || c == '=' || c == '
 /* The tokens of one line (s, len bytes, no newline), from column c0. A
  * ';' or a '$' after a blank ends the line (comments). */
 static int lex_tokens(nx *x, const char *s, size_t len, size_t c0, int line, int origin) {
-  nx_tok here = {NX_WORD, NULL, line, 0, origin};
+  nx_tok here = {NX_WORD, NULL, line, 0, origin, x->cur_file, 0};
   for (size_t i = c0; i < len;) {
     unsigned char c = (unsigned char)s[i];
     here.col = (int)i + 1;
@@ -148,19 +177,28 @@ static int lex_tokens(nx *x, const char *s, size_t len, size_t c0, int line, int
   return CUP_OK;
 }
 
-int nx_lex_file(nx *x, const char *text, size_t len) {
+int nx_add_file(nx *x, const char *path, int from_file, int from_line) {
+  if (cup_grow(&x->files, &x->capfiles, x->nfiles, sizeof *x->files, 4)) return -1;
+  char *copy = strdup(path);
+  if (!copy) return -1;
+  x->files[x->nfiles] = (nx_file){copy, from_file, from_line};
+  return x->nfiles++;
+}
+
+int nx_lex_file(nx *x, int file, const char *text, size_t len, int title) {
   int line = 0;
+  x->cur_file = file;
   for (size_t pos = 0; pos < len;) {
     size_t end = pos;
     while (end < len && text[end] != '\n') end++;
     const char *s = text + pos;
     size_t n = end - pos;
     pos = end + 1;
-    if (++line == 1) continue;                    /* the title line (SPICE) */
+    if (++line == 1 && title) continue;           /* the title line (SPICE) */
     size_t i = 0;
     while (i < n && is_sep((unsigned char)s[i])) i++;
     if (i == n || s[i] == '*' || s[i] == ';') continue;
-    nx_tok here = {NX_WORD, NULL, line, (int)i + 1, -1};
+    nx_tok here = {NX_WORD, NULL, line, (int)i + 1, -1, x->cur_file, 0};
     if (s[i] == '+') {
       if (!x->ncard) return nx_fail(x, CUP_ERR_PARSE, &here, NULL, "'+' continues a line, but there is none before it");
       int st = lex_tokens(x, s, n, i + 1, line, -1);
@@ -189,6 +227,13 @@ void nx_free(nx *x) {
   for (int i = 0; i < x->npar; i++) free(x->par[i].name);
   free(x->par);
   nx_hash_free(&x->parh);
+  for (int i = 0; i < x->nfiles; i++) free(x->files[i].path);
+  free(x->files);
+  for (int i = 0; i < x->ninst; i++) { free(x->inst[i].path); nx_hash_free(&x->inst[i].parh); }
+  free(x->inst);
+  for (int i = 0; i < x->nsub; i++) free(x->sub[i].body);
+  free(x->sub);
+  nx_hash_free(&x->subh);
   memset(x, 0, sizeof *x);
 }
 
@@ -299,7 +344,7 @@ static int ex_ident(ex *e, double *v) {
     return ex_fail(e, "unknown function '%s' (sqrt, abs, exp, ln, log10, sin, cos, tan, atan)", name);
   }
   if (!strcasecmp(name, "pi")) { *v = 3.141592653589793238462643383279502884; return CUP_OK; }
-  int k = nx_hash_get(&e->x->parh, name);
+  int k = nx_param_find(e->x, e->at, name);
   if (k < 0) return ex_fail(e, "unknown parameter '%s' (no .param defines it)", name);
   return param_value(e->x, k, e->at, v);
 }
@@ -376,6 +421,14 @@ static int eval(nx *x, const nx_tok *t, const char *what, double *v) {
   return st;
 }
 
+int nx_param_find(const nx *x, const nx_tok *at, const char *name) {
+  if (at && at->inst > 0 && at->inst <= x->ninst) {
+    int k = nx_hash_get(&x->inst[at->inst - 1].parh, name);
+    if (k >= 0) return k;
+  }
+  return nx_hash_get(&x->parh, name);
+}
+
 /* A .param's value, evaluated once, on first use (so that sets replace
  * them before anything reads them); a cycle is an error. */
 static int param_value(nx *x, int k, const nx_tok *use, double *v) {
@@ -399,7 +452,7 @@ int nx_value(nx *x, const nx_tok *t, const char *what, double *v) {
   } else if (nx_number(t->s, v)) {
     st = CUP_OK;
   } else {
-    int k = nx_hash_get(&x->parh, t->s);
+    int k = nx_param_find(x, t, t->s);
     if (k < 0)
       return nx_fail(x, CUP_ERR_PARSE, t, what, "bad value '%.40s': expected a number such as 4.7k, 10u "
                      "or 1meg, a .param name, or {expression}", t->s);

@@ -10,17 +10,33 @@
 #include <stddef.h>
 
 typedef enum nx_kind { NX_WORD, NX_LP, NX_RP, NX_EQ, NX_EXPR } nx_kind;
+typedef struct nx nx;
 
 typedef struct nx_tok {
   nx_kind kind;
   char *s;            /* WORD: the text; EXPR: the expression inside {} or '' */
   int line, col;      /* 1-based; line 0: a value given by a set (origin >= 0) */
   int origin;         /* -1: the file; k >= 0: set k ("NAME=VALUE") */
+  int file;           /* x->files[file] holds it (0: the netlist) */
+  int inst;           /* 0, or 1 + the subcircuit instance it was copied into (x->inst) */
 } nx_tok;
 
 typedef struct nx_card {
   int first, n;       /* tokens first .. first + n - 1 */
+  char type;          /* 0: the first token's first letter says; else a copy's element type
+                         (its name "x1.r1" no longer starts with it) */
 } nx_card;
+
+/* The card's element type: 'r', 'x', '.', ... (lowercase). */
+int nx_card_type(const nx *x, nx_card c);
+
+/* A .subckt definition: its header card (.subckt NAME pins... [params])
+ * and its body, as cards into x->tok. */
+typedef struct nx_sub {
+  nx_card head;
+  nx_card *body;
+  int nbody;
+} nx_sub;
 
 /* Case-insensitive name -> index table (open addressing). */
 typedef struct nx_hash {
@@ -40,8 +56,24 @@ typedef struct nx_param {
   double v;
 } nx_param;
 
+/* A file read: the netlist or an included one, and where it was included. */
+typedef struct nx_file {
+  char *path;         /* as opened (relative paths joined to the including file's folder) */
+  int from_file;      /* -1: the netlist itself */
+  int from_line;
+} nx_file;
+
+/* A subcircuit instance: its hierarchical name and the X card that made it. */
+typedef struct nx_inst {
+  char *path;         /* "x1.x2" (lowercase) */
+  int parent;         /* 0, or 1 + the enclosing instance */
+  int file, line, col;  /* the X card */
+  int sub;            /* its definition: x->sub[sub] */
+  nx_hash parh;       /* its parameters: name -> x->par index (evaluated) */
+} nx_inst;
+
 /* Everything the reader keeps while it works. */
-typedef struct nx {
+struct nx {
   const char *file;
   const char *const *sets;   /* "NAME=VALUE" */
   int nsets;
@@ -53,7 +85,15 @@ typedef struct nx {
   nx_param *par;
   int npar, cappar;
   nx_hash parh;
-} nx;
+  int cur_file;       /* the file being split into cards */
+  int nfiles, capfiles;
+  nx_file *files;     /* files[0]: the netlist; then .include/.lib files */
+  int ninst, capinst;
+  nx_inst *inst;      /* subcircuit instances (netlist_subckt.c) */
+  int nsub, capsub;
+  nx_sub *sub;        /* .subckt definitions */
+  nx_hash subh;       /* name -> sub index */
+};
 
 /* "FILE:LINE:COL: WHAT: message" (or "FILE: set 'S': WHAT: message" for a
  * token from a set) into x->errmsg; returns status. `at` may be NULL (then
@@ -61,8 +101,15 @@ typedef struct nx {
 int nx_fail(nx *x, int status, const nx_tok *at, const char *what, const char *fmt, ...)
   __attribute__((format(printf, 5, 6)));
 
-/* Split text (len bytes) into cards; line 1 is the title and is skipped. */
-int nx_lex_file(nx *x, const char *text, size_t len);
+/* Split text (len bytes) of file x->files[file] into cards, appended; line 1
+ * is the title and is skipped when `title` (the netlist, not an included
+ * file). */
+int nx_lex_file(nx *x, int file, const char *text, size_t len, int title);
+/* Record a file read (path copied); its index, or -1 out of memory. */
+int nx_add_file(nx *x, const char *path, int from_file, int from_line);
+/* The parameter `name` as seen from token at: its subcircuit instance's
+ * parameters first, then the .param table; an index into x->par or -1. */
+int nx_param_find(const nx *x, const nx_tok *at, const char *name);
 /* Tokens of a set's value (set k), appended; *first and *n receive them. */
 int nx_lex_value(nx *x, int k, const char *text, int *first, int *n);
 void nx_free(nx *x);

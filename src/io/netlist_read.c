@@ -14,6 +14,7 @@
 #include <strings.h>
 #include "catchup.h"
 #include "netlist_lex.h"
+#include "netlist_subckt.h"
 #include "read_text.h"
 #include "model/netlist_desc.h"
 #include "model/netlist_impl.h"
@@ -25,7 +26,7 @@ typedef struct rd {
   int end;                  /* cards 0 .. end-1 are read (.end stops) */
   unsigned char *skip;      /* cards inside .control ... .endc */
   int *set_used, *set_first, *set_n;   /* per set: used, its value's tokens */
-  int capelem, capic, capprobe;
+  int capelem, capic, capprobe, capcoup;
 } rd;
 
 #define TOK(r_, c_, k_) (&(r_)->x.tok[(r_)->x.card[c_].first + (k_)])
@@ -79,6 +80,7 @@ static int new_elem(rd *r, nl_kind kind, const nx_tok *name, nl_elem **out) {
   nl_elem *e = &c->elem[c->nelem];
   memset(e, 0, sizeof *e);
   e->kind = kind;
+  e->file = name->file;
   e->line = name->line;
   e->col = name->col;
   if (!(e->name = strdup(name->s)) || nx_hash_put(&r->elems, name->s, c->nelem)) { free(e->name); return nomem(r); }
@@ -152,7 +154,7 @@ static int read_passive(rd *r, int card, nl_kind kind) {
 
 static int looks_value(rd *r, const nx_tok *t) {
   double v;
-  return t->kind == NX_EXPR || (t->kind == NX_WORD && (nx_number(t->s, &v) || nx_hash_get(&r->x.parh, t->s) >= 0));
+  return t->kind == NX_EXPR || (t->kind == NX_WORD && (nx_number(t->s, &v) || nx_param_find(&r->x, t, t->s) >= 0));
 }
 
 /* The arguments of SIN/PULSE/PWL: "(a b c)" or "a b c" up to the next word
@@ -285,6 +287,126 @@ static int read_diode(rd *r, int card) {
   if (n >= 5)
     return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, 4), name->s, "'%.40s' is not supported (a diode "
                    "takes ANODE CATHODE [MODEL])", TOK(r, card, 4)->s);
+  return CUP_OK;
+}
+
+/* ---- controlled sources and coupled inductors -------------------------------- */
+
+/* One value from the card at token k, or from the set that names the
+ * element; nothing may follow it. */
+/* POLY, VALUE= and the like (nonlinear or frequency-domain forms) at token k. */
+static int nonlinear_form(rd *r, int card, int k, const char *operands) {
+  static const char *const kw[] = {"poly", "value", "table", "laplace", "vol", "cur", "freq", NULL};
+  const nx_tok *name = TOK(r, card, 0), *t = TOK(r, card, k);
+  for (int j = 0; kw[j]; j++)
+    if (nx_is(t, kw[j]))
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, name->s, "%s is not supported (linear controlled sources "
+                     "only: '%s %s')", t->s, name->s, operands);
+  return CUP_OK;
+}
+
+static int read_gain(rd *r, int card, int k, const char *operands, double *v) {
+  int n = r->x.card[card].n, sfirst, sn;
+  const nx_tok *name = TOK(r, card, 0);
+  if (n <= k) return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s %s'", name->s, operands);
+  const nx_tok *vt = TOK(r, card, k);
+  int st = nonlinear_form(r, card, k, operands);
+  if (st) return st;
+  if (set_tokens(r, name->s, &sfirst, &sn)) {
+    if (sn != 1) return nx_fail(&r->x, CUP_ERR_PARSE, sn ? &r->x.tok[sfirst] : name, name->s, "expected one value");
+    vt = &r->x.tok[sfirst];
+  }
+  st = nx_value(&r->x, vt, name->s, v);
+  if (!st && n > k + 1)
+    st = nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, k + 1), name->s, "'%.40s' is not supported here "
+                 "(expected '%s %s')", TOK(r, card, k + 1)->s, name->s, operands);
+  return st;
+}
+
+/* E, G: N+ N- NC+ NC- GAIN; F, H: N+ N- VNAME GAIN (the controlling
+ * element is looked up once every element is read). */
+static int read_controlled(rd *r, int card, nl_kind kind) {
+  const nx_tok *name = TOK(r, card, 0);
+  int voltage = kind == NL_E || kind == NL_G;
+  const char *operands = voltage ? "N+ N- NC+ NC- GAIN" : "N+ N- VNAME GAIN";
+  nl_elem *e;
+  int st = r->x.card[card].n > 3 ? nonlinear_form(r, card, 3, operands) : CUP_OK;
+  if (!st) st = open_elem(r, card, kind, voltage ? 6 : 5, operands, &e);
+  if (st) return st;
+  if (voltage) {
+    st = node_of(r, TOK(r, card, 3), name->s, &e->ca);
+    if (!st) st = node_of(r, TOK(r, card, 4), name->s, &e->cb);
+  } else {
+    const nx_tok *v = TOK(r, card, 3);
+    if (v->kind != NX_WORD) return nx_fail(&r->x, CUP_ERR_PARSE, v, name->s, "expected the controlling element's name");
+    e->ctrl = -1 - (int)(v - r->x.tok);         /* resolved later */
+  }
+  if (!st) st = read_gain(r, card, voltage ? 5 : 4, operands, &e->value);
+  return st;
+}
+
+/* K L1 L2 k: the inductors are looked up once every element is read. */
+static int read_coupling(rd *r, int card) {
+  nl_circuit *c = r->c;
+  const nx_tok *name = TOK(r, card, 0);
+  int prev = nx_hash_get(&r->elems, name->s);
+  if (prev >= 0)
+    return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate element name (first at line %d)", c->elem[prev].line);
+  if (r->x.card[card].n < 4) return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s L1 L2 k'", name->s);
+  if (cup_grow(&c->coup, &r->capcoup, c->ncoup, sizeof *c->coup, 8)) return nomem(r);
+  nl_coupling *k = &c->coup[c->ncoup];
+  memset(k, 0, sizeof *k);
+  if (!(k->name = strdup(name->s))) return nomem(r);
+  c->ncoup++;
+  k->file = name->file;
+  k->line = name->line;
+  k->col = name->col;
+  if (!strcasecmp(TOK(r, card, 1)->s, TOK(r, card, 2)->s))
+    return nx_fail(&r->x, CUP_ERR_PARSE, TOK(r, card, 2), name->s, "an inductor coupled to itself");
+  for (int j = 1; j <= 2; j++) {
+    const nx_tok *l = TOK(r, card, j);
+    if (l->kind != NX_WORD || (l->s[0] != 'l' && l->s[0] != 'L'))
+      return nx_fail(&r->x, CUP_ERR_PARSE, l, name->s, "expected an inductor's name (got '%.40s')", l->s);
+    *(j == 1 ? &k->l1 : &k->l2) = -1 - (int)(l - r->x.tok);
+  }
+  int st = read_gain(r, card, 3, "L1 L2 k", &k->k);
+  const nx_tok *kt = TOK(r, card, 3);
+  if (!st && !(fabs(k->k) < 1))
+    return nx_fail(&r->x, CUP_ERR_PARSE, kt, name->s, fabs(k->k) == 1
+                   ? "k = %g is not supported: a perfect coupling (an ideal transformer) has a singular "
+                     "inductance matrix, which gives no energy metric; use |k| < 1 such as 0.999 (the leakage "
+                     "inductance is then (1 - k^2) L) or model the transformer's leakage with a series inductor"
+                   : "k = %g is out of range: a coupling coefficient needs |k| < 1", k->k);
+  return st;
+}
+
+/* The names that F, H and K refer to, once every element is read. */
+static int resolve_refs(rd *r) {
+  nl_circuit *c = r->c;
+  for (int e = 0; e < c->nelem; e++) {
+    nl_elem *el = &c->elem[e];
+    if ((el->kind != NL_F && el->kind != NL_H) || el->ctrl >= 0) continue;
+    const nx_tok *t = &r->x.tok[-1 - el->ctrl];
+    el->ctrl = nx_hash_get(&r->elems, t->s);
+    if (el->ctrl < 0)
+      return nx_fail(&r->x, CUP_ERR_PARSE, t, el->name, "no element named '%.40s' (the controlling current "
+                     "flows through it)", t->s);
+  }
+  for (int q = 0; q < c->ncoup; q++) {
+    nl_coupling *k = &c->coup[q];
+    for (int j = 0; j < 2; j++) {
+      int *l = j ? &k->l2 : &k->l1;
+      const nx_tok *t = &r->x.tok[-1 - *l];
+      *l = nx_hash_get(&r->elems, t->s);
+      if (*l < 0 || c->elem[*l].kind != NL_L)
+        return nx_fail(&r->x, CUP_ERR_PARSE, t, k->name, "no inductor named '%.40s'", t->s);
+    }
+    nx_tok at = {NX_WORD, NULL, k->line, k->col, -1, k->file, 0};
+    for (int p = 0; p < q; p++)
+      if ((c->coup[p].l1 == k->l1 && c->coup[p].l2 == k->l2) || (c->coup[p].l1 == k->l2 && c->coup[p].l2 == k->l1))
+        return nx_fail(&r->x, CUP_ERR_PARSE, &at, k->name, "%s and %s are already coupled by %s",
+                       c->elem[k->l1].name, c->elem[k->l2].name, c->coup[p].name);
+  }
   return CUP_OK;
 }
 
@@ -424,7 +546,7 @@ static int read_probes(rd *r, int card) {
 
 static int read_control(rd *r, int card) {
   static const char *const ignored[] = {".options", ".option", ".opt", ".title", ".temp", ".width", NULL};
-  static const char *const refused[] = {".include", ".inc", ".lib", ".subckt", ".ends", ".func", ".global",
+  static const char *const refused[] = {".func", ".global",
                                         ".ac", ".dc", ".op", ".noise", ".tf", ".four", ".meas", ".measure",
                                         ".sens", ".pz", ".disto", ".nodeset", ".csparam", ".if", ".else",
                                         ".elseif", ".endif", ".savecurrents", ".model_x", NULL};
@@ -439,8 +561,9 @@ static int read_control(rd *r, int card) {
     if (!strcasecmp(w, ignored[k])) return CUP_OK;
   for (int k = 0; refused[k]; k++)
     if (!strcasecmp(w, refused[k]))
-      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, cmd, w, "not supported (catchup reads R, L, C, V, I, D, "
-                     ".tran, .param, .ic, .model NAME D, .probe/.save/.print, .options and .end)");
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, cmd, w, "not supported (catchup reads R, L, C, V, I, D, E, F, "
+                     "G, H, K, X, .tran, .param, .ic, .model NAME D, .subckt, .include, .lib, .probe/.save/.print, "
+                     ".options and .end)");
   return nx_fail(&r->x, CUP_ERR_PARSE, cmd, w, "unknown control line");
 }
 
@@ -449,17 +572,15 @@ static int read_control(rd *r, int card) {
 static int read_element(rd *r, int card) {
   static const char *const what[26] = {
     ['a' - 'a'] = "XSPICE code models (A)", ['b' - 'a'] = "behavioural sources (B)",
-    ['e' - 'a'] = "controlled sources (E)", ['f' - 'a'] = "controlled sources (F)",
-    ['g' - 'a'] = "controlled sources (G)", ['h' - 'a'] = "controlled sources (H)",
-    ['j' - 'a'] = "JFETs (J)", ['k' - 'a'] = "coupled inductors (K)", ['m' - 'a'] = "MOSFETs (M)",
+    ['j' - 'a'] = "JFETs (J)", ['m' - 'a'] = "MOSFETs (M)",
     ['o' - 'a'] = "transmission lines (O)", ['q' - 'a'] = "bipolar transistors (Q)",
     ['s' - 'a'] = "switches (S)", ['t' - 'a'] = "transmission lines (T)",
-    ['u' - 'a'] = "RC lines (U)", ['w' - 'a'] = "switches (W)", ['x' - 'a'] = "subcircuits (X)",
-    ['y' - 'a'] = "transmission lines (Y)", ['z' - 'a'] = "MESFETs (Z)"};
+    ['u' - 'a'] = "RC lines (U)", ['w' - 'a'] = "switches (W)", ['y' - 'a'] = "transmission lines (Y)",
+    ['z' - 'a'] = "MESFETs (Z)"};
   const nx_tok *t = TOK(r, card, 0);
   if (t->kind != NX_WORD)
     return nx_fail(&r->x, CUP_ERR_PARSE, t, NULL, "expected an element or a control line (got '%s')", t->s);
-  int c = tolower((unsigned char)t->s[0]);
+  int c = nx_card_type(&r->x, r->x.card[card]);
   switch (c) {
     case 'r': return read_passive(r, card, NL_R);
     case 'l': return read_passive(r, card, NL_L);
@@ -467,13 +588,18 @@ static int read_element(rd *r, int card) {
     case 'v': return read_source(r, card, NL_V);
     case 'i': return read_source(r, card, NL_I);
     case 'd': return read_diode(r, card);
+    case 'e': return read_controlled(r, card, NL_E);
+    case 'f': return read_controlled(r, card, NL_F);
+    case 'g': return read_controlled(r, card, NL_G);
+    case 'h': return read_controlled(r, card, NL_H);
+    case 'k': return read_coupling(r, card);
     case '.': return read_control(r, card);
   }
   if (c >= 'a' && c <= 'z' && what[c - 'a'])
-    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, t->s, "%s are not supported (R, L, C, V, I and ideal diodes D are)",
-                   what[c - 'a']);
-  return nx_fail(&r->x, CUP_ERR_PARSE, t, t->s, "unknown element type '%c' (R, L, C, V, I and D are supported)",
-                 t->s[0]);
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, t->s, "%s are not supported (R, L, C, V, I, ideal diodes D, "
+                   "E, F, G, H, K and X are)", what[c - 'a']);
+  return nx_fail(&r->x, CUP_ERR_PARSE, t, t->s, "unknown element type '%c' (R, L, C, V, I, D, E, F, G, H, K and X "
+                 "are supported)", c);
 }
 
 /* First pass: .end, .control blocks, .param and .model (used anywhere). */
@@ -508,7 +634,7 @@ static int apply_sets(rd *r) {
       !(r->set_n = calloc(ns, sizeof(int))))
     return nomem(r);
   for (int k = 0; k < x->nsets; k++) {
-    nx_tok at = {NX_WORD, NULL, 0, 0, k};
+    nx_tok at = {NX_WORD, NULL, 0, 0, k, 0, 0};
     const char *s = x->sets[k], *eq = strchr(s, '=');
     if (!eq || eq == s) return nx_fail(x, CUP_ERR_ARG, &at, NULL, "expected NAME=VALUE");
     char name[128];
@@ -543,20 +669,38 @@ static int resolve_ic(rd *r) {
   return CUP_OK;
 }
 
+/* The files read, each once, for the formulation's messages and the list
+ * that cup_netlist_file gives. */
+static int copy_files(rd *r) {
+  nl_circuit *c = r->c;
+  if (!(c->files = calloc((size_t)r->x.nfiles + 1, sizeof(char *)))) return nomem(r);
+  for (int f = 0; f < r->x.nfiles; f++)
+    if (!(c->files[c->nfiles++] = strdup(r->x.files[f].path))) return nomem(r);
+  return CUP_OK;
+}
+
 static int read_cards(rd *r) {
   nl_circuit *c = r->c;
   if (!(c->node = calloc(1, sizeof *c->node)) || !(c->node_line = calloc(1, sizeof(int))) ||
       !(c->node_col = calloc(1, sizeof(int))))
     return nomem(r);
   c->nnodes = 1;                                   /* ground */
-  int st = first_pass(r);
+  int st = nx_structure(&r->x);
+  if (!st) st = first_pass(r);
   if (!st) st = apply_sets(r);
+  if (!st && (st = nx_flatten(&r->x)) == CUP_OK) {   /* the cards are now the flattened ones */
+    r->end = r->x.ncard;
+    free(r->skip);
+    if (!(r->skip = calloc((size_t)r->x.ncard + 1, 1))) st = nomem(r);
+  }
+  if (!st) st = copy_files(r);
   for (int k = 0; k < r->end && !st; k++)
     if (!r->skip[k]) st = read_element(r, k);
   if (!st) st = resolve_ic(r);
+  if (!st) st = resolve_refs(r);
   for (int k = 0; k < r->x.nsets && !st; k++)
     if (!r->set_used[k]) {
-      nx_tok at = {NX_WORD, NULL, 0, 0, k};
+      nx_tok at = {NX_WORD, NULL, 0, 0, k, 0, 0};
       st = nx_fail(&r->x, CUP_ERR_ARG, &at, NULL, "no element or .param of that name");
     }
   if (!st && c->nelem == 0) st = nx_fail(&r->x, CUP_ERR_PARSE, NULL, NULL, "no elements (line 1 is the title)");
@@ -575,7 +719,11 @@ void nl_circuit_free(nl_circuit *c) {
     free(c->elem[k].src.v);
   }
   free(c->elem);
+  for (int k = 0; k < c->ncoup; k++) free(c->coup[k].name);
+  free(c->coup);
   free(c->ic);
+  for (int k = 0; k < c->nfiles; k++) free(c->files[k]);
+  free(c->files);
   for (int k = 0; k < c->nprobe; k++) free(c->probe[k].text);
   free(c->probe);
   free(c->file);
@@ -594,9 +742,14 @@ static int load(cup_netlist **out, const char *text, size_t len, const char *nam
   r.x.errmsg = errmsg;
   r.c = &c;
   int st = (c.file = strdup(name)) ? CUP_OK : nomem(&r);
-  if (!st) st = nx_lex_file(&r.x, text, len);
+  if (!st && nx_add_file(&r.x, name, -1, 0) < 0) st = nomem(&r);
+  if (!st) st = nx_lex_file(&r.x, 0, text, len, 1);
   if (!st) st = read_cards(&r);
   if (!st) st = cup_netlist_formulate(out, &c, errmsg);
+  if (!st && !((*out)->source = strndup(text, len))) {
+    cup_netlist_free(out);
+    st = nomem(&r);
+  }
   nl_circuit_free(&c);
   nx_free(&r.x);
   nx_hash_free(&r.nodes); nx_hash_free(&r.elems); nx_hash_free(&r.models); nx_hash_free(&r.setnames);

@@ -35,6 +35,7 @@ struct cup_scene {
   cup_integrator_options opt;
   char *eps_spec, *eta_spec;    /* as written */
   char *text;                   /* the document after overrides */
+  int circuit;                  /* the model is circuit: (its states have names) */
 };
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
@@ -160,6 +161,7 @@ static int read_model(rd *r, const st_node *root, cup_scene *S) {
     const st_node *k2 = c && l ? (kc->line > kl->line ? kc : kl) : nl && (c || l) ? kn : kc;
     return fail(r, CUP_ERR_PARSE, k2, k2->text, "give one model, circuit, lcs or netlist, not two");
   }
+  S->circuit = c != NULL;
   if (c) return read_circuit(r, kc, c, &S->lcs);
   if (l) return read_lcs(r, kl, l, &S->lcs);
   if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
@@ -651,3 +653,26 @@ const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ?
 const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }
 const char *cup_scene_eta_spec(const cup_scene *s) { return s ? s->eta_spec : NULL; }
 const char *cup_scene_text(const cup_scene *s) { return s ? s->text : NULL; }
+
+/* The paper's circuit (Sec. 7): x1 is the time integral of the current
+ * through C4 (its charge), x2 that current (L3's, in series), x3 L2's. */
+int cup_scene_state_label(const cup_scene *s, int j, char *name, unsigned long size, const char **unit) {
+  static const char *const circ[3] = {"q(C4)", "i(L3)", "i(L2)"}, *const circ_unit[3] = {"C", "A", "A"};
+  if (!s || !name || size == 0 || j < 0 || j >= cup_scene_dim(s)) return CUP_ERR_ARG;
+  const char *u = "1";
+  if (s->nl) {
+    const char *nm = cup_netlist_state_name(s->nl, j);
+    snprintf(name, size, "%s", nm);
+    u = nm[0] == 'i' ? "A" : "V";      /* a netlist's states: inductor currents, capacitor voltages */
+  } else if (s->crowd) {
+    snprintf(name, size, "%c%d", j % 2 ? 'y' : 'x', j / 2);
+    u = "m";
+  } else if (s->circuit && j < 3) {
+    snprintf(name, size, "%s", circ[j]);
+    u = circ_unit[j];
+  } else {
+    snprintf(name, size, "x%d", j + 1);
+  }
+  if (unit) *unit = u;
+  return CUP_OK;
+}

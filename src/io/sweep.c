@@ -326,8 +326,9 @@ static int read_variants(prs *p, cup_sweep *s, const st_node *root) {
 /* ---- reference and output -------------------------------------------------- */
 
 static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
-  static const char *const known[] = {"samples", "n", "method", NULL};
+  static const char *const known[] = {"samples", "n", "method", "check", NULL};
   static const char *const methods[] = {"richardson", "adaptive", NULL};
+  static const char *const checks[] = {"none", "richardson", NULL};
   const st_node *r = opt(root, "reference"), *x;
   s->samples = 1001;
   s->ref_n = 0;
@@ -338,6 +339,11 @@ static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
   if ((st = check_keys(p, r, "reference", known))) return st;
   if ((x = opt(r, "method")) && (st = read_word_item(p, x, "reference.method", "reference method", methods,
                                                      &s->ref_method))) return st;
+  if ((x = opt(r, "check")) && (st = read_word_item(p, x, "reference.check", "reference check", checks,
+                                                    &s->ref_check))) return st;
+  if (x && s->ref_check && s->ref_method != SW_REF_ADAPTIVE)
+    return fail(p, CUP_ERR_PARSE, x, "reference.check", "checks the adaptive reference against the Richardson "
+                "limit: it needs method: adaptive");
   if ((x = opt(r, "samples")) && (st = integer(p, x, "reference.samples", 2, 1000001, &s->samples))) return st;
   if ((x = opt(r, "n")) && !(x->kind == ST_SCALAR && !x->quoted && !strcmp(x->text, "auto"))) {
     if ((st = integer(p, x, "reference.n", 1, 4503599627370496L, &s->ref_n))) return st;
@@ -474,6 +480,52 @@ static long variant_max_n(const cup_sweep *s, const sw_variant *v) {
   return m;
 }
 
+const char *sw_signal_name(const cup_sweep *s, int k) {
+  return k >= 0 && k < s->nsig ? cup_netlist_signal_name(cup_scene_netlist(s->var[0].scene), k) : NULL;
+}
+
+/* A netlist sweep records the signals catchup-run would (the scene's or
+ * netlist's probes, else every node voltage and element current when at
+ * most 256), the same in every variant: they share /runs/signals. */
+static int resolve_signals(cup_sweep *s, char *errmsg) {
+  s->nsig = 0;
+  for (int k = 0; k < s->n_variants; k++) {
+    cup_netlist *nl = cup_scene_netlist(s->var[k].scene);
+    char err[CUP_ERRMSG_LEN];
+    if (!nl) {
+      if (k > 0 && s->nsig)
+        return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "has no netlist, and variants.0 has: the variants "
+                            "share /runs/signals");
+      continue;
+    }
+    if (cup_netlist_signal_count(nl) == 0 && cup_netlist_probe_default(nl, 256, err))
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s", err);
+    int n = cup_netlist_signal_count(nl);
+    if (k == 0) s->nsig = n;
+    int same = n == s->nsig;
+    for (int j = 0; same && j < n; j++) same = !strcmp(cup_netlist_signal_name(nl, j), sw_signal_name(s, j));
+    if (!same)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "its netlist's signals (%d, from %s) differ from "
+                          "variants.0's (%d): the variants share /runs/signals", n,
+                          n ? cup_netlist_signal_name(nl, 0) : "none", s->nsig);
+  }
+  return CUP_OK;
+}
+
+/* After the variants' scenes are loaded: crowd sweeps take no n axis (the
+ * crowd is built for its scene's step), store no positions unless
+ * output.samples says so, and have no reference (sweep_crowd.c runs them).
+ * Here, not there, so that the sweep file's parser needs no HDF5. */
+static int crowd_resolve(cup_sweep *s, char *errmsg) {
+  if (s->len[SW_AXIS_N]) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: grid.n: a crowd is built for its scene's step T/n (its margins and "
+             "exit times): vary n in a variant's set ({n: 4000}) instead", s->path);
+    return CUP_ERR_PARSE;
+  }
+  if (!s->out_given) s->out_samples = 0;     /* positions only when asked: 2N per sample */
+  return CUP_OK;
+}
+
 int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
   for (int k = 0; k < s->n_variants; k++) {
     sw_variant *v = &s->var[k];
@@ -497,14 +549,17 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
                           dim, s->dim);
     if (dim > s->dim) s->dim = dim;     /* crowds of N agents: positions padded to the largest */
     long S1 = s->samples - 1;
-    if (crowd || s->ref_method == SW_REF_ADAPTIVE) v->n_ref = 0;   /* none, or it chooses its own steps */
+    if (crowd || (s->ref_method == SW_REF_ADAPTIVE && !s->ref_check))
+      v->n_ref = 0;                     /* none, or the adaptive scheme chooses its own steps */
     else if (s->ref_n) v->n_ref = s->ref_n;
     else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
   }
   if (s->crowd) {
-    int st = sw_crowd_resolve(s, errmsg);
+    int st = crowd_resolve(s, errmsg);
     if (st) return st;
   }
+  int st = resolve_signals(s, errmsg);
+  if (st) return st;
   s->per_variant = 1;
   for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */
     if (s->len[a] && leads(s, a)) s->per_variant *= s->len[a];
@@ -573,7 +628,9 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
 double sw_job_cost(const cup_sweep *s, long job) {
   static const double scheme_f[] = {1.0, 1.0, 1.1, 0.8}, proj_f[] = {1.0, 1.0, 1.3, 1.2};
   const double setup = 100;
-  if (job < s->n_variants && s->ref_method == SW_REF_ADAPTIVE) return 8.0 * (double)s->samples + 10 * setup;
+  if (job < s->n_variants && s->crowd) return 0;   /* a crowd's reference computes nothing */
+  if (job < s->n_variants && s->ref_method == SW_REF_ADAPTIVE)
+    return 8.0 * (double)s->samples + 10 * setup + (s->ref_check ? 3.0 * ((double)s->var[job].n_ref + setup) : 0);
   if (job < s->n_variants) return 3.0 * ((double)s->var[job].n_ref + setup);
   sw_task t;
   if (sw_task_get(s, job - s->n_variants, &t)) return 0;

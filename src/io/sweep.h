@@ -55,6 +55,7 @@ typedef struct cup_sweep {
   long samples;              /* common sample times t_j = j T / (samples - 1) */
   long ref_n;                /* reference.n as written; 0 = auto */
   int ref_method;            /* SW_REF_RICHARDSON or SW_REF_ADAPTIVE */
+  int ref_check;             /* adaptive: also the Richardson limit, and their difference (reference.check) */
   long out_samples;          /* trajectories stored per task: samples or 0 */
   /* After sw_resolve: */
   double T;                  /* every variant's final time (they must agree) */
@@ -64,7 +65,15 @@ typedef struct cup_sweep {
   /* crowd sweeps (sweep_crowd.c): */
   int out_given;             /* output.samples is written in the file */
   int crowd;                 /* the variants are crowd: scenes (then dim is the largest 2N) */
+  /* netlist sweeps: the signals every task records (variants.0's netlist's
+   * probes, or its defaults; every variant's must be the same) */
+  int nsig;
 } cup_sweep;
+
+/* A job's trajectory: samples * dim states, then samples * nsig signals. */
+static inline long sw_traj_len(const cup_sweep *s) { return s->samples * (s->dim + s->nsig); }
+/* Signal k's name (a netlist sweep's), e.g. "v(out)". */
+const char *sw_signal_name(const cup_sweep *s, int k);
 
 /* One task's parameters (sw_task_get). */
 typedef struct sw_task {
@@ -77,8 +86,8 @@ typedef struct sw_task {
   double tol_abs, tol_rel;   /* the adaptive scheme's */
 } sw_task;
 
-/* What a job sends back, followed by samples * dim doubles (the trajectory
- * at the common times; NaN where not reached). Plain data: it travels as
+/* What a job sends back, followed by sw_traj_len doubles (the trajectory
+ * at the common times, then its signals; NaN where not reached). Plain data: it travels as
  * bytes between ranks of one machine type. */
 typedef struct sw_result {
   int64_t job;
@@ -89,6 +98,7 @@ typedef struct sw_result {
   int64_t projected, skipped, not_certified, dual_iterations, factorizations;
   int64_t stopped_step;      /* steps completed */
   double correction;         /* references: max |x(2 n_ref) - x(n_ref)| at the common times */
+  double cross_check;        /* references with check: max |x_adaptive - x_richardson| (NaN: none) */
   char message[SW_MSG_LEN];
   double err_est;            /* the run's a posteriori error estimate (NaN: none) */
   int64_t events;            /* the adaptive scheme's changes of the active set */
@@ -168,6 +178,17 @@ const double *sw_file_reference(const sw_file *f, int variant);
 /* 1 once the variant's reference job finished (even if it failed). */
 int sw_file_reference_done(const sw_file *f, int variant);
 
+/* What the tasks in the file came to, counted apart so that a summary
+ * hides none: failed (an error status), not certified (a projection's
+ * (eps, eta) not certified: CUP_WARN_NOT_CERTIFIED), tolerance missed (an
+ * adaptive task whose error against its reference exceeds
+ * tol_abs + tol_rel * max|x_ref|), other warnings, and ok (done, CUP_OK,
+ * and within its tolerance). */
+typedef struct sw_tally {
+  long done, ok, failed, not_certified, tol_missed, warned, adaptive;
+} sw_tally;
+void sw_file_tally(const sw_file *f, sw_tally *t);
+
 /* One task's result for sw_file_write_tasks. */
 typedef struct sw_task_out {
   long task;
@@ -190,10 +211,6 @@ const char *sw_file_errmsg(const sw_file *f);
 
 /* ---- crowd sweeps (sweep_crowd.c): variants that are crowd: scenes ---- */
 
-/* After the variants' scenes are loaded: crowd sweeps take no n axis (the
- * crowd is built for its scene's step), store no positions unless
- * output.samples says so, and have no reference. */
-int sw_crowd_resolve(cup_sweep *s, char *errmsg);
 /* A crowd variant's reference job: nothing to compute (NaN, CUP_OK). */
 void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj);
 

@@ -10,20 +10,10 @@
 #include <string.h>
 #include "sweep_h5.h"
 
-int sw_crowd_resolve(cup_sweep *s, char *errmsg) {
-  if (s->len[SW_AXIS_N]) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: grid.n: a crowd is built for its scene's step T/n (its margins and "
-             "exit times): vary n in a variant's set ({n: 4000}) instead", s->path);
-    return CUP_ERR_PARSE;
-  }
-  if (!s->out_given) s->out_samples = 0;     /* positions only when asked: 2N per sample */
-  return CUP_OK;
-}
-
 void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < s->samples * s->dim; j++) traj[j] = NAN;
   r->status = CUP_OK;
-  r->correction = r->max_eps_cert = r->max_eta_cert = NAN;
+  r->correction = r->cross_check = r->max_eps_cert = r->max_eta_cert = NAN;
   snprintf(r->message, sizeof r->message, "%s", SW_CROWD_REFERENCE);
 }
 

@@ -45,6 +45,7 @@ hid_t sw_h5_str(size_t size) {
   hid_t t = H5Tcopy(H5T_C_S1);
   H5Tset_size(t, size);
   H5Tset_strpad(t, H5T_STR_NULLTERM);
+  H5Tset_cset(t, H5T_CSET_UTF8);
   return t;
 }
 
@@ -106,6 +107,7 @@ static hid_t refrow_type(void) {
   INS(T, "message", message, smsg);
   INS(T, "wall_time_s", wall_time_s, H5T_NATIVE_DOUBLE);
   INS(T, "correction", correction, H5T_NATIVE_DOUBLE);
+  INS(T, "cross_check", cross_check, H5T_NATIVE_DOUBLE);
   INS(T, "max_eps_cert", max_eps_cert, H5T_NATIVE_DOUBLE);
   INS(T, "max_eta_cert", max_eta_cert, H5T_NATIVE_DOUBLE);
   INS(T, "dual_iterations", dual_iterations, H5T_NATIVE_INT64);
@@ -175,7 +177,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   sw_file *f = calloc(1, sizeof *f);
   if (!f) return NULL;
   f->s = s;
-  f->file = f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = H5I_INVALID_HID;
+  f->file = f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = f->runs_sig = f->ref_sig = H5I_INVALID_HID;
   f->path = strdup(path);
   size_t N = (size_t)s->n_tasks, V = (size_t)s->n_variants;
   f->done = calloc(N, 1);
@@ -203,7 +205,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
 
 void sw_h5_file_free(sw_file *f) {
   quiet_t q = quiet_begin();
-  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd};
+  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd, f->runs_sig, f->ref_sig};
   for (size_t k = 0; k < sizeof h / sizeof h[0]; k++)
     if (h[k] >= 0) H5Dclose(h[k]);
   if (f->file >= 0) H5Fclose(f->file);
@@ -214,7 +216,7 @@ void sw_h5_file_free(sw_file *f) {
   H5Eclear2(H5E_DEFAULT);
   quiet_end(q);
   for (int k = 0; k < f->s->n_variants; k++) free(f->xref[k]);
-  free(f->ids); free(f->rows); free(f->x); free(f->crows);
+  free(f->ids); free(f->rows); free(f->x); free(f->crows); free(f->sig);
   free(f->xref); free(f->ref_done); free(f->done); free(f->status); free(f->error); free(f->path);
   free(f);
 }
@@ -354,8 +356,10 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
     f->ref_summary = H5Dopen2(f->file, "references/summary", H5P_DEFAULT);
     if (s->out_samples > 0) f->runs_x = H5Dopen2(f->file, "runs/x", H5P_DEFAULT);
     if (s->crowd) f->crowd = H5Dopen2(f->file, "crowd", H5P_DEFAULT);
+    if (s->nsig) f->ref_sig = H5Dopen2(f->file, "references/signals", H5P_DEFAULT);
+    if (s->nsig && s->out_samples > 0) f->runs_sig = H5Dopen2(f->file, "runs/signals", H5P_DEFAULT);
     if (f->summary < 0 || f->ref_x < 0 || f->ref_summary < 0 || (s->out_samples > 0 && f->runs_x < 0) ||
-        (s->crowd && f->crowd < 0))
+        (s->crowd && f->crowd < 0) || (s->nsig && f->ref_sig < 0) || (s->nsig && s->out_samples > 0 && f->runs_sig < 0))
       st = sw_h5_fail(f, "open the datasets of");
   }
   if (!st) st = check_scenes(f, errmsg);
@@ -378,9 +382,9 @@ int sw_file_task_status(const sw_file *f, long task) { return f->status[task]; }
 const double *sw_file_reference(const sw_file *f, int variant) { return f->xref[variant]; }
 int sw_file_reference_done(const sw_file *f, int variant) { return f->ref_done[variant]; }
 
-static int write_traj(sw_file *f, hid_t d, hsize_t row, const double *traj) {
+static int write_traj(sw_file *f, hid_t d, hsize_t row, const double *traj, int width) {
   const cup_sweep *s = f->s;
-  hsize_t start[3] = {row, 0, 0}, cnt[3] = {1, (hsize_t)s->samples, (hsize_t)s->dim};
+  hsize_t start[3] = {row, 0, 0}, cnt[3] = {1, (hsize_t)s->samples, (hsize_t)width};
   hid_t fs = H5Dget_space(d), ms = H5Screate_simple(3, cnt, NULL);
   int ok = H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, cnt, NULL) >= 0 &&
            H5Dwrite(d, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, traj) >= 0;
@@ -423,7 +427,12 @@ static int reserve(sw_file *f, long count) {
   if (x) f->x = x;
   sw_crowd_row *crows = f->s->crowd ? realloc(f->crows, sizeof *crows * (size_t)cap) : NULL;
   if (crows) f->crows = crows;
-  if (!ids || !rows || (f->s->out_samples > 0 && !x) || (f->s->crowd && !crows)) return CUP_ERR_NOMEM;
+  int with_sig = f->runs_sig >= 0;
+  size_t sig_len = (size_t)(f->s->samples * f->s->nsig);
+  double *sig = with_sig ? realloc(f->sig, sizeof *sig * sig_len * (size_t)cap) : NULL;
+  if (sig) f->sig = sig;
+  if (!ids || !rows || (f->s->out_samples > 0 && !x) || (f->s->crowd && !crows) || (with_sig && !sig))
+    return CUP_ERR_NOMEM;
   f->cap = cap;
   return CUP_OK;
 }
@@ -456,6 +465,32 @@ int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid
   return task_io(f, d, memtype, count, buf, dxpl, writing, op);
 }
 
+void sw_file_tally(const sw_file *f, sw_tally *out) {
+  const cup_sweep *s = f->s;
+  sw_tally c = {0};
+  double *scale = calloc((size_t)s->n_variants, sizeof *scale);
+  long per = s->samples * s->dim;
+  for (int k = 0; scale && k < s->n_variants; k++)
+    for (long j = 0; f->xref[k] && j < per; j++) scale[k] = fmax(scale[k], fabs(f->xref[k][j]));
+  for (long i = 0; i < s->n_tasks; i++) {
+    if (!f->done[i]) continue;
+    c.done++;
+    int st = f->status[i], missed = 0;
+    sw_task t;
+    if (!sw_task_get(s, i, &t) && t.scheme == CUP_SCHEME_ADAPTIVE) {
+      c.adaptive++;
+      missed = scale && f->error[i] > t.tol_abs + t.tol_rel * scale[t.variant];
+    }
+    if (st < 0) c.failed++;
+    else if (st == CUP_WARN_NOT_CERTIFIED) c.not_certified++;
+    else if (st > 0) c.warned++;
+    if (st >= 0 && missed) c.tol_missed++;
+    if (st == CUP_OK && !missed) c.ok++;
+  }
+  free(scale);
+  *out = c;
+}
+
 int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   if (f->failed) return CUP_ERR_IO;
   int st = count > 0 ? reserve(f, count) : CUP_OK;
@@ -470,9 +505,14 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
     f->ids[j] = t[j].task;
     result_row(f, t[j].task, t[j].r, t[j].error, &f->rows[j]);
     if (f->runs_x >= 0) memcpy(f->x + per * j, t[j].traj, sizeof(double) * (size_t)per);
+    if (f->runs_sig >= 0)                      /* the signals follow the states (sw_traj_len) */
+      memcpy(f->sig + f->s->samples * f->s->nsig * j, t[j].traj + per,
+             sizeof(double) * (size_t)(f->s->samples * f->s->nsig));
   }
   quiet_t q = quiet_begin();
   if (f->runs_x >= 0) st = task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 1, "write /runs/x in");
+  if (!st && f->runs_sig >= 0)
+    st = task_io(f, f->runs_sig, H5T_NATIVE_DOUBLE, count, f->sig, H5P_DEFAULT, 1, "write /runs/signals in");
   if (!st && f->crowd >= 0) st = sw_crowd_write(f, t, count);
   if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
@@ -528,12 +568,15 @@ int sw_file_write_reference(sw_file *f, int k, const sw_result *r, const double 
   sw_copy_str(row.message, sizeof row.message, r->message);
   row.wall_time_s = r->wall;
   row.correction = r->correction;
+  row.cross_check = r->cross_check;
   row.max_eps_cert = r->max_eps_cert;
   row.max_eta_cert = r->max_eta_cert;
   row.dual_iterations = r->dual_iterations;
   row.done = 1;
   quiet_t q = quiet_begin();
-  int st = write_traj(f, f->ref_x, (hsize_t)k, xref) ? sw_h5_fail(f, "write /references/x in") : CUP_OK;
+  int st = write_traj(f, f->ref_x, (hsize_t)k, xref, s->dim) ? sw_h5_fail(f, "write /references/x in") : CUP_OK;
+  if (!st && f->ref_sig >= 0 && write_traj(f, f->ref_sig, (hsize_t)k, xref + s->samples * s->dim, s->nsig))
+    st = sw_h5_fail(f, "write /references/signals in");
   if (!st && sw_h5_write_rows(f->ref_summary, f->refrow_t, (hsize_t)k, 1, &row, f->dxpl))
     st = sw_h5_fail(f, "write /references/summary in");
   quiet_end(q);

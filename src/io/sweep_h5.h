@@ -32,7 +32,9 @@
 #include <hdf5.h>
 #include "sweep.h"
 
-#define FORMAT_NAME "catchup-sweep 2"   /* 2: /summary has tol_abs, tol_rel, err_est, events */
+/* 2: /summary has tol_abs, tol_rel, err_est, events; 3: the tables' strings
+ * are UTF-8, the datasets have CF attributes and dimension scales */
+#define FORMAT_NAME "catchup-sweep 3"
 
 /* One /summary row, packed as it is in the file: HDF5 then writes rows
  * as they are, where a conversion to the file's layout would first read
@@ -78,6 +80,7 @@ typedef struct sw_refrow {
   char status_name[SW_STATUS_LEN];
   char message[SW_MSG_LEN];
   double wall_time_s, correction, max_eps_cert, max_eta_cert;
+  double cross_check;
   int64_t dual_iterations;
   int8_t done;
 } sw_refrow;
@@ -102,6 +105,9 @@ struct sw_file {
   /* crowd sweeps: /crowd, its memory type and staging rows (cap of them) */
   hid_t crowd, crowd_row_t;
   sw_crowd_row *crows;
+  /* netlist sweeps: /runs/signals, /references/signals, staging (cap tasks' signals) */
+  hid_t runs_sig, ref_sig;
+  double *sig;
 };
 
 typedef struct { H5E_auto2_t fn; void *data; } quiet_t;

@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <hdf5.h>
+#include <hdf5_hl.h>
 #include "file_in_use.h"
 #include "sweep_h5.h"
 
@@ -102,6 +103,12 @@ static const char *const reference_adaptive =
   "t_j = j T / (samples - 1) (exact flow between events located by root finding; docs/adaptive.md); "
   "/references/summary 'correction' holds that run's a posteriori error estimate.";
 
+static const char *const reference_checked =
+  "per variant: the adaptive scheme at tol = 1e-13 (absolute and relative), at the common sample times "
+  "t_j = j T / (samples - 1) (exact flow between events located by root finding; docs/adaptive.md); "
+  "/references/summary 'correction' holds that run's a posteriori error estimate, 'cross_check' its max-norm "
+  "difference from the Richardson limit 2 x(2 n_ref) - x(n_ref) of two exact-projection explicit runs.";
+
 static const char *const reference_method =
   "per variant: Richardson extrapolation x_ref = 2 x(2 n_ref) - x(n_ref) of two exact-projection "
   "(eps = eta = 0, certified to rounding) explicit catching-up runs, at the common sample times "
@@ -153,7 +160,8 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
   r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE
-                : s->ref_method == SW_REF_ADAPTIVE ? reference_adaptive : reference_method);
+                : s->ref_method == SW_REF_ADAPTIVE ? (s->ref_check ? reference_checked : reference_adaptive)
+                : reference_method);
   r |= attr_i64(root, "samples", s->samples);
   r |= attr_i64(root, "output_samples", s->out_samples);
   r |= attr_f64(root, "T", s->T);
@@ -200,6 +208,9 @@ static int create_references(sw_file *f, hid_t g) {
   hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
   f->ref_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
   if (f->ref_x < 0) return sw_h5_fail(f, "create /references/x in");
+  dims[2] = (hsize_t)s->nsig;
+  if (s->nsig && (f->ref_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
+    return sw_h5_fail(f, "create /references/signals in");
   hid_t ft = H5Tcopy(f->refrow_t);
   H5Tpack(ft);
   f->ref_summary = fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
@@ -213,7 +224,7 @@ static int create_references(sw_file *f, hid_t g) {
     rows[k].n_ref = s->var[k].n_ref;
     rows[k].status = CUP_ERR_INTERRUPTED;
     sw_copy_str(rows[k].status_name, sizeof rows[k].status_name, "pending");
-    rows[k].wall_time_s = rows[k].correction = rows[k].max_eps_cert = rows[k].max_eta_cert = NAN;
+    rows[k].wall_time_s = rows[k].correction = rows[k].cross_check = rows[k].max_eps_cert = rows[k].max_eta_cert = NAN;
   }
   int st = sw_h5_write_rows(f->ref_summary, f->refrow_t, 0, V, rows, H5P_DEFAULT) ? sw_h5_fail(f, "write /references/summary in") : 0;
   free(rows);
@@ -264,6 +275,150 @@ static int create_variants(sw_file *f) {
   return st;
 }
 
+/* ---- description: CF attributes and netCDF-4 dimensions ---- */
+
+static int describe(hid_t d, const char *units, const char *long_name) {
+  return (units ? attr_str(d, "units", units) : 0) | attr_str(d, "long_name", long_name);
+}
+
+static int describe_path(hid_t file, const char *path, const char *units, const char *long_name) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  int r = d < 0 ? -1 : describe(d, units, long_name);
+  if (d >= 0) H5Dclose(d);
+  return r;
+}
+
+/* A dimension without a coordinate, netCDF-4's way (see h5run.c). */
+static int pure_dim(hid_t loc, const char *name, hsize_t len) {
+  char nc[80];
+  snprintf(nc, sizeof nc, "This is a netCDF dimension but not a netCDF variable.%10llu", (unsigned long long)len);
+  hid_t d = fixed_dataset(loc, name, H5T_IEEE_F32LE, 1, &len, 0, NULL);
+  int r = d < 0 || H5DSset_scale(d, nc) < 0 ? -1 : 0;
+  if (d >= 0) H5Dclose(d);
+  return r;
+}
+
+/* Attach the scales at the paths dims[k] (NULL: none) to path's axes. */
+static int attach(hid_t file, const char *path, int rank, const char *const *dims) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  int r = d < 0 ? -1 : 0;
+  for (int k = 0; k < rank && !r; k++) {
+    if (!dims[k]) continue;
+    hid_t s = H5Dopen2(file, dims[k], H5P_DEFAULT);
+    r = s < 0 || H5DSattach_scale(d, s, (unsigned)k) < 0 ? -1 : 0;
+    if (s >= 0) H5Dclose(s);
+  }
+  if (d >= 0) H5Dclose(d);
+  return r;
+}
+
+/* Labels: n variable-length strings at path, made the dimension scale `scale`. */
+static int label_scale(hid_t file, const char *path, const char *scale, const char *const *names, hsize_t n,
+                       const char *long_name) {
+  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL);
+  hid_t d = H5Dcreate2(file, path, t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  int r = d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, scale) < 0 ||
+          describe(d, NULL, long_name) ? -1 : 0;
+  if (d >= 0) H5Dclose(d);
+  H5Sclose(sp);
+  H5Tclose(t);
+  return r;
+}
+
+/* Appends unit to the list "u1, u2, ..." in units (size bytes); returns the
+ * bytes written so far. */
+static size_t add_unit(char *units, size_t size, size_t w, const char *unit) {
+  if (w + strlen(unit) + 3 < size) w += (size_t)snprintf(units + w, size - w, "%s%s", w ? ", " : "", unit);
+  return w;
+}
+
+/* /runs/state: the names of the state's components (the variant with the
+ * largest state's: a crowd's x0, y0, ... up to the largest N), and the unit
+ * of /runs/x: the components' one unit, or their units in order. */
+static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size) {
+  hsize_t n = (hsize_t)s->dim;
+  const cup_scene *sc = s->var[0].scene;
+  for (int k = 0; k < s->n_variants; k++)
+    if (cup_scene_dim(s->var[k].scene) == s->dim) { sc = s->var[k].scene; break; }
+  char **names = calloc(n, sizeof *names);
+  int r = names ? 0 : -1, same = 1;
+  const char *first = NULL;
+  size_t w = 0;
+  units[0] = '\0';
+  for (hsize_t j = 0; j < n && !r; j++) {
+    char buf[128];
+    const char *u = "1";
+    cup_scene_state_label(sc, (int)j, buf, sizeof buf, &u);
+    if (!(names[j] = strdup(buf))) r = -1;
+    if (!first) first = u;
+    same &= !strcmp(u, first);
+    w = add_unit(units, size, w, u);
+  }
+  if (same && first) snprintf(units, size, "%s", first);
+  if (!r) r = label_scale(file, "runs/state", "state", (const char *const *)names, n,
+                          "state component: the last axis of /runs/x and /references/x");
+  for (hsize_t j = 0; names && j < n; j++) free(names[j]);
+  free(names);
+  return r;
+}
+
+/* A netlist sweep's signals: /runs/signal (their names, the scale
+ * "signal"), and their units, in order, as catchup-run's /signals. */
+static int describe_signals(sw_file *f) {
+  const cup_sweep *s = f->s;
+  const cup_netlist *nl = cup_scene_netlist(s->var[0].scene);
+  hsize_t n = (hsize_t)s->nsig;
+  const char **names = malloc(sizeof *names * n);
+  char units[512] = "";
+  size_t w = 0;
+  for (hsize_t k = 0; names && k < n; k++) {
+    names[k] = sw_signal_name(s, (int)k);
+    w = add_unit(units, sizeof units, w, cup_netlist_signal_unit(nl, (int)k));
+  }
+  int r = names ? label_scale(f->file, "runs/signal", "signal", names, n,
+                              "a netlist's signal: the last axis of /runs/signals and /references/signals") : -1;
+  free(names);
+  r |= describe(f->ref_sig, units, "each variant's reference signals at the sample times");
+  r |= attach(f->file, "references/signals", 3, (const char *const[]){"variant", "runs/t", "runs/signal"});
+  if (f->runs_sig >= 0) {
+    r |= describe(f->runs_sig, units, "each task's signals (node voltages, branch currents) at the sample times");
+    r |= attach(f->file, "runs/signals", 3, (const char *const[]){"task", "runs/t", "runs/signal"});
+  }
+  return r;
+}
+
+/* Units, long names and dimensions (task, variant, t, state) of every
+ * dataset, written with the rest of the metadata at creation. */
+static int describe_layout(sw_file *f) {
+  const cup_sweep *s = f->s;
+  hid_t file = f->file;
+  char xunits[256];
+  int r = pure_dim(file, "task", (hsize_t)s->n_tasks) | pure_dim(file, "variant", (hsize_t)s->n_variants);
+  r |= write_state(file, s, xunits, sizeof xunits);
+  r |= describe_path(file, "runs/t", "s", "common sample time t_j = j T / (samples - 1)");
+  hid_t t = H5Dopen2(file, "runs/t", H5P_DEFAULT);
+  r |= t < 0 || H5DSset_scale(t, "t") < 0 ? -1 : 0;
+  if (t >= 0) H5Dclose(t);
+  r |= describe(f->summary, NULL, "one row per task: its parameters, status, error and certificates (docs/sweep-format.md)");
+  r |= attach(file, "summary", 1, (const char *const[]){"task"});
+  r |= describe_path(file, "variants", NULL, "the variants: name, scene file, overrides, scene text");
+  r |= attach(file, "variants", 1, (const char *const[]){"variant"});
+  r |= describe(f->ref_summary, NULL, "each variant's reference: method, status, correction");
+  r |= attach(file, "references/summary", 1, (const char *const[]){"variant"});
+  r |= describe(f->ref_x, xunits, "each variant's reference trajectory at the sample times");
+  r |= attach(file, "references/x", 3, (const char *const[]){"variant", "runs/t", "runs/state"});
+  if (f->runs_x >= 0) {
+    r |= describe(f->runs_x, xunits, "each task's state at the sample times (NaN where not reached)");
+    r |= attach(file, "runs/x", 3, (const char *const[]){"task", "runs/t", "runs/state"});
+  }
+  if (s->nsig) r |= describe_signals(f);
+  if (s->crowd) {
+    r |= describe(f->crowd, NULL, "one row per task: agents, agents out, evacuation time [s], smallest gap [m]");
+    r |= attach(file, "crowd", 1, (const char *const[]){"task"});
+  }
+  return r;
+}
+
 static int create_layout(sw_file *f, const sw_provenance *p) {
   const cup_sweep *s = f->s;
   if (write_root_attrs(f->file, s, p)) return sw_h5_fail(f, "write attributes in");
@@ -289,19 +444,24 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
     hsize_t dims[3] = {(hsize_t)s->n_tasks, (hsize_t)s->samples, (hsize_t)s->dim};
     f->runs_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
     if (f->runs_x < 0) st = sw_h5_fail(f, "create /runs/x in");
+    dims[2] = (hsize_t)s->nsig;
+    if (!st && s->nsig && (f->runs_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE,
+                                                       &nan)) < 0)
+      st = sw_h5_fail(f, "create /runs/signals in");
   }
   if (g >= 0) H5Gclose(g);
   g = st ? -1 : fixed_group(f->file, "references");
   if (!st && g < 0) st = sw_h5_fail(f, "create /references in");
   if (!st) st = create_references(f, g);
   if (g >= 0) H5Gclose(g);
+  if (!st && describe_layout(f)) st = sw_h5_fail(f, "describe the datasets in");
   if (!st && H5Fflush(f->file, H5F_SCOPE_LOCAL) < 0) st = sw_h5_fail(f, "flush");
   return st;
 }
 
 static double file_bytes(const cup_sweep *s) {
   double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0));
-  double traj = (double)s->samples * s->dim * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
+  double traj = (double)sw_traj_len(s) * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
   return rows + traj + 65536.0 + 2.0 * strlen(s->text);
 }
 

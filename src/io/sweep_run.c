@@ -27,21 +27,33 @@ typedef struct {
   int dim, stride;           /* the task's state, a sample's room (crowds: the sweep's largest 2N) */
   int at_times;              /* the run gives exactly t_j, in order (adaptive) */
   double *traj;
+  /* a netlist's signals, after the S samples of the state: nsig a sample,
+   * from x, u(t) and the zeta of the step that reached x (as catchup-run) */
+  cup_netlist *nl;
+  const cup_integrator *I;
+  int nsig;
+  double *zeta;
 } sampler;
 
+/* Sample j is x (at t): the state, and the signals when there are any. */
+static int keep(sampler *sp, long j, double t, const double *x) {
+  memcpy(sp->traj + j * sp->stride, x, sizeof(double) * (size_t)sp->dim);
+  if (!sp->nsig) return 0;
+  cup_integrator_zeta(sp->I, sp->zeta);
+  return cup_netlist_signals(sp->nl, t, x, sp->zeta, sp->traj + sp->S * sp->stride + j * sp->nsig) != CUP_OK
+           ? CUP_ERR_CALLBACK : 0;
+}
+
 static int sample_sink(long k, double t, const double *x, void *ctx) {
-  (void)t;
   sampler *sp = ctx;
+  int st = 0;
   if (sp->at_times) {
-    if (sp->next < sp->S) memcpy(sp->traj + sp->next++ * sp->stride, x, sizeof(double) * (size_t)sp->dim);
-    return 0;
+    if (sp->next < sp->S) st = keep(sp, sp->next++, t, x);
+    return st;
   }
   while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) < k) sp->next++;
-  while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) {
-    memcpy(sp->traj + sp->next * sp->stride, x, sizeof(double) * (size_t)sp->dim);
-    sp->next++;
-  }
-  return 0;
+  while (!st && sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) st = keep(sp, sp->next++, t, x);
+  return st;
 }
 
 /* Fails once t reaches T/2: exercises a real mid-run failure (tests). */
@@ -67,7 +79,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
                     sw_result *r, double *traj) {
   long S = s->samples, S1 = S - 1;
   int dim = s->dim;
-  for (long j = 0; j < S * dim; j++) traj[j] = NAN;
+  for (long j = 0; j < sw_traj_len(s); j++) traj[j] = NAN;
   cup_integrator_options o = *cup_scene_options(v->scene);
   o.n = rp->n;
   o.eps = rp->eps;
@@ -100,9 +112,17 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
     r->wall += now_seconds() - t0;
     return;
   }
-  sampler sp = {S, rp->n, 0, cup_scene_dim(v->scene), dim, adaptive, traj};
+  sampler sp = {S, rp->n, 0, cup_scene_dim(v->scene), dim, adaptive, traj, cup_scene_netlist(v->scene), I,
+                s->nsig, NULL};
+  if (s->nsig && !(sp.zeta = calloc((size_t)cup_lcs_rows(cup_scene_lcs(v->scene)) + 1, sizeof(double)))) {
+    cup_integrator_free(&I);
+    r->status = CUP_ERR_NOMEM;
+    snprintf(r->message, sizeof r->message, "set-up: out of memory");
+    return;
+  }
   cup_run_info info;
   r->status = cup_integrator_run(I, cup_scene_x0(v->scene), sample_sink, &sp, &info);
+  free(sp.zeta);
   if (s->crowd) sw_crowd_watch_end(&cw, cup_integrator_state(I), r);
   cup_integrator_free(&I);
   r->wall += now_seconds() - t0;
@@ -133,33 +153,18 @@ double sw_max_error(const double *traj, const double *ref, long count) {
   return e;
 }
 
-/* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection explicit
- * runs; the scheme is first order, so this removes the 1/n term. An LCS
- * with D != 0 (a netlist's diode behind a resistance) runs on the theta
- * scheme only; at theta = 1/2 it is second order there (docs/netlist.md):
- * x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3. Or (reference.method:
- * adaptive) the adaptive scheme at tol 1e-13. */
-static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
-  const sw_variant *v = &s->var[k];
-  long count = s->samples * s->dim;
-  double *coarse = malloc(sizeof(double) * (size_t)count);
-  if (!coarse) {
-    r->status = CUP_ERR_NOMEM;
-    snprintf(r->message, sizeof r->message, "reference: out of memory");
-    return;
-  }
+/* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection
+ * explicit runs; the scheme is first order, so this removes the 1/n term.
+ * An LCS with D != 0 (a netlist's diode behind a resistance) runs on the
+ * theta scheme only; at theta = 1/2 it is second order there
+ * (docs/netlist.md): x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3.
+ * coarse: samples * dim doubles of scratch. */
+static void richardson(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
+                       double *traj, double *coarse) {
+  long count = s->samples * s->dim, len = sw_traj_len(s);   /* the states; with the signals (linear in them) */
   int theta = cup_lcs_has_D(cup_scene_lcs(v->scene)), order2 = theta && cup_scene_options(v->scene)->theta == 0.5;
   run_params rp = {v->n_ref, {0, 0}, {0, 0}, theta ? CUP_SCHEME_THETA : CUP_SCHEME_EXPLICIT, CUP_PROJ_AUTO,
                    0, 0, 0, 0};
-  if (s->ref_method == SW_REF_ADAPTIVE) {
-    rp.scheme = CUP_SCHEME_ADAPTIVE;
-    rp.n = s->samples - 1;         /* unused by the scheme */
-    rp.tol_abs = rp.tol_rel = SW_REF_ADAPTIVE_TOL;
-    run_one(s, v, &rp, ro, r, traj);
-    r->correction = r->err_est;    /* the run's own estimate of its error */
-    free(coarse);
-    return;
-  }
   run_one(s, v, &rp, ro, r, coarse);
   if (r->status >= 0) {
     rp.n = 2 * v->n_ref;
@@ -167,12 +172,46 @@ static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_r
   }
   if (r->status >= 0) {
     r->correction = sw_max_error(traj, coarse, count);
-    for (long j = 0; j < count; j++)
+    for (long j = 0; j < len; j++)
       traj[j] = order2 ? traj[j] + (traj[j] - coarse[j]) / 3 : 2 * traj[j] - coarse[j];
   } else {
-    for (long j = 0; j < count; j++) traj[j] = NAN;
+    for (long j = 0; j < len; j++) traj[j] = NAN;
   }
-  free(coarse);
+}
+
+/* The adaptive scheme at tol 1e-13 (reference.method: adaptive); with
+ * check: richardson also the Richardson limit, and how far the two are
+ * apart (r->cross_check), which the sweep reports. The reference is the
+ * adaptive run's, whatever the check gives. */
+static void adaptive_reference(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
+                               double *traj, double *scratch, double *coarse) {
+  sw_result rr;
+  memset(&rr, 0, sizeof rr);
+  if (s->ref_check) richardson(s, v, ro, &rr, scratch, coarse);
+  run_params rp = {s->samples - 1, {0, 0}, {0, 0}, CUP_SCHEME_ADAPTIVE, CUP_PROJ_AUTO, 0, 0,
+                   SW_REF_ADAPTIVE_TOL, SW_REF_ADAPTIVE_TOL};    /* n: unused by the scheme */
+  run_one(s, v, &rp, ro, r, traj);
+  r->correction = r->err_est;      /* the run's own estimate of its error */
+  if (!s->ref_check) return;
+  r->wall += rr.wall;
+  r->cross_check = r->status >= 0 && rr.status >= 0 ? sw_max_error(traj, scratch, s->samples * s->dim) : NAN;
+  if (rr.status < 0 && r->status >= 0)
+    snprintf(r->message, sizeof r->message, "the Richardson check failed: %s: %.200s", cup_status_name(rr.status),
+             rr.message);
+}
+
+static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
+  long count = sw_traj_len(s);
+  double *scratch = malloc(sizeof(double) * (size_t)count * 2);
+  r->cross_check = NAN;
+  if (!scratch) {
+    r->status = CUP_ERR_NOMEM;
+    snprintf(r->message, sizeof r->message, "reference: out of memory");
+    return;
+  }
+  if (s->ref_method == SW_REF_ADAPTIVE) adaptive_reference(s, &s->var[k], ro, r, traj, scratch, scratch + count);
+  else richardson(s, &s->var[k], ro, r, traj, scratch);
+  free(scratch);
 }
 
 void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {

@@ -193,11 +193,18 @@ int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
   if (!st) st = cup_polyset_create(&L->K, &d->C, L->F, &d->P, errmsg);
   if (!st) st = copy_names(L, d->row_names, errmsg);
   L->has_D = !st && has_nonzero(&d->D);
-  if (L->has_D) {                            /* not a sweeping process: keep B and D as given */
+  L->keep_B = !st && d->keep_B && d->m > 0;
+  if (L->keep_B && !L->has_D) {              /* D = 0, B as given: stored as a zero D */
+    L->has_D = 1;
+    if (!present(&d->B)) st = cup_fail(errmsg, CUP_ERR_ARG, "keep_B needs B");
+    if (!st) st = cup_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
+    if (!st) st = cup_sparse_alloc(&L->D, d->m, d->m, 0) ? cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory")
+                                                          : CUP_OK;
+  } else if (L->has_D) {                     /* not a sweeping process: keep B and D as given */
     if (!present(&d->B)) st = cup_fail(errmsg, CUP_ERR_ARG, "D != 0 needs B (it is not P^-1 C^T then)");
     if (!st) st = cup_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
     if (!st) st = cup_sparse_copy(&L->D, &d->D, "D", d->m, d->m, errmsg);
-    if (!st) st = check_D(&L->D, errmsg);
+    if (!st && !L->keep_B) st = check_D(&L->D, errmsg);   /* keep_B: an active network, see lcs.h */
   } else if (!st && present(&d->B)) {
     cup_sparse B;
     st = cup_sparse_copy(&B, &d->B, "B", d->n, d->m, errmsg);

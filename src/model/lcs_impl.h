@@ -16,8 +16,9 @@ struct cup_lcs {
   cup_polyset *K;       /* {x : C x + F >= 0}, metric P */
   int fixed;            /* G absent or zero */
   /* D != 0: the LCS is not a sweeping process; only the theta scheme runs it */
-  int has_D;            /* D given with a nonzero entry */
-  cup_sparse B, D;      /* has_D: n x m and m x m as given */
+  int has_D;            /* D given with a nonzero entry, or keep_B: B and D as given */
+  int keep_B;           /* B kept as given (P B != C^T allowed): the reason when D = 0 */
+  cup_sparse B, D;      /* has_D: n x m and m x m as given (D may be all zero) */
   char **row_names;     /* m names for messages, or NULL */
 };
 

@@ -39,7 +39,11 @@ static int distribute(cup_netlist *nl, parts *q, const double *pdiag, int i, int
   double v = h * pj->sign;
   if (pi->var == NL_VAR_X) {
     nl_coo *t = pj->var == NL_VAR_X ? &q->A : pj->var == NL_VAR_U ? &q->E : &q->B;
-    return nl_coo_add(t, pi->index, pj->index, v / pdiag[pi->index], 0);
+    if (!nl->coupled || !nl->coupled[pi->index]) return nl_coo_add(t, pi->index, pj->index, v / pdiag[pi->index], 0);
+    int st = CUP_OK;                              /* a coupled inductor: P^-1's column, the group's rows */
+    for (int k = nl->Pinv.p[pi->index]; k < nl->Pinv.p[pi->index + 1] && !st; k++)
+      st = nl_coo_add(t, nl->Pinv.i[k], pj->index, nl->Pinv.x[k] * v, fabs(nl->Pinv.x[k] * v));
+    return st;
   }
   if (pi->var == NL_VAR_Z) {                      /* w = i (fixed: a voltage port) or -v (free) */
     double s = i < nl->nv ? 1 : -1;
@@ -79,13 +83,34 @@ static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const part
   return st;
 }
 
+/* A diode whose current reaches no state and no other row (it flows
+ * through voltage sources and controlled sources alone, e.g. straight
+ * across an E's output) cannot be held off: when its row asks for current,
+ * nothing bounds it. */
+static int idle_columns(const cup_netlist *nl, const nl_circuit *c, const parts *q, char *errmsg) {
+  for (int e = 0; e < c->nelem; e++) {
+    if (c->elem[e].kind != NL_D) continue;
+    int j = nl->evar[e], used = 0;
+    for (int k = q->sB.p[j]; k < q->sB.p[j + 1] && !used; k++) used = q->sB.x[k] != 0;
+    for (int k = q->sD.p[j]; k < q->sD.p[j + 1] && !used; k++) used = q->sD.x[k] != 0;
+    if (!used)
+      return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "no path: the diode's current flows through voltage sources "
+                     "(V, E, H) alone and changes no state: when it conducts its current is unbounded; put a "
+                     "resistor or inductor in its loop");
+  }
+  return CUP_OK;
+}
+
 static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   if (nl->n == 0)
     return nl_fail(c, -1, errmsg, CUP_ERR_UNSUPPORTED, "the circuit has no inductor or capacitor: there is no "
                    "state to integrate (resistive circuits are not supported)");
   parts q = {0};
+  cup_sparse Pc = {0};
   double *pdiag = malloc(sizeof(double) * (size_t)nl->n);
-  int st = pdiag ? CUP_OK : CUP_ERR_NOMEM;
+  if (!pdiag) return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
+  int st = nl_coupling_metric(nl, c, &Pc, errmsg);
+  if (st) { free(pdiag); return st; }
   for (int e = 0; e < c->nelem && !st; e++)
     if (c->elem[e].kind == NL_L || c->elem[e].kind == NL_C) pdiag[nl->evar[e]] = c->elem[e].value;
   for (int j = 0; j < nl->H.ncol && !st; j++)
@@ -97,20 +122,30 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   if (!st) st = nl_coo_to_csc(&q.D, m, m, &q.sD);
   if (!st) st = nl_coo_to_csc(&q.E, n, p, &q.sE);
   if (!st) st = nl_coo_to_csc(&q.G, m, p, &q.sG);
-  if (st) { free(pdiag); parts_free(&q); return nl_fail(c, -1, errmsg, st, "out of memory"); }
+  if (st) { free(pdiag); cup_sparse_free(&Pc); parts_free(&q); return nl_fail(c, -1, errmsg, st, "out of memory"); }
   st = decoupled_rows(nl, c, &q, errmsg);
+  if (!st) st = idle_columns(nl, c, &q, errmsg);
   if (!st) {
     cup_lcs_desc d = {0};
     d.n = n; d.m = m; d.p = p;
     d.A = view(&q.sA); d.C = view(&q.sC); d.E = view(&q.sE); d.G = view(&q.sG);
     d.B = view(&q.sB);
     if (q.sD.nnz) d.D = view(&q.sD);
-    d.P = (cup_metric){CUP_METRIC_DIAGONAL, pdiag, {0}, 0};
+    d.P = Pc.p ? (cup_metric){CUP_METRIC_SPARSE, NULL, view(&Pc), 0}
+               : (cup_metric){CUP_METRIC_DIAGONAL, pdiag, {0}, 0};
     d.row_names = (const char *const *)nl->row_name;
     char lib[CUP_ERRMSG_LEN];
-    if ((st = cup_lcs_create(&nl->L, &d, lib))) st = nl_fail(c, -1, errmsg, st, "%s", lib);
+    st = cup_lcs_create(&nl->L, &d, lib);
+    if (st && nl->nctl && (st == CUP_ERR_PB_CT || q.sD.nnz)) {
+      /* controlled sources drive the diodes: B is not P^-1 C^T, or D is not
+       * positive semidefinite (an active network); only theta runs it */
+      d.keep_B = 1;
+      st = cup_lcs_create(&nl->L, &d, lib);
+    }
+    if (st) st = nl_fail(c, -1, errmsg, st, "%s", lib);
   }
   free(pdiag);
+  cup_sparse_free(&Pc);
   parts_free(&q);
   return st;
 }
@@ -199,6 +234,12 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   nl->tstep = c->tstep;
   nl->tstop = c->tstop;
   if (!(nl->file = strdup(c->file))) return CUP_ERR_NOMEM;
+  if (!(nl->files = calloc((size_t)c->nfiles + 1, sizeof(char *)))) return CUP_ERR_NOMEM;
+  for (int f = 0; f < c->nfiles; f++) {
+    int seen = 0;
+    for (int g = 0; g < nl->nfiles && !seen; g++) seen = !strcmp(nl->files[g], c->files[f]);
+    if (!seen && !(nl->files[nl->nfiles++] = strdup(c->files[f]))) return CUP_ERR_NOMEM;
+  }
   nl->node = calloc((size_t)c->nnodes, sizeof(char *));
   nl->elem = calloc((size_t)c->nelem, sizeof(nl_elem));
   if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
@@ -243,6 +284,7 @@ int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) 
   else st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st && (st = name_variables(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st) st = nl_hybrid(nl, c, errmsg);
+  if (!st) st = nl_controlled(nl, c, errmsg);
   if (!st) st = build_lcs(nl, c, errmsg);
   if (!st) st = build_input(nl, c, errmsg);
   double *vic = NULL;
@@ -277,6 +319,8 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->state_name); free(nl->row_name); free(nl->row_fixed); free(nl->input_elem);
   free(nl->eport); free(nl->evar); free(nl->port);
   free(nl->parent); free(nl->pport); free(nl->depth); free(nl->snode); free(nl->psign);
+  free(nl->ctl_elem); free(nl->zmap); free(nl->coupled); free(nl->prow);
+  cup_sparse_free(&nl->Pinv);
   if (nl->cm_started) {
     cholmod_free_factor(&nl->Lf, &nl->cm);
     cholmod_free_sparse(&nl->K, &nl->cm);
@@ -288,7 +332,10 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->ubuf); free(nl->dense);
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
+  for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);
+  free(nl->files);
   free(nl->file);
+  free(nl->source);
   free(nl);
   *p = NULL;
 }
@@ -307,6 +354,7 @@ int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop) {
 const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
 }
+const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source : NULL; }
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
 }
@@ -315,4 +363,9 @@ const char *cup_netlist_input_name(const cup_netlist *nl, int j) {
 }
 int cup_netlist_row_fixed(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < nl->m ? nl->row_fixed[i] : 0;
+}
+
+int cup_netlist_file_count(const cup_netlist *nl) { return nl ? nl->nfiles : 0; }
+const char *cup_netlist_file(const cup_netlist *nl, int k) {
+  return nl && k >= 0 && k < nl->nfiles ? nl->files[k] : NULL;
 }

@@ -6,8 +6,9 @@
 #ifndef CUP_NETLIST_DESC_H
 #define CUP_NETLIST_DESC_H
 
-/* Element kinds, in the order the formulation groups them. */
-typedef enum nl_kind { NL_R, NL_L, NL_C, NL_V, NL_I, NL_D } nl_kind;
+/* Element kinds, in the order the formulation groups them; E, F, G, H are
+ * the linear controlled sources (VCVS, CCCS, VCCS, CCVS). */
+typedef enum nl_kind { NL_R, NL_L, NL_C, NL_V, NL_I, NL_D, NL_E, NL_F, NL_G, NL_H } nl_kind;
 
 /* An independent source's transient function (SPICE syntax). */
 typedef enum nl_fn { NL_FN_DC, NL_FN_SIN, NL_FN_PULSE, NL_FN_PWL } nl_fn;
@@ -27,13 +28,26 @@ typedef struct nl_source {
 typedef struct nl_elem {
   nl_kind kind;
   char *name;         /* as written ("R1"); names compare case-insensitively */
-  int a, b;           /* nodes (0: ground): R, L, C, D from a to b; V, I: a = n+, b = n- */
-  double value;       /* R: ohms, L: henries, C: farads */
+  int a, b;           /* nodes (0: ground): R, L, C, D from a to b; V, I, E-H: a = n+, b = n- */
+  double value;       /* R: ohms, L: henries, C: farads; E-H: the gain */
+  int ca, cb;         /* E, G: the controlling nodes nc+, nc- */
+  int ctrl;           /* F, H: the element whose current controls (its current from its
+                         first node to its second, as SPICE's V's branch current) */
   int has_ic;         /* L, C: IC= given */
   double ic;          /* L: initial current, C: initial voltage */
   nl_source src;      /* V, I */
+  int file;           /* c->files[file] holds it */
   int line, col;      /* where the element's name is written */
 } nl_elem;
+
+/* K: two inductors coupled, M = k sqrt(L1 L2), |k| < 1 (several K on one
+ * inductor couple it pairwise with each). */
+typedef struct nl_coupling {
+  char *name;
+  int l1, l2;         /* the inductors (element indices) */
+  double k;
+  int file, line, col;
+} nl_coupling;
 
 typedef struct nl_ic {
   int node;
@@ -47,12 +61,17 @@ typedef struct nl_probe {
 } nl_probe;
 
 typedef struct nl_circuit {
-  char *file;         /* name used in messages */
+  char *file;         /* name used in messages (files[0]) */
+  int nfiles;
+  char **files;       /* every file read: the netlist, then its .include/.lib files in the
+                         order they were first read */
   int nnodes;         /* nodes 0 .. nnodes-1; 0 is ground ("0" or "gnd") */
   char **node;        /* names as first written */
   int *node_line, *node_col;   /* first place each node is written */
   int nelem;
   nl_elem *elem;
+  int ncoup;
+  nl_coupling *coup;  /* K cards */
   int has_tran;
   double tstep, tstop;
   int tran_line, tran_col;

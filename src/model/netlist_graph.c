@@ -17,7 +17,8 @@
 int nl_fail(const nl_circuit *c, int e, char *errmsg, int status, const char *fmt, ...) {
   if (!errmsg) return status;
   size_t cap = CUP_ERRMSG_LEN;
-  int w = e >= 0 ? snprintf(errmsg, cap, "%s:%d:%d: %s: ", c->file, c->elem[e].line, c->elem[e].col, c->elem[e].name)
+  const char *file = e >= 0 && c->files && c->elem[e].file < c->nfiles ? c->files[c->elem[e].file] : c->file;
+  int w = e >= 0 ? snprintf(errmsg, cap, "%s:%d:%d: %s: ", file, c->elem[e].line, c->elem[e].col, c->elem[e].name)
                  : snprintf(errmsg, cap, "%s: ", c->file);
   va_list ap;
   va_start(ap, fmt);
@@ -81,6 +82,20 @@ static int forest_path(const nl_circuit *c, unsigned kinds, int upto, int a, int
 
 /* ---- topology --------------------------------------------------------------- */
 
+/* E and G sense v(nc+) - v(nc-): nodes that some element joins to the
+ * circuit (a node written only as a control pin has no voltage). */
+static int control_nodes(const nl_circuit *c, int e, char *errmsg) {
+  const nl_elem *el = &c->elem[e];
+  for (int k = 0; k < 2; k++) {
+    int v = k ? el->cb : el->ca, used = v == 0;
+    for (int f = 0; f < c->nelem && !used; f++) used = c->elem[f].a == v || c->elem[f].b == v;
+    if (!used)
+      return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "control node '%s' is not connected to any element (an "
+                     "undefined node: it has no voltage to sense)", c->node[v]);
+  }
+  return CUP_OK;
+}
+
 static int check_elements(const nl_circuit *c, char *errmsg) {
   int *deg = calloc((size_t)c->nnodes, sizeof(int)), *who = calloc((size_t)c->nnodes, sizeof(int));
   if (!deg || !who) { free(deg); free(who); return nomem(c, errmsg); }
@@ -89,8 +104,9 @@ static int check_elements(const nl_circuit *c, char *errmsg) {
     const nl_elem *el = &c->elem[e];
     deg[el->a]++; deg[el->b]++;
     who[el->a] = who[el->b] = e;
+    if ((el->kind == NL_E || el->kind == NL_G) && !st) st = control_nodes(c, e, errmsg);
     if (el->a != el->b) continue;
-    if (el->kind == NL_V)
+    if (el->kind == NL_V || el->kind == NL_E || el->kind == NL_H)
       st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, "short-circuited voltage source: both terminals on node '%s'",
                    c->node[el->a]);
     else if (el->kind == NL_C)
@@ -108,15 +124,16 @@ static int check_elements(const nl_circuit *c, char *errmsg) {
   return st;
 }
 
-/* Capacitors and voltage sources: a loop of them is an index problem. */
+/* Capacitors and voltage sources (E and H too): a loop of them is an index
+ * problem. */
 static int voltage_loops(const nl_circuit *c, int *uf, char *errmsg) {
   for (int e = 0; e < c->nelem; e++) {
     const nl_elem *el = &c->elem[e];
-    if (el->kind != NL_C && el->kind != NL_V) continue;
+    if (el->kind != NL_C && el->kind != NL_V && el->kind != NL_E && el->kind != NL_H) continue;
     if (find(uf, el->a) != find(uf, el->b)) { unite(uf, el->a, el->b); continue; }
     int *path = malloc(sizeof(int) * ((size_t)c->nelem + 1));
     if (!path) return nomem(c, errmsg);
-    int len = forest_path(c, 1u << NL_C | 1u << NL_V, e, el->a, el->b, path);
+    int len = forest_path(c, 1u << NL_C | 1u << NL_V | 1u << NL_E | 1u << NL_H, e, el->a, el->b, path);
     if (len < 0) { free(path); return nomem(c, errmsg); }
     path[len++] = e;
     int caps = 0;
@@ -197,13 +214,14 @@ static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned cha
   return CUP_OK;
 }
 
-/* Ports and variables: voltage ports (capacitors, voltage sources, fixed
- * diodes), then current ports (inductors, current sources, free diodes),
- * each group in netlist order; x = (inductor currents, capacitor voltages),
- * u = the sources, zeta = the diodes, in netlist order. */
+/* Ports and variables: voltage ports (capacitors, voltage sources, E, H,
+ * fixed diodes), then current ports (inductors, current sources, F, G,
+ * free diodes), each group in netlist order; x = (inductor currents,
+ * capacitor voltages), u = the sources, zeta = the diodes, in netlist
+ * order; the controlled sources are numbered in netlist order too. */
 static void number_ports(cup_netlist *nl, const nl_circuit *c, const unsigned char *fixed) {
-  static const nl_kind vorder[3] = {NL_C, NL_V, NL_D}, iorder[3] = {NL_L, NL_I, NL_D};
-  int nx_l = 0, nx_c = 0, nu = 0, nz = 0;
+  static const nl_kind order[10] = {NL_C, NL_V, NL_E, NL_H, NL_D, NL_L, NL_I, NL_F, NL_G, NL_D};
+  int nx_l = 0, nx_c = 0, nu = 0, nz = 0, nk = 0;
   for (int e = 0; e < c->nelem; e++) {
     nl_kind k = c->elem[e].kind;
     if (k == NL_L) nl->nL++;
@@ -211,25 +229,28 @@ static void number_ports(cup_netlist *nl, const nl_circuit *c, const unsigned ch
   }
   for (int e = 0; e < c->nelem; e++) {
     nl_kind k = c->elem[e].kind;
-    nl->evar[e] = k == NL_L ? nx_l++ : k == NL_C ? nl->nL + nx_c++ : k == NL_V || k == NL_I ? nu++ : k == NL_D ? nz++ : -1;
+    nl->evar[e] = k == NL_L ? nx_l++ : k == NL_C ? nl->nL + nx_c++ : k == NL_V || k == NL_I ? nu++ : k == NL_D ? nz++
+                : k >= NL_E ? nk++ : -1;
+    if (k >= NL_E) nl->ctl_elem[nl->evar[e]] = e;
     nl->eport[e] = -1;
   }
   int q = 0;
-  for (int g = 0; g < 6; g++) {
-    nl_kind want = g < 3 ? vorder[g] : iorder[g - 3];
+  for (int g = 0; g < 10; g++) {
+    nl_kind want = order[g];
     for (int e = 0; e < c->nelem; e++) {
       nl_kind k = c->elem[e].kind;
-      if (k != want || (k == NL_D && (g < 3) != (fixed[e] != 0))) continue;
+      if (k != want || (k == NL_D && (g < 5) != (fixed[e] != 0))) continue;
       nl->eport[e] = q;
-      int var = k == NL_L || k == NL_C ? NL_VAR_X : k == NL_D ? NL_VAR_Z : NL_VAR_U;
-      nl->port[q++] = (nl_port){e, var, nl->evar[e], k == NL_D && g < 3 ? -1 : 1};
+      int var = k == NL_L || k == NL_C ? NL_VAR_X : k == NL_D ? NL_VAR_Z : k >= NL_E ? NL_VAR_CTL : NL_VAR_U;
+      nl->port[q++] = (nl_port){e, var, nl->evar[e], k == NL_D && g < 5 ? -1 : 1};
     }
-    if (g == 2) nl->nv = q;
+    if (g == 4) nl->nv = q;
   }
   nl->ni = q - nl->nv;
   nl->n = nl->nL + nl->nC;
   nl->p = nu;
   nl->m = nz;
+  nl->nctl = nk;
 }
 
 int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
@@ -246,7 +267,8 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   nl->depth = malloc(sizeof(int) * (size_t)nn);
   nl->snode = malloc(sizeof(int) * (size_t)nn);
   nl->psign = malloc((size_t)nn);
-  if (!uf || !fixed || !vport || !nl->eport || !nl->evar || !nl->port || !nl->parent || !nl->pport ||
+  nl->ctl_elem = malloc(sizeof(int) * ((size_t)ne + 1));
+  if (!nl->ctl_elem || !uf || !fixed || !vport || !nl->eport || !nl->evar || !nl->port || !nl->parent || !nl->pport ||
       !nl->depth || !nl->snode || !nl->psign)
     st = nomem(c, errmsg);
   for (int v = 0; !st && v < nn; v++) uf[v] = v;

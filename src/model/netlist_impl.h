@@ -28,8 +28,10 @@
 #include "util/linalg.h"
 #include "netlist_desc.h"
 
-/* Which LCS variable a port's value is: the state, an input or a zeta. */
-enum { NL_VAR_X, NL_VAR_U, NL_VAR_Z };
+/* Which LCS variable a port's value is: the state, an input, a zeta, or
+ * (NL_VAR_CTL) a controlled source's output, a linear function of the
+ * others once the controlled sources are eliminated (netlist_ctl.c). */
+enum { NL_VAR_X, NL_VAR_U, NL_VAR_Z, NL_VAR_CTL };
 
 typedef struct nl_port {
   int elem;           /* the element */
@@ -46,6 +48,9 @@ struct cup_netlist {
   int n, m, p, nL, nC;
   /* the circuit, for names and signals */
   char *file;
+  char *source;       /* the netlist text as read (before sets), for provenance */
+  int nfiles;
+  char **files;       /* every file read, each once */
   int nnodes, nelem;
   char **node;
   nl_elem *elem;      /* copies (names owned; no sources) */
@@ -60,6 +65,12 @@ struct cup_netlist {
   int nv, ni;         /* voltage ports 0..nv-1, current ports nv..nv+ni-1 */
   nl_port *port;
   int *parent, *pport, *depth, *snode;   /* per node; snode -1: ground's tree */
+  int nctl;           /* controlled sources (E, F, G, H), ports of var NL_VAR_CTL */
+  int *ctl_elem;      /* per controlled source: its element */
+  double *zmap;       /* nctl x (nv + ni), row-major: each one's output as a combination
+                         of the other ports' values (its own columns zero) */
+  cup_sparse Pinv;    /* n x n, the inverse of P on coupled inductors' blocks only (K) */
+  int *coupled;       /* per state: 1 if in a coupled block (its P^-1 column is in Pinv) */
   signed char *psign; /* phi(node) = phi(parent) + psign * v(pport) */
   int ns;             /* supernodes other than ground's */
   cholmod_common cm;
@@ -73,6 +84,7 @@ struct cup_netlist {
   int *sig_ptr, *sig_idx;
   double *sig_val;
   double *ubuf, *dense;   /* p, and n + p + m + supernodes of scratch */
+  double *prow;           /* nv + ni: a signal's row over the ports */
 };
 
 /* Triplets, each with a bound on the magnitude of what was summed into it. */
@@ -99,6 +111,18 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg);
 /* tau(a) - tau(b) as (port, coefficient) pairs into buf (at most
  * depth(a) + depth(b) of them); returns their number. */
 int nl_path(const cup_netlist *nl, int a, int b, int *port, double *coef);
+
+/* Rows over the ports (nv + ni dense): node v's potential times coef, and
+ * element e's current (from its first node to its second), added in. */
+int nl_prow_node(cup_netlist *nl, int v, double coef, double *prow);
+int nl_prow_current(cup_netlist *nl, int e, double *prow);
+/* Eliminate the controlled sources: their outputs in terms of the other
+ * ports (zmap) and H's columns with them substituted; a singular loop of
+ * controlled sources is an error naming them. */
+int nl_controlled(cup_netlist *nl, const nl_circuit *c, char *errmsg);
+/* K: the inductance matrix's blocks, checked positive definite, into
+ * P (sparse, when any K) and Pinv. */
+int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, cup_sparse *P, char *errmsg);
 
 /* 0 if text is a valid probe of this circuit, else a message into msg. */
 int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t size);

@@ -15,23 +15,31 @@
 #include "netlist_impl.h"
 
 static int nvar(const cup_netlist *nl) { return nl->n + nl->p + nl->m; }
+static int nports(const cup_netlist *nl) { return nl->nv + nl->ni; }
 
-/* Port q's value (times coef) into the dense row over (x, u, zeta). */
+/* Port q's value (times coef) into the dense row over (x, u, zeta); a
+ * controlled source's output through its row of zmap. */
 static void add_port(const cup_netlist *nl, int q, double coef, double *row) {
   const nl_port *pt = &nl->port[q];
+  if (pt->var == NL_VAR_CTL) {
+    const double *z = nl->zmap + (size_t)pt->index * (size_t)nports(nl);
+    for (int j = 0; j < nports(nl); j++)
+      if (z[j] != 0) add_port(nl, j, coef * z[j], row);   /* zmap's columns of controlled ports are 0 */
+    return;
+  }
   int off = pt->var == NL_VAR_X ? 0 : pt->var == NL_VAR_U ? nl->n : nl->n + nl->p;
   row[off + pt->index] += coef * pt->sign;
 }
 
 /* Row q of H (port q's current if a voltage port, voltage if a current port). */
-static void add_h_row(const cup_netlist *nl, int q, double coef, double *row) {
+static void add_h_row(const cup_netlist *nl, int q, double coef, double *prow) {
   for (int j = 0; j < nl->H.ncol; j++)
     for (int k = nl->H.p[j]; k < nl->H.p[j + 1]; k++)
-      if (nl->H.i[k] == q) add_port(nl, j, coef * nl->H.x[k], row);
+      if (nl->H.i[k] == q) prow[j] += coef * nl->H.x[k];
 }
 
-static int add_node(cup_netlist *nl, int v, double coef, double *row) {
-  for (int w = v; nl->parent[w] >= 0; w = nl->parent[w]) add_port(nl, nl->pport[w], coef * nl->psign[w], row);
+int nl_prow_node(cup_netlist *nl, int v, double coef, double *prow) {
+  for (int w = v; nl->parent[w] >= 0; w = nl->parent[w]) prow[nl->pport[w]] += coef * nl->psign[w];
   int s = nl->snode[v];
   if (s < 0) return CUP_OK;
   cholmod_dense *b = cholmod_zeros((size_t)nl->ns, 1, CHOLMOD_REAL, &nl->cm);
@@ -46,32 +54,28 @@ static int add_node(cup_netlist *nl, int v, double coef, double *row) {
   for (int j = 0; j < (int)nl->K->ncol; j++) {
     double acc = 0;
     for (int k = Kp[j]; k < Kp[j + 1]; k++) acc += yv[Ki[k]] * Kx[k];
-    if (acc != 0) add_port(nl, j, -coef * acc, row);
+    if (acc != 0) prow[j] -= coef * acc;
   }
   cholmod_free_dense(&y, &nl->cm);
   return CUP_OK;
 }
 
-static int add_current(cup_netlist *nl, int e, double *row) {
+int nl_prow_current(cup_netlist *nl, int e, double *prow) {
   const nl_elem *el = &nl->elem[e];
   int q = nl->eport[e];
-  switch (el->kind) {
-    case NL_R: {
-      int st = add_node(nl, el->a, 1 / el->value, row);
-      return st ? st : add_node(nl, el->b, -1 / el->value, row);
-    }
-    case NL_L: case NL_I:
-      add_port(nl, q, 1, row);                    /* the port's own value */
-      return CUP_OK;
-    case NL_D:
-      if (q >= nl->nv) { add_port(nl, q, 1, row); return CUP_OK; }
-      add_h_row(nl, q, 1, row);
-      return CUP_OK;
-    case NL_C: case NL_V:
-      add_h_row(nl, q, 1, row);
-      return CUP_OK;
+  if (el->kind == NL_R) {
+    int st = nl_prow_node(nl, el->a, 1 / el->value, prow);
+    return st ? st : nl_prow_node(nl, el->b, -1 / el->value, prow);
   }
+  if (q >= nl->nv) prow[q] += 1;                  /* a current port: its own value */
+  else add_h_row(nl, q, 1, prow);                 /* a voltage port: its row of H */
   return CUP_OK;
+}
+
+/* A row over the ports into one over (x, u, zeta). */
+static void to_vars(const cup_netlist *nl, const double *prow, double *row) {
+  for (int q = 0; q < nports(nl); q++)
+    if (prow[q] != 0) add_port(nl, q, prow[q], row);
 }
 
 /* ---- the table of signals ----------------------------------------------------- */
@@ -115,6 +119,11 @@ static int find_node(const cup_netlist *nl, const char *s, size_t len) {
 static int find_elem(const cup_netlist *nl, const char *s, size_t len) {
   for (int e = 0; e < nl->nelem; e++)
     if (strlen(nl->elem[e].name) == len && !strncasecmp(nl->elem[e].name, s, len)) return e;
+  if (len > 2 && s[1] == '.') {                   /* ngspice's "r.x1.r1" for the subcircuit's "x1.r1" */
+    static const char letter[] = "rlcvidefgh";    /* by nl_kind */
+    int e = find_elem(nl, s + 2, len - 2);
+    if (e >= 0 && tolower((unsigned char)s[0]) == letter[nl->elem[e].kind]) return e;
+  }
   return -1;
 }
 
@@ -163,10 +172,12 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
   if (!name) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
   for (int k = 0; k < nl->nsig; k++)
     if (!strcmp(nl->sig_name[k], name)) { free(name); return k; }
-  double *row = nl->dense;
+  double *row = nl->dense, *prow = nl->prow;
   memset(row, 0, sizeof(double) * (size_t)nvar(nl));
-  int st = kind == 'i' ? add_current(nl, x, row) : add_node(nl, x, 1, row);
-  if (!st && y >= 0) st = add_node(nl, y, -1, row);
+  memset(prow, 0, sizeof(double) * (size_t)nports(nl));
+  int st = kind == 'i' ? nl_prow_current(nl, x, prow) : nl_prow_node(nl, x, 1, prow);
+  if (!st && y >= 0) st = nl_prow_node(nl, y, -1, prow);
+  if (!st) to_vars(nl, prow, row);
   if (!st) st = append(nl, name, row);
   if (st) { free(name); return cup_fail(errmsg, st, "out of memory"); }
   return nl->nsig - 1;
@@ -174,6 +185,8 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
 
 static int scratch(cup_netlist *nl, char *errmsg) {
   if (!nl->dense && !(nl->dense = calloc((size_t)nvar(nl) + 1, sizeof(double))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  if (!nl->prow && !(nl->prow = calloc((size_t)nports(nl) + 1, sizeof(double))))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
   if (!nl->ubuf && !(nl->ubuf = calloc((size_t)nl->p + 1, sizeof(double))))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
@@ -239,6 +252,11 @@ int cup_netlist_signal_count(const cup_netlist *nl) { return nl ? nl->nsig : 0; 
 
 const char *cup_netlist_signal_name(const cup_netlist *nl, int k) {
   return nl && k >= 0 && k < nl->nsig ? nl->sig_name[k] : NULL;
+}
+
+const char *cup_netlist_signal_unit(const cup_netlist *nl, int k) {
+  const char *name = cup_netlist_signal_name(nl, k);
+  return !name ? NULL : name[0] == 'v' ? "V" : name[0] == 'i' ? "A" : "1";
 }
 
 int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out) {

@@ -5,6 +5,9 @@
  * bit for bit, in fewer instructions. */
 #ifndef CUP_UTIL_LANES_H
 #define CUP_UTIL_LANES_H
+#ifdef __SSE2__
+#include <emmintrin.h>   /* the intrinsics GCC and clang both name (GCC's builtins are GCC's alone) */
+#endif
 
 typedef double cup_v2d __attribute__((vector_size(16)));
 typedef long long cup_v2l __attribute__((vector_size(16)));
@@ -22,7 +25,7 @@ static inline cup_v2d cup_v2_abs(cup_v2d v) {
  * maxpd and minpd exactly) */
 static inline cup_v2d cup_v2_max(cup_v2d a, cup_v2d b) {
 #ifdef __SSE2__
-  return __builtin_ia32_maxpd(a, b);
+  return _mm_max_pd(a, b);
 #else
   return (cup_v2d){a[0] > b[0] ? a[0] : b[0], a[1] > b[1] ? a[1] : b[1]};
 #endif
@@ -30,7 +33,7 @@ static inline cup_v2d cup_v2_max(cup_v2d a, cup_v2d b) {
 
 static inline cup_v2d cup_v2_min(cup_v2d a, cup_v2d b) {
 #ifdef __SSE2__
-  return __builtin_ia32_minpd(a, b);
+  return _mm_min_pd(a, b);
 #else
   return (cup_v2d){a[0] < b[0] ? a[0] : b[0], a[1] < b[1] ? a[1] : b[1]};
 #endif
@@ -39,11 +42,18 @@ static inline cup_v2d cup_v2_min(cup_v2d a, cup_v2d b) {
 /* mask ? 0 : v, lane by lane (mask lanes all ones or zero) */
 static inline cup_v2d cup_v2_clear(cup_v2l mask, cup_v2d v) {
 #ifdef __SSE2__
-  return __builtin_ia32_andnpd((cup_v2d)mask, v);
+  return _mm_andnot_pd((cup_v2d)mask, v);
 #else
   return (cup_v2d)(~mask & (cup_v2l)v);
 #endif
 }
+
+/* (a[i], b[j]) with lanes numbered 0, 1 in a and 2, 3 in b */
+#ifdef __clang__
+#define cup_v2_shuffle(a, b, i, j) __builtin_shufflevector(a, b, i, j)
+#else
+#define cup_v2_shuffle(a, b, i, j) __builtin_shuffle(a, b, (cup_v2l){i, j})
+#endif
 
 /* mask ? a : b, lane by lane (mask lanes all ones or zero) */
 static inline cup_v2d cup_v2_select(cup_v2l mask, cup_v2d a, cup_v2d b) {

@@ -4,7 +4,8 @@
 !    C v' = max(0, (V - v)/Rs) - v/RL (docs/netlist.md): v(60 ms) to 1e-3 V;
 !  * signals against Kirchhoff's laws at a given (t, x, zeta), and zeta of
 !    the last step equal to the diode current (V - v)/Rs of the final state;
-!  * sets, and errors with their messages (a bad value, an X element).
+!  * sets, errors with their messages (a bad value, an undefined subcircuit),
+!    and the list of files read.
 program test_f_netlist
   use, intrinsic :: iso_c_binding
   use catchup
@@ -21,6 +22,7 @@ program test_f_netlist
   call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, errmsg=msg)
   call check_int(ierr, CUP_OK, 'load halfwave-rc.cir: ' // trim(msg))
   call check(cup_netlist_state_name(nl, 1) == 'v(C1)', 'state 1 is v(C1)')
+  call check(index(cup_netlist_source(nl), 'C1 out 0 100u') > 0, 'the source text is the file')
   call check(cup_netlist_row_name(nl, 1) == 'D1', 'row 1 is D1')
   call check(cup_netlist_input_name(nl, 1) == 'V1', 'input 1 is V1')
   call check(.not. cup_netlist_row_fixed(nl, 1), 'D1 is free (zeta is its current)')
@@ -62,6 +64,7 @@ program test_f_netlist
     call cup_netlist_probe(nl, 'v(a,out)', ierr, index=k)
     call check_int(k, 3, 'third probe')
     call check(cup_netlist_signal_name(nl, 2) == 'i(D1)', 'canonical name i(D1)')
+    call check(cup_netlist_signal_unit(nl, 2) == 'A' .and. cup_netlist_signal_unit(nl, 1) == 'V', 'units A, V')
     call cup_netlist_probe(nl, 'v(nowhere)', ierr, errmsg=msg)
     call check_int(ierr, CUP_ERR_ARG, 'unknown node')
     call check_contains(msg, "no node named 'nowhere'", 'its message')
@@ -81,8 +84,12 @@ program test_f_netlist
   call check_contains(msg, "set 'RL=-1': RL: bad value: resistance must be > 0", 'its message')
   call cup_netlist_load_string(nl, 'title' // new_line('a') // 'X1 a 0 amp' // new_line('a'), 'x.cir', ierr, &
                                errmsg=msg)
-  call check_int(ierr, CUP_ERR_UNSUPPORTED, 'an X element')
-  call check_contains(msg, 'x.cir:2:1: X1: subcircuits (X) are not supported', 'its message')
+  call check_int(ierr, CUP_ERR_PARSE, 'an X element of no subcircuit')
+  call check_contains(msg, "x.cir:2:8: X1: subcircuit 'amp' is not defined", 'its message')
+  call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr)
+  call check_int(cup_netlist_file_count(nl), 1, 'files read')
+  call check_contains(cup_netlist_file(nl, 1), 'halfwave-rc.cir', 'the netlist is file 1')
+  call cup_netlist_free(nl)
   call finish()
 
 contains

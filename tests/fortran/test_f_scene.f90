@@ -58,6 +58,10 @@ program test_f_scene
   call check_int(ierr, CUP_OK, 'load: ' // trim(msg))
   call cup_scene_options(s, o, ierr)
   call check(ierr == CUP_OK .and. o%n >= 1, 'options of the file')
+  call check(cup_scene_state_name(s, 1) == 'q(C4)' .and. cup_scene_state_unit(s, 1) == 'C', &
+    'state 1 is the charge q(C4), in C')
+  call check(cup_scene_state_name(s, 3) == 'i(L2)' .and. cup_scene_state_unit(s, 3) == 'A', 'state 3 is i(L2), in A')
+  call check(cup_scene_state_name(s, 4) == '' .and. cup_scene_state_unit(s, 4) == '', 'no state 4 of 3')
   call cup_scene_free(s)
 
   call section('a set: scene, examples/tractrix.yaml')
