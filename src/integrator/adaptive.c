@@ -73,6 +73,14 @@ static void exosystem(cup_adaptive *A) {
     return;
   }
   for (int k = 0; k < u->nterms; k++) A->U[u->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
+  for (int k = 0; k < u->nterms; k++) {          /* the rounding scale of the value states */
+    const cup_term *t = &u->terms[k];
+    double sc = fabs(t->value) + fabs(t->amp);
+    if (t->kind == CUP_WAVE_PULSE) sc = fmax(fabs(t->value), fabs(t->value2));
+    for (int j = 0; t->kind == CUP_WAVE_PWL && j < t->np; j++) sc = fmax(sc, fabs(t->v[j]));
+    A->wscale[A->first_state[k]] = sc;
+    if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) A->wscale[A->first_state[k] + 1] = sc;
+  }
   cup_input_gen_dynamics(u, A->first_state, A->W, nw);
   for (int k = 0; k < u->nterms; k++)
     if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
@@ -90,7 +98,8 @@ static void dae_setup(cup_adaptive *A, const cup_sparse *B, const cup_sparse *Dm
   for (int j = 0; j < m; j++)
     for (int i = 0; i < m; i++) {
       double acc = 0;
-      for (int k = A->K->Ct.p[i]; k < A->K->Ct.p[i + 1]; k++) acc += A->K->Ct.x[k] * A->Bd[A->K->Ct.i[k] + (size_t)j * n];
+      for (int k = A->K->Ct.p[i]; k < A->K->Ct.p[i + 1]; k++)
+        acc += A->K->Ct.x[k] * A->Bd[A->K->Ct.i[k] + (size_t)j * n];
       A->CB[i + (size_t)j * m] = acc;
       if (A->Dd[i + (size_t)j * m] != 0) A->dcpl[i] = A->dcpl[j] = 1;
     }
@@ -188,6 +197,8 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->uerr = take((size_t)p, sizeof(double), &fail);
   A->wa = take((size_t)nw, sizeof(double), &fail);
   A->wt = take((size_t)nw, sizeof(double), &fail);
+  A->wscale = take((size_t)nw, sizeof(double), &fail);
+  A->gscale = take((size_t)m, sizeof(double), &fail);
   A->zw = take((size_t)nw, sizeof(double), &fail);
   A->zy = take((size_t)na, sizeof(double), &fail);
   A->xo = take((size_t)n, sizeof(double), &fail);
@@ -224,6 +235,11 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   if (G) dense_of(G, 1, A->G, m);
   A->hmax_input = o->T / 8;
   exosystem(A);
+  if (A->one >= 0) A->wscale[A->one] = 1;
+  for (int i = 0; i < m; i++)                    /* g's rounding scale: sum |G_iq| |u_q| at most */
+    for (int c = 0; c < nw; c++)
+      for (int q = 0; q < p; q++)
+        A->gscale[i] += fabs(A->G[i + (size_t)q * m] * A->U[q + (size_t)c * p]) * A->wscale[c];
   for (int j = 0; j <= AD_DEGREE; j++) A->node[j] = 0.5 * (1 - cos(M_PI * j / AD_DEGREE));
   A->pinf = p_to_inf(K);
   if (A->has_D) dae_setup(A, B, Dm);
@@ -247,8 +263,10 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et);
-  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->lcpM); free(A->touch);
-  free(A->samp); free(A->coef); free(A->zw); free(A->zy); free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
+  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt);
+  free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
+  free(A->samp); free(A->coef); free(A->zw); free(A->zy);
+  free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
   free(A);
   *Ap = NULL;
 }

@@ -104,7 +104,7 @@ static int mode_fits(cup_adaptive *A, ad_mode *md, const double *x, const double
     double res = 0, mag = 0;
     for (int a = 0; a < md->nj; a++) {
       int i = md->rows[a];
-      double s = A->g[i], sm = fabs(A->g[i]) + A->c1[i] * xn;
+      double s = A->g[i], sm = fabs(A->g[i]) + A->c1[i] * xn + A->gscale[i];
       for (int k = A->K->Ct.p[i]; k < A->K->Ct.p[i + 1]; k++) s += A->K->Ct.x[k] * x[A->K->Ct.i[k]];
       res += md->Zt[(size_t)b * md->nj + a] * s;
       mag += fabs(md->Zt[(size_t)b * md->nj + a]) * sm;
@@ -120,8 +120,11 @@ static int mode_fits(cup_adaptive *A, ad_mode *md, const double *x, const double
   cup_copy(My, A->My, na);
   ad_events_deriv(A, md, My, d2);                /* L M (M y) */
   for (int i = 0; i < m; i++) {
-    if (g[i] < -16 * thr[i]) return 0;
-    if (g[i] > 16 * thr[i]) continue;
+    double tw = 0;                               /* the input's rounding: a sine's zero is an ulp off */
+    for (int j = A->n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * fmax(fabs(y[j]), A->wscale[j - A->n]);
+    double th = 16 * thr[i] + 64 * DBL_EPSILON * tw;
+    if (g[i] < -th) return 0;
+    if (g[i] > th) continue;
     double dm = 0, d2m = 0;                      /* the rounding of the slopes */
     for (int j = 0; j < na; j++) {
       dm += md->Lm[(size_t)i * na + j] * fabs(My[j]);

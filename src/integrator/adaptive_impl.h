@@ -76,6 +76,9 @@ struct cup_adaptive {
   unsigned char *dcpl;      /* rows with a nonzero in their row or column of D */
   int one;                  /* the exosystem's constant state 1 (F reaches zeta through D), or -1 */
   int nwu;                  /* the input's own exosystem states (nw without the constant) */
+  double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
+                               table's largest value; 0 for a slope: its own size) */
+  double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
   double *N, *Ninv, *Nw;    /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse, scratch */
   double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ and of N (m x m, m, m) */
   double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
@@ -105,7 +108,8 @@ struct cup_adaptive {
   double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
-  double *cz, *cs;          /* per row: ||B_i||_inf and ||A B_i||_inf / S_ii (the late-switch error, docs/adaptive.md) */
+  double *cz, *cs;          /* per row, the late-switch error (docs/adaptive.md): pinf ||B_i||_P and
+                               pinf ||A B_i||_P / (C B)_ii (pinf ||B_i||_P / D_ii where D_ii > 0) */
   double *c1;               /* per row: ||c_i||_1 */
   double *x, *xs, *xr, *xf, *s, *gam, *g, *ut, *udot, *uerr, *wa, *wt;
   double *e, *et;           /* the propagated error estimate, n */
