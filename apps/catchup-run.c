@@ -264,6 +264,7 @@ typedef struct {
   double wall;               /* seconds in cup_integrator_run */
   int status;
   char message[MSG_LEN];
+  char warnings[2 * MSG_LEN]; /* the model's (model_warnings), one a line */
 } run_t;
 
 /* The writer is created after the integrator (a scene that cannot run must
@@ -419,6 +420,7 @@ static int write_results(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_double(w, "stopped_t", i->t));
   st = cup_status_merge(st, cup_h5run_attr_long(w, "status", r->status));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "status_name", cup_status_name(r->status)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "warnings", r->warnings));
   return cup_status_merge(st, cup_h5run_attr_string(w, "message", r->message));
 }
 
@@ -503,6 +505,22 @@ static int setup_signals(run_t *r, char *err) {
   return 0;
 }
 
+/* What the model found suspect but allowed (a loop of ideal diodes, a
+ * door no agent can pass): one stderr line each before the run, whatever
+ * --quiet says, and the file's attribute `warnings`. */
+static void model_warnings(run_t *r) {
+  const char *w[2] = {cup_crowd_warning(cup_scene_crowd(r->scene)), cup_netlist_warning(cup_scene_netlist(r->scene))};
+  size_t len = 0;
+  for (int k = 0; k < 2; k++) {
+    if (!w[k]) continue;
+    const char *scene = r->args->scene;            /* a netlist's own warning names it already */
+    if (!strncmp(w[k], scene, strlen(scene)) && w[k][strlen(scene)] == ':') fprintf(stderr, "catchup-run: warning: %s\n", w[k]);
+    else fprintf(stderr, "catchup-run: warning: %s: %s\n", scene, w[k]);
+    int n = snprintf(r->warnings + len, sizeof r->warnings - len, "%s%s", len ? "\n" : "", w[k]);
+    if (n > 0 && len + (size_t)n < sizeof r->warnings) len += (size_t)n;
+  }
+}
+
 static int setup(run_t *r, char *err) {
   const args_t *a = r->args;
   if (load_scene(r, err)) return EXIT_RUN;       /* the message names file:line:column and key */
@@ -533,6 +551,7 @@ static int setup(run_t *r, char *err) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
     return EXIT_RUN;
   }
+  model_warnings(r);
   return 0;
 }
 

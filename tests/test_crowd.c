@@ -536,6 +536,64 @@ static void test_errors(void **state) {
   d.door = door; d.clearance = 0;
   d.speed = 0;
   expect_error(&d, "desired speed");
+  d.speed = 1;
+  /* rooms that are not simple polygons: a bow tie (edges 0 and 2 cross at
+   * (5, 5)), a vertex on a far edge (edges 0 and 3 touch at (5, 0)), an
+   * edge folding back over its neighbour (edges 1 and 2 overlap on
+   * [(10, 0), (12, 0)]); the simple ones beside them pass */
+  const double bowtie[8] = {0, 0, 10, 10, 10, 0, 0, 10};
+  const double touch[10] = {0, 0, 10, 0, 10, 10, 0, 10, 5, 0};
+  const double fold[10] = {0, 0, 14, 0, 10, 0, 10, 10, 0, 10};
+  const double bq[2] = {2, 8.5}, br[1] = {0.25}, bdoor[4] = {0, 7, 0, 9};
+  cup_crowd_desc b = {.agents = 1, .q0 = bq, .radius = br, .room_points = 4, .room = bowtie, .doors = 1,
+                      .door = bdoor, .speed = 1};
+  expect_error(&b, "the room is not a simple polygon: its edges 0, from (0, 0) to (10, 10), and 2, from (10, 0) "
+               "to (0, 10), cross");
+  b.room_points = 5; b.room = touch;
+  expect_error(&b, "its edges 0, from (0, 0) to (10, 0), and 3, from (0, 10) to (5, 0), cross");
+  b.room = fold;
+  expect_error(&b, "its edges 0, from (0, 0) to (14, 0), and 1, from (14, 0) to (10, 0), cross");
+  d.obstacles = 1;
+  const double tie[8] = {4, 4, 4, 6, 6, 4, 6, 6};
+  d.obstacle = tie;
+  q[2] = 8; q[3] = 8;
+  expect_error(&d, "obstacle 0 is not a simple polygon: its edges 1, from (4, 6) to (6, 4), and 3");
+  d.obstacle = box;
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c = NULL;
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);   /* the same with a square obstacle */
+  assert_null(cup_crowd_warning(c));
+  cup_crowd_free(&c);
+}
+
+/* A door passes a disk of radius r exactly when it is at least 2 r wide:
+ * one narrower than the smallest agent's diameter is warned of, naming the
+ * door and that agent; at 2 r_min it is not (issue 27). */
+static void test_impassable_door(void **state) {
+  (void)state;
+  const double room[8] = {0, 0, 10, 0, 10, 10, 0, 10};
+  double q[4] = {2, 2, 5, 5}, r[2] = {0.3, 0.25}, door[8] = {10, 4, 10, 4.49, 0, 4, 0, 6};
+  cup_crowd_desc d = {.agents = 2, .q0 = q, .radius = r, .room_points = 4, .room = room, .doors = 1,
+                      .door = door, .speed = 1};
+  char err[CUP_ERRMSG_LEN];
+  cup_crowd *c = NULL;
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+  assert_non_null(cup_crowd_warning(c));
+  assert_string_equal(cup_crowd_warning(c), "door 0 (from (10, 4) to (10, 4.49)) is 0.49 wide, narrower than the "
+                      "smallest agent (agent 1, diameter 0.5): no agent can pass it; it is the only door: no agent "
+                      "can leave");
+  cup_crowd_free(&c);
+  door[3] = 4.5;                                   /* 2 r_min: passable */
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+  assert_null(cup_crowd_warning(c));
+  cup_crowd_free(&c);
+  door[3] = 4.3;                                   /* a second door, wide enough */
+  d.doors = 2;
+  assert_int_equal(cup_crowd_create(&c, &d, 0.05, err), CUP_OK);
+  assert_non_null(cup_crowd_warning(c));
+  assert_non_null(strstr(cup_crowd_warning(c), "door 0 (from (10, 4) to (10, 4.3)) is 0.3 wide"));
+  assert_null(strstr(cup_crowd_warning(c), "no agent can leave"));
+  cup_crowd_free(&c);
 }
 
 int main(void) {
@@ -549,6 +607,7 @@ int main(void) {
     cmocka_unit_test(test_evacuation_checked),
     cmocka_unit_test(test_exits_notched_room),
     cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_impassable_door),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -539,6 +539,35 @@ static void test_bad_corpus(void **state) {
   assert_true(count >= 40);
 }
 
+/* Loops of ideal diodes with no resistance (issue 27): each netlist of
+ * tests/netlists/warn loads, with the warning its first line expects,
+ * naming the loop's elements; the example circuits (a bridge among them:
+ * a loop of diodes in both directions, whose current is unique) have none. */
+static void test_diode_loops(void **state) {
+  (void)state;
+  static const char *const warn[] = {"antiparallel", "parallel", "diode-ring"};
+  for (int k = 0; k < 3; k++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/../warn/%s.cir", BAD, warn[k]);
+    char *want = bad_expected_error(path, "* expect-warning: ");
+    assert_non_null(want);
+    cup_netlist *nl = load_ok(path, NULL, 0);
+    const char *got = cup_netlist_warning(nl);
+    if (!got || !strstr(got, want)) fail_msg("%s: warning\n  %s\nexpected\n  %s", warn[k], got ? got : "(none)", want);
+    free(want);
+    cup_netlist_free(&nl);
+  }
+  static const char *const clean[] = {"bridge", "clamp", "doubler", "halfwave-rc", "ladder", "paper-fig2",
+                                      "rl-halfwave"};
+  for (int k = 0; k < 7; k++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.cir", CIR, clean[k]);
+    cup_netlist *nl = load_ok(path, NULL, 0);
+    if (cup_netlist_warning(nl)) fail_msg("%s: unexpected warning %s", clean[k], cup_netlist_warning(nl));
+    cup_netlist_free(&nl);
+  }
+}
+
 static char *slurp_text(const char *path) {
   FILE *f = fopen(path, "rb");
   assert_non_null(f);
@@ -605,6 +634,7 @@ int main(void) {
     cmocka_unit_test(test_rl_adaptive_signals),
     cmocka_unit_test(test_rectifiers_with_D),
     cmocka_unit_test(test_bad_corpus),
+    cmocka_unit_test(test_diode_loops),
     cmocka_unit_test(test_mutations),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -411,10 +411,22 @@ static void test_radius_turning_negative_stops_the_run(void **state) {
   o.scheme = CUP_SCHEME_EXPLICIT;
   assert_int_equal(cup_integrator_create_process(&I, &db, &o, err), CUP_OK);
   double y0[2] = {0.25, 0};
+  /* at t = 1 (step 4) they touch in one point, which no point is certainly
+   * in: no answer can be certified, and the run stops there (main stored a
+   * stale point with a warning, issue 27); from 1.25 on they are apart */
+  assert_int_equal(cup_integrator_run(I, y0, count_sink, &last, &info), CUP_ERR_UNCERTIFIED);
+  assert_non_null(strstr(info.message, "step 4 (t = 1)"));
+  assert_non_null(strstr(info.message, "no point certainly in both"));
+  assert_int_equal(last, 3);
+  /* apart: on a grid that skips the touching */
+  cup_integrator_free(&I);
+  o.n = 7;
+  o.T = 2.1;                             /* h = 0.3: 0.9, then 1.2 */
+  assert_int_equal(cup_integrator_create_process(&I, &db, &o, err), CUP_OK);
   assert_int_equal(cup_integrator_run(I, y0, count_sink, &last, &info), CUP_ERR_EMPTY_SET);
-  assert_non_null(strstr(info.message, "step 5 (t = 1.25)"));
+  assert_non_null(strstr(info.message, "step 4 (t = 1.2"));
   assert_non_null(strstr(info.message, "do not meet"));
-  assert_int_equal(last, 4);
+  assert_int_equal(last, 3);
   cup_integrator_free(&I);
   cup_set_free(&B);
   tcsc_free(&Cs);

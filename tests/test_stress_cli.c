@@ -135,6 +135,118 @@ static void test_divergence_keeps_prefix(void **state) {
   unload(&a);
 }
 
+/* The paper's circuit with L2 = 1e-9 (diverging-paper.yaml) under the
+ * explicit scheme: the fused steps of a small LCS, every state stored or
+ * only the last, and the projector pg: each exits 1 with CUP_ERR_DIVERGED
+ * at the same step, the first whose state has ||x||_1 > 1e150, the rows
+ * before it in the file and within that range. */
+static void test_divergence_every_stride(void **state) {
+  (void)state;
+  const char *scene = SCENES "/stress/diverging-paper.yaml";
+  const char *out = tmp_path("diverging.h5");
+  long named = -1;
+  const char *extra[][4] = {{"--quiet", NULL}, {"--set", "output=final", "--quiet", NULL},
+                            {"--set", "output.every=7", "--quiet", NULL}, {"--projector", "pg", "--quiet", NULL}};
+  for (int v = 0; v < 4; v++) {
+    const char *args[8] = {scene, "-o", out};
+    for (int j = 0; extra[v][j]; j++) args[3 + j] = extra[v][j];
+    result r = run_cli(args, 0, 0);
+    if (r.code != 1 || r.lines != 1) fail_msg("variant %d: exit %d with %d lines:\n%s", v, r.code, r.lines, r.err);
+    expect_in(r.err, "CUP_ERR_DIVERGED");
+    expect_in(r.err, "the state left its range ||x||_1 <= 1e+150");
+    expect_in(r.err, "h*rho(A) = 3e+07 > 2");
+    h5file a;
+    load(out, 3, &a);
+    assert_int_equal(a.status, CUP_ERR_DIVERGED);
+    if (v == 0) named = (long)a.stopped_step + 1;
+    assert_int_equal(a.stopped_step + 1, named);
+    char want[64];
+    snprintf(want, sizeof want, "step %ld (t = ", named);
+    expect_in(r.err, want);
+    expect_in(a.msg, want);
+    for (hsize_t k = 0; k < a.rows; k++) {
+      double n1 = fabs(a.x[3 * k]) + fabs(a.x[3 * k + 1]) + fabs(a.x[3 * k + 2]);
+      if (!(n1 <= 1e150)) fail_msg("variant %d: row %llu has ||x||_1 = %g", v, (unsigned long long)k, n1);
+    }
+    assert_int_equal(a.rows, v == 0 || v == 3 ? named : v == 1 ? 0 : (named - 1) / 7 + 1);
+    unload(&a);
+  }
+  assert_int_equal(named, 71);
+}
+
+/* A polyset and a ball with x0 on a face of the polyset
+ * (intersection-face.yaml): the drift presses the point into the face and
+ * slides it up to the corner of the face and the circle; the closed form
+ * x(t) = (0.5, min(0.5 + t, 1.5)) holds at every step, each certified
+ * (eta 0). Main stored a stale point at step 100 (eta = inf). Without the
+ * drift the point stays at x0, on the face (main stored (0, 0) at step 1). */
+static void test_intersection_on_a_face(void **state) {
+  (void)state;
+  const char *scene = SCENES "/stress/intersection-face.yaml";
+  const char *out = tmp_path("face.h5");
+  for (int drift = 1; drift >= 0; drift--) {
+    const char *args[] = {scene, "-o", out, "--quiet", drift ? NULL : "--set", "f.b=[0, 0]", NULL};
+    result r = run_cli(args, 0, 0);
+    if (r.code != 0 || r.lines != 0) fail_msg("drift %d: exit %d:\n%s", drift, r.code, r.err);
+    h5file a;
+    load(out, 2, &a);
+    assert_int_equal(a.status, CUP_OK);
+    assert_int_equal(a.rows, 201);
+    for (hsize_t k = 0; k < a.rows; k++) {
+      double y = drift ? fmin(0.5 + (double)k / 100, 1.5) : 0.5;
+      if (fabs(a.x[2 * k] - 0.5) > 1e-12 || fabs(a.x[2 * k + 1] - y) > 1e-12)
+        fail_msg("drift %d, row %llu: (%.17g, %.17g), expected (0.5, %.17g)", drift, (unsigned long long)k,
+                 a.x[2 * k], a.x[2 * k + 1], y);
+    }
+    hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(attr_f64(f, "max_eta_cert") == 0);
+    H5Fclose(f);
+    unload(&a);
+  }
+}
+
+/* What the model allows but warns of (issue 27): a loop of ideal diodes
+ * (tests/netlists/warn) and a door no agent can pass: exit 0, the warning
+ * on one stderr line before the run's, and in the attribute `warnings`. */
+static void test_model_warnings(void **state) {
+  (void)state;
+  const char *out = tmp_path("warn.h5");
+  const char *cir = CUP_SOURCE_DIR "/tests/netlists/warn/antiparallel.cir";
+  const char *a1[] = {cir, "-o", out, "--quiet", NULL};
+  result r = run_cli(a1, 0, 0);
+  if (r.code != 0) fail_msg("diode loop: exit %d:\n%s", r.code, r.err);
+  const char *want = "antiparallel.cir:7:1: D1: D1 and D2 are ideal diodes in anti-parallel between nodes 'a' and "
+                     "'b', a loop with no resistance: a current around it is not unique; the run takes one";
+  expect_in(r.err, "catchup-run: warning: ");
+  expect_in(r.err, want);
+  char text[512];
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  attr_str(f, "warnings", text, sizeof text);
+  H5Fclose(f);
+  expect_in(text, want);
+  const char *room = SCENES "/crowd/narrow-door.yaml";
+  const char *a2[] = {room, "-o", out, NULL};
+  r = run_cli(a2, 0, 0);
+  if (r.code != 0) fail_msg("narrow door: exit %d:\n%s", r.code, r.err);
+  want = "door 0 (from (6, 1.8) to (6, 2.2)) is 0.4 wide, narrower than the smallest agent (agent 1, diameter "
+         "0.5): no agent can pass it; it is the only door: no agent can leave";
+  expect_in(r.err, want);
+  assert_true(strstr(r.err, want) < strstr(r.err, "-> "));   /* before the run's summary */
+  expect_in(r.err, "0 out");
+  f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  attr_str(f, "warnings", text, sizeof text);
+  H5Fclose(f);
+  expect_in(text, want);
+  const char *a3[] = {CUP_SOURCE_DIR "/examples/paper-fig2.yaml", "-o", out, "--quiet", NULL};
+  r = run_cli(a3, 0, 0);                             /* no warning: the attribute is empty */
+  if (r.code != 0 || r.lines != 0) fail_msg("paper-fig2: exit %d:\n%s", r.code, r.err);
+  f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  attr_str(f, "warnings", text, sizeof text);
+  H5Fclose(f);
+  assert_string_equal(text, "");
+}
+
 /* NaN in a scene file and in an override: exit 1, one line, the place. */
 static void test_nonfinite_scene_values(void **state) {
   (void)state;
@@ -158,6 +270,9 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_empty_set_keeps_prefix),
     cmocka_unit_test(test_divergence_keeps_prefix),
+    cmocka_unit_test(test_divergence_every_stride),
+    cmocka_unit_test(test_model_warnings),
+    cmocka_unit_test(test_intersection_on_a_face),
     cmocka_unit_test(test_nonfinite_scene_values),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

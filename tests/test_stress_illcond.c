@@ -396,7 +396,10 @@ static int log_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   (void)t;
   eta_log *l = ctx;
   if (k <= 2000) { l->eta[k] = pi->eta_cert; l->eps[k] = pi->eps_cert; }
-  if (pi->status == CUP_WARN_NOT_CERTIFIED && l->first_uncertified == 0) l->first_uncertified = k;
+  /* not certified, or certified only by a distance of z to K (the
+   * integrator's fallback where the exact step found no point certainly in
+   * K: z is kept, its eta > 0), as at the wedge's apex */
+  if ((pi->status == CUP_WARN_NOT_CERTIFIED || pi->eta_cert > 0) && l->first_uncertified == 0) l->first_uncertified = k;
   l->k = k;
   return 0;
 }
@@ -449,15 +452,31 @@ static void test_integrator_ill_conditioned(void **state) {
       traj_init(&tr, 3, n + 1);
       cup_run_info info;
       int st = cup_integrator_run(I, x0, traj_sink, &tr, &info);
-      assert_true(st == CUP_OK || st == CUP_WARN_NOT_CERTIFIED);
-      assert_int_equal(tr.rows, n + 1);
-      assert_true((st == CUP_WARN_NOT_CERTIFIED) == (info.not_certified > 0));
+      /* an answer provably farther than eta_n from K, where the exact
+       * fallback cannot certify either (the apex of the 1e-8 wedge, and of
+       * the 1e-6 one in the metric of condition 1e8: main went on there
+       * with states 872 from K), stops the run (issue 27): the rows before
+       * it are kept, each within its certified eta as below */
+      int stopped = st == CUP_ERR_UNCERTIFIED;
+      if (!(st == CUP_OK || st == CUP_WARN_NOT_CERTIFIED || stopped))
+        fail_msg("%s: %s", cup_status_name(st), info.message);
+      if (stopped) {
+        char want[48];
+        snprintf(want, sizeof want, "step %ld (t = ", info.step + 1);
+        assert_non_null(strstr(info.message, want));
+        assert_non_null(strstr(info.message, "no method found a point within a certified distance"));
+        print_message("theta %.0e, %s P, %s: %s at step %ld\n", theta, diag ? "diagonal" : "cond-1e8",
+                      starved ? "pg, 20 iterations" : "exact", cup_status_name(st), info.step + 1);
+      }
+      const long nk = stopped ? info.step : n;        /* the rows kept: 0 .. nk */
+      assert_int_equal(tr.rows, nk + 1);
+      if (!stopped) assert_true((st == CUP_WARN_NOT_CERTIFIED) == (info.not_certified > 0));
       ref_problem rp = as_ref(&q);
       double scale = 1, dev = 0, worst_eta = 0;
       long first_bad = lg.first_uncertified;
-      for (long k = 0; k <= n; k++)
+      for (long k = 0; k <= nk; k++)
         for (int a = 0; a < 3; a++) scale = fmax(scale, fabs(Xr[3 * k + a]));
-      for (long k = 1; k <= n; k++) {
+      for (long k = 1; k <= nk; k++) {
         /* every step's eta_cert bounds the true distance of the stored state */
         double zz[3], dd[3];
         assert_int_equal(ref_project(&rp, tr.X + 3 * k, zz), 0);
@@ -477,15 +496,15 @@ static void test_integrator_ill_conditioned(void **state) {
         assert_non_null(strstr(info.message, want));   /* the first one, with its step */
       }
       double final_dev = 0;
-      for (int a = 0; a < 3; a++) final_dev = fmax(final_dev, fabs(tr.X[3 * n + a] - Xr[3 * n + a]));
+      for (int a = 0; a < 3; a++) final_dev = fmax(final_dev, fabs(tr.X[3 * nk + a] - Xr[3 * nk + a]));
       print_message("theta %.0e, %s P, %s: %s, %ld of %ld projections not certified (first at step %ld), "
-                    "max d_K(x_k) %.2e <= eta_cert; |x - x_ref| %.2e before it, %.2e at T\n",
+                    "max d_K(x_k) %.2e <= eta_cert; |x - x_ref| %.2e before it, %.2e at T\nk",
                     theta, diag ? "diagonal" : "cond-1e8",
                     starved ? "pg, 20 iterations" : "exact", cup_status_name(st), info.not_certified,
                     info.projected, first_bad, worst_eta, dev, final_dev);
       if (!starved && getenv("CUP_TEST_VERBOSE") && first_bad > 0)
-        for (long j = first_bad - 1; j <= first_bad + 3 && j <= n; j++)
-          fprintf(stderr, "k %ld lib (%.6g %.6g %.6g) ref (%.6g %.6g %.6g) eps %.3g eta %.3g\n", j,
+        for (long j = first_bad - 1; j <= first_bad + 3 && j <= nk; j++)
+          fprintf(stderr, "k %ld lib (%.6g %.6g %.6g) ref (%.6g %.6g %.6g) eps %.3g eta %.3g\nk", j,
                   tr.X[3 * j], tr.X[3 * j + 1], tr.X[3 * j + 2], Xr[3 * j], Xr[3 * j + 1], Xr[3 * j + 2],
                   lg.eps[j], lg.eta[j]);
       if (!starved) assert_true(dev <= 1e-9 * scale);

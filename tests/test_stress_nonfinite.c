@@ -143,9 +143,9 @@ static void test_callbacks_mid_run(void **state) {
 /* ---- overflow during a run ---------------------------------------------------------- */
 
 /* x' = 1000 x with h = 0.01: the explicit step multiplies by 11, and the
- * state passes ~1e154, where ||x||_P^2 overflows, after ~148 steps. The
- * run stops with CUP_ERR_DIVERGED at that step, says where and why, and
- * every state before it was delivered, finite. */
+ * state leaves its range (||x||_1 <= CUP_STATE_MAX = 1e150) at step 145.
+ * The run stops with CUP_ERR_DIVERGED at that step, says where and why,
+ * and every state before it was delivered, within the range. */
 static void test_overflow_mid_run(void **state) {
   (void)state;
   double A[4] = {1000, 0, 0, -1}, C[2] = {1, 0}, F[1] = {1};
@@ -170,15 +170,128 @@ static void test_overflow_mid_run(void **state) {
   assert_contains(info.message, "h*rho(A)");
   assert_int_equal(s.count, info.step + 1);
   assert_true(s.all_finite);
-  /* independently: x_k = 11^k while it is finite; the library stops no
-   * later than the step at which 11^k overflows, and not before 1e150 */
-  long k_inf = 0;
-  for (double x = 1; isfinite(x); x = x + 1000 * (0.01 * x)) k_inf++;
-  assert_true(info.step + 1 <= k_inf);
+  /* independently: x_k = (11^k, 0.99^k) (x2' = -x); the first step whose
+   * state has |x1| + |x2| > 1e150 is the one named, the state returned is
+   * the one before it */
+  long k_out = 0;
+  for (double x1 = 1, x2 = 1; x1 + x2 <= 1e150; x1 = x1 + 1000 * (0.01 * x1), x2 = x2 - 0.01 * x2) k_out++;
+  assert_int_equal(k_out, 145);
+  assert_int_equal(info.step + 1, k_out);
   const double *xl = cup_integrator_state(I);
-  assert_true(xl[0] > 1e150 && isfinite(xl[0]));
+  assert_true(fabs(xl[0]) + fabs(xl[1]) <= 1e150 && xl[0] > 1e148);
   cup_integrator_free(&I);
   unbuild_lcs(&b);
+}
+
+/* The range check in every path: x' = diag(1000, -1) x, whose exact
+ * solution itself leaves any range, under each scheme and projector, a
+ * general set (a half-space, through the set projector) and the adaptive
+ * scheme, with every state stored and with strides (the fused steps of a
+ * small LCS check the range once per run of steps, then find the step
+ * again). Each run stops with CUP_ERR_DIVERGED at the first step whose
+ * state has ||x||_1 > 1e150, the one the scheme's own growth factor gives
+ * (computed here by the scalar recurrence), having delivered only states
+ * within the range; a stride names the same step. */
+typedef struct { long count, last_k; double worst; } range_seen;
+
+static int range_sink(long k, double t, const double *x, void *vp) {
+  (void)t;
+  range_seen *s = vp;
+  s->count++;
+  s->last_k = k;
+  double n1 = fabs(x[0]) + fabs(x[1]);
+  if (!(n1 <= s->worst)) s->worst = n1;
+  return 0;
+}
+
+/* The first k with |x1_k| + |x2_k| > 1e150 for x_{k+1} = (a x1_k, b x2_k). */
+static long first_out(double a, double b) {
+  long k = 0;
+  for (double x1 = 1, x2 = 1; fabs(x1) + fabs(x2) <= 1e150; x1 *= a, x2 *= b) k++;
+  return k;
+}
+
+static int diverging_run(int scheme, int method, int process, cup_output_kind out, long every, long *named,
+                         range_seen *s) {
+  double A[4] = {1000, 0, 0, -1}, C[2] = {1, 0}, F[1] = {1};
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = scheme;
+  o.proj.method = method;
+  o.n = 2000;
+  o.T = 1;
+  o.output = out;
+  o.output_every = every;
+  o.output_samples = 0;
+  char msg[CUP_ERRMSG_LEN];
+  cup_integrator *I = NULL;
+  lcs_built b = {0};
+  cup_set *S = NULL;
+  tcsc Am, Cm;
+  tcsc_from_dense(&Am, A, 2, 2);
+  tcsc_from_dense(&Cm, C, 1, 2);
+  if (process) {                          /* K as a half-space: the set projector's path */
+    cup_set_desc d = {.kind = CUP_SET_HALFSPACE, .n = 2, .C = Cm.view, .F = F};
+    if (cup_set_create(&S, &d, msg)) fail_msg("set: %s", msg);
+    cup_process_desc pd = {.n = 2, .C = S, .A = Am.view};
+    if (cup_integrator_create_process(&I, &pd, &o, msg)) fail_msg("process: %s", msg);
+  } else {
+    if (build_lcs(&b, 2, 1, 0, A, NULL, C, NULL, F, NULL, NULL, NULL, msg)) fail_msg("lcs: %s", msg);
+    if (cup_integrator_create(&I, b.L, NULL, &o, msg)) fail_msg("integrator: %s", msg);
+  }
+  *s = (range_seen){0, -1, 0};
+  cup_run_info info;
+  double x0[2] = {1, 1};
+  int st = cup_integrator_run(I, x0, range_sink, s, &info);
+  if (st != CUP_ERR_DIVERGED)
+    fail_msg("scheme %d, method %d, process %d: %s (%s)", scheme, method, process, cup_status_name(st), info.message);
+  assert_contains(info.message, "left its range");
+  char want[64];
+  snprintf(want, sizeof want, "step %ld (t = ", info.step + 1);
+  assert_contains(info.message, want);
+  assert_true(s->worst <= 1e150);
+  const double *xl = cup_integrator_state(I);
+  assert_true(fabs(xl[0]) + fabs(xl[1]) <= 1e150);
+  *named = info.step + 1;
+  cup_integrator_free(&I);
+  cup_set_free(&S);
+  tcsc_free(&Am);
+  tcsc_free(&Cm);
+  if (!process) unbuild_lcs(&b);
+  return st;
+}
+
+static void test_divergence_every_scheme(void **state) {
+  (void)state;
+  const double h = 1.0 / 2000, l = 1000;
+  struct { int scheme; double a, b; } sc[] = {
+      {CUP_SCHEME_EXPLICIT, 1 + h * l, 1 - h},
+      {CUP_SCHEME_IMPLICIT, 1 / (1 - h * l), 1 / (1 + h)},
+      {CUP_SCHEME_EXPONENTIAL, exp(h * l), exp(-h)},
+      {CUP_SCHEME_THETA, (1 + 0.5 * h * l) / (1 - 0.5 * h * l), (1 - 0.5 * h) / (1 + 0.5 * h)}};
+  for (int i = 0; i < 4; i++) {
+    long want = first_out(sc[i].a, sc[i].b);
+    for (int method = 0; method < (sc[i].scheme == CUP_SCHEME_THETA ? 1 : 4); method++)
+      for (int process = 0; process < (sc[i].scheme == CUP_SCHEME_THETA ? 1 : 2); process++) {
+        range_seen s;
+        long named, strided;
+        diverging_run(sc[i].scheme, method, process, CUP_OUTPUT_EVERY, 1, &named, &s);
+        if (named != want) fail_msg("scheme %d, method %d, process %d: step %ld, expected %ld", sc[i].scheme,
+                                    method, process, named, want);
+        assert_int_equal(s.count, named);            /* rows 0 .. named - 1 */
+        diverging_run(sc[i].scheme, method, process, CUP_OUTPUT_EVERY, 300, &strided, &s);
+        assert_int_equal(strided, want);
+        assert_int_equal(s.last_k, (want - 1) / 300 * 300);
+        diverging_run(sc[i].scheme, method, process, CUP_OUTPUT_FINAL, 1, &strided, &s);
+        assert_int_equal(strided, want);
+        assert_int_equal(s.count, 0);
+      }
+  }
+  /* the adaptive scheme: the exact flow passes 1e150 at t = ln(1e150) / 1000 = 0.345 */
+  range_seen s;
+  long named;
+  diverging_run(CUP_SCHEME_ADAPTIVE, 0, 0, CUP_OUTPUT_EVERY, 1, &named, &s);
+  assert_true(s.count >= 2);
 }
 
 /* ---- the projector ------------------------------------------------------------------- */
@@ -462,6 +575,7 @@ int main(void) {
     cmocka_unit_test(test_lcs_matrices),
     cmocka_unit_test(test_callbacks_mid_run),
     cmocka_unit_test(test_overflow_mid_run),
+    cmocka_unit_test(test_divergence_every_scheme),
     cmocka_unit_test(test_projector_never_returns_nonfinite),
     cmocka_unit_test(test_nan_is_never_feasible),
     cmocka_unit_test(test_options_and_overrides),

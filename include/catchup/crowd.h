@@ -68,6 +68,13 @@ typedef struct cup_crowd_desc {
  *  default margin. */
 int cup_crowd_create(cup_crowd **c, const cup_crowd_desc *d, double h, char *errmsg);
 void cup_crowd_free(cup_crowd **c);
+/** What the crowd's creation found suspect but allowed, or NULL: a door
+ *  narrower than the smallest agent's diameter ("door 0 (from (10, 4) to
+ *  (10, 4.4)) is 0.4 wide, narrower than the smallest agent (agent 3,
+ *  diameter 0.5): no agent can pass it; it is the only door: no agent can
+ *  leave"). catchup-run prints it before the run and keeps it in the
+ *  file's attribute `warnings`. */
+const char *cup_crowd_warning(const cup_crowd *c);
 int cup_crowd_agents(const cup_crowd *c);          /**< N */
 const double *cup_crowd_q0(const cup_crowd *c);    /**< the start (2N), as given */
 const double *cup_crowd_radii(const cup_crowd *c); /**< the radii (N) */

@@ -222,6 +222,15 @@ typedef struct cup_process_desc {
 int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
                                   const cup_integrator_options *o, char *errmsg);
 
+/** The range of a state: a step whose state has an entry beyond CUP_STATE_MAX
+ *  in magnitude, or NaN or Inf, has diverged. Every scheme stops there with
+ *  CUP_ERR_DIVERGED (the step and time in info->message) before storing or
+ *  returning that state; the states before it were passed to the sink. The
+ *  bound leaves room below sqrt(DBL_MAX) = 1.3e154, where ||x||_P^2 (the
+ *  projector's scale) overflows, for n P up to 1e8. x0 beyond it is
+ *  CUP_ERR_ARG. */
+#define CUP_STATE_MAX 1e150
+
 /** Run from x0 (n entries) over [0, T], passing the selected states to sink
  *  (may be NULL). Allocates nothing per step. Returns info->status. */
 int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,

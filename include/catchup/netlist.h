@@ -32,6 +32,14 @@ int cup_netlist_load(cup_netlist **nl, const char *path, const char *const *sets
 int cup_netlist_load_string(cup_netlist **nl, const char *text, const char *name,
                             const char *const *sets, int nsets, char *errmsg);
 void cup_netlist_free(cup_netlist **nl);
+/** What the formulation found suspect but allowed, or NULL: a loop of
+ *  ideal diodes with no resistance, whose current is not unique (two
+ *  diodes between the same two nodes, or diodes all in one direction around
+ *  a loop), named with file:line:column of its first element ("c.cir:3:1:
+ *  D1: D1 and D2 are ideal diodes in anti-parallel between nodes 'a' and
+ *  'b', ..."). The run takes one of the solutions. catchup-run prints it
+ *  before the run and keeps it in the file's attribute `warnings`. */
+const char *cup_netlist_warning(const cup_netlist *nl);
 
 /** The LCS (owned by the netlist). */
 const cup_lcs *cup_netlist_lcs(const cup_netlist *nl);

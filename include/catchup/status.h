@@ -18,7 +18,7 @@ extern "C" {
   X(CUP_ERR_EMPTY_SET,      -6, "the set is empty (Farkas certificate in info)") \
   X(CUP_ERR_PB_CT,          -7, "P B differs from C^T")                       \
   X(CUP_ERR_CALLBACK,       -8, "a user callback failed or returned NaN/Inf") \
-  X(CUP_ERR_DIVERGED,       -9, "an iterate became NaN or Inf")               \
+  X(CUP_ERR_DIVERGED,       -9, "an iterate or the state became NaN or Inf, or left its range (CUP_STATE_MAX)") \
   X(CUP_ERR_IO,            -10, "file input/output failed")                   \
   X(CUP_ERR_PARSE,         -11, "syntax or schema error in an input file")    \
   X(CUP_ERR_LINALG,        -12, "sparse factorization failed")                \
@@ -32,7 +32,8 @@ extern "C" {
   X(CUP_WARN_SPLITTING,      5, "implicit/exponential scheme with h above the time constant of a constraint direction: the projection along B loses what the step moved") \
   X(CUP_ERR_STEP_SIZE,     -16, "adaptive scheme: the step size underflowed (the input or the solution is not smooth enough for tol there)") \
   X(CUP_WARN_ZENO,           6, "adaptive scheme: events accumulate (Zeno behaviour or chattering) beyond the event rate cap; catching-up steps took over there") \
-  X(CUP_WARN_TOL_FLOOR,      7, "adaptive scheme: tol is below what double precision can deliver at the state's scale")
+  X(CUP_WARN_TOL_FLOOR,      7, "adaptive scheme: tol is below what double precision can deliver at the state's scale") \
+  X(CUP_ERR_UNCERTIFIED,   -17, "no method found a point within a certified distance of the set (eta = inf)")
 
 typedef enum cup_status {
 #define CUP_STATUS_ENUM_(name, value, text) name = value,

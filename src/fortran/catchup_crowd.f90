@@ -46,9 +46,9 @@ module catchup_crowd
   public :: c_cup_crowd_create, c_cup_crowd_free, c_cup_crowd_agents, c_cup_crowd_q0, &
     c_cup_crowd_radii, c_cup_crowd_process, c_cup_crowd_exit_times, c_cup_crowd_inside, &
     c_cup_crowd_gap, c_cup_crowd_rows, c_cup_crowd_added, c_cup_crowd_door_distance, &
-    c_cup_crowd_desired_velocity, c_cup_crowd_walls, c_cup_crowd_min_gap
+    c_cup_crowd_desired_velocity, c_cup_crowd_walls, c_cup_crowd_min_gap, c_cup_crowd_warning
   public :: cup_crowd_create, cup_crowd_free, cup_crowd_integrator, cup_crowd_exit_times, &
-    cup_crowd_inside, cup_crowd_door_distance, cup_crowd_min_gap
+    cup_crowd_inside, cup_crowd_door_distance, cup_crowd_min_gap, cup_crowd_warning
 
   interface
     function c_cup_crowd_create(c, d, h, errmsg) bind(C, name="cup_crowd_create") result(st)
@@ -63,6 +63,11 @@ module catchup_crowd
       import :: c_ptr
       type(c_ptr), intent(inout) :: c
     end subroutine c_cup_crowd_free
+    function c_cup_crowd_warning(c) bind(C, name="cup_crowd_warning") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: c
+      type(c_ptr) :: p
+    end function c_cup_crowd_warning
     function c_cup_crowd_agents(c) bind(C, name="cup_crowd_agents") result(n)
       import :: c_int, c_ptr
       type(c_ptr), value :: c
@@ -219,6 +224,14 @@ contains
     call c_f_pointer(c_cup_crowd_exit_times(c%ptr), p, [c%agents])
     t = p
   end function cup_crowd_exit_times
+
+  !> What the creation allows but warns of (a door narrower than the
+  !> smallest agent), or '' when nothing.
+  function cup_crowd_warning(c) result(s)
+    type(cup_crowd_t), intent(in) :: c
+    character(len=:), allocatable :: s
+    s = cup_c_string(c_cup_crowd_warning(c%ptr))
+  end function cup_crowd_warning
 
   integer function cup_crowd_inside(c)
     type(cup_crowd_t), intent(in) :: c

@@ -15,8 +15,9 @@ module catchup_netlist
     cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_source, cup_netlist_row_name, cup_netlist_input_name, &
     cup_netlist_row_fixed, cup_netlist_probe, cup_netlist_probe_default, cup_netlist_signal_count, &
     cup_netlist_signal_name, cup_netlist_signal_unit, cup_netlist_signals, cup_netlist_file_count, cup_netlist_file, &
-    cup_netlist_tran_window, cup_netlist_tolerances
-  public :: c_cup_netlist_file_count, c_cup_netlist_file, c_cup_netlist_tran_window, c_cup_netlist_tolerances
+    cup_netlist_tran_window, cup_netlist_tolerances, cup_netlist_warning
+  public :: c_cup_netlist_file_count, c_cup_netlist_file, c_cup_netlist_tran_window, c_cup_netlist_tolerances, &
+    c_cup_netlist_warning
   public :: c_cup_netlist_load, c_cup_netlist_load_string, c_cup_netlist_free, c_cup_netlist_lcs, &
     c_cup_netlist_input, c_cup_netlist_x0, c_cup_netlist_tran, c_cup_netlist_state_name, c_cup_netlist_source, &
     c_cup_netlist_row_name, c_cup_netlist_input_name, c_cup_netlist_row_fixed, c_cup_netlist_probe, &
@@ -103,6 +104,11 @@ module catchup_netlist
       type(c_ptr), value :: nl
       type(c_ptr) :: p
     end function c_cup_netlist_source
+    function c_cup_netlist_warning(nl) bind(C, name="cup_netlist_warning") result(p)
+      import :: c_ptr
+      type(c_ptr), value :: nl
+      type(c_ptr) :: p
+    end function c_cup_netlist_warning
     function c_cup_netlist_row_name(nl, i) bind(C, name="cup_netlist_row_name") result(p)
       import :: c_int, c_ptr
       type(c_ptr), value :: nl
@@ -316,6 +322,15 @@ contains
     s = ''
     if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_source(nl%ptr))
   end function cup_netlist_source
+
+  !> What the formulation allows but warns of (a loop of ideal diodes with
+  !> no resistance, named), or '' when nothing.
+  function cup_netlist_warning(nl) result(s)
+    type(cup_netlist_t), intent(in) :: nl
+    character(len=:), allocatable :: s
+    s = ''
+    if (c_associated(nl%ptr)) s = cup_c_string(c_cup_netlist_warning(nl%ptr))
+  end function cup_netlist_warning
 
   !> Name of complementarity row i (1-based): the diode.
   function cup_netlist_row_name(nl, i) result(s)

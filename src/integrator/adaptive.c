@@ -190,7 +190,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
                        &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++) *vecs_m[k] = take((size_t)m, sizeof(double), &fail);
-  double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et};
+  double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
   for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++) *vecs_n[k] = take((size_t)n, sizeof(double), &fail);
   A->ut = take((size_t)p, sizeof(double), &fail);
   A->udot = take((size_t)p, sizeof(double), &fail);
@@ -262,7 +262,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
-  free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et);
+  free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et); free(A->xok);
   free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt);
   free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
   free(A->samp); free(A->coef); free(A->zw); free(A->zy);

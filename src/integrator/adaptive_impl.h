@@ -113,6 +113,7 @@ struct cup_adaptive {
   double *c1;               /* per row: ||c_i||_1 */
   double *x, *xs, *xr, *xf, *s, *gam, *g, *ut, *udot, *uerr, *wa, *wt;
   double *e, *et;           /* the propagated error estimate, n */
+  double *xok;              /* the last state within range (run-state check), n */
   double *zero;             /* m zeros */
   cup_lcp lcp;
   double *lcpM, *lcpq;

@@ -13,6 +13,7 @@
 #include "catchup.h"
 #include "adaptive.h"
 #include "adaptive_impl.h"
+#include "tally.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of
  * tol (the exact flow has none of its own). */
@@ -149,6 +150,11 @@ static int emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya,
     R->est_max = fmax(R->est_max, inf_norm(A->de, n) + R->rloc + sqrt(R->r2));
     if (!R->sink) continue;
     ad_state(A, md, A->zy, A->xo);
+    if (cup_state_beyond(A->xo, n)) {              /* as step_done: never a state out of range */
+      int w = cup_state_worst(A->xo, n);
+      return stop(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): the "
+                  "scheme diverged", CUP_STATE_MAX, ts, w, A->xo[w]);
+    }
     R->info->samples++;
     A->zmd = md;
     A->zt = ts;
@@ -167,6 +173,14 @@ static int emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya,
  * the step callback. */
 static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at_event) {
   cup_run_info *info = R->info;
+  if (cup_state_beyond(A->x, A->n)) {          /* before the sink sees it, and the state stays the last good one */
+    int w = cup_state_worst(A->x, A->n);
+    snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): the state left its range ||x||_1 <= "
+             "%g (x[%d] = %.3g): the scheme diverged", R->steps + 1, R->t, CUP_STATE_MAX, w, A->x[w]);
+    cup_copy(A->x, A->xok, A->n);
+    return info->status = CUP_ERR_DIVERGED;
+  }
+  cup_copy(A->xok, A->x, A->n);
   R->steps++;
   info->step = R->steps;
   info->t = R->t;
@@ -750,9 +764,14 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
-  for (int j = 0; j < A->n; j++)
-    if (!isfinite(x0[j])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", j, x0[j]);
+  if (cup_state_beyond(x0, A->n)) {
+    int w = cup_state_worst(x0, A->n);
+    if (!isfinite(x0[w])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
+    return stop(&R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
+                CUP_STATE_MAX, w, x0[w]);
+  }
   cup_copy(A->x, x0, A->n);
+  cup_copy(A->xok, x0, A->n);
   cup_zero(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;

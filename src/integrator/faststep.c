@@ -201,8 +201,54 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
   }
 }
 
-long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
-                      cup_run_info *info) {
+/* What a run of steps changes besides scratch, to take it back. */
+typedef struct fast_undo {
+  double x[CUP_STEP_SMALL_N], lam[CUP_STEP_SMALL_M], g[CUP_STEP_SMALL_M], lq;
+  int prev[CUP_STEP_SMALL_M];
+  long step, skipped, projected;   /* the info it books */
+  long long dual_iterations;
+  double t, max_eps_cert, max_eta_cert;
+} fast_undo;
+
+static void undo_save(fast_undo *u, const cup_faststep *f, const double *x, const cup_run_info *info) {
+  const cup_lcp_step *th = f->th;
+  for (int j = 0; j < th->n; j++) u->x[j] = x[j];
+  for (int i = 0; i < th->m; i++) {
+    u->lam[i] = th->lcp.lam[i];
+    u->prev[i] = th->lcp.prev[i];
+    u->g[i] = f->moving ? f->g[i] : 0;
+  }
+  u->lq = th->lq;
+  u->step = info->step;
+  u->t = info->t;
+  u->skipped = info->skipped;
+  u->projected = info->projected;
+  u->dual_iterations = info->dual_iterations;
+  u->max_eps_cert = info->max_eps_cert;
+  u->max_eta_cert = info->max_eta_cert;
+}
+
+static void undo_apply(const fast_undo *u, cup_faststep *f, double *x, cup_run_info *info) {
+  cup_lcp_step *th = f->th;
+  for (int j = 0; j < th->n; j++) x[j] = u->x[j];
+  for (int i = 0; i < th->m; i++) {
+    th->lcp.lam[i] = u->lam[i];
+    th->lcp.prev[i] = u->prev[i];
+    if (f->moving) f->g[i] = u->g[i];
+  }
+  th->lq = u->lq;
+  info->step = u->step;
+  info->t = u->t;
+  info->skipped = u->skipped;
+  info->projected = u->projected;
+  info->dual_iterations = u->dual_iterations;
+  info->max_eps_cert = u->max_eps_cert;
+  info->max_eta_cert = u->max_eta_cert;
+}
+
+/* run() for the sizes: each size's steps compiled apart. */
+static __attribute__((noinline)) long dispatch(cup_faststep *f, long k, long stop, double *x, double *xnew,
+                                               cup_proj_info *pi, int *st, cup_run_info *info) {
 #define CUP_FAST_CASE(N, M) \
   case (N) * 8 + (M): return run(f, k, stop, x, xnew, pi, st, info, N, M);
   switch (f->th->n * 8 + f->th->m) {
@@ -212,4 +258,27 @@ long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xne
 #undef CUP_FAST_CASE
   *st = CUP_FAST_DECLINED;
   return k;
+}
+
+/* A run of more than one step, its last booked state checked. */
+static __attribute__((noinline)) long run_checked(cup_faststep *f, long k, long stop, double *x, double *xnew,
+                                                  cup_proj_info *pi, int *st, cup_run_info *info) {
+  fast_undo u;
+  undo_save(&u, f, x, info);
+  long pending = dispatch(f, k, stop, x, xnew, pi, st, info);
+  /* the last booked state against its range, here and not in run(): there
+   * it cost the loop registers (1.4-3.5 instructions a step) */
+  if (pending > k && cup_state_beyond(x, f->th->n)) {
+    undo_apply(&u, f, x, info);
+    f->hold = pending;
+    *st = CUP_FAST_DECLINED;
+    return k;
+  }
+  return pending;
+}
+
+long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                      cup_run_info *info) {
+  return stop == k ? dispatch(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
+                   : run_checked(f, k, stop, x, xnew, pi, st, info);
 }

@@ -50,6 +50,9 @@ typedef struct cup_faststep {
   /* the square terms' antiderivatives at the last step's end (its start now) */
   double last_t;
   double last_tri[CUP_FAST_TERMS];
+  /* a run of steps that left the state's range (CUP_STATE_MAX) is declined
+   * whole: the loop takes its steps up to this one itself, checking each */
+  long hold;
 } cup_faststep;
 
 /* on = 1 when the steps qualify (the caller checks for a step callback);
@@ -61,7 +64,12 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
  * booked in info as cup_integrator_run books it (tally, step, t), its state
  * written into x; the first one that does not, or step stop, is left
  * pending: its state in xnew, its status in *st and *pi (not booked), or
- * *st = CUP_FAST_DECLINED, nothing taken. Returns the pending step's index. */
+ * *st = CUP_FAST_DECLINED, nothing taken. Returns the pending step's index.
+ * The state is checked against its range once, at the end of the run of
+ * steps (not in each step, the time loop's cost): when the last booked one
+ * is beyond it, nothing is taken (*st = CUP_FAST_DECLINED, k returned) and
+ * hold is set to the pending step, so that the loop finds the first state
+ * beyond the range itself. */
 long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
                       cup_run_info *info);
 

@@ -49,7 +49,8 @@ struct cup_integrator {
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
-  double *x, *xnew, *xf, *g, *ut, *s0;
+  double *x, *xnew, *xf, *g, *ut, *s0, *sg;
+  double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
   double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */
   double zs;                /* ... and its place between them (1: on a step) */
 };
@@ -289,10 +290,12 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   I->g = calloc(M, sizeof(double));
   I->ut = calloc(P, sizeof(double));
   I->s0 = calloc(M, sizeof(double));
+  I->sg = calloc(M, sizeof(double));
+  I->v = calloc(2 * N, sizeof(double));
   I->xs = calloc(N, sizeof(double));
   I->zprev = calloc(M, sizeof(double));
   I->zs = 1;
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->xs || !I->zprev)
+  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->sg || !I->v || !I->xs || !I->zprev)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   if (o->scheme == CUP_SCHEME_THETA && !I->K)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
@@ -461,7 +464,8 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_sparse_free(&I->A_own);
   cup_sparse_free(&I->E_own);
   if (I->use_theta) cup_lcp_step_free(&I->th);
-  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->xs); free(I->zprev);
+  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
+  free(I->xs); free(I->zprev);
   free(I);
   *Ip = NULL;
 }
@@ -601,6 +605,78 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
     snprintf(buf, size, "projection failed: %s", cup_status_string(st));
 }
 
+/* A step's state beyond its range (tally.h): the scheme diverged. */
+static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup_run_info *info, long k, double t,
+                                                    const double *x) {
+  char what[200];
+  int j = cup_state_worst(x, I->n);
+  int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
+                     "diverged", CUP_STATE_MAX, j, x[j]);
+  if (I->o.scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
+    snprintf(what + len, sizeof what - (size_t)len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+  return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+}
+
+/* A polyset step whose answer z (in xnew) has no certified distance to
+ * K(t_{k+1}) (eta = inf) is not passed on as it is (issue 27, guarantee 6),
+ * the projector's exact method (cup_project_exact) standing in whatever
+ * method the options ask: first z's own distance from the projection v of z, d_K(z) <=
+ * ||z - v||_P + eta(v) (z kept: the theta step's is not a projection, and
+ * an exact step's is more accurate than a certified one); then, for a step
+ * that projects xf, the projector's answer (its dual methods walk to known
+ * feasible points), once more with the last state offered as one. Returns
+ * the step's status; CUP_ERR_UNCERTIFIED (info->message naming step, time
+ * and set) when z is provably farther than eta_n from K(t) and nothing
+ * certifies. xf: the step's free point (recomputed by the caller when the
+ * fused steps kept it in registers). */
+static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, long k, double t, const double *g,
+                                                           cup_proj_info *pi, int st, cup_run_info *info) {
+  cup_proj_info pp = {0}, first = *pi;
+  int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
+  double own = INFINITY;
+  if (ps == CUP_OK && (ps = cup_project_exact(I->proj, I->xnew, I->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
+    own = cup_metric_dist_hi(I->K, I->xnew, I->v, NULL, I->v + I->n) + pp.eta_cert;
+  if (own <= pi->eta_target) ps = CUP_OK;
+  else if (ps >= 0 && (!I->use_theta || I->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
+    for (int offer = !I->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
+      if (offer && !cup_projector_offer_feasible(I->proj, I->x)) break;
+      if ((ps = cup_project_exact(I->proj, I->xf, I->v, &pp)) >= 0 && pp.eta_cert < own) {
+        *pi = pp;
+        st = ps;
+        I->zeta_from = 2;
+        cup_copy(I->xnew, I->v, I->n);
+      }
+    }
+  }
+  if (!(pi->eta_cert < INFINITY) && own < INFINITY) {
+    *pi = first;
+    pi->eta_cert = own;
+    st = pi->eps_cert <= pi->eps_target && own <= pi->eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  }
+  if (pi->eta_cert < INFINITY) return pi->status = st;
+  /* still none. Each row's half-space bounds d_K(z) from below: a z that
+   * is farther than eta_n (or, below what rounding allows, 1e-10 of the
+   * scale) from one of them is certainly no (eps, eta)-projection, and
+   * stops the run; one nearer is kept, warned of (a set without interior,
+   * as two opposite rows, has no point certainly in it, and no distance to
+   * it can be certified: the answer may be right) */
+  const double *sz = I->s0, *gam = I->sg;        /* z's slack and its rounding */
+  if (I->use_theta && I->th.D) sz = I->th.s, gam = I->th.gam;   /* the step's own, with D zeta's rounding */
+  else cup_slack(I->K, g, I->xnew, I->s0, I->sg);
+  int row = -1;
+  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(I->K, I->xnew));
+  for (int i = 0; i < I->m; i++) {
+    double d = I->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / I->K->rownorm[i] : 0;   /* <= d_K(z) */
+    if (d > far) { far = d; row = i; }
+  }
+  if (!(far > tol)) return pi->status = st > 0 ? st : CUP_WARN_NOT_CERTIFIED;
+  char what[200];
+  snprintf(what, sizeof what, "the answer is at least %.3g from K(t) (row %d), beyond eta_n = %.3g, and no method "
+           "found a point within a certified distance of K(t)%s%s", far, row, pi->eta_target, ps < 0 ? ": " : "",
+           ps < 0 ? cup_status_string(ps) : "");
+  return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
+}
+
 /* The paper assumes x0 in K(0); say so when it is not (the first step
  * projects it), by the raw slack so that a point on the boundary passes. */
 static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
@@ -651,6 +727,15 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
     pi->row_updates += first.row_updates;
   }
   if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
+  /* never a point without a certified distance passed on (issue 27); a
+   * state polyset's projector keeps the polyset's rule (an answer within
+   * rounding of a set without interior is warned of), not applied here yet */
+  if (!(pi->eta_cert < INFINITY) && I->S->kind != CUP_SET_STATE_POLYSET) {
+    char what[200];
+    snprintf(what, sizeof what, "the %s: no point within a certified distance of the set was found (eta = inf)%s%s",
+             cup_set_kind_name(I->S->kind), cup_setproj_message(I->sp)[0] ? ": " : "", cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
+  }
   long rows = cup_setproj_rows(I->sp);
   if (rows > info->max_rows) info->max_rows = rows;
   return st;
@@ -682,12 +767,14 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   info->eps_target = I->eps_n;
   info->eta_target = I->eta_n;
   info->h_rho = I->h_rho;
-  for (int j = 0; j < n; j++)
-    if (!isfinite(x0[j])) {
-      char what[96];
-      snprintf(what, sizeof what, "x0[%d] is %g", j, x0[j]);
-      return stop_at(info, CUP_ERR_NONFINITE, 0, 0, what);
-    }
+  if (cup_state_beyond(x0, n)) {
+    int w = cup_state_worst(x0, n);
+    char what[160];
+    if (isfinite(x0[w])) snprintf(what, sizeof what, "x0 is beyond the range of a state, ||x||_1 <= %g "
+                                  "(CUP_STATE_MAX): x0[%d] = %g", CUP_STATE_MAX, w, x0[w]);
+    else snprintf(what, sizeof what, "x0[%d] is %g", w, x0[w]);
+    return stop_at(info, isfinite(x0[w]) ? CUP_ERR_ARG : CUP_ERR_NONFINITE, 0, 0, what);
+  }
   memcpy(I->x, x0, sizeof(double) * (size_t)n);
   cup_projector_reset(I->proj);
   I->zeta_from = 0;
@@ -728,12 +815,15 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
   int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
+  I->fast.hold = 0;
   for (long k = 0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
-    if (fast) k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
+    if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
+      k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
-    if (st != CUP_FAST_DECLINED) {
+    int fused = st != CUP_FAST_DECLINED;   /* its free point stayed in registers */
+    if (fused) {
       I->zeta_from = 1;
       goto stepped;                      /* all that follows up to there, done by faststep.c */
     }
@@ -774,6 +864,10 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       I->zeta_from = 2;
     }
   stepped:
+    if (st >= 0 && I->K && !(pi.eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
+      if (fused && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
+      else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, &pi, st, info)) < 0) return st;
+    }
     if (st < 0) {                        /* the polyset path's errors */
       char what[224];
       describe_projection_error(what, sizeof what, st, &pi);
@@ -783,6 +877,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       }
       return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
     }
+    if (cup_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
     double *t = I->x; I->x = I->xnew; I->xnew = t;
     if (I->half) {
       cup_estimate_compare(&I->est, k + 1, I->x);

@@ -509,6 +509,19 @@ static int note_worst(cup_crowd *c, int a, int b, void *ctx) {
 
 /* ---- creation and its checks -------------------------------------------------------- */
 
+/* A polygon (the room, obstacle o) must be simple: its inside, the walls
+ * and the distance field are those of a region only then. */
+static int simple(const double *v, int np, const char *what, int o, char *errmsg) {
+  int a, b;
+  if (!crowd_polygon_crossing(v, np, &a, &b)) return 1;
+  const double *p = v + 2 * a, *q = v + 2 * b, *p1 = v + 2 * ((a + 1) % np), *q1 = v + 2 * ((b + 1) % np);
+  char name[32];
+  snprintf(name, sizeof name, o < 0 ? "%s" : "%s %d", what, o);
+  cup_fail(errmsg, CUP_ERR_ARG, "%s is not a simple polygon: its edges %d, from (%g, %g) to (%g, %g), and %d, "
+           "from (%g, %g) to (%g, %g), cross", name, a, p[0], p[1], p1[0], p1[1], b, q[0], q[1], q1[0], q1[1]);
+  return 0;
+}
+
 static int check_numbers(const cup_crowd_desc *d, char *errmsg) {
   if (d->agents < 1) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: %d agents (at least 1)", d->agents);
   if (!d->q0 || !d->radius) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: no positions or no radii");
@@ -535,10 +548,12 @@ static int check_numbers(const cup_crowd_desc *d, char *errmsg) {
       return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the clearance %g exceeds agent %d's radius %g (it must be at "
                       "most the smallest radius)", d->clearance, i, d->radius[i]);
   }
-  for (int o = 0; o < d->obstacles; o++)
+  for (int o = 0, v0 = 0; o < d->obstacles; v0 += d->obstacle_points[o++])
     if (d->obstacle_points[o] < 3)
       return cup_fail(errmsg, CUP_ERR_ARG, "obstacle %d has %d vertices (at least 3)", o, d->obstacle_points[o]);
-  return CUP_OK;
+    else if (!simple(d->obstacle + 2 * v0, d->obstacle_points[o], "obstacle", o, errmsg))
+      return CUP_ERR_ARG;
+  return simple(d->room, d->room_points, "the room", -1, errmsg) ? CUP_OK : CUP_ERR_ARG;
 }
 
 /* Every agent in the room, out of the obstacles, clear of the walls and of
@@ -647,7 +662,7 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->out = calloc((size_t)N, 1);
   c->exit_time = malloc(sizeof(double) * (size_t)N);
   c->kcell = malloc(sizeof(int) * (size_t)N);
-  c->run_start = malloc(sizeof(int) * (size_t)N);
+  c->run_start = calloc((size_t)N, sizeof(int));   /* emit_rows reads it for agents with no rows, too */
   c->run_len = malloc(sizeof(int) * (size_t)N);
   c->stage_cap = 2 * N + 64;                 /* a crowd has about 1.5 N rows and patterns to come */
   c->stage = malloc(sizeof(crowd_entry) * (size_t)c->stage_cap);
@@ -705,6 +720,31 @@ static int set_scales(cup_crowd *c, const cup_crowd_desc *d, double h, double bo
   return CUP_OK;
 }
 
+/* A door narrower than the smallest agent's diameter lets no one out (a
+ * run ends with every agent inside): warned, not refused (the room may
+ * have other doors, or the user may want the jam). */
+static void door_warning(cup_crowd *c) {
+  int small = 0, shut = 0, first = -1;
+  for (int i = 1; i < c->N; i++)
+    if (c->r[i] < c->r[small]) small = i;
+  for (int k = 0; k < c->ndoor; k++) {
+    const double *s = c->door + 4 * k;
+    if (hypot(s[2] - s[0], s[3] - s[1]) < 2 * c->r[small] && shut++ == 0) first = k;
+  }
+  if (!shut) return;
+  const double *s = c->door + 4 * first;
+  int len = snprintf(c->warning, sizeof c->warning, "door %d (from (%g, %g) to (%g, %g)) is %.6g wide, narrower "
+                     "than the smallest agent (agent %d, diameter %.6g): no agent can pass it", first, s[0], s[1],
+                     s[2], s[3], hypot(s[2] - s[0], s[3] - s[1]), small, 2 * c->r[small]);
+  if (shut > 1 && len > 0 && (size_t)len < sizeof c->warning)
+    snprintf(c->warning + len, sizeof c->warning - (size_t)len, "%s (%d of the %d doors are so)",
+             shut == c->ndoor ? "; nor any other door: no agent can leave" : "", shut, c->ndoor);
+  else if (shut == c->ndoor && len > 0 && (size_t)len < sizeof c->warning)
+    snprintf(c->warning + len, sizeof c->warning - (size_t)len, "; it is the only door: no agent can leave");
+}
+
+const char *cup_crowd_warning(const cup_crowd *c) { return c && c->warning[0] ? c->warning : NULL; }
+
 int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: output pointer is NULL");
   *out = NULL;
@@ -739,6 +779,7 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
     if (!st) c->S->recheck = crowd_recheck;
   }
   if (st) { cup_crowd_free(&c); return st; }
+  door_warning(c);
   c->proc = (cup_process_desc){.n = 2 * c->N, .C = c->S, .f_integral = crowd_walk, .f_integral_ctx = c};
   *out = c;
   return CUP_OK;

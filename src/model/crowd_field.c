@@ -24,6 +24,46 @@ double crowd_seg_nearest(const double *s, double x, double y, double *px, double
   return hypot(x - *px, y - *py);
 }
 
+/* The sign of the turn a -> b -> c (0: collinear). */
+static int turn(const double *a, const double *b, const double *c) {
+  double d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  return (d > 0) - (d < 0);
+}
+
+/* p, collinear with segment [a, b], lies on it. */
+static int within(const double *a, const double *b, const double *p) {
+  return fmin(a[0], b[0]) <= p[0] && p[0] <= fmax(a[0], b[0]) && fmin(a[1], b[1]) <= p[1] &&
+         p[1] <= fmax(a[1], b[1]);
+}
+
+/* Segments [a, b] and [c, d] meet (crossing or touching). */
+static int segments_meet(const double *a, const double *b, const double *c, const double *d) {
+  int o1 = turn(a, b, c), o2 = turn(a, b, d), o3 = turn(c, d, a), o4 = turn(c, d, b);
+  if (o1 * o2 < 0 && o3 * o4 < 0) return 1;
+  return (!o1 && within(a, b, c)) || (!o2 && within(a, b, d)) || (!o3 && within(c, d, a)) ||
+         (!o4 && within(c, d, b));
+}
+
+int crowd_polygon_crossing(const double *v, int np, int *ea, int *eb) {
+  for (int a = 0; a < np; a++)
+    for (int b = a + 1; b < np; b++) {
+      const double *p0 = v + 2 * a, *p1 = v + 2 * ((a + 1) % np), *q0 = v + 2 * b, *q1 = v + 2 * ((b + 1) % np);
+      int meet;
+      if (b == a + 1 || (a == 0 && b == np - 1)) {   /* neighbours share a vertex: they may only fold back */
+        const double *s = b == a + 1 ? p1 : p0, *u = b == a + 1 ? p0 : p1, *w = b == a + 1 ? q1 : q0;
+        meet = !turn(s, u, w) && (u[0] - s[0]) * (w[0] - s[0]) + (u[1] - s[1]) * (w[1] - s[1]) > 0;
+      } else {
+        meet = segments_meet(p0, p1, q0, q1);
+      }
+      if (meet) {
+        *ea = a;
+        *eb = b;
+        return 1;
+      }
+    }
+  return 0;
+}
+
 int crowd_in_polygon(const double *v, int np, double x, double y) {
   int in = 0;
   for (int a = 0, b = np - 1; a < np; b = a++) {

@@ -26,6 +26,10 @@ typedef struct crowd_field {
 int crowd_field_build(crowd_field *F, const double *room, int nroom, const double *seg, int nseg,
                       const double *door, int ndoor, const double box[4], double h, double seed_radius,
                       double clearance, char *errmsg);
+/* Whether the polygon of np vertices is not simple: 1 with the first two
+ * edges that meet (edge e runs from vertex e to e + 1), neighbours only
+ * where they fold back over each other; 0 when it is simple. */
+int crowd_polygon_crossing(const double *v, int np, int *ea, int *eb);
 /* Crossing number: (x, y) inside the polygon of np vertices (2 each)? */
 int crowd_in_polygon(const double *v, int np, double x, double y);
 void crowd_field_free(crowd_field *F);
@@ -56,6 +60,7 @@ typedef struct crowd_entry {
 } crowd_entry;
 
 struct cup_crowd {
+  char warning[CUP_ERRMSG_LEN];     /* a door no agent can pass, or "" */
   int N;
   double *q0, *r;
   double speed, h, margin, reach, rmax;

@@ -288,6 +288,7 @@ int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) 
   int st = nl ? copy_circuit(nl, c) : CUP_ERR_NOMEM;
   if (!st) st = nl_topology(nl, c, errmsg);
   else st = nl_fail(c, -1, errmsg, st, "out of memory");
+  if (!st && (st = nl_diode_loops(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st && (st = name_variables(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st) st = nl_hybrid(nl, c, errmsg);
   if (!st) st = nl_controlled(nl, c, errmsg);
@@ -377,6 +378,8 @@ const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
 }
 const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source : NULL; }
+const char *cup_netlist_warning(const cup_netlist *nl) { return nl && nl->warning[0] ? nl->warning : NULL; }
+
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
 }

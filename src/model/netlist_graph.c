@@ -291,6 +291,89 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   return st;
 }
 
+/* ---- loops of ideal diodes ---------------------------------------------------- */
+
+/* A diode by its two nodes, the smaller first (parallel diodes sort together). */
+typedef struct { int lo, hi, e; } nl_pair;
+
+static int pair_cmp(const void *x, const void *y) {
+  const nl_pair *p = x, *q = y;
+  if (p->lo != q->lo) return (p->lo > q->lo) - (p->lo < q->lo);
+  if (p->hi != q->hi) return (p->hi > q->hi) - (p->hi < q->hi);
+  return (p->e > q->e) - (p->e < q->e);
+}
+
+/* A directed cycle of diodes (anode to cathode) by depth-first search:
+ * its elements into loop, their count returned (0: none, -1: no memory). */
+static int directed_cycle(const nl_circuit *c, const int *diode, int nd, int *loop) {
+  int nn = c->nnodes, len = 0;
+  int *start = calloc((size_t)nn + 1, sizeof(int)), *adj = malloc(sizeof(int) * ((size_t)nd + 1));
+  int *state = calloc((size_t)nn, sizeof(int)), *via = malloc(sizeof(int) * (size_t)nn);
+  int *stack = malloc(sizeof(int) * ((size_t)nn + 1)), *next = malloc(sizeof(int) * (size_t)nn);
+  if (!start || !adj || !state || !via || !stack || !next) len = -1;
+  for (int k = 0; len == 0 && k < nd; k++) start[c->elem[diode[k]].a + 1]++;
+  for (int v = 0; len == 0 && v < nn; v++) start[v + 1] += start[v];
+  for (int k = 0; len == 0 && k < nd; k++) adj[start[c->elem[diode[k]].a]++] = diode[k];
+  for (int v = nn; len == 0 && v > 0; v--) start[v] = start[v - 1];
+  if (len == 0) start[0] = 0;
+  for (int r = 0; len == 0 && r < nn; r++) {     /* state 0 new, 1 on the stack, 2 done */
+    if (state[r]) continue;
+    int top = 0;
+    stack[top++] = r;
+    state[r] = 1;
+    next[r] = start[r];
+    while (top > 0 && len == 0) {
+      int v = stack[top - 1];
+      if (next[v] == start[v + 1]) { state[v] = 2; top--; continue; }
+      int e = adj[next[v]++], w = c->elem[e].b;
+      if (state[w] == 0) { state[w] = 1; via[w] = e; next[w] = start[w]; stack[top++] = w; }
+      else if (state[w] == 1) {                  /* back to the stack: the cycle w -> ... -> v -> w */
+        loop[len++] = e;
+        for (int u = v; u != w; u = c->elem[via[u]].a) loop[len++] = via[u];
+      }
+    }
+  }
+  free(start); free(adj); free(state); free(via); free(stack); free(next);
+  for (int i = 0, j = len - 1; i < j; i++, j--) { int t = loop[i]; loop[i] = loop[j]; loop[j] = t; }
+  return len;
+}
+
+int nl_diode_loops(cup_netlist *nl, const nl_circuit *c) {
+  int nd = 0;
+  int *diode = malloc(sizeof(int) * ((size_t)c->nelem + 1)), *loop = malloc(sizeof(int) * ((size_t)c->nnodes + 1));
+  nl_pair *pr = malloc(sizeof(nl_pair) * ((size_t)c->nelem + 1));
+  if (!diode || !loop || !pr) { free(diode); free(loop); free(pr); return CUP_ERR_NOMEM; }
+  for (int e = 0; e < c->nelem; e++) {
+    const nl_elem *el = &c->elem[e];
+    if (el->kind != NL_D) continue;
+    pr[nd] = (nl_pair){el->a < el->b ? el->a : el->b, el->a < el->b ? el->b : el->a, e};
+    diode[nd++] = e;
+  }
+  qsort(pr, (size_t)nd, sizeof *pr, pair_cmp);
+  int two[2] = {-1, -1};
+  for (int k = 0; k + 1 < nd && two[0] < 0; k++)
+    if (pr[k].lo == pr[k + 1].lo && pr[k].hi == pr[k + 1].hi) { two[0] = pr[k].e; two[1] = pr[k + 1].e; }
+  char names[CUP_ERRMSG_LEN];
+  int st = CUP_OK, len = two[0] < 0 ? directed_cycle(c, diode, nd, loop) : 0;
+  if (two[0] >= 0) {
+    const nl_elem *d0 = &c->elem[two[0]];
+    int same = d0->a == c->elem[two[1]].a;
+    join_names(names, sizeof names, c, two, 2);
+    nl_fail(c, two[0], nl->warning, CUP_OK, "%s are ideal diodes %s between nodes '%s' and '%s', a loop with no "
+            "resistance: %s is not unique; the run takes one", names, same ? "in parallel" : "in anti-parallel",
+            c->node[d0->a], c->node[d0->b],
+            same ? "how their current splits when they conduct" : "a current around it");
+  } else if (len > 0) {
+    join_names(names, sizeof names, c, loop, len);
+    nl_fail(c, loop[0], nl->warning, CUP_OK, "%s form a loop of ideal diodes, all in one direction around it, "
+            "with no resistance: a current around it is not unique; the run takes one", names);
+  } else if (len < 0) {
+    st = CUP_ERR_NOMEM;
+  }
+  free(diode); free(loop); free(pr);
+  return st;
+}
+
 int nl_path(const cup_netlist *nl, int a, int b, int *port, double *coef) {
   int len = 0;
   while (a != b && !(nl->parent[a] < 0 && nl->parent[b] < 0)) {

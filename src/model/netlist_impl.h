@@ -40,6 +40,7 @@ typedef struct nl_port {
 } nl_port;
 
 struct cup_netlist {
+  char warning[CUP_ERRMSG_LEN];   /* a loop of ideal diodes (nl_diode_loops), or "" */
   cup_lcs *L;
   cup_input *u;       /* NULL when p = 0 */
   double *x0;
@@ -107,6 +108,10 @@ int nl_fail(const nl_circuit *c, int e, char *errmsg, int status, const char *fm
 /* Classify the diodes, build the forest and the ports; index problems,
  * dangling nodes and shorted elements are errors here. */
 int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg);
+/* A loop of ideal diodes with no resistance, whose current is not unique:
+ * two diodes between the same nodes, or diodes all in one direction around
+ * a loop; named in nl->warning (file:line:col of its first element). */
+int nl_diode_loops(cup_netlist *nl, const nl_circuit *c);
 /* The hybrid matrix H (and Lap's factor and K, kept for signals). */
 int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg);
 /* tau(a) - tau(b) as (port, coefficient) pairs into buf (at most

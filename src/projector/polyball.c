@@ -36,6 +36,25 @@ static double dist_hi(cup_setproj *sp, const double *a, const double *b, double 
 
 static int in_ball(cup_setproj *sp, const double *y) { return dist_hi(sp, y, sp->c, NULL) <= sp->r; }
 
+/* y pushed along the polyset's interior direction d (C d > 0) just far
+ * enough that every row holds beyond its rounding, as lcp/step.c's eta
+ * certificate does, into out (may alias y): 1 when that point is certainly
+ * in the rows. A point on a face (the polyset's answer for a point of that
+ * face) is not certainly in them; this one is, a rounding away. */
+static int push_inside(cup_setproj *sp, const double *y, double *out) {
+  const cup_polyset *K = sp->S->K;
+  if (!K->rdir || sp->m == 0) return 0;
+  cup_slack(K, sp->g, y, sp->sm, sp->gm);
+  double t = 0;
+  for (int i = 0; i < sp->m; i++)
+    if (sp->sm[i] - sp->gm[i] < 0) {
+      if (!(K->Crdir[i] > 0)) return 0;
+      t = fmax(t, (3 * sp->gm[i] - sp->sm[i]) / K->Crdir[i]);
+    }
+  for (int j = 0; j < sp->n; j++) out[j] = y[j] + t * K->rdir[j];
+  return in_rows(sp, out);
+}
+
 /* Project y onto K to absolute targets (and rounding-level relative ones). */
 static int onto_rows(cup_setproj *sp, const double *y, double *out, double eps, double eta,
                      cup_proj_info *pi) {
@@ -56,6 +75,7 @@ static int anchor(cup_setproj *sp, double eta) {
   if (!in_rows(sp, sp->anchor)) {
     const double *v = cup_projector_feasible(sp->proj);
     if (v) cup_copy(sp->anchor, v, sp->n);
+    else push_inside(sp, sp->anchor, sp->anchor);   /* the centre's projection on a face */
   }
   sp->anchor_ok = in_rows(sp, sp->anchor) && in_ball(sp, sp->anchor);
   double dlow = sqrt(fmax(pi.dual_value, 0)) * (1 - 1e-12);
@@ -70,7 +90,8 @@ static int anchor(cup_setproj *sp, double eta) {
  * exactly feasible point of K, or NULL) into sp->v; 0 if none was found. */
 static int feasible_near(cup_setproj *sp, const double *y, const double *pfeas, double eta) {
   int n = sp->n;
-  const double *base = in_rows(sp, y) ? y : pfeas && in_rows(sp, pfeas) ? pfeas : NULL;
+  const double *base = in_rows(sp, y) ? y : pfeas && in_rows(sp, pfeas) ? pfeas
+                    : push_inside(sp, y, sp->v) ? sp->v : NULL;   /* y on a face */
   if (!base) return 0;
   if (in_ball(sp, base)) { cup_copy(sp->v, base, n); return 1; }
   if (anchor(sp, eta) != 1) return 0;
@@ -107,11 +128,12 @@ static int judge(cup_setproj *sp, const double *x, double lb, double *best, doub
   return e <= info->eps_target;
 }
 
+/* The best certified point into z; without one, an error (z untouched:
+ * never an uncertified point passed on as an answer). */
 static int finish(cup_setproj *sp, double *z, const double *best, double best_eps, cup_proj_info *info) {
-  if (!(best_eps < INFINITY)) {
-    cup_setproj_fail(sp, CUP_WARN_NOT_CERTIFIED, "no point certainly in both the polyset and the ball was found");
-    return info->status = CUP_WARN_NOT_CERTIFIED;
-  }
+  if (!(best_eps < INFINITY))
+    return info->status = cup_setproj_fail(sp, CUP_ERR_UNCERTIFIED, "the intersection of the polyset and the "
+                                           "ball: no point certainly in both was found (eta = inf)");
   cup_copy(z, best, sp->n);
   info->eps_cert = best_eps;
   info->eta_cert = 0;

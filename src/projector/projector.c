@@ -286,6 +286,15 @@ static int project_small(cup_projector *p, const double *x, double *z, cup_proj_
   return 1;
 }
 
+int cup_project_exact(cup_projector *p, const double *x, double *z, cup_proj_info *info) {
+  if (!p) return CUP_ERR_ARG;
+  int method = p->opt.method;
+  if (p->K->dense || p->nw) p->opt.method = CUP_PROJ_ACTIVESET;   /* the small path is AUTO's alone */
+  int st = cup_project(p, x, z, info);
+  p->opt.method = method;
+  return st;
+}
+
 int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info_out) {
   cup_proj_info local;
   cup_proj_info *info = info_out ? info_out : &local;

@@ -12,6 +12,13 @@
  * Allocation-free. */
 void cup_projector_revalue(cup_projector *p);
 
+/* cup_project by the exact method whatever the options ask (the dense
+ * active set, or the sparse Newton path when the projector has one):
+ * another method for a step whose answer was not certified (the
+ * integrator's fallback, issue 27); the configured one where no exact
+ * path was set up. Allocation-free. */
+int cup_project_exact(cup_projector *p, const double *x, double *z, cup_proj_info *info);
+
 /* After the projection z of a step from the state x at t onto a
  * state-dependent set whose rows can be rechecked (a crowd's): 1 when the
  * rows missed a constraint z violates and were built again at (t, x) with
