@@ -242,6 +242,16 @@ int ad_dae_jump(cup_adaptive *A, const double *g, double *x, uint64_t *active, i
   int outside = 0;                               /* zeta = 0 is consistent */
   for (int i = 0; i < m; i++) outside |= A->dq0[i] < -A->gam[i];
   if (!outside) return 0;
+  /* the multipliers alone, x as it is: 0 <= zeta _|_ C x + D zeta + g >= 0
+   * (a diode behind a resistance takes any slack; and there B need not be
+   * P^-1 C^T, which the jump below assumes) */
+  for (int j = 0; j < m; j++)
+    for (int i = 0; i < m; i++) A->lcpM[i + (size_t)j * m] = A->Dd[i + (size_t)j * m];
+  if (cup_lcp_solve(&A->lcp, A->lcpM, A->dq0, pivots) == CUP_OK) {
+    int ok = 1;
+    for (int i = 0; i < m; i++) ok &= A->lcp.w[i] >= -16 * A->gam[i] - 64 * DBL_EPSILON * fabs(A->dq0[i]);
+    if (ok) return 0;
+  }
   /* x+ = x + B mu with 0 <= mu _|_ C x+ + D zeta + g >= 0 and
    * 0 <= zeta _|_ -D^T mu >= 0: the KKT conditions of the P-projection onto
    * Q(t) when P B = C^T; M = [C B, D; -D^T, 0] is monotone then */
