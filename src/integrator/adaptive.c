@@ -215,6 +215,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
     A->dcpl = take((size_t)m, 1, &fail);
   }
   A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), &fail);
+  A->samp_mid = take((size_t)p * AD_DEGREE, sizeof(double), &fail);
   A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), &fail);
   if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     cup_adaptive_free(&A);
@@ -265,7 +266,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et); free(A->xok);
   free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt);
   free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
-  free(A->samp); free(A->coef); free(A->zw); free(A->zy);
+  free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
   free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
   free(A);
   *Ap = NULL;

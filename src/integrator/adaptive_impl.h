@@ -121,7 +121,7 @@ struct cup_adaptive {
   cup_lcp_step proj;        /* W = I, h = 1: the certified P-projection onto K(t) */
   cup_projector *projector; /* ... and the projector where pivoting fails (degenerate rows, empty K) */
   /* callback inputs: Chebyshev-Lobatto nodes on [0, 1], samples, coefficients */
-  double node[AD_DEGREE + 1], *samp, *coef;
+  double node[AD_DEGREE + 1], *samp, *samp_mid, *coef;
   double zeno[AD_ZENO_RING]; /* times and rows of the last changes of the active set */
   int zeno_row[AD_ZENO_RING];
   long nzeno;

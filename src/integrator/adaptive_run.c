@@ -220,6 +220,10 @@ static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *e
     if (cup_input_eval(A->u, j == q ? t0 + h : t0 + tau[j], A->ut)) return CUP_ERR_CALLBACK;
     for (int k = 0; k < p; k++) A->samp[k * (q + 1) + j] = A->ut[k];
   }
+  for (int j = 0; j < q; j++) {                  /* and between the nodes: a check on the interpolant */
+    if (cup_input_eval(A->u, t0 + 0.5 * (tau[j] + tau[j + 1]), A->ut)) return CUP_ERR_CALLBACK;
+    for (int k = 0; k < p; k++) A->samp_mid[k * q + j] = A->ut[k];
+  }
   for (int k = 0; k < p; k++) {
     const double *f = A->samp + k * (q + 1);
     double aq = 0, aq1 = 0, fmag = 0;          /* Chebyshev coefficients q and q - 1 */
@@ -240,6 +244,14 @@ static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *e
     for (int l = q - 1; l >= 0; l--) {
       for (int j = q - l; j >= 1; j--) c[j] = c[j - 1] - tau[l] * c[j];
       c[0] = d[l] - tau[l] * c[0];
+    }
+    /* the interpolant against the input between its nodes: the tail of the
+     * Chebyshev coefficients alone underrates a step too long for degree q
+     * (a 1 kHz sine over 0.3 ms: 1e-7 of its amplitude off, estimated 1e-12) */
+    for (int j = 0; j < q; j++) {
+      double s = 0.5 * (tau[j] + tau[j + 1]), v = c[q];
+      for (int l = q - 1; l >= 0; l--) v = v * s + c[l];
+      err[k] = fmax(err[k], fabs(v - A->samp_mid[k * q + j]) + 4 * DBL_EPSILON * fmag);
     }
     double fact = 1;
     for (int j = 0; j <= q; j++) {
@@ -444,15 +456,20 @@ static int start_piece(cup_adaptive *A, ad_run *R) {
 /* ---- steps ------------------------------------------------------------------------ */
 
 /* Callback inputs: the step's interpolation error carried to x through the
- * flow: E's column of a component's constant state is the response to a
- * unit step of that input. */
-static double interp_error(const cup_adaptive *A, const double *E) {
+ * flow: X E's column of a component's constant state is the response of x
+ * to a unit step of that input (X, not only E: on a manifold the input
+ * moves x directly, x = v - K_J u, while v stays put; a clamp holding its
+ * capacitor to the source took steps of 0.6 ms at 1 kHz with no error
+ * seen). */
+static double interp_error(const cup_adaptive *A, const ad_mode *md, const double *E) {
   int n = A->n, na = A->na;
   double worst = 0;
   for (int i = 0; i < n; i++) {
     double acc = 0;
-    for (int c = 0; c < A->p; c++)
-      acc += fabs(E[i + (size_t)(n + c * (AD_DEGREE + 1)) * na]) * A->uerr[c];
+    for (int c = 0; c < A->p; c++) {
+      const double *col = E + (size_t)(n + c * (AD_DEGREE + 1)) * na;
+      acc += fabs(cup_dot(md->X + (size_t)i * na, col, na)) * A->uerr[c];
+    }
     worst = fmax(worst, acc);
   }
   return worst;
@@ -495,7 +512,7 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
     }
     const double *E = ad_expm(A, md, h);
     if (!A->callback) return E;
-    double ie = interp_error(A, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
+    double ie = interp_error(A, md, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
     double fac = errn > 0 ? 0.9 * pow(errn, -1.0 / (AD_DEGREE + 2)) : 5;
     if (errn <= 1) {
       R->h_cb = h * fmin(5, fac);
