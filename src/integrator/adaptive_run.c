@@ -392,17 +392,20 @@ static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, d
   return CUP_OK;
 }
 
-/* The time scale of the choice of an active set with D (its LCP is a step
- * of a millionth of it): the current mode's step limit, or the input's. */
-static double time_scale(cup_adaptive *A, ad_run *R) {
-  return fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);
+/* The time scale of the choice of an active set with D at time t (its LCP
+ * is a step of a millionth of it): the current mode's step limit, or the
+ * input's, and no longer than what is left of the input's piece (a pulse's
+ * 1 fs fall, linearised over 25 ns, drove the other pair of a bridge on). */
+static double time_scale(cup_adaptive *A, ad_run *R, double t) {
+  double s = fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);
+  return R->tb > t ? fmin(s, R->tb - t) : s;
 }
 
 /* The active set that continues from (x, w) at R->t, made current, x put
  * on its manifold; changes reported at time t_event. */
 static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0;
-  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R), &mask, &piv)
+  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R, R->t), &mask, &piv)
                              : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return stop(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
@@ -579,7 +582,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     uint64_t mask = 0;
     int piv = 0;
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
-    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R), &mask, &piv)
+    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R, R->t + tsw), &mask, &piv)
                  : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
       return stop(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
                   "the LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
@@ -701,7 +704,7 @@ static ad_mode *catch_up_mode(cup_adaptive *A, ad_run *R, double h) {
     stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     return NULL;
   }
-  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, time_scale(A, R), &mask, &piv)) {
+  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, time_scale(A, R, R->t), &mask, &piv)) {
     stop(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
     return NULL;
   }
