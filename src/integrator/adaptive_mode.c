@@ -299,7 +299,7 @@ static void mode_events(cup_adaptive *A, ad_mode *md) {
       }
       CQ[(size_t)k * na + j] = acc;
     }
-  const double *Yc = A->Ym + (size_t)r * na;
+  const double *Yc = r > 0 ? A->Ym + (size_t)r * na : NULL;   /* NULL without D (no Y rows) */
   int kj[CUP_DENSE_MAX_ROWS];                    /* row i's place in J, or -1 */
   for (int i = 0; i < m; i++) kj[i] = -1;
   for (int a = 0; a < nj; a++) kj[J[a]] = a;
