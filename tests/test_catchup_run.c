@@ -438,12 +438,9 @@ static void test_netlist_signals(void **state) {
   expect_in_err(&r, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
 }
 
-/* A rectifier whose diode has D != 0 (behind the source's resistance) is
- * refused by the explicit scheme with one line naming the diode and the
- * schemes that run it, and the file keeps nothing computed (there was
- * nothing). */
 /* A fixed-step scheme is one flag away from a netlist, with its own n or h:
- * .tran's TSTEP is the output's spacing, not a step. */
+ * .tran's TSTEP is the output's spacing, not a step; n or h alone chooses
+ * theta. */
 static void test_netlist_fixed_step(void **state) {
   (void)state;
   const char *cir = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.cir", *out = tmp_path("fixed.h5");
@@ -463,7 +460,19 @@ static void test_netlist_fixed_step(void **state) {
   r = run_cli(both, 0, 0);
   expect_exit(&r, 1, 1);
   expect_in_err(&r, "h: give n or h, not both");
+  const char *nalone[] = {cir, "-o", out, "--n", "6000", NULL};
+  r = run_cli(nalone, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  const char *halone[] = {cir, "-o", out, "--h", "1e-5", NULL};
+  r = run_cli(halone, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=6000 theta, 3001 samples");
 }
+
+/* A rectifier whose diode has D != 0 (behind the source's resistance) is
+ * refused by the explicit scheme with one line naming the diode and the
+ * schemes that run it. */
 
 static void test_explicit_refuses_D(void **state) {
   (void)state;

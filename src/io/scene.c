@@ -478,8 +478,10 @@ static int read_times(rd *r, const st_node *root, cup_scene *S) {
 
 /* A netlist's .tran TSTEP is the output's spacing, not a step: a fixed-step
  * scheme the scene chooses for a circuit the adaptive scheme runs needs its
- * own n or h (docs/netlist.md). */
+ * own n or h, and n or h without a scheme chooses theta (docs/netlist.md). */
 static int netlist_steps(rd *r, const st_node *root, cup_scene *S, cup_scheme fallback) {
+  if (S->nl && S->steps_given && fallback == CUP_SCHEME_ADAPTIVE && !opt(root, "scheme"))
+    S->opt.scheme = CUP_SCHEME_THETA;
   if (!S->nl || S->steps_given || S->opt.scheme == CUP_SCHEME_ADAPTIVE || fallback != CUP_SCHEME_ADAPTIVE ||
       !cup_netlist_tran(S->nl, NULL, NULL))
     return CUP_OK;
