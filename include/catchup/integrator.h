@@ -63,7 +63,7 @@ int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size);
 #define CUP_OUTPUT_LIST(X)                                                              \
   X(CUP_OUTPUT_EVERY, 0, "every", "{every: K}", "steps 0, K, 2K, ... and always the last") \
   X(CUP_OUTPUT_SAMPLES, 1, "samples", "{samples: N}",                                   \
-    "N >= 2 states at steps round(j n / (N - 1)), j = 0..N-1")                        \
+    "N >= 2 states at t_j = j T / (N - 1), j = 0..N-1, interpolated between steps")   \
   X(CUP_OUTPUT_FINAL, 2, "final", "final", "the final state only")                      \
   X(CUP_OUTPUT_NONE, 3, "none", "none", "nothing: statistics only")
 
