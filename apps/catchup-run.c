@@ -27,12 +27,16 @@
 #include <string.h>
 #include <strings.h>
 #include <time.h>
+#include <sys/stat.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
 #include "crowd_log.h"
+#include "run_plan.h"
+#include "run_stop.h"
+#include "read_text.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
-enum { MSG_LEN = CUP_ERRMSG_LEN + 768 };   /* room for a path before a library message */
+enum { MSG_LEN = 2 * CUP_ERRMSG_LEN };     /* a path, then a library message, whole */
 
 /* "a, b, c or d" from a choice list of the library (CUP_*_LIST). */
 static const char *names_or(char *buf, size_t size, const char *(*name)(int), int count) {
@@ -47,7 +51,7 @@ static void print_usage(void) {
   char schemes[160], methods[160];
   printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N | --h STEP] [--eps SPEC] [--eta SPEC]\n"
          "                   [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]\n"
-         "                   [--set key=value]... [--quiet]\n"
+         "                   [--max-steps N] [--set key=value]... [--resume] [--quiet]\n"
          "       catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]\n"
          "  -o, --output OUT.h5  HDF5 file to write (/t, /x, /events and attributes); replaced\n"
          "  --probe SIGNAL       a netlist's v(NODE), v(NODE1,NODE2), i(ELEMENT) or all, into\n"
@@ -61,11 +65,15 @@ static void print_usage(void) {
          "  --projector NAME     %s (scene key projector.method)\n"
          "  --tol TOL            adaptive scheme: error target on x, absolute and relative (scene key tol)\n"
          "  --estimate           fixed-step schemes: estimate the error by step doubling (scene key estimate)\n"
+         "  --max-steps N        refuse a fixed-step run of more than N steps (scene key max_steps;\n"
+         "                       default %ld)\n"
          "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
+         "  --resume             continue OUT.h5, stopped by SIGINT/SIGTERM, with the same scene,\n"
+         "                       inputs and options, to the same trajectory bit for bit\n"
          "  --quiet              no summary line (warnings and errors are still printed)\n"
          "  -h, --help           this text;  --version  the library versions\n",
          names_or(schemes, sizeof schemes, cup_scheme_name, CUP_SCHEME_COUNT),
-         names_or(methods, sizeof methods, cup_proj_method_name, CUP_PROJ_METHOD_COUNT));
+         names_or(methods, sizeof methods, cup_proj_method_name, CUP_PROJ_METHOD_COUNT), CUP_MAX_STEPS_DEFAULT);
 }
 
 /* ---- command line ---- */
@@ -76,7 +84,7 @@ typedef struct {
   int n_overrides;
   const char **probes;       /* --probe values (argv's) */
   int n_probes;
-  int quiet;
+  int quiet, resume;
 } args_t;
 
 __attribute__((format(printf, 1, 2)))
@@ -127,6 +135,10 @@ static int check_value(const char *flag, const char *v) {
     double tol = strtod(v, &end);
     if (end == v || *end || !(tol > 0) || !(tol < 1e300))
       return usage_error("--tol '%s': not a positive number", v);
+  } else if (strcmp(flag, "--max-steps") == 0) {
+    double n = strtod(v, &end);
+    if (end == v || *end || !(n >= 1) || n > 9.2e18 || n != floor(n))
+      return usage_error("--max-steps '%s': not a positive integer", v);
   } else if (strcmp(flag, "--set") == 0) {
     const char *eq = strchr(v, '=');
     if (!eq || eq == v) return usage_error("--set '%s': expected key=value", v);
@@ -137,7 +149,8 @@ static int check_value(const char *flag, const char *v) {
 /* The scene key each value flag sets; --set passes key=value through. */
 static const struct { const char *flag, *key; } value_flags[] = {
   {"--n", "n="}, {"--h", "h="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
-  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--set", ""}, {"-o", NULL},
+  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--max-steps", "max_steps="}, {"--set", ""},
+  {"-o", NULL},
   {"--output", NULL},
 };
 
@@ -157,7 +170,7 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
     if (strlen(value_flags[f].flag) != flen || strncmp(arg, value_flags[f].flag, flen) != 0)
       continue;
     const char *v = NULL;
-    char flag[16];
+    char flag[24];
     snprintf(flag, sizeof flag, "%.*s", (int)flen, arg);
     int rc = flag_value(argc, argv, i, flag, &v);
     if (!rc && value_flags[f].key) rc = check_value(flag, v);
@@ -172,6 +185,7 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
     return rc;
   }
   if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) { a->quiet = 1; return 0; }
+  if (strcmp(arg, "--resume") == 0) { a->resume = 1; return 0; }
   if (strcmp(arg, "--estimate") == 0) return add_override(a, "estimate=", "true");
   if (arg[0] == '-' && arg[1]) return usage_error("unknown option '%s'", arg);
   if (a->scene) return usage_error("one scene per run: '%s' after '%s'", arg, a->scene);
@@ -241,7 +255,13 @@ typedef struct {
   double *zeta, *sig;
 } sink_t;
 
+/* Test hook (docs/run-output.md): CATCHUP_RUN_TEST_SIGNAL=K raises SIGINT
+ * at the K-th sample this process writes (0: before the run), as a user's
+ * Ctrl-C would arrive there. */
+static long hook_at = -1, hook_seen;
+
 static int sink(long k, double t, const double *x, void *ctx) {
+  if (hook_at > 0 && ++hook_seen == hook_at) raise(SIGINT);
   if (stop_signal) return 1;
   sink_t *c = ctx;
   if (!c->nl) return cup_h5run_sink(k, t, x, c->w);
@@ -262,6 +282,8 @@ typedef struct {
   cup_run_info info;
   sink_t sk;
   double wall;               /* seconds in cup_integrator_run */
+  double wall_before;        /* --resume: the seconds of the run before its stop */
+  int resumable;             /* stopped by a signal, with a checkpoint saved */
   int status;
   char message[MSG_LEN];
   char warnings[2 * MSG_LEN]; /* the model's (model_warnings), one a line */
@@ -390,6 +412,9 @@ static int write_provenance(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene", cup_scene_text(r->scene)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_file", r->args->scene));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_name", cup_scene_name(r->scene)));
+  char *inputs = cup_file_list_text(cup_scene_file_list(r->scene));   /* for --resume, and sha256sum -c */
+  st = cup_status_merge(st, inputs ? cup_h5run_attr_string(w, "inputs_sha256", inputs) : CUP_ERR_NOMEM);
+  free(inputs);
   st = cup_status_merge(st, describe_run(r));
   /* Overwritten at the end; what a reader finds if the process was killed. */
   st = cup_status_merge(st, cup_h5run_attr_long(w, "status", CUP_ERR_INTERRUPTED));
@@ -403,7 +428,7 @@ static int write_provenance(run_t *r) {
 static int write_results(run_t *r) {
   cup_h5run *w = r->w;
   const cup_run_info *i = &r->info;
-  int st = cup_h5run_attr_double(w, "wall_time_s", r->wall);
+  int st = cup_h5run_attr_double(w, "wall_time_s", r->wall_before + r->wall);
   st = cup_status_merge(st, cup_h5run_attr_long(w, "projected", i->projected));
   st = cup_status_merge(st, cup_h5run_attr_long(w, "skipped", i->skipped));
   st = cup_status_merge(st, cup_h5run_attr_long(w, "not_certified", i->not_certified));
@@ -471,8 +496,9 @@ static int load_scene(run_t *r, char *err) {
   return st;
 }
 
-/* --probe signals, or the netlist's defaults; written to /signals. */
-static int setup_signals(run_t *r, char *err) {
+/* --probe signals, or the netlist's defaults: checked before the output is
+ * touched (declared in /signals by declare_signals). */
+static int check_probes(run_t *r, char *err) {
   const args_t *a = r->args;
   cup_netlist *nl = cup_scene_netlist(r->scene);
   char e2[CUP_ERRMSG_LEN];
@@ -490,10 +516,20 @@ static int setup_signals(run_t *r, char *err) {
     return EXIT_RUN;
   }
   int ns = cup_netlist_signal_count(nl), m = cup_lcs_rows(cup_scene_lcs(r->scene));
-  const char **names = calloc((size_t)ns + 1, sizeof *names);
   r->sk.zeta = calloc((size_t)m + 1, sizeof(double));
   r->sk.sig = calloc((size_t)ns + 1, sizeof(double));
-  if (!names || !r->sk.zeta || !r->sk.sig) { free(names); snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
+  if (!r->sk.zeta || !r->sk.sig) { snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
+  r->sk.nl = nl;
+  return 0;
+}
+
+/* The signals' datasets in the output, in the order asked. */
+static int declare_signals(run_t *r, char *err) {
+  cup_netlist *nl = r->sk.nl;
+  if (!nl) return 0;
+  int ns = cup_netlist_signal_count(nl);
+  const char **names = calloc((size_t)ns + 1, sizeof *names);
+  if (!names) { snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
   for (int k = 0; k < ns; k++) names[k] = cup_netlist_signal_name(nl, k);
   int st = cup_h5run_signals(r->w, ns, names);
   free(names);
@@ -501,7 +537,63 @@ static int setup_signals(run_t *r, char *err) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w)[0] ? cup_h5run_errmsg(r->w) : cup_status_string(st));
     return EXIT_RUN;
   }
-  r->sk.nl = nl;
+  return 0;
+}
+
+/* Where n came from, for the step limit's message: --n or --h (or --set
+ * n=, h=), the scene's n or h, else a netlist's .tran (a circuit the
+ * adaptive scheme cannot run falls back to TSTOP / TSTEP steps). */
+static void n_source(const run_t *r, char *buf, size_t size) {
+  const args_t *a = r->args;
+  const cup_netlist *nl = cup_scene_netlist(r->scene);
+  double tstep, tstop;
+  const char *flag = NULL;
+  for (int k = 0; k < a->n_overrides; k++) {
+    if (!strncmp(a->overrides[k], "n=", 2)) flag = "--n";
+    if (!strncmp(a->overrides[k], "h=", 2)) flag = "--h";
+  }
+  if (flag) snprintf(buf, size, "%s", flag);
+  else if (nl && cup_netlist_tran(nl, &tstep, &tstop) && fabs(tstop / tstep - (double)r->opts.n) < 1)
+    snprintf(buf, size, ".tran %g %g asks for T / TSTEP = %.4g", tstep, tstop, tstop / tstep);
+  else
+    snprintf(buf, size, "the scene's n");
+}
+
+/* The run's steps and output are known before its first step: refuse one
+ * beyond the step limit or the free space, naming the numbers. */
+static int check_plan(run_t *r, char *err) {
+  const args_t *a = r->args;
+  run_plan p;
+  char from[96], msg[MSG_LEN / 2];
+  int nsig = r->sk.nl ? cup_netlist_signal_count(r->sk.nl) : 0;
+  run_plan_make(&p, &r->opts, cup_scene_dim(r->scene), nsig, cup_scene_crowd(r->scene) ? CROWD_LOG_STEP_BYTES : 0);
+  n_source(r, from, sizeof from);
+  struct stat sb;                                  /* --resume: what the file holds already */
+  if (a->resume && stat(a->out, &sb) == 0) p.bytes = p.bytes > (double)sb.st_size ? p.bytes - (double)sb.st_size : 0;
+  if (run_plan_too_long(&p, &r->opts, cup_scene_max_steps(r->scene), from, "--scheme adaptive --tol 1e-6", msg,
+                        sizeof msg) ||
+      run_plan_no_room(p.bytes, a->out, msg, sizeof msg)) {
+    snprintf(err, MSG_LEN, "%s: %s", a->scene, msg);
+    return EXIT_RUN;
+  }
+  return 0;
+}
+
+/* --resume: the stopped run's file, reopened and checked (run_stop.c), says
+ * "running" again until it closes. */
+static int reopen(run_t *r, char *err) {
+  run_signals s = {r->sk.nl, r->sk.zeta, r->sk.sig};
+  if (run_stop_reopen(r->args->out, r->scene, r->I, &s, &r->w, &r->wall_before, err, MSG_LEN)) return EXIT_RUN;
+  r->sk.w = r->w;
+  r->sk.I = r->I;
+  int st = cup_h5run_attr_long(r->w, "status", CUP_ERR_INTERRUPTED);
+  st = cup_status_merge(st, cup_h5run_attr_string(r->w, "status_name", "running"));
+  st = cup_status_merge(st, cup_h5run_attr_string(r->w, "message", "the run did not finish: the process ended "
+                        "before closing the file; /t and /x hold the samples up to its last flush"));
+  if (cup_status_merge(st, cup_h5run_flush(r->w))) {
+    snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
+    return EXIT_RUN;
+  }
   return 0;
 }
 
@@ -521,10 +613,21 @@ static void model_warnings(run_t *r) {
   }
 }
 
+/* Every argument and input is checked before the output is touched; the
+ * file is written beside it and replaces it (cup_h5run_commit) only once
+ * the run got past its checks: a run that fails them leaves an earlier
+ * result as it was. */
 static int setup(run_t *r, char *err) {
   const args_t *a = r->args;
+  char e2[CUP_ERRMSG_LEN];
   if (load_scene(r, err)) return EXIT_RUN;       /* the message names file:line:column and key */
+  if (cup_scene_check_output(r->scene, a->out, e2)) {
+    snprintf(err, MSG_LEN, "%s", e2);
+    return EXIT_RUN;
+  }
+  if (check_probes(r, err)) return EXIT_RUN;
   r->opts = *cup_scene_options(r->scene);
+  if (check_plan(r, err)) return EXIT_RUN;
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   r->opts.interrupt = (const volatile int *)&stop_signal;
@@ -538,16 +641,20 @@ static int setup(run_t *r, char *err) {
     r->opts.on_step = crowd_log_step;
     r->opts.step_ctx = r->crowd;
   }
-  char e2[CUP_ERRMSG_LEN];
   if (cup_scene_integrator(r->scene, &r->opts, &r->I, e2)) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }
-  if (cup_h5run_create(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
+  if (a->resume) {
+    if (reopen(r, err)) return EXIT_RUN;
+    model_warnings(r);
+    return 0;
+  }
+  if (cup_h5run_begin(&r->w, a->out, cup_scene_dim(r->scene), err)) return EXIT_RUN;
   r->sk.w = r->w;
   r->sk.I = r->I;
-  if (setup_signals(r, err)) return EXIT_RUN;
-  if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w))) {
+  if (declare_signals(r, err)) return EXIT_RUN;
+  if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w)) || cup_h5run_commit(r->w)) {
     snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
     return EXIT_RUN;
   }
@@ -556,9 +663,12 @@ static int setup(run_t *r, char *err) {
 }
 
 static void run(run_t *r) {
-  install_handlers();
+  const char *hook = getenv("CATCHUP_RUN_TEST_SIGNAL");
+  if (hook && *hook) hook_at = strtol(hook, NULL, 10);
+  if (hook_at == 0) raise(SIGINT);
   double t0 = now_seconds();
-  int st = cup_integrator_run(r->I, cup_scene_x0(r->scene), sink, &r->sk, &r->info);
+  int st = r->args->resume ? cup_integrator_resume(r->I, sink, &r->sk, &r->info)
+                           : cup_integrator_run(r->I, cup_scene_x0(r->scene), sink, &r->sk, &r->info);
   r->wall = now_seconds() - t0;
   settle_status(r, st);
 }
@@ -567,7 +677,10 @@ static void run(run_t *r) {
  * error (the samples may be incomplete). */
 static void finish_file(run_t *r) {
   char err[CUP_ERRMSG_LEN] = "";
-  int wst = write_results(r);
+  run_signals s = {r->sk.nl, r->sk.zeta, r->sk.sig};
+  int wst = r->status == CUP_ERR_INTERRUPTED && stop_signal ? run_stop_save(r->w, r->I, &r->info, &s, &r->resumable)
+                                                            : run_stop_clear(r->w);
+  wst = cup_status_merge(wst, write_results(r));
   if (r->crowd)
     wst = cup_status_merge(wst, crowd_log_write(r->crowd, r->w, r->info.step, cup_integrator_state(r->I)));
   if (wst != CUP_OK && r->status >= 0) {
@@ -588,6 +701,12 @@ static void report(const run_t *r) {
   const cup_run_info *i = &r->info;
   if (r->status == CUP_ERR_IO) {   /* the message names the output file */
     fprintf(stderr, "catchup-run: %s: %s\n", a->scene, r->message);
+    return;
+  }
+  if (r->status == CUP_ERR_INTERRUPTED && stop_signal) {
+    fprintf(stderr, "catchup-run: %s: %s: %s; %s holds the samples before it and, as its last row (stop_row), "
+            "the state there%s\n", a->scene, cup_status_name(r->status), r->message, a->out,
+            r->resumable ? ": continue with --resume" : " (this run cannot be resumed: its set is not a polyset)");
     return;
   }
   if (r->status < 0) {
@@ -640,6 +759,7 @@ int main(int argc, char **argv) {
   args_t args;
   int rc = parse_args(&args, argc, argv);
   if (rc >= 0) { free_args(&args); return rc; }
+  install_handlers();            /* before the output is touched: a signal in the set-up stops the run at once */
   run_t r;
   memset(&r, 0, sizeof r);
   r.args = &args;

@@ -40,6 +40,7 @@
 #include "catchup/h5run.h"
 #include "sweep.h"
 #include "sweep_manager.h"
+#include "run_plan.h"
 #include "git_revision.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
@@ -53,7 +54,7 @@ enum { AHEAD = 2 };
 
 static const char usage_text[] =
   "usage: mpirun -n K catchup-sweep SWEEP.yaml -o RESULTS.h5 [--resume] [--quiet]\n"
-  "                                 [--task-time-limit S]\n"
+  "                                 [--task-time-limit S] [--max-steps N]\n"
   "  -o, --output FILE      results file (HDF5); replaced unless --resume\n"
   "  --resume               continue FILE: run only the tasks not done yet\n"
   "  --quiet                no progress line and no summary line\n"
@@ -62,12 +63,15 @@ static const char usage_text[] =
   "                         terminal; mpirun gives stdout a pseudo-terminal even when\n"
   "                         its output goes to a file)\n"
   "  --task-time-limit S    stop a task after S seconds (status CUP_ERR_TIME_LIMIT)\n"
+  "  --max-steps N          refuse a sweep whose fixed-step task or reference takes more than N\n"
+  "                         steps (default: each scene's max_steps, 1000000000 unless it says)\n"
   "  -h, --help             this text;  --version  the library versions\n";
 
 typedef struct {
   const char *sweep, *out;
   int resume, quiet, log_progress;
   double time_limit;
+  long max_steps;            /* --max-steps, or 0: each variant's scene says */
 } args_t;
 
 static int rank, nranks;
@@ -147,13 +151,21 @@ static int parse_args(args_t *a, int argc, char **argv) {
     }
     int is_out = (flen == 2 && !strncmp(arg, "-o", 2)) || (flen == 8 && !strncmp(arg, "--output", 8));
     int is_tl = flen == 17 && !strncmp(arg, "--task-time-limit", 17);
-    if (is_out || is_tl) {
+    int is_ms = flen == 11 && !strncmp(arg, "--max-steps", 11);
+    if (is_out || is_tl || is_ms) {
       if (eq && arg[1] == '-') v = eq + 1;
       else if (i + 1 < argc) v = argv[++i];
-      else return usage_error("%s needs a value", is_out ? "-o" : "--task-time-limit");
+      else return usage_error("%s needs a value", is_out ? "-o" : is_tl ? "--task-time-limit" : "--max-steps");
       if (is_out) { a->out = v; continue; }
       char *end;
       errno = 0;
+      if (is_ms) {
+        double n = strtod(v, &end);
+        if (errno || end == v || *end || !(n >= 1) || n > 9.2e18 || n != floor(n))
+          return usage_error("--max-steps '%s': not a positive integer", v);
+        a->max_steps = (long)n;
+        continue;
+      }
       a->time_limit = strtod(v, &end);
       if (errno || end == v || *end || !(a->time_limit > 0) || !isfinite(a->time_limit))
         return usage_error("--task-time-limit '%s': not a positive number of seconds", v);
@@ -646,17 +658,56 @@ static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit)
 
 /* ---- the run on rank 0 ---- */
 
+/* Every fixed-step task and reference against the step limit, before the
+ * results file is touched (run_plan.h): the first one beyond it, named. */
+static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
+  for (long id = 0; id < s->n_tasks; id++) {
+    sw_task t;
+    if (sw_task_get(s, id, &t)) continue;
+    const sw_variant *v = &s->var[t.variant];
+    cup_integrator_options o = *cup_scene_options(v->scene);
+    o.n = t.n;
+    o.scheme = (cup_scheme)t.scheme;
+    run_plan p;
+    run_plan_make(&p, &o, s->dim, 0, 0);
+    long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(v->scene);
+    char from[SW_ERR_LEN / 4], msg[SW_ERR_LEN / 2];  /* a variant's name, whole */
+    snprintf(from, sizeof from, "task %ld, variant %s%s", id, v->name, s->len[SW_AXIS_N] ? ": grid.n" : "");
+    if (run_plan_too_long(&p, &o, limit, from, "grid: {scheme: [adaptive], tol: [1e-6]}", msg, sizeof msg)) {
+      snprintf(err, SW_ERR_LEN, "%s: %s", s->path, msg);
+      return CUP_ERR_ARG;
+    }
+  }
+  for (int k = 0; k < s->n_variants; k++) {
+    const sw_variant *v = &s->var[k];
+    long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(v->scene);
+    if (!s->crowd && s->ref_method == SW_REF_RICHARDSON && 2.0 * (double)v->n_ref > (double)limit) {
+      snprintf(err, SW_ERR_LEN, "%s: variant %s's reference takes n = %ld and %ld steps (reference.n, or 4 x its "
+               "largest n) beyond the limit of %ld (--max-steps, the scene key max_steps): take fewer steps, or "
+               "reference.method: adaptive", s->path, v->name, v->n_ref, 2 * v->n_ref, limit);
+      return CUP_ERR_ARG;
+    }
+  }
+  return CUP_OK;
+}
+
 static int open_results(const args_t *a, const cup_sweep *s, int argc, char **argv, sw_file **f, char *err) {
+  if (cup_file_list_check_output(&s->files, a->out, err)) return CUP_ERR_ARG;   /* an input is never an output */
   if (a->resume) return sw_file_open(f, a->out, s, err);
-  char deps[512], h5[64], cmd[2048] = "";
+  char deps[512], h5[64];
   int n = cup_dependency_versions(deps, sizeof deps);
   cup_h5_version(h5, sizeof h5);
   if (n >= 0 && (size_t)n < sizeof deps) snprintf(deps + n, sizeof deps - (size_t)n, "; %s", h5);
-  size_t w = 0;
-  for (int i = 0; i < argc && w < sizeof cmd; i++)
-    w += (size_t)snprintf(cmd + w, sizeof cmd - w, "%s%s", i ? " " : "", argv[i]);
+  size_t len = 1, w = 0;                       /* the command line, whole */
+  for (int i = 0; i < argc; i++) len += strlen(argv[i]) + 1;
+  char *cmd = malloc(len);
+  if (!cmd) return snprintf(err, SW_ERR_LEN, "%s: out of memory", a->out), CUP_ERR_NOMEM;
+  cmd[0] = '\0';
+  for (int i = 0; i < argc; i++) w += (size_t)snprintf(cmd + w, len - w, "%s%s", i ? " " : "", argv[i]);
   sw_provenance p = {cup_version(), deps, CATCHUP_GIT_REVISION, cmd};
-  return sw_file_create(f, a->out, s, &p, err);
+  int st = sw_file_create(f, a->out, s, &p, err);
+  free(cmd);
+  return st;
 }
 
 static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const hooks_t *hooks) {
@@ -741,6 +792,7 @@ int main(int argc, char **argv) {
   sw_file *f = NULL;
   char err[SW_ERR_LEN] = "";
   int st = share_sweep(&a, &s, err);
+  if (!st && rank == 0) st = check_steps(&a, s, err);
   if (!st && rank == 0) st = open_results(&a, s, argc, argv, &f, err);
   bcast_status(&st);
   if (st) {

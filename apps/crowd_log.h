@@ -11,6 +11,9 @@
 
 typedef struct crowd_log crowd_log;
 
+/* Bytes the log keeps (and writes) per step: 11 float64 columns. */
+#define CROWD_LOG_STEP_BYTES 88
+
 /* Room for n steps; NULL when out of memory. */
 crowd_log *crowd_log_create(cup_crowd *c, long n);
 void crowd_log_free(crowd_log **L);

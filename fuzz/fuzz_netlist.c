@@ -70,7 +70,7 @@ static void exercise(cup_netlist *nl) {
   if (!(tstart >= 0) || !(tmax >= 0)) abort();
   cup_integrator_options_default(&o);
   scene_netlist_options(nl, &o);
-  if (!(o.tol_abs > 0) || !(o.tol_rel > 0) || !(o.max_step >= 0)) abort();
+  if (!(o.tol_abs > 0) || !(o.tol_rel > 0) || !(o.hmax >= 0)) abort();
   if (o.scheme != CUP_SCHEME_ADAPTIVE) return;
   o.T = o.T > 0 ? fmin(o.T, 1e-4) : 1e-4;
   o.output = CUP_OUTPUT_SAMPLES;

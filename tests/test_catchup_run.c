@@ -306,14 +306,17 @@ static void test_crowd_missed_contacts(void **state) {
   }
 }
 
-/* Rows k = 0, 1000, 2000, ... of a run too long to finish. */
-static void check_prefix(hid_t f, hsize_t *rows) {
+/* Rows k = 0, 1000, 2000, ... of a run too long to finish (but the last
+ * when it is the stop's row, flagged by stop_row); *last = t of the last. */
+static void check_prefix(hid_t f, hsize_t *rows, double *last) {
   double *t, *x;
   hsize_t nt = read_rows(f, "t", 1, 1, &t), nx = read_rows(f, "x", 2, 3, &x);
   *rows = nt < nx ? nt : nx;
-  for (hsize_t j = 0; j < *rows; j++)
+  hsize_t samples = H5Aexists(f, "stop_row") > 0 ? *rows - 1 : *rows;
+  for (hsize_t j = 0; j < samples; j++)
     if (t[j] != (double)(j * 1000) * (1.0 / 1000000000))
       fail_msg("t[%llu] = %.17g", (unsigned long long)j, t[j]);
+  *last = *rows ? t[*rows - 1] : NAN;
   free(t);
   free(x);
 }
@@ -331,13 +334,17 @@ static void test_sigint_stops_cleanly(void **state) {
   result r = run_cli(args, 1.5, SIGINT);
   if (r.sig != SIGINT || r.lines != 1) fail_msg("signal %d, %d lines:\n%s", r.sig, r.lines, r.err);
   expect_in_err(&r, "stopped by SIGINT");
+  expect_in_err(&r, "as its last row (stop_row), the state there: continue with --resume");
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
   assert_true(f >= 0);
   hsize_t rows;
-  check_prefix(f, &rows);
-  assert_true(rows > 0);
+  double last;
+  check_prefix(f, &rows, &last);
+  assert_true(rows > 1);
   assert_true(attr_i64(f, "status") == CUP_ERR_INTERRUPTED);
   assert_true(attr_i64(f, "samples") == (int64_t)rows);
+  assert_true(attr_i64(f, "stop_row") == (int64_t)rows - 1);     /* the state where it stopped */
+  assert_true(last == attr_f64(f, "stopped_t"));
   expect_attr_str(f, "status_name", "CUP_ERR_INTERRUPTED");
   H5Fclose(f);
 }
@@ -355,7 +362,8 @@ static void test_kill9_file_readable(void **state) {
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
   assert_true(f >= 0);
   hsize_t rows;
-  check_prefix(f, &rows);
+  double last;
+  check_prefix(f, &rows, &last);
   assert_true(rows > 0);          /* at least the flush of the first second */
   expect_attr_str(f, "status_name", "running");
   assert_false(has_attr(f, "wall_time_s"));

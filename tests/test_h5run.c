@@ -416,6 +416,52 @@ static void test_write_failure_is_reported(void **state) {
   free_run(&r);
 }
 
+/* No PATH.part* file is left in the temporary folder. */
+static int staged_left(void) {
+  char cmd[512];
+  snprintf(cmd, sizeof cmd, "ls %s | grep -q '\\.part'", tmpdir);
+  return system(cmd) == 0;
+}
+
+/* cup_h5run_begin writes a sibling: the file at the path keeps the earlier
+ * run's rows (bit for bit) while the new one is written, after a discard,
+ * and after a close without commit; cup_h5run_commit replaces it in one
+ * rename; nothing is left beside it. */
+static void test_staged_replace(void **state) {
+  (void)state;
+  char path[256];
+  path_in_tmp(path, sizeof path, "staged.h5");
+  cup_h5run *w = NULL;
+  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  assert_int_equal(write_samples(w, 0, 10, 3), CUP_OK);
+  assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
+  for (int round = 0; round < 3; round++) {
+    assert_int_equal(cup_h5run_begin(&w, path, 2, NULL), CUP_OK);
+    assert_int_equal(write_samples(w, 0, 5, 2), CUP_OK);
+    assert_int_equal(cup_h5run_flush(w), CUP_OK);
+    if (round == 1) assert_true(staged_left());            /* the sibling, while it is written */
+    run_file r;
+    read_run(path, &r);
+    assert_int_equal(r.n, 10);
+    assert_int_equal(r.dim, 3);
+    check_rows(&r, 10);
+    free_run(&r);
+    if (round == 0) cup_h5run_discard(&w);
+    else if (round == 1) assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);   /* not committed */
+    else assert_int_equal(cup_h5run_commit(w), CUP_OK);
+    assert_false(staged_left());
+  }
+  assert_int_equal(write_samples(w, 5, 7, 2), CUP_OK);
+  assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
+  run_file r;
+  read_run(path, &r);
+  assert_int_equal(r.n, 7);
+  assert_int_equal(r.dim, 2);
+  check_rows(&r, 7);
+  free_run(&r);
+  cup_h5run_discard(&w);                                    /* NULL: nothing */
+}
+
 static void test_version(void **state) {
   (void)state;
   char buf[64];
@@ -632,6 +678,7 @@ int main(void) {
     cmocka_unit_test(test_unwritable_path_names_path),
     cmocka_unit_test(test_bad_arguments),
     cmocka_unit_test(test_write_failure_is_reported),
+    cmocka_unit_test(test_staged_replace),
     cmocka_unit_test(test_version),
     CRASH(0), CRASH(1), CRASH(2),
   };

@@ -186,6 +186,44 @@ static void test_values(void **state) {
                   "t.cir: set 'R1=-5': R1: bad value: resistance must be > 0 (got -5)");
 }
 
+/* V1's value at t for the source specification spec (a netlist with
+ * .tran 1u 2m and .param jump=2u when param). */
+static double pulse_at(const char *spec, int param, double t) {
+  char text[256];
+  snprintf(text, sizeof text, "p\n%sV1 a 0 %s\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n",
+           param ? ".param jump=2u\n" : "", spec);
+  cup_netlist *nl = text_ok(text, NULL, 0);
+  double u = NAN;
+  assert_int_equal(cup_input_eval(cup_netlist_input(nl), t, &u), CUP_OK);
+  cup_netlist_free(&nl);
+  return u;
+}
+
+/* PULSE's TR or TF of 0 (or omitted) is TSTEP, as SPICE3 and ngspice read
+ * it (a ramp; PLECS's reader takes 0 as a jump); `jump` in their place is
+ * an edge of no duration, right-continuous, unless a .param is named so. */
+static void test_pulse_edges(void **state) {
+  (void)state;
+  assert_close(pulse_at("PULSE(0 10 1m 0 0 0.5m 1m)", 0, 1e-3 + 0.5e-6), 5, 1e-9);       /* TSTEP = 1u */
+  assert_close(pulse_at("PULSE(0 10 1m 0 0 0.5m 1m)", 0, 1.5e-3 + 1e-6 + 0.25e-6), 7.5, 1e-9);
+  assert_close(pulse_at("PULSE(0 10 1m jump jump 0.5m 1m)", 0, 1e-3), 10, 0);
+  assert_close(pulse_at("PULSE(0 10 1m jump jump 0.5m 1m)", 0, 1e-3 * (1 - 1e-12)), 0, 0);
+  assert_close(pulse_at("PULSE(0 10 1m jump jump 0.5m 1m)", 0, 1.5e-3), 0, 0);
+  assert_close(pulse_at("PULSE(0 10 1m jump jump 0.5m 1m)", 0, 2.5e-3 - 1e-9), 10, 0);   /* the next period */
+  assert_close(pulse_at("PULSE 0 10 1m JUMP 1u 0.5m 1m", 0, 1.5e-3 + 0.5e-6), 5, 1e-9);  /* no parentheses */
+  assert_close(pulse_at("PULSE(0 10 1m jump 0 0.5m 1m)", 1, 1e-3 + 1e-6), 5, 1e-9);      /* .param jump=2u */
+  assert_contains(text_bad("p\nV1 a 0 PULSE(jump 10 1m)\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n", NULL, 0),
+                  "t.cir:2:14: V1: PULSE: 'jump' stands only for PULSE's rise or fall time TR, TF");
+  assert_contains(text_bad("p\nV1 a 0 SIN(0 10 jump)\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n", NULL, 0),
+                  "V1: SIN: 'jump' stands only for PULSE's rise or fall time");
+  const char *set[] = {"V1=PULSE(0 10 1m jump jump 0.5m 1m)"};                        /* a set too */
+  cup_netlist *nl = text_ok("p\nV1 a 0 1\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n", set, 1);
+  double u;
+  assert_int_equal(cup_input_eval(cup_netlist_input(nl), 1e-3, &u), CUP_OK);
+  assert_close(u, 10, 0);
+  cup_netlist_free(&nl);
+}
+
 /* Half-wave rectifier with source resistance: the diode sees Rs, so zeta is
  * its current and D = Rs; C v' = zeta - v/RL, w = -(v_a - v) with v_a = V - Rs zeta. */
 static void test_free_diode(void **state) {
@@ -643,7 +681,7 @@ static void test_spice_meaning(void **state) {
   const cup_integrator_options *o = cup_scene_options(sc);
   assert_int_equal(o->scheme, CUP_SCHEME_ADAPTIVE);
   assert_close(o->T, 20e-3, 1e-18);
-  assert_close(o->max_step, 50e-6, 1e-20);
+  assert_close(o->hmax, 50e-6, 1e-20);
   assert_close(o->output_t0, 5e-3, 1e-18);
   assert_int_equal(o->output, CUP_OUTPUT_SAMPLES);
   assert_int_equal(o->output_samples, 151);      /* (20m - 5m) / 0.1m + 1 */
@@ -667,6 +705,7 @@ int main(void) {
     cmocka_unit_test(test_paper_matrices),
     cmocka_unit_test(test_paper_trajectory),
     cmocka_unit_test(test_values),
+    cmocka_unit_test(test_pulse_edges),
     cmocka_unit_test(test_free_diode),
     cmocka_unit_test(test_bridge),
     cmocka_unit_test(test_doubler),

@@ -11,6 +11,7 @@
 #include <setjmp.h>
 #include <stdio.h>
 #include <dirent.h>
+#include <sys/stat.h>
 #include <cmocka.h>
 #include "testutil.h"
 #include "badcorpus.h"
@@ -428,6 +429,29 @@ static void test_overrides_replace_shapes(void **state) {
   assert_contains(load_bad(EX "/paper-fig2.yaml", o8, 1), "input.1.amplitude: missing");
 }
 
+/* netlist.NAME=VALUE takes VALUE as SPICE text, as the netlist would:
+ * {100/13} is an expression, not a YAML mapping (which failed), and a
+ * source's whole specification keeps its parentheses and blanks. */
+static void test_overrides_netlist_spice(void **state) {
+  (void)state;
+  const char *o1[] = {"netlist.RL={100/13}", "netlist.V1 = SIN(0 5 50) "};
+  cup_scene *s = load_ok(EX "/circuits/halfwave-rc.yaml", o1, 2);
+  dense_lcs d;
+  dense_lcs_of(s, &d);
+  assert_close(d.A[0], -1 / (100.0 / 13 * 100e-6), 1e-12 / (100.0 / 13 * 100e-6));   /* -1 / (RL C1) */
+  double u;
+  assert_int_equal(cup_input_eval(cup_scene_input(s), 0.005, &u), CUP_OK);       /* a quarter period */
+  assert_close(u, 5, 1e-14);
+  cup_scene_free(&s);
+  const char *o2[] = {"netlist.RL={100/}"};                    /* SPICE's message, at the override */
+  assert_contains(load_bad(EX "/circuits/halfwave-rc.yaml", o2, 1),
+                  "override 'netlist.RL={100/}': netlist: ");
+  assert_contains(load_bad(EX "/circuits/halfwave-rc.yaml", o2, 1), "RL: the expression ends too early");
+  const char *o3[] = {"netlist.probe=[v(out)]"};               /* the scene's own keys stay YAML */
+  s = load_ok(EX "/circuits/halfwave-rc.yaml", o3, 1);
+  cup_scene_free(&s);
+}
+
 static void test_overrides_errors(void **state) {
   (void)state;
   const char *o1[] = {"circuit.R1=-1"};
@@ -641,6 +665,157 @@ static void test_message_layout(void **state) {
   assert_null(s);
 }
 
+/* The SHA-256 of a file by the system's sha256sum (an independent
+ * reference for the scene's own hash), into hex[65]. */
+static void sha256sum(const char *path, char hex[65]) {
+  char cmd[1024];
+  snprintf(cmd, sizeof cmd, "sha256sum '%s'", path);
+  FILE *p = popen(cmd, "r");
+  assert_non_null(p);
+  assert_int_equal(fscanf(p, "%64s", hex), 1);
+  pclose(p);
+}
+
+/* The files a scene was read from: each once, in the order read, with the
+ * SHA-256 of its bytes (against sha256sum); a netlist's through the scene;
+ * none for a scene from text that names no file. */
+static void test_files_read(void **state) {
+  (void)state;
+  cup_scene *s = load_ok(EX "/sparse-mtx/scene.yaml", NULL, 0);
+  static const char *const names[] = {"scene.yaml", "A.mtx", "C.mtx", "P.mtx", "x0.mtx"};
+  assert_int_equal(cup_scene_file_count(s), 5);
+  assert_string_equal(cup_scene_file(s, 0), EX "/sparse-mtx/scene.yaml");   /* then as the keys are read */
+  for (int k = 0; k < 5; k++) {
+    char want[256], hex[65];
+    snprintf(want, sizeof want, EX "/sparse-mtx/%s", names[k]);
+    int at = -1;
+    for (int j = 0; j < 5; j++) at = !strcmp(cup_scene_file(s, j), want) ? j : at;
+    assert_true(at >= 0);
+    sha256sum(want, hex);
+    assert_string_equal(cup_scene_file_sha256(s, at), hex);
+  }
+  assert_null(cup_scene_file(s, 5));
+  assert_null(cup_scene_file(s, -1));
+  cup_scene_free(&s);
+  /* the same file named twice is one file */
+  char err[CUP_ERRMSG_LEN];
+  const char *same = "lcs:\n  C: {file: C.mtx}\n  A: {file: A.mtx}\n  P: {file: P.mtx}\n  E: {file: x0.mtx}\n"
+                     "  G: [[0], [0], [0], [0]]\nx0: {file: x0.mtx}\ninput: 1\nT: 1\nn: 10\n";
+  assert_int_equal(cup_scene_load_string(&s, same, "same.yaml", EX "/sparse-mtx", NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 4);             /* C, A, P, x0 (for E and for x0) */
+  int x0_seen = 0;
+  for (int j = 0; j < 4; j++) x0_seen += !strcmp(cup_scene_file(s, j), EX "/sparse-mtx/x0.mtx");
+  assert_int_equal(x0_seen, 1);
+  cup_scene_free(&s);
+  s = load_ok(EX "/paper-fig2.yaml", NULL, 0);
+  assert_int_equal(cup_scene_file_count(s), 1);
+  cup_scene_free(&s);
+  assert_int_equal(cup_scene_load_string(&s, "netlist: halfwave-rc.cir\n", "n.yaml", EX "/circuits", NULL, 0, err),
+                   CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 1);
+  assert_string_equal(cup_scene_file(s, 0), EX "/circuits/halfwave-rc.cir");
+  cup_scene_free(&s);
+  assert_int_equal(cup_scene_file_count(NULL), 0);
+  /* what a netlist includes is read through the same list */
+  char dir[] = "/tmp/cup_incXXXXXX", path[64], hex[65];
+  assert_non_null(mkdtemp(dir));
+  snprintf(path, sizeof path, "%s/rc.cir", dir);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs("rc\nV1 in 0 DC 1\n.include parts.inc\n.tran 1u 1m\n.end\n", f);
+  fclose(f);
+  snprintf(path, sizeof path, "%s/parts.inc", dir);
+  assert_non_null(f = fopen(path, "w"));
+  fputs("R1 in out 1k\nC1 out 0 1u\n", f);
+  fclose(f);
+  assert_int_equal(cup_scene_load_string(&s, "netlist: rc.cir\n", "inc.yaml", dir, NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 2);
+  assert_string_equal(cup_scene_file(s, 1), path);
+  sha256sum(path, hex);
+  assert_string_equal(cup_scene_file_sha256(s, 1), hex);
+  assert_int_equal(cup_scene_check_output(s, path, err), CUP_ERR_ARG);      /* the included file */
+  assert_contains(err, "which the run reads");
+  cup_scene_free(&s);
+  char text[256];
+  snprintf(text, sizeof text, "netlist: {text: \"rc\\nV1 in 0 DC 1\\n.include %s\\n.tran 1u 1m\\n.end\\n\"}\n", path);
+  assert_int_equal(cup_scene_load_string(&s, text, "text.yaml", dir, NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_scene_file_count(s), 1);                             /* a netlist given as text: its include */
+  assert_string_equal(cup_scene_file(s, 0), path);
+  cup_scene_free(&s);
+  char cmd[64];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
+/* A folder `len` characters deep (folders of at most 200 characters) under
+ * a fresh temporary one, made; *top is that temporary folder. */
+static char *deep_dir(size_t len, char **top) {
+  char tmpl[] = "/tmp/cup_deepXXXXXX";
+  assert_non_null(mkdtemp(tmpl));
+  *top = strdup(tmpl);
+  char *d = malloc(len + 256);
+  assert_non_null(d);
+  size_t w = (size_t)snprintf(d, len + 256, "%s", tmpl);
+  while (w < len) {
+    size_t seg = len - w - 1 < 200 ? len - w - 1 : 200;
+    if (seg == 0) seg = 1;
+    d[w++] = '/';
+    memset(d + w, 'd', seg);
+    w += seg;
+    d[w] = '\0';
+    assert_int_equal(mkdir(d, 0700), 0);
+  }
+  return d;
+}
+
+static char *write_in(const char *dir, const char *name, const char *text) {
+  size_t n = strlen(dir) + strlen(name) + 2;
+  char *path = malloc(n);
+  assert_non_null(path);
+  snprintf(path, n, "%s/%s", dir, name);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+  return path;
+}
+
+/* Messages are never cut (CUP_ERRMSG_LEN): through a path of 250
+ * characters, and of 4000 (near PATH_MAX), a scene's error, a Matrix Market
+ * file's that it names (two paths in one message) and a netlist's read
+ * through the scene end as they do through a short path. */
+static void test_long_path_messages(void **state) {
+  (void)state;
+  static const size_t lens[] = {250, 4000};
+  for (size_t k = 0; k < sizeof lens / sizeof lens[0]; k++) {
+    char *top, *dir = deep_dir(lens[k] - strlen("/bad.yaml"), &top), err[CUP_ERRMSG_LEN], want[CUP_ERRMSG_LEN];
+    char *bad = write_in(dir, "bad.yaml", "circuit:\n  R1: 1\n  R2: 2\n  L3:   -1\n  R3: 1\n  L2: 1\n"
+                                           "  C4: 1\nT: 1\nn: 100\n");
+    assert_true(strlen(bad) >= lens[k]);
+    cup_scene *s = NULL;
+    assert_int_equal(cup_scene_load(&s, bad, NULL, 0, err), CUP_ERR_PARSE);
+    snprintf(want, sizeof want, "%s:4:9: circuit.L3: must be > 0 (got -1)", bad);
+    assert_string_equal(err, want);
+    char *mtx = write_in(dir, "m.yaml", "lcs:\n  C: [[1]]\n  E: [[1]]\n  G: {file: missing.mtx}\ninput: 1\nT: 1\n");
+    assert_int_equal(cup_scene_load(&s, mtx, NULL, 0, err), CUP_ERR_IO);
+    snprintf(want, sizeof want, "%s:4:13: lcs.G.file: cannot open '%s/missing.mtx': No such file or directory",
+             mtx, dir);
+    assert_string_equal(err, want);
+    char *cir = write_in(dir, "c.cir", "* rc\nV1 in 0 DC 1\nR1 in out 1k\nC1 out 0 1u\nD1 out 0 nomodel\n.tran 1u 1m\n");
+    char *sc = write_in(dir, "n.yaml", "netlist: c.cir\n");
+    assert_int_equal(cup_scene_load(&s, sc, NULL, 0, err), CUP_ERR_PARSE);
+    assert_contains(err, cir);
+    assert_contains(err, "model 'nomodel' is not defined (an ideal diode needs '.model nomodel D' or no model)");
+    assert_null(s);
+    free(bad); free(mtx); free(cir); free(sc);
+    char cmd[64 + sizeof "/tmp/cup_deepXXXXXX"];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", top);
+    assert_int_equal(system(cmd), 0);
+    free(dir);
+    free(top);
+  }
+}
+
 static void test_api_edges(void **state) {
   (void)state;
   char err[CUP_ERRMSG_LEN];
@@ -673,12 +848,15 @@ int main(void) {
     cmocka_unit_test(test_overrides_change_values),
     cmocka_unit_test(test_overrides_add_keys),
     cmocka_unit_test(test_overrides_replace_shapes),
+    cmocka_unit_test(test_overrides_netlist_spice),
     cmocka_unit_test(test_overrides_errors),
     cmocka_unit_test(test_round_trip),
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_mutations),
     cmocka_unit_test(test_allocation_failures),
     cmocka_unit_test(test_message_layout),
+    cmocka_unit_test(test_long_path_messages),
+    cmocka_unit_test(test_files_read),
     cmocka_unit_test(test_api_edges),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -16,11 +16,18 @@
  * Errors return CUP_ERR_IO (or CUP_ERR_ARG / CUP_ERR_NOMEM) with a message
  * naming the operation and the file; HDF5's automatic error printing is
  * switched off inside each call and restored before it returns. The writer
- * keeps 8 MiB free on the file's device: below that it stops taking samples
+ * keeps CUP_H5_SPACE_MARGIN free on the file's device beyond what HDF5
+ * still holds in its caches: below that it stops taking samples
  * (CUP_ERR_IO) but still writes attributes and closes cleanly, because HDF5
  * 1.10 cannot close a file after a write failed for lack of space (the file
  * is then unreadable and the library may crash at exit). After any failed
- * HDF5 call the writer refuses everything but close, for the same reason. */
+ * HDF5 call the writer refuses everything but close, for the same reason.
+ *
+ * Replacing a file: cup_h5run_begin writes a new sibling (PATH.partXXXXXX)
+ * and cup_h5run_commit renames it over PATH in one step, so that an earlier
+ * file at PATH is replaced only by a run that got past its checks; a
+ * writer closed (or discarded) before its commit removes the sibling and
+ * leaves PATH as it was. cup_h5run_create is begin and commit at once. */
 #ifndef CATCHUP_H5RUN_H
 #define CATCHUP_H5RUN_H
 
@@ -30,10 +37,27 @@ extern "C" {
 
 typedef struct cup_h5run cup_h5run;
 
-/** Create (truncate) path for states of dimension dim; /t and /x exist, with
- *  N = 0, on disk when this returns. errmsg (CUP_ERRMSG_LEN bytes, may be
- *  NULL) names the path and the problem on failure; *w is then NULL. */
+/** Bytes the writers (this one and catchup-sweep's) keep free on an
+ *  output's device, beyond what HDF5 may still hold in its caches: what
+ *  the final attributes, the metadata and the close need. catchup-run and
+ *  catchup-sweep refuse a run whose planned output does not fit beside it. */
+#define CUP_H5_SPACE_MARGIN (8u << 20)
+
+/** Create path for states of dimension dim, replacing a file there; /t and
+ *  /x exist, with N = 0, on disk when this returns (cup_h5run_begin, then
+ *  cup_h5run_commit). errmsg (CUP_ERRMSG_LEN bytes, may be NULL) names the
+ *  path and the problem on failure; *w is then NULL and path as it was. */
 int cup_h5run_create(cup_h5run **w, const char *path, int dim, char *errmsg);
+/** The same, written to a new sibling of path (PATH.partXXXXXX, in the same
+ *  folder, which must take new files) until cup_h5run_commit: path keeps
+ *  what it holds while the caller declares signals, writes provenance and
+ *  checks what it must. */
+int cup_h5run_begin(cup_h5run **w, const char *path, int dim, char *errmsg);
+/** Flush, then rename the sibling over path (refused while another process
+ *  holds path open). CUP_OK at once when there is nothing staged. */
+int cup_h5run_commit(cup_h5run *w);
+/** Close and free without a word, removing a sibling not committed; *w = NULL. */
+void cup_h5run_discard(cup_h5run **w);
 /** A cup_sample_fn: append (t, x) through ctx = the cup_h5run (k is not
  *  stored). Returns nonzero (the status) once writing has failed or space
  *  ran short, so that a run stops instead of computing what cannot be saved. */
@@ -83,6 +107,30 @@ int cup_h5run_flush(cup_h5run *w);
  *  path during the writer's life (samples were lost) or of the close, with
  *  its message in errmsg (may be NULL). */
 int cup_h5run_close(cup_h5run **w, char *errmsg);
+/** A stopped run's file, continued (catchup-run --resume).
+ *
+ *  Reopen path, written by this writer for states of dimension dim with
+ *  the nsig signals `names` (in /signals, in that order): refused, naming
+ *  what differs, when it is not such a file; appending goes on after its
+ *  rows (the file is not staged: it is the run's own). */
+int cup_h5run_open(cup_h5run **w, const char *path, int dim, int nsig, const char *const *names, char *errmsg);
+/** Cut /t, /x and /signals back to `rows` rows and /events to `events`. */
+int cup_h5run_truncate(cup_h5run *w, long rows, long events);
+/** Store a checkpoint (cup_integrator_checkpoint_save's bytes) as the
+ *  dataset /checkpoint (uint8), replacing one, with the rows and events
+ *  written so far as its attributes `rows` and `events`; flushed. */
+int cup_h5run_put_checkpoint(cup_h5run *w, const void *blob, unsigned long size);
+/** The stored checkpoint (malloc'd into *blob, size bytes) and the rows and
+ *  events it covers; CUP_ERR_ARG when the file has none. */
+int cup_h5run_get_checkpoint(cup_h5run *w, void **blob, unsigned long *size, long *rows, long *events);
+/** Remove /checkpoint (nothing when there is none). */
+int cup_h5run_drop_checkpoint(cup_h5run *w);
+/** A root attribute read back: a string (malloc'd into *value) or a float64;
+ *  CUP_ERR_ARG when there is no such attribute of that type. */
+int cup_h5run_get_string(cup_h5run *w, const char *name, char **value);
+int cup_h5run_get_double(cup_h5run *w, const char *name, double *v);
+/** Remove a root attribute (nothing when there is none). */
+int cup_h5run_drop_attr(cup_h5run *w, const char *name);
 /** Samples accepted so far (written or buffered). */
 long cup_h5run_count(const cup_h5run *w);
 /** Message of the first failure ("" if none): a sink cannot return one. */

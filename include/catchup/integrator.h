@@ -143,7 +143,7 @@ typedef struct cup_integrator_options {
   int estimate;               /**< fixed-step schemes: 1 estimates the error by step doubling, from a
                                    second run at n/2 in step (half again the work; n even); the
                                    adaptive scheme always estimates */
-  double max_step;            /**< ADAPTIVE: no step longer than this (SPICE's TMAX); 0: none */
+  double hmax;                /**< ADAPTIVE: no step longer than this (SPICE's TMAX); 0: none */
   double output_t0;           /**< SAMPLES: the first sample's time (SPICE's TSTART), in [0, T);
                                    the samples are at output_t0 + j (T - output_t0) / (N - 1),
                                    the adaptive scheme's from its exact flow, the fixed-step
@@ -167,7 +167,7 @@ typedef struct cup_run_info {
   double eta_target;          /**< eta_n used */
   double h_rho;               /**< h * spectral radius of A */
   long samples;               /**< states passed to the sink */
-  char message[256];          /**< what went wrong, with step and time */
+  char message[CUP_RUN_MSG_LEN]; /**< what went wrong, with step and time (never cut) */
   /* general sets (cup_integrator_create_process) */
   long set_rebuilds;          /**< state polyset: symbolic analyses of the run (and their
                                    allocations): the one at t = 0, then one per step whose rows
@@ -235,6 +235,38 @@ int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
  *  (may be NULL). Allocates nothing per step. Returns info->status. */
 int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
                        void *sink_ctx, cup_run_info *info);
+
+/** Checkpoints. A run stopped at a step's end before T — by the interrupt
+ *  flag, by the sink or the step callback returning nonzero (status
+ *  CUP_ERR_INTERRUPTED), or by the wall-time limit — can be saved as an
+ *  opaque, versioned byte blob: the step, x_k, what the scheme carries
+ *  from step to step (the projector's warm start and the anchor of its
+ *  certificates, the LCP step's active set; the adaptive scheme's step
+ *  size, active set, kept exponentials and error estimate), the output
+ *  schedule's place and the run's statistics. An integrator made from the
+ *  same model with the same options restores it, and cup_integrator_resume
+ *  continues the run: the same steps, bit for bit, and the same samples
+ *  (the one the sink refused is passed again), events and statistics as a
+ *  run that was not stopped (a sparse set's Newton projections start from
+ *  a fresh factorization of the same rows: the same answers to rounding).
+ *  The blob holds no model: restoring refuses one from another
+ *  configuration (scheme, dimensions, n, T, tolerances, output), naming
+ *  what differs; keeping the model's values the same is the caller's part
+ *  (catchup-run compares its input files' SHA-256). Processes of sets other
+ *  than a polyset cannot be saved (CUP_ERR_UNSUPPORTED). A blob is read by
+ *  the build that wrote it, on the same kind of machine.
+ *
+ *  The size of the blob of the last run's stop: bytes, or a negative status
+ *  (CUP_ERR_ARG: it did not stop where it can resume; CUP_ERR_UNSUPPORTED). */
+long cup_integrator_checkpoint_size(const cup_integrator *I);
+/** Write it into buf (size bytes): info is what the stopped run returned. */
+int cup_integrator_checkpoint_save(const cup_integrator *I, const cup_run_info *info, void *buf,
+                                   unsigned long size);
+/** Read a blob into I (made as the saved one was); errmsg says why not. */
+int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsigned long size, char *errmsg);
+/** Continue the restored run to T (or its next stop), as cup_integrator_run
+ *  would have; info starts from the saved run's statistics. */
+int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 
 /** The final state of the last run (n entries). */
 const double *cup_integrator_state(const cup_integrator *I);

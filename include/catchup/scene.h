@@ -49,8 +49,30 @@ const double *cup_scene_x0(const cup_scene *s);          /**< n entries */
 const cup_integrator_options *cup_scene_options(const cup_scene *s);
 const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "n^-2.1" */
 const char *cup_scene_eta_spec(const cup_scene *s);
+/** The default of the scene key max_steps: a fixed-step run of more steps
+ *  is refused by catchup-run and catchup-sweep before its first step (a
+ *  netlist's `.tran 1f 1k` asks for 10^18). 10^9 steps take under a minute
+ *  on the paper's circuit, the cheapest there is (10^8: 4.2-5.1 s, output:
+ *  final, on a shared 2-core machine), and hours on most others. */
+#define CUP_MAX_STEPS_DEFAULT 1000000000L
+/** The scene's max_steps (CUP_MAX_STEPS_DEFAULT when it has none). */
+long cup_scene_max_steps(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
 const char *cup_scene_text(const cup_scene *s);
+/** The files the scene was read from, in the order first read, each once:
+ *  the scene file (none for cup_scene_load_string), the Matrix Market
+ *  files it names, its netlist and what that includes. k in [0, count). */
+int cup_scene_file_count(const cup_scene *s);
+/** File k's path as it was opened (NULL for k out of range). */
+const char *cup_scene_file(const cup_scene *s, int k);
+/** The SHA-256 (64 lowercase hex digits) of the bytes of file k that were
+ *  read: what the scene holds, whatever the file says now. */
+const char *cup_scene_file_sha256(const cup_scene *s, int k);
+/** CUP_ERR_ARG, with a message naming both, when the output path names one
+ *  of the scene's files: the same path once resolved (path need not exist),
+ *  or the same file (device and inode, now or when it was read: hard links,
+ *  symbolic links). CUP_OK otherwise. For a program's -o, before it writes. */
+int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg);
 /** The name and unit of state component j (0-based), for files and plots:
  *  the paper's circuit "q(C4)" (C), "i(L3)", "i(L2)" (A); a netlist's
  *  "i(L1)" (A), "v(C1)" (V); a crowd's "x0", "y0", "x1", ... (m); any other

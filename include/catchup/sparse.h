@@ -6,8 +6,15 @@
 extern "C" {
 #endif
 
-/** Length of the error-message buffers that create functions fill. */
-#define CUP_ERRMSG_LEN 256
+/** Length of the error-message buffers that create and load functions fill:
+ *  room for two paths of PATH_MAX (a file and a file it names) and the rest
+ *  of the message, so that no message is cut, however deep the folders.
+ *  (It was 256: an ABI change; rebuild what calls the library.) */
+#define CUP_ERRMSG_LEN 12288
+/** Length of cup_run_info.message (integrator.h). A run's messages name a
+ *  step, a time, rows and values, never a path: this holds the longest of
+ *  them whole. (The field had 256 bytes: an ABI change.) */
+#define CUP_RUN_MSG_LEN 1024
 
 /** A compressed-sparse-column matrix, 0-based (CHOLMOD's layout), as a view:
  *  the library copies what it needs at creation and never keeps the pointers.

@@ -28,7 +28,7 @@ extern "C" {
   X(CUP_WARN_NOT_CERTIFIED,  1, "requested (eps, eta) not certified within the iteration limit; bounds reached are in info") \
   X(CUP_WARN_STIFF,          2, "explicit scheme with h*rho(A) > 2: the free step is unstable") \
   X(CUP_WARN_QUADRATURE,     3, "input quadrature did not reach its tolerance") \
-  X(CUP_WARN_X0_OUTSIDE,     4, "x0 is outside K(0): the first step projects it") \
+  X(CUP_WARN_X0_OUTSIDE,     4, "x0 is not consistent (outside K(0); with D != 0, no zeta >= 0 makes C x0 + D zeta + g >= 0): the first step jumps, by the size in the message") \
   X(CUP_WARN_SPLITTING,      5, "implicit/exponential scheme with h above the time constant of a constraint direction: the projection along B loses what the step moved") \
   X(CUP_ERR_STEP_SIZE,     -16, "adaptive scheme: the step size underflowed (the input or the solution is not smooth enough for tol there)") \
   X(CUP_WARN_ZENO,           6, "adaptive scheme: events accumulate (Zeno behaviour or chattering) beyond the event rate cap; catching-up steps took over there") \

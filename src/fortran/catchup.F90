@@ -17,7 +17,8 @@ module catchup
   use catchup_scene, only: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_netlist, &
     cup_scene_name, cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, &
     cup_scene_eps_spec, cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, &
-    cup_scene_integrator, cup_scene_state_name, cup_scene_state_unit
+    cup_scene_integrator, cup_scene_state_name, cup_scene_state_unit, cup_scene_file_count, cup_scene_file, &
+    cup_scene_file_sha256, cup_scene_check_output, cup_scene_max_steps
 #endif
   implicit none
   public

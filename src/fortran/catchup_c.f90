@@ -32,7 +32,9 @@ module catchup_c
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
     c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_create_process, &
     c_cup_integrator_free, &
-    c_cup_integrator_run, c_cup_integrator_state, c_cup_integrator_zeta, c_cup_scheme_name, c_cup_scheme_parse, &
+    c_cup_integrator_run, c_cup_integrator_state, c_cup_integrator_zeta, c_cup_integrator_checkpoint_size, &
+    c_cup_integrator_checkpoint_save, c_cup_integrator_checkpoint_restore, c_cup_integrator_resume, &
+    c_cup_scheme_name, c_cup_scheme_parse, &
     c_cup_output_name, c_cup_output_parse, c_cup_wave_name, c_cup_wave_parse
 
   interface
@@ -352,6 +354,37 @@ module catchup_c
       type(cup_run_info), intent(inout) :: info
       integer(c_int) :: st
     end function c_cup_integrator_run
+    function c_cup_integrator_checkpoint_size(I) bind(C, name="cup_integrator_checkpoint_size") result(n)
+      import :: c_ptr, c_long
+      type(c_ptr), value :: I
+      integer(c_long) :: n
+    end function c_cup_integrator_checkpoint_size
+    function c_cup_integrator_checkpoint_save(I, info, buf, size) bind(C, name="cup_integrator_checkpoint_save") &
+        result(st)
+      import :: c_ptr, c_int, c_long, cup_run_info
+      type(c_ptr), value :: I
+      type(cup_run_info), intent(in) :: info
+      type(c_ptr), value :: buf
+      integer(c_long), value :: size
+      integer(c_int) :: st
+    end function c_cup_integrator_checkpoint_save
+    function c_cup_integrator_checkpoint_restore(I, buf, size, errmsg) &
+        bind(C, name="cup_integrator_checkpoint_restore") result(st)
+      import :: c_ptr, c_int, c_long, c_char
+      type(c_ptr), value :: I
+      type(c_ptr), value :: buf
+      integer(c_long), value :: size
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_integrator_checkpoint_restore
+    function c_cup_integrator_resume(I, sink, sink_ctx, info) bind(C, name="cup_integrator_resume") result(st)
+      import :: c_int, c_ptr, c_funptr, cup_run_info
+      type(c_ptr), value :: I
+      type(c_funptr), value :: sink
+      type(c_ptr), value :: sink_ctx
+      type(cup_run_info), intent(inout) :: info
+      integer(c_int) :: st
+    end function c_cup_integrator_resume
     function c_cup_integrator_zeta(I, zeta) bind(C, name="cup_integrator_zeta") result(st)
       import :: c_ptr, c_int, c_double
       type(c_ptr), value :: I

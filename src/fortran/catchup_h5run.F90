@@ -8,27 +8,33 @@
 ! cup_h5run_errmsg (CMake reads the header).
 module catchup_h5run
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
-    c_associated, c_funloc, c_loc
+    c_associated, c_funloc, c_loc, c_int8_t, c_f_pointer
   use catchup_constants
   use catchup_types
   use catchup_base
   use catchup_core, only: cup_integrator_run
   implicit none
   private
-  public :: cup_h5run_create, cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
+  public :: cup_h5run_create, cup_h5run_begin, cup_h5run_commit, cup_h5run_discard, &
+    cup_h5run_close, cup_h5run_free, cup_h5run_attr, &
     cup_h5run_attr_double, cup_h5run_attr_long, cup_h5run_attr_string, cup_h5run_flush, &
     cup_h5run_count, cup_h5_version, cup_integrator_run_h5, cup_h5run_signals, cup_h5run_append, &
-    cup_h5run_describe, cup_h5run_strings, cup_h5run_dims
+    cup_h5run_describe, cup_h5run_strings, cup_h5run_dims, &
+    cup_h5run_open, cup_h5run_truncate, cup_h5run_put_checkpoint, cup_h5run_get_checkpoint, &
+    cup_h5run_drop_checkpoint, cup_h5run_get_string, cup_h5run_get_double, cup_h5run_drop_attr
 #ifdef CATCHUP_H5RUN_ERRMSG
   public :: cup_h5run_errmsg, c_cup_h5run_errmsg
 #endif
   ! the C sinks themselves: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...);
   ! o%on_event = c_funloc(cup_h5run_event), o%event_ctx = w%ptr (adaptive scheme: /events)
   public :: cup_h5run_sink, cup_h5run_event
-  public :: c_cup_h5run_create, c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
+  public :: c_cup_h5run_create, c_cup_h5run_begin, c_cup_h5run_commit, c_cup_h5run_discard, &
+    c_cup_h5run_attr_double, c_cup_h5run_attr_long, &
     c_cup_h5run_attr_string, c_cup_h5run_flush, c_cup_h5run_close, c_cup_h5run_count, &
     c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append, &
-    c_cup_h5run_describe, c_cup_h5run_strings, c_cup_h5run_dims
+    c_cup_h5run_describe, c_cup_h5run_strings, c_cup_h5run_dims, c_cup_h5run_open, &
+    c_cup_h5run_truncate, c_cup_h5run_put_checkpoint, c_cup_h5run_get_checkpoint, c_cup_h5run_drop_checkpoint, &
+    c_cup_h5run_get_string, c_cup_h5run_get_double, c_cup_h5run_drop_attr
 
   !> Root attribute: real(c_double), integer (stored as long) or string.
   interface cup_h5run_attr
@@ -44,6 +50,23 @@ module catchup_h5run
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_h5run_create
+    function c_cup_h5run_begin(w, path, dim, errmsg) bind(C, name="cup_h5run_begin") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(out) :: w
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: dim
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_begin
+    function c_cup_h5run_commit(w) bind(C, name="cup_h5run_commit") result(st)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: w
+      integer(c_int) :: st
+    end function c_cup_h5run_commit
+    subroutine c_cup_h5run_discard(w) bind(C, name="cup_h5run_discard")
+      import :: c_ptr
+      type(c_ptr), intent(inout) :: w
+    end subroutine c_cup_h5run_discard
     function cup_h5run_sink(k, t, x, ctx) bind(C, name="cup_h5run_sink") result(st)
       import :: c_int, c_long, c_double, c_ptr
       integer(c_long), value :: k
@@ -100,6 +123,64 @@ module catchup_h5run
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_h5run_close
+    function c_cup_h5run_open(w, path, dim, nsig, names, errmsg) bind(C, name="cup_h5run_open") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), intent(out) :: w
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int), value :: dim, nsig
+      type(c_ptr), value :: names
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_open
+    function c_cup_h5run_truncate(w, rows, events) bind(C, name="cup_h5run_truncate") result(st)
+      import :: c_int, c_ptr, c_long
+      type(c_ptr), value :: w
+      integer(c_long), value :: rows, events
+      integer(c_int) :: st
+    end function c_cup_h5run_truncate
+    function c_cup_h5run_put_checkpoint(w, blob, size) bind(C, name="cup_h5run_put_checkpoint") result(st)
+      import :: c_int, c_ptr, c_long
+      type(c_ptr), value :: w, blob
+      integer(c_long), value :: size
+      integer(c_int) :: st
+    end function c_cup_h5run_put_checkpoint
+    function c_cup_h5run_get_checkpoint(w, blob, size, rows, events) bind(C, name="cup_h5run_get_checkpoint") &
+        result(st)
+      import :: c_int, c_ptr, c_long
+      type(c_ptr), value :: w
+      type(c_ptr), intent(out) :: blob
+      integer(c_long), intent(out) :: size, rows, events
+      integer(c_int) :: st
+    end function c_cup_h5run_get_checkpoint
+    function c_cup_h5run_drop_checkpoint(w) bind(C, name="cup_h5run_drop_checkpoint") result(st)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: w
+      integer(c_int) :: st
+    end function c_cup_h5run_drop_checkpoint
+    function c_cup_h5run_get_string(w, name, value) bind(C, name="cup_h5run_get_string") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      type(c_ptr), intent(out) :: value
+      integer(c_int) :: st
+    end function c_cup_h5run_get_string
+    function c_cup_h5run_get_double(w, name, v) bind(C, name="cup_h5run_get_double") result(st)
+      import :: c_int, c_ptr, c_char, c_double
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      real(c_double), intent(out) :: v
+      integer(c_int) :: st
+    end function c_cup_h5run_get_double
+    function c_cup_h5run_drop_attr(w, name) bind(C, name="cup_h5run_drop_attr") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(in) :: name(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_drop_attr
+    subroutine c_free_(p) bind(C, name="free")
+      import :: c_ptr
+      type(c_ptr), value :: p
+    end subroutine c_free_
     function c_cup_h5run_signals(w, nsig, names) bind(C, name="cup_h5run_signals") result(st)
       import :: c_int, c_ptr
       type(c_ptr), value :: w
@@ -173,6 +254,37 @@ contains
     if (st == CUP_OK) w%dim = dim
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_h5run_create
+
+  !> The same, written to a new sibling of path (PATH.partXXXXXX) that
+  !> cup_h5run_commit renames over path: an earlier file stays until then.
+  subroutine cup_h5run_begin(w, path, dim, ierr, errmsg)
+    type(cup_h5run_t), intent(out) :: w
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: dim
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    cmsg = cup_errbuf_()
+    st = c_cup_h5run_begin(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    if (st == CUP_OK) w%dim = dim
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_h5run_begin
+
+  !> Rename the staged file over its path (after cup_h5run_begin).
+  subroutine cup_h5run_commit(w, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_commit(w%ptr))
+  end subroutine cup_h5run_commit
+
+  !> Close and free without a word, removing a file not committed.
+  subroutine cup_h5run_discard(w)
+    type(cup_h5run_t), intent(inout) :: w
+    if (c_associated(w%ptr)) call c_cup_h5run_discard(w%ptr)
+    w%ptr = c_null_ptr
+    w%dim = 0
+  end subroutine cup_h5run_discard
 
   !> Flush, close, free; w%ptr becomes null (closing a null handle is CUP_OK).
   subroutine cup_h5run_close(w, ierr, errmsg)
@@ -318,6 +430,102 @@ contains
     end if
     ierr = int(c_cup_h5run_append(w%ptr, t, x, sp))
   end subroutine cup_h5run_append
+
+  !> Reopen a stopped run's file to continue it (catchup-run --resume): states
+  !> of dimension dim, and the signals `names` in /signals in that order.
+  subroutine cup_h5run_open(w, path, dim, ierr, names, errmsg)
+    type(cup_h5run_t), intent(out) :: w
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: dim
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: names(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    character(kind=c_char), allocatable, target :: buf(:, :)
+    type(c_ptr), allocatable, target :: ptrs(:)
+    type(c_ptr) :: np
+    integer(c_int) :: st, ns
+    cmsg = cup_errbuf_()
+    np = c_null_ptr
+    ns = 0
+    if (present(names)) then
+      if (size(names) > 0) then
+        call cup_pack_strings_(names, buf, ptrs)
+        np = c_loc(ptrs)
+        ns = int(size(names), c_int)
+      end if
+    end if
+    st = c_cup_h5run_open(w%ptr, cup_f_c_string(path), int(dim, c_int), ns, np, cmsg)
+    if (st == CUP_OK) w%dim = dim
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_h5run_open
+
+  !> Cut the rows back to `rows` and /events to `events`.
+  subroutine cup_h5run_truncate(w, rows, events, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer(c_long), intent(in) :: rows, events
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_truncate(w%ptr, rows, events))
+  end subroutine cup_h5run_truncate
+
+  !> Store a checkpoint (cup_integrator_checkpoint_save's blob) as /checkpoint.
+  subroutine cup_h5run_put_checkpoint(w, blob, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer(c_int8_t), target, intent(in) :: blob(:)
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_put_checkpoint(w%ptr, c_loc(blob), int(size(blob), c_long)))
+  end subroutine cup_h5run_put_checkpoint
+
+  !> The stored checkpoint and the rows and events it covers.
+  subroutine cup_h5run_get_checkpoint(w, blob, rows, events, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer(c_int8_t), allocatable, intent(out) :: blob(:)
+    integer(c_long), intent(out) :: rows, events
+    integer, intent(out) :: ierr
+    type(c_ptr) :: p
+    integer(c_long) :: n
+    integer(c_int8_t), pointer :: b(:)
+    ierr = int(c_cup_h5run_get_checkpoint(w%ptr, p, n, rows, events))
+    if (ierr /= CUP_OK) return
+    call c_f_pointer(p, b, [n])
+    blob = b
+    call c_free_(p)
+  end subroutine cup_h5run_get_checkpoint
+
+  subroutine cup_h5run_drop_checkpoint(w, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_drop_checkpoint(w%ptr))
+  end subroutine cup_h5run_drop_checkpoint
+
+  !> A root string attribute read back ('' with ierr /= 0 when absent).
+  subroutine cup_h5run_get_string(w, name, value, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name
+    character(len=:), allocatable, intent(out) :: value
+    integer, intent(out) :: ierr
+    type(c_ptr) :: p
+    value = ''
+    ierr = int(c_cup_h5run_get_string(w%ptr, cup_f_c_string(name), p))
+    if (ierr /= CUP_OK) return
+    value = cup_c_string(p)
+    call c_free_(p)
+  end subroutine cup_h5run_get_string
+
+  subroutine cup_h5run_get_double(w, name, v, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name
+    real(c_double), intent(out) :: v
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_get_double(w%ptr, cup_f_c_string(name), v))
+  end subroutine cup_h5run_get_double
+
+  subroutine cup_h5run_drop_attr(w, name, ierr)
+    type(cup_h5run_t), intent(in) :: w
+    character(len=*), intent(in) :: name
+    integer, intent(out) :: ierr
+    ierr = int(c_cup_h5run_drop_attr(w%ptr, cup_f_c_string(name)))
+  end subroutine cup_h5run_drop_attr
 
   !> Samples written so far.
   integer(c_long) function cup_h5run_count(w)

@@ -3,7 +3,7 @@
 ! k = 0..n.
 module catchup_integrator
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_funptr, &
-    c_null_ptr, c_null_funptr, c_f_pointer, c_loc, c_funloc
+    c_null_ptr, c_null_funptr, c_f_pointer, c_loc, c_funloc, c_int8_t, c_associated
   use catchup_constants
   use catchup_types
   use catchup_c
@@ -15,6 +15,8 @@ module catchup_integrator
     cup_integrator_options_default, cup_integrator_create, cup_integrator_create_process, &
     cup_integrator_free, &
     cup_integrator_run, cup_integrator_run_store, cup_integrator_state, cup_integrator_zeta, &
+    cup_integrator_checkpoint_size, cup_integrator_checkpoint_save, cup_integrator_checkpoint_restore, &
+    cup_integrator_resume, &
     cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_run_info_message
   ! for the other modules of the binding (not part of the documented API)
   public :: cup_expected_samples_
@@ -321,6 +323,61 @@ contains
     end if
     call cup_copy_out_(c_cup_integrator_state(integ%ptr), integ%dim, x, found, ierr)
   end subroutine cup_integrator_state
+
+  !> Bytes of the checkpoint of the last run's stop (a stop at a step's end:
+  !> the interrupt flag, the sink, the step callback, the time limit), or a
+  !> negative status when there is none to save.
+  function cup_integrator_checkpoint_size(integ) result(n)
+    type(cup_integrator_t), intent(in) :: integ
+    integer(c_long) :: n
+    n = CUP_ERR_ARG
+    if (c_associated(integ%ptr)) n = c_cup_integrator_checkpoint_size(integ%ptr)
+  end function cup_integrator_checkpoint_size
+
+  !> The stopped run (info: what it returned) as a byte blob, allocated here.
+  subroutine cup_integrator_checkpoint_save(integ, info, blob, ierr)
+    type(cup_integrator_t), intent(in) :: integ
+    type(cup_run_info), intent(in) :: info
+    integer(c_int8_t), allocatable, target, intent(out) :: blob(:)
+    integer, intent(out) :: ierr
+    integer(c_long) :: n
+    n = cup_integrator_checkpoint_size(integ)
+    if (n < 0) then
+      ierr = int(n)
+      return
+    end if
+    allocate(blob(max(n, 1_c_long)))
+    ierr = int(c_cup_integrator_checkpoint_save(integ%ptr, info, c_loc(blob), n))
+  end subroutine cup_integrator_checkpoint_save
+
+  !> Read a blob into an integrator made as the saved one was (errmsg: why not).
+  subroutine cup_integrator_checkpoint_restore(integ, blob, ierr, errmsg)
+    type(cup_integrator_t), intent(in) :: integ
+    integer(c_int8_t), target, intent(in) :: blob(:)
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    if (cup_null_fail_(integ%ptr, 'integrator', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    ierr = int(c_cup_integrator_checkpoint_restore(integ%ptr, c_loc(blob), int(size(blob), c_long), cmsg))
+    if (present(errmsg)) errmsg = cup_chars_to_string(cmsg)
+  end subroutine cup_integrator_checkpoint_restore
+
+  !> Continue a restored run to T, as cup_integrator_run would have (the same
+  !> steps bit for bit); info continues the saved run's statistics.
+  subroutine cup_integrator_resume(integ, sink, sink_ctx, ierr, info, errmsg)
+    type(cup_integrator_t), intent(in) :: integ
+    type(c_funptr), value :: sink
+    type(c_ptr), value :: sink_ctx
+    integer, intent(out) :: ierr
+    type(cup_run_info), intent(out), optional :: info
+    character(len=*), intent(out), optional :: errmsg
+    type(cup_run_info) :: ri
+    if (cup_null_fail_(integ%ptr, 'integrator', ierr, errmsg)) return
+    ierr = int(c_cup_integrator_resume(integ%ptr, sink, sink_ctx, ri))
+    if (present(info)) info = ri
+    if (present(errmsg)) errmsg = cup_chars_to_string(ri%message)
+  end subroutine cup_integrator_resume
 
   !> zeta of the last step (rows entries): the diodes' currents and reverse
   !> voltages of a netlist, for cup_netlist_signals (0 before the first step).

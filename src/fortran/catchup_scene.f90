@@ -13,11 +13,13 @@ module catchup_scene
   public :: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_name, cup_scene_netlist, &
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
     cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator, &
-    cup_scene_state_name, cup_scene_state_unit
+    cup_scene_state_name, cup_scene_state_unit, &
+    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256, cup_scene_check_output, cup_scene_max_steps
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
-    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_state_label
+    c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_state_label, c_cup_scene_file_count, &
+    c_cup_scene_file, c_cup_scene_file_sha256, c_cup_scene_check_output, c_cup_scene_max_steps
 
   interface
     function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
@@ -122,6 +124,35 @@ module catchup_scene
       type(c_ptr), value :: s
       type(c_ptr) :: p
     end function c_cup_scene_text
+    function c_cup_scene_file_count(s) bind(C, name="cup_scene_file_count") result(n)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: s
+      integer(c_int) :: n
+    end function c_cup_scene_file_count
+    function c_cup_scene_file(s, k) bind(C, name="cup_scene_file") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: s
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_scene_file
+    function c_cup_scene_file_sha256(s, k) bind(C, name="cup_scene_file_sha256") result(p)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: s
+      integer(c_int), value :: k
+      type(c_ptr) :: p
+    end function c_cup_scene_file_sha256
+    function c_cup_scene_check_output(s, path, errmsg) bind(C, name="cup_scene_check_output") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: s
+      character(kind=c_char), intent(in) :: path(*)
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_check_output
+    function c_cup_scene_max_steps(s) bind(C, name="cup_scene_max_steps") result(n)
+      import :: c_ptr, c_long
+      type(c_ptr), value :: s
+      integer(c_long) :: n
+    end function c_cup_scene_max_steps
   end interface
 
 contains
@@ -370,4 +401,50 @@ contains
     text = ''
     if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_text(s%ptr))
   end function cup_scene_text
+
+  !> How many files the scene was read from (the scene file, its Matrix
+  !> Market files, its netlist and what that includes).
+  integer function cup_scene_file_count(s) result(n)
+    type(cup_scene_t), intent(in) :: s
+    n = 0
+    if (c_associated(s%ptr)) n = int(c_cup_scene_file_count(s%ptr))
+  end function cup_scene_file_count
+
+  !> File k (1-based) as it was opened ('' out of range).
+  function cup_scene_file(s, k) result(text)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: k
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_file(s%ptr, int(k - 1, c_int)))
+  end function cup_scene_file
+
+  !> The SHA-256 (hex) of the bytes of file k (1-based) that were read.
+  function cup_scene_file_sha256(s, k) result(text)
+    type(cup_scene_t), intent(in) :: s
+    integer, intent(in) :: k
+    character(len=:), allocatable :: text
+    text = ''
+    if (c_associated(s%ptr)) text = cup_c_string(c_cup_scene_file_sha256(s%ptr, int(k - 1, c_int)))
+  end function cup_scene_file_sha256
+
+  !> ierr = CUP_ERR_ARG (errmsg names both) when `path` is one of the files
+  !> the scene was read from (the same path resolved, or the same file).
+  subroutine cup_scene_check_output(s, path, ierr, errmsg)
+    type(cup_scene_t), intent(in) :: s
+    character(len=*), intent(in) :: path
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    cmsg = c_null_char
+    ierr = int(c_cup_scene_check_output(s%ptr, cup_f_c_string(path), cmsg))
+    if (present(errmsg)) errmsg = cup_chars_to_string(cmsg)
+  end subroutine cup_scene_check_output
+
+  !> The scene's max_steps: the most steps a fixed-step run of it may take.
+  function cup_scene_max_steps(s) result(n)
+    type(cup_scene_t), intent(in) :: s
+    integer(c_long) :: n
+    n = c_cup_scene_max_steps(s%ptr)
+  end function cup_scene_max_steps
 end module catchup_scene

@@ -152,7 +152,7 @@ module catchup_types
     type(c_funptr) :: on_event = c_null_funptr  !< c_funloc of a procedure(cup_event_fn), or null
     type(c_ptr) :: event_ctx = c_null_ptr
     integer(c_int) :: estimate = 0              !< fixed-step schemes: 1 = step-doubling error estimate
-    real(c_double) :: max_step = 0              !< ADAPTIVE: no step longer than this (TMAX); 0: none
+    real(c_double) :: hmax = 0                  !< ADAPTIVE: no step longer than this (TMAX); 0: none
     real(c_double) :: output_t0 = 0             !< SAMPLES: the first sample's time (TSTART)
   end type cup_integrator_options
 
@@ -171,7 +171,7 @@ module catchup_types
     real(c_double) :: eta_target = 0
     real(c_double) :: h_rho = 0
     integer(c_long) :: samples = 0
-    character(kind=c_char) :: message(256) = c_null_char   !< use cup_run_info_message(info)
+    character(kind=c_char) :: message(CUP_RUN_MSG_LEN) = c_null_char   !< use cup_run_info_message(info)
     integer(c_long) :: set_rebuilds = 0   !< state polyset: symbolic analyses of the run
     integer(c_long) :: max_rows = 0       !< state polyset: the most rows of one step
     ! the adaptive scheme and error estimates

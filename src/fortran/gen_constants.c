@@ -66,6 +66,8 @@ int main(int argc, char **argv) {
 
   fprintf(f, "\n  ! length of the error-message buffers (include/catchup/sparse.h)\n");
   CONST(f, CUP_ERRMSG_LEN);
+  fprintf(f, "  ! length of cup_run_info%%message (include/catchup/sparse.h)\n");
+  CONST(f, CUP_RUN_MSG_LEN);
 
   status_table(f);
 

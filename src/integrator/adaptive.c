@@ -206,6 +206,10 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->de = take((size_t)na, sizeof(double), &fail);
   A->de2 = take((size_t)na, sizeof(double), &fail);
   A->ed = take((size_t)n, sizeof(double), &fail);
+  A->pend.zy = take((size_t)na, sizeof(double), &fail);
+  A->pend.de = take((size_t)na, sizeof(double), &fail);
+  A->pend.y2 = take((size_t)na, sizeof(double), &fail);
+  A->pend.e2 = take((size_t)n, sizeof(double), &fail);
   A->lcpM = take((size_t)m * m, sizeof(double), &fail);
   A->touch = take((size_t)m, 1, &fail);
   if (A->has_D) {
@@ -268,6 +272,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
   free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
   free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
+  free(A->pend.zy); free(A->pend.de); free(A->pend.y2); free(A->pend.e2);
   free(A);
   *Ap = NULL;
 }

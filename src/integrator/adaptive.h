@@ -5,6 +5,7 @@
 
 #include "catchup/integrator.h"
 #include "freestep.h"
+#include "util/ckpt.h"
 
 typedef struct cup_adaptive cup_adaptive;
 
@@ -28,5 +29,13 @@ const double *cup_adaptive_state(const cup_adaptive *A);
  * chosen there; zeros at t = 0 and on catching-up steps across accumulating
  * events, whose multipliers are the projections' impulses). */
 int cup_adaptive_zeta(cup_adaptive *A, double *zeta);
+/* Checkpoints (integrator.h): 1 when the last run stopped at a step's end,
+ * where it can resume; the status and message the stop replaced, into
+ * info; the run's state to or from a checkpoint (util/ckpt.h); and the
+ * restored run continued (info: the saved run's statistics). */
+int cup_adaptive_stopped(const cup_adaptive *A);
+void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info);
+void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c);
+int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 
 #endif

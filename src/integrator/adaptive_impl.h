@@ -61,6 +61,38 @@ typedef struct ad_mode {
 
 typedef struct cup_adaptive cup_adaptive;   /* as in adaptive.h, which the run's API is in */
 
+/* One run's progress (adaptive_run.c). */
+typedef struct ad_run {
+  cup_run_info *info;
+  cup_sample_fn sink;
+  void *sink_ctx;
+  double t, tb;             /* now; the next breakpoint of the input (or T) */
+  struct ad_mode *md;       /* the active set's system */
+  long steps, next_sample;
+  double est_max;           /* the largest error estimate so far */
+  double r2, rloc;          /* rounding (sum of squares), unsigned local contributions */
+  double h_cb;              /* callback inputs: the next step size */
+  int floor_warned;
+  double wall0;
+  double tend;              /* catching-up steps across accumulating events until tend (0: none) */
+  long ev0;                 /* the events before the step under way (the accumulation check after it) */
+} ad_run;
+
+/* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
+enum { AD_STOP_NONE, AD_STOP_STEP, AD_STOP_SAMPLE, AD_STOP_DENSE };
+typedef struct ad_stop {
+  int phase;                /* AD_STOP_STEP: the step's sample and what follows it are next;
+                               AD_STOP_SAMPLE: the sink refused that sample;
+                               AD_STOP_DENSE: it refused a sample inside the step (ad_pend), the
+                               step is taken: its samples from that one on, its callback and its
+                               end's sample are next */
+  cup_proj_info pi;         /* AD_STOP_DENSE: the step's, for its callback */
+  ad_run R;                 /* the run's scalars (its pointers are set again on resume) */
+  int md, pinned1;          /* slots of R.md and of the other set in use (-1: none) */
+  int status;               /* the run's status and message before the stop replaced them */
+  char message[CUP_RUN_MSG_LEN];
+} ad_stop;
+
 struct cup_adaptive {
   const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
@@ -131,22 +163,39 @@ struct cup_adaptive {
   double *zw, *zy;          /* nw, na */
   int zy_ready;             /* a sample inside a step: zy is its y already */
   double *xo, *dy, *de, *de2, *ed; /* n, na, na, na, n: a sample inside a step (dense output), its error */
+  ad_stop stop;             /* where the last run stopped */
+  /* a sample inside a step that the sink refused: the step goes on to its
+   * end without offering more, and the run stops there (AD_STOP_DENSE);
+   * the samples from it on are offered again by the resumed run, from the
+   * same states (bit for bit): the refused one's y and error on mode md up
+   * to t_end, then a second piece's (an event's new flow) from its start */
+  struct ad_pend {
+    int active, md, seg2, md2;
+    long k;                 /* the step number the sink was given */
+    double t_end, t2a, t2b;
+    double *zy, *de, *y2, *e2;   /* na, na, na, n */
+  } pend;
 };
 
-/* One run's progress (adaptive_run.c). */
-typedef struct ad_run {
-  cup_run_info *info;
-  cup_sample_fn sink;
-  void *sink_ctx;
-  double t, tb;             /* now; the next breakpoint of the input (or T) */
-  ad_mode *md;              /* the active set's system */
-  long steps, next_sample;
-  double est_max;           /* the largest error estimate so far */
-  double r2, rloc;          /* rounding (sum of squares), unsigned local contributions */
-  double h_cb;              /* callback inputs: the next step size */
-  int floor_warned;
-  double wall0;
-} ad_run;
+/* ---- adaptive_run.c ---- */
+/* "step k (t = ...): " and the text into the run's message; the status. */
+__attribute__((format(printf, 3, 4)))
+int ad_fail(ad_run *R, int status, const char *fmt, ...);
+
+/* ---- adaptive_sample.c ---- */
+/* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */
+double ad_sample_time(const cup_adaptive *A, long j);
+/* The samples due in [t0, t1) on md's flow from y = ya with error e0,
+ * offered to the sink (a refusal kept in A->pend: the step goes on, the
+ * run stops at its end); CUP_OK or an error. */
+int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                  double t1);
+/* A stop at a refused sample inside a step, resumed: that sample and the
+ * rest of the step's; 1 if the sink refused one again. */
+int ad_dense_resume(cup_adaptive *A, ad_run *R);
+/* The input's exosystem states at t0 for a step to t1 into w (a callback's
+ * interpolation error per component into err); nonzero if the input failed. */
+int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err);
 
 /* ---- adaptive_mode.c ---- */
 /* The active set with rows `mask` (built, or found among the kept ones). A
@@ -156,6 +205,10 @@ typedef struct ad_run {
 ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask);
 int ad_modes_init(cup_adaptive *A);
 void ad_modes_free(cup_adaptive *A);
+/* A checkpoint's kept active set in slot s: its rows (mask), built again,
+ * its exponentials for the step lengths hc (< 0: none) computed again (the
+ * same bits: the same function of the same h M) and its stamps of use. */
+void ad_mode_restore(cup_adaptive *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);
 /* exp(h M_J), cached by h (NULL: h = 0 needs none). */
 const double *ad_expm(cup_adaptive *A, ad_mode *md, double h);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */

@@ -396,18 +396,36 @@ ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
   return oldest;
 }
 
+/* exp(h M_J) into slot c of md's cache. */
+static void expm_into(cup_adaptive *A, ad_mode *md, double h, int c) {
+  size_t NA = (size_t)A->na * A->na;
+  double *hM = A->ework + 4 * NA;
+  for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
+  /* a stiff generator needs the small entries of exp - I kept (linalg.h):
+   * the run reuses this exponential on every step */
+  cup_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
+}
+
+void ad_mode_restore(cup_adaptive *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp) {
+  ad_mode *md = &A->modes[s];
+  md->stamp = 0;
+  if (!stamp) return;
+  mode_build(A, md, mask);
+  for (int c = 0; c < AD_CACHE; c++) {
+    if (hc[c] >= 0) expm_into(A, md, hc[c], c);
+    md->hc[c] = hc[c];
+    md->cstamp[c] = cstamp[c];
+  }
+  md->stamp = stamp;
+}
+
 const double *ad_expm(cup_adaptive *A, ad_mode *md, double h) {
   int slot = 0;
   for (int c = 0; c < AD_CACHE; c++) {
     if (md->hc[c] == h) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
     if (md->cstamp[c] < md->cstamp[slot]) slot = c;
   }
-  size_t NA = (size_t)A->na * A->na;
-  double *hM = A->ework + 4 * NA;
-  for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
-  /* a stiff generator needs the small entries of exp - I kept (linalg.h):
-   * the run reuses this exponential on every step */
-  cup_dense_expm_stiff(hM, A->na, md->Ec[slot], A->ework);
+  expm_into(A, md, h, slot);
   md->hc[slot] = h;
   md->cstamp[slot] = ++A->clock;
   return md->Ec[slot];

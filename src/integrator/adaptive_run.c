@@ -1,8 +1,9 @@
 /* adaptive_run — the run of the event-driven scheme (adaptive_impl.h,
  * docs/adaptive.md): steps of the exact flow that end on the input's
- * breakpoints and the output times, events located inside them, the
- * certified projection where the state is inconsistent, and the error
- * estimate carried along. Allocates nothing. */
+ * breakpoints (the output times inside them: adaptive_sample.c), events
+ * located inside them, the certified projection or the jump where the
+ * state is inconsistent, the error estimate carried along, and the
+ * checkpoints of a stopped run. Allocates nothing. */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
 #include <math.h>
@@ -13,6 +14,7 @@
 #include "catchup.h"
 #include "adaptive.h"
 #include "adaptive_impl.h"
+#include "projector/projector.h"
 #include "tally.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of
@@ -33,8 +35,7 @@ static void say(ad_run *R, const char *fmt, va_list ap) {
     vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
 }
 
-__attribute__((format(printf, 3, 4)))
-static int stop(ad_run *R, int status, const char *fmt, ...) {
+int ad_fail(ad_run *R, int status, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   say(R, fmt, ap);
@@ -64,25 +65,43 @@ static double tolw(const cup_adaptive *A, const double *x) {
   return A->o.tol_abs + A->o.tol_rel * inf_norm(x, A->n);
 }
 
-static double sample_time(const cup_adaptive *A, long j) {
-  long last = A->o.output_samples - 1;
-  double t0 = A->o.output_t0;
-  return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
-}
-
 /* Where the next step must end at the latest: a breakpoint, T, or t + hlim
- * (hlim within max_step); with to_samples, an output time too (catching-up
+ * (hlim within hmax); with to_samples, an output time too (catching-up
  * steps: the other steps' samples come from their exact flow, emit_dense). */
 static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim, int to_samples) {
   double s = fmin(R->tb, A->o.T);
   if (to_samples && A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
-    s = fmin(s, sample_time(A, R->next_sample));
-  if (A->o.max_step > 0) hlim = fmin(hlim, A->o.max_step);
+    s = fmin(s, ad_sample_time(A, R->next_sample));
+  if (A->o.hmax > 0) hlim = fmin(hlim, A->o.hmax);
   return R->t + hlim < s ? R->t + hlim : s;
 }
 
 static double estimate_now(const cup_adaptive *A, const ad_run *R) {
   return inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2);
+}
+
+/* A stop at a step's end that a checkpoint can resume from: the run's
+ * place, and the status and message the stop replaces (adaptive.h). */
+static int halt(cup_adaptive *A, ad_run *R, int status, int phase, const char *what) {
+  ad_stop *s = &A->stop;
+  s->phase = phase;
+  s->R = *R;
+  s->md = R->md ? (int)(R->md - A->modes) : -1;
+  s->pinned1 = A->pinned[1] ? (int)(A->pinned[1] - A->modes) : -1;
+  s->status = R->info->status;
+  memcpy(s->message, R->info->message, sizeof s->message);
+  return ad_fail(R, status, "%s", what);
+}
+
+/* The sample at R->t to the sink. */
+static int offer(cup_adaptive *A, ad_run *R) {
+  R->info->samples++;
+  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
+  A->zt = R->t;
+  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
+  A->zmd = NULL;
+  if (stopped) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_SAMPLE, "stopped by the output sink");
+  return CUP_OK;
 }
 
 static int emit(cup_adaptive *A, ad_run *R) {
@@ -91,7 +110,7 @@ static int emit(cup_adaptive *A, ad_run *R) {
   switch (o->output) {
     case CUP_OUTPUT_EVERY: out = R->steps % o->output_every == 0 || last; break;
     case CUP_OUTPUT_SAMPLES:
-      if (R->next_sample < o->output_samples && R->t == sample_time(A, R->next_sample)) {
+      if (R->next_sample < o->output_samples && R->t == ad_sample_time(A, R->next_sample)) {
         out = 1;
         R->next_sample++;
       }
@@ -101,68 +120,17 @@ static int emit(cup_adaptive *A, ad_run *R) {
   }
   if (!out) return CUP_OK;
   R->est_max = fmax(R->est_max, estimate_now(A, R));
-  if (!R->sink) return CUP_OK;
-  R->info->samples++;
-  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
-  A->zt = R->t;
-  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
-  A->zmd = NULL;
-  if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
-  return CUP_OK;
+  return R->sink ? offer(A, R) : CUP_OK;
 }
 
-/* E y in place (na x na, column-major; tmp: na). */
-static void times(int na, const double *E, double *y, double *tmp) {
-  cup_copy(tmp, y, na);
-  for (int i = 0; i < na; i++) {
-    double acc = 0;
-    for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * tmp[j];
-    y[i] = acc;
-  }
-}
-
-/* The samples due before t1 on the flow of md from (t0, ya), exact: the
- * first by exp((t_j - t0) M), the next ones each by the cached exp(dt M) of
- * the output spacing dt (one product a sample: asking 10^5 samples adds no
- * steps); the error estimate there is e0's (the error at t0) carried along
- * by the same flow. */
-static int emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
-                      double t1) {
-  const cup_integrator_options *o = &A->o;
-  if (o->output != CUP_OUTPUT_SAMPLES) return CUP_OK;
-  int n = A->n, na = A->na, first = 1;
-  double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
-  while (R->next_sample < o->output_samples) {
-    double ts = sample_time(A, R->next_sample);
-    if (!(ts < t1)) break;
-    R->next_sample++;
-    if (first) {
-      ad_flow(A, md, ts - t0, ya, A->zy);
-      cup_zero(A->de2, na);
-      cup_copy(A->de2, e0, n);
-      ad_flow(A, md, ts - t0, A->de2, A->de);
-      first = 0;
-    } else {
-      const double *E = ad_expm(A, md, dt);
-      times(na, E, A->zy, A->dy);
-      times(na, E, A->de, A->dy);
-    }
-    R->est_max = fmax(R->est_max, inf_norm(A->de, n) + R->rloc + sqrt(R->r2));
-    if (!R->sink) continue;
-    ad_state(A, md, A->zy, A->xo);
-    if (cup_state_beyond(A->xo, n)) {              /* as step_done: never a state out of range */
-      int w = cup_state_worst(A->xo, n);
-      return stop(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): the "
-                  "scheme diverged", CUP_STATE_MAX, ts, w, A->xo[w]);
-    }
-    R->info->samples++;
-    A->zmd = md;
-    A->zt = ts;
-    A->zy_ready = 1;
-    int stopped = R->sink(R->steps + 1, ts, A->xo, R->sink_ctx);   /* inside the step in progress */
-    A->zmd = NULL;
-    A->zy_ready = 0;
-    if (stopped) return stop(R, CUP_ERR_INTERRUPTED, "stopped by the output sink");
+/* A step's callback, and the interrupt and wall-time checks. */
+static int step_checks(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
+  if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
+    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
+  if ((R->steps & 1023) == 0) {
+    if (A->o.interrupt && *A->o.interrupt) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "interrupted");
+    if (A->o.max_wall_seconds > 0 && wall_now() - R->wall0 > A->o.max_wall_seconds)
+      return halt(A, R, CUP_ERR_TIME_LIMIT, AD_STOP_STEP, "wall-time limit reached");
   }
   return CUP_OK;
 }
@@ -195,101 +163,11 @@ static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at
          "precision can deliver there (about %.3g)", A->o.tol_abs, A->o.tol_rel, tw, xn,
          16 * DBL_EPSILON * xn);
   }
-  if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
-    return stop(R, CUP_ERR_INTERRUPTED, "stopped by the step callback");
-  if ((R->steps & 1023) == 0) {
-    if (A->o.interrupt && *A->o.interrupt) return stop(R, CUP_ERR_INTERRUPTED, "interrupted");
-    if (A->o.max_wall_seconds > 0 && wall_now() - R->wall0 > A->o.max_wall_seconds)
-      return stop(R, CUP_ERR_TIME_LIMIT, "wall-time limit reached");
+  if (A->pend.active) {                          /* the sink refused a sample inside the step */
+    A->stop.pi = *pi;
+    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, "stopped by the output sink");
   }
-  return CUP_OK;
-}
-
-/* ---- the input on a step ------------------------------------------------------------ */
-
-/* A callback input on [t0, t0 + h]: its interpolant at Chebyshev-Lobatto
- * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
- * (p entries) estimates the interpolation error from the last Chebyshev
- * coefficients (geometric decay assumed). */
-static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *err) {
-  enum { q = AD_DEGREE };
-  int p = A->p;
-  double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
-  for (int j = 0; j <= q; j++) {
-    tau[j] = h * A->node[j];
-    if (cup_input_eval(A->u, j == q ? t0 + h : t0 + tau[j], A->ut)) return CUP_ERR_CALLBACK;
-    for (int k = 0; k < p; k++) A->samp[k * (q + 1) + j] = A->ut[k];
-  }
-  for (int j = 0; j < q; j++) {                  /* and between the nodes: a check on the interpolant */
-    if (cup_input_eval(A->u, t0 + 0.5 * (tau[j] + tau[j + 1]), A->ut)) return CUP_ERR_CALLBACK;
-    for (int k = 0; k < p; k++) A->samp_mid[k * q + j] = A->ut[k];
-  }
-  for (int k = 0; k < p; k++) {
-    const double *f = A->samp + k * (q + 1);
-    double aq = 0, aq1 = 0, fmag = 0;          /* Chebyshev coefficients q and q - 1 */
-    for (int j = 0; j <= q; j++) {
-      double wj = j == 0 || j == q ? 0.5 : 1;
-      aq += wj * f[j] * cos(M_PI * j * q / q) * ((q & 1) ? -1 : 1);
-      aq1 += wj * f[j] * cos(M_PI * j * (q - 1) / q) * (((q - 1) & 1) ? -1 : 1);
-      fmag = fmax(fmag, fabs(f[j]));
-    }
-    aq = fabs(aq) / q;                            /* the last coefficient is halved */
-    aq1 = 2 * fabs(aq1) / q;
-    err[k] = (aq1 > 0 ? aq * fmin(1, aq / aq1) : aq) + 4 * DBL_EPSILON * fmag;
-    for (int j = 0; j <= q; j++) d[j] = f[j];    /* Newton's divided differences */
-    for (int l = 1; l <= q; l++)
-      for (int j = q; j >= l; j--) d[j] = (d[j] - d[j - 1]) / (tau[j] - tau[j - l]);
-    for (int j = 0; j <= q; j++) c[j] = 0;       /* to monomials: Horner from the top */
-    c[0] = d[q];
-    for (int l = q - 1; l >= 0; l--) {
-      for (int j = q - l; j >= 1; j--) c[j] = c[j - 1] - tau[l] * c[j];
-      c[0] = d[l] - tau[l] * c[0];
-    }
-    /* the interpolant against the input between its nodes: the tail of the
-     * Chebyshev coefficients alone underrates a step too long for degree q
-     * (a 1 kHz sine over 0.3 ms: 1e-7 of its amplitude off, estimated 1e-12) */
-    for (int j = 0; j < q; j++) {
-      double s = 0.5 * (tau[j] + tau[j + 1]), v = c[q];
-      for (int l = q - 1; l >= 0; l--) v = v * s + c[l];
-      err[k] = fmax(err[k], fabs(v - A->samp_mid[k * q + j]) + 4 * DBL_EPSILON * fmag);
-    }
-    double fact = 1;
-    for (int j = 0; j <= q; j++) {
-      if (j > 0) fact *= j;
-      w[k * (q + 1) + j] = fact * c[j];
-    }
-  }
-  return CUP_OK;
-}
-
-/* The exosystem's states for a step [t0, t1] inside a piece (and the
- * constant state, with D). */
-static int inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) {
-  if (A->one >= 0) w[A->one] = 1;
-  if (!A->nwu) return CUP_OK;
-  if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
-  cup_input_gen_piece(A->u, A->first_state, t0, t1, w);
-  return CUP_OK;
-}
-
-/* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
- * state and the input's states from the output time on. */
-int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
-  const ad_mode *md = A->zmd;
-  for (int i = 0; i < A->m; i++) zeta[i] = 0;
-  if (!md) return CUP_OK;
-  if (A->zy_ready) {                             /* a sample inside a step: its y is known */
-    for (int i = 0; i < A->m; i++)
-      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
-    return CUP_OK;
-  }
-  double t = A->zt, tb = cup_input_next_break(A->u, t);
-  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
-  if (inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
-  ad_lift(A, md, A->x, A->zw, A->zy);
-  for (int i = 0; i < A->m; i++)
-    if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
-  return CUP_OK;
+  return step_checks(A, R, pi);
 }
 
 /* ---- projection, active sets, events ------------------------------------------------- */
@@ -300,7 +178,7 @@ static int jump(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t
   int piv = 0, st = ad_dae_jump(A, g, x, active, &piv);
   R->info->dual_iterations += piv;
   if (st < 0)
-    return stop(R, CUP_ERR_EMPTY_SET, "no state is consistent with the rows at this time: the jump's LCP "
+    return ad_fail(R, CUP_ERR_EMPTY_SET, "no state is consistent with the rows at this time: the jump's LCP "
                 "(x + B mu with 0 <= mu _|_ C x + D zeta + g >= 0) has no solution");
   if (st == 0) return CUP_OK;
   pi->skipped = 0;
@@ -338,9 +216,9 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
   if (st < 0) {
     cup_copy(x, A->xr, A->n);
     if (st == CUP_ERR_EMPTY_SET)
-      return stop(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
+      return ad_fail(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
                   pi->farkas_gap, pi->farkas_residual);
-    return stop(R, st, "the projection onto K(t) failed: %s", cup_status_string(st));
+    return ad_fail(R, st, "the projection onto K(t) failed: %s", cup_status_string(st));
   }
   cup_run_info *info = R->info;
   info->projected++;
@@ -387,7 +265,7 @@ static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, d
     A->zeno_row[A->nzeno % AD_ZENO_RING] = i;
     A->nzeno++;
     if (A->o.on_event && A->o.on_event(t, i, now, A->o.event_ctx))
-      return stop(R, CUP_ERR_INTERRUPTED, "stopped by the event callback");
+      return ad_fail(R, CUP_ERR_INTERRUPTED, "stopped by the event callback");
   }
   return CUP_OK;
 }
@@ -408,7 +286,7 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R, R->t), &mask, &piv)
                              : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
-  if (st) return stop(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
+  if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   A->pinned[0] = R->md = ad_mode_get(A, mask);
@@ -424,7 +302,7 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
  * wave is 0 there), which is what the catching-up limit holds at t. */
 static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
   if (A->u && cup_input_eval(A->u, R->t, A->ut))
-    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   cup_copy(A->g, A->F, A->m);
   for (int i = 0; i < A->m; i++)
     for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
@@ -445,8 +323,8 @@ static int start_piece(cup_adaptive *A, ad_run *R) {
   R->tb = tb < A->o.T ? tb : A->o.T;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
   double h = A->callback ? fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
-  if (inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
-    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
+    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   ad_offset(A, A->wt, A->g);
   uint64_t active;
   cup_proj_info pi;
@@ -506,11 +384,11 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
     double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * fmax(fabs(R->t), DBL_MIN);
     if (!(h > tiny)) {
       if (*t1 < R->t + hl) { *snap = 1; return NULL; }   /* a stop point a rounding away */
-      stop(R, CUP_ERR_STEP_SIZE, "the step size %.3g underflows", h);
+      ad_fail(R, CUP_ERR_STEP_SIZE, "the step size %.3g underflows", h);
       return NULL;
     }
-    if (inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
-      stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
+    if (ad_inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
+      ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
       return NULL;
     }
     const double *E = ad_expm(A, md, h);
@@ -584,7 +462,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
     if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R, R->t + tsw), &mask, &piv)
                  : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
-      return stop(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
+      return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
                   "the LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
                   : "the velocity LCP that chooses the active set after the event of row %d has no solution by "
                   "pivoting (dependent rows?)", ev->row);
@@ -625,7 +503,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
    * measured against): the run's own path there would show the violation
    * the late switch lets through, first order in its delay */
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
-  if ((st = emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
+  if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
   cup_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
   if (troot > t0) {
     cup_zero(A->de2, A->na);
@@ -634,7 +512,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     cup_copy(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
-  if ((st = emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
+  if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   error_flow(A, old, ev->tau_sw);
   A->pinned[0] = R->md = nm;
   A->pinned[1] = NULL;
@@ -678,7 +556,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
   double h = t1 - R->t;
   ad_event ev = {.t0 = R->t, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
-  int st = emit_dense(A, R, md, A->ya, A->e, R->t, t1);
+  int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
   if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
   ad_offset(A, A->yb + n, A->g);
@@ -700,17 +578,19 @@ static int take_step(cup_adaptive *A, ad_run *R) {
 static ad_mode *catch_up_mode(cup_adaptive *A, ad_run *R, double h) {
   uint64_t mask;
   int piv = 0;
-  if (inputs_on(A, R->t, fmin(R->tb, R->t + h), A->wt, A->uerr)) {
-    stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  if (ad_inputs_on(A, R->t, fmin(R->tb, R->t + h), A->wt, A->uerr)) {
+    ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     return NULL;
   }
   if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, time_scale(A, R, R->t), &mask, &piv)) {
-    stop(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
+    ad_fail(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
     return NULL;
   }
   R->info->dual_iterations += piv;
   return ad_mode_get(A, mask);
 }
+
+static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb);
 
 static int catch_up(cup_adaptive *A, ad_run *R) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
@@ -727,7 +607,16 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
   warn(R, CUP_WARN_ZENO, "rows %s switched %d times within %.3g (over max_event_rate = %.3g per unit "
        "time): catching-up steps across [%.17g, %.17g]", rows, AD_ZENO_RING,
        R->t - A->zeno[A->nzeno % AD_ZENO_RING], rate, R->t, tend);
-  int n = A->n, na = A->na, st, at_tb = 0;
+  R->tend = tend;
+  return catch_up_from(A, R, 0);
+}
+
+/* The catching-up steps until R->tend (a resumed run may start inside
+ * them; at_tb: its last step ended on a breakpoint). */
+static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
+  double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
+  double window = AD_ZENO_RING / rate, tend = R->tend;
+  int n = A->n, na = A->na, st;
   while (R->t < tend) {
     /* the free system's flow, then the certified projection: the paper's
      * scheme with an exact free step, through breakpoints too (which pick
@@ -738,8 +627,8 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
     A->pinned[1] = md0;
     double t1 = fmin(next_stop(A, R, fmin(ad_mode_hmax(A, md0), window / 16), 1), tend);
     if (!(t1 > R->t)) break;
-    if (inputs_on(A, R->t, t1, A->wa, A->uerr))
-      return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    if (ad_inputs_on(A, R->t, t1, A->wa, A->uerr))
+      return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     const double *E = ad_expm(A, md0, t1 - R->t);
     ad_lift(A, md0, A->x, A->wa, A->ya);
     for (int i = 0; i < na; i++) {
@@ -762,11 +651,12 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
     at_tb = R->t == R->tb;
     if ((st = end_of_step(A, R, &pi, 0)) < 0) return st;
   }
+  R->tend = 0;
   A->pinned[1] = NULL;
   A->nzeno = 0;
   if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
-  if (inputs_on(A, R->t, fmin(R->tb, R->t + ad_mode_hmax(A, R->md)), A->wt, A->uerr))
-    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  if (ad_inputs_on(A, R->t, fmin(R->tb, R->t + ad_mode_hmax(A, R->md)), A->wt, A->uerr))
+    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   return choose_mode(A, R, A->wt, 0, R->t);
 }
 
@@ -779,15 +669,28 @@ static int zeno_check(cup_adaptive *A, ad_run *R) {
 
 /* ---- the run ----------------------------------------------------------------------- */
 
+/* From where a run is (its start, or a resumed stop) to T. */
+static int run_to_end(cup_adaptive *A, ad_run *R, int st) {
+  while (st >= 0 && R->t < A->o.T) {
+    R->ev0 = R->info->events;
+    st = take_step(A, R);
+    if (st >= 0 && R->info->events > R->ev0) st = zeno_check(A, R);
+  }
+  R->info->err_est = R->est_max;
+  return R->info->status;
+}
+
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info) {
+  A->stop.phase = AD_STOP_NONE;
+  A->pend.active = 0;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
   if (cup_state_beyond(x0, A->n)) {
     int w = cup_state_worst(x0, A->n);
-    if (!isfinite(x0[w])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
-    return stop(&R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
+    if (!isfinite(x0[w])) return ad_fail(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
+    return ad_fail(&R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
                 CUP_STATE_MAX, w, x0[w]);
   }
   cup_copy(A->x, x0, A->n);
@@ -800,11 +703,102 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, &R, 1, &pi);
   if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
-  while (st >= 0 && R.t < A->o.T) {
-    long events = info->events;
-    st = take_step(A, &R);
-    if (st >= 0 && info->events > events) st = zeno_check(A, &R);
+  return run_to_end(A, &R, st);
+}
+
+/* ---- checkpoints (integrator.h) ----------------------------------------------------- */
+
+int cup_adaptive_stopped(const cup_adaptive *A) { return A->stop.phase != AD_STOP_NONE; }
+
+void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info) {
+  info->status = A->stop.status;
+  memcpy(info->message, A->stop.message, sizeof info->message);
+}
+
+/* Everything a step carries to the next: the stopped run's scalars, x and
+ * its error, the accumulation ring, the LCPs' and the projector's warm
+ * starts, and the kept active sets with their exponentials' step lengths
+ * (which ad_flow takes from the cache, or computes another way). */
+void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
+  ad_stop *s = &A->stop;
+  ad_run *R = &s->R;
+  size_t N = sizeof(double) * (size_t)A->n, M = (size_t)A->m;
+  CUP_CKPT_IO(c, s->phase); CUP_CKPT_IO(c, s->md); CUP_CKPT_IO(c, s->pinned1);
+  CUP_CKPT_IO(c, R->t); CUP_CKPT_IO(c, R->tb); CUP_CKPT_IO(c, R->steps); CUP_CKPT_IO(c, R->next_sample);
+  CUP_CKPT_IO(c, R->est_max); CUP_CKPT_IO(c, R->r2); CUP_CKPT_IO(c, R->rloc); CUP_CKPT_IO(c, R->h_cb);
+  CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0);
+  cup_ckpt_io(c, A->x, N);
+  cup_ckpt_io(c, A->e, N);
+  if (s->phase == AD_STOP_DENSE) {               /* the refused sample's states, the step's projection */
+    struct ad_pend *p = &A->pend;
+    size_t NA = sizeof(double) * (size_t)A->na;
+    CUP_CKPT_IO(c, s->pi);
+    CUP_CKPT_IO(c, p->active); CUP_CKPT_IO(c, p->md); CUP_CKPT_IO(c, p->seg2); CUP_CKPT_IO(c, p->md2);
+    CUP_CKPT_IO(c, p->k); CUP_CKPT_IO(c, p->t_end); CUP_CKPT_IO(c, p->t2a); CUP_CKPT_IO(c, p->t2b);
+    cup_ckpt_io(c, p->zy, NA);
+    cup_ckpt_io(c, p->de, NA);
+    cup_ckpt_io(c, p->y2, NA);
+    cup_ckpt_io(c, p->e2, N);
   }
-  info->err_est = R.est_max;
-  return info->status;
+  CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
+  cup_ckpt_io(c, A->lcp.lam, sizeof(double) * M);
+  cup_ckpt_io(c, A->lcp.prev, M);
+  if (A->has_D) {                                /* the jump's LCP (2 m) warm-starts too */
+    cup_ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
+    cup_ckpt_io(c, A->jlcp.prev, 2 * M);
+  }
+  cup_lcp_step_checkpoint(&A->proj, c);
+  cup_projector_checkpoint(A->projector, c);
+  for (int k = 0; k < AD_MODES; k++) {
+    ad_mode *md = &A->modes[k];
+    uint64_t mask = md->mask;
+    long stamp = md->stamp, cstamp[AD_CACHE];
+    double hc[AD_CACHE];
+    memcpy(hc, md->hc, sizeof hc);
+    memcpy(cstamp, md->cstamp, sizeof cstamp);
+    CUP_CKPT_IO(c, mask); CUP_CKPT_IO(c, stamp); CUP_CKPT_IO(c, hc); CUP_CKPT_IO(c, cstamp);
+    if (!c->saving && !c->bad) ad_mode_restore(A, k, mask, stamp, hc, cstamp);
+  }
+}
+
+/* A restored stop goes on: the stopped step's sample (again, when the sink
+ * refused it) and what followed it in its step (the next piece at a
+ * breakpoint, the catching-up steps under way, the accumulation check),
+ * then the steps to T. */
+int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  ad_stop *s = &A->stop;
+  if (s->phase == AD_STOP_NONE) return info->status = CUP_ERR_ARG;
+  ad_run R = s->R;
+  R.info = info;
+  R.sink = sink;
+  R.sink_ctx = sink_ctx;
+  R.wall0 = wall_now();
+  R.md = s->md >= 0 ? &A->modes[s->md] : NULL;
+  A->pinned[0] = R.md;
+  A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
+  int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
+  s->phase = AD_STOP_NONE;
+  cup_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
+  if (phase == AD_STOP_SAMPLE) {
+    info->samples--;                             /* counted when the sink refused it */
+    if (sink) st = offer(A, &R);
+  } else if (phase == AD_STOP_DENSE) {           /* the step's samples from the refused one, its callback */
+    info->samples--;
+    st = ad_dense_resume(A, &R);
+    if (st == 1) return halt(A, &R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, "stopped by the output sink");
+    if (st >= 0) st = step_checks(A, &R, &s->pi);
+    if (st >= 0) st = emit(A, &R);
+  } else {
+    st = emit(A, &R);
+  }
+  cup_proj_info pi;
+  if (R.steps == 0) {                            /* stopped at x0's sample: the start goes on */
+    if (st >= 0) st = at_break(A, &R, 1, &pi);
+    if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
+    return run_to_end(A, &R, st);
+  }
+  if (st >= 0 && at_tb && R.t < A->o.T) st = start_piece(A, &R);
+  if (st >= 0 && R.tend > 0) st = catch_up_from(A, &R, at_tb);
+  else if (st >= 0 && info->events > R.ev0) st = zeno_check(A, &R);
+  return run_to_end(A, &R, st);
 }

@@ -23,37 +23,7 @@
 #include "projector/projector.h"
 #include "adaptive.h"
 #include "estimate.h"
-
-struct cup_integrator {
-  const cup_input *u;
-  cup_integrator_options o;
-  int n, m, p;
-  double h, eps_n, eta_n, h_rho, split;
-  int split_row;
-  /* the set: a polyset is stepped here (K, G, the projector or the LCP
-   * step), any other set through its cup_setproj */
-  const cup_set *S;
-  cup_set *S_own;           /* an LCS's polyset, wrapped */
-  const cup_polyset *K;     /* the polyset's rows, or NULL */
-  const cup_sparse *G;      /* the offset's motion, or NULL */
-  int fixed;                /* the polyset does not move */
-  cup_setproj *sp;          /* other sets */
-  cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
-  const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
-  cup_freestep fs;
-  cup_projector *proj;
-  cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
-  int use_theta;
-  cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
-  cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
-  cup_estimate est;         /* ... and the comparison with it */
-  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
-  cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
-  double *x, *xnew, *xf, *g, *ut, *s0, *sg;
-  double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
-  double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */
-  double zs;                /* ... and its place between them (1: on a step) */
-};
+#include "integrator_impl.h"
 
 /* ---- schedules ---------------------------------------------------------------- */
 
@@ -191,8 +161,8 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   }
   if (!(o->max_wall_seconds >= 0))
     return cup_fail(errmsg, CUP_ERR_ARG, "max_wall_seconds = %g must be >= 0", o->max_wall_seconds);
-  if (!(o->max_step >= 0) || !isfinite(o->max_step))
-    return cup_fail(errmsg, CUP_ERR_ARG, "max_step = %g must be finite and >= 0", o->max_step);
+  if (!(o->hmax >= 0) || !isfinite(o->hmax))
+    return cup_fail(errmsg, CUP_ERR_ARG, "hmax = %g must be finite and >= 0", o->hmax);
   return CUP_OK;
 }
 
@@ -343,7 +313,8 @@ static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_
   h.n = I->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
-  if (cup_estimate_init(&I->est, I->o.n, I->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  if (cup_estimate_init(&I->est, I->o.n, I->n) || !(I->x0 = calloc((size_t)I->n, sizeof(double))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   h.output = CUP_OUTPUT_EVERY;
   h.output_every = cup_estimate_stride(&I->est);
   int st;
@@ -466,6 +437,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   if (I->use_theta) cup_lcp_step_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
   free(I->xs); free(I->zprev);
+  free(I->x0);
   free(I);
   *Ip = NULL;
 }
@@ -566,17 +538,51 @@ static int emit_samples(cup_integrator *I, sampler *sp, long k, cup_sample_fn si
   return 0;
 }
 
+/* After the samples of step k: zeta_k kept when the next sample falls
+ * between steps k and k + 1 (its zeta is interpolated from it). */
+static void keep_zeta(cup_integrator *I, const sampler *sp, long k) {
+  if (!sp->aligned && k + 1 == sp->kdue && I->zprev) cup_integrator_zeta(I, I->zprev);
+}
+
 static double wall_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
+ * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
+ * the cause's (what[WHAT_LEN] buffers below). */
+enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
+
 static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
   info->status = status;
-  /* the cause cut where the message would be: "step ", 20 digits, " (t = ", 24, "): " */
-  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %.190s", k, t, what);
+  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
   return status;
+}
+
+/* The estimate's run at n/2 from I->x0 (its states kept for the
+ * comparisons). CUP_ERR_INTERRUPTED when the interrupt flag stopped it:
+ * the run it serves stops too (a signal is not to wait for half the work). */
+static int coarse_run(cup_integrator *I, cup_run_info *info) {
+  cup_run_info hi;
+  int st = cup_integrator_run(I->half, I->x0, cup_estimate_keep, &I->est, &hi);
+  cup_estimate_start(&I->est, st >= 0);
+  info->err_est = cup_estimate_value(&I->est);
+  return st == CUP_ERR_INTERRUPTED && I->o.interrupt && *I->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
+}
+
+/* A stop at the end of step k that a checkpoint can resume from: where,
+ * the output schedule's place, and the status and message it replaces
+ * (a warning met before it is the resumed run's, as the whole run's). */
+static int halt(cup_integrator *I, cup_run_info *info, int status, long k, double t, const char *what, int phase,
+                const sampler *sp) {
+  I->stop.phase = phase;
+  I->stop.k = k;
+  I->stop.next_j = sp->next_j;
+  I->stop.status = info->status;
+  memcpy(I->stop.message, info->message, sizeof I->stop.message);
+  return stop_at(info, status, k, t, what);
 }
 
 /* g = F + G u(t) for a moving polyset. */
@@ -678,15 +684,37 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
 }
 
 /* The paper assumes x0 in K(0); say so when it is not (the first step
- * projects it), by the raw slack so that a point on the boundary passes. */
-static void polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
+ * projects it), by the raw slack so that a point on the boundary passes.
+ * With D != 0 the state is consistent when some zeta >= 0 makes
+ * C x0 + D zeta + g >= 0 (the theta step's LCP at x0): a rectifier's
+ * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
+ * is not: the first step jumps (jump_size tells by how much). */
+static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
-  if (I->use_theta) cup_lcp_step_start(&I->th, I->x, g0);
-  if (cup_slack(I->K, g0, I->x, I->s0, NULL) < 0) {
-    info->status = CUP_WARN_X0_OUTSIDE;
-    snprintf(info->message, sizeof info->message,
-             "step 0 (t = 0): x0 is outside K(0); the first step projects it");
-  }
+  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
+                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
+  if (consistent) return 0;
+  info->status = CUP_WARN_X0_OUTSIDE;
+  snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
+           I->L && I->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
+  return 1;
+}
+
+/* After the first step (status st) from an x0 that was not consistent: the
+ * jump's size, as far as that step moved x beyond its free step (the jump
+ * itself, to O(h)), into the warning's message if it is still the run's
+ * status. Such a run takes the general path (bit for bit the fused one's),
+ * where this is called; out of line and cold, since inlined it cost the
+ * fused loop an instruction a step (callgrind, paper-fig2, n = 1e5). */
+__attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st, cup_run_info *info) {
+  I->jump = 0;
+  double big = 0;
+  int at = 0;
+  for (int j = 0; j < I->n; j++)
+    if (fabs(I->xnew[j] - I->xf[j]) > big) big = fabs(I->xnew[j] - I->xf[j]), at = j;
+  if (st < 0 || info->status != CUP_WARN_X0_OUTSIDE) return;
+  size_t len = strlen(info->message);
+  snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
 }
 
 /* Projections of one step again after rows were found missing (each adds
@@ -700,12 +728,12 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
     return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
   int st = cup_setproj_move(I->sp, t, I->ut, xk);
   if (st == CUP_ERR_NONFINITE) {
-    char what[200];
+    char what[WHAT_LEN];
     snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
   }
   if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
-    char what[200];                      /* as on the polyset path: the state overflowed */
+    char what[WHAT_LEN];                 /* as on the polyset path: the state overflowed */
     snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
              cup_setproj_message(I->sp));
     return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
@@ -758,6 +786,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
                        cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
+  if (I) I->stop.restored = 0;
   if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
@@ -779,10 +808,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   cup_projector_reset(I->proj);
   I->zeta_from = 0;
   int fixed = I->fixed || !I->u;
-  long rebuilds0 = cup_setproj_rebuilds(I->sp);
+  I->stop.phase = CUP_STOP_NONE;
+  I->rebuilds0 = cup_setproj_rebuilds(I->sp);
   if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-  if (I->K) polyset_x0(I, fixed, info);
-  else if (general_x0(I, info) < 0) return info->status;
+  I->jump = I->K && polyset_x0(I, fixed, info);
+  if (!I->K && general_x0(I, info) < 0) return info->status;
   int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   if (stiff) {
     info->status = CUP_WARN_STIFF;
@@ -798,25 +828,37 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
              "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
              I->split, I->split_row);
   }
-  if (I->half) {
-    cup_run_info hi;
-    cup_estimate_start(&I->est, cup_integrator_run(I->half, x0, cup_estimate_keep, &I->est, &hi) >= 0);
-    info->err_est = cup_estimate_value(&I->est);
-  }
   sampler sp = {0};
   sampler_next(I, &sp);
   I->zs = 1;
   if (I->zprev) cup_zero(I->zprev, I->m);
+  if (I->half) {
+    memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
+    if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
+      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
+                  CUP_STOP_SAMPLE_DUE, &sp);
+  }
   if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(I, &sp, 0)) {
     info->samples++;
-    if (sink(0, 0.0, I->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
+    if (sink(0, 0.0, I->x, sink_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
   }
   if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(I, &sp, 0, sink, sink_ctx, info))
-    return stop_at(info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink");
+    return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+  return cup_integrator_steps_(I, 0, sp.next_j, sink, sink_ctx, info);
+}
+
+int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx,
+                          cup_run_info *info) {
+  const cup_integrator_options *o = &I->o;
+  sampler sp = {next_j, 0, 0, 0};
+  sampler_next(I, &sp);
+  int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
+  long rebuilds0 = I->rebuilds0;
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
-  int fast = I->fast.on && !o->on_step && !I->half;   /* the estimate compares every step */
+  int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
   I->fast.hold = 0;
-  for (long k = 0; k < o->n; k++) {
+  for (long k = k0; k < o->n; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
     if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
@@ -859,9 +901,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       } else {
         I->zeta_from = 1;
       }
+      if (I->jump) jump_size(I, st, info);
     } else {
       st = cup_project(I->proj, I->xf, I->xnew, &pi);
       I->zeta_from = 2;
+      if (I->jump) jump_size(I, st, info);
     }
   stepped:
     if (st >= 0 && I->K && !(pi.eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
@@ -869,7 +913,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, &pi, st, info)) < 0) return st;
     }
     if (st < 0) {                        /* the polyset path's errors */
-      char what[224];
+      char what[WHAT_LEN];
       describe_projection_error(what, sizeof what, st, &pi);
       if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
         size_t len = strlen(what);
@@ -895,22 +939,71 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
       }
     }
     if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
-      return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback");
+      return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
     if (sink && o->output == CUP_OUTPUT_SAMPLES) {
       if (emit_samples(I, &sp, k + 1, sink, sink_ctx, info))
-        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");
-      if (!sp.aligned && k + 2 == sp.kdue && I->zprev) cup_integrator_zeta(I, I->zprev);  /* zeta_{k+1} */
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+      keep_zeta(I, &sp, k + 1);
     } else if (sink && selected(I, &sp, k + 1)) {
       info->samples++;
       if (sink(k + 1, t1, I->x, sink_ctx))
-        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink");
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
     }
     if ((k & 1023) == 1023) {
       if (o->interrupt && *o->interrupt)
-        return stop_at(info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted");
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
       if (start > 0 && wall_seconds() - start > o->max_wall_seconds)
-        return stop_at(info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached");
+        return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
     }
   }
   return info->status;
+}
+
+/* A restored checkpoint (checkpoint.c) goes on from the step it stopped
+ * after: the coarse run of the estimate again (the same states), the
+ * stopped step's sample when it was still due or the sink refused it, then
+ * the steps as cup_integrator_run takes them. */
+int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info_out) {
+  cup_run_info local;
+  cup_run_info *info = info_out ? info_out : &local;
+  if (!I || !I->stop.restored) {
+    memset(info, 0, sizeof *info);
+    info->err_est = NAN;
+    return info->status = CUP_ERR_ARG;
+  }
+  *info = I->stop.info;
+  I->stop.restored = 0;
+  if (I->ad) return cup_adaptive_resume(I->ad, sink, sink_ctx, info);
+  int phase = I->stop.phase;
+  long k = I->stop.k;
+  sampler sp = {I->stop.next_j, 0, 0, 0};
+  sampler_next(I, &sp);
+  if (I->half) {
+    double err = I->est.err;                     /* the comparisons made before the stop */
+    int cst = coarse_run(I, info);
+    I->est.err = err;
+    info->err_est = cup_estimate_value(&I->est);
+    if (cst == CUP_ERR_INTERRUPTED)
+      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "interrupted (in the estimate's run at n/2)",
+                  phase, &sp);
+  }
+  I->stop.phase = CUP_STOP_NONE;
+  if (phase == CUP_STOP_SAMPLE_REFUSED) info->samples--;          /* counted when it was refused */
+  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* the samples due at k, from x_k, x_{k-1} and zeta_{k-1} */
+    if (sink && phase != CUP_STOP_STEP_DONE) {
+      if (emit_samples(I, &sp, k, sink, sink_ctx, info))
+        return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+                    CUP_STOP_SAMPLE_REFUSED, &sp);
+      if (k > 0) keep_zeta(I, &sp, k);
+    }
+    return cup_integrator_steps_(I, k, sp.next_j, sink, sink_ctx, info);
+  }
+  int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(I, &sp, k));
+  if (sink && offer) {
+    info->samples++;
+    if (sink(k, grid_time(I, k), I->x, sink_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+                  CUP_STOP_SAMPLE_REFUSED, &sp);
+  }
+  return cup_integrator_steps_(I, k, sp.next_j, sink, sink_ctx, info);
 }

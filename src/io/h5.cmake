@@ -5,7 +5,7 @@
 # HDF5 and MPI are PRIVATE: h5run.h does not include hdf5.h, so a consumer of
 # the shared catchup::catchup_h5 needs neither at build time (the dynamic
 # linker finds them through the library's DT_NEEDED entries).
-add_library(catchup_h5 SHARED ${CMAKE_CURRENT_LIST_DIR}/h5run.c)
+add_library(catchup_h5 SHARED ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c)
 set_target_properties(catchup_h5 PROPERTIES
   VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}
   EXPORT_NAME catchup_h5

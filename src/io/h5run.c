@@ -24,61 +24,24 @@
 #include "catchup.h"
 #include "catchup/h5run.h"
 #include "file_in_use.h"
+#include "h5run_impl.h"
 
 enum { MAX_CHUNK_ROWS = 4096 };
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
+#define CACHE_BYTES (1u << 20)  /* HDF5's default chunk cache, per dataset */
 #define FLUSH_SECONDS 1.0
-/* Free space kept on the device: HDF5 1.10 cannot close a file once a write
- * has failed for lack of space (the file is left corrupt and the library
- * crashes at exit), so the writer stops while HDF5 can still close cleanly:
- * dirty chunk caches (1 MiB per dataset), metadata and final attributes. */
-#define SPACE_MARGIN (8u << 20)
 /* A chunk must stay under HDF5's 4 GiB limit even when it holds one row. */
 #define MAX_DIM ((int)(UINT32_MAX / sizeof(double)))
 
-/* One row of /events, in memory. */
-typedef struct { double t; int32_t row; int8_t on; } h5_event;
-enum { EVENT_ROWS = 1024 };     /* chunk and buffer of /events */
-
-struct cup_h5run {
-  hid_t file, dset_t, dset_x, dset_e;
-  hid_t etype_file, etype_mem;  /* /events' compound types */
-  hsize_t ewritten, enbuf;      /* events handed to HDF5, buffered */
-  h5_event ebuf[EVENT_ROWS];
-  int dim;
-  hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
-  hsize_t written;        /* rows already handed to HDF5 */
-  hsize_t nbuf;           /* rows waiting in the buffer */
-  double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
-  int nsig;               /* named signals: /signals/<name> */
-  hid_t group;
-  hid_t *dset_s;
-  double *sbuf;           /* chunk_rows * nsig entries, one signal after another */
-  double last_flush;      /* monotonic seconds */
-  int data_status;        /* first failure of the data path; sticky */
-  int h5_failed;          /* an HDF5 call failed: only close is attempted */
-  char *path;
-  char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind */
-};
-
 /* ---- errors: HDF5 must not print, and must not stay silenced after us ---- */
-
-typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
-
-static quiet_t quiet_begin(void) {
-  quiet_t q = {NULL, NULL};
-  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-  return q;
-}
-
-static void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
 
 /* The innermost description on the error stack is the most specific one;
  * for a failed open() it carries the system's message, which is all a user
  * needs ("No such file or directory"). */
+enum { DETAIL_LEN = CUP_ERRMSG_LEN / 2 };   /* a description names the file: whole */
+
 static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
-  if (n == 0 && e->desc) snprintf((char *)out, 160, "%s", e->desc);
+  if (n == 0 && e->desc) snprintf((char *)out, DETAIL_LEN, "%s", e->desc);
   return 0;
 }
 
@@ -93,18 +56,18 @@ static void h5_detail(char *buf) {
     if (end) *end = '\0';
     memmove(buf, s, strlen(s) + 1);
   }
-  if (!buf[0]) snprintf(buf, 160, "HDF5 call failed");
+  if (!buf[0]) snprintf(buf, DETAIL_LEN, "HDF5 call failed");
 }
 
 /* An HDF5 call failed. Record "h5run: cannot <op> '<path>': <detail>" unless
  * an earlier failure is already recorded (the first one explains the rest),
  * and stop the writer: HDF5 1.10 may crash if used further on a file it
  * failed to write, so after this only close is attempted. */
-static int set_error(cup_h5run *w, int status, const char *op) {
+int set_error(cup_h5run *w, int status, const char *op) {
   w->h5_failed = 1;
   if (w->data_status == CUP_OK) w->data_status = status;
   if (!w->errmsg[0]) {
-    char detail[160];
+    char detail[DETAIL_LEN];
     h5_detail(detail);
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot %s '%s': %s", op, w->path, detail);
   }
@@ -114,16 +77,15 @@ static int set_error(cup_h5run *w, int status, const char *op) {
 
 /* Closing handles after a failure is itself an HDF5 call, which clears the
  * error stack: keep the failure's stack across the cleanup for set_error. */
-static hid_t keep_stack(int failed) {
+hid_t keep_stack(int failed) {
   return failed ? H5Eget_current_stack() : H5I_INVALID_HID;
 }
 
-static void restore_stack(hid_t saved) {
+void restore_stack(hid_t saved) {
   if (saved >= 0) H5Eset_current_stack(saved);
 }
 
-__attribute__((format(printf, 3, 4)))
-static int fail_msg(char *errmsg, int status, const char *fmt, ...) {
+int fail_msg(char *errmsg, int status, const char *fmt, ...) {
   if (errmsg) {
     va_list ap;
     va_start(ap, fmt);
@@ -133,18 +95,25 @@ static int fail_msg(char *errmsg, int status, const char *fmt, ...) {
   return status;
 }
 
-static double now_seconds(void) {
+double now_seconds(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* 1 when the device holding path has less than SPACE_MARGIN available.
- * A device that does not report sizes (f_blocks = 0) is never "full". */
-static int space_low(const char *path) {
+/* Free space kept on the device: HDF5 1.10 cannot close a file once a write
+ * has failed for lack of space (the file is left corrupt and the library
+ * crashes at exit), so the writer stops while HDF5 can still close cleanly.
+ * What HDF5 holds in its chunk caches (up to 1 MiB per dataset: with a
+ * netlist's signals, tens of MiB) reaches the disk only at the next flush,
+ * so the check counts it (`ahead`) on top of the margin: on a 20 MiB tmpfs
+ * the margin was otherwise eaten by the caches, and with 30 signals the
+ * disk filled up and the close crashed. A device that does not report
+ * sizes (f_blocks = 0) is never "full". */
+int space_low(const char *path, double ahead) {
   struct statvfs v;
   if (statvfs(path, &v) != 0 || v.f_blocks == 0) return 0;
-  return (double)v.f_bavail * (double)v.f_frsize < (double)SPACE_MARGIN;
+  return (double)v.f_bavail * (double)v.f_frsize - ahead < (double)CUP_H5_SPACE_MARGIN;
 }
 
 /* ---- file and datasets ---- */
@@ -165,9 +134,9 @@ static hid_t create_dataset(hid_t file, const char *name, int rank, hsize_t dim,
   return d;
 }
 
-/* /events: (t float64, row int32, on int8) rows, chunked, extendable; the
- * file type is packed (13 bytes), the memory type follows the struct. */
-static hid_t create_events(cup_h5run *w) {
+/* /events' rows (t float64, row int32, on int8): the file type is packed
+ * (13 bytes), the memory type follows the struct. */
+int event_types(cup_h5run *w) {
   w->etype_file = H5Tcreate(H5T_COMPOUND, 13);
   w->etype_mem = H5Tcreate(H5T_COMPOUND, sizeof(h5_event));
   if (w->etype_file < 0 || w->etype_mem < 0 ||
@@ -177,7 +146,13 @@ static hid_t create_events(cup_h5run *w) {
       H5Tinsert(w->etype_mem, "t", HOFFSET(h5_event, t), H5T_NATIVE_DOUBLE) < 0 ||
       H5Tinsert(w->etype_mem, "row", HOFFSET(h5_event, row), H5T_NATIVE_INT32) < 0 ||
       H5Tinsert(w->etype_mem, "on", HOFFSET(h5_event, on), H5T_NATIVE_INT8) < 0)
-    return H5I_INVALID_HID;
+    return -1;
+  return 0;
+}
+
+/* /events, chunked and extendable. */
+static hid_t create_events(cup_h5run *w) {
+  if (event_types(w) < 0) return H5I_INVALID_HID;
   hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {EVENT_ROWS};
   hid_t space = H5Screate_simple(1, dims, maxdims);
   hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
@@ -194,12 +169,26 @@ static hid_t create_events(cup_h5run *w) {
 /* The directory the file goes into (the file may not exist yet). */
 static int dir_space_low(const char *path) {
   char *copy = strdup(path);
-  int low = copy ? space_low(dirname(copy)) : 0;
+  int low = copy ? space_low(dirname(copy), 0) : 0;
   free(copy);
   return low;
 }
 
-static int open_file(cup_h5run *w) {
+/* Upper bound 1.8: never the version-3 superblock, whose "file is open for
+ * writing" flag would make a killed writer's file unreadable until h5clear.
+ * Strong close: H5Fclose really closes, whatever is still open inside. */
+hid_t writer_access(void) {
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (fapl >= 0 && (H5Pset_libver_bounds(fapl, H5F_LIBVER_EARLIEST, H5F_LIBVER_V18) < 0 ||
+                    H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0)) {
+    H5Pclose(fapl);
+    return H5I_INVALID_HID;
+  }
+  return fapl;
+}
+
+/* The file at `at` (the staged sibling, or the path itself), its datasets. */
+static int open_file(cup_h5run *w, const char *at) {
   if (cup_file_in_use(w->path)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': the file is in use by another "
              "process (HDF5 file locking): close it there or wait for that run to end; the file is "
@@ -208,16 +197,11 @@ static int open_file(cup_h5run *w) {
   }
   if (dir_space_low(w->path)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': less than %u MiB "
-             "left on its device", w->path, SPACE_MARGIN >> 20);
+             "left on its device", w->path, CUP_H5_SPACE_MARGIN >> 20);
     return CUP_ERR_IO;
   }
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  /* Upper bound 1.8: never the version-3 superblock, whose "file is open for
-   * writing" flag would make a killed writer's file unreadable until h5clear.
-   * Strong close: H5Fclose really closes, whatever is still open inside. */
-  if (fapl >= 0 && H5Pset_libver_bounds(fapl, H5F_LIBVER_EARLIEST, H5F_LIBVER_V18) >= 0 &&
-      H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) >= 0)
-    w->file = H5Fcreate(w->path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  hid_t fapl = writer_access();
+  if (fapl >= 0) w->file = H5Fcreate(at, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   hid_t err = keep_stack(w->file < 0);
   if (fapl >= 0) H5Pclose(fapl);
   restore_stack(err);
@@ -248,7 +232,7 @@ static void close_signals(cup_h5run *w) {
   w->nsig = 0;
 }
 
-static void free_writer(cup_h5run *w) {
+void free_writer(cup_h5run *w) {
   quiet_t q = quiet_begin();
   close_signals(w);
   if (w->dset_e >= 0) H5Dclose(w->dset_e);
@@ -264,23 +248,18 @@ static void free_writer(cup_h5run *w) {
   free(w->dset_s);
   free(w->sbuf);
   free(w->path);
+  free(w->staged);
   free(w);
 }
 
-int cup_h5run_create(cup_h5run **out, const char *path, int dim, char *errmsg) {
-  if (!out) return fail_msg(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
-  *out = NULL;
-  if (!path || !path[0]) return fail_msg(errmsg, CUP_ERR_ARG, "h5run: empty file name");
-  if (dim < 1 || dim > MAX_DIM)
-    return fail_msg(errmsg, CUP_ERR_ARG, "h5run: '%s': state dimension %d outside [1, %d]",
-                    path, dim, MAX_DIM);
-  /* HDF5 1.10 leaks internal state when a create fails after open() (a
-   * device, a /proc file) and then prints at exit; refuse those up front. */
-  struct stat sb;
-  if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
-    return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
+cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st) {
+  if (!path || !path[0]) return *st = fail_msg(errmsg, CUP_ERR_ARG, "h5run: empty file name"), NULL;
+  if (dim < 1 || dim > MAX_DIM) {
+    *st = fail_msg(errmsg, CUP_ERR_ARG, "h5run: '%s': state dimension %d outside [1, %d]", path, dim, MAX_DIM);
+    return NULL;
+  }
   cup_h5run *w = calloc(1, sizeof *w);
-  if (!w) return fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
+  if (!w) return *st = fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path), NULL;
   w->file = w->dset_t = w->dset_x = w->dset_e = w->etype_file = w->etype_mem = w->group = H5I_INVALID_HID;
   w->dim = dim;
   w->chunk_rows = chunk_rows_for(dim);
@@ -289,19 +268,87 @@ int cup_h5run_create(cup_h5run **out, const char *path, int dim, char *errmsg) {
   w->path = strdup(path);
   if (!w->tbuf || !w->xbuf || !w->path) {
     free_writer(w);
-    return fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
+    *st = fail_msg(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
+    return NULL;
   }
-  quiet_t q = quiet_begin();
-  int st = open_file(w);
-  quiet_end(q);
-  if (st != CUP_OK) {
-    if (errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
+  w->last_flush = now_seconds();
+  *st = CUP_OK;
+  return w;
+}
+
+int cup_h5run_begin(cup_h5run **out, const char *path, int dim, char *errmsg) {
+  if (!out) return fail_msg(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
+  *out = NULL;
+  /* HDF5 1.10 leaks internal state when a create fails after open() (a
+   * device, a /proc file) and then prints at exit; refuse those up front. */
+  struct stat sb;
+  if (path && stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+    return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
+  int st;
+  cup_h5run *w = writer_new(path, dim, errmsg, &st);
+  if (!w) return st;
+  w->staged = cup_staged_name(path);
+  if (!w->staged) {
+    st = fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': cannot create a file beside it (%s): its "
+                  "folder must take new files; an existing '%s' is left as it was", path, strerror(errno), path);
     free_writer(w);
     return st;
   }
-  w->last_flush = now_seconds();
+  quiet_t q = quiet_begin();
+  st = open_file(w, w->staged);
+  quiet_end(q);
+  if (st != CUP_OK) {
+    if (errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
+    cup_h5run_discard(&w);
+    return st;
+  }
   *out = w;
   return CUP_OK;
+}
+
+/* The staged file replaces path in one rename: a reader sees the old file
+ * or the new one, never a part of either. Refused while another process
+ * holds path open (it would go on writing a file no name leads to). */
+int cup_h5run_commit(cup_h5run *w) {
+  if (!w) return CUP_ERR_ARG;
+  if (!w->staged) return CUP_OK;
+  int st = cup_h5run_flush(w);
+  if (st) return st;
+  if (cup_file_in_use(w->path)) {
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot replace '%s': the file is in use by another process "
+             "(HDF5 file locking): close it there or wait for that run to end; the file is left as it was", w->path);
+    return w->data_status = CUP_ERR_IO;
+  }
+  if (rename(w->staged, w->path) != 0) {
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot replace '%s': %s; the file is left as it was", w->path,
+             strerror(errno));
+    return w->data_status = CUP_ERR_IO;
+  }
+  free(w->staged);
+  w->staged = NULL;
+  return CUP_OK;
+}
+
+/* Closes the writer; a file still staged is removed, so that a run that
+ * fails its checks leaves nothing beside the output it did not replace. */
+void cup_h5run_discard(cup_h5run **pw) {
+  if (!pw || !*pw) return;
+  cup_h5run *w = *pw;
+  char *staged = w->staged;
+  w->staged = NULL;
+  free_writer(w);
+  if (staged) unlink(staged);
+  free(staged);
+  *pw = NULL;
+}
+
+int cup_h5run_create(cup_h5run **out, const char *path, int dim, char *errmsg) {
+  int st = cup_h5run_begin(out, path, dim, errmsg);
+  if (st == CUP_OK && (st = cup_h5run_commit(*out)) != CUP_OK) {
+    if (errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", (*out)->errmsg);
+    cup_h5run_discard(out);
+  }
+  return st;
 }
 
 /* ---- the data path ---- */
@@ -346,6 +393,7 @@ static herr_t append_events(cup_h5run *w) {
 static int write_buffer(cup_h5run *w) {
   if (w->data_status != CUP_OK) return w->data_status;
   if (w->enbuf) {
+    w->unflushed += 13.0 * (double)w->enbuf;
     quiet_t q = quiet_begin();
     if (append_events(w) < 0) set_error(w, CUP_ERR_IO, "append rows to /events in");
     quiet_end(q);
@@ -363,12 +411,15 @@ static int write_buffer(cup_h5run *w) {
   quiet_end(q);
   if (w->h5_failed) return w->data_status;
   w->written += w->nbuf;
+  w->unflushed += 8.0 * (double)w->nbuf * (double)(w->dim + 1 + w->nsig);
   w->nbuf = 0;
-  if (space_low(w->path)) {
+  /* at most a chunk cache per dataset holds what the disk has not seen */
+  double cached = (double)CACHE_BYTES * (3 + w->nsig);
+  if (space_low(w->path, w->unflushed < cached ? w->unflushed : cached)) {
     if (!w->errmsg[0])
       snprintf(w->errmsg, sizeof w->errmsg, "h5run: stopped writing '%s' after %llu rows: "
                "less than %u MiB left on its device", w->path,
-               (unsigned long long)w->written, SPACE_MARGIN >> 20);
+               (unsigned long long)w->written, CUP_H5_SPACE_MARGIN >> 20);
     w->data_status = CUP_ERR_IO;
   }
   return w->data_status;
@@ -383,6 +434,7 @@ int cup_h5run_flush(cup_h5run *w) {
   if (w->h5_failed) return st;
   quiet_t q = quiet_begin();
   if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) set_error(w, CUP_ERR_IO, "flush");
+  else w->unflushed = 0;
   quiet_end(q);
   w->last_flush = now_seconds();
   return w->data_status;
@@ -718,8 +770,7 @@ int cup_h5run_close(cup_h5run **pw, char *errmsg) {
   if (r < 0 && st == CUP_OK) st = set_error(w, CUP_ERR_IO, "close");
   quiet_end(q);
   if (st != CUP_OK && errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
-  free_writer(w);
-  *pw = NULL;
+  cup_h5run_discard(pw);        /* a file never committed is not left behind */
   return st;
 }
 

@@ -157,16 +157,32 @@ static int looks_value(rd *r, const nx_tok *t) {
   return t->kind == NX_EXPR || (t->kind == NX_WORD && (nx_number(t->s, &v) || nx_param_find(&r->x, t, t->s) >= 0));
 }
 
+/* PULSE's TR or TF written `jump` (not a .param of that name): an edge of
+ * no duration, where SPICE reads 0 as TSTEP. */
+static int is_jump(rd *r, const nx_tok *t) {
+  return t->kind == NX_WORD && nx_is(t, "jump") && !looks_value(r, t);
+}
+
 /* The arguments of SIN/PULSE/PWL: "(a b c)" or "a b c" up to the next word
- * that is not a value. */
+ * that is not a value; for PULSE (jumps not NULL) TR and TF may be `jump`,
+ * a bit each in *jumps (by position) with the value 0. */
 static int fn_args(rd *r, const nx_tok *t, int n, int *k, const char *elem, const char *fn, double *v,
-                   int max, int *count) {
+                   int max, int *count, unsigned *jumps) {
   int paren = *k < n && t[*k].kind == NX_LP;
   if (paren) (*k)++;
   *count = 0;
-  while (*k < n && t[*k].kind != NX_RP && (paren || looks_value(r, &t[*k]))) {
+  while (*k < n && t[*k].kind != NX_RP && (paren || looks_value(r, &t[*k]) || (jumps && is_jump(r, &t[*k])))) {
     if (*count == max)
       return nx_fail(&r->x, CUP_ERR_PARSE, &t[*k], elem, "%s takes at most %d values", fn, max);
+    if (is_jump(r, &t[*k])) {
+      if (!jumps || (*count != NL_PULSE_TR && *count != NL_PULSE_TF))
+        return nx_fail(&r->x, CUP_ERR_PARSE, &t[*k], elem, "%s: 'jump' stands only for PULSE's rise or fall "
+                       "time TR, TF (an edge of no duration)", fn);
+      *jumps |= 1u << *count;
+      v[(*count)++] = 0;
+      (*k)++;
+      continue;
+    }
     if (t[*k].kind == NX_EQ || (t[*k].kind == NX_WORD && !looks_value(r, &t[*k])))
       return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, &t[*k], elem, "%s: '%.40s' is not supported (only values)", fn, t[*k].s);
     int st = nx_value(&r->x, &t[*k], elem, &v[(*count)++]);
@@ -221,7 +237,7 @@ static int source_spec(rd *r, const nx_tok *t, int n, const char *elem, nl_sourc
       int max = s->fn == NL_FN_SIN ? 6 : s->fn == NL_FN_PULSE ? 7 : n, count = 0;
       if (!(v = malloc(sizeof(double) * (size_t)(max + 1)))) { st = nomem(r); break; }
       k++;
-      st = fn_args(r, t, n, &k, elem, w->s, v, max, &count);
+      st = fn_args(r, t, n, &k, elem, w->s, v, max, &count, s->fn == NL_FN_PULSE ? &s->jumps : NULL);
       if (!st && s->fn == NL_FN_PWL) st = read_pwl(r, w, elem, s, v, count);
       if (!st && s->fn != NL_FN_PWL) {
         if (count < 2)
@@ -771,11 +787,12 @@ void nl_circuit_free(nl_circuit *c) {
 /* ---- public ------------------------------------------------------------------ */
 
 static int load(cup_netlist **out, const char *text, size_t len, const char *name,
-                const char *const *sets, int nsets, char *errmsg) {
+                const char *const *sets, int nsets, cup_file_list *files, char *errmsg) {
   nl_circuit c = {0};
   c.reltol = c.abstol = c.vntol = c.chgtol = NAN;  /* .options not given */
   rd r = {0};
   r.x.file = name;
+  r.x.read_list = files;
   r.x.sets = sets;
   r.x.nsets = nsets;
   r.x.errmsg = errmsg;
@@ -802,18 +819,28 @@ static int check_args(cup_netlist **out, const void *src, const char *const *lis
   return cup_load_args("netlist", "set", out != NULL, src, list, n, errmsg);
 }
 
-int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
-                            const char *const *sets, int nsets, char *errmsg) {
+int cup_netlist_load_string_files(cup_netlist **out, const char *text, const char *name, const char *const *sets,
+                                  int nsets, cup_file_list *files, char *errmsg) {
   int st = check_args(out, text, sets, nsets, errmsg);
-  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, errmsg);
+  return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, files, errmsg);
 }
 
-int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
+int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
+                            const char *const *sets, int nsets, char *errmsg) {
+  return cup_netlist_load_string_files(out, text, name, sets, nsets, NULL, errmsg);
+}
+
+int cup_netlist_load_files(cup_netlist **out, const char *path, const char *const *sets, int nsets,
+                           cup_file_list *files, char *errmsg) {
   int st = check_args(out, path, sets, nsets, errmsg);
   char *text = NULL;
   size_t len = 0;
-  if (!st) st = cup_read_text(path, &text, &len, errmsg);
-  if (!st) st = load(out, text, len, path, sets, nsets, errmsg);
+  if (!st) st = cup_read_text(path, &text, &len, files, errmsg);
+  if (!st) st = load(out, text, len, path, sets, nsets, files, errmsg);
   free(text);
   return st;
+}
+
+int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
+  return cup_netlist_load_files(out, path, sets, nsets, NULL, errmsg);
 }

@@ -71,7 +71,7 @@ static int lex_included(nx *x, const nx_tok *t, int depth, int *c0, int *c1) {
   struct stat sb;
   if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))   /* /dev/zero, a FIFO, a folder: never read */
     return nx_fail(x, CUP_ERR_IO, t, NULL, "cannot read '%s' (%s): not a regular file", t->s, path);
-  if (cup_read_text(path, &text, &len, why)) {
+  if (cup_read_text(path, &text, &len, x->read_list, why)) {
     const char *reason = strstr(why, ": ");       /* "PATH: cannot open: why" */
     return nx_fail(x, CUP_ERR_IO, t, NULL, "cannot read '%s' (%s)%s", t->s, path, reason ? reason : "");
   }

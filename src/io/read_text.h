@@ -1,14 +1,62 @@
-/* read_text — a whole file into memory, and the argument checks the readers
- * of scene files and netlists share. Internal to the library. */
+/* read_text — a whole file into memory, the list of the files a load read,
+ * and the argument checks the readers of scene files and netlists share.
+ * Internal to the library. */
 #ifndef CUP_READ_TEXT_H
 #define CUP_READ_TEXT_H
 
 #include <stddef.h>
 
+/* The files one load read (a scene, the Matrix Market files and the netlist
+ * it names, what a netlist includes; a sweep file and its scenes' files),
+ * in the order first read, each once: its path as opened, the SHA-256 of
+ * the bytes that were parsed (not of the file as it may be now), and its
+ * identity (st_dev, st_ino) when read. catchup-run refuses an output that is
+ * one of them; --resume refuses a run whose files changed since. Every
+ * reader of a file goes through cup_read_text with the load's list, so that
+ * a new kind of file read (an .include) is on it without more code. */
+typedef struct cup_file_entry {
+  char *path;
+  char sha256[65];
+  unsigned long long dev, ino;
+} cup_file_entry;
+
+typedef struct cup_file_list {
+  int n, cap;
+  cup_file_entry *e;
+} cup_file_list;
+
+void cup_file_list_free(cup_file_list *l);
+struct cup_scene;
+/* A loaded scene's list (scene.c). */
+const cup_file_list *cup_scene_file_list(const struct cup_scene *s);
+/* Append what src lists (a loaded scene's files to a sweep's) that l does
+ * not hold yet. CUP_OK or CUP_ERR_NOMEM. */
+int cup_file_list_merge(cup_file_list *l, const cup_file_list *src);
+
+/* CUP_ERR_ARG with "OUT is FILE, which the run reads (...)" in errmsg when
+ * the output path out names one of l's files: the same path once resolved
+ * (realpath of its folder, then its name: out need not exist), or the same
+ * file (st_dev, st_ino) now or when it was read (hard links, a file renamed
+ * over). CUP_OK otherwise. Call before anything is written to out. */
+int cup_file_list_check_output(const cup_file_list *l, const char *out, char *errmsg);
+
+/* The list as text, one line per file in sha256sum's format ("HASH  PATH",
+ * a newline or backslash in a path escaped as \n, \\), for a results
+ * file's attribute `inputs_sha256` (sha256sum -c checks the files against
+ * it). malloc'd; NULL without memory. */
+char *cup_file_list_text(const cup_file_list *l);
+/* The files of l against `stored` (cup_file_list_text of the files an
+ * earlier run read), file by file in the order read: CUP_ERR_ARG with
+ * "FILE changed since WHAT was made (SHA-256 ... then, ... now)" (or a file
+ * read now and not then, or one then and not now) in errmsg (size bytes). */
+int cup_file_list_compare(const cup_file_list *l, const char *stored, const char *what, char *errmsg,
+                          size_t size);
+
 /* The bytes of path into *text (malloc'd; not NUL-terminated beyond len)
- * and *len. CUP_ERR_IO ("PATH: cannot open: reason") or CUP_ERR_NOMEM with
- * the message in errmsg (CUP_ERRMSG_LEN bytes, may be NULL). */
-int cup_read_text(const char *path, char **text, size_t *len, char *errmsg);
+ * and *len, recorded in files (may be NULL). CUP_ERR_IO ("PATH: cannot
+ * open: reason") or CUP_ERR_NOMEM with the message in errmsg
+ * (CUP_ERRMSG_LEN bytes, may be NULL). */
+int cup_read_text(const char *path, char **text, size_t *len, cup_file_list *files, char *errmsg);
 
 /* The arguments common to the loaders (what: "scene" or "netlist"; item:
  * what the list holds, "override" or "set"): CUP_ERR_ARG with a message when

@@ -35,6 +35,8 @@ struct cup_scene {
   cup_integrator_options opt;
   char *eps_spec, *eta_spec;    /* as written */
   char *text;                   /* the document after overrides */
+  cup_file_list files;          /* every file read: the scene's, its Matrix Market files, its netlist's */
+  long max_steps;               /* the key max_steps: the most steps a fixed-step run may take */
   int circuit;                  /* the model is circuit: (its states have names) */
   int steps_given;              /* the scene gave n or h (a netlist's .tran gives neither) */
 };
@@ -165,7 +167,7 @@ static int read_model(rd *r, const st_node *root, cup_scene *S) {
   S->circuit = c != NULL;
   if (c) return read_circuit(r, kc, c, &S->lcs);
   if (l) return read_lcs(r, kl, l, &S->lcs);
-  if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->errmsg);
+  if (nl) return scene_netlist_read(&r->src, r->dir, kn, nl, &S->nl, r->files, r->errmsg);
   return fail(r, CUP_ERR_PARSE, root, "circuit/lcs/netlist/set", "missing: the scene needs a model, circuit:, "
               "lcs:, netlist:, set: or crowd:");
 }
@@ -232,7 +234,7 @@ static int read_spice_wave(rd *r, const st_node *map, const char *key, cup_wave 
 }
 
 static int read_term_map(rd *r, const st_node *map, const char *key, cup_input *u, int j) {
-  char k1[KEY_LEN], hint[160], lib[CUP_ERRMSG_LEN];
+  char k1[KEY_LEN], hint[ST_HINT_LEN], lib[CUP_ERRMSG_LEN];
   const st_node *tn = NULL, *nd = NULL;
   const char *type = "";
   int st = need(r, map, key, "type", &tn);
@@ -330,7 +332,7 @@ static int read_schedule(rd *r, const st_node *root, const char *key, const char
 /* A word from a list, parsed by the library's own parser. */
 static int read_word(rd *r, const st_node *nd, const char *key, const char *what, const char *const *names,
                      int (*parse)(const char *), int *out) {
-  char hint[160];
+  char hint[ST_HINT_LEN];
   const char *w = "";
   int st = string(r, nd, key, &w);
   if (st) return st;
@@ -372,7 +374,7 @@ static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
     else words[nw++] = output_names[k];
   }
   words[nw] = keys[nk] = NULL;
-  char b[64], hint[160], expected[160];
+  char b[64], hint[ST_HINT_LEN], expected[160];
   cup_words_join(expected, sizeof expected, forms, "or");
   int kind = nd->kind == ST_SCALAR && !nd->quoted ? cup_output_parse(nd->text) : -1;
   if (kind >= 0 && forms[kind][0] != '{') { o->output = (cup_output_kind)kind; return CUP_OK; }
@@ -433,7 +435,7 @@ static int read_tolerance(rd *r, const st_node *root, cup_integrator_options *o)
               "deliver (16 eps = %.2g)", o->tol_rel, 16 * DBL_EPSILON);
   if (!st && (nd = opt(root, "max_event_rate")))
     st = number_min(r, nd, "max_event_rate", 0, 1, &o->max_event_rate);
-  if (!st && (nd = opt(root, "max_step"))) st = number_min(r, nd, "max_step", 0, 1, &o->max_step);
+  if (!st && (nd = opt(root, "hmax"))) st = number_min(r, nd, "hmax", 0, 1, &o->hmax);
   if (!st && (nd = opt(root, "estimate"))) st = boolean(r, nd, "estimate", &o->estimate);
   return st;
 }
@@ -558,11 +560,13 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
                                       "T", "n", "h", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
-                                      "max_event_rate", "max_step", "estimate", NULL};
-  const st_node *kf, *ki;
+                                      "max_event_rate", "hmax", "estimate", "max_steps", NULL};
+  const st_node *kf, *ki, *nd;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
   cup_integrator_options_default(&S->opt);
+  S->max_steps = CUP_MAX_STEPS_DEFAULT;
+  if (!st && (nd = opt(root, "max_steps"))) st = integer(r, nd, "max_steps", 1, LONG_MAX, &S->max_steps);
   if (!st && opt(root, "crowd")) {
     st = read_crowd(r, root, S);
     if (!st) st = read_method(r, root, &S->opt);
@@ -594,15 +598,22 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
 
 /* ---- public -------------------------------------------------------------- */
 
+/* files: what was read so far (the scene file itself), moved into the
+ * scene, or freed. */
 static int load(cup_scene **s, const char *text, size_t len, const char *name, const char *dir,
-                const char *const *ovr, int nov, char *errmsg) {
-  rd r = {{name, ovr}, dir, errmsg};
+                const char *const *ovr, int nov, cup_file_list *files, char *errmsg) {
+  rd r = {{name, ovr}, dir, errmsg, files};
   st_node *root = NULL;
   cup_scene *S = NULL;
   int st = st_parse(&root, text, len, &r.src, -1, NULL, errmsg);
-  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, scene_reshape, errmsg);
+  for (int k = 0; k < nov && !st; k++) st = st_apply_override(&root, &r.src, k, scene_reshape, scene_verbatim, errmsg);
   if (!st && !(S = calloc(1, sizeof *S))) st = CUP_ERR_NOMEM;
   if (!st) st = read_scene(&r, root, S);
+  if (S) {
+    S->files = *files;
+    memset(files, 0, sizeof *files);
+  }
+  cup_file_list_free(files);
   if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;
   st_free(root);
   if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "%s: out of memory while loading the scene", name);
@@ -620,7 +631,8 @@ int cup_scene_load_string(cup_scene **s, const char *text, const char *name, con
                           const char *const *overrides, int n_overrides, char *errmsg) {
   int st = check_args(s, text, overrides, n_overrides, errmsg);
   if (st) return st;
-  return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, errmsg);
+  cup_file_list files = {0};
+  return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, &files, errmsg);
 }
 
 int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides, int n_overrides,
@@ -628,10 +640,12 @@ int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides
   int st = check_args(s, path, overrides, n_overrides, errmsg);
   char *text = NULL, *dir = NULL;
   size_t len = 0;
-  if (!st) st = cup_read_text(path, &text, &len, errmsg);
+  cup_file_list files = {0};
+  if (!st) st = cup_read_text(path, &text, &len, &files, errmsg);
   const char *slash = path ? strrchr(path, '/') : NULL;
   if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
-  if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, errmsg);
+  if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, &files, errmsg);
+  cup_file_list_free(&files);
   free(text);
   free(dir);
   return st;
@@ -650,6 +664,7 @@ void cup_scene_free(cup_scene **s) {
   free(S->eps_spec);
   free(S->eta_spec);
   free(S->text);
+  cup_file_list_free(&S->files);
   free(S);
   *s = NULL;
 }
@@ -683,6 +698,19 @@ const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ?
 const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }
 const char *cup_scene_eta_spec(const cup_scene *s) { return s ? s->eta_spec : NULL; }
 const char *cup_scene_text(const cup_scene *s) { return s ? s->text : NULL; }
+const cup_file_list *cup_scene_file_list(const cup_scene *s) { return s ? &s->files : NULL; }
+int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg) {
+  if (!s || !path) return cup_fail(errmsg, CUP_ERR_ARG, "scene: NULL argument");
+  return cup_file_list_check_output(&s->files, path, errmsg);
+}
+int cup_scene_file_count(const cup_scene *s) { return s ? s->files.n : 0; }
+long cup_scene_max_steps(const cup_scene *s) { return s ? s->max_steps : CUP_MAX_STEPS_DEFAULT; }
+const char *cup_scene_file(const cup_scene *s, int k) {
+  return s && k >= 0 && k < s->files.n ? s->files.e[k].path : NULL;
+}
+const char *cup_scene_file_sha256(const cup_scene *s, int k) {
+  return s && k >= 0 && k < s->files.n ? s->files.e[k].sha256 : NULL;
+}
 
 /* The paper's circuit (Sec. 7): x1 is the time integral of the current
  * through C4 (its charge), x2 that current (L3's, in series), x3 L2's. */

@@ -18,6 +18,8 @@
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 #include "scene_netlist.h"
+#include "netlist_lex.h"
+#include "read_text.h"
 
 static int is_word(const char *k, const char *const *words) {
   for (int i = 0; words[i]; i++)
@@ -100,7 +102,7 @@ static int read_probes(const st_src *src, const st_node *nd, cup_netlist *nl, ch
 }
 
 int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode, const st_node *val,
-                       cup_netlist **out, char *errmsg) {
+                       cup_netlist **out, cup_file_list *files, char *errmsg) {
   const st_node *fnode = val, *tnode = NULL, *nnode = NULL, *pnode = NULL;
   char **sets = NULL;
   int nsets = 0, st = CUP_OK;
@@ -122,8 +124,8 @@ int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode,
   if (!st && file && !(path = path_in(dir, file))) st = CUP_ERR_NOMEM;
   if (!st) {
     const char *shown = path ? path : name ? name : "netlist";
-    st = path ? cup_netlist_load(out, path, (const char *const *)sets, nsets, lib)
-              : cup_netlist_load_string(out, text, shown, (const char *const *)sets, nsets, lib);
+    st = path ? cup_netlist_load_files(out, path, (const char *const *)sets, nsets, files, lib)
+              : cup_netlist_load_string_files(out, text, shown, (const char *const *)sets, nsets, files, lib);
     if (st) st = netlist_fail(src, fnode ? fnode : knode, val, st, lib, shown, errmsg);
   }
   if (!st && pnode) st = read_probes(src, pnode, *out, errmsg);
@@ -167,7 +169,7 @@ void scene_netlist_options(const cup_netlist *nl, cup_integrator_options *o) {
     o->T = tstop;
     double n = tstop / tstep;
     o->n = n < 1 ? 1 : n > 9007199254740992.0 ? 9007199254740992L : (long)(n + 0.5);
-    o->max_step = tmax;
+    o->hmax = tmax;
     scene_netlist_sampling(nl, o);
   }
   /* RELTOL relative, ABSTOL (currents) and VNTOL (voltages) absolute,

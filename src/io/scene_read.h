@@ -15,13 +15,17 @@
 #include <string.h>
 #include "catchup.h"
 #include "mtx.h"
+#include "read_text.h"
 #include "scene_tree.h"
 
-/* What every reader needs: names for messages, the directory of the file. */
+/* What every reader needs: names for messages, the directory of the file,
+ * the list of the files read (read_text.h: every file a key names is
+ * read through cup_read_text with it). */
 typedef struct rd {
   st_src src;
   const char *dir;
   char *errmsg;
+  cup_file_list *files;
 } rd;
 
 #define KEY_LEN 128              /* dotted keys ("input.1.0.amplitude") */
@@ -54,7 +58,7 @@ static inline const char *joini(char *buf, const char *parent, int i) {
 static inline int check_keys(rd *r, const st_node *map, const char *mkey, const char *const *known) {
   const st_node *bad = st_unknown_key(map, known);
   if (!bad) return CUP_OK;
-  char key[KEY_LEN], hint[320];                  /* the scene's 21 top-level keys fit */
+  char key[KEY_LEN], hint[ST_HINT_LEN];
   return fail(r, CUP_ERR_PARSE, bad, join(key, mkey, bad->text), "unknown key (%s)",
               st_suggest(hint, sizeof hint, bad->text, known));
 }
@@ -213,17 +217,17 @@ static inline int matrix_file(rd *r, const st_node *nd, const char *key, mat *M)
   if (!st) st = need(r, nd, key, "file", &fn);
   if (!st) st = string(r, fn, join(k1, key, "file"), &name);
   if (st) return st;
-  char *full = resolve(r->dir, name);
+  char *full = resolve(r->dir, name), *text = NULL;
   if (!full) return CUP_ERR_NOMEM;
-  FILE *f = fopen(full, "r");
-  if (!f) {
-    st = fail(r, CUP_ERR_IO, fn, k1, "cannot open '%s': %s", full, strerror(errno));
-    free(full);
-    return st;
-  }
+  size_t len = 0;
+  st = cup_read_text(full, &text, &len, r->files, NULL);   /* the bytes hashed are the bytes parsed */
+  if (st == CUP_ERR_IO) st = fail(r, CUP_ERR_IO, fn, k1, "cannot open '%s': %s", full, strerror(errno));
+  FILE *f = st ? NULL : len ? fmemopen(text, len, "r") : fopen("/dev/null", "r");   /* no empty fmemopen */
+  if (!st && !f) st = CUP_ERR_NOMEM;
   char msg[CUP_ERRMSG_LEN];
-  st = mtx_read(f, name, &M->a, msg);
-  fclose(f);
+  if (!st) st = mtx_read(f, name, &M->a, msg);
+  if (f) fclose(f);
+  free(text);
   free(full);
   return st == CUP_ERR_PARSE ? fail(r, st, fn, k1, "%s", msg) : st;
 }

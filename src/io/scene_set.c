@@ -342,7 +342,7 @@ static int read_f_rest(rd *r, scene_process *P, const st_node *f, int n) {
 /* ---- the whole ---------------------------------------------------------------------- */
 
 static int read_set_key(rd *r, const st_node *set, int *kind, const st_node **map, char *key) {
-  char hint[160], b[64];
+  char hint[ST_HINT_LEN], b[64];
   if (set->kind != ST_MAP || set->len != 1)
     return fail(r, CUP_ERR_PARSE, set, "set", "expected a mapping with one key, the kind of set: ball, "
                 "ellipsoid, halfspace, polyset or intersection (got %s)",

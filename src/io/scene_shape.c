@@ -63,3 +63,11 @@ int scene_reshape(st_node **slot, const char *path, const char *seg, const st_no
   }
   return CUP_OK;
 }
+
+int scene_verbatim(const char *key) {
+  static const char *const own[] = {"file", "text", "name", "probe", NULL};
+  if (strncmp(key, "netlist.", 8) || strchr(key + 8, '.')) return 0;
+  for (int i = 0; own[i]; i++)
+    if (!strcmp(key + 8, own[i])) return 0;
+  return 1;
+}

@@ -6,6 +6,7 @@
  * replaces tol: 1e-6 (tol.rel is then 0 unless set too); lcs.A.file=a.mtx
  * replaces an inline A (and every matrix, F and x0 the same); input....type=pwl
  * drops the fields the old waveform had and the new one does not take.
+ * And netlist.R1={100/13} is SPICE, not YAML (scene_verbatim).
  * Internal to the library. */
 #ifndef CUP_SCENE_SHAPE_H
 #define CUP_SCENE_SHAPE_H
@@ -18,5 +19,8 @@
 extern const char *const scene_wave_keys[CUP_WAVE_COUNT][SCENE_WAVE_KEYS];
 
 int scene_reshape(st_node **slot, const char *path, const char *seg, const st_node *val, int k);
+/* An st_verbatim_fn: netlist.NAME=VALUE (an element or a .param, not
+ * file, text, name or probe) takes VALUE as SPICE text. */
+int scene_verbatim(const char *key);
 
 #endif

@@ -432,7 +432,8 @@ static int put(st_node *parent, const char *seg, st_node *val, int k_ovr, st_nod
 /* Split "a.b.0=value" at the first '=' and walk the dotted key, splicing the
  * parsed value in at the end. Intermediate mapping keys that are absent are
  * created, so "output.every=10" works when the file has no output. */
-int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn reshape, char *errmsg) {
+int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn reshape, st_verbatim_fn verbatim,
+                      char *errmsg) {
   const char *o = src->ovr[k];
   st_node at = {0};
   at.origin = k;
@@ -448,7 +449,16 @@ int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn re
   key[klen] = '\0';
   memcpy(walk, key, klen + 1);
   st_node *val = NULL;
-  int st = st_parse(&val, eq + 1, strlen(eq + 1), src, k, key, errmsg);
+  int st = CUP_OK;
+  if (verbatim && verbatim(key)) {
+    const char *v = eq + 1;
+    size_t vlen = strlen(v);
+    while (vlen && isspace((unsigned char)*v)) { v++; vlen--; }
+    while (vlen && isspace((unsigned char)v[vlen - 1])) vlen--;
+    if (!(val = scalar_new(v, vlen, 1, 0, 0, k))) st = CUP_ERR_NOMEM;
+  } else {
+    st = st_parse(&val, eq + 1, strlen(eq + 1), src, k, key, errmsg);
+  }
   if (!st && (*root)->kind != ST_MAP)
     st = st_error(errmsg, CUP_ERR_PARSE, src, &at, key, "the document is not a mapping");
   st_node **slot = root;                     /* where the node we are in hangs */

@@ -50,8 +50,15 @@ int st_parse(st_node **root, const char *text, size_t len, const st_src *src, in
  * becomes {samples: 2}). Nodes it adds get origin k. Returns a status. */
 typedef int (*st_reshape_fn)(st_node **slot, const char *path, const char *seg, const st_node *val, int k);
 
-/* Apply src->ovr[k] ("dotted.key=value") to the document; reshape may be NULL. */
-int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn reshape, char *errmsg);
+/* 1 when the value of an override of `key` is its text as written (a
+ * string scalar, trimmed), not YAML: a netlist's SPICE expression such as
+ * {100/13}, which YAML would read as a mapping. */
+typedef int (*st_verbatim_fn)(const char *key);
+
+/* Apply src->ovr[k] ("dotted.key=value") to the document; reshape and
+ * verbatim may be NULL. */
+int st_apply_override(st_node **root, const st_src *src, int k, st_reshape_fn reshape, st_verbatim_fn verbatim,
+                      char *errmsg);
 
 /* Building blocks for a reshape: an empty mapping; append key: val to a
  * mapping (val is then owned by it); drop a key (absent: nothing). */
@@ -73,6 +80,9 @@ int st_is_null(const st_node *nd);
 /* "did you mean 'x'?" when word is a likely typo of one of the NULL-terminated
  * known words, else "expected one of a, b, c"; into buf (n bytes). */
 const char *st_suggest(char *buf, size_t n, const char *word, const char *const *known);
+/* Room for st_suggest's "expected one of" and a list of the library's own
+ * words (the scene's 22 keys take about 200 characters), whole. */
+#define ST_HINT_LEN 512
 /* The first key of a mapping that is not among the NULL-terminated known
  * words, or NULL when all are known. */
 const st_node *st_unknown_key(const st_node *map, const char *const *known);

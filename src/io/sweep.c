@@ -45,7 +45,7 @@ static int fail(prs *p, int status, const st_node *at, const char *key, const ch
 static int check_keys(prs *p, const st_node *map, const char *mkey, const char *const *known) {
   const st_node *bad = st_unknown_key(map, known);
   if (!bad) return CUP_OK;
-  char key[128], hint[160];
+  char key[128], hint[ST_HINT_LEN];
   snprintf(key, sizeof key, "%s%s%s", mkey, *mkey ? "." : "", bad->text);
   return fail(p, CUP_ERR_PARSE, bad, key, "unknown key (%s)", st_suggest(hint, sizeof hint, bad->text, known));
 }
@@ -120,7 +120,7 @@ static int axis_items(prs *p, const st_node *nd, const char *key, const st_node 
 
 static int read_word_item(prs *p, const st_node *nd, const char *key, const char *what,
                           const char *const *names, int *out) {
-  char hint[160], b[64];
+  char hint[ST_HINT_LEN], b[64];
   if (nd->kind != ST_SCALAR || st_is_null(nd))
     return fail(p, CUP_ERR_PARSE, nd, key, "expected a %s name (got %s)", what, st_looks(nd, b, sizeof b));
   for (int k = 0; names[k]; k++)
@@ -422,9 +422,12 @@ int sw_load(cup_sweep **s, const char *path, char *errmsg) {
   *s = NULL;
   char *buf = NULL;
   size_t n = 0;
-  int rt = cup_read_text(path, &buf, &n, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
+  cup_file_list files = {0};
+  int rt = cup_read_text(path, &buf, &n, &files, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
   if (rt) return rt;
   int st = sw_parse(s, buf, n, path, errmsg);
+  if (!st) (*s)->files = files;
+  else cup_file_list_free(&files);
   free(buf);
   return st;
 }
@@ -457,6 +460,7 @@ int sw_resolve_files(cup_sweep *s, char *errmsg) {
     }
     if (st) { variant_fail(s, k, st, errmsg, "%s", err); break; }
     if (!(texts[k] = strdup(cup_scene_text(sc)))) st = CUP_ERR_NOMEM;
+    if (!st) st = cup_file_list_merge(&s->files, cup_scene_file_list(sc));   /* its files join the sweep's */
     cup_scene_free(&sc);
   }
   if (!st) st = sw_resolve_texts(s, texts, errmsg);
@@ -585,6 +589,7 @@ void sw_free(cup_sweep **ps) {
   for (int k = 0; k < s->len[SW_AXIS_ETA]; k++) free(s->eta[k]);
   free(s->n); free(s->eps); free(s->eta); free(s->scheme); free(s->projector); free(s->tol);
   free(s->path); free(s->dir); free(s->text); free(s->name);
+  cup_file_list_free(&s->files);
   free(s);
   *ps = NULL;
 }

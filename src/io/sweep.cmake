@@ -8,8 +8,7 @@ add_library(catchup_sweep STATIC
   ${CMAKE_CURRENT_LIST_DIR}/sweep_run.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5_create.c
-  ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c
-  ${CMAKE_CURRENT_LIST_DIR}/sha256.c)
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c)
 target_include_directories(catchup_sweep PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(catchup_sweep PUBLIC catchup hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C
                       PRIVATE catchup_warnings m)

@@ -11,8 +11,9 @@
 
 #include <stdint.h>
 #include "catchup.h"
+#include "read_text.h"
 
-#define SW_ERR_LEN 1024          /* messages: a scene's message inside a sweep's */
+#define SW_ERR_LEN (2 * CUP_ERRMSG_LEN)   /* messages: a scene's message, whole, inside a sweep's */
 
 enum { SW_AXIS_N, SW_AXIS_EPS, SW_AXIS_ETA, SW_AXIS_SCHEME, SW_AXIS_PROJECTOR, SW_AXIS_TOL, SW_NAXES };
 
@@ -21,7 +22,9 @@ enum { SW_REF_RICHARDSON, SW_REF_ADAPTIVE };
 #define SW_REF_ADAPTIVE_TOL 1e-13  /* the adaptive reference's tol (absolute and relative) */
 
 /* String sizes of the /summary fields (fixed-length, NUL-terminated). */
-enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = 256 };
+/* SW_MSG_LEN: a task's message is its run's (cup_run_info.message), whole,
+ * after a prefix of at most 64 characters ("set-up: ", "injected failure"). */
+enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = CUP_RUN_MSG_LEN + 64 };
 
 typedef struct sw_variant {
   char *name;
@@ -41,6 +44,8 @@ typedef struct cup_sweep {
   char *dir;                 /* its directory, or NULL */
   char *text;                /* its full text (hashed, stored) */
   char sha256[65];
+  cup_file_list files;       /* rank 0, after sw_resolve_files: every file read (the sweep
+                                file, its scenes and theirs: read_text.h), hashed */
   char *name;
   int base_line, base_col;   /* where base: is written, for messages */
   int n_variants;

@@ -15,7 +15,7 @@
 
 /* ---- HDF5 errors: never printed; the innermost description is kept ---- */
 
-typedef struct { char desc[160]; int locked; } h5_err;
+typedef struct { char desc[CUP_ERRMSG_LEN / 2]; int locked; } h5_err;   /* names the file: whole */
 
 static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
   h5_err *r = out;
@@ -275,6 +275,30 @@ static int check_layout(sw_file *f, char *errmsg) {
   return CUP_OK;
 }
 
+/* Every file the sweep reads (its scenes, their Matrix Market files,
+ * netlists and what those include) must hold what it held when the file
+ * was made: the sweep file's hash covers none of them. A file made before
+ * this check (no inputs_sha256) has the scene texts' check below only. */
+static int check_inputs(sw_file *f, char *errmsg) {
+  hid_t a = H5Aopen(f->file, "inputs_sha256", H5P_DEFAULT);
+  if (a < 0) { H5Eclear2(H5E_DEFAULT); return CUP_OK; }
+  hid_t t = sw_h5_vlen_str();
+  char *v = NULL;
+  int st = H5Aread(a, t, &v) >= 0 ? CUP_OK : sw_h5_fail(f, "read the attribute inputs_sha256 of");
+  H5Tclose(t);
+  H5Aclose(a);
+  if (!st) {
+    int w = snprintf(errmsg, SW_ERR_LEN, "%s: cannot resume: ", f->path);
+    if (cup_file_list_compare(&f->s->files, v ? v : "", "the file", errmsg + w, (size_t)(SW_ERR_LEN - w))) {
+      size_t len = strlen(errmsg);
+      snprintf(errmsg + len, SW_ERR_LEN - len, "; run without --resume to start again");
+      st = CUP_ERR_ARG;
+    }
+  }
+  if (v) H5free_memory(v);
+  return st;
+}
+
 /* A variant's scene (after overrides) must not have changed since the file
  * was made: the sweep file's hash does not cover the scene files. */
 static int check_scenes(sw_file *f, char *errmsg) {
@@ -362,6 +386,7 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
         (s->crowd && f->crowd < 0) || (s->nsig && f->ref_sig < 0) || (s->nsig && s->out_samples > 0 && f->runs_sig < 0))
       st = sw_h5_fail(f, "open the datasets of");
   }
+  if (!st) st = check_inputs(f, errmsg);
   if (!st) st = check_scenes(f, errmsg);
   if (!st) st = read_state(f);
   quiet_end(q);

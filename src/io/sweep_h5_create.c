@@ -14,10 +14,9 @@
 #include <sys/statvfs.h>
 #include <hdf5.h>
 #include <hdf5_hl.h>
+#include "catchup/h5run.h"
 #include "file_in_use.h"
 #include "sweep_h5.h"
-
-#define SPACE_MARGIN (8.0 * 1048576)
 
 typedef struct sw_varrow {
   int32_t variant;
@@ -159,6 +158,9 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_file", s->path);
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
+  char *inputs = cup_file_list_text(&s->files);   /* every file read, for --resume (and sha256sum -c) */
+  r |= inputs ? attr_str(root, "inputs_sha256", inputs) : -1;
+  free(inputs);
   r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE
                 : s->ref_method == SW_REF_ADAPTIVE ? (s->ref_check ? reference_checked : reference_adaptive)
                 : reference_method);
@@ -480,28 +482,46 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
   struct statvfs v;
   double need = file_bytes(s);
   if (copy && statvfs(dirname(copy), &v) == 0 && v.f_blocks &&
-      (double)v.f_bavail * (double)v.f_frsize < need + SPACE_MARGIN) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.0f MiB and its device has %.0f MiB free "
-             "(store fewer samples: output.samples)", path, need / 1048576,
-             (double)v.f_bavail * (double)v.f_frsize / 1048576);
+      (double)v.f_bavail * (double)v.f_frsize < need + CUP_H5_SPACE_MARGIN) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.3g MiB and %u MiB kept free beside it, and "
+             "its device has %.3g MiB free (store fewer samples: output.samples)", path, need / 1048576,
+             CUP_H5_SPACE_MARGIN >> 20, (double)v.f_bavail * (double)v.f_frsize / 1048576);
     free(copy);
     return CUP_ERR_IO;
   }
   free(copy);
+  /* the whole layout goes to a new sibling first, renamed over path once
+   * written: an earlier results file stays whole until then */
+  char *staged = cup_staged_name(path);
+  if (!staged) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: cannot create a file beside it (%s): its folder must take "
+             "new files; an existing %s is left as it was", path, strerror(errno), path);
+    return CUP_ERR_IO;
+  }
   sw_file *f = sw_h5_file_new(s, path);
-  if (!f) { snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
+  if (!f) { unlink(staged); free(staged); snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
   quiet_t q = quiet_begin();
   hid_t fapl = sw_h5_access();
-  f->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  f->file = H5Fcreate(staged, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   int st = f->file < 0 ? sw_h5_fail(f, "create") : create_layout(f, p);
   H5Pclose(fapl);
   quiet_end(q);
+  if (!st && cup_file_in_use(path)) {
+    snprintf(f->errmsg, sizeof f->errmsg, SW_IN_USE_FMT, path, "replace");
+    st = CUP_ERR_IO;
+  }
+  if (!st && rename(staged, path) != 0) {
+    snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot replace it: %s; the file is left as it was", path,
+             strerror(errno));
+    st = CUP_ERR_IO;
+  }
   if (st) {
     snprintf(errmsg, SW_ERR_LEN, "%s", f->errmsg[0] ? f->errmsg : "out of memory");
     sw_h5_file_free(f);
-    return st;
+    unlink(staged);
   }
-  *out = f;
-  return CUP_OK;
+  free(staged);
+  if (!st) *out = f;
+  return st;
 }
 

@@ -108,7 +108,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   char err[CUP_ERRMSG_LEN] = "";
   r->status = cup_scene_integrator(v->scene, &o, &I, err);
   if (r->status < 0) {
-    snprintf(r->message, sizeof r->message, "set-up: %.240s", err);
+    snprintf(r->message, sizeof r->message, "set-up: %s", err);
     r->wall += now_seconds() - t0;
     return;
   }
@@ -137,7 +137,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   r->err_est = info.err_est;
   r->events = info.events;
   if (rp->inject && r->status == CUP_ERR_CALLBACK)
-    snprintf(r->message, sizeof r->message, "injected failure (CATCHUP_SWEEP_INJECT_FAIL): %.200s",
+    snprintf(r->message, sizeof r->message, "injected failure (CATCHUP_SWEEP_INJECT_FAIL): %s",
              info.message);
   else
     snprintf(r->message, sizeof r->message, "%s", info.message);

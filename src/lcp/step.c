@@ -12,6 +12,77 @@ int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, d
   return cup_lcp_step_init_bd(ls, K, W, h, NULL, NULL, 1);
 }
 
+/* H = h w W B column by column (w = 1 on a zero column of D, whose zeta no
+ * row fixes, theta on the others, and the mode's kernel columns as
+ * set_mode found them), then M = C H + D and its rows scaled. */
+static void build_hm(cup_lcp_step *ls) {
+  const cup_polyset *K = ls->K;
+  int n = ls->n, m = ls->m;
+  double h = ls->h, theta = ls->theta;
+  for (int i = 0; i < m; i++)
+    for (int r = 0; r < n; r++) {
+      int trap = !ls->dcol0[i];
+      ls->H[r + (size_t)i * n] = h * (trap ? theta : 1) * ls->WB[r + (size_t)i * n];
+    }
+  /* a kernel column t: W B (theta e_t + (1 - theta) z_t), z_t = e_t + its part on the other columns */
+  for (int k = 0; k < ls->nker; k++) {
+    int t = ls->kcol[k];
+    const double *z = ls->Z + (size_t)k * m;
+    for (int r = 0; r < n; r++) {
+      double acc = h * ls->WB[r + (size_t)t * n];
+      for (int s = 0; s < m; s++)
+        if (s != t && z[s] != 0) acc += h * (1 - theta) * z[s] * ls->WB[r + (size_t)s * n];
+      ls->H[r + (size_t)t * n] = acc;
+    }
+  }
+  for (int j = 0; j < m; j++)                      /* M = C H + D */
+    for (int i = 0; i < m; i++) {
+      double acc = ls->D[i + (size_t)j * m];
+      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * ls->H[K->Ct.i[k] + (size_t)j * n];
+      ls->M[i + (size_t)j * m] = acc;
+    }
+  /* The LCP is solved with its rows scaled to largest entry 1: a row is
+   * volts or amperes, and LU's residual and the pivoting's tolerance are
+   * relative to the largest row; scaled, each row's are its own. */
+  for (int i = 0; i < m; i++) {
+    double r = 0;
+    for (int j = 0; j < m; j++) r = cup_max(r, fabs(ls->M[i + (size_t)j * m]));
+    ls->rsc[i] = r > 0 ? 1 / r : 1;
+    for (int j = 0; j < m; j++) ls->Ms[i + (size_t)j * m] = ls->rsc[i] * ls->M[i + (size_t)j * m];
+  }
+}
+
+/* The D path's arrays (cup_lcp_step_free releases them on failure). */
+static int init_d(cup_lcp_step *ls, const double *D, double theta) {
+  size_t N = (size_t)ls->n, M = (size_t)ls->m + 1;
+  ls->D = malloc(sizeof(double) * M * M);
+  ls->geff = calloc(M, sizeof(double));
+  ls->WB = calloc(N * M, sizeof(double));
+  ls->Hprev = calloc(N * M, sizeof(double));
+  ls->carry = calloc(M, sizeof(double));
+  ls->xpred = calloc(N, sizeof(double));
+  ls->q0 = calloc(M, sizeof(double));
+  ls->dcol0 = calloc(M, 1);
+  ls->kcol = calloc(2 * M, sizeof(int));          /* the kernel in force, and a new one (set_mode) */
+  ls->Z = calloc(2 * M * M, sizeof(double));
+  ls->work = calloc(M * M + 2 * M, sizeof(double));
+  ls->Ms = calloc(M * M, sizeof(double));
+  ls->rsc = calloc(3 * M, sizeof(double));         /* and q, q - tau scaled */
+  ls->kwork = calloc(3 * M, sizeof(int));
+  if (!ls->D || !ls->geff || !ls->WB || !ls->Hprev || !ls->carry || !ls->xpred || !ls->q0 || !ls->dcol0 ||
+      !ls->kcol || !ls->Z || !ls->work || !ls->kwork || !ls->Ms || !ls->rsc || cup_lcp_monotone(&ls->lcp))
+    return CUP_ERR_NOMEM;
+  int m = ls->m;
+  memcpy(ls->D, D, sizeof(double) * (size_t)m * m);
+  ls->theta = theta;
+  for (int j = 0; j < m; j++) {
+    ls->dcol0[j] = 1;
+    for (int i = 0; i < m; i++)
+      if (D[i + (size_t)j * m] != 0) ls->dcol0[j] = 0;
+  }
+  return CUP_OK;
+}
+
 int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
                          const double *B, const double *D, double theta) {
   memset(ls, 0, sizeof *ls);
@@ -30,21 +101,9 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
   if (fail || !ls->H || !ls->M || !ls->s || !ls->gam || !ls->v || !ls->tau || !ls->qs || !ls->sv ||
       !ls->gamv)
     return CUP_ERR_NOMEM;
-  if (D) {
-    ls->D = malloc(sizeof(double) * M * M);
-    ls->geff = calloc(M, sizeof(double));
-    ls->drow = calloc(M, 1);
-    ls->Hprev = calloc(N * M, sizeof(double));
-    ls->xpred = calloc(N, sizeof(double));
-    if (!ls->D || !ls->geff || !ls->drow || !ls->Hprev || !ls->xpred || cup_lcp_monotone(&ls->lcp))
-      return CUP_ERR_NOMEM;
-    memcpy(ls->D, D, sizeof(double) * (size_t)m * m);
-    for (int i = 0; i < m; i++)
-      for (int j = 0; j < m; j++)
-        if (D[i + (size_t)j * m] != 0) ls->drow[i] = ls->drow[j] = 1;
-  }
+  if (D && init_d(ls, D, theta)) return CUP_ERR_NOMEM;
   /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T), or
-   * the B given */
+   * the B given; with D, the weights of build_hm */
   for (int i = 0; i < m; i++)
     for (int r = 0; r < n; r++) {
       const double *b = B ? B + (size_t)i * n : K->Bt + (size_t)i * n;
@@ -53,24 +112,32 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
         for (int c = 0; c < n; c++) acc += W[r + (size_t)c * n] * b[c];
       else
         acc = b[r];
-      int trap = ls->drow && ls->drow[i];
-      ls->H[r + (size_t)i * n] = h * (trap ? theta : 1) * acc;
-      if (trap) ls->Hprev[r + (size_t)i * n] = h * (1 - theta) * acc;
+      if (!D) {
+        ls->H[r + (size_t)i * n] = h * acc;
+        continue;
+      }
+      ls->WB[r + (size_t)i * n] = acc;
+      if (!ls->dcol0[i]) ls->Hprev[r + (size_t)i * n] = h * (1 - theta) * acc;
     }
-  for (int j = 0; j < m; j++)                      /* M = C H (+ D) */
-    for (int i = 0; i < m; i++) {
-      double acc = D ? D[i + (size_t)j * m] : 0;
-      for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * ls->H[K->Ct.i[k] + (size_t)j * n];
-      ls->M[i + (size_t)j * m] = acc;
-    }
+  if (D) {
+    build_hm(ls);
+  } else {
+    for (int j = 0; j < m; j++)                    /* M = C H */
+      for (int i = 0; i < m; i++) {
+        double acc = 0;
+        for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * ls->H[K->Ct.i[k] + (size_t)j * n];
+        ls->M[i + (size_t)j * m] = acc;
+      }
+  }
   small_init(ls);
   return CUP_OK;
 }
 
 void cup_lcp_step_free(cup_lcp_step *ls) {
   free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
-  free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->drow); free(ls->Hprev);
-  free(ls->xpred);
+  free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->WB); free(ls->Hprev);
+  free(ls->carry); free(ls->xpred); free(ls->q0); free(ls->dcol0); free(ls->kcol); free(ls->Z);
+  free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc);
   cup_lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
@@ -93,15 +160,140 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z) {
                                                         : INFINITY;
 }
 
-void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
+/* A pivot of D_JJ, equilibrated (every row's and column's largest entry 1),
+ * below this is a zero: D's entries are resistances and the +-1 of a
+ * bridge's cutsets, whose cancellations leave rounding only. */
+#define KER_TOL 1e-12
+
+/* ker D_JJ for the support J (a bit per row), by complete pivoting on D_JJ
+ * equilibrated by rows, then columns (w_i and zeta_j are volts or amperes
+ * by row and column, so only a scaled pivot means anything): its free
+ * columns T, less those of dcol0, into nk, kc, and the vectors z_t
+ * (z_t[t] = 1, 0 on the other free columns) into Zn, m x nk. */
+static void kernel_of(cup_lcp_step *ls, unsigned long long J, int *nk, int *kc, double *Zn) {
+  int m = ls->m, p = 0;
+  int *idx = ls->kwork, *pr = idx + m, *pc = pr + m;
+  double *A = ls->work, *cs = A + (size_t)m * m, *z = cs + m;
+  for (int i = 0; i < m; i++)
+    if (J >> i & 1) idx[p++] = i;
+  for (int b = 0; b < p; b++) {
+    pr[b] = pc[b] = b;
+    for (int a = 0; a < p; a++) A[a + (size_t)b * p] = ls->D[idx[a] + (size_t)idx[b] * m];
+  }
+  for (int a = 0; a < p; a++) {                   /* rows, then columns, to largest entry 1 */
+    double r = 0;
+    for (int b = 0; b < p; b++) r = cup_max(r, fabs(A[a + (size_t)b * p]));
+    for (int b = 0; r > 0 && b < p; b++) A[a + (size_t)b * p] /= r;
+  }
+  for (int b = 0; b < p; b++) {
+    double c = 0;
+    for (int a = 0; a < p; a++) c = cup_max(c, fabs(A[a + (size_t)b * p]));
+    cs[b] = c > 0 ? c : 1;
+    for (int a = 0; a < p; a++) A[a + (size_t)b * p] /= cs[b];
+  }
+  int r = 0;
+  for (; r < p; r++) {                            /* eliminate, the largest remaining entry first */
+    int bi = r, bj = r;
+    double best = 0;
+    for (int j = r; j < p; j++)
+      for (int i = r; i < p; i++)
+        if (fabs(A[pr[i] + (size_t)pc[j] * p]) > best) best = fabs(A[pr[i] + (size_t)pc[j] * p]), bi = i, bj = j;
+    if (!(best > KER_TOL)) break;
+    int t = pr[r]; pr[r] = pr[bi]; pr[bi] = t;
+    t = pc[r]; pc[r] = pc[bj]; pc[bj] = t;
+    double piv = A[pr[r] + (size_t)pc[r] * p];
+    for (int i = r + 1; i < p; i++) {
+      double f = A[pr[i] + (size_t)pc[r] * p] / piv;
+      if (f == 0) continue;
+      for (int j = r; j < p; j++) A[pr[i] + (size_t)pc[j] * p] -= f * A[pr[r] + (size_t)pc[j] * p];
+    }
+  }
+  *nk = 0;
+  for (int f = r; f < p; f++) {                   /* back substitution on the pivot rows */
+    int t = idx[pc[f]];
+    if (ls->dcol0[t]) continue;                   /* z_t = e_t, weighted whole already */
+    for (int b = 0; b < p; b++) z[b] = 0;
+    z[pc[f]] = 1;
+    for (int k = r - 1; k >= 0; k--) {
+      double acc = 0;
+      for (int j = k + 1; j < p; j++) acc += A[pr[k] + (size_t)pc[j] * p] * z[pc[j]];
+      z[pc[k]] = -acc / A[pr[k] + (size_t)pc[k] * p];
+    }
+    double *out = Zn + (size_t)*nk * m;           /* D_JJ diag(1/cs) z' = 0: z = z' / cs, z_t = 1 */
+    for (int i = 0; i < m; i++) out[i] = 0;
+    for (int b = 0; b < p; b++) out[idx[b]] = z[b] / cs[b] * cs[pc[f]];
+    out[t] = 1;
+    kc[(*nk)++] = t;
+  }
+}
+
+/* The support of the last zeta, a bit per row. */
+static unsigned long long support(const cup_lcp_step *ls) {
+  unsigned long long J = 0;
+  for (int i = 0; i < ls->m; i++)
+    if (ls->lcp.lam[i] > 0) J |= 1ull << i;
+  return J;
+}
+
+/* The weights for the support J: 1 when H and M changed (another kernel),
+ * 0 when those in force are J's. With theta = 1 every weight is 1. */
+static int set_mode(cup_lcp_step *ls, unsigned long long J) {
+  ls->mode = J;
+  if (ls->theta == 1) return 0;
+  int m = ls->m, nk;
+  int *kc = ls->kcol + m + 1;                     /* the second halves: J's kernel, to compare */
+  double *Zn = ls->Z + (size_t)(m + 1) * (m + 1);
+  kernel_of(ls, J, &nk, kc, Zn);
+  if (nk == ls->nker && !memcmp(kc, ls->kcol, sizeof(int) * (size_t)nk) &&
+      !memcmp(Zn, ls->Z, sizeof(double) * (size_t)nk * m))
+    return 0;
+  ls->nker = nk;
+  memcpy(ls->kcol, kc, sizeof(int) * (size_t)nk);
+  memcpy(ls->Z, Zn, sizeof(double) * (size_t)nk * m);
+  build_hm(ls);
+  return 1;
+}
+
+/* carry = Pi zeta: zeta less its part in the kernel, sum_t zeta_t z_t
+ * (0 on D's zero columns). */
+static void carry_of(cup_lcp_step *ls) {
+  int m = ls->m;
+  const double *lam = ls->lcp.lam;
+  for (int j = 0; j < m; j++) ls->carry[j] = ls->dcol0[j] ? 0 : lam[j];
+  for (int k = 0; k < ls->nker; k++) {
+    double zt = lam[ls->kcol[k]];
+    if (zt == 0) continue;
+    const double *z = ls->Z + (size_t)k * m;
+    for (int j = 0; j < m; j++)
+      if (z[j] != 0) ls->carry[j] -= zt * z[j];
+    ls->carry[ls->kcol[k]] = 0;
+  }
+}
+
+/* With D, a step carries the weights in force (the support they were set
+ * for: its kernel makes H and M) and Pi zeta to the next as well. */
+void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c) {
+  cup_ckpt_io(c, ls->lcp.lam, sizeof(double) * (size_t)ls->m);
+  cup_ckpt_io(c, ls->lcp.prev, (size_t)ls->m);
+  CUP_CKPT_IO(c, ls->lq);
+  if (!ls->D) return;
+  unsigned long long mode = ls->mode;
+  CUP_CKPT_IO(c, mode);
+  cup_ckpt_io(c, ls->carry, sizeof(double) * (size_t)ls->m);
+  if (!c->saving && c->buf && !c->bad) set_mode(ls, mode);
+}
+
+int cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
   int m = ls->m, pivots = 0;
   double *lam = ls->lcp.lam;
   cup_zero(lam, m);
-  if (!ls->D) return;
+  if (!ls->D) return cup_slack(ls->K, g, x0, ls->qs, NULL) >= 0;
   cup_slack(ls->K, g, x0, ls->qs, NULL);          /* q = C x0 + g, M = D */
-  if (cup_lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) != CUP_OK) cup_zero(lam, m);
-  for (int i = 0; i < m; i++)
-    if (!ls->drow[i]) lam[i] = 0;
+  int consistent = cup_lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) == CUP_OK;
+  if (!consistent) cup_zero(lam, m);
+  set_mode(ls, support(ls));
+  carry_of(ls);
+  return consistent;
 }
 
 /* (m + 2) eps sum_j |A_ij| lambda_j: the rounding of row i of A lambda. */
@@ -168,6 +360,161 @@ static void small_init(cup_lcp_step *ls) {
   ls->small = 1;
 }
 
+/* The LCP aimed at slack tau (qs = q - tau), warm, then cold; an aim that
+ * makes it unsolvable (a set without interior) gives way to the exact one.
+ * With D, a row that z does not move is aimed past (M lambda)_i's rounding
+ * too (widen_aim). */
+static int aimed_solve(cup_lcp_step *ls, const double *q, int *pivots) {
+  int m = ls->m, st = CUP_ERR_LINALG, aimed = 0;
+  double *tau = ls->tau, *qs = ls->qs;
+  const double *M = ls->M, *qa = q, *qb = qs;
+  if (ls->D) {                                    /* rows scaled (build_hm) */
+    double *sq = ls->rsc + m, *sqs = sq + m;
+    for (int i = 0; i < m; i++) {
+      sq[i] = ls->rsc[i] * q[i];
+      sqs[i] = ls->rsc[i] * qs[i];
+    }
+    M = ls->Ms, qa = sq, qb = sqs;
+  }
+  for (int aim = 1; aim >= 0 && st == CUP_ERR_LINALG; aim--) {
+    if (!aim) cup_zero(tau, m);
+    st = cup_lcp_solve(&ls->lcp, M, aim ? qb : qa, pivots);
+    aimed = aim && !st;
+  }
+  if (aimed && ls->D && widen_aim(ls, q)) {
+    for (int i = 0; i < m; i++) ls->rsc[2 * m + i] = ls->rsc[i] * qs[i];
+    if (cup_lcp_solve(&ls->lcp, M, qb, pivots) != CUP_OK) {
+      cup_zero(tau, m);
+      st = cup_lcp_solve(&ls->lcp, M, qa, pivots);
+    }
+  }
+  return st;
+}
+
+/* lambda >= 0, lambda^T q, z = xf + H lambda, and z's slack and its rounding
+ * in ls->s, ls->gam for the offset returned (g, or g + D lambda). */
+static const double *finish(cup_lcp_step *ls, const double *q, const double *g, const double *xf, double *z) {
+  int n = ls->n, m = ls->m;
+  double *lam = ls->lcp.lam, lq = 0;
+  for (int i = 0; i < m; i++) {
+    lam[i] = cup_max(lam[i], 0);
+    lq += lam[i] * q[i];
+  }
+  ls->lq = lq;
+  cup_copy(z, xf, n);
+  for (int i = 0; i < m; i++) {
+    if (lam[i] == 0) continue;
+    for (int r = 0; r < n; r++) z[r] += ls->H[r + (size_t)i * n] * lam[i];
+  }
+  /* certificates from the slack of z itself; with D, in K shifted by D lambda */
+  g = effective_offset(ls, g);
+  cup_slack(ls->K, g, z, ls->s, ls->gam);
+  for (int i = 0; ls->D && i < m; i++) ls->gam[i] += row_rounding(ls, ls->D, i);
+  return g;
+}
+
+/* The most solves again for a new support's weights (mode_solve), and for
+ * rows aimed further in (solve_d). */
+enum { MODE_PASSES = 4, AIM_PASSES = 3 };
+
+/* Solves again while the solution's support asks for other weights than
+ * those it was solved with (set_mode). */
+
+static int mode_solve(cup_lcp_step *ls, const double *q, int *pivots) {
+  for (int pass = 0;; pass++) {
+    if (pass)
+      for (int i = 0; i < ls->m; i++) ls->qs[i] = q[i] - ls->tau[i];
+    int st = aimed_solve(ls, q, pivots);
+    unsigned long long J = support(ls);
+    if (st || J == ls->mode || pass == MODE_PASSES || !set_mode(ls, J)) return st;
+  }
+}
+
+/* Rows whose slack at z is below its rounding bound are aimed further in
+ * by twice the shortfall, and start the next solve active: the pivoting
+ * accepts w_i >= -64 eps max |q| (a tolerance of the largest row), which
+ * on a row of small scale, or one tied to another that is aimed in (two
+ * diodes whose rows leave K no interior), is no rounding at all. 1 if some
+ * row was. */
+static int reaim(cup_lcp_step *ls, const double *q) {
+  int more = 0;
+  for (int i = 0; i < ls->m; i++) {
+    if (ls->s[i] >= ls->gam[i]) continue;
+    ls->tau[i] += 2 * (ls->gam[i] - ls->s[i]) + 16 * ls->gam[i] + DBL_MIN;
+    ls->lcp.prev[i] = 1;
+    more = 1;
+  }
+  for (int i = 0; more && i < ls->m; i++) ls->qs[i] = q[i] - ls->tau[i];
+  return more;
+}
+
+/* One step of iterative refinement of lambda on its support J: the aimed,
+ * scaled LCP's rows on J, (R qs)_J + (Ms lambda)_J, should be 0. LU on a
+ * nearly singular block (an op-amp's loop gain in D) leaves them at
+ * cond(Ms_JJ) eps, which an aim could only cover by moving the answer by
+ * cond times the aim; one correction in working precision brings them to
+ * the rounding of the block's entries. */
+static void refine(cup_lcp_step *ls, const double *q) {
+  int m = ls->m, p = 0;
+  int *idx = ls->kwork, *piv = idx + m;
+  double *A = ls->work, *r = A + (size_t)m * m, *w = r + m, *lam = ls->lcp.lam;
+  for (int i = 0; i < m; i++)
+    if (lam[i] > 0) idx[p++] = i;
+  for (int a = 0; a < p; a++) {
+    int i = idx[a];
+    double acc = ls->rsc[i] * (q[i] - ls->tau[i]);  /* R (q - tau): tau is 0 if the aim gave way */
+    for (int j = 0; j < m; j++) acc += ls->Ms[idx[a] + (size_t)j * m] * lam[j];
+    r[a] = -acc;
+    for (int b = 0; b < p; b++) A[a + (size_t)b * p] = ls->Ms[idx[a] + (size_t)idx[b] * m];
+  }
+  if (!p || cup_dense_lu(A, p, piv)) return;
+  cup_dense_lu_solve(A, p, piv, r, w);
+  for (int a = 0; a < p; a++) lam[idx[a]] += r[a];
+}
+
+/* 1 when some row's slack at z is below its rounding bound; *active: one
+ * of them has lambda > 0. */
+static int short_rows(const cup_lcp_step *ls, int *active) {
+  int any = 0;
+  *active = 0;
+  for (int i = 0; i < ls->m; i++)
+    if (ls->s[i] < ls->gam[i]) {
+      any = 1;
+      *active |= ls->lcp.lam[i] > 0;
+    }
+  return any;
+}
+
+/* The step with D: the mode's weights, then until z certainly satisfies
+ * every row (a row that z does not move, a bridge's diode fixed by the
+ * others' currents, cannot be pushed into K afterwards): first lambda
+ * refined on its support if an active row falls short, then aims moved
+ * further in (reaim), keeping the last solution if a solve fails; the
+ * trapezoid's carry. *g: the offset of z's certificates. */
+static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const double *xf, double *z,
+                   int *pivots) {
+  int st = mode_solve(ls, q, pivots), m = ls->m, active;
+  if (st) return st;
+  const double *g0 = *g;
+  *g = finish(ls, q, g0, xf, z);
+  int short_ = short_rows(ls, &active);
+  if (short_ && active) {
+    refine(ls, q);
+    *g = finish(ls, q, g0, xf, z);
+    short_ = short_rows(ls, &active);
+  }
+  for (int r = 0; r < AIM_PASSES && short_ && reaim(ls, q); r++) {
+    cup_copy(ls->sv, ls->lcp.lam, m);
+    int ok = aimed_solve(ls, q, pivots) == CUP_OK;
+    if (!ok) cup_copy(ls->lcp.lam, ls->sv, m);
+    *g = finish(ls, q, g0, xf, z);
+    if (!ok) break;
+    short_ = short_rows(ls, &active);
+  }
+  carry_of(ls);
+  return CUP_OK;
+}
+
 int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
                        double scale, double eps_target, double eta_target, cup_proj_info *info) {
   if (ls->small && eps_target >= 0 && small_dispatch(ls, g, xf, z, scale, eps_target, eta_target, info))
@@ -179,11 +526,11 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
   info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
   info->eta_target = eta_target;
   info->method = CUP_PROJ_ACTIVESET;
-  if (ls->D) {                                    /* the trapezoid's old half: h (1 - theta) W B zeta_k */
+  if (ls->D) {                                    /* the trapezoid's old half: h (1 - theta) W B Pi zeta_k */
     cup_copy(ls->xpred, xf, n);
     for (int i = 0; i < m; i++)
-      if (lam[i] != 0)
-        for (int r = 0; r < n; r++) ls->xpred[r] += ls->Hprev[r + (size_t)i * n] * lam[i];
+      if (ls->carry[i] != 0)
+        for (int r = 0; r < n; r++) ls->xpred[r] += ls->Hprev[r + (size_t)i * n] * ls->carry[i];
     xf = ls->xpred;
   }
   double probe = 0;                               /* NaN iff some entry is NaN or Inf */
@@ -197,6 +544,7 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
     cup_copy(z, xf, n);
     cup_zero(lam, m);
+    if (ls->D) cup_zero(ls->carry, m);
     ls->lq = 0;
     info->skipped = 1;
     info->eta_cert = cup_lcp_step_eta(ls, g, z);
@@ -211,33 +559,17 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
     tau[i] = 16 * ls->gam[i] + DBL_MIN;
     qs[i] = q[i] - tau[i];
   }
-  int pivots = 0, st = CUP_ERR_LINALG, aimed = 0;
-  for (int aim = 1; aim >= 0 && st == CUP_ERR_LINALG; aim--) {
-    if (!aim) cup_zero(tau, m);
-    st = cup_lcp_solve(&ls->lcp, ls->M, aim ? qs : q, &pivots);
-    aimed = aim && !st;
-  }
-  if (aimed && ls->D && widen_aim(ls, q) && cup_lcp_solve(&ls->lcp, ls->M, qs, &pivots) != CUP_OK) {
-    cup_zero(tau, m);
-    st = cup_lcp_solve(&ls->lcp, ls->M, q, &pivots);
+  int pivots = 0, st;
+  if (ls->D) {                                    /* q outlives the slack of z (ls->s) */
+    cup_copy(ls->q0, q, m);
+    q = ls->q0;
+    st = solve_d(ls, q, &g, xf, z, &pivots);
+  } else {
+    st = aimed_solve(ls, q, &pivots);
+    if (!st) g = finish(ls, q, g, xf, z);
   }
   info->iterations = pivots + 1;
   if (st) return info->status = st;
-  double lq = 0;
-  for (int i = 0; i < m; i++) {
-    lam[i] = cup_max(lam[i], 0);
-    lq += lam[i] * q[i];
-  }
-  ls->lq = lq;
-  cup_copy(z, xf, n);
-  for (int i = 0; i < m; i++) {
-    if (lam[i] == 0) continue;
-    for (int r = 0; r < n; r++) z[r] += ls->H[r + (size_t)i * n] * lam[i];
-  }
-  /* certificates from the slack of z itself; with D, in K shifted by D lambda */
-  g = effective_offset(ls, g);
-  cup_slack(K, g, z, ls->s, ls->gam);
-  for (int i = 0; ls->D && i < m; i++) ls->gam[i] += row_rounding(ls, ls->D, i);
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {

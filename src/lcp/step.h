@@ -19,6 +19,7 @@
 #include "catchup/status.h"
 #include "util/lanes.h"
 #include "util/linalg.h"
+#include "util/ckpt.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
 
@@ -43,9 +44,21 @@ typedef struct cup_lcp_step {
   /* D != 0 (cup_lcp_step_init_bd): w = C z + D lambda + g */
   double *D;        /* m x m, column-major, or NULL */
   double *geff;     /* g + D lambda: the offset the step's z must satisfy */
-  unsigned char *drow; /* rows with D != 0 in their row or column: zeta is a function there */
-  double *Hprev;    /* n x m: h (1 - theta) W B on those rows (the trapezoid's old half), else 0 */
-  double *xpred;    /* xf + Hprev lambda_k */
+  double theta;
+  double *WB;       /* n x m: W B, of which H is made by the weights below */
+  double *Hprev;    /* n x m: h (1 - theta) W B (the trapezoid's old half; 0 where D's column is) */
+  double *carry;    /* m: Pi zeta_k, the part of the last zeta that is a function of the state */
+  double *xpred;    /* xf + Hprev carry */
+  double *q0;       /* m: the free point's slack C xpred + g, kept for the step's re-solves */
+  unsigned char *dcol0; /* D's column j is zero: zeta_j is never fixed by w, an impulse wherever it acts */
+  unsigned long long mode; /* the support J of zeta (a bit per row) the weights were set for */
+  int nker;         /* dim ker D_JJ, less the columns of dcol0 (weighted so already) */
+  int *kcol;        /* its free columns t: the kernel vector z_t has z_t[t] = 1, 0 on the other t */
+  double *Z;        /* m x nker: the kernel vectors z_t, column-major */
+  double *work;     /* m x m + 2 m doubles and 3 m ints (kwork): the kernel's elimination */
+  int *kwork;
+  double *Ms;       /* m x m: M with rows scaled by rsc, which the LCP solves */
+  double *rsc;      /* m: 1 / (largest entry of M's row); then q and q - tau so scaled */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
   int small;        /* 1: cup_lcp_step_solve tries the unrolled step first */
   cup_v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
@@ -59,21 +72,35 @@ typedef struct cup_lcp_step {
  * write the message, in their own name. */
 int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h);
 /* The same for an LCS with D != 0 (Siconos's EulerMoreauOSI): B (n x m,
- * column-major) replaces P^-1 C^T in H = h W B, M = C H + D (D m x m,
+ * column-major) replaces P^-1 C^T in H = h W B Wt, M = C H + D (D m x m,
  * column-major); z satisfies C z + D lambda + g >= 0 and the certificates
  * below use g + D lambda; an M that is not a P-matrix (a monotone LCP) is
  * solved by Lemke's method. B NULL: P^-1 C^T; D NULL: cup_lcp_step_init.
- * On a row where D vanishes zeta is an impulse (a measure), taken whole at
- * t_{k+1} as Moreau-Jean does; on a row with D != 0 it is a function of the
- * state, and the trapezoid's weights keep theta = 1/2 second order there:
- * h theta W B in H, and h (1 - theta) W B lambda_k added to the free point
- * (lambda_0 from cup_lcp_step_start). */
+ * The weights Wt follow the step's mode, the support J of zeta: on J,
+ * 0 = C_J x + D_JJ zeta_J + g_J fixes zeta_J up to ker D_JJ. The part of
+ * zeta in ker D_JJ is not a function of the state but a multiplier of a
+ * constraint on it (a diode with D = 0, or a loop of diodes, capacitors and
+ * sources with no resistance: a bridge's skew coupling), a measure that
+ * carries the state's jumps: it is taken whole at t_{k+1}, h W B, as
+ * Moreau-Jean does. The rest, Pi zeta, is a function of the state, and the
+ * trapezoid's weights keep theta = 1/2 second order on it: h theta W B in
+ * H, and h (1 - theta) W B Pi zeta_k added to the free point. So every
+ * impulse is taken once, whichever rows D couples. The kernel's free
+ * columns carry the full weight (Pi is the projection along ker D_JJ onto
+ * the other columns); a step whose solution has another support than the
+ * weights were set for is solved again with that support's weights. */
 int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
                          const double *B, const double *D, double theta);
-/* Before a run from x0 with offset g: lambda_0 on the rows with D != 0 from
- * the LCP 0 <= zeta _|_ C x0 + D zeta + g >= 0 (0 where it has none). */
-void cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g);
+/* Before a run from x0 with offset g: zeta_0 from the LCP
+ * 0 <= zeta _|_ C x0 + D zeta + g >= 0 (by Lemke's method), its support's
+ * weights and the trapezoid's carry Pi zeta_0. Returns 1 when x0 is
+ * consistent (that LCP has a solution; with D = 0: C x0 + g >= 0), 0 when
+ * it is not (the state jumps at t = 0, in the first step). */
+int cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g);
 void cup_lcp_step_free(cup_lcp_step *ls);
+/* What a step carries to the next (lambda, its warm start, lambda^T q), to
+ * or from a checkpoint (util/ckpt.h). */
+void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:
  * certified when the gap is below max(1e-12 scale^2, floor), the floor

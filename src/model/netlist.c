@@ -159,8 +159,10 @@ static int add_wave(cup_input *u, int j, const cup_wave *w, const nl_circuit *c,
 }
 
 /* Parameter k of a SIN or PULSE, or SPICE's default when it is omitted or 0
- * (as SPICE reads them: a 0 rise time is TSTEP, not a jump). */
+ * (as SPICE3 and ngspice read them: a 0 rise time is TSTEP, not a jump;
+ * `jump` written for TR or TF is one). */
 static double spice_param(const nl_source *s, int k, double dflt) {
+  if (s->jumps >> k & 1) return 0;
   return s->np > k && s->p[k] != 0 ? s->p[k] : dflt;
 }
 

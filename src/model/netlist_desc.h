@@ -21,6 +21,7 @@ typedef struct nl_source {
   double dc;          /* DC value: the source's value for NL_FN_DC */
   double p[7];        /* SIN: VO VA FREQ TD THETA PHASE(degrees); PULSE: V1 V2 TD TR TF PW PER */
   int np;             /* number of parameters written (SPICE defaults fill the rest) */
+  unsigned jumps;     /* PULSE: bit NL_PULSE_TR, NL_PULSE_TF: written `jump`, an edge of no duration */
   int npts;           /* PWL: points */
   double *t, *v;      /* PWL: times (strictly increasing) and values */
 } nl_source;

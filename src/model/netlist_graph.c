@@ -138,7 +138,7 @@ static int voltage_loops(const nl_circuit *c, int *uf, char *errmsg) {
     path[len++] = e;
     int caps = 0;
     for (int k = 0; k < len; k++) caps += c->elem[path[k]].kind == NL_C;
-    char names[CUP_ERRMSG_LEN];
+    char names[1024];                  /* join_names elides past 160 characters */
     join_names(names, sizeof names, c, path, len);
     free(path);
     return caps ? nl_fail(c, e, errmsg, CUP_ERR_PARSE, "%s form a loop of capacitors and voltage sources "
@@ -157,14 +157,14 @@ static int cutsets(const nl_circuit *c, int *uf, char *errmsg) {
     if (find(uf, v) != find(uf, 0)) bad = v;
   if (bad < 0) return CUP_OK;
   int root = find(uf, bad), n = 0, first = -1;
-  int *cut = malloc(sizeof(int) * ((size_t)c->nelem + 1));
+  int *cut = calloc((size_t)c->nelem + 1, sizeof(int));
   if (!cut) return nomem(c, errmsg);
   for (int e = 0; e < c->nelem; e++) {
     const nl_elem *el = &c->elem[e];
     if ((find(uf, el->a) == root) != (find(uf, el->b) == root)) cut[n++] = e;
     if (first < 0 && (find(uf, el->a) == root || find(uf, el->b) == root)) first = e;
   }
-  char names[CUP_ERRMSG_LEN];
+  char names[1024];                    /* join_names elides past 160 characters */
   join_names(names, sizeof names, c, cut, n);
   int st = n ? nl_fail(c, cut[0], errmsg, CUP_ERR_PARSE, "%s form a cutset of inductors and current sources "
                        "(they alone join node '%s' to the rest of the circuit): their currents are not "

@@ -232,6 +232,21 @@ void cup_projector_reset(cup_projector *p) {
   if (p && p->small) cup_lcp_forget(&p->small->lcp);
 }
 
+void cup_projector_checkpoint(cup_projector *p, cup_ckpt *c) {
+  size_t M = sizeof(double) * (size_t)p->m, N = sizeof(double) * (size_t)p->n;
+  cup_ckpt_io(c, p->g, M);
+  CUP_CKPT_IO(c, p->gscale);
+  CUP_CKPT_IO(c, p->empty_row);
+  CUP_CKPT_IO(c, p->origin_ok);
+  CUP_CKPT_IO(c, p->user_ok);
+  cup_ckpt_io(c, p->lam, M);
+  cup_ckpt_io(c, p->lam_warm, M);
+  cup_ckpt_io(c, p->anchor, N);
+  cup_ckpt_io(c, p->s_anchor, M);
+  CUP_CKPT_IO(c, p->anchor_ok);
+  if (p->small) cup_lcp_step_checkpoint(p->small, c);
+}
+
 void cup_projector_revalue(cup_projector *p) {
   offset_changed(p);                      /* row norms changed: scale, empty rows, anchors */
   for (int i = 0; i < p->m; i++)

@@ -6,6 +6,14 @@
 
 #include "proj_ws.h"
 #include "catchup/set.h"
+#include "util/ckpt.h"
+
+/* The projector's state between projections, to or from a checkpoint
+ * (util/ckpt.h): the offset it holds, its warm start, the anchor of its
+ * certificates. What it keeps besides (the dense factors of active sets,
+ * the sparse factor) depends on the rows alone and is made again as
+ * needed. */
+void cup_projector_checkpoint(cup_projector *p, cup_ckpt *c);
 
 /* The values of the (sparse, diagonal-metric) polyset changed in place:
  * forget what depended on them, keep the warm start of rows still on.

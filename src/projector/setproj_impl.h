@@ -11,7 +11,9 @@
 #include "set/rowpool.h"
 #include "set/set_impl.h"
 
-#define CUP_SETPROJ_MSG 256
+/* A set's message goes whole into the integrator's cause (integrator.c's
+ * WHAT_LEN) after a prefix of at most 80 characters. */
+#define CUP_SETPROJ_MSG (CUP_RUN_MSG_LEN - 192)
 
 struct cup_setproj {
   const cup_set *S;

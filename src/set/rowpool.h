@@ -30,7 +30,7 @@ struct cup_rowbuf {
   int me, ecap, enz, enzcap;   /* expected patterns (cup_rowbuf_expect): count, capacities */
   int *eptr, *ecol;
   int status;            /* first failed cup_rowbuf_add since the clear (CUP_OK if none) */
-  char message[128];     /* what was wrong with it */
+  char message[256];     /* what was wrong with it (bounded: numbers), whole inside a set's message */
   /* the callback's own numbering of the state (cup_rowbuf_order) */
   const int *perm;       /* n: column k of the rows is x[perm[k]]; NULL: the state's order */
   long perm_gen;         /* changes whenever perm does */

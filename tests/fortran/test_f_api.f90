@@ -105,7 +105,7 @@ contains
       off(b, c_loc(o%on_step)), &
       off(b, c_loc(o%step_ctx)), off(b, c_loc(o%interrupt)), off(b, c_loc(o%tol_abs)), &
       off(b, c_loc(o%tol_rel)), off(b, c_loc(o%max_event_rate)), off(b, c_loc(o%on_event)), &
-      off(b, c_loc(o%event_ctx)), off(b, c_loc(o%estimate)), off(b, c_loc(o%max_step)), &
+      off(b, c_loc(o%event_ctx)), off(b, c_loc(o%estimate)), off(b, c_loc(o%hmax)), &
       off(b, c_loc(o%output_t0))])
     b = c_loc(r)
     call compare('cup_run_info', [int(c_sizeof(r), c_long), off(b, c_loc(r%status)), off(b, c_loc(r%step)), &
@@ -115,7 +115,7 @@ contains
       off(b, c_loc(r%eta_target)), off(b, c_loc(r%h_rho)), off(b, c_loc(r%samples)), &
       off(b, c_loc(r%message)), off(b, c_loc(r%set_rebuilds)), off(b, c_loc(r%max_rows)), &
       off(b, c_loc(r%err_est)), off(b, c_loc(r%events)), off(b, c_loc(r%rejected))])
-    call check_int(size(r%message), 256, 'cup_run_info%message has 256 chars')
+    call check_int(size(r%message), CUP_RUN_MSG_LEN, 'cup_run_info%message has CUP_RUN_MSG_LEN chars')
     b = c_loc(sd)
     call compare('cup_set_desc', [int(c_sizeof(sd), c_long), off(b, c_loc(sd%kind)), off(b, c_loc(sd%n)), &
       off(b, c_loc(sd%p)), off(b, c_loc(sd%metric)), off(b, c_loc(sd%C)), off(b, c_loc(sd%F)), &
@@ -584,7 +584,59 @@ contains
     call check(ierr == CUP_ERR_ARG .and. ns == 0 .and. size(t) == 0, 'run a freed integrator')
     call cup_lcs_free(L)
     call cup_input_free(u)
+    call test_checkpoint()
   end subroutine test_schedule_and_options
+
+  !> A run stopped by the interrupt flag at step 1024, saved, restored into a
+  !> new integrator and resumed ends in the state of the run never stopped,
+  !> bit for bit; a blob refused by an integrator of another n.
+  subroutine test_checkpoint()
+    type(cup_integrator_options) :: o
+    type(cup_lcs_t) :: L
+    type(cup_input_t) :: u
+    type(cup_integrator_t) :: integ, again
+    type(cup_run_info) :: info
+    integer(c_int), target :: flag
+    integer(c_int8_t), allocatable :: blob(:)
+    real(c_double) :: whole(3), resumed(3)
+    integer :: ierr
+    character(len=CUP_ERRMSG_LEN) :: msg
+    call section('checkpoints')
+    call cup_lcs_circuit(L, cup_circuit(R1=1, R2=2, R3=1, L2=1, L3=2, C4=1, G=[0, 0]), ierr)
+    call cup_input_create(u, 1, ierr)
+    call cup_input_add_sine(u, 1, 16d0, 3d0, ierr)
+    call cup_integrator_options_default(o)
+    o%n = 5000
+    o%output = CUP_OUTPUT_FINAL
+    flag = 0
+    o%interrupt = c_loc(flag)
+    call cup_integrator_create(integ, L, ierr, u=u, opt=o)
+    call cup_integrator_run(integ, [0d0, 0d0, 0d0], c_null_funptr, c_null_ptr, ierr, info)
+    call cup_integrator_state(integ, whole, ierr)
+    call check(cup_integrator_checkpoint_size(integ) < 0, 'a run that ended has no checkpoint')
+    flag = 1
+    call cup_integrator_run(integ, [0d0, 0d0, 0d0], c_null_funptr, c_null_ptr, ierr, info)
+    call check(ierr == CUP_ERR_INTERRUPTED .and. info%step == 1024, 'stopped at step 1024')
+    call cup_integrator_checkpoint_save(integ, info, blob, ierr)
+    call check(ierr == CUP_OK .and. size(blob) == cup_integrator_checkpoint_size(integ), 'saved')
+    flag = 0
+    call cup_integrator_create(again, L, ierr, u=u, opt=o)
+    call cup_integrator_checkpoint_restore(again, blob, ierr, msg)
+    call check_int(ierr, CUP_OK, 'restored: ' // trim(msg))
+    call cup_integrator_resume(again, c_null_funptr, c_null_ptr, ierr, info)
+    call cup_integrator_state(again, resumed, ierr)
+    call check(info%step == 5000 .and. info%status == CUP_OK .and. all(resumed == whole), 'resumed bit for bit')
+    call cup_integrator_free(again)
+    o%n = 5001
+    call cup_integrator_create(again, L, ierr, u=u, opt=o)
+    call cup_integrator_checkpoint_restore(again, blob, ierr, msg)
+    call check(ierr == CUP_ERR_ARG, 'another n refused')
+    call check_contains(msg, 'n = 5000 there, 5001 here', 'its message')
+    call cup_integrator_free(again)
+    call cup_integrator_free(integ)
+    call cup_lcs_free(L)
+    call cup_input_free(u)
+  end subroutine test_checkpoint
 
   logical function round_trip(s)
     type(cup_schedule), intent(in) :: s

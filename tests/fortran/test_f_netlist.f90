@@ -15,7 +15,7 @@ program test_f_netlist
   character(len=512) :: dir
   type(cup_netlist_t) :: nl
   integer :: ierr, k
-  character(len=256) :: msg
+  character(len=CUP_ERRMSG_LEN) :: msg
 
   call get_command_argument(1, dir)
   call section('netlist: names, .tran, rows')

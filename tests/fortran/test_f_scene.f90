@@ -58,6 +58,9 @@ program test_f_scene
   call check_int(ierr, CUP_OK, 'load: ' // trim(msg))
   call cup_scene_options(s, o, ierr)
   call check(ierr == CUP_OK .and. o%n >= 1, 'options of the file')
+  call check_int(cup_scene_file_count(s), 1, 'one file read')
+  call check(cup_scene_file(s, 1) == trim(srcdir) // '/examples/paper-fig2.yaml', 'the file read: ' // cup_scene_file(s, 1))
+  call check(len(cup_scene_file_sha256(s, 1)) == 64 .and. cup_scene_file(s, 2) == '', 'its SHA-256; nothing beyond')
   call check(cup_scene_state_name(s, 1) == 'q(C4)' .and. cup_scene_state_unit(s, 1) == 'C', &
     'state 1 is the charge q(C4), in C')
   call check(cup_scene_state_name(s, 3) == 'i(L2)' .and. cup_scene_state_unit(s, 3) == 'A', 'state 3 is i(L2), in A')

@@ -88,7 +88,7 @@ program test_f_sets
   type(disc_par), target :: dp
   real(c_double), allocatable :: t(:), X(:, :), Xo(:, :), to(:)
   real(c_double) :: err, z(2), Q(2, 2)
-  character(len=256) :: msg
+  character(len=CUP_ERRMSG_LEN) :: msg
   integer :: ierr, ns, k
 
   call section('the tractrix: a ball with a moving centre')

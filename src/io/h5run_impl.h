@@ -1,0 +1,77 @@
+/* h5run_impl — the run writer's state, shared by h5run.c (create, the data
+ * path, attributes, close) and h5run_stop.c (a staged file and its commit,
+ * reopening a stopped run's file, checkpoints). Internal to catchup_h5:
+ * the functions below are hidden from the shared library's users. */
+#ifndef CUP_H5RUN_IMPL_H
+#define CUP_H5RUN_IMPL_H
+
+#include <stdint.h>
+#include <hdf5.h>
+#include "catchup.h"
+#include "catchup/h5run.h"
+
+#define H5R_HIDDEN __attribute__((visibility("hidden")))
+
+/* One row of /events, in memory. */
+typedef struct { double t; int32_t row; int8_t on; } h5_event;
+enum { EVENT_ROWS = 1024 };     /* chunk and buffer of /events */
+
+struct cup_h5run {
+  hid_t file, dset_t, dset_x, dset_e;
+  hid_t etype_file, etype_mem;  /* /events' compound types */
+  hsize_t ewritten, enbuf;      /* events handed to HDF5, buffered */
+  h5_event ebuf[EVENT_ROWS];
+  int dim;
+  hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
+  hsize_t written;        /* rows already handed to HDF5 */
+  hsize_t nbuf;           /* rows waiting in the buffer */
+  double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
+  int nsig;               /* named signals: /signals/<name> */
+  hid_t group;
+  hid_t *dset_s;
+  double *sbuf;           /* chunk_rows * nsig entries, one signal after another */
+  double last_flush;      /* monotonic seconds */
+  double unflushed;       /* bytes handed to HDF5 since the last H5Fflush: HDF5's chunk cache may
+                             hold them (1 MiB per dataset), so the disk has not seen them yet */
+  int data_status;        /* first failure of the data path; sticky */
+  int h5_failed;          /* an HDF5 call failed: only close is attempted */
+  char *path;
+  char *staged;           /* cup_h5run_begin: the sibling written until cup_h5run_commit renames
+                             it to path; NULL once committed (or reopened) */
+  char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind */
+};
+
+/* HDF5 must not print, and must not stay silenced after us. */
+typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
+
+static inline quiet_t quiet_begin(void) {
+  quiet_t q = {NULL, NULL};
+  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+  return q;
+}
+
+static inline void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
+
+/* h5run.c: record the first HDF5 failure ("h5run: cannot OP 'PATH': ...")
+ * and stop the writer; keep the error stack across a cleanup; a message
+ * into errmsg (CUP_ERRMSG_LEN bytes, may be NULL); monotonic seconds. */
+H5R_HIDDEN int set_error(cup_h5run *w, int status, const char *op);
+H5R_HIDDEN hid_t keep_stack(int failed);
+H5R_HIDDEN void restore_stack(hid_t saved);
+H5R_HIDDEN int fail_msg(char *errmsg, int status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+H5R_HIDDEN double now_seconds(void);
+/* A writer for path and dim with its buffers, no file yet (NULL: the
+ * status, with the message, in *st). */
+H5R_HIDDEN cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st);
+H5R_HIDDEN void free_writer(cup_h5run *w);
+/* The file access the writer uses: the 1.8 format (no "open for writing"
+ * flag), strong close. */
+H5R_HIDDEN hid_t writer_access(void);
+/* /events' file and memory types into w. 0 or -1. */
+H5R_HIDDEN int event_types(cup_h5run *w);
+/* The device of path has less than CUP_H5_SPACE_MARGIN free beyond `ahead`
+ * bytes still to reach it. */
+H5R_HIDDEN int space_low(const char *path, double ahead);
+
+#endif
