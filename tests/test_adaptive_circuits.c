@@ -46,12 +46,15 @@ static void traj_exact(double t, double *x, const void *ctx) { cr_eval(ctx, t, x
 
 /* The netlist (with a set, if any) at tol = 1e-4, 1e-6, 1e-8, 1e-10
  * against exact(t). */
+static double run_T = 0;             /* > 0: the run's T instead of .tran's TSTOP */
+
 static void check_circuit_set(const char *file, const char *set, exact_fn exact, const void *ctx, int same) {
   char err[CUP_ERRMSG_LEN];
   cup_netlist *nl = NULL;
   if (cup_netlist_load(&nl, file, set ? &set : NULL, set ? 1 : 0, err)) fail_msg("%s", err);
   double tstep, T;
   assert_true(cup_netlist_tran(nl, &tstep, &T));
+  if (run_T > 0) T = run_T;
   const char *name = set ? set : strrchr(file, '/') + 1;
   for (double tol = 1e-4; tol >= 0.99e-10; tol *= 1e-2) {
     cup_integrator_options o;
@@ -287,6 +290,37 @@ static void test_resonant(void **state) {
   solve_and_check(CIR "/resonant.cir", &c, (double[]){0, 0, 0}, 200e-6, 0);
 }
 
+/* The series-resonant converter behind a 10 kOhm shunt (Rb across the
+ * bridge's input): x = (i(L1), v(C1), v(Co)); conducting forward (D1, D4:
+ * v(p) = v(Co), the bridge takes i - v(Co)/Rb >= 0) or backward (D2, D3:
+ * v(p) = -v(Co), it takes -i - v(Co)/Rb >= 0), or blocked (the tank's
+ * current through Rb, |Rb i| <= v(Co)). Over its first 200 us. */
+static void test_series_resonant(void **state) {
+  (void)state;
+  double L = 100e-6, Cr = 253.3e-9, Co = 10e-6, R = 10, Rb = 10e3, T = 200e-6;
+  cr_circuit c = {.n = 3, .nmodes = 3, .w = 0, .piece = cr_pulse, .par = {-100, 100, 0, 1e-9, 1e-9, 5e-6, 10e-6},
+                  .hsub = 2e-9};
+  for (int k = 0; k < 2; k++) {
+    double s = k == 0 ? 1 : -1;
+    cr_mode *md = &c.mode[k];
+    row(md->f[0], 3, (double[]){0, -1 / L, -s / L, 1 / L, 0, 0});
+    row(md->f[1], 3, (double[]){1 / Cr, 0, 0, 0, 0, 0});
+    row(md->f[2], 3, (double[]){s / Co, 0, -1 / (Rb * Co) - 1 / (R * Co), 0, 0, 0});
+    md->ng = 1;
+    row(md->g[0], 3, (double[]){s, 0, -1 / Rb, 0, 0, 0});
+  }
+  cr_mode *z = &c.mode[2];
+  row(z->f[0], 3, (double[]){-Rb / L, -1 / L, 0, 1 / L, 0, 0});
+  row(z->f[1], 3, (double[]){1 / Cr, 0, 0, 0, 0, 0});
+  row(z->f[2], 3, (double[]){0, 0, -1 / (R * Co), 0, 0, 0});
+  z->ng = 2;
+  row(z->g[0], 3, (double[]){-Rb, 0, 1, 0, 0, 0});
+  row(z->g[1], 3, (double[]){Rb, 0, 1, 0, 0, 0});
+  run_T = T;
+  solve_and_check(CIR "/series-resonant.cir", &c, (double[]){0, 0, 0}, T, 0);
+  run_T = 0;
+}
+
 /* The capacitor-filter bridge, in closed form: v = u while the pulse rises
  * and holds (the source charges C1 through a pair of diodes with no
  * resistance), then v = 10 exp(-(t - t_fall) / (R C)) once the pulse falls
@@ -294,7 +328,7 @@ static void test_resonant(void **state) {
 static void cfilter_exact(double t, double *x, const void *ctx) {
   double tr = *(const double *)ctx, td = 1e-3, pw = 10e-3, per = 20e-3, tau = 1e3 * 300e-9;
   double k = floor((t - td) / per), s = td + k * per, tt = t - s;
-  if (t <= td) { x[0] = 0; return; }
+  if (t < td || (t == td && tr > 0)) { x[0] = 0; return; }   /* an edge of no duration: u(td) = 10 */
   double tfall = s + tr + pw, before = k > 0 ? 10 * exp(-(s - (tfall - per)) / tau) : 0;
   if (tt < tr) x[0] = fmax(before, 10 * tt / tr);
   else if (tt <= tr + pw) x[0] = 10;
@@ -303,15 +337,16 @@ static void cfilter_exact(double t, double *x, const void *ctx) {
 
 /* As netlisted (1 ps edges), and with edges of 1 fs (575 ulps of the time
  * at 11 ms: the choice of the active set on the fall is linearised over
- * the piece, not beyond it) and 1e-25 s (below the time's ulp: a jump of
- * the source, the state jumps onto v = 10 through the bridge, the
- * impulsive LCP with D; and back the bridge blocks). */
+ * the piece, not beyond it), 1e-25 s (below the time's ulp) and `jump`
+ * (no duration): the source jumps, the state jumps onto v = 10 through the
+ * bridge (the impulsive LCP with D), and back the bridge blocks. */
 static void test_bridge_cfilter(void **state) {
   (void)state;
-  static const double tr[] = {1e-12, 1e-15, 1e-25};
+  static const double tr[] = {1e-12, 1e-15, 1e-25, 0};
   check_circuit(CIR "/bridge-cfilter.cir", cfilter_exact, &tr[0], 0);
   check_circuit_set(CIR "/bridge-cfilter.cir", "V1=PULSE(0 10 1m 1f 1f 10m 20m)", cfilter_exact, &tr[1], 0);
   check_circuit_set(CIR "/bridge-cfilter.cir", "V1=PULSE(0 10 1m 1e-25 1e-25 10m 20m)", cfilter_exact, &tr[2], 0);
+  check_circuit_set(CIR "/bridge-cfilter.cir", "V1=PULSE(0 10 1m jump jump 10m 20m)", cfilter_exact, &tr[3], 0);
 }
 
 /* Consistent initialization: C1 at 0 V with the source at 10 V from t = 0
@@ -341,6 +376,7 @@ int main(void) {
     cmocka_unit_test(test_paper_fig2),
     cmocka_unit_test(test_bridge_lc),
     cmocka_unit_test(test_resonant),
+    cmocka_unit_test(test_series_resonant),
     cmocka_unit_test(test_bridge_cfilter),
     cmocka_unit_test(test_bridge_x0_jump),
   };
