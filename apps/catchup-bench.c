@@ -16,7 +16,7 @@
  * /proc/self/clear_refs), and that minus its size before the set-up and
  * minus the library code paged in on first use (the projector's own data,
  * beside the QP peers' in scripts/bench_qp_peers.py). With the heapcount
- * shim preloaded (LD_PRELOAD=build/apps/libcatchup_heapcount.so, as
+ * shim preloaded (LD_PRELOAD=build/bench/libcatchup_heapcount.so, as
  * scripts/bench-projector does for both harnesses) it also reports the most
  * heap bytes the set-up and the projections held at once: resident pages are
  * too coarse a measure for sets of a few rows. */

@@ -40,7 +40,7 @@ peak minus its resident size after loading and minus the library code paged
 in on first use (the growth of RssFile), i.e. the solver's own data. (A
 forked child would reuse the parent's freed heap and hide the solver's
 allocations.) The resident figures come from one read of /proc/self/status
-each. With --heapcount SO (apps/heapcount.c, preloaded) it also reports
+each. With --heapcount SO (bench/heap.c, preloaded) it also reports
 solver_heap_bytes: the most bytes malloc held at once during the run above
 what it held before (catchup-bench reports the same with the same shim);
 pages are too coarse for sets of a few rows. --memory-only PEERS.jsonl does
@@ -558,7 +558,7 @@ def rss_now():
 
 
 def heapcount(name):
-    """the heapcount shim's function `name` (apps/heapcount.c, preloaded by
+    """the heapcount shim's function `name` (bench/heap.c, preloaded by
     --heapcount), or None"""
     import ctypes
     try:
@@ -1149,7 +1149,7 @@ def main():
                     help="time limit of that run (solvers with a time limit get it; "
                          "the others are killed a minute after it)")
     ap.add_argument("--heapcount", metavar="SO",
-                    help="preload this heapcount shim (build/apps/libcatchup_heapcount.so) into "
+                    help="preload this heapcount shim (build/bench/libcatchup_heapcount.so) into "
                          "the memory probe: solver_heap_bytes, the most heap bytes held at once")
     ap.add_argument("--memory-only", metavar="PEERS_JSONL",
                     help="measure only the memory of the sequences an earlier run reported "

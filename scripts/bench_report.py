@@ -415,7 +415,7 @@ def projector_section(outdir, lines, old=""):
             lines.append(f"| {r['problem']} | {r['mode']} | {setup:.3g} s | {own} | {cells} |")
         lines.append("")
         if any(r.get("solver_heap_bytes") is not None for r in auto):
-            lines.append("Heap held at most, bytes by the heapcount shim (`apps/heapcount.c`, preloaded "
+            lines.append("Heap held at most, bytes by the heapcount shim (`bench/heap.c`, preloaded "
                          "into both harnesses): the most bytes malloc held at once during the run above "
                          "what it held before the set-up, resident pages being too coarse for a set of "
                          "a few rows; the peers' include what their Python wrappers allocate through "

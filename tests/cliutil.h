@@ -1,8 +1,8 @@
 /* Helpers of the tests that run catchup-run as a program and read its HDF5
  * file back (test_catchup_run.c, test_stress_cli.c). The includer defines
  * CLI_TMPDIR_TEMPLATE (a mkdtemp template) and CUP_CATCHUP_RUN, and
- * includes cmocka.h and hdf5.h first; make_tmpdir/remove_tmpdir are the
- * group set-up and tear-down. */
+ * includes cmocka.h and hdf5.h first; make_tmpdir/remove_tmpdir
+ * (tmpdir.h) are the group set-up and tear-down. */
 #ifndef CUP_TEST_CLIUTIL_H
 #define CUP_TEST_CLIUTIL_H
 
@@ -16,8 +16,7 @@
 #include <unistd.h>
 #include <sys/types.h>
 #include <sys/wait.h>
-
-static char tmpdir[] = CLI_TMPDIR_TEMPLATE;
+#include "tmpdir.h"
 
 static const char *tmp_path(const char *name) {
   static char buf[4][256];
@@ -118,18 +117,6 @@ static double attr_f64(hid_t f, const char *name) {
   assert_true(H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0);
   H5Aclose(a);
   return v;
-}
-
-static int make_tmpdir(void **state) {
-  (void)state;
-  return mkdtemp(tmpdir) ? 0 : -1;
-}
-
-static int remove_tmpdir(void **state) {
-  (void)state;
-  char cmd[300];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-  return system(cmd) == 0 ? 0 : -1;
 }
 
 #endif

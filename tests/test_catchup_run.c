@@ -1,4 +1,4 @@
-/* catchup-run end to end (DESIGN.md contract): exit codes and one-line
+/* catchup-run end to end (the contract in docs/design.md): exit codes and one-line
  * messages; the file's datasets, grid and attributes read back through the
  * HDF5 API; the trajectory in original x coordinates against the paper's
  * reference limit; a clean stop on SIGINT and a readable file after kill -9. */

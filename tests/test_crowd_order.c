@@ -13,7 +13,7 @@
 #include <stddef.h>
 #include <stdio.h>
 #include <cmocka.h>
-#include "alloc_count.h"
+#include "heap.h"
 #include "testutil.h"
 #include "set/rowpool.h"
 #include "set/set_impl.h"
@@ -187,14 +187,14 @@ static void test_step_allocates_nothing(void **state) {
   assert_int_equal(cup_setproj_create(&sp, pd->C, NULL, err), CUP_OK);
   long allocs = 0;
   for (int k = 0; k < 4; k++) {
-#if CUP_COUNTING
-    if (k >= 2) { alloc_count = 0; counting = 1; }
+#if HEAP_INTERPOSED
+    if (k >= 2) { heap_calls = 0; heap_counting = 1; }
 #endif
     int st = cup_setproj_move(sp, 0.05 * (k + 1), NULL, q0);
     if (!st) st = pd->f_integral(0.05 * k, 0.05 * (k + 1), q0, F, pd->f_integral_ctx);
-#if CUP_COUNTING
-    counting = 0;
-    allocs += alloc_count;
+#if HEAP_INTERPOSED
+    heap_counting = 0;
+    allocs += heap_calls;
 #endif
     assert_int_equal(st, CUP_OK);
   }

@@ -10,7 +10,7 @@
 #include <cmocka.h>
 #include <gsl/gsl_linalg.h>
 #include "testutil.h"
-#include "alloc_count.h"
+#include "heap.h"
 #include "projector/dual_factor.h"
 
 /* M~ v by a dense GSL Cholesky of M~ built from C (dense, row-major) and d. */
@@ -87,15 +87,15 @@ static long solves_against_dense(long room, double per_row) {
       if (step == 13 || step == 29) delta *= 10;
       for (int i = 0; i < m; i++) v[i] = rng_normal(&r);
       memcpy(w, v, sizeof(double) * m);
-#if CUP_COUNTING
-      long before = alloc_count;     /* nothing allocated: CHOLMOD's row updates */
-      counting = 1;                  /* never outgrow the layout's room */
+#if HEAP_INTERPOSED
+      long before = heap_calls;      /* nothing allocated: CHOLMOD's row updates */
+      heap_counting = 1;             /* never outgrow the layout's room */
 #endif
       assert_int_equal(cup_dfact_factor(f, act, delta, &facts, &updates), CUP_OK);
       cup_dfact_solve(f, w);
-#if CUP_COUNTING
-      counting = 0;
-      assert_int_equal(alloc_count - before, 0);
+#if HEAP_INTERPOSED
+      heap_counting = 0;
+      assert_int_equal(heap_calls - before, 0);
 #endif
       cg_solves += cup_dfact_by_cg(f);
       dense_reference(C, d, m, n, act, delta, v, ref);

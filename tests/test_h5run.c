@@ -26,7 +26,8 @@
 #include "catchup.h"
 #include "catchup/h5run.h"
 
-static char tmpdir[] = "/tmp/cup_h5run_XXXXXX";
+#define CLI_TMPDIR_TEMPLATE "/tmp/cup_h5run_XXXXXX"
+#include "tmpdir.h"
 
 static void path_in_tmp(char *buf, size_t size, const char *name) {
   snprintf(buf, size, "%s/%s", tmpdir, name);
@@ -649,18 +650,6 @@ static void test_dimension_scales(void **state) {
   hid_t types[] = {x, t, st, e, ev, s, gt, gg};
   for (size_t k = 0; k < sizeof types / sizeof types[0]; k++) H5Dclose(types[k]);
   H5Fclose(f);
-}
-
-static int make_tmpdir(void **state) {
-  (void)state;
-  return mkdtemp(tmpdir) ? 0 : -1;
-}
-
-static int remove_tmpdir(void **state) {
-  (void)state;
-  char cmd[300];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-  return system(cmd) == 0 ? 0 : -1;
 }
 
 #define ROUNDTRIP(i) cmocka_unit_test_prestate(test_roundtrip, (void *)&shapes[i])

@@ -93,7 +93,7 @@ static cup_lcs *paper_lcs(int cas) {
 }
 
 /* Exact-projection catching-up: max-norm error within 2% of 1.52/n (case 1)
- * and 1.79/n (case 2) at n = 10^3 and 10^4 (DESIGN.md, measured). */
+ * and 1.79/n (case 2) at n = 10^3 and 10^4 (docs/design.md, measured here). */
 static void test_paper_cases_exact_projection(void **state) {
   (void)state;
   ref_load("ref_case1_limit_richardson.csv", ref1);

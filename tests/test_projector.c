@@ -9,7 +9,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 
-#include "alloc_count.h"
+#include "heap.h"
 #include "projector/newton.h"
 
 /* ---- random polyhedra ---------------------------------------------------------- */
@@ -930,7 +930,7 @@ static void test_ladder_cold_start(void **state) {
 /* No allocation in cup_project: 10^4 projections per configuration. */
 static void test_no_allocation(void **state) {
   (void)state;
-#if !CUP_COUNTING
+#if !HEAP_INTERPOSED
   skip();
 #else
   rng_t r = {2};
@@ -959,16 +959,16 @@ static void test_no_allocation(void **state) {
       /* 10^4 projections on the small set; the big one with the exact method
        * too, fewer with the slow first-order methods */
       int nproj = s == 0 || method == CUP_PROJ_AUTO ? 10000 : 300;
-      long before = alloc_count;
-      counting = 1;
+      long before = heap_calls;
+      heap_counting = 1;
       int bad = 0;
       for (int k = 0; k < nproj; k++) {
         for (int a = 0; a < I->n; a++) x[a] += dir[a] * (k % 200 < 100 ? 1 : -1);
         int st = cup_project(pr, x, z, NULL);
         bad += st < 0;
       }
-      counting = 0;
-      long allocs = alloc_count - before;
+      heap_counting = 0;
+      long allocs = heap_calls - before;
       if (allocs != 0)
         fail_msg("set %d method %s: %ld allocations in %d projections", s,
                  cup_proj_method_name(method), allocs, nproj);

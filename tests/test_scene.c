@@ -15,27 +15,18 @@
 #include <cmocka.h>
 #include "testutil.h"
 #include "badcorpus.h"
+#include "heap.h"
 #include "lcs_impl.h"
 #include "polyset_impl.h"
 
-/* ---- an allocator that fails on request and counts live blocks (glibc
- * interposition, as in test_projector.c; off under ASan) ------------------- */
-#if defined(__SANITIZE_ADDRESS__)
-#define CUP_FAULTS 0
-#else
-#define CUP_FAULTS 1
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-extern void __libc_free(void *);
-static long fault_at = -1, alloc_calls = 0, live_blocks = 0;
-static int tracking = 0;
-/* Dependencies whose own out-of-memory paths fail are left alone (the
+/* ---- failed allocations (bench/heap.c's fault mode; off under ASan) -------- */
+/* Dependencies whose own out-of-memory paths fail are spared (the
  * next allocation is failed instead): GSL (its default handler aborts, and
  * gsl_matrix_alloc leaks its struct when the block allocation fails),
  * CHOLMOD 3.0.14's cholmod_spsolve (dereferences X when spzeros fails), and
  * libyaml 0.2.5's growing of a stack (yaml_parser_load leaks a sequence's
  * item stack when the node stack cannot grow). */
+#if HEAP_INTERPOSED
 static int dependency_bug(void *caller, int grow) {
   Dl_info info;
   if (dladdr(caller, &info) && info.dli_fname && strstr(info.dli_fname, "libgsl")) return 1;
@@ -45,34 +36,6 @@ static int dependency_bug(void *caller, int grow) {
   for (int k = 0; k < n; k++)
     if (dladdr(frames[k], &info) && info.dli_sname && !strcmp(info.dli_sname, "cholmod_spsolve")) return 1;
   return 0;
-}
-
-static int inject(void *caller, int grow) {
-  if (!tracking || ++alloc_calls != fault_at) return 0;
-  if (dependency_bug(caller, grow)) { fault_at++; return 0; }
-  return 1;
-}
-void *malloc(size_t n) {
-  if (inject(__builtin_return_address(0), 0)) return NULL;
-  void *q = __libc_malloc(n);
-  if (tracking && q) live_blocks++;
-  return q;
-}
-void *calloc(size_t a, size_t b) {
-  if (inject(__builtin_return_address(0), 0)) return NULL;
-  void *q = __libc_calloc(a, b);
-  if (tracking && q) live_blocks++;
-  return q;
-}
-void *realloc(void *p, size_t n) {
-  if (inject(__builtin_return_address(0), 1)) return NULL;
-  void *q = __libc_realloc(p, n);
-  if (tracking && q && !p) live_blocks++;
-  return q;
-}
-void free(void *p) {
-  if (tracking && p) live_blocks--;
-  __libc_free(p);
 }
 #endif
 
@@ -611,18 +574,19 @@ static void test_mutations(void **state) {
  * needs to fail: each must return an error with *s NULL and free every block
  * it took. */
 static void fault_sweep(const char *path, int final_status) {
-#if CUP_FAULTS
+#if HEAP_INTERPOSED
   char err[CUP_ERRMSG_LEN];
   long k = 1;
   for (;; k++) {
     cup_scene *s = (cup_scene *)&err;
-    alloc_calls = 0; live_blocks = 0; fault_at = k; tracking = 1;
+    heap_fault_calls = 0; heap_live_blocks = 0; heap_fault_at = k; heap_spare = dependency_bug;
+    heap_tracking = 1;
     int st = cup_scene_load(&s, path, NULL, 0, err);
-    int failed = alloc_calls >= fault_at;      /* some allocation was refused */
+    int failed = heap_fault_calls >= heap_fault_at;   /* some allocation was refused */
     if (st == CUP_OK) cup_scene_free(&s);
-    tracking = 0; fault_at = -1;
-    if (live_blocks != 0) fail_msg("%s: failing allocation %ld leaves %ld blocks", path, k, live_blocks);
-    if (!failed && alloc_calls == 0) {          /* valgrind replaced our malloc */
+    heap_tracking = 0; heap_fault_at = -1;
+    if (heap_live_blocks != 0) fail_msg("%s: failing allocation %ld leaves %ld blocks", path, k, heap_live_blocks);
+    if (!failed && heap_fault_calls == 0) {     /* valgrind replaced our malloc */
       print_message("%s: malloc is not interposed here; sweep skipped\n", path);
       skip();
     }
@@ -640,7 +604,7 @@ static void fault_sweep(const char *path, int final_status) {
 
 static void test_allocation_failures(void **state) {
   (void)state;
-#if CUP_FAULTS
+#if HEAP_INTERPOSED
   void *warm[2];
   backtrace(warm, 2);                      /* its first call allocates (loads libgcc) */
 #endif

@@ -11,7 +11,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 
-#include "alloc_count.h"
+#include "heap.h"
 #include "set/rowpool.h"
 
 /* ---- dense metrics in long double ------------------------------------------------ */
@@ -601,15 +601,15 @@ static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) 
   for (int k = 0; k < 50; k++) {
     xk[0] = cos(0.1 * k); xk[1] = sin(0.1 * k);
     x[0] = 2 * cos(0.1 * k + 0.05); x[1] = 2 * sin(0.1 * k + 0.05);
-#if CUP_COUNTING
-    if (k >= 2) { alloc_count = 0; counting = 1; }
+#if HEAP_INTERPOSED
+    if (k >= 2) { heap_calls = 0; heap_counting = 1; }
 #endif
     cup_proj_info pi;
     int st = cup_setproj_move(sp, 0.1 * k, NULL, xk);
     if (!st) st = cup_setproj_project(sp, x, z, &pi);
-#if CUP_COUNTING
-    counting = 0;
-    allocs += alloc_count;
+#if HEAP_INTERPOSED
+    heap_counting = 0;
+    allocs += heap_calls;
 #endif
     assert_int_equal(st, CUP_OK);
     /* the answer: the tangent line's point nearest to x */

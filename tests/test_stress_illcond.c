@@ -12,7 +12,7 @@
 #include <cmocka.h>
 #include "stress_util.h"
 #include "refdata.h"
-#include "alloc_count.h"
+#include "heap.h"
 
 /* ---- a dense problem and the checks ----------------------------------------------- */
 
@@ -643,7 +643,7 @@ static void test_adaptive_degenerate_rows(void **state) {
  * cup_integrator_create): paper case 1 (events), case 2 (the set jumps at
  * breakpoints), case 1 with a callback input (rejected steps), counted from
  * the first run of a fresh integrator. */
-#if CUP_COUNTING
+#if HEAP_INTERPOSED
 static int sine_cb(double t, double *u, void *ctx) {
   (void)ctx;
   u[0] = 16 * sin(6 * M_PI * t) - 0.5;
@@ -653,7 +653,7 @@ static int sine_cb(double t, double *u, void *ctx) {
 
 static void test_adaptive_allocates_nothing(void **state) {
   (void)state;
-#if CUP_COUNTING
+#if HEAP_INTERPOSED
   for (int k = 0; k < 3; k++) {
     cup_circuit c = {1, 2, 1, 1, 2, 1, {0, k == 1 ? 1 : 0}};
     cup_lcs *L = NULL;
@@ -676,15 +676,15 @@ static void test_adaptive_allocates_nothing(void **state) {
     if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
     double x0[3] = {0, 0, 0};
     cup_run_info info;
-    alloc_count = 0;
-    counting = 1;
+    heap_calls = 0;
+    heap_counting = 1;
     int st = cup_integrator_run(I, x0, NULL, NULL, &info);
-    counting = 0;
+    heap_counting = 0;
     print_message("adaptive run %d: %s, %ld events, %ld rejected steps, %ld allocations\n", k,
-                  cup_status_name(st), info.events, info.rejected, alloc_count);
+                  cup_status_name(st), info.events, info.rejected, heap_calls);
     assert_int_equal(st, CUP_OK);
     assert_true(info.events >= 5);
-    assert_int_equal(alloc_count, 0);
+    assert_int_equal(heap_calls, 0);
     cup_integrator_free(&I);
     cup_input_free(&u);
     cup_lcs_free(&L);

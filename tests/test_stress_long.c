@@ -28,7 +28,8 @@
 #include <hdf5.h>
 
 static long ns[2] = {10000, 1000000};
-static char tmpdir[] = "/tmp/cup_stress_long_XXXXXX";
+#define CLI_TMPDIR_TEMPLATE "/tmp/cup_stress_long_XXXXXX"
+#include "tmpdir.h"
 static double ref[1001][3];
 
 typedef struct { long n; double wall, maxrss_mb; double err; long t_mismatch_kTn; } outcome;
@@ -137,18 +138,6 @@ static void test_long_runs(void **state) {
   double growth = o[1].maxrss_mb - o[0].maxrss_mb;
   print_message("peak RSS growth from n = %ld to n = %ld: %+.2f MiB\n", ns[0], ns[1], growth);
   assert_true(growth <= 1.0);
-}
-
-static int make_tmpdir(void **state) {
-  (void)state;
-  return mkdtemp(tmpdir) ? 0 : -1;
-}
-
-static int remove_tmpdir(void **state) {
-  (void)state;
-  char cmd[300];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
-  return system(cmd) == 0 ? 0 : -1;
 }
 
 int main(int argc, char **argv) {

@@ -17,6 +17,7 @@
 #ifndef CATCHUP_CROWD_H
 #define CATCHUP_CROWD_H
 
+#include "catchup/export.h"
 #include "catchup/integrator.h"
 
 #ifdef __cplusplus
@@ -66,51 +67,51 @@ typedef struct cup_crowd_desc {
  *  reached by any agent", "agent 9 at (..) cannot reach any door". On
  *  failure *c is NULL. h is the integrator's step (T/n), used for the
  *  default margin. */
-int cup_crowd_create(cup_crowd **c, const cup_crowd_desc *d, double h, char *errmsg);
-void cup_crowd_free(cup_crowd **c);
+CUP_API int cup_crowd_create(cup_crowd **c, const cup_crowd_desc *d, double h, char *errmsg);
+CUP_API void cup_crowd_free(cup_crowd **c);
 /** What the crowd's creation found suspect but allowed, or NULL: a door
  *  narrower than the smallest agent's diameter ("door 0 (from (10, 4) to
  *  (10, 4.4)) is 0.4 wide, narrower than the smallest agent (agent 3,
  *  diameter 0.5): no agent can pass it; it is the only door: no agent can
  *  leave"). catchup-run prints it before the run and keeps it in the
  *  file's attribute `warnings`. */
-const char *cup_crowd_warning(const cup_crowd *c);
-int cup_crowd_agents(const cup_crowd *c);          /**< N */
-const double *cup_crowd_q0(const cup_crowd *c);    /**< the start (2N), as given */
-const double *cup_crowd_radii(const cup_crowd *c); /**< the radii (N) */
+CUP_API const char *cup_crowd_warning(const cup_crowd *c);
+CUP_API int cup_crowd_agents(const cup_crowd *c);          /**< N */
+CUP_API const double *cup_crowd_q0(const cup_crowd *c);    /**< the start (2N), as given */
+CUP_API const double *cup_crowd_radii(const cup_crowd *c); /**< the radii (N) */
 /** The process (state q in R^2N, a state-dependent polyset with identity
  *  metric, f the desired velocity through its exact integral), valid while
  *  c lives. Run it with cup_integrator_create_process and the explicit
  *  scheme; one run at a time per crowd (its exit times are the run's). */
-const cup_process_desc *cup_crowd_process(const cup_crowd *c);
+CUP_API const cup_process_desc *cup_crowd_process(const cup_crowd *c);
 /** The agents' exit times (N entries): the first t_k at which the centre
  *  was out of the room; NaN while inside. Reset when a run starts. */
-const double *cup_crowd_exit_times(const cup_crowd *c);
+CUP_API const double *cup_crowd_exit_times(const cup_crowd *c);
 /** Agents inside the room at the last step the process took. */
-int cup_crowd_inside(const cup_crowd *c);
+CUP_API int cup_crowd_inside(const cup_crowd *c);
 /** The smallest gap (as cup_crowd_min_gap) at the state x_k from which the
  *  last step's rows were built, found while building them: the overlap the
  *  step before left (at most about sqrt 2 eta of that step). */
-double cup_crowd_gap(const cup_crowd *c);
+CUP_API double cup_crowd_gap(const cup_crowd *c);
 /** The rows (contacts and walls within the margin) of the last step. */
-int cup_crowd_rows(const cup_crowd *c);
+CUP_API int cup_crowd_rows(const cup_crowd *c);
 /** Contacts (pairs and agent-wall) the last step's rows missed: beyond the
  *  margin at x_k, overlapping at the step's first answer (an agent closed
  *  more than the margin in one step). The step added their rows and was
  *  projected again; 0 in a step that missed none. */
-int cup_crowd_added(const cup_crowd *c);
+CUP_API int cup_crowd_added(const cup_crowd *c);
 /** The distance to the nearest door around the walls (bilinear on the
  *  grid; INFINITY where no door can be reached). */
-double cup_crowd_door_distance(const cup_crowd *c, double x, double y);
+CUP_API double cup_crowd_door_distance(const cup_crowd *c, double x, double y);
 /** The desired velocity at (x, y): speed times the unit direction that
  *  descends the door distance (u, 2 entries; 0 where it is undefined). */
-void cup_crowd_desired_velocity(const cup_crowd *c, double x, double y, double *u);
+CUP_API void cup_crowd_desired_velocity(const cup_crowd *c, double x, double y, double *u);
 /** The wall segments (4 per segment: x0, y0, x1, y1), for plots and checks. */
-int cup_crowd_walls(const cup_crowd *c, const double **seg);
+CUP_API int cup_crowd_walls(const cup_crowd *c, const double **seg);
 /** The smallest gap of the state q (2N): min over pairs of agents inside
  *  of |q_i - q_j| - r_i - r_j and over agents and walls of the distance to
  *  the wall - r_i (found with the cell list, pairs within reach). */
-double cup_crowd_min_gap(cup_crowd *c, const double *q);
+CUP_API double cup_crowd_min_gap(cup_crowd *c, const double *q);
 
 #ifdef __cplusplus
 }

@@ -3,6 +3,8 @@
 #ifndef CATCHUP_INPUT_H
 #define CATCHUP_INPUT_H
 
+#include "catchup/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -54,32 +56,32 @@ typedef struct cup_wave {
 typedef int (*cup_input_fn)(double t, double *u, void *ctx);
 
 /** The name of a waveform in CUP_WAVE_LIST ("sine", ...); "unknown" otherwise. */
-const char *cup_wave_name(int kind);
+CUP_API const char *cup_wave_name(int kind);
 /** A name of CUP_WAVE_LIST -> its value; -1 if unknown. */
-int cup_wave_parse(const char *name);
+CUP_API int cup_wave_parse(const char *name);
 
 /** An input with p components, all zero until terms are added. */
-int cup_input_create(cup_input **u, int p, char *errmsg);
-void cup_input_free(cup_input **u);
+CUP_API int cup_input_create(cup_input **u, int p, char *errmsg);
+CUP_API void cup_input_free(cup_input **u);
 /** Add a waveform term to component j (0-based). Validates finiteness,
  *  frequency >= 0, PWL times increasing; errmsg names the problem. */
-int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg);
+CUP_API int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg);
 /** Replace the waveforms by a callback. Integrals use adaptive GSL quadrature
  *  (QAG, 21-point Gauss-Kronrod) per component to the absolute/relative
  *  tolerance given; a step that misses it yields CUP_WARN_QUADRATURE. */
-int cup_input_set_callback(cup_input *u, cup_input_fn fn, void *ctx,
-                           double abs_tol, double rel_tol);
+CUP_API int cup_input_set_callback(cup_input *u, cup_input_fn fn, void *ctx,
+                                   double abs_tol, double rel_tol);
 
-int cup_input_dim(const cup_input *u);
+CUP_API int cup_input_dim(const cup_input *u);
 /** 1 if u is constant in time (then integrals are h * u and never recomputed). */
-int cup_input_is_constant(const cup_input *u);
+CUP_API int cup_input_is_constant(const cup_input *u);
 /** u(t) into out (p entries). */
-int cup_input_eval(const cup_input *u, double t, double *out);
+CUP_API int cup_input_eval(const cup_input *u, double t, double *out);
 /** The exact integral of u over [a, b] into out (quadrature for callbacks). */
-int cup_input_integral(const cup_input *u, double a, double b, double *out);
+CUP_API int cup_input_integral(const cup_input *u, double a, double b, double *out);
 /** The next time > t at which some term is not smooth (a square-wave jump
  *  or a PWL breakpoint), or INFINITY. Used by the exponential scheme. */
-double cup_input_next_break(const cup_input *u, double t);
+CUP_API double cup_input_next_break(const cup_input *u, double t);
 
 #ifdef __cplusplus
 }

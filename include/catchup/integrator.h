@@ -5,6 +5,7 @@
 #ifndef CATCHUP_INTEGRATOR_H
 #define CATCHUP_INTEGRATOR_H
 
+#include "catchup/export.h"
 #include "catchup/lcs.h"
 #include "catchup/input.h"
 #include "catchup/projector.h"
@@ -53,10 +54,10 @@ typedef struct cup_schedule {
 } cup_schedule;
 /** Parse "n^-2.1", "3e-7", "0.5*n^-1" (spaces allowed). Returns CUP_ERR_PARSE
  *  with a message for anything else (a NaN or negative coefficient too). */
-int cup_schedule_parse(const char *spec, cup_schedule *out, char *errmsg);
-double cup_schedule_value(const cup_schedule *s, long n);
+CUP_API int cup_schedule_parse(const char *spec, cup_schedule *out, char *errmsg);
+CUP_API double cup_schedule_value(const cup_schedule *s, long n);
 /** Format back as the canonical text ("n^-2.1", "1e-06", "0.5*n^-1.05"). */
-int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size);
+CUP_API int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long size);
 
 /* One list of the output modes: X(enumerator, value, name, as written in a
  * scene, what is kept). Values are part of the ABI: append, never renumber. */
@@ -180,15 +181,15 @@ typedef struct cup_run_info {
   long rejected;              /**< ADAPTIVE: steps rejected by the error test (callback inputs) */
 } cup_run_info;
 
-void cup_integrator_options_default(cup_integrator_options *o);
+CUP_API void cup_integrator_options_default(cup_integrator_options *o);
 
 /** Set up an integrator for the LCS with input u (may be NULL when the LCS
  *  has no input). Does everything that does not depend on the state: the
  *  free-step operator (e^{hA}, (I - hA)^-1), input integrals when u is
  *  constant, the projector (factored once), the stiffness check. */
-int cup_integrator_create(cup_integrator **I, const cup_lcs *L, const cup_input *u,
-                          const cup_integrator_options *o, char *errmsg);
-void cup_integrator_free(cup_integrator **I);
+CUP_API int cup_integrator_create(cup_integrator **I, const cup_lcs *L, const cup_input *u,
+                                  const cup_integrator_options *o, char *errmsg);
+CUP_API void cup_integrator_free(cup_integrator **I);
 
 /** A general sweeping process (paper, Sec. 3)
  *      x'(t) in -N(C(t); x(t)) + f(t, x(t)),
@@ -219,8 +220,8 @@ typedef struct cup_process_desc {
  *  with that set (the same code and the same trajectory); other sets go
  *  through their cup_setproj. Errors name the field ("A is 2 x 3, expected
  *  3 x 3"). */
-int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
-                                  const cup_integrator_options *o, char *errmsg);
+CUP_API int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
+                                          const cup_integrator_options *o, char *errmsg);
 
 /** The range of a state: a step whose state has an entry beyond CUP_STATE_MAX
  *  in magnitude, or NaN or Inf, has diverged. Every scheme stops there with
@@ -233,8 +234,8 @@ int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
 
 /** Run from x0 (n entries) over [0, T], passing the selected states to sink
  *  (may be NULL). Allocates nothing per step. Returns info->status. */
-int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
-                       void *sink_ctx, cup_run_info *info);
+CUP_API int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
+                               void *sink_ctx, cup_run_info *info);
 
 /** Checkpoints. A run stopped at a step's end before T — by the interrupt
  *  flag, by the sink or the step callback returning nonzero (status
@@ -258,18 +259,18 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink,
  *
  *  The size of the blob of the last run's stop: bytes, or a negative status
  *  (CUP_ERR_ARG: it did not stop where it can resume; CUP_ERR_UNSUPPORTED). */
-long cup_integrator_checkpoint_size(const cup_integrator *I);
+CUP_API long cup_integrator_checkpoint_size(const cup_integrator *I);
 /** Write it into buf (size bytes): info is what the stopped run returned. */
-int cup_integrator_checkpoint_save(const cup_integrator *I, const cup_run_info *info, void *buf,
-                                   unsigned long size);
+CUP_API int cup_integrator_checkpoint_save(const cup_integrator *I, const cup_run_info *info, void *buf,
+                                           unsigned long size);
 /** Read a blob into I (made as the saved one was); errmsg says why not. */
-int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsigned long size, char *errmsg);
+CUP_API int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsigned long size, char *errmsg);
 /** Continue the restored run to T (or its next stop), as cup_integrator_run
  *  would have; info starts from the saved run's statistics. */
-int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+CUP_API int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 
 /** The final state of the last run (n entries). */
-const double *cup_integrator_state(const cup_integrator *I);
+CUP_API const double *cup_integrator_state(const cup_integrator *I);
 /** zeta of the last step taken (m entries into zeta, m the LCS's rows):
  *  the theta step's LCP solution, or the projection's multipliers divided
  *  by h (the impulse of the step over its length); 0 before the first step.
@@ -279,16 +280,16 @@ const double *cup_integrator_state(const cup_integrator *I);
  *  (at an event, the one chosen there), and zeros at t = 0 and on its
  *  catching-up steps across accumulating events. CUP_ERR_UNSUPPORTED for an
  *  integrator from cup_integrator_create_process. */
-int cup_integrator_zeta(const cup_integrator *I, double *zeta);
+CUP_API int cup_integrator_zeta(const cup_integrator *I, double *zeta);
 
 /** The name of a scheme in CUP_SCHEME_LIST ("explicit", ...); "unknown" otherwise. */
-const char *cup_scheme_name(int scheme);
+CUP_API const char *cup_scheme_name(int scheme);
 /** A name of CUP_SCHEME_LIST -> its value; -1 if unknown. */
-int cup_scheme_parse(const char *name);
+CUP_API int cup_scheme_parse(const char *name);
 /** The name of an output mode in CUP_OUTPUT_LIST ("every", ...); "unknown" otherwise. */
-const char *cup_output_name(int output);
+CUP_API const char *cup_output_name(int output);
 /** A name of CUP_OUTPUT_LIST -> its value; -1 if unknown. */
-int cup_output_parse(const char *name);
+CUP_API int cup_output_parse(const char *name);
 
 #ifdef __cplusplus
 }

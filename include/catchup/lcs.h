@@ -5,6 +5,7 @@
 #ifndef CATCHUP_LCS_H
 #define CATCHUP_LCS_H
 
+#include "catchup/export.h"
 #include "catchup/sparse.h"
 #include "catchup/polyset.h"
 
@@ -45,20 +46,20 @@ typedef struct cup_lcs_desc {
 
 /** Validate and copy. Fails with CUP_ERR_PB_CT and a message naming the
  *  largest entry of P B - C^T when the check fails, CUP_ERR_DIM for sizes. */
-int cup_lcs_create(cup_lcs **L, const cup_lcs_desc *d, char *errmsg);
-void cup_lcs_free(cup_lcs **L);
+CUP_API int cup_lcs_create(cup_lcs **L, const cup_lcs_desc *d, char *errmsg);
+CUP_API void cup_lcs_free(cup_lcs **L);
 
-int cup_lcs_dim(const cup_lcs *L);
-int cup_lcs_rows(const cup_lcs *L);
-int cup_lcs_inputs(const cup_lcs *L);
+CUP_API int cup_lcs_dim(const cup_lcs *L);
+CUP_API int cup_lcs_rows(const cup_lcs *L);
+CUP_API int cup_lcs_inputs(const cup_lcs *L);
 /** The set {x : C x + F >= 0} with metric P (offset moved by G u(t)). */
-const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
+CUP_API const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
 /** 1 if G is absent or zero: K does not move. */
-int cup_lcs_fixed_set(const cup_lcs *L);
+CUP_API int cup_lcs_fixed_set(const cup_lcs *L);
 /** 1 if the LCS is not a sweeping process: D has a nonzero entry (the
  *  theta and adaptive schemes run it), or B was kept as given (keep_B:
  *  theta only). */
-int cup_lcs_has_D(const cup_lcs *L);
+CUP_API int cup_lcs_has_D(const cup_lcs *L);
 
 /** The paper's circuit (Sec. 7, after Acary-Brogliato Ex. 2.52): R1, R2, R3
  *  >= 0, L2, L3, C4 > 0, and g = G (2 entries, NULL for 0). Builds A, B, C,
@@ -67,7 +68,7 @@ typedef struct cup_circuit {
   double R1, R2, R3, L2, L3, C4;
   double G[2];
 } cup_circuit;
-int cup_lcs_circuit(cup_lcs **L, const cup_circuit *c, char *errmsg);
+CUP_API int cup_lcs_circuit(cup_lcs **L, const cup_circuit *c, char *errmsg);
 
 #ifdef __cplusplus
 }

@@ -13,6 +13,7 @@
 #ifndef CATCHUP_NETLIST_H
 #define CATCHUP_NETLIST_H
 
+#include "catchup/export.h"
 #include "catchup/lcs.h"
 #include "catchup/input.h"
 
@@ -26,12 +27,12 @@ typedef struct cup_netlist cup_netlist;
  *  strings applied before anything is evaluated: NAME is an element
  *  ("R1=2k", "V1=SIN(0 5 50)") or a .param ("vin=5"). Every error names
  *  file:line:column and the element in errmsg (CUP_ERRMSG_LEN bytes). */
-int cup_netlist_load(cup_netlist **nl, const char *path, const char *const *sets, int nsets,
-                     char *errmsg);
+CUP_API int cup_netlist_load(cup_netlist **nl, const char *path, const char *const *sets, int nsets,
+                             char *errmsg);
 /** The same from text; `name` is used in messages in place of a file name. */
-int cup_netlist_load_string(cup_netlist **nl, const char *text, const char *name,
-                            const char *const *sets, int nsets, char *errmsg);
-void cup_netlist_free(cup_netlist **nl);
+CUP_API int cup_netlist_load_string(cup_netlist **nl, const char *text, const char *name,
+                                    const char *const *sets, int nsets, char *errmsg);
+CUP_API void cup_netlist_free(cup_netlist **nl);
 /** What the formulation found suspect but allowed, or NULL: a loop of
  *  ideal diodes with no resistance, whose current is not unique (two
  *  diodes between the same two nodes, or diodes all in one direction around
@@ -39,62 +40,62 @@ void cup_netlist_free(cup_netlist **nl);
  *  D1: D1 and D2 are ideal diodes in anti-parallel between nodes 'a' and
  *  'b', ..."). The run takes one of the solutions. catchup-run prints it
  *  before the run and keeps it in the file's attribute `warnings`. */
-const char *cup_netlist_warning(const cup_netlist *nl);
+CUP_API const char *cup_netlist_warning(const cup_netlist *nl);
 
 /** The LCS (owned by the netlist). */
-const cup_lcs *cup_netlist_lcs(const cup_netlist *nl);
+CUP_API const cup_lcs *cup_netlist_lcs(const cup_netlist *nl);
 /** The sources as an input u(t) (p components); NULL when there is none. */
-const cup_input *cup_netlist_input(const cup_netlist *nl);
+CUP_API const cup_input *cup_netlist_input(const cup_netlist *nl);
 /** x(0) from IC= on L and C and .ic v(node)=...; zero otherwise. */
-const double *cup_netlist_x0(const cup_netlist *nl);
+CUP_API const double *cup_netlist_x0(const cup_netlist *nl);
 /** .tran TSTEP TSTOP: 1 and the values if the netlist has one, else 0.
  *  As in SPICE, TSTEP is the output's spacing, not a step (docs/netlist.md). */
-int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop);
+CUP_API int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop);
 /** .tran's TSTART (where the output begins) and TMAX (the longest step), 0
  *  where not given: 1 if the netlist has a .tran, else 0. */
-int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, double *tmax);
+CUP_API int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, double *tmax);
 /** .options RELTOL, ABSTOL, VNTOL, CHGTOL as given, NAN where not: 1 if any
  *  is given, else 0 (docs/netlist.md: how they map onto the adaptive
  *  scheme's tol). */
-int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol);
+CUP_API int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol);
 
 /** The files the netlist was read from: 0 is the netlist itself, then each
  *  file its .include and .lib cards read (paths joined to the including
  *  file's folder, each once, in the order first read); NULL out of range.
  *  Tools that write outputs can refuse to overwrite any of them, and hash
  *  them all to know what a run read. */
-int cup_netlist_file_count(const cup_netlist *nl);
-const char *cup_netlist_file(const cup_netlist *nl, int k);
+CUP_API int cup_netlist_file_count(const cup_netlist *nl);
+CUP_API const char *cup_netlist_file(const cup_netlist *nl, int k);
 
 /** Names of the state ("i(L1)", "v(C1)"), the rows (the diodes, "D1") and
  *  the inputs (the sources, "V1"); NULL out of range. */
-const char *cup_netlist_state_name(const cup_netlist *nl, int j);
+CUP_API const char *cup_netlist_state_name(const cup_netlist *nl, int j);
 /** The netlist's text as it was read (before any `sets`), for provenance. */
-const char *cup_netlist_source(const cup_netlist *nl);
-const char *cup_netlist_row_name(const cup_netlist *nl, int i);
-const char *cup_netlist_input_name(const cup_netlist *nl, int j);
+CUP_API const char *cup_netlist_source(const cup_netlist *nl);
+CUP_API const char *cup_netlist_row_name(const cup_netlist *nl, int i);
+CUP_API const char *cup_netlist_input_name(const cup_netlist *nl, int j);
 /** 1 if the current of diode row i is fixed by the state (zeta_i is its
  *  reverse voltage, row of D zero), 0 if zeta_i is its current. */
-int cup_netlist_row_fixed(const cup_netlist *nl, int i);
+CUP_API int cup_netlist_row_fixed(const cup_netlist *nl, int i);
 
 /** Add a signal to record: "v(NODE)", "v(NODE1,NODE2)" or "i(ELEMENT)"
  *  (case-insensitive); "all" adds every node voltage and element current.
  *  Returns its index (>= 0) or an error with errmsg. Adding one twice
  *  returns the first index. */
-int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg);
+CUP_API int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg);
 /** The probes the netlist itself asks for (.probe/.save/.print); when it
  *  asks for none, every signal if the circuit has at most `limit` of them. */
-int cup_netlist_probe_default(cup_netlist *nl, int limit, char *errmsg);
-int cup_netlist_signal_count(const cup_netlist *nl);
+CUP_API int cup_netlist_probe_default(cup_netlist *nl, int limit, char *errmsg);
+CUP_API int cup_netlist_signal_count(const cup_netlist *nl);
 /** Canonical name: "v(out)", "v(a,b)", "i(D1)" (node and element names as
  *  first written in the netlist). */
-const char *cup_netlist_signal_name(const cup_netlist *nl, int k);
+CUP_API const char *cup_netlist_signal_name(const cup_netlist *nl, int k);
 /** Its unit: "V" for a voltage v(...), "A" for a current i(...). */
-const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
+CUP_API const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
 /** The recorded signals at time t for state x and complementarity
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */
-int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out);
+CUP_API int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out);
 
 #ifdef __cplusplus
 }

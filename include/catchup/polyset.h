@@ -4,6 +4,7 @@
 #ifndef CATCHUP_POLYSET_H
 #define CATCHUP_POLYSET_H
 
+#include "catchup/export.h"
 #include "catchup/sparse.h"
 
 #ifdef __cplusplus
@@ -31,30 +32,30 @@ typedef struct cup_metric {
  *  start from; P may be NULL (identity). Validates sizes, finiteness, symmetry
  *  and positive definiteness of P. On failure *K is NULL, nothing is leaked
  *  and errmsg (CUP_ERRMSG_LEN bytes, may be NULL) names the problem. */
-int cup_polyset_create(cup_polyset **K, const cup_csc *C, const double *g,
-                       const cup_metric *P, char *errmsg);
+CUP_API int cup_polyset_create(cup_polyset **K, const cup_csc *C, const double *g,
+                               const cup_metric *P, char *errmsg);
 
 /** Free and set *K to NULL (a NULL *K is fine). */
-void cup_polyset_free(cup_polyset **K);
+CUP_API void cup_polyset_free(cup_polyset **K);
 
-int cup_polyset_dim(const cup_polyset *K);   /**< number of variables */
-int cup_polyset_rows(const cup_polyset *K);  /**< number of constraints m */
+CUP_API int cup_polyset_dim(const cup_polyset *K);   /**< number of variables */
+CUP_API int cup_polyset_rows(const cup_polyset *K);  /**< number of constraints m */
 
 /** Guaranteed upper bound L >= lambda_max(C P^-1 C^T) used as 1/step by the
  *  projected-gradient methods (Collatz-Wielandt bound on |C| P^-1 |C|^T,
  *  tightened by a dense eigenvalue bound for small sets). */
-double cup_polyset_lipschitz(const cup_polyset *K);
+CUP_API double cup_polyset_lipschitz(const cup_polyset *K);
 
 /** The P-norm sqrt(v^T P v) of a vector of dim entries. */
-double cup_polyset_norm(const cup_polyset *K, const double *v);
+CUP_API double cup_polyset_norm(const cup_polyset *K, const double *v);
 
 /** 1 if x is certainly in {C x + g >= 0} (each row checked with a bound on
  *  its rounding error), 0 otherwise. g NULL means the default offset. */
-int cup_polyset_contains(const cup_polyset *K, const double *g, const double *x);
+CUP_API int cup_polyset_contains(const cup_polyset *K, const double *g, const double *x);
 
 /** A direction d with C d > 0 (so x + t d enters K for t large), if one was
  *  found at creation; NULL otherwise. Used to certify distances. */
-const double *cup_polyset_interior_direction(const cup_polyset *K);
+CUP_API const double *cup_polyset_interior_direction(const cup_polyset *K);
 
 #ifdef __cplusplus
 }

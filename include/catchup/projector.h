@@ -11,36 +11,15 @@
 #ifndef CATCHUP_PROJECTOR_H
 #define CATCHUP_PROJECTOR_H
 
+#include "catchup/export.h"
 #include "catchup/polyset.h"
+#include "catchup/projection.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 typedef struct cup_projector cup_projector;
-
-/* One list of the projector methods: X(enumerator, value, name, what it is).
- * The enum, cup_proj_method_name/parse, --help texts, the scene reader's
- * messages, the Fortran constants and the docs tables are all made from it.
- * Values are part of the ABI: append, never renumber. */
-#define CUP_PROJ_METHOD_LIST(X)                                                         \
-  X(CUP_PROJ_AUTO, 0, "auto",                                                           \
-    "fastest method that certifies the tolerances: on small dense sets (m <= 64, "     \
-    "dim <= 256) the dual LCP by principal pivoting (closed form for 1 or 2 active "   \
-    "rows), falling back to the active set; on sparse sets the active-set Newton method") \
-  X(CUP_PROJ_PG, 1, "pg", "the paper's dual projected gradient, step 1/L")              \
-  X(CUP_PROJ_FISTA, 2, "fista", "accelerated dual gradient with adaptive restart")      \
-  X(CUP_PROJ_ACTIVESET, 3, "activeset", "exact: active-set Newton on the dual (dense or CHOLMOD)")
-
-typedef enum cup_proj_method {
-#define CUP_PROJ_ENUM_(e, v, name, doc) e = v,
-  CUP_PROJ_METHOD_LIST(CUP_PROJ_ENUM_)
-#undef CUP_PROJ_ENUM_
-} cup_proj_method;
-#define CUP_PROJ_ONE_(e, v, name, doc) +1
-/** The number of methods: values 0 .. CUP_PROJ_METHOD_COUNT - 1. */
-enum { CUP_PROJ_METHOD_COUNT = 0 CUP_PROJ_METHOD_LIST(CUP_PROJ_ONE_) };
-#undef CUP_PROJ_ONE_
 
 /** Options; fill with cup_projector_options_default() and change fields. */
 typedef struct cup_projector_options {
@@ -64,47 +43,26 @@ typedef struct cup_projector_options {
                                always refactored */
 } cup_projector_options;
 
-/** What one projection did and what it certifies. */
-typedef struct cup_proj_info {
-  int status;             /**< as returned */
-  int method;             /**< method that produced the answer (cup_proj_method) */
-  int iterations;         /**< dual iterations (first-order steps + Newton solves) */
-  int factorizations;     /**< sparse numeric factorizations */
-  int skipped;            /**< 1 if x was already in K: z = x exactly */
-  int active;             /**< constraints with lambda_i > 0 */
-  double scale;           /**< S = max(||x||_P, max_i |g_i| / ||c_i||_{P^-1}) */
-  double eps_target;      /**< eps requested (absolute) */
-  double eta_target;      /**< eta requested (absolute) */
-  double eps_cert;        /**< certified: ||x - z||_P^2 - d_K(x)^2 <= eps_cert */
-  double eta_cert;        /**< certified: d_K(z) <= eta_cert (INFINITY if unknown) */
-  double violation;       /**< raw max_i (-(C z + g)_i)_+ for comparison with eta_cert */
-  double dual_value;      /**< 2 q(lambda): a certified lower bound on d_K(x)^2 */
-  double farkas_gap;      /**< empty K: g^T y (< 0) for the certificate y >= 0 */
-  double farkas_residual; /**< empty K: ||C^T y||_{P^-1}; K has no point within
-                               radius -farkas_gap / farkas_residual of 0 */
-  int row_updates;        /**< rows added to or removed from the sparse factor */
-} cup_proj_info;
-
-void cup_projector_options_default(cup_projector_options *opt);
+CUP_API void cup_projector_options_default(cup_projector_options *opt);
 
 /** Create a projector onto K; allocates all workspace (cup_project does not
  *  allocate). The projector keeps a pointer to K, which must outlive it. */
-int cup_projector_create(cup_projector **p, const cup_polyset *K,
-                         const cup_projector_options *opt, char *errmsg);
-void cup_projector_free(cup_projector **p);
+CUP_API int cup_projector_create(cup_projector **p, const cup_polyset *K,
+                                 const cup_projector_options *opt, char *errmsg);
+CUP_API void cup_projector_free(cup_projector **p);
 
 /** Replace the offset g (m entries, copied) for the following projections:
  *  K(t) = {x : C x + g(t) >= 0} with g(t) = G u(t) + F. */
-int cup_projector_set_offset(cup_projector *p, const double *g);
+CUP_API int cup_projector_set_offset(cup_projector *p, const double *g);
 /** Change the absolute/relative tolerances for the following projections. */
-int cup_projector_set_tolerances(cup_projector *p, double eps_abs, double eps_rel,
-                                 double eta_abs, double eta_rel);
+CUP_API int cup_projector_set_tolerances(cup_projector *p, double eps_abs, double eps_rel,
+                                         double eta_abs, double eta_rel);
 /** Offer a point believed to be in K(current offset); it is checked (with a
  *  rounding bound) and used as an anchor for eta certificates if feasible.
  *  Returns 1 if accepted. */
-int cup_projector_offer_feasible(cup_projector *p, const double *w);
+CUP_API int cup_projector_offer_feasible(cup_projector *p, const double *w);
 /** Forget the warm start. */
-void cup_projector_reset(cup_projector *p);
+CUP_API void cup_projector_reset(cup_projector *p);
 
 /** Project x onto K in the P-metric: z (dim entries; may alias x) and info
  *  (may be NULL). Returns CUP_OK when (eps_target, eta_target) are certified,
@@ -112,20 +70,20 @@ void cup_projector_reset(cup_projector *p);
  *  CUP_ERR_EMPTY_SET with a Farkas certificate (cup_projector_farkas),
  *  CUP_ERR_NONFINITE for a NaN/Inf in x, CUP_ERR_DIVERGED if an iterate
  *  became non-finite. On an error z is left unchanged. */
-int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info);
+CUP_API int cup_project(cup_projector *p, const double *x, double *z, cup_proj_info *info);
 
 /** Multipliers lambda (m entries) of the last projection (0 after a skip). */
-const double *cup_projector_lambda(const cup_projector *p);
+CUP_API const double *cup_projector_lambda(const cup_projector *p);
 /** An exactly feasible point v of K found while certifying the last
  *  projection (eta_cert = ||z - v||_P), or NULL if none was needed/found. */
-const double *cup_projector_feasible(const cup_projector *p);
+CUP_API const double *cup_projector_feasible(const cup_projector *p);
 /** After CUP_ERR_EMPTY_SET: y >= 0 (m entries) with C^T y ~ 0 and g^T y < 0. */
-const double *cup_projector_farkas(const cup_projector *p);
+CUP_API const double *cup_projector_farkas(const cup_projector *p);
 
 /** The name of a method in CUP_PROJ_METHOD_LIST ("auto", ...); "unknown" otherwise. */
-const char *cup_proj_method_name(int method);
+CUP_API const char *cup_proj_method_name(int method);
 /** A name of CUP_PROJ_METHOD_LIST -> its value; -1 if unknown. */
-int cup_proj_method_parse(const char *name);
+CUP_API int cup_proj_method_parse(const char *name);
 
 #ifdef __cplusplus
 }

@@ -7,6 +7,7 @@
 #ifndef CATCHUP_SCENE_H
 #define CATCHUP_SCENE_H
 
+#include "catchup/export.h"
 #include "catchup/integrator.h"
 #include "catchup/crowd.h"
 #include "catchup/netlist.h"
@@ -21,34 +22,34 @@ typedef struct cup_scene cup_scene;
  *  applied to the document before it is read, value parsed as YAML
  *  ("circuit.R1=2", "n=1000", "input.0.amplitude=8", "x0=[0, 1, 0]"). Matrix
  *  Market files named in the scene are found relative to its directory. */
-int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides,
-                   int n_overrides, char *errmsg);
+CUP_API int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides,
+                           int n_overrides, char *errmsg);
 /** The same from text; `name` is used in messages in place of a file name
  *  and `dir` (may be NULL: the working directory) to find Matrix Market files. */
-int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,
-                          const char *const *overrides, int n_overrides, char *errmsg);
-void cup_scene_free(cup_scene **s);
+CUP_API int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,
+                                  const char *const *overrides, int n_overrides, char *errmsg);
+CUP_API void cup_scene_free(cup_scene **s);
 
-const char *cup_scene_name(const cup_scene *s);          /**< the `name` key, or the file stem */
-const cup_lcs *cup_scene_lcs(const cup_scene *s);           /**< NULL for a set: scene */
+CUP_API const char *cup_scene_name(const cup_scene *s);          /**< the `name` key, or the file stem */
+CUP_API const cup_lcs *cup_scene_lcs(const cup_scene *s);           /**< NULL for a set: scene */
 /** The general process of a set: scene (set and f; NULL for an LCS scene). */
-const cup_process_desc *cup_scene_process(const cup_scene *s);
+CUP_API const cup_process_desc *cup_scene_process(const cup_scene *s);
 /** The crowd of a crowd: scene (NULL otherwise); it belongs to the scene.
  *  Its process is cup_scene_process's, its x0 the agents' centres. */
-cup_crowd *cup_scene_crowd(const cup_scene *s);
+CUP_API cup_crowd *cup_scene_crowd(const cup_scene *s);
 /** The state dimension, for either kind of scene. */
-int cup_scene_dim(const cup_scene *s);
+CUP_API int cup_scene_dim(const cup_scene *s);
 /** An integrator for the scene's model, an LCS or a process, with options o
  *  (NULL: the scene's). One integrator of a set: scene with f: towards at a
  *  time (its f keeps a buffer in the scene). */
-int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
-                         char *errmsg);
-const cup_input *cup_scene_input(const cup_scene *s);    /**< NULL when p = 0; a set: scene's signals */
-const double *cup_scene_x0(const cup_scene *s);          /**< n entries */
+CUP_API int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
+                                 char *errmsg);
+CUP_API const cup_input *cup_scene_input(const cup_scene *s);    /**< NULL when p = 0; a set: scene's signals */
+CUP_API const double *cup_scene_x0(const cup_scene *s);          /**< n entries */
 /** T, n, eps, eta, scheme, projector, output from the file. */
-const cup_integrator_options *cup_scene_options(const cup_scene *s);
-const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "n^-2.1" */
-const char *cup_scene_eta_spec(const cup_scene *s);
+CUP_API const cup_integrator_options *cup_scene_options(const cup_scene *s);
+CUP_API const char *cup_scene_eps_spec(const cup_scene *s);      /**< as written, e.g. "n^-2.1" */
+CUP_API const char *cup_scene_eta_spec(const cup_scene *s);
 /** The default of the scene key max_steps: a fixed-step run of more steps
  *  is refused by catchup-run and catchup-sweep before its first step (a
  *  netlist's `.tran 1f 1k` asks for 10^18). 10^9 steps take under a minute
@@ -56,32 +57,32 @@ const char *cup_scene_eta_spec(const cup_scene *s);
  *  final, on a shared 2-core machine), and hours on most others. */
 #define CUP_MAX_STEPS_DEFAULT 1000000000L
 /** The scene's max_steps (CUP_MAX_STEPS_DEFAULT when it has none). */
-long cup_scene_max_steps(const cup_scene *s);
+CUP_API long cup_scene_max_steps(const cup_scene *s);
 /** The document after overrides, as YAML text (for provenance attributes). */
-const char *cup_scene_text(const cup_scene *s);
+CUP_API const char *cup_scene_text(const cup_scene *s);
 /** The files the scene was read from, in the order first read, each once:
  *  the scene file (none for cup_scene_load_string), the Matrix Market
  *  files it names, its netlist and what that includes. k in [0, count). */
-int cup_scene_file_count(const cup_scene *s);
+CUP_API int cup_scene_file_count(const cup_scene *s);
 /** File k's path as it was opened (NULL for k out of range). */
-const char *cup_scene_file(const cup_scene *s, int k);
+CUP_API const char *cup_scene_file(const cup_scene *s, int k);
 /** The SHA-256 (64 lowercase hex digits) of the bytes of file k that were
  *  read: what the scene holds, whatever the file says now. */
-const char *cup_scene_file_sha256(const cup_scene *s, int k);
+CUP_API const char *cup_scene_file_sha256(const cup_scene *s, int k);
 /** CUP_ERR_ARG, with a message naming both, when the output path names one
  *  of the scene's files: the same path once resolved (path need not exist),
  *  or the same file (device and inode, now or when it was read: hard links,
  *  symbolic links). CUP_OK otherwise. For a program's -o, before it writes. */
-int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg);
+CUP_API int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg);
 /** The name and unit of state component j (0-based), for files and plots:
  *  the paper's circuit "q(C4)" (C), "i(L3)", "i(L2)" (A); a netlist's
  *  "i(L1)" (A), "v(C1)" (V); a crowd's "x0", "y0", "x1", ... (m); any other
  *  model "x1", "x2", ... with unit "1" (the model's own units). */
-int cup_scene_state_label(const cup_scene *s, int j, char *name, unsigned long size, const char **unit);
+CUP_API int cup_scene_state_label(const cup_scene *s, int j, char *name, unsigned long size, const char **unit);
 /** The scene's netlist when its model is `netlist:` (NULL otherwise), owned
  *  by the scene; its LCS and input are the scene's. Signals are added to it
  *  (cup_netlist_probe), so it is not const. */
-cup_netlist *cup_scene_netlist(const cup_scene *s);
+CUP_API cup_netlist *cup_scene_netlist(const cup_scene *s);
 
 #ifdef __cplusplus
 }

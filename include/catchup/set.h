@@ -11,6 +11,7 @@
 #ifndef CATCHUP_SET_H
 #define CATCHUP_SET_H
 
+#include "catchup/export.h"
 #include "catchup/sparse.h"
 #include "catchup/polyset.h"
 #include "catchup/projector.h"
@@ -70,14 +71,14 @@ typedef struct cup_rowbuf cup_rowbuf;
  *  (the only allocation, until the largest row count has been seen).
  *  Returns CUP_OK, CUP_ERR_ARG (a column out of range or not increasing:
  *  the row is not added), CUP_ERR_NONFINITE or CUP_ERR_NOMEM. */
-int cup_rowbuf_add(cup_rowbuf *rows, int nnz, const int *cols, const double *vals, double offset);
+CUP_API int cup_rowbuf_add(cup_rowbuf *rows, int nnz, const int *cols, const double *vals, double offset);
 /** Announce a row pattern that may become a row soon (a contact just beyond
  *  the margin): no constraint now. Such patterns join the factorization's
  *  pool whenever a new row forces a new analysis anyway, so that the rows
  *  they announce need none when they come. Columns as for cup_rowbuf_add. */
-int cup_rowbuf_expect(cup_rowbuf *rows, int nnz, const int *cols);
+CUP_API int cup_rowbuf_expect(cup_rowbuf *rows, int nnz, const int *cols);
 /** Rows appended so far. */
-int cup_rowbuf_rows(const cup_rowbuf *rows);
+CUP_API int cup_rowbuf_rows(const cup_rowbuf *rows);
 
 /** The rows of C(t, x): append them with cup_rowbuf_add (the buffer is
  *  empty on entry). Return 0, or nonzero to stop with CUP_ERR_CALLBACK.
@@ -113,15 +114,15 @@ typedef struct cup_set_desc {
 /** Validate and copy. On failure *S is NULL and errmsg (CUP_ERRMSG_LEN
  *  bytes, may be NULL) names the field and the problem. A set is read-only
  *  after creation (its callbacks aside) and may be shared. */
-int cup_set_create(cup_set **S, const cup_set_desc *d, char *errmsg);
-void cup_set_free(cup_set **S);
-int cup_set_dim(const cup_set *S);       /**< n */
-int cup_set_params(const cup_set *S);    /**< p */
-int cup_set_kind_of(const cup_set *S);   /**< its cup_set_kind */
+CUP_API int cup_set_create(cup_set **S, const cup_set_desc *d, char *errmsg);
+CUP_API void cup_set_free(cup_set **S);
+CUP_API int cup_set_dim(const cup_set *S);       /**< n */
+CUP_API int cup_set_params(const cup_set *S);    /**< p */
+CUP_API int cup_set_kind_of(const cup_set *S);   /**< its cup_set_kind */
 /** The name of a kind in CUP_SET_LIST ("ball", ...); "unknown" otherwise. */
-const char *cup_set_kind_name(int kind);
+CUP_API const char *cup_set_kind_name(int kind);
 /** A name of CUP_SET_LIST -> its value; -1 if unknown. */
-int cup_set_kind_parse(const char *name);
+CUP_API int cup_set_kind_parse(const char *name);
 
 /* ---- projections onto a set, one at a time ------------------------------------ */
 
@@ -131,13 +132,13 @@ typedef struct cup_setproj cup_setproj;
  *  opt (NULL: defaults) gives the tolerances, targets eps_abs + eps_rel S^2
  *  and eta_abs + eta_rel S with S the scale of the problem, and the method
  *  of the polyset projections. */
-int cup_setproj_create(cup_setproj **sp, const cup_set *S, const cup_projector_options *opt,
-                       char *errmsg);
-void cup_setproj_free(cup_setproj **sp);
+CUP_API int cup_setproj_create(cup_setproj **sp, const cup_set *S, const cup_projector_options *opt,
+                               char *errmsg);
+CUP_API void cup_setproj_free(cup_setproj **sp);
 /** Place the set: time t, parameters u (p entries; NULL when p = 0) and, for
  *  a state-dependent set, the state x (n entries; rows are rebuilt here).
  *  Returns CUP_OK or an error with cup_setproj_message saying what failed. */
-int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x);
+CUP_API int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x);
 /** Project x onto the set as last placed: z (n entries; may alias x) with
  *  the certified (eps, eta) in info (may be NULL): CUP_OK when the targets
  *  are certified, CUP_WARN_NOT_CERTIFIED with what was reached otherwise,
@@ -145,17 +146,17 @@ int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x
  *  meet), CUP_ERR_CALLBACK (an oracle that failed, returned NaN or a point
  *  farther from x than its claims allow), CUP_ERR_NONFINITE. On an error z
  *  is unchanged and cup_setproj_message says what happened. */
-int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
+CUP_API int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
 /** Change the absolute/relative tolerances for the following projections. */
-int cup_setproj_set_tolerances(cup_setproj *sp, double eps_abs, double eps_rel, double eta_abs,
-                               double eta_rel);
+CUP_API int cup_setproj_set_tolerances(cup_setproj *sp, double eps_abs, double eps_rel, double eta_abs,
+                                       double eta_rel);
 /** What the last failing call did wrong ("" after a success). */
-const char *cup_setproj_message(const cup_setproj *sp);
+CUP_API const char *cup_setproj_message(const cup_setproj *sp);
 /** State polyset: rows of the set as last placed; 0 for other kinds. */
-int cup_setproj_rows(const cup_setproj *sp);
+CUP_API int cup_setproj_rows(const cup_setproj *sp);
 /** State polyset: how many times a new row pattern forced a new symbolic
  *  analysis (and the allocations that go with it) since creation. */
-long cup_setproj_rebuilds(const cup_setproj *sp);
+CUP_API long cup_setproj_rebuilds(const cup_setproj *sp);
 
 #ifdef __cplusplus
 }

@@ -2,6 +2,8 @@
 #ifndef CATCHUP_STATUS_H
 #define CATCHUP_STATUS_H
 
+#include "catchup/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -42,14 +44,14 @@ typedef enum cup_status {
 } cup_status;
 
 /** Message for a status code; "unknown status" for a value not in the list. */
-const char *cup_status_string(int status);
+CUP_API const char *cup_status_string(int status);
 
 /** Symbolic name ("CUP_ERR_EMPTY_SET"); "CUP_UNKNOWN" for a value not in the list. */
-const char *cup_status_name(int status);
+CUP_API const char *cup_status_name(int status);
 
 /** Most severe of two statuses: any error beats any warning beats ok; among
  *  errors (or warnings) the first one is kept. */
-int cup_status_merge(int first, int second);
+CUP_API int cup_status_merge(int first, int second);
 
 #ifdef __cplusplus
 }

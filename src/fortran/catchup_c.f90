@@ -143,8 +143,7 @@ module catchup_c
       real(c_double), value :: eps_abs, eps_rel, eta_abs, eta_rel
       integer(c_int) :: st
     end function c_cup_projector_set_tolerances
-    ! Declared in projector.h but not defined by libcatchup 0.1.0: no wrapper
-    ! in module catchup until it is (a call to this interface fails to link).
+    ! No wrapper in module catchup yet (owed: tests/fortran/check_coverage.sh).
     function c_cup_projector_offer_feasible(p, w) bind(C, name="cup_projector_offer_feasible") result(yes)
       import :: c_int, c_double, c_ptr
       type(c_ptr), value :: p

@@ -1,8 +1,9 @@
 /* adaptive — the event-driven scheme (adaptive_impl.h, docs/adaptive.md):
- * set-up, and the run from breakpoint to breakpoint, event to event. */
+ * set-up, the energy bound and the late-switch model, the run's messages. */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -103,6 +104,22 @@ static void dae_setup(cup_adaptive *A, const cup_sparse *B, const cup_sparse *Dm
       A->CB[i + (size_t)j * m] = acc;
       if (A->Dd[i + (size_t)j * m] != 0) A->dcpl[i] = A->dcpl[j] = 1;
     }
+}
+
+/* "step k (t = ...): " and the text into info->message. */
+void ad_say(ad_run *R, const char *fmt, va_list ap) {
+  cup_run_info *info = R->info;
+  int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
+  if (len >= 0 && (size_t)len < sizeof info->message)
+    vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
+}
+
+int ad_fail(ad_run *R, int status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  ad_say(R, fmt, ap);
+  va_end(ap);
+  return R->info->status = status;
 }
 
 double ad_energy_bound(const cup_adaptive *A, const double *v, double *scratch) {

@@ -20,6 +20,7 @@
 #ifndef CUP_ADAPTIVE_IMPL_H
 #define CUP_ADAPTIVE_IMPL_H
 
+#include <stdarg.h>
 #include <stdint.h>
 #include <gsl/gsl_eigen.h>
 #include "catchup/integrator.h"
@@ -177,8 +178,10 @@ struct cup_adaptive {
   } pend;
 };
 
-/* ---- adaptive_run.c ---- */
-/* "step k (t = ...): " and the text into the run's message; the status. */
+/* ---- adaptive.c: the run's messages ---- */
+/* "step k (t = ...): " and the text into the run's message; ad_fail also
+ * sets the status and returns it. */
+void ad_say(ad_run *R, const char *fmt, va_list ap);
 __attribute__((format(printf, 3, 4)))
 int ad_fail(ad_run *R, int status, const char *fmt, ...);
 

@@ -27,22 +27,6 @@ static double wall_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* "step k (t = ...): " and the text into info->message. */
-static void say(ad_run *R, const char *fmt, va_list ap) {
-  cup_run_info *info = R->info;
-  int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
-  if (len >= 0 && (size_t)len < sizeof info->message)
-    vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
-}
-
-int ad_fail(ad_run *R, int status, const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  say(R, fmt, ap);
-  va_end(ap);
-  return R->info->status = status;
-}
-
 /* The first warning is kept (status and message), as in the fixed-step run. */
 __attribute__((format(printf, 3, 4)))
 static void warn(ad_run *R, int status, const char *fmt, ...) {
@@ -50,7 +34,7 @@ static void warn(ad_run *R, int status, const char *fmt, ...) {
   R->info->status = status;
   va_list ap;
   va_start(ap, fmt);
-  say(R, fmt, ap);
+  ad_say(R, fmt, ap);
   va_end(ap);
 }
 

@@ -5,7 +5,19 @@
 # HDF5 and MPI are PRIVATE: h5run.h does not include hdf5.h, so a consumer of
 # the shared catchup::catchup_h5 needs neither at build time (the dynamic
 # linker finds them through the library's DT_NEEDED entries).
-add_library(catchup_h5 SHARED ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c)
+#
+# Compiled once (hidden but for CUP_API, as libcatchup) into the shared
+# library and into catchup_h5_static, an internal archive over catchup_static
+# for programs that also call the library's internal functions (catchup-sweep):
+# linking the shared catchup_h5 would load a second copy of libcatchup there.
+add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c)
+set_target_properties(catchup_h5_objects PROPERTIES C_VISIBILITY_PRESET hidden)
+target_include_directories(catchup_h5_objects PRIVATE
+  ${PROJECT_SOURCE_DIR}/include ${PROJECT_BINARY_DIR}/include)
+target_link_libraries(catchup_h5_objects PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C catchup_warnings)
+add_library(catchup_h5_static STATIC $<TARGET_OBJECTS:catchup_h5_objects>)
+target_link_libraries(catchup_h5_static PUBLIC catchup_static PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C)
+add_library(catchup_h5 SHARED $<TARGET_OBJECTS:catchup_h5_objects>)
 set_target_properties(catchup_h5 PROPERTIES
   VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}
   EXPORT_NAME catchup_h5

@@ -15,7 +15,7 @@
 
 #include <float.h>
 #include <math.h>
-#include "catchup/projector.h"
+#include "catchup/projection.h"
 #include "catchup/status.h"
 #include "util/lanes.h"
 #include "util/linalg.h"

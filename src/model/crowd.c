@@ -776,7 +776,7 @@ int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *e
   if (!st) {
     cup_set_desc sd = {.kind = CUP_SET_STATE_POLYSET, .n = 2 * c->N, .rows = crowd_rows, .rows_ctx = c};
     st = cup_set_create(&c->S, &sd, errmsg);
-    if (!st) c->S->recheck = crowd_recheck;
+    if (!st) st = set_on_recheck(c->S, crowd_recheck);
   }
   if (st) { cup_crowd_free(&c); return st; }
   door_warning(c);

@@ -284,6 +284,12 @@ int cup_set_create(cup_set **out, const cup_set_desc *d, char *errmsg) {
   return CUP_OK;
 }
 
+int set_on_recheck(cup_set *S, int (*recheck)(double t, const double *x, const double *z, void *ctx)) {
+  if (!S || S->kind != CUP_SET_STATE_POLYSET) return CUP_ERR_ARG;
+  S->recheck = recheck;
+  return CUP_OK;
+}
+
 void cup_set_place(const cup_set *S, const double *u, double *g, double *c, double *r) {
   int use_u = S->p > 0 && u;
   if (g && S->K->m) {

@@ -4,7 +4,7 @@
 #define CUP_SET_IMPL_H
 
 #include "catchup/set.h"
-#include "catchup/projector.h"
+#include "catchup/projection.h"
 #include "polyset_impl.h"
 
 struct cup_set {
@@ -36,6 +36,10 @@ struct cup_set {
    * they missed none, < 0 on failure. Called with rows_ctx. */
   int (*recheck)(double t, const double *x, const double *z, void *ctx);
 };
+
+/* Give a STATE_POLYSET its recheck (the field above): the one way a module
+ * above set/ (a crowd) sets it. CUP_ERR_ARG for another kind of set. */
+int set_on_recheck(cup_set *S, int (*recheck)(double t, const double *x, const double *z, void *ctx));
 
 /* A set over a polyset that is not copied (an LCS's): g = F + G u with the
  * polyset's default offset as F and G (may be NULL) borrowed too. */

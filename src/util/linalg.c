@@ -1,4 +1,4 @@
-/* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up; error messages, growing arrays. */
+/* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up; growing arrays. */
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -7,25 +7,6 @@
 #include <string.h>
 #include "catchup.h"
 #include "linalg.h"
-
-int cup_fail(char *buf, int status, const char *fmt, ...) {
-  if (buf) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, CUP_ERRMSG_LEN, fmt, ap);
-    va_end(ap);
-  }
-  return status;
-}
-
-int cup_vfail_at(char *buf, int w, int status, const char *fmt, va_list ap) {
-  if (!buf) return status;
-  size_t cap = CUP_ERRMSG_LEN;
-  if (w >= 0 && (size_t)w < cap) vsnprintf(buf + w, cap - (size_t)w, fmt, ap);
-  for (char *p = buf; *p; p++)                  /* one line, always */
-    if (*p == '\n' || *p == '\r') *p = ' ';
-  return status;
-}
 
 int cup_grow(void *arr, int *cap, int n, size_t size, int first) {
   if (n < *cap) return CUP_OK;

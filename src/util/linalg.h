@@ -1,5 +1,6 @@
 /* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up;
- * error messages and growing arrays. Internal to the library. */
+ * growing arrays. Internal to the library. Its users report errors too: it
+ * includes fail.h (cup_fail). */
 #ifndef CUP_LINALG_H
 #define CUP_LINALG_H
 
@@ -8,6 +9,7 @@
 #include <math.h>
 #include <cholmod.h>
 #include "catchup/sparse.h"
+#include "fail.h"
 
 /* An owned CSC matrix. */
 typedef struct cup_sparse {
@@ -17,20 +19,10 @@ typedef struct cup_sparse {
   double *x;    /* nnz */
 } cup_sparse;
 
-/* Format an error message into buf (may be NULL); returns status. */
-int cup_fail(char *buf, int status, const char *fmt, ...)
-  __attribute__((format(printf, 3, 4)));
-
 /* Room for one more element in the array *(T **)arr of *cap elements of
  * size bytes, n of them in use: doubles *cap (from first) when n == *cap.
  * CUP_ERR_NOMEM leaves the array and *cap as they were. */
 int cup_grow(void *arr, int *cap, int n, size_t size, int first);
-
-/* The rest of a message after a prefix of w characters already in buf
- * (CUP_ERRMSG_LEN bytes; w as snprintf returned it), with newlines turned to
- * spaces so that the whole message is one line; returns status. */
-int cup_vfail_at(char *buf, int w, int status, const char *fmt, va_list ap)
-  __attribute__((format(printf, 4, 0)));
 
 /* Copy and validate a view: sizes, index ranges, strictly increasing rows in
  * each column, finite values. `name` is used in messages ("C", "P"). */

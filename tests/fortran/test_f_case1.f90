@@ -3,7 +3,7 @@
 !    helper linked into this test calls the C functions directly), every
 !    sample to 1e-14, for the paper's tolerances and exact projections;
 !  * with exact projections at n = 10^3 the max-norm error against the
-!    Richardson reference (tests/data) is within 2% of 1.52/n (DESIGN.md);
+!    Richardson reference (tests/data) is within 2% of 1.52/n (docs/design.md);
 !  * the paper's tolerances eps_n = n^-2.1, eta_n = n^-1.05 are certified and
 !    change the trajectory by < 1% of the discretization error.
 !

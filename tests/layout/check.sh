@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Dependencies run one way, down the paper's chain:
 #
-#     util < set < lcp < projector < model < integrator < io < apps, fortran
+#     util < set < lcp < projector < model < integrator < io < apps, fortran, bench
 #
 # A file may include (and its object may call) only its own folder and the
 # folders below it; the public headers (include/) may be included by any
@@ -18,11 +18,15 @@
 # .o, named FOLDER/NAME.c.o; a ;-separated list is split), the symbols each
 # one uses from the others must follow the same order and form no cycle
 # either: that catches a call upward or a circle behind a shared header.
+# And the map: every source file (.c, .h, .h.in, .f90, .F90, .cmake) of a
+# folder with a README.md (src/*/, apps/, bench/, include/) has its line
+# there, "- `NAME` — what it holds", and every such line names a file that
+# exists.
 # Prints one line per violation and exits 1 if there is any.
 set -u
 order=(util set lcp projector model integrator io apps)
 declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [io]=6
-                  [apps]=7 [fortran]=7)
+                  [apps]=7 [fortran]=7 [bench]=7)
 generated=" catchup/version.h git_revision.h "   # written into the build tree
 
 root=${1:?usage: check.sh SRCDIR [OBJECT...]}
@@ -36,6 +40,7 @@ folder_of() {
   case $1 in
     include/*) echo public ;;
     apps/*) echo apps ;;
+    bench/*) echo bench ;;
     src/*/*) local f=${1#src/}; f=${f%%/*}; [ -n "${level[$f]+x}" ] && echo "$f" ;;
   esac
 }
@@ -54,11 +59,11 @@ declare -A deps=()   # module -> space-separated modules it needs
 module_of() { local m=${1%.c}; echo "${m%.h}"; }
 add_dep() { [ "$1" != "$2" ] && [[ " ${deps[$1]:-} " != *" $2 "* ]] && deps[$1]+=" $2"; }
 
-mapfile -t files < <(find src apps include -name '*.[ch]' -type f | sort)
+mapfile -t files < <(find src apps bench include -name '*.[ch]' -type f 2>/dev/null | sort)
 for f in "${files[@]}"; do
   ff=$(folder_of "$f")
   if [ -z "$ff" ]; then
-    say "$f: not in a layer folder (src/{$(IFS=,; echo "${order[*]}"),fortran}/, apps/, include/)"
+    say "$f: not in a layer folder (src/{$(IFS=,; echo "${order[*]}"),fortran}/, apps/, bench/, include/)"
     continue
   fi
   while IFS=: read -r line name; do
@@ -78,6 +83,23 @@ for f in "${files[@]}"; do
       add_dep "$(module_of "$f")" "$(module_of "$t")"
     fi
   done < <(grep -n '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$f")
+done
+
+# The map: a folder's README.md names each of its source files on a line of
+# its own, "- `NAME` — ..." (NAME relative to the folder), and nothing else.
+for d in src/*/ apps/ bench/ include/; do
+  d=${d%/}
+  readme=$d/README.md
+  [ -f "$readme" ] || { [ -d "$d" ] && say "$d/: has no README.md naming its files"; continue; }
+  while read -r f; do
+    rel=${f#"$d"/}
+    grep -qF -- "- \`$rel\`" "$readme" ||
+      say "$f: not named in $readme: add the line \"- \`$rel\` — what it holds\" (one line per file)"
+  done < <(find "$d" \( -name '*.[ch]' -o -name '*.h.in' -o -name '*.[fF]90' -o -name '*.cmake' \) \
+             -type f | sort)
+  while read -r rel; do
+    [ -f "$d/$rel" ] || say "$readme: names \`$rel\`, which is not in $d/: remove or mend its line"
+  done < <(sed -n 's/^- `\([^`]*\)`.*/\1/p' "$readme")
 done
 
 # Objects: FOLDER/NAME.c.o; an undefined symbol defined by another object is

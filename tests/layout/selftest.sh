@@ -2,8 +2,9 @@
 # The layout check itself: on copies of the tree it must pass as the tree is
 # and fail, naming the culprit, on each injected violation: an include up the
 # chain, a cycle inside a folder, a public header reaching into src/, a file
-# outside the layers, src/ including apps/; and with objects, a call up the
-# chain and a circle of calls behind includes that look innocent.
+# outside the layers, src/ including apps/, a source file its folder's
+# README.md does not name, a README line naming no file; and with objects, a
+# call up the chain and a circle of calls behind includes that look innocent.
 #
 #   selftest.sh SRCDIR [CC]
 set -u
@@ -14,15 +15,10 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 t=$work/t
 
-fail() { echo "selftest: $*"; exit 1; }
-fresh() { rm -rf "$t"; mkdir -p "$t"; cp -r "$src/src" "$src/apps" "$src/include" "$t/"; }
-expect_fail() {   # expect_fail WHAT TEXT [OBJECT...]
-  local what=$1 text=$2 out
-  shift 2
-  out=$(bash "$here/check.sh" "$t" "$@" 2>&1) && fail "$what: the check passed, expected a failure"
-  grep -qF -- "$text" <<< "$out" || fail "$what: the check failed without naming '$text': $out"
-  echo "selftest: $what: caught"
-}
+self=selftest
+. "$here/expect.sh"
+fresh() { rm -rf "$t"; mkdir -p "$t"; cp -r "$src/src" "$src/apps" "$src/bench" "$src/include" "$t/"; }
+check() { bash "$here/check.sh" "$t" "$@"; }   # check [OBJECT...]
 
 fresh
 bash "$here/check.sh" "$t" > /dev/null || fail "the tree as it is does not pass: $(bash "$here/check.sh" "$t")"
@@ -47,6 +43,15 @@ fresh
 echo 'int app_helper(void);' > "$t/apps/app_helper.h"
 echo '#include "../../apps/app_helper.h"' >> "$t/src/io/scene.c"
 expect_fail "src/ including apps/" "src/io/scene.c:"
+
+fresh
+echo '/* a new reader */' > "$t/src/io/stray_reader.c"
+expect_fail "file missing from its README" \
+  'src/io/stray_reader.c: not named in src/io/README.md: add the line "- `stray_reader.c` — what it holds"'
+
+fresh
+echo '- `later.c` — later the netlist' >> "$t/src/model/README.md"
+expect_fail "README naming no file" 'src/model/README.md: names `later.c`, which is not in src/model/'
 
 # Objects: set/a calls projector/b (upward); projector/c and projector/d call
 # each other (a circle); projector/e calls set/f (fine).

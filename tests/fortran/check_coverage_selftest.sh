@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The Fortran drift check itself: on a copy of the tree it must pass as the
+# tree is, and fail, naming the culprit, on a new public function without a
+# binding (the case it exists for), a binding of a function C no longer
+# declares, and a binding no wrapper uses.
+#
+#   check_coverage_selftest.sh CC SRCDIR BUILD_INCLUDE_DIR
+set -u
+here=$(cd "$(dirname "$0")" && pwd)
+cc=$1 src=$2 binc=$3
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+t=$work/t
+self=check_coverage_selftest
+. "$here/../layout/expect.sh"
+fresh() { rm -rf "$t"; mkdir -p "$t/src"; cp -r "$src/include" "$t/"; cp -r "$src/src/fortran" "$t/src/"; }
+check() { bash "$here/check_coverage.sh" "$cc" "$t/include:$binc" "$t"; }
+
+fresh
+check > /dev/null || fail "the tree as it is fails: $(check)"
+
+fresh
+sed -i 's|^CUP_API int cup_lcs_dim(|CUP_API int cup_lcs_brand_new(const cup_lcs *L);\n&|' "$t/include/catchup/lcs.h"
+expect_fail "public function without a binding" "cup_lcs_brand_new has no bind(C) interface"
+
+fresh
+printf '%s\n' 'module gone' 'interface' \
+  '  function c_cup_gone(k) bind(C, name="cup_gone") result(r)' 'end interface' 'end module gone' \
+  > "$t/src/fortran/gone.f90"
+expect_fail "binding of a function C no longer declares" "binds cup_gone (bind(C, name=\"cup_gone\")), which no public header declares"
+
+fresh
+sed -i 's|c_cup_lcs_has_D(L%ptr) /= 0|.false.|' "$t/src/fortran/catchup_model.f90"
+expect_fail "binding no wrapper uses" "c_cup_lcs_has_D (bind(C) of cup_lcs_has_D) is used by no wrapper"
+echo "check_coverage_selftest: the drift check catches every injected drift"
