@@ -224,6 +224,44 @@ static void test_buck(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* A relaxation oscillator gated by its own capacitor: C charges from 10 V
+ * through R1 = 1k while S1 is off and discharges through RON = 250 (to
+ * v_inf = 2 V, tau2 = R1 || RON C) while on; S1 turns on above VT + VH = 6 V
+ * and off below VT - VH = 4 V. From v(0) = 0: on at tau1 ln(10/4), then
+ * off after t2 = tau2 ln((6 - 2)/(4 - 2)), on after t1 = tau1 ln((10 - 4)/(10 - 6)),
+ * a period of t1 + t2. The samples against that piecewise closed form. */
+static double relax_exact(double t) {
+  const double tau1 = 1e-3, tau2 = 0.2e-3, t1 = tau1 * log(6.0 / 4), t2 = tau2 * log(4.0 / 2);
+  double ton = tau1 * log(10.0 / 4);
+  if (t <= ton) return 10 * (1 - exp(-t / tau1));
+  double s = fmod(t - ton, t1 + t2);
+  return s <= t2 ? 2 + 4 * exp(-s / tau2) : 10 - 6 * exp(-(s - t2) / tau1);
+}
+
+static void test_relaxation(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("hysteretic RC relaxation oscillator\n"
+                            "V1 in 0 10\n"
+                            "R1 in c 1k\n"
+                            "C1 c 0 1u\n"
+                            "S1 c 0 c 0 SMOD\n"
+                            ".model SMOD SW(VT=5 VH=1 RON=250)\n");
+  run_rec r;
+  run(nl, 5e-3, 1e-12, 5001, "v(c)", &r);
+  double worst = 0, tw = 0;
+  for (long k = 0; k < r.count; k++) {
+    double e = fabs(r.x[k] - relax_exact(r.t[k]));
+    if (e > worst) { worst = e; tw = r.t[k]; }
+  }
+  const double period = 1e-3 * log(1.5) + 0.2e-3 * log(2.0);
+  printf("relaxation oscillator (period 2 tau ln form: %.9e s, %.1f periods): max |v - closed form| = %.2e V "
+         "(at t = %.6e)\n", period, (5e-3 - 1e-3 * log(2.5)) / period, worst, tw);
+  assert_true(worst <= 1e-8);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
 static void test_errors(void **state) {
   (void)state;
   assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 NOPE\nV1 c 0 1\n"),
@@ -247,7 +285,8 @@ static void test_errors(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
-    cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
+    cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -92,6 +92,9 @@ typedef struct cup_switching {
   void (*jump)(void *ctx, int topo, double *x);
   /** 1 if a switch's control in it depends on the state or the diodes. */
   int (*state_gated)(void *ctx, int topo);
+  /** 1 if a switch the circuit gates leaves configuration topo at time t,
+   *  state x (its control past the threshold), 0 if not, < 0 on error. */
+  int (*crossed)(void *ctx, int topo, double t, const double *x);
 } cup_switching;
 
 #ifdef __cplusplus

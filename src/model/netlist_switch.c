@@ -528,16 +528,22 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
                  "hysteresis)", t);
 }
 
-/* 1 if, from configuration tp, some source-gated switch changes at s. */
-static int changes(nl_switched *S, const nl_topo *tp, double s, double *cv) {
-  if (controls(S, tp, s, NULL, NULL, cv)) return -1;
-  for (int k = 0; k < S->nsw; k++) {
-    const double *row = tp->ctl + (size_t)k * (tp->sub->n + tp->sub->p + tp->sub->m);
-    int src = 1;
-    for (int j = 0; j < tp->sub->n && src; j++) src = row[j] == 0;
-    for (int j = tp->sub->n + tp->sub->p; j < tp->sub->n + tp->sub->p + tp->sub->m && src; j++) src = row[j] == 0;
-    if (!src) cv[k] = S->c.elem[S->sw[k]].vt;     /* circuit-gated: not a breakpoint */
-  }
+/* 1 if switch k's control in configuration tp depends on the state or the diodes. */
+static int gated_by_state(const nl_switched *S, const nl_topo *tp, int k) {
+  int n = tp->sub->n, p = tp->sub->p, nv = n + p + tp->sub->m;
+  const double *row = tp->ctl + (size_t)k * nv;
+  for (int j = 0; j < nv; j++)
+    if (row[j] != 0 && (j < n || j >= n + p)) return 1;
+  (void)S;
+  return 0;
+}
+
+/* 1 if, from configuration tp, a switch of one kind (by_state: those the
+ * circuit gates, else those the sources alone gate) changes at s, state x. */
+static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
+  if (controls(S, tp, s, x, NULL, cv)) return -1;
+  for (int k = 0; k < S->nsw; k++)
+    if (gated_by_state(S, tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
   return rule(S, tp->cfg, cv) != tp->cfg;
 }
 
@@ -556,14 +562,14 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
     double lo = a, hi = -1;
     for (int j = 1; j <= 16 && hi < 0; j++) {
       double s = j == 16 ? b : a + (b - a) * j / 16;
-      int ch = changes(S, tp, s, cv);
+      int ch = changes(S, tp, s, NULL, 0, cv);
       if (ch < 0) return CUP_ERR_CALLBACK;
       if (ch) hi = s; else lo = s;
     }
     if (hi >= 0) {
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
-        int ch = changes(S, tp, mid, cv);
+        int ch = changes(S, tp, mid, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
         if (ch) hi = mid; else lo = mid;
       }
@@ -609,6 +615,12 @@ static void op_jump(void *ctx, int topo, double *x) {
   cup_copy(x, y, n);
 }
 
+static int op_crossed(void *ctx, int topo, double t, const double *x) {
+  cup_netlist *nl = ctx;
+  double cv[64];
+  return changes(nl->sw, &nl->sw->topo[topo], t, x, 1, cv);
+}
+
 static int op_state_gated(void *ctx, int topo) {
   cup_netlist *nl = ctx;
   return nl->sw->topo[topo].state_gated;
@@ -617,7 +629,7 @@ static int op_state_gated(void *ctx, int topo) {
 int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
   if (!nl || !nl->sw || !ops) return 0;
   *ops = (cup_switching){.ctx = nl, .settle = op_settle, .next = op_next, .lcs = op_lcs, .jump = op_jump,
-                         .state_gated = op_state_gated};
+                         .state_gated = op_state_gated, .crossed = op_crossed};
   return 1;
 }
 
