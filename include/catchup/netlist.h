@@ -97,6 +97,16 @@ CUP_API const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */
 CUP_API int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out);
 
+/** Switches (S, W): how many the netlist has. */
+CUP_API int cup_netlist_switch_count(const cup_netlist *nl);
+/** 1 and the netlist's switched LCS in *sw if it has switches, else 0.
+ *  The netlist's own LCS (cup_netlist_lcs) is the configuration at t = 0,
+ *  and its signals are the configuration's in force (the last settled or
+ *  jumped into). */
+CUP_API int cup_netlist_switching(cup_netlist *nl, cup_switching *sw);
+/** Switch configurations formulated so far (each once). */
+CUP_API long cup_netlist_configurations_formed(const cup_netlist *nl);
+
 #ifdef __cplusplus
 }
 #endif

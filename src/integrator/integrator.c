@@ -359,6 +359,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
 void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
+  if (I->swo) I->swo->free(&I->swr);
   cup_adaptive_free(&I->ad);
   cup_integrator_free(&I->half);
   cup_estimate_free(&I->est);
@@ -377,7 +378,8 @@ void cup_integrator_free(cup_integrator **Ip) {
 }
 
 const double *cup_integrator_state(const cup_integrator *I) {
-  return !I ? NULL : I->ad ? cup_adaptive_state(I->ad) : I->x;
+  return !I ? NULL : I->swr ? cup_integrator_state(I->swo->child(I->swr)) : I->ad ? cup_adaptive_state(I->ad)
+                                                                                    : I->x;
 }
 
 /* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
@@ -385,6 +387,7 @@ const double *cup_integrator_state(const cup_integrator *I) {
 int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I || !zeta) return CUP_ERR_ARG;
   if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
+  if (I->swr) return cup_integrator_zeta(I->swo->child(I->swr), zeta);
   if (I->ad) return cup_adaptive_zeta(I->ad, zeta);
   const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
@@ -722,6 +725,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   cup_run_info *info = info_out ? info_out : &local;
   if (I) I->stop.restored = 0;
   if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
+  if (I && I->swr && x0) return I->swo->run(I, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   if (!I || !x0) return info->status = CUP_ERR_ARG;
