@@ -237,6 +237,19 @@ static inline void pr_eval_y(const pr_traj *tr, double t, double *y) {
   pr_flow(tr->c->ny, tr->c->mode[s->mode].M, s->y0, t - s->t0, y);
 }
 
+/* The value before a jump at t (the first segment with t1 >= t). */
+static inline void pr_eval_left(const pr_traj *tr, double t, double *x) {
+  int lo = 0, hi = tr->nseg - 1;
+  while (lo < hi) {
+    int mid = (lo + hi) / 2;
+    if (tr->seg[mid].t1 >= t) hi = mid; else lo = mid + 1;
+  }
+  const pr_seg *s = &tr->seg[lo];
+  double y[PR_Y];
+  pr_flow(tr->c->ny, tr->c->mode[s->mode].M, s->y0, t - s->t0, y);
+  memcpy(x, y, sizeof(double) * (size_t)tr->c->n);
+}
+
 static inline void pr_eval(const pr_traj *tr, double t, double *x) {
   double y[PR_Y];
   pr_eval_y(tr, t, y);
