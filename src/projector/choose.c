@@ -26,3 +26,9 @@ int proj_small_lcp(const cup_polyset *K, const cup_projector_options *o) {
   const cup_projector_options defaults = {.method = CUP_PROJ_AUTO};   /* what the choice reads of them */
   return proj_choose(K, o ? o : &defaults) == proj_small;
 }
+
+cup_projector_options proj_backup_options(const cup_polyset *K, const cup_projector_options *o) {
+  cup_projector_options b = *o;
+  if (proj_choose(K, o) == proj_small) b.method = CUP_PROJ_ACTIVESET;   /* proj_dense: small's fallback */
+  return b;
+}

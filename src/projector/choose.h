@@ -1,6 +1,7 @@
 /* choose — which method projects onto a set (choose.c): the registry of
  * the projector's methods, and the one question the modules above ask of
- * the projector's small-set path. */
+ * the projector's small-set path, and the options of a projector behind a
+ * scheme's own step LCP. */
 #ifndef CUP_CHOOSE_H
 #define CUP_CHOOSE_H
 
@@ -18,5 +19,12 @@ const proj_method *proj_choose(const cup_polyset *K, const cup_projector_options
  * schemes whose step is that LCP (the explicit scheme on such a set, the
  * theta scheme for a circuit) ask here. */
 int proj_small_lcp(const cup_polyset *K, const cup_projector_options *o);
+
+/* The options of a projector that stands behind a scheme's own step LCP
+ * (the theta step, the explicit step where proj_small_lcp says so, the
+ * adaptive scheme's projection), for what that LCP cannot certify: where
+ * the small-set path would be chosen, the method it falls back to (the
+ * dense active set), so that a run builds one LCP; else o itself. */
+cup_projector_options proj_backup_options(const cup_polyset *K, const cup_projector_options *o);
 
 #endif
