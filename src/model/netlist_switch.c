@@ -48,6 +48,7 @@ struct nl_switched {
   int cur;                 /* the configuration in force (signals) */
   double *ut;              /* p: u(t) */
   double *zf;              /* scratch: a configuration's zeta with multipliers */
+  int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
 };
 
 static int nomem(const nl_circuit *c, char *errmsg) {
@@ -548,9 +549,10 @@ static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x,
 }
 
 /* The first time in (t, tmax] at which a source-gated switch of
- * configuration topo changes (tmax if none): the input's pieces sampled
- * 16 times each (exact for PULSE and PWL, whose pieces are linear), the
- * crossing bisected to the last bit; a jump edge switches at its time. */
+ * configuration topo changes (tmax if none): the input's pieces checked at
+ * their ends when every source is DC, PULSE or PWL (linear pieces), else
+ * sampled 16 times each; the crossing bisected to the last bit; a jump edge
+ * switches at its time. */
 static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double *tnext) {
   nl_switched *S = nl->sw;
   const nl_topo *tp = &S->topo[topo];
@@ -560,13 +562,24 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
     double b = tp->sub->u ? cup_input_next_break(tp->sub->u, a) : tmax;
     if (!(b <= tmax)) b = tmax;
     double lo = a, hi = -1;
-    for (int j = 1; j <= 16 && hi < 0; j++) {
-      double s = j == 16 ? b : a + (b - a) * j / 16;
+    /* linear pieces: the rule is monotone along one, so its end decides (just
+     * before b, clear of the input's rounding of its own breakpoints, then b
+     * itself: a jump edge switches there; bisection finds the last bit) */
+    int samples = S->linear ? 2 : 16;
+    for (int j = 1; j <= samples && hi < 0; j++) {
+      double s = j == samples ? b : S->linear ? b - (b - a) * 1e-9 : a + (b - a) * j / 16;
+      if (!(s > lo)) continue;
       int ch = changes(S, tp, s, NULL, 0, cv);
       if (ch < 0) return CUP_ERR_CALLBACK;
       if (ch) hi = s; else lo = s;
     }
     if (hi >= 0) {
+      double p = nextafter(hi, lo);                /* a jump edge: at hi itself, one check */
+      if (p > lo) {
+        int ch = changes(S, tp, p, NULL, 0, cv);
+        if (ch < 0) return CUP_ERR_CALLBACK;
+        if (!ch) lo = p;
+      }
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
         int ch = changes(S, tp, mid, NULL, 0, cv);
@@ -695,6 +708,9 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
       st = check_controls(c, e, errmsg);
       S->sw[S->nsw++] = e;
     }
+  S->linear = 1;
+  for (int e = 0; e < c->nelem; e++)
+    if ((c->elem[e].kind == NL_V || c->elem[e].kind == NL_I) && c->elem[e].src.fn == NL_FN_SIN) S->linear = 0;
   uint64_t cfg = 0;                                /* ON/OFF as written, else off, until the controls say */
   for (int k = 0; !st && k < S->nsw; k++)
     if (c->elem[S->sw[k]].init == 1) cfg |= (uint64_t)1 << k;
