@@ -321,6 +321,65 @@ static void test_fixed_step(void **state) {
   assert_true(err[1] <= 0.1 && err[0] / err[1] > 1.6);   /* each switching up to h late: first order */
 }
 
+/* A controller from code (cup_netlist_set_controller) that writes the
+ * buck's PWM every 5 us (on at instants 4k, off at the others) gives the
+ * trajectory of the gate from PULSE: the same switching times, so the
+ * same states (the two runs against each other, the PULSE run against
+ * D Vin in test_buck). A controller failing stops the run at its time. */
+static int pwm_gate(double t, const double *x, int nswitch, int *gate, void *ctx) {
+  (void)x;
+  long *calls = ctx;
+  (*calls)++;
+  assert_int_equal(nswitch, 1);
+  long k = lround(t / 5e-6);
+  gate[0] = k % 4 == 0;
+  return 0;
+}
+
+static int failing_gate(double t, const double *x, int nswitch, int *gate, void *ctx) {
+  (void)x; (void)nswitch; (void)ctx;
+  gate[0] = 1;
+  return t > 1e-4;
+}
+
+static void test_controller(void **state) {
+  (void)state;
+  const char *buck = "ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                     "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n";
+  cup_netlist *ref = text_ok(buck), *nl = text_ok(buck);
+  char err[CUP_ERRMSG_LEN];
+  long calls = 0;
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, &calls, err), CUP_OK);
+  run_rec a, b;
+  run(ref, 2e-3, 1e-10, 2001, NULL, &a);
+  run(nl, 2e-3, 1e-10, 2001, NULL, &b);
+  double worst = 0;
+  for (long k = 0; k < a.count * 2; k++) worst = fmax(worst, fabs(a.x[k] - b.x[k]));
+  printf("buck, PWM from a controller every 5 us (%ld calls) against PULSE: max |dx| = %.2e\n", calls, worst);
+  assert_true(worst <= 1e-9);
+  assert_int_equal(calls, 400);                   /* t = 0, 5u, ..., 1995u */
+  rec_free(&a);
+  rec_free(&b);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, failing_gate, NULL, err), CUP_OK);
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = 2e-3;
+  o.output = CUP_OUTPUT_FINAL;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err), CUP_OK);
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info), CUP_ERR_CALLBACK);
+  assert_contains(info.message, "the controller callback failed");
+  printf("failing controller: %s\n", info.message);
+  cup_integrator_free(&I);
+  assert_int_equal(cup_netlist_set_controller(nl, 0, pwm_gate, NULL, err), CUP_ERR_ARG);
+  cup_netlist_free(&nl);
+  cup_netlist_free(&ref);
+}
+
 static void test_errors(void **state) {
   (void)state;
   assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 NOPE\nV1 c 0 1\n"),
@@ -345,7 +404,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
-    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -49,7 +49,18 @@ struct nl_switched {
   double *ut;              /* p: u(t) */
   double *zf;              /* scratch: a configuration's zeta with multipliers */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
+  /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
+  cup_gate_fn gate_fn;
+  void *gate_ctx;
+  double gate_ts;
+  int *gate;               /* nsw */
 };
+
+/* t's sampling instant k if t is one (within 1e-9 ts), else -1. */
+static long instant(const nl_switched *S, double t) {
+  double k = floor(t / S->gate_ts + 0.5);
+  return fabs(t - k * S->gate_ts) <= 1e-9 * S->gate_ts ? (long)k : -1;
+}
 
 static int nomem(const nl_circuit *c, char *errmsg) {
   return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory while forming a switch configuration");
@@ -516,6 +527,16 @@ static uint64_t rule(const nl_switched *S, uint64_t cfg, const double *cv) {
 static int settle(cup_netlist *nl, int *topo, double t, const double *x, const double *zeta, char *errmsg) {
   nl_switched *S = nl->sw;
   double cv[64];
+  if (S->gate_fn) {                                /* a controller: its gates at its instants, held between */
+    if (instant(S, t) < 0) return CUP_OK;
+    for (int k = 0; k < S->nsw; k++) S->gate[k] = (int)(S->topo[*topo].cfg >> k & 1u);
+    if (S->gate_fn(t, x, S->nsw, S->gate, S->gate_ctx))
+      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "t = %.17g: the controller callback failed", t);
+    uint64_t cfg = 0;
+    for (int k = 0; k < S->nsw; k++)
+      if (S->gate[k]) cfg |= (uint64_t)1 << k;
+    return topo_of(nl, cfg, topo, errmsg);
+  }
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
     if (controls(S, &S->topo[*topo], t, x, zeta, cv))
       return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
@@ -558,6 +579,12 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
   const nl_topo *tp = &S->topo[topo];
   double cv[64], a = t;
   *tnext = tmax;
+  if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
+    long k = instant(S, t);
+    double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
+    if (next < tmax) *tnext = next;
+    return CUP_OK;
+  }
   while (a < tmax) {
     double b = tp->sub->u ? cup_input_next_break(tp->sub->u, a) : tmax;
     if (!(b <= tmax)) b = tmax;
@@ -631,12 +658,13 @@ static void op_jump(void *ctx, int topo, double *x) {
 static int op_crossed(void *ctx, int topo, double t, const double *x) {
   cup_netlist *nl = ctx;
   double cv[64];
+  if (nl->sw->gate_fn) return 0;
   return changes(nl->sw, &nl->sw->topo[topo], t, x, 1, cv);
 }
 
 static int op_state_gated(void *ctx, int topo) {
   cup_netlist *nl = ctx;
-  return nl->sw->topo[topo].state_gated;
+  return !nl->sw->gate_fn && nl->sw->topo[topo].state_gated;
 }
 
 int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
@@ -647,6 +675,20 @@ int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
 }
 
 int cup_netlist_switch_count(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->nsw : 0; }
+
+int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void *ctx, char *errmsg) {
+  if (!nl) return cup_fail(errmsg, CUP_ERR_ARG, "controller: NULL netlist");
+  if (!nl->sw) return cup_fail(errmsg, CUP_ERR_ARG, "controller: %s has no switch to gate", nl->file);
+  if (fn && !(ts > 0 && isfinite(ts)))
+    return cup_fail(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
+  nl_switched *S = nl->sw;
+  if (fn && !S->gate && !(S->gate = calloc((size_t)S->nsw + 1, sizeof(int))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  S->gate_fn = fn;
+  S->gate_ctx = ctx;
+  S->gate_ts = ts;
+  return CUP_OK;
+}
 
 long cup_netlist_configurations_formed(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->formed : 0; }
 
@@ -672,7 +714,7 @@ static void sw_free(nl_switched **Sp) {
     free(S->topo[k].ctl);
   }
   nl_circuit_free(&S->c);
-  free(S->sw); free(S->ut); free(S->zf);
+  free(S->sw); free(S->ut); free(S->zf); free(S->gate);
   free(S);
   *Sp = NULL;
 }
