@@ -59,8 +59,10 @@ static int record(long k, double t, const double *x, void *ctx) {
   return 0;
 }
 
-/* Run nl adaptively over [0, T] at tol with N samples into r. */
-static void run(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r) {
+/* Run nl over [0, T] with N samples into r: the adaptive scheme at tol,
+ * or (steps > 0) scheme on that many steps. */
+static void run_with(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r, cup_scheme scheme,
+                     long steps) {
   char err[CUP_ERRMSG_LEN];
   memset(r, 0, sizeof *r);
   r->nl = nl;
@@ -75,7 +77,8 @@ static void run(cup_netlist *nl, double T, double tol, long N, const char *probe
   assert_int_equal(cup_netlist_switching(nl, &sw), 1);
   cup_integrator_options o;
   cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.scheme = steps > 0 ? scheme : CUP_SCHEME_ADAPTIVE;
+  if (steps > 0) o.n = steps;
   o.T = T;
   o.tol_abs = o.tol_rel = tol;
   o.output = CUP_OUTPUT_SAMPLES;
@@ -89,6 +92,10 @@ static void run(cup_netlist *nl, double T, double tol, long N, const char *probe
   r->status = st;
   assert_int_equal(r->count, N);
   cup_integrator_free(&I);
+}
+
+static void run(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r) {
+  run_with(nl, T, tol, N, probe, r, CUP_SCHEME_ADAPTIVE, 0);
 }
 
 static void rec_free(run_rec *r) { free(r->t); free(r->x); free(r->s); }
@@ -262,6 +269,117 @@ static void test_relaxation(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* The fixed-step schemes switch at the end of the step that holds the
+ * switching time: on a grid that holds it, the two capacitors are as
+ * exact as under the adaptive scheme, and the buck's mean output is D Vin
+ * to the scheme's error (it was 3.41 V while the gate's edges and the grid
+ * rounded apart and a step in seven periods was taken in the old
+ * configuration); the relaxation oscillator, whose switching times fall
+ * between grid points, converges at first order in h. */
+static void test_fixed_step(void **state) {
+  (void)state;
+  static const cup_scheme schemes[] = {CUP_SCHEME_EXPLICIT, CUP_SCHEME_IMPLICIT, CUP_SCHEME_EXPONENTIAL,
+                                       CUP_SCHEME_THETA};
+  for (int q = 0; q < 4; q++) {
+    cup_netlist *nl = text_ok("two capacitors\nC1 a 0 1u IC=10\nC2 b 0 3u\nS1 a b g 0 SMOD\n"
+                              "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n.model SMOD SW(VT=0.5 VH=0.1)\n");
+    run_rec r;
+    run_with(nl, 2e-3, 0, 201, NULL, &r, schemes[q], 200);
+    double worst = 0;
+    for (long k = 0; k < r.count; k++)
+      worst = fmax(worst, r.t[k] <= 1e-3 ? fmax(fabs(r.x[2 * k] - 10), fabs(r.x[2 * k + 1]))
+                                        : fmax(fabs(r.x[2 * k] - 2.5), fabs(r.x[2 * k + 1] - 2.5)));
+    printf("two capacitors, %-11s n = 200: max error %.2e V\n", cup_scheme_name(schemes[q]), worst);
+    assert_true(worst <= 1e-13);
+    rec_free(&r);
+    cup_netlist_free(&nl);
+  }
+  cup_netlist *nl = text_ok("ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                            "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n");
+  run_rec r;
+  long per = 40, periods = 200;
+  run_with(nl, periods * 20e-6, 0, periods * per + 1, NULL, &r, CUP_SCHEME_THETA, periods * per);
+  double mean = 0;
+  long k0 = (periods - 1) * per;
+  for (long k = k0; k < k0 + per; k++) mean += 0.5 * (r.x[2 * k + 1] + r.x[2 * k + 3]) / (double)per;
+  printf("buck, theta, 40 steps a period: mean v(out) over the 200th period %.6f V (D Vin = 3)\n", mean);
+  assert_true(fabs(mean - 3) <= 2e-3);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+  double err[2];
+  for (int h = 0; h < 2; h++) {
+    nl = text_ok("relaxation\nV1 in 0 10\nR1 in c 1k\nC1 c 0 1u\nS1 c 0 c 0 SMOD\n.model SMOD SW(VT=5 VH=1 RON=250)\n");
+    run_with(nl, 5e-3, 0, 501, NULL, &r, CUP_SCHEME_THETA, 10000L << h);
+    err[h] = 0;
+    for (long k = 0; k < r.count; k++) err[h] = fmax(err[h], fabs(r.x[k] - relax_exact(r.t[k])));
+    rec_free(&r);
+    cup_netlist_free(&nl);
+  }
+  printf("relaxation oscillator, theta: max error %.3e V (n = 10000), %.3e V (n = 20000): ratio %.2f\n", err[0],
+         err[1], err[0] / err[1]);
+  assert_true(err[1] <= 0.1 && err[0] / err[1] > 1.6);   /* each switching up to h late: first order */
+}
+
+/* A controller from code (cup_netlist_set_controller) that writes the
+ * buck's PWM every 5 us (on at instants 4k, off at the others) gives the
+ * trajectory of the gate from PULSE: the same switching times, so the
+ * same states (the two runs against each other, the PULSE run against
+ * D Vin in test_buck). A controller failing stops the run at its time. */
+static int pwm_gate(double t, const double *x, int nswitch, int *gate, void *ctx) {
+  (void)x;
+  long *calls = ctx;
+  (*calls)++;
+  assert_int_equal(nswitch, 1);
+  long k = lround(t / 5e-6);
+  gate[0] = k % 4 == 0;
+  return 0;
+}
+
+static int failing_gate(double t, const double *x, int nswitch, int *gate, void *ctx) {
+  (void)x; (void)nswitch; (void)ctx;
+  gate[0] = 1;
+  return t > 1e-4;
+}
+
+static void test_controller(void **state) {
+  (void)state;
+  const char *buck = "ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                     "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n";
+  cup_netlist *ref = text_ok(buck), *nl = text_ok(buck);
+  char err[CUP_ERRMSG_LEN];
+  long calls = 0;
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, &calls, err), CUP_OK);
+  run_rec a, b;
+  run(ref, 2e-3, 1e-10, 2001, NULL, &a);
+  run(nl, 2e-3, 1e-10, 2001, NULL, &b);
+  double worst = 0;
+  for (long k = 0; k < a.count * 2; k++) worst = fmax(worst, fabs(a.x[k] - b.x[k]));
+  printf("buck, PWM from a controller every 5 us (%ld calls) against PULSE: max |dx| = %.2e\n", calls, worst);
+  assert_true(worst <= 1e-9);
+  assert_int_equal(calls, 400);                   /* t = 0, 5u, ..., 1995u */
+  rec_free(&a);
+  rec_free(&b);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, failing_gate, NULL, err), CUP_OK);
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = 2e-3;
+  o.output = CUP_OUTPUT_FINAL;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err), CUP_OK);
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info), CUP_ERR_CALLBACK);
+  assert_contains(info.message, "the controller callback failed");
+  printf("failing controller: %s\n", info.message);
+  cup_integrator_free(&I);
+  assert_int_equal(cup_netlist_set_controller(nl, 0, pwm_gate, NULL, err), CUP_ERR_ARG);
+  cup_netlist_free(&nl);
+  cup_netlist_free(&ref);
+}
+
 static void test_errors(void **state) {
   (void)state;
   assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 NOPE\nV1 c 0 1\n"),
@@ -286,7 +404,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
-    cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -195,9 +195,11 @@ CUP_API void cup_integrator_free(cup_integrator **I);
  *  a netlist with switches gives one): each configuration's integrator is
  *  made from its LCS when the configuration first occurs and kept; the run
  *  steps to the switching times and jumps the state onto each new
- *  configuration's constraints there. The adaptive scheme only (its steps
- *  end on breakpoints); switches gated by the sources alone. The same run,
- *  state, zeta and free as any integrator's; no checkpoints. */
+ *  configuration's constraints there. The adaptive scheme steps to the
+ *  switching times and locates those of switches the circuit gates; the
+ *  fixed-step schemes switch at the end of the step that holds them (exact
+ *  when the grid holds them). The same run, state, zeta and free as any
+ *  integrator's; no checkpoints, no step-doubling estimate. */
 CUP_API int cup_integrator_create_switched(cup_integrator **I, const cup_switching *sw, const cup_input *u,
                                            const cup_integrator_options *o, char *errmsg);
 

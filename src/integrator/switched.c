@@ -9,9 +9,13 @@
  * projection in the energy metric), then its integrator goes on from there
  * (projecting onto its K(t) first, as at any breakpoint).
  *
- * The adaptive scheme runs switched circuits: its steps end on breakpoints
- * already, and a window [ta, tb] of one configuration is its run from ta
- * to tb (cup_adaptive_window). */
+ * The adaptive scheme steps to the switching times (its steps end on
+ * breakpoints already; a window [ta, tb] of one configuration is its run
+ * from ta to tb, cup_adaptive_window) and locates those of switches the
+ * circuit gates. The fixed-step schemes keep their grid (t_k = k T / n)
+ * and switch at the end of the step that holds the switching time
+ * (cup_integrator_window_): exact when the grid holds the switching times,
+ * an error of order h in the switching time otherwise. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -63,7 +67,7 @@ static int watch_sink(long k, double t, const double *x, void *ctx) {
 
 static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   cup_swrun *S = ctx;
-  if (check(S, t, cup_adaptive_state(S->child[S->cur]->ad))) return 1;
+  if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
   if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
   return 0;
 }
@@ -165,6 +169,54 @@ static int locate(cup_swrun *S, int topo, double *t, long *steps, long *next_sam
   return st;
 }
 
+/* The fixed-step schemes: each configuration's integrator on the run's
+ * grid (all have the same T and n), a window from t_k to the first grid
+ * time at or after the next source-gated switching time, or one step when
+ * a switch the circuit gates is in force; the configuration settled at the
+ * window's end (a switching inside a step is taken at its end). */
+static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
+  const cup_switching *sw = &S->ops;
+  long k = 0, n = S->o.n, next_j = 0;
+  int st = CUP_OK;
+  for (int first = 1; st >= 0 && k < n; first = 0) {
+    if (!first) sw->jump(sw->ctx, topo, S->x);
+    st = child_of(S, topo, info->message);
+    if (st) break;
+    S->cur = topo;
+    cup_integrator *C = S->child[topo];
+    long k1 = k + 1;
+    double tb = 0;
+    if (!sw->state_gated(sw->ctx, topo)) {
+      if (sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
+        st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
+        break;
+      }
+      k1 = (long)ceil(tb / C->h);
+      if (k1 > n) k1 = n;
+      while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
+      while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
+      /* a switching time within 1e-9 h of a grid time is on it: the gate's
+       * edges (k PER + PW) and the grid (k T / n) round apart by an ulp, and
+       * a whole step more of the old configuration would follow (a buck on a
+       * grid holding its edges: 29 of 200 periods one step longer on) */
+      if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * C->h) k1--;
+      if (k1 <= k) k1 = k + 1;
+    }
+    cup_run_info w;
+    int wst = cup_integrator_window_(C, k, k1, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
+    add_info(info, &w);
+    if (wst < 0) { st = wst; break; }
+    cup_copy(S->x, cup_integrator_state(C), S->n);
+    k = k1;
+    t = cup_integrator_grid_time_(C, k);
+    /* the rule at the switching time when the grid time was snapped to it from below */
+    if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
+  }
+  if (st < 0) info->status = st;
+  info->t = t;
+  return info->status;
+}
+
 static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   cup_swrun *S = I->swr;
   const cup_switching *sw = &S->ops;
@@ -176,6 +228,16 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
   cup_copy(S->x, x0, S->n);
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
+  if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
+    sw->jump(sw->ctx, topo, S->x);
+    if (memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) {
+      info->status = CUP_WARN_X0_OUTSIDE;
+      snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
+               "t = 0 (a loop of capacitors or a cut of inductors): it is projected onto them, and the first "
+               "sample is the projection");
+    }
+    return fixed_run(S, 0, topo, info);
+  }
   for (int first = 1; st >= 0 && t < T; first = 0) {
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
     if (first && memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) {
@@ -215,9 +277,6 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
   if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
     return cup_fail(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
   *out = NULL;
-  if (o->scheme != CUP_SCHEME_ADAPTIVE)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "a circuit with switches runs under the adaptive scheme (it steps "
-                    "to the switching times); the %s scheme does not switch yet", cup_scheme_name(o->scheme));
   if (o->estimate)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "a circuit with switches: the adaptive scheme estimates its error "
                     "itself (estimate is for the fixed-step schemes)");

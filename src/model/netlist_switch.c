@@ -48,7 +48,19 @@ struct nl_switched {
   int cur;                 /* the configuration in force (signals) */
   double *ut;              /* p: u(t) */
   double *zf;              /* scratch: a configuration's zeta with multipliers */
+  int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
+  /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
+  cup_gate_fn gate_fn;
+  void *gate_ctx;
+  double gate_ts;
+  int *gate;               /* nsw */
 };
+
+/* t's sampling instant k if t is one (within 1e-9 ts), else -1. */
+static long instant(const nl_switched *S, double t) {
+  double k = floor(t / S->gate_ts + 0.5);
+  return fabs(t - k * S->gate_ts) <= 1e-9 * S->gate_ts ? (long)k : -1;
+}
 
 static int nomem(const nl_circuit *c, char *errmsg) {
   return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory while forming a switch configuration");
@@ -515,6 +527,16 @@ static uint64_t rule(const nl_switched *S, uint64_t cfg, const double *cv) {
 static int settle(cup_netlist *nl, int *topo, double t, const double *x, const double *zeta, char *errmsg) {
   nl_switched *S = nl->sw;
   double cv[64];
+  if (S->gate_fn) {                                /* a controller: its gates at its instants, held between */
+    if (instant(S, t) < 0) return CUP_OK;
+    for (int k = 0; k < S->nsw; k++) S->gate[k] = (int)(S->topo[*topo].cfg >> k & 1u);
+    if (S->gate_fn(t, x, S->nsw, S->gate, S->gate_ctx))
+      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "t = %.17g: the controller callback failed", t);
+    uint64_t cfg = 0;
+    for (int k = 0; k < S->nsw; k++)
+      if (S->gate[k]) cfg |= (uint64_t)1 << k;
+    return topo_of(nl, cfg, topo, errmsg);
+  }
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
     if (controls(S, &S->topo[*topo], t, x, zeta, cv))
       return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
@@ -548,25 +570,43 @@ static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x,
 }
 
 /* The first time in (t, tmax] at which a source-gated switch of
- * configuration topo changes (tmax if none): the input's pieces sampled
- * 16 times each (exact for PULSE and PWL, whose pieces are linear), the
- * crossing bisected to the last bit; a jump edge switches at its time. */
+ * configuration topo changes (tmax if none): the input's pieces checked at
+ * their ends when every source is DC, PULSE or PWL (linear pieces), else
+ * sampled 16 times each; the crossing bisected to the last bit; a jump edge
+ * switches at its time. */
 static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double *tnext) {
   nl_switched *S = nl->sw;
   const nl_topo *tp = &S->topo[topo];
   double cv[64], a = t;
   *tnext = tmax;
+  if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
+    long k = instant(S, t);
+    double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
+    if (next < tmax) *tnext = next;
+    return CUP_OK;
+  }
   while (a < tmax) {
     double b = tp->sub->u ? cup_input_next_break(tp->sub->u, a) : tmax;
     if (!(b <= tmax)) b = tmax;
     double lo = a, hi = -1;
-    for (int j = 1; j <= 16 && hi < 0; j++) {
-      double s = j == 16 ? b : a + (b - a) * j / 16;
+    /* linear pieces: the rule is monotone along one, so its end decides (just
+     * before b, clear of the input's rounding of its own breakpoints, then b
+     * itself: a jump edge switches there; bisection finds the last bit) */
+    int samples = S->linear ? 2 : 16;
+    for (int j = 1; j <= samples && hi < 0; j++) {
+      double s = j == samples ? b : S->linear ? b - (b - a) * 1e-9 : a + (b - a) * j / 16;
+      if (!(s > lo)) continue;
       int ch = changes(S, tp, s, NULL, 0, cv);
       if (ch < 0) return CUP_ERR_CALLBACK;
       if (ch) hi = s; else lo = s;
     }
     if (hi >= 0) {
+      double p = nextafter(hi, lo);                /* a jump edge: at hi itself, one check */
+      if (p > lo) {
+        int ch = changes(S, tp, p, NULL, 0, cv);
+        if (ch < 0) return CUP_ERR_CALLBACK;
+        if (!ch) lo = p;
+      }
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
         int ch = changes(S, tp, mid, NULL, 0, cv);
@@ -618,12 +658,13 @@ static void op_jump(void *ctx, int topo, double *x) {
 static int op_crossed(void *ctx, int topo, double t, const double *x) {
   cup_netlist *nl = ctx;
   double cv[64];
+  if (nl->sw->gate_fn) return 0;
   return changes(nl->sw, &nl->sw->topo[topo], t, x, 1, cv);
 }
 
 static int op_state_gated(void *ctx, int topo) {
   cup_netlist *nl = ctx;
-  return nl->sw->topo[topo].state_gated;
+  return !nl->sw->gate_fn && nl->sw->topo[topo].state_gated;
 }
 
 int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
@@ -634,6 +675,20 @@ int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
 }
 
 int cup_netlist_switch_count(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->nsw : 0; }
+
+int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void *ctx, char *errmsg) {
+  if (!nl) return cup_fail(errmsg, CUP_ERR_ARG, "controller: NULL netlist");
+  if (!nl->sw) return cup_fail(errmsg, CUP_ERR_ARG, "controller: %s has no switch to gate", nl->file);
+  if (fn && !(ts > 0 && isfinite(ts)))
+    return cup_fail(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
+  nl_switched *S = nl->sw;
+  if (fn && !S->gate && !(S->gate = calloc((size_t)S->nsw + 1, sizeof(int))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  S->gate_fn = fn;
+  S->gate_ctx = ctx;
+  S->gate_ts = ts;
+  return CUP_OK;
+}
 
 long cup_netlist_configurations_formed(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->formed : 0; }
 
@@ -659,7 +714,7 @@ static void sw_free(nl_switched **Sp) {
     free(S->topo[k].ctl);
   }
   nl_circuit_free(&S->c);
-  free(S->sw); free(S->ut); free(S->zf);
+  free(S->sw); free(S->ut); free(S->zf); free(S->gate);
   free(S);
   *Sp = NULL;
 }
@@ -695,6 +750,9 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
       st = check_controls(c, e, errmsg);
       S->sw[S->nsw++] = e;
     }
+  S->linear = 1;
+  for (int e = 0; e < c->nelem; e++)
+    if ((c->elem[e].kind == NL_V || c->elem[e].kind == NL_I) && c->elem[e].src.fn == NL_FN_SIN) S->linear = 0;
   uint64_t cfg = 0;                                /* ON/OFF as written, else off, until the controls say */
   for (int k = 0; !st && k < S->nsw; k++)
     if (c->elem[S->sw[k]].init == 1) cfg |= (uint64_t)1 << k;
