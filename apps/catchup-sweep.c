@@ -41,6 +41,7 @@
 #include "sweep.h"
 #include "sweep_manager.h"
 #include "run_plan.h"
+#include "stop_signal.h"
 #include "git_revision.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
@@ -81,15 +82,6 @@ static int rank, nranks;
 static void sleep_us(long us) {
   struct timespec ts = {us / 1000000, (us % 1000000) * 1000};
   nanosleep(&ts, NULL);
-}
-
-/* CPU seconds of the process (every thread: MPI keeps some) or of the
- * calling thread, which computes the jobs. Each is a system call of about
- * a microsecond: they are read per batch, not per job. */
-static double cpu_seconds(clockid_t which) {
-  struct timespec ts;
-  clock_gettime(which, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 /* Wait for a request without spinning (a blocking wait would take a
@@ -186,22 +178,6 @@ static int parse_args(args_t *a, int argc, char **argv) {
   if (!a->sweep) return usage_error("%s", "no sweep file given");
   if (!a->out) return usage_error("%s", "no output file given: -o RESULTS.h5");
   return -1;
-}
-
-/* ---- signals ---- */
-
-static volatile sig_atomic_t stop_signal = 0;
-
-static void on_signal(int sig) { stop_signal = sig; }
-
-static void install_handlers(void) {
-  struct sigaction sa;
-  memset(&sa, 0, sizeof sa);
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND;        /* a second signal ends the process at once */
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
 }
 
 /* ---- test hooks ---- */
@@ -379,9 +355,11 @@ static void compute(computer *c, long job, sw_result *r, double *traj) {
 /* Jobs ids[0..count) into buf as the manager takes them (msg_head, then
  * each result followed by its trajectory). Returns the count, short of
  * `count` when a stop interrupted a job (that is not a result). Between
- * jobs, the answers in transit move along. */
+ * jobs, the answers in transit move along. The CPU time is the computing
+ * thread's (a system call of about a microsecond: read per batch, not per
+ * job); MPI keeps threads of its own. */
 static int64_t run_batch(computer *c, const long *ids, int count, char *buf) {
-  msg_head h = {0, cpu_seconds(CLOCK_THREAD_CPUTIME_ID)};
+  msg_head h = {0, clock_seconds(CLOCK_THREAD_CPUTIME_ID)};
   for (int j = 0; j < count && !c->stop_msg && !stop_signal; j++) {
     sw_result *r = (sw_result *)(void *)(buf + sizeof h + c->one * (size_t)h.count);
     compute(c, ids[j], r, (double *)(void *)(r + 1));
@@ -389,7 +367,7 @@ static int64_t run_batch(computer *c, const long *ids, int count, char *buf) {
     h.count++;
     if (c->sending) c->sending = move_sends(c->out);
   }
-  h.cpu = cpu_seconds(CLOCK_THREAD_CPUTIME_ID) - h.cpu;
+  h.cpu = clock_seconds(CLOCK_THREAD_CPUTIME_ID) - h.cpu;
   memcpy(buf, &h, sizeof h);
   return h.count;
 }
@@ -413,7 +391,7 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
   computer c = {s, hooks, time_limit, one, out, 0, 0, 0};
   long ids[MAX_BATCH];
   int next = 0;
-  double cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
+  double cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
   for (;;) {
     MPI_Status st;
     wait_message(&st, out);
@@ -439,7 +417,7 @@ static int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
     c.sending = 1;
   }
   for (int b = 0; b < AHEAD; b++) wait_request(&out[b].req, SHORT_POLL_US);
-  double cpu = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;   /* for the manager's account of the CPU time */
+  double cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;   /* for the manager's account of the CPU time */
   MPI_Send(&cpu, 1, MPI_DOUBLE, 0, TAG_BYE, MPI_COMM_WORLD);
   /* After a stop, take what rank 0 sent until its STOP (for half a second at
    * most: it sends none to a worker that left first), so that its sends of
@@ -724,13 +702,13 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
   if (setup_queue(&m)) { free_manager(&m); say("%s: out of memory", a->out); return EXIT_RUN; }
   m.t_start = m.last_flush = now_seconds();
   m.last_progress = 0;
-  double cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
+  double cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
   /* the errors of tasks written before their reference, in an earlier run */
   for (int k = 0; k < s->n_variants; k++) fill_errors(&m, k);
   int lost = 0;
   if (nranks == 1) manager_alone(&m, hooks, a->time_limit);
   else lost = manager_mpi(&m);
-  double wall = now_seconds() - m.t_start, cpu_manager = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
+  double wall = now_seconds() - m.t_start, cpu_manager = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
   m.rank_cpu += cpu_manager;
   progress(&m, 1);
   sw_tally tally;

@@ -9,8 +9,8 @@
 #define CUP_SWEEP_MANAGER_H
 
 #include <stddef.h>
-#include <time.h>
 #include "sweep.h"
+#include "util/clock.h"
 
 enum { MAX_BATCH = 1024 };   /* jobs per batch, at most */
 
@@ -50,12 +50,6 @@ typedef struct {
   int io_status;
   char io_msg[SW_ERR_LEN];
 } manager_t;
-
-static inline double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* The queue (jobs not done yet, in sw_schedule's order) and its costs;
  * CUP_OK or CUP_ERR_NOMEM. free_manager releases what the manager holds. */

@@ -13,7 +13,7 @@
 add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c)
 set_target_properties(catchup_h5_objects PROPERTIES C_VISIBILITY_PRESET hidden)
 target_include_directories(catchup_h5_objects PRIVATE
-  ${PROJECT_SOURCE_DIR}/include ${PROJECT_BINARY_DIR}/include)
+  ${PROJECT_SOURCE_DIR}/include ${PROJECT_BINARY_DIR}/include ${PROJECT_SOURCE_DIR}/src)
 target_link_libraries(catchup_h5_objects PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C catchup_warnings)
 add_library(catchup_h5_static STATIC $<TARGET_OBJECTS:catchup_h5_objects>)
 target_link_libraries(catchup_h5_static PUBLIC catchup_static PRIVATE hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C)

@@ -25,6 +25,7 @@
 #include "catchup/h5run.h"
 #include "file_in_use.h"
 #include "h5run_impl.h"
+#include "util/clock.h"
 
 enum { MAX_CHUNK_ROWS = 4096 };
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
@@ -93,12 +94,6 @@ int fail_msg(char *errmsg, int status, const char *fmt, ...) {
     va_end(ap);
   }
   return status;
-}
-
-double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 /* Free space kept on the device: HDF5 1.10 cannot close a file once a write

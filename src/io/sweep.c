@@ -13,6 +13,7 @@
 #include "read_text.h"
 #include "sha256.h"
 #include "sweep.h"
+#include "util/path.h"
 
 static const char *const axis_names[SW_NAXES + 1] = {"n", "eps", "eta", "scheme", "projector", "tol", NULL};
 enum { MAX_WORDS = 16 };
@@ -89,20 +90,6 @@ static int positive(prs *p, const st_node *nd, const char *key, double *out) {
     return fail(p, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", st_looks(nd, b, sizeof b));
   if (!(*out > 0)) return fail(p, CUP_ERR_PARSE, nd, key, "must be > 0 (got %g)", *out);
   return CUP_OK;
-}
-
-static char *path_join(const char *dir, const char *name) {
-  if (!dir || name[0] == '/') return strdup(name);
-  size_t len = strlen(dir) + strlen(name) + 2;
-  char *s = malloc(len);
-  if (s) snprintf(s, len, "%s/%s", dir, name);
-  return s;
-}
-
-static char *dir_of(const char *path) {
-  const char *slash = strrchr(path, '/');
-  if (!slash) return NULL;
-  return strndup(path, slash == path ? 1 : (size_t)(slash - path));
 }
 
 /* ---- grid ---------------------------------------------------------------- */
@@ -294,7 +281,7 @@ static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const ch
     v->from_base = 1;
   }
   if (!(v->scene_file = path_join(s->dir, scene))) return CUP_ERR_NOMEM;
-  v->scene_dir = dir_of(v->scene_file);
+  if ((st = path_dir(v->scene_file, &v->scene_dir))) return st;
   if ((x = opt(nd, "set"))) {
     snprintf(k2, sizeof k2, "%s.set", key);
     if ((st = need_map(p, x, k2, "a mapping of dotted scene keys to values, e.g. {circuit.R1: 2}"))) return st;
@@ -395,9 +382,8 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
   prs p = {{path, NULL}, errmsg};
   st_node *root = NULL;
   s->path = strdup(path);
-  s->dir = dir_of(path);
   s->text = malloc(len + 1);
-  int st = s->path && s->text ? CUP_OK : CUP_ERR_NOMEM;
+  int st = s->path && s->text ? path_dir(path, &s->dir) : CUP_ERR_NOMEM;
   if (!st) {
     memcpy(s->text, text, len);
     s->text[len] = '\0';
@@ -405,12 +391,7 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
     st = st_parse(&root, text, len, &p.src, -1, NULL, errmsg);
   }
   if (!st) st = read_sweep(&p, s, root);
-  if (!st && !s->name) {
-    const char *b = strrchr(path, '/');
-    b = b ? b + 1 : path;
-    const char *dot = strrchr(b, '.');
-    if (!(s->name = strndup(b, dot && dot != b ? (size_t)(dot - b) : strlen(b)))) st = CUP_ERR_NOMEM;
-  }
+  if (!st && !s->name && !(s->name = path_stem(path))) st = CUP_ERR_NOMEM;
   st_free(root);
   if (st == CUP_ERR_NOMEM && errmsg) snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path);
   if (st) { sw_free(&s); return st; }

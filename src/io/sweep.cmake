@@ -10,6 +10,6 @@ add_library(catchup_sweep STATIC
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5_create.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c)
-target_include_directories(catchup_sweep PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_include_directories(catchup_sweep PUBLIC ${CMAKE_CURRENT_LIST_DIR} PRIVATE ${PROJECT_SOURCE_DIR}/src)
 target_link_libraries(catchup_sweep PUBLIC catchup_static hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C
                       PRIVATE catchup_warnings m)

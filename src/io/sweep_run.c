@@ -9,12 +9,7 @@
 #include <string.h>
 #include <time.h>
 #include "sweep.h"
-
-static double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "util/clock.h"
 
 /* Step nearest to t_j = j T / (S - 1) on the grid t_k = k T / n: round(j n / (S - 1)),
  * halves rounded up, in integers. */
