@@ -1,4 +1,4 @@
-/* sweep (src/io/sweep.c, sha256.c): the sweep file, task order, the
+/* sweep (src/sweep/, io/sha256.c): the sweep file, task order, the
  * sampling of n that are not multiples of samples - 1, and the Richardson
  * reference against the reference limit (tests/data) of the paper's case 1.
  * tests/sweeps/bad names its expected error in a "# expect: ..." first line. */
@@ -14,7 +14,7 @@
 #include <cmocka.h>
 #include <hdf5.h>
 #include "catchup.h"
-#include "sha256.h"
+#include "io/sha256.h"
 #include "sweep.h"
 #include "refdata.h"
 

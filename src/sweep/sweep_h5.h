@@ -30,6 +30,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <hdf5.h>
+#include "h5/h5util.h"
 #include "sweep.h"
 
 /* 2: /summary has tol_abs, tol_rel, err_est, events; 3: the tables' strings
@@ -110,17 +111,6 @@ struct sw_file {
   double *sig;
 };
 
-typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
-
-static inline quiet_t quiet_begin(void) {
-  quiet_t q = {NULL, NULL};
-  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-  return q;
-}
-
-static inline void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
-
 /* Keep the innermost HDF5 error as "PATH: cannot OP: detail" (the first
  * one only); the file is then failed: only close is attempted. */
 int sw_h5_fail(sw_file *f, const char *op);
@@ -128,11 +118,9 @@ int sw_h5_fail(sw_file *f, const char *op);
 #define SW_IN_USE_FMT "%s: cannot %s: the file is in use by another process (HDF5 file locking; another " \
   "catchup-sweep may be writing it): wait for that run to end, or stop it, then --resume; the file is " \
   "left as it was"
-/* Fixed-length (NUL-terminated) and variable-length (UTF-8) string types. */
+/* A fixed-length (NUL-terminated) UTF-8 string type (h5util.h has the
+ * variable-length one). */
 hid_t sw_h5_str(size_t size);
-hid_t sw_h5_vlen_str(void);
-/* Format 1.8, no sieve buffer: raw writes go out at once, in order. */
-hid_t sw_h5_access(void);
 void sw_copy_str(char *dst, size_t size, const char *src);
 /* A task's row before it ran: its parameters, status "pending". */
 void sw_pending_row(const cup_sweep *s, long id, sw_row *r);

@@ -3,19 +3,18 @@
  * are written here, up front, then flushed once; afterwards sweep_h5.c
  * only overwrites raw bytes (the design is in sweep_h5.h). */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <libgen.h>
+#include <unistd.h>
 #include <sys/stat.h>
-#include <sys/statvfs.h>
 #include <hdf5.h>
 #include <hdf5_hl.h>
 #include "catchup/h5run.h"
-#include "file_in_use.h"
 #include "sweep_h5.h"
 
 typedef struct sw_varrow {
@@ -28,7 +27,7 @@ typedef struct sw_varrow {
 
 static hid_t varrow_type(void) {
   hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_varrow));
-  hid_t sname = sw_h5_str(SW_NAME_LEN), vs = sw_h5_vlen_str();
+  hid_t sname = sw_h5_str(SW_NAME_LEN), vs = h5_vlen_str();
   H5Tinsert(T, "variant", HOFFSET(sw_varrow, variant), H5T_NATIVE_INT32);
   H5Tinsert(T, "name", HOFFSET(sw_varrow, name), sname);
   H5Tinsert(T, "scene_file", HOFFSET(sw_varrow, scene_file), vs);
@@ -76,7 +75,7 @@ static int attr_write(hid_t loc, const char *name, hid_t type, int rank, hsize_t
 }
 
 static int attr_str(hid_t loc, const char *name, const char *v) {
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   int r = attr_write(loc, name, t, 0, 0, &v);
   H5Tclose(t);
   return r;
@@ -91,7 +90,7 @@ static int attr_f64(hid_t loc, const char *name, double v) {
 }
 
 static int attr_strs(hid_t loc, const char *name, const char *const *v, int len) {
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   int r = attr_write(loc, name, t, 1, (hsize_t)len, v);
   H5Tclose(t);
   return r;
@@ -317,7 +316,7 @@ static int attach(hid_t file, const char *path, int rank, const char *const *dim
 /* Labels: n variable-length strings at path, made the dimension scale `scale`. */
 static int label_scale(hid_t file, const char *path, const char *scale, const char *const *names, hsize_t n,
                        const char *long_name) {
-  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL);
+  hid_t t = h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL);
   hid_t d = H5Dcreate2(file, path, t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   int r = d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, scale) < 0 ||
           describe(d, NULL, long_name) ? -1 : 0;
@@ -478,18 +477,13 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
     snprintf(errmsg, SW_ERR_LEN, SW_IN_USE_FMT, path, "create");
     return CUP_ERR_IO;
   }
-  char *copy = strdup(path);
-  struct statvfs v;
-  double need = file_bytes(s);
-  if (copy && statvfs(dirname(copy), &v) == 0 && v.f_blocks &&
-      (double)v.f_bavail * (double)v.f_frsize < need + CUP_H5_SPACE_MARGIN) {
+  double need = file_bytes(s), avail = 0;
+  if (h5_space_short(path, 1, need, &avail)) {
     snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.3g MiB and %u MiB kept free beside it, and "
              "its device has %.3g MiB free (store fewer samples: output.samples)", path, need / 1048576,
-             CUP_H5_SPACE_MARGIN >> 20, (double)v.f_bavail * (double)v.f_frsize / 1048576);
-    free(copy);
+             CUP_H5_SPACE_MARGIN >> 20, avail / 1048576);
     return CUP_ERR_IO;
   }
-  free(copy);
   /* the whole layout goes to a new sibling first, renamed over path once
    * written: an earlier results file stays whole until then */
   char *staged = cup_staged_name(path);
@@ -501,10 +495,10 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
   sw_file *f = sw_h5_file_new(s, path);
   if (!f) { unlink(staged); free(staged); snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
   quiet_t q = quiet_begin();
-  hid_t fapl = sw_h5_access();
-  f->file = H5Fcreate(staged, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  hid_t fapl = h5_file_access(1);          /* raw writes go out at once, in order */
+  f->file = fapl < 0 ? H5I_INVALID_HID : H5Fcreate(staged, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   int st = f->file < 0 ? sw_h5_fail(f, "create") : create_layout(f, p);
-  H5Pclose(fapl);
+  if (fapl >= 0) H5Pclose(fapl);
   quiet_end(q);
   if (!st && cup_file_in_use(path)) {
     snprintf(f->errmsg, sizeof f->errmsg, SW_IN_USE_FMT, path, "replace");

@@ -9,9 +9,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "scene_tree.h"
-#include "read_text.h"
-#include "sha256.h"
+#include "io/scene_tree.h"
+#include "io/read_text.h"
+#include "io/sha256.h"
 #include "sweep.h"
 #include "util/path.h"
 

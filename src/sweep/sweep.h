@@ -11,7 +11,7 @@
 
 #include <stdint.h>
 #include "catchup.h"
-#include "read_text.h"
+#include "io/read_text.h"
 
 #define SW_ERR_LEN (2 * CUP_ERRMSG_LEN)   /* messages: a scene's message, whole, inside a sweep's */
 

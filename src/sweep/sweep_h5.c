@@ -15,21 +15,11 @@
 
 /* ---- HDF5 errors: never printed; the innermost description is kept ---- */
 
-typedef struct { char desc[CUP_ERRMSG_LEN / 2]; int locked; } h5_err;   /* names the file: whole */
-
-static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
-  h5_err *r = out;
-  if (n == 0 && e->desc) snprintf(r->desc, sizeof r->desc, "%s", e->desc);
-  if (e->min_num == H5E_CANTLOCKFILE) r->locked = 1;
-  return 0;
-}
-
 /* Call right after the failed HDF5 call: any later API call (even
  * H5Pclose) clears the error stack that says why. */
 int sw_h5_fail(sw_file *f, const char *op) {
-  h5_err e = {"", 0};
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, &e);
-  if (!e.desc[0]) snprintf(e.desc, sizeof e.desc, "HDF5 call failed");
+  h5_detail e;
+  h5_error_detail(&e, 0);
   if (!f->errmsg[0] && e.locked) snprintf(f->errmsg, sizeof f->errmsg, SW_IN_USE_FMT, f->path, op);
   if (!f->errmsg[0]) snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot %s: %s", f->path, op, e.desc);
   f->failed = 1;
@@ -45,13 +35,6 @@ hid_t sw_h5_str(size_t size) {
   hid_t t = H5Tcopy(H5T_C_S1);
   H5Tset_size(t, size);
   H5Tset_strpad(t, H5T_STR_NULLTERM);
-  H5Tset_cset(t, H5T_CSET_UTF8);
-  return t;
-}
-
-hid_t sw_h5_vlen_str(void) {
-  hid_t t = H5Tcopy(H5T_C_S1);
-  H5Tset_size(t, H5T_VARIABLE);
   H5Tset_cset(t, H5T_CSET_UTF8);
   return t;
 }
@@ -122,14 +105,6 @@ static hid_t column_type(const char *name, size_t size, hid_t type) {
   hid_t T = H5Tcreate(H5T_COMPOUND, size);
   H5Tinsert(T, name, 0, type);
   return T;
-}
-
-hid_t sw_h5_access(void) {
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  H5Pset_libver_bounds(fapl, H5F_LIBVER_EARLIEST, H5F_LIBVER_V18);
-  H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
-  H5Pset_sieve_buf_size(fapl, 0);          /* raw writes go out at once, in order */
-  return fapl;
 }
 
 /* snprintf(dst, size, "%s", src), zero-padded, at a fraction of its cost
@@ -226,7 +201,7 @@ void sw_h5_file_free(sw_file *f) {
 static int read_attr_str(hid_t loc, const char *name, char *buf, size_t size) {
   hid_t a = H5Aopen(loc, name, H5P_DEFAULT);
   if (a < 0) return -1;
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   char *v = NULL;
   int ok = H5Aread(a, t, &v) >= 0;
   if (ok) snprintf(buf, size, "%s", v ? v : "");
@@ -282,7 +257,7 @@ static int check_layout(sw_file *f, char *errmsg) {
 static int check_inputs(sw_file *f, char *errmsg) {
   hid_t a = H5Aopen(f->file, "inputs_sha256", H5P_DEFAULT);
   if (a < 0) { H5Eclear2(H5E_DEFAULT); return CUP_OK; }
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   char *v = NULL;
   int st = H5Aread(a, t, &v) >= 0 ? CUP_OK : sw_h5_fail(f, "read the attribute inputs_sha256 of");
   H5Tclose(t);
@@ -305,7 +280,7 @@ static int check_scenes(sw_file *f, char *errmsg) {
   const cup_sweep *s = f->s;
   hsize_t V = (hsize_t)s->n_variants;
   hid_t d = H5Dopen2(f->file, "variants", H5P_DEFAULT);
-  hid_t vs = sw_h5_vlen_str(), mt = column_type("scene", sizeof(char *), vs);
+  hid_t vs = h5_vlen_str(), mt = column_type("scene", sizeof(char *), vs);
   char **texts = calloc(V, sizeof *texts);
   int st = d < 0 || !texts || H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, texts) < 0
                ? sw_h5_fail(f, "read /variants in") : CUP_OK;
@@ -369,10 +344,10 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
   sw_file *f = sw_h5_file_new(s, path);
   if (!f) { snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
   quiet_t q = quiet_begin();
-  hid_t fapl = sw_h5_access();
-  f->file = H5Fopen(path, H5F_ACC_RDWR, fapl);
+  hid_t fapl = h5_file_access(1);          /* raw writes go out at once, in order */
+  f->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
   int st = f->file < 0 ? sw_h5_fail(f, "open") : CUP_OK;
-  H5Pclose(fapl);
+  if (fapl >= 0) H5Pclose(fapl);
   if (!st) st = check_layout(f, errmsg);
   if (!st) {
     f->summary = H5Dopen2(f->file, "summary", H5P_DEFAULT);
