@@ -38,7 +38,7 @@
 #include <mpi.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
-#include "sweep.h"
+#include "sweep_run.h"
 #include "sweep_manager.h"
 #include "run_plan.h"
 #include "stop_signal.h"

@@ -1,6 +1,6 @@
 /* sweep_manager — what rank 0 of catchup-sweep does with jobs and results,
  * MPI aside: the queue of jobs and its batches, the results of a message
- * into the results file at once (src/io/sweep_h5.c), the tasks' errors
+ * into the results file at once (src/sweep/sweep_file.c), the tasks' errors
  * against their variant's reference
  * (held in memory until it is known when no trajectories are stored), the
  * regular flush and the progress line. The MPI protocol that brings the
@@ -9,7 +9,7 @@
 #define CUP_SWEEP_MANAGER_H
 
 #include <stddef.h>
-#include "sweep.h"
+#include "sweep_file.h"
 #include "util/clock.h"
 
 enum { MAX_BATCH = 1024 };   /* jobs per batch, at most */

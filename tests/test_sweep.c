@@ -15,7 +15,8 @@
 #include <hdf5.h>
 #include "catchup.h"
 #include "io/sha256.h"
-#include "sweep.h"
+#include "sweep_file.h"
+#include "sweep_run.h"
 #include "refdata.h"
 
 #define EX CUP_EXAMPLES_DIR

@@ -577,6 +577,16 @@ void sw_free(cup_sweep **ps) {
 
 /* ---- tasks ------------------------------------------------------------------ */
 
+double sw_max_error(const double *traj, const double *ref, long count) {
+  double e = 0;
+  for (long j = 0; j < count; j++) {
+    double d = fabs(traj[j] - ref[j]);
+    if (isnan(d)) return NAN;
+    if (d > e) e = d;
+  }
+  return e;
+}
+
 int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
   if (id < 0 || id >= s->n_tasks) return CUP_ERR_ARG;
   memset(t, 0, sizeof *t);

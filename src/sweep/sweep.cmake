@@ -10,8 +10,9 @@ add_library(catchup_sweep STATIC
   ${CMAKE_CURRENT_LIST_DIR}/sweep.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_run.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
-  ${CMAKE_CURRENT_LIST_DIR}/sweep_h5_create.c
-  ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c)
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_file.c
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_file_create.c)
 target_include_directories(catchup_sweep PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${PROJECT_SOURCE_DIR}/src)
 target_link_libraries(catchup_sweep PUBLIC catchup_h5_static hdf5::hdf5_hl hdf5::hdf5 MPI::MPI_C
                       PRIVATE catchup_warnings m)

@@ -1,5 +1,8 @@
-/* sweep_h5 — what sweep_h5.c and sweep_h5_create.c share: the results file
- * of a sweep (docs/sweep-format.md, "Output").
+/* sweep_h5 — the results file of a sweep (docs/sweep-format.md, "Output"):
+ * its layout, and what its writers share (sweep_h5.c): errors, row types,
+ * the state kept in memory, the one-row-per-task tables. Below the crowd
+ * sweeps' /crowd (sweep_crowd.c) and the file's writers (sweep_file.c,
+ * sweep_file_create.c).
  *
  * Crash safety by a fixed layout instead of SWMR. Everything that is
  * metadata — every group, dataset, attribute, the /variants table with its
@@ -23,7 +26,7 @@
  * written.
  *
  * The full allocation at creation also means the disk cannot fill up during
- * the run (HDF5 1.10 cannot close a file after a failed write, h5run.c). */
+ * the run (HDF5 1.10 cannot close a file after a failed write, h5util.h). */
 #ifndef CUP_SWEEP_H5_H
 #define CUP_SWEEP_H5_H
 
@@ -65,7 +68,8 @@ typedef struct __attribute__((packed)) sw_row {
  * whose last byte says done is whole. */
 _Static_assert(offsetof(sw_row, done) + sizeof(int8_t) == sizeof(sw_row), "done is the last byte of a row");
 
-/* One /crowd row (crowd sweeps, sweep_crowd.c), packed like sw_row. */
+/* One /crowd row (crowd sweeps, sweep_crowd.c), packed like sw_row; its
+ * memory type is f->crowd_row_t. */
 typedef struct __attribute__((packed)) sw_crowd_row {
   int64_t task_id;
   int32_t variant, agents, agents_out;
@@ -129,6 +133,10 @@ int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const vo
 /* The state in memory (no file yet), or NULL; sw_h5_file_free closes what is open. */
 sw_file *sw_h5_file_new(const cup_sweep *s, const char *path);
 void sw_h5_file_free(sw_file *f);
+/* A dataset that is contiguous, allocated (and filled with *fill of
+ * fill_type, unless fill is NULL) at creation, without modification times. */
+hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
+                          hid_t fill_type, const void *fill);
 /* A task's row before it ran, into row (row_size bytes). */
 typedef void (*sw_pending_fn)(const cup_sweep *s, long id, void *row);
 /* Create the one-row-per-task dataset name (memtype packed), filled with
@@ -139,12 +147,5 @@ int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_siz
  * dimension is the task, the entries of tasks f->ids[0..count). */
 int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
                   const char *op);
-
-/* /crowd (sweep_crowd.c): its memory type; create it with pending rows;
- * write the rows of tasks t[0..count) (staged in f->crows, ids in f->ids). */
-#define SW_CROWD_REFERENCE "none: the variants are crowds; each task's evacuation is in /crowd"
-hid_t sw_crowd_row_type(void);
-int sw_crowd_create(sw_file *f);
-int sw_crowd_write(sw_file *f, const sw_task_out *t, long count);
 
 #endif

@@ -1,7 +1,7 @@
-/* sweep_h5_create — creating the results file of a sweep: every group,
- * dataset and attribute, the /variants table and the pending /summary rows
- * are written here, up front, then flushed once; afterwards sweep_h5.c
- * only overwrites raw bytes (the design is in sweep_h5.h). */
+/* sweep_file_create — creating the results file of a sweep (sweep_file.h):
+ * every group, dataset and attribute, the /variants table and the pending
+ * /summary rows are written here, up front, then flushed once; afterwards
+ * sweep_file.c only overwrites raw bytes (the design is in sweep_h5.h). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -15,6 +15,8 @@
 #include <hdf5.h>
 #include <hdf5_hl.h>
 #include "catchup/h5run.h"
+#include "sweep_crowd.h"
+#include "sweep_file.h"
 #include "sweep_h5.h"
 
 typedef struct sw_varrow {
@@ -23,7 +25,6 @@ typedef struct sw_varrow {
   char *scene_file, *overrides, *scene;
   int64_t n_ref;
 } sw_varrow;
-
 
 static hid_t varrow_type(void) {
   hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_varrow));
@@ -37,24 +38,6 @@ static hid_t varrow_type(void) {
   H5Tclose(sname);
   H5Tclose(vs);
   return T;
-}
-
-/* Contiguous, allocated (and filled) at creation, no modification times. */
-static hid_t fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
-                           hid_t fill_type, const void *fill) {
-  hid_t space = H5Screate_simple(rank, dims, NULL);
-  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
-  H5Pset_layout(dcpl, H5D_CONTIGUOUS);
-  H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_EARLY);
-  H5Pset_obj_track_times(dcpl, 0);
-  if (fill) {
-    H5Pset_fill_value(dcpl, fill_type, fill);
-    H5Pset_fill_time(dcpl, H5D_FILL_TIME_ALLOC);
-  }
-  hid_t d = H5Dcreate2(loc, name, ftype, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-  H5Pclose(dcpl);
-  H5Sclose(space);
-  return d;
 }
 
 static hid_t fixed_group(hid_t loc, const char *name) {
@@ -172,31 +155,6 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   return r | write_grid_attrs(root, s);
 }
 
-int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,
-                     hid_t *d) {
-  const cup_sweep *s = f->s;
-  hsize_t N = (hsize_t)s->n_tasks;
-  char op[64];
-  hid_t ft = H5Tcopy(memtype);
-  H5Tpack(ft);
-  *d = fixed_dataset(f->file, name, ft, 1, &N, 0, NULL);
-  H5Tclose(ft);
-  snprintf(op, sizeof op, "create /%s in", name);
-  if (*d < 0) return sw_h5_fail(f, op);
-  enum { BLOCK = 1024 };
-  char *rows = malloc(row_size * BLOCK);
-  if (!rows) return CUP_ERR_NOMEM;
-  int st = CUP_OK;
-  snprintf(op, sizeof op, "write /%s in", name);
-  for (hsize_t at = 0; at < N && !st; at += BLOCK) {
-    hsize_t cnt = N - at < BLOCK ? N - at : BLOCK;
-    for (hsize_t k = 0; k < cnt; k++) pending(s, (long)(at + k), rows + row_size * k);
-    if (sw_h5_write_rows(*d, memtype, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, op);
-  }
-  free(rows);
-  return st;
-}
-
 static void pending_summary_row(const cup_sweep *s, long id, void *row) { sw_pending_row(s, id, row); }
 
 static int create_summary(sw_file *f) {
@@ -207,14 +165,14 @@ static int create_references(sw_file *f, hid_t g) {
   const cup_sweep *s = f->s;
   double nan = NAN;
   hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
-  f->ref_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
+  f->ref_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
   if (f->ref_x < 0) return sw_h5_fail(f, "create /references/x in");
   dims[2] = (hsize_t)s->nsig;
-  if (s->nsig && (f->ref_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
+  if (s->nsig && (f->ref_sig = sw_h5_fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
     return sw_h5_fail(f, "create /references/signals in");
   hid_t ft = H5Tcopy(f->refrow_t);
   H5Tpack(ft);
-  f->ref_summary = fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
+  f->ref_summary = sw_h5_fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
   H5Tclose(ft);
   if (f->ref_summary < 0) return sw_h5_fail(f, "create /references/summary in");
   sw_refrow *rows = calloc(V, sizeof *rows);
@@ -265,7 +223,7 @@ static int create_variants(sw_file *f) {
   if (!st) {
     hid_t ft = H5Tcopy(mt);
     H5Tpack(ft);
-    d = fixed_dataset(f->file, "variants", ft, 1, &V, 0, NULL);
+    d = sw_h5_fixed_dataset(f->file, "variants", ft, 1, &V, 0, NULL);
     H5Tclose(ft);
     if (d < 0 || sw_h5_write_rows(d, mt, 0, V, rows, H5P_DEFAULT)) st = sw_h5_fail(f, "write /variants in");
   }
@@ -293,7 +251,7 @@ static int describe_path(hid_t file, const char *path, const char *units, const 
 static int pure_dim(hid_t loc, const char *name, hsize_t len) {
   char nc[80];
   snprintf(nc, sizeof nc, "This is a netCDF dimension but not a netCDF variable.%10llu", (unsigned long long)len);
-  hid_t d = fixed_dataset(loc, name, H5T_IEEE_F32LE, 1, &len, 0, NULL);
+  hid_t d = sw_h5_fixed_dataset(loc, name, H5T_IEEE_F32LE, 1, &len, 0, NULL);
   int r = d < 0 || H5DSset_scale(d, nc) < 0 ? -1 : 0;
   if (d >= 0) H5Dclose(d);
   return r;
@@ -434,7 +392,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
     if (!t) st = CUP_ERR_NOMEM;
     for (hsize_t j = 0; t && j < S; j++)    /* t_j = j T / (S - 1), t_{S-1} = T exactly */
       t[j] = j + 1 == S ? s->T : (double)j * (s->T / (double)(S - 1));
-    hid_t d = st ? -1 : fixed_dataset(g, "t", H5T_IEEE_F64LE, 1, &S, 0, NULL);
+    hid_t d = st ? -1 : sw_h5_fixed_dataset(g, "t", H5T_IEEE_F64LE, 1, &S, 0, NULL);
     if (!st && (d < 0 || H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t) < 0))
       st = sw_h5_fail(f, "write /runs/t in");
     if (d >= 0) H5Dclose(d);
@@ -443,10 +401,10 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   if (!st && s->out_samples > 0) {
     double nan = NAN;
     hsize_t dims[3] = {(hsize_t)s->n_tasks, (hsize_t)s->samples, (hsize_t)s->dim};
-    f->runs_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
+    f->runs_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
     if (f->runs_x < 0) st = sw_h5_fail(f, "create /runs/x in");
     dims[2] = (hsize_t)s->nsig;
-    if (!st && s->nsig && (f->runs_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE,
+    if (!st && s->nsig && (f->runs_sig = sw_h5_fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE,
                                                        &nan)) < 0)
       st = sw_h5_fail(f, "create /runs/signals in");
   }
