@@ -4,7 +4,7 @@
  * against their variant's reference
  * (held in memory until it is known when no trajectories are stored), the
  * regular flush and the progress line. The MPI protocol that brings the
- * results, and the run itself, are in catchup-sweep.c. */
+ * results is sweep_mpi.c, the run itself catchup-sweep.c. */
 #ifndef CUP_SWEEP_MANAGER_H
 #define CUP_SWEEP_MANAGER_H
 
@@ -51,6 +51,8 @@ typedef struct {
   char io_msg[SW_ERR_LEN];
 } manager_t;
 
+/* One line "catchup-sweep: ..." on stderr. */
+void say(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* The queue (jobs not done yet, in sw_schedule's order) and its costs;
  * CUP_OK or CUP_ERR_NOMEM. free_manager releases what the manager holds. */
 int setup_queue(manager_t *m);
