@@ -494,16 +494,19 @@ static int replace_attr(hid_t obj, const char *name, hid_t ftype, hid_t mtype, c
   return ok;
 }
 
+/* set_error for "WHAT 'NAME' in" (a dataset or attribute name cut at 120
+ * characters). */
+static int fail_op(cup_h5run *w, const char *what, const char *name) {
+  char op[200];
+  snprintf(op, sizeof op, "%s '%.120s' in", what, name);
+  return set_error(w, CUP_ERR_IO, op);
+}
+
 static int put_attr(cup_h5run *w, const char *name, hid_t ftype, hid_t mtype, const void *buf) {
   if (!w || !name || !name[0]) return CUP_ERR_ARG;
   if (w->h5_failed) return w->data_status;   /* see set_error */
   quiet_t q = quiet_begin();
-  int ok = replace_attr(w->file, name, ftype, mtype, buf), st = CUP_OK;
-  if (!ok) {
-    char op[128];
-    snprintf(op, sizeof op, "write attribute '%s' in", name);
-    st = set_error(w, CUP_ERR_IO, op);
-  }
+  int st = replace_attr(w->file, name, ftype, mtype, buf) ? CUP_OK : fail_op(w, "write attribute", name);
   quiet_end(q);
   return st;
 }
@@ -550,12 +553,7 @@ int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, 
   if (space >= 0) H5Sclose(space);
   if (lcpl >= 0) H5Pclose(lcpl);
   restore_stack(err);
-  int st = CUP_OK;
-  if (!ok) {
-    char op[160];
-    snprintf(op, sizeof op, "write dataset '%s' in", name);
-    st = set_error(w, CUP_ERR_IO, op);
-  }
+  int st = ok ? CUP_OK : fail_op(w, "write dataset", name);
   quiet_end(q);
   return st;
 }
@@ -570,12 +568,6 @@ static int obj_string_attr(hid_t obj, const char *name, const char *v) {
   if (type >= 0) H5Tclose(type);
   restore_stack(err);
   return ok;
-}
-
-static int fail_op(cup_h5run *w, const char *what, const char *name) {
-  char op[200];
-  snprintf(op, sizeof op, "%s '%.120s' in", what, name);
-  return set_error(w, CUP_ERR_IO, op);
 }
 
 int cup_h5run_describe(cup_h5run *w, const char *dataset, const char *units, const char *long_name) {
