@@ -35,6 +35,7 @@
 #include <cholmod.h>
 #include "catchup.h"
 #include "util/clock.h"
+#include "paper.h"
 
 static int cmp_double(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;
@@ -358,27 +359,11 @@ static void bench_projector(int argc, char **argv) {
 
 /* ---- the integrator on the paper's circuit ------------------------------------- */
 
-static cup_input *paper_input(int cas) {
-  cup_input *u = NULL;
-  cup_input_create(&u, 1, NULL);
-  if (cas == 1) {
-    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
-    cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
-    cup_input_add(u, 0, &s, NULL);
-    cup_input_add(u, 0, &c, NULL);
-  } else {
-    cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
-    cup_input_add(u, 0, &q, NULL);
-  }
-  return u;
-}
-
 static double run_circuit(int cas, long n, int scheme, int method, cup_output_kind out,
                           cup_run_info *info) {
-  cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
   cup_lcs *L = NULL;
   char msg[CUP_ERRMSG_LEN];
-  if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+  if (paper_lcs(&L, cas, msg)) die("%s", msg);
   cup_input *u = paper_input(cas);
   cup_integrator_options o;
   cup_integrator_options_default(&o);
@@ -488,10 +473,9 @@ static void bench_circuit(int argc, char **argv) {
     char path[1024];
     snprintf(path, sizeof path, "%s/ref_case%d_limit_richardson.csv", refdir, cas);
     double *ref = load_reference(path);
-    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
     cup_lcs *L = NULL;
     char msg[CUP_ERRMSG_LEN];
-    if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+    if (paper_lcs(&L, cas, msg)) die("%s", msg);
     cup_input *u = paper_input(cas);
     for (size_t q = 0; q < sizeof cfg / sizeof cfg[0]; q++)
       for (int k = 0; k < nn; k++) {
@@ -574,9 +558,8 @@ static void bench_adaptive(int argc, char **argv) {
     double *ref = load_reference(path);
     snprintf(path, sizeof path, "%s/ref_case%d_limit_richardson.csv", refdir, cas);
     double *rich = load_reference(path);
-    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
     cup_lcs *L = NULL;
-    if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+    if (paper_lcs(&L, cas, msg)) die("%s", msg);
     cup_input *u = paper_input(cas);
     for (int k = 0; k < nt; k++) {
       cup_integrator_options o;

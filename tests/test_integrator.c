@@ -8,6 +8,8 @@
 #include <stdio.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "stress_util.h"
+#include "paper.h"
 #include "closed_forms.h"
 #include "refdata.h"
 
@@ -70,25 +72,16 @@ static double order_of(double e1, double e2) { return log10(e1 / e2); }   /* n x
 
 static double ref1[1001 * 3], ref2[1001 * 3];
 
-static cup_input *paper_input(int cas) {
-  cup_input *u = NULL;
-  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
-  if (cas == 1) {
-    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
-    cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
-    cup_input_add(u, 0, &s, NULL);
-    cup_input_add(u, 0, &c, NULL);
-  } else {
-    cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
-    cup_input_add(u, 0, &q, NULL);
-  }
+/* The paper's cases (bench/paper.h), which must build. */
+static cup_input *case_input(int cas) {
+  cup_input *u = paper_input(cas);
+  assert_non_null(u);
   return u;
 }
 
-static cup_lcs *paper_lcs(int cas) {
-  cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
+static cup_lcs *case_lcs(int cas) {
   cup_lcs *L = NULL;
-  assert_int_equal(cup_lcs_circuit(&L, &c, NULL), CUP_OK);
+  assert_int_equal(paper_lcs(&L, cas, NULL), CUP_OK);
   return L;
 }
 
@@ -100,8 +93,8 @@ static void test_paper_cases_exact_projection(void **state) {
   ref_load("ref_case2_limit_richardson.csv", ref2);
   static const double C[3] = {0, 1.52, 1.79};
   for (int cas = 1; cas <= 2; cas++) {
-    cup_lcs *L = paper_lcs(cas);
-    cup_input *u = paper_input(cas);
+    cup_lcs *L = case_lcs(cas);
+    cup_input *u = case_input(cas);
     double x0[3] = {0, 0, 0};
     for (long n = 1000; n <= 10000; n *= 10) {
       double e = run_error(L, u, x0, n, 1, CUP_SCHEME_EXPLICIT, NULL, NULL, cas == 1 ? ref1 : ref2, NULL);
@@ -134,8 +127,8 @@ static void test_paper_tolerances(void **state) {
   static const int methods[] = {CUP_PROJ_AUTO};
   for (int cas = 1; cas <= 2; cas++)
     for (long n = 1000; n <= 10000; n *= 10) {
-      cup_lcs *L = paper_lcs(cas);
-      cup_input *u = paper_input(cas);
+      cup_lcs *L = case_lcs(cas);
+      cup_input *u = case_input(cas);
       double *X[2];
       for (int q = 0; q < 2; q++) X[q] = malloc(sizeof(double) * 3 * (size_t)(n + 1));
       for (int pass = -1; pass < 1; pass++) {     /* -1: the exact reference */
@@ -200,8 +193,8 @@ static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, 
 static void test_theta_scheme(void **state) {
   (void)state;
   for (int cas = 1; cas <= 2; cas++) {
-    cup_lcs *L = paper_lcs(cas);
-    cup_input *u = paper_input(cas);
+    cup_lcs *L = case_lcs(cas);
+    cup_input *u = case_input(cas);
     long n = 1000;
     double *X0 = malloc(sizeof(double) * 3 * (size_t)(n + 1)), *Xe = malloc(sizeof(double) * 3 * (size_t)(n + 1));
     run_store(L, u, n, CUP_SCHEME_THETA, 0, X0);
@@ -214,8 +207,8 @@ static void test_theta_scheme(void **state) {
     cup_input_free(&u);
     cup_lcs_free(&L);
   }
-  cup_lcs *L = paper_lcs(1);
-  cup_input *u = paper_input(1);
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
   static const double siconos[3] = {8.737e-6, 1.444e-7, 9.965e-10};
   double e[3];
   for (int k = 0; k < 3; k++) {
@@ -247,33 +240,13 @@ static void test_theta_scheme(void **state) {
 
 /* ---- closed forms --------------------------------------------------------------- */
 
-/* A small LCS from dense row-major matrices (absent ones: NULL). */
-typedef struct { tcsc A, B, C, E, G; cup_lcs *L; } lcs_built;
-
+/* A small LCS from dense row-major matrices (absent ones: NULL;
+ * stress_util.h), which must be valid. */
 static void build(lcs_built *b, int n, int m, int p, const double *A, const double *B,
                   const double *C, const double *E, const double *F, const double *G,
                   const double *Pdiag) {
-  memset(b, 0, sizeof *b);
-  cup_lcs_desc d = {0};
-  d.n = n; d.m = m; d.p = p;
-  if (A) { tcsc_from_dense(&b->A, A, n, n); d.A = b->A.view; }
-  if (B) { tcsc_from_dense(&b->B, B, n, m); d.B = b->B.view; }
-  tcsc_from_dense(&b->C, C, m, n); d.C = b->C.view;
-  if (E) { tcsc_from_dense(&b->E, E, n, p); d.E = b->E.view; }
-  if (G) { tcsc_from_dense(&b->G, G, m, p); d.G = b->G.view; }
-  d.F = F;
-  if (Pdiag) d.P = (cup_metric){CUP_METRIC_DIAGONAL, Pdiag, {0}, 0};
   char msg[CUP_ERRMSG_LEN];
-  if (cup_lcs_create(&b->L, &d, msg)) fail_msg("lcs: %s", msg);
-}
-
-static void unbuild(lcs_built *b) {
-  cup_lcs_free(&b->L);
-  if (b->A.p) tcsc_free(&b->A);
-  if (b->B.p) tcsc_free(&b->B);
-  tcsc_free(&b->C);
-  if (b->E.p) tcsc_free(&b->E);
-  if (b->G.p) tcsc_free(&b->G);
+  if (build_lcs(b, n, m, p, A, B, C, E, F, G, Pdiag, NULL, msg)) fail_msg("lcs: %s", msg);
 }
 
 /* The theta step's LCP with up to four rows active at once (the paper's
@@ -367,7 +340,7 @@ static void test_theta_many_rows(void **state) {
   assert_true(dt > 0 && dt <= 2e-2);
   free(Xt); free(Xe);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static cup_input *const_input(double v) {
@@ -407,7 +380,7 @@ static void test_closed_form_moving_interval(void **state) {
     assert_true(e <= 1e-12);
   }
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_interval_with_relaxation(void **state) {
@@ -425,7 +398,7 @@ static void test_closed_form_interval_with_relaxation(void **state) {
   assert_true(q.nev >= 4);                        /* free, pushed, free, pushed, ... */
   check_order("moving interval, relaxation", &b, u, x0, T, relax_exact, &q, 1000);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_cone(void **state) {
@@ -437,7 +410,7 @@ static void test_closed_form_cone(void **state) {
   double x0[2] = {0, 1};
   check_order("cone, f = -x + c", &b, u, x0, 2, cone_exact, NULL, 1000);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void rect_build(lcs_built *b, const rect_par *q, double *P) {
@@ -465,7 +438,7 @@ static void test_closed_form_rectifier(void **state) {
   double x0[1] = {0};
   check_order("RL half-wave rectifier", &b, u, x0, 2, rect_exact, &q, 1000);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_corner(void **state) {
@@ -477,7 +450,7 @@ static void test_closed_form_corner(void **state) {
   double x0[2] = {1, 1};
   check_order("corner of a quadrant", &b, u, x0, 1.5, corner_exact, NULL, 1000);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_jumping_set(void **state) {
@@ -496,7 +469,7 @@ static void test_closed_form_jumping_set(void **state) {
     assert_true(e <= 1.0 * 1.75 / n);            /* C = 1 */
   }
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 /* Stiff: the rectifier with L = 1e-3 (time constant 1e-3) at n = 100 over two
@@ -526,7 +499,7 @@ static void test_stiff_rectifier(void **state) {
     assert_true(e100 <= 2 * 100 * e1e4);
   }
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 /* ---- output, schedules, errors ------------------------------------------------------ */
@@ -544,8 +517,8 @@ static int count_sink(long k, double t, const double *x, void *vp) {
 
 static void test_output_modes_and_exact_time(void **state) {
   (void)state;
-  cup_lcs *L = paper_lcs(1);
-  cup_input *u = paper_input(1);
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
   double x0[3] = {0, 0, 0};
   struct { cup_output_kind kind; long every, samples, expect; } cases[] = {
     {CUP_OUTPUT_EVERY, 1, 0, 1001}, {CUP_OUTPUT_EVERY, 7, 0, 144},  /* 0,7,..,994 and 1000 */
@@ -615,8 +588,8 @@ static int f_fails_late(double t, const double *x, double *f, void *ctx) {
 
 static void test_errors_say_where(void **state) {
   (void)state;
-  cup_lcs *L = paper_lcs(1);
-  cup_input *u = paper_input(1);
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.n = 1000;
@@ -678,7 +651,7 @@ static void test_empty_set_at_a_step(void **state) {
   assert_int_equal(cc.count, 51);
   cup_integrator_free(&I);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 int main(void) {
