@@ -1,6 +1,6 @@
 /* catchup-run — run one scene; write its trajectory and what ran to HDF5.
  *
- *   catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]
+ *   catchup-run SCENE.yaml -o OUT.h5 [--n N | --h STEP] [--eps SPEC] [--eta SPEC]
  *               [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]
  *               [--set key=value]... [--quiet]
  *   catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]
@@ -52,7 +52,7 @@ static const char *names_or(char *buf, size_t size, const char *(*name)(int), in
 
 static void print_usage(void) {
   char schemes[160], methods[160];
-  printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N] [--eps SPEC] [--eta SPEC]\n"
+  printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N | --h STEP] [--eps SPEC] [--eta SPEC]\n"
          "                   [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]\n"
          "                   [--max-steps N] [--set key=value]... [--resume] [--quiet]\n"
          "       catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]\n"
@@ -60,7 +60,8 @@ static void print_usage(void) {
          "  --probe SIGNAL       a netlist's v(NODE), v(NODE1,NODE2), i(ELEMENT) or all, into\n"
          "                       /signals (repeatable; default: the netlist's .probe lines, or\n"
          "                       every signal of a circuit with at most 256)\n"
-         "  --n N                number of steps (scene key n)\n"
+         "  --n N                number of steps of a fixed-step scheme (scene key n)\n"
+         "  --h STEP             or its step: n = T / STEP rounded up (scene key h)\n"
          "  --eps SPEC           eps_n schedule, e.g. n^-2.1 or 1e-8 (scene key eps)\n"
          "  --eta SPEC           eta_n schedule, e.g. n^-1.05 (scene key eta)\n"
          "  --scheme NAME        %s (scene key scheme)\n"
@@ -130,6 +131,9 @@ static int check_value(const char *flag, const char *v) {
     if (cup_proj_method_parse(v) < 0)
       return usage_error("--projector '%s': unknown projector (%s)", v,
                          names_or(err, sizeof err, cup_proj_method_name, CUP_PROJ_METHOD_COUNT));
+  } else if (strcmp(flag, "--h") == 0) {
+    double h = strtod(v, &end);
+    if (end == v || *end || !(h > 0) || !(h < 1e300)) return usage_error("--h '%s': not a positive number", v);
   } else if (strcmp(flag, "--tol") == 0) {
     double tol = strtod(v, &end);
     if (end == v || *end || !(tol > 0) || !(tol < 1e300))
@@ -147,8 +151,9 @@ static int check_value(const char *flag, const char *v) {
 
 /* The scene key each value flag sets; --set passes key=value through. */
 static const struct { const char *flag, *key; } value_flags[] = {
-  {"--n", "n="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
-  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--max-steps", "max_steps="}, {"--set", ""}, {"-o", NULL},
+  {"--n", "n="}, {"--h", "h="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
+  {"--projector", "projector.method="}, {"--tol", "tol="}, {"--max-steps", "max_steps="}, {"--set", ""},
+  {"-o", NULL},
   {"--output", NULL},
 };
 
@@ -515,18 +520,23 @@ static int declare_signals(run_t *r, char *err) {
   return 0;
 }
 
-/* Where n came from, for the step limit's message: a netlist's .tran
- * (unless --n or --set n= replaced it), else the scene's n. */
+/* Where n came from, for the step limit's message: --n or --h (or --set
+ * n=, h=), the scene's n or h, else a netlist's .tran (a circuit the
+ * adaptive scheme cannot run falls back to TSTOP / TSTEP steps). */
 static void n_source(const run_t *r, char *buf, size_t size) {
   const args_t *a = r->args;
   const cup_netlist *nl = cup_scene_netlist(r->scene);
   double tstep, tstop;
-  int overridden = 0;
-  for (int k = 0; k < a->n_overrides; k++) overridden |= !strncmp(a->overrides[k], "n=", 2);
-  if (nl && !overridden && cup_netlist_tran(nl, &tstep, &tstop))
+  const char *flag = NULL;
+  for (int k = 0; k < a->n_overrides; k++) {
+    if (!strncmp(a->overrides[k], "n=", 2)) flag = "--n";
+    if (!strncmp(a->overrides[k], "h=", 2)) flag = "--h";
+  }
+  if (flag) snprintf(buf, size, "%s", flag);
+  else if (nl && cup_netlist_tran(nl, &tstep, &tstop) && fabs(tstop / tstep - (double)r->opts.n) < 1)
     snprintf(buf, size, ".tran %g %g asks for T / TSTEP = %.4g", tstep, tstop, tstop / tstep);
   else
-    snprintf(buf, size, "%s", overridden ? "--n" : "the scene's n");
+    snprintf(buf, size, "the scene's n");
 }
 
 /* The run's steps and output are known before its first step: refuse one

@@ -4,14 +4,18 @@
  * An input is a netlist's text. It is loaded without sets and with one of
  * a few fixed sets (elements and .params that the seeds define, and ones
  * they do not); a netlist that loads has every signal probed and evaluated
- * at a state of ones, and a small one is run for a few steps by the scheme
- * it defaults to. Every failure must be an error code with a one-line
+ * at a state of ones, and a small one is run for a few steps by the theta
+ * scheme and, where catchup-run would choose it, for a short time by the
+ * adaptive one at the tolerances of its .options (RELTOL, ABSTOL, VNTOL,
+ * CHGTOL) and the TMAX of its .tran (scene_netlist_options). Every failure must be an error code with a one-line
  * message naming the input, *nl NULL after it; ASan, UBSan and
  * LeakSanitizer catch the rest. Build and run: README.md, "Fuzzing". */
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
+#include "scene_netlist.h"
 
 static const char *const sets[4][3] = {
   {"R1=2k", "C1=1u", "vin=5"},
@@ -50,6 +54,30 @@ static void exercise(cup_netlist *nl) {
   o.output = CUP_OUTPUT_NONE;
   o.proj.max_iter = 200;
   cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err) == CUP_OK) {
+    cup_run_info info;
+    cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
+    if (info.status < 0 && !info.message[0]) abort();
+    cup_integrator_free(&I);
+  } else if (!err[0] || strchr(err, '\n')) {
+    abort();
+  }
+  /* the scheme, tol, samples and TMAX catchup-run takes from .tran and
+   * .options (scene_netlist_options: the adaptive scheme where it fits, D
+   * != 0 too), over a short time with a wall-time cap */
+  double tstart = 0, tmax = 0;
+  cup_netlist_tran_window(nl, &tstart, &tmax);
+  if (!(tstart >= 0) || !(tmax >= 0)) abort();
+  cup_integrator_options_default(&o);
+  scene_netlist_options(nl, &o);
+  if (!(o.tol_abs > 0) || !(o.tol_rel > 0) || !(o.hmax >= 0)) abort();
+  if (o.scheme != CUP_SCHEME_ADAPTIVE) return;
+  o.T = o.T > 0 ? fmin(o.T, 1e-4) : 1e-4;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_t0 = 0;
+  o.output_samples = 5;
+  o.max_wall_seconds = 0.5;
+  I = NULL;
   if (cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err) == CUP_OK) {
     cup_run_info info;
     cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);

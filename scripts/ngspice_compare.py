@@ -4,13 +4,15 @@
     python scripts/ngspice_compare.py [--build build] [--out bench-out] [--reps 5]
 
 For each circuit in examples/circuits: the ideal-diode reference (catchup's
-theta scheme at 64 times the .tran steps, checked against 32 times), then
-ngspice (batch mode) with a steep diode model and catchup at several step
-counts, every run timed side by side in this one process, interleaved round
-by round; the errors are max-norm against the reference on the .tran grid,
-relative to each signal's peak. Writes OUTDIR/ngspice.jsonl, the figures
-docs/figures/circuit-*.png (catchup's waveforms with ngspice's dashed over
-them) and the section of BENCHMARKS.md between its ngspice markers.
+adaptive scheme at tol 1e-12, checked against tol 1e-10), then ngspice
+(batch mode) with a steep diode model, catchup's adaptive scheme at several
+tolerances and its theta scheme at several step counts (theta = 1/2; on the
+bridges --bridge-theta, 1/2 by default), every run timed side by
+side in this one process, interleaved round by round; the errors are
+max-norm against the reference on the .tran grid, relative to each signal's
+peak. Writes OUTDIR/ngspice.jsonl, the figures docs/figures/circuit-*.png
+(catchup's waveforms with ngspice's dashed over them) and the section of
+BENCHMARKS.md between its ngspice markers.
 
 The steep model, D(IS=1e-15 N=0.01): a forward drop N V_T ln(I/IS) of about
 9 mV at 0.3 A, 1e-3 of a 10 V peak, which is how far ngspice's voltages sit
@@ -34,14 +36,18 @@ import time
 import numpy as np
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-CIRCUITS = ["halfwave-rc", "bridge", "clamp", "doubler", "rl-halfwave", "paper-fig2"]
+CIRCUITS = ["halfwave-rc", "bridge", "bridge-lc", "bridge-cfilter", "resonant", "series-resonant", "clamp", "doubler",
+            "rl-halfwave", "paper-fig2"]
+BRIDGES = ("bridge", "bridge-lc", "bridge-cfilter", "resonant", "series-resonant")
 MODEL = "D(IS=1e-15 N=0.01)"
 # ngspice diverges on the paper's circuit with N = 0.01 (its two diodes in
 # series with the inductors: the inductive kick when one turns off); a
 # gentler exponential lets it run.
 MODEL_FOR = {"paper-fig2": "D(IS=1e-15 N=0.05)"}
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
-FACTORS = [1 / 8, 1 / 4, 1 / 2, 1, 2, 4]
+FACTORS = [1 / 8, 1 / 2, 2, 8, 32]       # theta's n, times TSTOP / TSTEP
+TOLS = [1e-3, 1e-5, 1e-7, 1e-9]          # the adaptive scheme's
+REF_TOL, REF_CHECK_TOL = 1e-12, 1e-10
 VOLT_TOL = 2e-3      # ngspice against the ideal reference, voltages, relative to the peak, for N = 0.01
                      # (the forward drop, N V_T ln(I/IS), grows with N: so does the tolerance)
 
@@ -112,18 +118,22 @@ def read_h5(path, names):
         return f["t"][:n], np.array([f["signals"][s][:n] for s in names])
 
 
-def run_catchup(build, cir, n, samples, probes, tmp):
+def run_catchup(build, cir, args, probes, tmp):
+    """catchup-run with args (["--tol", T] or ["--scheme", "theta", "--n", N, ...]);
+    the samples are the netlist's, every TSTEP (interpolated)."""
     out = os.path.join(tmp, "c.h5")
-    cmd = [os.path.join(build, "apps", "catchup-run"), cir, "-o", out, "--n", str(n),
-           "--set", "output.samples=%d" % samples] + sum([["--probe", p] for p in probes], [])
+    cmd = [os.path.join(build, "apps", "catchup-run"), cir, "-o", out] + [str(x) for x in args] + \
+        sum([["--probe", p] for p in probes], [])
     t0 = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if r.returncode != 0:
         raise RuntimeError("catchup-run failed: %s" % r.stderr.strip())
     m = re.search(r", ([0-9.e+-]+) s: (CUP_\w+)", r.stderr)
+    steps = re.search(r"adaptive, (\d+) steps", r.stderr)
     t, x = read_h5(out, probes)
-    return {"run_s": float(m.group(1)), "wall_s": wall, "status": m.group(2), "t": t, "x": x}
+    return {"run_s": float(m.group(1)), "wall_s": wall, "status": m.group(2), "t": t, "x": x,
+            "steps": int(steps.group(1)) if steps else None}
 
 
 def run_ngspice(src, tstep, tstop, probes, options, tmp, model):
@@ -136,7 +146,10 @@ def run_ngspice(src, tstep, tstop, probes, options, tmp, model):
     wall = time.perf_counter() - t0
     m = re.search(r"Transient analysis time = ([0-9.e+-]+)", r.stdout + r.stderr)
     if not m or not os.path.exists(out):            # ngspice -b exits 1 even when it ran
-        raise RuntimeError("ngspice failed: %s" % (r.stdout + r.stderr)[-400:])
+        stop = re.search(r"Timestep too small; time = ([0-9.e+-]+)", r.stdout + r.stderr)
+        why = "stopped at t = %.3g s (timestep too small)" % float(stop.group(1)) if stop else \
+            "failed: %s" % (r.stdout + r.stderr).strip().splitlines()[-1][:120]
+        return {"run_s": math.nan, "wall_s": wall, "t": None, "x": None, "failed": why}
     d = np.loadtxt(out, ndmin=2)
     os.remove(out)
     stop = re.search(r"Timestep too small; time = ([0-9.e+-]+)", r.stdout + r.stderr)
@@ -176,19 +189,23 @@ def compare_circuit(name, a, tmp, log):
     cir = os.path.join(ROOT, "examples", "circuits", name + ".cir")
     tstep, tstop, probes = tran_and_probes(cir)
     base = int(round(tstop / tstep))
-    ref = run_catchup(a.build, cir, 64 * base, base + 1, probes, tmp)
-    half = run_catchup(a.build, cir, 32 * base, base + 1, probes, tmp)
-    ref_err = errors(ref["t"], ref["x"], half["t"], half["x"], probes)[:2]
-    print("%s: reference n = %d (against n/2: %.1e V, %.1e A of the peaks)" % (name, 64 * base, *ref_err),
-          file=sys.stderr)
+    ref = run_catchup(a.build, cir, ["--tol", REF_TOL], probes, tmp)
+    check = run_catchup(a.build, cir, ["--tol", REF_CHECK_TOL], probes, tmp)
+    ref_err = errors(ref["t"], ref["x"], check["t"], check["x"], probes)[:2]
+    print("%s: reference adaptive tol %g (against tol %g: %.1e V, %.1e A of the peaks)" % (
+        name, REF_TOL, REF_CHECK_TOL, *ref_err), file=sys.stderr)
+    theta = a.bridge_theta if name in BRIDGES else 0.5
     runs = []
     for rep in range(a.reps):                       # interleaved: every configuration once per round
         for label, opts in NGSPICE_SETTINGS:
             r = run_ngspice(cir, tstep, tstop, probes, opts, tmp, MODEL_FOR.get(name, MODEL))
             runs.append(("ngspice", label, r))
+        for tol in TOLS:
+            runs.append(("catchup", "adaptive tol=%g" % tol, run_catchup(a.build, cir, ["--tol", tol], probes, tmp)))
         for f in FACTORS:
             n = max(1, int(round(f * base)))
-            runs.append(("catchup", "theta n=%d" % n, run_catchup(a.build, cir, n, min(n, base) + 1, probes, tmp)))
+            runs.append(("catchup", "theta(%g) n=%d" % (theta, n), run_catchup(
+                a.build, cir, ["--scheme", "theta", "--n", n, "--set", "theta=%g" % theta], probes, tmp)))
     rows = []
     for tool, label in dict.fromkeys((t, l) for t, l, _ in runs):
         rs = [r for t, l, r in runs if t == tool and l == label]
@@ -198,11 +215,13 @@ def compare_circuit(name, a, tmp, log):
         rows.append({"circuit": name, "tool": tool, "config": label, "model": MODEL_FOR.get(name, MODEL),
                      "failed": failed, "worst_v_at": where, "run_s": statistics.median(r["run_s"] for r in rs),
                      "wall_s": statistics.median(r["wall_s"] for r in rs), "err_v": ev, "err_i": ei,
-                     "ref_err_v": ref_err[0], "ref_err_i": ref_err[1], "reps": len(rs)})
+                     "ref_err_v": ref_err[0], "ref_err_i": ref_err[1], "reps": len(rs),
+                     "steps": rs[0].get("steps"), "theta": theta})
         log.write(json.dumps(rows[-1]) + "\n")
     ng_best = min((r for r in rows if r["tool"] == "ngspice"), key=lambda r: r["err_v"])
     ng_plot = [r for t, l, r in runs if t == "ngspice" and l == ng_best["config"]][0]
-    plot(name, probes, ref, ng_plot, MODEL_FOR.get(name, MODEL), ng_best["config"])
+    plot(name, probes, ref, ng_plot if not ng_best["failed"] else None, MODEL_FOR.get(name, MODEL),
+         ng_best["config"])
     return rows
 
 
@@ -218,27 +237,55 @@ def plot(name, probes, ref, ng, model, setting):
     for ax, ks, ylabel in zip(axes[:, 0], panels, ["V" if volts else "A", "A"]):
         for k in ks:
             line, = ax.plot(ref["t"] * scale, ref["x"][k], lw=1.3, label=probes[k] + " catchup")
-            ax.plot(ng["t"] * scale, ng["x"][k], "--", lw=0.9, color="k", alpha=0.6,
-                    label=probes[k] + " ngspice" if k == ks[0] else None)
+            if ng:
+                ax.plot(ng["t"] * scale, ng["x"][k], "--", lw=0.9, color="k", alpha=0.6,
+                        label=probes[k] + " ngspice" if k == ks[0] else None)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, ncol=2, loc="upper right")
     axes[-1, 0].set_xlabel("t (%s)" % unit)
-    axes[0, 0].set_title("%s: catchup (ideal diodes) and ngspice (%s, %s, dashed)" % (name, model, setting),
-                         fontsize=10)
+    axes[0, 0].set_title("%s: catchup (ideal diodes) and ngspice (%s, %s, dashed)" % (name, model, setting)
+                         if ng else "%s: catchup (ideal diodes); ngspice (%s) failed" % (name, model), fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.join(ROOT, "docs", "figures"), exist_ok=True)
     fig.savefig(os.path.join(ROOT, "docs", "figures", "circuit-%s.png" % name), dpi=110)
     plt.close(fig)
 
 
-def section(rows):
+def adaptive_cost(a, tmp):
+    """The adaptive scheme's time loop on 5 periods of the 50 Hz bridge at
+    tol 1e-8 (final state only), and its steps against the samples asked."""
+    cir = os.path.join(ROOT, "examples", "circuits", "bridge.cir")
+    base = ["--tol", 1e-8, "--set", "T=0.1"]
+    loop = [run_catchup(a.build, cir, base + ["--set", "output=final"], ["v(out)"], tmp) for _ in range(max(a.reps, 5))]
+    out = {"loop_s": statistics.median(r["run_s"] for r in loop), "loop_steps": loop[0]["steps"], "samples": []}
+    for S in (2, 1001, 100001):
+        rs = [run_catchup(a.build, cir, base + ["--set", "output.samples=%d" % S], ["v(out)"], tmp)
+              for _ in range(max(a.reps, 3))]
+        out["samples"].append((S, rs[0]["steps"], statistics.median(r["run_s"] for r in rs),
+                               statistics.median(r["wall_s"] for r in rs)))
+    return out
+
+
+def cost_text(c):
+    rows = "; ".join("%d samples: %d steps, %.3g s in the integrator (%.3g s the process)" % s for s in c["samples"])
+    return ["### The adaptive scheme's cost on the bridge", "",
+            "Five periods of `bridge.cir`'s 50 Hz line (T = 100 ms) at tol 1e-8, final state only: the time loop "
+            "takes %.3g ms (%d steps; catchup-run's time in the integrator, median). Samples are interpolated "
+            "from the exact flow, not stepped to: %s." % (1e3 * c["loop_s"], c["loop_steps"], rows), ""]
+
+
+def section(rows, cost=None):
+    thetas = sorted({r["theta"] for r in rows if r["circuit"] in BRIDGES})
     out = ["<!-- BEGIN ngspice: generated by scripts/bench-vs-ngspice; do not edit -->",
            "## Circuits: catchup against ngspice", "",
            "Command: `bash scripts/bench-vs-ngspice` (ngspice %s from Debian's `ngspice`, batch mode; "
-           "every diode `%s` unless said otherwise; `.tran` with TMAX = TSTEP and UIC (the initial state from the ICs, 0 by default, as in catchup); `.options rshunt=1e12`, "
-           "without which ngspice stops on the bridge). Errors are max-norm differences on the "
-           "`.tran` grid from catchup's θ scheme at 64× the `.tran` steps (checked against 32×), relative to "
+           "every diode `%s` unless said otherwise; `.tran` with TMAX = TSTEP and UIC (the initial state from the "
+           "ICs, 0 by default, as in catchup); `.options rshunt=1e12`, without which ngspice stops on the bridge). "
+           "catchup runs each netlist as `catchup-run` does by default, the adaptive scheme (`--tol`, every "
+           "`.tran` TSTEP sampled from its exact flow), and the θ scheme at a fixed step (`--scheme theta --n N`, "
+           "%s). Errors are max-norm differences on the "
+           "`.tran` grid from catchup's adaptive scheme at tol %g (checked against tol %g), relative to "
            "each signal's peak: the worst voltage and the worst current of the netlist's `.probe` signals, "
            "away from the reference's jumps (two samples on each side of a step of more than 5 %% of the "
            "peak: a sampled waveform misplaces a jump by up to a sample, an O(1) difference whatever the "
@@ -247,28 +294,38 @@ def section(rows):
            "in one run: `run` is each tool's own count (ngspice's transient analysis time, 1 ms "
            "resolution; catchup-run's time in the integrator, with the signals and HDF5 writes), `process` "
            "the whole command (on circuits this small mostly each program's start-up: loading its libraries, "
-           "for catchup-run creating the HDF5 file)." % (ngspice_version(), MODEL), ""]
+           "for catchup-run creating the HDF5 file)." % (
+               ngspice_version(), MODEL, "θ = ½, through the bridges too (issue 30's fix)" if thetas in ([], [0.5])
+               else "θ = ½; on the bridges θ = %s" % ", ".join("%g" % t for t in thetas), REF_TOL, REF_CHECK_TOL), ""]
     for name in CIRCUITS:
         rs = [r for r in rows if r["circuit"] == name]
         if not rs:
             continue
         model = "" if rs[0]["model"] == MODEL else " (ngspice's diode: `%s`)" % rs[0]["model"]
         out += ["### %s%s" % (name, model), "", "![%s](docs/figures/circuit-%s.png)" % (name, name), "",
+                "Reference against tol %g: %.1e of the peak voltage, %.1e of the peak current." % (
+                    REF_CHECK_TOL, rs[0]["ref_err_v"], rs[0]["ref_err_i"]), "",
                 "| tool | setting | voltage error | current error | run | process |",
                 "|---|---|---:|---:|---:|---:|"]
         for r in rs:
+            label = r["config"] + (" (%d steps)" % r["steps"] if r.get("steps") else "")
             if r.get("failed"):
-                out.append("| %s | %s | %s | | %.3g s | %.3g s |" % (r["tool"], r["config"], r["failed"],
-                                                                    r["run_s"], r["wall_s"]))
+                out.append("| %s | %s | %s | | %s | %.3g s |" % (r["tool"], label, r["failed"],
+                                                                 "" if math.isnan(r["run_s"]) else
+                                                                 "%.3g s" % r["run_s"], r["wall_s"]))
             else:
                 out.append("| %s | %s | %.1e | %.1e | %.3g s | %.3g s |" % (
-                    r["tool"], r["config"], r["err_v"], r["err_i"], r["run_s"], r["wall_s"]))
+                    r["tool"], label, r["err_v"], r["err_i"], r["run_s"], r["wall_s"]))
         for r in rs:
             if r["tool"] == "ngspice" and r.get("worst_v_at") and r["err_v"] >= 0.1:
                 out += ["", "ngspice %s: its worst voltage difference, %.2g times the peak, is in %s at t = "
                         "%.4g s." % (
                             r["config"], r["err_v"], r["worst_v_at"][0], r["worst_v_at"][1])]
+        out += equal_error(rs)
         ng = min((r for r in rs if r["tool"] == "ngspice"), key=lambda r: r["err_v"])
+        if ng.get("failed"):
+            out += ["", "ngspice does not finish this circuit (%s)." % ng["failed"], ""]
+            continue
         target = ng["err_v"]
         tol = VOLT_TOL * float(re.search(r"N=([0-9.e-]+)", ng["model"]).group(1)) / 0.01
         ok = [r for r in rs if r["tool"] == "catchup" and r["err_v"] <= target]
@@ -284,8 +341,54 @@ def section(rows):
         else:
             out += ["", verdict]
         out.append("")
+    if cost:
+        out += cost_text(cost)
     out.append("<!-- END ngspice -->")
     return "\n".join(out)
+
+
+def equal_error(rs):
+    """The adaptive scheme against theta at equal error: for each tol, the
+    cheapest theta run whose worse error (voltage or current) is no larger;
+    where none is, theta's steps and time extrapolated from its two finest
+    runs at their observed order (marked ~)."""
+    worse = lambda r: max(r["err_v"], r["err_i"])
+    steps = lambda r: int(r["config"].split("n=")[1])
+    thetas = sorted((r for r in rs if r["config"].startswith("theta") and not r.get("failed")), key=steps)
+    ratio = lambda a, b: "%.2gx" % (a / max(b, 1e-9))
+    lines = []
+    for a in (r for r in rs if r["config"].startswith("adaptive") and not r.get("failed")):
+        e = worse(a)
+        ok = [t for t in thetas if worse(t) <= e]
+        if ok:
+            t = min(ok, key=lambda r: r["run_s"])
+            lines.append("| %s | %.1e | %.3g s | %s | %.1e | %.3g s | %s |" % (
+                a["config"], e, a["run_s"], t["config"], worse(t), t["run_s"], ratio(t["run_s"], a["run_s"])))
+            continue
+        t1, t2 = thetas[-2:] if len(thetas) >= 2 else (None, None)
+        p = math.log(worse(t1) / worse(t2)) / math.log(steps(t2) / steps(t1)) \
+            if t1 and worse(t1) > 0 and worse(t2) > 0 and worse(t1) > worse(t2) else 0
+        if e > 0 and p > 0.3:
+            n = steps(t2) * (worse(t2) / e) ** (1 / p)
+            if n > 100 * steps(t2):               # too far to extrapolate: a bound
+                n = 100 * steps(t2)
+                secs = t2["run_s"] * 100
+                lines.append("| %s | %.1e | %.3g s | more than 100 times its finest n (order %.1f from n = %d, %d) "
+                             "| | > %.2g s | > %s |" % (a["config"], e, a["run_s"], p, steps(t1), steps(t2), secs,
+                                                     ratio(secs, a["run_s"])))
+                continue
+            secs = t2["run_s"] * n / steps(t2)
+            lines.append("| %s | %.1e | %.3g s | ~n = %.2g (order %.1f from n = %d, %d) | | ~%.2g s | ~%s |" % (
+                a["config"], e, a["run_s"], n, p, steps(t1), steps(t2), secs, ratio(secs, a["run_s"])))
+        else:
+            lines.append("| %s | %.1e | %.3g s | none of the θ runs%s | | | |" % (
+                a["config"], e, a["run_s"], " (the adaptive run is exact here)" if e == 0 else ""))
+    if not lines:
+        return []
+    return ["", "At equal error, the adaptive scheme against θ (the worse of the voltage and the current "
+            "error; the cheapest θ run above at least as accurate, or, marked ~, θ's steps and time extrapolated "
+            "from its two finest runs at their observed order, up to 100 times the finest n):", "",
+            "| adaptive | error | run | θ | error | run | θ / adaptive |", "|---|---:|---:|---|---:|---:|---:|"] + lines
 
 
 def ngspice_version():
@@ -300,13 +403,17 @@ def main():
     ap.add_argument("--out", default="bench-out")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--only", nargs="*", default=CIRCUITS)
+    ap.add_argument("--bridge-theta", type=float, default=0.5,
+                    help="theta of the theta scheme on the bridges (1: implicit Euler, first order)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rows = []
     with tempfile.TemporaryDirectory() as tmp, open(os.path.join(a.out, "ngspice.jsonl"), "w") as log:
         for name in a.only:
             rows += compare_circuit(name, a, tmp, log)
-    text = section(rows)
+        cost = adaptive_cost(a, tmp)
+        log.write(json.dumps({"adaptive_cost": cost}) + "\n")
+    text = section(rows, cost)
     path = os.path.join(ROOT, "BENCHMARKS.md")
     doc = open(path).read() if os.path.exists(path) else "# Benchmarks\n"
     m = re.search(r"<!-- BEGIN ngspice.*?<!-- END ngspice -->", doc, re.S)

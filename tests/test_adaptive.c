@@ -543,6 +543,70 @@ static void test_spice_sources(void **state) {
   unbuild_lcs(&b);
 }
 
+/* A diamond |x1 - c| + |x2| <= 1 carried by c = 4 sin t, f = 0, x0 =
+ * (0, 1/2), in long steps (output every step: an eighth of the period):
+ * the upper-left edge (row 2) meets x at c = 1/2 and pushes it along its
+ * normal, x = (l, 1/2 - l), l = (c - 1/2)/2, until the lower-left edge
+ * (row 3) comes too at c = 3/2, in the same step; the left corner then
+ * carries x, x = (c - 1, 0), and leaves it at (3, 0) when c turns at pi/2;
+ * the right corner (rows 0 and 1) takes it at c = 2, carries it,
+ * x = (c + 1, 0), and leaves it at (-3, 0) at 3 pi/2; the left corner again
+ * at c = -2. Each event at its own time, the states exact (issue 27: the
+ * second row's event took the first's time). */
+static double diamond_x(double t, int i) {
+  double c = 4 * sin(t), t1 = asin(0.125), t2 = asin(0.375);
+  if (t < t1) return i == 0 ? 0 : 0.5;
+  if (t < t2) { double l = (c - 0.5) / 2; return i == 0 ? l : 0.5 - l; }
+  if (i == 1) return 0;
+  if (t <= M_PI / 2) return c - 1;
+  if (t < 5 * M_PI / 6) return 3;
+  if (t <= 1.5 * M_PI) return c + 1;
+  if (t < 11 * M_PI / 6) return -3;
+  return c - 1;
+}
+
+static double diamond_exact(double t, int i, const void *par) { (void)par; return diamond_x(t, i); }
+
+static void test_moving_diamond(void **state) {
+  (void)state;
+  double C[8] = {-1, -1, -1, 1, 1, -1, 1, 1}, F[4] = {1, 1, 1, 1}, G[4] = {4, 4, -4, -4};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 2, 4, 1, NULL, NULL, C, NULL, F, G, NULL, NULL, msg)) fail_msg("%s", msg);
+  cup_input *u = sine(1, 1 / (2 * M_PI));
+  const double tsw[] = {asin(0.125), asin(0.375), M_PI / 2, M_PI / 2, 5 * M_PI / 6, 5 * M_PI / 6,
+                        1.5 * M_PI, 1.5 * M_PI, 11 * M_PI / 6, 11 * M_PI / 6};
+  const int rows[] = {2, 3, 2, 3, 0, 1, 0, 1, 2, 3}, on[] = {1, 1, 0, 0, 1, 1, 0, 0, 1, 1};
+  for (double tol = 1e-4; tol >= 1e-10; tol *= 1e-3) {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_ADAPTIVE;
+    o.T = 2 * M_PI;
+    o.tol_abs = o.tol_rel = tol;
+    o.output = CUP_OUTPUT_EVERY;
+    o.output_every = 1;
+    ad_ctx c = {.exact = diamond_exact, .dim = 2};
+    o.on_event = ad_event;
+    o.event_ctx = &c;
+    cup_integrator *I = NULL;
+    if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+    cup_run_info info;
+    int st = cup_integrator_run(I, (double[]){0, 0.5}, ad_sink, &c, &info);
+    if (st != CUP_OK) fail_msg("run: %s: %s", cup_status_name(st), info.message);
+    print_message("moving diamond tol %.0e: %ld steps, %d events, error %.3g\n", tol, info.step, c.nev, c.err);
+    assert_int_equal(c.nev, 10);
+    for (int k = 0; k < 10; k++) {
+      if (c.row[k] != rows[k] || c.on[k] != on[k] || !(fabs(c.tev[k] - tsw[k]) <= tol))
+        fail_msg("event %d: row %d %s at %.17g; expected row %d %s at %.17g", k, c.row[k], c.on[k] ? "on" : "off",
+                 c.tev[k], rows[k], on[k] ? "on" : "off", tsw[k]);
+    }
+    assert_true(c.err <= tol * (1 + 3));
+    cup_integrator_free(&I);
+  }
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_moving_interval),
@@ -557,6 +621,7 @@ int main(void) {
     cmocka_unit_test(test_general_process),
     cmocka_unit_test(test_step_doubling_process),
     cmocka_unit_test(test_spice_sources),
+    cmocka_unit_test(test_moving_diamond),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

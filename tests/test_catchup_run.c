@@ -403,7 +403,10 @@ static void test_netlist_signals(void **state) {
   const char *args[] = {cir, "-o", out, "--probe", "v(out)", "--probe", "V(IN)", "--set", "netlist.RL=500", NULL};
   result r = run_cli(args, 0, 0);
   expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=3000 theta, 3001 samples");
+  /* SPICE's meaning: the adaptive scheme to the default .options (RELTOL
+   * 1e-6; CHGTOL 1e-14 over C1's 100 uF), sampled every TSTEP = 20 us */
+  expect_in_err(&r, "tol=1e-10/1e-06 adaptive");
+  expect_in_err(&r, "3001 samples");
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
   assert_true(f >= 0);
   expect_attr_str(f, "state_names", "v(C1)");
@@ -416,6 +419,7 @@ static void test_netlist_signals(void **state) {
   for (hsize_t k = 0; k < n; k++) {
     assert_true(vout[k] == x[k]);
     assert_true(fabs(vin[k] - 10 * sin(100 * 3.14159265358979323846 * t[k])) <= 1e-12);
+    assert_true(fabs(t[k] - 0.06 * (double)k / 3000) <= 1e-18);
   }
   hid_t g = H5Gopen2(f, "signals", H5P_DEFAULT), a = H5Aopen(g, "names", H5P_DEFAULT);
   hid_t type = H5Aget_type(a);
@@ -442,24 +446,58 @@ static void test_netlist_signals(void **state) {
   expect_in_err(&r, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
 }
 
-/* A rectifier whose diode has D != 0 (behind the source's resistance) is
- * refused by the adaptive scheme with one line naming the diode, and the
- * file keeps nothing computed (there was nothing). */
-static void test_adaptive_refuses_D(void **state) {
+/* A fixed-step scheme is one flag away from a netlist, with its own n or h:
+ * .tran's TSTEP is the output's spacing, not a step; n or h alone chooses
+ * theta. */
+static void test_netlist_fixed_step(void **state) {
   (void)state;
-  const char *scene = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.yaml", *out = tmp_path("adaptive-D.h5");
-  const char *args[] = {scene, "-o", out, "--scheme", "adaptive", NULL};
+  const char *cir = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.cir", *out = tmp_path("fixed.h5");
+  const char *none[] = {cir, "-o", out, "--scheme", "theta", NULL};
+  result r = run_cli(none, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "the theta scheme needs n or h: the netlist's .tran TSTEP is the output's spacing, not a step");
+  const char *withn[] = {cir, "-o", out, "--scheme", "theta", "--n", "6000", NULL};
+  r = run_cli(withn, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  const char *withh[] = {cir, "-o", out, "--scheme", "theta", "--h", "1e-5", NULL};
+  r = run_cli(withh, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  const char *both[] = {cir, "-o", out, "--scheme", "theta", "--h", "1e-5", "--n", "3", NULL};
+  r = run_cli(both, 0, 0);
+  expect_exit(&r, 1, 1);
+  expect_in_err(&r, "h: give n or h, not both");
+  const char *nalone[] = {cir, "-o", out, "--n", "6000", NULL};
+  r = run_cli(nalone, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  const char *halone[] = {cir, "-o", out, "--h", "1e-5", NULL};
+  r = run_cli(halone, 0, 0);
+  expect_exit(&r, 0, 1);
+  expect_in_err(&r, "n=6000 theta, 3001 samples");
+}
+
+/* A rectifier whose diode has D != 0 (behind the source's resistance) is
+ * refused by the explicit scheme with one line naming the diode and the
+ * schemes that run it. */
+
+static void test_explicit_refuses_D(void **state) {
+  (void)state;
+  const char *scene = CUP_EXAMPLES_DIR "/circuits/halfwave-rc.yaml", *out = tmp_path("explicit-D.h5");
+  const char *args[] = {scene, "-o", out, "--scheme", "explicit", "--n", "3000", NULL};
   result r = run_cli(args, 0, 0);
   expect_exit(&r, 1, 1);
-  expect_in_err(&r, "halfwave-rc.yaml: the adaptive scheme needs D = 0");
+  expect_in_err(&r, "halfwave-rc.yaml: the explicit scheme needs D = 0");
   expect_in_err(&r, "row D1 has D != 0");
-  expect_in_err(&r, "use the theta scheme");
+  expect_in_err(&r, "use the theta or the adaptive scheme");
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_netlist_signals),
-    cmocka_unit_test(test_adaptive_refuses_D),
+    cmocka_unit_test(test_explicit_refuses_D),
+    cmocka_unit_test(test_netlist_fixed_step),
     cmocka_unit_test(test_paper_case1_file),
     cmocka_unit_test(test_adaptive_file),
     cmocka_unit_test(test_summary_line_and_overrides),

@@ -248,6 +248,8 @@ static const char *const implicit_final[] = {"n=9000", "scheme=implicit", "outpu
 static const char *const estimate[] = {"n=6000", "estimate=true", "output={samples: 11}"};
 static const char *const adaptive[] = {"scheme=adaptive", "tol=1e-10", "output={every: 1}", "T=100"};
 static const char *const adaptive_samples[] = {"scheme=adaptive", "tol=1e-8", "output={samples: 501}", "T=3"};
+static const char *const adaptive_bridge[] = {"scheme=adaptive", "tol=1e-8", "output={samples: 801}", "T=1e-4"};
+static const char *const theta_between[] = {"n=20000", "scheme=theta", "output={samples: 301}"};
 static const char *const square[] = {"n=30000", "output={every: 11}"};
 static const char *const square_adaptive[] = {"scheme=adaptive", "tol=1e-9", "output={every: 2}", "T=4"};
 static const char *const zeno[] = {"scheme=adaptive", "max_event_rate=5", "output={every: 1}", "T=100"};
@@ -266,6 +268,9 @@ static const scene_case cases[] = {
   {"explicit with the step-doubling estimate", EX "/paper-fig2.yaml", estimate, 3},
   {"adaptive, every step", EX "/paper-fig2.yaml", adaptive, 4},
   {"adaptive, samples", EX "/paper-fig2.yaml", adaptive_samples, 4},
+  {"adaptive through a diode bridge (D != 0), samples inside steps and events", EX "/circuits/series-resonant.yaml",
+   adaptive_bridge, 3},
+  {"theta, samples between steps (interpolated)", EX "/paper-fig2.yaml", theta_between, 3},
   {"explicit, square wave", EX "/paper-fig3.yaml", square, 2},
   {"adaptive, square wave (breakpoints)", EX "/paper-fig3.yaml", square_adaptive, 4},
   {"adaptive, accumulating events (catching-up steps)", EX "/paper-fig2.yaml", zeno, 4},

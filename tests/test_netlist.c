@@ -209,18 +209,19 @@ static void test_free_diode(void **state) {
   assert_close(at(&L->A, 0, 0), -1 / (RL * C), 1e-12);
   assert_close(at(&L->K->C, 0, 0), 1, 1e-15);
   assert_close(at(&L->G, 0, 0), -1, 1e-15);
-  /* the catching-up schemes and the adaptive one refuse it, naming the diode */
+  /* the catching-up schemes refuse it, naming the diode (theta and the
+   * adaptive scheme run it) */
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   cup_integrator *I = NULL;
   char err[CUP_ERRMSG_LEN];
   for (int scheme = CUP_SCHEME_EXPLICIT; scheme < CUP_SCHEME_COUNT; scheme++) {
-    if (scheme == CUP_SCHEME_THETA) continue;
+    if (scheme == CUP_SCHEME_THETA || scheme == CUP_SCHEME_ADAPTIVE) continue;
     o.scheme = (cup_scheme)scheme;
     assert_int_equal(cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err), CUP_ERR_UNSUPPORTED);
     assert_contains(err, "needs D = 0");
     assert_contains(err, "row D1 has D != 0");
-    assert_contains(err, "use the theta scheme");
+    assert_contains(err, "use the theta or the adaptive scheme");
   }
   cup_netlist_free(&nl);
 }
@@ -629,6 +630,47 @@ static void test_mutations(void **state) {
   print_message("mutated netlists: %ld of %ld loaded, the rest failed cleanly\n", loaded, total);
 }
 
+/* A netlist means what SPICE means (docs/netlist.md): .tran TSTEP TSTOP
+ * TSTART TMAX samples every TSTEP from TSTART and caps the step at TMAX;
+ * .options sets the adaptive scheme's tol (RELTOL relative; the smallest
+ * of ABSTOL for L's currents, VNTOL and CHGTOL / C for C's voltages). */
+static int keep_times(long k, double t, const double *x, void *ctx) {
+  (void)k; (void)x;
+  traj *s = ctx;
+  if (s->n < 1001) s->x[s->n++][0] = t;
+  return 0;
+}
+
+static void test_spice_meaning(void **state) {
+  (void)state;
+  const char *text = "netlist: {name: rc.cir, text: \"rc\\nV1 a 0 SIN(0 10 50)\\nR1 a b 1k\\nC1 b 0 10u\\n"
+                     "L1 b c 1m\\nR2 c 0 10\\nD1 c 0\\n.options reltol=1e-8 abstol=1e-11 vntol=1e-7 itl4=50 "
+                     "chgtol=1e-15\\n.tran 0.1m 20m 5m 50u\\n\"}\n";
+  char err[CUP_ERRMSG_LEN];
+  cup_scene *sc = NULL;
+  if (cup_scene_load_string(&sc, text, "spice.yaml", NULL, NULL, 0, err)) fail_msg("%s", err);
+  const cup_integrator_options *o = cup_scene_options(sc);
+  assert_int_equal(o->scheme, CUP_SCHEME_ADAPTIVE);
+  assert_close(o->T, 20e-3, 1e-18);
+  assert_close(o->hmax, 50e-6, 1e-20);
+  assert_close(o->output_t0, 5e-3, 1e-18);
+  assert_int_equal(o->output, CUP_OUTPUT_SAMPLES);
+  assert_int_equal(o->output_samples, 151);      /* (20m - 5m) / 0.1m + 1 */
+  assert_close(o->tol_rel, 1e-8, 1e-23);
+  assert_close(o->tol_abs, 1e-11, 1e-26);        /* min(ABSTOL 1e-11, VNTOL 1e-7, CHGTOL / C = 1e-10) */
+  cup_integrator *I = NULL;
+  if (cup_scene_integrator(sc, o, &I, err)) fail_msg("%s", err);
+  static traj tt = {.dim = 1};
+  tt.n = 0;
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_scene_x0(sc), keep_times, &tt, &info), CUP_OK);
+  assert_int_equal(tt.n, 151);
+  for (int k = 0; k < tt.n; k++) assert_close(tt.x[k][0], 5e-3 + 0.1e-3 * k, 1e-17);
+  assert_true(info.step >= 400);                 /* TMAX caps the steps: T / TMAX = 400 */
+  cup_integrator_free(&I);
+  cup_scene_free(&sc);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_paper_matrices),
@@ -645,6 +687,7 @@ int main(void) {
     cmocka_unit_test(test_bad_corpus),
     cmocka_unit_test(test_diode_loops),
     cmocka_unit_test(test_mutations),
+    cmocka_unit_test(test_spice_meaning),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

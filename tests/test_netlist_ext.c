@@ -148,10 +148,10 @@ static void test_precision_rectifier(void **state) {
   o.n = 2000;
   cup_integrator *I = NULL;
   for (int s = 0; s < CUP_SCHEME_COUNT; s++) {
-    if (s == CUP_SCHEME_THETA) continue;
+    if (s == CUP_SCHEME_THETA || s == CUP_SCHEME_ADAPTIVE) continue;
     o.scheme = (cup_scheme)s;
     assert_int_not_equal(cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err), CUP_OK);
-    assert_contains(err, "use the theta scheme");
+    assert_contains(err, "use the theta or the adaptive scheme");
   }
   print_message("explicit refused: %s\n", err);
   o.scheme = CUP_SCHEME_THETA;
@@ -168,6 +168,21 @@ static void test_precision_rectifier(void **state) {
   print_message("precision rectifier, theta n = 2000: max |v(vo) - k max(0, -vin)| = %.3e V (k = %.9f)\n",
                 r.worst, r.kgain);
   assert_true(r.worst < 1e-8);                   /* rounding times the loop gain A = 1e5 */
+  cup_integrator_free(&I);
+  /* the adaptive scheme: each conducting diode's multiplier is algebraic
+   * (its row of D), the switch at each zero of the input */
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = 1e-9;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 2001;
+  if (cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+  r.I = I;
+  r.worst = 0;
+  st = cup_integrator_run(I, cup_netlist_x0(nl), rec_sink, &r, &info);
+  if (st != CUP_OK) fail_msg("%s", info.message);
+  print_message("precision rectifier, adaptive tol 1e-9: max |v(vo) - k max(0, -vin)| = %.3e V, %ld events\n",
+                r.worst, info.events);
+  assert_true(r.worst < 1e-8);
   cup_integrator_free(&I);
   cup_netlist_free(&nl);
 }

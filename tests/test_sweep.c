@@ -4,6 +4,7 @@
  * tests/sweeps/bad names its expected error in a "# expect: ..." first line. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -192,18 +193,28 @@ static void test_bad_corpus(void **state) {
   assert_true(count >= 10);
 }
 
-typedef struct { double x[101 * 3]; long k[101]; int n; } store_t;
+typedef struct { double x[101 * 3], t[101]; long k[101]; int n; } store_t;
 static int sink(long k, double t, const double *x, void *ctx) {
-  (void)t;
   store_t *st = ctx;
-  if (st->n < 101) { st->k[st->n] = k; memcpy(st->x + 3 * st->n, x, 3 * sizeof(double)); st->n++; }
+  if (st->n < 101) { st->k[st->n] = k; st->t[st->n] = t; memcpy(st->x + 3 * st->n, x, 3 * sizeof(double)); st->n++; }
   return 0;
 }
 
-/* n = 250 with 101 samples: the samples are the grid points nearest to
- * t_j = j/100, i.e. steps round(2.5 j) (halves up) — the steps the library's
- * own CUP_OUTPUT_SAMPLES picks, run here independently. */
-static void test_nearest_samples(void **state) {
+typedef struct { double x[251][3]; int n; } traj_all;
+static int sink_all(long k, double t, const double *x, void *ctx) {
+  (void)t;
+  traj_all *a = ctx;
+  if (k < 251) { memcpy(a->x[k], x, 3 * sizeof(double)); a->n = (int)k + 1; }
+  return 0;
+}
+
+/* n = 250 with 101 samples: the sweep takes the grid points nearest to
+ * t_j = j/100, steps round(2.5 j) (halves up); the library's
+ * CUP_OUTPUT_SAMPLES gives t_j itself, the step's state where t_j is on the
+ * grid (even j: the sweep's, bit for bit) and the linear interpolation of
+ * the two steps around it otherwise (odd j: halfway between steps m and
+ * m + 1, against every step kept by an independent run). */
+static void test_samples_between_steps(void **state) {
   (void)state;
   cup_sweep *s = load_file(EX "/sweep-smoke.yaml");
   long task = 8;                                  /* case1, n = 250, paper schedules, explicit, auto */
@@ -214,21 +225,40 @@ static void test_nearest_samples(void **state) {
   assert_int_equal(r.stopped_step, 250);
   cup_integrator_options o = *cup_scene_options(s->var[0].scene);
   o.n = 250;
-  o.output = CUP_OUTPUT_SAMPLES;
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = 1;
   o.output_samples = 101;
-  cup_integrator *I = NULL;
-  assert_int_equal(cup_integrator_create(&I, cup_scene_lcs(s->var[0].scene), cup_scene_input(s->var[0].scene),
-                                         &o, NULL), CUP_OK);
-  store_t st = {{0}, {0}, 0};
-  cup_run_info info;
-  assert_int_equal(cup_integrator_run(I, cup_scene_x0(s->var[0].scene), sink, &st, &info), CUP_OK);
-  assert_int_equal(st.n, 101);
-  for (int j = 0; j < 101; j++) {
-    assert_int_equal(st.k[j], (long)floor(2.5 * j + 0.5));
-    for (int i = 0; i < 3; i++)
-      if (traj[3 * j + i] != st.x[3 * j + i]) fail_msg("sample %d component %d differs", j, i);
+  static traj_all all = {.n = 0};
+  for (int pass = 0; pass < 2; pass++) {
+    cup_integrator *I = NULL;
+    assert_int_equal(cup_integrator_create(&I, cup_scene_lcs(s->var[0].scene), cup_scene_input(s->var[0].scene),
+                                           &o, NULL), CUP_OK);
+    store_t st = {{0}, {0}, {0}, 0};
+    cup_run_info info;
+    assert_int_equal(cup_integrator_run(I, cup_scene_x0(s->var[0].scene), pass ? sink : sink_all,
+                                        pass ? (void *)&st : (void *)&all, &info), CUP_OK);
+    cup_integrator_free(&I);
+    if (!pass) {                                  /* every step first */
+      assert_int_equal(all.n, 251);
+      o.output = CUP_OUTPUT_SAMPLES;
+      continue;
+    }
+    assert_int_equal(st.n, 101);
+    for (int j = 0; j < 101; j++) {
+      long m = (long)floor(2.5 * j);
+      assert_int_equal(st.k[j], j % 2 ? m + 1 : m);
+      assert_true(st.t[j] == (j == 100 ? 1.0 : j % 2 ? (double)j / 100 : (double)m * (1.0 / 250)));
+      for (int i = 0; i < 3; i++) {
+        /* halfway, to rounding: the weight (t_j - t_m) / h is 1/2 to the
+         * rounding of t_j and t_m (~0.5 eps) over h (0.004): a few 100 eps */
+        double want = j % 2 ? all.x[m][i] + 0.5 * (all.x[m + 1][i] - all.x[m][i]) : traj[3 * j + i];
+        double tol = j % 2 ? 4 * DBL_EPSILON * (fabs(all.x[m][i]) + fabs(all.x[m + 1][i])) +
+                             512 * DBL_EPSILON * fabs(all.x[m + 1][i] - all.x[m][i]) : 0;
+        if (!(fabs(want - st.x[3 * j + i]) <= tol))
+          fail_msg("sample %d component %d: %.17g, expected %.17g", j, i, st.x[3 * j + i], want);
+      }
+    }
   }
-  cup_integrator_free(&I);
   free(traj);
   sw_free(&s);
 }
@@ -501,7 +531,7 @@ int main(void) {
     cmocka_unit_test(test_zip_groups_and_defaults),
     cmocka_unit_test(test_paper_sweep),
     cmocka_unit_test(test_bad_corpus),
-    cmocka_unit_test(test_nearest_samples),
+    cmocka_unit_test(test_samples_between_steps),
     cmocka_unit_test(test_reference_vs_data),
     cmocka_unit_test(test_tol_axis_adaptive_reference),
     cmocka_unit_test(test_checked_adaptive_reference),

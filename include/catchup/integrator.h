@@ -64,7 +64,7 @@ CUP_API int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long 
 #define CUP_OUTPUT_LIST(X)                                                              \
   X(CUP_OUTPUT_EVERY, 0, "every", "{every: K}", "steps 0, K, 2K, ... and always the last") \
   X(CUP_OUTPUT_SAMPLES, 1, "samples", "{samples: N}",                                   \
-    "N >= 2 states at steps round(j n / (N - 1)), j = 0..N-1")                        \
+    "N >= 2 states at t_j = j T / (N - 1), j = 0..N-1, interpolated between steps")   \
   X(CUP_OUTPUT_FINAL, 2, "final", "final", "the final state only")                      \
   X(CUP_OUTPUT_NONE, 3, "none", "none", "nothing: statistics only")
 
@@ -144,6 +144,12 @@ typedef struct cup_integrator_options {
   int estimate;               /**< fixed-step schemes: 1 estimates the error by step doubling, from a
                                    second run at n/2 in step (half again the work; n even); the
                                    adaptive scheme always estimates */
+  double hmax;                /**< ADAPTIVE: no step longer than this (SPICE's TMAX); 0: none */
+  double output_t0;           /**< SAMPLES: the first sample's time (SPICE's TSTART), in [0, T);
+                                   the samples are at output_t0 + j (T - output_t0) / (N - 1),
+                                   the adaptive scheme's from its exact flow, the fixed-step
+                                   schemes' interpolated linearly between the steps around
+                                   them (a sample on a step is that step's state); default 0 */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */

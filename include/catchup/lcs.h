@@ -33,7 +33,7 @@ typedef struct cup_lcs_desc {
   cup_csc D;       /**< m x m: 0 <= zeta _|_ C x + D zeta + G u + F >= 0; absent or
                         zero: D = 0. With D != 0, B is required and is not checked
                         against P B = C^T (P is then only the norm of certificates),
-                        and only the theta scheme runs the LCS */
+                        and only the theta and adaptive schemes run the LCS */
   const char *const *row_names; /**< m names of the rows for messages (the diodes), or NULL */
   int keep_B;      /**< 1: B is kept as given and not checked against P B = C^T,
                         D = 0 or not: a nonreciprocal network (a circuit with
@@ -56,8 +56,9 @@ CUP_API int cup_lcs_inputs(const cup_lcs *L);
 CUP_API const cup_polyset *cup_lcs_polyset(const cup_lcs *L);
 /** 1 if G is absent or zero: K does not move. */
 CUP_API int cup_lcs_fixed_set(const cup_lcs *L);
-/** 1 if the LCS is not a sweeping process, only the theta scheme runs
- *  it: D has a nonzero entry, or B was kept as given (keep_B). */
+/** 1 if the LCS is not a sweeping process: D has a nonzero entry (the
+ *  theta and adaptive schemes run it), or B was kept as given (keep_B:
+ *  theta only). */
 CUP_API int cup_lcs_has_D(const cup_lcs *L);
 
 /** The paper's circuit (Sec. 7, after Acary-Brogliato Ex. 2.52): R1, R2, R3

@@ -48,8 +48,16 @@ CUP_API const cup_lcs *cup_netlist_lcs(const cup_netlist *nl);
 CUP_API const cup_input *cup_netlist_input(const cup_netlist *nl);
 /** x(0) from IC= on L and C and .ic v(node)=...; zero otherwise. */
 CUP_API const double *cup_netlist_x0(const cup_netlist *nl);
-/** .tran TSTEP TSTOP: 1 and the values if the netlist has one, else 0. */
+/** .tran TSTEP TSTOP: 1 and the values if the netlist has one, else 0.
+ *  As in SPICE, TSTEP is the output's spacing, not a step (docs/netlist.md). */
 CUP_API int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop);
+/** .tran's TSTART (where the output begins) and TMAX (the longest step), 0
+ *  where not given: 1 if the netlist has a .tran, else 0. */
+CUP_API int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, double *tmax);
+/** .options RELTOL, ABSTOL, VNTOL, CHGTOL as given, NAN where not: 1 if any
+ *  is given, else 0 (docs/netlist.md: how they map onto the adaptive
+ *  scheme's tol). */
+CUP_API int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol);
 
 /** The files the netlist was read from: 0 is the netlist itself, then each
  *  file its .include and .lib cards read (paths joined to the including

@@ -336,7 +336,7 @@ contains
     cup_lcs_fixed_set = c_cup_lcs_fixed_set(L%ptr) /= 0
   end function cup_lcs_fixed_set
 
-  !> .true. when D has a nonzero entry (only the theta scheme runs the LCS).
+  !> .true. when D has a nonzero entry (the theta and adaptive schemes run the LCS).
   logical function cup_lcs_has_D(L)
     type(cup_lcs_t), intent(in) :: L
     cup_lcs_has_D = c_cup_lcs_has_D(L%ptr) /= 0

@@ -15,8 +15,9 @@ module catchup_netlist
     cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_source, cup_netlist_row_name, cup_netlist_input_name, &
     cup_netlist_row_fixed, cup_netlist_probe, cup_netlist_probe_default, cup_netlist_signal_count, &
     cup_netlist_signal_name, cup_netlist_signal_unit, cup_netlist_signals, cup_netlist_file_count, cup_netlist_file, &
-    cup_netlist_warning
-  public :: c_cup_netlist_file_count, c_cup_netlist_file, c_cup_netlist_warning
+    cup_netlist_tran_window, cup_netlist_tolerances, cup_netlist_warning
+  public :: c_cup_netlist_file_count, c_cup_netlist_file, c_cup_netlist_tran_window, c_cup_netlist_tolerances, &
+    c_cup_netlist_warning
   public :: c_cup_netlist_load, c_cup_netlist_load_string, c_cup_netlist_free, c_cup_netlist_lcs, &
     c_cup_netlist_input, c_cup_netlist_x0, c_cup_netlist_tran, c_cup_netlist_state_name, c_cup_netlist_source, &
     c_cup_netlist_row_name, c_cup_netlist_input_name, c_cup_netlist_row_fixed, c_cup_netlist_probe, &
@@ -68,6 +69,19 @@ module catchup_netlist
       real(c_double), intent(out) :: tstep, tstop
       integer(c_int) :: has
     end function c_cup_netlist_tran
+    function c_cup_netlist_tran_window(nl, tstart, tmax) bind(C, name="cup_netlist_tran_window") result(has)
+      import :: c_int, c_ptr, c_double
+      type(c_ptr), value :: nl
+      real(c_double), intent(out) :: tstart, tmax
+      integer(c_int) :: has
+    end function c_cup_netlist_tran_window
+    function c_cup_netlist_tolerances(nl, reltol, abstol, vntol, chgtol) bind(C, name="cup_netlist_tolerances") &
+        result(has)
+      import :: c_int, c_ptr, c_double
+      type(c_ptr), value :: nl
+      real(c_double), intent(out) :: reltol, abstol, vntol, chgtol
+      integer(c_int) :: has
+    end function c_cup_netlist_tolerances
     function c_cup_netlist_file_count(nl) bind(C, name="cup_netlist_file_count") result(n)
       import :: c_int, c_ptr
       type(c_ptr), value :: nl
@@ -258,6 +272,23 @@ contains
     has = .false.
     if (c_associated(nl%ptr)) has = c_cup_netlist_tran(nl%ptr, tstep, tstop) /= 0
   end function cup_netlist_tran
+
+  !> .tran's TSTART and TMAX (0 where not given): .true. when the netlist has a .tran.
+  logical function cup_netlist_tran_window(nl, tstart, tmax) result(has)
+    type(cup_netlist_t), intent(in) :: nl
+    real(c_double), intent(out) :: tstart, tmax
+    tstart = 0
+    tmax = 0
+    has = .false.
+    if (c_associated(nl%ptr)) has = c_cup_netlist_tran_window(nl%ptr, tstart, tmax) /= 0
+  end function cup_netlist_tran_window
+
+  !> .options RELTOL, ABSTOL, VNTOL, CHGTOL (NaN where not given): .true. when any is given.
+  logical function cup_netlist_tolerances(nl, reltol, abstol, vntol, chgtol) result(has)
+    type(cup_netlist_t), intent(in) :: nl
+    real(c_double), intent(out) :: reltol, abstol, vntol, chgtol
+    has = c_cup_netlist_tolerances(nl%ptr, reltol, abstol, vntol, chgtol) /= 0
+  end function cup_netlist_tolerances
 
   !> The number of files the netlist was read from (itself, then its .include/.lib files).
   integer function cup_netlist_file_count(nl) result(n)

@@ -152,6 +152,8 @@ module catchup_types
     type(c_funptr) :: on_event = c_null_funptr  !< c_funloc of a procedure(cup_event_fn), or null
     type(c_ptr) :: event_ctx = c_null_ptr
     integer(c_int) :: estimate = 0              !< fixed-step schemes: 1 = step-doubling error estimate
+    real(c_double) :: hmax = 0                  !< ADAPTIVE: no step longer than this (TMAX); 0: none
+    real(c_double) :: output_t0 = 0             !< SAMPLES: the first sample's time (TSTART)
   end type cup_integrator_options
 
   type, bind(C), public :: cup_run_info

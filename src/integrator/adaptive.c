@@ -1,8 +1,9 @@
 /* adaptive — the event-driven scheme (adaptive_impl.h, docs/adaptive.md):
- * set-up, and the run from breakpoint to breakpoint, event to event. */
+ * set-up, the energy bound and the late-switch model, the run's messages. */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -63,7 +64,7 @@ static void dense_of(const cup_sparse *S, int has, double *out, int ld) {
 static void exosystem(cup_adaptive *A) {
   int p = A->p, nw = A->nw;
   const cup_input *u = A->u;
-  if (!nw) return;
+  if (!A->nwu) return;
   if (A->callback) {
     for (int c = 0; c < p; c++) {
       int g = c * (AD_DEGREE + 1);
@@ -73,6 +74,14 @@ static void exosystem(cup_adaptive *A) {
     return;
   }
   for (int k = 0; k < u->nterms; k++) A->U[u->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
+  for (int k = 0; k < u->nterms; k++) {          /* the rounding scale of the value states */
+    const cup_term *t = &u->terms[k];
+    double sc = fabs(t->value) + fabs(t->amp);
+    if (t->kind == CUP_WAVE_PULSE) sc = fmax(fabs(t->value), fabs(t->value2));
+    for (int j = 0; t->kind == CUP_WAVE_PWL && j < t->np; j++) sc = fmax(sc, fabs(t->v[j]));
+    A->wscale[A->first_state[k]] = sc;
+    if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) A->wscale[A->first_state[k] + 1] = sc;
+  }
   cup_input_gen_dynamics(u, A->first_state, A->W, nw);
   for (int k = 0; k < u->nterms; k++)
     if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
@@ -80,8 +89,71 @@ static void exosystem(cup_adaptive *A) {
       A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
 }
 
+/* D != 0: B and D dense, C B, the rows D couples; the late-switch model of
+ * a row whose D_ii > 0 (its multiplier is a function, no impulse: switched
+ * on late by delta it misses (1/2) delta^2 |s'| B_i / D_ii). */
+static void dae_setup(cup_adaptive *A, const cup_sparse *B, const cup_sparse *Dm) {
+  int n = A->n, m = A->m;
+  dense_of(B, 1, A->Bd, n);
+  dense_of(Dm, 1, A->Dd, m);
+  for (int j = 0; j < m; j++)
+    for (int i = 0; i < m; i++) {
+      double acc = 0;
+      for (int k = A->K->Ct.p[i]; k < A->K->Ct.p[i + 1]; k++)
+        acc += A->K->Ct.x[k] * A->Bd[A->K->Ct.i[k] + (size_t)j * n];
+      A->CB[i + (size_t)j * m] = acc;
+      if (A->Dd[i + (size_t)j * m] != 0) A->dcpl[i] = A->dcpl[j] = 1;
+    }
+}
+
+/* "step k (t = ...): " and the text into info->message. */
+void ad_say(ad_run *R, const char *fmt, va_list ap) {
+  cup_run_info *info = R->info;
+  int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
+  if (len >= 0 && (size_t)len < sizeof info->message)
+    vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
+}
+
+int ad_fail(ad_run *R, int status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  ad_say(R, fmt, ap);
+  va_end(ap);
+  return R->info->status = status;
+}
+
+double ad_energy_bound(const cup_adaptive *A, const double *v, double *scratch) {
+  cup_metric_apply(A->K, v, scratch);
+  return A->pinf * sqrt(fmax(0, cup_dot(v, scratch, A->n)));
+}
+
+/* The late-switch error model per row (docs/adaptive.md), in the energy
+ * bound: B_i, and A B_i / (C B)_ii (B_i / D_ii where D_ii > 0). */
+static void switch_model(cup_adaptive *A) {
+  const cup_polyset *K = A->K;
+  int n = A->n, m = A->m;
+  for (int i = 0; i < m; i++) {
+    const double *b = A->has_D ? A->Bd + (size_t)i * n : K->Bt + (size_t)i * n;
+    for (int r = 0; r < n; r++) {
+      double acc = 0;
+      for (int c = 0; c < n; c++) acc += A->A[r + (size_t)c * n] * b[c];
+      A->xr[r] = acc;
+    }
+    double bn = ad_energy_bound(A, b, A->xf), abn = ad_energy_bound(A, A->xr, A->xf);
+    A->cz[i] = bn;
+    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) A->c1[i] += fabs(K->Ct.x[k]);
+    if (!A->has_D) {
+      A->cs[i] = K->Md[i + (size_t)i * m] > 0 ? abn / K->Md[i + (size_t)i * m] : 0;
+      continue;
+    }
+    double dii = A->Dd[i + (size_t)i * m], cb = A->CB[i + (size_t)i * m];
+    A->cs[i] = dii > 0 ? bn / dii : cb > 0 ? abn / cb : 0;
+  }
+}
+
 int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
-                        const cup_input *u, const cup_integrator_options *o, char *errmsg) {
+                        const cup_sparse *B, const cup_sparse *Dm, const cup_input *u,
+                        const cup_integrator_options *o, char *errmsg) {
   *out = NULL;
   if (!K->dense)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
@@ -108,10 +180,14 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->o = *o;
   A->n = D->n; A->m = K->m; A->p = D->p;
   A->callback = A->u && A->u->fn;
+  A->has_D = Dm != NULL;
   int fail = 0, n = A->n, m = A->m, p = A->p;
   int nterms = A->u && !A->callback ? A->u->nterms : 0;
   A->first_state = take((size_t)nterms + 1, sizeof(int), &fail);
-  if (!fail) A->nw = A->callback ? p * (AD_DEGREE + 1) : cup_input_gen_dim(A->u, A->first_state);
+  if (!fail) A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : cup_input_gen_dim(A->u, A->first_state);
+  A->one = -1;
+  for (int i = 0; A->has_D && i < m && A->one < 0; i++)
+    if (K->g0[i] != 0) A->one = A->nw++;         /* F reaches the multipliers through D: a constant state */
   int nw = A->nw, na = A->na = n + nw;
   if (!fail && na > CUP_EXPONENTIAL_MAX_DIM) {
     cup_adaptive_free(&A);
@@ -138,13 +214,31 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->uerr = take((size_t)p, sizeof(double), &fail);
   A->wa = take((size_t)nw, sizeof(double), &fail);
   A->wt = take((size_t)nw, sizeof(double), &fail);
+  A->wscale = take((size_t)nw, sizeof(double), &fail);
+  A->gscale = take((size_t)m, sizeof(double), &fail);
   A->zw = take((size_t)nw, sizeof(double), &fail);
   A->zy = take((size_t)na, sizeof(double), &fail);
+  A->xo = take((size_t)n, sizeof(double), &fail);
+  A->dy = take((size_t)na, sizeof(double), &fail);
+  A->de = take((size_t)na, sizeof(double), &fail);
+  A->de2 = take((size_t)na, sizeof(double), &fail);
+  A->ed = take((size_t)n, sizeof(double), &fail);
+  A->pend.zy = take((size_t)na, sizeof(double), &fail);
+  A->pend.de = take((size_t)na, sizeof(double), &fail);
+  A->pend.y2 = take((size_t)na, sizeof(double), &fail);
+  A->pend.e2 = take((size_t)n, sizeof(double), &fail);
   A->lcpM = take((size_t)m * m, sizeof(double), &fail);
   A->touch = take((size_t)m, 1, &fail);
+  if (A->has_D) {
+    A->Bd = take((size_t)n * m, sizeof(double), &fail);
+    A->Dd = take((size_t)m * m, sizeof(double), &fail);
+    A->CB = take((size_t)m * m, sizeof(double), &fail);
+    A->dcpl = take((size_t)m, 1, &fail);
+  }
   A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), &fail);
+  A->samp_mid = take((size_t)p * AD_DEGREE, sizeof(double), &fail);
   A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), &fail);
-  if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m)) {
+  if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     cup_adaptive_free(&A);
     return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
@@ -163,21 +257,15 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   if (G) dense_of(G, 1, A->G, m);
   A->hmax_input = o->T / 8;
   exosystem(A);
+  if (A->one >= 0) A->wscale[A->one] = 1;
+  for (int i = 0; i < m; i++)                    /* g's rounding scale: sum |G_iq| |u_q| at most */
+    for (int c = 0; c < nw; c++)
+      for (int q = 0; q < p; q++)
+        A->gscale[i] += fabs(A->G[i + (size_t)q * m] * A->U[q + (size_t)c * p]) * A->wscale[c];
   for (int j = 0; j <= AD_DEGREE; j++) A->node[j] = 0.5 * (1 - cos(M_PI * j / AD_DEGREE));
   A->pinf = p_to_inf(K);
-  for (int i = 0; i < m; i++) {                  /* the late-switch error model, per row */
-    const double *b = K->Bt + (size_t)i * n;
-    double bn = 0, abn = 0;
-    for (int r = 0; r < n; r++) {
-      bn = fmax(bn, fabs(b[r]));
-      double acc = 0;
-      for (int c = 0; c < n; c++) acc += A->A[r + (size_t)c * n] * b[c];
-      abn = fmax(abn, fabs(acc));
-    }
-    A->cz[i] = bn;
-    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) A->c1[i] += fabs(K->Ct.x[k]);
-    A->cs[i] = K->Md[i + (size_t)i * m] > 0 ? abn / K->Md[i + (size_t)i * m] : 0;
-  }
+  if (A->has_D) dae_setup(A, B, Dm);
+  switch_model(A);
   *out = A;
   return CUP_OK;
 }
@@ -186,6 +274,8 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   if (!Ap || !*Ap) return;
   cup_adaptive *A = *Ap;
   ad_modes_free(A);
+  if (A->has_D) ad_dae_free(A);
+  free(A->Bd); free(A->Dd); free(A->CB); free(A->dcpl);
   cup_lcp_free(&A->lcp);
   cup_lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
@@ -195,8 +285,11 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et); free(A->xok);
-  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->lcpM); free(A->touch);
-  free(A->samp); free(A->coef); free(A->zw); free(A->zy);
+  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt);
+  free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
+  free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
+  free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
+  free(A->pend.zy); free(A->pend.de); free(A->pend.y2); free(A->pend.e2);
   free(A);
   *Ap = NULL;
 }

@@ -12,11 +12,14 @@ typedef struct cup_adaptive cup_adaptive;
 /* x' = A x + E u + B zeta, 0 <= zeta _|_ C x + g0 + G u(t) >= 0 (D's
  * drift; K's rows, offset g0 and metric P, B = P^-1 C^T; G m x p or NULL):
  * an LCS's, or a general process's with a polyset and no other term.
+ * An LCS with D != 0 gives its B and D (n x m, m x m; both NULL when
+ * D = 0): then w = C x + D zeta + g0 + G u and x' = A x + B zeta + E u.
  * Requires a small dense set (K in dense form), no perturbation f, and
  * state plus input generators within the dense limit; errmsg says which
  * does not hold. Copies what it uses. */
 int cup_adaptive_create(cup_adaptive **A, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
-                        const cup_input *u, const cup_integrator_options *o, char *errmsg);
+                        const cup_sparse *B, const cup_sparse *Dm, const cup_input *u,
+                        const cup_integrator_options *o, char *errmsg);
 void cup_adaptive_free(cup_adaptive **A);
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info);

@@ -153,6 +153,12 @@ static double root_estimate(const cup_adaptive *A, int k, double lo, double hi) 
 void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev) {
   double lo = ev->tau_lo, hi = ev->tau_sw;
   double floor_ = 16 * DBL_EPSILON * (fabs(ev->t0) + hi);
+  /* An event whose delay costs nothing (c = 0: A B_k parallel to B_k) is
+   * still switched at its root, not at the step's end: another row may
+   * cross later in the step, and its event must come at its own time
+   * (issue 27: with long steps two rows' events took the first's time,
+   * and a row that crossed and came back was lost). */
+  double free_delay = ldexp(hi - lo, -20);
   int k = leading(A), stalls = 0;
   double est = hi;
   for (int it = 0; it < 200 && k >= 0; it++) {
@@ -161,8 +167,8 @@ void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev) {
      * c = |zeta_k'| ||B_k|| when row k turns off, |s_k'| ||A B_k|| / S_kk
      * when it turns on (docs/adaptive.md). */
     double slope = fmax(fabs(A->db[k]), (A->ga[k] - A->gb[k]) / (hi - lo));
-    double c = ev->cfac * slope * (md->is_zeta[k] ? A->cz[k] : A->cs[k]);
-    double need = c > 0 ? sqrt(2 * AD_EVENT_SHARE * tolw / c) : INFINITY;
+    double c = fmax(ev->cfac * slope * (md->is_zeta[k] ? A->cz[k] : A->cs[k]), ev->cmin);
+    double need = c > 0 ? sqrt(2 * AD_EVENT_SHARE * tolw / c) : free_delay;
     need = fmax(need, floor_);
     if (hi - lo <= need) break;
     /* close the bracket around the estimate: from the right first (the

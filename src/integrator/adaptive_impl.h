@@ -1,8 +1,10 @@
 /* adaptive — the event-driven scheme (docs/adaptive.md). Internal layout
  * shared by adaptive.c (set-up), adaptive_mode.c (one active set's linear
- * system, its exact flow, the velocity LCP), adaptive_event.c (the event
- * functions, detection and location of a crossing) and adaptive_run.c (the
- * run: steps, breakpoints, switches and the error estimate).
+ * system, its exact flow, the velocity LCP), adaptive_split.c (with D != 0,
+ * the algebraic part of a mode), adaptive_dae.c (with D != 0, the choice of
+ * the active set and the state jump), adaptive_event.c (the event functions, detection and
+ * location of a crossing) and adaptive_run.c (the run: steps, breakpoints,
+ * switches and the error estimate).
  *
  * Between events the active set J is fixed and, with B = P^-1 C^T, the LCS is
  * a linear ODE on the manifold C_J x + g_J(t) = 0 with zeta_J eliminated.
@@ -18,6 +20,7 @@
 #ifndef CUP_ADAPTIVE_IMPL_H
 #define CUP_ADAPTIVE_IMPL_H
 
+#include <stdarg.h>
 #include <stdint.h>
 #include <gsl/gsl_eigen.h>
 #include "catchup/integrator.h"
@@ -26,7 +29,7 @@
 #include "lcp/lcp.h"
 #include "lcp/step.h"
 
-#define AD_MODES 4          /* active sets kept with their matrices (least recently used goes) */
+#define AD_MODES 6          /* active sets kept with their matrices (least recently used goes) */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
@@ -44,10 +47,14 @@ typedef struct ad_mode {
                                the active ones has a tiny L_i, but its slack rounds at that) */
   unsigned char *is_zeta;   /* m */
   double *X;                /* n x na, row-major: x = X y */
-  double *R;                /* n x nj, column-major: B_J S_J^-1 (the manifold correction) */
+  int nz;                   /* the rows of the manifold: nj when D = 0; with D, those of Z^T (left
+                               null space of D_JJ), the others fix zeta algebraically */
+  double *Zt;               /* D != 0: nz x nj, row-major: Z^T (the manifold Z^T (C_J x + g_J) = 0) */
+  double *R;                /* n x nz, column-major: B_J S_J^-1 (the manifold correction; with D,
+                               B_J N^-1 on the Z rows) */
   double *KU;               /* n x nw, column-major: v = x + K_J U w */
   double mnorm;             /* ||M||_inf */
-  double hmax;              /* step limit for event detection */
+  double hmax;              /* step limit for event detection (< 0: not computed yet, ad_mode_hmax) */
   double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
   double *Ec[AD_CACHE];
   long cstamp[AD_CACHE];
@@ -73,10 +80,14 @@ typedef struct ad_run {
 } ad_run;
 
 /* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
-enum { AD_STOP_NONE, AD_STOP_STEP, AD_STOP_SAMPLE };
+enum { AD_STOP_NONE, AD_STOP_STEP, AD_STOP_SAMPLE, AD_STOP_DENSE };
 typedef struct ad_stop {
   int phase;                /* AD_STOP_STEP: the step's sample and what follows it are next;
-                               AD_STOP_SAMPLE: the sink refused that sample */
+                               AD_STOP_SAMPLE: the sink refused that sample;
+                               AD_STOP_DENSE: it refused a sample inside the step (ad_pend), the
+                               step is taken: its samples from that one on, its callback and its
+                               end's sample are next */
+  cup_proj_info pi;         /* AD_STOP_DENSE: the step's, for its callback */
   ad_run R;                 /* the run's scalars (its pointers are set again on resume) */
   int md, pinned1;          /* slots of R.md and of the other set in use (-1: none) */
   int status;               /* the run's status and message before the stop replaced them */
@@ -90,6 +101,28 @@ struct cup_adaptive {
   cup_integrator_options o;
   int n, m, p, nw, na;
   int callback;             /* u is a callback: polynomial exosystem of degree AD_DEGREE */
+  /* D != 0 (adaptive_dae.c): w = C x + D zeta + G u + F, x' = A x + B zeta + E u */
+  int has_D;
+  double *Bd;               /* n x m, column-major: B (P^-1 C^T when D = 0) */
+  double *Dd;               /* m x m, column-major */
+  double *CB;               /* m x m, column-major: C B */
+  unsigned char *dcpl;      /* rows with a nonzero in their row or column of D */
+  int one;                  /* the exosystem's constant state 1 (F reaches zeta through D), or -1 */
+  int nwu;                  /* the input's own exosystem states (nw without the constant) */
+  double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
+                               table's largest value; 0 for a slope: its own size) */
+  double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
+  double *N, *Ninv, *Nw;    /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse, scratch */
+  double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ and of N (m x m, m, m) */
+  double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
+  cup_lcp jlcp;
+  double *dq0, *dq1;        /* the choice of the active set: slack and its velocity at zeta = 0 */
+  double *sz, *eqr, *eqc;   /* m: the manifold's residual Z^T s_J; N's equilibration */
+  double *cg, *cd, *cd2, *cthr, *cy, *cMy;   /* a candidate's check: m values, slopes, curvatures,
+                                                thresholds; na: y, M y */
+  double *jx;               /* n: a jump, or a candidate's state on its manifold */
+  double *Ry, *Ym, *Zc;     /* mode construction: B_J N^-1 on the Y rows (n x m), the Y rows' terms
+                               ((m + 1) x na: the last row their constants), Z^T C_J (m x n) */
   int *first_state;         /* built-in waveforms: first exosystem state of each term */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
   double *U, *W;            /* p x nw, nw x nw, column-major */
@@ -108,7 +141,8 @@ struct cup_adaptive {
   double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
-  double *cz, *cs;          /* per row: ||B_i||_inf and ||A B_i||_inf / S_ii (the late-switch error, docs/adaptive.md) */
+  double *cz, *cs;          /* per row, the late-switch error (docs/adaptive.md): pinf ||B_i||_P and
+                               pinf ||A B_i||_P / (C B)_ii (pinf ||B_i||_P / D_ii where D_ii > 0) */
   double *c1;               /* per row: ||c_i||_1 */
   double *x, *xs, *xr, *xf, *s, *gam, *g, *ut, *udot, *uerr, *wa, *wt;
   double *e, *et;           /* the propagated error estimate, n */
@@ -120,7 +154,7 @@ struct cup_adaptive {
   cup_lcp_step proj;        /* W = I, h = 1: the certified P-projection onto K(t) */
   cup_projector *projector; /* ... and the projector where pivoting fails (degenerate rows, empty K) */
   /* callback inputs: Chebyshev-Lobatto nodes on [0, 1], samples, coefficients */
-  double node[AD_DEGREE + 1], *samp, *coef;
+  double node[AD_DEGREE + 1], *samp, *samp_mid, *coef;
   double zeno[AD_ZENO_RING]; /* times and rows of the last changes of the active set */
   int zeno_row[AD_ZENO_RING];
   long nzeno;
@@ -128,8 +162,43 @@ struct cup_adaptive {
   const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
   double zt;
   double *zw, *zy;          /* nw, na */
+  int zy_ready;             /* a sample inside a step: zy is its y already */
+  double *xo, *dy, *de, *de2, *ed; /* n, na, na, na, n: a sample inside a step (dense output), its error */
   ad_stop stop;             /* where the last run stopped */
+  /* a sample inside a step that the sink refused: the step goes on to its
+   * end without offering more, and the run stops there (AD_STOP_DENSE);
+   * the samples from it on are offered again by the resumed run, from the
+   * same states (bit for bit): the refused one's y and error on mode md up
+   * to t_end, then a second piece's (an event's new flow) from its start */
+  struct ad_pend {
+    int active, md, seg2, md2;
+    long k;                 /* the step number the sink was given */
+    double t_end, t2a, t2b;
+    double *zy, *de, *y2, *e2;   /* na, na, na, n */
+  } pend;
 };
+
+/* ---- adaptive.c: the run's messages ---- */
+/* "step k (t = ...): " and the text into the run's message; ad_fail also
+ * sets the status and returns it. */
+void ad_say(ad_run *R, const char *fmt, va_list ap);
+__attribute__((format(printf, 3, 4)))
+int ad_fail(ad_run *R, int status, const char *fmt, ...);
+
+/* ---- adaptive_sample.c ---- */
+/* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */
+double ad_sample_time(const cup_adaptive *A, long j);
+/* The samples due in [t0, t1) on md's flow from y = ya with error e0,
+ * offered to the sink (a refusal kept in A->pend: the step goes on, the
+ * run stops at its end); CUP_OK or an error. */
+int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                  double t1);
+/* A stop at a refused sample inside a step, resumed: that sample and the
+ * rest of the step's; 1 if the sink refused one again. */
+int ad_dense_resume(cup_adaptive *A, ad_run *R);
+/* The input's exosystem states at t0 for a step to t1 into w (a callback's
+ * interpolation error per component into err); nonzero if the input failed. */
+int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err);
 
 /* ---- adaptive_mode.c ---- */
 /* The active set with rows `mask` (built, or found among the kept ones). A
@@ -162,6 +231,39 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
 /* g = F + G U w. */
 void ad_offset(const cup_adaptive *A, const double *w, double *g);
 
+/* pinf ||v||_P: a bound on the max norm of v, and of what the flow makes of
+ * it when the LCS is passive (its flow does not expand the P-norm): the
+ * measure of an event's local error, whose effect a resonance carries from
+ * one component to another (scratch: n). */
+double ad_energy_bound(const cup_adaptive *A, const double *v, double *scratch);
+/* The step limit of event detection of md (computed on first use). */
+double ad_mode_hmax(cup_adaptive *A, ad_mode *md);
+/* Row i of C, dense, into out (n entries). */
+void ad_row_of_C(const cup_polyset *K, int i, double *out);
+
+/* ---- adaptive_split.c (D != 0) ---- */
+/* Of the rows J (nj, in increasing order), a subset whose N is nonsingular
+ * (all of them when it is): returns the new count and writes Zt (nz x nj),
+ * nz, and A->Ninv (nj x nj, column-major: N's rows are Y's then Z's). */
+int ad_dae_factor(cup_adaptive *A, int *rows, int nj, double *Zt, int *nz);
+
+/* ---- adaptive_dae.c (D != 0) ---- */
+int ad_dae_init(cup_adaptive *A);
+void ad_dae_free(cup_adaptive *A);
+/* The active set that continues from (x, w) at a time: the mode cur with
+ * the event row flipped (with no event, cur itself) when that fits, else
+ * the finite-h LCP with D (docs/adaptive.md), each candidate checked on
+ * the mode's own flow.
+ * CUP_OK, or CUP_ERR_LINALG when no candidate continues (or the LCP has no
+ * solution). */
+int ad_dae_select(cup_adaptive *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
+                  double tscale, uint64_t *mask, int *pivots);
+/* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some
+ * zeta >= 0} by the impulsive LCP (x + B mu; the P-projection when
+ * P B = C^T): 0 if x was consistent, 1 if it jumped (rows with mu > 0 in
+ * *active), CUP_ERR_LINALG if the LCP has no solution. */
+int ad_dae_jump(cup_adaptive *A, const double *g, double *x, uint64_t *active, int *pivots);
+
 /* ---- adaptive_event.c ---- */
 /* g = L y + Lc and the rounding thresholds thr. */
 void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, double *g, double *thr);
@@ -173,6 +275,7 @@ typedef struct ad_event {
   double tau_lo, tau_sw;    /* the bracket from the step start: no crossing at tau_lo, one at tau_sw */
   double tau_est;           /* best estimate of the root */
   double cfac;              /* multiplies the late-switch error model (1; more after an underestimate) */
+  double cmin;              /* a floor under the model's c: 2 err / delay^2 measured (0 at first) */
   int row;                  /* the row whose function crosses first */
   int evals;                /* flow evaluations spent */
 } ad_event;

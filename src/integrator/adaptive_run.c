@@ -1,8 +1,9 @@
 /* adaptive_run — the run of the event-driven scheme (adaptive_impl.h,
  * docs/adaptive.md): steps of the exact flow that end on the input's
- * breakpoints and the output times, events located inside them, the
- * certified projection where the state is inconsistent, and the error
- * estimate carried along. Allocates nothing. */
+ * breakpoints (the output times inside them: adaptive_sample.c), events
+ * located inside them, the certified projection or the jump where the
+ * state is inconsistent, the error estimate carried along, and the
+ * checkpoints of a stopped run. Allocates nothing. */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
 #include <math.h>
@@ -21,23 +22,6 @@
  * tol (the exact flow has none of its own). */
 #define AD_STEP_SHARE 0.1
 
-/* "step k (t = ...): " and the text into info->message. */
-static void say(ad_run *R, const char *fmt, va_list ap) {
-  cup_run_info *info = R->info;
-  int len = snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): ", R->steps, R->t);
-  if (len >= 0 && (size_t)len < sizeof info->message)
-    vsnprintf(info->message + len, sizeof info->message - (size_t)len, fmt, ap);
-}
-
-__attribute__((format(printf, 3, 4)))
-static int stop(ad_run *R, int status, const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  say(R, fmt, ap);
-  va_end(ap);
-  return R->info->status = status;
-}
-
 /* The first warning is kept (status and message), as in the fixed-step run. */
 __attribute__((format(printf, 3, 4)))
 static void warn(ad_run *R, int status, const char *fmt, ...) {
@@ -45,7 +29,7 @@ static void warn(ad_run *R, int status, const char *fmt, ...) {
   R->info->status = status;
   va_list ap;
   va_start(ap, fmt);
-  say(R, fmt, ap);
+  ad_say(R, fmt, ap);
   va_end(ap);
 }
 
@@ -60,17 +44,14 @@ static double tolw(const cup_adaptive *A, const double *x) {
   return A->o.tol_abs + A->o.tol_rel * inf_norm(x, A->n);
 }
 
-static double sample_time(const cup_adaptive *A, long j) {
-  long last = A->o.output_samples - 1;
-  return j >= last ? A->o.T : A->o.T * (double)j / (double)last;
-}
-
-/* Where the next step must end at the latest: a breakpoint, T, an output
- * time, or t + hlim. */
-static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim) {
+/* Where the next step must end at the latest: a breakpoint, T, or t + hlim
+ * (hlim within hmax); with to_samples, an output time too (catching-up
+ * steps: the other steps' samples come from their exact flow, emit_dense). */
+static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim, int to_samples) {
   double s = fmin(R->tb, A->o.T);
-  if (A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
-    s = fmin(s, sample_time(A, R->next_sample));
+  if (to_samples && A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
+    s = fmin(s, ad_sample_time(A, R->next_sample));
+  if (A->o.hmax > 0) hlim = fmin(hlim, A->o.hmax);
   return R->t + hlim < s ? R->t + hlim : s;
 }
 
@@ -88,7 +69,7 @@ static int halt(cup_adaptive *A, ad_run *R, int status, int phase, const char *w
   s->pinned1 = A->pinned[1] ? (int)(A->pinned[1] - A->modes) : -1;
   s->status = R->info->status;
   memcpy(s->message, R->info->message, sizeof s->message);
-  return stop(R, status, "%s", what);
+  return ad_fail(R, status, "%s", what);
 }
 
 /* The sample at R->t to the sink. */
@@ -108,7 +89,7 @@ static int emit(cup_adaptive *A, ad_run *R) {
   switch (o->output) {
     case CUP_OUTPUT_EVERY: out = R->steps % o->output_every == 0 || last; break;
     case CUP_OUTPUT_SAMPLES:
-      if (R->next_sample < o->output_samples && R->t == sample_time(A, R->next_sample)) {
+      if (R->next_sample < o->output_samples && R->t == ad_sample_time(A, R->next_sample)) {
         out = 1;
         R->next_sample++;
       }
@@ -119,6 +100,18 @@ static int emit(cup_adaptive *A, ad_run *R) {
   if (!out) return CUP_OK;
   R->est_max = fmax(R->est_max, estimate_now(A, R));
   return R->sink ? offer(A, R) : CUP_OK;
+}
+
+/* A step's callback, and the interrupt and wall-time checks. */
+static int step_checks(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
+  if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
+    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
+  if ((R->steps & 1023) == 0) {
+    if (A->o.interrupt && *A->o.interrupt) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "interrupted");
+    if (A->o.max_wall_seconds > 0 && now_seconds() - R->wall0 > A->o.max_wall_seconds)
+      return halt(A, R, CUP_ERR_TIME_LIMIT, AD_STOP_STEP, "wall-time limit reached");
+  }
+  return CUP_OK;
 }
 
 /* The end of a step: statistics, the error estimate (not at the switch
@@ -149,87 +142,30 @@ static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at
          "precision can deliver there (about %.3g)", A->o.tol_abs, A->o.tol_rel, tw, xn,
          16 * DBL_EPSILON * xn);
   }
-  if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
-    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
-  if ((R->steps & 1023) == 0) {
-    if (A->o.interrupt && *A->o.interrupt) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "interrupted");
-    if (A->o.max_wall_seconds > 0 && now_seconds() - R->wall0 > A->o.max_wall_seconds)
-      return halt(A, R, CUP_ERR_TIME_LIMIT, AD_STOP_STEP, "wall-time limit reached");
+  if (A->pend.active) {                          /* the sink refused a sample inside the step */
+    A->stop.pi = *pi;
+    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, "stopped by the output sink");
   }
-  return CUP_OK;
-}
-
-/* ---- the input on a step ------------------------------------------------------------ */
-
-/* A callback input on [t0, t0 + h]: its interpolant at Chebyshev-Lobatto
- * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
- * (p entries) estimates the interpolation error from the last Chebyshev
- * coefficients (geometric decay assumed). */
-static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *err) {
-  enum { q = AD_DEGREE };
-  int p = A->p;
-  double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
-  for (int j = 0; j <= q; j++) {
-    tau[j] = h * A->node[j];
-    if (cup_input_eval(A->u, j == q ? t0 + h : t0 + tau[j], A->ut)) return CUP_ERR_CALLBACK;
-    for (int k = 0; k < p; k++) A->samp[k * (q + 1) + j] = A->ut[k];
-  }
-  for (int k = 0; k < p; k++) {
-    const double *f = A->samp + k * (q + 1);
-    double aq = 0, aq1 = 0, fmag = 0;          /* Chebyshev coefficients q and q - 1 */
-    for (int j = 0; j <= q; j++) {
-      double wj = j == 0 || j == q ? 0.5 : 1;
-      aq += wj * f[j] * cos(M_PI * j * q / q) * ((q & 1) ? -1 : 1);
-      aq1 += wj * f[j] * cos(M_PI * j * (q - 1) / q) * (((q - 1) & 1) ? -1 : 1);
-      fmag = fmax(fmag, fabs(f[j]));
-    }
-    aq = fabs(aq) / q;                            /* the last coefficient is halved */
-    aq1 = 2 * fabs(aq1) / q;
-    err[k] = (aq1 > 0 ? aq * fmin(1, aq / aq1) : aq) + 4 * DBL_EPSILON * fmag;
-    for (int j = 0; j <= q; j++) d[j] = f[j];    /* Newton's divided differences */
-    for (int l = 1; l <= q; l++)
-      for (int j = q; j >= l; j--) d[j] = (d[j] - d[j - 1]) / (tau[j] - tau[j - l]);
-    for (int j = 0; j <= q; j++) c[j] = 0;       /* to monomials: Horner from the top */
-    c[0] = d[q];
-    for (int l = q - 1; l >= 0; l--) {
-      for (int j = q - l; j >= 1; j--) c[j] = c[j - 1] - tau[l] * c[j];
-      c[0] = d[l] - tau[l] * c[0];
-    }
-    double fact = 1;
-    for (int j = 0; j <= q; j++) {
-      if (j > 0) fact *= j;
-      w[k * (q + 1) + j] = fact * c[j];
-    }
-  }
-  return CUP_OK;
-}
-
-/* The exosystem's states for a step [t0, t1] inside a piece. */
-static int inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) {
-  if (!A->nw) return CUP_OK;
-  if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
-  cup_input_gen_values(A->u, A->first_state, t0, t1, w);
-  return CUP_OK;
-}
-
-/* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
- * state and the input's states from the output time on. */
-int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
-  const ad_mode *md = A->zmd;
-  for (int i = 0; i < A->m; i++) zeta[i] = 0;
-  if (!md) return CUP_OK;
-  double t = A->zt, tb = cup_input_next_break(A->u, t);
-  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
-  if (A->nw && A->callback && poly_input(A, t, t < A->o.T ? h : -h, A->zw, A->uerr))
-    return CUP_ERR_CALLBACK;
-  if (A->nw && !A->callback) cup_input_gen_values(A->u, A->first_state, t, t + h, A->zw);
-  ad_lift(A, md, A->x, A->zw, A->zy);
-  for (int i = 0; i < A->m; i++)
-    if (md->is_zeta[i]) zeta[i] = cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
-  return CUP_OK;
+  return step_checks(A, R, pi);
 }
 
 /* ---- projection, active sets, events ------------------------------------------------- */
+
+/* With D: x onto the consistent states Q(t) (adaptive_dae.c), exact up to
+ * rounding (the LCP solved by pivoting); not certified by a projector. */
+static int jump(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t *active, cup_proj_info *pi) {
+  int piv = 0, st = ad_dae_jump(A, g, x, active, &piv);
+  R->info->dual_iterations += piv;
+  if (st < 0)
+    return ad_fail(R, CUP_ERR_EMPTY_SET, "no state is consistent with the rows at this time: the jump's LCP "
+                "(x + B mu with 0 <= mu _|_ C x + D zeta + g >= 0) has no solution");
+  if (st == 0) return CUP_OK;
+  pi->skipped = 0;
+  pi->iterations = piv;
+  R->info->projected++;
+  R->rloc += 8 * DBL_EPSILON * inf_norm(x, A->n);
+  return CUP_OK;
+}
 
 /* If x is outside {C x + g >= 0}, its certified P-projection (the exact
  * small-set LCP, as the explicit scheme's step); *active gets its active
@@ -239,6 +175,7 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
   *active = 0;
   *pi = (cup_proj_info){0};
   pi->skipped = 1;
+  if (A->has_D) return jump(A, R, g, x, active, pi);
   cup_slack(A->K, g, x, A->s, A->gam);
   int outside = 0;                               /* beyond rounding: a held row is at 0 */
   for (int i = 0; i < A->m; i++) outside |= A->s[i] < -A->gam[i];
@@ -258,9 +195,9 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
   if (st < 0) {
     cup_copy(x, A->xr, A->n);
     if (st == CUP_ERR_EMPTY_SET)
-      return stop(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
+      return ad_fail(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
                   pi->farkas_gap, pi->farkas_residual);
-    return stop(R, st, "the projection onto K(t) failed: %s", cup_status_string(st));
+    return ad_fail(R, st, "the projection onto K(t) failed: %s", cup_status_string(st));
   }
   cup_run_info *info = R->info;
   info->projected++;
@@ -307,19 +244,30 @@ static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, d
     A->zeno_row[A->nzeno % AD_ZENO_RING] = i;
     A->nzeno++;
     if (A->o.on_event && A->o.on_event(t, i, now, A->o.event_ctx))
-      return stop(R, CUP_ERR_INTERRUPTED, "stopped by the event callback");
+      return ad_fail(R, CUP_ERR_INTERRUPTED, "stopped by the event callback");
   }
   return CUP_OK;
+}
+
+/* The time scale of the choice of an active set with D at time t (its LCP
+ * is a step of a millionth of it): the current mode's step limit, or the
+ * input's, and no longer than what is left of the input's piece (a pulse's
+ * 1 fs fall, linearised over 25 ns, drove the other pair of a bridge on). */
+static double time_scale(cup_adaptive *A, ad_run *R, double t) {
+  double s = fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);
+  return R->tb > t ? fmin(s, R->tb - t) : s;
 }
 
 /* The active set that continues from (x, w) at R->t, made current, x put
  * on its manifold; changes reported at time t_event. */
 static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0;
-  int piv = 0, st = ad_select(A, A->x, w, hint, &mask, &piv);
+  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R, R->t), &mask, &piv)
+                             : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
-  if (st) return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set has no "
-                      "solution by pivoting (dependent rows?)");
+  if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
+                      "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
+                      : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   A->pinned[0] = R->md = ad_mode_get(A, mask);
   ad_offset(A, w, A->g);
   ad_manifold(A, R->md, A->g, A->x);
@@ -333,7 +281,7 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
  * wave is 0 there), which is what the catching-up limit holds at t. */
 static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
   if (A->u && cup_input_eval(A->u, R->t, A->ut))
-    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   cup_copy(A->g, A->F, A->m);
   for (int i = 0; i < A->m; i++)
     for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
@@ -354,8 +302,8 @@ static int start_piece(cup_adaptive *A, ad_run *R) {
   R->tb = tb < A->o.T ? tb : A->o.T;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
   double h = A->callback ? fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
-  if (inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
-    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
+    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   ad_offset(A, A->wt, A->g);
   uint64_t active;
   cup_proj_info pi;
@@ -368,15 +316,20 @@ static int start_piece(cup_adaptive *A, ad_run *R) {
 /* ---- steps ------------------------------------------------------------------------ */
 
 /* Callback inputs: the step's interpolation error carried to x through the
- * flow: E's column of a component's constant state is the response to a
- * unit step of that input. */
-static double interp_error(const cup_adaptive *A, const double *E) {
+ * flow: X E's column of a component's constant state is the response of x
+ * to a unit step of that input (X, not only E: on a manifold the input
+ * moves x directly, x = v - K_J u, while v stays put; a clamp holding its
+ * capacitor to the source took steps of 0.6 ms at 1 kHz with no error
+ * seen). */
+static double interp_error(const cup_adaptive *A, const ad_mode *md, const double *E) {
   int n = A->n, na = A->na;
   double worst = 0;
   for (int i = 0; i < n; i++) {
     double acc = 0;
-    for (int c = 0; c < A->p; c++)
-      acc += fabs(E[i + (size_t)(n + c * (AD_DEGREE + 1)) * na]) * A->uerr[c];
+    for (int c = 0; c < A->p; c++) {
+      const double *col = E + (size_t)(n + c * (AD_DEGREE + 1)) * na;
+      acc += fabs(cup_dot(md->X + (size_t)i * na, col, na)) * A->uerr[c];
+    }
     worst = fmax(worst, acc);
   }
   return worst;
@@ -405,21 +358,21 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
   ad_mode *md = R->md;
   *snap = 0;
   for (;;) {
-    double hl = A->callback ? fmin(md->hmax, R->h_cb) : md->hmax;
-    *t1 = next_stop(A, R, hl);
+    double hm = ad_mode_hmax(A, md), hl = A->callback ? fmin(hm, R->h_cb) : hm;
+    *t1 = next_stop(A, R, hl, 0);
     double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * fmax(fabs(R->t), DBL_MIN);
     if (!(h > tiny)) {
       if (*t1 < R->t + hl) { *snap = 1; return NULL; }   /* a stop point a rounding away */
-      stop(R, CUP_ERR_STEP_SIZE, "the step size %.3g underflows", h);
+      ad_fail(R, CUP_ERR_STEP_SIZE, "the step size %.3g underflows", h);
       return NULL;
     }
-    if (inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
-      stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
+    if (ad_inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
+      ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
       return NULL;
     }
     const double *E = ad_expm(A, md, h);
     if (!A->callback) return E;
-    double ie = interp_error(A, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
+    double ie = interp_error(A, md, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
     double fac = errn > 0 ? 0.9 * pow(errn, -1.0 / (AD_DEGREE + 2)) : 5;
     if (errn <= 1) {
       R->h_cb = h * fmin(5, fac);
@@ -435,6 +388,15 @@ static int any_negative(const cup_adaptive *A) {
   for (int i = 0; i < A->m; i++)
     if (A->ga[i] < -A->ta[i]) return 1;
   return 0;
+}
+
+/* The tolerance an event's local error is held to: tolw at the state, less
+ * as the estimate of what the run has already spent of it grows past half
+ * (events accumulate: a resonant converter switches 86 times in 200 us),
+ * down to 1/16 of it. */
+static double event_budget(const cup_adaptive *A, const ad_run *R) {
+  double tw = tolw(A, A->x), left = tw - estimate_now(A, R);
+  return left >= 0.5 * tw ? tw : tw * fmax(1.0 / 16, left / (0.5 * tw));
 }
 
 /* The reported time of the event of row k: Newton steps on its function
@@ -462,7 +424,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   int n = A->n, nw = A->nw, st;
   ad_mode *old = R->md, *nm = NULL;
   A->pinned[1] = old;
-  double tw = tolw(A, A->x), tau_rep = 0;
+  double tw = event_budget(A, R), tau_rep = 0;
   uint64_t before = old->mask, active = 0;
   cup_proj_info pi = {0};
   for (int attempt = 0;; attempt++) {
@@ -477,9 +439,12 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     uint64_t mask = 0;
     int piv = 0;
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
-    if (ad_select(A, A->xs, A->wt, hint, &mask, &piv))
-      return stop(R, CUP_ERR_LINALG, "the velocity LCP that chooses the active set after the event of "
-                  "row %d has no solution by pivoting (dependent rows?)", ev->row);
+    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R, R->t + tsw), &mask, &piv)
+                 : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
+      return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
+                  "the LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
+                  : "the velocity LCP that chooses the active set after the event of row %d has no solution by "
+                  "pivoting (dependent rows?)", ev->row);
     R->info->dual_iterations += piv;
     nm = ad_mode_get(A, mask);
     A->pinned[0] = nm;
@@ -494,10 +459,39 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     ad_flow(A, nm, tsw - tau_rep, A->yt, A->yr);
     ad_state(A, nm, A->yr, A->xr);
     for (int i = 0; i < n; i++) A->et[i] = A->xs[i] - A->xr[i];
-    double err = inf_norm(A->et, n);
-    if (err <= 4 * AD_EVENT_SHARE * tw || attempt >= 3 || nm->mask == before) break;
+    double err = ad_energy_bound(A, A->et, A->xf);
+    /* A switch that leaves the active set as it was, although a row
+     * crossed well before it, has stepped over the row's whole excursion
+     * (a diode that conducts for a moment inside a long step: the error is
+     * its charge, first order): the bracket is closed further, 16x a try. */
+    double width = ev->tau_sw - ev->tau_lo;
+    if (nm->mask == before) {
+      if (width <= ldexp(h, -20) || attempt >= 8) break;
+      ev->cmin = fmax(ev->cmin, 2 * AD_EVENT_SHARE * tw * 256 / (width * width));
+      continue;
+    }
+    if (err <= 4 * AD_EVENT_SHARE * tw || attempt >= 3) break;
     ev->cfac *= fmax(4, err / (0.25 * AD_EVENT_SHARE * tw));
+    /* a model of 0 (another row switching with this one, D's coupling) is
+     * raised by nothing: the measured error over the delay is a floor */
+    double delay = tsw - tau_rep;
+    if (delay > 0) ev->cmin = fmax(ev->cmin, 4 * err / (delay * delay));
   }
+  /* samples before the root on the old flow, after it on the new one from
+   * the root's state made consistent (A->yt, what the local error was
+   * measured against): the run's own path there would show the violation
+   * the late switch lets through, first order in its delay */
+  double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
+  if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
+  cup_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  if (troot > t0) {
+    cup_zero(A->de2, A->na);
+    cup_copy(A->de2, A->e, n);
+    ad_flow(A, old, troot - t0, A->de2, A->de);
+    cup_copy(A->ed, A->de, n);
+  }
+  ad_manifold(A, nm, A->zero, A->ed);
+  if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   error_flow(A, old, ev->tau_sw);
   A->pinned[0] = R->md = nm;
   A->pinned[1] = NULL;
@@ -505,7 +499,6 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   if (nm->mask != before)
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
   cup_copy(A->x, A->xs, n);
-  double t0 = R->t;
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
   return end_of_step(A, R, &pi, 1);
@@ -542,6 +535,8 @@ static int take_step(cup_adaptive *A, ad_run *R) {
   double h = t1 - R->t;
   ad_event ev = {.t0 = R->t, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
+  int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
+  if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
   ad_offset(A, A->yb + n, A->g);
   ad_manifold(A, md, A->g, A->x);
@@ -556,6 +551,23 @@ static int take_step(cup_adaptive *A, ad_run *R) {
 }
 
 /* ---- accumulating events: catching-up steps across them --------------------------- */
+
+/* With D, a catching-up step's active set: the one that continues from the
+ * step's start (NULL with the status set on an error). */
+static ad_mode *catch_up_mode(cup_adaptive *A, ad_run *R, double h) {
+  uint64_t mask;
+  int piv = 0;
+  if (ad_inputs_on(A, R->t, fmin(R->tb, R->t + h), A->wt, A->uerr)) {
+    ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    return NULL;
+  }
+  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, time_scale(A, R, R->t), &mask, &piv)) {
+    ad_fail(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
+    return NULL;
+  }
+  R->info->dual_iterations += piv;
+  return ad_mode_get(A, mask);
+}
 
 static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb);
 
@@ -587,13 +599,15 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
   while (R->t < tend) {
     /* the free system's flow, then the certified projection: the paper's
      * scheme with an exact free step, through breakpoints too (which pick
-     * an active set that this loop does not use) */
-    ad_mode *md0 = ad_mode_get(A, 0);
+     * an active set that this loop does not use); with D, whose multipliers
+     * act through the step, the flow of the active set chosen at its start */
+    ad_mode *md0 = A->has_D ? catch_up_mode(A, R, fmin(window / 16, tend - R->t)) : ad_mode_get(A, 0);
+    if (!md0) return R->info->status;
     A->pinned[1] = md0;
-    double t1 = fmin(next_stop(A, R, fmin(md0->hmax, window / 16)), tend);
+    double t1 = fmin(next_stop(A, R, fmin(ad_mode_hmax(A, md0), window / 16), 1), tend);
     if (!(t1 > R->t)) break;
-    if (inputs_on(A, R->t, t1, A->wa, A->uerr))
-      return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    if (ad_inputs_on(A, R->t, t1, A->wa, A->uerr))
+      return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     const double *E = ad_expm(A, md0, t1 - R->t);
     ad_lift(A, md0, A->x, A->wa, A->ya);
     for (int i = 0; i < na; i++) {
@@ -620,8 +634,8 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
   A->pinned[1] = NULL;
   A->nzeno = 0;
   if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
-  if (inputs_on(A, R->t, fmin(R->tb, R->t + R->md->hmax), A->wt, A->uerr))
-    return stop(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  if (ad_inputs_on(A, R->t, fmin(R->tb, R->t + ad_mode_hmax(A, R->md)), A->wt, A->uerr))
+    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   return choose_mode(A, R, A->wt, 0, R->t);
 }
 
@@ -648,13 +662,14 @@ static int run_to_end(cup_adaptive *A, ad_run *R, int st) {
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                      cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
+  A->pend.active = 0;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
   if (cup_state_beyond(x0, A->n)) {
     int w = cup_state_worst(x0, A->n);
-    if (!isfinite(x0[w])) return stop(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
-    return stop(&R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
+    if (!isfinite(x0[w])) return ad_fail(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
+    return ad_fail(&R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
                 CUP_STATE_MAX, w, x0[w]);
   }
   cup_copy(A->x, x0, A->n);
@@ -693,9 +708,24 @@ void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
   CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0);
   cup_ckpt_io(c, A->x, N);
   cup_ckpt_io(c, A->e, N);
+  if (s->phase == AD_STOP_DENSE) {               /* the refused sample's states, the step's projection */
+    struct ad_pend *p = &A->pend;
+    size_t NA = sizeof(double) * (size_t)A->na;
+    CUP_CKPT_IO(c, s->pi);
+    CUP_CKPT_IO(c, p->active); CUP_CKPT_IO(c, p->md); CUP_CKPT_IO(c, p->seg2); CUP_CKPT_IO(c, p->md2);
+    CUP_CKPT_IO(c, p->k); CUP_CKPT_IO(c, p->t_end); CUP_CKPT_IO(c, p->t2a); CUP_CKPT_IO(c, p->t2b);
+    cup_ckpt_io(c, p->zy, NA);
+    cup_ckpt_io(c, p->de, NA);
+    cup_ckpt_io(c, p->y2, NA);
+    cup_ckpt_io(c, p->e2, N);
+  }
   CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
   cup_ckpt_io(c, A->lcp.lam, sizeof(double) * M);
   cup_ckpt_io(c, A->lcp.prev, M);
+  if (A->has_D) {                                /* the jump's LCP (2 m) warm-starts too */
+    cup_ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
+    cup_ckpt_io(c, A->jlcp.prev, 2 * M);
+  }
   cup_lcp_step_checkpoint(&A->proj, c);
   cup_projector_checkpoint(A->projector, c);
   for (int k = 0; k < AD_MODES; k++) {
@@ -731,6 +761,12 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
   if (phase == AD_STOP_SAMPLE) {
     info->samples--;                             /* counted when the sink refused it */
     if (sink) st = offer(A, &R);
+  } else if (phase == AD_STOP_DENSE) {           /* the step's samples from the refused one, its callback */
+    info->samples--;
+    st = ad_dense_resume(A, &R);
+    if (st == 1) return halt(A, &R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, "stopped by the output sink");
+    if (st >= 0) st = step_checks(A, &R, &s->pi);
+    if (st >= 0) st = emit(A, &R);
   } else {
     st = emit(A, &R);
   }

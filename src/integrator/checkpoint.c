@@ -15,14 +15,14 @@
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
-enum { VERSION = 1 };
+enum { VERSION = 2 };
 
 /* What a blob belongs to: restored only into an integrator of the same
  * build (sizes and byte order) and configuration. */
 typedef struct fingerprint {
   int32_t endian, sizes, version, scheme, n, m, p, method, output, estimate, f_order, warm_start, theta_step;
   int64_t steps, every, samples;
-  double T, h, eps_n, eta_n, theta, tol_abs, tol_rel, max_event_rate, lipschitz;
+  double T, h, eps_n, eta_n, theta, tol_abs, tol_rel, max_event_rate, lipschitz, hmax, output_t0;
 } fingerprint;
 
 static void fingerprint_of(const cup_integrator *I, fingerprint *f) {
@@ -43,6 +43,8 @@ static void fingerprint_of(const cup_integrator *I, fingerprint *f) {
   f->T = o->T; f->h = I->h; f->eps_n = I->eps_n; f->eta_n = I->eta_n; f->theta = o->theta;
   f->tol_abs = o->tol_abs; f->tol_rel = o->tol_rel; f->max_event_rate = o->max_event_rate;
   f->lipschitz = o->proj.lipschitz;
+  f->hmax = o->hmax;
+  f->output_t0 = o->output_t0;
 }
 
 /* The first field that differs, named in errmsg; CUP_OK when none. */
@@ -59,7 +61,8 @@ static int same_run(const fingerprint *a, const fingerprint *b, char *errmsg) {
   CK_INT(theta_step, "the exact LCP step") CK_INT(steps, "n") CK_INT(every, "output.every")
   CK_INT(samples, "output.samples") CK_DBL(T, "T") CK_DBL(h, "h") CK_DBL(eps_n, "eps_n") CK_DBL(eta_n, "eta_n")
   CK_DBL(theta, "theta") CK_DBL(tol_abs, "tol_abs") CK_DBL(tol_rel, "tol_rel")
-  CK_DBL(max_event_rate, "max_event_rate") CK_DBL(lipschitz, "projector.lipschitz")
+  CK_DBL(max_event_rate, "max_event_rate") CK_DBL(lipschitz, "projector.lipschitz") CK_DBL(hmax, "hmax")
+  CK_DBL(output_t0, "output_t0")
 #undef CK_INT
 #undef CK_DBL
   return CUP_OK;
@@ -86,6 +89,10 @@ static void io_state(cup_integrator *I, cup_ckpt *c, cup_run_info *info) {
   CUP_CKPT_IO(c, I->zeta_from);
   CUP_CKPT_IO(c, I->jump);
   cup_ckpt_io(c, I->x, sizeof(double) * (size_t)I->n);
+  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* a sample between steps k - 1 and k: x_{k-1}, zeta_{k-1} */
+    cup_ckpt_io(c, I->xnew, sizeof(double) * (size_t)I->n);
+    if (I->zprev) cup_ckpt_io(c, I->zprev, sizeof(double) * (size_t)I->m);
+  }
   if (I->half) {
     cup_ckpt_io(c, I->x0, sizeof(double) * (size_t)I->n);
     CUP_CKPT_IO(c, I->est.err);

@@ -83,9 +83,10 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
         return cup_fail(errmsg, CUP_ERR_ARG, "output every %ld: the stride must be >= 1", o->output_every);
       break;
     case CUP_OUTPUT_SAMPLES:
-      if (o->output_samples < 2 || (o->scheme != CUP_SCHEME_ADAPTIVE && o->output_samples - 1 > o->n))
-        return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be in [2, n + 1 = %ld]",
-                        o->output_samples, o->n + 1);
+      if (o->output_samples < 2)
+        return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be >= 2", o->output_samples);
+      if (!(o->output_t0 >= 0 && o->output_t0 < o->T))
+        return cup_fail(errmsg, CUP_ERR_ARG, "output_t0 = %g must be in [0, T = %g)", o->output_t0, o->T);
       break;
     case CUP_OUTPUT_FINAL:
     case CUP_OUTPUT_NONE:
@@ -95,17 +96,24 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
   }
   if (!(o->max_wall_seconds >= 0))
     return cup_fail(errmsg, CUP_ERR_ARG, "max_wall_seconds = %g must be >= 0", o->max_wall_seconds);
+  if (!(o->hmax >= 0) || !isfinite(o->hmax))
+    return cup_fail(errmsg, CUP_ERR_ARG, "hmax = %g must be finite and >= 0", o->hmax);
   return CUP_OK;
 }
 
-/* Only the theta scheme's LCP takes D: the catching-up schemes project
- * onto K(t) = {C x + G u + F >= 0}, which exists only when D = 0. */
+/* Only the theta scheme's LCP and the adaptive scheme take D: the
+ * catching-up schemes project onto K(t) = {C x + G u + F >= 0}, which
+ * exists only when D = 0; an active network (B kept as given) only theta. */
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
   if (L->keep_B)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: it projects "
-                    "in the energy metric P, and B is not P^-1 C^T here: controlled sources drive the diodes' "
-                    "rows): use the theta scheme", cup_scheme_name(scheme));
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
+                    "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
+                    cup_scheme_name(scheme), scheme == CUP_SCHEME_ADAPTIVE
+                    ? "its state jumps are projections in the energy metric P and its choice of the active set "
+                      "takes the network as passive"
+                    : "it projects in the energy metric P");
+  if (scheme == CUP_SCHEME_ADAPTIVE) return CUP_OK;
   int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
   if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
@@ -116,12 +124,9 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   char text[128];
   cup_lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
-  const char *why = scheme == CUP_SCHEME_ADAPTIVE
-                        ? "its active sets' manifolds C_J x + G_J u + F_J = 0 leave out D zeta_J, which it does "
-                          "not integrate yet"
-                        : "it projects onto K(t) = {C x + G u + F >= 0}, which D != 0 does not define";
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (%s); %s %s D != 0 (a diode whose "
-                  "current the state does not fix): use the theta scheme", cup_scheme_name(scheme), why, text,
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
+                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state does "
+                  "not fix): use the theta or the adaptive scheme", cup_scheme_name(scheme), text,
                   k == 1 ? "has" : "have");
 }
 
@@ -192,7 +197,10 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   I->s0 = calloc(M, sizeof(double));
   I->sg = calloc(M, sizeof(double));
   I->v = calloc(2 * N, sizeof(double));
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->sg || !I->v)
+  I->xs = calloc(N, sizeof(double));
+  I->zprev = calloc(M, sizeof(double));
+  I->zs = 1;
+  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->sg || !I->v || !I->xs || !I->zprev)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   if (o->scheme == CUP_SCHEME_THETA && !I->K)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
@@ -272,7 +280,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->fixed = L->fixed;
   cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
-    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, u, &I->o, errmsg);
+    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, L->has_D ? &L->B : NULL, L->has_D ? &L->D : NULL, u,
+                             &I->o, errmsg);
     if (st) { cup_integrator_free(&I); return st; }
     *out = I;
     return CUP_OK;
@@ -336,7 +345,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
                     "(this process has %s); use the explicit, implicit or exponential scheme",
                     !I->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
     else
-      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, I->u, &I->o, errmsg);
+      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, NULL, NULL, I->u, &I->o, errmsg);
     if (st) { cup_integrator_free(&I); return st; }
     *out = I;
     return CUP_OK;
@@ -362,6 +371,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   cup_sparse_free(&I->E_own);
   if (I->use_theta) cup_lcp_step_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
+  free(I->xs); free(I->zprev);
   free(I->x0);
   free(I);
   *Ip = NULL;
@@ -380,6 +390,8 @@ int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
   for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
+  if (I->zs < 1 && I->zprev)                     /* a sample between two steps */
+    for (int i = 0; i < I->m; i++) zeta[i] = I->zprev[i] + I->zs * (zeta[i] - I->zprev[i]);
   return CUP_OK;
 }
 
@@ -387,7 +399,27 @@ int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
 
 static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
 
-typedef struct { long next_j; } sampler;
+/* The output: every k-th step, the last, none; or samples at
+ * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
+ * first step that reaches it: on a step (aligned: that step's state, as it
+ * always was) or between two (interpolated linearly, the scheme's own
+ * order at most two: x and zeta both). */
+typedef struct { long next_j, kdue; int aligned; double tau; } sampler;
+
+static void sampler_next(const cup_integrator *I, sampler *sp) {
+  const cup_integrator_options *o = &I->o;
+  long S = o->output_samples, n = o->n, j = sp->next_j;
+  if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
+  double t0 = o->output_t0;
+  sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
+  long k = (long)llround(sp->tau / I->h);
+  if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
+  else sp->aligned = grid_time(I, k) == sp->tau;
+  if (!sp->aligned) k = (long)ceil(sp->tau / I->h);
+  if (k < 0) k = 0;
+  if (k > n) k = n;
+  sp->kdue = k;
+}
 
 static int selected(const cup_integrator *I, sampler *sp, long k) {
   const cup_integrator_options *o = &I->o;
@@ -395,29 +427,56 @@ static int selected(const cup_integrator *I, sampler *sp, long k) {
     case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
     case CUP_OUTPUT_FINAL: return k == o->n;
     case CUP_OUTPUT_NONE: return 0;
-    case CUP_OUTPUT_SAMPLES: {
-      long S = o->output_samples;
-      long step = (long)llround((double)sp->next_j * (double)o->n / (double)(S - 1));
-      if (sp->next_j < S && k == step) { sp->next_j++; return 1; }
-      return 0;
-    }
+    case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
   }
   return 0;
 }
 
-/* The first step j >= k whose end the loop must see itself: a sample, the
- * interrupt check after each 1024th step, the last step (faststep.c runs
- * the ones before it). */
+/* The first step j >= k whose end the loop must see itself: a sample (and
+ * the step before an interpolated one, whose zeta it keeps), the interrupt
+ * check after each 1024th step, the last step (faststep.c runs the ones
+ * before it). */
 static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
   const cup_integrator_options *o = &I->o;
   long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
   if (stop > o->n - 1) stop = o->n - 1;
   if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
-  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->next_j < o->output_samples) {
-    next = (long)llround((double)sp->next_j * (double)o->n / (double)(o->output_samples - 1));
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
+    next = sp->aligned ? sp->kdue : sp->kdue - 1;
     if (next <= k) next = k + 1;
   }
   return next - 1 < stop ? next - 1 : stop;
+}
+
+/* The samples due at step k (x_k in I->x, x_{k-1} in I->xnew): on the step,
+ * or interpolated between the two. */
+static int emit_samples(cup_integrator *I, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
+  while (selected(I, sp, k)) {
+    const double *x = I->x;
+    double t = grid_time(I, k);
+    if (!sp->aligned && k > 0) {
+      double t_prev = grid_time(I, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
+      if (s < 1) {
+        for (int i = 0; i < I->n; i++) I->xs[i] = I->xnew[i] + s * (I->x[i] - I->xnew[i]);
+        x = I->xs;
+        I->zs = s;
+      }
+      t = sp->tau;
+    }
+    info->samples++;
+    int stopped = sink(k, t, x, ctx);
+    I->zs = 1;
+    if (stopped) return 1;
+    sp->next_j++;
+    sampler_next(I, sp);
+  }
+  return 0;
+}
+
+/* After the samples of step k: zeta_k kept when the next sample falls
+ * between steps k and k + 1 (its zeta is interpolated from it). */
+static void keep_zeta(cup_integrator *I, const sampler *sp, long k) {
+  if (!sp->aligned && k + 1 == sp->kdue && I->zprev) cup_integrator_zeta(I, I->zprev);
 }
 
 /* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
@@ -699,24 +758,30 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
              I->split, I->split_row);
   }
   sampler sp = {0};
+  sampler_next(I, &sp);
+  I->zs = 1;
+  if (I->zprev) cup_zero(I->zprev, I->m);
   if (I->half) {
     memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
     if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
       return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
                   CUP_STOP_SAMPLE_DUE, &sp);
   }
-  if (sink && selected(I, &sp, 0)) {
+  if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(I, &sp, 0)) {
     info->samples++;
     if (sink(0, 0.0, I->x, sink_ctx))
       return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
   }
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(I, &sp, 0, sink, sink_ctx, info))
+    return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
   return cup_integrator_steps_(I, 0, sp.next_j, sink, sink_ctx, info);
 }
 
 int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx,
                           cup_run_info *info) {
   const cup_integrator_options *o = &I->o;
-  sampler sp = {next_j};
+  sampler sp = {next_j, 0, 0, 0};
+  sampler_next(I, &sp);
   int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   long rebuilds0 = I->rebuilds0;
   double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
@@ -804,7 +869,11 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
     }
     if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
       return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
-    if (sink && selected(I, &sp, k + 1)) {
+    if (sink && o->output == CUP_OUTPUT_SAMPLES) {
+      if (emit_samples(I, &sp, k + 1, sink, sink_ctx, info))
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+      keep_zeta(I, &sp, k + 1);
+    } else if (sink && selected(I, &sp, k + 1)) {
       info->samples++;
       if (sink(k + 1, t1, I->x, sink_ctx))
         return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
@@ -836,7 +905,8 @@ int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx,
   if (I->ad) return cup_adaptive_resume(I->ad, sink, sink_ctx, info);
   int phase = I->stop.phase;
   long k = I->stop.k;
-  sampler sp = {I->stop.next_j};
+  sampler sp = {I->stop.next_j, 0, 0, 0};
+  sampler_next(I, &sp);
   if (I->half) {
     double err = I->est.err;                     /* the comparisons made before the stop */
     int cst = coarse_run(I, info);
@@ -848,6 +918,15 @@ int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx,
   }
   I->stop.phase = CUP_STOP_NONE;
   if (phase == CUP_STOP_SAMPLE_REFUSED) info->samples--;          /* counted when it was refused */
+  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* the samples due at k, from x_k, x_{k-1} and zeta_{k-1} */
+    if (sink && phase != CUP_STOP_STEP_DONE) {
+      if (emit_samples(I, &sp, k, sink, sink_ctx, info))
+        return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+                    CUP_STOP_SAMPLE_REFUSED, &sp);
+      if (k > 0) keep_zeta(I, &sp, k);
+    }
+    return cup_integrator_steps_(I, k, sp.next_j, sink, sink_ctx, info);
+  }
   int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(I, &sp, k));
   if (sink && offer) {
     info->samples++;

@@ -59,6 +59,8 @@ struct cup_integrator {
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0, *sg;
   double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
+  double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */
+  double zs;                /* ... and its place between them (1: on a step) */
   long rebuilds0;           /* a state polyset's rebuilds before the run */
   double *x0;               /* the estimate's: x0 of the run, for a resumed run's coarse one */
   /* where the last run stopped, for a checkpoint (checkpoint.c) */

@@ -469,9 +469,11 @@ static int read_param(rd *r, int card) {
 
 /* ---- control lines ----------------------------------------------------------- */
 
+/* .tran TSTEP TSTOP [TSTART [TMAX]] [UIC]: TSTEP is the output's spacing,
+ * TSTART where the output begins, TMAX the longest step (docs/netlist.md). */
 static int read_tran(rd *r, int card) {
   int n = r->x.card[card].n;
-  const nx_tok *cmd = TOK(r, card, 0);
+  const nx_tok *cmd = TOK(r, card, 0), *at[4] = {NULL};
   nl_circuit *c = r->c;
   if (c->has_tran) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "given twice (line %d)", c->tran_line);
   if (n < 3) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "expected '.tran TSTEP TSTOP'");
@@ -481,20 +483,55 @@ static int read_tran(rd *r, int card) {
     const nx_tok *t = TOK(r, card, k);
     if (nx_is(t, "uic")) continue;               /* initial conditions are always used */
     if (nv == 4) return nx_fail(&r->x, CUP_ERR_PARSE, t, ".tran", "too many values");
+    at[nv] = t;
     st = nx_value(&r->x, t, ".tran", &v[nv++]);
   }
   if (st) return st;
   if (nv < 2) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "expected '.tran TSTEP TSTOP'");
   if (!(v[0] > 0) || !(v[1] > 0))
     return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".tran", "TSTEP = %g and TSTOP = %g must be > 0", v[0], v[1]);
-  if (v[2] != 0)
-    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, 3), ".tran", "TSTART = %g is not supported "
-                   "(the run starts at t = 0)", v[2]);
+  if (nv > 2 && !(v[2] >= 0 && v[2] < v[1]))
+    return nx_fail(&r->x, CUP_ERR_PARSE, at[2], ".tran", "TSTART = %g must be in [0, TSTOP = %g)", v[2], v[1]);
+  if (nv > 3 && !(v[3] > 0))
+    return nx_fail(&r->x, CUP_ERR_PARSE, at[3], ".tran", "TMAX = %g must be > 0", v[3]);
   c->has_tran = 1;
   c->tstep = v[0];
   c->tstop = v[1];
+  c->tstart = v[2];
+  c->tmax = v[3];
   c->tran_line = cmd->line;
   c->tran_col = cmd->col;
+  return CUP_OK;
+}
+
+/* .options NAME[=VALUE] ...: RELTOL, ABSTOL, VNTOL and CHGTOL set the
+ * adaptive scheme's tolerances (docs/netlist.md); SPICE's other options
+ * tune its own numerics and are accepted and ignored. */
+static int read_options(rd *r, int card) {
+  static const char *const known[] = {"reltol", "abstol", "vntol", "chgtol", NULL};
+  nl_circuit *c = r->c;
+  double *slot[] = {&c->reltol, &c->abstol, &c->vntol, &c->chgtol};
+  int n = r->x.card[card].n;
+  for (int k = 1; k < n; k++) {
+    const nx_tok *t = TOK(r, card, k);
+    int which = -1;
+    for (int q = 0; known[q]; q++)
+      if (nx_is(t, known[q])) which = q;
+    int valued = k + 2 < n && TOK(r, card, k + 1)->kind == NX_EQ;
+    if (which < 0) {                             /* another SPICE option: its value, if any, skipped */
+      if (valued) k += 2;
+      continue;
+    }
+    if (!valued) return nx_fail(&r->x, CUP_ERR_PARSE, t, ".options", "expected %s=VALUE", known[which]);
+    double v;
+    int st = nx_value(&r->x, TOK(r, card, k + 2), ".options", &v);
+    if (st) return st;
+    if (!(v > 0) || !isfinite(v) || (which == 0 && !(v < 1)))
+      return nx_fail(&r->x, CUP_ERR_PARSE, TOK(r, card, k + 2), ".options", "%s = %g must be %s", known[which], v,
+                     which == 0 ? "in (0, 1)" : "finite and > 0");
+    *slot[which] = v;
+    k += 2;
+  }
   return CUP_OK;
 }
 
@@ -561,7 +598,7 @@ static int read_probes(rd *r, int card) {
 }
 
 static int read_control(rd *r, int card) {
-  static const char *const ignored[] = {".options", ".option", ".opt", ".title", ".temp", ".width", NULL};
+  static const char *const ignored[] = {".title", ".temp", ".width", NULL};
   static const char *const refused[] = {".func", ".global",
                                         ".ac", ".dc", ".op", ".noise", ".tf", ".four", ".meas", ".measure",
                                         ".sens", ".pz", ".disto", ".nodeset", ".csparam", ".if", ".else",
@@ -569,6 +606,7 @@ static int read_control(rd *r, int card) {
   const nx_tok *cmd = TOK(r, card, 0);
   const char *w = cmd->s;
   if (!strcasecmp(w, ".tran")) return read_tran(r, card);
+  if (!strcasecmp(w, ".options") || !strcasecmp(w, ".option") || !strcasecmp(w, ".opt")) return read_options(r, card);
   if (!strcasecmp(w, ".ic")) return read_ic(r, card);
   if (!strcasecmp(w, ".probe") || !strcasecmp(w, ".save") || !strcasecmp(w, ".print") || !strcasecmp(w, ".plot"))
     return read_probes(r, card);
@@ -751,6 +789,7 @@ void nl_circuit_free(nl_circuit *c) {
 static int load(cup_netlist **out, const char *text, size_t len, const char *name,
                 const char *const *sets, int nsets, cup_file_list *files, char *errmsg) {
   nl_circuit c = {0};
+  c.reltol = c.abstol = c.vntol = c.chgtol = NAN;  /* .options not given */
   rd r = {0};
   r.x.file = name;
   r.x.read_list = files;

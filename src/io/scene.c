@@ -39,6 +39,7 @@ struct cup_scene {
   cup_file_list files;          /* every file read: the scene's, its Matrix Market files, its netlist's */
   long max_steps;               /* the key max_steps: the most steps a fixed-step run may take */
   int circuit;                  /* the model is circuit: (its states have names) */
+  int steps_given;              /* the scene gave n or h (a netlist's .tran gives neither) */
 };
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
@@ -435,6 +436,7 @@ static int read_tolerance(rd *r, const st_node *root, cup_integrator_options *o)
               "deliver (16 eps = %.2g)", o->tol_rel, 16 * DBL_EPSILON);
   if (!st && (nd = opt(root, "max_event_rate")))
     st = number_min(r, nd, "max_event_rate", 0, 1, &o->max_event_rate);
+  if (!st && (nd = opt(root, "hmax"))) st = number_min(r, nd, "hmax", 0, 1, &o->hmax);
   if (!st && (nd = opt(root, "estimate"))) st = boolean(r, nd, "estimate", &o->estimate);
   return st;
 }
@@ -445,24 +447,51 @@ static int is_adaptive(const st_node *root) {
   return nd && nd->kind == ST_SCALAR && cup_scheme_parse(nd->text) == CUP_SCHEME_ADAPTIVE;
 }
 
-/* T, n and the tolerance schedules. */
+/* T, n (or the step h) and the tolerance schedules. */
 static int read_times(rd *r, const st_node *root, cup_scene *S) {
-  const st_node *nd;
+  const st_node *nd, *hn = opt(root, "h");
   cup_integrator_options *o = &S->opt;
-  int tran = S->nl && cup_netlist_tran(S->nl, NULL, NULL);   /* .tran gives T and n */
+  int tran = S->nl && cup_netlist_tran(S->nl, NULL, NULL);   /* .tran gives T (and the output) */
   int st = CUP_OK;
   if (!tran || opt(root, "T")) {
     st = need(r, root, "", "T", &nd);
     if (!st) st = number_min(r, nd, "T", 0, 1, &o->T);
+    if (!st && tran) scene_netlist_sampling(S->nl, o);
   }
-  if (!st && (!tran || opt(root, "n")) && !(is_adaptive(root) && !opt(root, "n"))) {
+  if (!st && hn && opt(root, "n"))
+    st = fail(r, CUP_ERR_PARSE, hn, "h", "give n or h, not both (n = T / h, rounded up)");
+  if (!st && hn) {
+    double h;
+    st = number_min(r, hn, "h", 0, 1, &h);
+    double n = ceil(o->T / h * (1 - 1e-12));   /* a step of at most h; T / h itself when it divides */
+    if (!st && !(n <= 9007199254740992.0))
+      st = fail(r, CUP_ERR_PARSE, hn, "h", "T / h = %g steps is more than 2^53", n);
+    if (!st) o->n = n < 1 ? 1 : (long)n;
+    S->steps_given = 1;
+  } else if (!st && (!tran || opt(root, "n")) && !(is_adaptive(root) && !opt(root, "n"))) {
     st = need(r, root, "", "n", &nd);
     /* 2^53: every integer up to it is exact in a double */
     if (!st) st = integer(r, nd, "n", 1, 9007199254740992L, &o->n);
+    S->steps_given = 1;
   }
   if (!st) st = read_schedule(r, root, "eps", "n^-2.1", &o->eps, &S->eps_spec);
   if (!st) st = read_schedule(r, root, "eta", "n^-1.05", &o->eta, &S->eta_spec);
   return st;
+}
+
+/* A netlist's .tran TSTEP is the output's spacing, not a step: a fixed-step
+ * scheme the scene chooses for a circuit the adaptive scheme runs needs its
+ * own n or h, and n or h without a scheme chooses theta (docs/netlist.md). */
+static int netlist_steps(rd *r, const st_node *root, cup_scene *S, cup_scheme fallback) {
+  if (S->nl && S->steps_given && fallback == CUP_SCHEME_ADAPTIVE && !opt(root, "scheme"))
+    S->opt.scheme = CUP_SCHEME_THETA;
+  if (!S->nl || S->steps_given || S->opt.scheme == CUP_SCHEME_ADAPTIVE || fallback != CUP_SCHEME_ADAPTIVE ||
+      !cup_netlist_tran(S->nl, NULL, NULL))
+    return CUP_OK;
+  const st_node *nd = opt(root, "scheme");
+  return fail(r, CUP_ERR_PARSE, nd ? nd : root, "n", "the %s scheme needs n or h: the netlist's .tran TSTEP is "
+              "the output's spacing, not a step (give n: N or h: STEP; catchup-run --n N or --h STEP)",
+              cup_scheme_name(S->opt.scheme));
 }
 
 /* T, n, the schedules and x0. */
@@ -527,8 +556,8 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
-                                      "T", "n", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
-                                      "max_event_rate", "estimate", "max_steps", NULL};
+                                      "T", "n", "h", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
+                                      "max_event_rate", "hmax", "estimate", "max_steps", NULL};
   const st_node *kf, *ki, *nd;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
@@ -555,9 +584,11 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
       st = read_input(r, root, cup_lcs_inputs(S->lcs), &S->u);
   }
   if (!st && S->nl) scene_netlist_options(S->nl, &S->opt);
+  cup_scheme netlist_scheme = S->opt.scheme;
   if (!st) st = read_run(r, root, cup_scene_dim(S), S);
   if (!st) st = read_method(r, root, &S->opt);
   if (!st) st = read_tolerance(r, root, &S->opt);
+  if (!st) st = netlist_steps(r, root, S, netlist_scheme);
   if (!st) st = read_name(r, root, S);
   return st;
 }

@@ -12,7 +12,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
+#include <math.h>
 #include "integrator/freestep.h"
+#include "model/input_impl.h"
+#include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 #include "scene_netlist.h"
 #include "netlist_lex.h"
@@ -125,16 +128,71 @@ int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode,
   return st;
 }
 
+/* Can the adaptive scheme run this netlist? Dense (the small-set limits),
+ * a passive network (B = P^-1 C^T), an input its exosystem holds, states
+ * plus generator states within the exponential's limit. */
+static int adaptive_fits(const cup_netlist *nl) {
+  const cup_lcs *L = cup_netlist_lcs(nl);
+  const cup_polyset *K = cup_lcs_polyset(L);
+  const cup_input *u = cup_netlist_input(nl);
+  if (!K->dense || L->keep_B || (u && cup_input_gen_check(u, "adaptive", NULL))) return 0;
+  return K->n + cup_input_gen_dim(u, NULL) + 1 <= CUP_EXPONENTIAL_MAX_DIM;
+}
+
+void scene_netlist_sampling(const cup_netlist *nl, cup_integrator_options *o) {
+  double tstep, tstop, tstart = 0, tmax = 0;
+  if (!cup_netlist_tran(nl, &tstep, &tstop)) return;
+  cup_netlist_tran_window(nl, &tstart, &tmax);
+  double span = o->T - tstart, S = span > 0 ? floor(span / tstep + 0.5) + 1 : 2;
+  o->output = CUP_OUTPUT_SAMPLES;
+  o->output_t0 = span > 0 ? tstart : 0;
+  o->output_samples = S < 2 ? 2 : S > 9007199254740992.0 ? 9007199254740992L : (long)S;
+}
+
+/* SPICE's meaning (docs/netlist.md): .tran TSTEP TSTOP TSTART TMAX gives T,
+ * the output every TSTEP from TSTART, and the longest step; the adaptive
+ * scheme runs to the tolerances of .options; n = TSTOP / TSTEP only for a
+ * circuit the adaptive scheme cannot run (a fixed-step scheme chosen by the
+ * user needs its own n or h, scene.c). */
 void scene_netlist_options(const cup_netlist *nl, cup_integrator_options *o) {
-  double tstep, tstop;
+  double tstep, tstop, tstart = 0, tmax = 0;
   if (cup_netlist_tran(nl, &tstep, &tstop)) {
+    cup_netlist_tran_window(nl, &tstart, &tmax);
     o->T = tstop;
     double n = tstop / tstep;
     o->n = n < 1 ? 1 : n > 9007199254740992.0 ? 9007199254740992L : (long)(n + 0.5);
+    o->hmax = tmax;
+    scene_netlist_sampling(nl, o);
   }
-  /* the theta scheme runs every circuit that fits its dense limits (D != 0
-   * too) and is second order; a larger one gets the stable implicit scheme
-   * while it is dense enough, the explicit one beyond */
-  const cup_polyset *K = cup_lcs_polyset(cup_netlist_lcs(nl));
-  o->scheme = K->dense ? CUP_SCHEME_THETA : K->n <= CUP_IMPLICIT_MAX_DIM ? CUP_SCHEME_IMPLICIT : CUP_SCHEME_EXPLICIT;
+  /* RELTOL relative, ABSTOL (currents) and VNTOL (voltages) absolute,
+   * CHGTOL (charge) over the largest capacitance as a voltage; one tol on
+   * the max norm of the state takes the smallest absolute part of the
+   * kinds of state present */
+  double reltol, abstol, vntol, chgtol, cmax = 0;
+  cup_netlist_tolerances(nl, &reltol, &abstol, &vntol, &chgtol);
+  if (isnan(reltol)) reltol = CUP_NETLIST_RELTOL;
+  if (isnan(abstol)) abstol = CUP_NETLIST_ABSTOL;
+  if (isnan(vntol)) vntol = CUP_NETLIST_VNTOL;
+  if (isnan(chgtol)) chgtol = CUP_NETLIST_CHGTOL;
+  const cup_lcs *L = cup_netlist_lcs(nl);
+  const cup_polyset *K = cup_lcs_polyset(L);
+  int inductors = 0, capacitors = 0;
+  for (int j = 0; j < K->n; j++) {
+    const char *name = cup_netlist_state_name(nl, j);
+    if (name[0] == 'i') inductors = 1;
+    else capacitors = 1;
+    /* P = diag(L, C): a capacitor's entry is its capacitance */
+    if (name[0] == 'v' && K->pkind == CUP_METRIC_DIAGONAL) cmax = fmax(cmax, K->pd[j]);
+  }
+  double atol = INFINITY;
+  if (inductors) atol = fmin(atol, abstol);
+  if (capacitors) atol = fmin(atol, fmin(vntol, cmax > 0 ? chgtol / cmax : INFINITY));
+  o->tol_rel = reltol;
+  o->tol_abs = isfinite(atol) ? atol : abstol;
+  /* the adaptive scheme where it can run the circuit; else the theta
+   * scheme (second order, every circuit within its dense limits), the
+   * stable implicit scheme while it is dense enough, the explicit one
+   * beyond, at n = TSTOP / TSTEP */
+  o->scheme = adaptive_fits(nl) ? CUP_SCHEME_ADAPTIVE
+              : K->dense ? CUP_SCHEME_THETA : K->n <= CUP_IMPLICIT_MAX_DIM ? CUP_SCHEME_IMPLICIT : CUP_SCHEME_EXPLICIT;
 }

@@ -29,10 +29,17 @@ void cup_lemke_free(cup_lemke *s) {
 
 /* The leaving row for entering column e: the least ratio q_i / a_ie over
  * a_ie > tol, ties broken lexicographically by the rows of B^-1 (the w
- * columns) over a_ie: a strict order, so no basis repeats. -1: a ray. */
+ * columns) over a_ie: a strict order, so no basis repeats. When z0's row
+ * ties with that row to rounding, z0 leaves (the method ends there):
+ * ratios that are equal in exact arithmetic differ by rounding after some
+ * pivots, and the lexicographic order then follows the rounding, which can
+ * end on a ray although the LCP is feasible. -1: a ray. */
 static int ratio_test(const cup_lemke *s, int e, double tol) {
-  int m = s->m, qc = 2 * m + 1, best = -1;
+  int m = s->m, qc = 2 * m + 1, best = -1, zrow = -1;
+  double qscale = 0;
   for (int i = 0; i < m; i++) {
+    qscale = fmax(qscale, fabs(TAB(s, i, qc)));
+    if (s->basis[i] == 2 * m) zrow = i;
     double a = TAB(s, i, e);
     if (!(a > tol)) continue;
     if (best < 0) { best = i; continue; }
@@ -40,6 +47,10 @@ static int ratio_test(const cup_lemke *s, int e, double tol) {
     double d = TAB(s, i, qc) / a - TAB(s, best, qc) / ab;
     for (int j = 0; d == 0 && j < m; j++) d = TAB(s, i, j) / a - TAB(s, best, j) / ab;
     if (d < 0) best = i;
+  }
+  if (best >= 0 && zrow >= 0 && zrow != best && TAB(s, zrow, e) > tol) {
+    double az = TAB(s, zrow, e), rz = TAB(s, zrow, qc) / az, rb = TAB(s, best, qc) / TAB(s, best, e);
+    if (rz - rb <= 64 * DBL_EPSILON * (fabs(rb) + qscale / az)) return zrow;
   }
   return best;
 }

@@ -260,6 +260,27 @@ void cup_input_gen_values(const cup_input *u, const int *first_state, double a, 
   }
 }
 
+void cup_input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w) {
+  cup_input_gen_values(u, first_state, a, b, w);
+  double mid = 0.5 * (a + b);
+  for (int k = 0; k < u->nterms; k++) {
+    const cup_term *t = &u->terms[k];
+    double *wk = w + first_state[k], t0, v0, slope;
+    if (t->kind == CUP_WAVE_PULSE) {
+      cup_spice_pulse_line(t, mid, &t0, &v0, &slope);
+    } else if (t->kind == CUP_WAVE_PWL && mid > t->t[0] && mid < t->t[t->np - 1]) {
+      int j = pwl_segment(t, mid);
+      t0 = t->t[j];
+      v0 = t->v[j];
+      slope = (t->v[j + 1] - t->v[j]) / (t->t[j + 1] - t->t[j]);
+    } else {
+      continue;
+    }
+    wk[0] = v0 + slope * (a - t0);
+    wk[1] = slope;
+  }
+}
+
 /* ---- callback quadrature ------------------------------------------------------ */
 
 typedef struct { const cup_input *u; int comp; double *buf; int failed; } quad_ctx;

@@ -40,6 +40,10 @@ int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg);
 double cup_spice_term_value(const cup_term *t, double tt);
 double cup_spice_term_integral(const cup_term *t, double a, double b);
 double cup_spice_term_break(const cup_term *t, double tt);   /* the next corner after tt, or INFINITY */
+/* A PULSE's piece around mid as the line u = v0 + slope (t - t0) through its
+ * corners at the times cup_spice_term_break gives them (t0 the one before
+ * mid), with the corners' own values. */
+void cup_spice_pulse_line(const cup_term *t, double mid, double *t0, double *v0, double *slope);
 int cup_spice_term_constant(const cup_term *t);
 
 /* The square wave in units of pi: q = omega t / pi + phase / pi, so that
@@ -151,6 +155,13 @@ void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *
  * the jump instants carry no weight), the table's value at a and its slope
  * on (a, b). Taken from the waveform itself, so nothing drifts. */
 void cup_input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w);
+/* The same, with a table's or a pulse's states from the line of its piece
+ * through the piece's corners (their values at the breakpoints' times):
+ * the value at a and the slope of the step's piece are then the ones the
+ * piece before and after meet, whatever a and b round to (the adaptive
+ * scheme's steps run between breakpoints; a fixed step that straddles a
+ * corner needs gen_values' secant instead). */
+void cup_input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w);
 
 int cup_quad_ws_init(cup_quad_ws *ws, int p);
 void cup_quad_ws_free(cup_quad_ws *ws);

@@ -120,10 +120,41 @@ static double pulse_break(const cup_term *t, double tt) {
   double j0 = floor((tt - t->delay) / P) - 1;
   for (int j = 0; j < 3; j++)
     for (int k = 0; k < 4; k++) {
-      double b = t->delay + P * (j0 + j) + knot[k];
+      /* the first period's start is the delay, not delay - P + P (an ulp
+       * or more off: a second corner there, a step of 4 ulps at 1 ms) */
+      double b = j0 + j + 1 == 0 && k == 3 ? t->delay : t->delay + P * (j0 + j) + knot[k];
       if (b > tt) return b;
     }
   return INFINITY;                                    /* not reached: 3 periods span tt */
+}
+
+void cup_spice_pulse_line(const cup_term *t, double mid, double *t0, double *v0, double *slope) {
+  /* each corner as pulse_break returns it (delay + P j + knot k), the piece
+   * after it (0 the rise, 1 the top, 2 the fall, 3 the bottom) and that
+   * piece's own end; the delay and delay - P + P are both the first rise's
+   * start (they may differ by an ulp, and pulse_break returns both); a
+   * rise or fall below the corner's ulp (1e-25 at 1 ms) leaves two corners
+   * equal, and the piece is the later one's (the step is then a jump) */
+  const double knot[4] = {t->rise, t->rise + t->width, t->rise + t->width + t->fall, t->period};
+  const double from[4] = {t->value, t->value2, t->value2, t->value};
+  const double to[4] = {t->value2, t->value2, t->value, t->value};
+  double P = t->period, start = -INFINITY, end = t->delay;
+  int piece = 3;
+  if (mid >= t->delay) { start = t->delay; piece = 0; end = t->delay + knot[0]; }
+  double j0 = P > 0 ? floor((mid - t->delay) / P) - 1 : 0;
+  for (int j = 0; j < (P > 0 ? 3 : 1); j++)
+    for (int k = 0; k < (P > 0 ? 4 : 3); k++) {
+      double jj = j0 + j, c = t->delay + P * jj + knot[k];
+      if (!(P > 0)) c = t->delay + knot[k];
+      if (!(c <= mid && c >= start)) continue;      /* a later corner on an earlier one: a piece of length 0 */
+      start = jj + 1 == 0 && k == 3 ? t->delay : c;   /* the first period's start is the delay */
+      piece = (k + 1) % 4;
+      end = k < 2 ? t->delay + P * jj + knot[k + 1] : k == 3 ? t->delay + P * (jj + 1) + knot[0] : INFINITY;
+      if (!(P > 0) && k < 2) end = t->delay + knot[k + 1];
+    }
+  *t0 = isfinite(start) ? start : mid;
+  *v0 = from[piece];
+  *slope = to[piece] != from[piece] && isfinite(start) && end > start ? (to[piece] - from[piece]) / (end - start) : 0;
 }
 
 /* ---- SIN with delay and damping ------------------------------------------------ */

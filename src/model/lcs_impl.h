@@ -15,7 +15,7 @@ struct cup_lcs {
   double *F;            /* m */
   cup_polyset *K;       /* {x : C x + F >= 0}, metric P */
   int fixed;            /* G absent or zero */
-  /* D != 0: the LCS is not a sweeping process; only the theta scheme runs it */
+  /* D != 0: the LCS is not a sweeping process; the theta and adaptive schemes run it */
   int has_D;            /* D given with a nonzero entry, or keep_B: B and D as given */
   int keep_B;           /* B kept as given (P B != C^T allowed): the reason when D = 0 */
   cup_sparse B, D;      /* has_D: n x m and m x m as given (D may be all zero) */

@@ -235,6 +235,12 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   nl->has_tran = c->has_tran;
   nl->tstep = c->tstep;
   nl->tstop = c->tstop;
+  nl->tstart = c->tstart;
+  nl->tmax = c->tmax;
+  nl->reltol = c->reltol;
+  nl->abstol = c->abstol;
+  nl->vntol = c->vntol;
+  nl->chgtol = c->chgtol;
   if (!(nl->file = strdup(c->file))) return CUP_ERR_NOMEM;
   if (!(nl->files = calloc((size_t)c->nfiles + 1, sizeof(char *)))) return CUP_ERR_NOMEM;
   for (int f = 0; f < c->nfiles; f++) {
@@ -346,6 +352,22 @@ void cup_netlist_free(cup_netlist **p) {
 const cup_lcs *cup_netlist_lcs(const cup_netlist *nl) { return nl ? nl->L : NULL; }
 const cup_input *cup_netlist_input(const cup_netlist *nl) { return nl ? nl->u : NULL; }
 const double *cup_netlist_x0(const cup_netlist *nl) { return nl ? nl->x0 : NULL; }
+
+int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, double *tmax) {
+  if (!nl || !nl->has_tran) return 0;
+  if (tstart) *tstart = nl->tstart;
+  if (tmax) *tmax = nl->tmax;
+  return 1;
+}
+
+int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol) {
+  const double none = NAN;
+  if (reltol) *reltol = nl ? nl->reltol : none;
+  if (abstol) *abstol = nl ? nl->abstol : none;
+  if (vntol) *vntol = nl ? nl->vntol : none;
+  if (chgtol) *chgtol = nl ? nl->chgtol : none;
+  return nl && (!isnan(nl->reltol) || !isnan(nl->abstol) || !isnan(nl->vntol) || !isnan(nl->chgtol));
+}
 
 int cup_netlist_tran(const cup_netlist *nl, double *tstep, double *tstop) {
   if (!nl || !nl->has_tran) return 0;

@@ -74,8 +74,9 @@ typedef struct nl_circuit {
   int ncoup;
   nl_coupling *coup;  /* K cards */
   int has_tran;
-  double tstep, tstop;
+  double tstep, tstop, tstart, tmax;   /* tstart, tmax 0 when not given */
   int tran_line, tran_col;
+  double reltol, abstol, vntol, chgtol;   /* .options: NAN when not given */
   int nic;
   nl_ic *ic;          /* .ic v(node)=value */
   int nprobe;

@@ -45,7 +45,8 @@ struct cup_netlist {
   cup_input *u;       /* NULL when p = 0 */
   double *x0;
   int has_tran;
-  double tstep, tstop;
+  double tstep, tstop, tstart, tmax;
+  double reltol, abstol, vntol, chgtol;   /* .options, NAN when not given */
   int n, m, p, nL, nC;
   /* the circuit, for names and signals */
   char *file;

@@ -140,8 +140,8 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
 
 /* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection
  * explicit runs; the scheme is first order, so this removes the 1/n term.
- * An LCS with D != 0 (a netlist's diode behind a resistance) runs on the
- * theta scheme only; at theta = 1/2 it is second order there
+ * An LCS with D != 0 (a netlist's diode behind a resistance) is not for
+ * the explicit scheme: its two runs are theta's, at theta = 1/2 second order there
  * (docs/netlist.md): x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3.
  * coarse: samples * dim doubles of scratch. */
 static void richardson(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,

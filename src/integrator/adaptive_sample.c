@@ -1,0 +1,224 @@
+/* adaptive_sample — the adaptive scheme's samples and input on a step
+ * (adaptive_impl.h, docs/adaptive.md): the output times' states from the
+ * exact flow inside a step (dense output: no step ends at a sample), one
+ * the sink refused kept for a resumed run, the multipliers at a sample,
+ * and the input's exosystem states on a step (a callback's by
+ * interpolation). Allocates nothing. */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include "catchup.h"
+#include "adaptive.h"
+#include "adaptive_impl.h"
+#include "tally.h"
+
+static double norm_inf(const double *v, int n) {
+  double r = 0;
+  for (int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
+  return r;
+}
+
+double ad_sample_time(const cup_adaptive *A, long j) {
+  long last = A->o.output_samples - 1;
+  double t0 = A->o.output_t0;
+  return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
+}
+
+/* E y in place (na x na, column-major; tmp: na). */
+static void times(int na, const double *E, double *y, double *tmp) {
+  cup_copy(tmp, y, na);
+  for (int i = 0; i < na; i++) {
+    double acc = 0;
+    for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * tmp[j];
+    y[i] = acc;
+  }
+}
+
+/* The samples due before t1 on the flow of md, the first of them (sample
+ * R->next_sample) in A->zy with its error in A->de; each next one by the
+ * cached exp(dt M) of the output spacing dt (one product a sample: asking
+ * 10^5 samples adds no steps). The sink is given step number k. A refused
+ * sample leaves its states in A->pend (the step goes on to its end, where
+ * the run stops): 1; else 0, or an error. */
+static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k) {
+  const cup_integrator_options *o = &A->o;
+  int n = A->n, na = A->na;
+  double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
+  for (;;) {
+    double ts = ad_sample_time(A, R->next_sample);
+    R->next_sample++;
+    R->est_max = fmax(R->est_max, norm_inf(A->de, n) + R->rloc + sqrt(R->r2));
+    if (R->sink) {
+      ad_state(A, md, A->zy, A->xo);
+      if (cup_state_beyond(A->xo, n)) {            /* as step_done: never a state out of range */
+        int w = cup_state_worst(A->xo, n);
+        return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
+                    "the scheme diverged", CUP_STATE_MAX, ts, w, A->xo[w]);
+      }
+      R->info->samples++;
+      A->zmd = md;
+      A->zt = ts;
+      A->zy_ready = 1;
+      int stopped = R->sink(k, ts, A->xo, R->sink_ctx);   /* inside the step in progress */
+      A->zmd = NULL;
+      A->zy_ready = 0;
+      if (stopped) {
+        struct ad_pend *p = &A->pend;
+        R->next_sample--;
+        p->active = 1;
+        p->seg2 = 0;
+        p->md = (int)(md - A->modes);
+        p->k = k;
+        p->t_end = t1;
+        cup_copy(p->zy, A->zy, na);
+        cup_copy(p->de, A->de, na);
+        return 1;
+      }
+    }
+    if (!(R->next_sample < o->output_samples && ad_sample_time(A, R->next_sample) < t1)) return 0;
+    const double *E = ad_expm(A, md, dt);
+    times(na, E, A->zy, A->dy);
+    times(na, E, A->de, A->dy);
+  }
+}
+
+/* The samples due before t1 on the flow of md from (t0, ya), exact: the
+ * first by exp((t_j - t0) M), the next ones by dense_from; the error
+ * estimate there is e0's (the error at t0) carried along by the same flow.
+ * After a refused sample in this step, nothing is offered: a second piece
+ * (an event's new flow) is kept for the resumed run. */
+int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                      double t1) {
+  const cup_integrator_options *o = &A->o;
+  if (o->output != CUP_OUTPUT_SAMPLES) return CUP_OK;
+  struct ad_pend *p = &A->pend;
+  if (p->active) {
+    if (!p->seg2) {
+      p->seg2 = 1;
+      p->md2 = (int)(md - A->modes);
+      p->t2a = t0;
+      p->t2b = t1;
+      cup_copy(p->y2, ya, A->na);
+      cup_copy(p->e2, e0, A->n);
+    }
+    return CUP_OK;
+  }
+  if (!(R->next_sample < o->output_samples)) return CUP_OK;
+  double ts = ad_sample_time(A, R->next_sample);
+  if (!(ts < t1)) return CUP_OK;
+  int n = A->n, na = A->na;
+  ad_flow(A, md, ts - t0, ya, A->zy);
+  cup_zero(A->de2, na);
+  cup_copy(A->de2, e0, n);
+  ad_flow(A, md, ts - t0, A->de2, A->de);
+  p->seg2 = 0;
+  int st = dense_from(A, R, md, t1, R->steps + 1);
+  return st < 0 ? st : CUP_OK;
+}
+
+/* A resumed AD_STOP_DENSE: the refused sample and the rest of its piece
+ * from the states kept, then the second piece's. */
+int ad_dense_resume(cup_adaptive *A, ad_run *R) {
+  struct ad_pend *p = &A->pend;
+  p->active = 0;
+  cup_copy(A->zy, p->zy, A->na);
+  cup_copy(A->de, p->de, A->na);
+  int st = dense_from(A, R, &A->modes[p->md], p->t_end, p->k);
+  if (st) return st;
+  if (!p->seg2) return CUP_OK;
+  if (!(R->next_sample < A->o.output_samples && ad_sample_time(A, R->next_sample) < p->t2b)) return CUP_OK;
+  ad_mode *md2 = &A->modes[p->md2];
+  double ts = ad_sample_time(A, R->next_sample);
+  p->seg2 = 0;                                   /* a refusal there is the only piece left */
+  ad_flow(A, md2, ts - p->t2a, p->y2, A->zy);
+  cup_zero(A->de2, A->na);
+  cup_copy(A->de2, p->e2, A->n);
+  ad_flow(A, md2, ts - p->t2a, A->de2, A->de);
+  return dense_from(A, R, md2, p->t2b, p->k);
+}
+
+/* A callback input on [t0, t0 + h]: its interpolant at Chebyshev-Lobatto
+ * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
+ * (p entries) estimates the interpolation error from the last Chebyshev
+ * coefficients (geometric decay assumed). */
+static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *err) {
+  enum { q = AD_DEGREE };
+  int p = A->p;
+  double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
+  for (int j = 0; j <= q; j++) {
+    tau[j] = h * A->node[j];
+    if (cup_input_eval(A->u, j == q ? t0 + h : t0 + tau[j], A->ut)) return CUP_ERR_CALLBACK;
+    for (int k = 0; k < p; k++) A->samp[k * (q + 1) + j] = A->ut[k];
+  }
+  for (int j = 0; j < q; j++) {                  /* and between the nodes: a check on the interpolant */
+    if (cup_input_eval(A->u, t0 + 0.5 * (tau[j] + tau[j + 1]), A->ut)) return CUP_ERR_CALLBACK;
+    for (int k = 0; k < p; k++) A->samp_mid[k * q + j] = A->ut[k];
+  }
+  for (int k = 0; k < p; k++) {
+    const double *f = A->samp + k * (q + 1);
+    double aq = 0, aq1 = 0, fmag = 0;          /* Chebyshev coefficients q and q - 1 */
+    for (int j = 0; j <= q; j++) {
+      double wj = j == 0 || j == q ? 0.5 : 1;
+      aq += wj * f[j] * cos(M_PI * j * q / q) * ((q & 1) ? -1 : 1);
+      aq1 += wj * f[j] * cos(M_PI * j * (q - 1) / q) * (((q - 1) & 1) ? -1 : 1);
+      fmag = fmax(fmag, fabs(f[j]));
+    }
+    aq = fabs(aq) / q;                            /* the last coefficient is halved */
+    aq1 = 2 * fabs(aq1) / q;
+    err[k] = (aq1 > 0 ? aq * fmin(1, aq / aq1) : aq) + 4 * DBL_EPSILON * fmag;
+    for (int j = 0; j <= q; j++) d[j] = f[j];    /* Newton's divided differences */
+    for (int l = 1; l <= q; l++)
+      for (int j = q; j >= l; j--) d[j] = (d[j] - d[j - 1]) / (tau[j] - tau[j - l]);
+    for (int j = 0; j <= q; j++) c[j] = 0;       /* to monomials: Horner from the top */
+    c[0] = d[q];
+    for (int l = q - 1; l >= 0; l--) {
+      for (int j = q - l; j >= 1; j--) c[j] = c[j - 1] - tau[l] * c[j];
+      c[0] = d[l] - tau[l] * c[0];
+    }
+    /* the interpolant against the input between its nodes: the tail of the
+     * Chebyshev coefficients alone underrates a step too long for degree q
+     * (a 1 kHz sine over 0.3 ms: 1e-7 of its amplitude off, estimated 1e-12) */
+    for (int j = 0; j < q; j++) {
+      double s = 0.5 * (tau[j] + tau[j + 1]), v = c[q];
+      for (int l = q - 1; l >= 0; l--) v = v * s + c[l];
+      err[k] = fmax(err[k], fabs(v - A->samp_mid[k * q + j]) + 4 * DBL_EPSILON * fmag);
+    }
+    double fact = 1;
+    for (int j = 0; j <= q; j++) {
+      if (j > 0) fact *= j;
+      w[k * (q + 1) + j] = fact * c[j];
+    }
+  }
+  return CUP_OK;
+}
+
+/* The exosystem's states for a step [t0, t1] inside a piece (and the
+ * constant state, with D). */
+int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) {
+  if (A->one >= 0) w[A->one] = 1;
+  if (!A->nwu) return CUP_OK;
+  if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
+  cup_input_gen_piece(A->u, A->first_state, t0, t1, w);
+  return CUP_OK;
+}
+
+/* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
+ * state and the input's states from the output time on. */
+int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
+  const ad_mode *md = A->zmd;
+  for (int i = 0; i < A->m; i++) zeta[i] = 0;
+  if (!md) return CUP_OK;
+  if (A->zy_ready) {                             /* a sample inside a step: its y is known */
+    for (int i = 0; i < A->m; i++)
+      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+    return CUP_OK;
+  }
+  double t = A->zt, tb = cup_input_next_break(A->u, t);
+  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
+  if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
+  ad_lift(A, md, A->x, A->zw, A->zy);
+  for (int i = 0; i < A->m; i++)
+    if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+  return CUP_OK;
+}
+

@@ -1,0 +1,101 @@
+/* adaptive_split — with D != 0, an active set's rows split by the SVD of
+ * D_JJ into those that fix zeta_J algebraically (Y) and the manifold of the
+ * state (Z), and the inverse of N = [Y^T D_JJ; Z^T C_J B_J] (adaptive_dae.c
+ * says why; adaptive_impl.h, ad_dae_factor). Allocates nothing. */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
+#include "catchup.h"
+#include "adaptive_impl.h"
+
+/* Singular values of D_JJ below this share of the largest are zero; N is
+ * singular when its condition (rows and columns equilibrated) exceeds the
+ * inverse of AD_N_RCOND. */
+#define AD_D_RANK_TOL 1e-12
+#define AD_N_RCOND 1e-11
+
+/* The SVD of the k x k row-major matrix a (overwritten by U, row-major);
+ * V row-major into v, the singular values (decreasing) into s. */
+static int svd(double *a, double *v, double *s, double *work, int k) {
+  gsl_matrix_view av = gsl_matrix_view_array(a, (size_t)k, (size_t)k);
+  gsl_matrix_view vv = gsl_matrix_view_array(v, (size_t)k, (size_t)k);
+  gsl_vector_view sv = gsl_vector_view_array(s, (size_t)k), wv = gsl_vector_view_array(work, (size_t)k);
+  gsl_error_handler_t *old = gsl_set_error_handler_off();
+  int st = gsl_linalg_SV_decomp(&av.matrix, &vv.matrix, &sv.vector, &wv.vector);
+  gsl_set_error_handler(old);
+  return st;
+}
+
+/* N for the rows J, its inverse into A->Ninv and Z^T into Zt; 1 if N is
+ * singular (or the SVD failed). The SVD is D_JJ^T's, U' S V'^T (GSL leaves
+ * the columns of U for zero singular values zero; V is complete): D_JJ's
+ * left singular vectors are V', kept in A->svd_v (row-major, nj x nj). */
+static int factor_rows(cup_adaptive *A, const int *J, int nj, double *Zt, int *nz) {
+  int m = A->m;
+  *nz = 0;
+  if (nj == 0) return 0;
+  double *U = A->svd_u, *V = A->svd_v, *s = A->svd_s, *N = A->N;
+  for (int a = 0; a < nj; a++)
+    for (int c = 0; c < nj; c++) U[(size_t)a * nj + c] = A->Dd[J[c] + (size_t)J[a] * m];
+  if (svd(U, V, s, A->svd_w, nj)) return 1;
+  int r = 0;
+  while (r < nj && s[r] > AD_D_RANK_TOL * nj * s[0]) r++;
+  *nz = nj - r;
+  /* N, column-major: Y^T D_JJ = S_Y U'_Y^T, then Z^T C_J B_J */
+  for (int c = 0; c < nj; c++) {
+    for (int b = 0; b < r; b++) N[b + (size_t)c * nj] = s[b] * U[(size_t)c * nj + b];
+    for (int b = r; b < nj; b++) {
+      double acc = 0;
+      for (int a = 0; a < nj; a++) acc += V[(size_t)a * nj + b] * A->CB[J[a] + (size_t)J[c] * m];
+      N[b + (size_t)c * nj] = acc;
+    }
+  }
+  for (int b = 0; b < *nz; b++)
+    for (int a = 0; a < nj; a++) Zt[(size_t)b * nj + a] = V[(size_t)a * nj + r + b];
+  /* equilibrate (Y rows are in D's units, Z rows in C B's; zeta's columns
+   * are currents or voltages), then its condition by an SVD */
+  double *dr = A->eqr, *dc = A->eqc, *Nw = A->Nw;
+  for (int b = 0; b < nj; b++) {
+    dr[b] = 0;
+    for (int c = 0; c < nj; c++) dr[b] = fmax(dr[b], fabs(N[b + (size_t)c * nj]));
+    if (!(dr[b] > 0)) return 1;
+    dr[b] = 1 / dr[b];
+  }
+  for (int c = 0; c < nj; c++) {
+    dc[c] = 0;
+    for (int b = 0; b < nj; b++) dc[c] = fmax(dc[c], fabs(dr[b] * N[b + (size_t)c * nj]));
+    if (!(dc[c] > 0)) return 1;
+    dc[c] = 1 / dc[c];
+  }
+  for (int b = 0; b < nj; b++)
+    for (int c = 0; c < nj; c++) Nw[(size_t)b * nj + c] = dr[b] * N[b + (size_t)c * nj] * dc[c];
+  double *Vw = A->Ninv;                          /* scratch: the SVD's V */
+  double tmp_s[CUP_DENSE_MAX_ROWS], tmp_w[CUP_DENSE_MAX_ROWS];
+  if (svd(Nw, Vw, tmp_s, tmp_w, nj) || !(tmp_s[nj - 1] > AD_N_RCOND * tmp_s[0])) return 1;
+  /* N^-1 = Dc (Dr N Dc)^-1 Dr by LU of the equilibrated matrix */
+  double *lu = A->Sl, *col = A->Sinv;
+  for (int b = 0; b < nj; b++)
+    for (int c = 0; c < nj; c++) lu[b + (size_t)c * nj] = dr[b] * N[b + (size_t)c * nj] * dc[c];
+  if (cup_dense_lu(lu, nj, A->perm)) return 1;
+  for (int k = 0; k < nj; k++) {
+    for (int b = 0; b < nj; b++) col[b] = b == k ? dr[k] : 0;
+    cup_dense_lu_solve(lu, nj, A->perm, col, tmp_w);
+    for (int c = 0; c < nj; c++) A->Ninv[c + (size_t)k * nj] = dc[c] * col[c];
+  }
+  return 0;
+}
+
+int ad_dae_factor(cup_adaptive *A, int *rows, int nj, double *Zt, int *nz) {
+  if (!factor_rows(A, rows, nj, Zt, nz)) return nj;
+  /* dependent rows: keep, in order, each row that leaves N nonsingular */
+  int keep[CUP_DENSE_MAX_ROWS], nk = 0;
+  for (int a = 0; a < nj; a++) {
+    keep[nk] = rows[a];
+    if (!factor_rows(A, keep, nk + 1, Zt, nz)) nk++;
+  }
+  factor_rows(A, keep, nk, Zt, nz);              /* leaves the buffers for the kept rows */
+  memcpy(rows, keep, sizeof(int) * (size_t)nk);
+  return nk;
+}
