@@ -35,7 +35,7 @@
 #include <cholmod.h>
 #include "catchup.h"
 #include "util/clock.h"
-#include "paper.h"
+#include "../bench/paper.h"   /* the paper's circuit, shared with the tests */
 
 static int cmp_double(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;

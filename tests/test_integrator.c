@@ -9,7 +9,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 #include "stress_util.h"
-#include "paper.h"
+#include "../bench/paper.h"
 #include "closed_forms.h"
 #include "refdata.h"
 
