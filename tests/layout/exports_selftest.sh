@@ -9,8 +9,6 @@ set -u
 here=$(cd "$(dirname "$0")" && pwd)
 src=$1
 cc=${2:-cc}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
 self=exports_selftest
 . "$here/expect.sh"
 
