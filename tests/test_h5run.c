@@ -28,6 +28,7 @@
 
 #define CLI_TMPDIR_TEMPLATE "/tmp/cup_h5run_XXXXXX"
 #include "tmpdir.h"
+#include "h5read.h"
 
 static void path_in_tmp(char *buf, size_t size, const char *name) {
   snprintf(buf, size, "%s/%s", tmpdir, name);
@@ -557,38 +558,16 @@ static void test_events(void **state) {
     }
     assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
     typedef struct { int8_t on; double t; int32_t row; } ev;   /* another order than the writer's */
-    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT), d = H5Dopen2(f, "events", H5P_DEFAULT);
-    hid_t mt = H5Tcreate(H5T_COMPOUND, sizeof(ev));
-    H5Tinsert(mt, "t", HOFFSET(ev, t), H5T_NATIVE_DOUBLE);
-    H5Tinsert(mt, "row", HOFFSET(ev, row), H5T_NATIVE_INT32);
-    H5Tinsert(mt, "on", HOFFSET(ev, on), H5T_NATIVE_INT8);
-    hid_t sp = H5Dget_space(d);
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     hsize_t n = 0;
-    H5Sget_simple_extent_dims(sp, &n, NULL);
+    ev *e = read_events(f, sizeof(ev), HOFFSET(ev, t), HOFFSET(ev, row), HOFFSET(ev, on), &n);
     assert_int_equal((long)n, count);
-    ev *e = malloc(sizeof(ev) * (n + 1));
-    if (n) assert_true(H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, e) >= 0);
     for (int k = 0; k < count; k++)
       if (e[k].t != 0.5 * k || e[k].row != k % 7 || e[k].on != (k % 3 == 0))
         fail_msg("event %d read back as (%g, %d, %d)", k, e[k].t, e[k].row, e[k].on);
     free(e);
-    H5Sclose(sp);
-    H5Tclose(mt);
-    H5Dclose(d);
     H5Fclose(f);
   }
-}
-
-/* A string attribute of an object, read through HDF5 (not the writer). */
-static void read_str_attr(hid_t obj, const char *name, char *out, size_t size) {
-  hid_t a = H5Aopen(obj, name, H5P_DEFAULT), t = H5Aget_type(a);
-  assert_true(a >= 0 && H5Tis_variable_str(t) > 0 && H5Tget_cset(t) == H5T_CSET_UTF8);
-  char *v = NULL;
-  assert_true(H5Aread(a, t, &v) >= 0);
-  snprintf(out, size, "%s", v);
-  H5free_memory(v);
-  H5Tclose(t);
-  H5Aclose(a);
 }
 
 /* Dimension scales and CF attributes, read back with the H5DS API: /x's
@@ -635,9 +614,9 @@ static void test_dimension_scales(void **state) {
   assert_true(H5DSis_attached(x, t, 0) > 0 && H5DSis_attached(x, st, 1) > 0 && H5DSis_attached(x, t, 1) == 0);
   assert_true(H5DSget_scale_name(t, buf, sizeof buf) > 0);
   assert_string_equal(buf, "t");
-  read_str_attr(x, "units", buf, sizeof buf);
+  attr_str(x, "units", buf, sizeof buf);
   assert_string_equal(buf, "C, A");
-  read_str_attr(x, "long_name", buf, sizeof buf);
+  attr_str(x, "long_name", buf, sizeof buf);
   assert_string_equal(buf, "state x(t)");
   hid_t e = H5Dopen2(f, "events", H5P_DEFAULT), ev = H5Dopen2(f, "event", H5P_DEFAULT);
   assert_true(H5DSis_attached(e, ev, 0) > 0);
