@@ -106,11 +106,11 @@ static void test_paper_cases_exact_projection(void **state) {
   }
 }
 
-typedef struct { double *X; } store_ctx;
+typedef struct { double *X; int dim; } store_ctx;   /* row k of X: x_k */
 static int store_sink(long k, double t, const double *x, void *vp) {
   (void)t;
   store_ctx *c = vp;
-  memcpy(c->X + 3 * k, x, 3 * sizeof(double));
+  memcpy(c->X + (size_t)c->dim * (size_t)k, x, (size_t)c->dim * sizeof(double));
   return 0;
 }
 
@@ -145,7 +145,7 @@ static void test_paper_tolerances(void **state) {
         cup_integrator *I = NULL;
         assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
         double x0[3] = {0, 0, 0};
-        store_ctx sc = {X[pass < 0 ? 0 : 1]};
+        store_ctx sc = {X[pass < 0 ? 0 : 1], 3};
         cup_run_info info;
         assert_int_equal(cup_integrator_run(I, x0, store_sink, &sc, &info), CUP_OK);
         cup_integrator_free(&I);
@@ -170,21 +170,29 @@ static void test_paper_tolerances(void **state) {
  * 4.4's Moreau-Jean values on case 1 (measured with EulerMoreauOSI,
  * theta = 0.5, Lemke: 8.737e-6 at n = 10^3, 1.444e-7 at 10^4, 9.965e-10 at
  * 10^5). */
-static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta,
-                      double *X) {
+/* A run of n steps from x0 with the projector's dense active-set method
+ * (explicit: the projector, not the theta path), its states into X; the
+ * targets eps and eta absolute; on_step rows_step into rc unless NULL. */
+typedef struct rows_ctx rows_ctx;
+static int rows_step(long k, double t, const cup_proj_info *pi, void *vp);
+static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta, double eps,
+                      double eta, const double *x0, double *X, rows_ctx *rc) {
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.n = n;
   o.scheme = scheme;
   o.theta = theta;
-  o.proj.method = CUP_PROJ_ACTIVESET;      /* explicit: the projector, not the theta path */
-  o.eps = (cup_schedule){0, 0};
-  o.eta = (cup_schedule){0, 0};
+  o.proj.method = CUP_PROJ_ACTIVESET;
+  o.eps = (cup_schedule){eps, 0};
+  o.eta = (cup_schedule){eta, 0};
+  if (rc) {
+    o.on_step = rows_step;
+    o.step_ctx = rc;
+  }
   cup_integrator *I = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
-  double x0[3] = {0, 0, 0};
-  store_ctx sc = {X};
+  store_ctx sc = {X, cup_lcs_dim(L)};
   cup_run_info info;
   if (cup_integrator_run(I, x0, store_sink, &sc, &info) < 0) fail_msg("run: %s", info.message);
   cup_integrator_free(&I);
@@ -197,8 +205,9 @@ static void test_theta_scheme(void **state) {
     cup_input *u = case_input(cas);
     long n = 1000;
     double *X0 = malloc(sizeof(double) * 3 * (size_t)(n + 1)), *Xe = malloc(sizeof(double) * 3 * (size_t)(n + 1));
-    run_store(L, u, n, CUP_SCHEME_THETA, 0, X0);
-    run_store(L, u, n, CUP_SCHEME_EXPLICIT, 0, Xe);
+    static const double x0[3] = {0, 0, 0};
+    run_store(L, u, n, CUP_SCHEME_THETA, 0, 0, 0, x0, X0, NULL);
+    run_store(L, u, n, CUP_SCHEME_EXPLICIT, 0, 0, 0, x0, Xe, NULL);
     double d = 0;
     for (long q = 0; q < 3 * (n + 1); q++) d = fmax(d, fabs(X0[q] - Xe[q]));
     print_message("case %d: theta = 0 vs explicit projection: max difference %.3e\n", cas, d);
@@ -255,7 +264,7 @@ static void build(lcs_built *b, int n, int m, int p, const double *A, const doub
  * pushed on together by E u. theta = 0 must equal the explicit step with the
  * exact projection (the projector's dense active-set method: an independent
  * solver), theta = 1/2 must certify complementarity at every step. */
-typedef struct { int max_active; double max_eps; int bad; } rows_ctx;
+struct rows_ctx { int max_active; double max_eps; int bad; };
 static int rows_step(long k, double t, const cup_proj_info *pi, void *vp) {
   (void)k; (void)t;
   rows_ctx *c = vp;
@@ -264,35 +273,6 @@ static int rows_step(long k, double t, const cup_proj_info *pi, void *vp) {
   if (pi->status != CUP_OK) c->bad++;
   return 0;
 }
-typedef struct { double *X; } rows_store;
-static int rows_sink(long k, double t, const double *x, void *vp) {
-  (void)t;
-  memcpy(((rows_store *)vp)->X + 4 * k, x, 4 * sizeof(double));
-  return 0;
-}
-
-static void run_rows(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta,
-                     double *X, rows_ctx *rc) {
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.n = n;
-  o.scheme = scheme;
-  o.theta = theta;
-  o.proj.method = CUP_PROJ_ACTIVESET;      /* explicit: the projector, not the theta path */
-  o.eps = (cup_schedule){1e-14, 0};             /* absolute: the state passes near 0, */
-  o.eta = (cup_schedule){1e-12, 0};             /* where relative targets fall below rounding */
-  o.on_step = rows_step;
-  o.step_ctx = rc;
-  cup_integrator *I = NULL;
-  char msg[CUP_ERRMSG_LEN];
-  if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
-  double x0[4] = {1, 0, 0, 0};
-  rows_store sc = {X};
-  cup_run_info info;
-  if (cup_integrator_run(I, x0, rows_sink, &sc, &info) < 0) fail_msg("run: %s", info.message);
-  cup_integrator_free(&I);
-}
-
 static void test_theta_many_rows(void **state) {
   (void)state;
   const double A[16] = {-1, 2, 0, 0,  -2, -1, 1, 0,  0, -1, -0.5, 3,  0, 0, -3, -0.2};
@@ -314,8 +294,10 @@ static void test_theta_many_rows(void **state) {
   size_t len = 4 * (size_t)(n + 1);
   double *Xt = malloc(sizeof(double) * len), *Xe = malloc(sizeof(double) * len);
   rows_ctx rt = {0, 0, 0}, re = {0, 0, 0};
-  run_rows(b.L, u, n, CUP_SCHEME_THETA, 0, Xt, &rt);
-  run_rows(b.L, u, n, CUP_SCHEME_EXPLICIT, 0, Xe, &re);
+  static const double x0[4] = {1, 0, 0, 0};
+  /* targets absolute: the state passes near 0, where relative ones fall below rounding */
+  run_store(b.L, u, n, CUP_SCHEME_THETA, 0, 1e-14, 1e-12, x0, Xt, &rt);
+  run_store(b.L, u, n, CUP_SCHEME_EXPLICIT, 0, 1e-14, 1e-12, x0, Xe, &re);
   double d = 0;
   for (size_t q = 0; q < len; q++) d = fmax(d, fabs(Xt[q] - Xe[q]));
   print_message("4 rows: theta = 0 vs explicit projection: max difference %.3e, "
@@ -324,7 +306,7 @@ static void test_theta_many_rows(void **state) {
   assert_int_equal(rt.bad + re.bad, 0);
   assert_true(d <= 1e-12);
   rows_ctx rh = {0, 0, 0};
-  run_rows(b.L, u, n, CUP_SCHEME_THETA, 0.5, Xt, &rh);
+  run_store(b.L, u, n, CUP_SCHEME_THETA, 0.5, 1e-14, 1e-12, x0, Xt, &rh);
   print_message("4 rows: theta = 1/2: at most %d rows active, largest gap %.3e, %d uncertified\n",
                 rh.max_active, rh.max_eps, rh.bad);
   assert_true(rh.max_active >= 3);
