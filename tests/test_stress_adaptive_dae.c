@@ -219,17 +219,6 @@ static void test_nan_input(void **state) {
  * x(1) = -Rs (to e^-5000: the time constant is Rs). */
 static void test_zeno_with_D(void **state) {
   (void)state;
-  enum { TEETH = 200 };
-  double tt[2 * TEETH + 1], vv[2 * TEETH + 1], t = 0, d = 0.05;
-  for (int k = 0; k < TEETH; k++, d *= 0.9) {       /* sum of d = 1/2 */
-    tt[2 * k] = t;
-    vv[2 * k] = 0;
-    tt[2 * k + 1] = t + 0.5 * d;                   /* up at slope 10, down at -10 */
-    vv[2 * k + 1] = 5 * d;
-    t += d;
-  }
-  tt[2 * TEETH] = t;
-  vv[2 * TEETH] = 0;
   double Rs = 1e-4, B[1] = {1}, C[1] = {1}, D[1] = {Rs}, G[2] = {-1, 0}, E[2] = {0, 1};
   tcsc tB, tC, tD, tG, tE;
   tcsc_from_dense(&tB, B, 1, 1);
@@ -244,12 +233,7 @@ static void test_zeno_with_D(void **state) {
   cup_lcs *L = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_lcs_create(&L, &desc, msg)) fail_msg("lcs: %s", msg);
-  cup_input *u = NULL;
-  assert_int_equal(cup_input_create(&u, 2, NULL), CUP_OK);
-  cup_wave zig = {.kind = CUP_WAVE_PWL, .npoints = 2 * TEETH + 1, .t = tt, .v = vv};
-  cup_wave down = {.kind = CUP_WAVE_CONSTANT, .value = -1};
-  assert_int_equal(cup_input_add(u, 0, &zig, NULL), CUP_OK);
-  assert_int_equal(cup_input_add(u, 1, &down, NULL), CUP_OK);
+  cup_input *u = zigzag_input(0.5, 5);             /* up at slope 10, down at -10 */
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = CUP_SCHEME_ADAPTIVE;
