@@ -34,6 +34,15 @@ static void path_in_tmp(char *buf, size_t size, const char *name) {
   snprintf(buf, size, "%s/%s", tmpdir, name);
 }
 
+/* A writer of dim-state rows into the temporary folder's NAME (its path
+ * into buf), which must open. */
+static cup_h5run *create_in_tmp(char *buf, size_t size, const char *name, int dim) {
+  path_in_tmp(buf, size, name);
+  cup_h5run *w = NULL;
+  assert_int_equal(cup_h5run_create(&w, buf, dim, NULL), CUP_OK);
+  return w;
+}
+
 /* ---- reference values: any 64-bit pattern, NaN payloads and -0 included ---- */
 
 static uint64_t mix(uint64_t z) {                       /* splitmix64 finaliser */
@@ -161,9 +170,7 @@ static void test_roundtrip(void **state) {
 static void test_flushes_in_between(void **state) {
   (void)state;
   char path[256];
-  path_in_tmp(path, sizeof path, "flushes.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "flushes.h5", 2);
   long cuts[] = {0, 10, 5010, 5013, 9000, 13001};
   for (size_t i = 1; i < sizeof cuts / sizeof cuts[0]; i++) {
     assert_int_equal(write_samples(w, cuts[i - 1], cuts[i], 2), CUP_OK);
@@ -263,10 +270,8 @@ static void check_attrs(const char *path, const char *big) {
 static void test_attributes_roundtrip(void **state) {
   (void)state;
   char path[256];
-  path_in_tmp(path, sizeof path, "attrs.h5");
   char *big = long_text(200000);
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "attrs.h5", 3);
   write_attrs(w, big);
   assert_int_equal(cup_h5run_attr_double(NULL, "x", 1), CUP_ERR_ARG);
   assert_int_equal(cup_h5run_attr_string(w, "x", NULL), CUP_ERR_ARG);
@@ -283,9 +288,7 @@ static void test_h5dump_reads_attributes(void **state) {
   skip();
 #else
   char path[256], cmd[512], out[8192];
-  path_in_tmp(path, sizeof path, "dump.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "dump.h5", 3);
   assert_int_equal(cup_h5run_attr_string(w, "scheme", "explicit"), CUP_OK);
   assert_int_equal(cup_h5run_attr_long(w, "n", 1000), CUP_OK);
   assert_int_equal(cup_h5run_attr_double(w, "T", 0.5), CUP_OK);
@@ -432,9 +435,7 @@ static int staged_left(void) {
 static void test_staged_replace(void **state) {
   (void)state;
   char path[256];
-  path_in_tmp(path, sizeof path, "staged.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "staged.h5", 3);
   assert_int_equal(write_samples(w, 0, 10, 3), CUP_OK);
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
   for (int round = 0; round < 3; round++) {
@@ -577,9 +578,7 @@ static void test_events(void **state) {
 static void test_dimension_scales(void **state) {
   (void)state;
   char path[512], buf[128];
-  path_in_tmp(path, sizeof path, "dims.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "dims.h5", 2);
   const char *names[2] = {"q(C4)", "i(L3)"};
   assert_int_equal(cup_h5run_strings(w, "state", 2, names), CUP_OK);
   assert_int_equal(cup_h5run_dims(w, "x", (const char *const[]){"t", "state"}), CUP_OK);

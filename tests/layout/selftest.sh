@@ -9,8 +9,7 @@
 #   selftest.sh SRCDIR [CC]
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
-src=$1
-cc=${2:-cc}
+src=$1 cc=${2:-cc}
 self=selftest
 . "$here/expect.sh"
 t=$work/t
