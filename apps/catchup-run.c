@@ -460,7 +460,7 @@ static int load_scene(run_t *r, char *err) {
   const args_t *a = r->args;
   const char *const *ovr = (const char *const *)a->overrides;
   if (!is_netlist(a->scene)) return cup_scene_load(&r->scene, a->scene, ovr, a->n_overrides, err);
-  const char *slash = strrchr(a->scene, '/'), *base = slash ? slash + 1 : a->scene;
+  const char *base = path_base(a->scene);
   size_t len = 2 * strlen(base) + 32;
   char *text = malloc(len), *dir = NULL;
   if (!text || path_dir(a->scene, &dir)) { free(text); return snprintf(err, MSG_LEN, "out of memory"), CUP_ERR_NOMEM; }

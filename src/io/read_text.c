@@ -44,7 +44,7 @@ int cup_file_list_merge(cup_file_list *l, const cup_file_list *src) {
 static char *canonical(const char *path) {
   char *full = realpath(path, NULL);
   if (full) return full;
-  const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path;
+  const char *base = path_base(path);
   char *dir = NULL, *d = path_dir(path, &dir) ? NULL : realpath(dir ? dir : ".", NULL);
   free(dir);
   if (!d) return NULL;

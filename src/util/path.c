@@ -20,7 +20,12 @@ int path_dir(const char *path, char **dir) {
   return slash && !*dir ? CUP_ERR_NOMEM : CUP_OK;
 }
 
+const char *path_base(const char *path) {
+  const char *slash = strrchr(path, '/');
+  return slash ? slash + 1 : path;
+}
+
 char *path_stem(const char *path) {
-  const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path, *dot = strrchr(base, '.');
+  const char *base = path_base(path), *dot = strrchr(base, '.');
   return strndup(base, dot && dot != base ? (size_t)(dot - base) : strlen(base));
 }

@@ -13,6 +13,10 @@ char *path_join(const char *dir, const char *name);
  * readers take as the working directory. CUP_ERR_NOMEM or CUP_OK. */
 int path_dir(const char *path, char **dir);
 
+/* The last name of path, inside it: "a/b/c.yaml" -> "c.yaml", "c.yaml"
+ * -> "c.yaml", "a/" -> "". */
+const char *path_base(const char *path);
+
 /* The last name of path without its extension, malloc'd: "a/paper.yaml"
  * -> "paper", ".hidden" -> ".hidden" (a default name). NULL when out of
  * memory. */
