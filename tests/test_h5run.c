@@ -137,6 +137,17 @@ static void check_rows(const run_file *r, long n) {
 
 static void free_run(run_file *r) { free(r->t); free(r->x); }
 
+/* The file at path holds the rows 0..n-1 of write_samples, of dim states
+ * (dim 0: any). */
+static void expect_run(const char *path, long n, int dim) {
+  run_file r;
+  read_run(path, &r);
+  assert_int_equal(r.n, n);
+  if (dim) assert_int_equal(r.dim, dim);
+  check_rows(&r, n);
+  free_run(&r);
+}
+
 /* ---- round trip of N samples of dimension dim ---- */
 
 typedef struct { long n; int dim; } shape;
@@ -157,12 +168,7 @@ static void test_roundtrip(void **state) {
   assert_int_equal(cup_h5run_count(w), s->n);
   assert_int_equal(cup_h5run_close(&w, err), CUP_OK);
   assert_null(w);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, s->n);
-  assert_int_equal(r.dim, s->dim);
-  check_rows(&r, s->n);
-  free_run(&r);
+  expect_run(path, s->n, s->dim);
 }
 
 /* Explicit flushes of partial buffers in between: writes realign to chunk
@@ -178,11 +184,7 @@ static void test_flushes_in_between(void **state) {
     assert_int_equal(cup_h5run_flush(w), CUP_OK);       /* nothing buffered */
   }
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, 13001);
-  check_rows(&r, 13001);
-  free_run(&r);
+  expect_run(path, 13001, 0);
 }
 
 /* ---- attributes ---- */
@@ -414,11 +416,7 @@ static void test_write_failure_is_reported(void **state) {
   assert_int_equal(c.close_status, CUP_ERR_IO);
   assert_null(c.w);
   if (!strstr(c.err, path) || !strstr(c.err, "append")) fail_msg("%s", c.err);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, 4096);
-  check_rows(&r, 4096);
-  free_run(&r);
+  expect_run(path, 4096, 0);
 }
 
 /* No PATH.part* file is left in the temporary folder. */
@@ -443,12 +441,7 @@ static void test_staged_replace(void **state) {
     assert_int_equal(write_samples(w, 0, 5, 2), CUP_OK);
     assert_int_equal(cup_h5run_flush(w), CUP_OK);
     if (round == 1) assert_true(staged_left());            /* the sibling, while it is written */
-    run_file r;
-    read_run(path, &r);
-    assert_int_equal(r.n, 10);
-    assert_int_equal(r.dim, 3);
-    check_rows(&r, 10);
-    free_run(&r);
+    expect_run(path, 10, 3);
     if (round == 0) cup_h5run_discard(&w);
     else if (round == 1) assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);   /* not committed */
     else assert_int_equal(cup_h5run_commit(w), CUP_OK);
@@ -456,12 +449,7 @@ static void test_staged_replace(void **state) {
   }
   assert_int_equal(write_samples(w, 5, 7, 2), CUP_OK);
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, 7);
-  assert_int_equal(r.dim, 2);
-  check_rows(&r, 7);
-  free_run(&r);
+  expect_run(path, 7, 2);
   cup_h5run_discard(&w);                                    /* NULL: nothing */
 }
 

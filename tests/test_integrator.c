@@ -383,16 +383,23 @@ static void test_closed_form_interval_with_relaxation(void **state) {
   unbuild_lcs(&b);
 }
 
-static void test_closed_form_cone(void **state) {
-  (void)state;
-  double A[4] = {-1, 0, 0, -1}, C[4] = {1, 0, 0, 1}, E[2] = {1, -1};
+/* x' = A x + E with u = 1 onto the quadrant x >= 0 (C = I, P diagonal or
+ * NULL), against its exact solution. */
+static void quadrant_case(const char *name, const double *A, const double *E, const double *P,
+                          const double *x0, double T, exact_fn ex) {
+  static const double C[4] = {1, 0, 0, 1};
   lcs_built b;
-  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, NULL);
+  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, P);
   cup_input *u = const_input(1);
-  double x0[2] = {0, 1};
-  check_order("cone, f = -x + c", &b, u, x0, 2, cone_exact, NULL, 1000);
+  check_order(name, &b, u, x0, T, ex, NULL, 1000);
   cup_input_free(&u);
   unbuild_lcs(&b);
+}
+
+static void test_closed_form_cone(void **state) {
+  (void)state;
+  double A[4] = {-1, 0, 0, -1}, E[2] = {1, -1}, x0[2] = {0, 1};
+  quadrant_case("cone, f = -x + c", A, E, NULL, x0, 2, cone_exact);
 }
 
 static void rect_build(lcs_built *b, const rect_par *q, double *P) {
@@ -425,14 +432,8 @@ static void test_closed_form_rectifier(void **state) {
 
 static void test_closed_form_corner(void **state) {
   (void)state;
-  double A[4] = {-1, 0, 0, -2}, C[4] = {1, 0, 0, 1}, E[2] = {-1, -1}, P[2] = {2, 3};
-  lcs_built b;
-  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, P);
-  cup_input *u = const_input(1);
-  double x0[2] = {1, 1};
-  check_order("corner of a quadrant", &b, u, x0, 1.5, corner_exact, NULL, 1000);
-  cup_input_free(&u);
-  unbuild_lcs(&b);
+  double A[4] = {-1, 0, 0, -2}, E[2] = {-1, -1}, P[2] = {2, 3}, x0[2] = {1, 1};
+  quadrant_case("corner of a quadrant", A, E, P, x0, 1.5, corner_exact);
 }
 
 static void test_closed_form_jumping_set(void **state) {
