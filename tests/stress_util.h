@@ -70,6 +70,19 @@ static inline cup_input *input_terms(int nterm, const cup_wave *w) {
   return u;
 }
 
+/* The adaptive scheme's options over [0, T] at tol_abs, tol_rel, with
+ * `samples` output times (the rest the defaults). */
+static inline void adaptive_options(cup_integrator_options *o, double T, double tol_abs, double tol_rel,
+                                    long samples) {
+  cup_integrator_options_default(o);
+  o->scheme = CUP_SCHEME_ADAPTIVE;
+  o->T = T;
+  o->tol_abs = tol_abs;
+  o->tol_rel = tol_rel;
+  o->output = CUP_OUTPUT_SAMPLES;
+  o->output_samples = samples;
+}
+
 /* Events that accumulate at t = 1/2: u = (zigzag, -1), the zigzag's 200
  * teeth of widths 0.05 0.9^k (summing to 1/2) rising from 0 over the share
  * `rise` of each width to `height` times it, falling back to 0 over the

@@ -45,12 +45,7 @@ static int ad_event(double t, int row, int on, void *vp) {
 static ad_ctx run_adaptive(const cup_lcs *L, const cup_input *u, const double *x0, double T, double tol,
                            long samples, exact_fn ex, const void *par, cup_run_info *info) {
   cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.T = T;
-  o.tol_abs = o.tol_rel = tol;
-  o.output = CUP_OUTPUT_SAMPLES;
-  o.output_samples = samples;
+  adaptive_options(&o, T, tol, tol, samples);
   ad_ctx c = {.exact = ex, .par = par, .dim = cup_lcs_dim(L)};
   o.on_event = ad_event;
   o.event_ctx = &c;

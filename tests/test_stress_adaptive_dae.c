@@ -81,13 +81,7 @@ static int sink(long k, double t, const double *x, void *vp) {
 
 static int run(const cup_lcs *L, const cup_input *u, double tol_abs, double tol_rel, sink_ctx *c, cup_run_info *info) {
   cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.T = T_END;
-  o.tol_abs = tol_abs;
-  o.tol_rel = tol_rel;
-  o.output = CUP_OUTPUT_SAMPLES;
-  o.output_samples = SAMPLES;
+  adaptive_options(&o, T_END, tol_abs, tol_rel, SAMPLES);
   cup_integrator *I = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
