@@ -37,6 +37,13 @@ static void expect_in_err(const result *r, const char *text) {
   if (!strstr(r->err, text)) fail_msg("stderr lacks '%s':\n%s", text, r->err);
 }
 
+/* catchup-run ARGS exits with code and says text in one line of stderr. */
+static void expect_says(const char *const *args, int code, const char *text) {
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, code, 1);
+  expect_in_err(&r, text);
+}
+
 /* ---- reading the file ---- */
 
 static void expect_attr_str(hid_t f, const char *name, const char *expect) {
@@ -140,9 +147,7 @@ static void test_adaptive_file(void **state) {
   free(t);
   free(x);
   const char *bad[] = {fig2, "-o", out, "--tol", "-1e-8", NULL};
-  r = run_cli(bad, 0, 0);
-  expect_exit(&r, 2, 1);
-  expect_in_err(&r, "--tol '-1e-8': not a positive number");
+  expect_says(bad, 2, "--tol '-1e-8': not a positive number");
 }
 
 static void test_summary_line_and_overrides(void **state) {
@@ -184,9 +189,7 @@ static void test_help_lists_and_output_override(void **state) {
   for (int k = 0; k < CUP_PROJ_METHOD_COUNT; k++)
     if (!strstr(r.out, cup_proj_method_name(k))) fail_msg("--help lacks method %s", cup_proj_method_name(k));
   const char *bad[] = {fig2, "-o", tmp_path("x.h5"), "--scheme", "thet", NULL};
-  r = run_cli(bad, 0, 0);
-  expect_exit(&r, 2, 1);
-  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential, theta or adaptive)");
+  expect_says(bad, 2, "unknown scheme (explicit, implicit, exponential, theta or adaptive)");
 
   const char *out = tmp_path("samples.h5");
   const char *args[] = {fig2, "-o", out, "--set", "output.samples=2", "--quiet", NULL};
@@ -416,17 +419,11 @@ static void test_netlist_signals(void **state) {
   H5Fclose(f);
   free(t); free(x); free(vout); free(vin);
   const char *noprobe[] = {fig2, "-o", out, "--probe", "v(a)", NULL};
-  r = run_cli(noprobe, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "--probe: the scene has no netlist");
+  expect_says(noprobe, 1, "--probe: the scene has no netlist");
   const char *unknown[] = {cir, "-o", out, "--probe", "i(R9)", NULL};
-  r = run_cli(unknown, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "probe 'i(R9)': no element named 'R9'");
+  expect_says(unknown, 1, "probe 'i(R9)': no element named 'R9'");
   const char *bad[] = {CUP_SOURCE_DIR "/tests/netlists/bad/inductor-cutset.cir", "-o", out, NULL};
-  r = run_cli(bad, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
+  expect_says(bad, 1, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
 }
 
 /* A fixed-step scheme is one flag away from a netlist, with its own n or h:
@@ -440,25 +437,15 @@ static void test_netlist_fixed_step(void **state) {
   expect_exit(&r, 1, 1);
   expect_in_err(&r, "the theta scheme needs n or h: the netlist's .tran TSTEP is the output's spacing, not a step");
   const char *withn[] = {cir, "-o", out, "--scheme", "theta", "--n", "6000", NULL};
-  r = run_cli(withn, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(withn, 0, "n=6000 theta, 3001 samples");
   const char *withh[] = {cir, "-o", out, "--scheme", "theta", "--h", "1e-5", NULL};
-  r = run_cli(withh, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(withh, 0, "n=6000 theta, 3001 samples");
   const char *both[] = {cir, "-o", out, "--scheme", "theta", "--h", "1e-5", "--n", "3", NULL};
-  r = run_cli(both, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "h: give n or h, not both");
+  expect_says(both, 1, "h: give n or h, not both");
   const char *nalone[] = {cir, "-o", out, "--n", "6000", NULL};
-  r = run_cli(nalone, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(nalone, 0, "n=6000 theta, 3001 samples");
   const char *halone[] = {cir, "-o", out, "--h", "1e-5", NULL};
-  r = run_cli(halone, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(halone, 0, "n=6000 theta, 3001 samples");
 }
 
 /* A rectifier whose diode has D != 0 (behind the source's resistance) is
