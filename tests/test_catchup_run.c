@@ -307,16 +307,20 @@ static void check_prefix(hid_t f, hsize_t *rows, double *last) {
   free(x);
 }
 
-static const char *long_run[] = {NULL, "-o", NULL, "--n", "1000000000", "--set",
-                                 "output.every=1000", "--quiet", NULL};
+/* A run of the paper's circuit long enough to be stopped, into out. */
+static void long_run_args(const char *args[9], const char *out) {
+  static const char *long_run[] = {NULL, "-o", NULL, "--n", "1000000000", "--set",
+                                   "output.every=1000", "--quiet", NULL};
+  memcpy(args, long_run, sizeof long_run);
+  args[0] = fig2;
+  args[2] = out;
+}
 
 static void test_sigint_stops_cleanly(void **state) {
   (void)state;
   const char *out = tmp_path("sigint.h5");
   const char *args[9];
-  memcpy(args, long_run, sizeof args);
-  args[0] = fig2;
-  args[2] = out;
+  long_run_args(args, out);
   result r = run_cli(args, 1.5, SIGINT);
   if (r.sig != SIGINT || r.lines != 1) fail_msg("signal %d, %d lines:\n%s", r.sig, r.lines, r.err);
   expect_in_err(&r, "stopped by SIGINT");
@@ -340,9 +344,7 @@ static void test_kill9_file_readable(void **state) {
   (void)state;
   const char *out = tmp_path("kill9.h5");
   const char *args[9];
-  memcpy(args, long_run, sizeof args);
-  args[0] = fig2;
-  args[2] = out;
+  long_run_args(args, out);
   result r = run_cli(args, 2.5, SIGKILL);
   assert_int_equal(r.sig, SIGKILL);
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);

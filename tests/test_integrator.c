@@ -348,10 +348,8 @@ static void test_closed_form_moving_interval(void **state) {
   double C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};   /* x - sin t + r >= 0, -x + sin t + r >= 0 */
   lcs_built b;
   build(&b, 1, 2, 1, NULL, NULL, C, NULL, F, G, NULL);
-  cup_input *u = NULL;
-  cup_input_create(&u, 1, NULL);
-  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
-  cup_input_add(u, 0, &s, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};   /* sin t */
+  cup_input *u = input_terms(1, &s);
   double x0[1] = {0};
   /* Rate independent: the catching-up iterate equals the solution at every
    * grid point (a projection of the previous value is exactly what the play
@@ -370,10 +368,8 @@ static void test_closed_form_interval_with_relaxation(void **state) {
   double A[1] = {-1}, C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};
   lcs_built b;
   build(&b, 1, 2, 1, A, NULL, C, NULL, F, G, NULL);
-  cup_input *u = NULL;
-  cup_input_create(&u, 1, NULL);
-  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
-  cup_input_add(u, 0, &s, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};   /* sin t */
+  cup_input *u = input_terms(1, &s);
   double T = 2.5 * M_PI, x0[1] = {0};
   relax_par q;
   relax_setup(&q, T);
