@@ -31,12 +31,15 @@ static void check_message(int st, const char *err) {
   if (!err[0] || strchr(err, '\n') || (strncmp(err, "fuzz.cir", 8) && !strstr(err, ":"))) abort();
 }
 
-/* A run with options o: it stops with a message, or its creation fails
- * with one line. */
+/* A run with options o (a switched circuit's through its configurations):
+ * it stops with a message, or its creation fails with one line. */
 static void run_with(cup_netlist *nl, const cup_integrator_options *o) {
   char err[CUP_ERRMSG_LEN] = "";
   cup_integrator *I = NULL;
-  if (cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), o, err) == CUP_OK) {
+  cup_switching sw; /* switches: each configuration formed as it occurs */
+  int made = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), o, err)
+                                            : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), o, err);
+  if (made == CUP_OK) {
     cup_run_info info;
     cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
     if (info.status < 0 && !info.message[0]) abort();
