@@ -96,6 +96,13 @@ CUP_API const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */
 CUP_API int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out);
+/** The nodes of element `element` (case-insensitive), a its first and b its
+ *  second (owned by the netlist): its voltage is v(a,b) and its current
+ *  i(element) flows from a to b through it, so that v(a,b) i(element) is
+ *  the power it absorbs (a source delivering power absorbs a negative one).
+ *  CUP_ERR_ARG naming the element when there is none. */
+CUP_API int cup_netlist_element_nodes(const cup_netlist *nl, const char *element, const char **a, const char **b,
+                                      char *errmsg);
 
 #ifdef __cplusplus
 }

@@ -72,6 +72,10 @@ CUP_API void cup_pss_options_default(cup_pss_options *o);
  *  a PWL that changes (constant after its last point); a damped or delayed
  *  SIN; a PULSE whose delay makes [0, T) unlike later periods; a callback. */
 CUP_API int cup_input_period(const cup_input *u, double *T, char *errmsg);
+/** CUP_OK if T is a whole number of the input's common periods (within
+ *  1e-9), or the input tells none (a constant, a callback); CUP_ERR_ARG
+ *  naming both otherwise: over such a T the period map is not a period. */
+CUP_API int cup_input_period_fits(const cup_input *u, double T, char *errmsg);
 
 /** The steady state of an LCS driven by u: the period from o->period or u;
  *  the period map by the integrator with options io (scheme, tolerances;
@@ -117,7 +121,8 @@ CUP_API int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *z
  *  h = T / (N - 1) (docs/steady-state.md). */
 typedef struct cup_measure {
   double avg, rms, min, max, pp;  /**< average, RMS, minimum, maximum, peak-to-peak */
-  double thd;                     /**< sqrt(sum_{k=2..order} |c_k|^2) / |c_1| (NaN if c_1 = 0) */
+  double thd;                     /**< sqrt(sum_{k=2..order} |c_k|^2) / |c_1| (NaN when |c_1| is below
+                                       1e-9 of the RMS: no fundamental, a DC output) */
 } cup_measure;
 
 /** The measurements of v (N >= 3 samples) and, with order >= 1, its

@@ -47,6 +47,6 @@ int cup_measure_period(const double *v, long N, int order, cup_measure *m, doubl
     if (k == 1) c1 = mag;
     if (k >= 2) ch2 += mag * mag;
   }
-  if (order >= 1 && c1 > 0) m->thd = sqrt(ch2) / c1;
+  if (order >= 1 && c1 > 1e-9 * m->rms) m->thd = sqrt(ch2) / c1;   /* no fundamental (a DC output): NaN */
   return CUP_OK;
 }

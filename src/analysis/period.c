@@ -85,3 +85,12 @@ int cup_input_period(const cup_input *u, double *T, char *errmsg) {
   *T = per;
   return CUP_OK;
 }
+
+int cup_input_period_fits(const cup_input *u, double T, char *errmsg) {
+  double Tu;
+  if (!u || !(T > 0) || cup_input_period(u, &Tu, NULL) != CUP_OK) return CUP_OK;
+  double k = nearbyint(T / Tu);
+  if (k >= 1 && fabs(T / Tu - k) <= 1e-9 * k) return CUP_OK;
+  return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
+                  "%.17g (%.6g of them): over it the sources do not repeat", T, Tu, T / Tu);
+}

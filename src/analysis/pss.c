@@ -105,10 +105,18 @@ static int jacobian(pss_work *w, const double *x, const double *F) {
   for (int j = 0; j < n; j++) {
     double d = w->o->fd_step * fmax(fmax(fabs(x[j]), fabs(F[j])), scale);
     if (!(d > 0)) d = w->o->fd_step;
-    memcpy(w->xt, x, sizeof(double) * (size_t)n);
-    w->xt[j] += d;
-    d = w->xt[j] - x[j];                         /* the step as represented */
-    int st = phi(w, w->xt, w->col, "a finite difference of the monodromy");
+    int st = CUP_OK;
+    for (int side = 0; side < 2; side++) {       /* a step the map refuses (no consistent state): the other side */
+      memcpy(w->xt, x, sizeof(double) * (size_t)n);
+      w->xt[j] += side ? -d : d;
+      double dj = w->xt[j] - x[j];               /* the step as represented */
+      st = phi(w, w->xt, w->col, "a finite difference of the monodromy");
+      if (st >= 0) { d = dj; break; }
+      if (side == 0) {                           /* the other side may do: forget this one's failure */
+        r->info.status = CUP_OK;
+        r->info.message[0] = '\0';
+      }
+    }
     if (st < 0) return st;
     for (int i = 0; i < n; i++) r->J[i + (size_t)j * n] = (w->col[i] - F[i]) / d;
   }
@@ -405,6 +413,7 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
     if ((st = cup_input_period(u, &T, errmsg))) return st;
   }
   if (!isfinite(T)) return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the period %g is not finite", T);
+  if (cup_lcs_inputs(L) > 0 && (st = cup_input_period_fits(u, T, errmsg))) return st;
   cup_integrator_options mo = *io;                /* the period map: the final state only */
   mo.T = T;
   mo.output = CUP_OUTPUT_FINAL;

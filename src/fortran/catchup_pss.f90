@@ -14,9 +14,9 @@ module catchup_pss
   implicit none
   private
   public :: cup_pss_options, cup_pss_info, cup_measure, cup_pss_t, &
-    cup_pss_options_default, cup_input_period, cup_pss_solve, cup_pss_solve_map, cup_pss_free, &
+    cup_pss_options_default, cup_input_period, cup_input_period_fits, cup_pss_solve, cup_pss_solve_map, cup_pss_free, &
     cup_pss_get_info, cup_pss_x0, cup_pss_residuals, cup_pss_monodromy, cup_pss_multipliers, &
-    cup_pss_trajectory, cup_measure_period, cup_pss_info_message
+    cup_pss_trajectory, cup_measure_period, cup_pss_info_message, cup_netlist_element_nodes
 
   !> cup_pss_options (pss.h): fields as in C
   type, bind(C) :: cup_pss_options
@@ -68,6 +68,13 @@ module catchup_pss
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_input_period
+    function c_cup_input_period_fits(u, T, errmsg) bind(C, name="cup_input_period_fits") result(st)
+      import :: c_int, c_ptr, c_double, c_char
+      type(c_ptr), value :: u
+      real(c_double), value :: T
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_input_period_fits
     function c_cup_pss_solve(r, L, u, io, x_guess, o, errmsg) bind(C, name="cup_pss_solve") result(st)
       import :: c_int, c_ptr, c_char, cup_integrator_options, cup_pss_options
       type(c_ptr), intent(out) :: r
@@ -124,6 +131,15 @@ module catchup_pss
       type(c_ptr), value :: r, t, x, zeta
       integer(c_int) :: st
     end function c_cup_pss_trajectory
+    function c_cup_netlist_element_nodes(nl, element, a, b, errmsg) bind(C, name="cup_netlist_element_nodes") &
+        result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: nl
+      character(kind=c_char), intent(in) :: element(*)
+      type(c_ptr), intent(out) :: a, b
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_netlist_element_nodes
     function c_cup_measure_period(v, N, order, m, amp, phase, errmsg) bind(C, name="cup_measure_period") result(st)
       import :: c_int, c_long, c_ptr, c_double, c_char, cup_measure
       real(c_double), intent(in) :: v(*)
@@ -156,6 +172,19 @@ contains
     st = c_cup_input_period(u%ptr, T, cmsg)
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_input_period
+
+  !> CUP_OK if T is a whole number of u's common periods (or u tells none).
+  subroutine cup_input_period_fits(u, T, ierr, errmsg)
+    type(cup_input_t), intent(in) :: u
+    real(c_double), intent(in) :: T
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    cmsg = cup_errbuf_()
+    st = c_cup_input_period_fits(u%ptr, T, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_input_period_fits
 
   !> The steady state of L driven by u (pss.h). r holds the result also when
   !> ierr reports a failed solve (cup_pss_get_info says why).
@@ -386,4 +415,27 @@ contains
     st = c_cup_measure_period(v, int(size(v), c_long), int(order, c_int), m, ap, pp, cmsg)
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_measure_period
+
+  !> The nodes of a netlist element (a its first, b its second): its power is
+  !> v(a,b) i(element). Bound here, beside the power measurements.
+  subroutine cup_netlist_element_nodes(nl, element, a, b, ierr, errmsg)
+    type(cup_netlist_t), intent(in) :: nl
+    character(len=*), intent(in) :: element
+    character(len=:), allocatable, intent(out) :: a, b
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    type(c_ptr) :: pa, pb
+    integer(c_int) :: st
+    a = ''
+    b = ''
+    if (cup_null_fail_(nl%ptr, 'netlist', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_netlist_element_nodes(nl%ptr, cup_f_c_string(element), pa, pb, cmsg)
+    if (st == CUP_OK) then
+      a = cup_c_string(pa)
+      b = cup_c_string(pb)
+    end if
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_netlist_element_nodes
 end module catchup_pss

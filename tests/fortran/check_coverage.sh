@@ -23,6 +23,7 @@ src=${3:?usage: check_coverage.sh CC INCLUDE_DIRS SRCDIR}
 # Public functions deliberately without a bind(C) interface, each with why.
 UNBOUND=(
   cup_status_merge   # restated in Fortran as an elemental function (catchup_base.f90)
+  cup_scene_steady_state   # catchup-run's request (scene key steady_state:); Fortran sets cup_pss_options itself
 )
 # bind(C) interfaces deliberately without a wrapper in `use catchup`, each with why.
 # Those marked "owed" are usable through module catchup_c / the module's c_

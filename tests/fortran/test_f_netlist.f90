@@ -115,6 +115,15 @@ program test_f_netlist
     call cup_measure_period(X(1, :), 0, me, ierr)
     call check(me%min < me%avg .and. me%avg < me%max .and. me%max <= 10, 'average within the extremes')
     call cup_pss_free(r)
+    call cup_input_period_fits(cup_netlist_input(nl), 40d-3, ierr)
+    call check_int(ierr, CUP_OK, '40 ms is two periods')
+    call cup_input_period_fits(cup_netlist_input(nl), 30d-3, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, '30 ms is not a whole number of periods')
+    block
+      character(len=:), allocatable :: na, nb
+      call cup_netlist_element_nodes(nl, 'rs', na, nb, ierr)
+      call check(ierr == CUP_OK .and. na == 'in' .and. nb == 'a', 'Rs is from in to a')
+    end block
   end block
   call cup_netlist_free(nl)
   block
