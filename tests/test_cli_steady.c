@@ -126,6 +126,30 @@ static void no_steady_state(void **state) {
   expect_in(r.err, "CUP_ERR_NO_STEADY_STATE");
 }
 
+/* .options steadyperiod=40m asks for it from the netlist itself (two periods of 50 Hz). */
+static void netlist_option(void **state) {
+  (void)state;
+  const char *cir = tmp_path("hw.cir"), *out = tmp_path("hw.h5");
+  FILE *fp = fopen(cir, "w");
+  assert_non_null(fp);
+  fputs("Half-wave\nV1 in 0 SIN(0 10 50)\nRs in a 1\nD1 a out\nC1 out 0 100u\nRL out 0 1k\n"
+        ".options reltol=1e-4 steadyperiod=40m\n.tran 20u 60m\n.end\n", fp);
+  fclose(fp);
+  result r = run_cli((const char *const[]){cir, "-o", out, NULL}, 0, 0);
+  expect_exit(&r, 0);
+  expect_in(r.err, "steady state: period 0.04 s");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t;
+  hsize_t N = read_rows(f, "t", 1, 1, &t);
+  assert_close(t[N - 1], 0.04, 1e-17);
+  H5Fclose(f);
+  free(t);
+  r = run_cli((const char *const[]){cir, "-o", out, "--set", "steady_state=false", NULL}, 0, 0);
+  expect_exit(&r, 0);
+  assert_null(strstr(r.err, "steady state"));    /* the scene's key overrides the netlist's */
+}
+
 static void bad_input(void **state) {
   (void)state;
   const char *out = tmp_path("bad.h5");
@@ -146,6 +170,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(bridge_period),
     cmocka_unit_test(no_steady_state),
+    cmocka_unit_test(netlist_option),
     cmocka_unit_test(bad_input),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

@@ -59,6 +59,10 @@ CUP_API int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, doubl
  *  scheme's tol). */
 CUP_API int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol);
 
+/** .options steadystate (or steadyperiod=T): 1 if the netlist asks for its
+ *  periodic steady state (docs/steady-state.md), with the period (0: the
+ *  sources') into period; 0 otherwise. */
+CUP_API int cup_netlist_steady_state(const cup_netlist *nl, double *period);
 /** The files the netlist was read from: 0 is the netlist itself, then each
  *  file its .include and .lib cards read (paths joined to the including
  *  file's folder, each once, in the order first read); NULL out of range.

@@ -240,10 +240,10 @@ static int newton(pss_work *w, const double *x_guess) {
   r->res[0] = r->info.residual = res;
   w->ev_min = w->ev_max = r->info.events;
   while (!converged(w, r->res[r->info.iterations], w->x)) {
+    memcpy(r->x0, w->x, sizeof(double) * (size_t)n);   /* a failure below leaves the last iterate */
     if (r->info.iterations >= o->max_iter) {
       char list[200];
       residual_list(r, list, sizeof list);
-      memcpy(r->x0, w->x, sizeof(double) * (size_t)n);
       if (w->ev_min != w->ev_max)
         return say(r, CUP_ERR_NO_STEADY_STATE, "Newton's method did not converge in %d steps (residuals %s; "
                    "target %.3g): the events per period kept changing (%ld to %ld), the mode sequence does not "
@@ -254,7 +254,7 @@ static int newton(pss_work *w, const double *x_guess) {
                  o->tol * (inf_norm(w->x, n) + o->tol_floor), r->info.max_multiplier);
     }
     if ((st = jacobian(w, w->x, w->F)) < 0) return st;
-    if ((st = newton_step(w, w->x, w->F)) < 0) { memcpy(r->x0, w->x, sizeof(double) * (size_t)n); return st; }
+    if ((st = newton_step(w, w->x, w->F)) < 0) return st;
     if ((st = advance(w)) < 0) return st;
   }
   memcpy(r->x0, w->x, sizeof(double) * (size_t)n);

@@ -16,7 +16,8 @@ module catchup_pss
   public :: cup_pss_options, cup_pss_info, cup_measure, cup_pss_t, &
     cup_pss_options_default, cup_input_period, cup_input_period_fits, cup_pss_solve, cup_pss_solve_map, cup_pss_free, &
     cup_pss_get_info, cup_pss_x0, cup_pss_residuals, cup_pss_monodromy, cup_pss_multipliers, &
-    cup_pss_trajectory, cup_measure_period, cup_pss_info_message, cup_netlist_element_nodes
+    cup_pss_trajectory, cup_measure_period, cup_pss_info_message, cup_netlist_element_nodes, &
+    cup_netlist_steady_state
 
   !> cup_pss_options (pss.h): fields as in C
   type, bind(C) :: cup_pss_options
@@ -140,6 +141,12 @@ module catchup_pss
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_netlist_element_nodes
+    function c_cup_netlist_steady_state(nl, period) bind(C, name="cup_netlist_steady_state") result(asks)
+      import :: c_int, c_ptr, c_double
+      type(c_ptr), value :: nl
+      real(c_double), intent(out) :: period
+      integer(c_int) :: asks
+    end function c_cup_netlist_steady_state
     function c_cup_measure_period(v, N, order, m, amp, phase, errmsg) bind(C, name="cup_measure_period") result(st)
       import :: c_int, c_long, c_ptr, c_double, c_char, cup_measure
       real(c_double), intent(in) :: v(*)
@@ -438,4 +445,14 @@ contains
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_netlist_element_nodes
+
+  !> .options steadystate (steadyperiod=T): .true. if the netlist asks for its
+  !> steady state, with the period (0: the sources').
+  logical function cup_netlist_steady_state(nl, period) result(asks)
+    type(cup_netlist_t), intent(in) :: nl
+    real(c_double), intent(out) :: period
+    period = 0
+    asks = .false.
+    if (c_associated(nl%ptr)) asks = c_cup_netlist_steady_state(nl%ptr, period) /= 0
+  end function cup_netlist_steady_state
 end module catchup_pss

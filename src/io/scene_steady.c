@@ -11,6 +11,7 @@ void scene_steady_free(scene_steady *s) {
   int n = s->pub.nmeasure + s->pub.npower;
   for (int k = 0; s->own && k < n; k++) free(s->own[k]);
   free(s->own);
+  free(s->list);
   memset(s, 0, sizeof *s);
 }
 
@@ -95,13 +96,18 @@ int scene_read_steady(rd *r, const st_node *root, cup_netlist *nl, scene_steady 
                                       NULL};
   const st_node *map = opt(root, "steady_state"), *nd;
   memset(s, 0, sizeof *s);
-  if (!map) return CUP_OK;
+  double nl_period = 0;
+  int nl_asks = nl && cup_netlist_steady_state(nl, &nl_period);
+  if (!map && !nl_asks) return CUP_OK;
   cup_scene_steady *p = &s->pub;
   cup_pss_options_default(&p->pss);
   p->samples = 2001;
   p->harmonics = 10;
   p->fallback = 1;
   p->eff_out = p->eff_in = -1;
+  p->pss.period = nl_period;                     /* .options steadystate / steadyperiod=T: the key overrides */
+  s->enabled = nl_asks;
+  if (!map) return CUP_OK;
   if (map->kind == ST_SCALAR) return boolean(r, map, "steady_state", &s->enabled);
   int st = need_map(r, map, "steady_state", "true, false or a mapping of keys such as period and measure");
   if (!st) st = check_keys(r, map, "steady_state", known);

@@ -115,6 +115,7 @@ program test_f_netlist
     call cup_measure_period(X(1, :), 0, me, ierr)
     call check(me%min < me%avg .and. me%avg < me%max .and. me%max <= 10, 'average within the extremes')
     call cup_pss_free(r)
+    call check(.not. cup_netlist_steady_state(nl, per), 'halfwave-rc.cir does not ask for its steady state')
     call cup_input_period_fits(cup_netlist_input(nl), 40d-3, ierr)
     call check_int(ierr, CUP_OK, '40 ms is two periods')
     call cup_input_period_fits(cup_netlist_input(nl), 30d-3, ierr, errmsg=msg)
