@@ -11,6 +11,9 @@
 
 #include "heap.h"
 #include "projector/newton.h"
+#include "projector/choose.h"
+#include "projector/small.h"
+#include "projector/activeset.h"
 
 /* ---- random polyhedra ---------------------------------------------------------- */
 
@@ -984,6 +987,52 @@ static void test_no_allocation(void **state) {
 #endif
 }
 
+/* The small-set path has one owner (choose.c): a scheme whose step is the
+ * LCP asks proj_small_lcp, and the projector it keeps behind that step
+ * (proj_backup_options) sets up no second LCP: the small method's fallback
+ * alone, which still projects (against the auto projector's answer). */
+static void test_backup_holds_no_second_lcp(void **state) {
+  (void)state;
+  double Cd[4] = {1, 0.5, -0.25, 1}, g[2] = {-1, -2}, pd[2] = {1, 2};
+  tcsc C;
+  tcsc_from_dense(&C, Cd, 2, 2);
+  cup_metric P = {.kind = CUP_METRIC_DIAGONAL, .diag = pd};
+  cup_polyset *K = NULL;
+  assert_int_equal(cup_polyset_create(&K, &C.view, g, &P, NULL), CUP_OK);
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.eps_abs = o.eta_abs = 0;
+  o.eps_rel = 1e-14;
+  assert_true(proj_small_lcp(K, &o));
+  assert_true(proj_small_lcp(K, NULL));
+  cup_projector_options b = proj_backup_options(K, &o);
+  assert_false(proj_small_lcp(K, &b));
+  assert_ptr_equal(proj_choose(K, &b), *proj_small->fallback);
+  cup_projector *pa = NULL, *pb = NULL;
+  assert_int_equal(cup_projector_create(&pa, K, &o, NULL), CUP_OK);
+  assert_int_equal(cup_projector_create(&pb, K, &b, NULL), CUP_OK);
+  assert_ptr_equal(pa->slot[pa->method].m, proj_small);
+  assert_int_equal(pb->nslots, 1);
+  assert_ptr_equal(pb->slot[pb->method].m, proj_dense);
+  double x[2] = {-3, 0.5}, za[2], zb[2];
+  cup_proj_info ia, ib;
+  assert_int_equal(cup_project(pa, x, za, &ia), CUP_OK);
+  assert_int_equal(cup_project(pb, x, zb, &ib), CUP_OK);
+  assert_int_equal(ia.skipped, 0);
+  for (int j = 0; j < 2; j++) assert_true(fabs(za[j] - zb[j]) <= 1e-12 * (1 + fabs(za[j])));
+  cup_projector_free(&pa);
+  cup_projector_free(&pb);
+  /* no small path, nothing to take over: the options as they are */
+  o.method = CUP_PROJ_PG;
+  assert_int_equal(proj_backup_options(K, &o).method, CUP_PROJ_PG);
+  o.method = CUP_PROJ_AUTO;
+  o.feasible_point = x;
+  assert_false(proj_small_lcp(K, &o));
+  assert_int_equal(proj_backup_options(K, &o).method, CUP_PROJ_AUTO);
+  cup_polyset_free(&K);
+  tcsc_free(&C);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_random_polyhedra_enumeration),
@@ -1001,6 +1050,7 @@ int main(void) {
     cmocka_unit_test(test_jammed_packing_door_in_floor),
     cmocka_unit_test(test_jammed_packing_first_order),
     cmocka_unit_test(test_no_allocation),
+    cmocka_unit_test(test_backup_holds_no_second_lcp),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

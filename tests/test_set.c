@@ -659,6 +659,45 @@ static void test_names_and_bad_descriptions(void **state) {
   tcsc_free(&Qs);
 }
 
+/* Each kind's own checks, reached through set.c's registry (set_impl.h's
+ * set_kind): the rows a kind carries (any number, exactly one, none), its
+ * own fields, then the radius of a kind with a ball; each message whole,
+ * kind by kind (a wrong registry line gives another kind's checks). */
+static void test_kind_checks(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  cup_set *S = NULL;
+  double A[6] = {1, 0, 0, 1, 1, 1}, c[2] = {0, 0};
+  tcsc C22, C13;
+  tcsc_from_dense(&C22, A, 2, 2);
+  tcsc_from_dense(&C13, A, 1, 3);
+  struct { cup_set_desc d; int st; const char *msg; } cases[] = {
+    {{.kind = CUP_SET_POLYSET, .n = 2}, CUP_ERR_ARG, "set polyset: C is missing"},
+    {{.kind = CUP_SET_HALFSPACE, .n = 2, .C = C22.view}, CUP_ERR_DIM, "set halfspace: C is 2 x 2, expected 1 x 2"},
+    {{.kind = CUP_SET_INTERSECTION, .n = 2, .C = C13.view, .radius = 1}, CUP_ERR_DIM,
+     "set intersection: C is 1 x 3, expected m x 2"},
+    {{.kind = CUP_SET_INTERSECTION, .n = 2, .C = C22.view, .center = c, .radius = NAN}, CUP_ERR_NONFINITE,
+     "set intersection: radius is nan"},
+    {{.kind = CUP_SET_ELLIPSOID, .n = 257, .radius = 1}, CUP_ERR_UNSUPPORTED,
+     "set ellipsoid: n = 257 exceeds the dense limit 256"},
+    {{.kind = CUP_SET_ELLIPSOID, .n = 2, .radius = -1}, CUP_ERR_ARG, "set ellipsoid: the shape Q is missing"},
+    {{.kind = CUP_SET_BALL, .n = 2, .center = c, .radius = -1}, CUP_ERR_EMPTY_SET,
+     "set ball: radius = -1 < 0: the set is empty"},
+    {{.kind = CUP_SET_STATE_POLYSET, .n = 2}, CUP_ERR_ARG, "set state-polyset: the rows callback is NULL"},
+    {{.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .P = {.kind = CUP_METRIC_SPARSE}},
+     CUP_ERR_UNSUPPORTED, "set state-polyset: the metric must be the identity or diagonal (the rows' dual "
+     "matrix C P^-1 C^T is refactored in place at every step)"},
+  };
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    err[0] = '\0';
+    assert_int_equal(cup_set_create(&S, &cases[k].d, err), cases[k].st);
+    assert_null(S);
+    assert_string_equal(err, cases[k].msg);
+  }
+  tcsc_free(&C22);
+  tcsc_free(&C13);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_ball_against_closed_form),
@@ -673,6 +712,7 @@ int main(void) {
     cmocka_unit_test(test_state_polyset_no_allocation_when_patterns_repeat),
     cmocka_unit_test(test_state_polyset_bad_row),
     cmocka_unit_test(test_names_and_bad_descriptions),
+    cmocka_unit_test(test_kind_checks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,6 +14,7 @@
 #include "adaptive.h"
 #include "adaptive_impl.h"
 #include "freestep.h"
+#include "projector/choose.h"
 
 static void *take(size_t count, size_t size, int *fail) {
   void *q = calloc(count ? count : 1, size);
@@ -250,6 +251,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   po.eps_abs = po.eta_abs = 0;
   po.eps_rel = 1e-12;
   po.eta_rel = 1e-10;
+  po = proj_backup_options(K, &po);                /* one LCP onto K: A->proj */
   int st = cup_projector_create(&A->projector, K, &po, errmsg);
   if (st) { cup_adaptive_free(&A); return st; }
   dense_of(&D->A, D->has_A, A->A, n);

@@ -16,6 +16,7 @@
 #include "integrator/freestep.h"
 #include "model/input_impl.h"
 #include "model/lcs_impl.h"
+#include "projector/choose.h"
 #include "set/polyset_impl.h"
 #include "scene_netlist.h"
 #include "netlist_lex.h"
@@ -136,14 +137,15 @@ int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode,
   return st;
 }
 
-/* Can the adaptive scheme run this netlist? Dense (the small-set limits),
+/* Can the adaptive scheme run this netlist? Dense (the projector's exact
+ * small-set path, which the adaptive and theta schemes' LCPs are),
  * a passive network (B = P^-1 C^T), an input its exosystem holds, states
  * plus generator states within the exponential's limit. */
 static int adaptive_fits(const cup_netlist *nl) {
   const cup_lcs *L = cup_netlist_lcs(nl);
   const cup_polyset *K = cup_lcs_polyset(L);
   const cup_input *u = cup_netlist_input(nl);
-  if (!K->dense || L->keep_B || (u && cup_input_gen_check(u, "adaptive", NULL))) return 0;
+  if (!proj_small_lcp(K, NULL) || L->keep_B || (u && cup_input_gen_check(u, "adaptive", NULL))) return 0;
   return K->n + cup_input_gen_dim(u, NULL) + 1 <= CUP_EXPONENTIAL_MAX_DIM;
 }
 
@@ -202,5 +204,6 @@ void scene_netlist_options(const cup_netlist *nl, cup_integrator_options *o) {
    * stable implicit scheme while it is dense enough, the explicit one
    * beyond, at n = TSTOP / TSTEP */
   o->scheme = adaptive_fits(nl) ? CUP_SCHEME_ADAPTIVE
-              : K->dense ? CUP_SCHEME_THETA : K->n <= CUP_IMPLICIT_MAX_DIM ? CUP_SCHEME_IMPLICIT : CUP_SCHEME_EXPLICIT;
+              : proj_small_lcp(K, NULL) ? CUP_SCHEME_THETA
+              : K->n <= CUP_IMPLICIT_MAX_DIM ? CUP_SCHEME_IMPLICIT : CUP_SCHEME_EXPLICIT;
 }

@@ -515,10 +515,12 @@ static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const do
   return CUP_OK;
 }
 
-int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
-                       double scale, double eps_target, double eta_target, cup_proj_info *info) {
-  if (ls->small && eps_target >= 0 && small_dispatch(ls, g, xf, z, scale, eps_target, eta_target, info))
-    return info->status;
+/* cup_lcp_step_solve beyond the unrolled step: out of line, so that the
+ * unrolled step's callers pay for none of its registers (35 instructions a
+ * call on the paper circuit's projections). */
+static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const double *g, const double *xf, double *z,
+                                                   double scale, double eps_target, double eta_target,
+                                                   cup_proj_info *info) {
   const cup_polyset *K = ls->K;
   int n = ls->n, m = ls->m;
   double *lam = ls->lcp.lam;
@@ -601,6 +603,13 @@ int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, doub
   info->eta_cert = cup_lcp_step_eta(ls, g, z);
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+}
+
+int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
+                       double scale, double eps_target, double eta_target, cup_proj_info *info) {
+  if (ls->small && eps_target >= 0 && small_dispatch(ls, g, xf, z, scale, eps_target, eta_target, info))
+    return info->status;
+  return solve_general(ls, g, xf, z, scale, eps_target, eta_target, info);
 }
 
 /* step.h's cup_small_pass until no index flips */

@@ -187,7 +187,7 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
       keep_candidate(p, segment_to(p, z, p->origin, p->g), &best);
     if (!(best <= info->eta_target) && p->make_inward && !p->has_inward) {
       int it = p->iters;
-      p->make_inward(p);               /* certification work, not dual iterations */
+      p->make_inward(p, p->inward_ws);   /* certification work, not dual iterations */
       p->iters = it;
     }
     if (!(best <= info->eta_target) && p->has_inward &&

@@ -3,8 +3,9 @@
  * and its accelerated variant (FISTA with O'Donoghue-Candes gradient
  * restart). The gradient C P^-1 C^T lambda + b is the slack s(y(lambda)) of
  * the recovered primal point y = x + P^-1 C^T lambda, so one evaluation per
- * iteration gives both the step and the certificate. Starts from p->lam;
- * runs at most `budget` iterations. */
+ * iteration gives both the step and the certificate. The methods pg and
+ * fista run it from the warm start to max_iter; the dense active set
+ * (activeset.c) runs it in bursts. */
 #include <math.h>
 #include <string.h>
 #include "catchup.h"
@@ -24,8 +25,8 @@
 
 #define SWAP(a, b) do { double *t_ = (a); (a) = (b); (b) = t_; } while (0)
 
-int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
-                        int budget, cup_proj_info *info) {
+int cup_proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int accelerated, int budget,
+                        cup_proj_info *info) {
   const cup_polyset *K = p->K;
   int m = p->m;
   size_t msz = sizeof(double) * (size_t)m;
@@ -38,7 +39,7 @@ int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
     return cup_certify(p, x, p->lam, p->y, info) ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   }
   double tau = 1.0 / L, t = 1;
-  double *mu = p->wm2, *smu = p->wm3, *snap = p->wm4;
+  double *mu = w->wm2, *smu = w->wm3, *snap = w->wm4;
   if (accelerated) { memcpy(mu, p->lam, msz); memcpy(smu, p->s, msz); }
   memcpy(snap, p->lam, msz);
   int next_full = 0;
@@ -54,7 +55,7 @@ int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
     }
     const double *src = accelerated ? mu : p->lam;
     const double *gsrc = accelerated ? smu : p->s;
-    double *lnew = p->wm;
+    double *lnew = w->wm;
     for (int i = 0; i < m; i++) lnew[i] = fmax(0, src[i] - tau * (gsrc[i] - AIM * p->gam[i]));
     cup_eval_primal(p, x, p->g, lnew, p->y2, p->s2, p->gam2);
     p->iters++;
@@ -69,15 +70,64 @@ int cup_proj_firstorder(cup_projector *p, const double *x, int accelerated,
       }
       t = tn;
     }
-    SWAP(p->lam, p->wm);
+    SWAP(p->lam, w->wm);
     SWAP(p->y, p->y2);
     SWAP(p->s, p->s2);
     SWAP(p->gam, p->gam2);
     if ((it + 1) % 64 == 0) {           /* an empty K makes lambda grow along a Farkas ray */
-      double *d = p->wm;                /* free now: holds the previous lambda */
+      double *d = w->wm;                /* free now: holds the previous lambda */
       for (int i = 0; i < m; i++) d[i] = fmax(0, p->lam[i] - snap[i]);
       if (cup_farkas_test(p, d, info)) return CUP_ERR_EMPTY_SET;
       memcpy(snap, p->lam, msz);
     }
   }
 }
+
+/* ---- the methods pg and fista ------------------------------------------------- */
+
+void proj_fo_lay_out(cup_projector *p, proj_carve *a, fo_ws *w) {
+  size_t M = (size_t)p->m;
+  w->wm = proj_carve_piece(a, M, sizeof(double));
+  w->wm2 = proj_carve_piece(a, M, sizeof(double));
+  w->wm3 = proj_carve_piece(a, M, sizeof(double));
+  w->wm4 = proj_carve_piece(a, M, sizeof(double));
+}
+
+static void lay_out(cup_projector *p, proj_carve *a, void **ws) {
+  fo_ws scratch, *w = PROJ_WS_CARVE(a, *ws, fo_ws, &scratch);
+  proj_fo_lay_out(p, a, w);
+}
+
+/* Every call from the warm start (or from 0), to the iteration limit. */
+static int solve(cup_projector *p, void *ws, const double *x, int accelerated, cup_proj_info *info) {
+  if (p->opt.warm_start) memcpy(p->lam, p->lam_warm, sizeof(double) * (size_t)p->m);
+  else memset(p->lam, 0, sizeof(double) * (size_t)p->m);
+  return cup_proj_firstorder(p, ws, x, accelerated, p->opt.max_iter, info);
+}
+
+static int solve_pg(cup_projector *p, void *ws, const double *x, cup_proj_info *info) {
+  return solve(p, ws, x, 0, info);
+}
+
+static int solve_fista(cup_projector *p, void *ws, const double *x, cup_proj_info *info) {
+  return solve(p, ws, x, 1, info);
+}
+
+static int takes_pg(const cup_polyset *K, const cup_projector_options *o) {
+  (void)K;
+  return o->method == CUP_PROJ_PG;
+}
+
+static int takes_fista(const cup_polyset *K, const cup_projector_options *o) {
+  (void)K;
+  return o->method == CUP_PROJ_FISTA;
+}
+
+static const proj_method pg_method = {
+  .name = "pg", .takes = takes_pg, .lay_out = lay_out, .solve = solve_pg,
+};
+static const proj_method fista_method = {
+  .name = "fista", .takes = takes_fista, .lay_out = lay_out, .solve = solve_fista,
+};
+const proj_method *const proj_pg = &pg_method;
+const proj_method *const proj_fista = &fista_method;

@@ -16,6 +16,29 @@
 #include "dual_factor.h"
 #include "newton.h"
 
+/* Iterate and scratch of one projected-Newton solve. */
+typedef struct pn_ws {
+  double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
+  double *y2, *s2, *gam2;           /* line-search trial */
+  double *d, *lt, *snap, *keep;     /* m each (snap: the main solve's only) */
+  unsigned char *act, *prev;        /* free set, and the previous one */
+  int *idx;                         /* m: the line search's rows that can reach their bound */
+} pn_ws;
+
+/* The method's workspace: the dual factor and the iterates of the main and
+ * the inward-anchor solves. */
+typedef struct newton_ws {
+  struct cup_dfact *df;
+  pn_ws pmain;          /* the projection (lam, y, s, gam shared with the projector) */
+  pn_ws pin;            /* the inward anchor's solve */
+  double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
+  double *tau, *rhs;    /* slack targets of the finishing solve; a dual vector */
+  double delta_peak;    /* largest Levenberg parameter of the last projection's steps */
+  int stieltjes;        /* M = C P^-1 C^T has no positive off-diagonal (diagonal P); -1 unknown */
+} newton_ws;
+
+static const proj_method newton_method;
+
 /* One dual problem: project xc onto {C y + g >= 0}, rows outside `rows`
  * ignored (NULL: all rows); the finishing solve aims the free rows' slack at
  * tau (NULL: 0). */
@@ -26,6 +49,7 @@ typedef struct pn_problem {
   const double *tau;
   pn_ws *w;                      /* iterate and scratch */
   int finishing;                 /* inside the finishing solve (2: an early one) */
+  newton_ws *nw;                 /* the method's workspace */
 } pn_problem;
 
 /* Scratch of a solve; with own = 0 (the main solve) the iterate buffers
@@ -54,11 +78,25 @@ static void pn_free(pn_ws *w, int own) {
   free(w->act); free(w->prev); free(w->idx);
 }
 
-int cup_newton_create(cup_projector *p, char *errmsg) {
+static void free_ws(cup_projector *p, void *ws) {
+  (void)p;
+  newton_ws *w = ws;
+  if (!w) return;
+  cup_dfact_free(&w->df);
+  pn_free(&w->pmain, 0);
+  pn_free(&w->pin, 1);
+  free(w->gin); free(w->bin); free(w->tau); free(w->rhs);
+  free(w);
+}
+
+static void revalue(cup_projector *p, void *ws);
+
+/* The dual factor and the solves' vectors. */
+static int create(cup_projector *p, void **ws, char *errmsg) {
   int n = p->n, m = p->m;
   newton_ws *w = calloc(1, sizeof *w);
   if (!w) return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
-  p->nw = w;
+  *ws = w;
   int st = cup_dfact_create(&w->df, p->K, p->opt.factor_updates, -1, errmsg);
   if (st) return st;
   size_t M = (size_t)m + 1;
@@ -66,19 +104,8 @@ int cup_newton_create(cup_projector *p, char *errmsg) {
       !(w->gin = malloc(sizeof(double) * M)) || !(w->bin = malloc(sizeof(double) * M)) ||
       !(w->tau = malloc(sizeof(double) * M)) || !(w->rhs = malloc(sizeof(double) * M)))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
-  cup_newton_revalue(p);
+  revalue(p, w);
   return CUP_OK;
-}
-
-void cup_newton_free(cup_projector *p) {
-  newton_ws *w = p->nw;
-  if (!w) return;
-  cup_dfact_free(&w->df);
-  pn_free(&w->pmain, 0);
-  pn_free(&w->pin, 1);
-  free(w->gin); free(w->bin); free(w->tau); free(w->rhs);
-  free(w);
-  p->nw = NULL;
 }
 
 /* Whether M = C P^-1 C^T (diagonal P) has no positive off-diagonal entry:
@@ -107,23 +134,31 @@ static int stieltjes(const cup_polyset *K, double *acc) {
   return ok;
 }
 
-/* Checked when a cold projection first needs it, not at every revalue: a
- * state-dependent set (a crowd) revalues at every step and projects warm,
- * and the check costs a pass over M (1.6 M cache misses a step on a crowd
- * of 10^5 agents). */
-void cup_newton_revalue(cup_projector *p) {
-  if (p->nw) p->nw->stieltjes = -1;
+/* C's values changed: M's values with them (the same symbolic analysis),
+ * and its signs are to be checked again. That check waits until a cold
+ * projection needs it, not done at every revalue: a state-dependent set (a
+ * crowd) revalues at every step and projects warm, and the check costs a
+ * pass over M (1.6 M cache misses a step on a crowd of 10^5 agents). */
+static void revalue(cup_projector *p, void *ws) {
+  (void)p;
+  newton_ws *w = ws;
+  if (w) w->stieltjes = -1;
 }
 
-/* in the dual scratch rhs: free between solves (p->wm exists only for dense
- * sets and the first-order methods) */
-static int is_stieltjes(cup_projector *p) {
-  if (p->nw->stieltjes < 0) p->nw->stieltjes = stieltjes(p->K, p->nw->rhs);
-  return p->nw->stieltjes;
+static void revalue_values(cup_projector *p, void *ws) {
+  newton_ws *w = ws;
+  if (w) cup_dfact_revalue(w->df);
+  revalue(p, ws);
 }
 
-static int factor(cup_projector *p, const unsigned char *act, double delta) {
-  return cup_dfact_factor(p->nw->df, act, delta, &p->facts, &p->updates);
+/* in the dual scratch rhs: free between solves */
+static int is_stieltjes(cup_projector *p, newton_ws *nw) {
+  if (nw->stieltjes < 0) nw->stieltjes = stieltjes(p->K, nw->rhs);
+  return nw->stieltjes;
+}
+
+static int factor(cup_projector *p, newton_ws *nw, const unsigned char *act, double delta) {
+  return cup_dfact_factor(nw->df, act, delta, &p->facts, &p->updates);
 }
 
 /* f(lam) = lam'(s + b)/2 (since s = M lam + b), with y and s at lam. */
@@ -224,10 +259,11 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
                      cup_proj_info *info, int early) {
   int m = p->m;
   pn_ws *w = q->w;
-  double *rhs = p->nw->rhs;
+  newton_ws *nw = q->nw;
+  double *rhs = nw->rhs;
   /* the least regularized factor on F, and the iterate as the first guess
    * (refinement from zero with a large delta crawls on ill-conditioned M_FF) */
-  if (factor(p, w->act, cup_dfact_delta_min(p->nw->df))) return 0;
+  if (factor(p, nw, w->act, cup_dfact_delta_min(nw->df))) return 0;
   memcpy(w->keep, w->lam, sizeof(double) * (size_t)m);
   for (int i = 0; i < m; i++) if (!w->act[i]) w->lam[i] = 0;
   double prev = INFINITY;
@@ -241,7 +277,7 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
     }
     if (!(worst > 1) || !(worst < 0.5 * prev)) break;  /* at rounding, or no longer gaining */
     prev = worst;
-    cup_dfact_solve(p->nw->df, rhs);
+    cup_dfact_solve(nw->df, rhs);
     for (int i = 0; i < m; i++) if (w->act[i]) w->lam[i] += rhs[i];
   }
   /* Multipliers left slightly negative stay in z = y(lam): on a singular
@@ -282,9 +318,75 @@ static int pn_correct(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
       else if (!w->act[i] && w->s2[i] < -w->gam2[i] && (!q->rows || q->rows[i]) &&
                p->K->rownorm[i] > 0) { w->act[i] = 1; changed = 1; }
     }
-    if (!changed || factor(p, w->act, cup_dfact_delta_min(p->nw->df))) break;
+    if (!changed || factor(p, q->nw, w->act, cup_dfact_delta_min(q->nw->df))) break;
   }
   return CUP_WARN_NOT_CERTIFIED;
+}
+
+/* The free set F of the iterate, into w->act: rows at (or within eps_k of)
+ * zero with a positive gradient are held, the others free; the right side
+ * s_F of the direction into nw->rhs. Returns the projected gradient's
+ * residual, its largest multiplier into *lmax. */
+static double pn_free_set(cup_projector *p, const pn_problem *q, double tau, double *lmax) {
+  const cup_polyset *K = p->K;
+  int m = p->m;
+  pn_ws *w = q->w;
+  double resid = 0, lm = 0;
+  for (int i = 0; i < m; i++) {
+    /* cup_max(v, 0) is fmax(0, v) (0 for a NaN v) without a libm call */
+    resid = cup_max(fabs(w->lam[i] - cup_max(w->lam[i] - tau * w->s[i], 0)), resid);
+    lm = cup_max(w->lam[i], lm);
+  }
+  double epsk = fmin(resid, 1e-3 * lm);
+  double *rhs = q->nw->rhs;
+  for (int i = 0; i < m; i++) {
+    w->act[i] = K->rownorm[i] > 0 && (!q->rows || q->rows[i]) &&
+                !(w->lam[i] <= epsk && w->s[i] > 0);
+    rhs[i] = w->act[i] ? w->s[i] : 0;
+  }
+  *lmax = lm;
+  return resid;
+}
+
+/* The projected Armijo search along w->d from f (slope: the free rows'
+ * s'd): 1 with the step's alpha and f there in *alpha, *ft and the trial
+ * lt, y2, s2, gam2 at it; 0 when no trial decreased f enough, and the
+ * last ones no longer moved f above its rounding. */
+static int pn_line_search(cup_projector *p, const pn_problem *q, double f, double slope, double *alpha,
+                          double *ft) {
+  int m = p->m;
+  pn_ws *w = q->w;
+  double a = 1, t = f;
+  int accepted = 0, cheap = p->K->pdinv != NULL;
+  line_model L = {0};
+  if (cheap) {                            /* v in y2, the trials' scratch in wn */
+    line_setup(p, w, &L, w->y2);
+    memset(p->wn, 0, sizeof(double) * (size_t)p->n);
+  }
+  for (int ls = 0; ls < 40 && !accepted; ls++) {
+    double bound = 0;
+    if (cheap) {
+      t = line_value(p, w, &L, f, a, w->y2, p->wn, &bound);
+    } else {
+      for (int i = 0; i < m; i++) {
+        w->lt[i] = cup_max(w->lam[i] + a * w->d[i], 0);
+        if (!w->act[i]) bound += w->s[i] * (w->lam[i] - w->lt[i]);
+      }
+      t = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
+    }
+    accepted = f - t >= 1e-4 * (-a * slope + bound);
+    /* a short trial that no longer moves f above its rounding: shorter
+     * ones cannot either) */
+    if (!accepted && a < 0.1 && !(fabs(f - t) > 1e3 * DBL_EPSILON * fabs(f))) break;
+    if (!accepted) a *= 0.5;
+  }
+  if (accepted && cheap) {                /* the step, and y, s, gam there */
+    for (int i = 0; i < m; i++) w->lt[i] = cup_max(w->lam[i] + a * w->d[i], 0);
+    t = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
+  }
+  *alpha = a;
+  *ft = t;
+  return accepted;
 }
 
 /* Projected Newton: rows at (or within eps_k of) zero with a positive
@@ -301,12 +403,13 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
   int m = p->m;
   size_t msz = sizeof(double) * (size_t)m;
   pn_ws *w = q->w;
+  newton_ws *nw = q->nw;
   double f = dual_eval(p, q, w->lam, w->y, w->s, w->gam);
   double tau = K->lip > 0 ? 1 / K->lip : 0;
   /* the main solve starts from a hundredth of the largest delta the last
    * projection needed (a jam stays degenerate from one step to the next) */
-  double dmin = cup_dfact_delta_min(p->nw->df), dmax = 1e-2 * K->lip;
-  double delta = q->rows ? dmin : fmin(fmax(dmin, 1e-2 * p->nw->delta_peak), dmax), peak = delta;
+  double dmin = cup_dfact_delta_min(nw->df), dmax = 1e-2 * K->lip;
+  double delta = q->rows ? dmin : fmin(fmax(dmin, 1e-2 * nw->delta_peak), dmax), peak = delta;
   int settled = 0, early = 0;
   if (!q->rows) memcpy(w->snap, w->lam, msz);
   memset(w->prev, 0, (size_t)m);
@@ -319,20 +422,9 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
       if (cup_farkas_test(p, w->d, info)) return CUP_ERR_EMPTY_SET;
       memcpy(w->snap, w->lam, msz);
     }
-    double resid = 0, lmax = 0;
-    for (int i = 0; i < m; i++) {
-      /* cup_max(v, 0) is fmax(0, v) (0 for a NaN v) without a libm call */
-      resid = cup_max(fabs(w->lam[i] - cup_max(w->lam[i] - tau * w->s[i], 0)), resid);
-      lmax = cup_max(w->lam[i], lmax);
-    }
-    double epsk = fmin(resid, 1e-3 * lmax);
-    double *rhs = p->nw->rhs;               /* and the right side s_F of the direction */
-    for (int i = 0; i < m; i++) {
-      w->act[i] = K->rownorm[i] > 0 && (!q->rows || q->rows[i]) &&
-                  !(w->lam[i] <= epsk && w->s[i] > 0);
-      rhs[i] = w->act[i] ? w->s[i] : 0;
-    }
-    int st = factor(p, w->act, delta);
+    double lmax, resid = pn_free_set(p, q, tau, &lmax);
+    double *rhs = nw->rhs;                  /* the right side s_F of the direction */
+    int st = factor(p, nw, w->act, delta);
     if (st) return st;
     /* finish once F repeats after a full step, or once the iterate is
      * stationary to rounding (then steps shrink for reasons of rounding) */
@@ -342,7 +434,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
       for (int i = 0; i < m; i++) rhs[i] = w->act[i] ? w->s[i] : 0;   /* pn_finish used rhs */
     }
     memcpy(w->prev, w->act, (size_t)m);
-    cup_dfact_solve(p->nw->df, rhs);        /* d_F = -(M_FF + delta I)^-1 s_F */
+    cup_dfact_solve(nw->df, rhs);           /* d_F = -(M_FF + delta I)^-1 s_F */
     p->iters++;
     double slope = 0;
     for (int i = 0; i < m; i++) {
@@ -350,30 +442,8 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
       w->d[i] = w->act[i] ? -rhs[i] : allowed ? -tau * w->s[i] : -w->lam[i];
       if (w->act[i]) slope += w->s[i] * w->d[i];
     }
-    double alpha = 1, ft = f;
-    int accepted = 0, cheap = K->pdinv != NULL;
-    line_model L = {0};
-    if (cheap) {                            /* v in y2, the trials' scratch in wn */
-      line_setup(p, w, &L, w->y2);
-      memset(p->wn, 0, sizeof(double) * (size_t)p->n);
-    }
-    for (int ls = 0; ls < 40 && !accepted; ls++) {
-      double bound = 0;
-      if (cheap) {
-        ft = line_value(p, w, &L, f, alpha, w->y2, p->wn, &bound);
-      } else {
-        for (int i = 0; i < m; i++) {
-          w->lt[i] = cup_max(w->lam[i] + alpha * w->d[i], 0);
-          if (!w->act[i]) bound += w->s[i] * (w->lam[i] - w->lt[i]);
-        }
-        ft = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
-      }
-      accepted = f - ft >= 1e-4 * (-alpha * slope + bound);
-      /* a short trial that no longer moves f above its rounding: shorter
-       * ones cannot either) */
-      if (!accepted && alpha < 0.1 && !(fabs(f - ft) > 1e3 * DBL_EPSILON * fabs(f))) break;
-      if (!accepted) alpha *= 0.5;
-    }
+    double alpha, ft;
+    int accepted = pn_line_search(p, q, f, slope, &alpha, &ft);
     if (!accepted && delta > dmin) {        /* a regularized direction stalls near the */
       delta = dmin;                         /* answer: the exact one first */
       settled = 0;
@@ -381,10 +451,6 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     }
     if (!accepted)                          /* no decrease above rounding */
       return pn_correct(p, q, stop, info);
-    if (cheap) {                            /* the step, and y, s, gam there */
-      for (int i = 0; i < m; i++) w->lt[i] = cup_max(w->lam[i] + alpha * w->d[i], 0);
-      ft = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
-    }
     /* a full step settles F only at the least regularization: a full
      * damped step is short of the answer, and a finishing solve on a wrong
      * F returns a point outside K (certified, but not exact) */
@@ -407,7 +473,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     if (alpha < LM_SHORT && measurable) delta = fmin(delta * LM_UP, dmax);
     else if (alpha == 1) delta = fmax(delta / LM_DOWN, dmin);
     peak = fmax(peak, delta);
-    if (!q->rows) p->nw->delta_peak = peak;
+    if (!q->rows) nw->delta_peak = peak;
     memcpy(w->lam, w->lt, msz);
     double *t;
     t = w->y; w->y = w->y2; w->y2 = t;
@@ -430,9 +496,9 @@ static int inward_stop(cup_projector *p, const pn_problem *q, cup_proj_info *inf
   return 1;
 }
 
-static void inward_sparse(cup_projector *p) {
+static void inward_sparse(cup_projector *p, void *ws) {
   int m = p->m, n = p->n;
-  newton_ws *nw = p->nw;
+  newton_ws *nw = ws;
   pn_ws *w = &nw->pin;
   unsigned char *a2 = p->act2;
   int any = 0;
@@ -444,7 +510,7 @@ static void inward_sparse(cup_projector *p) {
   }
   if (!any) return;
   cup_slack(p->K, nw->gin, p->y, nw->bin, NULL);
-  pn_problem q = {p->y, nw->gin, a2, nw->bin, NULL, w, 0};
+  pn_problem q = {p->y, nw->gin, a2, nw->bin, NULL, w, 0, nw};
   cup_proj_info scratch = {0};
   if (pn_solve(p, &q, inward_stop, 50, &scratch) != CUP_OK) return;
   memcpy(p->inward, w->y, sizeof(double) * (size_t)n);
@@ -479,6 +545,7 @@ static int main_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info)
   detach(p, w);                             /* cup_certify reads p->y, p->s, p->gam */
   p->has_inward = 0;                        /* an anchor belongs to one candidate */
   p->make_inward = inward_sparse;
+  p->inward_ws = q->nw;
   int ok = cup_certify(p, q->xc, w->lam, w->y, info);
   p->make_inward = NULL;
   return ok;
@@ -522,9 +589,9 @@ static void sor_sweeps(cup_projector *p, double omega, double *lam, double *y) {
  * Newton finishes from the last lam_F, clipped at 0. */
 #define GROW_ROUNDS 30
 #define GROW_OMEGA 1.9
-static void grow_start(cup_projector *p, const double *x, pn_ws *w) {
+static void grow_start(cup_projector *p, newton_ws *nw, const double *x, pn_ws *w) {
   int m = p->m;
-  double *lam = w->lam, *lamF = w->keep, *rhs = p->nw->rhs;
+  double *lam = w->lam, *lamF = w->keep, *rhs = nw->rhs;
   unsigned char *F = w->act, *proved = w->prev;
   const double *rn = p->K->rownorm;
   for (int i = 0; i < m; i++) {
@@ -533,9 +600,9 @@ static void grow_start(cup_projector *p, const double *x, pn_ws *w) {
     F[i] = rn[i] > 0 && p->b[i] < 0;
   }
   for (int round = 0; round < GROW_ROUNDS; round++) {
-    if (factor(p, F, cup_dfact_delta_min(p->nw->df))) { memset(lamF, 0, sizeof(double) * (size_t)m); break; }
+    if (factor(p, nw, F, cup_dfact_delta_min(nw->df))) { memset(lamF, 0, sizeof(double) * (size_t)m); break; }
     for (int i = 0; i < m; i++) rhs[i] = F[i] ? -p->b[i] : 0;
-    cup_dfact_solve(p->nw->df, rhs);
+    cup_dfact_solve(nw->df, rhs);
     p->iters++;                             /* a solve on a free set, as a Newton step */
     for (int i = 0; i < m; i++) lam[i] = lamF[i] = F[i] ? rhs[i] : 0;
     cup_sparse_gatxy(&p->K->C, lam, w->y);
@@ -554,20 +621,21 @@ static void grow_start(cup_projector *p, const double *x, pn_ws *w) {
 }
 
 int cup_newton_cold_start(cup_projector *p, const double *x, double *lam) {
-  if (!p->nw || !is_stieltjes(p)) return 0;
-  pn_ws *w = &p->nw->pmain;
+  newton_ws *nw = proj_ws_of(p, &newton_method);
+  if (!nw || !is_stieltjes(p, nw)) return 0;
+  pn_ws *w = &nw->pmain;
   attach(p, w);
   cup_slack(p->K, p->g, x, p->b, p->gam);
   p->iters = p->facts = p->updates = 0;
-  grow_start(p, x, w);
+  grow_start(p, nw, x, w);
   memcpy(lam, w->lam, sizeof(double) * (size_t)p->m);
   detach(p, w);
   return p->iters;
 }
 
-int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *info) {
+static int solve(cup_projector *p, void *ws, const double *x, cup_proj_info *info) {
   int m = p->m;
-  newton_ws *nw = p->nw;
+  newton_ws *nw = ws;
   pn_ws *w = &nw->pmain;
   info->method = CUP_PROJ_ACTIVESET;
   attach(p, w);
@@ -576,14 +644,25 @@ int cup_proj_sparse_newton(cup_projector *p, const double *x, cup_proj_info *inf
   if (nw->stieltjes) {                      /* the scan only where the start may apply */
     int cold = 1;
     for (int i = 0; i < m && cold; i++) cold = w->lam[i] == 0;
-    if (cold && is_stieltjes(p)) grow_start(p, x, w);
+    if (cold && is_stieltjes(p, nw)) grow_start(p, nw, x, w);
   }
   /* finishing target: a slack well above its rounding bound (the bound at x
    * is a fair estimate of the one at the answer) */
   for (int i = 0; i < m; i++) nw->tau[i] = 16 * p->gam[i] + DBL_MIN;
-  pn_problem q = {x, p->g, NULL, p->b, nw->tau, w, 0};
+  pn_problem q = {x, p->g, NULL, p->b, nw->tau, w, 0, nw};
   int st = pn_solve(p, &q, main_stop, p->opt.max_iter, info);
   detach(p, w);
   if (st == CUP_WARN_NOT_CERTIFIED) cup_certify(p, x, w->lam, w->y, info);
   return st;
 }
+
+/* The exact method for sets beyond the dense limits. */
+static int takes(const cup_polyset *K, const cup_projector_options *o) {
+  return !K->dense && K->m > 0 && (o->method == CUP_PROJ_AUTO || o->method == CUP_PROJ_ACTIVESET);
+}
+
+static const proj_method newton_method = {
+  .name = "sparse Newton", .exact = 1, .takes = takes, .create = create, .free = free_ws,
+  .revalue = revalue_values, .solve = solve,
+};
+const proj_method *const proj_newton = &newton_method;

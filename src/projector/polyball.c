@@ -16,7 +16,7 @@
  * is, else the point where the segment from it to an anchor (the projection
  * of c onto K, which is in S whenever S is not empty) enters the ball. If
  * that projection of c is farther than r from c by a certified margin, S is
- * empty: CUP_ERR_EMPTY_SET. */
+ * empty: CUP_ERR_EMPTY_SET. The kind intersection's table ends the file. */
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -141,7 +141,7 @@ static int finish(cup_setproj *sp, double *z, const double *best, double best_ep
   return info->status;
 }
 
-int cup_polyball_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
+static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
   const cup_polyset *K = sp->S->K;
   int n = sp->n;
   double *xs = sp->work, *best = sp->work + n;
@@ -201,3 +201,11 @@ int cup_polyball_project(cup_setproj *sp, const double *x, double *z, cup_proj_i
   }
   return finish(sp, z, best, best_eps, info);
 }
+
+/* The projector onto the rows; its tolerances are set at each trial (onto_rows). */
+static int create(cup_setproj *sp, char *errmsg) {
+  return cup_projector_create(&sp->proj, sp->S->K, &sp->opt, errmsg);
+}
+
+const setproj_kind setproj_intersection = {.create = create, .place = cup_setproj_place, .project = project,
+                                           .own_tolerances = 1};

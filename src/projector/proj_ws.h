@@ -1,67 +1,76 @@
-/* proj_ws — the internal layout of cup_projector and the workspaces of its
- * methods: types only, the lowest header of the projector, included by the
+/* proj_ws — the shared layout of cup_projector and the table every
+ * projection method fills: types only (and the carving of the projector's
+ * one block), the lowest header of the projector, included by the
  * certificates (certify.h) and through them by every method and the
- * dispatcher. */
+ * dispatcher. What belongs to one method (its scratch, a factor, an LCP)
+ * is that method's own workspace, declared in its file; what every method
+ * and the certificates share (the candidate and its slack, the multipliers,
+ * the anchors, the scale) is here. */
 #ifndef CUP_PROJ_WS_H
 #define CUP_PROJ_WS_H
 
-#include <stdint.h>
-#include <cholmod.h>
+#include <stddef.h>
+#ifdef __SANITIZE_ADDRESS__
+#include <sanitizer/asan_interface.h>
+#endif
 #include "catchup/projector.h"
 #include "set/polyset_impl.h"
+#include "util/ckpt.h"
 
-#define CUP_DENSE_CACHE 4
+/* The projector's vectors live in one block, carved in two passes over the
+ * same lay-out functions (the dispatcher's and each method's): the first
+ * (base NULL) sums the sizes and hands out NULL, the second hands out the
+ * pieces. One allocation instead of about forty: on small sets (the paper
+ * circuit's, 3 x 2) a third of the projector's heap was malloc's minimum
+ * chunk and header per vector. Under ASan each piece is followed by a
+ * poisoned gap, so that an overrun into the next vector is still caught. */
+#ifdef __SANITIZE_ADDRESS__
+#define CUP_CARVE_GAP 32
+#else
+#define CUP_CARVE_GAP 0
+#endif
+typedef struct proj_carve { char *base; size_t used; } proj_carve;
 
-/* A cached dense pivoted Cholesky of M_AA for one active set A (m <= 64). */
-typedef struct dense_fact {
-  uint64_t mask;      /* the active set; 0 = unused slot */
-  int k, rank;        /* |A| and numerical rank */
-  int *idx;           /* A's rows, increasing (k) */
-  int *perm;          /* pivot order (k) */
-  double *l;          /* k x k factor */
-  unsigned stamp;     /* for least-recently-used replacement */
-} dense_fact;
+static inline void *proj_carve_piece(proj_carve *a, size_t count, size_t size) {
+  size_t at = a->used, bytes = (count ? count : 1) * size;
+  a->used += (bytes + CUP_CARVE_GAP + 15) & ~(size_t)15;    /* 16-byte aligned pieces */
+  if (!a->base) return NULL;
+#ifdef __SANITIZE_ADDRESS__
+  ASAN_POISON_MEMORY_REGION(a->base + at + bytes, a->used - at - bytes);
+#endif
+  return a->base + at;
+}
 
-/* Iterate and scratch of one projected-Newton solve (newton.c). */
-typedef struct pn_ws {
-  double *lam, *y, *s, *gam;        /* iterate: lambda, y(lambda), slack, rounding */
-  double *y2, *s2, *gam2;           /* line-search trial */
-  double *d, *lt, *snap, *keep;     /* m each (snap: the main solve's only) */
-  unsigned char *act, *prev;        /* free set, and the previous one */
-  int *idx;                         /* m: the line search's rows that can reach their bound */
-} pn_ws;
+typedef struct proj_method proj_method;
 
-/* The sparse exact path (newton.c): the dual factor and the iterates
- * of the main and the inward-anchor solves. */
-typedef struct newton_ws {
-  struct cup_dfact *df;
-  pn_ws pmain;          /* the projection (lam, y, s, gam shared with the projector) */
-  pn_ws pin;            /* the inward anchor's solve */
-  double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
-  double *tau, *rhs;    /* slack targets of the finishing solve; a dual vector */
-  double delta_peak;    /* largest Levenberg parameter of the last projection's steps */
-  int stieltjes;        /* M = C P^-1 C^T has no positive off-diagonal (diagonal P); -1 unknown */
-} newton_ws;
+/* A method as the projector holds it: its table, its workspace, and where
+ * in the projector's slots the method it falls back to sits (-1: none). */
+typedef struct proj_slot {
+  const proj_method *m;
+  void *ws;
+  int fallback;
+} proj_slot;
+
+/* The most methods a projector sets up: the chosen one, the one it falls
+ * back to, and the exact stand-in of an inexact one. */
+#define PROJ_SLOTS 3
 
 struct cup_projector {
   const cup_polyset *K;
   cup_projector_options opt;
   int n, m;
-  void *block;          /* every vector below, in one allocation (projector.c: lay_out) */
+  void *block;          /* every vector, the methods' included, in one allocation */
   size_t block_bytes;
   double *g;            /* current offset */
   double gscale;        /* max_i |g_i| / ||c_i||_{P^-1} */
   int empty_row;        /* a zero row of C with g_i < 0 (K empty), or -1 */
   double *lam;          /* multipliers of the last projection */
   double *lam_warm;     /* warm start (kept across skips) */
-  double *lam_fista;    /* FISTA's own iterate across bursts of a fallback; this and the */
-                        /* m scratch below (to act): dense sets and first-order methods only */
-  int has_fista;
   double *b;            /* s(x) = C x + g at the point being projected */
   double *s, *gam;      /* slack and its rounding bound at the candidate z */
   double *sv, *gamv;    /* the same at a trial feasible point v */
   double *y, *u;        /* candidate z = x + u, u = P^-1 C^T lambda */
-  double *y2, *s2, *gam2;      /* the next iterate's (first-order methods) */
+  double *y2, *s2, *gam2;      /* a trial iterate's (the methods swap them with y, s, gam) */
   double *v, *s_v;      /* exactly feasible point found by certification, its slack */
   int has_v;
   double *anchor, *s_anchor;   /* last certified feasible point, its slack */
@@ -72,22 +81,69 @@ struct cup_projector {
   int origin_ok;        /* every g_i > 0 */
   double *inward, *s_inward;   /* inward point from the exact method, its slack */
   int has_inward;
-  void (*make_inward)(cup_projector *);  /* builds it on demand, or NULL */
+  void (*make_inward)(cup_projector *, void *);  /* builds it on demand (the running method's), or NULL */
+  void *inward_ws;      /* ... with that method's workspace */
   double *farkas;       /* Farkas certificate y >= 0 */
   double *wn, *wn2;     /* n scratch */
-  double *wm, *wm2, *wm3, *wm4; /* m scratch */
-  int *iwm;             /* m scratch */
-  unsigned char *act, *act2;    /* m flags */
-  /* dense path */
-  dense_fact cache[CUP_DENSE_CACHE];
-  unsigned stamp;
-  double *dwork;        /* m*m + m scratch */
-  /* small dense sets, auto: the dual LCP solved exactly (lcp/step.c, W = I, h = 1) */
-  struct cup_lcp_step *small;
-  /* sparse Newton */
-  newton_ws *nw;
+  unsigned char *act2;  /* m flags: the rows of an inward anchor */
+  proj_slot slot[PROJ_SLOTS];   /* the methods set up (proj_choose), each once */
+  int nslots;
+  int method;           /* the slot cup_project runs (-1: none, a sparse set without rows) */
+  int exact;            /* the slot cup_project_exact runs */
+  const proj_slot *run; /* the slot running now (method's, or exact's in cup_project_exact) */
+  int (*project)(cup_projector *, const proj_slot *, const double *, double *, cup_proj_info *);
+                        /* ... its project hook, or the shared course (course.c) */
   /* statistics of the current call */
   int iters, facts, updates;
 };
+
+/* A projection method, as GSL's step types and OSQP's linear-system
+ * solvers are: one file fills one table and exports a pointer to it; the
+ * dispatcher (projector.c) calls through the table and never names a
+ * method, and choose.c's registry picks one by `takes`. Every hook gets the
+ * method's own workspace ws (NULL until lay_out or create made one). */
+struct proj_method {
+  const char *name;
+  /* its answers are the projection to rounding: cup_project_exact runs it */
+  int exact;
+  /* set up beside an inexact method as its exact stand-in (cheap: vectors of the block only) */
+  int standby;
+  /* the method taking what this one declines (answer returns 0), or NULL */
+  const proj_method *const *fallback;
+  /* 1 when it is the method for K with the options o */
+  int (*takes)(const cup_polyset *K, const cup_projector_options *o);
+  /* its vectors from the projector's block (both passes: a = sizes then pieces); NULL: none */
+  void (*lay_out)(cup_projector *p, proj_carve *a, void **ws);
+  /* what it needs beyond the block (a factorization, an LCP): allocates; NULL: nothing */
+  int (*create)(cup_projector *p, void **ws, char *errmsg);
+  void (*free)(cup_projector *p, void *ws);
+  /* C's values changed in place (cup_projector_revalue); NULL: nothing depends on them */
+  void (*revalue)(cup_projector *p, void *ws);
+  /* forget a warm start of its own (cup_projector_reset); NULL: none */
+  void (*reset)(cup_projector *p, void *ws);
+  /* its state between projections, to or from a checkpoint; NULL: none */
+  void (*checkpoint)(cup_projector *p, void *ws, cup_ckpt *c);
+  /* the whole projection of x as cup_project makes it (s: its slot, info
+   * may be NULL), for a method that answers most points itself and leaves
+   * the rest to its fallback (course.h: proj_start, proj_course); NULL: the
+   * shared course with solve */
+  int (*project)(cup_projector *p, const proj_slot *s, const double *x, double *z, cup_proj_info *info);
+  /* inside the shared course, x not in K and b = s(x) in p->b: fills p->lam
+   * (>= 0) and p->y = z with certificates in info; returns a status. NULL
+   * for a method with its own project */
+  int (*solve)(cup_projector *p, void *ws, const double *x, cup_proj_info *info);
+};
+
+/* The workspace of method m in p, or NULL when p did not set m up. */
+static inline void *proj_ws_of(const cup_projector *p, const proj_method *m) {
+  for (int k = 0; k < p->nslots; k++)
+    if (p->slot[k].m == m) return p->slot[k].ws;
+  return NULL;
+}
+
+/* A method's lay_out writes its workspace's fields through this pointer:
+ * the workspace itself in the second pass, a scratch copy in the first. */
+#define PROJ_WS_CARVE(a, ws, type, scratch) \
+  ((ws) = proj_carve_piece((a), 1, sizeof(type)), (ws) ? (type *)(ws) : (scratch))
 
 #endif

@@ -20,11 +20,14 @@ void cup_projector_checkpoint(cup_projector *p, cup_ckpt *c);
  * Allocation-free. */
 void cup_projector_revalue(cup_projector *p);
 
-/* cup_project by the exact method whatever the options ask (the dense
- * active set, or the sparse Newton path when the projector has one):
+/* cup_project by the exact method whatever the options ask (the method
+ * chosen when it is exact: the small LCP with the dense active set behind
+ * it, the dense active set, the sparse Newton path; the dense active set
+ * beside a first-order method on a dense set), reported as activeset:
  * another method for a step whose answer was not certified (the
  * integrator's fallback, issue 27); the configured one where no exact
- * path was set up. Allocation-free. */
+ * method was set up (a first-order method on a sparse set).
+ * Allocation-free. */
 int cup_project_exact(cup_projector *p, const double *x, double *z, cup_proj_info *info);
 
 /* After the projection z of a step from the state x at t onto a

@@ -1,6 +1,9 @@
-/* Internal layout of cup_setproj: the projection onto any cup_set, shared
- * by setproj.c (dispatch, closed forms, oracle), polyball.c (a polyset and a
- * ball) and statepoly.c (rows rebuilt from the state). */
+/* Internal layout of cup_setproj: the projection onto any cup_set, and the
+ * table of a set kind's projection (setproj_kind), shared by the dispatcher
+ * (setproj.c) and the kinds: setpoly.c (polyset, and the placing of a set
+ * with rows or a ball that the others share), closedform.c (ball,
+ * ellipsoid, halfspace), setoracle.c, polyball.c (intersection) and
+ * statepoly.c (state-polyset). */
 #ifndef CUP_SETPROJ_IMPL_H
 #define CUP_SETPROJ_IMPL_H
 
@@ -15,8 +18,33 @@
  * WHAT_LEN) after a prefix of at most 80 characters. */
 #define CUP_SETPROJ_MSG (CUP_RUN_MSG_LEN - 192)
 
+/* A set kind's projection, as the projector's methods (proj_ws.h) and
+ * GSL's step types: one static table a kind, in the kind's file, and one
+ * line in setproj.c's registry; the dispatcher names no kind. The set's own
+ * part of a kind (checks, set-up) is set/'s set_kind. */
+typedef struct setproj_kind {
+  /* the kind's own part of the set projector, after the common buffers;
+   * NULL: none */
+  int (*create)(cup_setproj *sp, char *errmsg);
+  void (*free)(cup_setproj *sp);            /* what create took; NULL: none */
+  /* the set at t, u(t) (u checked present when the set has parameters) and
+   * the state x (may be NULL); NULL: the set does not move */
+  int (*place)(cup_setproj *sp, double t, const double *u, const double *x);
+  /* the certified projection of x (finite) onto the placed set; a failure
+   * leaves its message (cup_setproj_fail) */
+  int (*project)(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
+  /* rows the placing missed at the answer z (set_impl.h's recheck), as
+   * cup_setproj_recheck returns; NULL: it misses none */
+  int (*recheck)(cup_setproj *sp, double t, const double *x, const double *z);
+  int own_tolerances;   /* 1: it sets its projector's tolerances at each call (not the options') */
+} setproj_kind;
+
+extern const setproj_kind setproj_polyset, setproj_ball, setproj_ellipsoid, setproj_halfspace,
+    setproj_intersection, setproj_oracle, setproj_state_polyset;
+
 struct cup_setproj {
   const cup_set *S;
+  const setproj_kind *type;    /* the registry's entry of S's kind */
   cup_projector_options opt;
   int kind, n, m;
   double t;                    /* time of the set as placed */
@@ -62,17 +90,13 @@ static inline int cup_setproj_fail(cup_setproj *sp, int status, const char *fmt,
   return status;
 }
 
-int cup_polyball_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
-
-int cup_statepoly_init(cup_setproj *sp, char *errmsg);
-void cup_statepoly_free(cup_setproj *sp);
-/* Rows at (t, x) from the callback, into the pool's polyset and projector. */
-int cup_statepoly_move(cup_setproj *sp, double t, const double *x);
-/* The projection, in the callback's numbering if it gave one. */
-int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
-/* The set's recheck of the answer z of the step from x at t (set_impl.h): 1
- * when it missed rows, which are then built again at (t, x) within the same
- * step; 0 when it missed none (or has no recheck); an error status. */
-int cup_statepoly_recheck(cup_setproj *sp, double t, const double *x, const double *z);
+/* The placing of a set with rows or a ball (setpoly.c), every placed
+ * kind's: g, c and r at u, checked finite (and r >= 0), the offset into
+ * the rows' projector. */
+int cup_setproj_place(cup_setproj *sp, double t, const double *u, const double *x);
+/* The message of a polyset projection's outcome st (setpoly.c): the
+ * Farkas certificate of an empty set, the status of another failure.
+ * Returns st. */
+int cup_setproj_polyset_outcome(cup_setproj *sp, int st, const cup_proj_info *info);
 
 #endif

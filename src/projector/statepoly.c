@@ -20,13 +20,13 @@
 #include "catchup.h"
 #include "setproj_impl.h"
 
-int cup_statepoly_init(cup_setproj *sp, char *errmsg) {
+static int init(cup_setproj *sp, char *errmsg) {
   if (cup_rowbuf_init(&sp->rb, sp->n, 64, 256) || cup_rowpool_init(&sp->pool, sp->n))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
   return CUP_OK;
 }
 
-void cup_statepoly_free(cup_setproj *sp) {
+static void free_pool(cup_setproj *sp) {
   cup_rowbuf_free(&sp->rb);
   cup_rowpool_free(&sp->pool);
   cup_projector_free(&sp->proj);
@@ -176,7 +176,8 @@ static int renumber(cup_setproj *sp) {
   return CUP_OK;
 }
 
-int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
+/* The projection, in the callback's numbering if it gave one. */
+static int project_ordered(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
   if (!sp->ordered || !sp->proj) return cup_project(sp->proj, x, z, info);
   const int *perm = sp->perm;
   for (int k = 0; k < sp->n; k++) sp->xs[k] = x[perm[k]];
@@ -184,6 +185,10 @@ int cup_statepoly_project(cup_setproj *sp, const double *x, double *z, cup_proj_
   if (st >= 0)                               /* on an error z is unchanged */
     for (int k = 0; k < sp->n; k++) z[perm[k]] = sp->zk[k];
   return st;
+}
+
+static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
+  return cup_setproj_polyset_outcome(sp, project_ordered(sp, x, z, info), info);
 }
 
 /* The rows at (t, x) into the pool: a new step (advance) or the same one
@@ -214,11 +219,17 @@ static int place_rows(cup_setproj *sp, double t, const double *x, int advance) {
   return cup_projector_set_offset(sp->proj, sp->g);
 }
 
-int cup_statepoly_move(cup_setproj *sp, double t, const double *x) {
+/* Rows at (t, x) from the callback, into the pool's polyset and projector. */
+static int place(cup_setproj *sp, double t, const double *u, const double *x) {
+  (void)u;
+  if (!x) return cup_setproj_fail(sp, CUP_ERR_ARG, "a state-dependent set needs the state x");
   return place_rows(sp, t, x, 1);
 }
 
-int cup_statepoly_recheck(cup_setproj *sp, double t, const double *x, const double *z) {
+/* The set's recheck of the answer z of the step from x at t (set_impl.h): 1
+ * when it missed rows, which are then built again at (t, x) within the same
+ * step; 0 when it missed none (or has no recheck); an error status. */
+static int recheck(cup_setproj *sp, double t, const double *x, const double *z) {
   const cup_set *S = sp->S;
   if (!S->recheck || !sp->proj) return 0;
   int rc = S->recheck(t, x, z, S->rows_ctx);
@@ -228,3 +239,6 @@ int cup_statepoly_recheck(cup_setproj *sp, double t, const double *x, const doub
   int st = place_rows(sp, t, x, 0);
   return st ? st : 1;
 }
+
+const setproj_kind setproj_state_polyset = {.create = init, .free = free_pool, .place = place, .project = project,
+                                            .recheck = recheck};

@@ -2,9 +2,11 @@
  * half-space {a^T x + b >= 0} in the P-metric, certified like the
  * polyset's: the answer is aimed a few ulps inside, so that it is
  * certainly in the set (eta = 0), and eps is the excess of ||x - z||_P^2,
- * bounded above, over a lower bound on d(x)^2 that allows for rounding. */
+ * bounded above, over a lower bound on d(x)^2 that allows for rounding.
+ * The kinds ball and halfspace (set_impl.h's set_kind) end the file. */
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 #include "catchup.h"
 #include "set_impl.h"
 
@@ -82,3 +84,21 @@ int cup_halfspace_project(const cup_set *S, const double *g, const double *x, do
   info->eps_cert = fmax(0, xz * xz - dlo * dlo);
   return settle(info);
 }
+
+/* P^-1 a for the half-space's step. */
+static int halfspace_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
+  (void)d;
+  const cup_polyset *K = S->K;
+  int n = S->n;
+  S->pa = calloc((size_t)n, sizeof(double));
+  double *w = calloc((size_t)n, sizeof(double));
+  if (!S->pa || !w) { free(w); return cup_fail(errmsg, CUP_ERR_NOMEM, "set halfspace: out of memory"); }
+  for (int k = K->Ct.p[0]; k < K->Ct.p[1]; k++) S->pa[K->Ct.i[k]] = K->Ct.x[k];
+  if (K->pkind == CUP_METRIC_SPARSE) cup_simplicial_solve(K->LP, S->pa, w);
+  else cup_metric_solve_diag(K, S->pa);
+  free(w);
+  return CUP_OK;
+}
+
+const set_kind set_kind_ball = {.ball = 1};
+const set_kind set_kind_halfspace = {.rows = 1, .setup = halfspace_setup};

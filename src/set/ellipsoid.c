@@ -12,9 +12,14 @@
  * rounding cannot fool them: eta from q(z) computed with a rounding bound
  * (and a shrink towards c if needed), eps by weak duality: for mu >= 0,
  *     d(x)^2 >= min_z L(z),  L(z) = ||z - x||_P^2 + mu (q(z) - r^2),
- * and min L >= L(z) - ||grad L(z)||^2 / (4 lambda_min(P)) at any z. */
+ * and min L >= L(z) - ||grad L(z)||^2 / (4 lambda_min(P)) at any z.
+ * The kind's checks, its set-up (the eigenbasis) and its table end the file. */
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
 #include "catchup.h"
 #include "set_impl.h"
 
@@ -120,3 +125,119 @@ int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const dou
                      ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   return info->status;
 }
+
+/* ---- the kind: its checks, the eigenbasis, its table --------------------------- */
+
+static int ellipsoid_check(const cup_set_desc *d, char *errmsg) {
+  if (d->n > CUP_DENSE_MAX_DIM)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "set ellipsoid: n = %d exceeds the dense limit %d",
+                    d->n, CUP_DENSE_MAX_DIM);
+  if (!set_present(&d->Q))
+    return cup_fail(errmsg, CUP_ERR_ARG, "set ellipsoid: the shape Q is missing");
+  return CUP_OK;
+}
+
+/* P as a dense column-major matrix. */
+static void dense_metric(const cup_polyset *K, double *Pd) {
+  int n = K->n;
+  memset(Pd, 0, sizeof(double) * (size_t)n * n);
+  if (K->pkind != CUP_METRIC_SPARSE) {
+    for (int j = 0; j < n; j++) Pd[j + (size_t)j * n] = K->pd[j];
+    return;
+  }
+  for (int j = 0; j < n; j++)
+    for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++) Pd[K->Pfull.i[k] + (size_t)j * n] = K->Pfull.x[k];
+}
+
+/* lambda_min(P) from below: exact for a diagonal P; for a sparse one the
+ * dense eigenvalue less its backward error bound. */
+static double metric_min_eig(const cup_polyset *K, const double *Pd, gsl_vector *ev, double *work) {
+  int n = K->n;
+  if (K->pkind != CUP_METRIC_SPARSE) {
+    double m = INFINITY;
+    for (int j = 0; j < n; j++) m = fmin(m, K->pd[j]);
+    return m;
+  }
+  gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc((size_t)n);
+  if (!w) return NAN;
+  memcpy(work, Pd, sizeof(double) * (size_t)n * n);
+  gsl_matrix_view A = gsl_matrix_view_array(work, (size_t)n, (size_t)n);
+  double fro = 0;
+  for (size_t q = 0; q < (size_t)n * n; q++) fro += Pd[q] * Pd[q];
+  int rc = gsl_eigen_symm(&A.matrix, ev, w);
+  gsl_eigen_symm_free(w);
+  return rc ? NAN : gsl_vector_min(ev) - 16.0 * (n + 1) * DBL_EPSILON * sqrt(fro);
+}
+
+/* The generalized eigenbasis of (Q, P): V^T P V = I, V^T Q V = diag(lam). */
+static int ellipsoid_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
+  int n = d->n, st = CUP_OK;
+  size_t NN = (size_t)n * n;
+  cup_sparse Q = {0};
+  st = cup_sparse_copy(&Q, &d->Q, "Q", n, n, errmsg);
+  if (st) return st;
+  S->Qd = calloc(NN, sizeof(double));
+  S->V = calloc(NN, sizeof(double));
+  S->VtP = calloc(NN, sizeof(double));
+  S->lam = calloc((size_t)n, sizeof(double));
+  double *Pd = calloc(NN, sizeof(double)), *A = calloc(NN, sizeof(double)), *B = calloc(NN, sizeof(double));
+  gsl_vector *ev = gsl_vector_alloc((size_t)n);
+  gsl_matrix *evec = gsl_matrix_alloc((size_t)n, (size_t)n);
+  gsl_eigen_gensymmv_workspace *w = gsl_eigen_gensymmv_alloc((size_t)n);
+  if (!S->Qd || !S->V || !S->VtP || !S->lam || !Pd || !A || !B || !ev || !evec || !w) {
+    st = cup_fail(errmsg, CUP_ERR_NOMEM, "set ellipsoid: out of memory");
+    goto done;
+  }
+  for (int j = 0; j < n; j++)
+    for (int k = Q.p[j]; k < Q.p[j + 1]; k++) S->Qd[Q.i[k] + (size_t)j * n] = Q.x[k];
+  double qmax = 0;
+  for (size_t q = 0; q < NN; q++) qmax = fmax(qmax, fabs(S->Qd[q]));
+  for (int j = 0; j < n && !st; j++)
+    for (int i = j + 1; i < n; i++)
+      if (fabs(S->Qd[i + (size_t)j * n] - S->Qd[j + (size_t)i * n]) > 1e-12 * qmax) {
+        st = cup_fail(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: Q is not symmetric: Q(%d,%d) = %.17g, Q(%d,%d) = %.17g",
+                      i, j, S->Qd[i + (size_t)j * n], j, i, S->Qd[j + (size_t)i * n]);
+        break;
+      }
+  if (st) goto done;
+  dense_metric(S->K, Pd);
+  memcpy(A, S->Qd, NN * sizeof(double));
+  memcpy(B, Pd, NN * sizeof(double));
+  gsl_matrix_view Av = gsl_matrix_view_array(A, (size_t)n, (size_t)n);
+  gsl_matrix_view Bv = gsl_matrix_view_array(B, (size_t)n, (size_t)n);
+  gsl_error_handler_t *old = gsl_set_error_handler_off();
+  int rc = gsl_eigen_gensymmv(&Av.matrix, &Bv.matrix, ev, evec, w);
+  gsl_set_error_handler(old);
+  if (rc) { st = cup_fail(errmsg, CUP_ERR_LINALG, "set ellipsoid: the eigenproblem Q v = lam P v failed"); goto done; }
+  for (int i = 0; i < n; i++) {
+    double l = gsl_vector_get(ev, (size_t)i);
+    if (!(l > 0)) { st = cup_fail(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: Q is not positive definite (eigenvalue %g)", l); goto done; }
+    S->lam[i] = l;
+    double *v = S->V + (size_t)i * n, pvv = 0;          /* column i, normalized in the P-norm */
+    for (int r = 0; r < n; r++) v[r] = gsl_matrix_get(evec, (size_t)r, (size_t)i);
+    for (int r = 0; r < n; r++)
+      for (int c = 0; c < n; c++) pvv += v[r] * Pd[r + (size_t)c * n] * v[c];
+    for (int r = 0; r < n; r++) v[r] /= sqrt(pvv);
+  }
+  for (int i = 0; i < n; i++)                             /* row i of V^T P, stored row-major */
+    for (int c = 0; c < n; c++) {
+      double acc = 0;
+      for (int r = 0; r < n; r++) acc += S->V[r + (size_t)i * n] * Pd[r + (size_t)c * n];
+      S->VtP[(size_t)i * n + c] = acc;
+    }
+  gsl_vector *pev = gsl_vector_alloc((size_t)n);
+  old = gsl_set_error_handler_off();
+  S->pmin = pev ? metric_min_eig(S->K, Pd, pev, A) : NAN;
+  gsl_set_error_handler(old);
+  if (pev) gsl_vector_free(pev);
+  if (!(S->pmin > 0)) st = cup_fail(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: no positive lower bound on lambda_min(P)");
+done:
+  if (w) gsl_eigen_gensymmv_free(w);
+  if (evec) gsl_matrix_free(evec);
+  if (ev) gsl_vector_free(ev);
+  free(Pd); free(A); free(B);
+  cup_sparse_free(&Q);
+  return st;
+}
+
+const set_kind set_kind_ellipsoid = {.ball = 1, .check = ellipsoid_check, .setup = ellipsoid_setup};

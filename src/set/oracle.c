@@ -71,3 +71,9 @@ int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, d
   info->status = ec <= et && hc <= ht ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   return info->status;
 }
+
+static int oracle_check(const cup_set_desc *d, char *errmsg) {
+  return d->oracle ? CUP_OK : cup_fail(errmsg, CUP_ERR_ARG, "set oracle: the oracle callback is NULL");
+}
+
+const set_kind set_kind_oracle = {.check = oracle_check};

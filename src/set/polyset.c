@@ -270,6 +270,39 @@ double cup_polyset_norm(const cup_polyset *K, const double *v) {
   return isnan(s) ? NAN : s > 0 ? sqrt(s) : 0;   /* rounding may make s < 0; NaN must show */
 }
 
+double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi) {
+  double s = 0, a = 0;
+  int n = K->n;
+  if (K->pkind == CUP_METRIC_SPARSE) {
+    for (int j = 0; j < n; j++) {
+      double pv = 0, pa = 0;
+      for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++) {
+        pv += K->Pfull.x[k] * v[K->Pfull.i[k]];
+        pa += fabs(K->Pfull.x[k] * v[K->Pfull.i[k]]);
+      }
+      s += v[j] * pv;
+      a += fabs(v[j]) * pa;
+    }
+  } else {
+    for (int j = 0; j < n; j++) s += K->pd[j] * v[j] * v[j];
+    a = s;
+  }
+  /* recursive sums of n terms of products: (n + 2) u of the absolute sum,
+   * and v itself one subtraction away from the exact difference: 2 u more */
+  double err = (n + 6) * DBL_EPSILON * a;
+  double val = s > 0 ? sqrt(s) : 0;
+  if (lo) *lo = s - err > 0 ? sqrt(s - err) : 0;
+  if (hi) *hi = sqrt(s + err) * (1 + 2 * DBL_EPSILON);
+  return isnan(s) ? NAN : val;
+}
+
+double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w) {
+  for (int j = 0; j < K->n; j++) w[j] = a[j] - b[j];
+  double hi;
+  cup_metric_norm_bounds(K, w, lo, &hi);
+  return hi;
+}
+
 double cup_slack(const cup_polyset *K, const double *g, const double *x,
                  double *s, double *gam) {
   const int *p = K->Ct.p, *ri = K->Ct.i;

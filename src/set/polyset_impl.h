@@ -57,6 +57,14 @@ void cup_polyset_revalue(cup_polyset *K, double *work);
 
 /* P v into out (n entries). */
 void cup_metric_apply(const cup_polyset *K, const double *v, double *out);
+/* Bounds on ||v||_P for a computed v: *lo <= ||v||_P <= *hi, allowing for the
+ * rounding of the sum (and of forming v from one subtraction). Returns the
+ * computed value. */
+double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi);
+/* An upper bound on ||a - b||_P (and a lower one into *lo, may be NULL);
+ * scratch w: n entries. */
+double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w);
+
 /* In place P^-1 v for IDENTITY/DIAGONAL metrics. SPARSE metrics go through
  * the projector's CHOLMOD workspace (cup_metric_solve in projector/certify.h). */
 static inline void cup_metric_solve_diag(const cup_polyset *K, double *v) {

@@ -1,4 +1,5 @@
-/* rowpool — see rowpool.h. */
+/* rowpool — see rowpool.h; and the kind state-polyset's part of the set
+ * (its checks, its recheck, its table) at the end. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -7,6 +8,7 @@
 #include "catchup.h"
 #include "util/linalg.h"
 #include "rowpool.h"
+#include "set_impl.h"
 
 /* ---- the row buffer ------------------------------------------------------------ */
 
@@ -338,3 +340,22 @@ int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
   free(kptr); free(kcol); free(kold); free(rold); free(kused);
   return st;
 }
+
+/* ---- the kind state-polyset ---------------------------------------------------- */
+
+static int state_check(const cup_set_desc *d, char *errmsg) {
+  if (!d->rows) return cup_fail(errmsg, CUP_ERR_ARG, "set state-polyset: the rows callback is NULL");
+  if (d->P.kind == CUP_METRIC_SPARSE)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+                    "set state-polyset: the metric must be the identity or diagonal (the rows' "
+                    "dual matrix C P^-1 C^T is refactored in place at every step)");
+  return CUP_OK;
+}
+
+int set_on_recheck(cup_set *S, int (*recheck)(double t, const double *x, const double *z, void *ctx)) {
+  if (!S || S->kind != CUP_SET_STATE_POLYSET) return CUP_ERR_ARG;
+  S->recheck = recheck;
+  return CUP_OK;
+}
+
+const set_kind set_kind_state_polyset = {.check = state_check};

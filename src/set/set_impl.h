@@ -1,5 +1,5 @@
-/* Internal layout of cup_set and the closed-form projections that sit with
- * their sets (ball, ellipsoid, half-space). */
+/* Internal layout of cup_set, its kinds' table and the closed-form
+ * projections that sit with their sets (ball, ellipsoid, half-space). */
 #ifndef CUP_SET_IMPL_H
 #define CUP_SET_IMPL_H
 
@@ -7,8 +7,31 @@
 #include "catchup/projection.h"
 #include "polyset_impl.h"
 
+/* A set kind's part of the set itself, as GSL's step types: what its
+ * description carries, the kind's own checks and its set-up. One static
+ * table a kind, in the kind's file (ball.c: ball, halfspace; ellipsoid.c;
+ * oracle.c; rowpool.c: state-polyset; set.c: polyset, intersection), and
+ * one line in set.c's registry. The kind's projection is the projector's
+ * (projector/setproj_impl.h, setproj_kind). */
+typedef struct set_kind {
+  int rows;      /* rows C x + F >= 0 in the description: 0 none, -1 any number, k > 0 exactly k */
+  int ball;      /* a centre and a radius (the motion Gc, gr) */
+  /* the kind's own fields, checked after n, p and the rows, before the
+   * radius; NULL: none */
+  int (*check)(const cup_set_desc *d, char *errmsg);
+  /* after the rows (or none) and the motion are copied; NULL: nothing more */
+  int (*setup)(cup_set *S, const cup_set_desc *d, char *errmsg);
+} set_kind;
+
+extern const set_kind set_kind_ball, set_kind_halfspace, set_kind_ellipsoid, set_kind_oracle,
+    set_kind_state_polyset;
+
+/* The description holds the matrix c (a view: columns and pointers). */
+static inline int set_present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
+
 struct cup_set {
   int kind, n, p;
+  const set_kind *type;  /* the registry's entry of kind */
   cup_polyset *K;        /* the rows {C x + F >= 0} and the metric P; a set without rows
                             keeps a polyset of 0 rows for its metric */
   int owns_K;            /* 0: borrowed (an LCS's polyset) */
@@ -70,13 +93,5 @@ int cup_halfspace_project(const cup_set *S, const double *g, const double *x, do
  * (size bytes) says what was wrong on CUP_ERR_CALLBACK. work: 3 n. */
 int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, double *work,
                        cup_proj_info *info, char *msg, size_t size);
-
-/* Bounds on ||v||_P for a computed v: *lo <= ||v||_P <= *hi, allowing for the
- * rounding of the sum (and of forming v from one subtraction). Returns the
- * computed value. */
-double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi);
-/* An upper bound on ||a - b||_P (and a lower one into *lo, may be NULL);
- * scratch w: n entries. */
-double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w);
 
 #endif
