@@ -158,7 +158,9 @@ def section(rows, brutes, ng, reps):
                 r["name"], why.group(1) if why else "failed"))
             continue
         b = brutes.get(r["name"])
-        if b and "failed" in b:
+        if not b:
+            bf, bt, ratio = "none: the orbit does not attract (a multiplier at 1)", "", ""
+        elif "failed" in b:
             bf, bt, ratio = "failed: " + b["failed"].replace("|", "/"), "", ""
         else:
             bf = "%s%s" % (b["reached"] or ("x0 is the orbit" if b["last_change"] * b["scale"] < 1e-15 else
@@ -202,8 +204,8 @@ def main():
         for name in CIRCUITS:
             r = steady(a.build, name, a.reps, tmp)
             rows.append(r)
-            if "failed" not in r:
-                brutes[name] = catchup_brute(a.build, name, r["T"], periods_needed(r["mu"]), a.reps, tmp)
+            if "failed" not in r and r["mu"] < 0.999:   # an orbit that does not attract has no brute force
+                brutes[name] = catchup_brute(a.build, name, r["T"], min(periods_needed(r["mu"]), 2000), a.reps, tmp)
             print(r, brutes.get(name), flush=True)
         ng_r = next(r for r in rows if r["name"] == NGSPICE_CIRCUIT)
         probes = [p for p in ngc.tran_and_probes(cir(NGSPICE_CIRCUIT))[2] if p.lower().startswith("v(")]
