@@ -143,8 +143,8 @@ def section(rows, brutes, ng, reps):
            "## The periodic steady state: Newton on the period map against brute force", "",
            "Command: `bash scripts/bench-steady` (%d runs each, medians; this machine, 2 cores shared with "
            "other work: times are noisy, ratios within one run). `catchup-run CIRCUIT.cir --steady-state`: the "
-           "solve's wall time (the period map by the adaptive scheme at tol 1e-12, the monodromy by finite "
-           "differences; docs/steady-state.md). Brute force: the transient from the same x0 until the change "
+           "solve's wall time (the period map by the adaptive scheme at tol 1e-12, the monodromy exact with D = 0 "
+           "(clamp, doubler, rl-halfwave, ladder, paper-fig2), else by finite differences; docs/steady-state.md). Brute force: the transient from the same x0 until the change "
            "from one period's end to the next is below %g of the state's largest entry (Newton's target), by "
            "catchup's adaptive scheme at tol 1e-12 (`--set T=K*T --set 'output={samples: K+1}'`), K from the "
            "largest multiplier (the periods a change of 1 needs to fall below the target)." % (reps, TARGET), "",
