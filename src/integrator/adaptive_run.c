@@ -16,16 +16,11 @@
 #include "adaptive_impl.h"
 #include "projector/projector.h"
 #include "tally.h"
+#include "util/clock.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of
  * tol (the exact flow has none of its own). */
 #define AD_STEP_SHARE 0.1
-
-static double wall_now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* The first warning is kept (status and message), as in the fixed-step run. */
 __attribute__((format(printf, 3, 4)))
@@ -113,7 +108,7 @@ static int step_checks(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
     return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
   if ((R->steps & 1023) == 0) {
     if (A->o.interrupt && *A->o.interrupt) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "interrupted");
-    if (A->o.max_wall_seconds > 0 && wall_now() - R->wall0 > A->o.max_wall_seconds)
+    if (A->o.max_wall_seconds > 0 && now_seconds() - R->wall0 > A->o.max_wall_seconds)
       return halt(A, R, CUP_ERR_TIME_LIMIT, AD_STOP_STEP, "wall-time limit reached");
   }
   return CUP_OK;
@@ -228,16 +223,26 @@ static void error_onto(cup_adaptive *A, uint64_t mask, double *e) {
   if (!mask) return;
   ad_mode *md = ad_mode_get(A, mask);
   ad_manifold(A, md, A->zero, e);
+  for (int j = 0; A->tan && j < A->n; j++) ad_manifold(A, md, A->zero, A->tan + (size_t)j * A->n);   /* as e */
 }
 
-/* e <- its propagation by the exact flow of md over tau (w = 0: the
+/* v <- its propagation by the exact flow of md over tau (w = 0: the
  * homogeneous part). */
+static void flow_vector(cup_adaptive *A, ad_mode *md, double tau, double *v) {
+  cup_zero(A->yr, A->na);
+  cup_copy(A->yr, v, A->n);
+  ad_flow(A, md, tau, A->yr, A->yt);
+  cup_copy(v, A->yt, A->n);
+}
+
 static void error_flow(cup_adaptive *A, ad_mode *md, double tau) {
   if (!(tau > 0)) return;
-  cup_zero(A->yr, A->na);
-  cup_copy(A->yr, A->e, A->n);
-  ad_flow(A, md, tau, A->yr, A->yt);
-  cup_copy(A->e, A->yt, A->n);
+  flow_vector(A, md, tau, A->e);
+}
+
+/* The tangent's columns (cup_adaptive_tangent) over tau on md. */
+static void tangent_flow(cup_adaptive *A, ad_mode *md, double tau) {
+  for (int j = 0; A->tan && tau > 0 && j < A->n; j++) flow_vector(A, md, tau, A->tan + (size_t)j * A->n);
 }
 
 static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, double t) {
@@ -498,6 +503,12 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   error_flow(A, old, ev->tau_sw);
+  if (A->tan) {   /* the tangent: the old flow to the root, its saltation (the new manifold's projection), the new flow */
+    double tr = fmin(fmax(tau_rep, 0), ev->tau_sw);
+    tangent_flow(A, old, tr);
+    for (int j = 0; j < n; j++) ad_manifold(A, nm, A->zero, A->tan + (size_t)j * n);
+    tangent_flow(A, nm, ev->tau_sw - tr);
+  }
   A->pinned[0] = R->md = nm;
   A->pinned[1] = NULL;
   error_onto(A, nm->mask, A->e);
@@ -551,6 +562,15 @@ static int take_step(cup_adaptive *A, ad_run *R) {
     A->et[i] = acc;
   }
   cup_copy(A->e, A->et, n);
+  for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
+    double *v = A->tan + (size_t)c * n;
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * v[j];
+      A->et[i] = acc;
+    }
+    cup_copy(v, A->et, n);
+  }
   R->t = t1;
   return end_of_step(A, R, &pi, 0);
 }
@@ -630,6 +650,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
     for (int i = 0; i < n; i++) moved = fmax(moved, fabs(A->x[i] - A->xf[i]));
     R->rloc += 0.5 * moved;                      /* a catching-up step's error is below its move */
     error_flow(A, md0, t1 - R->t);
+    tangent_flow(A, md0, t1 - R->t);
     error_onto(A, active, A->e);
     R->t = t1;
     at_tb = R->t == R->tb;
@@ -671,7 +692,7 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   A->tend = A->o.T;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
-  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
   if (cup_state_beyond(x0, A->n)) {
     int w = cup_state_worst(x0, A->n);
     if (!isfinite(x0[w])) return ad_fail(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
@@ -681,6 +702,8 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   cup_copy(A->x, x0, A->n);
   cup_copy(A->xok, x0, A->n);
   cup_zero(A->e, A->n);
+  for (int j = 0; A->tan && j < A->n; j++)       /* V(0) = I */
+    for (int i = 0; i < A->n; i++) A->tan[i + (size_t)j * A->n] = i == j;
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
   cup_lcp_forget(&A->lcp);
@@ -757,7 +780,7 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
   A->tend = tb;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
-  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now(),
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds(),
               .t = ta, .steps = *steps, .next_sample = *next_sample};
   cup_copy(A->x, xa, A->n);
   cup_copy(A->xok, xa, A->n);
@@ -784,7 +807,7 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
   R.info = info;
   R.sink = sink;
   R.sink_ctx = sink_ctx;
-  R.wall0 = wall_now();
+  R.wall0 = now_seconds();
   R.md = s->md >= 0 ? &A->modes[s->md] : NULL;
   A->pinned[0] = R.md;
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;

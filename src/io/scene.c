@@ -23,6 +23,8 @@
 #include "scene_tree.h"
 #include "read_text.h"
 #include "scene_netlist.h"
+#include "util/path.h"
+#include "scene_steady.h"
 
 struct cup_scene {
   char *name;
@@ -39,6 +41,7 @@ struct cup_scene {
   long max_steps;               /* the key max_steps: the most steps a fixed-step run may take */
   int circuit;                  /* the model is circuit: (its states have names) */
   int steps_given;              /* the scene gave n or h (a netlist's .tran gives neither) */
+  scene_steady steady;          /* steady_state: */
 };
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
@@ -518,11 +521,7 @@ static int read_name(rd *r, const st_node *root, cup_scene *S) {
     if (st) return st;
     S->name = strdup(name);
   } else {
-    const char *base = strrchr(r->src.file, '/');
-    base = base ? base + 1 : r->src.file;
-    const char *dot = strrchr(base, '.');
-    size_t len = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-    S->name = strndup(base, len);
+    S->name = path_stem(r->src.file);
   }
   return S->name ? CUP_OK : CUP_ERR_NOMEM;
 }
@@ -560,7 +559,7 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
                                       "T", "n", "h", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
-                                      "max_event_rate", "hmax", "estimate", "max_steps", NULL};
+                                      "max_event_rate", "hmax", "estimate", "max_steps", "steady_state", NULL};
   const st_node *kf, *ki, *nd;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
@@ -568,6 +567,9 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   S->max_steps = CUP_MAX_STEPS_DEFAULT;
   if (!st && (nd = opt(root, "max_steps"))) st = integer(r, nd, "max_steps", 1, LONG_MAX, &S->max_steps);
   if (!st && opt(root, "crowd")) {
+    const st_node *ks;
+    if (opt(root, "steady_state") && st_get(root, "steady_state", &ks))
+      return fail(r, CUP_ERR_PARSE, ks, "steady_state", "a crowd has no periodic steady state");
     st = read_crowd(r, root, S);
     if (!st) st = read_method(r, root, &S->opt);
     if (!st) st = read_tolerance(r, root, &S->opt);
@@ -593,6 +595,7 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   if (!st) st = read_tolerance(r, root, &S->opt);
   if (!st) st = netlist_steps(r, root, S, netlist_scheme);
   if (!st) st = read_name(r, root, S);
+  if (!st) st = scene_read_steady(r, root, S->nl, &S->steady);
   return st;
 }
 
@@ -642,8 +645,7 @@ int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides
   size_t len = 0;
   cup_file_list files = {0};
   if (!st) st = cup_read_text(path, &text, &len, &files, errmsg);
-  const char *slash = path ? strrchr(path, '/') : NULL;
-  if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
+  if (!st) st = path_dir(path, &dir);
   if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, &files, errmsg);
   cup_file_list_free(&files);
   free(text);
@@ -665,8 +667,13 @@ void cup_scene_free(cup_scene **s) {
   free(S->eta_spec);
   free(S->text);
   cup_file_list_free(&S->files);
+  scene_steady_free(&S->steady);
   free(S);
   *s = NULL;
+}
+
+const cup_scene_steady *cup_scene_steady_state(const cup_scene *s) {
+  return s && s->steady.enabled ? &s->steady.pub : NULL;
 }
 
 const char *cup_scene_name(const cup_scene *s) { return s ? s->name : NULL; }
