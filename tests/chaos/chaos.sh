@@ -169,9 +169,10 @@ case_signals() {
     rm -f "sg/$name.h5"
     timeout --preserve-status -s INT 0.2 "$RUN" "${args[@]}" -o "sg/$name.h5" 2> "sg/$name.err"; rc=$?
     while [ $rc -ne 0 ] && [ $tries -lt 40 ]; do
-      [ $rc = 130 ] || [ $rc = 143 ] || { fail "$name: exit $rc after $stops signals: $(tail -n 2 "sg/$name.err")"; return; }
+      [ $rc = 130 ] || [ $rc = 143 ] || { fail "$name: exit $rc after $stops signals: $(tail -n 2 "sg/$name.err") (the run before it: $(tail -n 2 "sg/$name.err0" 2> /dev/null))"; return; }
       stops=$((stops + 1)) tries=$((tries + 1))
       sig=$([ $sig = INT ] && echo TERM || echo INT)
+      mv "sg/$name.err" "sg/$name.err0"   # the stopped run's message, named with the resume's on a failure
       timeout --preserve-status -s $sig 0.$((RANDOM % 3 + 1)) "$RUN" "${args[@]}" -o "sg/$name.h5" --resume 2> "sg/$name.err"; rc=$?
     done
     same "sg/$name-whole.h5" "sg/$name.h5" || { fail "$name: resumed after $stops signals, differs"; return; }
