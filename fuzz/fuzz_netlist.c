@@ -78,7 +78,10 @@ static void exercise(cup_netlist *nl) {
   o.output_samples = 5;
   o.max_wall_seconds = 0.5;
   I = NULL;
-  if (cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err) == CUP_OK) {
+  cup_switching sw;                              /* switches: each configuration formed as it occurs */
+  int made = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)
+                                            : cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err);
+  if (made == CUP_OK) {
     cup_run_info info;
     cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
     if (info.status < 0 && !info.message[0]) abort();

@@ -191,6 +191,18 @@ CUP_API int cup_integrator_create(cup_integrator **I, const cup_lcs *L, const cu
                                   const cup_integrator_options *o, char *errmsg);
 CUP_API void cup_integrator_free(cup_integrator **I);
 
+/** Set up an integrator for a switched LCS (catchup/lcs.h, cup_switching;
+ *  a netlist with switches gives one): each configuration's integrator is
+ *  made from its LCS when the configuration first occurs and kept; the run
+ *  steps to the switching times and jumps the state onto each new
+ *  configuration's constraints there. The adaptive scheme steps to the
+ *  switching times and locates those of switches the circuit gates; the
+ *  fixed-step schemes switch at the end of the step that holds them (exact
+ *  when the grid holds them). The same run, state, zeta and free as any
+ *  integrator's; no checkpoints, no step-doubling estimate. */
+CUP_API int cup_integrator_create_switched(cup_integrator **I, const cup_switching *sw, const cup_input *u,
+                                           const cup_integrator_options *o, char *errmsg);
+
 /** A general sweeping process (paper, Sec. 3)
  *      x'(t) in -N(C(t); x(t)) + f(t, x(t)),
  *  f(t, x) = A x + E u(t) + f_cb(t, x) + (a term given by its exact integral),

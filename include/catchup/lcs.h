@@ -70,6 +70,33 @@ typedef struct cup_circuit {
 } cup_circuit;
 CUP_API int cup_lcs_circuit(cup_lcs **L, const cup_circuit *c, char *errmsg);
 
+/** A switched LCS: a family of LCS over one state (x), input (u) and rows,
+ *  one per configuration of its switches, each with the jump into it (the
+ *  projection onto its constraints in the metric P). Configurations are
+ *  numbered as they are formed (0: the one at t = 0); a netlist with S or
+ *  W elements gives one (cup_netlist_switching), and an integrator made
+ *  with it (cup_integrator_create_switched) runs each configuration's LCS
+ *  between the switchings, stepping to them. */
+typedef struct cup_switching {
+  void *ctx;
+  /** The configuration in force from t on, from *topo in force before t
+   *  (hysteresis), at state x and multipliers zeta (NULL: 0); formed on its
+   *  first occurrence (allocation then only). 0 or an error into errmsg. */
+  int (*settle)(void *ctx, int *topo, double t, const double *x, const double *zeta, char *errmsg);
+  /** The first time in (t, tmax] at which a switch gated by the sources
+   *  alone changes in configuration topo (tmax if none). */
+  int (*next)(void *ctx, int topo, double t, double tmax, double *tnext);
+  /** Its LCS (owned by ctx). */
+  const struct cup_lcs *(*lcs)(void *ctx, int topo);
+  /** x onto its constraints (in place): the jump into it. */
+  void (*jump)(void *ctx, int topo, double *x);
+  /** 1 if a switch's control in it depends on the state or the diodes. */
+  int (*state_gated)(void *ctx, int topo);
+  /** 1 if a switch the circuit gates leaves configuration topo at time t,
+   *  state x (its control past the threshold), 0 if not, < 0 on error. */
+  int (*crossed)(void *ctx, int topo, double t, const double *x);
+} cup_switching;
+
 #ifdef __cplusplus
 }
 #endif

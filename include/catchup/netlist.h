@@ -97,6 +97,28 @@ CUP_API const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */
 CUP_API int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out);
 
+/** Switches (S, W): how many the netlist has. */
+CUP_API int cup_netlist_switch_count(const cup_netlist *nl);
+/** 1 and the netlist's switched LCS in *sw if it has switches, else 0.
+ *  The netlist's own LCS (cup_netlist_lcs) is the configuration at t = 0,
+ *  and its signals are the configuration's in force (the last settled or
+ *  jumped into). */
+CUP_API int cup_netlist_switching(cup_netlist *nl, cup_switching *sw);
+/** A digital controller: called at its sampling instants t = k ts (k =
+ *  0, 1, ...; each computed as k ts) with the state x there (n entries,
+ *  before any jump) and gate[] (nswitch entries, the switches in netlist
+ *  order, 1 closed) holding the gates in force; it writes the gates to hold
+ *  until its next instant. Return nonzero to stop the run (an error naming
+ *  the time). Callable from Fortran (bind(C)). */
+typedef int (*cup_gate_fn)(double t, const double *x, int nswitch, int *gate, void *ctx);
+/** Let fn set the switches' gates every ts (their models' thresholds are
+ *  then not used; RON and ROFF still are); fn NULL gives them back to their
+ *  controls. The adaptive scheme steps to each instant; the fixed-step
+ *  schemes take it at the end of the step that holds it. */
+CUP_API int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void *ctx, char *errmsg);
+/** Switch configurations formulated so far (each once). */
+CUP_API long cup_netlist_configurations_formed(const cup_netlist *nl);
+
 #ifdef __cplusplus
 }
 #endif

@@ -3,7 +3,7 @@
 ! Re-exported by module `catchup`. Conventions as in catchup_base: ierr last
 ! among the required arguments, errmsg optional after it, indices from 1.
 module catchup_netlist
-  use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char, c_ptr, c_null_ptr, c_associated, &
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_funptr, c_null_ptr, c_associated, &
     c_f_pointer, c_loc
   use catchup_constants
   use catchup_types
@@ -15,7 +15,9 @@ module catchup_netlist
     cup_netlist_x0, cup_netlist_tran, cup_netlist_state_name, cup_netlist_source, cup_netlist_row_name, cup_netlist_input_name, &
     cup_netlist_row_fixed, cup_netlist_probe, cup_netlist_probe_default, cup_netlist_signal_count, &
     cup_netlist_signal_name, cup_netlist_signal_unit, cup_netlist_signals, cup_netlist_file_count, cup_netlist_file, &
-    cup_netlist_tran_window, cup_netlist_tolerances, cup_netlist_warning
+    cup_netlist_tran_window, cup_netlist_tolerances, cup_netlist_warning, cup_netlist_switch_count, &
+    cup_netlist_configurations_formed, cup_netlist_set_controller
+  public :: c_cup_netlist_switch_count, c_cup_netlist_configurations_formed, c_cup_netlist_set_controller
   public :: c_cup_netlist_file_count, c_cup_netlist_file, c_cup_netlist_tran_window, c_cup_netlist_tolerances, &
     c_cup_netlist_warning
   public :: c_cup_netlist_load, c_cup_netlist_load_string, c_cup_netlist_free, c_cup_netlist_lcs, &
@@ -82,6 +84,26 @@ module catchup_netlist
       real(c_double), intent(out) :: reltol, abstol, vntol, chgtol
       integer(c_int) :: has
     end function c_cup_netlist_tolerances
+    function c_cup_netlist_switch_count(nl) bind(C, name="cup_netlist_switch_count") result(n)
+      import :: c_int, c_ptr
+      type(c_ptr), value :: nl
+      integer(c_int) :: n
+    end function c_cup_netlist_switch_count
+    function c_cup_netlist_set_controller(nl, ts, fn, ctx, errmsg) bind(C, name="cup_netlist_set_controller") &
+        result(st)
+      import :: c_int, c_ptr, c_double, c_funptr, c_char
+      type(c_ptr), value :: nl
+      real(c_double), value :: ts
+      type(c_funptr), value :: fn
+      type(c_ptr), value :: ctx
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_netlist_set_controller
+    function c_cup_netlist_configurations_formed(nl) bind(C, name="cup_netlist_configurations_formed") result(n)
+      import :: c_long, c_ptr
+      type(c_ptr), value :: nl
+      integer(c_long) :: n
+    end function c_cup_netlist_configurations_formed
     function c_cup_netlist_file_count(nl) bind(C, name="cup_netlist_file_count") result(n)
       import :: c_int, c_ptr
       type(c_ptr), value :: nl
@@ -296,6 +318,37 @@ contains
     n = 0
     if (c_associated(nl%ptr)) n = int(c_cup_netlist_file_count(nl%ptr))
   end function cup_netlist_file_count
+
+  !> Switches (S, W) in the netlist; a scene's integrator runs them (cup_scene_integrator).
+  integer function cup_netlist_switch_count(nl) result(n)
+    type(cup_netlist_t), intent(in) :: nl
+    n = 0
+    if (c_associated(nl%ptr)) n = int(c_cup_netlist_switch_count(nl%ptr))
+  end function cup_netlist_switch_count
+
+  !> A digital controller: fn, an integer(c_int) function(t, x, nswitch, gate, ctx) bind(C)
+  !> (t and nswitch by value, x(n) and gate(nswitch) arrays, ctx a type(c_ptr) by value),
+  !> called every ts with the state; it writes gate (1 closed) to hold until its next call.
+  !> c_null_funptr gives the switches back to their controls.
+  subroutine cup_netlist_set_controller(nl, ts, fn, ctx, ierr, errmsg)
+    type(cup_netlist_t), intent(in) :: nl
+    real(c_double), intent(in) :: ts
+    type(c_funptr), value :: fn
+    type(c_ptr), value :: ctx
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    if (cup_null_fail_(nl%ptr, 'netlist', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    call cup_finish_(c_cup_netlist_set_controller(nl%ptr, ts, fn, ctx, cmsg), cmsg, ierr, errmsg)
+  end subroutine cup_netlist_set_controller
+
+  !> Switch configurations formulated so far (each once, on its first occurrence).
+  integer(c_long) function cup_netlist_configurations_formed(nl) result(n)
+    type(cup_netlist_t), intent(in) :: nl
+    n = 0
+    if (c_associated(nl%ptr)) n = c_cup_netlist_configurations_formed(nl%ptr)
+  end function cup_netlist_configurations_formed
 
   !> File k (1-based; 1 is the netlist itself); '' out of range.
   function cup_netlist_file(nl, k) result(s)

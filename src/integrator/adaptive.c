@@ -179,6 +179,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   A->u = D->p > 0 ? u : NULL;
   A->K = K;
   A->o = *o;
+  A->tend = o->T;
   A->n = D->n; A->m = K->m; A->p = D->p;
   A->callback = A->u && A->u->fn;
   A->has_D = Dm != NULL;

@@ -99,6 +99,7 @@ struct cup_adaptive {
   const cup_input *u;
   const cup_polyset *K;
   cup_integrator_options o;
+  double tend;              /* where the run ends: T, or a window's end (cup_adaptive_window) */
   int n, m, p, nw, na;
   int callback;             /* u is a callback: polynomial exosystem of degree AD_DEGREE */
   /* D != 0 (adaptive_dae.c): w = C x + D zeta + G u + F, x' = A x + B zeta + E u */

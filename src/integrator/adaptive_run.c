@@ -53,7 +53,7 @@ static double tolw(const cup_adaptive *A, const double *x) {
  * (hlim within hmax); with to_samples, an output time too (catching-up
  * steps: the other steps' samples come from their exact flow, emit_dense). */
 static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim, int to_samples) {
-  double s = fmin(R->tb, A->o.T);
+  double s = fmin(R->tb, A->tend);
   if (to_samples && A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
     s = fmin(s, ad_sample_time(A, R->next_sample));
   if (A->o.hmax > 0) hlim = fmin(hlim, A->o.hmax);
@@ -304,7 +304,7 @@ static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
  * K(t+) (a projection, certified), and the active set by the velocity LCP. */
 static int start_piece(cup_adaptive *A, ad_run *R) {
   double tb = cup_input_next_break(A->u, R->t);
-  R->tb = tb < A->o.T ? tb : A->o.T;
+  R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
   double h = A->callback ? fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
   if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
@@ -350,7 +350,7 @@ static int end_of_step(cup_adaptive *A, ad_run *R, cup_proj_info *pi, int at_eve
     if (!pb.skipped) *pi = pb;
   }
   if ((st = step_done(A, R, pi, at_event && !at_tb)) < 0 || (st = emit(A, R)) < 0) return st;
-  if (at_tb && R->t < A->o.T && (st = start_piece(A, R)) < 0) return st;
+  if (at_tb && R->t < A->tend && (st = start_piece(A, R)) < 0) return st;
   return CUP_OK;
 }
 
@@ -578,7 +578,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb);
 
 static int catch_up(cup_adaptive *A, ad_run *R) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
-  double window = AD_ZENO_RING / rate, tend = fmin(A->o.T, R->t + window);
+  double window = AD_ZENO_RING / rate, tend = fmin(A->tend, R->t + window);
   char rows[96] = "";
   size_t len = 0;
   for (int k = 0, shown = 0; k < AD_ZENO_RING && shown < 8; k++) {
@@ -638,7 +638,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
   R->tend = 0;
   A->pinned[1] = NULL;
   A->nzeno = 0;
-  if (R->t >= A->o.T || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
+  if (R->t >= A->tend || at_tb) return CUP_OK;    /* at a breakpoint start_piece chose the active set */
   if (ad_inputs_on(A, R->t, fmin(R->tb, R->t + ad_mode_hmax(A, R->md)), A->wt, A->uerr))
     return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   return choose_mode(A, R, A->wt, 0, R->t);
@@ -655,7 +655,7 @@ static int zeno_check(cup_adaptive *A, ad_run *R) {
 
 /* From where a run is (its start, or a resumed stop) to T. */
 static int run_to_end(cup_adaptive *A, ad_run *R, int st) {
-  while (st >= 0 && R->t < A->o.T) {
+  while (st >= 0 && R->t < A->tend) {
     R->ev0 = R->info->events;
     st = take_step(A, R);
     if (st >= 0 && R->info->events > R->ev0) st = zeno_check(A, R);
@@ -668,6 +668,7 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
                      cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
+  A->tend = A->o.T;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
@@ -686,7 +687,7 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   int st = emit(A, &R);                          /* x0 as given, like the fixed-step schemes */
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, &R, 1, &pi);
-  if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
+  if (st >= 0 && A->tend > 0) st = start_piece(A, &R);
   return run_to_end(A, &R, st);
 }
 
@@ -749,9 +750,36 @@ void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
  * refused it) and what followed it in its step (the next piece at a
  * breakpoint, the catching-up steps under way, the accumulation check),
  * then the steps to T. */
+int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, long *steps,
+                        long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  A->stop.phase = AD_STOP_NONE;
+  A->pend.active = 0;
+  A->tend = tb;
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now(),
+              .t = ta, .steps = *steps, .next_sample = *next_sample};
+  cup_copy(A->x, xa, A->n);
+  cup_copy(A->xok, xa, A->n);
+  cup_zero(A->e, A->n);
+  A->nzeno = 0;
+  A->pinned[0] = A->pinned[1] = NULL;
+  cup_lcp_forget(&A->lcp);
+  int st = first ? emit(A, &R) : CUP_OK;
+  cup_proj_info pi;
+  if (st >= 0) st = at_break(A, &R, first, &pi);
+  if (st >= 0 && ta < tb) st = start_piece(A, &R);
+  st = run_to_end(A, &R, st);
+  A->tend = A->o.T;
+  *steps = R.steps;
+  *next_sample = R.next_sample;
+  return st;
+}
+
 int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   ad_stop *s = &A->stop;
   if (s->phase == AD_STOP_NONE) return info->status = CUP_ERR_ARG;
+  A->tend = A->o.T;
   ad_run R = s->R;
   R.info = info;
   R.sink = sink;
@@ -778,10 +806,10 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
   cup_proj_info pi;
   if (R.steps == 0) {                            /* stopped at x0's sample: the start goes on */
     if (st >= 0) st = at_break(A, &R, 1, &pi);
-    if (st >= 0 && A->o.T > 0) st = start_piece(A, &R);
+    if (st >= 0 && A->tend > 0) st = start_piece(A, &R);
     return run_to_end(A, &R, st);
   }
-  if (st >= 0 && at_tb && R.t < A->o.T) st = start_piece(A, &R);
+  if (st >= 0 && at_tb && R.t < A->tend) st = start_piece(A, &R);
   if (st >= 0 && R.tend > 0) st = catch_up_from(A, &R, at_tb);
   else if (st >= 0 && info->events > R.ev0) st = zeno_check(A, &R);
   return run_to_end(A, &R, st);

@@ -105,7 +105,7 @@ static void io_state(cup_integrator *I, cup_ckpt *c, cup_run_info *info) {
 static int save(const cup_integrator *Ic, const cup_run_info *run, cup_ckpt *c) {
   cup_integrator *I = (cup_integrator *)Ic;      /* saving only reads it */
   if (!I) return CUP_ERR_ARG;
-  if (I->sp && !I->ad) return CUP_ERR_UNSUPPORTED;
+  if ((I->sp && !I->ad) || I->swr) return CUP_ERR_UNSUPPORTED;
   int resumable = I->ad ? cup_adaptive_stopped(I->ad) : I->stop.phase != CUP_STOP_NONE;
   if (!resumable) return CUP_ERR_ARG;
   fingerprint f;
@@ -138,8 +138,9 @@ int cup_integrator_checkpoint_save(const cup_integrator *I, const cup_run_info *
 
 int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsigned long size, char *errmsg) {
   if (!I || !buf) return cup_fail(errmsg, CUP_ERR_ARG, "checkpoint: NULL argument");
-  if (I->sp && !I->ad)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "checkpoint: a run of this kind of set cannot be resumed");
+  if ((I->sp && !I->ad) || I->swr)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "checkpoint: a run of this kind of set (or with switches) cannot "
+                    "be resumed");
   cup_ckpt c = {(unsigned char *)buf, 0, size, 0, 0};
   char m[sizeof magic];
   fingerprint have, want;

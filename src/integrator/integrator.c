@@ -185,6 +185,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
 static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
   const cup_integrator_options *o = &I->o;
   I->h = o->T / (double)o->n;
+  I->kend = o->n;
   I->eps_n = cup_schedule_value(&o->eps, o->n);
   I->eta_n = cup_schedule_value(&o->eta, o->n);
   size_t N = (size_t)I->n, M = (size_t)I->m + 1, P = (size_t)I->p + 1;
@@ -360,6 +361,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
 void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
+  if (I->swo) I->swo->free(&I->swr);
   cup_adaptive_free(&I->ad);
   cup_integrator_free(&I->half);
   cup_estimate_free(&I->est);
@@ -378,7 +380,8 @@ void cup_integrator_free(cup_integrator **Ip) {
 }
 
 const double *cup_integrator_state(const cup_integrator *I) {
-  return !I ? NULL : I->ad ? cup_adaptive_state(I->ad) : I->x;
+  return !I ? NULL : I->swr ? cup_integrator_state(I->swo->child(I->swr)) : I->ad ? cup_adaptive_state(I->ad)
+                                                                                    : I->x;
 }
 
 /* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
@@ -386,6 +389,7 @@ const double *cup_integrator_state(const cup_integrator *I) {
 int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I || !zeta) return CUP_ERR_ARG;
   if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
+  if (I->swr) return cup_integrator_zeta(I->swo->child(I->swr), zeta);
   if (I->ad) return cup_adaptive_zeta(I->ad, zeta);
   const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
@@ -439,7 +443,7 @@ static int selected(const cup_integrator *I, sampler *sp, long k) {
 static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
   const cup_integrator_options *o = &I->o;
   long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
-  if (stop > o->n - 1) stop = o->n - 1;
+  if (stop > I->kend - 1) stop = I->kend - 1;
   if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
   if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
     next = sp->aligned ? sp->kdue : sp->kdue - 1;
@@ -723,6 +727,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   cup_run_info *info = info_out ? info_out : &local;
   if (I) I->stop.restored = 0;
   if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
+  if (I && I->swr && x0) return I->swo->run(I, x0, sink, sink_ctx, info);
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   if (!I || !x0) return info->status = CUP_ERR_ARG;
@@ -793,7 +798,7 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
   double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
   int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
   I->fast.hold = 0;
-  for (long k = k0; k < o->n; k++) {
+  for (long k = k0; k < I->kend; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
     if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
@@ -891,7 +896,41 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
         return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
     }
   }
+  I->next_j = sp.next_j;
   return info->status;
+}
+
+double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
+
+int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  I->kend = k1;
+  int st;
+  if (first) {
+    st = cup_integrator_run(I, x, sink, sink_ctx, info);
+  } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
+    memset(info, 0, sizeof *info);
+    info->err_est = NAN;
+    info->eps_target = I->eps_n;
+    info->eta_target = I->eta_n;
+    info->h_rho = I->h_rho;
+    memcpy(I->x, x, sizeof(double) * (size_t)I->n);
+    memcpy(I->xnew, x, sizeof(double) * (size_t)I->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
+    int fixed = I->fixed || !I->u;
+    I->zeta_from = 0;
+    I->jump = 0;
+    I->zs = 1;
+    if (I->zprev) cup_zero(I->zprev, I->m);
+    if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
+    if (I->K && I->use_theta) {                    /* theta's zeta_k0 at the window's start */
+      const double *g = !fixed && moving_offset(I, grid_time(I, k0)) == CUP_OK ? I->g : I->K->g0;
+      cup_lcp_step_start(&I->th, I->x, g);
+    }
+    st = cup_integrator_steps_(I, k0, *next_j, sink, sink_ctx, info);
+  }
+  *next_j = I->next_j;
+  I->kend = I->o.n;
+  return st;
 }
 
 /* A restored checkpoint (checkpoint.c) goes on from the step it stopped

@@ -31,6 +31,15 @@ typedef struct cup_ckpt_stop {
   cup_run_info info;        /* the restored run's statistics */
 } cup_ckpt_stop;
 
+/* A switched LCS's driver (switched.c), reached through a table: it makes
+ * integrators, so integrator.c must not depend on it. */
+typedef struct cup_swrun cup_swrun;
+typedef struct cup_swops {
+  int (*run)(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+  void (*free)(cup_swrun **S);
+  const cup_integrator *(*child)(const cup_swrun *S);   /* the configuration in force's integrator */
+} cup_swops;
+
 struct cup_integrator {
   const cup_input *u;
   cup_integrator_options o;
@@ -52,6 +61,10 @@ struct cup_integrator {
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
   cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
+  long kend;                /* the run's last step: n, or a switched circuit's window's end */
+  long next_j;              /* where the last run left the output samples (a window's next one) */
+  cup_swrun *swr;           /* a switched LCS (switched.c): its configurations' integrators */
+  const cup_swops *swo;     /* ... and its driver */
   cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
@@ -73,5 +86,13 @@ struct cup_integrator {
  * through it. */
 int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx,
                           cup_run_info *info);
+/* A fixed-step run's window (a switched circuit's stretch in one
+ * configuration, switched.c): steps k0 + 1 .. k1 on the run's grid from
+ * state x at t_k0 (first: k0 = 0, the run's own start and x0's sample),
+ * the samples from *next_j on; *next_j advanced. */
+int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* Its grid's time t_k. */
+double cup_integrator_grid_time_(const cup_integrator *I, long k);
 
 #endif

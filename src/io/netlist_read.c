@@ -296,9 +296,10 @@ static int read_diode(rd *r, int card) {
     if (m->kind != NX_WORD || looks_value(r, m))
       return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, m, name->s, "'%.40s' is not supported (a diode takes ANODE "
                      "CATHODE [MODEL]; area factors are not)", m->s);
-    if (nx_hash_get(&r->models, m->s) < 0)
-      return nx_fail(&r->x, CUP_ERR_PARSE, m, name->s, "model '%.40s' is not defined (an ideal diode needs "
-                     "'.model %.40s D' or no model)", m->s, m->s);
+    int mc = nx_hash_get(&r->models, m->s);
+    if (mc < 0 || !nx_is(TOK(r, mc, 2), "d"))
+      return nx_fail(&r->x, CUP_ERR_PARSE, m, name->s, "model '%.40s' is not %s (an ideal diode needs "
+                     "'.model %.40s D' or no model)", m->s, mc < 0 ? "defined" : "a diode model", m->s);
   }
   if (n >= 5)
     return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, 4), name->s, "'%.40s' is not supported (a diode "
@@ -396,17 +397,97 @@ static int read_coupling(rd *r, int card) {
   return st;
 }
 
-/* The names that F, H and K refer to, once every element is read. */
+/* ---- switches ----------------------------------------------------------------- */
+
+/* The parameters of an SW (S) or CSW (W) model, as ngspice names them:
+ * VT VH (IT IH) RON ROFF, with or without parentheses. RON and ROFF not
+ * given are 0: an ideal switch (a short, an open). */
+static int switch_model(rd *r, int mc, const nx_tok *at, nl_elem *e) {
+  int n = r->x.card[mc].n, current = e->kind == NL_W;
+  const nx_tok *mname = TOK(r, mc, 1);
+  static const char *const vnames[] = {"vt", "vh", "ron", "roff"}, *const inames[] = {"it", "ih", "ron", "roff"};
+  const char *const *names = current ? inames : vnames;
+  if (!nx_is(TOK(r, mc, 2), current ? "csw" : "sw"))
+    return nx_fail(&r->x, CUP_ERR_PARSE, at, e->name, "model '%.40s' is not a%s model (%s takes '.model %.40s %s(%s)')",
+                   mname->s, current ? " CSW" : "n SW", current ? "W" : "S", mname->s, current ? "CSW" : "SW",
+                   current ? "IT= IH= RON= ROFF=" : "VT= VH= RON= ROFF=");
+  double *dst[4] = {&e->vt, &e->vh, &e->ron, &e->roff};
+  for (int k = 3; k < n; k++) {
+    const nx_tok *t = TOK(r, mc, k);
+    if (t->kind == NX_LP || t->kind == NX_RP) continue;
+    int j = 0;
+    while (j < 4 && !nx_is(t, names[j])) j++;
+    if (j == 4 || t->kind != NX_WORD)
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, mname->s, "'%.20s' is not a parameter of a %s model (%s %s "
+                     "%s %s)", t->s, current ? "CSW" : "SW", names[0], names[1], names[2], names[3]);
+    if (k + 2 >= n || TOK(r, mc, k + 1)->kind != NX_EQ)
+      return nx_fail(&r->x, CUP_ERR_PARSE, t, mname->s, "expected %s=VALUE", t->s);
+    int st = nx_value(&r->x, TOK(r, mc, k + 2), mname->s, dst[j]);
+    if (st) return st;
+    if (j >= 2 && !(*dst[j] > 0))
+      return nx_fail(&r->x, CUP_ERR_PARSE, TOK(r, mc, k + 2), mname->s, "bad value: %s must be > 0 (got %g; "
+                     "leave it out for an ideal switch)", names[j], *dst[j]);
+    k += 2;
+  }
+  return CUP_OK;
+}
+
+/* S N+ N- NC+ NC- MODEL [ON|OFF]; W N+ N- VCTRL MODEL [ON|OFF] (the
+ * controlling element is looked up once every element is read). */
+static int read_switch(rd *r, int card, nl_kind kind) {
+  const nx_tok *name = TOK(r, card, 0);
+  int voltage = kind == NL_S, n = r->x.card[card].n, k = voltage ? 5 : 4;
+  const char *operands = voltage ? "N+ N- NC+ NC- MODEL [ON|OFF]" : "N+ N- VCTRL MODEL [ON|OFF]";
+  nl_elem *e;
+  int st = open_elem(r, card, kind, k + 1, operands, &e);
+  if (st) return st;
+  r->c->nswitch++;
+  e->init = -1;
+  int sfirst, sn;
+  if (set_tokens(r, name->s, &sfirst, &sn))
+    return nx_fail(&r->x, CUP_ERR_ARG, NULL, name->s, "a switch has no value to set (set its model's parameters "
+                   "through .param)");
+  if (voltage) {
+    st = node_of(r, TOK(r, card, 3), name->s, &e->ca);
+    if (!st) st = node_of(r, TOK(r, card, 4), name->s, &e->cb);
+    if (!st && e->ca == e->cb)
+      return nx_fail(&r->x, CUP_ERR_PARSE, TOK(r, card, 4), name->s, "no control path: both control nodes are "
+                     "'%.40s', so the control voltage is always 0", TOK(r, card, 4)->s);
+  } else {
+    const nx_tok *v = TOK(r, card, 3);
+    if (v->kind != NX_WORD) return nx_fail(&r->x, CUP_ERR_PARSE, v, name->s, "expected the controlling element's name");
+    e->ctrl = -1 - (int)(v - r->x.tok);         /* resolved later */
+  }
+  if (st) return st;
+  const nx_tok *m = TOK(r, card, k++);
+  int mc = m->kind == NX_WORD ? nx_hash_get(&r->models, m->s) : -1;
+  if (mc < 0)
+    return nx_fail(&r->x, CUP_ERR_PARSE, m, name->s, "model '%.40s' is not defined (a switch needs '.model %.40s "
+                   "%s(...)')", m->s, m->s, voltage ? "SW" : "CSW");
+  st = switch_model(r, mc, m, e);
+  if (st) return st;
+  if (k < n && (nx_is(TOK(r, card, k), "on") || nx_is(TOK(r, card, k), "off"))) e->init = nx_is(TOK(r, card, k++), "on");
+  if (k < n)
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, k), name->s, "'%.40s' is not supported here (expected "
+                   "'%s %s')", TOK(r, card, k)->s, name->s, operands);
+  return CUP_OK;
+}
+
+/* The names that F, H, W and K refer to, once every element is read. */
 static int resolve_refs(rd *r) {
   nl_circuit *c = r->c;
   for (int e = 0; e < c->nelem; e++) {
     nl_elem *el = &c->elem[e];
-    if ((el->kind != NL_F && el->kind != NL_H) || el->ctrl >= 0) continue;
+    if ((el->kind != NL_F && el->kind != NL_H && el->kind != NL_W) || el->ctrl >= 0) continue;
     const nx_tok *t = &r->x.tok[-1 - el->ctrl];
     el->ctrl = nx_hash_get(&r->elems, t->s);
     if (el->ctrl < 0)
-      return nx_fail(&r->x, CUP_ERR_PARSE, t, el->name, "no element named '%.40s' (the controlling current "
-                     "flows through it)", t->s);
+      return nx_fail(&r->x, CUP_ERR_PARSE, t, el->name, "%sno element named '%.40s' (the controlling current "
+                     "flows through it)", el->kind == NL_W ? "no control path: " : "", t->s);
+    int ck = c->elem[el->ctrl].kind;
+    if (ck == NL_S || ck == NL_W)
+      return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, el->name, "a switch's current (%.40s) does not control "
+                     "others here (any other element's can)", t->s);
   }
   for (int q = 0; q < c->ncoup; q++) {
     nl_coupling *k = &c->coup[q];
@@ -432,9 +513,14 @@ static int read_model(rd *r, int card) {
   if (n < 3) return nx_fail(&r->x, CUP_ERR_PARSE, cmd, ".model", "expected '.model NAME D'");
   const nx_tok *name = TOK(r, card, 1), *type = TOK(r, card, 2);
   if (name->kind != NX_WORD) return nx_fail(&r->x, CUP_ERR_PARSE, name, ".model", "expected a model name");
+  if (nx_is(type, "sw") || nx_is(type, "csw")) {  /* parameters read with the switches that use it */
+    if (nx_hash_get(&r->models, name->s) >= 0)
+      return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "model defined twice");
+    return nx_hash_put(&r->models, name->s, card) ? nomem(r) : CUP_OK;
+  }
   if (!nx_is(type, "d"))
-    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, type, name->s, "model type '%.20s' is not supported (only ideal "
-                   "diodes: '.model %.40s D')", type->s, name->s);
+    return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, type, name->s, "model type '%.20s' is not supported (ideal "
+                   "diodes: '.model %.40s D'; switches: SW, CSW)", type->s, name->s);
   for (int k = 3; k < n; k++)
     if (TOK(r, card, k)->kind != NX_LP && TOK(r, card, k)->kind != NX_RP)
       return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, TOK(r, card, k), name->s, "diode model parameters are not "
@@ -616,7 +702,7 @@ static int read_control(rd *r, int card) {
   for (int k = 0; refused[k]; k++)
     if (!strcasecmp(w, refused[k]))
       return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, cmd, w, "not supported (catchup reads R, L, C, V, I, D, E, F, "
-                     "G, H, K, X, .tran, .param, .ic, .model NAME D, .subckt, .include, .lib, .probe/.save/.print, "
+                     "G, H, K, S, W, X, .tran, .param, .ic, .model NAME D|SW|CSW, .subckt, .include, .lib, .probe/.save/.print, "
                      ".options and .end)");
   return nx_fail(&r->x, CUP_ERR_PARSE, cmd, w, "unknown control line");
 }
@@ -628,8 +714,8 @@ static int read_element(rd *r, int card) {
     ['a' - 'a'] = "XSPICE code models (A)", ['b' - 'a'] = "behavioural sources (B)",
     ['j' - 'a'] = "JFETs (J)", ['m' - 'a'] = "MOSFETs (M)",
     ['o' - 'a'] = "transmission lines (O)", ['q' - 'a'] = "bipolar transistors (Q)",
-    ['s' - 'a'] = "switches (S)", ['t' - 'a'] = "transmission lines (T)",
-    ['u' - 'a'] = "RC lines (U)", ['w' - 'a'] = "switches (W)", ['y' - 'a'] = "transmission lines (Y)",
+    ['t' - 'a'] = "transmission lines (T)",
+    ['u' - 'a'] = "RC lines (U)", ['y' - 'a'] = "transmission lines (Y)",
     ['z' - 'a'] = "MESFETs (Z)"};
   const nx_tok *t = TOK(r, card, 0);
   if (t->kind != NX_WORD)
@@ -647,13 +733,15 @@ static int read_element(rd *r, int card) {
     case 'g': return read_controlled(r, card, NL_G);
     case 'h': return read_controlled(r, card, NL_H);
     case 'k': return read_coupling(r, card);
+    case 's': return read_switch(r, card, NL_S);
+    case 'w': return read_switch(r, card, NL_W);
     case '.': return read_control(r, card);
   }
   if (c >= 'a' && c <= 'z' && what[c - 'a'])
     return nx_fail(&r->x, CUP_ERR_UNSUPPORTED, t, t->s, "%s are not supported (R, L, C, V, I, ideal diodes D, "
-                   "E, F, G, H, K and X are)", what[c - 'a']);
-  return nx_fail(&r->x, CUP_ERR_PARSE, t, t->s, "unknown element type '%c' (R, L, C, V, I, D, E, F, G, H, K and X "
-                 "are supported)", c);
+                   "E, F, G, H, K, switches S and W, and X are)", what[c - 'a']);
+  return nx_fail(&r->x, CUP_ERR_PARSE, t, t->s, "unknown element type '%c' (R, L, C, V, I, D, E, F, G, H, K, S, W "
+                 "and X are supported)", c);
 }
 
 /* First pass: .end, .control blocks, .param and .model (used anywhere). */
@@ -763,26 +851,6 @@ static int read_cards(rd *r) {
   return st;
 }
 
-void nl_circuit_free(nl_circuit *c) {
-  if (!c) return;
-  for (int k = 0; k < c->nnodes; k++) free(c->node[k]);
-  free(c->node); free(c->node_line); free(c->node_col);
-  for (int k = 0; k < c->nelem; k++) {
-    free(c->elem[k].name);
-    free(c->elem[k].src.t);
-    free(c->elem[k].src.v);
-  }
-  free(c->elem);
-  for (int k = 0; k < c->ncoup; k++) free(c->coup[k].name);
-  free(c->coup);
-  free(c->ic);
-  for (int k = 0; k < c->nfiles; k++) free(c->files[k]);
-  free(c->files);
-  for (int k = 0; k < c->nprobe; k++) free(c->probe[k].text);
-  free(c->probe);
-  free(c->file);
-  memset(c, 0, sizeof *c);
-}
 
 /* ---- public ------------------------------------------------------------------ */
 
@@ -801,7 +869,7 @@ static int load(cup_netlist **out, const char *text, size_t len, const char *nam
   if (!st && nx_add_file(&r.x, name, -1, 0) < 0) st = nomem(&r);
   if (!st) st = nx_lex_file(&r.x, 0, text, len, 1);
   if (!st) st = read_cards(&r);
-  if (!st) st = cup_netlist_formulate(out, &c, errmsg);
+  if (!st) st = c.nswitch ? nl_switched_formulate(out, &c, errmsg) : cup_netlist_formulate(out, &c, errmsg);
   if (!st && !((*out)->source = strndup(text, len))) {
     cup_netlist_free(out);
     st = nomem(&r);

@@ -235,8 +235,9 @@ static int role(const nx *x, nx_card c, int type, int k) {
   for (int j = 0; kw[j]; j++)
     if (nx_is(t, kw[j])) return 0;
   switch (type) {
-    case 'r': case 'l': case 'c': case 'd': case 'v': case 'i': case 's': case 'w': return k <= 2;
-    case 'e': case 'g': return k <= 4;
+    case 'r': case 'l': case 'c': case 'd': case 'v': case 'i': return k <= 2;
+    case 'e': case 'g': case 's': return k <= 4;
+    case 'w': return k <= 2 ? 1 : k == 3 ? 2 : 0;
     case 'f': case 'h': return k <= 2 ? 1 : k == 3 ? 2 : 0;
     case 'k': return k <= 2 ? 2 : 0;
     case 'x': return k < params_start(x, c, 1) - 1;

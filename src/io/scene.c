@@ -691,6 +691,9 @@ int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cu
   if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
   if (!o) o = &s->opt;
   if (s->proc || s->crowd) return cup_integrator_create_process(I, cup_scene_process(s), o, errmsg);
+  cup_switching sw;
+  if (s->nl && cup_netlist_switching(s->nl, &sw))
+    return cup_integrator_create_switched(I, &sw, cup_scene_input(s), o, errmsg);
   return cup_integrator_create(I, cup_scene_lcs(s), cup_scene_input(s), o, errmsg);
 }
 const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }

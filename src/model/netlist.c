@@ -36,6 +36,7 @@ static cup_csc view(const cup_sparse *s) {
 /* H's entry (row port i, column port j) into the LCS matrix it belongs to. */
 static int distribute(cup_netlist *nl, parts *q, const double *pdiag, int i, int j, double h) {
   const nl_port *pi = &nl->port[i], *pj = &nl->port[j];
+  if (pj->var == NL_VAR_NONE) return CUP_OK;     /* a closed switch's voltage: 0 */
   double v = h * pj->sign;
   if (pi->var == NL_VAR_X) {
     nl_coo *t = pj->var == NL_VAR_X ? &q->A : pj->var == NL_VAR_U ? &q->E : &q->B;
@@ -53,8 +54,31 @@ static int distribute(cup_netlist *nl, parts *q, const double *pdiag, int i, int
   return CUP_OK;                                  /* a source's current or voltage: signals only */
 }
 
+/* 1 if diode j's column of B or D has an entry. */
+static int column_used(const parts *q, int j) {
+  for (int k = q->sB.p[j]; k < q->sB.p[j + 1]; k++)
+    if (q->sB.x[k] != 0) return 1;
+  for (int k = q->sD.p[j]; k < q->sD.p[j + 1]; k++)
+    if (q->sD.x[k] != 0) return 1;
+  return 0;
+}
+
+/* 1 if row i of C or D (or G, with_g) has an entry. */
+static int row_used(const parts *q, int i, int with_g) {
+  const cup_sparse *M[3] = {&q->sC, &q->sD, &q->sG};
+  for (int t = 0; t < 2 + with_g; t++)
+    for (int k = 0; M[t]->p && k < M[t]->p[M[t]->ncol]; k++)
+      if (M[t]->i[k] == i && M[t]->x[k] != 0) return 1;
+  return 0;
+}
+
 /* A diode row that depends on neither the state nor another diode is
- * fixed by the sources alone: an index problem, named with them. */
+ * fixed by the sources alone: an index problem, named with them. In a
+ * switch configuration's circuit a diode whose column is empty (shorted by
+ * a closed switch, left hanging by an open one, or put across a source by
+ * one) is inert or held off by the source instead: it changes nothing
+ * (netlist_switch.c); a source that drives it forward leaves K(t) empty,
+ * and the run stops there. */
 static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const parts *q, char *errmsg) {
   int *used = calloc((size_t)nl->m + 1, sizeof(int));
   if (!used) return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
@@ -72,6 +96,15 @@ static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const part
         if (q->sG.i[k] == r)
           len += (size_t)snprintf(names + len, sizeof names - len, "%s%s", len ? ", " : "",
                                   c->elem[nl->input_elem[j]].name);
+    if (c->derived && c->elem[e].eq == NL_EQ_NONE && !column_used(q, r)) continue;   /* inert, or held off */
+    if (c->elem[e].eq != NL_EQ_NONE) {
+      st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, c->elem[e].eq == NL_EQ_LOOP
+                   ? "no path: closed, the switch makes a loop of voltage sources (%s) with no capacitor: "
+                     "put a resistor or inductor in the loop"
+                   : "no path: open, the switch leaves current sources (%s) alone in a cutset: put a resistor "
+                     "across the switch or give the current another path", len ? names : "nothing");
+      break;
+    }
     st = nl->row_fixed[r]
       ? nl_fail(c, e, errmsg, CUP_ERR_PARSE, "no path: the diode's current is set by %s alone (a cutset of "
                 "current sources and diodes): put a resistor or capacitor across it", len ? names : "nothing")
@@ -90,9 +123,8 @@ static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const part
 static int idle_columns(const cup_netlist *nl, const nl_circuit *c, const parts *q, char *errmsg) {
   for (int e = 0; e < c->nelem; e++) {
     if (c->elem[e].kind != NL_D) continue;
-    int j = nl->evar[e], used = 0;
-    for (int k = q->sB.p[j]; k < q->sB.p[j + 1] && !used; k++) used = q->sB.x[k] != 0;
-    for (int k = q->sD.p[j]; k < q->sD.p[j + 1] && !used; k++) used = q->sD.x[k] != 0;
+    int j = nl->evar[e], used = column_used(q, j);
+    if (!used && c->derived && c->elem[e].eq == NL_EQ_NONE && !row_used(q, j, 0)) continue;   /* inert */
     if (!used)
       return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "no path: the diode's current flows through voltage sources "
                      "(V, E, H) alone and changes no state: when it conducts its current is unbounded; put a "
@@ -125,7 +157,11 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   if (st) { free(pdiag); cup_sparse_free(&Pc); parts_free(&q); return nl_fail(c, -1, errmsg, st, "out of memory"); }
   st = decoupled_rows(nl, c, &q, errmsg);
   if (!st) st = idle_columns(nl, c, &q, errmsg);
-  if (!st) {
+  if (!st && c->derived) {                        /* a switch configuration: netlist_switch.c reduces it */
+    const cup_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
+    st = nl_raw_store(nl, six, pdiag, Pc.p ? &Pc : NULL);
+    if (st) st = nl_fail(c, -1, errmsg, st, "out of memory");
+  } else if (!st) {
     cup_lcs_desc d = {0};
     d.n = n; d.m = m; d.p = p;
     d.A = view(&q.sA); d.C = view(&q.sC); d.E = view(&q.sE); d.G = view(&q.sG);
@@ -148,6 +184,30 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   cup_sparse_free(&Pc);
   parts_free(&q);
   return st;
+}
+
+/* ---- a switch configuration's parts, dense (netlist_switch.c reduces them) ---------- */
+
+static double *dense(const cup_sparse *s, int nrow, int ncol) {
+  double *a = calloc((size_t)nrow * (size_t)ncol + 1, sizeof(double));
+  if (!a) return NULL;
+  for (int j = 0; s->p && j < s->ncol; j++)
+    for (int k = s->p[j]; k < s->p[j + 1]; k++) a[s->i[k] + (size_t)j * (size_t)nrow] = s->x[k];
+  return a;
+}
+
+int nl_raw_store(cup_netlist *nl, const cup_sparse *const six[6], const double *pdiag, const cup_sparse *Pc) {
+  int n = nl->n, m = nl->m, p = nl->p;
+  nl_raw *R = calloc(1, sizeof *R);
+  if (!R) return CUP_ERR_NOMEM;
+  nl->raw = R;
+  R->A = dense(six[0], n, n); R->B = dense(six[1], n, m); R->C = dense(six[2], m, n);
+  R->D = dense(six[3], m, m); R->E = dense(six[4], n, p); R->G = dense(six[5], m, p);
+  R->P = Pc ? dense(Pc, n, n) : calloc((size_t)n * (size_t)n, sizeof(double));
+  if (!R->A || !R->B || !R->C || !R->D || !R->E || !R->G || !R->P) return CUP_ERR_NOMEM;
+  for (int j = 0; !Pc && j < n; j++) R->P[j + (size_t)j * n] = pdiag[j];
+  R->keep_B = nl->nctl > 0;
+  return CUP_OK;
 }
 
 /* ---- the input and x0 ------------------------------------------------------------ */
@@ -311,6 +371,28 @@ int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) 
   return CUP_OK;
 }
 
+/* The reader's description, freed (the reader and netlist_switch.c, which keeps one). */
+void nl_circuit_free(nl_circuit *c) {
+  if (!c) return;
+  for (int k = 0; k < c->nnodes; k++) free(c->node[k]);
+  free(c->node); free(c->node_line); free(c->node_col);
+  for (int k = 0; k < c->nelem; k++) {
+    free(c->elem[k].name);
+    free(c->elem[k].src.t);
+    free(c->elem[k].src.v);
+  }
+  free(c->elem);
+  for (int k = 0; k < c->ncoup; k++) free(c->coup[k].name);
+  free(c->coup);
+  free(c->ic);
+  for (int k = 0; k < c->nfiles; k++) free(c->files[k]);
+  free(c->files);
+  for (int k = 0; k < c->nprobe; k++) free(c->probe[k].text);
+  free(c->probe);
+  free(c->file);
+  memset(c, 0, sizeof *c);
+}
+
 /* ---- public ------------------------------------------------------------------------ */
 
 void cup_netlist_free(cup_netlist **p) {
@@ -345,6 +427,12 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->files);
   free(nl->file);
   free(nl->source);
+  if (nl->hooks) nl->hooks->free(&nl->sw);
+  if (nl->raw) {
+    free(nl->raw->A); free(nl->raw->B); free(nl->raw->C); free(nl->raw->D);
+    free(nl->raw->E); free(nl->raw->G); free(nl->raw->P); free(nl->raw);
+  }
+  free(nl->zrow); free(nl->Lam); free(nl->zfull);
   free(nl);
   *p = NULL;
 }
@@ -383,13 +471,13 @@ const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source :
 const char *cup_netlist_warning(const cup_netlist *nl) { return nl && nl->warning[0] ? nl->warning : NULL; }
 
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
-  return nl && i >= 0 && i < nl->m ? nl->row_name[i] : NULL;
+  return nl && i >= 0 && i < (nl->zrow ? nl->mr : nl->m) ? nl->row_name[i] : NULL;
 }
 const char *cup_netlist_input_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->p ? nl->elem[nl->input_elem[j]].name : NULL;
 }
 int cup_netlist_row_fixed(const cup_netlist *nl, int i) {
-  return nl && i >= 0 && i < nl->m ? nl->row_fixed[i] : 0;
+  return nl && i >= 0 && i < (nl->zrow ? nl->mr : nl->m) ? nl->row_fixed[i] : 0;
 }
 
 int cup_netlist_file_count(const cup_netlist *nl) { return nl ? nl->nfiles : 0; }

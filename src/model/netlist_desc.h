@@ -7,8 +7,20 @@
 #define CUP_NETLIST_DESC_H
 
 /* Element kinds, in the order the formulation groups them; E, F, G, H are
- * the linear controlled sources (VCVS, CCCS, VCCS, CCVS). */
-typedef enum nl_kind { NL_R, NL_L, NL_C, NL_V, NL_I, NL_D, NL_E, NL_F, NL_G, NL_H } nl_kind;
+ * the linear controlled sources (VCVS, CCCS, VCCS, CCVS). S and W are
+ * switches (voltage- and current-controlled), which the formulation never
+ * sees: each switch configuration becomes a circuit of its own
+ * (netlist_switch.c) where a closed ideal switch is NL_Z, a short (a
+ * voltage port of value 0), an open one NL_O (a current port of value 0),
+ * and RON, ROFF are resistors. */
+typedef enum nl_kind { NL_R, NL_L, NL_C, NL_V, NL_I, NL_D, NL_E, NL_F, NL_G, NL_H, NL_S, NL_W, NL_Z, NL_O } nl_kind;
+
+/* A diode row that is a switch configuration's constraint on the state
+ * (nl_elem.eq): NL_EQ_LOOP, a closed switch that closes a loop of
+ * capacitors (a current port whose current is the loop's, its voltage held
+ * at 0); NL_EQ_CUT, across a cutset of inductors that an open switch leaves
+ * (a voltage port whose voltage is the cut's, its current held at 0). */
+enum { NL_EQ_NONE, NL_EQ_LOOP, NL_EQ_CUT };
 
 /* An independent source's transient function (SPICE syntax). */
 typedef enum nl_fn { NL_FN_DC, NL_FN_SIN, NL_FN_PULSE, NL_FN_PWL } nl_fn;
@@ -31,10 +43,14 @@ typedef struct nl_elem {
   char *name;         /* as written ("R1"); names compare case-insensitively */
   int a, b;           /* nodes (0: ground): R, L, C, D from a to b; V, I, E-H: a = n+, b = n- */
   double value;       /* R: ohms, L: henries, C: farads; E-H: the gain */
-  int ca, cb;         /* E, G: the controlling nodes nc+, nc- */
-  int ctrl;           /* F, H: the element whose current controls (its current from its
+  int ca, cb;         /* E, G, S: the controlling nodes nc+, nc- */
+  int ctrl;           /* F, H, W: the element whose current controls (its current from its
                          first node to its second, as SPICE's V's branch current) */
   int has_ic;         /* L, C: IC= given */
+  double vt, vh;      /* S, W: threshold and hysteresis (on above vt + |vh|, off below vt - |vh|) */
+  double ron, roff;   /* S, W: on and off resistances, 0 when not given (ideal: a short, an open) */
+  int init;           /* S, W: ON or OFF written on the card: 1 or 0; -1 not written */
+  int eq;             /* D: NL_EQ_* (a derived circuit's constraint row), else NL_EQ_NONE */
   double ic;          /* L: initial current, C: initial voltage */
   nl_source src;      /* V, I */
   int file;           /* c->files[file] holds it */
@@ -82,6 +98,9 @@ typedef struct nl_circuit {
   int nprobe;
   nl_probe *probe;    /* .probe/.save/.print lines, in order */
   int probe_all;      /* .save all / .probe all */
+  int nswitch;        /* S and W elements */
+  int derived;        /* a switch configuration's circuit (netlist_switch.c): constraint rows
+                         (eq) allowed, dangling nodes allowed, inert diodes kept */
 } nl_circuit;
 
 void nl_circuit_free(nl_circuit *c);

@@ -116,7 +116,7 @@ static int check_elements(const nl_circuit *c, char *errmsg) {
       st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, "both terminals on node '%s': the diode is shorted",
                    c->node[el->a]);
   }
-  for (int v = 1; v < c->nnodes && !st; v++)
+  for (int v = 1; v < c->nnodes && !st && !c->derived; v++)   /* an open switch may leave one */
     if (deg[v] == 1)
       st = nl_fail(c, who[v], errmsg, CUP_ERR_PARSE, "node '%s' is connected to %s only (a dangling node)",
                    c->node[v], c->elem[who[v]].name);
@@ -145,6 +145,8 @@ static int voltage_loops(const nl_circuit *c, int *uf, char *errmsg) {
                           "(an index problem: their voltages are not independent)", names)
                 : nl_fail(c, e, errmsg, CUP_ERR_PARSE, "short-circuited voltage sources: %s form a loop", names);
   }
+  for (int e = 0; e < c->nelem; e++)            /* closed switches after them (netlist_switch.c made any */
+    if (c->elem[e].kind == NL_Z) unite(uf, c->elem[e].a, c->elem[e].b);   /* that closes a loop a row) */
   return CUP_OK;
 }
 
@@ -220,7 +222,7 @@ static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned cha
  * capacitor voltages), u = the sources, zeta = the diodes, in netlist
  * order; the controlled sources are numbered in netlist order too. */
 static void number_ports(cup_netlist *nl, const nl_circuit *c, const unsigned char *fixed) {
-  static const nl_kind order[10] = {NL_C, NL_V, NL_E, NL_H, NL_D, NL_L, NL_I, NL_F, NL_G, NL_D};
+  static const nl_kind order[12] = {NL_C, NL_V, NL_E, NL_H, NL_Z, NL_D, NL_L, NL_I, NL_F, NL_G, NL_O, NL_D};
   int nx_l = 0, nx_c = 0, nu = 0, nz = 0, nk = 0;
   for (int e = 0; e < c->nelem; e++) {
     nl_kind k = c->elem[e].kind;
@@ -230,21 +232,22 @@ static void number_ports(cup_netlist *nl, const nl_circuit *c, const unsigned ch
   for (int e = 0; e < c->nelem; e++) {
     nl_kind k = c->elem[e].kind;
     nl->evar[e] = k == NL_L ? nx_l++ : k == NL_C ? nl->nL + nx_c++ : k == NL_V || k == NL_I ? nu++ : k == NL_D ? nz++
-                : k >= NL_E ? nk++ : -1;
-    if (k >= NL_E) nl->ctl_elem[nl->evar[e]] = e;
+                : k >= NL_E && k <= NL_H ? nk++ : -1;
+    if (k >= NL_E && k <= NL_H) nl->ctl_elem[nl->evar[e]] = e;
     nl->eport[e] = -1;
   }
   int q = 0;
-  for (int g = 0; g < 10; g++) {
+  for (int g = 0; g < 12; g++) {
     nl_kind want = order[g];
     for (int e = 0; e < c->nelem; e++) {
       nl_kind k = c->elem[e].kind;
-      if (k != want || (k == NL_D && (g < 5) != (fixed[e] != 0))) continue;
+      if (k != want || (k == NL_D && (g < 6) != (fixed[e] != 0))) continue;
       nl->eport[e] = q;
-      int var = k == NL_L || k == NL_C ? NL_VAR_X : k == NL_D ? NL_VAR_Z : k >= NL_E ? NL_VAR_CTL : NL_VAR_U;
-      nl->port[q++] = (nl_port){e, var, nl->evar[e], k == NL_D && g < 5 ? -1 : 1};
+      int var = k == NL_L || k == NL_C ? NL_VAR_X : k == NL_D ? NL_VAR_Z : k == NL_Z || k == NL_O ? NL_VAR_NONE
+              : k >= NL_E ? NL_VAR_CTL : NL_VAR_U;
+      nl->port[q++] = (nl_port){e, var, nl->evar[e], k == NL_D && g < 6 ? -1 : 1};
     }
-    if (g == 4) nl->nv = q;
+    if (g == 5) nl->nv = q;
   }
   nl->ni = q - nl->nv;
   nl->n = nl->nL + nl->nC;
@@ -277,7 +280,8 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     if (c->elem[e].kind == NL_R) unite(uf, c->elem[e].a, c->elem[e].b);
   for (int e = 0; !st && e < ne; e++) {          /* a diode joining two parts is fixed */
     const nl_elem *el = &c->elem[e];
-    if (el->kind != NL_D || find(uf, el->a) == find(uf, el->b)) continue;
+    if (el->kind != NL_D || el->eq == NL_EQ_LOOP || (el->eq != NL_EQ_CUT && find(uf, el->a) == find(uf, el->b)))
+      continue;
     fixed[e] = 1;
     unite(uf, el->a, el->b);
   }

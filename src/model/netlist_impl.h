@@ -31,13 +31,30 @@
 /* Which LCS variable a port's value is: the state, an input, a zeta, or
  * (NL_VAR_CTL) a controlled source's output, a linear function of the
  * others once the controlled sources are eliminated (netlist_ctl.c). */
-enum { NL_VAR_X, NL_VAR_U, NL_VAR_Z, NL_VAR_CTL };
+enum { NL_VAR_X, NL_VAR_U, NL_VAR_Z, NL_VAR_CTL, NL_VAR_NONE };   /* NONE: a closed switch's 0 V */
 
 typedef struct nl_port {
   int elem;           /* the element */
   int var, index;     /* NL_VAR_* and its index in x, u or zeta */
   int sign;           /* port value = sign * that variable (-1: a fixed diode's -zeta) */
 } nl_port;
+
+/* A switch configuration's circuit as formulated (dense, column-major),
+ * before its constraint rows are eliminated (netlist_switch.c). */
+typedef struct nl_raw {
+  double *A, *B, *C, *D, *E, *G, *P;   /* n x n, n x m, m x n, m x m, n x p, m x p, n x n */
+  int keep_B;                          /* controlled sources: B as formed, not P^-1 C^T */
+} nl_raw;
+
+typedef struct nl_switched nl_switched;
+
+/* What the netlist's own functions ask of netlist_switch.c (a table, so that
+ * the formulation does not depend on it: it depends on the formulation). */
+typedef struct nl_sw_hooks {
+  void (*free)(nl_switched **S);
+  cup_netlist *(*current)(cup_netlist *nl);              /* the configuration in force */
+  int (*probe)(cup_netlist *nl, int k, char *errmsg);    /* signal k added to every configuration */
+} nl_sw_hooks;
 
 struct cup_netlist {
   char warning[CUP_ERRMSG_LEN];   /* a loop of ideal diodes (nl_diode_loops), or "" */
@@ -87,6 +104,16 @@ struct cup_netlist {
   double *sig_val;
   double *ubuf, *dense;   /* p, and n + p + m + supernodes of scratch */
   double *prow;           /* nv + ni: a signal's row over the ports */
+  /* switches (netlist_switch.c) */
+  nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */
+  const nl_sw_hooks *hooks;   /* ... and what its own functions ask of them */
+  nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction */
+  int nelem_user;         /* elements written (a configuration's circuit appends constraints) */
+  int mr;                 /* a configuration's diode rows (m counts its constraint rows too) */
+  int *zrow;              /* m: each row's diode row (>= 0) or constraint -1 - q; NULL: none */
+  int nq;                 /* constraint rows */
+  double *Lam;            /* nq x (n + p + mr), row-major: the constraints' multipliers */
+  double *zfull;          /* m: zeta with the multipliers, for signals */
 };
 
 /* Triplets, each with a bound on the magnitude of what was summed into it. */
@@ -135,5 +162,16 @@ int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t si
 
 /* The formulation of a parsed circuit (netlist.c); the reader calls it. */
 int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg);
+
+/* ---- switches (netlist_switch.c) ---- */
+/* A circuit with switches: its configuration at t = 0 formulated as the
+ * netlist, the circuit kept (moved out of *c) to form the others. */
+int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg);
+/* build_lcs for a configuration's circuit: the parts kept dense in nl->raw (netlist.c). */
+int nl_raw_store(cup_netlist *nl, const cup_sparse *const parts[6], const double *pdiag, const cup_sparse *Pc);
+/* A row over (x, u, zeta) of signal kind 'v' (nodes a, b; b < 0: ground) or
+ * 'i' (element a), into row (n + p + m). */
+int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row);
+
 
 #endif

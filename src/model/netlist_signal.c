@@ -27,6 +27,7 @@ static void add_port(const cup_netlist *nl, int q, double coef, double *row) {
       if (z[j] != 0) add_port(nl, j, coef * z[j], row);   /* zmap's columns of controlled ports are 0 */
     return;
   }
+  if (pt->var == NL_VAR_NONE) return;            /* a closed switch's voltage: 0 */
   int off = pt->var == NL_VAR_X ? 0 : pt->var == NL_VAR_U ? nl->n : nl->n + nl->p;
   row[off + pt->index] += coef * pt->sign;
 }
@@ -120,7 +121,7 @@ static int find_elem(const cup_netlist *nl, const char *s, size_t len) {
   for (int e = 0; e < nl->nelem; e++)
     if (strlen(nl->elem[e].name) == len && !strncasecmp(nl->elem[e].name, s, len)) return e;
   if (len > 2 && s[1] == '.') {                   /* ngspice's "r.x1.r1" for the subcircuit's "x1.r1" */
-    static const char letter[] = "rlcvidefgh";    /* by nl_kind */
+    static const char letter[] = "rlcvidefghswss";   /* by nl_kind (a switch's parts: s) */
     int e = find_elem(nl, s + 2, len - 2);
     if (e >= 0 && tolower((unsigned char)s[0]) == letter[nl->elem[e].kind]) return e;
   }
@@ -194,9 +195,9 @@ static int scratch(cup_netlist *nl, char *errmsg) {
 }
 
 static int probe_all(cup_netlist *nl, char *errmsg) {
-  int st = CUP_OK;
+  int st = CUP_OK, ne = nl->nelem_user ? nl->nelem_user : nl->nelem;
   for (int v = 1; v < nl->nnodes && st >= 0; v++) st = probe_one(nl, 'v', v, -1, errmsg);
-  for (int e = 0; e < nl->nelem && st >= 0; e++) st = probe_one(nl, 'i', e, -1, errmsg);
+  for (int e = 0; e < ne && st >= 0; e++) st = probe_one(nl, 'i', e, -1, errmsg);
   return st < 0 ? st : CUP_OK;
 }
 
@@ -234,7 +235,12 @@ int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg) {
   if (b && y < 0)
     return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no node named '%.*s' in %s", signal,
                     (int)(lb < 60 ? lb : 60), b, nl->file);
-  return probe_one(nl, kind, x, y, errmsg);
+  if (kind == 'i' && nl->nelem_user && x >= nl->nelem_user) x = -1;   /* a configuration's own constraint */
+  if (x < 0)
+    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no element named '%.*s' in %s", signal,
+                    (int)(la < 60 ? la : 60), a, nl->file);
+  int k = probe_one(nl, kind, x, y, errmsg);
+  return k >= 0 && nl->hooks ? nl->hooks->probe(nl, k, errmsg) : k;
 }
 
 int cup_netlist_probe_default(cup_netlist *nl, int limit, char *errmsg) {
@@ -259,10 +265,38 @@ const char *cup_netlist_signal_unit(const cup_netlist *nl, int k) {
   return !name ? NULL : name[0] == 'v' ? "V" : name[0] == 'i' ? "A" : "1";
 }
 
+/* zeta over a configuration's rows: its diodes' and its constraints'
+ * multipliers, Lam (x, u, zeta) (ubuf holds u). */
+static const double *zeta_full(cup_netlist *nl, const double *x, const double *zeta) {
+  int n = nl->n, p = nl->p, mr = nl->mr, nv = n + p + mr;
+  for (int r = 0; r < nl->m; r++) {
+    int k = nl->zrow[r];
+    if (k >= 0) { nl->zfull[r] = zeta ? zeta[k] : 0; continue; }
+    const double *l = nl->Lam + (size_t)(-1 - k) * (size_t)nv;
+    double acc = cup_dot(l, x, n) + cup_dot(l + n, nl->ubuf, p);
+    if (zeta) acc += cup_dot(l + n + p, zeta, mr);
+    nl->zfull[r] = acc;
+  }
+  return nl->zfull;
+}
+
+int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row) {
+  int st = scratch(nl, NULL);
+  if (st) return st;
+  memset(row, 0, sizeof(double) * (size_t)nvar(nl));
+  memset(nl->prow, 0, sizeof(double) * (size_t)nports(nl));
+  st = kind == 'i' ? nl_prow_current(nl, a, nl->prow) : nl_prow_node(nl, a, 1, nl->prow);
+  if (!st && kind == 'v' && b >= 0) st = nl_prow_node(nl, b, -1, nl->prow);
+  if (!st) to_vars(nl, nl->prow, row);
+  return st;
+}
+
 int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out) {
   if (!nl || !x || (!out && nl->nsig)) return CUP_ERR_ARG;
   if (!nl->nsig) return CUP_OK;
+  if (nl->hooks) nl = nl->hooks->current(nl);
   if (nl->p && cup_input_eval(nl->u, t, nl->ubuf)) return CUP_ERR_CALLBACK;
+  if (nl->zrow) zeta = zeta_full(nl, x, zeta);
   int n = nl->n, p = nl->p;
   for (int k = 0; k < nl->nsig; k++) {
     double acc = 0;

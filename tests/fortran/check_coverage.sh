@@ -23,6 +23,8 @@ src=${3:?usage: check_coverage.sh CC INCLUDE_DIRS SRCDIR}
 # Public functions deliberately without a bind(C) interface, each with why.
 UNBOUND=(
   cup_status_merge   # restated in Fortran as an elemental function (catchup_base.f90)
+  cup_netlist_switching            # a table of C function pointers; a scene's integrator (cup_scene_integrator) runs switches
+  cup_integrator_create_switched   # takes that table; Fortran reaches it through cup_scene_integrator
 )
 # bind(C) interfaces deliberately without a wrapper in `use catchup`, each with why.
 # Those marked "owed" are usable through module catchup_c / the module's c_

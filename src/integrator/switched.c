@@ -1,0 +1,309 @@
+/* switched — a switched LCS (cup_switching, catchup/lcs.h) run one
+ * configuration at a time (docs/netlist.md, "Switches"; docs/design.md,
+ * "Switched circuits"). Each configuration has its own integrator, made
+ * from its LCS the first time the configuration is in force and kept: a
+ * run allocates nothing once every configuration has occurred. The
+ * integrator steps to the switching times, which the sources alone fix
+ * for switches gated by them (breakpoints, found by the model), and at each
+ * one the state jumps onto the new configuration's constraints (the model's
+ * projection in the energy metric), then its integrator goes on from there
+ * (projecting onto its K(t) first, as at any breakpoint).
+ *
+ * The adaptive scheme steps to the switching times (its steps end on
+ * breakpoints already; a window [ta, tb] of one configuration is its run
+ * from ta to tb, cup_adaptive_window) and locates those of switches the
+ * circuit gates. The fixed-step schemes keep their grid (t_k = k T / n)
+ * and switch at the end of the step that holds the switching time
+ * (cup_integrator_window_): exact when the grid holds the switching times,
+ * an error of order h in the switching time otherwise. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "integrator_impl.h"
+#include "adaptive.h"
+
+#define SW_MAX 64          /* configurations (the model forms at most this many) */
+
+struct cup_swrun {
+  cup_switching ops;
+  const cup_input *u;
+  cup_integrator_options o;
+  int n;
+  cup_integrator *child[SW_MAX];
+  int cur;                 /* the configuration in force (its child answers state and zeta) */
+  double *x;
+  /* circuit-gated switches: each sample and step end of a window is checked */
+  int watch;               /* checking (the window's configuration has such a switch) */
+  int crossed;             /* one changed: at tbad, after tg */
+  int user_stop;           /* the user's sink or step callback stopped the run */
+  int probing;             /* locating a change: the user's step callback is not called */
+  int refused;             /* the sample the check stopped at (1), or a step's end (0) */
+  double tg, tbad;         /* the last time checked unchanged (state xg), the first changed */
+  double *xg;
+  cup_sample_fn sink;      /* the user's */
+  void *sink_ctx;
+  cup_step_fn on_step;
+  void *step_ctx;
+};
+
+/* The check at a sample or a step's end (t, x): 1 stops the window. */
+static int check(cup_swrun *S, double t, const double *x) {
+  if (!S->watch || !(t > S->tg)) return 0;
+  int c = S->ops.crossed(S->ops.ctx, S->cur, t, x);
+  if (c) { S->crossed = 1; S->tbad = t; return 1; }   /* (c < 0, a failed input, is caught again by settle) */
+  S->tg = t;
+  cup_copy(S->xg, x, S->n);
+  return 0;
+}
+
+static int watch_sink(long k, double t, const double *x, void *ctx) {
+  cup_swrun *S = ctx;
+  if (check(S, t, x)) { S->refused = 1; return 1; }
+  if (S->sink && S->sink(k, t, x, S->sink_ctx)) { S->user_stop = 1; return 1; }
+  return 0;
+}
+
+static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
+  cup_swrun *S = ctx;
+  if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
+  if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
+  return 0;
+}
+
+static int child_of(cup_swrun *S, int topo, char *errmsg) {
+  if (topo < 0 || topo >= SW_MAX) return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "more than %d switch configurations", SW_MAX);
+  if (S->child[topo]) return CUP_OK;
+  const cup_lcs *L = S->ops.lcs(S->ops.ctx, topo);
+  char msg[CUP_ERRMSG_LEN];
+  cup_integrator_options o = S->o;
+  o.on_step = watch_step;                          /* the circuit-gated switches' checks, then the user's */
+  o.step_ctx = S;
+  int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
+  return st ? cup_fail(errmsg, st, "switch configuration %d: %s", topo, msg) : CUP_OK;
+}
+
+
+static void sw_free(cup_swrun **Sp) {
+  cup_swrun *S = *Sp;
+  if (!S) return;
+  for (int k = 0; k < SW_MAX; k++) cup_integrator_free(&S->child[k]);
+  free(S->x);
+  free(S->xg);
+  free(S);
+  *Sp = NULL;
+}
+
+static const cup_integrator *sw_child(const cup_swrun *S) { return S->child[S->cur]; }
+
+/* One window's statistics into the run's. */
+static void add_info(cup_run_info *info, const cup_run_info *w) {
+  info->status = cup_status_merge(info->status, w->status);
+  if (w->status != CUP_OK && info->message[0] == '\0') memcpy(info->message, w->message, sizeof info->message);
+  if (w->status < 0) memcpy(info->message, w->message, sizeof info->message);
+  info->step = w->step;
+  info->t = w->t;
+  info->projected += w->projected;
+  info->skipped += w->skipped;
+  info->not_certified += w->not_certified;
+  info->dual_iterations += w->dual_iterations;
+  info->factorizations += w->factorizations;
+  info->max_eps_cert = fmax(info->max_eps_cert, w->max_eps_cert);
+  info->max_eta_cert = fmax(info->max_eta_cert, w->max_eta_cert);
+  info->samples += w->samples;
+  info->events += w->events;
+  info->rejected += w->rejected;
+  if (!(info->err_est >= w->err_est)) info->err_est = isnan(w->err_est) ? info->err_est : w->err_est;
+}
+
+/* Configuration topo's window from (t, x) to tb with the user's sink
+ * (through the checks when watching); the state at its end into S->x. */
+static int window(cup_swrun *S, int topo, double t, double tb, int first, long *steps, long *next_sample,
+                  int watching, cup_run_info *info) {
+  cup_integrator *C = S->child[topo];
+  cup_run_info w;
+  S->watch = watching;
+  S->crossed = S->user_stop = S->refused = 0;
+  S->tg = t;
+  cup_copy(S->xg, S->x, S->n);
+  int st = cup_adaptive_window(C->ad, t, tb, S->x, first, steps, next_sample, watch_sink, S, &w);
+  S->watch = 0;
+  if (S->crossed) {                                /* our stop, not an error; its sample not taken */
+    st = CUP_OK;
+    w.status = CUP_OK;
+    w.message[0] = '\0';
+    w.samples -= S->refused;
+  }
+  add_info(info, &w);
+  if (st < 0) return st;
+  cup_copy(S->x, cup_adaptive_state(C->ad), S->n);
+  return CUP_OK;
+}
+
+/* A circuit-gated switch changed in (tg, tbad]: the time by bisection on
+ * the exact flow from (tg, xg) (windows without output), to the last bit;
+ * then the window to it with the samples it holds. S->x and *t: there. */
+static int locate(cup_swrun *S, int topo, double *t, long *steps, long *next_sample, cup_run_info *info) {
+  cup_integrator *C = S->child[topo];
+  double lo = S->tg, hi = S->tbad;
+  long ksave = *steps, jsave = *next_sample;
+  memcpy(S->x, S->xg, sizeof(double) * (size_t)S->n);
+  double *x0 = S->xg;
+  S->probing = 1;
+  for (int it = 0; it < 200 && nextafter(lo, hi) < hi; it++) {
+    double mid = lo + (hi - lo) / 2;
+    long k = ksave, j = jsave;
+    cup_run_info w;
+    int st = cup_adaptive_window(C->ad, S->tg, mid, x0, 0, &k, &j, NULL, NULL, &w);
+    if (st < 0) { S->probing = 0; add_info(info, &w); return st; }
+    int c = S->ops.crossed(S->ops.ctx, topo, mid, cup_adaptive_state(C->ad));
+    if (c < 0) { S->probing = 0; return cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", mid); }
+    if (c) hi = mid; else lo = mid;
+  }
+  S->probing = 0;
+  double ta = S->tg;
+  cup_copy(S->x, x0, S->n);
+  int st = window(S, topo, ta, hi, 0, steps, next_sample, 0, info);
+  *t = hi;
+  return st;
+}
+
+/* The fixed-step schemes: each configuration's integrator on the run's
+ * grid (all have the same T and n), a window from t_k to the first grid
+ * time at or after the next source-gated switching time, or one step when
+ * a switch the circuit gates is in force; the configuration settled at the
+ * window's end (a switching inside a step is taken at its end). */
+static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
+  const cup_switching *sw = &S->ops;
+  long k = 0, n = S->o.n, next_j = 0;
+  int st = CUP_OK;
+  for (int first = 1; st >= 0 && k < n; first = 0) {
+    if (!first) sw->jump(sw->ctx, topo, S->x);
+    st = child_of(S, topo, info->message);
+    if (st) break;
+    S->cur = topo;
+    cup_integrator *C = S->child[topo];
+    long k1 = k + 1;
+    double tb = 0;
+    if (!sw->state_gated(sw->ctx, topo)) {
+      if (sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
+        st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
+        break;
+      }
+      k1 = (long)ceil(tb / C->h);
+      if (k1 > n) k1 = n;
+      while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
+      while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
+      /* a switching time within 1e-9 h of a grid time is on it: the gate's
+       * edges (k PER + PW) and the grid (k T / n) round apart by an ulp, and
+       * a whole step more of the old configuration would follow (a buck on a
+       * grid holding its edges: 29 of 200 periods one step longer on) */
+      if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * C->h) k1--;
+      if (k1 <= k) k1 = k + 1;
+    }
+    cup_run_info w;
+    int wst = cup_integrator_window_(C, k, k1, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
+    add_info(info, &w);
+    if (wst < 0) { st = wst; break; }
+    cup_copy(S->x, cup_integrator_state(C), S->n);
+    k = k1;
+    t = cup_integrator_grid_time_(C, k);
+    /* the rule at the switching time when the grid time was snapped to it from below */
+    if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
+  }
+  if (st < 0) info->status = st;
+  info->t = t;
+  return info->status;
+}
+
+static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  cup_swrun *S = I->swr;
+  const cup_switching *sw = &S->ops;
+  double T = S->o.T, t = 0;
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  S->sink = sink;
+  S->sink_ctx = sink_ctx;
+  cup_copy(S->x, x0, S->n);
+  int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
+  long steps = 0, next_sample = 0;
+  if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
+    sw->jump(sw->ctx, topo, S->x);
+    if (memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) {
+      info->status = CUP_WARN_X0_OUTSIDE;
+      snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
+               "t = 0 (a loop of capacitors or a cut of inductors): it is projected onto them, and the first "
+               "sample is the projection");
+    }
+    return fixed_run(S, 0, topo, info);
+  }
+  for (int first = 1; st >= 0 && t < T; first = 0) {
+    sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
+    if (first && memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) {
+      info->status = CUP_WARN_X0_OUTSIDE;
+      snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
+               "t = 0 (a loop of capacitors or a cut of inductors): it is projected onto them, and the first "
+               "sample is the projection");
+    }
+    st = child_of(S, topo, info->message);
+    if (st) break;
+    S->cur = topo;
+    double tb;
+    st = sw->next(sw->ctx, topo, t, T, &tb);
+    if (st) { st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
+    st = window(S, topo, t, tb, first, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
+    if (st < 0 || S->user_stop) break;
+    if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);
+    if (st < 0) break;
+    t = tb;
+    if (t < T) st = sw->settle(sw->ctx, &topo, t, S->x, NULL, info->message);
+  }
+  if (st < 0) info->status = st;
+  if (S->user_stop && info->status >= 0) {
+    info->status = CUP_ERR_INTERRUPTED;
+    snprintf(info->message, sizeof info->message, "t = %.17g: stopped by the output sink or the step callback", t);
+  }
+  info->step = steps;
+  info->t = t;
+  return info->status;
+}
+
+
+static const cup_swops ops = {sw_run, sw_free, sw_child};
+
+int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,
+                                   const cup_integrator_options *o, char *errmsg) {
+  if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
+    return cup_fail(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
+  *out = NULL;
+  if (o->estimate)
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "a circuit with switches: the adaptive scheme estimates its error "
+                    "itself (estimate is for the fixed-step schemes)");
+  cup_integrator *I = calloc(1, sizeof *I);
+  cup_swrun *S = calloc(1, sizeof *S);
+  if (!I || !S) { free(I); free(S); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
+  I->swr = S;
+  I->swo = &ops;
+  S->ops = *sw;
+  S->u = u;
+  S->o = *o;
+  S->on_step = o->on_step;
+  S->step_ctx = o->step_ctx;
+  int st = child_of(S, 0, errmsg);
+  if (!st) {
+    const cup_lcs *L = sw->lcs(sw->ctx, 0);
+    I->o = *o;
+    I->L = L;
+    I->u = u;
+    I->n = S->n = cup_lcs_dim(L);
+    I->m = cup_lcs_rows(L);
+    I->p = cup_lcs_inputs(L);
+    S->x = malloc(sizeof(double) * ((size_t)S->n + 1));
+    S->xg = malloc(sizeof(double) * ((size_t)S->n + 1));
+    if (!S->x || !S->xg) st = cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  }
+  if (st) { cup_integrator_free(&I); return st; }
+  *out = I;
+  return CUP_OK;
+}

@@ -1,0 +1,784 @@
+/* netlist_switch — switches (S, W; docs/netlist.md, "Switches"). A switch
+ * configuration is a circuit of its own: a closed ideal switch a short (a
+ * voltage port of value 0), an open one an open (a current port of value
+ * 0), RON and ROFF resistors. Each configuration is formulated the first
+ * time it occurs and kept, over the same state (inductor currents,
+ * capacitor voltages), inputs and diode rows as every other.
+ *
+ * Index problems that a switch makes are constraints on the state: a
+ * closed switch that closes a loop of capacitors becomes a row "its
+ * voltage is 0" whose multiplier is the loop's current (a current port),
+ * an inductor cutset that an open switch leaves gets a row "the cut's
+ * current is 0" whose multiplier is the cut's voltage (a voltage port
+ * across it). With B_Q = P^-1 C_Q^T (the network is reciprocal) the
+ * P-orthogonal projector onto {C_Q x = 0},
+ *     Pi = I - P^-1 C_Q^T (C_Q P^-1 C_Q^T)^-1 C_Q,
+ * eliminates them: x' = Pi (A x + E u) + Pi B zeta, w = C Pi x + ..., an
+ * LCS with P (Pi B) = (C Pi)^T, every scheme's. The state keeps to the
+ * constraints once on them, and the jump into the configuration is x <- Pi x:
+ * the projection in the energy metric, which conserves the charge of a
+ * capacitor loop and the flux of an inductor cut. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "catchup/netlist.h"
+#include "netlist_impl.h"
+
+#define NL_TOPO_MAX 64     /* configurations kept (a converter has a handful) */
+
+typedef struct nl_topo {
+  uint64_t cfg;            /* bit k: switch k closed */
+  cup_netlist *sub;        /* its netlist (LCS, signals); topo[0]'s is the netlist itself */
+  double *Pi;              /* n x n, column-major: the jump onto its constraints (nq > 0) */
+  double *ctl;             /* nsw x (n + p + m_sub), row-major: each switch's control */
+  int state_gated;         /* a control depends on the state or the diodes */
+} nl_topo;
+
+struct nl_switched {
+  nl_circuit c;            /* the circuit as read (owned) */
+  int nsw;
+  int *sw;                 /* the switches' elements */
+  int ntopo;
+  nl_topo topo[NL_TOPO_MAX];
+  long formed;             /* configurations formulated */
+  int cur;                 /* the configuration in force (signals) */
+  double *ut;              /* p: u(t) */
+  double *zf;              /* scratch: a configuration's zeta with multipliers */
+  int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
+  /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
+  cup_gate_fn gate_fn;
+  void *gate_ctx;
+  double gate_ts;
+  int *gate;               /* nsw */
+};
+
+/* t's sampling instant k if t is one (within 1e-9 ts), else -1. */
+static long instant(const nl_switched *S, double t) {
+  double k = floor(t / S->gate_ts + 0.5);
+  return fabs(t - k * S->gate_ts) <= 1e-9 * S->gate_ts ? (long)k : -1;
+}
+
+static int nomem(const nl_circuit *c, char *errmsg) {
+  return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory while forming a switch configuration");
+}
+
+/* ---- a configuration's circuit ---------------------------------------------------- */
+
+static int find(int *uf, int v) {
+  while (uf[v] != v) v = uf[v] = uf[uf[v]];
+  return v;
+}
+
+/* Element e of kind D (eq) or Z appended to d (names owned by d from
+ * c->nelem on). */
+static int append(nl_circuit *d, nl_kind kind, int eq, int a, int b, const char *base, const char *suffix, int at) {
+  nl_elem *e = &d->elem[d->nelem];
+  memset(e, 0, sizeof *e);
+  size_t len = strlen(base) + strlen(suffix) + 1;
+  if (!(e->name = malloc(len))) return CUP_ERR_NOMEM;
+  snprintf(e->name, len, "%s%s", base, suffix);
+  e->kind = kind; e->eq = eq; e->a = a; e->b = b;
+  e->file = d->elem[at].file; e->line = d->elem[at].line; e->col = d->elem[at].col;
+  d->nelem++;
+  return CUP_OK;
+}
+
+/* The part of the circuit with node v that nothing but current ports joins
+ * to ground's: a constraint across its inductor (or current source), or, if
+ * only open switches reach it, its potential pinned to ground's (it floats:
+ * nothing depends on it). */
+static int close_cut(nl_circuit *d, int *uf, int v) {
+  int rv = find(uf, v), pick = -1;
+  static const nl_kind pref[5] = {NL_L, NL_I, NL_F, NL_G, NL_O};
+  for (int g = 0; g < 5 && pick < 0; g++)
+    for (int e = 0; e < d->nelem && pick < 0; e++) {
+      const nl_elem *el = &d->elem[e];
+      if (el->kind == pref[g] && (find(uf, el->a) == rv) != (find(uf, el->b) == rv)) pick = e;
+    }
+  int st = pick >= 0 && d->elem[pick].kind != NL_O
+             ? append(d, NL_D, NL_EQ_CUT, d->elem[pick].a, d->elem[pick].b, d->elem[pick].name, "#cut", pick)
+             : append(d, NL_Z, NL_EQ_NONE, v, 0, d->node[v] ? d->node[v] : "?", "#ground", 0);
+  if (!st) uf[rv] = find(uf, 0);
+  return st;
+}
+
+/* Configuration cfg's circuit into d: switches replaced, loop constraints
+ * in place of the closed switches that close a loop of voltage ports, cut
+ * constraints appended. The order of the formulation's own checks
+ * (netlist_graph.c) is followed, so that it finds what this found. */
+static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
+  const nl_circuit *c = &S->c;
+  *d = *c;
+  d->derived = 1;
+  d->nprobe = 0; d->probe = NULL; d->probe_all = 0;
+  d->elem = calloc((size_t)c->nelem + (size_t)c->nnodes + 1, sizeof(nl_elem));
+  int *uf = malloc(sizeof(int) * (size_t)c->nnodes);
+  if (!d->elem || !uf) { free(uf); return CUP_ERR_NOMEM; }
+  for (int e = 0, k = 0; e < c->nelem; e++) {
+    nl_elem *el = &d->elem[e];
+    *el = c->elem[e];
+    if (el->kind != NL_S && el->kind != NL_W) continue;
+    int on = (int)(cfg >> k++ & 1u);
+    el->value = on ? el->ron : el->roff;
+    el->kind = el->value > 0 ? NL_R : on ? NL_Z : NL_O;
+  }
+  for (int v = 0; v < c->nnodes; v++) uf[v] = v;
+  for (int e = 0; e < c->nelem; e++) {
+    nl_elem *el = &d->elem[e];
+    if (el->kind == NL_C || el->kind == NL_V || el->kind == NL_E || el->kind == NL_H) uf[find(uf, el->a)] = find(uf, el->b);
+  }
+  for (int e = 0; e < c->nelem; e++) {            /* a closed switch that closes a loop: a row */
+    nl_elem *el = &d->elem[e];
+    if (el->kind != NL_Z) continue;
+    if (find(uf, el->a) == find(uf, el->b)) { el->kind = NL_D; el->eq = NL_EQ_LOOP; }
+    else uf[find(uf, el->a)] = find(uf, el->b);
+  }
+  for (int e = 0; e < c->nelem; e++)
+    if (d->elem[e].kind == NL_R) uf[find(uf, d->elem[e].a)] = find(uf, d->elem[e].b);
+  for (int e = 0; e < c->nelem; e++)
+    if (d->elem[e].kind == NL_D && d->elem[e].eq == NL_EQ_NONE) uf[find(uf, d->elem[e].a)] = find(uf, d->elem[e].b);
+  int st = CUP_OK;
+  for (int v = 1; v < c->nnodes && !st; v++)
+    if (find(uf, v) != find(uf, 0)) st = close_cut(d, uf, v);
+  free(uf);
+  return st;
+}
+
+static void derived_free(const nl_circuit *c, nl_circuit *d) {
+  for (int e = c->nelem; d->elem && e < d->nelem; e++) free(d->elem[e].name);
+  free(d->elem);
+}
+
+/* ---- the reduction ---------------------------------------------------------------- */
+
+/* Dense m x n (column-major) into CSC without its zeros: entries at or
+ * below 256 eps times their magnitude bound mag (same layout; NULL: exact
+ * zeros only) cancelled to rounding. */
+static int to_csc(const double *a, const double *mag, int m, int n, cup_sparse *out) {
+  int nnz = 0;
+  for (size_t k = 0; k < (size_t)m * (size_t)n; k++) nnz += fabs(a[k]) > (mag ? 256 * 2.2e-16 * mag[k] : 0);
+  if (cup_sparse_alloc(out, m, n, nnz)) return CUP_ERR_NOMEM;
+  int q = 0;
+  for (int j = 0; j < n; j++) {
+    out->p[j] = q;
+    for (int i = 0; i < m; i++) {
+      double v = a[i + (size_t)j * m];
+      if (fabs(v) > (mag ? 256 * 2.2e-16 * mag[i + (size_t)j * m] : 0)) { out->i[q] = i; out->x[q++] = v; }
+    }
+  }
+  out->p[n] = q;
+  out->nnz = q;
+  return CUP_OK;
+}
+
+/* out (m x n) = a (m x k) b (k x n), and |a| |b| into mag if not NULL. */
+static void mul(const double *a, const double *b, int m, int k, int n, double *out, double *mag) {
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < m; i++) {
+      double s = 0, t = 0;
+      for (int l = 0; l < k; l++) {
+        double v = a[i + (size_t)l * m] * b[l + (size_t)j * k];
+        s += v; t += fabs(v);
+      }
+      out[i + (size_t)j * m] = s;
+      if (mag) mag[i + (size_t)j * m] = t;
+    }
+}
+
+/* Columns (or rows) `pick` of a dense matrix: out = a(:, pick) or a(pick, :). */
+static void cols(const double *a, int nrow, const int *pick, int k, double *out) {
+  for (int j = 0; j < k; j++) memcpy(out + (size_t)j * nrow, a + (size_t)pick[j] * nrow, sizeof(double) * (size_t)nrow);
+}
+static void rows(const double *a, int nrow, int ncol, const int *pick, int k, double *out) {
+  for (int j = 0; j < ncol; j++)
+    for (int i = 0; i < k; i++) out[i + (size_t)j * k] = a[pick[i] + (size_t)j * nrow];
+}
+
+typedef struct red {
+  int n, p, m, mq, nq;
+  int *dr, *qr;            /* the diode rows (by diode index), the constraint rows */
+  double *Pinv, *Cq, *T, *Pi, *Pim;   /* n x n, nq x n, n x nq, n x n, |Pi| */
+  double *S;               /* nq x nq: C_Q P^-1 C_Q^T, factored */
+  int *piv;
+  double *w;
+} red;
+
+static void red_free(red *r) {
+  free(r->dr); free(r->qr); free(r->Pinv); free(r->Cq); free(r->T); free(r->Pi); free(r->Pim);
+  free(r->S); free(r->piv); free(r->w);
+}
+
+/* Which derived row is which: diode rows in the written order, constraint
+ * rows after; the constraints checked (no source, no diode in them). */
+static int classify(cup_netlist *sub, const nl_circuit *c, const nl_circuit *d, red *r, char *errmsg) {
+  const nl_raw *R = sub->raw;
+  r->n = sub->n; r->p = sub->p; r->mq = sub->m;
+  r->dr = malloc(sizeof(int) * ((size_t)r->mq + 1));
+  r->qr = malloc(sizeof(int) * ((size_t)r->mq + 1));
+  sub->zrow = malloc(sizeof(int) * ((size_t)r->mq + 1));
+  if (!r->dr || !r->qr || !sub->zrow) return nomem(c, errmsg);
+  for (int e = 0, k = 0; e < d->nelem; e++) {
+    if (d->elem[e].kind != NL_D) continue;
+    int row = sub->evar[e];
+    if (d->elem[e].eq == NL_EQ_NONE) { sub->zrow[row] = k; r->dr[k++] = row; r->m = k; }
+    else { sub->zrow[row] = -1 - r->nq; r->qr[r->nq++] = row; }
+  }
+  for (int q = 0; q < r->nq; q++) {
+    int row = r->qr[q], e = -1;
+    for (int f = 0; f < d->nelem && e < 0; f++)
+      if (d->elem[f].kind == NL_D && sub->evar[f] == row) e = f;
+    int src = 0, dio = 0;
+    for (int j = 0; j < r->p; j++) src |= R->G[row + (size_t)j * r->mq] != 0;
+    for (int j = 0; j < r->mq; j++) dio |= R->D[row + (size_t)j * r->mq] != 0 || R->D[j + (size_t)row * r->mq] != 0;
+    if (src || dio)
+      return nl_fail(d, e, errmsg, CUP_ERR_UNSUPPORTED, "%s %s: a jump through %s is not supported; put a "
+                     "resistor %s", d->elem[e].eq == NL_EQ_LOOP ? "closed, the switch puts capacitors in a loop with"
+                                                               : "open, the switch leaves inductors in a cutset with",
+                     src ? "a source" : "a diode", src ? "it" : "it",
+                     d->elem[e].eq == NL_EQ_LOOP ? "in series with the switch" : "across the switch");
+  }
+  return CUP_OK;
+}
+
+/* Pi = I - P^-1 C_Q^T S^-1 C_Q and T = P^-1 C_Q^T S^-1. */
+static int projector(cup_netlist *sub, const nl_circuit *d, red *r, char *errmsg) {
+  const nl_raw *R = sub->raw;
+  int n = r->n, nq = r->nq;
+  r->Pinv = malloc(sizeof(double) * (size_t)n * n);
+  r->Cq = malloc(sizeof(double) * (size_t)nq * n);
+  r->T = malloc(sizeof(double) * (size_t)n * nq);
+  r->Pi = malloc(sizeof(double) * (size_t)n * n);
+  r->Pim = malloc(sizeof(double) * (size_t)n * n);
+  r->S = malloc(sizeof(double) * (size_t)nq * nq);
+  r->piv = malloc(sizeof(int) * ((size_t)n + 1));
+  r->w = malloc(sizeof(double) * ((size_t)n + nq + 1) * 2);
+  double *lu = malloc(sizeof(double) * (size_t)n * n);
+  if (!r->Pinv || !r->Cq || !r->T || !r->Pi || !r->Pim || !r->S || !r->piv || !r->w || !lu) {
+    free(lu);
+    return nomem(d, errmsg);
+  }
+  memcpy(lu, R->P, sizeof(double) * (size_t)n * n);
+  int st = cup_dense_lu(lu, n, r->piv);
+  for (int j = 0; !st && j < n; j++) {
+    double *col = r->Pinv + (size_t)j * n;
+    cup_zero(col, n);
+    col[j] = 1;
+    cup_dense_lu_solve(lu, n, r->piv, col, r->w);
+  }
+  free(lu);
+  if (st) return nl_fail(d, -1, errmsg, CUP_ERR_LINALG, "the energy metric is singular");
+  rows(R->C, r->mq, n, r->qr, nq, r->Cq);
+  double *PCt = r->Pim;                            /* scratch: P^-1 C_Q^T, n x nq */
+  for (int j = 0; j < nq; j++)
+    for (int i = 0; i < n; i++) {
+      double s = 0;
+      for (int l = 0; l < n; l++) s += r->Pinv[i + (size_t)l * n] * r->Cq[j + (size_t)l * nq];
+      PCt[i + (size_t)j * n] = s;
+    }
+  mul(r->Cq, PCt, nq, n, nq, r->S, NULL);
+  if (cup_dense_lu(r->S, nq, r->piv)) {
+    int e = -1;
+    for (int f = 0; f < d->nelem && e < 0; f++)
+      if (d->elem[f].kind == NL_D && d->elem[f].eq != NL_EQ_NONE) e = f;
+    return nl_fail(d, e, errmsg, CUP_ERR_UNSUPPORTED, "the switches' constraints on the state are redundant "
+                   "(two switches close the same loop of capacitors, or open the same cut of inductors)");
+  }
+  for (int i = 0; i < n; i++) {                    /* T's rows: S^-T (P^-1 C_Q^T)^T's columns; S symmetric */
+    for (int j = 0; j < nq; j++) r->w[j] = PCt[i + (size_t)j * n];
+    cup_dense_lu_solve(r->S, nq, r->piv, r->w, r->w + nq);
+    for (int j = 0; j < nq; j++) r->T[i + (size_t)j * n] = r->w[j];
+  }
+  mul(r->T, r->Cq, n, nq, n, r->Pi, r->Pim);
+  for (size_t k = 0; k < (size_t)n * n; k++) r->Pi[k] = -r->Pi[k];
+  for (int j = 0; j < n; j++) { r->Pi[j + (size_t)j * n] += 1; r->Pim[j + (size_t)j * n] += 1; }
+  return CUP_OK;
+}
+
+/* The multipliers Lam (x, u, zeta) = -S^-1 C_Q (A x + E u + B zeta), what
+ * holds C_Q x' = 0 (signals: a loop's current, a cut's voltage). */
+static int multipliers(cup_netlist *sub, red *r) {
+  const nl_raw *R = sub->raw;
+  int n = r->n, p = r->p, m = r->m, nq = r->nq, nv = n + p + m;
+  sub->Lam = calloc((size_t)nq * nv + 1, sizeof(double));
+  sub->zfull = calloc((size_t)r->mq + 1, sizeof(double));
+  if (!sub->Lam || !sub->zfull) return CUP_ERR_NOMEM;
+  for (int v = 0; v < nv; v++) {
+    const double *col = v < n ? R->A + (size_t)v * n : v < n + p ? R->E + (size_t)(v - n) * n
+                                                              : R->B + (size_t)r->dr[v - n - p] * n;
+    for (int q = 0; q < nq; q++) {
+      double s = 0;
+      for (int l = 0; l < n; l++) s += r->Cq[q + (size_t)l * nq] * col[l];
+      r->w[q] = -s;
+    }
+    cup_dense_lu_solve(r->S, nq, r->piv, r->w, r->w + nq);
+    for (int q = 0; q < nq; q++) sub->Lam[(size_t)q * nv + v] = r->w[q];
+  }
+  return CUP_OK;
+}
+
+static cup_csc view(const cup_sparse *s) {
+  return s->nnz || s->ncol ? (cup_csc){s->nrow, s->ncol, s->p, s->i, s->x} : (cup_csc){0, 0, NULL, NULL, NULL};
+}
+
+/* The configuration's LCS: Pi A, Pi E, Pi B, C Pi on the diode rows (the
+ * formulation's own matrices where there is no constraint), F = 1 on a
+ * diode that is inert in it. */
+static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errmsg) {
+  const nl_raw *R = sub->raw;
+  int n = r->n, p = r->p, m = r->m, mq = r->mq, nq = r->nq;
+  size_t big = (size_t)(n > m ? n : m) * (size_t)(n > p ? (n > m ? n : m) : (p > m ? p : m)) + 1;
+  double *X = malloc(sizeof(double) * big), *Y = malloc(sizeof(double) * big), *M = malloc(sizeof(double) * big);
+  double *F = calloc((size_t)m + 1, sizeof(double));
+  cup_sparse s[6] = {{0}};
+  int st = X && Y && M && F ? CUP_OK : CUP_ERR_NOMEM;
+  /* A, E, B: Pi times the formulation's; C: its diode rows times Pi; D, G: its diode rows and columns */
+  const double *src[3] = {R->A, R->E, NULL};
+  int ncol[3] = {n, p, m};
+  for (int t = 0; t < 3 && !st; t++) {
+    const double *a = src[t];
+    if (t == 2) { cols(R->B, n, r->dr, m, Y); a = Y; }
+    if (nq) {
+      mul(r->Pi, a, n, n, ncol[t], X, M);
+      double *Mb = malloc(sizeof(double) * big);
+      if (!Mb) { st = CUP_ERR_NOMEM; break; }
+      for (size_t k = 0; k < (size_t)n * ncol[t]; k++) Mb[k] = fabs(a[k]);
+      mul(r->Pim, Mb, n, n, ncol[t], M, NULL);
+      free(Mb);
+      st = to_csc(X, M, n, ncol[t], &s[t]);
+    } else {
+      st = to_csc(a, NULL, n, ncol[t], &s[t]);
+    }
+  }
+  if (!st) {
+    rows(R->C, mq, n, r->dr, m, Y);
+    if (nq) {
+      mul(Y, r->Pi, m, n, n, X, NULL);
+      for (size_t k = 0; k < (size_t)m * n; k++) Y[k] = fabs(Y[k]);
+      mul(Y, r->Pim, m, n, n, M, NULL);
+      st = to_csc(X, M, m, n, &s[3]);
+    } else {
+      st = to_csc(Y, NULL, m, n, &s[3]);
+    }
+  }
+  if (!st) {
+    rows(R->G, mq, p, r->dr, m, Y);
+    st = to_csc(Y, NULL, m, p, &s[4]);
+  }
+  if (!st) {
+    for (int j = 0; j < m; j++)
+      for (int i = 0; i < m; i++) Y[i + (size_t)j * m] = R->D[r->dr[i] + (size_t)r->dr[j] * mq];
+    st = to_csc(Y, NULL, m, m, &s[5]);
+  }
+  int inert = 0, hasD = !st && s[5].nnz > 0;
+  for (int i = 0; !st && i < m; i++) {           /* a row that nothing reaches: never conducts */
+    int used = 0;
+    for (int k = 0; k < s[3].nnz && !used; k++) used = s[3].i[k] == i;
+    for (int k = 0; k < s[4].nnz && !used; k++) used = s[4].i[k] == i;
+    for (int k = 0; k < s[5].nnz && !used; k++) used = s[5].i[k] == i;
+    if (!used) { F[i] = 1; inert = 1; }
+  }
+  char lib[CUP_ERRMSG_LEN] = "";
+  if (!st) {
+    cup_lcs_desc q = {0};
+    q.n = n; q.m = m; q.p = p;
+    q.A = view(&s[0]); q.E = view(&s[1]); q.B = view(&s[2]); q.C = view(&s[3]); q.G = view(&s[4]);
+    if (hasD) q.D = view(&s[5]);
+    q.F = inert ? F : NULL;
+    cup_sparse Ps = {0};
+    int dia = 1;
+    for (int j = 0; j < n; j++)
+      for (int i = 0; i < n; i++) dia &= i == j || R->P[i + (size_t)j * n] == 0;
+    double *pd = malloc(sizeof(double) * ((size_t)n + 1));
+    if (!pd) st = CUP_ERR_NOMEM;
+    for (int j = 0; !st && j < n; j++) pd[j] = R->P[j + (size_t)j * n];
+    if (!st && !dia) st = to_csc(R->P, NULL, n, n, &Ps);
+    if (!st) {
+      q.P = dia ? (cup_metric){CUP_METRIC_DIAGONAL, pd, {0}, 0} : (cup_metric){CUP_METRIC_SPARSE, NULL, view(&Ps), 0};
+      q.row_names = (const char *const *)sub->row_name;
+      q.keep_B = R->keep_B && !hasD;
+      st = cup_lcs_create(&sub->L, &q, lib);
+      if (st && R->keep_B) { q.keep_B = 1; st = cup_lcs_create(&sub->L, &q, lib); }
+    }
+    free(pd);
+    cup_sparse_free(&Ps);
+  }
+  free(X); free(Y); free(M); free(F);
+  for (int t = 0; t < 6; t++) cup_sparse_free(&s[t]);
+  if (st == CUP_ERR_NOMEM) return nomem(d, errmsg);
+  return st ? nl_fail(d, -1, errmsg, st, "%s", lib) : CUP_OK;
+}
+
+/* The rows renamed: the diodes' first, in the written order (the public
+ * accessors see mr of them), the constraints' after. */
+static int rename_rows(cup_netlist *sub, const red *r) {
+  char **nm = malloc(sizeof(char *) * ((size_t)r->mq + 1));
+  int *fx = malloc(sizeof(int) * ((size_t)r->mq + 1));
+  if (!nm || !fx) { free(nm); free(fx); return CUP_ERR_NOMEM; }
+  for (int k = 0; k < r->m; k++) { nm[k] = sub->row_name[r->dr[k]]; fx[k] = sub->row_fixed[r->dr[k]]; }
+  for (int k = 0; k < r->nq; k++) { nm[r->m + k] = sub->row_name[r->qr[k]]; fx[r->m + k] = sub->row_fixed[r->qr[k]]; }
+  free(sub->row_name); free(sub->row_fixed);
+  sub->row_name = nm; sub->row_fixed = fx;
+  sub->mr = r->m;
+  sub->nq = r->nq;
+  return CUP_OK;
+}
+
+/* ---- configurations ---------------------------------------------------------------- */
+
+/* Configuration cfg formulated into topo (its netlist, LCS, jump, controls). */
+static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, char *errmsg) {
+  const nl_circuit *c = &S->c;
+  nl_circuit d;
+  int st = derive(S, cfg, &d);
+  if (st) { derived_free(c, &d); return nomem(c, errmsg); }
+  cup_netlist *sub = NULL;
+  red r = {0};
+  st = cup_netlist_formulate(&sub, &d, errmsg);
+  if (!st) { sub->nelem_user = c->nelem; st = classify(sub, c, &d, &r, errmsg); }
+  if (!st && r.nq) st = projector(sub, &d, &r, errmsg);
+  if (!st && r.nq && multipliers(sub, &r)) st = nomem(c, errmsg);
+  if (!st) st = rename_rows(sub, &r) ? nomem(c, errmsg) : CUP_OK;
+  if (!st) st = reduced_lcs(sub, &d, &r, errmsg);
+  if (!st && !r.nq) { free(sub->zrow); sub->zrow = NULL; }   /* diode rows as formulated */
+  tp->cfg = cfg;
+  tp->Pi = NULL;
+  if (!st && r.nq) { tp->Pi = r.Pi; r.Pi = NULL; }
+  int nv = sub ? sub->n + sub->p + sub->m : 0;
+  tp->ctl = !st ? calloc((size_t)S->nsw * nv + 1, sizeof(double)) : NULL;
+  if (!st && !tp->ctl) st = nomem(c, errmsg);
+  for (int k = 0; k < S->nsw && !st; k++) {       /* each switch's control over (x, u, zeta) */
+    const nl_elem *el = &c->elem[S->sw[k]];
+    double *row = tp->ctl + (size_t)k * nv;
+    st = el->kind == NL_S ? nl_signal_row(sub, 'v', el->ca, el->cb, row) : nl_signal_row(sub, 'i', el->ctrl, -1, row);
+    if (st) st = nomem(c, errmsg);
+    for (int j = 0; !st && j < nv; j++)
+      if (row[j] != 0 && (j < sub->n || j >= sub->n + sub->p)) tp->state_gated = 1;
+  }
+  red_free(&r);
+  derived_free(c, &d);
+  if (st) { cup_netlist_free(&sub); free(tp->Pi); free(tp->ctl); tp->Pi = NULL; tp->ctl = NULL; return st; }
+  S->formed++;
+  *subp = sub;
+  return CUP_OK;
+}
+
+/* The configuration's index, formed now if it is new. */
+static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
+  nl_switched *S = nl->sw;
+  for (int k = 0; k < S->ntopo; k++)
+    if (S->topo[k].cfg == cfg) { *out = k; return CUP_OK; }
+  if (S->ntopo == NL_TOPO_MAX)
+    return nl_fail(&S->c, -1, errmsg, CUP_ERR_UNSUPPORTED, "more than %d switch configurations", NL_TOPO_MAX);
+  nl_topo *tp = &S->topo[S->ntopo];
+  memset(tp, 0, sizeof *tp);
+  int st = form(S, &tp->sub, cfg, tp, errmsg);
+  for (int k = 0; !st && k < nl->nsig; k++) {     /* the signals recorded, in the same order */
+    int q = cup_netlist_probe(tp->sub, nl->sig_name[k], errmsg);
+    if (q != k) st = q < 0 ? q : nl_fail(&S->c, -1, errmsg, CUP_ERR_ARG, "signal order differs");
+  }
+  if (st) {
+    if (tp->sub) cup_netlist_free(&tp->sub);
+    free(tp->Pi); free(tp->ctl);
+    return st;
+  }
+  *out = S->ntopo++;
+  return CUP_OK;
+}
+
+/* Each switch's control at t in configuration tp (x, zeta may be NULL: 0). */
+static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x, const double *zeta, double *cv) {
+  cup_netlist *sub = tp->sub;
+  int n = sub->n, p = sub->p, m = sub->m, nv = n + p + m;
+  if (p && cup_input_eval(sub->u, t, S->ut)) return CUP_ERR_CALLBACK;
+  const double *z = zeta;
+  if (sub->zrow) {
+    for (int r = 0; r < m; r++) {
+      int k = sub->zrow[r];
+      if (k >= 0) { S->zf[r] = zeta ? zeta[k] : 0; continue; }
+      const double *l = sub->Lam + (size_t)(-1 - k) * (size_t)(n + p + sub->mr);
+      S->zf[r] = (x ? cup_dot(l, x, n) : 0) + cup_dot(l + n, S->ut, p) + (zeta ? cup_dot(l + n + p, zeta, sub->mr) : 0);
+    }
+    z = S->zf;
+  }
+  for (int k = 0; k < S->nsw; k++) {
+    const double *row = tp->ctl + (size_t)k * nv;
+    cv[k] = (x ? cup_dot(row, x, n) : 0) + cup_dot(row + n, S->ut, p) + (z ? cup_dot(row + n + p, z, m) : 0);
+  }
+  return CUP_OK;
+}
+
+/* ngspice's rule: on above VT + |VH|, off below VT - |VH|, else as before. */
+static uint64_t rule(const nl_switched *S, uint64_t cfg, const double *cv) {
+  for (int k = 0; k < S->nsw; k++) {
+    const nl_elem *el = &S->c.elem[S->sw[k]];
+    double h = fabs(el->vh);
+    if (cv[k] > el->vt + h) cfg |= (uint64_t)1 << k;
+    else if (cv[k] < el->vt - h) cfg &= ~((uint64_t)1 << k);
+  }
+  return cfg;
+}
+
+/* The configuration in force from t on, from the one before: the rule
+ * applied until it holds (a switch may move another's control). */
+static int settle(cup_netlist *nl, int *topo, double t, const double *x, const double *zeta, char *errmsg) {
+  nl_switched *S = nl->sw;
+  double cv[64];
+  if (S->gate_fn) {                                /* a controller: its gates at its instants, held between */
+    if (instant(S, t) < 0) return CUP_OK;
+    for (int k = 0; k < S->nsw; k++) S->gate[k] = (int)(S->topo[*topo].cfg >> k & 1u);
+    if (S->gate_fn(t, x, S->nsw, S->gate, S->gate_ctx))
+      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "t = %.17g: the controller callback failed", t);
+    uint64_t cfg = 0;
+    for (int k = 0; k < S->nsw; k++)
+      if (S->gate[k]) cfg |= (uint64_t)1 << k;
+    return topo_of(nl, cfg, topo, errmsg);
+  }
+  for (int pass = 0; pass <= S->nsw + 1; pass++) {
+    if (controls(S, &S->topo[*topo], t, x, zeta, cv))
+      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
+    uint64_t next = rule(S, S->topo[*topo].cfg, cv);
+    if (next == S->topo[*topo].cfg) return CUP_OK;
+    int st = topo_of(nl, next, topo, errmsg);
+    if (st) return st;
+  }
+  return nl_fail(&S->c, -1, errmsg, CUP_ERR_UNSUPPORTED, "the switches do not settle at t = %g: each "
+                 "configuration turns another's control past its threshold (a loop of switches with no "
+                 "hysteresis)", t);
+}
+
+/* 1 if switch k's control in configuration tp depends on the state or the diodes. */
+static int gated_by_state(const nl_switched *S, const nl_topo *tp, int k) {
+  int n = tp->sub->n, p = tp->sub->p, nv = n + p + tp->sub->m;
+  const double *row = tp->ctl + (size_t)k * nv;
+  for (int j = 0; j < nv; j++)
+    if (row[j] != 0 && (j < n || j >= n + p)) return 1;
+  (void)S;
+  return 0;
+}
+
+/* 1 if, from configuration tp, a switch of one kind (by_state: those the
+ * circuit gates, else those the sources alone gate) changes at s, state x. */
+static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
+  if (controls(S, tp, s, x, NULL, cv)) return -1;
+  for (int k = 0; k < S->nsw; k++)
+    if (gated_by_state(S, tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
+  return rule(S, tp->cfg, cv) != tp->cfg;
+}
+
+/* The first time in (t, tmax] at which a source-gated switch of
+ * configuration topo changes (tmax if none): the input's pieces checked at
+ * their ends when every source is DC, PULSE or PWL (linear pieces), else
+ * sampled 16 times each; the crossing bisected to the last bit; a jump edge
+ * switches at its time. */
+static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double *tnext) {
+  nl_switched *S = nl->sw;
+  const nl_topo *tp = &S->topo[topo];
+  double cv[64], a = t;
+  *tnext = tmax;
+  if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
+    long k = instant(S, t);
+    double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
+    if (next < tmax) *tnext = next;
+    return CUP_OK;
+  }
+  while (a < tmax) {
+    double b = tp->sub->u ? cup_input_next_break(tp->sub->u, a) : tmax;
+    if (!(b <= tmax)) b = tmax;
+    double lo = a, hi = -1;
+    /* linear pieces: the rule is monotone along one, so its end decides (just
+     * before b, clear of the input's rounding of its own breakpoints, then b
+     * itself: a jump edge switches there; bisection finds the last bit) */
+    int samples = S->linear ? 2 : 16;
+    for (int j = 1; j <= samples && hi < 0; j++) {
+      double s = j == samples ? b : S->linear ? b - (b - a) * 1e-9 : a + (b - a) * j / 16;
+      if (!(s > lo)) continue;
+      int ch = changes(S, tp, s, NULL, 0, cv);
+      if (ch < 0) return CUP_ERR_CALLBACK;
+      if (ch) hi = s; else lo = s;
+    }
+    if (hi >= 0) {
+      double p = nextafter(hi, lo);                /* a jump edge: at hi itself, one check */
+      if (p > lo) {
+        int ch = changes(S, tp, p, NULL, 0, cv);
+        if (ch < 0) return CUP_ERR_CALLBACK;
+        if (!ch) lo = p;
+      }
+      for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
+        double mid = lo + (hi - lo) / 2;
+        int ch = changes(S, tp, mid, NULL, 0, cv);
+        if (ch < 0) return CUP_ERR_CALLBACK;
+        if (ch) hi = mid; else lo = mid;
+      }
+      *tnext = hi;
+      return CUP_OK;
+    }
+    a = b;
+  }
+  return CUP_OK;
+}
+
+/* ---- the hook the integrator calls (integrator.h, cup_switching) ------------------- */
+
+static int op_settle(void *ctx, int *topo, double t, const double *x, const double *zeta, char *errmsg) {
+  cup_netlist *nl = ctx;
+  int st = settle(nl, topo, t, x, zeta, errmsg);
+  if (!st) nl->sw->cur = *topo;
+  return st;
+}
+
+static int op_next(void *ctx, int topo, double t, double tmax, double *tnext) {
+  return next_switch(ctx, topo, t, tmax, tnext);
+}
+
+static const cup_lcs *op_lcs(void *ctx, int topo) {
+  cup_netlist *nl = ctx;
+  return nl->sw->topo[topo].sub->L;
+}
+
+static void op_jump(void *ctx, int topo, double *x) {
+  cup_netlist *nl = ctx;
+  nl_switched *S = nl->sw;
+  const double *Pi = S->topo[topo].Pi;
+  int n = nl->n;
+  S->cur = topo;
+  if (!Pi) return;
+  double *y = S->zf + S->c.nelem + 1;              /* n entries past the multipliers' room */
+  for (int i = 0; i < n; i++) {
+    double s = 0;
+    for (int j = 0; j < n; j++) s += Pi[i + (size_t)j * n] * x[j];
+    y[i] = s;
+  }
+  cup_copy(x, y, n);
+}
+
+static int op_crossed(void *ctx, int topo, double t, const double *x) {
+  cup_netlist *nl = ctx;
+  double cv[64];
+  if (nl->sw->gate_fn) return 0;
+  return changes(nl->sw, &nl->sw->topo[topo], t, x, 1, cv);
+}
+
+static int op_state_gated(void *ctx, int topo) {
+  cup_netlist *nl = ctx;
+  return !nl->sw->gate_fn && nl->sw->topo[topo].state_gated;
+}
+
+int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
+  if (!nl || !nl->sw || !ops) return 0;
+  *ops = (cup_switching){.ctx = nl, .settle = op_settle, .next = op_next, .lcs = op_lcs, .jump = op_jump,
+                         .state_gated = op_state_gated, .crossed = op_crossed};
+  return 1;
+}
+
+int cup_netlist_switch_count(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->nsw : 0; }
+
+int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void *ctx, char *errmsg) {
+  if (!nl) return cup_fail(errmsg, CUP_ERR_ARG, "controller: NULL netlist");
+  if (!nl->sw) return cup_fail(errmsg, CUP_ERR_ARG, "controller: %s has no switch to gate", nl->file);
+  if (fn && !(ts > 0 && isfinite(ts)))
+    return cup_fail(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
+  nl_switched *S = nl->sw;
+  if (fn && !S->gate && !(S->gate = calloc((size_t)S->nsw + 1, sizeof(int))))
+    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  S->gate_fn = fn;
+  S->gate_ctx = ctx;
+  S->gate_ts = ts;
+  return CUP_OK;
+}
+
+long cup_netlist_configurations_formed(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->formed : 0; }
+
+/* ---- the netlist with switches ------------------------------------------------------ */
+
+static cup_netlist *sw_current(cup_netlist *nl) { return nl->sw->topo[nl->sw->cur].sub; }
+
+static int sw_probe(cup_netlist *nl, int k, char *errmsg) {
+  nl_switched *S = nl->sw;
+  for (int j = 1; j < S->ntopo; j++) {
+    int q = cup_netlist_probe(S->topo[j].sub, nl->sig_name[k], errmsg);
+    if (q < 0) return q;
+  }
+  return k;
+}
+
+static void sw_free(nl_switched **Sp) {
+  nl_switched *S = *Sp;
+  if (!S) return;
+  for (int k = 0; k < S->ntopo; k++) {
+    if (k > 0) cup_netlist_free(&S->topo[k].sub);  /* topo[0]'s is the netlist itself */
+    free(S->topo[k].Pi);
+    free(S->topo[k].ctl);
+  }
+  nl_circuit_free(&S->c);
+  free(S->sw); free(S->ut); free(S->zf); free(S->gate);
+  free(S);
+  *Sp = NULL;
+}
+
+/* A switch's control must be a voltage or a current of the circuit. */
+static int check_controls(const nl_circuit *c, int e, char *errmsg) {
+  const nl_elem *el = &c->elem[e];
+  if (el->kind == NL_W) return CUP_OK;             /* the reader found its element */
+  for (int k = 0; k < 2; k++) {
+    int v = k ? el->cb : el->ca, used = v == 0;
+    for (int f = 0; f < c->nelem && !used; f++) used = f != e && (c->elem[f].a == v || c->elem[f].b == v);
+    if (!used)
+      return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "no control path: control node '%s' is not connected to "
+                     "any element (it has no voltage to sense)", c->node[v]);
+  }
+  return CUP_OK;
+}
+
+static const nl_sw_hooks hooks = {sw_free, sw_current, sw_probe};
+
+int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
+  nl_switched *S = calloc(1, sizeof *S);
+  if (!S) return nomem(c, errmsg);
+  S->c = *c;
+  memset(c, 0, sizeof *c);
+  c = &S->c;
+  int st = CUP_OK;
+  if (c->nswitch > 63) st = nl_fail(c, -1, errmsg, CUP_ERR_UNSUPPORTED, "more than 63 switches");
+  S->sw = malloc(sizeof(int) * ((size_t)c->nswitch + 1));
+  if (!st && !S->sw) st = nomem(c, errmsg);
+  for (int e = 0; !st && e < c->nelem; e++)
+    if (c->elem[e].kind == NL_S || c->elem[e].kind == NL_W) {
+      st = check_controls(c, e, errmsg);
+      S->sw[S->nsw++] = e;
+    }
+  S->linear = 1;
+  for (int e = 0; e < c->nelem; e++)
+    if ((c->elem[e].kind == NL_V || c->elem[e].kind == NL_I) && c->elem[e].src.fn == NL_FN_SIN) S->linear = 0;
+  uint64_t cfg = 0;                                /* ON/OFF as written, else off, until the controls say */
+  for (int k = 0; !st && k < S->nsw; k++)
+    if (c->elem[S->sw[k]].init == 1) cfg |= (uint64_t)1 << k;
+  cup_netlist *nl = NULL;
+  if (!st) st = form(S, &nl, cfg, &S->topo[0], errmsg);
+  if (st) { sw_free(&S); return st; }
+  S->topo[0].sub = nl;
+  S->ntopo = 1;
+  nl->sw = S;
+  nl->hooks = &hooks;
+  S->ut = calloc((size_t)nl->p + 1, sizeof(double));
+  S->zf = calloc((size_t)nl->m + (size_t)c->nelem + (size_t)nl->n + 2, sizeof(double));
+  if (!S->ut || !S->zf) st = nomem(c, errmsg);
+  int topo = 0;                                    /* the state at t = 0 from the controls at t = 0 */
+  if (!st) st = settle(nl, &topo, 0, nl->x0, NULL, errmsg);
+  if (!st && topo != 0) {                          /* that configuration is the netlist's */
+    nl_topo t0 = S->topo[0];
+    S->topo[0] = S->topo[topo];
+    S->topo[topo] = t0;
+    nl->sw = NULL;
+    nl->hooks = NULL;
+    nl = S->topo[0].sub;
+    nl->sw = S;
+    nl->hooks = &hooks;
+  }
+  if (st) { cup_netlist_free(&nl); return st; }    /* frees S and every configuration */
+  *out = nl;
+  return CUP_OK;
+}

@@ -1,0 +1,410 @@
+/* netlist_switch: ideal switches (S, W) against closed forms computed here:
+ * the two-capacitor problem (charge conserved, C1 C2 / (C1 + C2) V0^2 / 2
+ * lost), the flux share of two inductors left in series by an opening
+ * switch, an RC discharge through a closed switch, the ideal CCM buck's
+ * average output D Vin and its inductor ripple, the configurations formed
+ * once each; and the reader's errors. */
+#define _GNU_SOURCE
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "testutil.h"
+
+static cup_netlist *text_ok(const char *text) {
+  char err[CUP_ERRMSG_LEN] = "";
+  cup_netlist *nl = NULL;
+  int st = cup_netlist_load_string(&nl, text, "t.cir", NULL, 0, err);
+  if (st) fail_msg("loading failed (%d): %s\n%s", st, err, text);
+  return nl;
+}
+
+static const char *text_bad(const char *text) {
+  static char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = NULL;
+  int st = cup_netlist_load_string(&nl, text, "t.cir", NULL, 0, err);
+  if (st == CUP_OK) fail_msg("loaded but should not have:\n%s", text);
+  assert_null(nl);
+  assert_null(strchr(err, '\n'));
+  return err;
+}
+
+static void assert_contains(const char *msg, const char *want) {
+  if (!strstr(msg, want)) fail_msg("message\n  %s\ndoes not contain\n  %s", msg, want);
+}
+
+/* The samples of a run: times, states and one signal. */
+typedef struct run_rec {
+  cup_netlist *nl;
+  int n, k, sig, status;
+  long cap, count;
+  double *t, *x, *s;
+  const cup_integrator *I;
+} run_rec;
+
+static int record(long k, double t, const double *x, void *ctx) {
+  (void)k;
+  run_rec *r = ctx;
+  if (r->count == r->cap) return 1;
+  r->t[r->count] = t;
+  memcpy(r->x + r->count * r->n, x, sizeof(double) * (size_t)r->n);
+  if (r->sig >= 0) {
+    double zeta[16] = {0}, out[16];
+    cup_integrator_zeta(r->I, zeta);
+    assert_int_equal(cup_netlist_signals(r->nl, t, x, zeta, out), CUP_OK);
+    r->s[r->count] = out[r->sig];
+  }
+  r->count++;
+  return 0;
+}
+
+/* Run nl over [0, T] with N samples into r: the adaptive scheme at tol,
+ * or (steps > 0) scheme on that many steps. */
+static void run_with(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r, cup_scheme scheme,
+                     long steps) {
+  char err[CUP_ERRMSG_LEN];
+  memset(r, 0, sizeof *r);
+  r->nl = nl;
+  r->n = cup_lcs_dim(cup_netlist_lcs(nl));
+  r->sig = probe ? cup_netlist_probe(nl, probe, err) : -1;
+  if (probe && r->sig < 0) fail_msg("probe %s: %s", probe, err);
+  r->cap = N;
+  r->t = malloc(sizeof(double) * (size_t)N);
+  r->x = malloc(sizeof(double) * (size_t)N * (size_t)r->n);
+  r->s = malloc(sizeof(double) * (size_t)N);
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = steps > 0 ? scheme : CUP_SCHEME_ADAPTIVE;
+  if (steps > 0) o.n = steps;
+  o.T = T;
+  o.tol_abs = o.tol_rel = tol;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = N;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("create: %s", err);
+  r->I = I;
+  cup_run_info info;
+  int st = cup_integrator_run(I, cup_netlist_x0(nl), record, r, &info);
+  if (st < 0) fail_msg("run: %s", info.message);
+  r->status = st;
+  assert_int_equal(r->count, N);
+  cup_integrator_free(&I);
+}
+
+static void run(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r) {
+  run_with(nl, T, tol, N, probe, r, CUP_SCHEME_ADAPTIVE, 0);
+}
+
+static void rec_free(run_rec *r) { free(r->t); free(r->x); free(r->s); }
+
+/* C1 charged to V0, C2 empty; S1 closes at 1 ms (a jump edge of its gate):
+ * both then hold C1 V0 / (C1 + C2), the charge is C1 V0 to rounding and
+ * the energy lost is C1 C2 / (C1 + C2) V0^2 / 2. Without the switch's
+ * constraint the formulation refuses the loop C1, S1, C2. */
+static void test_two_capacitors(void **state) {
+  (void)state;
+  const double C1 = 1e-6, C2 = 3e-6, V0 = 10;
+  cup_netlist *nl = text_ok("two capacitors\n"
+                            "C1 a 0 1u IC=10\n"
+                            "C2 b 0 3u\n"
+                            "S1 a b g 0 SMOD\n"
+                            "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n"
+                            ".model SMOD SW(VT=0.5 VH=0.1)\n");
+  run_rec r;
+  run(nl, 2e-3, 1e-10, 201, "i(S1)", &r);
+  double vf = C1 * V0 / (C1 + C2), lost = 0.5 * C1 * C2 / (C1 + C2) * V0 * V0, worst = 0, wq = 0;
+  for (long k = 0; k < r.count; k++) {
+    const double *x = r.x + 2 * k;
+    int after = r.t[k] > 1e-3;
+    worst = fmax(worst, after ? fmax(fabs(x[0] - vf), fabs(x[1] - vf)) : fmax(fabs(x[0] - V0), fabs(x[1])));
+    wq = fmax(wq, fabs(C1 * x[0] + C2 * x[1] - C1 * V0));
+    assert_true(fabs(r.s[k]) <= 1e-12);           /* no current once equal (and none before) */
+  }
+  const double *xe = r.x + 2 * (r.count - 1);
+  double e0 = 0.5 * C1 * V0 * V0, e1 = 0.5 * C1 * xe[0] * xe[0] + 0.5 * C2 * xe[1] * xe[1];
+  printf("two capacitors: |v - closed form| <= %.2e V, |charge - C1 V0| <= %.2e C, energy lost %.10e J "
+         "(closed form %.10e J)\n", worst, wq, e0 - e1, lost);
+  assert_true(worst <= 1e-12 * V0);
+  assert_true(wq <= 1e-15 * C1 * V0);
+  assert_true(fabs((e0 - e1) - lost) <= 1e-12 * lost);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
+/* L1 = 1 H carrying 2 A and L2 = 3 H carrying 0.5 A share node b with S1
+ * and R1; S1 is off from t = 0 (its gate is 0), which leaves L1 and L2 in
+ * series: the jump is the flux-conserving (L1 i1 + L2 i2) / (L1 + L2) =
+ * 0.875 A, then the loop R0, L1, L2 decays with tau = (L1 + L2) / R0.
+ * x0 is off the configuration's constraint: projected, with a warning. */
+static void test_inductor_cut(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("inductors left in series\n"
+                            "R0 a 0 2\n"
+                            "L1 a b 1 IC=2\n"
+                            "L2 b 0 3 IC=0.5\n"
+                            "S1 b c g 0 SMOD\n"
+                            "R1 c 0 1\n"
+                            "Vg g 0 0\n"
+                            ".model SMOD SW(VT=0.5)\n");
+  run_rec r;
+  run(nl, 4, 1e-11, 41, NULL, &r);
+  assert_int_equal(r.status, CUP_WARN_X0_OUTSIDE);
+  double istar = (1 * 2 + 3 * 0.5) / 4.0, worst = 0;
+  for (long k = 0; k < r.count; k++) {             /* x0 projected is the first sample */
+    double want = istar * exp(-2 * r.t[k] / 4);
+    worst = fmax(worst, fmax(fabs(r.x[2 * k] - want), fabs(r.x[2 * k + 1] - want)));
+  }
+  printf("inductor cut: i1 = i2 = 0.875 exp(-t/2) A to %.2e A\n", worst);
+  assert_true(worst <= 1e-10);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
+/* An RC discharge through a switch with RON, closing at 1 ms: v(t) =
+ * V0 exp(-(t - 1m) / ((R1 + RON) C)) after it, V0 before; and through an
+ * ideal one (RON omitted), R1 C. */
+static void test_rc_through_switch(void **state) {
+  (void)state;
+  for (int ideal = 0; ideal < 2; ideal++) {
+    cup_netlist *nl = text_ok(ideal ? "rc\nC1 a 0 1u IC=5\nS1 a b g 0 SM\nR1 b 0 1k\nVg g 0 PULSE(0 2 1m 1u 1u 1 2)\n"
+                                      ".model SM SW(VT=1)\n"
+                                    : "rc\nC1 a 0 1u IC=5\nS1 a b g 0 SM\nR1 b 0 1k\nVg g 0 PULSE(0 2 1m 1u 1u 1 2)\n"
+                                      ".model SM SW(VT=1 RON=250 ROFF=1e12)\n");
+    run_rec r;
+    run(nl, 4e-3, 1e-11, 401, NULL, &r);
+    double tau = (1e3 + (ideal ? 0 : 250)) * 1e-6, ts = 1e-3 + 0.5e-6, worst = 0, roff = ideal ? 0 : 1e12;
+    for (long k = 0; k < r.count; k++) {
+      double t = r.t[k];
+      double want = t <= ts ? 5 * exp(-t / (roff ? roff * 1e-6 : INFINITY)) : 5 * exp(-ts / (roff ? roff * 1e-6 : INFINITY)) * exp(-(t - ts) / tau);
+      worst = fmax(worst, fabs(r.x[k] - want));
+    }
+    printf("RC through a%s switch closing at the gate's crossing (1.0005 ms): max error %.2e V\n",
+           ideal ? "n ideal" : " RON=250 ROFF=1e12", worst);
+    assert_true(worst <= 1e-9);
+    rec_free(&r);
+    cup_netlist_free(&nl);
+  }
+}
+
+/* The ideal buck in CCM: 12 V in, D = 0.25 at 50 kHz (PULSE jump edges),
+ * L = 100 uH, C = 10 uF, R = 5 Ohm. In the periodic steady state the
+ * inductor's volt-seconds balance: the output's average over a period is
+ * D Vin = 3 V exactly (the switch node is Vin for D Ts and 0 after, the
+ * diode conducting); the inductor's ripple is (Vin - Vout) D Ts / L to
+ * the output's own ripple relative to Vin - Vout. The two configurations are formed once each. */
+static void test_buck(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("ideal buck\n"
+                            "V1 in 0 12\n"
+                            "S1 in sw g 0 SMOD\n"
+                            "D1 0 sw\n"
+                            "L1 sw out 100u\n"
+                            "C1 out 0 10u\n"
+                            "R1 out 0 5\n"
+                            "Vg g 0 PULSE(0 1 0 jump jump 5u 20u)\n"
+                            ".model SMOD SW(VT=0.5)\n");
+  const double Ts = 20e-6, D = 0.25, Vin = 12, L = 100e-6;
+  long per = 2000, periods = 200;
+  run_rec r;
+  run(nl, periods * Ts, 1e-10, periods * per + 1, NULL, &r);
+  /* the last period: the output's mean by the trapezoid on 2000 samples, the inductor's extremes */
+  long k0 = (periods - 1) * per;
+  double mean = 0, imax = -INFINITY, imin = INFINITY;
+  for (long k = k0; k < k0 + per; k++) mean += 0.5 * (r.x[2 * k + 1] + r.x[2 * k + 3]) / (double)per;
+  for (long k = k0; k <= k0 + per; k++) { imax = fmax(imax, r.x[2 * k]); imin = fmin(imin, r.x[2 * k]); }
+  double drift = fabs(r.x[2 * (k0 + per) + 1] - r.x[2 * k0 + 1]);
+  double ripple = (Vin - mean) * D * Ts / L, vmax = -INFINITY, vmin = INFINITY;
+  for (long k = k0; k <= k0 + per; k++) { vmax = fmax(vmax, r.x[2 * k + 1]); vmin = fmin(vmin, r.x[2 * k + 1]); }
+  printf("buck: mean v(out) over the last period %.9f V (D Vin = %.9f), drift over it %.1e V; ripple %.6f A "
+         "(closed form %.6f A)\n", mean, D * Vin, drift, imax - imin, ripple);
+  assert_true(drift <= 1e-7);
+  assert_true(fabs(mean - D * Vin) <= 1e-5);
+  /* the closed form takes v(out) constant: its error is within the output's ripple over Vin - Vout */
+  assert_true(fabs((imax - imin) - ripple) <= ripple * (vmax - vmin) / (Vin - mean));
+  assert_true(imin > 0);                          /* CCM */
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
+/* A relaxation oscillator gated by its own capacitor: C charges from 10 V
+ * through R1 = 1k while S1 is off and discharges through RON = 250 (to
+ * v_inf = 2 V, tau2 = R1 || RON C) while on; S1 turns on above VT + VH = 6 V
+ * and off below VT - VH = 4 V. From v(0) = 0: on at tau1 ln(10/4), then
+ * off after t2 = tau2 ln((6 - 2)/(4 - 2)), on after t1 = tau1 ln((10 - 4)/(10 - 6)),
+ * a period of t1 + t2. The samples against that piecewise closed form. */
+static double relax_exact(double t) {
+  const double tau1 = 1e-3, tau2 = 0.2e-3, t1 = tau1 * log(6.0 / 4), t2 = tau2 * log(4.0 / 2);
+  double ton = tau1 * log(10.0 / 4);
+  if (t <= ton) return 10 * (1 - exp(-t / tau1));
+  double s = fmod(t - ton, t1 + t2);
+  return s <= t2 ? 2 + 4 * exp(-s / tau2) : 10 - 6 * exp(-(s - t2) / tau1);
+}
+
+static void test_relaxation(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("hysteretic RC relaxation oscillator\n"
+                            "V1 in 0 10\n"
+                            "R1 in c 1k\n"
+                            "C1 c 0 1u\n"
+                            "S1 c 0 c 0 SMOD\n"
+                            ".model SMOD SW(VT=5 VH=1 RON=250)\n");
+  run_rec r;
+  run(nl, 5e-3, 1e-12, 5001, "v(c)", &r);
+  double worst = 0, tw = 0;
+  for (long k = 0; k < r.count; k++) {
+    double e = fabs(r.x[k] - relax_exact(r.t[k]));
+    if (e > worst) { worst = e; tw = r.t[k]; }
+  }
+  const double period = 1e-3 * log(1.5) + 0.2e-3 * log(2.0);
+  printf("relaxation oscillator (period 2 tau ln form: %.9e s, %.1f periods): max |v - closed form| = %.2e V "
+         "(at t = %.6e)\n", period, (5e-3 - 1e-3 * log(2.5)) / period, worst, tw);
+  assert_true(worst <= 1e-8);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
+/* The fixed-step schemes switch at the end of the step that holds the
+ * switching time: on a grid that holds it, the two capacitors are as
+ * exact as under the adaptive scheme, and the buck's mean output is D Vin
+ * to the scheme's error (it was 3.41 V while the gate's edges and the grid
+ * rounded apart and a step in seven periods was taken in the old
+ * configuration); the relaxation oscillator, whose switching times fall
+ * between grid points, converges at first order in h. */
+static void test_fixed_step(void **state) {
+  (void)state;
+  static const cup_scheme schemes[] = {CUP_SCHEME_EXPLICIT, CUP_SCHEME_IMPLICIT, CUP_SCHEME_EXPONENTIAL,
+                                       CUP_SCHEME_THETA};
+  for (int q = 0; q < 4; q++) {
+    cup_netlist *nl = text_ok("two capacitors\nC1 a 0 1u IC=10\nC2 b 0 3u\nS1 a b g 0 SMOD\n"
+                              "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n.model SMOD SW(VT=0.5 VH=0.1)\n");
+    run_rec r;
+    run_with(nl, 2e-3, 0, 201, NULL, &r, schemes[q], 200);
+    double worst = 0;
+    for (long k = 0; k < r.count; k++)
+      worst = fmax(worst, r.t[k] <= 1e-3 ? fmax(fabs(r.x[2 * k] - 10), fabs(r.x[2 * k + 1]))
+                                        : fmax(fabs(r.x[2 * k] - 2.5), fabs(r.x[2 * k + 1] - 2.5)));
+    printf("two capacitors, %-11s n = 200: max error %.2e V\n", cup_scheme_name(schemes[q]), worst);
+    assert_true(worst <= 1e-13);
+    rec_free(&r);
+    cup_netlist_free(&nl);
+  }
+  cup_netlist *nl = text_ok("ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                            "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n");
+  run_rec r;
+  long per = 40, periods = 200;
+  run_with(nl, periods * 20e-6, 0, periods * per + 1, NULL, &r, CUP_SCHEME_THETA, periods * per);
+  double mean = 0;
+  long k0 = (periods - 1) * per;
+  for (long k = k0; k < k0 + per; k++) mean += 0.5 * (r.x[2 * k + 1] + r.x[2 * k + 3]) / (double)per;
+  printf("buck, theta, 40 steps a period: mean v(out) over the 200th period %.6f V (D Vin = 3)\n", mean);
+  assert_true(fabs(mean - 3) <= 2e-3);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+  double err[2];
+  for (int h = 0; h < 2; h++) {
+    nl = text_ok("relaxation\nV1 in 0 10\nR1 in c 1k\nC1 c 0 1u\nS1 c 0 c 0 SMOD\n.model SMOD SW(VT=5 VH=1 RON=250)\n");
+    run_with(nl, 5e-3, 0, 501, NULL, &r, CUP_SCHEME_THETA, 10000L << h);
+    err[h] = 0;
+    for (long k = 0; k < r.count; k++) err[h] = fmax(err[h], fabs(r.x[k] - relax_exact(r.t[k])));
+    rec_free(&r);
+    cup_netlist_free(&nl);
+  }
+  printf("relaxation oscillator, theta: max error %.3e V (n = 10000), %.3e V (n = 20000): ratio %.2f\n", err[0],
+         err[1], err[0] / err[1]);
+  assert_true(err[1] <= 0.1 && err[0] / err[1] > 1.6);   /* each switching up to h late: first order */
+}
+
+/* A controller from code (cup_netlist_set_controller) that writes the
+ * buck's PWM every 5 us (on at instants 4k, off at the others) gives the
+ * trajectory of the gate from PULSE: the same switching times, so the
+ * same states (the two runs against each other, the PULSE run against
+ * D Vin in test_buck). A controller failing stops the run at its time. */
+static int pwm_gate(double t, const double *x, int nswitch, int *gate, void *ctx) {
+  (void)x;
+  long *calls = ctx;
+  (*calls)++;
+  assert_int_equal(nswitch, 1);
+  long k = lround(t / 5e-6);
+  gate[0] = k % 4 == 0;
+  return 0;
+}
+
+static int failing_gate(double t, const double *x, int nswitch, int *gate, void *ctx) {
+  (void)x; (void)nswitch; (void)ctx;
+  gate[0] = 1;
+  return t > 1e-4;
+}
+
+static void test_controller(void **state) {
+  (void)state;
+  const char *buck = "ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                     "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n";
+  cup_netlist *ref = text_ok(buck), *nl = text_ok(buck);
+  char err[CUP_ERRMSG_LEN];
+  long calls = 0;
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, &calls, err), CUP_OK);
+  run_rec a, b;
+  run(ref, 2e-3, 1e-10, 2001, NULL, &a);
+  run(nl, 2e-3, 1e-10, 2001, NULL, &b);
+  double worst = 0;
+  for (long k = 0; k < a.count * 2; k++) worst = fmax(worst, fabs(a.x[k] - b.x[k]));
+  printf("buck, PWM from a controller every 5 us (%ld calls) against PULSE: max |dx| = %.2e\n", calls, worst);
+  assert_true(worst <= 1e-9);
+  assert_int_equal(calls, 400);                   /* t = 0, 5u, ..., 1995u */
+  rec_free(&a);
+  rec_free(&b);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, failing_gate, NULL, err), CUP_OK);
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = 2e-3;
+  o.output = CUP_OUTPUT_FINAL;
+  cup_integrator *I = NULL;
+  assert_int_equal(cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err), CUP_OK);
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info), CUP_ERR_CALLBACK);
+  assert_contains(info.message, "the controller callback failed");
+  printf("failing controller: %s\n", info.message);
+  cup_integrator_free(&I);
+  assert_int_equal(cup_netlist_set_controller(nl, 0, pwm_gate, NULL, err), CUP_ERR_ARG);
+  cup_netlist_free(&nl);
+  cup_netlist_free(&ref);
+}
+
+static void test_errors(void **state) {
+  (void)state;
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 NOPE\nV1 c 0 1\n"),
+                  "t.cir:4:12: S1: model 'NOPE' is not defined");
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c c M\nV1 c 0 1\n.model M SW(VT=1)\n"),
+                  "t.cir:4:10: S1: no control path: both control nodes are 'c'");
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 M\n.model M SW(VT=1)\n"),
+                  "t.cir:4:1: S1: no control path: control node 'c' is not connected to any element");
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nW1 a b VX M\nV1 c 0 1\nR2 c 0 1\n.model M CSW(IT=1)\n"),
+                  "t.cir:4:8: W1: no control path: no element named 'VX'");
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 M\nV1 c 0 1\n.model M SW(VT=1 RON=0)\n"),
+                  "t.cir:6:22: M: bad value: ron must be > 0 (got 0");
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 M\nV1 c 0 1\n.model M SW(VT=1 VON=2)\n"),
+                  "t.cir:6:18: M: 'VON' is not a parameter of a SW model");
+  assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 M\nV1 c 0 1\n.model M CSW(IT=1)\n"),
+                  "t.cir:4:12: S1: model 'M' is not an SW model");
+  assert_contains(text_bad("t\nC1 a 0 1u\nV1 b 0 1\nS1 a b c 0 M\nV2 c 0 1\n.model M SW(VT=0.5)\n"),
+                  "t.cir:4:1: S1: closed, the switch puts capacitors in a loop with a source");
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
+    cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
+    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
