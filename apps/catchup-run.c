@@ -33,6 +33,7 @@
 #include "crowd_log.h"
 #include "run_plan.h"
 #include "run_stop.h"
+#include "run_steady.h"
 #include "read_text.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
@@ -52,6 +53,7 @@ static void print_usage(void) {
   printf("usage: catchup-run SCENE.yaml -o OUT.h5 [--n N | --h STEP] [--eps SPEC] [--eta SPEC]\n"
          "                   [--scheme NAME] [--projector NAME] [--tol TOL] [--estimate]\n"
          "                   [--max-steps N] [--set key=value]... [--resume] [--quiet]\n"
+         "                   [--steady-state [--period T]]\n"
          "       catchup-run CIRCUIT.cir -o OUT.h5 [--probe SIGNAL]... [the same options]\n"
          "  -o, --output OUT.h5  HDF5 file to write (/t, /x, /events and attributes); replaced\n"
          "  --probe SIGNAL       a netlist's v(NODE), v(NODE1,NODE2), i(ELEMENT) or all, into\n"
@@ -68,6 +70,9 @@ static void print_usage(void) {
          "  --max-steps N        refuse a fixed-step run of more than N steps (scene key max_steps;\n"
          "                       default %ld)\n"
          "  --set key=value      set any scene key (dotted path, value in YAML), repeatable\n"
+         "  --steady-state       the periodic steady state: one period from it, its Floquet multipliers and\n"
+         "                       measurements (scene key steady_state; docs/steady-state.md)\n"
+         "  --period T           its period (scene key steady_state.period; default: the sources')\n"
          "  --resume             continue OUT.h5, stopped by SIGINT/SIGTERM, with the same scene,\n"
          "                       inputs and options, to the same trajectory bit for bit\n"
          "  --quiet              no summary line (warnings and errors are still printed)\n"
@@ -131,10 +136,10 @@ static int check_value(const char *flag, const char *v) {
   } else if (strcmp(flag, "--h") == 0) {
     double h = strtod(v, &end);
     if (end == v || *end || !(h > 0) || !(h < 1e300)) return usage_error("--h '%s': not a positive number", v);
-  } else if (strcmp(flag, "--tol") == 0) {
+  } else if (strcmp(flag, "--tol") == 0 || strcmp(flag, "--period") == 0) {
     double tol = strtod(v, &end);
     if (end == v || *end || !(tol > 0) || !(tol < 1e300))
-      return usage_error("--tol '%s': not a positive number", v);
+      return usage_error("%s '%s': not a positive number", flag, v);
   } else if (strcmp(flag, "--max-steps") == 0) {
     double n = strtod(v, &end);
     if (end == v || *end || !(n >= 1) || n > 9.2e18 || n != floor(n))
@@ -150,6 +155,7 @@ static int check_value(const char *flag, const char *v) {
 static const struct { const char *flag, *key; } value_flags[] = {
   {"--n", "n="}, {"--h", "h="}, {"--eps", "eps="}, {"--eta", "eta="}, {"--scheme", "scheme="},
   {"--projector", "projector.method="}, {"--tol", "tol="}, {"--max-steps", "max_steps="}, {"--set", ""},
+  {"--period", "steady_state.period="},
   {"-o", NULL},
   {"--output", NULL},
 };
@@ -187,6 +193,7 @@ static int parse_one(args_t *a, int argc, char **argv, int *i) {
   if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) { a->quiet = 1; return 0; }
   if (strcmp(arg, "--resume") == 0) { a->resume = 1; return 0; }
   if (strcmp(arg, "--estimate") == 0) return add_override(a, "estimate=", "true");
+  if (strcmp(arg, "--steady-state") == 0) return add_override(a, "steady_state.enabled=", "true");
   if (arg[0] == '-' && arg[1]) return usage_error("unknown option '%s'", arg);
   if (a->scene) return usage_error("one scene per run: '%s' after '%s'", arg, a->scene);
   a->scene = arg;
@@ -253,6 +260,7 @@ typedef struct {
   cup_netlist *nl;           /* NULL: no signals */
   const cup_integrator *I;
   double *zeta, *sig;
+  run_steady *steady;        /* --steady-state: the period's samples kept for its measurements */
 } sink_t;
 
 /* Test hook (docs/run-output.md): CATCHUP_RUN_TEST_SIGNAL=K raises SIGINT
@@ -264,9 +272,13 @@ static int sink(long k, double t, const double *x, void *ctx) {
   if (hook_at > 0 && ++hook_seen == hook_at) raise(SIGINT);
   if (stop_signal) return 1;
   sink_t *c = ctx;
-  if (!c->nl) return cup_h5run_sink(k, t, x, c->w);
+  if (!c->nl) {
+    if (c->steady) run_steady_record(c->steady, t, x, NULL);
+    return cup_h5run_sink(k, t, x, c->w);
+  }
   cup_integrator_zeta(c->I, c->zeta);
   if (cup_netlist_signals(c->nl, t, x, c->zeta, c->sig) != CUP_OK) return CUP_ERR_CALLBACK;
+  if (c->steady) run_steady_record(c->steady, t, x, c->sig);
   return cup_h5run_append(c->w, t, x, c->sig);
 }
 
@@ -515,6 +527,10 @@ static int check_probes(run_t *r, char *err) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }
+  if (r->sk.steady && run_steady_probes(r->sk.steady, nl, e2, sizeof e2)) {
+    snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
+    return EXIT_RUN;
+  }
   int ns = cup_netlist_signal_count(nl), m = cup_lcs_rows(cup_scene_lcs(r->scene));
   r->sk.zeta = calloc((size_t)m + 1, sizeof(double));
   r->sk.sig = calloc((size_t)ns + 1, sizeof(double));
@@ -613,6 +629,23 @@ static void model_warnings(run_t *r) {
   }
 }
 
+/* --steady-state: solved before the output is touched; the run becomes one
+ * period from it (or, with no steady state, the transient: a warning). */
+static int steady_solve(run_t *r, char *err) {
+  char e2[MSG_LEN] = "";
+  cup_integrator_options o = r->opts;
+  o.interrupt = (const volatile int *)&stop_signal;
+  int rc = run_steady_solve(r->sk.steady, r->scene, &o, e2, sizeof e2);
+  if (rc) {
+    snprintf(err, MSG_LEN, "%s: %s", r->args->scene, e2);
+    return EXIT_RUN;
+  }
+  if (e2[0]) fprintf(stderr, "catchup-run: warning: %s: %s\n", r->args->scene, e2);
+  o.interrupt = r->opts.interrupt;
+  r->opts = o;
+  return 0;
+}
+
 /* Every argument and input is checked before the output is touched; the
  * file is written beside it and replaces it (cup_h5run_commit) only once
  * the run got past its checks: a run that fails them leaves an earlier
@@ -625,8 +658,17 @@ static int setup(run_t *r, char *err) {
     snprintf(err, MSG_LEN, "%s", e2);
     return EXIT_RUN;
   }
+  if (cup_scene_steady_state(r->scene) && !(r->sk.steady = run_steady_new(r->scene))) {
+    snprintf(err, MSG_LEN, "out of memory");
+    return EXIT_RUN;
+  }
+  if (r->sk.steady && a->resume) {
+    snprintf(err, MSG_LEN, "%s: --resume: a steady-state run is not resumable (run it again)", a->scene);
+    return EXIT_RUN;
+  }
   if (check_probes(r, err)) return EXIT_RUN;
   r->opts = *cup_scene_options(r->scene);
+  if (r->sk.steady && steady_solve(r, err)) return EXIT_RUN;
   if (check_plan(r, err)) return EXIT_RUN;
   /* a signal stops the run within 1024 steps even when no sample is due */
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
@@ -668,7 +710,8 @@ static void run(run_t *r) {
   if (hook_at == 0) raise(SIGINT);
   double t0 = now_seconds();
   int st = r->args->resume ? cup_integrator_resume(r->I, sink, &r->sk, &r->info)
-                           : cup_integrator_run(r->I, cup_scene_x0(r->scene), sink, &r->sk, &r->info);
+                           : cup_integrator_run(r->I, run_steady_x0(r->sk.steady, cup_scene_x0(r->scene)), sink,
+                                                &r->sk, &r->info);
   r->wall = now_seconds() - t0;
   settle_status(r, st);
 }
@@ -681,6 +724,7 @@ static void finish_file(run_t *r) {
   int wst = r->status == CUP_ERR_INTERRUPTED && stop_signal ? run_stop_save(r->w, r->I, &r->info, &s, &r->resumable)
                                                             : run_stop_clear(r->w);
   wst = cup_status_merge(wst, write_results(r));
+  wst = cup_status_merge(wst, run_steady_write(r->sk.steady, r->w, r->scene, r->status));
   if (r->crowd)
     wst = cup_status_merge(wst, crowd_log_write(r->crowd, r->w, r->info.step, cup_integrator_state(r->I)));
   if (wst != CUP_OK && r->status >= 0) {
@@ -732,6 +776,7 @@ static void report(const run_t *r) {
           "%lld dual iterations, max eps_cert %.3g, max eta_cert %.3g%s, %.3g s: %s\n",
           a->scene, a->out, how, i->samples, i->projected, i->skipped, i->dual_iterations,
           i->max_eps_cert, i->max_eta_cert, est, r->wall, cup_status_name(r->status));
+  run_steady_report(r->sk.steady, a->scene, stderr);
   if (r->crowd) {
     char line[160];
     crowd_log_summary(r->crowd, line, sizeof line);
@@ -743,6 +788,7 @@ static void cleanup(run_t *r) {
   if (r->w) cup_h5run_close(&r->w, NULL);
   free(r->sk.zeta);
   free(r->sk.sig);
+  run_steady_free(&r->sk.steady);
   cup_integrator_free(&r->I);
   crowd_log_free(&r->crowd);
   cup_scene_free(&r->scene);

@@ -18,6 +18,7 @@
 #include "catchup/input.h"
 #include "catchup/lcs.h"
 #include "catchup/integrator.h"
+#include "catchup/pss.h"
 #include "catchup/crowd.h"
 #include "catchup/scene.h"
 #include "catchup/netlist.h"

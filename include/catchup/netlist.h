@@ -59,6 +59,10 @@ CUP_API int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, doubl
  *  scheme's tol). */
 CUP_API int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol);
 
+/** .options steadystate (or steadyperiod=T): 1 if the netlist asks for its
+ *  periodic steady state (docs/steady-state.md), with the period (0: the
+ *  sources') into period; 0 otherwise. */
+CUP_API int cup_netlist_steady_state(const cup_netlist *nl, double *period);
 /** The files the netlist was read from: 0 is the netlist itself, then each
  *  file its .include and .lib cards read (paths joined to the including
  *  file's folder, each once, in the order first read); NULL out of range.
@@ -96,6 +100,13 @@ CUP_API const char *cup_netlist_signal_unit(const cup_netlist *nl, int k);
  *  variables zeta (m entries; NULL: 0), into out (signal_count entries).
  *  Each is linear: S_x x + S_u u(t) + S_zeta zeta. Allocates nothing. */
 CUP_API int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out);
+/** The nodes of element `element` (case-insensitive), a its first and b its
+ *  second (owned by the netlist): its voltage is v(a,b) and its current
+ *  i(element) flows from a to b through it, so that v(a,b) i(element) is
+ *  the power it absorbs (a source delivering power absorbs a negative one).
+ *  CUP_ERR_ARG naming the element when there is none. */
+CUP_API int cup_netlist_element_nodes(const cup_netlist *nl, const char *element, const char **a, const char **b,
+                                      char *errmsg);
 
 /** Switches (S, W): how many the netlist has. */
 CUP_API int cup_netlist_switch_count(const cup_netlist *nl);

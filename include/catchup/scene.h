@@ -11,6 +11,7 @@
 #include "catchup/integrator.h"
 #include "catchup/crowd.h"
 #include "catchup/netlist.h"
+#include "catchup/pss.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -83,6 +84,25 @@ CUP_API int cup_scene_state_label(const cup_scene *s, int j, char *name, unsigne
  *  by the scene; its LCS and input are the scene's. Signals are added to it
  *  (cup_netlist_probe), so it is not const. */
 CUP_API cup_netlist *cup_scene_netlist(const cup_scene *s);
+
+/** The steady-state request: the key steady_state: (docs/steady-state.md). */
+typedef struct cup_scene_steady {
+  cup_pss_options pss;   /**< period (0: the sources' common period), tol, max_iter, map_tol,
+                              fd_step, warmup_periods (its samples: the field below) */
+  long samples;          /**< the period's samples written (default 2001) */
+  int harmonics;         /**< the harmonics' and THD's order (default 10; 0: none) */
+  int fallback;          /**< 1 (default): when there is no steady state, run the transient */
+  int nmeasure;          /**< the netlist signals measured ("v(out)", checked against the netlist);
+                              0: every recorded signal (or, without a netlist, every state) */
+  const char *const *measure;
+  int npower;            /**< netlist elements whose average power v(a,b) i(E) is measured */
+  const char *const *power;        /**< their names */
+  int eff_out, eff_in;   /**< efficiency = P(power[eff_out]) / -P(power[eff_in]), the output's
+                              absorbed power over the power the input delivers; -1: none */
+} cup_scene_steady;
+
+/** The scene's steady-state request, or NULL when it asks for none. */
+CUP_API const cup_scene_steady *cup_scene_steady_state(const cup_scene *s);
 
 #ifdef __cplusplus
 }

@@ -13,6 +13,7 @@ module catchup
     cup_csc_from_fortran, cup_csc_from_dense, cup_csc_view, cup_csc_free
   use catchup_core
   use catchup_netlist
+  use catchup_pss
 #ifdef CATCHUP_HAVE_SCENE
   use catchup_scene, only: cup_scene_load, cup_scene_load_string, cup_scene_free, cup_scene_netlist, &
     cup_scene_name, cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, &

@@ -591,8 +591,9 @@ static int read_tran(rd *r, int card) {
 }
 
 /* .options NAME[=VALUE] ...: RELTOL, ABSTOL, VNTOL and CHGTOL set the
- * adaptive scheme's tolerances (docs/netlist.md); SPICE's other options
- * tune its own numerics and are accepted and ignored. */
+ * adaptive scheme's tolerances (docs/netlist.md), catchup's STEADYSTATE and
+ * STEADYPERIOD=T ask for the periodic steady state (docs/steady-state.md);
+ * SPICE's other options tune its own numerics and are accepted and ignored. */
 static int read_options(rd *r, int card) {
   static const char *const known[] = {"reltol", "abstol", "vntol", "chgtol", NULL};
   nl_circuit *c = r->c;
@@ -604,6 +605,18 @@ static int read_options(rd *r, int card) {
     for (int q = 0; known[q]; q++)
       if (nx_is(t, known[q])) which = q;
     int valued = k + 2 < n && TOK(r, card, k + 1)->kind == NX_EQ;
+    if (nx_is(t, "steadystate") || nx_is(t, "steadyperiod")) {   /* catchup's: docs/steady-state.md */
+      c->steady = 1;
+      if (nx_is(t, "steadystate")) continue;
+      int st = valued ? nx_value(&r->x, TOK(r, card, k + 2), ".options", &c->steady_period) :
+               nx_fail(&r->x, CUP_ERR_PARSE, t, ".options", "expected steadyperiod=T");
+      if (!st && !(c->steady_period > 0 && isfinite(c->steady_period)))
+        st = nx_fail(&r->x, CUP_ERR_PARSE, TOK(r, card, k + 2), ".options", "steadyperiod = %g must be > 0",
+                     c->steady_period);
+      if (st) return st;
+      k += 2;
+      continue;
+    }
     if (which < 0) {                             /* another SPICE option: its value, if any, skipped */
       if (valued) k += 2;
       continue;

@@ -23,6 +23,7 @@
 #include "scene_tree.h"
 #include "read_text.h"
 #include "scene_netlist.h"
+#include "scene_steady.h"
 
 struct cup_scene {
   char *name;
@@ -39,6 +40,7 @@ struct cup_scene {
   long max_steps;               /* the key max_steps: the most steps a fixed-step run may take */
   int circuit;                  /* the model is circuit: (its states have names) */
   int steps_given;              /* the scene gave n or h (a netlist's .tran gives neither) */
+  scene_steady steady;          /* steady_state: */
 };
 
 /* The choice lists' words, NULL-terminated, for suggestions (CUP_*_LIST). */
@@ -560,7 +562,7 @@ static int read_crowd(rd *r, const st_node *root, cup_scene *S) {
 static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   static const char *const known[] = {"name", "circuit", "lcs", "netlist", "set", "f", "crowd", "input", "x0",
                                       "T", "n", "h", "eps", "eta", "scheme", "theta", "projector", "output", "tol",
-                                      "max_event_rate", "hmax", "estimate", "max_steps", NULL};
+                                      "max_event_rate", "hmax", "estimate", "max_steps", "steady_state", NULL};
   const st_node *kf, *ki, *nd;
   int st = need_map(r, root, NULL, "a mapping of keys such as circuit, input, T and n");
   if (!st) st = check_keys(r, root, "", known);
@@ -568,6 +570,9 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   S->max_steps = CUP_MAX_STEPS_DEFAULT;
   if (!st && (nd = opt(root, "max_steps"))) st = integer(r, nd, "max_steps", 1, LONG_MAX, &S->max_steps);
   if (!st && opt(root, "crowd")) {
+    const st_node *ks;
+    if (opt(root, "steady_state") && st_get(root, "steady_state", &ks))
+      return fail(r, CUP_ERR_PARSE, ks, "steady_state", "a crowd has no periodic steady state");
     st = read_crowd(r, root, S);
     if (!st) st = read_method(r, root, &S->opt);
     if (!st) st = read_tolerance(r, root, &S->opt);
@@ -593,6 +598,7 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
   if (!st) st = read_tolerance(r, root, &S->opt);
   if (!st) st = netlist_steps(r, root, S, netlist_scheme);
   if (!st) st = read_name(r, root, S);
+  if (!st) st = scene_read_steady(r, root, S->nl, &S->steady);
   return st;
 }
 
@@ -665,8 +671,13 @@ void cup_scene_free(cup_scene **s) {
   free(S->eta_spec);
   free(S->text);
   cup_file_list_free(&S->files);
+  scene_steady_free(&S->steady);
   free(S);
   *s = NULL;
+}
+
+const cup_scene_steady *cup_scene_steady_state(const cup_scene *s) {
+  return s && s->steady.enabled ? &s->steady.pub : NULL;
 }
 
 const char *cup_scene_name(const cup_scene *s) { return s ? s->name : NULL; }

@@ -301,6 +301,8 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   nl->abstol = c->abstol;
   nl->vntol = c->vntol;
   nl->chgtol = c->chgtol;
+  nl->steady = c->steady;
+  nl->steady_period = c->steady_period;
   if (!(nl->file = strdup(c->file))) return CUP_ERR_NOMEM;
   if (!(nl->files = calloc((size_t)c->nfiles + 1, sizeof(char *)))) return CUP_ERR_NOMEM;
   for (int f = 0; f < c->nfiles; f++) {
@@ -483,4 +485,9 @@ int cup_netlist_row_fixed(const cup_netlist *nl, int i) {
 int cup_netlist_file_count(const cup_netlist *nl) { return nl ? nl->nfiles : 0; }
 const char *cup_netlist_file(const cup_netlist *nl, int k) {
   return nl && k >= 0 && k < nl->nfiles ? nl->files[k] : NULL;
+}
+
+int cup_netlist_steady_state(const cup_netlist *nl, double *period) {
+  if (period) *period = nl ? nl->steady_period : 0;
+  return nl && nl->steady;
 }

@@ -93,6 +93,8 @@ typedef struct nl_circuit {
   double tstep, tstop, tstart, tmax;   /* tstart, tmax 0 when not given */
   int tran_line, tran_col;
   double reltol, abstol, vntol, chgtol;   /* .options: NAN when not given */
+  int steady;         /* .options steadystate (or steadyperiod=T): the periodic steady state asked for */
+  double steady_period;                   /* its period, 0: the sources' */
   int nic;
   nl_ic *ic;          /* .ic v(node)=value */
   int nprobe;

@@ -64,6 +64,8 @@ struct cup_netlist {
   int has_tran;
   double tstep, tstop, tstart, tmax;
   double reltol, abstol, vntol, chgtol;   /* .options, NAN when not given */
+  int steady;         /* .options steadystate: asked for, with steady_period (0: the sources') */
+  double steady_period;
   int n, m, p, nL, nC;
   /* the circuit, for names and signals */
   char *file;

@@ -25,6 +25,7 @@ UNBOUND=(
   cup_status_merge   # restated in Fortran as an elemental function (catchup_base.f90)
   cup_netlist_switching            # a table of C function pointers; a scene's integrator (cup_scene_integrator) runs switches
   cup_integrator_create_switched   # takes that table; Fortran reaches it through cup_scene_integrator
+  cup_scene_steady_state   # catchup-run's request (scene key steady_state:); Fortran sets cup_pss_options itself
 )
 # bind(C) interfaces deliberately without a wrapper in `use catchup`, each with why.
 # Those marked "owed" are usable through module catchup_c / the module's c_

@@ -4,6 +4,10 @@
 !    C v' = max(0, (V - v)/Rs) - v/RL (docs/netlist.md): v(60 ms) to 1e-3 V;
 !  * signals against Kirchhoff's laws at a given (t, x, zeta), and zeta of
 !    the last step equal to the diode current (V - v)/Rs of the final state;
+!  * its periodic steady state (module catchup_pss): v(0) against RK4 run
+!    over 10 periods (the orbit attracts within two: its multiplier is
+!    1e-9), the residuals, the multiplier, the period's average within
+!    its extremes; a PWL source's error;
 !  * sets, errors with their messages (a bad value, an undefined subcircuit),
 !    and the list of files read.
 program test_f_netlist
@@ -77,6 +81,61 @@ program test_f_netlist
   end block
   call cup_netlist_free(nl)
   call cup_netlist_free(nl)                   ! a second free is harmless
+
+  call section('netlist: steady state')
+  call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr)
+  block
+    type(cup_pss_t) :: r
+    type(cup_pss_options) :: po
+    type(cup_pss_info) :: info
+    type(cup_measure) :: me
+    real(c_double), allocatable :: x0(:), res(:), t(:), X(:, :), J(:, :)
+    complex(c_double), allocatable :: mu(:)
+    real(c_double) :: per
+    call cup_input_period(cup_netlist_input(nl), per, ierr)
+    call check_int(ierr, CUP_OK, 'the input period')
+    call check_close(per, 20d-3, 1d-17, 'the period: 50 Hz')
+    call cup_pss_options_default(po)
+    po%samples = 2001
+    call cup_pss_solve(r, cup_netlist_lcs(nl), ierr, u=cup_netlist_input(nl), opt=po, errmsg=msg)
+    call check_int(ierr, CUP_OK, 'steady state: ' // trim(msg))
+    call cup_pss_get_info(r, info)
+    call cup_pss_x0(r, x0, ierr)
+    call check_close(x0(1), rk4_rectifier(200d-3, 1000000), 1d-3, 'v(0) against RK4 over 10 periods')
+    call cup_pss_residuals(r, res, ierr)
+    call check_int(size(res), info%iterations + 1, 'a residual per iterate')
+    call check(res(size(res)) <= 1d-10 * (abs(x0(1)) + 1d-9), 'the last residual below the target')
+    call cup_pss_multipliers(r, mu, ierr)
+    call check(size(mu) == 1 .and. abs(mu(1)) < 1d-6, 'one multiplier, |mu| < 1e-6')
+    call cup_pss_monodromy(r, J, ierr)
+    call check_close(J(1, 1), real(mu(1), c_double), 1d-15, 'the monodromy is its multiplier (n = 1)')
+    call cup_pss_trajectory(r, t, X, ierr)
+    call check_int(ierr, CUP_OK, 'the trajectory')
+    call check_close(X(1, size(t)), x0(1), 1d-9, 'the period closes')
+    call cup_measure_period(X(1, :), 0, me, ierr)
+    call check(me%min < me%avg .and. me%avg < me%max .and. me%max <= 10, 'average within the extremes')
+    call cup_pss_free(r)
+    call check(.not. cup_netlist_steady_state(nl, per), 'halfwave-rc.cir does not ask for its steady state')
+    call cup_input_period_fits(cup_netlist_input(nl), 40d-3, ierr)
+    call check_int(ierr, CUP_OK, '40 ms is two periods')
+    call cup_input_period_fits(cup_netlist_input(nl), 30d-3, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, '30 ms is not a whole number of periods')
+    block
+      character(len=:), allocatable :: na, nb
+      call cup_netlist_element_nodes(nl, 'rs', na, nb, ierr)
+      call check(ierr == CUP_OK .and. na == 'in' .and. nb == 'a', 'Rs is from in to a')
+    end block
+  end block
+  call cup_netlist_free(nl)
+  block
+    real(c_double) :: T
+    call cup_netlist_load_string(nl, 'pwl' // new_line('a') // 'V1 a 0 PWL(0 0 1m 1)' // new_line('a') // &
+                                 'R1 a b 1' // new_line('a') // 'C1 b 0 1u' // new_line('a'), 'p.cir', ierr)
+    call cup_input_period(cup_netlist_input(nl), T, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, 'a PWL source has no period')
+    call check_contains(msg, 'not periodic', 'its message')
+    call cup_netlist_free(nl)
+  end block
 
   call section('netlist: sets and errors')
   call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, sets=['RL=-1'], errmsg=msg)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Dependencies run one way, down the paper's chain:
 #
-#     util < set < lcp < projector < model < integrator < io < apps, fortran, bench
+#     util < set < lcp < projector < model < integrator < analysis < io < apps, fortran, bench
 #
 # A file may include (and its object may call) only its own folder and the
 # folders below it; the public headers (include/) may be included by any
@@ -24,9 +24,9 @@
 # exists.
 # Prints one line per violation and exits 1 if there is any.
 set -u
-order=(util set lcp projector model integrator io apps)
-declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [io]=6
-                  [apps]=7 [fortran]=7 [bench]=7)
+order=(util set lcp projector model integrator analysis io apps)
+declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [analysis]=6 [io]=7
+                  [apps]=8 [fortran]=8 [bench]=8)
 generated=" catchup/version.h git_revision.h "   # written into the build tree
 
 root=${1:?usage: check.sh SRCDIR [OBJECT...]}

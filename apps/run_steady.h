@@ -1,0 +1,36 @@
+/* run_steady — catchup-run --steady-state (docs/steady-state.md): the
+ * steady state solved before the output is touched, the run turned into
+ * one period from it, the period's samples kept for the measurements, and
+ * the /steady_state group and the summary lines. When there is no steady
+ * state the run falls back to the transient (or stops, fallback: false). */
+#ifndef CUP_RUN_STEADY_H
+#define CUP_RUN_STEADY_H
+
+#include <stdio.h>
+#include "catchup.h"
+#include "catchup/h5run.h"
+
+typedef struct run_steady run_steady;
+
+/* The scene's request (NULL: none, and nothing else here is called). */
+run_steady *run_steady_new(const cup_scene *scene);
+void run_steady_free(run_steady **s);
+/* With a netlist: the signals to measure and the power elements' v and i,
+ * probed after the run's own probes (before /signals is declared). */
+int run_steady_probes(run_steady *s, cup_netlist *nl, char *err, size_t size);
+/* Solve with the run's options (scheme, tolerances, the interrupt flag).
+ * Solved: o becomes one period from the steady state (T, the samples).
+ * Not solved: 0 with a warning in err when the request falls back to the
+ * transient (o unchanged), else nonzero with the error in err. */
+int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_options *o, char *err, size_t size);
+/* The run's x0: the steady state if solved, else the scene's. */
+const double *run_steady_x0(const run_steady *s, const double *scene_x0);
+/* A sample of the period (the sink's), for the measurements. */
+void run_steady_record(run_steady *s, double t, const double *x, const double *sig);
+/* /steady_state into the file (and its measurements once the period ran
+ * to its end); the status of the writes. */
+int run_steady_write(run_steady *s, cup_h5run *w, const cup_scene *scene, int run_status);
+/* The summary lines. */
+void run_steady_report(const run_steady *s, const char *scene, FILE *f);
+
+#endif

@@ -1,0 +1,138 @@
+/* catchup/pss.h — the periodic steady state of a circuit driven by a
+ * periodic input, by Newton's method on the period map (docs/steady-state.md),
+ * its Floquet multipliers, and measurements of one period.
+ *
+ * The period map Phi takes x(0) to x(T): one run of the integrator over the
+ * period (the adaptive scheme at a tight tolerance by default, a fixed-step
+ * scheme when asked). The steady state is the x0 with Phi(x0) = x0, found by
+ * Newton's method on Phi(x) - x; the Jacobian of Phi (the monodromy matrix)
+ * is taken by finite differences of the period map (n more runs a Newton
+ * step), and its eigenvalues are the Floquet multipliers: all inside the
+ * unit circle, the orbit attracts (a transient settles on it, the slowest
+ * mode by the largest modulus a period); one on or outside it, the orbit is
+ * not asymptotically stable (CUP_WARN_UNSTABLE_ORBIT); a multiplier at 1
+ * (an undamped mode driven at resonance, a charge no path ever corrects)
+ * leaves Phi(x) - x singular: no isolated periodic orbit, and the solve
+ * stops with CUP_ERR_NO_STEADY_STATE naming it. Never hangs: at most
+ * max_iter Newton steps, each of n + 1 periods at most. */
+#ifndef CATCHUP_PSS_H
+#define CATCHUP_PSS_H
+
+#include "catchup/export.h"
+#include "catchup/input.h"
+#include "catchup/lcs.h"
+#include "catchup/integrator.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The most Newton steps (the residuals' array). */
+#define CUP_PSS_MAX_ITER 100
+
+typedef struct cup_pss_options {
+  double period;          /**< T > 0, or 0: the input's common period (cup_input_period) */
+  int max_iter;           /**< Newton steps, 1 .. CUP_PSS_MAX_ITER; default 20 */
+  double tol;             /**< converged when ||Phi(x) - x||_inf <= tol (||x||_inf + tol_floor); default 1e-10 */
+  double tol_floor;       /**< the scale below which the residual is absolute; default 1e-9 */
+  double map_tol;         /**< adaptive scheme: the period map's tol_abs and tol_rel (cup_pss_solve);
+                               default 1e-12; 0: the integrator options' own */
+  double fd_step;         /**< the monodromy's finite differences: step relative to the state; default 1e-6 */
+  int warmup_periods;     /**< transient periods from x_guess before Newton; default 0 */
+  long samples;           /**< cup_pss_solve: one period of the steady state at this many
+                               uniform samples (>= 2), or 0: none; default 0 */
+} cup_pss_options;
+
+/** What a solve did (the arrays: cup_pss_x0, _residuals, _multipliers, ...). */
+typedef struct cup_pss_info {
+  int status;             /**< CUP_OK, CUP_WARN_UNSTABLE_ORBIT, or an error (CUP_ERR_NO_STEADY_STATE, a run's) */
+  int n;                  /**< state dimension */
+  int m;                  /**< complementarity rows (the multipliers zeta of the samples) */
+  int iterations;         /**< Newton steps taken (the residuals: iterations + 1 entries) */
+  double period;          /**< T */
+  double residual;        /**< the last ||Phi(x0) - x0||_inf */
+  double max_multiplier;  /**< the largest modulus of a Floquet multiplier (NaN: none computed) */
+  long period_runs;       /**< runs of the period map, Jacobians and the trajectory's included */
+  long events;            /**< events of the last period run (the adaptive scheme) */
+  long samples;           /**< the trajectory's samples (0: none) */
+  double seconds;         /**< wall time of the solve */
+  char message[CUP_RUN_MSG_LEN]; /**< what went wrong or what to know, whole */
+} cup_pss_info;
+
+/** A solve's result (opaque). */
+typedef struct cup_pss cup_pss;
+
+CUP_API void cup_pss_options_default(cup_pss_options *o);
+
+/** The common period of the input's waveforms: the least T that is an
+ *  integer multiple of every periodic term's period (the ratios within
+ *  1e-12 relative, multiples up to 1000). A sine, square wave or PULSE with
+ *  a period is periodic; a constant is any period. CUP_ERR_ARG naming the
+ *  term when none exists: no periodic term; periods with no common multiple;
+ *  a PWL that changes (constant after its last point); a damped or delayed
+ *  SIN; a PULSE whose delay makes [0, T) unlike later periods; a callback. */
+CUP_API int cup_input_period(const cup_input *u, double *T, char *errmsg);
+/** CUP_OK if T is a whole number of the input's common periods (within
+ *  1e-9), or the input tells none (a constant, a callback); CUP_ERR_ARG
+ *  naming both otherwise: over such a T the period map is not a period. */
+CUP_API int cup_input_period_fits(const cup_input *u, double T, char *errmsg);
+
+/** The steady state of an LCS driven by u: the period from o->period or u;
+ *  the period map by the integrator with options io (scheme, tolerances;
+ *  T and the output are set here; the adaptive scheme's tolerances are
+ *  o->map_tol unless 0), from x_guess (n entries, NULL: 0). On return *r
+ *  holds the result, also when the solve failed (its info says why, with
+ *  the residuals and multipliers so far); *r is NULL only when the
+ *  arguments are wrong or memory runs out (errmsg says which). Returns
+ *  the info's status. */
+CUP_API int cup_pss_solve(cup_pss **r, const cup_lcs *L, const cup_input *u, const cup_integrator_options *io,
+                          const double *x_guess, const cup_pss_options *o, char *errmsg);
+/** The same on any period map: I, made with options.T = period (any model,
+ *  any scheme; output FINAL or NONE is cheapest), run from x to x(T) per
+ *  evaluation; n its state dimension. No trajectory (o->samples is
+ *  ignored): run I's twin with samples from cup_pss_x0. */
+CUP_API int cup_pss_solve_map(cup_pss **r, cup_integrator *I, int n, double period, const double *x_guess,
+                              const cup_pss_options *o, char *errmsg);
+CUP_API void cup_pss_free(cup_pss **r);
+
+CUP_API void cup_pss_get_info(const cup_pss *r, cup_pss_info *info);
+/** The steady state x0 (n entries): where Newton stopped (the best iterate). */
+CUP_API const double *cup_pss_x0(const cup_pss *r);
+/** ||Phi(x_k) - x_k||_inf, k = 0 .. iterations (iterations + 1 entries). */
+CUP_API const double *cup_pss_residuals(const cup_pss *r);
+/** The monodromy matrix dPhi/dx at x0 (n x n, column-major), or NULL if
+ *  none was computed (a solve that failed before its first Jacobian). */
+CUP_API const double *cup_pss_monodromy(const cup_pss *r);
+/** The Floquet multipliers (n each, by decreasing modulus); CUP_ERR_ARG
+ *  if the monodromy was not computed. */
+CUP_API int cup_pss_multipliers(const cup_pss *r, double *re, double *im);
+/** One period of the steady state (cup_pss_solve with o->samples): the
+ *  sample times (samples), x (samples x n, row k the state at t[k]) and
+ *  zeta (samples x m), each pointer NULL if not wanted. */
+CUP_API int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *zeta);
+
+/* ---- measurements of one period (SPICE's .meas and .four) ---- */
+
+/** Of a signal sampled uniformly over one period, v[k] at t0 + k T / (N - 1),
+ *  k = 0 .. N - 1 (v[N-1] closes the period: the periodic trapezoid rule
+ *  uses v[0 .. N-2]). Exact for a trigonometric polynomial of degree
+ *  below (N - 1) / 2; a kink (a diode turning on) costs O(h^2), a jump
+ *  (a diode's current, a capacitor's current at its turn-on) O(h),
+ *  h = T / (N - 1) (docs/steady-state.md). */
+typedef struct cup_measure {
+  double avg, rms, min, max, pp;  /**< average, RMS, minimum, maximum, peak-to-peak */
+  double thd;                     /**< sqrt(sum_{k=2..order} |c_k|^2) / |c_1| (NaN when |c_1| is below
+                                       1e-9 of the RMS: no fundamental, a DC output) */
+} cup_measure;
+
+/** The measurements of v (N >= 3 samples) and, with order >= 1, its
+ *  harmonics k = 0 .. order as amplitudes (amp[k] = 2 |c_k|, amp[0] the
+ *  average) and phases (of the cosine: v ~ sum amp_k cos(2 pi k t / T +
+ *  phase_k)), each array order + 1 entries or NULL. order < (N - 1) / 2. */
+CUP_API int cup_measure_period(const double *v, long N, int order, cup_measure *m, double *amp, double *phase,
+                               char *errmsg);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,52 @@
+/* measure — measurements of one period of a uniformly sampled signal
+ * (catchup/pss.h): SPICE's .meas (average, RMS, extremes) and .four
+ * (harmonics, THD), by the periodic trapezoid rule and the DFT of the
+ * same samples. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <gsl/gsl_math.h>
+#include "catchup.h"
+#include "catchup/pss.h"
+#include "util/fail.h"
+
+
+int cup_measure_period(const double *v, long N, int order, cup_measure *m, double *amp, double *phase,
+                       char *errmsg) {
+  if (!v || !m) return cup_fail(errmsg, CUP_ERR_ARG, "measure: NULL argument");
+  if (N < 3) return cup_fail(errmsg, CUP_ERR_ARG, "measure: %ld samples, at least 3 needed", N);
+  long M = N - 1;                                /* v[M] closes the period: v[0 .. M-1] are its samples */
+  if (order < 0 || 2L * order >= M)
+    return cup_fail(errmsg, CUP_ERR_ARG, "measure: harmonic order %d needs more than %d samples a period (%ld)",
+                    order, 2 * order + 1, N);
+  double s = 0, s2 = 0, lo = INFINITY, hi = -INFINITY;
+  for (long j = 0; j < N; j++) {
+    if (!isfinite(v[j])) return cup_fail(errmsg, CUP_ERR_NONFINITE, "measure: sample %ld is %g", j, v[j]);
+    lo = fmin(lo, v[j]);
+    hi = fmax(hi, v[j]);
+    if (j < M) { s += v[j]; s2 += v[j] * v[j]; }
+  }
+  m->avg = s / (double)M;
+  m->rms = sqrt(s2 / (double)M);
+  m->min = lo;
+  m->max = hi;
+  m->pp = hi - lo;
+  m->thd = NAN;
+  double c1 = 0, ch2 = 0;
+  for (int k = 0; k <= order; k++) {
+    double re = 0, im = 0, w = 2 * M_PI / (double)M;
+    for (long j = 0; j < M; j++) {               /* the angle from j k mod M: exact phases for long records */
+      double a = w * (double)((j * (long)k) % M);
+      re += v[j] * cos(a);
+      im -= v[j] * sin(a);
+    }
+    re /= (double)M;
+    im /= (double)M;
+    double mag = hypot(re, im);
+    if (amp) amp[k] = k ? 2 * mag : re;
+    if (phase) phase[k] = k ? atan2(im, re) : 0;
+    if (k == 1) c1 = mag;
+    if (k >= 2) ch2 += mag * mag;
+  }
+  if (order >= 1 && c1 > 1e-9 * m->rms) m->thd = sqrt(ch2) / c1;   /* no fundamental (a DC output): NaN */
+  return CUP_OK;
+}

@@ -1,0 +1,96 @@
+/* period — the common period of an input's waveforms (catchup/pss.h): the
+ * least multiple of every periodic term's period, or the reason there is
+ * none, naming the term. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include "catchup.h"
+#include "catchup/pss.h"
+#include "model/input_impl.h"
+#include "util/fail.h"
+
+/* Periods in a ratio of integers up to this are commensurate. */
+#define PERIOD_MAX_MULTIPLE 1000
+/* ... to this relative accuracy (50 Hz and 150 Hz: 3 x 1/150 is 1/50 to 1 ulp). */
+#define PERIOD_REL 1e-12
+
+/* A term's period (0: constant, any period will do), or < 0 with errmsg. */
+static double term_period(const cup_term *t, int k, char *errmsg) {
+  const char *what = cup_wave_name(t->kind);
+  switch (t->kind) {
+    case CUP_WAVE_CONSTANT: return 0;
+    case CUP_WAVE_SINE:
+    case CUP_WAVE_SQUARE: return t->omega > 0 && t->amp != 0 ? 2 * M_PI / t->omega : 0;
+    case CUP_WAVE_PWL:
+      for (int j = 1; j < t->np; j++)
+        if (t->v[j] != t->v[0])
+          return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pwl): a PWL source is not periodic "
+                          "(it stays at its last value after t = %g); give the steady state a periodic source",
+                          t->comp, k, t->t[t->np - 1]), -1;
+      return 0;
+    case CUP_WAVE_PULSE: {
+      if (t->value2 == t->value) return 0;
+      if (!(t->period > 0))
+        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): PULSE with no period (a "
+                        "single pulse) is not periodic", t->comp, k), -1;
+      /* before its delay the source holds its initial value: [0, T) is a
+       * period like the later ones only if the pulse of the period before
+       * would have ended by t = 0 */
+      if (t->delay + t->rise + t->width + t->fall > t->period * (1 + 1e-12))
+        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): its delay %g makes [0, %g) "
+                        "unlike later periods (delay + rise + width + fall = %g > period); shift the pulse by "
+                        "a whole period less", t->comp, k, t->delay, t->period,
+                        t->delay + t->rise + t->width + t->fall), -1;
+      return t->period;
+    }
+    case CUP_WAVE_DAMPED_SINE:
+      if (t->damping != 0)
+        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): it decays (damping %g): no "
+                        "periodic steady state", t->comp, k, t->damping), -1;
+      if (t->delay != 0 && t->amp != 0 && t->omega > 0)
+        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): its delay %g makes [0, T) "
+                        "unlike later periods; give the steady state an undelayed SIN", t->comp, k, t->delay), -1;
+      return t->omega > 0 && t->amp != 0 ? 2 * M_PI / t->omega : 0;
+  }
+  (void)what;
+  return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d: unknown waveform", t->comp, k), -1;
+}
+
+int cup_input_period(const cup_input *u, double *T, char *errmsg) {
+  if (!u || !T) return cup_fail(errmsg, CUP_ERR_ARG, "input period: NULL argument");
+  *T = 0;
+  if (u->fn)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
+  double per = 0;
+  int first = -1;
+  for (int k = 0; k < u->nterms; k++) {
+    double p = term_period(&u->terms[k], k, errmsg);
+    if (p < 0) return CUP_ERR_ARG;
+    if (p == 0) continue;
+    if (per == 0) { per = p; first = k; continue; }
+    int a = 1;
+    for (; a <= PERIOD_MAX_MULTIPLE; a++) {      /* the least a with a per = b p */
+      double r = a * per / p, b = nearbyint(r);
+      if (b >= 1 && fabs(r - b) <= PERIOD_REL * r) break;
+    }
+    if (a > PERIOD_MAX_MULTIPLE)
+      return cup_fail(errmsg, CUP_ERR_ARG, "the sources have no common period: input component %d, term %d "
+                      "(period %.17g) and term %d (period %.17g) are not in a ratio of integers up to %d; "
+                      "give the period", u->terms[k].comp, k, p, first, per, PERIOD_MAX_MULTIPLE);
+    per *= a;
+  }
+  if (per == 0)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the input is constant: no period to find a steady state over; give the "
+                    "period");
+  *T = per;
+  return CUP_OK;
+}
+
+int cup_input_period_fits(const cup_input *u, double T, char *errmsg) {
+  double Tu;
+  if (!u || !(T > 0) || cup_input_period(u, &Tu, NULL) != CUP_OK) return CUP_OK;
+  double k = nearbyint(T / Tu);
+  if (k >= 1 && fabs(T / Tu - k) <= 1e-9 * k) return CUP_OK;
+  return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
+                  "%.17g (%.6g of them): over it the sources do not repeat", T, Tu, T / Tu);
+}

@@ -1,0 +1,177 @@
+/* catchup-run --steady-state end to end (docs/steady-state.md): the file
+ * holds one period from the steady state (/t over [0, T], /x's first row
+ * the solved x0 and its last row x0 again), the /steady_state group with
+ * units and long names, the measurements against the samples of the file
+ * itself (the RMS of v(out) against the resistor's power v^2 / R; the
+ * balance of the absorbed powers, which the capacitor's zero average closes
+ * only at the steady state), the summary lines; no steady state (the LC at
+ * resonance): the transient instead with a warning, or an error with
+ * fallback: false; bad input: a period that is no whole number of the
+ * sources', a usage error. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <math.h>
+#include <cmocka.h>
+#include <hdf5.h>
+#include "catchup.h"
+
+#define CLI_TMPDIR_TEMPLATE "/tmp/cup_steady_XXXXXX"
+#include "cliutil.h"
+#include "testutil.h"
+
+#define BRIDGE CUP_EXAMPLES_DIR "/circuits/bridge.cir"
+
+static void expect_exit(const result *r, int code) {
+  if (!r->exited || r->code != code) fail_msg("exit %d (signal %d), expected %d:\n%s", r->code, r->sig, code, r->err);
+}
+
+static void expect_in(const char *text, const char *what) {
+  if (!strstr(text, what)) fail_msg("lacks '%s':\n%s", what, text);
+}
+
+static char *attr_str(hid_t f, const char *obj, const char *name) {
+  hid_t a = H5Aopen_by_name(f, obj, name, H5P_DEFAULT, H5P_DEFAULT);
+  if (a < 0) fail_msg("attribute %s of %s missing", name, obj);
+  hid_t type = H5Aget_type(a);
+  char *s = NULL;
+  assert_true(H5Aread(a, type, &s) >= 0);
+  char *copy = strdup(s);
+  H5free_memory(s);
+  H5Tclose(type);
+  H5Aclose(a);
+  return copy;
+}
+
+static void bridge_period(void **state) {
+  (void)state;
+  const char *out = tmp_path("bridge.h5");
+  result r = run_cli((const char *const[]){BRIDGE, "-o", out, "--steady-state", "--set",
+                                           "steady_state.efficiency=[RL, V1]", "--set", "steady_state.power=[Rs]",
+                                           NULL}, 0, 0);
+  expect_exit(&r, 0);
+  expect_in(r.err, "steady state: period 0.02 s");
+  expect_in(r.err, "efficiency");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t, *x, *x0, *res, *vout, *per, *pw, *eff, *rms, *mre;
+  hsize_t N = read_rows(f, "t", 1, 1, &t);
+  assert_int_equal(N, 2001);
+  assert_true(read_rows(f, "x", 2, 1, &x) == N);
+  assert_true(read_rows(f, "steady_state/x0", 1, 1, &x0) == 1);
+  hsize_t nres = read_rows(f, "steady_state/residuals", 1, 1, &res);
+  read_rows(f, "signals/v(out)", 1, 1, &vout);
+  read_rows(f, "steady_state/period", 1, 1, &per);
+  assert_true(read_rows(f, "steady_state/power/average", 1, 1, &pw) == 3);   /* Rs, RL, V1 */
+  read_rows(f, "steady_state/efficiency", 1, 1, &eff);
+  read_rows(f, "steady_state/measure/rms", 1, 1, &rms);
+  assert_true(read_rows(f, "steady_state/multipliers_re", 1, 1, &mre) == 1);
+  assert_close(per[0], 0.02, 1e-17);
+  assert_close(t[0], 0, 0);
+  assert_close(t[N - 1], 0.02, 1e-17);
+  assert_true(x[0] == x0[0]);                    /* the period starts at the solved state */
+  assert_close(x[N - 1], x0[0], 1e-9 * fabs(x0[0]));   /* and closes on it */
+  assert_true(nres >= 2 && res[nres - 1] <= 1e-10 * (fabs(x0[0]) + 1e-9));
+  assert_true(fabs(mre[0]) < 1);
+  /* the resistor's power is v(out)^2 / RL: the RMS measured (first of the run's signals: v(out)) */
+  assert_close(pw[1], rms[0] * rms[0] / 1000, 1e-12 * pw[1]);
+  /* absorbed powers balance (the capacitor's average is 0 over a period): to the O(h) of the
+   * diodes' current jumps at 2001 samples */
+  print_message("  P(Rs) %.9g, P(RL) %.9g, P(V1) %.9g W: sum %.3g; efficiency %.9g\n", pw[0], pw[1], pw[2],
+                pw[0] + pw[1] + pw[2], eff[0]);
+  assert_close(pw[0] + pw[1] + pw[2], 0, 1e-4 * fabs(pw[2]));
+  assert_close(eff[0], pw[1] / -pw[2], 1e-15);
+  assert_true(eff[0] > 0.98 && eff[0] < 1);
+  char *u = attr_str(f, "steady_state/residuals", "long_name");
+  expect_in(u, "Newton residual");
+  free(u);
+  u = attr_str(f, "steady_state/power/average", "units");
+  assert_string_equal(u, "W");
+  free(u);
+  assert_int_equal(attr_i64(f, "steady_state_status"), CUP_OK);
+  assert_close(attr_f64(f, "T"), 0.02, 1e-17);    /* the run is the period */
+  H5Fclose(f);
+  free(t); free(x); free(x0); free(res); free(vout); free(per); free(pw); free(eff); free(rms); free(mre);
+}
+
+static const char *lc = "LC at resonance\nV1 in 0 SIN(0 1 5032.921210448704)\nL1 in a 1m\nC1 a 0 1u\n"
+                        ".tran 1u 1m\n.end\n";
+
+static void no_steady_state(void **state) {
+  (void)state;
+  const char *cir = tmp_path("lc.cir"), *out = tmp_path("lc.h5");
+  FILE *fp = fopen(cir, "w");
+  assert_non_null(fp);
+  fputs(lc, fp);
+  fclose(fp);
+  result r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", NULL}, 0, 0);
+  expect_exit(&r, 0);
+  expect_in(r.err, "warning");
+  expect_in(r.err, "a Floquet multiplier is at 1");
+  expect_in(r.err, "the transient instead");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t;
+  hsize_t N = read_rows(f, "t", 1, 1, &t);
+  assert_close(t[N - 1], 1e-3, 1e-18);           /* the transient's .tran TSTOP */
+  assert_int_equal(attr_i64(f, "steady_state_status"), CUP_ERR_NO_STEADY_STATE);
+  assert_int_equal(attr_i64(f, "steady_state_solved"), 0);
+  H5Fclose(f);
+  free(t);
+  r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", "--set", "steady_state.fallback=false", NULL},
+              0, 0);
+  expect_exit(&r, 1);
+  assert_int_equal(r.lines, 1);
+  expect_in(r.err, "CUP_ERR_NO_STEADY_STATE");
+}
+
+/* .options steadyperiod=40m asks for it from the netlist itself (two periods of 50 Hz). */
+static void netlist_option(void **state) {
+  (void)state;
+  const char *cir = tmp_path("hw.cir"), *out = tmp_path("hw.h5");
+  FILE *fp = fopen(cir, "w");
+  assert_non_null(fp);
+  fputs("Half-wave\nV1 in 0 SIN(0 10 50)\nRs in a 1\nD1 a out\nC1 out 0 100u\nRL out 0 1k\n"
+        ".options reltol=1e-4 steadyperiod=40m\n.tran 20u 60m\n.end\n", fp);
+  fclose(fp);
+  result r = run_cli((const char *const[]){cir, "-o", out, NULL}, 0, 0);
+  expect_exit(&r, 0);
+  expect_in(r.err, "steady state: period 0.04 s");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t;
+  hsize_t N = read_rows(f, "t", 1, 1, &t);
+  assert_close(t[N - 1], 0.04, 1e-17);
+  H5Fclose(f);
+  free(t);
+  r = run_cli((const char *const[]){cir, "-o", out, "--set", "steady_state=false", NULL}, 0, 0);
+  expect_exit(&r, 0);
+  assert_null(strstr(r.err, "steady state"));    /* the scene's key overrides the netlist's */
+}
+
+static void bad_input(void **state) {
+  (void)state;
+  const char *out = tmp_path("bad.h5");
+  result r = run_cli((const char *const[]){BRIDGE, "-o", out, "--period", "0.03", "--set",
+                                           "steady_state.fallback=false", NULL}, 0, 0);
+  expect_exit(&r, 1);
+  expect_in(r.err, "is not a whole number of the sources' common period");
+  r = run_cli((const char *const[]){BRIDGE, "-o", out, "--period", "-1", NULL}, 0, 0);
+  expect_exit(&r, 2);
+  expect_in(r.err, "--period '-1': not a positive number");
+  r = run_cli((const char *const[]){BRIDGE, "-o", out, "--steady-state", "--set", "steady_state.power=[R9]", NULL}, 0,
+              0);
+  expect_exit(&r, 1);
+  expect_in(r.err, "no element named 'R9'");
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(bridge_period),
+    cmocka_unit_test(no_steady_state),
+    cmocka_unit_test(netlist_option),
+    cmocka_unit_test(bad_input),
+  };
+  return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
+}

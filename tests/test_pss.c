@@ -1,0 +1,378 @@
+/* The periodic steady state (catchup/pss.h) against independent references:
+ * linear RC and RLC circuits driven by a sine or a pulse train (the steady
+ * state from the closed-form response, the Floquet multipliers e^{lambda T}
+ * of the circuit's eigenvalues); rectifiers with a diode that turns off
+ * inside the period (D = 0 and D != 0, a bridge) against brute-force
+ * transients run until the period-to-period change is below 1e-12, by the
+ * adaptive scheme and by a fixed-step one, and the largest multiplier
+ * against the brute force's contraction rate; the ideal LC driven at its
+ * resonance (no steady state: a clear error); the inputs' common period
+ * and its errors; the measurements against closed forms. Newton's
+ * iteration counts are printed. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "catchup.h"
+#include "testutil.h"
+
+static double cup_test_inf(const double *v, int n) {
+  double r = 0;
+  for (int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
+  return r;
+}
+
+typedef struct {
+  cup_netlist *nl;
+  cup_pss *r;
+  cup_pss_info info;
+  int n, m;
+} solved;
+
+static cup_netlist *load(const char *text) {
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = NULL;
+  if (cup_netlist_load_string(&nl, text, "test.cir", NULL, 0, err)) fail_msg("%s", err);
+  return nl;
+}
+
+static void opts_for(cup_integrator_options *io, int scheme, long n) {
+  cup_integrator_options_default(io);
+  io->scheme = scheme;
+  io->n = n > 0 ? n : 100;                      /* the adaptive scheme does not use n */
+  io->tol_abs = io->tol_rel = 1e-12;
+}
+
+/* The steady state of a netlist (status expected), samples of its period. */
+static solved solve(const char *text, int scheme, long n, long samples, int want) {
+  solved s = {0};
+  s.nl = load(text);
+  const cup_lcs *L = cup_netlist_lcs(s.nl);
+  s.n = cup_lcs_dim(L);
+  s.m = cup_lcs_rows(L);
+  cup_integrator_options io;
+  opts_for(&io, scheme, n);
+  cup_pss_options o;
+  cup_pss_options_default(&o);
+  o.samples = samples;
+  char err[CUP_ERRMSG_LEN] = "";
+  int st = cup_pss_solve(&s.r, L, cup_netlist_input(s.nl), &io, NULL, &o, err);
+  if (!s.r) fail_msg("no result: %s", err);
+  cup_pss_get_info(s.r, &s.info);
+  print_message("  %s: %d Newton steps, %ld period runs, residual %.3g, |mu|max %.6g, %.3g ms: %s%s%s\n",
+                cup_status_name(st), s.info.iterations, s.info.period_runs, s.info.residual, s.info.max_multiplier,
+                1e3 * s.info.seconds, s.info.message[0] ? "\"" : "", s.info.message, s.info.message[0] ? "\"" : "");
+  if (st != want) fail_msg("status %s, expected %s: %s", cup_status_name(st), cup_status_name(want), s.info.message);
+  return s;
+}
+
+static void done(solved *s) {
+  cup_pss_free(&s->r);
+  cup_netlist_free(&s->nl);
+}
+
+/* A signal (probe) of the steady state's samples into v (samples entries). */
+static void signal_of(solved *s, const char *probe, double *v) {
+  char err[CUP_ERRMSG_LEN];
+  int k = cup_netlist_probe(s->nl, probe, err);
+  if (k < 0) fail_msg("%s", err);
+  long S = s->info.samples;
+  double *t = calloc((size_t)S, sizeof *t), *x = calloc((size_t)S * s->n, sizeof *x);
+  double *z = calloc((size_t)S * (s->m + 1), sizeof *z), *out = calloc(64, sizeof *out);
+  assert_int_equal(cup_pss_trajectory(s->r, t, x, z), CUP_OK);
+  for (long j = 0; j < S; j++) {
+    assert_int_equal(cup_netlist_signals(s->nl, t[j], x + j * s->n, z + j * s->m, out), CUP_OK);
+    v[j] = out[k];
+  }
+  free(t); free(x); free(z); free(out);
+}
+
+/* The brute force: x <- Phi(x) from 0 until the period-to-period change is
+ * below rel * ||x||_inf; the last two changes' ratio (the slowest mode's
+ * multiplier) into *rate. Returns the periods run. */
+static long brute_force(cup_netlist *nl, int scheme, long n, double T, double rel, double *x, double *rate) {
+  const cup_lcs *L = cup_netlist_lcs(nl);
+  int dim = cup_lcs_dim(L);
+  cup_integrator_options io;
+  opts_for(&io, scheme, n);
+  io.T = T;
+  io.output = CUP_OUTPUT_FINAL;
+  char err[CUP_ERRMSG_LEN];
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, L, cup_netlist_input(nl), &io, err)) fail_msg("%s", err);
+  for (int i = 0; i < dim; i++) x[i] = 0;
+  double prev = 0, d = INFINITY;
+  long k = 0;
+  *rate = NAN;
+  for (; k < 100000 && !(d <= rel * (cup_test_inf(x, dim))); k++) {
+    cup_run_info ri;
+    int st = cup_integrator_run(I, x, NULL, NULL, &ri);
+    if (st < 0) fail_msg("%s", ri.message);
+    const double *y = cup_integrator_state(I);
+    d = 0;
+    for (int i = 0; i < dim; i++) { d = fmax(d, fabs(y[i] - x[i])); x[i] = y[i]; }
+    if (prev > 0 && d > 1e3 * rel * cup_test_inf(x, dim)) *rate = d / prev;   /* above the rounding */
+    prev = d;
+  }
+  cup_integrator_free(&I);
+  return k;
+}
+
+/* ---- linear circuits: closed forms ---- */
+
+/* RC low-pass under a 50 Hz sine: v(out) = Vm |H| sin(w t + arg H), H =
+ * 1 / (1 + j w R C), at every sample; the multiplier e^{-T / RC}; the
+ * resistor's average power |I|^2 R / 2 measured from v and i. */
+static void rc_sine(void **state) {
+  (void)state;
+  const double Vm = 10, R = 1e3, C = 10e-6, f = 50, w = 2 * M_PI * f, T = 1 / f;
+  solved s = solve("RC low-pass\nV1 in 0 SIN(0 10 50)\nR1 in out 1k\nC1 out 0 10u\n.end\n", CUP_SCHEME_ADAPTIVE, 0,
+                   1025, CUP_OK);
+  assert_close(s.info.period, T, 1e-17);
+  double re[4], im[4];
+  assert_int_equal(cup_pss_multipliers(s.r, re, im), CUP_OK);
+  assert_close(re[0], exp(-T / (R * C)), 1e-7);
+  assert_close(im[0], 0, 1e-12);
+  assert_true(s.info.iterations <= 2);          /* linear: one Newton step, exact to the FD error */
+  long S = s.info.samples;
+  double *v = calloc((size_t)S, sizeof *v), *vr = calloc((size_t)S, sizeof *vr), *i = calloc((size_t)S, sizeof *i);
+  signal_of(&s, "v(out)", v);
+  double a = w * R * C, mag = Vm / sqrt(1 + a * a), ph = -atan(a), err = 0;
+  for (long j = 0; j < S; j++) err = fmax(err, fabs(v[j] - mag * sin(w * T * (double)j / (double)(S - 1) + ph)));
+  print_message("  RC: max |v - closed form| over the period %.3g V (|v| <= %.3g)\n", err, mag);
+  assert_true(err <= 1e-9 * Vm);
+  signal_of(&s, "v(in,out)", vr);
+  signal_of(&s, "i(R1)", i);
+  for (long j = 0; j < S; j++) vr[j] *= i[j];
+  cup_measure mp;
+  char e2[CUP_ERRMSG_LEN];
+  assert_int_equal(cup_measure_period(vr, S, 0, &mp, NULL, NULL, e2), CUP_OK);
+  double P = Vm * Vm / (R * R + 1 / (w * w * C * C)) * R / 2;
+  print_message("  RC: resistor power %.15g W, closed form %.15g W\n", mp.avg, P);
+  assert_close(mp.avg, P, 1e-9 * P);
+  free(v); free(vr); free(i);
+  done(&s);
+}
+
+/* x' = A x + b u, A 2 x 2, u a pulse train V2 on [0, width), 0 after: the
+ * fixed point x0 = (I - e^{AT})^-1 A^-1 (e^{A(T-on)} - e^{A(T-off)}) b V2 for a
+ * pulse on [on, off), by GSL's matrix exponential. */
+static void pulse_fixed_point(const double A[4], const double b[2], double V2, double on, double off, double T,
+                              double x0[2]) {
+  gsl_matrix *Am = gsl_matrix_alloc(2, 2), *E1 = gsl_matrix_alloc(2, 2), *E2 = gsl_matrix_alloc(2, 2);
+  gsl_matrix *S = gsl_matrix_alloc(2, 2);
+  for (int k = 0; k < 4; k++) Am->data[k] = A[k] * (T - on);
+  gsl_linalg_exponential_ss(Am, E1, GSL_PREC_DOUBLE);
+  for (int k = 0; k < 4; k++) Am->data[k] = A[k] * (T - off);
+  gsl_linalg_exponential_ss(Am, E2, GSL_PREC_DOUBLE);
+  double d[2], y[2];
+  for (int i = 0; i < 2; i++) d[i] = ((E1->data[2 * i] - E2->data[2 * i]) * b[0] + (E1->data[2 * i + 1] - E2->data[2 * i + 1]) * b[1]) * V2;
+  double det = A[0] * A[3] - A[1] * A[2];          /* y = A^-1 d */
+  y[0] = (A[3] * d[0] - A[1] * d[1]) / det;
+  y[1] = (-A[2] * d[0] + A[0] * d[1]) / det;
+  for (int k = 0; k < 4; k++) Am->data[k] = A[k] * T;
+  gsl_linalg_exponential_ss(Am, S, GSL_PREC_DOUBLE);
+  double M[4] = {1 - S->data[0], -S->data[1], -S->data[2], 1 - S->data[3]};
+  double dm = M[0] * M[3] - M[1] * M[2];
+  x0[0] = (M[3] * y[0] - M[1] * y[1]) / dm;
+  x0[1] = (-M[2] * y[0] + M[0] * y[1]) / dm;
+  gsl_matrix_free(Am); gsl_matrix_free(E1); gsl_matrix_free(E2); gsl_matrix_free(S);
+}
+
+/* Series RLC under a 5 V, 10 us pulse every 25 us: i(L1) and v(C1) at
+ * t = 0 against the closed form, the multipliers e^{lambda T} with
+ * lambda = -R/2L +- j sqrt(1/LC - R^2/4L^2) (complex: their modulus and
+ * angle). By the adaptive scheme and by theta at 4000 steps a period. */
+static void rlc_pulse(void **state) {
+  (void)state;
+  const double R = 2, L = 100e-6, C = 1e-6, T = 25e-6, wid = 10e-6;   /* 1 fs edges */
+  const char *cir = "RLC\nV1 in 0 PULSE(0 5 0 1f 1f 10u 25u)\nR1 in a 2\nL1 a b 100u\nC1 b 0 1u\n.end\n";
+  double A[4] = {-R / L, -1 / L, 1 / C, 0}, b[2] = {1 / L, 0}, x0[2];
+  pulse_fixed_point(A, b, 5, 0.5e-15, 1.5e-15 + wid, T, x0);   /* the 1 fs edges' middles */
+  double sig = -R / (2 * L), om = sqrt(1 / (L * C) - R * R / (4 * L * L));
+  for (int k = 0; k < 2; k++) {
+    int scheme = k ? CUP_SCHEME_THETA : CUP_SCHEME_ADAPTIVE;
+    print_message("  RLC pulse, %s:\n", cup_scheme_name(scheme));
+    solved s = solve(cir, scheme, 4000, 101, CUP_OK);
+    double iL[101], vC[101], re[2], im[2];
+    signal_of(&s, "i(L1)", iL);
+    signal_of(&s, "v(b)", vC);
+    double tol = k ? 1e-3 : 1e-9;               /* theta: second order, h = T / 4000 */
+    print_message("  i(L1)(0) = %.15g (closed form %.15g), v(C1)(0) = %.15g (%.15g)\n", iL[0], x0[0], vC[0], x0[1]);
+    assert_close(iL[0], x0[0], tol * fabs(x0[0]));
+    assert_close(vC[0], x0[1], tol * fabs(x0[1]));
+    assert_close(iL[100], iL[0], tol * fabs(x0[0]));
+    assert_int_equal(cup_pss_multipliers(s.r, re, im), CUP_OK);
+    assert_close(hypot(re[0], im[0]), exp(sig * T), k ? 1e-5 : 1e-7);
+    assert_close(fabs(atan2(im[0], re[0])), om * T, k ? 1e-3 : 1e-7);
+    assert_close(im[0], -im[1], 1e-12);
+    done(&s);
+  }
+}
+
+/* ---- rectifiers: brute-force transients ---- */
+
+static const char *halfwave_rc =
+  "Half-wave rectifier with an RC load\nV1 in 0 SIN(0 10 50)\nRs in a 1\nD1 a out\nC1 out 0 100u\nRL out 0 1k\n.end\n";
+static const char *bridge_rc =
+  "Bridge\nV1 in1 x SIN(0 10 50)\nRs x in2 1\nD1 in1 out\nD2 in2 out\nD3 0 in1\nD4 0 in2\nC1 out 0 100u\n"
+  "RL out 0 1k\n.end\n";
+static const char *rl_halfwave = "RL half-wave\nV1 in 0 SIN(0 10 50)\nD1 in a\nR1 a b 10\nL1 b 0 50m\n.end\n";
+
+/* The steady state by Newton against the brute force of the same scheme
+ * (the same period map: they agree to its accuracy), and the largest
+ * multiplier against the brute force's contraction rate. */
+static void against_brute_force(const char *cir, int scheme, long n, double rate_tol) {
+  solved s = solve(cir, scheme, n, 0, CUP_OK);
+  double xb[16], rate, re[16], im[16];
+  long periods = brute_force(s.nl, scheme, n, s.info.period, 1e-12, xb, &rate);
+  const double *x0 = cup_pss_x0(s.r);
+  double diff = 0, sc = cup_test_inf(xb, s.n);
+  for (int i = 0; i < s.n; i++) diff = fmax(diff, fabs(x0[i] - xb[i]));
+  assert_int_equal(cup_pss_multipliers(s.r, re, im), CUP_OK);
+  print_message("  %s: brute force %ld periods (to a change below 1e-12), |x0 - x_bf| = %.3g (|x| %.3g); "
+                "multipliers %.9g%+.3gi, %.9g%+.3gi; contraction rate %.9g\n", cup_scheme_name(scheme), periods, diff,
+                sc, re[0], im[0], s.n > 1 ? re[1] : 0., s.n > 1 ? im[1] : 0., rate);
+  assert_true(diff <= 1e-9 * sc);
+  if (rate_tol > 0 && isfinite(rate)) assert_close(hypot(re[0], im[0]), rate, rate_tol);
+  assert_true(s.info.max_multiplier < 1);
+  done(&s);
+}
+
+static void halfwave_rc_adaptive(void **state) { (void)state; against_brute_force(halfwave_rc, CUP_SCHEME_ADAPTIVE, 0, 1e-4); }
+static void halfwave_rc_theta(void **state) { (void)state; against_brute_force(halfwave_rc, CUP_SCHEME_THETA, 2000, 1e-4); }
+/* Rs = 20 ohm: the capacitor charges through 2 ms, its mode survives a
+ * period (a multiplier the brute force's contraction shows). */
+static void halfwave_slow(void **state) {
+  (void)state;
+  against_brute_force("Half-wave, 20 ohm\nV1 in 0 SIN(0 10 50)\nRs in a 20\nD1 a out\nC1 out 0 100u\nRL out 0 1k\n.end\n",
+                      CUP_SCHEME_ADAPTIVE, 0, 1e-4);
+}
+static void bridge_adaptive(void **state) { (void)state; against_brute_force(bridge_rc, CUP_SCHEME_ADAPTIVE, 0, 1e-4); }
+
+/* D = 0 in DCM: the current dies inside every period, so the orbit starts
+ * at i = 0 and every perturbation is forgotten (multipliers 0); the
+ * current is the closed form (Vm/Z)(sin(w t - phi) + sin(phi) e^{-t R/L})
+ * while positive (docs/closed-forms.md), 0 after. */
+static void rl_halfwave_dcm(void **state) {
+  (void)state;
+  solved s = solve(rl_halfwave, CUP_SCHEME_ADAPTIVE, 0, 2001, CUP_OK);
+  double i[2001], re[1], im[1];
+  signal_of(&s, "i(L1)", i);
+  const double Vm = 10, R = 10, L = 50e-3, w = 2 * M_PI * 50, Z = hypot(R, w * L), phi = atan2(w * L, R);
+  double err = 0;
+  int off = 0;
+  for (long j = 0; j < 2001; j++) {
+    double t = 0.02 * (double)j / 2000, ref = Vm / Z * (sin(w * t - phi) + sin(phi) * exp(-t * R / L));
+    if (ref <= 0 || off) { off = j > 0; ref = 0; }
+    err = fmax(err, fabs(i[j] - ref));
+  }
+  assert_int_equal(cup_pss_multipliers(s.r, re, im), CUP_OK);
+  print_message("  RL half-wave: max |i - closed form| %.3g A, multiplier %.3g\n", err, re[0]);
+  assert_true(err <= 1e-9);
+  assert_true(fabs(re[0]) <= 1e-6);
+  assert_true(fabs(cup_pss_x0(s.r)[0]) <= 1e-12);
+  done(&s);
+}
+
+/* ---- no steady state, bad input ---- */
+
+/* An ideal LC driven at its resonance grows without bound: the multipliers
+ * e^{+-j w0 T} are 1, Phi(x) - x is singular; the error says so, with the
+ * residual, at once. */
+static void lc_resonance(void **state) {
+  (void)state;
+  char cir[256];
+  snprintf(cir, sizeof cir, "LC\nV1 in 0 SIN(0 1 %.17g)\nL1 in a 1m\nC1 a 0 1u\n.end\n", 1 / (2 * M_PI * sqrt(1e-9)));
+  solved s = solve(cir, CUP_SCHEME_ADAPTIVE, 0, 0, CUP_ERR_NO_STEADY_STATE);
+  assert_non_null(strstr(s.info.message, "multiplier is at 1"));
+  assert_true(s.info.period_runs <= 4);
+  done(&s);
+}
+
+/* An undamped LC off resonance has a periodic orbit, but it does not
+ * attract: a warning, the orbit and the multipliers on the unit circle. */
+static void lc_off_resonance(void **state) {
+  (void)state;
+  solved s = solve("LC\nV1 in 0 SIN(0 1 3000)\nL1 in a 1m\nC1 a 0 1u\n.end\n", CUP_SCHEME_ADAPTIVE, 0, 0,
+                   CUP_WARN_UNSTABLE_ORBIT);
+  assert_close(s.info.max_multiplier, 1, 1e-6);
+  done(&s);
+}
+
+static void periods(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  double T;
+  cup_netlist *nl = load("two\nV1 in 0 SIN(0 1 50)\nV2 b 0 SIN(0 1 150)\nR1 in c 1\nC1 c b 1u\n.end\n");
+  assert_int_equal(cup_input_period(cup_netlist_input(nl), &T, err), CUP_OK);
+  assert_close(T, 0.02, 1e-17);
+  cup_netlist_free(&nl);
+  nl = load("two\nV1 in 0 SIN(0 1 60)\nV2 b 0 PULSE(0 1 0 1u 1u 1m 2.5m)\nR1 in c 1\nC1 c b 1u\n.end\n");
+  assert_int_equal(cup_input_period(cup_netlist_input(nl), &T, err), CUP_OK);
+  assert_close(T, 0.05, 1e-16);                 /* 3 periods of 60 Hz, 20 of the pulse */
+  cup_netlist_free(&nl);
+  nl = load("none\nV1 in 0 SIN(0 1 50)\nV2 b 0 SIN(0 1 70.71067811865476)\nR1 in c 1\nC1 c b 1u\n.end\n");
+  assert_int_equal(cup_input_period(cup_netlist_input(nl), &T, err), CUP_ERR_ARG);
+  print_message("  %s\n", err);
+  assert_non_null(strstr(err, "no common period"));
+  cup_netlist_free(&nl);
+  nl = load("damped\nV1 in 0 SIN(0 1 50 0 3)\nR1 in b 1\nC1 b 0 1u\n.end\n");
+  assert_int_equal(cup_input_period(cup_netlist_input(nl), &T, err), CUP_ERR_ARG);
+  assert_non_null(strstr(err, "decays"));
+  cup_netlist_free(&nl);
+}
+
+/* ---- measurements ---- */
+
+static void measure_closed_forms(void **state) {
+  (void)state;
+  enum { N = 257, H = 4097 };
+  double v[N], amp[6], ph[6], w[H];
+  cup_measure m;
+  char err[CUP_ERRMSG_LEN];
+  for (int j = 0; j < N; j++) {
+    double a = 2 * M_PI * j / (N - 1);
+    v[j] = 3 + 2 * cos(a + 0.3) + 0.5 * sin(3 * a);
+  }
+  assert_int_equal(cup_measure_period(v, N, 5, &m, amp, ph, err), CUP_OK);
+  assert_close(m.avg, 3, 1e-14);
+  assert_close(m.rms, sqrt(9 + 2 + 0.125), 1e-14);
+  assert_close(m.thd, 0.25, 1e-14);
+  assert_close(amp[1], 2, 1e-14);
+  assert_close(ph[1], 0.3, 1e-14);
+  assert_close(amp[3], 0.5, 1e-14);
+  assert_close(ph[3], -M_PI / 2, 1e-13);
+  /* a half-wave rectified sine: kinks, O(h^2) */
+  for (int j = 0; j < H; j++) w[j] = fmax(0, sin(2 * M_PI * j / (H - 1)));
+  double a10[11];
+  assert_int_equal(cup_measure_period(w, H, 10, &m, a10, NULL, err), CUP_OK);
+  double h2 = 0;
+  for (int k = 1; k <= 5; k++) h2 += pow(2 / (M_PI * (4.0 * k * k - 1)), 2);
+  print_message("  half-wave sine: avg %.12g (1/pi %.12g), rms %.12g (1/2), thd %.12g (%.12g)\n", m.avg, 1 / M_PI,
+                m.rms, m.thd, sqrt(h2) / 0.5);
+  assert_close(m.avg, 1 / M_PI, 1e-7);
+  assert_close(m.rms, 0.5, 1e-7);
+  assert_close(m.max, 1, 1e-6);
+  assert_close(m.min, 0, 0);
+  assert_close(m.thd, sqrt(h2) / 0.5, 1e-6);
+  assert_int_equal(cup_measure_period(v, N, 128, &m, NULL, NULL, err), CUP_ERR_ARG);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(rc_sine),
+    cmocka_unit_test(rlc_pulse),
+    cmocka_unit_test(halfwave_rc_adaptive),
+    cmocka_unit_test(halfwave_rc_theta),
+    cmocka_unit_test(halfwave_slow),
+    cmocka_unit_test(bridge_adaptive),
+    cmocka_unit_test(rl_halfwave_dcm),
+    cmocka_unit_test(lc_resonance),
+    cmocka_unit_test(lc_off_resonance),
+    cmocka_unit_test(periods),
+    cmocka_unit_test(measure_closed_forms),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
