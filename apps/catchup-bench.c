@@ -34,12 +34,8 @@
 #include <dlfcn.h>
 #include <cholmod.h>
 #include "catchup.h"
-
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "util/clock.h"
+#include "../bench/paper.h"   /* the paper's circuit, shared with the tests */
 
 static int cmp_double(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;
@@ -145,9 +141,9 @@ static double make_set(problem *pb) {
   cup_csc C = view(pb->C);
   cup_metric P = {CUP_METRIC_SPARSE, NULL, view(pb->P), 0};
   char msg[CUP_ERRMSG_LEN];
-  double t0 = now();
+  double t0 = now_seconds();
   if (cup_polyset_create(&pb->set, &C, pb->g, &P, msg)) die("%s", msg);
-  return now() - t0;
+  return now_seconds() - t0;
 }
 
 /* Restart the kernel's peak-RSS record (VmHWM) at the current size, the
@@ -237,15 +233,15 @@ static void run_sequence(problem *pb, const char *tok, int method, int warm, int
   o.factor_updates = updates;
   cup_projector *pr = NULL;
   char msg[CUP_ERRMSG_LEN];
-  double t0 = now();
+  double t0 = now_seconds();
   if (cup_projector_create(&pr, pb->set, &o, msg)) die("%s", msg);
-  double setup = now() - t0;
+  double setup = now_seconds() - t0;
   /* timed: the whole sequence, one clock read before and after (a clock read per
    * projection would cost about as much as the projection on small sets); cold
    * mode resets the warm start between points, inside the timing */
   long inner = 1;                    /* sequences per timing: at least 20 ms */
   for (int r = -1; r < reps; r++) {
-    double a = now();
+    double a = now_seconds();
     for (long q = 0; q < inner; q++) {
       cup_projector_reset(pr);
       for (int k = 0; k < pb->K; k++) {
@@ -253,7 +249,7 @@ static void run_sequence(problem *pb, const char *tok, int method, int warm, int
         if (!warm) cup_projector_reset(pr);
       }
     }
-    double el = now() - a;
+    double el = now_seconds() - a;
     if (r < 0) inner = el < 0.02 ? (long)ceil(0.02 / fmax(el, 1e-9)) : 1;   /* calibration */
     else times[r] = el / ((double)inner * pb->K);
   }
@@ -263,14 +259,14 @@ static void run_sequence(problem *pb, const char *tok, int method, int warm, int
   cup_projector_reset(pr);
   for (int k = 0; k < pb->K; k++) {
     cup_proj_info info;
-    double a = now();
+    double a = now_seconds();
     int st = cup_project(pr, pb->x + (size_t)k * pb->n, z, &info);
     if (!warm) cup_projector_reset(pr);
     if (verbose)
       fprintf(stderr, "  point %d: %s, %d iterations, %d factorizations, %d row updates, "
               "eps %.3g (target %.3g), eta %.3g (target %.3g), %.3g s\n", k, cup_status_name(st),
               info.iterations, info.factorizations, info.row_updates, info.eps_cert,
-              info.eps_target, info.eta_cert, info.eta_target, now() - a);
+              info.eps_target, info.eta_cert, info.eta_target, now_seconds() - a);
     iters += info.iterations;
     facts += info.factorizations;
     certified += st == CUP_OK;
@@ -363,27 +359,11 @@ static void bench_projector(int argc, char **argv) {
 
 /* ---- the integrator on the paper's circuit ------------------------------------- */
 
-static cup_input *paper_input(int cas) {
-  cup_input *u = NULL;
-  cup_input_create(&u, 1, NULL);
-  if (cas == 1) {
-    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
-    cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
-    cup_input_add(u, 0, &s, NULL);
-    cup_input_add(u, 0, &c, NULL);
-  } else {
-    cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
-    cup_input_add(u, 0, &q, NULL);
-  }
-  return u;
-}
-
 static double run_circuit(int cas, long n, int scheme, int method, cup_output_kind out,
                           cup_run_info *info) {
-  cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
   cup_lcs *L = NULL;
   char msg[CUP_ERRMSG_LEN];
-  if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+  if (paper_lcs(&L, cas, msg)) die("%s", msg);
   cup_input *u = paper_input(cas);
   cup_integrator_options o;
   cup_integrator_options_default(&o);
@@ -395,9 +375,9 @@ static double run_circuit(int cas, long n, int scheme, int method, cup_output_ki
   cup_integrator *I = NULL;
   if (cup_integrator_create(&I, L, u, &o, msg)) die("%s", msg);
   double x0[3] = {0, 0, 0};
-  double t0 = now();
+  double t0 = now_seconds();
   cup_integrator_run(I, x0, NULL, NULL, info);
-  double dt = now() - t0;
+  double dt = now_seconds() - t0;
   cup_integrator_free(&I);
   cup_input_free(&u);
   cup_lcs_free(&L);
@@ -493,10 +473,9 @@ static void bench_circuit(int argc, char **argv) {
     char path[1024];
     snprintf(path, sizeof path, "%s/ref_case%d_limit_richardson.csv", refdir, cas);
     double *ref = load_reference(path);
-    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
     cup_lcs *L = NULL;
     char msg[CUP_ERRMSG_LEN];
-    if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+    if (paper_lcs(&L, cas, msg)) die("%s", msg);
     cup_input *u = paper_input(cas);
     for (size_t q = 0; q < sizeof cfg / sizeof cfg[0]; q++)
       for (int k = 0; k < nn; k++) {
@@ -517,9 +496,9 @@ static void bench_circuit(int argc, char **argv) {
         double x0[3] = {0, 0, 0};
         for (int r = 0; r < reps; r++) {
           ce.err = 0;
-          double a = now();
+          double a = now_seconds();
           cup_integrator_run(I, x0, circ_sink, &ce, &info);
-          t[r] = now() - a;
+          t[r] = now_seconds() - a;
         }
         double med = median(t, reps);
         fprintf(stderr, "case %d %-17s n %9ld: %10.4g s %8.1f ns/step error %.4e %s\n", cas, cfg[q].name,
@@ -579,9 +558,8 @@ static void bench_adaptive(int argc, char **argv) {
     double *ref = load_reference(path);
     snprintf(path, sizeof path, "%s/ref_case%d_limit_richardson.csv", refdir, cas);
     double *rich = load_reference(path);
-    cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
     cup_lcs *L = NULL;
-    if (cup_lcs_circuit(&L, &c, msg)) die("%s", msg);
+    if (paper_lcs(&L, cas, msg)) die("%s", msg);
     cup_input *u = paper_input(cas);
     for (int k = 0; k < nt; k++) {
       cup_integrator_options o;
@@ -597,9 +575,9 @@ static void bench_adaptive(int argc, char **argv) {
       double x0[3] = {0, 0, 0};
       for (int r = 0; r < reps; r++) {
         ce.err = ce.err_rich = 0;
-        double a = now();
+        double a = now_seconds();
         cup_integrator_run(I, x0, adaptive_sink, &ce, &info);
-        t[r] = now() - a;
+        t[r] = now_seconds() - a;
       }
       double med = median(t, reps);
       fprintf(stderr, "case %d adaptive tol %8.0e: %10.4g s, %5ld steps, %3ld events, error %.4e, estimate %.4e %s\n",

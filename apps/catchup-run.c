@@ -34,7 +34,10 @@
 #include "run_plan.h"
 #include "run_stop.h"
 #include "run_steady.h"
-#include "read_text.h"
+#include "stop_signal.h"
+#include "io/read_text.h"
+#include "util/clock.h"
+#include "util/path.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { MSG_LEN = 2 * CUP_ERRMSG_LEN };     /* a path, then a library message, whole */
@@ -234,24 +237,7 @@ static int parse_args(args_t *a, int argc, char **argv) {
   return -1;
 }
 
-/* ---- signals: a flag the sink reads ---- */
-
-static volatile sig_atomic_t stop_signal = 0;
-
-static void on_signal(int sig) { stop_signal = sig; }
-
-/* SA_RESETHAND: the first signal asks for a clean stop; a second one (a run
- * with no output between its steps never reaches the sink) ends at once,
- * and the file still holds everything up to its last flush. */
-static void install_handlers(void) {
-  struct sigaction sa;
-  memset(&sa, 0, sizeof sa);
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND;
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
-}
+/* ---- signals: stop_signal (stop_signal.h), which the sink reads ---- */
 
 /* A netlist's signals need zeta of the step that reached x (the diodes'
  * currents and voltages) and u(t): computed here, written beside x. */
@@ -306,12 +292,6 @@ typedef struct {
 static int event_sink(double t, int row, int on, void *ctx) {
   const run_t *r = ctx;
   return r->w ? cup_h5run_event(t, row, on, r->w) : 0;
-}
-
-static double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 static const char *output_name(int kind) {
@@ -492,10 +472,10 @@ static int load_scene(run_t *r, char *err) {
   const args_t *a = r->args;
   const char *const *ovr = (const char *const *)a->overrides;
   if (!is_netlist(a->scene)) return cup_scene_load(&r->scene, a->scene, ovr, a->n_overrides, err);
-  const char *slash = strrchr(a->scene, '/'), *base = slash ? slash + 1 : a->scene;
+  const char *base = path_base(a->scene);
   size_t len = 2 * strlen(base) + 32;
-  char *text = malloc(len), *dir = slash ? strndup(a->scene, slash == a->scene ? 1 : (size_t)(slash - a->scene)) : NULL;
-  if (!text || (slash && !dir)) { free(text); free(dir); return snprintf(err, MSG_LEN, "out of memory"), CUP_ERR_NOMEM; }
+  char *text = malloc(len), *dir = NULL;
+  if (!text || path_dir(a->scene, &dir)) { free(text); return snprintf(err, MSG_LEN, "out of memory"), CUP_ERR_NOMEM; }
   size_t w = (size_t)snprintf(text, len, "netlist: {file: \"");
   for (const char *p = base; *p; p++) {          /* a YAML double-quoted scalar */
     if (*p == '"' || *p == '\\') text[w++] = '\\';

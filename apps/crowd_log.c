@@ -6,6 +6,7 @@
 #include <string.h>
 #include <time.h>
 #include "crowd_log.h"
+#include "util/clock.h"
 
 enum { COLS = 11 };
 static const char *const names[COLS] = {"t", "inside", "rows", "active", "eps_cert", "eta_cert", "gap",
@@ -28,12 +29,6 @@ struct crowd_log {
   long last;                    /* the steps written (crowd_log_write), -1 before */
 };
 
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 crowd_log *crowd_log_create(cup_crowd *c, long n) {
   crowd_log *L = calloc(1, sizeof *L);
   if (!L) return NULL;
@@ -43,7 +38,7 @@ crowd_log *crowd_log_create(cup_crowd *c, long n) {
   for (int k = 0; k < COLS; k++) fail |= !(L->col[k] = calloc((size_t)n + 1, sizeof(double)));
   if (fail) { crowd_log_free(&L); return NULL; }
   L->col[1][0] = cup_crowd_agents(c);
-  L->last_clock = now();
+  L->last_clock = now_seconds();
   L->last = -1;
   return L;
 }
@@ -58,7 +53,7 @@ void crowd_log_free(crowd_log **L) {
 int crowd_log_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   crowd_log *L = ctx;
   if (k < 1 || k > L->n) return 0;
-  double clock = now();
+  double clock = now_seconds();
   double v[COLS] = {t, cup_crowd_inside(L->c), cup_crowd_rows(L->c), pi->active, pi->eps_cert, pi->eta_cert,
                     NAN, pi->iterations, pi->factorizations, clock - L->last_clock, cup_crowd_added(L->c)};
   L->last_clock = clock;

@@ -1,12 +1,9 @@
 /* run_plan — see run_plan.h. */
 #define _POSIX_C_SOURCE 200809L
-#include <libgen.h>
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <sys/statvfs.h>
 #include "catchup/h5run.h"
+#include "h5/h5util.h"
 #include "run_plan.h"
 
 enum { OVERHEAD = 1 << 16 };    /* attributes, the scene's text, metadata: well under 64 KiB */
@@ -37,13 +34,8 @@ int run_plan_too_long(const run_plan *p, const cup_integrator_options *o, long m
 }
 
 int run_plan_no_room(double bytes, const char *out, char *msg, size_t size) {
-  char *copy = strdup(out);
-  struct statvfs v;
-  int ok = copy && statvfs(dirname(copy), &v) == 0 && v.f_blocks;
-  free(copy);
-  if (!ok || isnan(bytes)) return 0;               /* a device that reports no size: checked as the file grows */
-  double avail = (double)v.f_bavail * (double)v.f_frsize;
-  if (bytes + CUP_H5_SPACE_MARGIN <= avail) return 0;
+  double avail = 0;                                /* NaN bytes, or a device that reports no size: */
+  if (!h5_space_short(out, 1, bytes, &avail)) return 0;   /* checked as the file grows */
   snprintf(msg, size, "the output needs about %.4g MiB and %u MiB kept free beside it, and the device of %s has "
            "%.4g MiB free: store fewer samples (output.samples, output.every) or write elsewhere",
            bytes / 1048576, CUP_H5_SPACE_MARGIN >> 20, out, avail / 1048576);

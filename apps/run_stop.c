@@ -3,7 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "read_text.h"
+#include "io/read_text.h"
 #include "run_stop.h"
 
 int run_stop_save(cup_h5run *w, const cup_integrator *I, const cup_run_info *info, const run_signals *s,

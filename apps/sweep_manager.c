@@ -1,6 +1,7 @@
 /* sweep_manager — see sweep_manager.h. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +20,15 @@
 #define FLUSH_SECONDS 1.0
 #define PROGRESS_SECONDS 0.25
 #define PROGRESS_LOG_SECONDS 10.0
+
+void say(const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  fputs("catchup-sweep: ", stderr);
+  vfprintf(stderr, fmt, ap);
+  fputc('\n', stderr);
+  va_end(ap);
+}
 
 void io_fail(manager_t *m, int st) {
   if (st && !m->io_status) {

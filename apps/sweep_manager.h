@@ -1,16 +1,16 @@
 /* sweep_manager — what rank 0 of catchup-sweep does with jobs and results,
  * MPI aside: the queue of jobs and its batches, the results of a message
- * into the results file at once (src/io/sweep_h5.c), the tasks' errors
+ * into the results file at once (src/sweep/sweep_file.c), the tasks' errors
  * against their variant's reference
  * (held in memory until it is known when no trajectories are stored), the
  * regular flush and the progress line. The MPI protocol that brings the
- * results, and the run itself, are in catchup-sweep.c. */
+ * results is sweep_mpi.c, the run itself catchup-sweep.c. */
 #ifndef CUP_SWEEP_MANAGER_H
 #define CUP_SWEEP_MANAGER_H
 
 #include <stddef.h>
-#include <time.h>
-#include "sweep.h"
+#include "sweep_file.h"
+#include "util/clock.h"
 
 enum { MAX_BATCH = 1024 };   /* jobs per batch, at most */
 
@@ -51,12 +51,8 @@ typedef struct {
   char io_msg[SW_ERR_LEN];
 } manager_t;
 
-static inline double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
+/* One line "catchup-sweep: ..." on stderr. */
+void say(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* The queue (jobs not done yet, in sw_schedule's order) and its costs;
  * CUP_OK or CUP_ERR_NOMEM. free_manager releases what the manager holds. */
 int setup_queue(manager_t *m);

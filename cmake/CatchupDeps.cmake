@@ -11,6 +11,20 @@ endfunction()
 
 find_package(PkgConfig QUIET)
 
+# catchup_pkg(TARGET PREFIX MODULE): TARGET, an interface over pkg-config's
+# MODULE (PkgConfig::PREFIX), when pkg-config knows it; PREFIX_FOUND says
+# whether it did.
+macro(catchup_pkg target prefix module)
+  set(${prefix}_FOUND FALSE)
+  if(PKG_CONFIG_FOUND)
+    pkg_check_modules(${prefix} QUIET IMPORTED_TARGET ${module})
+    if(${prefix}_FOUND)
+      add_library(${target} INTERFACE IMPORTED)
+      target_link_libraries(${target} INTERFACE PkgConfig::${prefix})
+    endif()
+  endif()
+endmacro()
+
 # --- GSL (quadrature, special functions) ---------------------------------
 find_package(GSL QUIET)
 if(NOT GSL_FOUND)
@@ -30,16 +44,8 @@ else()
 endif()
 
 # --- libyaml (scene and sweep files) ---------------------------------------
-set(_yaml_found FALSE)
-if(PKG_CONFIG_FOUND)
-  pkg_check_modules(YAML QUIET IMPORTED_TARGET yaml-0.1)
-  if(YAML_FOUND)
-    set(_yaml_found TRUE)
-    add_library(catchup_yaml INTERFACE IMPORTED)
-    target_link_libraries(catchup_yaml INTERFACE PkgConfig::YAML)
-  endif()
-endif()
-if(NOT _yaml_found)
+catchup_pkg(catchup_yaml YAML yaml-0.1)
+if(NOT YAML_FOUND)
   find_path(YAML_INCLUDE_DIR yaml.h)
   find_library(YAML_LIBRARY NAMES yaml)
   if(NOT YAML_INCLUDE_DIR OR NOT YAML_LIBRARY)
@@ -85,16 +91,8 @@ endif()
 
 # --- cmocka: tests only -------------------------------------------------------
 if(CATCHUP_BUILD_TESTS)
-  set(_cmocka_found FALSE)
-  if(PKG_CONFIG_FOUND)
-    pkg_check_modules(CMOCKA QUIET IMPORTED_TARGET cmocka)
-    if(CMOCKA_FOUND)
-      set(_cmocka_found TRUE)
-      add_library(catchup_cmocka INTERFACE IMPORTED)
-      target_link_libraries(catchup_cmocka INTERFACE PkgConfig::CMOCKA)
-    endif()
-  endif()
-  if(NOT _cmocka_found)
+  catchup_pkg(catchup_cmocka CMOCKA cmocka)
+  if(NOT CMOCKA_FOUND)
     catchup_missing("cmocka (unit test framework)" "libcmocka-dev")
   endif()
 endif()

@@ -16,6 +16,7 @@
 #include <string.h>
 #include "catchup.h"
 #include "scene_netlist.h"
+#include "fuzz_text.h"
 
 static const char *const sets[4][3] = {
   {"R1=2k", "C1=1u", "vin=5"},
@@ -28,6 +29,26 @@ static void check_message(int st, const char *err) {
   if (st >= 0) return;
   /* one line, naming the input (or, for an error in a file it includes, that file: "PATH:LINE:COL: ...") */
   if (!err[0] || strchr(err, '\n') || (strncmp(err, "fuzz.cir", 8) && !strstr(err, ":"))) abort();
+}
+
+/* A run with options o: it stops with a message, or its creation fails
+ * with one line. With switched, a netlist's switches run each configuration
+ * as it occurs. */
+static void run_with(cup_netlist *nl, const cup_integrator_options *o, int switched) {
+  char err[CUP_ERRMSG_LEN] = "";
+  cup_integrator *I = NULL;
+  cup_switching sw;
+  int made = switched && cup_netlist_switching(nl, &sw)
+                 ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), o, err)
+                 : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), o, err);
+  if (made == CUP_OK) {
+    cup_run_info info;
+    cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
+    if (info.status < 0 && !info.message[0]) abort();
+    cup_integrator_free(&I);
+  } else if (!err[0] || strchr(err, '\n')) {
+    abort();
+  }
 }
 
 /* Signals at a state of ones, and a few steps of the default scheme. */
@@ -53,15 +74,7 @@ static void exercise(cup_netlist *nl) {
   o.T = 1e-3;
   o.output = CUP_OUTPUT_NONE;
   o.proj.max_iter = 200;
-  cup_integrator *I = NULL;
-  if (cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err) == CUP_OK) {
-    cup_run_info info;
-    cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
-    if (info.status < 0 && !info.message[0]) abort();
-    cup_integrator_free(&I);
-  } else if (!err[0] || strchr(err, '\n')) {
-    abort();
-  }
+  run_with(nl, &o, 0);
   /* the scheme, tol, samples and TMAX catchup-run takes from .tran and
    * .options (scene_netlist_options: the adaptive scheme where it fits, D
    * != 0 too), over a short time with a wall-time cap */
@@ -77,26 +90,12 @@ static void exercise(cup_netlist *nl) {
   o.output_t0 = 0;
   o.output_samples = 5;
   o.max_wall_seconds = 0.5;
-  I = NULL;
-  cup_switching sw;                              /* switches: each configuration formed as it occurs */
-  int made = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)
-                                            : cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err);
-  if (made == CUP_OK) {
-    cup_run_info info;
-    cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
-    if (info.status < 0 && !info.message[0]) abort();
-    cup_integrator_free(&I);
-  } else if (!err[0] || strchr(err, '\n')) {
-    abort();
-  }
+  run_with(nl, &o, 1);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
-  if (size > (1 << 16)) return 0;
-  char *text = malloc(size + 1);
+  char *text = fuzz_text(data, size);
   if (!text) return 0;
-  memcpy(text, data, size);
-  text[size] = '\0';
   cup_netlist *nl = NULL;
   char err[CUP_ERRMSG_LEN] = "";
   int st = cup_netlist_load_string(&nl, text, "fuzz.cir", NULL, 0, err);

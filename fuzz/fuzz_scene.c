@@ -19,6 +19,7 @@
 #include <unistd.h>
 #include "catchup.h"
 #include "sweep.h"
+#include "fuzz_text.h"
 
 static char dir[] = "/tmp/cup_fuzz_XXXXXX";
 static char mtx_path[64];
@@ -72,11 +73,8 @@ static void run_briefly(const char *text, const char *d) {
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
-  if (size > (1 << 16)) return 0;
-  char *text = malloc(size + 1);
+  char *text = fuzz_text(data, size);
   if (!text) return 0;
-  memcpy(text, data, size);
-  text[size] = '\0';
   const char *d = "/nonexistent";
   char *mtx = strstr(text, "\n#%mtx\n");
   unlink(mtx_path);

@@ -155,10 +155,15 @@ def one_legend(fig, axes, **kw):
     fig.legend(list(seen.values()), list(seen.keys()), **kw)
 
 
-def work_precision(rows, variants, schemes, title, out):
+def panels(variants, schemes):
+    """A panel per variant on a grid, and a colour per scheme."""
     nr, nc = grid(len(variants))
     fig, axes = plt.subplots(nr, nc, figsize=(5 * nc, 4 * nr), squeeze=False)
-    colors = {s: plt.cm.tab10(i) for i, s in enumerate(schemes)}
+    return fig, axes, {s: plt.cm.tab10(i) for i, s in enumerate(schemes)}
+
+
+def work_precision(rows, variants, schemes, title, out):
+    fig, axes, colors = panels(variants, schemes)
     for ax, v in zip(axes.flat, variants):
         for s in schemes:
             pts = [r for r in rows if r["variant"] == v and r["scheme"] == s and r["wall"] > 0 and r["error"] > 0]
@@ -203,9 +208,7 @@ def power10(n):
 
 
 def error_order(rows, variants, schemes, title, out):
-    nr, nc = grid(len(variants))
-    fig, axes = plt.subplots(nr, nc, figsize=(5 * nc, 4 * nr), squeeze=False)
-    colors = {s: plt.cm.tab10(i) for i, s in enumerate(schemes)}
+    fig, axes, colors = panels(variants, schemes)
     for ax, v in zip(axes.flat, variants):
         for s in schemes:
             if s == "adaptive":

@@ -17,6 +17,7 @@
 #include <sys/types.h>
 #include <sys/wait.h>
 #include "tmpdir.h"
+#include "h5read.h"   /* reading the file */
 
 static const char *tmp_path(const char *name) {
   static char buf[4][256];
@@ -81,42 +82,6 @@ static result run_cli(const char *const *args, double signal_after, int sig) {
   r.out[n] = '\0';
   fclose(f);
   return r;
-}
-
-/* ---- reading the file ---- */
-
-static hsize_t read_rows(hid_t f, const char *name, int rank, hsize_t cols, double **out) {
-  hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
-  assert_true(d >= 0);
-  hid_t s = H5Dget_space(d);
-  hsize_t dims[2] = {0, 0};
-  assert_int_equal(H5Sget_simple_extent_ndims(s), rank);
-  H5Sget_simple_extent_dims(s, dims, NULL);
-  if (rank == 2) assert_true(dims[1] == cols);
-  *out = malloc(sizeof(double) * (dims[0] * cols + 1));
-  if (dims[0] > 0)
-    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, *out) >= 0);
-  H5Sclose(s);
-  H5Dclose(d);
-  return dims[0];
-}
-
-static int64_t attr_i64(hid_t f, const char *name) {
-  int64_t v = 0;
-  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
-  if (a < 0) fail_msg("attribute %s missing", name);
-  assert_true(H5Aread(a, H5T_NATIVE_INT64, &v) >= 0);
-  H5Aclose(a);
-  return v;
-}
-
-static double attr_f64(hid_t f, const char *name) {
-  double v = 0;
-  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
-  if (a < 0) fail_msg("attribute %s missing", name);
-  assert_true(H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0);
-  H5Aclose(a);
-  return v;
 }
 
 #endif

@@ -1,12 +1,8 @@
 # Install this build into a scratch prefix, then build and run an outside
 # project against it twice: once with find_package(catchup), once with
 # pkg-config only.
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "install consumer failed at: ${ARGN}")
-  endif()
-endfunction()
+set(RUN_WHAT "install consumer")
+include(${CMAKE_CURRENT_LIST_DIR}/run_step.cmake)
 set(PREFIX ${WORK}/prefix)
 file(REMOVE_RECURSE ${WORK})
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${PREFIX})

@@ -1,11 +1,7 @@
 # Configure, build and run the unit and stress tests with -fsanitize=address,undefined.
 # Invoked by ctest as: cmake -DSRC=... -DBIN=... -P run_sanitize.cmake
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "sanitizer run failed at: ${ARGN}")
-  endif()
-endfunction()
+set(RUN_WHAT "sanitizer run")
+include(${CMAKE_CURRENT_LIST_DIR}/run_step.cmake)
 run(${CMAKE_COMMAND} -S ${SRC} -B ${BIN} -G ${GENERATOR}
     -DCMAKE_BUILD_TYPE=Debug -DCATCHUP_SANITIZE=ON -DCATCHUP_WERROR=ON
     -DCATCHUP_BUILD_APPS=OFF -DCATCHUP_BUILD_FORTRAN=OFF)

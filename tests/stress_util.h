@@ -70,4 +70,42 @@ static inline cup_input *input_terms(int nterm, const cup_wave *w) {
   return u;
 }
 
+/* The adaptive scheme's options over [0, T] at tol_abs, tol_rel, with
+ * `samples` output times (the rest the defaults). */
+static inline void adaptive_options(cup_integrator_options *o, double T, double tol_abs, double tol_rel,
+                                    long samples) {
+  cup_integrator_options_default(o);
+  o->scheme = CUP_SCHEME_ADAPTIVE;
+  o->T = T;
+  o->tol_abs = tol_abs;
+  o->tol_rel = tol_rel;
+  o->output = CUP_OUTPUT_SAMPLES;
+  o->output_samples = samples;
+}
+
+/* Events that accumulate at t = 1/2: u = (zigzag, -1), the zigzag's 200
+ * teeth of widths 0.05 0.9^k (summing to 1/2) rising from 0 over the share
+ * `rise` of each width to `height` times it, falling back to 0 over the
+ * rest, then 0. Its rows: x' = zeta - 1 pushed up by the teeth. */
+static inline cup_input *zigzag_input(double rise, double height) {
+  enum { TEETH = 200 };
+  double tt[2 * TEETH + 1], vv[2 * TEETH + 1], t = 0, d = 0.05;
+  for (int k = 0; k < TEETH; k++, d *= 0.9) {       /* sum of d = 1/2 */
+    tt[2 * k] = t;
+    vv[2 * k] = 0;
+    tt[2 * k + 1] = t + rise * d;
+    vv[2 * k + 1] = height * d;
+    t += d;
+  }
+  tt[2 * TEETH] = t;
+  vv[2 * TEETH] = 0;
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, 2, NULL), CUP_OK);
+  cup_wave zig = {.kind = CUP_WAVE_PWL, .npoints = 2 * TEETH + 1, .t = tt, .v = vv};
+  cup_wave down = {.kind = CUP_WAVE_CONSTANT, .value = -1};
+  assert_int_equal(cup_input_add(u, 0, &zig, NULL), CUP_OK);
+  assert_int_equal(cup_input_add(u, 1, &down, NULL), CUP_OK);
+  return u;
+}
+
 #endif

@@ -45,12 +45,7 @@ static int ad_event(double t, int row, int on, void *vp) {
 static ad_ctx run_adaptive(const cup_lcs *L, const cup_input *u, const double *x0, double T, double tol,
                            long samples, exact_fn ex, const void *par, cup_run_info *info) {
   cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.T = T;
-  o.tol_abs = o.tol_rel = tol;
-  o.output = CUP_OUTPUT_SAMPLES;
-  o.output_samples = samples;
+  adaptive_options(&o, T, tol, tol, samples);
   ad_ctx c = {.exact = ex, .par = par, .dim = cup_lcs_dim(L)};
   o.on_event = ad_event;
   o.event_ctx = &c;
@@ -345,27 +340,11 @@ static void test_step_doubling(void **state) {
  * envelope: after t* u is constant and x falls to it, at slope -1. */
 static void test_zeno(void **state) {
   (void)state;
-  enum { TEETH = 200 };
-  double tt[2 * TEETH + 1], vv[2 * TEETH + 1], t = 0, d = 0.05;
-  for (int k = 0; k < TEETH; k++, d *= 0.9) {       /* sum of d = 1/2 */
-    tt[2 * k] = t;
-    vv[2 * k] = 0;
-    tt[2 * k + 1] = t + 0.75 * d;                   /* up 0.75 d at slope 1, down at -3 */
-    vv[2 * k + 1] = 0.75 * d;
-    t += d;
-  }
-  tt[2 * TEETH] = t;
-  vv[2 * TEETH] = 0;
   double C[1] = {1}, G[2] = {-1, 0}, E[2] = {0, 1};
   lcs_built b;
   char msg[CUP_ERRMSG_LEN];
   if (build_lcs(&b, 1, 1, 2, NULL, NULL, C, E, NULL, G, NULL, NULL, msg)) fail_msg("lcs: %s", msg);
-  cup_input *u = NULL;
-  assert_int_equal(cup_input_create(&u, 2, NULL), CUP_OK);
-  cup_wave zig = {.kind = CUP_WAVE_PWL, .npoints = 2 * TEETH + 1, .t = tt, .v = vv};
-  cup_wave down = {.kind = CUP_WAVE_CONSTANT, .value = -1};
-  assert_int_equal(cup_input_add(u, 0, &zig, NULL), CUP_OK);
-  assert_int_equal(cup_input_add(u, 1, &down, NULL), CUP_OK);
+  cup_input *u = zigzag_input(0.75, 0.75);         /* up 0.75 d at slope 1, down at -3 */
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = CUP_SCHEME_ADAPTIVE;

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <cmocka.h>
 #include "catchup.h"
+#include "stress_util.h"
 #include "circuit_ref.h"
 
 #define CIR CUP_EXAMPLES_DIR "/circuits"
@@ -58,12 +59,7 @@ static void check_circuit_set(const char *file, const char *set, exact_fn exact,
   const char *name = set ? set : strrchr(file, '/') + 1;
   for (double tol = 1e-4; tol >= 0.99e-10; tol *= 1e-2) {
     cup_integrator_options o;
-    cup_integrator_options_default(&o);
-    o.scheme = CUP_SCHEME_ADAPTIVE;
-    o.T = T;
-    o.tol_abs = o.tol_rel = tol;
-    o.output = CUP_OUTPUT_SAMPLES;
-    o.output_samples = SAMPLES;
+    adaptive_options(&o, T, tol, tol, SAMPLES);
     cup_integrator *I = NULL;
     if (cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err)) fail_msg("%s: %s", name, err);
     run_ctx c = {exact, ctx, cup_lcs_dim(cup_netlist_lcs(nl)), same, 0, 0, 0};

@@ -37,19 +37,19 @@ static void expect_in_err(const result *r, const char *text) {
   if (!strstr(r->err, text)) fail_msg("stderr lacks '%s':\n%s", text, r->err);
 }
 
+/* catchup-run ARGS exits with code and says text in one line of stderr. */
+static void expect_says(const char *const *args, int code, const char *text) {
+  result r = run_cli(args, 0, 0);
+  expect_exit(&r, code, 1);
+  expect_in_err(&r, text);
+}
+
 /* ---- reading the file ---- */
 
 static void expect_attr_str(hid_t f, const char *name, const char *expect) {
-  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
-  if (a < 0) fail_msg("attribute %s missing", name);
-  hid_t type = H5Aget_type(a);
-  char *s = NULL;
-  assert_true(H5Tis_variable_str(type) > 0);
-  assert_true(H5Aread(a, type, &s) >= 0);
+  char s[4096];
+  attr_str(f, name, s, sizeof s);
   if (strcmp(s, expect) != 0) fail_msg("attribute %s = '%s', expected '%s'", name, s, expect);
-  H5free_memory(s);
-  H5Tclose(type);
-  H5Aclose(a);
 }
 
 static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; }
@@ -133,16 +133,9 @@ static void test_adaptive_file(void **state) {
   expect_attr_str(f, "scheme", "adaptive");
   /* /events: (t, row, on) */
   typedef struct { double t; int32_t row; int8_t on; } ev;
-  hid_t d = H5Dopen2(f, "events", H5P_DEFAULT), mt = H5Tcreate(H5T_COMPOUND, sizeof(ev));
-  H5Tinsert(mt, "t", HOFFSET(ev, t), H5T_NATIVE_DOUBLE);
-  H5Tinsert(mt, "row", HOFFSET(ev, row), H5T_NATIVE_INT32);
-  H5Tinsert(mt, "on", HOFFSET(ev, on), H5T_NATIVE_INT8);
-  hid_t sp = H5Dget_space(d);
   hsize_t ne = 0;
-  H5Sget_simple_extent_dims(sp, &ne, NULL);
+  ev *e = read_events(f, sizeof(ev), HOFFSET(ev, t), HOFFSET(ev, row), HOFFSET(ev, on), &ne);
   assert_true((long)ne == attr_i64(f, "events") && ne >= 8);
-  ev *e = malloc(sizeof(ev) * ne);
-  assert_true(H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, e) >= 0);
   for (hsize_t k = 0; k < ne; k++) {
     assert_true(e[k].row >= 0 && e[k].row < 2 && (e[k].on == 0 || e[k].on == 1));
     if (k) assert_true(e[k].t >= e[k - 1].t);
@@ -150,16 +143,11 @@ static void test_adaptive_file(void **state) {
   /* case 1 starts with row 1 (x2 >= 0) pushed on at t = 0 */
   assert_true(e[0].t == 0 && e[0].row == 1 && e[0].on == 1);
   free(e);
-  H5Sclose(sp);
-  H5Tclose(mt);
-  H5Dclose(d);
   H5Fclose(f);
   free(t);
   free(x);
   const char *bad[] = {fig2, "-o", out, "--tol", "-1e-8", NULL};
-  r = run_cli(bad, 0, 0);
-  expect_exit(&r, 2, 1);
-  expect_in_err(&r, "--tol '-1e-8': not a positive number");
+  expect_says(bad, 2, "--tol '-1e-8': not a positive number");
 }
 
 static void test_summary_line_and_overrides(void **state) {
@@ -201,9 +189,7 @@ static void test_help_lists_and_output_override(void **state) {
   for (int k = 0; k < CUP_PROJ_METHOD_COUNT; k++)
     if (!strstr(r.out, cup_proj_method_name(k))) fail_msg("--help lacks method %s", cup_proj_method_name(k));
   const char *bad[] = {fig2, "-o", tmp_path("x.h5"), "--scheme", "thet", NULL};
-  r = run_cli(bad, 0, 0);
-  expect_exit(&r, 2, 1);
-  expect_in_err(&r, "unknown scheme (explicit, implicit, exponential, theta or adaptive)");
+  expect_says(bad, 2, "unknown scheme (explicit, implicit, exponential, theta or adaptive)");
 
   const char *out = tmp_path("samples.h5");
   const char *args[] = {fig2, "-o", out, "--set", "output.samples=2", "--quiet", NULL};
@@ -321,16 +307,20 @@ static void check_prefix(hid_t f, hsize_t *rows, double *last) {
   free(x);
 }
 
-static const char *long_run[] = {NULL, "-o", NULL, "--n", "1000000000", "--set",
-                                 "output.every=1000", "--quiet", NULL};
+/* A run of the paper's circuit long enough to be stopped, into out. */
+static void long_run_args(const char *args[9], const char *out) {
+  static const char *long_run[] = {NULL, "-o", NULL, "--n", "1000000000", "--set",
+                                   "output.every=1000", "--quiet", NULL};
+  memcpy(args, long_run, sizeof long_run);
+  args[0] = fig2;
+  args[2] = out;
+}
 
 static void test_sigint_stops_cleanly(void **state) {
   (void)state;
   const char *out = tmp_path("sigint.h5");
   const char *args[9];
-  memcpy(args, long_run, sizeof args);
-  args[0] = fig2;
-  args[2] = out;
+  long_run_args(args, out);
   result r = run_cli(args, 1.5, SIGINT);
   if (r.sig != SIGINT || r.lines != 1) fail_msg("signal %d, %d lines:\n%s", r.sig, r.lines, r.err);
   expect_in_err(&r, "stopped by SIGINT");
@@ -354,9 +344,7 @@ static void test_kill9_file_readable(void **state) {
   (void)state;
   const char *out = tmp_path("kill9.h5");
   const char *args[9];
-  memcpy(args, long_run, sizeof args);
-  args[0] = fig2;
-  args[2] = out;
+  long_run_args(args, out);
   result r = run_cli(args, 2.5, SIGKILL);
   assert_int_equal(r.sig, SIGKILL);
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -433,17 +421,11 @@ static void test_netlist_signals(void **state) {
   H5Fclose(f);
   free(t); free(x); free(vout); free(vin);
   const char *noprobe[] = {fig2, "-o", out, "--probe", "v(a)", NULL};
-  r = run_cli(noprobe, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "--probe: the scene has no netlist");
+  expect_says(noprobe, 1, "--probe: the scene has no netlist");
   const char *unknown[] = {cir, "-o", out, "--probe", "i(R9)", NULL};
-  r = run_cli(unknown, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "probe 'i(R9)': no element named 'R9'");
+  expect_says(unknown, 1, "probe 'i(R9)': no element named 'R9'");
   const char *bad[] = {CUP_SOURCE_DIR "/tests/netlists/bad/inductor-cutset.cir", "-o", out, NULL};
-  r = run_cli(bad, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
+  expect_says(bad, 1, "inductor-cutset.cir:4:1: L1: L1 and L2 form a cutset of inductors and current sources");
 }
 
 /* A fixed-step scheme is one flag away from a netlist, with its own n or h:
@@ -457,25 +439,15 @@ static void test_netlist_fixed_step(void **state) {
   expect_exit(&r, 1, 1);
   expect_in_err(&r, "the theta scheme needs n or h: the netlist's .tran TSTEP is the output's spacing, not a step");
   const char *withn[] = {cir, "-o", out, "--scheme", "theta", "--n", "6000", NULL};
-  r = run_cli(withn, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(withn, 0, "n=6000 theta, 3001 samples");
   const char *withh[] = {cir, "-o", out, "--scheme", "theta", "--h", "1e-5", NULL};
-  r = run_cli(withh, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(withh, 0, "n=6000 theta, 3001 samples");
   const char *both[] = {cir, "-o", out, "--scheme", "theta", "--h", "1e-5", "--n", "3", NULL};
-  r = run_cli(both, 0, 0);
-  expect_exit(&r, 1, 1);
-  expect_in_err(&r, "h: give n or h, not both");
+  expect_says(both, 1, "h: give n or h, not both");
   const char *nalone[] = {cir, "-o", out, "--n", "6000", NULL};
-  r = run_cli(nalone, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(nalone, 0, "n=6000 theta, 3001 samples");
   const char *halone[] = {cir, "-o", out, "--h", "1e-5", NULL};
-  r = run_cli(halone, 0, 0);
-  expect_exit(&r, 0, 1);
-  expect_in_err(&r, "n=6000 theta, 3001 samples");
+  expect_says(halone, 0, "n=6000 theta, 3001 samples");
 }
 
 /* A rectifier whose diode has D != 0 (behind the source's resistance) is

@@ -27,6 +27,22 @@ static cup_crowd *square_room(int walled, double grid, double clearance, char *e
   return c;
 }
 
+/* The crowd of d at step dt into *c and an integrator over its n steps
+ * (T = n dt), output out; both must build. */
+static cup_integrator *crowd_integrator(cup_crowd **c, const cup_crowd_desc *d, double dt, long n,
+                                        cup_output_kind out) {
+  char err[CUP_ERRMSG_LEN];
+  if (cup_crowd_create(c, d, dt, err)) fail_msg("crowd: %s", err);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.n = n;
+  o.T = n * dt;
+  o.output = out;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create_process(&I, cup_crowd_process(*c), &o, err)) fail_msg("integrator: %s", err);
+  return I;
+}
+
 /* Do segments p-q and a-b cross? */
 static int crosses(double px, double py, double qx, double qy, double ax, double ay, double bx, double by) {
   double d1 = (bx - ax) * (py - ay) - (by - ay) * (px - ax), d2 = (bx - ax) * (qy - ay) - (by - ay) * (qx - ax);
@@ -187,16 +203,8 @@ static void test_clearance_round_the_edge(void **state) {
       for (int point = 0; point <= 1; point++) {
         cup_crowd_desc d = {.agents = 1, .q0 = start[a], .radius = r, .room_points = 4, .room = room,
                             .doors = 1, .door = door, .speed = v, .grid = grids[g], .clearance = point ? 0 : 0.25};
-        char err[CUP_ERRMSG_LEN];
         cup_crowd *c;
-        assert_int_equal(cup_crowd_create(&c, &d, dt, err), CUP_OK);
-        cup_integrator_options o;
-        cup_integrator_options_default(&o);
-        o.n = 400;
-        o.T = o.n * dt;
-        o.output = CUP_OUTPUT_FINAL;
-        cup_integrator *I;
-        assert_int_equal(cup_integrator_create_process(&I, cup_crowd_process(c), &o, err), CUP_OK);
+        cup_integrator *I = crowd_integrator(&c, &d, dt, 400, CUP_OUTPUT_FINAL);
         cup_run_info info;
         assert_int_equal(cup_integrator_run(I, start[a], NULL, NULL, &info), CUP_OK);
         double t = cup_crowd_exit_times(c)[0], ideal = jamb_path(start[a][0], start[a][1], 0.25) / v;
@@ -261,16 +269,8 @@ static void test_alone(void **state) {
   const double v = 1.3, dt = 0.01;
   cup_crowd_desc d = {.agents = 1, .q0 = q0, .radius = r, .room_points = 4, .room = room, .doors = 1,
                       .door = door, .speed = v, .grid = 0.05};
-  char err[CUP_ERRMSG_LEN];
   cup_crowd *c;
-  assert_int_equal(cup_crowd_create(&c, &d, dt, err), CUP_OK);
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.n = 1500;
-  o.T = o.n * dt;
-  o.output = CUP_OUTPUT_EVERY;
-  cup_integrator *I;
-  assert_int_equal(cup_integrator_create_process(&I, cup_crowd_process(c), &o, err), CUP_OK);
+  cup_integrator *I = crowd_integrator(&c, &d, dt, 1500, CUP_OUTPUT_EVERY);
   cup_run_info info;
   assert_int_equal(cup_integrator_run(I, q0, NULL, NULL, &info), CUP_OK);
   const double *q = cup_integrator_state(I);

@@ -28,9 +28,19 @@
 
 #define CLI_TMPDIR_TEMPLATE "/tmp/cup_h5run_XXXXXX"
 #include "tmpdir.h"
+#include "h5read.h"
 
 static void path_in_tmp(char *buf, size_t size, const char *name) {
   snprintf(buf, size, "%s/%s", tmpdir, name);
+}
+
+/* A writer of dim-state rows into the temporary folder's NAME (its path
+ * into buf), which must open. */
+static cup_h5run *create_in_tmp(char *buf, size_t size, const char *name, int dim) {
+  path_in_tmp(buf, size, name);
+  cup_h5run *w = NULL;
+  assert_int_equal(cup_h5run_create(&w, buf, dim, NULL), CUP_OK);
+  return w;
 }
 
 /* ---- reference values: any 64-bit pattern, NaN payloads and -0 included ---- */
@@ -127,6 +137,17 @@ static void check_rows(const run_file *r, long n) {
 
 static void free_run(run_file *r) { free(r->t); free(r->x); }
 
+/* The file at path holds the rows 0..n-1 of write_samples, of dim states
+ * (dim 0: any). */
+static void expect_run(const char *path, long n, int dim) {
+  run_file r;
+  read_run(path, &r);
+  assert_int_equal(r.n, n);
+  if (dim) assert_int_equal(r.dim, dim);
+  check_rows(&r, n);
+  free_run(&r);
+}
+
 /* ---- round trip of N samples of dimension dim ---- */
 
 typedef struct { long n; int dim; } shape;
@@ -147,12 +168,7 @@ static void test_roundtrip(void **state) {
   assert_int_equal(cup_h5run_count(w), s->n);
   assert_int_equal(cup_h5run_close(&w, err), CUP_OK);
   assert_null(w);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, s->n);
-  assert_int_equal(r.dim, s->dim);
-  check_rows(&r, s->n);
-  free_run(&r);
+  expect_run(path, s->n, s->dim);
 }
 
 /* Explicit flushes of partial buffers in between: writes realign to chunk
@@ -160,9 +176,7 @@ static void test_roundtrip(void **state) {
 static void test_flushes_in_between(void **state) {
   (void)state;
   char path[256];
-  path_in_tmp(path, sizeof path, "flushes.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "flushes.h5", 2);
   long cuts[] = {0, 10, 5010, 5013, 9000, 13001};
   for (size_t i = 1; i < sizeof cuts / sizeof cuts[0]; i++) {
     assert_int_equal(write_samples(w, cuts[i - 1], cuts[i], 2), CUP_OK);
@@ -170,11 +184,7 @@ static void test_flushes_in_between(void **state) {
     assert_int_equal(cup_h5run_flush(w), CUP_OK);       /* nothing buffered */
   }
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, 13001);
-  check_rows(&r, 13001);
-  free_run(&r);
+  expect_run(path, 13001, 0);
 }
 
 /* ---- attributes ---- */
@@ -262,10 +272,8 @@ static void check_attrs(const char *path, const char *big) {
 static void test_attributes_roundtrip(void **state) {
   (void)state;
   char path[256];
-  path_in_tmp(path, sizeof path, "attrs.h5");
   char *big = long_text(200000);
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "attrs.h5", 3);
   write_attrs(w, big);
   assert_int_equal(cup_h5run_attr_double(NULL, "x", 1), CUP_ERR_ARG);
   assert_int_equal(cup_h5run_attr_string(w, "x", NULL), CUP_ERR_ARG);
@@ -282,9 +290,7 @@ static void test_h5dump_reads_attributes(void **state) {
   skip();
 #else
   char path[256], cmd[512], out[8192];
-  path_in_tmp(path, sizeof path, "dump.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "dump.h5", 3);
   assert_int_equal(cup_h5run_attr_string(w, "scheme", "explicit"), CUP_OK);
   assert_int_equal(cup_h5run_attr_long(w, "n", 1000), CUP_OK);
   assert_int_equal(cup_h5run_attr_double(w, "T", 0.5), CUP_OK);
@@ -410,11 +416,7 @@ static void test_write_failure_is_reported(void **state) {
   assert_int_equal(c.close_status, CUP_ERR_IO);
   assert_null(c.w);
   if (!strstr(c.err, path) || !strstr(c.err, "append")) fail_msg("%s", c.err);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, 4096);
-  check_rows(&r, 4096);
-  free_run(&r);
+  expect_run(path, 4096, 0);
 }
 
 /* No PATH.part* file is left in the temporary folder. */
@@ -431,9 +433,7 @@ static int staged_left(void) {
 static void test_staged_replace(void **state) {
   (void)state;
   char path[256];
-  path_in_tmp(path, sizeof path, "staged.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 3, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "staged.h5", 3);
   assert_int_equal(write_samples(w, 0, 10, 3), CUP_OK);
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
   for (int round = 0; round < 3; round++) {
@@ -441,12 +441,7 @@ static void test_staged_replace(void **state) {
     assert_int_equal(write_samples(w, 0, 5, 2), CUP_OK);
     assert_int_equal(cup_h5run_flush(w), CUP_OK);
     if (round == 1) assert_true(staged_left());            /* the sibling, while it is written */
-    run_file r;
-    read_run(path, &r);
-    assert_int_equal(r.n, 10);
-    assert_int_equal(r.dim, 3);
-    check_rows(&r, 10);
-    free_run(&r);
+    expect_run(path, 10, 3);
     if (round == 0) cup_h5run_discard(&w);
     else if (round == 1) assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);   /* not committed */
     else assert_int_equal(cup_h5run_commit(w), CUP_OK);
@@ -454,12 +449,7 @@ static void test_staged_replace(void **state) {
   }
   assert_int_equal(write_samples(w, 5, 7, 2), CUP_OK);
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
-  run_file r;
-  read_run(path, &r);
-  assert_int_equal(r.n, 7);
-  assert_int_equal(r.dim, 2);
-  check_rows(&r, 7);
-  free_run(&r);
+  expect_run(path, 7, 2);
   cup_h5run_discard(&w);                                    /* NULL: nothing */
 }
 
@@ -557,38 +547,16 @@ static void test_events(void **state) {
     }
     assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
     typedef struct { int8_t on; double t; int32_t row; } ev;   /* another order than the writer's */
-    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT), d = H5Dopen2(f, "events", H5P_DEFAULT);
-    hid_t mt = H5Tcreate(H5T_COMPOUND, sizeof(ev));
-    H5Tinsert(mt, "t", HOFFSET(ev, t), H5T_NATIVE_DOUBLE);
-    H5Tinsert(mt, "row", HOFFSET(ev, row), H5T_NATIVE_INT32);
-    H5Tinsert(mt, "on", HOFFSET(ev, on), H5T_NATIVE_INT8);
-    hid_t sp = H5Dget_space(d);
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     hsize_t n = 0;
-    H5Sget_simple_extent_dims(sp, &n, NULL);
+    ev *e = read_events(f, sizeof(ev), HOFFSET(ev, t), HOFFSET(ev, row), HOFFSET(ev, on), &n);
     assert_int_equal((long)n, count);
-    ev *e = malloc(sizeof(ev) * (n + 1));
-    if (n) assert_true(H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, e) >= 0);
     for (int k = 0; k < count; k++)
       if (e[k].t != 0.5 * k || e[k].row != k % 7 || e[k].on != (k % 3 == 0))
         fail_msg("event %d read back as (%g, %d, %d)", k, e[k].t, e[k].row, e[k].on);
     free(e);
-    H5Sclose(sp);
-    H5Tclose(mt);
-    H5Dclose(d);
     H5Fclose(f);
   }
-}
-
-/* A string attribute of an object, read through HDF5 (not the writer). */
-static void read_str_attr(hid_t obj, const char *name, char *out, size_t size) {
-  hid_t a = H5Aopen(obj, name, H5P_DEFAULT), t = H5Aget_type(a);
-  assert_true(a >= 0 && H5Tis_variable_str(t) > 0 && H5Tget_cset(t) == H5T_CSET_UTF8);
-  char *v = NULL;
-  assert_true(H5Aread(a, t, &v) >= 0);
-  snprintf(out, size, "%s", v);
-  H5free_memory(v);
-  H5Tclose(t);
-  H5Aclose(a);
 }
 
 /* Dimension scales and CF attributes, read back with the H5DS API: /x's
@@ -598,9 +566,7 @@ static void read_str_attr(hid_t obj, const char *name, char *out, size_t size) {
 static void test_dimension_scales(void **state) {
   (void)state;
   char path[512], buf[128];
-  path_in_tmp(path, sizeof path, "dims.h5");
-  cup_h5run *w = NULL;
-  assert_int_equal(cup_h5run_create(&w, path, 2, NULL), CUP_OK);
+  cup_h5run *w = create_in_tmp(path, sizeof path, "dims.h5", 2);
   const char *names[2] = {"q(C4)", "i(L3)"};
   assert_int_equal(cup_h5run_strings(w, "state", 2, names), CUP_OK);
   assert_int_equal(cup_h5run_dims(w, "x", (const char *const[]){"t", "state"}), CUP_OK);
@@ -635,9 +601,9 @@ static void test_dimension_scales(void **state) {
   assert_true(H5DSis_attached(x, t, 0) > 0 && H5DSis_attached(x, st, 1) > 0 && H5DSis_attached(x, t, 1) == 0);
   assert_true(H5DSget_scale_name(t, buf, sizeof buf) > 0);
   assert_string_equal(buf, "t");
-  read_str_attr(x, "units", buf, sizeof buf);
+  attr_str(x, "units", buf, sizeof buf);
   assert_string_equal(buf, "C, A");
-  read_str_attr(x, "long_name", buf, sizeof buf);
+  attr_str(x, "long_name", buf, sizeof buf);
   assert_string_equal(buf, "state x(t)");
   hid_t e = H5Dopen2(f, "events", H5P_DEFAULT), ev = H5Dopen2(f, "event", H5P_DEFAULT);
   assert_true(H5DSis_attached(e, ev, 0) > 0);

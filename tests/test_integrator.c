@@ -8,6 +8,8 @@
 #include <stdio.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "stress_util.h"
+#include "../bench/paper.h"
 #include "closed_forms.h"
 #include "refdata.h"
 
@@ -70,25 +72,16 @@ static double order_of(double e1, double e2) { return log10(e1 / e2); }   /* n x
 
 static double ref1[1001 * 3], ref2[1001 * 3];
 
-static cup_input *paper_input(int cas) {
-  cup_input *u = NULL;
-  assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
-  if (cas == 1) {
-    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 16, .frequency = 3};
-    cup_wave c = {.kind = CUP_WAVE_CONSTANT, .value = -0.5};
-    cup_input_add(u, 0, &s, NULL);
-    cup_input_add(u, 0, &c, NULL);
-  } else {
-    cup_wave q = {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 2};
-    cup_input_add(u, 0, &q, NULL);
-  }
+/* The paper's cases (bench/paper.h), which must build. */
+static cup_input *case_input(int cas) {
+  cup_input *u = paper_input(cas);
+  assert_non_null(u);
   return u;
 }
 
-static cup_lcs *paper_lcs(int cas) {
-  cup_circuit c = {1, 2, 1, 1, 2, 1, {0, cas == 2 ? 1 : 0}};
+static cup_lcs *case_lcs(int cas) {
   cup_lcs *L = NULL;
-  assert_int_equal(cup_lcs_circuit(&L, &c, NULL), CUP_OK);
+  assert_int_equal(paper_lcs(&L, cas, NULL), CUP_OK);
   return L;
 }
 
@@ -100,8 +93,8 @@ static void test_paper_cases_exact_projection(void **state) {
   ref_load("ref_case2_limit_richardson.csv", ref2);
   static const double C[3] = {0, 1.52, 1.79};
   for (int cas = 1; cas <= 2; cas++) {
-    cup_lcs *L = paper_lcs(cas);
-    cup_input *u = paper_input(cas);
+    cup_lcs *L = case_lcs(cas);
+    cup_input *u = case_input(cas);
     double x0[3] = {0, 0, 0};
     for (long n = 1000; n <= 10000; n *= 10) {
       double e = run_error(L, u, x0, n, 1, CUP_SCHEME_EXPLICIT, NULL, NULL, cas == 1 ? ref1 : ref2, NULL);
@@ -113,11 +106,11 @@ static void test_paper_cases_exact_projection(void **state) {
   }
 }
 
-typedef struct { double *X; } store_ctx;
+typedef struct { double *X; int dim; } store_ctx;   /* row k of X: x_k */
 static int store_sink(long k, double t, const double *x, void *vp) {
   (void)t;
   store_ctx *c = vp;
-  memcpy(c->X + 3 * k, x, 3 * sizeof(double));
+  memcpy(c->X + (size_t)c->dim * (size_t)k, x, (size_t)c->dim * sizeof(double));
   return 0;
 }
 
@@ -134,8 +127,8 @@ static void test_paper_tolerances(void **state) {
   static const int methods[] = {CUP_PROJ_AUTO};
   for (int cas = 1; cas <= 2; cas++)
     for (long n = 1000; n <= 10000; n *= 10) {
-      cup_lcs *L = paper_lcs(cas);
-      cup_input *u = paper_input(cas);
+      cup_lcs *L = case_lcs(cas);
+      cup_input *u = case_input(cas);
       double *X[2];
       for (int q = 0; q < 2; q++) X[q] = malloc(sizeof(double) * 3 * (size_t)(n + 1));
       for (int pass = -1; pass < 1; pass++) {     /* -1: the exact reference */
@@ -152,7 +145,7 @@ static void test_paper_tolerances(void **state) {
         cup_integrator *I = NULL;
         assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
         double x0[3] = {0, 0, 0};
-        store_ctx sc = {X[pass < 0 ? 0 : 1]};
+        store_ctx sc = {X[pass < 0 ? 0 : 1], 3};
         cup_run_info info;
         assert_int_equal(cup_integrator_run(I, x0, store_sink, &sc, &info), CUP_OK);
         cup_integrator_free(&I);
@@ -177,21 +170,29 @@ static void test_paper_tolerances(void **state) {
  * 4.4's Moreau-Jean values on case 1 (measured with EulerMoreauOSI,
  * theta = 0.5, Lemke: 8.737e-6 at n = 10^3, 1.444e-7 at 10^4, 9.965e-10 at
  * 10^5). */
-static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta,
-                      double *X) {
+/* A run of n steps from x0 with the projector's dense active-set method
+ * (explicit: the projector, not the theta path), its states into X; the
+ * targets eps and eta absolute; on_step rows_step into rc unless NULL. */
+typedef struct rows_ctx rows_ctx;
+static int rows_step(long k, double t, const cup_proj_info *pi, void *vp);
+static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta, double eps,
+                      double eta, const double *x0, double *X, rows_ctx *rc) {
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.n = n;
   o.scheme = scheme;
   o.theta = theta;
-  o.proj.method = CUP_PROJ_ACTIVESET;      /* explicit: the projector, not the theta path */
-  o.eps = (cup_schedule){0, 0};
-  o.eta = (cup_schedule){0, 0};
+  o.proj.method = CUP_PROJ_ACTIVESET;
+  o.eps = (cup_schedule){eps, 0};
+  o.eta = (cup_schedule){eta, 0};
+  if (rc) {
+    o.on_step = rows_step;
+    o.step_ctx = rc;
+  }
   cup_integrator *I = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
-  double x0[3] = {0, 0, 0};
-  store_ctx sc = {X};
+  store_ctx sc = {X, cup_lcs_dim(L)};
   cup_run_info info;
   if (cup_integrator_run(I, x0, store_sink, &sc, &info) < 0) fail_msg("run: %s", info.message);
   cup_integrator_free(&I);
@@ -200,12 +201,13 @@ static void run_store(const cup_lcs *L, const cup_input *u, long n, int scheme, 
 static void test_theta_scheme(void **state) {
   (void)state;
   for (int cas = 1; cas <= 2; cas++) {
-    cup_lcs *L = paper_lcs(cas);
-    cup_input *u = paper_input(cas);
+    cup_lcs *L = case_lcs(cas);
+    cup_input *u = case_input(cas);
     long n = 1000;
     double *X0 = malloc(sizeof(double) * 3 * (size_t)(n + 1)), *Xe = malloc(sizeof(double) * 3 * (size_t)(n + 1));
-    run_store(L, u, n, CUP_SCHEME_THETA, 0, X0);
-    run_store(L, u, n, CUP_SCHEME_EXPLICIT, 0, Xe);
+    static const double x0[3] = {0, 0, 0};
+    run_store(L, u, n, CUP_SCHEME_THETA, 0, 0, 0, x0, X0, NULL);
+    run_store(L, u, n, CUP_SCHEME_EXPLICIT, 0, 0, 0, x0, Xe, NULL);
     double d = 0;
     for (long q = 0; q < 3 * (n + 1); q++) d = fmax(d, fabs(X0[q] - Xe[q]));
     print_message("case %d: theta = 0 vs explicit projection: max difference %.3e\n", cas, d);
@@ -214,8 +216,8 @@ static void test_theta_scheme(void **state) {
     cup_input_free(&u);
     cup_lcs_free(&L);
   }
-  cup_lcs *L = paper_lcs(1);
-  cup_input *u = paper_input(1);
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
   static const double siconos[3] = {8.737e-6, 1.444e-7, 9.965e-10};
   double e[3];
   for (int k = 0; k < 3; k++) {
@@ -247,33 +249,13 @@ static void test_theta_scheme(void **state) {
 
 /* ---- closed forms --------------------------------------------------------------- */
 
-/* A small LCS from dense row-major matrices (absent ones: NULL). */
-typedef struct { tcsc A, B, C, E, G; cup_lcs *L; } lcs_built;
-
+/* A small LCS from dense row-major matrices (absent ones: NULL;
+ * stress_util.h), which must be valid. */
 static void build(lcs_built *b, int n, int m, int p, const double *A, const double *B,
                   const double *C, const double *E, const double *F, const double *G,
                   const double *Pdiag) {
-  memset(b, 0, sizeof *b);
-  cup_lcs_desc d = {0};
-  d.n = n; d.m = m; d.p = p;
-  if (A) { tcsc_from_dense(&b->A, A, n, n); d.A = b->A.view; }
-  if (B) { tcsc_from_dense(&b->B, B, n, m); d.B = b->B.view; }
-  tcsc_from_dense(&b->C, C, m, n); d.C = b->C.view;
-  if (E) { tcsc_from_dense(&b->E, E, n, p); d.E = b->E.view; }
-  if (G) { tcsc_from_dense(&b->G, G, m, p); d.G = b->G.view; }
-  d.F = F;
-  if (Pdiag) d.P = (cup_metric){CUP_METRIC_DIAGONAL, Pdiag, {0}, 0};
   char msg[CUP_ERRMSG_LEN];
-  if (cup_lcs_create(&b->L, &d, msg)) fail_msg("lcs: %s", msg);
-}
-
-static void unbuild(lcs_built *b) {
-  cup_lcs_free(&b->L);
-  if (b->A.p) tcsc_free(&b->A);
-  if (b->B.p) tcsc_free(&b->B);
-  tcsc_free(&b->C);
-  if (b->E.p) tcsc_free(&b->E);
-  if (b->G.p) tcsc_free(&b->G);
+  if (build_lcs(b, n, m, p, A, B, C, E, F, G, Pdiag, NULL, msg)) fail_msg("lcs: %s", msg);
 }
 
 /* The theta step's LCP with up to four rows active at once (the paper's
@@ -282,7 +264,7 @@ static void unbuild(lcs_built *b) {
  * pushed on together by E u. theta = 0 must equal the explicit step with the
  * exact projection (the projector's dense active-set method: an independent
  * solver), theta = 1/2 must certify complementarity at every step. */
-typedef struct { int max_active; double max_eps; int bad; } rows_ctx;
+struct rows_ctx { int max_active; double max_eps; int bad; };
 static int rows_step(long k, double t, const cup_proj_info *pi, void *vp) {
   (void)k; (void)t;
   rows_ctx *c = vp;
@@ -291,35 +273,6 @@ static int rows_step(long k, double t, const cup_proj_info *pi, void *vp) {
   if (pi->status != CUP_OK) c->bad++;
   return 0;
 }
-typedef struct { double *X; } rows_store;
-static int rows_sink(long k, double t, const double *x, void *vp) {
-  (void)t;
-  memcpy(((rows_store *)vp)->X + 4 * k, x, 4 * sizeof(double));
-  return 0;
-}
-
-static void run_rows(const cup_lcs *L, const cup_input *u, long n, int scheme, double theta,
-                     double *X, rows_ctx *rc) {
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.n = n;
-  o.scheme = scheme;
-  o.theta = theta;
-  o.proj.method = CUP_PROJ_ACTIVESET;      /* explicit: the projector, not the theta path */
-  o.eps = (cup_schedule){1e-14, 0};             /* absolute: the state passes near 0, */
-  o.eta = (cup_schedule){1e-12, 0};             /* where relative targets fall below rounding */
-  o.on_step = rows_step;
-  o.step_ctx = rc;
-  cup_integrator *I = NULL;
-  char msg[CUP_ERRMSG_LEN];
-  if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
-  double x0[4] = {1, 0, 0, 0};
-  rows_store sc = {X};
-  cup_run_info info;
-  if (cup_integrator_run(I, x0, rows_sink, &sc, &info) < 0) fail_msg("run: %s", info.message);
-  cup_integrator_free(&I);
-}
-
 static void test_theta_many_rows(void **state) {
   (void)state;
   const double A[16] = {-1, 2, 0, 0,  -2, -1, 1, 0,  0, -1, -0.5, 3,  0, 0, -3, -0.2};
@@ -341,8 +294,10 @@ static void test_theta_many_rows(void **state) {
   size_t len = 4 * (size_t)(n + 1);
   double *Xt = malloc(sizeof(double) * len), *Xe = malloc(sizeof(double) * len);
   rows_ctx rt = {0, 0, 0}, re = {0, 0, 0};
-  run_rows(b.L, u, n, CUP_SCHEME_THETA, 0, Xt, &rt);
-  run_rows(b.L, u, n, CUP_SCHEME_EXPLICIT, 0, Xe, &re);
+  static const double x0[4] = {1, 0, 0, 0};
+  /* targets absolute: the state passes near 0, where relative ones fall below rounding */
+  run_store(b.L, u, n, CUP_SCHEME_THETA, 0, 1e-14, 1e-12, x0, Xt, &rt);
+  run_store(b.L, u, n, CUP_SCHEME_EXPLICIT, 0, 1e-14, 1e-12, x0, Xe, &re);
   double d = 0;
   for (size_t q = 0; q < len; q++) d = fmax(d, fabs(Xt[q] - Xe[q]));
   print_message("4 rows: theta = 0 vs explicit projection: max difference %.3e, "
@@ -351,7 +306,7 @@ static void test_theta_many_rows(void **state) {
   assert_int_equal(rt.bad + re.bad, 0);
   assert_true(d <= 1e-12);
   rows_ctx rh = {0, 0, 0};
-  run_rows(b.L, u, n, CUP_SCHEME_THETA, 0.5, Xt, &rh);
+  run_store(b.L, u, n, CUP_SCHEME_THETA, 0.5, 1e-14, 1e-12, x0, Xt, &rh);
   print_message("4 rows: theta = 1/2: at most %d rows active, largest gap %.3e, %d uncertified\n",
                 rh.max_active, rh.max_eps, rh.bad);
   assert_true(rh.max_active >= 3);
@@ -367,7 +322,7 @@ static void test_theta_many_rows(void **state) {
   assert_true(dt > 0 && dt <= 2e-2);
   free(Xt); free(Xe);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static cup_input *const_input(double v) {
@@ -393,10 +348,8 @@ static void test_closed_form_moving_interval(void **state) {
   double C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};   /* x - sin t + r >= 0, -x + sin t + r >= 0 */
   lcs_built b;
   build(&b, 1, 2, 1, NULL, NULL, C, NULL, F, G, NULL);
-  cup_input *u = NULL;
-  cup_input_create(&u, 1, NULL);
-  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
-  cup_input_add(u, 0, &s, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};   /* sin t */
+  cup_input *u = input_terms(1, &s);
   double x0[1] = {0};
   /* Rate independent: the catching-up iterate equals the solution at every
    * grid point (a projection of the previous value is exactly what the play
@@ -407,7 +360,7 @@ static void test_closed_form_moving_interval(void **state) {
     assert_true(e <= 1e-12);
   }
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_interval_with_relaxation(void **state) {
@@ -415,29 +368,34 @@ static void test_closed_form_interval_with_relaxation(void **state) {
   double A[1] = {-1}, C[2] = {1, -1}, F[2] = {0.5, 0.5}, G[2] = {-1, 1};
   lcs_built b;
   build(&b, 1, 2, 1, A, NULL, C, NULL, F, G, NULL);
-  cup_input *u = NULL;
-  cup_input_create(&u, 1, NULL);
-  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
-  cup_input_add(u, 0, &s, NULL);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};   /* sin t */
+  cup_input *u = input_terms(1, &s);
   double T = 2.5 * M_PI, x0[1] = {0};
   relax_par q;
   relax_setup(&q, T);
   assert_true(q.nev >= 4);                        /* free, pushed, free, pushed, ... */
   check_order("moving interval, relaxation", &b, u, x0, T, relax_exact, &q, 1000);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
+}
+
+/* x' = A x + E with u = 1 onto the quadrant x >= 0 (C = I, P diagonal or
+ * NULL), against its exact solution. */
+static void quadrant_case(const char *name, const double *A, const double *E, const double *P,
+                          const double *x0, double T, exact_fn ex) {
+  static const double C[4] = {1, 0, 0, 1};
+  lcs_built b;
+  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, P);
+  cup_input *u = const_input(1);
+  check_order(name, &b, u, x0, T, ex, NULL, 1000);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_cone(void **state) {
   (void)state;
-  double A[4] = {-1, 0, 0, -1}, C[4] = {1, 0, 0, 1}, E[2] = {1, -1};
-  lcs_built b;
-  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, NULL);
-  cup_input *u = const_input(1);
-  double x0[2] = {0, 1};
-  check_order("cone, f = -x + c", &b, u, x0, 2, cone_exact, NULL, 1000);
-  cup_input_free(&u);
-  unbuild(&b);
+  double A[4] = {-1, 0, 0, -1}, E[2] = {1, -1}, x0[2] = {0, 1};
+  quadrant_case("cone, f = -x + c", A, E, NULL, x0, 2, cone_exact);
 }
 
 static void rect_build(lcs_built *b, const rect_par *q, double *P) {
@@ -465,19 +423,13 @@ static void test_closed_form_rectifier(void **state) {
   double x0[1] = {0};
   check_order("RL half-wave rectifier", &b, u, x0, 2, rect_exact, &q, 1000);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 static void test_closed_form_corner(void **state) {
   (void)state;
-  double A[4] = {-1, 0, 0, -2}, C[4] = {1, 0, 0, 1}, E[2] = {-1, -1}, P[2] = {2, 3};
-  lcs_built b;
-  build(&b, 2, 2, 1, A, NULL, C, E, NULL, NULL, P);
-  cup_input *u = const_input(1);
-  double x0[2] = {1, 1};
-  check_order("corner of a quadrant", &b, u, x0, 1.5, corner_exact, NULL, 1000);
-  cup_input_free(&u);
-  unbuild(&b);
+  double A[4] = {-1, 0, 0, -2}, E[2] = {-1, -1}, P[2] = {2, 3}, x0[2] = {1, 1};
+  quadrant_case("corner of a quadrant", A, E, P, x0, 1.5, corner_exact);
 }
 
 static void test_closed_form_jumping_set(void **state) {
@@ -496,7 +448,7 @@ static void test_closed_form_jumping_set(void **state) {
     assert_true(e <= 1.0 * 1.75 / n);            /* C = 1 */
   }
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 /* Stiff: the rectifier with L = 1e-3 (time constant 1e-3) at n = 100 over two
@@ -526,7 +478,7 @@ static void test_stiff_rectifier(void **state) {
     assert_true(e100 <= 2 * 100 * e1e4);
   }
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 /* ---- output, schedules, errors ------------------------------------------------------ */
@@ -544,8 +496,8 @@ static int count_sink(long k, double t, const double *x, void *vp) {
 
 static void test_output_modes_and_exact_time(void **state) {
   (void)state;
-  cup_lcs *L = paper_lcs(1);
-  cup_input *u = paper_input(1);
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
   double x0[3] = {0, 0, 0};
   struct { cup_output_kind kind; long every, samples, expect; } cases[] = {
     {CUP_OUTPUT_EVERY, 1, 0, 1001}, {CUP_OUTPUT_EVERY, 7, 0, 144},  /* 0,7,..,994 and 1000 */
@@ -615,8 +567,8 @@ static int f_fails_late(double t, const double *x, double *f, void *ctx) {
 
 static void test_errors_say_where(void **state) {
   (void)state;
-  cup_lcs *L = paper_lcs(1);
-  cup_input *u = paper_input(1);
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.n = 1000;
@@ -678,7 +630,7 @@ static void test_empty_set_at_a_step(void **state) {
   assert_int_equal(cc.count, 51);
   cup_integrator_free(&I);
   cup_input_free(&u);
-  unbuild(&b);
+  unbuild_lcs(&b);
 }
 
 int main(void) {

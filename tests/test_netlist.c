@@ -15,6 +15,7 @@
 #include "testutil.h"
 #include "badcorpus.h"
 #include "lcs_impl.h"
+#include "netlistutil.h"
 #include "polyset_impl.h"
 
 #define EX CUP_EXAMPLES_DIR
@@ -28,36 +29,6 @@ static cup_netlist *load_ok(const char *path, const char *const *sets, int nsets
   if (st) fail_msg("loading %s failed (%d): %s", path, st, err);
   assert_non_null(nl);
   return nl;
-}
-
-static cup_netlist *text_ok(const char *text, const char *const *sets, int nsets) {
-  char err[CUP_ERRMSG_LEN] = "";
-  cup_netlist *nl = NULL;
-  int st = cup_netlist_load_string(&nl, text, "t.cir", sets, nsets, err);
-  if (st) fail_msg("loading failed (%d): %s\n%s", st, err, text);
-  return nl;
-}
-
-static const char *text_bad(const char *text, const char *const *sets, int nsets) {
-  static char err[CUP_ERRMSG_LEN];
-  cup_netlist *nl = (cup_netlist *)&err;
-  int st = cup_netlist_load_string(&nl, text, "t.cir", sets, nsets, err);
-  if (st == CUP_OK) fail_msg("loaded but should not have:\n%s", text);
-  assert_null(nl);
-  assert_null(strchr(err, '\n'));
-  return err;
-}
-
-static void assert_contains(const char *msg, const char *want) {
-  if (!strstr(msg, want)) fail_msg("message\n  %s\ndoes not contain\n  %s", msg, want);
-}
-
-/* Entry (r, c) of an owned CSC (0 when absent). */
-static double at(const cup_sparse *S, int r, int c) {
-  if (!S->p || c >= S->ncol) return 0;
-  for (int k = S->p[c]; k < S->p[c + 1]; k++)
-    if (S->i[k] == r) return S->x[k];
-  return 0;
 }
 
 /* ---- the paper's circuit ----------------------------------------------------- */

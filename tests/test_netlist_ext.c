@@ -14,35 +14,7 @@
 #include <cmocka.h>
 #include "testutil.h"
 #include "lcs_impl.h"
-
-static cup_netlist *text_ok(const char *text) {
-  char err[CUP_ERRMSG_LEN] = "";
-  cup_netlist *nl = NULL;
-  int st = cup_netlist_load_string(&nl, text, "t.cir", NULL, 0, err);
-  if (st) fail_msg("loading failed (%d): %s\n%s", st, err, text);
-  return nl;
-}
-
-static const char *text_bad(const char *text) {
-  static char err[CUP_ERRMSG_LEN];
-  cup_netlist *nl = NULL;
-  int st = cup_netlist_load_string(&nl, text, "t.cir", NULL, 0, err);
-  if (st == CUP_OK) fail_msg("loaded but should not have:\n%s", text);
-  assert_null(nl);
-  assert_null(strchr(err, '\n'));
-  return err;
-}
-
-static void assert_contains(const char *msg, const char *want) {
-  if (!strstr(msg, want)) fail_msg("message\n  %s\ndoes not contain\n  %s", msg, want);
-}
-
-static double at(const cup_sparse *S, int r, int c) {
-  if (!S->p || c >= S->ncol) return 0;
-  for (int k = S->p[c]; k < S->p[c + 1]; k++)
-    if (S->i[k] == r) return S->x[k];
-  return 0;
-}
+#include "netlistutil.h"
 
 static void assert_rel(double got, double want, double tol) {
   if (!(fabs(got - want) <= tol * fabs(want))) fail_msg("got %.17g, want %.17g (rel tol %g)", got, want, tol);
@@ -72,7 +44,7 @@ static void test_vcvs_amplifier(void **state) {
                             "R2 inm out 10k\n"
                             "E1 out 0 0 inm 1e5\n"
                             "RL out o2 1k\n"
-                            "C1 o2 0 1u\n");
+                            "C1 o2 0 1u\n", NULL, 0);
   const cup_lcs *L = cup_netlist_lcs(nl);
   double k = A * R2 / (R1 + R2 + A * R1);
   assert_false(L->has_D);                         /* no diode: a sweeping process, every scheme */
@@ -105,7 +77,7 @@ static void test_vccs_cccs_ccvs(void **state) {
                             "CF of 0 1u\n"
                             "H1 oh 0 Vs 2k\n"
                             "RH oh b 5k\n"
-                            "CH b 0 1u\n");
+                            "CH b 0 1u\n", NULL, 0);
   const cup_lcs *L = cup_netlist_lcs(nl);
   for (int j = 0; j < 3; j++) assert_rel(at(&L->A, j, j), -1 / (RL * C), 1e-14);
   /* inputs in netlist order: V1, I1, Vs */
@@ -123,12 +95,12 @@ static void test_vccs_cccs_ccvs(void **state) {
  * output) is singular; gain 0.5 is not (v = 0.5 v + ...). */
 static void test_controlled_loop(void **state) {
   (void)state;
-  assert_contains(text_bad("loop\nV1 in 0 1\nR1 in a 1k\nE1 b 0 b 0 1\nR2 b a 1k\nC1 a 0 1u\n"),
+  assert_contains(text_bad("loop\nV1 in 0 1\nR1 in a 1k\nE1 b 0 b 0 1\nR2 b a 1k\nC1 a 0 1u\n", NULL, 0),
                   "t.cir:4:1: E1: a loop of controlled sources (E1) makes the circuit singular");
   assert_contains(text_bad("loop2\nV1 in 0 1\nR1 in a 1k\nE1 b 0 c 0 2\nE2 c 0 b 0 0.5\nR2 b a 1k\nR3 c a 1k\n"
-                           "C1 a 0 1u\n"), "a loop of controlled sources (E1 and E2)");
+                           "C1 a 0 1u\n", NULL, 0), "a loop of controlled sources (E1 and E2)");
   cup_netlist *nl = text_ok("loop ok\nV1 in 0 1\nR1 in a 1k\nE1 b 0 c 0 2\nE2 c 0 b 0 0.25\nR2 b a 1k\n"
-                            "R3 c a 1k\nC1 a 0 1u\n");
+                            "R3 c a 1k\nC1 a 0 1u\n", NULL, 0);
   cup_netlist_free(&nl);
 }
 
@@ -166,7 +138,7 @@ static void test_precision_rectifier(void **state) {
                             "D1 inm oa\n"
                             "D2 oa vo\n"
                             "RL vo 0 10k\n"
-                            ".tran 20u 40m\n");
+                            ".tran 20u 40m\n", NULL, 0);
   const cup_lcs *L = cup_netlist_lcs(nl);
   assert_true(L->has_D);
   char err[CUP_ERRMSG_LEN];
@@ -250,7 +222,7 @@ static void test_coupled_rl(void **state) {
                             "L1 b 0 1m\n"
                             "L2 c 0 2m\n"
                             "R2 c 0 2\n"
-                            "K1 L1 L2 0.6\n");
+                            "K1 L1 L2 0.6\n", NULL, 0);
   const cup_lcs *L = cup_netlist_lcs(nl);
   double M = kc * sqrt(L1 * L2), det = L1 * L2 - M * M;
   double Li[4] = {L2 / det, -M / det, -M / det, L1 / det};
@@ -286,17 +258,17 @@ static void test_coupled_rl(void **state) {
 static void test_coupled_diode(void **state) {
   (void)state;
   cup_netlist *nl = text_ok("coupled with a diode\nV1 a 0 SIN(0 1 1k)\nR1 a b 1\nL1 b 0 1m\nL2 c 0 2m\n"
-                            "D1 c d\nR2 d 0 2\nK1 L1 L2 0.9\n");
+                            "D1 c d\nR2 d 0 2\nK1 L1 L2 0.9\n", NULL, 0);
   const cup_lcs *L = cup_netlist_lcs(nl);
   assert_false(L->has_D);
   cup_netlist_free(&nl);
-  assert_contains(text_bad("k=1\nV1 a 0 1\nR1 a b 1\nL1 b 0 1m\nL2 c 0 2m\nR2 c 0 2\nK1 L1 L2 1\n"),
+  assert_contains(text_bad("k=1\nV1 a 0 1\nR1 a b 1\nL1 b 0 1m\nL2 c 0 2m\nR2 c 0 2\nK1 L1 L2 1\n", NULL, 0),
                   "t.cir:7:10: K1: k = 1 is not supported: a perfect coupling (an ideal transformer)");
-  assert_contains(text_bad("k>1\nV1 a 0 1\nR1 a b 1\nL1 b 0 1m\nL2 c 0 2m\nR2 c 0 2\nK1 L1 L2 -1.5\n"),
+  assert_contains(text_bad("k>1\nV1 a 0 1\nR1 a b 1\nL1 b 0 1m\nL2 c 0 2m\nR2 c 0 2\nK1 L1 L2 -1.5\n", NULL, 0),
                   "K1: k = -1.5 is out of range");
   /* pairwise 0.9 with signs that cannot all hold: L not positive definite */
   assert_contains(text_bad("3k\nV1 a 0 1\nR1 a b 1\nL1 b 0 1m\nL2 c 0 1m\nR2 c 0 2\nL3 d 0 1m\nR3 d 0 1\n"
-                           "K1 L1 L2 0.9\nK2 L2 L3 0.9\nK3 L1 L3 -0.9\n"),
+                           "K1 L1 L2 0.9\nK2 L2 L3 0.9\nK3 L1 L3 -0.9\n", NULL, 0),
                   "t.cir:11:1: K3: the inductance matrix of L1, L2 and L3 is not positive definite");
 }
 
@@ -320,7 +292,7 @@ static void test_subckt(void **state) {
                             "V1 a 0 1\n"
                             "X1 a b rc r=2k\n"
                             "X2 a d rc params: c=3u\n"
-                            "X3 a e two\n");
+                            "X3 a e two\n", NULL, 0);
   const cup_lcs *L = cup_netlist_lcs(nl);
   const char *names[5] = {"v(X1.C1)", "v(X2.C1)", "v(X3.X1.C1)", "v(X3.X2.C1)", NULL};
   for (int j = 0; j < 4; j++) assert_string_equal(cup_netlist_state_name(nl, j), names[j]);

@@ -81,13 +81,7 @@ static int sink(long k, double t, const double *x, void *vp) {
 
 static int run(const cup_lcs *L, const cup_input *u, double tol_abs, double tol_rel, sink_ctx *c, cup_run_info *info) {
   cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.T = T_END;
-  o.tol_abs = tol_abs;
-  o.tol_rel = tol_rel;
-  o.output = CUP_OUTPUT_SAMPLES;
-  o.output_samples = SAMPLES;
+  adaptive_options(&o, T_END, tol_abs, tol_rel, SAMPLES);
   cup_integrator *I = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
@@ -219,17 +213,6 @@ static void test_nan_input(void **state) {
  * x(1) = -Rs (to e^-5000: the time constant is Rs). */
 static void test_zeno_with_D(void **state) {
   (void)state;
-  enum { TEETH = 200 };
-  double tt[2 * TEETH + 1], vv[2 * TEETH + 1], t = 0, d = 0.05;
-  for (int k = 0; k < TEETH; k++, d *= 0.9) {       /* sum of d = 1/2 */
-    tt[2 * k] = t;
-    vv[2 * k] = 0;
-    tt[2 * k + 1] = t + 0.5 * d;                   /* up at slope 10, down at -10 */
-    vv[2 * k + 1] = 5 * d;
-    t += d;
-  }
-  tt[2 * TEETH] = t;
-  vv[2 * TEETH] = 0;
   double Rs = 1e-4, B[1] = {1}, C[1] = {1}, D[1] = {Rs}, G[2] = {-1, 0}, E[2] = {0, 1};
   tcsc tB, tC, tD, tG, tE;
   tcsc_from_dense(&tB, B, 1, 1);
@@ -244,12 +227,7 @@ static void test_zeno_with_D(void **state) {
   cup_lcs *L = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_lcs_create(&L, &desc, msg)) fail_msg("lcs: %s", msg);
-  cup_input *u = NULL;
-  assert_int_equal(cup_input_create(&u, 2, NULL), CUP_OK);
-  cup_wave zig = {.kind = CUP_WAVE_PWL, .npoints = 2 * TEETH + 1, .t = tt, .v = vv};
-  cup_wave down = {.kind = CUP_WAVE_CONSTANT, .value = -1};
-  assert_int_equal(cup_input_add(u, 0, &zig, NULL), CUP_OK);
-  assert_int_equal(cup_input_add(u, 1, &down, NULL), CUP_OK);
+  cup_input *u = zigzag_input(0.5, 5);             /* up at slope 10, down at -10 */
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = CUP_SCHEME_ADAPTIVE;

@@ -31,18 +31,6 @@ static void expect_in(const char *text, const char *want) {
   if (!strstr(text, want)) fail_msg("'%s' not in:\n%s", want, text);
 }
 
-static void attr_str(hid_t f, const char *name, char *out, size_t size) {
-  hid_t a = H5Aopen(f, name, H5P_DEFAULT);
-  if (a < 0) fail_msg("attribute %s missing", name);
-  hid_t type = H5Aget_type(a);
-  char *s = NULL;
-  assert_true(H5Aread(a, type, &s) >= 0);
-  snprintf(out, size, "%s", s);
-  H5free_memory(s);
-  H5Tclose(type);
-  H5Aclose(a);
-}
-
 typedef struct { hsize_t rows; double *t, *x; int64_t status, stopped_step; double stopped_t; char msg[512]; } h5file;
 
 static void load(const char *path, int dim, h5file *o) {

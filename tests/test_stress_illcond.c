@@ -541,16 +541,6 @@ static void paper_rows(lcs_built *b, int m, const double *C) {
   if (build_lcs(b, 3, m, 1, A, NULL, C, E, NULL, NULL, P, NULL, msg)) fail_msg("lcs: %s", msg);
 }
 
-static cup_integrator_options adaptive_options(double tol, long samples) {
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.tol_abs = o.tol_rel = tol;
-  o.output = CUP_OUTPUT_SAMPLES;
-  o.output_samples = samples;
-  return o;
-}
-
 static void test_adaptive_dependent_rows(void **state) {
   (void)state;
   ref_load("ref_case1_adaptive.csv", ref_case1);
@@ -565,7 +555,8 @@ static void test_adaptive_dependent_rows(void **state) {
     lcs_built b;
     char msg[CUP_ERRMSG_LEN];
     paper_rows(&b, m, C);
-    cup_integrator_options o = adaptive_options(1e-8, 1001);
+    cup_integrator_options o;
+    adaptive_options(&o, 1, 1e-8, 1e-8, 1001);
     cup_integrator *I = NULL;
     if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
     dup_err e = {0};
@@ -614,7 +605,8 @@ static void test_adaptive_degenerate_rows(void **state) {
     char msg[CUP_ERRMSG_LEN];
     paper_rows(&b, 3, C);
     for (int scheme = 0; scheme < 2; scheme++) {
-      cup_integrator_options o = adaptive_options(1e-8, 1001);
+      cup_integrator_options o;
+      adaptive_options(&o, 1, 1e-8, 1e-8, 1001);
       if (scheme == 1) {                            /* the explicit scheme, exact projections */
         o.scheme = CUP_SCHEME_EXPLICIT;
         o.n = 100000;
@@ -670,7 +662,8 @@ static void test_adaptive_allocates_nothing(void **state) {
       assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
       assert_int_equal(cup_input_set_callback(u, sine_cb, NULL, 1e-12, 1e-12), CUP_OK);
     }
-    cup_integrator_options o = adaptive_options(1e-9, 11);
+    cup_integrator_options o;
+    adaptive_options(&o, 1, 1e-9, 1e-9, 11);
     cup_integrator *I = NULL;
     char msg[CUP_ERRMSG_LEN];
     if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);

@@ -13,14 +13,9 @@
 #include <time.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "util/clock.h"
 
 enum { STAGES = 10000 };
-
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* The netlist scripts/make-ladder writes, without leaks. */
 static char *ladder(int n) {
@@ -50,9 +45,9 @@ static void test_ladder_10k(void **state) {
   (void)state;
   char *text = ladder(STAGES), err[CUP_ERRMSG_LEN];
   cup_netlist *nl = NULL;
-  double t0 = now();
+  double t0 = now_seconds();
   assert_int_equal(cup_netlist_load_string(&nl, text, "ladder.cir", NULL, 0, err), CUP_OK);
-  double t1 = now();
+  double t1 = now_seconds();
   const cup_lcs *L = cup_netlist_lcs(nl);
   assert_int_equal(cup_lcs_dim(L), STAGES);
   assert_int_equal(cup_lcs_rows(L), STAGES);
@@ -66,9 +61,9 @@ static void test_ladder_10k(void **state) {
   assert_int_equal(cup_integrator_create(&I, L, cup_netlist_input(nl), &o, err), CUP_OK);
   check_ctx c = {0, 0, 0, o.T / (double)o.n};
   cup_run_info info;
-  double t2 = now();
+  double t2 = now_seconds();
   int st = cup_integrator_run(I, cup_netlist_x0(nl), check_sink, &c, &info);
-  double t3 = now();
+  double t3 = now_seconds();
   /* exact projections on a set with no interior direction known may end
    * uncertified (eta); the states are checked here against the closed form */
   assert_true(st >= 0);

@@ -26,6 +26,7 @@
 #include <sys/wait.h>
 #include <cmocka.h>
 #include <hdf5.h>
+#include "util/clock.h"
 
 static long ns[2] = {10000, 1000000};
 #define CLI_TMPDIR_TEMPLATE "/tmp/cup_stress_long_XXXXXX"
@@ -46,12 +47,6 @@ static void load_ref(void) {
     assert_true(fabs(t - j / 1000.0) < 1e-15);
   }
   fclose(f);
-}
-
-static double now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 static hsize_t read_all(hid_t f, const char *name, double **out) {
@@ -78,7 +73,7 @@ static void run_one(long n, outcome *o) {
                         "--n", nstr, "--eps", "0", "--eta", "0", "--set", "output={samples: 1001}",
                         "--quiet", NULL};
   fflush(NULL);
-  double t0 = now();
+  double t0 = now_seconds();
   pid_t pid = fork();
   if (pid < 0) skip();
   if (pid == 0) {
@@ -92,7 +87,7 @@ static void run_one(long n, outcome *o) {
   struct rusage ru;
   assert_int_equal(wait4(pid, &st, 0, &ru), pid);
   o->n = n;
-  o->wall = now() - t0;
+  o->wall = now_seconds() - t0;
   o->maxrss_mb = (double)ru.ru_maxrss / 1024;       /* KiB on Linux */
   if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) fail_msg("catchup-run --n %ld failed (status %d), see %s", n, st, errf);
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);

@@ -1,4 +1,4 @@
-/* sweep (src/io/sweep.c, sha256.c): the sweep file, task order, the
+/* sweep (src/sweep/, io/sha256.c): the sweep file, task order, the
  * sampling of n that are not multiples of samples - 1, and the Richardson
  * reference against the reference limit (tests/data) of the paper's case 1.
  * tests/sweeps/bad names its expected error in a "# expect: ..." first line. */
@@ -15,8 +15,9 @@
 #include <cmocka.h>
 #include <hdf5.h>
 #include "catchup.h"
-#include "sha256.h"
-#include "sweep.h"
+#include "io/sha256.h"
+#include "sweep_file.h"
+#include "sweep_run.h"
 #include "refdata.h"
 
 #define EX CUP_EXAMPLES_DIR

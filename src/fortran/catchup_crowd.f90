@@ -11,8 +11,8 @@ module catchup_crowd
   use catchup_constants
   use catchup_types
   use catchup_base
-  use catchup_c, only: c_cup_integrator_options_default, c_cup_integrator_create_process
-  use catchup_integrator, only: cup_expected_samples_
+  use catchup_c, only: c_cup_integrator_create_process
+  use catchup_integrator, only: cup_expected_samples_, cup_options_or_default_
   implicit none
   private
 
@@ -199,11 +199,7 @@ contains
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
     if (cup_null_fail_(c%ptr, 'crowd', ierr, errmsg)) return
-    if (present(opt)) then
-      o = opt
-    else
-      call c_cup_integrator_options_default(o)
-    end if
+    o = cup_options_or_default_(opt)
     call c_f_pointer(c_cup_crowd_process(c%ptr), d)
     cmsg = cup_errbuf_()
     st = c_cup_integrator_create_process(integ%ptr, d, o, cmsg)

@@ -19,7 +19,7 @@ module catchup_integrator
     cup_integrator_resume, &
     cup_scheme_name, cup_scheme_parse, cup_output_name, cup_output_parse, cup_run_info_message
   ! for the other modules of the binding (not part of the documented API)
-  public :: cup_expected_samples_
+  public :: cup_expected_samples_, cup_options_or_default_
 
   !> value(n) = coef * n^power, for a default-kind or a c_long n
   interface cup_schedule_value
@@ -84,6 +84,18 @@ contains
     call c_cup_integrator_options_default(o)
   end subroutine cup_integrator_options_default
 
+  !> opt, or the library's defaults where it is absent (for the modules
+  !> that create integrators).
+  function cup_options_or_default_(opt) result(o)
+    type(cup_integrator_options), intent(in), optional :: opt
+    type(cup_integrator_options) :: o
+    if (present(opt)) then
+      o = opt
+    else
+      call c_cup_integrator_options_default(o)
+    end if
+  end function cup_options_or_default_
+
   !> An integrator for the LCS L with input u (absent: no input). L and u
   !> must outlive it; opt defaults to the library's.
   subroutine cup_integrator_create(integ, L, ierr, u, opt, errmsg)
@@ -98,11 +110,7 @@ contains
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
     if (cup_null_fail_(L%ptr, 'integrator: LCS', ierr, errmsg)) return
-    if (present(opt)) then
-      o = opt
-    else
-      call c_cup_integrator_options_default(o)
-    end if
+    o = cup_options_or_default_(opt)
     up = c_null_ptr
     if (present(u)) up = u%ptr
     cmsg = cup_errbuf_()
@@ -139,11 +147,7 @@ contains
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
     if (cup_null_fail_(S%ptr, 'integrator: set', ierr, errmsg)) return
-    if (present(opt)) then
-      o = opt
-    else
-      call c_cup_integrator_options_default(o)
-    end if
+    o = cup_options_or_default_(opt)
     d%n = int(S%dim, c_int)
     d%C = S%ptr
     if (present(u)) then

@@ -16,16 +16,11 @@
 #include "adaptive_impl.h"
 #include "projector/projector.h"
 #include "tally.h"
+#include "util/clock.h"
 
 /* Callback inputs: the interpolation error of a step may take this share of
  * tol (the exact flow has none of its own). */
 #define AD_STEP_SHARE 0.1
-
-static double wall_now(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* The first warning is kept (status and message), as in the fixed-step run. */
 __attribute__((format(printf, 3, 4)))
@@ -113,7 +108,7 @@ static int step_checks(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
     return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
   if ((R->steps & 1023) == 0) {
     if (A->o.interrupt && *A->o.interrupt) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "interrupted");
-    if (A->o.max_wall_seconds > 0 && wall_now() - R->wall0 > A->o.max_wall_seconds)
+    if (A->o.max_wall_seconds > 0 && now_seconds() - R->wall0 > A->o.max_wall_seconds)
       return halt(A, R, CUP_ERR_TIME_LIMIT, AD_STOP_STEP, "wall-time limit reached");
   }
   return CUP_OK;
@@ -671,7 +666,7 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   A->tend = A->o.T;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
-  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now()};
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
   if (cup_state_beyond(x0, A->n)) {
     int w = cup_state_worst(x0, A->n);
     if (!isfinite(x0[w])) return ad_fail(&R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, x0[w]);
@@ -784,7 +779,7 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
   R.info = info;
   R.sink = sink;
   R.sink_ctx = sink_ctx;
-  R.wall0 = wall_now();
+  R.wall0 = now_seconds();
   R.md = s->md >= 0 ? &A->modes[s->md] : NULL;
   A->pinned[0] = R.md;
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;

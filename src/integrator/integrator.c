@@ -18,6 +18,7 @@
 #include "tally.h"
 #include "lcp/step.h"
 #include "model/lcs_impl.h"
+#include "util/clock.h"
 #include "set/polyset_impl.h"
 #include "set/set_impl.h"
 #include "projector/projector.h"
@@ -483,12 +484,6 @@ static void keep_zeta(cup_integrator *I, const sampler *sp, long k) {
   if (!sp->aligned && k + 1 == sp->kdue && I->zprev) cup_integrator_zeta(I, I->zprev);
 }
 
-static double wall_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
  * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
  * the cause's (what[WHAT_LEN] buffers below). */
@@ -795,7 +790,7 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
   sampler_next(I, &sp);
   int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
   long rebuilds0 = I->rebuilds0;
-  double start = o->max_wall_seconds > 0 ? wall_seconds() : 0;
+  double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
   int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
   I->fast.hold = 0;
   for (long k = k0; k < I->kend; k++) {
@@ -892,7 +887,7 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
     if ((k & 1023) == 1023) {
       if (o->interrupt && *o->interrupt)
         return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
-      if (start > 0 && wall_seconds() - start > o->max_wall_seconds)
+      if (start > 0 && now_seconds() - start > o->max_wall_seconds)
         return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
     }
   }

@@ -9,6 +9,7 @@
 #include "util/linalg.h"
 #include "read_text.h"
 #include "sha256.h"
+#include "util/path.h"
 
 void cup_file_list_free(cup_file_list *l) {
   if (!l) return;
@@ -43,9 +44,8 @@ int cup_file_list_merge(cup_file_list *l, const cup_file_list *src) {
 static char *canonical(const char *path) {
   char *full = realpath(path, NULL);
   if (full) return full;
-  const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path;
-  char *dir = slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
-  char *d = dir ? realpath(dir, NULL) : NULL;
+  const char *base = path_base(path);
+  char *dir = NULL, *d = path_dir(path, &dir) ? NULL : realpath(dir ? dir : ".", NULL);
   free(dir);
   if (!d) return NULL;
   size_t n = strlen(d) + strlen(base) + 2;

@@ -24,6 +24,7 @@
 #include "read_text.h"
 #include "scene_netlist.h"
 #include "scene_steady.h"
+#include "util/path.h"
 
 struct cup_scene {
   char *name;
@@ -520,11 +521,7 @@ static int read_name(rd *r, const st_node *root, cup_scene *S) {
     if (st) return st;
     S->name = strdup(name);
   } else {
-    const char *base = strrchr(r->src.file, '/');
-    base = base ? base + 1 : r->src.file;
-    const char *dot = strrchr(base, '.');
-    size_t len = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-    S->name = strndup(base, len);
+    S->name = path_stem(r->src.file);
   }
   return S->name ? CUP_OK : CUP_ERR_NOMEM;
 }
@@ -648,8 +645,7 @@ int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides
   size_t len = 0;
   cup_file_list files = {0};
   if (!st) st = cup_read_text(path, &text, &len, &files, errmsg);
-  const char *slash = path ? strrchr(path, '/') : NULL;
-  if (!st && slash && !(dir = strndup(path, slash == path ? 1 : (size_t)(slash - path)))) st = CUP_ERR_NOMEM;
+  if (!st) st = path_dir(path, &dir);
   if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, &files, errmsg);
   cup_file_list_free(&files);
   free(text);

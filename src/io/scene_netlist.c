@@ -21,6 +21,7 @@
 #include "scene_netlist.h"
 #include "netlist_lex.h"
 #include "read_text.h"
+#include "util/path.h"
 
 static int is_word(const char *k, const char *const *words) {
   for (int i = 0; words[i]; i++)
@@ -70,15 +71,6 @@ static int netlist_fail(const st_src *src, const st_node *at, const st_node *map
   return st_error(errmsg, st, src, at, "netlist", "%s", msg);
 }
 
-static char *path_in(const char *dir, const char *name) {
-  size_t len = (dir ? strlen(dir) : 0) + strlen(name) + 2;
-  char *p = malloc(len);
-  if (!p) return NULL;
-  if (dir && name[0] != '/') snprintf(p, len, "%s/%s", dir, name);
-  else snprintf(p, len, "%s", name);
-  return p;
-}
-
 static int string_of(const st_src *src, const st_node *nd, const char *key, const char **out, char *errmsg) {
   char b[64];
   if (!nd || nd->kind != ST_SCALAR || st_is_null(nd))
@@ -122,7 +114,7 @@ int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode,
   if (!st && fnode) st = string_of(src, fnode, fnode == val ? "netlist" : "netlist.file", &file, errmsg);
   if (!st && tnode) st = string_of(src, tnode, "netlist.text", &text, errmsg);
   if (!st && nnode) st = string_of(src, nnode, "netlist.name", &name, errmsg);
-  if (!st && file && !(path = path_in(dir, file))) st = CUP_ERR_NOMEM;
+  if (!st && file && !(path = path_join(dir, file))) st = CUP_ERR_NOMEM;
   if (!st) {
     const char *shown = path ? path : name ? name : "netlist";
     st = path ? cup_netlist_load_files(out, path, (const char *const *)sets, nsets, files, lib)

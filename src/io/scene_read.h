@@ -17,6 +17,7 @@
 #include "mtx.h"
 #include "read_text.h"
 #include "scene_tree.h"
+#include "util/path.h"
 
 /* What every reader needs: names for messages, the directory of the file,
  * the list of the files read (read_text.h: every file a key names is
@@ -200,14 +201,6 @@ static inline int matrix_dims(rd *r, const mat *M, const char *key, int nr, int 
               M->a.ncol);
 }
 
-static inline char *resolve(const char *dir, const char *name) {
-  if (name[0] == '/' || !dir || !*dir) return strdup(name);
-  size_t n = strlen(dir) + strlen(name) + 2;
-  char *s = malloc(n);
-  if (s) snprintf(s, n, "%s/%s", dir, name);
-  return s;
-}
-
 static inline int matrix_file(rd *r, const st_node *nd, const char *key, mat *M) {
   static const char *const known[] = {"file", NULL};
   char k1[KEY_LEN];
@@ -217,7 +210,7 @@ static inline int matrix_file(rd *r, const st_node *nd, const char *key, mat *M)
   if (!st) st = need(r, nd, key, "file", &fn);
   if (!st) st = string(r, fn, join(k1, key, "file"), &name);
   if (st) return st;
-  char *full = resolve(r->dir, name), *text = NULL;
+  char *full = path_join(r->dir, name), *text = NULL;
   if (!full) return CUP_ERR_NOMEM;
   size_t len = 0;
   st = cup_read_text(full, &text, &len, r->files, NULL);   /* the bytes hashed are the bytes parsed */

@@ -8,11 +8,9 @@
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 cc=$1 src=$2 binc=$3
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-t=$work/t
 self=check_coverage_selftest
 . "$here/../layout/expect.sh"
+t=$work/t
 fresh() { rm -rf "$t"; mkdir -p "$t/src"; cp -r "$src/include" "$t/"; cp -r "$src/src/fortran" "$t/src/"; }
 check() { bash "$here/check_coverage.sh" "$cc" "$t/include:$binc" "$t"; }
 

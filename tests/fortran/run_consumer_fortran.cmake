@@ -3,12 +3,8 @@
 # Fortran) -> catchup::catchup_fortran, and with plain
 #   FC main.f90 $(pkg-config --cflags --libs catchup-fortran)
 # Invoked by ctest: cmake -DBUILD_DIR= -DSRC= -DWORK= -DFC= -P this.
-function(run)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "Fortran install consumer failed at: ${ARGN}")
-  endif()
-endfunction()
+set(RUN_WHAT "Fortran install consumer")
+include(${CMAKE_CURRENT_LIST_DIR}/../run_step.cmake)
 set(PREFIX ${WORK}/prefix)
 file(REMOVE_RECURSE ${WORK})
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${PREFIX})

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Dependencies run one way, down the paper's chain:
 #
-#     util < set < lcp < projector < model < integrator < analysis < io < apps, fortran, bench
+#     util < set < lcp < projector < model < integrator < analysis < io < h5 < sweep < apps, fortran, bench
 #
 # A file may include (and its object may call) only its own folder and the
 # folders below it; the public headers (include/) may be included by any
@@ -14,7 +14,7 @@
 #
 # Reads every `#include "..."` of src/, apps/ and include/, resolved as the
 # build resolves them (the including file's folder, src/, include/, then a
-# folder of src/ that a library exports). With object files (the library's
+# folder of src/ that a library exports). With object files (the libraries'
 # .o, named FOLDER/NAME.c.o; a ;-separated list is split), the symbols each
 # one uses from the others must follow the same order and form no cycle
 # either: that catches a call upward or a circle behind a shared header.
@@ -24,9 +24,9 @@
 # exists.
 # Prints one line per violation and exits 1 if there is any.
 set -u
-order=(util set lcp projector model integrator analysis io apps)
-declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [analysis]=6 [io]=7
-                  [apps]=8 [fortran]=8 [bench]=8)
+order=(util set lcp projector model integrator analysis io h5 sweep apps)
+declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [analysis]=6 [io]=7 [h5]=8
+                  [sweep]=9 [apps]=10 [fortran]=10 [bench]=10)
 generated=" catchup/version.h git_revision.h "   # written into the build tree
 
 root=${1:?usage: check.sh SRCDIR [OBJECT...]}

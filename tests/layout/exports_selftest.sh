@@ -7,10 +7,7 @@
 #   exports_selftest.sh SRCDIR [CC]
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
-src=$1
-cc=${2:-cc}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+src=$1 cc=${2:-cc}
 self=exports_selftest
 . "$here/expect.sh"
 

@@ -9,14 +9,10 @@
 #   selftest.sh SRCDIR [CC]
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
-src=$1
-cc=${2:-cc}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-t=$work/t
-
+src=$1 cc=${2:-cc}
 self=selftest
 . "$here/expect.sh"
+t=$work/t
 fresh() { rm -rf "$t"; mkdir -p "$t"; cp -r "$src/src" "$src/apps" "$src/bench" "$src/include" "$t/"; }
 check() { bash "$here/check.sh" "$t" "$@"; }   # check [OBJECT...]
 

@@ -126,8 +126,5 @@ def test_generic_lcs():
 
 
 if __name__ == "__main__":
-    tests = [v for k, v in sorted(globals().items()) if k.startswith("test_")]
-    for t in tests:
-        t()
-        print("ok", t.__name__)
-    print("%d passed, 0 failed" % len(tests))
+    from testmain import run_all
+    run_all(globals())

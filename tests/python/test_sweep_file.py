@@ -88,8 +88,5 @@ def test_netlist_sweep_keeps_probes():
 
 
 if __name__ == "__main__":
-    tests = [v for k, v in sorted(globals().items()) if k.startswith("test_")]
-    for t in tests:
-        t()
-        print("ok", t.__name__)
-    print("%d passed, 0 failed" % len(tests))
+    from testmain import run_all
+    run_all(globals())

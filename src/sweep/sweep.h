@@ -1,8 +1,10 @@
 /* sweep — parameter studies for catchup-sweep (docs/sweep-format.md): the
- * sweep file (YAML, read with the scene loader's tree so that every error
- * names FILE:LINE:COL and the key), its tasks in a fixed order, one task's
- * computation, and the HDF5 results file (sweep_h5*.c). No MPI here: the
- * driver (apps/catchup-sweep.c) moves job numbers and results between ranks.
+ * sweep file (YAML, read with the scene loader's readers, io/scene_read.h,
+ * so that every error names FILE:LINE:COL and the key), its tasks in a
+ * fixed order, and what a job gives back. Above it in this folder: one
+ * job's computation (sweep_run.h), the crowd sweeps' part (sweep_crowd.h)
+ * and the HDF5 results file (sweep_file.h). No MPI here: the driver
+ * (apps/catchup-sweep.c) moves job numbers and results between ranks.
  *
  * Jobs: 0 .. V-1 are the variants' references, V .. V+N-1 the tasks (task
  * id = job - V). Internal to the apps and tests; not installed. */
@@ -11,7 +13,7 @@
 
 #include <stdint.h>
 #include "catchup.h"
-#include "read_text.h"
+#include "io/read_text.h"
 
 #define SW_ERR_LEN (2 * CUP_ERRMSG_LEN)   /* messages: a scene's message, whole, inside a sweep's */
 
@@ -115,6 +117,16 @@ typedef struct sw_result {
   } crowd;
 } sw_result;
 
+/* The results file (sweep_file.h; its layout is sweep_h5.h's), and one
+ * task's result on its way there (sw_file_write_tasks). */
+typedef struct sw_file sw_file;
+typedef struct sw_task_out {
+  long task;
+  const sw_result *r;
+  const double *traj;        /* samples * dim; unused when no trajectories are stored */
+  double error;              /* against the variant's reference; NaN while not known */
+} sw_task_out;
+
 /* ---- the sweep file ---- */
 
 /* Parse the sweep file's text (no file access). path names it in messages
@@ -142,92 +154,7 @@ void sw_schedule(const cup_sweep *s, long *out);
 /* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
 char *sw_grid_text(const cup_sweep *s);
 
-/* ---- one job (sweep_run.c) ---- */
-
-typedef struct sw_run_opts {
-  const volatile int *interrupt;  /* the integrator's interrupt flag (signals) */
-  cup_step_fn on_step;            /* e.g. polling for a stop message; may be NULL */
-  void *step_ctx;
-  double task_time_limit;         /* seconds per task (not references); 0: none */
-  int inject_fail;                /* make this task fail with CUP_ERR_CALLBACK (tests) */
-} sw_run_opts;
-
-/* Run job `job` (a reference or a task); fills r and traj (samples * dim). */
-void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *o, sw_result *r, double *traj);
 /* Max-norm of traj - ref over times and components; NaN if any entry is NaN. */
 double sw_max_error(const double *traj, const double *ref, long count);
-
-/* ---- the results file (sweep_h5.c, created by sweep_h5_create.c) ---- */
-
-typedef struct sw_file sw_file;
-
-typedef struct sw_provenance {
-  const char *catchup_version, *dependency_versions, *git_revision, *command;
-} sw_provenance;
-
-/* Create (replace) path with every dataset at full size and all metadata,
- * and flush: afterwards only raw data changes. */
-int sw_file_create(sw_file **f, const char *path, const cup_sweep *s, const sw_provenance *p,
-                   char *errmsg);
-/* Reopen for --resume: the stored sweep hash and variants must match s. */
-int sw_file_open(sw_file **f, const char *path, const cup_sweep *s, char *errmsg);
-int sw_file_close(sw_file **f, char *errmsg);
-int sw_file_flush(sw_file *f);
-
-/* State read at open (and kept up to date by the writes). */
-int sw_file_task_done(const sw_file *f, long task);
-double sw_file_task_error(const sw_file *f, long task);
-int sw_file_task_status(const sw_file *f, long task);
-/* The variant's reference (samples * dim), or NULL while not known (or failed). */
-const double *sw_file_reference(const sw_file *f, int variant);
-/* 1 once the variant's reference job finished (even if it failed). */
-int sw_file_reference_done(const sw_file *f, int variant);
-
-/* What the tasks in the file came to, counted apart so that a summary
- * hides none: failed (an error status), not certified (a projection's
- * (eps, eta) not certified: CUP_WARN_NOT_CERTIFIED), tolerance missed (an
- * adaptive task whose error against its reference exceeds
- * tol_abs + tol_rel * max|x_ref|), other warnings, and ok (done, CUP_OK,
- * and within its tolerance). */
-typedef struct sw_tally {
-  long done, ok, failed, not_certified, tol_missed, warned, adaptive;
-} sw_tally;
-void sw_file_tally(const sw_file *f, sw_tally *t);
-
-/* One task's result for sw_file_write_tasks. */
-typedef struct sw_task_out {
-  long task;
-  const sw_result *r;
-  const double *traj;        /* samples * dim; unused when no trajectories are stored */
-  double error;              /* against the variant's reference; NaN while not known */
-} sw_task_out;
-
-/* Write tasks given in increasing task order: first every trajectory (when
- * stored), then every /summary row with done = 1 — two HDF5 writes whatever
- * the count, each run of consecutive tasks one piece of the file — so that a
- * row marked done is complete wherever a kill stops the writes. */
-int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count);
-/* The reference of a variant is now known: set the error of its tasks that
- * were written without one, from their trajectories in /runs/x (reads and
- * writes by runs of consecutive tasks, as above). */
-int sw_file_fill_errors(sw_file *f, int variant);
-int sw_file_write_reference(sw_file *f, int variant, const sw_result *r, const double *xref);
-const char *sw_file_errmsg(const sw_file *f);
-
-/* ---- crowd sweeps (sweep_crowd.c): variants that are crowd: scenes ---- */
-
-/* A crowd variant's reference job: nothing to compute (NaN, CUP_OK). */
-void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj);
-
-/* Watches a crowd task's run: the smallest gap of its states (the step
- * callback, chained to the one already in o), then its evacuation. */
-typedef struct sw_crowd_watch {
-  cup_crowd *c;
-  double min_gap;
-  cup_step_fn next;
-  void *next_ctx;
-} sw_crowd_watch;
-void sw_crowd_watch_begin(sw_crowd_watch *w, cup_crowd *c, cup_integrator_options *o);
-void sw_crowd_watch_end(sw_crowd_watch *w, const double *q_end, sw_result *r);
 
 #endif

@@ -10,21 +10,20 @@
  * HDF5 as the buffer fills, between flushes. H5Fflush does not fsync: a
  * machine crash (not a process crash) may lose more. */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <libgen.h>
+#include <unistd.h>
 #include <sys/stat.h>
-#include <sys/statvfs.h>
 #include <hdf5.h>
 #include <hdf5_hl.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
-#include "file_in_use.h"
 #include "h5run_impl.h"
+#include "util/clock.h"
 
 enum { MAX_CHUNK_ROWS = 4096 };
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
@@ -35,30 +34,6 @@ enum { MAX_CHUNK_ROWS = 4096 };
 
 /* ---- errors: HDF5 must not print, and must not stay silenced after us ---- */
 
-/* The innermost description on the error stack is the most specific one;
- * for a failed open() it carries the system's message, which is all a user
- * needs ("No such file or directory"). */
-enum { DETAIL_LEN = CUP_ERRMSG_LEN / 2 };   /* a description names the file: whole */
-
-static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
-  if (n == 0 && e->desc) snprintf((char *)out, DETAIL_LEN, "%s", e->desc);
-  return 0;
-}
-
-static void h5_detail(char *buf) {
-  buf[0] = '\0';
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, buf);
-  const char *key = "error message = '";
-  char *s = strstr(buf, key);
-  if (s) {
-    s += strlen(key);
-    char *end = strchr(s, '\'');
-    if (end) *end = '\0';
-    memmove(buf, s, strlen(s) + 1);
-  }
-  if (!buf[0]) snprintf(buf, DETAIL_LEN, "HDF5 call failed");
-}
-
 /* An HDF5 call failed. Record "h5run: cannot <op> '<path>': <detail>" unless
  * an earlier failure is already recorded (the first one explains the rest),
  * and stop the writer: HDF5 1.10 may crash if used further on a file it
@@ -67,9 +42,9 @@ int set_error(cup_h5run *w, int status, const char *op) {
   w->h5_failed = 1;
   if (w->data_status == CUP_OK) w->data_status = status;
   if (!w->errmsg[0]) {
-    char detail[DETAIL_LEN];
-    h5_detail(detail);
-    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot %s '%s': %s", op, w->path, detail);
+    h5_detail d;
+    h5_error_detail(&d, 1);                /* a failed open(): the system's message */
+    snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot %s '%s': %s", op, w->path, d.desc);
   }
   H5Eclear2(H5E_DEFAULT);
   return status;
@@ -93,27 +68,6 @@ int fail_msg(char *errmsg, int status, const char *fmt, ...) {
     va_end(ap);
   }
   return status;
-}
-
-double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Free space kept on the device: HDF5 1.10 cannot close a file once a write
- * has failed for lack of space (the file is left corrupt and the library
- * crashes at exit), so the writer stops while HDF5 can still close cleanly.
- * What HDF5 holds in its chunk caches (up to 1 MiB per dataset: with a
- * netlist's signals, tens of MiB) reaches the disk only at the next flush,
- * so the check counts it (`ahead`) on top of the margin: on a 20 MiB tmpfs
- * the margin was otherwise eaten by the caches, and with 30 signals the
- * disk filled up and the close crashed. A device that does not report
- * sizes (f_blocks = 0) is never "full". */
-int space_low(const char *path, double ahead) {
-  struct statvfs v;
-  if (statvfs(path, &v) != 0 || v.f_blocks == 0) return 0;
-  return (double)v.f_bavail * (double)v.f_frsize - ahead < (double)CUP_H5_SPACE_MARGIN;
 }
 
 /* ---- file and datasets ---- */
@@ -166,27 +120,6 @@ static hid_t create_events(cup_h5run *w) {
   return d;
 }
 
-/* The directory the file goes into (the file may not exist yet). */
-static int dir_space_low(const char *path) {
-  char *copy = strdup(path);
-  int low = copy ? space_low(dirname(copy), 0) : 0;
-  free(copy);
-  return low;
-}
-
-/* Upper bound 1.8: never the version-3 superblock, whose "file is open for
- * writing" flag would make a killed writer's file unreadable until h5clear.
- * Strong close: H5Fclose really closes, whatever is still open inside. */
-hid_t writer_access(void) {
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (fapl >= 0 && (H5Pset_libver_bounds(fapl, H5F_LIBVER_EARLIEST, H5F_LIBVER_V18) < 0 ||
-                    H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) < 0)) {
-    H5Pclose(fapl);
-    return H5I_INVALID_HID;
-  }
-  return fapl;
-}
-
 /* The file at `at` (the staged sibling, or the path itself), its datasets. */
 static int open_file(cup_h5run *w, const char *at) {
   if (cup_file_in_use(w->path)) {
@@ -195,12 +128,12 @@ static int open_file(cup_h5run *w, const char *at) {
              "left as it was", w->path);
     return CUP_ERR_IO;
   }
-  if (dir_space_low(w->path)) {
+  if (h5_space_short(w->path, 1, 0, NULL)) {   /* the folder it goes into */
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': less than %u MiB "
              "left on its device", w->path, CUP_H5_SPACE_MARGIN >> 20);
     return CUP_ERR_IO;
   }
-  hid_t fapl = writer_access();
+  hid_t fapl = h5_file_access(0);
   if (fapl >= 0) w->file = H5Fcreate(at, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   hid_t err = keep_stack(w->file < 0);
   if (fapl >= 0) H5Pclose(fapl);
@@ -413,9 +346,13 @@ static int write_buffer(cup_h5run *w) {
   w->written += w->nbuf;
   w->unflushed += 8.0 * (double)w->nbuf * (double)(w->dim + 1 + w->nsig);
   w->nbuf = 0;
-  /* at most a chunk cache per dataset holds what the disk has not seen */
+  /* What HDF5 holds in its chunk caches (at most one per dataset: with a
+   * netlist's signals, tens of MiB) reaches the disk only at the next
+   * flush, so the check counts it on top of the margin: on a 20 MiB tmpfs
+   * the margin was otherwise eaten by the caches, and with 30 signals the
+   * disk filled up and the close crashed. */
   double cached = (double)CACHE_BYTES * (3 + w->nsig);
-  if (space_low(w->path, w->unflushed < cached ? w->unflushed : cached)) {
+  if (h5_space_short(w->path, 0, w->unflushed < cached ? w->unflushed : cached, NULL)) {
     if (!w->errmsg[0])
       snprintf(w->errmsg, sizeof w->errmsg, "h5run: stopped writing '%s' after %llu rows: "
                "less than %u MiB left on its device", w->path,
@@ -482,9 +419,8 @@ int cup_h5run_sink(long k, double t, const double *x, void *ctx) {
 /* The names, in order, as a variable-length string array attribute. */
 static int names_attr(cup_h5run *w, int nsig, const char *const *names) {
   hsize_t n = (hsize_t)nsig;
-  hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate_simple(1, &n, NULL), a = H5I_INVALID_HID;
-  int ok = type >= 0 && space >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
-           H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
+  hid_t type = h5_vlen_str(), space = H5Screate_simple(1, &n, NULL), a = H5I_INVALID_HID;
+  int ok = type >= 0 && space >= 0;
   if (ok) a = H5Acreate2(w->group, "names", type, space, H5P_DEFAULT, H5P_DEFAULT);
   ok = a >= 0 && H5Awrite(a, type, names) >= 0;
   hid_t err = keep_stack(!ok);
@@ -541,30 +477,36 @@ const char *cup_h5run_errmsg(const cup_h5run *w) {
 
 /* ---- attributes on the root group ---- */
 
-/* Replace (delete, then create) the scalar attribute `name`, so that a value
- * written before the run ("status" = running) can be rewritten after it,
- * even with another type. */
-static int put_attr(cup_h5run *w, const char *name, hid_t ftype, hid_t mtype, const void *buf) {
-  if (!w || !name || !name[0]) return CUP_ERR_ARG;
-  if (w->h5_failed) return w->data_status;   /* see set_error */
-  quiet_t q = quiet_begin();
-  hid_t space = H5Screate(H5S_SCALAR);
-  hid_t a = H5I_INVALID_HID;
-  int ok = space >= 0;
-  htri_t exists = ok ? H5Aexists(w->file, name) : -1;
-  ok = exists >= 0 && (exists == 0 || H5Adelete(w->file, name) >= 0);
-  if (ok) a = H5Acreate2(w->file, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
+/* Replace (delete, then create) the scalar attribute `name` of obj, so that
+ * a value written before the run ("status" = running) can be rewritten
+ * after it, even with another type; 1 when written (else the failure's
+ * error stack is kept for set_error). */
+static int replace_attr(hid_t obj, const char *name, hid_t ftype, hid_t mtype, const void *buf) {
+  hid_t space = H5Screate(H5S_SCALAR), a = H5I_INVALID_HID;
+  htri_t exists = space >= 0 ? H5Aexists(obj, name) : -1;
+  int ok = exists >= 0 && (exists == 0 || H5Adelete(obj, name) >= 0);
+  if (ok) a = H5Acreate2(obj, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT);
   ok = a >= 0 && H5Awrite(a, mtype, buf) >= 0;
   hid_t err = keep_stack(!ok);
   if (a >= 0) H5Aclose(a);
   if (space >= 0) H5Sclose(space);
   restore_stack(err);
-  int st = CUP_OK;
-  if (!ok) {
-    char op[128];
-    snprintf(op, sizeof op, "write attribute '%s' in", name);
-    st = set_error(w, CUP_ERR_IO, op);
-  }
+  return ok;
+}
+
+/* set_error for "WHAT 'NAME' in" (a dataset or attribute name cut at 120
+ * characters). */
+static int fail_op(cup_h5run *w, const char *what, const char *name) {
+  char op[200];
+  snprintf(op, sizeof op, "%s '%.120s' in", what, name);
+  return set_error(w, CUP_ERR_IO, op);
+}
+
+static int put_attr(cup_h5run *w, const char *name, hid_t ftype, hid_t mtype, const void *buf) {
+  if (!w || !name || !name[0]) return CUP_ERR_ARG;
+  if (w->h5_failed) return w->data_status;   /* see set_error */
+  quiet_t q = quiet_begin();
+  int st = replace_attr(w->file, name, ftype, mtype, buf) ? CUP_OK : fail_op(w, "write attribute", name);
   quiet_end(q);
   return st;
 }
@@ -584,10 +526,8 @@ int cup_h5run_attr_long(cup_h5run *w, const char *name, long v) {
 int cup_h5run_attr_string(cup_h5run *w, const char *name, const char *v) {
   if (!w || !v) return CUP_ERR_ARG;
   quiet_t q = quiet_begin();
-  hid_t type = H5Tcopy(H5T_C_S1);
-  int ok = type >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
-           H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
-  int st = ok ? CUP_OK : set_error(w, CUP_ERR_IO, "make a string type for");
+  hid_t type = h5_vlen_str();
+  int st = type >= 0 ? CUP_OK : set_error(w, CUP_ERR_IO, "make a string type for");
   quiet_end(q);
   if (st == CUP_OK) st = put_attr(w, name, type, type, &v);
   if (type >= 0) H5Tclose(type);
@@ -613,12 +553,7 @@ int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, 
   if (space >= 0) H5Sclose(space);
   if (lcpl >= 0) H5Pclose(lcpl);
   restore_stack(err);
-  int st = CUP_OK;
-  if (!ok) {
-    char op[160];
-    snprintf(op, sizeof op, "write dataset '%s' in", name);
-    st = set_error(w, CUP_ERR_IO, op);
-  }
+  int st = ok ? CUP_OK : fail_op(w, "write dataset", name);
   quiet_end(q);
   return st;
 }
@@ -627,25 +562,12 @@ int cup_h5run_array(cup_h5run *w, const char *name, int rank, const long *dims, 
 
 /* A string attribute on an object (dataset or group) by path, replaced. */
 static int obj_string_attr(hid_t obj, const char *name, const char *v) {
-  hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR), a = H5I_INVALID_HID;
-  int ok = type >= 0 && space >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
-           H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
-  htri_t exists = ok ? H5Aexists(obj, name) : -1;
-  ok = exists >= 0 && (exists == 0 || H5Adelete(obj, name) >= 0);
-  if (ok) a = H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
-  ok = a >= 0 && H5Awrite(a, type, &v) >= 0;
+  hid_t type = h5_vlen_str();
+  int ok = type >= 0 && replace_attr(obj, name, type, type, &v);
   hid_t err = keep_stack(!ok);
-  if (a >= 0) H5Aclose(a);
-  if (space >= 0) H5Sclose(space);
   if (type >= 0) H5Tclose(type);
   restore_stack(err);
   return ok;
-}
-
-static int fail_op(cup_h5run *w, const char *what, const char *name) {
-  char op[200];
-  snprintf(op, sizeof op, "%s '%.120s' in", what, name);
-  return set_error(w, CUP_ERR_IO, op);
 }
 
 int cup_h5run_describe(cup_h5run *w, const char *dataset, const char *units, const char *long_name) {
@@ -669,10 +591,9 @@ int cup_h5run_strings(cup_h5run *w, const char *name, long n, const char *const 
   for (long k = 0; k < n; k++) if (!v[k]) return CUP_ERR_ARG;
   hsize_t hn = (hsize_t)n;
   quiet_t q = quiet_begin();
-  hid_t type = H5Tcopy(H5T_C_S1), lcpl = H5Pcreate(H5P_LINK_CREATE);
+  hid_t type = h5_vlen_str(), lcpl = H5Pcreate(H5P_LINK_CREATE);
   hid_t space = H5Screate_simple(1, &hn, NULL), d = H5I_INVALID_HID;
-  int ok = type >= 0 && lcpl >= 0 && space >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 &&
-           H5Tset_cset(type, H5T_CSET_UTF8) >= 0 && H5Pset_create_intermediate_group(lcpl, 1) >= 0;
+  int ok = type >= 0 && lcpl >= 0 && space >= 0 && H5Pset_create_intermediate_group(lcpl, 1) >= 0;
   if (ok) d = H5Dcreate2(w->file, name, type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
   ok = d >= 0 && H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0;
   hid_t err = keep_stack(!ok);

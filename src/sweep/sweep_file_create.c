@@ -1,21 +1,22 @@
-/* sweep_h5_create — creating the results file of a sweep: every group,
- * dataset and attribute, the /variants table and the pending /summary rows
- * are written here, up front, then flushed once; afterwards sweep_h5.c
- * only overwrites raw bytes (the design is in sweep_h5.h). */
+/* sweep_file_create — creating the results file of a sweep (sweep_file.h):
+ * every group, dataset and attribute, the /variants table and the pending
+ * /summary rows are written here, up front, then flushed once; afterwards
+ * sweep_file.c only overwrites raw bytes (the design is in sweep_h5.h). */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <libgen.h>
+#include <unistd.h>
 #include <sys/stat.h>
-#include <sys/statvfs.h>
 #include <hdf5.h>
 #include <hdf5_hl.h>
 #include "catchup/h5run.h"
-#include "file_in_use.h"
+#include "sweep_crowd.h"
+#include "sweep_file.h"
 #include "sweep_h5.h"
 
 typedef struct sw_varrow {
@@ -25,10 +26,9 @@ typedef struct sw_varrow {
   int64_t n_ref;
 } sw_varrow;
 
-
 static hid_t varrow_type(void) {
   hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_varrow));
-  hid_t sname = sw_h5_str(SW_NAME_LEN), vs = sw_h5_vlen_str();
+  hid_t sname = sw_h5_str(SW_NAME_LEN), vs = h5_vlen_str();
   H5Tinsert(T, "variant", HOFFSET(sw_varrow, variant), H5T_NATIVE_INT32);
   H5Tinsert(T, "name", HOFFSET(sw_varrow, name), sname);
   H5Tinsert(T, "scene_file", HOFFSET(sw_varrow, scene_file), vs);
@@ -38,24 +38,6 @@ static hid_t varrow_type(void) {
   H5Tclose(sname);
   H5Tclose(vs);
   return T;
-}
-
-/* Contiguous, allocated (and filled) at creation, no modification times. */
-static hid_t fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
-                           hid_t fill_type, const void *fill) {
-  hid_t space = H5Screate_simple(rank, dims, NULL);
-  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
-  H5Pset_layout(dcpl, H5D_CONTIGUOUS);
-  H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_EARLY);
-  H5Pset_obj_track_times(dcpl, 0);
-  if (fill) {
-    H5Pset_fill_value(dcpl, fill_type, fill);
-    H5Pset_fill_time(dcpl, H5D_FILL_TIME_ALLOC);
-  }
-  hid_t d = H5Dcreate2(loc, name, ftype, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-  H5Pclose(dcpl);
-  H5Sclose(space);
-  return d;
 }
 
 static hid_t fixed_group(hid_t loc, const char *name) {
@@ -76,7 +58,7 @@ static int attr_write(hid_t loc, const char *name, hid_t type, int rank, hsize_t
 }
 
 static int attr_str(hid_t loc, const char *name, const char *v) {
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   int r = attr_write(loc, name, t, 0, 0, &v);
   H5Tclose(t);
   return r;
@@ -91,7 +73,7 @@ static int attr_f64(hid_t loc, const char *name, double v) {
 }
 
 static int attr_strs(hid_t loc, const char *name, const char *const *v, int len) {
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   int r = attr_write(loc, name, t, 1, (hsize_t)len, v);
   H5Tclose(t);
   return r;
@@ -173,31 +155,6 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   return r | write_grid_attrs(root, s);
 }
 
-int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,
-                     hid_t *d) {
-  const cup_sweep *s = f->s;
-  hsize_t N = (hsize_t)s->n_tasks;
-  char op[64];
-  hid_t ft = H5Tcopy(memtype);
-  H5Tpack(ft);
-  *d = fixed_dataset(f->file, name, ft, 1, &N, 0, NULL);
-  H5Tclose(ft);
-  snprintf(op, sizeof op, "create /%s in", name);
-  if (*d < 0) return sw_h5_fail(f, op);
-  enum { BLOCK = 1024 };
-  char *rows = malloc(row_size * BLOCK);
-  if (!rows) return CUP_ERR_NOMEM;
-  int st = CUP_OK;
-  snprintf(op, sizeof op, "write /%s in", name);
-  for (hsize_t at = 0; at < N && !st; at += BLOCK) {
-    hsize_t cnt = N - at < BLOCK ? N - at : BLOCK;
-    for (hsize_t k = 0; k < cnt; k++) pending(s, (long)(at + k), rows + row_size * k);
-    if (sw_h5_write_rows(*d, memtype, at, cnt, rows, H5P_DEFAULT)) st = sw_h5_fail(f, op);
-  }
-  free(rows);
-  return st;
-}
-
 static void pending_summary_row(const cup_sweep *s, long id, void *row) { sw_pending_row(s, id, row); }
 
 static int create_summary(sw_file *f) {
@@ -208,14 +165,14 @@ static int create_references(sw_file *f, hid_t g) {
   const cup_sweep *s = f->s;
   double nan = NAN;
   hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
-  f->ref_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
+  f->ref_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
   if (f->ref_x < 0) return sw_h5_fail(f, "create /references/x in");
   dims[2] = (hsize_t)s->nsig;
-  if (s->nsig && (f->ref_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
+  if (s->nsig && (f->ref_sig = sw_h5_fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
     return sw_h5_fail(f, "create /references/signals in");
   hid_t ft = H5Tcopy(f->refrow_t);
   H5Tpack(ft);
-  f->ref_summary = fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
+  f->ref_summary = sw_h5_fixed_dataset(g, "summary", ft, 1, &V, 0, NULL);
   H5Tclose(ft);
   if (f->ref_summary < 0) return sw_h5_fail(f, "create /references/summary in");
   sw_refrow *rows = calloc(V, sizeof *rows);
@@ -266,7 +223,7 @@ static int create_variants(sw_file *f) {
   if (!st) {
     hid_t ft = H5Tcopy(mt);
     H5Tpack(ft);
-    d = fixed_dataset(f->file, "variants", ft, 1, &V, 0, NULL);
+    d = sw_h5_fixed_dataset(f->file, "variants", ft, 1, &V, 0, NULL);
     H5Tclose(ft);
     if (d < 0 || sw_h5_write_rows(d, mt, 0, V, rows, H5P_DEFAULT)) st = sw_h5_fail(f, "write /variants in");
   }
@@ -294,7 +251,7 @@ static int describe_path(hid_t file, const char *path, const char *units, const 
 static int pure_dim(hid_t loc, const char *name, hsize_t len) {
   char nc[80];
   snprintf(nc, sizeof nc, "This is a netCDF dimension but not a netCDF variable.%10llu", (unsigned long long)len);
-  hid_t d = fixed_dataset(loc, name, H5T_IEEE_F32LE, 1, &len, 0, NULL);
+  hid_t d = sw_h5_fixed_dataset(loc, name, H5T_IEEE_F32LE, 1, &len, 0, NULL);
   int r = d < 0 || H5DSset_scale(d, nc) < 0 ? -1 : 0;
   if (d >= 0) H5Dclose(d);
   return r;
@@ -317,7 +274,7 @@ static int attach(hid_t file, const char *path, int rank, const char *const *dim
 /* Labels: n variable-length strings at path, made the dimension scale `scale`. */
 static int label_scale(hid_t file, const char *path, const char *scale, const char *const *names, hsize_t n,
                        const char *long_name) {
-  hid_t t = sw_h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL);
+  hid_t t = h5_vlen_str(), sp = H5Screate_simple(1, &n, NULL);
   hid_t d = H5Dcreate2(file, path, t, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   int r = d < 0 || H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, names) < 0 || H5DSset_scale(d, scale) < 0 ||
           describe(d, NULL, long_name) ? -1 : 0;
@@ -435,7 +392,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
     if (!t) st = CUP_ERR_NOMEM;
     for (hsize_t j = 0; t && j < S; j++)    /* t_j = j T / (S - 1), t_{S-1} = T exactly */
       t[j] = j + 1 == S ? s->T : (double)j * (s->T / (double)(S - 1));
-    hid_t d = st ? -1 : fixed_dataset(g, "t", H5T_IEEE_F64LE, 1, &S, 0, NULL);
+    hid_t d = st ? -1 : sw_h5_fixed_dataset(g, "t", H5T_IEEE_F64LE, 1, &S, 0, NULL);
     if (!st && (d < 0 || H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t) < 0))
       st = sw_h5_fail(f, "write /runs/t in");
     if (d >= 0) H5Dclose(d);
@@ -444,10 +401,10 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   if (!st && s->out_samples > 0) {
     double nan = NAN;
     hsize_t dims[3] = {(hsize_t)s->n_tasks, (hsize_t)s->samples, (hsize_t)s->dim};
-    f->runs_x = fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
+    f->runs_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
     if (f->runs_x < 0) st = sw_h5_fail(f, "create /runs/x in");
     dims[2] = (hsize_t)s->nsig;
-    if (!st && s->nsig && (f->runs_sig = fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE,
+    if (!st && s->nsig && (f->runs_sig = sw_h5_fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE,
                                                        &nan)) < 0)
       st = sw_h5_fail(f, "create /runs/signals in");
   }
@@ -478,18 +435,13 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
     snprintf(errmsg, SW_ERR_LEN, SW_IN_USE_FMT, path, "create");
     return CUP_ERR_IO;
   }
-  char *copy = strdup(path);
-  struct statvfs v;
-  double need = file_bytes(s);
-  if (copy && statvfs(dirname(copy), &v) == 0 && v.f_blocks &&
-      (double)v.f_bavail * (double)v.f_frsize < need + CUP_H5_SPACE_MARGIN) {
+  double need = file_bytes(s), avail = 0;
+  if (h5_space_short(path, 1, need, &avail)) {
     snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: the file needs %.3g MiB and %u MiB kept free beside it, and "
              "its device has %.3g MiB free (store fewer samples: output.samples)", path, need / 1048576,
-             CUP_H5_SPACE_MARGIN >> 20, (double)v.f_bavail * (double)v.f_frsize / 1048576);
-    free(copy);
+             CUP_H5_SPACE_MARGIN >> 20, avail / 1048576);
     return CUP_ERR_IO;
   }
-  free(copy);
   /* the whole layout goes to a new sibling first, renamed over path once
    * written: an earlier results file stays whole until then */
   char *staged = cup_staged_name(path);
@@ -501,10 +453,10 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
   sw_file *f = sw_h5_file_new(s, path);
   if (!f) { unlink(staged); free(staged); snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
   quiet_t q = quiet_begin();
-  hid_t fapl = sw_h5_access();
-  f->file = H5Fcreate(staged, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  hid_t fapl = h5_file_access(1);          /* raw writes go out at once, in order */
+  f->file = fapl < 0 ? H5I_INVALID_HID : H5Fcreate(staged, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   int st = f->file < 0 ? sw_h5_fail(f, "create") : create_layout(f, p);
-  H5Pclose(fapl);
+  if (fapl >= 0) H5Pclose(fapl);
   quiet_end(q);
   if (!st && cup_file_in_use(path)) {
     snprintf(f->errmsg, sizeof f->errmsg, SW_IN_USE_FMT, path, "replace");

@@ -1,8 +1,7 @@
-/* sweep_h5 — the results file of a sweep (docs/sweep-format.md, "Output"),
- * once it exists: reopening it for --resume, the raw writes of the run, and
- * closing it; with the pieces that creating it (sweep_h5_create.c) shares:
- * errors, types, the state kept in memory. The design, crash safety by a
- * fixed layout, is described in sweep_h5.h. */
+/* sweep_file — the results file of a sweep once it exists (sweep_file.h):
+ * reopening it for --resume, the raw writes of the run, and closing it;
+ * creating it is sweep_file_create.c. The design, crash safety by a fixed
+ * layout, is described in sweep_h5.h. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
@@ -11,111 +10,11 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <hdf5.h>
+#include "sweep_crowd.h"
+#include "sweep_file.h"
 #include "sweep_h5.h"
 
-/* ---- HDF5 errors: never printed; the innermost description is kept ---- */
-
-typedef struct { char desc[CUP_ERRMSG_LEN / 2]; int locked; } h5_err;   /* names the file: whole */
-
-static herr_t innermost(unsigned n, const H5E_error2_t *e, void *out) {
-  h5_err *r = out;
-  if (n == 0 && e->desc) snprintf(r->desc, sizeof r->desc, "%s", e->desc);
-  if (e->min_num == H5E_CANTLOCKFILE) r->locked = 1;
-  return 0;
-}
-
-/* Call right after the failed HDF5 call: any later API call (even
- * H5Pclose) clears the error stack that says why. */
-int sw_h5_fail(sw_file *f, const char *op) {
-  h5_err e = {"", 0};
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, &e);
-  if (!e.desc[0]) snprintf(e.desc, sizeof e.desc, "HDF5 call failed");
-  if (!f->errmsg[0] && e.locked) snprintf(f->errmsg, sizeof f->errmsg, SW_IN_USE_FMT, f->path, op);
-  if (!f->errmsg[0]) snprintf(f->errmsg, sizeof f->errmsg, "%s: cannot %s: %s", f->path, op, e.desc);
-  f->failed = 1;
-  H5Eclear2(H5E_DEFAULT);
-  return CUP_ERR_IO;
-}
-
 const char *sw_file_errmsg(const sw_file *f) { return f ? f->errmsg : ""; }
-
-/* ---- types ---- */
-
-hid_t sw_h5_str(size_t size) {
-  hid_t t = H5Tcopy(H5T_C_S1);
-  H5Tset_size(t, size);
-  H5Tset_strpad(t, H5T_STR_NULLTERM);
-  H5Tset_cset(t, H5T_CSET_UTF8);
-  return t;
-}
-
-hid_t sw_h5_vlen_str(void) {
-  hid_t t = H5Tcopy(H5T_C_S1);
-  H5Tset_size(t, H5T_VARIABLE);
-  H5Tset_cset(t, H5T_CSET_UTF8);
-  return t;
-}
-
-#define INS(T, name, field, type) H5Tinsert(T, name, HOFFSET(sw_row, field), type)
-static hid_t row_type(void) {
-  hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_row));
-  hid_t sname = sw_h5_str(SW_NAME_LEN), sspec = sw_h5_str(SW_SPEC_LEN), sword = sw_h5_str(SW_WORD_LEN),
-        sstat = sw_h5_str(SW_STATUS_LEN), smsg = sw_h5_str(SW_MSG_LEN);
-  INS(T, "task_id", task_id, H5T_NATIVE_INT64);
-  INS(T, "variant", variant, H5T_NATIVE_INT32);
-  INS(T, "variant_name", variant_name, sname);
-  INS(T, "n", n, H5T_NATIVE_INT64);
-  INS(T, "eps", eps, sspec);
-  INS(T, "eps_value", eps_value, H5T_NATIVE_DOUBLE);
-  INS(T, "eta", eta, sspec);
-  INS(T, "eta_value", eta_value, H5T_NATIVE_DOUBLE);
-  INS(T, "scheme", scheme, sword);
-  INS(T, "projector", projector, sword);
-  INS(T, "status", status, H5T_NATIVE_INT32);
-  INS(T, "status_name", status_name, sstat);
-  INS(T, "message", message, smsg);
-  INS(T, "error_code", error_code, H5T_NATIVE_INT32);
-  INS(T, "wall_time_s", wall_time_s, H5T_NATIVE_DOUBLE);
-  INS(T, "error", error, H5T_NATIVE_DOUBLE);
-  INS(T, "max_eps_cert", max_eps_cert, H5T_NATIVE_DOUBLE);
-  INS(T, "max_eta_cert", max_eta_cert, H5T_NATIVE_DOUBLE);
-  INS(T, "projected", projected, H5T_NATIVE_INT64);
-  INS(T, "skipped", skipped, H5T_NATIVE_INT64);
-  INS(T, "not_certified", not_certified, H5T_NATIVE_INT64);
-  INS(T, "dual_iterations", dual_iterations, H5T_NATIVE_INT64);
-  INS(T, "factorizations", factorizations, H5T_NATIVE_INT64);
-  INS(T, "stopped_step", stopped_step, H5T_NATIVE_INT64);
-  INS(T, "tol_abs", tol_abs, H5T_NATIVE_DOUBLE);
-  INS(T, "tol_rel", tol_rel, H5T_NATIVE_DOUBLE);
-  INS(T, "err_est", err_est, H5T_NATIVE_DOUBLE);
-  INS(T, "events", events, H5T_NATIVE_INT64);
-  INS(T, "done", done, H5T_NATIVE_INT8);
-  H5Tclose(sname); H5Tclose(sspec); H5Tclose(sword); H5Tclose(sstat); H5Tclose(smsg);
-  return T;
-}
-#undef INS
-
-#define INS(T, name, field, type) H5Tinsert(T, name, HOFFSET(sw_refrow, field), type)
-static hid_t refrow_type(void) {
-  hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_refrow));
-  hid_t sname = sw_h5_str(SW_NAME_LEN), sstat = sw_h5_str(SW_STATUS_LEN), smsg = sw_h5_str(SW_MSG_LEN);
-  INS(T, "variant", variant, H5T_NATIVE_INT32);
-  INS(T, "variant_name", variant_name, sname);
-  INS(T, "n_ref", n_ref, H5T_NATIVE_INT64);
-  INS(T, "status", status, H5T_NATIVE_INT32);
-  INS(T, "status_name", status_name, sstat);
-  INS(T, "message", message, smsg);
-  INS(T, "wall_time_s", wall_time_s, H5T_NATIVE_DOUBLE);
-  INS(T, "correction", correction, H5T_NATIVE_DOUBLE);
-  INS(T, "cross_check", cross_check, H5T_NATIVE_DOUBLE);
-  INS(T, "max_eps_cert", max_eps_cert, H5T_NATIVE_DOUBLE);
-  INS(T, "max_eta_cert", max_eta_cert, H5T_NATIVE_DOUBLE);
-  INS(T, "dual_iterations", dual_iterations, H5T_NATIVE_INT64);
-  INS(T, "done", done, H5T_NATIVE_INT8);
-  H5Tclose(sname); H5Tclose(sstat); H5Tclose(smsg);
-  return T;
-}
-#undef INS
 
 /* A one-field memory type for reading one column of a compound dataset. */
 static hid_t column_type(const char *name, size_t size, hid_t type) {
@@ -124,109 +23,12 @@ static hid_t column_type(const char *name, size_t size, hid_t type) {
   return T;
 }
 
-hid_t sw_h5_access(void) {
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  H5Pset_libver_bounds(fapl, H5F_LIBVER_EARLIEST, H5F_LIBVER_V18);
-  H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
-  H5Pset_sieve_buf_size(fapl, 0);          /* raw writes go out at once, in order */
-  return fapl;
-}
-
-/* snprintf(dst, size, "%s", src), zero-padded, at a fraction of its cost
- * (rank 0 fills a row's strings for every result it writes). */
-void sw_copy_str(char *dst, size_t size, const char *src) {
-  size_t n = src ? strnlen(src, size - 1) : 0;
-  if (n) memcpy(dst, src, n);
-  memset(dst + n, 0, size - n);
-}
-
-void sw_pending_row(const cup_sweep *s, long id, sw_row *r) {
-  sw_task t;
-  memset(r, 0, sizeof *r);
-  sw_task_get(s, id, &t);
-  r->task_id = id;
-  r->variant = t.variant;
-  sw_copy_str(r->variant_name, sizeof r->variant_name, s->var[t.variant].name);
-  r->n = t.n;
-  sw_copy_str(r->eps, sizeof r->eps, t.eps);
-  sw_copy_str(r->eta, sizeof r->eta, t.eta);
-  r->eps_value = cup_schedule_value(&t.eps_s, t.n);
-  r->eta_value = cup_schedule_value(&t.eta_s, t.n);
-  sw_copy_str(r->scheme, sizeof r->scheme, cup_scheme_name(t.scheme));
-  sw_copy_str(r->projector, sizeof r->projector, cup_proj_method_name(t.projector));
-  r->tol_abs = t.scheme == CUP_SCHEME_ADAPTIVE ? t.tol_abs : NAN;
-  r->tol_rel = t.scheme == CUP_SCHEME_ADAPTIVE ? t.tol_rel : NAN;
-  r->err_est = NAN;
-  r->status = r->error_code = CUP_ERR_INTERRUPTED;
-  sw_copy_str(r->status_name, sizeof r->status_name, "pending");
-  r->wall_time_s = r->error = r->max_eps_cert = r->max_eta_cert = NAN;
-}
-
-int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const void *buf, hid_t dxpl) {
-  hid_t fs = H5Dget_space(d), ms = H5Screate_simple(1, &count, NULL);
-  int ok = fs >= 0 && ms >= 0 && H5Sselect_hyperslab(fs, H5S_SELECT_SET, &at, NULL, &count, NULL) >= 0 &&
-           H5Dwrite(d, memtype, ms, fs, dxpl, buf) >= 0;
-  if (ms >= 0) H5Sclose(ms);
-  if (fs >= 0) H5Sclose(fs);
-  return ok ? 0 : -1;
-}
-
-/* ---- state ---- */
-
-sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
-  sw_file *f = calloc(1, sizeof *f);
-  if (!f) return NULL;
-  f->s = s;
-  f->file = f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = f->runs_sig = f->ref_sig = H5I_INVALID_HID;
-  f->path = strdup(path);
-  size_t N = (size_t)s->n_tasks, V = (size_t)s->n_variants;
-  f->done = calloc(N, 1);
-  f->status = calloc(N, sizeof *f->status);
-  f->error = malloc(N * sizeof *f->error);
-  f->ref_done = calloc(V, 1);
-  f->xref = calloc(V, sizeof *f->xref);
-  f->row_t = row_type();
-  f->refrow_t = refrow_type();
-  f->crowd_row_t = sw_crowd_row_type();
-  /* A reference row's write converts a compound type (to the packed file
-   * type): HDF5 would otherwise allocate and clear a 1 MiB conversion
-   * buffer each time. */
-  f->dxpl = H5Pcreate(H5P_DATASET_XFER);
-  H5Pset_buffer(f->dxpl, 4 * sizeof(sw_refrow), NULL, NULL);
-  if (!f->path || !f->done || !f->status || !f->error || !f->ref_done || !f->xref) {
-    free(f->path); free(f->done); free(f->status); free(f->error); free(f->ref_done); free(f->xref);
-    H5Tclose(f->row_t); H5Tclose(f->refrow_t); H5Tclose(f->crowd_row_t); H5Pclose(f->dxpl);
-    free(f);
-    return NULL;
-  }
-  for (size_t k = 0; k < N; k++) { f->error[k] = NAN; f->status[k] = CUP_ERR_INTERRUPTED; }
-  return f;
-}
-
-void sw_h5_file_free(sw_file *f) {
-  quiet_t q = quiet_begin();
-  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd, f->runs_sig, f->ref_sig};
-  for (size_t k = 0; k < sizeof h / sizeof h[0]; k++)
-    if (h[k] >= 0) H5Dclose(h[k]);
-  if (f->file >= 0) H5Fclose(f->file);
-  H5Tclose(f->row_t);
-  H5Tclose(f->refrow_t);
-  H5Tclose(f->crowd_row_t);
-  H5Pclose(f->dxpl);
-  H5Eclear2(H5E_DEFAULT);
-  quiet_end(q);
-  for (int k = 0; k < f->s->n_variants; k++) free(f->xref[k]);
-  free(f->ids); free(f->rows); free(f->x); free(f->crows); free(f->sig);
-  free(f->xref); free(f->ref_done); free(f->done); free(f->status); free(f->error); free(f->path);
-  free(f);
-}
-
 /* ---- resume ---- */
 
 static int read_attr_str(hid_t loc, const char *name, char *buf, size_t size) {
   hid_t a = H5Aopen(loc, name, H5P_DEFAULT);
   if (a < 0) return -1;
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   char *v = NULL;
   int ok = H5Aread(a, t, &v) >= 0;
   if (ok) snprintf(buf, size, "%s", v ? v : "");
@@ -282,7 +84,7 @@ static int check_layout(sw_file *f, char *errmsg) {
 static int check_inputs(sw_file *f, char *errmsg) {
   hid_t a = H5Aopen(f->file, "inputs_sha256", H5P_DEFAULT);
   if (a < 0) { H5Eclear2(H5E_DEFAULT); return CUP_OK; }
-  hid_t t = sw_h5_vlen_str();
+  hid_t t = h5_vlen_str();
   char *v = NULL;
   int st = H5Aread(a, t, &v) >= 0 ? CUP_OK : sw_h5_fail(f, "read the attribute inputs_sha256 of");
   H5Tclose(t);
@@ -305,7 +107,7 @@ static int check_scenes(sw_file *f, char *errmsg) {
   const cup_sweep *s = f->s;
   hsize_t V = (hsize_t)s->n_variants;
   hid_t d = H5Dopen2(f->file, "variants", H5P_DEFAULT);
-  hid_t vs = sw_h5_vlen_str(), mt = column_type("scene", sizeof(char *), vs);
+  hid_t vs = h5_vlen_str(), mt = column_type("scene", sizeof(char *), vs);
   char **texts = calloc(V, sizeof *texts);
   int st = d < 0 || !texts || H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, texts) < 0
                ? sw_h5_fail(f, "read /variants in") : CUP_OK;
@@ -369,10 +171,10 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
   sw_file *f = sw_h5_file_new(s, path);
   if (!f) { snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path); return CUP_ERR_NOMEM; }
   quiet_t q = quiet_begin();
-  hid_t fapl = sw_h5_access();
-  f->file = H5Fopen(path, H5F_ACC_RDWR, fapl);
+  hid_t fapl = h5_file_access(1);          /* raw writes go out at once, in order */
+  f->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
   int st = f->file < 0 ? sw_h5_fail(f, "open") : CUP_OK;
-  H5Pclose(fapl);
+  if (fapl >= 0) H5Pclose(fapl);
   if (!st) st = check_layout(f, errmsg);
   if (!st) {
     f->summary = H5Dopen2(f->file, "summary", H5P_DEFAULT);
@@ -462,34 +264,6 @@ static int reserve(sw_file *f, long count) {
   return CUP_OK;
 }
 
-/* Read or write, between buf (count entries in a row) and dataset d whose
- * first dimension is the task, the entries of tasks ids[0..count), which
- * increase: one hyperslab per run of consecutive tasks. */
-static int task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
-                   const char *op) {
-  hsize_t dims[3] = {0, 1, 1}, start[3] = {0, 0, 0};
-  hid_t fs = H5Dget_space(d), ms = -1;
-  int rank = fs < 0 ? -1 : H5Sget_simple_extent_dims(fs, dims, NULL), ok = rank >= 1 && rank <= 3;
-  for (long j = 0, e; j < count && ok; j = e) {
-    for (e = j + 1; e < count && f->ids[e] == f->ids[e - 1] + 1; e++) {}
-    start[0] = (hsize_t)f->ids[j];
-    dims[0] = (hsize_t)(e - j);
-    ok = H5Sselect_hyperslab(fs, j ? H5S_SELECT_OR : H5S_SELECT_SET, start, NULL, dims, NULL) >= 0;
-  }
-  dims[0] = (hsize_t)count;
-  if (ok) ok = (ms = H5Screate_simple(rank, dims, NULL)) >= 0;
-  if (ok) ok = (writing ? H5Dwrite(d, memtype, ms, fs, dxpl, buf) : H5Dread(d, memtype, ms, fs, dxpl, buf)) >= 0;
-  int st = ok ? CUP_OK : sw_h5_fail(f, op);
-  if (ms >= 0) H5Sclose(ms);
-  if (fs >= 0) H5Sclose(fs);
-  return st;
-}
-
-int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
-                  const char *op) {
-  return task_io(f, d, memtype, count, buf, dxpl, writing, op);
-}
-
 void sw_file_tally(const sw_file *f, sw_tally *out) {
   const cup_sweep *s = f->s;
   sw_tally c = {0};
@@ -535,11 +309,11 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
              sizeof(double) * (size_t)(f->s->samples * f->s->nsig));
   }
   quiet_t q = quiet_begin();
-  if (f->runs_x >= 0) st = task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 1, "write /runs/x in");
+  if (f->runs_x >= 0) st = sw_h5_task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 1, "write /runs/x in");
   if (!st && f->runs_sig >= 0)
-    st = task_io(f, f->runs_sig, H5T_NATIVE_DOUBLE, count, f->sig, H5P_DEFAULT, 1, "write /runs/signals in");
+    st = sw_h5_task_io(f, f->runs_sig, H5T_NATIVE_DOUBLE, count, f->sig, H5P_DEFAULT, 1, "write /runs/signals in");
   if (!st && f->crowd >= 0) st = sw_crowd_write(f, t, count);
-  if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
+  if (!st) st = sw_h5_task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
   for (long j = 0; j < count && !st; j++) {
     f->done[t[j].task] = 1;
@@ -554,10 +328,10 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
 static int fill_chunk(sw_file *f, const double *xref, long count) {
   long per = f->s->samples * f->s->dim;
   quiet_t q = quiet_begin();
-  int st = task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 0, "read /runs/x in");
-  if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 0, "read /summary in");
+  int st = sw_h5_task_io(f, f->runs_x, H5T_NATIVE_DOUBLE, count, f->x, H5P_DEFAULT, 0, "read /runs/x in");
+  if (!st) st = sw_h5_task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 0, "read /summary in");
   for (long j = 0; j < count && !st; j++) f->rows[j].error = sw_max_error(f->x + per * j, xref, per);
-  if (!st) st = task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
+  if (!st) st = sw_h5_task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
   for (long j = 0; j < count && !st; j++) f->error[f->ids[j]] = f->rows[j].error;
   return st;

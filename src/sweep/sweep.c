@@ -1,18 +1,19 @@
 /* sweep — the sweep file (docs/sweep-format.md) and its tasks in a fixed
  * order; one job's computation is in sweep_run.c. The file is read through
- * the scene loader's tree (scene_tree.c), so every error names
- * FILE:LINE:COL and the dotted key; a variant's scene is loaded by the scene
- * loader itself, with the variant's `set` entries as overrides. */
+ * the scene loader's tree and readers (io/scene_tree.c, io/scene_read.h),
+ * so every error names FILE:LINE:COL and the dotted key; a variant's scene
+ * is loaded by the scene loader itself, with the variant's `set` entries as
+ * overrides. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "scene_tree.h"
-#include "read_text.h"
-#include "sha256.h"
+#include "io/scene_read.h"
+#include "io/sha256.h"
 #include "sweep.h"
+#include "util/path.h"
 
 static const char *const axis_names[SW_NAXES + 1] = {"n", "eps", "eta", "scheme", "projector", "tol", NULL};
 enum { MAX_WORDS = 16 };
@@ -26,89 +27,47 @@ static const char *const *names_of(const char *(*name)(int), const char **buf) {
   return buf;
 }
 
-typedef struct prs {
-  st_src src;
-  char *errmsg;               /* SW_ERR_LEN bytes */
-} prs;
+/* The scene's readers (io/scene_read.h: fail, check_keys, opt, need_map,
+ * string, integer, number_min) with a reader of no folder and no file list
+ * (rd.dir, rd.files: the variants' scenes are loaded by the scene loader
+ * itself). st_error writes at most CUP_ERRMSG_LEN bytes, which is what we
+ * want for the sweep file's own messages; nested scene messages use
+ * SW_ERR_LEN. What the sweep says its own way: */
 
-/* st_error writes at most CUP_ERRMSG_LEN bytes, which is what we want for
- * the sweep file's own messages; nested scene messages use SW_ERR_LEN. */
-__attribute__((format(printf, 5, 6)))
-static int fail(prs *p, int status, const st_node *at, const char *key, const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  st_verror(p->errmsg, status, &p->src, at, key, fmt, ap);
-  va_end(ap);
-  return status;
-}
-
-static int check_keys(prs *p, const st_node *map, const char *mkey, const char *const *known) {
-  const st_node *bad = st_unknown_key(map, known);
-  if (!bad) return CUP_OK;
-  char key[128], hint[ST_HINT_LEN];
-  snprintf(key, sizeof key, "%s%s%s", mkey, *mkey ? "." : "", bad->text);
-  return fail(p, CUP_ERR_PARSE, bad, key, "unknown key (%s)", st_suggest(hint, sizeof hint, bad->text, known));
-}
-
-static const st_node *opt(const st_node *map, const char *k) {
-  const st_node *v = st_get(map, k, NULL);
-  return st_is_null(v) ? NULL : v;
-}
-
-static int need_map(prs *p, const st_node *nd, const char *key, const char *what) {
+/* A name or a file: a string, not empty. */
+static int word(rd *p, const st_node *nd, const char *key, const char **out) {
   char b[64];
-  if (nd->kind == ST_MAP) return CUP_OK;
+  if (nd->kind == ST_SCALAR && !st_is_null(nd) && !nd->text[0])
+    return fail(p, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", st_looks(nd, b, sizeof b));
+  return string(p, nd, key, out);
+}
+
+/* A plain finite number, or a message that names what was expected ("an
+ * integer"), for a quoted number and an infinity too. */
+static int plain_number(rd *p, const st_node *nd, const char *key, const char *what) {
+  char b[64];
+  double v;
+  if (nd->kind == ST_SCALAR && !nd->quoted && !st_is_null(nd) && st_number(nd->text, &v) && isfinite(v))
+    return CUP_OK;
   return fail(p, CUP_ERR_PARSE, nd, key, "expected %s (got %s)", what, st_looks(nd, b, sizeof b));
 }
 
-static int string(prs *p, const st_node *nd, const char *key, const char **out) {
-  char b[64];
-  if (nd->kind != ST_SCALAR || st_is_null(nd) || !nd->text[0])
-    return fail(p, CUP_ERR_PARSE, nd, key, "expected a word or a string (got %s)", st_looks(nd, b, sizeof b));
-  *out = nd->text;
-  return CUP_OK;
-}
-
 /* An integer in [lo, hi]; 1e6 is accepted (an exact integer in a double). */
-static int integer(prs *p, const st_node *nd, const char *key, long lo, long hi, long *out) {
-  char b[64];
-  double v;
-  if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, &v) || !isfinite(v))
-    return fail(p, CUP_ERR_PARSE, nd, key, "expected an integer (got %s)", st_looks(nd, b, sizeof b));
-  if (v != floor(v)) return fail(p, CUP_ERR_PARSE, nd, key, "must be an integer (got %g)", v);
-  if (v < (double)lo) return fail(p, CUP_ERR_PARSE, nd, key, "must be >= %ld (got %g)", lo, v);
-  if (v > (double)hi) return fail(p, CUP_ERR_PARSE, nd, key, "must be <= %ld (got %g)", hi, v);
-  *out = (long)v;
-  return CUP_OK;
+static int count(rd *p, const st_node *nd, const char *key, long lo, long hi, long *out) {
+  int st = plain_number(p, nd, key, "an integer");
+  return st ? st : integer(p, nd, key, lo, hi, out);
 }
 
 /* A number > 0 (the adaptive scheme's tol). */
-static int positive(prs *p, const st_node *nd, const char *key, double *out) {
-  char b[64];
-  if (nd->kind != ST_SCALAR || nd->quoted || st_is_null(nd) || !st_number(nd->text, out) || !isfinite(*out))
-    return fail(p, CUP_ERR_PARSE, nd, key, "expected a number (got %s)", st_looks(nd, b, sizeof b));
-  if (!(*out > 0)) return fail(p, CUP_ERR_PARSE, nd, key, "must be > 0 (got %g)", *out);
-  return CUP_OK;
-}
-
-static char *path_join(const char *dir, const char *name) {
-  if (!dir || name[0] == '/') return strdup(name);
-  size_t len = strlen(dir) + strlen(name) + 2;
-  char *s = malloc(len);
-  if (s) snprintf(s, len, "%s/%s", dir, name);
-  return s;
-}
-
-static char *dir_of(const char *path) {
-  const char *slash = strrchr(path, '/');
-  if (!slash) return NULL;
-  return strndup(path, slash == path ? 1 : (size_t)(slash - path));
+static int positive(rd *p, const st_node *nd, const char *key, double *out) {
+  int st = plain_number(p, nd, key, "a number");
+  return st ? st : number_min(p, nd, key, 0, 1, out);
 }
 
 /* ---- grid ---------------------------------------------------------------- */
 
 /* A scalar is a one-element list. */
-static int axis_items(prs *p, const st_node *nd, const char *key, const st_node *const **items, int *len) {
+static int axis_items(rd *p, const st_node *nd, const char *key, const st_node *const **items, int *len) {
   static const st_node *one[1];
   if (nd->kind == ST_MAP) return fail(p, CUP_ERR_PARSE, nd, key, "expected a value or a list of values (got a mapping)");
   if (nd->kind == ST_SCALAR) { one[0] = nd; *items = one; *len = 1; return CUP_OK; }
@@ -118,7 +77,7 @@ static int axis_items(prs *p, const st_node *nd, const char *key, const st_node 
   return CUP_OK;
 }
 
-static int read_word_item(prs *p, const st_node *nd, const char *key, const char *what,
+static int read_word_item(rd *p, const st_node *nd, const char *key, const char *what,
                           const char *const *names, int *out) {
   char hint[ST_HINT_LEN], b[64];
   if (nd->kind != ST_SCALAR || st_is_null(nd))
@@ -129,7 +88,7 @@ static int read_word_item(prs *p, const st_node *nd, const char *key, const char
               st_suggest(hint, sizeof hint, nd->text, names));
 }
 
-static int read_schedule_item(prs *p, const st_node *nd, const char *key, char **out) {
+static int read_schedule_item(rd *p, const st_node *nd, const char *key, char **out) {
   char b[64], lib[CUP_ERRMSG_LEN];
   cup_schedule sch;
   if (nd->kind != ST_SCALAR || st_is_null(nd))
@@ -142,7 +101,7 @@ static int read_schedule_item(prs *p, const st_node *nd, const char *key, char *
   return *out ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-static int read_axis(prs *p, cup_sweep *s, int a, const st_node *nd) {
+static int read_axis(rd *p, cup_sweep *s, int a, const st_node *nd) {
   char key[64];
   const char *words[MAX_WORDS];
   const st_node *const *items = NULL;
@@ -160,7 +119,7 @@ static int read_axis(prs *p, cup_sweep *s, int a, const st_node *nd) {
     else snprintf(key, sizeof key, "grid.%s", axis_names[a]);
     switch (a) {
       case SW_AXIS_N:
-        st = s->n ? integer(p, items[k], key, 1, 9007199254740992L, &s->n[k]) : CUP_ERR_NOMEM;
+        st = s->n ? count(p, items[k], key, 1, 9007199254740992L, &s->n[k]) : CUP_ERR_NOMEM;
         break;
       case SW_AXIS_EPS:
         st = s->eps ? read_schedule_item(p, items[k], key, &s->eps[k]) : CUP_ERR_NOMEM;
@@ -184,7 +143,7 @@ static int read_axis(prs *p, cup_sweep *s, int a, const st_node *nd) {
 }
 
 /* zip: [eps, eta] (one group) or [[eps, eta], [scheme, projector]]. */
-static int read_zip_group(prs *p, cup_sweep *s, const st_node *nd, const char *key, int g) {
+static int read_zip_group(rd *p, cup_sweep *s, const st_node *nd, const char *key, int g) {
   char k2[64];
   if (nd->kind != ST_SEQ || nd->len < 2)
     return fail(p, CUP_ERR_PARSE, nd, key, "expected a list of at least two axis names, e.g. [eps, eta]");
@@ -204,7 +163,7 @@ static int read_zip_group(prs *p, cup_sweep *s, const st_node *nd, const char *k
   return CUP_OK;
 }
 
-static int read_zip(prs *p, cup_sweep *s, const st_node *nd) {
+static int read_zip(rd *p, cup_sweep *s, const st_node *nd) {
   if (nd->kind == ST_SEQ && nd->len > 0 && nd->item[0]->kind == ST_SEQ) {
     char key[32];
     int st = CUP_OK;
@@ -217,7 +176,7 @@ static int read_zip(prs *p, cup_sweep *s, const st_node *nd) {
   return read_zip_group(p, s, nd, "grid.zip", 0);
 }
 
-static int read_grid(prs *p, cup_sweep *s, const st_node *root) {
+static int read_grid(rd *p, cup_sweep *s, const st_node *root) {
   static const char *const known[] = {"n", "eps", "eta", "scheme", "projector", "tol", "zip", NULL};
   for (int a = 0; a < SW_NAXES; a++) s->zip[a] = -1;
   const st_node *g = opt(root, "grid"), *nd;
@@ -264,7 +223,7 @@ static char *override_text(const char *key, const st_node *v) {
   return s;
 }
 
-static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const char *base) {
+static int read_variant(rd *p, cup_sweep *s, const st_node *nd, int k, const char *base) {
   static const char *const known[] = {"name", "scene", "set", NULL};
   char key[64], k2[160];
   sw_variant *v = &s->var[k];
@@ -278,7 +237,7 @@ static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const ch
   const char *name = NULL, *scene = base;
   snprintf(k2, sizeof k2, "%s.name", key);
   if (!x) return fail(p, CUP_ERR_PARSE, nd, k2, "missing (required)");
-  if ((st = string(p, x, k2, &name))) return st;
+  if ((st = word(p, x, k2, &name))) return st;
   if (strlen(name) >= SW_NAME_LEN)
     return fail(p, CUP_ERR_PARSE, x, k2, "longer than %d characters", SW_NAME_LEN - 1);
   for (int j = 0; j < k; j++)
@@ -287,14 +246,14 @@ static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const ch
   if (!(v->name = strdup(name))) return CUP_ERR_NOMEM;
   if ((x = opt(nd, "scene"))) {
     snprintf(k2, sizeof k2, "%s.scene", key);
-    if ((st = string(p, x, k2, &scene))) return st;
+    if ((st = word(p, x, k2, &scene))) return st;
   } else if (!base) {
     return fail(p, CUP_ERR_PARSE, nd, key, "no scene: give base: at the top or scene: in this variant");
   } else {
     v->from_base = 1;
   }
   if (!(v->scene_file = path_join(s->dir, scene))) return CUP_ERR_NOMEM;
-  v->scene_dir = dir_of(v->scene_file);
+  if ((st = path_dir(v->scene_file, &v->scene_dir))) return st;
   if ((x = opt(nd, "set"))) {
     snprintf(k2, sizeof k2, "%s.set", key);
     if ((st = need_map(p, x, k2, "a mapping of dotted scene keys to values, e.g. {circuit.R1: 2}"))) return st;
@@ -307,11 +266,11 @@ static int read_variant(prs *p, cup_sweep *s, const st_node *nd, int k, const ch
   return CUP_OK;
 }
 
-static int read_variants(prs *p, cup_sweep *s, const st_node *root) {
+static int read_variants(rd *p, cup_sweep *s, const st_node *root) {
   const st_node *kb, *b = st_get(root, "base", &kb), *nd = opt(root, "variants");
   const char *base = NULL;
   int st = CUP_OK;
-  if (b && !st_is_null(b) && (st = string(p, b, "base", &base))) return st;
+  if (b && !st_is_null(b) && (st = word(p, b, "base", &base))) return st;
   if (base) { s->base_line = b->line; s->base_col = b->col; }
   if (!nd) return fail(p, CUP_ERR_PARSE, root, "variants", "missing (required): a list of at least one variant, "
                        "e.g. [{name: case1}]");
@@ -325,7 +284,7 @@ static int read_variants(prs *p, cup_sweep *s, const st_node *root) {
 
 /* ---- reference and output -------------------------------------------------- */
 
-static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
+static int read_reference(rd *p, cup_sweep *s, const st_node *root) {
   static const char *const known[] = {"samples", "n", "method", "check", NULL};
   static const char *const methods[] = {"richardson", "adaptive", NULL};
   static const char *const checks[] = {"none", "richardson", NULL};
@@ -344,9 +303,9 @@ static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
   if (x && s->ref_check && s->ref_method != SW_REF_ADAPTIVE)
     return fail(p, CUP_ERR_PARSE, x, "reference.check", "checks the adaptive reference against the Richardson "
                 "limit: it needs method: adaptive");
-  if ((x = opt(r, "samples")) && (st = integer(p, x, "reference.samples", 2, 1000001, &s->samples))) return st;
+  if ((x = opt(r, "samples")) && (st = count(p, x, "reference.samples", 2, 1000001, &s->samples))) return st;
   if ((x = opt(r, "n")) && !(x->kind == ST_SCALAR && !x->quoted && !strcmp(x->text, "auto"))) {
-    if ((st = integer(p, x, "reference.n", 1, 4503599627370496L, &s->ref_n))) return st;
+    if ((st = count(p, x, "reference.n", 1, 4503599627370496L, &s->ref_n))) return st;
     if (s->ref_n % (s->samples - 1))
       return fail(p, CUP_ERR_PARSE, x, "reference.n", "must be a multiple of samples - 1 = %ld (got %ld), "
                   "so that the reference's grid holds every sample time; or write auto", s->samples - 1, s->ref_n);
@@ -354,7 +313,7 @@ static int read_reference(prs *p, cup_sweep *s, const st_node *root) {
   return st;
 }
 
-static int read_output(prs *p, cup_sweep *s, const st_node *root) {
+static int read_output(rd *p, cup_sweep *s, const st_node *root) {
   static const char *const known[] = {"samples", NULL};
   const st_node *o = opt(root, "output"), *x;
   s->out_samples = s->samples;
@@ -363,7 +322,7 @@ static int read_output(prs *p, cup_sweep *s, const st_node *root) {
   if ((st = need_map(p, o, "output", "a mapping with samples"))) return st;
   if ((st = check_keys(p, o, "output", known))) return st;
   s->out_given = opt(o, "samples") != NULL;
-  if ((x = opt(o, "samples")) && !(st = integer(p, x, "output.samples", 0, 1000001, &s->out_samples)) &&
+  if ((x = opt(o, "samples")) && !(st = count(p, x, "output.samples", 0, 1000001, &s->out_samples)) &&
       s->out_samples != 0 && s->out_samples != s->samples)
     return fail(p, CUP_ERR_PARSE, x, "output.samples", "must be 0 (no trajectories) or reference.samples = %ld "
                 "(trajectories are stored at the common sample times), got %ld", s->samples, s->out_samples);
@@ -372,13 +331,13 @@ static int read_output(prs *p, cup_sweep *s, const st_node *root) {
 
 /* ---- public: parse and resolve ---------------------------------------------- */
 
-static int read_sweep(prs *p, cup_sweep *s, const st_node *root) {
+static int read_sweep(rd *p, cup_sweep *s, const st_node *root) {
   static const char *const known[] = {"name", "base", "grid", "variants", "reference", "output", NULL};
   int st = need_map(p, root, NULL, "a mapping with base, grid and variants");
   if (!st) st = check_keys(p, root, "", known);
   const st_node *x;
   const char *name = NULL;
-  if (!st && (x = opt(root, "name")) && !(st = string(p, x, "name", &name)) && !(s->name = strdup(name)))
+  if (!st && (x = opt(root, "name")) && !(st = word(p, x, "name", &name)) && !(s->name = strdup(name)))
     st = CUP_ERR_NOMEM;
   if (!st) st = read_grid(p, s, root);
   if (!st) st = read_reference(p, s, root);
@@ -392,12 +351,11 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
   if (errmsg) errmsg[0] = '\0';
   cup_sweep *s = calloc(1, sizeof *s);
   if (!s) return CUP_ERR_NOMEM;
-  prs p = {{path, NULL}, errmsg};
+  rd p = {{path, NULL}, NULL, errmsg, NULL};
   st_node *root = NULL;
   s->path = strdup(path);
-  s->dir = dir_of(path);
   s->text = malloc(len + 1);
-  int st = s->path && s->text ? CUP_OK : CUP_ERR_NOMEM;
+  int st = s->path && s->text ? path_dir(path, &s->dir) : CUP_ERR_NOMEM;
   if (!st) {
     memcpy(s->text, text, len);
     s->text[len] = '\0';
@@ -405,12 +363,7 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
     st = st_parse(&root, text, len, &p.src, -1, NULL, errmsg);
   }
   if (!st) st = read_sweep(&p, s, root);
-  if (!st && !s->name) {
-    const char *b = strrchr(path, '/');
-    b = b ? b + 1 : path;
-    const char *dot = strrchr(b, '.');
-    if (!(s->name = strndup(b, dot && dot != b ? (size_t)(dot - b) : strlen(b)))) st = CUP_ERR_NOMEM;
-  }
+  if (!st && !s->name && !(s->name = path_stem(path))) st = CUP_ERR_NOMEM;
   st_free(root);
   if (st == CUP_ERR_NOMEM && errmsg) snprintf(errmsg, SW_ERR_LEN, "%s: out of memory", path);
   if (st) { sw_free(&s); return st; }
@@ -595,6 +548,16 @@ void sw_free(cup_sweep **ps) {
 }
 
 /* ---- tasks ------------------------------------------------------------------ */
+
+double sw_max_error(const double *traj, const double *ref, long count) {
+  double e = 0;
+  for (long j = 0; j < count; j++) {
+    double d = fabs(traj[j] - ref[j]);
+    if (isnan(d)) return NAN;
+    if (d > e) e = d;
+  }
+  return e;
+}
 
 int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
   if (id < 0 || id >= s->n_tasks) return CUP_ERR_ARG;

@@ -1,5 +1,5 @@
-/* sweep_crowd — sweeps whose variants are crowd: scenes (docs/sweep-format.md,
- * "Crowd sweeps"): what differs from circuits. A crowd has no reference
+/* sweep_crowd — sweeps whose variants are crowd: scenes (sweep_crowd.h,
+ * docs/sweep-format.md, "Crowd sweeps"): what differs from circuits. A crowd has no reference
  * (its evacuation is the result, not a trajectory to converge), its
  * variants may have different numbers of agents, and each task reports its
  * evacuation in /crowd, one row per task, written before its /summary row
@@ -8,7 +8,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include "sweep_h5.h"
+#include "sweep_crowd.h"
 
 void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < s->samples * s->dim; j++) traj[j] = NAN;
@@ -43,20 +43,6 @@ void sw_crowd_watch_end(sw_crowd_watch *w, const double *q_end, sw_result *r) {
 }
 
 /* ---- /crowd in the results file ---- */
-
-#define INS(T, name, field, type) H5Tinsert(T, name, HOFFSET(sw_crowd_row, field), type)
-hid_t sw_crowd_row_type(void) {
-  hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_crowd_row));
-  INS(T, "task_id", task_id, H5T_NATIVE_INT64);
-  INS(T, "variant", variant, H5T_NATIVE_INT32);
-  INS(T, "agents", agents, H5T_NATIVE_INT32);
-  INS(T, "agents_out", agents_out, H5T_NATIVE_INT32);
-  INS(T, "evacuation_time", evacuation_time, H5T_NATIVE_DOUBLE);
-  INS(T, "min_gap", min_gap, H5T_NATIVE_DOUBLE);
-  INS(T, "done", done, H5T_NATIVE_INT8);
-  return T;
-}
-#undef INS
 
 static void pending(const cup_sweep *s, long id, void *vrow) {
   sw_crowd_row *row = vrow;

@@ -13,7 +13,6 @@
 #include <hdf5.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
-#include "file_in_use.h"
 #include "h5run_impl.h"
 
 /* ---- reopening ---- */
@@ -32,9 +31,9 @@ static long rows_of(hid_t d, int rank, hsize_t *cols) {
 static int same_signals(cup_h5run *w, int nsig, const char *const *names) {
   hid_t a = H5Aopen(w->group, "names", H5P_DEFAULT);
   if (a < 0) return 0;
-  hid_t space = H5Aget_space(a), type = H5Tcopy(H5T_C_S1);
+  hid_t space = H5Aget_space(a), type = h5_vlen_str();
   hssize_t n = space >= 0 ? H5Sget_simple_extent_npoints(space) : -1;
-  int same = n == nsig && type >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 && H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
+  int same = n == nsig && type >= 0;
   char **got = same ? calloc((size_t)nsig + 1, sizeof *got) : NULL;
   if (got && H5Aread(a, type, got) >= 0) {
     for (int k = 0; k < nsig; k++) same &= got[k] && !strcmp(got[k], names[k]);
@@ -79,7 +78,7 @@ int cup_h5run_open(cup_h5run **out, const char *path, int dim, int nsig, const c
   cup_h5run *w = writer_new(path, dim, errmsg, &st);
   if (!w) return st;
   quiet_t q = quiet_begin();
-  hid_t fapl = writer_access();
+  hid_t fapl = h5_file_access(0);
   if (fapl >= 0) w->file = H5Fopen(path, H5F_ACC_RDWR, fapl);
   if (fapl >= 0) H5Pclose(fapl);
   hsize_t cols = 0;
@@ -218,10 +217,9 @@ int cup_h5run_get_string(cup_h5run *w, const char *name, char **value) {
   *value = NULL;
   quiet_t q = quiet_begin();
   hid_t a = H5Aexists(w->file, name) > 0 ? H5Aopen(w->file, name, H5P_DEFAULT) : H5I_INVALID_HID;
-  hid_t type = H5Tcopy(H5T_C_S1);
+  hid_t type = h5_vlen_str();
   char *s = NULL;
-  int ok = a >= 0 && type >= 0 && H5Tset_size(type, H5T_VARIABLE) >= 0 && H5Tset_cset(type, H5T_CSET_UTF8) >= 0 &&
-           H5Aread(a, type, &s) >= 0 && s;
+  int ok = a >= 0 && type >= 0 && H5Aread(a, type, &s) >= 0 && s;
   if (ok) *value = strdup(s);
   if (s) H5free_memory(s);
   if (type >= 0) H5Tclose(type);

@@ -1,5 +1,8 @@
-/* sweep_h5 — what sweep_h5.c and sweep_h5_create.c share: the results file
- * of a sweep (docs/sweep-format.md, "Output").
+/* sweep_h5 — the results file of a sweep (docs/sweep-format.md, "Output"):
+ * its layout, and what its writers share (sweep_h5.c): errors, row types,
+ * the state kept in memory, the one-row-per-task tables. Below the crowd
+ * sweeps' /crowd (sweep_crowd.c) and the file's writers (sweep_file.c,
+ * sweep_file_create.c).
  *
  * Crash safety by a fixed layout instead of SWMR. Everything that is
  * metadata — every group, dataset, attribute, the /variants table with its
@@ -23,13 +26,14 @@
  * written.
  *
  * The full allocation at creation also means the disk cannot fill up during
- * the run (HDF5 1.10 cannot close a file after a failed write, h5run.c). */
+ * the run (HDF5 1.10 cannot close a file after a failed write, h5util.h). */
 #ifndef CUP_SWEEP_H5_H
 #define CUP_SWEEP_H5_H
 
 #include <stddef.h>
 #include <stdint.h>
 #include <hdf5.h>
+#include "h5/h5util.h"
 #include "sweep.h"
 
 /* 2: /summary has tol_abs, tol_rel, err_est, events; 3: the tables' strings
@@ -64,7 +68,8 @@ typedef struct __attribute__((packed)) sw_row {
  * whose last byte says done is whole. */
 _Static_assert(offsetof(sw_row, done) + sizeof(int8_t) == sizeof(sw_row), "done is the last byte of a row");
 
-/* One /crowd row (crowd sweeps, sweep_crowd.c), packed like sw_row. */
+/* One /crowd row (crowd sweeps, sweep_crowd.c), packed like sw_row; its
+ * memory type is f->crowd_row_t. */
 typedef struct __attribute__((packed)) sw_crowd_row {
   int64_t task_id;
   int32_t variant, agents, agents_out;
@@ -110,17 +115,6 @@ struct sw_file {
   double *sig;
 };
 
-typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
-
-static inline quiet_t quiet_begin(void) {
-  quiet_t q = {NULL, NULL};
-  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-  return q;
-}
-
-static inline void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
-
 /* Keep the innermost HDF5 error as "PATH: cannot OP: detail" (the first
  * one only); the file is then failed: only close is attempted. */
 int sw_h5_fail(sw_file *f, const char *op);
@@ -128,11 +122,9 @@ int sw_h5_fail(sw_file *f, const char *op);
 #define SW_IN_USE_FMT "%s: cannot %s: the file is in use by another process (HDF5 file locking; another " \
   "catchup-sweep may be writing it): wait for that run to end, or stop it, then --resume; the file is " \
   "left as it was"
-/* Fixed-length (NUL-terminated) and variable-length (UTF-8) string types. */
+/* A fixed-length (NUL-terminated) UTF-8 string type (h5util.h has the
+ * variable-length one). */
 hid_t sw_h5_str(size_t size);
-hid_t sw_h5_vlen_str(void);
-/* Format 1.8, no sieve buffer: raw writes go out at once, in order. */
-hid_t sw_h5_access(void);
 void sw_copy_str(char *dst, size_t size, const char *src);
 /* A task's row before it ran: its parameters, status "pending". */
 void sw_pending_row(const cup_sweep *s, long id, sw_row *r);
@@ -141,6 +133,10 @@ int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const vo
 /* The state in memory (no file yet), or NULL; sw_h5_file_free closes what is open. */
 sw_file *sw_h5_file_new(const cup_sweep *s, const char *path);
 void sw_h5_file_free(sw_file *f);
+/* A dataset that is contiguous, allocated (and filled with *fill of
+ * fill_type, unless fill is NULL) at creation, without modification times. */
+hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
+                          hid_t fill_type, const void *fill);
 /* A task's row before it ran, into row (row_size bytes). */
 typedef void (*sw_pending_fn)(const cup_sweep *s, long id, void *row);
 /* Create the one-row-per-task dataset name (memtype packed), filled with
@@ -151,12 +147,5 @@ int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_siz
  * dimension is the task, the entries of tasks f->ids[0..count). */
 int sw_h5_task_io(sw_file *f, hid_t d, hid_t memtype, long count, void *buf, hid_t dxpl, int writing,
                   const char *op);
-
-/* /crowd (sweep_crowd.c): its memory type; create it with pending rows;
- * write the rows of tasks t[0..count) (staged in f->crows, ids in f->ids). */
-#define SW_CROWD_REFERENCE "none: the variants are crowds; each task's evacuation is in /crowd"
-hid_t sw_crowd_row_type(void);
-int sw_crowd_create(sw_file *f);
-int sw_crowd_write(sw_file *f, const sw_task_out *t, long count);
 
 #endif

@@ -9,6 +9,7 @@
 #include <hdf5.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
+#include "h5util.h"
 
 #define H5R_HIDDEN __attribute__((visibility("hidden")))
 
@@ -41,37 +42,18 @@ struct cup_h5run {
   char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind */
 };
 
-/* HDF5 must not print, and must not stay silenced after us. */
-typedef struct { H5E_auto2_t fn; void *data; } quiet_t;
-
-static inline quiet_t quiet_begin(void) {
-  quiet_t q = {NULL, NULL};
-  H5Eget_auto2(H5E_DEFAULT, &q.fn, &q.data);
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-  return q;
-}
-
-static inline void quiet_end(quiet_t q) { H5Eset_auto2(H5E_DEFAULT, q.fn, q.data); }
-
 /* h5run.c: record the first HDF5 failure ("h5run: cannot OP 'PATH': ...")
  * and stop the writer; keep the error stack across a cleanup; a message
- * into errmsg (CUP_ERRMSG_LEN bytes, may be NULL); monotonic seconds. */
+ * into errmsg (CUP_ERRMSG_LEN bytes, may be NULL). */
 H5R_HIDDEN int set_error(cup_h5run *w, int status, const char *op);
 H5R_HIDDEN hid_t keep_stack(int failed);
 H5R_HIDDEN void restore_stack(hid_t saved);
 H5R_HIDDEN int fail_msg(char *errmsg, int status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-H5R_HIDDEN double now_seconds(void);
 /* A writer for path and dim with its buffers, no file yet (NULL: the
  * status, with the message, in *st). */
 H5R_HIDDEN cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st);
 H5R_HIDDEN void free_writer(cup_h5run *w);
-/* The file access the writer uses: the 1.8 format (no "open for writing"
- * flag), strong close. */
-H5R_HIDDEN hid_t writer_access(void);
 /* /events' file and memory types into w. 0 or -1. */
 H5R_HIDDEN int event_types(cup_h5run *w);
-/* The device of path has less than CUP_H5_SPACE_MARGIN free beyond `ahead`
- * bytes still to reach it. */
-H5R_HIDDEN int space_low(const char *path, double ahead);
 
 #endif

@@ -1,4 +1,4 @@
-/* sweep_run — one job of a sweep (sweep.h): a task, or a variant's
+/* sweep_run — one job of a sweep (sweep_run.h): a task, or a variant's
  * reference (Richardson extrapolation of two exact runs, or an adaptive run
  * at tol 1e-13), run by the integrator on the variant's scene and sampled at
  * the common times. */
@@ -7,14 +7,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include "sweep.h"
-
-static double now_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "sweep_crowd.h"
+#include "sweep_run.h"
+#include "util/clock.h"
 
 /* Step nearest to t_j = j T / (S - 1) on the grid t_k = k T / n: round(j n / (S - 1)),
  * halves rounded up, in integers. */
@@ -141,16 +136,6 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
              info.message);
   else
     snprintf(r->message, sizeof r->message, "%s", info.message);
-}
-
-double sw_max_error(const double *traj, const double *ref, long count) {
-  double e = 0;
-  for (long j = 0; j < count; j++) {
-    double d = fabs(traj[j] - ref[j]);
-    if (isnan(d)) return NAN;
-    if (d > e) e = d;
-  }
-  return e;
 }
 
 /* Richardson: x_ref = 2 x(2 n_ref) - x(n_ref), both exact-projection

@@ -1,0 +1,20 @@
+/* sweep_run — one job of a sweep (sweep.h): a task, or a variant's
+ * reference, run by the integrator on the variant's scene and sampled at
+ * the common times. Internal to catchup-sweep and the tests. */
+#ifndef CUP_SWEEP_RUN_H
+#define CUP_SWEEP_RUN_H
+
+#include "sweep.h"
+
+typedef struct sw_run_opts {
+  const volatile int *interrupt;  /* the integrator's interrupt flag (signals) */
+  cup_step_fn on_step;            /* e.g. polling for a stop message; may be NULL */
+  void *step_ctx;
+  double task_time_limit;         /* seconds per task (not references); 0: none */
+  int inject_fail;                /* make this task fail with CUP_ERR_CALLBACK (tests) */
+} sw_run_opts;
+
+/* Run job `job` (a reference or a task); fills r and traj (samples * dim). */
+void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *o, sw_result *r, double *traj);
+
+#endif
