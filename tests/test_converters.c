@@ -1,0 +1,231 @@
+/* The converters and rectifiers of examples/circuits against an exact
+ * solution computed another way: each circuit's topologies written by hand
+ * from its physics, flowed by matrix exponentials between switching times
+ * and events located by bisection (tests/pwl_ref.h, tests/pwl_circuits.h).
+ * The reference itself is checked first against the closed forms: the
+ * ideal CCM buck's mean output D Vin and ripple (Vin - Vout) D Ts / L, the
+ * boost's Vin / (1 - D), the inverting buck-boost's -D Vin / (1 - D), the
+ * DCM buck's conversion ratio 2 / (1 + sqrt(1 + 8 L / (R D^2 Ts))) and the
+ * six-pulse rectifier's 3 sqrt(3) / pi of the peak. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <cmocka.h>
+#include "catchup.h"
+#include "pwl_circuits.h"
+
+#define CIR CUP_EXAMPLES_DIR "/circuits/"
+
+/* ---- the reference against the closed forms ---------------------------------- */
+
+/* min and max of state i over [a, b] on 20001 points. */
+static void range_of(const pr_traj *tr, int i, double a, double b, double *lo, double *hi) {
+  *lo = INFINITY; *hi = -INFINITY;
+  for (int k = 0; k <= 20000; k++) {
+    double x[PR_Y];
+    pr_eval(tr, a + (b - a) * k / 20000, x);
+    *lo = fmin(*lo, x[i]); *hi = fmax(*hi, x[i]);
+  }
+}
+
+static pr_traj solve_example(const char *name, pr_circuit *c, double T) {
+  double y0[PR_Y], Tnet;
+  assert_int_equal(pc_example(name, c, y0, &Tnet), 0);
+  pr_traj tr;
+  assert_int_equal(pr_solve(c, y0, T, &tr), 0);
+  return tr;
+}
+
+/* The buck in CCM over 300 periods (30 times 2 R C): the mean output over
+ * the last period is D Vin (the inductor's mean voltage is 0 and the
+ * switch node is Vin for D Ts, 0 otherwise); the ripple is exactly
+ * (Vin - mean_on v) D Ts / L, which the closed form's (Vin - D Vin) D Ts / L
+ * approximates within D Ts / L times the output's ripple. */
+static void test_ref_buck_ccm(void **state) {
+  (void)state;
+  static pr_circuit c;
+  const double Vin = 12, D = 0.5, Ts = 10e-6, L = 100e-6, T = 300 * Ts, t0 = T - Ts;
+  pr_traj tr = solve_example("buck-ccm", &c, T);
+  const double rv[PR_Y] = {0, 1, 0};
+  double mean = pr_mean(&tr, rv, t0, T), mean_on = pr_mean(&tr, rv, t0, t0 + D * Ts), x0[PR_Y], x1[PR_Y], vlo, vhi;
+  pr_eval(&tr, t0, x0);
+  pr_eval(&tr, t0 + D * Ts, x1);
+  range_of(&tr, 1, t0, T, &vlo, &vhi);
+  double ripple = x1[0] - x0[0], closed = (Vin - D * Vin) * D * Ts / L;
+  print_message("buck CCM: mean %.15g (D Vin %g), ripple %.6g A (closed form %.6g, exact %.6g), v ripple %.3g V, "
+                "%d events\n", mean, D * Vin, ripple, closed, (Vin - mean_on) * D * Ts / L, vhi - vlo, tr.events);
+  assert_true(fabs(mean - D * Vin) <= 1e-10 * Vin);
+  assert_true(fabs(ripple - (Vin - mean_on) * D * Ts / L) <= 1e-10 * ripple);
+  assert_true(fabs(ripple - closed) <= D * Ts / L * (vhi - vlo));
+  assert_int_equal(tr.events, 0);                   /* CCM: the diode follows the gate */
+  pr_free(&tr);
+}
+
+/* The buck in DCM (K = 2 L / (R Ts) = 0.1 < 1 - D) over 1500 periods (37
+ * times 2 R C): the conversion ratio within the output's relative ripple
+ * of the closed form's (which takes the output constant), and an event
+ * (the diode's turn-off) in every period. */
+static void test_ref_buck_dcm(void **state) {
+  (void)state;
+  static pr_circuit c;
+  const double Vin = 12, D = 0.3, Ts = 10e-6, L = 10e-6, R = 20, T = 1500 * Ts;
+  pr_traj tr = solve_example("buck-dcm", &c, T);
+  const double rv[PR_Y] = {0, 1, 0};
+  double M = pr_mean(&tr, rv, T - Ts, T) / Vin, closed = 2 / (1 + sqrt(1 + 8 * L / (R * D * D * Ts))), vlo, vhi;
+  range_of(&tr, 1, T - Ts, T, &vlo, &vhi);
+  print_message("buck DCM: M %.6g (closed form %.6g), v ripple %.3g of %.3g V, %d events\n", M, closed, vhi - vlo,
+                M * Vin, tr.events);
+  assert_true(fabs(M - closed) <= (vhi - vlo) / Vin);
+  assert_true(fabs(M - closed) >= 1e-6);            /* the closed form is not the exact ratio */
+  assert_true(tr.events >= 1400);
+  pr_free(&tr);
+}
+
+/* Boost and inverting buck-boost in CCM over 1000 periods: the inductor's
+ * mean voltage is 0, so the output's mean over the off time is exactly
+ * Vin / (1 - D), resp. -D Vin / (1 - D); the mean over the period is
+ * within the output's ripple of it. */
+static void check_ratio(const char *name, double want) {
+  static pr_circuit c;
+  const double D = 0.5, Ts = 10e-6, T = 1000 * Ts, t0 = T - Ts;
+  pr_traj tr = solve_example(name, &c, T);
+  const double rv[PR_Y] = {0, 1, 0};
+  double mean = pr_mean(&tr, rv, t0, T), mean_off = pr_mean(&tr, rv, t0 + D * Ts, T), vlo, vhi;
+  range_of(&tr, 1, t0, T, &vlo, &vhi);
+  print_message("%s: mean over the off time %.15g, over the period %.8g (closed form %g), ripple %.3g V\n", name,
+                mean_off, mean, want, vhi - vlo);
+  assert_true(fabs(mean_off - want) <= 1e-9 * fabs(want));
+  assert_true(fabs(mean - want) <= vhi - vlo);
+  pr_free(&tr);
+}
+
+static void test_ref_boost(void **state) { (void)state; check_ratio("boost", 5 / (1 - 0.5)); }
+static void test_ref_buckboost(void **state) { (void)state; check_ratio("buckboost", -0.5 * 12 / (1 - 0.5)); }
+
+/* The six-pulse rectifier after 0.3 s (32 times the filter's 1/alpha =
+ * 2 R C): the mean output over the last sixth of the line's period is the
+ * mean of the largest line-to-line voltage, 3 sqrt(3) / pi Vp. */
+static void test_ref_sixpulse(void **state) {
+  (void)state;
+  static pr_circuit c;
+  const double T = 0.3, want = 3 * sqrt(3) / M_PI * 100;
+  pr_traj tr = solve_example("sixpulse", &c, T);
+  const double rv[PR_Y] = {0, 1, 0, 0};
+  double mean = pr_mean(&tr, rv, T - 1.0 / 300, T);
+  print_message("six-pulse: mean %.12g V (3 sqrt(3)/pi Vp = %.12g), %d events\n", mean, want, tr.events);
+  assert_true(fabs(mean - want) <= 1e-8 * want);
+  pr_free(&tr);
+}
+
+/* The flyback's jumps: at each switch-off the primary's current goes to 0
+ * and the secondary's flux L2 i2 + M i1 is kept, so i2 jumps by
+ * (M / L2) i1 (the projection in the inductance metric onto i1 = 0). */
+static void test_ref_flyback_jump(void **state) {
+  (void)state;
+  static pr_circuit c;
+  const double Ts = 10e-6, D = 0.4, T = 10 * Ts, M = 0.999 * 100e-6, L2 = 100e-6;
+  pr_traj tr = solve_example("flyback", &c, T);
+  for (int k = 1; k < 10; k++) {
+    double toff = k * Ts + D * Ts, before[PR_Y], after[PR_Y];
+    pr_eval(&tr, toff * (1 - 1e-12), before);
+    pr_eval(&tr, toff, after);
+    assert_true(before[0] > 0.1);
+    assert_true(fabs(after[0]) <= 1e-12);
+    assert_true(fabs(after[1] - (before[1] + M / L2 * before[0])) <= 1e-6 * fabs(after[1]));
+  }
+  assert_true(tr.jumps >= 10);
+  pr_free(&tr);
+}
+
+/* ---- catchup against the reference -------------------------------------------- */
+
+typedef struct { const pr_traj *tr; int n; double err, xmax, t_worst; } run_ctx;
+
+static int sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  run_ctx *c = vp;
+  double ref[PR_Y], left[PR_Y], dr = 0, dl = 0;
+  pr_eval(c->tr, t, ref);                        /* at a jump's time either side is the state */
+  pr_eval_left(c->tr, t, left);
+  for (int i = 0; i < c->n; i++) {
+    dr = fmax(dr, fabs(x[i] - ref[i]));
+    dl = fmax(dl, fabs(x[i] - left[i]));
+    c->xmax = fmax(c->xmax, fmax(fabs(ref[i]), fabs(left[i])));
+  }
+  if (fmin(dr, dl) > c->err) c->t_worst = t;
+  c->err = fmax(c->err, fmin(dr, dl));
+  return 0;
+}
+
+/* The netlist under the adaptive scheme at tol = 1e-4 ... 1e-10 (T its
+ * TSTOP, 2001 samples) against the reference: within 10 tol (1 + max |x|). */
+static void check_adaptive(const char *name) {
+  static pr_circuit c;
+  char err[CUP_ERRMSG_LEN], file[512];
+  snprintf(file, sizeof file, CIR "%s.cir", name);
+  cup_netlist *nl = NULL;
+  if (cup_netlist_load(&nl, file, NULL, 0, err)) fail_msg("%s", err);
+  double tstep, T, y0[PR_Y], Tref;
+  assert_true(cup_netlist_tran(nl, &tstep, &T));
+  assert_int_equal(pc_example(name, &c, y0, &Tref), 0);
+  assert_true(fabs(T - Tref) <= 1e-12 * T);
+  assert_int_equal(cup_lcs_dim(cup_netlist_lcs(nl)), c.n);
+  pr_traj tr;
+  assert_int_equal(pr_solve(&c, y0, T, &tr), 0);
+  for (double tol = 1e-4; tol >= 0.99e-10; tol *= 1e-2) {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_ADAPTIVE;
+    o.T = T;
+    o.tol_abs = o.tol_rel = tol;
+    o.output = CUP_OUTPUT_SAMPLES;
+    o.output_samples = 2001;
+    cup_integrator *I = NULL;
+    cup_switching sw;
+    int st = cup_netlist_switching(nl, &sw)
+                 ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)
+                 : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err);
+    if (st) fail_msg("%s: %s", name, err);
+    run_ctx rc = {&tr, c.n, 0, 0, 0};
+    cup_run_info info;
+    st = cup_integrator_run(I, cup_netlist_x0(nl), sink, &rc, &info);
+    if (st != CUP_OK) fail_msg("%s tol %g: %s: %s", name, tol, cup_status_name(st), info.message);
+    double target = tol * (1 + rc.xmax);
+    print_message("%-20s tol %.0e: error %.3e (%.2f tol, at t = %.6g), %ld steps, %ld events; reference %d pieces\n",
+                  name, tol, rc.err, rc.err / target, rc.t_worst, info.step, info.events, tr.nseg);
+    assert_true(rc.err <= 10 * target);
+    cup_integrator_free(&I);
+  }
+  pr_free(&tr);
+  cup_netlist_free(&nl);
+}
+
+static void test_buck_ccm(void **state) { (void)state; check_adaptive("buck-ccm"); }
+static void test_buck_dcm(void **state) { (void)state; check_adaptive("buck-dcm"); }
+static void test_boost(void **state) { (void)state; check_adaptive("boost"); }
+static void test_buckboost(void **state) { (void)state; check_adaptive("buckboost"); }
+static void test_flyback(void **state) { (void)state; check_adaptive("flyback"); }
+static void test_fullbridge(void **state) { (void)state; check_adaptive("fullbridge"); }
+static void test_sixpulse(void **state) { (void)state; check_adaptive("sixpulse"); }
+static void test_precision_rectifier(void **state) { (void)state; check_adaptive("precision-rectifier"); }
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+    cmocka_unit_test(test_ref_buck_ccm),
+    cmocka_unit_test(test_ref_buck_dcm),
+    cmocka_unit_test(test_ref_boost),
+    cmocka_unit_test(test_ref_buckboost),
+    cmocka_unit_test(test_ref_sixpulse),
+    cmocka_unit_test(test_ref_flyback_jump),
+    cmocka_unit_test(test_buck_ccm),
+    cmocka_unit_test(test_buck_dcm),
+    cmocka_unit_test(test_boost),
+    cmocka_unit_test(test_buckboost),
+    cmocka_unit_test(test_flyback),
+    cmocka_unit_test(test_fullbridge),
+    cmocka_unit_test(test_sixpulse),
+    cmocka_unit_test(test_precision_rectifier),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
