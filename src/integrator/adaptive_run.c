@@ -752,7 +752,7 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
   A->tend = tb;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
-  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = wall_now(),
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds(),
               .t = ta, .steps = *steps, .next_sample = *next_sample};
   cup_copy(A->x, xa, A->n);
   cup_copy(A->xok, xa, A->n);
