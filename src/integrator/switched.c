@@ -169,6 +169,15 @@ static int locate(cup_swrun *S, int topo, double *t, long *steps, long *next_sam
   return st;
 }
 
+/* x0 moved by the jump into the configuration at t = 0: a warning. */
+static void x0_moved(const cup_swrun *S, const double *x0, cup_run_info *info) {
+  if (!memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) return;
+  info->status = CUP_WARN_X0_OUTSIDE;
+  snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
+           "t = 0 (a loop of capacitors or a cut of inductors): it is projected onto them, and the first "
+           "sample is the projection");
+}
+
 /* The fixed-step schemes: each configuration's integrator on the run's
  * grid (all have the same T and n), a window from t_k to the first grid
  * time at or after the next source-gated switching time, or one step when
@@ -230,22 +239,12 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
   long steps = 0, next_sample = 0;
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
     sw->jump(sw->ctx, topo, S->x);
-    if (memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) {
-      info->status = CUP_WARN_X0_OUTSIDE;
-      snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
-               "t = 0 (a loop of capacitors or a cut of inductors): it is projected onto them, and the first "
-               "sample is the projection");
-    }
+    x0_moved(S, x0, info);
     return fixed_run(S, 0, topo, info);
   }
   for (int first = 1; st >= 0 && t < T; first = 0) {
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
-    if (first && memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) {
-      info->status = CUP_WARN_X0_OUTSIDE;
-      snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
-               "t = 0 (a loop of capacitors or a cut of inductors): it is projected onto them, and the first "
-               "sample is the projection");
-    }
+    if (first) x0_moved(S, x0, info);
     st = child_of(S, topo, info->message);
     if (st) break;
     S->cur = topo;

@@ -429,6 +429,15 @@ static int rename_rows(cup_netlist *sub, const red *r) {
 
 /* ---- configurations ---------------------------------------------------------------- */
 
+/* 1 if switch k's control in configuration tp depends on the state or the diodes. */
+static int gated_by_state(const nl_topo *tp, int k) {
+  int n = tp->sub->n, p = tp->sub->p, nv = n + p + tp->sub->m;
+  const double *row = tp->ctl + (size_t)k * nv;
+  for (int j = 0; j < nv; j++)
+    if (row[j] != 0 && (j < n || j >= n + p)) return 1;
+  return 0;
+}
+
 /* Configuration cfg formulated into topo (its netlist, LCS, jump, controls). */
 static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, char *errmsg) {
   const nl_circuit *c = &S->c;
@@ -455,12 +464,17 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
     double *row = tp->ctl + (size_t)k * nv;
     st = el->kind == NL_S ? nl_signal_row(sub, 'v', el->ca, el->cb, row) : nl_signal_row(sub, 'i', el->ctrl, -1, row);
     if (st) st = nomem(c, errmsg);
-    for (int j = 0; !st && j < nv; j++)
-      if (row[j] != 0 && (j < sub->n || j >= sub->n + sub->p)) tp->state_gated = 1;
   }
+  tp->sub = sub;                                   /* (gated_by_state reads it) */
+  for (int k = 0; !st && k < S->nsw; k++) tp->state_gated |= gated_by_state(tp, k);
   red_free(&r);
   derived_free(c, &d);
-  if (st) { cup_netlist_free(&sub); free(tp->Pi); free(tp->ctl); tp->Pi = NULL; tp->ctl = NULL; return st; }
+  if (st) {
+    cup_netlist_free(&sub);
+    free(tp->Pi); free(tp->ctl);
+    tp->sub = NULL; tp->Pi = NULL; tp->ctl = NULL;
+    return st;
+  }
   S->formed++;
   *subp = sub;
   return CUP_OK;
@@ -550,22 +564,13 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
                  "hysteresis)", t);
 }
 
-/* 1 if switch k's control in configuration tp depends on the state or the diodes. */
-static int gated_by_state(const nl_switched *S, const nl_topo *tp, int k) {
-  int n = tp->sub->n, p = tp->sub->p, nv = n + p + tp->sub->m;
-  const double *row = tp->ctl + (size_t)k * nv;
-  for (int j = 0; j < nv; j++)
-    if (row[j] != 0 && (j < n || j >= n + p)) return 1;
-  (void)S;
-  return 0;
-}
 
 /* 1 if, from configuration tp, a switch of one kind (by_state: those the
  * circuit gates, else those the sources alone gate) changes at s, state x. */
 static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
   if (controls(S, tp, s, x, NULL, cv)) return -1;
   for (int k = 0; k < S->nsw; k++)
-    if (gated_by_state(S, tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
+    if (gated_by_state(tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
   return rule(S, tp->cfg, cv) != tp->cfg;
 }
 
