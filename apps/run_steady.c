@@ -304,7 +304,7 @@ int run_steady_write(run_steady *s, cup_h5run *w, const cup_scene *scene, int ru
     st = cup_status_merge(st, array(w, "steady_state/multipliers_im", 1, n, 0, im, "1",
                                     "Floquet multipliers, imaginary part", NULL));
     st = cup_status_merge(st, array(w, "steady_state/monodromy", 2, n, n, J, "1",
-                                    "monodromy matrix dPhi/dx0 (finite differences of the period map)", NULL));
+                                    "monodromy matrix dPhi/dx0 (the adaptive tangent with D = 0, else finite differences)", NULL));
   }
   free(re); free(im); free(J);
   if (!st && s->solved && run_status >= 0 && s->k == s->N) {

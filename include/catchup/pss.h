@@ -6,7 +6,9 @@
  * period (the adaptive scheme at a tight tolerance by default, a fixed-step
  * scheme when asked). The steady state is the x0 with Phi(x0) = x0, found by
  * Newton's method on Phi(x) - x; the Jacobian of Phi (the monodromy matrix)
- * is taken by finite differences of the period map (n more runs a Newton
+ * is the adaptive scheme's tangent of its run with D = 0 (the flows of the
+ * active sets and the saltation projections at events: exact, no extra
+ * run) or, with D != 0 and for the other schemes, finite differences of the period map (n more runs a Newton
  * step), and its eigenvalues are the Floquet multipliers: all inside the
  * unit circle, the orbit attracts (a transient settles on it, the slowest
  * mode by the largest modulus a period); one on or outside it, the orbit is
@@ -41,7 +43,14 @@ typedef struct cup_pss_options {
   int warmup_periods;     /**< transient periods from x_guess before Newton; default 0 */
   long samples;           /**< cup_pss_solve: one period of the steady state at this many
                                uniform samples (>= 2), or 0: none; default 0 */
+  int jacobian;           /**< the monodromy: CUP_PSS_JACOBIAN_AUTO (default) exact where the scheme
+                               carries the map's tangent (the adaptive scheme with D = 0: flows and
+                               saltation projections, no extra run), else finite differences;
+                               CUP_PSS_JACOBIAN_FD finite differences always */
 } cup_pss_options;
+
+/** cup_pss_options.jacobian */
+enum { CUP_PSS_JACOBIAN_AUTO = 0, CUP_PSS_JACOBIAN_FD = 1 };
 
 /** What a solve did (the arrays: cup_pss_x0, _residuals, _multipliers, ...). */
 typedef struct cup_pss_info {

@@ -18,6 +18,7 @@
 #include <gsl/gsl_linalg.h>
 #include "catchup.h"
 #include "catchup/pss.h"
+#include "integrator/integrator_impl.h"
 #include "util/fail.h"
 
 /* A multiplier this close to 1 (relative) leaves Phi(x) - x singular. */
@@ -39,6 +40,8 @@ struct cup_pss {
 typedef struct pss_work {
   cup_pss *r;
   cup_integrator *I;
+  cup_adaptive *tan;        /* the adaptive scheme carrying the map's tangent (exact monodromy), or NULL */
+  cup_adaptive *ad;         /* ... the same while a step falls back to finite differences */
   const cup_pss_options *o;
   int n;
   double *x, *F, *xt, *Ft, *dx, *col;
@@ -102,7 +105,9 @@ static int jacobian(pss_work *w, const double *x, const double *F) {
   cup_pss *r = w->r;
   int n = w->n;
   double scale = fmax(inf_norm(x, n), inf_norm(F, n));
-  for (int j = 0; j < n; j++) {
+  if (w->tan)                                    /* the last run was from x: its tangent is the monodromy */
+    memcpy(r->J, cup_adaptive_tangent_matrix(w->tan), sizeof(double) * (size_t)n * (size_t)n);
+  for (int j = 0; !w->tan && j < n; j++) {
     double d = w->o->fd_step * fmax(fmax(fabs(x[j]), fabs(F[j])), scale);
     if (!(d > 0)) d = w->o->fd_step;
     int st = CUP_OK;
@@ -196,20 +201,32 @@ static void residual_list(const cup_pss *r, char *buf, size_t size) {
     len += (size_t)snprintf(buf + len, size - len, "%s%.3g", k > k0 ? ", " : k0 ? "..., " : "", r->res[k]);
 }
 
-/* One Newton step from (x, F) with step halvings; when none lowers the
- * residual, one transient period (x <- F), which a stable orbit contracts. */
+/* One Newton step from (x, F) with step halvings (an iterate the map
+ * cannot run from, an inconsistent state the integrator refuses, counts as
+ * no descent); when none lowers the residual, one transient period
+ * (x <- F), which a stable orbit contracts. */
 static int advance(pss_work *w) {
   cup_pss *r = w->r;
   int n = w->n, k = r->info.iterations, st;
   double rt = INFINITY, lam = 1;
   for (int h = 0; h <= PSS_HALVINGS; h++, lam *= 0.5) {
     for (int i = 0; i < n; i++) w->xt[i] = w->x[i] + lam * w->dx[i];
-    if ((st = phi(w, w->xt, w->Ft, "a Newton iterate")) < 0) return st;
+    rt = INFINITY;
+    if ((st = phi(w, w->xt, w->Ft, "a Newton iterate")) < 0) {
+      r->info.status = CUP_OK;
+      r->info.message[0] = '\0';
+      continue;
+    }
     rt = 0;
     for (int i = 0; i < n; i++) rt = fmax(rt, fabs(w->Ft[i] - w->xt[i]));
     if (rt < r->res[k]) break;
   }
-  if (!(rt < r->res[k])) {
+  int descended = rt < r->res[k];
+  if (!descended && w->tan) {                    /* the exact step did not descend: finite differences from here */
+    w->tan = NULL;
+    return 1;
+  }
+  if (!descended) {
     memcpy(w->xt, w->F, sizeof(double) * (size_t)n);
     if ((st = phi(w, w->xt, w->Ft, "a transient period")) < 0) return st;
     rt = 0;
@@ -256,6 +273,13 @@ static int newton(pss_work *w, const double *x_guess) {
     if ((st = jacobian(w, w->x, w->F)) < 0) return st;
     if ((st = newton_step(w, w->x, w->F)) < 0) return st;
     if ((st = advance(w)) < 0) return st;
+    if (st == 1) {                               /* again from x with the differences' Jacobian, once */
+      if ((st = phi(w, w->x, w->F, "the iterate again")) < 0) return st;
+      if ((st = jacobian(w, w->x, w->F)) < 0) return st;
+      if ((st = newton_step(w, w->x, w->F)) < 0) return st;
+      if ((st = advance(w)) < 0) return st;
+      w->tan = w->ad;                            /* the next step exact again (every run carries the tangent) */
+    }
   }
   memcpy(r->x0, w->x, sizeof(double) * (size_t)n);
   /* the monodromy at the orbit itself (the last one was one step before) */
@@ -303,6 +327,9 @@ static int check_options(const cup_pss_options *o, char *errmsg) {
                     o->tol_floor);
   if (!(o->fd_step > 0) || !(o->fd_step < 1))
     return cup_fail(errmsg, CUP_ERR_ARG, "steady state: fd_step = %g must be in (0, 1)", o->fd_step);
+  if (o->jacobian != CUP_PSS_JACOBIAN_AUTO && o->jacobian != CUP_PSS_JACOBIAN_FD)
+    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: jacobian = %d must be CUP_PSS_JACOBIAN_AUTO or _FD",
+                    o->jacobian);
   if (!(o->map_tol >= 0) || !isfinite(o->map_tol))
     return cup_fail(errmsg, CUP_ERR_ARG, "steady state: map_tol = %g must be finite and >= 0", o->map_tol);
   if (o->warmup_periods < 0 || o->samples < 0 || o->samples == 1)
@@ -340,7 +367,20 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
   w.b = gsl_vector_view_array(w.col, N);         /* the right-hand side (col is free between Jacobians) */
   w.s = gsl_vector_view_array(w.dx, N);
   w.r->info.period = period;
+  int ts = o->jacobian == CUP_PSS_JACOBIAN_AUTO && I->ad ? cup_adaptive_tangent(I->ad, 1) : CUP_ERR_UNSUPPORTED;
+  if (ts != CUP_ERR_UNSUPPORTED) {               /* D != 0: finite differences */
+    if (ts) {
+      cup_pss_free(&w.r);
+      free(buf);
+      gsl_matrix_free(w.JI);
+      gsl_permutation_free(w.perm);
+      return cup_fail(errmsg, CUP_ERR_NOMEM, "steady state: out of memory");
+    }
+    w.tan = w.ad = I->ad;
+  }
+  int tangent_on = w.tan != NULL;
   newton(&w, x_guess);
+  if (tangent_on) cup_adaptive_tangent(I->ad, 0);
   w.r->info.seconds = now_s() - t0;
   free(buf);
   gsl_matrix_free(w.JI);

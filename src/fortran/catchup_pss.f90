@@ -29,6 +29,7 @@ module catchup_pss
     real(c_double) :: fd_step = 1e-6_c_double
     integer(c_int) :: warmup_periods = 0
     integer(c_long) :: samples = 0
+    integer(c_int) :: jacobian = 0      !< CUP_PSS_JACOBIAN_AUTO (exact where it can) or _FD
   end type cup_pss_options
 
   !> cup_pss_info (pss.h); the message by cup_pss_info_message(info)

@@ -93,6 +93,10 @@ int main(int argc, char **argv) {
   fprintf(f, "\n  ! enum cup_set_kind (set.h, CUP_SET_LIST)\n");
   CUP_SET_LIST(CONST4_)
   CONST(f, CUP_SET_COUNT);
+  fprintf(f, "\n  ! cup_pss_options%%jacobian (pss.h)\n");
+  CONST(f, CUP_PSS_JACOBIAN_AUTO);
+  CONST(f, CUP_PSS_JACOBIAN_FD);
+  CONST(f, CUP_PSS_MAX_ITER);
 #undef CONST4_
 #undef CONST5_
 

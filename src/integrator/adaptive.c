@@ -293,8 +293,22 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
   free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
   free(A->pend.zy); free(A->pend.de); free(A->pend.y2); free(A->pend.e2);
+  free(A->tan);
   free(A);
   *Ap = NULL;
 }
 
 const double *cup_adaptive_state(const cup_adaptive *A) { return A ? A->x : NULL; }
+
+int cup_adaptive_tangent(cup_adaptive *A, int on) {
+  if (on && A->has_D) return CUP_ERR_UNSUPPORTED;
+  if (!on) {
+    free(A->tan);
+    A->tan = NULL;
+    return CUP_OK;
+  }
+  if (!A->tan && !(A->tan = calloc((size_t)A->n * (size_t)A->n + 1, sizeof(double)))) return CUP_ERR_NOMEM;
+  return CUP_OK;
+}
+
+const double *cup_adaptive_tangent_matrix(const cup_adaptive *A) { return A->tan; }

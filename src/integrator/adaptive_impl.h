@@ -166,6 +166,8 @@ struct cup_adaptive {
   int zy_ready;             /* a sample inside a step: zy is its y already */
   double *xo, *dy, *de, *de2, *ed; /* n, na, na, na, n: a sample inside a step (dense output), its error */
   ad_stop stop;             /* where the last run stopped */
+  double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
+                               carried through the error estimate's linear maps (adaptive.h) */
   /* a sample inside a step that the sink refused: the step goes on to its
    * end without offering more, and the run stops there (AD_STOP_DENSE);
    * the samples from it on are offered again by the resumed run, from the

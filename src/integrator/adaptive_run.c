@@ -223,16 +223,26 @@ static void error_onto(cup_adaptive *A, uint64_t mask, double *e) {
   if (!mask) return;
   ad_mode *md = ad_mode_get(A, mask);
   ad_manifold(A, md, A->zero, e);
+  for (int j = 0; A->tan && j < A->n; j++) ad_manifold(A, md, A->zero, A->tan + (size_t)j * A->n);   /* as e */
 }
 
-/* e <- its propagation by the exact flow of md over tau (w = 0: the
+/* v <- its propagation by the exact flow of md over tau (w = 0: the
  * homogeneous part). */
+static void flow_vector(cup_adaptive *A, ad_mode *md, double tau, double *v) {
+  cup_zero(A->yr, A->na);
+  cup_copy(A->yr, v, A->n);
+  ad_flow(A, md, tau, A->yr, A->yt);
+  cup_copy(v, A->yt, A->n);
+}
+
 static void error_flow(cup_adaptive *A, ad_mode *md, double tau) {
   if (!(tau > 0)) return;
-  cup_zero(A->yr, A->na);
-  cup_copy(A->yr, A->e, A->n);
-  ad_flow(A, md, tau, A->yr, A->yt);
-  cup_copy(A->e, A->yt, A->n);
+  flow_vector(A, md, tau, A->e);
+}
+
+/* The tangent's columns (cup_adaptive_tangent) over tau on md. */
+static void tangent_flow(cup_adaptive *A, ad_mode *md, double tau) {
+  for (int j = 0; A->tan && tau > 0 && j < A->n; j++) flow_vector(A, md, tau, A->tan + (size_t)j * A->n);
 }
 
 static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, double t) {
@@ -493,6 +503,12 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   error_flow(A, old, ev->tau_sw);
+  if (A->tan) {   /* the tangent: the old flow to the root, its saltation (the new manifold's projection), the new flow */
+    double tr = fmin(fmax(tau_rep, 0), ev->tau_sw);
+    tangent_flow(A, old, tr);
+    for (int j = 0; j < n; j++) ad_manifold(A, nm, A->zero, A->tan + (size_t)j * n);
+    tangent_flow(A, nm, ev->tau_sw - tr);
+  }
   A->pinned[0] = R->md = nm;
   A->pinned[1] = NULL;
   error_onto(A, nm->mask, A->e);
@@ -546,6 +562,15 @@ static int take_step(cup_adaptive *A, ad_run *R) {
     A->et[i] = acc;
   }
   cup_copy(A->e, A->et, n);
+  for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
+    double *v = A->tan + (size_t)c * n;
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * v[j];
+      A->et[i] = acc;
+    }
+    cup_copy(v, A->et, n);
+  }
   R->t = t1;
   return end_of_step(A, R, &pi, 0);
 }
@@ -625,6 +650,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
     for (int i = 0; i < n; i++) moved = fmax(moved, fabs(A->x[i] - A->xf[i]));
     R->rloc += 0.5 * moved;                      /* a catching-up step's error is below its move */
     error_flow(A, md0, t1 - R->t);
+    tangent_flow(A, md0, t1 - R->t);
     error_onto(A, active, A->e);
     R->t = t1;
     at_tb = R->t == R->tb;
@@ -676,6 +702,8 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   cup_copy(A->x, x0, A->n);
   cup_copy(A->xok, x0, A->n);
   cup_zero(A->e, A->n);
+  for (int j = 0; A->tan && j < A->n; j++)       /* V(0) = I */
+    for (int i = 0; i < A->n; i++) A->tan[i + (size_t)j * A->n] = i == j;
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
   cup_lcp_forget(&A->lcp);
