@@ -26,13 +26,13 @@ static inline void pc_row(double *r, int ny, ...) {
   va_end(ap);
 }
 
-/* A new mode of gate configuration gate, with the exosystem's rows: the
- * constant at index one (if >= 0) and (sin, cos) at sin_at (if >= 0). */
-static inline pr_mode *pc_mode(pr_circuit *c, int gate, int one, int sin_at, double w) {
+/* A new mode of gate configuration gate (-1: every one), with the
+ * exosystem's rows: (sin, cos) at sin_at if >= 0 (a constant's row, 1' = 0,
+ * stays zero). */
+static inline pr_mode *pc_mode(pr_circuit *c, int gate, int sin_at, double w) {
   pr_mode *m = &c->mode[c->nmodes++];
   memset(m, 0, sizeof *m);
   m->gate = gate;
-  (void)one;                                     /* 1' = 0: its row stays zero */
   if (sin_at >= 0) { m->M[sin_at][sin_at + 1] = w; m->M[sin_at + 1][sin_at] = -w; }
   return m;
 }
@@ -58,15 +58,15 @@ static inline void pc_buck(pr_circuit *c, double Vin, double L, double C, double
   memset(c, 0, sizeof *c);
   c->n = 2; c->ny = 3; c->hsub = Ts / 20;
   pc_gate(c, 0, D * Ts, Ts);
-  pr_mode *m = pc_mode(c, 1, 2, -1, 0);
+  pr_mode *m = pc_mode(c, 1, -1, 0);
   pc_row(m->M[0], 3, 0.0, -1 / L, Vin / L);
   pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, 0.0, Vin);             /* D1 reverse: v(sw) = Vin */
-  m = pc_mode(c, 0, 2, -1, 0);
+  m = pc_mode(c, 0, -1, 0);
   pc_row(m->M[0], 3, 0.0, -1 / L, 0.0);
   pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 1.0, 0.0, 0.0);             /* D1's current i */
-  m = pc_mode(c, 0, 2, -1, 0);
+  m = pc_mode(c, 0, -1, 0);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   pc_zero(c, m, 0, -1);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, 1.0, 0.0);             /* D1 reverse: v(sw) = v */
@@ -79,15 +79,15 @@ static inline void pc_boost(pr_circuit *c, double Vin, double L, double C, doubl
   memset(c, 0, sizeof *c);
   c->n = 2; c->ny = 3; c->hsub = Ts / 20;
   pc_gate(c, 0, D * Ts, Ts);
-  pr_mode *m = pc_mode(c, 1, 2, -1, 0);
+  pr_mode *m = pc_mode(c, 1, -1, 0);
   pc_row(m->M[0], 3, 0.0, 0.0, Vin / L);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, 1.0, 0.0);
-  m = pc_mode(c, 0, 2, -1, 0);
+  m = pc_mode(c, 0, -1, 0);
   pc_row(m->M[0], 3, 0.0, -1 / L, Vin / L);
   pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 1.0, 0.0, 0.0);
-  m = pc_mode(c, 0, 2, -1, 0);
+  m = pc_mode(c, 0, -1, 0);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   pc_zero(c, m, 0, -1);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, 1.0, -Vin);
@@ -102,15 +102,15 @@ static inline void pc_buckboost(pr_circuit *c, double Vin, double L, double C, d
   memset(c, 0, sizeof *c);
   c->n = 2; c->ny = 3; c->hsub = Ts / 20;
   pc_gate(c, 0, D * Ts, Ts);
-  pr_mode *m = pc_mode(c, 1, 2, -1, 0);
+  pr_mode *m = pc_mode(c, 1, -1, 0);
   pc_row(m->M[0], 3, 0.0, 0.0, Vin / L);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, -1.0, Vin);
-  m = pc_mode(c, 0, 2, -1, 0);
+  m = pc_mode(c, 0, -1, 0);
   pc_row(m->M[0], 3, 0.0, 1 / L, 0.0);
   pc_row(m->M[1], 3, -1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 1.0, 0.0, 0.0);
-  m = pc_mode(c, 0, 2, -1, 0);
+  m = pc_mode(c, 0, -1, 0);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   pc_zero(c, m, 0, -1);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, -1.0, 0.0);
@@ -132,13 +132,13 @@ static inline void pc_flyback(pr_circuit *c, double Vin, double L1, double L2, d
   c->n = 3; c->ny = 4; c->hsub = Ts / 20;
   pc_gate(c, 0, D * Ts, Ts);
   double M = k * sqrt(L1 * L2), det = L1 * L2 - M * M;
-  pr_mode *m = pc_mode(c, 1, 3, -1, 0);                      /* on, D1 on */
+  pr_mode *m = pc_mode(c, 1, -1, 0);                      /* on, D1 on */
   /* (i1', i2') = [L2 -M; -M L1] (Vin, -v) / det */
   pc_row(m->M[0], 4, 0.0, 0.0, M / det, L2 * Vin / det);
   pc_row(m->M[1], 4, 0.0, 0.0, -L1 / det, -M * Vin / det);
   pc_row(m->M[2], 4, 0.0, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 4, 0.0, 1.0, 0.0, 0.0);
-  m = pc_mode(c, 1, 3, -1, 0);                               /* on, D1 off */
+  m = pc_mode(c, 1, -1, 0);                               /* on, D1 off */
   pc_row(m->M[0], 4, 0.0, 0.0, 0.0, Vin / L1);
   pc_row(m->M[2], 4, 0.0, 0.0, -1 / (R * C), 0.0);
   m->jump = 1;
@@ -146,7 +146,7 @@ static inline void pc_flyback(pr_circuit *c, double Vin, double L1, double L2, d
   pc_row(m->J[2], 4, 0.0, 0.0, 1.0, 0.0);
   pc_row(m->J[3], 4, 0.0, 0.0, 0.0, 1.0);
   m->ng = 1; pc_row(m->g[0], 4, 0.0, 0.0, 1.0, M / L1 * Vin);
-  m = pc_mode(c, 0, 3, -1, 0);                               /* off, D1 on */
+  m = pc_mode(c, 0, -1, 0);                               /* off, D1 on */
   pc_row(m->M[1], 4, 0.0, 0.0, -1 / L2, 0.0);
   pc_row(m->M[2], 4, 0.0, 1 / C, -1 / (R * C), 0.0);
   m->jump = 1;
@@ -154,7 +154,7 @@ static inline void pc_flyback(pr_circuit *c, double Vin, double L1, double L2, d
   pc_row(m->J[2], 4, 0.0, 0.0, 1.0, 0.0);
   pc_row(m->J[3], 4, 0.0, 0.0, 0.0, 1.0);
   m->ng = 1; pc_row(m->g[0], 4, 0.0, 1.0, 0.0, 0.0);
-  m = pc_mode(c, 0, 3, -1, 0);                               /* off, D1 off */
+  m = pc_mode(c, 0, -1, 0);                               /* off, D1 off */
   pc_row(m->M[2], 4, 0.0, 0.0, -1 / (R * C), 0.0);
   pc_zero(c, m, 0, 1);
   m->ng = 1; pc_row(m->g[0], 4, 0.0, 0.0, 1.0, 0.0);
@@ -189,7 +189,7 @@ static inline void pc_fullbridge(pr_circuit *c, double Vdc, double L, double C, 
         /* v(a) - v(b) as an affine row: va = Vdc on top or (dead and i < 0) */
         double va = la == 0 ? Vdc : la == 1 ? 0 : (s < 0 ? Vdc : 0);
         double vb = lb == 0 ? Vdc : lb == 1 ? 0 : (s < 0 ? 0 : Vdc);
-        pr_mode *m = pc_mode(c, mask, 2, -1, 0);
+        pr_mode *m = pc_mode(c, mask, -1, 0);
         pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
         if (s != 0) {
           pc_row(m->M[0], 3, 0.0, -1 / L, (va - vb) / L);
@@ -237,7 +237,7 @@ static inline void pc_sixpulse(pr_circuit *c, double Vp, double f, double L, dou
   for (int j = 0; j < 3; j++)
     for (int k = 0; k < 3; k++) {
       if (j == k) continue;
-      pr_mode *m = pc_mode(c, -1, -1, 2, w);
+      pr_mode *m = pc_mode(c, -1, 2, w);
       pc_row(m->M[0], 4, 0.0, -1 / L, (ph[j][0] - ph[k][0]) / L, (ph[j][1] - ph[k][1]) / L);
       pc_row(m->M[1], 4, 1 / C, -1 / (R * C), 0.0, 0.0);
       m->ng = 1;
@@ -247,7 +247,7 @@ static inline void pc_sixpulse(pr_circuit *c, double Vp, double f, double L, dou
         if (q != k) pc_row(m->g[m->ng++], 4, 0.0, 0.0, ph[q][0] - ph[k][0], ph[q][1] - ph[k][1]);
       }
     }
-  pr_mode *m = pc_mode(c, -1, -1, 2, w);
+  pr_mode *m = pc_mode(c, -1, 2, w);
   pc_row(m->M[1], 4, 0.0, -1 / (R * C), 0.0, 0.0);
   pc_zero(c, m, 0, -1);
   for (int j = 0; j < 3; j++)
@@ -271,12 +271,12 @@ static inline void pc_precision(pr_circuit *c, double Vp, double f, double R1, d
   memset(c, 0, sizeof *c);
   c->n = 1; c->ny = 3; c->hsub = 1 / (f * 2000);
   double w = 2 * M_PI * f, den = R1 + R2 + A * R1, kg = A * R2 / den, kin = R2 / den;
-  pr_mode *m = pc_mode(c, -1, -1, 1, w);         /* D2 on, D1 off */
+  pr_mode *m = pc_mode(c, -1, 1, w);         /* D2 on, D1 off */
   pc_row(m->M[0], 3, -1 / (Rf * C) - 1 / (RL * C), -kg * Vp / (Rf * C), 0.0);
   m->ng = 2;
   pc_row(m->g[0], 3, -1 / Rf, (-kg - kin) * Vp / R2 - kg * Vp / Rf, 0.0);
   pc_row(m->g[1], 3, 0.0, (-kg - kin) * Vp, 0.0);
-  m = pc_mode(c, -1, -1, 1, w);                  /* D1 on, D2 off */
+  m = pc_mode(c, -1, 1, w);                  /* D1 on, D2 off */
   pc_row(m->M[0], 3, -1 / ((R2 + Rf) * C) - 1 / (RL * C), 0.0, 0.0);
   m->ng = 2;
   pc_row(m->g[0], 3, 1 / (R2 + Rf), Vp / R1, 0.0);
@@ -285,7 +285,7 @@ static inline void pc_precision(pr_circuit *c, double Vp, double f, double R1, d
   double G11 = 1 / R1 + 1 / R2, G12 = -1 / R2, G22 = 1 / R2 + 1 / Rf, det = G11 * G22 - G12 * G12;
   double inm_v = -G12 / Rf / det, inm_s = G22 * Vp / R1 / det;      /* inm = inm_v v + inm_s sin */
   double vo_v = G11 / Rf / det, vo_s = -G12 * Vp / R1 / det;
-  m = pc_mode(c, -1, -1, 1, w);
+  m = pc_mode(c, -1, 1, w);
   pc_row(m->M[0], 3, (vo_v - 1) / (Rf * C) - 1 / (RL * C), vo_s / (Rf * C), 0.0);
   m->ng = 2;
   pc_row(m->g[0], 3, -(A + 1) * inm_v, -(A + 1) * inm_s, 0.0);

@@ -193,8 +193,9 @@ static inline int pr_solve(const pr_circuit *c, const double *y0, double T, pr_t
       memcpy(before, y, sizeof before);
       mode = pr_choose(c, gc, y);
       if (mode < 0) return -1;
+      double scale = pr_scale(c->n, before);      /* a jump moves a state beyond its rounding */
       for (int i = 0; i < c->n; i++)
-        if (y[i] != before[i]) { tr->jumps++; break; }
+        if (fabs(y[i] - before[i]) > 1e-9 * scale) { tr->jumps++; break; }
     }
     double g0[PR_G], t_event = -1, ta = t;
     for (int q = 0; q < c->mode[mode].ng; q++) g0[q] = pr_dot(ny, c->mode[mode].g[q], y);
