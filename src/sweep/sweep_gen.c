@@ -58,6 +58,7 @@ static int value_list(rd *p, const st_node *nd, const char *key, long *len) {
   char k2[KEY_LEN], b[64];
   if (nd->kind == ST_MAP) return fail(p, CUP_ERR_PARSE, nd, key, "expected a value or a list of values (got a mapping)");
   if (nd->kind == ST_SEQ && nd->len == 0) return fail(p, CUP_ERR_PARSE, nd, key, "empty list: give at least one value");
+  if (nd->kind == ST_SCALAR && st_is_null(nd)) return fail(p, CUP_ERR_PARSE, nd, key, "expected a value (got null)");
   *len = nd->kind == ST_SEQ ? nd->len : 1;
   for (int j = 0; nd->kind == ST_SEQ && j < nd->len; j++)
     if (nd->item[j]->kind != ST_SCALAR || st_is_null(nd->item[j]))
