@@ -138,6 +138,32 @@ static void test_ref_flyback_jump(void **state) {
   pr_free(&tr);
 }
 
+/* The full bridge's dead times: a leg with both switches open hands the
+ * filter's current to its anti-parallel diodes (the reference's modes with
+ * a dead leg and i != 0), both ways round over the run: of the 4 us of dead
+ * time per period (two legs, two edges each) nearly all is diode conduction. */
+static void test_ref_fullbridge_dead_time(void **state) {
+  (void)state;
+  static pr_circuit c;
+  const double T = 10e-3;
+  pr_traj tr = solve_example("fullbridge", &c, T);
+  double pos = 0, neg = 0, dead = 0;
+  for (int k = 0; k < tr.nseg; k++) {
+    const pr_mode *m = &c.mode[tr.seg[k].mode];
+    double d = tr.seg[k].t1 - tr.seg[k].t0, y[PR_Y];
+    if ((m->gate & 3) && (m->gate & 12)) continue;           /* both legs driven */
+    dead += d;
+    if (m->ng != 1) continue;                               /* i = 0: the diodes block */
+    pr_eval_y(&tr, 0.5 * (tr.seg[k].t0 + tr.seg[k].t1), y);
+    if (y[0] > 0) pos += d; else neg += d;
+  }
+  print_message("full bridge: dead time %.4g s, diodes carrying i > 0 for %.4g s, i < 0 for %.4g s\n", dead, pos,
+                neg);
+  assert_true(pos > 0.3 * dead && neg > 0.3 * dead);
+  assert_true(pos + neg > 0.95 * dead - 30e-6);             /* leg b's first 26 us start at rest */
+  pr_free(&tr);
+}
+
 /* ---- catchup against the reference -------------------------------------------- */
 
 typedef struct { const pr_traj *tr; int n; double err, xmax, t_worst; } run_ctx;
@@ -218,6 +244,7 @@ int main(void) {
     cmocka_unit_test(test_ref_buckboost),
     cmocka_unit_test(test_ref_sixpulse),
     cmocka_unit_test(test_ref_flyback_jump),
+    cmocka_unit_test(test_ref_fullbridge_dead_time),
     cmocka_unit_test(test_buck_ccm),
     cmocka_unit_test(test_buck_dcm),
     cmocka_unit_test(test_boost),
