@@ -33,11 +33,11 @@
 #include "crowd_log.h"
 #include "run_plan.h"
 #include "run_stop.h"
-#include "run_steady.h"
 #include "stop_signal.h"
 #include "io/read_text.h"
 #include "util/clock.h"
 #include "util/path.h"
+#include "run_steady.h"
 
 enum { EXIT_RUN = 1, EXIT_USAGE = 2 };
 enum { MSG_LEN = 2 * CUP_ERRMSG_LEN };     /* a path, then a library message, whole */

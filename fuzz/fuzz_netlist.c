@@ -31,16 +31,14 @@ static void check_message(int st, const char *err) {
   if (!err[0] || strchr(err, '\n') || (strncmp(err, "fuzz.cir", 8) && !strstr(err, ":"))) abort();
 }
 
-/* A run with options o: it stops with a message, or its creation fails
- * with one line. With switched, a netlist's switches run each configuration
- * as it occurs. */
-static void run_with(cup_netlist *nl, const cup_integrator_options *o, int switched) {
+/* A run with options o (a switched circuit's through its configurations):
+ * it stops with a message, or its creation fails with one line. */
+static void run_with(cup_netlist *nl, const cup_integrator_options *o) {
   char err[CUP_ERRMSG_LEN] = "";
   cup_integrator *I = NULL;
-  cup_switching sw;
-  int made = switched && cup_netlist_switching(nl, &sw)
-                 ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), o, err)
-                 : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), o, err);
+  cup_switching sw; /* switches: each configuration formed as it occurs */
+  int made = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), o, err)
+                                            : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), o, err);
   if (made == CUP_OK) {
     cup_run_info info;
     cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
@@ -74,7 +72,7 @@ static void exercise(cup_netlist *nl) {
   o.T = 1e-3;
   o.output = CUP_OUTPUT_NONE;
   o.proj.max_iter = 200;
-  run_with(nl, &o, 0);
+  run_with(nl, &o);
   /* the scheme, tol, samples and TMAX catchup-run takes from .tran and
    * .options (scene_netlist_options: the adaptive scheme where it fits, D
    * != 0 too), over a short time with a wall-time cap */
@@ -90,7 +88,7 @@ static void exercise(cup_netlist *nl) {
   o.output_t0 = 0;
   o.output_samples = 5;
   o.max_wall_seconds = 0.5;
-  run_with(nl, &o, 1);
+  run_with(nl, &o);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {

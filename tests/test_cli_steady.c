@@ -31,7 +31,7 @@ static void expect_in(const char *text, const char *what) {
   if (!strstr(text, what)) fail_msg("lacks '%s':\n%s", what, text);
 }
 
-static char *attr_obj_str(hid_t f, const char *obj, const char *name) {
+static char *attr_at(hid_t f, const char *obj, const char *name) {
   hid_t a = H5Aopen_by_name(f, obj, name, H5P_DEFAULT, H5P_DEFAULT);
   if (a < 0) fail_msg("attribute %s of %s missing", name, obj);
   hid_t type = H5Aget_type(a);
@@ -83,10 +83,10 @@ static void bridge_period(void **state) {
   assert_close(pw[0] + pw[1] + pw[2], 0, 1e-4 * fabs(pw[2]));
   assert_close(eff[0], pw[1] / -pw[2], 1e-15);
   assert_true(eff[0] > 0.98 && eff[0] < 1);
-  char *u = attr_obj_str(f, "steady_state/residuals", "long_name");
+  char *u = attr_at(f, "steady_state/residuals", "long_name");
   expect_in(u, "Newton residual");
   free(u);
-  u = attr_obj_str(f, "steady_state/power/average", "units");
+  u = attr_at(f, "steady_state/power/average", "units");
   assert_string_equal(u, "W");
   free(u);
   assert_int_equal(attr_i64(f, "steady_state_status"), CUP_OK);

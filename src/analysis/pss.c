@@ -19,6 +19,7 @@
 #include "catchup.h"
 #include "catchup/pss.h"
 #include "integrator/integrator_impl.h"
+#include "util/clock.h"
 #include "util/fail.h"
 
 /* A multiplier this close to 1 (relative) leaves Phi(x) - x singular. */
@@ -50,12 +51,6 @@ typedef struct pss_work {
   gsl_vector_view b, s;
   long ev_min, ev_max;      /* events per period over the iterations */
 } pss_work;
-
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static double inf_norm(const double *v, int n) {
   double r = 0;
@@ -349,7 +344,7 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
     return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the period %g must be finite and > 0", period);
   int st = check_options(o, errmsg);
   if (st) return st;
-  double t0 = now_s();
+  double t0 = now_seconds();
   pss_work w = {.I = I, .o = o, .n = n};
   w.r = result_new(n, 0);
   size_t N = (size_t)n;
@@ -381,7 +376,7 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
   int tangent_on = w.tan != NULL;
   newton(&w, x_guess);
   if (tangent_on) cup_adaptive_tangent(I->ad, 0);
-  w.r->info.seconds = now_s() - t0;
+  w.r->info.seconds = now_seconds() - t0;
   free(buf);
   gsl_matrix_free(w.JI);
   gsl_permutation_free(w.perm);
@@ -468,10 +463,10 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   if (!*out) return st;
   (*out)->info.m = cup_lcs_rows(L);
   if (st >= 0 && o->samples >= 2) {
-    double t0 = now_s();
+    double t0 = now_seconds();
     mo.on_event = io->on_event;                  /* the events of the period shown */
     int ts = trajectory(*out, L, u, &mo, o->samples);
-    (*out)->info.seconds += now_s() - t0;
+    (*out)->info.seconds += now_seconds() - t0;
     if (ts < 0) return ts;
   }
   return (*out)->info.status;

@@ -23,8 +23,8 @@
 #include "scene_tree.h"
 #include "read_text.h"
 #include "scene_netlist.h"
-#include "scene_steady.h"
 #include "util/path.h"
+#include "scene_steady.h"
 
 struct cup_scene {
   char *name;

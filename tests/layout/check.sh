@@ -25,8 +25,8 @@
 # Prints one line per violation and exits 1 if there is any.
 set -u
 order=(util set lcp projector model integrator analysis io h5 sweep apps)
-declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [analysis]=6 [io]=7 [h5]=8
-                  [sweep]=9 [apps]=10 [fortran]=10 [bench]=10)
+declare -A level=([util]=0 [set]=1 [lcp]=2 [projector]=3 [model]=4 [integrator]=5 [analysis]=6 [io]=7
+                  [h5]=8 [sweep]=9 [apps]=10 [fortran]=10 [bench]=10)
 generated=" catchup/version.h git_revision.h "   # written into the build tree
 
 root=${1:?usage: check.sh SRCDIR [OBJECT...]}
