@@ -167,12 +167,12 @@ case_signals() {
     "$RUN" "${args[@]}" -o "sg/$name-whole.h5" || { fail "$name: the whole run failed"; return; }
     local sig=INT stops=0 rc=130 tries=0
     rm -f "sg/$name.h5"
-    timeout --preserve-status -s INT 0.2 "$RUN" "${args[@]}" -o "sg/$name.h5" 2> /dev/null; rc=$?
+    timeout --preserve-status -s INT 0.2 "$RUN" "${args[@]}" -o "sg/$name.h5" 2> "sg/$name.err"; rc=$?
     while [ $rc -ne 0 ] && [ $tries -lt 40 ]; do
-      [ $rc = 130 ] || [ $rc = 143 ] || { fail "$name: exit $rc"; return; }
+      [ $rc = 130 ] || [ $rc = 143 ] || { fail "$name: exit $rc after $stops signals: $(tail -n 2 "sg/$name.err")"; return; }
       stops=$((stops + 1)) tries=$((tries + 1))
       sig=$([ $sig = INT ] && echo TERM || echo INT)
-      timeout --preserve-status -s $sig 0.$((RANDOM % 3 + 1)) "$RUN" "${args[@]}" -o "sg/$name.h5" --resume 2> /dev/null; rc=$?
+      timeout --preserve-status -s $sig 0.$((RANDOM % 3 + 1)) "$RUN" "${args[@]}" -o "sg/$name.h5" --resume 2> "sg/$name.err"; rc=$?
     done
     same "sg/$name-whole.h5" "sg/$name.h5" || { fail "$name: resumed after $stops signals, differs"; return; }
     sc=$((sc + stops))
