@@ -13,6 +13,7 @@
 #include "io/scene_read.h"
 #include "io/sha256.h"
 #include "sweep.h"
+#include "sweep_gen.h"
 #include "util/path.h"
 
 static const char *const axis_names[SW_NAXES + 1] = {"n", "eps", "eta", "scheme", "projector", "tol", NULL};
@@ -223,10 +224,10 @@ static char *override_text(const char *key, const st_node *v) {
   return s;
 }
 
-static int read_variant(rd *p, cup_sweep *s, const st_node *nd, int k, const char *base) {
-  static const char *const known[] = {"name", "scene", "set", NULL};
+/* Entry k of variants: into v; its name unlike those of the nprev variants before it. */
+static int read_variant(rd *p, cup_sweep *s, const st_node *nd, int k, const char *base, sw_variant *v, long nprev) {
+  static const char *const known[] = {"name", "scene", "set", SW_GEN_KEYS, NULL};
   char key[64], k2[160];
-  sw_variant *v = &s->var[k];
   v->line = nd->line;
   v->col = nd->col;
   snprintf(key, sizeof key, "variants.%d", k);
@@ -240,9 +241,9 @@ static int read_variant(rd *p, cup_sweep *s, const st_node *nd, int k, const cha
   if ((st = word(p, x, k2, &name))) return st;
   if (strlen(name) >= SW_NAME_LEN)
     return fail(p, CUP_ERR_PARSE, x, k2, "longer than %d characters", SW_NAME_LEN - 1);
-  for (int j = 0; j < k; j++)
+  for (long j = 0; j < nprev; j++)
     if (!strcmp(s->var[j].name, name))
-      return fail(p, CUP_ERR_PARSE, x, k2, "'%s' is also the name of variants.%d", name, j);
+      return fail(p, CUP_ERR_PARSE, x, k2, "'%s' is also the name of variants.%ld", name, j);
   if (!(v->name = strdup(name))) return CUP_ERR_NOMEM;
   if ((x = opt(nd, "scene"))) {
     snprintf(k2, sizeof k2, "%s.scene", key);
@@ -266,6 +267,51 @@ static int read_variant(rd *p, cup_sweep *s, const st_node *nd, int k, const cha
   return CUP_OK;
 }
 
+static void variant_free(sw_variant *v) {
+  free(v->name);
+  free(v->scene_file);
+  free(v->scene_dir);
+  for (int j = 0; j < v->n_set; j++) free(v->set[j]);
+  free(v->set);
+  free(v->scene_text);
+  cup_scene_free(&v->scene);
+}
+
+/* The variants entry e generates from its template t (name, scene, set). */
+static int expand(rd *p, const st_node *e, const char *key, const sw_variant *t, sw_variant *out, long count) {
+  sw_gen_variant *g = calloc((size_t)count, sizeof *g);
+  if (!g) return CUP_ERR_NOMEM;
+  int st = sw_gen_expand(p, e, key, t->name, SW_NAME_LEN, t->set, t->n_set, g, count);
+  for (long j = 0; j < count; j++) {       /* each takes what it was given, whatever happened */
+    sw_variant *v = &out[j];
+    v->name = g[j].name, v->set = g[j].set, v->n_set = g[j].n_set;
+    v->line = t->line, v->col = t->col, v->from_base = t->from_base;
+    if (!st && (!(v->scene_file = strdup(t->scene_file)) || (t->scene_dir && !(v->scene_dir = strdup(t->scene_dir)))))
+      st = CUP_ERR_NOMEM;
+  }
+  free(g);
+  return st;
+}
+
+static int by_name(const void *a, const void *b) {
+  return strcmp((*(const sw_variant *const *)a)->name, (*(const sw_variant *const *)b)->name);
+}
+
+/* Generated names ("NAME.J") may meet a written one: every name once. */
+static int unique_names(rd *p, const cup_sweep *s, const st_node *nd) {
+  const sw_variant **v = malloc(sizeof *v * (size_t)(s->n_variants + 1));
+  if (!v) return CUP_ERR_NOMEM;
+  for (int k = 0; k < s->n_variants; k++) v[k] = &s->var[k];
+  qsort(v, (size_t)s->n_variants, sizeof *v, by_name);
+  int st = CUP_OK;
+  for (int k = 1; k < s->n_variants && !st; k++)
+    if (!strcmp(v[k]->name, v[k - 1]->name))
+      st = fail(p, CUP_ERR_PARSE, nd, "variants", "two variants are named '%s' (a generated name is the entry's "
+                "name, a dot and its index)", v[k]->name);
+  free(v);
+  return st;
+}
+
 static int read_variants(rd *p, cup_sweep *s, const st_node *root) {
   const st_node *kb, *b = st_get(root, "base", &kb), *nd = opt(root, "variants");
   const char *base = NULL;
@@ -276,9 +322,31 @@ static int read_variants(rd *p, cup_sweep *s, const st_node *root) {
                        "e.g. [{name: case1}]");
   if (nd->kind != ST_SEQ || nd->len == 0)
     return fail(p, CUP_ERR_PARSE, nd, "variants", "expected a list of at least one variant (a mapping with name)");
-  if (!(s->var = calloc((size_t)nd->len, sizeof *s->var))) return CUP_ERR_NOMEM;
-  s->n_variants = nd->len;
-  for (int k = 0; k < nd->len && !st; k++) st = read_variant(p, s, nd->item[k], k, base);
+  long total = 0, *count = calloc((size_t)nd->len, sizeof *count);
+  char key[64];
+  if (!count) return CUP_ERR_NOMEM;
+  for (int k = 0; k < nd->len && !st; k++) {        /* what each entry generates (1: itself) */
+    snprintf(key, sizeof key, "variants.%d", k);
+    st = need_map(p, nd->item[k], key, "a mapping with name and optionally scene and set");
+    if (!st) st = sw_gen_count(p, nd->item[k], key, &count[k]);
+    total += count[k];
+    if (!st && total > SW_GEN_MAX) st = fail(p, CUP_ERR_PARSE, nd->item[k], key, "more than %ld variants", SW_GEN_MAX);
+  }
+  if (!st && !(s->var = calloc((size_t)total, sizeof *s->var))) st = CUP_ERR_NOMEM;
+  long at = 0;
+  for (int k = 0; k < nd->len && !st; k++) {
+    const st_node *e = nd->item[k];
+    int generated = opt(e, "grid") || opt(e, "zip") || opt(e, "sample");
+    sw_variant t = {0};
+    s->n_variants = (int)(at + count[k]);         /* freed by sw_free, whatever happens */
+    st = read_variant(p, s, e, k, base, generated ? &t : &s->var[at], at);
+    snprintf(key, sizeof key, "variants.%d", k);
+    if (!st && generated) st = expand(p, e, key, &t, &s->var[at], count[k]);
+    if (generated) variant_free(&t);
+    at += count[k];
+  }
+  free(count);
+  if (!st) st = unique_names(p, s, nd);
   return st;
 }
 
@@ -483,6 +551,71 @@ static int crowd_resolve(cup_sweep *s, char *errmsg) {
   return CUP_OK;
 }
 
+/* Steady-state sweeps (sweep_steady.c runs them): the variants' scenes all
+ * ask for the steady state or none do; no reference, no trajectories; the
+ * signals measured and the elements' v(a,b) and i(E) probed before the
+ * sweep's signals are fixed (resolve_signals), so that they are the same in
+ * every variant, at the same indices. */
+static int steady_probe(cup_sweep *s, int k, const cup_scene_steady *q, char *errmsg) {
+  cup_netlist *nl = cup_scene_netlist(s->var[k].scene);
+  char err[CUP_ERRMSG_LEN];
+  int sig[SW_SS_SIGNALS], pv[SW_SS_POWER], pc[SW_SS_POWER];
+  if (!nl)
+    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state: a steady-state sweep measures a netlist's "
+                        "signals, and this scene has no netlist");
+  if (q->nmeasure < 1 || q->nmeasure > SW_SS_SIGNALS)
+    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.measure: a steady-state sweep measures 1 to %d "
+                        "signals (got %d), e.g. [v(out), i(L1)]", SW_SS_SIGNALS, q->nmeasure);
+  if (q->npower > SW_SS_POWER)
+    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: at most %d elements (got %d)", SW_SS_POWER,
+                        q->npower);
+  for (int j = 0; j < q->nmeasure; j++)
+    if ((sig[j] = cup_netlist_probe(nl, q->measure[j], err)) < 0)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.measure: %s", err);
+  for (int j = 0; j < q->npower; j++) {
+    const char *a, *b;
+    char v[300], i[300];
+    if (cup_netlist_element_nodes(nl, q->power[j], &a, &b, err))
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
+    snprintf(v, sizeof v, "v(%.120s,%.120s)", a, b);
+    snprintf(i, sizeof i, "i(%.200s)", q->power[j]);
+    if ((pv[j] = cup_netlist_probe(nl, v, err)) < 0 || (pc[j] = cup_netlist_probe(nl, i, err)) < 0)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
+  }
+  if (k == 0) {
+    s->ss_nm = q->nmeasure;
+    s->ss_np = q->npower;
+    memcpy(s->ss_sig, sig, sizeof sig);
+    memcpy(s->ss_pv, pv, sizeof pv);
+    memcpy(s->ss_pc, pc, sizeof pc);
+  }
+  if (q->nmeasure != s->ss_nm || q->npower != s->ss_np || memcmp(sig, s->ss_sig, sizeof(int) * (size_t)s->ss_nm) ||
+      memcmp(pv, s->ss_pv, sizeof(int) * (size_t)s->ss_np) || memcmp(pc, s->ss_pc, sizeof(int) * (size_t)s->ss_np))
+    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state: its measure and power lists differ from "
+                        "variants.0's: the variants share /steady_state's columns");
+  return CUP_OK;
+}
+
+static int steady_resolve(cup_sweep *s, char *errmsg) {
+  for (int k = 0; k < s->n_variants; k++) {
+    const cup_scene_steady *q = cup_scene_steady_state(s->var[k].scene);
+    if (!q != !s->steady)
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s the steady state, and variants.0 %s: a sweep's variants "
+                          "all ask for it (steady_state:) or none do", q ? "asks for" : "does not ask for",
+                          s->steady ? "does" : "does not");
+    if (!q) continue;
+    int st = steady_probe(s, k, q, errmsg);
+    if (st) return st;
+  }
+  if (s->steady && s->out_given && s->out_samples) {
+    snprintf(errmsg, SW_ERR_LEN, "%s: output.samples: a steady-state sweep stores no trajectories (its figures are "
+             "in /steady_state): leave it out or write 0", s->path);
+    return CUP_ERR_PARSE;
+  }
+  if (s->steady) s->out_samples = 0;
+  return CUP_OK;
+}
+
 int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
   for (int k = 0; k < s->n_variants; k++) {
     sw_variant *v = &s->var[k];
@@ -494,7 +627,7 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
     if (st) return variant_fail(s, k, st, errmsg, "%s", err);
     const cup_integrator_options *o = cup_scene_options(v->scene);
     int dim = cup_scene_dim(v->scene), crowd = cup_scene_crowd(v->scene) != NULL;
-    if (k == 0) { s->T = o->T; s->dim = dim; s->crowd = crowd; }
+    if (k == 0) { s->T = o->T; s->dim = dim; s->crowd = crowd; s->steady = cup_scene_steady_state(v->scene) != NULL; }
     if (crowd != s->crowd)
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s, and variants.0 %s: a sweep's variants are all "
                           "crowds or none", crowd ? "a crowd" : "not a crowd", s->crowd ? "is one" : "is not");
@@ -506,7 +639,7 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
                           dim, s->dim);
     if (dim > s->dim) s->dim = dim;     /* crowds of N agents: positions padded to the largest */
     long S1 = s->samples - 1;
-    if (crowd || (s->ref_method == SW_REF_ADAPTIVE && !s->ref_check))
+    if (crowd || s->steady || (s->ref_method == SW_REF_ADAPTIVE && !s->ref_check))
       v->n_ref = 0;                     /* none, or the adaptive scheme chooses its own steps */
     else if (s->ref_n) v->n_ref = s->ref_n;
     else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
@@ -515,7 +648,8 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
     int st = crowd_resolve(s, errmsg);
     if (st) return st;
   }
-  int st = resolve_signals(s, errmsg);
+  int st = steady_resolve(s, errmsg);
+  if (!st) st = resolve_signals(s, errmsg);
   if (st) return st;
   s->per_variant = 1;
   for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */
@@ -527,16 +661,7 @@ int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
 void sw_free(cup_sweep **ps) {
   if (!ps || !*ps) return;
   cup_sweep *s = *ps;
-  for (int k = 0; k < s->n_variants; k++) {
-    sw_variant *v = &s->var[k];
-    free(v->name);
-    free(v->scene_file);
-    free(v->scene_dir);
-    for (int j = 0; j < v->n_set; j++) free(v->set[j]);
-    free(v->set);
-    free(v->scene_text);
-    cup_scene_free(&v->scene);
-  }
+  for (int k = 0; k < s->n_variants; k++) variant_free(&s->var[k]);
   free(s->var);
   for (int k = 0; k < s->len[SW_AXIS_EPS]; k++) free(s->eps[k]);
   for (int k = 0; k < s->len[SW_AXIS_ETA]; k++) free(s->eta[k]);
@@ -596,7 +721,10 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
 double sw_job_cost(const cup_sweep *s, long job) {
   static const double scheme_f[] = {1.0, 1.0, 1.1, 0.8}, proj_f[] = {1.0, 1.0, 1.3, 1.2};
   const double setup = 100;
-  if (job < s->n_variants && s->crowd) return 0;   /* a crowd's reference computes nothing */
+  if (job < s->n_variants && (s->crowd || s->steady)) return 0;   /* a crowd's reference computes nothing */
+  /* a steady state: a few Newton steps of n + 1 period runs, and its period
+   * sampled (about 0.2 ms on a buck, BENCHMARKS.md) */
+  if (s->steady) return 2000;
   if (job < s->n_variants && s->ref_method == SW_REF_ADAPTIVE)
     return 8.0 * (double)s->samples + 10 * setup + (s->ref_check ? 3.0 * ((double)s->var[job].n_ref + setup) : 0);
   if (job < s->n_variants) return 3.0 * ((double)s->var[job].n_ref + setup);

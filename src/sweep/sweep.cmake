@@ -7,10 +7,12 @@
 # catchup_static). Its users include its headers, which include "io/...":
 # both folders are PUBLIC include directories.
 add_library(catchup_sweep STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_gen.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_run.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_steady.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_file.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_file_create.c)
 target_include_directories(catchup_sweep PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${PROJECT_SOURCE_DIR}/src)

@@ -28,6 +28,9 @@ enum { SW_REF_RICHARDSON, SW_REF_ADAPTIVE };
  * after a prefix of at most 64 characters ("set-up: ", "injected failure"). */
 enum { SW_NAME_LEN = 64, SW_SPEC_LEN = 32, SW_WORD_LEN = 16, SW_STATUS_LEN = 32, SW_MSG_LEN = CUP_RUN_MSG_LEN + 64 };
 
+/* A steady-state sweep measures at most this many signals and elements. */
+enum { SW_SS_SIGNALS = 8, SW_SS_POWER = 8, SW_SS_FIGURES = 5 };
+
 typedef struct sw_variant {
   char *name;
   char *scene_file;          /* path as resolved against the sweep file's directory */
@@ -75,6 +78,13 @@ typedef struct cup_sweep {
   /* netlist sweeps: the signals every task records (variants.0's netlist's
    * probes, or its defaults; every variant's must be the same) */
   int nsig;
+  /* steady-state sweeps (sweep_steady.c): the variants' scenes ask for the
+   * steady state (steady_state:, or the netlist's .options steadystate); each
+   * task solves it and measures one period (/steady_state) */
+  int steady;
+  int ss_nm, ss_np;                /* measured signals, power elements (variants.0's request) */
+  int ss_sig[SW_SS_SIGNALS];       /* the measured signals' indices among the netlist's */
+  int ss_pv[SW_SS_POWER], ss_pc[SW_SS_POWER];   /* each power element's v(a,b) and i(E) signal */
 } cup_sweep;
 
 /* A job's trajectory: samples * dim states, then samples * nsig signals. */
@@ -115,6 +125,13 @@ typedef struct sw_result {
     double evacuation_time;  /* the last agent's exit time if all left, else NaN */
     double min_gap;          /* smallest gap of the run's states (negative: overlap) */
   } crowd;
+  /* steady-state sweeps: a task's steady state and its period's figures (/steady_state) */
+  struct sw_steady_result {
+    int32_t solved, iterations;  /* solved: 0 when no steady state was found (the figures NaN) */
+    int64_t period_runs;
+    double period, residual, max_multiplier, efficiency;
+    double fig[SW_SS_SIGNALS][SW_SS_FIGURES];   /* average, rms, min, max, peak-to-peak */
+  } steady;
 } sw_result;
 
 /* The results file (sweep_file.h; its layout is sweep_h5.h's), and one

@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <hdf5.h>
 #include "sweep_crowd.h"
+#include "sweep_steady.h"
 #include "sweep_file.h"
 #include "sweep_h5.h"
 
@@ -182,10 +183,11 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
     f->ref_summary = H5Dopen2(f->file, "references/summary", H5P_DEFAULT);
     if (s->out_samples > 0) f->runs_x = H5Dopen2(f->file, "runs/x", H5P_DEFAULT);
     if (s->crowd) f->crowd = H5Dopen2(f->file, "crowd", H5P_DEFAULT);
+    if (s->steady) f->steady = H5Dopen2(f->file, "steady_state", H5P_DEFAULT);
     if (s->nsig) f->ref_sig = H5Dopen2(f->file, "references/signals", H5P_DEFAULT);
     if (s->nsig && s->out_samples > 0) f->runs_sig = H5Dopen2(f->file, "runs/signals", H5P_DEFAULT);
     if (f->summary < 0 || f->ref_x < 0 || f->ref_summary < 0 || (s->out_samples > 0 && f->runs_x < 0) ||
-        (s->crowd && f->crowd < 0) || (s->nsig && f->ref_sig < 0) || (s->nsig && s->out_samples > 0 && f->runs_sig < 0))
+        (s->crowd && f->crowd < 0) || (s->steady && f->steady < 0) || (s->nsig && f->ref_sig < 0) || (s->nsig && s->out_samples > 0 && f->runs_sig < 0))
       st = sw_h5_fail(f, "open the datasets of");
   }
   if (!st) st = check_inputs(f, errmsg);
@@ -254,11 +256,14 @@ static int reserve(sw_file *f, long count) {
   if (x) f->x = x;
   sw_crowd_row *crows = f->s->crowd ? realloc(f->crows, sizeof *crows * (size_t)cap) : NULL;
   if (crows) f->crows = crows;
+  sw_steady_row *ssrows = f->s->steady ? realloc(f->ssrows, sizeof *ssrows * (size_t)cap) : NULL;
+  if (ssrows) f->ssrows = ssrows;
   int with_sig = f->runs_sig >= 0;
   size_t sig_len = (size_t)(f->s->samples * f->s->nsig);
   double *sig = with_sig ? realloc(f->sig, sizeof *sig * sig_len * (size_t)cap) : NULL;
   if (sig) f->sig = sig;
-  if (!ids || !rows || (f->s->out_samples > 0 && !x) || (f->s->crowd && !crows) || (with_sig && !sig))
+  if (!ids || !rows || (f->s->out_samples > 0 && !x) || (f->s->crowd && !crows) || (f->s->steady && !ssrows) ||
+      (with_sig && !sig))
     return CUP_ERR_NOMEM;
   f->cap = cap;
   return CUP_OK;
@@ -313,6 +318,7 @@ int sw_file_write_tasks(sw_file *f, const sw_task_out *t, long count) {
   if (!st && f->runs_sig >= 0)
     st = sw_h5_task_io(f, f->runs_sig, H5T_NATIVE_DOUBLE, count, f->sig, H5P_DEFAULT, 1, "write /runs/signals in");
   if (!st && f->crowd >= 0) st = sw_crowd_write(f, t, count);
+  if (!st && f->steady >= 0) st = sw_steady_write(f, t, count);
   if (!st) st = sw_h5_task_io(f, f->summary, f->row_t, count, f->rows, H5P_DEFAULT, 1, "write /summary in");
   quiet_end(q);
   for (long j = 0; j < count && !st; j++) {
@@ -402,10 +408,10 @@ int sw_file_close(sw_file **pf, char *errmsg) {
   sw_file *f = *pf;
   int st = f->failed ? CUP_ERR_IO : sw_file_flush(f);
   quiet_t q = quiet_begin();
-  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd};
+  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd, f->steady};
   for (size_t k = 0; k < sizeof h / sizeof h[0]; k++)
     if (h[k] >= 0 && H5Dclose(h[k]) < 0 && !st) st = sw_h5_fail(f, "close a dataset of");
-  f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = H5I_INVALID_HID;
+  f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = f->steady = H5I_INVALID_HID;
   if (H5Fclose(f->file) < 0 && !st) st = sw_h5_fail(f, "close");
   f->file = H5I_INVALID_HID;
   quiet_end(q);

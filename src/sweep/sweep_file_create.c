@@ -16,6 +16,7 @@
 #include <hdf5_hl.h>
 #include "catchup/h5run.h"
 #include "sweep_crowd.h"
+#include "sweep_steady.h"
 #include "sweep_file.h"
 #include "sweep_h5.h"
 
@@ -143,7 +144,7 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   char *inputs = cup_file_list_text(&s->files);   /* every file read, for --resume (and sha256sum -c) */
   r |= inputs ? attr_str(root, "inputs_sha256", inputs) : -1;
   free(inputs);
-  r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE
+  r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE : s->steady ? SW_STEADY_REFERENCE
                 : s->ref_method == SW_REF_ADAPTIVE ? (s->ref_check ? reference_checked : reference_adaptive)
                 : reference_method);
   r |= attr_i64(root, "samples", s->samples);
@@ -375,6 +376,12 @@ static int describe_layout(sw_file *f) {
     r |= describe(f->crowd, NULL, "one row per task: agents, agents out, evacuation time [s], smallest gap [m]");
     r |= attach(file, "crowd", 1, (const char *const[]){"task"});
   }
+  if (s->steady) {
+    r |= describe(f->steady, NULL, "one row per task: the steady state's period [s], Newton steps, residual, largest "
+                  "Floquet multiplier modulus, efficiency, and each measured signal's average, rms, min, max and "
+                  "peak-to-peak over the period (the signal's units)");
+    r |= attach(file, "steady_state", 1, (const char *const[]){"task"});
+  }
   return r;
 }
 
@@ -384,6 +391,7 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   int st = create_variants(f);
   if (!st) st = create_summary(f);
   if (!st && s->crowd) st = sw_crowd_create(f);
+  if (!st && s->steady) st = sw_steady_create(f);
   hid_t g = st ? -1 : fixed_group(f->file, "runs");
   if (!st && g < 0) st = sw_h5_fail(f, "create /runs in");
   if (!st) {
@@ -419,7 +427,8 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
 }
 
 static double file_bytes(const cup_sweep *s) {
-  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0));
+  double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0) +
+                                       (s->steady ? sizeof(sw_steady_row) : 0));
   double traj = (double)sw_traj_len(s) * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
   return rows + traj + 65536.0 + 2.0 * strlen(s->text);
 }

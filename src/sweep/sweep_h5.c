@@ -110,6 +110,33 @@ static hid_t crowd_row_type(void) {
 }
 #undef INS
 
+const char *const sw_steady_figures[SW_SS_FIGURES] = {"average", "rms", "min", "max", "peak_to_peak"};
+
+#define INS(T, name, field, type) H5Tinsert(T, name, HOFFSET(sw_steady_row, field), type)
+static hid_t steady_row_type(const cup_sweep *s) {
+  hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_steady_row));
+  INS(T, "task_id", task_id, H5T_NATIVE_INT64);
+  INS(T, "variant", variant, H5T_NATIVE_INT32);
+  INS(T, "status", status, H5T_NATIVE_INT32);
+  INS(T, "solved", solved, H5T_NATIVE_INT32);
+  INS(T, "newton_iterations", newton_iterations, H5T_NATIVE_INT32);
+  INS(T, "period_runs", period_runs, H5T_NATIVE_INT64);
+  INS(T, "period", period, H5T_NATIVE_DOUBLE);
+  INS(T, "residual", residual, H5T_NATIVE_DOUBLE);
+  INS(T, "max_multiplier", max_multiplier, H5T_NATIVE_DOUBLE);
+  INS(T, "efficiency", efficiency, H5T_NATIVE_DOUBLE);
+  for (int j = 0; j < s->ss_nm; j++)
+    for (int q = 0; q < SW_SS_FIGURES; q++) {
+      char name[160];
+      snprintf(name, sizeof name, "%.120s_%s", sw_signal_name(s, s->ss_sig[j]), sw_steady_figures[q]);
+      H5Tinsert(T, name, HOFFSET(sw_steady_row, fig) + sizeof(double) * (size_t)(j * SW_SS_FIGURES + q),
+                H5T_NATIVE_DOUBLE);
+    }
+  INS(T, "done", done, H5T_NATIVE_INT8);
+  return T;
+}
+#undef INS
+
 /* snprintf(dst, size, "%s", src), zero-padded, at a fraction of its cost
  * (rank 0 fills a row's strings for every result it writes). */
 void sw_copy_str(char *dst, size_t size, const char *src) {
@@ -200,6 +227,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   if (!f) return NULL;
   f->s = s;
   f->file = f->summary = f->runs_x = f->ref_x = f->ref_summary = f->crowd = f->runs_sig = f->ref_sig = H5I_INVALID_HID;
+  f->steady = H5I_INVALID_HID;
   f->path = strdup(path);
   size_t N = (size_t)s->n_tasks, V = (size_t)s->n_variants;
   f->done = calloc(N, 1);
@@ -210,6 +238,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   f->row_t = row_type();
   f->refrow_t = refrow_type();
   f->crowd_row_t = crowd_row_type();
+  f->ss_row_t = steady_row_type(s);
   /* A reference row's write converts a compound type (to the packed file
    * type): HDF5 would otherwise allocate and clear a 1 MiB conversion
    * buffer each time. */
@@ -217,7 +246,7 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
   H5Pset_buffer(f->dxpl, 4 * sizeof(sw_refrow), NULL, NULL);
   if (!f->path || !f->done || !f->status || !f->error || !f->ref_done || !f->xref) {
     free(f->path); free(f->done); free(f->status); free(f->error); free(f->ref_done); free(f->xref);
-    H5Tclose(f->row_t); H5Tclose(f->refrow_t); H5Tclose(f->crowd_row_t); H5Pclose(f->dxpl);
+    H5Tclose(f->row_t); H5Tclose(f->refrow_t); H5Tclose(f->crowd_row_t); H5Tclose(f->ss_row_t); H5Pclose(f->dxpl);
     free(f);
     return NULL;
   }
@@ -227,18 +256,19 @@ sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
 
 void sw_h5_file_free(sw_file *f) {
   quiet_t q = quiet_begin();
-  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd, f->runs_sig, f->ref_sig};
+  hid_t h[] = {f->summary, f->runs_x, f->ref_x, f->ref_summary, f->crowd, f->runs_sig, f->ref_sig, f->steady};
   for (size_t k = 0; k < sizeof h / sizeof h[0]; k++)
     if (h[k] >= 0) H5Dclose(h[k]);
   if (f->file >= 0) H5Fclose(f->file);
   H5Tclose(f->row_t);
   H5Tclose(f->refrow_t);
   H5Tclose(f->crowd_row_t);
+  H5Tclose(f->ss_row_t);
   H5Pclose(f->dxpl);
   H5Eclear2(H5E_DEFAULT);
   quiet_end(q);
   for (int k = 0; k < f->s->n_variants; k++) free(f->xref[k]);
-  free(f->ids); free(f->rows); free(f->x); free(f->crows); free(f->sig);
+  free(f->ids); free(f->rows); free(f->x); free(f->crows); free(f->ssrows); free(f->sig);
   free(f->xref); free(f->ref_done); free(f->done); free(f->status); free(f->error); free(f->path);
   free(f);
 }

@@ -77,6 +77,20 @@ typedef struct __attribute__((packed)) sw_crowd_row {
   int8_t done;
 } sw_crowd_row;
 
+/* One /steady_state row (steady-state sweeps, sweep_steady.c), packed like
+ * sw_row; its memory type (f->ss_row_t) names the figures of the measured
+ * signals only ("v(out)_average", ...), the rest of fig unused. */
+typedef struct __attribute__((packed)) sw_steady_row {
+  int64_t task_id;
+  int32_t variant, status, solved, newton_iterations;
+  int64_t period_runs;
+  double period, residual, max_multiplier, efficiency;
+  double fig[SW_SS_SIGNALS][SW_SS_FIGURES];
+  int8_t done;
+} sw_steady_row;
+/* The figures' names, in fig's order. */
+extern const char *const sw_steady_figures[SW_SS_FIGURES];
+
 typedef struct sw_refrow {
   int32_t variant;
   char variant_name[SW_NAME_LEN];
@@ -110,6 +124,9 @@ struct sw_file {
   /* crowd sweeps: /crowd, its memory type and staging rows (cap of them) */
   hid_t crowd, crowd_row_t;
   sw_crowd_row *crows;
+  /* steady-state sweeps: /steady_state, its memory type and staging rows (cap of them) */
+  hid_t steady, ss_row_t;
+  sw_steady_row *ssrows;
   /* netlist sweeps: /runs/signals, /references/signals, staging (cap tasks' signals) */
   hid_t runs_sig, ref_sig;
   double *sig;

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sweep_crowd.h"
+#include "sweep_steady.h"
 #include "sweep_run.h"
 #include "util/clock.h"
 
@@ -94,6 +95,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
   o.interrupt = ro ? ro->interrupt : NULL;
   o.on_step = ro ? ro->on_step : NULL;
   o.step_ctx = ro ? ro->step_ctx : NULL;
+  if (s->steady) { sw_steady_run(s, v, &o, r); return; }
   failing fc = {0.5 * o.T, cup_scene_dim(v->scene)};
   if (rp->inject) { o.f = failing_rhs; o.f_ctx = &fc; }
   sw_crowd_watch cw;
@@ -203,6 +205,7 @@ void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *
   memset(r, 0, sizeof *r);
   r->job = job;
   if (job < s->n_variants && s->crowd) { sw_crowd_no_reference(s, r, traj); return; }
+  if (job < s->n_variants && s->steady) { sw_steady_no_reference(s, r, traj); return; }
   if (job < s->n_variants) { run_reference(s, (int)job, ro, r, traj); return; }
   sw_task t;
   if (sw_task_get(s, job - s->n_variants, &t)) {

@@ -1,0 +1,322 @@
+"""Converters' steady states and a 10^4-variant design study (scripts/bench-design).
+
+1. Per switched converter of examples/circuits: catchup-run --steady-state
+   (the solve's wall time from its summary line, median of --reps runs; the
+   residual target 1e-10 relative, pss's default), Newton's steps, period
+   runs and the largest Floquet multiplier, beside catchup's brute force:
+   the adaptive scheme at tol 1e-12 from rest until the change from one
+   period's end to the next is below 1e-10 of the state (scripts/steady_bench.py
+   runs both).
+2. A design study of the buck (examples/circuits/buck-design.yaml) over a
+   grid duty x L x C x load of --variants (10^4: 10 values each) by
+   catchup-sweep on 1 rank (it computes everything) and on 3 ranks (rank 0
+   dispatches, 2 workers: the machine's 2 cores), the wall time of each and
+   the parallel efficiency T(1 rank) / (2 T(2 workers)), with catchup-sweep's
+   own figures.
+
+Prints the tables and writes the section of BENCHMARKS.md between its
+design markers.
+
+    python scripts/design_bench.py [--build build] [--reps 5] [--per-axis 10] [--no-write]
+"""
+import argparse
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+import h5py
+import numpy as np
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import steady_bench as sb  # noqa: E402
+import converters_compare as cc  # noqa: E402
+
+CONVERTERS = ["buck-ccm", "buck-dcm", "boost", "buckboost", "flyback", "fullbridge"]
+
+
+def converters(build, reps, tmp):
+    rows = []
+    for name in CONVERTERS:
+        r = sb.steady(build, name, reps, tmp)
+        if "failed" not in r:
+            r["brute"] = sb.catchup_brute(build, name, r["T"], sb.periods_needed(r["mu"]), reps, tmp)
+        print(r, flush=True)
+        rows.append(r)
+    return rows
+
+
+NGSPICE_CONVERTER = "buck-ccm"
+
+
+def ngspice_brute(name, T, periods, tmp):
+    """ngspice on the near-ideal copy of scripts/converters_compare.py (RON 1 mOhm,
+    ROFF 1 GOhm, 1 ns edges, the steep diode) over `periods` periods at TSTEP =
+    TMAX = T/200, its states at each period's end (interpolated between its
+    time points, written at 15 digits), the first period whose change is below
+    1e-10 of the state's largest entry and the transient time of the whole run."""
+    cir = sb.cir(name)
+    st = cc.states(cc.read_netlist(cir))
+    vecs = list(dict.fromkeys(["i(%s)" % n.lower() if k == "i" else "v(%s)" % a for k, n, a, b in st]))
+    rows = []
+    for label, opts in cc.NGSPICE_SETTINGS:
+        def run(k):
+            text = cc.near_ideal(cir, None, opts)
+            text = re.sub(r"(?m)^\.tran .*$", ".tran %.17g %.17g 0 %.17g uic" % (T / 200, k * T, T / 200), text)
+            data, net = os.path.join(tmp, "ng.txt"), os.path.join(tmp, "ng.cir")
+            open(net, "w").write(text + ".save %s\n.control\nset numdgt=15\nrun\nrusage trantime\nwrdata %s %s\n"
+                                 ".endc\n.end\n" % (" ".join(vecs), data, " ".join(vecs)))
+            if os.path.exists(data):
+                os.remove(data)
+            r = subprocess.run(["ngspice", "-b", net], capture_output=True, text=True, cwd=tmp)
+            m = re.search(r"Transient analysis time = ([0-9.e+-]+)", r.stdout + r.stderr)
+            if not m or not os.path.exists(data):
+                return None, (r.stdout + r.stderr).strip().splitlines()[-1][:120]
+            d = np.loadtxt(data, ndmin=2)
+            t, cols = d[:, 0], [d[:, 2 * j + 1] for j in range(len(vecs))]
+            return float(m.group(1)), np.array([[np.interp(j * T, t, c) for c in cols] for j in range(k + 1)])
+        run_s, ends = run(periods)
+        if run_s is None:
+            rows.append({"setting": label, "failed": ends})
+            continue
+        ch = np.abs(np.diff(ends, axis=0)).max(axis=1) / (np.abs(ends).max() + 1e-9)
+        k = next((i + 1 for i, v in enumerate(ch) if v < sb.TARGET), None)
+        row = {"setting": label, "run_s": run_s, "periods": periods, "reached": k, "min_change": float(ch.min())}
+        if k:                                   # the run to that period alone
+            row["run_to_k_s"] = run(k)[0]
+        rows.append(row)
+        print(row, flush=True)
+    return rows
+
+
+PULSIM_CONVERTERS = ["buck-ccm", "boost", "buck-dcm"]
+PULSIM_STEPS = [100, 1000, 10000]          # its fixed step dt = T / N
+
+
+def pulsim_version():
+    import pulsim
+    return getattr(pulsim, "__version__", "?")
+
+
+def x0_of(build, name, tmp):
+    """catchup's steady state x0 and the state's names (tests/test_pss_converters.c:
+    the exact period map's fixed point to 2e-11 .. 6e-10)."""
+    out = os.path.join(tmp, "x0.h5")
+    subprocess.run([os.path.join(build, "apps", "catchup-run"), sb.cir(name), "-o", out, "--steady-state"],
+                   capture_output=True, check=True)
+    with h5py.File(out, "r") as f:
+        return f["steady_state"]["x0"][:], [s.decode() if isinstance(s, bytes) else s for s in f["state"][:]]
+
+
+def pulsim_one(name, n):
+    """Child: pulsim's run_periodic_shooting on the converter (scripts/converters_compare.py's
+    builder: g_on 1e3, g_off 1e-9, the gates as a schedule), dt = T / n; prints JSON."""
+    import pulsim as p
+    cards = cc.read_netlist(sb.cir(name))
+    times = []
+    for _ in range(3):
+        b, gates = cc.pulsim_circuit(cards)()
+        fn = cc.pulsim_schedule(b, gates)
+        t0 = time.perf_counter()
+        r = p.run_periodic_shooting(b, t_period=1e-5, dt=1e-5 / n, switch_fn=fn, tol=1e-10, max_iterations=50)
+        times.append(time.perf_counter() - t0)
+    names = b.state_var_names()
+    x = {}
+    for kind, el, a, c in cc.states(cards):       # catchup's states: inductor currents, capacitor voltages
+        if kind == "i":
+            x["i(%s)" % el] = float(r.x_steady_state[names.index("I(%s)" % el)])
+        else:
+            v = lambda nd: 0.0 if nd in ("0", "gnd") else float(r.x_steady_state[names.index("V(%s)" % nd)])
+            x["v(%s)" % el] = v(a) - v(c)
+    print(json.dumps({"seconds": sorted(times)[1], "converged": bool(r.converged), "iterations": int(r.n_iterations),
+                      "runs": int(r.n_simulations), "residual": float(r.final_residual), "x": x}))
+
+
+def pulsim_shooting(build, tmp):
+    """Per converter and step: pulsim's steady state, its time and its error against catchup's x0."""
+    rows = []
+    for name in PULSIM_CONVERTERS:
+        ref, labels = x0_of(build, name, tmp)
+        for n in PULSIM_STEPS:
+            try:
+                r = subprocess.run([sys.executable, os.path.abspath(__file__), "--pulsim-one", name, str(n)],
+                                   capture_output=True, text=True, timeout=120)
+                d = json.loads(r.stdout.strip().splitlines()[-1]) if r.returncode == 0 else None
+            except subprocess.TimeoutExpired:
+                d = None
+            if not d:
+                rows.append({"name": name, "n": n, "failed": "no result in 120 s" if r is None else r.stderr[-200:]})
+                continue
+            err = max(abs(d["x"][lab] - ref[k]) for k, lab in enumerate(labels)) / np.abs(ref).max()
+            rows.append(dict(d, name=name, n=n, error=err))
+            print(rows[-1], flush=True)
+    return rows
+
+
+def values(lo, hi, k, log):
+    v = np.geomspace(lo, hi, k) if log else np.linspace(lo, hi, k)
+    return "[" + ", ".join("%.6g" % x for x in v) + "]"
+
+
+def study_file(tmp, k):
+    path = os.path.join(tmp, "buck-study.yaml")
+    base = os.path.join(ROOT, "examples", "circuits", "buck-design.yaml")
+    with open(path, "w") as f:
+        f.write("name: buck-study\nbase: %s\nvariants:\n  - name: buck\n    grid:\n" % base)
+        f.write("      netlist.D: %s\n" % values(0.1, 0.9, k, False))
+        f.write("      netlist.L: %s\n" % values(5e-6, 200e-6, k, True))
+        f.write("      netlist.C: %s\n" % values(2e-6, 100e-6, k, True))
+        f.write("      netlist.R: %s\n" % values(1, 50, k, True))
+    return path
+
+
+def sweep(build, path, ranks, tmp):
+    out = os.path.join(tmp, "study-%d.h5" % ranks)
+    cmd = [os.path.join(build, "apps", "catchup-sweep"), path, "-o", out, "--log-progress"]
+    if ranks > 1:
+        cmd = ["mpirun", "-n", str(ranks)] + cmd
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    if r.returncode:
+        sys.exit("catchup-sweep failed: " + r.stderr[-2000:])
+    line = [s for s in r.stderr.splitlines() if "parallel efficiency" in s][-1]
+    with h5py.File(out, "r") as f:
+        ss = f["steady_state"][:]
+        summ = f["summary"][:]
+    eff = re.search(r"parallel efficiency ([0-9.]+)", line).group(1)
+    inner = re.search(r", ([0-9.e+-]+) s on (\d+) rank", line)
+    return {"ranks": ranks, "wall": wall, "cpu": cpu, "sweep_s": float(inner.group(1)), "own_eff": float(eff), "line": line,
+            "tasks": len(ss), "ok": int((summ["status"] == 0).sum()), "solved": int((ss["solved"] == 1).sum()),
+            "iters": (int(ss["newton_iterations"].min()), float(np.median(ss["newton_iterations"])),
+                      int(ss["newton_iterations"].max())),
+            "mu": float(np.nanmax(ss["max_multiplier"])), "task_ms": 1e3 * float(np.median(summ["wall_time_s"])),
+            "statuses": dict(zip(*[list(map(lambda b: b.decode(), u)) if i == 0 else list(map(int, u))
+                                  for i, u in enumerate(np.unique(summ["status_name"], return_counts=True))]))}
+
+
+def section(rows, runs, reps, k, ng, pul):
+    out = ["<!-- BEGIN design: generated by scripts/bench-design; do not edit -->",
+           "## Switched converters' steady states and a design study", "",
+           "Command: `bash scripts/bench-design` (%d runs each, medians; this machine's 2 cores shared with other "
+           "sessions: times are noisy). `catchup-run CONVERTER.cir --steady-state`: the solve's wall time (the "
+           "switched integrator's adaptive map at tol 1e-12, Newton to a residual of 1e-10 relative, the monodromy "
+           "by finite differences). Brute force: catchup's adaptive scheme at tol 1e-12 from rest until the change "
+           "from one period's end to the next is below 1e-10 of the state's largest entry." % reps, "",
+           "| converter | Newton steps | period runs | final residual | largest multiplier | steady state "
+           "(target 5 ms) | brute force: periods | brute force: time | ratio |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if "failed" in r:
+            out.append("| %s | | | | | none: %s | | | |" % (r["name"], r["failed"].replace("|", "/")[:150]))
+            continue
+        b = r["brute"]
+        if "failed" in b:
+            bf, bt, ratio = "failed: " + b["failed"], "", ""
+        else:
+            bf = str(b["reached"] or ">%d (last change %.1e)" % (b["periods"], b["last_change"]))
+            bt, ratio = "%.3g ms" % (1e3 * b["seconds"]), "%.2g" % (b["seconds"] / r["seconds"])
+        out.append("| %s | %d | %d | %.1e | %.4g | %.3g ms | %s | %s | %s |" % (
+            r["name"], r["iterations"], r["runs"], r["residual"], r["mu"], 1e3 * r["seconds"], bf, bt, ratio))
+    ours = next(r for r in rows if r["name"] == NGSPICE_CONVERTER)
+    out += ["", "**ngspice's brute force** on `%s` (the near-ideal copy of scripts/converters_compare.py: RON 1 mOhm, "
+            "ROFF 1 GOhm, 1 ns edges, `%s`; TSTEP = TMAX = T/200, its states at each period's end interpolated "
+            "between its time points, written at 15 digits), over 4x the periods catchup's brute force needs:" % (
+                NGSPICE_CONVERTER, cc.DIODE), "",
+            "| ngspice setting | periods run | first period below %g | transient time to it | smallest "
+            "change seen | catchup steady state | ratio |" % sb.TARGET, "|---|---|---|---|---|---|---|"]
+    for g in ng:
+        if g.get("failed"):
+            out.append("| %s | | failed: %s | | | | |" % (g["setting"], g["failed"]))
+            continue
+        t = g.get("run_to_k_s") or g["run_s"]
+        ratio = t / ours["seconds"]
+        out.append("| %s | %d | %s | %.3g ms | %.1e | %.3g ms | %s%.0fx |" % (
+            g["setting"], g["periods"], g["reached"] or "never", 1e3 * t, g["min_change"],
+            1e3 * ours["seconds"], "" if g["reached"] else ">", ratio))
+    if pul is not None:
+        out += ["", "**pulsim's `run_periodic_shooting`** (pulsim %s from PyPI; the circuit as scripts/converters_compare.py "
+                "builds it: switches g_on 1e3 S, g_off 1e-9 S, the gates as a schedule; a fixed step dt = T/N, Newton "
+                "to 1e-10, 3 runs each, median); error: the max-norm distance of its steady state from catchup's "
+                "(the exact map's fixed point to 6e-10) over the state's largest entry:" % pulsim_version(), "",
+                "| converter | N (dt = T/N) | pulsim: time | converged | Newton steps | simulations | error | catchup "
+                "steady state (error <= 1e-9) | ratio |", "|---|---|---|---|---|---|---|---|---|"]
+        for q in pul:
+            ours_q = next(r for r in rows if r["name"] == q["name"])
+            if "failed" in q:
+                out.append("| %s | %d | failed: %s | | | | | | |" % (q["name"], q["n"], q["failed"].replace("|", "/")))
+                continue
+            out.append("| %s | %d | %.3g ms | %s | %d | %d | %.1e | %.3g ms | %.0fx |" % (
+                q["name"], q["n"], 1e3 * q["seconds"], "yes" if q["converged"] else "no (residual %.1e)" % q["residual"],
+                q["iterations"], q["runs"], q["error"],
+                1e3 * ours_q["seconds"], q["seconds"] / ours_q["seconds"]))
+    one = next(x for x in runs if x["ranks"] == 1)
+    out += ["", "**A design study of %d buck variants** (examples/circuits/buck-design.yaml, a grid of %d duties "
+            "0.1-0.9 x %d inductances 5-200 uH x %d capacitances 2-100 uF x %d loads 1-50 ohm, generated by the "
+            "sweep file's `grid:`; each task a steady state and its period measured): `catchup-sweep` on 1 rank "
+            "and under `mpirun -n 3` (rank 0 dispatches, 2 workers on the 2 cores). Target: <= 60 s on 2 cores at "
+            "a parallel efficiency >= 0.9." % (one["tasks"], k, k, k, k), "",
+            "| ranks | wall time (process) | CPU time (all processes) | sweep's own time (dispatch) | "
+            "T(1 rank) / (workers x T), process | the same, dispatch | catchup-sweep's efficiency figure | tasks ok | "
+            "steady states | Newton steps min/median/max | task median | largest multiplier |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for x in runs:
+        workers = max(1, x["ranks"] - 1)
+        out.append("| %d | %.1f s | %.1f s | %.1f s | %.2f | %.2f | %.2f | %d of %d | %d | %d / %g / %d | %.2f ms | "
+                   "%.4g |" % (x["ranks"], x["wall"], x["cpu"], x["sweep_s"], one["wall"] / (workers * x["wall"]),
+                               one["sweep_s"] / (workers * x["sweep_s"]), x["own_eff"], x["ok"], x["tasks"],
+                               x["solved"], *x["iters"], x["task_ms"], x["mu"]))
+    out += ["", "Load average (1, 5, 15 min) at the end: %s (other sessions share the 2 cores: the parallel "
+            "figures say more about that load than about the sweep; the CPU times say what the work costs)." % (
+                ", ".join("%.1f" % v for v in os.getloadavg())),
+            "", "Statuses (1 rank): %s." % ", ".join("%s %d" % kv for kv in one["statuses"].items()), "",
+            "<!-- END design -->"]
+    return "\n".join(out)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--per-axis", type=int, default=10)
+    ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--pulsim-one", nargs=2, metavar=("NAME", "N"), help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.pulsim_one:
+        return pulsim_one(a.pulsim_one[0], int(a.pulsim_one[1]))
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = converters(a.build, a.reps, tmp)
+        ours = next(r for r in rows if r["name"] == NGSPICE_CONVERTER)
+        ng = ngspice_brute(NGSPICE_CONVERTER, ours["T"], 4 * sb.periods_needed(ours["mu"]), tmp)
+        try:
+            import pulsim  # noqa: F401
+            pul = pulsim_shooting(a.build, tmp)
+        except ImportError:
+            print("pulsim not installed (.venv/bin/pip install pulsim): its rows are left out", flush=True)
+            pul = None
+        path = study_file(tmp, a.per_axis)
+        runs = []
+        for ranks in (1, 3):
+            runs.append(sweep(a.build, path, ranks, tmp))
+            print({k: v for k, v in runs[-1].items() if k != "line"}, runs[-1]["line"], flush=True)
+    text = section(rows, runs, a.reps, a.per_axis, ng, pul)
+    print(text)
+    if not a.no_write:
+        p = os.path.join(ROOT, "BENCHMARKS.md")
+        doc = open(p).read()
+        if "<!-- BEGIN design" in doc:
+            doc = re.sub(r"<!-- BEGIN design.*?<!-- END design -->", lambda m: text, doc, flags=re.S)
+        else:
+            doc = doc.rstrip("\n") + "\n\n" + text + "\n"
+        open(p, "w").write(doc)
+
+
+if __name__ == "__main__":
+    main()

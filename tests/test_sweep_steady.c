@@ -1,0 +1,149 @@
+/* Steady-state sweeps and generated variants (src/sweep/sweep_steady.c,
+ * sweep_gen.c; docs/sweep-format.md): each task of a sweep over the buck of
+ * examples/circuits/buck-design.cir solves its steady state and measures it,
+ * checked against the closed forms of the ideal buck (RS set to 1 uOhm):
+ * the CCM average D Vin, the inductor's ripple (Vin - Vout) D Ts / L, the
+ * efficiency 1, the largest multiplier e^{-Ts / (2 R C)} (both topologies
+ * share the L-C-R filter's A), the DCM conversion ratio 2 / (1 + sqrt(1 +
+ * 8 L / (R D^2 Ts))) within the ripple; a grid and a zip make the variants
+ * and overrides they say; the Latin hypercube puts one point in each
+ * stratum of every range, the same on every parse. Small sizes: the 10^4
+ * study is scripts/bench-design. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+#include "catchup.h"
+#include "sweep_run.h"
+
+#define EX CUP_EXAMPLES_DIR
+
+static cup_sweep *parse(const char *text, int resolve) {
+  cup_sweep *s = NULL;
+  char err[SW_ERR_LEN] = "";
+  int st = sw_parse(&s, text, strlen(text), EX "/circuits/inline-sweep.yaml", err);
+  if (!st && resolve) st = sw_resolve_files(s, err);
+  if (st) fail_msg("sweep did not load: %s", err);
+  return s;
+}
+
+/* variants: D = 0.3, 0.5, 0.7 at L = 100u (CCM), then L = 10u, R = 20 at D = 0.3 (DCM) */
+static const char *buck_sweep =
+    "base: buck-design.yaml\n"
+    "variants:\n"
+    "  - name: ccm\n"
+    "    set: {netlist.RS: 1u}\n"
+    "    grid: {netlist.D: [0.3, 0.5, 0.7]}\n"
+    "  - name: dcm\n"
+    "    set: {netlist.RS: 1u, netlist.D: 0.3}\n"
+    "    zip: {netlist.L: [10u], netlist.R: [20]}\n";
+
+static void steady_buck(void **state) {
+  (void)state;
+  cup_sweep *s = parse(buck_sweep, 1);
+  assert_int_equal(s->n_variants, 4);
+  assert_int_equal(s->n_tasks, 4);
+  assert_true(s->steady);
+  assert_int_equal(s->out_samples, 0);
+  assert_string_equal(s->var[1].name, "ccm.1");
+  assert_string_equal(s->var[1].set[1], "netlist.D=0.5");
+  assert_string_equal(s->var[3].set[2], "netlist.L=10u");
+  assert_string_equal(s->var[3].set[3], "netlist.R=20");
+  assert_string_equal(sw_signal_name(s, s->ss_sig[0]), "v(out)");
+  assert_string_equal(sw_signal_name(s, s->ss_sig[1]), "i(L1)");
+  const double Vin = 12, Ts = 10e-6, C = 10e-6, RS = 1e-6;
+  const double D[4] = {0.3, 0.5, 0.7, 0.3}, L[4] = {100e-6, 100e-6, 100e-6, 10e-6}, R[4] = {5, 5, 5, 20};
+  double *traj = malloc(sizeof(double) * (size_t)(sw_traj_len(s) + 1));
+  for (int k = 0; k < 4; k++) {
+    sw_result r;
+    sw_run_job(s, k, NULL, &r, traj);                 /* the reference: nothing to compute */
+    assert_int_equal(r.status, CUP_OK);
+    sw_run_job(s, s->n_variants + k, NULL, &r, traj);
+    const struct sw_steady_result *q = &r.steady;
+    const double *v = q->fig[0], *i = q->fig[1];      /* average, rms, min, max, peak-to-peak */
+    printf("# %-6s %s: %d Newton steps, %ld period runs, residual %.2g, |mu| %.9f, v(out) %.9f V (p-p %.4g), "
+           "i(L1) p-p %.6f A, efficiency %.9f, %.3f ms\n", s->var[k].name, cup_status_name(r.status), q->iterations,
+           (long)q->period_runs, q->residual, q->max_multiplier, v[0], v[4], i[4], q->efficiency, 1e3 * r.wall);
+    assert_int_equal(r.status, CUP_OK);
+    assert_true(q->solved);
+    assert_true(q->iterations >= 1 && q->iterations <= 6);
+    assert_true(fabs(q->period - Ts) <= 1e-18);
+    if (k < 3) {                                      /* CCM */
+      assert_true(fabs(v[0] - D[k] * Vin) <= 2 * D[k] * RS * i[3] + 1e-9);
+      double closed = (Vin - v[0]) * D[k] * Ts / L[k];
+      assert_true(fabs(i[4] - closed) <= D[k] * Ts / L[k] * v[4] + 1e-9);
+      assert_true(fabs(i[0] - v[0] / R[k]) <= 1e-6 * i[0]);      /* the capacitor's charge balance */
+      assert_true(fabs(q->max_multiplier - exp(-Ts / (2 * R[k] * C))) <= 1e-6);
+    } else {                                          /* DCM: the current reaches 0 */
+      assert_true(fabs(i[2]) <= 1e-9);
+      double M = 2 / (1 + sqrt(1 + 8 * L[k] / (R[k] * D[k] * D[k] * Ts)));
+      assert_true(fabs(v[0] / Vin - M) <= v[4] / Vin);
+    }
+    /* The input's current jumps at the two gate edges: the trapezoid rule on
+     * 2001 samples is O(h) there, at most h/2 Vin i_max per edge against
+     * the input's Vin D i_avg T (docs/steady-state.md); the circuit's own
+     * efficiency is 1 - O(RS) */
+    double h = Ts / 2000, bound = 2 * (h / 2) * Vin * i[3] / (Vin * D[k] * i[0] * Ts);
+    printf("#        efficiency 1 - %.3g, the samples' bound %.3g\n", 1 - q->efficiency, bound);
+    assert_true(fabs(q->efficiency - 1) <= bound);
+  }
+  free(traj);
+  sw_free(&s);
+}
+
+/* The Latin hypercube: 50 points, one in each fiftieth of every range (of
+ * the logarithm for a log range), the same overrides on a second parse and
+ * others with another seed. */
+static void latin_hypercube(void **state) {
+  (void)state;
+  const char *text =
+      "base: buck-design.yaml\n"
+      "variants:\n"
+      "  - name: first\n"
+      "  - name: lhs\n"
+      "    sample: {count: 50, seed: 7, ranges: {netlist.D: [0.2, 0.8], netlist.L: {log: [1u, 100u]}}}\n";
+  cup_sweep *a = parse(text, 0), *b = parse(text, 0);
+  assert_int_equal(a->n_variants, 51);
+  int hitD[50] = {0}, hitL[50] = {0};
+  for (int k = 1; k <= 50; k++) {
+    const sw_variant *v = &a->var[k];
+    char name[16];
+    snprintf(name, sizeof name, "lhs.%d", k - 1);
+    assert_string_equal(v->name, name);
+    assert_int_equal(v->n_set, 2);
+    assert_string_equal(v->set[0], b->var[k].set[0]);
+    assert_string_equal(v->set[1], b->var[k].set[1]);
+    double d = atof(strchr(v->set[0], '=') + 1), l = atof(strchr(v->set[1], '=') + 1);
+    assert_true(d >= 0.2 && d < 0.8 && l >= 1e-6 && l < 100e-6);
+    hitD[(int)floor((d - 0.2) / 0.6 * 50)]++;
+    hitL[(int)floor(log(l / 1e-6) / log(100.0) * 50)]++;
+  }
+  for (int j = 0; j < 50; j++) {
+    assert_int_equal(hitD[j], 1);
+    assert_int_equal(hitL[j], 1);
+  }
+  sw_free(&b);
+  const char *other =
+      "base: buck-design.yaml\n"
+      "variants:\n"
+      "  - name: first\n"
+      "  - name: lhs\n"
+      "    sample: {count: 50, seed: 8, ranges: {netlist.D: [0.2, 0.8], netlist.L: {log: [1u, 100u]}}}\n";
+  b = parse(other, 0);
+  assert_string_not_equal(a->var[1].set[0], b->var[1].set[0]);
+  sw_free(&a);
+  sw_free(&b);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(steady_buck),
+      cmocka_unit_test(latin_hypercube),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
