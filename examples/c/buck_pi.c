@@ -38,7 +38,7 @@ typedef struct {
   long p;                 /* completed periods */
   double acc_v, acc_i;    /* sums over the current period */
   int on;                 /* closed instants in the current period */
-  double vmean[PERIODS + 1], imean[PERIODS + 1], duty[PERIODS + 1];
+  double vmean[PERIODS], imean[PERIODS], duty[PERIODS];
 } pi_ctl;
 
 static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
@@ -48,7 +48,7 @@ static int pi_gate(double t, const double *x, int nswitch, int *gate, void *ctx)
   if (nswitch != 1) return 1;
   long k = lround(t / c->ts);
   int j = (int)(k % M);
-  if (j == 0 && k > 0 && c->p <= PERIODS) {      /* close the period that just ended */
+  if (j == 0 && k > 0 && c->p < PERIODS) {      /* close the period that just ended */
     c->vmean[c->p] = c->acc_v / M;
     c->imean[c->p] = c->acc_i / M;
     c->duty[c->p] = (double)c->on / M;
