@@ -7,8 +7,8 @@
  * and at the start of each switching period it latches the duty command
  *     d = clamp(kp (Vref - v) + xi, 0, 1)
  * and turns S1 on; S1 turns off when the sawtooth carrier j / M (j the
- * call's index within the period) passes d. IL steps the load from 1.2 to
- * 2.2 A halfway (2 ms).
+ * call's index within the period) passes d. IL steps the load by 1 A
+ * halfway (2 ms): from 1 to 2 A at Vref = 5 V.
  *
  * Independent references, checked at the end of each half (the last 50
  * periods before the step and before the end): the integrator forces zero
