@@ -150,6 +150,41 @@ static void netlist_option(void **state) {
   assert_null(strstr(r.err, "steady state"));    /* the scene's key overrides the netlist's */
 }
 
+/* A switched netlist's signals follow its configuration sample by sample:
+ * on the ideal CCM buck's steady-state period (12 V, D = 0.5) the switch
+ * and the diode share the inductor's current (i(S1) + i(D1) = i(L1) at every
+ * sample, each zero while the other conducts) and v(sw) is 12 V or 0, its
+ * mean D Vin = 6 V to the sampling's O(1/N) at the two edges. */
+static void switched_signals(void **state) {
+  (void)state;
+  const char *out = tmp_path("buck.h5");
+  result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/buck-ccm.cir", "-o", out, "--steady-state",
+                                           "--probe", "i(S1)", "--probe", "i(D1)", "--probe", "i(L1)", "--probe",
+                                           "v(sw)", NULL}, 0, 0);
+  expect_exit(&r, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *is, *id, *il, *vsw;
+  hsize_t N = read_rows(f, "signals/i(S1)", 1, 1, &is);
+  assert_true(N > 100);
+  assert_true(read_rows(f, "signals/i(D1)", 1, 1, &id) == N);
+  assert_true(read_rows(f, "signals/i(L1)", 1, 1, &il) == N);
+  assert_true(read_rows(f, "signals/v(sw)", 1, 1, &vsw) == N);
+  double mean = 0;
+  long on = 0;
+  for (hsize_t j = 0; j < N; j++) {
+    assert_close(is[j] + id[j], il[j], 1e-12 * fabs(il[j]));
+    assert_true(is[j] == 0 || id[j] == 0);
+    assert_true(vsw[j] == 12 || vsw[j] == 0);
+    on += vsw[j] == 12;
+    mean += (j == 0 || j == N - 1 ? 0.5 : 1.0) * vsw[j] / (double)(N - 1);
+  }
+  assert_true(on > (long)N / 3 && on < 2 * (long)N / 3);
+  assert_close(mean, 6, 12.0 * 2 / (double)(N - 1));
+  H5Fclose(f);
+  free(is); free(id); free(il); free(vsw);
+}
+
 static void bad_input(void **state) {
   (void)state;
   const char *out = tmp_path("bad.h5");
@@ -171,6 +206,7 @@ int main(void) {
     cmocka_unit_test(bridge_period),
     cmocka_unit_test(no_steady_state),
     cmocka_unit_test(netlist_option),
+    cmocka_unit_test(switched_signals),
     cmocka_unit_test(bad_input),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
