@@ -187,6 +187,13 @@ static void test_pulse_edges(void **state) {
                   "t.cir:2:14: V1: PULSE: 'jump' stands only for PULSE's rise or fall time TR, TF");
   assert_contains(text_bad("p\nV1 a 0 SIN(0 10 jump)\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n", NULL, 0),
                   "V1: SIN: 'jump' stands only for PULSE's rise or fall time");
+  /* PW and PER omitted are TSTOP (2m): one pulse, as SPICE runs it (TR = TSTEP, then V2 to the end) */
+  assert_close(pulse_at("PULSE(0 10 1m)", 0, 1e-3 + 0.5e-6), 5, 1e-9);
+  assert_close(pulse_at("PULSE(0 10 1m)", 0, 1.5e-3), 10, 0);
+  assert_close(pulse_at("PULSE(0 10 1m)", 0, 2e-3), 10, 0);
+  assert_close(pulse_at("PULSE(0 10 0 jump 0 2m)", 0, 1.9e-3), 10, 0);             /* PER = TSTOP < 2.001m */
+  assert_contains(text_bad("p\nV1 a 0 PULSE(0 10 0 1u 1u 1.5m 1m)\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n", NULL, 0),
+                  "pulse period 0.001 is shorter than rise + width + fall");                 /* PER given: refused */
   const char *set[] = {"V1=PULSE(0 10 1m jump jump 0.5m 1m)"};                        /* a set too */
   cup_netlist *nl = text_ok("p\nV1 a 0 1\nR1 a b 1\nC1 b 0 1\n.tran 1u 2m\n", set, 1);
   double u;

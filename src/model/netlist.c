@@ -255,6 +255,10 @@ static int source_terms(cup_netlist *nl, const nl_circuit *c, int e, char *errms
   if (isnan(w.rise) || isnan(w.fall) || isnan(w.width) || isnan(w.period))
     return nl_fail(c, e, errmsg, CUP_ERR_PARSE, "PULSE without TR, TF, PW or PER needs .tran (they default to "
                    "TSTEP and TSTOP)");
+  /* PER omitted is TSTOP: a pulse longer than that (PULSE(0 10 1m): PW is
+   * TSTOP too) starts no second period before TSTOP, in SPICE as here, so it
+   * is one pulse, not a period shorter than rise + width + fall */
+  if (spice_param(s, NL_PULSE_PER, 0) == 0 && w.period < w.rise + w.width + w.fall) w.period = 0;
   return add_wave(nl->u, j, &w, c, e, errmsg);
 }
 
