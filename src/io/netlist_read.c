@@ -369,6 +369,9 @@ static int read_coupling(rd *r, int card) {
   int prev = nx_hash_get(&r->elems, name->s);
   if (prev >= 0)
     return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate element name (first at line %d)", c->elem[prev].line);
+  for (int j = 0; j < c->ncoup; j++)   /* K cards are not elements: their names are checked here */
+    if (!strcasecmp(c->coup[j].name, name->s))
+      return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate coupling name (first at line %d)", c->coup[j].line);
   if (r->x.card[card].n < 4) return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s L1 L2 k'", name->s);
   if (cup_grow(&c->coup, &r->capcoup, c->ncoup, sizeof *c->coup, 8)) return nomem(r);
   nl_coupling *k = &c->coup[c->ncoup];
