@@ -46,7 +46,7 @@ import warnings
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ngspice_compare import ngspice_version  # noqa: E402
+from ngspice_compare import ngspice_version, write_section  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 EXAMPLES = ["buck-ccm", "buck-dcm", "boost", "buckboost", "flyback", "fullbridge", "sixpulse", "precision-rectifier"]
@@ -613,11 +613,7 @@ def main():
     print(text)
     if a.no_doc:
         return
-    path = os.path.join(ROOT, "BENCHMARKS.md")
-    doc = open(path).read()
-    m = re.search(r"<!-- BEGIN converters.*?<!-- END converters -->", doc, re.S)
-    doc = doc[:m.start()] + text + doc[m.end():] if m else doc.rstrip("\n") + "\n\n" + text + "\n"
-    open(path, "w").write(doc)
+    write_section("converters", text)
 
 
 if __name__ == "__main__":

@@ -309,13 +309,7 @@ def main():
     text = section(rows, runs, a.reps, a.per_axis, ng, pul)
     print(text)
     if not a.no_write:
-        p = os.path.join(ROOT, "BENCHMARKS.md")
-        doc = open(p).read()
-        if "<!-- BEGIN design" in doc:
-            doc = re.sub(r"<!-- BEGIN design.*?<!-- END design -->", lambda m: text, doc, flags=re.S)
-        else:
-            doc = doc.rstrip("\n") + "\n\n" + text + "\n"
-        open(p, "w").write(doc)
+        sb.ngc.write_section("design", text)
 
 
 if __name__ == "__main__":

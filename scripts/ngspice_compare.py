@@ -397,6 +397,18 @@ def ngspice_version():
     return m.group(1) if m else "?"
 
 
+def write_section(name, text):
+    """BENCHMARKS.md with its block from "<!-- BEGIN NAME" to "<!-- END NAME -->" replaced
+    by text (which carries both markers), or text appended when there is no such block;
+    every generated section of the bench scripts is written so."""
+    path = os.path.join(ROOT, "BENCHMARKS.md")
+    doc = open(path).read() if os.path.exists(path) else "# Benchmarks\n"
+    m = re.search(r"<!-- BEGIN %s.*?<!-- END %s -->" % (re.escape(name), re.escape(name)), doc, re.S)
+    doc = doc[:m.start()] + text + doc[m.end():] if m else doc.rstrip("\n") + "\n\n" + text + "\n"
+    with open(path, "w") as f:
+        f.write(doc)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
@@ -414,11 +426,7 @@ def main():
         cost = adaptive_cost(a, tmp)
         log.write(json.dumps({"adaptive_cost": cost}) + "\n")
     text = section(rows, cost)
-    path = os.path.join(ROOT, "BENCHMARKS.md")
-    doc = open(path).read() if os.path.exists(path) else "# Benchmarks\n"
-    m = re.search(r"<!-- BEGIN ngspice.*?<!-- END ngspice -->", doc, re.S)
-    doc = doc[:m.start()] + text + doc[m.end():] if m else doc.rstrip("\n") + "\n\n" + text + "\n"
-    open(path, "w").write(doc)
+    write_section("ngspice", text)
     print(text)
 
 

@@ -214,13 +214,7 @@ def main():
     text = section(rows, brutes, ng, a.reps)
     print(text)
     if not a.no_write:
-        path = os.path.join(ROOT, "BENCHMARKS.md")
-        doc = open(path).read()
-        if "<!-- BEGIN steady" in doc:
-            doc = re.sub(r"<!-- BEGIN steady.*?<!-- END steady -->", lambda m: text, doc, flags=re.S)
-        else:
-            doc = doc.rstrip("\n") + "\n\n" + text + "\n"
-        open(path, "w").write(doc)
+        ngc.write_section("steady", text)
 
 
 if __name__ == "__main__":
