@@ -2,7 +2,7 @@
  * driver's part is here: a header naming the build and the configuration,
  * where the run stopped, its statistics and x_k. Each scheme keeps its own
  * part in its own file: the projector's (projector.c), the LCP step's
- * (lcp/step.c), the adaptive scheme's (adaptive_run.c). Every part is one
+ * (lcp/step.c), the adaptive scheme's (adaptive_ckpt.c). Every part is one
  * function that reads or writes its fields in one order (util/ckpt.h), so
  * that the size, the save and the restore cannot disagree. */
 #include <math.h>
