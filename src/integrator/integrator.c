@@ -1,267 +1,25 @@
-/* integrator — the inexact catching-up algorithm (paper, Sec. 3, eq. for
- * x_{k+1}): a free step (freestep.c), then an (eps_n, eta_n)-projection onto
- * K(t_{k+1}) in the P-metric (projector.c). Everything that does not depend
- * on the state is prepared once in cup_integrator_create; a step allocates
- * nothing and a run keeps only the current state. */
-#define _POSIX_C_SOURCE 200809L
-#include <ctype.h>
-#include <float.h>
-#include <limits.h>
+/* integrator — the driver: the front doors that make an integrator from a
+ * model (an LCS, a sweeping process; switched.c makes a switched LCS's),
+ * and the calls of the public API through the scheme's table (scheme.h),
+ * which schemes.c chooses by the options. It names no scheme: the
+ * fixed-step schemes are fixed.c, the event-driven one adaptive_scheme.c;
+ * each checks what it needs of the model. */
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include "catchup.h"
-#include "faststep.h"
-#include "freestep.h"
-#include "tally.h"
-#include "lcp/step.h"
-#include "model/lcs_impl.h"
-#include "util/clock.h"
-#include "set/polyset_impl.h"
-#include "set/set_impl.h"
-#include "projector/projector.h"
-#include "projector/choose.h"
-#include "adaptive.h"
-#include "estimate.h"
+#include "options.h"
+#include "schemes.h"
 #include "integrator_impl.h"
+#include "model/lcs_impl.h"
+#include "set/set_impl.h"
+#include "util/fail.h"
 
-void cup_integrator_options_default(cup_integrator_options *o) {
-  if (!o) return;
-  memset(o, 0, sizeof *o);
-  o->scheme = CUP_SCHEME_EXPLICIT;
-  o->T = 1;
-  o->n = 100;
-  o->eps = (cup_schedule){1, -2.1};
-  o->eta = (cup_schedule){1, -1.05};
-  cup_projector_options_default(&o->proj);
-  o->output = CUP_OUTPUT_EVERY;
-  o->output_every = 1;
-  o->output_samples = 0;
-  o->f_order = 3;
-  o->theta = 0.5;
-  o->tol_abs = 1e-6;
-  o->tol_rel = 1e-6;
-}
-
-/* ---- set-up --------------------------------------------------------------------- */
-
-/* tol of the adaptive scheme, the event rate cap, the step-doubling estimate. */
-static int validate_tolerances(const cup_integrator_options *o, char *errmsg) {
-  if (o->scheme == CUP_SCHEME_ADAPTIVE) {
-    if (!(o->tol_abs >= 0) || !isfinite(o->tol_abs))
-      return cup_fail(errmsg, CUP_ERR_ARG, "tol_abs = %g must be finite and >= 0", o->tol_abs);
-    if (!(o->tol_rel >= 0) || !isfinite(o->tol_rel))
-      return cup_fail(errmsg, CUP_ERR_ARG, "tol_rel = %g must be finite and >= 0", o->tol_rel);
-    if (o->tol_abs == 0 && !(o->tol_rel >= 16 * DBL_EPSILON))
-      return cup_fail(errmsg, CUP_ERR_ARG, "tol_rel = %g with tol_abs = 0 is below what double precision "
-                      "can deliver (16 eps = %.2g): raise tol_rel or give tol_abs", o->tol_rel, 16 * DBL_EPSILON);
-    if (!(o->max_event_rate >= 0) || !isfinite(o->max_event_rate))
-      return cup_fail(errmsg, CUP_ERR_ARG, "max_event_rate = %g must be finite and >= 0", o->max_event_rate);
-  } else if (o->estimate && (o->n < 2 || o->n % 2))
-    return cup_fail(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
-                    "must be even", o->n);
-  return CUP_OK;
-}
-
-static int validate(const cup_integrator_options *o, char *errmsg) {
-  if (!(o->T > 0) || !isfinite(o->T))
-    return cup_fail(errmsg, CUP_ERR_ARG, "T = %g must be finite and > 0", o->T);
-  if (o->n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "n = %ld must be >= 1", o->n);
-  if ((int)o->scheme < 0 || (int)o->scheme >= (int)CUP_SCHEME_COUNT)
-    return cup_fail(errmsg, CUP_ERR_ARG, "unknown scheme %d", (int)o->scheme);
-  if (o->scheme == CUP_SCHEME_THETA && !(o->theta >= 0 && o->theta <= 1))
-    return cup_fail(errmsg, CUP_ERR_ARG, "theta = %g must be in [0, 1]", o->theta);
-  int st = validate_tolerances(o, errmsg);
-  if (st) return st;
-  double e = cup_schedule_value(&o->eps, o->n), t = cup_schedule_value(&o->eta, o->n);
-  if (!(e >= 0) || !isfinite(e) || !(t >= 0) || !isfinite(t))
-    return cup_fail(errmsg, CUP_ERR_ARG, "tolerances eps_n = %g, eta_n = %g must be finite and >= 0", e, t);
-  switch (o->output) {
-    case CUP_OUTPUT_EVERY:
-      if (o->output_every < 1)
-        return cup_fail(errmsg, CUP_ERR_ARG, "output every %ld: the stride must be >= 1", o->output_every);
-      break;
-    case CUP_OUTPUT_SAMPLES:
-      if (o->output_samples < 2)
-        return cup_fail(errmsg, CUP_ERR_ARG, "output samples = %ld must be >= 2", o->output_samples);
-      if (!(o->output_t0 >= 0 && o->output_t0 < o->T))
-        return cup_fail(errmsg, CUP_ERR_ARG, "output_t0 = %g must be in [0, T = %g)", o->output_t0, o->T);
-      break;
-    case CUP_OUTPUT_FINAL:
-    case CUP_OUTPUT_NONE:
-      break;
-    default:
-      return cup_fail(errmsg, CUP_ERR_ARG, "unknown output kind %d", (int)o->output);
-  }
-  if (!(o->max_wall_seconds >= 0))
-    return cup_fail(errmsg, CUP_ERR_ARG, "max_wall_seconds = %g must be >= 0", o->max_wall_seconds);
-  if (!(o->hmax >= 0) || !isfinite(o->hmax))
-    return cup_fail(errmsg, CUP_ERR_ARG, "hmax = %g must be finite and >= 0", o->hmax);
-  return CUP_OK;
-}
-
-/* Only the theta scheme's LCP and the adaptive scheme take D: the
- * catching-up schemes project onto K(t) = {C x + G u + F >= 0}, which
- * exists only when D = 0; an active network (B kept as given) only theta. */
-static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
-  if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
-  if (L->keep_B)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
-                    "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
-                    cup_scheme_name(scheme), scheme == CUP_SCHEME_ADAPTIVE
-                    ? "its state jumps are projections in the energy metric P and its choice of the active set "
-                      "takes the network as passive"
-                    : "it projects in the energy metric P");
-  if (scheme == CUP_SCHEME_ADAPTIVE) return CUP_OK;
-  int *rows = malloc(sizeof(int) * ((size_t)L->m + 1)), k = 0;
-  unsigned char *used = calloc((size_t)L->m + 1, 1);
-  if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
-  for (int j = 0; j < L->m; j++)
-    for (int q = L->D.p[j]; q < L->D.p[j + 1]; q++)
-      if (L->D.x[q] != 0) used[L->D.i[q]] = used[j] = 1;
-  for (int i = 0; i < L->m; i++) if (used[i]) rows[k++] = i;
-  char text[128];
-  cup_lcs_rows_text(L, rows, k, text, sizeof text);
-  free(rows); free(used);
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
-                  "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state does "
-                  "not fix): use the theta or the adaptive scheme", cup_scheme_name(scheme), text,
-                  k == 1 ? "has" : "have");
-}
-
-/* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
-static int theta_step_init(cup_integrator *I, const double *W, double theta, char *errmsg) {
-  const cup_lcs *L = I->L;
-  int n = I->n, m = I->m, st = CUP_OK;
-  double *B = NULL, *D = NULL;
-  if (L && L->has_D) {
-    B = calloc((size_t)n * m + 1, sizeof(double));
-    D = calloc((size_t)m * m + 1, sizeof(double));
-    if (!B || !D) st = CUP_ERR_NOMEM;
-    for (int j = 0; !st && j < m; j++) {
-      for (int k = L->B.p[j]; k < L->B.p[j + 1]; k++) B[L->B.i[k] + (size_t)j * n] = L->B.x[k];
-      for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
-    }
-  }
-  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D, theta);
-  free(B);
-  free(D);
-  return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
-}
-
-/* The polyset path: the projector, and the exact LCP step where it is
- * cheaper or the scheme needs it. */
-static int polyset_setup(cup_integrator *I, char *errmsg) {
-  const cup_integrator_options *o = &I->o;
-  int st = CUP_OK;
-  /* The theta step with W = I is the P-projection of the explicit free
-   * point, solved exactly by principal pivoting on the m x m dual: for a
-   * small dense set that is what the auto projector would do, certified the
-   * same way, in fewer operations (70 against 107 ns a step on the paper's
-   * circuit). The projector decides (a user's feasible point keeps it). */
-  I->use_theta = o->scheme == CUP_SCHEME_THETA ||
-                 (o->scheme == CUP_SCHEME_EXPLICIT && proj_small_lcp(I->K, &o->proj));
-  if (I->use_theta && !I->K->dense)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
-                    "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
-                    "use the explicit, implicit or exponential scheme", I->K->m, I->K->n, CUP_DENSE_MAX_ROWS,
-                    CUP_DENSE_MAX_DIM);
-  if (I->use_theta) {
-    double *W = I->fs.W, *eye = NULL;
-    if (!W) {
-      eye = calloc((size_t)I->n * (size_t)I->n, sizeof(double));
-      if (!eye) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-      for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
-      W = eye;
-    }
-    st = theta_step_init(I, W, o->scheme == CUP_SCHEME_THETA ? o->theta : 0, errmsg);
-    free(eye);
-  }
-  return st;
-}
-
-/* Everything but the model: buffers, the free step, the projection. */
-static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
-  const cup_integrator_options *o = &I->o;
-  I->h = o->T / (double)o->n;
-  I->kend = o->n;
-  I->eps_n = cup_schedule_value(&o->eps, o->n);
-  I->eta_n = cup_schedule_value(&o->eta, o->n);
-  size_t N = (size_t)I->n, M = (size_t)I->m + 1, P = (size_t)I->p + 1;
-  I->x = calloc(N, sizeof(double));
-  I->xnew = calloc(N, sizeof(double));
-  I->xf = calloc(N, sizeof(double));
-  I->g = calloc(M, sizeof(double));
-  I->ut = calloc(P, sizeof(double));
-  I->s0 = calloc(M, sizeof(double));
-  I->sg = calloc(M, sizeof(double));
-  I->v = calloc(2 * N, sizeof(double));
-  I->xs = calloc(N, sizeof(double));
-  I->zprev = calloc(M, sizeof(double));
-  I->zs = 1;
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->sg || !I->v || !I->xs || !I->zprev)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-  if (o->scheme == CUP_SCHEME_THETA && !I->K)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
-                    "theta scheme: the set is a %s; the theta step solves an LCP on a polyset's rows "
-                    "(use the explicit, implicit or exponential scheme)", cup_set_kind_name(I->S->kind));
-  int st = cup_freestep_init(&I->fs, D, I->K, I->u, o->scheme, o->theta, I->h, o->f_order, errmsg);
-  if (!st) st = cup_freestep_add_rhs(&I->fs, o->f, o->f_ctx);
-  if (!st && pd) st = cup_freestep_add_rhs(&I->fs, pd->f, pd->f_ctx);
-  if (!st && pd) cup_freestep_set_rhs_integral(&I->fs, pd->f_integral, pd->f_integral_ctx);
-  if (!st && I->K) st = polyset_setup(I, errmsg);
-  /* the paper's tolerances are absolute; a zero schedule asks for the exact
-   * projection, certified relative to the problem's scale */
-  cup_projector_options po = o->proj;
-  po.eps_abs = I->eps_n;
-  po.eps_rel = I->eps_n > 0 ? 0 : 1e-12;
-  po.eta_abs = I->eta_n;
-  po.eta_rel = I->eta_n > 0 ? 0 : 1e-10;
-  if (!st && I->use_theta) po = proj_backup_options(I->K, &po);   /* one LCP: the step's */
-  if (!st && I->K) st = cup_projector_create(&I->proj, I->K, &po, errmsg);
-  if (!st && !I->K) st = cup_setproj_create(&I->sp, I->S, &po, errmsg);
-  if (st) return st;
-  I->h_rho = cup_freestep_h_rho(D, I->h);
-  I->split = cup_freestep_splitting(&I->fs, &I->split_row);
-  if (I->K)
-    cup_faststep_init(&I->fast, &I->fs, &I->th, I->K, I->fixed || !I->u ? NULL : I->G, I->g, I->use_theta,
-                      I->eps_n, I->eta_n, o->n, o->T);
-  return CUP_OK;
-}
-
-static cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st) {
-  cup_integrator_options o;
-  if (opt) o = *opt; else cup_integrator_options_default(&o);
-  *st = validate(&o, errmsg);
-  if (*st) return NULL;
-  cup_integrator *I = calloc(1, sizeof *I);
-  if (!I) *st = cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-  else I->o = o;
-  return I;
-}
-
-/* The step-doubling estimate: the same model and scheme at n/2 (borrowing
- * this integrator's model), keeping its states where the two grids meet
- * (estimate.h). */
-static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
-  cup_integrator_options h = I->o;
-  h.n = I->o.n / 2;
-  h.estimate = 0;
-  h.on_step = NULL;
-  if (cup_estimate_init(&I->est, I->o.n, I->n) || !(I->x0 = calloc((size_t)I->n, sizeof(double))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
-  h.output = CUP_OUTPUT_EVERY;
-  h.output_every = cup_estimate_stride(&I->est);
-  int st;
-  cup_integrator *H = I->half = integrator_new(&h, errmsg, &st);
-  if (!H) return st;
-  H->u = I->u;
-  H->L = I->L;                                   /* the theta step takes D from it */
-  H->n = I->n; H->m = I->m; H->p = I->p;
-  H->S = I->S; H->K = I->K; H->G = I->G; H->fixed = I->fixed;
-  return setup(H, D, pd, errmsg);
+/* Both front doors end here: the scheme the options name, made from the
+ * model that I's fields hold (md: the same, with what only set-up reads). */
+static int build(cup_integrator *I, const scheme_model *md, char *errmsg) {
+  I->sch = scheme_choose(&I->o);
+  return I->sch->create(I, md, &I->ws, errmsg);
 }
 
 int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
@@ -270,10 +28,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   *out = NULL;
   if (!L) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
   int st;
-  cup_integrator *I = integrator_new(opt, errmsg, &st);
+  cup_integrator *I = cup_integrator_new_(opt, errmsg, &st);
   if (!I) return st;
-  st = needs_theta(L, I->o.scheme, errmsg);
-  if (st) { cup_integrator_free(&I); return st; }
   I->u = u;
   I->L = L;
   I->n = L->n; I->m = L->m; I->p = L->p;
@@ -281,17 +37,8 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->G = L->has_G ? &L->G : NULL;
   I->fixed = L->fixed;
   cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
-  if (I->o.scheme == CUP_SCHEME_ADAPTIVE) {
-    st = cup_adaptive_create(&I->ad, &D, I->K, I->G, L->has_D ? &L->B : NULL, L->has_D ? &L->D : NULL, u,
-                             &I->o, errmsg);
-    if (st) { cup_integrator_free(&I); return st; }
-    *out = I;
-    return CUP_OK;
-  }
-  st = cup_set_wrap_polyset(&I->S_own, L->K, I->G, L->p, errmsg);
-  I->S = I->S_own;
-  if (!st) st = setup(I, &D, NULL, errmsg);
-  if (!st && I->o.estimate) st = create_half(I, &D, NULL, errmsg);
+  scheme_model md = {&D, L, NULL, I->K, I->G, u, &I->o};
+  st = build(I, &md, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -337,23 +84,12 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
   *out = NULL;
   if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: process description is NULL");
   int st;
-  cup_integrator *I = integrator_new(opt, errmsg, &st);
+  cup_integrator *I = cup_integrator_new_(opt, errmsg, &st);
   if (!I) return st;
   cup_drift D;
   st = process_model(I, d, &D, errmsg);
-  if (!st && I->o.scheme == CUP_SCHEME_ADAPTIVE) {   /* an LCS written as a process */
-    if (!I->K || d->f || d->f_integral)
-      st = cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS, a polyset with f = A x + E u "
-                    "(this process has %s); use the explicit, implicit or exponential scheme",
-                    !I->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
-    else
-      st = cup_adaptive_create(&I->ad, &D, I->K, I->G, NULL, NULL, I->u, &I->o, errmsg);
-    if (st) { cup_integrator_free(&I); return st; }
-    *out = I;
-    return CUP_OK;
-  }
-  if (!st) st = setup(I, &D, d, errmsg);
-  if (!st && I->o.estimate) st = create_half(I, &D, d, errmsg);
+  scheme_model md = {&D, NULL, d, I->K, I->G, I->u, &I->o};
+  if (!st) st = build(I, &md, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
@@ -362,576 +98,28 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
 void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
-  if (I->swo) I->swo->free(&I->swr);
-  cup_adaptive_free(&I->ad);
-  cup_integrator_free(&I->half);
-  cup_estimate_free(&I->est);
-  cup_freestep_free(&I->fs);
-  cup_projector_free(&I->proj);
-  cup_setproj_free(&I->sp);
-  cup_set_free(&I->S_own);
+  if (I->sch && I->ws) I->sch->free(I->ws);
   cup_sparse_free(&I->A_own);
   cup_sparse_free(&I->E_own);
-  if (I->use_theta) cup_lcp_step_free(&I->th);
-  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
-  free(I->xs); free(I->zprev);
-  free(I->x0);
   free(I);
   *Ip = NULL;
-}
-
-const double *cup_integrator_state(const cup_integrator *I) {
-  return !I ? NULL : I->swr ? cup_integrator_state(I->swo->child(I->swr)) : I->ad ? cup_adaptive_state(I->ad)
-                                                                                    : I->x;
-}
-
-/* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
- * are the impulse of the step, h zeta. */
-int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
-  if (!I || !zeta) return CUP_ERR_ARG;
-  if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
-  if (I->swr) return cup_integrator_zeta(I->swo->child(I->swr), zeta);
-  if (I->ad) return cup_adaptive_zeta(I->ad, zeta);
-  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
-  double s = I->zeta_from == 2 ? 1 / I->h : 1;
-  for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
-  if (I->zs < 1 && I->zprev)                     /* a sample between two steps */
-    for (int i = 0; i < I->m; i++) zeta[i] = I->zprev[i] + I->zs * (zeta[i] - I->zprev[i]);
-  return CUP_OK;
-}
-
-/* ---- the run ---------------------------------------------------------------------- */
-
-static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
-
-/* The output: every k-th step, the last, none; or samples at
- * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
- * first step that reaches it: on a step (aligned: that step's state, as it
- * always was) or between two (interpolated linearly, the scheme's own
- * order at most two: x and zeta both). */
-typedef struct { long next_j, kdue; int aligned; double tau; } sampler;
-
-static void sampler_next(const cup_integrator *I, sampler *sp) {
-  const cup_integrator_options *o = &I->o;
-  long S = o->output_samples, n = o->n, j = sp->next_j;
-  if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
-  double t0 = o->output_t0;
-  sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
-  long k = (long)llround(sp->tau / I->h);
-  if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
-  else sp->aligned = grid_time(I, k) == sp->tau;
-  if (!sp->aligned) k = (long)ceil(sp->tau / I->h);
-  if (k < 0) k = 0;
-  if (k > n) k = n;
-  sp->kdue = k;
-}
-
-static int selected(const cup_integrator *I, sampler *sp, long k) {
-  const cup_integrator_options *o = &I->o;
-  switch (o->output) {
-    case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
-    case CUP_OUTPUT_FINAL: return k == o->n;
-    case CUP_OUTPUT_NONE: return 0;
-    case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
-  }
-  return 0;
-}
-
-/* The first step j >= k whose end the loop must see itself: a sample (and
- * the step before an interpolated one, whose zeta it keeps), the interrupt
- * check after each 1024th step, the last step (faststep.c runs the ones
- * before it). */
-static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
-  const cup_integrator_options *o = &I->o;
-  long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
-  if (stop > I->kend - 1) stop = I->kend - 1;
-  if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
-  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
-    next = sp->aligned ? sp->kdue : sp->kdue - 1;
-    if (next <= k) next = k + 1;
-  }
-  return next - 1 < stop ? next - 1 : stop;
-}
-
-/* The samples due at step k (x_k in I->x, x_{k-1} in I->xnew): on the step,
- * or interpolated between the two. */
-static int emit_samples(cup_integrator *I, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
-  while (selected(I, sp, k)) {
-    const double *x = I->x;
-    double t = grid_time(I, k);
-    if (!sp->aligned && k > 0) {
-      double t_prev = grid_time(I, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
-      if (s < 1) {
-        for (int i = 0; i < I->n; i++) I->xs[i] = I->xnew[i] + s * (I->x[i] - I->xnew[i]);
-        x = I->xs;
-        I->zs = s;
-      }
-      t = sp->tau;
-    }
-    info->samples++;
-    int stopped = sink(k, t, x, ctx);
-    I->zs = 1;
-    if (stopped) return 1;
-    sp->next_j++;
-    sampler_next(I, sp);
-  }
-  return 0;
-}
-
-/* After the samples of step k: zeta_k kept when the next sample falls
- * between steps k and k + 1 (its zeta is interpolated from it). */
-static void keep_zeta(cup_integrator *I, const sampler *sp, long k) {
-  if (!sp->aligned && k + 1 == sp->kdue && I->zprev) cup_integrator_zeta(I, I->zprev);
-}
-
-/* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
- * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
- * the cause's (what[WHAT_LEN] buffers below). */
-enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
-
-static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
-  info->status = status;
-  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
-  return status;
-}
-
-/* The estimate's run at n/2 from I->x0 (its states kept for the
- * comparisons). CUP_ERR_INTERRUPTED when the interrupt flag stopped it:
- * the run it serves stops too (a signal is not to wait for half the work). */
-static int coarse_run(cup_integrator *I, cup_run_info *info) {
-  cup_run_info hi;
-  int st = cup_integrator_run(I->half, I->x0, cup_estimate_keep, &I->est, &hi);
-  cup_estimate_start(&I->est, st >= 0);
-  info->err_est = cup_estimate_value(&I->est);
-  return st == CUP_ERR_INTERRUPTED && I->o.interrupt && *I->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
-}
-
-/* A stop at the end of step k that a checkpoint can resume from: where,
- * the output schedule's place, and the status and message it replaces
- * (a warning met before it is the resumed run's, as the whole run's). */
-static int halt(cup_integrator *I, cup_run_info *info, int status, long k, double t, const char *what, int phase,
-                const sampler *sp) {
-  I->stop.phase = phase;
-  I->stop.k = k;
-  I->stop.next_j = sp->next_j;
-  I->stop.status = info->status;
-  memcpy(I->stop.message, info->message, sizeof I->stop.message);
-  return stop_at(info, status, k, t, what);
-}
-
-/* g = F + G u(t) for a moving polyset. */
-static int moving_offset(cup_integrator *I, double t) {
-  if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
-  memcpy(I->g, I->K->g0, sizeof(double) * (size_t)I->m);
-  cup_sparse_gaxpy(I->G, I->ut, I->g);
-  if (!I->use_theta) return cup_projector_set_offset(I->proj, I->g);
-  for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
-    if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
-  return CUP_OK;
-}
-
-static void describe_projection_error(char *buf, size_t size, int st, const cup_proj_info *pi) {
-  if (st == CUP_ERR_EMPTY_SET)
-    snprintf(buf, size, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, "
-             "||C^T y||_{P^-1} = %.3g (no point of K within %.3g of 0)",
-             pi->farkas_gap, pi->farkas_residual,
-             pi->farkas_residual > 0 ? -pi->farkas_gap / pi->farkas_residual : INFINITY);
-  else if (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)
-    snprintf(buf, size, "the free step produced NaN or Inf, or overflowed (the scheme diverged)");
-  else if (st == CUP_ERR_LINALG)
-    snprintf(buf, size, "the step's LCP has a singular principal block (M = h C W B is not a "
-             "P-matrix at this step size)");
-  else
-    snprintf(buf, size, "projection failed: %s", cup_status_string(st));
-}
-
-/* A step's state beyond its range (tally.h): the scheme diverged. */
-static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup_run_info *info, long k, double t,
-                                                    const double *x) {
-  char what[200];
-  int j = cup_state_worst(x, I->n);
-  int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
-                     "diverged", CUP_STATE_MAX, j, x[j]);
-  if (I->o.scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
-    snprintf(what + len, sizeof what - (size_t)len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
-  return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
-}
-
-/* A polyset step whose answer z (in xnew) has no certified distance to
- * K(t_{k+1}) (eta = inf) is not passed on as it is (issue 27, guarantee 6),
- * the projector's exact method (cup_project_exact) standing in whatever
- * method the options ask: first z's own distance from the projection v of z, d_K(z) <=
- * ||z - v||_P + eta(v) (z kept: the theta step's is not a projection, and
- * an exact step's is more accurate than a certified one); then, for a step
- * that projects xf, the projector's answer (its dual methods walk to known
- * feasible points), once more with the last state offered as one. Returns
- * the step's status; CUP_ERR_UNCERTIFIED (info->message naming step, time
- * and set) when z is provably farther than eta_n from K(t) and nothing
- * certifies. xf: the step's free point (recomputed by the caller when the
- * fused steps kept it in registers). */
-static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, long k, double t, const double *g,
-                                                           cup_proj_info *pi, int st, cup_run_info *info) {
-  cup_proj_info pp = {0}, first = *pi;
-  int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
-  double own = INFINITY;
-  if (ps == CUP_OK && (ps = cup_project_exact(I->proj, I->xnew, I->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
-    own = cup_metric_dist_hi(I->K, I->xnew, I->v, NULL, I->v + I->n) + pp.eta_cert;
-  if (own <= pi->eta_target) ps = CUP_OK;
-  else if (ps >= 0 && (!I->use_theta || I->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
-    for (int offer = !I->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
-      if (offer && !cup_projector_offer_feasible(I->proj, I->x)) break;
-      if ((ps = cup_project_exact(I->proj, I->xf, I->v, &pp)) >= 0 && pp.eta_cert < own) {
-        *pi = pp;
-        st = ps;
-        I->zeta_from = 2;
-        cup_copy(I->xnew, I->v, I->n);
-      }
-    }
-  }
-  if (!(pi->eta_cert < INFINITY) && own < INFINITY) {
-    *pi = first;
-    pi->eta_cert = own;
-    st = pi->eps_cert <= pi->eps_target && own <= pi->eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
-  }
-  if (pi->eta_cert < INFINITY) return pi->status = st;
-  /* still none. Each row's half-space bounds d_K(z) from below: a z that
-   * is farther than eta_n (or, below what rounding allows, 1e-10 of the
-   * scale) from one of them is certainly no (eps, eta)-projection, and
-   * stops the run; one nearer is kept, warned of (a set without interior,
-   * as two opposite rows, has no point certainly in it, and no distance to
-   * it can be certified: the answer may be right) */
-  const double *sz = I->s0, *gam = I->sg;        /* z's slack and its rounding */
-  if (I->use_theta && I->th.D) sz = I->th.s, gam = I->th.gam;   /* the step's own, with D zeta's rounding */
-  else cup_slack(I->K, g, I->xnew, I->s0, I->sg);
-  int row = -1;
-  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(I->K, I->xnew));
-  for (int i = 0; i < I->m; i++) {
-    double d = I->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / I->K->rownorm[i] : 0;   /* <= d_K(z) */
-    if (d > far) { far = d; row = i; }
-  }
-  if (!(far > tol)) return pi->status = st > 0 ? st : CUP_WARN_NOT_CERTIFIED;
-  char what[200];
-  snprintf(what, sizeof what, "the answer is at least %.3g from K(t) (row %d), beyond eta_n = %.3g, and no method "
-           "found a point within a certified distance of K(t)%s%s", far, row, pi->eta_target, ps < 0 ? ": " : "",
-           ps < 0 ? cup_status_string(ps) : "");
-  return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
-}
-
-/* The paper assumes x0 in K(0); say so when it is not (the first step
- * projects it), by the raw slack so that a point on the boundary passes.
- * With D != 0 the state is consistent when some zeta >= 0 makes
- * C x0 + D zeta + g >= 0 (the theta step's LCP at x0): a rectifier's
- * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
- * is not: the first step jumps (jump_size tells by how much). */
-static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
-  const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
-  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
-                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
-  if (consistent) return 0;
-  info->status = CUP_WARN_X0_OUTSIDE;
-  snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
-           I->L && I->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
-  return 1;
-}
-
-/* After the first step (status st) from an x0 that was not consistent: the
- * jump's size, as far as that step moved x beyond its free step (the jump
- * itself, to O(h)), into the warning's message if it is still the run's
- * status. Such a run takes the general path (bit for bit the fused one's),
- * where this is called; out of line and cold, since inlined it cost the
- * fused loop an instruction a step (callgrind, paper-fig2, n = 1e5). */
-__attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st, cup_run_info *info) {
-  I->jump = 0;
-  double big = 0;
-  int at = 0;
-  for (int j = 0; j < I->n; j++)
-    if (fabs(I->xnew[j] - I->xf[j]) > big) big = fabs(I->xnew[j] - I->xf[j]), at = j;
-  if (st < 0 || info->status != CUP_WARN_X0_OUTSIDE) return;
-  size_t len = strlen(info->message);
-  snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
-}
-
-/* Projections of one step again after rows were found missing (each adds
- * at least one row; a crowd needs one in the jams seen). */
-enum { RECHECKS = 8 };
-
-/* The set at t_{k+1} (and x_k), then the projection of the free point. */
-static int general_step(cup_integrator *I, long k, double t, const double *xk, const double *xf,
-                        double *z, cup_proj_info *pi, cup_run_info *info) {
-  if (I->p > 0 && I->u && cup_input_eval(I->u, t, I->ut))
-    return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
-  int st = cup_setproj_move(I->sp, t, I->ut, xk);
-  if (st == CUP_ERR_NONFINITE) {
-    char what[WHAT_LEN];
-    snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
-    return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
-  }
-  if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
-    char what[WHAT_LEN];                 /* as on the polyset path: the state overflowed */
-    snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
-             cup_setproj_message(I->sp));
-    return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
-  }
-  /* a state-dependent set may find that the step's rows missed a
-   * constraint its answer violates (a crowd: a pair that closed more than
-   * the contact margin in one step); the step is then projected again, warm,
-   * with that row, its work added to the step's */
-  for (int again = 0; st >= 0 && again < RECHECKS; again++) {
-    int rc = cup_setproj_recheck(I->sp, t, xk, z);
-    if (rc <= 0) {
-      if (rc < 0) st = rc;
-      break;
-    }
-    cup_proj_info first = *pi;
-    st = cup_setproj_project(I->sp, xf, z, pi);
-    pi->iterations += first.iterations;
-    pi->factorizations += first.factorizations;
-    pi->row_updates += first.row_updates;
-  }
-  if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
-  /* never a point without a certified distance passed on (issue 27); a
-   * state polyset's projector keeps the polyset's rule (an answer within
-   * rounding of a set without interior is warned of), not applied here yet */
-  if (!(pi->eta_cert < INFINITY) && I->S->kind != CUP_SET_STATE_POLYSET) {
-    char what[200];
-    snprintf(what, sizeof what, "the %s: no point within a certified distance of the set was found (eta = inf)%s%s",
-             cup_set_kind_name(I->S->kind), cup_setproj_message(I->sp)[0] ? ": " : "", cup_setproj_message(I->sp));
-    return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
-  }
-  long rows = cup_setproj_rows(I->sp);
-  if (rows > info->max_rows) info->max_rows = rows;
-  return st;
-}
-
-/* x0 against C(0, x0), by its projection: warn when it moves. */
-static int general_x0(cup_integrator *I, cup_run_info *info) {
-  cup_proj_info pi;
-  int st = general_step(I, 0, 0, I->x, I->x, I->xf, &pi, info);
-  if (st < 0) return st;
-  if (!pi.skipped) {
-    info->status = CUP_WARN_X0_OUTSIDE;
-    snprintf(info->message, sizeof info->message,
-             "step 0 (t = 0): x0 is outside C(0); the first step projects it");
-  }
-  return CUP_OK;
 }
 
 int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx,
                        cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
-  if (I) I->stop.restored = 0;
-  if (I && I->ad && x0) return cup_adaptive_run(I->ad, x0, sink, sink_ctx, info);
-  if (I && I->swr && x0) return I->swo->run(I, x0, sink, sink_ctx, info);
-  memset(info, 0, sizeof *info);
-  info->err_est = NAN;
-  if (!I || !x0) return info->status = CUP_ERR_ARG;
-  const cup_integrator_options *o = &I->o;
-  int n = I->n;
-  info->eps_target = I->eps_n;
-  info->eta_target = I->eta_n;
-  info->h_rho = I->h_rho;
-  if (cup_state_beyond(x0, n)) {
-    int w = cup_state_worst(x0, n);
-    char what[160];
-    if (isfinite(x0[w])) snprintf(what, sizeof what, "x0 is beyond the range of a state, ||x||_1 <= %g "
-                                  "(CUP_STATE_MAX): x0[%d] = %g", CUP_STATE_MAX, w, x0[w]);
-    else snprintf(what, sizeof what, "x0[%d] is %g", w, x0[w]);
-    return stop_at(info, isfinite(x0[w]) ? CUP_ERR_ARG : CUP_ERR_NONFINITE, 0, 0, what);
-  }
-  memcpy(I->x, x0, sizeof(double) * (size_t)n);
-  cup_projector_reset(I->proj);
-  I->zeta_from = 0;
-  int fixed = I->fixed || !I->u;
-  I->stop.phase = CUP_STOP_NONE;
-  I->rebuilds0 = cup_setproj_rebuilds(I->sp);
-  if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-  I->jump = I->K && polyset_x0(I, fixed, info);
-  if (!I->K && general_x0(I, info) < 0) return info->status;
-  int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
-  if (stiff) {
-    info->status = CUP_WARN_STIFF;
-    snprintf(info->message, sizeof info->message,
-             "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; use the theta "
-             "scheme, or implicit/exponential if no constraint acts on the fast states", I->h_rho);
-  }
-  if (I->split > CUP_SPLIT_WARN) {   /* NaN (no memory to tell) does not warn */
-    info->status = CUP_WARN_SPLITTING;
-    snprintf(info->message, sizeof info->message,
-             "%s scheme: one step relaxes a fraction %.4g of constraint direction %d (h above its "
-             "time constant); projecting along B loses what that relaxation moved, an error of "
-             "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
-             I->split, I->split_row);
-  }
-  sampler sp = {0};
-  sampler_next(I, &sp);
-  I->zs = 1;
-  if (I->zprev) cup_zero(I->zprev, I->m);
-  if (I->half) {
-    memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
-    if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
-      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
-                  CUP_STOP_SAMPLE_DUE, &sp);
-  }
-  if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(I, &sp, 0)) {
-    info->samples++;
-    if (sink(0, 0.0, I->x, sink_ctx))
-      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-  }
-  if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(I, &sp, 0, sink, sink_ctx, info))
-    return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-  return cup_integrator_steps_(I, 0, sp.next_j, sink, sink_ctx, info);
-}
-
-int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx,
-                          cup_run_info *info) {
-  const cup_integrator_options *o = &I->o;
-  sampler sp = {next_j, 0, 0, 0};
-  sampler_next(I, &sp);
-  int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
-  long rebuilds0 = I->rebuilds0;
-  double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
-  int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
-  I->fast.hold = 0;
-  for (long k = k0; k < I->kend; k++) {
-    cup_proj_info pi;
-    int st = CUP_FAST_DECLINED;
-    if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
-      k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
-    double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
-    int fused = st != CUP_FAST_DECLINED;   /* its free point stayed in registers */
-    if (fused) {
-      I->zeta_from = 1;
-      goto stepped;                      /* all that follows up to there, done by faststep.c */
-    }
-    st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
-    if (st < 0)
-      return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
-                     ? "a user callback (input or perturbation) failed or returned NaN/Inf"
-                     : cup_status_string(st));
-    if (st > 0 && info->status == CUP_OK) {
-      info->status = st;
-      snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k + 1, t1, cup_status_string(st));
-    }
-    if (I->sp) {
-      st = general_step(I, k + 1, t1, I->x, I->xf, I->xnew, &pi, info);
-      info->set_rebuilds = cup_setproj_rebuilds(I->sp) - rebuilds0;
-      if (st < 0) return st;
-    } else if (!fixed && (st = moving_offset(I, t1)) != CUP_OK) {
-      return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
-                     "the input u(t) that moves K failed or returned NaN/Inf");
-    } else if (I->use_theta) {
-      double S = cup_polyset_norm(I->K, I->xf);
-      const double *g = fixed ? I->K->g0 : I->g;
-      st = cup_lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
-                              I->eta_n > 0 ? I->eta_n : 1e-10 * S, &pi);
-      if (st == CUP_ERR_LINALG) {
-        /* pivoting failed: an empty K(t) (the projector proves it with a
-         * Farkas certificate) or, for theta > 0, M not a P-matrix; for the
-         * explicit step the projector's answer is the step */
-        cup_proj_info pp = {0};
-        int ps = cup_projector_set_offset(I->proj, g);
-        if (ps == CUP_OK) ps = cup_project(I->proj, I->xf, I->xnew, &pp);
-        if (ps == CUP_ERR_EMPTY_SET || o->scheme == CUP_SCHEME_EXPLICIT) { st = ps; pi = pp; I->zeta_from = 2; }
-      } else {
-        I->zeta_from = 1;
-      }
-      if (I->jump) jump_size(I, st, info);
-    } else {
-      st = cup_project(I->proj, I->xf, I->xnew, &pi);
-      I->zeta_from = 2;
-      if (I->jump) jump_size(I, st, info);
-    }
-  stepped:
-    if (st >= 0 && I->K && !(pi.eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
-      if (fused && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
-      else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, &pi, st, info)) < 0) return st;
-    }
-    if (st < 0) {                        /* the polyset path's errors */
-      char what[WHAT_LEN];
-      describe_projection_error(what, sizeof what, st, &pi);
-      if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
-        size_t len = strlen(what);
-        snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
-      }
-      return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
-    }
-    if (cup_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
-    double *t = I->x; I->x = I->xnew; I->xnew = t;
-    if (I->half) {
-      cup_estimate_compare(&I->est, k + 1, I->x);
-      info->err_est = cup_estimate_value(&I->est);
-    }
-    info->step = k + 1;
-    info->t = t1;
-    cup_tally(info, &pi);
-    if (st == CUP_WARN_NOT_CERTIFIED) {
-      if (info->not_certified++ == 0 && info->status == CUP_OK) {
-        info->status = st;
-        snprintf(info->message, sizeof info->message,
-                 "step %ld (t = %.17g): projection not certified: eps %.3g (target %.3g), eta %.3g (target %.3g)",
-                 k + 1, t1, pi.eps_cert, pi.eps_target, pi.eta_cert, pi.eta_target);
-      }
-    }
-    if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
-      return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
-    if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-      if (emit_samples(I, &sp, k + 1, sink, sink_ctx, info))
-        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-      keep_zeta(I, &sp, k + 1);
-    } else if (sink && selected(I, &sp, k + 1)) {
-      info->samples++;
-      if (sink(k + 1, t1, I->x, sink_ctx))
-        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-    }
-    if ((k & 1023) == 1023) {
-      if (o->interrupt && *o->interrupt)
-        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
-      if (start > 0 && now_seconds() - start > o->max_wall_seconds)
-        return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
-    }
-  }
-  I->next_j = sp.next_j;
-  return info->status;
-}
-
-double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
-
-int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
-                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  I->kend = k1;
-  int st;
-  if (first) {
-    st = cup_integrator_run(I, x, sink, sink_ctx, info);
-  } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
+  if (!I || !x0) {
     memset(info, 0, sizeof *info);
     info->err_est = NAN;
-    info->eps_target = I->eps_n;
-    info->eta_target = I->eta_n;
-    info->h_rho = I->h_rho;
-    memcpy(I->x, x, sizeof(double) * (size_t)I->n);
-    memcpy(I->xnew, x, sizeof(double) * (size_t)I->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
-    int fixed = I->fixed || !I->u;
-    I->zeta_from = 0;
-    I->jump = 0;
-    I->zs = 1;
-    if (I->zprev) cup_zero(I->zprev, I->m);
-    if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-    if (I->K && I->use_theta) {                    /* theta's zeta_k0 at the window's start */
-      const double *g = !fixed && moving_offset(I, grid_time(I, k0)) == CUP_OK ? I->g : I->K->g0;
-      cup_lcp_step_start(&I->th, I->x, g);
-    }
-    st = cup_integrator_steps_(I, k0, *next_j, sink, sink_ctx, info);
+    return info->status = CUP_ERR_ARG;
   }
-  *next_j = I->next_j;
-  I->kend = I->o.n;
-  return st;
+  I->stop.restored = 0;
+  return I->sch->run(I->ws, x0, sink, sink_ctx, info);
 }
 
-/* A restored checkpoint (checkpoint.c) goes on from the step it stopped
- * after: the coarse run of the estimate again (the same states), the
- * stopped step's sample when it was still due or the sink refused it, then
- * the steps as cup_integrator_run takes them. */
+/* A restored checkpoint (checkpoint.c): the saved run's statistics, then
+ * the scheme goes on from its stop. */
 int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
@@ -942,37 +130,13 @@ int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx,
   }
   *info = I->stop.info;
   I->stop.restored = 0;
-  if (I->ad) return cup_adaptive_resume(I->ad, sink, sink_ctx, info);
-  int phase = I->stop.phase;
-  long k = I->stop.k;
-  sampler sp = {I->stop.next_j, 0, 0, 0};
-  sampler_next(I, &sp);
-  if (I->half) {
-    double err = I->est.err;                     /* the comparisons made before the stop */
-    int cst = coarse_run(I, info);
-    I->est.err = err;
-    info->err_est = cup_estimate_value(&I->est);
-    if (cst == CUP_ERR_INTERRUPTED)
-      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "interrupted (in the estimate's run at n/2)",
-                  phase, &sp);
-  }
-  I->stop.phase = CUP_STOP_NONE;
-  if (phase == CUP_STOP_SAMPLE_REFUSED) info->samples--;          /* counted when it was refused */
-  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* the samples due at k, from x_k, x_{k-1} and zeta_{k-1} */
-    if (sink && phase != CUP_STOP_STEP_DONE) {
-      if (emit_samples(I, &sp, k, sink, sink_ctx, info))
-        return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
-                    CUP_STOP_SAMPLE_REFUSED, &sp);
-      if (k > 0) keep_zeta(I, &sp, k);
-    }
-    return cup_integrator_steps_(I, k, sp.next_j, sink, sink_ctx, info);
-  }
-  int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(I, &sp, k));
-  if (sink && offer) {
-    info->samples++;
-    if (sink(k, grid_time(I, k), I->x, sink_ctx))
-      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
-                  CUP_STOP_SAMPLE_REFUSED, &sp);
-  }
-  return cup_integrator_steps_(I, k, sp.next_j, sink, sink_ctx, info);
+  return I->sch->resume(I->ws, sink, sink_ctx, info);
+}
+
+const double *cup_integrator_state(const cup_integrator *I) { return I ? I->sch->state(I->ws) : NULL; }
+
+int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
+  if (!I || !zeta) return CUP_ERR_ARG;
+  if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
+  return I->sch->zeta(I->ws, zeta);
 }
