@@ -199,8 +199,9 @@ void fixed_free(void *ws) {
 const double *fixed_state(const void *ws) { return ((const cup_integrator *)ws)->x; }
 
 /* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
- * are the impulse of the step, h zeta. On a set other than a polyset there
- * are no rows to give them of. */
+ * are the impulse of the step, h zeta. A process on a polyset has them as
+ * an LCS (its normal cone is P^-1 C^T zeta, B = P^-1 C^T); on another set
+ * there are no rows to give them of. */
 int fixed_zeta(void *ws, double *zeta) {
   const cup_integrator *I = ws;
   if (!I->K) return CUP_ERR_UNSUPPORTED;

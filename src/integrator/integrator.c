@@ -137,6 +137,7 @@ const double *cup_integrator_state(const cup_integrator *I) { return I ? I->sch-
 
 int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I || !zeta) return CUP_ERR_ARG;
-  if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
   return I->sch->zeta(I->ws, zeta);
 }
+
+int cup_integrator_rows(const cup_integrator *I) { return I ? I->m : 0; }
