@@ -321,6 +321,30 @@ static void test_fixed_step(void **state) {
   assert_true(err[1] <= 0.1 && err[0] / err[1] > 1.6);   /* each switching up to h late: first order */
 }
 
+/* Signals probed with "all" are recorded in every configuration: v(out)
+ * is the capacitor's state at every sample of the buck, in both
+ * configurations (a configuration formed before the probe had none, and
+ * its samples kept the signals of the last sample before it: v(out) of
+ * the buck-ccm example flat over each off-time in catchup-run's output). */
+static void test_probe_all(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = text_ok("ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                            "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n");
+  assert_int_equal(cup_netlist_probe(nl, "all", err), CUP_OK);
+  run_rec r;
+  run_with(nl, 100e-6, 1e-8, 1001, "v(out)", &r, CUP_SCHEME_ADAPTIVE, 0);
+  assert_int_equal(r.sig, 3);                      /* v(in) v(g) v(sw) v(out): "all"'s */
+  assert_int_equal(r.count, 1001);
+  double worst = 0;
+  for (long k = 0; k < r.count; k++) worst = fmax(worst, fabs(r.s[k] - r.x[2 * k + 1]));
+  printf("buck, probe all: max |v(out) - x_C1| over %ld samples %.2e V\n", r.count, worst);
+  assert_true(worst == 0);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
 /* A controller from code (cup_netlist_set_controller) that writes the
  * buck's PWM every 5 us (on at instants 4k, off at the others) gives the
  * trajectory of the gate from PULSE: the same switching times, so the
@@ -404,7 +428,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
-    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_probe_all), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
