@@ -197,8 +197,11 @@ CUP_API void cup_integrator_free(cup_integrator **I);
  *  steps to the switching times and jumps the state onto each new
  *  configuration's constraints there. The adaptive scheme steps to the
  *  switching times and locates those of switches the circuit gates; the
- *  fixed-step schemes switch at the end of the step that holds them (exact
- *  when the grid holds them). The same run, state, zeta and free as any
+ *  fixed-step schemes keep their grid and split a step that holds a
+ *  switching time of a switch the sources gate there (its pieces by the
+ *  configurations' exact flows, the adaptive scheme's at tol_abs/tol_rel),
+ *  and take a switching of one the circuit gates at the end of the step
+ *  whose end state passes its threshold. The same run, state, zeta and free as any
  *  integrator's; no checkpoints, no step-doubling estimate. */
 CUP_API int cup_integrator_create_switched(cup_integrator **I, const cup_switching *sw, const cup_input *u,
                                            const cup_integrator_options *o, char *errmsg);
