@@ -53,6 +53,8 @@ struct cup_swrun {
   void *sink_ctx;
   cup_step_fn on_step;
   void *step_ctx;
+  cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
+  cup_estimate est;        /* ... and the comparison with it at each step's end */
 };
 
 /* The check at a sample or a step's end (t, x): 1 stops the window. */
@@ -74,6 +76,7 @@ static int watch_sink(long k, double t, const double *x, void *ctx) {
 
 static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   cup_swrun *S = ctx;
+  if (S->half) cup_estimate_compare(&S->est, k, cup_integrator_state(S->child[S->cur]));
   if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
   if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
   return 0;
@@ -85,6 +88,7 @@ static int child_of(cup_swrun *S, int topo, char *errmsg) {
   const cup_lcs *L = S->ops.lcs(S->ops.ctx, topo);
   char msg[CUP_ERRMSG_LEN];
   cup_integrator_options o = S->o;
+  o.estimate = 0;                                  /* the run's, not each configuration's (S->half) */
   o.on_step = watch_step;                          /* the circuit-gated switches' checks, then the user's */
   o.step_ctx = S;
   int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
@@ -99,6 +103,8 @@ static void sw_free(cup_swrun **Sp) {
     cup_integrator_free(&S->child[k]);
     cup_integrator_free(&S->twin[k]);
   }
+  cup_integrator_free(&S->half);
+  cup_estimate_free(&S->est);
   free(S->x);
   free(S->xprev);
   free(S->zsplit);
@@ -341,8 +347,21 @@ static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
   }
   if (st < 0) info->status = st;
-  info->t = t;
+  else info->t = t;                                /* (a stop's: the window's, from add_info) */
   return info->status;
+}
+
+/* The estimate's run at n/2 (integrator.c's coarse_run for a switched
+ * run): its states kept at the compared points. 1 when the interrupt flag
+ * stopped it (the run stops too), its status in info. */
+static int coarse_run(cup_swrun *S, const double *x0, cup_run_info *info) {
+  cup_run_info hi;
+  int st = cup_integrator_run(S->half, x0, cup_estimate_keep, &S->est, &hi);
+  cup_estimate_start(&S->est, st >= 0);
+  if (!(st == CUP_ERR_INTERRUPTED && S->o.interrupt && *S->o.interrupt)) return 0;
+  info->status = CUP_ERR_INTERRUPTED;
+  snprintf(info->message, sizeof info->message, "step 0 (t = 0): interrupted (in the estimate's run at n/2)");
+  return 1;
 }
 
 static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
@@ -357,9 +376,12 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
+    if (S->half && coarse_run(S, x0, info)) return info->status;
     sw->jump(sw->ctx, topo, S->x);
     x0_moved(S, x0, info);
-    return fixed_run(S, 0, topo, info);
+    st = fixed_run(S, 0, topo, info);
+    if (S->half) info->err_est = cup_estimate_value(&S->est);
+    return st;
   }
   for (int first = 1; st >= 0 && t < T; first = 0) {
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
@@ -371,6 +393,7 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
     st = sw->next(sw->ctx, topo, t, T, &tb);
     if (st) { st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
     st = window(S, topo, t, tb, first, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
+    if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;
     if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);
     if (st < 0) break;
@@ -388,6 +411,19 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
 }
 
 
+/* The estimate's coarse run: the same switched circuit at n/2, its output
+ * every stride steps into the comparison's rows. */
+static int create_half(cup_swrun *S, const cup_switching *sw, const cup_input *u, char *errmsg) {
+  if (cup_estimate_init(&S->est, S->o.n, S->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  cup_integrator_options h = S->o;
+  h.n = S->o.n / 2;
+  h.estimate = 0;
+  h.on_step = NULL;
+  h.output = CUP_OUTPUT_EVERY;
+  h.output_every = cup_estimate_stride(&S->est);
+  return cup_integrator_create_switched(&S->half, sw, u, &h, errmsg);
+}
+
 static const cup_swops ops = {sw_run, sw_free, sw_child};
 
 int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,
@@ -395,9 +431,10 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
   if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
     return cup_fail(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
   *out = NULL;
-  if (o->estimate)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "a circuit with switches: the adaptive scheme estimates its error "
-                    "itself (estimate is for the fixed-step schemes)");
+  int estimate = o->estimate && o->scheme != CUP_SCHEME_ADAPTIVE;   /* (the adaptive scheme estimates always) */
+  if (estimate && (o->n < 2 || o->n % 2))
+    return cup_fail(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
+                    "must be even", o->n);
   cup_integrator *I = calloc(1, sizeof *I);
   cup_swrun *S = calloc(1, sizeof *S);
   if (!I || !S) { free(I); free(S); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
@@ -423,6 +460,7 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
     S->zsplit = malloc(sizeof(double) * ((size_t)I->m + 1));
     if (!S->x || !S->xg || !S->xprev || !S->zsplit) st = cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
   }
+  if (!st && estimate) st = create_half(S, sw, u, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;
