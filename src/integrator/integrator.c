@@ -898,6 +898,15 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
 
 double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
 
+/* A window's (or a split step's) statistics, from nothing. */
+static void window_info(const cup_integrator *I, cup_run_info *info) {
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  info->eps_target = I->eps_n;
+  info->eta_target = I->eta_n;
+  info->h_rho = I->h_rho;
+}
+
 int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                            cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   I->kend = k1;
@@ -905,11 +914,7 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
   if (first) {
     st = cup_integrator_run(I, x, sink, sink_ctx, info);
   } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
-    memset(info, 0, sizeof *info);
-    info->err_est = NAN;
-    info->eps_target = I->eps_n;
-    info->eta_target = I->eta_n;
-    info->h_rho = I->h_rho;
+    window_info(I, info);
     memcpy(I->x, x, sizeof(double) * (size_t)I->n);
     memcpy(I->xnew, x, sizeof(double) * (size_t)I->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
     int fixed = I->fixed || !I->u;
@@ -933,11 +938,7 @@ int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, co
                               long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   const cup_integrator_options *o = &I->o;
   double t = grid_time(I, k);
-  memset(info, 0, sizeof *info);
-  info->err_est = NAN;
-  info->eps_target = I->eps_n;
-  info->eta_target = I->eta_n;
-  info->h_rho = I->h_rho;
+  window_info(I, info);
   info->step = k;
   info->t = t;
   memcpy(I->x, x, sizeof(double) * (size_t)I->n);
