@@ -205,7 +205,8 @@ const double *fixed_state(const void *ws) { return ((const cup_integrator *)ws)-
 int fixed_zeta(void *ws, double *zeta) {
   const cup_integrator *I = ws;
   if (!I->K) return CUP_ERR_UNSUPPORTED;
-  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
+  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj)
+                    : I->zeta_from == 3 ? I->zeta_ext : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
   for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
   if (I->zs < 1 && I->zprev)                     /* a sample between two steps */
