@@ -105,7 +105,7 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
     for (int k = 0; k < SW_SS_FIGURES; k++) ss->fig[j][k] = NAN;
   r->err_est = NAN;
   double t0 = now_seconds(), T;
-  if ((r->status = period_of(v, q, &T, r))) { r->wall = now_seconds() - t0; return; }
+  if ((r->status = period_of(v, q, &T, r))) { r->wall += now_seconds() - t0; return; }
   ss->period = T;
   cup_integrator_options mo = *o;          /* the period map: one period, its final state */
   const cup_integrator_options *so = cup_scene_options(v->scene);
@@ -144,7 +144,7 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
     }
   }
   cup_pss_free(&pss);
-  r->wall = now_seconds() - t0;
+  r->wall += now_seconds() - t0;
 }
 
 /* ---- /steady_state in the results file ---- */
