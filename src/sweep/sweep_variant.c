@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "analysis/pss_run.h"
 #include "io/read_text.h"
 #include "io/scene_shape.h"
 #include "io/scene_tree.h"
@@ -162,16 +163,9 @@ static int check_steady(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) 
   for (int j = 0; j < q->nmeasure; j++)
     if ((sig[j] = cup_netlist_probe(nl, q->measure[j], err)) < 0)
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.measure: %s", err);
-  for (int j = 0; j < q->npower; j++) {
-    const char *a, *b;
-    char v[300], i[300];
-    if (cup_netlist_element_nodes(nl, q->power[j], &a, &b, err))
+  for (int j = 0; j < q->npower; j++)
+    if (cup_pss_probe_power(nl, q->power[j], &pv[j], &pc[j], err))
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
-    snprintf(v, sizeof v, "v(%.120s,%.120s)", a, b);
-    snprintf(i, sizeof i, "i(%.200s)", q->power[j]);
-    if ((pv[j] = cup_netlist_probe(nl, v, err)) < 0 || (pc[j] = cup_netlist_probe(nl, i, err)) < 0)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
-  }
   if (k == 0) {
     s->ss_nm = q->nmeasure;
     s->ss_np = q->npower;
