@@ -155,8 +155,9 @@ typedef struct sw_task_out {
 int sw_parse(cup_sweep **s, const char *text, size_t len, const char *path, char *errmsg);
 /* Read and parse a sweep file. */
 int sw_load(cup_sweep **s, const char *path, char *errmsg);
-/* Load every variant's scene from its file with its overrides and keep the
- * resulting scene text (rank 0); then sw_resolve_texts. */
+/* Every variant's scene text after its overrides (rank 0): a variant that
+ * is not lazy loaded from its file (its files join s->files), a lazy one's
+ * text made without loading it; then sw_resolve_texts. */
 int sw_resolve_files(cup_sweep *s, char *errmsg);
 /* Keep the variants' scene texts (what rank 0 broadcast), load the scenes
  * of those that are not lazy, check that T and the dimension agree, fix
