@@ -606,11 +606,17 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
       if (ch) hi = s; else lo = s;
     }
     if (hi >= 0) {
-      double p = nextafter(hi, lo);                /* a jump edge: at hi itself, one check */
-      if (p > lo) {
+      /* a jump edge: at hi itself, or a few ulps before it where the
+       * source's corner (delay + P j + knot) rounds apart from the
+       * breakpoint; one check an ulp, then bisection for the rest (the same
+       * crossing: the rule is monotone along the piece) */
+      for (int u = 0; u < 4; u++) {
+        double p = nextafter(hi, lo);
+        if (!(p > lo)) break;
         int ch = changes(S, tp, p, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
-        if (!ch) lo = p;
+        if (!ch) { lo = p; break; }
+        hi = p;
       }
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
