@@ -279,7 +279,7 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   A->pinned[0] = R->md = ad_mode_get(A, mask);
-  ad_offset(A, w, A->g);
+  if (A->has_D) ad_offset(A, w, A->g);           /* (ad_select left it in A->g) */
   ad_manifold(A, R->md, A->g, A->x);
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
