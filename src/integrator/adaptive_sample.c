@@ -24,10 +24,28 @@ double ad_sample_time(const cup_adaptive *A, long j) {
   return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
 }
 
-/* E y in place (na x na, column-major; tmp: na). */
+/* E y in place (na x na, column-major; tmp: na). Four rows at a time, each
+ * summed over j in order from 0 as a row's dot product is, bit for bit:
+ * the rows' entries of a column are side by side in E (a sample is this
+ * product twice; row by row it was most of a sample's own cost). */
 static void times(int na, const double *E, double *y, double *tmp) {
   cup_copy(tmp, y, na);
-  for (int i = 0; i < na; i++) {
+  int i = 0;
+  for (; i + 4 <= na; i += 4) {
+    double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    for (int j = 0; j < na; j++) {
+      const double *c = E + i + (size_t)j * na, tj = tmp[j];
+      a0 += c[0] * tj;
+      a1 += c[1] * tj;
+      a2 += c[2] * tj;
+      a3 += c[3] * tj;
+    }
+    y[i] = a0;
+    y[i + 1] = a1;
+    y[i + 2] = a2;
+    y[i + 3] = a3;
+  }
+  for (; i < na; i++) {
     double acc = 0;
     for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * tmp[j];
     y[i] = acc;
