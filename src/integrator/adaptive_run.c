@@ -689,6 +689,7 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
                      cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
+  A->piece_ok = 0;                               /* (the input may have changed between runs) */
   A->tend = A->o.T;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
@@ -777,6 +778,7 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
                         long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
+  A->piece_ok = 0;                               /* (the input may have changed between runs) */
   A->tend = tb;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
