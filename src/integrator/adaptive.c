@@ -174,6 +174,7 @@ static void alloc_vectors(cup_adaptive *A, int *fail) {
   A->uerr = take((size_t)p, sizeof(double), fail);
   A->wa = take((size_t)nw, sizeof(double), fail);
   A->wt = take((size_t)nw, sizeof(double), fail);
+  A->piece_w = take((size_t)nw, sizeof(double), fail);
   A->wscale = take((size_t)nw, sizeof(double), fail);
   A->gscale = take((size_t)m, sizeof(double), fail);
   A->zw = take((size_t)nw, sizeof(double), fail);
@@ -294,7 +295,7 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
   free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et); free(A->xok);
-  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt);
+  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->piece_w);
   free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
   free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
   free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);

@@ -110,6 +110,8 @@ struct cup_adaptive {
   unsigned char *dcpl;      /* rows with a nonzero in their row or column of D */
   int one;                  /* the exosystem's constant state 1 (F reaches zeta through D), or -1 */
   int nwu;                  /* the input's own exosystem states (nw without the constant) */
+  int piece_ok;             /* built-in waveforms: piece_w holds the states on [piece_t0, piece_t1] */
+  double piece_t0, piece_t1, *piece_w;   /* (a piece's start and its one step ask for the same: nwu) */
   double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
                                table's largest value; 0 for a slope: its own size) */
   double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */

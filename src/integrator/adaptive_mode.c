@@ -532,24 +532,7 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
               int *pivots) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, p = A->p, nw = A->nw;
-  /* u, u' and the free velocity f = A x + E u */
   ad_offset(A, w, A->g);                         /* also leaves u in A->ut */
-  for (int q = 0; q < p; q++) {
-    double acc = 0;
-    for (int c = 0; c < nw; c++) {
-      double wd = 0;
-      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
-      acc += A->U[q + (size_t)c * p] * wd;
-    }
-    A->udot[q] = acc;
-  }
-  double *f = A->xf;
-  for (int i = 0; i < n; i++) {
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += A->A[i + (size_t)j * n] * x[j];
-    for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->ut[q];
-    f[i] = acc;
-  }
   cup_slack(K, A->g, x, A->s, NULL);
   /* touching rows: slack at the level a certified projection leaves (it
    * aims a few rounding bounds inside), on the scale of the whole state (a
@@ -558,10 +541,30 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
   for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
   const double *Md = K->Md;
   unsigned char *touch = A->touch;
+  int touching = 0;
   for (int i = 0; i < m; i++) {
     double c1 = 0;
     for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) c1 += fabs(K->Ct.x[k]);
     touch[i] = (hint >> i & 1) || A->s[i] <= 64 * DBL_EPSILON * (fabs(A->g[i]) + c1 * xn);
+    touching |= touch[i];
+  }
+  /* u', and the free velocity f = A x + E u: the touching rows' q (none
+   * touches between a PWM's edges in most windows) */
+  double *f = A->xf;
+  for (int q = 0; touching && q < p; q++) {
+    double acc = 0;
+    for (int c = 0; c < nw; c++) {
+      double wd = 0;
+      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
+      acc += A->U[q + (size_t)c * p] * wd;
+    }
+    A->udot[q] = acc;
+  }
+  for (int i = 0; touching && i < n; i++) {
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += A->A[i + (size_t)j * n] * x[j];
+    for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->ut[q];
+    f[i] = acc;
   }
   for (int i = 0; i < m; i++) {
     double qi = 1;

@@ -279,7 +279,7 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   A->pinned[0] = R->md = ad_mode_get(A, mask);
-  ad_offset(A, w, A->g);
+  if (A->has_D) ad_offset(A, w, A->g);           /* (ad_select left it in A->g) */
   ad_manifold(A, R->md, A->g, A->x);
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
@@ -689,6 +689,7 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
                      cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
+  A->piece_ok = 0;                               /* (the input may have changed between runs) */
   A->tend = A->o.T;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
@@ -722,6 +723,7 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
                         long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
+  A->piece_ok = 0;                               /* (the input may have changed between runs) */
   A->tend = tb;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;

@@ -24,10 +24,28 @@ double ad_sample_time(const cup_adaptive *A, long j) {
   return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
 }
 
-/* E y in place (na x na, column-major; tmp: na). */
+/* E y in place (na x na, column-major; tmp: na). Four rows at a time, each
+ * summed over j in order from 0 as a row's dot product is, bit for bit:
+ * the rows' entries of a column are side by side in E (a sample is this
+ * product twice; row by row it was most of a sample's own cost). */
 static void times(int na, const double *E, double *y, double *tmp) {
   cup_copy(tmp, y, na);
-  for (int i = 0; i < na; i++) {
+  int i = 0;
+  for (; i + 4 <= na; i += 4) {
+    double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    for (int j = 0; j < na; j++) {
+      const double *c = E + i + (size_t)j * na, tj = tmp[j];
+      a0 += c[0] * tj;
+      a1 += c[1] * tj;
+      a2 += c[2] * tj;
+      a3 += c[3] * tj;
+    }
+    y[i] = a0;
+    y[i + 1] = a1;
+    y[i + 2] = a2;
+    y[i + 3] = a3;
+  }
+  for (; i < na; i++) {
     double acc = 0;
     for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * tmp[j];
     y[i] = acc;
@@ -44,10 +62,12 @@ static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k
   const cup_integrator_options *o = &A->o;
   int n = A->n, na = A->na;
   double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
+  double rnd = R->rloc + sqrt(R->r2);            /* (fixed inside the step) */
+  const double *E = NULL;                        /* exp(dt M), looked up at the second sample */
+  double ts = ad_sample_time(A, R->next_sample);
   for (;;) {
-    double ts = ad_sample_time(A, R->next_sample);
     R->next_sample++;
-    R->est_max = fmax(R->est_max, norm_inf(A->de, n) + R->rloc + sqrt(R->r2));
+    R->est_max = fmax(R->est_max, norm_inf(A->de, n) + rnd);
     if (R->sink) {
       ad_state(A, md, A->zy, A->xo);
       if (cup_state_beyond(A->xo, n)) {            /* as step_done: never a state out of range */
@@ -75,8 +95,10 @@ static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k
         return 1;
       }
     }
-    if (!(R->next_sample < o->output_samples && ad_sample_time(A, R->next_sample) < t1)) return 0;
-    const double *E = ad_expm(A, md, dt);
+    if (!(R->next_sample < o->output_samples)) return 0;
+    ts = ad_sample_time(A, R->next_sample);
+    if (!(ts < t1)) return 0;
+    if (!E) E = ad_expm(A, md, dt);
     times(na, E, A->zy, A->dy);
     times(na, E, A->de, A->dy);
   }
@@ -198,7 +220,15 @@ int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) 
   if (A->one >= 0) w[A->one] = 1;
   if (!A->nwu) return CUP_OK;
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
+  if (A->piece_ok && t0 == A->piece_t0 && t1 == A->piece_t1) {   /* the same piece again: its states */
+    cup_copy(w, A->piece_w, A->nwu);
+    return CUP_OK;
+  }
   cup_input_gen_piece(A->u, A->first_state, t0, t1, w);
+  cup_copy(A->piece_w, w, A->nwu);
+  A->piece_t0 = t0;
+  A->piece_t1 = t1;
+  A->piece_ok = 1;
   return CUP_OK;
 }
 

@@ -606,11 +606,21 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
       if (ch) hi = s; else lo = s;
     }
     if (hi >= 0) {
-      double p = nextafter(hi, lo);                /* a jump edge: at hi itself, one check */
-      if (p > lo) {
+      /* a jump edge rounds apart from its breakpoint by an ulp or a few
+       * (the source's corner delay + P j + knot against the breakpoint's
+       * own sum): at the piece's end b, or just below it; or just after
+       * the piece's start, the breakpoint below the corner where the value
+       * jumps (the crossing then lies inside the piece, as a ramp's does).
+       * One check an ulp on that side, then bisection for the rest: the
+       * same crossing, the rule being monotone along the piece. */
+      int at_end = hi == b;
+      for (int u = 0; u < 4; u++) {
+        double p = at_end ? nextafter(hi, lo) : nextafter(lo, hi);
+        if (!(p > lo && p < hi)) break;
         int ch = changes(S, tp, p, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
-        if (!ch) lo = p;
+        if (ch) hi = p; else lo = p;
+        if (at_end != ch) break;                   /* the other side of the crossing: found */
       }
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;

@@ -9,7 +9,7 @@ run 0 "$CRASH" -o "$WORK/base.h5" --quiet
 out=$WORK/held.h5
 "$SWEEP" "$CRASH" -o "$out" --log-progress > "$WORK/log.txt" 2>&1 &
 pid=$!
-for _ in $(seq 1 400); do                     # until the file exists (first progress line)
+for _ in $(seq 1 3000); do                    # until the file exists (first progress line; 60 s at most: a loaded machine)
   grep -q "done," "$WORK/log.txt" 2> /dev/null && break
   sleep 0.02
 done
