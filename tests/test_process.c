@@ -435,7 +435,22 @@ static void test_radius_turning_negative_stops_the_run(void **state) {
   cup_set_free(&S);
 }
 
-/* A polyset process is the LCS path: same trajectory as the LCS itself. */
+/* The state and zeta (m entries) of each sample, by step. */
+typedef struct {
+  const cup_integrator *I;
+  int dim, m;
+  double *x, *z;
+} zeta_rec;
+
+static int zeta_sink(long k, double t, const double *x, void *vp) {
+  (void)t;
+  zeta_rec *r = vp;
+  memcpy(r->x + k * r->dim, x, sizeof(double) * (size_t)r->dim);
+  return cup_integrator_zeta(r->I, r->z + k * r->m) != CUP_OK;
+}
+
+/* A polyset process is the LCS path: same trajectory and zeta as the LCS
+ * itself (its normal cone is P^-1 C^T zeta, the LCS's B zeta). */
 static void test_polyset_process_is_the_lcs(void **state) {
   (void)state;
   cup_circuit c = {1, 2, 1, 1, 2, 1, {0, 1}};
@@ -465,27 +480,124 @@ static void test_polyset_process_is_the_lcs(void **state) {
     o.n = 500;
     o.scheme = scheme;
     long n = o.n;
-    double *ta = calloc((size_t)(n + 1) * 3, sizeof(double)), *tb = calloc((size_t)(n + 1) * 3, sizeof(double));
-    err_ctx ca = {NULL, NULL, 3, 0, 0, ta}, cb = {NULL, NULL, 3, 0, 0, tb};
+    size_t N = (size_t)(n + 1) * 3, M = (size_t)(n + 1) * 2;
+    zeta_rec ra = {NULL, 3, 2, calloc(N, sizeof(double)), calloc(M, sizeof(double))};
+    zeta_rec rb = {NULL, 3, 2, calloc(N, sizeof(double)), calloc(M, sizeof(double))};
     cup_integrator *I;
     cup_run_info ia, ib;
     double x0[3] = {0, 0, 0};
     assert_int_equal(cup_integrator_create(&I, L, u, &o, err), CUP_OK);
-    cup_integrator_run(I, x0, err_sink, &ca, &ia);
+    ra.I = I;
+    cup_integrator_run(I, x0, zeta_sink, &ra, &ia);
     cup_integrator_free(&I);
     assert_int_equal(cup_integrator_create_process(&I, &d, &o, err), CUP_OK);
-    cup_integrator_run(I, x0, err_sink, &cb, &ib);
+    rb.I = I;
+    cup_integrator_run(I, x0, zeta_sink, &rb, &ib);
     cup_integrator_free(&I);
     assert_int_equal(ia.status, ib.status);
-    for (long q = 0; q < 3 * (n + 1); q++)
-      if (ta[q] != tb[q]) fail_msg("%s: entry %ld differs: %.17g vs %.17g", cup_scheme_name(scheme), q, ta[q], tb[q]);
-    free(ta);
-    free(tb);
+    assert_int_equal(ia.samples, ib.samples);
+    for (size_t q = 0; q < N; q++)
+      if (ra.x[q] != rb.x[q])
+        fail_msg("%s: entry %zu differs: %.17g vs %.17g", cup_scheme_name(scheme), q, ra.x[q], rb.x[q]);
+    double zmax = 0;
+    for (size_t q = 0; q < M; q++) {
+      if (ra.z[q] != rb.z[q])
+        fail_msg("%s: zeta entry %zu differs: %.17g vs %.17g", cup_scheme_name(scheme), q, ra.z[q], rb.z[q]);
+      zmax = fmax(zmax, fabs(ra.z[q]));
+    }
+    if (!(zmax > 0.1)) fail_msg("%s: the diodes never conduct (max zeta %g)", cup_scheme_name(scheme), zmax);
+    free(ra.x); free(ra.z); free(rb.x); free(rb.z);
   }
   cup_set_free(&S);
   tcsc_free(&As); tcsc_free(&Cs); tcsc_free(&Es); tcsc_free(&Gs);
   cup_input_free(&u);
   cup_lcs_free(&L);
+}
+
+/* The samples in order: time, state (1-D) and zeta (1 row). */
+typedef struct {
+  const cup_integrator *I;
+  int count;
+  double t[64], x[64], z[64];
+} line_rec;
+
+static int line_sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  line_rec *r = vp;
+  if (r->count == 64) return 1;
+  r->t[r->count] = t;
+  r->x[r->count] = x[0];
+  return cup_integrator_zeta(r->I, &r->z[r->count++]) != CUP_OK;
+}
+
+/* zeta of a process: on the half-line {x >= 0} with x' = u = -1 from
+ * x0 = 1/2, x reaches 0 at t = 1/2 and stays there, held by the
+ * multiplier of x' = u + zeta = 0: zeta = 0 before, 1 after, under every
+ * scheme. A ball has no rows to give multipliers of: CUP_ERR_UNSUPPORTED. */
+static void test_zeta_of_a_process(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  double one = 1;
+  tcsc Cs, Es;
+  tcsc_from_dense(&Cs, &one, 1, 1);
+  tcsc_from_dense(&Es, &one, 1, 1);
+  cup_set_desc sd = {.kind = CUP_SET_POLYSET, .n = 1, .C = Cs.view};
+  cup_set *S;
+  assert_int_equal(cup_set_create(&S, &sd, err), CUP_OK);
+  cup_input *u;
+  cup_wave w = {.kind = CUP_WAVE_CONSTANT, .value = -1};
+  assert_int_equal(cup_input_create(&u, 1, err), CUP_OK);
+  assert_int_equal(cup_input_add(u, 0, &w, err), CUP_OK);
+  cup_process_desc d = {.n = 1, .p = 1, .C = S, .u = u, .E = Es.view};
+  double x0 = 0.5;
+  for (int scheme = 0; scheme < CUP_SCHEME_COUNT; scheme++) {
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.n = 10;
+    o.scheme = scheme;
+    cup_integrator *I;
+    assert_int_equal(cup_integrator_create_process(&I, &d, &o, err), CUP_OK);
+    line_rec r = {.I = I};
+    cup_run_info info;
+    int st = cup_integrator_run(I, &x0, line_sink, &r, &info);
+    if (st < 0) fail_msg("%s: %s", cup_scheme_name(scheme), info.message);
+    int before = 0, after = 0;
+    for (int j = 0; j < r.count; j++) {
+      if (r.t[j] <= 0.45) {
+        before++;
+        if (r.z[j] != 0) fail_msg("%s: zeta(%g) = %.17g before the contact", cup_scheme_name(scheme), r.t[j], r.z[j]);
+      } else if (r.t[j] >= 0.65) {
+        after++;
+        if (!(fabs(r.z[j] - 1) <= 1e-12) || !(fabs(r.x[j]) <= 1e-12))
+          fail_msg("%s: at t = %g x = %.3g, zeta = %.17g (1 on the boundary)", cup_scheme_name(scheme), r.t[j],
+                   r.x[j], r.z[j]);
+      }
+    }
+    if (before < 2 || after < 1) fail_msg("%s: %d samples before, %d after", cup_scheme_name(scheme), before, after);
+    cup_integrator_free(&I);
+  }
+  /* the unit disc: no rows */
+  double c[1] = {0};
+  cup_set_desc bd = {.kind = CUP_SET_BALL, .n = 1, .center = c, .radius = 1};
+  cup_set *B;
+  assert_int_equal(cup_set_create(&B, &bd, err), CUP_OK);
+  cup_process_desc db = {.n = 1, .C = B};
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  cup_integrator *I;
+  assert_int_equal(cup_integrator_create_process(&I, &db, &o, err), CUP_OK);
+  line_rec r = {.I = I};
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, &x0, line_sink, &r, &info), CUP_ERR_INTERRUPTED);   /* the sink stops */
+  double z = -1;
+  assert_int_equal(cup_integrator_zeta(I, &z), CUP_ERR_UNSUPPORTED);
+  assert_true(z == -1);
+  cup_integrator_free(&I);
+  cup_set_free(&B);
+  cup_input_free(&u);
+  cup_set_free(&S);
+  tcsc_free(&Cs);
+  tcsc_free(&Es);
 }
 
 int main(void) {
@@ -498,6 +610,7 @@ int main(void) {
     cmocka_unit_test(test_oracle_matches_builtin_ball),
     cmocka_unit_test(test_radius_turning_negative_stops_the_run),
     cmocka_unit_test(test_polyset_process_is_the_lcs),
+    cmocka_unit_test(test_zeta_of_a_process),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

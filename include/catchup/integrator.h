@@ -186,7 +186,12 @@ CUP_API void cup_integrator_options_default(cup_integrator_options *o);
 /** Set up an integrator for the LCS with input u (may be NULL when the LCS
  *  has no input). Does everything that does not depend on the state: the
  *  free-step operator (e^{hA}, (I - hA)^-1), input integrals when u is
- *  constant, the projector (factored once), the stiffness check. */
+ *  constant, the projector (factored once), the stiffness check. An LCS
+ *  with D = 0 is the sweeping process on its polyset {C x + G u + F >= 0}
+ *  with f = A x + E u: cup_integrator_create_process on that set makes the
+ *  same integrator (the same trajectory and zeta, bit for bit). This door
+ *  also takes what a process cannot say: D != 0 and an active network's B
+ *  (the theta and adaptive schemes). */
 CUP_API int cup_integrator_create(cup_integrator **I, const cup_lcs *L, const cup_input *u,
                                   const cup_integrator_options *o, char *errmsg);
 CUP_API void cup_integrator_free(cup_integrator **I);
@@ -232,10 +237,10 @@ typedef struct cup_process_desc {
 } cup_process_desc;
 
 /** Set up an integrator for a general sweeping process; the same options,
- *  run, state and free as an LCS's. A polyset is stepped exactly as an LCS
- *  with that set (the same code and the same trajectory); other sets go
- *  through their cup_setproj. Errors name the field ("A is 2 x 3, expected
- *  3 x 3"). */
+ *  run, state, zeta and free as an LCS's (both doors end in one builder).
+ *  A polyset is stepped exactly as an LCS with that set (the same code, the
+ *  same trajectory and zeta); other sets go through their cup_setproj.
+ *  Errors name the field ("A is 2 x 3, expected 3 x 3"). */
 CUP_API int cup_integrator_create_process(cup_integrator **I, const cup_process_desc *d,
                                           const cup_integrator_options *o, char *errmsg);
 
@@ -294,9 +299,16 @@ CUP_API const double *cup_integrator_state(const cup_integrator *I);
  *  currents and voltages, cup_netlist_signals). The adaptive scheme gives
  *  the multipliers of the active set that holds from the sample's time on
  *  (at an event, the one chosen there), and zeros at t = 0 and on its
- *  catching-up steps across accumulating events. CUP_ERR_UNSUPPORTED for an
- *  integrator from cup_integrator_create_process. */
+ *  catching-up steps across accumulating events. A process on a polyset
+ *  has them too, one per row of its set: its normal cone is
+ *  {P^-1 C^T zeta : 0 <= zeta _|_ C x + g}, so x' = f + P^-1 C^T zeta as an
+ *  LCS's x' = A x + E u + B zeta. CUP_ERR_UNSUPPORTED for a process on any
+ *  other set (a ball, an oracle, a polyset and a ball, a state polyset):
+ *  its normal cone has no fixed rows to give multipliers of. */
 CUP_API int cup_integrator_zeta(const cup_integrator *I, double *zeta);
+/** m, the entries cup_integrator_zeta writes: the LCS's rows, or the rows of
+ *  a process's polyset; 0 for a process on another set (zeta refuses it). */
+CUP_API int cup_integrator_rows(const cup_integrator *I);
 
 /** The name of a scheme in CUP_SCHEME_LIST ("explicit", ...); "unknown" otherwise. */
 CUP_API const char *cup_scheme_name(int scheme);

@@ -19,7 +19,7 @@
 #include "catchup.h"
 #include "catchup/pss.h"
 #include "pss_run.h"
-#include "integrator/integrator_impl.h"
+#include "integrator/adaptive.h"
 #include "util/clock.h"
 #include "util/fail.h"
 
@@ -363,7 +363,8 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
   w.b = gsl_vector_view_array(w.col, N);         /* the right-hand side (col is free between Jacobians) */
   w.s = gsl_vector_view_array(w.dx, N);
   w.r->info.period = period;
-  int ts = o->jacobian == CUP_PSS_JACOBIAN_AUTO && I->ad ? cup_adaptive_tangent(I->ad, 1) : CUP_ERR_UNSUPPORTED;
+  cup_adaptive *ad = cup_adaptive_of(I);
+  int ts = o->jacobian == CUP_PSS_JACOBIAN_AUTO && ad ? cup_adaptive_tangent(ad, 1) : CUP_ERR_UNSUPPORTED;
   if (ts != CUP_ERR_UNSUPPORTED) {               /* D != 0: finite differences */
     if (ts) {
       cup_pss_free(&w.r);
@@ -372,11 +373,11 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
       gsl_permutation_free(w.perm);
       return cup_fail(errmsg, CUP_ERR_NOMEM, "steady state: out of memory");
     }
-    w.tan = w.ad = I->ad;
+    w.tan = w.ad = ad;
   }
   int tangent_on = w.tan != NULL;
   newton(&w, x_guess);
-  if (tangent_on) cup_adaptive_tangent(I->ad, 0);
+  if (tangent_on) cup_adaptive_tangent(ad, 0);
   w.r->info.seconds = now_seconds() - t0;
   free(buf);
   gsl_matrix_free(w.JI);

@@ -32,7 +32,8 @@ module catchup_c
   public :: c_cup_schedule_parse, c_cup_schedule_value, c_cup_schedule_format, &
     c_cup_integrator_options_default, c_cup_integrator_create, c_cup_integrator_create_process, &
     c_cup_integrator_free, &
-    c_cup_integrator_run, c_cup_integrator_state, c_cup_integrator_zeta, c_cup_integrator_checkpoint_size, &
+    c_cup_integrator_run, c_cup_integrator_state, c_cup_integrator_zeta, c_cup_integrator_rows, &
+    c_cup_integrator_checkpoint_size, &
     c_cup_integrator_checkpoint_save, c_cup_integrator_checkpoint_restore, c_cup_integrator_resume, &
     c_cup_scheme_name, c_cup_scheme_parse, &
     c_cup_output_name, c_cup_output_parse, c_cup_wave_name, c_cup_wave_parse
@@ -390,6 +391,11 @@ module catchup_c
       real(c_double), intent(out) :: zeta(*)
       integer(c_int) :: st
     end function c_cup_integrator_zeta
+    function c_cup_integrator_rows(I) bind(C, name="cup_integrator_rows") result(m)
+      import :: c_ptr, c_int
+      type(c_ptr), value :: I
+      integer(c_int) :: m
+    end function c_cup_integrator_rows
     function c_cup_integrator_state(I) bind(C, name="cup_integrator_state") result(x)
       import :: c_ptr
       type(c_ptr), value :: I

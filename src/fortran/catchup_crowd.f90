@@ -11,7 +11,7 @@ module catchup_crowd
   use catchup_constants
   use catchup_types
   use catchup_base
-  use catchup_c, only: c_cup_integrator_create_process
+  use catchup_c, only: c_cup_integrator_create_process, c_cup_integrator_rows
   use catchup_integrator, only: cup_expected_samples_, cup_options_or_default_
   implicit none
   private
@@ -205,6 +205,7 @@ contains
     st = c_cup_integrator_create_process(integ%ptr, d, o, cmsg)
     if (st == CUP_OK) then
       integ%dim = 2 * c%agents
+      integ%rows = int(c_cup_integrator_rows(integ%ptr))
       integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)

@@ -170,6 +170,7 @@ contains
     st = c_cup_integrator_create_process(integ%ptr, d, o, cmsg)
     if (st == CUP_OK) then
       integ%dim = S%dim
+      integ%rows = int(c_cup_integrator_rows(integ%ptr))   ! a polyset's rows; 0 for another set
       integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)
@@ -385,7 +386,8 @@ contains
 
   !> zeta of the last step (rows entries): the diodes' currents and reverse
   !> voltages of a netlist, for cup_netlist_signals (0 before the first step).
-  !> An integrator from an LCS only (ierr = CUP_ERR_UNSUPPORTED for a process).
+  !> A process on a polyset has one per row of its set (rows); a process on
+  !> another set has none (rows = 0, ierr = CUP_ERR_UNSUPPORTED).
   subroutine cup_integrator_zeta(integ, zeta, ierr)
     type(cup_integrator_t), intent(in) :: integ
     real(c_double), intent(out) :: zeta(:)

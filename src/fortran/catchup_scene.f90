@@ -7,6 +7,7 @@ module catchup_scene
   use catchup_constants
   use catchup_types
   use catchup_base
+  use catchup_c, only: c_cup_integrator_rows
   use catchup_integrator, only: cup_expected_samples_
   implicit none
   private
@@ -358,6 +359,7 @@ contains
     st = c_cup_scene_integrator(s%ptr, o, integ%ptr, cmsg)
     if (st == CUP_OK) then
       integ%dim = int(c_cup_scene_dim(s%ptr))
+      integ%rows = int(c_cup_integrator_rows(integ%ptr))
       integ%expected = cup_expected_samples_(o)
     end if
     call cup_finish_(st, cmsg, ierr, errmsg)

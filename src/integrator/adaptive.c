@@ -152,6 +152,55 @@ static void switch_model(cup_adaptive *A) {
   }
 }
 
+/* Every matrix and vector of the run (its sizes set): *fail = 1 when memory runs out. */
+static void alloc_vectors(cup_adaptive *A, int *fail) {
+  int n = A->n, m = A->m, p = A->p, nw = A->nw, na = A->na;
+  size_t NA = (size_t)na * na;
+  A->A = take((size_t)n * n, sizeof(double), fail);
+  A->E = take((size_t)n * p, sizeof(double), fail);
+  A->G = take((size_t)m * p, sizeof(double), fail);
+  A->U = take((size_t)p * nw, sizeof(double), fail);
+  A->W = take((size_t)nw * nw, sizeof(double), fail);
+  A->ework = take(6 * NA, sizeof(double), fail);
+  double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
+  for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), fail);
+  double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
+                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
+  for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++) *vecs_m[k] = take((size_t)m, sizeof(double), fail);
+  double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
+  for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++) *vecs_n[k] = take((size_t)n, sizeof(double), fail);
+  A->ut = take((size_t)p, sizeof(double), fail);
+  A->udot = take((size_t)p, sizeof(double), fail);
+  A->uerr = take((size_t)p, sizeof(double), fail);
+  A->wa = take((size_t)nw, sizeof(double), fail);
+  A->wt = take((size_t)nw, sizeof(double), fail);
+  A->piece_w = take((size_t)nw, sizeof(double), fail);
+  A->wscale = take((size_t)nw, sizeof(double), fail);
+  A->gscale = take((size_t)m, sizeof(double), fail);
+  A->zw = take((size_t)nw, sizeof(double), fail);
+  A->zy = take((size_t)na, sizeof(double), fail);
+  A->xo = take((size_t)n, sizeof(double), fail);
+  A->dy = take((size_t)na, sizeof(double), fail);
+  A->de = take((size_t)na, sizeof(double), fail);
+  A->de2 = take((size_t)na, sizeof(double), fail);
+  A->ed = take((size_t)n, sizeof(double), fail);
+  A->pend.zy = take((size_t)na, sizeof(double), fail);
+  A->pend.de = take((size_t)na, sizeof(double), fail);
+  A->pend.y2 = take((size_t)na, sizeof(double), fail);
+  A->pend.e2 = take((size_t)n, sizeof(double), fail);
+  A->lcpM = take((size_t)m * m, sizeof(double), fail);
+  A->touch = take((size_t)m, 1, fail);
+  if (A->has_D) {
+    A->Bd = take((size_t)n * m, sizeof(double), fail);
+    A->Dd = take((size_t)m * m, sizeof(double), fail);
+    A->CB = take((size_t)m * m, sizeof(double), fail);
+    A->dcpl = take((size_t)m, 1, fail);
+  }
+  A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), fail);
+  A->samp_mid = take((size_t)p * AD_DEGREE, sizeof(double), fail);
+  A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), fail);
+}
+
 int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
                         const cup_sparse *B, const cup_sparse *Dm, const cup_input *u,
                         const cup_integrator_options *o, char *errmsg) {
@@ -197,50 +246,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
   }
-  size_t NA = (size_t)na * na;
-  A->A = take((size_t)n * n, sizeof(double), &fail);
-  A->E = take((size_t)n * p, sizeof(double), &fail);
-  A->G = take((size_t)m * p, sizeof(double), &fail);
-  A->U = take((size_t)p * nw, sizeof(double), &fail);
-  A->W = take((size_t)nw * nw, sizeof(double), &fail);
-  A->ework = take(6 * NA, sizeof(double), &fail);
-  double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
-  for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), &fail);
-  double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
-                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
-  for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++) *vecs_m[k] = take((size_t)m, sizeof(double), &fail);
-  double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
-  for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++) *vecs_n[k] = take((size_t)n, sizeof(double), &fail);
-  A->ut = take((size_t)p, sizeof(double), &fail);
-  A->udot = take((size_t)p, sizeof(double), &fail);
-  A->uerr = take((size_t)p, sizeof(double), &fail);
-  A->wa = take((size_t)nw, sizeof(double), &fail);
-  A->wt = take((size_t)nw, sizeof(double), &fail);
-  A->piece_w = take((size_t)nw, sizeof(double), &fail);
-  A->wscale = take((size_t)nw, sizeof(double), &fail);
-  A->gscale = take((size_t)m, sizeof(double), &fail);
-  A->zw = take((size_t)nw, sizeof(double), &fail);
-  A->zy = take((size_t)na, sizeof(double), &fail);
-  A->xo = take((size_t)n, sizeof(double), &fail);
-  A->dy = take((size_t)na, sizeof(double), &fail);
-  A->de = take((size_t)na, sizeof(double), &fail);
-  A->de2 = take((size_t)na, sizeof(double), &fail);
-  A->ed = take((size_t)n, sizeof(double), &fail);
-  A->pend.zy = take((size_t)na, sizeof(double), &fail);
-  A->pend.de = take((size_t)na, sizeof(double), &fail);
-  A->pend.y2 = take((size_t)na, sizeof(double), &fail);
-  A->pend.e2 = take((size_t)n, sizeof(double), &fail);
-  A->lcpM = take((size_t)m * m, sizeof(double), &fail);
-  A->touch = take((size_t)m, 1, &fail);
-  if (A->has_D) {
-    A->Bd = take((size_t)n * m, sizeof(double), &fail);
-    A->Dd = take((size_t)m * m, sizeof(double), &fail);
-    A->CB = take((size_t)m * m, sizeof(double), &fail);
-    A->dcpl = take((size_t)m, 1, &fail);
-  }
-  A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), &fail);
-  A->samp_mid = take((size_t)p * AD_DEGREE, sizeof(double), &fail);
-  A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), &fail);
+  alloc_vectors(A, &fail);
   if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     cup_adaptive_free(&A);
     return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");

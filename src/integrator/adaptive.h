@@ -1,13 +1,20 @@
-/* adaptive — the event-driven scheme CUP_SCHEME_ADAPTIVE behind
- * cup_integrator_create/run (integrator.c dispatches here). */
+/* adaptive — the event-driven scheme CUP_SCHEME_ADAPTIVE: its entry of the
+ * scheme table (scheme.h), and what switched.c and analysis/pss.c call of
+ * it directly. */
 #ifndef CUP_ADAPTIVE_H
 #define CUP_ADAPTIVE_H
 
 #include "catchup/integrator.h"
 #include "freestep.h"
+#include "scheme.h"
 #include "util/ckpt.h"
 
 typedef struct cup_adaptive cup_adaptive;
+
+extern const scheme_type *const scheme_adaptive;
+
+/* I's adaptive scheme, or NULL when I runs another. */
+cup_adaptive *cup_adaptive_of(const cup_integrator *I);
 
 /* x' = A x + E u + B zeta, 0 <= zeta _|_ C x + g0 + G u(t) >= 0 (D's
  * drift; K's rows, offset g0 and metric P, B = P^-1 C^T; G m x p or NULL):

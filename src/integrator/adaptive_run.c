@@ -2,8 +2,8 @@
  * docs/adaptive.md): steps of the exact flow that end on the input's
  * breakpoints (the output times inside them: adaptive_sample.c), events
  * located inside them, the certified projection or the jump where the
- * state is inconsistent, the error estimate carried along, and the
- * checkpoints of a stopped run. Allocates nothing. */
+ * state is inconsistent, the error estimate carried along, and a stopped
+ * run resumed (adaptive_ckpt.c saves and restores it). Allocates nothing. */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
 #include <math.h>
@@ -713,61 +713,6 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   if (st >= 0) st = at_break(A, &R, 1, &pi);
   if (st >= 0 && A->tend > 0) st = start_piece(A, &R);
   return run_to_end(A, &R, st);
-}
-
-/* ---- checkpoints (integrator.h) ----------------------------------------------------- */
-
-int cup_adaptive_stopped(const cup_adaptive *A) { return A->stop.phase != AD_STOP_NONE; }
-
-void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info) {
-  info->status = A->stop.status;
-  memcpy(info->message, A->stop.message, sizeof info->message);
-}
-
-/* Everything a step carries to the next: the stopped run's scalars, x and
- * its error, the accumulation ring, the LCPs' and the projector's warm
- * starts, and the kept active sets with their exponentials' step lengths
- * (which ad_flow takes from the cache, or computes another way). */
-void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
-  ad_stop *s = &A->stop;
-  ad_run *R = &s->R;
-  size_t N = sizeof(double) * (size_t)A->n, M = (size_t)A->m;
-  CUP_CKPT_IO(c, s->phase); CUP_CKPT_IO(c, s->md); CUP_CKPT_IO(c, s->pinned1);
-  CUP_CKPT_IO(c, R->t); CUP_CKPT_IO(c, R->tb); CUP_CKPT_IO(c, R->steps); CUP_CKPT_IO(c, R->next_sample);
-  CUP_CKPT_IO(c, R->est_max); CUP_CKPT_IO(c, R->r2); CUP_CKPT_IO(c, R->rloc); CUP_CKPT_IO(c, R->h_cb);
-  CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0);
-  cup_ckpt_io(c, A->x, N);
-  cup_ckpt_io(c, A->e, N);
-  if (s->phase == AD_STOP_DENSE) {               /* the refused sample's states, the step's projection */
-    struct ad_pend *p = &A->pend;
-    size_t NA = sizeof(double) * (size_t)A->na;
-    CUP_CKPT_IO(c, s->pi);
-    CUP_CKPT_IO(c, p->active); CUP_CKPT_IO(c, p->md); CUP_CKPT_IO(c, p->seg2); CUP_CKPT_IO(c, p->md2);
-    CUP_CKPT_IO(c, p->k); CUP_CKPT_IO(c, p->t_end); CUP_CKPT_IO(c, p->t2a); CUP_CKPT_IO(c, p->t2b);
-    cup_ckpt_io(c, p->zy, NA);
-    cup_ckpt_io(c, p->de, NA);
-    cup_ckpt_io(c, p->y2, NA);
-    cup_ckpt_io(c, p->e2, N);
-  }
-  CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
-  cup_ckpt_io(c, A->lcp.lam, sizeof(double) * M);
-  cup_ckpt_io(c, A->lcp.prev, M);
-  if (A->has_D) {                                /* the jump's LCP (2 m) warm-starts too */
-    cup_ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
-    cup_ckpt_io(c, A->jlcp.prev, 2 * M);
-  }
-  cup_lcp_step_checkpoint(&A->proj, c);
-  cup_projector_checkpoint(A->projector, c);
-  for (int k = 0; k < AD_MODES; k++) {
-    ad_mode *md = &A->modes[k];
-    uint64_t mask = md->mask;
-    long stamp = md->stamp, cstamp[AD_CACHE];
-    double hc[AD_CACHE];
-    memcpy(hc, md->hc, sizeof hc);
-    memcpy(cstamp, md->cstamp, sizeof cstamp);
-    CUP_CKPT_IO(c, mask); CUP_CKPT_IO(c, stamp); CUP_CKPT_IO(c, hc); CUP_CKPT_IO(c, cstamp);
-    if (!c->saving && !c->bad) ad_mode_restore(A, k, mask, stamp, hc, cstamp);
-  }
 }
 
 /* A restored stop goes on: the stopped step's sample (again, when the sink

@@ -1,8 +1,9 @@
 /* checkpoint — a stopped run as a byte blob and back (integrator.h). The
  * driver's part is here: a header naming the build and the configuration,
- * where the run stopped, its statistics and x_k. Each scheme keeps its own
- * part in its own file: the projector's (projector.c), the LCP step's
- * (lcp/step.c), the adaptive scheme's (adaptive_run.c). Every part is one
+ * and the run's statistics. Each scheme writes its own part through its
+ * table (scheme.h): the fixed-step schemes' (fixed_setup.c: where the run
+ * stopped, x_k, the projector's part in projector.c, the LCP step's in
+ * lcp/step.c), the adaptive scheme's (adaptive_ckpt.c). Every part is one
  * function that reads or writes its fields in one order (util/ckpt.h), so
  * that the size, the save and the restore cannot disagree. */
 #include <math.h>
@@ -11,7 +12,6 @@
 #include <string.h>
 #include "catchup.h"
 #include "integrator_impl.h"
-#include "projector/projector.h"
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
@@ -80,43 +80,25 @@ static void io_info(cup_ckpt *c, cup_run_info *i) {
 
 /* The run's state after the header, both ways. */
 static void io_state(cup_integrator *I, cup_ckpt *c, cup_run_info *info) {
-  cup_ckpt_stop *s = &I->stop;
   io_info(c, info);
-  if (I->ad) { cup_adaptive_checkpoint(I->ad, c); return; }
-  CUP_CKPT_IO(c, s->phase);
-  CUP_CKPT_IO(c, s->k);
-  CUP_CKPT_IO(c, s->next_j);
-  CUP_CKPT_IO(c, I->zeta_from);
-  CUP_CKPT_IO(c, I->jump);
-  cup_ckpt_io(c, I->x, sizeof(double) * (size_t)I->n);
-  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* a sample between steps k - 1 and k: x_{k-1}, zeta_{k-1} */
-    cup_ckpt_io(c, I->xnew, sizeof(double) * (size_t)I->n);
-    if (I->zprev) cup_ckpt_io(c, I->zprev, sizeof(double) * (size_t)I->m);
-  }
-  if (I->half) {
-    cup_ckpt_io(c, I->x0, sizeof(double) * (size_t)I->n);
-    CUP_CKPT_IO(c, I->est.err);
-  }
-  cup_projector_checkpoint(I->proj, c);
-  if (I->use_theta) cup_lcp_step_checkpoint(&I->th, c);
+  I->sch->checkpoint(I->ws, c);
+}
+
+/* The scheme keeps what a checkpoint needs (a set other than a polyset
+ * keeps state of its own, a switched run one integrator a configuration). */
+static int saves(const cup_integrator *I) {
+  return I->sch->checkpoint && (!I->sch->saves || I->sch->saves(I->ws));
 }
 
 /* Header and state into c (a counting stream when c->buf is NULL). */
 static int save(const cup_integrator *Ic, const cup_run_info *run, cup_ckpt *c) {
   cup_integrator *I = (cup_integrator *)Ic;      /* saving only reads it */
   if (!I) return CUP_ERR_ARG;
-  if ((I->sp && !I->ad) || I->swr) return CUP_ERR_UNSUPPORTED;
-  int resumable = I->ad ? cup_adaptive_stopped(I->ad) : I->stop.phase != CUP_STOP_NONE;
-  if (!resumable) return CUP_ERR_ARG;
+  if (!saves(I)) return CUP_ERR_UNSUPPORTED;
+  cup_run_info info = run ? *run : (cup_run_info){0};
+  if (!I->sch->stopped(I->ws, &info)) return CUP_ERR_ARG;   /* info: the status the stop replaced */
   fingerprint f;
   fingerprint_of(I, &f);
-  cup_run_info info = run ? *run : (cup_run_info){0};
-  if (I->ad) {                                   /* the status the stop replaced */
-    cup_adaptive_unstop(I->ad, &info);
-  } else {
-    info.status = I->stop.status;
-    memcpy(info.message, I->stop.message, sizeof info.message);
-  }
   cup_ckpt_io(c, (void *)magic, sizeof magic);
   CUP_CKPT_IO(c, f);
   io_state(I, c, &info);
@@ -138,7 +120,7 @@ int cup_integrator_checkpoint_save(const cup_integrator *I, const cup_run_info *
 
 int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsigned long size, char *errmsg) {
   if (!I || !buf) return cup_fail(errmsg, CUP_ERR_ARG, "checkpoint: NULL argument");
-  if ((I->sp && !I->ad) || I->swr)
+  if (!saves(I))
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "checkpoint: a run of this kind of set (or with switches) cannot "
                     "be resumed");
   cup_ckpt c = {(unsigned char *)buf, 0, size, 0, 0};

@@ -1,6 +1,7 @@
-/* integrator_impl — the fixed-step driver's state, shared by integrator.c
- * (set-up, the run) and checkpoint.c (saving and restoring a stopped run).
- * Internal to the library. */
+/* integrator_impl — an integrator's state: the driver's (the options, the
+ * model, the scheme's table and workspace) and the fixed-step schemes'
+ * (fixed.c, fixed_setup.c, whose workspace is the integrator itself),
+ * shared with checkpoint.c and switched.c. Internal to the library. */
 #ifndef CUP_INTEGRATOR_IMPL_H
 #define CUP_INTEGRATOR_IMPL_H
 
@@ -8,7 +9,7 @@
 #include "faststep.h"
 #include "freestep.h"
 #include "estimate.h"
-#include "adaptive.h"
+#include "scheme.h"
 #include "lcp/step.h"
 #include "util/ckpt.h"
 
@@ -31,16 +32,9 @@ typedef struct cup_ckpt_stop {
   cup_run_info info;        /* the restored run's statistics */
 } cup_ckpt_stop;
 
-/* A switched LCS's driver (switched.c), reached through a table: it makes
- * integrators, so integrator.c must not depend on it. */
-typedef struct cup_swrun cup_swrun;
-typedef struct cup_swops {
-  int (*run)(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
-  void (*free)(cup_swrun **S);
-  const cup_integrator *(*child)(const cup_swrun *S);   /* the configuration in force's integrator */
-} cup_swops;
-
 struct cup_integrator {
+  const scheme_type *sch;   /* the scheme (scheme.h): the driver calls through it */
+  void *ws;                 /* ... its workspace (the fixed-step schemes': this integrator) */
   const cup_input *u;
   cup_integrator_options o;
   int n, m, p;
@@ -56,15 +50,14 @@ struct cup_integrator {
   cup_setproj *sp;          /* other sets */
   cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
   const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
+  /* the fixed-step schemes' (fixed_setup.c, fixed.c) from here on, with
+   * h .. split_row above; the other schemes keep theirs in their workspace */
   cup_freestep fs;
   cup_projector *proj;
   cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
-  cup_adaptive *ad;         /* the adaptive scheme: everything else unused */
   long kend;                /* the run's last step: n, or a switched circuit's window's end */
   long next_j;              /* where the last run left the output samples (a window's next one) */
-  cup_swrun *swr;           /* a switched LCS (switched.c): its configurations' integrators */
-  const cup_swops *swo;     /* ... and its driver */
   cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
   cup_estimate est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector,
@@ -82,12 +75,6 @@ struct cup_integrator {
   cup_ckpt_stop stop;
 };
 
-/* integrator.c: the steps from k0 (the sampler at next_j) to n, as
- * cup_integrator_run takes them after its start (the run's warnings and
- * first sample, the coarse run of the estimate); checkpoint.c resumes
- * through it. */
-int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx,
-                          cup_run_info *info);
 /* A fixed-step run's window (a switched circuit's stretch in one
  * configuration, switched.c): steps k0 + 1 .. k1 on the run's grid from
  * state x at t_k0 (first: k0 = 0, the run's own start and x0's sample),

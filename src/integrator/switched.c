@@ -28,6 +28,8 @@
 #include "integrator_impl.h"
 #include "adaptive.h"
 
+typedef struct cup_swrun cup_swrun;
+
 #define SW_MAX 64          /* configurations (the model forms at most this many) */
 
 struct cup_swrun {
@@ -96,9 +98,8 @@ static int child_of(cup_swrun *S, int topo, char *errmsg) {
 }
 
 
-static void sw_free(cup_swrun **Sp) {
-  cup_swrun *S = *Sp;
-  if (!S) return;
+static void sw_free(void *ws) {
+  cup_swrun *S = ws;
   for (int k = 0; k < SW_MAX; k++) {
     cup_integrator_free(&S->child[k]);
     cup_integrator_free(&S->twin[k]);
@@ -110,10 +111,18 @@ static void sw_free(cup_swrun **Sp) {
   free(S->zsplit);
   free(S->xg);
   free(S);
-  *Sp = NULL;
 }
 
-static const cup_integrator *sw_child(const cup_swrun *S) { return S->child[S->cur]; }
+/* The configuration in force's integrator answers state and zeta. */
+static const double *sw_state(const void *ws) {
+  const cup_swrun *S = ws;
+  return cup_integrator_state(S->child[S->cur]);
+}
+
+static int sw_zeta(void *ws, double *zeta) {
+  cup_swrun *S = ws;
+  return cup_integrator_zeta(S->child[S->cur], zeta);
+}
 
 /* One window's statistics into the run's. */
 static void add_info(cup_run_info *info, const cup_run_info *w) {
@@ -145,7 +154,7 @@ static int window(cup_swrun *S, int topo, double t, double tb, int first, long *
   S->crossed = S->user_stop = S->refused = 0;
   S->tg = t;
   cup_copy(S->xg, S->x, S->n);
-  int st = cup_adaptive_window(C->ad, t, tb, S->x, first, steps, next_sample, watch_sink, S, &w);
+  int st = cup_adaptive_window(cup_adaptive_of(C), t, tb, S->x, first, steps, next_sample, watch_sink, S, &w);
   S->watch = 0;
   if (S->crossed) {                                /* our stop, not an error; its sample not taken */
     st = CUP_OK;
@@ -155,7 +164,7 @@ static int window(cup_swrun *S, int topo, double t, double tb, int first, long *
   }
   add_info(info, &w);
   if (st < 0) return st;
-  cup_copy(S->x, cup_adaptive_state(C->ad), S->n);
+  cup_copy(S->x, cup_adaptive_state(cup_adaptive_of(C)), S->n);
   return CUP_OK;
 }
 
@@ -173,9 +182,9 @@ static int locate(cup_swrun *S, int topo, double *t, long *steps, long *next_sam
     double mid = lo + (hi - lo) / 2;
     long k = ksave, j = jsave;
     cup_run_info w;
-    int st = cup_adaptive_window(C->ad, S->tg, mid, x0, 0, &k, &j, NULL, NULL, &w);
+    int st = cup_adaptive_window(cup_adaptive_of(C), S->tg, mid, x0, 0, &k, &j, NULL, NULL, &w);
     if (st < 0) { S->probing = 0; add_info(info, &w); return st; }
-    int c = S->ops.crossed(S->ops.ctx, topo, mid, cup_adaptive_state(C->ad));
+    int c = S->ops.crossed(S->ops.ctx, topo, mid, cup_adaptive_state(cup_adaptive_of(C)));
     if (c < 0) { S->probing = 0; return cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", mid); }
     if (c) hi = mid; else lo = mid;
   }
@@ -231,13 +240,13 @@ static int piece(cup_swrun *S, int topo, double ta, double tb, cup_run_info *inf
   S->cur = topo;
   S->piece_end = tb;
   cup_zero(S->zsplit, cup_lcs_rows(W->L));
-  int st = cup_adaptive_window(W->ad, ta, tb, S->x, 0, &steps, &next, twin_sink, S, &w);
+  int st = cup_adaptive_window(cup_adaptive_of(W), ta, tb, S->x, 0, &steps, &next, twin_sink, S, &w);
   if (st < 0) {
     add_info(info, &w);
     return st;
   }
   info->events += w.events;
-  cup_copy(S->x, cup_adaptive_state(W->ad), S->n);
+  cup_copy(S->x, cup_adaptive_state(cup_adaptive_of(W)), S->n);
   return CUP_OK;
 }
 
@@ -351,7 +360,7 @@ static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
   return info->status;
 }
 
-/* The estimate's run at n/2 (integrator.c's coarse_run for a switched
+/* The estimate's run at n/2 (fixed.c's coarse_run for a switched
  * run): its states kept at the compared points. 1 when the interrupt flag
  * stopped it (the run stops too), its status in info. */
 static int coarse_run(cup_swrun *S, const double *x0, cup_run_info *info) {
@@ -364,8 +373,8 @@ static int coarse_run(cup_swrun *S, const double *x0, cup_run_info *info) {
   return 1;
 }
 
-static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  cup_swrun *S = I->swr;
+static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  cup_swrun *S = ws;
   const cup_switching *sw = &S->ops;
   double T = S->o.T, t = 0;
   memset(info, 0, sizeof *info);
@@ -424,7 +433,10 @@ static int create_half(cup_swrun *S, const cup_switching *sw, const cup_input *u
   return cup_integrator_create_switched(&S->half, sw, u, &h, errmsg);
 }
 
-static const cup_swops ops = {sw_run, sw_free, sw_child};
+/* Made by its own front door below, never chosen by the options; no checkpoints. */
+static const scheme_type switched_type = {
+  .name = "switched", .free = sw_free, .run = sw_run, .state = sw_state, .zeta = sw_zeta,
+};
 
 int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,
                                    const cup_integrator_options *o, char *errmsg) {
@@ -438,8 +450,8 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
   cup_integrator *I = calloc(1, sizeof *I);
   cup_swrun *S = calloc(1, sizeof *S);
   if (!I || !S) { free(I); free(S); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
-  I->swr = S;
-  I->swo = &ops;
+  I->sch = &switched_type;
+  I->ws = S;
   S->ops = *sw;
   S->u = u;
   S->o = *o;

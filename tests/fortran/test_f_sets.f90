@@ -112,7 +112,38 @@ program test_f_sets
     err = max(err, abs(X(1, k) - (t(k) - tanh(t(k)))), abs(X(2, k) - 1 / cosh(t(k))))
   end do
   call check_close(err * 1000, 0.5174d0, 0.026d0, 'error*n of the tractrix at n = 1000')
+  call check(integ%rows == 0, 'a ball has no rows')
+  call cup_integrator_zeta(integ, z(1:0), ierr)
+  call check_int(ierr, CUP_ERR_UNSUPPORTED, 'so no zeta')
   call cup_integrator_free(integ)
+
+  call section('zeta of a process on a polyset: the half-line x >= 0 with x'' = -1 from 1/2')
+  block
+    type(cup_set_t) :: line
+    type(cup_input_t) :: down
+    type(cup_integrator_options) :: o10
+    real(c_double) :: zz(1)
+    real(c_double), allocatable :: tl(:), Xl(:, :)
+    integer :: nl
+    call cup_set_polyset_create(line, reshape([1d0], [1, 1]), ierr)
+    call check_int(ierr, CUP_OK, 'half-line created')
+    call cup_input_create(down, 1, ierr)
+    call cup_input_add_constant(down, 1, -1d0, ierr)
+    call cup_integrator_options_default(o10)
+    o10%n = 10
+    call cup_integrator_create_process(integ, line, ierr, u=down, E=reshape([1d0], [1, 1]), opt=o10)
+    call check_int(ierr, CUP_OK, 'process created')
+    call check(integ%rows == 1, 'one row')
+    call cup_integrator_run_store(integ, [0.5d0], tl, Xl, nl, ierr)
+    call check_int(ierr, CUP_OK, 'half-line run')
+    call cup_integrator_zeta(integ, zz, ierr)
+    call check_int(ierr, CUP_OK, 'its zeta')
+    call check_close(zz(1), 1d0, 1d-12, 'zeta = 1 holds x on the boundary (x'' = -1 + zeta = 0)')
+    call check(abs(Xl(1, nl)) <= 1d-12 .and. tl(nl) == 1, 'x(1) = 0')
+    call cup_integrator_free(integ)
+    call cup_input_free(down)
+    call cup_set_free(line)
+  end block
 
   call section('a Fortran oracle gives the built-in ball''s trajectory')
   call cup_set_oracle_create(orc, 2, c_funloc(disc_oracle), c_loc(dp), ierr)

@@ -1,0 +1,661 @@
+/* fixed — the fixed-step schemes' run: the inexact catching-up algorithm
+ * (paper, Sec. 3, eq. for x_{k+1}) on the grid t_k = k T / n, a free step
+ * (freestep.c), then an (eps_n, eta_n)-projection onto K(t_{k+1}) in the
+ * P-metric (projector.c) or the step's exact LCP (lcp/step.c), stretches of
+ * a small LCS's steps fused (faststep.c); the output samples, the
+ * estimate's run at n/2, stops and their resumption; and the table that
+ * makes the four schemes one entry (fixed_setup.c sets them up). A step
+ * allocates nothing and a run keeps only the current state. */
+#define _POSIX_C_SOURCE 200809L
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "catchup.h"
+#include "fixed.h"
+#include "fixed_setup.h"
+#include "faststep.h"
+#include "freestep.h"
+#include "tally.h"
+#include "lcp/step.h"
+#include "model/lcs_impl.h"
+#include "util/clock.h"
+#include "util/fail.h"
+#include "set/polyset_impl.h"
+#include "set/set_impl.h"
+#include "projector/projector.h"
+#include "estimate.h"
+#include "integrator_impl.h"
+
+static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
+
+/* The output: every k-th step, the last, none; or samples at
+ * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
+ * first step that reaches it: on a step (aligned: that step's state, as it
+ * always was) or between two (interpolated linearly, the scheme's own
+ * order at most two: x and zeta both). */
+typedef struct { long next_j, kdue; int aligned; double tau; } sampler;
+
+static void sampler_next(const cup_integrator *I, sampler *sp) {
+  const cup_integrator_options *o = &I->o;
+  long S = o->output_samples, n = o->n, j = sp->next_j;
+  if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
+  double t0 = o->output_t0;
+  sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
+  long k = (long)llround(sp->tau / I->h);
+  if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
+  else sp->aligned = grid_time(I, k) == sp->tau;
+  if (!sp->aligned) k = (long)ceil(sp->tau / I->h);
+  if (k < 0) k = 0;
+  if (k > n) k = n;
+  sp->kdue = k;
+}
+
+static int selected(const cup_integrator *I, sampler *sp, long k) {
+  const cup_integrator_options *o = &I->o;
+  switch (o->output) {
+    case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
+    case CUP_OUTPUT_FINAL: return k == o->n;
+    case CUP_OUTPUT_NONE: return 0;
+    case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
+  }
+  return 0;
+}
+
+/* The first step j >= k whose end the loop must see itself: a sample (and
+ * the step before an interpolated one, whose zeta it keeps), the interrupt
+ * check after each 1024th step, the last step (faststep.c runs the ones
+ * before it). */
+static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
+  const cup_integrator_options *o = &I->o;
+  long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
+  if (stop > I->kend - 1) stop = I->kend - 1;
+  if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
+    next = sp->aligned ? sp->kdue : sp->kdue - 1;
+    if (next <= k) next = k + 1;
+  }
+  return next - 1 < stop ? next - 1 : stop;
+}
+
+/* The samples due at step k (x_k in I->x, x_{k-1} in I->xnew): on the step,
+ * or interpolated between the two. */
+static int emit_samples(cup_integrator *I, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
+  while (selected(I, sp, k)) {
+    const double *x = I->x;
+    double t = grid_time(I, k);
+    if (!sp->aligned && k > 0) {
+      double t_prev = grid_time(I, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
+      if (s < 1) {
+        for (int i = 0; i < I->n; i++) I->xs[i] = I->xnew[i] + s * (I->x[i] - I->xnew[i]);
+        x = I->xs;
+        I->zs = s;
+      }
+      t = sp->tau;
+    }
+    info->samples++;
+    int stopped = sink(k, t, x, ctx);
+    I->zs = 1;
+    if (stopped) return 1;
+    sp->next_j++;
+    sampler_next(I, sp);
+  }
+  return 0;
+}
+
+/* After the samples of step k: zeta_k kept when the next sample falls
+ * between steps k and k + 1 (its zeta is interpolated from it). */
+static void keep_zeta(cup_integrator *I, const sampler *sp, long k) {
+  if (!sp->aligned && k + 1 == sp->kdue && I->zprev) fixed_zeta(I, I->zprev);
+}
+
+/* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
+ * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
+ * the cause's (what[WHAT_LEN] buffers below). */
+enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
+
+static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
+  info->status = status;
+  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
+  return status;
+}
+
+/* The estimate's run at n/2 from I->x0 (its states kept for the
+ * comparisons). CUP_ERR_INTERRUPTED when the interrupt flag stopped it:
+ * the run it serves stops too (a signal is not to wait for half the work). */
+static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+
+static int coarse_run(cup_integrator *I, cup_run_info *info) {
+  cup_run_info hi;
+  int st = fixed_run(I->half, I->x0, cup_estimate_keep, &I->est, &hi);
+  cup_estimate_start(&I->est, st >= 0);
+  info->err_est = cup_estimate_value(&I->est);
+  return st == CUP_ERR_INTERRUPTED && I->o.interrupt && *I->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
+}
+
+/* A stop at the end of step k that a checkpoint can resume from: where,
+ * the output schedule's place, and the status and message it replaces
+ * (a warning met before it is the resumed run's, as the whole run's). */
+static int halt(cup_integrator *I, cup_run_info *info, int status, long k, double t, const char *what, int phase,
+                const sampler *sp) {
+  I->stop.phase = phase;
+  I->stop.k = k;
+  I->stop.next_j = sp->next_j;
+  I->stop.status = info->status;
+  memcpy(I->stop.message, info->message, sizeof I->stop.message);
+  return stop_at(info, status, k, t, what);
+}
+
+/* g = F + G u(t) for a moving polyset. */
+static int moving_offset(cup_integrator *I, double t) {
+  if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
+  memcpy(I->g, I->K->g0, sizeof(double) * (size_t)I->m);
+  cup_sparse_gaxpy(I->G, I->ut, I->g);
+  if (!I->use_theta) return cup_projector_set_offset(I->proj, I->g);
+  for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
+    if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
+  return CUP_OK;
+}
+
+static void describe_projection_error(char *buf, size_t size, int st, const cup_proj_info *pi) {
+  if (st == CUP_ERR_EMPTY_SET)
+    snprintf(buf, size, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, "
+             "||C^T y||_{P^-1} = %.3g (no point of K within %.3g of 0)",
+             pi->farkas_gap, pi->farkas_residual,
+             pi->farkas_residual > 0 ? -pi->farkas_gap / pi->farkas_residual : INFINITY);
+  else if (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)
+    snprintf(buf, size, "the free step produced NaN or Inf, or overflowed (the scheme diverged)");
+  else if (st == CUP_ERR_LINALG)
+    snprintf(buf, size, "the step's LCP has a singular principal block (M = h C W B is not a "
+             "P-matrix at this step size)");
+  else
+    snprintf(buf, size, "projection failed: %s", cup_status_string(st));
+}
+
+/* A step's state beyond its range (tally.h): the scheme diverged. */
+static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup_run_info *info, long k, double t,
+                                                    const double *x) {
+  char what[200];
+  int j = cup_state_worst(x, I->n);
+  int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
+                     "diverged", CUP_STATE_MAX, j, x[j]);
+  if (I->o.scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
+    snprintf(what + len, sizeof what - (size_t)len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+  return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+}
+
+/* A polyset step whose answer z (in xnew) has no certified distance to
+ * K(t_{k+1}) (eta = inf) is not passed on as it is (issue 27, guarantee 6),
+ * the projector's exact method (cup_project_exact) standing in whatever
+ * method the options ask: first z's own distance from the projection v of z, d_K(z) <=
+ * ||z - v||_P + eta(v) (z kept: the theta step's is not a projection, and
+ * an exact step's is more accurate than a certified one); then, for a step
+ * that projects xf, the projector's answer (its dual methods walk to known
+ * feasible points), once more with the last state offered as one. Returns
+ * the step's status; CUP_ERR_UNCERTIFIED (info->message naming step, time
+ * and set) when z is provably farther than eta_n from K(t) and nothing
+ * certifies. xf: the step's free point (recomputed by the caller when the
+ * fused steps kept it in registers). */
+static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, long k, double t, const double *g,
+                                                           cup_proj_info *pi, int st, cup_run_info *info) {
+  cup_proj_info pp = {0}, first = *pi;
+  int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
+  double own = INFINITY;
+  if (ps == CUP_OK && (ps = cup_project_exact(I->proj, I->xnew, I->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
+    own = cup_metric_dist_hi(I->K, I->xnew, I->v, NULL, I->v + I->n) + pp.eta_cert;
+  if (own <= pi->eta_target) ps = CUP_OK;
+  else if (ps >= 0 && (!I->use_theta || I->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
+    for (int offer = !I->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
+      if (offer && !cup_projector_offer_feasible(I->proj, I->x)) break;
+      if ((ps = cup_project_exact(I->proj, I->xf, I->v, &pp)) >= 0 && pp.eta_cert < own) {
+        *pi = pp;
+        st = ps;
+        I->zeta_from = 2;
+        cup_copy(I->xnew, I->v, I->n);
+      }
+    }
+  }
+  if (!(pi->eta_cert < INFINITY) && own < INFINITY) {
+    *pi = first;
+    pi->eta_cert = own;
+    st = pi->eps_cert <= pi->eps_target && own <= pi->eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+  }
+  if (pi->eta_cert < INFINITY) return pi->status = st;
+  /* still none. Each row's half-space bounds d_K(z) from below: a z that
+   * is farther than eta_n (or, below what rounding allows, 1e-10 of the
+   * scale) from one of them is certainly no (eps, eta)-projection, and
+   * stops the run; one nearer is kept, warned of (a set without interior,
+   * as two opposite rows, has no point certainly in it, and no distance to
+   * it can be certified: the answer may be right) */
+  const double *sz = I->s0, *gam = I->sg;        /* z's slack and its rounding */
+  if (I->use_theta && I->th.D) sz = I->th.s, gam = I->th.gam;   /* the step's own, with D zeta's rounding */
+  else cup_slack(I->K, g, I->xnew, I->s0, I->sg);
+  int row = -1;
+  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(I->K, I->xnew));
+  for (int i = 0; i < I->m; i++) {
+    double d = I->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / I->K->rownorm[i] : 0;   /* <= d_K(z) */
+    if (d > far) { far = d; row = i; }
+  }
+  if (!(far > tol)) return pi->status = st > 0 ? st : CUP_WARN_NOT_CERTIFIED;
+  char what[200];
+  snprintf(what, sizeof what, "the answer is at least %.3g from K(t) (row %d), beyond eta_n = %.3g, and no method "
+           "found a point within a certified distance of K(t)%s%s", far, row, pi->eta_target, ps < 0 ? ": " : "",
+           ps < 0 ? cup_status_string(ps) : "");
+  return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
+}
+
+/* The paper assumes x0 in K(0); say so when it is not (the first step
+ * projects it), by the raw slack so that a point on the boundary passes.
+ * With D != 0 the state is consistent when some zeta >= 0 makes
+ * C x0 + D zeta + g >= 0 (the theta step's LCP at x0): a rectifier's
+ * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
+ * is not: the first step jumps (jump_size tells by how much). */
+static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
+  const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
+  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
+                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
+  if (consistent) return 0;
+  info->status = CUP_WARN_X0_OUTSIDE;
+  snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
+           I->L && I->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
+  return 1;
+}
+
+/* After the first step (status st) from an x0 that was not consistent: the
+ * jump's size, as far as that step moved x beyond its free step (the jump
+ * itself, to O(h)), into the warning's message if it is still the run's
+ * status. Such a run takes the general path (bit for bit the fused one's),
+ * where this is called; out of line and cold, since inlined it cost the
+ * fused loop an instruction a step (callgrind, paper-fig2, n = 1e5). */
+__attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st, cup_run_info *info) {
+  I->jump = 0;
+  double big = 0;
+  int at = 0;
+  for (int j = 0; j < I->n; j++)
+    if (fabs(I->xnew[j] - I->xf[j]) > big) big = fabs(I->xnew[j] - I->xf[j]), at = j;
+  if (st < 0 || info->status != CUP_WARN_X0_OUTSIDE) return;
+  size_t len = strlen(info->message);
+  snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
+}
+
+/* Projections of one step again after rows were found missing (each adds
+ * at least one row; a crowd needs one in the jams seen). */
+enum { RECHECKS = 8 };
+
+/* The set at t_{k+1} (and x_k), then the projection of the free point. */
+static int general_step(cup_integrator *I, long k, double t, const double *xk, const double *xf,
+                        double *z, cup_proj_info *pi, cup_run_info *info) {
+  if (I->p > 0 && I->u && cup_input_eval(I->u, t, I->ut))
+    return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
+  int st = cup_setproj_move(I->sp, t, I->ut, xk);
+  if (st == CUP_ERR_NONFINITE) {
+    char what[WHAT_LEN];
+    snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
+  }
+  if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
+    char what[WHAT_LEN];                 /* as on the polyset path: the state overflowed */
+    snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
+             cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
+  }
+  /* a state-dependent set may find that the step's rows missed a
+   * constraint its answer violates (a crowd: a pair that closed more than
+   * the contact margin in one step); the step is then projected again, warm,
+   * with that row, its work added to the step's */
+  for (int again = 0; st >= 0 && again < RECHECKS; again++) {
+    int rc = cup_setproj_recheck(I->sp, t, xk, z);
+    if (rc <= 0) {
+      if (rc < 0) st = rc;
+      break;
+    }
+    cup_proj_info first = *pi;
+    st = cup_setproj_project(I->sp, xf, z, pi);
+    pi->iterations += first.iterations;
+    pi->factorizations += first.factorizations;
+    pi->row_updates += first.row_updates;
+  }
+  if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
+  /* never a point without a certified distance passed on (issue 27); a
+   * state polyset's projector keeps the polyset's rule (an answer within
+   * rounding of a set without interior is warned of), not applied here yet */
+  if (!(pi->eta_cert < INFINITY) && I->S->kind != CUP_SET_STATE_POLYSET) {
+    char what[200];
+    snprintf(what, sizeof what, "the %s: no point within a certified distance of the set was found (eta = inf)%s%s",
+             cup_set_kind_name(I->S->kind), cup_setproj_message(I->sp)[0] ? ": " : "", cup_setproj_message(I->sp));
+    return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
+  }
+  long rows = cup_setproj_rows(I->sp);
+  if (rows > info->max_rows) info->max_rows = rows;
+  return st;
+}
+
+/* x0 against C(0, x0), by its projection: warn when it moves. */
+static int general_x0(cup_integrator *I, cup_run_info *info) {
+  cup_proj_info pi;
+  int st = general_step(I, 0, 0, I->x, I->x, I->xf, &pi, info);
+  if (st < 0) return st;
+  if (!pi.skipped) {
+    info->status = CUP_WARN_X0_OUTSIDE;
+    snprintf(info->message, sizeof info->message,
+             "step 0 (t = 0): x0 is outside C(0); the first step projects it");
+  }
+  return CUP_OK;
+}
+
+static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+
+/* The run's start (x0's checks and warnings, the estimate's run at n/2,
+ * x0's sample), then its steps. */
+static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  cup_integrator *I = ws;
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  const cup_integrator_options *o = &I->o;
+  int n = I->n;
+  info->eps_target = I->eps_n;
+  info->eta_target = I->eta_n;
+  info->h_rho = I->h_rho;
+  if (cup_state_beyond(x0, n)) {
+    int w = cup_state_worst(x0, n);
+    char what[160];
+    if (isfinite(x0[w])) snprintf(what, sizeof what, "x0 is beyond the range of a state, ||x||_1 <= %g "
+                                  "(CUP_STATE_MAX): x0[%d] = %g", CUP_STATE_MAX, w, x0[w]);
+    else snprintf(what, sizeof what, "x0[%d] is %g", w, x0[w]);
+    return stop_at(info, isfinite(x0[w]) ? CUP_ERR_ARG : CUP_ERR_NONFINITE, 0, 0, what);
+  }
+  memcpy(I->x, x0, sizeof(double) * (size_t)n);
+  cup_projector_reset(I->proj);
+  I->zeta_from = 0;
+  int fixed = I->fixed || !I->u;
+  I->stop.phase = CUP_STOP_NONE;
+  I->rebuilds0 = cup_setproj_rebuilds(I->sp);
+  if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
+  I->jump = I->K && polyset_x0(I, fixed, info);
+  if (!I->K && general_x0(I, info) < 0) return info->status;
+  int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
+  if (stiff) {
+    info->status = CUP_WARN_STIFF;
+    snprintf(info->message, sizeof info->message,
+             "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; use the theta "
+             "scheme, or implicit/exponential if no constraint acts on the fast states", I->h_rho);
+  }
+  if (I->split > CUP_SPLIT_WARN) {   /* NaN (no memory to tell) does not warn */
+    info->status = CUP_WARN_SPLITTING;
+    snprintf(info->message, sizeof info->message,
+             "%s scheme: one step relaxes a fraction %.4g of constraint direction %d (h above its "
+             "time constant); projecting along B loses what that relaxation moved, an error of "
+             "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
+             I->split, I->split_row);
+  }
+  sampler sp = {0};
+  sampler_next(I, &sp);
+  I->zs = 1;
+  if (I->zprev) cup_zero(I->zprev, I->m);
+  if (I->half) {
+    memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
+    if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
+      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
+                  CUP_STOP_SAMPLE_DUE, &sp);
+  }
+  if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(I, &sp, 0)) {
+    info->samples++;
+    if (sink(0, 0.0, I->x, sink_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+  }
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(I, &sp, 0, sink, sink_ctx, info))
+    return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+  return steps(I, 0, sp.next_j, sink, sink_ctx, info);
+}
+
+/* The step's answer without a certified distance to K(t), or its error:
+ * the run's stop (negative), or the step's status. fused: the free point
+ * stayed in faststep.c's registers (xf computed again when needed). */
+static inline int step_checked(cup_integrator *I, long k, double t0, double t1, int fixed, int fused, int stiff,
+                               cup_proj_info *pi, int st, cup_run_info *info) {
+  if (st >= 0 && I->K && !(pi->eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
+    if (fused && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
+    else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, pi, st, info)) < 0) return st;
+  }
+  if (st < 0) {                          /* the polyset path's errors */
+    char what[WHAT_LEN];
+    describe_projection_error(what, sizeof what, st, pi);
+    if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
+      size_t len = strlen(what);
+      snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+    }
+    return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
+  }
+  return st;
+}
+
+/* Step k + 1 as faststep.c does not take it: the free step, then the
+ * projection onto a general set, the theta step's LCP or the projector's
+ * projection, checked. */
+static int step(cup_integrator *I, long k, double t0, double t1, int fixed, long rebuilds0, int stiff,
+                cup_proj_info *pi, cup_run_info *info) {
+  int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
+  if (st < 0)
+    return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
+                   ? "a user callback (input or perturbation) failed or returned NaN/Inf"
+                   : cup_status_string(st));
+  if (st > 0 && info->status == CUP_OK) {
+    info->status = st;
+    snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k + 1, t1, cup_status_string(st));
+  }
+  if (I->sp) {
+    st = general_step(I, k + 1, t1, I->x, I->xf, I->xnew, pi, info);
+    info->set_rebuilds = cup_setproj_rebuilds(I->sp) - rebuilds0;
+    return st;                           /* stopped already when negative */
+  }
+  if (!fixed && (st = moving_offset(I, t1)) != CUP_OK)
+    return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
+                   "the input u(t) that moves K failed or returned NaN/Inf");
+  if (I->use_theta) {
+    double S = cup_polyset_norm(I->K, I->xf);
+    const double *g = fixed ? I->K->g0 : I->g;
+    st = cup_lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
+                            I->eta_n > 0 ? I->eta_n : 1e-10 * S, pi);
+    if (st == CUP_ERR_LINALG) {
+      /* pivoting failed: an empty K(t) (the projector proves it with a
+       * Farkas certificate) or, for theta > 0, M not a P-matrix; for the
+       * explicit step the projector's answer is the step */
+      cup_proj_info pp = {0};
+      int ps = cup_projector_set_offset(I->proj, g);
+      if (ps == CUP_OK) ps = cup_project(I->proj, I->xf, I->xnew, &pp);
+      if (ps == CUP_ERR_EMPTY_SET || I->o.scheme == CUP_SCHEME_EXPLICIT) { st = ps; *pi = pp; I->zeta_from = 2; }
+    } else {
+      I->zeta_from = 1;
+    }
+    if (I->jump) jump_size(I, st, info);
+  } else {
+    st = cup_project(I->proj, I->xf, I->xnew, pi);
+    I->zeta_from = 2;
+    if (I->jump) jump_size(I, st, info);
+  }
+  return step_checked(I, k, t0, t1, fixed, 0, stiff, pi, st, info);
+}
+
+/* The steps from k0 (the sampler at next_j) to kend, as a run takes them
+ * after its start; a window and a resumed run go on through them. */
+static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  const cup_integrator_options *o = &I->o;
+  sampler sp = {next_j, 0, 0, 0};
+  sampler_next(I, &sp);
+  int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
+  long rebuilds0 = I->rebuilds0;
+  double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
+  int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
+  I->fast.hold = 0;
+  for (long k = k0; k < I->kend; k++) {
+    cup_proj_info pi;
+    int st = CUP_FAST_DECLINED;
+    if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
+      k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
+    double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
+    if (st != CUP_FAST_DECLINED) {       /* fused: all that step() does, done by faststep.c */
+      I->zeta_from = 1;
+      st = step_checked(I, k, t0, t1, fixed, 1, stiff, &pi, st, info);
+    } else {
+      st = step(I, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
+    }
+    if (st < 0) return st;
+    if (cup_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
+    double *t = I->x; I->x = I->xnew; I->xnew = t;
+    if (I->half) {
+      cup_estimate_compare(&I->est, k + 1, I->x);
+      info->err_est = cup_estimate_value(&I->est);
+    }
+    info->step = k + 1;
+    info->t = t1;
+    cup_tally(info, &pi);
+    if (st == CUP_WARN_NOT_CERTIFIED) {
+      if (info->not_certified++ == 0 && info->status == CUP_OK) {
+        info->status = st;
+        snprintf(info->message, sizeof info->message,
+                 "step %ld (t = %.17g): projection not certified: eps %.3g (target %.3g), eta %.3g (target %.3g)",
+                 k + 1, t1, pi.eps_cert, pi.eps_target, pi.eta_cert, pi.eta_target);
+      }
+    }
+    if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
+    if (sink && o->output == CUP_OUTPUT_SAMPLES) {
+      if (emit_samples(I, &sp, k + 1, sink, sink_ctx, info))
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+      keep_zeta(I, &sp, k + 1);
+    } else if (sink && selected(I, &sp, k + 1)) {
+      info->samples++;
+      if (sink(k + 1, t1, I->x, sink_ctx))
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+    }
+    if ((k & 1023) == 1023) {
+      if (o->interrupt && *o->interrupt)
+        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
+      if (start > 0 && now_seconds() - start > o->max_wall_seconds)
+        return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
+    }
+  }
+  I->next_j = sp.next_j;
+  return info->status;
+}
+
+double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
+
+/* A window's (or a split step's) statistics, from nothing. */
+static void window_info(const cup_integrator *I, cup_run_info *info) {
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  info->eps_target = I->eps_n;
+  info->eta_target = I->eta_n;
+  info->h_rho = I->h_rho;
+}
+
+int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  I->kend = k1;
+  int st;
+  if (first) {
+    st = fixed_run(I, x, sink, sink_ctx, info);
+  } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
+    window_info(I, info);
+    memcpy(I->x, x, sizeof(double) * (size_t)I->n);
+    memcpy(I->xnew, x, sizeof(double) * (size_t)I->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
+    int fixed = I->fixed || !I->u;
+    I->zeta_from = 0;
+    I->jump = 0;
+    I->zs = 1;
+    if (I->zprev) cup_zero(I->zprev, I->m);
+    if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
+    if (I->K && I->use_theta) {                    /* theta's zeta_k0 at the window's start */
+      const double *g = !fixed && moving_offset(I, grid_time(I, k0)) == CUP_OK ? I->g : I->K->g0;
+      cup_lcp_step_start(&I->th, I->x, g);
+    }
+    st = steps(I, k0, *next_j, sink, sink_ctx, info);
+  }
+  *next_j = I->next_j;
+  I->kend = I->o.n;
+  return st;
+}
+
+int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+                              long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  const cup_integrator_options *o = &I->o;
+  double t = grid_time(I, k);
+  window_info(I, info);
+  info->step = k;
+  info->t = t;
+  memcpy(I->x, x, sizeof(double) * (size_t)I->n);
+  memcpy(I->xnew, xprev, sizeof(double) * (size_t)I->n);
+  I->zeta_from = 3;
+  I->zeta_ext = zeta;
+  I->zs = 1;
+  if (I->zprev) memcpy(I->zprev, zeta, sizeof(double) * (size_t)I->m);   /* zeta: the step's, at every sample in it */
+  sampler sp = {*next_j, 0, 0, 0};
+  sampler_next(I, &sp);
+  cup_proj_info pi = {0};
+  int st = CUP_OK;
+  if (o->on_step && o->on_step(k, t, &pi, o->step_ctx)) {
+    st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the step callback");
+  } else if (sink && o->output == CUP_OUTPUT_SAMPLES) {
+    if (emit_samples(I, &sp, k, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+    else keep_zeta(I, &sp, k);
+  } else if (sink && selected(I, &sp, k)) {
+    info->samples++;
+    if (sink(k, t, I->x, sink_ctx)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+  }
+  *next_j = sp.next_j;
+  return st;
+}
+
+/* A restored checkpoint (checkpoint.c) goes on from the step it stopped
+ * after: the coarse run of the estimate again (the same states), the
+ * stopped step's sample when it was still due or the sink refused it, then
+ * the steps as a run takes them. */
+static int fixed_resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  cup_integrator *I = ws;
+  int phase = I->stop.phase;
+  long k = I->stop.k;
+  sampler sp = {I->stop.next_j, 0, 0, 0};
+  sampler_next(I, &sp);
+  if (I->half) {
+    double err = I->est.err;                     /* the comparisons made before the stop */
+    int cst = coarse_run(I, info);
+    I->est.err = err;
+    info->err_est = cup_estimate_value(&I->est);
+    if (cst == CUP_ERR_INTERRUPTED)
+      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "interrupted (in the estimate's run at n/2)",
+                  phase, &sp);
+  }
+  I->stop.phase = CUP_STOP_NONE;
+  if (phase == CUP_STOP_SAMPLE_REFUSED) info->samples--;          /* counted when it was refused */
+  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* the samples due at k, from x_k, x_{k-1} and zeta_{k-1} */
+    if (sink && phase != CUP_STOP_STEP_DONE) {
+      if (emit_samples(I, &sp, k, sink, sink_ctx, info))
+        return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+                    CUP_STOP_SAMPLE_REFUSED, &sp);
+      if (k > 0) keep_zeta(I, &sp, k);
+    }
+    return steps(I, k, sp.next_j, sink, sink_ctx, info);
+  }
+  int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(I, &sp, k));
+  if (sink && offer) {
+    info->samples++;
+    if (sink(k, grid_time(I, k), I->x, sink_ctx))
+      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+                  CUP_STOP_SAMPLE_REFUSED, &sp);
+  }
+  return steps(I, k, sp.next_j, sink, sink_ctx, info);
+}
+
+static int takes(const cup_integrator_options *o) {
+  return o->scheme == CUP_SCHEME_EXPLICIT || o->scheme == CUP_SCHEME_IMPLICIT ||
+         o->scheme == CUP_SCHEME_EXPONENTIAL || o->scheme == CUP_SCHEME_THETA;
+}
+
+static const scheme_type fixed_type = {
+  .name = "fixed-step", .takes = takes, .create = fixed_create, .free = fixed_free, .run = fixed_run,
+  .state = fixed_state, .zeta = fixed_zeta, .saves = fixed_saves, .stopped = fixed_stopped,
+  .checkpoint = fixed_checkpoint, .resume = fixed_resume,
+};
+const scheme_type *const scheme_fixed = &fixed_type;

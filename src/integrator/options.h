@@ -1,0 +1,11 @@
+/* options — a new integrator holding a checked copy of the options (the
+ * defaults when opt is NULL); NULL with *st and errmsg set when they do not
+ * hold or memory runs out. Internal to the library. */
+#ifndef CUP_OPTIONS_H
+#define CUP_OPTIONS_H
+
+#include "catchup.h"
+
+cup_integrator *cup_integrator_new_(const cup_integrator_options *opt, char *errmsg, int *st);
+
+#endif
