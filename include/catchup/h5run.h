@@ -135,7 +135,7 @@ CUP_API int cup_h5run_get_double(cup_h5run *w, const char *name, double *v);
 CUP_API int cup_h5run_drop_attr(cup_h5run *w, const char *name);
 /** Samples accepted so far (written or buffered). */
 CUP_API long cup_h5run_count(const cup_h5run *w);
-/** The writer's first failure, the one way errors travel (README, "Errors"):
+/** The writer's first failure, the one way errors travel (README, "Errors: one way"):
  *  its status (CUP_OK if nothing failed) and its words into errmsg
  *  (CUP_ERRMSG_LEN bytes, may be NULL; untouched when nothing failed). The
  *  writer stops at its first failure, so these words explain every later

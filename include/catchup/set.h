@@ -144,7 +144,7 @@ CUP_API void cup_setproj_free(cup_setproj **sp);
 /** Place the set: time t, parameters u (p entries; NULL when p = 0) and, for
  *  a state-dependent set, the state x (n entries; rows are rebuilt here).
  *  Returns CUP_OK or an error whose words go into errmsg (CUP_ERRMSG_LEN
- *  bytes, may be NULL), the one way errors travel (README, "Errors"). */
+ *  bytes, may be NULL), the one way errors travel (README, "Errors: one way"). */
 CUP_API int cup_setproj_place(cup_setproj *sp, double t, const double *u, const double *x, char *errmsg);
 /** Project x onto the set as last placed: z (n entries; may alias x) with
  *  the certified (eps, eta) in info (may be NULL): CUP_OK when the targets
@@ -152,9 +152,8 @@ CUP_API int cup_setproj_place(cup_setproj *sp, double t, const double *u, const 
  *  CUP_ERR_EMPTY_SET (a negative radius, a polyset and a ball that do not
  *  meet), CUP_ERR_CALLBACK (an oracle that failed, returned NaN or a point
  *  farther from x than its claims allow), CUP_ERR_NONFINITE. On an error z
- *  is unchanged and errmsg (as above) says what happened. Allocation-free
- *  (but for a state polyset's new row pattern); errmsg is written only on
- *  an error. */
+ *  is unchanged and errmsg (as above) says what happened; errmsg is
+ *  written only on an error. */
 CUP_API int cup_setproj_solve(cup_setproj *sp, const double *x, double *z, cup_proj_info *info, char *errmsg);
 /** Change the absolute/relative tolerances for the following projections. */
 CUP_API int cup_setproj_set_tolerances(cup_setproj *sp, double eps_abs, double eps_rel, double eta_abs,

@@ -81,7 +81,7 @@ const char *cup_setproj_message(const cup_setproj *sp) { return sp ? sp->message
 int cup_setproj_rows(const cup_setproj *sp) { return sp ? sp->rows_now : 0; }   /* 0 but for rows from x */
 long cup_setproj_rebuilds(const cup_setproj *sp) { return sp ? sp->rebuilds : 0; }
 
-/* The one way errors travel (README, "Errors"): a failure's words, whole,
+/* The one way errors travel (README, "Errors: one way"): a failure's words, whole,
  * into the caller's errmsg; the set projector keeps them too, for the older
  * cup_setproj_message and for the integrator's message. */
 static int told(int st, const char *words, char *errmsg) {
