@@ -532,9 +532,13 @@ static void report(const run_t *r) {
     return;
   }
   if (r->status == CUP_ERR_INTERRUPTED && stop_signal) {
+    cup_switching sw;
+    int switched = r->sk.nl && cup_netlist_switching(r->sk.nl, &sw);
     fprintf(stderr, "catchup-run: %s: %s: %s; %s holds the samples before it and, as its last row (stop_row), "
             "the state there%s\n", a->scene, cup_status_name(r->status), r->message, a->out,
-            r->resumable ? ": continue with --resume" : " (this run cannot be resumed: its set is not a polyset)");
+            r->resumable ? ": continue with --resume"
+            : switched ? " (this run cannot be resumed: a circuit with switches has no checkpoints; run it again)"
+                       : " (this run cannot be resumed: its set is not a polyset)");
     return;
   }
   if (r->status < 0) {

@@ -51,14 +51,30 @@ static inline void pc_gate(pr_circuit *c, double td, double pw, double per) {
   c->ngates++;
 }
 
+/* The two-state converters below (buck, boost, buck-boost): y = (i(L1),
+ * v(C1), 1), S1 gated at duty D. pc_converter sets the sizes and the gate
+ * and returns the first mode, S1 on, for the caller's rows. */
+static inline pr_mode *pc_converter(pr_circuit *c, double D, double Ts) {
+  memset(c, 0, sizeof *c);
+  c->n = 2; c->ny = 3; c->hsub = Ts / 20;
+  pc_gate(c, 0, D * Ts, Ts);
+  return pc_mode(c, 1, -1, 0);
+}
+
+/* Their discontinuous mode, S1 and D1 off: i = 0, C1 discharges into R,
+ * while D1's reverse voltage g1 v + g2 stays >= 0. */
+static inline void pc_converter_dcm(pr_circuit *c, double R, double C, double g1, double g2) {
+  pr_mode *m = pc_mode(c, 0, -1, 0);
+  pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
+  pc_zero(c, m, 0, -1);
+  m->ng = 1; pc_row(m->g[0], 3, 0.0, g1, g2);
+}
+
 /* ---- buck.cir-like: Vin, S1 in-sw gated, D1 0->sw, L1 sw-out, C1 || RL ----
  * y = (i(L1), v(C1), 1). On: L i' = Vin - v. Off, D1 on: L i' = -v while
  * i >= 0. Off, D1 off: i = 0 while D1's reverse voltage v(sw) = v >= 0. */
 static inline void pc_buck(pr_circuit *c, double Vin, double L, double C, double R, double D, double Ts) {
-  memset(c, 0, sizeof *c);
-  c->n = 2; c->ny = 3; c->hsub = Ts / 20;
-  pc_gate(c, 0, D * Ts, Ts);
-  pr_mode *m = pc_mode(c, 1, -1, 0);
+  pr_mode *m = pc_converter(c, D, Ts);
   pc_row(m->M[0], 3, 0.0, -1 / L, Vin / L);
   pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, 0.0, Vin);             /* D1 reverse: v(sw) = Vin */
@@ -66,20 +82,14 @@ static inline void pc_buck(pr_circuit *c, double Vin, double L, double C, double
   pc_row(m->M[0], 3, 0.0, -1 / L, 0.0);
   pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 1.0, 0.0, 0.0);             /* D1's current i */
-  m = pc_mode(c, 0, -1, 0);
-  pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
-  pc_zero(c, m, 0, -1);
-  m->ng = 1; pc_row(m->g[0], 3, 0.0, 1.0, 0.0);             /* D1 reverse: v(sw) = v */
+  pc_converter_dcm(c, R, C, 1.0, 0.0);                      /* D1 reverse: v(sw) = v */
 }
 
 /* ---- boost: Vin, L1 in-sw, S1 sw-0 gated, D1 sw->out, C1 || RL ----
  * On: L i' = Vin, D1 reverse v >= 0. Off, D1 on: L i' = Vin - v,
  * C v' = i - v/R while i >= 0. Off, D1 off: i = 0 while v - Vin >= 0. */
 static inline void pc_boost(pr_circuit *c, double Vin, double L, double C, double R, double D, double Ts) {
-  memset(c, 0, sizeof *c);
-  c->n = 2; c->ny = 3; c->hsub = Ts / 20;
-  pc_gate(c, 0, D * Ts, Ts);
-  pr_mode *m = pc_mode(c, 1, -1, 0);
+  pr_mode *m = pc_converter(c, D, Ts);
   pc_row(m->M[0], 3, 0.0, 0.0, Vin / L);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, 1.0, 0.0);
@@ -87,10 +97,7 @@ static inline void pc_boost(pr_circuit *c, double Vin, double L, double C, doubl
   pc_row(m->M[0], 3, 0.0, -1 / L, Vin / L);
   pc_row(m->M[1], 3, 1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 1.0, 0.0, 0.0);
-  m = pc_mode(c, 0, -1, 0);
-  pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
-  pc_zero(c, m, 0, -1);
-  m->ng = 1; pc_row(m->g[0], 3, 0.0, 1.0, -Vin);
+  pc_converter_dcm(c, R, C, 1.0, -Vin);
 }
 
 /* ---- inverting buck-boost: Vin, S1 in-sw gated, L1 sw-0, D1 out->sw,
@@ -99,10 +106,7 @@ static inline void pc_boost(pr_circuit *c, double Vin, double L, double C, doubl
  * v(sw) = v, L i' = v, C v' = -i - v/R while i >= 0. Off, D1 off: i = 0
  * while D1's reverse voltage v(sw) - v = -v >= 0. */
 static inline void pc_buckboost(pr_circuit *c, double Vin, double L, double C, double R, double D, double Ts) {
-  memset(c, 0, sizeof *c);
-  c->n = 2; c->ny = 3; c->hsub = Ts / 20;
-  pc_gate(c, 0, D * Ts, Ts);
-  pr_mode *m = pc_mode(c, 1, -1, 0);
+  pr_mode *m = pc_converter(c, D, Ts);
   pc_row(m->M[0], 3, 0.0, 0.0, Vin / L);
   pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 0.0, -1.0, Vin);
@@ -110,10 +114,7 @@ static inline void pc_buckboost(pr_circuit *c, double Vin, double L, double C, d
   pc_row(m->M[0], 3, 0.0, 1 / L, 0.0);
   pc_row(m->M[1], 3, -1 / C, -1 / (R * C), 0.0);
   m->ng = 1; pc_row(m->g[0], 3, 1.0, 0.0, 0.0);
-  m = pc_mode(c, 0, -1, 0);
-  pc_row(m->M[1], 3, 0.0, -1 / (R * C), 0.0);
-  pc_zero(c, m, 0, -1);
-  m->ng = 1; pc_row(m->g[0], 3, 0.0, -1.0, 0.0);
+  pc_converter_dcm(c, R, C, -1.0, 0.0);
 }
 
 /* ---- flyback: Vin, L1 in-d (dot at in), S1 d-0 gated, L2 0-a (dot at 0),

@@ -54,14 +54,27 @@ static void expect_attr_str(hid_t f, const char *name, const char *expect) {
 
 static int has_attr(hid_t f, const char *name) { return H5Aexists(f, name) > 0; }
 
-/* max |x - ref| against tests/data/NAME, checking that t holds the times
- * k/1000 exactly: the grid k h of a fixed-step run, or the output times
- * j T / (N - 1) of an adaptive one. */
-static double diff_to_data(const char *name, const double *t, const double *x) {
+/* The run's file OUT, opened for reading (the test fails if it cannot be). */
+static hid_t open_out(const char *out) {
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  return f;
+}
+
+/* max |x - ref| of file f's 1001 rows against tests/data/NAME, checking
+ * that t holds the times k/1000 exactly: the grid k h of a fixed-step run,
+ * or the output times j T / (N - 1) of an adaptive one. */
+static double diff_to_data(hid_t f, const char *name) {
   static double ref[1001 * 3];
+  double *t, *x;
+  assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
+  assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
   ref_load(name, ref);
   for (int k = 0; k <= 1000; k++) assert_true(t[k] == (double)k * (1.0 / 1000) || t[k] == (double)k / 1000);
-  return ref_diff(x, ref);
+  double err = ref_diff(x, ref);
+  free(t);
+  free(x);
+  return err;
 }
 
 /* ---- tests ---- */
@@ -75,12 +88,8 @@ static void test_paper_case1_file(void **state) {
   const char *args[] = {fig2, "-o", out, "--n", "1e3", "--quiet", NULL};
   result r = run_cli(args, 0, 0);
   expect_exit(&r, 0, 0);
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
-  double *t, *x;
-  assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
-  assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
-  double err = diff_to_data("ref_case1_limit_richardson.csv", t, x);
+  hid_t f = open_out(out);
+  double err = diff_to_data(f, "ref_case1_limit_richardson.csv");
   if (!(err > 1.0e-3 && err < 2.0e-3)) fail_msg("max error %.3g, expected ~1.52e-3", err);
   assert_true(attr_i64(f, "n") == 1000);
   assert_true(attr_f64(f, "T") == 1.0);
@@ -102,8 +111,6 @@ static void test_paper_case1_file(void **state) {
   for (size_t i = 0; i < sizeof need / sizeof need[0]; i++)
     if (!has_attr(f, need[i])) fail_msg("attribute %s missing", need[i]);
   H5Fclose(f);
-  free(t);
-  free(x);
 }
 
 /* The adaptive scheme through the command line: --tol, the summary line
@@ -119,12 +126,8 @@ static void test_adaptive_file(void **state) {
   expect_exit(&r, 0, 1);
   expect_in_err(&r, "tol=1e-08/1e-08 adaptive");
   expect_in_err(&r, "error estimate");
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
-  double *t, *x;
-  assert_int_equal(read_rows(f, "t", 1, 1, &t), 1001);
-  assert_int_equal(read_rows(f, "x", 2, 3, &x), 1001);
-  double err = diff_to_data("ref_case1_adaptive.csv", t, x);
+  hid_t f = open_out(out);
+  double err = diff_to_data(f, "ref_case1_adaptive.csv");
   double est = attr_f64(f, "err_est");
   print_message("catchup-run --scheme adaptive --tol 1e-8: error %.3e, err_est %.3e, %ld events\n", err, est,
                 (long)attr_i64(f, "events"));
@@ -144,8 +147,6 @@ static void test_adaptive_file(void **state) {
   assert_true(e[0].t == 0 && e[0].row == 1 && e[0].on == 1);
   free(e);
   H5Fclose(f);
-  free(t);
-  free(x);
   const char *bad[] = {fig2, "-o", out, "--tol", "-1e-8", NULL};
   expect_says(bad, 2, "--tol '-1e-8': not a positive number");
 }
@@ -160,8 +161,7 @@ static void test_summary_line_and_overrides(void **state) {
   result r = run_cli(args2, 0, 0);
   expect_exit(&r, 0, 1);
   expect_in_err(&r, "n=50 implicit, 6 samples");
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
+  hid_t f = open_out(out);
   assert_true(attr_i64(f, "n") == 50);
   assert_true(attr_f64(f, "eps_value") == 1e-9);
   expect_attr_str(f, "scheme", "implicit");
@@ -195,8 +195,7 @@ static void test_help_lists_and_output_override(void **state) {
   const char *args[] = {fig2, "-o", out, "--set", "output.samples=2", "--quiet", NULL};
   r = run_cli(args, 0, 0);
   expect_exit(&r, 0, 0);
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
+  hid_t f = open_out(out);
   double *t;
   assert_int_equal(read_rows(f, "t", 1, 1, &t), 2);
   assert_true(t[0] == 0 && t[1] == 1);
@@ -240,8 +239,7 @@ static void test_warning_exits_zero(void **state) {
   expect_exit(&r, 0, 1);
   expect_in_err(&r, "warning");
   expect_in_err(&r, "CUP_WARN_NOT_CERTIFIED");
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
+  hid_t f = open_out(out);
   assert_true(attr_i64(f, "status") == CUP_WARN_NOT_CERTIFIED);
   H5Fclose(f);
 }
@@ -271,8 +269,7 @@ static void test_crowd_missed_contacts(void **state) {
     result r = run_cli(args, 0, 0);
     expect_exit(&r, 0, 2);
     assert_null(strstr(r.err, "overlap"));
-    hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-    assert_true(f >= 0);
+    hid_t f = open_out(out);
     double *gap, *eta, *added, total = 0;
     hsize_t n = read_rows(f, "steps/gap", 1, 1, &gap);
     assert_true(read_rows(f, "steps/eta_cert", 1, 1, &eta) == n && n == 81);
@@ -325,8 +322,7 @@ static void test_sigint_stops_cleanly(void **state) {
   if (r.sig != SIGINT || r.lines != 1) fail_msg("signal %d, %d lines:\n%s", r.sig, r.lines, r.err);
   expect_in_err(&r, "stopped by SIGINT");
   expect_in_err(&r, "as its last row (stop_row), the state there: continue with --resume");
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
+  hid_t f = open_out(out);
   hsize_t rows;
   double last;
   check_prefix(f, &rows, &last);
@@ -347,8 +343,7 @@ static void test_kill9_file_readable(void **state) {
   long_run_args(args, out);
   result r = run_cli(args, 2.5, SIGKILL);
   assert_int_equal(r.sig, SIGKILL);
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
+  hid_t f = open_out(out);
   hsize_t rows;
   double last;
   check_prefix(f, &rows, &last);
@@ -366,8 +361,7 @@ static void test_output_in_use(void **state) {
   const char *first[] = {fig2, "-o", out, "--quiet", NULL};
   result r = run_cli(first, 0, 0);
   expect_exit(&r, 0, 0);
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);      /* this process now holds it */
-  assert_true(f >= 0);
+  hid_t f = open_out(out);                                  /* this process now holds it */
   const char *again[] = {fig2, "-o", out, "--n", "10", NULL};
   r = run_cli(again, 0, 0);
   expect_exit(&r, 1, 1);
@@ -395,8 +389,7 @@ static void test_netlist_signals(void **state) {
    * 1e-6; CHGTOL 1e-14 over C1's 100 uF), sampled every TSTEP = 20 us */
   expect_in_err(&r, "tol=1e-10/1e-06 adaptive");
   expect_in_err(&r, "3001 samples");
-  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-  assert_true(f >= 0);
+  hid_t f = open_out(out);
   expect_attr_str(f, "state_names", "v(C1)");
   double *t, *x, *vout, *vin;
   hsize_t n = read_rows(f, "t", 1, 1, &t);

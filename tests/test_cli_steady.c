@@ -185,6 +185,41 @@ static void switched_signals(void **state) {
   free(is); free(id); free(il); free(vsw);
 }
 
+/* The same period with the signals left to their default (every signal,
+ * 'all'): each must follow the configuration too. The capacitor's mean
+ * current is 0 in a steady state, v(out)'s mean is D Vin = 6 V and its
+ * ripple ΔI Ts / (8 C) = 0.3 A * 10 us / 80 uF = 37.5 mV (the inductor's
+ * ripple current integrated over half a period, the load's share of it
+ * 0.2 % here). Before the signals of 'all' reached every configuration,
+ * the off-time rows repeated the last on-time sample: v(out)'s mean read
+ * 5.994 V, its ripple 19.4 mV and i(C1)'s mean 0.076 A. */
+static void switched_default_signals(void **state) {
+  (void)state;
+  const char *out = tmp_path("buck-all.h5");
+  result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/buck-ccm.cir", "-o", out, "--steady-state",
+                                           NULL}, 0, 0);
+  expect_exit(&r, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *vo, *ic;
+  hsize_t N = read_rows(f, "signals/v(out)", 1, 1, &vo);
+  assert_true(N > 100);
+  assert_true(read_rows(f, "signals/i(C1)", 1, 1, &ic) == N);
+  double mv = 0, mi = 0, lo = vo[0], hi = vo[0];
+  for (hsize_t j = 0; j < N; j++) {
+    double w = (j == 0 || j == N - 1 ? 0.5 : 1.0) / (double)(N - 1);
+    mv += w * vo[j];
+    mi += w * ic[j];
+    lo = fmin(lo, vo[j]);
+    hi = fmax(hi, vo[j]);
+  }
+  assert_close(mv, 6, 1e-4);
+  assert_close(mi, 0, 0.3 * 2 / (double)(N - 1));
+  assert_close(hi - lo, 0.0375, 0.0375 * 0.01);
+  H5Fclose(f);
+  free(vo); free(ic);
+}
+
 static void bad_input(void **state) {
   (void)state;
   const char *out = tmp_path("bad.h5");
@@ -207,6 +242,7 @@ int main(void) {
     cmocka_unit_test(no_steady_state),
     cmocka_unit_test(netlist_option),
     cmocka_unit_test(switched_signals),
+    cmocka_unit_test(switched_default_signals),
     cmocka_unit_test(bad_input),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

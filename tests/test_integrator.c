@@ -412,18 +412,26 @@ static cup_input *sine_input(double f) {
   return u;
 }
 
+/* The RL half-wave rectifier of q under a unit sine, as the tests below run it. */
+typedef struct { lcs_built b; double P[1]; cup_input *u; } rect_case;
+static void rect_open(rect_case *c, rect_par *q) {
+  rect_setup(q);
+  rect_build(&c->b, q, c->P);
+  c->u = sine_input(1);
+}
+static void rect_close(rect_case *c) {
+  cup_input_free(&c->u);
+  unbuild_lcs(&c->b);
+}
+
 static void test_closed_form_rectifier(void **state) {
   (void)state;
   rect_par q = {1, 0.2, 1, 2 * M_PI, 0};
-  rect_setup(&q);
-  double P[1];
-  lcs_built b;
-  rect_build(&b, &q, P);
-  cup_input *u = sine_input(1);
+  rect_case rc;
+  rect_open(&rc, &q);
   double x0[1] = {0};
-  check_order("RL half-wave rectifier", &b, u, x0, 2, rect_exact, &q, 1000);
-  cup_input_free(&u);
-  unbuild_lcs(&b);
+  check_order("RL half-wave rectifier", &rc.b, rc.u, x0, 2, rect_exact, &q, 1000);
+  rect_close(&rc);
 }
 
 static void test_closed_form_corner(void **state) {
@@ -457,28 +465,26 @@ static void test_closed_form_jumping_set(void **state) {
 static void test_stiff_rectifier(void **state) {
   (void)state;
   rect_par q = {1, 1e-3, 1, 2 * M_PI, 0};
-  rect_setup(&q);
-  double P[1];
-  lcs_built b;
-  rect_build(&b, &q, P);
-  cup_input *u = sine_input(1);
+  rect_case rc;
+  rect_open(&rc, &q);
+  const cup_lcs *L = rc.b.L;
+  const cup_input *u = rc.u;
   double x0[1] = {0};
   cup_run_info info;
-  double ex = run_error(b.L, u, x0, 100, 2, CUP_SCHEME_EXPLICIT, rect_exact, &q, NULL, &info);
+  double ex = run_error(L, u, x0, 100, 2, CUP_SCHEME_EXPLICIT, rect_exact, &q, NULL, &info);
   assert_int_equal(info.status, CUP_WARN_STIFF);
   assert_true(info.h_rho > 2);
   assert_non_null(strstr(info.message, "h*rho(A)"));
   print_message("stiff explicit n 100: h*rho = %.1f, error %.3e\n", info.h_rho, ex);
   for (int scheme = CUP_SCHEME_IMPLICIT; scheme <= CUP_SCHEME_EXPONENTIAL; scheme++) {
-    double e100 = run_error(b.L, u, x0, 100, 2, scheme, rect_exact, &q, NULL, &info);
+    double e100 = run_error(L, u, x0, 100, 2, scheme, rect_exact, &q, NULL, &info);
     assert_int_equal(info.status, CUP_OK);
-    double e1e4 = run_error(b.L, u, x0, 10000, 2, scheme, rect_exact, &q, NULL, NULL);
+    double e1e4 = run_error(L, u, x0, 10000, 2, scheme, rect_exact, &q, NULL, NULL);
     print_message("stiff %-11s: n 100 error %.3e, n 1e4 error %.3e (x100 = %.3e)\n",
                   cup_scheme_name(scheme), e100, e1e4, 100 * e1e4);
     assert_true(e100 <= 2 * 100 * e1e4);
   }
-  cup_input_free(&u);
-  unbuild_lcs(&b);
+  rect_close(&rc);
 }
 
 /* ---- output, schedules, errors ------------------------------------------------------ */

@@ -321,6 +321,66 @@ static void test_fixed_step(void **state) {
   assert_true(err[1] <= 0.1 && err[0] / err[1] > 1.6);   /* each switching up to h late: first order */
 }
 
+/* A switch the circuit gates, under a fixed-step scheme: the switching is
+ * taken at the end of the first step whose end state passes the threshold
+ * (docs/netlist.md, "Gating"). C charges through 1 kOhm from 10 V; S1
+ * closes above 6 V (VT 5, VH 1), at t* = tau ln 2.5, onto 1 kOhm to ground
+ * and stays closed (v tends to 5 V > 4 V). Under theta on a grid of h =
+ * 10 us, t* = 916.3 us falls inside a step: the run follows the closed form
+ * switched at the grid time after t* (920 us) to theta's error, and is off
+ * the one switched at t* by the step's delay. */
+static double rc_gated(double t, double ts) {
+  if (t <= ts) return 10 * (1 - exp(-t / 1e-3));
+  return 5 + (10 * (1 - exp(-ts / 1e-3)) - 5) * exp(-(t - ts) / 0.5e-3);
+}
+
+static void test_circuit_gated_step_end(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("rc gated\nV1 in 0 10\nR1 in c 1k\nC1 c 0 1u\nS1 c d c 0 SMOD\nR2 d 0 1k\n"
+                            ".model SMOD SW(VT=5 VH=1)\n");
+  run_rec r;
+  const double h = 1e-5, tstar = 1e-3 * log(2.5), tgrid = ceil(tstar / h) * h;
+  run_with(nl, 3e-3, 0, 301, NULL, &r, CUP_SCHEME_THETA, 300);
+  assert_int_equal(r.count, 301);
+  double e_grid = 0, e_star = 0;
+  for (long k = 0; k < r.count; k++) {
+    e_grid = fmax(e_grid, fabs(r.x[k] - rc_gated(r.t[k], tgrid)));
+    e_star = fmax(e_star, fabs(r.x[k] - rc_gated(r.t[k], tstar)));
+  }
+  printf("rc gated at 6 V, theta, h = 10 us: t* = %.6e s, taken at %.6e s: max error %.2e V against the closed form "
+         "switched there, %.2e V against the one switched at t*\n", tstar, tgrid, e_grid, e_star);
+  assert_true(tgrid - tstar > 0.2 * h);            /* inside a step */
+  assert_true(e_grid <= 1e-4);
+  assert_true(e_star >= 5e-3);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
+/* Signals probed with "all" are recorded in every configuration: v(out)
+ * is the capacitor's state at every sample of the buck, in both
+ * configurations (a configuration formed before the probe had none, and
+ * its samples kept the signals of the last sample before it: v(out) of
+ * the buck-ccm example flat over each off-time in catchup-run's output). */
+static void test_probe_all(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = text_ok("ideal buck\nV1 in 0 12\nS1 in sw g 0 SMOD\nD1 0 sw\nL1 sw out 100u\nC1 out 0 10u\n"
+                            "R1 out 0 5\nVg g 0 PULSE(0 1 0 jump jump 5u 20u)\n.model SMOD SW(VT=0.5)\n");
+  assert_int_equal(cup_netlist_probe(nl, "all", err), CUP_OK);
+  run_rec r;
+  run_with(nl, 100e-6, 1e-8, 1001, "v(out)", &r, CUP_SCHEME_ADAPTIVE, 0);
+  assert_int_equal(r.sig, 3);                      /* v(in) v(g) v(sw) v(out): "all"'s */
+  assert_int_equal(r.count, 1001);
+  double worst = 0;
+  for (long k = 0; k < r.count; k++) worst = fmax(worst, fabs(r.s[k] - r.x[2 * k + 1]));
+  printf("buck, probe all: max |v(out) - x_C1| over %ld samples %.2e V\n", r.count, worst);
+  assert_true(worst == 0);
+  assert_int_equal(cup_netlist_configurations_formed(nl), 2);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
 /* A controller from code (cup_netlist_set_controller) that writes the
  * buck's PWM every 5 us (on at instants 4k, off at the others) gives the
  * trajectory of the gate from PULSE: the same switching times, so the
@@ -404,7 +464,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
-    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_probe_all),
+    cmocka_unit_test(test_circuit_gated_step_end), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

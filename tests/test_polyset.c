@@ -108,21 +108,19 @@ static void test_validation_messages(void **state) {
   assert_int_equal(create_err(&C, NULL, &Pneg, msg), CUP_ERR_NOT_SPD);
   assert_non_null(strstr(msg, "P(1,1)"));
 
-  /* sparse P, not symmetric */
-  double Pd[9] = {2, 1, 0, 0, 2, 0, 0, 0, 2};
-  tcsc Pa; tcsc_from_dense(&Pa, Pd, 3, 3);
-  cup_metric Pns = {CUP_METRIC_SPARSE, NULL, Pa.view, 0};
-  assert_int_equal(create_err(&C, NULL, &Pns, msg), CUP_ERR_NOT_SPD);
-  assert_non_null(strstr(msg, "not symmetric"));
-  tcsc_free(&Pa);
-
-  /* sparse P, symmetric but indefinite: eigenvalues 3 and -1 in the first block */
-  double Pi[9] = {1, 2, 0, 2, 1, 0, 0, 0, 1};
-  tcsc Pb; tcsc_from_dense(&Pb, Pi, 3, 3);
-  cup_metric Pind = {CUP_METRIC_SPARSE, NULL, Pb.view, 0};
-  assert_int_equal(create_err(&C, NULL, &Pind, msg), CUP_ERR_NOT_SPD);
-  assert_non_null(strstr(msg, "not positive definite"));
-  tcsc_free(&Pb);
+  /* sparse P refused: not symmetric; symmetric but indefinite (eigenvalues
+   * 3 and -1 in the first block) */
+  const struct { double P[9]; const char *why; } bad_P[] = {
+    {{2, 1, 0, 0, 2, 0, 0, 0, 2}, "not symmetric"},
+    {{1, 2, 0, 2, 1, 0, 0, 0, 1}, "not positive definite"},
+  };
+  for (size_t k = 0; k < sizeof bad_P / sizeof bad_P[0]; k++) {
+    tcsc Ps; tcsc_from_dense(&Ps, bad_P[k].P, 3, 3);
+    cup_metric Pm = {CUP_METRIC_SPARSE, NULL, Ps.view, 0};
+    assert_int_equal(create_err(&C, NULL, &Pm, msg), CUP_ERR_NOT_SPD);
+    assert_non_null(strstr(msg, bad_P[k].why));
+    tcsc_free(&Ps);
+  }
 
   cup_csc Cdim = {2, 3, p, ri, x};
   Cdim.ncol = 0;

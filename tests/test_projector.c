@@ -97,6 +97,14 @@ static void inst_free(inst *I) {
   tcsc_free(&I->Ct); tcsc_free(&I->Pt);
 }
 
+/* The polyset of I; the test fails, saying why, if it is refused. */
+static cup_polyset *inst_polyset(const inst *I) {
+  cup_polyset *K = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_polyset_create(&K, &I->Ct.view, I->g, &I->Pm, msg)) fail_msg("create: %s", msg);
+  return K;
+}
+
 static ref_problem inst_ref(const inst *I) {
   return (ref_problem){I->n, I->m, I->C, I->g, I->P};
 }
@@ -236,9 +244,8 @@ static void test_random_polyhedra_enumeration(void **state) {
     if (kind == RANK_DEFICIENT) m = rng_int(&r, n, 10);
     inst I;
     inst_make(&I, &r, kind, n, m, trial % 3 == 0);
-    cup_polyset *K = NULL;
+    cup_polyset *K = inst_polyset(&I);
     char msg[CUP_ERRMSG_LEN];
-    if (cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, msg)) fail_msg("create: %s", msg);
     cup_projector_options o;
     cup_projector_options_default(&o);
     o.eps_rel = kind == THIN_WEDGE ? 1e-8 : 1e-14;
@@ -281,9 +288,8 @@ static void test_random_polyhedra_sparse_path(void **state) {
     if (kind == CONE) n = m + 10;                 /* a cone with interior */
     inst I;
     inst_make(&I, &r, kind, n, m, trial % 2);
-    cup_polyset *K = NULL;
+    cup_polyset *K = inst_polyset(&I);
     char msg[CUP_ERRMSG_LEN];
-    if (cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, msg)) fail_msg("create: %s", msg);
     cup_projector_options o;
     cup_projector_options_default(&o);
     o.eps_rel = 1e-11;   /* the rigorous floor 2 sum lam_i gam_i is ~1e-13 S^2 here */
@@ -315,8 +321,7 @@ static void test_first_order_methods(void **state) {
       int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
       inst I;
       inst_make(&I, &r, kind, n, m, trial % 2);
-      cup_polyset *K = NULL;
-      assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+      cup_polyset *K = inst_polyset(&I);
       cup_projector_options o;
       cup_projector_options_default(&o);
       o.method = method;
@@ -353,8 +358,7 @@ static void test_scaling(void **state) {
     double *xs = malloc(sizeof(double) * n), *zs = malloc(sizeof(double) * n);
     double *gs = malloc(sizeof(double) * m);
     random_point(&I, &r, x);
-    cup_polyset *K = NULL;
-    assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+    cup_polyset *K = inst_polyset(&I);
     cup_projector *pr = NULL;
     assert_int_equal(cup_projector_create(&pr, K, NULL, NULL), CUP_OK);
     cup_proj_info info;
@@ -386,8 +390,7 @@ static void test_skip_returns_x_exactly(void **state) {
   rng_t r = {5};
   inst I;
   inst_make(&I, &r, GENERIC, 5, 6, 1);
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+  cup_polyset *K = inst_polyset(&I);
   for (int method = 0; method < 4; method++) {
     cup_projector_options o;
     cup_projector_options_default(&o);
@@ -479,8 +482,7 @@ static void test_return_feasible(void **state) {
     int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
     inst I;
     inst_make(&I, &r, kind, n, m, trial % 2);
-    cup_polyset *K = NULL;
-    assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+    cup_polyset *K = inst_polyset(&I);
     cup_projector_options o;
     cup_projector_options_default(&o);
     o.return_feasible = 1;
@@ -518,8 +520,7 @@ static void test_bad_input(void **state) {
   rng_t r = {8};
   inst I;
   inst_make(&I, &r, GENERIC, 3, 4, 0);
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &I.Ct.view, I.g, &I.Pm, NULL), CUP_OK);
+  cup_polyset *K = inst_polyset(&I);
   cup_projector *pr = NULL;
   char msg[CUP_ERRMSG_LEN];
   cup_projector_options o;

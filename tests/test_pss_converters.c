@@ -170,14 +170,31 @@ static void check_multipliers(const conv *v, const double M[2][2], double tol) {
   }
 }
 
+/* The steady state of examples/circuits/NAME.cir, solved and checked
+ * against the exact map and brute force (check_fixed_point); tr keeps the
+ * exact period from x0. */
+static void solve_checked(conv *v, const char *name, pr_traj *tr) {
+  solve(v, name);
+  check_fixed_point(v, tr);
+}
+
+/* The extremes of v(out) = x[1] over the period, on 2001 points. */
+static void vout_range(const pr_traj *tr, double Ts, double *vmin, double *vmax) {
+  *vmin = INFINITY, *vmax = -INFINITY;
+  for (int k = 0; k <= 2000; k++) {
+    double x[2];
+    pr_eval(tr, k * Ts / 2000, x);
+    *vmin = fmin(*vmin, x[1]), *vmax = fmax(*vmax, x[1]);
+  }
+}
+
 /* ---- the CCM buck: 12 V, D = 0.5, 100 uH, 10 uF || 5 ohm ---- */
 static void buck_ccm(void **state) {
   (void)state;
   const double Vin = 12, D = 0.5, L = 100e-6, C = 10e-6, R = 5;
   conv v;
-  solve(&v, "buck-ccm");
   pr_traj tr;
-  check_fixed_point(&v, &tr);
+  solve_checked(&v, "buck-ccm", &tr);
   const double rv[PR_Y] = {0, 1, 0}, Ts = v.Ts;
   double vavg = pr_mean(&tr, rv, 0, Ts), von = pr_mean(&tr, rv, 0, D * Ts);
   double a[2], b[2];
@@ -185,12 +202,8 @@ static void buck_ccm(void **state) {
   pr_eval(&tr, D * Ts, b);
   double ripple = b[0] - a[0], closed = (Vin - vavg) * D * Ts / L;
   /* the output's own ripple bounds how far the mean over the on time is from the mean */
-  double vmin = INFINITY, vmax = -INFINITY;
-  for (int k = 0; k <= 2000; k++) {
-    double x[2];
-    pr_eval(&tr, k * Ts / 2000, x);
-    vmin = fmin(vmin, x[1]), vmax = fmax(vmax, x[1]);
-  }
+  double vmin, vmax;
+  vout_range(&tr, Ts, &vmin, &vmax);
   print_message("buck-ccm  mean v(out) %.12f V (D Vin = %.12f); i(L) ripple %.9f A, (Vin - Vout) D Ts / L = %.9f A, "
                 "exact (Vin - mean_on v) D Ts / L = %.9f A; v(out) p-p %.6g V\n", vavg, D * Vin, ripple, closed,
                 (Vin - von) * D * Ts / L, vmax - vmin);
@@ -211,9 +224,8 @@ static void boost(void **state) {
   (void)state;
   const double Vin = 5, D = 0.5, L = 50e-6, C = 20e-6, R = 10;
   conv v;
-  solve(&v, "boost");
   pr_traj tr;
-  check_fixed_point(&v, &tr);
+  solve_checked(&v, "boost", &tr);
   const double rv[PR_Y] = {0, 1, 0}, Ts = v.Ts;
   double voff = pr_mean(&tr, rv, D * Ts, Ts), vavg = pr_mean(&tr, rv, 0, Ts);
   print_message("boost     mean v(out) over the off time %.12f V (Vin / (1 - D) = %.12f), over the period %.9f V\n", voff,
@@ -238,17 +250,12 @@ static void buck_dcm(void **state) {
   (void)state;
   const double Vin = 12, D = 0.3, L = 10e-6, R = 20;
   conv v;
-  solve(&v, "buck-dcm");
   pr_traj tr;
-  check_fixed_point(&v, &tr);
+  solve_checked(&v, "buck-dcm", &tr);
   const double rv[PR_Y] = {0, 1, 0}, Ts = v.Ts;
   double M = pr_mean(&tr, rv, 0, Ts) / Vin, closed = 2 / (1 + sqrt(1 + 8 * L / (R * D * D * Ts)));
-  double vmin = INFINITY, vmax = -INFINITY;
-  for (int k = 0; k <= 2000; k++) {
-    double x[2];
-    pr_eval(&tr, k * Ts / 2000, x);
-    vmin = fmin(vmin, x[1]), vmax = fmax(vmax, x[1]);
-  }
+  double vmin, vmax;
+  vout_range(&tr, Ts, &vmin, &vmax);
   print_message("buck-dcm  M = %.9f against 2 / (1 + sqrt(1 + 8 L / (R D^2 Ts))) = %.9f; v(out) p-p / Vin %.6g; "
                 "%d events a period\n", M, closed, (vmax - vmin) / Vin, tr.events);
   assert_true(fabs(M - closed) <= (vmax - vmin) / Vin);

@@ -63,6 +63,19 @@ static void check_certs(const double *P, int n, const double *x, const double *z
 
 /* ---- balls ---------------------------------------------------------------------- */
 
+/* The set of d and its projection (default options); the test fails, saying
+ * why, if either is refused. set_close frees both. */
+static void set_open(cup_set **S, cup_setproj **sp, const cup_set_desc *d) {
+  char err[CUP_ERRMSG_LEN];
+  if (cup_set_create(S, d, err) != CUP_OK) fail_msg("cup_set_create: %s", err);
+  if (cup_setproj_create(sp, *S, NULL, err) != CUP_OK) fail_msg("cup_setproj_create: %s", err);
+}
+
+static void set_close(cup_set **S, cup_setproj **sp) {
+  cup_setproj_free(sp);
+  cup_set_free(S);
+}
+
 static void test_ball_against_closed_form(void **state) {
   (void)state;
   rng_t r = {11};
@@ -94,8 +107,7 @@ static void test_ball_against_closed_form(void **state) {
     check_certs(P, n, x, z, zr, dz, &pi, scale);
     assert_int_equal(st, CUP_OK);
     assert_true(pi.eta_cert == 0);          /* aimed inside: certainly in the ball */
-    cup_setproj_free(&sp);
-    cup_set_free(&S);
+    set_close(&S, &sp);
     tcsc_free(&Ps);
   }
 }
@@ -121,8 +133,7 @@ static void test_ball_negative_radius(void **state) {
   u = 1.25;
   assert_int_equal(cup_setproj_move(sp, 1.25, &u, NULL), CUP_ERR_EMPTY_SET);
   assert_non_null(strstr(cup_setproj_message(sp), "-0.25"));
-  cup_setproj_free(&sp);
-  cup_set_free(&S);
+  set_close(&S, &sp);
 }
 
 /* The one way errors travel: cup_setproj_place and _solve write a failure's
@@ -180,9 +191,7 @@ static void test_halfspace_against_closed_form(void **state) {
     cup_set_desc d = {.kind = CUP_SET_HALFSPACE, .n = n, .P = M, .C = As.view, .F = &b};
     cup_set *S;
     cup_setproj *sp;
-    char err[CUP_ERRMSG_LEN];
-    assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-    assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+    set_open(&S, &sp, &d);
     assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
     cup_proj_info pi;
     assert_int_equal(cup_setproj_project(sp, x, z, &pi), CUP_OK);
@@ -211,8 +220,7 @@ static void test_halfspace_against_closed_form(void **state) {
     assert_true(pi.eta_cert == 0);
     gsl_matrix_free(Lm);
     gsl_vector_free(v);
-    cup_setproj_free(&sp);
-    cup_set_free(&S);
+    set_close(&S, &sp);
     tcsc_free(&Ps);
     tcsc_free(&As);
   }
@@ -274,9 +282,7 @@ static void test_ellipsoid_against_bisection(void **state) {
     cup_set_desc d = {.kind = CUP_SET_ELLIPSOID, .n = n, .P = M, .center = c, .radius = rad, .Q = Qs.view};
     cup_set *S;
     cup_setproj *sp;
-    char err[CUP_ERRMSG_LEN];
-    assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-    assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+    set_open(&S, &sp, &d);
     assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
     cup_proj_info pi;
     int st = cup_setproj_project(sp, x, z, &pi);
@@ -307,8 +313,7 @@ static void test_ellipsoid_against_bisection(void **state) {
     check_certs(P, n, x, z, zr, dz, &pi, scale);
     assert_int_equal(st, CUP_OK);
     assert_true(pi.eps_cert <= 1e-11);
-    cup_setproj_free(&sp);
-    cup_set_free(&S);
+    set_close(&S, &sp);
     tcsc_free(&Ps);
     tcsc_free(&Qs);
   }
@@ -335,9 +340,7 @@ static void test_intersection_against_reference(void **state) {
                       .center = c, .radius = rad};
     cup_set *S;
     cup_setproj *sp;
-    char err[CUP_ERRMSG_LEN];
-    assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-    assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+    set_open(&S, &sp, &d);
     assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
     cup_proj_info pi;
     int st = cup_setproj_project(sp, x, z, &pi);
@@ -368,8 +371,7 @@ static void test_intersection_against_reference(void **state) {
     check_certs(P, n, x, z, zr, 0, &pi, scale);
     assert_true(st == CUP_OK || st == CUP_WARN_NOT_CERTIFIED);
     certified += st == CUP_OK;
-    cup_setproj_free(&sp);
-    cup_set_free(&S);
+    set_close(&S, &sp);
     tcsc_free(&Ps);
     tcsc_free(&Cs);
   }
@@ -385,16 +387,13 @@ static void test_intersection_empty(void **state) {
   cup_set_desc d = {.kind = CUP_SET_INTERSECTION, .n = 2, .C = Cs.view, .F = F, .center = c, .radius = 1};
   cup_set *S;
   cup_setproj *sp;
-  char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-  assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+  set_open(&S, &sp, &d);
   assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
   cup_proj_info pi;
   assert_int_equal(cup_setproj_project(sp, x, z, &pi), CUP_ERR_EMPTY_SET);
   assert_non_null(strstr(cup_setproj_message(sp), "do not meet"));
   assert_true(z[0] == 7 && z[1] == 7);      /* unchanged on an error */
-  cup_setproj_free(&sp);
-  cup_set_free(&S);
+  set_close(&S, &sp);
   tcsc_free(&Cs);
 }
 
@@ -429,15 +428,12 @@ static int oracle_run(int mode, double *z, cup_proj_info *pi, char *msg, size_t 
   cup_set_desc d = {.kind = CUP_SET_ORACLE, .n = 2, .oracle = disc_oracle, .oracle_ctx = &o};
   cup_set *S;
   cup_setproj *sp;
-  char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_set_create(&S, &d, err), CUP_OK);
-  assert_int_equal(cup_setproj_create(&sp, S, NULL, err), CUP_OK);
+  set_open(&S, &sp, &d);
   assert_int_equal(cup_setproj_move(sp, 0.25, NULL, NULL), CUP_OK);
   double x[2] = {3, 4};
   int st = cup_setproj_project(sp, x, z, pi);
   snprintf(msg, size, "%s", cup_setproj_message(sp));
-  cup_setproj_free(&sp);
-  cup_set_free(&S);
+  set_close(&S, &sp);
   return st;
 }
 
@@ -496,9 +492,7 @@ static int tangent_rows(double t, const double *x, cup_rowbuf *rows, void *vp) {
 /* A state polyset of tangent_rows and its projector. */
 static void tangent_setproj(rows_ctx *c, cup_set **S, cup_setproj **sp) {
   cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = c};
-  char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_set_create(S, &d, err), CUP_OK);
-  assert_int_equal(cup_setproj_create(sp, *S, NULL, err), CUP_OK);
+  set_open(S, sp, &d);
 }
 
 /* The same rows, in a fresh polyset and projector. */
@@ -550,8 +544,7 @@ static void test_state_polyset_reuse_and_rebuild(void **state) {
   assert_int_equal(rebuilds_at[3], 1);
   assert_int_equal(rebuilds_at[4], 2);
   assert_int_equal(rebuilds_at[5], 2);
-  cup_setproj_free(&sp);
-  cup_set_free(&S);
+  set_close(&S, &sp);
 }
 
 /* Three points in the plane (x: 6 coordinates) kept 1 apart in pairs (0, 1)
@@ -657,8 +650,7 @@ static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) 
   }
   assert_int_equal(allocs, 0);
   assert_int_equal(cup_setproj_rebuilds(sp), 1);
-  cup_setproj_free(&sp);
-  cup_set_free(&S);
+  set_close(&S, &sp);
 }
 
 static void test_state_polyset_bad_row(void **state) {
@@ -670,8 +662,7 @@ static void test_state_polyset_bad_row(void **state) {
   double xk[2] = {1, 0};
   assert_int_equal(cup_setproj_move(sp, 0, NULL, xk), CUP_ERR_CALLBACK);
   assert_non_null(strstr(cup_setproj_message(sp), "row 1: column 0 after column 1"));
-  cup_setproj_free(&sp);
-  cup_set_free(&S);
+  set_close(&S, &sp);
 }
 
 static void test_names_and_bad_descriptions(void **state) {

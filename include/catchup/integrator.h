@@ -197,9 +197,13 @@ CUP_API void cup_integrator_free(cup_integrator **I);
  *  steps to the switching times and jumps the state onto each new
  *  configuration's constraints there. The adaptive scheme steps to the
  *  switching times and locates those of switches the circuit gates; the
- *  fixed-step schemes switch at the end of the step that holds them (exact
- *  when the grid holds them). The same run, state, zeta and free as any
- *  integrator's; no checkpoints, no step-doubling estimate. */
+ *  fixed-step schemes keep their grid and split a step that holds a
+ *  switching time of a switch the sources gate there (its pieces by the
+ *  configurations' exact flows, the adaptive scheme's at tol_abs/tol_rel),
+ *  and take a switching of one the circuit gates at the end of the step
+ *  whose end state passes its threshold. The same run, state, zeta and free as any
+ *  integrator's, and the fixed-step schemes' step-doubling estimate (a
+ *  switched run at n/2 first); no checkpoints (CUP_ERR_UNSUPPORTED). */
 CUP_API int cup_integrator_create_switched(cup_integrator **I, const cup_switching *sw, const cup_input *u,
                                            const cup_integrator_options *o, char *errmsg);
 
@@ -266,7 +270,7 @@ CUP_API int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_f
  *  configuration (scheme, dimensions, n, T, tolerances, output), naming
  *  what differs; keeping the model's values the same is the caller's part
  *  (catchup-run compares its input files' SHA-256). Processes of sets other
- *  than a polyset cannot be saved (CUP_ERR_UNSUPPORTED). A blob is read by
+ *  than a polyset and switched LCSs cannot be saved (CUP_ERR_UNSUPPORTED). A blob is read by
  *  the build that wrote it, on the same kind of machine.
  *
  *  The size of the blob of the last run's stop: bytes, or a negative status

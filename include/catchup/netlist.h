@@ -124,8 +124,8 @@ CUP_API int cup_netlist_switching(cup_netlist *nl, cup_switching *sw);
 typedef int (*cup_gate_fn)(double t, const double *x, int nswitch, int *gate, void *ctx);
 /** Let fn set the switches' gates every ts (their models' thresholds are
  *  then not used; RON and ROFF still are); fn NULL gives them back to their
- *  controls. The adaptive scheme steps to each instant; the fixed-step
- *  schemes take it at the end of the step that holds it. */
+ *  controls. Every scheme steps to each instant (a fixed-step scheme splits
+ *  the step that holds it, as at a switching time). */
 CUP_API int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void *ctx, char *errmsg);
 /** Switch configurations formulated so far (each once). */
 CUP_API long cup_netlist_configurations_formed(const cup_netlist *nl);

@@ -20,7 +20,18 @@ module catchup_base
   public :: cup_csc_from_fortran, cup_csc_from_dense, cup_csc_view, cup_csc_free
   ! for the other modules of the binding (not part of the documented API)
   public :: cup_finish_, cup_fail_, cup_errbuf_, cup_size_fail_, cup_null_fail_, cup_copy_out_, &
-    cup_pack_strings_
+    cup_pack_strings_, cup_sized_string_
+
+  !> `int f(char *buf, unsigned long size)`: writes at most size bytes, NUL
+  !> included, and returns the full length (snprintf's contract).
+  abstract interface
+    function cup_sized_fn(buf, size) bind(C) result(n)
+      import :: c_int, c_long, c_char
+      character(kind=c_char), intent(out) :: buf(*)
+      integer(c_long), value :: size
+      integer(c_int) :: n
+    end function cup_sized_fn
+  end interface
 
 contains
 
@@ -143,14 +154,22 @@ contains
   !> "catchup 0.1.0; CHOLMOD 3.0.14; GSL 2.7.1; libyaml 0.2.5" (linked libraries).
   function cup_dependency_versions() result(s)
     character(len=:), allocatable :: s
+    s = cup_sized_string_(c_cup_dependency_versions)
+  end function cup_dependency_versions
+
+  !> The whole string a cup_sized_fn writes: its length first, from a one-byte
+  !> probe, then the string into a buffer of that size.
+  function cup_sized_string_(fn) result(s)
+    procedure(cup_sized_fn) :: fn
+    character(len=:), allocatable :: s
     character(kind=c_char) :: probe(1)
     character(kind=c_char), allocatable :: buf(:)
     integer(c_int) :: n
-    n = c_cup_dependency_versions(probe, 1_c_long)
+    n = fn(probe, 1_c_long)
     allocate(buf(max(n, 0) + 1))
-    n = c_cup_dependency_versions(buf, int(size(buf), c_long))
+    n = fn(buf, int(size(buf), c_long))
     s = cup_chars_to_string(buf)
-  end function cup_dependency_versions
+  end function cup_sized_string_
 
   ! ---- sparse.h: Fortran-owned 0-based CSC copies ------------------------------
 

@@ -232,7 +232,7 @@ module catchup_h5run
 #endif
     function c_cup_h5_version(buf, size) bind(C, name="cup_h5_version") result(n)
       import :: c_int, c_long, c_char
-      character(kind=c_char), intent(inout) :: buf(*)
+      character(kind=c_char), intent(out) :: buf(*)
       integer(c_long), value :: size
       integer(c_int) :: n
     end function c_cup_h5_version
@@ -547,13 +547,7 @@ contains
   !> "HDF5 1.10.8" of the linked HDF5.
   function cup_h5_version() result(s)
     character(len=:), allocatable :: s
-    character(kind=c_char) :: probe(1)
-    character(kind=c_char), allocatable :: buf(:)
-    integer(c_int) :: n
-    n = c_cup_h5_version(probe, 1_c_long)
-    allocate(buf(max(n, 0) + 1))
-    n = c_cup_h5_version(buf, int(size(buf), c_long))
-    s = cup_chars_to_string(buf)
+    s = cup_sized_string_(c_cup_h5_version)
   end function cup_h5_version
 
   !> cup_integrator_run with the states written to w (/t, /x).

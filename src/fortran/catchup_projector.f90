@@ -14,7 +14,7 @@ module catchup_projector
   public :: cup_polyset_create, cup_polyset_free, cup_polyset_dim, cup_polyset_rows, &
     cup_polyset_lipschitz, cup_polyset_norm, cup_polyset_contains, cup_polyset_interior_direction
   public :: cup_projector_options_default, cup_projector_create, cup_projector_free, &
-    cup_projector_set_offset, cup_projector_set_tolerances, &
+    cup_projector_set_offset, cup_projector_set_tolerances, cup_projector_offer_feasible, &
     cup_projector_reset, cup_project, cup_projector_lambda, cup_projector_feasible, &
     cup_projector_farkas, cup_proj_method_name, cup_proj_method_parse
 
@@ -213,6 +213,23 @@ contains
     if (cup_null_fail_(p%ptr, 'projector', ierr)) return
     ierr = int(c_cup_projector_set_tolerances(p%ptr, eps_abs, eps_rel, eta_abs, eta_rel))
   end subroutine cup_projector_set_tolerances
+
+  !> Offer w (dim entries), believed to be in K at the current offset, as
+  !> the anchor of the eta certificates: .true. if accepted, that is, found
+  !> feasible with a rounding bound (a point outside, or not finite, is not).
+  function cup_projector_offer_feasible(p, w, ierr) result(accepted)
+    type(cup_projector_t), intent(in) :: p
+    real(c_double), intent(in) :: w(:)
+    integer, intent(out) :: ierr
+    logical :: accepted
+    accepted = .false.
+    if (cup_null_fail_(p%ptr, 'projector', ierr)) return
+    if (size(w) /= p%dim) then
+      call cup_size_fail_('w', size(w), p%dim, ierr)
+      return
+    end if
+    accepted = c_cup_projector_offer_feasible(p%ptr, w) == 1
+  end function cup_projector_offer_feasible
 
   !> Forget the warm start.
   subroutine cup_projector_reset(p)

@@ -392,7 +392,8 @@ int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I->L) return CUP_ERR_UNSUPPORTED;        /* a process: its rows are the set's business */
   if (I->swr) return cup_integrator_zeta(I->swo->child(I->swr), zeta);
   if (I->ad) return cup_adaptive_zeta(I->ad, zeta);
-  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj) : NULL;
+  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj)
+                    : I->zeta_from == 3 ? I->zeta_ext : NULL;
   double s = I->zeta_from == 2 ? 1 / I->h : 1;
   for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
   if (I->zs < 1 && I->zprev)                     /* a sample between two steps */
@@ -897,6 +898,15 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
 
 double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
 
+/* A window's (or a split step's) statistics, from nothing. */
+static void window_info(const cup_integrator *I, cup_run_info *info) {
+  memset(info, 0, sizeof *info);
+  info->err_est = NAN;
+  info->eps_target = I->eps_n;
+  info->eta_target = I->eta_n;
+  info->h_rho = I->h_rho;
+}
+
 int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                            cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   I->kend = k1;
@@ -904,11 +914,7 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
   if (first) {
     st = cup_integrator_run(I, x, sink, sink_ctx, info);
   } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
-    memset(info, 0, sizeof *info);
-    info->err_est = NAN;
-    info->eps_target = I->eps_n;
-    info->eta_target = I->eta_n;
-    info->h_rho = I->h_rho;
+    window_info(I, info);
     memcpy(I->x, x, sizeof(double) * (size_t)I->n);
     memcpy(I->xnew, x, sizeof(double) * (size_t)I->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
     int fixed = I->fixed || !I->u;
@@ -925,6 +931,36 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
   }
   *next_j = I->next_j;
   I->kend = I->o.n;
+  return st;
+}
+
+int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+                              long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  const cup_integrator_options *o = &I->o;
+  double t = grid_time(I, k);
+  window_info(I, info);
+  info->step = k;
+  info->t = t;
+  memcpy(I->x, x, sizeof(double) * (size_t)I->n);
+  memcpy(I->xnew, xprev, sizeof(double) * (size_t)I->n);
+  I->zeta_from = 3;
+  I->zeta_ext = zeta;
+  I->zs = 1;
+  if (I->zprev) memcpy(I->zprev, zeta, sizeof(double) * (size_t)I->m);   /* zeta: the step's, at every sample in it */
+  sampler sp = {*next_j, 0, 0, 0};
+  sampler_next(I, &sp);
+  cup_proj_info pi = {0};
+  int st = CUP_OK;
+  if (o->on_step && o->on_step(k, t, &pi, o->step_ctx)) {
+    st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the step callback");
+  } else if (sink && o->output == CUP_OUTPUT_SAMPLES) {
+    if (emit_samples(I, &sp, k, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+    else keep_zeta(I, &sp, k);
+  } else if (sink && selected(I, &sp, k)) {
+    info->samples++;
+    if (sink(k, t, I->x, sink_ctx)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+  }
+  *next_j = sp.next_j;
   return st;
 }
 

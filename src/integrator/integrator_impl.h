@@ -67,7 +67,9 @@ struct cup_integrator {
   const cup_swops *swo;     /* ... and its driver */
   cup_integrator *half;     /* estimate: the same run at n/2 (step doubling), or NULL */
   cup_estimate est;         /* ... and the comparison with it */
-  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector */
+  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector,
+                               3 zeta_ext (a switched circuit's split step, switched.c) */
+  const double *zeta_ext;
   int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
   cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0, *sg;
@@ -92,6 +94,15 @@ int cup_integrator_steps_(cup_integrator *I, long k0, long next_j, cup_sample_fn
  * the samples from *next_j on; *next_j advanced. */
 int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                            cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* A switched circuit's split step (switched.c): step k - 1 -> k was
+ * taken outside, by the configurations' exact flows from xprev (at
+ * t_{k-1}) to x (at t_k), zeta its multipliers at t_k (m entries, kept by
+ * the caller until the next step). Sets the integrator there and gives
+ * step k's end as the loop does: the step callback, the samples due at k
+ * (between t_{k-1} and t_k: x interpolated linearly, zeta the step's);
+ * *next_j advanced. */
+int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+                              long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* Its grid's time t_k. */
 double cup_integrator_grid_time_(const cup_integrator *I, long k);
 

@@ -12,10 +12,14 @@
  * The adaptive scheme steps to the switching times (its steps end on
  * breakpoints already; a window [ta, tb] of one configuration is its run
  * from ta to tb, cup_adaptive_window) and locates those of switches the
- * circuit gates. The fixed-step schemes keep their grid (t_k = k T / n)
- * and switch at the end of the step that holds the switching time
- * (cup_integrator_window_): exact when the grid holds the switching times,
- * an error of order h in the switching time otherwise. */
+ * circuit gates. The fixed-step schemes keep their grid (t_k = k T / n,
+ * windows of cup_integrator_window_) and step to the switching times of
+ * the switches the sources gate: a step that holds one is split there,
+ * its pieces run by the configurations' exact flows (the adaptive scheme
+ * on each configuration's LCS, made on its first split step), so that the
+ * error stays the scheme's own order. A switching of a switch the circuit
+ * gates is taken at the end of the step whose end state passes the
+ * threshold: a crossing that comes and goes inside one step is not seen. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -32,6 +36,9 @@ struct cup_swrun {
   cup_integrator_options o;
   int n;
   cup_integrator *child[SW_MAX];
+  cup_integrator *twin[SW_MAX];   /* each configuration's exact flow, for split steps (fixed-step schemes) */
+  int twin_off[SW_MAX];    /* ... which the adaptive scheme does not take */
+  double piece_end, *xprev, *zsplit;   /* a split step: its last piece's end, x_{k-1}, zeta at t_k */
   int cur;                 /* the configuration in force (its child answers state and zeta) */
   double *x;
   /* circuit-gated switches: each sample and step end of a window is checked */
@@ -46,6 +53,8 @@ struct cup_swrun {
   void *sink_ctx;
   cup_step_fn on_step;
   void *step_ctx;
+  cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
+  cup_estimate est;        /* ... and the comparison with it at each step's end */
 };
 
 /* The check at a sample or a step's end (t, x): 1 stops the window. */
@@ -67,6 +76,7 @@ static int watch_sink(long k, double t, const double *x, void *ctx) {
 
 static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   cup_swrun *S = ctx;
+  if (S->half) cup_estimate_compare(&S->est, k, cup_integrator_state(S->child[S->cur]));
   if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
   if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
   return 0;
@@ -78,6 +88,7 @@ static int child_of(cup_swrun *S, int topo, char *errmsg) {
   const cup_lcs *L = S->ops.lcs(S->ops.ctx, topo);
   char msg[CUP_ERRMSG_LEN];
   cup_integrator_options o = S->o;
+  o.estimate = 0;                                  /* the run's, not each configuration's (S->half) */
   o.on_step = watch_step;                          /* the circuit-gated switches' checks, then the user's */
   o.step_ctx = S;
   int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
@@ -88,8 +99,15 @@ static int child_of(cup_swrun *S, int topo, char *errmsg) {
 static void sw_free(cup_swrun **Sp) {
   cup_swrun *S = *Sp;
   if (!S) return;
-  for (int k = 0; k < SW_MAX; k++) cup_integrator_free(&S->child[k]);
+  for (int k = 0; k < SW_MAX; k++) {
+    cup_integrator_free(&S->child[k]);
+    cup_integrator_free(&S->twin[k]);
+  }
+  cup_integrator_free(&S->half);
+  cup_estimate_free(&S->est);
   free(S->x);
+  free(S->xprev);
+  free(S->zsplit);
   free(S->xg);
   free(S);
   *Sp = NULL;
@@ -178,11 +196,108 @@ static void x0_moved(const cup_swrun *S, const double *x0, cup_run_info *info) {
            "sample is the projection");
 }
 
+/* A configuration's exact flow (its LCS under the adaptive scheme, made
+ * on the first split step it takes part in and kept): the pieces of a
+ * fixed-step run's step that switching times split. NULL when the
+ * adaptive scheme does not take the configuration (an active network: B
+ * kept as given): its switchings are then taken at the step's end. */
+static cup_integrator *twin_of(cup_swrun *S, int topo) {
+  if (S->twin[topo] || S->twin_off[topo]) return S->twin[topo];
+  cup_integrator_options o = S->o;
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.output = CUP_OUTPUT_EVERY;                     /* each step's end to twin_sink (the piece's end's zeta) */
+  o.output_every = 1;
+  o.on_step = NULL;
+  o.estimate = 0;
+  o.max_wall_seconds = 0;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_integrator_create(&S->twin[topo], S->ops.lcs(S->ops.ctx, topo), S->u, &o, msg)) S->twin_off[topo] = 1;
+  return S->twin[topo];
+}
+
+/* A piece's samples: none; at the piece's end, zeta. */
+static int twin_sink(long k, double t, const double *x, void *ctx) {
+  (void)k; (void)x;
+  cup_swrun *S = ctx;
+  if (t == S->piece_end) cup_integrator_zeta(S->twin[S->cur], S->zsplit);
+  return 0;
+}
+
+/* Configuration topo's exact flow from (ta, S->x) to tb, into S->x. */
+static int piece(cup_swrun *S, int topo, double ta, double tb, cup_run_info *info) {
+  cup_integrator *W = S->twin[topo];
+  long steps = 0, next = 0;
+  cup_run_info w;
+  S->cur = topo;
+  S->piece_end = tb;
+  cup_zero(S->zsplit, cup_lcs_rows(W->L));
+  int st = cup_adaptive_window(W->ad, ta, tb, S->x, 0, &steps, &next, twin_sink, S, &w);
+  if (st < 0) {
+    add_info(info, &w);
+    return st;
+  }
+  info->events += w.events;
+  cup_copy(S->x, cup_adaptive_state(W->ad), S->n);
+  return CUP_OK;
+}
+
+/* The step (t_{k-1}, t_k] holds the switching time tb (on no grid time):
+ * it is split there. From x_{k-1} (S->x) each configuration in force runs
+ * by its exact flow to the next switching time and the state jumps onto
+ * the next one's constraints, up to t_k; then step k's end is given to the
+ * configuration in force (its samples, zeta the last piece's). 1 when a
+ * configuration has no exact flow (nothing done: the step is taken as
+ * before, switching at its end). */
+static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
+  const cup_switching *sw = &S->ops;
+  cup_integrator *C = S->child[*topo];
+  double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k), snap = 1e-9 * C->h;
+  if (!twin_of(S, *topo)) return 1;
+  cup_copy(S->xprev, S->x, S->n);
+  int st = CUP_OK, to = *topo;
+  for (;;) {
+    double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as fixed_run snaps) */
+    if ((st = piece(S, to, ta, te, info)) < 0) return st;
+    if (te == tk) break;
+    if ((st = sw->settle(sw->ctx, &to, te, S->x, NULL, info->message)) < 0) return st;
+    sw->jump(sw->ctx, to, S->x);
+    if ((st = child_of(S, to, info->message)) != CUP_OK) return st;
+    if (!twin_of(S, to))
+      return cup_fail(info->message, CUP_ERR_UNSUPPORTED, "t = %.17g: switch configuration %d has no exact flow "
+                      "(an active network) to step from the switching time to the grid", te, to);
+    ta = te;
+    if (sw->next(sw->ctx, to, ta, S->o.T, tb))
+      return cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", ta);
+  }
+  *topo = to;
+  S->cur = to;
+  cup_run_info w;
+  st = cup_integrator_split_end_(S->child[to], k, S->xprev, S->x, S->zsplit, next_j, S->sink, S->sink_ctx, &w);
+  add_info(info, &w);
+  return st;
+}
+
+/* The grid step k1 whose end is the first at or after the switching time
+ * tb, from step k on: a switching time within 1e-9 h of a grid time is on
+ * it (the gate's edges k PER + PW and the grid k T / n round apart by an
+ * ulp, and a whole step more of the old configuration would follow: a
+ * buck on a grid holding its edges had 29 of 200 periods one step longer) */
+static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
+  long k1 = (long)ceil(tb / C->h);
+  if (k1 > n) k1 = n;
+  while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
+  while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
+  if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * C->h) k1--;
+  return k1 <= k ? k + 1 : k1;
+}
+
 /* The fixed-step schemes: each configuration's integrator on the run's
- * grid (all have the same T and n), a window from t_k to the first grid
- * time at or after the next source-gated switching time, or one step when
- * a switch the circuit gates is in force; the configuration settled at the
- * window's end (a switching inside a step is taken at its end). */
+ * grid (all have the same T and n), a window from t_k up to the next
+ * source-gated switching time, or one step when a switch the circuit gates
+ * is in force. A switching time on a grid time is taken there; one inside
+ * a step splits it (split_step: the pieces by the configurations' exact
+ * flows). A circuit-gated switching is taken at the end of the step whose
+ * end state passes the threshold (settle there). */
 static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   long k = 0, n = S->o.n, next_j = 0;
@@ -193,37 +308,60 @@ static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     if (st) break;
     S->cur = topo;
     cup_integrator *C = S->child[topo];
-    long k1 = k + 1;
     double tb = 0;
-    if (!sw->state_gated(sw->ctx, topo)) {
-      if (sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
-        st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
-        break;
-      }
-      k1 = (long)ceil(tb / C->h);
-      if (k1 > n) k1 = n;
-      while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
-      while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
-      /* a switching time within 1e-9 h of a grid time is on it: the gate's
-       * edges (k PER + PW) and the grid (k T / n) round apart by an ulp, and
-       * a whole step more of the old configuration would follow (a buck on a
-       * grid holding its edges: 29 of 200 periods one step longer on) */
-      if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * C->h) k1--;
-      if (k1 <= k) k1 = k + 1;
+    if (sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
+      st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
+      break;
     }
+    long k1 = grid_step_at(C, k, n, tb);
+    /* inside step k1: the steps before it, then that one split */
+    int split = tb < cup_integrator_grid_time_(C, k1) - 1e-9 * C->h;
+    long kw = split ? k1 - 1 : k1;
+    if (sw->state_gated(sw->ctx, topo) && kw > k) kw = k + 1, split = 0;   /* its end checked */
     cup_run_info w;
-    int wst = cup_integrator_window_(C, k, k1, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
-    add_info(info, &w);
-    if (wst < 0) { st = wst; break; }
-    cup_copy(S->x, cup_integrator_state(C), S->n);
-    k = k1;
+    if (kw > k || first) {
+      int wst = cup_integrator_window_(C, k, kw, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
+      add_info(info, &w);
+      if (wst < 0) { st = wst; break; }
+      cup_copy(S->x, cup_integrator_state(C), S->n);
+    }
+    k = kw;
+    if (split) {
+      int sst = split_step(S, k1, &tb, &topo, &next_j, info);
+      if (sst < 0) { st = sst; break; }
+      if (sst == 0) {                              /* tb: the next switching time, at or after t_k1 */
+        k = k1;
+        t = cup_integrator_grid_time_(C, k);
+        if (k < n) st = sw->settle(sw->ctx, &topo, tb > t && tb - t <= 1e-9 * C->h ? tb : t, S->x, NULL, info->message);
+        continue;
+      }
+      S->cur = topo;                               /* no exact flow: the step as the grid has it */
+      int wst = cup_integrator_window_(C, k, k1, S->x, 0, &next_j, S->sink, S->sink_ctx, &w);
+      add_info(info, &w);
+      if (wst < 0) { st = wst; break; }
+      cup_copy(S->x, cup_integrator_state(C), S->n);
+      k = k1;
+    }
     t = cup_integrator_grid_time_(C, k);
     /* the rule at the switching time when the grid time was snapped to it from below */
     if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
   }
   if (st < 0) info->status = st;
-  info->t = t;
+  else info->t = t;                                /* (a stop's: the window's, from add_info) */
   return info->status;
+}
+
+/* The estimate's run at n/2 (integrator.c's coarse_run for a switched
+ * run): its states kept at the compared points. 1 when the interrupt flag
+ * stopped it (the run stops too), its status in info. */
+static int coarse_run(cup_swrun *S, const double *x0, cup_run_info *info) {
+  cup_run_info hi;
+  int st = cup_integrator_run(S->half, x0, cup_estimate_keep, &S->est, &hi);
+  cup_estimate_start(&S->est, st >= 0);
+  if (!(st == CUP_ERR_INTERRUPTED && S->o.interrupt && *S->o.interrupt)) return 0;
+  info->status = CUP_ERR_INTERRUPTED;
+  snprintf(info->message, sizeof info->message, "step 0 (t = 0): interrupted (in the estimate's run at n/2)");
+  return 1;
 }
 
 static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
@@ -238,9 +376,12 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
+    if (S->half && coarse_run(S, x0, info)) return info->status;
     sw->jump(sw->ctx, topo, S->x);
     x0_moved(S, x0, info);
-    return fixed_run(S, 0, topo, info);
+    st = fixed_run(S, 0, topo, info);
+    if (S->half) info->err_est = cup_estimate_value(&S->est);
+    return st;
   }
   for (int first = 1; st >= 0 && t < T; first = 0) {
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
@@ -252,6 +393,7 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
     st = sw->next(sw->ctx, topo, t, T, &tb);
     if (st) { st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
     st = window(S, topo, t, tb, first, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
+    if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;
     if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);
     if (st < 0) break;
@@ -269,6 +411,19 @@ static int sw_run(cup_integrator *I, const double *x0, cup_sample_fn sink, void 
 }
 
 
+/* The estimate's coarse run: the same switched circuit at n/2, its output
+ * every stride steps into the comparison's rows. */
+static int create_half(cup_swrun *S, const cup_switching *sw, const cup_input *u, char *errmsg) {
+  if (cup_estimate_init(&S->est, S->o.n, S->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  cup_integrator_options h = S->o;
+  h.n = S->o.n / 2;
+  h.estimate = 0;
+  h.on_step = NULL;
+  h.output = CUP_OUTPUT_EVERY;
+  h.output_every = cup_estimate_stride(&S->est);
+  return cup_integrator_create_switched(&S->half, sw, u, &h, errmsg);
+}
+
 static const cup_swops ops = {sw_run, sw_free, sw_child};
 
 int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,
@@ -276,9 +431,10 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
   if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
     return cup_fail(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
   *out = NULL;
-  if (o->estimate)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "a circuit with switches: the adaptive scheme estimates its error "
-                    "itself (estimate is for the fixed-step schemes)");
+  int estimate = o->estimate && o->scheme != CUP_SCHEME_ADAPTIVE;   /* (the adaptive scheme estimates always) */
+  if (estimate && (o->n < 2 || o->n % 2))
+    return cup_fail(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
+                    "must be even", o->n);
   cup_integrator *I = calloc(1, sizeof *I);
   cup_swrun *S = calloc(1, sizeof *S);
   if (!I || !S) { free(I); free(S); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
@@ -300,8 +456,11 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
     I->p = cup_lcs_inputs(L);
     S->x = malloc(sizeof(double) * ((size_t)S->n + 1));
     S->xg = malloc(sizeof(double) * ((size_t)S->n + 1));
-    if (!S->x || !S->xg) st = cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    S->xprev = malloc(sizeof(double) * ((size_t)S->n + 1));
+    S->zsplit = malloc(sizeof(double) * ((size_t)I->m + 1));
+    if (!S->x || !S->xg || !S->xprev || !S->zsplit) st = cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
   }
+  if (!st && estimate) st = create_half(S, sw, u, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
   return CUP_OK;

@@ -111,6 +111,12 @@ static int set_tokens(rd *r, const char *name, int *first, int *n) {
   return 1;
 }
 
+/* An element with no value: a set naming it is refused, saying why. */
+static int refuse_set(rd *r, const char *name, const char *why) {
+  int sfirst, sn;
+  return set_tokens(r, name, &sfirst, &sn) ? nx_fail(&r->x, CUP_ERR_ARG, NULL, name, "%s", why) : CUP_OK;
+}
+
 /* ---- R, L, C ----------------------------------------------------------------- */
 
 static const char *kind_word(nl_kind k) {
@@ -269,15 +275,13 @@ static int source_spec(rd *r, const nx_tok *t, int n, const char *elem, nl_sourc
 }
 
 static int read_source(rd *r, int card, nl_kind kind) {
-  int n = r->x.card[card].n;
   const nx_tok *name = TOK(r, card, 0);
   nl_elem *e;
   int st = open_elem(r, card, kind, 3, "N+ N- [spec]", &e);
   if (st) return st;
   int sfirst, sn;
-  int set = set_tokens(r, name->s, &sfirst, &sn);
-  if (set) return source_spec(r, &r->x.tok[sfirst], sn, name->s, &e->src);
-  return source_spec(r, TOK(r, card, 3), n - 3, name->s, &e->src);
+  if (set_tokens(r, name->s, &sfirst, &sn)) return source_spec(r, &r->x.tok[sfirst], sn, name->s, &e->src);
+  return source_spec(r, TOK(r, card, 3), r->x.card[card].n - 3, name->s, &e->src);
 }
 
 /* ---- diodes and models ------------------------------------------------------- */
@@ -287,10 +291,8 @@ static int read_diode(rd *r, int card) {
   const nx_tok *name = TOK(r, card, 0);
   nl_elem *e;
   int st = open_elem(r, card, NL_D, 3, "ANODE CATHODE [MODEL]", &e);
+  if (!st) st = refuse_set(r, name->s, "a diode is ideal: it has no value to set");
   if (st) return st;
-  int sfirst, sn;
-  int set = set_tokens(r, name->s, &sfirst, &sn);
-  if (set) return nx_fail(&r->x, CUP_ERR_ARG, NULL, name->s, "a diode is ideal: it has no value to set");
   if (n >= 4) {
     const nx_tok *m = TOK(r, card, 3);
     if (m->kind != NX_WORD || looks_value(r, m))
@@ -446,10 +448,8 @@ static int read_switch(rd *r, int card, nl_kind kind) {
   if (st) return st;
   r->c->nswitch++;
   e->init = -1;
-  int sfirst, sn;
-  if (set_tokens(r, name->s, &sfirst, &sn))
-    return nx_fail(&r->x, CUP_ERR_ARG, NULL, name->s, "a switch has no value to set (set its model's parameters "
-                   "through .param)");
+  st = refuse_set(r, name->s, "a switch has no value to set (set its model's parameters through .param)");
+  if (st) return st;
   if (voltage) {
     st = node_of(r, TOK(r, card, 3), name->s, &e->ca);
     if (!st) st = node_of(r, TOK(r, card, 4), name->s, &e->cb);

@@ -178,15 +178,21 @@ static int walk(nx *x, int c0, int c1, cards *out, int depth) {
   return CUP_OK;
 }
 
+/* A pass's result: the new card list takes the place of x's on success
+ * (st = CUP_OK) and is dropped on a failure, which is returned. */
+static int replace_cards(nx *x, cards *out, int st) {
+  if (st) { free(out->c); return st; }
+  free(x->card);
+  x->card = out->c;
+  x->ncard = out->n;
+  x->capcard = out->cap;
+  return CUP_OK;
+}
+
 int nx_structure(nx *x) {
   cards out = {0};
   int st = walk(x, 0, x->ncard, &out, 0);
-  if (st) { free(out.c); return st; }
-  free(x->card);
-  x->card = out.c;
-  x->ncard = out.n;
-  x->capcard = out.cap;
-  return CUP_OK;
+  return replace_cards(x, &out, st);
 }
 
 /* ---- instances ------------------------------------------------------------------ */
@@ -386,10 +392,5 @@ int nx_flatten(nx *x) {
     nx_card c = x->card[k];
     st = nx_card_type(x, c) == 'x' ? expand(x, c, 0, &out, 0) : push(x, &out, c);
   }
-  if (st) { free(out.c); return st; }
-  free(x->card);
-  x->card = out.c;
-  x->ncard = out.n;
-  x->capcard = out.cap;
-  return CUP_OK;
+  return replace_cards(x, &out, st);
 }

@@ -194,10 +194,20 @@ static int scratch(cup_netlist *nl, char *errmsg) {
   return CUP_OK;
 }
 
+/* Each signal as cup_netlist_probe records it: through the hooks too, so
+ * that a switched netlist's configurations formed already record it (they
+ * were left without, and a sample in one of them kept the signals of the
+ * last sample before it). */
 static int probe_all(cup_netlist *nl, char *errmsg) {
   int st = CUP_OK, ne = nl->nelem_user ? nl->nelem_user : nl->nelem;
-  for (int v = 1; v < nl->nnodes && st >= 0; v++) st = probe_one(nl, 'v', v, -1, errmsg);
-  for (int e = 0; e < ne && st >= 0; e++) st = probe_one(nl, 'i', e, -1, errmsg);
+  for (int v = 1; v < nl->nnodes && st >= 0; v++) {
+    st = probe_one(nl, 'v', v, -1, errmsg);
+    if (st >= 0 && nl->hooks) st = nl->hooks->probe(nl, st, errmsg);
+  }
+  for (int e = 0; e < ne && st >= 0; e++) {
+    st = probe_one(nl, 'i', e, -1, errmsg);
+    if (st >= 0 && nl->hooks) st = nl->hooks->probe(nl, st, errmsg);
+  }
   return st < 0 ? st : CUP_OK;
 }
 

@@ -706,6 +706,7 @@ static int sw_probe(cup_netlist *nl, int k, char *errmsg) {
   for (int j = 1; j < S->ntopo; j++) {
     int q = cup_netlist_probe(S->topo[j].sub, nl->sig_name[k], errmsg);
     if (q < 0) return q;
+    if (q != k) return nl_fail(&S->c, -1, errmsg, CUP_ERR_ARG, "signal order differs");
   }
   return k;
 }

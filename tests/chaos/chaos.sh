@@ -200,7 +200,10 @@ case_resume_refusals() {
   kept rr/m.h5 rr/c.h5 || return
   "$RUN" "$EX/paper-fig2.yaml" -o rr/done.h5 --quiet &&
   expect 1 "rr/done.h5: cannot resume: it has no checkpoint" "$RUN" "$EX/paper-fig2.yaml" -o rr/done.h5 --resume &&
-  ok "--resume refuses another scene, other overrides or signals, an edited .mtx or netlist, a finished file; the files intact"
+  CATCHUP_RUN_TEST_SIGNAL=10 expect 130 "this run cannot be resumed: a circuit with switches has no checkpoints; run it again" \
+    "$RUN" "$EX/circuits/buck-ccm.cir" -o rr/sw.h5 &&
+  expect 1 "rr/sw.h5: cannot resume: it has no checkpoint" "$RUN" "$EX/circuits/buck-ccm.cir" -o rr/sw.h5 --resume &&
+  ok "--resume refuses another scene, other overrides or signals, an edited .mtx or netlist, a finished file, a switched run (no checkpoints, said at its stop); the files intact"
 }
 
 # kill -9 between rows: the file opens as it is, with the rows of its last

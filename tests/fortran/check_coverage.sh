@@ -6,6 +6,9 @@
 #     src/fortran and is not on the list UNBOUND below;
 #   * a bind(C) interface names no public function (one that was renamed or
 #     removed in C);
+#   * a bind(C) interface takes more or fewer arguments than the C function
+#     declares (a parameter added or removed in C: the call would pass
+#     garbage or drop one, silently);
 #   * a bind(C) interface is never called by a wrapper (c_cup_x declared but
 #     unused: `use catchup` does not offer it) and is not on RAW_ONLY;
 #   * an entry of either list no longer applies.
@@ -37,7 +40,6 @@ UNBOUND=(
 RAW_ONLY=(
   cup_crowd_agents               # cup_crowd_t%agents holds N (set by cup_crowd_create)
   cup_crowd_q0                   # the caller passed q0 in and keeps it
-  cup_projector_offer_feasible   # owed
   cup_crowd_radii                # owed
   cup_crowd_walls                # owed
   cup_crowd_gap                  # owed (a step's figures: the sink's ctx is the crowd)
@@ -59,19 +61,22 @@ for h in "$src"/include/catchup/*.h; do
 done
 IFS=: read -ra dirs <<< "$incs"
 for d in "${dirs[@]}"; do [ -f "$d/catchup/version.h" ] && headers+=("$d/catchup/version.h"); done
-bash "$here/../layout/declared.sh" "$cc" "$incs" "${headers[@]}" | sort -u -k1,1 > "$work/declared" ||
+bash "$here/../layout/declared.sh" --args "$cc" "$incs" "${headers[@]}" | sort -u -k1,1 > "$work/declared" ||
   say "cannot list the public headers' functions"
 
 fsrc=("$src"/src/fortran/*.f90 "$src"/src/fortran/*.F90)
-# "C_NAME FORTRAN_NAME" of every bind(C) interface (continuation lines joined)
+# "C_NAME FORTRAN_NAME NARGS" of every bind(C) interface (continuation lines
+# joined; NARGS counts the names between the parentheses after its name)
 awk '{ if (sub(/&[ \t]*$/, "")) { held = held $0; next } print held $0; held = "" }' "${fsrc[@]}" |
-  sed -n 's/.*\(function\|subroutine\) *\([A-Za-z0-9_]*\) *(.*bind(C, *name="\(cup_[A-Za-z0-9_]*\)").*/\3 \2/p' |
-  sort -u > "$work/pairs"
+  sed -n 's/.*\(function\|subroutine\) *\([A-Za-z0-9_]*\) *(\([^)]*\)).*bind(C, *name="\(cup_[A-Za-z0-9_]*\)").*/\4 \2 \3/p' |
+  awk '{ n = 0; for (i = 3; i <= NF; i++) n += split($i, a, ",") - ($i ~ /,$/); print $1, $2, n }' |
+  sort -u > "$work/pairs3"
+cut -d' ' -f1,2 "$work/pairs3" > "$work/pairs"
 cut -d' ' -f1 "$work/pairs" | sort -u > "$work/bound"
 printf '%s\n' "${UNBOUND[@]}" | sort > "$work/unbound"
 printf '%s\n' "${RAW_ONLY[@]}" | sort > "$work/raw_only"
 
-while read -r name where; do
+while read -r name where _; do
   say "$where: $name has no bind(C) interface in src/fortran: bind it (catchup_c.f90 or" \
       "its module's file, with a wrapper in the conventions of catchup_base.f90), or put it" \
       "on UNBOUND in tests/fortran/check_coverage.sh with why"
@@ -80,6 +85,10 @@ while read -r name; do
   say "src/fortran binds $name (bind(C, name=\"$name\")), which no public header declares:" \
       "follow its rename or removal in C"
 done < <(cut -d' ' -f1 "$work/declared" | join -v2 - "$work/bound")
+while read -r name where cargs fname fargs; do
+  say "$where: $name takes $cargs argument(s) in C, but its bind(C) interface $fname in src/fortran" \
+      "takes $fargs: follow the C declaration (and the wrappers that call $fname)"
+done < <(join "$work/declared" "$work/pairs3" | awk '$3 != $5')
 while read -r name; do
   say "UNBOUND lists $name, which is bound now or no longer declared: remove its line"
 done < <(join -v1 "$work/unbound" <(cut -d' ' -f1 "$work/declared" | join -v1 - "$work/bound"))

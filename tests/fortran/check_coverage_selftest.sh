@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The Fortran drift check itself: on a copy of the tree it must pass as the
 # tree is, and fail, naming the culprit, on a new public function without a
-# binding (the case it exists for), a binding of a function C no longer
-# declares, and a binding no wrapper uses.
+# binding (the case it exists for), a binding removed from src/fortran, a
+# parameter added in C, a binding of a function C no longer declares, and a
+# binding no wrapper uses.
 #
 #   check_coverage_selftest.sh CC SRCDIR BUILD_INCLUDE_DIR
 set -u
@@ -20,6 +21,15 @@ check > /dev/null || fail "the tree as it is fails: $(check)"
 fresh
 sed -i 's|^CUP_API int cup_lcs_dim(|CUP_API int cup_lcs_brand_new(const cup_lcs *L);\n&|' "$t/include/catchup/lcs.h"
 expect_fail "public function without a binding" "cup_lcs_brand_new has no bind(C) interface"
+
+fresh
+# cup_lcs_rows' interface cut out of catchup_c.f90 (its wrapper's call left dangling)
+sed -i '/function c_cup_lcs_rows(/,/end function c_cup_lcs_rows/d' "$t/src/fortran/catchup_c.f90"
+expect_fail "binding removed" "cup_lcs_rows has no bind(C) interface"
+
+fresh
+sed -i 's|^CUP_API int cup_lcs_dim(const cup_lcs \*L);|CUP_API int cup_lcs_dim(const cup_lcs *L, int extra);|' "$t/include/catchup/lcs.h"
+expect_fail "parameter added in C" "cup_lcs_dim takes 2 argument(s) in C, but its bind(C) interface c_cup_lcs_dim"
 
 fresh
 printf '%s\n' 'module gone' 'interface' \

@@ -366,6 +366,13 @@ contains
     call check(ierr == CUP_OK .and. z(2) - z(3) >= 1 - 1d-12, 'projection onto the moved set')
     call cup_projector_set_offset(p, [1d0], ierr)
     call check_int(ierr, CUP_ERR_DIM, 'offset of the wrong size')
+    ! (0, 2, 0) is in the moved set (2 - 0 >= 1, 2 >= 0), (0, 0.5, 0) is not (0.5 - 0 < 1)
+    call check(cup_projector_offer_feasible(p, [0d0, 2d0, 0d0], ierr) .and. ierr == CUP_OK, &
+      'a point of the moved set is accepted as the anchor')
+    call check(.not. cup_projector_offer_feasible(p, [0d0, 0.5d0, 0d0], ierr) .and. ierr == CUP_OK, &
+      'a point outside is refused')
+    call check(.not. cup_projector_offer_feasible(p, [0d0, 2d0], ierr) .and. ierr == CUP_ERR_DIM, &
+      'an anchor of the wrong size')
     call cup_projector_reset(p)
     call cup_projector_free(p)
     call cup_projector_free(p)

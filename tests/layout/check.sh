@@ -18,10 +18,11 @@
 # .o, named FOLDER/NAME.c.o; a ;-separated list is split), the symbols each
 # one uses from the others must follow the same order and form no cycle
 # either: that catches a call upward or a circle behind a shared header.
-# And the map: every source file (.c, .h, .h.in, .f90, .F90, .cmake) of a
-# folder with a README.md (src/*/, apps/, bench/, include/) has its line
-# there, "- `NAME` — what it holds", and every such line names a file that
-# exists.
+# And the map: every source and build file (.c, .h, .h.in, .f90, .F90,
+# .cmake, CMakeLists.txt, .py, .sh) of a folder with a README.md (src/*/,
+# apps/, bench/, include/), and every file of tests/data/, has its line
+# there, "- `NAME` — what it holds" (or a table row "| `NAME` | ..."), and
+# every such line names a file that exists.
 # Prints one line per violation and exits 1 if there is any.
 set -u
 order=(util set lcp projector model integrator analysis io h5 sweep apps)
@@ -85,21 +86,27 @@ for f in "${files[@]}"; do
   done < <(grep -n '^[[:space:]]*#[[:space:]]*include[[:space:]]*"' "$f")
 done
 
-# The map: a folder's README.md names each of its source files on a line of
-# its own, "- `NAME` — ..." (NAME relative to the folder), and nothing else.
-for d in src/*/ apps/ bench/ include/; do
+# The map: a folder's README.md names each of its files on a line of its
+# own, "- `NAME` — ..." or a table row "| `NAME` | ..." (NAME relative to
+# the folder), and nothing else.
+for d in src/*/ apps/ bench/ include/ tests/data/; do
   d=${d%/}
   readme=$d/README.md
   [ -f "$readme" ] || { [ -d "$d" ] && say "$d/: has no README.md naming its files"; continue; }
+  if [ "$d" = tests/data ]; then
+    which=(! -name README.md)                                  # data: every file
+  else
+    which=(\( -name '*.[ch]' -o -name '*.h.in' -o -name '*.[fF]90' -o -name '*.cmake' -o -name CMakeLists.txt
+           -o -name '*.py' -o -name '*.sh' \))
+  fi
   while read -r f; do
     rel=${f#"$d"/}
-    grep -qF -- "- \`$rel\`" "$readme" ||
+    grep -qF -e "- \`$rel\`" -e "| \`$rel\` |" "$readme" ||
       say "$f: not named in $readme: add the line \"- \`$rel\` — what it holds\" (one line per file)"
-  done < <(find "$d" \( -name '*.[ch]' -o -name '*.h.in' -o -name '*.[fF]90' -o -name '*.cmake' \) \
-             -type f | sort)
+  done < <(find "$d" "${which[@]}" -type f | sort)
   while read -r rel; do
     [ -f "$d/$rel" ] || say "$readme: names \`$rel\`, which is not in $d/: remove or mend its line"
-  done < <(sed -n 's/^- `\([^`]*\)`.*/\1/p' "$readme")
+  done < <(sed -n 's/^\(- \|| \)`\([^`]*\)`.*/\2/p' "$readme")
 done
 
 # Objects: FOLDER/NAME.c.o; an undefined symbol defined by another object is

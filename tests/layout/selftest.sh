@@ -3,7 +3,8 @@
 # and fail, naming the culprit, on each injected violation: an include up the
 # chain, a cycle inside a folder, a public header reaching into src/, a file
 # outside the layers, src/ including apps/, a source file its folder's
-# README.md does not name, a README line naming no file; and with objects, a
+# README.md does not name (a build file, a data file of tests/data too), a
+# README line naming no file; and with objects, a
 # call up the chain and a circle of calls behind includes that look innocent.
 #
 #   selftest.sh SRCDIR [CC]
@@ -44,6 +45,15 @@ fresh
 echo '/* a new reader */' > "$t/src/io/stray_reader.c"
 expect_fail "file missing from its README" \
   'src/io/stray_reader.c: not named in src/io/README.md: add the line "- `stray_reader.c` — what it holds"'
+
+fresh
+sed -i '/^- `CMakeLists.txt`/d' "$t/apps/README.md"
+expect_fail "build file missing from its README" 'apps/CMakeLists.txt: not named in apps/README.md'
+
+fresh
+mkdir -p "$t/tests" && cp -r "$src/tests/data" "$t/tests/"
+printf 't,x\n' > "$t/tests/data/ref_new.csv"
+expect_fail "data file missing from tests/data/README.md" 'tests/data/ref_new.csv: not named in tests/data/README.md'
 
 fresh
 echo '- `later.c` — later the netlist' >> "$t/src/model/README.md"
