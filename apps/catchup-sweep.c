@@ -29,6 +29,7 @@
  * asked to compute one aborts the whole job with a message. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -149,28 +150,33 @@ static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
   bcast_status(&st);
   if (st) return st;
   if (nranks == 1) return CUP_OK;
+  /* the sweep file's text, then the variants' scene texts in one message */
   cup_sweep *s = *sp;
-  long lens[2] = {rank == 0 ? (long)strlen(s->text) : 0, rank == 0 ? s->n_variants : 0};
-  MPI_Bcast(lens, 2, MPI_LONG, 0, MPI_COMM_WORLD);
+  long lens[3] = {0, 0, 0};
+  if (rank == 0) {
+    lens[0] = (long)strlen(s->text);
+    lens[1] = s->n_variants;
+    for (int k = 0; k < s->n_variants; k++) lens[2] += (long)strlen(s->var[k].scene_text) + 1;
+    if (lens[2] > INT_MAX) {
+      say("%s: the variants' scenes take %ld bytes, more than one MPI message holds", a->sweep, lens[2]);
+      MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+  }
+  MPI_Bcast(lens, 3, MPI_LONG, 0, MPI_COMM_WORLD);
   char *text = rank == 0 ? s->text : malloc((size_t)lens[0] + 1);
-  char **scenes = rank == 0 ? NULL : calloc((size_t)lens[1], sizeof *scenes);
-  if (!text || (rank && !scenes)) MPI_Abort(MPI_COMM_WORLD, 1);
+  char *all = malloc((size_t)lens[2] + 1);
+  char **scenes = calloc((size_t)lens[1] + 1, sizeof *scenes);
+  if (!text || !all || !scenes) MPI_Abort(MPI_COMM_WORLD, 1);
   MPI_Bcast(text, (int)lens[0] + 1, MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (rank == 0)
+    for (long k = 0, at = 0; k < lens[1]; k++) at += sprintf(all + at, "%s", s->var[k].scene_text) + 1;
+  MPI_Bcast(all, (int)lens[2], MPI_CHAR, 0, MPI_COMM_WORLD);
+  for (long k = 0, at = 0; k < lens[1]; k++, at += (long)strlen(all + at) + 1) scenes[k] = all + at;
   if (rank) st = sw_parse(sp, text, (size_t)lens[0], a->sweep, err);
-  for (long k = 0; k < lens[1]; k++) {
-    long len = rank == 0 ? (long)strlen(s->var[k].scene_text) : 0;
-    MPI_Bcast(&len, 1, MPI_LONG, 0, MPI_COMM_WORLD);
-    char *t = rank == 0 ? s->var[k].scene_text : malloc((size_t)len + 1);
-    if (!t) MPI_Abort(MPI_COMM_WORLD, 1);
-    MPI_Bcast(t, (int)len + 1, MPI_CHAR, 0, MPI_COMM_WORLD);
-    if (rank) scenes[k] = t;
-  }
   if (rank && !st) st = sw_resolve_texts(*sp, scenes, err);
-  if (rank) {
-    for (long k = 0; k < lens[1]; k++) free(scenes[k]);
-    free(scenes);
-    free(text);
-  }
+  free(all);
+  free(scenes);
+  if (rank) free(text);
   if (rank && st) {                     /* the same texts gave rank 0 no error */
     say("rank %d: %s", rank, err);
     MPI_Abort(MPI_COMM_WORLD, 1);
@@ -187,12 +193,13 @@ static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
     sw_task t;
     if (sw_task_get(s, id, &t)) continue;
     const sw_variant *v = &s->var[t.variant];
-    cup_integrator_options o = *cup_scene_options(v->scene);
+    const cup_scene *sc = sw_variant_settings(s, t.variant);   /* a lazy variant's are its entry's first's */
+    cup_integrator_options o = *cup_scene_options(sc);
     o.n = t.n;
     o.scheme = (cup_scheme)t.scheme;
     run_plan p;
     run_plan_make(&p, &o, s->dim, 0, 0);
-    long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(v->scene);
+    long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(sc);
     char from[SW_ERR_LEN / 4], msg[SW_ERR_LEN / 2];  /* a variant's name, whole */
     snprintf(from, sizeof from, "task %ld, variant %s%s", id, v->name, s->len[SW_AXIS_N] ? ": grid.n" : "");
     if (run_plan_too_long(&p, &o, limit, from, "grid: {scheme: [adaptive], tol: [1e-6]}", msg, sizeof msg)) {
@@ -202,7 +209,7 @@ static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
   }
   for (int k = 0; k < s->n_variants; k++) {
     const sw_variant *v = &s->var[k];
-    long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(v->scene);
+    long limit = a->max_steps ? a->max_steps : cup_scene_max_steps(sw_variant_settings(s, k));
     if (!s->crowd && s->ref_method == SW_REF_RICHARDSON && 2.0 * (double)v->n_ref > (double)limit) {
       snprintf(err, SW_ERR_LEN, "%s: variant %s's reference takes n = %ld and %ld steps (reference.n, or 4 x its "
                "largest n) beyond the limit of %ld (--max-steps, the scene key max_steps): take fewer steps, or "

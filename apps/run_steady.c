@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "run_steady.h"
+#include "analysis/pss_run.h"
 
 enum { MSG = 2 * CUP_ERRMSG_LEN };
 
@@ -62,30 +63,9 @@ int run_steady_probes(run_steady *s, cup_netlist *nl, char *err, size_t size) {
     s->mi[k] = q->nmeasure ? cup_netlist_probe(nl, q->measure[k], e2) : k;
     if (s->mi[k] < 0) return snprintf(err, size, "steady_state.measure: %s", e2), 1;
   }
-  for (int k = 0; k < q->npower; k++) {
-    const char *a, *b;
-    char v[300], i[300];
-    if (cup_netlist_element_nodes(nl, q->power[k], &a, &b, e2))
+  for (int k = 0; k < q->npower; k++)
+    if (cup_pss_probe_power(nl, q->power[k], &s->pv[k], &s->pc[k], e2))
       return snprintf(err, size, "steady_state.power: %s", e2), 1;
-    snprintf(v, sizeof v, "v(%.120s,%.120s)", a, b);
-    snprintf(i, sizeof i, "i(%.200s)", q->power[k]);
-    if ((s->pv[k] = cup_netlist_probe(nl, v, e2)) < 0 || (s->pc[k] = cup_netlist_probe(nl, i, e2)) < 0)
-      return snprintf(err, size, "steady_state.power: %s", e2), 1;
-  }
-  return 0;
-}
-
-/* The period map's integrator: the run's, over one period, its final state. */
-static int map_options(const run_steady *s, const cup_scene *scene, double T, cup_integrator_options *mo) {
-  const cup_integrator_options *so = cup_scene_options(scene);
-  if (mo->scheme != CUP_SCHEME_ADAPTIVE && so->T > 0)   /* a fixed-step scheme keeps its step */
-    mo->n = (long)fmax(1, ceil((double)mo->n * T / so->T * (1 - 1e-12)));
-  mo->T = T;
-  mo->output = CUP_OUTPUT_FINAL;
-  mo->output_t0 = 0;
-  mo->on_event = NULL;
-  mo->on_step = NULL;
-  if (mo->scheme == CUP_SCHEME_ADAPTIVE && s->req->pss.map_tol > 0) mo->tol_abs = mo->tol_rel = s->req->pss.map_tol;
   return 0;
 }
 
@@ -115,8 +95,9 @@ int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_optio
   }
   if ((st = cup_input_period_fits(cup_scene_input(scene), T, e2))) return no_steady(s, st, e2, err, size);
   s->info.period = T;
-  cup_integrator_options mo = *o;
-  map_options(s, scene, T, &mo);
+  cup_integrator_options mo;                     /* the period map: the run's, over one period */
+  cup_pss_map_options(o, cup_scene_options(scene)->T, T, s->req->pss.map_tol, &mo);
+  mo.on_step = NULL;
   cup_integrator *I = NULL;
   if ((st = cup_scene_integrator(scene, &mo, &I, e2))) return no_steady(s, st, e2, err, size);
   st = cup_pss_solve_map(&s->r, I, s->n, T, cup_scene_x0(scene), &s->req->pss, e2);
@@ -181,12 +162,7 @@ static int measure(run_steady *s) {
     for (long k = 0; k < N; k++) v[k] = s->nl ? s->sig[k * s->ns + s->mi[j]] : s->x[k * s->n + j];
     st = cup_measure_period(v, N, H, &s->me[j], s->amp + (size_t)j * (H + 1), s->phase + (size_t)j * (H + 1), e2);
   }
-  for (int j = 0; !st && j < np; j++) {
-    cup_measure m;
-    for (long k = 0; k < N; k++) v[k] = s->sig[k * s->ns + s->pv[j]] * s->sig[k * s->ns + s->pc[j]];
-    st = cup_measure_period(v, N, 0, &m, NULL, NULL, e2);
-    s->power[j] = m.avg;
-  }
+  for (int j = 0; !st && j < np; j++) st = cup_measure_power(s->sig, N, s->ns, s->pv[j], s->pc[j], v, &s->power[j], e2);
   if (!st && s->req->eff_out >= 0) s->efficiency = s->power[s->req->eff_out] / -s->power[s->req->eff_in];
   free(v);
   return st;

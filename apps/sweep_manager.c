@@ -220,6 +220,7 @@ int setup_queue(manager_t *m) {
   m->jobs_total = J;
   for (long j = 0; j < J; j++) {
     long job = order[j];
+    if (job < s->n_variants && s->steady) { m->jobs_total--; continue; }   /* no reference: done at creation */
     m->cost[job] = sw_job_cost(s, job);
     int done = job < s->n_variants ? sw_file_reference_done(m->f, (int)job)
                                    : sw_file_task_done(m->f, job - s->n_variants);

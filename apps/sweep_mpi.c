@@ -132,6 +132,7 @@ typedef struct {
   int sending;               /* one of them is in transit */
   long steps;                /* for polling a stop message */
   int stop_msg;              /* the manager said stop */
+  sw_scene_slot slot;        /* the last lazy variant loaded */
 } computer;
 
 /* Test the answers in transit, which moves them along; whether one still is. */
@@ -172,7 +173,7 @@ static void compute(computer *c, long job, sw_result *r, double *traj) {
   }
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   sw_run_opts o = {(const volatile int *)&stop_signal, nranks > 1 ? poll_stop : NULL, c, c->time_limit,
-                   task >= 0 && idset_has(&c->hooks->inject, task)};
+                   task >= 0 && idset_has(&c->hooks->inject, task), &c->slot};
   sw_run_job(s, job, &o, r, traj);
 }
 
@@ -214,7 +215,7 @@ int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
   size_t one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   outbuf out[AHEAD];
   for (int b = 0; b < AHEAD; b++) out[b] = (outbuf){NULL, 0, MPI_REQUEST_NULL};
-  computer c = {s, hooks, time_limit, one, out, 0, 0, 0};
+  computer c = {s, hooks, time_limit, one, out, 0, 0, 0, {-1, NULL}};
   long ids[MAX_BATCH];
   int next = 0;
   double cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
@@ -261,6 +262,7 @@ int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
     if (st.MPI_TAG == TAG_STOP) break;
   }
   for (int b = 0; b < AHEAD; b++) free(out[b].buf);
+  sw_scene_slot_free(&c.slot);
   return 0;
 }
 
@@ -443,7 +445,7 @@ static int manager_mpi(manager_t *m) {
 /* ---- manager: alone ---- */
 
 static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit) {
-  computer c = {m->s, hooks, time_limit, m->one, NULL, 0, 0, 0};
+  computer c = {m->s, hooks, time_limit, m->one, NULL, 0, 0, 0, {-1, NULL}};
   char *buf = malloc(sizeof(msg_head) + m->one * (size_t)m->max_batch);
   long ids[MAX_BATCH];
   if (!buf) { io_fail(m, CUP_ERR_NOMEM); return; }
@@ -457,6 +459,7 @@ static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit)
     progress(m, 0);
     if (n < count) break;                      /* stopped by a signal */
   }
+  sw_scene_slot_free(&c.slot);
   free(buf);
 }
 

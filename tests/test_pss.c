@@ -373,6 +373,40 @@ static void periods(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* A given period must be one over which every source repeats: a whole
+ * number of their common period, and no source that does not repeat from
+ * t = 0. Before, a source with no period of its own let any given period
+ * through, and the run over [0, T) was taken for a period map (the full
+ * bridge's delayed gate: CUP_ERR_LINALG at t = 0 after three runs). */
+static void given_periods(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  static const struct { const char *text; double T; const char *says; } cases[] = {
+      {"sine\nV1 in 0 SIN(0 1 50)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0.04, NULL},
+      {"sine\nV1 in 0 SIN(0 1 50)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0.03, "not a whole number"},
+      {"dc\nV1 in 0 5\nR1 in b 1\nC1 b 0 1u\n.end\n", 0.03, NULL},            /* constant: any period */
+      {"gate\nV1 in 0 PULSE(0 1 76u jump jump 49u 100u)\nR1 in b 1\nC1 b 0 1u\n.end\n", 1e-4,
+       "its delay 7.6e-05 makes [0, 0.0001) unlike later periods"},
+      {"gate\nV1 in 0 PULSE(0 1 51u jump jump 49u 100u)\nR1 in b 1\nC1 b 0 1u\n.end\n", 2e-4, NULL},
+      {"ramp\nV1 in 0 PWL(0 0 1m 1)\nR1 in b 1\nC1 b 0 1u\n.end\n", 1e-3, "a PWL source is not periodic"},
+      {"two\nV1 in 0 SIN(0 1 50)\nV2 b 0 SIN(0 1 70.71067811865476)\nR1 in c 1\nC1 c b 1u\n.end\n", 0.02,
+       "no common period"},
+      {"one\nV1 in 0 PULSE(0 1 0 1u 1u 1m)\nR1 in b 1\nC1 b 0 1u\n.tran 1u 10m\n.end\n", 1e-3, "not a whole number"},
+  };
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    cup_netlist *nl = load(cases[k].text);
+    err[0] = '\0';
+    int st = cup_input_period_fits(cup_netlist_input(nl), cases[k].T, err);
+    print_message("  T = %g: %s %s\n", cases[k].T, cup_status_name(st), err);
+    assert_int_equal(st, cases[k].says ? CUP_ERR_ARG : CUP_OK);
+    if (cases[k].says) {
+      assert_non_null(strstr(err, cases[k].says));
+      assert_non_null(strstr(err, "repeat"));
+    }
+    cup_netlist_free(&nl);
+  }
+}
+
 /* ---- measurements ---- */
 
 static void measure_closed_forms(void **state) {
@@ -422,6 +456,7 @@ int main(void) {
     cmocka_unit_test(lc_resonance),
     cmocka_unit_test(lc_off_resonance),
     cmocka_unit_test(periods),
+    cmocka_unit_test(given_periods),
     cmocka_unit_test(measure_closed_forms),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -140,10 +140,63 @@ static void latin_hypercube(void **state) {
   sw_free(&b);
 }
 
+/* Lazy variants: a generated variant beyond its entry's first is loaded
+ * by its own task. Its result is bit for bit a written variant's with the
+ * same overrides; a value its scene refuses fails that task alone, with
+ * the scene's message; a generated key that changes what the entry's first
+ * stood for (here max_steps) fails its task, naming it. */
+static void lazy_variants(void **state) {
+  (void)state;
+  cup_sweep *s = parse("base: buck-design.yaml\n"
+                       "variants:\n"
+                       "  - name: g\n"
+                       "    grid: {netlist.L: [100u, -1u, 47u]}\n"
+                       "  - name: m\n"
+                       "    grid: {max_steps: [1000000, 2000000]}\n", 1);
+  cup_sweep *w = parse("base: buck-design.yaml\n"
+                       "variants: [{name: written, set: {netlist.L: 47u}}]\n", 1);
+  assert_int_equal(s->n_variants, 5);
+  assert_non_null(s->var[0].scene);
+  assert_null(s->var[1].scene);                     /* lazy: loaded by its task */
+  assert_null(s->var[2].scene);
+  assert_non_null(s->var[3].scene);                 /* m.0: its entry's first */
+  assert_true(sw_variant_lazy(s, 4) && !sw_variant_lazy(s, 3));
+  assert_non_null(strstr(s->var[2].scene_text, "L: \"47u\""));
+  sw_scene_slot slot = {-1, NULL};
+  sw_run_opts ro = {NULL, NULL, NULL, 0, 0, &slot};
+  sw_result r, ref;
+  double traj[1];
+  sw_run_job(w, w->n_variants, NULL, &ref, traj);
+  for (int pass = 0; pass < 2; pass++) {            /* loaded per job, then kept in a slot */
+    const sw_run_opts *o = pass ? &ro : NULL;
+    sw_run_job(s, s->n_variants + 0, o, &r, traj);
+    assert_int_equal(r.status, CUP_OK);
+    sw_run_job(s, s->n_variants + 1, o, &r, traj);
+    printf("# g.1: %s: %s\n", cup_status_name(r.status), r.message);
+    assert_true(r.status < 0);
+    assert_non_null(strstr(r.message, "variants.1 (g.1): "));
+    assert_non_null(strstr(r.message, "inductance must be > 0"));
+    sw_run_job(s, s->n_variants + 2, o, &r, traj);
+    assert_int_equal(r.status, CUP_OK);
+    assert_int_equal(r.steady.iterations, ref.steady.iterations);
+    assert_memory_equal(r.steady.fig, ref.steady.fig, sizeof r.steady.fig);
+    assert_memory_equal(&r.steady.efficiency, &ref.steady.efficiency, sizeof(double));
+    assert_int_equal(slot.variant, pass ? 2 : -1);
+    sw_run_job(s, s->n_variants + 4, o, &r, traj);
+    printf("# m.1: %s: %s\n", cup_status_name(r.status), r.message);
+    assert_int_equal(r.status, CUP_ERR_PARSE);
+    assert_non_null(strstr(r.message, "variants.4 (m.1): its max_steps differs from m.0's"));
+  }
+  sw_scene_slot_free(&slot);
+  sw_free(&w);
+  sw_free(&s);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(steady_buck),
       cmocka_unit_test(latin_hypercube),
+      cmocka_unit_test(lazy_variants),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

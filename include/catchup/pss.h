@@ -83,7 +83,10 @@ CUP_API void cup_pss_options_default(cup_pss_options *o);
 CUP_API int cup_input_period(const cup_input *u, double *T, char *errmsg);
 /** CUP_OK if T is a whole number of the input's common periods (within
  *  1e-9), or the input tells none (a constant, a callback); CUP_ERR_ARG
- *  naming both otherwise: over such a T the period map is not a period. */
+ *  naming both otherwise, and naming the term when a source does not
+ *  repeat from t = 0 (cup_input_period's cases: a PWL that changes, a
+ *  damped or delayed SIN, a PULSE delayed past its period's start, no
+ *  common period): over such a T the period map is not a period. */
 CUP_API int cup_input_period_fits(const cup_input *u, double T, char *errmsg);
 
 /** The steady state of an LCS driven by u: the period from o->period or u;
@@ -140,6 +143,7 @@ typedef struct cup_measure {
  *  phase_k)), each array order + 1 entries or NULL. order < (N - 1) / 2. */
 CUP_API int cup_measure_period(const double *v, long N, int order, cup_measure *m, double *amp, double *phase,
                                char *errmsg);
+
 
 #ifdef __cplusplus
 }

@@ -4,9 +4,11 @@
  * same samples. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdio.h>
 #include <gsl/gsl_math.h>
 #include "catchup.h"
 #include "catchup/pss.h"
+#include "pss_run.h"
 #include "util/fail.h"
 
 
@@ -48,5 +50,27 @@ int cup_measure_period(const double *v, long N, int order, cup_measure *m, doubl
     if (k >= 2) ch2 += mag * mag;
   }
   if (order >= 1 && c1 > 1e-9 * m->rms) m->thd = sqrt(ch2) / c1;   /* no fundamental (a DC output): NaN */
+  return CUP_OK;
+}
+
+int cup_measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg, char *errmsg) {
+  if (!sig || !w || !avg || v < 0 || i < 0 || v >= ns || i >= ns)
+    return cup_fail(errmsg, CUP_ERR_ARG, "measure power: NULL argument or signal outside [0, %d)", ns);
+  for (long k = 0; k < N; k++) w[k] = sig[k * ns + v] * sig[k * ns + i];
+  cup_measure m;
+  int st = cup_measure_period(w, N, 0, &m, NULL, NULL, errmsg);
+  *avg = m.avg;
+  return st;
+}
+
+int cup_pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg) {
+  const char *a, *b;
+  char sv[300], si[300];
+  int st = cup_netlist_element_nodes(nl, element, &a, &b, errmsg);
+  if (st) return st;
+  snprintf(sv, sizeof sv, "v(%.120s,%.120s)", a, b);
+  snprintf(si, sizeof si, "i(%.200s)", element);
+  if ((*v = cup_netlist_probe(nl, sv, errmsg)) < 0) return *v;
+  if ((*i = cup_netlist_probe(nl, si, errmsg)) < 0) return *i;
   return CUP_OK;
 }

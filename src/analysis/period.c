@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 #include "catchup.h"
 #include "catchup/pss.h"
 #include "model/input_impl.h"
@@ -56,16 +57,17 @@ static double term_period(const cup_term *t, int k, char *errmsg) {
   return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d: unknown waveform", t->comp, k), -1;
 }
 
-int cup_input_period(const cup_input *u, double *T, char *errmsg) {
-  if (!u || !T) return cup_fail(errmsg, CUP_ERR_ARG, "input period: NULL argument");
+/* The least common multiple of the terms' periods in *T: 0, or 1 when the
+ * input tells none (a callback, or constant: any period), -1 naming the
+ * term that does not repeat, -2 naming two periods with no common one. */
+static int common_period(const cup_input *u, double *T, char *errmsg) {
   *T = 0;
-  if (u->fn)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
+  if (u->fn) return 1;
   double per = 0;
   int first = -1;
   for (int k = 0; k < u->nterms; k++) {
     double p = term_period(&u->terms[k], k, errmsg);
-    if (p < 0) return CUP_ERR_ARG;
+    if (p < 0) return -1;
     if (p == 0) continue;
     if (per == 0) { per = p; first = k; continue; }
     int a = 1;
@@ -75,20 +77,44 @@ int cup_input_period(const cup_input *u, double *T, char *errmsg) {
     }
     if (a > PERIOD_MAX_MULTIPLE)
       return cup_fail(errmsg, CUP_ERR_ARG, "the sources have no common period: input component %d, term %d "
-                      "(period %.17g) and term %d (period %.17g) are not in a ratio of integers up to %d; "
-                      "give the period", u->terms[k].comp, k, p, first, per, PERIOD_MAX_MULTIPLE);
+                      "(period %.17g) and term %d (period %.17g) are not in a ratio of integers up to %d",
+                      u->terms[k].comp, k, p, first, per, PERIOD_MAX_MULTIPLE), -2;
     per *= a;
   }
-  if (per == 0)
+  *T = per;
+  return per == 0;
+}
+
+int cup_input_period(const cup_input *u, double *T, char *errmsg) {
+  if (!u || !T) return cup_fail(errmsg, CUP_ERR_ARG, "input period: NULL argument");
+  int c = common_period(u, T, errmsg);
+  if (c == -2 && errmsg) {
+    size_t n = strlen(errmsg);
+    snprintf(errmsg + n, CUP_ERRMSG_LEN - n, "; give the period");
+  }
+  if (c < 0) return CUP_ERR_ARG;
+  if (c > 0 && u->fn)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
+  if (c > 0)
     return cup_fail(errmsg, CUP_ERR_ARG, "the input is constant: no period to find a steady state over; give the "
                     "period");
-  *T = per;
   return CUP_OK;
 }
 
+/* A given period must be one over which every source repeats: a whole
+ * number of their common period. A source that does not repeat from t = 0
+ * (a PWL that changes, a single or delayed pulse, a damped or delayed
+ * SIN), or two with no common period, make every T wrong: the run over
+ * [0, T) is then no period map, and a fixed point of it no steady state
+ * (a full bridge's delayed gates failed at t = 0 with CUP_ERR_LINALG). */
 int cup_input_period_fits(const cup_input *u, double T, char *errmsg) {
   double Tu;
-  if (!u || !(T > 0) || cup_input_period(u, &Tu, NULL) != CUP_OK) return CUP_OK;
+  char why[CUP_ERRMSG_LEN];
+  if (!u || !(T > 0)) return CUP_OK;
+  int c = common_period(u, &Tu, why);
+  if (c > 0) return CUP_OK;                      /* a callback or a constant: any period */
+  if (c < 0)
+    return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g: the sources do not repeat over it: %s", T, why);
   double k = nearbyint(T / Tu);
   if (k >= 1 && fabs(T / Tu - k) <= 1e-9 * k) return CUP_OK;
   return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "

@@ -18,6 +18,7 @@
 #include <gsl/gsl_linalg.h>
 #include "catchup.h"
 #include "catchup/pss.h"
+#include "pss_run.h"
 #include "integrator/integrator_impl.h"
 #include "util/clock.h"
 #include "util/fail.h"
@@ -449,13 +450,9 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   }
   if (!isfinite(T)) return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the period %g is not finite", T);
   if (cup_lcs_inputs(L) > 0 && (st = cup_input_period_fits(u, T, errmsg))) return st;
-  cup_integrator_options mo = *io;                /* the period map: the final state only */
-  mo.T = T;
-  mo.output = CUP_OUTPUT_FINAL;
-  mo.output_t0 = 0;
-  mo.on_event = NULL;
+  cup_integrator_options mo;                      /* the period map: the final state only */
+  cup_pss_map_options(io, T, T, o->map_tol, &mo);
   mo.on_step = NULL;
-  if (mo.scheme == CUP_SCHEME_ADAPTIVE && o->map_tol > 0) mo.tol_abs = mo.tol_rel = o->map_tol;
   cup_integrator *I = NULL;
   if ((st = cup_integrator_create(&I, L, u, &mo, errmsg))) return st;
   st = cup_pss_solve_map(out, I, cup_lcs_dim(L), T, x_guess, o, errmsg);
@@ -470,6 +467,18 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
     if (ts < 0) return ts;
   }
   return (*out)->info.status;
+}
+
+void cup_pss_map_options(const cup_integrator_options *run, double run_T, double T, double map_tol,
+                         cup_integrator_options *mo) {
+  *mo = *run;
+  if (mo->scheme != CUP_SCHEME_ADAPTIVE && run_T > 0 && run_T != T)   /* a fixed-step scheme keeps its step */
+    mo->n = (long)fmax(1, ceil((double)mo->n * T / run_T * (1 - 1e-12)));
+  mo->T = T;
+  mo->output = CUP_OUTPUT_FINAL;
+  mo->output_t0 = 0;
+  mo->on_event = NULL;
+  if (mo->scheme == CUP_SCHEME_ADAPTIVE && map_tol > 0) mo->tol_abs = mo->tol_rel = map_tol;
 }
 
 void cup_pss_get_info(const cup_pss *r, cup_pss_info *info) {

@@ -343,6 +343,7 @@ static int read_variants(rd *p, cup_sweep *s, const st_node *root) {
     snprintf(key, sizeof key, "variants.%d", k);
     if (!st && generated) st = expand(p, e, key, &t, &s->var[at], count[k]);
     if (generated) variant_free(&t);
+    for (long j = 0; j < count[k]; j++) s->var[at + j].proto = (int)at;   /* the entry's first stands for it */
     at += count[k];
   }
   free(count);
@@ -453,43 +454,6 @@ int sw_load(cup_sweep **s, const char *path, char *errmsg) {
   return st;
 }
 
-/* "SWEEP:LINE:COL: variants.K (NAME): " before a scene's own message. */
-static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, const char *fmt, ...)
-  __attribute__((format(printf, 5, 6)));
-static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, const char *fmt, ...) {
-  const sw_variant *v = &s->var[k];
-  int w = snprintf(errmsg, SW_ERR_LEN, "%s:%d:%d: variants.%d (%s): ", s->path, v->line, v->col, k, v->name);
-  va_list ap;
-  va_start(ap, fmt);
-  if (w >= 0 && w < SW_ERR_LEN) vsnprintf(errmsg + w, (size_t)(SW_ERR_LEN - w), fmt, ap);
-  va_end(ap);
-  return status;
-}
-
-int sw_resolve_files(cup_sweep *s, char *errmsg) {
-  char **texts = calloc((size_t)s->n_variants, sizeof *texts);
-  if (!texts) return CUP_ERR_NOMEM;
-  int st = CUP_OK;
-  for (int k = 0; k < s->n_variants && !st; k++) {
-    sw_variant *v = &s->var[k];
-    cup_scene *sc = NULL;
-    char err[CUP_ERRMSG_LEN];
-    st = cup_scene_load(&sc, v->scene_file, (const char *const *)v->set, v->n_set, err);
-    if (st == CUP_ERR_IO && v->from_base) {   /* the base itself is missing: say where it is named */
-      snprintf(errmsg, SW_ERR_LEN, "%s:%d:%d: base: %s", s->path, s->base_line, s->base_col, err);
-      break;
-    }
-    if (st) { variant_fail(s, k, st, errmsg, "%s", err); break; }
-    if (!(texts[k] = strdup(cup_scene_text(sc)))) st = CUP_ERR_NOMEM;
-    if (!st) st = cup_file_list_merge(&s->files, cup_scene_file_list(sc));   /* its files join the sweep's */
-    cup_scene_free(&sc);
-  }
-  if (!st) st = sw_resolve_texts(s, texts, errmsg);
-  for (int k = 0; k < s->n_variants; k++) free(texts[k]);
-  free(texts);
-  return st;
-}
-
 /* Axis a leads its zip group (or is not zipped). */
 static int leads(const cup_sweep *s, int a) {
   for (int b = 0; b < a; b++)
@@ -497,165 +461,17 @@ static int leads(const cup_sweep *s, int a) {
   return 1;
 }
 
-/* The largest n among a variant's tasks (the scene's n when the grid has none). */
-static long variant_max_n(const cup_sweep *s, const sw_variant *v) {
-  if (!s->len[SW_AXIS_N]) return cup_scene_options(v->scene)->n;
-  long m = 1;
-  for (int k = 0; k < s->len[SW_AXIS_N]; k++) m = s->n[k] > m ? s->n[k] : m;
-  return m;
+int sw_variant_lazy(const cup_sweep *s, int k) { return !s->crowd && s->var[k].proto != k; }
+
+const cup_scene *sw_variant_settings(const cup_sweep *s, int k) {
+  return s->var[k].scene ? s->var[k].scene : s->var[s->var[k].proto].scene;
 }
 
-const char *sw_signal_name(const cup_sweep *s, int k) {
-  return k >= 0 && k < s->nsig ? cup_netlist_signal_name(cup_scene_netlist(s->var[0].scene), k) : NULL;
-}
-
-/* A netlist sweep records the signals catchup-run would (the scene's or
- * netlist's probes, else every node voltage and element current when at
- * most 256), the same in every variant: they share /runs/signals. */
-static int resolve_signals(cup_sweep *s, char *errmsg) {
-  s->nsig = 0;
-  for (int k = 0; k < s->n_variants; k++) {
-    cup_netlist *nl = cup_scene_netlist(s->var[k].scene);
-    char err[CUP_ERRMSG_LEN];
-    if (!nl) {
-      if (k > 0 && s->nsig)
-        return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "has no netlist, and variants.0 has: the variants "
-                            "share /runs/signals");
-      continue;
-    }
-    if (cup_netlist_signal_count(nl) == 0 && cup_netlist_probe_default(nl, 256, err))
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s", err);
-    int n = cup_netlist_signal_count(nl);
-    if (k == 0) s->nsig = n;
-    int same = n == s->nsig;
-    for (int j = 0; same && j < n; j++) same = !strcmp(cup_netlist_signal_name(nl, j), sw_signal_name(s, j));
-    if (!same)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "its netlist's signals (%d, from %s) differ from "
-                          "variants.0's (%d): the variants share /runs/signals", n,
-                          n ? cup_netlist_signal_name(nl, 0) : "none", s->nsig);
-  }
-  return CUP_OK;
-}
-
-/* After the variants' scenes are loaded: crowd sweeps take no n axis (the
- * crowd is built for its scene's step), store no positions unless
- * output.samples says so, and have no reference (sweep_crowd.c runs them).
- * Here, not there, so that the sweep file's parser needs no HDF5. */
-static int crowd_resolve(cup_sweep *s, char *errmsg) {
-  if (s->len[SW_AXIS_N]) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: grid.n: a crowd is built for its scene's step T/n (its margins and "
-             "exit times): vary n in a variant's set ({n: 4000}) instead", s->path);
-    return CUP_ERR_PARSE;
-  }
-  if (!s->out_given) s->out_samples = 0;     /* positions only when asked: 2N per sample */
-  return CUP_OK;
-}
-
-/* Steady-state sweeps (sweep_steady.c runs them): the variants' scenes all
- * ask for the steady state or none do; no reference, no trajectories; the
- * signals measured and the elements' v(a,b) and i(E) probed before the
- * sweep's signals are fixed (resolve_signals), so that they are the same in
- * every variant, at the same indices. */
-static int steady_probe(cup_sweep *s, int k, const cup_scene_steady *q, char *errmsg) {
-  cup_netlist *nl = cup_scene_netlist(s->var[k].scene);
-  char err[CUP_ERRMSG_LEN];
-  int sig[SW_SS_SIGNALS], pv[SW_SS_POWER], pc[SW_SS_POWER];
-  if (!nl)
-    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state: a steady-state sweep measures a netlist's "
-                        "signals, and this scene has no netlist");
-  if (q->nmeasure < 1 || q->nmeasure > SW_SS_SIGNALS)
-    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.measure: a steady-state sweep measures 1 to %d "
-                        "signals (got %d), e.g. [v(out), i(L1)]", SW_SS_SIGNALS, q->nmeasure);
-  if (q->npower > SW_SS_POWER)
-    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: at most %d elements (got %d)", SW_SS_POWER,
-                        q->npower);
-  for (int j = 0; j < q->nmeasure; j++)
-    if ((sig[j] = cup_netlist_probe(nl, q->measure[j], err)) < 0)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.measure: %s", err);
-  for (int j = 0; j < q->npower; j++) {
-    const char *a, *b;
-    char v[300], i[300];
-    if (cup_netlist_element_nodes(nl, q->power[j], &a, &b, err))
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
-    snprintf(v, sizeof v, "v(%.120s,%.120s)", a, b);
-    snprintf(i, sizeof i, "i(%.200s)", q->power[j]);
-    if ((pv[j] = cup_netlist_probe(nl, v, err)) < 0 || (pc[j] = cup_netlist_probe(nl, i, err)) < 0)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
-  }
-  if (k == 0) {
-    s->ss_nm = q->nmeasure;
-    s->ss_np = q->npower;
-    memcpy(s->ss_sig, sig, sizeof sig);
-    memcpy(s->ss_pv, pv, sizeof pv);
-    memcpy(s->ss_pc, pc, sizeof pc);
-  }
-  if (q->nmeasure != s->ss_nm || q->npower != s->ss_np || memcmp(sig, s->ss_sig, sizeof(int) * (size_t)s->ss_nm) ||
-      memcmp(pv, s->ss_pv, sizeof(int) * (size_t)s->ss_np) || memcmp(pc, s->ss_pc, sizeof(int) * (size_t)s->ss_np))
-    return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state: its measure and power lists differ from "
-                        "variants.0's: the variants share /steady_state's columns");
-  return CUP_OK;
-}
-
-static int steady_resolve(cup_sweep *s, char *errmsg) {
-  for (int k = 0; k < s->n_variants; k++) {
-    const cup_scene_steady *q = cup_scene_steady_state(s->var[k].scene);
-    if (!q != !s->steady)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s the steady state, and variants.0 %s: a sweep's variants "
-                          "all ask for it (steady_state:) or none do", q ? "asks for" : "does not ask for",
-                          s->steady ? "does" : "does not");
-    if (!q) continue;
-    int st = steady_probe(s, k, q, errmsg);
-    if (st) return st;
-  }
-  if (s->steady && s->out_given && s->out_samples) {
-    snprintf(errmsg, SW_ERR_LEN, "%s: output.samples: a steady-state sweep stores no trajectories (its figures are "
-             "in /steady_state): leave it out or write 0", s->path);
-    return CUP_ERR_PARSE;
-  }
-  if (s->steady) s->out_samples = 0;
-  return CUP_OK;
-}
-
-int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
-  for (int k = 0; k < s->n_variants; k++) {
-    sw_variant *v = &s->var[k];
-    char err[CUP_ERRMSG_LEN];
-    cup_scene_free(&v->scene);
-    free(v->scene_text);
-    if (!(v->scene_text = strdup(texts[k]))) return CUP_ERR_NOMEM;
-    int st = cup_scene_load_string(&v->scene, v->scene_text, v->scene_file, v->scene_dir, NULL, 0, err);
-    if (st) return variant_fail(s, k, st, errmsg, "%s", err);
-    const cup_integrator_options *o = cup_scene_options(v->scene);
-    int dim = cup_scene_dim(v->scene), crowd = cup_scene_crowd(v->scene) != NULL;
-    if (k == 0) { s->T = o->T; s->dim = dim; s->crowd = crowd; s->steady = cup_scene_steady_state(v->scene) != NULL; }
-    if (crowd != s->crowd)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s, and variants.0 %s: a sweep's variants are all "
-                          "crowds or none", crowd ? "a crowd" : "not a crowd", s->crowd ? "is one" : "is not");
-    if (o->T != s->T)
-      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "T = %.17g differs from variants.0's T = %.17g: "
-                          "the variants share the sample times", o->T, s->T);
-    if (dim != s->dim && !crowd)
-      return variant_fail(s, k, CUP_ERR_DIM, errmsg, "state dimension %d differs from variants.0's %d",
-                          dim, s->dim);
-    if (dim > s->dim) s->dim = dim;     /* crowds of N agents: positions padded to the largest */
-    long S1 = s->samples - 1;
-    if (crowd || s->steady || (s->ref_method == SW_REF_ADAPTIVE && !s->ref_check))
-      v->n_ref = 0;                     /* none, or the adaptive scheme chooses its own steps */
-    else if (s->ref_n) v->n_ref = s->ref_n;
-    else v->n_ref = (4 * variant_max_n(s, v) + S1 - 1) / S1 * S1;
-  }
-  if (s->crowd) {
-    int st = crowd_resolve(s, errmsg);
-    if (st) return st;
-  }
-  int st = steady_resolve(s, errmsg);
-  if (!st) st = resolve_signals(s, errmsg);
-  if (st) return st;
+void sw_count_tasks(cup_sweep *s) {
   s->per_variant = 1;
   for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */
     if (s->len[a] && leads(s, a)) s->per_variant *= s->len[a];
   s->n_tasks = s->per_variant * s->n_variants;
-  return CUP_OK;
 }
 
 void sw_free(cup_sweep **ps) {
@@ -700,7 +516,7 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
     if (s->zip[a] >= 0 && !leads(s, a))
       for (int b = 0; b < a; b++)
         if (s->zip[b] == s->zip[a]) { d[a] = d[b]; break; }
-  const cup_scene *sc = s->var[t->variant].scene;
+  const cup_scene *sc = sw_variant_settings(s, t->variant);
   const cup_integrator_options *o = cup_scene_options(sc);
   t->n = s->len[SW_AXIS_N] ? s->n[d[SW_AXIS_N]] : o->n;
   t->eps = s->len[SW_AXIS_EPS] ? s->eps[d[SW_AXIS_EPS]] : cup_scene_eps_spec(sc);
@@ -737,7 +553,7 @@ double sw_job_cost(const cup_sweep *s, long job) {
   /* a crowd's step costs about 0.7 us an agent (BENCHMARKS.md, "Crowds"):
    * counted as the circuit's, 1000 agents made a 20 ms batch of 180 tasks
    * of a second each, sent to one rank */
-  if (s->crowd) return ((double)t.n + setup) * 3.5 * (double)cup_scene_dim(s->var[t.variant].scene);
+  if (s->crowd) return ((double)t.n + setup) * 3.5 * (double)cup_scene_dim(sw_variant_settings(s, t.variant));
   return ((double)t.n + setup) * fs * fp;
 }
 

@@ -9,6 +9,7 @@
 add_library(catchup_sweep STATIC
   ${CMAKE_CURRENT_LIST_DIR}/sweep_gen.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep.c
+  ${CMAKE_CURRENT_LIST_DIR}/sweep_variant.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_run.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_h5.c
   ${CMAKE_CURRENT_LIST_DIR}/sweep_crowd.c

@@ -39,8 +39,11 @@ typedef struct sw_variant {
   int n_set;
   int line, col;             /* where the variant is written, for messages */
   int from_base;             /* its scene is the sweep's base */
+  int proto;                 /* the variant whose scene stands for this one's settings (n, T, ...)
+                                until a task loads it: itself, or its generated entry's first */
   char *scene_text;          /* after sw_resolve: cup_scene_text (overrides applied) */
-  cup_scene *scene;          /* loaded from scene_text (the same on every rank) */
+  cup_scene *scene;          /* loaded from scene_text (the same on every rank); NULL for a lazy
+                                variant (sw_variant_lazy): each job loads it (sw_variant_load) */
   long n_ref;                /* reference steps (a multiple of samples - 1) */
 } sw_variant;
 
@@ -87,8 +90,9 @@ typedef struct cup_sweep {
   int ss_pv[SW_SS_POWER], ss_pc[SW_SS_POWER];   /* each power element's v(a,b) and i(E) signal */
 } cup_sweep;
 
-/* A job's trajectory: samples * dim states, then samples * nsig signals. */
-static inline long sw_traj_len(const cup_sweep *s) { return s->samples * (s->dim + s->nsig); }
+/* A job's trajectory: samples * dim states, then samples * nsig signals;
+ * none in a steady-state sweep (its figures are in the result). */
+static inline long sw_traj_len(const cup_sweep *s) { return s->steady ? 0 : s->samples * (s->dim + s->nsig); }
 /* Signal k's name (a netlist sweep's), e.g. "v(out)". */
 const char *sw_signal_name(const cup_sweep *s, int k);
 
@@ -151,12 +155,29 @@ typedef struct sw_task_out {
 int sw_parse(cup_sweep **s, const char *text, size_t len, const char *path, char *errmsg);
 /* Read and parse a sweep file. */
 int sw_load(cup_sweep **s, const char *path, char *errmsg);
-/* Load every variant's scene from its file with its overrides and keep the
- * resulting scene text (rank 0); then sw_resolve_texts. */
+/* Every variant's scene text after its overrides (rank 0): a variant that
+ * is not lazy loaded from its file (its files join s->files), a lazy one's
+ * text made without loading it; then sw_resolve_texts. */
 int sw_resolve_files(cup_sweep *s, char *errmsg);
-/* Load the variants' scenes from texts (what rank 0 broadcast), check that
- * T and the dimension agree, fix n_ref and the task count. */
+/* Keep the variants' scene texts (what rank 0 broadcast), load the scenes
+ * of those that are not lazy, check that T and the dimension agree, fix
+ * n_ref and the task count. */
 int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg);
+/* Lazy variants (loaded by sweep_variant.c): a generated variant beyond its entry's
+ * first, in a sweep that is not of crowds, is loaded by its own jobs only
+ * (a design study of 10^4 variants would otherwise load every scene on
+ * every rank before the first task); its entry's first stands for its
+ * settings until then, and its job checks that they agree. */
+int sw_variant_lazy(const cup_sweep *s, int k);
+/* The scene that gives variant k's settings (n, T, the scheme, ...): its
+ * own once loaded, else its entry's first's. */
+const cup_scene *sw_variant_settings(const cup_sweep *s, int k);
+/* Load lazy variant k's scene from its text into *sc (the caller frees it),
+ * probed as the sweep's scenes are, and checked against the scene that
+ * stood for it: a located error in errmsg (SW_ERR_LEN) otherwise. */
+int sw_variant_load(const cup_sweep *s, int k, cup_scene **sc, char *errmsg);
+/* per_variant and n_tasks from the axes (after the variants are known). */
+void sw_count_tasks(cup_sweep *s);
 void sw_free(cup_sweep **s);
 
 int sw_task_get(const cup_sweep *s, long id, sw_task *t);

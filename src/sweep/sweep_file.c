@@ -148,7 +148,7 @@ static int read_state(sw_file *f) {
   if (!st) st = read_column(f, f->ref_summary, "status", H5T_NATIVE_INT32, 4, ref_status);
   long count = s->samples * s->dim;
   for (int k = 0; k < s->n_variants && !st; k++) {
-    if (!f->ref_done[k] || ref_status[k] < 0) continue;   /* a failed reference gives no errors */
+    if (!f->ref_done[k] || ref_status[k] < 0 || f->ref_x < 0) continue;   /* a failed reference gives no errors */
     if (!(f->xref[k] = malloc(sizeof(double) * (size_t)count))) { st = CUP_ERR_NOMEM; break; }
     hsize_t start[3] = {(hsize_t)k, 0, 0}, cnt[3] = {1, (hsize_t)s->samples, (hsize_t)s->dim};
     hid_t fs = H5Dget_space(f->ref_x), ms = H5Screate_simple(3, cnt, NULL);
@@ -179,15 +179,17 @@ int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errm
   if (!st) st = check_layout(f, errmsg);
   if (!st) {
     f->summary = H5Dopen2(f->file, "summary", H5P_DEFAULT);
-    f->ref_x = H5Dopen2(f->file, "references/x", H5P_DEFAULT);
+    if (!s->steady) f->ref_x = H5Dopen2(f->file, "references/x", H5P_DEFAULT);
     f->ref_summary = H5Dopen2(f->file, "references/summary", H5P_DEFAULT);
     if (s->out_samples > 0) f->runs_x = H5Dopen2(f->file, "runs/x", H5P_DEFAULT);
     if (s->crowd) f->crowd = H5Dopen2(f->file, "crowd", H5P_DEFAULT);
     if (s->steady) f->steady = H5Dopen2(f->file, "steady_state", H5P_DEFAULT);
-    if (s->nsig) f->ref_sig = H5Dopen2(f->file, "references/signals", H5P_DEFAULT);
+    if (s->nsig && !s->steady) f->ref_sig = H5Dopen2(f->file, "references/signals", H5P_DEFAULT);
     if (s->nsig && s->out_samples > 0) f->runs_sig = H5Dopen2(f->file, "runs/signals", H5P_DEFAULT);
-    if (f->summary < 0 || f->ref_x < 0 || f->ref_summary < 0 || (s->out_samples > 0 && f->runs_x < 0) ||
-        (s->crowd && f->crowd < 0) || (s->steady && f->steady < 0) || (s->nsig && f->ref_sig < 0) || (s->nsig && s->out_samples > 0 && f->runs_sig < 0))
+    int refs = !s->steady;                     /* a steady-state sweep has no reference trajectories */
+    if (f->summary < 0 || (refs && f->ref_x < 0) || f->ref_summary < 0 || (s->out_samples > 0 && f->runs_x < 0) ||
+        (s->crowd && f->crowd < 0) || (s->steady && f->steady < 0) || (refs && s->nsig && f->ref_sig < 0) ||
+        (s->nsig && s->out_samples > 0 && f->runs_sig < 0))
       st = sw_h5_fail(f, "open the datasets of");
   }
   if (!st) st = check_inputs(f, errmsg);
@@ -379,7 +381,8 @@ int sw_file_write_reference(sw_file *f, int k, const sw_result *r, const double 
   row.dual_iterations = r->dual_iterations;
   row.done = 1;
   quiet_t q = quiet_begin();
-  int st = write_traj(f, f->ref_x, (hsize_t)k, xref, s->dim) ? sw_h5_fail(f, "write /references/x in") : CUP_OK;
+  int st = f->ref_x >= 0 && write_traj(f, f->ref_x, (hsize_t)k, xref, s->dim) ? sw_h5_fail(f, "write /references/x in")
+                                                                               : CUP_OK;
   if (!st && f->ref_sig >= 0 && write_traj(f, f->ref_sig, (hsize_t)k, xref + s->samples * s->dim, s->nsig))
     st = sw_h5_fail(f, "write /references/signals in");
   if (!st && sw_h5_write_rows(f->ref_summary, f->refrow_t, (hsize_t)k, 1, &row, f->dxpl))
@@ -388,7 +391,7 @@ int sw_file_write_reference(sw_file *f, int k, const sw_result *r, const double 
   if (st) return st;
   f->ref_done[k] = 1;
   long count = s->samples * s->dim;
-  if (r->status >= 0 && !f->xref[k]) {
+  if (r->status >= 0 && !f->xref[k] && f->ref_x >= 0) {
     if (!(f->xref[k] = malloc(sizeof(double) * (size_t)count))) return CUP_ERR_NOMEM;
     memcpy(f->xref[k], xref, sizeof(double) * (size_t)count);
   }

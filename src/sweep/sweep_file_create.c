@@ -162,14 +162,18 @@ static int create_summary(sw_file *f) {
   return sw_h5_task_table(f, "summary", f->row_t, sizeof(sw_row), pending_summary_row, &f->summary);
 }
 
+/* A steady-state sweep has no reference trajectories, and its references'
+ * rows are done at creation (none: each task's figures are its result):
+ * no job computes them. */
 static int create_references(sw_file *f, hid_t g) {
   const cup_sweep *s = f->s;
   double nan = NAN;
   hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
-  f->ref_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan);
-  if (f->ref_x < 0) return sw_h5_fail(f, "create /references/x in");
+  if (!s->steady && (f->ref_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
+    return sw_h5_fail(f, "create /references/x in");
   dims[2] = (hsize_t)s->nsig;
-  if (s->nsig && (f->ref_sig = sw_h5_fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
+  if (!s->steady && s->nsig &&
+      (f->ref_sig = sw_h5_fixed_dataset(g, "signals", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
     return sw_h5_fail(f, "create /references/signals in");
   hid_t ft = H5Tcopy(f->refrow_t);
   H5Tpack(ft);
@@ -185,6 +189,13 @@ static int create_references(sw_file *f, hid_t g) {
     rows[k].status = CUP_ERR_INTERRUPTED;
     sw_copy_str(rows[k].status_name, sizeof rows[k].status_name, "pending");
     rows[k].wall_time_s = rows[k].correction = rows[k].cross_check = rows[k].max_eps_cert = rows[k].max_eta_cert = NAN;
+    if (!s->steady) continue;
+    rows[k].status = CUP_OK;
+    sw_copy_str(rows[k].status_name, sizeof rows[k].status_name, cup_status_name(CUP_OK));
+    sw_copy_str(rows[k].message, sizeof rows[k].message, SW_STEADY_REFERENCE);
+    rows[k].wall_time_s = 0;
+    rows[k].done = 1;
+    f->ref_done[k] = 1;
   }
   int st = sw_h5_write_rows(f->ref_summary, f->refrow_t, 0, V, rows, H5P_DEFAULT) ? sw_h5_fail(f, "write /references/summary in") : 0;
   free(rows);
@@ -299,7 +310,7 @@ static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size)
   hsize_t n = (hsize_t)s->dim;
   const cup_scene *sc = s->var[0].scene;
   for (int k = 0; k < s->n_variants; k++)
-    if (cup_scene_dim(s->var[k].scene) == s->dim) { sc = s->var[k].scene; break; }
+    if (cup_scene_dim(sw_variant_settings(s, k)) == s->dim) { sc = sw_variant_settings(s, k); break; }
   char **names = calloc(n, sizeof *names);
   int r = names ? 0 : -1, same = 1;
   const char *first = NULL;
@@ -338,8 +349,10 @@ static int describe_signals(sw_file *f) {
   int r = names ? label_scale(f->file, "runs/signal", "signal", names, n,
                               "a netlist's signal: the last axis of /runs/signals and /references/signals") : -1;
   free(names);
-  r |= describe(f->ref_sig, units, "each variant's reference signals at the sample times");
-  r |= attach(f->file, "references/signals", 3, (const char *const[]){"variant", "runs/t", "runs/signal"});
+  if (f->ref_sig >= 0) {
+    r |= describe(f->ref_sig, units, "each variant's reference signals at the sample times");
+    r |= attach(f->file, "references/signals", 3, (const char *const[]){"variant", "runs/t", "runs/signal"});
+  }
   if (f->runs_sig >= 0) {
     r |= describe(f->runs_sig, units, "each task's signals (node voltages, branch currents) at the sample times");
     r |= attach(f->file, "runs/signals", 3, (const char *const[]){"task", "runs/t", "runs/signal"});
@@ -365,8 +378,10 @@ static int describe_layout(sw_file *f) {
   r |= attach(file, "variants", 1, (const char *const[]){"variant"});
   r |= describe(f->ref_summary, NULL, "each variant's reference: method, status, correction");
   r |= attach(file, "references/summary", 1, (const char *const[]){"variant"});
-  r |= describe(f->ref_x, xunits, "each variant's reference trajectory at the sample times");
-  r |= attach(file, "references/x", 3, (const char *const[]){"variant", "runs/t", "runs/state"});
+  if (f->ref_x >= 0) {
+    r |= describe(f->ref_x, xunits, "each variant's reference trajectory at the sample times");
+    r |= attach(file, "references/x", 3, (const char *const[]){"variant", "runs/t", "runs/state"});
+  }
   if (f->runs_x >= 0) {
     r |= describe(f->runs_x, xunits, "each task's state at the sample times (NaN where not reached)");
     r |= attach(file, "runs/x", 3, (const char *const[]){"task", "runs/t", "runs/state"});

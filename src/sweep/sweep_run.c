@@ -187,7 +187,8 @@ static void adaptive_reference(const cup_sweep *s, const sw_variant *v, const sw
              rr.message);
 }
 
-static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_result *r, double *traj) {
+static void run_reference(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
+                          double *traj) {
   long count = sw_traj_len(s);
   double *scratch = malloc(sizeof(double) * (size_t)count * 2);
   r->cross_check = NAN;
@@ -196,9 +197,43 @@ static void run_reference(const cup_sweep *s, int k, const sw_run_opts *ro, sw_r
     snprintf(r->message, sizeof r->message, "reference: out of memory");
     return;
   }
-  if (s->ref_method == SW_REF_ADAPTIVE) adaptive_reference(s, &s->var[k], ro, r, traj, scratch, scratch + count);
-  else richardson(s, &s->var[k], ro, r, traj, scratch);
+  if (s->ref_method == SW_REF_ADAPTIVE) adaptive_reference(s, v, ro, r, traj, scratch, scratch + count);
+  else richardson(s, v, ro, r, traj, scratch);
   free(scratch);
+}
+
+void sw_scene_slot_free(sw_scene_slot *slot) {
+  cup_scene_free(&slot->scene);
+  slot->variant = -1;
+}
+
+/* Variant k with its scene: as resolved, or a lazy one's loaded (into the
+ * slot, kept for the next job, or into *own, the caller's to free). */
+static int with_scene(const cup_sweep *s, int k, const sw_run_opts *ro, sw_variant *v, cup_scene **own,
+                      sw_result *r) {
+  *v = s->var[k];
+  if (v->scene) return CUP_OK;
+  sw_scene_slot *slot = ro ? ro->slot : NULL;
+  if (slot && slot->variant == k) { v->scene = slot->scene; return CUP_OK; }
+  char err[SW_ERR_LEN];
+  double t0 = now_seconds();
+  cup_scene *sc = NULL;
+  int st = sw_variant_load(s, k, &sc, err);
+  r->wall += now_seconds() - t0;            /* the job's own: every rank loads what it runs */
+  if (st) {
+    r->status = st;
+    snprintf(r->message, sizeof r->message, "set-up: %.*s", (int)sizeof r->message - 16, err);
+    return st;
+  }
+  if (slot) {
+    sw_scene_slot_free(slot);
+    slot->variant = k;
+    slot->scene = sc;
+  } else {
+    *own = sc;
+  }
+  v->scene = sc;
+  return CUP_OK;
 }
 
 void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {
@@ -206,7 +241,13 @@ void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *
   r->job = job;
   if (job < s->n_variants && s->crowd) { sw_crowd_no_reference(s, r, traj); return; }
   if (job < s->n_variants && s->steady) { sw_steady_no_reference(s, r, traj); return; }
-  if (job < s->n_variants) { run_reference(s, (int)job, ro, r, traj); return; }
+  sw_variant v;
+  cup_scene *own = NULL;
+  if (job < s->n_variants) {
+    if (!with_scene(s, (int)job, ro, &v, &own, r)) run_reference(s, &v, ro, r, traj);
+    cup_scene_free(&own);
+    return;
+  }
   sw_task t;
   if (sw_task_get(s, job - s->n_variants, &t)) {
     r->status = CUP_ERR_ARG;
@@ -215,5 +256,6 @@ void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *
   }
   run_params rp = {t.n, t.eps_s, t.eta_s, t.scheme, t.projector, ro ? ro->task_time_limit : 0,
                    ro ? ro->inject_fail : 0, t.tol_abs, t.tol_rel};
-  run_one(s, &s->var[t.variant], &rp, ro, r, traj);
+  if (!with_scene(s, t.variant, ro, &v, &own, r)) run_one(s, &v, &rp, ro, r, traj);
+  cup_scene_free(&own);
 }

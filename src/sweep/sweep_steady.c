@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sweep_steady.h"
+#include "analysis/pss_run.h"
 #include "util/clock.h"
 
 void sw_steady_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
@@ -69,11 +70,8 @@ static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_stea
     f[0] = m.avg, f[1] = m.rms, f[2] = m.min, f[3] = m.max, f[4] = m.pp;
   }
   double power[SW_SS_POWER];
-  for (int j = 0; st >= 0 && j < s->ss_np; j++) {
-    for (long k = 0; k < p.N; k++) w[k] = p.sig[k * p.ns + s->ss_pv[j]] * p.sig[k * p.ns + s->ss_pc[j]];
-    st = cup_measure_period(w, p.N, 0, &m, NULL, NULL, err);
-    power[j] = m.avg;
-  }
+  for (int j = 0; st >= 0 && j < s->ss_np; j++)
+    st = cup_measure_power(p.sig, p.N, p.ns, s->ss_pv[j], s->ss_pc[j], w, &power[j], err);
   if (st >= 0 && q->eff_out >= 0) r->steady.efficiency = power[q->eff_out] / -power[q->eff_in];
   if (st < 0) snprintf(r->message, sizeof r->message, "the steady state's period: %s: %s", cup_status_name(st), err);
   cup_integrator_free(&I);
@@ -105,15 +103,10 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
     for (int k = 0; k < SW_SS_FIGURES; k++) ss->fig[j][k] = NAN;
   r->err_est = NAN;
   double t0 = now_seconds(), T;
-  if ((r->status = period_of(v, q, &T, r))) { r->wall = now_seconds() - t0; return; }
+  if ((r->status = period_of(v, q, &T, r))) { r->wall += now_seconds() - t0; return; }
   ss->period = T;
-  cup_integrator_options mo = *o;          /* the period map: one period, its final state */
-  const cup_integrator_options *so = cup_scene_options(v->scene);
-  if (mo.scheme != CUP_SCHEME_ADAPTIVE && so->T > 0)   /* a fixed-step scheme keeps its step */
-    mo.n = (long)fmax(1, ceil((double)mo.n * T / so->T * (1 - 1e-12)));
-  mo.T = T;
-  mo.output = CUP_OUTPUT_FINAL;
-  if (mo.scheme == CUP_SCHEME_ADAPTIVE && q->pss.map_tol > 0) mo.tol_abs = mo.tol_rel = q->pss.map_tol;
+  cup_integrator_options mo;               /* the period map: one period, its final state */
+  cup_pss_map_options(o, cup_scene_options(v->scene)->T, T, q->pss.map_tol, &mo);
   char err[CUP_ERRMSG_LEN] = "";
   cup_integrator *I = NULL;
   cup_pss *pss = NULL;
@@ -144,7 +137,7 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
     }
   }
   cup_pss_free(&pss);
-  r->wall = now_seconds() - t0;
+  r->wall += now_seconds() - t0;
 }
 
 /* ---- /steady_state in the results file ---- */
