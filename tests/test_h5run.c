@@ -396,11 +396,17 @@ static void close_all_datasets(void) {
   for (ssize_t i = 0; i < n; i++) H5Dclose(ids[i]);
 }
 
-typedef struct { cup_h5run *w; int sink_status, close_status; char err[CUP_ERRMSG_LEN]; } fail_call;
+typedef struct {
+  cup_h5run *w;
+  int sink_status, close_status, status_before;
+  char err[CUP_ERRMSG_LEN], err_before[CUP_ERRMSG_LEN], errmsg_before[CUP_ERRMSG_LEN];
+} fail_call;
 static void call_failing_writes(void *arg) {
   fail_call *c = arg;
   close_all_datasets();
   c->sink_status = write_samples(c->w, 4096, 8192, 3);
+  c->status_before = cup_h5run_status(c->w, c->err_before);        /* before close: the sink's words */
+  snprintf(c->errmsg_before, sizeof c->errmsg_before, "%s", cup_h5run_errmsg(c->w));
   c->close_status = cup_h5run_close(&c->w, c->err);
 }
 
@@ -408,7 +414,7 @@ static void test_write_failure_is_reported(void **state) {
   (void)state;
   char path[256];
   path_in_tmp(path, sizeof path, "fail.h5");
-  fail_call c = {NULL, 0, 0, ""};
+  fail_call c = {.w = NULL};
   assert_int_equal(cup_h5run_create(&c.w, path, 3, NULL), CUP_OK);
   assert_int_equal(write_samples(c.w, 0, 4096, 3), CUP_OK);   /* one chunk, flushed */
   assert_int_equal(stderr_bytes(call_failing_writes, &c), 0);
@@ -416,7 +422,29 @@ static void test_write_failure_is_reported(void **state) {
   assert_int_equal(c.close_status, CUP_ERR_IO);
   assert_null(c.w);
   if (!strstr(c.err, path) || !strstr(c.err, "append")) fail_msg("%s", c.err);
+  /* the one way (cup_h5run_status) and the older form tell the words close gives, byte for byte */
+  assert_int_equal(c.status_before, CUP_ERR_IO);
+  assert_string_equal(c.err_before, c.err);
+  assert_string_equal(c.errmsg_before, c.err);
   expect_run(path, 4096, 0);
+}
+
+/* cup_h5run_status: CUP_OK with errmsg untouched while nothing failed; a
+ * refused call's status and its words (the expected text written out here)
+ * afterwards, the same as cup_h5run_errmsg's. */
+static void test_status_one_way(void **state) {
+  (void)state;
+  char path[256], err[CUP_ERRMSG_LEN] = "untouched";
+  cup_h5run *w = create_in_tmp(path, sizeof path, "status.h5", 2);
+  assert_int_equal(cup_h5run_status(w, err), CUP_OK);
+  assert_string_equal(err, "untouched");
+  assert_int_equal(cup_h5run_status(w, NULL), CUP_OK);
+  assert_int_equal(cup_h5run_signals(w, 1, (const char *const[]){"a/b"}), CUP_ERR_ARG);
+  assert_int_equal(cup_h5run_status(w, err), CUP_ERR_ARG);
+  assert_string_equal(err, "h5run: signal 0: 'a/b' is not a dataset name");
+  assert_string_equal(cup_h5run_errmsg(w), err);
+  assert_int_equal(cup_h5run_status(NULL, err), CUP_ERR_ARG);
+  assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
 }
 
 /* No PATH.part* file is left in the temporary folder. */
@@ -633,6 +661,7 @@ int main(void) {
     cmocka_unit_test(test_unwritable_path_names_path),
     cmocka_unit_test(test_bad_arguments),
     cmocka_unit_test(test_write_failure_is_reported),
+    cmocka_unit_test(test_status_one_way),
     cmocka_unit_test(test_staged_replace),
     cmocka_unit_test(test_version),
     CRASH(0), CRASH(1), CRASH(2),

@@ -136,6 +136,44 @@ static void test_ball_negative_radius(void **state) {
   set_close(&S, &sp);
 }
 
+/* The one way errors travel: cup_setproj_place and _solve write a failure's
+ * words into errmsg (the expected texts written out here), the same bytes
+ * the older cup_setproj_move/_project leave for cup_setproj_message, and
+ * leave errmsg alone on a success. */
+static void test_setproj_errmsg_one_way(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN] = "untouched", err2[CUP_ERRMSG_LEN];
+  double c[2] = {0, 0}, gr[1] = {-1}, u = 0.5, x[2] = {3, 4}, z[2];
+  cup_set *S;
+  cup_set_desc d = {.kind = CUP_SET_BALL, .n = 2, .p = 1, .center = c, .radius = 1, .gr = gr};
+  assert_int_equal(cup_set_create(&S, &d, err2), CUP_OK);
+  cup_setproj *sp;
+  assert_int_equal(cup_setproj_create(&sp, S, NULL, err2), CUP_OK);
+  assert_int_equal(cup_setproj_place(sp, 0.5, &u, NULL, err), CUP_OK);
+  cup_proj_info info;
+  assert_int_equal(cup_setproj_solve(sp, x, z, &info, err), CUP_OK);   /* onto radius 0.5: (0.3, 0.4) */
+  assert_true(fabs(z[0] - 0.3) < 1e-14 && fabs(z[1] - 0.4) < 1e-14);   /* aimed a few ulps inside */
+  assert_string_equal(err, "untouched");
+  u = 1.25;
+  assert_int_equal(cup_setproj_place(sp, 1.25, &u, NULL, err), CUP_ERR_EMPTY_SET);
+  assert_string_equal(err, "the radius r(t) = -0.25 < 0: the ball is empty");
+  assert_int_equal(cup_setproj_move(sp, 1.25, &u, NULL), CUP_ERR_EMPTY_SET);
+  assert_string_equal(cup_setproj_message(sp), err);
+  assert_int_equal(cup_setproj_place(sp, 1.25, NULL, NULL, err), CUP_ERR_ARG);
+  assert_string_equal(err, "the set moves with 1 parameters but u is NULL");
+  x[1] = NAN;
+  assert_int_equal(cup_setproj_solve(sp, x, z, &info, err), CUP_ERR_NONFINITE);
+  assert_string_equal(err, "x[1] is nan");
+  assert_int_equal(cup_setproj_project(sp, x, z, &info), CUP_ERR_NONFINITE);
+  assert_string_equal(cup_setproj_message(sp), err);
+  assert_int_equal(cup_setproj_solve(sp, NULL, z, &info, err), CUP_ERR_ARG);
+  assert_string_equal(err, "set projector: sp, x or z is NULL");
+  assert_int_equal(cup_setproj_place(NULL, 0, &u, NULL, err), CUP_ERR_ARG);
+  assert_string_equal(err, "set projector: sp is NULL");
+  cup_setproj_free(&sp);
+  cup_set_free(&S);
+}
+
 /* ---- half-spaces ----------------------------------------------------------------- */
 
 static void test_halfspace_against_closed_form(void **state) {
@@ -704,6 +742,7 @@ int main(void) {
     cmocka_unit_test(test_state_polyset_bad_row),
     cmocka_unit_test(test_names_and_bad_descriptions),
     cmocka_unit_test(test_kind_checks),
+    cmocka_unit_test(test_setproj_errmsg_one_way),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -135,7 +135,15 @@ CUP_API int cup_h5run_get_double(cup_h5run *w, const char *name, double *v);
 CUP_API int cup_h5run_drop_attr(cup_h5run *w, const char *name);
 /** Samples accepted so far (written or buffered). */
 CUP_API long cup_h5run_count(const cup_h5run *w);
-/** Message of the first failure ("" if none): a sink cannot return one. */
+/** The writer's first failure, the one way errors travel (README, "Errors: one way"):
+ *  its status (CUP_OK if nothing failed) and its words into errmsg
+ *  (CUP_ERRMSG_LEN bytes, may be NULL; untouched when nothing failed). The
+ *  writer stops at its first failure, so these words explain every later
+ *  refusal too, and a failing sink (a callback, which returns only a status)
+ *  is explained here. */
+CUP_API int cup_h5run_status(const cup_h5run *w, char *errmsg);
+/** The older form, kept for its users: the same words as cup_h5run_status
+ *  gives, read in place ("" if nothing failed). A thin wrapper. */
 CUP_API const char *cup_h5run_errmsg(const cup_h5run *w);
 /** "HDF5 1.10.8" of the linked library, into buf (snprintf semantics). */
 CUP_API int cup_h5_version(char *buf, unsigned long size);

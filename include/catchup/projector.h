@@ -7,7 +7,10 @@
  * weak duality (a dual point lambda >= 0 gives d_K(x)^2 >= 2 q(lambda)), and
  * eta_cert from an exactly feasible point v found on a segment from z or by a
  * push along a direction into K; eta_cert bounds the true distance d_K(z), not
- * the raw constraint violation. */
+ * the raw constraint violation.
+ *
+ * The one public way to project onto a polyset; cup_setproj (catchup/set.h)
+ * onto a set of kind CUP_SET_POLYSET is a thin wrapper over this one. */
 #ifndef CATCHUP_PROJECTOR_H
 #define CATCHUP_PROJECTOR_H
 

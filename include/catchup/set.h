@@ -124,7 +124,13 @@ CUP_API const char *cup_set_kind_name(int kind);
 /** A name of CUP_SET_LIST -> its value; -1 if unknown. */
 CUP_API int cup_set_kind_parse(const char *name);
 
-/* ---- projections onto a set, one at a time ------------------------------------ */
+/* ---- projections onto a set, one at a time ------------------------------------ *
+ * Onto any set. On a polyset (CUP_SET_POLYSET) the one public way is
+ * cup_projector (catchup/projector.h), with its offsets, multipliers and
+ * certificates; a cup_setproj onto a polyset is a thin wrapper over it
+ * (the projector made at create, g = F + G u placed at each place, the
+ * projection by cup_project, the same z and info), kept so that one loop
+ * serves every kind. */
 
 typedef struct cup_setproj cup_setproj;
 
@@ -137,20 +143,29 @@ CUP_API int cup_setproj_create(cup_setproj **sp, const cup_set *S, const cup_pro
 CUP_API void cup_setproj_free(cup_setproj **sp);
 /** Place the set: time t, parameters u (p entries; NULL when p = 0) and, for
  *  a state-dependent set, the state x (n entries; rows are rebuilt here).
- *  Returns CUP_OK or an error with cup_setproj_message saying what failed. */
-CUP_API int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x);
+ *  Returns CUP_OK or an error whose words go into errmsg (CUP_ERRMSG_LEN
+ *  bytes, may be NULL), the one way errors travel (README, "Errors: one way"). */
+CUP_API int cup_setproj_place(cup_setproj *sp, double t, const double *u, const double *x, char *errmsg);
 /** Project x onto the set as last placed: z (n entries; may alias x) with
  *  the certified (eps, eta) in info (may be NULL): CUP_OK when the targets
  *  are certified, CUP_WARN_NOT_CERTIFIED with what was reached otherwise,
  *  CUP_ERR_EMPTY_SET (a negative radius, a polyset and a ball that do not
  *  meet), CUP_ERR_CALLBACK (an oracle that failed, returned NaN or a point
  *  farther from x than its claims allow), CUP_ERR_NONFINITE. On an error z
- *  is unchanged and cup_setproj_message says what happened. */
-CUP_API int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
+ *  is unchanged and errmsg (as above) says what happened; errmsg is
+ *  written only on an error. */
+CUP_API int cup_setproj_solve(cup_setproj *sp, const double *x, double *z, cup_proj_info *info, char *errmsg);
 /** Change the absolute/relative tolerances for the following projections. */
 CUP_API int cup_setproj_set_tolerances(cup_setproj *sp, double eps_abs, double eps_rel, double eta_abs,
                                        double eta_rel);
-/** What the last failing call did wrong ("" after a success). */
+
+/* The older forms, kept for their users (C and Fortran), each a thin
+ * wrapper with the same behaviour: cup_setproj_move is cup_setproj_place
+ * and cup_setproj_project is cup_setproj_solve, without errmsg; their words
+ * are read afterwards with cup_setproj_message (the last failing call's,
+ * "" after a success), the text errmsg would have received. */
+CUP_API int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x);
+CUP_API int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
 CUP_API const char *cup_setproj_message(const cup_setproj *sp);
 /** State polyset: rows of the set as last placed; 0 for other kinds. */
 CUP_API int cup_setproj_rows(const cup_setproj *sp);

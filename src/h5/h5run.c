@@ -45,6 +45,7 @@ int set_error(cup_h5run *w, int status, const char *op) {
     h5_detail d;
     h5_error_detail(&d, 1);                /* a failed open(): the system's message */
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot %s '%s': %s", op, w->path, d.desc);
+    w->err_status = status;
   }
   H5Eclear2(H5E_DEFAULT);
   return status;
@@ -126,12 +127,12 @@ static int open_file(cup_h5run *w, const char *at) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': the file is in use by another "
              "process (HDF5 file locking): close it there or wait for that run to end; the file is "
              "left as it was", w->path);
-    return CUP_ERR_IO;
+    return w->err_status = CUP_ERR_IO;
   }
   if (h5_space_short(w->path, 1, 0, NULL)) {   /* the folder it goes into */
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': less than %u MiB "
              "left on its device", w->path, CUP_H5_SPACE_MARGIN >> 20);
-    return CUP_ERR_IO;
+    return w->err_status = CUP_ERR_IO;
   }
   hid_t fapl = h5_file_access(0);
   if (fapl >= 0) w->file = H5Fcreate(at, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
@@ -250,12 +251,12 @@ int cup_h5run_commit(cup_h5run *w) {
   if (cup_file_in_use(w->path)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot replace '%s': the file is in use by another process "
              "(HDF5 file locking): close it there or wait for that run to end; the file is left as it was", w->path);
-    return w->data_status = CUP_ERR_IO;
+    return w->err_status = w->data_status = CUP_ERR_IO;
   }
   if (rename(w->staged, w->path) != 0) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot replace '%s': %s; the file is left as it was", w->path,
              strerror(errno));
-    return w->data_status = CUP_ERR_IO;
+    return w->err_status = w->data_status = CUP_ERR_IO;
   }
   free(w->staged);
   w->staged = NULL;
@@ -357,6 +358,7 @@ static int write_buffer(cup_h5run *w) {
       snprintf(w->errmsg, sizeof w->errmsg, "h5run: stopped writing '%s' after %llu rows: "
                "less than %u MiB left on its device", w->path,
                (unsigned long long)w->written, CUP_H5_SPACE_MARGIN >> 20);
+    if (!w->err_status) w->err_status = CUP_ERR_IO;
     w->data_status = CUP_ERR_IO;
   }
   return w->data_status;
@@ -438,13 +440,13 @@ int cup_h5run_signals(cup_h5run *w, int nsig, const char *const *names) {
   if ((double)nsig * (double)w->chunk_rows * sizeof(double) > (double)(64u << 20)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: '%s': %d signals are too many to buffer (at most %u)",
              w->path, nsig, (unsigned)((64u << 20) / (w->chunk_rows * sizeof(double))));
-    return CUP_ERR_ARG;
+    return w->err_status = CUP_ERR_ARG;
   }
   for (int k = 0; k < nsig; k++)
     if (!names[k] || !names[k][0] || strchr(names[k], '/') || !strcmp(names[k], ".")) {
       snprintf(w->errmsg, sizeof w->errmsg, "h5run: signal %d: '%.60s' is not a dataset name", k,
                names[k] ? names[k] : "(null)");
-      return CUP_ERR_ARG;
+      return w->err_status = CUP_ERR_ARG;
     }
   w->dset_s = malloc(sizeof(hid_t) * (size_t)nsig);
   w->sbuf = malloc(sizeof(double) * (size_t)nsig * w->chunk_rows);
@@ -471,6 +473,13 @@ long cup_h5run_count(const cup_h5run *w) {
   return w ? (long)(w->written + w->nbuf) : 0;
 }
 
+int cup_h5run_status(const cup_h5run *w, char *errmsg) {
+  if (!w) return CUP_ERR_ARG;
+  if (w->err_status && errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
+  return w->err_status;
+}
+
+/* The older form (h5run.h): the same words, read in place. */
 const char *cup_h5run_errmsg(const cup_h5run *w) {
   return w ? w->errmsg : "";
 }

@@ -39,7 +39,8 @@ struct cup_h5run {
   char *path;
   char *staged;           /* cup_h5run_begin: the sibling written until cup_h5run_commit renames
                              it to path; NULL once committed (or reopened) */
-  char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind */
+  char errmsg[CUP_ERRMSG_LEN]; /* first failure of any kind (cup_h5run_status) */
+  int err_status;         /* its status; CUP_OK while errmsg is "" */
 };
 
 /* h5run.c: record the first HDF5 failure ("h5run: cannot OP 'PATH': ...")

@@ -36,6 +36,6 @@ static int project_halfspace(cup_setproj *sp, const double *x, double *z, cup_pr
   return said(sp, st);
 }
 
-const setproj_kind setproj_ball = {.place = cup_setproj_place, .project = project_ball};
-const setproj_kind setproj_ellipsoid = {.place = cup_setproj_place, .project = project_ellipsoid};
-const setproj_kind setproj_halfspace = {.place = cup_setproj_place, .project = project_halfspace};
+const setproj_kind setproj_ball = {.place = cup_setproj_place_affine, .project = project_ball};
+const setproj_kind setproj_ellipsoid = {.place = cup_setproj_place_affine, .project = project_ellipsoid};
+const setproj_kind setproj_halfspace = {.place = cup_setproj_place_affine, .project = project_halfspace};

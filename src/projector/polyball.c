@@ -207,5 +207,5 @@ static int create(cup_setproj *sp, char *errmsg) {
   return cup_projector_create(&sp->proj, sp->S->K, &sp->opt, errmsg);
 }
 
-const setproj_kind setproj_intersection = {.create = create, .place = cup_setproj_place, .project = project,
+const setproj_kind setproj_intersection = {.create = create, .place = cup_setproj_place_affine, .project = project,
                                            .own_tolerances = 1};

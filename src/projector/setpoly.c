@@ -17,7 +17,7 @@ static int check_ball(cup_setproj *sp) {
   return CUP_OK;
 }
 
-int cup_setproj_place(cup_setproj *sp, double t, const double *u, const double *x) {
+int cup_setproj_place_affine(cup_setproj *sp, double t, const double *u, const double *x) {
   (void)t; (void)x;
   cup_set_place(sp->S, u, sp->g, sp->c, &sp->r);
   for (int i = 0; i < sp->m; i++)
@@ -43,4 +43,4 @@ static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *i
   return cup_setproj_polyset_outcome(sp, cup_project(sp->proj, x, z, info), info);
 }
 
-const setproj_kind setproj_polyset = {.create = create, .place = cup_setproj_place, .project = project};
+const setproj_kind setproj_polyset = {.create = create, .place = cup_setproj_place_affine, .project = project};

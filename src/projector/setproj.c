@@ -76,11 +76,20 @@ int cup_setproj_set_tolerances(cup_setproj *sp, double eps_abs, double eps_rel, 
   return CUP_OK;
 }
 
+/* The older form of the words (set.h): read in place. */
 const char *cup_setproj_message(const cup_setproj *sp) { return sp ? sp->message : ""; }
 int cup_setproj_rows(const cup_setproj *sp) { return sp ? sp->rows_now : 0; }   /* 0 but for rows from x */
 long cup_setproj_rebuilds(const cup_setproj *sp) { return sp ? sp->rebuilds : 0; }
 
-int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x) {
+/* The one way errors travel (README, "Errors: one way"): a failure's words, whole,
+ * into the caller's errmsg; the set projector keeps them too, for the older
+ * cup_setproj_message and for the integrator's message. */
+static int told(int st, const char *words, char *errmsg) {
+  if (st < 0 && errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", words[0] ? words : cup_status_string(st));
+  return st;
+}
+
+static inline int move_(cup_setproj *sp, double t, const double *u, const double *x) {
   if (!sp) return CUP_ERR_ARG;
   sp->message[0] = '\0';
   sp->t = t;
@@ -90,13 +99,22 @@ int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x
   return sp->type->place ? sp->type->place(sp, t, u, x) : CUP_OK;
 }
 
+int cup_setproj_place(cup_setproj *sp, double t, const double *u, const double *x, char *errmsg) {
+  int st = move_(sp, t, u, x);
+  return told(st, sp ? sp->message : "set projector: sp is NULL", errmsg);
+}
+
+int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x) {
+  return move_(sp, t, u, x);     /* the older form: cup_setproj_place without errmsg */
+}
+
 int cup_setproj_recheck(cup_setproj *sp, double t, const double *x, const double *z) {
   if (!sp || !sp->type->recheck || !x || !z) return 0;
   sp->message[0] = '\0';
   return sp->type->recheck(sp, t, x, z);
 }
 
-int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info_out) {
+static inline int project_(cup_setproj *sp, const double *x, double *z, cup_proj_info *info_out) {
   cup_proj_info local;
   cup_proj_info *info = info_out ? info_out : &local;
   *info = (cup_proj_info){.eta_cert = INFINITY};
@@ -108,4 +126,13 @@ int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_in
       return info->status = CUP_ERR_NONFINITE;
     }
   return sp->type->project(sp, x, z, info);
+}
+
+int cup_setproj_solve(cup_setproj *sp, const double *x, double *z, cup_proj_info *info, char *errmsg) {
+  int st = project_(sp, x, z, info);
+  return told(st, sp && x && z ? sp->message : "set projector: sp, x or z is NULL", errmsg);
+}
+
+int cup_setproj_project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
+  return project_(sp, x, z, info);   /* the older form: cup_setproj_solve without errmsg */
 }

@@ -93,7 +93,7 @@ static inline int cup_setproj_fail(cup_setproj *sp, int status, const char *fmt,
 /* The placing of a set with rows or a ball (setpoly.c), every placed
  * kind's: g, c and r at u, checked finite (and r >= 0), the offset into
  * the rows' projector. */
-int cup_setproj_place(cup_setproj *sp, double t, const double *u, const double *x);
+int cup_setproj_place_affine(cup_setproj *sp, double t, const double *u, const double *x);
 /* The message of a polyset projection's outcome st (setpoly.c): the
  * Farkas certificate of an empty set, the status of another failure.
  * Returns st. */
