@@ -144,7 +144,6 @@ typedef struct cup_measure {
 CUP_API int cup_measure_period(const double *v, long N, int order, cup_measure *m, double *amp, double *phase,
                                char *errmsg);
 
-
 #ifdef __cplusplus
 }
 #endif
