@@ -268,8 +268,8 @@ static void say_summary(const args_t *a, const cup_sweep *s, const manager_t *m,
       "%.2f by job CPU time); jobs took %.1f%% of the CPU time of all ranks%s; manager %.1f us per job run",
       a->sweep, a->out, jobs, m->jobs_total, m->jobs_skipped, m->jobs_done, m->failures, wall, nranks,
       nranks > 1 ? "s" : "", s->crowd ? "tasks" : "jobs",
-      m->rate_jobs ? 1e6 * m->rate_work / (double)m->rate_jobs : 0.0, m->work_sum / (workers * wall), m->cpu_sum / (workers * wall), 100 * m->cpu_sum / m->rank_cpu, share,
-      1e6 * m->busy / (double)m->jobs_done);
+      m->rate_jobs ? 1e6 * m->rate_work / (double)m->rate_jobs : 0.0, m->work_sum / (workers * wall),
+      m->cpu_sum / (workers * wall), 100 * m->cpu_sum / m->rank_cpu, share, 1e6 * m->busy / (double)m->jobs_done);
 }
 
 static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const hooks_t *hooks) {
