@@ -2,7 +2,8 @@
  * physical lines into cards (title line, '*' comments, ';' and ' $ '
  * comments, '+' continuations), cards into tokens with their place, names
  * hashed case-insensitively, numbers with engineering suffixes, and .param
- * expressions. Internal to io/netlist_read.c. */
+ * expressions. Internal to the netlist reader (io/netlist_read.c,
+ * netlist_elem.c). */
 #ifndef CUP_NETLIST_LEX_H
 #define CUP_NETLIST_LEX_H
 

@@ -135,4 +135,35 @@ int crowd_order_init(cup_crowd *c, const double *q, char *errmsg);
 void crowd_renumber(cup_crowd *c, const double *q);
 void crowd_order_free(cup_crowd *c);
 
+/* ---- the step (crowd.c), as the set-up (crowd_create.c) uses it ------------------- */
+
+/* Visit every agent inside with the walls of its cell, fn(c, a, -1 - s,
+ * ctx) for wall s, and every pair of agents inside in neighbouring cells
+ * once, fn(c, a, b, ctx) with bin[a].i < bin[b].i (a, b positions in the
+ * binned order; bin_agents). Agents go in the binned order, each with its
+ * walls, then its pairs cell by cell (rows of cells from below, cells from
+ * the left), with the agents of a cell in increasing internal index: the
+ * calls of one agent come together, in the order a visit by increasing
+ * index would make them. Pairs whose gap is certainly at least c->bound
+ * (which fn may lower) are skipped without a square root, so the visit
+ * stays exactly the one over all pairs. Stops at the first nonzero return. */
+typedef int (*pair_fn)(cup_crowd *c, int a, int b, void *ctx);
+int crowd_each_pair(cup_crowd *c, const double *q, pair_fn fn, void *ctx);
+/* The smallest gap of a visit (crowd_each_pair) and where it is: agents i < j,
+ * or agent i and wall -1 - j (the user's indices); the first pair (i, j)
+ * among equals. */
+typedef struct worst_pair {
+  double gap;
+  int i, j;
+  int pairs_only;                  /* leave the walls out */
+} worst_pair;
+/* A pair_fn: the smallest gap so far into ctx, a worst_pair, and c->bound. */
+int crowd_note_worst(cup_crowd *c, int a, int b, void *ctx);
+/* The set's rows of C(q) (cup_set_desc.rows), the contacts a step missed
+ * (its recheck) and the integral of the desired velocity over a step
+ * (cup_process_desc.f_integral), their ctx the crowd. */
+int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc);
+int crowd_recheck(double t, const double *q, const double *z, void *vc);
+int crowd_walk(double t0, double t1, const double *q, double *F, void *vc);
+
 #endif
