@@ -239,6 +239,39 @@ static int open_results(const args_t *a, const cup_sweep *s, int argc, char **ar
   return st;
 }
 
+/* The two summary lines. The jobs as they are: a steady-state sweep
+ * dispatches no reference (its rows are written done at creation,
+ * setup_queue), a crowd's compute nothing (cost 0), and neither has a
+ * reference to check a tolerance against (the tasks' error is NaN). The
+ * mean counts the jobs that compute (rate_jobs, sweep_manager.h); rank 0's
+ * time, every job it ran. */
+static void say_summary(const args_t *a, const cup_sweep *s, const manager_t *m, const sw_tally *t, double wall,
+                        double cpu_manager) {
+  int workers = nranks > 1 ? nranks - 1 : 1;
+  char share[64] = "", tol[80] = "no tolerance check (no reference)", of[40] = "", jobs[96];
+  if (nranks > 1) snprintf(share, sizeof share, ", rank 0 %.1f%%", 100 * cpu_manager / m->rank_cpu);
+  if (t->adaptive) snprintf(of, sizeof of, " (of %ld adaptive)", t->adaptive);
+  if (!s->steady && !s->crowd) snprintf(tol, sizeof tol, "%ld tolerance missed%s", t->tol_missed, of);
+  if (s->steady) snprintf(jobs, sizeof jobs, "%ld tasks (steady states; no reference jobs)", s->n_tasks);
+  else snprintf(jobs, sizeof jobs, "%ld tasks + %d references%s", s->n_tasks, s->n_variants,
+                s->crowd ? " (a crowd's: they compute nothing)" : "");
+  say("%s -> %s: %ld tasks: %ld ok, %ld failed, %ld not certified, %s, %ld other warnings (/summary's "
+      "status_name and error say which)", a->sweep, a->out, s->n_tasks, t->ok, t->failed, t->not_certified, tol,
+      t->warned);
+  if (!m->jobs_done) {               /* a resume with nothing left: no averages over nothing */
+    say("%s -> %s: %s = %ld jobs: %ld done before, none run now", a->sweep, a->out, jobs, m->jobs_total,
+        m->jobs_skipped);
+    return;
+  }
+  say("%s -> %s: %s = %ld jobs: %ld done before, %ld run now (%ld failed), %.3g s on %d rank%s; "
+      "%s of %.3g us on average; parallel efficiency %.2f (job wall time / (workers x wall); "
+      "%.2f by job CPU time); jobs took %.1f%% of the CPU time of all ranks%s; manager %.1f us per job run",
+      a->sweep, a->out, jobs, m->jobs_total, m->jobs_skipped, m->jobs_done, m->failures, wall, nranks,
+      nranks > 1 ? "s" : "", s->crowd ? "tasks" : "jobs",
+      m->rate_jobs ? 1e6 * m->rate_work / (double)m->rate_jobs : 0.0, m->work_sum / (workers * wall),
+      m->cpu_sum / (workers * wall), 100 * m->cpu_sum / m->rank_cpu, share, 1e6 * m->busy / (double)m->jobs_done);
+}
+
 static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const hooks_t *hooks) {
   manager_t m;
   memset(&m, 0, sizeof m);
@@ -280,23 +313,7 @@ static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const ho
         m.jobs_total - done, m.jobs_total);
     rc = EXIT_RUN;
   }
-  if (!rc && !a->quiet) {
-    int workers = nranks > 1 ? nranks - 1 : 1;
-    char share[64] = "";
-    if (nranks > 1) snprintf(share, sizeof share, ", rank 0 %.1f%%", 100 * cpu_manager / m.rank_cpu);
-    double per_job = m.jobs_done ? 1e6 / (double)m.jobs_done : 0.0;
-    char adaptive[48] = "";
-    if (tally.adaptive) snprintf(adaptive, sizeof adaptive, " (of %ld adaptive)", tally.adaptive);
-    say("%s -> %s: %ld tasks: %ld ok, %ld failed, %ld not certified, %ld tolerance missed%s, %ld other "
-        "warnings (/summary's status_name and error say which)", a->sweep, a->out, s->n_tasks, tally.ok,
-        tally.failed, tally.not_certified, tally.tol_missed, adaptive, tally.warned);
-    say("%s -> %s: %ld tasks + %d references (%ld done before), %ld failed, %.3g s on %d rank%s; "
-        "jobs of %.3g us on average; parallel efficiency %.2f (job wall time / (workers x wall); "
-        "%.2f by job CPU time); jobs took %.1f%% of the CPU time of all ranks%s; manager %.1f us per job",
-        a->sweep, a->out, s->n_tasks, s->n_variants, m.jobs_skipped, m.failures, wall, nranks,
-        nranks > 1 ? "s" : "", m.work_sum * per_job, m.work_sum / (workers * wall), m.cpu_sum / (workers * wall),
-        100 * m.cpu_sum / m.rank_cpu, share, m.busy * per_job);
-  }
+  if (!rc && !a->quiet) say_summary(a, s, &m, &tally, wall, cpu_manager);
   free_manager(&m);
   if (lost) {                  /* a worker did not answer the stop: end the job */
     fflush(stderr);

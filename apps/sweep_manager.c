@@ -145,7 +145,8 @@ void progress(manager_t *m, int final) {
    * a job on average (one job, or the elapsed time while jobs that cost
    * nothing went first, says little about the rest). */
   double rate = m->rate_jobs >= m->workers && m->rate_cost > 0 ? m->rate_work / m->rate_cost : NAN;
-  fmt_seconds(eta, sizeof eta, fmax(0, rate * m->cost_left / m->workers - (now - m->last_done)));
+  double left = rate * m->cost_left / m->workers - (now - m->last_done);
+  fmt_seconds(eta, sizeof eta, isnan(rate) ? NAN : fmax(0, left));   /* fmax(0, NaN) is 0, not "?" */
   fprintf(stderr, "%scatchup-sweep: %ld/%ld done, %ld failed, %ld not certified, %s elapsed, ETA %s%s",
           live ? "\r" : "", m->jobs_done + m->jobs_skipped, m->jobs_total, m->failures, m->not_certified, el,
           m->cost_left <= 0 ? "0 s" : eta, live ? "   " : "\n");

@@ -39,4 +39,32 @@ run 2 "$SMOKE" -o "$WORK/c.h5" --log-progress 2> "$WORK/progress.txt" > /dev/nul
 if grep -q $'\r' "$WORK/progress.txt"; then fail "--log-progress wrote a carriage return"; fi
 grep -qE '^catchup-sweep: ([0-9]+)/\1 done, 0 failed' "$WORK/progress.txt" ||
   fail "--log-progress: no final progress line: $(cat "$WORK/progress.txt")"
-echo "cli: one-line errors, hash check, idle resume, log progress"
+# The summary line counts the jobs that ran, against the sweep file's own
+# counts: the smoke's tasks (the rows done in its file) and references (its
+# variants); a steady-state sweep (3 x 2 buck designs) has no reference job
+# at all, on a fresh run or a --resume with nothing left; no ETA before a
+# job is done ("?", not "0 s").
+tasks=$("$CHECK" donelist "$WORK/c.h5" "$WORK/done.txt")
+refs=$(grep -c '^  - name:' "$SMOKE")
+jobs=$((tasks + refs))
+grep -qF "$tasks tasks + $refs references = $jobs jobs: 0 done before, $jobs run now (0 failed)" \
+  "$WORK/progress.txt" || fail "smoke: summary line not '$tasks tasks + $refs references': $(cat "$WORK/progress.txt")"
+grep -qE "^catchup-sweep: $jobs/$jobs done" "$WORK/progress.txt" || fail "smoke: progress does not count $jobs jobs"
+D=(0.3 0.5 0.7) L=(10u 50u)
+printf 'name: steady\nbase: %s\nvariants:\n  - name: buck\n    grid: {netlist.D: [%s], netlist.L: [%s]}\n' \
+  "$SRC/examples/circuits/buck-design.yaml" "$(IFS=,; echo "${D[*]}")" "$(IFS=,; echo "${L[*]}")" > "$WORK/steady.yaml"
+n=$((${#D[@]} * ${#L[@]}))
+run 2 "$WORK/steady.yaml" -o "$WORK/s.h5" --log-progress 2> "$WORK/steady.txt" > /dev/null
+[ "$("$CHECK" donelist "$WORK/s.h5" "$WORK/done.txt")" = $n ] || fail "steady: not $n tasks done"
+grep -qF "$n tasks: $n ok, 0 failed, 0 not certified, no tolerance check (no reference)," "$WORK/steady.txt" ||
+  fail "steady: first summary line: $(cat "$WORK/steady.txt")"
+grep -qF "$n tasks (steady states; no reference jobs) = $n jobs: 0 done before, $n run now (0 failed)" \
+  "$WORK/steady.txt" || fail "steady: summary line: $(cat "$WORK/steady.txt")"
+grep -qE "^catchup-sweep: $n/$n done" "$WORK/steady.txt" || fail "steady: progress not out of $n jobs"
+if grep -hE '^catchup-sweep: 0/' "$WORK/progress.txt" "$WORK/steady.txt" | grep -qv 'ETA ?$'; then
+  fail "an ETA before any job was done: $(grep -h '^catchup-sweep: 0/' "$WORK/progress.txt" "$WORK/steady.txt")"
+fi
+run 2 "$WORK/steady.yaml" -o "$WORK/s.h5" --resume 2> "$WORK/steady.txt" > /dev/null
+grep -qF "$n tasks (steady states; no reference jobs) = $n jobs: $n done before, none run now" "$WORK/steady.txt" ||
+  fail "steady --resume: summary line: $(cat "$WORK/steady.txt")"
+echo "cli: one-line errors, hash check, idle resume, log progress, summary lines ($tasks + $refs jobs; $n steady)"

@@ -24,6 +24,13 @@ cp "$WORK/np0.h5" "$WORK/resumed.h5"
 "$CHECK" crowd-forget "$WORK/resumed.h5" 3
 "$CHECK" compare "$WORK/np0.h5" "$WORK/resumed.h5" > /dev/null && fail "crowd-forget changed nothing"
 [ "$("$CHECK" donelist "$WORK/resumed.h5" "$WORK/done.txt")" = 3 ] || fail "not 3 tasks done after forgetting 2"
-CATCHUP_SWEEP_DONE_LIST="$WORK/done.txt" run 2 "$SW" -o "$WORK/resumed.h5" --resume --quiet
+CATCHUP_SWEEP_DONE_LIST="$WORK/done.txt" run 2 "$SW" -o "$WORK/resumed.h5" --resume 2> "$WORK/resume.txt"
+# the summary line: the sweep file's tasks (all done in np0.h5) and references (its variants);
+# the references and the 3 tasks left done before, the 2 forgotten run now;
+# the mean over the tasks alone (the references compute nothing)
+T=$("$CHECK" donelist "$WORK/np0.h5" "$WORK/all.txt") V=$(grep -c '^  - name:' "$SW")
+line="$T tasks + $V references (a crowd's: they compute nothing) = $((T + V)) jobs: $((V + 3)) done before"
+grep -qF "$line, 2 run now (0 failed)" "$WORK/resume.txt" || fail "--resume summary line: $(cat "$WORK/resume.txt")"
+grep -qF "; tasks of " "$WORK/resume.txt" || fail "--resume: the mean is not over the tasks: $(cat "$WORK/resume.txt")"
 "$CHECK" compare "$WORK/np0.h5" "$WORK/resumed.h5" || fail "--resume did not restore the forgotten tasks"
 echo "crowd: 1, 2, 3 ranks alike; 5 tasks equal to catchup-run; --resume redoes only the 2 tasks not done"
