@@ -21,7 +21,8 @@ module catchup_h5run
     cup_h5run_count, cup_h5_version, cup_integrator_run_h5, cup_h5run_signals, cup_h5run_append, &
     cup_h5run_describe, cup_h5run_strings, cup_h5run_dims, &
     cup_h5run_open, cup_h5run_truncate, cup_h5run_put_checkpoint, cup_h5run_get_checkpoint, &
-    cup_h5run_drop_checkpoint, cup_h5run_get_string, cup_h5run_get_double, cup_h5run_drop_attr
+    cup_h5run_drop_checkpoint, cup_h5run_get_string, cup_h5run_get_double, cup_h5run_drop_attr, &
+    cup_h5run_status
 #ifdef CATCHUP_H5RUN_ERRMSG
   public :: cup_h5run_errmsg, c_cup_h5run_errmsg
 #endif
@@ -34,7 +35,7 @@ module catchup_h5run
     c_cup_h5_version, c_cup_h5run_array, c_cup_h5run_signals, c_cup_h5run_append, &
     c_cup_h5run_describe, c_cup_h5run_strings, c_cup_h5run_dims, c_cup_h5run_open, &
     c_cup_h5run_truncate, c_cup_h5run_put_checkpoint, c_cup_h5run_get_checkpoint, c_cup_h5run_drop_checkpoint, &
-    c_cup_h5run_get_string, c_cup_h5run_get_double, c_cup_h5run_drop_attr
+    c_cup_h5run_get_string, c_cup_h5run_get_double, c_cup_h5run_drop_attr, c_cup_h5run_status
 
   !> Root attribute: real(c_double), integer (stored as long) or string.
   interface cup_h5run_attr
@@ -223,6 +224,12 @@ module catchup_h5run
       type(c_ptr), value :: w
       integer(c_long) :: n
     end function c_cup_h5run_count
+    function c_cup_h5run_status(w, errmsg) bind(C, name="cup_h5run_status") result(st)
+      import :: c_int, c_ptr, c_char
+      type(c_ptr), value :: w
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_h5run_status
 #ifdef CATCHUP_H5RUN_ERRMSG
     function c_cup_h5run_errmsg(w) bind(C, name="cup_h5run_errmsg") result(s)
       import :: c_ptr
@@ -533,9 +540,24 @@ contains
     cup_h5run_count = c_cup_h5run_count(w%ptr)
   end function cup_h5run_count
 
+  !> The writer's first failure, the one way errors travel: ierr its status
+  !> (CUP_OK if nothing failed) and errmsg its words ('' if nothing failed).
+  !> A sink returns only a status, so after a run stopped by the writer, ask
+  !> here; the writer stops at its first failure, so these words explain
+  !> every later refusal too.
+  subroutine cup_h5run_status(w, ierr, errmsg)
+    type(cup_h5run_t), intent(in) :: w
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    if (cup_null_fail_(w%ptr, 'HDF5 run writer', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    call cup_finish_(c_cup_h5run_status(w%ptr, cmsg), cmsg, ierr, errmsg)
+  end subroutine cup_h5run_status
+
 #ifdef CATCHUP_H5RUN_ERRMSG
-  !> Message of the writer's first failure ('' if none): a sink cannot
-  !> return one, so after a run stopped by the writer, ask here.
+  !> The older form, kept for its users: cup_h5run_status's words ('' if
+  !> nothing failed).
   function cup_h5run_errmsg(w) result(s)
     type(cup_h5run_t), intent(in) :: w
     character(len=:), allocatable :: s

@@ -6,7 +6,7 @@
 ! numbered from 1, as Fortran counts (the C side gets them from 0).
 module catchup_sets
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_funptr, &
-    c_null_ptr, c_loc, c_associated
+    c_null_ptr, c_null_char, c_loc, c_associated
   use catchup_constants
   use catchup_types
   use catchup_base
@@ -16,15 +16,16 @@ module catchup_sets
 
   public :: c_cup_set_create, c_cup_set_free, c_cup_set_dim, c_cup_set_params, c_cup_set_kind_of, &
     c_cup_set_kind_name, c_cup_set_kind_parse, c_cup_setproj_create, c_cup_setproj_free, &
-    c_cup_setproj_move, c_cup_setproj_project, c_cup_setproj_set_tolerances, &
-    c_cup_setproj_message, c_cup_setproj_rows, c_cup_setproj_rebuilds, c_cup_rowbuf_add, &
-    c_cup_rowbuf_expect, c_cup_rowbuf_rows
+    c_cup_setproj_place, c_cup_setproj_solve, c_cup_setproj_move, c_cup_setproj_project, &
+    c_cup_setproj_set_tolerances, c_cup_setproj_message, c_cup_setproj_rows, c_cup_setproj_rebuilds, &
+    c_cup_rowbuf_add, c_cup_rowbuf_expect, c_cup_rowbuf_rows
   public :: cup_set_create, cup_set_ball_create, cup_set_ellipsoid_create, cup_set_halfspace_create, &
     cup_set_polyset_create, cup_set_intersection_create, cup_set_oracle_create, &
     cup_set_state_polyset_create, cup_set_free, cup_set_dim, cup_set_params, cup_set_kind_of, &
     cup_set_kind_name, cup_set_kind_parse
-  public :: cup_setproj_create, cup_setproj_free, cup_setproj_move, cup_setproj_project, &
-    cup_setproj_set_tolerances, cup_setproj_message, cup_setproj_rows, cup_setproj_rebuilds
+  public :: cup_setproj_create, cup_setproj_free, cup_setproj_place, cup_setproj_solve, &
+    cup_setproj_move, cup_setproj_project, cup_setproj_set_tolerances, cup_setproj_message, &
+    cup_setproj_rows, cup_setproj_rebuilds
   public :: cup_rowbuf_add, cup_rowbuf_expect, cup_rowbuf_rows
 
   interface
@@ -76,6 +77,23 @@ module catchup_sets
       import :: c_ptr
       type(c_ptr), intent(inout) :: sp
     end subroutine c_cup_setproj_free
+    function c_cup_setproj_place(sp, t, u, x, errmsg) bind(C, name="cup_setproj_place") result(st)
+      import :: c_int, c_double, c_ptr, c_char
+      type(c_ptr), value :: sp
+      real(c_double), value :: t
+      type(c_ptr), value :: u, x
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_setproj_place
+    function c_cup_setproj_solve(sp, x, z, info, errmsg) bind(C, name="cup_setproj_solve") result(st)
+      import :: c_int, c_double, c_ptr, c_char, cup_proj_info
+      type(c_ptr), value :: sp
+      real(c_double), intent(in) :: x(*)
+      real(c_double), intent(inout) :: z(*)
+      type(cup_proj_info), intent(out) :: info
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_setproj_solve
     function c_cup_setproj_move(sp, t, u, x) bind(C, name="cup_setproj_move") result(st)
       import :: c_int, c_double, c_ptr
       type(c_ptr), value :: sp
@@ -395,13 +413,15 @@ contains
   end subroutine cup_setproj_free
 
   !> Place the set at time t with parameters u (its p entries) and, for a
-  !> state-dependent set, the state x.
-  subroutine cup_setproj_move(sp, t, ierr, u, x, errmsg)
+  !> state-dependent set, the state x; errmsg: what went wrong (C's words,
+  !> the one way errors travel), '' on success.
+  subroutine cup_setproj_place(sp, t, ierr, u, x, errmsg)
     type(cup_setproj_t), intent(in) :: sp
     real(c_double), intent(in) :: t
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional, target, contiguous :: u(:), x(:)
     character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     type(c_ptr) :: up, xp
     if (cup_null_fail_(sp%ptr, 'set projector', ierr, errmsg)) return
     up = c_null_ptr
@@ -416,12 +436,44 @@ contains
       end if
       xp = c_loc(x)
     end if
-    ierr = int(c_cup_setproj_move(sp%ptr, t, up, xp))
-    if (present(errmsg)) errmsg = cup_c_string(c_cup_setproj_message(sp%ptr))
-  end subroutine cup_setproj_move
+    cmsg(1) = c_null_char            ! C writes only on an error; a per-step call clears 1 byte, not 12 KB
+    call cup_finish_(c_cup_setproj_place(sp%ptr, t, up, xp, cmsg), cmsg, ierr, errmsg)
+  end subroutine cup_setproj_place
 
   !> z = the certified projection of x; ierr: CUP_OK, CUP_WARN_NOT_CERTIFIED
-  !> or an error (errmsg: what happened).
+  !> or an error (errmsg: what happened, as cup_setproj_place's).
+  subroutine cup_setproj_solve(sp, x, z, ierr, info, errmsg)
+    type(cup_setproj_t), intent(in) :: sp
+    real(c_double), intent(in) :: x(:)
+    real(c_double), intent(inout) :: z(:)
+    integer, intent(out) :: ierr
+    type(cup_proj_info), intent(out), optional :: info
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    type(cup_proj_info) :: pi
+    if (cup_null_fail_(sp%ptr, 'set projector', ierr, errmsg)) return
+    if (size(x) /= sp%dim .or. size(z) /= sp%dim) then
+      call cup_size_fail_('x and z', min(size(x), size(z)), sp%dim, ierr, errmsg)
+      return
+    end if
+    cmsg(1) = c_null_char            ! C writes only on an error; a per-step call clears 1 byte, not 12 KB
+    call cup_finish_(c_cup_setproj_solve(sp%ptr, x, z, pi, cmsg), cmsg, ierr, errmsg)
+    if (present(info)) info = pi
+  end subroutine cup_setproj_solve
+
+  !> The older forms, kept for their users (and their compiled programs):
+  !> cup_setproj_place and cup_setproj_solve under their older names, the
+  !> same arguments, status and errmsg, as in C (set.h). u and x go on as
+  !> they came (CONTIGUOUS to CONTIGUOUS: no copy, absent stays absent).
+  subroutine cup_setproj_move(sp, t, ierr, u, x, errmsg)
+    type(cup_setproj_t), intent(in) :: sp
+    real(c_double), intent(in) :: t
+    integer, intent(out) :: ierr
+    real(c_double), intent(in), optional, target, contiguous :: u(:), x(:)
+    character(len=*), intent(out), optional :: errmsg
+    call cup_setproj_place(sp, t, ierr, u, x, errmsg)
+  end subroutine cup_setproj_move
+
   subroutine cup_setproj_project(sp, x, z, ierr, info, errmsg)
     type(cup_setproj_t), intent(in) :: sp
     real(c_double), intent(in) :: x(:)
@@ -429,15 +481,7 @@ contains
     integer, intent(out) :: ierr
     type(cup_proj_info), intent(out), optional :: info
     character(len=*), intent(out), optional :: errmsg
-    type(cup_proj_info) :: pi
-    if (cup_null_fail_(sp%ptr, 'set projector', ierr, errmsg)) return
-    if (size(x) /= sp%dim .or. size(z) /= sp%dim) then
-      call cup_size_fail_('x and z', min(size(x), size(z)), sp%dim, ierr, errmsg)
-      return
-    end if
-    ierr = int(c_cup_setproj_project(sp%ptr, x, z, pi))
-    if (present(info)) info = pi
-    if (present(errmsg)) errmsg = cup_c_string(c_cup_setproj_message(sp%ptr))
+    call cup_setproj_solve(sp, x, z, ierr, info, errmsg)
   end subroutine cup_setproj_project
 
   subroutine cup_setproj_set_tolerances(sp, eps_abs, eps_rel, eta_abs, eta_rel, ierr)

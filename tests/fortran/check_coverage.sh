@@ -29,9 +29,6 @@ UNBOUND=(
   cup_netlist_switching            # a table of C function pointers; a scene's integrator (cup_scene_integrator) runs switches
   cup_integrator_create_switched   # takes that table; Fortran reaches it through cup_scene_integrator
   cup_scene_steady_state   # catchup-run's request (scene key steady_state:); Fortran sets cup_pss_options itself
-  cup_setproj_place   # errmsg's C form; Fortran's cup_setproj_move(..., errmsg) already gives the words
-  cup_setproj_solve   # the same for Fortran's cup_setproj_project(..., errmsg)
-  cup_h5run_status    # errmsg's C form of cup_h5run_errmsg, which Fortran binds (a string function)
 )
 # bind(C) interfaces deliberately without a wrapper in `use catchup`, each with why.
 # Those marked "owed" are usable through module catchup_c / the module's c_
@@ -47,6 +44,8 @@ RAW_ONLY=(
   cup_crowd_added                # owed
   cup_crowd_desired_velocity     # owed
   cup_h5run_array                # owed
+  cup_setproj_move               # the older C form; Fortran's cup_setproj_move calls cup_setproj_place
+  cup_setproj_project            # the older C form; Fortran's cup_setproj_project calls cup_setproj_solve
   cup_scene_crowd                # owed (with the crowd's wrappers above)
 )
 

@@ -7,7 +7,11 @@
 !    built-in ball's trajectory to 1e-14;
 !  * a state-dependent half-line {y >= t + x/2} from a Fortran rows callback
 !    (columns counted from 1): error*n = 2 at n = 1e3;
-!  * cup_setproj on an ellipsoid and an empty intersection, with messages.
+!  * cup_setproj on an ellipsoid and an empty intersection, with messages;
+!  * the one way errors travel: cup_setproj_place/_solve's errmsg is C's
+!    words byte for byte (the texts of tests/test_set.c's
+!    test_setproj_errmsg_one_way), the same status and words as the older
+!    forms (cup_setproj_move/_project, cup_setproj_message).
 module sets_cb
   use, intrinsic :: iso_c_binding
   implicit none
@@ -74,6 +78,7 @@ end module sets_cb
 
 program test_f_sets
   use, intrinsic :: iso_c_binding
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
   use catchup
   use sets_cb
   use cup_testing
@@ -201,6 +206,56 @@ program test_f_sets
   call check_int(ierr, CUP_ERR_EMPTY_SET, '{x1 >= 2} and the unit ball do not meet')
   call check_contains(msg, 'do not meet', 'the message says so')
   call cup_setproj_free(sp)
+
+  call section('one way: cup_setproj_place/_solve, errmsg byte for byte, the older forms agree')
+  block
+    type(cup_set_t) :: shrink
+    real(c_double) :: xs(2)
+    real(c_double), target :: u_empty(1) = [1.25d0]
+    integer :: iold
+    character(len=CUP_ERRMSG_LEN) :: old
+    ! r(t) = 1 - u: u = 0.5 gives radius 0.5, u = 1.25 radius -0.25 (empty)
+    call cup_set_ball_create(shrink, [0d0, 0d0], 1d0, ierr, gr=[-1d0])
+    call cup_setproj_create(sp, shrink, ierr)
+    msg = 'untouched'
+    call cup_setproj_place(sp, 0.5d0, ierr, u=[0.5d0], errmsg=msg)
+    call check_int(ierr, CUP_OK, 'placed at u = 0.5')
+    call check_words(msg, '', 'no words on success')
+    call cup_setproj_solve(sp, [3d0, 4d0], z, ierr, pi, errmsg=msg)
+    call check_int(ierr, CUP_OK, '(3, 4) projected onto radius 0.5')
+    call check_close(z(1), 0.3d0, 1d-14, 'z(1) = 0.3, a few ulps inside')
+    call check_close(z(2), 0.4d0, 1d-14, 'z(2) = 0.4')
+    call check_words(msg, '', 'no words on success')
+    call cup_setproj_place(sp, 1.25d0, ierr, u=[1.25d0], errmsg=msg)
+    call check_int(ierr, CUP_ERR_EMPTY_SET, 'a negative radius: empty')
+    call check_words(msg, 'the radius r(t) = -0.25 < 0: the ball is empty', 'place''s words')
+    call check_words(cup_setproj_message(sp), trim(msg), 'the older cup_setproj_message, the same words')
+    call cup_setproj_move(sp, 1.25d0, iold, u=[1.25d0], errmsg=old)
+    call check_int(iold, ierr, 'cup_setproj_move: the same status')
+    call check_words(old, trim(msg), 'cup_setproj_move: the same words')
+    call check_int(int(c_cup_setproj_move(sp%ptr, 1.25d0, c_loc(u_empty), c_null_ptr)), ierr, &
+                   'the C older form: the same status')
+    call check_words(cup_setproj_message(sp), trim(msg), 'the C older form: the same words')
+    call cup_setproj_place(sp, 1.25d0, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, 'no u for a moving set')
+    call check_words(msg, 'the set moves with 1 parameters but u is NULL', 'place''s words')
+    call cup_setproj_place(sp, 0.5d0, ierr, u=[0.5d0])
+    xs = [3d0, ieee_value(0d0, ieee_quiet_nan)]
+    z = -7
+    call cup_setproj_solve(sp, xs, z, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_NONFINITE, 'a NaN in x')
+    call check_words(msg, 'x[1] is nan', 'solve''s words (C counts from 0)')
+    call check(all(z == -7), 'z unchanged on an error')
+    call cup_setproj_project(sp, xs, z, iold, errmsg=old)
+    call check_int(iold, ierr, 'cup_setproj_project: the same status')
+    call check_words(old, trim(msg), 'cup_setproj_project: the same words')
+    call check_words(cup_setproj_message(sp), trim(msg), 'cup_setproj_message: the same words')
+    call cup_setproj_free(sp)
+    call cup_setproj_solve(sp, xs, z, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, 'a freed handle')
+    call check_words(msg, 'set projector handle is null', 'the wrapper''s words')
+    call cup_set_free(shrink)
+  end block
 
   call cup_set_free(both)
   call cup_set_free(ell)

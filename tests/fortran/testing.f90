@@ -6,7 +6,7 @@ module cup_testing
   use, intrinsic :: iso_c_binding, only: c_double
   implicit none
   private
-  public :: check, check_int, check_close, check_contains, finish, section
+  public :: check, check_int, check_close, check_contains, check_words, finish, section
   integer, save :: nchecks = 0, nfailed = 0
 
 contains
@@ -47,6 +47,14 @@ contains
     character(len=*), intent(in) :: what
     call check(index(text, part) > 0, what // ' ("' // trim(text) // '" should contain "' // part // '")')
   end subroutine check_contains
+
+  !> text is want byte for byte (a Fortran errmsg: want, then blanks only).
+  subroutine check_words(text, want, what)
+    character(len=*), intent(in) :: text, want
+    character(len=*), intent(in) :: what
+    call check(len_trim(text) == len(want) .and. text(1:min(len(text), len(want))) == want, &
+               what // ' ("' // trim(text) // '" should be "' // want // '")')
+  end subroutine check_words
 
   subroutine finish()
     write(output_unit, '(i0,a,i0,a)') nchecks - nfailed, ' of ', nchecks, ' checks passed'
