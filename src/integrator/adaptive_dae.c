@@ -65,23 +65,9 @@ void ad_dae_free(cup_adaptive *A) {
  * bound (A->s, A->gam), and its velocity at zeta = 0, q1 = C (A x + E u) + G u'. */
 static void slack_and_velocity(cup_adaptive *A, const double *x, const double *w) {
   const cup_polyset *K = A->K;
-  int n = A->n, m = A->m, p = A->p, nw = A->nw;
+  int m = A->m, p = A->p;
   ad_offset(A, w, A->g);
-  for (int q = 0; q < p; q++) {
-    double acc = 0;
-    for (int c = 0; c < nw; c++) {
-      double wd = 0;
-      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
-      acc += A->U[q + (size_t)c * p] * wd;
-    }
-    A->udot[q] = acc;
-  }
-  for (int i = 0; i < n; i++) {
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += A->A[i + (size_t)j * n] * x[j];
-    for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->ut[q];
-    A->xf[i] = acc;
-  }
+  ad_free_velocity(A, x, w);
   cup_slack(K, A->g, x, A->dq0, A->gam);
   for (int i = 0; i < m; i++) {
     double acc = 0;

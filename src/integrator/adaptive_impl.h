@@ -235,6 +235,9 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
               int *pivots);
 /* g = F + G U w. */
 void ad_offset(const cup_adaptive *A, const double *w, double *g);
+/* u' (A->udot, from the input's piece w) and the free velocity
+ * A->xf = A x + E u (u in A->ut). */
+void ad_free_velocity(cup_adaptive *A, const double *x, const double *w);
 
 /* pinf ||v||_P: a bound on the max norm of v, and of what the flow makes of
  * it when the LCS is passive (its flow does not expand the P-norm): the

@@ -528,10 +528,29 @@ void ad_manifold(const cup_adaptive *A, const ad_mode *md, const double *g, doub
     for (int i = 0; i < n; i++) x[i] -= md->R[i + (size_t)k * n] * s[k];
 }
 
+void ad_free_velocity(cup_adaptive *A, const double *x, const double *w) {
+  int n = A->n, p = A->p, nw = A->nw;
+  for (int q = 0; q < p; q++) {
+    double acc = 0;
+    for (int c = 0; c < nw; c++) {
+      double wd = 0;
+      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
+      acc += A->U[q + (size_t)c * p] * wd;
+    }
+    A->udot[q] = acc;
+  }
+  for (int i = 0; i < n; i++) {
+    double acc = 0;
+    for (int j = 0; j < n; j++) acc += A->A[i + (size_t)j * n] * x[j];
+    for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->ut[q];
+    A->xf[i] = acc;
+  }
+}
+
 int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
               int *pivots) {
   const cup_polyset *K = A->K;
-  int n = A->n, m = A->m, p = A->p, nw = A->nw;
+  int n = A->n, m = A->m, p = A->p;
   ad_offset(A, w, A->g);                         /* also leaves u in A->ut */
   cup_slack(K, A->g, x, A->s, NULL);
   /* touching rows: slack at the level a certified projection leaves (it
@@ -551,21 +570,7 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
   /* u', and the free velocity f = A x + E u: the touching rows' q (none
    * touches between a PWM's edges in most windows) */
   double *f = A->xf;
-  for (int q = 0; touching && q < p; q++) {
-    double acc = 0;
-    for (int c = 0; c < nw; c++) {
-      double wd = 0;
-      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
-      acc += A->U[q + (size_t)c * p] * wd;
-    }
-    A->udot[q] = acc;
-  }
-  for (int i = 0; touching && i < n; i++) {
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += A->A[i + (size_t)j * n] * x[j];
-    for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->ut[q];
-    f[i] = acc;
-  }
+  if (touching) ad_free_velocity(A, x, w);
   for (int i = 0; i < m; i++) {
     double qi = 1;
     if (touch[i]) {

@@ -17,10 +17,9 @@ static int create(cup_integrator *I, const scheme_model *md, void **ws, char *er
   const cup_lcs *L = md->L;
   const cup_process_desc *d = md->pd;
   if (L && L->has_D && L->keep_B)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
-                    "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
-                    cup_scheme_name(CUP_SCHEME_ADAPTIVE), "its state jumps are projections in the energy metric P "
-                    "and its choice of the active set takes the network as passive");
+    return cup_lcs_needs_reciprocal_(cup_scheme_name(CUP_SCHEME_ADAPTIVE), "its state jumps are projections in the "
+                                     "energy metric P and its choice of the active set takes the network as passive",
+                                     errmsg);
   if (d && (!md->K || d->f || d->f_integral))
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS, a polyset with f = A x + E u "
                     "(this process has %s); use the explicit, implicit or exponential scheme",

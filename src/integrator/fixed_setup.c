@@ -24,9 +24,7 @@
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
   if (L->keep_B)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
-                    "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
-                    cup_scheme_name(scheme), "it projects in the energy metric P");
+    return cup_lcs_needs_reciprocal_(cup_scheme_name(scheme), "it projects in the energy metric P", errmsg);
   int *rows = calloc((size_t)L->m + 1, sizeof(int)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
   if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }

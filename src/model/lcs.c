@@ -163,6 +163,12 @@ void cup_lcs_rows_text(const cup_lcs *L, const int *rows, int k, char *buf, unsi
   }
 }
 
+int cup_lcs_needs_reciprocal_(const char *scheme, const char *why, char *errmsg) {
+  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
+                  "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
+                  scheme, why);
+}
+
 int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
   if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: output pointer is NULL");
   *out = NULL;

@@ -7,6 +7,10 @@
 
 /* "rows D1, D3" (or "rows 0, 2" without names) for messages, into buf. */
 void cup_lcs_rows_text(const struct cup_lcs *L, const int *rows, int k, char *buf, unsigned long size);
+/* CUP_ERR_UNSUPPORTED for the scheme named, which needs P B = C^T, on an
+ * LCS that keeps its B (keep_B: controlled sources drive the diodes' rows);
+ * why: what of the scheme needs it. The schemes' one wording of it. */
+int cup_lcs_needs_reciprocal_(const char *scheme, const char *why, char *errmsg);
 
 struct cup_lcs {
   int n, m, p;
