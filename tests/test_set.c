@@ -71,6 +71,12 @@ static void set_open(cup_set **S, cup_setproj **sp, const cup_set_desc *d) {
   if (cup_setproj_create(sp, *S, NULL, err) != CUP_OK) fail_msg("cup_setproj_create: %s", err);
 }
 
+/* set_open, then the set placed at time t (no parameters, no state). */
+static void set_open_at(cup_set **S, cup_setproj **sp, const cup_set_desc *d, double t) {
+  set_open(S, sp, d);
+  assert_int_equal(cup_setproj_move(*sp, t, NULL, NULL), CUP_OK);
+}
+
 static void set_close(cup_set **S, cup_setproj **sp) {
   cup_setproj_free(sp);
   cup_set_free(S);
@@ -191,8 +197,7 @@ static void test_halfspace_against_closed_form(void **state) {
     cup_set_desc d = {.kind = CUP_SET_HALFSPACE, .n = n, .P = M, .C = As.view, .F = &b};
     cup_set *S;
     cup_setproj *sp;
-    set_open(&S, &sp, &d);
-    assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+    set_open_at(&S, &sp, &d, 0);
     cup_proj_info pi;
     assert_int_equal(cup_setproj_project(sp, x, z, &pi), CUP_OK);
     /* reference: z = x + max(0, -s) / (a^T P^-1 a) P^-1 a, in GSL then long double */
@@ -282,8 +287,7 @@ static void test_ellipsoid_against_bisection(void **state) {
     cup_set_desc d = {.kind = CUP_SET_ELLIPSOID, .n = n, .P = M, .center = c, .radius = rad, .Q = Qs.view};
     cup_set *S;
     cup_setproj *sp;
-    set_open(&S, &sp, &d);
-    assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+    set_open_at(&S, &sp, &d, 0);
     cup_proj_info pi;
     int st = cup_setproj_project(sp, x, z, &pi);
     /* reference: mu by bisection on q(w(mu)) = r^2, w = (P + mu Q)^-1 P (x - c) */
@@ -340,8 +344,7 @@ static void test_intersection_against_reference(void **state) {
                       .center = c, .radius = rad};
     cup_set *S;
     cup_setproj *sp;
-    set_open(&S, &sp, &d);
-    assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+    set_open_at(&S, &sp, &d, 0);
     cup_proj_info pi;
     int st = cup_setproj_project(sp, x, z, &pi);
     /* reference: s in [0, 1] by bisection on ||proj_K((1-s) x + s c) - c|| = r,
@@ -387,8 +390,7 @@ static void test_intersection_empty(void **state) {
   cup_set_desc d = {.kind = CUP_SET_INTERSECTION, .n = 2, .C = Cs.view, .F = F, .center = c, .radius = 1};
   cup_set *S;
   cup_setproj *sp;
-  set_open(&S, &sp, &d);
-  assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+  set_open_at(&S, &sp, &d, 0);
   cup_proj_info pi;
   assert_int_equal(cup_setproj_project(sp, x, z, &pi), CUP_ERR_EMPTY_SET);
   assert_non_null(strstr(cup_setproj_message(sp), "do not meet"));
@@ -428,8 +430,7 @@ static int oracle_run(int mode, double *z, cup_proj_info *pi, char *msg, size_t 
   cup_set_desc d = {.kind = CUP_SET_ORACLE, .n = 2, .oracle = disc_oracle, .oracle_ctx = &o};
   cup_set *S;
   cup_setproj *sp;
-  set_open(&S, &sp, &d);
-  assert_int_equal(cup_setproj_move(sp, 0.25, NULL, NULL), CUP_OK);
+  set_open_at(&S, &sp, &d, 0.25);
   double x[2] = {3, 4};
   int st = cup_setproj_project(sp, x, z, pi);
   snprintf(msg, size, "%s", cup_setproj_message(sp));
