@@ -265,7 +265,7 @@ static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j,
   cup_copy(S->xprev, S->x, S->n);
   int st = CUP_OK, to = *topo;
   for (;;) {
-    double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as fixed_run snaps) */
+    double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as sw_fixed_run snaps) */
     if ((st = piece(S, to, ta, te, info)) < 0) return st;
     if (te == tk) break;
     if ((st = sw->settle(sw->ctx, &to, te, S->x, NULL, info->message)) < 0) return st;
@@ -307,7 +307,7 @@ static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
  * a step splits it (split_step: the pieces by the configurations' exact
  * flows). A circuit-gated switching is taken at the end of the step whose
  * end state passes the threshold (settle there). */
-static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
+static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   long k = 0, n = S->o.n, next_j = 0;
   int st = CUP_OK;
@@ -388,7 +388,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (S->half && coarse_run(S, x0, info)) return info->status;
     sw->jump(sw->ctx, topo, S->x);
     x0_moved(S, x0, info);
-    st = fixed_run(S, 0, topo, info);
+    st = sw_fixed_run(S, 0, topo, info);
     if (S->half) info->err_est = cup_estimate_value(&S->est);
     return st;
   }
