@@ -27,6 +27,7 @@
 #include <string.h>
 #include "integrator_impl.h"
 #include "adaptive.h"
+#include "estimate.h"
 
 typedef struct cup_swrun cup_swrun;
 
@@ -260,7 +261,8 @@ static int piece(cup_swrun *S, int topo, double ta, double tb, cup_run_info *inf
 static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   cup_integrator *C = S->child[*topo];
-  double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k), snap = 1e-9 * C->h;
+  double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k);
+  double snap = 1e-9 * cup_integrator_grid_step_(C);
   if (!twin_of(S, *topo)) return 1;
   cup_copy(S->xprev, S->x, S->n);
   int st = CUP_OK, to = *topo;
@@ -292,11 +294,11 @@ static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j,
  * ulp, and a whole step more of the old configuration would follow: a
  * buck on a grid holding its edges had 29 of 200 periods one step longer) */
 static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
-  long k1 = (long)ceil(tb / C->h);
+  long k1 = (long)ceil(tb / cup_integrator_grid_step_(C));
   if (k1 > n) k1 = n;
   while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
   while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
-  if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * C->h) k1--;
+  if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * cup_integrator_grid_step_(C)) k1--;
   return k1 <= k ? k + 1 : k1;
 }
 
@@ -324,7 +326,7 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     }
     long k1 = grid_step_at(C, k, n, tb);
     /* inside step k1: the steps before it, then that one split */
-    int split = tb < cup_integrator_grid_time_(C, k1) - 1e-9 * C->h;
+    int split = tb < cup_integrator_grid_time_(C, k1) - 1e-9 * cup_integrator_grid_step_(C);
     long kw = split ? k1 - 1 : k1;
     if (sw->state_gated(sw->ctx, topo) && kw > k) kw = k + 1, split = 0;   /* its end checked */
     cup_run_info w;
@@ -341,7 +343,8 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
       if (sst == 0) {                              /* tb: the next switching time, at or after t_k1 */
         k = k1;
         t = cup_integrator_grid_time_(C, k);
-        if (k < n) st = sw->settle(sw->ctx, &topo, tb > t && tb - t <= 1e-9 * C->h ? tb : t, S->x, NULL, info->message);
+        double ts = tb > t && tb - t <= 1e-9 * cup_integrator_grid_step_(C) ? tb : t;
+        if (k < n) st = sw->settle(sw->ctx, &topo, ts, S->x, NULL, info->message);
         continue;
       }
       S->cur = topo;                               /* no exact flow: the step as the grid has it */
