@@ -216,6 +216,7 @@ class SolverBase:
     pkg = "?"
     note = ""
     module = None     # "osqp", or "proxsuite.proxqp" (from proxsuite import proxqp): self.osqp, self.proxqp
+    _cache = None     # a dense solver's copy of the problem's data, (prob, ...), made once a problem
 
     def __init__(self, args):
         self.args = args
@@ -321,7 +322,6 @@ class DAQPSolver(SolverBase):
     name, pkg = "daqp", "daqp"
     note = "dense active set; warm: Model.update(f=) keeps the working set (hot start); level eps -> primal_tol"
     module = "daqp"
-    _cache = None
 
     def applicable(self, prob):
         if prob.dim > self.args.daqp_max_dim:
@@ -375,7 +375,6 @@ class ProxQPSolver(SolverBase):
     name, pkg = "proxqp", "proxsuite"
     note = "warm: update(g=) + initial_guess=WARM_START, solve(x_prev, y_prev, z_prev); cold and first solve: EQUALITY_CONSTRAINED_INITIAL_GUESS (default); check_duality_gap=True"
     module = "proxsuite.proxqp"
-    _cache = None
 
     def prepare(self, prob):
         if self.backend(prob) == "dense" and (self._cache is None or self._cache[0] is not prob):
