@@ -245,14 +245,14 @@ static int write_results(run_t *r) {
   return cup_status_merge(st, cup_h5run_attr_string(w, "message", r->message));
 }
 
-/* Turn the integrator's status into the run's: a stop requested by the sink
- * is either our signal or a write that failed (the writer knows which). */
 /* The writer's first failure's words into err (MSG_LEN bytes), "" if none. */
 static void writer_words(const cup_h5run *w, char *err) {
   err[0] = '\0';
   if (w) cup_h5run_status(w, err);
 }
 
+/* Turn the integrator's status into the run's: a stop requested by the sink
+ * is either our signal or a write that failed (the writer knows which). */
 static void settle_status(run_t *r, int st) {
   r->status = st;
   snprintf(r->message, sizeof r->message, "%s", r->info.message);
