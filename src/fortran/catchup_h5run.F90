@@ -61,12 +61,7 @@ contains
     integer, intent(in) :: dim
     integer, intent(out) :: ierr
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    integer(c_int) :: st
-    cmsg = cup_errbuf_()
-    st = c_cup_h5run_create(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
-    if (st == CUP_OK) w%dim = dim
-    call cup_finish_(st, cmsg, ierr, errmsg)
+    call start(w, path, dim, .false., ierr, errmsg)
   end subroutine cup_h5run_create
 
   !> The same, written to a new sibling of path (PATH.partXXXXXX) that
@@ -77,13 +72,28 @@ contains
     integer, intent(in) :: dim
     integer, intent(out) :: ierr
     character(len=*), intent(out), optional :: errmsg
+    call start(w, path, dim, .true., ierr, errmsg)
+  end subroutine cup_h5run_begin
+
+  ! Both starts: the file itself (create) or its staged sibling (begin).
+  subroutine start(w, path, dim, staged, ierr, errmsg)
+    type(cup_h5run_t), intent(out) :: w
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: dim
+    logical, intent(in) :: staged
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
     cmsg = cup_errbuf_()
-    st = c_cup_h5run_begin(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    if (staged) then
+      st = c_cup_h5run_begin(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    else
+      st = c_cup_h5run_create(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    end if
     if (st == CUP_OK) w%dim = dim
     call cup_finish_(st, cmsg, ierr, errmsg)
-  end subroutine cup_h5run_begin
+  end subroutine start
 
   !> Rename the staged file over its path (after cup_h5run_begin).
   subroutine cup_h5run_commit(w, ierr)

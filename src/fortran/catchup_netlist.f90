@@ -40,15 +40,7 @@ contains
     integer, intent(out) :: ierr
     character(len=*), intent(in), optional :: sets(:)
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char), allocatable, target :: buf(:, :)
-    type(c_ptr), allocatable, target :: ptrs(:)
-    type(c_ptr) :: sp
-    integer(c_int) :: ns, st
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    call pack_sets(sets, buf, ptrs, sp, ns)
-    cmsg = cup_errbuf_()
-    st = c_cup_netlist_load(nl%ptr, cup_f_c_string(path), sp, ns, cmsg)
-    call cup_finish_(st, cmsg, ierr, errmsg)
+    call load(nl, ierr, sets, errmsg, path=path)
   end subroutine cup_netlist_load
 
   !> The same from the netlist's text; `name` stands for the file in messages.
@@ -58,31 +50,38 @@ contains
     integer, intent(out) :: ierr
     character(len=*), intent(in), optional :: sets(:)
     character(len=*), intent(out), optional :: errmsg
+    call load(nl, ierr, sets, errmsg, text=text, name=name)
+  end subroutine cup_netlist_load_string
+
+  ! Both loads: the sets as an array of C strings, then the file path or the text.
+  subroutine load(nl, ierr, sets, errmsg, path, text, name)
+    type(cup_netlist_t), intent(out) :: nl
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: sets(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(len=*), intent(in), optional :: path, text, name
     character(kind=c_char), allocatable, target :: buf(:, :)
     type(c_ptr), allocatable, target :: ptrs(:)
     type(c_ptr) :: sp
     integer(c_int) :: ns, st
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    call pack_sets(sets, buf, ptrs, sp, ns)
-    cmsg = cup_errbuf_()
-    st = c_cup_netlist_load_string(nl%ptr, cup_f_c_string(text), cup_f_c_string(name), sp, ns, cmsg)
-    call cup_finish_(st, cmsg, ierr, errmsg)
-  end subroutine cup_netlist_load_string
-
-  subroutine pack_sets(sets, buf, ptrs, sp, ns)
-    character(len=*), intent(in), optional :: sets(:)
-    character(kind=c_char), allocatable, target, intent(out) :: buf(:, :)
-    type(c_ptr), allocatable, target, intent(out) :: ptrs(:)
-    type(c_ptr), intent(out) :: sp
-    integer(c_int), intent(out) :: ns
     sp = c_null_ptr
     ns = 0
-    if (.not. present(sets)) return
-    if (size(sets) == 0) return
-    call cup_pack_strings_(sets, buf, ptrs)
-    sp = c_loc(ptrs)
-    ns = int(size(sets), c_int)
-  end subroutine pack_sets
+    if (present(sets)) then
+      if (size(sets) > 0) then
+        call cup_pack_strings_(sets, buf, ptrs)
+        sp = c_loc(ptrs)
+        ns = int(size(sets), c_int)
+      end if
+    end if
+    cmsg = cup_errbuf_()
+    if (present(path)) then
+      st = c_cup_netlist_load(nl%ptr, cup_f_c_string(path), sp, ns, cmsg)
+    else
+      st = c_cup_netlist_load_string(nl%ptr, cup_f_c_string(text), cup_f_c_string(name), sp, ns, cmsg)
+    end if
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine load
 
   !> Free the netlist (its LCS and input with it) and null the handle; a
   !> borrowed handle (cup_scene_netlist) is only forgotten.

@@ -36,23 +36,7 @@ contains
     integer, intent(out) :: ierr
     character(len=*), intent(in), optional :: overrides(:)
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char), allocatable, target :: buf(:, :)
-    type(c_ptr), allocatable, target :: ptrs(:)
-    type(c_ptr) :: op
-    integer(c_int) :: nov, st
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    op = c_null_ptr
-    nov = 0
-    if (present(overrides)) then
-      if (size(overrides) > 0) then
-        call cup_pack_strings_(overrides, buf, ptrs)
-        op = c_loc(ptrs)
-        nov = int(size(overrides), c_int)
-      end if
-    end if
-    cmsg = cup_errbuf_()
-    st = c_cup_scene_load(s%ptr, cup_f_c_string(path), op, nov, cmsg)
-    call cup_finish_(st, cmsg, ierr, errmsg)
+    call load(s, ierr, overrides, errmsg, path=path)
   end subroutine cup_scene_load
 
   !> The same from YAML text; `name` stands for the file name in messages and
@@ -64,6 +48,17 @@ contains
     character(len=*), intent(in), optional :: dir
     character(len=*), intent(in), optional :: overrides(:)
     character(len=*), intent(out), optional :: errmsg
+    call load(s, ierr, overrides, errmsg, text=text, name=name, dir=dir)
+  end subroutine cup_scene_load_string
+
+  ! Both loads: the overrides as an array of C strings, then the file path or
+  ! the text (with its name and the optional directory, NULL when absent).
+  subroutine load(s, ierr, overrides, errmsg, path, text, name, dir)
+    type(cup_scene_t), intent(out) :: s
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: overrides(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(len=*), intent(in), optional :: path, text, name, dir
     character(kind=c_char), allocatable, target :: buf(:, :)
     type(c_ptr), allocatable, target :: ptrs(:)
     character(kind=c_char, len=:), allocatable, target :: cdir
@@ -79,15 +74,19 @@ contains
         nov = int(size(overrides), c_int)
       end if
     end if
-    dp = c_null_ptr
-    if (present(dir)) then
-      cdir = cup_f_c_string(dir)
-      dp = c_loc(cdir)
-    end if
     cmsg = cup_errbuf_()
-    st = c_cup_scene_load_string(s%ptr, cup_f_c_string(text), cup_f_c_string(name), dp, op, nov, cmsg)
+    if (present(path)) then
+      st = c_cup_scene_load(s%ptr, cup_f_c_string(path), op, nov, cmsg)
+    else
+      dp = c_null_ptr
+      if (present(dir)) then
+        cdir = cup_f_c_string(dir)
+        dp = c_loc(cdir)
+      end if
+      st = c_cup_scene_load_string(s%ptr, cup_f_c_string(text), cup_f_c_string(name), dp, op, nov, cmsg)
+    end if
     call cup_finish_(st, cmsg, ierr, errmsg)
-  end subroutine cup_scene_load_string
+  end subroutine load
 
   !> Free the scene (its LCS, input and options with it) and null the handle.
   subroutine cup_scene_free(s)
