@@ -6,8 +6,10 @@
 For each HEADER (include/catchup/X.h, and the configured version.h) that
 declares CUP_API functions, OUTDIR/bind_X.inc holds one interface block with
 an interface body per function, named c_<C name>, with the C parameter names
-as dummy names. The modules of src/fortran `include` these blocks and say
-themselves which names are public; the wrappers stay hand-written.
+as dummy names; OUTDIR/bind_callbacks.inc holds the abstract interfaces of
+the callback types (typedef int (*cup_x_fn)(...)), named as in C. The
+modules of src/fortran `include` these blocks and say themselves which
+names are public; the wrappers stay hand-written.
 
 A prototype says most of the mapping (RULES below). What it cannot say is in
 ANNOTATE, one line a function: a `double *` that is one scalar out and not
@@ -27,6 +29,7 @@ SKIP = {
     'cup_netlist_switching': 'a table of C function pointers; a scene\'s integrator (cup_scene_integrator) runs switches',
     'cup_integrator_create_switched': 'takes that table; Fortran reaches it through cup_scene_integrator',
     'cup_scene_steady_state': 'catchup-run\'s request (scene key steady_state:); Fortran sets cup_pss_options itself',
+    'cup_gate_fn': 'the controller of cup_netlist_set_controller, whose Fortran wrapper states its interface',
 }
 
 # What the prototype cannot say, per argument: null (may be NULL:
@@ -64,6 +67,7 @@ ANNOTATE = {
     'cup_h5run_get_checkpoint': 'size=scalar rows=scalar events=scalar',
     'cup_h5run_get_double': 'v=scalar',
     'cup_h5_version': 'buf=out',
+    'cup_oracle_fn': 'eps_cert=scalar eta_cert=scalar',
 }
 
 SCALARS = {'int': 'integer(c_int)', 'double': 'real(c_double)', 'long': 'integer(c_long)',
@@ -75,7 +79,7 @@ class Unmappable(Exception):
 
 
 def read_header(path):
-    """(typedef kinds, [(function, return type, [(type, name)], line)])"""
+    """(typedef kinds, functions, callback types): each [(name, return type, [(type, name)], line)]"""
     text = open(path).read()
     text = re.sub(r'/\*.*?\*/', lambda m: '\n' * m.group(0).count('\n'), text, flags=re.S)
     text = re.sub(r'//[^\n]*', '', text)
@@ -87,8 +91,12 @@ def read_header(path):
         kinds[name] = 'struct'
     for name in re.findall(r'typedef\s+enum\s+\w+\s*\{[^}]*\}\s*(\w+)\s*;', text):
         kinds[name] = 'enum'
-    for name in re.findall(r'typedef\s+[\w\s\*]+\(\s*\*\s*(\w+)\s*\)', text):
-        kinds[name] = 'funptr'
+    callbacks = []
+    for m in re.finditer(r'typedef\s+([\w\s\*]+?)\s*\(\s*\*\s*(\w+)\s*\)\s*\(([^;]*)\)\s*;', text):
+        kinds[m.group(2)] = 'funptr'
+        line = text.count('\n', 0, m.start()) + 1
+        callbacks.append((m.group(2), m.group(1).strip(), split_params(re.sub(r'\s+', ' ', m.group(3)), path, line),
+                          line))
     funcs = []
     for m in re.finditer(r'\bCUP_API\s+([^;{]*?)\s*;', text, flags=re.S):
         decl = re.sub(r'\s+', ' ', m.group(1))
@@ -98,7 +106,7 @@ def read_header(path):
             raise Unmappable('%s:%d: cannot read the declaration "%s"' % (path, line, decl))
         ret, name, params = d.groups()
         funcs.append((name, ret.strip(), split_params(params, path, line), line))
-    return kinds, funcs
+    return kinds, funcs, callbacks
 
 
 def split_params(params, path, line):
@@ -191,9 +199,11 @@ def wrap(line, indent):
     return '\n'.join(out + [line])
 
 
-def interface_body(name, ret, params, kinds):
+def interface_body(name, ret, params, kinds, abstract=False):
+    """A function's interface body (c_<name>, bind(C, name=...)), or a
+    callback type's abstract one (<name>, bind(C))."""
     notes = dict(a.split('=') if '=' in a else (a, '') for a in ANNOTATE.get(name, '').split())
-    fname = name if 'asc' in notes else 'c_' + name
+    fname = name if 'asc' in notes or abstract else 'c_' + name
     dummies = [p[1] for p in params]
     lower = [d.lower() for d in dummies]
     for d, n in notes.items():
@@ -206,8 +216,8 @@ def interface_body(name, ret, params, kinds):
     decls = [(t, a, n, dim) for (t, a, dim), n in
              ((map_arg(name, ct, n, notes.get(n), kinds), n) for ct, n in params)]
     what = 'function' if rtype else 'subroutine'
-    head = '  %s %s(%s) bind(C, name="%s")%s' % (what, fname, ', '.join(dummies), name,
-                                                 ' result(%s)' % res if rtype else '')
+    head = '  %s %s(%s) bind(C%s)%s' % (what, fname, ', '.join(dummies), '' if abstract else ', name="%s"' % name,
+                                        ' result(%s)' % res if rtype else '')
     if len(head) > 120:
         head = head.replace(' bind(C', ' &\n      bind(C', 1)
     types = [d[0] for d in decls] + ([rtype] if rtype else [])
@@ -226,10 +236,18 @@ def main(argv):
     outdir, headers = argv[1], argv[2:]
     parsed = [(h,) + read_header(h) for h in headers]
     kinds = {}
-    for _, k, _ in parsed:
+    for _, k, _, _ in parsed:
         kinds.update(k)
-    seen, errors, texts = set(), [], {}
-    for path, _, funcs in parsed:
+    seen, errors, texts, abstract = set(), [], {}, []
+    for path, _, funcs, callbacks in parsed:
+        for name, ret, params, line in callbacks:
+            seen.add(name)
+            if name in SKIP:
+                continue
+            try:
+                abstract.append(interface_body(name, ret, params, kinds, abstract=True))
+            except Unmappable as e:
+                errors.append('%s:%d: %s' % (path, line, e))
         stem = os.path.basename(path).split('.')[0]
         bodies = []
         for name, ret, params, line in funcs:
@@ -245,6 +263,8 @@ def main(argv):
         texts['bind_%s.inc' % stem] = ('! Generated from %s by src/fortran/gen_bindings.py: do not edit.\n'
                                        'interface\n%s\nend interface\n'
                                        % (os.path.basename(path), '\n'.join(bodies)))
+    texts['bind_callbacks.inc'] = ('! Generated from the callback types of the headers by src/fortran/gen_bindings.py:'
+                                   ' do not edit.\nabstract interface\n%s\nend interface\n' % '\n'.join(abstract))
     for name in sorted((set(SKIP) | set(ANNOTATE)) - seen):
         errors.append('gen_bindings.py: SKIP or ANNOTATE names %s, which no header declares' % name)
     for e in errors:
