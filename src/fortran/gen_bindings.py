@@ -127,7 +127,17 @@ def split_params(params, path, line):
 
 
 def map_arg(func, ctype, name, note, kinds):
-    """(Fortran type, attributes, dimension) of one parameter."""
+    """(Fortran type, attributes, dimension) of one parameter; an annotation
+    that does not apply to it is an error, not a silent no-op."""
+    mapped = map_param(func, ctype, name, note, kinds)
+    if note and not (note == 'null' and mapped[:2] == ('type(c_ptr)', 'value')
+                     or note == 'scalar' and mapped[1] == 'intent(out)' and not mapped[2]
+                     or note.startswith('out') and mapped[1] == 'intent(out)'):
+        raise Unmappable('%s: ANNOTATE says %s=%s, which does not apply to "%s %s"' % (func, name, note, ctype, name))
+    return mapped
+
+
+def map_param(func, ctype, name, note, kinds):
     const = ctype.startswith('const ')
     base = ctype.replace('const ', '').replace('*', '').strip()
     stars = ctype.count('*')
@@ -143,9 +153,9 @@ def map_arg(func, ctype, name, note, kinds):
             return 'type(c_funptr)', 'value', ''
     elif stars == 1 and (kind == 'handle' or base == 'void'):
         return 'type(c_ptr)', 'value', ''
-    elif ctype == 'const char*const*':   # an array of strings: c_loc of an array of c_ptr
+    elif stars == 2 and ctype.endswith('const*'):   # T *const *: an array of pointers, c_loc of one
         return 'type(c_ptr)', 'value', ''
-    elif stars == 2 and not const or ctype in ('const char**', 'const double**'):
+    elif stars == 2:
         # T **out: a pointer the call sets (a handle's create, a view); free: reset to NULL
         freeing = kind == 'handle' and re.search(r'_(free|discard|close)$', func)
         return 'type(c_ptr)', 'intent(inout)' if freeing else 'intent(out)', ''

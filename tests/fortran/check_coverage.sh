@@ -71,7 +71,6 @@ awk '{ if (sub(/&[ \t]*$/, "")) { held = held $0; next } print held $0; held = "
   sed -n 's/.*\(function\|subroutine\) *\([A-Za-z0-9_]*\) *(\([^)]*\)).*bind(C, *name="\(cup_[A-Za-z0-9_]*\)").*/\4 \2 \3/p' |
   awk '{ n = 0; for (i = 3; i <= NF; i++) n += split($i, a, ",") - ($i ~ /,$/); print $1, $2, n }' |
   sort -u > "$work/pairs3"
-# the generated ones are one line each (the bind(C) clause may be continued)
 cut -d' ' -f1,2 "$work/pairs3" > "$work/pairs"
 cut -d' ' -f1 "$work/pairs" | sort -u > "$work/bound"
 PYTHONDONTWRITEBYTECODE=1 python3 -c 'import sys; sys.path.insert(0, sys.argv[1]); import gen_bindings; print("\n".join(gen_bindings.SKIP))' \
