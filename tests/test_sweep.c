@@ -18,6 +18,7 @@
 #include "catchup.h"
 #include "io/sha256.h"
 #include "sweep_file.h"
+#include "sweep_h5.h"
 #include "sweep_run.h"
 #include "refdata.h"
 
@@ -192,6 +193,31 @@ static void test_bad_corpus(void **state) {
   }
   closedir(d);
   assert_true(count >= 10);
+}
+
+/* /summary's and /references/summary's strings are fixed-length: nothing
+ * written to them is cut. What a user writes (a variant's name, a schedule,
+ * a generated name with its suffix) is refused beyond its field
+ * (tests/sweeps/bad: long-name, long-eps, gen-long-name); the library's
+ * own words fit theirs, every one of them; a message has the room of a
+ * run's whole message and its prefix. */
+static void test_fixed_fields_fit(void **state) {
+  (void)state;
+  static const int codes[] = {
+#define CODE_(e, v, msg) e,
+      CUP_STATUS_LIST(CODE_)
+#undef CODE_
+  };
+  for (size_t k = 0; k < sizeof codes / sizeof codes[0]; k++)
+    if (strlen(cup_status_name(codes[k])) >= SW_STATUS_LEN) fail_msg("%s: longer than /summary's status_name",
+                                                                     cup_status_name(codes[k]));
+  for (int k = 0; k < CUP_SCHEME_COUNT; k++) assert_true(strlen(cup_scheme_name(k)) < SW_WORD_LEN);
+  for (int k = 0; k < CUP_PROJ_METHOD_COUNT; k++) assert_true(strlen(cup_proj_method_name(k)) < SW_WORD_LEN);
+  assert_true(sizeof ((sw_row *)0)->status_name == SW_STATUS_LEN);
+  assert_true(sizeof ((sw_refrow *)0)->status_name == SW_STATUS_LEN);
+  assert_true(sizeof ((sw_row *)0)->message == sizeof ((sw_result *)0)->message);
+  assert_true(sizeof ((sw_refrow *)0)->message == sizeof ((sw_result *)0)->message);
+  assert_true(sizeof ((sw_result *)0)->message >= CUP_RUN_MSG_LEN + 64);
 }
 
 typedef struct { double x[101 * 3], t[101]; long k[101]; int n; } store_t;
@@ -578,6 +604,7 @@ int main(void) {
     cmocka_unit_test(test_zip_groups_and_defaults),
     cmocka_unit_test(test_paper_sweep),
     cmocka_unit_test(test_bad_corpus),
+    cmocka_unit_test(test_fixed_fields_fit),
     cmocka_unit_test(test_samples_between_steps),
     cmocka_unit_test(test_netlist_samples_closed_form),
     cmocka_unit_test(test_reference_vs_data),
