@@ -172,8 +172,7 @@ int sw_resolve_scenes(cup_sweep *s, char *errmsg);
 int sw_lazy_texts(cup_sweep *s, char *errmsg);
 /* Keep the variants' scene texts (what rank 0 broadcast; NULL for a lazy
  * variant), load the scenes of those that are not lazy, check that T and
- * the dimension agree, fix n_ref and the task count. The entries' file_text
- * must be in place. */
+ * the dimension agree, fix n_ref and the task count. */
 int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg);
 /* Lazy variants (loaded by sweep_variant.c): a generated variant beyond its entry's
  * first, in a sweep that is not of crowds, is loaded by its own jobs only
@@ -184,7 +183,8 @@ int sw_variant_lazy(const cup_sweep *s, int k);
 /* The scene that gives variant k's settings (n, T, the scheme, ...): its
  * own once loaded, else its entry's first's. */
 const cup_scene *sw_variant_settings(const cup_sweep *s, int k);
-/* Load lazy variant k's scene from its text into *sc (the caller frees it),
+/* Load lazy variant k's scene from its entry's file_text and its own
+ * overrides into *sc (the caller frees it),
  * probed as the sweep's scenes are, and checked against the scene that
  * stood for it: a located error in errmsg (SW_ERR_LEN) otherwise. */
 int sw_variant_load(const cup_sweep *s, int k, cup_scene **sc, char *errmsg);
