@@ -143,7 +143,7 @@ void progress(manager_t *m, int final) {
     live = !m->log_progress && (isatty(STDOUT_FILENO) || isatty(STDERR_FILENO));
   double now = now_seconds();
   double every = live ? PROGRESS_SECONDS : PROGRESS_LOG_SECONDS;
-  if (m->quiet || (!final && now - m->last_progress < every)) return;
+  if (m->quiet || !m->f || (!final && now - m->last_progress < every)) return;   /* no file made: no progress */
   m->last_progress = now;
   char el[32], eta[32];
   double elapsed = now - m->t_start;

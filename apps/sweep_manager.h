@@ -75,7 +75,8 @@ void fill_errors(manager_t *m, int k);
 void take_message(manager_t *m, const char *buf, size_t size);
 /* The next batch for one of `workers` workers into ids; its length. */
 int next_batch(manager_t *m, int workers, long *ids);
-/* The progress line (final: the last one, always printed unless quiet). */
+/* The progress line (final: the last one, always printed unless quiet; none
+ * while the results file is not made, nor when it could not be). */
 void progress(manager_t *m, int final);
 /* Flush the results file every FLUSH_SECONDS (force: now). */
 void maybe_flush(manager_t *m, int force);

@@ -30,7 +30,7 @@ held
 # On 2 ranks the worker starts on its first batch before rank 0 makes the
 # file: the same one line, and the worker stopped, not aborted.
 set +e
-run 2 "$CRASH" -o "$out" --quiet > /dev/null 2> "$WORK/err.txt"
+run 2 "$CRASH" -o "$out" --log-progress > /dev/null 2> "$WORK/err.txt"
 rc=$?
 set -e
 [ "$rc" -eq 1 ] || fail "2 ranks: exit $rc, expected 1: $(cat "$WORK/err.txt")"
