@@ -82,29 +82,27 @@ static int no_steady(run_steady *s, int st, const char *why, char *err, size_t s
   return 1;
 }
 
-int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_options *o, char *err, size_t size) {
+int run_steady_solve(run_steady *s, cup_scene *scene, cup_integrator_options *o, char *err, size_t size) {
   char e2[MSG] = "";
   s->asked = 1;
-  double T = s->req->pss.period;
+  double T = s->req->pss.period, t0 = 0;
   int st;
-  if (!(T > 0)) {
-    const cup_input *u = cup_scene_input(scene);
-    if (!u) return no_steady(s, CUP_ERR_ARG, "the scene has no input to take the period from: give "
-                             "steady_state.period (--period)", err, size);
-    if ((st = cup_input_period(u, &T, e2))) return no_steady(s, st, e2, err, size);
-  }
-  if ((st = cup_input_period_fits(cup_scene_input(scene), T, e2))) return no_steady(s, st, e2, err, size);
+  /* the period map from the phase t0 (the scene's sources from t0 on); no steady state: as written again */
+  if ((st = cup_scene_steady_phase(scene, &T, &t0, e2))) return no_steady(s, st, e2, err, size);
   s->info.period = T;
   cup_integrator_options mo;                     /* the period map: the run's, over one period */
   cup_pss_map_options(o, cup_scene_options(scene)->T, T, s->req->pss.map_tol, &mo);
   mo.on_step = NULL;
   cup_integrator *I = NULL;
-  if ((st = cup_scene_integrator(scene, &mo, &I, e2))) return no_steady(s, st, e2, err, size);
-  st = cup_pss_solve_map(&s->r, I, s->n, T, cup_scene_x0(scene), &s->req->pss, e2);
+  st = cup_scene_integrator(scene, &mo, &I, e2);
+  if (!st) st = cup_pss_solve_map(&s->r, I, s->n, T, cup_scene_x0(scene), &s->req->pss, e2);
   cup_integrator_free(&I);
-  if (!s->r) return no_steady(s, st, e2, err, size);
-  cup_pss_get_info(s->r, &s->info);
-  if (st < 0) return no_steady(s, st, s->info.message, err, size);
+  if (s->r) cup_pss_get_info(s->r, &s->info);
+  s->info.t0 = t0;
+  if (!s->r || st < 0) {
+    cup_scene_set_time_origin(scene, 0, NULL);    /* the transient from t = 0 of the sources as written */
+    return no_steady(s, st, s->r ? s->info.message : e2, err, size);
+  }
   snprintf(s->message, sizeof s->message, "%s", s->info.message);
   s->solved = 1;
   o->n = mo.n;
@@ -122,6 +120,8 @@ int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_optio
   if (!s->t || !s->x || !s->sig) return snprintf(err, size, "out of memory for the period's samples"), 1;
   return 0;
 }
+
+double run_steady_t0(const run_steady *s) { return s && s->solved ? s->info.t0 : 0; }
 
 const double *run_steady_x0(const run_steady *s, const double *scene_x0) {
   return s && s->solved ? cup_pss_x0(s->r) : scene_x0;
@@ -258,6 +258,10 @@ int run_steady_write(run_steady *s, cup_h5run *w, const cup_scene *scene, int ru
   st = cup_status_merge(st, cup_h5run_attr_long(w, "steady_state_solved", s->solved));
   double per = s->info.period, it = s->info.iterations, runs = (double)s->info.period_runs;
   st = cup_status_merge(st, array(w, "steady_state/period", 1, 1, 0, &per, "s", "the period T", NULL));
+  if (s->info.t0 != 0)                           /* written only where it is not 0: files as before otherwise */
+    st = cup_status_merge(st, array(w, "steady_state/t0", 1, 1, 0, &s->info.t0, "s",
+                                    "the phase t0 (absent: 0): the sources repeat from t0 on; x0 is the state at t0, /t runs "
+                                    "over [t0, t0 + T] of the sources as written", NULL));
   if (!s->r) return st;
   static const char *const sd[] = {"state", NULL};
   st = cup_status_merge(st, array(w, "steady_state/iterations", 1, 1, 0, &it, "1", "Newton steps taken", NULL));
@@ -315,8 +319,10 @@ void run_steady_report(const run_steady *s, const char *scene, FILE *f) {
             mu[0] ? ", multipliers " : "", mu);
     return;
   }
-  fprintf(f, "catchup-run: %s: steady state: period %.6g s, %d Newton steps (residuals %s), %ld period runs, "
-          "%.3g s; Floquet multipliers %s%s (largest modulus %.6g: %s): %s\n", scene, i->period, i->iterations, res,
+  char phase[64] = "";
+  if (i->t0 != 0) snprintf(phase, sizeof phase, " from t0 = %.6g s (the sources repeat from there)", i->t0);
+  fprintf(f, "catchup-run: %s: steady state: period %.6g s%s, %d Newton steps (residuals %s), %ld period runs, "
+          "%.3g s; Floquet multipliers %s%s (largest modulus %.6g: %s): %s\n", scene, i->period, phase, i->iterations, res,
           i->period_runs, i->seconds, mu, s->n > 8 ? ", ..." : "", i->max_multiplier,
           i->max_multiplier < 1 - 1e-6 ? "stable" : "not asymptotically stable", cup_status_name(i->status));
   if (!s->me) return;

@@ -17,7 +17,8 @@ module catchup_pss
     cup_pss_options_default, cup_input_period, cup_input_period_fits, cup_pss_solve, cup_pss_solve_map, cup_pss_free, &
     cup_pss_get_info, cup_pss_x0, cup_pss_residuals, cup_pss_monodromy, cup_pss_multipliers, &
     cup_pss_trajectory, cup_measure_period, cup_pss_info_message, cup_netlist_element_nodes, &
-    cup_netlist_steady_state
+    cup_netlist_steady_state, cup_input_steady_phase, cup_netlist_set_time_origin, cup_scene_set_time_origin, &
+    cup_scene_steady_phase
 
   !> cup_pss_options (pss.h): fields as in C
   type, bind(C) :: cup_pss_options
@@ -46,6 +47,7 @@ module catchup_pss
     integer(c_long) :: samples = 0
     real(c_double) :: seconds = 0
     character(kind=c_char) :: message(CUP_RUN_MSG_LEN) = c_null_char
+    real(c_double) :: t0 = 0          !< the phase: x0 is the state at t0 (cup_input_steady_phase)
   end type cup_pss_info
 
   !> cup_measure (pss.h)
@@ -142,6 +144,36 @@ module catchup_pss
       character(kind=c_char), intent(inout) :: errmsg(*)
       integer(c_int) :: st
     end function c_cup_netlist_element_nodes
+    function c_cup_input_steady_phase(u, T, t0, errmsg) bind(C, name="cup_input_steady_phase") result(st)
+      import :: c_int, c_ptr, c_double, c_char
+      type(c_ptr), value :: u
+      real(c_double), intent(inout) :: T
+      real(c_double), intent(out) :: t0
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_input_steady_phase
+    function c_cup_netlist_set_time_origin(nl, t0, errmsg) bind(C, name="cup_netlist_set_time_origin") result(st)
+      import :: c_int, c_ptr, c_double, c_char
+      type(c_ptr), value :: nl
+      real(c_double), value :: t0
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_netlist_set_time_origin
+    function c_cup_scene_set_time_origin(sc, t0, errmsg) bind(C, name="cup_scene_set_time_origin") result(st)
+      import :: c_int, c_ptr, c_double, c_char
+      type(c_ptr), value :: sc
+      real(c_double), value :: t0
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_set_time_origin
+    function c_cup_scene_steady_phase(sc, T, t0, errmsg) bind(C, name="cup_scene_steady_phase") result(st)
+      import :: c_int, c_ptr, c_double, c_char
+      type(c_ptr), value :: sc
+      real(c_double), intent(inout) :: T
+      real(c_double), intent(out) :: t0
+      character(kind=c_char), intent(inout) :: errmsg(*)
+      integer(c_int) :: st
+    end function c_cup_scene_steady_phase
     function c_cup_netlist_steady_state(nl, period) bind(C, name="cup_netlist_steady_state") result(asks)
       import :: c_int, c_ptr, c_double
       type(c_ptr), value :: nl
@@ -193,6 +225,66 @@ contains
     st = c_cup_input_period_fits(u%ptr, T, cmsg)
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_input_period_fits
+
+  !> The steady state's period T (in: the one asked for, or 0: the sources')
+  !> and phase t0, the least time from which every source repeats (pss.h).
+  subroutine cup_input_steady_phase(u, T, t0, ierr, errmsg)
+    type(cup_input_t), intent(in) :: u
+    real(c_double), intent(inout) :: T
+    real(c_double), intent(out) :: t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    t0 = 0
+    cmsg = cup_errbuf_()
+    st = c_cup_input_steady_phase(u%ptr, T, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_input_steady_phase
+
+  !> The netlist's sources read from t0 on (netlist.h): make integrators after.
+  subroutine cup_netlist_set_time_origin(nl, t0, ierr, errmsg)
+    type(cup_netlist_t), intent(in) :: nl
+    real(c_double), intent(in) :: t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(nl%ptr, 'netlist', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_netlist_set_time_origin(nl%ptr, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_netlist_set_time_origin
+
+  !> The scene's sources read from t0 on (scene.h): make integrators after.
+  subroutine cup_scene_set_time_origin(sc, t0, ierr, errmsg)
+    type(cup_scene_t), intent(in) :: sc
+    real(c_double), intent(in) :: t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(sc%ptr, 'scene', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_set_time_origin(sc%ptr, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_set_time_origin
+
+  !> The scene's steady-state period and phase, its sources then read from t0 on.
+  subroutine cup_scene_steady_phase(sc, T, t0, ierr, errmsg)
+    type(cup_scene_t), intent(in) :: sc
+    real(c_double), intent(inout) :: T
+    real(c_double), intent(out) :: t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    t0 = 0
+    if (cup_null_fail_(sc%ptr, 'scene', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_steady_phase(sc%ptr, T, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_steady_phase
 
   !> The steady state of L driven by u (pss.h). r holds the result also when
   !> ierr reports a failed solve (cup_pss_get_info says why).

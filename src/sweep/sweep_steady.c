@@ -79,18 +79,14 @@ static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_stea
   return st;
 }
 
-/* The period, or an error in r. */
+/* The period and its phase t0 (the scene's sources from t0 on: the period
+ * map and the period measured are [t0, t0 + T) of the sources as written),
+ * or an error in r. */
 static int period_of(const sw_variant *v, const cup_scene_steady *q, double *T, sw_result *r) {
   char err[CUP_ERRMSG_LEN] = "";
-  const cup_input *u = cup_scene_input(v->scene);
-  int st = CUP_OK;
+  double t0;
   *T = q->pss.period;
-  if (!(*T > 0) && !u) {
-    snprintf(err, sizeof err, "the scene has no input to take the period from: give steady_state.period");
-    st = CUP_ERR_ARG;
-  }
-  if (!st && !(*T > 0)) st = cup_input_period(u, T, err);
-  if (!st) st = cup_input_period_fits(u, *T, err);
+  int st = cup_scene_steady_phase(v->scene, T, &t0, err);
   if (st) snprintf(r->message, sizeof r->message, "steady state: %s", err);
   return st;
 }
