@@ -1,4 +1,7 @@
-/* run_steady — catchup-run --steady-state (run_steady.h, docs/steady-state.md). */
+/* run_steady — catchup-run --steady-state (run_steady.h, docs/steady-state.md):
+ * solved as a steady-state sweep's task is (io/scene_pss.h), the period
+ * then catchup-run's own run (streamed to its file with its signals and
+ * events), its samples measured as a task's are (cup_pss_measure). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stddef.h>
@@ -6,6 +9,7 @@
 #include <string.h>
 #include "run_steady.h"
 #include "analysis/pss_run.h"
+#include "io/scene_pss.h"
 
 enum { MSG = 2 * CUP_ERRMSG_LEN };
 
@@ -85,33 +89,16 @@ static int no_steady(run_steady *s, int st, const char *why, char *err, size_t s
 int run_steady_solve(run_steady *s, cup_scene *scene, cup_integrator_options *o, char *err, size_t size) {
   char e2[MSG] = "";
   s->asked = 1;
-  double T = s->req->pss.period, t0 = 0;
-  int st;
-  /* the period map from the phase t0 (the scene's sources from t0 on); no steady state: as written again */
-  if ((st = cup_scene_steady_phase(scene, &T, &t0, e2))) return no_steady(s, st, e2, err, size);
-  s->info.period = T;
-  cup_integrator_options mo;                     /* the period map: the run's, over one period */
-  cup_pss_map_options(o, cup_scene_options(scene)->T, T, s->req->pss.map_tol, &mo);
-  mo.on_step = NULL;
-  cup_integrator *I = NULL;
-  st = cup_scene_integrator(scene, &mo, &I, e2);
-  if (!st) st = cup_pss_solve_map(&s->r, I, s->n, T, cup_scene_x0(scene), &s->req->pss, e2);
-  cup_integrator_free(&I);
+  cup_integrator_options period;
+  int stage;                                     /* (the message says which) */
+  int st = scene_pss_solve(scene, o, &s->r, &s->info.period, &s->info.t0, &period, &stage, e2);
+  double t0 = s->info.t0;
   if (s->r) cup_pss_get_info(s->r, &s->info);
   s->info.t0 = t0;
-  if (!s->r || st < 0) {
-    cup_scene_set_time_origin(scene, 0, NULL);    /* the transient from t = 0 of the sources as written */
-    return no_steady(s, st, s->r ? s->info.message : e2, err, size);
-  }
+  if (st < 0 || !s->r) return no_steady(s, st, s->r ? s->info.message : e2, err, size);
   snprintf(s->message, sizeof s->message, "%s", s->info.message);
   s->solved = 1;
-  o->n = mo.n;
-  o->T = T;
-  o->output = CUP_OUTPUT_SAMPLES;
-  o->output_samples = s->req->samples;
-  o->output_t0 = 0;
-  o->tol_abs = mo.tol_abs;                       /* the period written as accurate as the steady state */
-  o->tol_rel = mo.tol_rel;
+  *o = period;                                   /* the run: one period from the steady state */
   s->N = s->req->samples;
   s->ns = s->nl ? cup_netlist_signal_count(s->nl) : 0;
   s->t = calloc((size_t)s->N, sizeof *s->t);
@@ -150,21 +137,18 @@ static const char *measured_name(const run_steady *s, int j, char *buf, size_t s
 /* Each measured signal's figures and harmonics, each element's power. */
 static int measure(run_steady *s) {
   int H = s->req->harmonics, nm = s->nl ? s->nm : s->n, np = s->req->npower;
-  long N = s->N;
   char e2[CUP_ERRMSG_LEN];
   s->me = calloc((size_t)nm + 1, sizeof *s->me);
   s->amp = calloc(((size_t)nm + 1) * (size_t)(H + 1), sizeof *s->amp);
   s->phase = calloc(((size_t)nm + 1) * (size_t)(H + 1), sizeof *s->phase);
   s->power = calloc((size_t)np + 1, sizeof *s->power);
-  double *v = calloc((size_t)N, sizeof *v);
-  int st = !s->me || !s->amp || !s->phase || !s->power || !v ? CUP_ERR_NOMEM : CUP_OK;
-  for (int j = 0; !st && j < nm; j++) {
-    for (long k = 0; k < N; k++) v[k] = s->nl ? s->sig[k * s->ns + s->mi[j]] : s->x[k * s->n + j];
-    st = cup_measure_period(v, N, H, &s->me[j], s->amp + (size_t)j * (H + 1), s->phase + (size_t)j * (H + 1), e2);
-  }
-  for (int j = 0; !st && j < np; j++) st = cup_measure_power(s->sig, N, s->ns, s->pv[j], s->pc[j], v, &s->power[j], e2);
-  if (!st && s->req->eff_out >= 0) s->efficiency = s->power[s->req->eff_out] / -s->power[s->req->eff_in];
-  free(v);
+  double *w = calloc((size_t)s->N, sizeof *w);
+  int st = !s->me || !s->amp || !s->phase || !s->power || !w ? CUP_ERR_NOMEM : CUP_OK;
+  cup_pss_figures f = {nm, s->nl ? s->mi : NULL, H, np, s->pv, s->pc, s->req->eff_out, s->req->eff_in, s->me, s->amp,
+                       s->phase, s->power, s->efficiency};
+  if (!st) st = s->nl ? cup_pss_measure(s->sig, s->N, s->ns, &f, w, e2) : cup_pss_measure(s->x, s->N, s->n, &f, w, e2);
+  s->efficiency = f.efficiency;
+  free(w);
   return st;
 }
 
