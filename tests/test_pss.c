@@ -432,8 +432,8 @@ static void steady_phases(void **state) {
   for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
     cup_netlist *nl = load(cases[k].text);
     char err[CUP_ERRMSG_LEN] = "";
-    double T = cases[k].T, t0 = -1;
-    int st = cup_input_steady_phase(cup_netlist_input(nl), &T, &t0, err);
+    double T = -1, t0 = -1;
+    int st = cup_input_steady_phase(cup_netlist_input(nl), cases[k].T, &T, &t0, err);
     print_message("  %.*s, T = %g: %s, T %.17g, t0 %.17g %s\n", (int)strcspn(cases[k].text, "\n"), cases[k].text,
                   cases[k].T, cup_status_name(st), T, t0, err);
     if (cases[k].says) {
@@ -463,7 +463,7 @@ static void shift_values(void **state) {
   const cup_input *u = cup_netlist_input(as_written);
   char err[CUP_ERRMSG_LEN];
   double T = 0, t0 = 0;
-  assert_int_equal(cup_input_steady_phase(u, &T, &t0, err), CUP_OK);
+  assert_int_equal(cup_input_steady_phase(u, 0, &T, &t0, err), CUP_OK);
   assert_close(T, 100e-6, 1e-18);
   assert_close(t0, 37e-6, 1e-18);               /* the single pulse's end: 5u + 1u + 30u + 1u */
   for (int pass = 0; pass < 3; pass++) {

@@ -107,10 +107,10 @@ typedef struct cup_scene_steady {
  *  set: or crowd: scene. */
 CUP_API int cup_scene_set_time_origin(cup_scene *s, double t0, char *errmsg);
 /** The steady state's period and phase (cup_input_steady_phase of the
- *  sources as written; *T on entry the period asked for, or 0: the
- *  sources'), and the time origin set to t0: the period map is a run from
+ *  sources as written; period the one asked for, or 0: the sources') into
+ *  *T and *t0, and the time origin set to t0: the period map is a run from
  *  t = 0 of an integrator made after this call. */
-CUP_API int cup_scene_steady_phase(cup_scene *s, double *T, double *t0, char *errmsg);
+CUP_API int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, char *errmsg);
 
 /** The scene's steady-state request, or NULL when it asks for none. */
 CUP_API const cup_scene_steady *cup_scene_steady_state(const cup_scene *s);

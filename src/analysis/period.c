@@ -153,8 +153,9 @@ int cup_input_period_fits(const cup_input *u, double T, char *errmsg) {
                   "%.17g (%.6g of them): over it the sources do not repeat", T, Tu, T / Tu);
 }
 
-int cup_input_steady_phase(const cup_input *u, double *T, double *t0, char *errmsg) {
+int cup_input_steady_phase(const cup_input *u, double period, double *T, double *t0, char *errmsg) {
   if (!T || !t0) return cup_fail(errmsg, CUP_ERR_ARG, "steady phase: NULL argument");
+  *T = period;
   *t0 = 0;
   if (!(*T >= 0) || !isfinite(*T))
     return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the period %g must be finite and > 0 (or 0: the sources')",

@@ -448,7 +448,7 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   double T = o->period, t0 = 0;
   cup_input *v = NULL;                           /* u from the phase t0 on, when t0 > 0 */
   if (cup_lcs_inputs(L) > 0 && u) {
-    if ((st = cup_input_steady_phase(u, &T, &t0, errmsg))) return st;
+    if ((st = cup_input_steady_phase(u, o->period, &T, &t0, errmsg))) return st;
     if (t0 > 0 && (st = cup_input_shift(u, t0, &v, errmsg))) return st;
     if (v) u = v;
   } else if (!(T > 0) || !isfinite(T)) {

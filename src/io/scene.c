@@ -716,11 +716,13 @@ int cup_scene_set_time_origin(cup_scene *s, double t0, char *errmsg) {
   return cup_input_origin(&s->u, &s->u_written, t0, errmsg);
 }
 
-int cup_scene_steady_phase(cup_scene *s, double *T, double *t0, char *errmsg) {
+int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, char *errmsg) {
   int st = cup_scene_set_time_origin(s, 0, errmsg);   /* the sources as written */
-  if (!st && !cup_scene_input(s) && !(*T > 0))
+  *T = period;
+  *t0 = 0;
+  if (!st && !cup_scene_input(s) && !(period > 0))
     return cup_fail(errmsg, CUP_ERR_ARG, "the scene has no input to take the period from: give steady_state.period");
-  if (!st) st = cup_input_steady_phase(cup_scene_input(s), T, t0, errmsg);
+  if (!st) st = cup_input_steady_phase(cup_scene_input(s), period, T, t0, errmsg);
   if (!st) st = cup_scene_set_time_origin(s, *t0, errmsg);
   return st;
 }

@@ -10,9 +10,7 @@ int scene_pss_solve(cup_scene *s, const cup_integrator_options *o, cup_pss **r, 
   const cup_scene_steady *q = cup_scene_steady_state(s);
   *r = NULL;
   *stage = SCENE_PSS_PHASE;
-  *T = q->pss.period;
-  *t0 = 0;
-  int st = cup_scene_steady_phase(s, T, t0, errmsg);     /* the sources from t0 on */
+  int st = cup_scene_steady_phase(s, q->pss.period, T, t0, errmsg);   /* the sources from t0 on */
   if (st) return st;
   *stage = SCENE_PSS_SETUP;
   cup_integrator_options mo;                      /* the period map: the run's, over one period */
