@@ -66,7 +66,8 @@ CUP_API int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double
  *  starts at the phase cup_input_steady_phase gives (docs/steady-state.md).
  *  t0 = 0: as written again. Make integrators after this call: they keep
  *  the input they were made with. CUP_ERR_UNSUPPORTED for t0 != 0 and a
- *  source the shift cannot carry. */
+ *  controller (cup_netlist_set_controller: its instants k ts are on the
+ *  sources' clock). */
 CUP_API int cup_netlist_set_time_origin(cup_netlist *nl, double t0, char *errmsg);
 
 /** .options steadystate (or steadyperiod=T): 1 if the netlist asks for its

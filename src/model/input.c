@@ -95,8 +95,8 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
  * t0 at or past the time from which the term repeats (cup_input_steady_phase):
  * a phase advanced by omega t0 (mod 2 pi), a PULSE's delay moved back by t0
  * (into (-period, 0] once spent), a SIN's delay spent into its phase, knots
- * moved by -t0,
- * a PWL past its last knot and a single pulse past its end constants. */
+ * moved by -t0, a PWL past its last knot and a single pulse past its end
+ * constants. */
 static int term_shift(const cup_term *t, double t0, cup_term *out) {
   *out = *t;
   out->t = out->v = NULL;

@@ -699,6 +699,7 @@ int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void 
   if (fn && !(ts > 0 && isfinite(ts)))
     return cup_fail(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
   nl_switched *S = nl->sw;
+  if (fn && S->t0 != 0) return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "controller: %s has a time origin", nl->file);
   if (fn && !S->gate && !(S->gate = calloc((size_t)S->nsw + 1, sizeof(int))))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
   S->gate_fn = fn;
@@ -751,9 +752,12 @@ static int check_controls(const nl_circuit *c, int e, char *errmsg) {
   return CUP_OK;
 }
 
-/* Every configuration's sources from t0 on, and those formed later. */
+/* Every configuration's sources from t0 on, and those formed later (a
+ * controller's instants k ts stay on the sources' clock: refused). */
 static int sw_origin(cup_netlist *nl, double t0, char *errmsg) {
   nl_switched *S = nl->sw;
+  if (S->gate_fn && t0 != 0)                       /* its instants k ts would move with the clock */
+    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "%s: a controller with a time origin t0 = %g", nl->file, t0);
   for (int k = 0; k < S->ntopo; k++) {
     int st = nl_input_origin(S->topo[k].sub, t0, errmsg);
     if (st) return st;
