@@ -721,7 +721,8 @@ int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, c
   *T = period;
   *t0 = 0;
   if (!st && !cup_scene_input(s) && !(period > 0))
-    return cup_fail(errmsg, CUP_ERR_ARG, "the scene has no input to take the period from: give steady_state.period");
+    return cup_fail(errmsg, CUP_ERR_ARG, "the scene has no input to take the period from: give steady_state.period "
+                    "(catchup-run --period)");
   if (!st) st = cup_input_steady_phase(cup_scene_input(s), period, T, t0, errmsg);
   if (!st) st = cup_scene_set_time_origin(s, *t0, errmsg);
   return st;
