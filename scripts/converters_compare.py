@@ -10,7 +10,9 @@ in this one process:
     circuit's topologies written by hand, matrix exponentials between
     events bracketed to ulps), on the netlist's .tran grid;
   * catchup-run: the adaptive scheme at tol 1e-3 .. 1e-9 and theta at
-    fixed steps (a netlist catchup refuses is reported with its message);
+    fixed steps, sampled on the .tran grid; and cheaper settings recorded
+    at its own steps (--set output.every=1; a netlist catchup refuses is
+    reported with its message);
   * ngspice (batch) on a near-ideal copy written here: switches RON = 1 mOhm,
     ROFF = 1 GOhm, `jump` edges 1 ns, every diode D(IS=1e-15 N=0.01),
     .options rshunt=1e12, TMAX = TSTEP, UIC; default and tight tolerances;
@@ -21,8 +23,9 @@ in this one process:
     engine (dt = Ts/100, Ts/1000) and the variable-step ones (trbdf2 with
     its step capped at TSTEP, dsed with its default cap, 10 us, sampled at
     its own steps) at rtol 1e-6 and 1e-9.
-Errors: the states (inductor currents, capacitor voltages: the netlist
-formulation's x) against the reference on the .tran grid, max-norm of each
+Errors: every tool's states (inductor currents, capacitor voltages: the
+netlist formulation's x) at the points it reports, interpolated linearly
+onto the .tran grid, against the reference there, max-norm of each
 relative to its peak, the worst state; samples within two of a jump of the
 reference (a step of more than 5 % of the peak) are left out (a sampled
 waveform misplaces a jump by up to a sample). Times: each tool's own count
@@ -52,6 +55,9 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 EXAMPLES = ["buck-ccm", "buck-dcm", "boost", "buckboost", "flyback", "fullbridge", "sixpulse", "precision-rectifier"]
 TOLS = [1e-3, 1e-5, 1e-7, 1e-9]
 THETA_FACTORS = [0.1, 1, 10]              # theta's n, times TSTOP / TSTEP
+OWN_STEPS = ["--set", "output.every=1"]   # catchup-run at its own steps (docs/netlist.md)
+OWN_THETA_PER_PERIOD = [2, 4, 10, 30]     # theta's n at its own steps, times the switching periods
+OWN_HMAX = 10                             # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
 SWITCH = "RON=1m ROFF=1e9"
 DIODE = "D(IS=1e-15 N=0.01)"
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
@@ -344,9 +350,17 @@ def errors(ref, run):
 
 def configs(name, cards, tstep, tstop, period):
     base = int(round(tstop / tstep))
+    periods = int(round(tstop / period))
     out = [("catchup", "adaptive tol=%g" % tol, ["--tol", tol]) for tol in TOLS]
     out += [("catchup", "theta n=%d" % int(f * base), ["--scheme", "theta", "--n", int(f * base)])
             for f in THETA_FACTORS]
+    # the same tool recording at its own steps instead of the .tran grid
+    # (OWN_STEPS), as ngspice and pulsim do: cheaper settings only
+    out += [("catchup", "adaptive tol=1e-3, own steps", ["--tol", 1e-3] + OWN_STEPS),
+            ("catchup", "adaptive tol=1e-3 hmax=Ts/%d, own steps" % OWN_HMAX,
+             ["--tol", 1e-3, "--set", "hmax=%r" % (period / OWN_HMAX)] + OWN_STEPS)]
+    out += [("catchup", "theta n=%d, own steps" % (f * periods), ["--scheme", "theta", "--n", f * periods] + OWN_STEPS)
+            for f in OWN_THETA_PER_PERIOD]
     out += [("ngspice", label, opts) for label, opts in NGSPICE_SETTINGS]
     out += [("pulsim", "pwl dt=%g" % (period / k), {"dt": period / k}) for k in (100, 1000)]
     # trbdf2: dt is its step cap, TSTEP, so that it samples every TSTEP;
@@ -401,7 +415,8 @@ def compare(a, name, tmp, log):
                "err": err, "worst_at": where, "reps": len(rs), "periods": tstop / period,
                "run_s": statistics.median(r["run_s"] for r in rs),
                "wall_s": statistics.median(r["wall_s"] for r in rs),
-               "steps": r0.get("steps"), "warnings": r0.get("warnings")}
+               "steps": r0.get("steps"), "points": len(r0["t"]) if "t" in r0 else None,
+               "warnings": r0.get("warnings")}
         rows.append(row)
         log.write(json.dumps(row) + "\n")
         log.flush()
@@ -465,31 +480,44 @@ def section(rows, a, cost):
            "examples/circuits against its exact solution (`build/tests/pwl_ref_dump`, tests/pwl_ref.h: "
            "topologies written by hand, matrix exponentials between events bisected to ulps), on the "
            "netlist's `.tran` grid: the worst state (inductor currents, capacitor voltages), max-norm relative "
-           "to its peak, away from the reference's jumps. catchup: `catchup-run` (adaptive `--tol`, θ = ½ "
-           "`--scheme theta --n N`), its time in the integrator. ngspice %s: a near-ideal copy (switches `%s`, "
+           "to its peak, away from the reference's jumps." % a.reps, "",
+           "**One rule for every tool.** Each tool reports at the points it chooses, and its error is measured "
+           "on the `.tran` grid by linear interpolation between them (the *points* column counts them): "
+           "ngspice at its own time points (`wrdata`, no `.options interp`), pulsim at its own steps, catchup "
+           "either on the `.tran` grid from its dense output (`catchup-run`'s default for a netlist: the rows "
+           "without *own steps*) or at its own steps (`--set output.every=1`: each step's end, the input's "
+           "breakpoints and the events' switch points among them; the rows marked *own steps*). Each *at equal "
+           "error* row pairs a run of ngspice or pulsim with the cheapest catchup run, of either kind, at "
+           "least as accurate. No peer setting was dropped or loosened: ngspice and pulsim run exactly as "
+           "before catchup got its own-step rows.", "",
+           "catchup: `catchup-run` (adaptive `--tol`, θ = ½ `--scheme theta --n N`; at its own steps also the "
+           "adaptive scheme with its step capped at Ts/%d, `--set hmax=`, and θ at %s steps per switching "
+           "period Ts), its time in the integrator (sampling and HDF5 writes included). ngspice %s: a "
+           "near-ideal copy (switches `%s`, "
            "`jump` edges 1 ns, diodes `%s`, TMAX = TSTEP, UIC, rshunt = 1e12), its transient analysis time "
            "(1 ms resolution). pulsim %s (PyPI): the same circuit through its CircuitBuilder, switches and "
            "diodes the conductance pair g_on = 1e3 S, g_off = 1e-9 S, gates as a NativeMultiMaskPwm "
            "schedule; its fixed-step engine `pwl` (dt = Ts/100, Ts/1000), `trbdf2` with its step capped at "
            "TSTEP, `dsed` with its default cap (10 us; it ground on for over a minute on the buck with a cap of "
-           "1 us or 0.1 us) sampled at its own steps (linear interpolation between them is part of its "
-           "error); each run in a child process, stopped at %d s; the time of its `simulate()` call." % (
-               a.reps, ngspice_version(), SWITCH, DIODE, pulsim_version(), PULSIM_TIMEOUT), ""]
+           "1 us or 0.1 us); each run in a child process, stopped at %d s; the time of its `simulate()` "
+           "call." % (
+               OWN_HMAX, ", ".join(map(str, OWN_THETA_PER_PERIOD)), ngspice_version(), SWITCH, DIODE,
+               pulsim_version(), PULSIM_TIMEOUT), ""]
     out += summary(rows) + [""]
     for name in EXAMPLES:
         rs = [r for r in rows if r["example"] == name]
         if not rs:
             continue
         out += ["### %s" % name, "", "![%s](docs/figures/converter-%s.png)" % (name, name), "",
-                "| tool | setting | error | run | process | steps |", "|---|---|---:|---:|---:|---:|"]
+                "| tool | setting | error | run | process | steps | points |", "|---|---|---:|---:|---:|---:|---:|"]
         for r in rs:
             if r["failed"]:
-                out.append("| %s | %s | %s | | | |" % (r["tool"], r["config"], r["failed"].replace("|", "/")))
+                out.append("| %s | %s | %s | | | | |" % (r["tool"], r["config"], r["failed"].replace("|", "/")))
             else:
-                out.append("| %s | %s | %.1e | %.3g s | %s | %s |" % (
+                out.append("| %s | %s | %.1e | %.3g s | %s | %s | %s |" % (
                     r["tool"], r["config"], r["err"], r["run_s"],
                     "%.3g s" % r["wall_s"] if r["tool"] != "pulsim" else "",
-                    r["steps"] if r["steps"] else ""))
+                    r["steps"] if r["steps"] else "", r.get("points") or ""))
         out += equal_error(rs) + [""]
     out += cost_text(cost)
     out.append("<!-- END converters -->")
