@@ -380,7 +380,7 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
       ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
       return NULL;
     }
-    const double *E = ad_expm(A, md, h);
+    const double *E = ad_expm(A, md, h, *t1);
     if (!A->callback) return E;
     double ie = interp_error(A, md, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
     double fac = errn > 0 ? 0.9 * pow(errn, -1.0 / (AD_DEGREE + 2)) : 5;
@@ -633,7 +633,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
     if (!(t1 > R->t)) break;
     if (ad_inputs_on(A, R->t, t1, A->wa, A->uerr))
       return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-    const double *E = ad_expm(A, md0, t1 - R->t);
+    const double *E = ad_expm(A, md0, t1 - R->t, t1);
     ad_lift(A, md0, A->x, A->wa, A->ya);
     for (int i = 0; i < na; i++) {
       double acc = 0;
