@@ -719,8 +719,8 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
  * refused it) and what followed it in its step (the next piece at a
  * breakpoint, the catching-up steps under way, the accumulation check),
  * then the steps to T. */
-int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, long *steps,
-                        long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, int jumped,
+                        long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = 0;                               /* (the input may have changed between runs) */
@@ -739,6 +739,12 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, &R, first, &pi);
   if (st >= 0 && ta < tb) st = start_piece(A, &R);
+  /* every step recorded: the state after the jump too, at the same time
+   * (after the window's projections, with the active set chosen there, so
+   * that zeta is the new configuration's); a line drawn through the
+   * records then shows the jump, not a ramp across the next step */
+  if (st >= 0 && jumped && !first && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
+    st = offer(A, &R);
   st = run_to_end(A, &R, st);
   A->tend = A->o.T;
   *steps = R.steps;
