@@ -56,6 +56,7 @@ EXAMPLES = ["buck-ccm", "buck-dcm", "boost", "buckboost", "flyback", "fullbridge
 TOLS = [1e-3, 1e-5, 1e-7, 1e-9]
 THETA_FACTORS = [0.1, 1, 10]              # theta's n, times TSTOP / TSTEP
 OWN_STEPS = ["--set", "output.every=1"]   # catchup-run at its own steps (docs/netlist.md)
+OWN_TOLS = [1e-3, 1e-6]                   # the adaptive scheme's tol at its own steps
 OWN_THETA_PER_PERIOD = [2, 4, 10, 30]     # theta's n at its own steps, times the switching periods
 OWN_HMAX = 10                             # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
 SWITCH = "RON=1m ROFF=1e9"
@@ -356,9 +357,9 @@ def configs(name, cards, tstep, tstop, period):
             for f in THETA_FACTORS]
     # the same tool recording at its own steps instead of the .tran grid
     # (OWN_STEPS), as ngspice and pulsim do: cheaper settings only
-    out += [("catchup", "adaptive tol=1e-3, own steps", ["--tol", 1e-3] + OWN_STEPS),
-            ("catchup", "adaptive tol=1e-3 hmax=Ts/%d, own steps" % OWN_HMAX,
-             ["--tol", 1e-3, "--set", "hmax=%r" % (period / OWN_HMAX)] + OWN_STEPS)]
+    out += [("catchup", "adaptive tol=%g, own steps" % tol, ["--tol", tol] + OWN_STEPS) for tol in OWN_TOLS]
+    out += [("catchup", "adaptive tol=%g hmax=Ts/%d, own steps" % (OWN_TOLS[-1], OWN_HMAX),
+             ["--tol", OWN_TOLS[-1], "--set", "hmax=%r" % (period / OWN_HMAX)] + OWN_STEPS)]
     out += [("catchup", "theta n=%d, own steps" % (f * periods), ["--scheme", "theta", "--n", f * periods] + OWN_STEPS)
             for f in OWN_THETA_PER_PERIOD]
     out += [("ngspice", label, opts) for label, opts in NGSPICE_SETTINGS]
@@ -490,8 +491,8 @@ def section(rows, a, cost):
            "error* row pairs a run of ngspice or pulsim with the cheapest catchup run, of either kind, at "
            "least as accurate. No peer setting was dropped or loosened: ngspice and pulsim run exactly as "
            "before catchup got its own-step rows.", "",
-           "catchup: `catchup-run` (adaptive `--tol`, θ = ½ `--scheme theta --n N`; at its own steps also the "
-           "adaptive scheme with its step capped at Ts/%d, `--set hmax=`, and θ at %s steps per switching "
+           "catchup: `catchup-run` (adaptive `--tol`, θ = ½ `--scheme theta --n N`; at its own steps the "
+           "adaptive scheme, also with its step capped at Ts/%d, `--set hmax=`, and θ at %s steps per switching "
            "period Ts), its time in the integrator (sampling and HDF5 writes included). ngspice %s: a "
            "near-ideal copy (switches `%s`, "
            "`jump` edges 1 ns, diodes `%s`, TMAX = TSTEP, UIC, rshunt = 1e12), its transient analysis time "
