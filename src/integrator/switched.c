@@ -393,10 +393,12 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (S->half) info->err_est = cup_estimate_value(&S->est);
     return st;
   }
+  /* every step recorded: a jump at a switching is recorded after it too */
+  int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
   for (int first = 1; st >= 0 && t < T; first = 0) {
-    cup_copy(S->xprev, S->x, S->n);
+    if (each) cup_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
-    int jumped = memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0;
+    int jumped = each && memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0;
     if (first) x0_moved(S, x0, info);
     st = child_of(S, topo, info->message);
     if (st) break;
