@@ -129,6 +129,8 @@ struct cup_adaptive {
   int *first_state;         /* built-in waveforms: first exosystem state of each term */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
   double *U, *W;            /* p x nw, nw x nw, column-major */
+  int *up, *ui, *gp, *gi;   /* U's nonzeros by column (nw + 1 starts, rows), G's by row (m + 1 starts, columns) */
+  double *ux, *gx;          /* ... their values (ad_offset) */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
   ad_mode modes[AD_MODES];

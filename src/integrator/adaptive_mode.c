@@ -503,14 +503,16 @@ void ad_state(const cup_adaptive *A, const ad_mode *md, const double *y, double 
   for (int i = 0; i < n; i++) x[i] = cup_dot(md->X + (size_t)i * na, y, na);
 }
 
+/* U w and F + G u by their nonzeros (offset_pattern), in the dense
+ * products' order: the same sums, less the terms that are zero. */
 void ad_offset(const cup_adaptive *A, const double *w, double *g) {
   int m = A->m, p = A->p, nw = A->nw;
   for (int q = 0; q < p; q++) A->ut[q] = 0;
   for (int c = 0; c < nw; c++)
-    for (int q = 0; q < p; q++) A->ut[q] += A->U[q + (size_t)c * p] * w[c];
+    for (int k = A->up[c]; k < A->up[c + 1]; k++) A->ut[A->ui[k]] += A->ux[k] * w[c];
   for (int i = 0; i < m; i++) {
     double acc = A->F[i];
-    for (int q = 0; q < p; q++) acc += A->G[i + (size_t)q * m] * A->ut[q];
+    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
     g[i] = acc;
   }
 }
