@@ -742,8 +742,9 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
   /* every step recorded: the state after the jump too, at the same time
    * (after the window's projections, with the active set chosen there, so
    * that zeta is the new configuration's); a line drawn through the
-   * records then shows the jump, not a ramp across the next step */
-  if (st >= 0 && jumped && !first && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
+   * records then shows the jump, not a ramp across the next step (a
+   * window of length 0 chooses none: its state is the next window's) */
+  if (st >= 0 && jumped && !first && ta < tb && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
     st = offer(A, &R);
   st = run_to_end(A, &R, st);
   A->tend = A->o.T;
