@@ -483,6 +483,14 @@ static void test_controller(void **state) {
   printf("failing controller: %s\n", info.message);
   cup_integrator_free(&I);
   assert_int_equal(cup_netlist_set_controller(nl, 0, pwm_gate, NULL, err), CUP_ERR_ARG);
+  /* its instants k ts are on the sources' clock: no time origin with it, nor it after one */
+  assert_int_equal(cup_netlist_set_time_origin(nl, 1e-6, err), CUP_ERR_UNSUPPORTED);
+  assert_contains(err, "controller");
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, NULL, NULL, err), CUP_OK);
+  assert_int_equal(cup_netlist_set_time_origin(nl, 1e-6, err), CUP_OK);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, NULL, err), CUP_ERR_UNSUPPORTED);
+  assert_int_equal(cup_netlist_set_time_origin(nl, 0, err), CUP_OK);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, NULL, err), CUP_OK);
   cup_netlist_free(&nl);
   cup_netlist_free(&ref);
 }
