@@ -380,7 +380,7 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
       ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
       return NULL;
     }
-    const double *E = ad_expm(A, md, h);
+    const double *E = ad_expm(A, md, h, *t1);
     if (!A->callback) return E;
     double ie = interp_error(A, md, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
     double fac = errn > 0 ? 0.9 * pow(errn, -1.0 / (AD_DEGREE + 2)) : 5;
@@ -633,7 +633,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
     if (!(t1 > R->t)) break;
     if (ad_inputs_on(A, R->t, t1, A->wa, A->uerr))
       return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-    const double *E = ad_expm(A, md0, t1 - R->t);
+    const double *E = ad_expm(A, md0, t1 - R->t, t1);
     ad_lift(A, md0, A->x, A->wa, A->ya);
     for (int i = 0; i < na; i++) {
       double acc = 0;
@@ -710,13 +710,13 @@ static int run_begin(cup_adaptive *A, ad_run *R, double tend, const double *xa, 
   return CUP_OK;
 }
 
-/* ... then, after its first sample (first: x0's), the breakpoint there,
- * the first piece and the steps to tend. */
-static int run_from_start(cup_adaptive *A, ad_run *R, int first, int st) {
+/* ... then, after its first sample (first: x0's), the breakpoint there and
+ * the first piece (the steps to tend follow: run_to_end). */
+static int start_from(cup_adaptive *A, ad_run *R, int first, int st) {
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, R, first, &pi);
   if (st >= 0 && R->t < A->tend) st = start_piece(A, R);
-  return run_to_end(A, R, st);
+  return st;
 }
 
 int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
@@ -727,18 +727,26 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
   for (int j = 0; A->tan && j < A->n; j++)       /* V(0) = I */
     for (int i = 0; i < A->n; i++) A->tan[i + (size_t)j * A->n] = i == j;
   st = emit(A, &R);                              /* x0 as given, like the fixed-step schemes */
-  return run_from_start(A, &R, 1, st);
+  return run_to_end(A, &R, start_from(A, &R, 1, st));
 }
 
 /* A switched run's window (switched.c): from xa at ta to tb, the samples
  * (x0's when first) and steps counted on from *next_sample and *steps. */
-int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, long *steps,
-                        long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, int jumped,
+                        long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds(),
               .t = ta, .steps = *steps, .next_sample = *next_sample};
   run_begin(A, &R, tb, xa, 0);
   int st = first ? emit(A, &R) : CUP_OK;
-  st = run_from_start(A, &R, first, st);
+  st = start_from(A, &R, first, st);
+  /* every step recorded: the state after the jump too, at the same time
+   * (after the window's projections, with the active set chosen there, so
+   * that zeta is the new configuration's); a line drawn through the
+   * records then shows the jump, not a ramp across the next step (a
+   * window of length 0 chooses none: its state is the next window's) */
+  if (st >= 0 && jumped && !first && ta < tb && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
+    st = offer(A, &R);
+  st = run_to_end(A, &R, st);
   A->tend = A->o.T;
   *steps = R.steps;
   *next_sample = R.next_sample;
