@@ -246,6 +246,12 @@ static int write_results(run_t *r) {
   return cup_status_merge(st, cup_h5run_attr_string(w, "message", r->message));
 }
 
+/* The writer's first failure's words into err (MSG_LEN bytes), "" if none. */
+static void writer_words(const cup_h5run *w, char *err) {
+  err[0] = '\0';
+  if (w) cup_h5run_status(w, err);
+}
+
 /* Turn the integrator's status into the run's: a stop requested by the sink
  * is either our signal or a write that failed (the writer knows which). */
 static void settle_status(run_t *r, int st) {
@@ -258,9 +264,8 @@ static void settle_status(run_t *r, int st) {
   if (stop_signal) {
     snprintf(r->message, sizeof r->message, "stopped by %s at step %ld (t = %.17g)",
              stop_signal == SIGINT ? "SIGINT" : "SIGTERM", r->info.step, r->info.t);
-  } else if (cup_h5run_errmsg(r->w)[0]) {
+  } else if (r->w && cup_h5run_status(r->w, r->message)) {   /* the writer's failure stopped it */
     r->status = CUP_ERR_IO;
-    snprintf(r->message, sizeof r->message, "%s", cup_h5run_errmsg(r->w));
   }
 }
 
@@ -335,7 +340,7 @@ static int declare_signals(run_t *r, char *err) {
   int st = cup_h5run_signals(r->w, ns, names);
   free(names);
   if (st) {
-    snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w)[0] ? cup_h5run_errmsg(r->w) : cup_status_string(st));
+    if (!cup_h5run_status(r->w, err)) snprintf(err, MSG_LEN, "%s", cup_status_string(st));
     return EXIT_RUN;
   }
   return 0;
@@ -392,7 +397,7 @@ static int reopen(run_t *r, char *err) {
   st = cup_status_merge(st, cup_h5run_attr_string(r->w, "message", "the run did not finish: the process ended "
                         "before closing the file; /t and /x hold the samples up to its last flush"));
   if (cup_status_merge(st, cup_h5run_flush(r->w))) {
-    snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
+    writer_words(r->w, err);
     return EXIT_RUN;
   }
   return 0;
@@ -483,7 +488,7 @@ static int setup(run_t *r, char *err) {
   r->sk.I = r->I;
   if (declare_signals(r, err)) return EXIT_RUN;
   if (write_provenance(r) || (r->crowd && crowd_log_begin(r->crowd, r->w)) || cup_h5run_commit(r->w)) {
-    snprintf(err, MSG_LEN, "%s", cup_h5run_errmsg(r->w));
+    writer_words(r->w, err);
     return EXIT_RUN;
   }
   model_warnings(r);
@@ -515,7 +520,7 @@ static void finish_file(run_t *r) {
     wst = cup_status_merge(wst, crowd_log_write(r->crowd, r->w, r->info.step, cup_integrator_state(r->I)));
   if (wst != CUP_OK && r->status >= 0) {
     r->status = CUP_ERR_IO;
-    snprintf(r->message, sizeof r->message, "%s", cup_h5run_errmsg(r->w));
+    writer_words(r->w, r->message);
   }
   if (cup_h5run_close(&r->w, err) != CUP_OK && r->status >= 0) {
     r->status = CUP_ERR_IO;

@@ -90,6 +90,10 @@ int run_stop_reopen(const char *out, const cup_scene *sc, cup_integrator *I, con
   if (cup_h5run_get_double(*w, "wall_time_s", wall)) *wall = 0;
   st = cup_h5run_truncate(*w, rows, events);
   if (!st) st = cup_h5run_drop_attr(*w, "stop_row");
-  if (st) snprintf(err, size, "%s", cup_h5run_errmsg(*w));
+  if (st) {                                      /* the writer's words */
+    e2[0] = '\0';
+    cup_h5run_status(*w, e2);
+    snprintf(err, size, "%s", e2);
+  }
   return st;
 }

@@ -87,6 +87,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse
 import collections
+import importlib
 import json
 import math
 import sys
@@ -214,10 +215,18 @@ class SolverBase:
     name = "?"
     pkg = "?"
     note = ""
+    module = None     # "osqp", or "proxsuite.proxqp" (from proxsuite import proxqp): self.osqp, self.proxqp
+    _cache = None     # a dense solver's copy of the problem's data, (prob, ...), made once a problem
 
     def __init__(self, args):
         self.args = args
         self.version = pkg_version(self.pkg)
+        if self.module:
+            top, _, sub = self.module.partition(".")
+            mod = importlib.import_module(top)
+            if sub:
+                mod = getattr(mod, sub, None) or importlib.import_module(self.module)
+            setattr(self, sub or top, mod)
 
     def applicable(self, prob):
         return True, ""
@@ -261,11 +270,7 @@ OSQP_POLISH = {1: "ok", 0: "not_performed", -1: "failed", -2: "linsys_error",
 class OSQPSolver(SolverBase):
     name, pkg = "osqp", "osqp"
     note = "warm: warm_starting=True, update(q=) keeps previous (x,y); osqp>=1 setting names (polishing, warm_starting)"
-
-    def __init__(self, args):
-        super().__init__(args)
-        import osqp
-        self.osqp = osqp
+    module = "osqp"
 
     def levels(self, ladder):
         out = []
@@ -316,12 +321,7 @@ DAQP_FLAGS = {1: "optimal", 2: "soft_optimal", 3: "?3", -1: "infeasible",
 class DAQPSolver(SolverBase):
     name, pkg = "daqp", "daqp"
     note = "dense active set; warm: Model.update(f=) keeps the working set (hot start); level eps -> primal_tol"
-
-    def __init__(self, args):
-        super().__init__(args)
-        import daqp
-        self.daqp = daqp
-        self._cache = None
+    module = "daqp"
 
     def applicable(self, prob):
         if prob.dim > self.args.daqp_max_dim:
@@ -374,12 +374,7 @@ class DAQPSolver(SolverBase):
 class ProxQPSolver(SolverBase):
     name, pkg = "proxqp", "proxsuite"
     note = "warm: update(g=) + initial_guess=WARM_START, solve(x_prev, y_prev, z_prev); cold and first solve: EQUALITY_CONSTRAINED_INITIAL_GUESS (default); check_duality_gap=True"
-
-    def __init__(self, args):
-        super().__init__(args)
-        from proxsuite import proxqp
-        self.proxqp = proxqp
-        self._cache = None
+    module = "proxsuite.proxqp"
 
     def prepare(self, prob):
         if self.backend(prob) == "dense" and (self._cache is None or self._cache[0] is not prob):
@@ -458,11 +453,7 @@ class ProxQPSolver(SolverBase):
 class PIQPSolver(SolverBase):
     name, pkg = "piqp", "piqp"
     note = "interior point, SparseSolver; no primal/dual warm start in the API: warm = setup once + update(c=)"
-
-    def __init__(self, args):
-        super().__init__(args)
-        import piqp
-        self.piqp = piqp
+    module = "piqp"
 
     def _settings(self, s, eps_abs, eps_rel, max_iter):
         st = s.settings

@@ -355,6 +355,18 @@ def peer_row(peers, r, names, cell, key=None, missing="—"):
     return " | ".join(cells)
 
 
+def peer_table(lines, auto, peers, names, own, cell, **kw):
+    """A table of catchup's rows (auto) against each peer in names, then a blank
+    line: catchup's own columns first (own: (heading, text of a row) pairs), then
+    peer_row's cell for each peer (kw: its key and missing)."""
+    lines.append("| problem | mode | " + "".join(h + " | " for h, _ in own) + " | ".join(names) + " |")
+    lines.append("|---|---|" + "---:|" * (len(own) + len(names)))
+    for r in auto:
+        mine = "".join(text(r) + " | " for _, text in own)
+        lines.append(f"| {r['problem']} | {r['mode']} | {mine}{peer_row(peers, r, names, cell, **kw)} |")
+    lines.append("")
+
+
 def certified_bounds(r):
     """The largest certified eps/S^2 and eta/S of a row; JSON has no inf, so a
     bound some point never certified is null: said in words."""
@@ -395,39 +407,25 @@ def projector_section(outdir, lines, old=""):
     if names:
         lines.append("Every peer, at the loosest tolerance that reached 1e-8 (else the best error it "
                      "reached within its budget of the run):\n")
-        lines.append("| problem | mode | " + " | ".join(names) + " |")
-        lines.append("|---|---|" + "---:|" * len(names))
-        for r in auto:
-            cells = peer_row(peers, r, names, peer_cell, missing="not run")
-            lines.append(f"| {r['problem']} | {r['mode']} | {cells} |")
-        lines.append("")
+        peer_table(lines, auto, peers, names, [], peer_cell, missing="not run")
         lines.append("Peak memory, each (problem, solver, mode) in its own process: the process's "
                      "peak resident set less its size before the solver's set-up (the problem data "
                      "and, for the peers, the Python interpreter), i.e. the solver's own memory; "
                      "catchup's set-up (polyset and projector) beside it:\n")
-        lines.append("| problem | mode | catchup set-up | catchup | " + " | ".join(names) + " |")
-        lines.append("|---|---|---:|---:|" + "---:|" * len(names))
-        for r in auto:
-            cells = peer_row(peers, r, names, key="solver_rss_kb",
-                             cell=lambda p: mb(p["solver_rss_kb"]) + ("" if p.get("met") else " (not at 1e-8)"))
-            setup = r.get("setup_s", 0) + r.get("polyset_setup_s", 0)
-            own = mb(r["solver_rss_kb"]) if "solver_rss_kb" in r else "—"
-            lines.append(f"| {r['problem']} | {r['mode']} | {setup:.3g} s | {own} | {cells} |")
-        lines.append("")
+        own = [("catchup set-up", lambda r: f"{r.get('setup_s', 0) + r.get('polyset_setup_s', 0):.3g} s"),
+               ("catchup", lambda r: mb(r["solver_rss_kb"]) if "solver_rss_kb" in r else "—")]
+        peer_table(lines, auto, peers, names, own, key="solver_rss_kb",
+                   cell=lambda p: mb(p["solver_rss_kb"]) + ("" if p.get("met") else " (not at 1e-8)"))
         if any(r.get("solver_heap_bytes") is not None for r in auto):
             lines.append("Heap held at most, bytes by the heapcount shim (`bench/heap.c`, preloaded "
                          "into both harnesses): the most bytes malloc held at once during the run above "
                          "what it held before the set-up, resident pages being too coarse for a set of "
                          "a few rows; the peers' include what their Python wrappers allocate through "
                          "malloc (numpy's buffers), not Python's own small objects:\n")
-            lines.append("| problem | mode | catchup | " + " | ".join(names) + " |")
-            lines.append("|---|---|---:|" + "---:|" * len(names))
-            for r in auto:
-                cells = peer_row(peers, r, names, key="solver_heap_bytes",
-                                 cell=lambda p: heap(p["solver_heap_bytes"]))
-                own = heap(r["solver_heap_bytes"]) if r.get("solver_heap_bytes") is not None else "—"
-                lines.append(f"| {r['problem']} | {r['mode']} | {own} | {cells} |")
-            lines.append("")
+            own = [("catchup", lambda r: heap(r["solver_heap_bytes"]) if r.get("solver_heap_bytes") is not None
+                    else "—")]
+            peer_table(lines, auto, peers, names, own, key="solver_heap_bytes",
+                       cell=lambda p: heap(p["solver_heap_bytes"]))
     others = [r for r in cat if r.get("solver") in ("catchup-pg", "catchup-fista")]
     if others:
         lines.append("catchup's first-order methods on the small sets:\n")

@@ -34,7 +34,6 @@ pulsim's simulate() call) and the whole process for the command-line tools.
 Writes OUTDIR/converters.jsonl, docs/figures/converter-NAME.png and the
 section of BENCHMARKS.md between its converters markers.
 """
-import argparse
 import json
 import math
 import os
@@ -42,14 +41,13 @@ import re
 import statistics
 import subprocess
 import sys
-import tempfile
 import time
 import warnings
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ngspice_compare import ngspice_version, write_section  # noqa: E402
+from ngspice_compare import bench_arguments, compare_all, ngspice_version, write_section  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 EXAMPLES = ["buck-ccm", "buck-dcm", "boost", "buckboost", "flyback", "fullbridge", "sixpulse", "precision-rectifier"]
@@ -625,21 +623,12 @@ def pulsim_version():
 def main():
     if len(sys.argv) == 5 and sys.argv[1] == "--pulsim-one":
         return pulsim_one(sys.argv[2], json.loads(sys.argv[3]), sys.argv[4])
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
-    ap.add_argument("--out", default="bench-out")
-    ap.add_argument("--reps", type=int, default=5)
-    ap.add_argument("--only", nargs="*", default=EXAMPLES)
+    ap = bench_arguments(EXAMPLES)
     ap.add_argument("--no-doc", action="store_true", help="do not rewrite BENCHMARKS.md")
     a = ap.parse_args()
-    os.makedirs(a.out, exist_ok=True)
-    rows = []
     load0 = os.getloadavg()[0]                 # the machine may be shared: timings depend on it
-    with tempfile.TemporaryDirectory() as tmp, open(os.path.join(a.out, "converters.jsonl"), "w") as log:
-        for name in a.only:
-            rows += compare(a, name, tmp, log)
-        cost = loop_cost(a, tmp)
-        log.write(json.dumps({"loop_cost": cost}) + "\n")
+    rows, cost = compare_all(a, "converters.jsonl", lambda name, tmp, log: compare(a, name, tmp, log),
+                             "loop_cost", loop_cost)
     a.load = (load0, os.getloadavg()[0])
     text = section(rows, a, cost)
     print(text)

@@ -409,22 +409,37 @@ def write_section(name, text):
         f.write(doc)
 
 
-def main():
+def bench_arguments(circuits):
+    """The options of a comparison over circuits (converters_compare.py's too): the
+    build, where its records go, the repetitions, the circuits (all by default)."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default="bench-out")
     ap.add_argument("--reps", type=int, default=5)
-    ap.add_argument("--only", nargs="*", default=CIRCUITS)
+    ap.add_argument("--only", nargs="*", default=circuits)
+    return ap
+
+
+def compare_all(a, log_name, compare_one, cost_name, cost_of):
+    """compare_one(name, tmp, log) for each circuit of a.only, then cost_of(a, tmp):
+    their rows and the cost, each logged (JSON lines) into a.out/log_name."""
+    os.makedirs(a.out, exist_ok=True)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp, open(os.path.join(a.out, log_name), "w") as log:
+        for name in a.only:
+            rows += compare_one(name, tmp, log)
+        cost = cost_of(a, tmp)
+        log.write(json.dumps({cost_name: cost}) + "\n")
+    return rows, cost
+
+
+def main():
+    ap = bench_arguments(CIRCUITS)
     ap.add_argument("--bridge-theta", type=float, default=0.5,
                     help="theta of the theta scheme on the bridges (1: implicit Euler, first order)")
     a = ap.parse_args()
-    os.makedirs(a.out, exist_ok=True)
-    rows = []
-    with tempfile.TemporaryDirectory() as tmp, open(os.path.join(a.out, "ngspice.jsonl"), "w") as log:
-        for name in a.only:
-            rows += compare_circuit(name, a, tmp, log)
-        cost = adaptive_cost(a, tmp)
-        log.write(json.dumps({"adaptive_cost": cost}) + "\n")
+    rows, cost = compare_all(a, "ngspice.jsonl", lambda name, tmp, log: compare_circuit(name, a, tmp, log),
+                             "adaptive_cost", adaptive_cost)
     text = section(rows, cost)
     write_section("ngspice", text)
     print(text)

@@ -100,14 +100,15 @@ static int on_step(long k, double t, const cup_proj_info *pi, void *ctx) {
 
 typedef struct {
   const char *name, *scene;
-  const char *const *ovr;
-  int novr;
+  const char *ovr[6];       /* the scene's overrides (key=value), up to the first NULL */
 } scene_case;
 
 static cup_scene *load(const scene_case *sc) {
   char err[CUP_ERRMSG_LEN];
   cup_scene *s = NULL;
-  if (cup_scene_load(&s, sc->scene, sc->ovr, sc->novr, err) != CUP_OK) fail_msg("%s: %s", sc->name, err);
+  int novr = 0;
+  while (novr < 6 && sc->ovr[novr]) novr++;
+  if (cup_scene_load(&s, sc->scene, sc->ovr, novr, err) != CUP_OK) fail_msg("%s: %s", sc->name, err);
   return s;
 }
 
@@ -238,42 +239,30 @@ static void check_case(const scene_case *sc) {
   cup_scene_free(&s);
 }
 
-static const char *const explicit_auto[] = {"n=20000", "output={every: 7}"};
-static const char *const explicit_as[] = {"n=20000", "output={samples: 101}", "projector.method=activeset"};
-static const char *const explicit_pg[] = {"n=3000", "output={every: 10}", "projector.method=pg", "eps=1e-10",
-                                          "eta=1e-8"};
-static const char *const theta[] = {"n=20000", "scheme=theta", "output={every: 13}"};
-static const char *const theta_bridge[] = {"n=40000", "scheme=theta", "output={every: 9}"};
-static const char *const implicit_final[] = {"n=9000", "scheme=implicit", "output=final"};
-static const char *const estimate[] = {"n=6000", "estimate=true", "output={samples: 11}"};
-static const char *const adaptive[] = {"scheme=adaptive", "tol=1e-10", "output={every: 1}", "T=100"};
-static const char *const adaptive_samples[] = {"scheme=adaptive", "tol=1e-8", "output={samples: 501}", "T=3"};
-static const char *const adaptive_bridge[] = {"scheme=adaptive", "tol=1e-8", "output={samples: 801}", "T=1e-4"};
-static const char *const theta_between[] = {"n=20000", "scheme=theta", "output={samples: 301}"};
-static const char *const square[] = {"n=30000", "output={every: 11}"};
-static const char *const square_adaptive[] = {"scheme=adaptive", "tol=1e-9", "output={every: 2}", "T=4"};
-static const char *const zeno[] = {"scheme=adaptive", "max_event_rate=5", "output={every: 1}", "T=100"};
-
-static const char *const sparse[] = {"n=3000", "output={every: 3}"};
-
+#define FIG2 EX "/paper-fig2.yaml"
+#define BRIDGE EX "/circuits/series-resonant.yaml"
 static const scene_case cases[] = {
-  {"implicit, sparse set (Newton on CHOLMOD factors)", EX "/sparse-mtx/scene.yaml", sparse, 2},
-  {"explicit, exact small LCP (fused steps)", EX "/paper-fig2.yaml", explicit_auto, 2},
-  {"explicit, dense active-set projector", EX "/paper-fig2.yaml", explicit_as, 3},
-  {"explicit, projected gradient", EX "/paper-fig2.yaml", explicit_pg, 5},
-  {"theta", EX "/paper-fig2.yaml", theta, 3},
-  {"theta through a diode bridge (D != 0: the weights' mode and Pi zeta)", EX "/circuits/series-resonant.yaml",
-   theta_bridge, 3},
-  {"implicit, output final", EX "/paper-fig2.yaml", implicit_final, 3},
-  {"explicit with the step-doubling estimate", EX "/paper-fig2.yaml", estimate, 3},
-  {"adaptive, every step", EX "/paper-fig2.yaml", adaptive, 4},
-  {"adaptive, samples", EX "/paper-fig2.yaml", adaptive_samples, 4},
-  {"adaptive through a diode bridge (D != 0), samples inside steps and events", EX "/circuits/series-resonant.yaml",
-   adaptive_bridge, 3},
-  {"theta, samples between steps (interpolated)", EX "/paper-fig2.yaml", theta_between, 3},
-  {"explicit, square wave", EX "/paper-fig3.yaml", square, 2},
-  {"adaptive, square wave (breakpoints)", EX "/paper-fig3.yaml", square_adaptive, 4},
-  {"adaptive, accumulating events (catching-up steps)", EX "/paper-fig2.yaml", zeno, 4},
+  {"implicit, sparse set (Newton on CHOLMOD factors)", EX "/sparse-mtx/scene.yaml",
+   {"n=3000", "output={every: 3}"}},
+  {"explicit, exact small LCP (fused steps)", FIG2, {"n=20000", "output={every: 7}"}},
+  {"explicit, dense active-set projector", FIG2, {"n=20000", "output={samples: 101}", "projector.method=activeset"}},
+  {"explicit, projected gradient", FIG2,
+   {"n=3000", "output={every: 10}", "projector.method=pg", "eps=1e-10", "eta=1e-8"}},
+  {"theta", FIG2, {"n=20000", "scheme=theta", "output={every: 13}"}},
+  {"theta through a diode bridge (D != 0: the weights' mode and Pi zeta)", BRIDGE,
+   {"n=40000", "scheme=theta", "output={every: 9}"}},
+  {"implicit, output final", FIG2, {"n=9000", "scheme=implicit", "output=final"}},
+  {"explicit with the step-doubling estimate", FIG2, {"n=6000", "estimate=true", "output={samples: 11}"}},
+  {"adaptive, every step", FIG2, {"scheme=adaptive", "tol=1e-10", "output={every: 1}", "T=100"}},
+  {"adaptive, samples", FIG2, {"scheme=adaptive", "tol=1e-8", "output={samples: 501}", "T=3"}},
+  {"adaptive through a diode bridge (D != 0), samples inside steps and events", BRIDGE,
+   {"scheme=adaptive", "tol=1e-8", "output={samples: 801}"}},
+  {"theta, samples between steps (interpolated)", FIG2, {"n=20000", "scheme=theta", "output={samples: 301}"}},
+  {"explicit, square wave", EX "/paper-fig3.yaml", {"n=30000", "output={every: 11}"}},
+  {"adaptive, square wave (breakpoints)", EX "/paper-fig3.yaml",
+   {"scheme=adaptive", "tol=1e-9", "output={every: 2}", "T=4"}},
+  {"adaptive, accumulating events (catching-up steps)", FIG2,
+   {"scheme=adaptive", "max_event_rate=5", "output={every: 1}", "T=100"}},
 };
 
 static void test_resumed_is_bit_for_bit(void **state) { check_case(*state); }
@@ -281,7 +270,7 @@ static void test_resumed_is_bit_for_bit(void **state) { check_case(*state); }
 /* A blob goes only into an integrator of its configuration, whole. */
 static void test_refusals(void **state) {
   (void)state;
-  scene_case sc = {"refusals", EX "/paper-fig2.yaml", explicit_auto, 2};
+  scene_case sc = {"refusals", FIG2, {"n=20000", "output={every: 7}"}};   /* the fused steps' case */
   cup_scene *s = load(&sc);
   trace tr;
   trace_init(&tr, 3, 2);
@@ -330,7 +319,7 @@ static void test_refusals(void **state) {
   trace_free(&tr);
   cup_scene_free(&s);
   /* a ball's process: not saved */
-  scene_case disc = {"disc", EX "/rotating-disc.yaml", NULL, 0};
+  scene_case disc = {"disc", EX "/rotating-disc.yaml", {NULL}};
   s = load(&disc);
   I = make(s, &tr, &flag, NULL);
   trace_init(&tr, cup_scene_dim(s), 0);

@@ -338,10 +338,7 @@ static void test_mixed_kernel(void **state) {
   double Cd[4] = {1, 0, 0, 1}, g[2] = {0, 0}, pd[2] = {1, 1}, Bm[4] = {1, 0, 0, 1};
   double D[4] = {1, 1000, 1000, 1e6}, h = 0.1, theta = 0.5;
   tcsc Cc;
-  tcsc_from_dense(&Cc, Cd, 2, 2);
-  cup_metric P = {.kind = CUP_METRIC_DIAGONAL, .diag = pd};
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &Cc.view, g, &P, NULL), CUP_OK);
+  cup_polyset *K = tpolyset_dense(&Cc, Cd, 2, 2, g, pd);
   cup_lcp_step ls;
   assert_int_equal(cup_lcp_step_init_bd(&ls, K, NULL, h, Bm, D, theta), CUP_OK);
   double x0[2] = {0, 0};

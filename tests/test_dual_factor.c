@@ -68,10 +68,7 @@ static long solves_against_dense(long room, double per_row) {
     random_rows(&r, C, m, n);
     for (int j = 0; j < n; j++) d[j] = 0.5 + 4 * rng_unif(&r);
     tcsc Ct;
-    tcsc_from_dense(&Ct, C, m, n);
-    cup_metric P = {CUP_METRIC_DIAGONAL, d, {0}, 0};
-    cup_polyset *K = NULL;
-    assert_int_equal(cup_polyset_create(&K, &Ct.view, NULL, &P, NULL), CUP_OK);
+    cup_polyset *K = tpolyset_dense(&Ct, C, m, n, NULL, d);
     cup_dfact *f = NULL;
     assert_int_equal(cup_dfact_create(&f, K, 1, room, NULL), CUP_OK);
     unsigned char *act = calloc((size_t)m, 1);

@@ -222,10 +222,7 @@ static void test_unrolled_step_is_the_general_one(void **state) {
     for (int i = 0; i < n; i++)
       for (int j = 0; j < n; j++) W[i + j * n] = (i == j) + 0.01 * rng_normal(&r);
     tcsc Cc;
-    tcsc_from_dense(&Cc, C, m, n);
-    cup_metric P = {.kind = CUP_METRIC_DIAGONAL, .diag = pd};
-    cup_polyset *K = NULL;
-    assert_int_equal(cup_polyset_create(&K, &Cc.view, g, &P, NULL), CUP_OK);
+    cup_polyset *K = tpolyset_dense(&Cc, C, m, n, g, pd);
     cup_lcp_step fast, slow;
     int use_w = trial % 2;
     assert_int_equal(cup_lcp_step_init(&fast, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);

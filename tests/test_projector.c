@@ -123,6 +123,32 @@ static void random_point(const inst *I, rng_t *r, double *x) {
   for (int a = 0; a < I->n; a++) x[a] = I->w0[a] + amp * rng_normal(r);
 }
 
+/* A small instance of trial's kind (the kinds in turn): n in 2..6, m in
+ * 2..8 (2 for a thin wedge), a dense P every other trial. */
+static void inst_small(inst *I, rng_t *r, int trial) {
+  int kind = trial % NKIND;
+  int n = rng_int(r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(r, 2, 8);
+  inst_make(I, r, kind, n, m, trial % 2);
+}
+
+/* The default options with a method and relative tolerances. */
+static cup_projector_options proj_options(int method, double eps_rel, double eta_rel) {
+  cup_projector_options o;
+  cup_projector_options_default(&o);
+  o.method = method;
+  o.eps_rel = eps_rel;
+  o.eta_rel = eta_rel;
+  return o;
+}
+
+/* A projector onto K; the test fails, saying why, if it is refused. */
+static cup_projector *proj_new(const cup_polyset *K, const cup_projector_options *o) {
+  cup_projector *pr = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_projector_create(&pr, K, o, msg)) fail_msg("projector: %s", msg);
+  return pr;
+}
+
 /* Write an instance and a point as text (for reproducing a failure outside
  * the test: CUP_TEST_DUMP=1). */
 static void dump_instance(const inst *I, const double *x, const char *path) {
@@ -245,13 +271,9 @@ static void test_random_polyhedra_enumeration(void **state) {
     inst I;
     inst_make(&I, &r, kind, n, m, trial % 3 == 0);
     cup_polyset *K = inst_polyset(&I);
-    char msg[CUP_ERRMSG_LEN];
-    cup_projector_options o;
-    cup_projector_options_default(&o);
-    o.eps_rel = kind == THIN_WEDGE ? 1e-8 : 1e-14;
-    o.eta_rel = kind == THIN_WEDGE ? 1e-6 : 1e-12;
-    cup_projector *pr = NULL;
-    assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_OK);
+    cup_projector_options o = proj_options(CUP_PROJ_AUTO, kind == THIN_WEDGE ? 1e-8 : 1e-14,
+                                           kind == THIN_WEDGE ? 1e-6 : 1e-12);
+    cup_projector *pr = proj_new(K, &o);
     tally *t = kind == THIN_WEDGE ? &wedge : has_interior(&I) ? &with : &without;
     double *x = malloc(sizeof(double) * n);
     for (int rep = 0; rep < 3; rep++) {
@@ -289,13 +311,9 @@ static void test_random_polyhedra_sparse_path(void **state) {
     inst I;
     inst_make(&I, &r, kind, n, m, trial % 2);
     cup_polyset *K = inst_polyset(&I);
-    char msg[CUP_ERRMSG_LEN];
-    cup_projector_options o;
-    cup_projector_options_default(&o);
-    o.eps_rel = 1e-11;   /* the rigorous floor 2 sum lam_i gam_i is ~1e-13 S^2 here */
-    o.eta_rel = 1e-9;
-    cup_projector *pr = NULL;
-    assert_int_equal(cup_projector_create(&pr, K, &o, msg), CUP_OK);
+    /* the rigorous floor 2 sum lam_i gam_i is ~1e-13 S^2 here */
+    cup_projector_options o = proj_options(CUP_PROJ_AUTO, 1e-11, 1e-9);
+    cup_projector *pr = proj_new(K, &o);
     double *x = malloc(sizeof(double) * n);
     random_point(&I, &r, x);
     check_one(&I, pr, x, 1e-7, &t);
@@ -317,20 +335,13 @@ static void test_first_order_methods(void **state) {
   for (int method = CUP_PROJ_PG; method <= CUP_PROJ_FISTA; method++) {
     tally t = {0};
     for (int trial = 0; trial < 200; trial++) {
-      int kind = trial % NKIND;
-      int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
       inst I;
-      inst_make(&I, &r, kind, n, m, trial % 2);
+      inst_small(&I, &r, trial);
       cup_polyset *K = inst_polyset(&I);
-      cup_projector_options o;
-      cup_projector_options_default(&o);
-      o.method = method;
-      o.eps_rel = 1e-9;
-      o.eta_rel = 1e-7;
+      cup_projector_options o = proj_options(method, 1e-9, 1e-7);
       o.max_iter = 20000;
-      cup_projector *pr = NULL;
-      assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
-      double *x = malloc(sizeof(double) * n);
+      cup_projector *pr = proj_new(K, &o);
+      double *x = malloc(sizeof(double) * I.n);
       random_point(&I, &r, x);
       check_one(&I, pr, x, 1e-3, &t);
       free(x);
@@ -350,10 +361,9 @@ static void test_scaling(void **state) {
   rng_t r = {99};
   static const double scales[] = {1e-9, 1e9};
   for (int trial = 0; trial < 120; trial++) {
-    int kind = trial % NKIND;
-    int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
     inst I;
-    inst_make(&I, &r, kind, n, m, trial % 2);
+    inst_small(&I, &r, trial);
+    int kind = I.kind, n = I.n, m = I.m;
     double *x = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
     double *xs = malloc(sizeof(double) * n), *zs = malloc(sizeof(double) * n);
     double *gs = malloc(sizeof(double) * m);
@@ -395,8 +405,7 @@ static void test_skip_returns_x_exactly(void **state) {
     cup_projector_options o;
     cup_projector_options_default(&o);
     o.method = method;
-    cup_projector *pr = NULL;
-    assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+    cup_projector *pr = proj_new(K, &o);
     double z[5];
     cup_proj_info info;
     assert_int_equal(cup_project(pr, I.w0, z, &info), CUP_OK);
@@ -415,14 +424,11 @@ static void test_skip_returns_x_exactly(void **state) {
  * checked here from the data. */
 static void check_farkas(int n, int m, const double *C, const double *g, int method) {
   tcsc Ct;
-  tcsc_from_dense(&Ct, C, m, n);
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &Ct.view, g, NULL, NULL), CUP_OK);
+  cup_polyset *K = tpolyset_dense(&Ct, C, m, n, g, NULL);
   cup_projector_options o;
   cup_projector_options_default(&o);
   o.method = method;
-  cup_projector *pr = NULL;
-  assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+  cup_projector *pr = proj_new(K, &o);
   double x[16] = {0.3, -0.2, 0.1, 0.5}, z[16];
   assert_true(n <= 16);
   for (int a = 0; a < 16; a++) z[a] = 7;
@@ -478,19 +484,13 @@ static void test_return_feasible(void **state) {
   (void)state;
   rng_t r = {11};
   for (int trial = 0; trial < 200; trial++) {
-    int kind = trial % NKIND;
-    int n = rng_int(&r, 2, 6), m = kind == THIN_WEDGE ? 2 : rng_int(&r, 2, 8);
     inst I;
-    inst_make(&I, &r, kind, n, m, trial % 2);
+    inst_small(&I, &r, trial);
+    int n = I.n, m = I.m;
     cup_polyset *K = inst_polyset(&I);
-    cup_projector_options o;
-    cup_projector_options_default(&o);
+    cup_projector_options o = proj_options(trial % 3 == 0 ? CUP_PROJ_FISTA : CUP_PROJ_AUTO, 1e-8, 1e-6);
     o.return_feasible = 1;
-    o.method = trial % 3 == 0 ? CUP_PROJ_FISTA : CUP_PROJ_AUTO;
-    o.eps_rel = 1e-8;
-    o.eta_rel = 1e-6;
-    cup_projector *pr = NULL;
-    assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+    cup_projector *pr = proj_new(K, &o);
     double *x = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
     random_point(&I, &r, x);
     cup_proj_info info;
@@ -661,13 +661,8 @@ static void jammed_packing(const jam_case *jc) {
   cup_polyset *Kset = NULL;
   char msg[CUP_ERRMSG_LEN];
   if (cup_polyset_create(&Kset, &Ct.view, g, &Pm, msg)) fail_msg("create: %s", msg);
-  cup_projector_options o;
-  cup_projector_options_default(&o);
-  o.method = jc->method;
-  o.eps_rel = 1e-11;
-  o.eta_rel = 1e-9;
-  cup_projector *pr = NULL;
-  assert_int_equal(cup_projector_create(&pr, Kset, &o, msg), CUP_OK);
+  cup_projector_options o = proj_options(jc->method, 1e-11, 1e-9);
+  cup_projector *pr = proj_new(Kset, &o);
   ref_problem rq = {n, m, C, g, P};
   static int rp[MMAX + 1], ri[MMAX * n];
   static double rv[MMAX * n], lr[MMAX];
@@ -830,16 +825,12 @@ static void test_ladder_against_pava(void **state) {
   int m = L.m, n = L.n;
   double *x = malloc(sizeof(double) * n), *zr = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
   for (int warm = 0; warm <= 1; warm++) {
-    cup_projector_options o;
-    cup_projector_options_default(&o);
-    o.warm_start = warm;
     /* the finishing solve aims the slack of the active rows ~16 ulps inside,
      * which costs 2 sum lam_i s_i ~ 1e-12 S^2 here (long blocks carry large
      * multipliers): certify a little above that floor */
-    o.eps_rel = 1e-11;
-    o.eta_rel = 1e-8;
-    cup_projector *pr = NULL;
-    assert_int_equal(cup_projector_create(&pr, L.K, &o, NULL), CUP_OK);
+    cup_projector_options o = proj_options(CUP_PROJ_AUTO, 1e-11, 1e-8);
+    o.warm_start = warm;
+    cup_projector *pr = proj_new(L.K, &o);
     for (int k = 0; k < 6; k++) {
       ladder_point(&L, &r, k, x, zr);
       cup_proj_info info;
@@ -882,13 +873,9 @@ static void test_ladder_cold_start(void **state) {
   int m = L.m, n = L.n;
   double *x = malloc(sizeof(double) * n), *zr = malloc(sizeof(double) * n), *z = malloc(sizeof(double) * n);
   double *lam = malloc(sizeof(double) * m), *ls = malloc(sizeof(double) * m);
-  cup_projector_options o;
-  cup_projector_options_default(&o);
+  cup_projector_options o = proj_options(CUP_PROJ_AUTO, 1e-11, 1e-8);
   o.warm_start = 0;
-  o.eps_rel = 1e-11;
-  o.eta_rel = 1e-8;
-  cup_projector *pr = NULL;
-  assert_int_equal(cup_projector_create(&pr, L.K, &o, NULL), CUP_OK);
+  cup_projector *pr = proj_new(L.K, &o);
   for (int k = 0; k < 4; k++) {
     ladder_point(&L, &r, k, x, zr);
     double prev = 0, lmax = 0;
@@ -948,14 +935,9 @@ static void test_no_allocation(void **state) {
     cup_polyset *K = NULL;
     assert_int_equal(cup_polyset_create(&K, &I->Ct.view, I->g, &I->Pm, NULL), CUP_OK);
     for (int method = 0; method < 4; method++) {
-      cup_projector_options o;
-      cup_projector_options_default(&o);
-      o.method = method;
+      cup_projector_options o = proj_options(method, 1e-8, 1e-6);
       o.max_iter = 2000;
-      o.eps_rel = 1e-8;
-      o.eta_rel = 1e-6;
-      cup_projector *pr = NULL;
-      assert_int_equal(cup_projector_create(&pr, K, &o, NULL), CUP_OK);
+      cup_projector *pr = proj_new(K, &o);
       double *x = malloc(sizeof(double) * I->n), *z = malloc(sizeof(double) * I->n);
       double *dir = malloc(sizeof(double) * I->n);
       random_point(I, &r, x);
@@ -996,10 +978,7 @@ static void test_backup_holds_no_second_lcp(void **state) {
   (void)state;
   double Cd[4] = {1, 0.5, -0.25, 1}, g[2] = {-1, -2}, pd[2] = {1, 2};
   tcsc C;
-  tcsc_from_dense(&C, Cd, 2, 2);
-  cup_metric P = {.kind = CUP_METRIC_DIAGONAL, .diag = pd};
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &C.view, g, &P, NULL), CUP_OK);
+  cup_polyset *K = tpolyset_dense(&C, Cd, 2, 2, g, pd);
   cup_projector_options o;
   cup_projector_options_default(&o);
   o.eps_abs = o.eta_abs = 0;

@@ -43,7 +43,10 @@ typedef struct {
   cup_pss_info info;
   double mu[2][2];           /* the multipliers (re, im), by decreasing modulus */
   double di;                 /* the exact flow's i(L)(Ts) - i(L)(0) from x0: 0 at the fixed point */
+  pr_traj tr;                /* the exact flow over a period from x0 */
 } conv;
+
+static const double VOUT[PR_Y] = {0, 1, 0};   /* pr_mean's weights of v(out) = x[1] */
 
 static cup_integrator *period_map(conv *v, double tol) {
   char err[CUP_ERRMSG_LEN];
@@ -91,10 +94,6 @@ static void solve(conv *v, const char *name) {
   assert_true(v->info.residual <= 1e-10 * (1 + fmax(fabs(x0[0]), fabs(x0[1]))));
 }
 
-static void done(conv *v) {
-  cup_pss_free(&v->r);
-  cup_netlist_free(&v->nl);
-}
 
 /* The exact period map: x(Ts) from x (the reference's (x, 1)). */
 static void exact_map(const conv *v, const double *x, double *out, pr_traj *keep) {
@@ -108,10 +107,10 @@ static void exact_map(const conv *v, const double *x, double *out, pr_traj *keep
 }
 
 /* x0 against the exact map's fixed point and catchup's brute force. */
-static void check_fixed_point(conv *v, pr_traj *tr) {
+static void check_fixed_point(conv *v) {
   const double *x0 = cup_pss_x0(v->r);
   double y[2], scale = 1 + fmax(fabs(x0[0]), fabs(x0[1]));
-  exact_map(v, x0, y, tr);
+  exact_map(v, x0, y, &v->tr);
   double d = fmax(fabs(y[0] - x0[0]), fabs(y[1] - x0[1]));
   v->di = y[0] - x0[0];
   /* brute force: Phi from rest until the change is below 1e-12 relative */
@@ -174,12 +173,24 @@ static void check_multipliers(const conv *v, const double M[2][2], double tol) {
   }
 }
 
-/* The steady state of examples/circuits/NAME.cir, solved and checked
- * against the exact map and brute force (check_fixed_point); tr keeps the
- * exact period from x0. */
-static void solve_checked(conv *v, const char *name, pr_traj *tr) {
-  solve(v, name);
-  check_fixed_point(v, tr);
+/* The tests' fixture: the steady state of examples/circuits/NAME.cir (the
+ * test's prestate), solved and checked against the exact map and brute
+ * force (check_fixed_point), with the exact period from x0. */
+static int conv_solved(void **state) {
+  conv *v = malloc(sizeof *v);
+  solve(v, *state);
+  *state = v;
+  check_fixed_point(v);
+  return 0;
+}
+
+static int conv_done(void **state) {
+  conv *v = *state;
+  pr_free(&v->tr);
+  cup_pss_free(&v->r);
+  cup_netlist_free(&v->nl);
+  free(v);
+  return 0;
 }
 
 /* The extremes of v(out) = x[1] over the period, on 2001 points. */
@@ -194,20 +205,18 @@ static void vout_range(const pr_traj *tr, double Ts, double *vmin, double *vmax)
 
 /* ---- the CCM buck: 12 V, D = 0.5, 100 uH, 10 uF || 5 ohm ---- */
 static void buck_ccm(void **state) {
-  (void)state;
   const double Vin = 12, D = 0.5, L = 100e-6, C = 10e-6, R = 5;
-  conv v;
-  pr_traj tr;
-  solve_checked(&v, "buck-ccm", &tr);
-  const double rv[PR_Y] = {0, 1, 0}, Ts = v.Ts;
-  double vavg = pr_mean(&tr, rv, 0, Ts), von = pr_mean(&tr, rv, 0, D * Ts);
+  const conv *v = *state;
+  const pr_traj *tr = &v->tr;
+  const double Ts = v->Ts;
+  double vavg = pr_mean(tr, VOUT, 0, Ts), von = pr_mean(tr, VOUT, 0, D * Ts);
   double a[2], b[2];
-  pr_eval(&tr, 0, a);
-  pr_eval(&tr, D * Ts, b);
+  pr_eval(tr, 0, a);
+  pr_eval(tr, D * Ts, b);
   double ripple = b[0] - a[0], closed = (Vin - vavg) * D * Ts / L;
   /* the output's own ripple bounds how far the mean over the on time is from the mean */
   double vmin, vmax;
-  vout_range(&tr, Ts, &vmin, &vmax);
+  vout_range(tr, Ts, &vmin, &vmax);
   print_message("buck-ccm  mean v(out) %.12f V (D Vin = %.12f); i(L) ripple %.9f A, (Vin - Vout) D Ts / L = %.9f A, "
                 "exact (Vin - mean_on v) D Ts / L = %.9f A; v(out) p-p %.6g V\n", vavg, D * Vin, ripple, closed,
                 (Vin - von) * D * Ts / L, vmax - vmin);
@@ -218,25 +227,21 @@ static void buck_ccm(void **state) {
   const double A[2][2] = {{0, -1 / L}, {1 / C, -1 / (R * C)}};
   double E[2][2];
   expm2(A, Ts, E);
-  check_multipliers(&v, E, 1e-6);
-  pr_free(&tr);
-  done(&v);
+  check_multipliers(v, E, 1e-6);
 }
 
 /* ---- the boost: 5 V, 50 uH, D = 0.5, 20 uF || 10 ohm (in CCM) ---- */
 static void boost(void **state) {
-  (void)state;
   const double Vin = 5, D = 0.5, L = 50e-6, C = 20e-6, R = 10;
-  conv v;
-  pr_traj tr;
-  solve_checked(&v, "boost", &tr);
-  const double rv[PR_Y] = {0, 1, 0}, Ts = v.Ts;
-  double voff = pr_mean(&tr, rv, D * Ts, Ts), vavg = pr_mean(&tr, rv, 0, Ts);
+  const conv *v = *state;
+  const pr_traj *tr = &v->tr;
+  const double Ts = v->Ts;
+  double voff = pr_mean(tr, VOUT, D * Ts, Ts), vavg = pr_mean(tr, VOUT, 0, Ts);
   print_message("boost     mean v(out) over the off time %.12f V (Vin / (1 - D) = %.12f), over the period %.9f V\n", voff,
                 Vin / (1 - D), vavg);
   /* the inductor's volt-seconds: L (i(Ts) - i(0)) = (Vin - voff) (1 - D) Ts, so x0's
    * residual moves voff by L di / ((1 - D) Ts) (5.5e-9 V here) */
-  assert_true(fabs(voff - Vin / (1 - D)) <= L * fabs(v.di) / ((1 - D) * Ts) + 1e-12 * Vin);
+  assert_true(fabs(voff - Vin / (1 - D)) <= L * fabs(v->di) / ((1 - D) * Ts) + 1e-12 * Vin);
   /* CCM (the diode conducts the whole off time): Phi' = e^{A_off (1-D) Ts} e^{A_on D Ts} */
   const double Aon[2][2] = {{0, 0}, {0, -1 / (R * C)}}, Aoff[2][2] = {{0, -1 / L}, {1 / C, -1 / (R * C)}};
   double Eon[2][2], Eoff[2][2], M[2][2];
@@ -244,40 +249,34 @@ static void boost(void **state) {
   expm2(Aoff, (1 - D) * Ts, Eoff);
   for (int i = 0; i < 2; i++)
     for (int j = 0; j < 2; j++) M[i][j] = Eoff[i][0] * Eon[0][j] + Eoff[i][1] * Eon[1][j];
-  check_multipliers(&v, M, 1e-6);
-  pr_free(&tr);
-  done(&v);
+  check_multipliers(v, M, 1e-6);
 }
 
 /* ---- the DCM buck: 12 V, D = 0.3, 10 uH, 10 uF || 20 ohm ---- */
 static void buck_dcm(void **state) {
-  (void)state;
   const double Vin = 12, D = 0.3, L = 10e-6, R = 20;
-  conv v;
-  pr_traj tr;
-  solve_checked(&v, "buck-dcm", &tr);
-  const double rv[PR_Y] = {0, 1, 0}, Ts = v.Ts;
-  double M = pr_mean(&tr, rv, 0, Ts) / Vin, closed = 2 / (1 + sqrt(1 + 8 * L / (R * D * D * Ts)));
+  const conv *v = *state;
+  const pr_traj *tr = &v->tr;
+  const double Ts = v->Ts;
+  double M = pr_mean(tr, VOUT, 0, Ts) / Vin, closed = 2 / (1 + sqrt(1 + 8 * L / (R * D * D * Ts)));
   double vmin, vmax;
-  vout_range(&tr, Ts, &vmin, &vmax);
+  vout_range(tr, Ts, &vmin, &vmax);
   print_message("buck-dcm  M = %.9f against 2 / (1 + sqrt(1 + 8 L / (R D^2 Ts))) = %.9f; v(out) p-p / Vin %.6g; "
-                "%d events a period\n", M, closed, (vmax - vmin) / Vin, tr.events);
+                "%d events a period\n", M, closed, (vmax - vmin) / Vin, tr->events);
   assert_true(fabs(M - closed) <= (vmax - vmin) / Vin);
-  assert_true(tr.events >= 1);                      /* the diode blocks inside the period: DCM */
+  assert_true(tr->events >= 1);                      /* the diode blocks inside the period: DCM */
   /* the exact map's Jacobian by central differences (its pieces' events move with x) */
-  const double *x0 = cup_pss_x0(v.r);
+  const double *x0 = cup_pss_x0(v->r);
   double J[2][2];
   for (int j = 0; j < 2; j++) {
     double h = 1e-6 * fmax(1, fabs(x0[j])), xp[2] = {x0[0], x0[1]}, xm[2] = {x0[0], x0[1]}, yp[2], ym[2];
     xp[j] += h, xm[j] -= h;
-    exact_map(&v, xp, yp, NULL);
-    exact_map(&v, xm, ym, NULL);
+    exact_map(v, xp, yp, NULL);
+    exact_map(v, xm, ym, NULL);
     for (int i = 0; i < 2; i++) J[i][j] = (yp[i] - ym[i]) / (2 * h);
   }
-  check_multipliers(&v, J, 1e-5);
-  assert_true(hypot(v.mu[1][0], v.mu[1][1]) <= 1e-5);   /* the current's reset: a multiplier 0 */
-  pr_free(&tr);
-  done(&v);
+  check_multipliers(v, J, 1e-5);
+  assert_true(hypot(v->mu[1][0], v->mu[1][1]) <= 1e-5);   /* the current's reset: a multiplier 0 */
 }
 
 /* ---- the full bridge: 100 V, phase-shifted legs, 1 mH, 2.2 uF || 20 ohm ---- */
@@ -366,9 +365,9 @@ static void fullbridge(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(buck_ccm),
-      cmocka_unit_test(boost),
-      cmocka_unit_test(buck_dcm),
+      cmocka_unit_test_prestate_setup_teardown(buck_ccm, conv_solved, conv_done, (void *)"buck-ccm"),
+      cmocka_unit_test_prestate_setup_teardown(boost, conv_solved, conv_done, (void *)"boost"),
+      cmocka_unit_test_prestate_setup_teardown(buck_dcm, conv_solved, conv_done, (void *)"buck-dcm"),
       cmocka_unit_test(fullbridge),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

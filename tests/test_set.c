@@ -71,6 +71,12 @@ static void set_open(cup_set **S, cup_setproj **sp, const cup_set_desc *d) {
   if (cup_setproj_create(sp, *S, NULL, err) != CUP_OK) fail_msg("cup_setproj_create: %s", err);
 }
 
+/* set_open, then the set placed at time t (no parameters, no state). */
+static void set_open_at(cup_set **S, cup_setproj **sp, const cup_set_desc *d, double t) {
+  set_open(S, sp, d);
+  assert_int_equal(cup_setproj_move(*sp, t, NULL, NULL), CUP_OK);
+}
+
 static void set_close(cup_set **S, cup_setproj **sp) {
   cup_setproj_free(sp);
   cup_set_free(S);
@@ -191,8 +197,7 @@ static void test_halfspace_against_closed_form(void **state) {
     cup_set_desc d = {.kind = CUP_SET_HALFSPACE, .n = n, .P = M, .C = As.view, .F = &b};
     cup_set *S;
     cup_setproj *sp;
-    set_open(&S, &sp, &d);
-    assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+    set_open_at(&S, &sp, &d, 0);
     cup_proj_info pi;
     assert_int_equal(cup_setproj_project(sp, x, z, &pi), CUP_OK);
     /* reference: z = x + max(0, -s) / (a^T P^-1 a) P^-1 a, in GSL then long double */
@@ -282,8 +287,7 @@ static void test_ellipsoid_against_bisection(void **state) {
     cup_set_desc d = {.kind = CUP_SET_ELLIPSOID, .n = n, .P = M, .center = c, .radius = rad, .Q = Qs.view};
     cup_set *S;
     cup_setproj *sp;
-    set_open(&S, &sp, &d);
-    assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+    set_open_at(&S, &sp, &d, 0);
     cup_proj_info pi;
     int st = cup_setproj_project(sp, x, z, &pi);
     /* reference: mu by bisection on q(w(mu)) = r^2, w = (P + mu Q)^-1 P (x - c) */
@@ -340,8 +344,7 @@ static void test_intersection_against_reference(void **state) {
                       .center = c, .radius = rad};
     cup_set *S;
     cup_setproj *sp;
-    set_open(&S, &sp, &d);
-    assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+    set_open_at(&S, &sp, &d, 0);
     cup_proj_info pi;
     int st = cup_setproj_project(sp, x, z, &pi);
     /* reference: s in [0, 1] by bisection on ||proj_K((1-s) x + s c) - c|| = r,
@@ -387,8 +390,7 @@ static void test_intersection_empty(void **state) {
   cup_set_desc d = {.kind = CUP_SET_INTERSECTION, .n = 2, .C = Cs.view, .F = F, .center = c, .radius = 1};
   cup_set *S;
   cup_setproj *sp;
-  set_open(&S, &sp, &d);
-  assert_int_equal(cup_setproj_move(sp, 0, NULL, NULL), CUP_OK);
+  set_open_at(&S, &sp, &d, 0);
   cup_proj_info pi;
   assert_int_equal(cup_setproj_project(sp, x, z, &pi), CUP_ERR_EMPTY_SET);
   assert_non_null(strstr(cup_setproj_message(sp), "do not meet"));
@@ -428,8 +430,7 @@ static int oracle_run(int mode, double *z, cup_proj_info *pi, char *msg, size_t 
   cup_set_desc d = {.kind = CUP_SET_ORACLE, .n = 2, .oracle = disc_oracle, .oracle_ctx = &o};
   cup_set *S;
   cup_setproj *sp;
-  set_open(&S, &sp, &d);
-  assert_int_equal(cup_setproj_move(sp, 0.25, NULL, NULL), CUP_OK);
+  set_open_at(&S, &sp, &d, 0.25);
   double x[2] = {3, 4};
   int st = cup_setproj_project(sp, x, z, pi);
   snprintf(msg, size, "%s", cup_setproj_message(sp));
@@ -489,10 +490,25 @@ static int tangent_rows(double t, const double *x, cup_rowbuf *rows, void *vp) {
   return 0 * st;
 }
 
-/* A state polyset of tangent_rows and its projector. */
-static void tangent_setproj(rows_ctx *c, cup_set **S, cup_setproj **sp) {
-  cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = c};
-  set_open(S, sp, &d);
+/* The fixture of the tests of tangent_rows: its state polyset in the mode
+ * the test's prestate names, and its projector. */
+typedef struct { rows_ctx c; cup_set *S; cup_setproj *sp; } tangent;
+static const int tangent_modes[3] = {0, 1, 2};
+
+static int tangent_open(void **state) {
+  tangent *T = calloc(1, sizeof *T);
+  T->c = (rows_ctx){*(const int *)*state, 0};
+  cup_set_desc d = {.kind = CUP_SET_STATE_POLYSET, .n = 2, .rows = tangent_rows, .rows_ctx = &T->c};
+  set_open(&T->S, &T->sp, &d);
+  *state = T;
+  return 0;
+}
+
+static int tangent_close(void **state) {
+  tangent *T = *state;
+  set_close(&T->S, &T->sp);
+  free(T);
+  return 0;
 }
 
 /* The same rows, in a fresh polyset and projector. */
@@ -503,11 +519,9 @@ static void fresh_projection(double t, const double *xk, const double *x, double
   if (mode == 1 && t < 2.5) { Cm[2 * m] = 0; Cm[2 * m + 1] = 1; gm[m++] = 0.5; }
   if (mode == 1 && t >= 3.5) { Cm[2 * m] = 1; Cm[2 * m + 1] = 0; gm[m++] = 2; }
   tcsc Cs;
-  tcsc_from_dense(&Cs, Cm, m, 2);
-  cup_polyset *K;
+  cup_polyset *K = tpolyset_dense(&Cs, Cm, m, 2, gm, NULL);
   cup_projector *p;
   char err[CUP_ERRMSG_LEN];
-  assert_int_equal(cup_polyset_create(&K, &Cs.view, gm, NULL, err), CUP_OK);
   assert_int_equal(cup_projector_create(&p, K, NULL, err), CUP_OK);
   cup_proj_info pi;
   assert_int_equal(cup_project(p, x, z, &pi), CUP_OK);
@@ -517,11 +531,7 @@ static void fresh_projection(double t, const double *xk, const double *x, double
 }
 
 static void test_state_polyset_reuse_and_rebuild(void **state) {
-  (void)state;
-  rows_ctx c = {1, 0};
-  cup_set *S;
-  cup_setproj *sp;
-  tangent_setproj(&c, &S, &sp);
+  cup_setproj *sp = ((tangent *)*state)->sp;
   double xk[2] = {0.3, 0.2}, x[2], z[2], zr[2];
   long rebuilds_at[6];
   for (int k = 0; k < 6; k++) {
@@ -544,7 +554,6 @@ static void test_state_polyset_reuse_and_rebuild(void **state) {
   assert_int_equal(rebuilds_at[3], 1);
   assert_int_equal(rebuilds_at[4], 2);
   assert_int_equal(rebuilds_at[5], 2);
-  set_close(&S, &sp);
 }
 
 /* Three points in the plane (x: 6 coordinates) kept 1 apart in pairs (0, 1)
@@ -622,11 +631,7 @@ static void test_state_polyset_own_numbering(void **state) {
 }
 
 static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) {
-  (void)state;
-  rows_ctx c = {0, 0};
-  cup_set *S;
-  cup_setproj *sp;
-  tangent_setproj(&c, &S, &sp);
+  cup_setproj *sp = ((tangent *)*state)->sp;
   double xk[2], x[2], z[2];
   long allocs = 0;
   for (int k = 0; k < 50; k++) {
@@ -650,19 +655,13 @@ static void test_state_polyset_no_allocation_when_patterns_repeat(void **state) 
   }
   assert_int_equal(allocs, 0);
   assert_int_equal(cup_setproj_rebuilds(sp), 1);
-  set_close(&S, &sp);
 }
 
 static void test_state_polyset_bad_row(void **state) {
-  (void)state;
-  rows_ctx c = {2, 0};
-  cup_set *S;
-  cup_setproj *sp;
-  tangent_setproj(&c, &S, &sp);
+  cup_setproj *sp = ((tangent *)*state)->sp;
   double xk[2] = {1, 0};
   assert_int_equal(cup_setproj_move(sp, 0, NULL, xk), CUP_ERR_CALLBACK);
   assert_non_null(strstr(cup_setproj_message(sp), "row 1: column 0 after column 1"));
-  set_close(&S, &sp);
 }
 
 static void test_names_and_bad_descriptions(void **state) {
@@ -737,9 +736,12 @@ int main(void) {
     cmocka_unit_test(test_intersection_empty),
     cmocka_unit_test(test_oracle_checks),
     cmocka_unit_test(test_state_polyset_own_numbering),
-    cmocka_unit_test(test_state_polyset_reuse_and_rebuild),
-    cmocka_unit_test(test_state_polyset_no_allocation_when_patterns_repeat),
-    cmocka_unit_test(test_state_polyset_bad_row),
+    cmocka_unit_test_prestate_setup_teardown(test_state_polyset_reuse_and_rebuild, tangent_open, tangent_close,
+                                             (void *)&tangent_modes[1]),
+    cmocka_unit_test_prestate_setup_teardown(test_state_polyset_no_allocation_when_patterns_repeat, tangent_open, tangent_close,
+                                             (void *)&tangent_modes[0]),
+    cmocka_unit_test_prestate_setup_teardown(test_state_polyset_bad_row, tangent_open, tangent_close,
+                                             (void *)&tangent_modes[2]),
     cmocka_unit_test(test_names_and_bad_descriptions),
     cmocka_unit_test(test_kind_checks),
     cmocka_unit_test(test_setproj_errmsg_one_way),

@@ -304,10 +304,7 @@ static void test_projector_never_returns_nonfinite(void **state) {
   /* K = {x1 >= 1e10}, P = diag(1e300, 1): lambda = 1e10 / ||c||^2_{P^-1} = 1e310 */
   double C[2] = {1, 0}, g[1] = {-1e10}, Pd[2] = {1e300, 1};
   tcsc Ct;
-  tcsc_from_dense(&Ct, C, 1, 2);
-  cup_metric P = {CUP_METRIC_DIAGONAL, Pd, {0}, 0};
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &Ct.view, g, &P, NULL), CUP_OK);
+  cup_polyset *K = tpolyset_dense(&Ct, C, 1, 2, g, Pd);
   for (int method = 0; method < 4; method++) {
     cup_projector_options o;
     cup_projector_options_default(&o);
@@ -347,9 +344,7 @@ static void test_nan_is_never_feasible(void **state) {
   (void)state;
   double C[4] = {1, 0, 0, 1}, g[2] = {0, 0};
   tcsc Ct;
-  tcsc_from_dense(&Ct, C, 2, 2);
-  cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create(&K, &Ct.view, g, NULL, NULL), CUP_OK);
+  cup_polyset *K = tpolyset_dense(&Ct, C, 2, 2, g, NULL);
   double in[2] = {1, 1}, gn[2] = {0, NAN}, gi[2] = {INFINITY, 0};
   assert_int_equal(cup_polyset_contains(K, NULL, in), 1);
   assert_int_equal(cup_polyset_contains(K, gn, in), 0);     /* NaN offset: not inside */

@@ -60,6 +60,19 @@ static inline void tcsc_from_dense(tcsc *A, const double *d, int nr, int nc) {
 }
 static inline void tcsc_free(tcsc *A) { free(A->p); free(A->i); free(A->x); }
 
+/* The polyset {y : C y + g >= 0} of a dense C (m x n, row-major; its CSC
+ * copy in *Ct, freed by the caller) in the metric diag(pdiag) (NULL: the
+ * identity); the test fails, saying why, if it is refused. */
+static inline cup_polyset *tpolyset_dense(tcsc *Ct, const double *C, int m, int n, const double *g,
+                                          const double *pdiag) {
+  tcsc_from_dense(Ct, C, m, n);
+  cup_metric P = {.kind = CUP_METRIC_DIAGONAL, .diag = pdiag};
+  cup_polyset *K = NULL;
+  char msg[CUP_ERRMSG_LEN];
+  if (cup_polyset_create(&K, &Ct->view, g, pdiag ? &P : NULL, msg)) fail_msg("polyset: %s", msg);
+  return K;
+}
+
 /* ---- the independent reference --------------------------------------------- */
 
 typedef struct {

@@ -44,12 +44,11 @@ struct cup_h5run {
 };
 
 /* h5run.c: record the first HDF5 failure ("h5run: cannot OP 'PATH': ...")
- * and stop the writer; keep the error stack across a cleanup; a message
- * into errmsg (CUP_ERRMSG_LEN bytes, may be NULL). */
+ * and stop the writer; keep the error stack across a cleanup (a message
+ * into errmsg: util/fail.h's cup_fail, compiled into catchup_h5 too). */
 H5R_HIDDEN int set_error(cup_h5run *w, int status, const char *op);
 H5R_HIDDEN hid_t keep_stack(int failed);
 H5R_HIDDEN void restore_stack(hid_t saved);
-H5R_HIDDEN int fail_msg(char *errmsg, int status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 /* A writer for path and dim with its buffers, no file yet (NULL: the
  * status, with the message, in *st). */
 H5R_HIDDEN cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st);

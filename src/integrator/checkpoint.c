@@ -38,9 +38,11 @@ static void fingerprint_of(const cup_integrator *I, fingerprint *f) {
   f->estimate = o->estimate;
   f->f_order = o->f_order;
   f->warm_start = o->proj.warm_start;
-  f->theta_step = I->use_theta;
+  scheme_grid g = {0, 0, 0, 0};
+  if (I->sch->grid) I->sch->grid(I->ws, &g);
+  f->theta_step = g.theta_step;
   f->steps = o->n; f->every = o->output_every; f->samples = o->output_samples;
-  f->T = o->T; f->h = I->h; f->eps_n = I->eps_n; f->eta_n = I->eta_n; f->theta = o->theta;
+  f->T = o->T; f->h = g.h; f->eps_n = g.eps_n; f->eta_n = g.eta_n; f->theta = o->theta;
   f->tol_abs = o->tol_abs; f->tol_rel = o->tol_rel; f->max_event_rate = o->max_event_rate;
   f->lipschitz = o->proj.lipschitz;
   f->hmax = o->hmax;

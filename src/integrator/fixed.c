@@ -27,8 +27,9 @@
 #include "projector/projector.h"
 #include "estimate.h"
 #include "integrator_impl.h"
+#include "fixed_impl.h"
 
-static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
+static double grid_time(const fixed_ws *F, long k) { return cup_grid_time(k, F->o.n, F->o.T, F->h); }
 
 /* The output: every k-th step, the last, none; or samples at
  * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
@@ -37,23 +38,23 @@ static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(
  * order at most two: x and zeta both). */
 typedef struct { long next_j, kdue; int aligned; double tau; } sampler;
 
-static void sampler_next(const cup_integrator *I, sampler *sp) {
-  const cup_integrator_options *o = &I->o;
+static void sampler_next(const fixed_ws *F, sampler *sp) {
+  const cup_integrator_options *o = &F->o;
   long S = o->output_samples, n = o->n, j = sp->next_j;
   if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
   double t0 = o->output_t0;
   sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
-  long k = (long)llround(sp->tau / I->h);
+  long k = (long)llround(sp->tau / F->h);
   if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
-  else sp->aligned = grid_time(I, k) == sp->tau;
-  if (!sp->aligned) k = (long)ceil(sp->tau / I->h);
+  else sp->aligned = grid_time(F, k) == sp->tau;
+  if (!sp->aligned) k = (long)ceil(sp->tau / F->h);
   if (k < 0) k = 0;
   if (k > n) k = n;
   sp->kdue = k;
 }
 
-static int selected(const cup_integrator *I, sampler *sp, long k) {
-  const cup_integrator_options *o = &I->o;
+static int selected(const fixed_ws *F, sampler *sp, long k) {
+  const cup_integrator_options *o = &F->o;
   switch (o->output) {
     case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
     case CUP_OUTPUT_FINAL: return k == o->n;
@@ -67,10 +68,10 @@ static int selected(const cup_integrator *I, sampler *sp, long k) {
  * the step before an interpolated one, whose zeta it keeps), the interrupt
  * check after each 1024th step, the last step (faststep.c runs the ones
  * before it). */
-static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long k) {
-  const cup_integrator_options *o = &I->o;
+static long loop_stop(const fixed_ws *F, const sampler *sp, int sink, long k) {
+  const cup_integrator_options *o = &F->o;
   long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
-  if (stop > I->kend - 1) stop = I->kend - 1;
+  if (stop > F->kend - 1) stop = F->kend - 1;
   if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
   if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
     next = sp->aligned ? sp->kdue : sp->kdue - 1;
@@ -79,35 +80,35 @@ static long loop_stop(const cup_integrator *I, const sampler *sp, int sink, long
   return next - 1 < stop ? next - 1 : stop;
 }
 
-/* The samples due at step k (x_k in I->x, x_{k-1} in I->xnew): on the step,
+/* The samples due at step k (x_k in F->x, x_{k-1} in F->xnew): on the step,
  * or interpolated between the two. */
-static int emit_samples(cup_integrator *I, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
-  while (selected(I, sp, k)) {
-    const double *x = I->x;
-    double t = grid_time(I, k);
+static int emit_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
+  while (selected(F, sp, k)) {
+    const double *x = F->x;
+    double t = grid_time(F, k);
     if (!sp->aligned && k > 0) {
-      double t_prev = grid_time(I, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
+      double t_prev = grid_time(F, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
       if (s < 1) {
-        for (int i = 0; i < I->n; i++) I->xs[i] = I->xnew[i] + s * (I->x[i] - I->xnew[i]);
-        x = I->xs;
-        I->zs = s;
+        for (int i = 0; i < F->n; i++) F->xs[i] = F->xnew[i] + s * (F->x[i] - F->xnew[i]);
+        x = F->xs;
+        F->zs = s;
       }
       t = sp->tau;
     }
     info->samples++;
     int stopped = sink(k, t, x, ctx);
-    I->zs = 1;
+    F->zs = 1;
     if (stopped) return 1;
     sp->next_j++;
-    sampler_next(I, sp);
+    sampler_next(F, sp);
   }
   return 0;
 }
 
 /* After the samples of step k: zeta_k kept when the next sample falls
  * between steps k and k + 1 (its zeta is interpolated from it). */
-static void keep_zeta(cup_integrator *I, const sampler *sp, long k) {
-  if (!sp->aligned && k + 1 == sp->kdue && I->zprev) fixed_zeta(I, I->zprev);
+static void keep_zeta(fixed_ws *F, const sampler *sp, long k) {
+  if (!sp->aligned && k + 1 == sp->kdue && F->zprev) fixed_zeta(F, F->zprev);
 }
 
 /* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
@@ -121,40 +122,40 @@ static int stop_at(cup_run_info *info, int status, long k, double t, const char 
   return status;
 }
 
-/* The estimate's run at n/2 from I->x0 (its states kept for the
+/* The estimate's run at n/2 from F->x0 (its states kept for the
  * comparisons). CUP_ERR_INTERRUPTED when the interrupt flag stopped it:
  * the run it serves stops too (a signal is not to wait for half the work). */
 static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 
-static int coarse_run(cup_integrator *I, cup_run_info *info) {
+static int coarse_run(fixed_ws *F, cup_run_info *info) {
   cup_run_info hi;
-  int st = fixed_run(I->half, I->x0, cup_estimate_keep, &I->est, &hi);
-  cup_estimate_start(&I->est, st >= 0);
-  info->err_est = cup_estimate_value(&I->est);
-  return st == CUP_ERR_INTERRUPTED && I->o.interrupt && *I->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
+  int st = fixed_run(F->half, F->x0, cup_estimate_keep, &F->est, &hi);
+  cup_estimate_start(&F->est, st >= 0);
+  info->err_est = cup_estimate_value(&F->est);
+  return st == CUP_ERR_INTERRUPTED && F->o.interrupt && *F->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
 }
 
 /* A stop at the end of step k that a checkpoint can resume from: where,
  * the output schedule's place, and the status and message it replaces
  * (a warning met before it is the resumed run's, as the whole run's). */
-static int halt(cup_integrator *I, cup_run_info *info, int status, long k, double t, const char *what, int phase,
+static int halt(fixed_ws *F, cup_run_info *info, int status, long k, double t, const char *what, int phase,
                 const sampler *sp) {
-  I->stop.phase = phase;
-  I->stop.k = k;
-  I->stop.next_j = sp->next_j;
-  I->stop.status = info->status;
-  memcpy(I->stop.message, info->message, sizeof I->stop.message);
+  F->stop.phase = phase;
+  F->stop.k = k;
+  F->stop.next_j = sp->next_j;
+  F->stop.status = info->status;
+  memcpy(F->stop.message, info->message, sizeof F->stop.message);
   return stop_at(info, status, k, t, what);
 }
 
 /* g = F + G u(t) for a moving polyset. */
-static int moving_offset(cup_integrator *I, double t) {
-  if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
-  memcpy(I->g, I->K->g0, sizeof(double) * (size_t)I->m);
-  cup_sparse_gaxpy(I->G, I->ut, I->g);
-  if (!I->use_theta) return cup_projector_set_offset(I->proj, I->g);
-  for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
-    if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
+static int moving_offset(fixed_ws *F, double t) {
+  if (cup_input_eval(F->u, t, F->ut)) return CUP_ERR_CALLBACK;
+  memcpy(F->g, F->K->g0, sizeof(double) * (size_t)F->m);
+  cup_sparse_gaxpy(F->G, F->ut, F->g);
+  if (!F->use_theta) return cup_projector_set_offset(F->proj, F->g);
+  for (int i = 0; i < F->m; i++)           /* the theta step reads g itself */
+    if (!isfinite(F->g[i])) return CUP_ERR_NONFINITE;
   return CUP_OK;
 }
 
@@ -174,14 +175,14 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
 }
 
 /* A step's state beyond its range (tally.h): the scheme diverged. */
-static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup_run_info *info, long k, double t,
+static __attribute__((noinline, cold)) int diverged(const fixed_ws *F, cup_run_info *info, long k, double t,
                                                     const double *x) {
   char what[200];
-  int j = cup_state_worst(x, I->n);
+  int j = cup_state_worst(x, F->n);
   int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
                      "diverged", CUP_STATE_MAX, j, x[j]);
-  if (I->o.scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
-    snprintf(what + len, sizeof what - (size_t)len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+  if (F->o.scheme == CUP_SCHEME_EXPLICIT && F->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
+    snprintf(what + len, sizeof what - (size_t)len, "; explicit scheme with h*rho(A) = %.3g > 2", F->h_rho);
   return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
 }
 
@@ -197,22 +198,22 @@ static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup
  * and set) when z is provably farther than eta_n from K(t) and nothing
  * certifies. xf: the step's free point (recomputed by the caller when the
  * fused steps kept it in registers). */
-static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, long k, double t, const double *g,
+static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, double t, const double *g,
                                                            cup_proj_info *pi, int st, cup_run_info *info) {
   cup_proj_info pp = {0}, first = *pi;
-  int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
+  int ps = cup_projector_set_offset(F->proj, F->use_theta && F->th.D ? F->th.geff : g);   /* D: K shifted by D zeta */
   double own = INFINITY;
-  if (ps == CUP_OK && (ps = cup_project_exact(I->proj, I->xnew, I->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
-    own = cup_metric_dist_hi(I->K, I->xnew, I->v, NULL, I->v + I->n) + pp.eta_cert;
+  if (ps == CUP_OK && (ps = cup_project_exact(F->proj, F->xnew, F->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
+    own = cup_metric_dist_hi(F->K, F->xnew, F->v, NULL, F->v + F->n) + pp.eta_cert;
   if (own <= pi->eta_target) ps = CUP_OK;
-  else if (ps >= 0 && (!I->use_theta || I->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
-    for (int offer = !I->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
-      if (offer && !cup_projector_offer_feasible(I->proj, I->x)) break;
-      if ((ps = cup_project_exact(I->proj, I->xf, I->v, &pp)) >= 0 && pp.eta_cert < own) {
+  else if (ps >= 0 && (!F->use_theta || F->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
+    for (int offer = !F->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
+      if (offer && !cup_projector_offer_feasible(F->proj, F->x)) break;
+      if ((ps = cup_project_exact(F->proj, F->xf, F->v, &pp)) >= 0 && pp.eta_cert < own) {
         *pi = pp;
         st = ps;
-        I->zeta_from = 2;
-        cup_copy(I->xnew, I->v, I->n);
+        F->zeta_from = 2;
+        cup_copy(F->xnew, F->v, F->n);
       }
     }
   }
@@ -228,13 +229,13 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
    * stops the run; one nearer is kept, warned of (a set without interior,
    * as two opposite rows, has no point certainly in it, and no distance to
    * it can be certified: the answer may be right) */
-  const double *sz = I->s0, *gam = I->sg;        /* z's slack and its rounding */
-  if (I->use_theta && I->th.D) sz = I->th.s, gam = I->th.gam;   /* the step's own, with D zeta's rounding */
-  else cup_slack(I->K, g, I->xnew, I->s0, I->sg);
+  const double *sz = F->s0, *gam = F->sg;        /* z's slack and its rounding */
+  if (F->use_theta && F->th.D) sz = F->th.s, gam = F->th.gam;   /* the step's own, with D zeta's rounding */
+  else cup_slack(F->K, g, F->xnew, F->s0, F->sg);
   int row = -1;
-  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(I->K, I->xnew));
-  for (int i = 0; i < I->m; i++) {
-    double d = I->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / I->K->rownorm[i] : 0;   /* <= d_K(z) */
+  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(F->K, F->xnew));
+  for (int i = 0; i < F->m; i++) {
+    double d = F->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / F->K->rownorm[i] : 0;   /* <= d_K(z) */
     if (d > far) { far = d; row = i; }
   }
   if (!(far > tol)) return pi->status = st > 0 ? st : CUP_WARN_NOT_CERTIFIED;
@@ -251,14 +252,14 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
  * C x0 + D zeta + g >= 0 (the theta step's LCP at x0): a rectifier's
  * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
  * is not: the first step jumps (jump_size tells by how much). */
-static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
-  const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
-  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
-                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
+static int polyset_x0(fixed_ws *F, int fixed, cup_run_info *info) {
+  const double *g0 = !fixed && moving_offset(F, 0) == CUP_OK ? F->g : F->K->g0;
+  int consistent = F->use_theta ? cup_lcp_step_start(&F->th, F->x, g0)
+                                : cup_slack(F->K, g0, F->x, F->s0, NULL) >= 0;
   if (consistent) return 0;
   info->status = CUP_WARN_X0_OUTSIDE;
   snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
-           I->L && I->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
+           F->L && F->L->has_D ? "not consistent (no zeta >= 0 makes C x0 + D zeta + g >= 0)" : "outside K(0)");
   return 1;
 }
 
@@ -268,12 +269,12 @@ static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
  * status. Such a run takes the general path (bit for bit the fused one's),
  * where this is called; out of line and cold, since inlined it cost the
  * fused loop an instruction a step (callgrind, paper-fig2, n = 1e5). */
-__attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st, cup_run_info *info) {
-  I->jump = 0;
+__attribute__((noinline, cold)) static void jump_size(fixed_ws *F, int st, cup_run_info *info) {
+  F->jump = 0;
   double big = 0;
   int at = 0;
-  for (int j = 0; j < I->n; j++)
-    if (fabs(I->xnew[j] - I->xf[j]) > big) big = fabs(I->xnew[j] - I->xf[j]), at = j;
+  for (int j = 0; j < F->n; j++)
+    if (fabs(F->xnew[j] - F->xf[j]) > big) big = fabs(F->xnew[j] - F->xf[j]), at = j;
   if (st < 0 || info->status != CUP_WARN_X0_OUTSIDE) return;
   size_t len = strlen(info->message);
   snprintf(info->message + len, sizeof info->message - len, ", a jump of %.3g in x[%d] (max-norm)", big, at);
@@ -284,20 +285,20 @@ __attribute__((noinline, cold)) static void jump_size(cup_integrator *I, int st,
 enum { RECHECKS = 8 };
 
 /* The set at t_{k+1} (and x_k), then the projection of the free point. */
-static int general_step(cup_integrator *I, long k, double t, const double *xk, const double *xf,
+static int general_step(fixed_ws *F, long k, double t, const double *xk, const double *xf,
                         double *z, cup_proj_info *pi, cup_run_info *info) {
-  if (I->p > 0 && I->u && cup_input_eval(I->u, t, I->ut))
+  if (F->p > 0 && F->u && cup_input_eval(F->u, t, F->ut))
     return stop_at(info, CUP_ERR_CALLBACK, k, t, "the input u(t) that moves the set failed");
-  int st = cup_setproj_move(I->sp, t, I->ut, xk);
+  int st = cup_setproj_move(F->sp, t, F->ut, xk);
   if (st == CUP_ERR_NONFINITE) {
     char what[WHAT_LEN];
-    snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(I->sp));
+    snprintf(what, sizeof what, "the set's parameters from u(t) are not finite: %s", cup_setproj_message(F->sp));
     return stop_at(info, CUP_ERR_CALLBACK, k, t, what);
   }
-  if (st == CUP_OK && (st = cup_setproj_project(I->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
+  if (st == CUP_OK && (st = cup_setproj_project(F->sp, xf, z, pi)) == CUP_ERR_NONFINITE) {
     char what[WHAT_LEN];                 /* as on the polyset path: the state overflowed */
     snprintf(what, sizeof what, "the free step produced NaN or Inf, or overflowed (the scheme diverged): %s",
-             cup_setproj_message(I->sp));
+             cup_setproj_message(F->sp));
     return stop_at(info, CUP_ERR_DIVERGED, k, t, what);
   }
   /* a state-dependent set may find that the step's rows missed a
@@ -305,36 +306,36 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
    * the contact margin in one step); the step is then projected again, warm,
    * with that row, its work added to the step's */
   for (int again = 0; st >= 0 && again < RECHECKS; again++) {
-    int rc = cup_setproj_recheck(I->sp, t, xk, z);
+    int rc = cup_setproj_recheck(F->sp, t, xk, z);
     if (rc <= 0) {
       if (rc < 0) st = rc;
       break;
     }
     cup_proj_info first = *pi;
-    st = cup_setproj_project(I->sp, xf, z, pi);
+    st = cup_setproj_project(F->sp, xf, z, pi);
     pi->iterations += first.iterations;
     pi->factorizations += first.factorizations;
     pi->row_updates += first.row_updates;
   }
-  if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(I->sp));
+  if (st < 0) return stop_at(info, st, k, t, cup_setproj_message(F->sp));
   /* never a point without a certified distance passed on (issue 27); a
    * state polyset's projector keeps the polyset's rule (an answer within
    * rounding of a set without interior is warned of), not applied here yet */
-  if (!(pi->eta_cert < INFINITY) && I->S->kind != CUP_SET_STATE_POLYSET) {
+  if (!(pi->eta_cert < INFINITY) && F->S->kind != CUP_SET_STATE_POLYSET) {
     char what[200];
     snprintf(what, sizeof what, "the %s: no point within a certified distance of the set was found (eta = inf)%s%s",
-             cup_set_kind_name(I->S->kind), cup_setproj_message(I->sp)[0] ? ": " : "", cup_setproj_message(I->sp));
+             cup_set_kind_name(F->S->kind), cup_setproj_message(F->sp)[0] ? ": " : "", cup_setproj_message(F->sp));
     return stop_at(info, CUP_ERR_UNCERTIFIED, k, t, what);
   }
-  long rows = cup_setproj_rows(I->sp);
+  long rows = cup_setproj_rows(F->sp);
   if (rows > info->max_rows) info->max_rows = rows;
   return st;
 }
 
 /* x0 against C(0, x0), by its projection: warn when it moves. */
-static int general_x0(cup_integrator *I, cup_run_info *info) {
+static int general_x0(fixed_ws *F, cup_run_info *info) {
   cup_proj_info pi;
-  int st = general_step(I, 0, 0, I->x, I->x, I->xf, &pi, info);
+  int st = general_step(F, 0, 0, F->x, F->x, F->xf, &pi, info);
   if (st < 0) return st;
   if (!pi.skipped) {
     info->status = CUP_WARN_X0_OUTSIDE;
@@ -344,19 +345,19 @@ static int general_x0(cup_integrator *I, cup_run_info *info) {
   return CUP_OK;
 }
 
-static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 
 /* The run's start (x0's checks and warnings, the estimate's run at n/2,
  * x0's sample), then its steps. */
 static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  cup_integrator *I = ws;
+  fixed_ws *F = ws;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
-  const cup_integrator_options *o = &I->o;
-  int n = I->n;
-  info->eps_target = I->eps_n;
-  info->eta_target = I->eta_n;
-  info->h_rho = I->h_rho;
+  const cup_integrator_options *o = &F->o;
+  int n = F->n;
+  info->eps_target = F->eps_n;
+  info->eta_target = F->eta_n;
+  info->h_rho = F->h_rho;
   if (cup_state_beyond(x0, n)) {
     int w = cup_state_worst(x0, n);
     char what[160];
@@ -365,65 +366,65 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
     else snprintf(what, sizeof what, "x0[%d] is %g", w, x0[w]);
     return stop_at(info, isfinite(x0[w]) ? CUP_ERR_ARG : CUP_ERR_NONFINITE, 0, 0, what);
   }
-  memcpy(I->x, x0, sizeof(double) * (size_t)n);
-  cup_projector_reset(I->proj);
-  I->zeta_from = 0;
-  int fixed = I->fixed || !I->u;
-  I->stop.phase = CUP_STOP_NONE;
-  I->rebuilds0 = cup_setproj_rebuilds(I->sp);
-  if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-  I->jump = I->K && polyset_x0(I, fixed, info);
-  if (!I->K && general_x0(I, info) < 0) return info->status;
-  int stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
+  memcpy(F->x, x0, sizeof(double) * (size_t)n);
+  cup_projector_reset(F->proj);
+  F->zeta_from = 0;
+  int fixed = F->fixed || !F->u;
+  F->stop.phase = CUP_STOP_NONE;
+  F->rebuilds0 = cup_setproj_rebuilds(F->sp);
+  if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
+  F->jump = F->K && polyset_x0(F, fixed, info);
+  if (!F->K && general_x0(F, info) < 0) return info->status;
+  int stiff = o->scheme == CUP_SCHEME_EXPLICIT && F->h_rho > 2;
   if (stiff) {
     info->status = CUP_WARN_STIFF;
     snprintf(info->message, sizeof info->message,
              "explicit scheme with h*rho(A) = %.3g > 2: the free step is unstable; use the theta "
-             "scheme, or implicit/exponential if no constraint acts on the fast states", I->h_rho);
+             "scheme, or implicit/exponential if no constraint acts on the fast states", F->h_rho);
   }
-  if (I->split > CUP_SPLIT_WARN) {   /* NaN (no memory to tell) does not warn */
+  if (F->split > CUP_SPLIT_WARN) {   /* NaN (no memory to tell) does not warn */
     info->status = CUP_WARN_SPLITTING;
     snprintf(info->message, sizeof info->message,
              "%s scheme: one step relaxes a fraction %.4g of constraint direction %d (h above its "
              "time constant); projecting along B loses what that relaxation moved, an error of "
              "that order: use the theta scheme, or h well below that time constant", cup_scheme_name(o->scheme),
-             I->split, I->split_row);
+             F->split, F->split_row);
   }
   sampler sp = {0};
-  sampler_next(I, &sp);
-  I->zs = 1;
-  if (I->zprev) cup_zero(I->zprev, I->m);
-  if (I->half) {
-    memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
-    if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
-      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
+  sampler_next(F, &sp);
+  F->zs = 1;
+  if (F->zprev) cup_zero(F->zprev, F->m);
+  if (F->half) {
+    memcpy(F->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
+    if (coarse_run(F, info) == CUP_ERR_INTERRUPTED)
+      return halt(F, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
                   CUP_STOP_SAMPLE_DUE, &sp);
   }
-  if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(I, &sp, 0)) {
+  if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(F, &sp, 0)) {
     info->samples++;
-    if (sink(0, 0.0, I->x, sink_ctx))
-      return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+    if (sink(0, 0.0, F->x, sink_ctx))
+      return halt(F, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
   }
-  if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(I, &sp, 0, sink, sink_ctx, info))
-    return halt(I, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-  return steps(I, 0, sp.next_j, sink, sink_ctx, info);
+  if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(F, &sp, 0, sink, sink_ctx, info))
+    return halt(F, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+  return steps(F, 0, sp.next_j, sink, sink_ctx, info);
 }
 
 /* The step's answer without a certified distance to K(t), or its error:
  * the run's stop (negative), or the step's status. fused: the free point
  * stayed in faststep.c's registers (xf computed again when needed). */
-static inline int step_checked(cup_integrator *I, long k, double t0, double t1, int fixed, int fused, int stiff,
+static inline int step_checked(fixed_ws *F, long k, double t0, double t1, int fixed, int fused, int stiff,
                                cup_proj_info *pi, int st, cup_run_info *info) {
-  if (st >= 0 && I->K && !(pi->eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
-    if (fused && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
-    else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, pi, st, info)) < 0) return st;
+  if (st >= 0 && F->K && !(pi->eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
+    if (fused && cup_freestep_apply(&F->fs, t0, t1, F->x, F->xf) < 0) st = CUP_ERR_CALLBACK;
+    else if ((st = certify_or_stop(F, k + 1, t1, fixed ? F->K->g0 : F->g, pi, st, info)) < 0) return st;
   }
   if (st < 0) {                          /* the polyset path's errors */
     char what[WHAT_LEN];
     describe_projection_error(what, sizeof what, st, pi);
     if (stiff && (st == CUP_ERR_NONFINITE || st == CUP_ERR_DIVERGED)) {  /* keep the cause in view */
       size_t len = strlen(what);
-      snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", I->h_rho);
+      snprintf(what + len, sizeof what - len, "; explicit scheme with h*rho(A) = %.3g > 2", F->h_rho);
     }
     return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_DIVERGED : st, k + 1, t1, what);
   }
@@ -433,9 +434,9 @@ static inline int step_checked(cup_integrator *I, long k, double t0, double t1, 
 /* Step k + 1 as faststep.c does not take it: the free step, then the
  * projection onto a general set, the theta step's LCP or the projector's
  * projection, checked. */
-static int step(cup_integrator *I, long k, double t0, double t1, int fixed, long rebuilds0, int stiff,
+static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebuilds0, int stiff,
                 cup_proj_info *pi, cup_run_info *info) {
-  int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
+  int st = cup_freestep_apply(&F->fs, t0, t1, F->x, F->xf);
   if (st < 0)
     return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
                    ? "a user callback (input or perturbation) failed or returned NaN/Inf"
@@ -444,68 +445,68 @@ static int step(cup_integrator *I, long k, double t0, double t1, int fixed, long
     info->status = st;
     snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k + 1, t1, cup_status_string(st));
   }
-  if (I->sp) {
-    st = general_step(I, k + 1, t1, I->x, I->xf, I->xnew, pi, info);
-    info->set_rebuilds = cup_setproj_rebuilds(I->sp) - rebuilds0;
+  if (F->sp) {
+    st = general_step(F, k + 1, t1, F->x, F->xf, F->xnew, pi, info);
+    info->set_rebuilds = cup_setproj_rebuilds(F->sp) - rebuilds0;
     return st;                           /* stopped already when negative */
   }
-  if (!fixed && (st = moving_offset(I, t1)) != CUP_OK)
+  if (!fixed && (st = moving_offset(F, t1)) != CUP_OK)
     return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
                    "the input u(t) that moves K failed or returned NaN/Inf");
-  if (I->use_theta) {
-    double S = cup_polyset_norm(I->K, I->xf);
-    const double *g = fixed ? I->K->g0 : I->g;
-    st = cup_lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
-                            I->eta_n > 0 ? I->eta_n : 1e-10 * S, pi);
+  if (F->use_theta) {
+    double S = cup_polyset_norm(F->K, F->xf);
+    const double *g = fixed ? F->K->g0 : F->g;
+    st = cup_lcp_step_solve(&F->th, g, F->xf, F->xnew, S, F->eps_n > 0 ? F->eps_n : -1,
+                            F->eta_n > 0 ? F->eta_n : 1e-10 * S, pi);
     if (st == CUP_ERR_LINALG) {
       /* pivoting failed: an empty K(t) (the projector proves it with a
        * Farkas certificate) or, for theta > 0, M not a P-matrix; for the
        * explicit step the projector's answer is the step */
       cup_proj_info pp = {0};
-      int ps = cup_projector_set_offset(I->proj, g);
-      if (ps == CUP_OK) ps = cup_project(I->proj, I->xf, I->xnew, &pp);
-      if (ps == CUP_ERR_EMPTY_SET || I->o.scheme == CUP_SCHEME_EXPLICIT) { st = ps; *pi = pp; I->zeta_from = 2; }
+      int ps = cup_projector_set_offset(F->proj, g);
+      if (ps == CUP_OK) ps = cup_project(F->proj, F->xf, F->xnew, &pp);
+      if (ps == CUP_ERR_EMPTY_SET || F->o.scheme == CUP_SCHEME_EXPLICIT) { st = ps; *pi = pp; F->zeta_from = 2; }
     } else {
-      I->zeta_from = 1;
+      F->zeta_from = 1;
     }
-    if (I->jump) jump_size(I, st, info);
+    if (F->jump) jump_size(F, st, info);
   } else {
-    st = cup_project(I->proj, I->xf, I->xnew, pi);
-    I->zeta_from = 2;
-    if (I->jump) jump_size(I, st, info);
+    st = cup_project(F->proj, F->xf, F->xnew, pi);
+    F->zeta_from = 2;
+    if (F->jump) jump_size(F, st, info);
   }
-  return step_checked(I, k, t0, t1, fixed, 0, stiff, pi, st, info);
+  return step_checked(F, k, t0, t1, fixed, 0, stiff, pi, st, info);
 }
 
 /* The steps from k0 (the sampler at next_j) to kend, as a run takes them
  * after its start; a window and a resumed run go on through them. */
-static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  const cup_integrator_options *o = &I->o;
+static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  const cup_integrator_options *o = &F->o;
   sampler sp = {next_j, 0, 0, 0};
-  sampler_next(I, &sp);
-  int n = I->n, fixed = I->fixed || !I->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2;
-  long rebuilds0 = I->rebuilds0;
+  sampler_next(F, &sp);
+  int n = F->n, fixed = F->fixed || !F->u, stiff = o->scheme == CUP_SCHEME_EXPLICIT && F->h_rho > 2;
+  long rebuilds0 = F->rebuilds0;
   double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
-  int fast = I->fast.on && !o->on_step && !I->half && !I->jump;   /* the estimate compares every step */
-  I->fast.hold = 0;
-  for (long k = k0; k < I->kend; k++) {
+  int fast = F->fast.on && !o->on_step && !F->half && !F->jump;   /* the estimate compares every step */
+  F->fast.hold = 0;
+  for (long k = k0; k < F->kend; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
-    if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
-      k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
-    double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
+    if (fast && k >= F->fast.hold)       /* hold: a run of steps that left the range, stepped here */
+      k = cup_faststep_run(&F->fast, k, loop_stop(F, &sp, sink != NULL, k), F->x, F->xnew, &pi, &st, info);
+    double t0 = grid_time(F, k), t1 = grid_time(F, k + 1);
     if (st != CUP_FAST_DECLINED) {       /* fused: all that step() does, done by faststep.c */
-      I->zeta_from = 1;
-      st = step_checked(I, k, t0, t1, fixed, 1, stiff, &pi, st, info);
+      F->zeta_from = 1;
+      st = step_checked(F, k, t0, t1, fixed, 1, stiff, &pi, st, info);
     } else {
-      st = step(I, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
+      st = step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
     }
     if (st < 0) return st;
-    if (cup_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
-    double *t = I->x; I->x = I->xnew; I->xnew = t;
-    if (I->half) {
-      cup_estimate_compare(&I->est, k + 1, I->x);
-      info->err_est = cup_estimate_value(&I->est);
+    if (cup_state_beyond(F->xnew, n)) return diverged(F, info, k + 1, t1, F->xnew);
+    double *t = F->x; F->x = F->xnew; F->xnew = t;
+    if (F->half) {
+      cup_estimate_compare(&F->est, k + 1, F->x);
+      info->err_est = cup_estimate_value(&F->est);
     }
     info->step = k + 1;
     info->t = t1;
@@ -519,90 +520,94 @@ static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, vo
       }
     }
     if (o->on_step && o->on_step(k + 1, t1, &pi, o->step_ctx))
-      return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
+      return halt(F, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the step callback", CUP_STOP_SAMPLE_DUE, &sp);
     if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-      if (emit_samples(I, &sp, k + 1, sink, sink_ctx, info))
-        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-      keep_zeta(I, &sp, k + 1);
-    } else if (sink && selected(I, &sp, k + 1)) {
+      if (emit_samples(F, &sp, k + 1, sink, sink_ctx, info))
+        return halt(F, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+      keep_zeta(F, &sp, k + 1);
+    } else if (sink && selected(F, &sp, k + 1)) {
       info->samples++;
-      if (sink(k + 1, t1, I->x, sink_ctx))
-        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
+      if (sink(k + 1, t1, F->x, sink_ctx))
+        return halt(F, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
     }
     if ((k & 1023) == 1023) {
       if (o->interrupt && *o->interrupt)
-        return halt(I, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
+        return halt(F, info, CUP_ERR_INTERRUPTED, k + 1, t1, "interrupted", CUP_STOP_STEP_DONE, &sp);
       if (start > 0 && now_seconds() - start > o->max_wall_seconds)
-        return halt(I, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
+        return halt(F, info, CUP_ERR_TIME_LIMIT, k + 1, t1, "wall-time limit reached", CUP_STOP_STEP_DONE, &sp);
     }
   }
-  I->next_j = sp.next_j;
+  F->next_j = sp.next_j;
   return info->status;
 }
 
-double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
+double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I->ws, k); }
+
+double cup_integrator_grid_step_(const cup_integrator *I) { return ((const fixed_ws *)I->ws)->h; }
 
 /* A window's (or a split step's) statistics, from nothing. */
-static void window_info(const cup_integrator *I, cup_run_info *info) {
+static void window_info(const fixed_ws *F, cup_run_info *info) {
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
-  info->eps_target = I->eps_n;
-  info->eta_target = I->eta_n;
-  info->h_rho = I->h_rho;
+  info->eps_target = F->eps_n;
+  info->eta_target = F->eta_n;
+  info->h_rho = F->h_rho;
 }
 
 int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                            cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  I->kend = k1;
+  fixed_ws *F = I->ws;
+  F->kend = k1;
   int st;
   if (first) {
-    st = fixed_run(I, x, sink, sink_ctx, info);
+    st = fixed_run(F, x, sink, sink_ctx, info);
   } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
-    window_info(I, info);
-    memcpy(I->x, x, sizeof(double) * (size_t)I->n);
-    memcpy(I->xnew, x, sizeof(double) * (size_t)I->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
-    int fixed = I->fixed || !I->u;
-    I->zeta_from = 0;
-    I->jump = 0;
-    I->zs = 1;
-    if (I->zprev) cup_zero(I->zprev, I->m);
-    if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
-    if (I->K && I->use_theta) {                    /* theta's zeta_k0 at the window's start */
-      const double *g = !fixed && moving_offset(I, grid_time(I, k0)) == CUP_OK ? I->g : I->K->g0;
-      cup_lcp_step_start(&I->th, I->x, g);
+    window_info(F, info);
+    memcpy(F->x, x, sizeof(double) * (size_t)F->n);
+    memcpy(F->xnew, x, sizeof(double) * (size_t)F->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
+    int fixed = F->fixed || !F->u;
+    F->zeta_from = 0;
+    F->jump = 0;
+    F->zs = 1;
+    if (F->zprev) cup_zero(F->zprev, F->m);
+    if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
+    if (F->K && F->use_theta) {                    /* theta's zeta_k0 at the window's start */
+      const double *g = !fixed && moving_offset(F, grid_time(F, k0)) == CUP_OK ? F->g : F->K->g0;
+      cup_lcp_step_start(&F->th, F->x, g);
     }
-    st = steps(I, k0, *next_j, sink, sink_ctx, info);
+    st = steps(F, k0, *next_j, sink, sink_ctx, info);
   }
-  *next_j = I->next_j;
-  I->kend = I->o.n;
+  *next_j = F->next_j;
+  F->kend = F->o.n;
   return st;
 }
 
 int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
                               long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  const cup_integrator_options *o = &I->o;
-  double t = grid_time(I, k);
-  window_info(I, info);
+  fixed_ws *F = I->ws;
+  const cup_integrator_options *o = &F->o;
+  double t = grid_time(F, k);
+  window_info(F, info);
   info->step = k;
   info->t = t;
-  memcpy(I->x, x, sizeof(double) * (size_t)I->n);
-  memcpy(I->xnew, xprev, sizeof(double) * (size_t)I->n);
-  I->zeta_from = 3;
-  I->zeta_ext = zeta;
-  I->zs = 1;
-  if (I->zprev) memcpy(I->zprev, zeta, sizeof(double) * (size_t)I->m);   /* zeta: the step's, at every sample in it */
+  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
+  memcpy(F->xnew, xprev, sizeof(double) * (size_t)F->n);
+  F->zeta_from = 3;
+  F->zeta_ext = zeta;
+  F->zs = 1;
+  if (F->zprev) memcpy(F->zprev, zeta, sizeof(double) * (size_t)F->m);   /* zeta: the step's, at every sample in it */
   sampler sp = {*next_j, 0, 0, 0};
-  sampler_next(I, &sp);
+  sampler_next(F, &sp);
   cup_proj_info pi = {0};
   int st = CUP_OK;
   if (o->on_step && o->on_step(k, t, &pi, o->step_ctx)) {
     st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the step callback");
   } else if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-    if (emit_samples(I, &sp, k, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
-    else keep_zeta(I, &sp, k);
-  } else if (sink && selected(I, &sp, k)) {
+    if (emit_samples(F, &sp, k, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+    else keep_zeta(F, &sp, k);
+  } else if (sink && selected(F, &sp, k)) {
     info->samples++;
-    if (sink(k, t, I->x, sink_ctx)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+    if (sink(k, t, F->x, sink_ctx)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
   }
   *next_j = sp.next_j;
   return st;
@@ -613,39 +618,39 @@ int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, co
  * stopped step's sample when it was still due or the sink refused it, then
  * the steps as a run takes them. */
 static int fixed_resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  cup_integrator *I = ws;
-  int phase = I->stop.phase;
-  long k = I->stop.k;
-  sampler sp = {I->stop.next_j, 0, 0, 0};
-  sampler_next(I, &sp);
-  if (I->half) {
-    double err = I->est.err;                     /* the comparisons made before the stop */
-    int cst = coarse_run(I, info);
-    I->est.err = err;
-    info->err_est = cup_estimate_value(&I->est);
+  fixed_ws *F = ws;
+  int phase = F->stop.phase;
+  long k = F->stop.k;
+  sampler sp = {F->stop.next_j, 0, 0, 0};
+  sampler_next(F, &sp);
+  if (F->half) {
+    double err = F->est.err;                     /* the comparisons made before the stop */
+    int cst = coarse_run(F, info);
+    F->est.err = err;
+    info->err_est = cup_estimate_value(&F->est);
     if (cst == CUP_ERR_INTERRUPTED)
-      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "interrupted (in the estimate's run at n/2)",
+      return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "interrupted (in the estimate's run at n/2)",
                   phase, &sp);
   }
-  I->stop.phase = CUP_STOP_NONE;
+  F->stop.phase = CUP_STOP_NONE;
   if (phase == CUP_STOP_SAMPLE_REFUSED) info->samples--;          /* counted when it was refused */
-  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* the samples due at k, from x_k, x_{k-1} and zeta_{k-1} */
+  if (F->o.output == CUP_OUTPUT_SAMPLES) {      /* the samples due at k, from x_k, x_{k-1} and zeta_{k-1} */
     if (sink && phase != CUP_STOP_STEP_DONE) {
-      if (emit_samples(I, &sp, k, sink, sink_ctx, info))
-        return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+      if (emit_samples(F, &sp, k, sink, sink_ctx, info))
+        return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "stopped by the output sink",
                     CUP_STOP_SAMPLE_REFUSED, &sp);
-      if (k > 0) keep_zeta(I, &sp, k);
+      if (k > 0) keep_zeta(F, &sp, k);
     }
-    return steps(I, k, sp.next_j, sink, sink_ctx, info);
+    return steps(F, k, sp.next_j, sink, sink_ctx, info);
   }
-  int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(I, &sp, k));
+  int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(F, &sp, k));
   if (sink && offer) {
     info->samples++;
-    if (sink(k, grid_time(I, k), I->x, sink_ctx))
-      return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "stopped by the output sink",
+    if (sink(k, grid_time(F, k), F->x, sink_ctx))
+      return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "stopped by the output sink",
                   CUP_STOP_SAMPLE_REFUSED, &sp);
   }
-  return steps(I, k, sp.next_j, sink, sink_ctx, info);
+  return steps(F, k, sp.next_j, sink, sink_ctx, info);
 }
 
 static int takes(const cup_integrator_options *o) {
@@ -655,7 +660,7 @@ static int takes(const cup_integrator_options *o) {
 
 static const scheme_type fixed_type = {
   .name = "fixed-step", .takes = takes, .create = fixed_create, .free = fixed_free, .run = fixed_run,
-  .state = fixed_state, .zeta = fixed_zeta, .saves = fixed_saves, .stopped = fixed_stopped,
+  .state = fixed_state, .zeta = fixed_zeta, .grid = fixed_grid, .saves = fixed_saves, .stopped = fixed_stopped,
   .checkpoint = fixed_checkpoint, .resume = fixed_resume,
 };
 const scheme_type *const scheme_fixed = &fixed_type;

@@ -2,7 +2,8 @@
  * theta; fixed.c runs them) set up once on the grid t_k = k T / n: the free
  * step, the projector or the exact LCP step, the buffers, the estimate's
  * run at n/2; and what the driver asks of them between runs (state, zeta,
- * their part of a checkpoint, free). Their workspace is the integrator. */
+ * their part of a checkpoint, free). Their workspace is a fixed_ws
+ * (fixed_impl.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +11,7 @@
 #include "fixed_setup.h"
 #include "options.h"
 #include "integrator_impl.h"
+#include "fixed_impl.h"
 #include "model/lcs_impl.h"
 #include "set/polyset_impl.h"
 #include "set/set_impl.h"
@@ -42,9 +44,9 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
 }
 
 /* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
-static int theta_step_init(cup_integrator *I, const double *W, double theta, char *errmsg) {
-  const cup_lcs *L = I->L;
-  int n = I->n, m = I->m, st = CUP_OK;
+static int theta_step_init(fixed_ws *F, const double *W, double theta, char *errmsg) {
+  const cup_lcs *L = F->L;
+  int n = F->n, m = F->m, st = CUP_OK;
   double *B = NULL, *D = NULL;
   if (L && L->has_D) {
     B = calloc((size_t)n * m + 1, sizeof(double));
@@ -55,7 +57,7 @@ static int theta_step_init(cup_integrator *I, const double *W, double theta, cha
       for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
     }
   }
-  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D, theta);
+  if (!st) st = cup_lcp_step_init_bd(&F->th, F->K, W, F->h, B, D, theta);
   free(B);
   free(D);
   return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
@@ -63,152 +65,162 @@ static int theta_step_init(cup_integrator *I, const double *W, double theta, cha
 
 /* The polyset path: the projector, and the exact LCP step where it is
  * cheaper or the scheme needs it. */
-static int polyset_setup(cup_integrator *I, char *errmsg) {
-  const cup_integrator_options *o = &I->o;
+static int polyset_setup(fixed_ws *F, char *errmsg) {
+  const cup_integrator_options *o = &F->o;
   int st = CUP_OK;
   /* The theta step with W = I is the P-projection of the explicit free
    * point, solved exactly by principal pivoting on the m x m dual: for a
    * small dense set that is what the auto projector would do, certified the
    * same way, in fewer operations (70 against 107 ns a step on the paper's
    * circuit). The projector decides (a user's feasible point keeps it). */
-  I->use_theta = o->scheme == CUP_SCHEME_THETA ||
-                 (o->scheme == CUP_SCHEME_EXPLICIT && proj_small_lcp(I->K, &o->proj));
-  if (I->use_theta && !I->K->dense)
+  F->use_theta = o->scheme == CUP_SCHEME_THETA ||
+                 (o->scheme == CUP_SCHEME_EXPLICIT && proj_small_lcp(F->K, &o->proj));
+  if (F->use_theta && !F->K->dense)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
-                    "use the explicit, implicit or exponential scheme", I->K->m, I->K->n, CUP_DENSE_MAX_ROWS,
+                    "use the explicit, implicit or exponential scheme", F->K->m, F->K->n, CUP_DENSE_MAX_ROWS,
                     CUP_DENSE_MAX_DIM);
-  if (I->use_theta) {
-    double *W = I->fs.W, *eye = NULL;
+  if (F->use_theta) {
+    double *W = F->fs.W, *eye = NULL;
     if (!W) {
-      eye = calloc((size_t)I->n * (size_t)I->n, sizeof(double));
+      eye = calloc((size_t)F->n * (size_t)F->n, sizeof(double));
       if (!eye) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-      for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
+      for (int j = 0; j < F->n; j++) eye[j + (size_t)j * F->n] = 1;
       W = eye;
     }
-    st = theta_step_init(I, W, o->scheme == CUP_SCHEME_THETA ? o->theta : 0, errmsg);
+    st = theta_step_init(F, W, o->scheme == CUP_SCHEME_THETA ? o->theta : 0, errmsg);
     free(eye);
   }
   return st;
 }
 
 /* Everything but the model: buffers, the free step, the projection. */
-static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
-  const cup_integrator_options *o = &I->o;
-  I->h = o->T / (double)o->n;
-  I->kend = o->n;
-  I->eps_n = cup_schedule_value(&o->eps, o->n);
-  I->eta_n = cup_schedule_value(&o->eta, o->n);
-  size_t N = (size_t)I->n, M = (size_t)I->m + 1, P = (size_t)I->p + 1;
-  I->x = calloc(N, sizeof(double));
-  I->xnew = calloc(N, sizeof(double));
-  I->xf = calloc(N, sizeof(double));
-  I->g = calloc(M, sizeof(double));
-  I->ut = calloc(P, sizeof(double));
-  I->s0 = calloc(M, sizeof(double));
-  I->sg = calloc(M, sizeof(double));
-  I->v = calloc(2 * N, sizeof(double));
-  I->xs = calloc(N, sizeof(double));
-  I->zprev = calloc(M, sizeof(double));
-  I->zs = 1;
-  if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->sg || !I->v || !I->xs || !I->zprev)
+static int setup(fixed_ws *F, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+  const cup_integrator_options *o = &F->o;
+  F->h = o->T / (double)o->n;
+  F->kend = o->n;
+  F->eps_n = cup_schedule_value(&o->eps, o->n);
+  F->eta_n = cup_schedule_value(&o->eta, o->n);
+  size_t N = (size_t)F->n, M = (size_t)F->m + 1, P = (size_t)F->p + 1;
+  F->x = calloc(N, sizeof(double));
+  F->xnew = calloc(N, sizeof(double));
+  F->xf = calloc(N, sizeof(double));
+  F->g = calloc(M, sizeof(double));
+  F->ut = calloc(P, sizeof(double));
+  F->s0 = calloc(M, sizeof(double));
+  F->sg = calloc(M, sizeof(double));
+  F->v = calloc(2 * N, sizeof(double));
+  F->xs = calloc(N, sizeof(double));
+  F->zprev = calloc(M, sizeof(double));
+  F->zs = 1;
+  if (!F->x || !F->xnew || !F->xf || !F->g || !F->ut || !F->s0 || !F->sg || !F->v || !F->xs || !F->zprev)
     return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
-  if (o->scheme == CUP_SCHEME_THETA && !I->K)
+  if (o->scheme == CUP_SCHEME_THETA && !F->K)
     return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: the set is a %s; the theta step solves an LCP on a polyset's rows "
-                    "(use the explicit, implicit or exponential scheme)", cup_set_kind_name(I->S->kind));
-  int st = cup_freestep_init(&I->fs, D, I->K, I->u, o->scheme, o->theta, I->h, o->f_order, errmsg);
-  if (!st) st = cup_freestep_add_rhs(&I->fs, o->f, o->f_ctx);
-  if (!st && pd) st = cup_freestep_add_rhs(&I->fs, pd->f, pd->f_ctx);
-  if (!st && pd) cup_freestep_set_rhs_integral(&I->fs, pd->f_integral, pd->f_integral_ctx);
-  if (!st && I->K) st = polyset_setup(I, errmsg);
+                    "(use the explicit, implicit or exponential scheme)", cup_set_kind_name(F->S->kind));
+  int st = cup_freestep_init(&F->fs, D, F->K, F->u, o->scheme, o->theta, F->h, o->f_order, errmsg);
+  if (!st) st = cup_freestep_add_rhs(&F->fs, o->f, o->f_ctx);
+  if (!st && pd) st = cup_freestep_add_rhs(&F->fs, pd->f, pd->f_ctx);
+  if (!st && pd) cup_freestep_set_rhs_integral(&F->fs, pd->f_integral, pd->f_integral_ctx);
+  if (!st && F->K) st = polyset_setup(F, errmsg);
   /* the paper's tolerances are absolute; a zero schedule asks for the exact
    * projection, certified relative to the problem's scale */
   cup_projector_options po = o->proj;
-  po.eps_abs = I->eps_n;
-  po.eps_rel = I->eps_n > 0 ? 0 : 1e-12;
-  po.eta_abs = I->eta_n;
-  po.eta_rel = I->eta_n > 0 ? 0 : 1e-10;
-  if (!st && I->use_theta) po = proj_backup_options(I->K, &po);   /* one LCP: the step's */
-  if (!st && I->K) st = cup_projector_create(&I->proj, I->K, &po, errmsg);
-  if (!st && !I->K) st = cup_setproj_create(&I->sp, I->S, &po, errmsg);
+  po.eps_abs = F->eps_n;
+  po.eps_rel = F->eps_n > 0 ? 0 : 1e-12;
+  po.eta_abs = F->eta_n;
+  po.eta_rel = F->eta_n > 0 ? 0 : 1e-10;
+  if (!st && F->use_theta) po = proj_backup_options(F->K, &po);   /* one LCP: the step's */
+  if (!st && F->K) st = cup_projector_create(&F->proj, F->K, &po, errmsg);
+  if (!st && !F->K) st = cup_setproj_create(&F->sp, F->S, &po, errmsg);
   if (st) return st;
-  I->h_rho = cup_freestep_h_rho(D, I->h);
-  I->split = cup_freestep_splitting(&I->fs, &I->split_row);
-  if (I->K)
-    cup_faststep_init(&I->fast, &I->fs, &I->th, I->K, I->fixed || !I->u ? NULL : I->G, I->g, I->use_theta,
-                      I->eps_n, I->eta_n, o->n, o->T);
+  F->h_rho = cup_freestep_h_rho(D, F->h);
+  F->split = cup_freestep_splitting(&F->fs, &F->split_row);
+  if (F->K)
+    cup_faststep_init(&F->fast, &F->fs, &F->th, F->K, F->fixed || !F->u ? NULL : F->G, F->g, F->use_theta,
+                      F->eps_n, F->eta_n, o->n, o->T);
   return CUP_OK;
 }
 
 /* The step-doubling estimate: the same model and scheme at n/2 (borrowing
- * this integrator's model), keeping its states where the two grids meet
+ * this workspace's model), keeping its states where the two grids meet
  * (estimate.h). */
-static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
-  cup_integrator_options h = I->o;
-  h.n = I->o.n / 2;
+static int create_half(fixed_ws *F, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+  cup_integrator_options h = F->o;
+  h.n = F->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
-  if (cup_estimate_init(&I->est, I->o.n, I->n) || !(I->x0 = calloc((size_t)I->n, sizeof(double))))
+  if (cup_estimate_init(&F->est, F->o.n, F->n) || !(F->x0 = calloc((size_t)F->n, sizeof(double))))
     return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   h.output = CUP_OUTPUT_EVERY;
-  h.output_every = cup_estimate_stride(&I->est);
-  int st;
-  cup_integrator *H = I->half = cup_integrator_new_(&h, errmsg, &st);
-  if (!H) return st;
-  H->u = I->u;
-  H->L = I->L;                                   /* the theta step takes D from it */
-  H->n = I->n; H->m = I->m; H->p = I->p;
-  H->S = I->S; H->K = I->K; H->G = I->G; H->fixed = I->fixed;
+  h.output_every = cup_estimate_stride(&F->est);
+  int st = options_check(&h, errmsg);
+  if (st) return st;
+  fixed_ws *H = F->half = calloc(1, sizeof *H);
+  if (!H) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  H->o = h;
+  H->u = F->u;
+  H->L = F->L;                                   /* the theta step takes D from it */
+  H->n = F->n; H->m = F->m; H->p = F->p;
+  H->S = F->S; H->K = F->K; H->G = F->G; H->fixed = F->fixed;
   return setup(H, D, pd, errmsg);
 }
 
 int fixed_create(cup_integrator *I, const scheme_model *md, void **ws, char *errmsg) {
-  *ws = I;
-  int st = md->L ? needs_theta(md->L, I->o.scheme, errmsg) : CUP_OK;
+  fixed_ws *F = *ws = calloc(1, sizeof *F);
+  if (!F) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  F->o = I->o;                                   /* the model, as the front door checked it */
+  F->u = md->u;
+  F->L = md->L;
+  F->n = I->n; F->m = I->m; F->p = I->p;
+  F->S = I->S; F->K = md->K; F->G = md->G; F->fixed = I->fixed;
+  int st = md->L ? needs_theta(md->L, F->o.scheme, errmsg) : CUP_OK;
   if (st) return st;
-  if (!I->S) {                                   /* an LCS: its polyset as a set */
-    st = cup_set_wrap_polyset(&I->S_own, I->K, I->G, I->p, errmsg);
-    I->S = I->S_own;
+  if (!F->S) {                                   /* an LCS: its polyset as a set */
+    st = cup_set_wrap_polyset(&F->S_own, F->K, F->G, F->p, errmsg);
+    F->S = F->S_own;
   }
-  if (!st) st = setup(I, md->D, md->pd, errmsg);
-  if (!st && I->o.estimate) st = create_half(I, md->D, md->pd, errmsg);
+  if (!st) st = setup(F, md->D, md->pd, errmsg);
+  if (!st && F->o.estimate) st = create_half(F, md->D, md->pd, errmsg);
   return st;
 }
 
 void fixed_free(void *ws) {
-  cup_integrator *I = ws;
-  if (I->half) {                                 /* the estimate's: its model borrowed */
-    fixed_free(I->half);
-    free(I->half);
-    I->half = NULL;
-  }
-  cup_estimate_free(&I->est);
-  cup_freestep_free(&I->fs);
-  cup_projector_free(&I->proj);
-  cup_setproj_free(&I->sp);
-  cup_set_free(&I->S_own);
-  if (I->use_theta) cup_lcp_step_free(&I->th);
-  free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
-  free(I->xs); free(I->zprev);
-  free(I->x0);
+  fixed_ws *F = ws;
+  if (F->half) fixed_free(F->half);              /* the estimate's: its model borrowed */
+  cup_estimate_free(&F->est);
+  cup_freestep_free(&F->fs);
+  cup_projector_free(&F->proj);
+  cup_setproj_free(&F->sp);
+  cup_set_free(&F->S_own);
+  if (F->use_theta) cup_lcp_step_free(&F->th);
+  free(F->x); free(F->xnew); free(F->xf); free(F->g); free(F->ut); free(F->s0); free(F->sg); free(F->v);
+  free(F->xs); free(F->zprev);
+  free(F->x0);
+  free(F);
 }
 
-const double *fixed_state(const void *ws) { return ((const cup_integrator *)ws)->x; }
+const double *fixed_state(const void *ws) { return ((const fixed_ws *)ws)->x; }
+
+void fixed_grid(const void *ws, scheme_grid *g) {
+  const fixed_ws *F = ws;
+  *g = (scheme_grid){F->h, F->eps_n, F->eta_n, F->use_theta};
+}
 
 /* The LCP's lambda is zeta itself (H = h W B); the projector's multipliers
  * are the impulse of the step, h zeta. A process on a polyset has them as
  * an LCS (its normal cone is P^-1 C^T zeta, B = P^-1 C^T); on another set
  * there are no rows to give them of. */
 int fixed_zeta(void *ws, double *zeta) {
-  const cup_integrator *I = ws;
-  if (!I->K) return CUP_ERR_UNSUPPORTED;
-  const double *lam = I->zeta_from == 1 ? I->th.lcp.lam : I->zeta_from == 2 ? cup_projector_lambda(I->proj)
-                    : I->zeta_from == 3 ? I->zeta_ext : NULL;
-  double s = I->zeta_from == 2 ? 1 / I->h : 1;
-  for (int i = 0; i < I->m; i++) zeta[i] = lam ? s * lam[i] : 0;
-  if (I->zs < 1 && I->zprev)                     /* a sample between two steps */
-    for (int i = 0; i < I->m; i++) zeta[i] = I->zprev[i] + I->zs * (zeta[i] - I->zprev[i]);
+  const fixed_ws *F = ws;
+  if (!F->K) return CUP_ERR_UNSUPPORTED;
+  const double *lam = F->zeta_from == 1 ? F->th.lcp.lam : F->zeta_from == 2 ? cup_projector_lambda(F->proj)
+                    : F->zeta_from == 3 ? F->zeta_ext : NULL;
+  double s = F->zeta_from == 2 ? 1 / F->h : 1;
+  for (int i = 0; i < F->m; i++) zeta[i] = lam ? s * lam[i] : 0;
+  if (F->zs < 1 && F->zprev)                     /* a sample between two steps */
+    for (int i = 0; i < F->m; i++) zeta[i] = F->zprev[i] + F->zs * (zeta[i] - F->zprev[i]);
   return CUP_OK;
 }
 
@@ -216,13 +228,13 @@ int fixed_zeta(void *ws, double *zeta) {
 
 /* A run on a polyset can resume: another set's projections keep state
  * (a crowd's rows, an oracle's) that no checkpoint holds. */
-int fixed_saves(const void *ws) { return !((const cup_integrator *)ws)->sp; }
+int fixed_saves(const void *ws) { return !((const fixed_ws *)ws)->sp; }
 
 int fixed_stopped(const void *ws, cup_run_info *info) {
-  const cup_integrator *I = ws;
-  if (I->stop.phase == CUP_STOP_NONE) return 0;
-  info->status = I->stop.status;
-  memcpy(info->message, I->stop.message, sizeof info->message);
+  const fixed_ws *F = ws;
+  if (F->stop.phase == CUP_STOP_NONE) return 0;
+  info->status = F->stop.status;
+  memcpy(info->message, F->stop.message, sizeof info->message);
   return 1;
 }
 
@@ -230,22 +242,22 @@ int fixed_stopped(const void *ws, cup_run_info *info) {
  * steps), the estimate's x0 and its comparisons so far, the projector's
  * and the LCP step's warm starts. */
 void fixed_checkpoint(void *ws, cup_ckpt *c) {
-  cup_integrator *I = ws;
-  cup_ckpt_stop *s = &I->stop;
+  fixed_ws *F = ws;
+  fixed_stop *s = &F->stop;
   CUP_CKPT_IO(c, s->phase);
   CUP_CKPT_IO(c, s->k);
   CUP_CKPT_IO(c, s->next_j);
-  CUP_CKPT_IO(c, I->zeta_from);
-  CUP_CKPT_IO(c, I->jump);
-  cup_ckpt_io(c, I->x, sizeof(double) * (size_t)I->n);
-  if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* a sample between steps k - 1 and k: x_{k-1}, zeta_{k-1} */
-    cup_ckpt_io(c, I->xnew, sizeof(double) * (size_t)I->n);
-    if (I->zprev) cup_ckpt_io(c, I->zprev, sizeof(double) * (size_t)I->m);
+  CUP_CKPT_IO(c, F->zeta_from);
+  CUP_CKPT_IO(c, F->jump);
+  cup_ckpt_io(c, F->x, sizeof(double) * (size_t)F->n);
+  if (F->o.output == CUP_OUTPUT_SAMPLES) {      /* a sample between steps k - 1 and k: x_{k-1}, zeta_{k-1} */
+    cup_ckpt_io(c, F->xnew, sizeof(double) * (size_t)F->n);
+    if (F->zprev) cup_ckpt_io(c, F->zprev, sizeof(double) * (size_t)F->m);
   }
-  if (I->half) {
-    cup_ckpt_io(c, I->x0, sizeof(double) * (size_t)I->n);
-    CUP_CKPT_IO(c, I->est.err);
+  if (F->half) {
+    cup_ckpt_io(c, F->x0, sizeof(double) * (size_t)F->n);
+    CUP_CKPT_IO(c, F->est.err);
   }
-  cup_projector_checkpoint(I->proj, c);
-  if (I->use_theta) cup_lcp_step_checkpoint(&I->th, c);
+  cup_projector_checkpoint(F->proj, c);
+  if (F->use_theta) cup_lcp_step_checkpoint(&F->th, c);
 }

@@ -45,7 +45,7 @@ static int validate_tolerances(const cup_integrator_options *o, char *errmsg) {
   return CUP_OK;
 }
 
-static int validate(const cup_integrator_options *o, char *errmsg) {
+int options_check(const cup_integrator_options *o, char *errmsg) {
   if (!(o->T > 0) || !isfinite(o->T))
     return cup_fail(errmsg, CUP_ERR_ARG, "T = %g must be finite and > 0", o->T);
   if (o->n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "n = %ld must be >= 1", o->n);
@@ -85,7 +85,7 @@ static int validate(const cup_integrator_options *o, char *errmsg) {
 cup_integrator *cup_integrator_new_(const cup_integrator_options *opt, char *errmsg, int *st) {
   cup_integrator_options o;
   if (opt) o = *opt; else cup_integrator_options_default(&o);
-  *st = validate(&o, errmsg);
+  *st = options_check(&o, errmsg);
   if (*st) return NULL;
   cup_integrator *I = calloc(1, sizeof *I);
   if (!I) *st = cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");

@@ -23,6 +23,14 @@ typedef struct scheme_model {
   const cup_integrator_options *o;
 } scheme_model;
 
+/* What a checkpoint's header names of a scheme's set-up beyond the options
+ * (checkpoint.c): its grid step h, eps_n and eta_n, and whether the exact
+ * LCP step stands in for the projector; zeros for a scheme without them. */
+typedef struct scheme_grid {
+  double h, eps_n, eta_n;
+  int theta_step;
+} scheme_grid;
+
 typedef struct scheme_type {
   const char *name;
   /* 1 when it is the scheme the options name; NULL: made by its own front
@@ -35,10 +43,12 @@ typedef struct scheme_type {
   int (*run)(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
   const double *(*state)(const void *ws);
   int (*zeta)(void *ws, double *zeta);
-  /* checkpoints (checkpoint.c; checkpoint NULL: none): 1 when this one's
+  /* checkpoints (checkpoint.c; checkpoint NULL: none): what the header
+   * names of the set-up; 1 when this one's
    * stops can be saved (saves NULL: always); 1 when the last run stopped
    * where it can resume, with the status and message the stop replaced
    * into info; its state to or from the stream; the restored run continued */
+  void (*grid)(const void *ws, scheme_grid *g);   /* NULL: zeros */
   int (*saves)(const void *ws);
   int (*stopped)(const void *ws, cup_run_info *info);
   void (*checkpoint)(void *ws, cup_ckpt *c);

@@ -27,6 +27,7 @@
 #include <string.h>
 #include "integrator_impl.h"
 #include "adaptive.h"
+#include "estimate.h"
 
 typedef struct cup_swrun cup_swrun;
 
@@ -261,12 +262,13 @@ static int piece(cup_swrun *S, int topo, double ta, double tb, cup_run_info *inf
 static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   cup_integrator *C = S->child[*topo];
-  double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k), snap = 1e-9 * C->h;
+  double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k);
+  double snap = 1e-9 * cup_integrator_grid_step_(C);
   if (!twin_of(S, *topo)) return 1;
   cup_copy(S->xprev, S->x, S->n);
   int st = CUP_OK, to = *topo;
   for (;;) {
-    double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as fixed_run snaps) */
+    double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as sw_fixed_run snaps) */
     if ((st = piece(S, to, ta, te, info)) < 0) return st;
     if (te == tk) break;
     if ((st = sw->settle(sw->ctx, &to, te, S->x, NULL, info->message)) < 0) return st;
@@ -293,11 +295,11 @@ static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j,
  * ulp, and a whole step more of the old configuration would follow: a
  * buck on a grid holding its edges had 29 of 200 periods one step longer) */
 static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
-  long k1 = (long)ceil(tb / C->h);
+  long k1 = (long)ceil(tb / cup_integrator_grid_step_(C));
   if (k1 > n) k1 = n;
   while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
   while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
-  if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * C->h) k1--;
+  if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * cup_integrator_grid_step_(C)) k1--;
   return k1 <= k ? k + 1 : k1;
 }
 
@@ -308,7 +310,7 @@ static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
  * a step splits it (split_step: the pieces by the configurations' exact
  * flows). A circuit-gated switching is taken at the end of the step whose
  * end state passes the threshold (settle there). */
-static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
+static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   long k = 0, n = S->o.n, next_j = 0;
   int st = CUP_OK;
@@ -325,7 +327,7 @@ static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     }
     long k1 = grid_step_at(C, k, n, tb);
     /* inside step k1: the steps before it, then that one split */
-    int split = tb < cup_integrator_grid_time_(C, k1) - 1e-9 * C->h;
+    int split = tb < cup_integrator_grid_time_(C, k1) - 1e-9 * cup_integrator_grid_step_(C);
     long kw = split ? k1 - 1 : k1;
     if (sw->state_gated(sw->ctx, topo) && kw > k) kw = k + 1, split = 0;   /* its end checked */
     cup_run_info w;
@@ -342,7 +344,8 @@ static int fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
       if (sst == 0) {                              /* tb: the next switching time, at or after t_k1 */
         k = k1;
         t = cup_integrator_grid_time_(C, k);
-        if (k < n) st = sw->settle(sw->ctx, &topo, tb > t && tb - t <= 1e-9 * C->h ? tb : t, S->x, NULL, info->message);
+        double ts = tb > t && tb - t <= 1e-9 * cup_integrator_grid_step_(C) ? tb : t;
+        if (k < n) st = sw->settle(sw->ctx, &topo, ts, S->x, NULL, info->message);
         continue;
       }
       S->cur = topo;                               /* no exact flow: the step as the grid has it */
@@ -389,7 +392,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (S->half && coarse_run(S, x0, info)) return info->status;
     sw->jump(sw->ctx, topo, S->x);
     x0_moved(S, x0, info);
-    st = fixed_run(S, 0, topo, info);
+    st = sw_fixed_run(S, 0, topo, info);
     if (S->half) info->err_est = cup_estimate_value(&S->est);
     return st;
   }

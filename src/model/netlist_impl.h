@@ -40,7 +40,7 @@ typedef struct nl_port {
 } nl_port;
 
 /* A switch configuration's circuit as formulated (dense, column-major),
- * before its constraint rows are eliminated (netlist_switch.c). */
+ * before its constraint rows are eliminated (netlist_reduce.c). */
 typedef struct nl_raw {
   double *A, *B, *C, *D, *E, *G, *P;   /* n x n, n x m, m x n, m x m, n x p, m x p, n x n */
   int keep_B;                          /* controlled sources: B as formed, not P^-1 C^T */
@@ -172,10 +172,17 @@ int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t si
 /* The formulation of a parsed circuit (netlist.c); the reader calls it. */
 int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg);
 
-/* ---- switches (netlist_switch.c) ---- */
+/* ---- switches (netlist_switch.c, netlist_reduce.c) ---- */
 /* A circuit with switches: its configuration at t = 0 formulated as the
  * netlist, the circuit kept (moved out of *c) to form the others. */
 int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg);
+/* netlist_reduce.c: "out of memory while forming a switch configuration",
+ * as c's error; and configuration sub, formulated from the circuit d that
+ * c derives, reduced: its diode rows first, the constraint rows a switch
+ * makes eliminated by the P-projector (*Pi: n x n, malloc'd; left NULL
+ * when there are none), the LCS formed over the rest. */
+int nl_switch_nomem(const nl_circuit *c, char *errmsg);
+int nl_switch_reduce(cup_netlist *sub, const nl_circuit *c, const nl_circuit *d, double **Pi, char *errmsg);
 /* build_lcs for a configuration's circuit: the parts kept dense in nl->raw (netlist.c). */
 int nl_raw_store(cup_netlist *nl, const cup_sparse *const parts[6], const double *pdiag, const cup_sparse *Pc);
 /* A row over (x, u, zeta) of signal kind 'v' (nodes a, b; b < 0: ground) or

@@ -1,0 +1,70 @@
+/* fixed_impl — the fixed-step schemes' workspace, behind their entry of the
+ * scheme table (fixed.c runs it, fixed_setup.c sets it up): the model as
+ * the driver handed it over, the grid, the free step, the projector or the
+ * exact LCP step, the buffers, the estimate's run at n/2 and where the last
+ * run stopped. Internal to the library. */
+#ifndef CUP_FIXED_IMPL_H
+#define CUP_FIXED_IMPL_H
+
+#include "catchup.h"
+#include "faststep.h"
+#include "freestep.h"
+#include "estimate.h"
+#include "lcp/step.h"
+
+/* Where a run stopped before its end, at a step's end, and how far that
+ * step's tail went: a checkpoint resumes from there (cup_integrator_resume). */
+enum {
+  CUP_STOP_NONE,            /* not stopped, or stopped where it cannot resume (an error) */
+  CUP_STOP_SAMPLE_DUE,      /* the step callback stopped it: the step's sample (if selected) is next */
+  CUP_STOP_SAMPLE_REFUSED,  /* the sink refused the step's sample: offered again first */
+  CUP_STOP_STEP_DONE        /* the interrupt flag or the wall-time limit, after the step's sample */
+};
+
+typedef struct fixed_stop {
+  int phase;                /* CUP_STOP_* */
+  long k;                   /* the step taken last */
+  long next_j;              /* the output schedule's place (samples: the next j) */
+  int status;               /* the run's status and message before the stop replaced them */
+  char message[CUP_RUN_MSG_LEN];
+} fixed_stop;
+
+typedef struct fixed_ws fixed_ws;
+struct fixed_ws {
+  const cup_input *u;
+  cup_integrator_options o; /* the integrator's (the estimate's: at n/2) */
+  int n, m, p;
+  double h, eps_n, eta_n, h_rho, split;
+  int split_row;
+  /* the set: a polyset is stepped here (K, G, the projector or the LCP
+   * step), any other set through its cup_setproj */
+  const cup_set *S;
+  cup_set *S_own;           /* an LCS's polyset, wrapped */
+  const cup_polyset *K;     /* the polyset's rows, or NULL */
+  const cup_sparse *G;      /* the offset's motion, or NULL */
+  int fixed;                /* the polyset does not move */
+  cup_setproj *sp;          /* other sets */
+  const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
+  cup_freestep fs;
+  cup_projector *proj;
+  cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
+  int use_theta;
+  long kend;                /* the run's last step: n, or a switched circuit's window's end */
+  long next_j;              /* where the last run left the output samples (a window's next one) */
+  fixed_ws *half;           /* estimate: the same run at n/2 (step doubling), or NULL */
+  cup_estimate est;         /* ... and the comparison with it */
+  int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector,
+                               3 zeta_ext (a switched circuit's split step, switched.c) */
+  const double *zeta_ext;
+  int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
+  cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
+  double *x, *xnew, *xf, *g, *ut, *s0, *sg;
+  double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
+  double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */
+  double zs;                /* ... and its place between them (1: on a step) */
+  long rebuilds0;           /* a state polyset's rebuilds before the run */
+  double *x0;               /* the estimate's: x0 of the run, for a resumed run's coarse one */
+  fixed_stop stop;          /* where the last run stopped, for a checkpoint (checkpoint.c) */
+};
+
+#endif
