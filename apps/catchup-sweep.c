@@ -141,7 +141,7 @@ static int parse_args(args_t *a, int argc, char **argv) {
 
 /* Rank 0 reads the sweep file and the scenes; every rank then builds the
  * same sweep from the same texts (so that only rank 0 needs the files). */
-static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
+static int share_sweep(const args_t *a, sw_sweep **sp, char *err) {
   int st = CUP_OK;
   if (rank == 0) {
     st = sw_load(sp, a->sweep, err);
@@ -151,7 +151,7 @@ static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
   if (st) return st;
   if (nranks == 1) return CUP_OK;
   /* the sweep file's text, then the variants' scene texts in one message */
-  cup_sweep *s = *sp;
+  sw_sweep *s = *sp;
   long lens[3] = {0, 0, 0};
   if (rank == 0) {
     lens[0] = (long)strlen(s->text);
@@ -188,7 +188,7 @@ static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
 
 /* Every fixed-step task and reference against the step limit, before the
  * results file is touched (run_plan.h): the first one beyond it, named. */
-static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
+static int check_steps(const args_t *a, const sw_sweep *s, char *err) {
   for (long id = 0; id < s->n_tasks; id++) {
     sw_task t;
     if (sw_task_get(s, id, &t)) continue;
@@ -220,8 +220,8 @@ static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
   return CUP_OK;
 }
 
-static int open_results(const args_t *a, const cup_sweep *s, int argc, char **argv, sw_file **f, char *err) {
-  if (cup_file_list_check_output(&s->files, a->out, err)) return CUP_ERR_ARG;   /* an input is never an output */
+static int open_results(const args_t *a, const sw_sweep *s, int argc, char **argv, sw_file **f, char *err) {
+  if (file_list_check_output(&s->files, a->out, err)) return CUP_ERR_ARG;   /* an input is never an output */
   if (a->resume) return sw_file_open(f, a->out, s, err);
   char deps[512], h5[64];
   int n = cup_dependency_versions(deps, sizeof deps);
@@ -245,7 +245,7 @@ static int open_results(const args_t *a, const cup_sweep *s, int argc, char **ar
  * reference to check a tolerance against (the tasks' error is NaN). The
  * mean counts the jobs that compute (rate_jobs, sweep_manager.h); rank 0's
  * time, every job it ran. */
-static void say_summary(const args_t *a, const cup_sweep *s, const manager_t *m, const sw_tally *t, double wall,
+static void say_summary(const args_t *a, const sw_sweep *s, const manager_t *m, const sw_tally *t, double wall,
                         double cpu_manager) {
   int workers = nranks > 1 ? nranks - 1 : 1;
   char share[64] = "", tol[80] = "no tolerance check (no reference)", of[40] = "", jobs[96];
@@ -272,7 +272,7 @@ static void say_summary(const args_t *a, const cup_sweep *s, const manager_t *m,
       m->cpu_sum / (workers * wall), 100 * m->cpu_sum / m->rank_cpu, share, 1e6 * m->busy / (double)m->jobs_done);
 }
 
-static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, const hooks_t *hooks) {
+static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, const hooks_t *hooks) {
   manager_t m;
   memset(&m, 0, sizeof m);
   m.quiet = a->quiet;
@@ -333,7 +333,7 @@ int main(int argc, char **argv) {
   install_handlers();
   hooks_t hooks;
   hooks_read(&hooks);
-  cup_sweep *s = NULL;
+  sw_sweep *s = NULL;
   sw_file *f = NULL;
   char err[SW_ERR_LEN] = "";
   int st = share_sweep(&a, &s, err);

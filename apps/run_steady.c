@@ -64,7 +64,7 @@ int run_steady_probes(run_steady *s, cup_netlist *nl, char *err, size_t size) {
     if (s->mi[k] < 0) return snprintf(err, size, "steady_state.measure: %s", e2), 1;
   }
   for (int k = 0; k < q->npower; k++)
-    if (cup_pss_probe_power(nl, q->power[k], &s->pv[k], &s->pc[k], e2))
+    if (pss_probe_power(nl, q->power[k], &s->pv[k], &s->pc[k], e2))
       return snprintf(err, size, "steady_state.power: %s", e2), 1;
   return 0;
 }
@@ -96,7 +96,7 @@ int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_optio
   if ((st = cup_input_period_fits(cup_scene_input(scene), T, e2))) return no_steady(s, st, e2, err, size);
   s->info.period = T;
   cup_integrator_options mo;                     /* the period map: the run's, over one period */
-  cup_pss_map_options(o, cup_scene_options(scene)->T, T, s->req->pss.map_tol, &mo);
+  pss_map_options(o, cup_scene_options(scene)->T, T, s->req->pss.map_tol, &mo);
   mo.on_step = NULL;
   cup_integrator *I = NULL;
   if ((st = cup_scene_integrator(scene, &mo, &I, e2))) return no_steady(s, st, e2, err, size);
@@ -162,7 +162,7 @@ static int measure(run_steady *s) {
     for (long k = 0; k < N; k++) v[k] = s->nl ? s->sig[k * s->ns + s->mi[j]] : s->x[k * s->n + j];
     st = cup_measure_period(v, N, H, &s->me[j], s->amp + (size_t)j * (H + 1), s->phase + (size_t)j * (H + 1), e2);
   }
-  for (int j = 0; !st && j < np; j++) st = cup_measure_power(s->sig, N, s->ns, s->pv[j], s->pc[j], v, &s->power[j], e2);
+  for (int j = 0; !st && j < np; j++) st = measure_power(s->sig, N, s->ns, s->pv[j], s->pc[j], v, &s->power[j], e2);
   if (!st && s->req->eff_out >= 0) s->efficiency = s->power[s->req->eff_out] / -s->power[s->req->eff_in];
   free(v);
   return st;

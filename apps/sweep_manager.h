@@ -26,7 +26,7 @@ typedef struct held { long task; sw_result r; double *traj; struct held *next; }
 
 typedef struct {
   int quiet, log_progress;   /* the command line's --quiet, --log-progress */
-  const cup_sweep *s;
+  const sw_sweep *s;
   sw_file *f;
   long count;                /* samples * dim: the states, what the error measures */
   size_t one;                /* bytes of one job's answer: sw_result + trajectory */

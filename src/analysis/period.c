@@ -16,7 +16,7 @@
 #define PERIOD_REL 1e-12
 
 /* A term's period (0: constant, any period will do), or < 0 with errmsg. */
-static double term_period(const cup_term *t, int k, char *errmsg) {
+static double term_period(const input_term *t, int k, char *errmsg) {
   const char *what = cup_wave_name(t->kind);
   switch (t->kind) {
     case CUP_WAVE_CONSTANT: return 0;
@@ -25,20 +25,20 @@ static double term_period(const cup_term *t, int k, char *errmsg) {
     case CUP_WAVE_PWL:
       for (int j = 1; j < t->np; j++)
         if (t->v[j] != t->v[0])
-          return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pwl): a PWL source is not periodic "
+          return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (pwl): a PWL source is not periodic "
                           "(it stays at its last value after t = %g); give the steady state a periodic source",
                           t->comp, k, t->t[t->np - 1]), -1;
       return 0;
     case CUP_WAVE_PULSE: {
       if (t->value2 == t->value) return 0;
       if (!(t->period > 0))
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): PULSE with no period (a "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): PULSE with no period (a "
                         "single pulse) is not periodic", t->comp, k), -1;
       /* before its delay the source holds its initial value: [0, T) is a
        * period like the later ones only if the pulse of the period before
        * would have ended by t = 0 */
       if (t->delay + t->rise + t->width + t->fall > t->period * (1 + 1e-12))
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): its delay %g makes [0, %g) "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): its delay %g makes [0, %g) "
                         "unlike later periods (delay + rise + width + fall = %g > period); shift the pulse by "
                         "a whole period less", t->comp, k, t->delay, t->period,
                         t->delay + t->rise + t->width + t->fall), -1;
@@ -46,15 +46,15 @@ static double term_period(const cup_term *t, int k, char *errmsg) {
     }
     case CUP_WAVE_DAMPED_SINE:
       if (t->damping != 0)
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): it decays (damping %g): no "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): it decays (damping %g): no "
                         "periodic steady state", t->comp, k, t->damping), -1;
       if (t->delay != 0 && t->amp != 0 && t->omega > 0)
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): its delay %g makes [0, T) "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): its delay %g makes [0, T) "
                         "unlike later periods; give the steady state an undelayed SIN", t->comp, k, t->delay), -1;
       return t->omega > 0 && t->amp != 0 ? 2 * M_PI / t->omega : 0;
   }
   (void)what;
-  return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d: unknown waveform", t->comp, k), -1;
+  return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d: unknown waveform", t->comp, k), -1;
 }
 
 /* The least common multiple of the terms' periods in *T: 0, or 1 when the
@@ -76,7 +76,7 @@ static int common_period(const cup_input *u, double *T, char *errmsg) {
       if (b >= 1 && fabs(r - b) <= PERIOD_REL * r) break;
     }
     if (a > PERIOD_MAX_MULTIPLE)
-      return cup_fail(errmsg, CUP_ERR_ARG, "the sources have no common period: input component %d, term %d "
+      return fail_fmt(errmsg, CUP_ERR_ARG, "the sources have no common period: input component %d, term %d "
                       "(period %.17g) and term %d (period %.17g) are not in a ratio of integers up to %d",
                       u->terms[k].comp, k, p, first, per, PERIOD_MAX_MULTIPLE), -2;
     per *= a;
@@ -86,7 +86,7 @@ static int common_period(const cup_input *u, double *T, char *errmsg) {
 }
 
 int cup_input_period(const cup_input *u, double *T, char *errmsg) {
-  if (!u || !T) return cup_fail(errmsg, CUP_ERR_ARG, "input period: NULL argument");
+  if (!u || !T) return fail_fmt(errmsg, CUP_ERR_ARG, "input period: NULL argument");
   int c = common_period(u, T, errmsg);
   if (c == -2 && errmsg) {
     size_t n = strlen(errmsg);
@@ -94,9 +94,9 @@ int cup_input_period(const cup_input *u, double *T, char *errmsg) {
   }
   if (c < 0) return CUP_ERR_ARG;
   if (c > 0 && u->fn)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
   if (c > 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the input is constant: no period to find a steady state over; give the "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the input is constant: no period to find a steady state over; give the "
                     "period");
   return CUP_OK;
 }
@@ -114,9 +114,9 @@ int cup_input_period_fits(const cup_input *u, double T, char *errmsg) {
   int c = common_period(u, &Tu, why);
   if (c > 0) return CUP_OK;                      /* a callback or a constant: any period */
   if (c < 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g: the sources do not repeat over it: %s", T, why);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the period %.17g: the sources do not repeat over it: %s", T, why);
   double k = nearbyint(T / Tu);
   if (k >= 1 && fabs(T / Tu - k) <= 1e-9 * k) return CUP_OK;
-  return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
+  return fail_fmt(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
                   "%.17g (%.6g of them): over it the sources do not repeat", T, Tu, T / Tu);
 }

@@ -71,7 +71,7 @@ int cup_h5run_open(cup_h5run **out, const char *path, int dim, int nsig, const c
   struct stat sb;
   if (!path || stat(path, &sb) != 0 || !S_ISREG(sb.st_mode))
     return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': no such file", path ? path : "(null)");
-  if (cup_file_in_use(path))
+  if (h5_file_in_use(path))
     return fail_msg(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': the file is in use by another process (HDF5 "
                     "file locking): wait for that run to end; the file is left as it was", path);
   int st;

@@ -28,7 +28,7 @@
 #include "estimate.h"
 #include "integrator_impl.h"
 
-static double grid_time(const cup_integrator *I, long k) { return cup_grid_time(k, I->o.n, I->o.T, I->h); }
+static double grid_time(const cup_integrator *I, long k) { return tally_grid_time(k, I->o.n, I->o.T, I->h); }
 
 /* The output: every k-th step, the last, none; or samples at
  * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
@@ -128,9 +128,9 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
 
 static int coarse_run(cup_integrator *I, cup_run_info *info) {
   cup_run_info hi;
-  int st = fixed_run(I->half, I->x0, cup_estimate_keep, &I->est, &hi);
-  cup_estimate_start(&I->est, st >= 0);
-  info->err_est = cup_estimate_value(&I->est);
+  int st = fixed_run(I->half, I->x0, estimate_keep, &I->est, &hi);
+  estimate_start(&I->est, st >= 0);
+  info->err_est = estimate_value(&I->est);
   return st == CUP_ERR_INTERRUPTED && I->o.interrupt && *I->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
 }
 
@@ -151,7 +151,7 @@ static int halt(cup_integrator *I, cup_run_info *info, int status, long k, doubl
 static int moving_offset(cup_integrator *I, double t) {
   if (cup_input_eval(I->u, t, I->ut)) return CUP_ERR_CALLBACK;
   memcpy(I->g, I->K->g0, sizeof(double) * (size_t)I->m);
-  cup_sparse_gaxpy(I->G, I->ut, I->g);
+  la_sparse_gaxpy(I->G, I->ut, I->g);
   if (!I->use_theta) return cup_projector_set_offset(I->proj, I->g);
   for (int i = 0; i < I->m; i++)           /* the theta step reads g itself */
     if (!isfinite(I->g[i])) return CUP_ERR_NONFINITE;
@@ -177,7 +177,7 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
 static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup_run_info *info, long k, double t,
                                                     const double *x) {
   char what[200];
-  int j = cup_state_worst(x, I->n);
+  int j = tally_state_worst(x, I->n);
   int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
                      "diverged", CUP_STATE_MAX, j, x[j]);
   if (I->o.scheme == CUP_SCHEME_EXPLICIT && I->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
@@ -187,7 +187,7 @@ static __attribute__((noinline, cold)) int diverged(const cup_integrator *I, cup
 
 /* A polyset step whose answer z (in xnew) has no certified distance to
  * K(t_{k+1}) (eta = inf) is not passed on as it is (issue 27, guarantee 6),
- * the projector's exact method (cup_project_exact) standing in whatever
+ * the projector's exact method (proj_exact) standing in whatever
  * method the options ask: first z's own distance from the projection v of z, d_K(z) <=
  * ||z - v||_P + eta(v) (z kept: the theta step's is not a projection, and
  * an exact step's is more accurate than a certified one); then, for a step
@@ -202,17 +202,17 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
   cup_proj_info pp = {0}, first = *pi;
   int ps = cup_projector_set_offset(I->proj, I->use_theta && I->th.D ? I->th.geff : g);   /* D: K shifted by D zeta */
   double own = INFINITY;
-  if (ps == CUP_OK && (ps = cup_project_exact(I->proj, I->xnew, I->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
-    own = cup_metric_dist_hi(I->K, I->xnew, I->v, NULL, I->v + I->n) + pp.eta_cert;
+  if (ps == CUP_OK && (ps = proj_exact(I->proj, I->xnew, I->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
+    own = polyset_metric_dist_hi(I->K, I->xnew, I->v, NULL, I->v + I->n) + pp.eta_cert;
   if (own <= pi->eta_target) ps = CUP_OK;
   else if (ps >= 0 && (!I->use_theta || I->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
     for (int offer = !I->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
       if (offer && !cup_projector_offer_feasible(I->proj, I->x)) break;
-      if ((ps = cup_project_exact(I->proj, I->xf, I->v, &pp)) >= 0 && pp.eta_cert < own) {
+      if ((ps = proj_exact(I->proj, I->xf, I->v, &pp)) >= 0 && pp.eta_cert < own) {
         *pi = pp;
         st = ps;
         I->zeta_from = 2;
-        cup_copy(I->xnew, I->v, I->n);
+        la_copy(I->xnew, I->v, I->n);
       }
     }
   }
@@ -230,9 +230,9 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
    * it can be certified: the answer may be right) */
   const double *sz = I->s0, *gam = I->sg;        /* z's slack and its rounding */
   if (I->use_theta && I->th.D) sz = I->th.s, gam = I->th.gam;   /* the step's own, with D zeta's rounding */
-  else cup_slack(I->K, g, I->xnew, I->s0, I->sg);
+  else polyset_slack(I->K, g, I->xnew, I->s0, I->sg);
   int row = -1;
-  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(I->K, I->xnew));
+  double far = 0, tol = la_max(pi->eta_target, 1e-10 * cup_polyset_norm(I->K, I->xnew));
   for (int i = 0; i < I->m; i++) {
     double d = I->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / I->K->rownorm[i] : 0;   /* <= d_K(z) */
     if (d > far) { far = d; row = i; }
@@ -253,8 +253,8 @@ static __attribute__((noinline, cold)) int certify_or_stop(cup_integrator *I, lo
  * is not: the first step jumps (jump_size tells by how much). */
 static int polyset_x0(cup_integrator *I, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(I, 0) == CUP_OK ? I->g : I->K->g0;
-  int consistent = I->use_theta ? cup_lcp_step_start(&I->th, I->x, g0)
-                                : cup_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
+  int consistent = I->use_theta ? lcp_step_start(&I->th, I->x, g0)
+                                : polyset_slack(I->K, g0, I->x, I->s0, NULL) >= 0;
   if (consistent) return 0;
   info->status = CUP_WARN_X0_OUTSIDE;
   snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
@@ -305,7 +305,7 @@ static int general_step(cup_integrator *I, long k, double t, const double *xk, c
    * the contact margin in one step); the step is then projected again, warm,
    * with that row, its work added to the step's */
   for (int again = 0; st >= 0 && again < RECHECKS; again++) {
-    int rc = cup_setproj_recheck(I->sp, t, xk, z);
+    int rc = setproj_recheck(I->sp, t, xk, z);
     if (rc <= 0) {
       if (rc < 0) st = rc;
       break;
@@ -357,8 +357,8 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   info->eps_target = I->eps_n;
   info->eta_target = I->eta_n;
   info->h_rho = I->h_rho;
-  if (cup_state_beyond(x0, n)) {
-    int w = cup_state_worst(x0, n);
+  if (tally_state_beyond(x0, n)) {
+    int w = tally_state_worst(x0, n);
     char what[160];
     if (isfinite(x0[w])) snprintf(what, sizeof what, "x0 is beyond the range of a state, ||x||_1 <= %g "
                                   "(CUP_STATE_MAX): x0[%d] = %g", CUP_STATE_MAX, w, x0[w]);
@@ -392,7 +392,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   sampler sp = {0};
   sampler_next(I, &sp);
   I->zs = 1;
-  if (I->zprev) cup_zero(I->zprev, I->m);
+  if (I->zprev) la_zero(I->zprev, I->m);
   if (I->half) {
     memcpy(I->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
     if (coarse_run(I, info) == CUP_ERR_INTERRUPTED)
@@ -415,7 +415,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
 static inline int step_checked(cup_integrator *I, long k, double t0, double t1, int fixed, int fused, int stiff,
                                cup_proj_info *pi, int st, cup_run_info *info) {
   if (st >= 0 && I->K && !(pi->eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
-    if (fused && cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
+    if (fused && freestep_apply(&I->fs, t0, t1, I->x, I->xf) < 0) st = CUP_ERR_CALLBACK;
     else if ((st = certify_or_stop(I, k + 1, t1, fixed ? I->K->g0 : I->g, pi, st, info)) < 0) return st;
   }
   if (st < 0) {                          /* the polyset path's errors */
@@ -435,7 +435,7 @@ static inline int step_checked(cup_integrator *I, long k, double t0, double t1, 
  * projection, checked. */
 static int step(cup_integrator *I, long k, double t0, double t1, int fixed, long rebuilds0, int stiff,
                 cup_proj_info *pi, cup_run_info *info) {
-  int st = cup_freestep_apply(&I->fs, t0, t1, I->x, I->xf);
+  int st = freestep_apply(&I->fs, t0, t1, I->x, I->xf);
   if (st < 0)
     return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
                    ? "a user callback (input or perturbation) failed or returned NaN/Inf"
@@ -455,8 +455,8 @@ static int step(cup_integrator *I, long k, double t0, double t1, int fixed, long
   if (I->use_theta) {
     double S = cup_polyset_norm(I->K, I->xf);
     const double *g = fixed ? I->K->g0 : I->g;
-    st = cup_lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
-                            I->eta_n > 0 ? I->eta_n : 1e-10 * S, pi);
+    st = lcp_step_solve(&I->th, g, I->xf, I->xnew, S, I->eps_n > 0 ? I->eps_n : -1,
+                        I->eta_n > 0 ? I->eta_n : 1e-10 * S, pi);
     if (st == CUP_ERR_LINALG) {
       /* pivoting failed: an empty K(t) (the projector proves it with a
        * Farkas certificate) or, for theta > 0, M not a P-matrix; for the
@@ -492,7 +492,7 @@ static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, vo
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
     if (fast && k >= I->fast.hold)       /* hold: a run of steps that left the range, stepped here */
-      k = cup_faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
+      k = faststep_run(&I->fast, k, loop_stop(I, &sp, sink != NULL, k), I->x, I->xnew, &pi, &st, info);
     double t0 = grid_time(I, k), t1 = grid_time(I, k + 1);
     if (st != CUP_FAST_DECLINED) {       /* fused: all that step() does, done by faststep.c */
       I->zeta_from = 1;
@@ -501,15 +501,15 @@ static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, vo
       st = step(I, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
     }
     if (st < 0) return st;
-    if (cup_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
+    if (tally_state_beyond(I->xnew, n)) return diverged(I, info, k + 1, t1, I->xnew);
     double *t = I->x; I->x = I->xnew; I->xnew = t;
     if (I->half) {
-      cup_estimate_compare(&I->est, k + 1, I->x);
-      info->err_est = cup_estimate_value(&I->est);
+      estimate_compare(&I->est, k + 1, I->x);
+      info->err_est = estimate_value(&I->est);
     }
     info->step = k + 1;
     info->t = t1;
-    cup_tally(info, &pi);
+    tally_projection(info, &pi);
     if (st == CUP_WARN_NOT_CERTIFIED) {
       if (info->not_certified++ == 0 && info->status == CUP_OK) {
         info->status = st;
@@ -540,7 +540,7 @@ static int steps(cup_integrator *I, long k0, long next_j, cup_sample_fn sink, vo
   return info->status;
 }
 
-double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I, k); }
+double integrator_grid_time(const cup_integrator *I, long k) { return grid_time(I, k); }
 
 /* A window's (or a split step's) statistics, from nothing. */
 static void window_info(const cup_integrator *I, cup_run_info *info) {
@@ -551,8 +551,8 @@ static void window_info(const cup_integrator *I, cup_run_info *info) {
   info->h_rho = I->h_rho;
 }
 
-int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
-                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+                      cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   I->kend = k1;
   int st;
   if (first) {
@@ -565,11 +565,11 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
     I->zeta_from = 0;
     I->jump = 0;
     I->zs = 1;
-    if (I->zprev) cup_zero(I->zprev, I->m);
+    if (I->zprev) la_zero(I->zprev, I->m);
     if (I->K && fixed) cup_projector_set_offset(I->proj, I->K->g0);
     if (I->K && I->use_theta) {                    /* theta's zeta_k0 at the window's start */
       const double *g = !fixed && moving_offset(I, grid_time(I, k0)) == CUP_OK ? I->g : I->K->g0;
-      cup_lcp_step_start(&I->th, I->x, g);
+      lcp_step_start(&I->th, I->x, g);
     }
     st = steps(I, k0, *next_j, sink, sink_ctx, info);
   }
@@ -578,8 +578,8 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
   return st;
 }
 
-int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
-                              long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+                         long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   const cup_integrator_options *o = &I->o;
   double t = grid_time(I, k);
   window_info(I, info);
@@ -622,7 +622,7 @@ static int fixed_resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_in
     double err = I->est.err;                     /* the comparisons made before the stop */
     int cst = coarse_run(I, info);
     I->est.err = err;
-    info->err_est = cup_estimate_value(&I->est);
+    info->err_est = estimate_value(&I->est);
     if (cst == CUP_ERR_INTERRUPTED)
       return halt(I, info, CUP_ERR_INTERRUPTED, k, grid_time(I, k), "interrupted (in the estimate's run at n/2)",
                   phase, &sp);

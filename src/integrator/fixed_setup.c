@@ -24,18 +24,18 @@
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
   if (L->keep_B)
-    return cup_lcs_needs_reciprocal_(cup_scheme_name(scheme), "it projects in the energy metric P", errmsg);
+    return lcs_needs_reciprocal(cup_scheme_name(scheme), "it projects in the energy metric P", errmsg);
   int *rows = calloc((size_t)L->m + 1, sizeof(int)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
-  if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
+  if (!rows || !used) { free(rows); free(used); return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
   for (int j = 0; j < L->m; j++)
     for (int q = L->D.p[j]; q < L->D.p[j + 1]; q++)
       if (L->D.x[q] != 0) used[L->D.i[q]] = used[j] = 1;
   for (int i = 0; i < L->m; i++) if (used[i]) rows[k++] = i;
   char text[128];
-  cup_lcs_rows_text(L, rows, k, text, sizeof text);
+  lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
+  return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
                   "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state does "
                   "not fix): use the theta or the adaptive scheme", cup_scheme_name(scheme), text,
                   k == 1 ? "has" : "have");
@@ -55,10 +55,10 @@ static int theta_step_init(cup_integrator *I, const double *W, double theta, cha
       for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
     }
   }
-  if (!st) st = cup_lcp_step_init_bd(&I->th, I->K, W, I->h, B, D, theta);
+  if (!st) st = lcp_step_init_bd(&I->th, I->K, W, I->h, B, D, theta);
   free(B);
   free(D);
-  return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
+  return st ? fail_fmt(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
 }
 
 /* The polyset path: the projector, and the exact LCP step where it is
@@ -74,7 +74,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
   I->use_theta = o->scheme == CUP_SCHEME_THETA ||
                  (o->scheme == CUP_SCHEME_EXPLICIT && proj_small_lcp(I->K, &o->proj));
   if (I->use_theta && !I->K->dense)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
                     "use the explicit, implicit or exponential scheme", I->K->m, I->K->n, CUP_DENSE_MAX_ROWS,
                     CUP_DENSE_MAX_DIM);
@@ -82,7 +82,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
     double *W = I->fs.W, *eye = NULL;
     if (!W) {
       eye = calloc((size_t)I->n * (size_t)I->n, sizeof(double));
-      if (!eye) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+      if (!eye) return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
       for (int j = 0; j < I->n; j++) eye[j + (size_t)j * I->n] = 1;
       W = eye;
     }
@@ -93,7 +93,7 @@ static int polyset_setup(cup_integrator *I, char *errmsg) {
 }
 
 /* Everything but the model: buffers, the free step, the projection. */
-static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+static int setup(cup_integrator *I, const freestep_drift *D, const cup_process_desc *pd, char *errmsg) {
   const cup_integrator_options *o = &I->o;
   I->h = o->T / (double)o->n;
   I->kend = o->n;
@@ -112,15 +112,15 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   I->zprev = calloc(M, sizeof(double));
   I->zs = 1;
   if (!I->x || !I->xnew || !I->xf || !I->g || !I->ut || !I->s0 || !I->sg || !I->v || !I->xs || !I->zprev)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   if (o->scheme == CUP_SCHEME_THETA && !I->K)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: the set is a %s; the theta step solves an LCP on a polyset's rows "
                     "(use the explicit, implicit or exponential scheme)", cup_set_kind_name(I->S->kind));
-  int st = cup_freestep_init(&I->fs, D, I->K, I->u, o->scheme, o->theta, I->h, o->f_order, errmsg);
-  if (!st) st = cup_freestep_add_rhs(&I->fs, o->f, o->f_ctx);
-  if (!st && pd) st = cup_freestep_add_rhs(&I->fs, pd->f, pd->f_ctx);
-  if (!st && pd) cup_freestep_set_rhs_integral(&I->fs, pd->f_integral, pd->f_integral_ctx);
+  int st = freestep_init(&I->fs, D, I->K, I->u, o->scheme, o->theta, I->h, o->f_order, errmsg);
+  if (!st) st = freestep_add_rhs(&I->fs, o->f, o->f_ctx);
+  if (!st && pd) st = freestep_add_rhs(&I->fs, pd->f, pd->f_ctx);
+  if (!st && pd) freestep_set_rhs_integral(&I->fs, pd->f_integral, pd->f_integral_ctx);
   if (!st && I->K) st = polyset_setup(I, errmsg);
   /* the paper's tolerances are absolute; a zero schedule asks for the exact
    * projection, certified relative to the problem's scale */
@@ -133,28 +133,28 @@ static int setup(cup_integrator *I, const cup_drift *D, const cup_process_desc *
   if (!st && I->K) st = cup_projector_create(&I->proj, I->K, &po, errmsg);
   if (!st && !I->K) st = cup_setproj_create(&I->sp, I->S, &po, errmsg);
   if (st) return st;
-  I->h_rho = cup_freestep_h_rho(D, I->h);
-  I->split = cup_freestep_splitting(&I->fs, &I->split_row);
+  I->h_rho = freestep_h_rho(D, I->h);
+  I->split = freestep_splitting(&I->fs, &I->split_row);
   if (I->K)
-    cup_faststep_init(&I->fast, &I->fs, &I->th, I->K, I->fixed || !I->u ? NULL : I->G, I->g, I->use_theta,
-                      I->eps_n, I->eta_n, o->n, o->T);
+    faststep_init(&I->fast, &I->fs, &I->th, I->K, I->fixed || !I->u ? NULL : I->G, I->g, I->use_theta,
+                  I->eps_n, I->eta_n, o->n, o->T);
   return CUP_OK;
 }
 
 /* The step-doubling estimate: the same model and scheme at n/2 (borrowing
  * this integrator's model), keeping its states where the two grids meet
  * (estimate.h). */
-static int create_half(cup_integrator *I, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+static int create_half(cup_integrator *I, const freestep_drift *D, const cup_process_desc *pd, char *errmsg) {
   cup_integrator_options h = I->o;
   h.n = I->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
-  if (cup_estimate_init(&I->est, I->o.n, I->n) || !(I->x0 = calloc((size_t)I->n, sizeof(double))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  if (estimate_init(&I->est, I->o.n, I->n) || !(I->x0 = calloc((size_t)I->n, sizeof(double))))
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   h.output = CUP_OUTPUT_EVERY;
-  h.output_every = cup_estimate_stride(&I->est);
+  h.output_every = estimate_stride(&I->est);
   int st;
-  cup_integrator *H = I->half = cup_integrator_new_(&h, errmsg, &st);
+  cup_integrator *H = I->half = integrator_new(&h, errmsg, &st);
   if (!H) return st;
   H->u = I->u;
   H->L = I->L;                                   /* the theta step takes D from it */
@@ -168,7 +168,7 @@ int fixed_create(cup_integrator *I, const scheme_model *md, void **ws, char *err
   int st = md->L ? needs_theta(md->L, I->o.scheme, errmsg) : CUP_OK;
   if (st) return st;
   if (!I->S) {                                   /* an LCS: its polyset as a set */
-    st = cup_set_wrap_polyset(&I->S_own, I->K, I->G, I->p, errmsg);
+    st = set_wrap_polyset(&I->S_own, I->K, I->G, I->p, errmsg);
     I->S = I->S_own;
   }
   if (!st) st = setup(I, md->D, md->pd, errmsg);
@@ -183,12 +183,12 @@ void fixed_free(void *ws) {
     free(I->half);
     I->half = NULL;
   }
-  cup_estimate_free(&I->est);
-  cup_freestep_free(&I->fs);
+  estimate_free(&I->est);
+  freestep_free(&I->fs);
   cup_projector_free(&I->proj);
   cup_setproj_free(&I->sp);
   cup_set_free(&I->S_own);
-  if (I->use_theta) cup_lcp_step_free(&I->th);
+  if (I->use_theta) lcp_step_free(&I->th);
   free(I->x); free(I->xnew); free(I->xf); free(I->g); free(I->ut); free(I->s0); free(I->sg); free(I->v);
   free(I->xs); free(I->zprev);
   free(I->x0);
@@ -229,23 +229,23 @@ int fixed_stopped(const void *ws, cup_run_info *info) {
 /* Where the run stopped, x_k (and x_{k-1}, zeta_{k-1} for a sample between
  * steps), the estimate's x0 and its comparisons so far, the projector's
  * and the LCP step's warm starts. */
-void fixed_checkpoint(void *ws, cup_ckpt *c) {
+void fixed_checkpoint(void *ws, ckpt *c) {
   cup_integrator *I = ws;
-  cup_ckpt_stop *s = &I->stop;
+  integrator_ckpt_stop *s = &I->stop;
   CUP_CKPT_IO(c, s->phase);
   CUP_CKPT_IO(c, s->k);
   CUP_CKPT_IO(c, s->next_j);
   CUP_CKPT_IO(c, I->zeta_from);
   CUP_CKPT_IO(c, I->jump);
-  cup_ckpt_io(c, I->x, sizeof(double) * (size_t)I->n);
+  ckpt_io(c, I->x, sizeof(double) * (size_t)I->n);
   if (I->o.output == CUP_OUTPUT_SAMPLES) {      /* a sample between steps k - 1 and k: x_{k-1}, zeta_{k-1} */
-    cup_ckpt_io(c, I->xnew, sizeof(double) * (size_t)I->n);
-    if (I->zprev) cup_ckpt_io(c, I->zprev, sizeof(double) * (size_t)I->m);
+    ckpt_io(c, I->xnew, sizeof(double) * (size_t)I->n);
+    if (I->zprev) ckpt_io(c, I->zprev, sizeof(double) * (size_t)I->m);
   }
   if (I->half) {
-    cup_ckpt_io(c, I->x0, sizeof(double) * (size_t)I->n);
+    ckpt_io(c, I->x0, sizeof(double) * (size_t)I->n);
     CUP_CKPT_IO(c, I->est.err);
   }
-  cup_projector_checkpoint(I->proj, c);
-  if (I->use_theta) cup_lcp_step_checkpoint(&I->th, c);
+  projector_checkpoint(I->proj, c);
+  if (I->use_theta) lcp_step_checkpoint(&I->th, c);
 }

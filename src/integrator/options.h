@@ -6,6 +6,6 @@
 
 #include "catchup.h"
 
-cup_integrator *cup_integrator_new_(const cup_integrator_options *opt, char *errmsg, int *st);
+cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st);
 
 #endif

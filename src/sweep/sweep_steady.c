@@ -14,7 +14,7 @@
 #include "analysis/pss_run.h"
 #include "util/clock.h"
 
-void sw_steady_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
+void sw_steady_no_reference(const sw_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < sw_traj_len(s); j++) traj[j] = NAN;
   r->status = CUP_OK;
   r->correction = r->cross_check = r->max_eps_cert = r->max_eta_cert = NAN;
@@ -38,7 +38,7 @@ static int keep_sample(long k, double t, const double *x, void *ctx) {
 }
 
 /* One period from x0 at q->samples samples, measured into r->steady. */
-static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_steady *q, cup_integrator_options mo,
+static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_steady *q, cup_integrator_options mo,
                    const double *x0, sw_result *r) {
   cup_netlist *nl = cup_scene_netlist(v->scene);
   const cup_lcs *L = cup_scene_lcs(v->scene);
@@ -71,7 +71,7 @@ static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_stea
   }
   double power[SW_SS_POWER];
   for (int j = 0; st >= 0 && j < s->ss_np; j++)
-    st = cup_measure_power(p.sig, p.N, p.ns, s->ss_pv[j], s->ss_pc[j], w, &power[j], err);
+    st = measure_power(p.sig, p.N, p.ns, s->ss_pv[j], s->ss_pc[j], w, &power[j], err);
   if (st >= 0 && q->eff_out >= 0) r->steady.efficiency = power[q->eff_out] / -power[q->eff_in];
   if (st < 0) snprintf(r->message, sizeof r->message, "the steady state's period: %s: %s", cup_status_name(st), err);
   cup_integrator_free(&I);
@@ -95,7 +95,7 @@ static int period_of(const sw_variant *v, const cup_scene_steady *q, double *T, 
   return st;
 }
 
-void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r) {
+void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r) {
   const cup_scene_steady *q = cup_scene_steady_state(v->scene);
   struct sw_steady_result *ss = &r->steady;
   ss->period = ss->residual = ss->max_multiplier = ss->efficiency = NAN;
@@ -106,7 +106,7 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
   if ((r->status = period_of(v, q, &T, r))) { r->wall += now_seconds() - t0; return; }
   ss->period = T;
   cup_integrator_options mo;               /* the period map: one period, its final state */
-  cup_pss_map_options(o, cup_scene_options(v->scene)->T, T, q->pss.map_tol, &mo);
+  pss_map_options(o, cup_scene_options(v->scene)->T, T, q->pss.map_tol, &mo);
   char err[CUP_ERRMSG_LEN] = "";
   cup_integrator *I = NULL;
   cup_pss *pss = NULL;
@@ -142,7 +142,7 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
 
 /* ---- /steady_state in the results file ---- */
 
-static void pending(const cup_sweep *s, long id, void *vrow) {
+static void pending(const sw_sweep *s, long id, void *vrow) {
   sw_steady_row *row = vrow;
   memset(row, 0, sizeof *row);
   row->task_id = id;
