@@ -140,23 +140,29 @@ static int parse_args(args_t *a, int argc, char **argv) {
 /* ---- the sweep on every rank ---- */
 
 /* Rank 0 reads the sweep file and the scenes; every rank then builds the
- * same sweep from the same texts (so that only rank 0 needs the files). */
+ * same sweep from the same texts (so that only rank 0 needs the files):
+ * per variant its scene text, or for a lazy one nothing (its entry's scene
+ * file's text and its overrides give it, in its job). Rank 0 makes the
+ * lazy variants' texts, for the results file, itself (sw_lazy_texts). */
 static int share_sweep(const args_t *a, sw_sweep **sp, char *err) {
   int st = CUP_OK;
   if (rank == 0) {
     st = sw_load(sp, a->sweep, err);
-    if (!st) st = sw_resolve_files(*sp, err);
+    if (!st) st = sw_resolve_scenes(*sp, err);
   }
   bcast_status(&st);
   if (st) return st;
   if (nranks == 1) return CUP_OK;
-  /* the sweep file's text, then the variants' scene texts in one message */
+  /* the sweep file's text, then per variant its scene text and its file text ("" for none), in one message */
   sw_sweep *s = *sp;
   long lens[3] = {0, 0, 0};
   if (rank == 0) {
     lens[0] = (long)strlen(s->text);
     lens[1] = s->n_variants;
-    for (int k = 0; k < s->n_variants; k++) lens[2] += (long)strlen(s->var[k].scene_text) + 1;
+    for (int k = 0; k < s->n_variants; k++) {
+      const sw_variant *v = &s->var[k];
+      lens[2] += (long)((v->scene_text ? strlen(v->scene_text) : 0) + (v->file_text ? strlen(v->file_text) : 0) + 2);
+    }
     if (lens[2] > INT_MAX) {
       say("%s: the variants' scenes take %ld bytes, more than one MPI message holds", a->sweep, lens[2]);
       MPI_Abort(MPI_COMM_WORLD, 1);
@@ -169,10 +175,19 @@ static int share_sweep(const args_t *a, sw_sweep **sp, char *err) {
   if (!text || !all || !scenes) MPI_Abort(MPI_COMM_WORLD, 1);
   MPI_Bcast(text, (int)lens[0] + 1, MPI_CHAR, 0, MPI_COMM_WORLD);
   if (rank == 0)
-    for (long k = 0, at = 0; k < lens[1]; k++) at += sprintf(all + at, "%s", s->var[k].scene_text) + 1;
+    for (long k = 0, at = 0; k < lens[1]; k++) {
+      const sw_variant *v = &s->var[k];
+      at += sprintf(all + at, "%s", v->scene_text ? v->scene_text : "") + 1;
+      at += sprintf(all + at, "%s", v->file_text ? v->file_text : "") + 1;
+    }
   MPI_Bcast(all, (int)lens[2], MPI_CHAR, 0, MPI_COMM_WORLD);
-  for (long k = 0, at = 0; k < lens[1]; k++, at += (long)strlen(all + at) + 1) scenes[k] = all + at;
   if (rank) st = sw_parse(sp, text, (size_t)lens[0], a->sweep, err);
+  for (long k = 0, at = 0; rank && !st && k < lens[1]; k++) {
+    scenes[k] = all[at] ? all + at : NULL;
+    at += (long)strlen(all + at) + 1;
+    if (all[at] && !((*sp)->var[k].file_text = strdup(all + at))) st = CUP_ERR_NOMEM;
+    at += (long)strlen(all + at) + 1;
+  }
   if (rank && !st) st = sw_resolve_texts(*sp, scenes, err);
   free(all);
   free(scenes);
@@ -221,7 +236,6 @@ static int check_steps(const args_t *a, const sw_sweep *s, char *err) {
 }
 
 static int open_results(const args_t *a, const sw_sweep *s, int argc, char **argv, sw_file **f, char *err) {
-  if (file_list_check_output(&s->files, a->out, err)) return CUP_ERR_ARG;   /* an input is never an output */
   if (a->resume) return sw_file_open(f, a->out, s, err);
   char deps[512], h5[64];
   int n = cup_dependency_versions(deps, sizeof deps);
@@ -237,6 +251,18 @@ static int open_results(const args_t *a, const sw_sweep *s, int argc, char **arg
   int st = sw_file_create(f, a->out, s, &p, err);
   free(cmd);
   return st;
+}
+
+/* The results file, with the lazy variants' texts that /variants holds
+ * (and --resume compares): before the run on one rank or on a resume,
+ * after the workers' first batches went out otherwise, so that they do not
+ * wait for it (sweep_manager.h, open_file). */
+typedef struct { const args_t *a; sw_sweep *s; int argc; char **argv; } opener;
+
+static int open_late(void *ctx, sw_file **f, char *err) {
+  const opener *o = ctx;
+  int st = sw_lazy_texts(o->s, err);
+  return st ? st : open_results(o->a, o->s, o->argc, o->argv, f, err);
 }
 
 /* The two summary lines. The jobs as they are: a steady-state sweep
@@ -272,7 +298,7 @@ static void say_summary(const args_t *a, const sw_sweep *s, const manager_t *m, 
       m->cpu_sum / (workers * wall), 100 * m->cpu_sum / m->rank_cpu, share, 1e6 * m->busy / (double)m->jobs_done);
 }
 
-static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, const hooks_t *hooks) {
+static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, opener *late, const hooks_t *hooks) {
   manager_t m;
   memset(&m, 0, sizeof m);
   m.quiet = a->quiet;
@@ -280,6 +306,8 @@ static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, const hoo
   m.workers = nranks > 1 ? nranks - 1 : 1;
   m.s = s;
   m.f = f;
+  m.open_file = f ? NULL : open_late;
+  m.open_ctx = late;
   m.count = s->samples * s->dim;
   m.one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   m.max_batch = (int)fmax(1, fmin(MAX_BATCH, (double)(MAX_MESSAGE - sizeof(msg_head)) / (double)m.one));
@@ -287,17 +315,19 @@ static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, const hoo
   m.t_start = m.last_flush = now_seconds();
   m.last_progress = 0;
   double cpu0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
-  /* the errors of tasks written before their reference, in an earlier run */
-  for (int k = 0; k < s->n_variants; k++) fill_errors(&m, k);
   int lost = dispatch(&m, hooks, a->time_limit);
   double wall = now_seconds() - m.t_start, cpu_manager = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu0;
   m.rank_cpu += cpu_manager;
   progress(&m, 1);
   sw_tally tally;
-  sw_file_tally(f, &tally);
+  memset(&tally, 0, sizeof tally);
   char err[SW_ERR_LEN] = "";
-  sw_file *ff = f;
-  int cst = sw_file_close(&ff, err);
+  sw_file *ff = m.f;
+  int cst = CUP_OK;
+  if (ff) {
+    sw_file_tally(ff, &tally);
+    cst = sw_file_close(&ff, err);
+  }
   if (!m.io_status && cst) { m.io_status = cst; snprintf(m.io_msg, sizeof m.io_msg, "%s", err); }
   long done = m.jobs_done + m.jobs_skipped;
   int rc = 0;
@@ -338,13 +368,17 @@ int main(int argc, char **argv) {
   char err[SW_ERR_LEN] = "";
   int st = share_sweep(&a, &s, err);
   if (!st && rank == 0) st = check_steps(&a, s, err);
-  if (!st && rank == 0) st = open_results(&a, s, argc, argv, &f, err);
+  if (!st && rank == 0 && file_list_check_output(&s->files, a.out, err))
+    st = CUP_ERR_ARG;                           /* an input is never an output */
+  opener late = {&a, s, argc, argv};
+  int early = nranks > 1 && !a.resume;          /* the workers start before the results file is made */
+  if (!st && rank == 0 && !early) st = open_late(&late, &f, err);
   bcast_status(&st);
   if (st) {
     if (rank == 0) say("%s", err);
     rc = EXIT_RUN;
   } else if (rank == 0) {
-    rc = run_manager(&a, s, f, &hooks);
+    rc = run_manager(&a, s, f, &late, &hooks);
   } else {
     rc = worker(s, &hooks, a.time_limit);
   }

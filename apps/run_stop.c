@@ -62,6 +62,10 @@ static int same_run(cup_h5run *w, const char *out, const cup_scene *sc, char *er
 
 int run_stop_reopen(const char *out, const cup_scene *sc, cup_integrator *I, const run_signals *s, cup_h5run **w,
                     double *wall, char *err, size_t size) {
+  if (cup_integrator_checkpoint_size(I) == CUP_ERR_UNSUPPORTED)   /* before the file is touched: it never holds one */
+    return snprintf(err, size, "%s: cannot resume: it has no checkpoint: a run of this kind keeps none (a crowd "
+                    "or another set that is not a polyset, or a circuit with switches): run it again without "
+                    "--resume", out), CUP_ERR_UNSUPPORTED;
   int nsig = s->nl ? cup_netlist_signal_count(s->nl) : 0;
   const char **names = calloc((size_t)nsig + 1, sizeof *names);
   char e2[CUP_ERRMSG_LEN];

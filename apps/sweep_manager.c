@@ -37,6 +37,14 @@ void io_fail(manager_t *m, int st) {
   }
 }
 
+void manager_file_ready(manager_t *m) {
+  if (!m->f && m->open_file) {
+    int st = m->open_file(m->open_ctx, &m->f, m->io_msg);
+    if (st) { m->io_status = st; return; }
+  }
+  for (int k = 0; k < m->s->n_variants; k++) fill_errors(m, k);
+}
+
 static double task_error(manager_t *m, int status, const double *traj, const double *xref) {
   if (status < 0 || !xref) return NAN;
   return sw_max_error(traj, xref, m->count);
@@ -135,7 +143,7 @@ void progress(manager_t *m, int final) {
     live = !m->log_progress && (isatty(STDOUT_FILENO) || isatty(STDERR_FILENO));
   double now = now_seconds();
   double every = live ? PROGRESS_SECONDS : PROGRESS_LOG_SECONDS;
-  if (m->quiet || (!final && now - m->last_progress < every)) return;
+  if (m->quiet || !m->f || (!final && now - m->last_progress < every)) return;   /* no file made: no progress */
   m->last_progress = now;
   char el[32], eta[32];
   double elapsed = now - m->t_start;
@@ -223,8 +231,8 @@ int setup_queue(manager_t *m) {
     long job = order[j];
     if (job < s->n_variants && s->steady) { m->jobs_total--; continue; }   /* no reference: done at creation */
     m->cost[job] = sw_job_cost(s, job);
-    int done = job < s->n_variants ? sw_file_reference_done(m->f, (int)job)
-                                   : sw_file_task_done(m->f, job - s->n_variants);
+    int done = m->f && (job < s->n_variants ? sw_file_reference_done(m->f, (int)job)
+                                            : sw_file_task_done(m->f, job - s->n_variants));
     if (done) { m->jobs_skipped++; continue; }
     m->queue[m->qlen++] = job;
     m->cost_left += m->cost[job];

@@ -27,7 +27,11 @@ typedef struct held { long task; sw_result r; double *traj; struct held *next; }
 typedef struct {
   int quiet, log_progress;   /* the command line's --quiet, --log-progress */
   const sw_sweep *s;
-  sw_file *f;
+  sw_file *f;                /* NULL until open_file made it */
+  /* the results file, made once the workers have their first batches
+   * (manager_file_ready); NULL: f was open before */
+  int (*open_file)(void *ctx, sw_file **f, char *errmsg);
+  void *open_ctx;
   long count;                /* samples * dim: the states, what the error measures */
   size_t one;                /* bytes of one job's answer: sw_result + trajectory */
   int max_batch;             /* jobs per batch: MAX_BATCH, fewer for long trajectories */
@@ -53,19 +57,26 @@ typedef struct {
 
 /* One line "catchup-sweep: ..." on stderr. */
 void say(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-/* The queue (jobs not done yet, in sw_schedule's order) and its costs;
+/* The queue (jobs not done yet, in sw_schedule's order: all of them
+ * while the file is still to be made) and its costs;
  * CUP_OK or CUP_ERR_NOMEM. free_manager releases what the manager holds. */
 int setup_queue(manager_t *m);
 void free_manager(manager_t *m);
 /* Keep the first failure of the results file (or st, out of memory). */
 void io_fail(manager_t *m, int st);
+/* The results file before the first result is taken: made (open_file) if
+ * it is still to be, its failure kept as io_status (the workers are then
+ * stopped); then the errors of tasks written before their reference, in
+ * an earlier run. */
+void manager_file_ready(manager_t *m);
 /* The reference of variant k is known: fill in its tasks' errors. */
 void fill_errors(manager_t *m, int k);
 /* Every result of one message (msg_head and what follows) into the file. */
 void take_message(manager_t *m, const char *buf, size_t size);
 /* The next batch for one of `workers` workers into ids; its length. */
 int next_batch(manager_t *m, int workers, long *ids);
-/* The progress line (final: the last one, always printed unless quiet). */
+/* The progress line (final: the last one, always printed unless quiet; none
+ * while the results file is not made, nor when it could not be). */
 void progress(manager_t *m, int final);
 /* Flush the results file every FLUSH_SECONDS (force: now). */
 void maybe_flush(manager_t *m, int force);

@@ -374,6 +374,7 @@ static int manager_mpi(manager_t *m) {
     if (!(buf[w] = malloc(cap))) MPI_Abort(MPI_COMM_WORLD, 1);
   }
   int outstanding = feed(m, ws, workers), stopping = 0;
+  manager_file_ready(m);                   /* made while the workers start on their batches */
   long us = 200, fast = SHORT_POLL_US;     /* the sleeps: none, or some receive under way */
   double stop_t0 = 0;
   while (live > 0) {
@@ -449,6 +450,7 @@ static void manager_alone(manager_t *m, const hooks_t *hooks, double time_limit)
   char *buf = malloc(sizeof(msg_head) + m->one * (size_t)m->max_batch);
   long ids[MAX_BATCH];
   if (!buf) { io_fail(m, CUP_ERR_NOMEM); return; }
+  manager_file_ready(m);
   while (m->qhead < m->qlen && !stop_signal && !m->io_status) {
     int count = next_batch(m, 1, ids);
     int64_t n = run_batch(&c, ids, count, buf);

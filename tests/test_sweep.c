@@ -1,5 +1,6 @@
 /* sweep (src/sweep/, io/sha256.c): the sweep file, task order, the
- * sampling of n that are not multiples of samples - 1, and the Richardson
+ * sampling of n that are not multiples of samples - 1 (against the
+ * library's samples and a closed form), and the Richardson
  * reference against the reference limit (tests/data) of the paper's case 1.
  * tests/sweeps/bad names its expected error in a "# expect: ..." first line. */
 #define _POSIX_C_SOURCE 200809L
@@ -17,6 +18,7 @@
 #include "catchup.h"
 #include "io/sha256.h"
 #include "sweep_file.h"
+#include "sweep_h5.h"
 #include "sweep_run.h"
 #include "refdata.h"
 
@@ -193,6 +195,31 @@ static void test_bad_corpus(void **state) {
   assert_true(count >= 10);
 }
 
+/* /summary's and /references/summary's strings are fixed-length: nothing
+ * written to them is cut. What a user writes (a variant's name, a schedule,
+ * a generated name with its suffix) is refused beyond its field
+ * (tests/sweeps/bad: long-name, long-eps, gen-long-name); the library's
+ * own words fit theirs, every one of them; a message has the room of a
+ * run's whole message and its prefix. */
+static void test_fixed_fields_fit(void **state) {
+  (void)state;
+  static const int codes[] = {
+#define CODE_(e, v, msg) e,
+      CUP_STATUS_LIST(CODE_)
+#undef CODE_
+  };
+  for (size_t k = 0; k < sizeof codes / sizeof codes[0]; k++)
+    if (strlen(cup_status_name(codes[k])) >= SW_STATUS_LEN) fail_msg("%s: longer than /summary's status_name",
+                                                                     cup_status_name(codes[k]));
+  for (int k = 0; k < CUP_SCHEME_COUNT; k++) assert_true(strlen(cup_scheme_name(k)) < SW_WORD_LEN);
+  for (int k = 0; k < CUP_PROJ_METHOD_COUNT; k++) assert_true(strlen(cup_proj_method_name(k)) < SW_WORD_LEN);
+  assert_true(sizeof ((sw_row *)0)->status_name == SW_STATUS_LEN);
+  assert_true(sizeof ((sw_refrow *)0)->status_name == SW_STATUS_LEN);
+  assert_true(sizeof ((sw_row *)0)->message == sizeof ((sw_result *)0)->message);
+  assert_true(sizeof ((sw_refrow *)0)->message == sizeof ((sw_result *)0)->message);
+  assert_true(sizeof ((sw_result *)0)->message >= CUP_RUN_MSG_LEN + 64);
+}
+
 typedef struct { double x[101 * 3], t[101]; long k[101]; int n; } store_t;
 static int sink(long k, double t, const double *x, void *ctx) {
   store_t *st = ctx;
@@ -208,12 +235,11 @@ static int sink_all(long k, double t, const double *x, void *ctx) {
   return 0;
 }
 
-/* n = 250 with 101 samples: the sweep takes the grid points nearest to
- * t_j = j/100, steps round(2.5 j) (halves up); the library's
- * CUP_OUTPUT_SAMPLES gives t_j itself, the step's state where t_j is on the
- * grid (even j: the sweep's, bit for bit) and the linear interpolation of
- * the two steps around it otherwise (odd j: halfway between steps m and
- * m + 1, against every step kept by an independent run). */
+/* n = 250 with 101 samples: the library's CUP_OUTPUT_SAMPLES gives
+ * t_j = j/100 itself, the step's state where t_j is on the grid (even j)
+ * and the linear interpolation of the two steps around it otherwise (odd
+ * j: halfway between steps m and m + 1, against every step kept by an
+ * independent run); the sweep's task keeps those samples, bit for bit. */
 static void test_samples_between_steps(void **state) {
   (void)state;
   sw_sweep *s = load_file(EX "/sweep-smoke.yaml");
@@ -251,7 +277,10 @@ static void test_samples_between_steps(void **state) {
       for (int i = 0; i < 3; i++) {
         /* halfway, to rounding: the weight (t_j - t_m) / h is 1/2 to the
          * rounding of t_j and t_m (~0.5 eps) over h (0.004): a few 100 eps */
-        double want = j % 2 ? all.x[m][i] + 0.5 * (all.x[m + 1][i] - all.x[m][i]) : traj[3 * j + i];
+        if (traj[3 * j + i] != st.x[3 * j + i])
+          fail_msg("sample %d component %d: the sweep's %.17g, the library's %.17g", j, i, traj[3 * j + i],
+                   st.x[3 * j + i]);
+        double want = j % 2 ? all.x[m][i] + 0.5 * (all.x[m + 1][i] - all.x[m][i]) : all.x[m][i];
         double tol = j % 2 ? 4 * DBL_EPSILON * (fabs(all.x[m][i]) + fabs(all.x[m + 1][i])) +
                              512 * DBL_EPSILON * fabs(all.x[m + 1][i] - all.x[m][i]) : 0;
         if (!(fabs(want - st.x[3 * j + i]) <= tol))
@@ -260,6 +289,50 @@ static void test_samples_between_steps(void **state) {
     }
   }
   free(traj);
+  sw_free(&s);
+}
+
+/* A netlist's task sampled at the sweep's common times t_j = j T / 10,
+ * against the closed form of an RC charge (tests/sweeps/rc-tstart.cir:
+ * v = 1 - exp(-t / RC), RC = 1 ms, T = 2 ms) at t_j: theta at n = 1005
+ * (t_j = 100.5 j steps: odd j between steps) and the adaptive scheme, the
+ * state and the signals v(out) and i(R1) = (1 - v) / 1k. Before, the first
+ * was sampled at the nearest step (off by up to v' h / 2: 8.1e-4 V), the
+ * second from the netlist's TSTART (0.5 ms: 0.39 V off at t = 0). */
+static void test_netlist_samples_closed_form(void **state) {
+  (void)state;
+  const char *text = "base: rc-tstart.yaml\ngrid: {scheme: [theta, adaptive], n: [1005], eps: 0, eta: 0}\n"
+                     "variants: [{name: rc}]\nreference: {samples: 11, method: adaptive}\n";
+  sw_sweep *s = NULL;
+  char err[SW_ERR_LEN] = "";
+  int st = sw_parse(&s, text, strlen(text), CUP_BAD_SWEEPS_DIR "/../inline.yaml", err);
+  if (!st) st = sw_resolve_files(s, err);
+  if (st) fail_msg("sweep did not load: %s", err);
+  assert_int_equal(s->samples, 11);
+  int out = -1, ir = -1;
+  for (int k = 0; k < s->nsig; k++) {
+    if (!strcmp(sw_signal_name(s, k), "v(out)")) out = k;
+    if (!strcmp(sw_signal_name(s, k), "i(R1)")) ir = k;
+  }
+  assert_true(out >= 0 && ir >= 0);
+  double *x = malloc(sizeof(double) * (size_t)sw_traj_len(s));
+  for (long task = 0; task < 2; task++) {       /* theta, adaptive */
+    sw_result r;
+    sw_run_job(s, s->n_variants + task, NULL, &r, x);
+    assert_int_equal(r.status, CUP_OK);
+    double tol = task ? 1e-9 : 2e-6, worst = 0;   /* theta: its O(h^2) and the interpolation's, ~4e-7 */
+    for (int j = 0; j < 11; j++) {
+      double t = j * 2e-3 / 10, v = 1 - exp(-t / 1e-3);
+      const double *sig = x + 11 + j * s->nsig;
+      double e = fmax(fabs(x[j] - v), fmax(fabs(sig[out] - v), 1e3 * fabs(sig[ir] - (1 - v) / 1e3)));
+      worst = fmax(worst, e);
+      if (!(e <= tol)) fail_msg("task %ld, t = %g: v %.17g, v(out) %.17g, i(R1) %.17g; want %.17g", task, t, x[j],
+                                sig[out], sig[ir], v);
+    }
+    printf("# RC charge, %s: max error at the 11 sample times %.3g V\n", task ? "adaptive" : "theta n = 1005",
+           worst);
+  }
+  free(x);
   sw_free(&s);
 }
 
@@ -531,7 +604,9 @@ int main(void) {
     cmocka_unit_test(test_zip_groups_and_defaults),
     cmocka_unit_test(test_paper_sweep),
     cmocka_unit_test(test_bad_corpus),
+    cmocka_unit_test(test_fixed_fields_fit),
     cmocka_unit_test(test_samples_between_steps),
+    cmocka_unit_test(test_netlist_samples_closed_form),
     cmocka_unit_test(test_reference_vs_data),
     cmocka_unit_test(test_tol_axis_adaptive_reference),
     cmocka_unit_test(test_checked_adaptive_reference),

@@ -43,207 +43,14 @@ module catchup_h5run
   end interface cup_h5run_attr
 
   interface
-    function c_cup_h5run_create(w, path, dim, errmsg) bind(C, name="cup_h5run_create") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: w
-      character(kind=c_char), intent(in) :: path(*)
-      integer(c_int), value :: dim
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_create
-    function c_cup_h5run_begin(w, path, dim, errmsg) bind(C, name="cup_h5run_begin") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: w
-      character(kind=c_char), intent(in) :: path(*)
-      integer(c_int), value :: dim
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_begin
-    function c_cup_h5run_commit(w) bind(C, name="cup_h5run_commit") result(st)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: w
-      integer(c_int) :: st
-    end function c_cup_h5run_commit
-    subroutine c_cup_h5run_discard(w) bind(C, name="cup_h5run_discard")
-      import :: c_ptr
-      type(c_ptr), intent(inout) :: w
-    end subroutine c_cup_h5run_discard
-    function cup_h5run_sink(k, t, x, ctx) bind(C, name="cup_h5run_sink") result(st)
-      import :: c_int, c_long, c_double, c_ptr
-      integer(c_long), value :: k
-      real(c_double), value :: t
-      real(c_double), intent(in) :: x(*)
-      type(c_ptr), value :: ctx
-      integer(c_int) :: st
-    end function cup_h5run_sink
-    function cup_h5run_event(t, row, on, ctx) bind(C, name="cup_h5run_event") result(st)
-      import :: c_int, c_double, c_ptr
-      real(c_double), value :: t
-      integer(c_int), value :: row
-      integer(c_int), value :: on
-      type(c_ptr), value :: ctx
-      integer(c_int) :: st
-    end function cup_h5run_event
-    function c_cup_h5run_attr_double(w, name, v) bind(C, name="cup_h5run_attr_double") result(st)
-      import :: c_int, c_double, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      real(c_double), value :: v
-      integer(c_int) :: st
-    end function c_cup_h5run_attr_double
-    function c_cup_h5run_array(w, name, rank, dims, data) bind(C, name="cup_h5run_array") result(st)
-      import :: c_int, c_ptr, c_char, c_long, c_double
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      integer(c_int), value :: rank
-      integer(c_long), intent(in) :: dims(*)
-      real(c_double), intent(in) :: data(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_array
-    function c_cup_h5run_attr_long(w, name, v) bind(C, name="cup_h5run_attr_long") result(st)
-      import :: c_int, c_long, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      integer(c_long), value :: v
-      integer(c_int) :: st
-    end function c_cup_h5run_attr_long
-    function c_cup_h5run_attr_string(w, name, v) bind(C, name="cup_h5run_attr_string") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*), v(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_attr_string
-    function c_cup_h5run_flush(w) bind(C, name="cup_h5run_flush") result(st)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: w
-      integer(c_int) :: st
-    end function c_cup_h5run_flush
-    function c_cup_h5run_close(w, errmsg) bind(C, name="cup_h5run_close") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(inout) :: w
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_close
-    function c_cup_h5run_open(w, path, dim, nsig, names, errmsg) bind(C, name="cup_h5run_open") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: w
-      character(kind=c_char), intent(in) :: path(*)
-      integer(c_int), value :: dim, nsig
-      type(c_ptr), value :: names
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_open
-    function c_cup_h5run_truncate(w, rows, events) bind(C, name="cup_h5run_truncate") result(st)
-      import :: c_int, c_ptr, c_long
-      type(c_ptr), value :: w
-      integer(c_long), value :: rows, events
-      integer(c_int) :: st
-    end function c_cup_h5run_truncate
-    function c_cup_h5run_put_checkpoint(w, blob, size) bind(C, name="cup_h5run_put_checkpoint") result(st)
-      import :: c_int, c_ptr, c_long
-      type(c_ptr), value :: w, blob
-      integer(c_long), value :: size
-      integer(c_int) :: st
-    end function c_cup_h5run_put_checkpoint
-    function c_cup_h5run_get_checkpoint(w, blob, size, rows, events) bind(C, name="cup_h5run_get_checkpoint") &
-        result(st)
-      import :: c_int, c_ptr, c_long
-      type(c_ptr), value :: w
-      type(c_ptr), intent(out) :: blob
-      integer(c_long), intent(out) :: size, rows, events
-      integer(c_int) :: st
-    end function c_cup_h5run_get_checkpoint
-    function c_cup_h5run_drop_checkpoint(w) bind(C, name="cup_h5run_drop_checkpoint") result(st)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: w
-      integer(c_int) :: st
-    end function c_cup_h5run_drop_checkpoint
-    function c_cup_h5run_get_string(w, name, value) bind(C, name="cup_h5run_get_string") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      type(c_ptr), intent(out) :: value
-      integer(c_int) :: st
-    end function c_cup_h5run_get_string
-    function c_cup_h5run_get_double(w, name, v) bind(C, name="cup_h5run_get_double") result(st)
-      import :: c_int, c_ptr, c_char, c_double
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      real(c_double), intent(out) :: v
-      integer(c_int) :: st
-    end function c_cup_h5run_get_double
-    function c_cup_h5run_drop_attr(w, name) bind(C, name="cup_h5run_drop_attr") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_drop_attr
     subroutine c_free_(p) bind(C, name="free")
       import :: c_ptr
       type(c_ptr), value :: p
     end subroutine c_free_
-    function c_cup_h5run_signals(w, nsig, names) bind(C, name="cup_h5run_signals") result(st)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: w
-      integer(c_int), value :: nsig
-      type(c_ptr), value :: names            ! const char *const *
-      integer(c_int) :: st
-    end function c_cup_h5run_signals
-    function c_cup_h5run_describe(w, dataset, units, long_name) bind(C, name="cup_h5run_describe") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: dataset(*)
-      type(c_ptr), value :: units, long_name   ! strings, or NULL: not written
-      integer(c_int) :: st
-    end function c_cup_h5run_describe
-    function c_cup_h5run_strings(w, name, n, v) bind(C, name="cup_h5run_strings") result(st)
-      import :: c_int, c_ptr, c_char, c_long
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: name(*)
-      integer(c_long), value :: n
-      type(c_ptr), value :: v                  ! const char *const *
-      integer(c_int) :: st
-    end function c_cup_h5run_strings
-    function c_cup_h5run_dims(w, dataset, dims) bind(C, name="cup_h5run_dims") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(in) :: dataset(*)
-      type(c_ptr), value :: dims               ! const char *const *, one per axis
-      integer(c_int) :: st
-    end function c_cup_h5run_dims
-    function c_cup_h5run_append(w, t, x, sig) bind(C, name="cup_h5run_append") result(st)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: w
-      real(c_double), value :: t
-      real(c_double), intent(in) :: x(*)
-      type(c_ptr), value :: sig              ! nsig entries, or NULL without signals
-      integer(c_int) :: st
-    end function c_cup_h5run_append
-    function c_cup_h5run_count(w) bind(C, name="cup_h5run_count") result(n)
-      import :: c_long, c_ptr
-      type(c_ptr), value :: w
-      integer(c_long) :: n
-    end function c_cup_h5run_count
-    function c_cup_h5run_status(w, errmsg) bind(C, name="cup_h5run_status") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: w
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_h5run_status
-#ifdef CATCHUP_H5RUN_ERRMSG
-    function c_cup_h5run_errmsg(w) bind(C, name="cup_h5run_errmsg") result(s)
-      import :: c_ptr
-      type(c_ptr), value :: w
-      type(c_ptr) :: s
-    end function c_cup_h5run_errmsg
-#endif
-    function c_cup_h5_version(buf, size) bind(C, name="cup_h5_version") result(n)
-      import :: c_int, c_long, c_char
-      character(kind=c_char), intent(out) :: buf(*)
-      integer(c_long), value :: size
-      integer(c_int) :: n
-    end function c_cup_h5_version
   end interface
+
+  ! The raw bind(C) interfaces c_<C name>, generated from the header at build time (gen_bindings.py)
+  include "bind_h5run.inc"
 
 contains
 
@@ -254,12 +61,7 @@ contains
     integer, intent(in) :: dim
     integer, intent(out) :: ierr
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    integer(c_int) :: st
-    cmsg = cup_errbuf_()
-    st = c_cup_h5run_create(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
-    if (st == CUP_OK) w%dim = dim
-    call cup_finish_(st, cmsg, ierr, errmsg)
+    call start(w, path, dim, .false., ierr, errmsg)
   end subroutine cup_h5run_create
 
   !> The same, written to a new sibling of path (PATH.partXXXXXX) that
@@ -270,13 +72,28 @@ contains
     integer, intent(in) :: dim
     integer, intent(out) :: ierr
     character(len=*), intent(out), optional :: errmsg
+    call start(w, path, dim, .true., ierr, errmsg)
+  end subroutine cup_h5run_begin
+
+  ! Both starts: the file itself (create) or its staged sibling (begin).
+  subroutine start(w, path, dim, staged, ierr, errmsg)
+    type(cup_h5run_t), intent(out) :: w
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: dim
+    logical, intent(in) :: staged
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     integer(c_int) :: st
     cmsg = cup_errbuf_()
-    st = c_cup_h5run_begin(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    if (staged) then
+      st = c_cup_h5run_begin(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    else
+      st = c_cup_h5run_create(w%ptr, cup_f_c_string(path), int(dim, c_int), cmsg)
+    end if
     if (st == CUP_OK) w%dim = dim
     call cup_finish_(st, cmsg, ierr, errmsg)
-  end subroutine cup_h5run_begin
+  end subroutine start
 
   !> Rename the staged file over its path (after cup_h5run_begin).
   subroutine cup_h5run_commit(w, ierr)

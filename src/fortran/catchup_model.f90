@@ -81,12 +81,7 @@ contains
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional :: phase
     character(len=*), intent(out), optional :: errmsg
-    type(cup_wave) :: w
-    w%kind = CUP_WAVE_SINE
-    w%amplitude = amplitude
-    w%frequency = frequency
-    if (present(phase)) w%phase = phase
-    call cup_input_add(u, j, w, ierr, errmsg)
+    call add_periodic(u, j, CUP_WAVE_SINE, amplitude, frequency, ierr, phase, errmsg)
   end subroutine cup_input_add_sine
 
   !> u_j(t) += amplitude sign(sin(2 pi frequency t + phase)), sign(0) = 0.
@@ -97,13 +92,25 @@ contains
     integer, intent(out) :: ierr
     real(c_double), intent(in), optional :: phase
     character(len=*), intent(out), optional :: errmsg
+    call add_periodic(u, j, CUP_WAVE_SQUARE, amplitude, frequency, ierr, phase, errmsg)
+  end subroutine cup_input_add_square
+
+  ! A sine or a square wave: amplitude, frequency and an optional phase.
+  subroutine add_periodic(u, j, kind, amplitude, frequency, ierr, phase, errmsg)
+    type(cup_input_t), intent(in) :: u
+    integer, intent(in) :: j
+    integer(c_int), intent(in) :: kind
+    real(c_double), intent(in) :: amplitude, frequency
+    integer, intent(out) :: ierr
+    real(c_double), intent(in), optional :: phase
+    character(len=*), intent(out), optional :: errmsg
     type(cup_wave) :: w
-    w%kind = CUP_WAVE_SQUARE
+    w%kind = kind
     w%amplitude = amplitude
     w%frequency = frequency
     if (present(phase)) w%phase = phase
     call cup_input_add(u, j, w, ierr, errmsg)
-  end subroutine cup_input_add_square
+  end subroutine add_periodic
 
   !> u_j(t) += the piecewise-linear function through (t(i), v(i)) (copied).
   subroutine cup_input_add_pwl(u, j, t, v, ierr, errmsg)

@@ -26,170 +26,8 @@ module catchup_netlist
     c_cup_netlist_probe_default, c_cup_netlist_signal_count, c_cup_netlist_signal_name, &
     c_cup_netlist_signal_unit, c_cup_netlist_signals
 
-  interface
-    function c_cup_netlist_load(nl, path, sets, nsets, errmsg) bind(C, name="cup_netlist_load") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: nl
-      character(kind=c_char), intent(in) :: path(*)
-      type(c_ptr), value :: sets                 ! const char *const *, or NULL
-      integer(c_int), value :: nsets
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_netlist_load
-    function c_cup_netlist_load_string(nl, text, name, sets, nsets, errmsg) &
-        bind(C, name="cup_netlist_load_string") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: nl
-      character(kind=c_char), intent(in) :: text(*), name(*)
-      type(c_ptr), value :: sets
-      integer(c_int), value :: nsets
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_netlist_load_string
-    subroutine c_cup_netlist_free(nl) bind(C, name="cup_netlist_free")
-      import :: c_ptr
-      type(c_ptr), intent(inout) :: nl
-    end subroutine c_cup_netlist_free
-    function c_cup_netlist_lcs(nl) bind(C, name="cup_netlist_lcs") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: nl
-      type(c_ptr) :: p
-    end function c_cup_netlist_lcs
-    function c_cup_netlist_input(nl) bind(C, name="cup_netlist_input") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: nl
-      type(c_ptr) :: p
-    end function c_cup_netlist_input
-    function c_cup_netlist_x0(nl) bind(C, name="cup_netlist_x0") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: nl
-      type(c_ptr) :: p
-    end function c_cup_netlist_x0
-    function c_cup_netlist_tran(nl, tstep, tstop) bind(C, name="cup_netlist_tran") result(has)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: nl
-      real(c_double), intent(out) :: tstep, tstop
-      integer(c_int) :: has
-    end function c_cup_netlist_tran
-    function c_cup_netlist_tran_window(nl, tstart, tmax) bind(C, name="cup_netlist_tran_window") result(has)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: nl
-      real(c_double), intent(out) :: tstart, tmax
-      integer(c_int) :: has
-    end function c_cup_netlist_tran_window
-    function c_cup_netlist_tolerances(nl, reltol, abstol, vntol, chgtol) bind(C, name="cup_netlist_tolerances") &
-        result(has)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: nl
-      real(c_double), intent(out) :: reltol, abstol, vntol, chgtol
-      integer(c_int) :: has
-    end function c_cup_netlist_tolerances
-    function c_cup_netlist_switch_count(nl) bind(C, name="cup_netlist_switch_count") result(n)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int) :: n
-    end function c_cup_netlist_switch_count
-    function c_cup_netlist_set_controller(nl, ts, fn, ctx, errmsg) bind(C, name="cup_netlist_set_controller") &
-        result(st)
-      import :: c_int, c_ptr, c_double, c_funptr, c_char
-      type(c_ptr), value :: nl
-      real(c_double), value :: ts
-      type(c_funptr), value :: fn
-      type(c_ptr), value :: ctx
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_netlist_set_controller
-    function c_cup_netlist_configurations_formed(nl) bind(C, name="cup_netlist_configurations_formed") result(n)
-      import :: c_long, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_long) :: n
-    end function c_cup_netlist_configurations_formed
-    function c_cup_netlist_file_count(nl) bind(C, name="cup_netlist_file_count") result(n)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int) :: n
-    end function c_cup_netlist_file_count
-    function c_cup_netlist_file(nl, k) bind(C, name="cup_netlist_file") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: k
-      type(c_ptr) :: p
-    end function c_cup_netlist_file
-    function c_cup_netlist_state_name(nl, j) bind(C, name="cup_netlist_state_name") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: j
-      type(c_ptr) :: p
-    end function c_cup_netlist_state_name
-    function c_cup_netlist_source(nl) bind(C, name="cup_netlist_source") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: nl
-      type(c_ptr) :: p
-    end function c_cup_netlist_source
-    function c_cup_netlist_warning(nl) bind(C, name="cup_netlist_warning") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: nl
-      type(c_ptr) :: p
-    end function c_cup_netlist_warning
-    function c_cup_netlist_row_name(nl, i) bind(C, name="cup_netlist_row_name") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: i
-      type(c_ptr) :: p
-    end function c_cup_netlist_row_name
-    function c_cup_netlist_input_name(nl, j) bind(C, name="cup_netlist_input_name") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: j
-      type(c_ptr) :: p
-    end function c_cup_netlist_input_name
-    function c_cup_netlist_row_fixed(nl, i) bind(C, name="cup_netlist_row_fixed") result(f)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: i
-      integer(c_int) :: f
-    end function c_cup_netlist_row_fixed
-    function c_cup_netlist_probe(nl, signal, errmsg) bind(C, name="cup_netlist_probe") result(k)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: nl
-      character(kind=c_char), intent(in) :: signal(*)
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: k
-    end function c_cup_netlist_probe
-    function c_cup_netlist_probe_default(nl, limit, errmsg) bind(C, name="cup_netlist_probe_default") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: nl
-      integer(c_int), value :: limit
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_netlist_probe_default
-    function c_cup_netlist_signal_count(nl) bind(C, name="cup_netlist_signal_count") result(n)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int) :: n
-    end function c_cup_netlist_signal_count
-    function c_cup_netlist_signal_name(nl, k) bind(C, name="cup_netlist_signal_name") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: k
-      type(c_ptr) :: p
-    end function c_cup_netlist_signal_name
-    function c_cup_netlist_signal_unit(nl, k) bind(C, name="cup_netlist_signal_unit") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: nl
-      integer(c_int), value :: k
-      type(c_ptr) :: p
-    end function c_cup_netlist_signal_unit
-    function c_cup_netlist_signals(nl, t, x, zeta, out) bind(C, name="cup_netlist_signals") result(st)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: nl
-      real(c_double), value :: t
-      real(c_double), intent(in) :: x(*)
-      type(c_ptr), value :: zeta                 ! m entries, or NULL for 0
-      real(c_double), intent(out) :: out(*)
-      integer(c_int) :: st
-    end function c_cup_netlist_signals
-  end interface
+  ! The raw bind(C) interfaces c_<C name>, generated from the header at build time (gen_bindings.py)
+  include "bind_netlist.inc"
 
 contains
 
@@ -202,15 +40,7 @@ contains
     integer, intent(out) :: ierr
     character(len=*), intent(in), optional :: sets(:)
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char), allocatable, target :: buf(:, :)
-    type(c_ptr), allocatable, target :: ptrs(:)
-    type(c_ptr) :: sp
-    integer(c_int) :: ns, st
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    call pack_sets(sets, buf, ptrs, sp, ns)
-    cmsg = cup_errbuf_()
-    st = c_cup_netlist_load(nl%ptr, cup_f_c_string(path), sp, ns, cmsg)
-    call cup_finish_(st, cmsg, ierr, errmsg)
+    call load(nl, ierr, sets, errmsg, path=path)
   end subroutine cup_netlist_load
 
   !> The same from the netlist's text; `name` stands for the file in messages.
@@ -220,31 +50,38 @@ contains
     integer, intent(out) :: ierr
     character(len=*), intent(in), optional :: sets(:)
     character(len=*), intent(out), optional :: errmsg
+    call load(nl, ierr, sets, errmsg, text=text, name=name)
+  end subroutine cup_netlist_load_string
+
+  ! Both loads: the sets as an array of C strings, then the file path or the text.
+  subroutine load(nl, ierr, sets, errmsg, path, text, name)
+    type(cup_netlist_t), intent(out) :: nl
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: sets(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(len=*), intent(in), optional :: path, text, name
     character(kind=c_char), allocatable, target :: buf(:, :)
     type(c_ptr), allocatable, target :: ptrs(:)
     type(c_ptr) :: sp
     integer(c_int) :: ns, st
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    call pack_sets(sets, buf, ptrs, sp, ns)
-    cmsg = cup_errbuf_()
-    st = c_cup_netlist_load_string(nl%ptr, cup_f_c_string(text), cup_f_c_string(name), sp, ns, cmsg)
-    call cup_finish_(st, cmsg, ierr, errmsg)
-  end subroutine cup_netlist_load_string
-
-  subroutine pack_sets(sets, buf, ptrs, sp, ns)
-    character(len=*), intent(in), optional :: sets(:)
-    character(kind=c_char), allocatable, target, intent(out) :: buf(:, :)
-    type(c_ptr), allocatable, target, intent(out) :: ptrs(:)
-    type(c_ptr), intent(out) :: sp
-    integer(c_int), intent(out) :: ns
     sp = c_null_ptr
     ns = 0
-    if (.not. present(sets)) return
-    if (size(sets) == 0) return
-    call cup_pack_strings_(sets, buf, ptrs)
-    sp = c_loc(ptrs)
-    ns = int(size(sets), c_int)
-  end subroutine pack_sets
+    if (present(sets)) then
+      if (size(sets) > 0) then
+        call cup_pack_strings_(sets, buf, ptrs)
+        sp = c_loc(ptrs)
+        ns = int(size(sets), c_int)
+      end if
+    end if
+    cmsg = cup_errbuf_()
+    if (present(path)) then
+      st = c_cup_netlist_load(nl%ptr, cup_f_c_string(path), sp, ns, cmsg)
+    else
+      st = c_cup_netlist_load_string(nl%ptr, cup_f_c_string(text), cup_f_c_string(name), sp, ns, cmsg)
+    end if
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine load
 
   !> Free the netlist (its LCS and input with it) and null the handle; a
   !> borrowed handle (cup_scene_netlist) is only forgotten.

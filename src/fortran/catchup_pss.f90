@@ -5,7 +5,7 @@
 ! among the required arguments, errmsg optional after it; a trajectory's
 ! samples are columns (x(:, k) the state at t(k)).
 module catchup_pss
-  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, c_null_char, &
+  use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_funptr, c_null_ptr, c_null_char, &
     c_associated, c_f_pointer, c_loc
   use catchup_constants
   use catchup_types
@@ -58,107 +58,9 @@ module catchup_pss
     type(c_ptr) :: ptr = c_null_ptr
   end type cup_pss_t
 
-  interface
-    subroutine c_cup_pss_options_default(o) bind(C, name="cup_pss_options_default")
-      import :: cup_pss_options
-      type(cup_pss_options), intent(out) :: o
-    end subroutine c_cup_pss_options_default
-    function c_cup_input_period(u, T, errmsg) bind(C, name="cup_input_period") result(st)
-      import :: c_int, c_ptr, c_double, c_char
-      type(c_ptr), value :: u
-      real(c_double), intent(out) :: T
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_input_period
-    function c_cup_input_period_fits(u, T, errmsg) bind(C, name="cup_input_period_fits") result(st)
-      import :: c_int, c_ptr, c_double, c_char
-      type(c_ptr), value :: u
-      real(c_double), value :: T
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_input_period_fits
-    function c_cup_pss_solve(r, L, u, io, x_guess, o, errmsg) bind(C, name="cup_pss_solve") result(st)
-      import :: c_int, c_ptr, c_char, cup_integrator_options, cup_pss_options
-      type(c_ptr), intent(out) :: r
-      type(c_ptr), value :: L, u
-      type(cup_integrator_options), intent(in) :: io
-      type(c_ptr), value :: x_guess
-      type(cup_pss_options), intent(in) :: o
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_pss_solve
-    function c_cup_pss_solve_map(r, I, n, period, x_guess, o, errmsg) bind(C, name="cup_pss_solve_map") result(st)
-      import :: c_int, c_ptr, c_char, c_double, cup_pss_options
-      type(c_ptr), intent(out) :: r
-      type(c_ptr), value :: I
-      integer(c_int), value :: n
-      real(c_double), value :: period
-      type(c_ptr), value :: x_guess
-      type(cup_pss_options), intent(in) :: o
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_pss_solve_map
-    subroutine c_cup_pss_free(r) bind(C, name="cup_pss_free")
-      import :: c_ptr
-      type(c_ptr), intent(inout) :: r
-    end subroutine c_cup_pss_free
-    subroutine c_cup_pss_get_info(r, info) bind(C, name="cup_pss_get_info")
-      import :: c_ptr, cup_pss_info
-      type(c_ptr), value :: r
-      type(cup_pss_info), intent(out) :: info
-    end subroutine c_cup_pss_get_info
-    function c_cup_pss_x0(r) bind(C, name="cup_pss_x0") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: r
-      type(c_ptr) :: p
-    end function c_cup_pss_x0
-    function c_cup_pss_residuals(r) bind(C, name="cup_pss_residuals") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: r
-      type(c_ptr) :: p
-    end function c_cup_pss_residuals
-    function c_cup_pss_monodromy(r) bind(C, name="cup_pss_monodromy") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: r
-      type(c_ptr) :: p
-    end function c_cup_pss_monodromy
-    function c_cup_pss_multipliers(r, re, im) bind(C, name="cup_pss_multipliers") result(st)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: r
-      real(c_double), intent(out) :: re(*), im(*)
-      integer(c_int) :: st
-    end function c_cup_pss_multipliers
-    function c_cup_pss_trajectory(r, t, x, zeta) bind(C, name="cup_pss_trajectory") result(st)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: r, t, x, zeta
-      integer(c_int) :: st
-    end function c_cup_pss_trajectory
-    function c_cup_netlist_element_nodes(nl, element, a, b, errmsg) bind(C, name="cup_netlist_element_nodes") &
-        result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: nl
-      character(kind=c_char), intent(in) :: element(*)
-      type(c_ptr), intent(out) :: a, b
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_netlist_element_nodes
-    function c_cup_netlist_steady_state(nl, period) bind(C, name="cup_netlist_steady_state") result(asks)
-      import :: c_int, c_ptr, c_double
-      type(c_ptr), value :: nl
-      real(c_double), intent(out) :: period
-      integer(c_int) :: asks
-    end function c_cup_netlist_steady_state
-    function c_cup_measure_period(v, N, order, m, amp, phase, errmsg) bind(C, name="cup_measure_period") result(st)
-      import :: c_int, c_long, c_ptr, c_double, c_char, cup_measure
-      real(c_double), intent(in) :: v(*)
-      integer(c_long), value :: N
-      integer(c_int), value :: order
-      type(cup_measure), intent(out) :: m
-      type(c_ptr), value :: amp, phase
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_measure_period
-  end interface
+  ! The raw bind(C) interfaces c_<C name>, generated from the headers at build time (gen_bindings.py)
+  include "bind_pss.inc"
+  include "bind_netlist.inc"
 
 contains
 

@@ -22,139 +22,8 @@ module catchup_scene
     c_cup_scene_dim, c_cup_scene_integrator, c_cup_scene_crowd, c_cup_scene_state_label, c_cup_scene_file_count, &
     c_cup_scene_file, c_cup_scene_file_sha256, c_cup_scene_check_output, c_cup_scene_max_steps
 
-  interface
-    function c_cup_scene_load(s, path, overrides, n_overrides, errmsg) &
-        bind(C, name="cup_scene_load") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: s
-      character(kind=c_char), intent(in) :: path(*)
-      type(c_ptr), value :: overrides          ! const char *const *, or NULL
-      integer(c_int), value :: n_overrides
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_scene_load
-    function c_cup_scene_load_string(s, text, name, dir, overrides, n_overrides, errmsg) &
-        bind(C, name="cup_scene_load_string") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), intent(out) :: s
-      character(kind=c_char), intent(in) :: text(*), name(*)
-      type(c_ptr), value :: dir                ! may be NULL
-      type(c_ptr), value :: overrides
-      integer(c_int), value :: n_overrides
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_scene_load_string
-    subroutine c_cup_scene_free(s) bind(C, name="cup_scene_free")
-      import :: c_ptr
-      type(c_ptr), intent(inout) :: s
-    end subroutine c_cup_scene_free
-    function c_cup_scene_name(s) bind(C, name="cup_scene_name") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_name
-    function c_cup_scene_netlist(s) bind(C, name="cup_scene_netlist") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_netlist
-    function c_cup_scene_lcs(s) bind(C, name="cup_scene_lcs") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_lcs
-    function c_cup_scene_process(s) bind(C, name="cup_scene_process") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_process
-    function c_cup_scene_crowd(s) bind(C, name="cup_scene_crowd") result(c)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: c
-    end function c_cup_scene_crowd
-    function c_cup_scene_dim(s) bind(C, name="cup_scene_dim") result(n)
-      import :: c_ptr, c_int
-      type(c_ptr), value :: s
-      integer(c_int) :: n
-    end function c_cup_scene_dim
-    function c_cup_scene_state_label(s, j, name, size, unit) bind(C, name="cup_scene_state_label") result(st)
-      import :: c_ptr, c_int, c_char, c_long
-      type(c_ptr), value :: s
-      integer(c_int), value :: j
-      character(kind=c_char), intent(inout) :: name(*)
-      integer(c_long), value :: size
-      type(c_ptr), intent(out) :: unit
-      integer(c_int) :: st
-    end function c_cup_scene_state_label
-    function c_cup_scene_integrator(s, o, I, errmsg) bind(C, name="cup_scene_integrator") result(st)
-      import :: c_ptr, c_int, c_char, cup_integrator_options
-      type(c_ptr), value :: s
-      type(cup_integrator_options), intent(in) :: o
-      type(c_ptr), intent(out) :: I
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_scene_integrator
-    function c_cup_scene_input(s) bind(C, name="cup_scene_input") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_input
-    function c_cup_scene_x0(s) bind(C, name="cup_scene_x0") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_x0
-    function c_cup_scene_options(s) bind(C, name="cup_scene_options") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_options
-    function c_cup_scene_eps_spec(s) bind(C, name="cup_scene_eps_spec") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_eps_spec
-    function c_cup_scene_eta_spec(s) bind(C, name="cup_scene_eta_spec") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_eta_spec
-    function c_cup_scene_text(s) bind(C, name="cup_scene_text") result(p)
-      import :: c_ptr
-      type(c_ptr), value :: s
-      type(c_ptr) :: p
-    end function c_cup_scene_text
-    function c_cup_scene_file_count(s) bind(C, name="cup_scene_file_count") result(n)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: s
-      integer(c_int) :: n
-    end function c_cup_scene_file_count
-    function c_cup_scene_file(s, k) bind(C, name="cup_scene_file") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: s
-      integer(c_int), value :: k
-      type(c_ptr) :: p
-    end function c_cup_scene_file
-    function c_cup_scene_file_sha256(s, k) bind(C, name="cup_scene_file_sha256") result(p)
-      import :: c_int, c_ptr
-      type(c_ptr), value :: s
-      integer(c_int), value :: k
-      type(c_ptr) :: p
-    end function c_cup_scene_file_sha256
-    function c_cup_scene_check_output(s, path, errmsg) bind(C, name="cup_scene_check_output") result(st)
-      import :: c_int, c_ptr, c_char
-      type(c_ptr), value :: s
-      character(kind=c_char), intent(in) :: path(*)
-      character(kind=c_char), intent(inout) :: errmsg(*)
-      integer(c_int) :: st
-    end function c_cup_scene_check_output
-    function c_cup_scene_max_steps(s) bind(C, name="cup_scene_max_steps") result(n)
-      import :: c_ptr, c_long
-      type(c_ptr), value :: s
-      integer(c_long) :: n
-    end function c_cup_scene_max_steps
-  end interface
+  ! The raw bind(C) interfaces c_<C name>, generated from the header at build time (gen_bindings.py)
+  include "bind_scene.inc"
 
 contains
 
@@ -167,23 +36,7 @@ contains
     integer, intent(out) :: ierr
     character(len=*), intent(in), optional :: overrides(:)
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char), allocatable, target :: buf(:, :)
-    type(c_ptr), allocatable, target :: ptrs(:)
-    type(c_ptr) :: op
-    integer(c_int) :: nov, st
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    op = c_null_ptr
-    nov = 0
-    if (present(overrides)) then
-      if (size(overrides) > 0) then
-        call cup_pack_strings_(overrides, buf, ptrs)
-        op = c_loc(ptrs)
-        nov = int(size(overrides), c_int)
-      end if
-    end if
-    cmsg = cup_errbuf_()
-    st = c_cup_scene_load(s%ptr, cup_f_c_string(path), op, nov, cmsg)
-    call cup_finish_(st, cmsg, ierr, errmsg)
+    call load(s, ierr, overrides, errmsg, path=path)
   end subroutine cup_scene_load
 
   !> The same from YAML text; `name` stands for the file name in messages and
@@ -195,6 +48,17 @@ contains
     character(len=*), intent(in), optional :: dir
     character(len=*), intent(in), optional :: overrides(:)
     character(len=*), intent(out), optional :: errmsg
+    call load(s, ierr, overrides, errmsg, text=text, name=name, dir=dir)
+  end subroutine cup_scene_load_string
+
+  ! Both loads: the overrides as an array of C strings, then the file path or
+  ! the text (with its name and the optional directory, NULL when absent).
+  subroutine load(s, ierr, overrides, errmsg, path, text, name, dir)
+    type(cup_scene_t), intent(out) :: s
+    integer, intent(out) :: ierr
+    character(len=*), intent(in), optional :: overrides(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(len=*), intent(in), optional :: path, text, name, dir
     character(kind=c_char), allocatable, target :: buf(:, :)
     type(c_ptr), allocatable, target :: ptrs(:)
     character(kind=c_char, len=:), allocatable, target :: cdir
@@ -210,15 +74,19 @@ contains
         nov = int(size(overrides), c_int)
       end if
     end if
-    dp = c_null_ptr
-    if (present(dir)) then
-      cdir = cup_f_c_string(dir)
-      dp = c_loc(cdir)
-    end if
     cmsg = cup_errbuf_()
-    st = c_cup_scene_load_string(s%ptr, cup_f_c_string(text), cup_f_c_string(name), dp, op, nov, cmsg)
+    if (present(path)) then
+      st = c_cup_scene_load(s%ptr, cup_f_c_string(path), op, nov, cmsg)
+    else
+      dp = c_null_ptr
+      if (present(dir)) then
+        cdir = cup_f_c_string(dir)
+        dp = c_loc(cdir)
+      end if
+      st = c_cup_scene_load_string(s%ptr, cup_f_c_string(text), cup_f_c_string(name), dp, op, nov, cmsg)
+    end if
     call cup_finish_(st, cmsg, ierr, errmsg)
-  end subroutine cup_scene_load_string
+  end subroutine load
 
   !> Free the scene (its LCS, input and options with it) and null the handle.
   subroutine cup_scene_free(s)

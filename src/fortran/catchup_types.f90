@@ -275,92 +275,10 @@ module catchup_types
   end type cup_h5run_t
 
   ! ---- callbacks (write them as bind(C) procedures, pass c_funloc(fn)) -------
-  abstract interface
-    !> u(t): write the p entries of u; return 0, nonzero stops the run
-    !> (CUP_ERR_CALLBACK). ctx is what was given to cup_input_set_callback.
-    function cup_input_fn(t, u, ctx) result(stat) bind(C)
-      import :: c_double, c_ptr, c_int
-      real(c_double), value :: t
-      real(c_double), intent(inout) :: u(*)
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_input_fn
-
-    !> Perturbation f(t, x): write the n entries of f; nonzero stops the run.
-    function cup_rhs_fn(t, x, f, ctx) result(stat) bind(C)
-      import :: c_double, c_ptr, c_int
-      real(c_double), value :: t
-      real(c_double), intent(in) :: x(*)
-      real(c_double), intent(inout) :: f(*)
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_rhs_fn
-
-    !> Output sink: step k, time t_k, state x (n entries); nonzero stops the
-    !> run (CUP_ERR_INTERRUPTED).
-    function cup_sample_fn(k, t, x, ctx) result(stat) bind(C)
-      import :: c_long, c_double, c_ptr, c_int
-      integer(c_long), value :: k
-      real(c_double), value :: t
-      real(c_double), intent(in) :: x(*)
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_sample_fn
-
-    !> Per-step report with the projection statistics; nonzero stops the run.
-    function cup_step_fn(k, t, pi, ctx) result(stat) bind(C)
-      import :: c_long, c_double, c_ptr, c_int, cup_proj_info
-      integer(c_long), value :: k
-      real(c_double), value :: t
-      type(cup_proj_info), intent(in) :: pi
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_step_fn
-
-    !> A term of f by its exact integral over [t0, t1], x frozen: write the n
-    !> entries of F; nonzero stops the run.
-    function cup_rhs_integral_fn(t0, t1, x, F, ctx) result(stat) bind(C)
-      import :: c_double, c_ptr, c_int
-      real(c_double), value :: t0, t1
-      real(c_double), intent(in) :: x(*)
-      real(c_double), intent(inout) :: F(*)
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_rhs_integral_fn
-
-    !> A projection oracle: z, an (eps, eta)-approximate projection of x onto
-    !> C(t), and what it certifies; nonzero stops the run (CUP_ERR_CALLBACK).
-    function cup_oracle_fn(t, x, eps, eta, z, eps_cert, eta_cert, ctx) result(stat) bind(C)
-      import :: c_double, c_ptr, c_int
-      real(c_double), value :: t, eps, eta
-      real(c_double), intent(in) :: x(*)
-      real(c_double), intent(inout) :: z(*)
-      real(c_double), intent(out) :: eps_cert, eta_cert
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_oracle_fn
-
-    !> The rows of a state-dependent polyset at (t, x): append them with
-    !> cup_rowbuf_add(rows, ...); nonzero stops the run.
-    function cup_rows_fn(t, x, rows, ctx) result(stat) bind(C)
-      import :: c_double, c_ptr, c_int
-      real(c_double), value :: t
-      real(c_double), intent(in) :: x(*)
-      type(c_ptr), value :: rows, ctx
-      integer(c_int) :: stat
-    end function cup_rows_fn
-
-    !> Adaptive scheme: row (0-based) turns on (on = 1) or off (0) at time t;
-    !> nonzero stops the run (CUP_ERR_INTERRUPTED).
-    function cup_event_fn(t, row, on, ctx) result(stat) bind(C)
-      import :: c_double, c_ptr, c_int
-      real(c_double), value :: t
-      integer(c_int), value :: row
-      integer(c_int), value :: on
-      type(c_ptr), value :: ctx
-      integer(c_int) :: stat
-    end function cup_event_fn
-  end interface
+  ! Their abstract interfaces, named and with dummies as the C typedefs
+  ! (include/catchup/*.h say what each does), generated at build time
+  ! (gen_bindings.py): procedure(cup_rhs_fn) :: my_f declares one.
+  include "bind_callbacks.inc"
   public :: cup_input_fn, cup_rhs_fn, cup_sample_fn, cup_step_fn, cup_rhs_integral_fn, &
     cup_oracle_fn, cup_rows_fn, cup_event_fn
 end module catchup_types

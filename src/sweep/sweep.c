@@ -274,6 +274,7 @@ static void variant_free(sw_variant *v) {
   for (int j = 0; j < v->n_set; j++) free(v->set[j]);
   free(v->set);
   free(v->scene_text);
+  free(v->file_text);
   cup_scene_free(&v->scene);
 }
 

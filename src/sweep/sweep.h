@@ -41,7 +41,10 @@ typedef struct sw_variant {
   int from_base;             /* its scene is the sweep's base */
   int proto;                 /* the variant whose scene stands for this one's settings (n, T, ...)
                                 until a task loads it: itself, or its generated entry's first */
-  char *scene_text;          /* after sw_resolve: cup_scene_text (overrides applied) */
+  char *scene_text;          /* after sw_resolve: cup_scene_text (overrides applied); a lazy
+                                variant's only after sw_lazy_texts (rank 0: /variants) */
+  char *file_text;           /* an entry's first with lazy variants: its scene file's text, which
+                                their overrides apply to when a job loads one (sw_variant_load) */
   cup_scene *scene;          /* loaded from scene_text (the same on every rank); NULL for a lazy
                                 variant (sw_variant_lazy): each job loads it (sw_variant_load) */
   long n_ref;                /* reference steps (a multiple of samples - 1) */
@@ -155,13 +158,21 @@ typedef struct sw_task_out {
 int sw_parse(sw_sweep **s, const char *text, size_t len, const char *path, char *errmsg);
 /* Read and parse a sweep file. */
 int sw_load(sw_sweep **s, const char *path, char *errmsg);
-/* Every variant's scene text after its overrides (rank 0): a variant that
- * is not lazy loaded from its file (its files join s->files), a lazy one's
- * text made without loading it; then sw_resolve_texts. */
+/* Every variant's scene text after its overrides (rank 0): sw_resolve_scenes,
+ * then sw_lazy_texts. */
 int sw_resolve_files(sw_sweep *s, char *errmsg);
-/* Keep the variants' scene texts (what rank 0 broadcast), load the scenes
- * of those that are not lazy, check that T and the dimension agree, fix
- * n_ref and the task count. */
+/* The scenes (rank 0): a variant that is not lazy loaded from its file (its
+ * files join s->files), the scene file's text of an entry with lazy
+ * variants read once (file_text: what their jobs need); then
+ * sw_resolve_texts. The lazy variants' texts are not made: a sweep on
+ * several ranks makes them (sw_lazy_texts) once the workers have work. */
+int sw_resolve_scenes(sw_sweep *s, char *errmsg);
+/* Each lazy variant's scene text (its entry's file_text after its
+ * overrides, as cup_scene_text would give it), for /variants and --resume. */
+int sw_lazy_texts(sw_sweep *s, char *errmsg);
+/* Keep the variants' scene texts (what rank 0 broadcast; NULL for a lazy
+ * variant), load the scenes of those that are not lazy, check that T and
+ * the dimension agree, fix n_ref and the task count. */
 int sw_resolve_texts(sw_sweep *s, char *const *texts, char *errmsg);
 /* Lazy variants (loaded by sweep_variant.c): a generated variant beyond its entry's
  * first, in a sweep that is not of crowds, is loaded by its own jobs only
@@ -172,7 +183,8 @@ int sw_variant_lazy(const sw_sweep *s, int k);
 /* The scene that gives variant k's settings (n, T, the scheme, ...): its
  * own once loaded, else its entry's first's. */
 const cup_scene *sw_variant_settings(const sw_sweep *s, int k);
-/* Load lazy variant k's scene from its text into *sc (the caller frees it),
+/* Load lazy variant k's scene from its entry's file_text and its own
+ * overrides into *sc (the caller frees it),
  * probed as the sweep's scenes are, and checked against the scene that
  * stood for it: a located error in errmsg (SW_ERR_LEN) otherwise. */
 int sw_variant_load(const sw_sweep *s, int k, cup_scene **sc, char *errmsg);

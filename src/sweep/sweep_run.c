@@ -12,19 +12,16 @@
 #include "sweep_run.h"
 #include "util/clock.h"
 
-/* Step nearest to t_j = j T / (S - 1) on the grid t_k = k T / n: round(j n / (S - 1)),
- * halves rounded up, in integers. */
-static long nearest_step(long j, long n, long S1) {
-  return (long)((2 * (long long)j * n + S1) / (2 * (long long)S1));
-}
-
+/* The integrator samples the run at the common times t_j = j T / (S - 1)
+ * (CUP_OUTPUT_SAMPLES: the step's state where t_j is a step time,
+ * interpolated as the scheme's own dense output between steps otherwise,
+ * as catchup-run's samples are); this keeps them in order. */
 typedef struct {
-  long S, n, next;
+  long S, next;
   int dim, stride;           /* the task's state, a sample's room (crowds: the sweep's largest 2N) */
-  int at_times;              /* the run gives exactly t_j, in order (adaptive) */
   double *traj;
   /* a netlist's signals, after the S samples of the state: nsig a sample,
-   * from x, u(t) and the zeta of the step that reached x (as catchup-run) */
+   * from x, u(t) and the zeta at t (as catchup-run) */
   cup_netlist *nl;
   const cup_integrator *I;
   int nsig;
@@ -41,15 +38,9 @@ static int keep(sampler *sp, long j, double t, const double *x) {
 }
 
 static int sample_sink(long k, double t, const double *x, void *ctx) {
+  (void)k;
   sampler *sp = ctx;
-  int st = 0;
-  if (sp->at_times) {
-    if (sp->next < sp->S) st = keep(sp, sp->next++, t, x);
-    return st;
-  }
-  while (sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) < k) sp->next++;
-  while (!st && sp->next < sp->S && nearest_step(sp->next, sp->n, sp->S - 1) == k) st = keep(sp, sp->next++, t, x);
-  return st;
+  return sp->next < sp->S ? keep(sp, sp->next++, t, x) : 0;
 }
 
 /* Fails once t reaches T/2: exercises a real mid-run failure (tests). */
@@ -73,7 +64,7 @@ typedef struct {
 
 static void run_one(const sw_sweep *s, const sw_variant *v, const run_params *rp, const sw_run_opts *ro,
                     sw_result *r, double *traj) {
-  long S = s->samples, S1 = S - 1;
+  long S = s->samples;
   int dim = s->dim;
   for (long j = 0; j < sw_traj_len(s); j++) traj[j] = NAN;
   cup_integrator_options o = *cup_scene_options(v->scene);
@@ -82,15 +73,11 @@ static void run_one(const sw_sweep *s, const sw_variant *v, const run_params *rp
   o.eta = rp->eta;
   o.scheme = (cup_scheme)rp->scheme;
   o.proj.method = (cup_proj_method)rp->projector;
-  o.output = CUP_OUTPUT_EVERY;
-  o.output_every = rp->n % S1 == 0 ? rp->n / S1 : 1;
+  o.output = CUP_OUTPUT_SAMPLES;   /* at the common times from 0, whatever the scene asks (.tran's TSTART) */
+  o.output_samples = S;
+  o.output_t0 = 0;
   o.tol_abs = rp->tol_abs;
   o.tol_rel = rp->tol_rel;
-  int adaptive = rp->scheme == CUP_SCHEME_ADAPTIVE;
-  if (adaptive) {                  /* its dense output lands on the sample times themselves */
-    o.output = CUP_OUTPUT_SAMPLES;
-    o.output_samples = S;
-  }
   o.max_wall_seconds = rp->time_limit;
   o.interrupt = ro ? ro->interrupt : NULL;
   o.on_step = ro ? ro->on_step : NULL;
@@ -109,8 +96,7 @@ static void run_one(const sw_sweep *s, const sw_variant *v, const run_params *rp
     r->wall += now_seconds() - t0;
     return;
   }
-  sampler sp = {S, rp->n, 0, cup_scene_dim(v->scene), dim, adaptive, traj, cup_scene_netlist(v->scene), I,
-                s->nsig, NULL};
+  sampler sp = {S, 0, cup_scene_dim(v->scene), dim, traj, cup_scene_netlist(v->scene), I, s->nsig, NULL};
   if (s->nsig && !(sp.zeta = calloc((size_t)cup_lcs_rows(cup_scene_lcs(v->scene)) + 1, sizeof(double)))) {
     cup_integrator_free(&I);
     r->status = CUP_ERR_NOMEM;

@@ -2,9 +2,11 @@
  * overrides, the scenes loaded from them, and the checks that the variants
  * can share one results file (the same T, state dimension, signals and
  * steady-state columns). A generated variant beyond its entry's first is
- * lazy: rank 0 makes its text only (the YAML document after its overrides,
- * for /variants), and the job that needs its scene loads it and checks it
- * against the entry's first, which stood for it until then. */
+ * lazy: the job that needs its scene loads it from the entry's scene file's
+ * text and its own overrides, and checks it against the entry's first,
+ * which stood for it until then; rank 0 makes its text (the YAML document
+ * after its overrides, for /variants) apart, sw_lazy_texts, which a sweep
+ * on several ranks does while the workers start. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdarg.h>
 #include <stdio.h>
@@ -47,27 +49,29 @@ static int text_after(const char *text, size_t len, const sw_variant *v, char **
   return st;
 }
 
-/* A scene file's text, read once for the lazy variants that share it. */
-typedef struct { char *path, *text; size_t len; } file_text;
-
 /* Variant k's text: its scene loaded from its file (its files join the
- * sweep's), or for a lazy variant its file's text after its overrides. */
-static int variant_text(sw_sweep *s, int k, char **text, file_text *f, char *errmsg) {
+ * sweep's). A lazy variant's is made later (sw_lazy_texts); its entry's
+ * first reads the scene file's text, once, for the jobs that load them. */
+static int variant_text(sw_sweep *s, int k, char **text, char *errmsg) {
   sw_variant *v = &s->var[k];
   char err[CUP_ERRMSG_LEN];
   int st;
   if (sw_variant_lazy(s, k)) {
-    if (!f->path || strcmp(f->path, v->scene_file)) {
-      file_list seen = {0};
-      free(f->text);
-      f->text = NULL;
-      f->path = v->scene_file;
-      st = read_text(v->scene_file, &f->text, &f->len, &seen, err);
-      file_list_free(&seen);
-      if (st) return f->path = NULL, variant_fail(s, k, st, errmsg, "%s", err);
+    sw_variant *first = &s->var[v->proto];
+    if (first->file_text) return CUP_OK;
+    file_list seen = {0};
+    size_t len;
+    char *bytes = NULL;
+    st = read_text(v->scene_file, &bytes, &len, &seen, err);
+    file_list_free(&seen);
+    if (st) return variant_fail(s, k, st, errmsg, "%s", err);
+    if (memchr(bytes, '\0', len)) {           /* it travels and is kept as a string */
+      free(bytes);
+      return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s: holds a NUL byte", v->scene_file);
     }
-    st = text_after(f->text, f->len, v, text, err);
-    return st ? variant_fail(s, k, st, errmsg, "%s", err) : CUP_OK;
+    if (!(first->file_text = realloc(bytes, len + 1))) { free(bytes); return CUP_ERR_NOMEM; }
+    first->file_text[len] = '\0';
+    return CUP_OK;
   }
   cup_scene *sc = NULL;
   st = cup_scene_load(&sc, v->scene_file, (const char *const *)v->set, v->n_set, err);
@@ -81,17 +85,32 @@ static int variant_text(sw_sweep *s, int k, char **text, file_text *f, char *err
   return st;
 }
 
-int sw_resolve_files(sw_sweep *s, char *errmsg) {
+int sw_resolve_scenes(sw_sweep *s, char *errmsg) {
   char **texts = calloc((size_t)s->n_variants, sizeof *texts);
-  file_text f = {NULL, NULL, 0};
   if (!texts) return CUP_ERR_NOMEM;
   int st = CUP_OK;
-  for (int k = 0; k < s->n_variants && !st; k++) st = variant_text(s, k, &texts[k], &f, errmsg);
-  free(f.text);
+  for (int k = 0; k < s->n_variants && !st; k++) st = variant_text(s, k, &texts[k], errmsg);
   if (!st) st = sw_resolve_texts(s, texts, errmsg);
   for (int k = 0; k < s->n_variants; k++) free(texts[k]);
   free(texts);
   return st;
+}
+
+int sw_lazy_texts(sw_sweep *s, char *errmsg) {
+  for (int k = 0; k < s->n_variants; k++) {
+    sw_variant *v = &s->var[k];
+    const char *base = s->var[v->proto].file_text;
+    if (v->scene_text || !sw_variant_lazy(s, k) || !base) continue;
+    char err[CUP_ERRMSG_LEN];
+    int st = text_after(base, strlen(base), v, &v->scene_text, err);
+    if (st) return variant_fail(s, k, st, errmsg, "%s", err);
+  }
+  return CUP_OK;
+}
+
+int sw_resolve_files(sw_sweep *s, char *errmsg) {
+  int st = sw_resolve_scenes(s, errmsg);
+  return st ? st : sw_lazy_texts(s, errmsg);
 }
 
 /* ---- the checks ---- */
@@ -212,8 +231,9 @@ int sw_resolve_texts(sw_sweep *s, char *const *texts, char *errmsg) {
     char err[CUP_ERRMSG_LEN];
     cup_scene_free(&v->scene);
     free(v->scene_text);
-    if (!(v->scene_text = strdup(texts[k]))) return CUP_ERR_NOMEM;
+    v->scene_text = NULL;
     if (sw_variant_lazy(s, k)) continue;      /* variants.0 is not: s->crowd is known before a lazy one */
+    if (!(v->scene_text = strdup(texts[k]))) return CUP_ERR_NOMEM;
     int st = cup_scene_load_string(&v->scene, v->scene_text, v->scene_file, v->scene_dir, NULL, 0, err);
     if (st) return variant_fail(s, k, st, errmsg, "%s", err);
     if ((st = check_shape(s, k, v->scene, errmsg))) return st;
@@ -270,7 +290,8 @@ int sw_variant_load(const sw_sweep *s, int k, cup_scene **out, char *errmsg) {
   char err[CUP_ERRMSG_LEN];
   cup_scene *sc = NULL;
   *out = NULL;
-  int st = cup_scene_load_string(&sc, v->scene_text, v->scene_file, v->scene_dir, NULL, 0, err);
+  const char *base = s->var[v->proto].file_text;     /* the scene file, then the variant's overrides */
+  int st = cup_scene_load_string(&sc, base, v->scene_file, v->scene_dir, (const char *const *)v->set, v->n_set, err);
   if (st) return variant_fail(s, k, st, errmsg, "%s", err), st;
   const char *what = differs(sc, sw_variant_settings(s, k));
   if (what)

@@ -202,8 +202,11 @@ case_resume_refusals() {
   expect 1 "rr/done.h5: cannot resume: it has no checkpoint" "$RUN" "$EX/paper-fig2.yaml" -o rr/done.h5 --resume &&
   CATCHUP_RUN_TEST_SIGNAL=10 expect 130 "this run cannot be resumed: a circuit with switches has no checkpoints; run it again" \
     "$RUN" "$EX/circuits/buck-ccm.cir" -o rr/sw.h5 &&
-  expect 1 "rr/sw.h5: cannot resume: it has no checkpoint" "$RUN" "$EX/circuits/buck-ccm.cir" -o rr/sw.h5 --resume &&
-  ok "--resume refuses another scene, other overrides or signals, an edited .mtx or netlist, a finished file, a switched run (no checkpoints, said at its stop); the files intact"
+  expect 1 "rr/sw.h5: cannot resume: it has no checkpoint: a run of this kind keeps none" "$RUN" "$EX/circuits/buck-ccm.cir" -o rr/sw.h5 --resume &&
+  "$RUN" "$EX/crowd-corridor.yaml" --set n=20 --set T=1 -o rr/cr.h5 --quiet && keep rr/cr.h5 &&
+  expect 1 "rr/cr.h5: cannot resume: it has no checkpoint: a run of this kind keeps none (a crowd" \
+    "$RUN" "$EX/crowd-corridor.yaml" --set n=20 --set T=1 -o rr/cr.h5 --resume && kept rr/cr.h5 &&
+  ok "--resume refuses another scene, other overrides or signals, an edited .mtx or netlist, a finished file, a switched run and a crowd's (no checkpoints, said at the stop and at the resume); the files intact"
 }
 
 # kill -9 between rows: the file opens as it is, with the rows of its last

@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
-# The Fortran module cannot silently fall behind the C API (src/fortran is
-# written by hand; docs/design.md says why). Fails, naming the function and
-# what to do, when
-#   * a function of the public headers has no bind(C) interface in
-#     src/fortran and is not on the list UNBOUND below;
-#   * a bind(C) interface names no public function (one that was renamed or
-#     removed in C);
-#   * a bind(C) interface takes more or fewer arguments than the C function
-#     declares (a parameter added or removed in C: the call would pass
-#     garbage or drop one, silently);
+# The Fortran module cannot silently fall behind the C API. Its raw bind(C)
+# interfaces are generated from the headers at build time
+# (src/fortran/gen_bindings.py, which stops on a function it cannot map);
+# this check runs that generator on the tree and fails, naming the function
+# and what to do, when
+#   * a function of the public headers has no bind(C) interface that a
+#     module of src/fortran includes, and is not on the generator's SKIP;
+#   * a bind(C) interface names no public function (one written by hand in
+#     src/fortran that was renamed or removed in C);
+#   * a bind(C) interface takes more or fewer arguments than the compiler's
+#     reading of the C declaration (gcc -aux-info: the generator's own
+#     reading of the headers is checked against it);
 #   * a bind(C) interface is never called by a wrapper (c_cup_x declared but
 #     unused: `use catchup` does not offer it) and is not on RAW_ONLY;
-#   * an entry of either list no longer applies.
+#   * an entry of RAW_ONLY no longer applies.
 #
 #   check_coverage.sh CC INCLUDE_DIRS SRCDIR
 #
@@ -23,13 +25,6 @@ cc=${1:?usage: check_coverage.sh CC INCLUDE_DIRS SRCDIR}
 incs=${2:?usage: check_coverage.sh CC INCLUDE_DIRS SRCDIR}
 src=${3:?usage: check_coverage.sh CC INCLUDE_DIRS SRCDIR}
 
-# Public functions deliberately without a bind(C) interface, each with why.
-UNBOUND=(
-  cup_status_merge   # restated in Fortran as an elemental function (catchup_base.f90)
-  cup_netlist_switching            # a table of C function pointers; a scene's integrator (cup_scene_integrator) runs switches
-  cup_integrator_create_switched   # takes that table; Fortran reaches it through cup_scene_integrator
-  cup_scene_steady_state   # catchup-run's request (scene key steady_state:); Fortran sets cup_pss_options itself
-)
 # bind(C) interfaces deliberately without a wrapper in `use catchup`, each with why.
 # Those marked "owed" are usable through module catchup_c / the module's c_
 # interface today; their wrappers are owed (found by this check when it
@@ -64,21 +59,28 @@ bash "$here/../layout/declared.sh" --args "$cc" "$incs" "${headers[@]}" | sort -
   say "cannot list the public headers' functions"
 
 fsrc=("$src"/src/fortran/*.f90 "$src"/src/fortran/*.F90)
+# The generated interfaces, as the build makes them, of the headers a module includes.
+gen=$(python3 "$src/src/fortran/gen_bindings.py" "$work/gen" "${headers[@]}" 2>&1) || say "$gen"
+included=()
+for f in $(sed -n 's/^ *include *"\(bind_[a-z0-9_]*\.inc\)".*/\1/p' "${fsrc[@]}" | sort -u); do
+  [ -f "$work/gen/$f" ] && included+=("$work/gen/$f")
+done
 # "C_NAME FORTRAN_NAME NARGS" of every bind(C) interface (continuation lines
 # joined; NARGS counts the names between the parentheses after its name)
-awk '{ if (sub(/&[ \t]*$/, "")) { held = held $0; next } print held $0; held = "" }' "${fsrc[@]}" |
+awk '{ if (sub(/&[ \t]*$/, "")) { held = held $0; next } print held $0; held = "" }' "${fsrc[@]}" "${included[@]}" |
   sed -n 's/.*\(function\|subroutine\) *\([A-Za-z0-9_]*\) *(\([^)]*\)).*bind(C, *name="\(cup_[A-Za-z0-9_]*\)").*/\4 \2 \3/p' |
   awk '{ n = 0; for (i = 3; i <= NF; i++) n += split($i, a, ",") - ($i ~ /,$/); print $1, $2, n }' |
   sort -u > "$work/pairs3"
 cut -d' ' -f1,2 "$work/pairs3" > "$work/pairs"
 cut -d' ' -f1 "$work/pairs" | sort -u > "$work/bound"
-printf '%s\n' "${UNBOUND[@]}" | sort > "$work/unbound"
+PYTHONDONTWRITEBYTECODE=1 python3 -c 'import sys; sys.path.insert(0, sys.argv[1]); import gen_bindings; print("\n".join(gen_bindings.SKIP))' \
+  "$src/src/fortran" | sort > "$work/unbound"
 printf '%s\n' "${RAW_ONLY[@]}" | sort > "$work/raw_only"
 
 while read -r name where _; do
-  say "$where: $name has no bind(C) interface in src/fortran: bind it (catchup_c.f90 or" \
-      "its module's file, with a wrapper in the conventions of catchup_base.f90), or put it" \
-      "on UNBOUND in tests/fortran/check_coverage.sh with why"
+  say "$where: $name has no bind(C) interface in src/fortran: include its header's" \
+      "generated block (include \"bind_<header>.inc\") in its module, or put it on SKIP" \
+      "in src/fortran/gen_bindings.py with why"
 done < <(join -v1 "$work/declared" "$work/bound" | join -v1 - "$work/unbound")
 while read -r name; do
   say "src/fortran binds $name (bind(C, name=\"$name\")), which no public header declares:" \
@@ -88,9 +90,6 @@ while read -r name where cargs fname fargs; do
   say "$where: $name takes $cargs argument(s) in C, but its bind(C) interface $fname in src/fortran" \
       "takes $fargs: follow the C declaration (and the wrappers that call $fname)"
 done < <(join "$work/declared" "$work/pairs3" | awk '$3 != $5')
-while read -r name; do
-  say "UNBOUND lists $name, which is bound now or no longer declared: remove its line"
-done < <(join -v1 "$work/unbound" <(cut -d' ' -f1 "$work/declared" | join -v1 - "$work/bound"))
 
 # A wrapper: the interface itself under the C name (public, as cup_h5run_sink
 # for c_funloc), or a reference to its Fortran name outside its own
@@ -117,6 +116,6 @@ while read -r name; do
 done < "$work/raw_only"
 
 [ $bad = 0 ] && echo "fortran coverage: $(wc -l < "$work/declared") public functions:" \
-  "$(wc -l < "$work/bound") bound in src/fortran, ${#UNBOUND[@]} on UNBOUND;" \
+  "$(wc -l < "$work/bound") bound in src/fortran, $(wc -l < "$work/unbound") on SKIP;" \
   "${#RAW_ONLY[@]} bound without a wrapper, on RAW_ONLY"
 exit $bad

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The Fortran drift check itself: on a copy of the tree it must pass as the
-# tree is, and fail, naming the culprit, on a new public function without a
-# binding (the case it exists for), a binding removed from src/fortran, a
-# parameter added in C, a binding of a function C no longer declares, and a
-# binding no wrapper uses.
+# tree is, and fail, naming the culprit, on a new public function no wrapper
+# uses (generated, but not offered by `use catchup`), a new one the
+# generator cannot map, a header whose generated block no module includes,
+# an annotation of a parameter C renamed, a binding written by hand of a
+# function C no longer declares, and a binding no wrapper uses.
 #
 #   check_coverage_selftest.sh CC SRCDIR BUILD_INCLUDE_DIR
 set -u
@@ -20,16 +21,21 @@ check > /dev/null || fail "the tree as it is fails: $(check)"
 
 fresh
 sed -i 's|^CUP_API int cup_lcs_dim(|CUP_API int cup_lcs_brand_new(const cup_lcs *L);\n&|' "$t/include/catchup/lcs.h"
-expect_fail "public function without a binding" "cup_lcs_brand_new has no bind(C) interface"
+expect_fail "new public function, no wrapper" "c_cup_lcs_brand_new (bind(C) of cup_lcs_brand_new) is used by no wrapper"
 
 fresh
-# cup_lcs_rows' interface cut out of catchup_c.f90 (its wrapper's call left dangling)
-sed -i '/function c_cup_lcs_rows(/,/end function c_cup_lcs_rows/d' "$t/src/fortran/catchup_c.f90"
-expect_fail "binding removed" "cup_lcs_rows has no bind(C) interface"
+sed -i 's|^CUP_API int cup_lcs_dim(|CUP_API int cup_lcs_brand_new(const cup_lcs *L, float *q);\n&|' "$t/include/catchup/lcs.h"
+expect_fail "new public function the generator cannot map" \
+  'cup_lcs_brand_new: parameter "float* q" has no Fortran mapping'
 
 fresh
-sed -i 's|^CUP_API int cup_lcs_dim(const cup_lcs \*L);|CUP_API int cup_lcs_dim(const cup_lcs *L, int extra);|' "$t/include/catchup/lcs.h"
-expect_fail "parameter added in C" "cup_lcs_dim takes 2 argument(s) in C, but its bind(C) interface c_cup_lcs_dim"
+sed -i '/include "bind_lcs.inc"/d' "$t/src/fortran/catchup_c.f90"
+expect_fail "a header's block included by no module" "cup_lcs_rows has no bind(C) interface"
+
+fresh
+sed -i 's|^CUP_API int cup_polyset_contains(const cup_polyset \*K, const double \*g,|CUP_API int cup_polyset_contains(const cup_polyset *K, const double *h,|' \
+  "$t/include/catchup/polyset.h"
+expect_fail "annotated parameter renamed in C" 'cup_polyset_contains: ANNOTATE names "g", which is no parameter of it'
 
 fresh
 printf '%s\n' 'module gone' 'interface' \

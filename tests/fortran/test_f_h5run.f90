@@ -3,7 +3,9 @@
 ! '' while nothing failed, then the first failure's status and C's words
 ! byte for byte (the text of tests/test_h5run.c's test_status_one_way), the
 ! same words as the older cup_h5run_errmsg; a null handle is CUP_ERR_ARG.
-!   test_f_h5run DIR   (the file is DIR/f_status.h5)
+! cup_h5run_begin stages the file: nothing at its path until the commit, the
+! dimension kept as cup_h5run_create keeps it.
+!   test_f_h5run DIR   (the files are DIR/f_status.h5, DIR/f_staged.h5)
 program test_f_h5run
   use catchup
   use catchup_h5run
@@ -12,7 +14,8 @@ program test_f_h5run
   type(cup_h5run_t) :: w
   character(len=CUP_ERRMSG_LEN) :: msg, closed
   character(len=4096) :: dir
-  integer :: ierr, iclose
+  integer :: ierr, iclose, unit
+  logical :: there
   character(len=*), parameter :: words = "h5run: signal 0: 'a/b' is not a dataset name"
 
   call get_command_argument(1, dir)
@@ -40,5 +43,23 @@ program test_f_h5run
   call cup_h5run_status(w, ierr, msg)
   call check_int(ierr, CUP_ERR_ARG, 'a null handle')
   call check_words(msg, 'HDF5 run writer handle is null', 'the wrapper''s words')
+
+  call section('cup_h5run_begin: staged beside its path until cup_h5run_commit')
+  open(newunit=unit, file=trim(dir) // '/f_staged.h5')
+  close(unit, status='delete')
+  call cup_h5run_begin(w, trim(dir) // '/f_staged.h5', 3, ierr, msg)
+  call check_int(ierr, CUP_OK, 'begun: ' // trim(msg))
+  call check_int(w%dim, 3, 'the dimension kept')
+  inquire(file=trim(dir) // '/f_staged.h5', exist=there)
+  call check(.not. there, 'nothing at the path before the commit')
+  call cup_h5run_commit(w, ierr)
+  call check_int(ierr, CUP_OK, 'committed')
+  inquire(file=trim(dir) // '/f_staged.h5', exist=there)
+  call check(there, 'the file at its path after the commit')
+  call cup_h5run_close(w, iclose)
+  call check_int(iclose, CUP_OK, 'closed')
+  call cup_h5run_begin(w, trim(dir) // '/no/such/dir/f.h5', 3, ierr, msg)
+  call check(ierr < 0, 'a folder that does not exist is refused')
+  call check(index(msg, 'no/such/dir') > 0, 'its words name the path: ' // trim(msg))
   call finish()
 end program test_f_h5run

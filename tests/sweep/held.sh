@@ -27,8 +27,17 @@ held() {   # held ARGS...: one line, exit 1, the file named, in use, what to do
 }
 held --resume
 held
+# On 2 ranks the worker starts on its first batch before rank 0 makes the
+# file: the same one line, and the worker stopped, not aborted.
+set +e
+run 2 "$CRASH" -o "$out" --log-progress > /dev/null 2> "$WORK/err.txt"
+rc=$?
+set -e
+[ "$rc" -eq 1 ] || fail "2 ranks: exit $rc, expected 1: $(cat "$WORK/err.txt")"
+[ "$(grep -c '^catchup-sweep:' "$WORK/err.txt")" -eq 1 ] || fail "2 ranks: not one line: $(cat "$WORK/err.txt")"
+grep -qF "in use by another process" "$WORK/err.txt" || fail "2 ranks: the file in use not said: $(cat "$WORK/err.txt")"
 kill -CONT "$pid"
 wait "$pid" || fail "the held sweep failed: $(cat "$WORK/log.txt")"
 "$CHECK" complete "$out"
 "$CHECK" compare "$WORK/base.h5" "$out" || fail "the held sweep's file differs from an undisturbed run's"
-echo "held: --resume and a fresh start on a file in use say so; the running sweep finished unharmed"
+echo "held: --resume and a fresh start (1 and 2 ranks) on a file in use say so; the running sweep finished unharmed"
