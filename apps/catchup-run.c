@@ -51,6 +51,7 @@ typedef struct {
   const cup_integrator *I;
   double *zeta, *sig;
   run_steady *steady;        /* --steady-state: the period's samples kept for its measurements */
+  double t0;                 /* --steady-state: the period's phase; the samples written at t0 + t */
 } sink_t;
 
 /* Test hook (docs/run-output.md): CATCHUP_RUN_TEST_SIGNAL=K raises SIGINT
@@ -63,13 +64,13 @@ static int sink(long k, double t, const double *x, void *ctx) {
   if (stop_signal) return 1;
   sink_t *c = ctx;
   if (!c->nl) {
-    if (c->steady) run_steady_record(c->steady, t, x, NULL);
-    return cup_h5run_sink(k, t, x, c->w);
+    if (c->steady) run_steady_record(c->steady, c->t0 + t, x, NULL);
+    return cup_h5run_sink(k, c->t0 + t, x, c->w);
   }
   cup_integrator_zeta(c->I, c->zeta);
   if (cup_netlist_signals(c->nl, t, x, c->zeta, c->sig) != CUP_OK) return CUP_ERR_CALLBACK;
-  if (c->steady) run_steady_record(c->steady, t, x, c->sig);
-  return cup_h5run_append(c->w, t, x, c->sig);
+  if (c->steady) run_steady_record(c->steady, c->t0 + t, x, c->sig);
+  return cup_h5run_append(c->w, c->t0 + t, x, c->sig);
 }
 
 /* ---- the run ---- */
@@ -95,7 +96,7 @@ typedef struct {
  * not replace the output file): events reach it through the run. */
 static int event_sink(double t, int row, int on, void *ctx) {
   const run_t *r = ctx;
-  return r->w ? cup_h5run_event(t, row, on, r->w) : 0;
+  return r->w ? cup_h5run_event(r->sk.t0 + t, row, on, r->w) : 0;
 }
 
 static const char *output_name(int kind) {
@@ -427,6 +428,7 @@ static int steady_solve(run_t *r, char *err) {
   if (e2[0]) fprintf(stderr, "catchup-run: warning: %s: %s\n", r->args->scene, e2);
   o.interrupt = r->opts.interrupt;
   r->opts = o;
+  r->sk.t0 = run_steady_t0(r->sk.steady);
   return 0;
 }
 

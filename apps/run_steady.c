@@ -1,4 +1,7 @@
-/* run_steady — catchup-run --steady-state (run_steady.h, docs/steady-state.md). */
+/* run_steady — catchup-run --steady-state (run_steady.h, docs/steady-state.md):
+ * solved as a steady-state sweep's task is (io/scene_pss.h), the period
+ * then catchup-run's own run (streamed to its file with its signals and
+ * events), its samples measured as a task's are (pss_measure). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stddef.h>
@@ -6,6 +9,7 @@
 #include <string.h>
 #include "run_steady.h"
 #include "analysis/pss_run.h"
+#include "io/scene_pss.h"
 
 enum { MSG = 2 * CUP_ERRMSG_LEN };
 
@@ -82,38 +86,19 @@ static int no_steady(run_steady *s, int st, const char *why, char *err, size_t s
   return 1;
 }
 
-int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_options *o, char *err, size_t size) {
+int run_steady_solve(run_steady *s, cup_scene *scene, cup_integrator_options *o, char *err, size_t size) {
   char e2[MSG] = "";
   s->asked = 1;
-  double T = s->req->pss.period;
-  int st;
-  if (!(T > 0)) {
-    const cup_input *u = cup_scene_input(scene);
-    if (!u) return no_steady(s, CUP_ERR_ARG, "the scene has no input to take the period from: give "
-                             "steady_state.period (--period)", err, size);
-    if ((st = cup_input_period(u, &T, e2))) return no_steady(s, st, e2, err, size);
-  }
-  if ((st = cup_input_period_fits(cup_scene_input(scene), T, e2))) return no_steady(s, st, e2, err, size);
-  s->info.period = T;
-  cup_integrator_options mo;                     /* the period map: the run's, over one period */
-  pss_map_options(o, cup_scene_options(scene)->T, T, s->req->pss.map_tol, &mo);
-  mo.on_step = NULL;
-  cup_integrator *I = NULL;
-  if ((st = cup_scene_integrator(scene, &mo, &I, e2))) return no_steady(s, st, e2, err, size);
-  st = cup_pss_solve_map(&s->r, I, s->n, T, cup_scene_x0(scene), &s->req->pss, e2);
-  cup_integrator_free(&I);
-  if (!s->r) return no_steady(s, st, e2, err, size);
-  cup_pss_get_info(s->r, &s->info);
-  if (st < 0) return no_steady(s, st, s->info.message, err, size);
+  cup_integrator_options period;
+  int stage;                                     /* (the message says which) */
+  int st = scene_pss_solve(scene, o, &s->r, &s->info.period, &s->info.t0, &period, &stage, e2);
+  double t0 = s->info.t0;
+  if (s->r) cup_pss_get_info(s->r, &s->info);
+  s->info.t0 = t0;
+  if (st < 0 || !s->r) return no_steady(s, st, s->r ? s->info.message : e2, err, size);
   snprintf(s->message, sizeof s->message, "%s", s->info.message);
   s->solved = 1;
-  o->n = mo.n;
-  o->T = T;
-  o->output = CUP_OUTPUT_SAMPLES;
-  o->output_samples = s->req->samples;
-  o->output_t0 = 0;
-  o->tol_abs = mo.tol_abs;                       /* the period written as accurate as the steady state */
-  o->tol_rel = mo.tol_rel;
+  *o = period;                                   /* the run: one period from the steady state */
   s->N = s->req->samples;
   s->ns = s->nl ? cup_netlist_signal_count(s->nl) : 0;
   s->t = calloc((size_t)s->N, sizeof *s->t);
@@ -122,6 +107,8 @@ int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_optio
   if (!s->t || !s->x || !s->sig) return snprintf(err, size, "out of memory for the period's samples"), 1;
   return 0;
 }
+
+double run_steady_t0(const run_steady *s) { return s && s->solved ? s->info.t0 : 0; }
 
 const double *run_steady_x0(const run_steady *s, const double *scene_x0) {
   return s && s->solved ? cup_pss_x0(s->r) : scene_x0;
@@ -150,21 +137,18 @@ static const char *measured_name(const run_steady *s, int j, char *buf, size_t s
 /* Each measured signal's figures and harmonics, each element's power. */
 static int measure(run_steady *s) {
   int H = s->req->harmonics, nm = s->nl ? s->nm : s->n, np = s->req->npower;
-  long N = s->N;
   char e2[CUP_ERRMSG_LEN];
   s->me = calloc((size_t)nm + 1, sizeof *s->me);
   s->amp = calloc(((size_t)nm + 1) * (size_t)(H + 1), sizeof *s->amp);
   s->phase = calloc(((size_t)nm + 1) * (size_t)(H + 1), sizeof *s->phase);
   s->power = calloc((size_t)np + 1, sizeof *s->power);
-  double *v = calloc((size_t)N, sizeof *v);
-  int st = !s->me || !s->amp || !s->phase || !s->power || !v ? CUP_ERR_NOMEM : CUP_OK;
-  for (int j = 0; !st && j < nm; j++) {
-    for (long k = 0; k < N; k++) v[k] = s->nl ? s->sig[k * s->ns + s->mi[j]] : s->x[k * s->n + j];
-    st = cup_measure_period(v, N, H, &s->me[j], s->amp + (size_t)j * (H + 1), s->phase + (size_t)j * (H + 1), e2);
-  }
-  for (int j = 0; !st && j < np; j++) st = measure_power(s->sig, N, s->ns, s->pv[j], s->pc[j], v, &s->power[j], e2);
-  if (!st && s->req->eff_out >= 0) s->efficiency = s->power[s->req->eff_out] / -s->power[s->req->eff_in];
-  free(v);
+  double *w = calloc((size_t)s->N, sizeof *w);
+  int st = !s->me || !s->amp || !s->phase || !s->power || !w ? CUP_ERR_NOMEM : CUP_OK;
+  pss_figures f = {nm, s->nl ? s->mi : NULL, H, np, s->pv, s->pc, s->req->eff_out, s->req->eff_in, s->me, s->amp,
+                       s->phase, s->power, s->efficiency};
+  if (!st) st = s->nl ? pss_measure(s->sig, s->N, s->ns, &f, w, e2) : pss_measure(s->x, s->N, s->n, &f, w, e2);
+  s->efficiency = f.efficiency;
+  free(w);
   return st;
 }
 
@@ -258,6 +242,10 @@ int run_steady_write(run_steady *s, cup_h5run *w, const cup_scene *scene, int ru
   st = cup_status_merge(st, cup_h5run_attr_long(w, "steady_state_solved", s->solved));
   double per = s->info.period, it = s->info.iterations, runs = (double)s->info.period_runs;
   st = cup_status_merge(st, array(w, "steady_state/period", 1, 1, 0, &per, "s", "the period T", NULL));
+  if (s->info.t0 != 0)                           /* written only where it is not 0: files as before otherwise */
+    st = cup_status_merge(st, array(w, "steady_state/t0", 1, 1, 0, &s->info.t0, "s",
+                                    "the phase t0 (absent: 0): the sources repeat from t0 on; x0 is the state at t0, /t runs "
+                                    "over [t0, t0 + T] of the sources as written", NULL));
   if (!s->r) return st;
   static const char *const sd[] = {"state", NULL};
   st = cup_status_merge(st, array(w, "steady_state/iterations", 1, 1, 0, &it, "1", "Newton steps taken", NULL));
@@ -315,8 +303,10 @@ void run_steady_report(const run_steady *s, const char *scene, FILE *f) {
             mu[0] ? ", multipliers " : "", mu);
     return;
   }
-  fprintf(f, "catchup-run: %s: steady state: period %.6g s, %d Newton steps (residuals %s), %ld period runs, "
-          "%.3g s; Floquet multipliers %s%s (largest modulus %.6g: %s): %s\n", scene, i->period, i->iterations, res,
+  char phase[64] = "";
+  if (i->t0 != 0) snprintf(phase, sizeof phase, " from t0 = %.6g s (the sources repeat from there)", i->t0);
+  fprintf(f, "catchup-run: %s: steady state: period %.6g s%s, %d Newton steps (residuals %s), %ld period runs, "
+          "%.3g s; Floquet multipliers %s%s (largest modulus %.6g: %s): %s\n", scene, i->period, phase, i->iterations, res,
           i->period_runs, i->seconds, mu, s->n > 8 ? ", ..." : "", i->max_multiplier,
           i->max_multiplier < 1 - 1e-6 ? "stable" : "not asymptotically stable", cup_status_name(i->status));
   if (!s->me) return;

@@ -18,11 +18,16 @@ void run_steady_free(run_steady **s);
 /* With a netlist: the signals to measure and the power elements' v and i,
  * probed after the run's own probes (before /signals is declared). */
 int run_steady_probes(run_steady *s, cup_netlist *nl, char *err, size_t size);
-/* Solve with the run's options (scheme, tolerances, the interrupt flag).
- * Solved: o becomes one period from the steady state (T, the samples).
+/* Solve with the run's options (scheme, tolerances, the interrupt flag),
+ * the period map from the phase t0 of the sources (cup_scene_steady_phase).
+ * Solved: o becomes one period from the steady state (T, the samples), and
+ * the scene's sources stay read from t0 on.
  * Not solved: 0 with a warning in err when the request falls back to the
  * transient (o unchanged), else nonzero with the error in err. */
-int run_steady_solve(run_steady *s, const cup_scene *scene, cup_integrator_options *o, char *err, size_t size);
+int run_steady_solve(run_steady *s, cup_scene *scene, cup_integrator_options *o, char *err, size_t size);
+/* The phase t0 of the period run (0 when not solved): the scene's sources
+ * are read from t0 on, and the run's t is t0 + t of the sources as written. */
+double run_steady_t0(const run_steady *s);
 /* The run's x0: the steady state if solved, else the scene's. */
 const double *run_steady_x0(const run_steady *s, const double *scene_x0);
 /* A sample of the period (the sink's), for the measurements. */

@@ -220,6 +220,48 @@ static void switched_default_signals(void **state) {
   free(vo); free(ic);
 }
 
+/* The full bridge: its gate VG3 (delay 76 us, width 49 us, period 100 us)
+ * repeats only from t0 = 25 us (the base build refused it, CUP_ERR_ARG,
+ * and ran the transient). The period written is [t0, t0 + T] of the
+ * sources as written: /t from t0, /steady_state/t0, the summary says so,
+ * and each gate's signal at each /t is its PULSE as written there. */
+static void fullbridge_phase(void **state) {
+  (void)state;
+  const char *out = tmp_path("fullbridge.h5");
+  result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/fullbridge.cir", "-o", out, "--steady-state",
+                                           NULL}, 0, 0);
+  expect_exit(&r, 0);
+  expect_in(r.err, "steady state: period 0.0001 s from t0 = 2.5e-05 s");
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *t, *x, *x0, *t0, *g[4];
+  hsize_t N = read_rows(f, "t", 1, 1, &t);
+  assert_true(read_rows(f, "x", 2, 2, &x) == N);
+  assert_true(read_rows(f, "steady_state/x0", 1, 1, &x0) == 2);
+  assert_true(read_rows(f, "steady_state/t0", 1, 1, &t0) == 1);
+  const char *gate[4] = {"signals/v(g1)", "signals/v(g2)", "signals/v(g3)", "signals/v(g4)"};
+  const double delay[4] = {1e-6, 51e-6, 76e-6, 26e-6};
+  for (int k = 0; k < 4; k++) assert_true(read_rows(f, gate[k], 1, 1, &g[k]) == N);
+  assert_close(t0[0], 25e-6, 1e-18);
+  assert_close(t[0], t0[0], 0);
+  assert_close(t[N - 1], t0[0] + 100e-6, 1e-18);
+  assert_true(x[0] == x0[0] && x[1] == x0[1]);
+  assert_close(x[2 * (N - 1)], x0[0], 1e-9);
+  long checked = 0;
+  for (hsize_t j = 0; j < N; j++)
+    for (int k = 0; k < 4; k++) {
+      double s = fmod(t[j] - delay[k] + 200e-6, 100e-6);   /* the time into its period as written */
+      if (fabs(s) < 1e-12 || fabs(s - 49e-6) < 1e-12 || fabs(s - 100e-6) < 1e-12) continue;   /* an edge */
+      assert_close(g[k][j], s < 49e-6 ? 1 : 0, 0);
+      checked++;
+    }
+  print_message("  t0 %.17g, /t [%.9g, %.9g], x0 (%.9g, %.9g), %ld gate samples as written\n", t0[0], t[0], t[N - 1],
+                x0[0], x0[1], checked);
+  free(t); free(x); free(x0); free(t0);
+  for (int k = 0; k < 4; k++) free(g[k]);
+  H5Fclose(f);
+}
+
 static void bad_input(void **state) {
   (void)state;
   const char *out = tmp_path("bad.h5");
@@ -243,6 +285,7 @@ int main(void) {
     cmocka_unit_test(netlist_option),
     cmocka_unit_test(switched_signals),
     cmocka_unit_test(switched_default_signals),
+    cmocka_unit_test(fullbridge_phase),
     cmocka_unit_test(bad_input),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

@@ -135,6 +135,53 @@ static void test_two_capacitors(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* The same jump with every step recorded (output every 1, the adaptive
+ * scheme): the switching time holds two records, the state before the
+ * jump (V0, 0) and after it (vf, vf) with no current through S1, so that a
+ * line through the records shows the jump (it had the one before only,
+ * and ramped to vf across the next step). */
+static void test_two_capacitors_every_step(void **state) {
+  (void)state;
+  const double C1 = 1e-6, C2 = 3e-6, V0 = 10, vf = C1 * V0 / (C1 + C2);
+  cup_netlist *nl = text_ok("two capacitors\nC1 a 0 1u IC=10\nC2 b 0 3u\nS1 a b g 0 SMOD\n"
+                            "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n.model SMOD SW(VT=0.5 VH=0.1)\n");
+  char err[CUP_ERRMSG_LEN];
+  run_rec r = {.nl = nl, .n = 2, .cap = 4096};
+  r.sig = cup_netlist_probe(nl, "i(S1)", err);
+  assert_true(r.sig >= 0);
+  r.t = malloc(sizeof(double) * (size_t)r.cap);
+  r.x = malloc(sizeof(double) * 2 * (size_t)r.cap);
+  r.s = malloc(sizeof(double) * (size_t)r.cap);
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = 2e-3;
+  o.tol_abs = o.tol_rel = 1e-10;
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = 1;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("create: %s", err);
+  r.I = I;
+  cup_run_info info;
+  assert_true(cup_integrator_run(I, cup_netlist_x0(nl), record, &r, &info) >= 0);
+  assert_true(r.count < r.cap);
+  long at[4], nat = 0;
+  for (long k = 0; k < r.count; k++)
+    if (fabs(r.t[k] - 1e-3) <= 1e-15 && nat < 4) at[nat++] = k;
+  printf("two capacitors, every step: %ld records, %ld at the switching time\n", r.count, nat);
+  assert_int_equal(nat, 2);
+  assert_int_equal(at[1], at[0] + 1);
+  const double *x0 = r.x + 2 * at[0], *x1 = r.x + 2 * at[1];
+  assert_true(fabs(x0[0] - V0) <= 1e-12 * V0 && fabs(x0[1]) <= 1e-12 * V0);
+  assert_true(fabs(x1[0] - vf) <= 1e-12 * V0 && fabs(x1[1] - vf) <= 1e-12 * V0);
+  assert_true(fabs(r.s[at[1]]) <= 1e-12);
+  cup_integrator_free(&I);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
 /* L1 = 1 H carrying 2 A and L2 = 3 H carrying 0.5 A share node b with S1
  * and R1; S1 is off from t = 0 (its gate is 0), which leaves L1 and L2 in
  * series: the jump is the flux-conserving (L1 i1 + L2 i2) / (L1 + L2) =
@@ -436,6 +483,14 @@ static void test_controller(void **state) {
   printf("failing controller: %s\n", info.message);
   cup_integrator_free(&I);
   assert_int_equal(cup_netlist_set_controller(nl, 0, pwm_gate, NULL, err), CUP_ERR_ARG);
+  /* its instants k ts are on the sources' clock: no time origin with it, nor it after one */
+  assert_int_equal(cup_netlist_set_time_origin(nl, 1e-6, err), CUP_ERR_UNSUPPORTED);
+  assert_contains(err, "controller");
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, NULL, NULL, err), CUP_OK);
+  assert_int_equal(cup_netlist_set_time_origin(nl, 1e-6, err), CUP_OK);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, NULL, err), CUP_ERR_UNSUPPORTED);
+  assert_int_equal(cup_netlist_set_time_origin(nl, 0, err), CUP_OK);
+  assert_int_equal(cup_netlist_set_controller(nl, 5e-6, pwm_gate, NULL, err), CUP_OK);
   cup_netlist_free(&nl);
   cup_netlist_free(&ref);
 }
@@ -462,7 +517,8 @@ static void test_errors(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-    cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_inductor_cut),
+    cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_two_capacitors_every_step),
+    cmocka_unit_test(test_inductor_cut),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
     cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_probe_all),
     cmocka_unit_test(test_circuit_gated_step_end), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),

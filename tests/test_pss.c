@@ -407,6 +407,114 @@ static void given_periods(void **state) {
   }
 }
 
+/* ---- the phase t0: sources that repeat only from a later time ---- */
+
+/* The least phase from which every source repeats, against its closed form
+ * per waveform: a PULSE whose pulse of the period before runs past t = 0
+ * (delay + rise + width + fall - period), a delayed SIN (its delay), a PWL
+ * (its last knot); a pulse ending on its period's end keeps t0 = 0. */
+static void steady_phases(void **state) {
+  (void)state;
+  static const struct { const char *text; double T, want_T, want_t0; const char *says; } cases[] = {
+      {"gate\nV1 in 0 PULSE(0 1 76u jump jump 49u 100u)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0, 100e-6,
+       76e-6 + 49e-6 - 100e-6, NULL},
+      {"ramps\nV1 in 0 PULSE(0 1 80u 2u 3u 44u 100u)\nR1 in b 1\nC1 b 0 1u\n.end\n", 200e-6, 200e-6,
+       80e-6 + 2e-6 + 44e-6 + 3e-6 - 100e-6, NULL},
+      {"ends\nV1 in 0 PULSE(0 1 51u jump jump 49u 100u)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0, 100e-6, 0, NULL},
+      {"sin\nV1 in 0 SIN(0 1 50 3m)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0, 0.02, 3e-3, NULL},
+      {"soft\nV1 in 0 PWL(0 0 1m 1)\nV2 b 0 SIN(0 1 50)\nR1 in c 1\nC1 c b 1u\n.end\n", 0, 0.02, 1e-3, NULL},
+      {"ramp\nV1 in 0 PWL(0 0 1m 1)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0, 0, 0, "constant"},
+      {"ramp\nV1 in 0 PWL(0 0 1m 1)\nR1 in b 1\nC1 b 0 1u\n.end\n", 5e-3, 5e-3, 1e-3, NULL},
+      {"damped\nV1 in 0 SIN(0 1 50 0 3)\nR1 in b 1\nC1 b 0 1u\n.end\n", 0, 0, 0, "decays"},
+      {"gate\nV1 in 0 PULSE(0 1 76u jump jump 49u 100u)\nR1 in b 1\nC1 b 0 1u\n.end\n", 150e-6, 0, 0,
+       "not a whole number"},
+  };
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    cup_netlist *nl = load(cases[k].text);
+    char err[CUP_ERRMSG_LEN] = "";
+    double T = -1, t0 = -1;
+    int st = cup_input_steady_phase(cup_netlist_input(nl), cases[k].T, &T, &t0, err);
+    print_message("  %.*s, T = %g: %s, T %.17g, t0 %.17g %s\n", (int)strcspn(cases[k].text, "\n"), cases[k].text,
+                  cases[k].T, cup_status_name(st), T, t0, err);
+    if (cases[k].says) {
+      assert_int_equal(st, CUP_ERR_ARG);
+      assert_non_null(strstr(err, cases[k].says));
+    } else {
+      assert_int_equal(st, CUP_OK);
+      assert_close(T, cases[k].want_T, 1e-12 * cases[k].want_T);
+      assert_true(fabs(t0 - cases[k].want_t0) <= 1e-12 * T);
+    }
+    cup_netlist_free(&nl);
+  }
+}
+
+/* A netlist read from t0 on (cup_netlist_set_time_origin): its input v(t)
+ * = u(t0 + t), integrals and breakpoints, against the same netlist as
+ * written at the later times, for every waveform a netlist makes (a PULSE
+ * with ramps delayed into the next period, one spent, a delayed SIN, a
+ * PWL, a sine, a single pulse); the origin 0 again gives u back. */
+static void shift_values(void **state) {
+  (void)state;
+  static const char *text = "shift\nV1 a 0 PULSE(0 1 76u 1u 2u 47u 100u)\nV2 b 0 PULSE(-1 2 1u 3u 1u 40u 100u)\n"
+                            "V3 c 0 SIN(0.5 1 10k 30u)\nV4 d 0 PWL(0 0 20u 1 25u 3)\nV5 e 0 SIN(0 2 20k)\n"
+                            "V6 f 0 PULSE(0 1 5u 1u 1u 30u)\nR1 a x 1\nR2 b x 1\nR3 c x 1\nR4 d x 1\nR5 e x 1\n"
+                            "R6 f x 1\nC1 x 0 1u\n.tran 1u 20u\n.end\n";   /* V6: PER = TSTOP < its pulse: one pulse */
+  cup_netlist *nl = load(text), *as_written = load(text);
+  const cup_input *u = cup_netlist_input(as_written);
+  char err[CUP_ERRMSG_LEN];
+  double T = 0, t0 = 0;
+  assert_int_equal(cup_input_steady_phase(u, 0, &T, &t0, err), CUP_OK);
+  assert_close(T, 100e-6, 1e-18);
+  assert_close(t0, 37e-6, 1e-18);               /* the single pulse's end: 5u + 1u + 30u + 1u */
+  for (int pass = 0; pass < 3; pass++) {
+    double s0 = pass == 0 ? t0 : pass == 1 ? 250e-6 : 0;   /* the phase, a later one, back to 0 */
+    assert_int_equal(cup_netlist_set_time_origin(nl, s0, err), CUP_OK);
+    const cup_input *v = cup_netlist_input(nl);
+    double a[6], b[6], ia[6], ib[6], worst = 0;
+    for (int j = 0; j <= 1000; j++) {
+      double t = j * 0.7e-6 + 0.013e-6;
+      assert_int_equal(cup_input_eval(v, t, a), CUP_OK);
+      assert_int_equal(cup_input_eval(u, s0 + t, b), CUP_OK);
+      assert_int_equal(cup_input_integral(v, t, t + 0.9e-6, ia), CUP_OK);
+      assert_int_equal(cup_input_integral(u, s0 + t, s0 + t + 0.9e-6, ib), CUP_OK);
+      for (int c = 0; c < 6; c++) worst = fmax(worst, fmax(fabs(a[c] - b[c]), fabs(ia[c] - ib[c]) / 0.9e-6));
+      double bv = cup_input_next_break(v, t), bu = cup_input_next_break(u, s0 + t);
+      if (isfinite(bu) || isfinite(bv)) assert_true(fabs(bv + s0 - bu) <= 1e-15);
+    }
+    print_message("  t0 = %g: |v(t) - u(t0 + t)| and its integrals' mean: %.3g at most\n", s0, worst);
+    assert_true(pass < 2 ? worst <= 1e-11 : worst == 0);
+  }
+  cup_netlist_free(&nl);
+  cup_netlist_free(&as_written);
+}
+
+/* An RC under a pulse train whose pulse runs past its period's end (the
+ * full bridge's VG3): the steady state from the phase t0 = 25 us, where
+ * the pulse ends, is its maximum (1 - e^{-Ton/RC}) / (1 - e^{-T/RC}), the
+ * trajectory starts at t0 and its v(out) is the closed form at each
+ * sample. Before, the solve refused the source (CUP_ERR_ARG). */
+static void rc_delayed_pulse(void **state) {
+  (void)state;
+  const double T = 100e-6, Ton = 49e-6, tau = 50e-6, t0 = 25e-6;
+  solved s = solve("RC\nV1 in 0 PULSE(0 1 76u jump jump 49u 100u)\nR1 in out 1\nC1 out 0 50u\n.end\n",
+                   CUP_SCHEME_ADAPTIVE, 0, 101, CUP_OK);
+  assert_close(s.info.period, T, 1e-18);
+  assert_close(s.info.t0, t0, 1e-18);
+  double top = (1 - exp(-Ton / tau)) / (1 - exp(-T / tau));
+  print_message("  x0 %.15g, closed form %.15g\n", cup_pss_x0(s.r)[0], top);
+  assert_close(cup_pss_x0(s.r)[0], top, 1e-10);
+  double t[101], x[101];
+  assert_int_equal(cup_pss_trajectory(s.r, t, x, NULL), CUP_OK);
+  assert_close(t[0], t0, 1e-18);
+  assert_close(t[100], t0 + T, 1e-18);
+  for (int j = 0; j <= 100; j++) {              /* off on [25, 76) us, on on [76, 125) us */
+    double off = fmin(t[j], 76e-6) - t0, v = top * exp(-off / tau);
+    if (t[j] > 76e-6) v = 1 + (v - 1) * exp(-(t[j] - 76e-6) / tau);
+    assert_close(x[j], v, 1e-9);
+  }
+  done(&s);
+}
+
 /* ---- measurements ---- */
 
 static void measure_closed_forms(void **state) {
@@ -457,6 +565,9 @@ int main(void) {
     cmocka_unit_test(lc_off_resonance),
     cmocka_unit_test(periods),
     cmocka_unit_test(given_periods),
+    cmocka_unit_test(steady_phases),
+    cmocka_unit_test(shift_values),
+    cmocka_unit_test(rc_delayed_pulse),
     cmocka_unit_test(measure_closed_forms),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -16,7 +16,11 @@
  *     CCM buck's monodromy e^{A Ts} (both topologies share A: the multipliers
  *     e^{lambda Ts}), the boost's e^{A_off (1-D) Ts} e^{A_on D Ts}; and the
  *     DCM buck's against central differences of the exact period map (one
- *     multiplier 0: the inductor's current restarts from 0 every period).
+ *     multiplier 0: the inductor's current restarts from 0 every period);
+ *   - the full bridge, whose gate VG3 repeats only from t0 = 25 us: the
+ *     steady state through t0 against the brute-force transient of the
+ *     netlist as written, sampled at t0 + k T, and its multipliers against
+ *     e^{A T} of the filter.
  * Newton's iteration counts and the solve's time are printed. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -276,11 +280,96 @@ static void buck_dcm(void **state) {
   done(&v);
 }
 
+/* ---- the full bridge: 100 V, phase-shifted legs, 1 mH, 2.2 uF || 20 ohm ---- */
+
+/* Its gate VG3 (delay 76 us, width 49 us, period 100 us) runs past its
+ * period's end: the sources repeat from t0 = 76 + 49 - 100 = 25 us on, not
+ * from 0. The steady state is the orbit through t0 (the netlist's sources
+ * read from t0, cup_netlist_set_time_origin), checked against the brute
+ * force of the netlist as written: the transient from rest, sampled at
+ * t0 + k T, until the change from one period to the next is below 1e-12;
+ * and the multipliers against e^{A T}: the bridge only switches the
+ * voltage across the filter (its diodes carry the current in the dead
+ * times, which never reaches 0 there), so the map is e^{A T} x + c. */
+typedef struct {
+  double prev[2], change;
+  long k, settled;
+} bf_watch;
+
+static int bf_sink(long k, double t, const double *x, void *ctx) {
+  (void)k, (void)t;
+  bf_watch *w = ctx;
+  w->change = fmax(fabs(x[0] - w->prev[0]), fabs(x[1] - w->prev[1]));
+  w->prev[0] = x[0], w->prev[1] = x[1];
+  if (w->k++ > 0 && w->change <= 1e-12 * fmax(fabs(x[0]), fabs(x[1]))) return 1;   /* settled: stop */
+  return 0;
+}
+
+static void fullbridge(void **state) {
+  (void)state;
+  const double L = 1e-3, C = 2.2e-6, R = 20;
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = NULL;
+  if (cup_netlist_load(&nl, CIR "fullbridge.cir", NULL, 0, err)) fail_msg("%s", err);
+  double T = 0, t0;
+  assert_int_equal(cup_input_steady_phase(cup_netlist_input(nl), 0, &T, &t0, err), CUP_OK);
+  assert_true(fabs(T - 100e-6) <= 1e-18 && fabs(t0 - 25e-6) <= 1e-18);
+  /* brute force: the netlist as written from rest, a sample at t0 + k T, up to 1000 periods */
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = 1e-12;
+  o.T = t0 + 1000 * T;
+  o.output = CUP_OUTPUT_SAMPLES;
+  o.output_samples = 1001;
+  o.output_t0 = t0;
+  cup_switching sw;
+  cup_integrator *I = NULL;
+  assert_true(cup_netlist_switching(nl, &sw));
+  if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+  bf_watch bw = {{0, 0}, INFINITY, 0, 0};
+  cup_run_info ri;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), bf_sink, &bw, &ri), CUP_ERR_INTERRUPTED);
+  cup_integrator_free(&I);
+  /* the steady state from t0 */
+  assert_int_equal(cup_netlist_set_time_origin(nl, t0, err), CUP_OK);
+  conv v = {.name = "fullbridge", .nl = nl, .Ts = T};
+  I = period_map(&v, 1e-12);
+  cup_pss_options po;
+  cup_pss_options_default(&po);
+  int st = cup_pss_solve_map(&v.r, I, 2, T, cup_netlist_x0(nl), &po, err);
+  cup_integrator_free(&I);
+  if (!v.r) fail_msg("%s", err);
+  cup_pss_get_info(v.r, &v.info);
+  const double *x0 = cup_pss_x0(v.r);
+  double re[2], im[2];
+  assert_int_equal(cup_pss_multipliers(v.r, re, im), CUP_OK);
+  for (int k = 0; k < 2; k++) v.mu[k][0] = re[k], v.mu[k][1] = im[k];
+  double d = fmax(fabs(x0[0] - bw.prev[0]), fabs(x0[1] - bw.prev[1]));
+  const double *M = cup_pss_monodromy(v.r);
+  double a = 1 - M[0], b = -M[2], c = -M[1], e = 1 - M[3], det = a * e - b * c;
+  double inv = fmax(fabs(e) + fabs(b), fabs(c) + fabs(a)) / fabs(det);
+  print_message("fullbridge %s: t0 = %.17g, %d Newton steps (residuals %.2g .. %.2g), %ld period runs, %.3f ms; "
+                "x0 = (%.12g, %.12g); brute force %ld periods to a change of %.2g, |x - x0| = %.3g (bound %.3g)\n",
+                cup_status_name(st), t0, v.info.iterations, cup_pss_residuals(v.r)[0], v.info.residual,
+                v.info.period_runs, 1e3 * v.info.seconds, x0[0], x0[1], bw.k - 1, bw.change, d,
+                2 * inv * (v.info.residual + bw.change));
+  assert_int_equal(st, CUP_OK);
+  assert_true(d <= 2 * inv * (v.info.residual + bw.change));
+  const double A[2][2] = {{0, -1 / L}, {1 / C, -1 / (R * C)}};
+  double E[2][2];
+  expm2(A, T, E);
+  check_multipliers(&v, E, 1e-6);
+  cup_pss_free(&v.r);
+  cup_netlist_free(&nl);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(buck_ccm),
       cmocka_unit_test(boost),
       cmocka_unit_test(buck_dcm),
+      cmocka_unit_test(fullbridge),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

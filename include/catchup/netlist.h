@@ -59,6 +59,17 @@ CUP_API int cup_netlist_tran_window(const cup_netlist *nl, double *tstart, doubl
  *  scheme's tol). */
 CUP_API int cup_netlist_tolerances(const cup_netlist *nl, double *reltol, double *abstol, double *vntol, double *chgtol);
 
+/** Read the sources from time t0 >= 0 on: the netlist's input (and every
+ *  switch configuration's, formed or to come: their gates, signals and
+ *  E u) becomes the sources as written at t0 + t (term by term), so that
+ *  a run from t = 0 is the circuit's from t0. The steady state's period map
+ *  starts at the phase cup_input_steady_phase gives (docs/steady-state.md).
+ *  t0 = 0: as written again. Make integrators after this call: they keep
+ *  the input they were made with. CUP_ERR_UNSUPPORTED for t0 != 0 and a
+ *  controller (cup_netlist_set_controller: its instants k ts are on the
+ *  sources' clock). */
+CUP_API int cup_netlist_set_time_origin(cup_netlist *nl, double t0, char *errmsg);
+
 /** .options steadystate (or steadyperiod=T): 1 if the netlist asks for its
  *  periodic steady state (docs/steady-state.md), with the period (0: the
  *  sources') into period; 0 otherwise. */

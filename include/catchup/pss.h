@@ -66,6 +66,9 @@ typedef struct cup_pss_info {
   long samples;           /**< the trajectory's samples (0: none) */
   double seconds;         /**< wall time of the solve */
   char message[CUP_RUN_MSG_LEN]; /**< what went wrong or what to know, whole */
+  double t0;              /**< the phase (cup_input_steady_phase): x0 is the state at t0, the
+                               period [t0, t0 + T) of the sources as written (cup_pss_solve; 0
+                               for cup_pss_solve_map, whose map starts where it was made to) */
 } cup_pss_info;
 
 /** A solve's result (opaque). */
@@ -88,6 +91,20 @@ CUP_API int cup_input_period(const cup_input *u, double *T, char *errmsg);
  *  damped or delayed SIN, a PULSE delayed past its period's start, no
  *  common period): over such a T the period map is not a period. */
 CUP_API int cup_input_period_fits(const cup_input *u, double T, char *errmsg);
+
+/** The steady state's period and phase: period the one asked for (> 0:
+ *  it must be a whole number of the sources' common period) or 0 (the
+ *  sources' common period, as cup_input_period finds it once every source
+ *  repeats); into *T that period and into *t0 the least time from which every source
+ *  repeats with period T: 0 unless a source starts otherwise (a PULSE whose
+ *  delay lets [0, T) differ from later periods, delay + rise + width + fall
+ *  > period: t0 = delay + rise + width + fall - period, or its delay if
+ *  less; a delayed SIN: its delay; a PWL that changes: its last knot; a
+ *  single pulse: its end). The steady state is the orbit through t0: the
+ *  period map runs over [t0, t0 + T): from t = 0 of u read from t0 on.
+ *  CUP_ERR_ARG naming the term when there is none (a damped SIN, no common
+ *  period, a constant input and no period given, a callback and none). */
+CUP_API int cup_input_steady_phase(const cup_input *u, double period, double *T, double *t0, char *errmsg);
 
 /** The steady state of an LCS driven by u: the period from o->period or u;
  *  the period map by the integrator with options io (scheme, tolerances;

@@ -101,6 +101,17 @@ typedef struct cup_scene_steady {
                               absorbed power over the power the input delivers; -1: none */
 } cup_scene_steady;
 
+/** Read the scene's sources from t0 >= 0 on (cup_netlist_set_time_origin,
+ *  phases and delays moved): integrators made after this run from t0 of the sources
+ *  as written; 0 puts them back. CUP_ERR_UNSUPPORTED for t0 != 0 and a
+ *  set: or crowd: scene. */
+CUP_API int cup_scene_set_time_origin(cup_scene *s, double t0, char *errmsg);
+/** The steady state's period and phase (cup_input_steady_phase of the
+ *  sources as written; period the one asked for, or 0: the sources') into
+ *  *T and *t0, and the time origin set to t0: the period map is a run from
+ *  t = 0 of an integrator made after this call. */
+CUP_API int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, char *errmsg);
+
 /** The scene's steady-state request, or NULL when it asks for none. */
 CUP_API const cup_scene_steady *cup_scene_steady_state(const cup_scene *s);
 

@@ -63,6 +63,20 @@ int measure_power(const double *sig, long N, int ns, int v, int i, double *w, do
   return st;
 }
 
+int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {
+  int st = CUP_OK, H = f->harmonics;
+  for (int j = 0; !st && j < f->nm; j++) {
+    int c = f->idx ? f->idx[j] : j;
+    for (long k = 0; k < N; k++) w[k] = sig[k * ns + c];
+    size_t row = (size_t)j * (size_t)(H + 1);
+    st = cup_measure_period(w, N, H, &f->me[j], f->amp ? f->amp + row : NULL, f->phase ? f->phase + row : NULL,
+                            errmsg);
+  }
+  for (int j = 0; !st && j < f->np; j++) st = measure_power(sig, N, ns, f->pv[j], f->pc[j], w, &f->power[j], errmsg);
+  if (!st && f->eff_out >= 0) f->efficiency = f->power[f->eff_out] / -f->power[f->eff_in];
+  return st;
+}
+
 int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg) {
   const char *a, *b;
   char sv[300], si[300];

@@ -20,6 +20,7 @@
 #include "catchup/pss.h"
 #include "pss_run.h"
 #include "integrator/adaptive.h"
+#include "model/input_impl.h"
 #include "util/clock.h"
 #include "util/fail.h"
 
@@ -391,6 +392,7 @@ typedef struct traj {
   cup_pss *r;
   const cup_integrator *I;
   long k;
+  double t0;                /* the phase: the samples' times are t0 + t */
 } traj;
 
 static int traj_sink(long step, double t, const double *x, void *ctx) {
@@ -398,16 +400,17 @@ static int traj_sink(long step, double t, const double *x, void *ctx) {
   traj *c = ctx;
   cup_pss *r = c->r;
   if (c->k >= r->info.samples) return 1;
-  r->t[c->k] = t;
+  r->t[c->k] = c->t0 + t;
   memcpy(r->x + (size_t)c->k * r->info.n, x, sizeof(double) * (size_t)r->info.n);
   if (r->info.m > 0 && cup_integrator_zeta(c->I, r->zeta + (size_t)c->k * r->info.m) < 0) return 1;
   c->k++;
   return 0;
 }
 
-/* One period from x0 at o->samples samples into r (an error into its info). */
+/* One period from x0 at o->samples samples into r (an error into its info);
+ * u is read from the phase t0 on, the times written t0 + t. */
 static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cup_integrator_options *io,
-                      long samples) {
+                      long samples, double t0) {
   int n = r->info.n, m = r->info.m;
   r->t = calloc((size_t)samples, sizeof(double));
   r->x = calloc((size_t)samples * n, sizeof(double));
@@ -421,7 +424,7 @@ static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cu
   int st = cup_integrator_create(&I, L, u, &so, e2);
   if (st) return say(r, st, "the trajectory's integrator: %s", e2);
   r->info.samples = samples;
-  traj c = {r, I, 0};
+  traj c = {r, I, 0, t0};
   cup_run_info ri;
   st = cup_integrator_run(I, r->x0, traj_sink, &c, &ri);
   r->info.period_runs++;
@@ -442,32 +445,36 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   if (!o) { cup_pss_options_default(&def); o = &def; }
   int st = check_options(o, errmsg);
   if (st) return st;
-  double T = o->period;
-  if (!(T > 0)) {
-    if (cup_lcs_inputs(L) == 0 || !u)
-      return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the circuit has no input to take the period from: give "
-                      "the period");
-    if ((st = cup_input_period(u, &T, errmsg))) return st;
+  double T = o->period, t0 = 0;
+  cup_input *v = NULL;                           /* u from the phase t0 on, when t0 > 0 */
+  if (cup_lcs_inputs(L) > 0 && u) {
+    if ((st = cup_input_steady_phase(u, o->period, &T, &t0, errmsg))) return st;
+    if (t0 > 0 && (st = input_shift(u, t0, &v, errmsg))) return st;
+    if (v) u = v;
+  } else if (!(T > 0) || !isfinite(T)) {
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the circuit has no input to take the period from: give "
+                    "the period");
   }
-  if (!isfinite(T)) return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the period %g is not finite", T);
-  if (cup_lcs_inputs(L) > 0 && (st = cup_input_period_fits(u, T, errmsg))) return st;
   cup_integrator_options mo;                      /* the period map: the final state only */
   pss_map_options(io, T, T, o->map_tol, &mo);
   mo.on_step = NULL;
   cup_integrator *I = NULL;
-  if ((st = cup_integrator_create(&I, L, u, &mo, errmsg))) return st;
+  if ((st = cup_integrator_create(&I, L, u, &mo, errmsg))) { cup_input_free(&v); return st; }
   st = cup_pss_solve_map(out, I, cup_lcs_dim(L), T, x_guess, o, errmsg);
   cup_integrator_free(&I);
-  if (!*out) return st;
-  (*out)->info.m = cup_lcs_rows(L);
-  if (st >= 0 && o->samples >= 2) {
-    double t0 = now_seconds();
-    mo.on_event = io->on_event;                  /* the events of the period shown */
-    int ts = trajectory(*out, L, u, &mo, o->samples);
-    (*out)->info.seconds += now_seconds() - t0;
-    if (ts < 0) return ts;
+  if (*out) {
+    (*out)->info.m = cup_lcs_rows(L);
+    (*out)->info.t0 = t0;
   }
-  return (*out)->info.status;
+  if (*out && st >= 0 && o->samples >= 2) {
+    double w0 = now_seconds();
+    mo.on_event = io->on_event;                  /* the events of the period shown */
+    int ts = trajectory(*out, L, u, &mo, o->samples, t0);
+    (*out)->info.seconds += now_seconds() - w0;
+    if (ts < 0) st = ts;
+  }
+  cup_input_free(&v);
+  return *out ? (*out)->info.status : st;
 }
 
 void pss_map_options(const cup_integrator_options *run, double run_T, double T, double map_tol,

@@ -30,4 +30,26 @@ int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *
 int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg,
                   char *errmsg);
 
+/* What is measured over one period (catchup-run --steady-state, the
+ * steady-state sweeps) and the figures (pss_measure). */
+typedef struct pss_figures {
+  int nm;                   /* signals measured: columns idx[0 .. nm) of the samples (idx NULL: 0 .. nm) */
+  const int *idx;
+  int harmonics;            /* their harmonics up to this order into amp and phase (nm rows of
+                               harmonics + 1; NULL: none) */
+  int np;                   /* elements whose average power is measured: from signals pv[j] and pc[j] */
+  const int *pv, *pc;
+  int eff_out, eff_in;      /* efficiency = power[eff_out] / -power[eff_in]; eff_out < 0: none */
+  cup_measure *me;          /* out: nm figures */
+  double *amp, *phase;      /* out, or NULL */
+  double *power;            /* out: np averages */
+  double efficiency;        /* out (untouched without eff_out) */
+} pss_figures;
+
+/* The figures f asks for of one period of N samples of ns signals each
+ * (row-major, as recorded): cup_measure_period of each signal, then
+ * measure_power of each element, then the efficiency; stops at the
+ * first error. w: N doubles of scratch. */
+int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg);
+
 #endif

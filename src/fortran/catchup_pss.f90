@@ -17,7 +17,7 @@ module catchup_pss
     cup_pss_options_default, cup_input_period, cup_input_period_fits, cup_pss_solve, cup_pss_solve_map, cup_pss_free, &
     cup_pss_get_info, cup_pss_x0, cup_pss_residuals, cup_pss_monodromy, cup_pss_multipliers, &
     cup_pss_trajectory, cup_measure_period, cup_pss_info_message, cup_netlist_element_nodes, &
-    cup_netlist_steady_state
+    cup_netlist_steady_state, cup_input_steady_phase, cup_netlist_set_time_origin
 
   !> cup_pss_options (pss.h): fields as in C
   type, bind(C) :: cup_pss_options
@@ -46,6 +46,7 @@ module catchup_pss
     integer(c_long) :: samples = 0
     real(c_double) :: seconds = 0
     character(kind=c_char) :: message(CUP_RUN_MSG_LEN) = c_null_char
+    real(c_double) :: t0 = 0          !< the phase: x0 is the state at t0 (cup_input_steady_phase)
   end type cup_pss_info
 
   !> cup_measure (pss.h)
@@ -95,6 +96,37 @@ contains
     st = c_cup_input_period_fits(u%ptr, T, cmsg)
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_input_period_fits
+
+  !> The steady state's period T (period: the one asked for, or 0: the
+  !> sources') and phase t0, the least time from which every source repeats (pss.h).
+  subroutine cup_input_steady_phase(u, period, T, t0, ierr, errmsg)
+    type(cup_input_t), intent(in) :: u
+    real(c_double), intent(in) :: period
+    real(c_double), intent(out) :: T, t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    T = 0
+    t0 = 0
+    cmsg = cup_errbuf_()
+    st = c_cup_input_steady_phase(u%ptr, period, T, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_input_steady_phase
+
+  !> The netlist's sources read from t0 on (netlist.h): make integrators after.
+  subroutine cup_netlist_set_time_origin(nl, t0, ierr, errmsg)
+    type(cup_netlist_t), intent(in) :: nl
+    real(c_double), intent(in) :: t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(nl%ptr, 'netlist', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_netlist_set_time_origin(nl%ptr, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_netlist_set_time_origin
 
   !> The steady state of L driven by u (pss.h). r holds the result also when
   !> ierr reports a failed solve (cup_pss_get_info says why).

@@ -15,7 +15,8 @@ module catchup_scene
     cup_scene_lcs, cup_scene_input, cup_scene_x0, cup_scene_options, cup_scene_eps_spec, &
     cup_scene_eta_spec, cup_scene_text, cup_scene_process, cup_scene_dim, cup_scene_integrator, &
     cup_scene_state_name, cup_scene_state_unit, &
-    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256, cup_scene_check_output, cup_scene_max_steps
+    cup_scene_file_count, cup_scene_file, cup_scene_file_sha256, cup_scene_check_output, cup_scene_max_steps, &
+    cup_scene_set_time_origin, cup_scene_steady_phase
   public :: c_cup_scene_load, c_cup_scene_load_string, c_cup_scene_free, c_cup_scene_name, c_cup_scene_netlist, &
     c_cup_scene_lcs, c_cup_scene_input, c_cup_scene_x0, c_cup_scene_options, &
     c_cup_scene_eps_spec, c_cup_scene_eta_spec, c_cup_scene_text, c_cup_scene_process, &
@@ -317,4 +318,36 @@ contains
     integer(c_long) :: n
     n = c_cup_scene_max_steps(s%ptr)
   end function cup_scene_max_steps
+  !> The scene's sources read from t0 on (scene.h): make integrators after.
+  subroutine cup_scene_set_time_origin(sc, t0, ierr, errmsg)
+    type(cup_scene_t), intent(in) :: sc
+    real(c_double), intent(in) :: t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    if (cup_null_fail_(sc%ptr, 'scene', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_set_time_origin(sc%ptr, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_set_time_origin
+
+  !> The scene's steady-state period T (period: the one asked for, or 0) and
+  !> phase t0, its sources then read from t0 on (scene.h).
+  subroutine cup_scene_steady_phase(sc, period, T, t0, ierr, errmsg)
+    type(cup_scene_t), intent(in) :: sc
+    real(c_double), intent(in) :: period
+    real(c_double), intent(out) :: T, t0
+    integer, intent(out) :: ierr
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    integer(c_int) :: st
+    T = 0
+    t0 = 0
+    if (cup_null_fail_(sc%ptr, 'scene', ierr, errmsg)) return
+    cmsg = cup_errbuf_()
+    st = c_cup_scene_steady_phase(sc%ptr, period, T, t0, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_scene_steady_phase
+
 end module catchup_scene

@@ -53,6 +53,8 @@ ANNOTATE = {
     'cup_netlist_signals': 'zeta=null out=out',
     'cup_pss_options_default': 'o=out',
     'cup_input_period': 'T=scalar',
+    'cup_input_steady_phase': 'T=scalar t0=scalar',
+    'cup_scene_steady_phase': 'T=scalar t0=scalar',
     'cup_pss_solve': 'x_guess=null',
     'cup_pss_solve_map': 'x_guess=null',
     'cup_pss_get_info': 'info=out',

@@ -152,6 +152,26 @@ static void switch_model(adaptive_ws *A) {
   }
 }
 
+/* U's and G's nonzeros, for ad_offset (a step's g from the input's
+ * states): U holds one 1 a waveform, G the sources each row sees; on the
+ * full bridge the dense products were 9 % of the run. */
+static void offset_pattern(adaptive_ws *A) {
+  int m = A->m, p = A->p, nw = A->nw, k = 0;
+  for (int c = 0; c < nw; c++) {
+    A->up[c] = k;
+    for (int q = 0; q < p; q++)
+      if (A->U[q + (size_t)c * p] != 0) { A->ui[k] = q; A->ux[k++] = A->U[q + (size_t)c * p]; }
+  }
+  A->up[nw] = k;
+  k = 0;
+  for (int i = 0; i < m; i++) {
+    A->gp[i] = k;
+    for (int q = 0; q < p; q++)
+      if (A->G[i + (size_t)q * m] != 0) { A->gi[k] = q; A->gx[k++] = A->G[i + (size_t)q * m]; }
+  }
+  A->gp[m] = k;
+}
+
 /* Every matrix and vector of the run (its sizes set): *fail = 1 when memory runs out. */
 static void alloc_vectors(adaptive_ws *A, int *fail) {
   int n = A->n, m = A->m, p = A->p, nw = A->nw, na = A->na;
@@ -161,6 +181,12 @@ static void alloc_vectors(adaptive_ws *A, int *fail) {
   A->G = take((size_t)m * p, sizeof(double), fail);
   A->U = take((size_t)p * nw, sizeof(double), fail);
   A->W = take((size_t)nw * nw, sizeof(double), fail);
+  A->up = take((size_t)nw + 1, sizeof(int), fail);
+  A->ui = take((size_t)p * nw + 1, sizeof(int), fail);
+  A->ux = take((size_t)p * nw + 1, sizeof(double), fail);
+  A->gp = take((size_t)m + 1, sizeof(int), fail);
+  A->gi = take((size_t)m * p + 1, sizeof(int), fail);
+  A->gx = take((size_t)m * p + 1, sizeof(double), fail);
   A->ework = take(6 * NA, sizeof(double), fail);
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), fail);
@@ -267,6 +293,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   if (G) dense_of(G, 1, A->G, m);
   A->hmax_input = o->T / 8;
   exosystem(A);
+  offset_pattern(A);
   if (A->one >= 0) A->wscale[A->one] = 1;
   for (int i = 0; i < m; i++)                    /* g's rounding scale: sum |G_iq| |u_q| at most */
     for (int c = 0; c < nw; c++)
@@ -290,6 +317,7 @@ void adaptive_free(adaptive_ws **Ap) {
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
   free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
+  free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx);
   free(A->ya); free(A->yb); free(A->yt); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);

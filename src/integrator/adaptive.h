@@ -32,10 +32,12 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
                  cup_run_info *info);
 /* The run from ta (state xa) to tb only: a switched circuit's stretch in
  * one configuration (integrator/switched.c). first: ta = 0, x0 as given is
- * the first sample; steps and next_sample carry the numbering across the
+ * the first sample; jumped: xa is the state after a jump at ta (a switching),
+ * which output every 1 records at ta, after the one before it that ended the
+ * window before; steps and next_sample carry the numbering across the
  * windows. The statistics of the window into info. */
-int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, long *steps,
-                    long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
+                    long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 const double *adaptive_state(const adaptive_ws *A);
 /* Inside the sink: zeta at the output time (m entries), the multipliers of
  * the active set that holds from there (at an event or a breakpoint, the one

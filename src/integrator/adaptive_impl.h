@@ -129,6 +129,8 @@ struct adaptive_ws {
   int *first_state;         /* built-in waveforms: first exosystem state of each term */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
   double *U, *W;            /* p x nw, nw x nw, column-major */
+  int *up, *ui, *gp, *gi;   /* U's nonzeros by column (nw + 1 starts, rows), G's by row (m + 1 starts, columns) */
+  double *ux, *gx;          /* ... their values (ad_offset) */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
   ad_mode modes[AD_MODES];
@@ -217,8 +219,11 @@ void ad_modes_free(adaptive_ws *A);
  * its exponentials for the step lengths hc (< 0: none) computed again (the
  * same bits: the same function of the same h M) and its stamps of use. */
 void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);
-/* exp(h M_J), cached by h (NULL: h = 0 needs none). */
-const double *ad_expm(adaptive_ws *A, ad_mode *md, double h);
+/* exp(h M_J), cached by h (NULL: h = 0 needs none): a step's length h
+ * ending at t (t_end) takes a cached one within two ulps of t of it
+ * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
+ * applied sample after sample). */
+const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */

@@ -380,7 +380,7 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
       ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
       return NULL;
     }
-    const double *E = ad_expm(A, md, h);
+    const double *E = ad_expm(A, md, h, *t1);
     if (!A->callback) return E;
     double ie = interp_error(A, md, E), errn = ie / (AD_STEP_SHARE * tolw(A, A->x));
     double fac = errn > 0 ? 0.9 * pow(errn, -1.0 / (AD_DEGREE + 2)) : 5;
@@ -633,7 +633,7 @@ static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb) {
     if (!(t1 > R->t)) break;
     if (ad_inputs_on(A, R->t, t1, A->wa, A->uerr))
       return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-    const double *E = ad_expm(A, md0, t1 - R->t);
+    const double *E = ad_expm(A, md0, t1 - R->t, t1);
     ad_lift(A, md0, A->x, A->wa, A->ya);
     for (int i = 0; i < na; i++) {
       double acc = 0;
@@ -719,8 +719,8 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
  * refused it) and what followed it in its step (the next piece at a
  * breakpoint, the catching-up steps under way, the accumulation check),
  * then the steps to T. */
-int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, long *steps,
-                    long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
+                    long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = 0;                               /* (the input may have changed between runs) */
@@ -739,6 +739,13 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, &R, first, &pi);
   if (st >= 0 && ta < tb) st = start_piece(A, &R);
+  /* every step recorded: the state after the jump too, at the same time
+   * (after the window's projections, with the active set chosen there, so
+   * that zeta is the new configuration's); a line drawn through the
+   * records then shows the jump, not a ramp across the next step (a
+   * window of length 0 chooses none: its state is the next window's) */
+  if (st >= 0 && jumped && !first && ta < tb && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
+    st = offer(A, &R);
   st = run_to_end(A, &R, st);
   A->tend = A->o.T;
   *steps = R.steps;

@@ -98,7 +98,7 @@ static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
     if (!(R->next_sample < o->output_samples)) return 0;
     ts = ad_sample_time(A, R->next_sample);
     if (!(ts < t1)) return 0;
-    if (!E) E = ad_expm(A, md, dt);
+    if (!E) E = ad_expm(A, md, dt, 0);   /* (applied sample after sample: dt itself) */
     times(na, E, A->zy, A->dy);
     times(na, E, A->de, A->dy);
   }

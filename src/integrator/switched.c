@@ -146,15 +146,16 @@ static void add_info(cup_run_info *info, const cup_run_info *w) {
 
 /* Configuration topo's window from (t, x) to tb with the user's sink
  * (through the checks when watching); the state at its end into S->x. */
-static int window(switched_run *S, int topo, double t, double tb, int first, long *steps, long *next_sample,
-                  int watching, cup_run_info *info) {
+static int window(switched_run *S, int topo, double t, double tb, int first, int jumped, long *steps,
+                  long *next_sample, int watching, cup_run_info *info) {
   cup_integrator *C = S->child[topo];
   cup_run_info w;
   S->watch = watching;
   S->crossed = S->user_stop = S->refused = 0;
   S->tg = t;
   la_copy(S->xg, S->x, S->n);
-  int st = adaptive_window(adaptive_of(C), t, tb, S->x, first, steps, next_sample, watch_sink, S, &w);
+  int st = adaptive_window(adaptive_of(C), t, tb, S->x, first, jumped, steps, next_sample, watch_sink, S,
+                           &w);
   S->watch = 0;
   if (S->crossed) {                                /* our stop, not an error; its sample not taken */
     st = CUP_OK;
@@ -182,7 +183,7 @@ static int locate(switched_run *S, int topo, double *t, long *steps, long *next_
     double mid = lo + (hi - lo) / 2;
     long k = ksave, j = jsave;
     cup_run_info w;
-    int st = adaptive_window(adaptive_of(C), S->tg, mid, x0, 0, &k, &j, NULL, NULL, &w);
+    int st = adaptive_window(adaptive_of(C), S->tg, mid, x0, 0, 0, &k, &j, NULL, NULL, &w);
     if (st < 0) { S->probing = 0; add_info(info, &w); return st; }
     int c = S->ops.crossed(S->ops.ctx, topo, mid, adaptive_state(adaptive_of(C)));
     if (c < 0) { S->probing = 0; return fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", mid); }
@@ -191,7 +192,7 @@ static int locate(switched_run *S, int topo, double *t, long *steps, long *next_
   S->probing = 0;
   double ta = S->tg;
   la_copy(S->x, x0, S->n);
-  int st = window(S, topo, ta, hi, 0, steps, next_sample, 0, info);
+  int st = window(S, topo, ta, hi, 0, 0, steps, next_sample, 0, info);
   *t = hi;
   return st;
 }
@@ -240,7 +241,7 @@ static int piece(switched_run *S, int topo, double ta, double tb, cup_run_info *
   S->cur = topo;
   S->piece_end = tb;
   la_zero(S->zsplit, cup_lcs_rows(W->L));
-  int st = adaptive_window(adaptive_of(W), ta, tb, S->x, 0, &steps, &next, twin_sink, S, &w);
+  int st = adaptive_window(adaptive_of(W), ta, tb, S->x, 0, 0, &steps, &next, twin_sink, S, &w);
   if (st < 0) {
     add_info(info, &w);
     return st;
@@ -392,8 +393,12 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (S->half) info->err_est = estimate_value(&S->est);
     return st;
   }
+  /* every step recorded: a jump at a switching is recorded after it too */
+  int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
   for (int first = 1; st >= 0 && t < T; first = 0) {
+    if (each) la_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
+    int jumped = each && memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0;
     if (first) x0_moved(S, x0, info);
     st = child_of(S, topo, info->message);
     if (st) break;
@@ -401,7 +406,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     double tb;
     st = sw->next(sw->ctx, topo, t, T, &tb);
     if (st) { st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
-    st = window(S, topo, t, tb, first, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
+    st = window(S, topo, t, tb, first, jumped, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;
     if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);

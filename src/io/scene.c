@@ -25,6 +25,7 @@
 #include "scene_netlist.h"
 #include "util/path.h"
 #include "scene_steady.h"
+#include "model/input_impl.h"
 
 struct cup_scene {
   char *name;
@@ -32,7 +33,8 @@ struct cup_scene {
   scene_process *proc;          /* a general process (set:, f:) instead of an LCS */
   cup_crowd *crowd;             /* or a crowd (crowd:) */
   cup_netlist *nl;              /* netlist: the model (its LCS and input) */
-  cup_input *u;                 /* NULL when p = 0 */
+  cup_input *u;                 /* NULL when p = 0; read from the time origin on */
+  cup_input *u_written;         /* the input as written while the time origin is not 0 */
   double *x0;
   cup_integrator_options opt;
   char *eps_spec, *eta_spec;    /* as written */
@@ -661,6 +663,7 @@ void cup_scene_free(cup_scene **s) {
   scene_process_free(&S->proc);
   cup_crowd_free(&S->crowd);
   cup_input_free(&S->u);
+  cup_input_free(&S->u_written);
   cup_netlist_free(&S->nl);
   free(S->x0);
   free(S->eps_spec);
@@ -703,6 +706,28 @@ int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cu
     return cup_integrator_create_switched(I, &sw, cup_scene_input(s), o, errmsg);
   return cup_integrator_create(I, cup_scene_lcs(s), cup_scene_input(s), o, errmsg);
 }
+int cup_scene_set_time_origin(cup_scene *s, double t0, char *errmsg) {
+  if (!s || !(t0 >= 0) || !isfinite(t0))
+    return fail_fmt(errmsg, CUP_ERR_ARG, "scene: time origin: no scene, or t0 = %g not finite and >= 0", t0);
+  if (s->nl) return cup_netlist_set_time_origin(s->nl, t0, errmsg);
+  if ((s->proc || s->crowd) && t0 != 0)
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s: a time origin t0 = %g for a set: or crowd: scene (its input "
+                    "cannot be moved)", s->name, t0);
+  return input_origin(&s->u, &s->u_written, t0, errmsg);
+}
+
+int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, char *errmsg) {
+  int st = cup_scene_set_time_origin(s, 0, errmsg);   /* the sources as written */
+  *T = period;
+  *t0 = 0;
+  if (!st && !cup_scene_input(s) && !(period > 0))
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the scene has no input to take the period from: give steady_state.period "
+                    "(catchup-run --period)");
+  if (!st) st = cup_input_steady_phase(cup_scene_input(s), period, T, t0, errmsg);
+  if (!st) st = cup_scene_set_time_origin(s, *t0, errmsg);
+  return st;
+}
+
 const double *cup_scene_x0(const cup_scene *s) { return s ? s->x0 : NULL; }
 const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ? &s->opt : NULL; }
 const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }

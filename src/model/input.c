@@ -91,6 +91,92 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
   return CUP_OK;
 }
 
+/* A copy of term t read from t0 on: the same waveform at t0 + s for s >= 0,
+ * t0 at or past the time from which the term repeats (cup_input_steady_phase):
+ * a phase advanced by omega t0 (mod 2 pi), a PULSE's delay moved back by t0
+ * (into (-period, 0] once spent), a SIN's delay spent into its phase, knots
+ * moved by -t0, a PWL past its last knot and a single pulse past its end
+ * constants. */
+static int term_shift(const input_term *t, double t0, input_term *out) {
+  *out = *t;
+  out->t = out->v = NULL;
+  switch (t->kind) {
+    case CUP_WAVE_CONSTANT: return CUP_OK;
+    case CUP_WAVE_SINE:
+    case CUP_WAVE_SQUARE:
+      if (t->omega > 0) out->phase = t->phase + fmod(t->omega * t0, TWO_PI);
+      return CUP_OK;
+    case CUP_WAVE_PWL:
+      if (t0 >= t->t[t->np - 1]) {
+        *out = (input_term){.comp = t->comp, .kind = CUP_WAVE_CONSTANT, .value = t->v[t->np - 1]};
+        return CUP_OK;
+      }
+      out->t = malloc(sizeof(double) * (size_t)t->np);
+      out->v = malloc(sizeof(double) * (size_t)t->np);
+      if (!out->t || !out->v) { free(out->t); free(out->v); return CUP_ERR_NOMEM; }
+      for (int k = 0; k < t->np; k++) out->t[k] = t->t[k] - t0, out->v[k] = t->v[k];
+      return CUP_OK;
+    case CUP_WAVE_PULSE: {
+      /* a delay at or below 0 leaves v periodic from t = 0 (pulse_value's s >= 0): t0 past the delay
+       * is delay - t0 less whole periods, in (-period, 0]; before it, the delay left */
+      double P = t->period, d = t->delay - t0;
+      if (!(P > 0) && d + t->rise + t->width + t->fall <= 0) {
+        *out = (input_term){.comp = t->comp, .kind = CUP_WAVE_CONSTANT, .value = t->value};
+        return CUP_OK;
+      }
+      if (P > 0 && d < 0) {
+        d += P * floor(-d / P);
+        if (d > 0) d -= P;
+      }
+      out->delay = d;
+      return CUP_OK;
+    }
+    case CUP_WAVE_DAMPED_SINE:
+      if (t0 <= t->delay) { out->delay = t->delay - t0; return CUP_OK; }
+      out->delay = 0;
+      out->phase = t->phase + fmod(t->omega * (t0 - t->delay), TWO_PI);
+      return CUP_OK;
+  }
+  return CUP_ERR_ARG;
+}
+
+int input_shift(const cup_input *u, double t0, cup_input **out, char *errmsg) {
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "input shift: output pointer is NULL");
+  *out = NULL;
+  if (!u || !(t0 >= 0) || !isfinite(t0))
+    return fail_fmt(errmsg, CUP_ERR_ARG, "input shift: no input, or t0 = %g not finite and >= 0", t0);
+  if (u->fn && t0 != 0)
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "input shift: a callback input cannot be read from t0 = %g", t0);
+  int st = cup_input_create(out, u->p, errmsg);
+  if (st) return st;
+  cup_input *v = *out;
+  v->fn = u->fn; v->ctx = u->ctx; v->abs_tol = u->abs_tol; v->rel_tol = u->rel_tol;
+  v->terms = calloc((size_t)u->nterms + 1, sizeof(input_term));
+  for (int k = 0; v->terms && k < u->nterms && !st; k++)
+    if (!(st = term_shift(&u->terms[k], t0, &v->terms[k]))) v->nterms = k + 1;
+  if (!v->terms || st) {
+    cup_input_free(out);
+    return fail_fmt(errmsg, st == CUP_ERR_ARG ? st : CUP_ERR_NOMEM, "input shift: %s",
+                    st == CUP_ERR_ARG ? "unknown waveform" : "out of memory");
+  }
+  return CUP_OK;
+}
+
+int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg) {
+  const cup_input *w = *written ? *written : *u;
+  cup_input *v = NULL;
+  if (!*u) return CUP_OK;
+  if (t0 != 0) {
+    int st = input_shift(w, t0, &v, errmsg);
+    if (st) return st;
+  }
+  if (*written) cup_input_free(u);
+  else *written = *u;
+  *u = v ? v : *written;
+  if (!v) *written = NULL;
+  return CUP_OK;
+}
+
 int cup_input_set_callback(cup_input *u, cup_input_fn fn, void *ctx, double abs_tol, double rel_tol) {
   if (!u || !fn) return CUP_ERR_ARG;
   if (!(abs_tol >= 0) || !(rel_tol >= 0) || (abs_tol == 0 && rel_tol == 0)) return CUP_ERR_ARG;

@@ -130,6 +130,17 @@ static inline int input_square_block(const v2d *q, int np, v2d *r, v2d *sg) {
   return 0;
 }
 
+/* A new input v(t) = u(t0 + t), t >= 0, term by term (phases advanced by
+ * omega t0, PULSE and SIN delays spent, PWL knots moved), for t0 at or past
+ * the time from which every term repeats (cup_input_steady_phase; a PWL is
+ * then constant, a single pulse over). CUP_ERR_UNSUPPORTED for a callback
+ * and t0 != 0. */
+int input_shift(const cup_input *u, double t0, cup_input **v, char *errmsg);
+/* *u read from t0 on (input_shift): *written keeps the input as written
+ * while t0 != 0, *u its shift; t0 = 0 puts the written one back. An
+ * integrator made with the old *u must be freed first. */
+int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
+
 /* One term's value at t (its component's share of u(t)). */
 double input_term_value(const input_term *w, double t);
 /* One term's exact integral over [a, b]. */

@@ -12,6 +12,7 @@
 #include "catchup.h"
 #include "catchup/netlist.h"
 #include "netlist_impl.h"
+#include "input_impl.h"
 
 #define TWO_PI 6.283185307179586476925286766559
 
@@ -406,6 +407,7 @@ void cup_netlist_free(cup_netlist **p) {
   cup_netlist *nl = *p;
   cup_lcs_free(&nl->L);
   cup_input_free(&nl->u);
+  cup_input_free(&nl->u_written);
   free(nl->x0);
   for (int v = 0; nl->node && v < nl->nnodes; v++) free(nl->node[v]);
   free(nl->node);
@@ -441,6 +443,20 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->zrow); free(nl->Lam); free(nl->zfull);
   free(nl);
   *p = NULL;
+}
+
+int nl_input_origin(cup_netlist *nl, double t0, char *errmsg) {
+  char lib[CUP_ERRMSG_LEN];
+  int st = t0 == nl->t0 ? CUP_OK : input_origin(&nl->u, &nl->u_written, t0, lib);
+  if (st) return fail_fmt(errmsg, st, "%s: the sources from t0 = %.17g: %s", nl->file, t0, lib);
+  nl->t0 = t0;
+  return CUP_OK;
+}
+
+int cup_netlist_set_time_origin(cup_netlist *nl, double t0, char *errmsg) {
+  if (!nl || !(t0 >= 0) || !isfinite(t0))
+    return fail_fmt(errmsg, CUP_ERR_ARG, "time origin: no netlist, or t0 = %g not finite and >= 0", t0);
+  return nl->hooks ? nl->hooks->origin(nl, t0, errmsg) : nl_input_origin(nl, t0, errmsg);
 }
 
 const cup_lcs *cup_netlist_lcs(const cup_netlist *nl) { return nl ? nl->L : NULL; }

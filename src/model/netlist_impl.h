@@ -54,12 +54,15 @@ typedef struct nl_sw_hooks {
   void (*free)(nl_switched **S);
   cup_netlist *(*current)(cup_netlist *nl);              /* the configuration in force */
   int (*probe)(cup_netlist *nl, int k, char *errmsg);    /* signal k added to every configuration */
+  int (*origin)(cup_netlist *nl, double t0, char *errmsg);   /* every configuration's sources from t0 */
 } nl_sw_hooks;
 
 struct cup_netlist {
   char warning[CUP_ERRMSG_LEN];   /* a loop of ideal diodes (nl_diode_loops), or "" */
   cup_lcs *L;
-  cup_input *u;       /* NULL when p = 0 */
+  cup_input *u;       /* NULL when p = 0; the sources from the time origin t0 on */
+  cup_input *u_written;   /* the sources as written, when t0 != 0 (u is then its shift) */
+  double t0;          /* the time origin (cup_netlist_set_time_origin): u(t) = the sources at t0 + t */
   double *x0;
   int has_tran;
   double tstep, tstop, tstart, tmax;
@@ -117,6 +120,10 @@ struct cup_netlist {
   double *Lam;            /* nq x (n + p + mr), row-major: the constraints' multipliers */
   double *zfull;          /* m: zeta with the multipliers, for signals */
 };
+
+/* nl's own sources read from t0 on (u the shift of the sources as written,
+ * kept in u_written; t0 = 0: as written again). */
+int nl_input_origin(cup_netlist *nl, double t0, char *errmsg);
 
 /* Triplets, each with a bound on the magnitude of what was summed into it. */
 typedef struct nl_coo {

@@ -49,6 +49,7 @@ struct nl_switched {
   double *ut;              /* p: u(t) */
   double *zf;              /* scratch: a configuration's zeta with multipliers */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
+  double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
   cup_gate_fn gate_fn;
   void *gate_ctx;
@@ -452,6 +453,7 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
   if (!st && r.nq && multipliers(sub, &r)) st = nomem(c, errmsg);
   if (!st) st = rename_rows(sub, &r) ? nomem(c, errmsg) : CUP_OK;
   if (!st) st = reduced_lcs(sub, &d, &r, errmsg);
+  if (!st && S->t0 != 0) st = nl_input_origin(sub, S->t0, errmsg);   /* formed after the origin was set */
   if (!st && !r.nq) { free(sub->zrow); sub->zrow = NULL; }   /* diode rows as formulated */
   tp->cfg = cfg;
   tp->Pi = NULL;
@@ -697,6 +699,7 @@ int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void 
   if (fn && !(ts > 0 && isfinite(ts)))
     return fail_fmt(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
   nl_switched *S = nl->sw;
+  if (fn && S->t0 != 0) return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "controller: %s has a time origin", nl->file);
   if (fn && !S->gate && !(S->gate = calloc((size_t)S->nsw + 1, sizeof(int))))
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   S->gate_fn = fn;
@@ -749,7 +752,21 @@ static int check_controls(const nl_circuit *c, int e, char *errmsg) {
   return CUP_OK;
 }
 
-static const nl_sw_hooks hooks = {sw_free, sw_current, sw_probe};
+/* Every configuration's sources from t0 on, and those formed later (a
+ * controller's instants k ts stay on the sources' clock: refused). */
+static int sw_origin(cup_netlist *nl, double t0, char *errmsg) {
+  nl_switched *S = nl->sw;
+  if (S->gate_fn && t0 != 0)                       /* its instants k ts would move with the clock */
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s: a controller with a time origin t0 = %g", nl->file, t0);
+  for (int k = 0; k < S->ntopo; k++) {
+    int st = nl_input_origin(S->topo[k].sub, t0, errmsg);
+    if (st) return st;
+  }
+  S->t0 = t0;
+  return CUP_OK;
+}
+
+static const nl_sw_hooks hooks = {sw_free, sw_current, sw_probe, sw_origin};
 
 int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   nl_switched *S = calloc(1, sizeof *S);

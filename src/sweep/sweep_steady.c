@@ -1,10 +1,10 @@
 /* sweep_steady — steady-state sweeps (sweep_steady.h, docs/sweep-format.md,
  * "Steady-state sweeps"). A task is catchup-run --steady-state without the
- * file: the period map is the task's integrator over one period (a
- * fixed-step scheme keeps its step, the adaptive one runs at the request's
- * map_tol), Newton's method on it (cup_pss_solve_map), then one period from
- * the steady state at the request's samples, measured by cup_measure_period
- * (the signals the request names, each element's power, the efficiency). */
+ * file, solved the same way (io/scene_pss.h: the period and its phase, the
+ * period map of the task's integrator options, Newton's method on it), then
+ * one period from the steady state sampled in memory and measured as
+ * catchup-run measures it (pss_measure: the signals the request names,
+ * each element's power, the efficiency). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -12,6 +12,7 @@
 #include <string.h>
 #include "sweep_steady.h"
 #include "analysis/pss_run.h"
+#include "io/scene_pss.h"
 #include "util/clock.h"
 
 void sw_steady_no_reference(const sw_sweep *s, sw_result *r, double *traj) {
@@ -37,21 +38,18 @@ static int keep_sample(long k, double t, const double *x, void *ctx) {
   return cup_netlist_signals(p->nl, t, x, p->zeta, p->sig + p->k++ * p->ns) != CUP_OK ? CUP_ERR_CALLBACK : 0;
 }
 
-/* One period from x0 at q->samples samples, measured into r->steady. */
-static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_steady *q, cup_integrator_options mo,
+/* One period from x0 (options mo: scene_pss_solve's), measured into r->steady. */
+static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_steady *q, const cup_integrator_options *mo,
                    const double *x0, sw_result *r) {
   cup_netlist *nl = cup_scene_netlist(v->scene);
   const cup_lcs *L = cup_scene_lcs(v->scene);
   period_samples p = {nl, NULL, cup_netlist_signal_count(nl), q->samples, 0, NULL, NULL};
-  mo.output = CUP_OUTPUT_SAMPLES;
-  mo.output_samples = q->samples;
-  mo.output_t0 = 0;
   p.sig = malloc(sizeof(double) * (size_t)(p.N * p.ns + 1));
   p.zeta = calloc((size_t)(L ? cup_lcs_rows(L) : 0) + 1, sizeof(double));
   double *w = malloc(sizeof(double) * (size_t)p.N);
   char err[CUP_ERRMSG_LEN] = "";
   cup_integrator *I = NULL;
-  int st = !p.sig || !p.zeta || !w ? CUP_ERR_NOMEM : cup_scene_integrator(v->scene, &mo, &I, err);
+  int st = !p.sig || !p.zeta || !w ? CUP_ERR_NOMEM : cup_scene_integrator(v->scene, mo, &I, err);
   cup_run_info info = {0};
   if (!st) {
     p.I = I;
@@ -62,39 +60,24 @@ static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_stead
       st = CUP_ERR_ARG;
     }
   }
-  cup_measure m;
-  for (int j = 0; st >= 0 && j < s->ss_nm; j++) {
-    for (long k = 0; k < p.N; k++) w[k] = p.sig[k * p.ns + s->ss_sig[j]];
-    st = cup_measure_period(w, p.N, 0, &m, NULL, NULL, err);
-    double *f = r->steady.fig[j];
-    f[0] = m.avg, f[1] = m.rms, f[2] = m.min, f[3] = m.max, f[4] = m.pp;
-  }
+  cup_measure me[SW_SS_SIGNALS];
   double power[SW_SS_POWER];
-  for (int j = 0; st >= 0 && j < s->ss_np; j++)
-    st = measure_power(p.sig, p.N, p.ns, s->ss_pv[j], s->ss_pc[j], w, &power[j], err);
-  if (st >= 0 && q->eff_out >= 0) r->steady.efficiency = power[q->eff_out] / -power[q->eff_in];
+  for (int j = 0; j < SW_SS_SIGNALS; j++) me[j] = (cup_measure){NAN, NAN, NAN, NAN, NAN, NAN};   /* not measured */
+  pss_figures f = {s->ss_nm, s->ss_sig, 0, s->ss_np, s->ss_pv, s->ss_pc, q->eff_out, q->eff_in, me, NULL, NULL,
+                       power, r->steady.efficiency};
+  if (st >= 0) st = pss_measure(p.sig, p.N, p.ns, &f, w, err);
+  for (int j = 0; j < s->ss_nm; j++) {         /* those measured before an error too */
+    double *fig = r->steady.fig[j];
+    fig[0] = me[j].avg, fig[1] = me[j].rms, fig[2] = me[j].min, fig[3] = me[j].max, fig[4] = me[j].pp;
+  }
+  r->steady.efficiency = f.efficiency;
   if (st < 0) snprintf(r->message, sizeof r->message, "the steady state's period: %s: %s", cup_status_name(st), err);
   cup_integrator_free(&I);
   free(p.sig); free(p.zeta); free(w);
   return st;
 }
 
-/* The period, or an error in r. */
-static int period_of(const sw_variant *v, const cup_scene_steady *q, double *T, sw_result *r) {
-  char err[CUP_ERRMSG_LEN] = "";
-  const cup_input *u = cup_scene_input(v->scene);
-  int st = CUP_OK;
-  *T = q->pss.period;
-  if (!(*T > 0) && !u) {
-    snprintf(err, sizeof err, "the scene has no input to take the period from: give steady_state.period");
-    st = CUP_ERR_ARG;
-  }
-  if (!st && !(*T > 0)) st = cup_input_period(u, T, err);
-  if (!st) st = cup_input_period_fits(u, *T, err);
-  if (st) snprintf(r->message, sizeof r->message, "steady state: %s", err);
-  return st;
-}
-
+/* The task's steady state (scene_pss_solve), its period measured. */
 void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r) {
   const cup_scene_steady *q = cup_scene_steady_state(v->scene);
   struct sw_steady_result *ss = &r->steady;
@@ -102,24 +85,15 @@ void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_
   for (int j = 0; j < SW_SS_SIGNALS; j++)
     for (int k = 0; k < SW_SS_FIGURES; k++) ss->fig[j][k] = NAN;
   r->err_est = NAN;
-  double t0 = now_seconds(), T;
-  if ((r->status = period_of(v, q, &T, r))) { r->wall += now_seconds() - t0; return; }
-  ss->period = T;
-  cup_integrator_options mo;               /* the period map: one period, its final state */
-  pss_map_options(o, cup_scene_options(v->scene)->T, T, q->pss.map_tol, &mo);
+  double t0 = now_seconds(), T, phase;
   char err[CUP_ERRMSG_LEN] = "";
-  cup_integrator *I = NULL;
+  cup_integrator_options period;
   cup_pss *pss = NULL;
-  int st = cup_scene_integrator(v->scene, &mo, &I, err);
-  if (st) {
-    r->status = st;
-    snprintf(r->message, sizeof r->message, "set-up: %s", err);
-  } else {
-    st = cup_pss_solve_map(&pss, I, cup_scene_dim(v->scene), T, cup_scene_x0(v->scene), &q->pss, err);
-    cup_integrator_free(&I);
-    r->status = st;
-    snprintf(r->message, sizeof r->message, "steady state: %s", err);
-  }
+  int stage;
+  int st = scene_pss_solve(v->scene, o, &pss, &T, &phase, &period, &stage, err);
+  r->status = st;
+  if (stage > SCENE_PSS_PHASE) ss->period = T;   /* the period found */
+  snprintf(r->message, sizeof r->message, "%s%s", stage == SCENE_PSS_SETUP ? "set-up: " : "steady state: ", err);
   if (pss) {
     cup_pss_info info;
     cup_pss_get_info(pss, &info);
@@ -132,7 +106,7 @@ void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_
     r->stopped_step = info.period_runs;
     if (st >= 0) {
       ss->solved = 1;
-      int ms = measure(s, v, q, mo, cup_pss_x0(pss), r);
+      int ms = measure(s, v, q, &period, cup_pss_x0(pss), r);
       if (ms < 0) r->status = ms;
     }
   }

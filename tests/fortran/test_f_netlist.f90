@@ -136,6 +136,19 @@ program test_f_netlist
     call check_contains(msg, 'not periodic', 'its message')
     call cup_netlist_free(nl)
   end block
+  block
+    real(c_double) :: T, t0
+    call cup_netlist_load_string(nl, 'gate' // new_line('a') // 'V1 a 0 PULSE(0 1 76u jump jump 49u 100u)' // &
+                                 new_line('a') // 'R1 a b 1' // new_line('a') // 'C1 b 0 1u' // new_line('a'), &
+                                 'g.cir', ierr)
+    call check_int(ierr, CUP_OK, 'the gate netlist loads')
+    call cup_input_steady_phase(cup_netlist_input(nl), 0d0, T, t0, ierr)
+    call check_int(ierr, CUP_OK, 'a pulse running past its period has a steady phase')
+    call check(abs(T - 100d-6) <= 1d-18 .and. abs(t0 - 25d-6) <= 1d-18, 'T = 100 us, t0 = 76 + 49 - 100 us')
+    call cup_netlist_set_time_origin(nl, t0, ierr)
+    call check_int(ierr, CUP_OK, 'the netlist read from t0')
+    call cup_netlist_free(nl)
+  end block
 
   call section('netlist: sets and errors')
   call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, sets=['RL=-1'], errmsg=msg)
