@@ -209,7 +209,7 @@ static int write_provenance(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene", cup_scene_text(r->scene)));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_file", r->args->scene));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene_name", cup_scene_name(r->scene)));
-  char *inputs = cup_file_list_text(cup_scene_file_list(r->scene));   /* for --resume, and sha256sum -c */
+  char *inputs = file_list_text(scene_file_list(r->scene));   /* for --resume, and sha256sum -c */
   st = cup_status_merge(st, inputs ? cup_h5run_attr_string(w, "inputs_sha256", inputs) : CUP_ERR_NOMEM);
   free(inputs);
   st = cup_status_merge(st, describe_run(r));

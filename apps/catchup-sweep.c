@@ -144,7 +144,7 @@ static int parse_args(args_t *a, int argc, char **argv) {
  * per variant its scene text, or for a lazy one nothing (its entry's scene
  * file's text and its overrides give it, in its job). Rank 0 makes the
  * lazy variants' texts, for the results file, itself (sw_lazy_texts). */
-static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
+static int share_sweep(const args_t *a, sw_sweep **sp, char *err) {
   int st = CUP_OK;
   if (rank == 0) {
     st = sw_load(sp, a->sweep, err);
@@ -154,7 +154,7 @@ static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
   if (st) return st;
   if (nranks == 1) return CUP_OK;
   /* the sweep file's text, then per variant its scene text and its file text ("" for none), in one message */
-  cup_sweep *s = *sp;
+  sw_sweep *s = *sp;
   long lens[3] = {0, 0, 0};
   if (rank == 0) {
     lens[0] = (long)strlen(s->text);
@@ -203,7 +203,7 @@ static int share_sweep(const args_t *a, cup_sweep **sp, char *err) {
 
 /* Every fixed-step task and reference against the step limit, before the
  * results file is touched (run_plan.h): the first one beyond it, named. */
-static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
+static int check_steps(const args_t *a, const sw_sweep *s, char *err) {
   for (long id = 0; id < s->n_tasks; id++) {
     sw_task t;
     if (sw_task_get(s, id, &t)) continue;
@@ -235,7 +235,7 @@ static int check_steps(const args_t *a, const cup_sweep *s, char *err) {
   return CUP_OK;
 }
 
-static int open_results(const args_t *a, const cup_sweep *s, int argc, char **argv, sw_file **f, char *err) {
+static int open_results(const args_t *a, const sw_sweep *s, int argc, char **argv, sw_file **f, char *err) {
   if (a->resume) return sw_file_open(f, a->out, s, err);
   char deps[512], h5[64];
   int n = cup_dependency_versions(deps, sizeof deps);
@@ -257,7 +257,7 @@ static int open_results(const args_t *a, const cup_sweep *s, int argc, char **ar
  * (and --resume compares): before the run on one rank or on a resume,
  * after the workers' first batches went out otherwise, so that they do not
  * wait for it (sweep_manager.h, open_file). */
-typedef struct { const args_t *a; cup_sweep *s; int argc; char **argv; } opener;
+typedef struct { const args_t *a; sw_sweep *s; int argc; char **argv; } opener;
 
 static int open_late(void *ctx, sw_file **f, char *err) {
   const opener *o = ctx;
@@ -271,7 +271,7 @@ static int open_late(void *ctx, sw_file **f, char *err) {
  * reference to check a tolerance against (the tasks' error is NaN). The
  * mean counts the jobs that compute (rate_jobs, sweep_manager.h); rank 0's
  * time, every job it ran. */
-static void say_summary(const args_t *a, const cup_sweep *s, const manager_t *m, const sw_tally *t, double wall,
+static void say_summary(const args_t *a, const sw_sweep *s, const manager_t *m, const sw_tally *t, double wall,
                         double cpu_manager) {
   int workers = nranks > 1 ? nranks - 1 : 1;
   char share[64] = "", tol[80] = "no tolerance check (no reference)", of[40] = "", jobs[96];
@@ -298,7 +298,7 @@ static void say_summary(const args_t *a, const cup_sweep *s, const manager_t *m,
       m->cpu_sum / (workers * wall), 100 * m->cpu_sum / m->rank_cpu, share, 1e6 * m->busy / (double)m->jobs_done);
 }
 
-static int run_manager(const args_t *a, const cup_sweep *s, sw_file *f, opener *late, const hooks_t *hooks) {
+static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, opener *late, const hooks_t *hooks) {
   manager_t m;
   memset(&m, 0, sizeof m);
   m.quiet = a->quiet;
@@ -363,12 +363,12 @@ int main(int argc, char **argv) {
   install_handlers();
   hooks_t hooks;
   hooks_read(&hooks);
-  cup_sweep *s = NULL;
+  sw_sweep *s = NULL;
   sw_file *f = NULL;
   char err[SW_ERR_LEN] = "";
   int st = share_sweep(&a, &s, err);
   if (!st && rank == 0) st = check_steps(&a, s, err);
-  if (!st && rank == 0 && cup_file_list_check_output(&s->files, a.out, err))
+  if (!st && rank == 0 && file_list_check_output(&s->files, a.out, err))
     st = CUP_ERR_ARG;                           /* an input is never an output */
   opener late = {&a, s, argc, argv};
   int early = nranks > 1 && !a.resume;          /* the workers start before the results file is made */

@@ -1,7 +1,7 @@
 /* run_steady — catchup-run --steady-state (run_steady.h, docs/steady-state.md):
  * solved as a steady-state sweep's task is (io/scene_pss.h), the period
  * then catchup-run's own run (streamed to its file with its signals and
- * events), its samples measured as a task's are (cup_pss_measure). */
+ * events), its samples measured as a task's are (pss_measure). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stddef.h>
@@ -68,7 +68,7 @@ int run_steady_probes(run_steady *s, cup_netlist *nl, char *err, size_t size) {
     if (s->mi[k] < 0) return snprintf(err, size, "steady_state.measure: %s", e2), 1;
   }
   for (int k = 0; k < q->npower; k++)
-    if (cup_pss_probe_power(nl, q->power[k], &s->pv[k], &s->pc[k], e2))
+    if (pss_probe_power(nl, q->power[k], &s->pv[k], &s->pc[k], e2))
       return snprintf(err, size, "steady_state.power: %s", e2), 1;
   return 0;
 }
@@ -144,9 +144,9 @@ static int measure(run_steady *s) {
   s->power = calloc((size_t)np + 1, sizeof *s->power);
   double *w = calloc((size_t)s->N, sizeof *w);
   int st = !s->me || !s->amp || !s->phase || !s->power || !w ? CUP_ERR_NOMEM : CUP_OK;
-  cup_pss_figures f = {nm, s->nl ? s->mi : NULL, H, np, s->pv, s->pc, s->req->eff_out, s->req->eff_in, s->me, s->amp,
+  pss_figures f = {nm, s->nl ? s->mi : NULL, H, np, s->pv, s->pc, s->req->eff_out, s->req->eff_in, s->me, s->amp,
                        s->phase, s->power, s->efficiency};
-  if (!st) st = s->nl ? cup_pss_measure(s->sig, s->N, s->ns, &f, w, e2) : cup_pss_measure(s->x, s->N, s->n, &f, w, e2);
+  if (!st) st = s->nl ? pss_measure(s->sig, s->N, s->ns, &f, w, e2) : pss_measure(s->x, s->N, s->n, &f, w, e2);
   s->efficiency = f.efficiency;
   free(w);
   return st;

@@ -52,7 +52,7 @@ static int same_run(cup_h5run *w, const char *out, const cup_scene *sc, char *er
     st = CUP_ERR_ARG;
   } else {
     int w0 = snprintf(err, size, "%s: cannot resume: ", out);
-    if (cup_file_list_compare(cup_scene_file_list(sc), inputs, "the file", err + w0, size - (size_t)w0)) st = CUP_ERR_ARG;
+    if (file_list_compare(scene_file_list(sc), inputs, "the file", err + w0, size - (size_t)w0)) st = CUP_ERR_ARG;
     else err[0] = '\0';
   }
   free(text);

@@ -105,7 +105,7 @@ static void take_reference(manager_t *m, const sw_result *r, const double *traj)
  * is known or trajectories are stored; otherwise held until it is. Returns
  * whether t was filled. */
 static int take_task(manager_t *m, const sw_result *r, const double *traj, sw_task_out *t) {
-  const cup_sweep *s = m->s;
+  const sw_sweep *s = m->s;
   count_result(m, r);
   if (m->io_status) return 0;
   long task = r->job - s->n_variants;
@@ -174,7 +174,7 @@ void maybe_flush(manager_t *m, int force) {
 void take_message(manager_t *m, const char *buf, size_t size) {
   _Static_assert(sizeof(msg_head) % sizeof(double) == 0 && sizeof(sw_result) % sizeof(double) == 0,
                  "trajectories in a message are aligned");
-  const cup_sweep *s = m->s;
+  const sw_sweep *s = m->s;
   msg_head h = {0, 0};
   int64_t fits = size >= sizeof h ? (int64_t)((size - sizeof h) / m->one) : 0;
   if (size >= sizeof h) memcpy(&h, buf, sizeof h);
@@ -217,7 +217,7 @@ int next_batch(manager_t *m, int workers, long *ids) {
 }
 
 int setup_queue(manager_t *m) {
-  const cup_sweep *s = m->s;
+  const sw_sweep *s = m->s;
   long J = s->n_variants + s->n_tasks;
   long *order = malloc(sizeof(long) * (size_t)J);
   m->queue = malloc(sizeof(long) * (size_t)J);

@@ -26,7 +26,7 @@ typedef struct held { long task; sw_result r; double *traj; struct held *next; }
 
 typedef struct {
   int quiet, log_progress;   /* the command line's --quiet, --log-progress */
-  const cup_sweep *s;
+  const sw_sweep *s;
   sw_file *f;                /* NULL until open_file made it */
   /* the results file, made once the workers have their first batches
    * (manager_file_ready); NULL: f was open before */

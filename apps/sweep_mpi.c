@@ -124,7 +124,7 @@ typedef struct {             /* a worker's answer to a batch, and its send */
 } outbuf;
 
 typedef struct {
-  const cup_sweep *s;
+  const sw_sweep *s;
   const hooks_t *hooks;
   double time_limit;
   size_t one;                /* bytes of a job's answer: sw_result + trajectory */
@@ -164,7 +164,7 @@ static int poll_stop(long k, double t, const cup_proj_info *pi, void *ctx) {
 }
 
 static void compute(computer *c, long job, sw_result *r, double *traj) {
-  const cup_sweep *s = c->s;
+  const sw_sweep *s = c->s;
   long task = job - s->n_variants;
   if (task >= 0 && idset_has(&c->hooks->done_before, task)) {
     say("rank %d: asked to compute task %ld, which CATCHUP_SWEEP_DONE_LIST (%s) says was done before "
@@ -211,7 +211,7 @@ static void wait_message(MPI_Status *status, outbuf *out) {
   }
 }
 
-int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit) {
+int worker(const sw_sweep *s, const hooks_t *hooks, double time_limit) {
   size_t one = sizeof(sw_result) + sizeof(double) * (size_t)sw_traj_len(s);
   outbuf out[AHEAD];
   for (int b = 0; b < AHEAD; b++) out[b] = (outbuf){NULL, 0, MPI_REQUEST_NULL};

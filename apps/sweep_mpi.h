@@ -39,7 +39,7 @@ void hooks_free(hooks_t *h);
 
 /* A worker's life: batches until rank 0 says stop (or a signal), then its
  * CPU time to rank 0 and goodbye. Returns 0. */
-int worker(const cup_sweep *s, const hooks_t *hooks, double time_limit);
+int worker(const sw_sweep *s, const hooks_t *hooks, double time_limit);
 /* Rank 0: every job of m's queue computed (by the workers, or alone) and
  * taken into the file; -1 when a worker did not answer the stop within the
  * grace time (the job must then be aborted), else 0. */

@@ -103,7 +103,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   check_message(st, err);
   cup_scene_free(&s);
   {                                                /* the same input as a sweep file */
-    cup_sweep *w = NULL;
+    sw_sweep *w = NULL;
     char werr[SW_ERR_LEN] = "";
     st = sw_parse(&w, text, strlen(text), "fuzz-sweep.yaml", werr);
     check_message(st, werr);

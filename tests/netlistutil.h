@@ -6,7 +6,7 @@
 
 #include <string.h>
 #include "catchup.h"
-#include "util/linalg.h"   /* cup_sparse */
+#include "util/linalg.h"   /* la_sparse */
 
 static inline cup_netlist *text_ok(const char *text, const char *const *sets, int nsets) {
   char err[CUP_ERRMSG_LEN] = "";
@@ -32,7 +32,7 @@ static inline void assert_contains(const char *msg, const char *want) {
 }
 
 /* Entry (r, c) of an owned CSC (0 when absent). */
-static inline double at(const cup_sparse *S, int r, int c) {
+static inline double at(const la_sparse *S, int r, int c) {
   if (!S->p || c >= S->ncol) return 0;
   for (int k = S->p[c]; k < S->p[c + 1]; k++)
     if (S->i[k] == r) return S->x[k];

@@ -342,7 +342,7 @@ static void test_mixed_kernel(void **state) {
   cup_lcp_step ls;
   assert_int_equal(cup_lcp_step_init_bd(&ls, K, NULL, h, Bm, D, theta), CUP_OK);
   double x0[2] = {0, 0};
-  assert_int_equal(cup_lcp_step_start(&ls, x0, g), 1);
+  assert_int_equal(lcp_step_start(&ls, x0, g), 1);
   int mixed = 0;
   for (int trial = 0; trial < 40; trial++) {
     /* free points below both rows with x1 / x0 in (952, 1000), where the
@@ -352,7 +352,7 @@ static void test_mixed_kernel(void **state) {
     for (int i = 0; i < 2; i++) carry_in[i] = ls.carry[i];
     for (int i = 0; i < 2; i++) xp[i] = xf[i] + h * (1 - theta) * carry_in[i];
     cup_proj_info pi;
-    int st = cup_lcp_step_solve(&ls, g, xf, z, 1, -1, 1e-10, &pi);
+    int st = lcp_step_solve(&ls, g, xf, z, 1, -1, 1e-10, &pi);
     assert_true(st >= 0);
     const double *lam = ls.lcp.lam, *c = ls.carry;
     for (int i = 0; i < 2; i++) {                  /* z = xpred + h (theta c + (zeta - c)) */
@@ -369,7 +369,7 @@ static void test_mixed_kernel(void **state) {
   }
   print_message("mixed kernel: %d of 40 steps with both rows active\n", mixed);
   assert_true(mixed >= 20);
-  cup_lcp_step_free(&ls);
+  lcp_step_free(&ls);
   cup_polyset_free(&K);
   tcsc_free(&Cc);
 }

@@ -290,7 +290,7 @@ static void test_rows_against_all_pairs(void **state) {
     int m, me;
     reference_rows(c, q, r, rows, &m, exp, &me);
     cup_rowbuf rb;
-    assert_int_equal(cup_rowbuf_init(&rb, 2 * N, 16, 64), CUP_OK);
+    assert_int_equal(rowbuf_init(&rb, 2 * N, 16, 64), CUP_OK);
     assert_int_equal(S->rows(0.05, q, &rb, S->rows_ctx), 0);
     assert_int_equal(rb.status, CUP_OK);
     printf("shaken by %.2f m: %d rows, %d patterns to come (reference %d, %d)\n", trial ? 0.15 : 0, rb.m, rb.me, m, me);
@@ -315,7 +315,7 @@ static void test_rows_against_all_pairs(void **state) {
       assert_close(got[k].off, rows[k].off, 1e-12);
     }
     for (int k = 0; k < me; k++) assert_int_equal(cmp_pattern(&gexp[k], &exp[k]), 0);
-    cup_rowbuf_free(&rb);
+    rowbuf_free(&rb);
   }
   free(rows); free(exp); free(got); free(gexp);
   cup_crowd_free(&c);

@@ -76,7 +76,7 @@ static long solves_against_dense(long room, double per_row) {
     double *ref = malloc(sizeof(double) * m);
     int facts = 0, updates = 0;
     /* M_FF may be singular: keep M~ well posed */
-    double delta = cup_dfact_delta_min(f) * (room >= 0 && room < 1000 ? 1e7 : 1e4);
+    double delta = dfact_delta_min(f) * (room >= 0 && room < 1000 ? 1e7 : 1e4);
     for (int step = 0; step < 40; step++) {
       /* mostly a few rows change; every 8th step a new free set; delta changes twice */
       if (step % 8 == 0) for (int i = 0; i < m; i++) act[i] = rng_unif(&r) < 0.4;
@@ -88,13 +88,13 @@ static long solves_against_dense(long room, double per_row) {
       long before = heap_calls;      /* nothing allocated: CHOLMOD's row updates */
       heap_counting = 1;             /* never outgrow the layout's room */
 #endif
-      assert_int_equal(cup_dfact_factor(f, act, delta, &facts, &updates), CUP_OK);
-      cup_dfact_solve(f, w);
+      assert_int_equal(dfact_factor(f, act, delta, &facts, &updates), CUP_OK);
+      dfact_solve(f, w);
 #if HEAP_INTERPOSED
       heap_counting = 0;
       assert_int_equal(heap_calls - before, 0);
 #endif
-      cg_solves += cup_dfact_by_cg(f);
+      cg_solves += dfact_by_cg(f);
       dense_reference(C, d, m, n, act, delta, v, ref);
       double err = 0, scale = 0;
       for (int i = 0; i < m; i++) {
@@ -107,7 +107,7 @@ static long solves_against_dense(long room, double per_row) {
     }
     assert_true(facts >= 5);       /* both paths ran */
     all_updates += updates;
-    cup_dfact_free(&f);
+    dfact_free(&f);
     assert_null(f);
     cup_polyset_free(&K);
     tcsc_free(&Ct);

@@ -1,12 +1,12 @@
 /* The fast paths of the time loop against the general ones they stand in
  * for (src/util/trig.h, the unrolled LCP step of src/lcp/step.h, the fused
- * steps of src/integrator/faststep.c): cup_sin against libm's sin in ulps,
+ * steps of src/integrator/faststep.c): trig_sin against libm's sin in ulps,
  * its two-lane form, the square wave's lane helpers and its blocks
- * (cup_square_block) against the scalar ones bit for bit;
+ * (input_square_block) against the scalar ones bit for bit;
  * the unrolled step against the general pivoting path on random small sets,
  * bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
- * the fused steps off), bit for bit, states and statistics; cup_floor
+ * the fused steps off), bit for bit, states and statistics; la_floor
  * against libm's floor. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -20,7 +20,7 @@
 #include "model/input_impl.h"
 #include "util/trig.h"
 
-/* ---- cup_sin ------------------------------------------------------------------- */
+/* ---- trig_sin ------------------------------------------------------------------- */
 
 static double ulps(double got, double want) {
   double u = nextafter(fabs(want), INFINITY) - fabs(want);
@@ -39,22 +39,22 @@ static void test_sin_within_two_ulps(void **state) {
       case 2: x = 131072 * rng_unif(&r) - 65536; break;                    /* up to the fallback */
       default: x = 6 * M_PI * (k / 4 + 0.5) * 1e-6 + 0.3; break;          /* case 1's w t_mid + phase */
     }
-    double e = ulps(cup_sin(x), sin(x));
+    double e = ulps(trig_sin(x), sin(x));
     if (e > worst) { worst = e; at = x; }
   }
-  if (!(worst <= 2)) fail_msg("cup_sin is %.3g ulp from sin at x = %.17g", worst, at);
+  if (!(worst <= 2)) fail_msg("trig_sin is %.3g ulp from sin at x = %.17g", worst, at);
   double big[] = {65536, -65536, 1e10, -3e200, INFINITY, -INFINITY};   /* libm's, bit for bit */
   for (size_t k = 0; k < sizeof big / sizeof big[0]; k++) {
-    double a = cup_sin(big[k]), b = sin(big[k]);
+    double a = trig_sin(big[k]), b = sin(big[k]);
     assert_true(memcmp(&a, &b, sizeof a) == 0 || (isnan(a) && isnan(b)));
   }
-  assert_true(isnan(cup_sin(NAN)));
-  assert_true(cup_sin(0.0) == 0 && !signbit(cup_sin(0.0)) && signbit(cup_sin(-0.0)));
+  assert_true(isnan(trig_sin(NAN)));
+  assert_true(trig_sin(0.0) == 0 && !signbit(trig_sin(0.0)) && signbit(trig_sin(-0.0)));
 }
 
 static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
 
-/* cup_sin2 is cup_sin in each lane, bit for bit: the inputs' range, near
+/* trig_sin2 is trig_sin in each lane, bit for bit: the inputs' range, near
  * multiples of pi/2, tiny and zero arguments, and pairs where one lane goes
  * to libm (65536 and beyond, Inf, NaN) and the other does not. */
 static void test_sin2_is_sin(void **state) {
@@ -71,11 +71,11 @@ static void test_sin2_is_sin(void **state) {
            : pick == 1 ? rng_int(&r, -40000, 40000) * (M_PI / 2) * (1 + 1e-15 * rng_normal(&r))
            : 200 * rng_unif(&r) - 100;
     }
-    cup_v2d s = cup_sin2((cup_v2d){a[0], a[1]});
+    v2d s = trig_sin2((v2d){a[0], a[1]});
     for (int l = 0; l < 2; l++) {
-      double want = cup_sin(a[l]);
+      double want = trig_sin(a[l]);
       if (!same(s[l], want) && !(isnan(s[l]) && isnan(want)))
-        fail_msg("cup_sin2 lane %d at %.17g: %.17g, cup_sin %.17g", l, a[l], s[l], want);
+        fail_msg("trig_sin2 lane %d at %.17g: %.17g, trig_sin %.17g", l, a[l], s[l], want);
     }
   }
 }
@@ -97,12 +97,12 @@ static void test_square_lanes_are_scalar(void **state) {
         if (k % 37 == 5) qa = qb = floor(qa) + 1;                /* on a jump, twice */
         if (trial == 7 && k == 9) { qa = 2.5; qb = 1.5; }       /* not increasing */
         if (trial == 8 && k == 3) qb = NAN;
-        cup_v2d q = {qa, qb}, rr = cup_mod2_2(q, &fl), tri = cup_triangle_r2(rr), sg = cup_sign_sin_qr2(q, rr);
+        v2d q = {qa, qb}, rr = input_mod2_2(q, &fl), tri = input_triangle_r2(rr), sg = input_sign_sin_qr2(q, rr);
         for (int l = 0; l < 2; l++) {
-          double want = cup_mod2(q[l]);
+          double want = input_mod2(q[l]);
           assert_true(same(rr[l], want) || (isnan(rr[l]) && isnan(want)));
-          assert_true(same(tri[l], cup_triangle_r(want)) || (isnan(tri[l]) && isnan(want)));
-          assert_true(same(sg[l], cup_sign_sin_qr(q[l], want)));
+          assert_true(same(tri[l], input_triangle_r(want)) || (isnan(tri[l]) && isnan(want)));
+          assert_true(same(sg[l], input_sign_sin_qr(q[l], want)));
         }
       }
     }
@@ -110,26 +110,26 @@ static void test_square_lanes_are_scalar(void **state) {
 
 enum { BLOCK = 16 };   /* positions in a block, as faststep.c's CUP_FAST_AHEAD */
 
-/* One block of cup_square_block against the scalar cup_mod2 and
- * cup_sign_sin_qr, position by position, bit for bit; a block it calls
+/* One block of input_square_block against the scalar input_mod2 and
+ * input_sign_sin_qr, position by position, bit for bit; a block it calls
  * jump-free must have one sign throughout. Returns what it returned. */
 static int check_square_block(const double *q, int np) {
-  cup_v2d qv[BLOCK / 2], r[BLOCK / 2], sg[BLOCK / 2];
-  for (int p = 0; p < np; p++) qv[p] = (cup_v2d){q[2 * p], q[2 * p + 1]};
-  int one_sign = cup_square_block(qv, np, r, sg);
+  v2d qv[BLOCK / 2], r[BLOCK / 2], sg[BLOCK / 2];
+  for (int p = 0; p < np; p++) qv[p] = (v2d){q[2 * p], q[2 * p + 1]};
+  int one_sign = input_square_block(qv, np, r, sg);
   for (int j = 0; j < 2 * np; j++) {
-    double want = cup_mod2(q[j]), got = r[j >> 1][j & 1], s = sg[j >> 1][j & 1];
+    double want = input_mod2(q[j]), got = r[j >> 1][j & 1], s = sg[j >> 1][j & 1];
     if (!(same(got, want) || (isnan(got) && isnan(want))))
-      fail_msg("cup_square_block: r = %.17g at q = %.17g, cup_mod2 %.17g", got, q[j], want);
-    if (!same(s, cup_sign_sin_qr(q[j], want)))
-      fail_msg("cup_square_block: sign %g at q = %.17g (block from %.17g), cup_sign_sin_qr %g", s, q[j], q[0],
-               cup_sign_sin_qr(q[j], want));
-    if (one_sign && !same(s, sg[0][0])) fail_msg("cup_square_block: one sign claimed, %g and %g", s, sg[0][0]);
+      fail_msg("input_square_block: r = %.17g at q = %.17g, input_mod2 %.17g", got, q[j], want);
+    if (!same(s, input_sign_sin_qr(q[j], want)))
+      fail_msg("input_square_block: sign %g at q = %.17g (block from %.17g), input_sign_sin_qr %g", s, q[j], q[0],
+               input_sign_sin_qr(q[j], want));
+    if (one_sign && !same(s, sg[0][0])) fail_msg("input_square_block: one sign claimed, %g and %g", s, sg[0][0]);
   }
   return one_sign;
 }
 
-/* The square wave's blocks (cup_square_block, model/input_impl.h) against
+/* The square wave's blocks (input_square_block, model/input_impl.h) against
  * the scalar functions: the positions q = omega t / pi + phase / pi of 16
  * steps t = (k + j) h as the fused steps form them, for frequencies, steps
  * and phases (negative ones too) that put jumps inside blocks, at their ends
@@ -176,18 +176,18 @@ static void test_square_block_is_scalar(void **state) {
     fail_msg("%ld of %ld blocks jump-free: one way through is hardly tested", jump_free, blocks);
 }
 
-/* cup_floor (the square wave's, util/linalg.h) is libm's floor bit for bit. */
+/* la_floor (the square wave's, util/linalg.h) is libm's floor bit for bit. */
 static void test_floor_is_libm(void **state) {
   (void)state;
   rng_t r = {3};
   double special[] = {0.0, -0.0, 0.5, -0.5, 1, -1, 0x1p52, -0x1p52, 0x1p52 - 0.5, -0x1p52 + 0.5, 1e300, -1e300,
                       DBL_TRUE_MIN, -DBL_TRUE_MIN, INFINITY, -INFINITY};
   for (size_t k = 0; k < sizeof special / sizeof special[0]; k++)
-    assert_true(same(cup_floor(special[k]), floor(special[k])));
-  assert_true(isnan(cup_floor(NAN)));
+    assert_true(same(la_floor(special[k]), floor(special[k])));
+  assert_true(isnan(la_floor(NAN)));
   for (int k = 0; k < 1000000; k++) {
     double x = ldexp(rng_normal(&r), rng_int(&r, -60, 60));
-    if (!same(cup_floor(x), floor(x))) fail_msg("cup_floor(%.17g) = %.17g, floor %.17g", x, cup_floor(x), floor(x));
+    if (!same(la_floor(x), floor(x))) fail_msg("la_floor(%.17g) = %.17g, floor %.17g", x, la_floor(x), floor(x));
   }
 }
 
@@ -225,8 +225,8 @@ static void test_unrolled_step_is_the_general_one(void **state) {
     cup_polyset *K = tpolyset_dense(&Cc, C, m, n, g, pd);
     cup_lcp_step fast, slow;
     int use_w = trial % 2;
-    assert_int_equal(cup_lcp_step_init(&fast, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
-    assert_int_equal(cup_lcp_step_init(&slow, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
+    assert_int_equal(lcp_step_init(&fast, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
+    assert_int_equal(lcp_step_init(&slow, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
     assert_int_equal(fast.small, 1);
     slow.small = 0;
     double x[4], za[4], zb[4];
@@ -235,8 +235,8 @@ static void test_unrolled_step_is_the_general_one(void **state) {
       for (int j = 0; j < n; j++) x[j] += 0.3 * rng_normal(&r);
       double S = cup_polyset_norm(K, x), eps = step % 5 ? 1e-20 : 1e-9, eta = 1e-9;
       cup_proj_info ia, ib;
-      int sa = cup_lcp_step_solve(&fast, g, x, za, S, eps, eta, &ia);
-      int sb = cup_lcp_step_solve(&slow, g, x, zb, S, eps, eta, &ib);
+      int sa = lcp_step_solve(&fast, g, x, za, S, eps, eta, &ia);
+      int sb = lcp_step_solve(&slow, g, x, zb, S, eps, eta, &ib);
       assert_int_equal(sa, sb);
       assert_same_info(&ia, &ib);
       for (int j = 0; j < n; j++) assert_true(same(za[j], zb[j]));
@@ -249,8 +249,8 @@ static void test_unrolled_step_is_the_general_one(void **state) {
       projected += !ia.skipped;
       if (step % 3 == 0) for (int j = 0; j < n; j++) x[j] = za[j];   /* walk on from z now and then */
     }
-    cup_lcp_step_free(&fast);
-    cup_lcp_step_free(&slow);
+    lcp_step_free(&fast);
+    lcp_step_free(&slow);
     cup_polyset_free(&K);
     tcsc_free(&Cc);
   }

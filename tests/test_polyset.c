@@ -170,7 +170,7 @@ static void test_lipschitz_bound_is_guaranteed(void **state) {
   }
 }
 
-/* The bound a state polyset recomputes at every step (cup_polyset_revalue,
+/* The bound a state polyset recomputes at every step (polyset_revalue,
  * started from the last step's vector) stays above lambda_max(C C^T) (GSL's
  * symmetric eigensolver) while the rows' values change and rows go off and
  * on again, and within 15 % of the bound of a fresh polyset of the same
@@ -186,7 +186,7 @@ static void test_revalued_lipschitz_bound(void **state) {
   tcsc_from_dense(&Cs, C0, M, N);            /* the pattern (every entry of C0) */
   char msg[CUP_ERRMSG_LEN];
   cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, NULL, msg), CUP_OK);
+  assert_int_equal(polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, NULL, msg), CUP_OK);
   double *work = malloc(sizeof(double) * (2 * M + N)), f[M];
   gsl_matrix *A = gsl_matrix_alloc(M, M);
   gsl_vector *ev = gsl_vector_alloc(M);
@@ -199,7 +199,7 @@ static void test_revalued_lipschitz_bound(void **state) {
       for (int k = K->C.p[j]; k < K->C.p[j + 1]; k++) K->C.x[k] = C[K->C.i[k] * N + j];
     for (int i = 0; i < M; i++)
       for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) K->Ct.x[k] = C[i * N + K->Ct.i[k]];
-    cup_polyset_revalue(K, work);
+    polyset_revalue(K, work);
     for (int i = 0; i < M; i++)
       for (int j = 0; j < M; j++) {
         double s = 0;
@@ -211,7 +211,7 @@ static void test_revalued_lipschitz_bound(void **state) {
     tcsc Cf;
     tcsc_from_dense(&Cf, C, M, N);
     cup_polyset *F = NULL;
-    assert_int_equal(cup_polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, NULL, msg), CUP_OK);
+    assert_int_equal(polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, NULL, msg), CUP_OK);
     printf("step %d: lambda_max %.6g, revalued bound %.6g, fresh bound %.6g\n", step, lmax, K->lip, F->lip);
     assert_true(K->lip >= lmax * (1 - 1e-13));
     assert_true(K->lip <= 1.15 * F->lip);
@@ -257,10 +257,10 @@ static void test_rebuilt_lipschitz_bound(void **state) {
   tcsc_from_dense(&Cs, C, M, N);
   char msg[CUP_ERRMSG_LEN];
   cup_polyset *K = NULL;
-  assert_int_equal(cup_polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, NULL, msg), CUP_OK);
+  assert_int_equal(polyset_create_ex(&K, &Cs.view, NULL, NULL, 1, NULL, msg), CUP_OK);
   assert_int_equal(K->cw_warm, 0);
   double *work = malloc(sizeof(double) * (2 * M + N)), *wnew = malloc(sizeof(double) * (2 * M + N));
-  cup_polyset_revalue(K, work);               /* the last set's vector, in work */
+  polyset_revalue(K, work);               /* the last set's vector, in work */
   int old_of[M];
   for (int s = 0; s < M; s++) old_of[s] = s < KEEP ? (7 * s + 3) % M : -1;   /* 60 of the 80 rows */
   for (int s = 0; s < M; s++) {
@@ -273,8 +273,8 @@ static void test_rebuilt_lipschitz_bound(void **state) {
   tcsc Cf;
   tcsc_from_dense(&Cf, Cn, M, N);
   cup_polyset *W = NULL, *F = NULL;
-  assert_int_equal(cup_polyset_create_ex(&W, &Cf.view, NULL, NULL, 1, wnew, msg), CUP_OK);
-  assert_int_equal(cup_polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, NULL, msg), CUP_OK);
+  assert_int_equal(polyset_create_ex(&W, &Cf.view, NULL, NULL, 1, wnew, msg), CUP_OK);
+  assert_int_equal(polyset_create_ex(&F, &Cf.view, NULL, NULL, 1, NULL, msg), CUP_OK);
   double lmax = lambda_max_cct(Cn, M, N);
   printf("rebuilt: lambda_max %.6g, warm bound %.6g, cold bound %.6g\n", lmax, W->lip, F->lip);
   assert_true(W->lip >= lmax * (1 - 1e-13));
@@ -282,7 +282,7 @@ static void test_rebuilt_lipschitz_bound(void **state) {
   assert_int_equal(W->cw_warm, 1);
   for (int k = 0; k < W->Ct.nnz; k++) W->Ct.x[k] *= 1.1;   /* the next step: revalued warm */
   for (int k = 0; k < W->C.nnz; k++) W->C.x[k] *= 1.1;
-  cup_polyset_revalue(W, wnew);
+  polyset_revalue(W, wnew);
   assert_true(W->lip >= 1.21 * lmax * (1 - 1e-13));
   assert_true(W->lip <= 1.21 * 1.15 * F->lip);
   cup_polyset_free(&K); cup_polyset_free(&W); cup_polyset_free(&F);

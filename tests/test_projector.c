@@ -884,7 +884,7 @@ static void test_ladder_cold_start(void **state) {
       prev = ls[i];
       lmax = fmax(lmax, ls[i]);
     }
-    int solves = cup_newton_cold_start(pr, x, lam);
+    int solves = newton_cold_start(pr, x, lam);
     assert_true(solves >= 1);
     double above = 0;
     int wrong = 0;
@@ -911,7 +911,7 @@ static void test_ladder_cold_start(void **state) {
   cup_polyset *K2 = NULL;
   assert_int_equal(cup_polyset_create(&K2, &C2, L.g, &P2, NULL), CUP_OK);
   assert_int_equal(cup_projector_create(&pr, K2, &o, NULL), CUP_OK);
-  assert_int_equal(cup_newton_cold_start(pr, x, lam), 0);
+  assert_int_equal(newton_cold_start(pr, x, lam), 0);
   cup_projector_free(&pr);
   cup_polyset_free(&K2);
   ladder_free(&L);

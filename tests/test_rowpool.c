@@ -29,14 +29,14 @@ static void add(cup_rowbuf *rb, int p) {
   assert_int_equal(cup_rowbuf_add(rb, pattern(p, col), col, val, 0), CUP_OK);
 }
 
-static int same(const cup_rowpool *P, int s, const cup_rowbuf *rb, int r) {
+static int same(const row_pool *P, int s, const cup_rowbuf *rb, int r) {
   int len = rb->ptr[r + 1] - rb->ptr[r];
   return P->ptr[s + 1] - P->ptr[s] == len && !memcmp(P->col + P->ptr[s], rb->col + rb->ptr[r], sizeof(int) * (size_t)len);
 }
 
 /* The match of rb against a linear scan of the pool; returns its misses. */
-static int check_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
-  int missing = cup_rowpool_match(P, rb, step), expect_missing = 0;
+static int check_match(row_pool *P, const cup_rowbuf *rb, long step) {
+  int missing = rowpool_match(P, rb, step), expect_missing = 0;
   assert_true(missing >= 0);
   int *taken = calloc((size_t)P->m + 1, sizeof(int));
   for (int r = 0; r < rb->m; r++) {
@@ -68,20 +68,20 @@ static int check_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
 
 static void run(int repeats) {
   cup_rowbuf rb;
-  cup_rowpool P;
-  assert_int_equal(cup_rowbuf_init(&rb, NCOL, 16, 64), CUP_OK);
-  assert_int_equal(cup_rowpool_init(&P, NCOL), CUP_OK);
+  row_pool P;
+  assert_int_equal(rowbuf_init(&rb, NCOL, 16, 64), CUP_OK);
+  assert_int_equal(rowpool_init(&P, NCOL), CUP_OK);
   rng_t g = {repeats ? 9 : 4};
   for (int p = 0; p < NPAT; p++) {            /* the first step: every pattern, some twice */
     add(&rb, p);
     if (repeats && p % 10 == 0) add(&rb, p);
   }
-  assert_int_equal(cup_rowpool_match(&P, &rb, 1), rb.m);
-  assert_int_equal(cup_rowpool_rebuild(&P, &rb, 1), CUP_OK);
+  assert_int_equal(rowpool_match(&P, &rb, 1), rb.m);
+  assert_int_equal(rowpool_rebuild(&P, &rb, 1), CUP_OK);
   assert_int_equal(P.unique, !repeats);
   int order[NPAT];
   for (long step = 2; step < 8; step++) {
-    cup_rowbuf_clear(&rb);
+    rowbuf_clear(&rb);
     for (int p = 0; p < NPAT; p++) order[p] = p;
     for (int k = 0; step % 2 && k < 40; k++) {   /* odd steps: some neighbours swap */
       int a = (int)(rng_unif(&g) * (NPAT - 1)), t = order[a];
@@ -96,19 +96,19 @@ static void run(int repeats) {
     if (step == 5) add(&rb, NPAT + 3);         /* a new pattern */
     int missing = check_match(&P, &rb, step);
     if (step == 5) assert_true(missing >= 1);
-    if (missing) assert_int_equal(cup_rowpool_rebuild(&P, &rb, step), CUP_OK);
+    if (missing) assert_int_equal(rowpool_rebuild(&P, &rb, step), CUP_OK);
   }
   /* a step repeating a row just after the slot before its own: the guess
    * then points at the taken slot */
-  cup_rowbuf_clear(&rb);
+  rowbuf_clear(&rb);
   int at[3] = {5, 4, 5};
   double val[4] = {1, 2, 3, 4};
   for (int k = 0; k < 3; k++)
     assert_int_equal(cup_rowbuf_add(&rb, P.ptr[at[k] + 1] - P.ptr[at[k]], P.col + P.ptr[at[k]], val, 0), CUP_OK);
   int miss = check_match(&P, &rb, 9);
   if (!repeats) assert_int_equal(miss, 1);     /* the pattern's one slot is taken */
-  cup_rowbuf_free(&rb);
-  cup_rowpool_free(&P);
+  rowbuf_free(&rb);
+  rowpool_free(&P);
 }
 
 static void test_match_unique(void **state) { (void)state; run(0); }

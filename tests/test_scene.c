@@ -69,7 +69,7 @@ static void assert_contains(const char *msg, const char *want) {
 
 /* ---- dense views of what the scene built (row-major) ---------------------- */
 
-static void dense_of(const cup_sparse *S, int has, int nr, int nc, double *out) {
+static void dense_of(const la_sparse *S, int has, int nr, int nc, double *out) {
   memset(out, 0, sizeof(double) * (size_t)nr * (size_t)nc);
   if (!has) return;
   assert_int_equal(S->nrow, nr);

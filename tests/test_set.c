@@ -574,7 +574,7 @@ static int trio_rows(double t, const double *x, cup_rowbuf *rows, void *vp) {
     colmap[c->gen % 3][2 * k] = 2 * perm[k];
     colmap[c->gen % 3][2 * k + 1] = 2 * perm[k] + 1;
   }
-  if (c->numbered) cup_rowbuf_order(rows, colmap[c->gen % 3], c->gen);
+  if (c->numbered) rowbuf_order(rows, colmap[c->gen % 3], c->gen);
   for (int p = 0; p < 2; p++) {
     int i = p, j = p + 1;
     double dx = x[2 * i] - x[2 * j], dy = x[2 * i + 1] - x[2 * j + 1], d = hypot(dx, dy);

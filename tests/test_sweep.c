@@ -27,23 +27,23 @@
 static void test_sha256_vectors(void **state) {
   (void)state;
   char hex[65];
-  cup_sha256_hex("", 0, hex);
+  sha256_hex("", 0, hex);
   assert_string_equal(hex, "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
-  cup_sha256_hex("abc", 3, hex);
+  sha256_hex("abc", 3, hex);
   assert_string_equal(hex, "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
   const char *m = "abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq";   /* 448 bits: two blocks */
-  cup_sha256_hex(m, strlen(m), hex);
+  sha256_hex(m, strlen(m), hex);
   assert_string_equal(hex, "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
   char *a = malloc(1000000);
   assert_non_null(a);
   memset(a, 'a', 1000000);
-  cup_sha256_hex(a, 1000000, hex);
+  sha256_hex(a, 1000000, hex);
   assert_string_equal(hex, "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
   free(a);
 }
 
-static cup_sweep *load_text(const char *text) {
-  cup_sweep *s = NULL;
+static sw_sweep *load_text(const char *text) {
+  sw_sweep *s = NULL;
   char err[SW_ERR_LEN] = "";
   int st = sw_parse(&s, text, strlen(text), EX "/inline-sweep.yaml", err);
   if (!st) st = sw_resolve_files(s, err);
@@ -51,8 +51,8 @@ static cup_sweep *load_text(const char *text) {
   return s;
 }
 
-static cup_sweep *load_file(const char *path) {
-  cup_sweep *s = NULL;
+static sw_sweep *load_file(const char *path) {
+  sw_sweep *s = NULL;
   char err[SW_ERR_LEN] = "";
   int st = sw_load(&s, path, err);
   if (!st) st = sw_resolve_files(s, err);
@@ -60,7 +60,7 @@ static cup_sweep *load_file(const char *path) {
   return s;
 }
 
-static void expect_task(const cup_sweep *s, long id, int variant, long n, const char *eps, const char *eta,
+static void expect_task(const sw_sweep *s, long id, int variant, long n, const char *eps, const char *eta,
                         int scheme, int projector) {
   sw_task t;
   assert_int_equal(sw_task_get(s, id, &t), CUP_OK);
@@ -74,7 +74,7 @@ static void expect_task(const cup_sweep *s, long id, int variant, long n, const 
  * zipped eps/eta count once. */
 static void test_smoke_task_order(void **state) {
   (void)state;
-  cup_sweep *s = load_file(EX "/sweep-smoke.yaml");
+  sw_sweep *s = load_file(EX "/sweep-smoke.yaml");
   assert_int_equal(s->n_variants, 2);
   assert_int_equal(s->per_variant, 3 * 2 * 2 * 2);
   assert_int_equal(s->n_tasks, 48);
@@ -106,14 +106,14 @@ static void test_smoke_task_order(void **state) {
 /* Two zip groups; absent axes come from the scene; "auto" n_ref. */
 static void test_zip_groups_and_defaults(void **state) {
   (void)state;
-  cup_sweep *s = load_text("base: paper-fig2.yaml\n"
-                           "grid:\n"
-                           "  n: [10, 20]\n"
-                           "  eps: [1e-8, 0]\n  eta: [1e-4, 0]\n"
-                           "  scheme: [explicit, exponential]\n  projector: [pg, fista]\n"
-                           "  zip: [[eps, eta], [scheme, projector]]\n"
-                           "variants:\n  - name: a\n  - {name: b, set: {n: 7, circuit.R1: 2}}\n"
-                           "reference: {samples: 11}\n");
+  sw_sweep *s = load_text("base: paper-fig2.yaml\n"
+                          "grid:\n"
+                          "  n: [10, 20]\n"
+                          "  eps: [1e-8, 0]\n  eta: [1e-4, 0]\n"
+                          "  scheme: [explicit, exponential]\n  projector: [pg, fista]\n"
+                          "  zip: [[eps, eta], [scheme, projector]]\n"
+                          "variants:\n  - name: a\n  - {name: b, set: {n: 7, circuit.R1: 2}}\n"
+                          "reference: {samples: 11}\n");
   assert_int_equal(s->per_variant, 2 * 2 * 2);
   expect_task(s, 0, 0, 10, "1e-8", "1e-4", CUP_SCHEME_EXPLICIT, CUP_PROJ_PG);
   expect_task(s, 1, 0, 10, "1e-8", "1e-4", CUP_SCHEME_EXPONENTIAL, CUP_PROJ_FISTA);
@@ -146,7 +146,7 @@ static void test_zip_groups_and_defaults(void **state) {
 /* The shipped study: both paper cases, three circuit variants, n up to 10^6. */
 static void test_paper_sweep(void **state) {
   (void)state;
-  cup_sweep *s = load_file(EX "/paper-sweep.yaml");
+  sw_sweep *s = load_file(EX "/paper-sweep.yaml");
   assert_true(s->n_variants >= 5);
   assert_int_equal(s->var[0].n_ref % (s->samples - 1), 0);
   long nmax = 0;
@@ -182,7 +182,7 @@ static void test_bad_corpus(void **state) {
     char path[1024], err[SW_ERR_LEN] = "";
     snprintf(path, sizeof path, "%s/%s", CUP_BAD_SWEEPS_DIR, e->d_name);
     const char *want = first_line_expect(path);
-    cup_sweep *s = NULL;
+    sw_sweep *s = NULL;
     int st = sw_load(&s, path, err);
     if (!st) st = sw_resolve_files(s, err);
     if (st == CUP_OK) fail_msg("%s loaded without error", e->d_name);
@@ -242,7 +242,7 @@ static int sink_all(long k, double t, const double *x, void *ctx) {
  * independent run); the sweep's task keeps those samples, bit for bit. */
 static void test_samples_between_steps(void **state) {
   (void)state;
-  cup_sweep *s = load_file(EX "/sweep-smoke.yaml");
+  sw_sweep *s = load_file(EX "/sweep-smoke.yaml");
   long task = 8;                                  /* case1, n = 250, paper schedules, explicit, auto */
   double *traj = malloc(sizeof(double) * 101 * 3);
   sw_result r;
@@ -303,7 +303,7 @@ static void test_netlist_samples_closed_form(void **state) {
   (void)state;
   const char *text = "base: rc-tstart.yaml\ngrid: {scheme: [theta, adaptive], n: [1005], eps: 0, eta: 0}\n"
                      "variants: [{name: rc}]\nreference: {samples: 11, method: adaptive}\n";
-  cup_sweep *s = NULL;
+  sw_sweep *s = NULL;
   char err[SW_ERR_LEN] = "";
   int st = sw_parse(&s, text, strlen(text), CUP_BAD_SWEEPS_DIR "/../inline.yaml", err);
   if (!st) st = sw_resolve_files(s, err);
@@ -340,7 +340,7 @@ static void test_netlist_samples_closed_form(void **state) {
  * 10^4) against the reference limit in tests/data on t = k/1000. */
 static void test_reference_vs_data(void **state) {
   (void)state;
-  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
+  sw_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [100, 10000]}\nvariants: [{name: case1}]\n");
   assert_int_equal(s->var[0].n_ref, 40000);
   double *x = malloc(sizeof(double) * 1001 * 3);
   sw_result r;
@@ -364,8 +364,8 @@ static void test_reference_vs_data(void **state) {
  * estimate within 10x. */
 static void test_tol_axis_adaptive_reference(void **state) {
   (void)state;
-  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {scheme: [explicit, adaptive], tol: [1e-6, 1e-9]}\n"
-                           "variants: [{name: case1}]\nreference: {method: adaptive}\n");
+  sw_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {scheme: [explicit, adaptive], tol: [1e-6, 1e-9]}\n"
+                          "variants: [{name: case1}]\nreference: {method: adaptive}\n");
   assert_int_equal(s->n_tasks, 4);
   sw_task t;
   assert_int_equal(sw_task_get(s, 3, &t), CUP_OK);
@@ -403,11 +403,11 @@ static void test_checked_adaptive_reference(void **state) {
   const char *common = "base: paper-fig2.yaml\nvariants: [{name: case1}]\n";
   char text[256];
   snprintf(text, sizeof text, "%sreference: {method: adaptive, check: richardson, n: 40000}\n", common);
-  cup_sweep *s = load_text(text);
+  sw_sweep *s = load_text(text);
   snprintf(text, sizeof text, "%sreference: {method: adaptive}\n", common);
-  cup_sweep *sa = load_text(text);
+  sw_sweep *sa = load_text(text);
   snprintf(text, sizeof text, "%sreference: {n: 40000}\n", common);
-  cup_sweep *sr = load_text(text);
+  sw_sweep *sr = load_text(text);
   assert_int_equal(s->var[0].n_ref, 40000);
   long count = 1001 * 3;
   double *x = malloc(sizeof(double) * (size_t)count * 3), *xa = x + count, *xr = xa + count;
@@ -425,7 +425,7 @@ static void test_checked_adaptive_reference(void **state) {
   sw_free(&sa);
   sw_free(&sr);
   free(x);
-  cup_sweep *bad = NULL;
+  sw_sweep *bad = NULL;
   char err[SW_ERR_LEN] = "";
   snprintf(text, sizeof text, "%sreference: {check: richardson}\n", common);
   assert_int_equal(sw_parse(&bad, text, strlen(text), EX "/inline-sweep.yaml", err), CUP_ERR_PARSE);
@@ -443,7 +443,7 @@ static double rect_rhs(double t, double v) {
 
 static void test_netlist_variants(void **state) {
   (void)state;
-  cup_sweep *s = load_file(EX "/circuits/rectifier-sweep.yaml");
+  sw_sweep *s = load_file(EX "/circuits/rectifier-sweep.yaml");
   assert_int_equal(s->n_variants, 3);
   assert_true(cup_lcs_has_D(cup_scene_lcs(s->var[1].scene)));
   long S = s->samples;
@@ -481,7 +481,7 @@ static void test_netlist_variants(void **state) {
  * one seed start alike and those of two seeds do not. */
 static void test_crowd_sweep_example(void **state) {
   (void)state;
-  cup_sweep *s = load_file(EX "/crowd-sweep.yaml");
+  sw_sweep *s = load_file(EX "/crowd-sweep.yaml");
   assert_int_equal(s->n_variants, 48);
   assert_true(s->crowd);
   const double *q0_of_seed[7] = {NULL};
@@ -540,8 +540,8 @@ static void read_back(const char *path, row_view *rows, double *x) {
  * keep NaN. */
 static void test_batched_writes(void **state) {
   (void)state;
-  cup_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [10, 20, 30, 40, 50, 60]}\n"
-                           "variants: [{name: a}, {name: b, set: {circuit.R1: 2}}]\nreference: {samples: 3}\n");
+  sw_sweep *s = load_text("base: paper-fig2.yaml\ngrid: {n: [10, 20, 30, 40, 50, 60]}\n"
+                          "variants: [{name: a}, {name: b, set: {circuit.R1: 2}}]\nreference: {samples: 3}\n");
   enum { N = 12, K = 9, W = 6 };                  /* tasks; samples x dim; tasks written */
   assert_int_equal(s->n_tasks, N);
   assert_int_equal(s->samples * s->dim, K);

@@ -23,8 +23,8 @@
 
 #define EX CUP_EXAMPLES_DIR
 
-static cup_sweep *parse(const char *text, int resolve) {
-  cup_sweep *s = NULL;
+static sw_sweep *parse(const char *text, int resolve) {
+  sw_sweep *s = NULL;
   char err[SW_ERR_LEN] = "";
   int st = sw_parse(&s, text, strlen(text), EX "/circuits/inline-sweep.yaml", err);
   if (!st && resolve) st = sw_resolve_files(s, err);
@@ -45,7 +45,7 @@ static const char *buck_sweep =
 
 static void steady_buck(void **state) {
   (void)state;
-  cup_sweep *s = parse(buck_sweep, 1);
+  sw_sweep *s = parse(buck_sweep, 1);
   assert_int_equal(s->n_variants, 4);
   assert_int_equal(s->n_tasks, 4);
   assert_true(s->steady);
@@ -107,7 +107,7 @@ static void latin_hypercube(void **state) {
       "  - name: first\n"
       "  - name: lhs\n"
       "    sample: {count: 50, seed: 7, ranges: {netlist.D: [0.2, 0.8], netlist.L: {log: [1u, 100u]}}}\n";
-  cup_sweep *a = parse(text, 0), *b = parse(text, 0);
+  sw_sweep *a = parse(text, 0), *b = parse(text, 0);
   assert_int_equal(a->n_variants, 51);
   int hitD[50] = {0}, hitL[50] = {0};
   for (int k = 1; k <= 50; k++) {
@@ -147,14 +147,14 @@ static void latin_hypercube(void **state) {
  * stood for (here max_steps) fails its task, naming it. */
 static void lazy_variants(void **state) {
   (void)state;
-  cup_sweep *s = parse("base: buck-design.yaml\n"
-                       "variants:\n"
-                       "  - name: g\n"
-                       "    grid: {netlist.L: [100u, -1u, 47u]}\n"
-                       "  - name: m\n"
-                       "    grid: {max_steps: [1000000, 2000000]}\n", 1);
-  cup_sweep *w = parse("base: buck-design.yaml\n"
-                       "variants: [{name: written, set: {netlist.L: 47u}}]\n", 1);
+  sw_sweep *s = parse("base: buck-design.yaml\n"
+                      "variants:\n"
+                      "  - name: g\n"
+                      "    grid: {netlist.L: [100u, -1u, 47u]}\n"
+                      "  - name: m\n"
+                      "    grid: {max_steps: [1000000, 2000000]}\n", 1);
+  sw_sweep *w = parse("base: buck-design.yaml\n"
+                      "variants: [{name: written, set: {netlist.L: 47u}}]\n", 1);
   assert_int_equal(s->n_variants, 5);
   assert_non_null(s->var[0].scene);
   assert_null(s->var[1].scene);                     /* lazy: loaded by its task */

@@ -14,15 +14,15 @@
 
 int cup_measure_period(const double *v, long N, int order, cup_measure *m, double *amp, double *phase,
                        char *errmsg) {
-  if (!v || !m) return cup_fail(errmsg, CUP_ERR_ARG, "measure: NULL argument");
-  if (N < 3) return cup_fail(errmsg, CUP_ERR_ARG, "measure: %ld samples, at least 3 needed", N);
+  if (!v || !m) return fail_fmt(errmsg, CUP_ERR_ARG, "measure: NULL argument");
+  if (N < 3) return fail_fmt(errmsg, CUP_ERR_ARG, "measure: %ld samples, at least 3 needed", N);
   long M = N - 1;                                /* v[M] closes the period: v[0 .. M-1] are its samples */
   if (order < 0 || 2L * order >= M)
-    return cup_fail(errmsg, CUP_ERR_ARG, "measure: harmonic order %d needs more than %d samples a period (%ld)",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "measure: harmonic order %d needs more than %d samples a period (%ld)",
                     order, 2 * order + 1, N);
   double s = 0, s2 = 0, lo = INFINITY, hi = -INFINITY;
   for (long j = 0; j < N; j++) {
-    if (!isfinite(v[j])) return cup_fail(errmsg, CUP_ERR_NONFINITE, "measure: sample %ld is %g", j, v[j]);
+    if (!isfinite(v[j])) return fail_fmt(errmsg, CUP_ERR_NONFINITE, "measure: sample %ld is %g", j, v[j]);
     lo = fmin(lo, v[j]);
     hi = fmax(hi, v[j]);
     if (j < M) { s += v[j]; s2 += v[j] * v[j]; }
@@ -53,9 +53,9 @@ int cup_measure_period(const double *v, long N, int order, cup_measure *m, doubl
   return CUP_OK;
 }
 
-int cup_measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg, char *errmsg) {
+int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg, char *errmsg) {
   if (!sig || !w || !avg || v < 0 || i < 0 || v >= ns || i >= ns)
-    return cup_fail(errmsg, CUP_ERR_ARG, "measure power: NULL argument or signal outside [0, %d)", ns);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "measure power: NULL argument or signal outside [0, %d)", ns);
   for (long k = 0; k < N; k++) w[k] = sig[k * ns + v] * sig[k * ns + i];
   cup_measure m;
   int st = cup_measure_period(w, N, 0, &m, NULL, NULL, errmsg);
@@ -63,7 +63,7 @@ int cup_measure_power(const double *sig, long N, int ns, int v, int i, double *w
   return st;
 }
 
-int cup_pss_measure(const double *sig, long N, int ns, cup_pss_figures *f, double *w, char *errmsg) {
+int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {
   int st = CUP_OK, H = f->harmonics;
   for (int j = 0; !st && j < f->nm; j++) {
     int c = f->idx ? f->idx[j] : j;
@@ -72,12 +72,12 @@ int cup_pss_measure(const double *sig, long N, int ns, cup_pss_figures *f, doubl
     st = cup_measure_period(w, N, H, &f->me[j], f->amp ? f->amp + row : NULL, f->phase ? f->phase + row : NULL,
                             errmsg);
   }
-  for (int j = 0; !st && j < f->np; j++) st = cup_measure_power(sig, N, ns, f->pv[j], f->pc[j], w, &f->power[j], errmsg);
+  for (int j = 0; !st && j < f->np; j++) st = measure_power(sig, N, ns, f->pv[j], f->pc[j], w, &f->power[j], errmsg);
   if (!st && f->eff_out >= 0) f->efficiency = f->power[f->eff_out] / -f->power[f->eff_in];
   return st;
 }
 
-int cup_pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg) {
+int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg) {
   const char *a, *b;
   char sv[300], si[300];
   int st = cup_netlist_element_nodes(nl, element, &a, &b, errmsg);

@@ -25,7 +25,7 @@ static int whole_multiple(double T, double Tu) {
  * strict: the term must repeat from t = 0; else its period once it repeats
  * (a PWL or a single pulse, constant after their last corner: 0; a delayed
  * PULSE or SIN: their period; cup_input_steady_phase says from when). */
-static double term_period(const cup_term *t, int k, int strict, char *errmsg) {
+static double term_period(const input_term *t, int k, int strict, char *errmsg) {
   switch (t->kind) {
     case CUP_WAVE_CONSTANT: return 0;
     case CUP_WAVE_SINE:
@@ -33,7 +33,7 @@ static double term_period(const cup_term *t, int k, int strict, char *errmsg) {
     case CUP_WAVE_PWL:
       for (int j = 1; strict && j < t->np; j++)
         if (t->v[j] != t->v[0])
-          return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pwl): a PWL source is not periodic "
+          return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (pwl): a PWL source is not periodic "
                           "(it stays at its last value after t = %g); give the steady state a periodic source",
                           t->comp, k, t->t[t->np - 1]), -1;
       return 0;
@@ -41,13 +41,13 @@ static double term_period(const cup_term *t, int k, int strict, char *errmsg) {
       if (t->value2 == t->value) return 0;
       if (!(t->period > 0) && !strict) return 0;
       if (!(t->period > 0))
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): PULSE with no period (a "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): PULSE with no period (a "
                         "single pulse) is not periodic", t->comp, k), -1;
       /* before its delay the source holds its initial value: [0, T) is a
        * period like the later ones only if the pulse of the period before
        * would have ended by t = 0 */
       if (strict && t->delay + t->rise + t->width + t->fall > t->period * (1 + 1e-12))
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): its delay %g makes [0, %g) "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (pulse): its delay %g makes [0, %g) "
                         "unlike later periods (delay + rise + width + fall = %g > period); shift the pulse by "
                         "a whole period less, or take its period from t0 = %g on (cup_input_steady_phase)",
                         t->comp, k, t->delay, t->period, t->delay + t->rise + t->width + t->fall,
@@ -56,15 +56,15 @@ static double term_period(const cup_term *t, int k, int strict, char *errmsg) {
     }
     case CUP_WAVE_DAMPED_SINE:
       if (t->damping != 0)
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): it decays (damping %g): no "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): it decays (damping %g): no "
                         "periodic steady state", t->comp, k, t->damping), -1;
       if (strict && t->delay != 0 && t->amp != 0 && t->omega > 0)
-        return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): its delay %g makes [0, T) "
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d (SIN): its delay %g makes [0, T) "
                         "unlike later periods; give the steady state an undelayed SIN, or take its period "
                         "from t0 = %g on (cup_input_steady_phase)", t->comp, k, t->delay, t->delay), -1;
       return t->omega > 0 && t->amp != 0 ? 2 * M_PI / t->omega : 0;
   }
-  return cup_fail(errmsg, CUP_ERR_ARG, "input component %d, term %d: unknown waveform", t->comp, k), -1;
+  return fail_fmt(errmsg, CUP_ERR_ARG, "input component %d, term %d: unknown waveform", t->comp, k), -1;
 }
 
 /* The time from which term t repeats with its period (term_period's, not
@@ -73,7 +73,7 @@ static double term_period(const cup_term *t, int k, int strict, char *errmsg) {
  * would not have ended by then (delay + rise + width + fall > period) the
  * end of that pulse, delay + rise + width + fall - period (within 1e-12 of
  * the period: 0, so that a pulse ending on its period's end keeps t0 = 0). */
-static double term_phase(const cup_term *t) {
+static double term_phase(const input_term *t) {
   double rwf = t->rise + t->width + t->fall;
   switch (t->kind) {
     case CUP_WAVE_PWL:
@@ -109,7 +109,7 @@ static int common_period(const cup_input *u, int strict, double *T, char *errmsg
       if (b >= 1 && fabs(r - b) <= PERIOD_REL * r) break;
     }
     if (a > PERIOD_MAX_MULTIPLE)
-      return cup_fail(errmsg, CUP_ERR_ARG, "the sources have no common period: input component %d, term %d "
+      return fail_fmt(errmsg, CUP_ERR_ARG, "the sources have no common period: input component %d, term %d "
                       "(period %.17g) and term %d (period %.17g) are not in a ratio of integers up to %d",
                       u->terms[k].comp, k, p, first, per, PERIOD_MAX_MULTIPLE), -2;
     per *= a;
@@ -119,7 +119,7 @@ static int common_period(const cup_input *u, int strict, double *T, char *errmsg
 }
 
 int cup_input_period(const cup_input *u, double *T, char *errmsg) {
-  if (!u || !T) return cup_fail(errmsg, CUP_ERR_ARG, "input period: NULL argument");
+  if (!u || !T) return fail_fmt(errmsg, CUP_ERR_ARG, "input period: NULL argument");
   int c = common_period(u, 1, T, errmsg);
   if (c == -2 && errmsg) {
     size_t n = strlen(errmsg);
@@ -127,9 +127,9 @@ int cup_input_period(const cup_input *u, double *T, char *errmsg) {
   }
   if (c < 0) return CUP_ERR_ARG;
   if (c > 0 && u->fn)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the input is a callback, which cannot tell its period: give the period");
   if (c > 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the input is constant: no period to find a steady state over; give the "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the input is constant: no period to find a steady state over; give the "
                     "period");
   return CUP_OK;
 }
@@ -147,22 +147,22 @@ int cup_input_period_fits(const cup_input *u, double T, char *errmsg) {
   int c = common_period(u, 1, &Tu, why);
   if (c > 0) return CUP_OK;                      /* a callback or a constant: any period */
   if (c < 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g: the sources do not repeat over it: %s", T, why);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the period %.17g: the sources do not repeat over it: %s", T, why);
   if (whole_multiple(T, Tu)) return CUP_OK;
-  return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
+  return fail_fmt(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
                   "%.17g (%.6g of them): over it the sources do not repeat", T, Tu, T / Tu);
 }
 
 int cup_input_steady_phase(const cup_input *u, double period, double *T, double *t0, char *errmsg) {
-  if (!T || !t0) return cup_fail(errmsg, CUP_ERR_ARG, "steady phase: NULL argument");
+  if (!T || !t0) return fail_fmt(errmsg, CUP_ERR_ARG, "steady phase: NULL argument");
   *T = period;
   *t0 = 0;
   if (!(*T >= 0) || !isfinite(*T))
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the period %g must be finite and > 0 (or 0: the sources')",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the period %g must be finite and > 0 (or 0: the sources')",
                     *T);
   if (!u) {
     if (*T > 0) return CUP_OK;
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the circuit has no input to take the period from: give the "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the circuit has no input to take the period from: give the "
                     "period");
   }
   double Tu;
@@ -173,10 +173,10 @@ int cup_input_steady_phase(const cup_input *u, double period, double *T, double 
   }
   if (c < 0) return CUP_ERR_ARG;
   if (c > 0 && !(*T > 0))
-    return cup_fail(errmsg, CUP_ERR_ARG, u->fn ? "the input is a callback, which cannot tell its period: give the "
+    return fail_fmt(errmsg, CUP_ERR_ARG, u->fn ? "the input is a callback, which cannot tell its period: give the "
                     "period" : "the input is constant: no period to find a steady state over; give the period");
   if (c == 0 && *T > 0 && !whole_multiple(*T, Tu))
-    return cup_fail(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the period %.17g is not a whole number of the sources' common period "
                     "%.17g (%.6g of them): over it the sources do not repeat", *T, Tu, *T / Tu);
   if (!(*T > 0)) *T = Tu;
   for (int k = 0; !u->fn && k < u->nterms; k++) *t0 = fmax(*t0, term_phase(&u->terms[k]));

@@ -43,8 +43,8 @@ struct cup_pss {
 typedef struct pss_work {
   cup_pss *r;
   cup_integrator *I;
-  cup_adaptive *tan;        /* the adaptive scheme carrying the map's tangent (exact monodromy), or NULL */
-  cup_adaptive *ad;         /* ... the same while a step falls back to finite differences */
+  adaptive_ws *tan;        /* the adaptive scheme carrying the map's tangent (exact monodromy), or NULL */
+  adaptive_ws *ad;         /* ... the same while a step falls back to finite differences */
   const cup_pss_options *o;
   int n;
   double *x, *F, *xt, *Ft, *dx, *col;
@@ -103,7 +103,7 @@ static int jacobian(pss_work *w, const double *x, const double *F) {
   int n = w->n;
   double scale = fmax(inf_norm(x, n), inf_norm(F, n));
   if (w->tan)                                    /* the last run was from x: its tangent is the monodromy */
-    memcpy(r->J, cup_adaptive_tangent_matrix(w->tan), sizeof(double) * (size_t)n * (size_t)n);
+    memcpy(r->J, adaptive_tangent_matrix(w->tan), sizeof(double) * (size_t)n * (size_t)n);
   for (int j = 0; !w->tan && j < n; j++) {
     double d = w->o->fd_step * fmax(fmax(fabs(x[j]), fabs(F[j])), scale);
     if (!(d > 0)) d = w->o->fd_step;
@@ -317,33 +317,33 @@ void cup_pss_free(cup_pss **r) {
 
 static int check_options(const cup_pss_options *o, char *errmsg) {
   if (o->max_iter < 1 || o->max_iter > CUP_PSS_MAX_ITER)
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: max_iter = %d must be in 1 .. %d", o->max_iter,
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: max_iter = %d must be in 1 .. %d", o->max_iter,
                     CUP_PSS_MAX_ITER);
   if (!(o->tol > 0) || !isfinite(o->tol) || !(o->tol_floor >= 0) || !isfinite(o->tol_floor))
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: tol = %g must be > 0 and tol_floor = %g >= 0", o->tol,
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: tol = %g must be > 0 and tol_floor = %g >= 0", o->tol,
                     o->tol_floor);
   if (!(o->fd_step > 0) || !(o->fd_step < 1))
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: fd_step = %g must be in (0, 1)", o->fd_step);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: fd_step = %g must be in (0, 1)", o->fd_step);
   if (o->jacobian != CUP_PSS_JACOBIAN_AUTO && o->jacobian != CUP_PSS_JACOBIAN_FD)
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: jacobian = %d must be CUP_PSS_JACOBIAN_AUTO or _FD",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: jacobian = %d must be CUP_PSS_JACOBIAN_AUTO or _FD",
                     o->jacobian);
   if (!(o->map_tol >= 0) || !isfinite(o->map_tol))
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: map_tol = %g must be finite and >= 0", o->map_tol);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: map_tol = %g must be finite and >= 0", o->map_tol);
   if (o->warmup_periods < 0 || o->samples < 0 || o->samples == 1)
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: warmup_periods = %d must be >= 0 and samples = %ld 0 or "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: warmup_periods = %d must be >= 0 and samples = %ld 0 or "
                     ">= 2", o->warmup_periods, o->samples);
   return CUP_OK;
 }
 
 int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, const double *x_guess,
                       const cup_pss_options *o, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "steady state: NULL result");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: NULL result");
   *out = NULL;
   cup_pss_options def;
   if (!o) { cup_pss_options_default(&def); o = &def; }
-  if (!I || n < 1) return cup_fail(errmsg, CUP_ERR_ARG, "steady state: no integrator, or n = %d < 1", n);
+  if (!I || n < 1) return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: no integrator, or n = %d < 1", n);
   if (!(period > 0) || !isfinite(period))
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the period %g must be finite and > 0", period);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the period %g must be finite and > 0", period);
   int st = check_options(o, errmsg);
   if (st) return st;
   double t0 = now_seconds();
@@ -358,27 +358,27 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
     free(buf);
     if (w.JI) gsl_matrix_free(w.JI);
     if (w.perm) gsl_permutation_free(w.perm);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "steady state: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "steady state: out of memory");
   }
   w.x = buf; w.F = buf + N; w.xt = buf + 2 * N; w.Ft = buf + 3 * N; w.dx = buf + 4 * N; w.col = buf + 5 * N;
   w.b = gsl_vector_view_array(w.col, N);         /* the right-hand side (col is free between Jacobians) */
   w.s = gsl_vector_view_array(w.dx, N);
   w.r->info.period = period;
-  cup_adaptive *ad = cup_adaptive_of(I);
-  int ts = o->jacobian == CUP_PSS_JACOBIAN_AUTO && ad ? cup_adaptive_tangent(ad, 1) : CUP_ERR_UNSUPPORTED;
+  adaptive_ws *ad = adaptive_of(I);
+  int ts = o->jacobian == CUP_PSS_JACOBIAN_AUTO && ad ? adaptive_tangent(ad, 1) : CUP_ERR_UNSUPPORTED;
   if (ts != CUP_ERR_UNSUPPORTED) {               /* D != 0: finite differences */
     if (ts) {
       cup_pss_free(&w.r);
       free(buf);
       gsl_matrix_free(w.JI);
       gsl_permutation_free(w.perm);
-      return cup_fail(errmsg, CUP_ERR_NOMEM, "steady state: out of memory");
+      return fail_fmt(errmsg, CUP_ERR_NOMEM, "steady state: out of memory");
     }
     w.tan = w.ad = ad;
   }
   int tangent_on = w.tan != NULL;
   newton(&w, x_guess);
-  if (tangent_on) cup_adaptive_tangent(ad, 0);
+  if (tangent_on) adaptive_tangent(ad, 0);
   w.r->info.seconds = now_seconds() - t0;
   free(buf);
   gsl_matrix_free(w.JI);
@@ -438,9 +438,9 @@ static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cu
 
 int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup_integrator_options *io,
                   const double *x_guess, const cup_pss_options *o, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "steady state: NULL result");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: NULL result");
   *out = NULL;
-  if (!L || !io) return cup_fail(errmsg, CUP_ERR_ARG, "steady state: NULL LCS or integrator options");
+  if (!L || !io) return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: NULL LCS or integrator options");
   cup_pss_options def;
   if (!o) { cup_pss_options_default(&def); o = &def; }
   int st = check_options(o, errmsg);
@@ -449,14 +449,14 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   cup_input *v = NULL;                           /* u from the phase t0 on, when t0 > 0 */
   if (cup_lcs_inputs(L) > 0 && u) {
     if ((st = cup_input_steady_phase(u, o->period, &T, &t0, errmsg))) return st;
-    if (t0 > 0 && (st = cup_input_shift(u, t0, &v, errmsg))) return st;
+    if (t0 > 0 && (st = input_shift(u, t0, &v, errmsg))) return st;
     if (v) u = v;
   } else if (!(T > 0) || !isfinite(T)) {
-    return cup_fail(errmsg, CUP_ERR_ARG, "steady state: the circuit has no input to take the period from: give "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "steady state: the circuit has no input to take the period from: give "
                     "the period");
   }
   cup_integrator_options mo;                      /* the period map: the final state only */
-  cup_pss_map_options(io, T, T, o->map_tol, &mo);
+  pss_map_options(io, T, T, o->map_tol, &mo);
   mo.on_step = NULL;
   cup_integrator *I = NULL;
   if ((st = cup_integrator_create(&I, L, u, &mo, errmsg))) { cup_input_free(&v); return st; }
@@ -477,8 +477,8 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   return *out ? (*out)->info.status : st;
 }
 
-void cup_pss_map_options(const cup_integrator_options *run, double run_T, double T, double map_tol,
-                         cup_integrator_options *mo) {
+void pss_map_options(const cup_integrator_options *run, double run_T, double T, double map_tol,
+                     cup_integrator_options *mo) {
   *mo = *run;
   if (mo->scheme != CUP_SCHEME_ADAPTIVE && run_T > 0 && run_T != T)   /* a fixed-step scheme keeps its step */
     mo->n = (long)fmax(1, ceil((double)mo->n * T / run_T * (1 - 1e-12)));

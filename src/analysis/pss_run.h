@@ -16,23 +16,23 @@
  * tol_rel map_tol unless 0. The rest (the interrupt flag, on_step, the
  * wall-time limit) is run's. catchup-run --steady-state, the steady-state
  * sweeps and cup_pss_solve take their maps from it. */
-void cup_pss_map_options(const cup_integrator_options *run, double run_T, double T, double map_tol,
-                         cup_integrator_options *mo);
+void pss_map_options(const cup_integrator_options *run, double run_T, double T, double map_tol,
+                     cup_integrator_options *mo);
 /* Probe netlist element `element`'s voltage v(a,b) (a, b its nodes) and
  * current i(element), whose product is the power it absorbs: their
  * signal indices in *v and *i (cup_netlist_probe: a signal probed before
  * keeps its index). CUP_ERR_ARG naming the element otherwise. */
-int cup_pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg);
+int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg);
 
 /* The average power over one period of N samples of ns signals each
- * (row-major, as recorded), signals v and i (cup_pss_probe_power): the
+ * (row-major, as recorded), signals v and i (pss_probe_power): the
  * average of v i by cup_measure_period, in *avg. w: N doubles of scratch. */
-int cup_measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg,
-                      char *errmsg);
+int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg,
+                  char *errmsg);
 
 /* What is measured over one period (catchup-run --steady-state, the
- * steady-state sweeps) and the figures (cup_pss_measure). */
-typedef struct cup_pss_figures {
+ * steady-state sweeps) and the figures (pss_measure). */
+typedef struct pss_figures {
   int nm;                   /* signals measured: columns idx[0 .. nm) of the samples (idx NULL: 0 .. nm) */
   const int *idx;
   int harmonics;            /* their harmonics up to this order into amp and phase (nm rows of
@@ -44,12 +44,12 @@ typedef struct cup_pss_figures {
   double *amp, *phase;      /* out, or NULL */
   double *power;            /* out: np averages */
   double efficiency;        /* out (untouched without eff_out) */
-} cup_pss_figures;
+} pss_figures;
 
 /* The figures f asks for of one period of N samples of ns signals each
  * (row-major, as recorded): cup_measure_period of each signal, then
- * cup_measure_power of each element, then the efficiency; stops at the
+ * measure_power of each element, then the efficiency; stops at the
  * first error. w: N doubles of scratch. */
-int cup_pss_measure(const double *sig, long N, int ns, cup_pss_figures *f, double *w, char *errmsg);
+int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg);
 
 #endif

@@ -113,7 +113,7 @@ static hid_t create_events(cup_h5run *w) {
 
 /* The file at `at` (the staged sibling, or the path itself), its datasets. */
 static int open_file(cup_h5run *w, const char *at) {
-  if (cup_file_in_use(w->path)) {
+  if (h5_file_in_use(w->path)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot create '%s': the file is in use by another "
              "process (HDF5 file locking): close it there or wait for that run to end; the file is "
              "left as it was", w->path);
@@ -211,7 +211,7 @@ int cup_h5run_begin(cup_h5run **out, const char *path, int dim, char *errmsg) {
   int st;
   cup_h5run *w = writer_new(path, dim, errmsg, &st);
   if (!w) return st;
-  w->staged = cup_staged_name(path);
+  w->staged = h5_staged_name(path);
   if (!w->staged) {
     st = cup_fail(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': cannot create a file beside it (%s): its "
                   "folder must take new files; an existing '%s' is left as it was", path, strerror(errno), path);
@@ -238,7 +238,7 @@ int cup_h5run_commit(cup_h5run *w) {
   if (!w->staged) return CUP_OK;
   int st = cup_h5run_flush(w);
   if (st) return st;
-  if (cup_file_in_use(w->path)) {
+  if (h5_file_in_use(w->path)) {
     snprintf(w->errmsg, sizeof w->errmsg, "h5run: cannot replace '%s': the file is in use by another process "
              "(HDF5 file locking): close it there or wait for that run to end; the file is left as it was", w->path);
     return w->err_status = w->data_status = CUP_ERR_IO;

@@ -65,7 +65,7 @@ int h5_space_short(const char *path, int folder, double need, double *avail) {
   return known && need + (double)CUP_H5_SPACE_MARGIN > free_bytes;
 }
 
-int cup_file_in_use(const char *path) {
+int h5_file_in_use(const char *path) {
   int fd = open(path, O_RDONLY | O_CLOEXEC);
   if (fd < 0) return 0;
   int busy = flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
@@ -73,7 +73,7 @@ int cup_file_in_use(const char *path) {
   return busy;
 }
 
-char *cup_staged_name(const char *path) {
+char *h5_staged_name(const char *path) {
   size_t n = strlen(path) + 16;
   char *s = malloc(n);
   struct timespec ts;

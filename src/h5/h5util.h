@@ -9,7 +9,7 @@
  * writer) but creates with O_TRUNC before it locks, so creating over a
  * file that another catchup-sweep or catchup-run is still writing would
  * empty that run's file before the lock fails. The writers ask
- * cup_file_in_use first, and write a fresh sibling (cup_staged_name) that
+ * h5_file_in_use first, and write a fresh sibling (h5_staged_name) that
  * they rename over the file once the run got past its checks. */
 #ifndef CUP_H5UTIL_H
 #define CUP_H5UTIL_H
@@ -64,11 +64,11 @@ int h5_space_short(const char *path, int folder, double need, double *avail);
 
 /* 1 when another process holds a lock on path; 0 when none does, or the
  * file does not exist or cannot be opened (the create then says why). */
-int cup_file_in_use(const char *path);
+int h5_file_in_use(const char *path);
 
 /* A new empty sibling of path no one else has, PATH.partXXXXXX (malloc'd;
  * the umask applies, as to any new file). NULL with errno when the folder
  * takes no new file (read-only, full, missing). */
-char *cup_staged_name(const char *path);
+char *h5_staged_name(const char *path);
 
 #endif

@@ -39,7 +39,7 @@ static double p_to_inf(const cup_polyset *K) {
     for (int j = 0; j < n; j++) {
       gsl_vector_set_zero(col);
       gsl_vector_set(col, (size_t)j, 1);
-      cup_metric_apply(K, col->data, ev->data);
+      polyset_metric_apply(K, col->data, ev->data);
       for (int i = 0; i < n; i++) gsl_matrix_set(P, (size_t)i, (size_t)j, ev->data[i]);
     }
     gsl_error_handler_t *old = gsl_set_error_handler_off();
@@ -53,7 +53,7 @@ static double p_to_inf(const cup_polyset *K) {
   return r;
 }
 
-static void dense_of(const cup_sparse *S, int has, double *out, int ld) {
+static void dense_of(const la_sparse *S, int has, double *out, int ld) {
   if (!has) return;
   for (int j = 0; j < S->ncol; j++)
     for (int k = S->p[j]; k < S->p[j + 1]; k++) out[S->i[k] + (size_t)j * ld] = S->x[k];
@@ -62,7 +62,7 @@ static void dense_of(const cup_sparse *S, int has, double *out, int ld) {
 /* The input's exosystem: the waveforms' (input_impl.h), or for a callback
  * per component the Taylor states (u, u', ..., u^(q)) of the step's
  * interpolating polynomial, w_j' = w_{j+1}. */
-static void exosystem(cup_adaptive *A) {
+static void exosystem(adaptive_ws *A) {
   int p = A->p, nw = A->nw;
   const cup_input *u = A->u;
   if (!A->nwu) return;
@@ -76,14 +76,14 @@ static void exosystem(cup_adaptive *A) {
   }
   for (int k = 0; k < u->nterms; k++) A->U[u->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
   for (int k = 0; k < u->nterms; k++) {          /* the rounding scale of the value states */
-    const cup_term *t = &u->terms[k];
+    const input_term *t = &u->terms[k];
     double sc = fabs(t->value) + fabs(t->amp);
     if (t->kind == CUP_WAVE_PULSE) sc = fmax(fabs(t->value), fabs(t->value2));
     for (int j = 0; t->kind == CUP_WAVE_PWL && j < t->np; j++) sc = fmax(sc, fabs(t->v[j]));
     A->wscale[A->first_state[k]] = sc;
     if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) A->wscale[A->first_state[k] + 1] = sc;
   }
-  cup_input_gen_dynamics(u, A->first_state, A->W, nw);
+  input_gen_dynamics(u, A->first_state, A->W, nw);
   for (int k = 0; k < u->nterms; k++)
     if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
         u->terms[k].omega > 0)
@@ -93,7 +93,7 @@ static void exosystem(cup_adaptive *A) {
 /* D != 0: B and D dense, C B, the rows D couples; the late-switch model of
  * a row whose D_ii > 0 (its multiplier is a function, no impulse: switched
  * on late by delta it misses (1/2) delta^2 |s'| B_i / D_ii). */
-static void dae_setup(cup_adaptive *A, const cup_sparse *B, const cup_sparse *Dm) {
+static void dae_setup(adaptive_ws *A, const la_sparse *B, const la_sparse *Dm) {
   int n = A->n, m = A->m;
   dense_of(B, 1, A->Bd, n);
   dense_of(Dm, 1, A->Dd, m);
@@ -123,14 +123,14 @@ int ad_fail(ad_run *R, int status, const char *fmt, ...) {
   return R->info->status = status;
 }
 
-double ad_energy_bound(const cup_adaptive *A, const double *v, double *scratch) {
-  cup_metric_apply(A->K, v, scratch);
-  return A->pinf * sqrt(fmax(0, cup_dot(v, scratch, A->n)));
+double ad_energy_bound(const adaptive_ws *A, const double *v, double *scratch) {
+  polyset_metric_apply(A->K, v, scratch);
+  return A->pinf * sqrt(fmax(0, la_dot(v, scratch, A->n)));
 }
 
 /* The late-switch error model per row (docs/adaptive.md), in the energy
  * bound: B_i, and A B_i / (C B)_ii (B_i / D_ii where D_ii > 0). */
-static void switch_model(cup_adaptive *A) {
+static void switch_model(adaptive_ws *A) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m;
   for (int i = 0; i < m; i++) {
@@ -155,7 +155,7 @@ static void switch_model(cup_adaptive *A) {
 /* U's and G's nonzeros, for ad_offset (a step's g from the input's
  * states): U holds one 1 a waveform, G the sources each row sees; on the
  * full bridge the dense products were 9 % of the run. */
-static void offset_pattern(cup_adaptive *A) {
+static void offset_pattern(adaptive_ws *A) {
   int m = A->m, p = A->p, nw = A->nw, k = 0;
   for (int c = 0; c < nw; c++) {
     A->up[c] = k;
@@ -173,7 +173,7 @@ static void offset_pattern(cup_adaptive *A) {
 }
 
 /* Every matrix and vector of the run (its sizes set): *fail = 1 when memory runs out. */
-static void alloc_vectors(cup_adaptive *A, int *fail) {
+static void alloc_vectors(adaptive_ws *A, int *fail) {
   int n = A->n, m = A->m, p = A->p, nw = A->nw, na = A->na;
   size_t NA = (size_t)na * na;
   A->A = take((size_t)n * n, sizeof(double), fail);
@@ -227,29 +227,29 @@ static void alloc_vectors(cup_adaptive *A, int *fail) {
   A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), fail);
 }
 
-int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
-                        const cup_sparse *B, const cup_sparse *Dm, const cup_input *u,
-                        const cup_integrator_options *o, char *errmsg) {
+int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
+                    const la_sparse *B, const la_sparse *Dm, const cup_input *u,
+                    const cup_integrator_options *o, char *errmsg) {
   *out = NULL;
   if (!K->dense)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
                     "use a fixed-step scheme", K->m, K->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM);
   if (o->f)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: a perturbation f(t, x) is not supported (the scheme integrates "
                     "each active set's linear system exactly); use a fixed-step scheme");
   if (D->p > 0 && !u)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the %s has %d input(s) but no input u(t) was given", D->what, D->p);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the %s has %d input(s) but no input u(t) was given", D->what, D->p);
   if (u && D->p > 0 && cup_input_dim(u) != D->p)
-    return cup_fail(errmsg, CUP_ERR_DIM, "the input has %d component(s), the %s expects %d",
+    return fail_fmt(errmsg, CUP_ERR_DIM, "the input has %d component(s), the %s expects %d",
                     cup_input_dim(u), D->what, D->p);
   if (D->p > 0) {
-    int st = cup_input_gen_check(u, "adaptive", errmsg);
+    int st = input_gen_check(u, "adaptive", errmsg);
     if (st) return st;
   }
-  cup_adaptive *A = calloc(1, sizeof *A);
-  if (!A) return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  adaptive_ws *A = calloc(1, sizeof *A);
+  if (!A) return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   A->F = K->g0;
   A->u = D->p > 0 ? u : NULL;
   A->K = K;
@@ -261,25 +261,25 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   int fail = 0, n = A->n, m = A->m, p = A->p;
   int nterms = A->u && !A->callback ? A->u->nterms : 0;
   A->first_state = take((size_t)nterms + 1, sizeof(int), &fail);
-  if (!fail) A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : cup_input_gen_dim(A->u, A->first_state);
+  if (!fail) A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : input_gen_dim(A->u, A->first_state);
   A->one = -1;
   for (int i = 0; A->has_D && i < m && A->one < 0; i++)
     if (K->g0[i] != 0) A->one = A->nw++;         /* F reaches the multipliers through D: a constant state */
   int nw = A->nw, na = A->na = n + nw;
   if (!fail && na > CUP_EXPONENTIAL_MAX_DIM) {
-    cup_adaptive_free(&A);
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    adaptive_free(&A);
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
   }
   alloc_vectors(A, &fail);
-  if (fail || ad_modes_init(A) || cup_lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
-    cup_adaptive_free(&A);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  if (fail || ad_modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
+    adaptive_free(&A);
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
-  if (cup_lcp_step_init(&A->proj, K, NULL, 1)) {   /* K is dense: only memory can fail */
-    cup_adaptive_free(&A);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  if (lcp_step_init(&A->proj, K, NULL, 1)) {   /* K is dense: only memory can fail */
+    adaptive_free(&A);
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
   cup_projector_options po = o->proj;             /* exact, certified relative to the scale */
   po.eps_abs = po.eta_abs = 0;
@@ -287,7 +287,7 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   po.eta_rel = 1e-10;
   po = proj_backup_options(K, &po);                /* one LCP onto K: A->proj */
   int st = cup_projector_create(&A->projector, K, &po, errmsg);
-  if (st) { cup_adaptive_free(&A); return st; }
+  if (st) { adaptive_free(&A); return st; }
   dense_of(&D->A, D->has_A, A->A, n);
   dense_of(&D->E, D->has_E, A->E, n);
   if (G) dense_of(G, 1, A->G, m);
@@ -307,14 +307,14 @@ int cup_adaptive_create(cup_adaptive **out, const cup_drift *D, const cup_polyse
   return CUP_OK;
 }
 
-void cup_adaptive_free(cup_adaptive **Ap) {
+void adaptive_free(adaptive_ws **Ap) {
   if (!Ap || !*Ap) return;
-  cup_adaptive *A = *Ap;
+  adaptive_ws *A = *Ap;
   ad_modes_free(A);
   if (A->has_D) ad_dae_free(A);
   free(A->Bd); free(A->Dd); free(A->CB); free(A->dcpl);
-  cup_lcp_free(&A->lcp);
-  cup_lcp_step_free(&A->proj);
+  lcp_free(&A->lcp);
+  lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
   free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
   free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx);
@@ -333,9 +333,9 @@ void cup_adaptive_free(cup_adaptive **Ap) {
   *Ap = NULL;
 }
 
-const double *cup_adaptive_state(const cup_adaptive *A) { return A ? A->x : NULL; }
+const double *adaptive_state(const adaptive_ws *A) { return A ? A->x : NULL; }
 
-int cup_adaptive_tangent(cup_adaptive *A, int on) {
+int adaptive_tangent(adaptive_ws *A, int on) {
   if (on && A->has_D) return CUP_ERR_UNSUPPORTED;
   if (!on) {
     free(A->tan);
@@ -346,4 +346,4 @@ int cup_adaptive_tangent(cup_adaptive *A, int on) {
   return CUP_OK;
 }
 
-const double *cup_adaptive_tangent_matrix(const cup_adaptive *A) { return A->tan; }
+const double *adaptive_tangent_matrix(const adaptive_ws *A) { return A->tan; }

@@ -9,12 +9,12 @@
 #include "scheme.h"
 #include "util/ckpt.h"
 
-typedef struct cup_adaptive cup_adaptive;
+typedef struct adaptive_ws adaptive_ws;
 
 extern const scheme_type *const scheme_adaptive;
 
 /* I's adaptive scheme, or NULL when I runs another. */
-cup_adaptive *cup_adaptive_of(const cup_integrator *I);
+adaptive_ws *adaptive_of(const cup_integrator *I);
 
 /* x' = A x + E u + B zeta, 0 <= zeta _|_ C x + g0 + G u(t) >= 0 (D's
  * drift; K's rows, offset g0 and metric P, B = P^-1 C^T; G m x p or NULL):
@@ -24,34 +24,34 @@ cup_adaptive *cup_adaptive_of(const cup_integrator *I);
  * Requires a small dense set (K in dense form), no perturbation f, and
  * state plus input generators within the dense limit; errmsg says which
  * does not hold. Copies what it uses. */
-int cup_adaptive_create(cup_adaptive **A, const cup_drift *D, const cup_polyset *K, const cup_sparse *G,
-                        const cup_sparse *B, const cup_sparse *Dm, const cup_input *u,
-                        const cup_integrator_options *o, char *errmsg);
-void cup_adaptive_free(cup_adaptive **A);
-int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
-                     cup_run_info *info);
+int adaptive_create(adaptive_ws **A, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
+                    const la_sparse *B, const la_sparse *Dm, const cup_input *u,
+                    const cup_integrator_options *o, char *errmsg);
+void adaptive_free(adaptive_ws **A);
+int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
+                 cup_run_info *info);
 /* The run from ta (state xa) to tb only: a switched circuit's stretch in
  * one configuration (integrator/switched.c). first: ta = 0, x0 as given is
  * the first sample; jumped: xa is the state after a jump at ta (a switching),
  * which output every 1 records at ta, after the one before it that ended the
  * window before; steps and next_sample carry the numbering across the
  * windows. The statistics of the window into info. */
-int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, int jumped,
-                        long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
-const double *cup_adaptive_state(const cup_adaptive *A);
+int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
+                    long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+const double *adaptive_state(const adaptive_ws *A);
 /* Inside the sink: zeta at the output time (m entries), the multipliers of
  * the active set that holds from there (at an event or a breakpoint, the one
  * chosen there; zeros at t = 0 and on catching-up steps across accumulating
  * events, whose multipliers are the projections' impulses). */
-int cup_adaptive_zeta(cup_adaptive *A, double *zeta);
+int adaptive_zeta(adaptive_ws *A, double *zeta);
 /* Checkpoints (integrator.h): 1 when the last run stopped at a step's end,
  * where it can resume; the status and message the stop replaced, into
  * info; the run's state to or from a checkpoint (util/ckpt.h); and the
  * restored run continued (info: the saved run's statistics). */
-int cup_adaptive_stopped(const cup_adaptive *A);
-void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info);
-void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c);
-int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+int adaptive_stopped(const adaptive_ws *A);
+void adaptive_unstop(const adaptive_ws *A, cup_run_info *info);
+void adaptive_checkpoint(adaptive_ws *A, ckpt *c);
+int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* The derivative of the final state by x0 (the steady state's monodromy,
  * src/analysis/pss.c): with on, each run carries V = dx(t)/dx0 from V = I
  * through the linear maps the error estimate follows (each active set's
@@ -62,8 +62,8 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
  * couples is not that projection (resonant.cir's slowest multiplier came
  * out 0.997 against the differences' 0.903), CUP_ERR_UNSUPPORTED.
  * Allocates when turned on; CUP_ERR_NOMEM. */
-int cup_adaptive_tangent(cup_adaptive *A, int on);
+int adaptive_tangent(adaptive_ws *A, int on);
 /* V after the last run (n x n, column-major), or NULL when off. */
-const double *cup_adaptive_tangent_matrix(const cup_adaptive *A);
+const double *adaptive_tangent_matrix(const adaptive_ws *A);
 
 #endif

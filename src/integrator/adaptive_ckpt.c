@@ -8,9 +8,9 @@
 #include "adaptive_impl.h"
 #include "projector/projector.h"
 
-int cup_adaptive_stopped(const cup_adaptive *A) { return A->stop.phase != AD_STOP_NONE; }
+int adaptive_stopped(const adaptive_ws *A) { return A->stop.phase != AD_STOP_NONE; }
 
-void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info) {
+void adaptive_unstop(const adaptive_ws *A, cup_run_info *info) {
   info->status = A->stop.status;
   memcpy(info->message, A->stop.message, sizeof info->message);
 }
@@ -19,7 +19,7 @@ void cup_adaptive_unstop(const cup_adaptive *A, cup_run_info *info) {
  * its error, the accumulation ring, the LCPs' and the projector's warm
  * starts, and the kept active sets with their exponentials' step lengths
  * (which ad_flow takes from the cache, or computes another way). */
-void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
+void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
   ad_stop *s = &A->stop;
   ad_run *R = &s->R;
   size_t N = sizeof(double) * (size_t)A->n, M = (size_t)A->m;
@@ -27,28 +27,28 @@ void cup_adaptive_checkpoint(cup_adaptive *A, cup_ckpt *c) {
   CUP_CKPT_IO(c, R->t); CUP_CKPT_IO(c, R->tb); CUP_CKPT_IO(c, R->steps); CUP_CKPT_IO(c, R->next_sample);
   CUP_CKPT_IO(c, R->est_max); CUP_CKPT_IO(c, R->r2); CUP_CKPT_IO(c, R->rloc); CUP_CKPT_IO(c, R->h_cb);
   CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0);
-  cup_ckpt_io(c, A->x, N);
-  cup_ckpt_io(c, A->e, N);
+  ckpt_io(c, A->x, N);
+  ckpt_io(c, A->e, N);
   if (s->phase == AD_STOP_DENSE) {               /* the refused sample's states, the step's projection */
     struct ad_pend *p = &A->pend;
     size_t NA = sizeof(double) * (size_t)A->na;
     CUP_CKPT_IO(c, s->pi);
     CUP_CKPT_IO(c, p->active); CUP_CKPT_IO(c, p->md); CUP_CKPT_IO(c, p->seg2); CUP_CKPT_IO(c, p->md2);
     CUP_CKPT_IO(c, p->k); CUP_CKPT_IO(c, p->t_end); CUP_CKPT_IO(c, p->t2a); CUP_CKPT_IO(c, p->t2b);
-    cup_ckpt_io(c, p->zy, NA);
-    cup_ckpt_io(c, p->de, NA);
-    cup_ckpt_io(c, p->y2, NA);
-    cup_ckpt_io(c, p->e2, N);
+    ckpt_io(c, p->zy, NA);
+    ckpt_io(c, p->de, NA);
+    ckpt_io(c, p->y2, NA);
+    ckpt_io(c, p->e2, N);
   }
   CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
-  cup_ckpt_io(c, A->lcp.lam, sizeof(double) * M);
-  cup_ckpt_io(c, A->lcp.prev, M);
+  ckpt_io(c, A->lcp.lam, sizeof(double) * M);
+  ckpt_io(c, A->lcp.prev, M);
   if (A->has_D) {                                /* the jump's LCP (2 m) warm-starts too */
-    cup_ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
-    cup_ckpt_io(c, A->jlcp.prev, 2 * M);
+    ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
+    ckpt_io(c, A->jlcp.prev, 2 * M);
   }
-  cup_lcp_step_checkpoint(&A->proj, c);
-  cup_projector_checkpoint(A->projector, c);
+  lcp_step_checkpoint(&A->proj, c);
+  projector_checkpoint(A->projector, c);
   for (int k = 0; k < AD_MODES; k++) {
     ad_mode *md = &A->modes[k];
     uint64_t mask = md->mask;

@@ -24,7 +24,7 @@ static void *take(size_t count, size_t size, int *fail) {
   return q;
 }
 
-int ad_dae_init(cup_adaptive *A) {
+int ad_dae_init(adaptive_ws *A) {
   int n = A->n, m = A->m, na = A->na, fail = 0;
   size_t MM = (size_t)m * m;
   A->N = take(MM, sizeof(double), &fail);
@@ -46,29 +46,29 @@ int ad_dae_init(cup_adaptive *A) {
   A->cy = take((size_t)na, sizeof(double), &fail);
   A->cMy = take((size_t)na, sizeof(double), &fail);
   A->jx = take((size_t)n, sizeof(double), &fail);
-  if (fail || cup_lcp_init(&A->jlcp, 2 * m) || cup_lcp_monotone(&A->jlcp) || cup_lcp_monotone(&A->lcp))
+  if (fail || lcp_init(&A->jlcp, 2 * m) || lcp_monotone(&A->jlcp) || lcp_monotone(&A->lcp))
     return CUP_ERR_NOMEM;
   return CUP_OK;
 }
 
-void ad_dae_free(cup_adaptive *A) {
+void ad_dae_free(adaptive_ws *A) {
   free(A->N); free(A->Ninv); free(A->Nw); free(A->svd_u); free(A->svd_v); free(A->svd_s); free(A->svd_w);
   free(A->jM); free(A->jq); free(A->dq0); free(A->dq1); free(A->Ry); free(A->Ym); free(A->Zc);
   free(A->sz); free(A->eqr); free(A->eqc); free(A->cg); free(A->cd); free(A->cd2); free(A->cthr);
   free(A->cy); free(A->cMy); free(A->jx);
-  cup_lcp_free(&A->jlcp);
+  lcp_free(&A->jlcp);
 }
 
 /* ---- the choice of the active set ----------------------------------------------- */
 
 /* u, u' (A->ut, A->udot) and the slack q0 = C x + g with its rounding
  * bound (A->s, A->gam), and its velocity at zeta = 0, q1 = C (A x + E u) + G u'. */
-static void slack_and_velocity(cup_adaptive *A, const double *x, const double *w) {
+static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w) {
   const cup_polyset *K = A->K;
   int m = A->m, p = A->p;
   ad_offset(A, w, A->g);
   ad_free_velocity(A, x, w);
-  cup_slack(K, A->g, x, A->dq0, A->gam);
+  polyset_slack(K, A->g, x, A->dq0, A->gam);
   for (int i = 0; i < m; i++) {
     double acc = 0;
     for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * A->xf[K->Ct.i[k]];
@@ -81,7 +81,7 @@ static void slack_and_velocity(cup_adaptive *A, const double *x, const double *w
  * and every event function (multipliers of the held rows, slacks of the
  * others) nonnegative, lexicographically in its value and its first two
  * derivatives on the mode's own flow. */
-static int mode_fits(cup_adaptive *A, ad_mode *md, const double *x, const double *w) {
+static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w) {
   int n = A->n, na = A->na, m = A->m;
   double xn = 0;
   for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
@@ -98,12 +98,12 @@ static int mode_fits(cup_adaptive *A, ad_mode *md, const double *x, const double
     if (fabs(res) > 1024 * DBL_EPSILON * mag) return 0;
   }
   double *xm = A->jx, *y = A->cy, *My = A->cMy, *g = A->cg, *d = A->cd, *d2 = A->cd2, *thr = A->cthr;
-  cup_copy(xm, x, n);
+  la_copy(xm, x, n);
   ad_manifold(A, md, A->g, xm);
   ad_lift(A, md, xm, w, y);
   ad_events_eval(A, md, y, g, thr);
   ad_events_deriv(A, md, y, d);                  /* leaves M y in A->My */
-  cup_copy(My, A->My, na);
+  la_copy(My, A->My, na);
   ad_events_deriv(A, md, My, d2);                /* L M (M y) */
   for (int i = 0; i < m; i++) {
     double tw = 0;                               /* the input's rounding: a sine's zero is an ulp off */
@@ -123,7 +123,7 @@ static int mode_fits(cup_adaptive *A, ad_mode *md, const double *x, const double
 }
 
 /* The mode of mask if it continues from (x, w); NULL if not. */
-static ad_mode *try_mode(cup_adaptive *A, uint64_t mask, const double *x, const double *w) {
+static ad_mode *try_mode(adaptive_ws *A, uint64_t mask, const double *x, const double *w) {
   ad_mode *md = ad_mode_get(A, mask);
   return md && mode_fits(A, md, x, w) ? md : NULL;
 }
@@ -135,7 +135,7 @@ static ad_mode *try_mode(cup_adaptive *A, uint64_t mask, const double *x, const 
  * multipliers of least norm where they are not unique. The rows with
  * zeta > 0 into *mask; the degenerate ones (zeta and w both at zero) into
  * *degen. */
-static int lcp_rows(cup_adaptive *A, const double *x, uint64_t hint, double h, uint64_t *mask, uint64_t *degen,
+static int lcp_rows(adaptive_ws *A, const double *x, uint64_t hint, double h, uint64_t *mask, uint64_t *degen,
                     int *pivots) {
   int n = A->n, m = A->m;
   double xn = 0;
@@ -157,7 +157,7 @@ static int lcp_rows(cup_adaptive *A, const double *x, uint64_t hint, double h, u
     for (int j = 0; j < m; j++) sc += fabs(A->lcpM[i + (size_t)j * m]) + fabs(A->lcpM[j + (size_t)i * m]);
     A->lcpM[i + (size_t)i * m] += 1e-10 * sc;
   }
-  int st = cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots);
+  int st = lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots);
   if (st) return st;
   double lmax = 0, wmax = 0;
   for (int i = 0; i < m; i++) {
@@ -176,7 +176,7 @@ static int lcp_rows(cup_adaptive *A, const double *x, uint64_t hint, double h, u
  * dependent (the mode keeps the first independent ones: two rows of a
  * bridge alike, their multipliers split evenly by the LCP's least norm),
  * the kept rows with one exchanged for a dropped one. */
-static ad_mode *try_rows(cup_adaptive *A, uint64_t J, const double *x, const double *w) {
+static ad_mode *try_rows(adaptive_ws *A, uint64_t J, const double *x, const double *w) {
   ad_mode *md = ad_mode_get(A, J);
   if (!md) return NULL;
   if (mode_fits(A, md, x, w)) return md;
@@ -189,7 +189,7 @@ static ad_mode *try_rows(cup_adaptive *A, uint64_t J, const double *x, const dou
   return NULL;
 }
 
-int ad_dae_select(cup_adaptive *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
+int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   double tscale, uint64_t *mask, int *pivots) {
   int m = A->m;
   ad_mode *md;
@@ -221,10 +221,10 @@ int ad_dae_select(cup_adaptive *A, const double *x, const double *w, uint64_t cu
 
 /* ---- the state jump --------------------------------------------------------------- */
 
-int ad_dae_jump(cup_adaptive *A, const double *g, double *x, uint64_t *active, int *pivots) {
+int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, int *pivots) {
   int n = A->n, m = A->m, m2 = 2 * m;
   *active = 0;
-  cup_slack(A->K, g, x, A->dq0, A->gam);
+  polyset_slack(A->K, g, x, A->dq0, A->gam);
   int outside = 0;                               /* zeta = 0 is consistent */
   for (int i = 0; i < m; i++) outside |= A->dq0[i] < -A->gam[i];
   if (!outside) return 0;
@@ -233,7 +233,7 @@ int ad_dae_jump(cup_adaptive *A, const double *g, double *x, uint64_t *active, i
    * P^-1 C^T, which the jump below assumes) */
   for (int j = 0; j < m; j++)
     for (int i = 0; i < m; i++) A->lcpM[i + (size_t)j * m] = A->Dd[i + (size_t)j * m];
-  if (cup_lcp_solve(&A->lcp, A->lcpM, A->dq0, pivots) == CUP_OK) {
+  if (lcp_solve(&A->lcp, A->lcpM, A->dq0, pivots) == CUP_OK) {
     /* w to the rounding of the solve: its residual is eps (|q| + |D| |zeta|)
      * in every row (a bridge behind a 10 kOhm shunt: 38 kV terms, a 2 V
      * row off by 2.4e-12) */
@@ -259,7 +259,7 @@ int ad_dae_jump(cup_adaptive *A, const double *g, double *x, uint64_t *active, i
       A->jM[i + (size_t)j * m2] = v;
     }
   for (int i = 0; i < m; i++) { A->jq[i] = A->dq0[i]; A->jq[m + i] = 0; }
-  int st = cup_lcp_solve(&A->jlcp, A->jM, A->jq, pivots);
+  int st = lcp_solve(&A->jlcp, A->jM, A->jq, pivots);
   if (st) return CUP_ERR_LINALG;
   double xn = 0, move = 0;
   for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));

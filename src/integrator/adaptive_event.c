@@ -6,7 +6,7 @@
 #include "catchup.h"
 #include "adaptive_impl.h"
 
-void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, double *g, double *thr) {
+void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
   int m = A->m, na = A->na;
   double vmax = 0;                         /* the state's scale: v = x + K U w */
   for (int j = 0; j < A->n; j++) vmax = fmax(vmax, fabs(y[j]));
@@ -22,7 +22,7 @@ void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, d
   }
 }
 
-void ad_events_deriv(cup_adaptive *A, const ad_mode *md, const double *y, double *d) {
+void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d) {
   int m = A->m, na = A->na;
   double *My = A->My;
   for (int i = 0; i < na; i++) My[i] = 0;
@@ -32,11 +32,11 @@ void ad_events_deriv(cup_adaptive *A, const ad_mode *md, const double *y, double
     const double *col = md->M + (size_t)j * na;
     for (int i = 0; i < na; i++) My[i] += col[i] * yj;
   }
-  for (int i = 0; i < m; i++) d[i] = cup_dot(md->L + (size_t)i * na, My, na);
+  for (int i = 0; i < m; i++) d[i] = la_dot(md->L + (size_t)i * na, My, na);
 }
 
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */
-static void probe(cup_adaptive *A, ad_mode *md, double tau, double *g, double *d, double *thr,
+static void probe(adaptive_ws *A, ad_mode *md, double tau, double *g, double *d, double *thr,
                   ad_event *ev) {
   ad_flow(A, md, tau, A->ya, A->yt);
   ad_events_eval(A, md, A->yt, g, thr);
@@ -47,13 +47,13 @@ static void probe(cup_adaptive *A, ad_mode *md, double tau, double *g, double *d
 static int crossed(double glo, double tlo, double ghi, double thi) { return glo >= -tlo && ghi < -thi; }
 
 /* Any row crossing between the bracket's start (ga, ta) and (g, thr)? */
-static int any_crossed(const cup_adaptive *A, const double *g, const double *thr) {
+static int any_crossed(const adaptive_ws *A, const double *g, const double *thr) {
   for (int i = 0; i < A->m; i++)
     if (crossed(A->ga[i], A->ta[i], g[i], thr[i])) return 1;
   return 0;
 }
 
-static void keep(cup_adaptive *A, double *g, double *d, double *t, const double *gs, const double *ds,
+static void keep(adaptive_ws *A, double *g, double *d, double *t, const double *gs, const double *ds,
                  const double *ts) {
   int m = A->m;
   memcpy(g, gs, sizeof(double) * (size_t)m);
@@ -94,7 +94,7 @@ static double hermite_min(double g0, double d0, double g1, double d1, double h, 
  * find the lowest point of the true function by safeguarded secant steps on
  * its slope; 1 with the bracket end in ev if it goes below zero there (or
  * any row crossed at a probe). */
-static int find_dip(cup_adaptive *A, ad_mode *md, int i, double h, ad_event *ev) {
+static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) {
   double lo = 0, hi = h, dlo = A->da[i], dhi = A->db[i];
   for (int it = 0; it < 40 && hi - lo > 1e-3 * h; it++) {
     double s = lo + (hi - lo) * dlo / (dlo - dhi);
@@ -111,7 +111,7 @@ static int find_dip(cup_adaptive *A, ad_mode *md, int i, double h, ad_event *ev)
   return 0;
 }
 
-int ad_detect(cup_adaptive *A, ad_mode *md, double h, ad_event *ev) {
+int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
   ev->tau_lo = 0;
   ev->tau_sw = h;
@@ -128,7 +128,7 @@ int ad_detect(cup_adaptive *A, ad_mode *md, double h, ad_event *ev) {
 
 /* The row crossing first: of those crossed at the bracket's end, the one
  * whose secant root comes earliest. */
-static int leading(const cup_adaptive *A) {
+static int leading(const adaptive_ws *A) {
   int best = -1;
   double tbest = INFINITY;
   for (int i = 0; i < A->m; i++) {
@@ -141,7 +141,7 @@ static int leading(const cup_adaptive *A) {
 
 /* The root of row k from the bracket: a Newton step from the end nearer
  * the secant root when it stays inside, the secant root otherwise. */
-static double root_estimate(const cup_adaptive *A, int k, double lo, double hi) {
+static double root_estimate(const adaptive_ws *A, int k, double lo, double hi) {
   double gl = A->ga[k], gh = A->gb[k];
   double sec = lo + (hi - lo) * gl / (gl - gh);
   double nl = A->da[k] < 0 ? lo - gl / A->da[k] : NAN;
@@ -150,7 +150,7 @@ static double root_estimate(const cup_adaptive *A, int k, double lo, double hi) 
   return nt > lo && nt < hi ? nt : sec;
 }
 
-void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev) {
+void ad_locate(adaptive_ws *A, ad_mode *md, double tolw, ad_event *ev) {
   double lo = ev->tau_lo, hi = ev->tau_sw;
   double floor_ = 16 * DBL_EPSILON * (fabs(ev->t0) + hi);
   /* An event whose delay costs nothing (c = 0: A B_k parallel to B_k) is

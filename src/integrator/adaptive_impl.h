@@ -60,7 +60,7 @@ typedef struct ad_mode {
   long cstamp[AD_CACHE];
 } ad_mode;
 
-typedef struct cup_adaptive cup_adaptive;   /* as in adaptive.h, which the run's API is in */
+typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
 
 /* One run's progress (adaptive_run.c). */
 typedef struct ad_run {
@@ -94,12 +94,12 @@ typedef struct ad_stop {
   char message[CUP_RUN_MSG_LEN];
 } ad_stop;
 
-struct cup_adaptive {
+struct adaptive_ws {
   const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
   const cup_polyset *K;
   cup_integrator_options o;
-  double tend;              /* where the run ends: T, or a window's end (cup_adaptive_window) */
+  double tend;              /* where the run ends: T, or a window's end (adaptive_window) */
   int n, m, p, nw, na;
   int callback;             /* u is a callback: polynomial exosystem of degree AD_DEGREE */
   /* D != 0 (adaptive_dae.c): w = C x + D zeta + G u + F, x' = A x + B zeta + E u */
@@ -118,7 +118,7 @@ struct cup_adaptive {
   double *N, *Ninv, *Nw;    /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse, scratch */
   double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ and of N (m x m, m, m) */
   double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
-  cup_lcp jlcp;
+  lcp_solver jlcp;
   double *dq0, *dq1;        /* the choice of the active set: slack and its velocity at zeta = 0 */
   double *sz, *eqr, *eqc;   /* m: the manifold's residual Z^T s_J; N's equilibration */
   double *cg, *cd, *cd2, *cthr, *cy, *cMy;   /* a candidate's check: m values, slopes, curvatures,
@@ -153,17 +153,17 @@ struct cup_adaptive {
   double *e, *et;           /* the propagated error estimate, n */
   double *xok;              /* the last state within range (run-state check), n */
   double *zero;             /* m zeros */
-  cup_lcp lcp;
+  lcp_solver lcp;
   double *lcpM, *lcpq;
   unsigned char *touch;
-  cup_lcp_step proj;        /* W = I, h = 1: the certified P-projection onto K(t) */
+  lcp_step proj;        /* W = I, h = 1: the certified P-projection onto K(t) */
   cup_projector *projector; /* ... and the projector where pivoting fails (degenerate rows, empty K) */
   /* callback inputs: Chebyshev-Lobatto nodes on [0, 1], samples, coefficients */
   double node[AD_DEGREE + 1], *samp, *samp_mid, *coef;
   double zeno[AD_ZENO_RING]; /* times and rows of the last changes of the active set */
   int zeno_row[AD_ZENO_RING];
   long nzeno;
-  /* the multipliers at an output time (cup_adaptive_zeta, inside the sink) */
+  /* the multipliers at an output time (adaptive_zeta, inside the sink) */
   const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
   double zt;
   double *zw, *zy;          /* nw, na */
@@ -194,63 +194,63 @@ int ad_fail(ad_run *R, int status, const char *fmt, ...);
 
 /* ---- adaptive_sample.c ---- */
 /* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */
-double ad_sample_time(const cup_adaptive *A, long j);
+double ad_sample_time(const adaptive_ws *A, long j);
 /* The samples due in [t0, t1) on md's flow from y = ya with error e0,
  * offered to the sink (a refusal kept in A->pend: the step goes on, the
  * run stops at its end); CUP_OK or an error. */
-int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
                   double t1);
 /* A stop at a refused sample inside a step, resumed: that sample and the
  * rest of the step's; 1 if the sink refused one again. */
-int ad_dense_resume(cup_adaptive *A, ad_run *R);
+int ad_dense_resume(adaptive_ws *A, ad_run *R);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
  * interpolation error per component into err); nonzero if the input failed. */
-int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err);
+int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err);
 
 /* ---- adaptive_mode.c ---- */
 /* The active set with rows `mask` (built, or found among the kept ones). A
  * set whose rows are linearly dependent keeps an independent subset (the
  * mode's mask says which). NULL only without memory (none is allocated
  * here: the slots are set up by ad_modes_init). */
-ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask);
-int ad_modes_init(cup_adaptive *A);
-void ad_modes_free(cup_adaptive *A);
+ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
+int ad_modes_init(adaptive_ws *A);
+void ad_modes_free(adaptive_ws *A);
 /* A checkpoint's kept active set in slot s: its rows (mask), built again,
  * its exponentials for the step lengths hc (< 0: none) computed again (the
  * same bits: the same function of the same h M) and its stamps of use. */
-void ad_mode_restore(cup_adaptive *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);
+void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);
 /* exp(h M_J), cached by h (NULL: h = 0 needs none): a step's length h
  * ending at t (t_end) takes a cached one within two ulps of t of it
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
-const double *ad_expm(cup_adaptive *A, ad_mode *md, double h, double t_end);
+const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
-void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, double *y_out);
+void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
-void ad_lift(const cup_adaptive *A, const ad_mode *md, const double *x, const double *w, double *y);
-void ad_state(const cup_adaptive *A, const ad_mode *md, const double *y, double *x);
+void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y);
+void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x);
 /* x onto C_J x + g_J = 0 along B_J (P-orthogonal): removes rounding drift. */
-void ad_manifold(const cup_adaptive *A, const ad_mode *md, const double *g, double *x);
+void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x);
 /* The active set that continues from (x, t): the velocity LCP on the rows
  * that touch (slack at rounding level, or in hint: rows held until now,
  * active in a projection just made, or whose event it is), given u = U w
  * and u' = U W w. Returns CUP_OK or CUP_ERR_LINALG; pivots are added to
  * *pivots. */
-int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
               int *pivots);
 /* g = F + G U w. */
-void ad_offset(const cup_adaptive *A, const double *w, double *g);
+void ad_offset(const adaptive_ws *A, const double *w, double *g);
 /* u' (A->udot, from the input's piece w) and the free velocity
  * A->xf = A x + E u (u in A->ut). */
-void ad_free_velocity(cup_adaptive *A, const double *x, const double *w);
+void ad_free_velocity(adaptive_ws *A, const double *x, const double *w);
 
 /* pinf ||v||_P: a bound on the max norm of v, and of what the flow makes of
  * it when the LCS is passive (its flow does not expand the P-norm): the
  * measure of an event's local error, whose effect a resonance carries from
  * one component to another (scratch: n). */
-double ad_energy_bound(const cup_adaptive *A, const double *v, double *scratch);
+double ad_energy_bound(const adaptive_ws *A, const double *v, double *scratch);
 /* The step limit of event detection of md (computed on first use). */
-double ad_mode_hmax(cup_adaptive *A, ad_mode *md);
+double ad_mode_hmax(adaptive_ws *A, ad_mode *md);
 /* Row i of C, dense, into out (n entries). */
 void ad_row_of_C(const cup_polyset *K, int i, double *out);
 
@@ -258,30 +258,30 @@ void ad_row_of_C(const cup_polyset *K, int i, double *out);
 /* Of the rows J (nj, in increasing order), a subset whose N is nonsingular
  * (all of them when it is): returns the new count and writes Zt (nz x nj),
  * nz, and A->Ninv (nj x nj, column-major: N's rows are Y's then Z's). */
-int ad_dae_factor(cup_adaptive *A, int *rows, int nj, double *Zt, int *nz);
+int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz);
 
 /* ---- adaptive_dae.c (D != 0) ---- */
-int ad_dae_init(cup_adaptive *A);
-void ad_dae_free(cup_adaptive *A);
+int ad_dae_init(adaptive_ws *A);
+void ad_dae_free(adaptive_ws *A);
 /* The active set that continues from (x, w) at a time: the mode cur with
  * the event row flipped (with no event, cur itself) when that fits, else
  * the finite-h LCP with D (docs/adaptive.md), each candidate checked on
  * the mode's own flow.
  * CUP_OK, or CUP_ERR_LINALG when no candidate continues (or the LCP has no
  * solution). */
-int ad_dae_select(cup_adaptive *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
+int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   double tscale, uint64_t *mask, int *pivots);
 /* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some
  * zeta >= 0} by the impulsive LCP (x + B mu; the P-projection when
  * P B = C^T): 0 if x was consistent, 1 if it jumped (rows with mu > 0 in
  * *active), CUP_ERR_LINALG if the LCP has no solution. */
-int ad_dae_jump(cup_adaptive *A, const double *g, double *x, uint64_t *active, int *pivots);
+int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, int *pivots);
 
 /* ---- adaptive_event.c ---- */
 /* g = L y + Lc and the rounding thresholds thr. */
-void ad_events_eval(const cup_adaptive *A, const ad_mode *md, const double *y, double *g, double *thr);
+void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr);
 /* d = L M y (the event functions' time derivatives). */
-void ad_events_deriv(cup_adaptive *A, const ad_mode *md, const double *y, double *d);
+void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */
@@ -296,14 +296,14 @@ typedef struct ad_event {
  * the start; gb, db, tb at the end): 1 if an event function crosses zero
  * downwards (an interior dip below zero included), with the bracket
  * (tau_lo, tau_sw] and the values at its ends in ga.. and gb..; 0 if none. */
-int ad_detect(cup_adaptive *A, ad_mode *md, double h, ad_event *ev);
+int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev);
 /* Shrink the bracket around the earliest crossing until the switch at its
  * right end, tau_sw, lies past the root by no more than the time accuracy
  * at which the late switch's effect on x, second order in that delay
  * (docs/adaptive.md), is a fixed fraction of tolw (the absolute error
  * target at this state). tau_est: the root, refined by Newton steps on the
  * exact flow. */
-void ad_locate(cup_adaptive *A, ad_mode *md, double tolw, ad_event *ev);
+void ad_locate(adaptive_ws *A, ad_mode *md, double tolw, ad_event *ev);
 /* The late-switch error model's fraction of tol per event. */
 #define AD_EVENT_SHARE 0.4
 

@@ -19,7 +19,7 @@ static void *take(size_t count, size_t size, int *fail) {
   return q;
 }
 
-int ad_modes_init(cup_adaptive *A) {
+int ad_modes_init(adaptive_ws *A) {
   int n = A->n, m = A->m, na = A->na, nw = A->nw, fail = 0;
   size_t NA = (size_t)na * na;
   for (int s = 0; s < AD_MODES; s++) {
@@ -51,7 +51,7 @@ int ad_modes_init(cup_adaptive *A) {
   return A->eig && A->eigA && A->eigv ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-void ad_modes_free(cup_adaptive *A) {
+void ad_modes_free(adaptive_ws *A) {
   for (int s = 0; s < AD_MODES; s++) {
     ad_mode *md = &A->modes[s];
     free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
@@ -66,24 +66,24 @@ void ad_modes_free(cup_adaptive *A) {
 
 /* S = C_J P^-1 C_J^T from the set's dense M, and its pivoted Cholesky
  * factor in Sl; returns the rank. */
-static int factor_S(cup_adaptive *A, const int *rows, int nj) {
+static int factor_S(adaptive_ws *A, const int *rows, int nj) {
   const double *Md = A->K->Md;
   int m = A->m;
   for (int b = 0; b < nj; b++)
     for (int a = 0; a < nj; a++) A->S[a + (size_t)b * nj] = Md[rows[a] + (size_t)rows[b] * m];
   memcpy(A->Sl, A->S, sizeof(double) * (size_t)nj * nj);
-  return nj ? cup_dense_pchol(A->Sl, nj, A->perm, AD_RANK_TOL) : 0;
+  return nj ? la_dense_pchol(A->Sl, nj, A->perm, AD_RANK_TOL) : 0;
 }
 
 void ad_row_of_C(const cup_polyset *K, int i, double *out) {
-  cup_zero(out, K->n);
+  la_zero(out, K->n);
   for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) out[K->Ct.i[k]] = K->Ct.x[k];
 }
 
 /* The step limit of event detection for this active set: an eighth of the
  * period of its fastest oscillation (and of the input's), and the time an
  * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL. */
-static double mode_hmax(cup_adaptive *A, const double *AJ) {
+static double mode_hmax(adaptive_ws *A, const double *AJ) {
   int n = A->n;
   double h = A->hmax_input;
   if (n == 0) return h;
@@ -102,7 +102,7 @@ static double mode_hmax(cup_adaptive *A, const double *AJ) {
   return h;
 }
 
-double ad_mode_hmax(cup_adaptive *A, ad_mode *md) {
+double ad_mode_hmax(adaptive_ws *A, ad_mode *md) {
   if (md->hmax < 0) {                            /* Pi A, compact: an eigenproblem per mode used */
     int n = A->n, na = A->na;
     double *AJ = A->T1;
@@ -116,7 +116,7 @@ double ad_mode_hmax(cup_adaptive *A, ad_mode *md) {
 /* The rows of mask, an independent subset of them (the mode's mask says
  * which), and the inverse of S = C_J P^-1 C_J^T into A->Sinv; with D, of
  * N (ad_dae_factor) into A->Ninv, and Z^T into md->Zt. */
-static void mode_factor(cup_adaptive *A, ad_mode *md, uint64_t mask) {
+static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask) {
   int m = A->m, nj = 0;
   for (int i = 0; i < m; i++)
     if (mask >> i & 1) md->rows[nj++] = i;
@@ -137,9 +137,9 @@ static void mode_factor(cup_adaptive *A, ad_mode *md, uint64_t mask) {
     double *work = A->T3;
     for (int k = 0; k < nj; k++) {               /* S^-1, column by column */
       double *col = A->Sinv + (size_t)k * nj, *ek = work + nj;
-      cup_zero(ek, nj);
+      la_zero(ek, nj);
       ek[k] = 1;
-      cup_dense_pchol_solve(A->Sl, nj, nj, A->perm, ek, col, work);
+      la_dense_pchol_solve(A->Sl, nj, nj, A->perm, ek, col, work);
     }
     md->nz = nj;
   }
@@ -151,7 +151,7 @@ static void mode_factor(cup_adaptive *A, ad_mode *md, uint64_t mask) {
 /* With D: Y^T (C_J X + G_J U) and Y^T F_J (the rows that fix zeta_J
  * algebraically, r = nj - nz of them) into A->Ym (r x na, row-major) and
  * A->Ym + r na; the columns of Y are A->svd_v's first r. */
-static void y_rows(cup_adaptive *A, const ad_mode *md, const double *CJ) {
+static void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ) {
   int n = A->n, m = A->m, p = A->p, na = A->na, nj = md->nj, r = nj - md->nz;
   const int *J = md->rows;
   double *Yc = A->Ym + (size_t)r * na;
@@ -177,7 +177,7 @@ static void y_rows(cup_adaptive *A, const ad_mode *md, const double *CJ) {
 /* R = B_J N^-1 on the Z rows (or S^-1), Pi = I - R Z^T C_J, KU, Q, X, and
  * the generator M; with D also Ry = B_J N^-1 on the Y rows (A->Ry) and the
  * Y rows' own terms of M. C_J goes to A->T1 (nj x n), Q to A->T3. */
-static void mode_flow(cup_adaptive *A, ad_mode *md) {
+static void mode_flow(adaptive_ws *A, ad_mode *md) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, nw = A->nw, na = A->na, p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
@@ -275,7 +275,7 @@ static void mode_flow(cup_adaptive *A, ad_mode *md) {
 /* The event rows: zeta_J = -S^-1 (C_J Q y + G_J U W w) for the active rows
  * (with D, -N^-1 [Y^T (C_J X y + G_J U w + F_J); Z^T (C_J Q y + G_J U W w)]),
  * slack_i = C_i X y + G_i U w + F_i (+ D_iJ zeta_J) for the others. */
-static void mode_events(cup_adaptive *A, ad_mode *md) {
+static void mode_events(adaptive_ws *A, ad_mode *md) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, nw = A->nw, na = A->na, p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
@@ -358,7 +358,7 @@ static void mode_events(cup_adaptive *A, ad_mode *md) {
   }
 }
 
-static void mode_build(cup_adaptive *A, ad_mode *md, uint64_t mask) {
+static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
   int na = A->na;
   mode_factor(A, md, mask);
   mode_flow(A, md);
@@ -373,7 +373,7 @@ static void mode_build(cup_adaptive *A, ad_mode *md, uint64_t mask) {
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
 }
 
-ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
+ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
   ad_mode *oldest = &A->modes[0];
   for (int s = 0; s < AD_MODES; s++) {   /* AD_MODES > 2: a slot that is not pinned exists */
     ad_mode *md = &A->modes[s];
@@ -397,16 +397,16 @@ ad_mode *ad_mode_get(cup_adaptive *A, uint64_t mask) {
 }
 
 /* exp(h M_J) into slot c of md's cache. */
-static void expm_into(cup_adaptive *A, ad_mode *md, double h, int c) {
+static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   size_t NA = (size_t)A->na * A->na;
   double *hM = A->ework + 4 * NA;
   for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
-  cup_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
+  la_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
 }
 
-void ad_mode_restore(cup_adaptive *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp) {
+void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp) {
   ad_mode *md = &A->modes[s];
   md->stamp = 0;
   if (!stamp) return;
@@ -427,7 +427,7 @@ void ad_mode_restore(cup_adaptive *A, int s, uint64_t mask, long stamp, const do
  * the buck's time loop.) The state moves by |x'| 2 eps |t| at most, what
  * rounding t itself does. The samples' spacing is applied sample after
  * sample, where such differences would add up: it takes only itself. */
-const double *ad_expm(cup_adaptive *A, ad_mode *md, double h, double t_end) {
+const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   int slot = 0;
   double same = 2 * DBL_EPSILON * fabs(t_end);
   for (int c = 0; c < AD_CACHE; c++) {
@@ -451,7 +451,7 @@ static void matvec(int na, const double *E, const double *y, double *out) {
   }
 }
 
-void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, double *y_out) {
+void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out) {
   int na = A->na;
   for (int c = 0; c < AD_CACHE; c++)
     if (md->hc[c] == tau) { matvec(na, md->Ec[c], y_in, y_out); return; }
@@ -460,7 +460,7 @@ void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, doubl
     size_t NA = (size_t)na * na;
     double *hM = A->ework + 4 * NA, *Et = A->ework + 5 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
-    cup_dense_expm_stiff(hM, na, Et, A->ework);
+    la_dense_expm_stiff(hM, na, Et, A->ework);
     matvec(na, Et, y_in, y_out);
     return;
   }
@@ -468,9 +468,9 @@ void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, doubl
    * eps: na^2 per term instead of na^3 per matrix product */
   int sub = norm > 0.5 ? (int)ceil(norm / 0.5) : 1;
   double dt = tau / sub, *term = A->fa, *tmp = A->fb;
-  cup_copy(y_out, y_in, na);
+  la_copy(y_out, y_in, na);
   for (int s = 0; s < sub; s++) {
-    cup_copy(term, y_out, na);
+    la_copy(term, y_out, na);
     for (int k = 1; k <= 30; k++) {
       matvec(na, md->M, term, tmp);
       /* done when every component's term is below its rounding: a callback's
@@ -487,25 +487,25 @@ void ad_flow(cup_adaptive *A, ad_mode *md, double tau, const double *y_in, doubl
   }
 }
 
-void ad_lift(const cup_adaptive *A, const ad_mode *md, const double *x, const double *w, double *y) {
+void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
-  cup_copy(y, x, n);
+  la_copy(y, x, n);
   for (int c = 0; c < nw; c++) {
     double wc = w[c];
     if (wc == 0) continue;
     for (int i = 0; i < n; i++) y[i] += md->KU[i + (size_t)c * n] * wc;
   }
-  cup_copy(y + n, w, nw);
+  la_copy(y + n, w, nw);
 }
 
-void ad_state(const cup_adaptive *A, const ad_mode *md, const double *y, double *x) {
+void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
   int n = A->n, na = A->na;
-  for (int i = 0; i < n; i++) x[i] = cup_dot(md->X + (size_t)i * na, y, na);
+  for (int i = 0; i < n; i++) x[i] = la_dot(md->X + (size_t)i * na, y, na);
 }
 
 /* U w and F + G u by their nonzeros (offset_pattern), in the dense
  * products' order: the same sums, less the terms that are zero. */
-void ad_offset(const cup_adaptive *A, const double *w, double *g) {
+void ad_offset(const adaptive_ws *A, const double *w, double *g) {
   int m = A->m, p = A->p, nw = A->nw;
   for (int q = 0; q < p; q++) A->ut[q] = 0;
   for (int c = 0; c < nw; c++)
@@ -517,7 +517,7 @@ void ad_offset(const cup_adaptive *A, const double *w, double *g) {
   }
 }
 
-void ad_manifold(const cup_adaptive *A, const ad_mode *md, const double *g, double *x) {
+void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x) {
   const cup_polyset *K = A->K;
   int n = A->n;
   for (int k = 0; k < md->nj; k++) {
@@ -539,7 +539,7 @@ void ad_manifold(const cup_adaptive *A, const ad_mode *md, const double *g, doub
     for (int i = 0; i < n; i++) x[i] -= md->R[i + (size_t)k * n] * s[k];
 }
 
-void ad_free_velocity(cup_adaptive *A, const double *x, const double *w) {
+void ad_free_velocity(adaptive_ws *A, const double *x, const double *w) {
   int n = A->n, p = A->p, nw = A->nw;
   for (int q = 0; q < p; q++) {
     double acc = 0;
@@ -558,12 +558,12 @@ void ad_free_velocity(cup_adaptive *A, const double *x, const double *w) {
   }
 }
 
-int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
               int *pivots) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, p = A->p;
   ad_offset(A, w, A->g);                         /* also leaves u in A->ut */
-  cup_slack(K, A->g, x, A->s, NULL);
+  polyset_slack(K, A->g, x, A->s, NULL);
   /* touching rows: slack at the level a certified projection leaves (it
    * aims a few rounding bounds inside), on the scale of the whole state (a
    * row whose own terms vanish still rounds at that scale) */
@@ -594,7 +594,7 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
     for (int j = 0; j < m; j++)
       A->lcpM[i + (size_t)j * m] = touch[i] && touch[j] ? Md[i + (size_t)j * m] : (i == j);
   }
-  int st = m ? cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots) : CUP_OK;
+  int st = m ? lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots) : CUP_OK;
   if (st) {
     /* More touching rows than independent directions (a degenerate corner)
      * make M singular, and pivoting may find no nonsingular block. The
@@ -605,8 +605,8 @@ int ad_select(cup_adaptive *A, const double *x, const double *w, uint64_t hint, 
     for (int i = 0; i < m; i++) dmax = fmax(dmax, A->lcpM[i + (size_t)i * m]);
     for (int i = 0; i < m; i++)
       if (touch[i]) A->lcpM[i + (size_t)i * m] += 1e-10 * dmax;
-    cup_lcp_forget(&A->lcp);
-    st = cup_lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots);
+    lcp_forget(&A->lcp);
+    st = lcp_solve(&A->lcp, A->lcpM, A->lcpq, pivots);
   }
   if (st) return st;
   uint64_t J = 0;

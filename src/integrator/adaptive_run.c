@@ -40,14 +40,14 @@ static double inf_norm(const double *v, int n) {
 }
 
 /* The absolute error target at the state x. */
-static double tolw(const cup_adaptive *A, const double *x) {
+static double tolw(const adaptive_ws *A, const double *x) {
   return A->o.tol_abs + A->o.tol_rel * inf_norm(x, A->n);
 }
 
 /* Where the next step must end at the latest: a breakpoint, T, or t + hlim
  * (hlim within hmax); with to_samples, an output time too (catching-up
  * steps: the other steps' samples come from their exact flow, emit_dense). */
-static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim, int to_samples) {
+static double next_stop(const adaptive_ws *A, const ad_run *R, double hlim, int to_samples) {
   double s = fmin(R->tb, A->tend);
   if (to_samples && A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
     s = fmin(s, ad_sample_time(A, R->next_sample));
@@ -55,13 +55,13 @@ static double next_stop(const cup_adaptive *A, const ad_run *R, double hlim, int
   return R->t + hlim < s ? R->t + hlim : s;
 }
 
-static double estimate_now(const cup_adaptive *A, const ad_run *R) {
+static double estimate_now(const adaptive_ws *A, const ad_run *R) {
   return inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2);
 }
 
 /* A stop at a step's end that a checkpoint can resume from: the run's
  * place, and the status and message the stop replaces (adaptive.h). */
-static int halt(cup_adaptive *A, ad_run *R, int status, int phase, const char *what) {
+static int halt(adaptive_ws *A, ad_run *R, int status, int phase, const char *what) {
   ad_stop *s = &A->stop;
   s->phase = phase;
   s->R = *R;
@@ -73,7 +73,7 @@ static int halt(cup_adaptive *A, ad_run *R, int status, int phase, const char *w
 }
 
 /* The sample at R->t to the sink. */
-static int offer(cup_adaptive *A, ad_run *R) {
+static int offer(adaptive_ws *A, ad_run *R) {
   R->info->samples++;
   A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
   A->zt = R->t;
@@ -83,7 +83,7 @@ static int offer(cup_adaptive *A, ad_run *R) {
   return CUP_OK;
 }
 
-static int emit(cup_adaptive *A, ad_run *R) {
+static int emit(adaptive_ws *A, ad_run *R) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
   switch (o->output) {
@@ -103,7 +103,7 @@ static int emit(cup_adaptive *A, ad_run *R) {
 }
 
 /* A step's callback, and the interrupt and wall-time checks. */
-static int step_checks(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
+static int step_checks(adaptive_ws *A, ad_run *R, const cup_proj_info *pi) {
   if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
     return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
   if ((R->steps & 1023) == 0) {
@@ -118,16 +118,16 @@ static int step_checks(cup_adaptive *A, ad_run *R, const cup_proj_info *pi) {
  * instant of an event: there the error is the event's time localisation,
  * which decays with the new flow; at the output times after it counts),
  * the step callback. */
-static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at_event) {
+static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_event) {
   cup_run_info *info = R->info;
-  if (cup_state_beyond(A->x, A->n)) {          /* before the sink sees it, and the state stays the last good one */
-    int w = cup_state_worst(A->x, A->n);
+  if (tally_state_beyond(A->x, A->n)) {          /* before the sink sees it, and the state stays the last good one */
+    int w = tally_state_worst(A->x, A->n);
     snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): the state left its range ||x||_1 <= "
              "%g (x[%d] = %.3g): the scheme diverged", R->steps + 1, R->t, CUP_STATE_MAX, w, A->x[w]);
-    cup_copy(A->x, A->xok, A->n);
+    la_copy(A->x, A->xok, A->n);
     return info->status = CUP_ERR_DIVERGED;
   }
-  cup_copy(A->xok, A->x, A->n);
+  la_copy(A->xok, A->x, A->n);
   R->steps++;
   info->step = R->steps;
   info->t = R->t;
@@ -153,7 +153,7 @@ static int step_done(cup_adaptive *A, ad_run *R, const cup_proj_info *pi, int at
 
 /* With D: x onto the consistent states Q(t) (adaptive_dae.c), exact up to
  * rounding (the LCP solved by pivoting); not certified by a projector. */
-static int jump(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t *active, cup_proj_info *pi) {
+static int jump(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active, cup_proj_info *pi) {
   int piv = 0, st = ad_dae_jump(A, g, x, active, &piv);
   R->info->dual_iterations += piv;
   if (st < 0)
@@ -170,19 +170,19 @@ static int jump(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t
 /* If x is outside {C x + g >= 0}, its certified P-projection (the exact
  * small-set LCP, as the explicit scheme's step); *active gets its active
  * rows (0 when nothing moved). */
-static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *x, uint64_t *active,
+static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
                            cup_proj_info *pi) {
   *active = 0;
   *pi = (cup_proj_info){0};
   pi->skipped = 1;
   if (A->has_D) return jump(A, R, g, x, active, pi);
-  cup_slack(A->K, g, x, A->s, A->gam);
+  polyset_slack(A->K, g, x, A->s, A->gam);
   int outside = 0;                               /* beyond rounding: a held row is at 0 */
   for (int i = 0; i < A->m; i++) outside |= A->s[i] < -A->gam[i];
   if (!outside) return CUP_OK;
   double S = cup_polyset_norm(A->K, x);
-  cup_copy(A->xr, x, A->n);
-  int st = cup_lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
+  la_copy(A->xr, x, A->n);
+  int st = lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
   const double *lam = A->proj.lcp.lam;
   if (st == CUP_ERR_LINALG) {
     /* pivoting found no nonsingular block (nearly dependent rows) or K(t)
@@ -193,7 +193,7 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
     lam = cup_projector_lambda(A->projector);
   }
   if (st < 0) {
-    cup_copy(x, A->xr, A->n);
+    la_copy(x, A->xr, A->n);
     if (st == CUP_ERR_EMPTY_SET)
       return ad_fail(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
                   pi->farkas_gap, pi->farkas_residual);
@@ -219,7 +219,7 @@ static int make_consistent(cup_adaptive *A, ad_run *R, const double *g, double *
 
 /* e <- its P-orthogonal projection onto ker C_J (a perturbation of a state
  * held on C_J x + g = 0, or of one projected onto a face with rows J). */
-static void error_onto(cup_adaptive *A, uint64_t mask, double *e) {
+static void error_onto(adaptive_ws *A, uint64_t mask, double *e) {
   if (!mask) return;
   ad_mode *md = ad_mode_get(A, mask);
   ad_manifold(A, md, A->zero, e);
@@ -228,24 +228,24 @@ static void error_onto(cup_adaptive *A, uint64_t mask, double *e) {
 
 /* v <- its propagation by the exact flow of md over tau (w = 0: the
  * homogeneous part). */
-static void flow_vector(cup_adaptive *A, ad_mode *md, double tau, double *v) {
-  cup_zero(A->yr, A->na);
-  cup_copy(A->yr, v, A->n);
+static void flow_vector(adaptive_ws *A, ad_mode *md, double tau, double *v) {
+  la_zero(A->yr, A->na);
+  la_copy(A->yr, v, A->n);
   ad_flow(A, md, tau, A->yr, A->yt);
-  cup_copy(v, A->yt, A->n);
+  la_copy(v, A->yt, A->n);
 }
 
-static void error_flow(cup_adaptive *A, ad_mode *md, double tau) {
+static void error_flow(adaptive_ws *A, ad_mode *md, double tau) {
   if (!(tau > 0)) return;
   flow_vector(A, md, tau, A->e);
 }
 
-/* The tangent's columns (cup_adaptive_tangent) over tau on md. */
-static void tangent_flow(cup_adaptive *A, ad_mode *md, double tau) {
+/* The tangent's columns (adaptive_tangent) over tau on md. */
+static void tangent_flow(adaptive_ws *A, ad_mode *md, double tau) {
   for (int j = 0; A->tan && tau > 0 && j < A->n; j++) flow_vector(A, md, tau, A->tan + (size_t)j * A->n);
 }
 
-static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, double t) {
+static int report(adaptive_ws *A, ad_run *R, uint64_t before, uint64_t after, double t) {
   for (int i = 0; i < A->m; i++) {
     int was = before >> i & 1, now = after >> i & 1;
     if (was == now) continue;
@@ -263,14 +263,14 @@ static int report(cup_adaptive *A, ad_run *R, uint64_t before, uint64_t after, d
  * is a step of a millionth of it): the current mode's step limit, or the
  * input's, and no longer than what is left of the input's piece (a pulse's
  * 1 fs fall, linearised over 25 ns, drove the other pair of a bridge on). */
-static double time_scale(cup_adaptive *A, ad_run *R, double t) {
+static double time_scale(adaptive_ws *A, ad_run *R, double t) {
   double s = fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);
   return R->tb > t ? fmin(s, R->tb - t) : s;
 }
 
 /* The active set that continues from (x, w) at R->t, made current, x put
  * on its manifold; changes reported at time t_event. */
-static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
+static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R, R->t), &mask, &piv)
                              : ad_select(A, A->x, w, hint, &mask, &piv);
@@ -289,10 +289,10 @@ static int choose_mode(cup_adaptive *A, ad_run *R, const double *w, uint64_t hin
 
 /* At a breakpoint t (or 0): the state onto K(t) with u(t) itself (a square
  * wave is 0 there), which is what the catching-up limit holds at t. */
-static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
+static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
   if (A->u && cup_input_eval(A->u, R->t, A->ut))
     return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-  cup_copy(A->g, A->F, A->m);
+  la_copy(A->g, A->F, A->m);
   for (int i = 0; i < A->m; i++)
     for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
   uint64_t active;
@@ -307,7 +307,7 @@ static int at_break(cup_adaptive *A, ad_run *R, int first, cup_proj_info *pi) {
 
 /* The piece after a breakpoint: its exosystem states, the jump of K onto
  * K(t+) (a projection, certified), and the active set by the velocity LCP. */
-static int start_piece(cup_adaptive *A, ad_run *R) {
+static int start_piece(adaptive_ws *A, ad_run *R) {
   double tb = cup_input_next_break(A->u, R->t);
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
@@ -331,14 +331,14 @@ static int start_piece(cup_adaptive *A, ad_run *R) {
  * moves x directly, x = v - K_J u, while v stays put; a clamp holding its
  * capacitor to the source took steps of 0.6 ms at 1 kHz with no error
  * seen). */
-static double interp_error(const cup_adaptive *A, const ad_mode *md, const double *E) {
+static double interp_error(const adaptive_ws *A, const ad_mode *md, const double *E) {
   int n = A->n, na = A->na;
   double worst = 0;
   for (int i = 0; i < n; i++) {
     double acc = 0;
     for (int c = 0; c < A->p; c++) {
       const double *col = E + (size_t)(n + c * (AD_DEGREE + 1)) * na;
-      acc += fabs(cup_dot(md->X + (size_t)i * na, col, na)) * A->uerr[c];
+      acc += fabs(la_dot(md->X + (size_t)i * na, col, na)) * A->uerr[c];
     }
     worst = fmax(worst, acc);
   }
@@ -347,7 +347,7 @@ static double interp_error(const cup_adaptive *A, const ad_mode *md, const doubl
 
 /* The end of a step at R->t: a breakpoint's projection, the output, the
  * next piece. */
-static int end_of_step(cup_adaptive *A, ad_run *R, cup_proj_info *pi, int at_event) {
+static int end_of_step(adaptive_ws *A, ad_run *R, cup_proj_info *pi, int at_event) {
   int at_tb = R->t == R->tb, st;
   if (at_tb) {
     cup_proj_info pb;
@@ -364,7 +364,7 @@ static int end_of_step(cup_adaptive *A, ad_run *R, cup_proj_info *pi, int at_eve
  * shrinks until the interpolation error is within its share of tol.
  * NULL with *t1 set when t1 is within rounding of t (nothing to flow), or
  * with the status set on an error. */
-static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *snap) {
+static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap) {
   ad_mode *md = R->md;
   *snap = 0;
   for (;;) {
@@ -394,7 +394,7 @@ static const double *begin_step(cup_adaptive *A, ad_run *R, double *t1, int *sna
   }
 }
 
-static int any_negative(const cup_adaptive *A) {
+static int any_negative(const adaptive_ws *A) {
   for (int i = 0; i < A->m; i++)
     if (A->ga[i] < -A->ta[i]) return 1;
   return 0;
@@ -404,18 +404,18 @@ static int any_negative(const cup_adaptive *A) {
  * as the estimate of what the run has already spent of it grows past half
  * (events accumulate: a resonant converter switches 86 times in 200 us),
  * down to 1/16 of it. */
-static double event_budget(const cup_adaptive *A, const ad_run *R) {
+static double event_budget(const adaptive_ws *A, const ad_run *R) {
   double tw = tolw(A, A->x), left = tw - estimate_now(A, R);
   return left >= 0.5 * tw ? tw : tw * fmax(1.0 / 16, left / (0.5 * tw));
 }
 
 /* The reported time of the event of row k: Newton steps on its function
  * along the old flow from tau (the state at the last one in A->yr). */
-static double refine_root(cup_adaptive *A, ad_mode *md, int k, double tau, double tmax) {
+static double refine_root(adaptive_ws *A, ad_mode *md, int k, double tau, double tmax) {
   for (int it = 0; it < 4; it++) {
     ad_flow(A, md, tau, A->ya, A->yr);
     if (k < 0) break;
-    double g = md->Lc[k] + cup_dot(md->L + (size_t)k * A->na, A->yr, A->na);
+    double g = md->Lc[k] + la_dot(md->L + (size_t)k * A->na, A->yr, A->na);
     ad_events_deriv(A, md, A->yr, A->dt);
     double d = A->dt[k], next = d != 0 ? tau - g / d : tau;
     if (!(next >= 0 && next <= tmax) || fabs(next - tau) <= 4 * DBL_EPSILON * fabs(tau)) break;
@@ -430,7 +430,7 @@ static double refine_root(cup_adaptive *A, ad_mode *md, int k, double tau, doubl
  * changed in x: the same switch done at the root estimate, carried to the
  * switch time by the new flow (docs/adaptive.md). A model that underrates
  * that error has its factor raised and the location resumed. */
-static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) {
+static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   int n = A->n, nw = A->nw, st;
   ad_mode *old = R->md, *nm = NULL;
   A->pinned[1] = old;
@@ -442,7 +442,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     double tsw = ev->tau_sw;
     ad_flow(A, old, tsw, A->ya, A->yb);          /* the run's path */
     ad_state(A, old, A->yb, A->xs);
-    cup_copy(A->wt, A->yb + n, nw);
+    la_copy(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);
     ad_manifold(A, old, A->g, A->xs);
     if ((st = make_consistent(A, R, A->g, A->xs, &active, &pi)) < 0) return st;
@@ -462,7 +462,7 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
     ad_manifold(A, nm, A->g, A->xs);
     tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw);   /* the reference path */
     ad_state(A, old, A->yr, A->xr);
-    cup_copy(A->wa, A->yr + n, nw);
+    la_copy(A->wa, A->yr + n, nw);
     ad_offset(A, A->wa, A->g);
     ad_manifold(A, nm, A->g, A->xr);
     ad_lift(A, nm, A->xr, A->wa, A->yt);
@@ -493,12 +493,12 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
    * the late switch lets through, first order in its delay */
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
   if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
-  cup_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  la_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
   if (troot > t0) {
-    cup_zero(A->de2, A->na);
-    cup_copy(A->de2, A->e, n);
+    la_zero(A->de2, A->na);
+    la_copy(A->de2, A->e, n);
     ad_flow(A, old, troot - t0, A->de2, A->de);
-    cup_copy(A->ed, A->de, n);
+    la_copy(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
@@ -514,13 +514,13 @@ static int event(cup_adaptive *A, ad_run *R, ad_event *ev, double h, double t1) 
   error_onto(A, nm->mask, A->e);
   if (nm->mask != before)
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
-  cup_copy(A->x, A->xs, n);
+  la_copy(A->x, A->xs, n);
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
   return end_of_step(A, R, &pi, 1);
 }
 
-static int take_step(cup_adaptive *A, ad_run *R) {
+static int take_step(adaptive_ws *A, ad_run *R) {
   ad_mode *md = R->md;
   int n = A->n, na = A->na, snap;
   double t1;
@@ -561,7 +561,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
     for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
     A->et[i] = acc;
   }
-  cup_copy(A->e, A->et, n);
+  la_copy(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
     double *v = A->tan + (size_t)c * n;
     for (int i = 0; i < n; i++) {
@@ -569,7 +569,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
       for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * v[j];
       A->et[i] = acc;
     }
-    cup_copy(v, A->et, n);
+    la_copy(v, A->et, n);
   }
   R->t = t1;
   return end_of_step(A, R, &pi, 0);
@@ -579,7 +579,7 @@ static int take_step(cup_adaptive *A, ad_run *R) {
 
 /* With D, a catching-up step's active set: the one that continues from the
  * step's start (NULL with the status set on an error). */
-static ad_mode *catch_up_mode(cup_adaptive *A, ad_run *R, double h) {
+static ad_mode *catch_up_mode(adaptive_ws *A, ad_run *R, double h) {
   uint64_t mask;
   int piv = 0;
   if (ad_inputs_on(A, R->t, fmin(R->tb, R->t + h), A->wt, A->uerr)) {
@@ -594,9 +594,9 @@ static ad_mode *catch_up_mode(cup_adaptive *A, ad_run *R, double h) {
   return ad_mode_get(A, mask);
 }
 
-static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb);
+static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb);
 
-static int catch_up(cup_adaptive *A, ad_run *R) {
+static int catch_up(adaptive_ws *A, ad_run *R) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
   double window = AD_ZENO_RING / rate, tend = fmin(A->tend, R->t + window);
   char rows[96] = "";
@@ -617,7 +617,7 @@ static int catch_up(cup_adaptive *A, ad_run *R) {
 
 /* The catching-up steps until R->tend (a resumed run may start inside
  * them; at_tb: its last step ended on a breakpoint). */
-static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
+static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb) {
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
   double window = AD_ZENO_RING / rate, tend = R->tend;
   int n = A->n, na = A->na, st;
@@ -641,7 +641,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
       A->yb[i] = acc;
     }
     ad_state(A, md0, A->yb, A->x);
-    cup_copy(A->xf, A->x, n);
+    la_copy(A->xf, A->x, n);
     ad_offset(A, A->yb + n, A->g);
     uint64_t active;
     cup_proj_info pi;
@@ -665,7 +665,7 @@ static int catch_up_from(cup_adaptive *A, ad_run *R, int at_tb) {
   return choose_mode(A, R, A->wt, 0, R->t);
 }
 
-static int zeno_check(cup_adaptive *A, ad_run *R) {
+static int zeno_check(adaptive_ws *A, ad_run *R) {
   if (A->nzeno < AD_ZENO_RING) return CUP_OK;
   double rate = A->o.max_event_rate > 0 ? A->o.max_event_rate : 1e5 / A->o.T;
   double oldest = A->zeno[A->nzeno % AD_ZENO_RING];
@@ -675,7 +675,7 @@ static int zeno_check(cup_adaptive *A, ad_run *R) {
 /* ---- the run ----------------------------------------------------------------------- */
 
 /* From where a run is (its start, or a resumed stop) to T. */
-static int run_to_end(cup_adaptive *A, ad_run *R, int st) {
+static int run_to_end(adaptive_ws *A, ad_run *R, int st) {
   while (st >= 0 && R->t < A->tend) {
     R->ev0 = R->info->events;
     st = take_step(A, R);
@@ -771,7 +771,7 @@ int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
   int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
   s->phase = AD_STOP_NONE;
-  cup_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
+  la_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
   if (phase == AD_STOP_SAMPLE) {
     info->samples--;                             /* counted when the sink refused it */
     if (sink) st = offer(A, &R);

@@ -18,7 +18,7 @@ static double norm_inf(const double *v, int n) {
   return r;
 }
 
-double ad_sample_time(const cup_adaptive *A, long j) {
+double ad_sample_time(const adaptive_ws *A, long j) {
   long last = A->o.output_samples - 1;
   double t0 = A->o.output_t0;
   return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
@@ -29,7 +29,7 @@ double ad_sample_time(const cup_adaptive *A, long j) {
  * the rows' entries of a column are side by side in E (a sample is this
  * product twice; row by row it was most of a sample's own cost). */
 static void times(int na, const double *E, double *y, double *tmp) {
-  cup_copy(tmp, y, na);
+  la_copy(tmp, y, na);
   int i = 0;
   for (; i + 4 <= na; i += 4) {
     double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
@@ -58,7 +58,7 @@ static void times(int na, const double *E, double *y, double *tmp) {
  * 10^5 samples adds no steps). The sink is given step number k. A refused
  * sample leaves its states in A->pend (the step goes on to its end, where
  * the run stops): 1; else 0, or an error. */
-static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k) {
+static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
   const cup_integrator_options *o = &A->o;
   int n = A->n, na = A->na;
   double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
@@ -70,8 +70,8 @@ static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k
     R->est_max = fmax(R->est_max, norm_inf(A->de, n) + rnd);
     if (R->sink) {
       ad_state(A, md, A->zy, A->xo);
-      if (cup_state_beyond(A->xo, n)) {            /* as step_done: never a state out of range */
-        int w = cup_state_worst(A->xo, n);
+      if (tally_state_beyond(A->xo, n)) {            /* as step_done: never a state out of range */
+        int w = tally_state_worst(A->xo, n);
         return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
                     "the scheme diverged", CUP_STATE_MAX, ts, w, A->xo[w]);
       }
@@ -90,8 +90,8 @@ static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k
         p->md = (int)(md - A->modes);
         p->k = k;
         p->t_end = t1;
-        cup_copy(p->zy, A->zy, na);
-        cup_copy(p->de, A->de, na);
+        la_copy(p->zy, A->zy, na);
+        la_copy(p->de, A->de, na);
         return 1;
       }
     }
@@ -109,7 +109,7 @@ static int dense_from(cup_adaptive *A, ad_run *R, ad_mode *md, double t1, long k
  * estimate there is e0's (the error at t0) carried along by the same flow.
  * After a refused sample in this step, nothing is offered: a second piece
  * (an event's new flow) is kept for the resumed run. */
-int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
                       double t1) {
   const cup_integrator_options *o = &A->o;
   if (o->output != CUP_OUTPUT_SAMPLES) return CUP_OK;
@@ -120,8 +120,8 @@ int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, con
       p->md2 = (int)(md - A->modes);
       p->t2a = t0;
       p->t2b = t1;
-      cup_copy(p->y2, ya, A->na);
-      cup_copy(p->e2, e0, A->n);
+      la_copy(p->y2, ya, A->na);
+      la_copy(p->e2, e0, A->n);
     }
     return CUP_OK;
   }
@@ -130,8 +130,8 @@ int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, con
   if (!(ts < t1)) return CUP_OK;
   int n = A->n, na = A->na;
   ad_flow(A, md, ts - t0, ya, A->zy);
-  cup_zero(A->de2, na);
-  cup_copy(A->de2, e0, n);
+  la_zero(A->de2, na);
+  la_copy(A->de2, e0, n);
   ad_flow(A, md, ts - t0, A->de2, A->de);
   p->seg2 = 0;
   int st = dense_from(A, R, md, t1, R->steps + 1);
@@ -140,11 +140,11 @@ int ad_emit_dense(cup_adaptive *A, ad_run *R, ad_mode *md, const double *ya, con
 
 /* A resumed AD_STOP_DENSE: the refused sample and the rest of its piece
  * from the states kept, then the second piece's. */
-int ad_dense_resume(cup_adaptive *A, ad_run *R) {
+int ad_dense_resume(adaptive_ws *A, ad_run *R) {
   struct ad_pend *p = &A->pend;
   p->active = 0;
-  cup_copy(A->zy, p->zy, A->na);
-  cup_copy(A->de, p->de, A->na);
+  la_copy(A->zy, p->zy, A->na);
+  la_copy(A->de, p->de, A->na);
   int st = dense_from(A, R, &A->modes[p->md], p->t_end, p->k);
   if (st) return st;
   if (!p->seg2) return CUP_OK;
@@ -153,8 +153,8 @@ int ad_dense_resume(cup_adaptive *A, ad_run *R) {
   double ts = ad_sample_time(A, R->next_sample);
   p->seg2 = 0;                                   /* a refusal there is the only piece left */
   ad_flow(A, md2, ts - p->t2a, p->y2, A->zy);
-  cup_zero(A->de2, A->na);
-  cup_copy(A->de2, p->e2, A->n);
+  la_zero(A->de2, A->na);
+  la_copy(A->de2, p->e2, A->n);
   ad_flow(A, md2, ts - p->t2a, A->de2, A->de);
   return dense_from(A, R, md2, p->t2b, p->k);
 }
@@ -163,7 +163,7 @@ int ad_dense_resume(cup_adaptive *A, ad_run *R) {
  * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
  * (p entries) estimates the interpolation error from the last Chebyshev
  * coefficients (geometric decay assumed). */
-static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *err) {
+static int poly_input(adaptive_ws *A, double t0, double h, double *w, double *err) {
   enum { q = AD_DEGREE };
   int p = A->p;
   double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
@@ -216,16 +216,16 @@ static int poly_input(cup_adaptive *A, double t0, double h, double *w, double *e
 
 /* The exosystem's states for a step [t0, t1] inside a piece (and the
  * constant state, with D). */
-int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) {
+int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   if (A->one >= 0) w[A->one] = 1;
   if (!A->nwu) return CUP_OK;
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
   if (A->piece_ok && t0 == A->piece_t0 && t1 == A->piece_t1) {   /* the same piece again: its states */
-    cup_copy(w, A->piece_w, A->nwu);
+    la_copy(w, A->piece_w, A->nwu);
     return CUP_OK;
   }
-  cup_input_gen_piece(A->u, A->first_state, t0, t1, w);
-  cup_copy(A->piece_w, w, A->nwu);
+  input_gen_piece(A->u, A->first_state, t0, t1, w);
+  la_copy(A->piece_w, w, A->nwu);
   A->piece_t0 = t0;
   A->piece_t1 = t1;
   A->piece_ok = 1;
@@ -234,13 +234,13 @@ int ad_inputs_on(cup_adaptive *A, double t0, double t1, double *w, double *err) 
 
 /* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
  * state and the input's states from the output time on. */
-int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
+int adaptive_zeta(adaptive_ws *A, double *zeta) {
   const ad_mode *md = A->zmd;
   for (int i = 0; i < A->m; i++) zeta[i] = 0;
   if (!md) return CUP_OK;
   if (A->zy_ready) {                             /* a sample inside a step: its y is known */
     for (int i = 0; i < A->m; i++)
-      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
     return CUP_OK;
   }
   double t = A->zt, tb = cup_input_next_break(A->u, t);
@@ -248,7 +248,7 @@ int cup_adaptive_zeta(cup_adaptive *A, double *zeta) {
   if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
   for (int i = 0; i < A->m; i++)
-    if (md->is_zeta[i]) zeta[i] = md->Lc[i] + cup_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+    if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
   return CUP_OK;
 }
 

@@ -17,42 +17,42 @@ static int create(cup_integrator *I, const scheme_model *md, void **ws, char *er
   const cup_lcs *L = md->L;
   const cup_process_desc *d = md->pd;
   if (L && L->has_D && L->keep_B)
-    return cup_lcs_needs_reciprocal_(cup_scheme_name(CUP_SCHEME_ADAPTIVE), "its state jumps are projections in the "
-                                     "energy metric P and its choice of the active set takes the network as passive",
-                                     errmsg);
+    return lcs_needs_reciprocal(cup_scheme_name(CUP_SCHEME_ADAPTIVE), "its state jumps are projections in the "
+                                "energy metric P and its choice of the active set takes the network as passive",
+                                errmsg);
   if (d && (!md->K || d->f || d->f_integral))
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS, a polyset with f = A x + E u "
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "adaptive scheme: it steps an LCS, a polyset with f = A x + E u "
                     "(this process has %s); use the explicit, implicit or exponential scheme",
                     !md->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
-  cup_adaptive *A = NULL;
-  int st = cup_adaptive_create(&A, md->D, md->K, md->G, L && L->has_D ? &L->B : NULL, L && L->has_D ? &L->D : NULL,
-                               md->u, md->o, errmsg);
+  adaptive_ws *A = NULL;
+  int st = adaptive_create(&A, md->D, md->K, md->G, L && L->has_D ? &L->B : NULL, L && L->has_D ? &L->D : NULL,
+                           md->u, md->o, errmsg);
   *ws = A;
   return st;
 }
 
 static void free_ws(void *ws) {
-  cup_adaptive *A = ws;
-  cup_adaptive_free(&A);
+  adaptive_ws *A = ws;
+  adaptive_free(&A);
 }
 
 static int run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  return cup_adaptive_run(ws, x0, sink, sink_ctx, info);
+  return adaptive_run(ws, x0, sink, sink_ctx, info);
 }
 
-static const double *state(const void *ws) { return cup_adaptive_state(ws); }
-static int zeta(void *ws, double *z) { return cup_adaptive_zeta(ws, z); }
+static const double *state(const void *ws) { return adaptive_state(ws); }
+static int zeta(void *ws, double *z) { return adaptive_zeta(ws, z); }
 
 static int stopped(const void *ws, cup_run_info *info) {
-  if (!cup_adaptive_stopped(ws)) return 0;
-  cup_adaptive_unstop(ws, info);
+  if (!adaptive_stopped(ws)) return 0;
+  adaptive_unstop(ws, info);
   return 1;
 }
 
-static void checkpoint(void *ws, cup_ckpt *c) { cup_adaptive_checkpoint(ws, c); }
+static void checkpoint(void *ws, ckpt *c) { adaptive_checkpoint(ws, c); }
 
 static int resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  return cup_adaptive_resume(ws, sink, sink_ctx, info);
+  return adaptive_resume(ws, sink, sink_ctx, info);
 }
 
 static const scheme_type adaptive_type = {
@@ -61,4 +61,4 @@ static const scheme_type adaptive_type = {
 };
 const scheme_type *const scheme_adaptive = &adaptive_type;
 
-cup_adaptive *cup_adaptive_of(const cup_integrator *I) { return I->sch == scheme_adaptive ? I->ws : NULL; }
+adaptive_ws *adaptive_of(const cup_integrator *I) { return I->sch == scheme_adaptive ? I->ws : NULL; }

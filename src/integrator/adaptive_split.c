@@ -32,7 +32,7 @@ static int svd(double *a, double *v, double *s, double *work, int k) {
  * singular (or the SVD failed). The SVD is D_JJ^T's, U' S V'^T (GSL leaves
  * the columns of U for zero singular values zero; V is complete): D_JJ's
  * left singular vectors are V', kept in A->svd_v (row-major, nj x nj). */
-static int factor_rows(cup_adaptive *A, const int *J, int nj, double *Zt, int *nz) {
+static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz) {
   int m = A->m;
   *nz = 0;
   if (nj == 0) return 0;
@@ -78,16 +78,16 @@ static int factor_rows(cup_adaptive *A, const int *J, int nj, double *Zt, int *n
   double *lu = A->Sl, *col = A->Sinv;
   for (int b = 0; b < nj; b++)
     for (int c = 0; c < nj; c++) lu[b + (size_t)c * nj] = dr[b] * N[b + (size_t)c * nj] * dc[c];
-  if (cup_dense_lu(lu, nj, A->perm)) return 1;
+  if (la_dense_lu(lu, nj, A->perm)) return 1;
   for (int k = 0; k < nj; k++) {
     for (int b = 0; b < nj; b++) col[b] = b == k ? dr[k] : 0;
-    cup_dense_lu_solve(lu, nj, A->perm, col, tmp_w);
+    la_dense_lu_solve(lu, nj, A->perm, col, tmp_w);
     for (int c = 0; c < nj; c++) A->Ninv[c + (size_t)k * nj] = dc[c] * col[c];
   }
   return 0;
 }
 
-int ad_dae_factor(cup_adaptive *A, int *rows, int nj, double *Zt, int *nz) {
+int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz) {
   if (!factor_rows(A, rows, nj, Zt, nz)) return nj;
   /* dependent rows: keep, in order, each row that leaves N nonsingular */
   int keep[CUP_DENSE_MAX_ROWS], nk = 0;

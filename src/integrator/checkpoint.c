@@ -51,12 +51,12 @@ static void fingerprint_of(const cup_integrator *I, fingerprint *f) {
 
 /* The first field that differs, named in errmsg; CUP_OK when none. */
 static int same_run(const fingerprint *a, const fingerprint *b, char *errmsg) {
-#define CK_INT(f, name) if (a->f != b->f) return cup_fail(errmsg, CUP_ERR_ARG, "the checkpoint is of another run: " \
+#define CK_INT(f, name) if (a->f != b->f) return fail_fmt(errmsg, CUP_ERR_ARG, "the checkpoint is of another run: " \
   "%s = %lld there, %lld here", name, (long long)a->f, (long long)b->f);
-#define CK_DBL(f, name) if (memcmp(&a->f, &b->f, sizeof a->f)) return cup_fail(errmsg, CUP_ERR_ARG, \
+#define CK_DBL(f, name) if (memcmp(&a->f, &b->f, sizeof a->f)) return fail_fmt(errmsg, CUP_ERR_ARG, \
   "the checkpoint is of another run: %s = %.17g there, %.17g here", name, a->f, b->f);
   if (a->endian != b->endian || a->sizes != b->sizes)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the checkpoint was written on another kind of machine");
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the checkpoint was written on another kind of machine");
   CK_INT(version, "its format version") CK_INT(scheme, "scheme") CK_INT(n, "the state dimension")
   CK_INT(m, "the rows") CK_INT(p, "the inputs") CK_INT(method, "projector.method") CK_INT(output, "output")
   CK_INT(estimate, "estimate") CK_INT(f_order, "f_order") CK_INT(warm_start, "projector.warm_start")
@@ -70,7 +70,7 @@ static int same_run(const fingerprint *a, const fingerprint *b, char *errmsg) {
   return CUP_OK;
 }
 
-static void io_info(cup_ckpt *c, cup_run_info *i) {
+static void io_info(ckpt *c, cup_run_info *i) {
   CUP_CKPT_IO(c, i->status); CUP_CKPT_IO(c, i->step); CUP_CKPT_IO(c, i->t); CUP_CKPT_IO(c, i->projected);
   CUP_CKPT_IO(c, i->skipped); CUP_CKPT_IO(c, i->not_certified); CUP_CKPT_IO(c, i->dual_iterations);
   CUP_CKPT_IO(c, i->factorizations); CUP_CKPT_IO(c, i->max_eps_cert); CUP_CKPT_IO(c, i->max_eta_cert);
@@ -81,7 +81,7 @@ static void io_info(cup_ckpt *c, cup_run_info *i) {
 }
 
 /* The run's state after the header, both ways. */
-static void io_state(cup_integrator *I, cup_ckpt *c, cup_run_info *info) {
+static void io_state(cup_integrator *I, ckpt *c, cup_run_info *info) {
   io_info(c, info);
   I->sch->checkpoint(I->ws, c);
 }
@@ -93,7 +93,7 @@ static int saves(const cup_integrator *I) {
 }
 
 /* Header and state into c (a counting stream when c->buf is NULL). */
-static int save(const cup_integrator *Ic, const cup_run_info *run, cup_ckpt *c) {
+static int save(const cup_integrator *Ic, const cup_run_info *run, ckpt *c) {
   cup_integrator *I = (cup_integrator *)Ic;      /* saving only reads it */
   if (!I) return CUP_ERR_ARG;
   if (!saves(I)) return CUP_ERR_UNSUPPORTED;
@@ -101,14 +101,14 @@ static int save(const cup_integrator *Ic, const cup_run_info *run, cup_ckpt *c) 
   if (!I->sch->stopped(I->ws, &info)) return CUP_ERR_ARG;   /* info: the status the stop replaced */
   fingerprint f;
   fingerprint_of(I, &f);
-  cup_ckpt_io(c, (void *)magic, sizeof magic);
+  ckpt_io(c, (void *)magic, sizeof magic);
   CUP_CKPT_IO(c, f);
   io_state(I, c, &info);
   return c->bad ? CUP_ERR_ARG : CUP_OK;
 }
 
 long cup_integrator_checkpoint_size(const cup_integrator *I) {
-  cup_ckpt c = {NULL, 0, 0, 1, 0};
+  ckpt c = {NULL, 0, 0, 1, 0};
   int st = save(I, NULL, &c);
   return st ? st : (long)c.len;
 }
@@ -116,28 +116,28 @@ long cup_integrator_checkpoint_size(const cup_integrator *I) {
 int cup_integrator_checkpoint_save(const cup_integrator *I, const cup_run_info *info, void *buf,
                                    unsigned long size) {
   if (!buf || !info) return CUP_ERR_ARG;
-  cup_ckpt c = {buf, 0, size, 1, 0};
+  ckpt c = {buf, 0, size, 1, 0};
   return save(I, info, &c);
 }
 
 int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsigned long size, char *errmsg) {
-  if (!I || !buf) return cup_fail(errmsg, CUP_ERR_ARG, "checkpoint: NULL argument");
+  if (!I || !buf) return fail_fmt(errmsg, CUP_ERR_ARG, "checkpoint: NULL argument");
   if (!saves(I))
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "checkpoint: a run of this kind of set (or with switches) cannot "
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "checkpoint: a run of this kind of set (or with switches) cannot "
                     "be resumed");
-  cup_ckpt c = {(unsigned char *)buf, 0, size, 0, 0};
+  ckpt c = {(unsigned char *)buf, 0, size, 0, 0};
   char m[sizeof magic];
   fingerprint have, want;
-  cup_ckpt_io(&c, m, sizeof m);
+  ckpt_io(&c, m, sizeof m);
   CUP_CKPT_IO(&c, have);
   if (c.bad || memcmp(m, magic, sizeof m))
-    return cup_fail(errmsg, CUP_ERR_ARG, "not a catchup checkpoint (%lu bytes)", size);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "not a catchup checkpoint (%lu bytes)", size);
   fingerprint_of(I, &want);
   int st = same_run(&have, &want, errmsg);
   if (st) return st;
   io_state(I, &c, &I->stop.info);
   if (c.bad || c.len != size)
-    return cup_fail(errmsg, CUP_ERR_ARG, "the checkpoint is %lu bytes, a run like this one's is %zu: cut short, "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the checkpoint is %lu bytes, a run like this one's is %zu: cut short, "
                     "or of another build", size, c.len);
   I->stop.restored = 1;
   return CUP_OK;

@@ -5,7 +5,7 @@
 #include "catchup.h"
 #include "estimate.h"
 
-int cup_estimate_init(cup_estimate *E, long n, int dim) {
+int estimate_init(estimate_ws *E, long n, int dim) {
   memset(E, 0, sizeof *E);
   long half = n / 2;
   E->n = n;
@@ -15,26 +15,26 @@ int cup_estimate_init(cup_estimate *E, long n, int dim) {
   return E->X ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-void cup_estimate_free(cup_estimate *E) {
+void estimate_free(estimate_ws *E) {
   free(E->X);
   memset(E, 0, sizeof *E);
 }
 
 /* Coarse step k goes to row k / s, the last one (k = n/2) to the row after. */
-int cup_estimate_keep(long k, double t, const double *x, void *ctx) {
+int estimate_keep(long k, double t, const double *x, void *ctx) {
   (void)t;
-  cup_estimate *E = ctx;
+  estimate_ws *E = ctx;
   long half = E->n / 2, row = k % E->stride == 0 ? k / E->stride : half / E->stride + 1;
   memcpy(E->X + (size_t)row * (size_t)E->dim, x, sizeof(double) * (size_t)E->dim);
   return 0;
 }
 
-void cup_estimate_start(cup_estimate *E, int ok) {
+void estimate_start(estimate_ws *E, int ok) {
   E->ok = ok;
   E->err = 0;
 }
 
-void cup_estimate_compare(cup_estimate *E, long k, const double *x) {
+void estimate_compare(estimate_ws *E, long k, const double *x) {
   long half = E->n / 2;
   const double *c;
   if (k == E->n) c = E->X + (size_t)(half / E->stride + (half % E->stride != 0)) * (size_t)E->dim;

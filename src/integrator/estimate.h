@@ -13,25 +13,25 @@
 
 #define CUP_ESTIMATE_POINTS 4096
 
-typedef struct cup_estimate {
+typedef struct estimate_ws {
   long n, stride;           /* the fine run's n (even); coarse steps between compared points */
   int dim, ok;
   double *X;                /* the coarse run at steps 0, s, 2s, ..., and at n/2 (last row) */
   double err;
-} cup_estimate;
+} estimate_ws;
 
 /* CUP_OK or CUP_ERR_NOMEM. */
-int cup_estimate_init(cup_estimate *E, long n, int dim);
-void cup_estimate_free(cup_estimate *E);
+int estimate_init(estimate_ws *E, long n, int dim);
+void estimate_free(estimate_ws *E);
 /* The coarse run's output stride (its output: every stride steps). */
-static inline long cup_estimate_stride(const cup_estimate *E) { return E->stride; }
+static inline long estimate_stride(const estimate_ws *E) { return E->stride; }
 /* A cup_sample_fn for the coarse run (ctx = E): keeps its states. */
-int cup_estimate_keep(long k, double t, const double *x, void *ctx);
+int estimate_keep(long k, double t, const double *x, void *ctx);
 /* After the coarse run: ok = it finished; comparisons start from 0. */
-void cup_estimate_start(cup_estimate *E, int ok);
+void estimate_start(estimate_ws *E, int ok);
 /* The fine run's state at step k (1..n): compared when k is a point. */
-void cup_estimate_compare(cup_estimate *E, long k, const double *x);
+void estimate_compare(estimate_ws *E, long k, const double *x);
 /* The estimate so far; NaN if the coarse run failed. */
-static inline double cup_estimate_value(const cup_estimate *E) { return E->ok ? E->err : NAN; }
+static inline double estimate_value(const estimate_ws *E) { return E->ok ? E->err : NAN; }
 
 #endif

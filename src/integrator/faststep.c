@@ -6,10 +6,10 @@
 #include "lcp/step.h"
 #include "tally.h"
 
-void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
-                       const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
-                       double T) {
-  *f = (cup_faststep){.th = th, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T, .h = fs->h,
+void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cup_polyset *K,
+                   const la_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
+                   double T) {
+  *f = (faststep_ws){.th = th, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T, .h = fs->h,
                       .last_t = NAN};
   const cup_input *u = fs->u;
   if (!use_theta || !th->small || !fs->affine || fs->has_f || fs->p > 1 || !(eps_n > 0) || !(eta_n > 0) ||
@@ -34,7 +34,7 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
   if (f->moving) {
     if (G->ncol != 1) return;
     for (int q = G->p[0]; q < G->p[1]; q++) {
-      if (f->grows[G->i[q]]) return;        /* a repeated row: cup_sparse_gaxpy adds twice */
+      if (f->grows[G->i[q]]) return;        /* a repeated row: la_sparse_gaxpy adds twice */
       f->grows[G->i[q]] = -1;
       f->gdir[G->i[q]] = G->x[q];
     }
@@ -45,28 +45,28 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
 /* The values of CUP_FAST_AHEAD steps: written two at a time, read one at a
  * time (a lane picked by a variable costs a few instructions, an element
  * one). */
-typedef union cup_ahead {
-  cup_v2d v[CUP_FAST_AHEAD / 2];
+typedef union faststep_ahead {
+  v2d v[CUP_FAST_AHEAD / 2];
   double d[CUP_FAST_AHEAD];
-} cup_ahead;
+} faststep_ahead;
 
 /* One square wave's share of ui and u1 (inputs_ahead) for the steps
  * ending at t1: its position q(t) serves both its integral and its value,
  * and its antiderivative at a step's start is the one at the last step's
  * end. Returns 1 when its value is the same at all these steps. */
-static int square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, int cnt, cup_ahead *ui,
-                        cup_ahead *u1) {
-  const cup_term *w = f->term[q];
-  const double omega = w->omega, ph = w->phase / M_PI;        /* cup_square_q */
-  const double height = w->amp * M_PI / w->omega, amp = w->amp;   /* cup_term_integral, cup_term_value */
-  cup_v2d qs[CUP_FAST_AHEAD / 2], r[CUP_FAST_AHEAD / 2], sg[CUP_FAST_AHEAD / 2];
-  cup_ahead tri;
-  cup_v2d before = {0, t0 == f->last_t ? f->last_tri[q] : cup_sign_sin_q_integral(cup_square_q(w, t0))};
+static int square_ahead(faststep_ws *f, int q, double t0, const faststep_ahead *t1, int cnt, faststep_ahead *ui,
+                        faststep_ahead *u1) {
+  const input_term *w = f->term[q];
+  const double omega = w->omega, ph = w->phase / M_PI;        /* input_square_q */
+  const double height = w->amp * M_PI / w->omega, amp = w->amp;   /* input_term_integral, input_term_value */
+  v2d qs[CUP_FAST_AHEAD / 2], r[CUP_FAST_AHEAD / 2], sg[CUP_FAST_AHEAD / 2];
+  faststep_ahead tri;
+  v2d before = {0, t0 == f->last_t ? f->last_tri[q] : input_sign_sin_q_integral(input_square_q(w, t0))};
   for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) qs[p] = omega * t1->v[p] / M_PI + ph;
-  int same = cup_square_block(qs, CUP_FAST_AHEAD / 2, r, sg);   /* omega > 0: q rises with t */
+  int same = input_square_block(qs, CUP_FAST_AHEAD / 2, r, sg);   /* omega > 0: q rises with t */
   for (int p = 0; p < CUP_FAST_AHEAD / 2; p++) {
-    tri.v[p] = cup_triangle_r2(r[p]);
-    ui->v[p] += height * (tri.v[p] - cup_v2_shuffle(before, tri.v[p], 1, 2));
+    tri.v[p] = input_triangle_r2(r[p]);
+    ui->v[p] += height * (tri.v[p] - v2_shuffle(before, tri.v[p], 1, 2));
     before = tri.v[p];
   }
   if (cnt) f->last_tri[q] = tri.d[cnt - 1];
@@ -76,7 +76,7 @@ static int square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, 
 
 /* The inputs of steps k, k + 1, ..., k + CUP_FAST_AHEAD - 1, step k + j in
  * lane j & 1 of entry j >> 1: t1 (each step's end), ui (the integral of u
- * over it: freestep.c's cup_freestep_term_integral summed term by term as
+ * over it: freestep.c's freestep_term_integral summed term by term as
  * waveform_step_integral sums one input) and, for a moving set, g (the
  * offset at its end: integrator.c's moving_offset of cup_input_eval's u,
  * once for the stretch when u is the same at all its steps); returns how
@@ -86,15 +86,15 @@ static int square_ahead(cup_faststep *f, int q, double t0, const cup_ahead *t1, 
  * overlap one another and the steps' chains; two steps at a time, and always
  * all of them (a few wasted at the end of a stretch) so that the loops have
  * no exits. */
-static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_ahead *ui, cup_v2d *g) {
+static int inputs_ahead(faststep_ws *f, long k, long stop, faststep_ahead *t1, faststep_ahead *ui, v2d *g) {
   enum { P = CUP_FAST_AHEAD / 2 };
   int cnt = stop - k + 1 < CUP_FAST_AHEAD ? (int)(stop - k + 1) : CUP_FAST_AHEAD;
-  cup_ahead t0, u1;                              /* t0: each step's start */
-  cup_v2d kk = {(double)k, (double)k + 1}, tmid[P];
-  for (int p = 0; p < P; p++) {                  /* t_{k+j} as cup_grid_time gives it: */
+  faststep_ahead t0, u1;                              /* t0: each step's start */
+  v2d kk = {(double)k, (double)k + 1}, tmid[P];
+  for (int p = 0; p < P; p++) {                  /* t_{k+j} as tally_grid_time gives it: */
     t0.v[p] = (kk + 2 * p) * f->h;               /* (double)(k + j) exactly: k < 2^53 */
     t1->v[p] = (kk + (2 * p + 1)) * f->h;
-    ui->v[p] = u1.v[p] = (cup_v2d){0, 0};
+    ui->v[p] = u1.v[p] = (v2d){0, 0};
   }
   if (k <= f->steps && f->steps - k <= CUP_FAST_AHEAD) {   /* t_steps = T */
     if (f->steps - k < CUP_FAST_AHEAD) t0.d[f->steps - k] = f->T;
@@ -103,7 +103,7 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_a
   for (int p = 0; p < P; p++) tmid[p] = 0.5 * (t0.v[p] + t1->v[p]);
   int integrate = f->integrate, moving = f->moving, same = 1;
   for (int q = 0; q < f->nterms && (integrate || moving); q++) {
-    const cup_term *w = f->term[q];
+    const input_term *w = f->term[q];
     double th = f->term_h[q];
     if (w->kind == CUP_WAVE_SQUARE && w->omega != 0) {
       same &= square_ahead(f, q, t0.d[0], t1, cnt, ui, &u1);
@@ -112,20 +112,20 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_a
     if (w->kind == CUP_WAVE_CONSTANT || (w->kind == CUP_WAVE_SINE && !(w->omega > 0)))
       for (int p = 0; p < P; p++) ui->v[p] += th;
     else if (w->kind == CUP_WAVE_SINE)
-      for (int p = 0; p < P; p++) ui->v[p] += th * cup_sin2(w->omega * tmid[p] + w->phase);
+      for (int p = 0; p < P; p++) ui->v[p] += th * trig_sin2(w->omega * tmid[p] + w->phase);
     else
-      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui->d[j] += cup_term_integral(w, t0.d[j], t1->d[j]);
+      for (int j = 0; j < CUP_FAST_AHEAD; j++) ui->d[j] += input_term_integral(w, t0.d[j], t1->d[j]);
     same &= w->kind == CUP_WAVE_CONSTANT;
-    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1.d[j] += cup_term_value(w, t1->d[j]);
+    for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) u1.d[j] += input_term_value(w, t1->d[j]);
   }
   if (cnt) f->last_t = t1->d[cnt - 1];
   for (int p = 0; p < P && !integrate; p++)   /* a constant input's h u, or none */
-    ui->v[p] = (cup_v2d){f->uconst, f->uconst};
-  /* moving_offset: g0 where u = 0, as cup_sparse_gaxpy skips a zero;
-   * cup_small_core declines an offset that is not finite */
+    ui->v[p] = (v2d){f->uconst, f->uconst};
+  /* moving_offset: g0 where u = 0, as la_sparse_gaxpy skips a zero;
+   * lcp_small_core declines an offset that is not finite */
   for (int j = 0; j < CUP_FAST_AHEAD && moving; j++) {
     double u = u1.d[same ? 0 : j];
-    g[j] = same && j ? g[0] : cup_v2_select(u != 0 ? f->grows : (cup_v2l){0, 0}, f->g0 + f->gdir * u, f->g0);
+    g[j] = same && j ? g[0] : v2_select(u != 0 ? f->grows : (v2l){0, 0}, f->g0 + f->gdir * u, f->g0);
   }
   return cnt;
 }
@@ -133,33 +133,33 @@ static int inputs_ahead(cup_faststep *f, long k, long stop, cup_ahead *t1, cup_a
 /* One step from x into z (xf: the free point, g: the offset), its input
  * given: the status, or CUP_FAST_DECLINED with nothing but scratch changed. */
 static inline __attribute__((always_inline)) int
-fast_step(const cup_faststep *f, cup_small_carry *c, double uint, cup_v2d g, const cup_v2d *restrict x,
-          cup_v2d *restrict xf, cup_v2d *restrict z, cup_small_out *o, const int n, const int m) {
+fast_step(const faststep_ws *f, lcp_small_carry *c, double uint, v2d g, const v2d *restrict x,
+          v2d *restrict xf, v2d *restrict z, lcp_small_out *o, const int n, const int m) {
   for (int r = 0; r < (n + 1) / 2; r++) {                 /* freestep.c's affine_rows */
-    cup_v2d acc = {0, 0};
-    for (int j = 0; j < n; j++) acc += f->Phi[j][r] * cup_lane(x, j);
+    v2d acc = {0, 0};
+    for (int j = 0; j < n; j++) acc += f->Phi[j][r] * v2_lane(x, j);
     xf[r] = acc + f->Gam[r] * uint;   /* without input 0 * 0: + 0 changes no sum but -0, never a 0 + ... */
   }
   /* the scale (cup_polyset_norm of xf) only goes into pi: not computed */
-  return cup_small_core(f->th, c, g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
+  return lcp_small_core(f->th, c, g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
 
 /* integrator.c's loop from step k, the state, the LCP's warm start and the
  * statistics in registers: each step that ends CUP_OK before stop is booked
- * as the loop books it (cup_tally, step, t: added up here, written into
+ * as the loop books it (tally_projection, step, t: added up here, written into
  * info at the end); the first other one, or step stop, is left pending. */
 static inline __attribute__((always_inline)) long
-run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
+run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m) {
-  cup_v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
-  cup_ahead t1, ui;
-  cup_v2d gs[CUP_FAST_AHEAD];
+  v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
+  faststep_ahead t1, ui;
+  v2d gs[CUP_FAST_AHEAD];
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
-  cup_small_carry c = cup_small_load(f->th, m);
-  cup_small_out o;
+  lcp_small_carry c = lcp_small_load(f->th, m);
+  lcp_small_out o;
   long booked = 0, skipped = 0;
   long long iterations = 0;
-  cup_v2d max_cert = {info->max_eps_cert, info->max_eta_cert};
+  v2d max_cert = {info->max_eps_cert, info->max_eta_cert};
   double t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
     if (a == have) {
@@ -169,12 +169,12 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
     if (f->moving) g = gs[a];
     int s = fast_step(f, &c, ui.d[a], g, x, xf, z, &o, n, m);
     if (k == stop || s != CUP_OK) {
-      for (int j = 0; j < n; j++) xp[j] = cup_lane(x, j);
+      for (int j = 0; j < n; j++) xp[j] = v2_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
-        for (int j = 0; j < n; j++) xnewp[j] = cup_lane(z, j);
-        cup_small_info(pi, &o, NAN, f->eps_n, f->eta_n);
+        for (int j = 0; j < n; j++) xnewp[j] = v2_lane(z, j);
+        lcp_small_info(pi, &o, NAN, f->eps_n, f->eta_n);
       }
-      cup_small_store(f->th, &c, m);
+      lcp_small_store(f->th, &c, m);
       for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
       if (booked) {
         info->step = k;
@@ -192,12 +192,12 @@ run(cup_faststep *f, long k, long stop, double *xp, double *xnewp, cup_proj_info
     x[1] = z[1];
     t = t1.d[a];
     booked++;
-    skipped += o.skipped;                                 /* cup_tally, per step */
+    skipped += o.skipped;                                 /* tally_projection, per step */
     iterations += o.iterations;
     /* the tally's !(cert <= max) ? cert : max as max > cert ? max : cert
      * (SSE2's maxpd): the same but for zeros of opposite signs, and the
      * certificates are never -0 (max(gap, 0), a distance) */
-    max_cert = cup_v2_max(max_cert, (cup_v2d){o.eps_cert, o.eta_cert});
+    max_cert = v2_max(max_cert, (v2d){o.eps_cert, o.eta_cert});
   }
 }
 
@@ -210,8 +210,8 @@ typedef struct fast_undo {
   double t, max_eps_cert, max_eta_cert;
 } fast_undo;
 
-static void undo_save(fast_undo *u, const cup_faststep *f, const double *x, const cup_run_info *info) {
-  const cup_lcp_step *th = f->th;
+static void undo_save(fast_undo *u, const faststep_ws *f, const double *x, const cup_run_info *info) {
+  const lcp_step *th = f->th;
   for (int j = 0; j < th->n; j++) u->x[j] = x[j];
   for (int i = 0; i < th->m; i++) {
     u->lam[i] = th->lcp.lam[i];
@@ -228,8 +228,8 @@ static void undo_save(fast_undo *u, const cup_faststep *f, const double *x, cons
   u->max_eta_cert = info->max_eta_cert;
 }
 
-static void undo_apply(const fast_undo *u, cup_faststep *f, double *x, cup_run_info *info) {
-  cup_lcp_step *th = f->th;
+static void undo_apply(const fast_undo *u, faststep_ws *f, double *x, cup_run_info *info) {
+  lcp_step *th = f->th;
   for (int j = 0; j < th->n; j++) x[j] = u->x[j];
   for (int i = 0; i < th->m; i++) {
     th->lcp.lam[i] = u->lam[i];
@@ -247,7 +247,7 @@ static void undo_apply(const fast_undo *u, cup_faststep *f, double *x, cup_run_i
 }
 
 /* run() for the sizes: each size's steps compiled apart. */
-static __attribute__((noinline)) long dispatch(cup_faststep *f, long k, long stop, double *x, double *xnew,
+static __attribute__((noinline)) long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew,
                                                cup_proj_info *pi, int *st, cup_run_info *info) {
 #define CUP_FAST_CASE(N, M) \
   case (N) * 8 + (M): return run(f, k, stop, x, xnew, pi, st, info, N, M);
@@ -261,14 +261,14 @@ static __attribute__((noinline)) long dispatch(cup_faststep *f, long k, long sto
 }
 
 /* A run of more than one step, its last booked state checked. */
-static __attribute__((noinline)) long run_checked(cup_faststep *f, long k, long stop, double *x, double *xnew,
+static __attribute__((noinline)) long run_checked(faststep_ws *f, long k, long stop, double *x, double *xnew,
                                                   cup_proj_info *pi, int *st, cup_run_info *info) {
   fast_undo u;
   undo_save(&u, f, x, info);
   long pending = dispatch(f, k, stop, x, xnew, pi, st, info);
   /* the last booked state against its range, here and not in run(): there
    * it cost the loop registers (1.4-3.5 instructions a step) */
-  if (pending > k && cup_state_beyond(x, f->th->n)) {
+  if (pending > k && tally_state_beyond(x, f->th->n)) {
     undo_apply(&u, f, x, info);
     f->hold = pending;
     *st = CUP_FAST_DECLINED;
@@ -277,8 +277,8 @@ static __attribute__((noinline)) long run_checked(cup_faststep *f, long k, long 
   return pending;
 }
 
-long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
-                      cup_run_info *info) {
+long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                  cup_run_info *info) {
   return stop == k ? dispatch(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
                    : run_checked(f, k, stop, x, xnew, pi, st, info);
 }

@@ -26,22 +26,22 @@
 #define CUP_FAST_AHEAD 16        /* steps whose inputs are computed together */
 #define CUP_FAST_DECLINED 1000   /* not a status: the general loop takes the step */
 
-typedef struct cup_faststep {
+typedef struct faststep_ws {
   int on;
-  cup_lcp_step *th;
+  lcp_step *th;
   /* the free step xf = Phi x + Gam int u, copied from freestep.c's, the
    * states in lanes (util/lanes.h): Phi[j] column j */
-  cup_v2d Phi[CUP_STEP_SMALL_N][2], Gam[2];
+  v2d Phi[CUP_STEP_SMALL_N][2], Gam[2];
   int has;                  /* an input enters through E */
   int integrate;            /* ... and is integrated at every step (not constant) */
   double uconst;            /* a constant input's h u */
   /* the input's terms (one component) */
   int nterms;
-  const cup_term *term[CUP_FAST_TERMS];
+  const input_term *term[CUP_FAST_TERMS];
   double term_h[CUP_FAST_TERMS];   /* freestep.c's step-length factors */
   /* the moving offset g = F + G u(t_{k+1}), the rows in lanes */
-  cup_v2d g0, gdir;         /* F and G's one column */
-  cup_v2l grows;            /* all ones in the lanes of G's rows */
+  v2d g0, gdir;         /* F and G's one column */
+  v2l grows;            /* all ones in the lanes of G's rows */
   double *g;                /* the integrator's offset buffer, written at the end of a run */
   int moving;
   double eps_n, eta_n;
@@ -53,13 +53,13 @@ typedef struct cup_faststep {
   /* a run of steps that left the state's range (CUP_STATE_MAX) is declined
    * whole: the loop takes its steps up to this one itself, checking each */
   long hold;
-} cup_faststep;
+} faststep_ws;
 
 /* on = 1 when the steps qualify (the caller checks for a step callback);
  * G: the set's motion, NULL for a fixed set; allocates nothing. */
-void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th, const cup_polyset *K,
-                       const cup_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
-                       double T);
+void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cup_polyset *K,
+                   const la_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
+                   double T);
 /* Steps k, k + 1, ... from x: each one before stop that ends CUP_OK is
  * booked in info as cup_integrator_run books it (tally, step, t), its state
  * written into x; the first one that does not, or step stop, is left
@@ -70,7 +70,7 @@ void cup_faststep_init(cup_faststep *f, const cup_freestep *fs, cup_lcp_step *th
  * is beyond it, nothing is taken (*st = CUP_FAST_DECLINED, k returned) and
  * hold is set to the pending step, so that the loop finds the first state
  * beyond the range itself. */
-long cup_faststep_run(cup_faststep *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
-                      cup_run_info *info);
+long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                  cup_run_info *info);
 
 #endif

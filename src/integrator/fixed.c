@@ -188,7 +188,7 @@ static __attribute__((noinline, cold)) int diverged(const fixed_ws *F, cup_run_i
 
 /* A polyset step whose answer z (in xnew) has no certified distance to
  * K(t_{k+1}) (eta = inf) is not passed on as it is (issue 27, guarantee 6),
- * the projector's exact method (cup_project_exact) standing in whatever
+ * the projector's exact method (proj_exact) standing in whatever
  * method the options ask: first z's own distance from the projection v of z, d_K(z) <=
  * ||z - v||_P + eta(v) (z kept: the theta step's is not a projection, and
  * an exact step's is more accurate than a certified one); then, for a step
@@ -510,7 +510,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
     }
     info->step = k + 1;
     info->t = t1;
-    cup_tally(info, &pi);
+    tally_projection(info, &pi);
     if (st == CUP_WARN_NOT_CERTIFIED) {
       if (info->not_certified++ == 0 && info->status == CUP_OK) {
         info->status = st;

@@ -26,18 +26,18 @@
 static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
   if (!L->has_D || scheme == CUP_SCHEME_THETA) return CUP_OK;
   if (L->keep_B)
-    return cup_lcs_needs_reciprocal_(cup_scheme_name(scheme), "it projects in the energy metric P", errmsg);
+    return lcs_needs_reciprocal(cup_scheme_name(scheme), "it projects in the energy metric P", errmsg);
   int *rows = calloc((size_t)L->m + 1, sizeof(int)), k = 0;
   unsigned char *used = calloc((size_t)L->m + 1, 1);
-  if (!rows || !used) { free(rows); free(used); return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
+  if (!rows || !used) { free(rows); free(used); return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory"); }
   for (int j = 0; j < L->m; j++)
     for (int q = L->D.p[j]; q < L->D.p[j + 1]; q++)
       if (L->D.x[q] != 0) used[L->D.i[q]] = used[j] = 1;
   for (int i = 0; i < L->m; i++) if (used[i]) rows[k++] = i;
   char text[128];
-  cup_lcs_rows_text(L, rows, k, text, sizeof text);
+  lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
+  return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
                   "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state does "
                   "not fix): use the theta or the adaptive scheme", cup_scheme_name(scheme), text,
                   k == 1 ? "has" : "have");
@@ -60,7 +60,7 @@ static int theta_step_init(fixed_ws *F, const double *W, double theta, char *err
   if (!st) st = cup_lcp_step_init_bd(&F->th, F->K, W, F->h, B, D, theta);
   free(B);
   free(D);
-  return st ? cup_fail(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
+  return st ? fail_fmt(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
 }
 
 /* The polyset path: the projector, and the exact LCP step where it is

@@ -13,6 +13,6 @@ void fixed_grid(const void *ws, scheme_grid *g);
 int fixed_zeta(void *ws, double *zeta);
 int fixed_saves(const void *ws);
 int fixed_stopped(const void *ws, cup_run_info *info);
-void fixed_checkpoint(void *ws, cup_ckpt *c);
+void fixed_checkpoint(void *ws, ckpt *c);
 
 #endif

@@ -23,21 +23,21 @@
 
 /* The affine part of f, A x + E u(t) (an LCS's, or a general process's);
  * the matrices are shared, not owned. */
-typedef struct cup_drift {
+typedef struct freestep_drift {
   int n, p;
   int has_A, has_E;
-  cup_sparse A, E;          /* n x n, n x p when present */
+  la_sparse A, E;          /* n x n, n x p when present */
   const char *what;         /* "LCS", "process": for messages */
-} cup_drift;
+} freestep_drift;
 
 /* Pointwise callbacks f(t, x) a free step sums (an LCS's perturbation and a
  * process's f). */
 #define CUP_RHS_MAX 2
 
-typedef struct cup_freestep {
+typedef struct freestep_ws {
   int scheme, n, p;
   double h;
-  cup_drift d;
+  freestep_drift d;
   const cup_polyset *K;     /* the rows the splitting check looks at, or NULL */
   const cup_input *u;
   int has_f, nrhs;          /* f: pointwise callbacks and/or an exact integral */
@@ -48,7 +48,7 @@ typedef struct cup_freestep {
   int const_input;          /* u constant: E int u = h E u precomputed */
   double *eu_const;         /* n */
   double *ubuf, *fsum, *fbuf, *work;       /* p, n, n, 2 n scratch */
-  cup_quad_ws qws;          /* callback input quadrature */
+  input_quad_ws qws;          /* callback input quadrature */
   double *term_h;           /* per waveform term over a full step: constant c h;
                                sine 2A/w sin(w h / 2) (times sin(w t_mid + phase)) */
   /* Gauss-Legendre nodes on [0, 1] for int f and for callback convolutions */
@@ -73,17 +73,17 @@ typedef struct cup_freestep {
   double *Es, *ework;       /* exp(tau M) for split steps; 3 na^2 work */
   double *wgen, *xa, *xa2;  /* nw; na; na */
   double *Q;                /* callback input: e^{A h (1 - tau_q)} E, n x p per node */
-} cup_freestep;
+} freestep_ws;
 
 /* K (may be NULL) is the polyset of the splitting check. */
-int cup_freestep_init(cup_freestep *fs, const cup_drift *D, const cup_polyset *K, const cup_input *u,
-                      int scheme, double theta, double h, int f_order, char *errmsg);
+int freestep_init(freestep_ws *fs, const freestep_drift *D, const cup_polyset *K, const cup_input *u,
+                  int scheme, double theta, double h, int f_order, char *errmsg);
 /* Add f(t, x) (NULL: nothing), integrated by Gauss-Legendre; CUP_ERR_ARG
  * beyond CUP_RHS_MAX. */
-int cup_freestep_add_rhs(cup_freestep *fs, cup_rhs_fn f, void *ctx);
+int freestep_add_rhs(freestep_ws *fs, cup_rhs_fn f, void *ctx);
 /* Add a term given by its exact integral over a step (NULL: none). */
-void cup_freestep_set_rhs_integral(cup_freestep *fs, cup_rhs_integral_fn F, void *ctx);
-void cup_freestep_free(cup_freestep *fs);
+void freestep_set_rhs_integral(freestep_ws *fs, cup_rhs_integral_fn F, void *ctx);
+void freestep_free(freestep_ws *fs);
 /* The splitting defect of the implicit and exponential schemes. They move
  * by the free step W = (I - h A)^-1 or e^{hA} and then project along
  * B = P^-1 C^T. When the dynamics along a constraint direction b_i is fast
@@ -104,24 +104,24 @@ void cup_freestep_free(cup_freestep *fs);
  * direction's time constant, where the limit as n grows is wrong until h
  * falls below it. */
 #define CUP_SPLIT_WARN 0.5
-double cup_freestep_splitting(const cup_freestep *fs, int *row);
+double freestep_splitting(const freestep_ws *fs, int *row);
 /* xf from x over [t0, t1] (t1 - t0 = h). Returns CUP_OK, CUP_ERR_CALLBACK,
  * or CUP_WARN_QUADRATURE. */
-int cup_freestep_apply(cup_freestep *fs, double t0, double t1, const double *x, double *xf);
+int freestep_apply(freestep_ws *fs, double t0, double t1, const double *x, double *xf);
 /* h * spectral radius of A (dense eigenvalues up to CUP_IMPLICIT_MAX_DIM,
  * a Gershgorin upper bound beyond). */
-double cup_freestep_h_rho(const cup_drift *D, double h);
+double freestep_h_rho(const freestep_drift *D, double h);
 
 /* One waveform term's integral over a full grid step [t0, t1], tmid its
  * midpoint, with the step-length factors of constants and sines cached in
  * term_h (one sin per sine term and step:
  * int A sin(w s + p) = 2A/w sin(w h/2) sin(w t_mid + p)). */
-static inline double cup_freestep_term_integral(const cup_freestep *fs, int k, double t0, double t1, double tmid) {
-  const cup_term *t = &fs->u->terms[k];
+static inline double freestep_term_integral(const freestep_ws *fs, int k, double t0, double t1, double tmid) {
+  const input_term *t = &fs->u->terms[k];
   switch (t->kind) {
     case CUP_WAVE_CONSTANT: return fs->term_h[k];
-    case CUP_WAVE_SINE: return t->omega > 0 ? fs->term_h[k] * cup_sin(t->omega * tmid + t->phase) : fs->term_h[k];
-    default: return cup_term_integral(t, t0, t1);
+    case CUP_WAVE_SINE: return t->omega > 0 ? fs->term_h[k] * trig_sin(t->omega * tmid + t->phase) : fs->term_h[k];
+    default: return input_term_integral(t, t0, t1);
   }
 }
 

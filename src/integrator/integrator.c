@@ -24,11 +24,11 @@ static int build(cup_integrator *I, const scheme_model *md, char *errmsg) {
 
 int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
                           const cup_integrator_options *opt, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
   *out = NULL;
-  if (!L) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
+  if (!L) return fail_fmt(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
   int st;
-  cup_integrator *I = cup_integrator_new_(opt, errmsg, &st);
+  cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
   I->u = u;
   I->L = L;
@@ -36,7 +36,7 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->K = L->K;
   I->G = L->has_G ? &L->G : NULL;
   I->fixed = L->fixed;
-  cup_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
+  freestep_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
   scheme_model md = {&D, L, NULL, I->K, I->G, u, &I->o};
   st = build(I, &md, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
@@ -46,20 +46,20 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
 
 static int present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
 
-static int process_model(cup_integrator *I, const cup_process_desc *d, cup_drift *D, char *errmsg) {
+static int process_model(cup_integrator *I, const cup_process_desc *d, freestep_drift *D, char *errmsg) {
   const cup_set *S = d->C;
-  if (!S) return cup_fail(errmsg, CUP_ERR_ARG, "process: the set C is NULL");
+  if (!S) return fail_fmt(errmsg, CUP_ERR_ARG, "process: the set C is NULL");
   if (d->n != S->n)
-    return cup_fail(errmsg, CUP_ERR_DIM, "process: n = %d but the set has dimension %d", d->n, S->n);
-  if (d->p < 0) return cup_fail(errmsg, CUP_ERR_DIM, "process: p = %d must be >= 0", d->p);
+    return fail_fmt(errmsg, CUP_ERR_DIM, "process: n = %d but the set has dimension %d", d->n, S->n);
+  if (d->p < 0) return fail_fmt(errmsg, CUP_ERR_DIM, "process: p = %d must be >= 0", d->p);
   if (S->p > 0 && S->p != d->p)
-    return cup_fail(errmsg, CUP_ERR_DIM, "process: the set moves with %d parameters but p = %d", S->p, d->p);
+    return fail_fmt(errmsg, CUP_ERR_DIM, "process: the set moves with %d parameters but p = %d", S->p, d->p);
   int st = CUP_OK;
-  *D = (cup_drift){d->n, d->p, present(&d->A), present(&d->E), {0}, {0}, "process"};
-  if (D->has_A) st = cup_sparse_copy(&I->A_own, &d->A, "A", d->n, d->n, errmsg);
+  *D = (freestep_drift){d->n, d->p, present(&d->A), present(&d->E), {0}, {0}, "process"};
+  if (D->has_A) st = la_sparse_copy(&I->A_own, &d->A, "A", d->n, d->n, errmsg);
   if (!st && D->has_E) {
-    if (d->p == 0) return cup_fail(errmsg, CUP_ERR_DIM, "process: E is given but p = 0");
-    st = cup_sparse_copy(&I->E_own, &d->E, "E", d->n, d->p, errmsg);
+    if (d->p == 0) return fail_fmt(errmsg, CUP_ERR_DIM, "process: E is given but p = 0");
+    st = la_sparse_copy(&I->E_own, &d->E, "E", d->n, d->p, errmsg);
   }
   D->A = I->A_own;
   D->E = I->E_own;
@@ -80,13 +80,13 @@ static int process_model(cup_integrator *I, const cup_process_desc *d, cup_drift
 
 int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *d,
                                   const cup_integrator_options *opt, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
   *out = NULL;
-  if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "integrator: process description is NULL");
+  if (!d) return fail_fmt(errmsg, CUP_ERR_ARG, "integrator: process description is NULL");
   int st;
-  cup_integrator *I = cup_integrator_new_(opt, errmsg, &st);
+  cup_integrator *I = integrator_new(opt, errmsg, &st);
   if (!I) return st;
-  cup_drift D;
+  freestep_drift D;
   st = process_model(I, d, &D, errmsg);
   scheme_model md = {&D, NULL, d, I->K, I->G, I->u, &I->o};
   if (!st) st = build(I, &md, errmsg);
@@ -99,8 +99,8 @@ void cup_integrator_free(cup_integrator **Ip) {
   if (!Ip || !*Ip) return;
   cup_integrator *I = *Ip;
   if (I->sch && I->ws) I->sch->free(I->ws);
-  cup_sparse_free(&I->A_own);
-  cup_sparse_free(&I->E_own);
+  la_sparse_free(&I->A_own);
+  la_sparse_free(&I->E_own);
   free(I);
   *Ip = NULL;
 }

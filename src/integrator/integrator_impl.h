@@ -18,7 +18,7 @@ struct cup_integrator {
   /* the model the front door described (the scheme's create copies what it keeps) */
   const cup_set *S;         /* a process's set, or NULL (an LCS's polyset) */
   const cup_polyset *K;     /* the polyset's rows, or NULL */
-  const cup_sparse *G;      /* the offset's motion, or NULL */
+  const la_sparse *G;      /* the offset's motion, or NULL */
   int fixed;                /* the polyset does not move */
   cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
   const cup_lcs *L;         /* the LCS it was made from, or NULL */
@@ -32,8 +32,8 @@ struct cup_integrator {
  * configuration, switched.c): steps k0 + 1 .. k1 on the run's grid from
  * state x at t_k0 (first: k0 = 0, the run's own start and x0's sample),
  * the samples from *next_j on; *next_j advanced. */
-int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
-                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+                      cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* A switched circuit's split step (switched.c): step k - 1 -> k was
  * taken outside, by the configurations' exact flows from xprev (at
  * t_{k-1}) to x (at t_k), zeta its multipliers at t_k (m entries, kept by

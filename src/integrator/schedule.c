@@ -12,7 +12,7 @@
 static const char *skip_ws(const char *s) { while (isspace((unsigned char)*s)) s++; return s; }
 
 int cup_schedule_parse(const char *spec, cup_schedule *out, char *errmsg) {
-  if (!spec || !out) return cup_fail(errmsg, CUP_ERR_ARG, "schedule: NULL argument");
+  if (!spec || !out) return fail_fmt(errmsg, CUP_ERR_ARG, "schedule: NULL argument");
   const char *s = skip_ws(spec);
   double coef = 1, power = 0;
   char *end;
@@ -41,12 +41,12 @@ int cup_schedule_parse(const char *spec, cup_schedule *out, char *errmsg) {
     if (*s) goto bad;
   }
   if (!isfinite(coef) || !isfinite(power) || coef < 0)
-    return cup_fail(errmsg, CUP_ERR_PARSE, "schedule '%s': the coefficient must be finite and >= 0", spec);
+    return fail_fmt(errmsg, CUP_ERR_PARSE, "schedule '%s': the coefficient must be finite and >= 0", spec);
   out->coef = coef;
   out->power = power;
   return CUP_OK;
 bad:
-  return cup_fail(errmsg, CUP_ERR_PARSE,
+  return fail_fmt(errmsg, CUP_ERR_PARSE,
                   "schedule '%s': expected a number, \"n^-2.1\" or \"0.5*n^-1.05\"", spec);
 }
 

@@ -14,11 +14,11 @@
 /* What a scheme is made from, after the front door's checks (an LCS's or a
  * process's model; the integrator holds the same in its fields). */
 typedef struct scheme_model {
-  const cup_drift *D;               /* A x + E u */
+  const freestep_drift *D;               /* A x + E u */
   const cup_lcs *L;                 /* an LCS (its B and D), or NULL */
   const cup_process_desc *pd;       /* a process (its set and f terms), or NULL */
   const cup_polyset *K;             /* the polyset's rows, or NULL (another set) */
-  const cup_sparse *G;              /* the offset's motion, or NULL */
+  const la_sparse *G;              /* the offset's motion, or NULL */
   const cup_input *u;
   const cup_integrator_options *o;
 } scheme_model;
@@ -51,7 +51,7 @@ typedef struct scheme_type {
   void (*grid)(const void *ws, scheme_grid *g);   /* NULL: zeros */
   int (*saves)(const void *ws);
   int (*stopped)(const void *ws, cup_run_info *info);
-  void (*checkpoint)(void *ws, cup_ckpt *c);
+  void (*checkpoint)(void *ws, ckpt *c);
   int (*resume)(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 } scheme_type;
 

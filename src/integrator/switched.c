@@ -11,9 +11,9 @@
  *
  * The adaptive scheme steps to the switching times (its steps end on
  * breakpoints already; a window [ta, tb] of one configuration is its run
- * from ta to tb, cup_adaptive_window) and locates those of switches the
+ * from ta to tb, adaptive_window) and locates those of switches the
  * circuit gates. The fixed-step schemes keep their grid (t_k = k T / n,
- * windows of cup_integrator_window_) and step to the switching times of
+ * windows of integrator_window) and step to the switching times of
  * the switches the sources gate: a step that holds one is split there,
  * its pieces run by the configurations' exact flows (the adaptive scheme
  * on each configuration's LCS, made on its first split step), so that the
@@ -29,11 +29,11 @@
 #include "adaptive.h"
 #include "estimate.h"
 
-typedef struct cup_swrun cup_swrun;
+typedef struct switched_run switched_run;
 
 #define SW_MAX 64          /* configurations (the model forms at most this many) */
 
-struct cup_swrun {
+struct switched_run {
   cup_switching ops;
   const cup_input *u;
   cup_integrator_options o;
@@ -57,36 +57,36 @@ struct cup_swrun {
   cup_step_fn on_step;
   void *step_ctx;
   cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
-  cup_estimate est;        /* ... and the comparison with it at each step's end */
+  estimate_ws est;        /* ... and the comparison with it at each step's end */
 };
 
 /* The check at a sample or a step's end (t, x): 1 stops the window. */
-static int check(cup_swrun *S, double t, const double *x) {
+static int check(switched_run *S, double t, const double *x) {
   if (!S->watch || !(t > S->tg)) return 0;
   int c = S->ops.crossed(S->ops.ctx, S->cur, t, x);
   if (c) { S->crossed = 1; S->tbad = t; return 1; }   /* (c < 0, a failed input, is caught again by settle) */
   S->tg = t;
-  cup_copy(S->xg, x, S->n);
+  la_copy(S->xg, x, S->n);
   return 0;
 }
 
 static int watch_sink(long k, double t, const double *x, void *ctx) {
-  cup_swrun *S = ctx;
+  switched_run *S = ctx;
   if (check(S, t, x)) { S->refused = 1; return 1; }
   if (S->sink && S->sink(k, t, x, S->sink_ctx)) { S->user_stop = 1; return 1; }
   return 0;
 }
 
 static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
-  cup_swrun *S = ctx;
-  if (S->half) cup_estimate_compare(&S->est, k, cup_integrator_state(S->child[S->cur]));
+  switched_run *S = ctx;
+  if (S->half) estimate_compare(&S->est, k, cup_integrator_state(S->child[S->cur]));
   if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
   if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
   return 0;
 }
 
-static int child_of(cup_swrun *S, int topo, char *errmsg) {
-  if (topo < 0 || topo >= SW_MAX) return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "more than %d switch configurations", SW_MAX);
+static int child_of(switched_run *S, int topo, char *errmsg) {
+  if (topo < 0 || topo >= SW_MAX) return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "more than %d switch configurations", SW_MAX);
   if (S->child[topo]) return CUP_OK;
   const cup_lcs *L = S->ops.lcs(S->ops.ctx, topo);
   char msg[CUP_ERRMSG_LEN];
@@ -95,18 +95,18 @@ static int child_of(cup_swrun *S, int topo, char *errmsg) {
   o.on_step = watch_step;                          /* the circuit-gated switches' checks, then the user's */
   o.step_ctx = S;
   int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
-  return st ? cup_fail(errmsg, st, "switch configuration %d: %s", topo, msg) : CUP_OK;
+  return st ? fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg) : CUP_OK;
 }
 
 
 static void sw_free(void *ws) {
-  cup_swrun *S = ws;
+  switched_run *S = ws;
   for (int k = 0; k < SW_MAX; k++) {
     cup_integrator_free(&S->child[k]);
     cup_integrator_free(&S->twin[k]);
   }
   cup_integrator_free(&S->half);
-  cup_estimate_free(&S->est);
+  estimate_free(&S->est);
   free(S->x);
   free(S->xprev);
   free(S->zsplit);
@@ -116,12 +116,12 @@ static void sw_free(void *ws) {
 
 /* The configuration in force's integrator answers state and zeta. */
 static const double *sw_state(const void *ws) {
-  const cup_swrun *S = ws;
+  const switched_run *S = ws;
   return cup_integrator_state(S->child[S->cur]);
 }
 
 static int sw_zeta(void *ws, double *zeta) {
-  cup_swrun *S = ws;
+  switched_run *S = ws;
   return cup_integrator_zeta(S->child[S->cur], zeta);
 }
 
@@ -147,16 +147,16 @@ static void add_info(cup_run_info *info, const cup_run_info *w) {
 
 /* Configuration topo's window from (t, x) to tb with the user's sink
  * (through the checks when watching); the state at its end into S->x. */
-static int window(cup_swrun *S, int topo, double t, double tb, int first, int jumped, long *steps,
+static int window(switched_run *S, int topo, double t, double tb, int first, int jumped, long *steps,
                   long *next_sample, int watching, cup_run_info *info) {
   cup_integrator *C = S->child[topo];
   cup_run_info w;
   S->watch = watching;
   S->crossed = S->user_stop = S->refused = 0;
   S->tg = t;
-  cup_copy(S->xg, S->x, S->n);
-  int st = cup_adaptive_window(cup_adaptive_of(C), t, tb, S->x, first, jumped, steps, next_sample, watch_sink, S,
-                               &w);
+  la_copy(S->xg, S->x, S->n);
+  int st = adaptive_window(adaptive_of(C), t, tb, S->x, first, jumped, steps, next_sample, watch_sink, S,
+                           &w);
   S->watch = 0;
   if (S->crossed) {                                /* our stop, not an error; its sample not taken */
     st = CUP_OK;
@@ -166,14 +166,14 @@ static int window(cup_swrun *S, int topo, double t, double tb, int first, int ju
   }
   add_info(info, &w);
   if (st < 0) return st;
-  cup_copy(S->x, cup_adaptive_state(cup_adaptive_of(C)), S->n);
+  la_copy(S->x, adaptive_state(adaptive_of(C)), S->n);
   return CUP_OK;
 }
 
 /* A circuit-gated switch changed in (tg, tbad]: the time by bisection on
  * the exact flow from (tg, xg) (windows without output), to the last bit;
  * then the window to it with the samples it holds. S->x and *t: there. */
-static int locate(cup_swrun *S, int topo, double *t, long *steps, long *next_sample, cup_run_info *info) {
+static int locate(switched_run *S, int topo, double *t, long *steps, long *next_sample, cup_run_info *info) {
   cup_integrator *C = S->child[topo];
   double lo = S->tg, hi = S->tbad;
   long ksave = *steps, jsave = *next_sample;
@@ -184,22 +184,22 @@ static int locate(cup_swrun *S, int topo, double *t, long *steps, long *next_sam
     double mid = lo + (hi - lo) / 2;
     long k = ksave, j = jsave;
     cup_run_info w;
-    int st = cup_adaptive_window(cup_adaptive_of(C), S->tg, mid, x0, 0, 0, &k, &j, NULL, NULL, &w);
+    int st = adaptive_window(adaptive_of(C), S->tg, mid, x0, 0, 0, &k, &j, NULL, NULL, &w);
     if (st < 0) { S->probing = 0; add_info(info, &w); return st; }
-    int c = S->ops.crossed(S->ops.ctx, topo, mid, cup_adaptive_state(cup_adaptive_of(C)));
-    if (c < 0) { S->probing = 0; return cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", mid); }
+    int c = S->ops.crossed(S->ops.ctx, topo, mid, adaptive_state(adaptive_of(C)));
+    if (c < 0) { S->probing = 0; return fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", mid); }
     if (c) hi = mid; else lo = mid;
   }
   S->probing = 0;
   double ta = S->tg;
-  cup_copy(S->x, x0, S->n);
+  la_copy(S->x, x0, S->n);
   int st = window(S, topo, ta, hi, 0, 0, steps, next_sample, 0, info);
   *t = hi;
   return st;
 }
 
 /* x0 moved by the jump into the configuration at t = 0: a warning. */
-static void x0_moved(const cup_swrun *S, const double *x0, cup_run_info *info) {
+static void x0_moved(const switched_run *S, const double *x0, cup_run_info *info) {
   if (!memcmp(S->x, x0, sizeof(double) * (size_t)S->n)) return;
   info->status = CUP_WARN_X0_OUTSIDE;
   snprintf(info->message, sizeof info->message, "x0 is off the constraints of the switches' configuration at "
@@ -212,7 +212,7 @@ static void x0_moved(const cup_swrun *S, const double *x0, cup_run_info *info) {
  * fixed-step run's step that switching times split. NULL when the
  * adaptive scheme does not take the configuration (an active network: B
  * kept as given): its switchings are then taken at the step's end. */
-static cup_integrator *twin_of(cup_swrun *S, int topo) {
+static cup_integrator *twin_of(switched_run *S, int topo) {
   if (S->twin[topo] || S->twin_off[topo]) return S->twin[topo];
   cup_integrator_options o = S->o;
   o.scheme = CUP_SCHEME_ADAPTIVE;
@@ -229,26 +229,26 @@ static cup_integrator *twin_of(cup_swrun *S, int topo) {
 /* A piece's samples: none; at the piece's end, zeta. */
 static int twin_sink(long k, double t, const double *x, void *ctx) {
   (void)k; (void)x;
-  cup_swrun *S = ctx;
+  switched_run *S = ctx;
   if (t == S->piece_end) cup_integrator_zeta(S->twin[S->cur], S->zsplit);
   return 0;
 }
 
 /* Configuration topo's exact flow from (ta, S->x) to tb, into S->x. */
-static int piece(cup_swrun *S, int topo, double ta, double tb, cup_run_info *info) {
+static int piece(switched_run *S, int topo, double ta, double tb, cup_run_info *info) {
   cup_integrator *W = S->twin[topo];
   long steps = 0, next = 0;
   cup_run_info w;
   S->cur = topo;
   S->piece_end = tb;
-  cup_zero(S->zsplit, cup_lcs_rows(W->L));
-  int st = cup_adaptive_window(cup_adaptive_of(W), ta, tb, S->x, 0, 0, &steps, &next, twin_sink, S, &w);
+  la_zero(S->zsplit, cup_lcs_rows(W->L));
+  int st = adaptive_window(adaptive_of(W), ta, tb, S->x, 0, 0, &steps, &next, twin_sink, S, &w);
   if (st < 0) {
     add_info(info, &w);
     return st;
   }
   info->events += w.events;
-  cup_copy(S->x, cup_adaptive_state(cup_adaptive_of(W)), S->n);
+  la_copy(S->x, adaptive_state(adaptive_of(W)), S->n);
   return CUP_OK;
 }
 
@@ -259,13 +259,13 @@ static int piece(cup_swrun *S, int topo, double ta, double tb, cup_run_info *inf
  * configuration in force (its samples, zeta the last piece's). 1 when a
  * configuration has no exact flow (nothing done: the step is taken as
  * before, switching at its end). */
-static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
+static int split_step(switched_run *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   cup_integrator *C = S->child[*topo];
   double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k);
   double snap = 1e-9 * cup_integrator_grid_step_(C);
   if (!twin_of(S, *topo)) return 1;
-  cup_copy(S->xprev, S->x, S->n);
+  la_copy(S->xprev, S->x, S->n);
   int st = CUP_OK, to = *topo;
   for (;;) {
     double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as sw_fixed_run snaps) */
@@ -275,16 +275,16 @@ static int split_step(cup_swrun *S, long k, double *tb, int *topo, long *next_j,
     sw->jump(sw->ctx, to, S->x);
     if ((st = child_of(S, to, info->message)) != CUP_OK) return st;
     if (!twin_of(S, to))
-      return cup_fail(info->message, CUP_ERR_UNSUPPORTED, "t = %.17g: switch configuration %d has no exact flow "
+      return fail_fmt(info->message, CUP_ERR_UNSUPPORTED, "t = %.17g: switch configuration %d has no exact flow "
                       "(an active network) to step from the switching time to the grid", te, to);
     ta = te;
     if (sw->next(sw->ctx, to, ta, S->o.T, tb))
-      return cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", ta);
+      return fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", ta);
   }
   *topo = to;
   S->cur = to;
   cup_run_info w;
-  st = cup_integrator_split_end_(S->child[to], k, S->xprev, S->x, S->zsplit, next_j, S->sink, S->sink_ctx, &w);
+  st = integrator_split_end(S->child[to], k, S->xprev, S->x, S->zsplit, next_j, S->sink, S->sink_ctx, &w);
   add_info(info, &w);
   return st;
 }
@@ -322,7 +322,7 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     cup_integrator *C = S->child[topo];
     double tb = 0;
     if (sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
-      st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
+      st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
       break;
     }
     long k1 = grid_step_at(C, k, n, tb);
@@ -332,10 +332,10 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     if (sw->state_gated(sw->ctx, topo) && kw > k) kw = k + 1, split = 0;   /* its end checked */
     cup_run_info w;
     if (kw > k || first) {
-      int wst = cup_integrator_window_(C, k, kw, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
+      int wst = integrator_window(C, k, kw, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
       if (wst < 0) { st = wst; break; }
-      cup_copy(S->x, cup_integrator_state(C), S->n);
+      la_copy(S->x, cup_integrator_state(C), S->n);
     }
     k = kw;
     if (split) {
@@ -349,13 +349,13 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
         continue;
       }
       S->cur = topo;                               /* no exact flow: the step as the grid has it */
-      int wst = cup_integrator_window_(C, k, k1, S->x, 0, &next_j, S->sink, S->sink_ctx, &w);
+      int wst = integrator_window(C, k, k1, S->x, 0, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
       if (wst < 0) { st = wst; break; }
-      cup_copy(S->x, cup_integrator_state(C), S->n);
+      la_copy(S->x, cup_integrator_state(C), S->n);
       k = k1;
     }
-    t = cup_integrator_grid_time_(C, k);
+    t = integrator_grid_time(C, k);
     /* the rule at the switching time when the grid time was snapped to it from below */
     if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
   }
@@ -367,10 +367,10 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
 /* The estimate's run at n/2 (fixed.c's coarse_run for a switched
  * run): its states kept at the compared points. 1 when the interrupt flag
  * stopped it (the run stops too), its status in info. */
-static int coarse_run(cup_swrun *S, const double *x0, cup_run_info *info) {
+static int coarse_run(switched_run *S, const double *x0, cup_run_info *info) {
   cup_run_info hi;
-  int st = cup_integrator_run(S->half, x0, cup_estimate_keep, &S->est, &hi);
-  cup_estimate_start(&S->est, st >= 0);
+  int st = cup_integrator_run(S->half, x0, estimate_keep, &S->est, &hi);
+  estimate_start(&S->est, st >= 0);
   if (!(st == CUP_ERR_INTERRUPTED && S->o.interrupt && *S->o.interrupt)) return 0;
   info->status = CUP_ERR_INTERRUPTED;
   snprintf(info->message, sizeof info->message, "step 0 (t = 0): interrupted (in the estimate's run at n/2)");
@@ -378,14 +378,14 @@ static int coarse_run(cup_swrun *S, const double *x0, cup_run_info *info) {
 }
 
 static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  cup_swrun *S = ws;
+  switched_run *S = ws;
   const cup_switching *sw = &S->ops;
   double T = S->o.T, t = 0;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
   S->sink = sink;
   S->sink_ctx = sink_ctx;
-  cup_copy(S->x, x0, S->n);
+  la_copy(S->x, x0, S->n);
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
@@ -399,7 +399,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   /* every step recorded: a jump at a switching is recorded after it too */
   int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
   for (int first = 1; st >= 0 && t < T; first = 0) {
-    if (each) cup_copy(S->xprev, S->x, S->n);
+    if (each) la_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
     int jumped = each && memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0;
     if (first) x0_moved(S, x0, info);
@@ -408,7 +408,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     S->cur = topo;
     double tb;
     st = sw->next(sw->ctx, topo, t, T, &tb);
-    if (st) { st = cup_fail(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
+    if (st) { st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
     st = window(S, topo, t, tb, first, jumped, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;
@@ -430,14 +430,14 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
 
 /* The estimate's coarse run: the same switched circuit at n/2, its output
  * every stride steps into the comparison's rows. */
-static int create_half(cup_swrun *S, const cup_switching *sw, const cup_input *u, char *errmsg) {
-  if (cup_estimate_init(&S->est, S->o.n, S->n)) return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+static int create_half(switched_run *S, const cup_switching *sw, const cup_input *u, char *errmsg) {
+  if (estimate_init(&S->est, S->o.n, S->n)) return fail_fmt(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   cup_integrator_options h = S->o;
   h.n = S->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
   h.output = CUP_OUTPUT_EVERY;
-  h.output_every = cup_estimate_stride(&S->est);
+  h.output_every = estimate_stride(&S->est);
   return cup_integrator_create_switched(&S->half, sw, u, &h, errmsg);
 }
 
@@ -449,15 +449,15 @@ static const scheme_type switched_type = {
 int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,
                                    const cup_integrator_options *o, char *errmsg) {
   if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
-    return cup_fail(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
+    return fail_fmt(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
   *out = NULL;
   int estimate = o->estimate && o->scheme != CUP_SCHEME_ADAPTIVE;   /* (the adaptive scheme estimates always) */
   if (estimate && (o->n < 2 || o->n % 2))
-    return cup_fail(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
                     "must be even", o->n);
   cup_integrator *I = calloc(1, sizeof *I);
-  cup_swrun *S = calloc(1, sizeof *S);
-  if (!I || !S) { free(I); free(S); return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory"); }
+  switched_run *S = calloc(1, sizeof *S);
+  if (!I || !S) { free(I); free(S); return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory"); }
   I->sch = &switched_type;
   I->ws = S;
   S->ops = *sw;
@@ -478,7 +478,7 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
     S->xg = malloc(sizeof(double) * ((size_t)S->n + 1));
     S->xprev = malloc(sizeof(double) * ((size_t)S->n + 1));
     S->zsplit = malloc(sizeof(double) * ((size_t)I->m + 1));
-    if (!S->x || !S->xg || !S->xprev || !S->zsplit) st = cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    if (!S->x || !S->xg || !S->xprev || !S->zsplit) st = fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   }
   if (!st && estimate) st = create_half(S, sw, u, errmsg);
   if (st) { cup_integrator_free(&I); return st; }

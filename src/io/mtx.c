@@ -190,7 +190,7 @@ static int from_cholmod(mtx_csc *M, cholmod_sparse *A) {
 /* CHOLMOD reads the checked file: sparse with both triangles, or dense. */
 static int mm_read(mm_ctx *c, FILE *f, mtx_csc *M) {
   cholmod_common cm;
-  if (cup_cholmod_start(&cm)) return mm_fail(c, "CHOLMOD start failed");
+  if (la_cholmod_start(&cm)) return mm_fail(c, "CHOLMOD start failed");
   int mtype = -1, st = CUP_OK;
   void *X = cholmod_read_matrix(f, 1, &mtype, &cm);
   if (X && mtype == CHOLMOD_SPARSE) {

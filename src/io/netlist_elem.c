@@ -57,7 +57,7 @@ static int new_elem(rd *r, nl_kind kind, const nx_tok *name, nl_elem **out) {
   if (prev >= 0)
     return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate element name (first at line %d)",
                    c->elem[prev].line);
-  if (cup_grow(&c->elem, &r->capelem, c->nelem, sizeof *c->elem, 32)) return nr_nomem(r);
+  if (la_grow(&c->elem, &r->capelem, c->nelem, sizeof *c->elem, 32)) return nr_nomem(r);
   nl_elem *e = &c->elem[c->nelem];
   memset(e, 0, sizeof *e);
   e->kind = kind;
@@ -356,7 +356,7 @@ int nr_read_coupling(rd *r, int card) {
     if (!strcasecmp(c->coup[j].name, name->s))
       return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "duplicate coupling name (first at line %d)", c->coup[j].line);
   if (r->x.card[card].n < 4) return nx_fail(&r->x, CUP_ERR_PARSE, name, name->s, "expected '%s L1 L2 k'", name->s);
-  if (cup_grow(&c->coup, &r->capcoup, c->ncoup, sizeof *c->coup, 8)) return nr_nomem(r);
+  if (la_grow(&c->coup, &r->capcoup, c->ncoup, sizeof *c->coup, 8)) return nr_nomem(r);
   nl_coupling *k = &c->coup[c->ncoup];
   memset(k, 0, sizeof *k);
   if (!(k->name = strdup(name->s))) return nr_nomem(r);

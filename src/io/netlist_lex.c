@@ -29,7 +29,7 @@ int nx_fail(nx *x, int status, const nx_tok *at, const char *what, const char *f
   if (w >= 0 && (size_t)w < cap && what) w += snprintf(buf + w, cap - (size_t)w, "%s: ", what);
   va_list ap;
   va_start(ap, fmt);
-  cup_vfail_at(buf, w, status, fmt, ap);
+  fail_vfmt_at(buf, w, status, fmt, ap);
   va_end(ap);
   if (at && at->origin < 0) where_from(x, at, buf, cap);
   return status;
@@ -122,7 +122,7 @@ int nx_is(const nx_tok *t, const char *w) { return t->kind == NX_WORD && !strcas
 /* ---- lines into tokens ------------------------------------------------------- */
 
 static int push_tok(nx *x, nx_kind kind, const char *s, size_t len, int line, int col, int origin) {
-  if (cup_grow(&x->tok, &x->captok, x->ntok, sizeof *x->tok, 256)) return CUP_ERR_NOMEM;
+  if (la_grow(&x->tok, &x->captok, x->ntok, sizeof *x->tok, 256)) return CUP_ERR_NOMEM;
   char *copy = strndup(s, len);
   if (!copy) return CUP_ERR_NOMEM;
   x->tok[x->ntok++] = (nx_tok){kind, copy, line, col, origin, x->cur_file, 0};
@@ -130,7 +130,7 @@ static int push_tok(nx *x, nx_kind kind, const char *s, size_t len, int line, in
 }
 
 static int push_card(nx *x) {
-  if (cup_grow(&x->card, &x->capcard, x->ncard, sizeof *x->card, 64)) return CUP_ERR_NOMEM;
+  if (la_grow(&x->card, &x->capcard, x->ncard, sizeof *x->card, 64)) return CUP_ERR_NOMEM;
   x->card[x->ncard++] = (nx_card){x->ntok, 0, 0};
   return CUP_OK;
 }
@@ -178,7 +178,7 @@ static int lex_tokens(nx *x, const char *s, size_t len, size_t c0, int line, int
 }
 
 int nx_add_file(nx *x, const char *path, int from_file, int from_line) {
-  if (cup_grow(&x->files, &x->capfiles, x->nfiles, sizeof *x->files, 4)) return -1;
+  if (la_grow(&x->files, &x->capfiles, x->nfiles, sizeof *x->files, 4)) return -1;
   char *copy = strdup(path);
   if (!copy) return -1;
   x->files[x->nfiles] = (nx_file){copy, from_file, from_line};

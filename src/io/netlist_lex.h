@@ -10,14 +10,14 @@
 #include <stdarg.h>
 #include <stddef.h>
 
-struct cup_file_list;
+struct file_list;
 struct cup_netlist;
 /* cup_netlist_load and _load_string recording the files they read in files
  * (read_text.h; may be NULL): the scene's netlist: key loads through these. */
-int cup_netlist_load_files(struct cup_netlist **out, const char *path, const char *const *sets, int nsets,
-                           struct cup_file_list *files, char *errmsg);
-int cup_netlist_load_string_files(struct cup_netlist **out, const char *text, const char *name,
-                                  const char *const *sets, int nsets, struct cup_file_list *files, char *errmsg);
+int netlist_load_files(struct cup_netlist **out, const char *path, const char *const *sets, int nsets,
+                       struct file_list *files, char *errmsg);
+int netlist_load_string_files(struct cup_netlist **out, const char *text, const char *name,
+                              const char *const *sets, int nsets, struct file_list *files, char *errmsg);
 
 typedef enum nx_kind { NX_WORD, NX_LP, NX_RP, NX_EQ, NX_EXPR } nx_kind;
 typedef struct nx nx;
@@ -85,9 +85,9 @@ typedef struct nx_inst {
 /* Everything the reader keeps while it works. */
 struct nx {
   const char *file;
-  struct cup_file_list *read_list;  /* the load's files read (read_text.h), or NULL: every file
+  struct file_list *read_list;  /* the load's files read (read_text.h), or NULL: every file
                                        this reader opens (an .include, a .lib) goes through
-                                       cup_read_text with it */
+                                       read_text with it */
   const char *const *sets;   /* "NAME=VALUE" */
   int nsets;
   char *errmsg;

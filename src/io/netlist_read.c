@@ -58,7 +58,7 @@ static int read_param(rd *r, int card) {
       return nx_fail(x, CUP_ERR_PARSE, name, name->s, "expected %s=VALUE", name->s);
     if (nx_hash_get(&x->parh, name->s) >= 0)
       return nx_fail(x, CUP_ERR_PARSE, name, name->s, "parameter defined twice");
-    if (cup_grow(&x->par, &x->cappar, x->npar, sizeof *x->par, 16)) return nr_nomem(r);
+    if (la_grow(&x->par, &x->cappar, x->npar, sizeof *x->par, 16)) return nr_nomem(r);
     nx_param *p = &x->par[x->npar];
     memset(p, 0, sizeof *p);
     if (!(p->name = strdup(name->s))) return nr_nomem(r);
@@ -161,7 +161,7 @@ static int read_ic(rd *r, int card) {
     if (!nx_is(t, "v") || TOK(r, card, k + 1)->kind != NX_LP || TOK(r, card, k + 2)->kind != NX_WORD ||
         TOK(r, card, k + 3)->kind != NX_RP || TOK(r, card, k + 4)->kind != NX_EQ)
       return nx_fail(&r->x, CUP_ERR_PARSE, t, ".ic", "expected v(NODE)=VALUE (got '%.40s')", t->s);
-    if (cup_grow(&c->ic, &r->capic, c->nic, sizeof *c->ic, 8)) return nr_nomem(r);
+    if (la_grow(&c->ic, &r->capic, c->nic, sizeof *c->ic, 8)) return nr_nomem(r);
     nl_ic *ic = &c->ic[c->nic];
     const nx_tok *nd = TOK(r, card, k + 2);
     ic->line = nd->line;
@@ -176,7 +176,7 @@ static int read_ic(rd *r, int card) {
 
 static int add_probe(rd *r, const nx_tok *at, const char *text) {
   nl_circuit *c = r->c;
-  if (cup_grow(&c->probe, &r->capprobe, c->nprobe, sizeof *c->probe, 8)) return nr_nomem(r);
+  if (la_grow(&c->probe, &r->capprobe, c->nprobe, sizeof *c->probe, 8)) return nr_nomem(r);
   nl_probe *p = &c->probe[c->nprobe];
   if (!(p->text = strdup(text))) return nr_nomem(r);
   p->line = at->line;
@@ -384,7 +384,7 @@ static int read_cards(rd *r) {
 /* ---- public ------------------------------------------------------------------ */
 
 static int load(cup_netlist **out, const char *text, size_t len, const char *name,
-                const char *const *sets, int nsets, cup_file_list *files, char *errmsg) {
+                const char *const *sets, int nsets, file_list *files, char *errmsg) {
   nl_circuit c = {0};
   c.reltol = c.abstol = c.vntol = c.chgtol = NAN;  /* .options not given */
   rd r = {0};
@@ -398,7 +398,7 @@ static int load(cup_netlist **out, const char *text, size_t len, const char *nam
   if (!st && nx_add_file(&r.x, name, -1, 0) < 0) st = nr_nomem(&r);
   if (!st) st = nx_lex_file(&r.x, 0, text, len, 1);
   if (!st) st = read_cards(&r);
-  if (!st) st = c.nswitch ? nl_switched_formulate(out, &c, errmsg) : cup_netlist_formulate(out, &c, errmsg);
+  if (!st) st = c.nswitch ? nl_switched_formulate(out, &c, errmsg) : netlist_formulate(out, &c, errmsg);
   if (!st && !((*out)->source = strndup(text, len))) {
     cup_netlist_free(out);
     st = nr_nomem(&r);
@@ -413,31 +413,31 @@ static int load(cup_netlist **out, const char *text, size_t len, const char *nam
 
 static int check_args(cup_netlist **out, const void *src, const char *const *list, int n, char *errmsg) {
   if (out) *out = NULL;
-  return cup_load_args("netlist", "set", out != NULL, src, list, n, errmsg);
+  return load_args("netlist", "set", out != NULL, src, list, n, errmsg);
 }
 
-int cup_netlist_load_string_files(cup_netlist **out, const char *text, const char *name, const char *const *sets,
-                                  int nsets, cup_file_list *files, char *errmsg) {
+int netlist_load_string_files(cup_netlist **out, const char *text, const char *name, const char *const *sets,
+                              int nsets, file_list *files, char *errmsg) {
   int st = check_args(out, text, sets, nsets, errmsg);
   return st ? st : load(out, text, strlen(text), name ? name : "<string>", sets, nsets, files, errmsg);
 }
 
 int cup_netlist_load_string(cup_netlist **out, const char *text, const char *name,
                             const char *const *sets, int nsets, char *errmsg) {
-  return cup_netlist_load_string_files(out, text, name, sets, nsets, NULL, errmsg);
+  return netlist_load_string_files(out, text, name, sets, nsets, NULL, errmsg);
 }
 
-int cup_netlist_load_files(cup_netlist **out, const char *path, const char *const *sets, int nsets,
-                           cup_file_list *files, char *errmsg) {
+int netlist_load_files(cup_netlist **out, const char *path, const char *const *sets, int nsets,
+                       file_list *files, char *errmsg) {
   int st = check_args(out, path, sets, nsets, errmsg);
   char *text = NULL;
   size_t len = 0;
-  if (!st) st = cup_read_text(path, &text, &len, files, errmsg);
+  if (!st) st = read_text(path, &text, &len, files, errmsg);
   if (!st) st = load(out, text, len, path, sets, nsets, files, errmsg);
   free(text);
   return st;
 }
 
 int cup_netlist_load(cup_netlist **out, const char *path, const char *const *sets, int nsets, char *errmsg) {
-  return cup_netlist_load_files(out, path, sets, nsets, NULL, errmsg);
+  return netlist_load_files(out, path, sets, nsets, NULL, errmsg);
 }

@@ -29,7 +29,7 @@ typedef struct cards {
 } cards;
 
 static int push(nx *x, cards *out, nx_card c) {
-  if (cup_grow(&out->c, &out->cap, out->n, sizeof *out->c, 64))
+  if (la_grow(&out->c, &out->cap, out->n, sizeof *out->c, 64))
     return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
   out->c[out->n++] = c;
   return CUP_OK;
@@ -71,7 +71,7 @@ static int lex_included(nx *x, const nx_tok *t, int depth, int *c0, int *c1) {
   struct stat sb;
   if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))   /* /dev/zero, a FIFO, a folder: never read */
     return nx_fail(x, CUP_ERR_IO, t, NULL, "cannot read '%s' (%s): not a regular file", t->s, path);
-  if (cup_read_text(path, &text, &len, x->read_list, why)) {
+  if (read_text(path, &text, &len, x->read_list, why)) {
     const char *reason = strstr(why, ": ");       /* "PATH: cannot open: why" */
     return nx_fail(x, CUP_ERR_IO, t, NULL, "cannot read '%s' (%s)%s", t->s, path, reason ? reason : "");
   }
@@ -121,7 +121,7 @@ static int define(nx *x, int k, int end, cards *out) {
   if (prev >= 0)
     return nx_fail(x, CUP_ERR_PARSE, name, name->s, "subcircuit defined twice (first at %s:%d)",
                    x->files[tok(x, x->sub[prev].head, 0)->file].path, tok(x, x->sub[prev].head, 0)->line);
-  if (cup_grow(&x->sub, &x->capsub, x->nsub, sizeof *x->sub, 8)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
+  if (la_grow(&x->sub, &x->capsub, x->nsub, sizeof *x->sub, 8)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
   nx_sub *s = &x->sub[x->nsub];
   *s = (nx_sub){head, NULL, 0};
   if (nx_hash_put(&x->subh, name->s, x->nsub++)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
@@ -212,7 +212,7 @@ static int is_ground(const char *s) { return !strcmp(s, "0") || !strcasecmp(s, "
 /* A new token: a copy of t in instance inst with text s. */
 static int copy_tok(nx *x, const nx_tok *t, const char *s, int inst) {
   nx_tok c = *t;                                  /* t may move with x->tok: copied first */
-  if (cup_grow(&x->tok, &x->captok, x->ntok, sizeof *x->tok, 256)) return CUP_ERR_NOMEM;
+  if (la_grow(&x->tok, &x->captok, x->ntok, sizeof *x->tok, 256)) return CUP_ERR_NOMEM;
   char *dup = strdup(s);
   if (!dup) return CUP_ERR_NOMEM;
   c.s = dup;
@@ -274,7 +274,7 @@ static int set_param(nx *x, int inst, const nx_tok *name, const nx_tok *value) {
   double v;
   int st = nx_value(x, value, name->s, &v);
   if (st) return st;
-  if (cup_grow(&x->par, &x->cappar, x->npar, sizeof *x->par, 16)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
+  if (la_grow(&x->par, &x->cappar, x->npar, sizeof *x->par, 16)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
   nx_param *p = &x->par[x->npar];
   memset(p, 0, sizeof *p);
   if (!(p->name = strdup(name->s))) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
@@ -369,7 +369,7 @@ static int expand(nx *x, nx_card xc, int parent, cards *out, int depth) {
       return nx_fail(x, CUP_ERR_PARSE, sn, name->s, "subcircuit '%s' calls itself (through instance %s)", sn->s,
                      x->inst[parent - 1].path);
   if (depth >= MAX_DEPTH) return nx_fail(x, CUP_ERR_PARSE, name, name->s, "instances nested %d deep", depth);
-  if (cup_grow(&x->inst, &x->capinst, x->ninst, sizeof *x->inst, 8)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
+  if (la_grow(&x->inst, &x->capinst, x->ninst, sizeof *x->inst, 8)) return nx_fail(x, CUP_ERR_NOMEM, NULL, NULL, "out of memory");
   nx_inst *in = &x->inst[x->ninst];
   memset(in, 0, sizeof *in);
   in->path = strdup(name->s);                     /* copy_card made it hierarchical already */

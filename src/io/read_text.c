@@ -11,29 +11,29 @@
 #include "sha256.h"
 #include "util/path.h"
 
-void cup_file_list_free(cup_file_list *l) {
+void file_list_free(file_list *l) {
   if (!l) return;
   for (int k = 0; k < l->n; k++) free(l->e[k].path);
   free(l->e);
   memset(l, 0, sizeof *l);
 }
 
-static int holds(const cup_file_list *l, const cup_file_entry *f) {
+static int holds(const file_list *l, const file_entry *f) {
   for (int k = 0; k < l->n; k++)
     if (!strcmp(l->e[k].path, f->path) && !strcmp(l->e[k].sha256, f->sha256)) return 1;
   return 0;
 }
 
-static int add(cup_file_list *l, const cup_file_entry *f) {
+static int add(file_list *l, const file_entry *f) {
   if (holds(l, f)) return CUP_OK;
   char *path = strdup(f->path);
-  if (!path || cup_grow(&l->e, &l->cap, l->n, sizeof *l->e, 4)) { free(path); return CUP_ERR_NOMEM; }
+  if (!path || la_grow(&l->e, &l->cap, l->n, sizeof *l->e, 4)) { free(path); return CUP_ERR_NOMEM; }
   l->e[l->n] = *f;
   l->e[l->n++].path = path;
   return CUP_OK;
 }
 
-int cup_file_list_merge(cup_file_list *l, const cup_file_list *src) {
+int file_list_merge(file_list *l, const file_list *src) {
   int st = CUP_OK;
   for (int k = 0; src && k < src->n && !st; k++) st = add(l, &src->e[k]);
   return st;
@@ -55,13 +55,13 @@ static char *canonical(const char *path) {
   return full;
 }
 
-int cup_file_list_check_output(const cup_file_list *l, const char *out, char *errmsg) {
+int file_list_check_output(const file_list *l, const char *out, char *errmsg) {
   struct stat so, si;
   int out_exists = stat(out, &so) == 0;
   char *co = canonical(out);
   int st = CUP_OK;
   for (int k = 0; l && k < l->n && !st; k++) {
-    const cup_file_entry *e = &l->e[k];
+    const file_entry *e = &l->e[k];
     const char *why = NULL;
     char *ci = co ? canonical(e->path) : NULL;
     if (ci && !strcmp(co, ci)) why = "the same path";
@@ -72,14 +72,14 @@ int cup_file_list_check_output(const cup_file_list *l, const char *out, char *er
       why = "the file it was when read";
     free(ci);
     if (why)
-      st = cup_fail(errmsg, CUP_ERR_ARG, "the output %s is %s, which the run reads (%s): writing there would "
+      st = fail_fmt(errmsg, CUP_ERR_ARG, "the output %s is %s, which the run reads (%s): writing there would "
                     "destroy an input; nothing was written", out, e->path, why);
   }
   free(co);
   return st;
 }
 
-char *cup_file_list_text(const cup_file_list *l) {
+char *file_list_text(const file_list *l) {
   size_t len = 1;
   for (int k = 0; l && k < l->n; k++) len += 64 + 3 + 2 * strlen(l->e[k].path);
   char *s = malloc(len), *w = s;
@@ -95,12 +95,12 @@ char *cup_file_list_text(const cup_file_list *l) {
   return s;
 }
 
-int cup_file_list_compare(const cup_file_list *l, const char *stored, const char *what, char *errmsg,
-                          size_t size) {
+int file_list_compare(const file_list *l, const char *stored, const char *what, char *errmsg,
+                      size_t size) {
   const char *line = stored;
   int k = 0;
   for (; line && *line && k < l->n; k++) {
-    const cup_file_entry *e = &l->e[k];
+    const file_entry *e = &l->e[k];
     if (strncmp(line, e->sha256, 64) != 0) {
       snprintf(errmsg, size, "%s changed since %s was made (SHA-256 %.12s... then, %.12s... now)", e->path, what,
                line, e->sha256);
@@ -124,9 +124,9 @@ int cup_file_list_compare(const cup_file_list *l, const char *stored, const char
   return CUP_OK;
 }
 
-int cup_read_text(const char *path, char **text, size_t *len, cup_file_list *files, char *errmsg) {
+int read_text(const char *path, char **text, size_t *len, file_list *files, char *errmsg) {
   FILE *f = fopen(path, "rb");
-  if (!f) return cup_fail(errmsg, CUP_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  if (!f) return fail_fmt(errmsg, CUP_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
   struct stat sb;
   int have_id = fstat(fileno(f), &sb) == 0;
   size_t cap = 4096, n = 0, got;
@@ -141,26 +141,26 @@ int cup_read_text(const char *path, char **text, size_t *len, cup_file_list *fil
   }
   int err = ferror(f);
   fclose(f);
-  if (!buf) return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path);
-  if (err) { free(buf); return cup_fail(errmsg, CUP_ERR_IO, "%s: read error", path); }
+  if (!buf) return fail_fmt(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path);
+  if (err) { free(buf); return fail_fmt(errmsg, CUP_ERR_IO, "%s: read error", path); }
   if (files) {
-    cup_file_entry e = {(char *)path, "", have_id ? (unsigned long long)sb.st_dev : 0,
+    file_entry e = {(char *)path, "", have_id ? (unsigned long long)sb.st_dev : 0,
                         have_id ? (unsigned long long)sb.st_ino : 0};
-    cup_sha256_hex(buf, n, e.sha256);
-    if (add(files, &e)) { free(buf); return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path); }
+    sha256_hex(buf, n, e.sha256);
+    if (add(files, &e)) { free(buf); return fail_fmt(errmsg, CUP_ERR_NOMEM, "%s: out of memory", path); }
   }
   *text = buf;
   *len = n;
   return CUP_OK;
 }
 
-int cup_load_args(const char *what, const char *item, int has_out, const void *src,
-                  const char *const *list, int n, char *errmsg) {
+int load_args(const char *what, const char *item, int has_out, const void *src,
+              const char *const *list, int n, char *errmsg) {
   if (errmsg) errmsg[0] = '\0';
-  if (!has_out) return cup_fail(errmsg, CUP_ERR_ARG, "%s: output pointer is NULL", what);
-  if (!src) return cup_fail(errmsg, CUP_ERR_ARG, "%s: path or text is NULL", what);
-  if (n < 0 || (n > 0 && !list)) return cup_fail(errmsg, CUP_ERR_ARG, "%s: %d %ss but no list", what, n, item);
+  if (!has_out) return fail_fmt(errmsg, CUP_ERR_ARG, "%s: output pointer is NULL", what);
+  if (!src) return fail_fmt(errmsg, CUP_ERR_ARG, "%s: path or text is NULL", what);
+  if (n < 0 || (n > 0 && !list)) return fail_fmt(errmsg, CUP_ERR_ARG, "%s: %d %ss but no list", what, n, item);
   for (int k = 0; k < n; k++)
-    if (!list[k]) return cup_fail(errmsg, CUP_ERR_ARG, "%s: %s %d is NULL", what, item, k);
+    if (!list[k]) return fail_fmt(errmsg, CUP_ERR_ARG, "%s: %s %d is NULL", what, item, k);
   return CUP_OK;
 }

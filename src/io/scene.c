@@ -39,7 +39,7 @@ struct cup_scene {
   cup_integrator_options opt;
   char *eps_spec, *eta_spec;    /* as written */
   char *text;                   /* the document after overrides */
-  cup_file_list files;          /* every file read: the scene's, its Matrix Market files, its netlist's */
+  file_list files;          /* every file read: the scene's, its Matrix Market files, its netlist's */
   long max_steps;               /* the key max_steps: the most steps a fixed-step run may take */
   int circuit;                  /* the model is circuit: (its states have names) */
   int steps_given;              /* the scene gave n or h (a netlist's .tran gives neither) */
@@ -380,7 +380,7 @@ static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
   }
   words[nw] = keys[nk] = NULL;
   char b[64], hint[ST_HINT_LEN], expected[160];
-  cup_words_join(expected, sizeof expected, forms, "or");
+  words_join(expected, sizeof expected, forms, "or");
   int kind = nd->kind == ST_SCALAR && !nd->quoted ? cup_output_parse(nd->text) : -1;
   if (kind >= 0 && forms[kind][0] != '{') { o->output = (cup_output_kind)kind; return CUP_OK; }
   if (nd->kind == ST_SCALAR)
@@ -606,7 +606,7 @@ static int read_scene(rd *r, const st_node *root, cup_scene *S) {
 /* files: what was read so far (the scene file itself), moved into the
  * scene, or freed. */
 static int load(cup_scene **s, const char *text, size_t len, const char *name, const char *dir,
-                const char *const *ovr, int nov, cup_file_list *files, char *errmsg) {
+                const char *const *ovr, int nov, file_list *files, char *errmsg) {
   rd r = {{name, ovr}, dir, errmsg, files};
   st_node *root = NULL;
   cup_scene *S = NULL;
@@ -618,10 +618,10 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
     S->files = *files;
     memset(files, 0, sizeof *files);
   }
-  cup_file_list_free(files);
+  file_list_free(files);
   if (!st && !(S->text = st_emit(root))) st = CUP_ERR_NOMEM;
   st_free(root);
-  if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "%s: out of memory while loading the scene", name);
+  if (st == CUP_ERR_NOMEM) fail_fmt(errmsg, st, "%s: out of memory while loading the scene", name);
   if (st) { cup_scene_free(&S); return st; }
   *s = S;
   return CUP_OK;
@@ -629,14 +629,14 @@ static int load(cup_scene **s, const char *text, size_t len, const char *name, c
 
 static int check_args(cup_scene **s, const void *src, const char *const *list, int n, char *errmsg) {
   if (s) *s = NULL;
-  return cup_load_args("scene", "override", s != NULL, src, list, n, errmsg);
+  return load_args("scene", "override", s != NULL, src, list, n, errmsg);
 }
 
 int cup_scene_load_string(cup_scene **s, const char *text, const char *name, const char *dir,
                           const char *const *overrides, int n_overrides, char *errmsg) {
   int st = check_args(s, text, overrides, n_overrides, errmsg);
   if (st) return st;
-  cup_file_list files = {0};
+  file_list files = {0};
   return load(s, text, strlen(text), name ? name : "<string>", dir, overrides, n_overrides, &files, errmsg);
 }
 
@@ -645,11 +645,11 @@ int cup_scene_load(cup_scene **s, const char *path, const char *const *overrides
   int st = check_args(s, path, overrides, n_overrides, errmsg);
   char *text = NULL, *dir = NULL;
   size_t len = 0;
-  cup_file_list files = {0};
-  if (!st) st = cup_read_text(path, &text, &len, &files, errmsg);
+  file_list files = {0};
+  if (!st) st = read_text(path, &text, &len, &files, errmsg);
   if (!st) st = path_dir(path, &dir);
   if (!st) st = load(s, text, len, path, dir, overrides, n_overrides, &files, errmsg);
-  cup_file_list_free(&files);
+  file_list_free(&files);
   free(text);
   free(dir);
   return st;
@@ -669,7 +669,7 @@ void cup_scene_free(cup_scene **s) {
   free(S->eps_spec);
   free(S->eta_spec);
   free(S->text);
-  cup_file_list_free(&S->files);
+  file_list_free(&S->files);
   scene_steady_free(&S->steady);
   free(S);
   *s = NULL;
@@ -696,9 +696,9 @@ int cup_scene_dim(const cup_scene *s) {
 
 int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cup_integrator **I,
                          char *errmsg) {
-  if (!I) return cup_fail(errmsg, CUP_ERR_ARG, "scene: output pointer is NULL");
+  if (!I) return fail_fmt(errmsg, CUP_ERR_ARG, "scene: output pointer is NULL");
   *I = NULL;
-  if (!s) return cup_fail(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
+  if (!s) return fail_fmt(errmsg, CUP_ERR_ARG, "scene: scene is NULL");
   if (!o) o = &s->opt;
   if (s->proc || s->crowd) return cup_integrator_create_process(I, cup_scene_process(s), o, errmsg);
   cup_switching sw;
@@ -708,12 +708,12 @@ int cup_scene_integrator(const cup_scene *s, const cup_integrator_options *o, cu
 }
 int cup_scene_set_time_origin(cup_scene *s, double t0, char *errmsg) {
   if (!s || !(t0 >= 0) || !isfinite(t0))
-    return cup_fail(errmsg, CUP_ERR_ARG, "scene: time origin: no scene, or t0 = %g not finite and >= 0", t0);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "scene: time origin: no scene, or t0 = %g not finite and >= 0", t0);
   if (s->nl) return cup_netlist_set_time_origin(s->nl, t0, errmsg);
   if ((s->proc || s->crowd) && t0 != 0)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "%s: a time origin t0 = %g for a set: or crowd: scene (its input "
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s: a time origin t0 = %g for a set: or crowd: scene (its input "
                     "cannot be moved)", s->name, t0);
-  return cup_input_origin(&s->u, &s->u_written, t0, errmsg);
+  return input_origin(&s->u, &s->u_written, t0, errmsg);
 }
 
 int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, char *errmsg) {
@@ -721,7 +721,7 @@ int cup_scene_steady_phase(cup_scene *s, double period, double *T, double *t0, c
   *T = period;
   *t0 = 0;
   if (!st && !cup_scene_input(s) && !(period > 0))
-    return cup_fail(errmsg, CUP_ERR_ARG, "the scene has no input to take the period from: give steady_state.period "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "the scene has no input to take the period from: give steady_state.period "
                     "(catchup-run --period)");
   if (!st) st = cup_input_steady_phase(cup_scene_input(s), period, T, t0, errmsg);
   if (!st) st = cup_scene_set_time_origin(s, *t0, errmsg);
@@ -733,10 +733,10 @@ const cup_integrator_options *cup_scene_options(const cup_scene *s) { return s ?
 const char *cup_scene_eps_spec(const cup_scene *s) { return s ? s->eps_spec : NULL; }
 const char *cup_scene_eta_spec(const cup_scene *s) { return s ? s->eta_spec : NULL; }
 const char *cup_scene_text(const cup_scene *s) { return s ? s->text : NULL; }
-const cup_file_list *cup_scene_file_list(const cup_scene *s) { return s ? &s->files : NULL; }
+const file_list *scene_file_list(const cup_scene *s) { return s ? &s->files : NULL; }
 int cup_scene_check_output(const cup_scene *s, const char *path, char *errmsg) {
-  if (!s || !path) return cup_fail(errmsg, CUP_ERR_ARG, "scene: NULL argument");
-  return cup_file_list_check_output(&s->files, path, errmsg);
+  if (!s || !path) return fail_fmt(errmsg, CUP_ERR_ARG, "scene: NULL argument");
+  return file_list_check_output(&s->files, path, errmsg);
 }
 int cup_scene_file_count(const cup_scene *s) { return s ? s->files.n : 0; }
 long cup_scene_max_steps(const cup_scene *s) { return s ? s->max_steps : CUP_MAX_STEPS_DEFAULT; }

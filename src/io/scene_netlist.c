@@ -95,7 +95,7 @@ static int read_probes(const st_src *src, const st_node *nd, cup_netlist *nl, ch
 }
 
 int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode, const st_node *val,
-                       cup_netlist **out, cup_file_list *files, char *errmsg) {
+                       cup_netlist **out, file_list *files, char *errmsg) {
   const st_node *fnode = val, *tnode = NULL, *nnode = NULL, *pnode = NULL;
   char **sets = NULL;
   int nsets = 0, st = CUP_OK;
@@ -117,8 +117,8 @@ int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode,
   if (!st && file && !(path = path_join(dir, file))) st = CUP_ERR_NOMEM;
   if (!st) {
     const char *shown = path ? path : name ? name : "netlist";
-    st = path ? cup_netlist_load_files(out, path, (const char *const *)sets, nsets, files, lib)
-              : cup_netlist_load_string_files(out, text, shown, (const char *const *)sets, nsets, files, lib);
+    st = path ? netlist_load_files(out, path, (const char *const *)sets, nsets, files, lib)
+              : netlist_load_string_files(out, text, shown, (const char *const *)sets, nsets, files, lib);
     if (st) st = netlist_fail(src, fnode ? fnode : knode, val, st, lib, shown, errmsg);
   }
   if (!st && pnode) st = read_probes(src, pnode, *out, errmsg);
@@ -137,8 +137,8 @@ static int adaptive_fits(const cup_netlist *nl) {
   const cup_lcs *L = cup_netlist_lcs(nl);
   const cup_polyset *K = cup_lcs_polyset(L);
   const cup_input *u = cup_netlist_input(nl);
-  if (!proj_small_lcp(K, NULL) || L->keep_B || (u && cup_input_gen_check(u, "adaptive", NULL))) return 0;
-  return K->n + cup_input_gen_dim(u, NULL) + 1 <= CUP_EXPONENTIAL_MAX_DIM;
+  if (!proj_small_lcp(K, NULL) || L->keep_B || (u && input_gen_check(u, "adaptive", NULL))) return 0;
+  return K->n + input_gen_dim(u, NULL) + 1 <= CUP_EXPONENTIAL_MAX_DIM;
 }
 
 void scene_netlist_sampling(const cup_netlist *nl, cup_integrator_options *o) {

@@ -6,13 +6,13 @@
 #include "catchup/integrator.h"
 #include "scene_tree.h"
 
-struct cup_file_list;
+struct file_list;
 
 /* The netlist named by val (a file name relative to dir, or a mapping with
  * file or text, name, probe and NAME: VALUE sets); errors name the scene's
  * place or the netlist's line. */
 int scene_netlist_read(const st_src *src, const char *dir, const st_node *knode, const st_node *val,
-                       cup_netlist **out, struct cup_file_list *files, char *errmsg);
+                       cup_netlist **out, struct file_list *files, char *errmsg);
 /* The tolerances a netlist's .options defaults to (docs/netlist.md):
  * SPICE's, but for RELTOL (SPICE's 1e-3 is loose for a max norm over
  * currents and voltages alike; the adaptive scheme costs little more). */

@@ -14,7 +14,7 @@ int scene_pss_solve(cup_scene *s, const cup_integrator_options *o, cup_pss **r, 
   if (st) return st;
   *stage = SCENE_PSS_SETUP;
   cup_integrator_options mo;                      /* the period map: the run's, over one period */
-  cup_pss_map_options(o, cup_scene_options(s)->T, *T, q->pss.map_tol, &mo);
+  pss_map_options(o, cup_scene_options(s)->T, *T, q->pss.map_tol, &mo);
   mo.on_step = NULL;
   cup_integrator *I = NULL;
   st = cup_scene_integrator(s, &mo, &I, errmsg);

@@ -5,7 +5,7 @@
  * of the run's integrator options, and the options of one period from the
  * steady state. The period itself is each caller's run (catchup-run's is
  * its output run, streamed to its file with its events; a sweep's task
- * samples it in memory); its samples are measured by cup_pss_measure
+ * samples it in memory); its samples are measured by pss_measure
  * (analysis/pss_run.h). Internal: the apps and src/sweep link the static
  * library. */
 #ifndef CUP_SCENE_PSS_H
@@ -16,7 +16,7 @@
 /* The steady state of scene s's request (cup_scene_steady_state) with the
  * run's options o (scheme, n over the scene's T, tolerances, the interrupt
  * flag, the wall-time limit): *T and *t0 the period and its phase
- * (cup_scene_steady_phase), the period map cup_pss_map_options(o, the
+ * (cup_scene_steady_phase), the period map pss_map_options(o, the
  * scene's T, T, the request's map_tol) from the scene's x0. Solved (a
  * status >= 0): *period the options of one period from cup_pss_x0(*r): the
  * map's, with the request's samples from t = 0 (the time t0 of the sources

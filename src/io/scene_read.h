@@ -21,12 +21,12 @@
 
 /* What every reader needs: names for messages, the directory of the file,
  * the list of the files read (read_text.h: every file a key names is
- * read through cup_read_text with it). */
+ * read through read_text with it). */
 typedef struct rd {
   st_src src;
   const char *dir;
   char *errmsg;
-  cup_file_list *files;
+  file_list *files;
 } rd;
 
 #define KEY_LEN 128              /* dotted keys ("input.1.0.amplitude") */
@@ -213,7 +213,7 @@ static inline int matrix_file(rd *r, const st_node *nd, const char *key, mat *M)
   char *full = path_join(r->dir, name), *text = NULL;
   if (!full) return CUP_ERR_NOMEM;
   size_t len = 0;
-  st = cup_read_text(full, &text, &len, r->files, NULL);   /* the bytes hashed are the bytes parsed */
+  st = read_text(full, &text, &len, r->files, NULL);   /* the bytes hashed are the bytes parsed */
   if (st == CUP_ERR_IO) st = fail(r, CUP_ERR_IO, fn, k1, "cannot open '%s': %s", full, strerror(errno));
   FILE *f = st ? NULL : len ? fmemopen(text, len, "r") : fopen("/dev/null", "r");   /* no empty fmemopen */
   if (!st && !f) st = CUP_ERR_NOMEM;

@@ -6,6 +6,6 @@
 #include <stddef.h>
 
 /* hex receives 64 lowercase hex digits and a NUL (65 bytes). */
-void cup_sha256_hex(const void *data, size_t len, char hex[65]);
+void sha256_hex(const void *data, size_t len, char hex[65]);
 
 #endif

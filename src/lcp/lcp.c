@@ -7,7 +7,7 @@
 #include "util/linalg.h"
 #include "lcp.h"
 
-int cup_lcp_init(cup_lcp *s, int m) {
+int lcp_init(lcp_solver *s, int m) {
   memset(s, 0, sizeof *s);
   s->m = m;
   size_t M = (size_t)m + 1;
@@ -21,22 +21,22 @@ int cup_lcp_init(cup_lcp *s, int m) {
   return CUP_OK;
 }
 
-void cup_lcp_free(cup_lcp *s) {
+void lcp_free(lcp_solver *s) {
   free(s->lam); free(s->w); free(s->rhs); free(s->lu); free(s->work);
   free(s->piv); free(s->idx); free(s->act); free(s->prev);
-  cup_lemke_free(&s->lemke);
+  lemke_free(&s->lemke);
   memset(s, 0, sizeof *s);
 }
 
-int cup_lcp_monotone(cup_lcp *s) {
-  if (!s->monotone && cup_lemke_init(&s->lemke, s->m)) return CUP_ERR_NOMEM;
+int lcp_monotone(lcp_solver *s) {
+  if (!s->monotone && lemke_init(&s->lemke, s->m)) return CUP_ERR_NOMEM;
   s->monotone = 1;
   return CUP_OK;
 }
 
 /* lambda on A from M_AA lambda_A = -q_A, 0 elsewhere, and w = q + M lambda.
  * Returns nonzero for a singular block. */
-static int solve_on(cup_lcp *s, const double *M, const double *q) {
+static int solve_on(lcp_solver *s, const double *M, const double *q) {
   int m = s->m, k = 0;
   for (int i = 0; i < m; i++) if (s->act[i]) s->idx[k++] = i;
   for (int i = 0; i < m; i++) s->lam[i] = 0;
@@ -58,8 +58,8 @@ static int solve_on(cup_lcp *s, const double *M, const double *q) {
       s->rhs[b] = -q[s->idx[b]];
       for (int a = 0; a < k; a++) s->lu[a + (size_t)b * k] = M[s->idx[a] + (size_t)s->idx[b] * m];
     }
-    if (cup_dense_lu(s->lu, k, s->piv)) return 1;
-    cup_dense_lu_solve(s->lu, k, s->piv, s->rhs, s->work);
+    if (la_dense_lu(s->lu, k, s->piv)) return 1;
+    la_dense_lu_solve(s->lu, k, s->piv, s->rhs, s->work);
     for (int b = 0; b < k; b++) s->lam[s->idx[b]] = s->rhs[b];
   }
   for (int i = 0; i < m; i++) {
@@ -71,14 +71,14 @@ static int solve_on(cup_lcp *s, const double *M, const double *q) {
 }
 
 /* Murty's least-index principal pivoting from the active set in s->act. */
-static int murty(cup_lcp *s, const double *M, const double *q, int *pivots) {
+static int murty(lcp_solver *s, const double *M, const double *q, int *pivots) {
   int m = s->m;
   double scale = 0;
-  for (int i = 0; i < m; i++) scale = cup_max(scale, fabs(q[i]));
+  for (int i = 0; i < m; i++) scale = la_max(scale, fabs(q[i]));
   for (int it = 0; it < 16 * m + 64; it++) {
     if (solve_on(s, M, q)) return CUP_ERR_LINALG;
     double lmax = 0;
-    for (int i = 0; i < m; i++) lmax = cup_max(lmax, fabs(s->lam[i]));
+    for (int i = 0; i < m; i++) lmax = la_max(lmax, fabs(s->lam[i]));
     double tol_l = 64 * DBL_EPSILON * lmax, tol_w = 64 * DBL_EPSILON * scale;
     int flip = -1;
     for (int i = 0; i < m && flip < 0; i++)
@@ -90,15 +90,15 @@ static int murty(cup_lcp *s, const double *M, const double *q, int *pivots) {
   return CUP_ERR_LINALG;                          /* cycling: not a P-matrix */
 }
 
-static int lemke(cup_lcp *s, const double *M, const double *q, int *pivots) {
-  int st = cup_lemke_solve(&s->lemke, M, q, s->lam, s->w, pivots);
+static int lemke(lcp_solver *s, const double *M, const double *q, int *pivots) {
+  int st = lemke_solve(&s->lemke, M, q, s->lam, s->w, pivots);
   if (st) return st;
   for (int i = 0; i < s->m; i++) s->act[i] = s->lam[i] > 0;
   memcpy(s->prev, s->act, (size_t)s->m);
   return CUP_OK;
 }
 
-int cup_lcp_solve(cup_lcp *s, const double *M, const double *q, int *pivots) {
+int lcp_solve(lcp_solver *s, const double *M, const double *q, int *pivots) {
   memcpy(s->act, s->prev, (size_t)s->m);
   for (int cold = 0;; cold++) {                   /* one call site: murty is inlined */
     int st = murty(s, M, q, pivots);

@@ -5,38 +5,38 @@
  * form for one or two rows (Cramer's rule is forward stable for 2 x 2), else
  * by LU with partial pivoting (M need not be symmetric). Each solve starts
  * from the active set of the last solution and is retried cold. Dense, for
- * the few rows of circuit models; allocation-free after cup_lcp_init. */
+ * the few rows of circuit models; allocation-free after lcp_init. */
 #ifndef CUP_LCP_H
 #define CUP_LCP_H
 
 #include <string.h>
 #include "lemke.h"
 
-typedef struct cup_lcp {
+typedef struct lcp_solver {
   int m;
   double *lam, *w;          /* the solution and its slack w = q + M lambda */
   double *rhs, *lu, *work;  /* scratch of the block solves */
   int *piv, *idx;
   unsigned char *act;       /* active set of the current solve */
   unsigned char *prev;      /* active set of the last solution: the warm start */
-  int monotone;             /* cup_lcp_monotone: Lemke's method where pivoting fails */
-  cup_lemke lemke;
-} cup_lcp;
+  int monotone;             /* lcp_monotone: Lemke's method where pivoting fails */
+  lemke_solver lemke;
+} lcp_solver;
 
-/* CUP_OK or CUP_ERR_NOMEM (then cup_lcp_free releases what was taken). */
-int cup_lcp_init(cup_lcp *s, int m);
-void cup_lcp_free(cup_lcp *s);
+/* CUP_OK or CUP_ERR_NOMEM (then lcp_free releases what was taken). */
+int lcp_init(lcp_solver *s, int m);
+void lcp_free(lcp_solver *s);
 /* For monotone LCPs (M + M^T positive semidefinite, as a passive circuit's
  * with D != 0) whose M need not be a P-matrix: when principal pivoting meets
  * a singular block, Lemke's method (lemke.h) solves the LCP instead.
  * CUP_OK or CUP_ERR_NOMEM. */
-int cup_lcp_monotone(cup_lcp *s);
+int lcp_monotone(lcp_solver *s);
 /* lambda and w into s->lam, s->w; adds the pivots to *pivots. Returns CUP_OK,
  * or CUP_ERR_LINALG for a singular principal block or cycling (M is not a
- * P-matrix; after cup_lcp_monotone: Lemke's method found no solution
+ * P-matrix; after lcp_monotone: Lemke's method found no solution
  * either), leaving the warm start as it was. */
-int cup_lcp_solve(cup_lcp *s, const double *M, const double *q, int *pivots);
+int lcp_solve(lcp_solver *s, const double *M, const double *q, int *pivots);
 /* The next solve starts cold. */
-static inline void cup_lcp_forget(cup_lcp *s) { memset(s->prev, 0, (size_t)s->m); }
+static inline void lcp_forget(lcp_solver *s) { memset(s->prev, 0, (size_t)s->m); }
 
 #endif

@@ -9,17 +9,17 @@
 #include "catchup.h"
 #include "lemke.h"
 
-int cup_lemke_init(cup_lemke *s, int m) {
+int lemke_init(lemke_solver *s, int m) {
   memset(s, 0, sizeof *s);
   s->m = m;
   size_t M = (size_t)m + 1;
   s->T = calloc(M * (2 * M + 2), sizeof(double));
   s->basis = calloc(M, sizeof(int));
-  if (!s->T || !s->basis) { cup_lemke_free(s); return CUP_ERR_NOMEM; }
+  if (!s->T || !s->basis) { lemke_free(s); return CUP_ERR_NOMEM; }
   return CUP_OK;
 }
 
-void cup_lemke_free(cup_lemke *s) {
+void lemke_free(lemke_solver *s) {
   free(s->T);
   free(s->basis);
   memset(s, 0, sizeof *s);
@@ -34,7 +34,7 @@ void cup_lemke_free(cup_lemke *s) {
  * ratios that are equal in exact arithmetic differ by rounding after some
  * pivots, and the lexicographic order then follows the rounding, which can
  * end on a ray although the LCP is feasible. -1: a ray. */
-static int ratio_test(const cup_lemke *s, int e, double tol) {
+static int ratio_test(const lemke_solver *s, int e, double tol) {
   int m = s->m, qc = 2 * m + 1, best = -1, zrow = -1;
   double qscale = 0;
   for (int i = 0; i < m; i++) {
@@ -55,7 +55,7 @@ static int ratio_test(const cup_lemke *s, int e, double tol) {
   return best;
 }
 
-static void pivot(cup_lemke *s, int r, int e) {
+static void pivot(lemke_solver *s, int r, int e) {
   int m = s->m, nc = 2 * m + 2;
   double p = TAB(s, r, e);
   for (int j = 0; j < nc; j++) TAB(s, r, j) /= p;
@@ -70,7 +70,7 @@ static void pivot(cup_lemke *s, int r, int e) {
   s->basis[r] = e;
 }
 
-int cup_lemke_solve(cup_lemke *s, const double *M, const double *q, double *z, double *w, int *pivots) {
+int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, double *w, int *pivots) {
   int m = s->m, z0 = 2 * m, qc = 2 * m + 1;
   double scale = 0, qmin = 0;
   int r = -1;

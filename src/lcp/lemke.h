@@ -6,23 +6,23 @@
  * series diodes a singular block), where principal pivoting (lcp.h) can
  * meet a singular block. Ties in the ratio test are broken
  * lexicographically, so degenerate problems cannot cycle. Dense tableau,
- * m x (2m + 2); allocation-free after cup_lemke_init. */
+ * m x (2m + 2); allocation-free after lemke_init. */
 #ifndef CUP_LCP_LEMKE_H
 #define CUP_LCP_LEMKE_H
 
-typedef struct cup_lemke {
+typedef struct lemke_solver {
   int m;
   double *T;          /* m x (2m + 2) tableau, column-major: w | z | z0 | q */
   int *basis;         /* basic variable of each row: 0..m-1 w, m..2m-1 z, 2m z0 */
-} cup_lemke;
+} lemke_solver;
 
-/* CUP_OK or CUP_ERR_NOMEM (then cup_lemke_free releases what was taken). */
-int cup_lemke_init(cup_lemke *s, int m);
-void cup_lemke_free(cup_lemke *s);
+/* CUP_OK or CUP_ERR_NOMEM (then lemke_free releases what was taken). */
+int lemke_init(lemke_solver *s, int m);
+void lemke_free(lemke_solver *s);
 /* z (m entries) and w = q + M z recomputed from M and q; adds the pivots to
  * *pivots. Returns CUP_OK, or CUP_ERR_LINALG when the method ends on a
  * secondary ray (no solution for this M and q, or M not copositive-plus)
  * or runs out of pivots. */
-int cup_lemke_solve(cup_lemke *s, const double *M, const double *q, double *z, double *w, int *pivots);
+int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, double *w, int *pivots);
 
 #endif

@@ -6,16 +6,16 @@
 #include "catchup.h"
 #include "step.h"
 
-static void small_init(cup_lcp_step *ls);
+static void small_init(lcp_step *ls);
 
-int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h) {
-  return cup_lcp_step_init_bd(ls, K, W, h, NULL, NULL, 1);
+int lcp_step_init(lcp_step *ls, const cup_polyset *K, const double *W, double h) {
+  return lcp_step_init_bd(ls, K, W, h, NULL, NULL, 1);
 }
 
 /* H = h w W B column by column (w = 1 on a zero column of D, whose zeta no
  * row fixes, theta on the others, and the mode's kernel columns as
  * set_mode found them), then M = C H + D and its rows scaled. */
-static void build_hm(cup_lcp_step *ls) {
+static void build_hm(lcp_step *ls) {
   const cup_polyset *K = ls->K;
   int n = ls->n, m = ls->m;
   double h = ls->h, theta = ls->theta;
@@ -46,14 +46,14 @@ static void build_hm(cup_lcp_step *ls) {
    * relative to the largest row; scaled, each row's are its own. */
   for (int i = 0; i < m; i++) {
     double r = 0;
-    for (int j = 0; j < m; j++) r = cup_max(r, fabs(ls->M[i + (size_t)j * m]));
+    for (int j = 0; j < m; j++) r = la_max(r, fabs(ls->M[i + (size_t)j * m]));
     ls->rsc[i] = r > 0 ? 1 / r : 1;
     for (int j = 0; j < m; j++) ls->Ms[i + (size_t)j * m] = ls->rsc[i] * ls->M[i + (size_t)j * m];
   }
 }
 
-/* The D path's arrays (cup_lcp_step_free releases them on failure). */
-static int init_d(cup_lcp_step *ls, const double *D, double theta) {
+/* The D path's arrays (lcp_step_free releases them on failure). */
+static int init_d(lcp_step *ls, const double *D, double theta) {
   size_t N = (size_t)ls->n, M = (size_t)ls->m + 1;
   ls->D = malloc(sizeof(double) * M * M);
   ls->geff = calloc(M, sizeof(double));
@@ -70,7 +70,7 @@ static int init_d(cup_lcp_step *ls, const double *D, double theta) {
   ls->rsc = calloc(3 * M, sizeof(double));         /* and q, q - tau scaled */
   ls->kwork = calloc(3 * M, sizeof(int));
   if (!ls->D || !ls->geff || !ls->WB || !ls->Hprev || !ls->carry || !ls->xpred || !ls->q0 || !ls->dcol0 ||
-      !ls->kcol || !ls->Z || !ls->work || !ls->kwork || !ls->Ms || !ls->rsc || cup_lcp_monotone(&ls->lcp))
+      !ls->kcol || !ls->Z || !ls->work || !ls->kwork || !ls->Ms || !ls->rsc || lcp_monotone(&ls->lcp))
     return CUP_ERR_NOMEM;
   int m = ls->m;
   memcpy(ls->D, D, sizeof(double) * (size_t)m * m);
@@ -83,8 +83,8 @@ static int init_d(cup_lcp_step *ls, const double *D, double theta) {
   return CUP_OK;
 }
 
-int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
-                         const double *B, const double *D, double theta) {
+int lcp_step_init_bd(lcp_step *ls, const cup_polyset *K, const double *W, double h,
+                     const double *B, const double *D, double theta) {
   memset(ls, 0, sizeof *ls);
   if (!K->dense) return CUP_ERR_UNSUPPORTED;
   int n = ls->n = K->n, m = ls->m = K->m;
@@ -97,7 +97,7 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
   ls->v = calloc(N, sizeof(double));
   ls->tau = calloc(M, sizeof(double)); ls->qs = calloc(M, sizeof(double));
   ls->sv = calloc(M, sizeof(double)); ls->gamv = calloc(M, sizeof(double));
-  int fail = cup_lcp_init(&ls->lcp, m);
+  int fail = lcp_init(&ls->lcp, m);
   if (fail || !ls->H || !ls->M || !ls->s || !ls->gam || !ls->v || !ls->tau || !ls->qs || !ls->sv ||
       !ls->gamv)
     return CUP_ERR_NOMEM;
@@ -133,30 +133,30 @@ int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W
   return CUP_OK;
 }
 
-void cup_lcp_step_free(cup_lcp_step *ls) {
+void lcp_step_free(lcp_step *ls) {
   free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
   free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->WB); free(ls->Hprev);
   free(ls->carry); free(ls->xpred); free(ls->q0); free(ls->dcol0); free(ls->kcol); free(ls->Z);
   free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc);
-  cup_lcp_free(&ls->lcp);
+  lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
 
-double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z) {
+double lcp_step_eta(lcp_step *ls, const double *g, const double *z) {
   const cup_polyset *K = ls->K;
   int n = ls->n, m = ls->m;
   double worst = INFINITY;
-  for (int i = 0; i < m; i++) worst = cup_min(worst, ls->s[i] - ls->gam[i]);
+  for (int i = 0; i < m; i++) worst = la_min(worst, ls->s[i] - ls->gam[i]);
   if (worst >= 0) return 0;
   if (!K->rdir) return INFINITY;
   double t = 0;
   for (int i = 0; i < m; i++)
     if (ls->s[i] - ls->gam[i] < 0) {
       if (!(K->Crdir[i] > 0)) return INFINITY;
-      t = cup_max(t, (3 * ls->gam[i] - ls->s[i]) / K->Crdir[i]);
+      t = la_max(t, (3 * ls->gam[i] - ls->s[i]) / K->Crdir[i]);
     }
   for (int j = 0; j < n; j++) ls->v[j] = z[j] + t * K->rdir[j];
-  return cup_slack(K, g, ls->v, ls->sv, ls->gamv) >= 0 ? t * K->rdir_norm * (1 + 8 * DBL_EPSILON)
+  return polyset_slack(K, g, ls->v, ls->sv, ls->gamv) >= 0 ? t * K->rdir_norm * (1 + 8 * DBL_EPSILON)
                                                         : INFINITY;
 }
 
@@ -170,7 +170,7 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z) {
  * by row and column, so only a scaled pivot means anything): its free
  * columns T, less those of dcol0, into nk, kc, and the vectors z_t
  * (z_t[t] = 1, 0 on the other free columns) into Zn, m x nk. */
-static void kernel_of(cup_lcp_step *ls, unsigned long long J, int *nk, int *kc, double *Zn) {
+static void kernel_of(lcp_step *ls, unsigned long long J, int *nk, int *kc, double *Zn) {
   int m = ls->m, p = 0;
   int *idx = ls->kwork, *pr = idx + m, *pc = pr + m;
   double *A = ls->work, *cs = A + (size_t)m * m, *z = cs + m;
@@ -182,12 +182,12 @@ static void kernel_of(cup_lcp_step *ls, unsigned long long J, int *nk, int *kc, 
   }
   for (int a = 0; a < p; a++) {                   /* rows, then columns, to largest entry 1 */
     double r = 0;
-    for (int b = 0; b < p; b++) r = cup_max(r, fabs(A[a + (size_t)b * p]));
+    for (int b = 0; b < p; b++) r = la_max(r, fabs(A[a + (size_t)b * p]));
     for (int b = 0; r > 0 && b < p; b++) A[a + (size_t)b * p] /= r;
   }
   for (int b = 0; b < p; b++) {
     double c = 0;
-    for (int a = 0; a < p; a++) c = cup_max(c, fabs(A[a + (size_t)b * p]));
+    for (int a = 0; a < p; a++) c = la_max(c, fabs(A[a + (size_t)b * p]));
     cs[b] = c > 0 ? c : 1;
     for (int a = 0; a < p; a++) A[a + (size_t)b * p] /= cs[b];
   }
@@ -228,7 +228,7 @@ static void kernel_of(cup_lcp_step *ls, unsigned long long J, int *nk, int *kc, 
 }
 
 /* The support of the last zeta, a bit per row. */
-static unsigned long long support(const cup_lcp_step *ls) {
+static unsigned long long support(const lcp_step *ls) {
   unsigned long long J = 0;
   for (int i = 0; i < ls->m; i++)
     if (ls->lcp.lam[i] > 0) J |= 1ull << i;
@@ -237,7 +237,7 @@ static unsigned long long support(const cup_lcp_step *ls) {
 
 /* The weights for the support J: 1 when H and M changed (another kernel),
  * 0 when those in force are J's. With theta = 1 every weight is 1. */
-static int set_mode(cup_lcp_step *ls, unsigned long long J) {
+static int set_mode(lcp_step *ls, unsigned long long J) {
   ls->mode = J;
   if (ls->theta == 1) return 0;
   int m = ls->m, nk;
@@ -256,7 +256,7 @@ static int set_mode(cup_lcp_step *ls, unsigned long long J) {
 
 /* carry = Pi zeta: zeta less its part in the kernel, sum_t zeta_t z_t
  * (0 on D's zero columns). */
-static void carry_of(cup_lcp_step *ls) {
+static void carry_of(lcp_step *ls) {
   int m = ls->m;
   const double *lam = ls->lcp.lam;
   for (int j = 0; j < m; j++) ls->carry[j] = ls->dcol0[j] ? 0 : lam[j];
@@ -272,32 +272,32 @@ static void carry_of(cup_lcp_step *ls) {
 
 /* With D, a step carries the weights in force (the support they were set
  * for: its kernel makes H and M) and Pi zeta to the next as well. */
-void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c) {
-  cup_ckpt_io(c, ls->lcp.lam, sizeof(double) * (size_t)ls->m);
-  cup_ckpt_io(c, ls->lcp.prev, (size_t)ls->m);
+void lcp_step_checkpoint(lcp_step *ls, ckpt *c) {
+  ckpt_io(c, ls->lcp.lam, sizeof(double) * (size_t)ls->m);
+  ckpt_io(c, ls->lcp.prev, (size_t)ls->m);
   CUP_CKPT_IO(c, ls->lq);
   if (!ls->D) return;
   unsigned long long mode = ls->mode;
   CUP_CKPT_IO(c, mode);
-  cup_ckpt_io(c, ls->carry, sizeof(double) * (size_t)ls->m);
+  ckpt_io(c, ls->carry, sizeof(double) * (size_t)ls->m);
   if (!c->saving && c->buf && !c->bad) set_mode(ls, mode);
 }
 
-int cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g) {
+int lcp_step_start(lcp_step *ls, const double *x0, const double *g) {
   int m = ls->m, pivots = 0;
   double *lam = ls->lcp.lam;
-  cup_zero(lam, m);
-  if (!ls->D) return cup_slack(ls->K, g, x0, ls->qs, NULL) >= 0;
-  cup_slack(ls->K, g, x0, ls->qs, NULL);          /* q = C x0 + g, M = D */
-  int consistent = cup_lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) == CUP_OK;
-  if (!consistent) cup_zero(lam, m);
+  la_zero(lam, m);
+  if (!ls->D) return polyset_slack(ls->K, g, x0, ls->qs, NULL) >= 0;
+  polyset_slack(ls->K, g, x0, ls->qs, NULL);          /* q = C x0 + g, M = D */
+  int consistent = lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) == CUP_OK;
+  if (!consistent) la_zero(lam, m);
   set_mode(ls, support(ls));
   carry_of(ls);
   return consistent;
 }
 
 /* (m + 2) eps sum_j |A_ij| lambda_j: the rounding of row i of A lambda. */
-static double row_rounding(const cup_lcp_step *ls, const double *A, int i) {
+static double row_rounding(const lcp_step *ls, const double *A, int i) {
   double mag = 0;
   for (int j = 0; j < ls->m; j++) mag += fabs(A[i + (size_t)j * ls->m]) * ls->lcp.lam[j];
   return (ls->m + 2) * DBL_EPSILON * mag;
@@ -306,7 +306,7 @@ static double row_rounding(const cup_lcp_step *ls, const double *A, int i) {
 /* With D, a row of w may not depend on z at all (a diode fixed by the
  * other diodes' currents): aim it beyond the rounding of (M lambda)_i too,
  * known only once lambda is; 1 if some tau_i grew. */
-static int widen_aim(cup_lcp_step *ls, const double *q) {
+static int widen_aim(lcp_step *ls, const double *q) {
   int m = ls->m, more = 0;
   for (int i = 0; i < m; i++) {
     double want = 16 * row_rounding(ls, ls->M, i);
@@ -320,7 +320,7 @@ static int widen_aim(cup_lcp_step *ls, const double *q) {
 }
 
 /* g + D lambda (D != 0), else g itself. */
-static const double *effective_offset(cup_lcp_step *ls, const double *g) {
+static const double *effective_offset(lcp_step *ls, const double *g) {
   if (!ls->D) return g;
   int m = ls->m;
   for (int i = 0; i < m; i++) {
@@ -331,10 +331,10 @@ static const double *effective_offset(cup_lcp_step *ls, const double *g) {
   return ls->geff;
 }
 
-static int small_dispatch(cup_lcp_step *ls, const double *g, const double *xf, double *z, double scale,
+static int small_dispatch(lcp_step *ls, const double *g, const double *xf, double *z, double scale,
                           double eps_target, double eta_target, cup_proj_info *info) {
 #define CUP_SMALL_CASE(N, M) \
-  case (N) * 8 + (M): return cup_small_step(ls, g, xf, z, scale, eps_target, eta_target, info, N, M);
+  case (N) * 8 + (M): return lcp_small_step(ls, g, xf, z, scale, eps_target, eta_target, info, N, M);
   switch (ls->n * 8 + ls->m) {
     CUP_SMALL_CASE(1, 1) CUP_SMALL_CASE(2, 1) CUP_SMALL_CASE(3, 1) CUP_SMALL_CASE(4, 1)
     CUP_SMALL_CASE(1, 2) CUP_SMALL_CASE(2, 2) CUP_SMALL_CASE(3, 2) CUP_SMALL_CASE(4, 2)
@@ -345,7 +345,7 @@ static int small_dispatch(cup_lcp_step *ls, const double *g, const double *xf, d
 
 /* The dense rows of a small set without D; small stays 0 otherwise (or
  * where a row repeats a column, whose sparse sum would round differently). */
-static void small_init(cup_lcp_step *ls) {
+static void small_init(lcp_step *ls) {
   const cup_polyset *K = ls->K;
   if (ls->D || ls->n > CUP_STEP_SMALL_N || ls->m > CUP_STEP_SMALL_M || ls->m < 1) return;
   for (int i = 0; i < ls->m; i++) {
@@ -364,7 +364,7 @@ static void small_init(cup_lcp_step *ls) {
  * makes it unsolvable (a set without interior) gives way to the exact one.
  * With D, a row that z does not move is aimed past (M lambda)_i's rounding
  * too (widen_aim). */
-static int aimed_solve(cup_lcp_step *ls, const double *q, int *pivots) {
+static int aimed_solve(lcp_step *ls, const double *q, int *pivots) {
   int m = ls->m, st = CUP_ERR_LINALG, aimed = 0;
   double *tau = ls->tau, *qs = ls->qs;
   const double *M = ls->M, *qa = q, *qb = qs;
@@ -377,15 +377,15 @@ static int aimed_solve(cup_lcp_step *ls, const double *q, int *pivots) {
     M = ls->Ms, qa = sq, qb = sqs;
   }
   for (int aim = 1; aim >= 0 && st == CUP_ERR_LINALG; aim--) {
-    if (!aim) cup_zero(tau, m);
-    st = cup_lcp_solve(&ls->lcp, M, aim ? qb : qa, pivots);
+    if (!aim) la_zero(tau, m);
+    st = lcp_solve(&ls->lcp, M, aim ? qb : qa, pivots);
     aimed = aim && !st;
   }
   if (aimed && ls->D && widen_aim(ls, q)) {
     for (int i = 0; i < m; i++) ls->rsc[2 * m + i] = ls->rsc[i] * qs[i];
-    if (cup_lcp_solve(&ls->lcp, M, qb, pivots) != CUP_OK) {
-      cup_zero(tau, m);
-      st = cup_lcp_solve(&ls->lcp, M, qa, pivots);
+    if (lcp_solve(&ls->lcp, M, qb, pivots) != CUP_OK) {
+      la_zero(tau, m);
+      st = lcp_solve(&ls->lcp, M, qa, pivots);
     }
   }
   return st;
@@ -393,22 +393,22 @@ static int aimed_solve(cup_lcp_step *ls, const double *q, int *pivots) {
 
 /* lambda >= 0, lambda^T q, z = xf + H lambda, and z's slack and its rounding
  * in ls->s, ls->gam for the offset returned (g, or g + D lambda). */
-static const double *finish(cup_lcp_step *ls, const double *q, const double *g, const double *xf, double *z) {
+static const double *finish(lcp_step *ls, const double *q, const double *g, const double *xf, double *z) {
   int n = ls->n, m = ls->m;
   double *lam = ls->lcp.lam, lq = 0;
   for (int i = 0; i < m; i++) {
-    lam[i] = cup_max(lam[i], 0);
+    lam[i] = la_max(lam[i], 0);
     lq += lam[i] * q[i];
   }
   ls->lq = lq;
-  cup_copy(z, xf, n);
+  la_copy(z, xf, n);
   for (int i = 0; i < m; i++) {
     if (lam[i] == 0) continue;
     for (int r = 0; r < n; r++) z[r] += ls->H[r + (size_t)i * n] * lam[i];
   }
   /* certificates from the slack of z itself; with D, in K shifted by D lambda */
   g = effective_offset(ls, g);
-  cup_slack(ls->K, g, z, ls->s, ls->gam);
+  polyset_slack(ls->K, g, z, ls->s, ls->gam);
   for (int i = 0; ls->D && i < m; i++) ls->gam[i] += row_rounding(ls, ls->D, i);
   return g;
 }
@@ -420,7 +420,7 @@ enum { MODE_PASSES = 4, AIM_PASSES = 3 };
 /* Solves again while the solution's support asks for other weights than
  * those it was solved with (set_mode). */
 
-static int mode_solve(cup_lcp_step *ls, const double *q, int *pivots) {
+static int mode_solve(lcp_step *ls, const double *q, int *pivots) {
   for (int pass = 0;; pass++) {
     if (pass)
       for (int i = 0; i < ls->m; i++) ls->qs[i] = q[i] - ls->tau[i];
@@ -436,7 +436,7 @@ static int mode_solve(cup_lcp_step *ls, const double *q, int *pivots) {
  * on a row of small scale, or one tied to another that is aimed in (two
  * diodes whose rows leave K no interior), is no rounding at all. 1 if some
  * row was. */
-static int reaim(cup_lcp_step *ls, const double *q) {
+static int reaim(lcp_step *ls, const double *q) {
   int more = 0;
   for (int i = 0; i < ls->m; i++) {
     if (ls->s[i] >= ls->gam[i]) continue;
@@ -454,7 +454,7 @@ static int reaim(cup_lcp_step *ls, const double *q) {
  * cond(Ms_JJ) eps, which an aim could only cover by moving the answer by
  * cond times the aim; one correction in working precision brings them to
  * the rounding of the block's entries. */
-static void refine(cup_lcp_step *ls, const double *q) {
+static void refine(lcp_step *ls, const double *q) {
   int m = ls->m, p = 0;
   int *idx = ls->kwork, *piv = idx + m;
   double *A = ls->work, *r = A + (size_t)m * m, *w = r + m, *lam = ls->lcp.lam;
@@ -467,14 +467,14 @@ static void refine(cup_lcp_step *ls, const double *q) {
     r[a] = -acc;
     for (int b = 0; b < p; b++) A[a + (size_t)b * p] = ls->Ms[idx[a] + (size_t)idx[b] * m];
   }
-  if (!p || cup_dense_lu(A, p, piv)) return;
-  cup_dense_lu_solve(A, p, piv, r, w);
+  if (!p || la_dense_lu(A, p, piv)) return;
+  la_dense_lu_solve(A, p, piv, r, w);
   for (int a = 0; a < p; a++) lam[idx[a]] += r[a];
 }
 
 /* 1 when some row's slack at z is below its rounding bound; *active: one
  * of them has lambda > 0. */
-static int short_rows(const cup_lcp_step *ls, int *active) {
+static int short_rows(const lcp_step *ls, int *active) {
   int any = 0;
   *active = 0;
   for (int i = 0; i < ls->m; i++)
@@ -491,7 +491,7 @@ static int short_rows(const cup_lcp_step *ls, int *active) {
  * refined on its support if an active row falls short, then aims moved
  * further in (reaim), keeping the last solution if a solve fails; the
  * trapezoid's carry. *g: the offset of z's certificates. */
-static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const double *xf, double *z,
+static int solve_d(lcp_step *ls, const double *q, const double **g, const double *xf, double *z,
                    int *pivots) {
   int st = mode_solve(ls, q, pivots), m = ls->m, active;
   if (st) return st;
@@ -504,9 +504,9 @@ static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const do
     short_ = short_rows(ls, &active);
   }
   for (int r = 0; r < AIM_PASSES && short_ && reaim(ls, q); r++) {
-    cup_copy(ls->sv, ls->lcp.lam, m);
+    la_copy(ls->sv, ls->lcp.lam, m);
     int ok = aimed_solve(ls, q, pivots) == CUP_OK;
-    if (!ok) cup_copy(ls->lcp.lam, ls->sv, m);
+    if (!ok) la_copy(ls->lcp.lam, ls->sv, m);
     *g = finish(ls, q, g0, xf, z);
     if (!ok) break;
     short_ = short_rows(ls, &active);
@@ -515,10 +515,10 @@ static int solve_d(cup_lcp_step *ls, const double *q, const double **g, const do
   return CUP_OK;
 }
 
-/* cup_lcp_step_solve beyond the unrolled step: out of line, so that the
+/* lcp_step_solve beyond the unrolled step: out of line, so that the
  * unrolled step's callers pay for none of its registers (35 instructions a
  * call on the paper circuit's projections). */
-static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const double *g, const double *xf, double *z,
+static __attribute__((noinline)) int solve_general(lcp_step *ls, const double *g, const double *xf, double *z,
                                                    double scale, double eps_target, double eta_target,
                                                    cup_proj_info *info) {
   const cup_polyset *K = ls->K;
@@ -529,7 +529,7 @@ static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const doubl
   info->eta_target = eta_target;
   info->method = CUP_PROJ_ACTIVESET;
   if (ls->D) {                                    /* the trapezoid's old half: h (1 - theta) W B Pi zeta_k */
-    cup_copy(ls->xpred, xf, n);
+    la_copy(ls->xpred, xf, n);
     for (int i = 0; i < m; i++)
       if (ls->carry[i] != 0)
         for (int r = 0; r < n; r++) ls->xpred[r] += ls->Hprev[r + (size_t)i * n] * ls->carry[i];
@@ -539,17 +539,17 @@ static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const doubl
   for (int j = 0; j < n; j++) probe += 0 * xf[j];
   if (isnan(probe)) return info->status = CUP_ERR_NONFINITE;
   double *q = ls->s;                              /* q = C x_free + g */
-  cup_slack(K, g, xf, q, ls->gam);
+  polyset_slack(K, g, xf, q, ls->gam);
   info->scale = scale;
   double qmin = INFINITY;
-  for (int i = 0; i < m; i++) qmin = cup_min(qmin, q[i]);
+  for (int i = 0; i < m; i++) qmin = la_min(qmin, q[i]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
-    cup_copy(z, xf, n);
-    cup_zero(lam, m);
-    if (ls->D) cup_zero(ls->carry, m);
+    la_copy(z, xf, n);
+    la_zero(lam, m);
+    if (ls->D) la_zero(ls->carry, m);
     ls->lq = 0;
     info->skipped = 1;
-    info->eta_cert = cup_lcp_step_eta(ls, g, z);
+    info->eta_cert = lcp_step_eta(ls, g, z);
     return info->status = info->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   }
   /* Aim the rows at slack tau = 16 gam (K shrunk by a few ulps): then z is
@@ -563,7 +563,7 @@ static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const doubl
   }
   int pivots = 0, st;
   if (ls->D) {                                    /* q outlives the slack of z (ls->s) */
-    cup_copy(ls->q0, q, m);
+    la_copy(ls->q0, q, m);
     q = ls->q0;
     st = solve_d(ls, q, &g, xf, z, &pivots);
   } else {
@@ -576,12 +576,12 @@ static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const doubl
   int active = 0;
   for (int i = 0; i < m; i++) {
     gap += 2 * ls->h * lam[i] * (ls->s[i] + ls->gam[i]);   /* impulse mu = h lambda */
-    viol = cup_max(viol, -ls->s[i]);
+    viol = la_max(viol, -ls->s[i]);
     active += lam[i] > 0;
   }
   info->active = active;
   info->violation = viol;
-  info->eps_cert = isnan(gap) ? NAN : cup_max(gap, 0);
+  info->eps_cert = isnan(gap) ? NAN : la_max(gap, 0);
   if (eps_target < 0) {
     /* exact: the active slacks are zero up to the rounding of forming
      * z = xf + H lambda and its slack: rowgam_i (|g_i| + |c_i| (|xf| + |H| lambda)),
@@ -598,30 +598,30 @@ static __attribute__((noinline)) int solve_general(cup_lcp_step *ls, const doubl
       double lcp_round = ls->D ? row_rounding(ls, ls->M, i) : 0;   /* with D: the LCP's own */
       floor += 2 * ls->h * lam[i] * (ls->gam[i] + 2 * K->rowgam[i] * mag + tau[i] + lcp_round);
     }
-    info->eps_target = eps_target = cup_max(1e-12 * scale * scale, floor);
+    info->eps_target = eps_target = la_max(1e-12 * scale * scale, floor);
   }
-  info->eta_cert = cup_lcp_step_eta(ls, g, z);
+  info->eta_cert = lcp_step_eta(ls, g, z);
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
 }
 
-int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
-                       double scale, double eps_target, double eta_target, cup_proj_info *info) {
+int lcp_step_solve(lcp_step *ls, const double *g, const double *xf, double *z,
+                   double scale, double eps_target, double eta_target, cup_proj_info *info) {
   if (ls->small && eps_target >= 0 && small_dispatch(ls, g, xf, z, scale, eps_target, eta_target, info))
     return info->status;
   return solve_general(ls, g, xf, z, scale, eps_target, eta_target, info);
 }
 
-/* step.h's cup_small_pass until no index flips */
-int cup_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
-                         cup_v2d *lam, int *pivots, int m) {
+/* step.h's lcp_small_pass until no index flips */
+int lcp_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
+                         v2d *lam, int *pivots, int m) {
   unsigned act = *actp;
   for (int it = 0; it < 16 * m + 64; it++) {
     double l0, l1;
-    int flip = cup_small_pass(act, M, det, q0, q1, tol_w, &l0, &l1, m);
+    int flip = lcp_small_pass(act, M, det, q0, q1, tol_w, &l0, &l1, m);
     if (flip == -2) return 1;
     if (flip < 0) {
-      *lam = (cup_v2d){l0, l1};
+      *lam = (v2d){l0, l1};
       *actp = act;
       return 0;
     }

@@ -32,16 +32,16 @@
 #define CUP_STEP_SMALL_N 4
 #define CUP_STEP_SMALL_M 2
 
-typedef struct cup_lcp_step {
+typedef struct lcp_step {
   int n, m;
   double h;
   const cup_polyset *K;
   double *H;        /* n x m, column-major */
   double *M;        /* m x m, column-major */
-  cup_lcp lcp;      /* lambda of the last step in lcp.lam */
+  lcp_solver lcp;      /* lambda of the last step in lcp.lam */
   double *s, *gam, *v, *tau, *qs, *sv, *gamv;
   double lq;        /* lambda^T q of the last step (q: the free point's slack) */
-  /* D != 0 (cup_lcp_step_init_bd): w = C z + D lambda + g */
+  /* D != 0 (lcp_step_init_bd): w = C z + D lambda + g */
   double *D;        /* m x m, column-major, or NULL */
   double *geff;     /* g + D lambda: the offset the step's z must satisfy */
   double theta;
@@ -60,22 +60,22 @@ typedef struct cup_lcp_step {
   double *Ms;       /* m x m: M with rows scaled by rsc, which the LCP solves */
   double *rsc;      /* m: 1 / (largest entry of M's row); then q and q - tau so scaled */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
-  int small;        /* 1: cup_lcp_step_solve tries the unrolled step first */
-  cup_v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
-  cup_v2d rowgam;                      /* K->rowgam, the rows in lanes */
-  cup_v2d Hcol[CUP_STEP_SMALL_M][2];   /* H's columns, the states in lanes (two pairs) */
+  int small;        /* 1: lcp_step_solve tries the unrolled step first */
+  v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
+  v2d rowgam;                      /* K->rowgam, the rows in lanes */
+  v2d Hcol[CUP_STEP_SMALL_M][2];   /* H's columns, the states in lanes (two pairs) */
   double det;                          /* M's determinant for m = 2, as the pivoting forms it */
-} cup_lcp_step;
+} lcp_step;
 
 /* W (n x n, column-major; NULL: the identity) and h give H and M. Returns
  * CUP_OK, CUP_ERR_UNSUPPORTED (K is not dense) or CUP_ERR_NOMEM; callers
  * write the message, in their own name. */
-int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h);
+int lcp_step_init(lcp_step *ls, const cup_polyset *K, const double *W, double h);
 /* The same for an LCS with D != 0 (Siconos's EulerMoreauOSI): B (n x m,
  * column-major) replaces P^-1 C^T in H = h W B Wt, M = C H + D (D m x m,
  * column-major); z satisfies C z + D lambda + g >= 0 and the certificates
  * below use g + D lambda; an M that is not a P-matrix (a monotone LCP) is
- * solved by Lemke's method. B NULL: P^-1 C^T; D NULL: cup_lcp_step_init.
+ * solved by Lemke's method. B NULL: P^-1 C^T; D NULL: lcp_step_init.
  * The weights Wt follow the step's mode, the support J of zeta: on J,
  * 0 = C_J x + D_JJ zeta_J + g_J fixes zeta_J up to ker D_JJ. The part of
  * zeta in ker D_JJ is not a function of the state but a multiplier of a
@@ -89,18 +89,18 @@ int cup_lcp_step_init(cup_lcp_step *ls, const cup_polyset *K, const double *W, d
  * columns carry the full weight (Pi is the projection along ker D_JJ onto
  * the other columns); a step whose solution has another support than the
  * weights were set for is solved again with that support's weights. */
-int cup_lcp_step_init_bd(cup_lcp_step *ls, const cup_polyset *K, const double *W, double h,
-                         const double *B, const double *D, double theta);
+int lcp_step_init_bd(lcp_step *ls, const cup_polyset *K, const double *W, double h,
+                     const double *B, const double *D, double theta);
 /* Before a run from x0 with offset g: zeta_0 from the LCP
  * 0 <= zeta _|_ C x0 + D zeta + g >= 0 (by Lemke's method), its support's
  * weights and the trapezoid's carry Pi zeta_0. Returns 1 when x0 is
  * consistent (that LCP has a solution; with D = 0: C x0 + g >= 0), 0 when
  * it is not (the state jumps at t = 0, in the first step). */
-int cup_lcp_step_start(cup_lcp_step *ls, const double *x0, const double *g);
-void cup_lcp_step_free(cup_lcp_step *ls);
+int lcp_step_start(lcp_step *ls, const double *x0, const double *g);
+void lcp_step_free(lcp_step *ls);
 /* What a step carries to the next (lambda, its warm start, lambda^T q), to
  * or from a checkpoint (util/ckpt.h). */
-void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c);
+void lcp_step_checkpoint(lcp_step *ls, ckpt *c);
 /* z from the free point xf for the offset g (scale: cup_polyset_norm of xf,
  * reported in info->scale); eps_target < 0 asks for the exact solution:
  * certified when the gap is below max(1e-12 scale^2, floor), the floor
@@ -113,15 +113,15 @@ void cup_lcp_step_checkpoint(cup_lcp_step *ls, cup_ckpt *c);
  * projector's weak-duality certificate), eta_cert a certified distance of z
  * to K(t). Returns CUP_OK, CUP_WARN_NOT_CERTIFIED, CUP_ERR_LINALG (a
  * singular principal block: M not a P-matrix) or CUP_ERR_NONFINITE. */
-int cup_lcp_step_solve(cup_lcp_step *ls, const double *g, const double *xf, double *z,
-                       double scale, double eps_target, double eta_target, cup_proj_info *info);
+int lcp_step_solve(lcp_step *ls, const double *g, const double *xf, double *z,
+                   double scale, double eps_target, double eta_target, cup_proj_info *info);
 /* A certified distance of z to K for the offset g, from the slack of z in
  * ls->s with rounding bounds ls->gam: 0 when z is certainly in K, else a
  * push along the polyset's direction into K, verified; INFINITY when
  * neither works. */
-double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
+double lcp_step_eta(lcp_step *ls, const double *g, const double *z);
 
-/* ---- cup_lcp_step_solve unrolled for a small set (CUP_STEP_SMALL_N
+/* ---- lcp_step_solve unrolled for a small set (CUP_STEP_SMALL_N
  * states, CUP_STEP_SMALL_M rows, no D), as always-inline
  * functions of compile-time sizes: step.c dispatches to them, and the
  * integrator's fused step (integrator/faststep.c) inlines them behind its
@@ -129,31 +129,31 @@ double cup_lcp_step_eta(cup_lcp_step *ls, const double *g, const double *z);
  * zero entry of the dense rows adds an exact zero to finite sums), so z,
  * lambda and the certificates are the general path's; where that path would
  * meet anything unusual they decline, having changed only scratch. States
- * x_0..x_3 are the lanes of two cup_v2d, (x_0, x_1) and (x_2, x_3); rows
+ * x_0..x_3 are the lanes of two v2d, (x_0, x_1) and (x_2, x_3); rows
  * the lanes of one; unused lanes hold zeros and are never read. */
 #define CUP_ALWAYS_INLINE static inline __attribute__((always_inline))
 
 /* What the unrolled step carries from one step to the next: lcp.lam, lq and
  * lcp.prev (as a bit mask), in registers while the fused steps run. */
-typedef struct cup_small_carry {
-  cup_v2d lam;
+typedef struct lcp_small_carry {
+  v2d lam;
   double lq;
   unsigned act;
-} cup_small_carry;
+} lcp_small_carry;
 
 /* A step's outcome: cup_proj_info's fields of the same names. */
-typedef struct cup_small_out {
+typedef struct lcp_small_out {
   int status, skipped, iterations, active;
   double eps_cert, eta_cert, violation;
-} cup_small_out;
+} lcp_small_out;
 
-CUP_ALWAYS_INLINE cup_small_carry cup_small_load(const cup_lcp_step *ls, const int m) {
-  cup_small_carry c = {.lam = {ls->lcp.lam[0], m > 1 ? ls->lcp.lam[1] : 0}, .lq = ls->lq};
+CUP_ALWAYS_INLINE lcp_small_carry lcp_small_load(const lcp_step *ls, const int m) {
+  lcp_small_carry c = {.lam = {ls->lcp.lam[0], m > 1 ? ls->lcp.lam[1] : 0}, .lq = ls->lq};
   for (int i = 0; i < m; i++) c.act |= (unsigned)(ls->lcp.prev[i] != 0) << i;
   return c;
 }
 
-CUP_ALWAYS_INLINE void cup_small_store(cup_lcp_step *ls, const cup_small_carry *c, const int m) {
+CUP_ALWAYS_INLINE void lcp_small_store(lcp_step *ls, const lcp_small_carry *c, const int m) {
   for (int i = 0; i < m; i++) {
     ls->lcp.lam[i] = c->lam[i];
     ls->lcp.prev[i] = (c->act >> i) & 1;
@@ -161,7 +161,7 @@ CUP_ALWAYS_INLINE void cup_small_store(cup_lcp_step *ls, const cup_small_carry *
   ls->lq = c->lq;
 }
 
-CUP_ALWAYS_INLINE void cup_small_info(cup_proj_info *info, const cup_small_out *o, double scale,
+CUP_ALWAYS_INLINE void lcp_small_info(cup_proj_info *info, const lcp_small_out *o, double scale,
                                       double eps_target, double eta_target) {
   *info = (cup_proj_info){.status = o->status, .method = CUP_PROJ_ACTIVESET, .iterations = o->iterations,
                           .skipped = o->skipped, .active = o->active, .scale = scale, .eps_target = eps_target,
@@ -169,27 +169,27 @@ CUP_ALWAYS_INLINE void cup_small_info(cup_proj_info *info, const cup_small_out *
                           .violation = o->violation};
 }
 
-/* cup_slack of the rows (lanes) at x, term by term in the same order (a
+/* polyset_slack of the rows (lanes) at x, term by term in the same order (a
  * zero entry adds an exact zero to finite sums). */
-CUP_ALWAYS_INLINE void cup_small_slack(const cup_lcp_step *ls, cup_v2d g, const cup_v2d *x, cup_v2d *s,
-                                       cup_v2d *gam, const int n) {
-  cup_v2d acc = g, mag = cup_v2_abs(g);
+CUP_ALWAYS_INLINE void lcp_small_slack(const lcp_step *ls, v2d g, const v2d *x, v2d *s,
+                                       v2d *gam, const int n) {
+  v2d acc = g, mag = v2_abs(g);
   for (int j = 0; j < n; j++) {
-    cup_v2d t = ls->Ccol[j] * cup_lane(x, j);
+    v2d t = ls->Ccol[j] * v2_lane(x, j);
     acc += t;
-    mag += cup_v2_abs(t);
+    mag += v2_abs(t);
   }
   *s = acc;
   *gam = ls->rowgam * mag;
 }
 
-/* cup_lcp_step_eta for the slack s, gam of z: its common case, z certainly
+/* lcp_step_eta for the slack s, gam of z: its common case, z certainly
  * in K, without a call. */
-CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2d *z, cup_v2d s, cup_v2d gam,
+CUP_ALWAYS_INLINE double lcp_small_eta(lcp_step *ls, v2d g, const v2d *z, v2d s, v2d gam,
                                        const int n, const int m) {
-  cup_v2d d = s - gam;
+  v2d d = s - gam;
   double worst = d[0];                            /* the general path's min from INFINITY */
-  if (m > 1) worst = cup_min(worst, d[1]);
+  if (m > 1) worst = la_min(worst, d[1]);
   if (worst >= 0) return 0;
   double gm[CUP_STEP_SMALL_M], zm[CUP_STEP_SMALL_N];
   for (int i = 0; i < m; i++) {
@@ -197,8 +197,8 @@ CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2
     ls->gam[i] = gam[i];
     gm[i] = g[i];
   }
-  for (int j = 0; j < n; j++) zm[j] = cup_lane(z, j);
-  return cup_lcp_step_eta(ls, gm, zm);
+  for (int j = 0; j < n; j++) zm[j] = v2_lane(z, j);
+  return lcp_step_eta(ls, gm, zm);
 }
 
 /* One pass of lcp.c's Murty pivoting for m <= 2 rows at the active set act
@@ -207,7 +207,7 @@ CUP_ALWAYS_INLINE double cup_small_eta(cup_lcp_step *ls, cup_v2d g, const cup_v2
  * -1 when no index flips, else the index to flip, or -2 at a singular
  * block. Scalars, not arrays indexed by the active set, so that nothing
  * goes through memory; det = M[0] M[3] - M[2] M[1], formed once. */
-CUP_ALWAYS_INLINE int cup_small_pass(unsigned act, const double *M, double det, double q0, double q1,
+CUP_ALWAYS_INLINE int lcp_small_pass(unsigned act, const double *M, double det, double q0, double q1,
                                      double tol_w, double *l0p, double *l1p, const int m) {
   double l0 = 0, l1 = 0;
   if (act == 3) {
@@ -226,8 +226,8 @@ CUP_ALWAYS_INLINE int cup_small_pass(unsigned act, const double *M, double det, 
   if (act & 2) w0 += M[m] * l1;
   if (m > 1 && (act & 1)) w1 += M[1] * l0;
   if (m > 1 && (act & 2)) w1 += M[1 + m] * l1;
-  double lmax = fabs(l0);                         /* cup_max from 0 */
-  if (m > 1) lmax = cup_max(lmax, fabs(l1));
+  double lmax = fabs(l0);                         /* la_max from 0 */
+  if (m > 1) lmax = la_max(lmax, fabs(l1));
   double tol_l = 64 * DBL_EPSILON * lmax;
   *l0p = l0;
   *l1p = l1;
@@ -240,95 +240,95 @@ CUP_ALWAYS_INLINE int cup_small_pass(unsigned act, const double *M, double det, 
  * (step.c): 0 with lam and *act written; 1, leaving them, where lcp.c would
  * meet a singular block or cycle (and then retry cold): the general path
  * takes the step over. */
-int cup_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
-                         cup_v2d *lam, int *pivots, int m);
+int lcp_small_murty_loop(unsigned *actp, const double *M, double det, double q0, double q1, double tol_w,
+                         v2d *lam, int *pivots, int m);
 
-/* cup_small_murty_loop, its first pass inlined: the warm start is right at
+/* lcp_small_murty_loop, its first pass inlined: the warm start is right at
  * almost every step, and the loop, kept out of line, holds no registers
  * there (GCC spilled the fused steps' states around it). */
-CUP_ALWAYS_INLINE int cup_small_murty(unsigned *actp, const double *M, double det, cup_v2d q, cup_v2d *lam,
+CUP_ALWAYS_INLINE int lcp_small_murty(unsigned *actp, const double *M, double det, v2d q, v2d *lam,
                                       int *pivots, const int m) {
   const double q0 = q[0], q1 = q[1];
-  double scale = fabs(q0);                        /* cup_max from 0 */
-  if (m > 1) scale = cup_max(scale, fabs(q1));
+  double scale = fabs(q0);                        /* la_max from 0 */
+  if (m > 1) scale = la_max(scale, fabs(q1));
   double tol_w = 64 * DBL_EPSILON * scale, l0, l1;
-  int flip = cup_small_pass(*actp, M, det, q0, q1, tol_w, &l0, &l1, m);
+  int flip = lcp_small_pass(*actp, M, det, q0, q1, tol_w, &l0, &l1, m);
   if (flip == -1) {
-    *lam = (cup_v2d){l0, l1};
+    *lam = (v2d){l0, l1};
     return 0;
   }
   if (flip == -2) return 1;
-  return cup_small_murty_loop(actp, M, det, q0, q1, tol_w, lam, pivots, m);
+  return lcp_small_murty_loop(actp, M, det, q0, q1, tol_w, lam, pivots, m);
 }
 
-/* cup_lcp_step_solve for n states and m rows known at compile time, eps_target
+/* lcp_step_solve for n states and m rows known at compile time, eps_target
  * >= 0 and no D, from the free point xf for the offset g (lanes), carrying
  * c from the last step: 1 when it took the step (z, *c and *o written), 0
  * when the general path must (NaN or Inf in xf or g, a singular block),
  * having changed nothing but scratch. */
-CUP_ALWAYS_INLINE int cup_small_core(cup_lcp_step *ls, cup_small_carry *c, cup_v2d g,
-                                     const cup_v2d *restrict xf, cup_v2d *restrict z, double eps_target,
-                                     double eta_target, cup_small_out *o, const int n, const int m) {
+CUP_ALWAYS_INLINE int lcp_small_core(lcp_step *ls, lcp_small_carry *c, v2d g,
+                                     const v2d *restrict xf, v2d *restrict z, double eps_target,
+                                     double eta_target, lcp_small_out *o, const int n, const int m) {
   const int halves = (n + 1) / 2;
-  cup_v2d q, gam;
-  cup_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */
+  v2d q, gam;
+  lcp_small_slack(ls, g, xf, &q, &gam, n);        /* q = C x_free + g */
   /* NaN or Inf in xf or g makes q so (every row takes every state, zeros
    * included, and 0 Inf is NaN); so does an overflow of q, declined too */
-  cup_v2d probe = 0 * q;
+  v2d probe = 0 * q;
   if (isnan(probe[0] + probe[1])) return 0;
   double qmin = q[0];                             /* the general path's min from INFINITY */
-  if (m > 1) qmin = cup_min(qmin, q[1]);
+  if (m > 1) qmin = la_min(qmin, q[1]);
   if (qmin >= 0) {                                /* the free point is in K: lambda = 0 */
     for (int r = 0; r < halves; r++) z[r] = xf[r];
-    c->lam = (cup_v2d){0, 0};
+    c->lam = (v2d){0, 0};
     c->lq = 0;
-    *o = (cup_small_out){.skipped = 1, .eta_cert = cup_small_eta(ls, g, z, q, gam, n, m)};
+    *o = (lcp_small_out){.skipped = 1, .eta_cert = lcp_small_eta(ls, g, z, q, gam, n, m)};
     o->status = o->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
     return 1;
   }
-  cup_v2d qs = q - (16 * gam + DBL_MIN), lam;     /* aimed a few ulps inside K, as step.c */
+  v2d qs = q - (16 * gam + DBL_MIN), lam;     /* aimed a few ulps inside K, as step.c */
   int pivots = 0;
-  if (cup_small_murty(&c->act, ls->M, ls->det, qs, &lam, &pivots, m)) return 0;
-  double l0 = cup_max(lam[0], 0), l1 = m > 1 ? cup_max(lam[1], 0) : 0, lq = 0;
+  if (lcp_small_murty(&c->act, ls->M, ls->det, qs, &lam, &pivots, m)) return 0;
+  double l0 = la_max(lam[0], 0), l1 = m > 1 ? la_max(lam[1], 0) : 0, lq = 0;
   lq += l0 * q[0];
   if (m > 1) lq += l1 * q[1];
-  c->lam = lam = (cup_v2d){l0, l1};
+  c->lam = lam = (v2d){l0, l1};
   c->lq = lq;
   for (int r = 0; r < halves; r++) z[r] = xf[r];
   for (int r = 0; r < halves && l0 != 0; r++) z[r] += ls->Hcol[0][r] * l0;
   for (int r = 0; r < halves && m > 1 && l1 != 0; r++) z[r] += ls->Hcol[1][r] * l1;
-  cup_v2d s, sg;
+  v2d s, sg;
   __asm__("" : "+r"(ls));   /* read C's columns again rather than keep them live across the step (spilled) */
-  cup_small_slack(ls, g, z, &s, &sg, n);
-  cup_v2d gapi = 2 * ls->h * lam * (s + sg);      /* impulse mu = h lambda */
+  lcp_small_slack(ls, g, z, &s, &sg, n);
+  v2d gapi = 2 * ls->h * lam * (s + sg);      /* impulse mu = h lambda */
   double gap = 0, viol = 0;
   int active = 0;
   for (int i = 0; i < m; i++) {
     gap += gapi[i];
-    viol = cup_max(viol, -s[i]);
+    viol = la_max(viol, -s[i]);
     active += lam[i] > 0;
   }
-  *o = (cup_small_out){.iterations = pivots + 1, .active = active, .violation = viol,
-                       .eps_cert = isnan(gap) ? NAN : cup_max(gap, 0),
-                       .eta_cert = cup_small_eta(ls, g, z, s, sg, n, m)};
+  *o = (lcp_small_out){.iterations = pivots + 1, .active = active, .violation = viol,
+                       .eps_cert = isnan(gap) ? NAN : la_max(gap, 0),
+                       .eta_cert = lcp_small_eta(ls, g, z, s, sg, n, m)};
   o->status = o->eps_cert <= eps_target && o->eta_cert <= eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   return 1;
 }
 
-/* cup_small_core from and to step.c's arrays: 1 when it took the step
+/* lcp_small_core from and to step.c's arrays: 1 when it took the step
  * (info->status set), 0 when the general path must. */
-CUP_ALWAYS_INLINE int cup_small_step(cup_lcp_step *ls, const double *g, const double *restrict xf,
+CUP_ALWAYS_INLINE int lcp_small_step(lcp_step *ls, const double *g, const double *restrict xf,
                                      double *restrict z, double scale, double eps_target, double eta_target,
                                      cup_proj_info *info, const int n, const int m) {
-  cup_v2d xv[2] = {{0, 0}, {0, 0}}, zv[2];
+  v2d xv[2] = {{0, 0}, {0, 0}}, zv[2];
   for (int j = 0; j < n; j++) xv[j >> 1][j & 1] = xf[j];
-  cup_v2d gv = {g[0], m > 1 ? g[1] : 0};
-  cup_small_carry c = cup_small_load(ls, m);
-  cup_small_out o;
-  if (!cup_small_core(ls, &c, gv, xv, zv, eps_target, eta_target, &o, n, m)) return 0;
-  cup_small_store(ls, &c, m);
-  for (int j = 0; j < n; j++) z[j] = cup_lane(zv, j);
-  cup_small_info(info, &o, scale, eps_target, eta_target);
+  v2d gv = {g[0], m > 1 ? g[1] : 0};
+  lcp_small_carry c = lcp_small_load(ls, m);
+  lcp_small_out o;
+  if (!lcp_small_core(ls, &c, gv, xv, zv, eps_target, eta_target, &o, n, m)) return 0;
+  lcp_small_store(ls, &c, m);
+  for (int j = 0; j < n; j++) z[j] = v2_lane(zv, j);
+  lcp_small_info(info, &o, scale, eps_target, eta_target);
   return 1;
 }
 

@@ -206,7 +206,7 @@ int crowd_rows(double t, const double *q, cup_rowbuf *rows, void *vc) {
   /* a run starts numbered from its start alone, then renumbers when the
      agents have moved enough for the pairs' columns to spread out */
   if (!again && (tk <= 0 || (c->far_base >= 0 && c->far > c->far_base + RENUMBER_DECAY))) crowd_renumber(c, q);
-  cup_rowbuf_order(rows, c->colmap, c->order_gen);
+  rowbuf_order(rows, c->colmap, c->order_gen);
   c->gap = c->bound = INFINITY;
   c->nstage = 0;
   memset(c->run_len, 0, sizeof(int) * (size_t)c->N);
@@ -284,7 +284,7 @@ int crowd_recheck(double t, const double *q, const double *z, void *vc) {
   double d2 = 0;                                /* the largest displacement, squared */
   for (int i = 0; i < c->N; i++) {
     double dx = z[2 * i] - q[2 * i], dy = z[2 * i + 1] - q[2 * i + 1];
-    if (!c->out[i]) d2 = cup_max(dx * dx + dy * dy, d2);   /* as fmax, without a libm call */
+    if (!c->out[i]) d2 = la_max(dx * dx + dy * dy, d2);   /* as fmax, without a libm call */
   }
   if (!(d2 > 0.25 * c->margin * c->margin)) return 0;   /* no agent moved enough to miss anything */
   double dmax = sqrt(d2);

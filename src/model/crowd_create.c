@@ -47,7 +47,7 @@ static int build_walls(cup_crowd *c, const cup_crowd_desc *d, double tol, char *
   double *cut = malloc(sizeof(double) * (2 * (size_t)d->doors + 2));
   int *door_edge = malloc(sizeof(int) * (size_t)d->doors);
   int st = c->seg && c->seg_kind && c->seg_of && c->seg_part && cut && door_edge ? CUP_OK
-           : cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+           : fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int k = 0; !st && k < d->doors; k++) {
     const double *s = d->door + 4 * k;
     door_edge[k] = -1;
@@ -56,10 +56,10 @@ static int build_walls(cup_crowd *c, const cup_crowd_desc *d, double tol, char *
       if (!isnan(on_edge(a, b, s[0], s[1], tol)) && !isnan(on_edge(a, b, s[2], s[3], tol))) door_edge[k] = e;
     }
     if (door_edge[k] < 0)
-      st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) does not lie on an edge of the room",
+      st = fail_fmt(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) does not lie on an edge of the room",
                     k, s[0], s[1], s[2], s[3]);
     else if (!(hypot(s[2] - s[0], s[3] - s[1]) > 0))
-      st = cup_fail(errmsg, CUP_ERR_ARG, "door %d has no width (both ends at (%g, %g))", k, s[0], s[1]);
+      st = fail_fmt(errmsg, CUP_ERR_ARG, "door %d has no width (both ends at (%g, %g))", k, s[0], s[1]);
   }
   for (int e = 0; !st && e < c->nroom; e++) {
     const double *a = c->room + 2 * e, *b = c->room + 2 * ((e + 1) % c->nroom);
@@ -115,12 +115,12 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
   int ncell = c->gx * c->gy;
   double range = c->rmax + c->reach + 0.7071067811865476 * c->cell;   /* from the cell's centre */
   c->wptr = calloc((size_t)ncell + 1, sizeof(int));
-  if (!c->wptr) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  if (!c->wptr) return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int pass = 0; pass < 2; pass++) {      /* count, then fill */
     if (pass == 1) {
       for (int k = 0; k < ncell; k++) c->wptr[k + 1] += c->wptr[k];
       c->widx = malloc(sizeof(int) * ((size_t)c->wptr[ncell] + 1));
-      if (!c->widx) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+      if (!c->widx) return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
     }
     int *fill = pass == 1 ? c->head : NULL;   /* head as per-cell cursors */
     if (fill) for (int k = 0; k < ncell; k++) fill[k] = c->wptr[k];
@@ -149,7 +149,7 @@ static int bin_walls(cup_crowd *c, char *errmsg) {
 static int inside_cells(cup_crowd *c, double tol, char *errmsg) {
   int ncell = c->gx * c->gy;
   c->cin = malloc((size_t)ncell);
-  if (!c->cin) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  if (!c->cin) return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int j = 0; j < c->gy; j++)
     for (int i = 0; i < c->gx; i++)
       c->cin[i + c->gx * j] = (unsigned char)crowd_in_polygon(c->room, c->nroom, c->cx0 + (i + 0.5) * c->cell,
@@ -176,40 +176,40 @@ static int simple(const double *v, int np, const char *what, int o, char *errmsg
   const double *p = v + 2 * a, *q = v + 2 * b, *p1 = v + 2 * ((a + 1) % np), *q1 = v + 2 * ((b + 1) % np);
   char name[32];
   snprintf(name, sizeof name, o < 0 ? "%s" : "%s %d", what, o);
-  cup_fail(errmsg, CUP_ERR_ARG, "%s is not a simple polygon: its edges %d, from (%g, %g) to (%g, %g), and %d, "
+  fail_fmt(errmsg, CUP_ERR_ARG, "%s is not a simple polygon: its edges %d, from (%g, %g) to (%g, %g), and %d, "
            "from (%g, %g) to (%g, %g), cross", name, a, p[0], p[1], p1[0], p1[1], b, q[0], q[1], q1[0], q1[1]);
   return 0;
 }
 
 static int check_numbers(const cup_crowd_desc *d, char *errmsg) {
-  if (d->agents < 1) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: %d agents (at least 1)", d->agents);
-  if (!d->q0 || !d->radius) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: no positions or no radii");
+  if (d->agents < 1) return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: %d agents (at least 1)", d->agents);
+  if (!d->q0 || !d->radius) return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: no positions or no radii");
   if (d->room_points < 3 || !d->room)
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the room has %d vertices (at least 3)", d->room_points);
-  if (d->doors < 1 || !d->door) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: no door (at least one exit)");
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: the room has %d vertices (at least 3)", d->room_points);
+  if (d->doors < 1 || !d->door) return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: no door (at least one exit)");
   if (d->obstacles < 0 || (d->obstacles > 0 && (!d->obstacle_points || !d->obstacle)))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: %d obstacles without their vertices", d->obstacles);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: %d obstacles without their vertices", d->obstacles);
   if (d->walls < 0 || (d->walls > 0 && !d->wall))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: %d walls without their segments", d->walls);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: %d walls without their segments", d->walls);
   if (!(d->speed > 0) || !isfinite(d->speed))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the desired speed is %g (must be > 0)", d->speed);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: the desired speed is %g (must be > 0)", d->speed);
   if (!(d->grid >= 0) || !(d->margin >= 0) || !(d->reach >= 0) || !(d->clearance >= 0) ||
       !isfinite(d->grid + d->margin + d->reach + d->clearance))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: grid %g, margin %g, reach %g, clearance %g (must be finite and >= 0)",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: grid %g, margin %g, reach %g, clearance %g (must be finite and >= 0)",
                     d->grid, d->margin, d->reach, d->clearance);
   for (int i = 0; i < d->agents; i++) {
     if (!isfinite(d->q0[2 * i]) || !isfinite(d->q0[2 * i + 1]))
-      return cup_fail(errmsg, CUP_ERR_NONFINITE, "agent %d: position (%g, %g) is not finite", i, d->q0[2 * i], d->q0[2 * i + 1]);
+      return fail_fmt(errmsg, CUP_ERR_NONFINITE, "agent %d: position (%g, %g) is not finite", i, d->q0[2 * i], d->q0[2 * i + 1]);
     if (!(d->radius[i] > 0) || !isfinite(d->radius[i]))
-      return cup_fail(errmsg, CUP_ERR_ARG, "agent %d: radius %g (must be > 0)", i, d->radius[i]);
+      return fail_fmt(errmsg, CUP_ERR_ARG, "agent %d: radius %g (must be > 0)", i, d->radius[i]);
     /* a centre closer to a wall than the clearance would find no direction */
     if (d->clearance > d->radius[i])
-      return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the clearance %g exceeds agent %d's radius %g (it must be at "
+      return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: the clearance %g exceeds agent %d's radius %g (it must be at "
                       "most the smallest radius)", d->clearance, i, d->radius[i]);
   }
   for (int o = 0, v0 = 0; o < d->obstacles; v0 += d->obstacle_points[o++])
     if (d->obstacle_points[o] < 3)
-      return cup_fail(errmsg, CUP_ERR_ARG, "obstacle %d has %d vertices (at least 3)", o, d->obstacle_points[o]);
+      return fail_fmt(errmsg, CUP_ERR_ARG, "obstacle %d has %d vertices (at least 3)", o, d->obstacle_points[o]);
     else if (!simple(d->obstacle + 2 * v0, d->obstacle_points[o], "obstacle", o, errmsg))
       return CUP_ERR_ARG;
   return simple(d->room, d->room_points, "the room", -1, errmsg) ? CUP_OK : CUP_ERR_ARG;
@@ -222,14 +222,14 @@ static int check_agents(cup_crowd *c, double tol, char *errmsg) {
   for (int i = 0; i < c->N; i++) {
     double x = c->q0[2 * i], y = c->q0[2 * i + 1];
     if (!crowd_in_polygon(c->room, c->nroom, x, y))
-      return cup_fail(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g) is outside the room", i, x, y);
+      return fail_fmt(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g) is outside the room", i, x, y);
     for (int o = 0; o < c->nobs; o++)
       if (crowd_in_polygon(c->obs + 2 * c->obs_ptr[o], c->obs_ptr[o + 1] - c->obs_ptr[o], x, y))
-        return cup_fail(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g) is inside obstacle %d", i, x, y, o);
+        return fail_fmt(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g) is inside obstacle %d", i, x, y, o);
     for (int s = 0; s < c->nseg; s++) {
       double px, py, d = crowd_seg_nearest(c->seg + 4 * s, x, y, &px, &py);
       if (d < c->r[i] - tol)
-        return cup_fail(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g), radius %g, overlaps %s by %.3g", i, x, y,
+        return fail_fmt(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g), radius %g, overlaps %s by %.3g", i, x, y,
                         c->r[i], wall_name(c, s, wb, sizeof wb), c->r[i] - d);
     }
   }
@@ -239,7 +239,7 @@ static int check_agents(cup_crowd *c, double tol, char *errmsg) {
   double worst = w.gap;
   int wi = w.i, wj = w.j;
   if (worst < -tol)
-    return cup_fail(errmsg, CUP_ERR_ARG, "agents %d and %d overlap by %.3g (centres (%g, %g) and (%g, %g), radii %g and %g)",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "agents %d and %d overlap by %.3g (centres (%g, %g) and (%g, %g), radii %g and %g)",
                     wi, wj, -worst, c->q0[2 * wi], c->q0[2 * wi + 1], c->q0[2 * wj], c->q0[2 * wj + 1], c->r[wi], c->r[wj]);
   return CUP_OK;
 }
@@ -250,7 +250,7 @@ static int check_reach(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   const crowd_field *F = &c->F;
   size_t nn = (size_t)F->nx * F->ny;
   int *comp = malloc(sizeof(int) * nn), *queue = malloc(sizeof(int) * nn);
-  int st = comp && queue ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  int st = comp && queue ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   int ncomp = 0;
   if (!st) for (size_t s = 0; s < nn; s++) comp[s] = -1;
   for (size_t s = 0; !st && s < nn; s++) {
@@ -267,7 +267,7 @@ static int check_reach(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
     ncomp++;
   }
   unsigned char *reached = st ? NULL : calloc((size_t)ncomp + 1, 1);
-  if (!st && !reached) st = cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  if (!st && !reached) st = fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int i = 0; !st && i < c->N; i++) {
     double x = c->q0[2 * i], y = c->q0[2 * i + 1];
     int k = crowd_field_node(F, x, y), best = -1;
@@ -280,7 +280,7 @@ static int check_reach(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
         if (dd < bd) { bd = dd; best = ii + F->nx * jj; }
       }
     if (best < 0)
-      st = cup_fail(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g) cannot reach any door (walls or obstacles "
+      st = fail_fmt(errmsg, CUP_ERR_ARG, "agent %d at (%g, %g) cannot reach any door (walls or obstacles "
                     "close it in)", i, x, y);
     else reached[comp[best]] = 1;
   }
@@ -297,7 +297,7 @@ static int check_reach(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
               crowd_seg_nearest(s, F->x0 + i * F->h, F->y0 + j * F->h, &px, &py) <= 1.5 * F->h;
       }
     if (!hit)
-      st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) cannot be reached by any agent "
+      st = fail_fmt(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) cannot be reached by any agent "
                     "(walls or obstacles close it off)", k, s[0], s[1], s[2], s[3]);
   }
   free(reached);
@@ -328,7 +328,7 @@ static int copy_desc(cup_crowd *c, const cup_crowd_desc *d, char *errmsg) {
   c->bin = malloc(sizeof(crowd_agent) * (size_t)N);
   if (!c->q0 || !c->r || !c->room || !c->door || !c->obs_ptr || !c->obs || !c->out || !c->exit_time ||
       !c->bin || !c->kcell || !c->run_start || !c->run_len || !c->stage)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   for (int i = 0; i < N; i++) c->bin[i].i = i;
   memcpy(c->q0, d->q0, sizeof(double) * 2 * (size_t)N);
   memcpy(c->r, d->radius, sizeof(double) * (size_t)N);
@@ -369,13 +369,13 @@ static int set_scales(cup_crowd *c, const cup_crowd_desc *d, double h, double bo
   /* counted in double first: a huge room's count does not fit an int */
   double gx = floor((box[2] - box[0]) / c->cell) + 1, gy = floor((box[3] - box[1]) / c->cell) + 1;
   if (!(gx * gy <= 5e7))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the room (%g x %g) needs %.3g cells of side %g: too many",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: the room (%g x %g) needs %.3g cells of side %g: too many",
                     box[2] - box[0], box[3] - box[1], gx * gy, c->cell);
   c->gx = (int)gx;
   c->gy = (int)gy;
   c->head = malloc(sizeof(int) * (size_t)c->gx * (size_t)c->gy);
   c->cell_ptr = malloc(sizeof(int) * ((size_t)c->gx * (size_t)c->gy + 1));
-  if (!c->head || !c->cell_ptr) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  if (!c->head || !c->cell_ptr) return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   return CUP_OK;
 }
 
@@ -405,14 +405,14 @@ static void door_warning(cup_crowd *c) {
 const char *cup_crowd_warning(const cup_crowd *c) { return c && c->warning[0] ? c->warning : NULL; }
 
 int cup_crowd_create(cup_crowd **out, const cup_crowd_desc *d, double h, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: output pointer is NULL");
   *out = NULL;
-  if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: description is NULL");
-  if (!(h > 0) || !isfinite(h)) return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the step h = %g (must be > 0)", h);
+  if (!d) return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: description is NULL");
+  if (!(h > 0) || !isfinite(h)) return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: the step h = %g (must be > 0)", h);
   int st = check_numbers(d, errmsg);
   if (st) return st;
   cup_crowd *c = calloc(1, sizeof *c);
-  if (!c) return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+  if (!c) return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   double box[4];
   st = copy_desc(c, d, errmsg);
   if (!st) st = set_scales(c, d, h, box, errmsg);

@@ -334,7 +334,7 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
   F->y0 = box[1] - 2 * h;
   double nx = ceil((box[2] - box[0]) / h) + 5, ny = ceil((box[3] - box[1]) / h) + 5;  /* may not fit an int */
   if (!(nx * ny <= 1e8))
-    return cup_fail(errmsg, CUP_ERR_ARG, "crowd: the distance grid would have %.3g nodes (step %g): "
+    return fail_fmt(errmsg, CUP_ERR_ARG, "crowd: the distance grid would have %.3g nodes (step %g): "
                     "make the grid step larger", nx * ny, h);
   F->nx = (int)nx;
   F->ny = (int)ny;
@@ -346,7 +346,7 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
   unsigned char *exact = calloc(nn, 1);      /* 1: the direction is known exactly */
   heap H = {malloc(sizeof(int) * nn), malloc(sizeof(int) * nn), 0, F->D};
   int st = F->D && F->ux && F->uy && state && exact && H.a && H.pos ? CUP_OK
-           : cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory for the distance grid");
+           : fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory for the distance grid");
   if (!st) {
     for (size_t k = 0; k < nn; k++) { F->D[k] = INFINITY; H.pos[k] = -1; }
     block_walls(F, state, seg, nseg, fmax(h, clearance));
@@ -357,12 +357,12 @@ int crowd_field_build(crowd_field *F, const double *room, int nroom, const doubl
       const double *s = door + 4 * d;
       double len = hypot(s[2] - s[0], s[3] - s[1]);
       if (!(len > 2 * clearance)) {
-        st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is %g wide: no wider than twice "
+        st = fail_fmt(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is %g wide: no wider than twice "
                       "the clearance %g, no centre can pass it", d, s[0], s[1], s[2], s[3], len, clearance);
         break;
       }
       if (!seed_door(F, state, &H, s, seg, nseg, room, nroom, fmax(seed_radius, len), clearance, exact))
-        st = cup_fail(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is too narrow for the distance "
+        st = fail_fmt(errmsg, CUP_ERR_ARG, "door %d (from (%g, %g) to (%g, %g)) is too narrow for the distance "
                       "grid (step %g): every grid node near it is within one step of a wall; make the grid "
                       "step smaller", d, s[0], s[1], s[2], s[3], h);
     }

@@ -1,6 +1,6 @@
 /* crowd_order — the crowd's internal numbering of its agents, along a
  * Hilbert curve over the cells of the cell list (crowd_impl.h). The state
- * polyset projects in it (cup_rowbuf_order): neighbours in the room are
+ * polyset projects in it (rowbuf_order): neighbours in the room are
  * then mostly neighbours in C's columns, in its rows and in the dual matrix,
  * where the user's numbering (random in space when the agents are placed
  * at random) made every row's columns a cache miss at 10^5 agents
@@ -45,7 +45,7 @@ int crowd_order_init(cup_crowd *c, const double *q, char *errmsg) {
   cell_key *key = malloc(sizeof(cell_key) * (size_t)ncell);
   if (!c->ord || !c->rank || !c->colmap || !c->hpos || !key) {
     free(key);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "crowd: out of memory");
   }
   for (int k = 0; k < ncell; k++) key[k] = (cell_key){hilbert_d(n, k % c->gx, k / c->gx), k};
   qsort(key, (size_t)ncell, sizeof *key, cmp_key);

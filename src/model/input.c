@@ -13,11 +13,11 @@
 #define TWO_PI 6.283185307179586476925286766559
 
 int cup_input_create(cup_input **out, int p, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "input: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "input: output pointer is NULL");
   *out = NULL;
-  if (p < 0) return cup_fail(errmsg, CUP_ERR_DIM, "input: dimension %d < 0", p);
+  if (p < 0) return fail_fmt(errmsg, CUP_ERR_DIM, "input: dimension %d < 0", p);
   cup_input *u = calloc(1, sizeof *u);
-  if (!u) return cup_fail(errmsg, CUP_ERR_NOMEM, "input: out of memory");
+  if (!u) return fail_fmt(errmsg, CUP_ERR_NOMEM, "input: out of memory");
   u->p = p;
   *out = u;
   return CUP_OK;
@@ -33,26 +33,26 @@ void cup_input_free(cup_input **up) {
 }
 
 int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
-  if (!u || !w) return cup_fail(errmsg, CUP_ERR_ARG, "input: NULL argument");
+  if (!u || !w) return fail_fmt(errmsg, CUP_ERR_ARG, "input: NULL argument");
   if (j < 0 || j >= u->p)
-    return cup_fail(errmsg, CUP_ERR_DIM, "input: component %d outside [0, %d)", j, u->p);
-  cup_term t = {0};
+    return fail_fmt(errmsg, CUP_ERR_DIM, "input: component %d outside [0, %d)", j, u->p);
+  input_term t = {0};
   t.comp = j;
   t.kind = w->kind;
   switch (w->kind) {
     case CUP_WAVE_CONSTANT:
-      if (!isfinite(w->value)) return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: constant value is %g", w->value);
+      if (!isfinite(w->value)) return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: constant value is %g", w->value);
       t.value = w->value;
       break;
     case CUP_WAVE_SINE:
     case CUP_WAVE_SQUARE:
       if (!isfinite(w->amplitude) || !isfinite(w->frequency) || !isfinite(w->phase))
-        return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: amplitude %g, frequency %g, phase %g must be finite",
+        return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: amplitude %g, frequency %g, phase %g must be finite",
                         w->amplitude, w->frequency, w->phase);
       if (w->frequency < 0)
-        return cup_fail(errmsg, CUP_ERR_ARG, "input: frequency %g must be >= 0", w->frequency);
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input: frequency %g must be >= 0", w->frequency);
       if (!isfinite(TWO_PI * w->frequency))
-        return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: frequency %g overflows (2 pi frequency is not finite)",
+        return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: frequency %g overflows (2 pi frequency is not finite)",
                         w->frequency);
       t.amp = w->amplitude;
       t.omega = TWO_PI * w->frequency;
@@ -60,32 +60,32 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
       break;
     case CUP_WAVE_PWL:
       if (w->npoints < 1 || !w->t || !w->v)
-        return cup_fail(errmsg, CUP_ERR_ARG, "input: a piecewise-linear table needs at least one point");
+        return fail_fmt(errmsg, CUP_ERR_ARG, "input: a piecewise-linear table needs at least one point");
       for (int k = 0; k < w->npoints; k++) {
         if (!isfinite(w->t[k]) || !isfinite(w->v[k]))
-          return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: table point %d is (%g, %g)", k, w->t[k], w->v[k]);
+          return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: table point %d is (%g, %g)", k, w->t[k], w->v[k]);
         if (k > 0 && !(w->t[k] > w->t[k - 1]))
-          return cup_fail(errmsg, CUP_ERR_ARG, "input: table times must increase (point %d: %g after %g)",
+          return fail_fmt(errmsg, CUP_ERR_ARG, "input: table times must increase (point %d: %g after %g)",
                           k, w->t[k], w->t[k - 1]);
       }
       t.np = w->npoints;
       t.t = malloc(sizeof(double) * (size_t)t.np);
       t.v = malloc(sizeof(double) * (size_t)t.np);
-      if (!t.t || !t.v) { free(t.t); free(t.v); return cup_fail(errmsg, CUP_ERR_NOMEM, "input: out of memory"); }
+      if (!t.t || !t.v) { free(t.t); free(t.v); return fail_fmt(errmsg, CUP_ERR_NOMEM, "input: out of memory"); }
       memcpy(t.t, w->t, sizeof(double) * (size_t)t.np);
       memcpy(t.v, w->v, sizeof(double) * (size_t)t.np);
       break;
     case CUP_WAVE_PULSE:
     case CUP_WAVE_DAMPED_SINE: {
-      int st = cup_spice_term_init(&t, w, errmsg);
+      int st = spice_term_init(&t, w, errmsg);
       if (st) return st;
       break;
     }
     default:
-      return cup_fail(errmsg, CUP_ERR_ARG, "input: unknown waveform kind %d", (int)w->kind);
+      return fail_fmt(errmsg, CUP_ERR_ARG, "input: unknown waveform kind %d", (int)w->kind);
   }
-  cup_term *nt = realloc(u->terms, sizeof(cup_term) * ((size_t)u->nterms + 1));
-  if (!nt) { free(t.t); free(t.v); return cup_fail(errmsg, CUP_ERR_NOMEM, "input: out of memory"); }
+  input_term *nt = realloc(u->terms, sizeof(input_term) * ((size_t)u->nterms + 1));
+  if (!nt) { free(t.t); free(t.v); return fail_fmt(errmsg, CUP_ERR_NOMEM, "input: out of memory"); }
   u->terms = nt;
   u->terms[u->nterms++] = t;
   return CUP_OK;
@@ -97,7 +97,7 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
  * (into (-period, 0] once spent), a SIN's delay spent into its phase, knots
  * moved by -t0, a PWL past its last knot and a single pulse past its end
  * constants. */
-static int term_shift(const cup_term *t, double t0, cup_term *out) {
+static int term_shift(const input_term *t, double t0, input_term *out) {
   *out = *t;
   out->t = out->v = NULL;
   switch (t->kind) {
@@ -108,7 +108,7 @@ static int term_shift(const cup_term *t, double t0, cup_term *out) {
       return CUP_OK;
     case CUP_WAVE_PWL:
       if (t0 >= t->t[t->np - 1]) {
-        *out = (cup_term){.comp = t->comp, .kind = CUP_WAVE_CONSTANT, .value = t->v[t->np - 1]};
+        *out = (input_term){.comp = t->comp, .kind = CUP_WAVE_CONSTANT, .value = t->v[t->np - 1]};
         return CUP_OK;
       }
       out->t = malloc(sizeof(double) * (size_t)t->np);
@@ -121,7 +121,7 @@ static int term_shift(const cup_term *t, double t0, cup_term *out) {
        * is delay - t0 less whole periods, in (-period, 0]; before it, the delay left */
       double P = t->period, d = t->delay - t0;
       if (!(P > 0) && d + t->rise + t->width + t->fall <= 0) {
-        *out = (cup_term){.comp = t->comp, .kind = CUP_WAVE_CONSTANT, .value = t->value};
+        *out = (input_term){.comp = t->comp, .kind = CUP_WAVE_CONSTANT, .value = t->value};
         return CUP_OK;
       }
       if (P > 0 && d < 0) {
@@ -140,34 +140,34 @@ static int term_shift(const cup_term *t, double t0, cup_term *out) {
   return CUP_ERR_ARG;
 }
 
-int cup_input_shift(const cup_input *u, double t0, cup_input **out, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "input shift: output pointer is NULL");
+int input_shift(const cup_input *u, double t0, cup_input **out, char *errmsg) {
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "input shift: output pointer is NULL");
   *out = NULL;
   if (!u || !(t0 >= 0) || !isfinite(t0))
-    return cup_fail(errmsg, CUP_ERR_ARG, "input shift: no input, or t0 = %g not finite and >= 0", t0);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "input shift: no input, or t0 = %g not finite and >= 0", t0);
   if (u->fn && t0 != 0)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "input shift: a callback input cannot be read from t0 = %g", t0);
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "input shift: a callback input cannot be read from t0 = %g", t0);
   int st = cup_input_create(out, u->p, errmsg);
   if (st) return st;
   cup_input *v = *out;
   v->fn = u->fn; v->ctx = u->ctx; v->abs_tol = u->abs_tol; v->rel_tol = u->rel_tol;
-  v->terms = calloc((size_t)u->nterms + 1, sizeof(cup_term));
+  v->terms = calloc((size_t)u->nterms + 1, sizeof(input_term));
   for (int k = 0; v->terms && k < u->nterms && !st; k++)
     if (!(st = term_shift(&u->terms[k], t0, &v->terms[k]))) v->nterms = k + 1;
   if (!v->terms || st) {
     cup_input_free(out);
-    return cup_fail(errmsg, st == CUP_ERR_ARG ? st : CUP_ERR_NOMEM, "input shift: %s",
+    return fail_fmt(errmsg, st == CUP_ERR_ARG ? st : CUP_ERR_NOMEM, "input shift: %s",
                     st == CUP_ERR_ARG ? "unknown waveform" : "out of memory");
   }
   return CUP_OK;
 }
 
-int cup_input_origin(cup_input **u, cup_input **written, double t0, char *errmsg) {
+int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg) {
   const cup_input *w = *written ? *written : *u;
   cup_input *v = NULL;
   if (!*u) return CUP_OK;
   if (t0 != 0) {
-    int st = cup_input_shift(w, t0, &v, errmsg);
+    int st = input_shift(w, t0, &v, errmsg);
     if (st) return st;
   }
   if (*written) cup_input_free(u);
@@ -193,16 +193,16 @@ int cup_input_is_constant(const cup_input *u) {
   if (!u) return 1;
   if (u->fn) return 0;
   for (int k = 0; k < u->nterms; k++) {
-    const cup_term *t = &u->terms[k];
+    const input_term *t = &u->terms[k];
     if ((t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_SQUARE) && t->amp != 0 && t->omega != 0) return 0;
     if (t->kind == CUP_WAVE_PWL && t->np > 1) return 0;
-    if ((t->kind == CUP_WAVE_PULSE || t->kind == CUP_WAVE_DAMPED_SINE) && !cup_spice_term_constant(t)) return 0;
+    if ((t->kind == CUP_WAVE_PULSE || t->kind == CUP_WAVE_DAMPED_SINE) && !spice_term_constant(t)) return 0;
   }
   return 1;
 }
 
 /* Index of the PWL segment [t_k, t_{k+1}] holding t (binary search). */
-static int pwl_segment(const cup_term *w, double t) {
+static int pwl_segment(const input_term *w, double t) {
   int lo = 0, hi = w->np - 1;
   while (hi - lo > 1) {
     int mid = (lo + hi) / 2;
@@ -211,7 +211,7 @@ static int pwl_segment(const cup_term *w, double t) {
   return lo;
 }
 
-static double pwl_value(const cup_term *w, double t) {
+static double pwl_value(const input_term *w, double t) {
   if (t <= w->t[0]) return w->v[0];
   if (t >= w->t[w->np - 1]) return w->v[w->np - 1];
   int k = pwl_segment(w, t);
@@ -221,7 +221,7 @@ static double pwl_value(const cup_term *w, double t) {
 
 /* Exact integral of the PWL table over [a, b] (a <= b): constant tails plus
  * trapezoids of the linear pieces, each clipped to [a, b]. */
-static double pwl_integral(const cup_term *w, double a, double b) {
+static double pwl_integral(const input_term *w, double a, double b) {
   double t0 = w->t[0], t1 = w->t[w->np - 1], sum = 0;
   if (a < t0) { double e = fmin(b, t0); sum += w->v[0] * (e - a); a = e; }
   if (b > t1) { double s = fmax(a, t1); sum += w->v[w->np - 1] * (b - s); b = s; }
@@ -234,18 +234,18 @@ static double pwl_integral(const cup_term *w, double a, double b) {
   return sum;
 }
 
-double cup_term_value(const cup_term *w, double t) {
+double input_term_value(const input_term *w, double t) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value;
     case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
-    case CUP_WAVE_SQUARE: return w->amp * cup_sign_sin_q(cup_square_q(w, t));
+    case CUP_WAVE_SQUARE: return w->amp * input_sign_sin_q(input_square_q(w, t));
     case CUP_WAVE_PWL: return pwl_value(w, t);
-    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_value(w, t);
+    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return spice_term_value(w, t);
   }
   return 0;
 }
 
-double cup_term_integral(const cup_term *w, double a, double b) {
+double input_term_integral(const input_term *w, double a, double b) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value * (b - a);
     case CUP_WAVE_SINE:
@@ -254,11 +254,11 @@ double cup_term_integral(const cup_term *w, double a, double b) {
       return 2 * w->amp / w->omega * sin(0.5 * w->omega * (a + b) + w->phase) *
              sin(0.5 * w->omega * (b - a));
     case CUP_WAVE_SQUARE:
-      if (w->omega == 0) return w->amp * cup_sign_sin_q(w->phase / M_PI) * (b - a);
-      return w->amp * M_PI / w->omega * (cup_sign_sin_q_integral(cup_square_q(w, b)) -
-                                         cup_sign_sin_q_integral(cup_square_q(w, a)));
+      if (w->omega == 0) return w->amp * input_sign_sin_q(w->phase / M_PI) * (b - a);
+      return w->amp * M_PI / w->omega * (input_sign_sin_q_integral(input_square_q(w, b)) -
+                                         input_sign_sin_q_integral(input_square_q(w, a)));
     case CUP_WAVE_PWL: return pwl_integral(w, a, b);
-    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return cup_spice_term_integral(w, a, b);
+    case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return spice_term_integral(w, a, b);
   }
   return 0;
 }
@@ -271,40 +271,40 @@ int cup_input_eval(const cup_input *u, double t, double *out) {
     return CUP_OK;
   }
   for (int j = 0; j < u->p; j++) out[j] = 0;
-  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_value(&u->terms[k], t);
+  for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += input_term_value(&u->terms[k], t);
   return CUP_OK;
 }
 
 /* ---- exosystem ------------------------------------------------------------------ */
 
-int cup_term_gen_states(const cup_term *t) {
+int input_term_gen_states(const input_term *t) {
   return t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE ||
          t->kind == CUP_WAVE_DAMPED_SINE ? 2 : 1;
 }
 
 /* Before its delay a damped sine is constant, which its generator (a damped
  * rotation) cannot hold. */
-int cup_input_gen_check(const cup_input *u, const char *scheme, char *errmsg) {
+int input_gen_check(const cup_input *u, const char *scheme, char *errmsg) {
   for (int k = 0; u && !u->fn && k < u->nterms; k++)
     if (u->terms[k].kind == CUP_WAVE_DAMPED_SINE && u->terms[k].delay > 0)
-      return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "%s scheme: a damped sine with a delay (input "
+      return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s scheme: a damped sine with a delay (input "
                       "term %d) is not supported; use the theta or implicit scheme", scheme, k);
   return CUP_OK;
 }
 
-int cup_input_gen_dim(const cup_input *u, int *first_state) {
+int input_gen_dim(const cup_input *u, int *first_state) {
   int nw = 0;
   if (!u || u->fn) return 0;
   for (int k = 0; k < u->nterms; k++) {
     if (first_state) first_state[k] = nw;
-    nw += cup_term_gen_states(&u->terms[k]);
+    nw += input_term_gen_states(&u->terms[k]);
   }
   return nw;
 }
 
-void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld) {
+void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld) {
   for (int k = 0; u && !u->fn && k < u->nterms; k++) {
-    const cup_term *t = &u->terms[k];
+    const input_term *t = &u->terms[k];
     int g = first_state[k];
     if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) {
       double d = t->kind == CUP_WAVE_DAMPED_SINE ? t->damping : 0;
@@ -317,10 +317,10 @@ void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *
   }
 }
 
-void cup_input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w) {
+void input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w) {
   double mid = 0.5 * (a + b);
   for (int k = 0; k < u->nterms; k++) {
-    const cup_term *t = &u->terms[k];
+    const input_term *t = &u->terms[k];
     double *wk = w + first_state[k];
     switch (t->kind) {
       case CUP_WAVE_CONSTANT: wk[0] = t->value; break;
@@ -328,8 +328,8 @@ void cup_input_gen_values(const cup_input *u, const int *first_state, double a, 
         wk[0] = t->amp * sin(t->omega * a + t->phase);
         wk[1] = t->amp * cos(t->omega * a + t->phase);
         break;
-      case CUP_WAVE_SQUARE: wk[0] = cup_term_value(t, mid); break;
-      case CUP_WAVE_DAMPED_SINE: {                   /* no delay (cup_input_gen_check) */
+      case CUP_WAVE_SQUARE: wk[0] = input_term_value(t, mid); break;
+      case CUP_WAVE_DAMPED_SINE: {                   /* no delay (input_gen_check) */
         double e = t->amp * exp(-t->damping * a);
         wk[0] = e * sin(t->omega * a + t->phase);
         wk[1] = e * cos(t->omega * a + t->phase);
@@ -337,23 +337,23 @@ void cup_input_gen_values(const cup_input *u, const int *first_state, double a, 
       }
       case CUP_WAVE_PULSE:
       case CUP_WAVE_PWL: {
-        double va = cup_term_value(t, a);
+        double va = input_term_value(t, a);
         wk[0] = va;
-        wk[1] = mid > a ? (cup_term_value(t, mid) - va) / (mid - a) : 0;
+        wk[1] = mid > a ? (input_term_value(t, mid) - va) / (mid - a) : 0;
         break;
       }
     }
   }
 }
 
-void cup_input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w) {
-  cup_input_gen_values(u, first_state, a, b, w);
+void input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w) {
+  input_gen_values(u, first_state, a, b, w);
   double mid = 0.5 * (a + b);
   for (int k = 0; k < u->nterms; k++) {
-    const cup_term *t = &u->terms[k];
+    const input_term *t = &u->terms[k];
     double *wk = w + first_state[k], t0, v0, slope;
     if (t->kind == CUP_WAVE_PULSE) {
-      cup_spice_pulse_line(t, mid, &t0, &v0, &slope);
+      spice_pulse_line(t, mid, &t0, &v0, &slope);
     } else if (t->kind == CUP_WAVE_PWL && mid > t->t[0] && mid < t->t[t->np - 1]) {
       int j = pwl_segment(t, mid);
       t0 = t->t[j];
@@ -378,11 +378,11 @@ static double quad_fn(double t, void *vp) {
   return q->buf[q->comp];
 }
 
-int cup_input_integral_ws(const cup_input *u, double a, double b, double *out,
-                          cup_quad_ws *ws) {
+int input_integral_ws(const cup_input *u, double a, double b, double *out,
+                      input_quad_ws *ws) {
   if (!u->fn) {
     for (int j = 0; j < u->p; j++) out[j] = 0;
-    for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += cup_term_integral(&u->terms[k], a, b);
+    for (int k = 0; k < u->nterms; k++) out[u->terms[k].comp] += input_term_integral(&u->terms[k], a, b);
     return CUP_OK;
   }
   int st = CUP_OK;
@@ -394,21 +394,21 @@ int cup_input_integral_ws(const cup_input *u, double a, double b, double *out,
     int rc = gsl_integration_qag(&F, a, b, u->abs_tol, u->rel_tol, ws->limit,
                                  GSL_INTEG_GAUSS21, ws->w, &out[j], &err);
     if (q.failed) { st = CUP_ERR_CALLBACK; break; }
-    if (rc) st = cup_merge(st, CUP_WARN_QUADRATURE);
+    if (rc) st = status_merge(st, CUP_WARN_QUADRATURE);
   }
   gsl_set_error_handler(old);
   return st;
 }
 
-int cup_quad_ws_init(cup_quad_ws *ws, int p) {
+int input_quad_ws_init(input_quad_ws *ws, int p) {
   ws->limit = 200;
   ws->w = gsl_integration_workspace_alloc(ws->limit);
   ws->buf = malloc(sizeof(double) * ((size_t)p + 1));
-  if (!ws->w || !ws->buf) { cup_quad_ws_free(ws); return CUP_ERR_NOMEM; }
+  if (!ws->w || !ws->buf) { input_quad_ws_free(ws); return CUP_ERR_NOMEM; }
   return CUP_OK;
 }
 
-void cup_quad_ws_free(cup_quad_ws *ws) {
+void input_quad_ws_free(input_quad_ws *ws) {
   if (ws->w) gsl_integration_workspace_free(ws->w);
   free(ws->buf);
   ws->w = NULL;
@@ -417,11 +417,11 @@ void cup_quad_ws_free(cup_quad_ws *ws) {
 
 int cup_input_integral(const cup_input *u, double a, double b, double *out) {
   if (!u || !out) return CUP_ERR_ARG;
-  if (!u->fn) return cup_input_integral_ws(u, a, b, out, NULL);
-  cup_quad_ws ws = {0};
-  if (cup_quad_ws_init(&ws, u->p)) return CUP_ERR_NOMEM;
-  int st = cup_input_integral_ws(u, a, b, out, &ws);
-  cup_quad_ws_free(&ws);
+  if (!u->fn) return input_integral_ws(u, a, b, out, NULL);
+  input_quad_ws ws = {0};
+  if (input_quad_ws_init(&ws, u->p)) return CUP_ERR_NOMEM;
+  int st = input_integral_ws(u, a, b, out, &ws);
+  input_quad_ws_free(&ws);
   return st;
 }
 
@@ -429,10 +429,10 @@ double cup_input_next_break(const cup_input *u, double t) {
   double next = INFINITY;
   if (!u) return next;
   for (int k = 0; k < u->nterms; k++) {
-    const cup_term *w = &u->terms[k];
+    const input_term *w = &u->terms[k];
     if (w->kind == CUP_WAVE_SQUARE && w->omega > 0 && w->amp != 0) {
       /* jumps at integer q */
-      double j = floor(cup_square_q(w, t)) + 1;
+      double j = floor(input_square_q(w, t)) + 1;
       double tb = (j * M_PI - w->phase) / w->omega;
       if (!(tb > t)) tb = ((j + 1) * M_PI - w->phase) / w->omega;
       next = fmin(next, tb);
@@ -440,7 +440,7 @@ double cup_input_next_break(const cup_input *u, double t) {
       for (int i = 0; i < w->np; i++)
         if (w->t[i] > t) { next = fmin(next, w->t[i]); break; }
     } else if (w->kind == CUP_WAVE_PULSE || w->kind == CUP_WAVE_DAMPED_SINE) {
-      next = fmin(next, cup_spice_term_break(w, t));
+      next = fmin(next, spice_term_break(w, t));
     }
   }
   return next;

@@ -10,7 +10,7 @@
 #include "util/lanes.h"
 #include "util/linalg.h"
 
-typedef struct cup_term {
+typedef struct input_term {
   int comp;
   cup_wave_kind kind;
   double value, amp, omega, phase;  /* omega = 2 pi frequency */
@@ -18,115 +18,115 @@ typedef struct cup_term {
   double *t, *v;
   double delay, damping;                    /* PULSE, DAMPED_SINE */
   double value2, rise, fall, width, period; /* PULSE */
-} cup_term;
+} input_term;
 
 struct cup_input {
   int p;
   int nterms;
-  cup_term *terms;
+  input_term *terms;
   cup_input_fn fn;
   void *ctx;
   double abs_tol, rel_tol;
 };
 
-typedef struct cup_quad_ws {
+typedef struct input_quad_ws {
   gsl_integration_workspace *w;
   size_t limit;
   double *buf;          /* p entries for the callback */
-} cup_quad_ws;
+} input_quad_ws;
 
 /* The SPICE source functions (input_spice.c): PULSE and DAMPED_SINE. */
-int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg);
-double cup_spice_term_value(const cup_term *t, double tt);
-double cup_spice_term_integral(const cup_term *t, double a, double b);
-double cup_spice_term_break(const cup_term *t, double tt);   /* the next corner after tt, or INFINITY */
+int spice_term_init(input_term *t, const cup_wave *w, char *errmsg);
+double spice_term_value(const input_term *t, double tt);
+double spice_term_integral(const input_term *t, double a, double b);
+double spice_term_break(const input_term *t, double tt);   /* the next corner after tt, or INFINITY */
 /* A PULSE's piece around mid as the line u = v0 + slope (t - t0) through its
- * corners at the times cup_spice_term_break gives them (t0 the one before
+ * corners at the times spice_term_break gives them (t0 the one before
  * mid), with the corners' own values. */
-void cup_spice_pulse_line(const cup_term *t, double mid, double *t0, double *v0, double *slope);
-int cup_spice_term_constant(const cup_term *t);
+void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, double *slope);
+int spice_term_constant(const input_term *t);
 
 /* The square wave in units of pi: q = omega t / pi + phase / pi, so that
  * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from
  * sin) makes the jump instants exact: sign(0) = 0 there, as in the paper,
  * even where sin(pi q) evaluates to 1e-16. */
-static inline double cup_square_q(const cup_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
+static inline double input_square_q(const input_term *w, double t) { return w->omega * t / M_PI + w->phase / M_PI; }
 
 /* q mod 2 in [0, 2) (floor is cheaper than fmod here) */
-static inline double cup_mod2(double q) { return q - 2.0 * cup_floor(0.5 * q); }
+static inline double input_mod2(double q) { return q - 2.0 * la_floor(0.5 * q); }
 
-/* r = cup_mod2(q) within tol of a zero of sin(pi q) */
-static inline int cup_square_near_zero(double r, double tol) {
+/* r = input_mod2(q) within tol of a zero of sin(pi q) */
+static inline int input_square_near_zero(double r, double tol) {
   return r <= tol || fabs(r - 1) <= tol || 2 - r <= tol;
 }
 
-/* sign(sin(pi q)) from q and r = cup_mod2(q) */
-static inline double cup_sign_sin_qr(double q, double r) {
+/* sign(sin(pi q)) from q and r = input_mod2(q) */
+static inline double input_sign_sin_qr(double q, double r) {
   double tol = 4 * DBL_EPSILON * (fabs(q) > 1 ? fabs(q) : 1.0);   /* fmax(1, |q|), NaN giving 1 */
-  if (cup_square_near_zero(r, tol)) return 0;
+  if (input_square_near_zero(r, tol)) return 0;
   return r < 1 ? 1 : -1;
 }
 
-static inline double cup_sign_sin_q(double q) { return cup_sign_sin_qr(q, cup_mod2(q)); }
+static inline double input_sign_sin_q(double q) { return input_sign_sin_qr(q, input_mod2(q)); }
 
 /* Antiderivative of sign(sin(pi q)) in q: a triangle wave between 0 and 1,
- * from r = cup_mod2(q). */
-static inline double cup_triangle_r(double r) { return r <= 1 ? r : 2 - r; }
+ * from r = input_mod2(q). */
+static inline double input_triangle_r(double r) { return r <= 1 ? r : 2 - r; }
 
-static inline double cup_sign_sin_q_integral(double q) { return cup_triangle_r(cup_mod2(q)); }
+static inline double input_sign_sin_q_integral(double q) { return input_triangle_r(input_mod2(q)); }
 
-/* The same three, two positions q at a time, bit for bit: r = cup_mod2(q)
+/* The same three, two positions q at a time, bit for bit: r = input_mod2(q)
  * taking floor(q / 2) = *fl when *fl <= q0 / 2 <= q1 / 2 < *fl + 1 (a
- * square wave's floor changes twice a period; q / 2 = 0 goes to cup_floor,
+ * square wave's floor changes twice a period; q / 2 = 0 goes to la_floor,
  * which keeps the sign of a zero), *fl the last lane's floor after. */
-static inline cup_v2d cup_mod2_2(cup_v2d q, double *fl) {
-  cup_v2d half = 0.5 * q;
+static inline v2d input_mod2_2(v2d q, double *fl) {
+  v2d half = 0.5 * q;
   double f = *fl, h0 = half[0], h1 = half[1];
-  cup_v2d fv = {f, f};
-  if (!(h0 >= f && h0 <= h1 && h1 < f + 1 && h0 != 0)) fv = (cup_v2d){cup_floor(h0), cup_floor(h1)};
+  v2d fv = {f, f};
+  if (!(h0 >= f && h0 <= h1 && h1 < f + 1 && h0 != 0)) fv = (v2d){la_floor(h0), la_floor(h1)};
   *fl = fv[1];
   return q - 2.0 * fv;
 }
 
-static inline cup_v2d cup_sign_sin_qr2(cup_v2d q, cup_v2d r) {
-  const cup_v2d one = {1, 1}, two = {2, 2};
-  const cup_v2l sign = {(long long)0x8000000000000000ULL, (long long)0x8000000000000000ULL};
-  cup_v2d tol = 4 * DBL_EPSILON * cup_v2_max(cup_v2_abs(q), one);
-  cup_v2l zero = (r <= tol) | (cup_v2_abs(r - one) <= tol) | (two - r <= tol);
-  cup_v2d s = (cup_v2d)((cup_v2l)one | (sign & ~(r < one)));   /* r < 1 ? 1 : -1 */
-  return cup_v2_clear(zero, s);
+static inline v2d input_sign_sin_qr2(v2d q, v2d r) {
+  const v2d one = {1, 1}, two = {2, 2};
+  const v2l sign = {(long long)0x8000000000000000ULL, (long long)0x8000000000000000ULL};
+  v2d tol = 4 * DBL_EPSILON * v2_max(v2_abs(q), one);
+  v2l zero = (r <= tol) | (v2_abs(r - one) <= tol) | (two - r <= tol);
+  v2d s = (v2d)((v2l)one | (sign & ~(r < one)));   /* r < 1 ? 1 : -1 */
+  return v2_clear(zero, s);
 }
 
 /* r <= 1 ? r : 2 - r as min(r, 2 - r): the same for r in [0, 2) (2 - r is
  * exact above 1) and NaN */
-static inline cup_v2d cup_triangle_r2(cup_v2d r) { return cup_v2_min(r, (cup_v2d){2, 2} - r); }
+static inline v2d input_triangle_r2(v2d r) { return v2_min(r, (v2d){2, 2} - r); }
 
-/* cup_mod2 and cup_sign_sin_qr of np pairs of positions q that never
+/* input_mod2 and input_sign_sin_qr of np pairs of positions q that never
  * decrease (a square wave's q at increasing times: omega > 0), bit for bit,
  * per block rather than per position where the block allows: floor, the
  * roundings and fabs on either side of 1 are monotone, so when q / 2 has one
  * floor at both ends (q[0] != 0, so that no zero's sign is in question) it
  * has it throughout, and when both ends' r are clear of the sign's zeros
- * (cup_square_near_zero) by the block's largest tolerance and on one side
+ * (input_square_near_zero) by the block's largest tolerance and on one side
  * of 1, every r between is too. Returns 1 when one sign holds for the whole
  * block (no jump in it). */
-static inline int cup_square_block(const cup_v2d *q, int np, cup_v2d *r, cup_v2d *sg) {
-  const double first = q[0][0], last = q[np - 1][1], fl = cup_floor(0.5 * first);
-  if (first != 0 && fl == cup_floor(0.5 * last)) {        /* NaN compares unequal */
-    const cup_v2d two_fl = 2.0 * (cup_v2d){fl, fl};
+static inline int input_square_block(const v2d *q, int np, v2d *r, v2d *sg) {
+  const double first = q[0][0], last = q[np - 1][1], fl = la_floor(0.5 * first);
+  if (first != 0 && fl == la_floor(0.5 * last)) {        /* NaN compares unequal */
+    const v2d two_fl = 2.0 * (v2d){fl, fl};
     for (int p = 0; p < np; p++) r[p] = q[p] - two_fl;
     const double r0 = r[0][0], r1 = r[np - 1][1];
-    const double tol = 4 * DBL_EPSILON * cup_max(cup_max(fabs(first), fabs(last)), 1.0);
-    if (!cup_square_near_zero(r0, tol) && !cup_square_near_zero(r1, tol) && (r0 < 1) == (r1 < 1)) {
+    const double tol = 4 * DBL_EPSILON * la_max(la_max(fabs(first), fabs(last)), 1.0);
+    if (!input_square_near_zero(r0, tol) && !input_square_near_zero(r1, tol) && (r0 < 1) == (r1 < 1)) {
       const double s = r0 < 1 ? 1 : -1;
-      for (int p = 0; p < np; p++) sg[p] = (cup_v2d){s, s};
+      for (int p = 0; p < np; p++) sg[p] = (v2d){s, s};
       return 1;
     }
   } else {
     double f = NAN;
-    for (int p = 0; p < np; p++) r[p] = cup_mod2_2(q[p], &f);
+    for (int p = 0; p < np; p++) r[p] = input_mod2_2(q[p], &f);
   }
-  for (int p = 0; p < np; p++) sg[p] = cup_sign_sin_qr2(q[p], r[p]);
+  for (int p = 0; p < np; p++) sg[p] = input_sign_sin_qr2(q[p], r[p]);
   return 0;
 }
 
@@ -135,49 +135,49 @@ static inline int cup_square_block(const cup_v2d *q, int np, cup_v2d *r, cup_v2d
  * the time from which every term repeats (cup_input_steady_phase; a PWL is
  * then constant, a single pulse over). CUP_ERR_UNSUPPORTED for a callback
  * and t0 != 0. */
-int cup_input_shift(const cup_input *u, double t0, cup_input **v, char *errmsg);
-/* *u read from t0 on (cup_input_shift): *written keeps the input as written
+int input_shift(const cup_input *u, double t0, cup_input **v, char *errmsg);
+/* *u read from t0 on (input_shift): *written keeps the input as written
  * while t0 != 0, *u its shift; t0 = 0 puts the written one back. An
  * integrator made with the old *u must be freed first. */
-int cup_input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
+int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
 
 /* One term's value at t (its component's share of u(t)). */
-double cup_term_value(const cup_term *w, double t);
+double input_term_value(const input_term *w, double t);
 /* One term's exact integral over [a, b]. */
-double cup_term_integral(const cup_term *w, double a, double b);
+double input_term_integral(const input_term *w, double a, double b);
 
 /* The built-in waveforms as the output of a linear exosystem on each interval
  * without breakpoints: w' = W w, u = U w. States per term: constant 1
  * (w' = 0), sine 2 (s' = om c, c' = -om s, the input is s; damped: minus
  * d s, d c), square 1 (piecewise constant), table and pulse 2 (v' = slope). Used by the exponential free
  * step and the adaptive scheme; callbacks have no exosystem. */
-int cup_term_gen_states(const cup_term *t);
+int input_term_gen_states(const input_term *t);
 /* CUP_ERR_UNSUPPORTED (naming the scheme and the term) for a waveform the
  * exosystem cannot hold: a damped sine with a delay. */
-int cup_input_gen_check(const cup_input *u, const char *scheme, char *errmsg);
+int input_gen_check(const cup_input *u, const char *scheme, char *errmsg);
 /* Total exosystem states of u (0 for a callback or NULL); first_state[k]
  * (if not NULL, nterms entries) gets the first state of term k. */
-int cup_input_gen_dim(const cup_input *u, int *first_state);
+int input_gen_dim(const cup_input *u, int *first_state);
 /* W into the nw x nw block at W (column-major, leading dimension ld),
  * added to what is there: the sine rotations and the table slopes. */
-void cup_input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld);
+void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld);
 /* The states on the interval (a, b) (no breakpoint inside), at a: constants,
  * sin/cos at a, the square's value on the open interval (at its midpoint:
  * the jump instants carry no weight), the table's value at a and its slope
  * on (a, b). Taken from the waveform itself, so nothing drifts. */
-void cup_input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w);
+void input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w);
 /* The same, with a table's or a pulse's states from the line of its piece
  * through the piece's corners (their values at the breakpoints' times):
  * the value at a and the slope of the step's piece are then the ones the
  * piece before and after meet, whatever a and b round to (the adaptive
  * scheme's steps run between breakpoints; a fixed step that straddles a
  * corner needs gen_values' secant instead). */
-void cup_input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w);
+void input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w);
 
-int cup_quad_ws_init(cup_quad_ws *ws, int p);
-void cup_quad_ws_free(cup_quad_ws *ws);
+int input_quad_ws_init(input_quad_ws *ws, int p);
+void input_quad_ws_free(input_quad_ws *ws);
 /* Integral with a caller-owned workspace (needed only for callbacks). */
-int cup_input_integral_ws(const cup_input *u, double a, double b, double *out,
-                          cup_quad_ws *ws);
+int input_integral_ws(const cup_input *u, double a, double b, double *out,
+                      input_quad_ws *ws);
 
 #endif

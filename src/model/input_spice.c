@@ -9,18 +9,18 @@
 
 #define TWO_PI 6.283185307179586476925286766559
 
-int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg) {
+int spice_term_init(input_term *t, const cup_wave *w, char *errmsg) {
   if (w->kind == CUP_WAVE_DAMPED_SINE) {
     if (!isfinite(w->amplitude) || !isfinite(w->frequency) || !isfinite(w->phase) || !isfinite(w->delay) ||
         !isfinite(w->damping))
-      return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: damped sine amplitude %g, frequency %g, phase %g, "
+      return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: damped sine amplitude %g, frequency %g, phase %g, "
                       "delay %g, damping %g must be finite", w->amplitude, w->frequency, w->phase, w->delay,
                       w->damping);
     if (w->frequency < 0 || w->delay < 0)
-      return cup_fail(errmsg, CUP_ERR_ARG, "input: damped sine frequency %g and delay %g must be >= 0",
+      return fail_fmt(errmsg, CUP_ERR_ARG, "input: damped sine frequency %g and delay %g must be >= 0",
                       w->frequency, w->delay);
     if (!isfinite(TWO_PI * w->frequency))
-      return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: frequency %g overflows", w->frequency);
+      return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: frequency %g overflows", w->frequency);
     t->amp = w->amplitude;
     t->omega = TWO_PI * w->frequency;
     t->phase = w->phase;
@@ -31,14 +31,14 @@ int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg) {
   const double v[7] = {w->value, w->value2, w->delay, w->rise, w->fall, w->width, w->period};
   for (int k = 0; k < 7; k++)
     if (!isfinite(v[k]))
-      return cup_fail(errmsg, CUP_ERR_NONFINITE, "input: pulse value %g, value2 %g, delay %g, rise %g, fall %g, "
+      return fail_fmt(errmsg, CUP_ERR_NONFINITE, "input: pulse value %g, value2 %g, delay %g, rise %g, fall %g, "
                       "width %g, period %g must be finite", v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
   for (int k = 2; k < 7; k++)
     if (v[k] < 0)
-      return cup_fail(errmsg, CUP_ERR_ARG, "input: pulse delay %g, rise %g, fall %g, width %g and period %g "
+      return fail_fmt(errmsg, CUP_ERR_ARG, "input: pulse delay %g, rise %g, fall %g, width %g and period %g "
                       "must be >= 0", v[2], v[3], v[4], v[5], v[6]);
   if (w->period > 0 && !(w->period >= w->rise + w->width + w->fall))
-    return cup_fail(errmsg, CUP_ERR_ARG, "input: pulse period %g is shorter than rise + width + fall = %g",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "input: pulse period %g is shorter than rise + width + fall = %g",
                     w->period, w->rise + w->width + w->fall);
   t->value = w->value;
   t->value2 = w->value2;
@@ -53,7 +53,7 @@ int cup_spice_term_init(cup_term *t, const cup_wave *w, char *errmsg) {
 /* ---- PULSE: one period, shape(s) for s in [0, period) ------------------------ */
 
 /* Value at s >= 0 after the delay; right-continuous at a jump (rise or fall 0). */
-static double shape(const cup_term *t, double s) {
+static double shape(const input_term *t, double s) {
   if (s < t->rise) return t->value + (t->value2 - t->value) * (s / t->rise);
   s -= t->rise;
   if (s < t->width) return t->value2;
@@ -64,7 +64,7 @@ static double shape(const cup_term *t, double s) {
 
 /* int_a^b shape, 0 <= a <= b (within one period when periodic): trapezoids
  * of the ramps, rectangles of the flat parts. */
-static double shape_integral(const cup_term *t, double a, double b) {
+static double shape_integral(const input_term *t, double a, double b) {
   const double knot[4] = {0, t->rise, t->rise + t->width, t->rise + t->width + t->fall};
   double sum = 0;
   for (int k = 0; k < 4; k++) {
@@ -81,14 +81,14 @@ static double shape_integral(const cup_term *t, double a, double b) {
   return sum;
 }
 
-static double pulse_value(const cup_term *t, double tt) {
+static double pulse_value(const input_term *t, double tt) {
   double s = tt - t->delay;
   if (s < 0) return t->value;
   if (t->period > 0) s -= t->period * floor(s / t->period);
   return shape(t, s);
 }
 
-static double pulse_integral(const cup_term *t, double a, double b) {
+static double pulse_integral(const input_term *t, double a, double b) {
   double sum = 0;
   if (a < t->delay) {
     double e = fmin(b, t->delay);
@@ -105,7 +105,7 @@ static double pulse_integral(const cup_term *t, double a, double b) {
 }
 
 /* The next corner after tt: the delay, then rise/width/fall knots of each period. */
-static double pulse_break(const cup_term *t, double tt) {
+static double pulse_break(const input_term *t, double tt) {
   if (tt < t->delay) return t->delay;
   double P = t->period;
   const double knot[4] = {t->rise, t->rise + t->width, t->rise + t->width + t->fall, P};
@@ -128,7 +128,7 @@ static double pulse_break(const cup_term *t, double tt) {
   return INFINITY;                                    /* not reached: 3 periods span tt */
 }
 
-void cup_spice_pulse_line(const cup_term *t, double mid, double *t0, double *v0, double *slope) {
+void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, double *slope) {
   /* each corner as pulse_break returns it (delay + P j + knot k), the piece
    * after it (0 the rise, 1 the top, 2 the fall, 3 the bottom) and that
    * piece's own end; the delay and delay - P + P are both the first rise's
@@ -159,7 +159,7 @@ void cup_spice_pulse_line(const cup_term *t, double mid, double *t0, double *v0,
 
 /* ---- SIN with delay and damping ------------------------------------------------ */
 
-static double damped_value(const cup_term *t, double tt) {
+static double damped_value(const input_term *t, double tt) {
   double s = tt - t->delay;
   if (s < 0) return t->amp * sin(t->phase);
   return t->amp * exp(-t->damping * s) * sin(t->omega * s + t->phase);
@@ -168,7 +168,7 @@ static double damped_value(const cup_term *t, double tt) {
 /* int_s0^s1 e^{-d s} sin(w s + p) ds = Im[e^{i p} e^{z s0} (e^{z h} - 1)/z],
  * z = -d + i w, h = s1 - s0, with e^{z h} - 1 from expm1 and half-angle
  * sines so that a short interval loses no digits. */
-static double damped_integral_after(const cup_term *t, double s0, double s1) {
+static double damped_integral_after(const input_term *t, double s0, double s1) {
   double d = t->damping, w = t->omega, h = s1 - s0;
   if (d == 0 && w == 0) return sin(t->phase) * h;
   double e0 = exp(-d * s0), c0 = cos(w * s0 + t->phase), n0 = sin(w * s0 + t->phase);
@@ -178,7 +178,7 @@ static double damped_integral_after(const cup_term *t, double s0, double s1) {
   return e0 * (-w * nr - d * ni) / (d * d + w * w);
 }
 
-static double damped_integral(const cup_term *t, double a, double b) {
+static double damped_integral(const input_term *t, double a, double b) {
   double sum = 0;
   if (a < t->delay) {
     double e = fmin(b, t->delay);
@@ -191,20 +191,20 @@ static double damped_integral(const cup_term *t, double a, double b) {
 
 /* ---- dispatch ---------------------------------------------------------------------- */
 
-double cup_spice_term_value(const cup_term *t, double tt) {
+double spice_term_value(const input_term *t, double tt) {
   return t->kind == CUP_WAVE_PULSE ? pulse_value(t, tt) : damped_value(t, tt);
 }
 
-double cup_spice_term_integral(const cup_term *t, double a, double b) {
+double spice_term_integral(const input_term *t, double a, double b) {
   return t->kind == CUP_WAVE_PULSE ? pulse_integral(t, a, b) : damped_integral(t, a, b);
 }
 
-double cup_spice_term_break(const cup_term *t, double tt) {
+double spice_term_break(const input_term *t, double tt) {
   if (t->kind == CUP_WAVE_PULSE) return t->value2 == t->value ? INFINITY : pulse_break(t, tt);
   return tt < t->delay && t->amp != 0 ? t->delay : INFINITY;
 }
 
-int cup_spice_term_constant(const cup_term *t) {
+int spice_term_constant(const input_term *t) {
   if (t->kind == CUP_WAVE_PULSE) return t->value2 == t->value;
   return t->amp == 0 || (t->omega == 0 && t->damping == 0);
 }

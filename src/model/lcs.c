@@ -14,25 +14,25 @@
 
 static int present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
 
-static int copy_opt(cup_sparse *dst, int *has, const cup_csc *src, const char *name,
+static int copy_opt(la_sparse *dst, int *has, const cup_csc *src, const char *name,
                     int nrow, int ncol, char *errmsg) {
   *has = present(src);
   if (!*has) { memset(dst, 0, sizeof *dst); return CUP_OK; }
-  return cup_sparse_copy(dst, src, name, nrow, ncol, errmsg);
+  return la_sparse_copy(dst, src, name, nrow, ncol, errmsg);
 }
 
 /* P B = C^T, compared column by column of B: (P b_j) against row j of C,
  * on the entries either can have (a netlist's LCS has 10^4 columns: a
  * dense sweep per column would be quadratic). The message names the
  * largest mismatch (the first, by column then row, among equal ones). */
-static int check_pb(const cup_polyset *K, const cup_sparse *B, double tol, char *errmsg) {
+static int check_pb(const cup_polyset *K, const la_sparse *B, double tol, char *errmsg) {
   int n = K->n, m = K->m;
   double *pb = calloc((size_t)n + 1, sizeof(double)), *ct = calloc((size_t)n + 1, sizeof(double));
   int *rows = malloc(sizeof(int) * ((size_t)n + 1));
   unsigned char *seen = calloc((size_t)n + 1, 1);
   if (!pb || !ct || !rows || !seen) {
     free(pb); free(ct); free(rows); free(seen);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   }
   double worst = 0, scale = 0, pbv = 0, ctv = 0;
   int wi = -1, wj = -1;
@@ -69,7 +69,7 @@ static int check_pb(const cup_polyset *K, const cup_sparse *B, double tol, char 
   }
   free(pb); free(ct); free(rows); free(seen);
   if (wi >= 0 && !(worst <= tol * scale))
-    return cup_fail(errmsg, CUP_ERR_PB_CT,
+    return fail_fmt(errmsg, CUP_ERR_PB_CT,
                     "P B differs from C^T: largest mismatch at (%d,%d): (P B) = %.17g but C^T = %.17g "
                     "(relative %.3g > tolerance %.3g)", wi, wj, pbv, ctv, worst / (scale > 0 ? scale : 1), tol);
   return CUP_OK;
@@ -89,7 +89,7 @@ static int p_matrix(const double *D, int m, double *work, int *piv) {
     for (int i = 0; i < m; i++) if (mask >> i & 1u) idx[k++] = i;
     for (int a = 0; a < k; a++)
       for (int b = 0; b < k; b++) work[a + b * k] = D[idx[a] + idx[b] * m];
-    if (cup_dense_lu(work, k, piv)) return 0;
+    if (la_dense_lu(work, k, piv)) return 0;
     double det = 1;
     unsigned char seen[16] = {0};
     for (int a = 0; a < k; a++) {
@@ -106,13 +106,13 @@ static int p_matrix(const double *D, int m, double *work, int *piv) {
 /* D must make each step's LCP solvable with a unique answer: positive
  * semidefinite (x^T D x >= 0, checked on (D + D^T)/2 by its eigenvalues,
  * to rounding) or, for a few rows, a P-matrix. */
-static int check_D(const cup_sparse *Ds, char *errmsg) {
+static int check_D(const la_sparse *Ds, char *errmsg) {
   int m = Ds->nrow;
   if (m > 1024) return CUP_OK;               /* too big to check densely: the LCP solver will tell */
   double *D = calloc((size_t)m * m, sizeof(double)), *S = malloc(sizeof(double) * (size_t)m * m);
   gsl_vector *ev = gsl_vector_alloc((size_t)m);
   gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc((size_t)m);
-  int st = D && S && ev && w ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  int st = D && S && ev && w ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   double lmin = 0, norm = 0;
   if (!st) {
     for (int j = 0; j < m; j++)
@@ -120,13 +120,13 @@ static int check_D(const cup_sparse *Ds, char *errmsg) {
     for (int j = 0; j < m; j++)
       for (int i = 0; i < m; i++) {
         S[i + (size_t)j * m] = 0.5 * (D[i + (size_t)j * m] + D[j + (size_t)i * m]);
-        norm = cup_max(norm, fabs(D[i + (size_t)j * m]));
+        norm = la_max(norm, fabs(D[i + (size_t)j * m]));
       }
     gsl_matrix_view Sv = gsl_matrix_view_array(S, (size_t)m, (size_t)m);
     gsl_error_handler_t *old = gsl_set_error_handler_off();
-    if (gsl_eigen_symm(&Sv.matrix, ev, w)) st = cup_fail(errmsg, CUP_ERR_LINALG, "LCS: eigenvalues of D failed");
+    if (gsl_eigen_symm(&Sv.matrix, ev, w)) st = fail_fmt(errmsg, CUP_ERR_LINALG, "LCS: eigenvalues of D failed");
     gsl_set_error_handler(old);
-    for (int i = 0; !st && i < m; i++) lmin = cup_min(lmin, gsl_vector_get(ev, i));
+    for (int i = 0; !st && i < m; i++) lmin = la_min(lmin, gsl_vector_get(ev, i));
   }
   if (!st && lmin < -1e-12 * m * norm) {
     double *work = malloc(sizeof(double) * 16 * 16);
@@ -134,7 +134,7 @@ static int check_D(const cup_sparse *Ds, char *errmsg) {
     int ok = m <= 12 && work && p_matrix(D, m, work, piv);
     free(work);
     if (!ok)
-      st = cup_fail(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
+      st = fail_fmt(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
                     "and not a P-matrix: the LCP of a step may have no or several solutions", lmin);
   }
   free(D); free(S);
@@ -146,13 +146,13 @@ static int check_D(const cup_sparse *Ds, char *errmsg) {
 static int copy_names(cup_lcs *L, const char *const *names, char *errmsg) {
   if (!names) return CUP_OK;
   L->row_names = calloc((size_t)L->m + 1, sizeof(char *));
-  if (!L->row_names) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  if (!L->row_names) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   for (int i = 0; i < L->m; i++)
-    if (!(L->row_names[i] = strdup(names[i] ? names[i] : "?"))) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+    if (!(L->row_names[i] = strdup(names[i] ? names[i] : "?"))) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   return CUP_OK;
 }
 
-void cup_lcs_rows_text(const cup_lcs *L, const int *rows, int k, char *buf, unsigned long size) {
+void lcs_rows_text(const cup_lcs *L, const int *rows, int k, char *buf, unsigned long size) {
   size_t len = (size_t)snprintf(buf, size, "%s", k == 1 ? "row" : "rows");
   for (int a = 0; a < k && len < size; a++) {
     if (len > size / 2) { snprintf(buf + len, size - len, ", ..."); return; }
@@ -163,36 +163,36 @@ void cup_lcs_rows_text(const cup_lcs *L, const int *rows, int k, char *buf, unsi
   }
 }
 
-int cup_lcs_needs_reciprocal_(const char *scheme, const char *why, char *errmsg) {
-  return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
+int lcs_needs_reciprocal(const char *scheme, const char *why, char *errmsg) {
+  return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs P B = C^T (a reciprocal network: %s, and B "
                   "is not P^-1 C^T here: controlled sources drive the diodes' rows): use the theta scheme",
                   scheme, why);
 }
 
 int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "LCS: output pointer is NULL");
   *out = NULL;
-  if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: description is NULL");
+  if (!d) return fail_fmt(errmsg, CUP_ERR_ARG, "LCS: description is NULL");
   if (d->n < 1 || d->m < 0 || d->p < 0)
-    return cup_fail(errmsg, CUP_ERR_DIM, "LCS: n = %d, m = %d, p = %d; need n >= 1, m >= 0, p >= 0",
+    return fail_fmt(errmsg, CUP_ERR_DIM, "LCS: n = %d, m = %d, p = %d; need n >= 1, m >= 0, p >= 0",
                     d->n, d->m, d->p);
-  if (!(d->pb_tol >= 0)) return cup_fail(errmsg, CUP_ERR_ARG, "LCS: pb_tol = %g must be >= 0", d->pb_tol);
+  if (!(d->pb_tol >= 0)) return fail_fmt(errmsg, CUP_ERR_ARG, "LCS: pb_tol = %g must be >= 0", d->pb_tol);
   cup_lcs *L = calloc(1, sizeof *L);
-  if (!L) return cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  if (!L) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   L->n = d->n; L->m = d->m; L->p = d->p;
   int st = CUP_OK;
   if (d->C.nrow != d->m || d->C.ncol != d->n)
-    st = cup_fail(errmsg, CUP_ERR_DIM, "C is %d x %d, expected m x n = %d x %d", d->C.nrow, d->C.ncol, d->m, d->n);
+    st = fail_fmt(errmsg, CUP_ERR_DIM, "C is %d x %d, expected m x n = %d x %d", d->C.nrow, d->C.ncol, d->m, d->n);
   if (!st) st = copy_opt(&L->A, &L->has_A, &d->A, "A", d->n, d->n, errmsg);
   if (!st) st = copy_opt(&L->E, &L->has_E, &d->E, "E", d->n, d->p, errmsg);
   if (!st) st = copy_opt(&L->G, &L->has_G, &d->G, "G", d->m, d->p, errmsg);
   if (!st && (L->has_E || L->has_G) && d->p == 0)
-    st = cup_fail(errmsg, CUP_ERR_DIM, "E or G given but the input dimension p is 0");
+    st = fail_fmt(errmsg, CUP_ERR_DIM, "E or G given but the input dimension p is 0");
   if (!st) {
     L->F = calloc((size_t)d->m + 1, sizeof(double));
-    if (!L->F) st = cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+    if (!L->F) st = fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
     for (int i = 0; !st && d->F && i < d->m; i++) {
-      if (!isfinite(d->F[i])) st = cup_fail(errmsg, CUP_ERR_NONFINITE, "F[%d] is %g", i, d->F[i]);
+      if (!isfinite(d->F[i])) st = fail_fmt(errmsg, CUP_ERR_NONFINITE, "F[%d] is %g", i, d->F[i]);
       L->F[i] = d->F[i];
     }
   }
@@ -202,21 +202,21 @@ int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
   L->keep_B = !st && d->keep_B && d->m > 0;
   if (L->keep_B && !L->has_D) {              /* D = 0, B as given: stored as a zero D */
     L->has_D = 1;
-    if (!present(&d->B)) st = cup_fail(errmsg, CUP_ERR_ARG, "keep_B needs B");
-    if (!st) st = cup_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
-    if (!st) st = cup_sparse_alloc(&L->D, d->m, d->m, 0) ? cup_fail(errmsg, CUP_ERR_NOMEM, "LCS: out of memory")
+    if (!present(&d->B)) st = fail_fmt(errmsg, CUP_ERR_ARG, "keep_B needs B");
+    if (!st) st = la_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
+    if (!st) st = la_sparse_alloc(&L->D, d->m, d->m, 0) ? fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory")
                                                           : CUP_OK;
   } else if (L->has_D) {                     /* not a sweeping process: keep B and D as given */
-    if (!present(&d->B)) st = cup_fail(errmsg, CUP_ERR_ARG, "D != 0 needs B (it is not P^-1 C^T then)");
-    if (!st) st = cup_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
-    if (!st) st = cup_sparse_copy(&L->D, &d->D, "D", d->m, d->m, errmsg);
+    if (!present(&d->B)) st = fail_fmt(errmsg, CUP_ERR_ARG, "D != 0 needs B (it is not P^-1 C^T then)");
+    if (!st) st = la_sparse_copy(&L->B, &d->B, "B", d->n, d->m, errmsg);
+    if (!st) st = la_sparse_copy(&L->D, &d->D, "D", d->m, d->m, errmsg);
     if (!st && !L->keep_B) st = check_D(&L->D, errmsg);   /* keep_B: an active network, see lcs.h */
   } else if (!st && present(&d->B)) {
-    cup_sparse B;
-    st = cup_sparse_copy(&B, &d->B, "B", d->n, d->m, errmsg);
+    la_sparse B;
+    st = la_sparse_copy(&B, &d->B, "B", d->n, d->m, errmsg);
     if (!st) {
       st = check_pb(L->K, &B, d->pb_tol > 0 ? d->pb_tol : 1e-12, errmsg);
-      cup_sparse_free(&B);
+      la_sparse_free(&B);
     }
   }
   if (st) { cup_lcs_free(&L); return st; }
@@ -230,13 +230,13 @@ int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
 void cup_lcs_free(cup_lcs **Lp) {
   if (!Lp || !*Lp) return;
   cup_lcs *L = *Lp;
-  cup_sparse_free(&L->A);
-  cup_sparse_free(&L->E);
-  cup_sparse_free(&L->G);
+  la_sparse_free(&L->A);
+  la_sparse_free(&L->E);
+  la_sparse_free(&L->G);
   free(L->F);
   cup_polyset_free(&L->K);
-  cup_sparse_free(&L->B);
-  cup_sparse_free(&L->D);
+  la_sparse_free(&L->B);
+  la_sparse_free(&L->D);
   for (int i = 0; L->row_names && i < L->m; i++) free(L->row_names[i]);
   free(L->row_names);
   free(L);
@@ -263,18 +263,18 @@ static cup_csc dense_view(int r, int c, const double *a, int *cp, int *ri, doubl
 }
 
 int cup_lcs_circuit(cup_lcs **out, const cup_circuit *c, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "circuit: output pointer is NULL");
   *out = NULL;
-  if (!c) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: parameters are NULL");
+  if (!c) return fail_fmt(errmsg, CUP_ERR_ARG, "circuit: parameters are NULL");
   const double v[6] = {c->R1, c->R2, c->R3, c->L2, c->L3, c->C4};
   const char *names[6] = {"R1", "R2", "R3", "L2", "L3", "C4"};
   for (int k = 0; k < 6; k++) {
-    if (!isfinite(v[k])) return cup_fail(errmsg, CUP_ERR_NONFINITE, "circuit: %s = %g", names[k], v[k]);
-    if (k < 3 && v[k] < 0) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: %s = %g must be >= 0", names[k], v[k]);
-    if (k >= 3 && !(v[k] > 0)) return cup_fail(errmsg, CUP_ERR_ARG, "circuit: %s = %g must be > 0", names[k], v[k]);
+    if (!isfinite(v[k])) return fail_fmt(errmsg, CUP_ERR_NONFINITE, "circuit: %s = %g", names[k], v[k]);
+    if (k < 3 && v[k] < 0) return fail_fmt(errmsg, CUP_ERR_ARG, "circuit: %s = %g must be >= 0", names[k], v[k]);
+    if (k >= 3 && !(v[k] > 0)) return fail_fmt(errmsg, CUP_ERR_ARG, "circuit: %s = %g must be > 0", names[k], v[k]);
   }
   if (!isfinite(c->G[0]) || !isfinite(c->G[1]))
-    return cup_fail(errmsg, CUP_ERR_NONFINITE, "circuit: G = (%g, %g)", c->G[0], c->G[1]);
+    return fail_fmt(errmsg, CUP_ERR_NONFINITE, "circuit: G = (%g, %g)", c->G[0], c->G[1]);
   double R1 = c->R1, R2 = c->R2, R3 = c->R3, L2 = c->L2, L3 = c->L3, C4 = c->C4;
   /* the paper's matrices (Sec. 7, example) */
   const double A[9] = {0, 1, 0,

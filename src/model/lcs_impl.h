@@ -6,23 +6,23 @@
 #include "util/linalg.h"
 
 /* "rows D1, D3" (or "rows 0, 2" without names) for messages, into buf. */
-void cup_lcs_rows_text(const struct cup_lcs *L, const int *rows, int k, char *buf, unsigned long size);
+void lcs_rows_text(const struct cup_lcs *L, const int *rows, int k, char *buf, unsigned long size);
 /* CUP_ERR_UNSUPPORTED for the scheme named, which needs P B = C^T, on an
  * LCS that keeps its B (keep_B: controlled sources drive the diodes' rows);
  * why: what of the scheme needs it. The schemes' one wording of it. */
-int cup_lcs_needs_reciprocal_(const char *scheme, const char *why, char *errmsg);
+int lcs_needs_reciprocal(const char *scheme, const char *why, char *errmsg);
 
 struct cup_lcs {
   int n, m, p;
   int has_A, has_E, has_G;
-  cup_sparse A, E, G;   /* present when has_*: n x n, n x p, m x p */
+  la_sparse A, E, G;   /* present when has_*: n x n, n x p, m x p */
   double *F;            /* m */
   cup_polyset *K;       /* {x : C x + F >= 0}, metric P */
   int fixed;            /* G absent or zero */
   /* D != 0: the LCS is not a sweeping process; the theta and adaptive schemes run it */
   int has_D;            /* D given with a nonzero entry, or keep_B: B and D as given */
   int keep_B;           /* B kept as given (P B != C^T allowed): the reason when D = 0 */
-  cup_sparse B, D;      /* has_D: n x m and m x m as given (D may be all zero) */
+  la_sparse B, D;      /* has_D: n x m and m x m as given (D may be all zero) */
   char **row_names;     /* m names for messages, or NULL */
 };
 

@@ -20,17 +20,17 @@
 
 typedef struct parts {
   nl_coo A, B, C, D, E, G;
-  cup_sparse sA, sB, sC, sD, sE, sG;
+  la_sparse sA, sB, sC, sD, sE, sG;
 } parts;
 
 static void parts_free(parts *q) {
   nl_coo_free(&q->A); nl_coo_free(&q->B); nl_coo_free(&q->C);
   nl_coo_free(&q->D); nl_coo_free(&q->E); nl_coo_free(&q->G);
-  cup_sparse_free(&q->sA); cup_sparse_free(&q->sB); cup_sparse_free(&q->sC);
-  cup_sparse_free(&q->sD); cup_sparse_free(&q->sE); cup_sparse_free(&q->sG);
+  la_sparse_free(&q->sA); la_sparse_free(&q->sB); la_sparse_free(&q->sC);
+  la_sparse_free(&q->sD); la_sparse_free(&q->sE); la_sparse_free(&q->sG);
 }
 
-static cup_csc view(const cup_sparse *s) {
+static cup_csc view(const la_sparse *s) {
   return s->nnz || s->ncol ? (cup_csc){s->nrow, s->ncol, s->p, s->i, s->x} : (cup_csc){0, 0, NULL, NULL, NULL};
 }
 
@@ -66,7 +66,7 @@ static int column_used(const parts *q, int j) {
 
 /* 1 if row i of C or D (or G, with_g) has an entry. */
 static int row_used(const parts *q, int i, int with_g) {
-  const cup_sparse *M[3] = {&q->sC, &q->sD, &q->sG};
+  const la_sparse *M[3] = {&q->sC, &q->sD, &q->sG};
   for (int t = 0; t < 2 + with_g; t++)
     for (int k = 0; M[t]->p && k < M[t]->p[M[t]->ncol]; k++)
       if (M[t]->i[k] == i && M[t]->x[k] != 0) return 1;
@@ -139,7 +139,7 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     return nl_fail(c, -1, errmsg, CUP_ERR_UNSUPPORTED, "the circuit has no inductor or capacitor: there is no "
                    "state to integrate (resistive circuits are not supported)");
   parts q = {0};
-  cup_sparse Pc = {0};
+  la_sparse Pc = {0};
   double *pdiag = malloc(sizeof(double) * (size_t)nl->n);
   if (!pdiag) return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
   int st = nl_coupling_metric(nl, c, &Pc, errmsg);
@@ -155,11 +155,11 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   if (!st) st = nl_coo_to_csc(&q.D, m, m, &q.sD);
   if (!st) st = nl_coo_to_csc(&q.E, n, p, &q.sE);
   if (!st) st = nl_coo_to_csc(&q.G, m, p, &q.sG);
-  if (st) { free(pdiag); cup_sparse_free(&Pc); parts_free(&q); return nl_fail(c, -1, errmsg, st, "out of memory"); }
+  if (st) { free(pdiag); la_sparse_free(&Pc); parts_free(&q); return nl_fail(c, -1, errmsg, st, "out of memory"); }
   st = decoupled_rows(nl, c, &q, errmsg);
   if (!st) st = idle_columns(nl, c, &q, errmsg);
   if (!st && c->derived) {                        /* a switch configuration: netlist_switch.c reduces it */
-    const cup_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
+    const la_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
     st = nl_raw_store(nl, six, pdiag, Pc.p ? &Pc : NULL);
     if (st) st = nl_fail(c, -1, errmsg, st, "out of memory");
   } else if (!st) {
@@ -182,14 +182,14 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     if (st) st = nl_fail(c, -1, errmsg, st, "%s", lib);
   }
   free(pdiag);
-  cup_sparse_free(&Pc);
+  la_sparse_free(&Pc);
   parts_free(&q);
   return st;
 }
 
 /* ---- a switch configuration's parts, dense (netlist_switch.c reduces them) ---------- */
 
-static double *dense(const cup_sparse *s, int nrow, int ncol) {
+static double *dense(const la_sparse *s, int nrow, int ncol) {
   double *a = calloc((size_t)nrow * (size_t)ncol + 1, sizeof(double));
   if (!a) return NULL;
   for (int j = 0; s->p && j < s->ncol; j++)
@@ -197,7 +197,7 @@ static double *dense(const cup_sparse *s, int nrow, int ncol) {
   return a;
 }
 
-int nl_raw_store(cup_netlist *nl, const cup_sparse *const six[6], const double *pdiag, const cup_sparse *Pc) {
+int nl_raw_store(cup_netlist *nl, const la_sparse *const six[6], const double *pdiag, const la_sparse *Pc) {
   int n = nl->n, m = nl->m, p = nl->p;
   nl_raw *R = calloc(1, sizeof *R);
   if (!R) return CUP_ERR_NOMEM;
@@ -352,7 +352,7 @@ static int name_variables(cup_netlist *nl, const nl_circuit *c) {
   return CUP_OK;
 }
 
-int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) {
+int netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) {
   cup_netlist *nl = calloc(1, sizeof *nl);
   int st = nl ? copy_circuit(nl, c) : CUP_ERR_NOMEM;
   if (!st) st = nl_topology(nl, c, errmsg);
@@ -372,7 +372,7 @@ int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) 
   char msg[160];
   for (int k = 0; k < c->nprobe && !st; k++)
     if (nl_probe_check(nl, c->probe[k].text, msg, sizeof msg))
-      st = cup_fail(errmsg, CUP_ERR_PARSE, "%s:%d:%d: %s", c->file, c->probe[k].line, c->probe[k].col, msg);
+      st = fail_fmt(errmsg, CUP_ERR_PARSE, "%s:%d:%d: %s", c->file, c->probe[k].line, c->probe[k].col, msg);
   if (st) { cup_netlist_free(&nl); return st; }
   *out = nl;
   return CUP_OK;
@@ -419,13 +419,13 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->eport); free(nl->evar); free(nl->port);
   free(nl->parent); free(nl->pport); free(nl->depth); free(nl->snode); free(nl->psign);
   free(nl->ctl_elem); free(nl->zmap); free(nl->coupled); free(nl->prow);
-  cup_sparse_free(&nl->Pinv);
+  la_sparse_free(&nl->Pinv);
   if (nl->cm_started) {
     cholmod_free_factor(&nl->Lf, &nl->cm);
     cholmod_free_sparse(&nl->K, &nl->cm);
     cholmod_finish(&nl->cm);
   }
-  cup_sparse_free(&nl->H);
+  la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
   free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
   free(nl->ubuf); free(nl->dense);
@@ -447,15 +447,15 @@ void cup_netlist_free(cup_netlist **p) {
 
 int nl_input_origin(cup_netlist *nl, double t0, char *errmsg) {
   char lib[CUP_ERRMSG_LEN];
-  int st = t0 == nl->t0 ? CUP_OK : cup_input_origin(&nl->u, &nl->u_written, t0, lib);
-  if (st) return cup_fail(errmsg, st, "%s: the sources from t0 = %.17g: %s", nl->file, t0, lib);
+  int st = t0 == nl->t0 ? CUP_OK : input_origin(&nl->u, &nl->u_written, t0, lib);
+  if (st) return fail_fmt(errmsg, st, "%s: the sources from t0 = %.17g: %s", nl->file, t0, lib);
   nl->t0 = t0;
   return CUP_OK;
 }
 
 int cup_netlist_set_time_origin(cup_netlist *nl, double t0, char *errmsg) {
   if (!nl || !(t0 >= 0) || !isfinite(t0))
-    return cup_fail(errmsg, CUP_ERR_ARG, "time origin: no netlist, or t0 = %g not finite and >= 0", t0);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "time origin: no netlist, or t0 = %g not finite and >= 0", t0);
   return nl->hooks ? nl->hooks->origin(nl, t0, errmsg) : nl_input_origin(nl, t0, errmsg);
 }
 

@@ -139,11 +139,11 @@ static int substitute(cup_netlist *nl) {
       for (int q = 0; q < np && !st; q++)
         if (z[q] != 0) st = nl_coo_add(&t, i, q, h * z[q], fabs(h * z[q]));
     }
-  cup_sparse H = {0};
+  la_sparse H = {0};
   if (!st) st = nl_coo_to_csc(&t, np, np, &H);
   nl_coo_free(&t);
   if (st) return st;
-  cup_sparse_free(&nl->H);
+  la_sparse_free(&nl->H);
   nl->H = H;
   return CUP_OK;
 }
@@ -236,7 +236,7 @@ static int spd_inverse(double *Lm, int k, double *inv) {
   return 1;
 }
 
-int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, cup_sparse *P, char *errmsg) {
+int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, la_sparse *P, char *errmsg) {
   int n = nl->n, nL = nl->nL;
   if (!c->ncoup) return CUP_OK;
   int *uf = malloc(sizeof(int) * ((size_t)nL + 1)), *state_elem = malloc(sizeof(int) * ((size_t)nL + 1));
@@ -272,7 +272,7 @@ int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, cup_sparse *P, char
                                 c->elem[state_elem[idx[a]]].name);
       const nl_coupling *K = &c->coup[lastk[s]];
       const char *file = c->files && K->file < c->nfiles ? c->files[K->file] : c->file;
-      st = cup_fail(errmsg, CUP_ERR_PARSE, "%s:%d:%d: %s: the inductance matrix of %s is not positive definite "
+      st = fail_fmt(errmsg, CUP_ERR_PARSE, "%s:%d:%d: %s: the inductance matrix of %s is not positive definite "
                     "(their coupling coefficients are inconsistent: the energy 1/2 i^T L i can vanish or turn "
                     "negative); lower the coupling coefficients", file, K->line, K->col, K->name, names);
       break;

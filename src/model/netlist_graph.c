@@ -22,7 +22,7 @@ int nl_fail(const nl_circuit *c, int e, char *errmsg, int status, const char *fm
                  : snprintf(errmsg, cap, "%s: ", c->file);
   va_list ap;
   va_start(ap, fmt);
-  cup_vfail_at(errmsg, w, status, fmt, ap);
+  fail_vfmt_at(errmsg, w, status, fmt, ap);
   va_end(ap);
   return status;
 }

@@ -36,7 +36,7 @@ int nl_coo_add(nl_coo *t, int i, int j, double x, double mag) {
 
 void nl_coo_free(nl_coo *t) { free(t->i); free(t->j); free(t->x); free(t->mag); memset(t, 0, sizeof *t); }
 
-int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, cup_sparse *out) {
+int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
   int *cnt = calloc((size_t)ncol + 1, sizeof(int)), *order = malloc(sizeof(int) * ((size_t)t->n + 1));
   int *mark = malloc(sizeof(int) * ((size_t)nrow + 1));
   double *acc = malloc(sizeof(double) * ((size_t)nrow + 1)), *amag = malloc(sizeof(double) * ((size_t)nrow + 1));
@@ -48,7 +48,7 @@ int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, cup_sparse *out) {
     for (int k = 0; k < t->n; k++) order[cnt[t->j[k]]++] = k;   /* by column */
     for (int c = ncol; c > 0; c--) cnt[c] = cnt[c - 1];
     cnt[0] = 0;
-    st = cup_sparse_alloc(out, nrow, ncol, t->n);
+    st = la_sparse_alloc(out, nrow, ncol, t->n);
   }
   for (int r = 0; !st && r < nrow; r++) mark[r] = -1;
   int nz = 0;
@@ -198,7 +198,7 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   y.pp = malloc(sizeof(int) * (2 * (size_t)maxd + 2));
   y.pc = malloc(sizeof(double) * (2 * (size_t)maxd + 2));
   int st = y.pp && y.pc ? CUP_OK : CUP_ERR_NOMEM;
-  if (!st && cup_cholmod_start(&nl->cm) == CUP_OK) nl->cm_started = 1;
+  if (!st && la_cholmod_start(&nl->cm) == CUP_OK) nl->cm_started = 1;
   else if (!st) st = CUP_ERR_LINALG;
   for (int e = 0; e < c->nelem && !st; e++)
     if (c->elem[e].kind == NL_R && c->elem[e].a != c->elem[e].b) st = add_resistor(&y, &c->elem[e]);

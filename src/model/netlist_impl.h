@@ -93,7 +93,7 @@ struct cup_netlist {
   int *ctl_elem;      /* per controlled source: its element */
   double *zmap;       /* nctl x (nv + ni), row-major: each one's output as a combination
                          of the other ports' values (its own columns zero) */
-  cup_sparse Pinv;    /* n x n, the inverse of P on coupled inductors' blocks only (K) */
+  la_sparse Pinv;    /* n x n, the inverse of P on coupled inductors' blocks only (K) */
   int *coupled;       /* per state: 1 if in a coupled block (its P^-1 column is in Pinv) */
   signed char *psign; /* phi(node) = phi(parent) + psign * v(pport) */
   int ns;             /* supernodes other than ground's */
@@ -101,7 +101,7 @@ struct cup_netlist {
   int cm_started;
   cholmod_factor *Lf; /* Lap = L L^T (ns > 0) */
   cholmod_sparse *K;  /* ns x (nv + ni) */
-  cup_sparse H;       /* (nv + ni) x (nv + ni), CSC */
+  la_sparse H;       /* (nv + ni) x (nv + ni), CSC */
   /* signals: sparse rows over (x, u, zeta) */
   int nsig, capsig, signnz, capnnz;
   char **sig_name;
@@ -134,7 +134,7 @@ typedef struct nl_coo {
 int nl_coo_add(nl_coo *t, int i, int j, double x, double mag);
 /* CSC with duplicates summed; an entry at or below 256 eps times its
  * magnitude bound is dropped (it cancelled to rounding; mag 0: exact zeros). */
-int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, cup_sparse *out);
+int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out);
 void nl_coo_free(nl_coo *t);
 
 /* "FILE:LINE:COL: ELEM: message" for element e (-1: FILE: message). */
@@ -164,13 +164,13 @@ int nl_prow_current(cup_netlist *nl, int e, double *prow);
 int nl_controlled(cup_netlist *nl, const nl_circuit *c, char *errmsg);
 /* K: the inductance matrix's blocks, checked positive definite, into
  * P (sparse, when any K) and Pinv. */
-int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, cup_sparse *P, char *errmsg);
+int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, la_sparse *P, char *errmsg);
 
 /* 0 if text is a valid probe of this circuit, else a message into msg. */
 int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t size);
 
 /* The formulation of a parsed circuit (netlist.c); the reader calls it. */
-int cup_netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg);
+int netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg);
 
 /* ---- switches (netlist_switch.c, netlist_reduce.c) ---- */
 /* A circuit with switches: its configuration at t = 0 formulated as the
@@ -184,7 +184,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg);
 int nl_switch_nomem(const nl_circuit *c, char *errmsg);
 int nl_switch_reduce(cup_netlist *sub, const nl_circuit *c, const nl_circuit *d, double **Pi, char *errmsg);
 /* build_lcs for a configuration's circuit: the parts kept dense in nl->raw (netlist.c). */
-int nl_raw_store(cup_netlist *nl, const cup_sparse *const parts[6], const double *pdiag, const cup_sparse *Pc);
+int nl_raw_store(cup_netlist *nl, const la_sparse *const parts[6], const double *pdiag, const la_sparse *Pc);
 /* A row over (x, u, zeta) of signal kind 'v' (nodes a, b; b < 0: ground) or
  * 'i' (element a), into row (n + p + m). */
 int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row);

@@ -9,12 +9,12 @@
 
 int cup_netlist_element_nodes(const cup_netlist *nl, const char *element, const char **a, const char **b,
                               char *errmsg) {
-  if (!nl || !element || !a || !b) return cup_fail(errmsg, CUP_ERR_ARG, "element nodes: NULL argument");
+  if (!nl || !element || !a || !b) return fail_fmt(errmsg, CUP_ERR_ARG, "element nodes: NULL argument");
   for (int e = 0; e < nl->nelem; e++)
     if (!strcasecmp(nl->elem[e].name, element)) {
       *a = nl->node[nl->elem[e].a];
       *b = nl->node[nl->elem[e].b];
       return CUP_OK;
     }
-  return cup_fail(errmsg, CUP_ERR_ARG, "no element named '%.60s' in %s", element, nl->file);
+  return fail_fmt(errmsg, CUP_ERR_ARG, "no element named '%.60s' in %s", element, nl->file);
 }

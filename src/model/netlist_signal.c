@@ -170,7 +170,7 @@ static char *canonical(char kind, const char *a, const char *b) {
 static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
   const char *a = kind == 'i' ? nl->elem[x].name : nl->node[x], *b = y >= 0 ? nl->node[y] : NULL;
   char *name = canonical(kind, a, b);
-  if (!name) return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+  if (!name) return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   for (int k = 0; k < nl->nsig; k++)
     if (!strcmp(nl->sig_name[k], name)) { free(name); return k; }
   double *row = nl->dense, *prow = nl->prow;
@@ -180,17 +180,17 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
   if (!st && y >= 0) st = nl_prow_node(nl, y, -1, prow);
   if (!st) to_vars(nl, prow, row);
   if (!st) st = append(nl, name, row);
-  if (st) { free(name); return cup_fail(errmsg, st, "out of memory"); }
+  if (st) { free(name); return fail_fmt(errmsg, st, "out of memory"); }
   return nl->nsig - 1;
 }
 
 static int scratch(cup_netlist *nl, char *errmsg) {
   if (!nl->dense && !(nl->dense = calloc((size_t)nvar(nl) + 1, sizeof(double))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   if (!nl->prow && !(nl->prow = calloc((size_t)nports(nl) + 1, sizeof(double))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   if (!nl->ubuf && !(nl->ubuf = calloc((size_t)nl->p + 1, sizeof(double))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   return CUP_OK;
 }
 
@@ -226,7 +226,7 @@ int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t si
 }
 
 int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg) {
-  if (!nl || !signal) return cup_fail(errmsg, CUP_ERR_ARG, "netlist probe: NULL argument");
+  if (!nl || !signal) return fail_fmt(errmsg, CUP_ERR_ARG, "netlist probe: NULL argument");
   int st = scratch(nl, errmsg);
   if (st) return st;
   const char *t = signal;
@@ -236,25 +236,25 @@ int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg) {
   const char *a, *b;
   size_t la, lb;
   if (!split(signal, &kind, &a, &la, &b, &lb))
-    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': expected v(NODE), v(NODE1,NODE2), i(ELEMENT) or all",
+    return fail_fmt(errmsg, CUP_ERR_ARG, "probe '%.60s': expected v(NODE), v(NODE1,NODE2), i(ELEMENT) or all",
                     signal);
   int x = kind == 'i' ? find_elem(nl, a, la) : find_node(nl, a, la), y = b ? find_node(nl, b, lb) : -1;
   if (x < 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no %s named '%.*s' in %s", signal,
+    return fail_fmt(errmsg, CUP_ERR_ARG, "probe '%.60s': no %s named '%.*s' in %s", signal,
                     kind == 'i' ? "element" : "node", (int)(la < 60 ? la : 60), a, nl->file);
   if (b && y < 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no node named '%.*s' in %s", signal,
+    return fail_fmt(errmsg, CUP_ERR_ARG, "probe '%.60s': no node named '%.*s' in %s", signal,
                     (int)(lb < 60 ? lb : 60), b, nl->file);
   if (kind == 'i' && nl->nelem_user && x >= nl->nelem_user) x = -1;   /* a configuration's own constraint */
   if (x < 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "probe '%.60s': no element named '%.*s' in %s", signal,
+    return fail_fmt(errmsg, CUP_ERR_ARG, "probe '%.60s': no element named '%.*s' in %s", signal,
                     (int)(la < 60 ? la : 60), a, nl->file);
   int k = probe_one(nl, kind, x, y, errmsg);
   return k >= 0 && nl->hooks ? nl->hooks->probe(nl, k, errmsg) : k;
 }
 
 int cup_netlist_probe_default(cup_netlist *nl, int limit, char *errmsg) {
-  if (!nl) return cup_fail(errmsg, CUP_ERR_ARG, "netlist probe: NULL netlist");
+  if (!nl) return fail_fmt(errmsg, CUP_ERR_ARG, "netlist probe: NULL netlist");
   int st = scratch(nl, errmsg);
   for (int k = 0; k < nl->nprobe && !st; k++) {
     int r = cup_netlist_probe(nl, nl->probe_text[k], errmsg);
@@ -283,8 +283,8 @@ static const double *zeta_full(cup_netlist *nl, const double *x, const double *z
     int k = nl->zrow[r];
     if (k >= 0) { nl->zfull[r] = zeta ? zeta[k] : 0; continue; }
     const double *l = nl->Lam + (size_t)(-1 - k) * (size_t)nv;
-    double acc = cup_dot(l, x, n) + cup_dot(l + n, nl->ubuf, p);
-    if (zeta) acc += cup_dot(l + n + p, zeta, mr);
+    double acc = la_dot(l, x, n) + la_dot(l + n, nl->ubuf, p);
+    if (zeta) acc += la_dot(l + n + p, zeta, mr);
     nl->zfull[r] = acc;
   }
   return nl->zfull;

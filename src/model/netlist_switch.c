@@ -231,13 +231,13 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
       int k = sub->zrow[r];
       if (k >= 0) { S->zf[r] = zeta ? zeta[k] : 0; continue; }
       const double *l = sub->Lam + (size_t)(-1 - k) * (size_t)(n + p + sub->mr);
-      S->zf[r] = (x ? cup_dot(l, x, n) : 0) + cup_dot(l + n, S->ut, p) + (zeta ? cup_dot(l + n + p, zeta, sub->mr) : 0);
+      S->zf[r] = (x ? la_dot(l, x, n) : 0) + la_dot(l + n, S->ut, p) + (zeta ? la_dot(l + n + p, zeta, sub->mr) : 0);
     }
     z = S->zf;
   }
   for (int k = 0; k < S->nsw; k++) {
     const double *row = tp->ctl + (size_t)k * nv;
-    cv[k] = (x ? cup_dot(row, x, n) : 0) + cup_dot(row + n, S->ut, p) + (z ? cup_dot(row + n + p, z, m) : 0);
+    cv[k] = (x ? la_dot(row, x, n) : 0) + la_dot(row + n, S->ut, p) + (z ? la_dot(row + n + p, z, m) : 0);
   }
   return CUP_OK;
 }
@@ -384,7 +384,7 @@ static void op_jump(void *ctx, int topo, double *x) {
     for (int j = 0; j < n; j++) s += Pi[i + (size_t)j * n] * x[j];
     y[i] = s;
   }
-  cup_copy(x, y, n);
+  la_copy(x, y, n);
 }
 
 static int op_crossed(void *ctx, int topo, double t, const double *x) {
@@ -409,14 +409,14 @@ int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
 int cup_netlist_switch_count(const cup_netlist *nl) { return nl && nl->sw ? nl->sw->nsw : 0; }
 
 int cup_netlist_set_controller(cup_netlist *nl, double ts, cup_gate_fn fn, void *ctx, char *errmsg) {
-  if (!nl) return cup_fail(errmsg, CUP_ERR_ARG, "controller: NULL netlist");
-  if (!nl->sw) return cup_fail(errmsg, CUP_ERR_ARG, "controller: %s has no switch to gate", nl->file);
+  if (!nl) return fail_fmt(errmsg, CUP_ERR_ARG, "controller: NULL netlist");
+  if (!nl->sw) return fail_fmt(errmsg, CUP_ERR_ARG, "controller: %s has no switch to gate", nl->file);
   if (fn && !(ts > 0 && isfinite(ts)))
-    return cup_fail(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "controller: the sampling period %g must be finite and > 0", ts);
   nl_switched *S = nl->sw;
-  if (fn && S->t0 != 0) return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "controller: %s has a time origin", nl->file);
+  if (fn && S->t0 != 0) return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "controller: %s has a time origin", nl->file);
   if (fn && !S->gate && !(S->gate = calloc((size_t)S->nsw + 1, sizeof(int))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   S->gate_fn = fn;
   S->gate_ctx = ctx;
   S->gate_ts = ts;
@@ -472,7 +472,7 @@ static int check_controls(const nl_circuit *c, int e, char *errmsg) {
 static int sw_origin(cup_netlist *nl, double t0, char *errmsg) {
   nl_switched *S = nl->sw;
   if (S->gate_fn && t0 != 0)                       /* its instants k ts would move with the clock */
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "%s: a controller with a time origin t0 = %g", nl->file, t0);
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s: a controller with a time origin t0 = %g", nl->file, t0);
   for (int k = 0; k < S->ntopo; k++) {
     int st = nl_input_origin(S->topo[k].sub, t0, errmsg);
     if (st) return st;

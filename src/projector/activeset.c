@@ -65,7 +65,7 @@ static dense_fact *dense_factor(cup_projector *p, dense_ws *w, uint64_t mask) {
     f->k = k;
     for (int b = 0; b < k; b++)
       for (int a = 0; a < k; a++) f->l[a + b * k] = K->Md[f->idx[a] + (size_t)f->idx[b] * m];
-    f->rank = cup_dense_pchol(f->l, k, f->perm, 1e-13);
+    f->rank = la_dense_pchol(f->l, k, f->perm, 1e-13);
   }
   f->stamp = ++w->stamp;
   return f;
@@ -86,7 +86,7 @@ static void dense_solve(cup_projector *p, dense_ws *ws, uint64_t mask, const dou
   dense_fact *f = dense_factor(p, ws, mask);
   double *r = ws->dwork, *sol = r + m, *w = sol + m;
   for (int a = 0; a < f->k; a++) r[a] = rhs[f->idx[a]];
-  cup_dense_pchol_solve(f->l, f->k, f->rank, f->perm, r, sol, w);
+  la_dense_pchol_solve(f->l, f->k, f->rank, f->perm, r, sol, w);
   for (int a = 0; a < f->k; a++) lam[f->idx[a]] = sol[a];
 }
 
@@ -196,7 +196,7 @@ static int refine_dense(cup_projector *p, dense_ws *w, const double *x, const do
   if (!mask) return 0;
   double *rhs = w->fo.wm, *dl = w->fo.wm2;
   for (int step = 0; step < 3; step++) {
-    cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+    certify_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
     int small = 1, nonneg = 1;
     for (int i = 0; i < m; i++) {
       double target = tau ? tau[i] : 0;
@@ -248,13 +248,13 @@ static void inward_dense(cup_projector *p, void *ws) {
 static int finish(cup_projector *p, dense_ws *w, const double *x, cup_proj_info *info,
                   void (*inward)(cup_projector *, void *), int evaluated) {
   if (!evaluated) {
-    for (int i = 0; i < p->m; i++) p->lam[i] = cup_max(p->lam[i], 0);
-    cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+    for (int i = 0; i < p->m; i++) p->lam[i] = la_max(p->lam[i], 0);
+    certify_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
   }
   p->has_inward = 0;
   p->make_inward = inward;
   p->inward_ws = w;
-  int ok = cup_certify(p, x, p->lam, p->y, info);
+  int ok = certify_candidate(p, x, p->lam, p->y, info);
   p->make_inward = NULL;
   return ok;
 }
@@ -283,7 +283,7 @@ static int solve(cup_projector *p, void *ws, const double *x, cup_proj_info *inf
   if (st == 1 && finish(p, w, x, info, inward_dense, refine_dense(p, w, x, tau))) return CUP_OK;
   for (int i = 0; i < m; i++) p->lam[i] = 0;
   st = dual_activeset_dense(p, w, p->b, NULL, w->act, p->lam, tolA);
-  if (st < 0 && cup_farkas_test(p, w->dwork + 4 * (size_t)m, info)) return CUP_ERR_EMPTY_SET;
+  if (st < 0 && certify_farkas_test(p, w->dwork + 4 * (size_t)m, info)) return CUP_ERR_EMPTY_SET;
   if (st == 1) {
     if (finish(p, w, x, info, inward_dense, refine_dense(p, w, x, NULL))) return CUP_OK;
     /* The exact optimum, certified only to what rounding allows (a set
@@ -294,7 +294,7 @@ static int solve(cup_projector *p, void *ws, const double *x, cup_proj_info *inf
    * (which detect emptiness) with active-set restarts from FISTA's support. */
   for (int burst = 32; p->iters < p->opt.max_iter; burst *= 2) {
     if (burst > 32) memcpy(p->lam, w->lam_fista, sizeof(double) * (size_t)m);
-    int fst = cup_proj_firstorder(p, &w->fo, x, 1, burst, info);
+    int fst = proj_firstorder(p, &w->fo, x, 1, burst, info);
     if (fst != CUP_WARN_NOT_CERTIFIED) { info->method = CUP_PROJ_FISTA; return fst; }
     memcpy(w->lam_fista, p->lam, sizeof(double) * (size_t)m);
     memcpy(w->fo.wm4, p->lam, sizeof(double) * (size_t)m);   /* keep FISTA's answer */

@@ -13,14 +13,14 @@
 
 /* ---- linear algebra on the projector's workspace ------------------------------ */
 
-void cup_metric_solve(cup_projector *p, double *v) {
+void certify_metric_solve(cup_projector *p, double *v) {
   const cup_polyset *K = p->K;
-  if (K->pkind == CUP_METRIC_SPARSE) cup_simplicial_solve(K->LP, v, p->wn2);
-  else cup_metric_solve_diag(K, v);
+  if (K->pkind == CUP_METRIC_SPARSE) la_simplicial_solve(K->LP, v, p->wn2);
+  else polyset_metric_solve_diag(K, v);
 }
 
-void cup_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
-                     double *y, double *s, double *gam) {
+void certify_eval_primal(cup_projector *p, const double *x, const double *g, const double *lam,
+                         double *y, double *s, double *gam) {
   const cup_polyset *K = p->K;
   int n = p->n;
   if (K->dense) {
@@ -32,20 +32,20 @@ void cup_eval_primal(cup_projector *p, const double *x, const double *g, const d
       for (int j = 0; j < n; j++) p->u[j] += bt[j] * li;
     }
   } else if (K->pkind == CUP_METRIC_DIAGONAL) {   /* one pass: u = P^-1 C^T lam, y = x + u */
-    cup_sparse_gatxy(&K->C, lam, p->u);
+    la_sparse_gatxy(&K->C, lam, p->u);
     const double *di = K->pdinv;
     for (int j = 0; j < n; j++) {
       p->u[j] *= di[j];
       y[j] = x[j] + p->u[j];
     }
-    cup_slack(K, g, y, s, gam);
+    polyset_slack(K, g, y, s, gam);
     return;
   } else {
-    cup_sparse_gatxy(&K->C, lam, p->u);     /* C^T lam by column gathers */
-    cup_metric_solve(p, p->u);
+    la_sparse_gatxy(&K->C, lam, p->u);     /* C^T lam by column gathers */
+    certify_metric_solve(p, p->u);
   }
   for (int j = 0; j < n; j++) y[j] = x[j] + p->u[j];
-  cup_slack(K, g, y, s, gam);
+  polyset_slack(K, g, y, s, gam);
 }
 
 /* ---- certificates ------------------------------------------------------------- */
@@ -53,7 +53,7 @@ void cup_eval_primal(cup_projector *p, const double *x, const double *g, const d
 /* Check a trial point: slack and rounding bound into sv/gamv; 1 if certainly
  * feasible. */
 static int verify_feasible(cup_projector *p, const double *w) {
-  return cup_slack(p->K, p->g, w, p->sv, p->gamv) >= 0;
+  return polyset_slack(p->K, p->g, w, p->sv, p->gamv) >= 0;
 }
 
 /* Is a stored anchor (user point or last feasible point) valid for the
@@ -61,7 +61,7 @@ static int verify_feasible(cup_projector *p, const double *w) {
 static int anchor_valid(cup_projector *p, const double *w, double *sw, int *state) {
   if (*state == -1) {
     double *gw = p->gamv;
-    *state = cup_slack(p->K, p->g, w, sw, gw) >= 0 ? 1 : 0;
+    *state = polyset_slack(p->K, p->g, w, sw, gw) >= 0 ? 1 : 0;
   }
   return *state == 1;
 }
@@ -114,8 +114,8 @@ static double push_along_direction(cup_projector *p, const double *z) {
 static void keep_candidate(cup_projector *p, double dist, double *best) {
   if (dist < *best) {
     *best = dist;
-    cup_copy(p->v, p->wn, p->n);
-    cup_copy(p->s_v, p->sv, p->m);
+    la_copy(p->v, p->wn, p->n);
+    la_copy(p->s_v, p->sv, p->m);
     p->has_v = 1;
   }
 }
@@ -131,7 +131,7 @@ static double positive_part(const cup_projector *p, const double *lam, double e0
                             double *eps_z, double *dq) {
   double e = e0, q = 0, clip = 0;
   for (int i = 0; i < p->m; i++) {
-    double lp = cup_max(lam[i], 0);
+    double lp = la_max(lam[i], 0);
     e += 2 * lp * (p->s[i] + p->gam[i]);
     q -= 2 * lp * p->b[i];
     clip += (lp - lam[i]) * p->K->rownorm[i];
@@ -141,28 +141,28 @@ static double positive_part(const cup_projector *p, const double *lam, double e0
   return clip * (1 + 64 * U * p->K->solve_amp + 2 * p->m * U);
 }
 
-int cup_certify(cup_projector *p, const double *x, const double *lam,
-                const double *z, cup_proj_info *info) {
+int certify_candidate(cup_projector *p, const double *x, const double *lam,
+                      const double *z, cup_proj_info *info) {
   const cup_polyset *K = p->K;
   int n = p->n, m = p->m;
   /* z = fl(x + u): the exact y(lam) = x + P^-1 C^T lam differs from z by e,
    * bounded elementwise by a few ulps of |x| + |u| (times P's condition for
    * a sparse metric, whose solve is backward stable). */
-  double un = z != x ? cup_step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
-  double ebound = cup_z_rounding(K, info->scale, un);
+  double un = z != x ? certify_step_norm(p, z, x) : 0;   /* ||z - x||_P = ||u||_P */
+  double ebound = certify_z_rounding(K, info->scale, un);
   double eps_z = ebound * ebound, viol = 0, worst = INFINITY, dq = 0, lmin = 0;
   for (int i = 0; i < m; i++) {
     eps_z += 2 * lam[i] * (p->s[i] + p->gam[i]);
-    viol = cup_max(viol, -p->s[i]);
+    viol = la_max(viol, -p->s[i]);
     double sl = p->s[i] - p->gam[i];
     if (isnan(sl) || sl < worst) worst = sl;   /* a NaN row stays the minimum */
     dq -= 2 * lam[i] * p->b[i];
-    lmin = cup_min(lmin, lam[i]);
+    lmin = la_min(lmin, lam[i]);
   }
   double clip = lmin < 0 ? positive_part(p, lam, ebound * ebound, &eps_z, &dq) : 0;
   eps_z += clip * clip;
   info->violation = viol;
-  info->eps_cert = isnan(eps_z) ? NAN : cup_max(eps_z, 0);
+  info->eps_cert = isnan(eps_z) ? NAN : la_max(eps_z, 0);
   /* 2 q(lam+) = -||u(lam+)||_P^2 - 2 lam+^T b with ||u(lam+)||_P <= un + clip
    * (= ||u||_P for lam >= 0), reported as a lower bound on d^2. */
   info->dual_value = dq - (un + clip) * (un + clip);
@@ -173,7 +173,7 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
    * when that already exceeds the target, no anchor can help */
   double dlow = 0;
   for (int i = 0; i < m; i++)
-    if (p->s[i] < 0 && K->rownorm[i] > 0) dlow = cup_max(dlow, -p->s[i] / K->rownorm[i]);
+    if (p->s[i] < 0 && K->rownorm[i] > 0) dlow = la_max(dlow, -p->s[i] / K->rownorm[i]);
   if (worst >= 0) {
     eta = 0;
   } else if (dlow > info->eta_target) {
@@ -191,7 +191,7 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
       p->iters = it;
     }
     if (!(best <= info->eta_target) && p->has_inward &&
-        cup_slack(K, p->g, p->inward, p->s_inward, p->gamv) >= 0)
+        polyset_slack(K, p->g, p->inward, p->s_inward, p->gamv) >= 0)
       keep_candidate(p, segment_to(p, z, p->inward, p->s_inward), &best);
     if (!(best <= info->eta_target) && p->user_pt &&
         anchor_valid(p, p->user_pt, p->s_user, &p->user_ok))
@@ -207,21 +207,21 @@ int cup_certify(cup_projector *p, const double *x, const double *lam,
      * s(v) is at most s_v plus its rounding bound */
     verify_feasible(p, p->v);
     double ev = 0;
-    for (int i = 0; i < m; i++) ev += 2 * cup_max(lam[i], 0) * (p->sv[i] + p->gamv[i]);
+    for (int i = 0; i < m; i++) ev += 2 * la_max(lam[i], 0) * (p->sv[i] + p->gamv[i]);
     double dv = eta + ebound + clip;
     info->eps_cert = fmax(ev + dv * dv, 0);
     info->eta_cert = 0;
   }
   /* Remember a certainly feasible point as the next anchor. */
   if (worst >= 0 || p->has_v) {
-    cup_copy(p->anchor, worst >= 0 ? z : p->v, n);
-    cup_copy(p->s_anchor, worst >= 0 ? p->s : p->s_v, m);
+    la_copy(p->anchor, worst >= 0 ? z : p->v, n);
+    la_copy(p->s_anchor, worst >= 0 ? p->s : p->s_v, m);
     p->anchor_ok = 1;
   }
   return info->eps_cert <= info->eps_target && info->eta_cert <= info->eta_target;
 }
 
-int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
+int certify_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
   const cup_polyset *K = p->K;
   double sum = 0, gy = 0;
   for (int i = 0; i < p->m; i++) {
@@ -230,10 +230,10 @@ int cup_farkas_test(cup_projector *p, const double *dlam, cup_proj_info *info) {
     gy += p->g[i] * dlam[i];
   }
   if (!(sum > 0) || !(gy < 0)) return 0;
-  cup_sparse_gatxy(&K->C, dlam, p->wn);          /* r = C^T y */
+  la_sparse_gatxy(&K->C, dlam, p->wn);          /* r = C^T y */
   memcpy(p->u, p->wn, sizeof(double) * (size_t)p->n);
-  cup_metric_solve(p, p->u);                     /* ||r||_{P^-1}^2 = r^T P^-1 r */
-  double rr = sqrt(fmax(cup_dot(p->wn, p->u, p->n), 0));
+  certify_metric_solve(p, p->u);                     /* ||r||_{P^-1}^2 = r^T P^-1 r */
+  double rr = sqrt(fmax(la_dot(p->wn, p->u, p->n), 0));
   double radius = rr > 0 ? -gy / rr : INFINITY;
   if (!(radius > 1e6 * fmax(info->scale, DBL_MIN))) return 0;
   for (int i = 0; i < p->m; i++) p->farkas[i] = dlam[i] / sum;

@@ -8,24 +8,24 @@
 int proj_course(cup_projector *p, const proj_slot *s, const double *x, double *z, cup_proj_info *info) {
   const cup_polyset *K = p->K;
   int n = p->n, m = p->m;
-  cup_slack(K, p->g, x, p->b, p->gam);
+  polyset_slack(K, p->g, x, p->b, p->gam);
   double worst_raw = INFINITY;
-  for (int i = 0; i < m; i++) worst_raw = cup_min(worst_raw, p->b[i]);
+  for (int i = 0; i < m; i++) worst_raw = la_min(worst_raw, p->b[i]);
   if (worst_raw >= 0) {                    /* x in K: returned unchanged, exactly */
-    if (z != x) cup_copy(z, x, n);
-    cup_zero(p->lam, m);
+    if (z != x) la_copy(z, x, n);
+    la_zero(p->lam, m);
     info->skipped = 1;
     double worst = INFINITY;
-    for (int i = 0; i < m; i++) worst = cup_min(worst, p->b[i] - p->gam[i]);
+    for (int i = 0; i < m; i++) worst = la_min(worst, p->b[i] - p->gam[i]);
     if (worst >= 0) {                      /* certainly inside: nothing to certify */
       info->eta_cert = info->eps_cert = 0;
-      cup_copy(p->anchor, x, n);           /* and a good anchor for later */
-      cup_copy(p->s_anchor, p->b, m);
+      la_copy(p->anchor, x, n);           /* and a good anchor for later */
+      la_copy(p->s_anchor, p->b, m);
       p->anchor_ok = 1;
       return info->status = CUP_OK;
     }
-    cup_copy(p->s, p->b, m);
-    cup_certify(p, x, p->lam, x, info);
+    la_copy(p->s, p->b, m);
+    certify_candidate(p, x, p->lam, x, info);
     info->eps_cert = 0;                    /* z = x exactly: no excess at all */
     info->status = info->eta_cert <= info->eta_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
     return info->status;

@@ -26,7 +26,7 @@ static inline int proj_start(cup_projector *p, const double *x, const double *z,
   p->has_inward = 0;
   p->make_inward = NULL;
   p->iters = p->facts = p->updates = 0;
-  double S = cup_max(cup_polyset_norm(K, x), p->gscale);
+  double S = la_max(cup_polyset_norm(K, x), p->gscale);
   if (!isfinite(S)) return info->status = CUP_ERR_DIVERGED, 0;   /* ||x||_P overflowed */
   info->scale = S;
   info->eps_target = p->opt.eps_abs + (p->opt.eps_rel > 0 ? p->opt.eps_rel * S * S : 0);

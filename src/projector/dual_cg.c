@@ -4,7 +4,7 @@
 /* out = (M_FF + delta I) w on the free rows, M's rows c_i from C^T's columns. */
 static void apply(const cup_polyset *K, const unsigned char *act, double delta, const double *w,
                   double *out, double *u) {
-  const cup_sparse *Ct = &K->Ct;
+  const la_sparse *Ct = &K->Ct;
   const double *pdinv = K->pdinv;
   for (int i = 0; i < K->m; i++)
     if (act[i])
@@ -26,8 +26,8 @@ static void apply(const cup_polyset *K, const unsigned char *act, double delta, 
  * contraction. */
 #define CG_MAX_ITER 4000
 
-void cup_dual_cg(const cup_polyset *K, const unsigned char *act, double delta, double *v,
-                 double *const w[5], double *u) {
+void dual_cg(const cup_polyset *K, const unsigned char *act, double delta, double *v,
+             double *const w[5], double *u) {
   int m = K->m;
   const double *rn = K->rownorm;
   double *x = w[0], *r = w[1], *z = w[2], *p = w[3], *q = w[4];

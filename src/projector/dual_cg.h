@@ -8,7 +8,7 @@
 #include "set/polyset_impl.h"
 
 /* w: five m-vectors of scratch; u: n entries, zero in and out. */
-void cup_dual_cg(const cup_polyset *K, const unsigned char *act, double delta, double *v,
-                 double *const w[5], double *u);
+void dual_cg(const cup_polyset *K, const unsigned char *act, double delta, double *v,
+             double *const w[5], double *u);
 
 #endif

@@ -8,7 +8,7 @@
 #include "dual_factor.h"
 #include "dual_cg.h"
 
-struct cup_dfact {
+struct dfact {
   const cup_polyset *K;
   int kkt;                    /* 1: KKT form (sparse P); 0: M form (diagonal P) */
   int n, m, N;                /* N: order of the factored matrix (n + m or m) */
@@ -46,8 +46,8 @@ struct cup_dfact {
   double *cg_z, *cg_p, *cg_q, *cg_u;   /* m, m, m, n */
 };
 
-double cup_dfact_delta_min(const cup_dfact *f) { return f->delta_min; }
-int cup_dfact_by_cg(const cup_dfact *f) { return f->by_cg; }
+double dfact_delta_min(const dfact *f) { return f->delta_min; }
+int dfact_by_cg(const dfact *f) { return f->by_cg; }
 
 /* ---- permutation and upper storage (shared) ---------------------------------- */
 
@@ -55,7 +55,7 @@ int cup_dfact_by_cg(const cup_dfact *f) { return f->by_cg; }
  * names) into pperm/iperm; the analysis' workspace is let go at once. With
  * full, the entries of the factor of all of it in that order (the analysis
  * counts them anyway). */
-static int amd_order(cup_dfact *f, cholmod_sparse *A, long *full, char *errmsg) {
+static int amd_order(dfact *f, cholmod_sparse *A, long *full, char *errmsg) {
   int N = (int)A->nrow;
   f->cm.supernodal = CHOLMOD_SIMPLICIAL;
   f->cm.final_ll = 0;
@@ -67,7 +67,7 @@ static int amd_order(cup_dfact *f, cholmod_sparse *A, long *full, char *errmsg) 
   f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_AMD;
   cholmod_factor *L0 = cholmod_analyze(A, &f->cm);
-  if (!L0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  if (!L0) return fail_fmt(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
   f->pperm = malloc(sizeof(int) * (size_t)N);
   f->iperm = malloc(sizeof(int) * (size_t)N);
   if (f->pperm && f->iperm)
@@ -82,14 +82,14 @@ static int amd_order(cup_dfact *f, cholmod_sparse *A, long *full, char *errmsg) 
   }
   cholmod_free_factor(&L0, &f->cm);
   cholmod_free_work(&f->cm);
-  if (!f->pperm || !f->iperm) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  if (!f->pperm || !f->iperm) return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   return CUP_OK;
 }
 
 /* From a symmetric matrix given by its lower triangle (natural order; each
  * entry tagged), build the permuted upper triangle with a map from every
  * original entry to its position. */
-static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, const double *Ax,
+static int permuted_upper(dfact *f, int N, const int *Ap, const int *Ai, const double *Ax,
                           int *map, char *errmsg) {
   int nnz = Ap[N];
   cholmod_sparse A = {0};
@@ -103,7 +103,7 @@ static int permuted_upper(cup_dfact *f, int N, const int *Ap, const int *Ai, con
   int *order = malloc(sizeof(int) * ((size_t)nnz + 1)), *colof = malloc(sizeof(int) * ((size_t)nnz + 1));
   f->Ku = cholmod_allocate_sparse((size_t)N, (size_t)N, (size_t)nnz, 1, 1, 1, CHOLMOD_REAL, &f->cm);
   if (!rowcnt || !colcnt || !order || !colof || !f->Ku) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    st = fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
     goto done;
   }
   for (int c = 0; c < N; c++)
@@ -138,15 +138,15 @@ done:
 /* Symbolic analysis in the stored (natural) order, unpacked so that row
  * updates find room, and a first numeric factorization so that later ones
  * reuse L's memory. */
-static int symbolic(cup_dfact *f, char *errmsg) {
+static int symbolic(dfact *f, char *errmsg) {
   f->cm.nmethods = 1;
   f->cm.method[0].ordering = CHOLMOD_NATURAL;
   f->cm.postorder = 0;
   f->cm.final_pack = 0;
   f->L = cholmod_analyze(f->Ku, &f->cm);
-  if (!f->L) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
+  if (!f->L) return fail_fmt(errmsg, CUP_ERR_LINALG, "dual factor: CHOLMOD analysis failed (%d)", f->cm.status);
   cholmod_factorize(f->Ku, f->L, &f->cm);
-  if (f->cm.status < 0) return cup_fail(errmsg, CUP_ERR_LINALG, "dual factor: factorization failed (%d)", f->cm.status);
+  if (f->cm.status < 0) return fail_fmt(errmsg, CUP_ERR_LINALG, "dual factor: factorization failed (%d)", f->cm.status);
   f->has_fact = 1;
   f->fact_delta = -1;                      /* no delta yet: the first real factor is full */
   return CUP_OK;
@@ -154,7 +154,7 @@ static int symbolic(cup_dfact *f, char *errmsg) {
 
 /* ---- the KKT form (sparse P) ---------------------------------------------------- */
 
-static int kkt_create(cup_dfact *f, char *errmsg) {
+static int kkt_create(dfact *f, char *errmsg) {
   const cup_polyset *K = f->K;
   int n = f->n, m = f->m, N = f->N = n + m;
   int nnzP = 0;
@@ -168,7 +168,7 @@ static int kkt_create(cup_dfact *f, char *errmsg) {
   f->dpos = malloc(sizeof(int) * ((size_t)m + 1));
   int st = CUP_OK;
   if (!Ap || !Ai || !tag || !map || !Ax || !f->cpos || !f->dpos) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    st = fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
     goto done;
   }
   /* lower triangle: P's lower part and C_j's entries below in each column
@@ -194,8 +194,8 @@ done:
   return st;
 }
 
-static int kkt_factor(cup_dfact *f, const unsigned char *act, double delta) {
-  const cup_sparse *C = &f->K->C;
+static int kkt_factor(dfact *f, const unsigned char *act, double delta) {
+  const la_sparse *C = &f->K->C;
   double *Kx = f->Ku->x;
   for (int j = 0; j < C->ncol; j++)
     for (int k = C->p[j]; k < C->p[j + 1]; k++) Kx[f->cpos[k]] = act[C->i[k]] ? C->x[k] : 0;
@@ -205,14 +205,14 @@ static int kkt_factor(cup_dfact *f, const unsigned char *act, double delta) {
 }
 
 /* [P C_F^T; C_F -delta][u; w] = [0; v]  gives  w = -(M_FF + delta)^-1 v. */
-static void kkt_solve(cup_dfact *f, double *v) {
+static void kkt_solve(dfact *f, double *v) {
   int n = f->n, m = f->m, N = f->N;
   double *t = f->work, *scratch = f->work + N;
   for (int k = 0; k < N; k++) {
     int o = f->pperm[k];
     t[k] = o < n ? 0 : v[o - n];
   }
-  cup_simplicial_solve(f->L, t, scratch);
+  la_simplicial_solve(f->L, t, scratch);
   for (int k = 0; k < N; k++) {
     int o = f->pperm[k];
     if (o >= n) v[o - n] = -t[k];
@@ -226,7 +226,7 @@ static void kkt_solve(cup_dfact *f, double *v) {
  * every factor of a principal submatrix in this order has its pattern
  * inside the factor of M, so a row of the full factor, found from this tree,
  * bounds the row of any factor (what rowdel needs). */
-static void full_etree(cup_dfact *f) {
+static void full_etree(dfact *f) {
   const int *Mp = f->Mp->p, *Mi = f->Mp->i;
   int *anc = f->flag;
   for (int k = 0; k < f->m; k++) {
@@ -267,8 +267,8 @@ static void sort_rows(int *a, int len) {
  * column from the rows of C, M_ri = sum_j c_rj c_ij / p_j, so that no
  * copy of M is made on the way (CHOLMOD's product, sum and sort made four);
  * a first pass counts the entries (the pattern alone), the second sums. */
-static cholmod_sparse *build_m(cup_dfact *f) {
-  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+static cholmod_sparse *build_m(dfact *f) {
+  const la_sparse *C = &f->K->C, *Ct = &f->K->Ct;
   const double *pdinv = f->K->pdinv;
   int m = f->m;
   int *mark = malloc(sizeof(int) * ((size_t)m + 1)), *list = malloc(sizeof(int) * ((size_t)m + 1));
@@ -319,7 +319,7 @@ done:
 /* The column counts of the factor of M_FF, F = pact (permuted order; the
  * reach of each row, as restricted_ldl walks it) laid out packed in p;
  * returns the entries. */
-static long packed_layout(cup_dfact *f, const unsigned char *pact, int *p) {
+static long packed_layout(dfact *f, const unsigned char *pact, int *p) {
   int m = f->m;
   const int *Mp = f->Mp->p, *Mi = f->Mp->i;
   int *par = f->par, *flag = f->flag;
@@ -344,7 +344,7 @@ static long packed_layout(cup_dfact *f, const unsigned char *pact, int *p) {
 /* A layout holds the factor of any subset of the rows it was made for (the
  * filled graph of a principal submatrix, eliminated in the same order, is a
  * subgraph): a new delta, or rows leaving, keep it. */
-static int fits_layout(const cup_dfact *f) {
+static int fits_layout(const dfact *f) {
   if (!f->lay_ok) return 0;
   for (int k = 0; k < f->m; k++)
     if (f->pact[k] > f->lay_act[k]) return 0;
@@ -354,7 +354,7 @@ static int fits_layout(const cup_dfact *f) {
 /* A layout for every row of nonzero norm if that fits the room (then every
  * free set fits it); else for the free set and the last layout's rows (the
  * free set of a jam wanders among the same rows); else for the free set. */
-static int new_layout(cup_dfact *f) {
+static int new_layout(dfact *f) {
   f->lp_stale = 1;
   if (f->all_fit) {
     for (int k = 0; k < f->m; k++) f->lay_act[k] = f->K->rownorm[f->pperm[k]] > 0;
@@ -402,13 +402,13 @@ static void columns_in_order(cholmod_factor *L, int m) {
  * factor out in it (new_layout). What row updates need (CHOLMOD's
  * workspace, a column, the tree of all of M) is taken now, not in a
  * projection. */
-static int factor_room(cup_dfact *f, long room, char *errmsg) {
+static int factor_room(dfact *f, long room, char *errmsg) {
   size_t M1 = (size_t)f->m + 1;
   f->room = (size_t)(room > f->m ? room : f->m);
   f->L = cholmod_allocate_factor((size_t)f->m, &f->cm);
   if (!f->L || !cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, f->L, &f->cm) ||
       !cholmod_reallocate_factor(f->room, f->L, &f->cm))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for the factor");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for the factor");
   f->lp0 = malloc(sizeof(int) * M1);
   f->lay_act = calloc(M1, 1);
   f->cg_z = malloc(sizeof(double) * M1);
@@ -416,7 +416,7 @@ static int factor_room(cup_dfact *f, long room, char *errmsg) {
   f->cg_q = malloc(sizeof(double) * M1);
   f->cg_u = calloc((size_t)f->n + 1, sizeof(double));
   if (!f->lp0 || !f->lay_act || !f->cg_z || !f->cg_p || !f->cg_q || !f->cg_u)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   f->all_fit = f->lp_stale = 1;
   new_layout(f);
   /* row updates in every layout: rows inside it join and leave by updates,
@@ -429,17 +429,17 @@ static int factor_room(cup_dfact *f, long room, char *errmsg) {
    * and 2 m doubles (+5-6 % of the projector's memory at 10^4 and 10^5) */
   if (!f->updates) return CUP_OK;
   f->etree = malloc(sizeof(int) * M1);
-  if (!f->etree) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  if (!f->etree) return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   full_etree(f);
   /* rowadd/rowdel need 2m of CHOLMOD workspace */
   if (!cholmod_allocate_work((size_t)f->m, 2 * (size_t)f->m, 2 * (size_t)f->m, &f->cm))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory for CHOLMOD workspace");
   return CUP_OK;
 }
 
 /* room < 0: automatic (auto_room); else the room, in entries. */
-static int mform_create(cup_dfact *f, long room, char *errmsg) {
-  const cup_sparse *C = &f->K->C;
+static int mform_create(dfact *f, long room, char *errmsg) {
+  const la_sparse *C = &f->K->C;
   int m = f->m;
   f->N = m;
   /* AMD of M = C P^-1 C^T from C's pattern (CHOLMOD orders C C^T), and the
@@ -461,7 +461,7 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
   f->stack = malloc(sizeof(int) * M1);
   f->yrow = calloc(M1, sizeof(double));
   if (!f->Mp || !f->pact || !f->par || !f->flag || !f->stack || !f->yrow)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory forming C P^-1 C^T");
   long nnz_m = 2L * ((int *)f->Mp->p)[m] - m;
   /* a column CHOLMOD's row updates would move (none should: new_layout
    * leaves a spare entry in each) gets no more room than it needs */
@@ -480,7 +480,7 @@ static int mform_create(cup_dfact *f, long room, char *errmsg) {
  * in a layout for a set of rows that holds F (made first if the last one
  * does not), so that row updates and solves work on it as on CHOLMOD's own;
  * by_cg when no layout for F fits the room. */
-static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) {
+static int restricted_ldl(dfact *f, const unsigned char *act, double delta) {
   int m = f->m;
   const int *Kp = f->Mp->p, *Ki = f->Mp->i, *Kend = Kp + 1;
   const double *Kx = f->Mp->x;
@@ -551,7 +551,7 @@ static int restricted_ldl(cup_dfact *f, const unsigned char *act, double delta) 
 }
 
 /* A fresh mark for flag: negative, never a row index of restricted_ldl. */
-static int new_mark(cup_dfact *f) {
+static int new_mark(dfact *f) {
   if (++f->stamp == 0 || f->stamp > (unsigned)INT_MAX) {
     memset(f->flag, 0, sizeof(int) * (size_t)f->m);
     f->stamp = 1;
@@ -564,8 +564,8 @@ static int new_mark(cup_dfact *f) {
  * (CHOLMOD's solve for a joining row, and the update of the rows below it
  * along the path from its new column's first entry, which starts at a
  * neighbour or on the path of one). */
-static double update_cost(cup_dfact *f, int i) {
-  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+static double update_cost(dfact *f, int i) {
+  const la_sparse *C = &f->K->C, *Ct = &f->K->Ct;
   const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz;
   int mark = new_mark(f);
   double cost = 0;
@@ -584,7 +584,7 @@ static double update_cost(cup_dfact *f, int i) {
 /* The column (rowadd) or row pattern (rowdel) handed to CHOLMOD, held in
  * scratch that is free during row updates: the reach stack and the solves'
  * work. */
-static cholmod_sparse *update_vector(cup_dfact *f, int nz) {
+static cholmod_sparse *update_vector(dfact *f, int nz) {
   cholmod_sparse *R = &f->R;
   memset(R, 0, sizeof *R);
   R->nrow = R->nzmax = (size_t)f->m;
@@ -600,8 +600,8 @@ static cholmod_sparse *update_vector(cup_dfact *f, int nz) {
 /* Free row i (natural) joins: its column of M~ against the rows free now,
  * M(:, i) = C P^-1 c_i summed as build_m does (the packed form keeps only
  * M's upper part). */
-static int mform_rowadd(cup_dfact *f, int i, double delta) {
-  const cup_sparse *C = &f->K->C, *Ct = &f->K->Ct;
+static int mform_rowadd(dfact *f, int i, double delta) {
+  const la_sparse *C = &f->K->C, *Ct = &f->K->Ct;
   int k = f->iperm[i], mark = new_mark(f), nz = 0;
   int *Ri = f->stack, *flag = f->flag;
   double *Rx = f->work, *y = f->yrow;
@@ -628,7 +628,7 @@ static int mform_rowadd(cup_dfact *f, int i, double delta) {
 /* Free row i (natural) leaves. CHOLMOD finds row k of L by searching every
  * column before k unless told where it can be: the row of the full factor
  * (the reach of M(:, k) in the full tree) bounds it. */
-static int mform_rowdel(cup_dfact *f, int i) {
+static int mform_rowdel(dfact *f, int i) {
   int k = f->iperm[i];
   const int *Kp = f->Mp->p, *Ki = f->Mp->i;
   int *Ri = f->stack, *flag = f->flag, nz = 0, mark = new_mark(f);
@@ -646,7 +646,7 @@ static int mform_rowdel(cup_dfact *f, int i) {
 /* L D L^T t = t on the free rows only, in the permuted order (the other
  * rows are identity and come back unchanged); D folded into the backward
  * sweep. */
-static void mform_solve(cup_dfact *f, double *v) {
+static void mform_solve(dfact *f, double *v) {
   int m = f->m, nf = 0;
   const int *Lp = f->L->p, *Li = f->L->i, *Lnz = f->L->nz, *pp = f->pperm;
   const double *Lx = f->L->x;
@@ -677,7 +677,7 @@ static void mform_solve(cup_dfact *f, double *v) {
  * keeps CHOLMOD from moving a full one before it looks; CHOLMOD would
  * otherwise reallocate L. Rows leave first, so that each joining row sees
  * the final free set. */
-static int mform_update(cup_dfact *f, const unsigned char *act, double delta, long *changes) {
+static int mform_update(dfact *f, const unsigned char *act, double delta, long *changes) {
   int m = f->m;
   double budget = f->refactor_ops / 4, cost = 0;
   for (int i = 0; i < m && cost <= budget; i++) {
@@ -696,33 +696,33 @@ static int mform_update(cup_dfact *f, const unsigned char *act, double delta, lo
 
 /* ---- the interface ------------------------------------------------------------------- */
 
-int cup_dfact_create(cup_dfact **out, const cup_polyset *K, int updates, long room, char *errmsg) {
+int dfact_create(dfact **out, const cup_polyset *K, int updates, long room, char *errmsg) {
   *out = NULL;
-  cup_dfact *f = calloc(1, sizeof *f);
-  if (!f) return cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+  dfact *f = calloc(1, sizeof *f);
+  if (!f) return fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   f->K = K;
   f->n = K->n;
   f->m = K->m;
   f->kkt = K->pkind == CUP_METRIC_SPARSE;
   f->updates = updates && !f->kkt;
-  int st = cup_cholmod_start(&f->cm) ? cup_fail(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
+  int st = la_cholmod_start(&f->cm) ? fail_fmt(errmsg, CUP_ERR_LINALG, "CHOLMOD start failed") : CUP_OK;
   if (!st) st = f->kkt ? kkt_create(f, errmsg) : mform_create(f, room, errmsg);
   if (!st) {
     f->work = calloc(2 * (size_t)f->N, sizeof(double));   /* M form: rows outside F stay finite */
     f->fact_act = calloc((size_t)f->m + 1, 1);
-    if (!f->work || !f->fact_act) st = cup_fail(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
+    if (!f->work || !f->fact_act) st = fail_fmt(errmsg, CUP_ERR_NOMEM, "dual factor: out of memory");
   }
   double mmax = 0;
-  for (int i = 0; i < f->m; i++) mmax = cup_max(K->rownorm[i] * K->rownorm[i], mmax);
+  for (int i = 0; i < f->m; i++) mmax = la_max(K->rownorm[i] * K->rownorm[i], mmax);
   f->delta_min = 1e-10 * (mmax > 0 ? mmax : 1);
-  if (st) { cup_dfact_free(&f); return st; }
+  if (st) { dfact_free(&f); return st; }
   *out = f;
   return CUP_OK;
 }
 
-void cup_dfact_free(cup_dfact **fp) {
+void dfact_free(dfact **fp) {
   if (!fp || !*fp) return;
-  cup_dfact *f = *fp;
+  dfact *f = *fp;
   if (f->L) cholmod_free_factor(&f->L, &f->cm);
   if (f->Ku) cholmod_free_sparse(&f->Ku, &f->cm);
   if (f->Mp) cholmod_free_sparse(&f->Mp, &f->cm);
@@ -736,8 +736,8 @@ void cup_dfact_free(cup_dfact **fp) {
   *fp = NULL;
 }
 
-int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
-                     int *refactorizations, int *row_updates) {
+int dfact_factor(dfact *f, const unsigned char *act, double delta,
+                 int *refactorizations, int *row_updates) {
   int m = f->m;
   int same = f->has_fact && f->fact_delta == delta;
   if (same && memcmp(act, f->fact_act, (size_t)m) == 0) return CUP_OK;
@@ -760,7 +760,7 @@ int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
   return CUP_OK;
 }
 
-void cup_dfact_revalue(cup_dfact *f) {
+void dfact_revalue(dfact *f) {
   const cup_polyset *K = f->K;
   int m = f->m;
   const int *Mp = f->Mp->p, *Mi = f->Mp->i;
@@ -778,7 +778,7 @@ void cup_dfact_revalue(cup_dfact *f) {
       int r = Mi[e];
       double v = wv[f->pperm[r]];
       Mx[e] = v;
-      if (r == c) mmax = cup_max(v, mmax);   /* NaN passed over, as by fmax */
+      if (r == c) mmax = la_max(v, mmax);   /* NaN passed over, as by fmax */
     }
     for (int a = K->Ct.p[i]; a < K->Ct.p[i + 1]; a++) {
       int j = K->Ct.i[a];
@@ -789,11 +789,11 @@ void cup_dfact_revalue(cup_dfact *f) {
   f->has_fact = 0;                         /* the next factor is a full numeric one */
 }
 
-void cup_dfact_solve(cup_dfact *f, double *v) {
+void dfact_solve(dfact *f, double *v) {
   if (f->kkt) kkt_solve(f, v);
   else if (f->by_cg) {
     double *w[5] = {f->work, f->work + f->m, f->cg_z, f->cg_p, f->cg_q};
-    cup_dual_cg(f->K, f->fact_act, f->fact_delta, v, w, f->cg_u);
+    dual_cg(f->K, f->fact_act, f->fact_delta, v, w, f->cg_u);
   }
   else mform_solve(f, v);
 }

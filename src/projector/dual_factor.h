@@ -19,26 +19,26 @@
 
 #include "set/polyset_impl.h"
 
-typedef struct cup_dfact cup_dfact;
+typedef struct dfact dfact;
 
 /* room: -1 automatic; else the room of the M form's factor in entries,
  * solves by CG on free sets whose factor does not fit (tests use it to run
  * every path). */
-int cup_dfact_create(cup_dfact **f, const cup_polyset *K, int updates, long room, char *errmsg);
-void cup_dfact_free(cup_dfact **f);
+int dfact_create(dfact **f, const cup_polyset *K, int updates, long room, char *errmsg);
+void dfact_free(dfact **f);
 /* Make the factor that of M~(act, delta); counts refactorizations and row
  * updates. Returns CUP_OK or CUP_ERR_LINALG. */
-int cup_dfact_factor(cup_dfact *f, const unsigned char *act, double delta,
-                     int *refactorizations, int *row_updates);
+int dfact_factor(dfact *f, const unsigned char *act, double delta,
+                 int *refactorizations, int *row_updates);
 /* v <- M~^-1 v (m entries; rows outside F come back unchanged). */
-void cup_dfact_solve(cup_dfact *f, double *v);
+void dfact_solve(dfact *f, double *v);
 /* The values of K's C changed in place (same pattern; diagonal metric, the
- * M form): recompute M's values, so that the next cup_dfact_factor is a
+ * M form): recompute M's values, so that the next dfact_factor is a
  * numeric factorization on the same symbolic analysis. Allocation-free. */
-void cup_dfact_revalue(cup_dfact *f);
+void dfact_revalue(dfact *f);
 /* 1: the current factor is solved by CG (it outgrew the packed room). */
-int cup_dfact_by_cg(const cup_dfact *f);
+int dfact_by_cg(const dfact *f);
 /* The smallest regularization, relative to the scale of M. */
-double cup_dfact_delta_min(const cup_dfact *f);
+double dfact_delta_min(const dfact *f);
 
 #endif

@@ -25,18 +25,18 @@
 
 #define SWAP(a, b) do { double *t_ = (a); (a) = (b); (b) = t_; } while (0)
 
-int cup_proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int accelerated, int budget,
-                        cup_proj_info *info) {
+int proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int accelerated, int budget,
+                    cup_proj_info *info) {
   const cup_polyset *K = p->K;
   int m = p->m;
   size_t msz = sizeof(double) * (size_t)m;
   info->method = accelerated ? CUP_PROJ_FISTA : CUP_PROJ_PG;
   double L = p->opt.lipschitz > 0 ? p->opt.lipschitz : K->lip;
-  cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+  certify_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
   if (!(L > 0)) {                       /* no row constrains x: K is everything */
     memset(p->lam, 0, msz);
-    cup_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
-    return cup_certify(p, x, p->lam, p->y, info) ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+    certify_eval_primal(p, x, p->g, p->lam, p->y, p->s, p->gam);
+    return certify_candidate(p, x, p->lam, p->y, info) ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
   }
   double tau = 1.0 / L, t = 1;
   double *mu = w->wm2, *smu = w->wm3, *snap = w->wm4;
@@ -49,7 +49,7 @@ int cup_proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int acceler
     if (!isfinite(eq)) return CUP_ERR_DIVERGED;
     int last = it >= budget;
     if (last || (eq <= info->eps_target && it >= next_full)) {
-      if (cup_certify(p, x, p->lam, p->y, info)) return CUP_OK;
+      if (certify_candidate(p, x, p->lam, p->y, info)) return CUP_OK;
       if (last) return CUP_WARN_NOT_CERTIFIED;
       next_full = it + 1 + it / 8;      /* eta pushes cost O(nnz): back off */
     }
@@ -57,7 +57,7 @@ int cup_proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int acceler
     const double *gsrc = accelerated ? smu : p->s;
     double *lnew = w->wm;
     for (int i = 0; i < m; i++) lnew[i] = fmax(0, src[i] - tau * (gsrc[i] - AIM * p->gam[i]));
-    cup_eval_primal(p, x, p->g, lnew, p->y2, p->s2, p->gam2);
+    certify_eval_primal(p, x, p->g, lnew, p->y2, p->s2, p->gam2);
     p->iters++;
     if (accelerated) {
       double r = 0;
@@ -77,7 +77,7 @@ int cup_proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int acceler
     if ((it + 1) % 64 == 0) {           /* an empty K makes lambda grow along a Farkas ray */
       double *d = w->wm;                /* free now: holds the previous lambda */
       for (int i = 0; i < m; i++) d[i] = fmax(0, p->lam[i] - snap[i]);
-      if (cup_farkas_test(p, d, info)) return CUP_ERR_EMPTY_SET;
+      if (certify_farkas_test(p, d, info)) return CUP_ERR_EMPTY_SET;
       memcpy(snap, p->lam, msz);
     }
   }
@@ -102,7 +102,7 @@ static void lay_out(cup_projector *p, proj_carve *a, void **ws) {
 static int solve(cup_projector *p, void *ws, const double *x, int accelerated, cup_proj_info *info) {
   if (p->opt.warm_start) memcpy(p->lam, p->lam_warm, sizeof(double) * (size_t)p->m);
   else memset(p->lam, 0, sizeof(double) * (size_t)p->m);
-  return cup_proj_firstorder(p, ws, x, accelerated, p->opt.max_iter, info);
+  return proj_firstorder(p, ws, x, accelerated, p->opt.max_iter, info);
 }
 
 static int solve_pg(cup_projector *p, void *ws, const double *x, cup_proj_info *info) {

@@ -15,8 +15,8 @@ void proj_fo_lay_out(cup_projector *p, proj_carve *a, fo_ws *w);
 /* Starts from p->lam, b = s(x) in p->b; fills p->lam (>= 0) and p->y = z
  * with certificates in info; stops after `budget` iterations. Returns a
  * status. */
-int cup_proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int accelerated, int budget,
-                        cup_proj_info *info);
+int proj_firstorder(cup_projector *p, fo_ws *w, const double *x, int accelerated, int budget,
+                    cup_proj_info *info);
 
 extern const proj_method *const proj_pg;
 extern const proj_method *const proj_fista;

@@ -28,7 +28,7 @@ typedef struct pn_ws {
 /* The method's workspace: the dual factor and the iterates of the main and
  * the inward-anchor solves. */
 typedef struct newton_ws {
-  struct cup_dfact *df;
+  struct dfact *df;
   pn_ws pmain;          /* the projection (lam, y, s, gam shared with the projector) */
   pn_ws pin;            /* the inward anchor's solve */
   double *gin, *bin;    /* shifted offset and its slack at z, for the inward solve */
@@ -82,7 +82,7 @@ static void free_ws(cup_projector *p, void *ws) {
   (void)p;
   newton_ws *w = ws;
   if (!w) return;
-  cup_dfact_free(&w->df);
+  dfact_free(&w->df);
   pn_free(&w->pmain, 0);
   pn_free(&w->pin, 1);
   free(w->gin); free(w->bin); free(w->tau); free(w->rhs);
@@ -95,15 +95,15 @@ static void revalue(cup_projector *p, void *ws);
 static int create(cup_projector *p, void **ws, char *errmsg) {
   int n = p->n, m = p->m;
   newton_ws *w = calloc(1, sizeof *w);
-  if (!w) return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
+  if (!w) return fail_fmt(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
   *ws = w;
-  int st = cup_dfact_create(&w->df, p->K, p->opt.factor_updates, -1, errmsg);
+  int st = dfact_create(&w->df, p->K, p->opt.factor_updates, -1, errmsg);
   if (st) return st;
   size_t M = (size_t)m + 1;
   if (pn_alloc(&w->pmain, n, m, 0) || pn_alloc(&w->pin, n, m, 1) ||
       !(w->gin = malloc(sizeof(double) * M)) || !(w->bin = malloc(sizeof(double) * M)) ||
       !(w->tau = malloc(sizeof(double) * M)) || !(w->rhs = malloc(sizeof(double) * M)))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
   revalue(p, w);
   return CUP_OK;
 }
@@ -113,7 +113,7 @@ static int create(cup_projector *p, void **ws, char *errmsg) {
  * Sums that cancel to rounding count as zero. */
 static int stieltjes(const cup_polyset *K, double *acc) {
   if (!K->pdinv || K->pkind == CUP_METRIC_SPARSE) return 0;
-  const cup_sparse *C = &K->C, *Ct = &K->Ct;
+  const la_sparse *C = &K->C, *Ct = &K->Ct;
   int ok = 1;
   memset(acc, 0, sizeof(double) * (size_t)K->m);   /* the scratch holds a solve's leftovers */
   for (int i = 0; i < K->m; i++) {
@@ -147,7 +147,7 @@ static void revalue(cup_projector *p, void *ws) {
 
 static void revalue_values(cup_projector *p, void *ws) {
   newton_ws *w = ws;
-  if (w) cup_dfact_revalue(w->df);
+  if (w) dfact_revalue(w->df);
   revalue(p, ws);
 }
 
@@ -158,13 +158,13 @@ static int is_stieltjes(cup_projector *p, newton_ws *nw) {
 }
 
 static int factor(cup_projector *p, newton_ws *nw, const unsigned char *act, double delta) {
-  return cup_dfact_factor(nw->df, act, delta, &p->facts, &p->updates);
+  return dfact_factor(nw->df, act, delta, &p->facts, &p->updates);
 }
 
 /* f(lam) = lam'(s + b)/2 (since s = M lam + b), with y and s at lam. */
 static double dual_eval(cup_projector *p, const pn_problem *q, const double *lam,
                         double *y, double *s, double *gam) {
-  cup_eval_primal(p, q->xc, q->g, lam, y, s, gam);
+  certify_eval_primal(p, q->xc, q->g, lam, y, s, gam);
   double f = 0;
   for (int i = 0; i < p->m; i++) f += lam[i] * (s[i] + q->b[i]);
   return 0.5 * f;
@@ -191,7 +191,7 @@ static int moves(const pn_ws *w, int i) { return w->d[i] > 0 || (w->d[i] < 0 && 
 
 /* v = C^T d over the rows that move, into v (n entries). */
 static void line_setup(const cup_projector *p, pn_ws *w, line_model *L, double *v) {
-  const cup_sparse *Ct = &p->K->Ct;
+  const la_sparse *Ct = &p->K->Ct;
   const double *pdinv = p->K->pdinv;
   memset(v, 0, sizeof(double) * (size_t)p->n);
   L->sd = L->sd_held = 0;
@@ -214,7 +214,7 @@ static void line_setup(const cup_projector *p, pn_ws *w, line_model *L, double *
  * comes in zero and goes back zero. */
 static double line_value(const cup_projector *p, const pn_ws *w, const line_model *L, double f,
                          double alpha, const double *v, double *u, double *bound) {
-  const cup_sparse *Ct = &p->K->Ct;
+  const la_sparse *Ct = &p->K->Ct;
   const double *pdinv = p->K->pdinv;
   double lin = alpha * L->sd, held = alpha * L->sd_held, cross = 0, ee = 0;
   int reached = 0;
@@ -263,21 +263,21 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
   double *rhs = nw->rhs;
   /* the least regularized factor on F, and the iterate as the first guess
    * (refinement from zero with a large delta crawls on ill-conditioned M_FF) */
-  if (factor(p, nw, w->act, cup_dfact_delta_min(nw->df))) return 0;
+  if (factor(p, nw, w->act, dfact_delta_min(nw->df))) return 0;
   memcpy(w->keep, w->lam, sizeof(double) * (size_t)m);
   for (int i = 0; i < m; i++) if (!w->act[i]) w->lam[i] = 0;
   double prev = INFINITY;
   for (int step = 0; step < 30; step++) {
-    cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
+    certify_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
     double worst = 0;
     for (int i = 0; i < m; i++) {
       double target = q->tau ? q->tau[i] : 0;
       rhs[i] = w->act[i] ? target - w->s[i] : 0;
-      if (w->act[i]) worst = cup_max(worst, fabs(rhs[i]) / (w->gam[i] + DBL_MIN));
+      if (w->act[i]) worst = la_max(worst, fabs(rhs[i]) / (w->gam[i] + DBL_MIN));
     }
     if (!(worst > 1) || !(worst < 0.5 * prev)) break;  /* at rounding, or no longer gaining */
     prev = worst;
-    cup_dfact_solve(nw->df, rhs);
+    dfact_solve(nw->df, rhs);
     for (int i = 0; i < m; i++) if (w->act[i]) w->lam[i] += rhs[i];
   }
   /* Multipliers left slightly negative stay in z = y(lam): on a singular
@@ -286,7 +286,7 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
    * which changes no slack but turns small multipliers negative; clipping
    * them first would move z off those rows by |lam_i| ||c_i||, above eta's
    * target, and the corrections below would cycle on them. The
-   * certificate takes lam's positive part (cup_certify). */
+   * certificate takes lam's positive part (certify_candidate). */
   ((pn_problem *)q)->finishing = early ? 2 : 1;
   int ok = stop(p, q, info);
   ((pn_problem *)q)->finishing = 0;
@@ -294,11 +294,11 @@ static int pn_finish(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
   for (int i = 0; i < m; i++)
     if (w->lam[i] < 0) { w->lam[i] = 0; neg = 1; w->d[i] = -1; } else w->d[i] = 0;   /* d marks rows to drop */
   if (ok) return 1;
-  if (neg) cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
+  if (neg) certify_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
   memcpy(w->s2, w->s, sizeof(double) * (size_t)m);      /* the finished point's slack, */
   memcpy(w->gam2, w->gam, sizeof(double) * (size_t)m);  /* for pn_correct */
   memcpy(w->lam, w->keep, sizeof(double) * (size_t)m);
-  cup_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
+  certify_eval_primal(p, q->xc, q->g, w->lam, w->y, w->s, w->gam);
   return 0;
 }
 
@@ -318,7 +318,7 @@ static int pn_correct(cup_projector *p, const pn_problem *q, pn_stop_fn stop,
       else if (!w->act[i] && w->s2[i] < -w->gam2[i] && (!q->rows || q->rows[i]) &&
                p->K->rownorm[i] > 0) { w->act[i] = 1; changed = 1; }
     }
-    if (!changed || factor(p, q->nw, w->act, cup_dfact_delta_min(q->nw->df))) break;
+    if (!changed || factor(p, q->nw, w->act, dfact_delta_min(q->nw->df))) break;
   }
   return CUP_WARN_NOT_CERTIFIED;
 }
@@ -333,9 +333,9 @@ static double pn_free_set(cup_projector *p, const pn_problem *q, double tau, dou
   pn_ws *w = q->w;
   double resid = 0, lm = 0;
   for (int i = 0; i < m; i++) {
-    /* cup_max(v, 0) is fmax(0, v) (0 for a NaN v) without a libm call */
-    resid = cup_max(fabs(w->lam[i] - cup_max(w->lam[i] - tau * w->s[i], 0)), resid);
-    lm = cup_max(w->lam[i], lm);
+    /* la_max(v, 0) is fmax(0, v) (0 for a NaN v) without a libm call */
+    resid = la_max(fabs(w->lam[i] - la_max(w->lam[i] - tau * w->s[i], 0)), resid);
+    lm = la_max(w->lam[i], lm);
   }
   double epsk = fmin(resid, 1e-3 * lm);
   double *rhs = q->nw->rhs;
@@ -369,7 +369,7 @@ static int pn_line_search(cup_projector *p, const pn_problem *q, double f, doubl
       t = line_value(p, w, &L, f, a, w->y2, p->wn, &bound);
     } else {
       for (int i = 0; i < m; i++) {
-        w->lt[i] = cup_max(w->lam[i] + a * w->d[i], 0);
+        w->lt[i] = la_max(w->lam[i] + a * w->d[i], 0);
         if (!w->act[i]) bound += w->s[i] * (w->lam[i] - w->lt[i]);
       }
       t = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
@@ -381,7 +381,7 @@ static int pn_line_search(cup_projector *p, const pn_problem *q, double f, doubl
     if (!accepted) a *= 0.5;
   }
   if (accepted && cheap) {                /* the step, and y, s, gam there */
-    for (int i = 0; i < m; i++) w->lt[i] = cup_max(w->lam[i] + a * w->d[i], 0);
+    for (int i = 0; i < m; i++) w->lt[i] = la_max(w->lam[i] + a * w->d[i], 0);
     t = dual_eval(p, q, w->lt, w->y2, w->s2, w->gam2);
   }
   *alpha = a;
@@ -408,7 +408,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
   double tau = K->lip > 0 ? 1 / K->lip : 0;
   /* the main solve starts from a hundredth of the largest delta the last
    * projection needed (a jam stays degenerate from one step to the next) */
-  double dmin = cup_dfact_delta_min(nw->df), dmax = 1e-2 * K->lip;
+  double dmin = dfact_delta_min(nw->df), dmax = 1e-2 * K->lip;
   double delta = q->rows ? dmin : fmin(fmax(dmin, 1e-2 * nw->delta_peak), dmax), peak = delta;
   int settled = 0, early = 0;
   if (!q->rows) memcpy(w->snap, w->lam, msz);
@@ -418,8 +418,8 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
     if (stop(p, q, info)) return CUP_OK;
     if (it >= max_iter) return CUP_WARN_NOT_CERTIFIED;
     if (it % 8 == 7 && !q->rows) {          /* an empty K: lam grows along a Farkas ray */
-      for (int i = 0; i < m; i++) w->d[i] = cup_max(w->lam[i] - w->snap[i], 0);
-      if (cup_farkas_test(p, w->d, info)) return CUP_ERR_EMPTY_SET;
+      for (int i = 0; i < m; i++) w->d[i] = la_max(w->lam[i] - w->snap[i], 0);
+      if (certify_farkas_test(p, w->d, info)) return CUP_ERR_EMPTY_SET;
       memcpy(w->snap, w->lam, msz);
     }
     double lmax, resid = pn_free_set(p, q, tau, &lmax);
@@ -434,7 +434,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
       for (int i = 0; i < m; i++) rhs[i] = w->act[i] ? w->s[i] : 0;   /* pn_finish used rhs */
     }
     memcpy(w->prev, w->act, (size_t)m);
-    cup_dfact_solve(nw->df, rhs);           /* d_F = -(M_FF + delta I)^-1 s_F */
+    dfact_solve(nw->df, rhs);           /* d_F = -(M_FF + delta I)^-1 s_F */
     p->iters++;
     double slope = 0;
     for (int i = 0; i < m; i++) {
@@ -487,7 +487,7 @@ static int pn_solve(cup_projector *p, const pn_problem *q, pn_stop_fn stop, int 
 
 /* Rows near activity with slack >= 32 gam: project z onto
  * {C_A' w + g_A' - 32 gam_A' >= 0}; done when every such row is at least
- * half way there (verification happens in cup_certify). */
+ * half way there (verification happens in certify_candidate). */
 static int inward_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info) {
   (void)info;
   pn_ws *w = q->w;
@@ -509,7 +509,7 @@ static void inward_sparse(cup_projector *p, void *ws) {
     w->lam[i] = 0;
   }
   if (!any) return;
-  cup_slack(p->K, nw->gin, p->y, nw->bin, NULL);
+  polyset_slack(p->K, nw->gin, p->y, nw->bin, NULL);
   pn_problem q = {p->y, nw->gin, a2, nw->bin, NULL, w, 0, nw};
   cup_proj_info scratch = {0};
   if (pn_solve(p, &q, inward_stop, 50, &scratch) != CUP_OK) return;
@@ -539,14 +539,14 @@ static int main_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info)
   double eq = 0, worst = INFINITY;
   for (int i = 0; i < p->m; i++) {
     eq += 2 * w->lam[i] * (w->s[i] + w->gam[i]);
-    worst = cup_min(worst, w->s[i] - w->gam[i]);
+    worst = la_min(worst, w->s[i] - w->gam[i]);
   }
   if (!(eq <= info->eps_target) || !(q->finishing == 1 || worst >= 0)) return 0;
-  detach(p, w);                             /* cup_certify reads p->y, p->s, p->gam */
+  detach(p, w);                             /* certify_candidate reads p->y, p->s, p->gam */
   p->has_inward = 0;                        /* an anchor belongs to one candidate */
   p->make_inward = inward_sparse;
   p->inward_ws = q->nw;
-  int ok = cup_certify(p, q->xc, w->lam, w->y, info);
+  int ok = certify_candidate(p, q->xc, w->lam, w->y, info);
   p->make_inward = NULL;
   return ok;
 }
@@ -557,7 +557,7 @@ static int main_stop(cup_projector *p, const pn_problem *q, cup_proj_info *info)
  * formed). */
 static void sor_sweeps(cup_projector *p, double omega, double *lam, double *y) {
   const cup_polyset *K = p->K;
-  const cup_sparse *Ct = &K->Ct;
+  const la_sparse *Ct = &K->Ct;
   const double *pdinv = K->pdinv, *g = p->g;
   int m = p->m;
   for (int t = 0; t < 2 * m; t++) {
@@ -566,7 +566,7 @@ static void sor_sweeps(cup_projector *p, double omega, double *lam, double *y) {
     if (!(mii > 0)) continue;
     double si = g[i];
     for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) si += Ct->x[a] * y[Ct->i[a]];
-    double li = cup_max(lam[i] - omega * si / mii, 0), dl = li - lam[i];
+    double li = la_max(lam[i] - omega * si / mii, 0), dl = li - lam[i];
     if (dl == 0) continue;
     lam[i] = li;
     for (int a = Ct->p[i]; a < Ct->p[i + 1]; a++) y[Ct->i[a]] += pdinv[Ct->i[a]] * Ct->x[a] * dl;
@@ -600,12 +600,12 @@ static void grow_start(cup_projector *p, newton_ws *nw, const double *x, pn_ws *
     F[i] = rn[i] > 0 && p->b[i] < 0;
   }
   for (int round = 0; round < GROW_ROUNDS; round++) {
-    if (factor(p, nw, F, cup_dfact_delta_min(nw->df))) { memset(lamF, 0, sizeof(double) * (size_t)m); break; }
+    if (factor(p, nw, F, dfact_delta_min(nw->df))) { memset(lamF, 0, sizeof(double) * (size_t)m); break; }
     for (int i = 0; i < m; i++) rhs[i] = F[i] ? -p->b[i] : 0;
-    cup_dfact_solve(nw->df, rhs);
+    dfact_solve(nw->df, rhs);
     p->iters++;                             /* a solve on a free set, as a Newton step */
     for (int i = 0; i < m; i++) lam[i] = lamF[i] = F[i] ? rhs[i] : 0;
-    cup_sparse_gatxy(&p->K->C, lam, w->y);
+    la_sparse_gatxy(&p->K->C, lam, w->y);
     for (int j = 0; j < p->n; j++) w->y[j] = x[j] + w->y[j] * p->K->pdinv[j];
     sor_sweeps(p, GROW_OMEGA, lam, w->y);
     int changed = 0;
@@ -617,15 +617,15 @@ static void grow_start(cup_projector *p, newton_ws *nw, const double *x, pn_ws *
     }
     if (!changed) break;
   }
-  for (int i = 0; i < m; i++) lam[i] = cup_max(lamF[i], 0);
+  for (int i = 0; i < m; i++) lam[i] = la_max(lamF[i], 0);
 }
 
-int cup_newton_cold_start(cup_projector *p, const double *x, double *lam) {
+int newton_cold_start(cup_projector *p, const double *x, double *lam) {
   newton_ws *nw = proj_ws_of(p, &newton_method);
   if (!nw || !is_stieltjes(p, nw)) return 0;
   pn_ws *w = &nw->pmain;
   attach(p, w);
-  cup_slack(p->K, p->g, x, p->b, p->gam);
+  polyset_slack(p->K, p->g, x, p->b, p->gam);
   p->iters = p->facts = p->updates = 0;
   grow_start(p, nw, x, w);
   memcpy(lam, w->lam, sizeof(double) * (size_t)p->m);
@@ -652,7 +652,7 @@ static int solve(cup_projector *p, void *ws, const double *x, cup_proj_info *inf
   pn_problem q = {x, p->g, NULL, p->b, nw->tau, w, 0, nw};
   int st = pn_solve(p, &q, main_stop, p->opt.max_iter, info);
   detach(p, w);
-  if (st == CUP_WARN_NOT_CERTIFIED) cup_certify(p, x, w->lam, w->y, info);
+  if (st == CUP_WARN_NOT_CERTIFIED) certify_candidate(p, x, w->lam, w->y, info);
   return st;
 }
 

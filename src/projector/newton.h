@@ -12,6 +12,6 @@ extern const proj_method *const proj_newton;
  * x, below lam*, on the active set once its free set settles. Returns the
  * number of solves it made, 0 (lam untouched) when the set does not take
  * this start or the projector has no sparse exact path. For the tests. */
-int cup_newton_cold_start(cup_projector *p, const double *x, double *lam);
+int newton_cold_start(cup_projector *p, const double *x, double *lam);
 
 #endif

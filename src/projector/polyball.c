@@ -26,12 +26,12 @@
 #define U DBL_EPSILON
 
 static int in_rows(cup_setproj *sp, const double *y) {
-  return sp->m == 0 || cup_slack(sp->S->K, sp->g, y, sp->sm, sp->gm) >= 0;
+  return sp->m == 0 || polyset_slack(sp->S->K, sp->g, y, sp->sm, sp->gm) >= 0;
 }
 
 /* ||a - b||_P from above (and below, lo may be NULL); scratch: work + 2n. */
 static double dist_hi(cup_setproj *sp, const double *a, const double *b, double *lo) {
-  return cup_metric_dist_hi(sp->S->K, a, b, lo, sp->work + 2 * (size_t)sp->n);
+  return polyset_metric_dist_hi(sp->S->K, a, b, lo, sp->work + 2 * (size_t)sp->n);
 }
 
 static int in_ball(cup_setproj *sp, const double *y) { return dist_hi(sp, y, sp->c, NULL) <= sp->r; }
@@ -44,7 +44,7 @@ static int in_ball(cup_setproj *sp, const double *y) { return dist_hi(sp, y, sp-
 static int push_inside(cup_setproj *sp, const double *y, double *out) {
   const cup_polyset *K = sp->S->K;
   if (!K->rdir || sp->m == 0) return 0;
-  cup_slack(K, sp->g, y, sp->sm, sp->gm);
+  polyset_slack(K, sp->g, y, sp->sm, sp->gm);
   double t = 0;
   for (int i = 0; i < sp->m; i++)
     if (sp->sm[i] - sp->gm[i] < 0) {
@@ -69,20 +69,20 @@ static int anchor(cup_setproj *sp, double eta) {
   cup_proj_info pi;
   int st = onto_rows(sp, sp->c, sp->anchor, 0, eta, &pi);
   if (st == CUP_ERR_EMPTY_SET)
-    return cup_setproj_fail(sp, st, "the polyset is empty: Farkas certificate y >= 0 with g^T y = %.3g, "
-                            "||C^T y||_{P^-1} = %.3g", pi.farkas_gap, pi.farkas_residual);
-  if (st < 0) return cup_setproj_fail(sp, st, "projecting the centre onto the polyset failed: %s", cup_status_string(st));
+    return setproj_fail(sp, st, "the polyset is empty: Farkas certificate y >= 0 with g^T y = %.3g, "
+                        "||C^T y||_{P^-1} = %.3g", pi.farkas_gap, pi.farkas_residual);
+  if (st < 0) return setproj_fail(sp, st, "projecting the centre onto the polyset failed: %s", cup_status_string(st));
   if (!in_rows(sp, sp->anchor)) {
     const double *v = cup_projector_feasible(sp->proj);
-    if (v) cup_copy(sp->anchor, v, sp->n);
+    if (v) la_copy(sp->anchor, v, sp->n);
     else push_inside(sp, sp->anchor, sp->anchor);   /* the centre's projection on a face */
   }
   sp->anchor_ok = in_rows(sp, sp->anchor) && in_ball(sp, sp->anchor);
   double dlow = sqrt(fmax(pi.dual_value, 0)) * (1 - 1e-12);
   if (!sp->anchor_ok && dlow > sp->r)
-    return cup_setproj_fail(sp, CUP_ERR_EMPTY_SET,
-                            "the polyset and the ball do not meet: the centre is at least %.6g from "
-                            "the polyset, the radius is %.6g", dlow, sp->r);
+    return setproj_fail(sp, CUP_ERR_EMPTY_SET,
+                        "the polyset and the ball do not meet: the centre is at least %.6g from "
+                        "the polyset, the radius is %.6g", dlow, sp->r);
   return sp->anchor_ok;
 }
 
@@ -93,7 +93,7 @@ static int feasible_near(cup_setproj *sp, const double *y, const double *pfeas, 
   const double *base = in_rows(sp, y) ? y : pfeas && in_rows(sp, pfeas) ? pfeas
                     : push_inside(sp, y, sp->v) ? sp->v : NULL;   /* y on a face */
   if (!base) return 0;
-  if (in_ball(sp, base)) { cup_copy(sp->v, base, n); return 1; }
+  if (in_ball(sp, base)) { la_copy(sp->v, base, n); return 1; }
   if (anchor(sp, eta) != 1) return 0;
   /* a + t (base - a) on the sphere: alpha t^2 + 2 beta t + gamma = 0, gamma < 0 */
   double *d = sp->work + 3 * (size_t)n, *ac = sp->v;
@@ -101,7 +101,7 @@ static int feasible_near(cup_setproj *sp, const double *y, const double *pfeas, 
   double dn = cup_polyset_norm(sp->S->K, d), an = cup_polyset_norm(sp->S->K, ac);
   double beta = 0;
   double *pd = sp->work + 2 * (size_t)n;
-  cup_metric_apply(sp->S->K, d, pd);
+  polyset_metric_apply(sp->S->K, d, pd);
   for (int j = 0; j < n; j++) beta += ac[j] * pd[j];
   double alpha = dn * dn, gamma = an * an - sp->r * sp->r;
   double t = alpha > 0 ? (-beta + sqrt(fmax(beta * beta - alpha * gamma, 0))) / alpha : 0;
@@ -110,7 +110,7 @@ static int feasible_near(cup_setproj *sp, const double *y, const double *pfeas, 
     for (int j = 0; j < n; j++) sp->v[j] = sp->anchor[j] + t * d[j];
     if (in_rows(sp, sp->v) && in_ball(sp, sp->v)) return 1;
   }
-  cup_copy(sp->v, sp->anchor, n);
+  la_copy(sp->v, sp->anchor, n);
   return 1;
 }
 
@@ -122,7 +122,7 @@ static int judge(cup_setproj *sp, const double *x, double lb, double *best, doub
   e = fmax(0, e * e - fmax(lb, 0));
   if (e < *best_eps) {
     *best_eps = e;
-    cup_copy(best, sp->v, sp->n);
+    la_copy(best, sp->v, sp->n);
     info->dual_value = fmax(lb, 0);
   }
   return e <= info->eps_target;
@@ -132,9 +132,9 @@ static int judge(cup_setproj *sp, const double *x, double lb, double *best, doub
  * never an uncertified point passed on as an answer). */
 static int finish(cup_setproj *sp, double *z, const double *best, double best_eps, cup_proj_info *info) {
   if (!(best_eps < INFINITY))
-    return info->status = cup_setproj_fail(sp, CUP_ERR_UNCERTIFIED, "the intersection of the polyset and the "
-                                           "ball: no point certainly in both was found (eta = inf)");
-  cup_copy(z, best, sp->n);
+    return info->status = setproj_fail(sp, CUP_ERR_UNCERTIFIED, "the intersection of the polyset and the "
+                                       "ball: no point certainly in both was found (eta = inf)");
+  la_copy(z, best, sp->n);
   info->eps_cert = best_eps;
   info->eta_cert = 0;
   info->status = best_eps <= info->eps_target ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
@@ -145,17 +145,17 @@ static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *i
   const cup_polyset *K = sp->S->K;
   int n = sp->n;
   double *xs = sp->work, *best = sp->work + n;
-  cup_setproj_targets(sp, fmax(cup_polyset_norm(K, x), cup_polyset_norm(K, sp->c) + sp->r), info);
+  setproj_targets(sp, fmax(cup_polyset_norm(K, x), cup_polyset_norm(K, sp->c) + sp->r), info);
   double et = info->eps_target, ht = info->eta_target, best_eps = INFINITY;
-  cup_copy(sp->xs, x, n);                          /* z may alias x */
+  la_copy(sp->xs, x, n);                          /* z may alias x */
   x = sp->xs;
   cup_proj_info pi;
   /* mu = 0: the ball may not be active */
   int st = onto_rows(sp, x, sp->zk, 0.25 * et, 0.25 * ht, &pi);
   if (st == CUP_ERR_EMPTY_SET)
-    return cup_setproj_fail(sp, info->status = st, "the polyset is empty: Farkas certificate y >= 0 with "
-                            "g^T y = %.3g, ||C^T y||_{P^-1} = %.3g", pi.farkas_gap, pi.farkas_residual);
-  if (st < 0) return cup_setproj_fail(sp, info->status = st, "polyset projection failed: %s", cup_status_string(st));
+    return setproj_fail(sp, info->status = st, "the polyset is empty: Farkas certificate y >= 0 with "
+                        "g^T y = %.3g, ||C^T y||_{P^-1} = %.3g", pi.farkas_gap, pi.farkas_residual);
+  if (st < 0) return setproj_fail(sp, info->status = st, "polyset projection failed: %s", cup_status_string(st));
   info->iterations = pi.iterations;
   double xc_lo, xc = dist_hi(sp, x, sp->c, &xc_lo);
   (void)xc;
@@ -182,7 +182,7 @@ static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *i
     double one_mu = 1 / (1 - s);                     /* 1 + mu */
     for (int j = 0; j < n; j++) xs[j] = (1 - s) * x[j] + s * sp->c[j];
     st = onto_rows(sp, xs, sp->zk, 0.25 * et / one_mu, 0.25 * ht, &pi);
-    if (st < 0) return cup_setproj_fail(sp, info->status = st, "polyset projection failed: %s", cup_status_string(st));
+    if (st < 0) return setproj_fail(sp, info->status = st, "polyset projection failed: %s", cup_status_string(st));
     info->iterations += pi.iterations;
     double lb = pi.dual_value * one_mu + s * xc_lo * xc_lo - s * one_mu * sp->r * sp->r;
     if (feasible_near(sp, sp->zk, cup_projector_feasible(sp->proj), ht) &&
@@ -207,5 +207,5 @@ static int create(cup_setproj *sp, char *errmsg) {
   return cup_projector_create(&sp->proj, sp->S->K, &sp->opt, errmsg);
 }
 
-const setproj_kind setproj_intersection = {.create = create, .place = cup_setproj_place_affine, .project = project,
+const setproj_kind setproj_intersection = {.create = create, .place = setproj_place_affine, .project = project,
                                            .own_tolerances = 1};

@@ -89,8 +89,8 @@ struct cup_projector {
   proj_slot slot[PROJ_SLOTS];   /* the methods set up (proj_choose), each once */
   int nslots;
   int method;           /* the slot cup_project runs (-1: none, a sparse set without rows) */
-  int exact;            /* the slot cup_project_exact runs */
-  const proj_slot *run; /* the slot running now (method's, or exact's in cup_project_exact) */
+  int exact;            /* the slot proj_exact runs */
+  const proj_slot *run; /* the slot running now (method's, or exact's in proj_exact) */
   int (*project)(cup_projector *, const proj_slot *, const double *, double *, cup_proj_info *);
                         /* ... its project hook, or the shared course (course.c) */
   /* statistics of the current call */
@@ -104,7 +104,7 @@ struct cup_projector {
  * method's own workspace ws (NULL until lay_out or create made one). */
 struct proj_method {
   const char *name;
-  /* its answers are the projection to rounding: cup_project_exact runs it */
+  /* its answers are the projection to rounding: proj_exact runs it */
   int exact;
   /* set up beside an inexact method as its exact stand-in (cheap: vectors of the block only) */
   int standby;
@@ -117,12 +117,12 @@ struct proj_method {
   /* what it needs beyond the block (a factorization, an LCP): allocates; NULL: nothing */
   int (*create)(cup_projector *p, void **ws, char *errmsg);
   void (*free)(cup_projector *p, void *ws);
-  /* C's values changed in place (cup_projector_revalue); NULL: nothing depends on them */
+  /* C's values changed in place (projector_revalue); NULL: nothing depends on them */
   void (*revalue)(cup_projector *p, void *ws);
   /* forget a warm start of its own (cup_projector_reset); NULL: none */
   void (*reset)(cup_projector *p, void *ws);
   /* its state between projections, to or from a checkpoint; NULL: none */
-  void (*checkpoint)(cup_projector *p, void *ws, cup_ckpt *c);
+  void (*checkpoint)(cup_projector *p, void *ws, ckpt *c);
   /* the whole projection of x as cup_project makes it (s: its slot, info
    * may be NULL), for a method that answers most points itself and leaves
    * the rest to its fallback (course.h: proj_start, proj_course); NULL: the

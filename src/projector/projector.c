@@ -38,7 +38,7 @@ static void offset_changed(cup_projector *p) {
   p->empty_row = -1;
   for (int i = 0; i < p->m; i++) {
     if (K->rownorm[i] > 0) {
-      p->gscale = cup_max(fabs(p->g[i]) / K->rownorm[i], p->gscale);   /* NaN passed over */
+      p->gscale = la_max(fabs(p->g[i]) / K->rownorm[i], p->gscale);   /* NaN passed over */
     } else if (p->g[i] < 0 && p->empty_row < 0) {
       p->empty_row = i;              /* 0 >= -g_i > 0 is impossible */
     }
@@ -102,7 +102,7 @@ static void run_slot(cup_projector *p, int k) {
 }
 
 /* The method the options choose for K (a sparse set without rows needs
- * none: every point is in it), and the one cup_project_exact runs: the
+ * none: every point is in it), and the one proj_exact runs: the
  * same when it is exact, else the exact method where that needs only
  * vectors (a dense set's), else the same again. */
 static void set_methods(cup_projector *p, const cup_projector_options *o) {
@@ -117,23 +117,23 @@ static void set_methods(cup_projector *p, const cup_projector_options *o) {
 
 int cup_projector_create(cup_projector **out, const cup_polyset *K,
                          const cup_projector_options *opt, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "projector: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "projector: output pointer is NULL");
   *out = NULL;
-  if (!K) return cup_fail(errmsg, CUP_ERR_ARG, "projector: polyset is NULL");
+  if (!K) return fail_fmt(errmsg, CUP_ERR_ARG, "projector: polyset is NULL");
   cup_projector_options o;
   if (opt) o = *opt; else cup_projector_options_default(&o);
   if (o.method < CUP_PROJ_AUTO || o.method > CUP_PROJ_ACTIVESET)
-    return cup_fail(errmsg, CUP_ERR_ARG, "projector: unknown method %d", (int)o.method);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "projector: unknown method %d", (int)o.method);
   if (!(o.eps_abs >= 0) || !(o.eps_rel >= 0) || !(o.eta_abs >= 0) || !(o.eta_rel >= 0))
-    return cup_fail(errmsg, CUP_ERR_ARG,
+    return fail_fmt(errmsg, CUP_ERR_ARG,
                     "projector: tolerances must be >= 0 (eps_abs %g, eps_rel %g, eta_abs %g, eta_rel %g)",
                     o.eps_abs, o.eps_rel, o.eta_abs, o.eta_rel);
   if (o.max_iter < 1)
-    return cup_fail(errmsg, CUP_ERR_ARG, "projector: max_iter = %d, must be >= 1", o.max_iter);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "projector: max_iter = %d, must be >= 1", o.max_iter);
   if (!(o.lipschitz >= 0) || isinf(o.lipschitz))
-    return cup_fail(errmsg, CUP_ERR_ARG, "projector: lipschitz = %g, must be finite and >= 0", o.lipschitz);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "projector: lipschitz = %g, must be finite and >= 0", o.lipschitz);
   cup_projector *p = calloc(1, sizeof *p);
-  if (!p) return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
+  if (!p) return fail_fmt(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
   p->K = K;
   p->opt = o;
   p->opt.feasible_point = NULL;
@@ -147,7 +147,7 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
   a.used = 0;
   if (!p->block) {
     cup_projector_free(&p);
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "projector: out of memory");
   }
   lay_out(p, &a, opt && opt->feasible_point);         /* pieces */
   if (p->user_pt) memcpy(p->user_pt, opt->feasible_point, sizeof(double) * N);
@@ -157,7 +157,7 @@ int cup_projector_create(cup_projector **out, const cup_polyset *K,
     for (int j = 0; j < n; j++)
       if (!isfinite(p->user_pt[j])) {
         cup_projector_free(&p);
-        return cup_fail(errmsg, CUP_ERR_NONFINITE, "projector: feasible_point[%d] is not finite", j);
+        return fail_fmt(errmsg, CUP_ERR_NONFINITE, "projector: feasible_point[%d] is not finite", j);
       }
   }
   for (int k = 0; k < p->nslots; k++) {
@@ -206,8 +206,8 @@ int cup_projector_offer_feasible(cup_projector *p, const double *w) {
   if (!p || !w) return 0;
   for (int j = 0; j < p->n; j++)
     if (!isfinite(w[j])) return 0;
-  if (cup_slack(p->K, p->g, w, p->s_anchor, p->gamv) < 0) return 0;
-  cup_copy(p->anchor, w, p->n);
+  if (polyset_slack(p->K, p->g, w, p->s_anchor, p->gamv) < 0) return 0;
+  la_copy(p->anchor, w, p->n);
   p->anchor_ok = 1;
   return 1;
 }
@@ -219,23 +219,23 @@ void cup_projector_reset(cup_projector *p) {
     if (p->slot[k].m->reset) p->slot[k].m->reset(p, p->slot[k].ws);
 }
 
-void cup_projector_checkpoint(cup_projector *p, cup_ckpt *c) {
+void projector_checkpoint(cup_projector *p, ckpt *c) {
   size_t M = sizeof(double) * (size_t)p->m, N = sizeof(double) * (size_t)p->n;
-  cup_ckpt_io(c, p->g, M);
+  ckpt_io(c, p->g, M);
   CUP_CKPT_IO(c, p->gscale);
   CUP_CKPT_IO(c, p->empty_row);
   CUP_CKPT_IO(c, p->origin_ok);
   CUP_CKPT_IO(c, p->user_ok);
-  cup_ckpt_io(c, p->lam, M);
-  cup_ckpt_io(c, p->lam_warm, M);
-  cup_ckpt_io(c, p->anchor, N);
-  cup_ckpt_io(c, p->s_anchor, M);
+  ckpt_io(c, p->lam, M);
+  ckpt_io(c, p->lam_warm, M);
+  ckpt_io(c, p->anchor, N);
+  ckpt_io(c, p->s_anchor, M);
   CUP_CKPT_IO(c, p->anchor_ok);
   for (int k = 0; k < p->nslots; k++)
     if (p->slot[k].m->checkpoint) p->slot[k].m->checkpoint(p, p->slot[k].ws, c);
 }
 
-void cup_projector_revalue(cup_projector *p) {
+void projector_revalue(cup_projector *p) {
   offset_changed(p);                      /* row norms changed: scale, empty rows, anchors */
   for (int i = 0; i < p->m; i++)
     if (!(p->K->rownorm[i] > 0)) p->lam_warm[i] = 0;   /* a row that is off holds nothing */
@@ -253,7 +253,7 @@ const double *cup_projector_farkas(const cup_projector *p) { return p ? p->farka
 
 /* The exact method whatever the options ask: the configured method runs
  * as if it were activeset where the projector has an exact one. */
-int cup_project_exact(cup_projector *p, const double *x, double *z, cup_proj_info *info) {
+int proj_exact(cup_projector *p, const double *x, double *z, cup_proj_info *info) {
   if (!p) return CUP_ERR_ARG;
   int method = p->opt.method;
   if (p->exact >= 0 && p->slot[p->exact].m->exact) p->opt.method = CUP_PROJ_ACTIVESET;

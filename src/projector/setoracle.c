@@ -5,8 +5,8 @@
 #include "setproj_impl.h"
 
 static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
-  cup_setproj_targets(sp, cup_polyset_norm(sp->S->K, x), info);
-  return cup_oracle_project(sp->S, sp->t, x, z, sp->work, info, sp->message, sizeof sp->message);
+  setproj_targets(sp, cup_polyset_norm(sp->S->K, x), info);
+  return oracle_project(sp->S, sp->t, x, z, sp->work, info, sp->message, sizeof sp->message);
 }
 
 const setproj_kind setproj_oracle = {.project = project};

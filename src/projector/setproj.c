@@ -35,11 +35,11 @@ void cup_setproj_free(cup_setproj **spp) {
 
 int cup_setproj_create(cup_setproj **out, const cup_set *S, const cup_projector_options *opt,
                        char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "set projector: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "set projector: output pointer is NULL");
   *out = NULL;
-  if (!S) return cup_fail(errmsg, CUP_ERR_ARG, "set projector: set is NULL");
+  if (!S) return fail_fmt(errmsg, CUP_ERR_ARG, "set projector: set is NULL");
   cup_setproj *sp = calloc(1, sizeof *sp);
-  if (!sp) return cup_fail(errmsg, CUP_ERR_NOMEM, "set projector: out of memory");
+  if (!sp) return fail_fmt(errmsg, CUP_ERR_NOMEM, "set projector: out of memory");
   if (opt) sp->opt = *opt; else cup_projector_options_default(&sp->opt);
   sp->S = S;
   sp->kind = S->kind;
@@ -57,10 +57,10 @@ int cup_setproj_create(cup_setproj **out, const cup_set *S, const cup_projector_
   sp->sm = calloc((size_t)sp->m + 1, sizeof(double));
   sp->gm = calloc((size_t)sp->m + 1, sizeof(double));
   int st = sp->g && sp->c && sp->work && sp->xs && sp->zk && sp->v && sp->anchor && sp->sm && sp->gm
-               ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "set projector: out of memory");
+               ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "set projector: out of memory");
   if (!st && sp->type->create) st = sp->type->create(sp, errmsg);
   if (st) { cup_setproj_free(&sp); return st; }
-  cup_set_place(S, NULL, sp->g, sp->c, &sp->r);
+  set_place(S, NULL, sp->g, sp->c, &sp->r);
   sp->anchor_ok = -1;
   *out = sp;
   return CUP_OK;
@@ -95,7 +95,7 @@ static inline int move_(cup_setproj *sp, double t, const double *u, const double
   sp->t = t;
   sp->anchor_ok = -1;
   if (sp->S->p > 0 && !u)
-    return cup_setproj_fail(sp, CUP_ERR_ARG, "the set moves with %d parameters but u is NULL", sp->S->p);
+    return setproj_fail(sp, CUP_ERR_ARG, "the set moves with %d parameters but u is NULL", sp->S->p);
   return sp->type->place ? sp->type->place(sp, t, u, x) : CUP_OK;
 }
 
@@ -108,7 +108,7 @@ int cup_setproj_move(cup_setproj *sp, double t, const double *u, const double *x
   return move_(sp, t, u, x);     /* the older form: cup_setproj_place without errmsg */
 }
 
-int cup_setproj_recheck(cup_setproj *sp, double t, const double *x, const double *z) {
+int setproj_recheck(cup_setproj *sp, double t, const double *x, const double *z) {
   if (!sp || !sp->type->recheck || !x || !z) return 0;
   sp->message[0] = '\0';
   return sp->type->recheck(sp, t, x, z);
@@ -122,7 +122,7 @@ static inline int project_(cup_setproj *sp, const double *x, double *z, cup_proj
   sp->message[0] = '\0';
   for (int j = 0; j < sp->n; j++)
     if (!isfinite(x[j])) {
-      cup_setproj_fail(sp, CUP_ERR_NONFINITE, "x[%d] is %g", j, x[j]);
+      setproj_fail(sp, CUP_ERR_NONFINITE, "x[%d] is %g", j, x[j]);
       return info->status = CUP_ERR_NONFINITE;
     }
   return sp->type->project(sp, x, z, info);

@@ -31,10 +31,10 @@ typedef struct setproj_kind {
    * the state x (may be NULL); NULL: the set does not move */
   int (*place)(cup_setproj *sp, double t, const double *u, const double *x);
   /* the certified projection of x (finite) onto the placed set; a failure
-   * leaves its message (cup_setproj_fail) */
+   * leaves its message (setproj_fail) */
   int (*project)(cup_setproj *sp, const double *x, double *z, cup_proj_info *info);
   /* rows the placing missed at the answer z (set_impl.h's recheck), as
-   * cup_setproj_recheck returns; NULL: it misses none */
+   * setproj_recheck returns; NULL: it misses none */
   int (*recheck)(cup_setproj *sp, double t, const double *x, const double *z);
   int own_tolerances;   /* 1: it sets its projector's tolerances at each call (not the options') */
 } setproj_kind;
@@ -58,13 +58,13 @@ struct cup_setproj {
   double *sm, *gm;             /* m: slack and its rounding bound at a trial point */
   /* STATE_POLYSET */
   cup_rowbuf rb;
-  cup_rowpool pool;
+  row_pool pool;
   cup_polyset *PK;             /* the pool's polyset (rows = slots) */
   int *cpos;                   /* per pool entry (CSR order): its position in PK->C */
-  double *rework;              /* 2 m + n doubles for cup_polyset_revalue */
+  double *rework;              /* 2 m + n doubles for polyset_revalue */
   long step, rebuilds;
   int rows_now;
-  /* the callback's numbering of the state (cup_rowbuf_order) */
+  /* the callback's numbering of the state (rowbuf_order) */
   int ordered;                 /* 1: the pool, PK and proj are in perm's numbering */
   int *perm, *pmap;            /* n: column k is x[perm[k]]; workspace of a renumbering */
   long perm_gen;
@@ -72,7 +72,7 @@ struct cup_setproj {
 };
 
 /* Targets eps_abs + eps_rel S^2, eta_abs + eta_rel S into info. */
-static inline void cup_setproj_targets(const cup_setproj *sp, double S, cup_proj_info *info) {
+static inline void setproj_targets(const cup_setproj *sp, double S, cup_proj_info *info) {
   const cup_projector_options *o = &sp->opt;
   info->scale = S;
   info->eps_target = o->eps_abs + (o->eps_rel > 0 ? o->eps_rel * S * S : 0);
@@ -82,7 +82,7 @@ static inline void cup_setproj_targets(const cup_setproj *sp, double S, cup_proj
 /* The message of a failure; returns status. (Inline, like the targets: the
  * methods below the dispatcher must not call back into it.) */
 __attribute__((format(printf, 3, 4)))
-static inline int cup_setproj_fail(cup_setproj *sp, int status, const char *fmt, ...) {
+static inline int setproj_fail(cup_setproj *sp, int status, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   vsnprintf(sp->message, sizeof sp->message, fmt, ap);
@@ -93,10 +93,10 @@ static inline int cup_setproj_fail(cup_setproj *sp, int status, const char *fmt,
 /* The placing of a set with rows or a ball (setpoly.c), every placed
  * kind's: g, c and r at u, checked finite (and r >= 0), the offset into
  * the rows' projector. */
-int cup_setproj_place_affine(cup_setproj *sp, double t, const double *u, const double *x);
+int setproj_place_affine(cup_setproj *sp, double t, const double *u, const double *x);
 /* The message of a polyset projection's outcome st (setpoly.c): the
  * Farkas certificate of an empty set, the status of another failure.
  * Returns st. */
-int cup_setproj_polyset_outcome(cup_setproj *sp, int st, const cup_proj_info *info);
+int setproj_polyset_outcome(cup_setproj *sp, int st, const cup_proj_info *info);
 
 #endif

@@ -3,7 +3,7 @@
  * pivoting (closed form on one or two active rows), the rows aimed a few
  * ulps inside K: the LCP step of lcp/step.h with W = I and h = 1. z is
  * then certainly in K (eta = 0) and eps is the weak-duality gap, as
- * cup_certify computes it. What it cannot certify (a singular block, a set
+ * certify_candidate computes it. What it cannot certify (a singular block, a set
  * without interior, a tolerance below rounding) goes to the dense active
  * set (activeset.c), its fallback. */
 #include <stdlib.h>
@@ -18,16 +18,16 @@
 /* Returns 1 with z and info filled when the LCP certifies the targets; 0
  * leaves everything to the fallback. */
 static int answer(cup_projector *p, void *ws, const double *x, double *z, cup_proj_info *info) {
-  cup_lcp_step *small = ws;
+  lcp_step *small = ws;
   if (!small) return 0;                            /* a set without rows */
   const cup_polyset *K = p->K;
   int n = p->n, m = p->m;
-  if (!p->opt.warm_start) cup_lcp_forget(&small->lcp);
+  if (!p->opt.warm_start) lcp_forget(&small->lcp);
   cup_proj_info ti;
-  if (cup_lcp_step_solve(small, p->g, x, p->y, info->scale, info->eps_target, info->eta_target, &ti))
+  if (lcp_step_solve(small, p->g, x, p->y, info->scale, info->eps_target, info->eta_target, &ti))
     return 0;
-  double un = ti.skipped ? 0 : cup_step_norm(p, p->y, x);   /* ||z - x||_P */
-  double ebound = ti.skipped ? 0 : cup_z_rounding(K, info->scale, un);
+  double un = ti.skipped ? 0 : certify_step_norm(p, p->y, x);   /* ||z - x||_P */
+  double ebound = ti.skipped ? 0 : certify_z_rounding(K, info->scale, un);
   double eps = ti.eps_cert + ebound * ebound;
   if (!(eps <= info->eps_target)) return 0;
   info->eps_cert = eps;
@@ -57,28 +57,28 @@ static int project(cup_projector *p, const proj_slot *s, const double *x, double
 /* The LCP's matrices (a set without rows needs none: every point is in it). */
 static int create(cup_projector *p, void **ws, char *errmsg) {
   if (p->m == 0) return CUP_OK;
-  cup_lcp_step *small = calloc(1, sizeof *small);
+  lcp_step *small = calloc(1, sizeof *small);
   *ws = small;
-  int st = small ? cup_lcp_step_init(small, p->K, NULL, 1.0) : CUP_ERR_NOMEM;
-  return st ? cup_fail(errmsg, st, "projector: out of memory") : CUP_OK;
+  int st = small ? lcp_step_init(small, p->K, NULL, 1.0) : CUP_ERR_NOMEM;
+  return st ? fail_fmt(errmsg, st, "projector: out of memory") : CUP_OK;
 }
 
 static void free_ws(cup_projector *p, void *ws) {
   (void)p;
-  if (ws) cup_lcp_step_free(ws);
+  if (ws) lcp_step_free(ws);
   free(ws);
 }
 
 static void reset(cup_projector *p, void *ws) {
   (void)p;
-  cup_lcp_step *small = ws;
-  if (small) cup_lcp_forget(&small->lcp);
+  lcp_step *small = ws;
+  if (small) lcp_forget(&small->lcp);
 }
 
 /* lambda, its warm start and lambda^T q: what a step carries to the next. */
-static void checkpoint(cup_projector *p, void *ws, cup_ckpt *c) {
+static void checkpoint(cup_projector *p, void *ws, ckpt *c) {
   (void)p;
-  if (ws) cup_lcp_step_checkpoint(ws, c);
+  if (ws) lcp_step_checkpoint(ws, c);
 }
 
 /* The auto method on a small dense set, unless the options want what only

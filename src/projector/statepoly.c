@@ -10,7 +10,7 @@
  * projector (a new symbolic analysis, allocations), carrying the warm start
  * over slot by slot.
  *
- * A callback may number the state its own way (cup_rowbuf_order: a crowd
+ * A callback may number the state its own way (rowbuf_order: a crowd
  * along a space-filling curve): the pool, its polyset and projector are
  * then in that numbering, a projection gathers x into it and scatters the
  * answer back, and a new numbering renumbers the pool's patterns and
@@ -21,14 +21,14 @@
 #include "setproj_impl.h"
 
 static int init(cup_setproj *sp, char *errmsg) {
-  if (cup_rowbuf_init(&sp->rb, sp->n, 64, 256) || cup_rowpool_init(&sp->pool, sp->n))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
+  if (rowbuf_init(&sp->rb, sp->n, 64, 256) || rowpool_init(&sp->pool, sp->n))
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
   return CUP_OK;
 }
 
 static void free_pool(cup_setproj *sp) {
-  cup_rowbuf_free(&sp->rb);
-  cup_rowpool_free(&sp->pool);
+  rowbuf_free(&sp->rb);
+  rowpool_free(&sp->pool);
   cup_projector_free(&sp->proj);
   cup_polyset_free(&sp->PK);
   free(sp->cpos);
@@ -42,14 +42,14 @@ static void free_pool(cup_setproj *sp) {
 
 /* The pool's pattern as CSC with this step's values (0 for slots not in use)
  * and offsets (1: never active); work: NULL, or revalue's work holding a
- * vector to start the Lipschitz bound from (cup_polyset_create_ex). */
+ * vector to start the Lipschitz bound from (polyset_create_ex). */
 static int pool_polyset(cup_setproj *sp, cup_polyset **K, double *work, char *errmsg) {
-  const cup_rowpool *P = &sp->pool;
+  const row_pool *P = &sp->pool;
   const cup_rowbuf *rb = &sp->rb;
   int n = sp->n, m = P->m, nnz = P->nnz;
   int *cp = calloc((size_t)n + 1, sizeof(int)), *ri = malloc(sizeof(int) * ((size_t)nnz + 1));
   double *vx = malloc(sizeof(double) * ((size_t)nnz + 1)), *g = malloc(sizeof(double) * ((size_t)m + 1)), *pd = NULL;
-  int st = cp && ri && vx && g ? CUP_OK : cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
+  int st = cp && ri && vx && g ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
   if (!st) {
     for (int e = 0; e < nnz; e++) cp[P->col[e] + 1]++;
     for (int j = 0; j < n; j++) cp[j + 1] += cp[j];
@@ -67,12 +67,12 @@ static int pool_polyset(cup_setproj *sp, cup_polyset **K, double *work, char *er
     cup_metric metric = {sp->S->K->pkind, sp->S->K->pd, {0}, 0};
     if (sp->ordered && metric.kind == CUP_METRIC_DIAGONAL) {   /* P's diagonal in the pool's numbering */
       pd = malloc(sizeof(double) * (size_t)n);
-      if (!pd) st = cup_fail(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
+      if (!pd) st = fail_fmt(errmsg, CUP_ERR_NOMEM, "state polyset: out of memory");
       for (int k = 0; !st && k < n; k++) pd[k] = sp->S->K->pd[sp->perm[k]];
       metric.diag = pd;
     }
     cup_csc view = {m, n, cp, ri, vx};
-    if (!st) st = cup_polyset_create_ex(K, &view, g, &metric, 1, work, errmsg);
+    if (!st) st = polyset_create_ex(K, &view, g, &metric, 1, work, errmsg);
   }
   free(cp); free(ri); free(vx); free(g); free(pd);
   return st;
@@ -81,9 +81,9 @@ static int pool_polyset(cup_setproj *sp, cup_polyset **K, double *work, char *er
 /* A new pool: polyset, projector, warm start slot by slot. Allocates. */
 static int rebuild(cup_setproj *sp) {
   char err[CUP_ERRMSG_LEN] = "";
-  cup_rowpool *P = &sp->pool;
+  row_pool *P = &sp->pool;
   int old_m = sp->PK ? sp->PK->m : 0;
-  if (cup_rowpool_rebuild(P, &sp->rb, sp->step)) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  if (rowpool_rebuild(P, &sp->rb, sp->step)) return setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
   int n = sp->n, m = P->m;
   /* cpos holds n column cursors, then one position per pool entry */
   int *cpos = realloc(sp->cpos, sizeof(int) * ((size_t)n + (size_t)P->nnz + 1));
@@ -93,7 +93,7 @@ static int rebuild(cup_setproj *sp) {
   if (g) sp->g = g;
   if (!cpos || !g || !rw) {
     free(rw);
-    return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+    return setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
   }
   /* the last bound's vector slot by slot (0 for a new slot), to start the
    * new set's bound from: a set built cold bounds twice cold, at its
@@ -112,7 +112,7 @@ static int rebuild(cup_setproj *sp) {
   double *fp = NULL;                         /* the user's feasible point in the pool's numbering */
   if (sp->ordered && po.feasible_point && (fp = malloc(sizeof(double) * (size_t)n)))
     for (int k = 0; k < n; k++) fp[k] = po.feasible_point[sp->perm[k]];
-  int st = sp->ordered && po.feasible_point && !fp ? cup_fail(err, CUP_ERR_NOMEM, "out of memory")
+  int st = sp->ordered && po.feasible_point && !fp ? fail_fmt(err, CUP_ERR_NOMEM, "out of memory")
                                                    : pool_polyset(sp, &K, warm ? rw : NULL, err);
   if (fp) po.feasible_point = fp;
   if (!st) st = cup_projector_create(&p, K, &po, err);
@@ -120,7 +120,7 @@ static int rebuild(cup_setproj *sp) {
   if (st) {
     cup_projector_free(&p);
     cup_polyset_free(&K);
-    return cup_setproj_fail(sp, st, "state polyset: %s", err);
+    return setproj_fail(sp, st, "state polyset: %s", err);
   }
   for (int s = 0; s < m && sp->proj; s++) {
     int o = P->old_of[s];
@@ -138,7 +138,7 @@ static int rebuild(cup_setproj *sp) {
 
 /* Same slots: this step's values in place. */
 static void revalue(cup_setproj *sp) {
-  const cup_rowpool *P = &sp->pool;
+  const row_pool *P = &sp->pool;
   const cup_rowbuf *rb = &sp->rb;
   cup_polyset *K = sp->PK;
   const int *pos = sp->cpos + sp->n;
@@ -151,8 +151,8 @@ static void revalue(cup_setproj *sp) {
     }
     sp->g[s] = r >= 0 ? rb->off[r] : 1;
   }
-  cup_polyset_revalue(K, sp->rework);
-  cup_projector_revalue(sp->proj);
+  polyset_revalue(K, sp->rework);
+  projector_revalue(sp->proj);
 }
 
 /* The callback's new numbering (NULL: the state's): the pool's patterns
@@ -169,7 +169,7 @@ static int renumber(cup_setproj *sp) {
   }
   for (int k = 0; k < n; k++) sp->pmap[pnew ? pnew[k] : k] = k;         /* the new inverse */
   for (int k = 0; k < n; k++) sp->perm[k] = sp->pmap[sp->perm[k]];     /* old column -> new */
-  cup_rowpool_renumber(&sp->pool, sp->perm);
+  rowpool_renumber(&sp->pool, sp->perm);
   for (int k = 0; k < n; k++) sp->perm[k] = pnew ? pnew[k] : k;
   sp->ordered = pnew != NULL;
   sp->perm_gen = sp->rb.perm_gen;
@@ -188,7 +188,7 @@ static int project_ordered(cup_setproj *sp, const double *x, double *z, cup_proj
 }
 
 static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *info) {
-  return cup_setproj_polyset_outcome(sp, project_ordered(sp, x, z, info), info);
+  return setproj_polyset_outcome(sp, project_ordered(sp, x, z, info), info);
 }
 
 /* The rows at (t, x) into the pool: a new step (advance) or the same one
@@ -196,19 +196,19 @@ static int project(cup_setproj *sp, const double *x, double *z, cup_proj_info *i
 static int place_rows(cup_setproj *sp, double t, const double *x, int advance) {
   const cup_set *S = sp->S;
   sp->step += advance;
-  cup_rowbuf_clear(&sp->rb);
+  rowbuf_clear(&sp->rb);
   int rc = S->rows(t, x, &sp->rb, S->rows_ctx);
-  if (rc) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback failed (returned %d)", rc);
-  if (sp->rb.status == CUP_ERR_NOMEM) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "rows: %s", sp->rb.message);
-  if (sp->rb.status) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback gave a bad %s", sp->rb.message);
+  if (rc) return setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback failed (returned %d)", rc);
+  if (sp->rb.status == CUP_ERR_NOMEM) return setproj_fail(sp, CUP_ERR_NOMEM, "rows: %s", sp->rb.message);
+  if (sp->rb.status) return setproj_fail(sp, CUP_ERR_CALLBACK, "the rows callback gave a bad %s", sp->rb.message);
   sp->rows_now = sp->rb.m;
   int renumbered = 0;
   if (sp->rb.perm ? !sp->ordered || sp->rb.perm_gen != sp->perm_gen : sp->ordered) {
-    if (renumber(sp)) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+    if (renumber(sp)) return setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
     renumbered = 1;
   }
-  int missing = cup_rowpool_match(&sp->pool, &sp->rb, sp->step);
-  if (missing < 0) return cup_setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
+  int missing = rowpool_match(&sp->pool, &sp->rb, sp->step);
+  if (missing < 0) return setproj_fail(sp, CUP_ERR_NOMEM, "state polyset: out of memory");
   if (missing > 0 || !sp->proj || renumbered) {
     int st = rebuild(sp);
     if (st && renumbered) cup_projector_free(&sp->proj);   /* in the old numbering: rebuild next time */
@@ -222,7 +222,7 @@ static int place_rows(cup_setproj *sp, double t, const double *x, int advance) {
 /* Rows at (t, x) from the callback, into the pool's polyset and projector. */
 static int place(cup_setproj *sp, double t, const double *u, const double *x) {
   (void)u;
-  if (!x) return cup_setproj_fail(sp, CUP_ERR_ARG, "a state-dependent set needs the state x");
+  if (!x) return setproj_fail(sp, CUP_ERR_ARG, "a state-dependent set needs the state x");
   return place_rows(sp, t, x, 1);
 }
 
@@ -233,8 +233,8 @@ static int recheck(cup_setproj *sp, double t, const double *x, const double *z) 
   const cup_set *S = sp->S;
   if (!S->recheck || !sp->proj) return 0;
   int rc = S->recheck(t, x, z, S->rows_ctx);
-  if (rc == CUP_ERR_NOMEM) return cup_setproj_fail(sp, rc, "state polyset: out of memory rechecking the rows");
-  if (rc < 0) return cup_setproj_fail(sp, CUP_ERR_CALLBACK, "the recheck of the rows failed (returned %d)", rc);
+  if (rc == CUP_ERR_NOMEM) return setproj_fail(sp, rc, "state polyset: out of memory rechecking the rows");
+  if (rc < 0) return setproj_fail(sp, CUP_ERR_CALLBACK, "the recheck of the rows failed (returned %d)", rc);
   if (rc == 0) return 0;
   int st = place_rows(sp, t, x, 0);
   return st ? st : 1;

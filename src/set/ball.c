@@ -20,7 +20,7 @@ static int settle(cup_proj_info *info) {
 
 /* x already in the set (to the raw test): z = x exactly, eps = 0. */
 static int keep_x(const double *x, double *z, int n, double eta, cup_proj_info *info) {
-  if (z != x) cup_copy(z, x, n);
+  if (z != x) la_copy(z, x, n);
   info->skipped = 1;
   info->eps_cert = 0;
   info->eta_cert = eta;
@@ -28,22 +28,22 @@ static int keep_x(const double *x, double *z, int n, double eta, cup_proj_info *
   return settle(info);
 }
 
-int cup_ball_project(const cup_set *S, const double *c, double r, const double *x, double *z,
-                     double *work, cup_proj_info *info) {
+int ball_project(const cup_set *S, const double *c, double r, const double *x, double *z,
+                 double *work, cup_proj_info *info) {
   const cup_polyset *K = S->K;
   int n = S->n;
   info->method = CUP_PROJ_AUTO;
   if (!(r >= 0)) return info->status = CUP_ERR_EMPTY_SET;
   double *v = work, *xs = work + n, *w = work + 2 * (size_t)n;
   for (int j = 0; j < n; j++) v[j] = x[j] - c[j];
-  double lo, hi, d = cup_metric_norm_bounds(K, v, &lo, &hi);
+  double lo, hi, d = polyset_metric_norm_bounds(K, v, &lo, &hi);
   if (!isfinite(d)) return info->status = CUP_ERR_NONFINITE;
   info->violation = fmax(0, d - r);
   if (d <= r) return keep_x(x, z, n, fmax(0, hi - r), info);
-  cup_copy(xs, x, n);                       /* z may alias x */
+  la_copy(xs, x, n);                       /* z may alias x */
   double s = r * (1 - 4 * (n + 8) * U) / d;
   for (int j = 0; j < n; j++) z[j] = c[j] + s * v[j];
-  double zc = cup_metric_dist_hi(K, z, c, NULL, w), xz = cup_metric_dist_hi(K, xs, z, NULL, w);
+  double zc = polyset_metric_dist_hi(K, z, c, NULL, w), xz = polyset_metric_dist_hi(K, xs, z, NULL, w);
   double dlo = fmax(0, lo - r);             /* d(x) = ||x - c||_P - r exactly */
   info->active = 1;
   info->iterations = 1;
@@ -53,8 +53,8 @@ int cup_ball_project(const cup_set *S, const double *c, double r, const double *
   return settle(info);
 }
 
-int cup_halfspace_project(const cup_set *S, const double *g, const double *x, double *z,
-                          double *work, cup_proj_info *info) {
+int halfspace_project(const cup_set *S, const double *g, const double *x, double *z,
+                      double *work, cup_proj_info *info) {
   const cup_polyset *K = S->K;
   int n = S->n;
   info->method = CUP_PROJ_AUTO;
@@ -66,16 +66,16 @@ int cup_halfspace_project(const cup_set *S, const double *g, const double *x, do
     return info->status = CUP_ERR_EMPTY_SET;
   }
   double *xs = work, *w = work + n;
-  cup_slack(K, g, x, &s, &gam);
+  polyset_slack(K, g, x, &s, &gam);
   if (!isfinite(s)) return info->status = CUP_ERR_NONFINITE;
   info->violation = fmax(0, -s);
   if (s >= 0) return keep_x(x, z, n, s - gam >= 0 ? 0 : (gam - s) / (a * (1 - arel)), info);
-  cup_copy(xs, x, n);
+  la_copy(xs, x, n);
   /* aim at slack 16 gam: certainly inside after the rounding of the step */
   double lam = (16 * gam + DBL_MIN - s) / (a * a);
   for (int j = 0; j < n; j++) z[j] = xs[j] + lam * S->pa[j];
-  cup_slack(K, g, z, &s2, &gam2);
-  double xz = cup_metric_dist_hi(K, xs, z, NULL, w);
+  polyset_slack(K, g, z, &s2, &gam2);
+  double xz = polyset_metric_dist_hi(K, xs, z, NULL, w);
   double dlo = fmax(0, (-s - gam) / (a * (1 + arel)));   /* d(x) = -(a^T x + b) / ||a||_{P^-1} */
   info->active = 1;
   info->iterations = 1;
@@ -92,10 +92,10 @@ static int halfspace_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
   int n = S->n;
   S->pa = calloc((size_t)n, sizeof(double));
   double *w = calloc((size_t)n, sizeof(double));
-  if (!S->pa || !w) { free(w); return cup_fail(errmsg, CUP_ERR_NOMEM, "set halfspace: out of memory"); }
+  if (!S->pa || !w) { free(w); return fail_fmt(errmsg, CUP_ERR_NOMEM, "set halfspace: out of memory"); }
   for (int k = K->Ct.p[0]; k < K->Ct.p[1]; k++) S->pa[K->Ct.i[k]] = K->Ct.x[k];
-  if (K->pkind == CUP_METRIC_SPARSE) cup_simplicial_solve(K->LP, S->pa, w);
-  else cup_metric_solve_diag(K, S->pa);
+  if (K->pkind == CUP_METRIC_SPARSE) la_simplicial_solve(K->LP, S->pa, w);
+  else polyset_metric_solve_diag(K, S->pa);
   free(w);
   return CUP_OK;
 }

@@ -65,8 +65,8 @@ static double secular_root(const cup_set *S, const double *y, double r, int *ite
   return mu;
 }
 
-int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const double *x, double *z,
-                          double *work, cup_proj_info *info) {
+int ellipsoid_project(const cup_set *S, const double *c, double r, const double *x, double *z,
+                      double *work, cup_proj_info *info) {
   const cup_polyset *K = S->K;
   int n = S->n;
   double gq = (2 * n + 8) * U;              /* relative rounding of a quadratic form */
@@ -77,12 +77,12 @@ int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const dou
   double qa, q = quad_form(S, v, t, &qa);
   if (!isfinite(q)) return info->status = CUP_ERR_NONFINITE;
   info->violation = fmax(0, sqrt(q) - r);
-  cup_copy(xs, x, n);
+  la_copy(xs, x, n);
   if (q <= r * r) {                         /* inside to the raw test: z = x */
-    if (z != x) cup_copy(z, x, n);
+    if (z != x) la_copy(z, x, n);
     info->skipped = 1;
   } else {
-    for (int i = 0; i < n; i++) w[i] = cup_dot(S->VtP + (size_t)i * n, v, n);   /* y */
+    for (int i = 0; i < n; i++) w[i] = la_dot(S->VtP + (size_t)i * n, v, n);   /* y */
     double ra = r * (1 - 4 * gq), mu = ra > 0 ? secular_root(S, w, ra, &info->iterations) : INFINITY;
     for (int i = 0; i < n; i++) w[i] = ra > 0 ? w[i] / (1 + mu * S->lam[i]) : 0;
     for (int j = 0; j < n; j++) {             /* z = c + V w */
@@ -97,10 +97,10 @@ int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const dou
   for (int j = 0; j < n; j++) v[j] = z[j] - c[j];
   double qz_abs, qz = quad_form(S, v, t, &qz_abs), qz_hi = qz + gq * qz_abs;
   double vz_hi;
-  cup_metric_norm_bounds(K, v, NULL, &vz_hi);
+  polyset_metric_norm_bounds(K, v, NULL, &vz_hi);
   info->eta_cert = qz_hi <= r * r ? 0 : (1 - r / sqrt(qz_hi) * (1 - 4 * U)) * vz_hi;
   for (int j = 0; j < n; j++) w[j] = z[j] - xs[j];
-  double zx_lo, zx_hi, zx = cup_metric_norm_bounds(K, w, &zx_lo, &zx_hi);
+  double zx_lo, zx_hi, zx = polyset_metric_norm_bounds(K, w, &zx_lo, &zx_hi);
   if (info->skipped) {
     info->eps_cert = 0;
     info->dual_value = 0;
@@ -110,7 +110,7 @@ int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const dou
   } else {
     /* weak duality at mu: L(z) less the gradient correction and rounding */
     double mu = info->dual_value;
-    cup_metric_apply(K, w, xs);             /* xs <- P (z - x): x is no longer needed */
+    polyset_metric_apply(K, w, xs);             /* xs <- P (z - x): x is no longer needed */
     double g2 = 0;
     for (int j = 0; j < n; j++) {
       double gj = 2 * xs[j] + 2 * mu * t[j];   /* t = Q (z - c) from quad_form */
@@ -130,10 +130,10 @@ int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const dou
 
 static int ellipsoid_check(const cup_set_desc *d, char *errmsg) {
   if (d->n > CUP_DENSE_MAX_DIM)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED, "set ellipsoid: n = %d exceeds the dense limit %d",
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "set ellipsoid: n = %d exceeds the dense limit %d",
                     d->n, CUP_DENSE_MAX_DIM);
   if (!set_present(&d->Q))
-    return cup_fail(errmsg, CUP_ERR_ARG, "set ellipsoid: the shape Q is missing");
+    return fail_fmt(errmsg, CUP_ERR_ARG, "set ellipsoid: the shape Q is missing");
   return CUP_OK;
 }
 
@@ -173,8 +173,8 @@ static double metric_min_eig(const cup_polyset *K, const double *Pd, gsl_vector 
 static int ellipsoid_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
   int n = d->n, st = CUP_OK;
   size_t NN = (size_t)n * n;
-  cup_sparse Q = {0};
-  st = cup_sparse_copy(&Q, &d->Q, "Q", n, n, errmsg);
+  la_sparse Q = {0};
+  st = la_sparse_copy(&Q, &d->Q, "Q", n, n, errmsg);
   if (st) return st;
   S->Qd = calloc(NN, sizeof(double));
   S->V = calloc(NN, sizeof(double));
@@ -185,7 +185,7 @@ static int ellipsoid_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
   gsl_matrix *evec = gsl_matrix_alloc((size_t)n, (size_t)n);
   gsl_eigen_gensymmv_workspace *w = gsl_eigen_gensymmv_alloc((size_t)n);
   if (!S->Qd || !S->V || !S->VtP || !S->lam || !Pd || !A || !B || !ev || !evec || !w) {
-    st = cup_fail(errmsg, CUP_ERR_NOMEM, "set ellipsoid: out of memory");
+    st = fail_fmt(errmsg, CUP_ERR_NOMEM, "set ellipsoid: out of memory");
     goto done;
   }
   for (int j = 0; j < n; j++)
@@ -195,7 +195,7 @@ static int ellipsoid_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
   for (int j = 0; j < n && !st; j++)
     for (int i = j + 1; i < n; i++)
       if (fabs(S->Qd[i + (size_t)j * n] - S->Qd[j + (size_t)i * n]) > 1e-12 * qmax) {
-        st = cup_fail(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: Q is not symmetric: Q(%d,%d) = %.17g, Q(%d,%d) = %.17g",
+        st = fail_fmt(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: Q is not symmetric: Q(%d,%d) = %.17g, Q(%d,%d) = %.17g",
                       i, j, S->Qd[i + (size_t)j * n], j, i, S->Qd[j + (size_t)i * n]);
         break;
       }
@@ -208,10 +208,10 @@ static int ellipsoid_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
   gsl_error_handler_t *old = gsl_set_error_handler_off();
   int rc = gsl_eigen_gensymmv(&Av.matrix, &Bv.matrix, ev, evec, w);
   gsl_set_error_handler(old);
-  if (rc) { st = cup_fail(errmsg, CUP_ERR_LINALG, "set ellipsoid: the eigenproblem Q v = lam P v failed"); goto done; }
+  if (rc) { st = fail_fmt(errmsg, CUP_ERR_LINALG, "set ellipsoid: the eigenproblem Q v = lam P v failed"); goto done; }
   for (int i = 0; i < n; i++) {
     double l = gsl_vector_get(ev, (size_t)i);
-    if (!(l > 0)) { st = cup_fail(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: Q is not positive definite (eigenvalue %g)", l); goto done; }
+    if (!(l > 0)) { st = fail_fmt(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: Q is not positive definite (eigenvalue %g)", l); goto done; }
     S->lam[i] = l;
     double *v = S->V + (size_t)i * n, pvv = 0;          /* column i, normalized in the P-norm */
     for (int r = 0; r < n; r++) v[r] = gsl_matrix_get(evec, (size_t)r, (size_t)i);
@@ -230,13 +230,13 @@ static int ellipsoid_setup(cup_set *S, const cup_set_desc *d, char *errmsg) {
   S->pmin = pev ? metric_min_eig(S->K, Pd, pev, A) : NAN;
   gsl_set_error_handler(old);
   if (pev) gsl_vector_free(pev);
-  if (!(S->pmin > 0)) st = cup_fail(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: no positive lower bound on lambda_min(P)");
+  if (!(S->pmin > 0)) st = fail_fmt(errmsg, CUP_ERR_NOT_SPD, "set ellipsoid: no positive lower bound on lambda_min(P)");
 done:
   if (w) gsl_eigen_gensymmv_free(w);
   if (evec) gsl_matrix_free(evec);
   if (ev) gsl_vector_free(ev);
   free(Pd); free(A); free(B);
-  cup_sparse_free(&Q);
+  la_sparse_free(&Q);
   return st;
 }
 

@@ -28,8 +28,8 @@ static int finite_answer(const double *z, int n, double ec, double hc, char *msg
   return 1;
 }
 
-int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, double *work,
-                       cup_proj_info *info, char *msg, size_t size) {
+int oracle_project(const cup_set *S, double t, const double *x, double *z, double *work,
+                   cup_proj_info *info, char *msg, size_t size) {
   int n = S->n;
   double *za = work, *zb = work + n, *w = work + 2 * (size_t)n;
   double et = info->eps_target, ht = info->eta_target, ec = NAN, hc = NAN, ec2 = NAN, hc2 = NAN;
@@ -47,7 +47,7 @@ int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, d
   }
   if (!finite_answer(zb, n, ec2, hc2, msg, size)) return info->status = CUP_ERR_CALLBACK;
   for (int j = 0; j < n; j++) w[j] = za[j] - zb[j];
-  double lo, zz = cup_metric_norm_bounds(S->K, w, &lo, NULL);
+  double lo, zz = polyset_metric_norm_bounds(S->K, w, &lo, NULL);
   double allowed = hc * hc + ec2;
   /* rounding of z' itself: a few ulps of the points' size */
   for (int j = 0; j < n; j++) w[j] = fabs(za[j]);
@@ -73,7 +73,7 @@ int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, d
 }
 
 static int oracle_check(const cup_set_desc *d, char *errmsg) {
-  return d->oracle ? CUP_OK : cup_fail(errmsg, CUP_ERR_ARG, "set oracle: the oracle callback is NULL");
+  return d->oracle ? CUP_OK : fail_fmt(errmsg, CUP_ERR_ARG, "set oracle: the oracle callback is NULL");
 }
 
 const set_kind set_kind_oracle = {.check = oracle_check};

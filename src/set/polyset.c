@@ -17,27 +17,27 @@ static void find_interior_direction(cup_polyset *K);
 
 int cup_polyset_create(cup_polyset **out, const cup_csc *C, const double *g,
                        const cup_metric *P, char *errmsg) {
-  return cup_polyset_create_ex(out, C, g, P, 0, NULL, errmsg);
+  return polyset_create_ex(out, C, g, P, 0, NULL, errmsg);
 }
 
-int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
-                          const cup_metric *P, int mutable_values, double *work, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: output pointer is NULL");
+int polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
+                      const cup_metric *P, int mutable_values, double *work, char *errmsg) {
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "polyset: output pointer is NULL");
   *out = NULL;
-  if (!C) return cup_fail(errmsg, CUP_ERR_ARG, "polyset: C is NULL");
+  if (!C) return fail_fmt(errmsg, CUP_ERR_ARG, "polyset: C is NULL");
   if (C->ncol < 1 || C->nrow < 0)
-    return cup_fail(errmsg, CUP_ERR_DIM, "polyset: C is %d x %d; need at least one column",
+    return fail_fmt(errmsg, CUP_ERR_DIM, "polyset: C is %d x %d; need at least one column",
                     C->nrow, C->ncol);
   cup_polyset *K = calloc(1, sizeof *K);
-  if (!K) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  if (!K) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   K->n = C->ncol;
   K->m = C->nrow;
   /* a bound recomputed at every step gets a few iterations (it is valid
    * after any number; more only tighten it) */
   K->mutable_values = mutable_values;
   K->cw_iters = mutable_values ? 6 : 40;
-  int st = cup_sparse_copy(&K->C, C, "C", K->m, K->n, errmsg);
-  if (!st) st = cup_sparse_transpose(&K->Ct, &K->C);
+  int st = la_sparse_copy(&K->C, C, "C", K->m, K->n, errmsg);
+  if (!st) st = la_sparse_transpose(&K->Ct, &K->C);
   if (!st) {
     K->g0 = calloc((size_t)K->m + 1, sizeof(double));
     K->rownnz = calloc((size_t)K->m + 1, sizeof(int));
@@ -45,12 +45,12 @@ int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
     K->rowgam = calloc((size_t)K->m + 1, sizeof(double));
     if (!K->g0 || !K->rownnz || !K->rownorm || !K->rowgam) st = CUP_ERR_NOMEM;
   }
-  if (st == CUP_ERR_NOMEM) cup_fail(errmsg, st, "polyset: out of memory");
+  if (st == CUP_ERR_NOMEM) fail_fmt(errmsg, st, "polyset: out of memory");
   for (int i = 0; !st && i < K->m; i++) {
     K->rownnz[i] = K->Ct.p[i + 1] - K->Ct.p[i];
     K->rowgam[i] = (K->rownnz[i] + 2) * DBL_EPSILON;
     if (g) {
-      if (!isfinite(g[i])) st = cup_fail(errmsg, CUP_ERR_NONFINITE, "g[%d] is %g", i, g[i]);
+      if (!isfinite(g[i])) st = fail_fmt(errmsg, CUP_ERR_NONFINITE, "g[%d] is %g", i, g[i]);
       K->g0[i] = g[i];
     }
   }
@@ -73,9 +73,9 @@ int cup_polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
 void cup_polyset_free(cup_polyset **Kp) {
   if (!Kp || !*Kp) return;
   cup_polyset *K = *Kp;
-  cup_sparse_free(&K->C);
-  cup_sparse_free(&K->Ct);
-  cup_sparse_free(&K->Pfull);
+  la_sparse_free(&K->C);
+  la_sparse_free(&K->Ct);
+  la_sparse_free(&K->Pfull);
   if (K->cm) {   /* started: holds workspace even if analysis failed */
     if (K->LP) cholmod_free_factor(&K->LP, K->cm);
     cholmod_finish(K->cm);
@@ -99,12 +99,12 @@ const double *cup_polyset_interior_direction(const cup_polyset *K) {
 static int diag_setup(cup_polyset *K, const double *d, char *errmsg) {
   K->pd = malloc(sizeof(double) * (size_t)K->n);
   K->pdinv = malloc(sizeof(double) * (size_t)K->n);
-  if (!K->pd || !K->pdinv) return cup_fail(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+  if (!K->pd || !K->pdinv) return fail_fmt(errmsg, CUP_ERR_NOMEM, "P: out of memory");
   for (int j = 0; j < K->n; j++) {
     double v = d ? d[j] : 1.0;
-    if (!isfinite(v)) return cup_fail(errmsg, CUP_ERR_NONFINITE, "P(%d,%d) is %g", j, j, v);
+    if (!isfinite(v)) return fail_fmt(errmsg, CUP_ERR_NONFINITE, "P(%d,%d) is %g", j, j, v);
     if (!(v > 0))
-      return cup_fail(errmsg, CUP_ERR_NOT_SPD,
+      return fail_fmt(errmsg, CUP_ERR_NOT_SPD,
                       "P(%d,%d) = %g: a positive definite P needs a positive diagonal", j, j, v);
     K->pd[j] = v;
     K->pdinv[j] = 1.0 / v;
@@ -116,22 +116,22 @@ static int diag_setup(cup_polyset *K, const double *d, char *errmsg) {
  * one; checks symmetry, and reports whether any off-diagonal is nonzero. */
 static int sparse_metric_full(cup_polyset *K, const cup_metric *P, int *offdiag,
                               char *errmsg) {
-  cup_sparse A, At;
-  int st = cup_sparse_copy(&A, &P->matrix, "P", K->n, K->n, errmsg);
+  la_sparse A, At;
+  int st = la_sparse_copy(&A, &P->matrix, "P", K->n, K->n, errmsg);
   if (st) return st;
   *offdiag = 0;
   if (P->lower_only) {
     for (int j = 0; j < K->n && !st; j++)
       for (int k = A.p[j]; k < A.p[j + 1]; k++)
         if (A.i[k] < j) {
-          st = cup_fail(errmsg, CUP_ERR_ARG,
+          st = fail_fmt(errmsg, CUP_ERR_ARG,
                         "P: lower_only is set but entry (%d,%d) is above the diagonal", A.i[k], j);
           break;
         }
-    if (!st) st = cup_sparse_transpose(&At, &A);
-    if (st) { cup_sparse_free(&A); return st; }
+    if (!st) st = la_sparse_transpose(&At, &A);
+    if (st) { la_sparse_free(&A); return st; }
     /* full = A + A^T - diag(A): merge sorted columns */
-    st = cup_sparse_alloc(&K->Pfull, K->n, K->n, 2 * A.nnz);
+    st = la_sparse_alloc(&K->Pfull, K->n, K->n, 2 * A.nnz);
     int nz = 0;
     for (int j = 0; !st && j < K->n; j++) {
       int a = At.p[j], b = A.p[j];     /* At column j: rows <= j; A column j: rows >= j */
@@ -143,31 +143,31 @@ static int sparse_metric_full(cup_polyset *K, const cup_metric *P, int *offdiag,
       K->Pfull.p[j + 1] = nz;
     }
     if (!st) K->Pfull.nnz = nz;
-    cup_sparse_free(&At);
-    cup_sparse_free(&A);
-    if (st) return cup_fail(errmsg, st, "P: out of memory");
+    la_sparse_free(&At);
+    la_sparse_free(&A);
+    if (st) return fail_fmt(errmsg, st, "P: out of memory");
   } else {
-    st = cup_sparse_transpose(&At, &A);
-    if (st) { cup_sparse_free(&A); return cup_fail(errmsg, st, "P: out of memory"); }
+    st = la_sparse_transpose(&At, &A);
+    if (st) { la_sparse_free(&A); return fail_fmt(errmsg, st, "P: out of memory"); }
     double amax = 0;
     for (int k = 0; k < A.nnz; k++) amax = fmax(amax, fabs(A.x[k]));
     /* Same pattern and values as the transpose, to rounding. */
     for (int j = 0; j < K->n && !st; j++) {
       if (A.p[j + 1] - A.p[j] != At.p[j + 1] - At.p[j]) {
-        st = cup_fail(errmsg, CUP_ERR_NOT_SPD,
+        st = fail_fmt(errmsg, CUP_ERR_NOT_SPD,
                       "P is not symmetric: row %d and column %d have different patterns", j, j);
         break;
       }
       for (int k = A.p[j]; k < A.p[j + 1]; k++)
         if (A.i[k] != At.i[k] || fabs(A.x[k] - At.x[k]) > 1e-12 * amax) {
-          st = cup_fail(errmsg, CUP_ERR_NOT_SPD,
+          st = fail_fmt(errmsg, CUP_ERR_NOT_SPD,
                         "P is not symmetric: P(%d,%d) = %.17g but P(%d,%d) = %.17g",
                         A.i[k], j, A.x[k], j, A.i[k], At.x[k]);
           break;
         }
     }
-    cup_sparse_free(&At);
-    if (st) { cup_sparse_free(&A); return st; }
+    la_sparse_free(&At);
+    if (st) { la_sparse_free(&A); return st; }
     K->Pfull = A;
   }
   for (int j = 0; j < K->n; j++) {
@@ -176,7 +176,7 @@ static int sparse_metric_full(cup_polyset *K, const cup_metric *P, int *offdiag,
       if (K->Pfull.i[k] == j) {
         has_diag = 1;
         if (!(K->Pfull.x[k] > 0))
-          return cup_fail(errmsg, CUP_ERR_NOT_SPD,
+          return fail_fmt(errmsg, CUP_ERR_NOT_SPD,
                           "P(%d,%d) = %g: a positive definite P needs a positive diagonal",
                           j, j, K->Pfull.x[k]);
       } else if (K->Pfull.x[k] != 0) {
@@ -184,7 +184,7 @@ static int sparse_metric_full(cup_polyset *K, const cup_metric *P, int *offdiag,
       }
     }
     if (!has_diag)
-      return cup_fail(errmsg, CUP_ERR_NOT_SPD, "P(%d,%d) is missing: the diagonal must be positive", j, j);
+      return fail_fmt(errmsg, CUP_ERR_NOT_SPD, "P(%d,%d) is missing: the diagonal must be positive", j, j);
   }
   return CUP_OK;
 }
@@ -195,22 +195,22 @@ static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg) {
     return diag_setup(K, NULL, errmsg);
   }
   if (P->kind == CUP_METRIC_DIAGONAL) {
-    if (!P->diag) return cup_fail(errmsg, CUP_ERR_ARG, "P: kind is DIAGONAL but diag is NULL");
+    if (!P->diag) return fail_fmt(errmsg, CUP_ERR_ARG, "P: kind is DIAGONAL but diag is NULL");
     K->pkind = CUP_METRIC_DIAGONAL;
     return diag_setup(K, P->diag, errmsg);
   }
   if (P->kind != CUP_METRIC_SPARSE)
-    return cup_fail(errmsg, CUP_ERR_ARG, "P: unknown metric kind %d", (int)P->kind);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "P: unknown metric kind %d", (int)P->kind);
   int offdiag = 0;
   int st = sparse_metric_full(K, P, &offdiag, errmsg);
   if (st) return st;
   if (!offdiag) {                   /* a diagonal matrix given in sparse form */
     double *d = malloc(sizeof(double) * (size_t)K->n);
-    if (!d) return cup_fail(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+    if (!d) return fail_fmt(errmsg, CUP_ERR_NOMEM, "P: out of memory");
     for (int j = 0; j < K->n; j++)
       for (int k = K->Pfull.p[j]; k < K->Pfull.p[j + 1]; k++)
         if (K->Pfull.i[k] == j) d[j] = K->Pfull.x[k];
-    cup_sparse_free(&K->Pfull);
+    la_sparse_free(&K->Pfull);
     K->pkind = CUP_METRIC_DIAGONAL;
     st = diag_setup(K, d, errmsg);
     free(d);
@@ -218,14 +218,14 @@ static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg) {
   }
   K->pkind = CUP_METRIC_SPARSE;
   K->cm = malloc(sizeof *K->cm);
-  if (!K->cm) return cup_fail(errmsg, CUP_ERR_NOMEM, "P: out of memory");
-  if (cup_cholmod_start(K->cm)) {
+  if (!K->cm) return fail_fmt(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+  if (la_cholmod_start(K->cm)) {
     free(K->cm);
     K->cm = NULL;
-    return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD start failed");
+    return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD start failed");
   }
   K->cm->final_ll = 1;               /* L L^T so that ||L^-1 Pi c|| = ||c||_{P^-1} */
-  K->cm->supernodal = CHOLMOD_SIMPLICIAL;  /* solved by cup_simplicial_solve, no allocation */
+  K->cm->supernodal = CHOLMOD_SIMPLICIAL;  /* solved by la_simplicial_solve, no allocation */
   cholmod_sparse A = {0};
   A.nrow = A.ncol = (size_t)K->n;
   A.nzmax = (size_t)K->Pfull.nnz;
@@ -234,23 +234,23 @@ static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg) {
   A.itype = CHOLMOD_INT; A.xtype = CHOLMOD_REAL; A.dtype = CHOLMOD_DOUBLE;
   A.sorted = 1; A.packed = 1;
   K->LP = cholmod_analyze(&A, K->cm);
-  if (!K->LP) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD analysis failed (status %d)", K->cm->status);
+  if (!K->LP) return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD analysis failed (status %d)", K->cm->status);
   cholmod_factorize(&A, K->LP, K->cm);
   if (K->cm->status == CHOLMOD_NOT_POSDEF) {
     int bad = (int)K->LP->minor;
     int col = K->LP->Perm ? ((int *)K->LP->Perm)[bad] : bad;
-    return cup_fail(errmsg, CUP_ERR_NOT_SPD,
+    return fail_fmt(errmsg, CUP_ERR_NOT_SPD,
                     "P is not positive definite: the Cholesky factorization breaks down at column %d", col);
   }
   if (K->cm->status < 0)
-    return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD factorization failed (status %d)", K->cm->status);
+    return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD factorization failed (status %d)", K->cm->status);
   return CUP_OK;
 }
 
-void cup_metric_apply(const cup_polyset *K, const double *v, double *out) {
+void polyset_metric_apply(const cup_polyset *K, const double *v, double *out) {
   if (K->pkind == CUP_METRIC_SPARSE) {
     memset(out, 0, sizeof(double) * (size_t)K->n);
-    cup_sparse_gaxpy(&K->Pfull, v, out);
+    la_sparse_gaxpy(&K->Pfull, v, out);
   } else {
     for (int j = 0; j < K->n; j++) out[j] = K->pd[j] * v[j];
   }
@@ -270,7 +270,7 @@ double cup_polyset_norm(const cup_polyset *K, const double *v) {
   return isnan(s) ? NAN : s > 0 ? sqrt(s) : 0;   /* rounding may make s < 0; NaN must show */
 }
 
-double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi) {
+double polyset_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi) {
   double s = 0, a = 0;
   int n = K->n;
   if (K->pkind == CUP_METRIC_SPARSE) {
@@ -296,15 +296,15 @@ double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo,
   return isnan(s) ? NAN : val;
 }
 
-double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w) {
+double polyset_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w) {
   for (int j = 0; j < K->n; j++) w[j] = a[j] - b[j];
   double hi;
-  cup_metric_norm_bounds(K, w, lo, &hi);
+  polyset_metric_norm_bounds(K, w, lo, &hi);
   return hi;
 }
 
-double cup_slack(const cup_polyset *K, const double *g, const double *x,
-                 double *s, double *gam) {
+double polyset_slack(const cup_polyset *K, const double *g, const double *x,
+                     double *s, double *gam) {
   const int *p = K->Ct.p, *ri = K->Ct.i;
   const double *cx = K->Ct.x, *rg = K->rowgam;
   double worst = INFINITY;
@@ -328,7 +328,7 @@ int cup_polyset_contains(const cup_polyset *K, const double *g, const double *x)
   if (!K || !x) return 0;
   double *s = malloc(sizeof(double) * ((size_t)K->m * 2 + 1));
   if (!s) return 0;
-  double worst = cup_slack(K, g ? g : K->g0, x, s, s + K->m);
+  double worst = polyset_slack(K, g ? g : K->g0, x, s, s + K->m);
   free(s);
   return worst >= 0;                 /* false for NaN */
 }
@@ -381,21 +381,21 @@ static void abs_apply_w(const cup_polyset *K, const void *Wv, const double *v,
 enum { CW_WARM_ITERS = 2 };
 #define CW_WARM_FLOOR 0.25
 
-/* cup_max, not fmax (a libm call), with the new value first: a NaN one is
+/* la_max, not fmax (a libm call), with the new value first: a NaN one is
  * passed over, as fmax would. */
 static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const void *W,
                                double *v, double *w, double *tmp, int warm) {
-  for (int i = 0; i < K->m; i++) v[i] = warm ? cup_max(v[i], CW_WARM_FLOOR) : 1.0;
+  for (int i = 0; i < K->m; i++) v[i] = warm ? la_max(v[i], CW_WARM_FLOOR) : 1.0;
   for (int it = 0; it < (warm ? CW_WARM_ITERS : K->cw_iters); it++) {
     apply(K, W, v, w, tmp);
     double wmax = 0;
-    for (int i = 0; i < K->m; i++) wmax = cup_max(w[i], wmax);
+    for (int i = 0; i < K->m; i++) wmax = la_max(w[i], wmax);
     if (!(wmax > 0)) return 0;
-    for (int i = 0; i < K->m; i++) v[i] = cup_max(w[i] / wmax, 1e-12);
+    for (int i = 0; i < K->m; i++) v[i] = la_max(w[i] / wmax, 1e-12);
   }
   apply(K, W, v, w, tmp);
   double bound = 0;
-  for (int i = 0; i < K->m; i++) bound = cup_max(w[i] / v[i], bound);
+  for (int i = 0; i < K->m; i++) bound = la_max(w[i] / v[i], bound);
   return bound * (1 + 1e-12);
 }
 
@@ -403,7 +403,7 @@ static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const v
 static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
   if (K->m == 0) { K->lip = 0; return CUP_OK; }
   double *v = work ? work : malloc(sizeof(double) * (2 * (size_t)K->m + (size_t)K->n));
-  if (!v) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  if (!v) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   double *w = v + K->m, *tmp = w + K->m;
   if (K->pkind != CUP_METRIC_SPARSE) {
     for (int i = 0; i < K->m; i++) {
@@ -428,7 +428,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
     cholmod_free_sparse(&PC, K->cm);
     if (!W) {
       if (!work) free(v);
-      return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed");
+      return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed");
     }
     const int *p = W->p;
     const double *x = W->x;
@@ -444,7 +444,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
   return CUP_OK;
 }
 
-void cup_polyset_revalue(cup_polyset *K, double *work) {
+void polyset_revalue(cup_polyset *K, double *work) {
   row_norms_and_lipschitz(K, work, NULL);   /* diagonal metric: allocation-free, cannot fail */
 }
 
@@ -454,7 +454,7 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
   int n = K->n, m = K->m;
   K->Bt = calloc((size_t)n * m + 1, sizeof(double));
   K->Md = calloc((size_t)m * m + 1, sizeof(double));
-  if (!K->Bt || !K->Md) return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  if (!K->Bt || !K->Md) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   for (int i = 0; i < m; i++) {            /* column i of Bt = P^-1 c_i */
     double *b = K->Bt + (size_t)i * n;
     for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) b[K->Ct.i[k]] = K->Ct.x[k];
@@ -464,11 +464,11 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
     B.nrow = (size_t)n; B.ncol = (size_t)m; B.nzmax = (size_t)n * m; B.d = (size_t)n;
     B.x = K->Bt; B.xtype = CHOLMOD_REAL; B.dtype = CHOLMOD_DOUBLE;
     cholmod_dense *X = cholmod_solve(CHOLMOD_A, K->LP, &B, K->cm);
-    if (!X) return cup_fail(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve failed");
+    if (!X) return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve failed");
     memcpy(K->Bt, X->x, sizeof(double) * (size_t)n * m);
     cholmod_free_dense(&X, K->cm);
   } else {
-    for (int i = 0; i < m; i++) cup_metric_solve_diag(K, K->Bt + (size_t)i * n);
+    for (int i = 0; i < m; i++) polyset_metric_solve_diag(K, K->Bt + (size_t)i * n);
   }
   for (int j = 0; j < m; j++)              /* M(:,j) = C Bt(:,j) */
     for (int i = 0; i < m; i++) {
@@ -492,7 +492,7 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
       if (A) gsl_matrix_free(A);
       if (ev) gsl_vector_free(ev);
       if (ws) gsl_eigen_symm_free(ws);
-      return cup_fail(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+      return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
     }
     double fro = 0;
     for (int j = 0; j < m; j++)
@@ -541,7 +541,7 @@ static void find_interior_direction(cup_polyset *K) {
       for (int i = 0; i < m; i++)
         for (int j = 0; j < n; j++) d[j] += K->Bt[(size_t)i * n + j] * mu[i];
       memset(cd, 0, sizeof(double) * (size_t)m);
-      cup_sparse_gaxpy(&K->C, d, cd);
+      la_sparse_gaxpy(&K->C, d, cd);
       found = 1;
       for (int i = 0; i < m && found; i++)
         if (K->rownorm[i] > 0 && !(cd[i] >= 0.5 * K->rownorm[i])) found = 0;

@@ -13,12 +13,12 @@
 
 struct cup_polyset {
   int n, m;
-  cup_sparse C;        /* m x n, CSC */
-  cup_sparse Ct;       /* n x m, CSC of C^T: the rows of C */
+  la_sparse C;        /* m x n, CSC */
+  la_sparse Ct;       /* n x m, CSC of C^T: the rows of C */
   double *g0;          /* default offset, m */
   int pkind;           /* CUP_METRIC_* after simplification */
   double *pd, *pdinv;  /* IDENTITY/DIAGONAL: P's diagonal and its inverse */
-  cup_sparse Pfull;    /* SPARSE: both triangles, for products P v */
+  la_sparse Pfull;    /* SPARSE: both triangles, for products P v */
   cholmod_common *cm;  /* SPARSE only (2.9 kB): owns LP; used only at creation and free */
   cholmod_factor *LP;  /* SPARSE: L L^T = Pi P Pi^T (read-only after creation) */
   double *rownorm;     /* ||c_i||_{P^-1} = sqrt(M_ii) */
@@ -27,7 +27,7 @@ struct cup_polyset {
   double lip;          /* guaranteed L >= lambda_max(M) */
   int cw_iters;        /* Collatz-Wielandt iterations of that bound */
   int cw_warm;         /* revalue: work's first m entries hold the last bound's vector (> 0) */
-  int mutable_values;  /* values rewritten in place at every step (cup_polyset_revalue) */
+  int mutable_values;  /* values rewritten in place at every step (polyset_revalue) */
   double solve_amp;    /* bound on the relative error amplification of P^-1 (1, or 1/rcond) */
   int dense;           /* small set: Md and Bt below are valid */
   double *Md;          /* m x m, column-major, M = C P^-1 C^T */
@@ -38,42 +38,42 @@ struct cup_polyset {
 };
 
 /* cup_polyset_create; with mutable_values, for a polyset whose values
- * change in place (cup_polyset_revalue), without the dense form (Md, Bt,
+ * change in place (polyset_revalue), without the dense form (Md, Bt,
  * the interior direction) and with a quicker Lipschitz bound. work: NULL,
- * or the 2 m + n doubles that cup_polyset_revalue will be given, its first
+ * or the 2 m + n doubles that polyset_revalue will be given, its first
  * m entries a vector to start the bound from as revalue does (a set rebuilt
  * with rows of the last one: their entries of its last vector, 0 for new
  * rows); the bound and the first revalue are then warm (a sparse metric's
  * bound is always cold). */
-int cup_polyset_create_ex(cup_polyset **K, const cup_csc *C, const double *g,
-                          const cup_metric *P, int mutable_values, double *work, char *errmsg);
+int polyset_create_ex(cup_polyset **K, const cup_csc *C, const double *g,
+                      const cup_metric *P, int mutable_values, double *work, char *errmsg);
 /* The values of C (C.x and Ct.x, the pattern unchanged) were rewritten:
  * recompute the row norms and the Lipschitz bound. Only for a polyset
  * without the dense form and with a diagonal metric; work: 2 m + n doubles,
  * the same from one call to the next and untouched between them: its first
  * m entries keep the bound's vector, from which the next bound starts (the
  * values change little from a step to the next). Allocates nothing. */
-void cup_polyset_revalue(cup_polyset *K, double *work);
+void polyset_revalue(cup_polyset *K, double *work);
 
 /* P v into out (n entries). */
-void cup_metric_apply(const cup_polyset *K, const double *v, double *out);
+void polyset_metric_apply(const cup_polyset *K, const double *v, double *out);
 /* Bounds on ||v||_P for a computed v: *lo <= ||v||_P <= *hi, allowing for the
  * rounding of the sum (and of forming v from one subtraction). Returns the
  * computed value. */
-double cup_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi);
+double polyset_metric_norm_bounds(const cup_polyset *K, const double *v, double *lo, double *hi);
 /* An upper bound on ||a - b||_P (and a lower one into *lo, may be NULL);
  * scratch w: n entries. */
-double cup_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w);
+double polyset_metric_dist_hi(const cup_polyset *K, const double *a, const double *b, double *lo, double *w);
 
 /* In place P^-1 v for IDENTITY/DIAGONAL metrics. SPARSE metrics go through
- * the projector's CHOLMOD workspace (cup_metric_solve in projector/certify.h). */
-static inline void cup_metric_solve_diag(const cup_polyset *K, double *v) {
+ * the projector's CHOLMOD workspace (certify_metric_solve in projector/certify.h). */
+static inline void polyset_metric_solve_diag(const cup_polyset *K, double *v) {
   if (K->pkind == CUP_METRIC_IDENTITY) return;
   for (int j = 0; j < K->n; j++) v[j] *= K->pdinv[j];
 }
 /* s = C x + g and, if gam is not NULL, gam_i = a bound on the rounding
  * error of s_i. Returns min_i (s_i - gam_i) (or min s_i when gam is NULL). */
-double cup_slack(const cup_polyset *K, const double *g, const double *x,
-                 double *s, double *gam);
+double polyset_slack(const cup_polyset *K, const double *g, const double *x,
+                     double *s, double *gam);
 
 #endif

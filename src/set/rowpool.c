@@ -43,7 +43,7 @@ static int grow_entries(cup_rowbuf *rb, int need) {
   return CUP_OK;
 }
 
-int cup_rowbuf_init(cup_rowbuf *rb, int n, int rows, int nnz) {
+int rowbuf_init(cup_rowbuf *rb, int n, int rows, int nnz) {
   memset(rb, 0, sizeof *rb);
   rb->n = n;
   int st = grow_rows(rb, rows > 0 ? rows : 16);
@@ -52,19 +52,19 @@ int cup_rowbuf_init(cup_rowbuf *rb, int n, int rows, int nnz) {
   return st;
 }
 
-void cup_rowbuf_free(cup_rowbuf *rb) {
+void rowbuf_free(cup_rowbuf *rb) {
   free(rb->ptr); free(rb->off); free(rb->col); free(rb->val); free(rb->eptr); free(rb->ecol);
   memset(rb, 0, sizeof *rb);
 }
 
-void cup_rowbuf_clear(cup_rowbuf *rb) {
+void rowbuf_clear(cup_rowbuf *rb) {
   rb->m = rb->nnz = rb->me = rb->enz = 0;
   rb->ptr[0] = 0;
   rb->status = CUP_OK;
   rb->message[0] = '\0';
 }
 
-void cup_rowbuf_order(cup_rowbuf *rb, const int *perm, long generation) {
+void rowbuf_order(cup_rowbuf *rb, const int *perm, long generation) {
   rb->perm = perm;
   rb->perm_gen = generation;
 }
@@ -153,7 +153,7 @@ static unsigned pattern_hash(const int *col, int len) {
   return h;
 }
 
-int cup_rowpool_init(cup_rowpool *P, int n) {
+int rowpool_init(row_pool *P, int n) {
   memset(P, 0, sizeof *P);
   P->n = n;
   P->unique = 1;
@@ -161,14 +161,14 @@ int cup_rowpool_init(cup_rowpool *P, int n) {
   return P->ptr ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-void cup_rowpool_free(cup_rowpool *P) {
+void rowpool_free(row_pool *P) {
   free(P->ptr); free(P->col); free(P->hash); free(P->next); free(P->head); free(P->used);
   free(P->row_of); free(P->slot_of); free(P->old_of);
   memset(P, 0, sizeof *P);
 }
 
 /* A slot with this pattern (holding no row this step, if free_only), or -1. */
-static int find_slot(const cup_rowpool *P, const int *col, int len, int free_only) {
+static int find_slot(const row_pool *P, const int *col, int len, int free_only) {
   if (!P->m) return -1;
   unsigned h = pattern_hash(col, len);
   for (int s = P->head[h & (unsigned)(P->hsize - 1)]; s >= 0; s = P->next[s])
@@ -179,7 +179,7 @@ static int find_slot(const cup_rowpool *P, const int *col, int len, int free_onl
 }
 
 /* Does slot s hold this pattern? */
-static int same_pattern(const cup_rowpool *P, int s, const int *col, int len) {
+static int same_pattern(const row_pool *P, int s, const int *col, int len) {
   return s >= 0 && s < P->m && P->ptr[s + 1] - P->ptr[s] == len &&
          !memcmp(P->col + P->ptr[s], col, sizeof(int) * (size_t)len);
 }
@@ -189,12 +189,12 @@ static int same_pattern(const cup_rowpool *P, int s, const int *col, int len) {
  * rebuild's, and the guess reads the pool in order where a hash lookup
  * reads it at random). When no pattern is in the pool twice, a slot with
  * the pattern is the only one, so the guess gives the same slot. */
-static int slot_for(const cup_rowpool *P, const int *col, int len, int free_only, int guess) {
+static int slot_for(const row_pool *P, const int *col, int len, int free_only, int guess) {
   if (P->unique && same_pattern(P, guess, col, len) && (!free_only || P->row_of[guess] < 0)) return guess;
   return find_slot(P, col, len, free_only);
 }
 
-int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
+int rowpool_match(row_pool *P, const cup_rowbuf *rb, long step) {
   if (rb->m > P->rcap) {
     int *q = realloc(P->slot_of, sizeof(int) * ((size_t)rb->m + 1));
     if (!q) return CUP_ERR_NOMEM;
@@ -217,7 +217,7 @@ int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step) {
 }
 
 /* Room for m slots of nnz entries in total. */
-static int reserve(cup_rowpool *P, int m, int nnz) {
+static int reserve(row_pool *P, int m, int nnz) {
   if (m > P->cap) {
     int c = P->cap > 0 ? P->cap : 16;
     while (c < m) c *= 2;
@@ -253,7 +253,7 @@ static int reserve(cup_rowpool *P, int m, int nnz) {
 }
 
 /* Append a slot of this pattern (room reserved) and hash it. */
-static void append_slot(cup_rowpool *P, const int *col, int len, long used, int old) {
+static void append_slot(row_pool *P, const int *col, int len, long used, int old) {
   int s = P->m++;
   memcpy(P->col + P->nnz, col, sizeof(int) * (size_t)len);
   P->nnz += len;
@@ -268,7 +268,7 @@ static void append_slot(cup_rowpool *P, const int *col, int len, long used, int 
 }
 
 /* The chains of the hash table over slots 0..m-1. */
-static void rehash(cup_rowpool *P) {
+static void rehash(row_pool *P) {
   for (int k = 0; k < P->hsize; k++) P->head[k] = -1;
   for (int s = 0; s < P->m; s++) {
     unsigned h = P->hash[s] = pattern_hash(P->col + P->ptr[s], P->ptr[s + 1] - P->ptr[s]);
@@ -277,7 +277,7 @@ static void rehash(cup_rowpool *P) {
   }
 }
 
-void cup_rowpool_renumber(cup_rowpool *P, const int *map) {
+void rowpool_renumber(row_pool *P, const int *map) {
   for (int s = 0; s < P->m; s++) {
     int *col = P->col + P->ptr[s], len = P->ptr[s + 1] - P->ptr[s];
     for (int k = 0; k < len; k++) {          /* insertion sort: a pattern has a few columns */
@@ -289,7 +289,7 @@ void cup_rowpool_renumber(cup_rowpool *P, const int *map) {
   if (P->m) rehash(P);
 }
 
-int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
+int rowpool_rebuild(row_pool *P, const cup_rowbuf *rb, long step) {
   /* the old slots to keep, and their patterns, before they are overwritten */
   int keep = 0, keep_nnz = 0;
   for (int s = 0; s < P->m; s++)
@@ -344,9 +344,9 @@ int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step) {
 /* ---- the kind state-polyset ---------------------------------------------------- */
 
 static int state_check(const cup_set_desc *d, char *errmsg) {
-  if (!d->rows) return cup_fail(errmsg, CUP_ERR_ARG, "set state-polyset: the rows callback is NULL");
+  if (!d->rows) return fail_fmt(errmsg, CUP_ERR_ARG, "set state-polyset: the rows callback is NULL");
   if (d->P.kind == CUP_METRIC_SPARSE)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "set state-polyset: the metric must be the identity or diagonal (the rows' "
                     "dual matrix C P^-1 C^T is refactored in place at every step)");
   return CUP_OK;

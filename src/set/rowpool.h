@@ -31,23 +31,23 @@ struct cup_rowbuf {
   int *eptr, *ecol;
   int status;            /* first failed cup_rowbuf_add since the clear (CUP_OK if none) */
   char message[256];     /* what was wrong with it (bounded: numbers), whole inside a set's message */
-  /* the callback's own numbering of the state (cup_rowbuf_order) */
+  /* the callback's own numbering of the state (rowbuf_order) */
   const int *perm;       /* n: column k of the rows is x[perm[k]]; NULL: the state's order */
   long perm_gen;         /* changes whenever perm does */
 };
 
-int cup_rowbuf_init(cup_rowbuf *rb, int n, int rows, int nnz);
-void cup_rowbuf_free(cup_rowbuf *rb);
-void cup_rowbuf_clear(cup_rowbuf *rb);
+int rowbuf_init(cup_rowbuf *rb, int n, int rows, int nnz);
+void rowbuf_free(cup_rowbuf *rb);
+void rowbuf_clear(cup_rowbuf *rb);
 /* The rows' columns are in the callback's numbering: column k is x[perm[k]]
  * (perm, n entries, a permutation, must stay unchanged and alive until the
  * next call with another generation). The state polyset then projects in
  * that numbering (a crowd numbered along a space-filling curve keeps C, M
  * and the factor nearly banded) and gives its answers in the state's. A
  * new generation renumbers the pool's patterns. Internal: the crowd's. */
-void cup_rowbuf_order(cup_rowbuf *rb, const int *perm, long generation);
+void rowbuf_order(cup_rowbuf *rb, const int *perm, long generation);
 
-typedef struct cup_rowpool {
+typedef struct row_pool {
   int n;
   int m, cap;            /* slots, capacity */
   int nnz, nzcap;        /* pattern entries, capacity */
@@ -62,20 +62,20 @@ typedef struct cup_rowpool {
   int rcap;
   int *old_of;           /* after a rebuild: per new slot, the old slot or -1 */
   int unique;            /* no pattern holds two slots (then a slot found is the slot) */
-} cup_rowpool;
+} row_pool;
 
-int cup_rowpool_init(cup_rowpool *P, int n);
-void cup_rowpool_free(cup_rowpool *P);
+int rowpool_init(row_pool *P, int n);
+void rowpool_free(row_pool *P);
 /* Give each row of rb a slot of the same pattern (at most one row a slot);
  * returns the number of rows left without one (0: the pattern repeats), or
  * CUP_ERR_NOMEM. */
-int cup_rowpool_match(cup_rowpool *P, const cup_rowbuf *rb, long step);
+int rowpool_match(row_pool *P, const cup_rowbuf *rb, long step);
 /* New slots: the rows of rb first (in order), then the slots used within
  * CUP_POOL_KEEP steps that hold no row now, then the expected patterns not
  * among them. Fills old_of and the matches. */
-int cup_rowpool_rebuild(cup_rowpool *P, const cup_rowbuf *rb, long step);
+int rowpool_rebuild(row_pool *P, const cup_rowbuf *rb, long step);
 /* The slots' patterns in a new numbering of the columns: column c becomes
  * map[c] (a permutation of 0..n-1); every slot and its hash follow. */
-void cup_rowpool_renumber(cup_rowpool *P, const int *map);
+void rowpool_renumber(row_pool *P, const int *map);
 
 #endif

@@ -46,18 +46,18 @@ void cup_set_free(cup_set **Sp) {
   if (!Sp || !*Sp) return;
   cup_set *S = *Sp;
   if (S->owns_K) cup_polyset_free(&S->K);
-  if (S->owns_G) cup_sparse_free(&S->G);
-  cup_sparse_free(&S->Gc);
+  if (S->owns_G) la_sparse_free(&S->G);
+  la_sparse_free(&S->Gc);
   free(S->center); free(S->gr); free(S->Qd); free(S->V); free(S->VtP); free(S->lam); free(S->pa);
   free(S);
   *Sp = NULL;
 }
 
-int cup_set_wrap_polyset(cup_set **out, const cup_polyset *K, const cup_sparse *G, int p,
-                         char *errmsg) {
+int set_wrap_polyset(cup_set **out, const cup_polyset *K, const la_sparse *G, int p,
+                     char *errmsg) {
   *out = NULL;
   cup_set *S = calloc(1, sizeof *S);
-  if (!S) return cup_fail(errmsg, CUP_ERR_NOMEM, "set: out of memory");
+  if (!S) return fail_fmt(errmsg, CUP_ERR_NOMEM, "set: out of memory");
   S->kind = CUP_SET_POLYSET;
   S->type = registry[CUP_SET_POLYSET];
   S->n = K->n;
@@ -72,7 +72,7 @@ int cup_set_wrap_polyset(cup_set **out, const cup_polyset *K, const cup_sparse *
 
 static int finite_vector(const double *v, int len, const char *name, char *errmsg) {
   for (int k = 0; v && k < len; k++)
-    if (!isfinite(v[k])) return cup_fail(errmsg, CUP_ERR_NONFINITE, "set: %s[%d] is %g", name, k, v[k]);
+    if (!isfinite(v[k])) return fail_fmt(errmsg, CUP_ERR_NONFINITE, "set: %s[%d] is %g", name, k, v[k]);
   return CUP_OK;
 }
 
@@ -80,32 +80,32 @@ static int copy_vector(double **dst, const double *src, int len, const char *nam
   int st = finite_vector(src, len, name, errmsg);
   if (st) return st;
   *dst = calloc((size_t)len + 1, sizeof(double));
-  if (!*dst) return cup_fail(errmsg, CUP_ERR_NOMEM, "set: out of memory");
+  if (!*dst) return fail_fmt(errmsg, CUP_ERR_NOMEM, "set: out of memory");
   if (src) memcpy(*dst, src, sizeof(double) * (size_t)len);
   return CUP_OK;
 }
 
 static int check_kind_fields(const cup_set_desc *d, char *errmsg) {
   if ((int)d->kind < 0 || (int)d->kind >= (int)CUP_SET_COUNT)
-    return cup_fail(errmsg, CUP_ERR_ARG, "set: unknown kind %d", (int)d->kind);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "set: unknown kind %d", (int)d->kind);
   const set_kind *k = registry[d->kind];
   const char *name = cup_set_kind_name(d->kind);
   if (d->n < 1 || d->p < 0)
-    return cup_fail(errmsg, CUP_ERR_DIM, "set %s: n = %d, p = %d; need n >= 1 and p >= 0", name, d->n, d->p);
+    return fail_fmt(errmsg, CUP_ERR_DIM, "set %s: n = %d, p = %d; need n >= 1 and p >= 0", name, d->n, d->p);
   if (k->rows && !set_present(&d->C))
-    return cup_fail(errmsg, CUP_ERR_ARG, "set %s: C is missing", name);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "set %s: C is missing", name);
   if (k->rows && (d->C.ncol != d->n || (k->rows > 0 && d->C.nrow != k->rows))) {
     char rows[16] = "m";
     if (k->rows > 0) snprintf(rows, sizeof rows, "%d", k->rows);
-    return cup_fail(errmsg, CUP_ERR_DIM, "set %s: C is %d x %d, expected %s x %d", name, d->C.nrow,
+    return fail_fmt(errmsg, CUP_ERR_DIM, "set %s: C is %d x %d, expected %s x %d", name, d->C.nrow,
                     d->C.ncol, rows, d->n);
   }
   int st = k->check ? k->check(d, errmsg) : CUP_OK;
   if (st) return st;
   if (k->ball && !isfinite(d->radius))
-    return cup_fail(errmsg, CUP_ERR_NONFINITE, "set %s: radius is %g", name, d->radius);
+    return fail_fmt(errmsg, CUP_ERR_NONFINITE, "set %s: radius is %g", name, d->radius);
   if (k->ball && !d->gr && !set_present(&d->Gc) && d->radius < 0)
-    return cup_fail(errmsg, CUP_ERR_EMPTY_SET, "set %s: radius = %g < 0: the set is empty", name, d->radius);
+    return fail_fmt(errmsg, CUP_ERR_EMPTY_SET, "set %s: radius = %g < 0: the set is empty", name, d->radius);
   return CUP_OK;
 }
 
@@ -113,7 +113,7 @@ static int check_kind_fields(const cup_set_desc *d, char *errmsg) {
 static int make_polyset(cup_set *S, const cup_set_desc *d, char *errmsg) {
   int zero = 0;
   int *cp = calloc((size_t)d->n + 1, sizeof(int));
-  if (!cp) return cup_fail(errmsg, CUP_ERR_NOMEM, "set: out of memory");
+  if (!cp) return fail_fmt(errmsg, CUP_ERR_NOMEM, "set: out of memory");
   cup_csc none = {0, d->n, cp, &zero, NULL};
   int rows = S->type->rows != 0;
   int st = cup_polyset_create(&S->K, rows ? &d->C : &none, rows ? d->F : NULL, &d->P, errmsg);
@@ -125,15 +125,15 @@ static int make_polyset(cup_set *S, const cup_set_desc *d, char *errmsg) {
 static int copy_motion(cup_set *S, const cup_set_desc *d, char *errmsg) {
   int st = CUP_OK, m = S->K->m;
   if (S->type->rows && set_present(&d->G)) {
-    if (d->p == 0) return cup_fail(errmsg, CUP_ERR_DIM, "set: G is given but p = 0");
-    st = cup_sparse_copy(&S->G, &d->G, "G", m, d->p, errmsg);
+    if (d->p == 0) return fail_fmt(errmsg, CUP_ERR_DIM, "set: G is given but p = 0");
+    st = la_sparse_copy(&S->G, &d->G, "G", m, d->p, errmsg);
     S->has_G = S->owns_G = !st;
   }
   if (st || !S->type->ball) return st;
   st = copy_vector(&S->center, d->center, d->n, "center", errmsg);
   if (!st && set_present(&d->Gc)) {
-    if (d->p == 0) return cup_fail(errmsg, CUP_ERR_DIM, "set: Gc is given but p = 0");
-    st = cup_sparse_copy(&S->Gc, &d->Gc, "Gc", d->n, d->p, errmsg);
+    if (d->p == 0) return fail_fmt(errmsg, CUP_ERR_DIM, "set: Gc is given but p = 0");
+    st = la_sparse_copy(&S->Gc, &d->Gc, "Gc", d->n, d->p, errmsg);
     S->has_Gc = !st;
   }
   S->radius = d->radius;
@@ -142,13 +142,13 @@ static int copy_motion(cup_set *S, const cup_set_desc *d, char *errmsg) {
 }
 
 int cup_set_create(cup_set **out, const cup_set_desc *d, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "set: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "set: output pointer is NULL");
   *out = NULL;
-  if (!d) return cup_fail(errmsg, CUP_ERR_ARG, "set: description is NULL");
+  if (!d) return fail_fmt(errmsg, CUP_ERR_ARG, "set: description is NULL");
   int st = check_kind_fields(d, errmsg);
   if (st) return st;
   cup_set *S = calloc(1, sizeof *S);
-  if (!S) return cup_fail(errmsg, CUP_ERR_NOMEM, "set: out of memory");
+  if (!S) return fail_fmt(errmsg, CUP_ERR_NOMEM, "set: out of memory");
   S->kind = d->kind;
   S->type = registry[d->kind];
   S->n = d->n;
@@ -165,15 +165,15 @@ int cup_set_create(cup_set **out, const cup_set_desc *d, char *errmsg) {
   return CUP_OK;
 }
 
-void cup_set_place(const cup_set *S, const double *u, double *g, double *c, double *r) {
+void set_place(const cup_set *S, const double *u, double *g, double *c, double *r) {
   int use_u = S->p > 0 && u;
   if (g && S->K->m) {
-    cup_copy(g, S->K->g0, S->K->m);
-    if (S->has_G && use_u) cup_sparse_gaxpy(&S->G, u, g);
+    la_copy(g, S->K->g0, S->K->m);
+    if (S->has_G && use_u) la_sparse_gaxpy(&S->G, u, g);
   }
   if (c && S->center) {
-    cup_copy(c, S->center, S->n);
-    if (S->has_Gc && use_u) cup_sparse_gaxpy(&S->Gc, u, c);
+    la_copy(c, S->center, S->n);
+    if (S->has_Gc && use_u) la_sparse_gaxpy(&S->Gc, u, c);
   }
   if (r) {
     double rr = S->radius;

@@ -35,10 +35,10 @@ struct cup_set {
   cup_polyset *K;        /* the rows {C x + F >= 0} and the metric P; a set without rows
                             keeps a polyset of 0 rows for its metric */
   int owns_K;            /* 0: borrowed (an LCS's polyset) */
-  cup_sparse G;          /* m x p: g = F + G u */
+  la_sparse G;          /* m x p: g = F + G u */
   int has_G, owns_G;
   double *center;        /* n: c = center + Gc u */
-  cup_sparse Gc;
+  la_sparse Gc;
   int has_Gc;
   double radius;         /* r = radius + gr^T u */
   double *gr;            /* p, or NULL */
@@ -66,13 +66,13 @@ int set_on_recheck(cup_set *S, int (*recheck)(double t, const double *x, const d
 
 /* A set over a polyset that is not copied (an LCS's): g = F + G u with the
  * polyset's default offset as F and G (may be NULL) borrowed too. */
-int cup_set_wrap_polyset(cup_set **S, const cup_polyset *K, const cup_sparse *G, int p,
-                         char *errmsg);
+int set_wrap_polyset(cup_set **S, const cup_polyset *K, const la_sparse *G, int p,
+                     char *errmsg);
 
 /* The parameters at u (p entries; ignored when p = 0): the offset g (m
  * entries) for sets with rows, the centre c (n) and the radius *r for
  * balls and ellipsoids. Any output may be NULL. */
-void cup_set_place(const cup_set *S, const double *u, double *g, double *c, double *r);
+void set_place(const cup_set *S, const double *u, double *g, double *c, double *r);
 
 /* Scratch the closed forms need: 4 n doubles. */
 #define CUP_CLOSED_WORK(n) (4 * (size_t)(n) + 4)
@@ -82,16 +82,16 @@ void cup_set_place(const cup_set *S, const double *u, double *g, double *c, doub
  * certificates on return, as cup_project fills them. z may alias x.
  * Return CUP_OK, CUP_WARN_NOT_CERTIFIED or CUP_ERR_EMPTY_SET (r < 0, or a
  * half-space 0 >= -b > 0). */
-int cup_ball_project(const cup_set *S, const double *c, double r, const double *x, double *z,
-                     double *work, cup_proj_info *info);
-int cup_ellipsoid_project(const cup_set *S, const double *c, double r, const double *x, double *z,
-                          double *work, cup_proj_info *info);
-int cup_halfspace_project(const cup_set *S, const double *g, const double *x, double *z,
-                          double *work, cup_proj_info *info);
+int ball_project(const cup_set *S, const double *c, double r, const double *x, double *z,
+                 double *work, cup_proj_info *info);
+int ellipsoid_project(const cup_set *S, const double *c, double r, const double *x, double *z,
+                      double *work, cup_proj_info *info);
+int halfspace_project(const cup_set *S, const double *g, const double *x, double *z,
+                      double *work, cup_proj_info *info);
 
 /* The user's oracle at t, checked (set/oracle.c): z only on success; msg
  * (size bytes) says what was wrong on CUP_ERR_CALLBACK. work: 3 n. */
-int cup_oracle_project(const cup_set *S, double t, const double *x, double *z, double *work,
-                       cup_proj_info *info, char *msg, size_t size);
+int oracle_project(const cup_set *S, double t, const double *x, double *z, double *work,
+                   cup_proj_info *info, char *msg, size_t size);
 
 #endif

@@ -102,7 +102,7 @@ static int read_schedule_item(rd *p, const st_node *nd, const char *key, char **
   return *out ? CUP_OK : CUP_ERR_NOMEM;
 }
 
-static int read_axis(rd *p, cup_sweep *s, int a, const st_node *nd) {
+static int read_axis(rd *p, sw_sweep *s, int a, const st_node *nd) {
   char key[64];
   const char *words[MAX_WORDS];
   const st_node *const *items = NULL;
@@ -144,7 +144,7 @@ static int read_axis(rd *p, cup_sweep *s, int a, const st_node *nd) {
 }
 
 /* zip: [eps, eta] (one group) or [[eps, eta], [scheme, projector]]. */
-static int read_zip_group(rd *p, cup_sweep *s, const st_node *nd, const char *key, int g) {
+static int read_zip_group(rd *p, sw_sweep *s, const st_node *nd, const char *key, int g) {
   char k2[64];
   if (nd->kind != ST_SEQ || nd->len < 2)
     return fail(p, CUP_ERR_PARSE, nd, key, "expected a list of at least two axis names, e.g. [eps, eta]");
@@ -164,7 +164,7 @@ static int read_zip_group(rd *p, cup_sweep *s, const st_node *nd, const char *ke
   return CUP_OK;
 }
 
-static int read_zip(rd *p, cup_sweep *s, const st_node *nd) {
+static int read_zip(rd *p, sw_sweep *s, const st_node *nd) {
   if (nd->kind == ST_SEQ && nd->len > 0 && nd->item[0]->kind == ST_SEQ) {
     char key[32];
     int st = CUP_OK;
@@ -177,7 +177,7 @@ static int read_zip(rd *p, cup_sweep *s, const st_node *nd) {
   return read_zip_group(p, s, nd, "grid.zip", 0);
 }
 
-static int read_grid(rd *p, cup_sweep *s, const st_node *root) {
+static int read_grid(rd *p, sw_sweep *s, const st_node *root) {
   static const char *const known[] = {"n", "eps", "eta", "scheme", "projector", "tol", "zip", NULL};
   for (int a = 0; a < SW_NAXES; a++) s->zip[a] = -1;
   const st_node *g = opt(root, "grid"), *nd;
@@ -225,7 +225,7 @@ static char *override_text(const char *key, const st_node *v) {
 }
 
 /* Entry k of variants: into v; its name unlike those of the nprev variants before it. */
-static int read_variant(rd *p, cup_sweep *s, const st_node *nd, int k, const char *base, sw_variant *v, long nprev) {
+static int read_variant(rd *p, sw_sweep *s, const st_node *nd, int k, const char *base, sw_variant *v, long nprev) {
   static const char *const known[] = {"name", "scene", "set", SW_GEN_KEYS, NULL};
   char key[64], k2[160];
   v->line = nd->line;
@@ -299,7 +299,7 @@ static int by_name(const void *a, const void *b) {
 }
 
 /* Generated names ("NAME.J") may meet a written one: every name once. */
-static int unique_names(rd *p, const cup_sweep *s, const st_node *nd) {
+static int unique_names(rd *p, const sw_sweep *s, const st_node *nd) {
   const sw_variant **v = malloc(sizeof *v * (size_t)(s->n_variants + 1));
   if (!v) return CUP_ERR_NOMEM;
   for (int k = 0; k < s->n_variants; k++) v[k] = &s->var[k];
@@ -313,7 +313,7 @@ static int unique_names(rd *p, const cup_sweep *s, const st_node *nd) {
   return st;
 }
 
-static int read_variants(rd *p, cup_sweep *s, const st_node *root) {
+static int read_variants(rd *p, sw_sweep *s, const st_node *root) {
   const st_node *kb, *b = st_get(root, "base", &kb), *nd = opt(root, "variants");
   const char *base = NULL;
   int st = CUP_OK;
@@ -354,7 +354,7 @@ static int read_variants(rd *p, cup_sweep *s, const st_node *root) {
 
 /* ---- reference and output -------------------------------------------------- */
 
-static int read_reference(rd *p, cup_sweep *s, const st_node *root) {
+static int read_reference(rd *p, sw_sweep *s, const st_node *root) {
   static const char *const known[] = {"samples", "n", "method", "check", NULL};
   static const char *const methods[] = {"richardson", "adaptive", NULL};
   static const char *const checks[] = {"none", "richardson", NULL};
@@ -383,7 +383,7 @@ static int read_reference(rd *p, cup_sweep *s, const st_node *root) {
   return st;
 }
 
-static int read_output(rd *p, cup_sweep *s, const st_node *root) {
+static int read_output(rd *p, sw_sweep *s, const st_node *root) {
   static const char *const known[] = {"samples", NULL};
   const st_node *o = opt(root, "output"), *x;
   s->out_samples = s->samples;
@@ -401,7 +401,7 @@ static int read_output(rd *p, cup_sweep *s, const st_node *root) {
 
 /* ---- public: parse and resolve ---------------------------------------------- */
 
-static int read_sweep(rd *p, cup_sweep *s, const st_node *root) {
+static int read_sweep(rd *p, sw_sweep *s, const st_node *root) {
   static const char *const known[] = {"name", "base", "grid", "variants", "reference", "output", NULL};
   int st = need_map(p, root, NULL, "a mapping with base, grid and variants");
   if (!st) st = check_keys(p, root, "", known);
@@ -416,10 +416,10 @@ static int read_sweep(rd *p, cup_sweep *s, const st_node *root) {
   return st;
 }
 
-int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, char *errmsg) {
+int sw_parse(sw_sweep **out, const char *text, size_t len, const char *path, char *errmsg) {
   *out = NULL;
   if (errmsg) errmsg[0] = '\0';
-  cup_sweep *s = calloc(1, sizeof *s);
+  sw_sweep *s = calloc(1, sizeof *s);
   if (!s) return CUP_ERR_NOMEM;
   rd p = {{path, NULL}, NULL, errmsg, NULL};
   st_node *root = NULL;
@@ -429,7 +429,7 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
   if (!st) {
     memcpy(s->text, text, len);
     s->text[len] = '\0';
-    cup_sha256_hex(text, len, s->sha256);
+    sha256_hex(text, len, s->sha256);
     st = st_parse(&root, text, len, &p.src, -1, NULL, errmsg);
   }
   if (!st) st = read_sweep(&p, s, root);
@@ -441,50 +441,50 @@ int sw_parse(cup_sweep **out, const char *text, size_t len, const char *path, ch
   return CUP_OK;
 }
 
-int sw_load(cup_sweep **s, const char *path, char *errmsg) {
+int sw_load(sw_sweep **s, const char *path, char *errmsg) {
   *s = NULL;
   char *buf = NULL;
   size_t n = 0;
-  cup_file_list files = {0};
-  int rt = cup_read_text(path, &buf, &n, &files, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
+  file_list files = {0};
+  int rt = read_text(path, &buf, &n, &files, errmsg);   /* errmsg: SW_ERR_LEN >= CUP_ERRMSG_LEN */
   if (rt) return rt;
   int st = sw_parse(s, buf, n, path, errmsg);
   if (!st) (*s)->files = files;
-  else cup_file_list_free(&files);
+  else file_list_free(&files);
   free(buf);
   return st;
 }
 
 /* Axis a leads its zip group (or is not zipped). */
-static int leads(const cup_sweep *s, int a) {
+static int leads(const sw_sweep *s, int a) {
   for (int b = 0; b < a; b++)
     if (s->zip[a] >= 0 && s->zip[b] == s->zip[a]) return 0;
   return 1;
 }
 
-int sw_variant_lazy(const cup_sweep *s, int k) { return !s->crowd && s->var[k].proto != k; }
+int sw_variant_lazy(const sw_sweep *s, int k) { return !s->crowd && s->var[k].proto != k; }
 
-const cup_scene *sw_variant_settings(const cup_sweep *s, int k) {
+const cup_scene *sw_variant_settings(const sw_sweep *s, int k) {
   return s->var[k].scene ? s->var[k].scene : s->var[s->var[k].proto].scene;
 }
 
-void sw_count_tasks(cup_sweep *s) {
+void sw_count_tasks(sw_sweep *s) {
   s->per_variant = 1;
   for (int a = 0; a < SW_NAXES; a++)          /* a zip group counts once */
     if (s->len[a] && leads(s, a)) s->per_variant *= s->len[a];
   s->n_tasks = s->per_variant * s->n_variants;
 }
 
-void sw_free(cup_sweep **ps) {
+void sw_free(sw_sweep **ps) {
   if (!ps || !*ps) return;
-  cup_sweep *s = *ps;
+  sw_sweep *s = *ps;
   for (int k = 0; k < s->n_variants; k++) variant_free(&s->var[k]);
   free(s->var);
   for (int k = 0; k < s->len[SW_AXIS_EPS]; k++) free(s->eps[k]);
   for (int k = 0; k < s->len[SW_AXIS_ETA]; k++) free(s->eta[k]);
   free(s->n); free(s->eps); free(s->eta); free(s->scheme); free(s->projector); free(s->tol);
   free(s->path); free(s->dir); free(s->text); free(s->name);
-  cup_file_list_free(&s->files);
+  file_list_free(&s->files);
   free(s);
   *ps = NULL;
 }
@@ -501,7 +501,7 @@ double sw_max_error(const double *traj, const double *ref, long count) {
   return e;
 }
 
-int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
+int sw_task_get(const sw_sweep *s, long id, sw_task *t) {
   if (id < 0 || id >= s->n_tasks) return CUP_ERR_ARG;
   memset(t, 0, sizeof *t);
   t->id = id;
@@ -535,7 +535,7 @@ int sw_task_get(const cup_sweep *s, long id, sw_task *t) {
  * projector, measured on the paper's circuit (~0.12 us a step), and a fixed
  * part for set-up (~10 us). Schemes and projectors not listed count 1;
  * crowds count by their agents. */
-double sw_job_cost(const cup_sweep *s, long job) {
+double sw_job_cost(const sw_sweep *s, long job) {
   static const double scheme_f[] = {1.0, 1.0, 1.1, 0.8}, proj_f[] = {1.0, 1.0, 1.3, 1.2};
   const double setup = 100;
   if (job < s->n_variants && (s->crowd || s->steady)) return 0;   /* a crowd's reference computes nothing */
@@ -572,7 +572,7 @@ static int by_cost(const void *a, const void *b) {
  * start first and the small ones make the tail, as with a plain sort by cost
  * (the estimates are rougher than that factor anyway), but a batch of small
  * tasks is then mostly one range of ids, which rank 0 writes at once. */
-void sw_schedule(const cup_sweep *s, long *out) {
+void sw_schedule(const sw_sweep *s, long *out) {
   long V = s->n_variants, N = s->n_tasks, nb = 0;
   keyed *k = malloc(sizeof *k * (size_t)(V + N));
   keyed *block = malloc(sizeof *block * (size_t)(N + 1));
@@ -626,7 +626,7 @@ static void sb_printf(sbuf *b, const char *fmt, ...) {
   }
 }
 
-char *sw_grid_text(const cup_sweep *s) {
+char *sw_grid_text(const sw_sweep *s) {
   sbuf b = {malloc(256), 0, 256};
   if (b.s) b.s[0] = '\0';
   for (int a = 0; a < SW_NAXES; a++) {

@@ -50,12 +50,12 @@ typedef struct sw_variant {
   long n_ref;                /* reference steps (a multiple of samples - 1) */
 } sw_variant;
 
-typedef struct cup_sweep {
+typedef struct sw_sweep {
   char *path;                /* the sweep file as named on the command line */
   char *dir;                 /* its directory, or NULL */
   char *text;                /* its full text (hashed, stored) */
   char sha256[65];
-  cup_file_list files;       /* rank 0, after sw_resolve_files: every file read (the sweep
+  file_list files;       /* rank 0, after sw_resolve_files: every file read (the sweep
                                 file, its scenes and theirs: read_text.h), hashed */
   char *name;
   int base_line, base_col;   /* where base: is written, for messages */
@@ -91,13 +91,13 @@ typedef struct cup_sweep {
   int ss_nm, ss_np;                /* measured signals, power elements (variants.0's request) */
   int ss_sig[SW_SS_SIGNALS];       /* the measured signals' indices among the netlist's */
   int ss_pv[SW_SS_POWER], ss_pc[SW_SS_POWER];   /* each power element's v(a,b) and i(E) signal */
-} cup_sweep;
+} sw_sweep;
 
 /* A job's trajectory: samples * dim states, then samples * nsig signals;
  * none in a steady-state sweep (its figures are in the result). */
-static inline long sw_traj_len(const cup_sweep *s) { return s->steady ? 0 : s->samples * (s->dim + s->nsig); }
+static inline long sw_traj_len(const sw_sweep *s) { return s->steady ? 0 : s->samples * (s->dim + s->nsig); }
 /* Signal k's name (a netlist sweep's), e.g. "v(out)". */
-const char *sw_signal_name(const cup_sweep *s, int k);
+const char *sw_signal_name(const sw_sweep *s, int k);
 
 /* One task's parameters (sw_task_get). */
 typedef struct sw_task {
@@ -155,54 +155,54 @@ typedef struct sw_task_out {
 
 /* Parse the sweep file's text (no file access). path names it in messages
  * and locates base/scene files. errmsg: SW_ERR_LEN bytes. */
-int sw_parse(cup_sweep **s, const char *text, size_t len, const char *path, char *errmsg);
+int sw_parse(sw_sweep **s, const char *text, size_t len, const char *path, char *errmsg);
 /* Read and parse a sweep file. */
-int sw_load(cup_sweep **s, const char *path, char *errmsg);
+int sw_load(sw_sweep **s, const char *path, char *errmsg);
 /* Every variant's scene text after its overrides (rank 0): sw_resolve_scenes,
  * then sw_lazy_texts. */
-int sw_resolve_files(cup_sweep *s, char *errmsg);
+int sw_resolve_files(sw_sweep *s, char *errmsg);
 /* The scenes (rank 0): a variant that is not lazy loaded from its file (its
  * files join s->files), the scene file's text of an entry with lazy
  * variants read once (file_text: what their jobs need); then
  * sw_resolve_texts. The lazy variants' texts are not made: a sweep on
  * several ranks makes them (sw_lazy_texts) once the workers have work. */
-int sw_resolve_scenes(cup_sweep *s, char *errmsg);
+int sw_resolve_scenes(sw_sweep *s, char *errmsg);
 /* Each lazy variant's scene text (its entry's file_text after its
  * overrides, as cup_scene_text would give it), for /variants and --resume. */
-int sw_lazy_texts(cup_sweep *s, char *errmsg);
+int sw_lazy_texts(sw_sweep *s, char *errmsg);
 /* Keep the variants' scene texts (what rank 0 broadcast; NULL for a lazy
  * variant), load the scenes of those that are not lazy, check that T and
  * the dimension agree, fix n_ref and the task count. */
-int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg);
+int sw_resolve_texts(sw_sweep *s, char *const *texts, char *errmsg);
 /* Lazy variants (loaded by sweep_variant.c): a generated variant beyond its entry's
  * first, in a sweep that is not of crowds, is loaded by its own jobs only
  * (a design study of 10^4 variants would otherwise load every scene on
  * every rank before the first task); its entry's first stands for its
  * settings until then, and its job checks that they agree. */
-int sw_variant_lazy(const cup_sweep *s, int k);
+int sw_variant_lazy(const sw_sweep *s, int k);
 /* The scene that gives variant k's settings (n, T, the scheme, ...): its
  * own once loaded, else its entry's first's. */
-const cup_scene *sw_variant_settings(const cup_sweep *s, int k);
+const cup_scene *sw_variant_settings(const sw_sweep *s, int k);
 /* Load lazy variant k's scene from its entry's file_text and its own
  * overrides into *sc (the caller frees it),
  * probed as the sweep's scenes are, and checked against the scene that
  * stood for it: a located error in errmsg (SW_ERR_LEN) otherwise. */
-int sw_variant_load(const cup_sweep *s, int k, cup_scene **sc, char *errmsg);
+int sw_variant_load(const sw_sweep *s, int k, cup_scene **sc, char *errmsg);
 /* per_variant and n_tasks from the axes (after the variants are known). */
-void sw_count_tasks(cup_sweep *s);
-void sw_free(cup_sweep **s);
+void sw_count_tasks(sw_sweep *s);
+void sw_free(sw_sweep **s);
 
-int sw_task_get(const cup_sweep *s, long id, sw_task *t);
+int sw_task_get(const sw_sweep *s, long id, sw_task *t);
 /* Relative cost of a job (references first: they are the costliest). */
-double sw_job_cost(const cup_sweep *s, long job);
+double sw_job_cost(const sw_sweep *s, long job);
 /* Jobs in the order to dispatch: references by decreasing cost, then the
  * tasks in blocks of consecutive ids whose costs are within SW_BLOCK_SPREAD
  * of each other, blocks by decreasing largest cost (ties: the lower ids).
  * out: n_variants + n_tasks entries. */
 #define SW_BLOCK_SPREAD 4.0
-void sw_schedule(const cup_sweep *s, long *out);
+void sw_schedule(const sw_sweep *s, long *out);
 /* The grid in words, for the file's attributes: "n: [100, 1000]; eps: ..." */
-char *sw_grid_text(const cup_sweep *s);
+char *sw_grid_text(const sw_sweep *s);
 
 /* Max-norm of traj - ref over times and components; NaN if any entry is NaN. */
 double sw_max_error(const double *traj, const double *ref, long count);

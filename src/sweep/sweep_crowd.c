@@ -10,7 +10,7 @@
 #include <string.h>
 #include "sweep_crowd.h"
 
-void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
+void sw_crowd_no_reference(const sw_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < s->samples * s->dim; j++) traj[j] = NAN;
   r->status = CUP_OK;
   r->correction = r->cross_check = r->max_eps_cert = r->max_eta_cert = NAN;
@@ -44,7 +44,7 @@ void sw_crowd_watch_end(sw_crowd_watch *w, const double *q_end, sw_result *r) {
 
 /* ---- /crowd in the results file ---- */
 
-static void pending(const cup_sweep *s, long id, void *vrow) {
+static void pending(const sw_sweep *s, long id, void *vrow) {
   sw_crowd_row *row = vrow;
   memset(row, 0, sizeof *row);
   row->task_id = id;

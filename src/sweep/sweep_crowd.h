@@ -10,7 +10,7 @@
 #include "sweep_h5.h"
 
 /* A crowd variant's reference job: nothing to compute (NaN, CUP_OK). */
-void sw_crowd_no_reference(const cup_sweep *s, sw_result *r, double *traj);
+void sw_crowd_no_reference(const sw_sweep *s, sw_result *r, double *traj);
 
 /* Watches a crowd task's run: the smallest gap of its states (the step
  * callback, chained to the one already in o), then its evacuation. */

@@ -49,7 +49,7 @@ static int read_attr_i64(hid_t loc, const char *name, int64_t *v) {
 
 /* The stored layout must be the one this sweep makes. */
 static int check_layout(sw_file *f, char *errmsg) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   char fmt[64] = "", hash[80] = "";
   int64_t ntask = -1, samples = -1, dim = -1, nvar = -1, outs = -1;
   if (read_attr_str(f->file, "format", fmt, sizeof fmt) || strcmp(fmt, FORMAT_NAME) ||
@@ -92,7 +92,7 @@ static int check_inputs(sw_file *f, char *errmsg) {
   H5Aclose(a);
   if (!st) {
     int w = snprintf(errmsg, SW_ERR_LEN, "%s: cannot resume: ", f->path);
-    if (cup_file_list_compare(&f->s->files, v ? v : "", "the file", errmsg + w, (size_t)(SW_ERR_LEN - w))) {
+    if (file_list_compare(&f->s->files, v ? v : "", "the file", errmsg + w, (size_t)(SW_ERR_LEN - w))) {
       size_t len = strlen(errmsg);
       snprintf(errmsg + len, SW_ERR_LEN - len, "; run without --resume to start again");
       st = CUP_ERR_ARG;
@@ -105,7 +105,7 @@ static int check_inputs(sw_file *f, char *errmsg) {
 /* A variant's scene (after overrides) must not have changed since the file
  * was made: the sweep file's hash does not cover the scene files. */
 static int check_scenes(sw_file *f, char *errmsg) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   hsize_t V = (hsize_t)s->n_variants;
   hid_t d = H5Dopen2(f->file, "variants", H5P_DEFAULT);
   hid_t vs = h5_vlen_str(), mt = column_type("scene", sizeof(char *), vs);
@@ -138,7 +138,7 @@ static int read_column(sw_file *f, hid_t d, const char *name, hid_t type, size_t
 }
 
 static int read_state(sw_file *f) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   int st = read_column(f, f->summary, "done", H5T_NATIVE_INT8, 1, f->done);
   if (!st) st = read_column(f, f->summary, "status", H5T_NATIVE_INT32, 4, f->status);
   if (!st) st = read_column(f, f->summary, "error", H5T_NATIVE_DOUBLE, 8, f->error);
@@ -162,7 +162,7 @@ static int read_state(sw_file *f) {
   return st;
 }
 
-int sw_file_open(sw_file **out, const char *path, const cup_sweep *s, char *errmsg) {
+int sw_file_open(sw_file **out, const char *path, const sw_sweep *s, char *errmsg) {
   *out = NULL;
   struct stat sb;
   if (stat(path, &sb) != 0 || !S_ISREG(sb.st_mode)) {
@@ -214,7 +214,7 @@ const double *sw_file_reference(const sw_file *f, int variant) { return f->xref[
 int sw_file_reference_done(const sw_file *f, int variant) { return f->ref_done[variant]; }
 
 static int write_traj(sw_file *f, hid_t d, hsize_t row, const double *traj, int width) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   hsize_t start[3] = {row, 0, 0}, cnt[3] = {1, (hsize_t)s->samples, (hsize_t)width};
   hid_t fs = H5Dget_space(d), ms = H5Screate_simple(3, cnt, NULL);
   int ok = H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, cnt, NULL) >= 0 &&
@@ -272,7 +272,7 @@ static int reserve(sw_file *f, long count) {
 }
 
 void sw_file_tally(const sw_file *f, sw_tally *out) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   sw_tally c = {0};
   double *scale = calloc((size_t)s->n_variants, sizeof *scale);
   long per = s->samples * s->dim;
@@ -347,7 +347,7 @@ static int fill_chunk(sw_file *f, const double *xref, long count) {
 
 int sw_file_fill_errors(sw_file *f, int k) {
   enum { CHUNK = 256 };
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   if (!f->xref[k] || f->runs_x < 0) return CUP_OK;
   if (f->failed) return CUP_ERR_IO;
   int st = reserve(f, CHUNK);
@@ -364,7 +364,7 @@ int sw_file_fill_errors(sw_file *f, int k) {
 
 int sw_file_write_reference(sw_file *f, int k, const sw_result *r, const double *xref) {
   if (f->failed) return CUP_ERR_IO;
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   sw_refrow row;
   memset(&row, 0, sizeof row);
   row.variant = k;

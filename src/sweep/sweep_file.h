@@ -14,10 +14,10 @@ typedef struct sw_provenance {
 
 /* Create (replace) path with every dataset at full size and all metadata,
  * and flush: afterwards only raw data changes. */
-int sw_file_create(sw_file **f, const char *path, const cup_sweep *s, const sw_provenance *p,
+int sw_file_create(sw_file **f, const char *path, const sw_sweep *s, const sw_provenance *p,
                    char *errmsg);
 /* Reopen for --resume: the stored sweep hash and variants must match s. */
-int sw_file_open(sw_file **f, const char *path, const cup_sweep *s, char *errmsg);
+int sw_file_open(sw_file **f, const char *path, const sw_sweep *s, char *errmsg);
 int sw_file_close(sw_file **f, char *errmsg);
 int sw_file_flush(sw_file *f);
 

@@ -98,7 +98,7 @@ static const char *const reference_method =
   "largest n of the variant's tasks). The scheme is first order, so the extrapolation removes the 1/n "
   "term; /references/summary 'correction' = max |x(2 n_ref) - x(n_ref)| bounds what it removed.";
 
-static int write_grid_attrs(hid_t root, const cup_sweep *s) {
+static int write_grid_attrs(hid_t root, const sw_sweep *s) {
   int r = 0;
   if (s->len[SW_AXIS_N]) {
     int64_t *n = malloc(sizeof *n * (size_t)s->len[SW_AXIS_N]);
@@ -125,7 +125,7 @@ static int write_grid_attrs(hid_t root, const cup_sweep *s) {
   return r;
 }
 
-static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance *p) {
+static int write_root_attrs(hid_t root, const sw_sweep *s, const sw_provenance *p) {
   char created[64];
   time_t now = time(NULL);
   struct tm tm;
@@ -141,7 +141,7 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   r |= attr_str(root, "sweep_file", s->path);
   r |= attr_str(root, "sweep_text", s->text);
   r |= attr_str(root, "sweep_sha256", s->sha256);
-  char *inputs = cup_file_list_text(&s->files);   /* every file read, for --resume (and sha256sum -c) */
+  char *inputs = file_list_text(&s->files);   /* every file read, for --resume (and sha256sum -c) */
   r |= inputs ? attr_str(root, "inputs_sha256", inputs) : -1;
   free(inputs);
   r |= attr_str(root, "reference_method", s->crowd ? SW_CROWD_REFERENCE : s->steady ? SW_STEADY_REFERENCE
@@ -156,7 +156,7 @@ static int write_root_attrs(hid_t root, const cup_sweep *s, const sw_provenance 
   return r | write_grid_attrs(root, s);
 }
 
-static void pending_summary_row(const cup_sweep *s, long id, void *row) { sw_pending_row(s, id, row); }
+static void pending_summary_row(const sw_sweep *s, long id, void *row) { sw_pending_row(s, id, row); }
 
 static int create_summary(sw_file *f) {
   return sw_h5_task_table(f, "summary", f->row_t, sizeof(sw_row), pending_summary_row, &f->summary);
@@ -166,7 +166,7 @@ static int create_summary(sw_file *f) {
  * rows are done at creation (none: each task's figures are its result):
  * no job computes them. */
 static int create_references(sw_file *f, hid_t g) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   double nan = NAN;
   hsize_t V = (hsize_t)s->n_variants, dims[3] = {V, (hsize_t)s->samples, (hsize_t)s->dim};
   if (!s->steady && (f->ref_x = sw_h5_fixed_dataset(g, "x", H5T_IEEE_F64LE, 3, dims, H5T_NATIVE_DOUBLE, &nan)) < 0)
@@ -216,7 +216,7 @@ static char *join_overrides(const sw_variant *v) {
 }
 
 static int create_variants(sw_file *f) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   hsize_t V = (hsize_t)s->n_variants;
   hid_t mt = varrow_type();
   f->failed |= mt < 0;
@@ -306,7 +306,7 @@ static size_t add_unit(char *units, size_t size, size_t w, const char *unit) {
 /* /runs/state: the names of the state's components (the variant with the
  * largest state's: a crowd's x0, y0, ... up to the largest N), and the unit
  * of /runs/x: the components' one unit, or their units in order. */
-static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size) {
+static int write_state(hid_t file, const sw_sweep *s, char *units, size_t size) {
   hsize_t n = (hsize_t)s->dim;
   const cup_scene *sc = s->var[0].scene;
   for (int k = 0; k < s->n_variants; k++)
@@ -336,7 +336,7 @@ static int write_state(hid_t file, const cup_sweep *s, char *units, size_t size)
 /* A netlist sweep's signals: /runs/signal (their names, the scale
  * "signal"), and their units, in order, as catchup-run's /signals. */
 static int describe_signals(sw_file *f) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   const cup_netlist *nl = cup_scene_netlist(s->var[0].scene);
   hsize_t n = (hsize_t)s->nsig;
   const char **names = malloc(sizeof *names * n);
@@ -363,7 +363,7 @@ static int describe_signals(sw_file *f) {
 /* Units, long names and dimensions (task, variant, t, state) of every
  * dataset, written with the rest of the metadata at creation. */
 static int describe_layout(sw_file *f) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   hid_t file = f->file;
   char xunits[256];
   int r = pure_dim(file, "task", (hsize_t)s->n_tasks) | pure_dim(file, "variant", (hsize_t)s->n_variants);
@@ -401,7 +401,7 @@ static int describe_layout(sw_file *f) {
 }
 
 static int create_layout(sw_file *f, const sw_provenance *p) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   if (write_root_attrs(f->file, s, p)) return sw_h5_fail(f, "write attributes in");
   int st = create_variants(f);
   if (!st) st = create_summary(f);
@@ -441,21 +441,21 @@ static int create_layout(sw_file *f, const sw_provenance *p) {
   return st;
 }
 
-static double file_bytes(const cup_sweep *s) {
+static double file_bytes(const sw_sweep *s) {
   double rows = (double)s->n_tasks * (sizeof(sw_row) + 16 + (s->crowd ? sizeof(sw_crowd_row) : 0) +
                                        (s->steady ? sizeof(sw_steady_row) : 0));
   double traj = (double)sw_traj_len(s) * 8.0 * ((s->out_samples ? (double)s->n_tasks : 0) + s->n_variants);
   return rows + traj + 65536.0 + 2.0 * strlen(s->text);
 }
 
-int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw_provenance *p, char *errmsg) {
+int sw_file_create(sw_file **out, const char *path, const sw_sweep *s, const sw_provenance *p, char *errmsg) {
   *out = NULL;
   struct stat sb;
   if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode)) {
     snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: not a regular file", path);
     return CUP_ERR_IO;
   }
-  if (cup_file_in_use(path)) {
+  if (h5_file_in_use(path)) {
     snprintf(errmsg, SW_ERR_LEN, SW_IN_USE_FMT, path, "create");
     return CUP_ERR_IO;
   }
@@ -468,7 +468,7 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
   }
   /* the whole layout goes to a new sibling first, renamed over path once
    * written: an earlier results file stays whole until then */
-  char *staged = cup_staged_name(path);
+  char *staged = h5_staged_name(path);
   if (!staged) {
     snprintf(errmsg, SW_ERR_LEN, "%s: cannot create: cannot create a file beside it (%s): its folder must take "
              "new files; an existing %s is left as it was", path, strerror(errno), path);
@@ -482,7 +482,7 @@ int sw_file_create(sw_file **out, const char *path, const cup_sweep *s, const sw
   int st = f->file < 0 ? sw_h5_fail(f, "create") : create_layout(f, p);
   if (fapl >= 0) H5Pclose(fapl);
   quiet_end(q);
-  if (!st && cup_file_in_use(path)) {
+  if (!st && h5_file_in_use(path)) {
     snprintf(f->errmsg, sizeof f->errmsg, SW_IN_USE_FMT, path, "replace");
     st = CUP_ERR_IO;
   }

@@ -113,7 +113,7 @@ static hid_t crowd_row_type(void) {
 const char *const sw_steady_figures[SW_SS_FIGURES] = {"average", "rms", "min", "max", "peak_to_peak"};
 
 #define INS(T, name, field, type) H5Tinsert(T, name, HOFFSET(sw_steady_row, field), type)
-static hid_t steady_row_type(const cup_sweep *s) {
+static hid_t steady_row_type(const sw_sweep *s) {
   hid_t T = H5Tcreate(H5T_COMPOUND, sizeof(sw_steady_row));
   INS(T, "task_id", task_id, H5T_NATIVE_INT64);
   INS(T, "variant", variant, H5T_NATIVE_INT32);
@@ -145,7 +145,7 @@ void sw_copy_str(char *dst, size_t size, const char *src) {
   memset(dst + n, 0, size - n);
 }
 
-void sw_pending_row(const cup_sweep *s, long id, sw_row *r) {
+void sw_pending_row(const sw_sweep *s, long id, sw_row *r) {
   sw_task t;
   memset(r, 0, sizeof *r);
   sw_task_get(s, id, &t);
@@ -197,7 +197,7 @@ hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, co
 
 int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,
                      hid_t *d) {
-  const cup_sweep *s = f->s;
+  const sw_sweep *s = f->s;
   hsize_t N = (hsize_t)s->n_tasks;
   char op[64];
   hid_t ft = H5Tcopy(memtype);
@@ -222,7 +222,7 @@ int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_siz
 
 /* ---- state ---- */
 
-sw_file *sw_h5_file_new(const cup_sweep *s, const char *path) {
+sw_file *sw_h5_file_new(const sw_sweep *s, const char *path) {
   sw_file *f = calloc(1, sizeof *f);
   if (!f) return NULL;
   f->s = s;

@@ -105,7 +105,7 @@ typedef struct sw_refrow {
 } sw_refrow;
 
 struct sw_file {
-  const cup_sweep *s;
+  const sw_sweep *s;
   char *path;
   hid_t file, summary, runs_x, ref_x, ref_summary;
   hid_t row_t, refrow_t;           /* memory types */
@@ -144,18 +144,18 @@ int sw_h5_fail(sw_file *f, const char *op);
 hid_t sw_h5_str(size_t size);
 void sw_copy_str(char *dst, size_t size, const char *src);
 /* A task's row before it ran: its parameters, status "pending". */
-void sw_pending_row(const cup_sweep *s, long id, sw_row *r);
+void sw_pending_row(const sw_sweep *s, long id, sw_row *r);
 /* Rows at..at+count-1 of a one-dimensional compound dataset. */
 int sw_h5_write_rows(hid_t d, hid_t memtype, hsize_t at, hsize_t count, const void *buf, hid_t dxpl);
 /* The state in memory (no file yet), or NULL; sw_h5_file_free closes what is open. */
-sw_file *sw_h5_file_new(const cup_sweep *s, const char *path);
+sw_file *sw_h5_file_new(const sw_sweep *s, const char *path);
 void sw_h5_file_free(sw_file *f);
 /* A dataset that is contiguous, allocated (and filled with *fill of
  * fill_type, unless fill is NULL) at creation, without modification times. */
 hid_t sw_h5_fixed_dataset(hid_t loc, const char *name, hid_t ftype, int rank, const hsize_t *dims,
                           hid_t fill_type, const void *fill);
 /* A task's row before it ran, into row (row_size bytes). */
-typedef void (*sw_pending_fn)(const cup_sweep *s, long id, void *row);
+typedef void (*sw_pending_fn)(const sw_sweep *s, long id, void *row);
 /* Create the one-row-per-task dataset name (memtype packed), filled with
  * every task's pending row. */
 int sw_h5_task_table(sw_file *f, const char *name, hid_t memtype, size_t row_size, sw_pending_fn pending,

@@ -62,7 +62,7 @@ typedef struct {
   double tol_abs, tol_rel;
 } run_params;
 
-static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *rp, const sw_run_opts *ro,
+static void run_one(const sw_sweep *s, const sw_variant *v, const run_params *rp, const sw_run_opts *ro,
                     sw_result *r, double *traj) {
   long S = s->samples;
   int dim = s->dim;
@@ -132,7 +132,7 @@ static void run_one(const cup_sweep *s, const sw_variant *v, const run_params *r
  * the explicit scheme: its two runs are theta's, at theta = 1/2 second order there
  * (docs/netlist.md): x_ref = x(2 n_ref) + (x(2 n_ref) - x(n_ref)) / 3.
  * coarse: samples * dim doubles of scratch. */
-static void richardson(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
+static void richardson(const sw_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
                        double *traj, double *coarse) {
   long count = s->samples * s->dim, len = sw_traj_len(s);   /* the states; with the signals (linear in them) */
   int theta = cup_lcs_has_D(cup_scene_lcs(v->scene)), order2 = theta && cup_scene_options(v->scene)->theta == 0.5;
@@ -156,7 +156,7 @@ static void richardson(const cup_sweep *s, const sw_variant *v, const sw_run_opt
  * check: richardson also the Richardson limit, and how far the two are
  * apart (r->cross_check), which the sweep reports. The reference is the
  * adaptive run's, whatever the check gives. */
-static void adaptive_reference(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
+static void adaptive_reference(const sw_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
                                double *traj, double *scratch, double *coarse) {
   sw_result rr;
   memset(&rr, 0, sizeof rr);
@@ -173,7 +173,7 @@ static void adaptive_reference(const cup_sweep *s, const sw_variant *v, const sw
              rr.message);
 }
 
-static void run_reference(const cup_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
+static void run_reference(const sw_sweep *s, const sw_variant *v, const sw_run_opts *ro, sw_result *r,
                           double *traj) {
   long count = sw_traj_len(s);
   double *scratch = malloc(sizeof(double) * (size_t)count * 2);
@@ -195,7 +195,7 @@ void sw_scene_slot_free(sw_scene_slot *slot) {
 
 /* Variant k with its scene: as resolved, or a lazy one's loaded (into the
  * slot, kept for the next job, or into *own, the caller's to free). */
-static int with_scene(const cup_sweep *s, int k, const sw_run_opts *ro, sw_variant *v, cup_scene **own,
+static int with_scene(const sw_sweep *s, int k, const sw_run_opts *ro, sw_variant *v, cup_scene **own,
                       sw_result *r) {
   *v = s->var[k];
   if (v->scene) return CUP_OK;
@@ -222,7 +222,7 @@ static int with_scene(const cup_sweep *s, int k, const sw_run_opts *ro, sw_varia
   return CUP_OK;
 }
 
-void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {
+void sw_run_job(const sw_sweep *s, long job, const sw_run_opts *ro, sw_result *r, double *traj) {
   memset(r, 0, sizeof *r);
   r->job = job;
   if (job < s->n_variants && s->crowd) { sw_crowd_no_reference(s, r, traj); return; }

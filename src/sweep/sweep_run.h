@@ -24,6 +24,6 @@ typedef struct sw_run_opts {
 } sw_run_opts;
 
 /* Run job `job` (a reference or a task); fills r and traj (samples * dim). */
-void sw_run_job(const cup_sweep *s, long job, const sw_run_opts *o, sw_result *r, double *traj);
+void sw_run_job(const sw_sweep *s, long job, const sw_run_opts *o, sw_result *r, double *traj);
 
 #endif

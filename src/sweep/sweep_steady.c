@@ -3,7 +3,7 @@
  * file, solved the same way (io/scene_pss.h: the period and its phase, the
  * period map of the task's integrator options, Newton's method on it), then
  * one period from the steady state sampled in memory and measured as
- * catchup-run measures it (cup_pss_measure: the signals the request names,
+ * catchup-run measures it (pss_measure: the signals the request names,
  * each element's power, the efficiency). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -15,7 +15,7 @@
 #include "io/scene_pss.h"
 #include "util/clock.h"
 
-void sw_steady_no_reference(const cup_sweep *s, sw_result *r, double *traj) {
+void sw_steady_no_reference(const sw_sweep *s, sw_result *r, double *traj) {
   for (long j = 0; j < sw_traj_len(s); j++) traj[j] = NAN;
   r->status = CUP_OK;
   r->correction = r->cross_check = r->max_eps_cert = r->max_eta_cert = NAN;
@@ -39,7 +39,7 @@ static int keep_sample(long k, double t, const double *x, void *ctx) {
 }
 
 /* One period from x0 (options mo: scene_pss_solve's), measured into r->steady. */
-static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_steady *q, const cup_integrator_options *mo,
+static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_steady *q, const cup_integrator_options *mo,
                    const double *x0, sw_result *r) {
   cup_netlist *nl = cup_scene_netlist(v->scene);
   const cup_lcs *L = cup_scene_lcs(v->scene);
@@ -63,9 +63,9 @@ static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_stea
   cup_measure me[SW_SS_SIGNALS];
   double power[SW_SS_POWER];
   for (int j = 0; j < SW_SS_SIGNALS; j++) me[j] = (cup_measure){NAN, NAN, NAN, NAN, NAN, NAN};   /* not measured */
-  cup_pss_figures f = {s->ss_nm, s->ss_sig, 0, s->ss_np, s->ss_pv, s->ss_pc, q->eff_out, q->eff_in, me, NULL, NULL,
+  pss_figures f = {s->ss_nm, s->ss_sig, 0, s->ss_np, s->ss_pv, s->ss_pc, q->eff_out, q->eff_in, me, NULL, NULL,
                        power, r->steady.efficiency};
-  if (st >= 0) st = cup_pss_measure(p.sig, p.N, p.ns, &f, w, err);
+  if (st >= 0) st = pss_measure(p.sig, p.N, p.ns, &f, w, err);
   for (int j = 0; j < s->ss_nm; j++) {         /* those measured before an error too */
     double *fig = r->steady.fig[j];
     fig[0] = me[j].avg, fig[1] = me[j].rms, fig[2] = me[j].min, fig[3] = me[j].max, fig[4] = me[j].pp;
@@ -78,7 +78,7 @@ static int measure(const cup_sweep *s, const sw_variant *v, const cup_scene_stea
 }
 
 /* The task's steady state (scene_pss_solve), its period measured. */
-void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r) {
+void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r) {
   const cup_scene_steady *q = cup_scene_steady_state(v->scene);
   struct sw_steady_result *ss = &r->steady;
   ss->period = ss->residual = ss->max_multiplier = ss->efficiency = NAN;
@@ -116,7 +116,7 @@ void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator
 
 /* ---- /steady_state in the results file ---- */
 
-static void pending(const cup_sweep *s, long id, void *vrow) {
+static void pending(const sw_sweep *s, long id, void *vrow) {
   sw_steady_row *row = vrow;
   memset(row, 0, sizeof *row);
   row->task_id = id;

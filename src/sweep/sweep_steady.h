@@ -14,11 +14,11 @@
 #define SW_STEADY_REFERENCE "none: each task's steady state and its period's figures are in /steady_state"
 
 /* A variant's reference job: nothing to compute (NaN, CUP_OK). */
-void sw_steady_no_reference(const cup_sweep *s, sw_result *r, double *traj);
+void sw_steady_no_reference(const sw_sweep *s, sw_result *r, double *traj);
 /* A task: the steady state of v's scene with the task's integrator options
  * o (scheme, n, tol, the wall-time limit, the interrupt flag), then one
  * period sampled and measured; fills r (status, message, r->steady, wall). */
-void sw_steady_run(const cup_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r);
+void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_options *o, sw_result *r);
 
 /* /steady_state in the results file: created with every task's pending
  * row; the rows of tasks t[0..count) written (staged in f->ssrows, ids in

@@ -19,9 +19,9 @@
 #include "sweep.h"
 
 /* "SWEEP:LINE:COL: variants.K (NAME): " before a scene's own message. */
-static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, const char *fmt, ...)
+static int variant_fail(const sw_sweep *s, int k, int status, char *errmsg, const char *fmt, ...)
   __attribute__((format(printf, 5, 6)));
-static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, const char *fmt, ...) {
+static int variant_fail(const sw_sweep *s, int k, int status, char *errmsg, const char *fmt, ...) {
   const sw_variant *v = &s->var[k];
   int w = snprintf(errmsg, SW_ERR_LEN, "%s:%d:%d: variants.%d (%s): ", s->path, v->line, v->col, k, v->name);
   va_list ap;
@@ -31,7 +31,7 @@ static int variant_fail(const cup_sweep *s, int k, int status, char *errmsg, con
   return status;
 }
 
-const char *sw_signal_name(const cup_sweep *s, int k) {
+const char *sw_signal_name(const sw_sweep *s, int k) {
   return k >= 0 && k < s->nsig ? cup_netlist_signal_name(cup_scene_netlist(s->var[0].scene), k) : NULL;
 }
 
@@ -52,18 +52,18 @@ static int text_after(const char *text, size_t len, const sw_variant *v, char **
 /* Variant k's text: its scene loaded from its file (its files join the
  * sweep's). A lazy variant's is made later (sw_lazy_texts); its entry's
  * first reads the scene file's text, once, for the jobs that load them. */
-static int variant_text(cup_sweep *s, int k, char **text, char *errmsg) {
+static int variant_text(sw_sweep *s, int k, char **text, char *errmsg) {
   sw_variant *v = &s->var[k];
   char err[CUP_ERRMSG_LEN];
   int st;
   if (sw_variant_lazy(s, k)) {
     sw_variant *first = &s->var[v->proto];
     if (first->file_text) return CUP_OK;
-    cup_file_list seen = {0};
+    file_list seen = {0};
     size_t len;
     char *bytes = NULL;
-    st = cup_read_text(v->scene_file, &bytes, &len, &seen, err);
-    cup_file_list_free(&seen);
+    st = read_text(v->scene_file, &bytes, &len, &seen, err);
+    file_list_free(&seen);
     if (st) return variant_fail(s, k, st, errmsg, "%s", err);
     if (memchr(bytes, '\0', len)) {           /* it travels and is kept as a string */
       free(bytes);
@@ -80,12 +80,12 @@ static int variant_text(cup_sweep *s, int k, char **text, char *errmsg) {
   if (st) return variant_fail(s, k, st, errmsg, "%s", err);
   if (k == 0) s->crowd = cup_scene_crowd(sc) != NULL;   /* crowds have no lazy variants */
   if (!(*text = strdup(cup_scene_text(sc)))) st = CUP_ERR_NOMEM;
-  if (!st) st = cup_file_list_merge(&s->files, cup_scene_file_list(sc));   /* its files join the sweep's */
+  if (!st) st = file_list_merge(&s->files, scene_file_list(sc));   /* its files join the sweep's */
   cup_scene_free(&sc);
   return st;
 }
 
-int sw_resolve_scenes(cup_sweep *s, char *errmsg) {
+int sw_resolve_scenes(sw_sweep *s, char *errmsg) {
   char **texts = calloc((size_t)s->n_variants, sizeof *texts);
   if (!texts) return CUP_ERR_NOMEM;
   int st = CUP_OK;
@@ -96,7 +96,7 @@ int sw_resolve_scenes(cup_sweep *s, char *errmsg) {
   return st;
 }
 
-int sw_lazy_texts(cup_sweep *s, char *errmsg) {
+int sw_lazy_texts(sw_sweep *s, char *errmsg) {
   for (int k = 0; k < s->n_variants; k++) {
     sw_variant *v = &s->var[k];
     const char *base = s->var[v->proto].file_text;
@@ -108,7 +108,7 @@ int sw_lazy_texts(cup_sweep *s, char *errmsg) {
   return CUP_OK;
 }
 
-int sw_resolve_files(cup_sweep *s, char *errmsg) {
+int sw_resolve_files(sw_sweep *s, char *errmsg) {
   int st = sw_resolve_scenes(s, errmsg);
   return st ? st : sw_lazy_texts(s, errmsg);
 }
@@ -116,7 +116,7 @@ int sw_resolve_files(cup_sweep *s, char *errmsg) {
 /* ---- the checks ---- */
 
 /* The largest n among a variant's tasks (the scene's n when the grid has none). */
-static long variant_max_n(const cup_sweep *s, int k) {
+static long variant_max_n(const sw_sweep *s, int k) {
   if (!s->len[SW_AXIS_N]) return cup_scene_options(sw_variant_settings(s, k))->n;
   long m = 1;
   for (int j = 0; j < s->len[SW_AXIS_N]; j++) m = s->n[j] > m ? s->n[j] : m;
@@ -125,7 +125,7 @@ static long variant_max_n(const cup_sweep *s, int k) {
 
 /* Variant k's scene sc against variants.0's (k = 0: sets the sweep's T,
  * dimension and kind). */
-static int check_shape(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) {
+static int check_shape(sw_sweep *s, int k, const cup_scene *sc, char *errmsg) {
   const cup_integrator_options *o = cup_scene_options(sc);
   int dim = cup_scene_dim(sc), crowd = cup_scene_crowd(sc) != NULL;
   if (k == 0) { s->T = o->T; s->dim = dim; s->crowd = crowd; s->steady = cup_scene_steady_state(sc) != NULL; }
@@ -145,7 +145,7 @@ static int check_shape(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) {
  * crowd is built for its scene's step), store no positions unless
  * output.samples says so, and have no reference (sweep_crowd.c runs them).
  * Here, not there, so that the sweep file's parser needs no HDF5. */
-static int crowd_resolve(cup_sweep *s, char *errmsg) {
+static int crowd_resolve(sw_sweep *s, char *errmsg) {
   if (s->len[SW_AXIS_N]) {
     snprintf(errmsg, SW_ERR_LEN, "%s: grid.n: a crowd is built for its scene's step T/n (its margins and "
              "exit times): vary n in a variant's set ({n: 4000}) instead", s->path);
@@ -160,7 +160,7 @@ static int crowd_resolve(cup_sweep *s, char *errmsg) {
  * signals measured and the elements' v(a,b) and i(E) probed before the
  * sweep's signals are fixed (check_signals), so that they are the same in
  * every variant, at the same indices (k = 0: they become the sweep's). */
-static int check_steady(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) {
+static int check_steady(sw_sweep *s, int k, const cup_scene *sc, char *errmsg) {
   const cup_scene_steady *q = cup_scene_steady_state(sc);
   if (!q != !s->steady)
     return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "%s the steady state, and variants.0 %s: a sweep's variants "
@@ -183,7 +183,7 @@ static int check_steady(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) 
     if ((sig[j] = cup_netlist_probe(nl, q->measure[j], err)) < 0)
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.measure: %s", err);
   for (int j = 0; j < q->npower; j++)
-    if (cup_pss_probe_power(nl, q->power[j], &pv[j], &pc[j], err))
+    if (pss_probe_power(nl, q->power[j], &pv[j], &pc[j], err))
       return variant_fail(s, k, CUP_ERR_PARSE, errmsg, "steady_state.power: %s", err);
   if (k == 0) {
     s->ss_nm = q->nmeasure;
@@ -203,7 +203,7 @@ static int check_steady(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) 
  * netlist's probes, else every node voltage and element current when at
  * most 256), the same in every variant: they share /runs/signals (k = 0:
  * they become the sweep's). */
-static int check_signals(cup_sweep *s, int k, const cup_scene *sc, char *errmsg) {
+static int check_signals(sw_sweep *s, int k, const cup_scene *sc, char *errmsg) {
   cup_netlist *nl = cup_scene_netlist(sc);
   char err[CUP_ERRMSG_LEN];
   if (!nl) {
@@ -225,7 +225,7 @@ static int check_signals(cup_sweep *s, int k, const cup_scene *sc, char *errmsg)
   return CUP_OK;
 }
 
-int sw_resolve_texts(cup_sweep *s, char *const *texts, char *errmsg) {
+int sw_resolve_texts(sw_sweep *s, char *const *texts, char *errmsg) {
   for (int k = 0; k < s->n_variants; k++) {
     sw_variant *v = &s->var[k];
     char err[CUP_ERRMSG_LEN];
@@ -284,9 +284,9 @@ static const char *differs(const cup_scene *sc, const cup_scene *stood) {
   return NULL;
 }
 
-int sw_variant_load(const cup_sweep *s, int k, cup_scene **out, char *errmsg) {
+int sw_variant_load(const sw_sweep *s, int k, cup_scene **out, char *errmsg) {
   const sw_variant *v = &s->var[k];
-  cup_sweep probe = *s;                     /* the checks compare against s; k > 0 never writes to it */
+  sw_sweep probe = *s;                     /* the checks compare against s; k > 0 never writes to it */
   char err[CUP_ERRMSG_LEN];
   cup_scene *sc = NULL;
   *out = NULL;

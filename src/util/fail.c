@@ -4,7 +4,7 @@
 #include "catchup/sparse.h"   /* CUP_ERRMSG_LEN */
 #include "fail.h"
 
-int cup_fail(char *buf, int status, const char *fmt, ...) {
+int fail_fmt(char *buf, int status, const char *fmt, ...) {
   if (buf) {
     va_list ap;
     va_start(ap, fmt);
@@ -14,7 +14,7 @@ int cup_fail(char *buf, int status, const char *fmt, ...) {
   return status;
 }
 
-int cup_vfail_at(char *buf, int w, int status, const char *fmt, va_list ap) {
+int fail_vfmt_at(char *buf, int w, int status, const char *fmt, va_list ap) {
   if (!buf) return status;
   size_t cap = CUP_ERRMSG_LEN;
   if (w >= 0 && (size_t)w < cap) vsnprintf(buf + w, cap - (size_t)w, fmt, ap);

@@ -7,13 +7,13 @@
 #include <stdarg.h>
 
 /* Format an error message into buf (may be NULL); returns status. */
-int cup_fail(char *buf, int status, const char *fmt, ...)
+int fail_fmt(char *buf, int status, const char *fmt, ...)
   __attribute__((format(printf, 3, 4)));
 
 /* The rest of a message after a prefix of w characters already in buf
  * (CUP_ERRMSG_LEN bytes; w as snprintf returned it), with newlines turned to
  * spaces so that the whole message is one line; returns status. */
-int cup_vfail_at(char *buf, int w, int status, const char *fmt, va_list ap)
+int fail_vfmt_at(char *buf, int w, int status, const char *fmt, va_list ap)
   __attribute__((format(printf, 4, 0)));
 
 #endif

@@ -9,55 +9,55 @@
 #include <emmintrin.h>   /* the intrinsics GCC and clang both name (GCC's builtins are GCC's alone) */
 #endif
 
-typedef double cup_v2d __attribute__((vector_size(16)));
-typedef long long cup_v2l __attribute__((vector_size(16)));
+typedef double v2d __attribute__((vector_size(16)));
+typedef long long v2l __attribute__((vector_size(16)));
 
 /* Entry j of the values v[0][0], v[0][1], v[1][0], ... */
-static inline __attribute__((always_inline)) double cup_lane(const cup_v2d *v, int j) {
+static inline __attribute__((always_inline)) double v2_lane(const v2d *v, int j) {
   return v[j >> 1][j & 1];
 }
 
-static inline cup_v2d cup_v2_abs(cup_v2d v) {
-  return (cup_v2d)((cup_v2l)v & (cup_v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
+static inline v2d v2_abs(v2d v) {
+  return (v2d)((v2l)v & (v2l){0x7fffffffffffffffLL, 0x7fffffffffffffffLL});
 }
 
 /* a > b ? a : b and a < b ? a : b, lane by lane (b where unordered: SSE2's
  * maxpd and minpd exactly) */
-static inline cup_v2d cup_v2_max(cup_v2d a, cup_v2d b) {
+static inline v2d v2_max(v2d a, v2d b) {
 #ifdef __SSE2__
   return _mm_max_pd(a, b);
 #else
-  return (cup_v2d){a[0] > b[0] ? a[0] : b[0], a[1] > b[1] ? a[1] : b[1]};
+  return (v2d){a[0] > b[0] ? a[0] : b[0], a[1] > b[1] ? a[1] : b[1]};
 #endif
 }
 
-static inline cup_v2d cup_v2_min(cup_v2d a, cup_v2d b) {
+static inline v2d v2_min(v2d a, v2d b) {
 #ifdef __SSE2__
   return _mm_min_pd(a, b);
 #else
-  return (cup_v2d){a[0] < b[0] ? a[0] : b[0], a[1] < b[1] ? a[1] : b[1]};
+  return (v2d){a[0] < b[0] ? a[0] : b[0], a[1] < b[1] ? a[1] : b[1]};
 #endif
 }
 
 /* mask ? 0 : v, lane by lane (mask lanes all ones or zero) */
-static inline cup_v2d cup_v2_clear(cup_v2l mask, cup_v2d v) {
+static inline v2d v2_clear(v2l mask, v2d v) {
 #ifdef __SSE2__
-  return _mm_andnot_pd((cup_v2d)mask, v);
+  return _mm_andnot_pd((v2d)mask, v);
 #else
-  return (cup_v2d)(~mask & (cup_v2l)v);
+  return (v2d)(~mask & (v2l)v);
 #endif
 }
 
 /* (a[i], b[j]) with lanes numbered 0, 1 in a and 2, 3 in b */
 #ifdef __clang__
-#define cup_v2_shuffle(a, b, i, j) __builtin_shufflevector(a, b, i, j)
+#define v2_shuffle(a, b, i, j) __builtin_shufflevector(a, b, i, j)
 #else
-#define cup_v2_shuffle(a, b, i, j) __builtin_shuffle(a, b, (cup_v2l){i, j})
+#define v2_shuffle(a, b, i, j) __builtin_shuffle(a, b, (v2l){i, j})
 #endif
 
 /* mask ? a : b, lane by lane (mask lanes all ones or zero) */
-static inline cup_v2d cup_v2_select(cup_v2l mask, cup_v2d a, cup_v2d b) {
-  return (cup_v2d)(((cup_v2l)a & mask) | ((cup_v2l)b & ~mask));
+static inline v2d v2_select(v2l mask, v2d a, v2d b) {
+  return (v2d)(((v2l)a & mask) | ((v2l)b & ~mask));
 }
 
 #endif

@@ -8,7 +8,7 @@
 #include "catchup.h"
 #include "linalg.h"
 
-int cup_grow(void *arr, int *cap, int n, size_t size, int first) {
+int la_grow(void *arr, int *cap, int n, size_t size, int first) {
   if (n < *cap) return CUP_OK;
   if (*cap > INT_MAX / 2) return CUP_ERR_NOMEM;
   int nc = *cap ? 2 * *cap : first;
@@ -21,51 +21,51 @@ int cup_grow(void *arr, int *cap, int n, size_t size, int first) {
   return CUP_OK;
 }
 
-int cup_sparse_alloc(cup_sparse *A, int nrow, int ncol, int nnz) {
+int la_sparse_alloc(la_sparse *A, int nrow, int ncol, int nnz) {
   A->nrow = nrow; A->ncol = ncol; A->nnz = nnz;
   A->p = malloc(sizeof(int) * ((size_t)ncol + 1));
   A->i = malloc(sizeof(int) * ((size_t)nnz + 1));
   A->x = malloc(sizeof(double) * ((size_t)nnz + 1));
-  if (!A->p || !A->i || !A->x) { cup_sparse_free(A); return CUP_ERR_NOMEM; }
+  if (!A->p || !A->i || !A->x) { la_sparse_free(A); return CUP_ERR_NOMEM; }
   A->p[0] = 0;
   return CUP_OK;
 }
 
-void cup_sparse_free(cup_sparse *A) {
+void la_sparse_free(la_sparse *A) {
   free(A->p); free(A->i); free(A->x);
   A->p = NULL; A->i = NULL; A->x = NULL;
   A->nnz = 0;
 }
 
-int cup_sparse_copy(cup_sparse *A, const cup_csc *v, const char *name,
-                    int nrow, int ncol, char *errmsg) {
+int la_sparse_copy(la_sparse *A, const cup_csc *v, const char *name,
+                   int nrow, int ncol, char *errmsg) {
   memset(A, 0, sizeof *A);
   if (!v || !v->colptr || (v->colptr[v->ncol] > 0 && (!v->rowind || !v->values)))
-    return cup_fail(errmsg, CUP_ERR_ARG, "%s: missing colptr, rowind or values", name);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "%s: missing colptr, rowind or values", name);
   if (v->nrow != nrow || v->ncol != ncol)
-    return cup_fail(errmsg, CUP_ERR_DIM, "%s is %d x %d, expected %d x %d",
+    return fail_fmt(errmsg, CUP_ERR_DIM, "%s is %d x %d, expected %d x %d",
                     name, v->nrow, v->ncol, nrow, ncol);
   if (v->colptr[0] != 0)
-    return cup_fail(errmsg, CUP_ERR_ARG, "%s: colptr[0] = %d, must be 0", name, v->colptr[0]);
+    return fail_fmt(errmsg, CUP_ERR_ARG, "%s: colptr[0] = %d, must be 0", name, v->colptr[0]);
   for (int j = 0; j < ncol; j++) {
     if (v->colptr[j + 1] < v->colptr[j])
-      return cup_fail(errmsg, CUP_ERR_ARG, "%s: colptr decreases at column %d", name, j);
+      return fail_fmt(errmsg, CUP_ERR_ARG, "%s: colptr decreases at column %d", name, j);
     for (int k = v->colptr[j]; k < v->colptr[j + 1]; k++) {
       int r = v->rowind[k];
       if (r < 0 || r >= nrow)
-        return cup_fail(errmsg, CUP_ERR_ARG, "%s: column %d has row index %d outside [0, %d)",
+        return fail_fmt(errmsg, CUP_ERR_ARG, "%s: column %d has row index %d outside [0, %d)",
                         name, j, r, nrow);
       if (k > v->colptr[j] && r <= v->rowind[k - 1])
-        return cup_fail(errmsg, CUP_ERR_ARG,
+        return fail_fmt(errmsg, CUP_ERR_ARG,
                         "%s: column %d row indices not strictly increasing (%d after %d)",
                         name, j, r, v->rowind[k - 1]);
       if (!isfinite(v->values[k]))
-        return cup_fail(errmsg, CUP_ERR_NONFINITE, "%s(%d,%d) is %g", name, r, j, v->values[k]);
+        return fail_fmt(errmsg, CUP_ERR_NONFINITE, "%s(%d,%d) is %g", name, r, j, v->values[k]);
     }
   }
   int nnz = v->colptr[ncol];
-  if (cup_sparse_alloc(A, nrow, ncol, nnz) != CUP_OK)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "%s: out of memory copying %d entries", name, nnz);
+  if (la_sparse_alloc(A, nrow, ncol, nnz) != CUP_OK)
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "%s: out of memory copying %d entries", name, nnz);
   memcpy(A->p, v->colptr, sizeof(int) * ((size_t)ncol + 1));
   if (nnz) {
     memcpy(A->i, v->rowind, sizeof(int) * (size_t)nnz);
@@ -74,11 +74,11 @@ int cup_sparse_copy(cup_sparse *A, const cup_csc *v, const char *name,
   return CUP_OK;
 }
 
-int cup_sparse_transpose(cup_sparse *At, const cup_sparse *A) {
-  int st = cup_sparse_alloc(At, A->ncol, A->nrow, A->nnz);
+int la_sparse_transpose(la_sparse *At, const la_sparse *A) {
+  int st = la_sparse_alloc(At, A->ncol, A->nrow, A->nnz);
   if (st) return st;
   int *cnt = calloc((size_t)A->nrow + 1, sizeof(int));
-  if (!cnt) { cup_sparse_free(At); return CUP_ERR_NOMEM; }
+  if (!cnt) { la_sparse_free(At); return CUP_ERR_NOMEM; }
   for (int k = 0; k < A->nnz; k++) cnt[A->i[k] + 1]++;
   for (int r = 0; r < A->nrow; r++) cnt[r + 1] += cnt[r];
   memcpy(At->p, cnt, sizeof(int) * ((size_t)A->nrow + 1));
@@ -92,7 +92,7 @@ int cup_sparse_transpose(cup_sparse *At, const cup_sparse *A) {
   return CUP_OK;
 }
 
-void cup_sparse_gaxpy(const cup_sparse *A, const double *x, double *y) {
+void la_sparse_gaxpy(const la_sparse *A, const double *x, double *y) {
   for (int j = 0; j < A->ncol; j++) {
     double xj = x[j];
     if (xj == 0) continue;
@@ -100,7 +100,7 @@ void cup_sparse_gaxpy(const cup_sparse *A, const double *x, double *y) {
   }
 }
 
-void cup_sparse_gatxy(const cup_sparse *A, const double *x, double *y) {
+void la_sparse_gatxy(const la_sparse *A, const double *x, double *y) {
   for (int j = 0; j < A->ncol; j++) {
     double s = 0;
     for (int k = A->p[j]; k < A->p[j + 1]; k++) s += A->x[k] * x[A->i[k]];
@@ -108,7 +108,7 @@ void cup_sparse_gatxy(const cup_sparse *A, const double *x, double *y) {
   }
 }
 
-int cup_dense_pchol(double *a, int k, int *perm, double tol) {
+int la_dense_pchol(double *a, int k, int *perm, double tol) {
   double dmax = 0;
   for (int j = 0; j < k; j++) {
     perm[j] = j;
@@ -147,8 +147,8 @@ int cup_dense_pchol(double *a, int k, int *perm, double tol) {
   return k;
 }
 
-void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
-                           const double *b, double *x, double *w) {
+void la_dense_pchol_solve(const double *l, int k, int r, const int *perm,
+                          const double *b, double *x, double *w) {
   for (int j = 0; j < r; j++) w[j] = b[perm[j]];
   for (int j = 0; j < r; j++) {             /* L w = b */
     w[j] /= l[j + (size_t)j * k];
@@ -161,14 +161,14 @@ void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
   for (int j = 0; j < k; j++) x[perm[j]] = j < r ? w[j] : 0.0;
 }
 
-int cup_cholmod_start(cholmod_common *c) {
+int la_cholmod_start(cholmod_common *c) {
   if (!cholmod_start(c)) return CUP_ERR_LINALG;
   c->print = 0;            /* the library never prints */
   c->error_handler = NULL;
   return CUP_OK;
 }
 
-void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w) {
+void la_simplicial_solve(const cholmod_factor *L, double *x, double *w) {
   const int n = (int)L->n;
   const int *Lp = L->p, *Li = L->i, *Lnz = L->nz, *perm = L->Perm;
   const double *Lx = L->x;
@@ -205,7 +205,7 @@ void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w) {
   }
 }
 
-int cup_dense_lu(double *a, int k, int *piv) {
+int la_dense_lu(double *a, int k, int *piv) {
   for (int i = 0; i < k; i++) piv[i] = i;
   for (int j = 0; j < k; j++) {
     int p = j;
@@ -230,7 +230,7 @@ int cup_dense_lu(double *a, int k, int *piv) {
   return 0;
 }
 
-void cup_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w) {
+void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w) {
   for (int i = 0; i < k; i++) w[i] = b[piv[i]];
   memcpy(b, w, sizeof(double) * (size_t)k);
   for (int j = 0; j < k; j++)               /* L y = Pb, unit diagonal */
@@ -269,7 +269,7 @@ static int expm_scale(const double *a, int k, double *s) {
 
 /* The same Taylor polynomial, carrying X = exp(s) - I through the
  * squarings as (I + X)^2 = I + (2 X + X^2). */
-void cup_dense_expm_stiff(const double *a, int k, double *out, double *work) {
+void la_dense_expm_stiff(const double *a, int k, double *out, double *work) {
   size_t K2 = (size_t)k * k;
   double *s = work, *x = s + K2, *term = x + K2, *tmp = term + K2;
   int sq = expm_scale(a, k, s);
@@ -286,7 +286,7 @@ void cup_dense_expm_stiff(const double *a, int k, double *out, double *work) {
   for (int i = 0; i < k; i++) out[i + (size_t)i * k] += 1;
 }
 
-void cup_dense_expm(const double *a, int k, double *out, double *work) {
+void la_dense_expm(const double *a, int k, double *out, double *work) {
   double *s = work, *term = work + (size_t)k * k, *tmp = term + (size_t)k * k;
   int sq = expm_scale(a, k, s);
   /* Taylor to degree 18: remainder < 0.5^19 / 19! relative */

@@ -1,6 +1,6 @@
 /* linalg — owned sparse matrices, small dense Cholesky, CHOLMOD set-up;
  * growing arrays. Internal to the library. Its users report errors too: it
- * includes fail.h (cup_fail). */
+ * includes fail.h (fail_fmt). */
 #ifndef CUP_LINALG_H
 #define CUP_LINALG_H
 
@@ -12,52 +12,52 @@
 #include "fail.h"
 
 /* An owned CSC matrix. */
-typedef struct cup_sparse {
+typedef struct la_sparse {
   int nrow, ncol, nnz;
   int *p;       /* ncol+1 */
   int *i;       /* nnz */
   double *x;    /* nnz */
-} cup_sparse;
+} la_sparse;
 
 /* Room for one more element in the array *(T **)arr of *cap elements of
  * size bytes, n of them in use: doubles *cap (from first) when n == *cap.
  * CUP_ERR_NOMEM leaves the array and *cap as they were. */
-int cup_grow(void *arr, int *cap, int n, size_t size, int first);
+int la_grow(void *arr, int *cap, int n, size_t size, int first);
 
 /* Copy and validate a view: sizes, index ranges, strictly increasing rows in
  * each column, finite values. `name` is used in messages ("C", "P"). */
-int cup_sparse_copy(cup_sparse *A, const cup_csc *view, const char *name,
-                    int nrow, int ncol, char *errmsg);
-int cup_sparse_alloc(cup_sparse *A, int nrow, int ncol, int nnz);
-void cup_sparse_free(cup_sparse *A);
+int la_sparse_copy(la_sparse *A, const cup_csc *view, const char *name,
+                   int nrow, int ncol, char *errmsg);
+int la_sparse_alloc(la_sparse *A, int nrow, int ncol, int nnz);
+void la_sparse_free(la_sparse *A);
 /* At = A^T (allocates At). */
-int cup_sparse_transpose(cup_sparse *At, const cup_sparse *A);
+int la_sparse_transpose(la_sparse *At, const la_sparse *A);
 /* y += A x */
-void cup_sparse_gaxpy(const cup_sparse *A, const double *x, double *y);
+void la_sparse_gaxpy(const la_sparse *A, const double *x, double *y);
 /* y = A^T x computed by column gathers (y has A->ncol entries). */
-void cup_sparse_gatxy(const cup_sparse *A, const double *x, double *y);
+void la_sparse_gatxy(const la_sparse *A, const double *x, double *y);
 
 /* Dense pivoted Cholesky of the k x k symmetric matrix a (column-major,
  * lower triangle used, overwritten by L). perm receives the pivot order; the
  * returned rank r counts pivots above tol * (largest diagonal). Rows beyond
  * the rank are treated as linearly dependent. */
-int cup_dense_pchol(double *a, int k, int *perm, double tol);
-/* Solve with the first r pivots of a factor from cup_dense_pchol: x[perm[j]]
+int la_dense_pchol(double *a, int k, int *perm, double tol);
+/* Solve with the first r pivots of a factor from la_dense_pchol: x[perm[j]]
  * for j < r is set, x[perm[j]] = 0 for j >= r. b is not modified. */
-void cup_dense_pchol_solve(const double *l, int k, int r, const int *perm,
-                           const double *b, double *x, double *work);
+void la_dense_pchol_solve(const double *l, int k, int r, const int *perm,
+                          const double *b, double *x, double *work);
 
 /* A CHOLMOD common that never prints and uses our memory routines. */
-int cup_cholmod_start(cholmod_common *c);
+int la_cholmod_start(cholmod_common *c);
 
 /* max/min without a libm call (fmax is not inlined at -O2); with a NaN
  * argument they return the second argument, so callers that must not let
  * NaN through use explicit comparisons instead. */
-static inline double cup_max(double a, double b) { return a > b ? a : b; }
-static inline double cup_min(double a, double b) { return a < b ? a : b; }
+static inline double la_max(double a, double b) { return a > b ? a : b; }
+static inline double la_min(double a, double b) { return a < b ? a : b; }
 /* floor(x) without a libm call (x86-64's baseline has no rounding
  * instruction): the same value, zeros, Inf and NaN included. */
-static inline double cup_floor(double x) {
+static inline double la_floor(double x) {
   if (!(fabs(x) < 0x1p52) || x == 0) return x;   /* already an integer, or NaN */
   double t = (double)(long long)x;               /* x truncated toward 0, exact */
   return t > x ? t - 1 : t;
@@ -65,22 +65,22 @@ static inline double cup_floor(double x) {
 
 /* Copies and fills of short vectors: loops beat a libc call for the tiny
  * sizes of circuit models and are no worse for long ones. */
-static inline void cup_copy(double *dst, const double *src, int n) {
+static inline void la_copy(double *dst, const double *src, int n) {
   for (int k = 0; k < n; k++) dst[k] = src[k];
 }
-static inline void cup_zero(double *dst, int n) {
+static inline void la_zero(double *dst, int n) {
   for (int k = 0; k < n; k++) dst[k] = 0;
 }
 
 /* cup_status_merge for the library's own hot paths (the exported function
  * is the same rule). */
-static inline int cup_merge(int first, int second) {
+static inline int status_merge(int first, int second) {
   if (first < 0) return first;
   if (second < 0) return second;
   return first > 0 ? first : second;
 }
 
-static inline double cup_dot(const double *a, const double *b, int n) {
+static inline double la_dot(const double *a, const double *b, int n) {
   double s = 0;
   for (int k = 0; k < n; k++) s += a[k] * b[k];
   return s;
@@ -91,20 +91,20 @@ static inline double cup_dot(const double *a, const double *b, int n) {
 /* In-place solve with a simplicial CHOLMOD factor (LL^T or LDL^T) including
  * its fill-reducing permutation: x <- A^-1 x. w is n entries of scratch.
  * Allocation-free (cholmod_solve2 allocates on every call). */
-void cup_simplicial_solve(const cholmod_factor *L, double *x, double *w);
+void la_simplicial_solve(const cholmod_factor *L, double *x, double *w);
 
 /* ---- small dense matrices (column-major, k x k), allocation-free ---------- */
 
 /* LU with partial pivoting in place; piv gets the row order. Returns 0, or
  * j+1 if the pivot in column j is exactly zero. */
-int cup_dense_lu(double *a, int k, int *piv);
-/* Solve with the factor from cup_dense_lu, in place; w: k doubles. */
-void cup_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w);
+int la_dense_lu(double *a, int k, int *piv);
+/* Solve with the factor from la_dense_lu, in place; w: k doubles. */
+void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w);
 /* out = exp(a) by scaling and squaring of a degree-18 Taylor polynomial;
  * work holds 3 k*k doubles. a and out must differ. */
-void cup_dense_expm(const double *a, int k, double *out, double *work);
+void la_dense_expm(const double *a, int k, double *out, double *work);
 /* The same polynomial with X = exp(a/2^s) - I carried through the squarings,
  * (I + X)^2 = I + (2 X + X^2): forming I + X rounds X's small entries
  * against 1 and each squaring doubles that, 2^s eps in all (1e-11 on a
  * generator with |lambda| ~ 1e5); this keeps them. work: 4 k*k doubles. */
-void cup_dense_expm_stiff(const double *a, int k, double *out, double *work);
+void la_dense_expm_stiff(const double *a, int k, double *out, double *work);

@@ -6,12 +6,12 @@
 
 
 /* names[v] for 0 <= v < count, else "unknown". */
-const char *cup_name_of(const char *const *names, int count, int v);
+const char *name_of(const char *const *names, int count, int v);
 /* The v with names[v] equal to name, else -1 (name NULL: -1). */
-int cup_value_of(const char *const *names, int count, const char *name);
+int value_of(const char *const *names, int count, const char *name);
 
 /* The NULL-terminated words as "a, b, c or d" (conj "or"/"and") into buf
  * (n bytes, truncated to fit); returns buf. */
-char *cup_words_join(char *buf, unsigned long n, const char *const *words, const char *conj);
+char *words_join(char *buf, unsigned long n, const char *const *words, const char *conj);
 
 #endif

@@ -11,7 +11,7 @@
 #include "lanes.h"
 
 /* The reduction and both series, for a scalar or for lanes (T double or
- * cup_v2d): r = x - k pi/2 with y = 1.5 2^52 + k, and s, c ~ sin r, cos r. */
+ * v2d): r = x - k pi/2 with y = 1.5 2^52 + k, and s, c ~ sin r, cos r. */
 #define CUP_SIN_CORE(T, x, y, s, c)                                                                     \
   const T y = x * 0x1.45f306dc9c883p-1 + 0x1.8p52;   /* adding 1.5 2^52 rounds x 2/pi to an integer */ \
   const T k_ = y - 0x1.8p52;                                                                          \
@@ -24,7 +24,7 @@
               r2_ * (-2.755731922398589e-07 + r2_ * (2.08767569878681e-09 +                          \
               r2_ * (-1.1470745597729725e-11 + r2_ * 4.779477332387385e-14)))))))
 
-static inline double cup_sin(double x) {
+static inline double trig_sin(double x) {
   double ax = fabs(x);
   if (!(ax < 65536.0)) return sin(x);
   if (ax < 0x1p-26) return x;                       /* sin x rounds to x (and keeps the sign of 0) */
@@ -34,18 +34,18 @@ static inline double cup_sin(double x) {
   return (q & 2) ? -v : v;
 }
 
-/* cup_sin of both lanes, bit for bit, in fewer instructions than two: the
+/* trig_sin of both lanes, bit for bit, in fewer instructions than two: the
  * quadrant from y's low mantissa bits (y = 1.5 2^52 + k holds k + 2^51
  * there, and 2^51 = 0 mod 4). */
-static inline cup_v2d cup_sin2(cup_v2d x) {
-  cup_v2d ax = cup_v2_abs(x);
-  cup_v2l fits = ax < (cup_v2d){65536.0, 65536.0};
-  if (!(fits[0] & fits[1])) return (cup_v2d){cup_sin(x[0]), cup_sin(x[1])};
-  CUP_SIN_CORE(cup_v2d, x, y, s, c);
-  cup_v2l q = (cup_v2l)y;
-  cup_v2d v = cup_v2_select(-(q & 1), c, s);
-  v = (cup_v2d)((cup_v2l)v ^ ((q & 2) << 62));
-  return cup_v2_select(ax < (cup_v2d){0x1p-26, 0x1p-26}, x, v);
+static inline v2d trig_sin2(v2d x) {
+  v2d ax = v2_abs(x);
+  v2l fits = ax < (v2d){65536.0, 65536.0};
+  if (!(fits[0] & fits[1])) return (v2d){trig_sin(x[0]), trig_sin(x[1])};
+  CUP_SIN_CORE(v2d, x, y, s, c);
+  v2l q = (v2l)y;
+  v2d v = v2_select(-(q & 1), c, s);
+  v = (v2d)((v2l)v ^ ((q & 2) << 62));
+  return v2_select(ax < (v2d){0x1p-26, 0x1p-26}, x, v);
 }
 
 #endif
