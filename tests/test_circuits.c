@@ -339,8 +339,8 @@ static void test_mixed_kernel(void **state) {
   double D[4] = {1, 1000, 1000, 1e6}, h = 0.1, theta = 0.5;
   tcsc Cc;
   cup_polyset *K = tpolyset_dense(&Cc, Cd, 2, 2, g, pd);
-  cup_lcp_step ls;
-  assert_int_equal(cup_lcp_step_init_bd(&ls, K, NULL, h, Bm, D, theta), CUP_OK);
+  lcp_step ls;
+  assert_int_equal(lcp_step_init_bd(&ls, K, NULL, h, Bm, D, theta), CUP_OK);
   double x0[2] = {0, 0};
   assert_int_equal(lcp_step_start(&ls, x0, g), 1);
   int mixed = 0;

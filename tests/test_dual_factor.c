@@ -69,8 +69,8 @@ static long solves_against_dense(long room, double per_row) {
     for (int j = 0; j < n; j++) d[j] = 0.5 + 4 * rng_unif(&r);
     tcsc Ct;
     cup_polyset *K = tpolyset_dense(&Ct, C, m, n, NULL, d);
-    cup_dfact *f = NULL;
-    assert_int_equal(cup_dfact_create(&f, K, 1, room, NULL), CUP_OK);
+    dfact *f = NULL;
+    assert_int_equal(dfact_create(&f, K, 1, room, NULL), CUP_OK);
     unsigned char *act = calloc((size_t)m, 1);
     double *v = malloc(sizeof(double) * m), *w = malloc(sizeof(double) * m);
     double *ref = malloc(sizeof(double) * m);

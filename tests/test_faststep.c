@@ -223,7 +223,7 @@ static void test_unrolled_step_is_the_general_one(void **state) {
       for (int j = 0; j < n; j++) W[i + j * n] = (i == j) + 0.01 * rng_normal(&r);
     tcsc Cc;
     cup_polyset *K = tpolyset_dense(&Cc, C, m, n, g, pd);
-    cup_lcp_step fast, slow;
+    lcp_step fast, slow;
     int use_w = trial % 2;
     assert_int_equal(lcp_step_init(&fast, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);
     assert_int_equal(lcp_step_init(&slow, K, use_w ? W : NULL, use_w ? h : 1), CUP_OK);

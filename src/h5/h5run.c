@@ -177,13 +177,13 @@ void free_writer(cup_h5run *w) {
 }
 
 cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st) {
-  if (!path || !path[0]) return *st = cup_fail(errmsg, CUP_ERR_ARG, "h5run: empty file name"), NULL;
+  if (!path || !path[0]) return *st = fail_fmt(errmsg, CUP_ERR_ARG, "h5run: empty file name"), NULL;
   if (dim < 1 || dim > MAX_DIM) {
-    *st = cup_fail(errmsg, CUP_ERR_ARG, "h5run: '%s': state dimension %d outside [1, %d]", path, dim, MAX_DIM);
+    *st = fail_fmt(errmsg, CUP_ERR_ARG, "h5run: '%s': state dimension %d outside [1, %d]", path, dim, MAX_DIM);
     return NULL;
   }
   cup_h5run *w = calloc(1, sizeof *w);
-  if (!w) return *st = cup_fail(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path), NULL;
+  if (!w) return *st = fail_fmt(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path), NULL;
   w->file = w->dset_t = w->dset_x = w->dset_e = w->etype_file = w->etype_mem = w->group = H5I_INVALID_HID;
   w->dim = dim;
   w->chunk_rows = chunk_rows_for(dim);
@@ -192,7 +192,7 @@ cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st) {
   w->path = strdup(path);
   if (!w->tbuf || !w->xbuf || !w->path) {
     free_writer(w);
-    *st = cup_fail(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
+    *st = fail_fmt(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
     return NULL;
   }
   w->last_flush = now_seconds();
@@ -201,19 +201,19 @@ cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st) {
 }
 
 int cup_h5run_begin(cup_h5run **out, const char *path, int dim, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
   *out = NULL;
   /* HDF5 1.10 leaks internal state when a create fails after open() (a
    * device, a /proc file) and then prints at exit; refuse those up front. */
   struct stat sb;
   if (path && stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
-    return cup_fail(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
+    return fail_fmt(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': not a regular file", path);
   int st;
   cup_h5run *w = writer_new(path, dim, errmsg, &st);
   if (!w) return st;
   w->staged = h5_staged_name(path);
   if (!w->staged) {
-    st = cup_fail(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': cannot create a file beside it (%s): its "
+    st = fail_fmt(errmsg, CUP_ERR_IO, "h5run: cannot create '%s': cannot create a file beside it (%s): its "
                   "folder must take new files; an existing '%s' is left as it was", path, strerror(errno), path);
     free_writer(w);
     return st;

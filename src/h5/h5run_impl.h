@@ -45,7 +45,7 @@ struct cup_h5run {
 
 /* h5run.c: record the first HDF5 failure ("h5run: cannot OP 'PATH': ...")
  * and stop the writer; keep the error stack across a cleanup (a message
- * into errmsg: util/fail.h's cup_fail, compiled into catchup_h5 too). */
+ * into errmsg: util/fail.h's fail_fmt, compiled into catchup_h5 too). */
 H5R_HIDDEN int set_error(cup_h5run *w, int status, const char *op);
 H5R_HIDDEN hid_t keep_stack(int failed);
 H5R_HIDDEN void restore_stack(hid_t saved);

@@ -66,14 +66,14 @@ static int open_signals(cup_h5run *w, int nsig, const char *const *names) {
 }
 
 int cup_h5run_open(cup_h5run **out, const char *path, int dim, int nsig, const char *const *names, char *errmsg) {
-  if (!out) return cup_fail(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
+  if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "h5run: output pointer is NULL");
   *out = NULL;
-  if (nsig < 0 || (nsig && !names)) return cup_fail(errmsg, CUP_ERR_ARG, "h5run: bad signal names");
+  if (nsig < 0 || (nsig && !names)) return fail_fmt(errmsg, CUP_ERR_ARG, "h5run: bad signal names");
   struct stat sb;
   if (!path || stat(path, &sb) != 0 || !S_ISREG(sb.st_mode))
-    return cup_fail(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': no such file", path ? path : "(null)");
-  if (cup_file_in_use(path))
-    return cup_fail(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': the file is in use by another process (HDF5 "
+    return fail_fmt(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': no such file", path ? path : "(null)");
+  if (h5_file_in_use(path))
+    return fail_fmt(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': the file is in use by another process (HDF5 "
                     "file locking): wait for that run to end; the file is left as it was", path);
   int st;
   cup_h5run *w = writer_new(path, dim, errmsg, &st);
@@ -91,13 +91,13 @@ int cup_h5run_open(cup_h5run **out, const char *path, int dim, int nsig, const c
   long nt = w->dset_t >= 0 ? rows_of(w->dset_t, 1, NULL) : -1, nx = w->dset_x >= 0 ? rows_of(w->dset_x, 2, &cols) : -1;
   long ne = w->dset_e >= 0 ? rows_of(w->dset_e, 1, NULL) : -1;
   if (w->file < 0 || nt < 0 || nx < 0 || ne < 0 || event_types(w) < 0)
-    st = cup_fail(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': not a file of catchup-run (no /t, /x and /events)",
+    st = fail_fmt(errmsg, CUP_ERR_IO, "h5run: cannot continue '%s': not a file of catchup-run (no /t, /x and /events)",
                   path);
   else if ((int)cols != dim)
-    st = cup_fail(errmsg, CUP_ERR_ARG, "h5run: cannot continue '%s': its states have %d entries, this run's %d", path,
+    st = fail_fmt(errmsg, CUP_ERR_ARG, "h5run: cannot continue '%s': its states have %d entries, this run's %d", path,
                   (int)cols, dim);
   else if (open_signals(w, nsig, names) < 0)
-    st = cup_fail(errmsg, CUP_ERR_ARG, "h5run: cannot continue '%s': it records other signals than this run (its "
+    st = fail_fmt(errmsg, CUP_ERR_ARG, "h5run: cannot continue '%s': it records other signals than this run (its "
                   "/signals and --probe must agree)", path);
   H5Eclear2(H5E_DEFAULT);
   quiet_end(q);

@@ -688,39 +688,39 @@ static int run_to_end(adaptive_ws *A, ad_run *R, int st) {
 /* What a run and a window start from: nothing pending, stopped or pinned
  * from before, the end at tend, the state xa at R's time (x0 refused when
  * beyond a state's range: check, the run's). */
-static int run_begin(cup_adaptive *A, ad_run *R, double tend, const double *xa, int check) {
+static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = 0;                               /* (the input may have changed between runs) */
   A->tend = tend;
   memset(R->info, 0, sizeof *R->info);
   R->info->err_est = NAN;
-  if (check && cup_state_beyond(xa, A->n)) {
-    int w = cup_state_worst(xa, A->n);
+  if (check && tally_state_beyond(xa, A->n)) {
+    int w = tally_state_worst(xa, A->n);
     if (!isfinite(xa[w])) return ad_fail(R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, xa[w]);
     return ad_fail(R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
                 CUP_STATE_MAX, w, xa[w]);
   }
-  cup_copy(A->x, xa, A->n);
-  cup_copy(A->xok, xa, A->n);
-  cup_zero(A->e, A->n);
+  la_copy(A->x, xa, A->n);
+  la_copy(A->xok, xa, A->n);
+  la_zero(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
-  cup_lcp_forget(&A->lcp);
+  lcp_forget(&A->lcp);
   return CUP_OK;
 }
 
 /* ... then, after its first sample (first: x0's), the breakpoint there and
  * the first piece (the steps to tend follow: run_to_end). */
-static int start_from(cup_adaptive *A, ad_run *R, int first, int st) {
+static int start_from(adaptive_ws *A, ad_run *R, int first, int st) {
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, R, first, &pi);
   if (st >= 0 && R->t < A->tend) st = start_piece(A, R);
   return st;
 }
 
-int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
-                     cup_run_info *info) {
+int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
+                 cup_run_info *info) {
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
   int st = run_begin(A, &R, A->o.T, x0, 1);
   if (st) return st;
@@ -732,8 +732,8 @@ int cup_adaptive_run(cup_adaptive *A, const double *x0, cup_sample_fn sink, void
 
 /* A switched run's window (switched.c): from xa at ta to tb, the samples
  * (x0's when first) and steps counted on from *next_sample and *steps. */
-int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa, int first, int jumped,
-                        long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
+                    long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds(),
               .t = ta, .steps = *steps, .next_sample = *next_sample};
   run_begin(A, &R, tb, xa, 0);
@@ -757,7 +757,7 @@ int cup_adaptive_window(cup_adaptive *A, double ta, double tb, const double *xa,
  * refused it) and what followed it in its step (the next piece at a
  * breakpoint, the catching-up steps under way, the accumulation check),
  * then the steps to T. */
-int cup_adaptive_resume(cup_adaptive *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   ad_stop *s = &A->stop;
   if (s->phase == AD_STOP_NONE) return info->status = CUP_ERR_ARG;
   A->tend = A->o.T;

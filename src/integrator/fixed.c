@@ -29,7 +29,7 @@
 #include "integrator_impl.h"
 #include "fixed_impl.h"
 
-static double grid_time(const fixed_ws *F, long k) { return cup_grid_time(k, F->o.n, F->o.T, F->h); }
+static double grid_time(const fixed_ws *F, long k) { return tally_grid_time(k, F->o.n, F->o.T, F->h); }
 
 /* The output: every k-th step, the last, none; or samples at
  * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
@@ -129,9 +129,9 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
 
 static int coarse_run(fixed_ws *F, cup_run_info *info) {
   cup_run_info hi;
-  int st = fixed_run(F->half, F->x0, cup_estimate_keep, &F->est, &hi);
-  cup_estimate_start(&F->est, st >= 0);
-  info->err_est = cup_estimate_value(&F->est);
+  int st = fixed_run(F->half, F->x0, estimate_keep, &F->est, &hi);
+  estimate_start(&F->est, st >= 0);
+  info->err_est = estimate_value(&F->est);
   return st == CUP_ERR_INTERRUPTED && F->o.interrupt && *F->o.interrupt ? CUP_ERR_INTERRUPTED : CUP_OK;
 }
 
@@ -152,7 +152,7 @@ static int halt(fixed_ws *F, cup_run_info *info, int status, long k, double t, c
 static int moving_offset(fixed_ws *F, double t) {
   if (cup_input_eval(F->u, t, F->ut)) return CUP_ERR_CALLBACK;
   memcpy(F->g, F->K->g0, sizeof(double) * (size_t)F->m);
-  cup_sparse_gaxpy(F->G, F->ut, F->g);
+  la_sparse_gaxpy(F->G, F->ut, F->g);
   if (!F->use_theta) return cup_projector_set_offset(F->proj, F->g);
   for (int i = 0; i < F->m; i++)           /* the theta step reads g itself */
     if (!isfinite(F->g[i])) return CUP_ERR_NONFINITE;
@@ -178,7 +178,7 @@ static void describe_projection_error(char *buf, size_t size, int st, const cup_
 static __attribute__((noinline, cold)) int diverged(const fixed_ws *F, cup_run_info *info, long k, double t,
                                                     const double *x) {
   char what[200];
-  int j = cup_state_worst(x, F->n);
+  int j = tally_state_worst(x, F->n);
   int len = snprintf(what, sizeof what, "the state left its range ||x||_1 <= %g (x[%d] = %.3g): the scheme "
                      "diverged", CUP_STATE_MAX, j, x[j]);
   if (F->o.scheme == CUP_SCHEME_EXPLICIT && F->h_rho > 2 && len > 0 && (size_t)len < sizeof what)
@@ -203,17 +203,17 @@ static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, 
   cup_proj_info pp = {0}, first = *pi;
   int ps = cup_projector_set_offset(F->proj, F->use_theta && F->th.D ? F->th.geff : g);   /* D: K shifted by D zeta */
   double own = INFINITY;
-  if (ps == CUP_OK && (ps = cup_project_exact(F->proj, F->xnew, F->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
-    own = cup_metric_dist_hi(F->K, F->xnew, F->v, NULL, F->v + F->n) + pp.eta_cert;
+  if (ps == CUP_OK && (ps = proj_exact(F->proj, F->xnew, F->v, &pp)) >= 0 && pp.eta_cert < INFINITY)
+    own = polyset_metric_dist_hi(F->K, F->xnew, F->v, NULL, F->v + F->n) + pp.eta_cert;
   if (own <= pi->eta_target) ps = CUP_OK;
   else if (ps >= 0 && (!F->use_theta || F->o.scheme == CUP_SCHEME_EXPLICIT)) {   /* z projects xf */
     for (int offer = !F->use_theta; offer < 2 && ps >= 0 && !(pi->eta_cert < INFINITY); offer++) {
       if (offer && !cup_projector_offer_feasible(F->proj, F->x)) break;
-      if ((ps = cup_project_exact(F->proj, F->xf, F->v, &pp)) >= 0 && pp.eta_cert < own) {
+      if ((ps = proj_exact(F->proj, F->xf, F->v, &pp)) >= 0 && pp.eta_cert < own) {
         *pi = pp;
         st = ps;
         F->zeta_from = 2;
-        cup_copy(F->xnew, F->v, F->n);
+        la_copy(F->xnew, F->v, F->n);
       }
     }
   }
@@ -231,9 +231,9 @@ static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, 
    * it can be certified: the answer may be right) */
   const double *sz = F->s0, *gam = F->sg;        /* z's slack and its rounding */
   if (F->use_theta && F->th.D) sz = F->th.s, gam = F->th.gam;   /* the step's own, with D zeta's rounding */
-  else cup_slack(F->K, g, F->xnew, F->s0, F->sg);
+  else polyset_slack(F->K, g, F->xnew, F->s0, F->sg);
   int row = -1;
-  double far = 0, tol = cup_max(pi->eta_target, 1e-10 * cup_polyset_norm(F->K, F->xnew));
+  double far = 0, tol = la_max(pi->eta_target, 1e-10 * cup_polyset_norm(F->K, F->xnew));
   for (int i = 0; i < F->m; i++) {
     double d = F->K->rownorm[i] > 0 ? (-sz[i] - gam[i]) / F->K->rownorm[i] : 0;   /* <= d_K(z) */
     if (d > far) { far = d; row = i; }
@@ -254,8 +254,8 @@ static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, 
  * is not: the first step jumps (jump_size tells by how much). */
 static int polyset_x0(fixed_ws *F, int fixed, cup_run_info *info) {
   const double *g0 = !fixed && moving_offset(F, 0) == CUP_OK ? F->g : F->K->g0;
-  int consistent = F->use_theta ? cup_lcp_step_start(&F->th, F->x, g0)
-                                : cup_slack(F->K, g0, F->x, F->s0, NULL) >= 0;
+  int consistent = F->use_theta ? lcp_step_start(&F->th, F->x, g0)
+                                : polyset_slack(F->K, g0, F->x, F->s0, NULL) >= 0;
   if (consistent) return 0;
   info->status = CUP_WARN_X0_OUTSIDE;
   snprintf(info->message, sizeof info->message, "step 0 (t = 0): x0 is %s; the first step projects it",
@@ -306,7 +306,7 @@ static int general_step(fixed_ws *F, long k, double t, const double *xk, const d
    * the contact margin in one step); the step is then projected again, warm,
    * with that row, its work added to the step's */
   for (int again = 0; st >= 0 && again < RECHECKS; again++) {
-    int rc = cup_setproj_recheck(F->sp, t, xk, z);
+    int rc = setproj_recheck(F->sp, t, xk, z);
     if (rc <= 0) {
       if (rc < 0) st = rc;
       break;
@@ -358,8 +358,8 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   info->eps_target = F->eps_n;
   info->eta_target = F->eta_n;
   info->h_rho = F->h_rho;
-  if (cup_state_beyond(x0, n)) {
-    int w = cup_state_worst(x0, n);
+  if (tally_state_beyond(x0, n)) {
+    int w = tally_state_worst(x0, n);
     char what[160];
     if (isfinite(x0[w])) snprintf(what, sizeof what, "x0 is beyond the range of a state, ||x||_1 <= %g "
                                   "(CUP_STATE_MAX): x0[%d] = %g", CUP_STATE_MAX, w, x0[w]);
@@ -393,7 +393,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   sampler sp = {0};
   sampler_next(F, &sp);
   F->zs = 1;
-  if (F->zprev) cup_zero(F->zprev, F->m);
+  if (F->zprev) la_zero(F->zprev, F->m);
   if (F->half) {
     memcpy(F->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
     if (coarse_run(F, info) == CUP_ERR_INTERRUPTED)
@@ -416,7 +416,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
 static inline int step_checked(fixed_ws *F, long k, double t0, double t1, int fixed, int fused, int stiff,
                                cup_proj_info *pi, int st, cup_run_info *info) {
   if (st >= 0 && F->K && !(pi->eta_cert < INFINITY)) {   /* no certified distance: another method, or stop */
-    if (fused && cup_freestep_apply(&F->fs, t0, t1, F->x, F->xf) < 0) st = CUP_ERR_CALLBACK;
+    if (fused && freestep_apply(&F->fs, t0, t1, F->x, F->xf) < 0) st = CUP_ERR_CALLBACK;
     else if ((st = certify_or_stop(F, k + 1, t1, fixed ? F->K->g0 : F->g, pi, st, info)) < 0) return st;
   }
   if (st < 0) {                          /* the polyset path's errors */
@@ -436,7 +436,7 @@ static inline int step_checked(fixed_ws *F, long k, double t0, double t1, int fi
  * projection, checked. */
 static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebuilds0, int stiff,
                 cup_proj_info *pi, cup_run_info *info) {
-  int st = cup_freestep_apply(&F->fs, t0, t1, F->x, F->xf);
+  int st = freestep_apply(&F->fs, t0, t1, F->x, F->xf);
   if (st < 0)
     return stop_at(info, st, k + 1, t1, st == CUP_ERR_CALLBACK
                    ? "a user callback (input or perturbation) failed or returned NaN/Inf"
@@ -456,8 +456,8 @@ static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebui
   if (F->use_theta) {
     double S = cup_polyset_norm(F->K, F->xf);
     const double *g = fixed ? F->K->g0 : F->g;
-    st = cup_lcp_step_solve(&F->th, g, F->xf, F->xnew, S, F->eps_n > 0 ? F->eps_n : -1,
-                            F->eta_n > 0 ? F->eta_n : 1e-10 * S, pi);
+    st = lcp_step_solve(&F->th, g, F->xf, F->xnew, S, F->eps_n > 0 ? F->eps_n : -1,
+                        F->eta_n > 0 ? F->eta_n : 1e-10 * S, pi);
     if (st == CUP_ERR_LINALG) {
       /* pivoting failed: an empty K(t) (the projector proves it with a
        * Farkas certificate) or, for theta > 0, M not a P-matrix; for the
@@ -493,7 +493,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
     if (fast && k >= F->fast.hold)       /* hold: a run of steps that left the range, stepped here */
-      k = cup_faststep_run(&F->fast, k, loop_stop(F, &sp, sink != NULL, k), F->x, F->xnew, &pi, &st, info);
+      k = faststep_run(&F->fast, k, loop_stop(F, &sp, sink != NULL, k), F->x, F->xnew, &pi, &st, info);
     double t0 = grid_time(F, k), t1 = grid_time(F, k + 1);
     if (st != CUP_FAST_DECLINED) {       /* fused: all that step() does, done by faststep.c */
       F->zeta_from = 1;
@@ -502,11 +502,11 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
       st = step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
     }
     if (st < 0) return st;
-    if (cup_state_beyond(F->xnew, n)) return diverged(F, info, k + 1, t1, F->xnew);
+    if (tally_state_beyond(F->xnew, n)) return diverged(F, info, k + 1, t1, F->xnew);
     double *t = F->x; F->x = F->xnew; F->xnew = t;
     if (F->half) {
-      cup_estimate_compare(&F->est, k + 1, F->x);
-      info->err_est = cup_estimate_value(&F->est);
+      estimate_compare(&F->est, k + 1, F->x);
+      info->err_est = estimate_value(&F->est);
     }
     info->step = k + 1;
     info->t = t1;
@@ -541,9 +541,9 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
   return info->status;
 }
 
-double cup_integrator_grid_time_(const cup_integrator *I, long k) { return grid_time(I->ws, k); }
+double integrator_grid_time(const cup_integrator *I, long k) { return grid_time(I->ws, k); }
 
-double cup_integrator_grid_step_(const cup_integrator *I) { return ((const fixed_ws *)I->ws)->h; }
+double integrator_grid_step(const cup_integrator *I) { return ((const fixed_ws *)I->ws)->h; }
 
 /* A window's (or a split step's) statistics, from nothing. */
 static void window_info(const fixed_ws *F, cup_run_info *info) {
@@ -554,8 +554,8 @@ static void window_info(const fixed_ws *F, cup_run_info *info) {
   info->h_rho = F->h_rho;
 }
 
-int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
-                           cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+                      cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
   F->kend = k1;
   int st;
@@ -569,11 +569,11 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
     F->zeta_from = 0;
     F->jump = 0;
     F->zs = 1;
-    if (F->zprev) cup_zero(F->zprev, F->m);
+    if (F->zprev) la_zero(F->zprev, F->m);
     if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
     if (F->K && F->use_theta) {                    /* theta's zeta_k0 at the window's start */
       const double *g = !fixed && moving_offset(F, grid_time(F, k0)) == CUP_OK ? F->g : F->K->g0;
-      cup_lcp_step_start(&F->th, F->x, g);
+      lcp_step_start(&F->th, F->x, g);
     }
     st = steps(F, k0, *next_j, sink, sink_ctx, info);
   }
@@ -582,8 +582,8 @@ int cup_integrator_window_(cup_integrator *I, long k0, long k1, const double *x,
   return st;
 }
 
-int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
-                              long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+                         long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
   const cup_integrator_options *o = &F->o;
   double t = grid_time(F, k);
@@ -627,7 +627,7 @@ static int fixed_resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_in
     double err = F->est.err;                     /* the comparisons made before the stop */
     int cst = coarse_run(F, info);
     F->est.err = err;
-    info->err_est = cup_estimate_value(&F->est);
+    info->err_est = estimate_value(&F->est);
     if (cst == CUP_ERR_INTERRUPTED)
       return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "interrupted (in the estimate's run at n/2)",
                   phase, &sp);

@@ -41,23 +41,23 @@ struct fixed_ws {
   const cup_set *S;
   cup_set *S_own;           /* an LCS's polyset, wrapped */
   const cup_polyset *K;     /* the polyset's rows, or NULL */
-  const cup_sparse *G;      /* the offset's motion, or NULL */
+  const la_sparse *G;      /* the offset's motion, or NULL */
   int fixed;                /* the polyset does not move */
   cup_setproj *sp;          /* other sets */
   const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */
-  cup_freestep fs;
+  freestep_ws fs;
   cup_projector *proj;
-  cup_lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
+  lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
   long kend;                /* the run's last step: n, or a switched circuit's window's end */
   long next_j;              /* where the last run left the output samples (a window's next one) */
   fixed_ws *half;           /* estimate: the same run at n/2 (step doubling), or NULL */
-  cup_estimate est;         /* ... and the comparison with it */
+  estimate_ws est;         /* ... and the comparison with it */
   int zeta_from;            /* the last step's multipliers: 0 none yet, 1 theta step, 2 projector,
                                3 zeta_ext (a switched circuit's split step, switched.c) */
   const double *zeta_ext;
   int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
-  cup_faststep fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
+  faststep_ws fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0, *sg;
   double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
   double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */

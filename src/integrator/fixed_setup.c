@@ -57,7 +57,7 @@ static int theta_step_init(fixed_ws *F, const double *W, double theta, char *err
       for (int k = L->D.p[j]; k < L->D.p[j + 1]; k++) D[L->D.i[k] + (size_t)j * m] = L->D.x[k];
     }
   }
-  if (!st) st = cup_lcp_step_init_bd(&F->th, F->K, W, F->h, B, D, theta);
+  if (!st) st = lcp_step_init_bd(&F->th, F->K, W, F->h, B, D, theta);
   free(B);
   free(D);
   return st ? fail_fmt(errmsg, CUP_ERR_NOMEM, "theta scheme: out of memory") : CUP_OK;
@@ -76,7 +76,7 @@ static int polyset_setup(fixed_ws *F, char *errmsg) {
   F->use_theta = o->scheme == CUP_SCHEME_THETA ||
                  (o->scheme == CUP_SCHEME_EXPLICIT && proj_small_lcp(F->K, &o->proj));
   if (F->use_theta && !F->K->dense)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
                     "use the explicit, implicit or exponential scheme", F->K->m, F->K->n, CUP_DENSE_MAX_ROWS,
                     CUP_DENSE_MAX_DIM);
@@ -84,7 +84,7 @@ static int polyset_setup(fixed_ws *F, char *errmsg) {
     double *W = F->fs.W, *eye = NULL;
     if (!W) {
       eye = calloc((size_t)F->n * (size_t)F->n, sizeof(double));
-      if (!eye) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+      if (!eye) return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
       for (int j = 0; j < F->n; j++) eye[j + (size_t)j * F->n] = 1;
       W = eye;
     }
@@ -95,7 +95,7 @@ static int polyset_setup(fixed_ws *F, char *errmsg) {
 }
 
 /* Everything but the model: buffers, the free step, the projection. */
-static int setup(fixed_ws *F, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+static int setup(fixed_ws *F, const freestep_drift *D, const cup_process_desc *pd, char *errmsg) {
   const cup_integrator_options *o = &F->o;
   F->h = o->T / (double)o->n;
   F->kend = o->n;
@@ -114,15 +114,15 @@ static int setup(fixed_ws *F, const cup_drift *D, const cup_process_desc *pd, ch
   F->zprev = calloc(M, sizeof(double));
   F->zs = 1;
   if (!F->x || !F->xnew || !F->xf || !F->g || !F->ut || !F->s0 || !F->sg || !F->v || !F->xs || !F->zprev)
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   if (o->scheme == CUP_SCHEME_THETA && !F->K)
-    return cup_fail(errmsg, CUP_ERR_UNSUPPORTED,
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: the set is a %s; the theta step solves an LCP on a polyset's rows "
                     "(use the explicit, implicit or exponential scheme)", cup_set_kind_name(F->S->kind));
-  int st = cup_freestep_init(&F->fs, D, F->K, F->u, o->scheme, o->theta, F->h, o->f_order, errmsg);
-  if (!st) st = cup_freestep_add_rhs(&F->fs, o->f, o->f_ctx);
-  if (!st && pd) st = cup_freestep_add_rhs(&F->fs, pd->f, pd->f_ctx);
-  if (!st && pd) cup_freestep_set_rhs_integral(&F->fs, pd->f_integral, pd->f_integral_ctx);
+  int st = freestep_init(&F->fs, D, F->K, F->u, o->scheme, o->theta, F->h, o->f_order, errmsg);
+  if (!st) st = freestep_add_rhs(&F->fs, o->f, o->f_ctx);
+  if (!st && pd) st = freestep_add_rhs(&F->fs, pd->f, pd->f_ctx);
+  if (!st && pd) freestep_set_rhs_integral(&F->fs, pd->f_integral, pd->f_integral_ctx);
   if (!st && F->K) st = polyset_setup(F, errmsg);
   /* the paper's tolerances are absolute; a zero schedule asks for the exact
    * projection, certified relative to the problem's scale */
@@ -135,30 +135,30 @@ static int setup(fixed_ws *F, const cup_drift *D, const cup_process_desc *pd, ch
   if (!st && F->K) st = cup_projector_create(&F->proj, F->K, &po, errmsg);
   if (!st && !F->K) st = cup_setproj_create(&F->sp, F->S, &po, errmsg);
   if (st) return st;
-  F->h_rho = cup_freestep_h_rho(D, F->h);
-  F->split = cup_freestep_splitting(&F->fs, &F->split_row);
+  F->h_rho = freestep_h_rho(D, F->h);
+  F->split = freestep_splitting(&F->fs, &F->split_row);
   if (F->K)
-    cup_faststep_init(&F->fast, &F->fs, &F->th, F->K, F->fixed || !F->u ? NULL : F->G, F->g, F->use_theta,
-                      F->eps_n, F->eta_n, o->n, o->T);
+    faststep_init(&F->fast, &F->fs, &F->th, F->K, F->fixed || !F->u ? NULL : F->G, F->g, F->use_theta,
+                  F->eps_n, F->eta_n, o->n, o->T);
   return CUP_OK;
 }
 
 /* The step-doubling estimate: the same model and scheme at n/2 (borrowing
  * this workspace's model), keeping its states where the two grids meet
  * (estimate.h). */
-static int create_half(fixed_ws *F, const cup_drift *D, const cup_process_desc *pd, char *errmsg) {
+static int create_half(fixed_ws *F, const freestep_drift *D, const cup_process_desc *pd, char *errmsg) {
   cup_integrator_options h = F->o;
   h.n = F->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
-  if (cup_estimate_init(&F->est, F->o.n, F->n) || !(F->x0 = calloc((size_t)F->n, sizeof(double))))
-    return cup_fail(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  if (estimate_init(&F->est, F->o.n, F->n) || !(F->x0 = calloc((size_t)F->n, sizeof(double))))
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   h.output = CUP_OUTPUT_EVERY;
-  h.output_every = cup_estimate_stride(&F->est);
+  h.output_every = estimate_stride(&F->est);
   int st = options_check(&h, errmsg);
   if (st) return st;
   fixed_ws *H = F->half = calloc(1, sizeof *H);
-  if (!H) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  if (!H) return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   H->o = h;
   H->u = F->u;
   H->L = F->L;                                   /* the theta step takes D from it */
@@ -169,7 +169,7 @@ static int create_half(fixed_ws *F, const cup_drift *D, const cup_process_desc *
 
 int fixed_create(cup_integrator *I, const scheme_model *md, void **ws, char *errmsg) {
   fixed_ws *F = *ws = calloc(1, sizeof *F);
-  if (!F) return cup_fail(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  if (!F) return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   F->o = I->o;                                   /* the model, as the front door checked it */
   F->u = md->u;
   F->L = md->L;
@@ -178,7 +178,7 @@ int fixed_create(cup_integrator *I, const scheme_model *md, void **ws, char *err
   int st = md->L ? needs_theta(md->L, F->o.scheme, errmsg) : CUP_OK;
   if (st) return st;
   if (!F->S) {                                   /* an LCS: its polyset as a set */
-    st = cup_set_wrap_polyset(&F->S_own, F->K, F->G, F->p, errmsg);
+    st = set_wrap_polyset(&F->S_own, F->K, F->G, F->p, errmsg);
     F->S = F->S_own;
   }
   if (!st) st = setup(F, md->D, md->pd, errmsg);
@@ -189,12 +189,12 @@ int fixed_create(cup_integrator *I, const scheme_model *md, void **ws, char *err
 void fixed_free(void *ws) {
   fixed_ws *F = ws;
   if (F->half) fixed_free(F->half);              /* the estimate's: its model borrowed */
-  cup_estimate_free(&F->est);
-  cup_freestep_free(&F->fs);
+  estimate_free(&F->est);
+  freestep_free(&F->fs);
   cup_projector_free(&F->proj);
   cup_setproj_free(&F->sp);
   cup_set_free(&F->S_own);
-  if (F->use_theta) cup_lcp_step_free(&F->th);
+  if (F->use_theta) lcp_step_free(&F->th);
   free(F->x); free(F->xnew); free(F->xf); free(F->g); free(F->ut); free(F->s0); free(F->sg); free(F->v);
   free(F->xs); free(F->zprev);
   free(F->x0);
@@ -241,7 +241,7 @@ int fixed_stopped(const void *ws, cup_run_info *info) {
 /* Where the run stopped, x_k (and x_{k-1}, zeta_{k-1} for a sample between
  * steps), the estimate's x0 and its comparisons so far, the projector's
  * and the LCP step's warm starts. */
-void fixed_checkpoint(void *ws, cup_ckpt *c) {
+void fixed_checkpoint(void *ws, ckpt *c) {
   fixed_ws *F = ws;
   fixed_stop *s = &F->stop;
   CUP_CKPT_IO(c, s->phase);
@@ -249,15 +249,15 @@ void fixed_checkpoint(void *ws, cup_ckpt *c) {
   CUP_CKPT_IO(c, s->next_j);
   CUP_CKPT_IO(c, F->zeta_from);
   CUP_CKPT_IO(c, F->jump);
-  cup_ckpt_io(c, F->x, sizeof(double) * (size_t)F->n);
+  ckpt_io(c, F->x, sizeof(double) * (size_t)F->n);
   if (F->o.output == CUP_OUTPUT_SAMPLES) {      /* a sample between steps k - 1 and k: x_{k-1}, zeta_{k-1} */
-    cup_ckpt_io(c, F->xnew, sizeof(double) * (size_t)F->n);
-    if (F->zprev) cup_ckpt_io(c, F->zprev, sizeof(double) * (size_t)F->m);
+    ckpt_io(c, F->xnew, sizeof(double) * (size_t)F->n);
+    if (F->zprev) ckpt_io(c, F->zprev, sizeof(double) * (size_t)F->m);
   }
   if (F->half) {
-    cup_ckpt_io(c, F->x0, sizeof(double) * (size_t)F->n);
+    ckpt_io(c, F->x0, sizeof(double) * (size_t)F->n);
     CUP_CKPT_IO(c, F->est.err);
   }
-  cup_projector_checkpoint(F->proj, c);
-  if (F->use_theta) cup_lcp_step_checkpoint(&F->th, c);
+  projector_checkpoint(F->proj, c);
+  if (F->use_theta) lcp_step_checkpoint(&F->th, c);
 }

@@ -20,7 +20,7 @@ struct cup_integrator {
   const cup_polyset *K;     /* the polyset's rows, or NULL */
   const la_sparse *G;      /* the offset's motion, or NULL */
   int fixed;                /* the polyset does not move */
-  cup_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
+  la_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
   const cup_lcs *L;         /* the LCS it was made from, or NULL */
   struct {
     int restored;           /* a checkpoint was restored: cup_integrator_resume may run */
@@ -41,10 +41,10 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
  * step k's end as the loop does: the step callback, the samples due at k
  * (between t_{k-1} and t_k: x interpolated linearly, zeta the step's);
  * *next_j advanced. */
-int cup_integrator_split_end_(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
-                              long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+                         long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* Its grid's time t_k, and its step h = T / n. */
-double cup_integrator_grid_time_(const cup_integrator *I, long k);
-double cup_integrator_grid_step_(const cup_integrator *I);
+double integrator_grid_time(const cup_integrator *I, long k);
+double integrator_grid_step(const cup_integrator *I);
 
 #endif

@@ -6,7 +6,7 @@
 
 #include "catchup.h"
 
-cup_integrator *cup_integrator_new_(const cup_integrator_options *opt, char *errmsg, int *st);
+cup_integrator *integrator_new(const cup_integrator_options *opt, char *errmsg, int *st);
 /* The same checks of options made inside (the estimate's run at n/2). */
 int options_check(const cup_integrator_options *o, char *errmsg);
 

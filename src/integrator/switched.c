@@ -262,8 +262,8 @@ static int piece(switched_run *S, int topo, double ta, double tb, cup_run_info *
 static int split_step(switched_run *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   cup_integrator *C = S->child[*topo];
-  double ta = cup_integrator_grid_time_(C, k - 1), tk = cup_integrator_grid_time_(C, k);
-  double snap = 1e-9 * cup_integrator_grid_step_(C);
+  double ta = integrator_grid_time(C, k - 1), tk = integrator_grid_time(C, k);
+  double snap = 1e-9 * integrator_grid_step(C);
   if (!twin_of(S, *topo)) return 1;
   la_copy(S->xprev, S->x, S->n);
   int st = CUP_OK, to = *topo;
@@ -295,11 +295,11 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
  * ulp, and a whole step more of the old configuration would follow: a
  * buck on a grid holding its edges had 29 of 200 periods one step longer) */
 static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
-  long k1 = (long)ceil(tb / cup_integrator_grid_step_(C));
+  long k1 = (long)ceil(tb / integrator_grid_step(C));
   if (k1 > n) k1 = n;
-  while (k1 > k + 1 && cup_integrator_grid_time_(C, k1 - 1) >= tb) k1--;
-  while (k1 < n && cup_integrator_grid_time_(C, k1) < tb) k1++;
-  if (k1 > k + 1 && tb - cup_integrator_grid_time_(C, k1 - 1) <= 1e-9 * cup_integrator_grid_step_(C)) k1--;
+  while (k1 > k + 1 && integrator_grid_time(C, k1 - 1) >= tb) k1--;
+  while (k1 < n && integrator_grid_time(C, k1) < tb) k1++;
+  if (k1 > k + 1 && tb - integrator_grid_time(C, k1 - 1) <= 1e-9 * integrator_grid_step(C)) k1--;
   return k1 <= k ? k + 1 : k1;
 }
 
@@ -310,7 +310,7 @@ static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
  * a step splits it (split_step: the pieces by the configurations' exact
  * flows). A circuit-gated switching is taken at the end of the step whose
  * end state passes the threshold (settle there). */
-static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
+static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   long k = 0, n = S->o.n, next_j = 0;
   int st = CUP_OK;
@@ -327,7 +327,7 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
     }
     long k1 = grid_step_at(C, k, n, tb);
     /* inside step k1: the steps before it, then that one split */
-    int split = tb < cup_integrator_grid_time_(C, k1) - 1e-9 * cup_integrator_grid_step_(C);
+    int split = tb < integrator_grid_time(C, k1) - 1e-9 * integrator_grid_step(C);
     long kw = split ? k1 - 1 : k1;
     if (sw->state_gated(sw->ctx, topo) && kw > k) kw = k + 1, split = 0;   /* its end checked */
     cup_run_info w;
@@ -343,8 +343,8 @@ static int sw_fixed_run(cup_swrun *S, double t, int topo, cup_run_info *info) {
       if (sst < 0) { st = sst; break; }
       if (sst == 0) {                              /* tb: the next switching time, at or after t_k1 */
         k = k1;
-        t = cup_integrator_grid_time_(C, k);
-        double ts = tb > t && tb - t <= 1e-9 * cup_integrator_grid_step_(C) ? tb : t;
+        t = integrator_grid_time(C, k);
+        double ts = tb > t && tb - t <= 1e-9 * integrator_grid_step(C) ? tb : t;
         if (k < n) st = sw->settle(sw->ctx, &topo, ts, S->x, NULL, info->message);
         continue;
       }
@@ -393,7 +393,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     sw->jump(sw->ctx, topo, S->x);
     x0_moved(S, x0, info);
     st = sw_fixed_run(S, 0, topo, info);
-    if (S->half) info->err_est = cup_estimate_value(&S->est);
+    if (S->half) info->err_est = estimate_value(&S->est);
     return st;
   }
   /* every step recorded: a jump at a switching is recorded after it too */

@@ -22,10 +22,10 @@ int nl_switch_nomem(const nl_circuit *c, char *errmsg) {
 /* Dense m x n (column-major) into CSC without its zeros: entries at or
  * below 256 eps times their magnitude bound mag (same layout; NULL: exact
  * zeros only) cancelled to rounding. */
-static int to_csc(const double *a, const double *mag, int m, int n, cup_sparse *out) {
+static int to_csc(const double *a, const double *mag, int m, int n, la_sparse *out) {
   int nnz = 0;
   for (size_t k = 0; k < (size_t)m * (size_t)n; k++) nnz += fabs(a[k]) > (mag ? 256 * 2.2e-16 * mag[k] : 0);
-  if (cup_sparse_alloc(out, m, n, nnz)) return CUP_ERR_NOMEM;
+  if (la_sparse_alloc(out, m, n, nnz)) return CUP_ERR_NOMEM;
   int q = 0;
   for (int j = 0; j < n; j++) {
     out->p[j] = q;
@@ -126,12 +126,12 @@ static int projector(cup_netlist *sub, const nl_circuit *d, red *r, char *errmsg
     return nl_switch_nomem(d, errmsg);
   }
   memcpy(lu, R->P, sizeof(double) * (size_t)n * n);
-  int st = cup_dense_lu(lu, n, r->piv);
+  int st = la_dense_lu(lu, n, r->piv);
   for (int j = 0; !st && j < n; j++) {
     double *col = r->Pinv + (size_t)j * n;
-    cup_zero(col, n);
+    la_zero(col, n);
     col[j] = 1;
-    cup_dense_lu_solve(lu, n, r->piv, col, r->w);
+    la_dense_lu_solve(lu, n, r->piv, col, r->w);
   }
   free(lu);
   if (st) return nl_fail(d, -1, errmsg, CUP_ERR_LINALG, "the energy metric is singular");
@@ -144,7 +144,7 @@ static int projector(cup_netlist *sub, const nl_circuit *d, red *r, char *errmsg
       PCt[i + (size_t)j * n] = s;
     }
   mul(r->Cq, PCt, nq, n, nq, r->S, NULL);
-  if (cup_dense_lu(r->S, nq, r->piv)) {
+  if (la_dense_lu(r->S, nq, r->piv)) {
     int e = -1;
     for (int f = 0; f < d->nelem && e < 0; f++)
       if (d->elem[f].kind == NL_D && d->elem[f].eq != NL_EQ_NONE) e = f;
@@ -153,7 +153,7 @@ static int projector(cup_netlist *sub, const nl_circuit *d, red *r, char *errmsg
   }
   for (int i = 0; i < n; i++) {                    /* T's rows: S^-T (P^-1 C_Q^T)^T's columns; S symmetric */
     for (int j = 0; j < nq; j++) r->w[j] = PCt[i + (size_t)j * n];
-    cup_dense_lu_solve(r->S, nq, r->piv, r->w, r->w + nq);
+    la_dense_lu_solve(r->S, nq, r->piv, r->w, r->w + nq);
     for (int j = 0; j < nq; j++) r->T[i + (size_t)j * n] = r->w[j];
   }
   mul(r->T, r->Cq, n, nq, n, r->Pi, r->Pim);
@@ -178,13 +178,13 @@ static int multipliers(cup_netlist *sub, red *r) {
       for (int l = 0; l < n; l++) s += r->Cq[q + (size_t)l * nq] * col[l];
       r->w[q] = -s;
     }
-    cup_dense_lu_solve(r->S, nq, r->piv, r->w, r->w + nq);
+    la_dense_lu_solve(r->S, nq, r->piv, r->w, r->w + nq);
     for (int q = 0; q < nq; q++) sub->Lam[(size_t)q * nv + v] = r->w[q];
   }
   return CUP_OK;
 }
 
-static cup_csc view(const cup_sparse *s) {
+static cup_csc view(const la_sparse *s) {
   return s->nnz || s->ncol ? (cup_csc){s->nrow, s->ncol, s->p, s->i, s->x} : (cup_csc){0, 0, NULL, NULL, NULL};
 }
 
@@ -197,7 +197,7 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
   size_t big = (size_t)(n > m ? n : m) * (size_t)(n > p ? (n > m ? n : m) : (p > m ? p : m)) + 1;
   double *X = malloc(sizeof(double) * big), *Y = malloc(sizeof(double) * big), *M = malloc(sizeof(double) * big);
   double *F = calloc((size_t)m + 1, sizeof(double));
-  cup_sparse s[6] = {{0}};
+  la_sparse s[6] = {{0}};
   int st = X && Y && M && F ? CUP_OK : CUP_ERR_NOMEM;
   /* A, E, B: Pi times the formulation's; C: its diode rows times Pi; D, G: its diode rows and columns */
   const double *src[3] = {R->A, R->E, NULL};
@@ -252,7 +252,7 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
     q.A = view(&s[0]); q.E = view(&s[1]); q.B = view(&s[2]); q.C = view(&s[3]); q.G = view(&s[4]);
     if (hasD) q.D = view(&s[5]);
     q.F = inert ? F : NULL;
-    cup_sparse Ps = {0};
+    la_sparse Ps = {0};
     int dia = 1;
     for (int j = 0; j < n; j++)
       for (int i = 0; i < n; i++) dia &= i == j || R->P[i + (size_t)j * n] == 0;
@@ -268,10 +268,10 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
       if (st && R->keep_B) { q.keep_B = 1; st = cup_lcs_create(&sub->L, &q, lib); }
     }
     free(pd);
-    cup_sparse_free(&Ps);
+    la_sparse_free(&Ps);
   }
   free(X); free(Y); free(M); free(F);
-  for (int t = 0; t < 6; t++) cup_sparse_free(&s[t]);
+  for (int t = 0; t < 6; t++) la_sparse_free(&s[t]);
   if (st == CUP_ERR_NOMEM) return nl_switch_nomem(d, errmsg);
   return st ? nl_fail(d, -1, errmsg, st, "%s", lib) : CUP_OK;
 }
