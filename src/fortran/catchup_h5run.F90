@@ -4,8 +4,6 @@
 ! own (catchup_h5_fortran over catchup_h5, built with the apps):
 !     use catchup
 !     use catchup_h5run
-! Preprocessed: CATCHUP_H5RUN_ERRMSG is defined when h5run.h declares
-! cup_h5run_errmsg (CMake reads the header).
 module catchup_h5run
   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_char, c_ptr, c_null_ptr, &
     c_associated, c_funloc, c_loc, c_int8_t, c_f_pointer
@@ -23,9 +21,7 @@ module catchup_h5run
     cup_h5run_open, cup_h5run_truncate, cup_h5run_put_checkpoint, cup_h5run_get_checkpoint, &
     cup_h5run_drop_checkpoint, cup_h5run_get_string, cup_h5run_get_double, cup_h5run_drop_attr, &
     cup_h5run_status
-#ifdef CATCHUP_H5RUN_ERRMSG
   public :: cup_h5run_errmsg, c_cup_h5run_errmsg
-#endif
   ! the C sinks themselves: cup_integrator_run(integ, x0, c_funloc(cup_h5run_sink), w%ptr, ...);
   ! o%on_event = c_funloc(cup_h5run_event), o%event_ctx = w%ptr (adaptive scheme: /events)
   public :: cup_h5run_sink, cup_h5run_event
@@ -372,7 +368,6 @@ contains
     call cup_finish_(c_cup_h5run_status(w%ptr, cmsg), cmsg, ierr, errmsg)
   end subroutine cup_h5run_status
 
-#ifdef CATCHUP_H5RUN_ERRMSG
   !> The older form, kept for its users: cup_h5run_status's words ('' if
   !> nothing failed).
   function cup_h5run_errmsg(w) result(s)
@@ -381,7 +376,6 @@ contains
     s = ''
     if (c_associated(w%ptr)) s = cup_c_string(c_cup_h5run_errmsg(w%ptr))
   end function cup_h5run_errmsg
-#endif
 
   !> "HDF5 1.10.8" of the linked HDF5.
   function cup_h5_version() result(s)
