@@ -59,22 +59,35 @@ static int record(long k, double t, const double *x, void *ctx) {
   return 0;
 }
 
-/* Run nl over [0, T] with N samples into r: the adaptive scheme at tol,
- * or (steps > 0) scheme on that many steps. */
-static void run_with(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r, cup_scheme scheme,
-                     long steps) {
+/* Run nl under the options o into r, at most cap records; the status in
+ * r->status, an error fails the test. */
+static void run_opts(cup_netlist *nl, const cup_integrator_options *o, long cap, const char *probe, run_rec *r) {
   char err[CUP_ERRMSG_LEN];
   memset(r, 0, sizeof *r);
   r->nl = nl;
   r->n = cup_lcs_dim(cup_netlist_lcs(nl));
   r->sig = probe ? cup_netlist_probe(nl, probe, err) : -1;
   if (probe && r->sig < 0) fail_msg("probe %s: %s", probe, err);
-  r->cap = N;
-  r->t = malloc(sizeof(double) * (size_t)N);
-  r->x = malloc(sizeof(double) * (size_t)N * (size_t)r->n);
-  r->s = malloc(sizeof(double) * (size_t)N);
+  r->cap = cap;
+  r->t = malloc(sizeof(double) * (size_t)cap);
+  r->x = malloc(sizeof(double) * (size_t)cap * (size_t)r->n);
+  r->s = malloc(sizeof(double) * (size_t)cap);
   cup_switching sw;
   assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  cup_integrator *I = NULL;
+  if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), o, err)) fail_msg("create: %s", err);
+  r->I = I;
+  cup_run_info info;
+  int st = cup_integrator_run(I, cup_netlist_x0(nl), record, r, &info);
+  if (st < 0) fail_msg("run: %s", info.message);
+  r->status = st;
+  cup_integrator_free(&I);
+}
+
+/* Run nl over [0, T] with N samples into r: the adaptive scheme at tol,
+ * or (steps > 0) scheme on that many steps. */
+static void run_with(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r, cup_scheme scheme,
+                     long steps) {
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = steps > 0 ? scheme : CUP_SCHEME_ADAPTIVE;
@@ -83,15 +96,8 @@ static void run_with(cup_netlist *nl, double T, double tol, long N, const char *
   o.tol_abs = o.tol_rel = tol;
   o.output = CUP_OUTPUT_SAMPLES;
   o.output_samples = N;
-  cup_integrator *I = NULL;
-  if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("create: %s", err);
-  r->I = I;
-  cup_run_info info;
-  int st = cup_integrator_run(I, cup_netlist_x0(nl), record, r, &info);
-  if (st < 0) fail_msg("run: %s", info.message);
-  r->status = st;
+  run_opts(nl, &o, N, probe, r);
   assert_int_equal(r->count, N);
-  cup_integrator_free(&I);
 }
 
 static void run(cup_netlist *nl, double T, double tol, long N, const char *probe, run_rec *r) {
@@ -145,15 +151,6 @@ static void test_two_capacitors_every_step(void **state) {
   const double C1 = 1e-6, C2 = 3e-6, V0 = 10, vf = C1 * V0 / (C1 + C2);
   cup_netlist *nl = text_ok("two capacitors\nC1 a 0 1u IC=10\nC2 b 0 3u\nS1 a b g 0 SMOD\n"
                             "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n.model SMOD SW(VT=0.5 VH=0.1)\n");
-  char err[CUP_ERRMSG_LEN];
-  run_rec r = {.nl = nl, .n = 2, .cap = 4096};
-  r.sig = cup_netlist_probe(nl, "i(S1)", err);
-  assert_true(r.sig >= 0);
-  r.t = malloc(sizeof(double) * (size_t)r.cap);
-  r.x = malloc(sizeof(double) * 2 * (size_t)r.cap);
-  r.s = malloc(sizeof(double) * (size_t)r.cap);
-  cup_switching sw;
-  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = CUP_SCHEME_ADAPTIVE;
@@ -161,11 +158,8 @@ static void test_two_capacitors_every_step(void **state) {
   o.tol_abs = o.tol_rel = 1e-10;
   o.output = CUP_OUTPUT_EVERY;
   o.output_every = 1;
-  cup_integrator *I = NULL;
-  if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("create: %s", err);
-  r.I = I;
-  cup_run_info info;
-  assert_true(cup_integrator_run(I, cup_netlist_x0(nl), record, &r, &info) >= 0);
+  run_rec r;
+  run_opts(nl, &o, 4096, "i(S1)", &r);
   assert_true(r.count < r.cap);
   long at[4], nat = 0;
   for (long k = 0; k < r.count; k++)
@@ -177,7 +171,6 @@ static void test_two_capacitors_every_step(void **state) {
   assert_true(fabs(x0[0] - V0) <= 1e-12 * V0 && fabs(x0[1]) <= 1e-12 * V0);
   assert_true(fabs(x1[0] - vf) <= 1e-12 * V0 && fabs(x1[1] - vf) <= 1e-12 * V0);
   assert_true(fabs(r.s[at[1]]) <= 1e-12);
-  cup_integrator_free(&I);
   rec_free(&r);
   cup_netlist_free(&nl);
 }
