@@ -488,6 +488,35 @@ static void shift_values(void **state) {
   cup_netlist_free(&as_written);
 }
 
+/* A damped SIN read from an origin past its delay: v(t) = u(t0 + t), its
+ * amplitude decayed by exp(-theta (t0 - td)) (no steady phase exists for it,
+ * but cup_netlist_set_time_origin takes any t0 >= 0). */
+static void shift_damped(void **state) {
+  (void)state;
+  static const char *text = "damped\nV1 a 0 SIN(0.5 2 10k 30u 2e4 45)\nR1 a x 1\nC1 x 0 1u\n.tran 1u 20u\n.end\n";
+  cup_netlist *nl = load(text), *as_written = load(text);
+  const cup_input *u = cup_netlist_input(as_written);
+  char err[CUP_ERRMSG_LEN];
+  const double origins[] = {0, 10e-6, 30e-6, 73.3e-6};
+  for (int pass = 0; pass < 4; pass++) {
+    double s0 = origins[pass], worst = 0, a, b, ia, ib;
+    assert_int_equal(cup_netlist_set_time_origin(nl, s0, err), CUP_OK);
+    const cup_input *v = cup_netlist_input(nl);
+    for (int j = 0; j <= 1000; j++) {
+      double t = j * 0.7e-6 + 0.013e-6;
+      assert_int_equal(cup_input_eval(v, t, &a), CUP_OK);
+      assert_int_equal(cup_input_eval(u, s0 + t, &b), CUP_OK);
+      assert_int_equal(cup_input_integral(v, t, t + 0.9e-6, &ia), CUP_OK);
+      assert_int_equal(cup_input_integral(u, s0 + t, s0 + t + 0.9e-6, &ib), CUP_OK);
+      worst = fmax(worst, fmax(fabs(a - b), fabs(ia - ib) / 0.9e-6));
+    }
+    print_message("  damped SIN, t0 = %g: |v(t) - u(t0 + t)| and its integrals' mean: %.3g at most\n", s0, worst);
+    assert_true(worst <= 1e-11);
+  }
+  cup_netlist_free(&nl);
+  cup_netlist_free(&as_written);
+}
+
 /* An RC under a pulse train whose pulse runs past its period's end (the
  * full bridge's VG3): the steady state from the phase t0 = 25 us, where
  * the pulse ends, is its maximum (1 - e^{-Ton/RC}) / (1 - e^{-T/RC}), the
@@ -567,6 +596,7 @@ int main(void) {
     cmocka_unit_test(given_periods),
     cmocka_unit_test(steady_phases),
     cmocka_unit_test(shift_values),
+    cmocka_unit_test(shift_damped),
     cmocka_unit_test(rc_delayed_pulse),
     cmocka_unit_test(measure_closed_forms),
   };

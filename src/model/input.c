@@ -92,11 +92,11 @@ int cup_input_add(cup_input *u, int j, const cup_wave *w, char *errmsg) {
 }
 
 /* A copy of term t read from t0 on: the same waveform at t0 + s for s >= 0,
- * t0 at or past the time from which the term repeats (cup_input_steady_phase):
- * a phase advanced by omega t0 (mod 2 pi), a PULSE's delay moved back by t0
- * (into (-period, 0] once spent), a SIN's delay spent into its phase, knots
- * moved by -t0, a PWL past its last knot and a single pulse past its end
- * constants. */
+ * for any t0 >= 0 (cup_input_steady_phase gives the one from which the term
+ * repeats): a phase advanced by omega t0 (mod 2 pi), a PULSE's delay moved
+ * back by t0 (into (-period, 0] once spent), a SIN's delay spent into its
+ * phase and a damped one's decay into its amplitude, knots moved by -t0, a
+ * PWL past its last knot and a single pulse past its end constants. */
 static int term_shift(const input_term *t, double t0, input_term *out) {
   *out = *t;
   out->t = out->v = NULL;
@@ -135,6 +135,7 @@ static int term_shift(const input_term *t, double t0, input_term *out) {
       if (t0 <= t->delay) { out->delay = t->delay - t0; return CUP_OK; }
       out->delay = 0;
       out->phase = t->phase + fmod(t->omega * (t0 - t->delay), TWO_PI);
+      out->amp = t->amp * exp(-t->damping * (t0 - t->delay));   /* the decay spent by t0 (1 undamped) */
       return CUP_OK;
   }
   return CUP_ERR_ARG;
