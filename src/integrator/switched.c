@@ -92,8 +92,13 @@ static int child_of(switched_run *S, int topo, char *errmsg) {
   char msg[CUP_ERRMSG_LEN];
   cup_integrator_options o = S->o;
   o.estimate = 0;                                  /* the run's, not each configuration's (S->half) */
-  o.on_step = watch_step;                          /* the circuit-gated switches' checks, then the user's */
-  o.step_ctx = S;
+  /* the circuit-gated switches' checks, then the user's; a fixed-step run
+   * checks them at its grid (sw_fixed_run), so there the callback serves
+   * the estimate's comparison and the user's alone: without either, the
+   * configurations' steps take the fused path (faststep.c, bit for bit) */
+  int calls = S->o.scheme == CUP_SCHEME_ADAPTIVE || S->o.estimate || S->on_step;
+  o.on_step = calls ? watch_step : NULL;
+  o.step_ctx = calls ? S : NULL;
   int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
   return st ? fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg) : CUP_OK;
 }
