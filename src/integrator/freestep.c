@@ -354,7 +354,7 @@ int freestep_init(freestep_ws *fs, const freestep_drift *D, const cup_polyset *K
     for (int k = 0; k < fs->u->nterms; k++) {
       const input_term *t = &fs->u->terms[k];
       int c = t->comp;                         /* (a switch's gate source drives no state) */
-      if (!D->has_E || D->E.p[c + 1] > D->E.p[c]) fs->live[fs->nlive++] = k;
+      if (!D->has_E || D->E.ncol != p || D->E.p[c + 1] > D->E.p[c]) fs->live[fs->nlive++] = k;
       if (t->kind == CUP_WAVE_CONSTANT) fs->term_h[k] = t->value * h;
       else if (t->kind == CUP_WAVE_SINE)
         fs->term_h[k] = t->omega > 0 ? 2 * t->amp / t->omega * sin(0.5 * t->omega * h)
