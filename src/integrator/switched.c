@@ -96,8 +96,8 @@ static int child_of(switched_run *S, int topo, char *errmsg) {
   o.estimate = 0;                                  /* the run's, not each configuration's (S->half) */
   /* the circuit-gated switches' checks, then the user's; a fixed-step run
    * checks them at its grid (sw_fixed_run), so there the callback serves
-   * the estimate's comparison and the user's alone: without either, the
-   * configurations' steps take the fused path (faststep.c, bit for bit) */
+   * the estimate's comparison and the user's alone: without either, no
+   * call a step (and the fused steps, faststep.c, where they apply) */
   int calls = S->o.scheme == CUP_SCHEME_ADAPTIVE || S->o.estimate || S->on_step;
   o.on_step = calls ? watch_step : NULL;
   o.step_ctx = calls ? S : NULL;
