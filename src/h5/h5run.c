@@ -80,11 +80,16 @@ static hid_t create_dataset(hid_t file, const char *name, int rank, hsize_t dim,
 }
 
 /* /events' rows (t float64, row int32, on int8): the file type is packed
- * (13 bytes), the memory type follows the struct. */
+ * (13 bytes), the memory type follows the struct, and HDF5 converts one to
+ * the other in the writer's own buffers: by default it takes and zeroes
+ * two of 1 MiB at each write (2.1 million instructions a write, half of
+ * the precision rectifier's run on its 10001 samples). */
 int event_types(cup_h5run *w) {
   w->etype_file = H5Tcreate(H5T_COMPOUND, 13);
   w->etype_mem = H5Tcreate(H5T_COMPOUND, sizeof(h5_event));
-  if (w->etype_file < 0 || w->etype_mem < 0 ||
+  w->exfer = H5Pcreate(H5P_DATASET_XFER);
+  if (w->etype_file < 0 || w->etype_mem < 0 || w->exfer < 0 ||
+      H5Pset_buffer(w->exfer, sizeof w->etconv, w->etconv, w->ebkg) < 0 ||
       H5Tinsert(w->etype_file, "t", 0, H5T_IEEE_F64LE) < 0 ||
       H5Tinsert(w->etype_file, "row", 8, H5T_STD_I32LE) < 0 ||
       H5Tinsert(w->etype_file, "on", 12, H5T_STD_I8LE) < 0 ||
@@ -162,6 +167,7 @@ void free_writer(cup_h5run *w) {
   if (w->dset_e >= 0) H5Dclose(w->dset_e);
   if (w->etype_file >= 0) H5Tclose(w->etype_file);
   if (w->etype_mem >= 0) H5Tclose(w->etype_mem);
+  if (w->exfer >= 0) H5Pclose(w->exfer);
   if (w->dset_x >= 0) H5Dclose(w->dset_x);
   if (w->dset_t >= 0) H5Dclose(w->dset_t);
   if (w->file >= 0) H5Fclose(w->file);
@@ -184,7 +190,8 @@ cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st) {
   }
   cup_h5run *w = calloc(1, sizeof *w);
   if (!w) return *st = fail_fmt(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path), NULL;
-  w->file = w->dset_t = w->dset_x = w->dset_e = w->etype_file = w->etype_mem = w->group = H5I_INVALID_HID;
+  w->file = w->dset_t = w->dset_x = w->dset_e = w->etype_file = w->etype_mem = w->exfer = w->group =
+      H5I_INVALID_HID;
   w->dim = dim;
   w->chunk_rows = chunk_rows_for(dim);
   w->tbuf = malloc(sizeof(double) * w->chunk_rows);
@@ -302,7 +309,7 @@ static herr_t append_events(cup_h5run *w) {
   hid_t ms = H5Screate_simple(1, count, NULL);
   herr_t r = -1;
   if (fs >= 0 && ms >= 0 && H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL) >= 0)
-    r = H5Dwrite(w->dset_e, w->etype_mem, ms, fs, H5P_DEFAULT, w->ebuf);
+    r = H5Dwrite(w->dset_e, w->etype_mem, ms, fs, w->exfer, w->ebuf);
   hid_t err = keep_stack(r < 0);
   if (ms >= 0) H5Sclose(ms);
   if (fs >= 0) H5Sclose(fs);
@@ -684,9 +691,10 @@ int cup_h5run_close(cup_h5run **pw, char *errmsg) {
   r = H5Dclose(w->dset_e) < 0 ? -1 : r;
   H5Tclose(w->etype_file);
   H5Tclose(w->etype_mem);
+  H5Pclose(w->exfer);
   r = H5Dclose(w->dset_t) < 0 ? -1 : r;
   r = H5Fclose(w->file) < 0 ? -1 : r;
-  w->dset_x = w->dset_t = w->dset_e = w->etype_file = w->etype_mem = w->file = H5I_INVALID_HID;
+  w->dset_x = w->dset_t = w->dset_e = w->etype_file = w->etype_mem = w->exfer = w->file = H5I_INVALID_HID;
   if (r < 0 && st == CUP_OK) st = set_error(w, CUP_ERR_IO, "close");
   quiet_end(q);
   if (st != CUP_OK && errmsg) snprintf(errmsg, CUP_ERRMSG_LEN, "%s", w->errmsg);
