@@ -107,7 +107,7 @@ struct cup_netlist {
   char **sig_name;
   int *sig_ptr, *sig_idx;
   double *sig_val;
-  double *ubuf, *dense;   /* p, and n + p + m + supernodes of scratch */
+  double *vals, *dense;   /* a sample's (x, u, zeta) side by side (n + p + m), and n + p + m + supernodes of scratch */
   double *prow;           /* nv + ni: a signal's row over the ports */
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */
@@ -118,7 +118,6 @@ struct cup_netlist {
   int *zrow;              /* m: each row's diode row (>= 0) or constraint -1 - q; NULL: none */
   int nq;                 /* constraint rows */
   double *Lam;            /* nq x (n + p + mr), row-major: the constraints' multipliers */
-  double *zfull;          /* m: zeta with the multipliers, for signals */
 };
 
 /* nl's own sources read from t0 on (u the shift of the sources as written,
