@@ -202,7 +202,7 @@ cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st) {
     *st = fail_fmt(errmsg, CUP_ERR_NOMEM, "h5run: '%s': out of memory", path);
     return NULL;
   }
-  w->last_flush = now_seconds();
+  w->last_flush = tick_seconds();
   *st = CUP_OK;
   return w;
 }
@@ -372,7 +372,7 @@ int cup_h5run_flush(cup_h5run *w) {
   if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) set_error(w, CUP_ERR_IO, "flush");
   else w->unflushed = 0;
   quiet_end(q);
-  w->last_flush = now_seconds();
+  w->last_flush = tick_seconds();
   return w->data_status;
 }
 
@@ -396,7 +396,7 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
   memcpy(w->xbuf + w->nbuf * (hsize_t)w->dim, x, sizeof(double) * (size_t)w->dim);
   for (int k = 0; k < w->nsig; k++) w->sbuf[(size_t)k * w->chunk_rows + w->nbuf] = sig[k];
   w->nbuf++;
-  if (now_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
+  if (tick_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
   if (w->nbuf >= room(w)) return write_buffer(w);
   return CUP_OK;
 }
@@ -406,7 +406,7 @@ int cup_h5run_event(double t, int row, int on, void *ctx) {
   if (!w) return CUP_ERR_ARG;
   if (w->data_status != CUP_OK) return w->data_status;
   w->ebuf[w->enbuf++] = (h5_event){t, (int32_t)row, (int8_t)(on != 0)};
-  if (w->enbuf == EVENT_ROWS || now_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
+  if (w->enbuf == EVENT_ROWS || tick_seconds() - w->last_flush >= FLUSH_SECONDS) return cup_h5run_flush(w);
   return CUP_OK;
 }
 
