@@ -107,6 +107,8 @@ struct cup_netlist {
   char **sig_name;
   int *sig_ptr, *sig_idx;
   double *sig_val;
+  int sig_u, sig_seen;    /* the signals read u (directly or through a constraint's multiplier),
+                             as found when there were sig_seen of them (cup_netlist_signals) */
   double *vals, *dense;   /* a sample's (x, u, zeta) side by side (n + p + m), and n + p + m + supernodes of scratch */
   double *prow;           /* nv + ni: a signal's row over the ports */
   /* switches (netlist_switch.c) */

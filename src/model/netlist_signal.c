@@ -301,9 +301,22 @@ int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row) {
   return st;
 }
 
+/* Whether a signal reads u: a column of u, or a constraint's multiplier
+ * (zeta_full's rows -1 - q hold Lam's u part). */
+static int reads_u(const cup_netlist *nl) {
+  int n = nl->n, p = nl->p;
+  for (int q = 0; q < nl->sig_ptr[nl->nsig]; q++) {
+    int i = nl->sig_idx[q];
+    if ((i >= n && i < n + p) || (i >= n + p && nl->zrow && nl->zrow[i - n - p] < 0)) return 1;
+  }
+  return 0;
+}
+
 /* The signals' sparse rows over (x, u, zeta) gathered side by side in
  * nl->vals first: the same terms in the same order as a row read from
- * three places (no zeta: zeros, 0 times an entry as before). */
+ * three places (no zeta: zeros, 0 times an entry as before). u(t) only
+ * when a signal reads it (the six-pulse rectifier's 4 signals do not: 3
+ * sines a sample, a fifth of its samples' instructions). */
 int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out) {
   if (!nl || !x || (!out && nl->nsig)) return CUP_ERR_ARG;
   if (!nl->nsig) return CUP_OK;
@@ -311,7 +324,11 @@ int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double
   int n = nl->n, p = nl->p, m = nl->m;
   double *v = nl->vals;
   la_copy(v, x, n);
-  if (p && cup_input_eval(nl->u, t, v + n)) return CUP_ERR_CALLBACK;
+  if (nl->sig_seen != nl->nsig) {
+    nl->sig_u = reads_u(nl);
+    nl->sig_seen = nl->nsig;
+  }
+  if (p && nl->sig_u && cup_input_eval(nl->u, t, v + n)) return CUP_ERR_CALLBACK;
   if (nl->zrow) zeta_full(nl, x, zeta, v);
   else if (zeta) la_copy(v + n + p, zeta, m);
   else la_zero(v + n + p, m);
