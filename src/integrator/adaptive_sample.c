@@ -27,7 +27,8 @@ double ad_sample_time(const adaptive_ws *A, long j) {
 /* E by rows, its nonzeros alone, each row's in column order (A->erp,
  * erj, erx). Most of a sample's exp(dt M) is zero: the inputs' states
  * move among themselves (the lower left block, n columns of the last
- * na - n rows, is exactly 0), a sine's by a 2 x 2 rotation. */
+ * na - n rows, was exactly 0 on every converter), a sine's by a 2 x 2
+ * rotation. Nothing relies on it: a zero is left out wherever it is. */
 static void by_rows(const adaptive_ws *A, const double *E) {
   int na = A->na, nz = 0;
   for (int i = 0; i < na; i++) {
