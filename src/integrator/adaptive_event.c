@@ -7,13 +7,16 @@
 #include "adaptive_impl.h"
 
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
-  int m = A->m, na = A->na;
+  int m = A->m;
   double vmax = 0;                         /* the state's scale: v = x + K U w */
   for (int j = 0; j < A->n; j++) vmax = fmax(vmax, fabs(y[j]));
-  for (int i = 0; i < m; i++) {
-    const double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
+  for (int i = 0; i < m; i++) {            /* over L's and Lm's nonzeros (mode_sparse): the dense sums */
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
-    for (int j = 0; j < na; j++) { acc += Li[j] * y[j]; mag += Lmi[j] * fabs(y[j]); }
+    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {
+      double yj = y[md->li[k]];
+      acc += md->lx[k] * yj;
+      mag += md->lmx[k] * fabs(yj);
+    }
     g[i] = acc;
     /* a few ulps of the terms summed; a slack also of the state's scale,
      * to which the held rows are kept (a row that depends on them sits at
@@ -23,16 +26,13 @@ void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, do
 }
 
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d) {
-  int m = A->m, na = A->na;
   double *My = A->My;
-  for (int i = 0; i < na; i++) My[i] = 0;
-  for (int j = 0; j < na; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    const double *col = md->M + (size_t)j * na;
-    for (int i = 0; i < na; i++) My[i] += col[i] * yj;
+  ad_mode_mv(A, md, y, My);
+  for (int i = 0; i < A->m; i++) {
+    double acc = 0;
+    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) acc += md->lx[k] * My[md->li[k]];
+    d[i] = acc;
   }
-  for (int i = 0; i < m; i++) d[i] = la_dot(md->L + (size_t)i * na, My, na);
 }
 
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */

@@ -40,11 +40,15 @@ typedef struct ad_mode {
   int nj;
   int *rows;                /* J, m entries */
   double *M;                /* na x na generator, column-major */
+  int *mp, *mi;             /* M's nonzeros by column (na + 1 starts, rows) and their values mx: M is */
+  double *mx;               /* [Pi Q; 0 W], its w rows almost empty (a few percent of M in a converter) */
   double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
   double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */
   double *Lm;               /* m x na, row-major: magnitudes of the terms an event value is
                                computed from (|C_i| |X| for a slack: a row that depends on
                                the active ones has a tiny L_i, but its slack rounds at that) */
+  int *lp, *li;             /* the nonzeros of L or Lm by row (m + 1 starts, columns), their values */
+  double *lx, *lmx;         /* in L and Lm: the event rows' sums over them, in the dense order */
   unsigned char *is_zeta;   /* m */
   double *X;                /* n x na, row-major: x = X y */
   int nz;                   /* the rows of the manifold: nj when D = 0; with D, those of Z^T (left
@@ -224,6 +228,8 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
 const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+/* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
+void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
