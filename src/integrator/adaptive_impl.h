@@ -29,7 +29,8 @@
 #include "lcp/lcp.h"
 #include "lcp/step.h"
 
-#define AD_MODES 6          /* active sets kept with their matrices (least recently used goes) */
+#define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
+                               six-pulse bridge cycles through more than 6, each rebuilt 5 times */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
