@@ -44,6 +44,13 @@ static void probe(adaptive_ws *A, ad_mode *md, double tau, double *g, double *d,
   ev->evals++;
 }
 
+/* A probe at the bracket's new right end: its state (A->yt) kept for the
+ * event, which flows there (the same function of the same arguments). */
+static void hold_hi(adaptive_ws *A, ad_event *ev) {
+  la_copy(A->yhi, A->yt, A->na);
+  ev->hi_ok = 1;
+}
+
 static int crossed(double glo, double tlo, double ghi, double thi) { return glo >= -tlo && ghi < -thi; }
 
 /* Any row crossing between the bracket's start (ga, ta) and (g, thr)? */
@@ -104,6 +111,7 @@ static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) 
       keep(A, A->gb, A->db, A->tb, A->gt, A->dt, A->tt);
       ev->tau_lo = 0;
       ev->tau_sw = s;
+      hold_hi(A, ev);
       return 1;
     }
     if (A->dt[i] < 0) { lo = s; dlo = A->dt[i]; } else { hi = s; dhi = A->dt[i]; }
@@ -115,6 +123,7 @@ int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
   ev->tau_lo = 0;
   ev->tau_sw = h;
+  ev->hi_ok = 0;
   if (any_crossed(A, A->gb, A->tb)) return 1;
   for (int i = 0; i < m; i++) {
     if (!(A->da[i] < 0 && A->db[i] > 0)) continue;
@@ -180,6 +189,7 @@ void ad_locate(adaptive_ws *A, ad_mode *md, double tolw, ad_event *ev) {
     if (any_crossed(A, A->gt, A->tt)) {
       hi = s;
       keep(A, A->gb, A->db, A->tb, A->gt, A->dt, A->tt);
+      hold_hi(A, ev);
       k = leading(A);
     } else {
       lo = s;

@@ -150,6 +150,7 @@ struct adaptive_ws {
   /* scratch of the run */
   double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
+  double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
   double *cz, *cs;          /* per row, the late-switch error (docs/adaptive.md): pinf ||B_i||_P and
                                pinf ||A B_i||_P / (C B)_ii (pinf ||B_i||_P / D_ii where D_ii > 0) */
@@ -298,6 +299,7 @@ typedef struct ad_event {
   double cmin;              /* a floor under the model's c: 2 err / delay^2 measured (0 at first) */
   int row;                  /* the row whose function crosses first */
   int evals;                /* flow evaluations spent */
+  int hi_ok;                /* A->yhi holds the flow from the step's start to tau_sw (a probe's) */
 } ad_event;
 /* After a step of length h from ya (values ga, slopes da, thresholds ta at
  * the start; gb, db, tb at the end): 1 if an event function crosses zero
