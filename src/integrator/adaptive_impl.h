@@ -41,7 +41,7 @@ typedef struct ad_mode {
   int nj;
   int *rows;                /* J, m entries */
   double *M;                /* na x na generator, column-major */
-  int *mp, *mi;             /* M's nonzeros by column (na + 1 starts, rows) and their values mx: M is */
+  int *mp, *mi, *mj;        /* M's nonzeros by column (na + 1 starts, rows, columns), their values mx: M is */
   double *mx;               /* [Pi Q; 0 W], its w rows almost empty (a few percent of M in a converter) */
   double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
   double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */

@@ -28,6 +28,7 @@ int ad_modes_init(adaptive_ws *A) {
     md->M = take(NA, sizeof(double), &fail);
     md->mp = take((size_t)na + 1, sizeof(int), &fail);
     md->mi = take(NA, sizeof(int), &fail);
+    md->mj = take(NA, sizeof(int), &fail);
     md->mx = take(NA, sizeof(double), &fail);
     md->lp = take((size_t)m + 1, sizeof(int), &fail);
     md->li = take((size_t)m * na, sizeof(int), &fail);
@@ -61,7 +62,7 @@ int ad_modes_init(adaptive_ws *A) {
 void ad_modes_free(adaptive_ws *A) {
   for (int s = 0; s < AD_MODES; s++) {
     ad_mode *md = &A->modes[s];
-    free(md->mp); free(md->mi); free(md->mx); free(md->lp); free(md->li); free(md->lx); free(md->lmx);
+    free(md->mp); free(md->mi); free(md->mj); free(md->mx); free(md->lp); free(md->li); free(md->lx); free(md->lmx);
     free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
     free(md->X); free(md->R); free(md->Zt); free(md->KU);
     for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
@@ -374,7 +375,7 @@ static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
     md->mp[j] = k;
     for (int i = 0; i < na; i++) {
       double v = md->M[i + (size_t)j * na];
-      if (v != 0) { md->mi[k] = i; md->mx[k++] = v; }
+      if (v != 0) { md->mi[k] = i; md->mj[k] = j; md->mx[k++] = v; }
     }
   }
   md->mp[na] = k;
@@ -389,14 +390,12 @@ static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
   md->lp[m] = k;
 }
 
+/* (Terms with y_j = 0 are added too: +-0, which leaves a sum started at +0
+ * as it was.) */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
-  int na = A->na;
+  int na = A->na, nnz = md->mp[na];
   for (int i = 0; i < na; i++) out[i] = 0;
-  for (int j = 0; j < na; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    for (int k = md->mp[j]; k < md->mp[j + 1]; k++) out[md->mi[k]] += md->mx[k] * yj;
-  }
+  for (int k = 0; k < nnz; k++) out[md->mi[k]] += md->mx[k] * y[md->mj[k]];
 }
 
 static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
