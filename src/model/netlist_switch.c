@@ -57,6 +57,12 @@ struct nl_switched {
   double *zf;              /* scratch: a configuration's zeta with multipliers */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
+  /* the switching time the last search found (a configuration with no
+   * switch the circuit gates) and the configuration the rule gave there:
+   * the settle that follows it, at that time, takes it (once) */
+  int memo_ok, memo_topo;
+  double memo_t;
+  uint64_t memo_cfg, last_cfg;   /* ... and the rule's at the last check (changes) */
   /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
   cup_gate_fn gate_fn;
   void *gate_ctx;
@@ -332,10 +338,15 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
       if (S->gate[k]) cfg |= (uint64_t)1 << k;
     return topo_of(nl, cfg, topo, errmsg);
   }
+  int memo = S->memo_ok && S->memo_topo == *topo && S->memo_t == t;
+  S->memo_ok = 0;
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
-    if (controls(S, &S->topo[*topo], t, x, zeta, cv))
-      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
-    uint64_t next = rule(S, S->topo[*topo].cfg, cv);
+    uint64_t next = S->memo_cfg;                   /* the search's at t: the same controls (they read no state) */
+    if (!(pass == 0 && memo)) {
+      if (controls(S, &S->topo[*topo], t, x, zeta, cv))
+        return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
+      next = rule(S, S->topo[*topo].cfg, cv);
+    }
     if (next == S->topo[*topo].cfg) return CUP_OK;
     int st = topo_of(nl, next, topo, errmsg);
     if (st) return st;
@@ -352,7 +363,8 @@ static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x,
   if (controls(S, tp, s, x, NULL, cv)) return -1;
   for (int k = 0; k < S->nsw; k++)
     if (gated_by_state(tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
-  return rule(S, tp->cfg, cv) != tp->cfg;
+  S->last_cfg = rule(S, tp->cfg, cv);
+  return S->last_cfg != tp->cfg;
 }
 
 /* The first time in (t, tmax] at which a source-gated switch of
@@ -364,6 +376,7 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
   nl_switched *S = nl->sw;
   const nl_topo *tp = &S->topo[topo];
   double cv[64], a = t;
+  uint64_t cfg = tp->cfg;
   *tnext = tmax;
   if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
     long k = instant(S, t);
@@ -384,7 +397,7 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
       if (!(s > lo)) continue;
       int ch = changes(S, tp, s, NULL, 0, cv);
       if (ch < 0) return CUP_ERR_CALLBACK;
-      if (ch) hi = s; else lo = s;
+      if (ch) hi = s, cfg = S->last_cfg; else lo = s;
     }
     if (hi >= 0) {
       /* a jump edge rounds apart from its breakpoint by an ulp or a few
@@ -400,16 +413,20 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
         if (!(p > lo && p < hi)) break;
         int ch = changes(S, tp, p, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
-        if (ch) hi = p; else lo = p;
+        if (ch) hi = p, cfg = S->last_cfg; else lo = p;
         if (at_end != ch) break;                   /* the other side of the crossing: found */
       }
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
         int ch = changes(S, tp, mid, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
-        if (ch) hi = mid; else lo = mid;
+        if (ch) hi = mid, cfg = S->last_cfg; else lo = mid;
       }
       *tnext = hi;
+      S->memo_ok = !tp->state_gated;               /* (a state-gated switch's control is settle's to read) */
+      S->memo_topo = topo;
+      S->memo_t = hi;
+      S->memo_cfg = cfg;
       return CUP_OK;
     }
     a = b;
