@@ -307,6 +307,8 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   return CUP_OK;
 }
 
+void adaptive_wall_limit(adaptive_ws *A, double seconds) { A->o.max_wall_seconds = seconds; }
+
 void adaptive_free(adaptive_ws **Ap) {
   if (!Ap || !*Ap) return;
   adaptive_ws *A = *Ap;

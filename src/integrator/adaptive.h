@@ -28,6 +28,9 @@ int adaptive_create(adaptive_ws **A, const freestep_drift *D, const cup_polyset 
                     const la_sparse *B, const la_sparse *Dm, const cup_input *u,
                     const cup_integrator_options *o, char *errmsg);
 void adaptive_free(adaptive_ws **A);
+/* A switched run's wall-time limit (switched.c): the seconds left of the
+ * run's, for the next window (0: none). */
+void adaptive_wall_limit(adaptive_ws *A, double seconds);
 int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                  cup_run_info *info);
 /* The run from ta (state xa) to tb only: a switched circuit's stretch in

@@ -554,6 +554,11 @@ static void window_info(const fixed_ws *F, cup_run_info *info) {
   info->h_rho = F->h_rho;
 }
 
+void integrator_window_wall_limit(cup_integrator *I, double seconds) {
+  I->o.max_wall_seconds = seconds;
+  ((fixed_ws *)I->ws)->o.max_wall_seconds = seconds;
+}
+
 int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;

@@ -28,6 +28,7 @@
 #include "integrator_impl.h"
 #include "adaptive.h"
 #include "estimate.h"
+#include "util/clock.h"
 
 typedef struct switched_run switched_run;
 
@@ -56,6 +57,7 @@ struct switched_run {
   void *sink_ctx;
   cup_step_fn on_step;
   void *step_ctx;
+  double wall0;            /* the run's start, when it has a wall-time limit */
   cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
   estimate_ws est;        /* ... and the comparison with it at each step's end */
 };
@@ -143,6 +145,21 @@ static void add_info(cup_run_info *info, const cup_run_info *w) {
   info->events += w->events;
   info->rejected += w->rejected;
   if (!(info->err_est >= w->err_est)) info->err_est = isnan(w->err_est) ? info->err_est : w->err_est;
+}
+
+/* The wall-time limit is the run's, not a window's (each window's clock
+ * starts afresh): the next window of configuration topo gets what is left
+ * of it, and nothing left stops the run at step k, time t. */
+static int wall_left(switched_run *S, int topo, long k, double t, cup_run_info *info) {
+  if (!(S->o.max_wall_seconds > 0)) return CUP_OK;
+  double left = S->o.max_wall_seconds - (now_seconds() - S->wall0);
+  if (!(left > 0))
+    return fail_fmt(info->message, CUP_ERR_TIME_LIMIT, "step %ld (t = %.17g): wall-time limit reached", k, t);
+  cup_integrator *C = S->child[topo];
+  adaptive_ws *A = adaptive_of(C);
+  if (A) adaptive_wall_limit(A, left);
+  else integrator_window_wall_limit(C, left);
+  return CUP_OK;
 }
 
 /* Configuration topo's window from (t, x) to tb with the user's sink
@@ -325,6 +342,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
       st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
       break;
     }
+    if ((st = wall_left(S, topo, k, t, info))) break;
     long k1 = grid_step_at(C, k, n, tb);
     /* inside step k1: the steps before it, then that one split */
     int split = tb < integrator_grid_time(C, k1) - 1e-9 * integrator_grid_step(C);
@@ -386,6 +404,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   S->sink = sink;
   S->sink_ctx = sink_ctx;
   la_copy(S->x, x0, S->n);
+  S->wall0 = S->o.max_wall_seconds > 0 ? now_seconds() : 0;
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
@@ -409,6 +428,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     double tb;
     st = sw->next(sw->ctx, topo, t, T, &tb);
     if (st) { st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
+    if ((st = wall_left(S, topo, steps, t, info))) break;
     st = window(S, topo, t, tb, first, jumped, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;

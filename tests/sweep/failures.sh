@@ -26,3 +26,23 @@ run 0 "$WORK/limit.yaml" -o "$WORK/limit.h5" --task-time-limit 0.02 --quiet
 got=$("$CHECK" failed "$WORK/limit.h5")
 [ "$got" = "1:CUP_ERR_TIME_LIMIT" ] || fail "time limit: failed rows '$got'"
 echo "failures: --task-time-limit fails the long task only"
+
+# ... and of a switched circuit, whose run goes window by window (one per
+# switch configuration in force): the limit is the task's, not a window's
+# (each window restarted the clock, and a 20 s buck ran to its end with
+# CUP_OK), for the adaptive scheme and for theta
+sed 's/^\.tran .*/.tran 1u 20/' "$SRC/examples/circuits/buck-ccm.cir" > "$WORK/buck-long.cir"
+printf 'netlist:\n  file: buck-long.cir\n' > "$WORK/buck-long.yaml"
+for grid in "{tol: [1e-6]}" "{scheme: theta, n: [20000000], eps: 0, eta: 0}"; do
+  cat > "$WORK/switched-limit.yaml" <<YAML
+base: buck-long.yaml
+grid: $grid
+variants: [{name: buck}]
+reference: {samples: 11, n: 100}
+YAML
+  rm -f "$WORK/switched-limit.h5"
+  run 0 "$WORK/switched-limit.yaml" -o "$WORK/switched-limit.h5" --task-time-limit 0.05 --quiet
+  got=$("$CHECK" failed "$WORK/switched-limit.h5")
+  [ "$got" = "0:CUP_ERR_TIME_LIMIT" ] || fail "switched circuit, grid $grid: failed rows '$got'"
+done
+echo "failures: --task-time-limit stops a switched circuit's task too"
