@@ -270,6 +270,32 @@ static long double damped_F(long double A, long double d, long double w, long do
   return A * expl(-d * s) * (-d * sinl(w * s + p) - w * cosl(w * s + p)) / (d * d + w * w);
 }
 
+/* A PULSE with jump edges (the buck's gate, PULSE(0 1 0 jump jump 5u 10u),
+ * its 10u read as 10 * 1e-6): walked from break to break over 200 periods,
+ * the value is the piece before each corner an ulp below it and the piece
+ * after it from the corner on, so that a switching time found from the
+ * value is the breakpoint itself (it fell an ulp off, the window after it
+ * paying a piece of length 0; and a time an ulp short of a period's start
+ * whose quotient rounded up read the rise of length 0 as -inf). */
+static void test_pulse_corners(void **state) {
+  (void)state;
+  cup_input *u = make(1);
+  cup_wave w = {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .width = 5 * 1e-6, .period = 10 * 1e-6};
+  assert_int_equal(cup_input_add(u, 0, &w, NULL), CUP_OK);
+  double tb = 0, out;
+  for (int k = 0; k < 400; k++) {
+    double prev = tb;
+    tb = cup_input_next_break(u, tb);
+    if (!(tb > prev && tb - prev < 5.0001e-6 && tb - prev > 4.9999e-6))
+      fail_msg("corner %d: break at %.17g after %.17g", k, tb, prev);
+    cup_input_eval(u, nextafter(tb, 0), &out);
+    if (out != (k % 2 ? 0 : 1)) fail_msg("corner %d (%.17g): %g an ulp before it", k, tb, out);
+    cup_input_eval(u, tb, &out);
+    if (out != (k % 2 ? 1 : 0)) fail_msg("corner %d (%.17g): %g at it", k, tb, out);
+  }
+  cup_input_free(&u);
+}
+
 static void test_damped_sine(void **state) {
   (void)state;
   double A = 2, f = 50, d = 30, p = 0.4, td = 3e-3;
@@ -306,6 +332,7 @@ int main(void) {
     cmocka_unit_test(test_callback),
     cmocka_unit_test(test_validation),
     cmocka_unit_test(test_pulse),
+    cmocka_unit_test(test_pulse_corners),
     cmocka_unit_test(test_damped_sine),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -81,11 +81,35 @@ static double shape_integral(const input_term *t, double a, double b) {
   return sum;
 }
 
+/* The corners of a PULSE are delay + P j + c_k, c = {0, rise, rise + width,
+ * rise + width + fall}, summed in that order (pulse_break returns them so,
+ * and a switching time found from the value lands on one): the value
+ * changes piece exactly at those numbers. The period j holding tt >= delay:
+ * floor's, moved by one where the quotient rounds across its start (a
+ * value an ulp before its own corner: the buck's switchings fell an ulp
+ * off the breakpoints, each window paying a piece of length 0). */
+static double pulse_period(const input_term *t, double tt) {
+  double j = floor((tt - t->delay) / t->period);
+  if (t->delay + t->period * j > tt) return j - 1;
+  if (t->delay + t->period * (j + 1) <= tt) return j + 1;
+  return j;
+}
+
 static double pulse_value(const input_term *t, double tt) {
   double s = tt - t->delay;
   if (s < 0) return t->value;
-  if (t->period > 0) s -= t->period * floor(s / t->period);
-  return shape(t, s);
+  double j = t->period > 0 ? pulse_period(t, tt) : 0, base = t->delay + t->period * j;
+  if (t->period > 0) s -= t->period * j;
+  /* a ramp's fraction clamped to [0, 1] (s rounds apart from tt - base);
+   * a ramp shorter than its corner's ulp starts there all the same (the
+   * value at the corner is the ramp's start, the jump just after it) */
+  double c2 = base + (t->rise + t->width);
+  if (tt < base + t->rise || (tt == base && t->rise > 0))
+    return t->value + (t->value2 - t->value) * fmin(fmax(s / t->rise, 0), 1);
+  if (tt < c2) return t->value2;
+  if (tt < base + (t->rise + t->width + t->fall) || (tt == c2 && t->fall > 0))
+    return t->value2 + (t->value - t->value2) * fmin(fmax((s - t->rise - t->width) / t->fall, 0), 1);
+  return t->value;
 }
 
 static double pulse_integral(const input_term *t, double a, double b) {
@@ -104,57 +128,40 @@ static double pulse_integral(const input_term *t, double a, double b) {
   return sum + shape_integral(t, ra, P) + (kb - ka - 1) * shape_integral(t, 0, P) + shape_integral(t, 0, rb);
 }
 
-/* The next corner after tt: the delay, then rise/width/fall knots of each period. */
+/* The next corner after tt (pulse_value's): the least of those of the
+ * periods around tt's (the last corner of one and the first of the next
+ * may round either way when rise + width + fall = P). */
 static double pulse_break(const input_term *t, double tt) {
   if (tt < t->delay) return t->delay;
-  double P = t->period;
-  const double knot[4] = {t->rise, t->rise + t->width, t->rise + t->width + t->fall, P};
-  if (!(P > 0)) {
-    for (int k = 0; k < 3; k++)
-      if (t->delay + knot[k] > tt) return t->delay + knot[k];
-    return INFINITY;
-  }
-  /* the knots from the period before tt's on: floor(s / P) rounds either way
-   * at a period's end (a break returned as delay + j P + P reads back as
-   * period j + 1 or j), and a knot is compared as the time it is returned as */
-  double j0 = floor((tt - t->delay) / P) - 1;
-  for (int j = 0; j < 3; j++)
+  const double c[4] = {0, t->rise, t->rise + t->width, t->rise + t->width + t->fall};
+  double P = t->period, next = INFINITY;
+  double j0 = P > 0 ? fmax(pulse_period(t, tt) - 1, 0) : 0;
+  for (int j = 0; j < (P > 0 ? 3 : 1); j++)
     for (int k = 0; k < 4; k++) {
-      /* the first period's start is the delay, not delay - P + P (an ulp
-       * or more off: a second corner there, a step of 4 ulps at 1 ms) */
-      double b = j0 + j + 1 == 0 && k == 3 ? t->delay : t->delay + P * (j0 + j) + knot[k];
-      if (b > tt) return b;
+      double b = t->delay + P * (j0 + j) + c[k];
+      if (b > tt && b < next) next = b;
     }
-  return INFINITY;                                    /* not reached: 3 periods span tt */
+  return next;
 }
 
 void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, double *slope) {
-  /* each corner as pulse_break returns it (delay + P j + knot k), the piece
-   * after it (0 the rise, 1 the top, 2 the fall, 3 the bottom) and that
-   * piece's own end; the delay and delay - P + P are both the first rise's
-   * start (they may differ by an ulp, and pulse_break returns both); a
-   * rise or fall below the corner's ulp (1e-25 at 1 ms) leaves two corners
-   * equal, and the piece is the later one's (the step is then a jump) */
-  const double knot[4] = {t->rise, t->rise + t->width, t->rise + t->width + t->fall, t->period};
+  /* the piece holding mid: after its corner (pulse_break's), up to the
+   * next; a rise or fall below the corner's ulp leaves two corners equal,
+   * and the piece is the later one's (the step is then a jump) */
+  const double c[4] = {0, t->rise, t->rise + t->width, t->rise + t->width + t->fall};
   const double from[4] = {t->value, t->value2, t->value2, t->value};
   const double to[4] = {t->value2, t->value2, t->value, t->value};
-  double P = t->period, start = -INFINITY, end = t->delay;
-  int piece = 3;
-  if (mid >= t->delay) { start = t->delay; piece = 0; end = t->delay + knot[0]; }
-  double j0 = P > 0 ? floor((mid - t->delay) / P) - 1 : 0;
-  for (int j = 0; j < (P > 0 ? 3 : 1); j++)
-    for (int k = 0; k < (P > 0 ? 4 : 3); k++) {
-      double jj = j0 + j, c = t->delay + P * jj + knot[k];
-      if (!(P > 0)) c = t->delay + knot[k];
-      if (!(c <= mid && c >= start)) continue;      /* a later corner on an earlier one: a piece of length 0 */
-      start = jj + 1 == 0 && k == 3 ? t->delay : c;   /* the first period's start is the delay */
-      piece = (k + 1) % 4;
-      end = k < 2 ? t->delay + P * jj + knot[k + 1] : k == 3 ? t->delay + P * (jj + 1) + knot[0] : INFINITY;
-      if (!(P > 0) && k < 2) end = t->delay + knot[k + 1];
-    }
-  *t0 = isfinite(start) ? start : mid;
-  *v0 = from[piece];
-  *slope = to[piece] != from[piece] && isfinite(start) && end > start ? (to[piece] - from[piece]) / (end - start) : 0;
+  *t0 = mid;
+  *v0 = t->value;
+  *slope = 0;
+  if (mid < t->delay) return;
+  double P = t->period, base = t->delay + (P > 0 ? P * pulse_period(t, mid) : 0);
+  int k = 3;
+  while (k > 0 && !(base + c[k] <= mid)) k--;
+  double start = base + c[k], end = k < 3 ? base + c[k + 1] : INFINITY;
+  *t0 = start;
+  *v0 = from[k];
+  *slope = to[k] != from[k] && end > start ? (to[k] - from[k]) / (end - start) : 0;
 }
 
 /* ---- SIN with delay and damping ------------------------------------------------ */
