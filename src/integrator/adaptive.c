@@ -315,6 +315,11 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
 
 void adaptive_wall_limit(adaptive_ws *A, double seconds) { A->o.max_wall_seconds = seconds; }
 
+void adaptive_seed(adaptive_ws *A, int on) {
+  A->seed_on = on;
+  A->seed = 0;
+}
+
 void adaptive_free(adaptive_ws **Ap) {
   if (!Ap || !*Ap) return;
   adaptive_ws *A = *Ap;

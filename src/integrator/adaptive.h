@@ -41,6 +41,10 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
  * windows. The statistics of the window into info. */
 int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
                     long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* A switched run's windows of this configuration (switched.c, window):
+ * from now on each tries the active set the last one started with before
+ * its LCP (on: 1); 0 forgets it and stops (a run starts afresh). */
+void adaptive_seed(adaptive_ws *A, int on);
 const double *adaptive_state(const adaptive_ws *A);
 /* Inside the sink: zeta at the output time (m entries), the multipliers of
  * the active set that holds from there (at an event or a breakpoint, the one

@@ -190,11 +190,12 @@ static ad_mode *try_rows(adaptive_ws *A, uint64_t J, const double *x, const doub
 }
 
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
-                  double tscale, uint64_t *mask, int *pivots) {
+                  uint64_t seed, double tscale, uint64_t *mask, int *pivots) {
   int m = A->m;
   ad_mode *md;
   if ((row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w))) ||   /* the event row alone */
-      (row < 0 && (md = try_mode(A, cur, x, w)))) {                         /* the same set, still right */
+      (row < 0 && (md = try_mode(A, cur, x, w))) ||                         /* the same set, still right */
+      (seed && seed != cur && (md = try_mode(A, seed, x, w)))) {             /* the caller's guess */
     *mask = md->mask;
     return CUP_OK;
   }

@@ -115,6 +115,8 @@ struct adaptive_ws {
   unsigned char *dcpl;      /* rows with a nonzero in their row or column of D */
   int one;                  /* the exosystem's constant state 1 (F reaches zeta through D), or -1 */
   int nwu;                  /* the input's own exosystem states (nw without the constant) */
+  int seed_on;              /* a switched run's windows (adaptive_seed): the active set chosen at ... */
+  uint64_t seed;            /* ... the last window's start is tried at the next one's before the LCP */
   int piece_ok;             /* built-in waveforms: piece_w holds the states on [piece_t0, piece_t1] */
   double piece_t0, piece_t1, *piece_w;   /* (a piece's start and its one step ask for the same: nwu) */
   double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
@@ -278,12 +280,12 @@ int ad_dae_init(adaptive_ws *A);
 void ad_dae_free(adaptive_ws *A);
 /* The active set that continues from (x, w) at a time: the mode cur with
  * the event row flipped (with no event, cur itself) when that fits, else
- * the finite-h LCP with D (docs/adaptive.md), each candidate checked on
- * the mode's own flow.
+ * seed when nonzero and it fits, else the finite-h LCP with D
+ * (docs/adaptive.md), each candidate checked on the mode's own flow.
  * CUP_OK, or CUP_ERR_LINALG when no candidate continues (or the LCP has no
  * solution). */
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
-                  double tscale, uint64_t *mask, int *pivots);
+                  uint64_t seed, double tscale, uint64_t *mask, int *pivots);
 /* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some
  * zeta >= 0} by the impulsive LCP (x + B mu; the P-projection when
  * P B = C^T): 0 if x was consistent, 1 if it jumped (rows with mu > 0 in

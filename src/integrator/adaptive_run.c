@@ -269,15 +269,20 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
 }
 
 /* The active set that continues from (x, w) at R->t, made current, x put
- * on its manifold; changes reported at time t_event. */
+ * on its manifold; changes reported at time t_event. A switched run's
+ * window starts with none current: the set its configuration's last window
+ * started with is tried before the LCP (the dead time of a bridge opens on
+ * the same diodes each period while the current keeps its sign); it is
+ * kept only when it continues, as the LCP's answer must. */
 static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
-  uint64_t mask = 0, before = R->md ? R->md->mask : 0;
-  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, time_scale(A, R, R->t), &mask, &piv)
+  uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
+  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), &mask, &piv)
                              : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
+  if (!R->md) A->seed = mask;
   A->pinned[0] = R->md = ad_mode_get(A, mask);
   if (A->has_D) ad_offset(A, w, A->g);           /* (ad_select left it in A->g) */
   ad_manifold(A, R->md, A->g, A->x);
@@ -450,7 +455,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     uint64_t mask = 0;
     int piv = 0;
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
-    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, time_scale(A, R, R->t + tsw), &mask, &piv)
+    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, 0, time_scale(A, R, R->t + tsw), &mask, &piv)
                  : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
       return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
                   "the LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
@@ -587,7 +592,7 @@ static ad_mode *catch_up_mode(adaptive_ws *A, ad_run *R, double h) {
     ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     return NULL;
   }
-  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, time_scale(A, R, R->t), &mask, &piv)) {
+  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, 0, time_scale(A, R, R->t), &mask, &piv)) {
     ad_fail(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
     return NULL;
   }

@@ -22,6 +22,7 @@
  * threshold: a crossing that comes and goes inside one step is not seen. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -428,6 +429,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   }
   /* every step recorded: a jump at a switching is recorded after it too */
   int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
+  uint64_t seeded = 0;                             /* configurations whose windows try the last start's set */
   for (int first = 1; st >= 0 && t < T; first = 0) {
     if (each) la_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
@@ -435,6 +437,10 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (first) x0_moved(S, x0, info);
     st = child_of(S, topo, info->message);
     if (st) break;
+    if (!(seeded >> topo & 1)) {                   /* (afresh each run: a run never reads the one before) */
+      adaptive_seed(adaptive_of(S->child[topo]), 1);
+      seeded |= (uint64_t)1 << topo;
+    }
     S->cur = topo;
     double tb;
     st = sw->next(sw->ctx, topo, t, T, &tb);
