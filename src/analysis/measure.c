@@ -1,10 +1,15 @@
 /* measure — measurements of one period of a uniformly sampled signal
  * (catchup/pss.h): SPICE's .meas (average, RMS, extremes) and .four
  * (harmonics, THD), by the periodic trapezoid rule and the DFT of the
- * same samples. */
+ * same samples; a signal that jumps at the period's known jump times (a
+ * switching, an event: pss_jumps) by the exact figures of its
+ * piecewise-linear interpolant with each jump at its own time, its sides
+ * extrapolated from the samples on each side (docs/steady-state.md). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include <gsl/gsl_math.h>
 #include "catchup.h"
 #include "catchup/pss.h"
@@ -53,28 +58,262 @@ int cup_measure_period(const double *v, long N, int order, cup_measure *m, doubl
   return CUP_OK;
 }
 
-int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg, char *errmsg) {
+
+/* ---- signals that jump: the piecewise-linear interpolant with its jumps ---- */
+
+/* Of a period's samples v[0 .. M] (h = 1) and its jump positions, the
+ * interpolant: each sample's left and right values (lv, rv; a jump on a
+ * sample has the sample on one side and a one-sided extrapolation on the
+ * other) and, in an interval holding a jump time, its position th (NAN:
+ * none), the values a (its left) and b (its right) and real (1: v jumps
+ * there; 0: a kink or nothing, the sides only split the integrals). */
+typedef struct jump_shape {
+  long M;
+  char *at, *inner, *real;     /* M + 1 each: a jump at sample j; one inside (j, j + 1); v jumps there */
+  double *lv, *rv, *th, *a, *b;
+} jump_shape;
+
+/* Interval [i, i + 1] holds no jump, inside or at its ends: its line
+ * extrapolates. */
+static int clean(const jump_shape *s, long i) {
+  return i >= 0 && i < s->M && !s->inner[i] && !s->at[i] && !s->at[i + 1];
+}
+
+/* The jump times (positions p in sample units) onto the samples and
+ * intervals: one within 1e-9 of a sample is on it (at 0 and M, the
+ * period's ends, the samples there are each side's already); of several
+ * inside one interval the first counts (the piece between them is not
+ * sampled: the right side's line stands for it). */
+static void place(jump_shape *s, const double *pos, int nj) {
+  memset(s->at, 0, (size_t)s->M + 1);
+  memset(s->inner, 0, (size_t)s->M + 1);
+  for (long j = 0; j <= s->M; j++) s->th[j] = NAN;
+  for (int q = 0; q < nj; q++) {
+    double p = pos[q], r = nearbyint(p);
+    if (fabs(p - r) <= 1e-9) {
+      if (r > 0 && r < s->M) s->at[(long)r] = 1;    /* the ends: the samples there are each side's */
+      continue;
+    }
+    long j = (long)floor(p);
+    if (j < 0 || j >= s->M || (s->inner[j] && s->th[j] <= p - (double)j)) continue;
+    s->inner[j] = 1;
+    s->th[j] = p - (double)j;
+  }
+}
+
+/* |v[i + 1] - v[i]|, 0 outside the period: the change over a sample beside
+ * a jump time, which an extrapolation's error of a continuous signal stays
+ * below (a jump of v smaller than it costs O(h^2) measured as none). */
+static double slope(const double *v, long M, long i) { return i >= 0 && i < M ? fabs(v[i + 1] - v[i]) : 0; }
+
+/* Each side's value at each jump time (one on a sample where v does not
+ * jump: the sample; one inside an interval: the lines on each side, and
+ * real whether v jumps there); 1 if v jumps at one of them or at the
+ * period's ends (by more than the change over a sample beside it and 1e-6
+ * of v's largest magnitude). */
+static int shape(jump_shape *s, const double *v) {
+  long M = s->M;
+  double scale = 0;
+  for (long j = 0; j <= M; j++) scale = fmax(scale, fabs(v[j]));
+  double floor_ = 1e-6 * scale;
+  int jumps = fabs(v[0] - v[M]) > fabs(v[1] - v[0]) + fabs(v[M] - v[M - 1]) + floor_;   /* at t0 = t0 + T */
+  for (long j = 0; j <= M; j++) {
+    s->lv[j] = s->rv[j] = v[j];
+    if (!s->at[j]) continue;
+    int cl = clean(s, j - 2) && !s->inner[j - 1], cr = clean(s, j + 1) && !s->inner[j];
+    double eL = cl ? 2 * v[j - 1] - v[j - 2] : v[j - 1], eR = cr ? 2 * v[j + 1] - v[j + 2] : v[j + 1];
+    if (fabs(v[j] - eL) <= fabs(v[j] - eR)) s->rv[j] = eR;   /* the sample is the side it continues */
+    else s->lv[j] = eL;
+    if (fabs(s->rv[j] - s->lv[j]) > slope(v, M, j - 2) + slope(v, M, j + 1) + floor_) jumps = 1;
+    else s->lv[j] = s->rv[j] = v[j];            /* no jump of v there (a kink, or nothing) */
+  }
+  for (long j = 0; j < M; j++) {
+    if (!s->inner[j]) continue;
+    double t = s->th[j];
+    int cl = clean(s, j - 1), cr = clean(s, j + 1);
+    s->a[j] = cl ? v[j] + t * (v[j] - v[j - 1]) : s->rv[j];
+    s->b[j] = cr ? v[j + 1] - (1 - t) * (v[j + 2] - v[j + 1]) : s->lv[j + 1];
+    s->real[j] = fabs(s->b[j] - s->a[j]) > slope(v, M, j - 1) + slope(v, M, j + 1) + floor_;
+    jumps |= s->real[j];
+  }
+  return jumps;
+}
+
+/* The integral over [0, L] (sample units) of the line from y0 to y1 times
+ * exp(-i (x0 + w s)), w = 2 pi k / M > 0, into (re, im): by parts,
+ * (i / w) (y1 E1 - y0 E0) + (y1 - y0) / (L w^2) (E1 - E0), E1 - E0 taken
+ * as E0 (e^{-i w L} - 1) with cos - 1 = -2 sin^2 (no cancellation). */
+static void line_fourier(double x0, double w, double L, double y0, double y1, double *re, double *im) {
+  double c0 = cos(x0), s0 = -sin(x0), c1 = cos(x0 + w * L), s1 = -sin(x0 + w * L);   /* E = c + i s */
+  double sh = sin(w * L / 2), dr = -2 * sh * sh, di = -sin(w * L);                   /* e^{-i w L} - 1 */
+  double er = c0 * dr - s0 * di, ei = c0 * di + s0 * dr;                             /* E1 - E0 */
+  double pr = y1 * c1 - y0 * c0, pi = y1 * s1 - y0 * s0, g = (y1 - y0) / (L * w * w);
+  *re += -pi / w + g * er;
+  *im += pr / w + g * ei;
+}
+
+/* The figures of the interpolant s of v: the exact average, RMS,
+ * extremes and (order >= 1) Fourier coefficients of the piecewise-linear
+ * function with its jumps. */
+static void shape_figures(const jump_shape *s, int order, cup_measure *m, double *amp, double *phase) {
+  long M = s->M;
+  double s1 = 0, s2 = 0, lo = INFINITY, hi = -INFINITY;
+  for (long j = 0; j < M; j++) {
+    double y[4] = {s->rv[j], s->lv[j + 1], s->lv[j + 1], s->lv[j + 1]}, L[2] = {1, 0};
+    if (s->inner[j]) y[1] = s->a[j], y[2] = s->b[j], L[0] = s->th[j], L[1] = 1 - s->th[j];
+    for (int p = 0; p < 2; p++) {
+      double a = y[2 * p], b = y[2 * p + 1];
+      s1 += L[p] * (a + b) / 2;
+      s2 += L[p] * (a * a + a * b + b * b) / 3;
+      if (p == 0 || s->real[j]) lo = fmin(lo, a), hi = fmax(hi, a);   /* a kink's sides: lines, not values */
+      if (p == 1 || s->real[j]) lo = fmin(lo, b), hi = fmax(hi, b);
+    }
+  }
+  m->avg = s1 / (double)M;
+  m->rms = sqrt(fmax(s2, 0) / (double)M);
+  m->min = lo;
+  m->max = hi;
+  m->pp = hi - lo;
+  m->thd = NAN;
+  double c1 = 0, ch2 = 0;
+  for (int k = 1; k <= order; k++) {
+    double re = 0, im = 0, w = 2 * M_PI * (double)k / (double)M, w0 = 2 * M_PI / (double)M;
+    for (long j = 0; j < M; j++) {
+      double x0 = w0 * (double)((j * (long)k) % M);     /* exact phases for long records, as the DFT's */
+      if (!s->inner[j]) { line_fourier(x0, w, 1, s->rv[j], s->lv[j + 1], &re, &im); continue; }
+      double t = s->th[j];
+      line_fourier(x0, w, t, s->rv[j], s->a[j], &re, &im);
+      line_fourier(x0 + w * t, w, 1 - t, s->b[j], s->lv[j + 1], &re, &im);
+    }
+    re /= (double)M;
+    im /= (double)M;
+    double mag = hypot(re, im);
+    if (amp) amp[k] = 2 * mag;
+    if (phase) phase[k] = atan2(im, re);
+    if (k == 1) c1 = mag;
+    if (k >= 2) ch2 += mag * mag;
+  }
+  if (amp && order >= 0) amp[0] = m->avg;
+  if (phase && order >= 0) phase[0] = 0;
+  if (order >= 1 && c1 > 1e-9 * m->rms) m->thd = sqrt(ch2) / c1;
+}
+
+/* A jump_shape for N samples and the jumps at times jt[0 .. nj) of a period
+ * T (sorted); NULL with no jumps (or no memory: *st says). */
+static jump_shape *shape_new(long N, const double *jt, int nj, double T, int *st) {
+  *st = CUP_OK;
+  if (nj <= 0 || !jt || !(T > 0) || N < 3) return NULL;
+  jump_shape *s = calloc(1, sizeof *s);
+  double *pos = malloc(sizeof(double) * (size_t)nj);
+  if (s) {
+    s->M = N - 1;
+    s->at = calloc((size_t)N, 1);
+    s->inner = calloc((size_t)N, 1);
+    s->real = calloc((size_t)N, 1);
+    s->lv = malloc(sizeof(double) * 5 * (size_t)N);
+  }
+  if (!s || !pos || !s->at || !s->inner || !s->real || !s->lv) {
+    if (s) { free(s->at); free(s->inner); free(s->real); free(s->lv); }
+    free(s);
+    free(pos);
+    *st = CUP_ERR_NOMEM;
+    return NULL;
+  }
+  s->rv = s->lv + N; s->th = s->lv + 2 * N; s->a = s->lv + 3 * N; s->b = s->lv + 4 * N;
+  for (int q = 0; q < nj; q++) pos[q] = jt[q] / T * (double)s->M;
+  place(s, pos, nj);
+  free(pos);
+  return s;
+}
+
+static void shape_free(jump_shape *s) {
+  if (!s) return;
+  free(s->at); free(s->inner); free(s->real); free(s->lv);
+  free(s);
+}
+
+/* cup_measure_period of w, then, if w jumps at s's jumps, the figures of its
+ * interpolant with the jumps instead (a signal that does not jump keeps
+ * the periodic trapezoid rule and the DFT, bit for bit). */
+static int measure_one(const double *w, long N, int order, jump_shape *s, cup_measure *m, double *amp,
+                       double *phase, char *errmsg) {
+  int st = cup_measure_period(w, N, order, m, amp, phase, errmsg);
+  if (!st && s && shape(s, w)) shape_figures(s, order, m, amp, phase);
+  return st;
+}
+
+static int power_of(const double *sig, long N, int ns, int v, int i, double *w, jump_shape *s, double *avg,
+                    char *errmsg) {
   if (!sig || !w || !avg || v < 0 || i < 0 || v >= ns || i >= ns)
     return fail_fmt(errmsg, CUP_ERR_ARG, "measure power: NULL argument or signal outside [0, %d)", ns);
   for (long k = 0; k < N; k++) w[k] = sig[k * ns + v] * sig[k * ns + i];
   cup_measure m;
-  int st = cup_measure_period(w, N, 0, &m, NULL, NULL, errmsg);
+  int st = measure_one(w, N, 0, s, &m, NULL, NULL, errmsg);
   *avg = m.avg;
   return st;
 }
 
+int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg, char *errmsg) {
+  return power_of(sig, N, ns, v, i, w, NULL, avg, errmsg);
+}
+
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {
   int st = CUP_OK, H = f->harmonics;
+  jump_shape *s = shape_new(N, f->jt, f->nj, f->T, &st);
+  if (st) return fail_fmt(errmsg, st, "measure: out of memory");
   for (int j = 0; !st && j < f->nm; j++) {
     int c = f->idx ? f->idx[j] : j;
     for (long k = 0; k < N; k++) w[k] = sig[k * ns + c];
     size_t row = (size_t)j * (size_t)(H + 1);
-    st = cup_measure_period(w, N, H, &f->me[j], f->amp ? f->amp + row : NULL, f->phase ? f->phase + row : NULL,
-                            errmsg);
+    st = measure_one(w, N, H, s, &f->me[j], f->amp ? f->amp + row : NULL, f->phase ? f->phase + row : NULL, errmsg);
   }
-  for (int j = 0; !st && j < f->np; j++) st = measure_power(sig, N, ns, f->pv[j], f->pc[j], w, &f->power[j], errmsg);
+  for (int j = 0; !st && j < f->np; j++) st = power_of(sig, N, ns, f->pv[j], f->pc[j], w, s, &f->power[j], errmsg);
   if (!st && f->eff_out >= 0) f->efficiency = f->power[f->eff_out] / -f->power[f->eff_in];
+  shape_free(s);
   return st;
+}
+
+int pss_jumps_init(pss_jumps *J, double T, long samples) {
+  memset(J, 0, sizeof *J);
+  J->T = T;
+  J->cap = samples + 64;
+  J->t = malloc(sizeof(double) * (size_t)J->cap);
+  return J->t ? CUP_OK : CUP_ERR_NOMEM;
+}
+
+void pss_jumps_free(pss_jumps *J) {
+  free(J->t);
+  J->t = NULL;
+  J->n = J->cap = 0;
+}
+
+void pss_jumps_add(pss_jumps *J, double t) {
+  if (!(t > 0 && t < J->T)) return;              /* the period's ends: its first and last samples */
+  if (J->n > 0 && J->t[J->n - 1] == t) return;
+  if (J->n < J->cap) J->t[J->n++] = t;
+  else J->overflow = 1;
+}
+
+int pss_jumps_event(double t, int row, int on, void *ctx) {
+  pss_jumps *J = ctx;
+  pss_jumps_add(J, t);
+  return J->on_event ? J->on_event(t, row, on, J->event_ctx) : 0;
+}
+
+static int by_time(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+int pss_jumps_finish(pss_jumps *J, pss_figures *f, char *errmsg) {
+  if (J->overflow)
+    return fail_fmt(errmsg, CUP_ERR_ARG, "measure: more than %ld switchings and events in the period, more than its "
+                    "samples: raise steady_state.samples", J->cap);
+  qsort(J->t, (size_t)J->n, sizeof(double), by_time);
+  f->jt = J->t;
+  f->nj = (int)J->n;
+  f->T = J->T;
+  return CUP_OK;
 }
 
 int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg) {

@@ -44,12 +44,48 @@ typedef struct pss_figures {
   double *amp, *phase;      /* out, or NULL */
   double *power;            /* out: np averages */
   double efficiency;        /* out (untouched without eff_out) */
+  const double *jt;         /* the period's jump times (pss_jumps_finish): nj, sorted, in (0, T); NULL: none */
+  int nj;
+  double T;
 } pss_figures;
 
 /* The figures f asks for of one period of N samples of ns signals each
  * (row-major, as recorded): cup_measure_period of each signal, then
  * measure_power of each element, then the efficiency; stops at the
- * first error. w: N doubles of scratch. */
+ * first error. w: N doubles of scratch. With jump times (f->jt), a signal
+ * (or a product v i) that jumps at one of them (by more than the change
+ * over a sample beside it and 1e-6 of its largest magnitude: a continuous
+ * signal does not, and keeps cup_measure_period's figures) is measured
+ * instead as the piecewise-linear interpolant of its samples with each
+ * jump at its own time, each side's value extrapolated linearly from the
+ * samples on its side (a jump on a sample: the sample is the side it
+ * continues): its exact average, RMS, extremes (both sides of each jump)
+ * and Fourier coefficients. O(h^2) on the smooth pieces, exact for
+ * piecewise-linear signals (docs/steady-state.md). */
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg);
+
+/* The times inside one period's run (0 < t < T, the run's own clock) at
+ * which a signal may jump: each switching of the switches (scene_pss's
+ * period integrator) and each event of the adaptive scheme
+ * (pss_jumps_event, chained to the run's own on_event). Room for samples
+ * + 64 times, allocated at init: nothing during the run. */
+typedef struct pss_jumps {
+  double *t;
+  long n, cap;
+  int overflow;             /* more than cap: pss_jumps_finish says so */
+  double T;
+  cup_event_fn on_event;    /* the run's own, called after (or NULL) */
+  void *event_ctx;
+  cup_switching sw;         /* the model's switching, which scene_pss's wrapper calls */
+} pss_jumps;
+
+int pss_jumps_init(pss_jumps *J, double T, long samples);
+void pss_jumps_free(pss_jumps *J);
+void pss_jumps_add(pss_jumps *J, double t);
+/* A cup_event_fn: the event's time, then the run's own on_event. */
+int pss_jumps_event(double t, int row, int on, void *ctx);
+/* The times sorted into f (jt, nj, T; J keeps them); CUP_ERR_ARG if they
+ * overflowed (more than the samples: the samples cannot resolve them). */
+int pss_jumps_finish(pss_jumps *J, pss_figures *f, char *errmsg);
 
 #endif

@@ -12,6 +12,7 @@
 #define CUP_SCENE_PSS_H
 
 #include "catchup.h"
+#include "analysis/pss_run.h"
 
 /* The steady state of scene s's request (cup_scene_steady_state) with the
  * run's options o (scheme, n over the scene's T, tolerances, the interrupt
@@ -26,5 +27,14 @@
 enum { SCENE_PSS_PHASE, SCENE_PSS_SETUP, SCENE_PSS_NEWTON };   /* the period and phase; the map's integrator; Newton */
 int scene_pss_solve(cup_scene *s, const cup_integrator_options *o, cup_pss **r, double *T, double *t0,
                     cup_integrator_options *period, int *stage, char *errmsg);
+
+/* The integrator of one period from the steady state (options period,
+ * scene_pss_solve's), as cup_scene_integrator makes it, that notes into J
+ * (pss_jumps_init'ed; it must outlive *I) the times at which a signal may
+ * jump: each break of the sources (cup_input_next_break: a PULSE's edges
+ * and corners), each change of the switches' configuration and each event
+ * of the adaptive scheme (the options' own on_event still called). */
+int scene_pss_period_integrator(cup_scene *s, const cup_integrator_options *period, pss_jumps *J,
+                                cup_integrator **I, char *errmsg);
 
 #endif
