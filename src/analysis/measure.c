@@ -61,17 +61,24 @@ int cup_measure_period(const double *v, long N, int order, cup_measure *m, doubl
 
 /* ---- signals that jump: the piecewise-linear interpolant with its jumps ---- */
 
-/* Of a period's samples v[0 .. M] (h = 1) and its jump positions, the
- * interpolant: each sample's left and right values (lv, rv; a jump on a
- * sample has the sample on one side and a one-sided extrapolation on the
- * other) and, in an interval holding a jump time, its position th (NAN:
- * none), the values a (its left) and b (its right) and real (1: v jumps
- * there; 0: a kink or nothing, the sides only split the integrals). */
+/* Of a period's samples v[0 .. M] (h = 1) and its jump times, the
+ * interpolant: at a jump on sample j (at[j]; listed in jat) the left and
+ * right values lv[j], rv[j] (the sample one of them, a one-sided
+ * extrapolation the other; elsewhere both are v[j]); in an interval
+ * [j, j + 1] holding one (inner[j]; listed in jin) its position th[j] and
+ * the values a[j] (its left) and b[j] (its right), real[j] 1 where v jumps
+ * there (0: a kink or nothing, the sides only split the integrals). */
 typedef struct jump_shape {
-  long M;
-  char *at, *inner, *real;     /* M + 1 each: a jump at sample j; one inside (j, j + 1); v jumps there */
+  long M, nat, nin;
+  long *jat, *jin;
+  char *at, *inner, *real;     /* M + 1 each */
   double *lv, *rv, *th, *a, *b;
+  double *cs, *sn;             /* M each: cos and -sin of 2 pi m / M (the harmonics' phases), or unset */
 } jump_shape;
+
+/* The values on each side of sample j. */
+static double left_of(const jump_shape *s, const double *v, long j) { return s->at[j] ? s->lv[j] : v[j]; }
+static double right_of(const jump_shape *s, const double *v, long j) { return s->at[j] ? s->rv[j] : v[j]; }
 
 /* Interval [i, i + 1] holds no jump, inside or at its ends: its line
  * extrapolates. */
@@ -79,24 +86,23 @@ static int clean(const jump_shape *s, long i) {
   return i >= 0 && i < s->M && !s->inner[i] && !s->at[i] && !s->at[i + 1];
 }
 
-/* The jump times (positions p in sample units) onto the samples and
- * intervals: one within 1e-9 of a sample is on it (at 0 and M, the
+/* The jump times (positions p in sample units, sorted) onto the samples
+ * and intervals: one within 1e-9 of a sample is on it (at 0 and M, the
  * period's ends, the samples there are each side's already); of several
  * inside one interval the first counts (the piece between them is not
  * sampled: the right side's line stands for it). */
 static void place(jump_shape *s, const double *pos, int nj) {
-  memset(s->at, 0, (size_t)s->M + 1);
-  memset(s->inner, 0, (size_t)s->M + 1);
-  for (long j = 0; j <= s->M; j++) s->th[j] = NAN;
   for (int q = 0; q < nj; q++) {
     double p = pos[q], r = nearbyint(p);
     if (fabs(p - r) <= 1e-9) {
-      if (r > 0 && r < s->M) s->at[(long)r] = 1;    /* the ends: the samples there are each side's */
+      long j = (long)r;
+      if (j > 0 && j < s->M && !s->at[j]) s->at[j] = 1, s->jat[s->nat++] = j;
       continue;
     }
     long j = (long)floor(p);
-    if (j < 0 || j >= s->M || (s->inner[j] && s->th[j] <= p - (double)j)) continue;
+    if (j < 0 || j >= s->M || s->inner[j]) continue;
     s->inner[j] = 1;
+    s->jin[s->nin++] = j;
     s->th[j] = p - (double)j;
   }
 }
@@ -110,29 +116,26 @@ static double slope(const double *v, long M, long i) { return i >= 0 && i < M ? 
  * jump: the sample; one inside an interval: the lines on each side, and
  * real whether v jumps there); 1 if v jumps at one of them or at the
  * period's ends (by more than the change over a sample beside it and 1e-6
- * of v's largest magnitude). */
-static int shape(jump_shape *s, const double *v) {
+ * of scale, v's largest magnitude). */
+static int shape(jump_shape *s, const double *v, double scale) {
   long M = s->M;
-  double scale = 0;
-  for (long j = 0; j <= M; j++) scale = fmax(scale, fabs(v[j]));
   double floor_ = 1e-6 * scale;
   int jumps = fabs(v[0] - v[M]) > fabs(v[1] - v[0]) + fabs(v[M] - v[M - 1]) + floor_;   /* at t0 = t0 + T */
-  for (long j = 0; j <= M; j++) {
-    s->lv[j] = s->rv[j] = v[j];
-    if (!s->at[j]) continue;
+  for (long q = 0; q < s->nat; q++) {
+    long j = s->jat[q];
     int cl = clean(s, j - 2) && !s->inner[j - 1], cr = clean(s, j + 1) && !s->inner[j];
     double eL = cl ? 2 * v[j - 1] - v[j - 2] : v[j - 1], eR = cr ? 2 * v[j + 1] - v[j + 2] : v[j + 1];
+    s->lv[j] = s->rv[j] = v[j];
     if (fabs(v[j] - eL) <= fabs(v[j] - eR)) s->rv[j] = eR;   /* the sample is the side it continues */
     else s->lv[j] = eL;
     if (fabs(s->rv[j] - s->lv[j]) > slope(v, M, j - 2) + slope(v, M, j + 1) + floor_) jumps = 1;
     else s->lv[j] = s->rv[j] = v[j];            /* no jump of v there (a kink, or nothing) */
   }
-  for (long j = 0; j < M; j++) {
-    if (!s->inner[j]) continue;
+  for (long q = 0; q < s->nin; q++) {
+    long j = s->jin[q];
     double t = s->th[j];
-    int cl = clean(s, j - 1), cr = clean(s, j + 1);
-    s->a[j] = cl ? v[j] + t * (v[j] - v[j - 1]) : s->rv[j];
-    s->b[j] = cr ? v[j + 1] - (1 - t) * (v[j + 2] - v[j + 1]) : s->lv[j + 1];
+    s->a[j] = clean(s, j - 1) ? v[j] + t * (v[j] - v[j - 1]) : right_of(s, v, j);
+    s->b[j] = clean(s, j + 1) ? v[j + 1] - (1 - t) * (v[j + 2] - v[j + 1]) : left_of(s, v, j + 1);
     s->real[j] = fabs(s->b[j] - s->a[j]) > slope(v, M, j - 1) + slope(v, M, j + 1) + floor_;
     jumps |= s->real[j];
   }
@@ -140,34 +143,77 @@ static int shape(jump_shape *s, const double *v) {
 }
 
 /* The integral over [0, L] (sample units) of the line from y0 to y1 times
- * exp(-i (x0 + w s)), w = 2 pi k / M > 0, into (re, im): by parts,
+ * E(s) = exp(-i (x0 + w s)), w = 2 pi k / M > 0, into (re, im), from E0 =
+ * E(0) = c0 + i s0, E1 = E(L) and e^{-i w L} - 1 = dr + i di: by parts,
  * (i / w) (y1 E1 - y0 E0) + (y1 - y0) / (L w^2) (E1 - E0), E1 - E0 taken
- * as E0 (e^{-i w L} - 1) with cos - 1 = -2 sin^2 (no cancellation). */
-static void line_fourier(double x0, double w, double L, double y0, double y1, double *re, double *im) {
-  double c0 = cos(x0), s0 = -sin(x0), c1 = cos(x0 + w * L), s1 = -sin(x0 + w * L);   /* E = c + i s */
-  double sh = sin(w * L / 2), dr = -2 * sh * sh, di = -sin(w * L);                   /* e^{-i w L} - 1 */
+ * as E0 (e^{-i w L} - 1) (dr = -2 sin^2(w L / 2): no cancellation). */
+static void line_fourier(double c0, double s0, double c1, double s1, double dr, double di, double w, double L,
+                         double y0, double y1, double *re, double *im) {
   double er = c0 * dr - s0 * di, ei = c0 * di + s0 * dr;                             /* E1 - E0 */
   double pr = y1 * c1 - y0 * c0, pi = y1 * s1 - y0 * s0, g = (y1 - y0) / (L * w * w);
   *re += -pi / w + g * er;
   *im += pr / w + g * ei;
 }
 
-/* The figures of the interpolant s of v: the exact average, RMS,
- * extremes and (order >= 1) Fourier coefficients of the piecewise-linear
- * function with its jumps. */
-static void shape_figures(const jump_shape *s, int order, cup_measure *m, double *amp, double *phase) {
+/* e^{-i w L} - 1 into (dr, di). */
+static void step_phase(double w, double L, double *dr, double *di) {
+  double sh = sin(w * L / 2);
+  *dr = -2 * sh * sh;
+  *di = -sin(w * L);
+}
+
+/* The Fourier coefficient k >= 1 of the interpolant s of v, times M, into
+ * (re, im): each sample's phase from the table, a jump's from its time. */
+static void shape_fourier(const jump_shape *s, const double *v, int k, double *re, double *im) {
   long M = s->M;
-  double s1 = 0, s2 = 0, lo = INFINITY, hi = -INFINITY;
+  double w = 2 * M_PI * (double)k / (double)M, dr1, di1;
+  step_phase(w, 1, &dr1, &di1);
+  *re = *im = 0;
   for (long j = 0; j < M; j++) {
-    double y[4] = {s->rv[j], s->lv[j + 1], s->lv[j + 1], s->lv[j + 1]}, L[2] = {1, 0};
-    if (s->inner[j]) y[1] = s->a[j], y[2] = s->b[j], L[0] = s->th[j], L[1] = 1 - s->th[j];
-    for (int p = 0; p < 2; p++) {
-      double a = y[2 * p], b = y[2 * p + 1];
-      s1 += L[p] * (a + b) / 2;
-      s2 += L[p] * (a * a + a * b + b * b) / 3;
-      if (p == 0 || s->real[j]) lo = fmin(lo, a), hi = fmax(hi, a);   /* a kink's sides: lines, not values */
-      if (p == 1 || s->real[j]) lo = fmin(lo, b), hi = fmax(hi, b);
+    long m0 = (j * (long)k) % M, m1 = ((j + 1) * (long)k) % M;   /* exact phases for long records */
+    double c0 = s->cs[m0], s0 = s->sn[m0], c1 = s->cs[m1], s1 = s->sn[m1];
+    double y0 = right_of(s, v, j), y1 = left_of(s, v, j + 1);
+    if (!s->inner[j]) {
+      line_fourier(c0, s0, c1, s1, dr1, di1, w, 1, y0, y1, re, im);
+      continue;
     }
+    double t = s->th[j], x = 2 * M_PI * (double)m0 / (double)M + w * t, cx = cos(x), sx = -sin(x), dr, di;
+    step_phase(w, t, &dr, &di);
+    line_fourier(c0, s0, cx, sx, dr, di, w, t, y0, s->a[j], re, im);
+    step_phase(w, 1 - t, &dr, &di);
+    line_fourier(cx, sx, c1, s1, dr, di, w, 1 - t, s->b[j], y1, re, im);
+  }
+}
+
+/* The figures of the interpolant s of v: the exact average, RMS,
+ * extremes (m's, the samples', with both sides of each jump) and (order
+ * >= 1) Fourier coefficients of the piecewise-linear function with its
+ * jumps. */
+static void shape_figures(const jump_shape *s, const double *v, int order, cup_measure *m, double *amp,
+                          double *phase) {
+  long M = s->M;
+  double s1 = 0, s2 = 0, lo = m->min, hi = m->max;
+  for (long j = 0; j < M; j++) {
+    double y0 = right_of(s, v, j), y1 = left_of(s, v, j + 1);
+    if (!s->inner[j]) {
+      s1 += (y0 + y1) / 2;
+      s2 += (y0 * y0 + y0 * y1 + y1 * y1) / 3;
+      continue;
+    }
+    double t = s->th[j], a = s->a[j], b = s->b[j];
+    s1 += t * (y0 + a) / 2 + (1 - t) * (b + y1) / 2;
+    s2 += t * (y0 * y0 + y0 * a + a * a) / 3 + (1 - t) * (b * b + b * y1 + y1 * y1) / 3;
+  }
+  for (long q = 0; q < s->nat; q++) {            /* the other side of a jump on a sample */
+    long j = s->jat[q];
+    lo = fmin(lo, fmin(s->lv[j], s->rv[j]));
+    hi = fmax(hi, fmax(s->lv[j], s->rv[j]));
+  }
+  for (long q = 0; q < s->nin; q++) {            /* both sides of one inside an interval (a kink's: lines) */
+    long j = s->jin[q];
+    if (!s->real[j]) continue;
+    lo = fmin(lo, fmin(s->a[j], s->b[j]));
+    hi = fmax(hi, fmax(s->a[j], s->b[j]));
   }
   m->avg = s1 / (double)M;
   m->rms = sqrt(fmax(s2, 0) / (double)M);
@@ -177,14 +223,8 @@ static void shape_figures(const jump_shape *s, int order, cup_measure *m, double
   m->thd = NAN;
   double c1 = 0, ch2 = 0;
   for (int k = 1; k <= order; k++) {
-    double re = 0, im = 0, w = 2 * M_PI * (double)k / (double)M, w0 = 2 * M_PI / (double)M;
-    for (long j = 0; j < M; j++) {
-      double x0 = w0 * (double)((j * (long)k) % M);     /* exact phases for long records, as the DFT's */
-      if (!s->inner[j]) { line_fourier(x0, w, 1, s->rv[j], s->lv[j + 1], &re, &im); continue; }
-      double t = s->th[j];
-      line_fourier(x0, w, t, s->rv[j], s->a[j], &re, &im);
-      line_fourier(x0 + w * t, w, 1 - t, s->b[j], s->lv[j + 1], &re, &im);
-    }
+    double re, im;
+    shape_fourier(s, v, k, &re, &im);
     re /= (double)M;
     im /= (double)M;
     double mag = hypot(re, im);
@@ -198,9 +238,16 @@ static void shape_figures(const jump_shape *s, int order, cup_measure *m, double
   if (order >= 1 && c1 > 1e-9 * m->rms) m->thd = sqrt(ch2) / c1;
 }
 
+static void shape_free(jump_shape *s) {
+  if (!s) return;
+  free(s->at); free(s->inner); free(s->real); free(s->lv); free(s->jat);
+  free(s);
+}
+
 /* A jump_shape for N samples and the jumps at times jt[0 .. nj) of a period
- * T (sorted); NULL with no jumps (or no memory: *st says). */
-static jump_shape *shape_new(long N, const double *jt, int nj, double T, int *st) {
+ * T (sorted), its phase table for the harmonics if asked; NULL with no
+ * jumps (or no memory: *st says). */
+static jump_shape *shape_new(long N, const double *jt, int nj, double T, int harmonics, int *st) {
   *st = CUP_OK;
   if (nj <= 0 || !jt || !(T > 0) || N < 3) return NULL;
   jump_shape *s = calloc(1, sizeof *s);
@@ -210,26 +257,29 @@ static jump_shape *shape_new(long N, const double *jt, int nj, double T, int *st
     s->at = calloc((size_t)N, 1);
     s->inner = calloc((size_t)N, 1);
     s->real = calloc((size_t)N, 1);
-    s->lv = malloc(sizeof(double) * 5 * (size_t)N);
+    s->lv = malloc(sizeof(double) * (harmonics > 0 ? 7 : 5) * (size_t)N);
+    s->jat = malloc(sizeof(long) * 2 * (size_t)nj);
   }
-  if (!s || !pos || !s->at || !s->inner || !s->real || !s->lv) {
-    if (s) { free(s->at); free(s->inner); free(s->real); free(s->lv); }
-    free(s);
+  if (!s || !pos || !s->at || !s->inner || !s->real || !s->lv || !s->jat) {
+    shape_free(s);
     free(pos);
     *st = CUP_ERR_NOMEM;
     return NULL;
   }
+  s->jin = s->jat + nj;
   s->rv = s->lv + N; s->th = s->lv + 2 * N; s->a = s->lv + 3 * N; s->b = s->lv + 4 * N;
+  if (harmonics > 0) {
+    s->cs = s->lv + 5 * N; s->sn = s->lv + 6 * N;
+    for (long m = 0; m < s->M; m++) {
+      double x = 2 * M_PI * (double)m / (double)s->M;
+      s->cs[m] = cos(x);
+      s->sn[m] = -sin(x);
+    }
+  }
   for (int q = 0; q < nj; q++) pos[q] = jt[q] / T * (double)s->M;
   place(s, pos, nj);
   free(pos);
   return s;
-}
-
-static void shape_free(jump_shape *s) {
-  if (!s) return;
-  free(s->at); free(s->inner); free(s->real); free(s->lv);
-  free(s);
 }
 
 /* cup_measure_period of w, then, if w jumps at s's jumps, the figures of its
@@ -238,7 +288,7 @@ static void shape_free(jump_shape *s) {
 static int measure_one(const double *w, long N, int order, jump_shape *s, cup_measure *m, double *amp,
                        double *phase, char *errmsg) {
   int st = cup_measure_period(w, N, order, m, amp, phase, errmsg);
-  if (!st && s && shape(s, w)) shape_figures(s, order, m, amp, phase);
+  if (!st && s && shape(s, w, fmax(fabs(m->min), fabs(m->max)))) shape_figures(s, w, order, m, amp, phase);
   return st;
 }
 
@@ -259,7 +309,7 @@ int measure_power(const double *sig, long N, int ns, int v, int i, double *w, do
 
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {
   int st = CUP_OK, H = f->harmonics;
-  jump_shape *s = shape_new(N, f->jt, f->nj, f->T, &st);
+  jump_shape *s = shape_new(N, f->jt, f->nj, f->T, H, &st);
   if (st) return fail_fmt(errmsg, st, "measure: out of memory");
   for (int j = 0; !st && j < f->nm; j++) {
     int c = f->idx ? f->idx[j] : j;
