@@ -326,7 +326,7 @@ int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, ch
 int pss_jumps_init(pss_jumps *J, double T, long samples) {
   memset(J, 0, sizeof *J);
   J->T = T;
-  J->cap = samples + 64;
+  J->cap = 4 * samples + 64;
   J->t = malloc(sizeof(double) * (size_t)J->cap);
   return J->t ? CUP_OK : CUP_ERR_NOMEM;
 }
@@ -355,15 +355,14 @@ static int by_time(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-int pss_jumps_finish(pss_jumps *J, pss_figures *f, char *errmsg) {
-  if (J->overflow)
-    return fail_fmt(errmsg, CUP_ERR_ARG, "measure: more than %ld switchings and events in the period, more than its "
-                    "samples: raise steady_state.samples", J->cap);
+void pss_jumps_finish(pss_jumps *J, pss_figures *f) {
+  f->jt = NULL;
+  f->nj = 0;
+  f->T = J->T;
+  if (J->overflow) return;                       /* more than the samples can resolve: as cup_measure_period */
   qsort(J->t, (size_t)J->n, sizeof(double), by_time);
   f->jt = J->t;
   f->nj = (int)J->n;
-  f->T = J->T;
-  return CUP_OK;
 }
 
 int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg) {

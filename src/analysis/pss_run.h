@@ -67,12 +67,12 @@ int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, ch
 /* The times inside one period's run (0 < t < T, the run's own clock) at
  * which a signal may jump: each switching of the switches (scene_pss's
  * period integrator) and each event of the adaptive scheme
- * (pss_jumps_event, chained to the run's own on_event). Room for samples
- * + 64 times, allocated at init: nothing during the run. */
+ * (pss_jumps_event, chained to the run's own on_event). Room for 4
+ * samples + 64 times, allocated at init: nothing during the run. */
 typedef struct pss_jumps {
   double *t;
   long n, cap;
-  int overflow;             /* more than cap: pss_jumps_finish says so */
+  int overflow;             /* more than cap (4 a sample): none is used */
   double T;
   cup_event_fn on_event;    /* the run's own, called after (or NULL) */
   void *event_ctx;
@@ -84,8 +84,9 @@ void pss_jumps_free(pss_jumps *J);
 void pss_jumps_add(pss_jumps *J, double t);
 /* A cup_event_fn: the event's time, then the run's own on_event. */
 int pss_jumps_event(double t, int row, int on, void *ctx);
-/* The times sorted into f (jt, nj, T; J keeps them); CUP_ERR_ARG if they
- * overflowed (more than the samples: the samples cannot resolve them). */
-int pss_jumps_finish(pss_jumps *J, pss_figures *f, char *errmsg);
+/* The times sorted into f (jt, nj, T; J keeps them); none if they
+ * overflowed (J->overflow: more than 4 a sample, which the samples cannot
+ * resolve: the signals measured as by cup_measure_period alone). */
+void pss_jumps_finish(pss_jumps *J, pss_figures *f);
 
 #endif
