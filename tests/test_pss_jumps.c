@@ -16,7 +16,9 @@
  *     v(sw), and the continuous v(out) and i(L1).
  * At D = 0.5 the switch's edge falls on a sample (the 1000th of 2001), at
  * D = 0.3137 between two; the DCM buck's diode blocks inside the period (an
- * event of the adaptive scheme). Before the jumps were measured as jumps,
+ * event of the adaptive scheme). More jump times than 4 a sample (200
+ * switchings at 21 samples): the samples' own trapezoid rule, with a
+ * warning. Before the jumps were measured as jumps,
  * the periodic trapezoid rule and the DFT of the samples were O(h) off at
  * each jump (efficiency 0.999 of the lossless buck). */
 #define _POSIX_C_SOURCE 200809L
@@ -216,11 +218,51 @@ static void dcm(void **state) {
   pr_free(&tr);
 }
 
+/* 200 switchings in the 1 ms period of a 1 kHz load, 21 samples: more
+ * jump times than 4 a sample, which the samples cannot place: the
+ * measurements are the samples' own (the periodic trapezoid rule of the
+ * file's /signals), with a warning; at 2001 samples the jumps are placed. */
+static void too_many_jumps(void **state) {
+  (void)state;
+  const char *cir = tmp_path("buck-1k.cir"), *out = tmp_path("buck-1k.h5");
+  FILE *fp = fopen(cir, "w");
+  assert_non_null(fp);
+  fputs("Buck, 1 kHz load\nV1 in 0 12\nVG g 0 PULSE(0 1 0 jump jump 5u 10u)\nS1 in sw g 0 SWI\nD1 0 sw\n"
+        "L1 sw out 100u\nC1 out 0 10u\nRL out 0 5\nIL out 0 SIN(0 0.1 1k)\n.model SWI SW(VT=0.5 VH=0)\n"
+        ".tran 100n 1m\n.probe v(sw)\n.end\n", fp);
+  fclose(fp);
+  for (int dense = 0; dense < 2; dense++) {
+    result r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", "--set", "steady_state.measure=[v(sw)]",
+                                             "--set", dense ? "steady_state.samples=2001" : "steady_state.samples=21",
+                                             "--set", "steady_state.harmonics=3", NULL}, 0, 0);
+    if (!r.exited || r.code != 0) fail_msg("exit %d:\n%s", r.code, r.err);
+    hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(f >= 0);
+    double *v, *avg;
+    hsize_t N = read_rows(f, "signals/v(sw)", 1, 1, &v);
+    read_rows(f, "steady_state/measure/average", 1, 1, &avg);
+    H5Fclose(f);
+    double trap = 0;
+    for (hsize_t k = 0; k + 1 < N; k++) trap += v[k] / (double)(N - 1);
+    print_message("%ld samples: avg v(sw) %.12g, the samples' trapezoid rule %.12g, D Vin 6%s\n", (long)N, avg[0], trap,
+                  strstr(r.err, "4 a sample") ? "; warned" : "");
+    if (!dense) {
+      assert_true(strstr(r.err, "warning") && strstr(r.err, "4 a sample"));
+      assert_true(avg[0] == trap || fabs(avg[0] - trap) <= 1e-14 * 12);
+    } else {
+      assert_null(strstr(r.err, "4 a sample"));
+      assert_true(fabs(avg[0] - 6) <= 1e-9 * 12);
+    }
+    free(v); free(avg);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(ccm_half),
       cmocka_unit_test(ccm_between),
       cmocka_unit_test(dcm),
+      cmocka_unit_test(too_many_jumps),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }
