@@ -292,6 +292,8 @@ static int measure_one(const double *w, long N, int order, jump_shape *s, cup_me
   return st;
 }
 
+/* The average power over the period of signals v and i (their product
+ * into w, measured as measure_one measures a signal). */
 static int power_of(const double *sig, long N, int ns, int v, int i, double *w, jump_shape *s, double *avg,
                     char *errmsg) {
   if (!sig || !w || !avg || v < 0 || i < 0 || v >= ns || i >= ns)
@@ -301,10 +303,6 @@ static int power_of(const double *sig, long N, int ns, int v, int i, double *w, 
   int st = measure_one(w, N, 0, s, &m, NULL, NULL, errmsg);
   *avg = m.avg;
   return st;
-}
-
-int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg, char *errmsg) {
-  return power_of(sig, N, ns, v, i, w, NULL, avg, errmsg);
 }
 
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {

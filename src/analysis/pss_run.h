@@ -24,12 +24,6 @@ void pss_map_options(const cup_integrator_options *run, double run_T, double T, 
  * keeps its index). CUP_ERR_ARG naming the element otherwise. */
 int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg);
 
-/* The average power over one period of N samples of ns signals each
- * (row-major, as recorded), signals v and i (pss_probe_power): the
- * average of v i by cup_measure_period, in *avg. w: N doubles of scratch. */
-int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg,
-                  char *errmsg);
-
 /* What is measured over one period (catchup-run --steady-state, the
  * steady-state sweeps) and the figures (pss_measure). */
 typedef struct pss_figures {
@@ -50,8 +44,8 @@ typedef struct pss_figures {
 } pss_figures;
 
 /* The figures f asks for of one period of N samples of ns signals each
- * (row-major, as recorded): cup_measure_period of each signal, then
- * measure_power of each element, then the efficiency; stops at the
+ * (row-major, as recorded): cup_measure_period of each signal, then the
+ * average of v i of each element, then the efficiency; stops at the
  * first error. w: N doubles of scratch. With jump times (f->jt), a signal
  * (or a product v i) that jumps at one of them (by more than the change
  * over a sample beside it and 1e-6 of its largest magnitude: a continuous

@@ -1,7 +1,7 @@
 /* scene_pss — a scene's steady state, solved the one way catchup-run and
- * the steady-state sweeps solve it (scene_pss.h). */
+ * the steady-state sweeps solve it, and the integrator of its period that
+ * notes where a signal may jump (scene_pss.h). */
 #include <stddef.h>
-#include <string.h>
 #include "catchup.h"
 #include "scene_pss.h"
 #include "analysis/pss_run.h"

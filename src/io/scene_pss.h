@@ -5,8 +5,9 @@
  * of the run's integrator options, and the options of one period from the
  * steady state. The period itself is each caller's run (catchup-run's is
  * its output run, streamed to its file with its events; a sweep's task
- * samples it in memory); its samples are measured by pss_measure
- * (analysis/pss_run.h). Internal: the apps and src/sweep link the static
+ * samples it in memory) by the integrator scene_pss_period_integrator
+ * makes, which notes the times a signal may jump; its samples are measured
+ * by pss_measure with those times (analysis/pss_run.h). Internal: the apps and src/sweep link the static
  * library. */
 #ifndef CUP_SCENE_PSS_H
 #define CUP_SCENE_PSS_H
