@@ -175,6 +175,43 @@ static void test_two_capacitors_every_step(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* A sine charges C1 through R1; S1 closes onto C2 at 1 ms. Then C1 and C2
+ * hold one voltage v, and by Kirchhoff's laws the switch's current (the
+ * multiplier of that configuration's constraint) is C2 / (C1 + C2)
+ * (vs(t) - v) / R1: it reads the input through the constraint alone, the
+ * probe naming no source node, and the signals' evaluation must see that
+ * (it evaluates u only for the signals that read it). */
+static void test_constraint_reads_input(void **state) {
+  (void)state;
+  const double C1 = 1e-6, C2 = 3e-6, R1 = 100, A = 10, f = 1e3;
+  cup_netlist *nl = text_ok("a sine through a closing switch\n"
+                            "V1 s 0 SIN(0 10 1k)\n"
+                            "R1 s a 100\n"
+                            "C1 a 0 1u\n"
+                            "C2 b 0 3u\n"
+                            "S1 a b g 0 SMOD\n"
+                            "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n"
+                            ".model SMOD SW(VT=0.5 VH=0.1)\n");
+  run_rec r;
+  run(nl, 2e-3, 1e-10, 201, "i(S1)", &r);
+  double worst = 0, largest = 0;
+  long after = 0;
+  for (long k = 0; k < r.count; k++) {
+    if (!(r.t[k] > 1e-3 + 1e-9)) continue;
+    double v = r.x[2 * k], vs = A * sin(2 * M_PI * f * r.t[k]), want = C2 / (C1 + C2) * (vs - v) / R1;
+    worst = fmax(worst, fabs(r.s[k] - want));
+    largest = fmax(largest, fabs(want));
+    after++;
+  }
+  printf("constraint reads the input: |i(S1) - C2/(C1+C2) (vs - v)/R1| <= %.2e A over %ld samples "
+         "(largest %.3f A)\n", worst, after, largest);
+  assert_true(after >= 99);
+  assert_true(largest > 0.01);
+  assert_true(worst <= 1e-12 * A / R1);
+  rec_free(&r);
+  cup_netlist_free(&nl);
+}
+
 /* L1 = 1 H carrying 2 A and L2 = 3 H carrying 0.5 A share node b with S1
  * and R1; S1 is off from t = 0 (its gate is 0), which leaves L1 and L2 in
  * series: the jump is the flux-conserving (L1 i1 + L2 i2) / (L1 + L2) =
@@ -512,6 +549,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_two_capacitors_every_step),
     cmocka_unit_test(test_inductor_cut),
+    cmocka_unit_test(test_constraint_reads_input),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
     cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_probe_all),
     cmocka_unit_test(test_circuit_gated_step_end), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),

@@ -20,8 +20,10 @@ enum { EVENT_ROWS = 1024 };     /* chunk and buffer of /events */
 struct cup_h5run {
   hid_t file, dset_t, dset_x, dset_e;
   hid_t etype_file, etype_mem;  /* /events' compound types */
+  hid_t exfer;                  /* /events' transfer: its conversion buffers below (event_types) */
   hsize_t ewritten, enbuf;      /* events handed to HDF5, buffered */
   h5_event ebuf[EVENT_ROWS];
+  h5_event etconv[EVENT_ROWS], ebkg[EVENT_ROWS];   /* HDF5's type conversion of ebuf, in place */
   int dim;
   hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
   hsize_t written;        /* rows already handed to HDF5 */
@@ -53,7 +55,7 @@ H5R_HIDDEN void restore_stack(hid_t saved);
  * status, with the message, in *st). */
 H5R_HIDDEN cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st);
 H5R_HIDDEN void free_writer(cup_h5run *w);
-/* /events' file and memory types into w. 0 or -1. */
+/* /events' file and memory types, and its transfer list, into w. 0 or -1. */
 H5R_HIDDEN int event_types(cup_h5run *w);
 
 #endif

@@ -206,7 +206,13 @@ static void alloc_vectors(adaptive_ws *A, int *fail) {
   A->zw = take((size_t)nw, sizeof(double), fail);
   A->zy = take((size_t)na, sizeof(double), fail);
   A->xo = take((size_t)n, sizeof(double), fail);
-  A->dy = take((size_t)na, sizeof(double), fail);
+  A->dy = take(2 * (size_t)na, sizeof(double), fail);
+  A->erp = take((size_t)na + 1, sizeof(int), fail);
+  A->erj = take(NA, sizeof(int), fail);
+  A->erx = take(NA, sizeof(double), fail);
+  A->xrp = take((size_t)n + m + 1, sizeof(int), fail);
+  A->xrj = take(((size_t)n + m) * na, sizeof(int), fail);
+  A->xrx = take(((size_t)n + m) * na, sizeof(double), fail);
   A->de = take((size_t)na, sizeof(double), fail);
   A->de2 = take((size_t)na, sizeof(double), fail);
   A->ed = take((size_t)n, sizeof(double), fail);
@@ -329,6 +335,7 @@ void adaptive_free(adaptive_ws **Ap) {
   free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
   free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
   free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
+  free(A->erp); free(A->erj); free(A->erx); free(A->xrp); free(A->xrj); free(A->xrx);
   free(A->pend.zy); free(A->pend.de); free(A->pend.y2); free(A->pend.e2);
   free(A->tan);
   free(A);

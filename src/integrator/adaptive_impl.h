@@ -168,7 +168,12 @@ struct adaptive_ws {
   double zt;
   double *zw, *zy;          /* nw, na */
   int zy_ready;             /* a sample inside a step: zy is its y already */
-  double *xo, *dy, *de, *de2, *ed; /* n, na, na, na, n: a sample inside a step (dense output), its error */
+  double *xo, *dy, *de, *de2, *ed; /* n, 2 na, na, na, n: a sample inside a step (dense output), its error */
+  int *erp, *erj;           /* na + 1, na * na: the sample spacing's exp(dt M) by rows, its nonzeros ... */
+  double *erx;              /* na * na: ... and their values (adaptive_sample.c) */
+  int *xrp, *xrj;           /* n + m + 1, (n + m) na: the step's X and its zeta rows of L likewise ... */
+  double *xrx;              /* (n + m) na: ... (rows_ready: made for the samples of this step) */
+  int rows_ready;
   ad_stop stop;             /* where the last run stopped */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */

@@ -24,32 +24,77 @@ double ad_sample_time(const adaptive_ws *A, long j) {
   return j >= last ? A->o.T : t0 + (A->o.T - t0) * (double)j / (double)last;
 }
 
-/* E y in place (na x na, column-major; tmp: na). Four rows at a time, each
- * summed over j in order from 0 as a row's dot product is, bit for bit:
- * the rows' entries of a column are side by side in E (a sample is this
- * product twice; row by row it was most of a sample's own cost). */
-static void times(int na, const double *E, double *y, double *tmp) {
-  la_copy(tmp, y, na);
-  int i = 0;
-  for (; i + 4 <= na; i += 4) {
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+/* E by rows, its nonzeros alone, each row's in column order (A->erp,
+ * erj, erx). Most of a sample's exp(dt M) is zero: the inputs' states
+ * move among themselves (the lower left block, n columns of the last
+ * na - n rows, was exactly 0 on every converter), a sine's by a 2 x 2
+ * rotation. Nothing relies on it: a zero is left out wherever it is. */
+static void by_rows(const adaptive_ws *A, const double *E) {
+  int na = A->na, nz = 0;
+  for (int i = 0; i < na; i++) {
+    A->erp[i] = nz;
     for (int j = 0; j < na; j++) {
-      const double *c = E + i + (size_t)j * na, tj = tmp[j];
-      a0 += c[0] * tj;
-      a1 += c[1] * tj;
-      a2 += c[2] * tj;
-      a3 += c[3] * tj;
+      double v = E[i + (size_t)j * na];
+      if (v != 0) { A->erj[nz] = j; A->erx[nz++] = v; }
     }
-    y[i] = a0;
-    y[i + 1] = a1;
-    y[i + 2] = a2;
-    y[i + 3] = a3;
   }
-  for (; i < na; i++) {
-    double acc = 0;
-    for (int j = 0; j < na; j++) acc += E[i + (size_t)j * na] * tmp[j];
-    y[i] = acc;
+  A->erp[na] = nz;
+}
+
+/* The step's x = X y and zeta rows of L (md) by rows likewise (A->xrp,
+ * xrj, xrx: X's n rows, then L's m, those not zeta empty): a sample's
+ * state and multipliers are sums over them from +0 in column order, as
+ * la_dot's, bit for bit (the argument of times, below). */
+static void rows_of(adaptive_ws *A, const ad_mode *md) {
+  int n = A->n, m = A->m, na = A->na, nz = 0;
+  for (int i = 0; i < n + m; i++) {
+    A->xrp[i] = nz;
+    const double *r = i < n ? md->X + (size_t)i * na : md->L + (size_t)(i - n) * na;
+    if (i >= n && !md->is_zeta[i - n]) continue;
+    for (int j = 0; j < na; j++)
+      if (r[j] != 0) { A->xrj[nz] = j; A->xrx[nz++] = r[j]; }
   }
+  A->xrp[n + m] = nz;
+  A->rows_ready = 1;
+}
+
+/* Row i of rows_of's times y. */
+static double row_times(const adaptive_ws *A, int i, const double *y) {
+  double acc = 0;
+  for (int k = A->xrp[i]; k < A->xrp[i + 1]; k++) acc += A->xrx[k] * y[A->xrj[k]];
+  return acc;
+}
+
+/* The next sample's y and error, E y and E e in place (tmp: 2 na), in one
+ * pass over by_rows' nonzeros; the columns of e's trailing zeros (its
+ * inputs' part) left out of E e (*nc: 1 + e's last nonzero, or -1 not
+ * known yet; then the new e's). Each row summed from 0 in column order,
+ * as the dense product's, bit for bit: a term left out is +-0 (E finite),
+ * and a sum begun at +0 is never -0, so adding +-0 changed nothing.
+ * (Dense, these products were 60 % of a sample's instructions on the
+ * six-pulse rectifier's grid.) */
+static void times(const adaptive_ws *A, double *y, double *e, double *tmp, int *ncp) {
+  int na = A->na, nc = *ncp, last = -1;
+  if (nc < 0)
+    for (nc = na; nc > 0 && e[nc - 1] == 0;) nc--;
+  double *ty = tmp, *te = tmp + na;
+  la_copy(ty, y, na);
+  la_copy(te, e, nc);
+  const int *rp = A->erp, *rj = A->erj;
+  const double *rx = A->erx;
+  for (int i = 0; i < na; i++) {
+    double a = 0, b = 0;
+    int k = rp[i], end = rp[i + 1];
+    for (; k < end && rj[k] < nc; k++) {
+      a += rx[k] * ty[rj[k]];
+      b += rx[k] * te[rj[k]];
+    }
+    for (; k < end; k++) a += rx[k] * ty[rj[k]];
+    y[i] = a;
+    e[i] = b;
+    if (b != 0) last = i;
+  }
+  *ncp = last + 1;
 }
 
 /* The samples due before t1 on the flow of md, the first of them (sample
@@ -65,11 +110,14 @@ static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
   double rnd = R->rloc + sqrt(R->r2);            /* (fixed inside the step) */
   const double *E = NULL;                        /* exp(dt M), looked up at the second sample */
   double ts = ad_sample_time(A, R->next_sample);
+  int nc = -1;                                   /* (times) */
+  A->rows_ready = 0;
   for (;;) {
     R->next_sample++;
     R->est_max = fmax(R->est_max, norm_inf(A->de, n) + rnd);
     if (R->sink) {
-      ad_state(A, md, A->zy, A->xo);
+      if (!A->rows_ready) ad_state(A, md, A->zy, A->xo);
+      else for (int i = 0; i < n; i++) A->xo[i] = row_times(A, i, A->zy);
       if (tally_state_beyond(A->xo, n)) {            /* as step_done: never a state out of range */
         int w = tally_state_worst(A->xo, n);
         return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
@@ -98,9 +146,12 @@ static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
     if (!(R->next_sample < o->output_samples)) return 0;
     ts = ad_sample_time(A, R->next_sample);
     if (!(ts < t1)) return 0;
-    if (!E) E = ad_expm(A, md, dt, 0);   /* (applied sample after sample: dt itself) */
-    times(na, E, A->zy, A->dy);
-    times(na, E, A->de, A->dy);
+    if (!E) {
+      E = ad_expm(A, md, dt, 0);   /* (applied sample after sample: dt itself) */
+      by_rows(A, E);
+      rows_of(A, md);
+    }
+    times(A, A->zy, A->de, A->dy, &nc);
   }
 }
 
@@ -240,7 +291,9 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
   if (!md) return CUP_OK;
   if (A->zy_ready) {                             /* a sample inside a step: its y is known */
     for (int i = 0; i < A->m; i++)
-      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
+      if (md->is_zeta[i])
+        zeta[i] = md->Lc[i] + (A->rows_ready ? row_times(A, A->n + i, A->zy)
+                                             : la_dot(md->L + (size_t)i * A->na, A->zy, A->na));
     return CUP_OK;
   }
   double t = A->zt, tb = cup_input_next_break(A->u, t);

@@ -42,6 +42,7 @@ struct fixed_ws {
   cup_set *S_own;           /* an LCS's polyset, wrapped */
   const cup_polyset *K;     /* the polyset's rows, or NULL */
   const la_sparse *G;      /* the offset's motion, or NULL */
+  int *gterms, ngterms;     /* the input's terms with a column in G, when others have none (else NULL) */
   int fixed;                /* the polyset does not move */
   cup_setproj *sp;          /* other sets */
   const cup_lcs *L;         /* the LCS it was made from (its B and D for the theta step), or NULL */

@@ -94,6 +94,22 @@ static int polyset_setup(fixed_ws *F, char *errmsg) {
   return st;
 }
 
+/* The terms of a waveform input that move the set (their input has a
+ * column in G), when some do not (a switch's gate source moves none): the
+ * offset's input evaluates those alone (fixed.c's moving_offset). */
+static int offset_terms(fixed_ws *F) {
+  const cup_input *u = F->u;
+  if (!u || u->fn || !F->G || F->G->ncol != u->p) return 0;
+  int live = 0;
+  for (int k = 0; k < u->nterms; k++) live += F->G->p[u->terms[k].comp + 1] > F->G->p[u->terms[k].comp];
+  if (live == u->nterms) return 0;
+  F->gterms = malloc(sizeof(int) * ((size_t)live + 1));
+  if (!F->gterms) return 1;
+  for (int k = 0; k < u->nterms; k++)
+    if (F->G->p[u->terms[k].comp + 1] > F->G->p[u->terms[k].comp]) F->gterms[F->ngterms++] = k;
+  return 0;
+}
+
 /* Everything but the model: buffers, the free step, the projection. */
 static int setup(fixed_ws *F, const freestep_drift *D, const cup_process_desc *pd, char *errmsg) {
   const cup_integrator_options *o = &F->o;
@@ -115,6 +131,7 @@ static int setup(fixed_ws *F, const freestep_drift *D, const cup_process_desc *p
   F->zs = 1;
   if (!F->x || !F->xnew || !F->xf || !F->g || !F->ut || !F->s0 || !F->sg || !F->v || !F->xs || !F->zprev)
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
+  if (offset_terms(F)) return fail_fmt(errmsg, CUP_ERR_NOMEM, "integrator: out of memory");
   if (o->scheme == CUP_SCHEME_THETA && !F->K)
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: the set is a %s; the theta step solves an LCP on a polyset's rows "
@@ -196,7 +213,7 @@ void fixed_free(void *ws) {
   cup_set_free(&F->S_own);
   if (F->use_theta) lcp_step_free(&F->th);
   free(F->x); free(F->xnew); free(F->xf); free(F->g); free(F->ut); free(F->s0); free(F->sg); free(F->v);
-  free(F->xs); free(F->zprev);
+  free(F->xs); free(F->zprev); free(F->gterms);
   free(F->x0);
   free(F);
 }

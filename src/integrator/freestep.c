@@ -349,9 +349,12 @@ int freestep_init(freestep_ws *fs, const freestep_drift *D, const cup_polyset *K
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "input quadrature: out of memory");
   if (fs->u && !fs->u->fn) {
     fs->term_h = zalloc((size_t)fs->u->nterms + 1, sizeof(double), &fail);
+    fs->live = zalloc((size_t)fs->u->nterms + 1, sizeof(int), &fail);
     if (fail) return fail_fmt(errmsg, CUP_ERR_NOMEM, "free step: out of memory");
     for (int k = 0; k < fs->u->nterms; k++) {
       const input_term *t = &fs->u->terms[k];
+      int c = t->comp;                         /* (a switch's gate source drives no state) */
+      if (!D->has_E || D->E.ncol != p || D->E.p[c + 1] > D->E.p[c]) fs->live[fs->nlive++] = k;
       if (t->kind == CUP_WAVE_CONSTANT) fs->term_h[k] = t->value * h;
       else if (t->kind == CUP_WAVE_SINE)
         fs->term_h[k] = t->omega > 0 ? 2 * t->amp / t->omega * sin(0.5 * t->omega * h)
@@ -374,7 +377,7 @@ int freestep_init(freestep_ws *fs, const freestep_drift *D, const cup_polyset *K
 }
 
 void freestep_free(freestep_ws *fs) {
-  free(fs->eu_const); free(fs->term_h); free(fs->ubuf); free(fs->fsum); free(fs->fbuf); free(fs->work);
+  free(fs->eu_const); free(fs->term_h); free(fs->live); free(fs->ubuf); free(fs->fsum); free(fs->fbuf); free(fs->work);
   input_quad_ws_free(&fs->qws);
   free(fs->lu); free(fs->piv); free(fs->W); free(fs->rhs); free(fs->Phi); free(fs->Gam);
   free(fs->gen_of_term); free(fs->M); free(fs->Eh); free(fs->Es); free(fs->ework);
@@ -383,7 +386,13 @@ void freestep_free(freestep_ws *fs) {
 }
 
 /* int_{t0}^{t1} u over a full step of the grid, term by term
- * (freestep_term_integral); one input is summed in a register. */
+ * (freestep_term_integral); one input is summed in a register. Several:
+ * those with a column in E only (each moves the state by E's column times
+ * its integral; a switch's gate source has none, and in a full bridge the
+ * four gates' pulses were 4/5 of the step's input work); the others stay
+ * 0, which Gam's zero columns meet as their integrals did, so that x_free
+ * keeps its bits (but for the sign of a zero state with a negative
+ * input). */
 static void waveform_step_integral(freestep_ws *fs, double t0, double t1) {
   const cup_input *u = fs->u;
   double tmid = 0.5 * (t0 + t1);
@@ -394,7 +403,10 @@ static void waveform_step_integral(freestep_ws *fs, double t0, double t1) {
     return;
   }
   for (int j = 0; j < fs->p; j++) fs->ubuf[j] = 0;
-  for (int k = 0; k < u->nterms; k++) fs->ubuf[u->terms[k].comp] += freestep_term_integral(fs, k, t0, t1, tmid);
+  for (int q = 0; q < fs->nlive; q++) {
+    int k = fs->live[q];
+    fs->ubuf[u->terms[k].comp] += freestep_term_integral(fs, k, t0, t1, tmid);
+  }
 }
 
 /* xf += E int_{t0}^{t1} u (nothing without input; the precomputed h E u

@@ -51,6 +51,7 @@ typedef struct freestep_ws {
   input_quad_ws qws;          /* callback input quadrature */
   double *term_h;           /* per waveform term over a full step: constant c h;
                                sine 2A/w sin(w h / 2) (times sin(w t_mid + phase)) */
+  int *live, nlive;         /* the terms whose input has a column in E (the others move no state) */
   /* Gauss-Legendre nodes on [0, 1] for int f and for callback convolutions */
   int nf;
   double fnode[CUP_GL_MAX], fweight[CUP_GL_MAX];

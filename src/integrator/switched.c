@@ -94,8 +94,13 @@ static int child_of(switched_run *S, int topo, char *errmsg) {
   char msg[CUP_ERRMSG_LEN];
   cup_integrator_options o = S->o;
   o.estimate = 0;                                  /* the run's, not each configuration's (S->half) */
-  o.on_step = watch_step;                          /* the circuit-gated switches' checks, then the user's */
-  o.step_ctx = S;
+  /* the circuit-gated switches' checks, then the user's; a fixed-step run
+   * checks them at its grid (sw_fixed_run), so there the callback serves
+   * the estimate's comparison and the user's alone: without either, no
+   * call a step (and the fused steps, faststep.c, where they apply) */
+  int calls = S->o.scheme == CUP_SCHEME_ADAPTIVE || S->o.estimate || S->on_step;
+  o.on_step = calls ? watch_step : NULL;
+  o.step_ctx = calls ? S : NULL;
   int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
   return st ? fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg) : CUP_OK;
 }
@@ -243,7 +248,7 @@ static cup_integrator *twin_of(switched_run *S, int topo) {
   return S->twin[topo];
 }
 
-/* A piece's samples: none; at the piece's end, zeta. */
+/* The last piece's samples: none; at its end (t_k), zeta. */
 static int twin_sink(long k, double t, const double *x, void *ctx) {
   (void)k; (void)x;
   switched_run *S = ctx;
@@ -251,15 +256,17 @@ static int twin_sink(long k, double t, const double *x, void *ctx) {
   return 0;
 }
 
-/* Configuration topo's exact flow from (ta, S->x) to tb, into S->x. */
-static int piece(switched_run *S, int topo, double ta, double tb, cup_run_info *info) {
+/* Configuration topo's exact flow from (ta, S->x) to tb, into S->x; the
+ * last piece of a step (last) leaves zeta at tb in S->zsplit (the pieces
+ * before it have no sink: their zeta, a solve at each end, went unused). */
+static int piece(switched_run *S, int topo, double ta, double tb, int last, cup_run_info *info) {
   cup_integrator *W = S->twin[topo];
   long steps = 0, next = 0;
   cup_run_info w;
   S->cur = topo;
   S->piece_end = tb;
-  la_zero(S->zsplit, cup_lcs_rows(W->L));
-  int st = adaptive_window(adaptive_of(W), ta, tb, S->x, 0, 0, &steps, &next, twin_sink, S, &w);
+  if (last) la_zero(S->zsplit, cup_lcs_rows(W->L));
+  int st = adaptive_window(adaptive_of(W), ta, tb, S->x, 0, 0, &steps, &next, last ? twin_sink : NULL, S, &w);
   if (st < 0) {
     add_info(info, &w);
     return st;
@@ -286,7 +293,7 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
   int st = CUP_OK, to = *topo;
   for (;;) {
     double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as sw_fixed_run snaps) */
-    if ((st = piece(S, to, ta, te, info)) < 0) return st;
+    if ((st = piece(S, to, ta, te, te == tk, info)) < 0) return st;
     if (te == tk) break;
     if ((st = sw->settle(sw->ctx, &to, te, S->x, NULL, info->message)) < 0) return st;
     sw->jump(sw->ctx, to, S->x);
@@ -330,15 +337,17 @@ static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
 static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   long k = 0, n = S->o.n, next_j = 0;
-  int st = CUP_OK;
+  int st = CUP_OK, known = -1;                     /* the configuration whose next switching time tb holds */
+  double tb = 0;
   for (int first = 1; st >= 0 && k < n; first = 0) {
     if (!first) sw->jump(sw->ctx, topo, S->x);
     st = child_of(S, topo, info->message);
     if (st) break;
     S->cur = topo;
     cup_integrator *C = S->child[topo];
-    double tb = 0;
-    if (sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
+    /* after a split step, tb is topo's first switching time after its
+     * last piece's start: past t, it is the first after t too (lcs.h) */
+    if ((known != topo || !(tb > t)) && sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
       st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t);
       break;
     }
@@ -356,6 +365,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
       la_copy(S->x, cup_integrator_state(C), S->n);
     }
     k = kw;
+    known = -1;
     if (split) {
       int sst = split_step(S, k1, &tb, &topo, &next_j, info);
       if (sst < 0) { st = sst; break; }
@@ -363,6 +373,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
         k = k1;
         t = integrator_grid_time(C, k);
         double ts = tb > t && tb - t <= 1e-9 * integrator_grid_step(C) ? tb : t;
+        known = topo;
         if (k < n) st = sw->settle(sw->ctx, &topo, ts, S->x, NULL, info->message);
         continue;
       }

@@ -428,7 +428,7 @@ void cup_netlist_free(cup_netlist **p) {
   la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
   free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
-  free(nl->ubuf); free(nl->dense);
+  free(nl->vals); free(nl->dense);
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
   for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);
@@ -440,7 +440,7 @@ void cup_netlist_free(cup_netlist **p) {
     free(nl->raw->A); free(nl->raw->B); free(nl->raw->C); free(nl->raw->D);
     free(nl->raw->E); free(nl->raw->G); free(nl->raw->P); free(nl->raw);
   }
-  free(nl->zrow); free(nl->Lam); free(nl->zfull);
+  free(nl->zrow); free(nl->Lam);
   free(nl);
   *p = NULL;
 }

@@ -107,7 +107,9 @@ struct cup_netlist {
   char **sig_name;
   int *sig_ptr, *sig_idx;
   double *sig_val;
-  double *ubuf, *dense;   /* p, and n + p + m + supernodes of scratch */
+  int sig_u, sig_seen;    /* the signals read u (directly or through a constraint's multiplier),
+                             as found when there were sig_seen of them (cup_netlist_signals) */
+  double *vals, *dense;   /* a sample's (x, u, zeta) side by side (n + p + m), and n + p + m + supernodes of scratch */
   double *prow;           /* nv + ni: a signal's row over the ports */
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */
@@ -118,7 +120,6 @@ struct cup_netlist {
   int *zrow;              /* m: each row's diode row (>= 0) or constraint -1 - q; NULL: none */
   int nq;                 /* constraint rows */
   double *Lam;            /* nq x (n + p + mr), row-major: the constraints' multipliers */
-  double *zfull;          /* m: zeta with the multipliers, for signals */
 };
 
 /* nl's own sources read from t0 on (u the shift of the sources as written,

@@ -168,8 +168,7 @@ static int multipliers(cup_netlist *sub, red *r) {
   const nl_raw *R = sub->raw;
   int n = r->n, p = r->p, m = r->m, nq = r->nq, nv = n + p + m;
   sub->Lam = calloc((size_t)nq * nv + 1, sizeof(double));
-  sub->zfull = calloc((size_t)r->mq + 1, sizeof(double));
-  if (!sub->Lam || !sub->zfull) return CUP_ERR_NOMEM;
+  if (!sub->Lam) return CUP_ERR_NOMEM;
   for (int v = 0; v < nv; v++) {
     const double *col = v < n ? R->A + (size_t)v * n : v < n + p ? R->E + (size_t)(v - n) * n
                                                               : R->B + (size_t)r->dr[v - n - p] * n;

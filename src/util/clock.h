@@ -18,4 +18,16 @@ static inline double clock_seconds(clockid_t which) {
 /* Monotonic seconds: differences are elapsed wall time. */
 static inline double now_seconds(void) { return clock_seconds(CLOCK_MONOTONIC); }
 
+/* Monotonic seconds to the kernel's tick (1-10 ms), for intervals of a
+ * second or more checked very often: the run writer's flush interval,
+ * asked at every sample (8 ns a call here against now_seconds' 50 ns, a
+ * fifth of the precision rectifier's 2 ms run on its 10001 samples). */
+static inline double tick_seconds(void) {
+#ifdef CLOCK_MONOTONIC_COARSE
+  return clock_seconds(CLOCK_MONOTONIC_COARSE);
+#else
+  return now_seconds();
+#endif
+}
+
 #endif
