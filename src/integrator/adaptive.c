@@ -188,7 +188,7 @@ static void alloc_vectors(adaptive_ws *A, int *fail) {
   A->gi = take((size_t)m * p + 1, sizeof(int), fail);
   A->gx = take((size_t)m * p + 1, sizeof(double), fail);
   A->ework = take(6 * NA, sizeof(double), fail);
-  double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb};
+  double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), fail);
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
                        &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
@@ -326,7 +326,7 @@ void adaptive_free(adaptive_ws **Ap) {
   cup_projector_free(&A->projector);
   free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
   free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx);
-  free(A->ya); free(A->yb); free(A->yt); free(A->yr); free(A->My); free(A->fa); free(A->fb);
+  free(A->ya); free(A->yb); free(A->yt); free(A->yhi); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
   free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);

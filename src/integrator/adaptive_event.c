@@ -7,13 +7,16 @@
 #include "adaptive_impl.h"
 
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
-  int m = A->m, na = A->na;
+  int m = A->m;
   double vmax = 0;                         /* the state's scale: v = x + K U w */
   for (int j = 0; j < A->n; j++) vmax = fmax(vmax, fabs(y[j]));
-  for (int i = 0; i < m; i++) {
-    const double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
+  for (int i = 0; i < m; i++) {            /* over L's and Lm's nonzeros (mode_sparse): the dense sums */
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
-    for (int j = 0; j < na; j++) { acc += Li[j] * y[j]; mag += Lmi[j] * fabs(y[j]); }
+    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {
+      double yj = y[md->li[k]];
+      acc += md->lx[k] * yj;
+      mag += md->lmx[k] * fabs(yj);
+    }
     g[i] = acc;
     /* a few ulps of the terms summed; a slack also of the state's scale,
      * to which the held rows are kept (a row that depends on them sits at
@@ -23,16 +26,13 @@ void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, do
 }
 
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d) {
-  int m = A->m, na = A->na;
   double *My = A->My;
-  for (int i = 0; i < na; i++) My[i] = 0;
-  for (int j = 0; j < na; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    const double *col = md->M + (size_t)j * na;
-    for (int i = 0; i < na; i++) My[i] += col[i] * yj;
+  ad_mode_mv(A, md, y, My);
+  for (int i = 0; i < A->m; i++) {
+    double acc = 0;
+    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) acc += md->lx[k] * My[md->li[k]];
+    d[i] = acc;
   }
-  for (int i = 0; i < m; i++) d[i] = la_dot(md->L + (size_t)i * na, My, na);
 }
 
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */
@@ -42,6 +42,13 @@ static void probe(adaptive_ws *A, ad_mode *md, double tau, double *g, double *d,
   ad_events_eval(A, md, A->yt, g, thr);
   ad_events_deriv(A, md, A->yt, d);
   ev->evals++;
+}
+
+/* A probe at the bracket's new right end: its state (A->yt) kept for the
+ * event, which flows there (the same function of the same arguments). */
+static void hold_hi(adaptive_ws *A, ad_event *ev) {
+  la_copy(A->yhi, A->yt, A->na);
+  ev->hi_ok = 1;
 }
 
 static int crossed(double glo, double tlo, double ghi, double thi) { return glo >= -tlo && ghi < -thi; }
@@ -104,6 +111,7 @@ static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) 
       keep(A, A->gb, A->db, A->tb, A->gt, A->dt, A->tt);
       ev->tau_lo = 0;
       ev->tau_sw = s;
+      hold_hi(A, ev);
       return 1;
     }
     if (A->dt[i] < 0) { lo = s; dlo = A->dt[i]; } else { hi = s; dhi = A->dt[i]; }
@@ -115,6 +123,7 @@ int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
   ev->tau_lo = 0;
   ev->tau_sw = h;
+  ev->hi_ok = 0;
   if (any_crossed(A, A->gb, A->tb)) return 1;
   for (int i = 0; i < m; i++) {
     if (!(A->da[i] < 0 && A->db[i] > 0)) continue;
@@ -180,6 +189,7 @@ void ad_locate(adaptive_ws *A, ad_mode *md, double tolw, ad_event *ev) {
     if (any_crossed(A, A->gt, A->tt)) {
       hi = s;
       keep(A, A->gb, A->db, A->tb, A->gt, A->dt, A->tt);
+      hold_hi(A, ev);
       k = leading(A);
     } else {
       lo = s;

@@ -29,7 +29,8 @@
 #include "lcp/lcp.h"
 #include "lcp/step.h"
 
-#define AD_MODES 6          /* active sets kept with their matrices (least recently used goes) */
+#define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
+                               six-pulse bridge cycles through more than 6, each rebuilt 5 times */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
@@ -40,11 +41,15 @@ typedef struct ad_mode {
   int nj;
   int *rows;                /* J, m entries */
   double *M;                /* na x na generator, column-major */
+  int *mp, *mi, *mj;        /* M's nonzeros by column (na + 1 starts, rows, columns), their values mx: M is */
+  double *mx;               /* [Pi Q; 0 W], its w rows almost empty (a few percent of M in a converter) */
   double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
   double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */
   double *Lm;               /* m x na, row-major: magnitudes of the terms an event value is
                                computed from (|C_i| |X| for a slack: a row that depends on
                                the active ones has a tiny L_i, but its slack rounds at that) */
+  int *lp, *li;             /* the nonzeros of L or Lm by row (m + 1 starts, columns), their values */
+  double *lx, *lmx;         /* in L and Lm: the event rows' sums over them, in the dense order */
   unsigned char *is_zeta;   /* m */
   double *X;                /* n x na, row-major: x = X y */
   int nz;                   /* the rows of the manifold: nj when D = 0; with D, those of Z^T (left
@@ -145,6 +150,7 @@ struct adaptive_ws {
   /* scratch of the run */
   double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
+  double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
   double *cz, *cs;          /* per row, the late-switch error (docs/adaptive.md): pinf ||B_i||_P and
                                pinf ||A B_i||_P / (C B)_ii (pinf ||B_i||_P / D_ii where D_ii > 0) */
@@ -229,6 +235,8 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
 const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+/* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
+void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
@@ -296,6 +304,7 @@ typedef struct ad_event {
   double cmin;              /* a floor under the model's c: 2 err / delay^2 measured (0 at first) */
   int row;                  /* the row whose function crosses first */
   int evals;                /* flow evaluations spent */
+  int hi_ok;                /* A->yhi holds the flow from the step's start to tau_sw (a probe's) */
 } ad_event;
 /* After a step of length h from ya (values ga, slopes da, thresholds ta at
  * the start; gb, db, tb at the end): 1 if an event function crosses zero

@@ -26,6 +26,14 @@ int ad_modes_init(adaptive_ws *A) {
     ad_mode *md = &A->modes[s];
     md->rows = take((size_t)m + 1, sizeof(int), &fail);
     md->M = take(NA, sizeof(double), &fail);
+    md->mp = take((size_t)na + 1, sizeof(int), &fail);
+    md->mi = take(NA, sizeof(int), &fail);
+    md->mj = take(NA, sizeof(int), &fail);
+    md->mx = take(NA, sizeof(double), &fail);
+    md->lp = take((size_t)m + 1, sizeof(int), &fail);
+    md->li = take((size_t)m * na, sizeof(int), &fail);
+    md->lx = take((size_t)m * na, sizeof(double), &fail);
+    md->lmx = take((size_t)m * na, sizeof(double), &fail);
     md->L = take((size_t)m * na, sizeof(double), &fail);
     md->Lm = take((size_t)m * na, sizeof(double), &fail);
     md->Lc = take((size_t)m, sizeof(double), &fail);
@@ -54,6 +62,7 @@ int ad_modes_init(adaptive_ws *A) {
 void ad_modes_free(adaptive_ws *A) {
   for (int s = 0; s < AD_MODES; s++) {
     ad_mode *md = &A->modes[s];
+    free(md->mp); free(md->mi); free(md->mj); free(md->mx); free(md->lp); free(md->li); free(md->lx); free(md->lmx);
     free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
     free(md->X); free(md->R); free(md->Zt); free(md->KU);
     for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
@@ -358,11 +367,43 @@ static void mode_events(adaptive_ws *A, ad_mode *md) {
   }
 }
 
+/* M's and the event rows' nonzeros (the products over them skip only
+ * terms that are exactly 0: the same sums, bit for bit). */
+static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
+  int na = A->na, m = A->m, k = 0;
+  for (int j = 0; j < na; j++) {
+    md->mp[j] = k;
+    for (int i = 0; i < na; i++) {
+      double v = md->M[i + (size_t)j * na];
+      if (v != 0) { md->mi[k] = i; md->mj[k] = j; md->mx[k++] = v; }
+    }
+  }
+  md->mp[na] = k;
+  k = 0;
+  for (int i = 0; i < m; i++) {
+    md->lp[i] = k;
+    for (int j = 0; j < na; j++) {
+      double l = md->L[(size_t)i * na + j], lm = md->Lm[(size_t)i * na + j];
+      if (l != 0 || lm != 0) { md->li[k] = j; md->lx[k] = l; md->lmx[k++] = lm; }
+    }
+  }
+  md->lp[m] = k;
+}
+
+/* (Terms with y_j = 0 are added too: +-0, which leaves a sum started at +0
+ * as it was.) */
+void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
+  int na = A->na, nnz = md->mp[na];
+  for (int i = 0; i < na; i++) out[i] = 0;
+  for (int k = 0; k < nnz; k++) out[md->mi[k]] += md->mx[k] * y[md->mj[k]];
+}
+
 static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
   int na = A->na;
   mode_factor(A, md, mask);
   mode_flow(A, md);
   mode_events(A, md);
+  mode_sparse(A, md);
   md->mnorm = 0;
   for (int i = 0; i < na; i++) {
     double r_ = 0;
@@ -472,7 +513,7 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   for (int s = 0; s < sub; s++) {
     la_copy(term, y_out, na);
     for (int k = 1; k <= 30; k++) {
-      matvec(na, md->M, term, tmp);
+      ad_mode_mv(A, md, term, tmp);
       /* done when every component's term is below its rounding: a callback's
        * Taylor states (u, u', ..., u^(7)) span 20 orders of magnitude, and a
        * test against the largest stopped x's series at 1e-5 of x */

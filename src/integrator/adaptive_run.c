@@ -440,7 +440,8 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   for (int attempt = 0;; attempt++) {
     ad_locate(A, old, tw, ev);
     double tsw = ev->tau_sw;
-    ad_flow(A, old, tsw, A->ya, A->yb);          /* the run's path */
+    if (ev->hi_ok) la_copy(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
+    else ad_flow(A, old, tsw, A->ya, A->yb);
     ad_state(A, old, A->yb, A->xs);
     la_copy(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);

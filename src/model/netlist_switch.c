@@ -27,6 +27,7 @@
 #include "catchup.h"
 #include "catchup/netlist.h"
 #include "netlist_impl.h"
+#include "input_impl.h"
 
 #define NL_TOPO_MAX 64     /* configurations kept (a converter has a handful) */
 
@@ -35,6 +36,12 @@ typedef struct nl_topo {
   cup_netlist *sub;        /* its netlist (LCS, signals); topo[0]'s is the netlist itself */
   double *Pi;              /* n x n, column-major: the jump onto its constraints (nq > 0) */
   double *ctl;             /* nsw x (n + p + m_sub), row-major: each switch's control */
+  /* the controls' nonzeros (ctl_sparse): the searches evaluate them, and
+   * only the input terms they read, some thousand times a run */
+  int *cp, *ci;            /* nsw + 1 starts, columns (in x, u, zeta) */
+  double *cx;              /* ... their values */
+  int *uterm, nuterm;      /* the input's terms whose component a control reads (all: zeta's rows read u) */
+  int reads_z;             /* a control reads zeta */
   int state_gated;         /* a control depends on the state or the diodes */
 } nl_topo;
 
@@ -50,6 +57,12 @@ struct nl_switched {
   double *zf;              /* scratch: a configuration's zeta with multipliers */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
+  /* the switching time the last search found (a configuration with no
+   * switch the circuit gates) and the configuration the rule gave there:
+   * the settle that follows it, at that time, takes it (once) */
+  int memo_ok, memo_topo;
+  double memo_t;
+  uint64_t memo_cfg, last_cfg;   /* ... and the rule's at the last check (changes) */
   /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
   cup_gate_fn gate_fn;
   void *gate_ctx;
@@ -161,6 +174,43 @@ static int gated_by_state(const nl_topo *tp, int k) {
   return 0;
 }
 
+static void ctl_free(nl_topo *tp) {
+  free(tp->ctl); free(tp->cp); free(tp->ci); free(tp->cx); free(tp->uterm);
+  tp->ctl = tp->cx = NULL;
+  tp->cp = tp->ci = tp->uterm = NULL;
+}
+
+/* The controls' rows by their nonzeros, and the input terms they read. */
+static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
+  const cup_netlist *sub = tp->sub;
+  int n = sub->n, p = sub->p, nv = n + p + sub->m, k = 0;
+  const cup_input *u = sub->u;
+  int nterms = p && u && !u->fn ? u->nterms : 0;
+  tp->cp = malloc(sizeof(int) * ((size_t)S->nsw + 1));
+  tp->ci = malloc(sizeof(int) * ((size_t)S->nsw * nv + 1));
+  tp->cx = malloc(sizeof(double) * ((size_t)S->nsw * nv + 1));
+  tp->uterm = malloc(sizeof(int) * ((size_t)nterms + 1));
+  unsigned char *reads = calloc((size_t)p + 1, 1);
+  if (!tp->cp || !tp->ci || !tp->cx || !tp->uterm || !reads) { free(reads); return CUP_ERR_NOMEM; }
+  for (int w = 0; w < S->nsw; w++) {
+    tp->cp[w] = k;
+    for (int j = 0; j < nv; j++) {
+      double v = tp->ctl[(size_t)w * nv + j];
+      if (v == 0) continue;
+      tp->ci[k] = j;
+      tp->cx[k++] = v;
+      if (j >= n + p) tp->reads_z = 1;
+      else if (j >= n) reads[j - n] = 1;
+    }
+  }
+  tp->cp[S->nsw] = k;
+  tp->nuterm = 0;
+  for (int q = 0; q < nterms; q++)
+    if (reads[u->terms[q].comp] || (tp->reads_z && sub->zrow)) tp->uterm[tp->nuterm++] = q;
+  free(reads);
+  return CUP_OK;
+}
+
 /* Configuration cfg formulated into topo (its netlist, LCS, jump, controls). */
 static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, char *errmsg) {
   const nl_circuit *c = &S->c;
@@ -185,11 +235,13 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
   }
   tp->sub = sub;                                   /* (gated_by_state reads it) */
   for (int k = 0; !st && k < S->nsw; k++) tp->state_gated |= gated_by_state(tp, k);
+  if (!st && ctl_sparse(S, tp)) st = nl_switch_nomem(c, errmsg);
   derived_free(c, &d);
   if (st) {
     cup_netlist_free(&sub);
-    free(tp->Pi); free(tp->ctl);
-    tp->sub = NULL; tp->Pi = NULL; tp->ctl = NULL;
+    free(tp->Pi);
+    ctl_free(tp);
+    tp->sub = NULL; tp->Pi = NULL;
     return st;
   }
   S->formed++;
@@ -213,20 +265,32 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   }
   if (st) {
     if (tp->sub) cup_netlist_free(&tp->sub);
-    free(tp->Pi); free(tp->ctl);
+    free(tp->Pi);
+    ctl_free(tp);
     return st;
   }
   *out = S->ntopo++;
   return CUP_OK;
 }
 
-/* Each switch's control at t in configuration tp (x, zeta may be NULL: 0). */
+/* Each switch's control at t in configuration tp (x, zeta may be NULL: 0),
+ * over the controls' nonzeros and the input terms they read (ctl_sparse):
+ * the dense rows' sums less terms that are exactly 0, bit for bit. */
 static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x, const double *zeta, double *cv) {
   cup_netlist *sub = tp->sub;
-  int n = sub->n, p = sub->p, m = sub->m, nv = n + p + m;
-  if (p && cup_input_eval(sub->u, t, S->ut)) return CUP_ERR_CALLBACK;
+  int n = sub->n, p = sub->p, m = sub->m;
+  const cup_input *u = sub->u;
+  if (p && (!u || u->fn)) {
+    if (cup_input_eval(u, t, S->ut)) return CUP_ERR_CALLBACK;
+  } else if (p) {                                  /* cup_input_eval's sums, of the terms read */
+    for (int q = 0; q < p; q++) S->ut[q] = 0;
+    for (int k = 0; k < tp->nuterm; k++) {
+      const input_term *w = &u->terms[tp->uterm[k]];
+      S->ut[w->comp] += input_term_value(w, t);
+    }
+  }
   const double *z = zeta;
-  if (sub->zrow) {
+  if (sub->zrow && tp->reads_z) {
     for (int r = 0; r < m; r++) {
       int k = sub->zrow[r];
       if (k >= 0) { S->zf[r] = zeta ? zeta[k] : 0; continue; }
@@ -236,8 +300,14 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
     z = S->zf;
   }
   for (int k = 0; k < S->nsw; k++) {
-    const double *row = tp->ctl + (size_t)k * nv;
-    cv[k] = (x ? la_dot(row, x, n) : 0) + la_dot(row + n, S->ut, p) + (z ? la_dot(row + n + p, z, m) : 0);
+    double sx = 0, su = 0, sz = 0;
+    for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
+      int j = tp->ci[q];
+      if (j < n) sx += x ? tp->cx[q] * x[j] : 0;
+      else if (j < n + p) su += tp->cx[q] * S->ut[j - n];
+      else sz += z ? tp->cx[q] * z[j - n - p] : 0;
+    }
+    cv[k] = (x ? sx : 0) + su + (z ? sz : 0);
   }
   return CUP_OK;
 }
@@ -268,10 +338,15 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
       if (S->gate[k]) cfg |= (uint64_t)1 << k;
     return topo_of(nl, cfg, topo, errmsg);
   }
+  int memo = S->memo_ok && S->memo_topo == *topo && S->memo_t == t;
+  S->memo_ok = 0;
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
-    if (controls(S, &S->topo[*topo], t, x, zeta, cv))
-      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
-    uint64_t next = rule(S, S->topo[*topo].cfg, cv);
+    uint64_t next = S->memo_cfg;                   /* the search's at t: the same controls (they read no state) */
+    if (!(pass == 0 && memo)) {
+      if (controls(S, &S->topo[*topo], t, x, zeta, cv))
+        return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
+      next = rule(S, S->topo[*topo].cfg, cv);
+    }
     if (next == S->topo[*topo].cfg) return CUP_OK;
     int st = topo_of(nl, next, topo, errmsg);
     if (st) return st;
@@ -288,7 +363,8 @@ static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x,
   if (controls(S, tp, s, x, NULL, cv)) return -1;
   for (int k = 0; k < S->nsw; k++)
     if (gated_by_state(tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
-  return rule(S, tp->cfg, cv) != tp->cfg;
+  S->last_cfg = rule(S, tp->cfg, cv);
+  return S->last_cfg != tp->cfg;
 }
 
 /* The first time in (t, tmax] at which a source-gated switch of
@@ -300,6 +376,7 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
   nl_switched *S = nl->sw;
   const nl_topo *tp = &S->topo[topo];
   double cv[64], a = t;
+  uint64_t cfg = tp->cfg;
   *tnext = tmax;
   if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
     long k = instant(S, t);
@@ -320,7 +397,7 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
       if (!(s > lo)) continue;
       int ch = changes(S, tp, s, NULL, 0, cv);
       if (ch < 0) return CUP_ERR_CALLBACK;
-      if (ch) hi = s; else lo = s;
+      if (ch) hi = s, cfg = S->last_cfg; else lo = s;
     }
     if (hi >= 0) {
       /* a jump edge rounds apart from its breakpoint by an ulp or a few
@@ -336,16 +413,20 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
         if (!(p > lo && p < hi)) break;
         int ch = changes(S, tp, p, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
-        if (ch) hi = p; else lo = p;
+        if (ch) hi = p, cfg = S->last_cfg; else lo = p;
         if (at_end != ch) break;                   /* the other side of the crossing: found */
       }
       for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
         int ch = changes(S, tp, mid, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
-        if (ch) hi = mid; else lo = mid;
+        if (ch) hi = mid, cfg = S->last_cfg; else lo = mid;
       }
       *tnext = hi;
+      S->memo_ok = !tp->state_gated;               /* (a state-gated switch's control is settle's to read) */
+      S->memo_topo = topo;
+      S->memo_t = hi;
+      S->memo_cfg = cfg;
       return CUP_OK;
     }
     a = b;
@@ -445,7 +526,7 @@ static void sw_free(nl_switched **Sp) {
   for (int k = 0; k < S->ntopo; k++) {
     if (k > 0) cup_netlist_free(&S->topo[k].sub);  /* topo[0]'s is the netlist itself */
     free(S->topo[k].Pi);
-    free(S->topo[k].ctl);
+    ctl_free(&S->topo[k]);
   }
   nl_circuit_free(&S->c);
   free(S->sw); free(S->ut); free(S->zf); free(S->gate);
