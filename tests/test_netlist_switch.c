@@ -141,38 +141,56 @@ static void test_two_capacitors(void **state) {
   cup_netlist_free(&nl);
 }
 
-/* The same jump with every step recorded (output every 1, the adaptive
- * scheme): the switching time holds two records, the state before the
- * jump (V0, 0) and after it (vf, vf) with no current through S1, so that a
- * line through the records shows the jump (it had the one before only,
- * and ramped to vf across the next step). */
-static void test_two_capacitors_every_step(void **state) {
-  (void)state;
+/* The same jump with every step recorded (output every 1) under options
+ * o: the switching time holds two records, the state before the jump
+ * (V0, 0) and after it (vf, vf) with no current through S1, so that a line
+ * through the records shows the jump (it had the one before only, and
+ * ramped to vf across the next step). The number of records, or -1. */
+static long two_capacitors_every(cup_integrator_options *o, const char *what) {
   const double C1 = 1e-6, C2 = 3e-6, V0 = 10, vf = C1 * V0 / (C1 + C2);
   cup_netlist *nl = text_ok("two capacitors\nC1 a 0 1u IC=10\nC2 b 0 3u\nS1 a b g 0 SMOD\n"
                             "Vg g 0 PULSE(0 1 1m jump jump 1 2)\n.model SMOD SW(VT=0.5 VH=0.1)\n");
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.T = 2e-3;
-  o.tol_abs = o.tol_rel = 1e-10;
-  o.output = CUP_OUTPUT_EVERY;
-  o.output_every = 1;
+  o->T = 2e-3;
+  o->output = CUP_OUTPUT_EVERY;
+  o->output_every = 1;
   run_rec r;
-  run_opts(nl, &o, 4096, "i(S1)", &r);
+  run_opts(nl, o, 4096, "i(S1)", &r);
   assert_true(r.count < r.cap);
   long at[4], nat = 0;
   for (long k = 0; k < r.count; k++)
     if (fabs(r.t[k] - 1e-3) <= 1e-15 && nat < 4) at[nat++] = k;
-  printf("two capacitors, every step: %ld records, %ld at the switching time\n", r.count, nat);
+  printf("two capacitors, every step (%s): %ld records, %ld at the switching time\n", what, r.count, nat);
   assert_int_equal(nat, 2);
   assert_int_equal(at[1], at[0] + 1);
-  const double *x0 = r.x + 2 * at[0], *x1 = r.x + 2 * at[1];
+  const double *x0 = r.x + 2 * at[0], *x1 = r.x + 2 * at[1], *xe = r.x + 2 * (r.count - 1);
   assert_true(fabs(x0[0] - V0) <= 1e-12 * V0 && fabs(x0[1]) <= 1e-12 * V0);
   assert_true(fabs(x1[0] - vf) <= 1e-12 * V0 && fabs(x1[1] - vf) <= 1e-12 * V0);
+  assert_true(fabs(xe[0] - vf) <= 1e-12 * V0 && fabs(xe[1] - vf) <= 1e-12 * V0);
   assert_true(fabs(r.s[at[1]]) <= 1e-12);
+  long count = r.count;
   rec_free(&r);
   cup_netlist_free(&nl);
+  return count;
+}
+
+static void test_two_capacitors_every_step(void **state) {
+  (void)state;
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.tol_abs = o.tol_rel = 1e-10;
+  two_capacitors_every(&o, "adaptive");
+}
+
+/* The fixed-step path (theta, the switching on grid time t_100): the
+ * steps' ends, and the jump's second record at t_100: n + 2 records. */
+static void test_two_capacitors_every_step_theta(void **state) {
+  (void)state;
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_THETA;
+  o.n = 200;
+  assert_int_equal(two_capacitors_every(&o, "theta, n = 200"), 202);
 }
 
 /* A sine charges C1 through R1; S1 closes onto C2 at 1 ms. Then C1 and C2
@@ -548,6 +566,7 @@ static void test_errors(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_two_capacitors_every_step),
+    cmocka_unit_test(test_two_capacitors_every_step_theta),
     cmocka_unit_test(test_inductor_cut),
     cmocka_unit_test(test_constraint_reads_input),
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),

@@ -570,6 +570,14 @@ void integrator_window_wall_limit(cup_integrator *I, double seconds) {
   ((fixed_ws *)I->ws)->o.max_wall_seconds = seconds;
 }
 
+/* The theta step's start at t_k from F->x: zeta_k by the LCP there (0
+ * with D = 0), its support's weights. */
+static void theta_start(fixed_ws *F, long k) {
+  int fixed = F->fixed || !F->u;
+  const double *g = !fixed && moving_offset(F, grid_time(F, k)) == CUP_OK ? F->g : F->K->g0;
+  lcp_step_start(&F->th, F->x, g);
+}
+
 int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
@@ -587,10 +595,7 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
     F->zs = 1;
     if (F->zprev) la_zero(F->zprev, F->m);
     if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
-    if (F->K && F->use_theta) {                    /* theta's zeta_k0 at the window's start */
-      const double *g = !fixed && moving_offset(F, grid_time(F, k0)) == CUP_OK ? F->g : F->K->g0;
-      lcp_step_start(&F->th, F->x, g);
-    }
+    if (F->K && F->use_theta) theta_start(F, k0);  /* theta's zeta_k0 at the window's start */
     st = steps(F, k0, *next_j, sink, sink_ctx, info);
   }
   *next_j = F->next_j;
@@ -627,6 +632,25 @@ int integrator_split_end(cup_integrator *I, long k, const double *xprev, const d
   }
   *next_j = sp.next_j;
   return st;
+}
+
+int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sample_fn sink, void *sink_ctx,
+                           cup_run_info *info) {
+  fixed_ws *F = I->ws;
+  double t = grid_time(F, k);
+  window_info(F, info);
+  info->step = k;
+  info->t = t;
+  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
+  F->zeta_from = 0;                                /* zeta as at a run's start: theta's LCP at x, else 0 */
+  F->zs = 1;
+  if (F->K && F->use_theta) {
+    theta_start(F, k);
+    F->zeta_from = 1;
+  }
+  info->samples++;
+  if (sink(k, t, F->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+  return CUP_OK;
 }
 
 /* A restored checkpoint (checkpoint.c) goes on from the step it stopped

@@ -47,6 +47,12 @@ void integrator_window_wall_limit(cup_integrator *I, double seconds);
  * *next_j advanced. */
 int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
                          long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* A switched circuit's jump at grid time t_k (switched.c): x, the state
+ * after it, given to the sink as a second record at t_k (the first was
+ * the step's end, before the jump); zeta as at a run's start (theta's LCP
+ * at x, else 0). No step callback. */
+int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sample_fn sink, void *sink_ctx,
+                           cup_run_info *info);
 /* Its grid's time t_k, and its step h = T / n. */
 double integrator_grid_time(const cup_integrator *I, long k);
 double integrator_grid_step(const cup_integrator *I);

@@ -58,6 +58,7 @@ struct switched_run {
   cup_step_fn on_step;
   void *step_ctx;
   double wall0;            /* the run's start, when it has a wall-time limit */
+  int coarse;              /* the estimate's run at n/2: its records are compared by step, no jump's */
   cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
   estimate_ws est;        /* ... and the comparison with it at each step's end */
 };
@@ -338,13 +339,26 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
   const cup_switching *sw = &S->ops;
   long k = 0, n = S->o.n, next_j = 0;
   int st = CUP_OK, known = -1;                     /* the configuration whose next switching time tb holds */
+  int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1 && !S->coarse;
+  int last = topo;                                 /* the configuration that ran up to t */
   double tb = 0;
   for (int first = 1; st >= 0 && k < n; first = 0) {
+    int jumps = each && !first && topo != last;
+    if (jumps) la_copy(S->xprev, S->x, S->n);
     if (!first) sw->jump(sw->ctx, topo, S->x);
     st = child_of(S, topo, info->message);
     if (st) break;
-    S->cur = topo;
+    S->cur = last = topo;
     cup_integrator *C = S->child[topo];
+    /* every step recorded: a switching that moved the state has a second
+     * record at t_k, after the jump (a line through the records shows the
+     * jump, not a ramp across the next step), as the adaptive scheme's */
+    if (jumps && memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0) {
+      cup_run_info w;
+      st = integrator_jump_sample(C, k, S->x, S->sink, S->sink_ctx, &w);
+      add_info(info, &w);
+      if (st < 0) break;
+    }
     /* after a split step, tb is topo's first switching time after its
      * last piece's start: past t, it is the first after t too (lcs.h) */
     if ((known != topo || !(tb > t)) && sw->next(sw->ctx, topo, t, S->o.T, &tb)) {
@@ -370,6 +384,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
       int sst = split_step(S, k1, &tb, &topo, &next_j, info);
       if (sst < 0) { st = sst; break; }
       if (sst == 0) {                              /* tb: the next switching time, at or after t_k1 */
+        last = topo;
         k = k1;
         t = integrator_grid_time(C, k);
         double ts = tb > t && tb - t <= 1e-9 * integrator_grid_step(C) ? tb : t;
@@ -469,7 +484,9 @@ static int create_half(switched_run *S, const cup_switching *sw, const cup_input
   h.on_step = NULL;
   h.output = CUP_OUTPUT_EVERY;
   h.output_every = estimate_stride(&S->est);
-  return cup_integrator_create_switched(&S->half, sw, u, &h, errmsg);
+  int st = cup_integrator_create_switched(&S->half, sw, u, &h, errmsg);
+  if (!st) ((switched_run *)S->half->ws)->coarse = 1;
+  return st;
 }
 
 /* Made by its own front door below, never chosen by the options; no checkpoints. */
