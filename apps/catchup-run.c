@@ -474,7 +474,7 @@ static int setup(run_t *r, char *err) {
     r->opts.on_step = crowd_log_step;
     r->opts.step_ctx = r->crowd;
   }
-  if (cup_scene_integrator(r->scene, &r->opts, &r->I, e2)) {
+  if (run_steady_integrator(r->sk.steady, r->scene, &r->opts, &r->I, e2)) {
     snprintf(err, MSG_LEN, "%s: %s", a->scene, e2);
     return EXIT_RUN;
   }

@@ -25,6 +25,7 @@ struct run_steady {
   int *pv, *pc;             /* power: each element's v(a,b) and i(E) signal */
   long N, k;                /* samples expected and recorded */
   double *t, *x, *sig;      /* N x n, N x ns */
+  pss_jumps jumps;          /* the period's switchings and events (its run's integrator notes them) */
   /* the measurements: nm rows, harmonics + 1 columns; power per element */
   cup_measure *me;
   double *amp, *phase, *power, efficiency;
@@ -49,6 +50,7 @@ void run_steady_free(run_steady **sp) {
   free(s->mi); free(s->pv); free(s->pc);
   free(s->t); free(s->x); free(s->sig);
   free(s->me); free(s->amp); free(s->phase); free(s->power);
+  pss_jumps_free(&s->jumps);
   free(s);
   *sp = NULL;
 }
@@ -104,8 +106,15 @@ int run_steady_solve(run_steady *s, cup_scene *scene, cup_integrator_options *o,
   s->t = calloc((size_t)s->N, sizeof *s->t);
   s->x = calloc((size_t)s->N * (size_t)s->n, sizeof *s->x);
   s->sig = calloc((size_t)s->N * (size_t)(s->ns + 1), sizeof *s->sig);
-  if (!s->t || !s->x || !s->sig) return snprintf(err, size, "out of memory for the period's samples"), 1;
+  if (!s->t || !s->x || !s->sig || pss_jumps_init(&s->jumps, s->info.period, s->N))
+    return snprintf(err, size, "out of memory for the period's samples"), 1;
   return 0;
+}
+
+int run_steady_integrator(run_steady *s, cup_scene *scene, const cup_integrator_options *o, cup_integrator **I,
+                          char *errmsg) {
+  if (!s || !s->solved) return cup_scene_integrator(scene, o, I, errmsg);
+  return scene_pss_period_integrator(scene, o, &s->jumps, I, errmsg);
 }
 
 double run_steady_t0(const run_steady *s) { return s && s->solved ? s->info.t0 : 0; }
@@ -145,7 +154,8 @@ static int measure(run_steady *s) {
   double *w = calloc((size_t)s->N, sizeof *w);
   int st = !s->me || !s->amp || !s->phase || !s->power || !w ? CUP_ERR_NOMEM : CUP_OK;
   pss_figures f = {nm, s->nl ? s->mi : NULL, H, np, s->pv, s->pc, s->req->eff_out, s->req->eff_in, s->me, s->amp,
-                       s->phase, s->power, s->efficiency};
+                       s->phase, s->power, s->efficiency, NULL, 0, 0};
+  pss_jumps_finish(&s->jumps, &f);
   if (!st) st = s->nl ? pss_measure(s->sig, s->N, s->ns, &f, w, e2) : pss_measure(s->x, s->N, s->n, &f, w, e2);
   s->efficiency = f.efficiency;
   free(w);
@@ -325,4 +335,8 @@ void run_steady_report(const run_steady *s, const char *scene, FILE *f) {
   for (int j = 0; j < s->req->npower; j++)
     fprintf(f, "catchup-run: %s:   power %-8s %.6g W\n", scene, s->req->power[j], s->power[j]);
   if (!isnan(s->efficiency)) fprintf(f, "catchup-run: %s:   efficiency %.6g\n", scene, s->efficiency);
+  if (s->jumps.overflow)
+    fprintf(f, "catchup-run: warning: %s: more than %ld switchings and events in the period, 4 a sample: the "
+            "measurements take no jump at its time (O(h) where a signal jumps; raise steady_state.samples)\n", scene,
+            s->jumps.cap);
 }

@@ -30,6 +30,11 @@ int run_steady_solve(run_steady *s, cup_scene *scene, cup_integrator_options *o,
 double run_steady_t0(const run_steady *s);
 /* The run's x0: the steady state if solved, else the scene's. */
 const double *run_steady_x0(const run_steady *s, const double *scene_x0);
+/* The run's integrator (options o): once solved, the one that notes the
+ * period's switchings and events for the measurements of the signals that
+ * jump (scene_pss_period_integrator); else cup_scene_integrator's. */
+int run_steady_integrator(run_steady *s, cup_scene *scene, const cup_integrator_options *o, cup_integrator **I,
+                          char *errmsg);
 /* A sample of the period (the sink's), for the measurements. */
 void run_steady_record(run_steady *s, double t, const double *x, const double *sig);
 /* /steady_state into the file (and its measurements once the period ran

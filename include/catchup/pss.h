@@ -147,7 +147,10 @@ CUP_API int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *z
  *  uses v[0 .. N-2]). Exact for a trigonometric polynomial of degree
  *  below (N - 1) / 2; a kink (a diode turning on) costs O(h^2), a jump
  *  (a diode's current, a capacitor's current at its turn-on) O(h),
- *  h = T / (N - 1) (docs/steady-state.md). */
+ *  h = T / (N - 1) (docs/steady-state.md). catchup-run --steady-state and
+ *  the steady-state sweeps, which know the period's switching and event
+ *  times, measure a signal that jumps with its jumps at those times
+ *  instead (docs/steady-state.md, "Signals that jump"). */
 typedef struct cup_measure {
   double avg, rms, min, max, pp;  /**< average, RMS, minimum, maximum, peak-to-peak */
   double thd;                     /**< sqrt(sum_{k=2..order} |c_k|^2) / |c_1| (NaN when |c_1| is below

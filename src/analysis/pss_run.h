@@ -24,12 +24,6 @@ void pss_map_options(const cup_integrator_options *run, double run_T, double T, 
  * keeps its index). CUP_ERR_ARG naming the element otherwise. */
 int pss_probe_power(cup_netlist *nl, const char *element, int *v, int *i, char *errmsg);
 
-/* The average power over one period of N samples of ns signals each
- * (row-major, as recorded), signals v and i (pss_probe_power): the
- * average of v i by cup_measure_period, in *avg. w: N doubles of scratch. */
-int measure_power(const double *sig, long N, int ns, int v, int i, double *w, double *avg,
-                  char *errmsg);
-
 /* What is measured over one period (catchup-run --steady-state, the
  * steady-state sweeps) and the figures (pss_measure). */
 typedef struct pss_figures {
@@ -44,12 +38,49 @@ typedef struct pss_figures {
   double *amp, *phase;      /* out, or NULL */
   double *power;            /* out: np averages */
   double efficiency;        /* out (untouched without eff_out) */
+  const double *jt;         /* the period's jump times (pss_jumps_finish): nj, sorted, in (0, T); NULL: none */
+  int nj;
+  double T;
 } pss_figures;
 
 /* The figures f asks for of one period of N samples of ns signals each
- * (row-major, as recorded): cup_measure_period of each signal, then
- * measure_power of each element, then the efficiency; stops at the
- * first error. w: N doubles of scratch. */
+ * (row-major, as recorded): cup_measure_period of each signal, then the
+ * average of v i of each element, then the efficiency; stops at the
+ * first error. w: N doubles of scratch. With jump times (f->jt), a signal
+ * (or a product v i) that jumps at one of them (by more than the change
+ * over a sample beside it and 1e-6 of its largest magnitude: a continuous
+ * signal does not, and keeps cup_measure_period's figures) is measured
+ * instead as the piecewise-linear interpolant of its samples with each
+ * jump at its own time, each side's value extrapolated linearly from the
+ * samples on its side (a jump on a sample: the sample is the side it
+ * continues): its exact average, RMS, extremes (both sides of each jump)
+ * and Fourier coefficients. O(h^2) on the smooth pieces, exact for
+ * piecewise-linear signals (docs/steady-state.md). */
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg);
+
+/* The times inside one period's run (0 < t < T, the run's own clock) at
+ * which a signal may jump: each switching of the switches (scene_pss's
+ * period integrator) and each event of the adaptive scheme
+ * (pss_jumps_event, chained to the run's own on_event). Room for 4
+ * samples + 64 times, allocated at init: nothing during the run. */
+typedef struct pss_jumps {
+  double *t;
+  long n, cap;
+  int overflow;             /* more than cap (4 a sample): none is used */
+  double T;
+  cup_event_fn on_event;    /* the run's own, called after (or NULL) */
+  void *event_ctx;
+  cup_switching sw;         /* the model's switching, which scene_pss's wrapper calls */
+} pss_jumps;
+
+int pss_jumps_init(pss_jumps *J, double T, long samples);
+void pss_jumps_free(pss_jumps *J);
+void pss_jumps_add(pss_jumps *J, double t);
+/* A cup_event_fn: the event's time, then the run's own on_event. */
+int pss_jumps_event(double t, int row, int on, void *ctx);
+/* The times sorted into f (jt, nj, T; J keeps them); none if they
+ * overflowed (J->overflow: more than 4 a sample, which the samples cannot
+ * resolve: the signals measured as by cup_measure_period alone). */
+void pss_jumps_finish(pss_jumps *J, pss_figures *f);
 
 #endif

@@ -1,5 +1,6 @@
 /* scene_pss — a scene's steady state, solved the one way catchup-run and
- * the steady-state sweeps solve it (scene_pss.h). */
+ * the steady-state sweeps solve it, and the integrator of its period that
+ * notes where a signal may jump (scene_pss.h). */
 #include <stddef.h>
 #include "catchup.h"
 #include "scene_pss.h"
@@ -32,4 +33,50 @@ int scene_pss_solve(cup_scene *s, const cup_integrator_options *o, cup_pss **r, 
   period->output_samples = q->samples;
   period->output_t0 = 0;
   return st;
+}
+
+/* The model's switching, each change of configuration at t noted as a
+ * jump time (the one at t = 0 is the period's start: pss_jumps_add drops it). */
+static int noted_settle(void *ctx, int *topo, double t, const double *x, const double *zeta, char *errmsg) {
+  pss_jumps *J = ctx;
+  int before = *topo, st = J->sw.settle(J->sw.ctx, topo, t, x, zeta, errmsg);
+  if (!st && *topo != before) pss_jumps_add(J, t);
+  return st;
+}
+static int noted_next(void *ctx, int topo, double t, double tmax, double *tnext) {
+  pss_jumps *J = ctx;
+  return J->sw.next(J->sw.ctx, topo, t, tmax, tnext);
+}
+static const cup_lcs *noted_lcs(void *ctx, int topo) {
+  pss_jumps *J = ctx;
+  return J->sw.lcs(J->sw.ctx, topo);
+}
+static void noted_jump(void *ctx, int topo, double *x) {
+  pss_jumps *J = ctx;
+  J->sw.jump(J->sw.ctx, topo, x);
+}
+static int noted_state_gated(void *ctx, int topo) {
+  pss_jumps *J = ctx;
+  return J->sw.state_gated(J->sw.ctx, topo);
+}
+static int noted_crossed(void *ctx, int topo, double t, const double *x) {
+  pss_jumps *J = ctx;
+  return J->sw.crossed(J->sw.ctx, topo, t, x);
+}
+
+int scene_pss_period_integrator(cup_scene *s, const cup_integrator_options *period, pss_jumps *J,
+                                cup_integrator **I, char *errmsg) {
+  cup_integrator_options o = *period;
+  const cup_input *u = cup_scene_input(s);        /* the sources' own jumps and corners (PULSE edges, PWL knots) */
+  for (double t = cup_input_next_break(u, 0); t < o.T && !J->overflow; t = cup_input_next_break(u, t))
+    pss_jumps_add(J, t);
+  J->on_event = o.on_event;                       /* the run's own, after the time is noted */
+  J->event_ctx = o.event_ctx;
+  o.on_event = pss_jumps_event;
+  o.event_ctx = J;
+  cup_netlist *nl = cup_scene_netlist(s);
+  if (!nl || !cup_netlist_switching(nl, &J->sw)) return cup_scene_integrator(s, &o, I, errmsg);
+  cup_switching noted = {.ctx = J, .settle = noted_settle, .next = noted_next, .lcs = noted_lcs, .jump = noted_jump,
+                         .state_gated = noted_state_gated, .crossed = noted_crossed};
+  return cup_integrator_create_switched(I, &noted, cup_scene_input(s), &o, errmsg);
 }

@@ -5,13 +5,15 @@
  * of the run's integrator options, and the options of one period from the
  * steady state. The period itself is each caller's run (catchup-run's is
  * its output run, streamed to its file with its events; a sweep's task
- * samples it in memory); its samples are measured by pss_measure
- * (analysis/pss_run.h). Internal: the apps and src/sweep link the static
+ * samples it in memory) by the integrator scene_pss_period_integrator
+ * makes, which notes the times a signal may jump; its samples are measured
+ * by pss_measure with those times (analysis/pss_run.h). Internal: the apps and src/sweep link the static
  * library. */
 #ifndef CUP_SCENE_PSS_H
 #define CUP_SCENE_PSS_H
 
 #include "catchup.h"
+#include "analysis/pss_run.h"
 
 /* The steady state of scene s's request (cup_scene_steady_state) with the
  * run's options o (scheme, n over the scene's T, tolerances, the interrupt
@@ -26,5 +28,14 @@
 enum { SCENE_PSS_PHASE, SCENE_PSS_SETUP, SCENE_PSS_NEWTON };   /* the period and phase; the map's integrator; Newton */
 int scene_pss_solve(cup_scene *s, const cup_integrator_options *o, cup_pss **r, double *T, double *t0,
                     cup_integrator_options *period, int *stage, char *errmsg);
+
+/* The integrator of one period from the steady state (options period,
+ * scene_pss_solve's), as cup_scene_integrator makes it, that notes into J
+ * (pss_jumps_init'ed; it must outlive *I) the times at which a signal may
+ * jump: each break of the sources (cup_input_next_break: a PULSE's edges
+ * and corners), each change of the switches' configuration and each event
+ * of the adaptive scheme (the options' own on_event still called). */
+int scene_pss_period_integrator(cup_scene *s, const cup_integrator_options *period, pss_jumps *J,
+                                cup_integrator **I, char *errmsg);
 
 #endif

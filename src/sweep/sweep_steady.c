@@ -49,7 +49,9 @@ static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_stead
   double *w = malloc(sizeof(double) * (size_t)p.N);
   char err[CUP_ERRMSG_LEN] = "";
   cup_integrator *I = NULL;
-  int st = !p.sig || !p.zeta || !w ? CUP_ERR_NOMEM : cup_scene_integrator(v->scene, mo, &I, err);
+  pss_jumps J;
+  int st = pss_jumps_init(&J, mo->T, p.N);
+  if (!st) st = !p.sig || !p.zeta || !w ? CUP_ERR_NOMEM : scene_pss_period_integrator(v->scene, mo, &J, &I, err);
   cup_run_info info = {0};
   if (!st) {
     p.I = I;
@@ -64,7 +66,8 @@ static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_stead
   double power[SW_SS_POWER];
   for (int j = 0; j < SW_SS_SIGNALS; j++) me[j] = (cup_measure){NAN, NAN, NAN, NAN, NAN, NAN};   /* not measured */
   pss_figures f = {s->ss_nm, s->ss_sig, 0, s->ss_np, s->ss_pv, s->ss_pc, q->eff_out, q->eff_in, me, NULL, NULL,
-                       power, r->steady.efficiency};
+                       power, r->steady.efficiency, NULL, 0, 0};
+  pss_jumps_finish(&J, &f);
   if (st >= 0) st = pss_measure(p.sig, p.N, p.ns, &f, w, err);
   for (int j = 0; j < s->ss_nm; j++) {         /* those measured before an error too */
     double *fig = r->steady.fig[j];
@@ -73,6 +76,7 @@ static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_stead
   r->steady.efficiency = f.efficiency;
   if (st < 0) snprintf(r->message, sizeof r->message, "the steady state's period: %s: %s", cup_status_name(st), err);
   cup_integrator_free(&I);
+  pss_jumps_free(&J);
   free(p.sig); free(p.zeta); free(w);
   return st;
 }
