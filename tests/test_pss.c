@@ -580,6 +580,89 @@ static void measure_closed_forms(void **state) {
   assert_int_equal(cup_measure_period(v, N, 128, &m, NULL, NULL, err), CUP_ERR_ARG);
 }
 
+/* The ideal buck through the library alone: V1 a 0 PULSE (Vin for D Ts,
+ * ideal edges) through the ideal diode D1 a -> sw, which is the switch and
+ * the freewheeling path at once (V1 = 0: D1 carries i(L1) at v(sw) = 0, and
+ * in DCM blocks inside the period, an event, v(sw) then v(out)). Lossless:
+ * the efficiency P(RL) / -P(V1) is 1; the inductor's average voltage is 0,
+ * so the average v(sw) is the average v(out); in CCM it is D Vin. v(sw),
+ * i(V1) and the input power jump at the PULSE's edges and the diode's
+ * turn-off: cup_measure_period_jumps with cup_pss_jumps' times measures
+ * them to rounding, cup_measure_period (the samples' trapezoid rule) only
+ * to O(h) (printed beside). */
+typedef struct { double avg_sw, avg_out, eff; } buck_figs;
+
+static buck_figs buck_measure(solved *s, const double *jt, long nj, int with_jumps) {
+  long S = s->info.samples;
+  double *sw = calloc((size_t)S, sizeof *sw), *out = calloc((size_t)S, sizeof *out);
+  double *pin = calloc((size_t)S, sizeof *pin), *pout = calloc((size_t)S, sizeof *pout);
+  double *w = calloc((size_t)S, sizeof *w);
+  signal_of(s, "v(sw)", sw);
+  signal_of(s, "v(out)", out);
+  signal_of(s, "v(a)", pin);
+  signal_of(s, "i(V1)", w);
+  for (long j = 0; j < S; j++) pin[j] *= w[j];
+  signal_of(s, "i(RL)", w);
+  for (long j = 0; j < S; j++) pout[j] = out[j] * w[j];
+  double *sig[4] = {sw, out, pin, pout}, avg[4];
+  char err[CUP_ERRMSG_LEN];
+  for (int k = 0; k < 4; k++) {
+    cup_measure m;
+    int st = with_jumps ? cup_measure_period_jumps(sig[k], S, jt, nj, s->info.t0, s->info.period, 0, &m, NULL, NULL,
+                                                   err)
+                        : cup_measure_period(sig[k], S, 0, &m, NULL, NULL, err);
+    if (st) fail_msg("%s", err);
+    avg[k] = m.avg;
+  }
+  free(sw); free(out); free(pin); free(pout); free(w);
+  return (buck_figs){avg[0], avg[1], avg[3] / -avg[2]};
+}
+
+static void buck_library(const char *what, double D, double L, double R, int ccm) {
+  const double Vin = 12, Ts = 10e-6;
+  char cir[512];
+  snprintf(cir, sizeof cir, "ideal buck\nV1 a 0 PULSE(0 %.17g 0 jump jump %.17g %.17g)\nD1 a sw\nL1 sw out %.17g\n"
+           "C1 out 0 10u\nRL out 0 %.17g\n.end\n", Vin, D * Ts, Ts, L, R);
+  solved s = solve(cir, CUP_SCHEME_ADAPTIVE, 0, 2001, CUP_OK);
+  long nj = cup_pss_jumps(s.r, NULL);
+  double jt[64];
+  assert_true(nj >= 2 && nj <= 64);
+  assert_int_equal(cup_pss_jumps(s.r, jt), nj);
+  for (long q = 1; q < nj; q++) assert_true(jt[q] > s.info.t0 && jt[q] < s.info.t0 + Ts);
+  assert_true(jt[0] == s.info.t0);               /* the PULSE's rising edge at t0 (and t0 + Ts) */
+  assert_true(fabs(jt[1] - D * Ts) <= 1e-20);     /* its falling edge */
+  buck_figs b = buck_measure(&s, NULL, 0, 0), j = buck_measure(&s, jt, nj, 1);
+  double M = 2 / (1 + sqrt(1 + 8 * L / (R * D * D * Ts)));   /* DCM's conversion ratio, within the ripple */
+  print_message("  %s: %ld jump times (the second %.6g us); avg v(sw) %.12f -> %.12f (%s %.12f), avg v(out) %.12f, "
+                "efficiency %.9f -> 1 %+.3g\n", what, nj, jt[1] * 1e6, b.avg_sw, j.avg_sw,
+                ccm ? "D Vin" : "DCM's M Vin", ccm ? D * Vin : M * Vin, j.avg_out, b.eff, j.eff - 1);
+  assert_close(j.eff, 1, 1e-7);
+  assert_true(fabs(b.eff - 1) > 1e-4);           /* the samples alone: O(h), h = Ts / 2000 */
+  assert_close(j.avg_sw, j.avg_out, 1e-7 * Vin);  /* the inductor's average voltage is 0 */
+  assert_true(fabs(b.avg_sw - b.avg_out) > 1e-5 * Vin);
+  if (ccm) assert_close(j.avg_sw, D * Vin, 1e-9 * Vin);
+  else assert_close(j.avg_out, M * Vin, 2e-2 * Vin);
+  cup_measure m;
+  char err[CUP_ERRMSG_LEN];
+  double rev[2] = {jt[1], jt[0]}, off[1] = {s.info.t0 + 2 * Ts};
+  double v[3] = {0, 1, 0};
+  assert_int_equal(cup_measure_period_jumps(v, 3, rev, 2, 0, Ts, 0, &m, NULL, NULL, err),
+                   CUP_ERR_ARG);
+  assert_int_equal(cup_measure_period_jumps(v, 3, off, 1, 0, Ts, 0, &m, NULL, NULL, err), CUP_ERR_ARG);
+  assert_non_null(strstr(err, "jump time 0"));
+  done(&s);
+}
+
+static void buck_library_ccm(void **state) {
+  (void)state;
+  buck_library("CCM D = 0.3137 (edge between samples)", 0.3137, 100e-6, 5, 1);
+}
+
+static void buck_library_dcm(void **state) {
+  (void)state;
+  buck_library("DCM D = 0.3 (D1 blocks inside the period)", 0.3, 10e-6, 20, 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(rc_sine),
@@ -599,6 +682,8 @@ int main(void) {
     cmocka_unit_test(shift_damped),
     cmocka_unit_test(rc_delayed_pulse),
     cmocka_unit_test(measure_closed_forms),
+    cmocka_unit_test(buck_library_ccm),
+    cmocka_unit_test(buck_library_dcm),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

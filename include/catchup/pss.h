@@ -139,6 +139,15 @@ CUP_API int cup_pss_multipliers(const cup_pss *r, double *re, double *im);
  *  sample times (samples), x (samples x n, row k the state at t[k]) and
  *  zeta (samples x m), each pointer NULL if not wanted. */
 CUP_API int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *zeta);
+/** The times inside the trajectory's period (t0, t0 + T), on its samples'
+ *  clock and sorted, at which a signal may jump: each break of the sources
+ *  (cup_input_next_break: a PULSE's edges and corners, a PWL's knots) and
+ *  each event of the adaptive scheme (a diode turning on or off; the
+ *  fixed-step schemes report none). Copied into t (NULL: the count only);
+ *  returns how many: 0 with no trajectory, none, or more than 4 a sample
+ *  (more than the samples resolve: measure those signals from the samples
+ *  alone). For cup_measure_period_jumps. */
+CUP_API long cup_pss_jumps(const cup_pss *r, double *t);
 
 /* ---- measurements of one period (SPICE's .meas and .four) ---- */
 
@@ -147,10 +156,10 @@ CUP_API int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *z
  *  uses v[0 .. N-2]). Exact for a trigonometric polynomial of degree
  *  below (N - 1) / 2; a kink (a diode turning on) costs O(h^2), a jump
  *  (a diode's current, a capacitor's current at its turn-on) O(h),
- *  h = T / (N - 1) (docs/steady-state.md). catchup-run --steady-state and
- *  the steady-state sweeps, which know the period's switching and event
- *  times, measure a signal that jumps with its jumps at those times
- *  instead (docs/steady-state.md, "Signals that jump"). */
+ *  h = T / (N - 1) (docs/steady-state.md). cup_measure_period_jumps,
+ *  given the period's jump times (cup_pss_jumps), measures a signal that
+ *  jumps exactly, as catchup-run --steady-state and the steady-state
+ *  sweeps do (docs/steady-state.md, "Signals that jump"). */
 typedef struct cup_measure {
   double avg, rms, min, max, pp;  /**< average, RMS, minimum, maximum, peak-to-peak */
   double thd;                     /**< sqrt(sum_{k=2..order} |c_k|^2) / |c_1| (NaN when |c_1| is below
@@ -163,6 +172,21 @@ typedef struct cup_measure {
  *  phase_k)), each array order + 1 entries or NULL. order < (N - 1) / 2. */
 CUP_API int cup_measure_period(const double *v, long N, int order, cup_measure *m, double *amp, double *phase,
                                char *errmsg);
+/** cup_measure_period of v sampled at t0 + k T / (N - 1), given the times
+ *  jump_t[0 .. nj) (sorted, in [t0, t0 + T]; cup_pss_jumps's) at which it
+ *  may jump. If v jumps at one of them (by more than its change over a
+ *  sample beside it and 1e-6 of its largest magnitude), it is measured as
+ *  the piecewise-linear interpolant of its samples with each jump at its
+ *  own time, each side extrapolated from the two samples on its side: the
+ *  exact average, RMS, extremes (both sides of a jump), harmonics and THD
+ *  of that function, O(h^2) on the smooth pieces and exact for
+ *  piecewise-linear signals (a pulse, a switch node, a product v i of the
+ *  ideal buck); of several jumps between two samples the first counts.
+ *  Otherwise (nj = 0, or no jump there) cup_measure_period's figures, bit
+ *  for bit. CUP_ERR_ARG naming the time when one is outside the period or
+ *  out of order. */
+CUP_API int cup_measure_period_jumps(const double *v, long N, const double *jump_t, long nj, double t0, double T,
+                                     int order, cup_measure *m, double *amp, double *phase, char *errmsg);
 
 #ifdef __cplusplus
 }

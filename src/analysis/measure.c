@@ -6,6 +6,7 @@
  * piecewise-linear interpolant with each jump at its own time, its sides
  * extrapolated from the samples on each side (docs/steady-state.md). */
 #define _POSIX_C_SOURCE 200809L
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -88,14 +89,19 @@ static int clean(const jump_shape *s, long i) {
 
 /* The jump times (positions p in sample units, sorted) onto the samples
  * and intervals: one within 1e-9 of a sample is on it (at 0 and M, the
- * period's ends, the samples there are each side's already); of several
+ * period's ends, the samples there are each side's already, unless ends:
+ * then one there is a jump on sample M, v[M] either side); of several
  * inside one interval the first counts (the piece between them is not
  * sampled: the right side's line stands for it). */
-static void place(jump_shape *s, const double *pos, int nj) {
+static void place(jump_shape *s, const double *pos, int nj, int ends) {
   for (int q = 0; q < nj; q++) {
     double p = pos[q], r = nearbyint(p);
     if (fabs(p - r) <= 1e-9) {
       long j = (long)r;
+      if (ends && (j == 0 || j == s->M)) {
+        if (!s->at[s->M]) s->at[s->M] = 1, s->jat[s->nat++] = s->M;
+        continue;
+      }
       if (j > 0 && j < s->M && !s->at[j]) s->at[j] = 1, s->jat[s->nat++] = j;
       continue;
     }
@@ -124,11 +130,12 @@ static int shape(jump_shape *s, const double *v, double scale) {
   for (long q = 0; q < s->nat; q++) {
     long j = s->jat[q];
     int cl = clean(s, j - 2) && !s->inner[j - 1], cr = clean(s, j + 1) && !s->inner[j];
-    double eL = cl ? 2 * v[j - 1] - v[j - 2] : v[j - 1], eR = cr ? 2 * v[j + 1] - v[j + 2] : v[j + 1];
+    double eL = cl ? 2 * v[j - 1] - v[j - 2] : v[j - 1];
+    double eR = j == M ? v[0] : cr ? 2 * v[j + 1] - v[j + 2] : v[j + 1];   /* at T: the next period's start */
     s->lv[j] = s->rv[j] = v[j];
     if (fabs(v[j] - eL) <= fabs(v[j] - eR)) s->rv[j] = eR;   /* the sample is the side it continues */
     else s->lv[j] = eL;
-    if (fabs(s->rv[j] - s->lv[j]) > slope(v, M, j - 2) + slope(v, M, j + 1) + floor_) jumps = 1;
+    if (fabs(s->rv[j] - s->lv[j]) > slope(v, M, j - 2) + slope(v, M, j == M ? 0 : j + 1) + floor_) jumps = 1;
     else s->lv[j] = s->rv[j] = v[j];            /* no jump of v there (a kink, or nothing) */
   }
   for (long q = 0; q < s->nin; q++) {
@@ -245,9 +252,10 @@ static void shape_free(jump_shape *s) {
 }
 
 /* A jump_shape for N samples and the jumps at times jt[0 .. nj) of a period
- * T (sorted), its phase table for the harmonics if asked; NULL with no
- * jumps (or no memory: *st says). */
-static jump_shape *shape_new(long N, const double *jt, int nj, double T, int harmonics, int *st) {
+ * [t0, t0 + T] (sorted), its phase table for the harmonics if asked; NULL
+ * with no jumps (or no memory: *st says). */
+static jump_shape *shape_new(long N, const double *jt, int nj, double t0, double T, int harmonics, int ends,
+                             int *st) {
   *st = CUP_OK;
   if (nj <= 0 || !jt || !(T > 0) || N < 3) return NULL;
   jump_shape *s = calloc(1, sizeof *s);
@@ -276,8 +284,8 @@ static jump_shape *shape_new(long N, const double *jt, int nj, double T, int har
       s->sn[m] = -sin(x);
     }
   }
-  for (int q = 0; q < nj; q++) pos[q] = jt[q] / T * (double)s->M;
-  place(s, pos, nj);
+  for (int q = 0; q < nj; q++) pos[q] = (jt[q] - t0) / T * (double)s->M;
+  place(s, pos, nj, ends);
   free(pos);
   return s;
 }
@@ -289,6 +297,28 @@ static int measure_one(const double *w, long N, int order, jump_shape *s, cup_me
                        double *phase, char *errmsg) {
   int st = cup_measure_period(w, N, order, m, amp, phase, errmsg);
   if (!st && s && shape(s, w, fmax(fabs(m->min), fabs(m->max)))) shape_figures(s, w, order, m, amp, phase);
+  return st;
+}
+
+int cup_measure_period_jumps(const double *v, long N, const double *jump_t, long nj, double t0, double T, int order,
+                             cup_measure *m, double *amp, double *phase, char *errmsg) {
+  if (nj < 0 || nj > INT_MAX || (nj > 0 && !jump_t))
+    return fail_fmt(errmsg, CUP_ERR_ARG, "measure: %ld jump times%s", nj, nj > 0 ? " and none given (NULL)" : "");
+  if (!(T > 0) || !isfinite(T) || !isfinite(t0))
+    return fail_fmt(errmsg, CUP_ERR_ARG, "measure: the period [%g, %g + %g] must be finite with T > 0", t0, t0, T);
+  for (long q = 0; q < nj; q++) {
+    if (!(jump_t[q] >= t0 && jump_t[q] <= t0 + T))
+      return fail_fmt(errmsg, CUP_ERR_ARG, "measure: jump time %ld (%.17g) outside the period [%.17g, %.17g]", q,
+                      jump_t[q], t0, t0 + T);
+    if (q > 0 && jump_t[q] < jump_t[q - 1])
+      return fail_fmt(errmsg, CUP_ERR_ARG, "measure: jump time %ld (%.17g) before jump time %ld (%.17g): they must "
+                      "be sorted", q, jump_t[q], q - 1, jump_t[q - 1]);
+  }
+  int st;
+  jump_shape *s = shape_new(N, jump_t, (int)nj, t0, T, order, 1, &st);   /* NULL: no jumps, or N < 3 */
+  if (st) return fail_fmt(errmsg, st, "measure: out of memory");
+  st = measure_one(v, N, order, s, m, amp, phase, errmsg);
+  shape_free(s);
   return st;
 }
 
@@ -307,7 +337,7 @@ static int power_of(const double *sig, long N, int ns, int v, int i, double *w, 
 
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {
   int st = CUP_OK, H = f->harmonics;
-  jump_shape *s = shape_new(N, f->jt, f->nj, f->T, H, &st);
+  jump_shape *s = shape_new(N, f->jt, f->nj, 0, f->T, H, 0, &st);
   if (st) return fail_fmt(errmsg, st, "measure: out of memory");
   for (int j = 0; !st && j < f->nm; j++) {
     int c = f->idx ? f->idx[j] : j;
@@ -340,6 +370,12 @@ void pss_jumps_add(pss_jumps *J, double t) {
   if (J->n > 0 && J->t[J->n - 1] == t) return;
   if (J->n < J->cap) J->t[J->n++] = t;
   else J->overflow = 1;
+}
+
+void pss_jumps_breaks(pss_jumps *J, const cup_input *u) {
+  double t = cup_input_next_break(u, 0);
+  for (; t < J->T && !J->overflow; t = cup_input_next_break(u, t)) pss_jumps_add(J, t);
+  J->at_ends = fabs(t - J->T) <= 1e-12 * J->T;
 }
 
 int pss_jumps_event(double t, int row, int on, void *ctx) {

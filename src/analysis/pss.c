@@ -37,6 +37,8 @@ struct cup_pss {
   double *x0, *res, *J, *mre, *mim;
   int have_J;
   double *t, *x, *zeta;     /* the trajectory: samples, samples x n, samples x m */
+  pss_jumps jumps;          /* the trajectory's jump times (run clock; t0 + them: cup_pss_jumps) */
+  long nj;                  /* their count (0: none, or more than the samples resolve) */
 };
 
 /* The period map and the Newton iteration's work. */
@@ -311,6 +313,7 @@ void cup_pss_free(cup_pss **r) {
   cup_pss *p = *r;
   free(p->x0); free(p->res); free(p->J); free(p->mre); free(p->mim);
   free(p->t); free(p->x); free(p->zeta);
+  pss_jumps_free(&p->jumps);
   free(p);
   *r = NULL;
 }
@@ -415,10 +418,17 @@ static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cu
   r->t = calloc((size_t)samples, sizeof(double));
   r->x = calloc((size_t)samples * n, sizeof(double));
   r->zeta = calloc((size_t)samples * (m ? m : 1), sizeof(double));
-  if (!r->t || !r->x || !r->zeta) return say(r, CUP_ERR_NOMEM, "out of memory for the trajectory");
+  if (!r->t || !r->x || !r->zeta || pss_jumps_init(&r->jumps, io->T, samples))
+    return say(r, CUP_ERR_NOMEM, "out of memory for the trajectory");
   cup_integrator_options so = *io;
   so.output = CUP_OUTPUT_SAMPLES;
   so.output_samples = samples;
+  pss_jumps *J = &r->jumps;                      /* the times a signal may jump, as catchup-run notes them */
+  pss_jumps_breaks(J, u);
+  J->on_event = so.on_event;
+  J->event_ctx = so.event_ctx;
+  so.on_event = pss_jumps_event;
+  so.event_ctx = J;
   char e2[CUP_ERRMSG_LEN];
   cup_integrator *I = NULL;
   int st = cup_integrator_create(&I, L, u, &so, e2);
@@ -433,6 +443,15 @@ static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cu
     r->info.samples = c.k;
     return say(r, st, "the steady state's period run failed: %s", ri.message);
   }
+  pss_figures f;
+  pss_jumps_finish(J, &f);
+  if (!J->overflow && J->at_ends && J->n < J->cap) {    /* a break at T is one at 0 too: a jump at t0 */
+    memmove(J->t + 1, J->t, sizeof(double) * (size_t)J->n);
+    J->t[0] = 0;
+    J->n++;
+  }
+  r->nj = J->overflow ? 0 : J->n;
+  for (long q = 0; q < r->nj; q++) J->t[q] += t0;   /* the samples' clock */
   return CUP_OK;
 }
 
@@ -504,6 +523,12 @@ int cup_pss_multipliers(const cup_pss *r, double *re, double *im) {
   if (re) memcpy(re, r->mre, sizeof(double) * (size_t)r->info.n);
   if (im) memcpy(im, r->mim, sizeof(double) * (size_t)r->info.n);
   return CUP_OK;
+}
+
+long cup_pss_jumps(const cup_pss *r, double *t) {
+  if (!r || !r->info.samples) return 0;
+  if (t && r->nj) memcpy(t, r->jumps.t, sizeof(double) * (size_t)r->nj);
+  return r->nj;
 }
 
 int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *zeta) {

@@ -67,6 +67,7 @@ typedef struct pss_jumps {
   double *t;
   long n, cap;
   int overflow;             /* more than cap (4 a sample): none is used */
+  int at_ends;              /* pss_jumps_breaks: the sources break at T too (so at 0 of the next period) */
   double T;
   cup_event_fn on_event;    /* the run's own, called after (or NULL) */
   void *event_ctx;
@@ -76,6 +77,10 @@ typedef struct pss_jumps {
 int pss_jumps_init(pss_jumps *J, double T, long samples);
 void pss_jumps_free(pss_jumps *J);
 void pss_jumps_add(pss_jumps *J, double t);
+/* The breaks of the sources u in (0, J->T) (cup_input_next_break: a PULSE's
+ * edges and corners, a PWL's knots), each noted as a jump time; at_ends
+ * set if they break at T (within 1e-12 T) too. */
+void pss_jumps_breaks(pss_jumps *J, const cup_input *u);
 /* A cup_event_fn: the event's time, then the run's own on_event. */
 int pss_jumps_event(double t, int row, int on, void *ctx);
 /* The times sorted into f (jt, nj, T; J keeps them); none if they

@@ -16,7 +16,8 @@ module catchup_pss
   public :: cup_pss_options, cup_pss_info, cup_measure, cup_pss_t, &
     cup_pss_options_default, cup_input_period, cup_input_period_fits, cup_pss_solve, cup_pss_solve_map, cup_pss_free, &
     cup_pss_get_info, cup_pss_x0, cup_pss_residuals, cup_pss_monodromy, cup_pss_multipliers, &
-    cup_pss_trajectory, cup_measure_period, cup_pss_info_message, cup_netlist_element_nodes, &
+    cup_pss_trajectory, cup_pss_jumps, cup_measure_period, cup_measure_period_jumps, cup_pss_info_message, &
+    cup_netlist_element_nodes, &
     cup_netlist_steady_state, cup_input_steady_phase, cup_netlist_set_time_origin
 
   !> cup_pss_options (pss.h): fields as in C
@@ -325,6 +326,23 @@ contains
     ierr = int(c_cup_pss_trajectory(r%ptr, c_loc(t), c_loc(x), zp))
   end subroutine cup_pss_trajectory
 
+  !> The times in the trajectory's period (on its samples' clock, sorted) at
+  !> which a signal may jump (sources' breaks, the adaptive scheme's events);
+  !> none with no trajectory, or more than 4 a sample (pss.h).
+  subroutine cup_pss_jumps(r, t, ierr)
+    type(cup_pss_t), intent(in) :: r
+    real(c_double), allocatable, target, intent(out) :: t(:)
+    integer, intent(out) :: ierr
+    integer(c_long) :: nj
+    allocate(t(0))
+    if (cup_null_fail_(r%ptr, 'steady state', ierr)) return
+    nj = c_cup_pss_jumps(r%ptr, c_null_ptr)
+    deallocate(t)
+    allocate(t(nj))
+    if (nj > 0) nj = c_cup_pss_jumps(r%ptr, c_loc(t))
+    ierr = CUP_OK
+  end subroutine cup_pss_jumps
+
   !> Measurements of v, sampled uniformly over one period (v(N) closes it);
   !> with amp/phase (order + 1 entries each), its harmonics 0 .. order.
   subroutine cup_measure_period(v, order, m, ierr, amp, phase, errmsg)
@@ -357,6 +375,45 @@ contains
     st = c_cup_measure_period(v, int(size(v), c_long), int(order, c_int), m, ap, pp, cmsg)
     call cup_finish_(st, cmsg, ierr, errmsg)
   end subroutine cup_measure_period
+
+  !> cup_measure_period of v sampled at t0 + (k - 1) T / (N - 1), a signal
+  !> that jumps at one of jump_t (sorted, in [t0, t0 + T]: cup_pss_jumps)
+  !> measured with its jumps at their times (pss.h).
+  subroutine cup_measure_period_jumps(v, jump_t, t0, T, order, m, ierr, amp, phase, errmsg)
+    real(c_double), intent(in) :: v(:)
+    real(c_double), intent(in), target :: jump_t(:)
+    real(c_double), intent(in) :: t0, T
+    integer, intent(in) :: order
+    type(cup_measure), intent(out) :: m
+    integer, intent(out) :: ierr
+    real(c_double), intent(out), target, optional :: amp(:), phase(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    type(c_ptr) :: ap, pp, jp
+    integer(c_int) :: st
+    ap = c_null_ptr
+    pp = c_null_ptr
+    jp = c_null_ptr
+    if (present(amp)) then
+      if (size(amp) /= order + 1) then
+        call cup_size_fail_('amp', size(amp), order + 1, ierr, errmsg)
+        return
+      end if
+      ap = c_loc(amp)
+    end if
+    if (present(phase)) then
+      if (size(phase) /= order + 1) then
+        call cup_size_fail_('phase', size(phase), order + 1, ierr, errmsg)
+        return
+      end if
+      pp = c_loc(phase)
+    end if
+    if (size(jump_t) > 0) jp = c_loc(jump_t)
+    cmsg = cup_errbuf_()
+    st = c_cup_measure_period_jumps(v, int(size(v), c_long), jp, int(size(jump_t), c_long), t0, T, &
+                                    int(order, c_int), m, ap, pp, cmsg)
+    call cup_finish_(st, cmsg, ierr, errmsg)
+  end subroutine cup_measure_period_jumps
 
   !> The nodes of a netlist element (a its first, b its second): its power is
   !> v(a,b) i(element). Bound here, beside the power measurements.

@@ -61,6 +61,8 @@ ANNOTATE = {
     'cup_pss_multipliers': 're=out im=out',
     'cup_pss_trajectory': 't=null x=null zeta=null',
     'cup_measure_period': 'm=out amp=null phase=null',
+    'cup_pss_jumps': 't=null',
+    'cup_measure_period_jumps': 'jump_t=null m=out amp=null phase=null',
     'cup_scene_load_string': 'dir=null',
     'cup_h5run_sink': 'asc',
     'cup_h5run_event': 'asc',

@@ -67,9 +67,7 @@ static int noted_crossed(void *ctx, int topo, double t, const double *x) {
 int scene_pss_period_integrator(cup_scene *s, const cup_integrator_options *period, pss_jumps *J,
                                 cup_integrator **I, char *errmsg) {
   cup_integrator_options o = *period;
-  const cup_input *u = cup_scene_input(s);        /* the sources' own jumps and corners (PULSE edges, PWL knots) */
-  for (double t = cup_input_next_break(u, 0); t < o.T && !J->overflow; t = cup_input_next_break(u, t))
-    pss_jumps_add(J, t);
+  pss_jumps_breaks(J, cup_scene_input(s));       /* the sources' own jumps and corners (PULSE edges, PWL knots) */
   J->on_event = o.on_event;                       /* the run's own, after the time is noted */
   J->event_ctx = o.event_ctx;
   o.on_event = pss_jumps_event;

@@ -150,6 +150,58 @@ program test_f_netlist
     call cup_netlist_free(nl)
   end block
 
+  call section('netlist: the ideal buck measured with its jumps')
+  ! V1 PULSE through the ideal diode D1 (the switch and the freewheeling
+  ! path), D = 0.3137 (the edge between samples): lossless, so the
+  ! efficiency P(RL) / -P(V1) is 1, and avg v(sw) = D Vin (tests/test_pss.c)
+  call cup_netlist_load_string(nl, 'buck' // new_line('a') // 'V1 a 0 PULSE(0 12 0 jump jump 3.137u 10u)' // &
+                               new_line('a') // 'D1 a sw' // new_line('a') // 'L1 sw out 100u' // new_line('a') // &
+                               'C1 out 0 10u' // new_line('a') // 'RL out 0 5' // new_line('a'), 'buck.cir', ierr)
+  call check_int(ierr, CUP_OK, 'the buck netlist')
+  block
+    type(cup_pss_t) :: r
+    type(cup_pss_options) :: po
+    type(cup_pss_info) :: info
+    type(cup_measure) :: msw, mpin, mpout, mold
+    real(c_double), allocatable :: t(:), X(:, :), Z(:, :), jt(:), sig(:, :)
+    real(c_double) :: out(5)
+    integer :: k
+    call cup_netlist_probe(nl, 'v(sw)', ierr)
+    call cup_netlist_probe(nl, 'v(a)', ierr)
+    call cup_netlist_probe(nl, 'i(V1)', ierr)
+    call cup_netlist_probe(nl, 'v(out)', ierr)
+    call cup_netlist_probe(nl, 'i(RL)', ierr)
+    call cup_pss_options_default(po)
+    po%samples = 2001
+    call cup_pss_solve(r, cup_netlist_lcs(nl), ierr, u=cup_netlist_input(nl), opt=po, errmsg=msg)
+    call check_int(ierr, CUP_OK, 'the buck''s steady state: ' // trim(msg))
+    call cup_pss_get_info(r, info)
+    call cup_pss_trajectory(r, t, X, ierr, zeta=Z)
+    call cup_pss_jumps(r, jt, ierr)
+    call check(ierr == CUP_OK .and. size(jt) == 2, 'two jump times: the PULSE''s edges')
+    call check_close(jt(1), 0d0, 0d0, 'the rising edge at t0')
+    call check_close(jt(2), 3.137d-6, 1d-20, 'the falling edge at D Ts')
+    allocate(sig(size(t), 3))
+    do k = 1, size(t)
+      call cup_netlist_signals(nl, t(k), X(:, k), out, ierr, zeta=Z(:, k))
+      sig(k, :) = [out(1), out(2) * out(3), out(4) * out(5)]
+    end do
+    call cup_measure_period_jumps(sig(:, 1), jt, info%t0, info%period, 0, msw, ierr)
+    call check_int(ierr, CUP_OK, 'v(sw) measured')
+    call check_close(msw%avg, 0.3137d0 * 12, 1d-8, 'avg v(sw) = D Vin')
+    call cup_measure_period_jumps(sig(:, 2), jt, info%t0, info%period, 0, mpin, ierr)
+    call cup_measure_period_jumps(sig(:, 3), jt, info%t0, info%period, 0, mpout, ierr)
+    call check_close(mpout%avg / (-mpin%avg), 1d0, 1d-9, 'efficiency 1 (lossless)')
+    call cup_measure_period(sig(:, 3), 0, mold, ierr)
+    call cup_measure_period(sig(:, 2), 0, mpin, ierr)
+    call check(abs(mold%avg / (-mpin%avg) - 1) > 1d-4, 'the samples alone: off by O(h)')
+    call cup_measure_period_jumps(sig(:, 1), [jt(2), jt(1)], info%t0, info%period, 0, msw, ierr, errmsg=msg)
+    call check_int(ierr, CUP_ERR_ARG, 'jump times out of order')
+    call check_contains(msg, 'must be sorted', 'its message')
+    call cup_pss_free(r)
+  end block
+  call cup_netlist_free(nl)
+
   call section('netlist: sets and errors')
   call cup_netlist_load(nl, trim(dir) // '/halfwave-rc.cir', ierr, sets=['RL=-1'], errmsg=msg)
   call check_int(ierr, CUP_ERR_PARSE, 'a negative resistance set')
