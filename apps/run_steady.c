@@ -154,7 +154,7 @@ static int measure(run_steady *s) {
   double *w = calloc((size_t)s->N, sizeof *w);
   int st = !s->me || !s->amp || !s->phase || !s->power || !w ? CUP_ERR_NOMEM : CUP_OK;
   pss_figures f = {nm, s->nl ? s->mi : NULL, H, np, s->pv, s->pc, s->req->eff_out, s->req->eff_in, s->me, s->amp,
-                       s->phase, s->power, s->efficiency, NULL, 0, 0};
+                       s->phase, s->power, s->efficiency, NULL, 0, 0, 0};
   pss_jumps_finish(&s->jumps, &f);
   if (!st) st = s->nl ? pss_measure(s->sig, s->N, s->ns, &f, w, e2) : pss_measure(s->x, s->N, s->n, &f, w, e2);
   s->efficiency = f.efficiency;

@@ -39,7 +39,7 @@ static double saw(double t, double tau) {
 static void measure(const double *v, const double *jt, int nj, cup_measure *m, double *amp) {
   int idx = 0;
   double phase[K + 1], w[N];
-  pss_figures f = {1, &idx, K, 0, NULL, NULL, -1, -1, m, amp, phase, NULL, NAN, jt, nj, T};
+  pss_figures f = {1, &idx, K, 0, NULL, NULL, -1, -1, m, amp, phase, NULL, NAN, jt, nj, T, 0};
   char err[CUP_ERRMSG_LEN];
   assert_int_equal(pss_measure(v, N, 1, &f, w, err), CUP_OK);
 }
@@ -79,7 +79,7 @@ static void rectangle_and_power(void **state) {
   cup_measure m;
   int idx = 0, pv = 0, pc = 1;
   double phase[K + 1], w[N], power;
-  pss_figures f = {1, &idx, K, 1, &pv, &pc, -1, -1, &m, amp, phase, &power, NAN, jt, 2, T};
+  pss_figures f = {1, &idx, K, 1, &pv, &pc, -1, -1, &m, amp, phase, &power, NAN, jt, 2, T, 0};
   char err[CUP_ERRMSG_LEN];
   assert_int_equal(pss_measure(v, N, 2, &f, w, err), CUP_OK);
   /* the power: the sawtooth's integral over [0, D): from 1 - tau to 1 over [0, tau), 0 to D - tau after */

@@ -257,12 +257,46 @@ static void too_many_jumps(void **state) {
   }
 }
 
+/* A buck without a switch: the source is the PULSE, D1 both switch and
+ * freewheeling path (V1 at 0 V closes the loop), so the sources' edges at
+ * t0 and t0 + T are the switchings; the period's last sample reads the
+ * next period's source (its edge at T), and the jump there must count:
+ * it read avg v(sw) 3.7674 and efficiency 0.99934 (D Vin = 3.7644, 1), and
+ * the gate of the switched examples avg 0.50025 for a duty of 1/2. */
+static void source_edge_at_period_end(void **state) {
+  (void)state;
+  const double D = 0.3137, Vin = 12;
+  const char *cir = tmp_path("buck-noswitch.cir"), *out = tmp_path("buck-noswitch.h5");
+  FILE *fp = fopen(cir, "w");
+  assert_non_null(fp);
+  fputs("Buck without a switch\nV1 a 0 PULSE(0 12 0 jump jump 3.137u 10u)\nD1 a sw\nL1 sw out 100u\n"
+        "C1 out 0 10u\nRL out 0 5\n.tran 100n 1m\n.end\n", fp);
+  fclose(fp);
+  result r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", "--set",
+                                           "steady_state.measure=[v(sw), v(a)]", "--set",
+                                           "steady_state.efficiency=[RL, V1]", NULL}, 0, 0);
+  if (!r.exited || r.code != 0) fail_msg("exit %d:\n%s", r.code, r.err);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *avg, *eff;
+  assert_true(read_rows(f, "steady_state/measure/average", 1, 1, &avg) == 2);
+  read_rows(f, "steady_state/efficiency", 1, 1, &eff);
+  H5Fclose(f);
+  print_message("no switch: avg v(sw) %.15g, avg v(a) %.15g (D Vin %.15g); efficiency 1 %+.3g\n", avg[0], avg[1],
+                D * Vin, eff[0] - 1);
+  assert_true(fabs(avg[0] - D * Vin) <= 1e-9 * Vin);
+  assert_true(fabs(avg[1] - D * Vin) <= 1e-12 * Vin);
+  assert_true(fabs(eff[0] - 1) <= 1e-9);
+  free(avg); free(eff);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(ccm_half),
       cmocka_unit_test(ccm_between),
       cmocka_unit_test(dcm),
       cmocka_unit_test(too_many_jumps),
+      cmocka_unit_test(source_edge_at_period_end),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }

@@ -337,7 +337,7 @@ static int power_of(const double *sig, long N, int ns, int v, int i, double *w, 
 
 int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, char *errmsg) {
   int st = CUP_OK, H = f->harmonics;
-  jump_shape *s = shape_new(N, f->jt, f->nj, 0, f->T, H, 0, &st);
+  jump_shape *s = shape_new(N, f->jt, f->nj, 0, f->T, H, f->ends, &st);
   if (st) return fail_fmt(errmsg, st, "measure: out of memory");
   for (int j = 0; !st && j < f->nm; j++) {
     int c = f->idx ? f->idx[j] : j;
@@ -393,8 +393,15 @@ void pss_jumps_finish(pss_jumps *J, pss_figures *f) {
   f->jt = NULL;
   f->nj = 0;
   f->T = J->T;
+  f->ends = 0;
   if (J->overflow) return;                       /* more than the samples can resolve: as cup_measure_period */
   qsort(J->t, (size_t)J->n, sizeof(double), by_time);
+  if (J->at_ends && J->n < J->cap) {             /* a break at T is one at 0 too */
+    memmove(J->t + 1, J->t, sizeof(double) * (size_t)J->n);
+    J->t[0] = 0;
+    J->n++;
+    f->ends = 1;
+  }
   f->jt = J->t;
   f->nj = (int)J->n;
 }

@@ -444,12 +444,7 @@ static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cu
     return say(r, st, "the steady state's period run failed: %s", ri.message);
   }
   pss_figures f;
-  pss_jumps_finish(J, &f);
-  if (!J->overflow && J->at_ends && J->n < J->cap) {    /* a break at T is one at 0 too: a jump at t0 */
-    memmove(J->t + 1, J->t, sizeof(double) * (size_t)J->n);
-    J->t[0] = 0;
-    J->n++;
-  }
+  pss_jumps_finish(J, &f);                       /* (a break at T is one at 0 too: a jump at t0) */
   r->nj = J->overflow ? 0 : J->n;
   for (long q = 0; q < r->nj; q++) J->t[q] += t0;   /* the samples' clock */
   return CUP_OK;

@@ -38,9 +38,10 @@ typedef struct pss_figures {
   double *amp, *phase;      /* out, or NULL */
   double *power;            /* out: np averages */
   double efficiency;        /* out (untouched without eff_out) */
-  const double *jt;         /* the period's jump times (pss_jumps_finish): nj, sorted, in (0, T); NULL: none */
+  const double *jt;         /* the period's jump times (pss_jumps_finish): nj, sorted, in [0, T); NULL: none */
   int nj;
   double T;
+  int ends;                 /* a jump at 0 is one at T too (the sources break there: pss_jumps_finish) */
 } pss_figures;
 
 /* The figures f asks for of one period of N samples of ns signals each
@@ -83,9 +84,12 @@ void pss_jumps_add(pss_jumps *J, double t);
 void pss_jumps_breaks(pss_jumps *J, const cup_input *u);
 /* A cup_event_fn: the event's time, then the run's own on_event. */
 int pss_jumps_event(double t, int row, int on, void *ctx);
-/* The times sorted into f (jt, nj, T; J keeps them); none if they
- * overflowed (J->overflow: more than 4 a sample, which the samples cannot
- * resolve: the signals measured as by cup_measure_period alone). */
+/* The times sorted into f (jt, nj, T, ends; J keeps them), 0 first when
+ * the sources break at T (at_ends): the last sample then reads them from
+ * the next period, and the jump at T is one of the signals too (a
+ * circuit without switches, a source's edge at the period's end); none if
+ * they overflowed (J->overflow: more than 4 a sample, which the samples
+ * cannot resolve: the signals measured as by cup_measure_period alone). */
 void pss_jumps_finish(pss_jumps *J, pss_figures *f);
 
 #endif

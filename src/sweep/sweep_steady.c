@@ -66,7 +66,7 @@ static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_stead
   double power[SW_SS_POWER];
   for (int j = 0; j < SW_SS_SIGNALS; j++) me[j] = (cup_measure){NAN, NAN, NAN, NAN, NAN, NAN};   /* not measured */
   pss_figures f = {s->ss_nm, s->ss_sig, 0, s->ss_np, s->ss_pv, s->ss_pc, q->eff_out, q->eff_in, me, NULL, NULL,
-                       power, r->steady.efficiency, NULL, 0, 0};
+                       power, r->steady.efficiency, NULL, 0, 0, 0};
   pss_jumps_finish(&J, &f);
   if (st >= 0) st = pss_measure(p.sig, p.N, p.ns, &f, w, err);
   for (int j = 0; j < s->ss_nm; j++) {         /* those measured before an error too */
