@@ -343,20 +343,19 @@ contains
     ierr = CUP_OK
   end subroutine cup_pss_jumps
 
-  !> Measurements of v, sampled uniformly over one period (v(N) closes it);
-  !> with amp/phase (order + 1 entries each), its harmonics 0 .. order.
-  subroutine cup_measure_period(v, order, m, ierr, amp, phase, errmsg)
-    real(c_double), intent(in) :: v(:)
+  !> The harmonics' outputs of cup_measure_period(_jumps): amp and phase
+  !> (each optional, order + 1 entries) as C pointers (NULL when absent);
+  !> .false. with ierr set when one has the wrong size.
+  logical function harmonics_out_(order, ap, pp, ierr, amp, phase, errmsg) result(ok)
     integer, intent(in) :: order
-    type(cup_measure), intent(out) :: m
+    type(c_ptr), intent(out) :: ap, pp
     integer, intent(out) :: ierr
-    real(c_double), intent(out), target, optional :: amp(:), phase(:)
+    real(c_double), intent(inout), target, optional :: amp(:), phase(:)
     character(len=*), intent(out), optional :: errmsg
-    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
-    type(c_ptr) :: ap, pp
-    integer(c_int) :: st
+    ok = .false.
     ap = c_null_ptr
     pp = c_null_ptr
+    ierr = CUP_OK
     if (present(amp)) then
       if (size(amp) /= order + 1) then
         call cup_size_fail_('amp', size(amp), order + 1, ierr, errmsg)
@@ -371,6 +370,22 @@ contains
       end if
       pp = c_loc(phase)
     end if
+    ok = .true.
+  end function harmonics_out_
+
+  !> Measurements of v, sampled uniformly over one period (v(N) closes it);
+  !> with amp/phase (order + 1 entries each), its harmonics 0 .. order.
+  subroutine cup_measure_period(v, order, m, ierr, amp, phase, errmsg)
+    real(c_double), intent(in) :: v(:)
+    integer, intent(in) :: order
+    type(cup_measure), intent(out) :: m
+    integer, intent(out) :: ierr
+    real(c_double), intent(out), target, optional :: amp(:), phase(:)
+    character(len=*), intent(out), optional :: errmsg
+    character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
+    type(c_ptr) :: ap, pp
+    integer(c_int) :: st
+    if (.not. harmonics_out_(order, ap, pp, ierr, amp, phase, errmsg)) return
     cmsg = cup_errbuf_()
     st = c_cup_measure_period(v, int(size(v), c_long), int(order, c_int), m, ap, pp, cmsg)
     call cup_finish_(st, cmsg, ierr, errmsg)
@@ -391,23 +406,8 @@ contains
     character(kind=c_char) :: cmsg(CUP_ERRMSG_LEN)
     type(c_ptr) :: ap, pp, jp
     integer(c_int) :: st
-    ap = c_null_ptr
-    pp = c_null_ptr
     jp = c_null_ptr
-    if (present(amp)) then
-      if (size(amp) /= order + 1) then
-        call cup_size_fail_('amp', size(amp), order + 1, ierr, errmsg)
-        return
-      end if
-      ap = c_loc(amp)
-    end if
-    if (present(phase)) then
-      if (size(phase) /= order + 1) then
-        call cup_size_fail_('phase', size(phase), order + 1, ierr, errmsg)
-        return
-      end if
-      pp = c_loc(phase)
-    end if
+    if (.not. harmonics_out_(order, ap, pp, ierr, amp, phase, errmsg)) return
     if (size(jump_t) > 0) jp = c_loc(jump_t)
     cmsg = cup_errbuf_()
     st = c_cup_measure_period_jumps(v, int(size(v), c_long), jp, int(size(jump_t), c_long), t0, T, &
