@@ -148,19 +148,9 @@ static int halt(fixed_ws *F, cup_run_info *info, int status, long k, double t, c
   return stop_at(info, status, k, t, what);
 }
 
-/* u(t)'s components with a column in G (cup_input_eval's sums; the others 0). */
-static void offset_input(fixed_ws *F, double t) {
-  const cup_input *u = F->u;
-  for (int j = 0; j < u->p; j++) F->ut[j] = 0;
-  for (int q = 0; q < F->ngterms; q++) {
-    const input_term *w = &u->terms[F->gterms[q]];
-    F->ut[w->comp] += input_term_value(w, t);
-  }
-}
-
 /* g = F + G u(t) for a moving polyset. */
 static int moving_offset(fixed_ws *F, double t) {
-  if (F->gterms) offset_input(F, t);
+  if (F->gterms) input_eval_terms(F->u, F->gterms, F->ngterms, t, F->ut);   /* those with a column in G */
   else if (cup_input_eval(F->u, t, F->ut)) return CUP_ERR_CALLBACK;
   memcpy(F->g, F->K->g0, sizeof(double) * (size_t)F->m);
   la_sparse_gaxpy(F->G, F->ut, F->g);

@@ -276,6 +276,11 @@ int cup_input_eval(const cup_input *u, double t, double *out) {
   return CUP_OK;
 }
 
+void input_eval_terms(const cup_input *u, const int *terms, int n, double t, double *out) {
+  for (int j = 0; j < u->p; j++) out[j] = 0;
+  for (int q = 0; q < n; q++) out[u->terms[terms[q]].comp] += input_term_value(&u->terms[terms[q]], t);
+}
+
 /* ---- exosystem ------------------------------------------------------------------ */
 
 int input_term_gen_states(const input_term *t) {

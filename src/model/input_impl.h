@@ -143,6 +143,9 @@ int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
 
 /* One term's value at t (its component's share of u(t)). */
 double input_term_value(const input_term *w, double t);
+/* cup_input_eval's sums of terms[0 .. n) alone into out (p entries; the
+ * others 0): u(t) where only the listed terms are read (a waveform u). */
+void input_eval_terms(const cup_input *u, const int *terms, int n, double t, double *out);
 /* One term's exact integral over [a, b]. */
 double input_term_integral(const input_term *w, double a, double b);
 

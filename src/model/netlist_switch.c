@@ -282,12 +282,8 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
   const cup_input *u = sub->u;
   if (p && (!u || u->fn)) {
     if (cup_input_eval(u, t, S->ut)) return CUP_ERR_CALLBACK;
-  } else if (p) {                                  /* cup_input_eval's sums, of the terms read */
-    for (int q = 0; q < p; q++) S->ut[q] = 0;
-    for (int k = 0; k < tp->nuterm; k++) {
-      const input_term *w = &u->terms[tp->uterm[k]];
-      S->ut[w->comp] += input_term_value(w, t);
-    }
+  } else if (p) {
+    input_eval_terms(u, tp->uterm, tp->nuterm, t, S->ut);   /* the terms read */
   }
   const double *z = zeta;
   if (sub->zrow && tp->reads_z) {
