@@ -31,6 +31,7 @@
 
 #define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
                                six-pulse bridge cycles through more than 6, each rebuilt 5 times */
+#define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
@@ -140,7 +141,9 @@ struct adaptive_ws {
   double *ux, *gx;          /* ... their values (ad_offset) */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
-  ad_mode modes[AD_MODES];
+  ad_mode modes[AD_MODES + 1];  /* the last: a spare, where a new one is built (ad_mode_get) */
+  uint64_t alias_from[AD_ALIASES], alias_to[AD_ALIASES];   /* a set asked for, the subset it holds as */
+  long nalias;
   long clock;
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
