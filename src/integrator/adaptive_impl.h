@@ -68,6 +68,28 @@ typedef struct ad_mode {
 
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
 
+/* A step's flow from one vector as polynomials in theta: on each of nseg
+ * equal pieces of [0, h] (hs = h / nseg, hs ||M|| <= 1),
+ * exp((j hs + theta hs) M) y0 = sum_k c_jk theta^k, c_jk = (hs M)^k y_j / k!,
+ * y_j the previous piece's end. Built once per step (about 20 products by
+ * M's nonzeros a piece, made when first needed) and valued at any tau in [0, h] by Horner's rule (na
+ * per term): an event's probes, its root's Newton steps and the error's
+ * flows each took a Taylor series of their own from the step's start
+ * (ad_series_at). */
+#define AD_SERIES_MAX 40    /* terms a piece */
+#define AD_SERIES_SEGS 16   /* pieces at most (h ||M|| <= 16; ad_flow beyond) */
+typedef struct ad_series {
+  const struct ad_mode *md; /* the mode it was asked for (NULL: not yet in this step) */
+  const double *y0;         /* ... and the start vector */
+  double h;
+  int nseg;                 /* pieces; 0: not usable (h ||M|| > AD_SERIES_SEGS), ad_flow instead */
+  int built;                /* the pieces made so far (each when a tau first falls in it) */
+  int K[AD_SERIES_SEGS];    /* a piece's c_j0 .. c_jK */
+  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x na */
+  double *mag;              /* na: the largest term of each component */
+  double *v;                /* na: a start vector the caller keeps here */
+} ad_series;
+
 /* One run's progress (adaptive_run.c). */
 typedef struct ad_run {
   cup_run_info *info;
@@ -155,6 +177,7 @@ struct adaptive_ws {
   /* scratch of the run */
   double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
+  ad_series sy, se;         /* this step's flow from ya, and from (e, 0) (the error's), when asked */
   double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
   double *cz, *cs;          /* per row, the late-switch error (docs/adaptive.md): pinf ||B_i||_P and
@@ -244,6 +267,11 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
+/* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector
+ * that S stands for: by S's series (built on the first call in a step: S->md
+ * = NULL; the caller resets it), or ad_flow when h ||M|| > 1. */
+void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
+                  double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y);
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x);
@@ -303,6 +331,7 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */
+  double h;                 /* the step's length (the flow's series: A->sy) */
   double tau_lo, tau_sw;    /* the bracket from the step start: no crossing at tau_lo, one at tau_sw */
   double tau_est;           /* best estimate of the root */
   double cfac;              /* multiplies the late-switch error model (1; more after an underestimate) */

@@ -44,6 +44,14 @@ int ad_modes_init(adaptive_ws *A) {
     md->KU = take((size_t)n * nw, sizeof(double), &fail);
     for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = take(NA, sizeof(double), &fail);
   }
+  ad_series *ser[] = {&A->sy, &A->se};
+  for (int k = 0; k < 2; k++) {
+    /* (written before it is read: not cleared, a switched run makes its integrators as it goes) */
+    ser[k]->c = malloc(sizeof(double) * AD_SERIES_SEGS * (AD_SERIES_MAX + 1) * (size_t)(na ? na : 1));
+    fail |= !ser[k]->c;
+    ser[k]->mag = take((size_t)na, sizeof(double), &fail);
+    ser[k]->v = take((size_t)na, sizeof(double), &fail);
+  }
   size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
   A->S = take((size_t)m * m, sizeof(double), &fail);
   A->Sl = take((size_t)m * m, sizeof(double), &fail);
@@ -67,6 +75,7 @@ void ad_modes_free(adaptive_ws *A) {
     free(md->X); free(md->R); free(md->Zt); free(md->KU);
     for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
   }
+  free(A->sy.c); free(A->sy.mag); free(A->sy.v); free(A->se.c); free(A->se.mag); free(A->se.v);
   free(A->S); free(A->Sl); free(A->Sinv); free(A->T1); free(A->T2); free(A->T3); free(A->perm);
   if (A->eig) gsl_eigen_nonsymm_free(A->eig);
   if (A->eigA) gsl_matrix_free(A->eigA);
@@ -559,6 +568,72 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
       if (done) break;
     }
   }
+}
+
+/* c_k = (hs M)^k y / k! into c until two terms in a row are below a
+ * quarter ulp of each component's largest term (what its sum already rounds
+ * at: a component through zero stops too); hs ||M|| <= 1: the terms
+ * decrease, and the sum rounds as they do. Their count, or 0. */
+static int piece_build(adaptive_ws *A, const ad_mode *md, double hs, const double *y, double *c, double *mag) {
+  int na = A->na, quiet = 0;
+  la_copy(c, y, na);
+  for (int i = 0; i < na; i++) mag[i] = fabs(c[i]);
+  for (int k = 1; k <= AD_SERIES_MAX; k++) {
+    double *ck = c + (size_t)k * na, f = hs / k;
+    ad_mode_mv(A, md, ck - na, ck);
+    int small = 1;
+    for (int i = 0; i < na; i++) {
+      double v = ck[i] *= f, a = fabs(v);
+      small &= a <= 0.25 * DBL_EPSILON * mag[i];
+      if (a > mag[i]) mag[i] = a;
+    }
+    quiet = small ? quiet + 1 : 0;
+    if (quiet == 2) return k;
+  }
+  return 0;
+}
+
+/* sum_k c_k theta^k (K + 1 terms) into y. */
+static void piece_at(int na, const double *c, int K, double theta, double *y) {
+  la_copy(y, c + (size_t)K * na, na);
+  for (int k = K - 1; k >= 0; k--) {
+    const double *ck = c + (size_t)k * na;
+    for (int i = 0; i < na; i++) y[i] = y[i] * theta + ck[i];
+  }
+}
+
+/* Pieces up to j made: 0 if one is not usable (the series is then not). */
+static int series_upto(adaptive_ws *A, ad_series *S, int j) {
+  int na = A->na;
+  size_t stride = (size_t)(AD_SERIES_MAX + 1) * na;
+  double hs = S->h / S->nseg;
+  for (; S->built <= j; S->built++) {
+    int b = S->built;
+    double *c = S->c + b * stride;
+    if (b > 0) piece_at(na, c - stride, S->K[b - 1], 1, A->fa);
+    if (!(S->K[b] = piece_build(A, S->md, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
+  }
+  return 1;
+}
+
+void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
+                  double *y_out) {
+  if (S->md != md || S->y0 != y0 || S->h != h) {
+    double norm = fabs(h) * md->mnorm;
+    S->md = md;
+    S->y0 = y0;
+    S->h = h;
+    S->nseg = !(norm <= AD_SERIES_SEGS) ? 0 : norm > 1 ? (int)ceil(norm) : 1;
+    S->built = 0;
+  }
+  int j = 0;
+  double hs = h / (S->nseg ? S->nseg : 1);
+  if (S->nseg) {
+    j = (int)(tau / hs);
+    if (j >= S->nseg) j = S->nseg - 1;
+  }
+  if (!S->nseg || !(tau >= 0 && tau <= h) || !series_upto(A, S, j)) { ad_flow(A, md, tau, y0, y_out); return; }
+  piece_at(A->na, S->c + (size_t)j * (AD_SERIES_MAX + 1) * A->na, S->K[j], (tau - j * hs) / hs, y_out);
 }
 
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {

@@ -416,9 +416,9 @@ static double event_budget(const adaptive_ws *A, const ad_run *R) {
 
 /* The reported time of the event of row k: Newton steps on its function
  * along the old flow from tau (the state at the last one in A->yr). */
-static double refine_root(adaptive_ws *A, ad_mode *md, int k, double tau, double tmax) {
+static double refine_root(adaptive_ws *A, ad_mode *md, int k, double tau, double tmax, double h) {
   for (int it = 0; it < 4; it++) {
-    ad_flow(A, md, tau, A->ya, A->yr);
+    ad_series_at(A, &A->sy, md, h, A->ya, tau, A->yr);
     if (k < 0) break;
     double g = md->Lc[k] + la_dot(md->L + (size_t)k * A->na, A->yr, A->na);
     ad_events_deriv(A, md, A->yr, A->dt);
@@ -446,7 +446,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     ad_locate(A, old, tw, ev);
     double tsw = ev->tau_sw;
     if (ev->hi_ok) la_copy(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
-    else ad_flow(A, old, tsw, A->ya, A->yb);
+    else ad_series_at(A, &A->sy, old, h, A->ya, tsw, A->yb);
     ad_state(A, old, A->yb, A->xs);
     la_copy(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);
@@ -466,7 +466,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     A->pinned[0] = nm;
     ad_offset(A, A->wt, A->g);
     ad_manifold(A, nm, A->g, A->xs);
-    tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw);   /* the reference path */
+    tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw, h);   /* the reference path */
     ad_state(A, old, A->yr, A->xr);
     la_copy(A->wa, A->yr + n, nw);
     ad_offset(A, A->wa, A->g);
@@ -500,15 +500,18 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
   if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
   la_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  la_zero(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
+  la_copy(A->se.v, A->e, n);
   if (troot > t0) {
-    la_zero(A->de2, A->na);
-    la_copy(A->de2, A->e, n);
-    ad_flow(A, old, troot - t0, A->de2, A->de);
+    ad_series_at(A, &A->se, old, h, A->se.v, troot - t0, A->de);
     la_copy(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
-  error_flow(A, old, ev->tau_sw);
+  if (ev->tau_sw > 0) {
+    ad_series_at(A, &A->se, old, h, A->se.v, ev->tau_sw, A->yt);
+    la_copy(A->e, A->yt, n);
+  }
   if (A->tan) {   /* the tangent: the old flow to the root, its saltation (the new manifold's projection), the new flow */
     double tr = fmin(fmax(tau_rep, 0), ev->tau_sw);
     tangent_flow(A, old, tr);
@@ -531,6 +534,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   int n = A->n, na = A->na, snap;
   double t1;
   const double *E = begin_step(A, R, &t1, &snap);
+  A->sy.md = A->se.md = NULL;                    /* (the flow's series are this step's) */
   cup_proj_info pi = {0};
   pi.skipped = 1;
   if (!E) {
@@ -555,7 +559,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   ad_events_eval(A, md, A->yb, A->gb, A->tb);
   ad_events_deriv(A, md, A->yb, A->db);
   double h = t1 - R->t;
-  ad_event ev = {.t0 = R->t, .cfac = 1, .row = -1};
+  ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
   if (st < 0) return st;
