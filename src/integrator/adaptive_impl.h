@@ -175,7 +175,7 @@ struct adaptive_ws {
   gsl_matrix *eigA;
   gsl_vector_complex *eigv;
   /* scratch of the run */
-  double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
+  double *ework;            /* 7 na^2: exponentials (5 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
   ad_series sy, se;         /* this step's flow from ya, and from (e, 0) (the error's), when asked */
   double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */

@@ -482,7 +482,7 @@ ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
 /* exp(h M_J) into slot c of md's cache. */
 static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   size_t NA = (size_t)A->na * A->na;
-  double *hM = A->ework + 4 * NA;
+  double *hM = A->ework + 5 * NA;
   for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
@@ -541,7 +541,7 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   double norm = fabs(tau) * md->mnorm;
   if (norm > 4) {                                /* stiff or long: the full exponential */
     size_t NA = (size_t)na * na;
-    double *hM = A->ework + 4 * NA, *Et = A->ework + 5 * NA;
+    double *hM = A->ework + 5 * NA, *Et = A->ework + 6 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
     la_dense_expm_stiff(hM, na, Et, A->ework);
     matvec(na, Et, y_in, y_out);
