@@ -105,6 +105,8 @@ typedef struct ad_run {
   double wall0;
   double tend;              /* catching-up steps across accumulating events until tend (0: none) */
   long ev0;                 /* the events before the step under way (the accumulation check after it) */
+  int after_event;          /* the steps since the last event met no breakpoint: a step that ends on
+                               one (not at its length limit) has a length that will not recur */
 } ad_run;
 
 /* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
@@ -263,6 +265,8 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
 const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+/* ... the cached one that ad_expm would take, or NULL (nothing computed). */
+const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */

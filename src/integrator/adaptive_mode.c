@@ -510,13 +510,19 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * the buck's time loop.) The state moves by |x'| 2 eps |t| at most, what
  * rounding t itself does. The samples' spacing is applied sample after
  * sample, where such differences would add up: it takes only itself. */
-const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
-  int slot = 0;
+const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   double same = 2 * DBL_EPSILON * fabs(t_end);
-  for (int c = 0; c < AD_CACHE; c++) {
+  for (int c = 0; c < AD_CACHE; c++)
     if (fabs(md->hc[c] - h) <= same) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
+  return NULL;
+}
+
+const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
+  const double *E = ad_expm_cached(A, md, h, t_end);
+  if (E) return E;
+  int slot = 0;
+  for (int c = 1; c < AD_CACHE; c++)
     if (md->cstamp[c] < md->cstamp[slot]) slot = c;
-  }
   expm_into(A, md, h, slot);
   md->hc[slot] = h;
   md->cstamp[slot] = ++A->clock;

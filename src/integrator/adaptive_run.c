@@ -355,6 +355,7 @@ static double interp_error(const adaptive_ws *A, const ad_mode *md, const double
 static int end_of_step(adaptive_ws *A, ad_run *R, cup_proj_info *pi, int at_event) {
   int at_tb = R->t == R->tb, st;
   if (at_tb) {
+    R->after_event = 0;
     cup_proj_info pb;
     if ((st = at_break(A, R, 0, &pb)) < 0) return st;
     if (!pb.skipped) *pi = pb;
@@ -367,11 +368,12 @@ static int end_of_step(adaptive_ws *A, ad_run *R, cup_proj_info *pi, int at_even
 /* The step's end t1 (a breakpoint, an output time, T, or the mode's step
  * limit), the input's states, and exp(h M). Callback inputs: the step
  * shrinks until the interpolation error is within its share of tol.
- * NULL with *t1 set when t1 is within rounding of t (nothing to flow), or
- * with the status set on an error. */
-static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap) {
+ * NULL with *t1 set when t1 is within rounding of t (nothing to flow), with
+ * *series set when the step takes the flow's series instead (ad_series_at),
+ * or with the status set on an error. */
+static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap, int *series) {
   ad_mode *md = R->md;
-  *snap = 0;
+  *snap = *series = 0;
   for (;;) {
     double hm = ad_mode_hmax(A, md), hl = A->callback ? fmin(hm, R->h_cb) : hm;
     *t1 = next_stop(A, R, hl, 0);
@@ -383,6 +385,15 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
     }
     if (ad_inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
       ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
+      return NULL;
+    }
+    /* a step from an event to a breakpoint has a length of its own: the
+     * flow's series (two of them: y and the error) cost less than the
+     * exponential, where h ||M|| <= 2 (its length limit's recurs) */
+    double hlim = A->o.hmax > 0 ? fmin(hl, A->o.hmax) : hl;
+    if (R->after_event && !A->callback && !A->tan && *t1 != R->t + hlim && h * md->mnorm <= 2 &&
+        !ad_expm_cached(A, md, h, *t1)) {
+      *series = 1;
       return NULL;
     }
     const double *E = ad_expm(A, md, h, *t1);
@@ -525,6 +536,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
   la_copy(A->x, A->xs, n);
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
+  R->after_event = 1;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
   return end_of_step(A, R, &pi, 1);
 }
@@ -533,11 +545,12 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   ad_mode *md = R->md;
   int n = A->n, na = A->na, snap;
   double t1;
-  const double *E = begin_step(A, R, &t1, &snap);
+  int series;
+  const double *E = begin_step(A, R, &t1, &snap, &series);
   A->sy.md = A->se.md = NULL;                    /* (the flow's series are this step's) */
   cup_proj_info pi = {0};
   pi.skipped = 1;
-  if (!E) {
+  if (!E && !series) {
     if (!snap) return R->info->status;
     R->t = t1;
     return end_of_step(A, R, &pi, 0);
@@ -550,15 +563,19 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     if (st < 0 || R->md->mask != was) return st;
   }
   ad_events_deriv(A, md, A->ya, A->da);
-  for (int i = 0; i < na; i++) A->yb[i] = 0;
-  for (int j = 0; j < na; j++) {
-    double yj = A->ya[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
+  double h = t1 - R->t;
+  if (series) {
+    ad_series_at(A, &A->sy, md, h, A->ya, h, A->yb);
+  } else {
+    for (int i = 0; i < na; i++) A->yb[i] = 0;
+    for (int j = 0; j < na; j++) {
+      double yj = A->ya[j];
+      if (yj == 0) continue;
+      for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
+    }
   }
   ad_events_eval(A, md, A->yb, A->gb, A->tb);
   ad_events_deriv(A, md, A->yb, A->db);
-  double h = t1 - R->t;
   ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
@@ -566,10 +583,17 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   ad_state(A, md, A->yb, A->x);
   ad_offset(A, A->yb + n, A->g);
   ad_manifold(A, md, A->g, A->x);
-  for (int i = 0; i < n; i++) {
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
-    A->et[i] = acc;
+  if (series) {                                  /* (e, 0) by its series */
+    la_zero(A->se.v, na);
+    la_copy(A->se.v, A->e, n);
+    ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
+    la_copy(A->et, A->yt, n);
+  } else {
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
+      A->et[i] = acc;
+    }
   }
   la_copy(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
