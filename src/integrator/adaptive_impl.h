@@ -72,10 +72,10 @@ typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's A
  * equal pieces of [0, h] (hs = h / nseg, hs ||M|| <= 1),
  * exp((j hs + theta hs) M) y0 = sum_k c_jk theta^k, c_jk = (hs M)^k y_j / k!,
  * y_j the previous piece's end. Built once per step (about 20 products by
- * M's nonzeros a piece, made when first needed) and valued at any tau in [0, h] by Horner's rule (na
- * per term): an event's probes, its root's Newton steps and the error's
- * flows each took a Taylor series of their own from the step's start
- * (ad_series_at). */
+ * M's nonzeros a piece, made when first needed) and valued at any tau in
+ * [0, h] by Horner's rule (na per term): an event's probes, its root's
+ * Newton steps and the error's flows each took a Taylor series of their own
+ * from the step's start (ad_series_at). */
 #define AD_SERIES_MAX 40    /* terms a piece */
 #define AD_SERIES_SEGS 16   /* pieces at most (h ||M|| <= 16; ad_flow beyond) */
 typedef struct ad_series {
@@ -273,7 +273,7 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector
  * that S stands for: by S's series (built on the first call in a step: S->md
- * = NULL; the caller resets it), or ad_flow when h ||M|| > 1. */
+ * = NULL; the caller resets it), or ad_flow when h ||M|| > AD_SERIES_SEGS. */
 void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
                   double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
