@@ -43,6 +43,7 @@ typedef struct nl_topo {
   int *uterm, nuterm;      /* the input's terms whose component a control reads (all: zeta's rows read u) */
   int reads_z;             /* a control reads zeta */
   int state_gated;         /* a control depends on the state or the diodes */
+  uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for changes) */
 } nl_topo;
 
 struct nl_switched {
@@ -234,7 +235,9 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
     if (st) st = nl_switch_nomem(c, errmsg);
   }
   tp->sub = sub;                                   /* (gated_by_state reads it) */
-  for (int k = 0; !st && k < S->nsw; k++) tp->state_gated |= gated_by_state(tp, k);
+  for (int k = 0; !st && k < S->nsw; k++)
+    if (gated_by_state(tp, k)) tp->by_state |= (uint64_t)1 << k;
+  tp->state_gated = tp->by_state != 0;
   if (!st && ctl_sparse(S, tp)) st = nl_switch_nomem(c, errmsg);
   derived_free(c, &d);
   if (st) {
@@ -358,7 +361,7 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
 static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
   if (controls(S, tp, s, x, NULL, cv)) return -1;
   for (int k = 0; k < S->nsw; k++)
-    if (gated_by_state(tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
+    if ((int)(tp->by_state >> k & 1u) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
   S->last_cfg = rule(S, tp->cfg, cv);
   return S->last_cfg != tp->cfg;
 }
