@@ -255,7 +255,7 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
   return CUP_OK;
 }
 
-/* Two inputs' terms q the same waveforms, bit for bit. */
+/* 1 if two inputs' terms are the same waveform, bit for bit. */
 static int same_term(const input_term *a, const input_term *b) {
   if (a->comp != b->comp || a->kind != b->kind || a->np != b->np) return 0;
   const double fa[] = {a->value, a->amp, a->omega, a->phase, a->delay, a->damping, a->value2, a->rise, a->fall,
@@ -604,7 +604,10 @@ static int sw_origin(cup_netlist *nl, double t0, char *errmsg) {
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s: a controller with a time origin t0 = %g", nl->file, t0);
   for (int k = 0; k < S->ntopo; k++) {
     int st = nl_input_origin(S->topo[k].sub, t0, errmsg);
-    if (st) return st;
+    if (st) {                                      /* the inputs now differ: no control class holds */
+      for (int j = 0; j < S->ntopo; j++) S->topo[j].ctl_class = 0;
+      return st;
+    }
   }
   S->t0 = t0;
   return CUP_OK;
