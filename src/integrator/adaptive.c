@@ -194,7 +194,7 @@ static void alloc_vectors(adaptive_ws *A, int *fail) {
   A->gi = take((size_t)m * p + 1, sizeof(int), fail);
   A->gx = take((size_t)m * p + 1, sizeof(double), fail);
   A->gterm = take(A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int), fail);
-  A->ework = take(6 * NA, sizeof(double), fail);
+  A->ework = take(7 * NA, sizeof(double), fail);
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), fail);
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
