@@ -12,9 +12,14 @@
 #include "adaptive_impl.h"
 #include "tally.h"
 
+/* As fmax(r, |v_i|) from r = 0, without a libm call an entry: r is never
+ * NaN, so a NaN entry is passed over, as fmax passes it. */
 static double norm_inf(const double *v, int n) {
   double r = 0;
-  for (int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
+  for (int i = 0; i < n; i++) {
+    double a = fabs(v[i]);
+    if (a > r) r = a;
+  }
   return r;
 }
 
@@ -78,8 +83,8 @@ static void times(const adaptive_ws *A, double *y, double *e, double *tmp, int *
   if (nc < 0)
     for (nc = na; nc > 0 && e[nc - 1] == 0;) nc--;
   double *ty = tmp, *te = tmp + na;
-  la_copy(ty, y, na);
-  la_copy(te, e, nc);
+  memcpy(ty, y, sizeof(double) * (size_t)na);
+  memcpy(te, e, sizeof(double) * (size_t)nc);
   const int *rp = A->erp, *rj = A->erj;
   const double *rx = A->erx;
   for (int i = 0; i < na; i++) {
@@ -89,7 +94,11 @@ static void times(const adaptive_ws *A, double *y, double *e, double *tmp, int *
       a += rx[k] * ty[rj[k]];
       b += rx[k] * te[rj[k]];
     }
-    for (; k < end; k++) a += rx[k] * ty[rj[k]];
+    for (; k + 1 < end; k += 2) {                /* two terms a turn, still added in order */
+      a += rx[k] * ty[rj[k]];
+      a += rx[k + 1] * ty[rj[k + 1]];
+    }
+    if (k < end) a += rx[k] * ty[rj[k]];
     y[i] = a;
     e[i] = b;
     if (b != 0) last = i;
@@ -114,7 +123,8 @@ static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
   A->rows_ready = 0;
   for (;;) {
     R->next_sample++;
-    R->est_max = fmax(R->est_max, norm_inf(A->de, n) + rnd);
+    double est = norm_inf(A->de, n) + rnd;
+    if (!(est <= R->est_max)) R->est_max = fmax(R->est_max, est);   /* (the call only when it moves) */
     if (R->sink) {
       if (!A->rows_ready) ad_state(A, md, A->zy, A->xo);
       else for (int i = 0; i < n; i++) A->xo[i] = row_times(A, i, A->zy);
@@ -287,13 +297,15 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
  * state and the input's states from the output time on. */
 int adaptive_zeta(adaptive_ws *A, double *zeta) {
   const ad_mode *md = A->zmd;
+  if (md && A->zy_ready && A->rows_ready) {      /* a sample inside a step, by rows_of's rows: one pass */
+    for (int i = 0; i < A->m; i++) zeta[i] = md->is_zeta[i] ? md->Lc[i] + row_times(A, A->n + i, A->zy) : 0;
+    return CUP_OK;
+  }
   for (int i = 0; i < A->m; i++) zeta[i] = 0;
   if (!md) return CUP_OK;
   if (A->zy_ready) {                             /* a sample inside a step: its y is known */
     for (int i = 0; i < A->m; i++)
-      if (md->is_zeta[i])
-        zeta[i] = md->Lc[i] + (A->rows_ready ? row_times(A, A->n + i, A->zy)
-                                             : la_dot(md->L + (size_t)i * A->na, A->zy, A->na));
+      if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
     return CUP_OK;
   }
   double t = A->zt, tb = cup_input_next_break(A->u, t);
