@@ -393,12 +393,8 @@ int cup_h5run_flush(cup_h5run *w) {
 
 /* Rows until the next chunk boundary: after a flush of a partial buffer the
  * next writes realign, so that HDF5 receives whole chunks. */
-static hsize_t room(cup_h5run *w) {
-  if (w->room_of != w->written || !w->room) {    /* (written moves by whole buffers, or on a resume) */
-    w->room = w->chunk_rows - w->written % w->chunk_rows;
-    w->room_of = w->written;
-  }
-  return w->room;
+static hsize_t room(const cup_h5run *w) {
+  return w->chunk_rows - w->written % w->chunk_rows;
 }
 
 /* Full chunks go to HDF5 as they fill; H5Fflush runs only once a second.

@@ -28,8 +28,6 @@ struct cup_h5run {
   hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
   hsize_t written;        /* rows already handed to HDF5 */
   hsize_t nbuf;           /* rows waiting in the buffer */
-  hsize_t room, room_of;  /* the rows to the next chunk boundary from written = room_of (0: not known):
-                             cup_h5run_append asks at each row, a 64-bit division each time before */
   double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
   int nsig;               /* named signals: /signals/<name> */
   hid_t group;
