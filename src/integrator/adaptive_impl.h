@@ -138,6 +138,8 @@ struct adaptive_ws {
   double *U, *W;            /* p x nw, nw x nw, column-major */
   int *up, *ui, *gp, *gi;   /* U's nonzeros by column (nw + 1 starts, rows), G's by row (m + 1 starts, columns) */
   double *ux, *gx;          /* ... their values (ad_offset) */
+  int *gterm, ngterm;       /* built-in waveforms: the terms whose input has a column in G (at_break's
+                               g = F + G u(t): a switch's gate source moves no row) */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
   ad_mode modes[AD_MODES];

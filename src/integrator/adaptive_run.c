@@ -293,13 +293,23 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
 /* ---- breakpoints ------------------------------------------------------------------- */
 
 /* At a breakpoint t (or 0): the state onto K(t) with u(t) itself (a square
- * wave is 0 there), which is what the catching-up limit holds at t. */
+ * wave is 0 there), which is what the catching-up limit holds at t. g =
+ * F + G u(t) by G's nonzeros, a waveform's terms those that reach them
+ * (ad_offset's sums: the dense ones less terms that are zero; a switched
+ * run's window starts and ends here, and a converter's gates, read by the
+ * switches alone, were half of what it cost). */
 static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
-  if (A->u && cup_input_eval(A->u, R->t, A->ut))
-    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-  la_copy(A->g, A->F, A->m);
-  for (int i = 0; i < A->m; i++)
-    for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
+  if (A->u && A->u->fn) {
+    if (cup_input_eval(A->u, R->t, A->ut))
+      return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  } else if (A->u) {
+    input_eval_terms(A->u, A->gterm, A->ngterm, R->t, A->ut);
+  }
+  for (int i = 0; i < A->m; i++) {
+    double acc = A->F[i];
+    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
+    A->g[i] = acc;
+  }
   uint64_t active;
   double x0n = inf_norm(A->x, A->n);
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
