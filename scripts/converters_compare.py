@@ -55,8 +55,8 @@ TOLS = [1e-3, 1e-5, 1e-7, 1e-9]
 THETA_FACTORS = [0.1, 1, 10]              # theta's n, times TSTOP / TSTEP
 OWN_STEPS = ["--set", "output.every=1"]   # catchup-run at its own steps (docs/netlist.md)
 OWN_TOLS = [1e-3, 1e-6]                   # the adaptive scheme's tol at its own steps
-OWN_THETA_PER_PERIOD = [2, 4, 10, 30]     # theta's n at its own steps, times the switching periods
-OWN_HMAX = 10                             # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
+OWN_THETA_PER_PERIOD = [2, 4, 10, 30, 100]  # theta's n at its own steps, times the switching periods
+OWN_HMAX = [3, 10]                        # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
 SWITCH = "RON=1m ROFF=1e9"
 DIODE = "D(IS=1e-15 N=0.01)"
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
@@ -356,8 +356,8 @@ def configs(name, cards, tstep, tstop, period):
     # the same tool recording at its own steps instead of the .tran grid
     # (OWN_STEPS), as ngspice and pulsim do: cheaper settings only
     out += [("catchup", "adaptive tol=%g, own steps" % tol, ["--tol", tol] + OWN_STEPS) for tol in OWN_TOLS]
-    out += [("catchup", "adaptive tol=%g hmax=Ts/%d, own steps" % (OWN_TOLS[-1], OWN_HMAX),
-             ["--tol", OWN_TOLS[-1], "--set", "hmax=%r" % (period / OWN_HMAX)] + OWN_STEPS)]
+    out += [("catchup", "adaptive tol=%g hmax=Ts/%d, own steps" % (OWN_TOLS[-1], h),
+             ["--tol", OWN_TOLS[-1], "--set", "hmax=%r" % (period / h)] + OWN_STEPS) for h in OWN_HMAX]
     out += [("catchup", "theta n=%d, own steps" % (f * periods), ["--scheme", "theta", "--n", f * periods] + OWN_STEPS)
             for f in OWN_THETA_PER_PERIOD]
     out += [("ngspice", label, opts) for label, opts in NGSPICE_SETTINGS]
@@ -491,7 +491,7 @@ def section(rows, a, cost):
            "least as accurate. No peer setting was dropped or loosened: ngspice and pulsim run exactly as "
            "before catchup got its own-step rows.", "",
            "catchup: `catchup-run` (adaptive `--tol`, θ = ½ `--scheme theta --n N`; at its own steps the "
-           "adaptive scheme, also with its step capped at Ts/%d, `--set hmax=`, and θ at %s steps per switching "
+           "adaptive scheme, also with its step capped at Ts/%s, `--set hmax=`, and θ at %s steps per switching "
            "period Ts), its time in the integrator (sampling and HDF5 writes included). ngspice %s: a "
            "near-ideal copy (switches `%s`, "
            "`jump` edges 1 ns, diodes `%s`, TMAX = TSTEP, UIC, rshunt = 1e12), its transient analysis time "
@@ -501,7 +501,7 @@ def section(rows, a, cost):
            "TSTEP, `dsed` with its default cap (10 us; it ground on for over a minute on the buck with a cap of "
            "1 us or 0.1 us); each run in a child process, stopped at %d s; the time of its `simulate()` "
            "call." % (
-               OWN_HMAX, ", ".join(map(str, OWN_THETA_PER_PERIOD)), ngspice_version(), SWITCH, DIODE,
+               " and Ts/".join(map(str, OWN_HMAX)), ", ".join(map(str, OWN_THETA_PER_PERIOD)), ngspice_version(), SWITCH, DIODE,
                pulsim_version(), PULSIM_TIMEOUT), ""]
     out += summary(rows) + [""]
     for name in EXAMPLES:

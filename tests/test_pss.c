@@ -663,6 +663,44 @@ static void buck_library_dcm(void **state) {
   buck_library("DCM D = 0.3 (D1 blocks inside the period)", 0.3, 10e-6, 20, 0);
 }
 
+/* A wall-time limit is the solve's, not each period run's: Newton's
+ * finite-difference monodromy on an 8-state RC ladder takes 9 period runs
+ * a step, each well inside the limit; a fifth of the unlimited solve's
+ * time stops it with CUP_ERR_TIME_LIMIT, before it has run as many
+ * periods (it returned CUP_OK after every run when each run had the
+ * limit afresh). */
+static void time_limit_is_the_solves(void **state) {
+  (void)state;
+  const char *ladder = "RC ladder\nV1 in 0 SIN(0 1 50)\nR1 in 1 1k\nC1 1 0 1u\nR2 1 2 1k\nC2 2 0 1u\n"
+                       "R3 2 3 1k\nC3 3 0 1u\nR4 3 4 1k\nC4 4 0 1u\nR5 4 5 1k\nC5 5 0 1u\nR6 5 6 1k\nC6 6 0 1u\n"
+                       "R7 6 7 1k\nC7 7 0 1u\nR8 7 8 1k\nC8 8 0 1u\n.end\n";
+  cup_netlist *nl = load(ladder);
+  const cup_lcs *L = cup_netlist_lcs(nl);
+  assert_int_equal(cup_lcs_dim(L), 8);
+  cup_integrator_options io;
+  opts_for(&io, CUP_SCHEME_THETA, 20000);
+  cup_pss_options o;
+  cup_pss_options_default(&o);
+  char err[CUP_ERRMSG_LEN] = "";
+  cup_pss *r = NULL;
+  cup_pss_info free_run, limited;
+  assert_int_equal(cup_pss_solve(&r, L, cup_netlist_input(nl), &io, NULL, &o, err), CUP_OK);
+  cup_pss_get_info(r, &free_run);
+  cup_pss_free(&r);
+  assert_true(free_run.period_runs >= 10);
+  io.max_wall_seconds = 0.2 * free_run.seconds;
+  int st = cup_pss_solve(&r, L, cup_netlist_input(nl), &io, NULL, &o, err);
+  assert_non_null(r);
+  cup_pss_get_info(r, &limited);
+  print_message("  unlimited: %ld period runs in %.3g ms; limit %.3g ms: %s after %ld runs, %.3g ms: \"%s\"\n",
+                free_run.period_runs, 1e3 * free_run.seconds, 1e3 * io.max_wall_seconds, cup_status_name(st),
+                limited.period_runs, 1e3 * limited.seconds, limited.message);
+  assert_int_equal(st, CUP_ERR_TIME_LIMIT);
+  assert_true(limited.period_runs < free_run.period_runs);
+  cup_pss_free(&r);
+  cup_netlist_free(&nl);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(rc_sine),
@@ -684,6 +722,7 @@ int main(void) {
     cmocka_unit_test(measure_closed_forms),
     cmocka_unit_test(buck_library_ccm),
     cmocka_unit_test(buck_library_dcm),
+    cmocka_unit_test(time_limit_is_the_solves),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -113,13 +113,17 @@ CUP_API int cup_input_steady_phase(const cup_input *u, double period, double *T,
  *  holds the result, also when the solve failed (its info says why, with
  *  the residuals and multipliers so far); *r is NULL only when the
  *  arguments are wrong or memory runs out (errmsg says which). Returns
- *  the info's status. */
+ *  the info's status. io->max_wall_seconds bounds the whole solve (the
+ *  trajectory included), not each period run: past it the solve stops with
+ *  CUP_ERR_TIME_LIMIT. */
 CUP_API int cup_pss_solve(cup_pss **r, const cup_lcs *L, const cup_input *u, const cup_integrator_options *io,
                           const double *x_guess, const cup_pss_options *o, char *errmsg);
 /** The same on any period map: I, made with options.T = period (any model,
  *  any scheme; output FINAL or NONE is cheapest), run from x to x(T) per
  *  evaluation; n its state dimension. No trajectory (o->samples is
- *  ignored): run I's twin with samples from cup_pss_x0. */
+ *  ignored): run I's twin with samples from cup_pss_x0. I's
+ *  max_wall_seconds bounds the whole solve, as in cup_pss_solve (I's own
+ *  limit is restored on return). */
 CUP_API int cup_pss_solve_map(cup_pss **r, cup_integrator *I, int n, double period, const double *x_guess,
                               const cup_pss_options *o, char *errmsg);
 CUP_API void cup_pss_free(cup_pss **r);

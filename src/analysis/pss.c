@@ -20,6 +20,7 @@
 #include "catchup/pss.h"
 #include "pss_run.h"
 #include "integrator/adaptive.h"
+#include "integrator/integrator_impl.h"
 #include "model/input_impl.h"
 #include "util/clock.h"
 #include "util/fail.h"
@@ -54,6 +55,7 @@ typedef struct pss_work {
   gsl_permutation *perm;
   gsl_vector_view b, s;
   long ev_min, ev_max;      /* events per period over the iterations */
+  double t0, limit;         /* the solve's start and the integrator's wall-time limit (0: none): the solve's */
 } pss_work;
 
 static double inf_norm(const double *v, int n) {
@@ -84,6 +86,13 @@ static int say(cup_pss *r, int status, const char *fmt, ...) {
 /* out = Phi(x): one run over the period; an error ends the solve, naming
  * the run's message. */
 static int phi(pss_work *w, const double *x, double *out, const char *what) {
+  if (w->limit > 0) {                            /* the limit is the solve's: each run gets what is left */
+    double left = w->limit - (now_seconds() - w->t0);
+    if (!(left > 0))
+      return say(w->r, CUP_ERR_TIME_LIMIT, "the steady state's wall-time limit (%g s) was reached after %ld "
+                 "period runs, before %s", w->limit, w->r->info.period_runs, what);
+    integrator_wall_limit(w->I, left);
+  }
   cup_run_info ri;
   int st = cup_integrator_run(w->I, x, NULL, NULL, &ri);
   w->r->info.period_runs++;
@@ -350,7 +359,7 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
   int st = check_options(o, errmsg);
   if (st) return st;
   double t0 = now_seconds();
-  pss_work w = {.I = I, .o = o, .n = n};
+  pss_work w = {.I = I, .o = o, .n = n, .t0 = t0, .limit = I->o.max_wall_seconds};
   w.r = result_new(n, 0);
   size_t N = (size_t)n;
   double *buf = calloc(6 * N, sizeof(double));
@@ -382,6 +391,7 @@ int cup_pss_solve_map(cup_pss **out, cup_integrator *I, int n, double period, co
   int tangent_on = w.tan != NULL;
   newton(&w, x_guess);
   if (tangent_on) adaptive_tangent(ad, 0);
+  if (w.limit > 0) integrator_wall_limit(I, w.limit);   /* I's own again */
   w.r->info.seconds = now_seconds() - t0;
   free(buf);
   gsl_matrix_free(w.JI);
@@ -483,6 +493,8 @@ int cup_pss_solve(cup_pss **out, const cup_lcs *L, const cup_input *u, const cup
   if (*out && st >= 0 && o->samples >= 2) {
     double w0 = now_seconds();
     mo.on_event = io->on_event;                  /* the events of the period shown */
+    if (mo.max_wall_seconds > 0)                 /* the solve's limit: what the Newton left */
+      mo.max_wall_seconds = fmax(mo.max_wall_seconds - (*out)->info.seconds, DBL_MIN);
     int ts = trajectory(*out, L, u, &mo, o->samples, t0);
     (*out)->info.seconds += now_seconds() - w0;
     if (ts < 0) st = ts;

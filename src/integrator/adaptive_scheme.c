@@ -55,9 +55,11 @@ static int resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_info *in
   return adaptive_resume(ws, sink, sink_ctx, info);
 }
 
+static void wall_limit(void *ws, double seconds) { adaptive_wall_limit(ws, seconds); }
+
 static const scheme_type adaptive_type = {
   .name = "adaptive", .takes = takes, .create = create, .free = free_ws, .run = run, .state = state,
-  .zeta = zeta, .stopped = stopped, .checkpoint = checkpoint, .resume = resume,
+  .zeta = zeta, .stopped = stopped, .checkpoint = checkpoint, .resume = resume, .wall_limit = wall_limit,
 };
 const scheme_type *const scheme_adaptive = &adaptive_type;
 

@@ -555,10 +555,7 @@ static void window_info(const fixed_ws *F, cup_run_info *info) {
   info->h_rho = F->h_rho;
 }
 
-void integrator_window_wall_limit(cup_integrator *I, double seconds) {
-  I->o.max_wall_seconds = seconds;
-  ((fixed_ws *)I->ws)->o.max_wall_seconds = seconds;
-}
+static void fixed_wall_limit(void *ws, double seconds) { ((fixed_ws *)ws)->o.max_wall_seconds = seconds; }
 
 /* The theta step's start at t_k from F->x: zeta_k by the LCP there (0
  * with D = 0), its support's weights. */
@@ -691,6 +688,6 @@ static int takes(const cup_integrator_options *o) {
 static const scheme_type fixed_type = {
   .name = "fixed-step", .takes = takes, .create = fixed_create, .free = fixed_free, .run = fixed_run,
   .state = fixed_state, .zeta = fixed_zeta, .grid = fixed_grid, .saves = fixed_saves, .stopped = fixed_stopped,
-  .checkpoint = fixed_checkpoint, .resume = fixed_resume,
+  .checkpoint = fixed_checkpoint, .resume = fixed_resume, .wall_limit = fixed_wall_limit,
 };
 const scheme_type *const scheme_fixed = &fixed_type;

@@ -118,6 +118,11 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
   return I->sch->run(I->ws, x0, sink, sink_ctx, info);
 }
 
+void integrator_wall_limit(cup_integrator *I, double seconds) {
+  I->o.max_wall_seconds = seconds;
+  if (I->sch->wall_limit) I->sch->wall_limit(I->ws, seconds);
+}
+
 /* A restored checkpoint (checkpoint.c): the saved run's statistics, then
  * the scheme goes on from its stop. */
 int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info_out) {

@@ -34,10 +34,11 @@ struct cup_integrator {
  * the samples from *next_j on; *next_j advanced. */
 int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
-/* A switched run's wall-time limit for the next window (its seconds left;
- * 0: none): windows start their clocks afresh, the run's limit is the
- * run's (switched.c). */
-void integrator_window_wall_limit(cup_integrator *I, double seconds);
+/* The wall-time limit of I's next runs (seconds; 0: none), through its
+ * scheme's table: each run starts its clock afresh, so a caller running I
+ * many times under one limit gives each run what is left (a switched
+ * run's windows, switched.c; a steady state's period runs, pss.c). */
+void integrator_wall_limit(cup_integrator *I, double seconds);
 /* A switched circuit's split step (switched.c): step k - 1 -> k was
  * taken outside, by the configurations' exact flows from xprev (at
  * t_{k-1}) to x (at t_k), zeta its multipliers at t_k (m entries, kept by

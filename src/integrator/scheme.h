@@ -43,6 +43,11 @@ typedef struct scheme_type {
   int (*run)(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
   const double *(*state)(const void *ws);
   int (*zeta)(void *ws, double *zeta);
+  /* the next runs' wall-time limit, in seconds from each run's start (0:
+   * none): a caller running it many times under one limit (a switched
+   * run's windows, a steady state's period runs) gives each run what is
+   * left; NULL: the scheme has none */
+  void (*wall_limit)(void *ws, double seconds);
   /* checkpoints (checkpoint.c; checkpoint NULL: none): what the header
    * names of the set-up; 1 when this one's
    * stops can be saved (saves NULL: always); 1 when the last run stopped

@@ -162,10 +162,7 @@ static int wall_left(switched_run *S, int topo, long k, double t, cup_run_info *
   double left = S->o.max_wall_seconds - (now_seconds() - S->wall0);
   if (!(left > 0))
     return fail_fmt(info->message, CUP_ERR_TIME_LIMIT, "step %ld (t = %.17g): wall-time limit reached", k, t);
-  cup_integrator *C = S->child[topo];
-  adaptive_ws *A = adaptive_of(C);
-  if (A) adaptive_wall_limit(A, left);
-  else integrator_window_wall_limit(C, left);
+  integrator_wall_limit(S->child[topo], left);
   return CUP_OK;
 }
 
@@ -496,8 +493,12 @@ static int create_half(switched_run *S, const cup_switching *sw, const cup_input
 }
 
 /* Made by its own front door below, never chosen by the options; no checkpoints. */
+/* The run's limit (its windows share it: wall_left). */
+static void sw_wall_limit(void *ws, double seconds) { ((switched_run *)ws)->o.max_wall_seconds = seconds; }
+
 static const scheme_type switched_type = {
   .name = "switched", .free = sw_free, .run = sw_run, .state = sw_state, .zeta = sw_zeta,
+  .wall_limit = sw_wall_limit,
 };
 
 int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,

@@ -6,6 +6,7 @@
  * catchup-run measures it (pss_measure: the signals the request names,
  * each element's power, the efficiency). */
 #define _POSIX_C_SOURCE 200809L
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -110,6 +111,8 @@ void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_
     r->stopped_step = info.period_runs;
     if (st >= 0) {
       ss->solved = 1;
+      if (period.max_wall_seconds > 0)           /* the task's limit: what the solve left */
+        period.max_wall_seconds = fmax(period.max_wall_seconds - (now_seconds() - t0), DBL_MIN);
       int ms = measure(s, v, q, &period, cup_pss_x0(pss), r);
       if (ms < 0) r->status = ms;
     }
