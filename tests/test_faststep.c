@@ -324,7 +324,7 @@ static void test_warm_step_is_the_general_one(void **state) {
       assert_true(same(fast.lq, slow.lq));
       assert_true(fast.mode == slow.mode);
       steps++;
-      warm += !ia.skipped && fast.blk[0].state;
+      warm += !ia.skipped && fast.blocks.blk[0].state;
       for (int j = 0; j < n; j++) x[j] = za[j];   /* walk on from z */
     }
     lcp_step_free(&fast);

@@ -55,24 +55,7 @@ static void build_hm(lcp_step *ls) {
                        isfinite(ls->Ms[i + (size_t)j * m]);
     }
   }
-  for (int c = 0; c < LCP_STEP_BLOCKS; c++) ls->blk[c].state = 0;   /* the blocks were M's */
-}
-
-/* The warm step's blocks (lcp_block) and scratch: 1 when out of memory. */
-static int blocks_init(lcp_step *ls) {
-  size_t m = (size_t)ls->m;
-  ls->bmem = calloc(LCP_STEP_BLOCKS * 5 * m * m + 5 * m, sizeof(double));
-  ls->bint = calloc(LCP_STEP_BLOCKS * 2 * m, sizeof(int));
-  if (!ls->bmem || !ls->bint) return 1;
-  for (int c = 0; c < LCP_STEP_BLOCKS; c++) {
-    lcp_block *B = &ls->blk[c];
-    double *d = ls->bmem + (size_t)c * 5 * m * m;
-    B->lu = d, B->Ws = d + m * m, B->Ma = d + 2 * m * m, B->Dg = d + 3 * m * m, B->Da = d + 4 * m * m;
-    B->idx = ls->bint + (size_t)c * 2 * m;
-    B->piv = B->idx + m;
-  }
-  ls->wscr = ls->bmem + LCP_STEP_BLOCKS * 5 * m * m;
-  return 0;
+  lcp_blocks_clear(&ls->blocks);                  /* they were the old M's */
 }
 
 /* The D path's arrays (lcp_step_free releases them on failure). */
@@ -92,8 +75,9 @@ static int init_d(lcp_step *ls, const double *D, double theta) {
   ls->Ms = calloc(M * M, sizeof(double));
   ls->rsc = calloc(3 * M, sizeof(double));         /* and q, q - tau scaled */
   ls->kwork = calloc(3 * M, sizeof(int));
-  ls->warm = ls->m <= LCP_STEP_WARM_M;
-  if (ls->warm && blocks_init(ls)) return CUP_ERR_NOMEM;
+  ls->warm = ls->m <= LCP_BLOCKS_MAX_M;
+  if (ls->warm && (lcp_blocks_init(&ls->blocks, ls->m) || !(ls->wscr = calloc(5 * M, sizeof(double)))))
+    return CUP_ERR_NOMEM;
   if (!ls->D || !ls->geff || !ls->WB || !ls->Hprev || !ls->carry || !ls->xpred || !ls->q0 || !ls->dcol0 ||
       !ls->kcol || !ls->Z || !ls->work || !ls->kwork || !ls->Ms || !ls->rsc || lcp_monotone(&ls->lcp))
     return CUP_ERR_NOMEM;
@@ -162,7 +146,8 @@ void lcp_step_free(lcp_step *ls) {
   free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
   free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->WB); free(ls->Hprev);
   free(ls->carry); free(ls->xpred); free(ls->q0); free(ls->dcol0); free(ls->kcol); free(ls->Z);
-  free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc); free(ls->bmem); free(ls->bint);
+  free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc); free(ls->wscr);
+  lcp_blocks_free(&ls->blocks);
   lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
@@ -456,7 +441,7 @@ CUP_ALWAYS_INLINE const double *block_offset(lcp_step *ls, const lcp_block *B, c
                                              const int m) {
   const int k = B->k, *restrict idx = B->idx;
   const double *restrict lam = ls->lcp.lam;
-  double acc[LCP_STEP_WARM_M], mag[LCP_STEP_WARM_M];
+  double acc[LCP_BLOCKS_MAX_M], mag[LCP_BLOCKS_MAX_M];
   for (int i = 0; i < m; i++) acc[i] = g[i], mag[i] = 0;
   for (int b = 0; b < k; b++) {
     const double *restrict dg = B->Dg + (size_t)b * m, *restrict da = B->Da + (size_t)b * m, l = lam[idx[b]];
@@ -617,103 +602,6 @@ static int solve_d(lcp_step *ls, const double *q, const double **g, const double
   return CUP_OK;
 }
 
-/* The block of the active set act, as lcp.c's solve_on would form its
- * parts at each solve (the same entries, the same closed forms, la_dense_lu
- * of the same matrix: the same bits). */
-static void block_build(lcp_step *ls, lcp_block *B, unsigned long long act) {
-  int m = ls->m, k = 0, o;
-  const double *Ms = ls->Ms;
-  for (int i = 0; i < m; i++)
-    if (act >> i & 1) B->idx[k++] = i;
-  o = k;
-  for (int i = 0; i < m; i++)
-    if (!(act >> i & 1)) B->idx[o++] = i;
-  const int *idx = B->idx;
-  B->act = act;
-  B->k = k;
-  B->state = 1;
-  if (k == 1) {
-    B->d[0] = Ms[idx[0] + (size_t)idx[0] * m];
-    if (!(B->d[0] != 0)) B->state = 2;
-  } else if (k == 2) {
-    int a = idx[0], b = idx[1];
-    double maa = Ms[a + (size_t)a * m], mab = Ms[a + (size_t)b * m];
-    double mba = Ms[b + (size_t)a * m], mbb = Ms[b + (size_t)b * m];
-    B->d[0] = maa, B->d[1] = mab, B->d[2] = mba, B->d[3] = mbb;
-    B->d[4] = maa * mbb - mab * mba;
-    if (!(B->d[4] != 0)) B->state = 2;
-  } else if (k) {
-    for (int b = 0; b < k; b++)
-      for (int a = 0; a < k; a++) B->lu[a + (size_t)b * k] = Ms[idx[a] + (size_t)idx[b] * m];
-    if (la_dense_lu(B->lu, k, B->piv)) B->state = 2;
-  }
-  for (int b = 0; b < k; b++)
-    for (int i = 0; i < m; i++) {
-      size_t f = (size_t)idx[b] * m + i, t = (size_t)b * m + i;
-      B->Ws[t] = Ms[f];
-      B->Ma[t] = fabs(ls->M[f]);
-      B->Dg[t] = ls->D[f];
-      B->Da[t] = fabs(ls->D[f]);
-    }
-}
-
-/* The block of the active set act, from the cache or built into it. */
-static const lcp_block *block_get(lcp_step *ls, unsigned long long act) {
-  for (int c = 0; c < LCP_STEP_BLOCKS; c++)
-    if (ls->blk[c].state && ls->blk[c].act == act) return &ls->blk[c];
-  lcp_block *B = &ls->blk[ls->bnext];
-  ls->bnext = (ls->bnext + 1) % LCP_STEP_BLOCKS;
-  block_build(ls, B, act);
-  return B;
-}
-
-/* The first pass of lcp.c's Murty pivoting on the scaled LCP (Ms, qv) at
- * the block's active set, its arithmetic in its order: 0 with lambda in
- * lam when no index flips (the pass that lcp_solve ends with, its warm
- * start kept), 1 when one does or the block is singular. */
-CUP_ALWAYS_INLINE int warm_pass(const lcp_block *B, const double *restrict qv, double *restrict lam,
-                                double *restrict y, const int m) {
-  if (B->state != 1) return 1;
-  const int k = B->k, *restrict idx = B->idx;
-  const double *restrict d = B->d;
-  double scale = 0;
-  for (int i = 0; i < m; i++) {
-    scale = la_max(scale, fabs(qv[i]));
-    lam[i] = 0;
-  }
-  if (k == 1) {
-    lam[idx[0]] = -qv[idx[0]] / d[0];
-  } else if (k == 2) {
-    int a = idx[0], b = idx[1];
-    lam[a] = (-qv[a] * d[3] + qv[b] * d[1]) / d[4];
-    lam[b] = (-qv[b] * d[0] + qv[a] * d[2]) / d[4];
-  } else if (k) {                                 /* la_dense_lu_solve's arithmetic, on -q permuted */
-    const double *restrict lu = B->lu;
-    for (int b = 0; b < k; b++) y[b] = -qv[idx[B->piv[b]]];
-    for (int j = 0; j < k; j++)
-      for (int i = j + 1; i < k; i++) y[i] -= lu[i + j * k] * y[j];
-    for (int j = k - 1; j >= 0; j--) {
-      y[j] /= lu[j + j * k];
-      for (int i = 0; i < j; i++) y[i] -= lu[i + j * k] * y[j];
-    }
-    for (int b = 0; b < k; b++) lam[idx[b]] = y[b];
-  }
-  double lmax = 0;
-  for (int i = 0; i < m; i++) lmax = la_max(lmax, fabs(lam[i]));
-  double tol_l = 64 * DBL_EPSILON * lmax, tol_w = 64 * DBL_EPSILON * scale;
-  for (int b = 0; b < k; b++)
-    if (lam[idx[b]] < -tol_l) return 1;
-  double w[LCP_STEP_WARM_M];                      /* w = q + M lambda on the active columns, row by row */
-  for (int i = 0; i < m; i++) w[i] = qv[i];
-  for (int b = 0; b < k; b++) {
-    const double *restrict col = B->Ws + (size_t)b * m, l = lam[idx[b]];
-    for (int i = 0; i < m; i++) w[i] += col[i] * l;
-  }
-  for (int r = k; r < m; r++)
-    if (w[idx[r]] < -tol_w) return 1;
-  return 0;
-}
-
 /* solve_d's common case, taken without its general machinery: the last
  * step's active set solves both aimed LCPs (aimed_solve and widen_aim's
  * second solve) with no pivot, its support is the mode in force, and z
@@ -724,7 +612,7 @@ CUP_ALWAYS_INLINE int warm_pass(const lcp_block *B, const double *restrict qv, d
  * the block's active columns: the others hold zeros (finish_m). */
 CUP_ALWAYS_INLINE int warm_d(lcp_step *ls, const double *q, const double **g, const double *xf, double *z,
                              const int m) {
-  if (m > LCP_STEP_WARM_M || !ls->lam_sparse) return 0;   /* lam_sparse implies warm */
+  if (m > LCP_BLOCKS_MAX_M || !ls->lam_sparse) return 0;   /* lam_sparse implies warm */
   double *restrict sqs = ls->wscr, *restrict tau = sqs + m, *restrict qs = tau + m, *restrict lam = qs + m;
   double *restrict y = lam + m;
   unsigned long long act = 0;
@@ -732,11 +620,11 @@ CUP_ALWAYS_INLINE int warm_d(lcp_step *ls, const double *q, const double **g, co
     act |= (unsigned long long)(ls->lcp.prev[i] != 0) << i;
     sqs[i] = ls->rsc[i] * ls->qs[i];
   }
-  const lcp_block *B = block_get(ls, act);
-  if (warm_pass(B, sqs, lam, y, m)) return 0;
+  const lcp_block *B = lcp_blocks_get(&ls->blocks, act, ls->Ms, ls->M, ls->D);
+  if (lcp_block_pass(B, sqs, lam, y, m)) return 0;
   const int k = B->k, *restrict idx = B->idx;
   int more = 0, active;                           /* widen_aim, on copies of the aims */
-  double mag[LCP_STEP_WARM_M];
+  double mag[LCP_BLOCKS_MAX_M];
   for (int i = 0; i < m; i++) mag[i] = 0;
   for (int b = 0; b < k; b++) {
     const double *restrict col = B->Ma + (size_t)b * m, l = lam[idx[b]];
@@ -754,7 +642,7 @@ CUP_ALWAYS_INLINE int warm_d(lcp_step *ls, const double *q, const double **g, co
   }
   if (more) {
     for (int i = 0; i < m; i++) sqs[i] = ls->rsc[i] * qs[i];
-    if (warm_pass(B, sqs, lam, y, m)) return 0;
+    if (lcp_block_pass(B, sqs, lam, y, m)) return 0;
   }
   unsigned long long J = 0;
   for (int i = 0; i < m; i++)

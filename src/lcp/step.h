@@ -22,6 +22,7 @@
 #include "util/ckpt.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
+#include "block.h"
 
 /* Up to this many states and rows, without D, a step is first tried by code
  * unrolled for its sizes (the circuits' common case: a few ns instead of a
@@ -31,27 +32,6 @@
  * block, NaN, the exact mode eps_target < 0). */
 #define CUP_STEP_SMALL_N 4
 #define CUP_STEP_SMALL_M 2
-/* The step with D keeps what its LCP needs of this many active sets (the
- * ones a bridge's commutations move between), for up to LCP_STEP_WARM_M
- * rows (step.c's warm_d; larger LCPs take the general path). */
-#define LCP_STEP_BLOCKS 4
-#define LCP_STEP_WARM_M 16
-
-/* One active set's part of the LCP with D (warm_d): its rows, the closed
- * form's entries or the LU factors of its principal block of Ms as lcp.c
- * forms them, and Ms, |M|, D and |D| on its columns, gathered column by
- * column. */
-typedef struct lcp_block {
-  unsigned long long act;   /* the active set, a bit per row */
-  int state;                /* 0 empty, 1 ready, 2 singular block */
-  int k;                    /* active rows */
-  double d[5];              /* k = 1: Ms_aa; k = 2: Ms_aa, Ms_ab, Ms_ba, Ms_bb and the determinant */
-  int *idx;                 /* m: the k active rows ascending, then the others */
-  int *piv;                 /* k >= 3: la_dense_lu's pivots */
-  double *lu;               /* k >= 3: its factors, k x k */
-  double *Ws, *Ma, *Dg, *Da;   /* m x k each: Ms, |M|, D and |D| on the active columns */
-} lcp_block;
-
 typedef struct lcp_step {
   int n, m;
   double h;
@@ -79,13 +59,9 @@ typedef struct lcp_step {
   int *kwork;
   double *Ms;       /* m x m: M with rows scaled by rsc, which the LCP solves */
   double *rsc;      /* m: 1 / (largest entry of M's row); then q and q - tau so scaled */
-  int warm;         /* 1: the step with D tries warm_d first (m <= LCP_STEP_WARM_M; tests set 0) */
+  int warm;         /* 1: the step with D tries warm_d first (m <= LCP_BLOCKS_MAX_M; tests set 0) */
   int lam_sparse;   /* 1 (warm, and M and D finite: build_hm): a zero entry of lambda adds an exact zero */
-  /* the warm step's blocks, emptied by build_hm */
-  lcp_block blk[LCP_STEP_BLOCKS];
-  int bnext;        /* the entry to replace next */
-  double *bmem;     /* the blocks' arrays */
-  int *bint;        /* their index arrays */
+  lcp_blocks blocks;   /* the warm step's active sets, emptied by build_hm */
   double *wscr;     /* 5 m: the warm step's scaled q, aims, lambda and a solve */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
   int small;        /* 1: lcp_step_solve tries the unrolled step first */
