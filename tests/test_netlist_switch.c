@@ -3,7 +3,8 @@
  * lost), the flux share of two inductors left in series by an opening
  * switch, an RC discharge through a closed switch, the ideal CCM buck's
  * average output D Vin and its inductor ripple, the configurations formed
- * once each; and the reader's errors. */
+ * once each, a switch that closes another through its control (the jump
+ * of the capacitor it shorts); and the reader's errors. */
 #define _GNU_SOURCE
 #include <stdarg.h>
 #include <stddef.h>
@@ -543,6 +544,35 @@ static void test_controller(void **state) {
   cup_netlist_free(&ref);
 }
 
+/* A switch that moves another's control: S2 reads v(c), which is V1 = 1
+ * through S1 when S1 is closed and 0 (R1 to ground) when it is open, so
+ * that the configurations differ in S2's control row. When S1's gate rises
+ * (1 ms) the rule closes S1, then, read in that configuration, S2 too (the
+ * settle takes the configurations in turn until the rule holds: one whose
+ * controls are another's, those of t alone, is not read again, and these
+ * two are not such). S2 closed shorts C1: the jump onto its constraints
+ * takes v(C1) = 1 to 0; with S2 open it stays 1. */
+static void test_settle_moves_another_control(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("cascade\n"
+                            "V1 a 0 1\nVG g 0 PULSE(0 1 1m jump jump 1 2)\nS1 a c g 0 SWA\nR1 c 0 1k\n"
+                            "V2 b 0 1\nR2 b x 1k\nC1 x 0 1u\nS2 x 0 c 0 SWA\n"
+                            ".model SWA SW(VT=0.5 VH=0)\n.tran 1u 2m\n.end\n");
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  assert_int_equal(cup_lcs_dim(cup_netlist_lcs(nl)), 1);
+  char err[CUP_ERRMSG_LEN];
+  const double tset[2] = {0.5e-3, 1.5e-3}, want[2] = {1, 0};
+  for (int k = 0; k < 2; k++) {
+    int topo = 0;                                /* both open: the configuration at t = 0 */
+    double x[1] = {1};
+    assert_int_equal(sw.settle(sw.ctx, &topo, tset[k], x, NULL, err), CUP_OK);
+    sw.jump(sw.ctx, topo, x);
+    if (fabs(x[0] - want[k]) > 1e-12) fail_msg("t = %g: v(C1) = %.17g after the jump, want %g", tset[k], x[0], want[k]);
+  }
+  cup_netlist_free(&nl);
+}
+
 static void test_errors(void **state) {
   (void)state;
   assert_contains(text_bad("t\nC1 a 0 1u\nR1 a b 1\nS1 a b c 0 NOPE\nV1 c 0 1\n"),
@@ -572,6 +602,7 @@ int main(void) {
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
     cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_probe_all),
     cmocka_unit_test(test_circuit_gated_step_end), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
+    cmocka_unit_test(test_settle_moves_another_control),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

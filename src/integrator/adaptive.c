@@ -170,6 +170,12 @@ static void offset_pattern(adaptive_ws *A) {
       if (A->G[i + (size_t)q * m] != 0) { A->gi[k] = q; A->gx[k++] = A->G[i + (size_t)q * m]; }
   }
   A->gp[m] = k;
+  A->ngterm = 0;
+  for (int t = 0; A->u && !A->u->fn && t < A->u->nterms; t++) {
+    int q = A->u->terms[t].comp, live = 0;
+    for (int i = 0; i < m; i++) live |= A->G[i + (size_t)q * m] != 0;
+    if (live) A->gterm[A->ngterm++] = t;
+  }
 }
 
 /* Every matrix and vector of the run (its sizes set): *fail = 1 when memory runs out. */
@@ -187,7 +193,8 @@ static void alloc_vectors(adaptive_ws *A, int *fail) {
   A->gp = take((size_t)m + 1, sizeof(int), fail);
   A->gi = take((size_t)m * p + 1, sizeof(int), fail);
   A->gx = take((size_t)m * p + 1, sizeof(double), fail);
-  A->ework = take(6 * NA, sizeof(double), fail);
+  A->gterm = take(A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int), fail);
+  A->ework = take(7 * NA, sizeof(double), fail);
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), fail);
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
@@ -330,7 +337,7 @@ void adaptive_free(adaptive_ws **Ap) {
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
   free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
-  free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx);
+  free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx); free(A->gterm);
   free(A->ya); free(A->yb); free(A->yt); free(A->yhi); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
   free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);

@@ -26,7 +26,7 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
   CUP_CKPT_IO(c, s->phase); CUP_CKPT_IO(c, s->md); CUP_CKPT_IO(c, s->pinned1);
   CUP_CKPT_IO(c, R->t); CUP_CKPT_IO(c, R->tb); CUP_CKPT_IO(c, R->steps); CUP_CKPT_IO(c, R->next_sample);
   CUP_CKPT_IO(c, R->est_max); CUP_CKPT_IO(c, R->r2); CUP_CKPT_IO(c, R->rloc); CUP_CKPT_IO(c, R->h_cb);
-  CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0);
+  CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0); CUP_CKPT_IO(c, R->after_event);
   ckpt_io(c, A->x, N);
   ckpt_io(c, A->e, N);
   if (s->phase == AD_STOP_DENSE) {               /* the refused sample's states, the step's projection */

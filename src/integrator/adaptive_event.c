@@ -38,7 +38,7 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */
 static void probe(adaptive_ws *A, ad_mode *md, double tau, double *g, double *d, double *thr,
                   ad_event *ev) {
-  ad_flow(A, md, tau, A->ya, A->yt);
+  ad_series_at(A, &A->sy, md, ev->h, A->ya, tau, A->yt);
   ad_events_eval(A, md, A->yt, g, thr);
   ad_events_deriv(A, md, A->yt, d);
   ev->evals++;

@@ -31,6 +31,7 @@
 
 #define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
                                six-pulse bridge cycles through more than 6, each rebuilt 5 times */
+#define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
@@ -67,6 +68,28 @@ typedef struct ad_mode {
 
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
 
+/* A step's flow from one vector as polynomials in theta: on each of nseg
+ * equal pieces of [0, h] (hs = h / nseg, hs ||M|| <= 1),
+ * exp((j hs + theta hs) M) y0 = sum_k c_jk theta^k, c_jk = (hs M)^k y_j / k!,
+ * y_j the previous piece's end. Built once per step (about 20 products by
+ * M's nonzeros a piece, made when first needed) and valued at any tau in
+ * [0, h] by Horner's rule (na per term): an event's probes, its root's
+ * Newton steps and the error's flows each took a Taylor series of their own
+ * from the step's start (ad_series_at). */
+#define AD_SERIES_MAX 40    /* terms a piece */
+#define AD_SERIES_SEGS 16   /* pieces at most (h ||M|| <= 16; ad_flow beyond) */
+typedef struct ad_series {
+  const struct ad_mode *md; /* the mode it was asked for (NULL: not yet in this step) */
+  const double *y0;         /* ... and the start vector */
+  double h;
+  int nseg;                 /* pieces; 0: not usable (h ||M|| > AD_SERIES_SEGS), ad_flow instead */
+  int built;                /* the pieces made so far (each when a tau first falls in it) */
+  int K[AD_SERIES_SEGS];    /* a piece's c_j0 .. c_jK */
+  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x na */
+  double *mag;              /* na: the largest term of each component */
+  double *v;                /* na: a start vector the caller keeps here */
+} ad_series;
+
 /* One run's progress (adaptive_run.c). */
 typedef struct ad_run {
   cup_run_info *info;
@@ -82,6 +105,8 @@ typedef struct ad_run {
   double wall0;
   double tend;              /* catching-up steps across accumulating events until tend (0: none) */
   long ev0;                 /* the events before the step under way (the accumulation check after it) */
+  int after_event;          /* the steps since the last event met no breakpoint: a step that ends on
+                               one (not at its length limit) has a length that will not recur */
 } ad_run;
 
 /* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
@@ -138,9 +163,13 @@ struct adaptive_ws {
   double *U, *W;            /* p x nw, nw x nw, column-major */
   int *up, *ui, *gp, *gi;   /* U's nonzeros by column (nw + 1 starts, rows), G's by row (m + 1 starts, columns) */
   double *ux, *gx;          /* ... their values (ad_offset) */
+  int *gterm, ngterm;       /* built-in waveforms: the terms whose input has a column in G (at_break's
+                               g = F + G u(t): a switch's gate source moves no row) */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
-  ad_mode modes[AD_MODES];
+  ad_mode modes[AD_MODES + 1];  /* the last: a spare, where a new one is built (ad_mode_get) */
+  uint64_t alias_from[AD_ALIASES], alias_to[AD_ALIASES];   /* a set asked for, the subset it holds as */
+  long nalias;
   long clock;
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
@@ -150,8 +179,9 @@ struct adaptive_ws {
   gsl_matrix *eigA;
   gsl_vector_complex *eigv;
   /* scratch of the run */
-  double *ework;            /* 6 na^2: exponentials (4 work, the scaled M, one out) */
+  double *ework;            /* 7 na^2: exponentials (5 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
+  ad_series sy, se;         /* this step's flow from ya, and from (e, 0) (the error's), when asked */
   double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
   double *cz, *cs;          /* per row, the late-switch error (docs/adaptive.md): pinf ||B_i||_P and
@@ -237,10 +267,17 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
 const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+/* ... the cached one that ad_expm would take, or NULL (nothing computed). */
+const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
+/* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector
+ * that S stands for: by S's series (built on the first call in a step: S->md
+ * = NULL; the caller resets it), or ad_flow when h ||M|| > AD_SERIES_SEGS. */
+void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
+                  double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y);
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x);
@@ -300,6 +337,7 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */
+  double h;                 /* the step's length (the flow's series: A->sy) */
   double tau_lo, tau_sw;    /* the bracket from the step start: no crossing at tau_lo, one at tau_sw */
   double tau_est;           /* best estimate of the root */
   double cfac;              /* multiplies the late-switch error model (1; more after an underestimate) */

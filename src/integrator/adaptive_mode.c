@@ -22,7 +22,7 @@ static void *take(size_t count, size_t size, int *fail) {
 int ad_modes_init(adaptive_ws *A) {
   int n = A->n, m = A->m, na = A->na, nw = A->nw, fail = 0;
   size_t NA = (size_t)na * na;
-  for (int s = 0; s < AD_MODES; s++) {
+  for (int s = 0; s <= AD_MODES; s++) {   /* (and the spare) */
     ad_mode *md = &A->modes[s];
     md->rows = take((size_t)m + 1, sizeof(int), &fail);
     md->M = take(NA, sizeof(double), &fail);
@@ -44,6 +44,14 @@ int ad_modes_init(adaptive_ws *A) {
     md->KU = take((size_t)n * nw, sizeof(double), &fail);
     for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = take(NA, sizeof(double), &fail);
   }
+  ad_series *ser[] = {&A->sy, &A->se};
+  for (int k = 0; k < 2; k++) {
+    /* (written before it is read: not cleared, a switched run makes its integrators as it goes) */
+    ser[k]->c = malloc(sizeof(double) * AD_SERIES_SEGS * (AD_SERIES_MAX + 1) * (size_t)(na ? na : 1));
+    fail |= !ser[k]->c;
+    ser[k]->mag = take((size_t)na, sizeof(double), &fail);
+    ser[k]->v = take((size_t)na, sizeof(double), &fail);
+  }
   size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
   A->S = take((size_t)m * m, sizeof(double), &fail);
   A->Sl = take((size_t)m * m, sizeof(double), &fail);
@@ -60,13 +68,14 @@ int ad_modes_init(adaptive_ws *A) {
 }
 
 void ad_modes_free(adaptive_ws *A) {
-  for (int s = 0; s < AD_MODES; s++) {
+  for (int s = 0; s <= AD_MODES; s++) {
     ad_mode *md = &A->modes[s];
     free(md->mp); free(md->mi); free(md->mj); free(md->mx); free(md->lp); free(md->li); free(md->lx); free(md->lmx);
     free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
     free(md->X); free(md->R); free(md->Zt); free(md->KU);
     for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
   }
+  free(A->sy.c); free(A->sy.mag); free(A->sy.v); free(A->se.c); free(A->se.mag); free(A->se.v);
   free(A->S); free(A->Sl); free(A->Sinv); free(A->T1); free(A->T2); free(A->T3); free(A->perm);
   if (A->eig) gsl_eigen_nonsymm_free(A->eig);
   if (A->eigA) gsl_matrix_free(A->eigA);
@@ -398,9 +407,9 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
   for (int k = 0; k < nnz; k++) out[md->mi[k]] += md->mx[k] * y[md->mj[k]];
 }
 
-static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
+/* The rest of a mode once mode_factor has chosen its rows. */
+static void mode_finish(adaptive_ws *A, ad_mode *md) {
   int na = A->na;
-  mode_factor(A, md, mask);
   mode_flow(A, md);
   mode_events(A, md);
   mode_sparse(A, md);
@@ -414,25 +423,58 @@ static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
 }
 
-ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
-  ad_mode *oldest = &A->modes[0];
-  for (int s = 0; s < AD_MODES; s++) {   /* AD_MODES > 2: a slot that is not pinned exists */
-    ad_mode *md = &A->modes[s];
-    if (md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
-    if (md != A->pinned[0] && md != A->pinned[1] &&
-        (oldest == A->pinned[0] || oldest == A->pinned[1] || md->stamp < oldest->stamp))
-      oldest = md;
-  }
-  mode_build(A, oldest, mask);
-  /* a dependent row dropped: the reduced set may be kept already */
+static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
+  mode_factor(A, md, mask);
+  mode_finish(A, md);
+}
+
+/* The kept mode whose rows are mask, or NULL. */
+static ad_mode *kept(adaptive_ws *A, uint64_t mask) {
   for (int s = 0; s < AD_MODES; s++) {
     ad_mode *md = &A->modes[s];
-    if (md != oldest && md->stamp && md->mask == oldest->mask) {
-      oldest->stamp = 0;
-      md->stamp = ++A->clock;
-      return md;
-    }
+    if (md->stamp && md->mask == mask) return md;
   }
+  return NULL;
+}
+
+/* A set with a dependent row is built as an independent subset of it: the
+ * subset is remembered (the same rows give the same subset), so that asking
+ * for the set again finds the subset's mode without factoring the rows
+ * again (a six-pulse bridge's commutation tries 3 rows that hold as 2, at
+ * each event: 40 % of its run went to that). */
+static uint64_t alias_of(const adaptive_ws *A, uint64_t mask) {
+  for (int k = 0; k < AD_ALIASES; k++)
+    if (A->alias_from[k] == mask && A->alias_to[k] != mask) return A->alias_to[k];
+  return mask;
+}
+
+ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
+  ad_mode *md = kept(A, mask);
+  if (!md) {                             /* (a kept mode's rows are independent: no alias) */
+    uint64_t sub = alias_of(A, mask);
+    if (sub != mask) md = kept(A, mask = sub);
+  }
+  if (md) { md->stamp = ++A->clock; return md; }
+  /* built in the spare slot first: a subset that is kept already takes
+   * nothing from the others */
+  ad_mode *spare = &A->modes[AD_MODES];
+  mode_factor(A, spare, mask);
+  if (spare->mask != mask) {
+    A->alias_from[A->nalias % AD_ALIASES] = mask;
+    A->alias_to[A->nalias % AD_ALIASES] = spare->mask;
+    A->nalias++;
+    if ((md = kept(A, spare->mask))) { md->stamp = ++A->clock; return md; }
+  }
+  mode_finish(A, spare);
+  ad_mode *oldest = NULL;                /* AD_MODES > 2: a slot that is not pinned exists */
+  for (int s = 0; s < AD_MODES; s++) {
+    md = &A->modes[s];
+    if (md != A->pinned[0] && md != A->pinned[1] && (!oldest || md->stamp < oldest->stamp)) oldest = md;
+  }
+  ad_mode t = *oldest;                   /* the least recently used gives its slot (and its buffers to the spare) */
+  *oldest = *spare;
+  *spare = t;
+  spare->stamp = 0;
   oldest->stamp = ++A->clock;
   return oldest;
 }
@@ -440,7 +482,7 @@ ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
 /* exp(h M_J) into slot c of md's cache. */
 static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   size_t NA = (size_t)A->na * A->na;
-  double *hM = A->ework + 4 * NA;
+  double *hM = A->ework + 5 * NA;
   for (size_t q = 0; q < NA; q++) hM[q] = h * md->M[q];
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
@@ -468,13 +510,19 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * the buck's time loop.) The state moves by |x'| 2 eps |t| at most, what
  * rounding t itself does. The samples' spacing is applied sample after
  * sample, where such differences would add up: it takes only itself. */
-const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
-  int slot = 0;
+const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   double same = 2 * DBL_EPSILON * fabs(t_end);
-  for (int c = 0; c < AD_CACHE; c++) {
+  for (int c = 0; c < AD_CACHE; c++)
     if (fabs(md->hc[c] - h) <= same) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
+  return NULL;
+}
+
+const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
+  const double *E = ad_expm_cached(A, md, h, t_end);
+  if (E) return E;
+  int slot = 0;
+  for (int c = 1; c < AD_CACHE; c++)
     if (md->cstamp[c] < md->cstamp[slot]) slot = c;
-  }
   expm_into(A, md, h, slot);
   md->hc[slot] = h;
   md->cstamp[slot] = ++A->clock;
@@ -499,7 +547,7 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   double norm = fabs(tau) * md->mnorm;
   if (norm > 4) {                                /* stiff or long: the full exponential */
     size_t NA = (size_t)na * na;
-    double *hM = A->ework + 4 * NA, *Et = A->ework + 5 * NA;
+    double *hM = A->ework + 5 * NA, *Et = A->ework + 6 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
     la_dense_expm_stiff(hM, na, Et, A->ework);
     matvec(na, Et, y_in, y_out);
@@ -526,6 +574,72 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
       if (done) break;
     }
   }
+}
+
+/* c_k = (hs M)^k y / k! into c until two terms in a row are below a
+ * quarter ulp of each component's largest term (what its sum already rounds
+ * at: a component through zero stops too); hs ||M|| <= 1: the terms
+ * decrease, and the sum rounds as they do. Their count, or 0. */
+static int piece_build(adaptive_ws *A, const ad_mode *md, double hs, const double *y, double *c, double *mag) {
+  int na = A->na, quiet = 0;
+  la_copy(c, y, na);
+  for (int i = 0; i < na; i++) mag[i] = fabs(c[i]);
+  for (int k = 1; k <= AD_SERIES_MAX; k++) {
+    double *ck = c + (size_t)k * na, f = hs / k;
+    ad_mode_mv(A, md, ck - na, ck);
+    int small = 1;
+    for (int i = 0; i < na; i++) {
+      double v = ck[i] *= f, a = fabs(v);
+      small &= a <= 0.25 * DBL_EPSILON * mag[i];
+      if (a > mag[i]) mag[i] = a;
+    }
+    quiet = small ? quiet + 1 : 0;
+    if (quiet == 2) return k;
+  }
+  return 0;
+}
+
+/* sum_k c_k theta^k (K + 1 terms) into y. */
+static void piece_at(int na, const double *c, int K, double theta, double *y) {
+  la_copy(y, c + (size_t)K * na, na);
+  for (int k = K - 1; k >= 0; k--) {
+    const double *ck = c + (size_t)k * na;
+    for (int i = 0; i < na; i++) y[i] = y[i] * theta + ck[i];
+  }
+}
+
+/* Pieces up to j made: 0 if one is not usable (the series is then not). */
+static int series_upto(adaptive_ws *A, ad_series *S, int j) {
+  int na = A->na;
+  size_t stride = (size_t)(AD_SERIES_MAX + 1) * na;
+  double hs = S->h / S->nseg;
+  for (; S->built <= j; S->built++) {
+    int b = S->built;
+    double *c = S->c + b * stride;
+    if (b > 0) piece_at(na, c - stride, S->K[b - 1], 1, A->fa);
+    if (!(S->K[b] = piece_build(A, S->md, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
+  }
+  return 1;
+}
+
+void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
+                  double *y_out) {
+  if (S->md != md || S->y0 != y0 || S->h != h) {
+    double norm = fabs(h) * md->mnorm;
+    S->md = md;
+    S->y0 = y0;
+    S->h = h;
+    S->nseg = !(norm <= AD_SERIES_SEGS) ? 0 : norm > 1 ? (int)ceil(norm) : 1;
+    S->built = 0;
+  }
+  int j = 0;
+  double hs = h / (S->nseg ? S->nseg : 1);
+  if (S->nseg) {
+    j = (int)(tau / hs);
+    if (j >= S->nseg) j = S->nseg - 1;
+  }
+  if (!S->nseg || !(tau >= 0 && tau <= h) || !series_upto(A, S, j)) { ad_flow(A, md, tau, y0, y_out); return; }
+  piece_at(A->na, S->c + (size_t)j * (AD_SERIES_MAX + 1) * A->na, S->K[j], (tau - j * hs) / hs, y_out);
 }
 
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {

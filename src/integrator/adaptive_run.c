@@ -293,13 +293,23 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
 /* ---- breakpoints ------------------------------------------------------------------- */
 
 /* At a breakpoint t (or 0): the state onto K(t) with u(t) itself (a square
- * wave is 0 there), which is what the catching-up limit holds at t. */
+ * wave is 0 there), which is what the catching-up limit holds at t. g =
+ * F + G u(t) by G's nonzeros, a waveform's terms those that reach them
+ * (ad_offset's sums: the dense ones less terms that are zero; a switched
+ * run's window starts and ends here, and a converter's gates, read by the
+ * switches alone, were half of what it cost). */
 static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
-  if (A->u && cup_input_eval(A->u, R->t, A->ut))
-    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-  la_copy(A->g, A->F, A->m);
-  for (int i = 0; i < A->m; i++)
-    for (int q = 0; q < A->p; q++) A->g[i] += A->G[i + (size_t)q * A->m] * A->ut[q];
+  if (A->u && A->u->fn) {
+    if (cup_input_eval(A->u, R->t, A->ut))
+      return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+  } else if (A->u) {
+    input_eval_terms(A->u, A->gterm, A->ngterm, R->t, A->ut);
+  }
+  for (int i = 0; i < A->m; i++) {
+    double acc = A->F[i];
+    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
+    A->g[i] = acc;
+  }
   uint64_t active;
   double x0n = inf_norm(A->x, A->n);
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
@@ -355,6 +365,7 @@ static double interp_error(const adaptive_ws *A, const ad_mode *md, const double
 static int end_of_step(adaptive_ws *A, ad_run *R, cup_proj_info *pi, int at_event) {
   int at_tb = R->t == R->tb, st;
   if (at_tb) {
+    R->after_event = 0;
     cup_proj_info pb;
     if ((st = at_break(A, R, 0, &pb)) < 0) return st;
     if (!pb.skipped) *pi = pb;
@@ -367,11 +378,12 @@ static int end_of_step(adaptive_ws *A, ad_run *R, cup_proj_info *pi, int at_even
 /* The step's end t1 (a breakpoint, an output time, T, or the mode's step
  * limit), the input's states, and exp(h M). Callback inputs: the step
  * shrinks until the interpolation error is within its share of tol.
- * NULL with *t1 set when t1 is within rounding of t (nothing to flow), or
- * with the status set on an error. */
-static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap) {
+ * NULL with *t1 set when t1 is within rounding of t (nothing to flow), with
+ * *series set when the step takes the flow's series instead (ad_series_at),
+ * or with the status set on an error. */
+static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap, int *series) {
   ad_mode *md = R->md;
-  *snap = 0;
+  *snap = *series = 0;
   for (;;) {
     double hm = ad_mode_hmax(A, md), hl = A->callback ? fmin(hm, R->h_cb) : hm;
     *t1 = next_stop(A, R, hl, 0);
@@ -383,6 +395,15 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
     }
     if (ad_inputs_on(A, R->t, *t1, A->wa, A->uerr)) {
       ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf on [%.17g, %.17g]", R->t, *t1);
+      return NULL;
+    }
+    /* a step from an event to a breakpoint has a length of its own: the
+     * flow's series (two of them: y and the error) cost less than the
+     * exponential, where h ||M|| <= 2 (its length limit's recurs) */
+    double hlim = A->o.hmax > 0 ? fmin(hl, A->o.hmax) : hl;
+    if (R->after_event && !A->callback && !A->tan && *t1 != R->t + hlim && h * md->mnorm <= 2 &&
+        !ad_expm_cached(A, md, h, *t1)) {
+      *series = 1;
       return NULL;
     }
     const double *E = ad_expm(A, md, h, *t1);
@@ -416,9 +437,9 @@ static double event_budget(const adaptive_ws *A, const ad_run *R) {
 
 /* The reported time of the event of row k: Newton steps on its function
  * along the old flow from tau (the state at the last one in A->yr). */
-static double refine_root(adaptive_ws *A, ad_mode *md, int k, double tau, double tmax) {
+static double refine_root(adaptive_ws *A, ad_mode *md, int k, double tau, double tmax, double h) {
   for (int it = 0; it < 4; it++) {
-    ad_flow(A, md, tau, A->ya, A->yr);
+    ad_series_at(A, &A->sy, md, h, A->ya, tau, A->yr);
     if (k < 0) break;
     double g = md->Lc[k] + la_dot(md->L + (size_t)k * A->na, A->yr, A->na);
     ad_events_deriv(A, md, A->yr, A->dt);
@@ -446,7 +467,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     ad_locate(A, old, tw, ev);
     double tsw = ev->tau_sw;
     if (ev->hi_ok) la_copy(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
-    else ad_flow(A, old, tsw, A->ya, A->yb);
+    else ad_series_at(A, &A->sy, old, h, A->ya, tsw, A->yb);
     ad_state(A, old, A->yb, A->xs);
     la_copy(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);
@@ -466,7 +487,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     A->pinned[0] = nm;
     ad_offset(A, A->wt, A->g);
     ad_manifold(A, nm, A->g, A->xs);
-    tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw);   /* the reference path */
+    tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw, h);   /* the reference path */
     ad_state(A, old, A->yr, A->xr);
     la_copy(A->wa, A->yr + n, nw);
     ad_offset(A, A->wa, A->g);
@@ -500,15 +521,18 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
   if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
   la_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  la_zero(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
+  la_copy(A->se.v, A->e, n);
   if (troot > t0) {
-    la_zero(A->de2, A->na);
-    la_copy(A->de2, A->e, n);
-    ad_flow(A, old, troot - t0, A->de2, A->de);
+    ad_series_at(A, &A->se, old, h, A->se.v, troot - t0, A->de);
     la_copy(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
-  error_flow(A, old, ev->tau_sw);
+  if (ev->tau_sw > 0) {
+    ad_series_at(A, &A->se, old, h, A->se.v, ev->tau_sw, A->yt);
+    la_copy(A->e, A->yt, n);
+  }
   if (A->tan) {   /* the tangent: the old flow to the root, its saltation (the new manifold's projection), the new flow */
     double tr = fmin(fmax(tau_rep, 0), ev->tau_sw);
     tangent_flow(A, old, tr);
@@ -522,6 +546,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
   la_copy(A->x, A->xs, n);
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
+  R->after_event = 1;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
   return end_of_step(A, R, &pi, 1);
 }
@@ -530,10 +555,12 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   ad_mode *md = R->md;
   int n = A->n, na = A->na, snap;
   double t1;
-  const double *E = begin_step(A, R, &t1, &snap);
+  int series;
+  const double *E = begin_step(A, R, &t1, &snap, &series);
+  A->sy.md = A->se.md = NULL;                    /* (the flow's series are this step's) */
   cup_proj_info pi = {0};
   pi.skipped = 1;
-  if (!E) {
+  if (!E && !series) {
     if (!snap) return R->info->status;
     R->t = t1;
     return end_of_step(A, R, &pi, 0);
@@ -546,26 +573,37 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     if (st < 0 || R->md->mask != was) return st;
   }
   ad_events_deriv(A, md, A->ya, A->da);
-  for (int i = 0; i < na; i++) A->yb[i] = 0;
-  for (int j = 0; j < na; j++) {
-    double yj = A->ya[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
+  double h = t1 - R->t;
+  if (series) {
+    ad_series_at(A, &A->sy, md, h, A->ya, h, A->yb);
+  } else {
+    for (int i = 0; i < na; i++) A->yb[i] = 0;
+    for (int j = 0; j < na; j++) {
+      double yj = A->ya[j];
+      if (yj == 0) continue;
+      for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
+    }
   }
   ad_events_eval(A, md, A->yb, A->gb, A->tb);
   ad_events_deriv(A, md, A->yb, A->db);
-  double h = t1 - R->t;
-  ad_event ev = {.t0 = R->t, .cfac = 1, .row = -1};
+  ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
   if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
   ad_offset(A, A->yb + n, A->g);
   ad_manifold(A, md, A->g, A->x);
-  for (int i = 0; i < n; i++) {
-    double acc = 0;
-    for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
-    A->et[i] = acc;
+  if (series) {                                  /* (e, 0) by its series */
+    la_zero(A->se.v, na);
+    la_copy(A->se.v, A->e, n);
+    ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
+    la_copy(A->et, A->yt, n);
+  } else {
+    for (int i = 0; i < n; i++) {
+      double acc = 0;
+      for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
+      A->et[i] = acc;
+    }
   }
   la_copy(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */

@@ -244,6 +244,7 @@ static cup_integrator *twin_of(switched_run *S, int topo) {
   o.max_wall_seconds = 0;
   char msg[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&S->twin[topo], S->ops.lcs(S->ops.ctx, topo), S->u, &o, msg)) S->twin_off[topo] = 1;
+  else adaptive_seed(adaptive_of(S->twin[topo]), 1);   /* its pieces try the last start's set (sw_run) */
   return S->twin[topo];
 }
 
@@ -432,6 +433,8 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
+    for (int k = 0; k < SW_MAX; k++)               /* the pieces' guesses afresh (a run never reads the one before) */
+      if (S->twin[k]) adaptive_seed(adaptive_of(S->twin[k]), 1);
     if (S->half && coarse_run(S, x0, info)) return info->status;
     sw->jump(sw->ctx, topo, S->x);
     x0_moved(S, x0, info);

@@ -323,37 +323,41 @@ void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, i
   }
 }
 
-void input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w) {
-  double mid = 0.5 * (a + b);
-  for (int k = 0; k < u->nterms; k++) {
-    const input_term *t = &u->terms[k];
-    double *wk = w + first_state[k];
-    switch (t->kind) {
-      case CUP_WAVE_CONSTANT: wk[0] = t->value; break;
-      case CUP_WAVE_SINE:
-        wk[0] = t->amp * sin(t->omega * a + t->phase);
-        wk[1] = t->amp * cos(t->omega * a + t->phase);
-        break;
-      case CUP_WAVE_SQUARE: wk[0] = input_term_value(t, mid); break;
-      case CUP_WAVE_DAMPED_SINE: {                   /* no delay (input_gen_check) */
-        double e = t->amp * exp(-t->damping * a);
-        wk[0] = e * sin(t->omega * a + t->phase);
-        wk[1] = e * cos(t->omega * a + t->phase);
-        break;
-      }
-      case CUP_WAVE_PULSE:
-      case CUP_WAVE_PWL: {
-        double va = input_term_value(t, a);
-        wk[0] = va;
-        wk[1] = mid > a ? (input_term_value(t, mid) - va) / (mid - a) : 0;
-        break;
-      }
+/* Term t's exosystem states at a for a step to b (mid its middle). */
+static void gen_term_values(const input_term *t, double a, double mid, double *wk) {
+  switch (t->kind) {
+    case CUP_WAVE_CONSTANT: wk[0] = t->value; break;
+    case CUP_WAVE_SINE:
+      wk[0] = t->amp * sin(t->omega * a + t->phase);
+      wk[1] = t->amp * cos(t->omega * a + t->phase);
+      break;
+    case CUP_WAVE_SQUARE: wk[0] = input_term_value(t, mid); break;
+    case CUP_WAVE_DAMPED_SINE: {                   /* no delay (input_gen_check) */
+      double e = t->amp * exp(-t->damping * a);
+      wk[0] = e * sin(t->omega * a + t->phase);
+      wk[1] = e * cos(t->omega * a + t->phase);
+      break;
+    }
+    case CUP_WAVE_PULSE:
+    case CUP_WAVE_PWL: {
+      double va = input_term_value(t, a);
+      wk[0] = va;
+      wk[1] = mid > a ? (input_term_value(t, mid) - va) / (mid - a) : 0;
+      break;
     }
   }
 }
 
+void input_gen_values(const cup_input *u, const int *first_state, double a, double b, double *w) {
+  double mid = 0.5 * (a + b);
+  for (int k = 0; k < u->nterms; k++) gen_term_values(&u->terms[k], a, mid, w + first_state[k]);
+}
+
+/* As input_gen_values, a PULSE's and a PWL's inside its table by the line
+ * of the piece that holds mid instead (the values they would have had
+ * first are not computed: a switched run's windows start a piece each,
+ * and those were a tenth of a window's instructions). */
 void input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w) {
-  input_gen_values(u, first_state, a, b, w);
   double mid = 0.5 * (a + b);
   for (int k = 0; k < u->nterms; k++) {
     const input_term *t = &u->terms[k];
@@ -366,6 +370,7 @@ void input_gen_piece(const cup_input *u, const int *first_state, double a, doubl
       v0 = t->v[j];
       slope = (t->v[j + 1] - t->v[j]) / (t->t[j + 1] - t->t[j]);
     } else {
+      gen_term_values(t, a, mid, wk);
       continue;
     }
     wk[0] = v0 + slope * (a - t0);

@@ -130,17 +130,30 @@ static double pulse_integral(const input_term *t, double a, double b) {
 
 /* The next corner after tt (pulse_value's): the least of those of the
  * periods around tt's (the last corner of one and the first of the next
- * may round either way when rise + width + fall = P). */
+ * may round either way when rise + width + fall = P). The parameters are
+ * >= 0 (spice_term_init), so a period's corners do not decrease with k nor
+ * its base with j: a period whose last corner is not past tt has none past
+ * it, the first corner of each past tt is its least, and a period whose
+ * base is not below the least found has none below it (the least of all 12
+ * corners, 5 or 6 of them computed: a switched run asks at each window's
+ * start and in each search for its next switching time). */
 static double pulse_break(const input_term *t, double tt) {
   if (tt < t->delay) return t->delay;
   const double c[4] = {0, t->rise, t->rise + t->width, t->rise + t->width + t->fall};
   double P = t->period, next = INFINITY;
   double j0 = P > 0 ? fmax(pulse_period(t, tt) - 1, 0) : 0;
-  for (int j = 0; j < (P > 0 ? 3 : 1); j++)
+  for (int j = 0; j < (P > 0 ? 3 : 1); j++) {
+    double base = t->delay + P * (j0 + j);
+    if (!(base < next)) break;
+    if (!(base + c[3] > tt)) continue;             /* (the period before tt's, as a rule) */
     for (int k = 0; k < 4; k++) {
-      double b = t->delay + P * (j0 + j) + c[k];
-      if (b > tt && b < next) next = b;
+      double b = base + c[k];
+      if (b > tt) {
+        if (b < next) next = b;
+        break;
+      }
     }
+  }
   return next;
 }
 

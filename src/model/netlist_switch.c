@@ -43,6 +43,9 @@ typedef struct nl_topo {
   int *uterm, nuterm;      /* the input's terms whose component a control reads (all: zeta's rows read u) */
   int reads_z;             /* a control reads zeta */
   int state_gated;         /* a control depends on the state or the diodes */
+  uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for changes) */
+  int ctl_class;           /* > 0: configurations of one class have the same controls, of t alone
+                              (same_controls): settle's rule holds in the one it moves to; 0: none */
 } nl_topo;
 
 struct nl_switched {
@@ -52,6 +55,7 @@ struct nl_switched {
   int ntopo;
   nl_topo topo[NL_TOPO_MAX];
   long formed;             /* configurations formulated */
+  int nclass;              /* the control classes given out (nl_topo's ctl_class) */
   int cur;                 /* the configuration in force (signals) */
   double *ut;              /* p: u(t) */
   double *zf;              /* scratch: a configuration's zeta with multipliers */
@@ -234,7 +238,9 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
     if (st) st = nl_switch_nomem(c, errmsg);
   }
   tp->sub = sub;                                   /* (gated_by_state reads it) */
-  for (int k = 0; !st && k < S->nsw; k++) tp->state_gated |= gated_by_state(tp, k);
+  for (int k = 0; !st && k < S->nsw; k++)
+    if (gated_by_state(tp, k)) tp->by_state |= (uint64_t)1 << k;
+  tp->state_gated = tp->by_state != 0;
   if (!st && ctl_sparse(S, tp)) st = nl_switch_nomem(c, errmsg);
   derived_free(c, &d);
   if (st) {
@@ -247,6 +253,46 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
   S->formed++;
   *subp = sub;
   return CUP_OK;
+}
+
+/* 1 if two inputs' terms are the same waveform, bit for bit. */
+static int same_term(const input_term *a, const input_term *b) {
+  if (a->comp != b->comp || a->kind != b->kind || a->np != b->np) return 0;
+  const double fa[] = {a->value, a->amp, a->omega, a->phase, a->delay, a->damping, a->value2, a->rise, a->fall,
+                       a->width, a->period};
+  const double fb[] = {b->value, b->amp, b->omega, b->phase, b->delay, b->damping, b->value2, b->rise, b->fall,
+                       b->width, b->period};
+  size_t np = a->np > 0 ? (size_t)a->np : 0;
+  return !memcmp(fa, fb, sizeof fa) && (!np || (!memcmp(a->t, b->t, np * sizeof *a->t) &&
+                                                !memcmp(a->v, b->v, np * sizeof *a->v)));
+}
+
+/* 1 if configurations a and b read their switches' controls from the
+ * input alone (built-in waveforms: no state, no multiplier), by the same
+ * rows and the same terms: at any t the same values, bit for bit. */
+static int same_controls(const nl_switched *S, const nl_topo *a, const nl_topo *b) {
+  const cup_netlist *sa = a->sub, *sb = b->sub;
+  if (a->state_gated || b->state_gated || a->reads_z || b->reads_z) return 0;
+  if (sa->n != sb->n || sa->p != sb->p || (sa->p && (!sa->u || !sb->u || sa->u->fn || sb->u->fn))) return 0;
+  if (memcmp(a->cp, b->cp, sizeof(int) * ((size_t)S->nsw + 1)) || a->nuterm != b->nuterm) return 0;
+  size_t nz = (size_t)a->cp[S->nsw];
+  if (memcmp(a->ci, b->ci, sizeof(int) * nz) || memcmp(a->cx, b->cx, sizeof(double) * nz)) return 0;
+  for (int q = 0; q < a->nuterm; q++)
+    if (a->uterm[q] != b->uterm[q] || !same_term(&sa->u->terms[a->uterm[q]], &sb->u->terms[b->uterm[q]])) return 0;
+  return 1;
+}
+
+/* Configuration tp's control class: that of a configuration formed before
+ * with the same controls, else a new one (0 when they read more than t). */
+static void control_class(nl_switched *S, nl_topo *tp) {
+  tp->ctl_class = 0;
+  if (!same_controls(S, tp, tp)) return;
+  for (int k = 0; k < S->ntopo; k++)
+    if (&S->topo[k] != tp && S->topo[k].ctl_class && same_controls(S, &S->topo[k], tp)) {
+      tp->ctl_class = S->topo[k].ctl_class;
+      return;
+    }
+  tp->ctl_class = ++S->nclass;
 }
 
 /* The configuration's index, formed now if it is new. */
@@ -269,6 +315,7 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
     ctl_free(tp);
     return st;
   }
+  control_class(S, tp);
   *out = S->ntopo++;
   return CUP_OK;
 }
@@ -335,8 +382,13 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
     return topo_of(nl, cfg, topo, errmsg);
   }
   int memo = S->memo_ok && S->memo_topo == *topo && S->memo_t == t;
+  int read = 0;                                    /* the control class the rule was last applied with */
   S->memo_ok = 0;
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
+    /* the configuration the rule gave reads the same controls: the rule,
+     * applied to its own result with the same values, gives it again */
+    if (read && S->topo[*topo].ctl_class == read) return CUP_OK;
+    read = S->topo[*topo].ctl_class;
     uint64_t next = S->memo_cfg;                   /* the search's at t: the same controls (they read no state) */
     if (!(pass == 0 && memo)) {
       if (controls(S, &S->topo[*topo], t, x, zeta, cv))
@@ -358,7 +410,7 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
 static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
   if (controls(S, tp, s, x, NULL, cv)) return -1;
   for (int k = 0; k < S->nsw; k++)
-    if (gated_by_state(tp, k) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
+    if ((int)(tp->by_state >> k & 1u) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
   S->last_cfg = rule(S, tp->cfg, cv);
   return S->last_cfg != tp->cfg;
 }
@@ -552,7 +604,10 @@ static int sw_origin(cup_netlist *nl, double t0, char *errmsg) {
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "%s: a controller with a time origin t0 = %g", nl->file, t0);
   for (int k = 0; k < S->ntopo; k++) {
     int st = nl_input_origin(S->topo[k].sub, t0, errmsg);
-    if (st) return st;
+    if (st) {                                      /* the inputs now differ: no control class holds */
+      for (int j = 0; j < S->ntopo; j++) S->topo[j].ctl_class = 0;
+      return st;
+    }
   }
   S->t0 = t0;
   return CUP_OK;
@@ -586,6 +641,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   if (st) { sw_free(&S); return st; }
   S->topo[0].sub = nl;
   S->ntopo = 1;
+  control_class(S, &S->topo[0]);
   nl->sw = S;
   nl->hooks = &hooks;
   S->ut = calloc((size_t)nl->p + 1, sizeof(double));

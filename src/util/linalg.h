@@ -103,8 +103,10 @@ void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, doubl
 /* out = exp(a) by scaling and squaring of a degree-18 Taylor polynomial;
  * work holds 3 k*k doubles. a and out must differ. */
 void la_dense_expm(const double *a, int k, double *out, double *work);
-/* The same polynomial with X = exp(a/2^s) - I carried through the squarings,
+/* exp(a) with X = exp(a/2^s) - I carried through the squarings,
  * (I + X)^2 = I + (2 X + X^2): forming I + X rounds X's small entries
  * against 1 and each squaring doubles that, 2^s eps in all (1e-11 on a
- * generator with |lambda| ~ 1e5); this keeps them. work: 4 k*k doubles. */
+ * generator with |lambda| ~ 1e5); this keeps them. X itself: the degree-15
+ * Taylor polynomial by Paterson-Stockmeyer (6 products). work: 5 k*k
+ * doubles; a and out must differ. */
 void la_dense_expm_stiff(const double *a, int k, double *out, double *work);
