@@ -5,6 +5,7 @@
 #define CUP_ADAPTIVE_H
 
 #include "catchup/integrator.h"
+#include "model/input_impl.h"
 #include "freestep.h"
 #include "scheme.h"
 #include "util/ckpt.h"
@@ -45,6 +46,19 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
  * from now on each tries the active set the last one started with before
  * its LCP (on: 1); 0 forgets it and stops (a run starts afresh). */
 void adaptive_seed(adaptive_ws *A, int on);
+/* What a record at a window's end asks of the input, and the next
+ * window's first piece asks again at the same time: cup_input_next_break's
+ * last answer (ad_next_break), and the workspace that built the last
+ * piece's exosystem states (ad_inputs_on). */
+typedef struct adaptive_breaks {
+  input_breaks nb;
+  const adaptive_ws *piece_of;
+} adaptive_breaks;
+/* A switched run's windows of this configuration (switched.c, sw_run) keep
+ * them in *b, shared by all of the run's configurations (same input; the
+ * run zeroes *b at its start); NULL: the workspace's own, forgotten at each
+ * run's start. */
+void adaptive_share_breaks(adaptive_ws *A, adaptive_breaks *b);
 const double *adaptive_state(const adaptive_ws *A);
 /* Inside the sink: zeta at the output time (m entries), the multipliers of
  * the active set that holds from there (at an event or a breakpoint, the one

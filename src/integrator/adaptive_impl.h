@@ -144,6 +144,8 @@ struct adaptive_ws {
   uint64_t seed;            /* ... the last window's start is tried at the next one's before the LCP */
   int piece_ok;             /* built-in waveforms: piece_w holds the states on [piece_t0, piece_t1] */
   double piece_t0, piece_t1, *piece_w;   /* (a piece's start and its one step ask for the same: nwu) */
+  input_breaks nb_own;      /* ad_next_break's memo, the workspace's own ... */
+  struct adaptive_breaks *nb;   /* ... or a switched run's (adaptive_share_breaks), NULL */
   double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
                                table's largest value; 0 for a slope: its own size) */
   double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
@@ -248,8 +250,12 @@ int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, cons
  * rest of the step's; 1 if the sink refused one again. */
 int ad_dense_resume(adaptive_ws *A, ad_run *R);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
- * interpolation error per component into err); nonzero if the input failed. */
+ * interpolation error per component into err); nonzero if the input failed.
+ * The same t0 and t1 as the last piece's (the workspace's own, or in a
+ * switched run the last window's, adaptive_breaks) copy its states. */
 int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err);
+/* cup_input_next_break(A->u, t), the last answer again when t is the same. */
+double ad_next_break(adaptive_ws *A, double t);
 
 /* ---- adaptive_mode.c ---- */
 /* The active set with rows `mask` (built, or found among the kept ones). A

@@ -323,7 +323,7 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
 /* The piece after a breakpoint: its exosystem states, the jump of K onto
  * K(t+) (a projection, certified), and the active set by the velocity LCP. */
 static int start_piece(adaptive_ws *A, ad_run *R) {
-  double tb = cup_input_next_break(A->u, R->t);
+  double tb = ad_next_break(A, R->t);   /* a record here asked already */
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
   double h = A->callback ? fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
@@ -735,7 +735,7 @@ static int run_to_end(adaptive_ws *A, ad_run *R, int st) {
 static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
-  A->piece_ok = 0;                               /* (the input may have changed between runs) */
+  A->piece_ok = A->nb_own.ok = 0;                /* (the input may have changed between runs) */
   A->tend = tend;
   memset(R->info, 0, sizeof *R->info);
   R->info->err_est = NAN;

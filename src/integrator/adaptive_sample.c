@@ -297,13 +297,32 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
     la_copy(w, A->piece_w, A->nwu);
     return CUP_OK;
   }
-  input_gen_piece(A->u, A->first_state, t0, t1, w);
+  const adaptive_ws *O = A->nb ? A->nb->piece_of : NULL;   /* the last window's, same input */
+  if (O && O != A && O->piece_ok && t0 == O->piece_t0 && t1 == O->piece_t1 && O->nwu == A->nwu)
+    la_copy(w, O->piece_w, A->nwu);
+  else input_gen_piece(A->u, A->first_state, t0, t1, w);
+  if (A->nb) A->nb->piece_of = A;
   la_copy(A->piece_w, w, A->nwu);
   A->piece_t0 = t0;
   A->piece_t1 = t1;
   A->piece_ok = 1;
   return CUP_OK;
 }
+
+/* A record at a breakpoint (adaptive_zeta) and the piece that starts there
+ * (start_piece, the next window's in a switched run) ask the same: on the
+ * full bridge, 12 pulses' corners, 640 instructions a record. */
+double ad_next_break(adaptive_ws *A, double t) {
+  input_breaks *b = A->nb ? &A->nb->nb : &A->nb_own;
+  if (!b->ok || t != b->t) {
+    b->next = cup_input_next_break(A->u, t);
+    b->t = t;
+    b->ok = 1;
+  }
+  return b->next;
+}
+
+void adaptive_share_breaks(adaptive_ws *A, adaptive_breaks *b) { A->nb = b; }
 
 /* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
  * state and the input's states from the output time on. */
@@ -320,7 +339,7 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
       if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
     return CUP_OK;
   }
-  double t = A->zt, tb = cup_input_next_break(A->u, t);
+  double t = A->zt, tb = ad_next_break(A, t);
   double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
   if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);

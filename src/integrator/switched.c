@@ -46,6 +46,7 @@ struct switched_run {
   double piece_end, *xprev, *zsplit;   /* a split step: its last piece's end, x_{k-1}, zeta at t_k */
   int cur;                 /* the configuration in force (its child answers state and zeta) */
   double *x;
+  adaptive_breaks breaks; /* the input's next breakpoint, asked at a window's end and the next's start */
   /* circuit-gated switches: each sample and step end of a window is checked */
   int watch;               /* checking (the window's configuration has such a switch) */
   int crossed;             /* one changed: at tbad, after tg */
@@ -445,6 +446,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   /* every step recorded: a jump at a switching is recorded after it too */
   int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
   uint64_t seeded = 0;                             /* configurations whose windows try the last start's set */
+  S->breaks = (adaptive_breaks){0};                /* (the input may have changed between runs) */
   for (int first = 1; st >= 0 && t < T; first = 0) {
     if (each) la_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
@@ -454,6 +456,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (st) break;
     if (!(seeded >> topo & 1)) {                   /* (afresh each run: a run never reads the one before) */
       adaptive_seed(adaptive_of(S->child[topo]), 1);
+      adaptive_share_breaks(adaptive_of(S->child[topo]), &S->breaks);
       seeded |= (uint64_t)1 << topo;
     }
     S->cur = topo;

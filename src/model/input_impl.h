@@ -29,6 +29,13 @@ struct cup_input {
   double abs_tol, rel_tol;
 };
 
+/* cup_input_next_break's last answer, kept by a caller that asks at the
+ * same time twice (the adaptive scheme's records and pieces, ad_next_break). */
+typedef struct input_breaks {
+  int ok;
+  double t, next;
+} input_breaks;
+
 typedef struct input_quad_ws {
   gsl_integration_workspace *w;
   size_t limit;
