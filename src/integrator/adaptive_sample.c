@@ -275,7 +275,7 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
     la_copy(w, A->piece_w, A->nwu);
     return CUP_OK;
   }
-  input_gen_piece(A->u, A->first_state, t0, t1, w);
+  input_gen_piece(&A->gen, A->first_state, t0, t1, w);
   la_copy(A->piece_w, w, A->nwu);
   A->piece_t0 = t0;
   A->piece_t1 = t1;
