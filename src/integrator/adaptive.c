@@ -295,6 +295,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   A->has_D = Dm != NULL;
   int fail = 0, n = A->n, m = A->m, p = A->p;
   A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : live_terms(A, D, G, &fail);
+  A->held = A->callback ? A->u : &A->gen;
   A->one = -1;
   for (int i = 0; A->has_D && i < m && A->one < 0; i++)
     if (K->g0[i] != 0) A->one = A->nw++;         /* F reaches the multipliers through D: a constant state */

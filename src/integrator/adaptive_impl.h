@@ -161,6 +161,8 @@ struct adaptive_ws {
   cup_input gen;            /* built-in waveforms: u's terms that E or G reads (copies; adaptive.c,
                                live_terms), those the exosystem holds */
   int *first_state;         /* ... and the first exosystem state of each */
+  const cup_input *held;    /* &gen, or a callback's u: the breakpoints that end an exosystem piece
+                               (adaptive_zeta's; a gate's corners move no state) */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
   double *U, *W;            /* p x nw, nw x nw, column-major */
   int *up, *ui, *gp, *gi;   /* U's nonzeros by column (nw + 1 starts, rows), G's by row (m + 1 starts, columns) */

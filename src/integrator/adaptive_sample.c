@@ -296,7 +296,7 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
                                              : la_dot(md->L + (size_t)i * A->na, A->zy, A->na));
     return CUP_OK;
   }
-  double t = A->zt, tb = cup_input_next_break(A->u, t);
+  double t = A->zt, tb = cup_input_next_break(A->held, t);
   double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
   if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
