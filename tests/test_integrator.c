@@ -538,6 +538,57 @@ static void test_output_modes_and_exact_time(void **state) {
   cup_lcs_free(&L);
 }
 
+/* The fixed-step schemes' samples on the .tran grid: sample j (tau_j =
+ * T j / (S - 1)) lies on step k when k (S - 1) = j n in integers, and is
+ * then that step's (t = k h, T at the end); otherwise it is interpolated,
+ * given to the sink at step ceil(j n / (S - 1)) with t = tau_j. Checked in
+ * integers against the schedule fixed.c finds by remainders (llround
+ * before), over grids finer and coarser than the steps. */
+typedef struct { long count, *k; double *t; } grid_ctx;
+static int grid_sink(long k, double t, const double *x, void *vp) {
+  (void)x;
+  grid_ctx *c = vp;
+  c->k[c->count] = k;
+  c->t[c->count++] = t;
+  return 0;
+}
+
+static void test_sample_steps(void **state) {
+  (void)state;
+  cup_lcs *L = case_lcs(1);
+  cup_input *u = case_input(1);
+  double x0[3] = {0, 0, 0};
+  const long cases[][2] = {{1000, 10001}, {997, 10001}, {1000, 11}, {12, 5}, {3, 11}, {7, 7}, {4096, 1025}};
+  for (int c = 0; c < 7; c++) {
+    long n = cases[c][0], S = cases[c][1];
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.n = n; o.T = 3;
+    o.scheme = CUP_SCHEME_THETA;                   /* (stable at n = 3) */
+    o.output = CUP_OUTPUT_SAMPLES;
+    o.output_samples = S;
+    cup_integrator *I = NULL;
+    assert_int_equal(cup_integrator_create(&I, L, u, &o, NULL), CUP_OK);
+    grid_ctx g = {0, malloc(sizeof(long) * (size_t)S), malloc(sizeof(double) * (size_t)S)};
+    cup_run_info info;
+    assert_int_equal(cup_integrator_run(I, x0, grid_sink, &g, &info), CUP_OK);
+    assert_int_equal(g.count, S);
+    double h = 3.0 / (double)n;
+    for (long j = 0; j < S; j++) {
+      long k = (j * n + S - 2) / (S - 1);          /* ceil(j n / (S - 1)) */
+      double tau = j == S - 1 ? 3.0 : 3.0 * (double)j / (double)(S - 1);
+      assert_int_equal(g.k[j], k);
+      if (j * n % (S - 1) == 0) assert_true(g.t[j] == (k == n ? 3.0 : (double)k * h));
+      else assert_true(g.t[j] == tau);
+    }
+    free(g.k);
+    free(g.t);
+    cup_integrator_free(&I);
+  }
+  cup_input_free(&u);
+  cup_lcs_free(&L);
+}
+
 static void test_schedules(void **state) {
   (void)state;
   cup_schedule s;
@@ -653,6 +704,7 @@ int main(void) {
     cmocka_unit_test(test_closed_form_jumping_set),
     cmocka_unit_test(test_stiff_rectifier),
     cmocka_unit_test(test_output_modes_and_exact_time),
+    cmocka_unit_test(test_sample_steps),
     cmocka_unit_test(test_schedules),
     cmocka_unit_test(test_errors_say_where),
     cmocka_unit_test(test_empty_set_at_a_step),

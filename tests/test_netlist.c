@@ -398,6 +398,50 @@ static void test_rl_closed_form(void **state) {
   cup_netlist_free(&nl);
 }
 
+/* A gate with jump edges is read from the piece's value while the time
+ * stays in the piece (netlist_signal.c, sig_input): v(g) equals the
+ * input's own evaluation bit for bit at every time, the corners (its
+ * breakpoints) and their neighbouring doubles included, right after a
+ * time in the piece before, forwards and backwards, and the closed
+ * form away from the corners; after a new time origin the sources move
+ * (a value kept from before would read 1 at 2.5 us, in the top it was
+ * found in: the pulse from 3 us on is 0 there). */
+static void test_signal_jump_pulse(void **state) {
+  (void)state;
+  const char *text = "gate\nV1 in 0 12\nVG g 0 PULSE(0 1 1u jump jump 3u 10u)\nR1 in a 1k\nRG g a 1k\n"
+                     "C1 a 0 1u\n.probe v(g) v(in)\n.end\n";
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = NULL;
+  assert_int_equal(cup_netlist_load_string(&nl, text, "gate.cir", NULL, 0, err), CUP_OK);
+  assert_int_equal(cup_netlist_probe_default(nl, 100, err), CUP_OK);
+  assert_string_equal(cup_netlist_signal_name(nl, 0), "v(g)");
+  double x = 0.5, out[2], u[2];
+  long checked = 0;
+  for (int pass = 0; pass < 2; pass++)
+    for (int i = 0; i <= 4000; i++) {
+      int j = pass ? 4000 - i : i;                  /* the second pass backwards */
+      double t = 50e-6 * j / 4000, b = cup_input_next_break(cup_netlist_input(nl), t);
+      double ts[4] = {t, nextafter(b, 0), b, nextafter(b, 1)};
+      for (int q = 0; q < (j % 20 ? 1 : 4); q++) {   /* the next corner and its neighbouring doubles */
+        assert_int_equal(cup_netlist_signals(nl, ts[q], &x, NULL, out), CUP_OK);
+        assert_int_equal(cup_input_eval(cup_netlist_input(nl), ts[q], u), CUP_OK);
+        assert_true(out[0] == u[1] && out[1] == 12);
+        double r = fmod(ts[q] - 1e-6, 1e-5);
+        if (ts[q] > 1e-6 && fabs(r) > 1e-12 && fabs(r - 3e-6) > 1e-12 && fabs(r - 1e-5) > 1e-12)
+          assert_true(out[0] == (r > 0 && r < 3e-6 ? 1 : 0)), checked++;
+      }
+    }
+  assert_true(checked > 7000);
+  assert_int_equal(cup_netlist_signals(nl, 2e-6, &x, NULL, out), CUP_OK);
+  assert_true(out[0] == 1);
+  assert_int_equal(cup_netlist_set_time_origin(nl, 3e-6, err), CUP_OK);
+  assert_int_equal(cup_netlist_signals(nl, 2.5e-6, &x, NULL, out), CUP_OK);
+  assert_true(out[0] == 0);                         /* 5.5 us as written: after the top */
+  assert_int_equal(cup_netlist_signals(nl, 8.5e-6, &x, NULL, out), CUP_OK);
+  assert_true(out[0] == 1);                         /* 11.5 us: the second period's top */
+  cup_netlist_free(&nl);
+}
+
 /* The adaptive scheme's zeta (cup_integrator_zeta in the sink) gives the
  * RL rectifier's diode voltage: v(in,a) = 0 while it conducts, the source
  * 10 sin(w t) while it blocks (i = 0, so v(a) = R i + L i' = 0); and v(a)
@@ -695,6 +739,7 @@ int main(void) {
     cmocka_unit_test(test_diode_loops),
     cmocka_unit_test(test_mutations),
     cmocka_unit_test(test_spice_meaning),
+    cmocka_unit_test(test_signal_jump_pulse),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -212,7 +212,8 @@ struct adaptive_ws {
   int zy_ready;             /* a sample inside a step: zy is its y already */
   double *xo, *dy, *de, *de2, *ed; /* n, 2 na, na, na, n: a sample inside a step (dense output), its error */
   int *erp, *erj;           /* na + 1, na * na: the sample spacing's exp(dt M) by rows, its nonzeros ... */
-  double *erx;              /* na * na: ... and their values (adaptive_sample.c) */
+  double *erx;              /* na * na: ... and their values (adaptive_sample.c); er_n: 1 + the */
+  int er_n;                 /* last row with a nonzero in one of the first n columns */
   int *xrp, *xrj;           /* n + m + 1, (n + m) na: the step's X and its zeta rows of L likewise ... */
   double *xrx;              /* (n + m) na: ... (rows_ready: made for the samples of this step) */
   int rows_ready;

@@ -44,10 +44,20 @@ static void sampler_next(const fixed_ws *F, sampler *sp) {
   if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
   double t0 = o->output_t0;
   sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
-  long k = (long)llround(sp->tau / F->h);
-  if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
-  else sp->aligned = grid_time(F, k) == sp->tau;
-  if (!sp->aligned) k = (long)ceil(sp->tau / F->h);
+  long k;
+  if (t0 == 0 && S > 1 && S < (1L << 31) && n < (1L << 31)) {
+    /* on a step when k (S - 1) = j n exactly, in integers, for k = llround(tau / h): that is when
+     * S - 1 divides j n, and then llround gives k = j n / (S - 1) (tau / h is within a few ulps
+     * of it, k < 2^31), so the remainder decides, in 64 bits, without llround's call a sample */
+    long jn = j * n;
+    sp->aligned = jn % (S - 1) == 0;
+    k = sp->aligned ? jn / (S - 1) : (long)ceil(sp->tau / F->h);
+  } else {
+    k = (long)llround(sp->tau / F->h);
+    if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
+    else sp->aligned = grid_time(F, k) == sp->tau;
+    if (!sp->aligned) k = (long)ceil(sp->tau / F->h);
+  }
   if (k < 0) k = 0;
   if (k > n) k = n;
   sp->kdue = k;

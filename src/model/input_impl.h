@@ -45,6 +45,8 @@ double spice_term_break(const input_term *t, double tt);   /* the next corner af
  * mid), with the corners' own values. */
 void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, double *slope);
 int spice_term_constant(const input_term *t);
+/* A PULSE with rise = fall = 0 at tt, constant on [tt, *hi) (the signals' samples). */
+double spice_jump_pulse(const input_term *t, double tt, double *hi);
 
 /* The square wave in units of pi: q = omega t / pi + phase / pi, so that
  * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from

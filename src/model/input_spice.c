@@ -112,6 +112,27 @@ static double pulse_value(const input_term *t, double tt) {
   return t->value;
 }
 
+/* A PULSE with jump edges (rise = fall = 0) at tt, as pulse_value gives
+ * it (its branches reduced: value2 on [base, base + width), value
+ * elsewhere), and in *hi the end of the piece tt is in: the sums
+ * pulse_value compares against (the top's end base + (rise + width) and,
+ * through pulse_period, the next period's start), so every time in
+ * [tt, *hi) has the value returned, bit for bit. */
+double spice_jump_pulse(const input_term *t, double tt, double *hi) {
+  if (tt - t->delay < 0) {
+    *hi = t->delay;
+    return t->value;
+  }
+  double j = t->period > 0 ? pulse_period(t, tt) : 0, base = t->delay + t->period * j;
+  double c2 = base + (t->rise + t->width), next = t->period > 0 ? t->delay + t->period * (j + 1) : INFINITY;
+  if (tt < c2) {
+    *hi = fmin(c2, next);
+    return t->value2;
+  }
+  *hi = next;
+  return t->value;
+}
+
 static double pulse_integral(const input_term *t, double a, double b) {
   double sum = 0;
   if (a < t->delay) {

@@ -428,7 +428,7 @@ void cup_netlist_free(cup_netlist **p) {
   la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
   free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
-  free(nl->vals); free(nl->dense);
+  free(nl->vals); free(nl->dense); free(nl->ucache);
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
   for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);
@@ -449,6 +449,7 @@ int nl_input_origin(cup_netlist *nl, double t0, char *errmsg) {
   char lib[CUP_ERRMSG_LEN];
   int st = t0 == nl->t0 ? CUP_OK : input_origin(&nl->u, &nl->u_written, t0, lib);
   if (st) return fail_fmt(errmsg, st, "%s: the sources from t0 = %.17g: %s", nl->file, t0, lib);
+  if (nl->ucache) memset(nl->ucache, 0, sizeof(double) * 3 * (size_t)nl->ucache_n);   /* other sources now */
   nl->t0 = t0;
   return CUP_OK;
 }

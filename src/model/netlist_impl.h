@@ -110,6 +110,9 @@ struct cup_netlist {
   int sig_u, sig_seen;    /* the signals read u (directly or through a constraint's multiplier),
                              as found when there were sig_seen of them (cup_netlist_signals) */
   double *vals, *dense;   /* a sample's (x, u, zeta) side by side (n + p + m), and n + p + m + supernodes of scratch */
+  double *ucache;         /* per input term, 3 doubles: a piecewise constant term's value v on [lo, hi)
+                             (lo, hi, v; lo = hi: none), for the signals' samples (sig_input) */
+  int ucache_n;           /* ... terms it has room for */
   double *prow;           /* nv + ni: a signal's row over the ports */
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */

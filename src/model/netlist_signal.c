@@ -13,6 +13,7 @@
 #include "catchup.h"
 #include "catchup/netlist.h"
 #include "netlist_impl.h"
+#include "input_impl.h"
 
 static int nvar(const cup_netlist *nl) { return nl->n + nl->p + nl->m; }
 static int nports(const cup_netlist *nl) { return nl->nv + nl->ni; }
@@ -184,6 +185,9 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
   return nl->nsig - 1;
 }
 
+/* A PULSE with jump edges: piecewise constant (sig_input). */
+static int jump_pulse(const input_term *w) { return w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0; }
+
 static int scratch(cup_netlist *nl, char *errmsg) {
   if (!nl->dense && !(nl->dense = calloc((size_t)nvar(nl) + 1, sizeof(double))))
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
@@ -191,6 +195,13 @@ static int scratch(cup_netlist *nl, char *errmsg) {
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   if (!nl->vals && !(nl->vals = calloc((size_t)nvar(nl) + 1, sizeof(double))))
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
+  int nt = nl->u && !nl->u->fn ? nl->u->nterms : 0, jumps = 0;
+  for (int k = 0; k < nt; k++) jumps += jump_pulse(&nl->u->terms[k]);
+  if (!nl->ucache && jumps) {                      /* (none: cup_input_eval, as quick) */
+    if (!(nl->ucache = calloc(3 * (size_t)nt, sizeof(double))))
+      return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
+    nl->ucache_n = nt;
+  }
   return CUP_OK;
 }
 
@@ -312,6 +323,32 @@ static int reads_u(const cup_netlist *nl) {
   return 0;
 }
 
+/* u(t) for the signals: cup_input_eval's sums (each component from 0, its
+ * terms in order), a PULSE with jump edges (rise and fall 0) read from
+ * nl->ucache while t is in the piece it was evaluated in (spice_jump_pulse:
+ * the value and where it ends, bit for bit pulse_value's), so a
+ * converter's gates are evaluated once a piece rather than at each of its
+ * samples (about 70 instructions a gate and sample). Not inlined: inside
+ * cup_netlist_signals it cost every netlist 16 instructions a sample. */
+static __attribute__((noinline)) int sig_input(cup_netlist *nl, double t, double *out) {
+  const cup_input *u = nl->u;
+  if (!u || u->fn || nl->ucache_n < u->nterms) return cup_input_eval(u, t, out);
+  for (int j = 0; j < u->p; j++) out[j] = 0;
+  for (int k = 0; k < u->nterms; k++) {
+    const input_term *w = &u->terms[k];
+    double *c = nl->ucache + 3 * (size_t)k, v;
+    if (t >= c[0] && t < c[1]) v = c[2];
+    else if (w->kind == CUP_WAVE_CONSTANT) v = w->value;   /* (input_term_value's, without the call) */
+    else if (!jump_pulse(w)) v = input_term_value(w, t);
+    else {
+      c[0] = t;
+      c[2] = v = spice_jump_pulse(w, t, &c[1]);
+    }
+    out[w->comp] += v;
+  }
+  return CUP_OK;
+}
+
 /* The signals' sparse rows over (x, u, zeta) gathered side by side in
  * nl->vals first: the same terms in the same order as a row read from
  * three places (no zeta: zeros, 0 times an entry as before). u(t) only
@@ -328,7 +365,8 @@ int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double
     nl->sig_u = reads_u(nl);
     nl->sig_seen = nl->nsig;
   }
-  if (p && nl->sig_u && cup_input_eval(nl->u, t, v + n)) return CUP_ERR_CALLBACK;
+  if (p && nl->sig_u && (nl->ucache ? sig_input(nl, t, v + n) : cup_input_eval(nl->u, t, v + n)))
+    return CUP_ERR_CALLBACK;
   if (nl->zrow) zeta_full(nl, x, zeta, v);
   else if (zeta) la_copy(v + n + p, zeta, m);
   else la_zero(v + n + p, m);
