@@ -4,7 +4,8 @@
  * its two-lane form, the square wave's lane helpers and its blocks
  * (input_square_block) against the scalar ones bit for bit;
  * the unrolled step against the general pivoting path on random small sets,
- * bit for bit; whole runs of the paper's circuits and variants through the
+ * bit for bit; the warm step with D against the general path with its sums
+ * whole, bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
  * the fused steps off), bit for bit, states and statistics; la_floor
  * against libm's floor. */
@@ -258,6 +259,82 @@ static void test_unrolled_step_is_the_general_one(void **state) {
     fail_msg("%ld of %ld steps projected", projected, unrolled);
 }
 
+/* Random LCS steps with D != 0 (1..4 states, 1..6 rows: D a resistive part
+ * R R^T, a skew part as a bridge's cutsets give, and zero columns, theta
+ * 1/2 or 1), along a random walk of free points, once with the warm step
+ * (lcp/step.c's warm_d: the last active set's cached block, the sums over
+ * lambda's support) and once by the general path with every sum whole:
+ * z, lambda, the warm start, the trapezoid's carry, the mode and every
+ * certificate agree bit for bit. */
+static void test_warm_step_is_the_general_one(void **state) {
+  (void)state;
+  rng_t r = {11};
+  long steps = 0, warm = 0;
+  for (int trial = 0; trial < 300; trial++) {
+    int n = rng_int(&r, 1, 4), m = rng_int(&r, 1, 6);
+    double C[24] = {0}, g[6], pd[4], W[16], D[36] = {0}, R[36], h = 0.001 * (1 + rng_unif(&r));
+    for (int q = 0; q < m * n; q++) C[q] = rng_unif(&r) < 0.3 ? 0 : rng_normal(&r);
+    for (int i = 0; i < m; i++) { C[i * n + rng_int(&r, 0, n - 1)] = 1 + rng_unif(&r); g[i] = rng_normal(&r); }
+    for (int j = 0; j < n; j++) pd[j] = 0.5 + rng_unif(&r);
+    for (int i = 0; i < n; i++)
+      for (int j = 0; j < n; j++) W[i + j * n] = (i == j) + 0.01 * rng_normal(&r);
+    for (int q = 0; q < m * m; q++) R[q] = rng_unif(&r) < 0.5 ? 0 : rng_normal(&r);
+    for (int i = 0; i < m; i++)                   /* D = R R^T + S, S skew */
+      for (int j = 0; j < m; j++) {
+        double acc = 0;
+        for (int c = 0; c < m; c++) acc += R[i + c * m] * R[j + c * m];
+        D[i + j * m] = acc;
+      }
+    for (int i = 0; i < m; i++)
+      for (int j = i + 1; j < m; j++)
+        if (rng_unif(&r) < 0.3) {
+          double s = rng_unif(&r) < 0.5 ? 1 : -1;
+          D[i + j * m] += s;
+          D[j + i * m] -= s;
+        }
+    int zc = rng_int(&r, -1, m - 1);              /* a zero column (a diode D does not fix), or none */
+    for (int i = 0; zc >= 0 && i < m; i++) D[i + zc * m] = D[zc + i * m] = 0;
+    tcsc Cc;
+    cup_polyset *K = tpolyset_dense(&Cc, C, m, n, g, pd);
+    double theta = trial % 3 ? 0.5 : 1;
+    lcp_step fast, slow;
+    assert_int_equal(lcp_step_init_bd(&fast, K, W, h, NULL, D, theta), CUP_OK);
+    assert_int_equal(lcp_step_init_bd(&slow, K, W, h, NULL, D, theta), CUP_OK);
+    assert_int_equal(fast.warm, 1);
+    slow.warm = slow.lam_sparse = 0;
+    double x[4], za[4], zb[4];
+    for (int j = 0; j < n; j++) x[j] = rng_normal(&r);
+    assert_int_equal(lcp_step_start(&fast, x, g), lcp_step_start(&slow, x, g));
+    for (int step = 0; step < 60; step++) {
+      for (int j = 0; j < n; j++) x[j] += 0.05 * rng_normal(&r);
+      double S = cup_polyset_norm(K, x), eps = step % 7 ? 1e-9 : -1, eta = 1e-9;
+      cup_proj_info ia, ib;
+      int sa = lcp_step_solve(&fast, g, x, za, S, eps, eta, &ia);
+      int sb = lcp_step_solve(&slow, g, x, zb, S, eps, eta, &ib);
+      assert_int_equal(sa, sb);
+      assert_same_info(&ia, &ib);
+      if (sa < 0) break;
+      for (int j = 0; j < n; j++) assert_true(same(za[j], zb[j]));
+      for (int i = 0; i < m; i++) {
+        assert_true(same(fast.lcp.lam[i], slow.lcp.lam[i]));
+        assert_int_equal(fast.lcp.prev[i], slow.lcp.prev[i]);
+        assert_true(same(fast.carry[i], slow.carry[i]));
+        assert_true(same(fast.geff[i], slow.geff[i]));
+      }
+      assert_true(same(fast.lq, slow.lq));
+      assert_true(fast.mode == slow.mode);
+      steps++;
+      warm += !ia.skipped && fast.blocks.blk[0].state;
+      for (int j = 0; j < n; j++) x[j] = za[j];   /* walk on from z */
+    }
+    lcp_step_free(&fast);
+    lcp_step_free(&slow);
+    cup_polyset_free(&K);
+    tcsc_free(&Cc);
+  }
+  if (!(warm > steps / 4)) fail_msg("%ld of %ld steps solved an LCP with the warm step's blocks built", warm, steps);
+}
+
 /* ---- fused steps against the loop ----------------------------------------------- */
 
 typedef struct { double *x; long count, cap; int dim; } keep;
@@ -364,6 +441,7 @@ int main(void) {
     cmocka_unit_test(test_square_block_is_scalar),
     cmocka_unit_test(test_floor_is_libm),
     cmocka_unit_test(test_unrolled_step_is_the_general_one),
+    cmocka_unit_test(test_warm_step_is_the_general_one),
     cmocka_unit_test(test_fused_steps_are_the_loop),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

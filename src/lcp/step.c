@@ -44,12 +44,18 @@ static void build_hm(lcp_step *ls) {
   /* The LCP is solved with its rows scaled to largest entry 1: a row is
    * volts or amperes, and LU's residual and the pivoting's tolerance are
    * relative to the largest row; scaled, each row's are its own. */
+  ls->lam_sparse = ls->warm;
   for (int i = 0; i < m; i++) {
     double r = 0;
     for (int j = 0; j < m; j++) r = la_max(r, fabs(ls->M[i + (size_t)j * m]));
     ls->rsc[i] = r > 0 ? 1 / r : 1;
-    for (int j = 0; j < m; j++) ls->Ms[i + (size_t)j * m] = ls->rsc[i] * ls->M[i + (size_t)j * m];
+    for (int j = 0; j < m; j++) {
+      ls->Ms[i + (size_t)j * m] = ls->rsc[i] * ls->M[i + (size_t)j * m];
+      ls->lam_sparse &= isfinite(ls->M[i + (size_t)j * m]) && isfinite(ls->D[i + (size_t)j * m]) &&
+                       isfinite(ls->Ms[i + (size_t)j * m]);
+    }
   }
+  lcp_blocks_clear(&ls->blocks);                  /* they were the old M's */
 }
 
 /* The D path's arrays (lcp_step_free releases them on failure). */
@@ -69,6 +75,9 @@ static int init_d(lcp_step *ls, const double *D, double theta) {
   ls->Ms = calloc(M * M, sizeof(double));
   ls->rsc = calloc(3 * M, sizeof(double));         /* and q, q - tau scaled */
   ls->kwork = calloc(3 * M, sizeof(int));
+  ls->warm = ls->m <= LCP_BLOCKS_MAX_M;
+  if (ls->warm && (lcp_blocks_init(&ls->blocks, ls->m) || !(ls->wscr = calloc(5 * M, sizeof(double)))))
+    return CUP_ERR_NOMEM;
   if (!ls->D || !ls->geff || !ls->WB || !ls->Hprev || !ls->carry || !ls->xpred || !ls->q0 || !ls->dcol0 ||
       !ls->kcol || !ls->Z || !ls->work || !ls->kwork || !ls->Ms || !ls->rsc || lcp_monotone(&ls->lcp))
     return CUP_ERR_NOMEM;
@@ -137,7 +146,8 @@ void lcp_step_free(lcp_step *ls) {
   free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
   free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->WB); free(ls->Hprev);
   free(ls->carry); free(ls->xpred); free(ls->q0); free(ls->dcol0); free(ls->kcol); free(ls->Z);
-  free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc);
+  free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc); free(ls->wscr);
+  lcp_blocks_free(&ls->blocks);
   lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
@@ -297,10 +307,33 @@ int lcp_step_start(lcp_step *ls, const double *x0, const double *g) {
 }
 
 /* (m + 2) eps sum_j |A_ij| lambda_j: the rounding of row i of A lambda. */
-static double row_rounding(const lcp_step *ls, const double *A, int i) {
+static double row_rounding(const lcp_step *ls, const double *A, const double *lam, int i) {
   double mag = 0;
-  for (int j = 0; j < ls->m; j++) mag += fabs(A[i + (size_t)j * ls->m]) * ls->lcp.lam[j];
+  for (int j = 0; j < ls->m; j++) mag += fabs(A[i + (size_t)j * ls->m]) * lam[j];
   return (ls->m + 2) * DBL_EPSILON * mag;
+}
+
+/* The entries of lambda that the sums over it must see, into nz: the
+ * nonzero ones (all of them unless lam_sparse). A zero lambda_j adds a
+ * zero to each sum (A finite), which changes it only where it is zero,
+ * and then at most its sign. Returns their count. */
+CUP_ALWAYS_INLINE int lam_support(const lcp_step *ls, const double *lam, int *nz, const int m) {
+  int p = 0;
+  for (int j = 0; j < m; j++)
+    if (lam[j] != 0 || !ls->lam_sparse) nz[p++] = j;
+  return p;
+}
+
+/* row_rounding of every row into out, over lambda's support nz (p
+ * entries): a sum of magnitudes starts at +0 and is never -0, so the zeros
+ * left out change none of its bits. */
+CUP_ALWAYS_INLINE void rows_rounding(const double *restrict A, const double *restrict lam, const int *restrict nz,
+                                     int p, double *restrict out, const int m) {
+  for (int i = 0; i < m; i++) {
+    double mag = 0;
+    for (int t = 0; t < p; t++) mag += fabs(A[i + (size_t)nz[t] * m]) * lam[nz[t]];
+    out[i] = (m + 2) * DBL_EPSILON * mag;
+  }
 }
 
 /* With D, a row of w may not depend on z at all (a diode fixed by the
@@ -308,8 +341,11 @@ static double row_rounding(const lcp_step *ls, const double *A, int i) {
  * known only once lambda is; 1 if some tau_i grew. */
 static int widen_aim(lcp_step *ls, const double *q) {
   int m = ls->m, more = 0;
+  double *r = ls->work;
+  int *nz = ls->kwork;
+  rows_rounding(ls->M, ls->lcp.lam, nz, lam_support(ls, ls->lcp.lam, nz, m), r, m);
   for (int i = 0; i < m; i++) {
-    double want = 16 * row_rounding(ls, ls->M, i);
+    double want = 16 * r[i];
     if (want > ls->tau[i]) {
       ls->tau[i] += want;
       ls->qs[i] = q[i] - ls->tau[i];
@@ -319,13 +355,20 @@ static int widen_aim(lcp_step *ls, const double *q) {
   return more;
 }
 
-/* g + D lambda (D != 0), else g itself. */
-static const double *effective_offset(lcp_step *ls, const double *g) {
+/* g + D lambda (D != 0), else g itself, over lambda's support nz (p
+ * entries, lam_support): a row whose sum is zero, whose sign the zeros
+ * left out may have changed, is summed whole again. */
+CUP_ALWAYS_INLINE const double *effective_offset(lcp_step *ls, const double *g, const int *restrict nz, int p,
+                                                 const int m) {
   if (!ls->D) return g;
-  int m = ls->m;
+  const double *restrict lam = ls->lcp.lam, *restrict D = ls->D;
   for (int i = 0; i < m; i++) {
     double acc = g[i];
-    for (int j = 0; j < m; j++) acc += ls->D[i + (size_t)j * m] * ls->lcp.lam[j];
+    for (int t = 0; t < p; t++) acc += D[i + (size_t)nz[t] * m] * lam[nz[t]];
+    if (acc == 0) {
+      acc = g[i];
+      for (int j = 0; j < m; j++) acc += D[i + (size_t)j * m] * lam[j];
+    }
     ls->geff[i] = acc;
   }
   return ls->geff;
@@ -391,10 +434,39 @@ static int aimed_solve(lcp_step *ls, const double *q, int *pivots) {
   return st;
 }
 
+/* g + D lambda and the rounding of D lambda (rows_rounding) into r over
+ * the block's active columns, which hold lambda's nonzero entries (the
+ * others add zeros, as lam_support says). */
+CUP_ALWAYS_INLINE const double *block_offset(lcp_step *ls, const lcp_block *B, const double *g, double *restrict r,
+                                             const int m) {
+  const int k = B->k, *restrict idx = B->idx;
+  const double *restrict lam = ls->lcp.lam;
+  double acc[LCP_BLOCKS_MAX_M], mag[LCP_BLOCKS_MAX_M];
+  for (int i = 0; i < m; i++) acc[i] = g[i], mag[i] = 0;
+  for (int b = 0; b < k; b++) {
+    const double *restrict dg = B->Dg + (size_t)b * m, *restrict da = B->Da + (size_t)b * m, l = lam[idx[b]];
+    for (int i = 0; i < m; i++) {
+      acc[i] += dg[i] * l;
+      mag[i] += da[i] * l;
+    }
+  }
+  for (int i = 0; i < m; i++) {
+    if (acc[i] == 0) {
+      acc[i] = g[i];
+      for (int j = 0; j < m; j++) acc[i] += ls->D[i + (size_t)j * m] * lam[j];
+    }
+    ls->geff[i] = acc[i];
+    r[i] = (m + 2) * DBL_EPSILON * mag[i];
+  }
+  return ls->geff;
+}
+
 /* lambda >= 0, lambda^T q, z = xf + H lambda, and z's slack and its rounding
- * in ls->s, ls->gam for the offset returned (g, or g + D lambda). */
-static const double *finish(lcp_step *ls, const double *q, const double *g, const double *xf, double *z) {
-  int n = ls->n, m = ls->m;
+ * in ls->s, ls->gam for the offset returned (g, or g + D lambda); B: the
+ * block of lambda's support (warm_d), or NULL. */
+CUP_ALWAYS_INLINE const double *finish_m(lcp_step *ls, const double *q, const double *g, const double *xf, double *z,
+                                         const lcp_block *B, const int m) {
+  int n = ls->n;
   double *lam = ls->lcp.lam, lq = 0;
   for (int i = 0; i < m; i++) {
     lam[i] = la_max(lam[i], 0);
@@ -407,10 +479,25 @@ static const double *finish(lcp_step *ls, const double *q, const double *g, cons
     for (int r = 0; r < n; r++) z[r] += ls->H[r + (size_t)i * n] * lam[i];
   }
   /* certificates from the slack of z itself; with D, in K shifted by D lambda */
-  g = effective_offset(ls, g);
+  if (!ls->D) {
+    polyset_slack(ls->K, g, z, ls->s, ls->gam);
+    return g;
+  }
+  double *r = ls->work;
+  if (B) {
+    g = block_offset(ls, B, g, r, m);
+  } else {
+    int *nz = ls->kwork, p = lam_support(ls, lam, nz, m);
+    g = effective_offset(ls, g, nz, p, m);
+    rows_rounding(ls->D, lam, nz, p, r, m);
+  }
   polyset_slack(ls->K, g, z, ls->s, ls->gam);
-  for (int i = 0; ls->D && i < m; i++) ls->gam[i] += row_rounding(ls, ls->D, i);
+  for (int i = 0; i < m; i++) ls->gam[i] += r[i];
   return g;
+}
+
+static const double *finish(lcp_step *ls, const double *q, const double *g, const double *xf, double *z) {
+  return finish_m(ls, q, g, xf, z, NULL, ls->m);
 }
 
 /* The most solves again for a new support's weights (mode_solve), and for
@@ -515,14 +602,69 @@ static int solve_d(lcp_step *ls, const double *q, const double **g, const double
   return CUP_OK;
 }
 
-/* lcp_step_solve beyond the unrolled step: out of line, so that the
- * unrolled step's callers pay for none of its registers (35 instructions a
- * call on the paper circuit's projections). */
-static __attribute__((noinline)) int solve_general(lcp_step *ls, const double *g, const double *xf, double *z,
-                                                   double scale, double eps_target, double eta_target,
-                                                   cup_proj_info *info) {
+/* solve_d's common case, taken without its general machinery: the last
+ * step's active set solves both aimed LCPs (aimed_solve and widen_aim's
+ * second solve) with no pivot, its support is the mode in force, and z
+ * satisfies every row with room for its rounding. Then z, lambda, the aims
+ * and the carry are solve_d's, bit for bit, and it returns 1 (*g: the
+ * offset of z's certificates); else 0, having changed only what solve_d
+ * computes again (lambda, z, the slacks). The sums over lambda run over
+ * the block's active columns: the others hold zeros (finish_m). */
+CUP_ALWAYS_INLINE int warm_d(lcp_step *ls, const double *q, const double **g, const double *xf, double *z,
+                             const int m) {
+  if (m > LCP_BLOCKS_MAX_M || !ls->lam_sparse) return 0;   /* lam_sparse implies warm */
+  double *restrict sqs = ls->wscr, *restrict tau = sqs + m, *restrict qs = tau + m, *restrict lam = qs + m;
+  double *restrict y = lam + m;
+  unsigned long long act = 0;
+  for (int i = 0; i < m; i++) {
+    act |= (unsigned long long)(ls->lcp.prev[i] != 0) << i;
+    sqs[i] = ls->rsc[i] * ls->qs[i];
+  }
+  const lcp_block *B = lcp_blocks_get(&ls->blocks, act, ls->Ms, ls->M, ls->D);
+  if (lcp_block_pass(B, sqs, lam, y, m)) return 0;
+  const int k = B->k, *restrict idx = B->idx;
+  int more = 0, active;                           /* widen_aim, on copies of the aims */
+  double mag[LCP_BLOCKS_MAX_M];
+  for (int i = 0; i < m; i++) mag[i] = 0;
+  for (int b = 0; b < k; b++) {
+    const double *restrict col = B->Ma + (size_t)b * m, l = lam[idx[b]];
+    for (int i = 0; i < m; i++) mag[i] += col[i] * l;
+  }
+  for (int i = 0; i < m; i++) {
+    double want = 16 * ((m + 2) * DBL_EPSILON * mag[i]);
+    tau[i] = ls->tau[i];
+    qs[i] = ls->qs[i];
+    if (want > tau[i]) {
+      tau[i] += want;
+      qs[i] = q[i] - tau[i];
+      more = 1;
+    }
+  }
+  if (more) {
+    for (int i = 0; i < m; i++) sqs[i] = ls->rsc[i] * qs[i];
+    if (lcp_block_pass(B, sqs, lam, y, m)) return 0;
+  }
+  unsigned long long J = 0;
+  for (int i = 0; i < m; i++)
+    if (lam[i] > 0) J |= 1ull << i;
+  if (J != ls->mode) return 0;
+  for (int i = 0; i < m; i++) ls->lcp.lam[i] = lam[i];
+  const double *geff = finish_m(ls, q, *g, xf, z, B, m);
+  if (short_rows(ls, &active)) return 0;
+  *g = geff;
+  for (int i = 0; i < m; i++) {
+    ls->tau[i] = tau[i];
+    ls->qs[i] = qs[i];
+  }
+  carry_of(ls);
+  return 1;
+}
+
+/* lcp_step_solve beyond the unrolled step, for m rows. */
+CUP_ALWAYS_INLINE int solve_general_m(lcp_step *ls, const double *g, const double *xf, double *z, double scale,
+                                      double eps_target, double eta_target, cup_proj_info *info, const int m) {
   const cup_polyset *K = ls->K;
-  int n = ls->n, m = ls->m;
+  int n = ls->n;
   double *lam = ls->lcp.lam;
   *info = (cup_proj_info){0};
   info->eps_target = eps_target < 0 ? 1e-12 * scale * scale : eps_target;
@@ -565,7 +707,7 @@ static __attribute__((noinline)) int solve_general(lcp_step *ls, const double *g
   if (ls->D) {                                    /* q outlives the slack of z (ls->s) */
     la_copy(ls->q0, q, m);
     q = ls->q0;
-    st = solve_d(ls, q, &g, xf, z, &pivots);
+    st = warm_d(ls, q, &g, xf, z, m) ? CUP_OK : solve_d(ls, q, &g, xf, z, &pivots);
   } else {
     st = aimed_solve(ls, q, &pivots);
     if (!st) g = finish(ls, q, g, xf, z);
@@ -595,7 +737,7 @@ static __attribute__((noinline)) int solve_general(lcp_step *ls, const double *g
       if (!(lam[i] > 0)) continue;
       double mag = fabs(g[i]);
       for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) mag += fabs(K->Ct.x[k]) * zmag[K->Ct.i[k]];
-      double lcp_round = ls->D ? row_rounding(ls, ls->M, i) : 0;   /* with D: the LCP's own */
+      double lcp_round = ls->D ? row_rounding(ls, ls->M, lam, i) : 0;   /* with D: the LCP's own */
       floor += 2 * ls->h * lam[i] * (ls->gam[i] + 2 * K->rowgam[i] * mag + tau[i] + lcp_round);
     }
     info->eps_target = eps_target = la_max(1e-12 * scale * scale, floor);
@@ -603,6 +745,21 @@ static __attribute__((noinline)) int solve_general(lcp_step *ls, const double *g
   info->eta_cert = lcp_step_eta(ls, g, z);
   return info->status = info->eps_cert <= eps_target && info->eta_cert <= eta_target
                             ? CUP_OK : CUP_WARN_NOT_CERTIFIED;
+}
+
+/* solve_general_m out of line, so that the unrolled step's callers pay for
+ * none of its registers (35 instructions a call on the paper circuit's
+ * projections); with the row counts of small circuits with D known at
+ * compile time, their steps being mostly warm_d's short loops. */
+static __attribute__((noinline)) int solve_general(lcp_step *ls, const double *g, const double *xf, double *z,
+                                                   double scale, double eps_target, double eta_target,
+                                                   cup_proj_info *info) {
+#define CUP_GENERAL_CASE(M) \
+  case M: return solve_general_m(ls, g, xf, z, scale, eps_target, eta_target, info, M);
+  if (ls->D) switch (ls->m) { CUP_GENERAL_CASE(1) CUP_GENERAL_CASE(2) CUP_GENERAL_CASE(3) CUP_GENERAL_CASE(4)
+                              CUP_GENERAL_CASE(6) }
+#undef CUP_GENERAL_CASE
+  return solve_general_m(ls, g, xf, z, scale, eps_target, eta_target, info, ls->m);
 }
 
 int lcp_step_solve(lcp_step *ls, const double *g, const double *xf, double *z,

@@ -22,6 +22,7 @@
 #include "util/ckpt.h"
 #include "set/polyset_impl.h"
 #include "lcp.h"
+#include "block.h"
 
 /* Up to this many states and rows, without D, a step is first tried by code
  * unrolled for its sizes (the circuits' common case: a few ns instead of a
@@ -31,7 +32,6 @@
  * block, NaN, the exact mode eps_target < 0). */
 #define CUP_STEP_SMALL_N 4
 #define CUP_STEP_SMALL_M 2
-
 typedef struct lcp_step {
   int n, m;
   double h;
@@ -59,6 +59,10 @@ typedef struct lcp_step {
   int *kwork;
   double *Ms;       /* m x m: M with rows scaled by rsc, which the LCP solves */
   double *rsc;      /* m: 1 / (largest entry of M's row); then q and q - tau so scaled */
+  int warm;         /* 1: the step with D tries warm_d first (m <= LCP_BLOCKS_MAX_M; tests set 0) */
+  int lam_sparse;   /* 1 (warm, and M and D finite: build_hm): a zero entry of lambda adds an exact zero */
+  lcp_blocks blocks;   /* the warm step's active sets, emptied by build_hm */
+  double *wscr;     /* 5 m: the warm step's scaled q, aims, lambda and a solve */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
   int small;        /* 1: lcp_step_solve tries the unrolled step first */
   v2d Ccol[CUP_STEP_SMALL_N];      /* C's columns, the rows in lanes, zeros included */
