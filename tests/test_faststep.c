@@ -263,13 +263,12 @@ static void test_unrolled_step_is_the_general_one(void **state) {
  * R R^T, a skew part as a bridge's cutsets give, and zero columns, theta
  * 1/2 or 1), along a random walk of free points, once with the warm step
  * (lcp/step.c's warm_d: the last active set's cached block, the sums over
- * lambda's support) and once by the general path with every sum whole:
+ * lambda's support; each mode's kernel and matrices cached, lcp/mode.h)
+ * and once by the general path with every sum whole, every mode's made anew:
  * z, lambda, the warm start, the trapezoid's carry, the mode and every
  * certificate agree bit for bit. */
-static void test_warm_step_is_the_general_one(void **state) {
-  (void)state;
-  rng_t r = {11};
-  long steps = 0, warm = 0;
+static void warm_runs(uint64_t seed, int rank, double walk, long *steps, long *warm, long *returns) {
+  rng_t r = {seed};
   for (int trial = 0; trial < 300; trial++) {
     int n = rng_int(&r, 1, 4), m = rng_int(&r, 1, 6);
     double C[24] = {0}, g[6], pd[4], W[16], D[36] = {0}, R[36], h = 0.001 * (1 + rng_unif(&r));
@@ -282,7 +281,7 @@ static void test_warm_step_is_the_general_one(void **state) {
     for (int i = 0; i < m; i++)                   /* D = R R^T + S, S skew */
       for (int j = 0; j < m; j++) {
         double acc = 0;
-        for (int c = 0; c < m; c++) acc += R[i + c * m] * R[j + c * m];
+        for (int c = 0; c < m && c < rank; c++) acc += R[i + c * m] * R[j + c * m];
         D[i + j * m] = acc;
       }
     for (int i = 0; i < m; i++)
@@ -305,8 +304,10 @@ static void test_warm_step_is_the_general_one(void **state) {
     double x[4], za[4], zb[4];
     for (int j = 0; j < n; j++) x[j] = rng_normal(&r);
     assert_int_equal(lcp_step_start(&fast, x, g), lcp_step_start(&slow, x, g));
+    unsigned long long seen[64];
+    int nseen = 0;
     for (int step = 0; step < 60; step++) {
-      for (int j = 0; j < n; j++) x[j] += 0.05 * rng_normal(&r);
+      for (int j = 0; j < n; j++) x[j] += walk * rng_normal(&r);
       double S = cup_polyset_norm(K, x), eps = step % 7 ? 1e-9 : -1, eta = 1e-9;
       cup_proj_info ia, ib;
       int sa = lcp_step_solve(&fast, g, x, za, S, eps, eta, &ia);
@@ -323,8 +324,12 @@ static void test_warm_step_is_the_general_one(void **state) {
       }
       assert_true(same(fast.lq, slow.lq));
       assert_true(fast.mode == slow.mode);
-      steps++;
-      warm += !ia.skipped && fast.blocks.blk[0].state;
+      (*steps)++;
+      *warm += !ia.skipped && fast.blocks.blk[0].state;
+      int old = 0;                                /* back in a mode met before, with weights (theta < 1) */
+      for (int e = 0; e < nseen; e++) old |= seen[e] == fast.mode;
+      if (!old && nseen < 64) seen[nseen++] = fast.mode;
+      *returns += old && theta < 1;
       for (int j = 0; j < n; j++) x[j] = za[j];   /* walk on from z */
     }
     lcp_step_free(&fast);
@@ -332,7 +337,23 @@ static void test_warm_step_is_the_general_one(void **state) {
     cup_polyset_free(&K);
     tcsc_free(&Cc);
   }
+}
+
+static void test_warm_step_is_the_general_one(void **state) {
+  (void)state;
+  long steps = 0, warm = 0, returns = 0;
+  warm_runs(11, 6, 0.05, &steps, &warm, &returns);
   if (!(warm > steps / 4)) fail_msg("%ld of %ld steps solved an LCP with the warm step's blocks built", warm, steps);
+}
+
+/* The same with D_JJ singular on most supports (R of rank 1: kernels) and
+ * longer strides, so that the steps move between modes and back: the
+ * mode's matrices copied from lcp/mode.h's cache are build_hm's. */
+static void test_cached_modes_are_the_general_ones(void **state) {
+  (void)state;
+  long steps = 0, warm = 0, returns = 0;
+  warm_runs(12, 1, 0.5, &steps, &warm, &returns);
+  if (!(returns > steps / 10)) fail_msg("%ld of %ld steps back in a mode met before", returns, steps);
 }
 
 /* ---- fused steps against the loop ----------------------------------------------- */
@@ -442,6 +463,7 @@ int main(void) {
     cmocka_unit_test(test_floor_is_libm),
     cmocka_unit_test(test_unrolled_step_is_the_general_one),
     cmocka_unit_test(test_warm_step_is_the_general_one),
+    cmocka_unit_test(test_cached_modes_are_the_general_ones),
     cmocka_unit_test(test_fused_steps_are_the_loop),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -76,7 +76,8 @@ static int init_d(lcp_step *ls, const double *D, double theta) {
   ls->rsc = calloc(3 * M, sizeof(double));         /* and q, q - tau scaled */
   ls->kwork = calloc(3 * M, sizeof(int));
   ls->warm = ls->m <= LCP_BLOCKS_MAX_M;
-  if (ls->warm && (lcp_blocks_init(&ls->blocks, ls->m) || !(ls->wscr = calloc(5 * M, sizeof(double)))))
+  if (ls->warm && (lcp_blocks_init(&ls->blocks, ls->m) || lcp_modes_init(&ls->modes, ls->n, ls->m) ||
+                   !(ls->wscr = calloc(5 * M, sizeof(double)))))
     return CUP_ERR_NOMEM;
   if (!ls->D || !ls->geff || !ls->WB || !ls->Hprev || !ls->carry || !ls->xpred || !ls->q0 || !ls->dcol0 ||
       !ls->kcol || !ls->Z || !ls->work || !ls->kwork || !ls->Ms || !ls->rsc || lcp_monotone(&ls->lcp))
@@ -148,6 +149,7 @@ void lcp_step_free(lcp_step *ls) {
   free(ls->carry); free(ls->xpred); free(ls->q0); free(ls->dcol0); free(ls->kcol); free(ls->Z);
   free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc); free(ls->wscr);
   lcp_blocks_free(&ls->blocks);
+  lcp_modes_free(&ls->modes);
   lcp_free(&ls->lcp);
   memset(ls, 0, sizeof *ls);
 }
@@ -246,21 +248,40 @@ static unsigned long long support(const lcp_step *ls) {
 }
 
 /* The weights for the support J: 1 when H and M changed (another kernel),
- * 0 when those in force are J's. With theta = 1 every weight is 1. */
+ * 0 when those in force are J's. With theta = 1 every weight is 1. A
+ * warm step keeps each mode's kernel and matrices (mode.h): functions of
+ * J alone, copied they are the same bits. */
 static int set_mode(lcp_step *ls, unsigned long long J) {
   ls->mode = J;
   if (ls->theta == 1) return 0;
   int m = ls->m, nk;
   int *kc = ls->kcol + m + 1;                     /* the second halves: J's kernel, to compare */
   double *Zn = ls->Z + (size_t)(m + 1) * (m + 1);
-  kernel_of(ls, J, &nk, kc, Zn);
+  lcp_mode *E = ls->warm ? lcp_modes_get(&ls->modes, J) : NULL;
+  if (E && E->state) {
+    nk = E->nk, kc = E->kc, Zn = E->Z;
+  } else {
+    kernel_of(ls, J, &nk, kc, Zn);
+    if (E) {
+      E->nk = nk;
+      memcpy(E->kc, kc, sizeof(int) * (size_t)nk);
+      memcpy(E->Z, Zn, sizeof(double) * (size_t)nk * m);
+      E->state = 1;
+    }
+  }
   if (nk == ls->nker && !memcmp(kc, ls->kcol, sizeof(int) * (size_t)nk) &&
       !memcmp(Zn, ls->Z, sizeof(double) * (size_t)nk * m))
     return 0;
   ls->nker = nk;
   memcpy(ls->kcol, kc, sizeof(int) * (size_t)nk);
   memcpy(ls->Z, Zn, sizeof(double) * (size_t)nk * m);
-  build_hm(ls);
+  if (E && E->state == 2) {
+    lcp_mode_copy(E, ls->H, ls->M, ls->Ms, ls->rsc, &ls->lam_sparse, 0);
+    lcp_blocks_clear(&ls->blocks);                /* they were the old M's */
+  } else {
+    build_hm(ls);
+    if (E) lcp_mode_copy(E, ls->H, ls->M, ls->Ms, ls->rsc, &ls->lam_sparse, 1), E->state = 2;
+  }
   return 1;
 }
 

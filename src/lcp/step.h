@@ -23,6 +23,7 @@
 #include "set/polyset_impl.h"
 #include "lcp.h"
 #include "block.h"
+#include "mode.h"
 
 /* Up to this many states and rows, without D, a step is first tried by code
  * unrolled for its sizes (the circuits' common case: a few ns instead of a
@@ -62,6 +63,7 @@ typedef struct lcp_step {
   int warm;         /* 1: the step with D tries warm_d first (m <= LCP_BLOCKS_MAX_M; tests set 0) */
   int lam_sparse;   /* 1 (warm, and M and D finite: build_hm): a zero entry of lambda adds an exact zero */
   lcp_blocks blocks;   /* the warm step's active sets, emptied by build_hm */
+  lcp_modes modes;     /* warm: the kernels and matrices of the modes met (set_mode) */
   double *wscr;     /* 5 m: the warm step's scaled q, aims, lambda and a solve */
   /* small sets (see CUP_STEP_SMALL_N): C's rows dense for the unrolled step */
   int small;        /* 1: lcp_step_solve tries the unrolled step first */
