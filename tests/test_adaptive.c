@@ -522,6 +522,68 @@ static void test_spice_sources(void **state) {
   unbuild_lcs(&b);
 }
 
+/* Input components that neither E nor G reads (a switch's gate source)
+ * get no exosystem states: the play operator of test_moving_interval with
+ * 130 PULSE components beside its sine, whose 260 generator states would
+ * pass the dense limit (256) were they held (CUP_ERR_UNSUPPORTED before).
+ * The run is the interval's closed form, its events at the sine's
+ * switching times, and every pulse corner still ends a step. */
+typedef struct { ad_ctx c; long nt; double t[4096]; } unread_ctx;
+
+static int unread_sink(long k, double t, const double *x, void *vp) {
+  unread_ctx *r = vp;
+  if (r->nt < 4096) r->t[r->nt++] = t;
+  return ad_sink(k, t, x, &r->c);
+}
+
+static void test_unread_inputs(void **state) {
+  (void)state;
+  enum { P = 131 };
+  static double G[2 * P];                       /* row-major: only column 0 (the sine) */
+  double C[2] = {1, -1}, F[2] = {0.5, 0.5};
+  G[0] = -1;
+  G[P] = 1;
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 1, 2, P, NULL, NULL, C, NULL, F, G, NULL, NULL, msg)) fail_msg("%s", msg);
+  cup_input *u = NULL;
+  assert_int_equal(cup_input_create(&u, P, msg), CUP_OK);
+  cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 1 / (2 * M_PI)};
+  assert_int_equal(cup_input_add(u, 0, &s, msg), CUP_OK);
+  for (int q = 1; q < P; q++) {                 /* corners at d, d + 0.01, d + 0.03, d + 0.04 */
+    cup_wave g = {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 0.05 * q, .rise = 0.01,
+                  .fall = 0.01, .width = 0.02, .period = 0};
+    assert_int_equal(cup_input_add(u, q, &g, msg), CUP_OK);
+  }
+  cup_integrator_options o;
+  adaptive_options(&o, 2.5 * M_PI, 1e-8, 1e-8, 0);
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = 1;
+  static unread_ctx r;
+  r = (unread_ctx){.c = {.exact = interval_exact, .dim = 1}};
+  o.on_event = ad_event;
+  o.event_ctx = &r.c;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+  cup_run_info info;
+  int st = cup_integrator_run(I, (double[]){0}, unread_sink, &r, &info);
+  if (st != CUP_OK) fail_msg("run: %s: %s", cup_status_name(st), info.message);
+  check_run("unread inputs", &r.c, &info, 1e-8);
+  const double tsw[] = {M_PI / 6, M_PI / 2, M_PI, 1.5 * M_PI, 2 * M_PI};
+  const int rows[] = {0, 0, 1, 1, 0};
+  check_events("unread inputs", &r.c, 5, tsw, rows, 1e-8);
+  assert_true(r.nt < 4096);
+  for (int q = 1; q < P; q++)
+    for (int j = 0; j < 4; j++) {
+      double corner = 0.05 * q + (double[]){0, 0.01, 0.03, 0.04}[j], best = INFINITY;
+      for (long k = 0; k < r.nt; k++) best = fmin(best, fabs(r.t[k] - corner));
+      if (!(best <= 1e-12)) fail_msg("pulse %d's corner at %.17g: nearest step end %.3g away", q, corner, best);
+    }
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+}
+
 /* A diamond |x1 - c| + |x2| <= 1 carried by c = 4 sin t, f = 0, x0 =
  * (0, 1/2), in long steps (output every step: an eighth of the period):
  * the upper-left edge (row 2) meets x at c = 1/2 and pushes it along its
@@ -601,6 +663,7 @@ int main(void) {
     cmocka_unit_test(test_step_doubling_process),
     cmocka_unit_test(test_spice_sources),
     cmocka_unit_test(test_moving_diamond),
+    cmocka_unit_test(test_unread_inputs),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

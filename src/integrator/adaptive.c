@@ -59,12 +59,17 @@ static void dense_of(const la_sparse *S, int has, double *out, int ld) {
     for (int k = S->p[j]; k < S->p[j + 1]; k++) out[S->i[k] + (size_t)j * ld] = S->x[k];
 }
 
-/* The input's exosystem: the waveforms' (input_impl.h), or for a callback
+/* The input's exosystem: the waveforms' of the terms live_terms kept
+ * (input_impl.h), and the step limit of every sine, or for a callback
  * per component the Taylor states (u, u', ..., u^(q)) of the step's
  * interpolating polynomial, w_j' = w_{j+1}. */
 static void exosystem(adaptive_ws *A) {
   int p = A->p, nw = A->nw;
   const cup_input *u = A->u;
+  for (int k = 0; u && !A->callback && k < u->nterms; k++)   /* all terms: the steps of the whole input */
+    if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
+        u->terms[k].omega > 0)
+      A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
   if (!A->nwu) return;
   if (A->callback) {
     for (int c = 0; c < p; c++) {
@@ -74,20 +79,37 @@ static void exosystem(adaptive_ws *A) {
     }
     return;
   }
-  for (int k = 0; k < u->nterms; k++) A->U[u->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
-  for (int k = 0; k < u->nterms; k++) {          /* the rounding scale of the value states */
-    const input_term *t = &u->terms[k];
+  const cup_input *gen = &A->gen;
+  for (int k = 0; k < gen->nterms; k++) A->U[gen->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
+  for (int k = 0; k < gen->nterms; k++) {        /* the rounding scale of the value states */
+    const input_term *t = &gen->terms[k];
     double sc = fabs(t->value) + fabs(t->amp);
     if (t->kind == CUP_WAVE_PULSE) sc = fmax(fabs(t->value), fabs(t->value2));
     for (int j = 0; t->kind == CUP_WAVE_PWL && j < t->np; j++) sc = fmax(sc, fabs(t->v[j]));
     A->wscale[A->first_state[k]] = sc;
     if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) A->wscale[A->first_state[k] + 1] = sc;
   }
-  input_gen_dynamics(u, A->first_state, A->W, nw);
-  for (int k = 0; k < u->nterms; k++)
-    if ((u->terms[k].kind == CUP_WAVE_SINE || u->terms[k].kind == CUP_WAVE_DAMPED_SINE) &&
-        u->terms[k].omega > 0)
-      A->hmax_input = fmin(A->hmax_input, M_PI / 4 / u->terms[k].omega);
+  input_gen_dynamics(gen, A->first_state, A->W, nw);
+}
+
+/* The built-in waveforms whose component a column of E (the drift) or of
+ * G (the offset) reads, into A->gen with their exosystem's first states:
+ * the others reach nothing the scheme integrates (a switch's gate source,
+ * which the switched run reads from the input itself). On the full bridge
+ * the four PULSE gates' 8 states made the flow 11 x 11 where 3 x 3 does
+ * (L, C and the DC source). Breakpoints still come from the whole input
+ * (A->u), and so does the step limit of a sine (exosystem). */
+static int live_terms(adaptive_ws *A, const freestep_drift *D, const la_sparse *G, int *fail) {
+  const cup_input *u = A->u;
+  A->gen = (cup_input){.p = u ? u->p : 0};
+  A->gen.terms = take(u ? (size_t)u->nterms : 0, sizeof(input_term), fail);
+  for (int k = 0; u && !*fail && k < u->nterms; k++) {
+    int q = u->terms[k].comp;
+    if ((D->has_E && q < D->E.ncol && D->E.p[q + 1] > D->E.p[q]) || (G && q < G->ncol && G->p[q + 1] > G->p[q]))
+      A->gen.terms[A->gen.nterms++] = u->terms[k];
+  }
+  A->first_state = take((size_t)A->gen.nterms + 1, sizeof(int), fail);
+  return *fail ? 0 : input_gen_dim(&A->gen, A->first_state);
 }
 
 /* D != 0: B and D dense, C B, the rows D couples; the late-switch model of
@@ -272,9 +294,8 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   A->callback = A->u && A->u->fn;
   A->has_D = Dm != NULL;
   int fail = 0, n = A->n, m = A->m, p = A->p;
-  int nterms = A->u && !A->callback ? A->u->nterms : 0;
-  A->first_state = take((size_t)nterms + 1, sizeof(int), &fail);
-  if (!fail) A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : input_gen_dim(A->u, A->first_state);
+  A->nwu = A->nw = A->callback ? p * (AD_DEGREE + 1) : live_terms(A, D, G, &fail);
+  A->held = A->callback ? A->u : &A->gen;
   A->one = -1;
   for (int i = 0; A->has_D && i < m && A->one < 0; i++)
     if (K->g0[i] != 0) A->one = A->nw++;         /* F reaches the multipliers through D: a constant state */
@@ -336,7 +357,7 @@ void adaptive_free(adaptive_ws **Ap) {
   lcp_free(&A->lcp);
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
-  free(A->first_state); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
+  free(A->first_state); free(A->gen.terms); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
   free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx); free(A->gterm);
   free(A->ya); free(A->yb); free(A->yt); free(A->yhi); free(A->yr); free(A->My); free(A->fa); free(A->fb);
   free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);

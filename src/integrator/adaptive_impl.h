@@ -160,7 +160,11 @@ struct adaptive_ws {
   double *jx;               /* n: a jump, or a candidate's state on its manifold */
   double *Ry, *Ym, *Zc;     /* mode construction: B_J N^-1 on the Y rows (n x m), the Y rows' terms
                                ((m + 1) x na: the last row their constants), Z^T C_J (m x n) */
-  int *first_state;         /* built-in waveforms: first exosystem state of each term */
+  cup_input gen;            /* built-in waveforms: u's terms that E or G reads (copies; adaptive.c,
+                               live_terms), those the exosystem holds */
+  int *first_state;         /* ... and the first exosystem state of each */
+  const cup_input *held;    /* &gen, or a callback's u: the breakpoints that end an exosystem piece
+                               (adaptive_zeta's; a gate's corners move no state) */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
   double *U, *W;            /* p x nw, nw x nw, column-major */
   int *up, *ui, *gp, *gi;   /* U's nonzeros by column (nw + 1 starts, rows), G's by row (m + 1 starts, columns) */

@@ -287,6 +287,9 @@ static int poly_input(adaptive_ws *A, double t0, double h, double *w, double *er
   return CUP_OK;
 }
 
+/* The exosystem holds every term of the input (live_terms dropped none). */
+static int gen_whole(const adaptive_ws *A) { return A->u && A->gen.nterms == A->u->nterms; }
+
 /* The exosystem's states for a step [t0, t1] inside a piece (and the
  * constant state, with D). */
 int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
@@ -297,10 +300,12 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
     la_copy(w, A->piece_w, A->nwu);
     return CUP_OK;
   }
-  const adaptive_ws *O = A->nb ? A->nb->piece_of : NULL;   /* the last window's, same input */
-  if (O && O != A && O->piece_ok && t0 == O->piece_t0 && t1 == O->piece_t1 && O->nwu == A->nwu)
+  /* the last window's, same input: only when both hold every term of it
+   * (live_terms: a configuration whose E and G read fewer has other states) */
+  const adaptive_ws *O = A->nb && gen_whole(A) ? A->nb->piece_of : NULL;
+  if (O && O != A && O->piece_ok && t0 == O->piece_t0 && t1 == O->piece_t1 && gen_whole(O))
     la_copy(w, O->piece_w, A->nwu);
-  else input_gen_piece(A->u, A->first_state, t0, t1, w);
+  else input_gen_piece(&A->gen, A->first_state, t0, t1, w);
   if (A->nb) A->nb->piece_of = A;
   la_copy(A->piece_w, w, A->nwu);
   A->piece_t0 = t0;
@@ -339,7 +344,9 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
       if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
     return CUP_OK;
   }
-  double t = A->zt, tb = ad_next_break(A, t);
+  /* the held terms' next break (a gate's corners move no state); when they
+   * are the whole input, the one start_piece asks for at t too (ad_next_break) */
+  double t = A->zt, tb = gen_whole(A) ? ad_next_break(A, t) : cup_input_next_break(A->held, t);
   double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
   if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
