@@ -498,10 +498,10 @@ static int create_half(switched_run *S, const cup_switching *sw, const cup_input
   return st;
 }
 
-/* Made by its own front door below, never chosen by the options; no checkpoints. */
 /* The run's limit (its windows share it: wall_left). */
 static void sw_wall_limit(void *ws, double seconds) { ((switched_run *)ws)->o.max_wall_seconds = seconds; }
 
+/* Made by its own front door below, never chosen by the options; no checkpoints. */
 static const scheme_type switched_type = {
   .name = "switched", .free = sw_free, .run = sw_run, .state = sw_state, .zeta = sw_zeta,
   .wall_limit = sw_wall_limit,
