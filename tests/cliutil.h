@@ -27,6 +27,16 @@ static const char *tmp_path(const char *name) {
   return p;
 }
 
+/* text written to the file name in the test's folder; its path (tmp_path's) */
+static inline const char *tmp_text(const char *name, const char *text) {
+  const char *path = tmp_path(name);
+  FILE *fp = fopen(path, "w");
+  assert_non_null(fp);
+  fputs(text, fp);
+  fclose(fp);
+  return path;
+}
+
 /* ---- running the program ---- */
 
 typedef struct {

@@ -254,16 +254,14 @@ static void test_warning_exits_zero(void **state) {
  * rechecked). With the default margin the same crowd misses no contact. */
 static void test_crowd_missed_contacts(void **state) {
   (void)state;
-  const char *scene = tmp_path("jam.yaml"), *out = tmp_path("jam.h5");
-  FILE *y = fopen(scene, "w");
-  assert_non_null(y);
-  fputs("crowd:\n"
-        "  room: [[0, 0], [6, 0], [6, 4], [0, 4]]\n"
-        "  doors: [[[6, 1.5], [6, 2.5]]]\n"
-        "  agents: {count: 25, radius: 0.25, spread: 0.0, region: [0.5, 0.5, 4, 3.5], seed: 3}\n"
-        "  speed: 1.5\n"
-        "T: 4\nn: 80\noutput: {every: 10}\n", y);
-  fclose(y);
+  const char *scene = tmp_text("jam.yaml",
+      "crowd:\n"
+      "  room: [[0, 0], [6, 0], [6, 4], [0, 4]]\n"
+      "  doors: [[[6, 1.5], [6, 2.5]]]\n"
+      "  agents: {count: 25, radius: 0.25, spread: 0.0, region: [0.5, 0.5, 4, 3.5], seed: 3}\n"
+      "  speed: 1.5\n"
+      "T: 4\nn: 80\noutput: {every: 10}\n");
+  const char *out = tmp_path("jam.h5");
   for (int tiny = 0; tiny <= 1; tiny++) {
     const char *args[] = {scene, "-o", out, "--set", tiny ? "crowd.margin=1e-9" : "crowd.grid=0.1", NULL};
     result r = run_cli(args, 0, 0);

@@ -100,11 +100,8 @@ static const char *lc = "LC at resonance\nV1 in 0 SIN(0 1 5032.921210448704)\nL1
 
 static void no_steady_state(void **state) {
   (void)state;
-  const char *cir = tmp_path("lc.cir"), *out = tmp_path("lc.h5");
-  FILE *fp = fopen(cir, "w");
-  assert_non_null(fp);
-  fputs(lc, fp);
-  fclose(fp);
+  const char *cir = tmp_text("lc.cir", lc);
+  const char *out = tmp_path("lc.h5");
   result r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", NULL}, 0, 0);
   expect_exit(&r, 0);
   expect_in(r.err, "warning");
@@ -129,12 +126,10 @@ static void no_steady_state(void **state) {
 /* .options steadyperiod=40m asks for it from the netlist itself (two periods of 50 Hz). */
 static void netlist_option(void **state) {
   (void)state;
-  const char *cir = tmp_path("hw.cir"), *out = tmp_path("hw.h5");
-  FILE *fp = fopen(cir, "w");
-  assert_non_null(fp);
-  fputs("Half-wave\nV1 in 0 SIN(0 10 50)\nRs in a 1\nD1 a out\nC1 out 0 100u\nRL out 0 1k\n"
-        ".options reltol=1e-4 steadyperiod=40m\n.tran 20u 60m\n.end\n", fp);
-  fclose(fp);
+  const char *cir = tmp_text("hw.cir",
+      "Half-wave\nV1 in 0 SIN(0 10 50)\nRs in a 1\nD1 a out\nC1 out 0 100u\nRL out 0 1k\n"
+      ".options reltol=1e-4 steadyperiod=40m\n.tran 20u 60m\n.end\n");
+  const char *out = tmp_path("hw.h5");
   result r = run_cli((const char *const[]){cir, "-o", out, NULL}, 0, 0);
   expect_exit(&r, 0);
   expect_in(r.err, "steady state: period 0.04 s");

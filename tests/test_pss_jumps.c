@@ -187,13 +187,10 @@ static void ccm_half(void **state) {
 /* D = 0.3137: the edge at 627.4 samples, between two */
 static void ccm_between(void **state) {
   (void)state;
-  const char *cir = tmp_path("buck-3137.cir");
-  FILE *fp = fopen(cir, "w");
-  assert_non_null(fp);
-  fputs("Buck, D = 0.3137\nV1 in 0 12\nVG g 0 PULSE(0 1 0 jump jump 3.137u 10u)\nS1 in sw g 0 SWI\nD1 0 sw\n"
-        "L1 sw out 100u\nC1 out 0 10u\nRL out 0 5\n.model SWI SW(VT=0.5 VH=0)\n.tran 100n 1m\n"
-        ".probe v(out) i(L1) v(sw)\n.end\n", fp);
-  fclose(fp);
+  const char *cir = tmp_text("buck-3137.cir",
+      "Buck, D = 0.3137\nV1 in 0 12\nVG g 0 PULSE(0 1 0 jump jump 3.137u 10u)\nS1 in sw g 0 SWI\nD1 0 sw\n"
+      "L1 sw out 100u\nC1 out 0 10u\nRL out 0 5\n.model SWI SW(VT=0.5 VH=0)\n.tran 100n 1m\n"
+      ".probe v(out) i(L1) v(sw)\n.end\n");
   ccm(0.3137, cir);
 }
 
@@ -224,13 +221,11 @@ static void dcm(void **state) {
  * file's /signals), with a warning; at 2001 samples the jumps are placed. */
 static void too_many_jumps(void **state) {
   (void)state;
-  const char *cir = tmp_path("buck-1k.cir"), *out = tmp_path("buck-1k.h5");
-  FILE *fp = fopen(cir, "w");
-  assert_non_null(fp);
-  fputs("Buck, 1 kHz load\nV1 in 0 12\nVG g 0 PULSE(0 1 0 jump jump 5u 10u)\nS1 in sw g 0 SWI\nD1 0 sw\n"
-        "L1 sw out 100u\nC1 out 0 10u\nRL out 0 5\nIL out 0 SIN(0 0.1 1k)\n.model SWI SW(VT=0.5 VH=0)\n"
-        ".tran 100n 1m\n.probe v(sw)\n.end\n", fp);
-  fclose(fp);
+  const char *cir = tmp_text("buck-1k.cir",
+      "Buck, 1 kHz load\nV1 in 0 12\nVG g 0 PULSE(0 1 0 jump jump 5u 10u)\nS1 in sw g 0 SWI\nD1 0 sw\n"
+      "L1 sw out 100u\nC1 out 0 10u\nRL out 0 5\nIL out 0 SIN(0 0.1 1k)\n.model SWI SW(VT=0.5 VH=0)\n"
+      ".tran 100n 1m\n.probe v(sw)\n.end\n");
+  const char *out = tmp_path("buck-1k.h5");
   for (int dense = 0; dense < 2; dense++) {
     result r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", "--set", "steady_state.measure=[v(sw)]",
                                              "--set", dense ? "steady_state.samples=2001" : "steady_state.samples=21",
@@ -266,12 +261,10 @@ static void too_many_jumps(void **state) {
 static void source_edge_at_period_end(void **state) {
   (void)state;
   const double D = 0.3137, Vin = 12;
-  const char *cir = tmp_path("buck-noswitch.cir"), *out = tmp_path("buck-noswitch.h5");
-  FILE *fp = fopen(cir, "w");
-  assert_non_null(fp);
-  fputs("Buck without a switch\nV1 a 0 PULSE(0 12 0 jump jump 3.137u 10u)\nD1 a sw\nL1 sw out 100u\n"
-        "C1 out 0 10u\nRL out 0 5\n.tran 100n 1m\n.end\n", fp);
-  fclose(fp);
+  const char *cir = tmp_text("buck-noswitch.cir",
+      "Buck without a switch\nV1 a 0 PULSE(0 12 0 jump jump 3.137u 10u)\nD1 a sw\nL1 sw out 100u\n"
+      "C1 out 0 10u\nRL out 0 5\n.tran 100n 1m\n.end\n");
+  const char *out = tmp_path("buck-noswitch.h5");
   result r = run_cli((const char *const[]){cir, "-o", out, "--steady-state", "--set",
                                            "steady_state.measure=[v(sw), v(a)]", "--set",
                                            "steady_state.efficiency=[RL, V1]", NULL}, 0, 0);
