@@ -44,10 +44,13 @@ typedef struct input_break_memo {
 double input_next_break_memo(const cup_input *u, input_break_memo *m, int nm, double t);
 
 /* cup_input_next_break's last answer, kept by a caller that asks at the
- * same time twice (the adaptive scheme's records and pieces, ad_next_break). */
+ * same time twice (the adaptive scheme's records and pieces, ad_next_break),
+ * and the first terms' memos for one that asks at each piece's start. */
+#define INPUT_BREAK_MEMOS 8
 typedef struct input_breaks {
   int ok;
   double t, next;
+  input_break_memo term[INPUT_BREAK_MEMOS];
 } input_breaks;
 
 typedef struct input_quad_ws {
