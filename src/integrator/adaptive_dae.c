@@ -242,9 +242,7 @@ int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, in
   /* the multipliers alone, x as it is: 0 <= zeta _|_ C x + D zeta + g >= 0
    * (a diode behind a resistance takes any slack; and there B need not be
    * P^-1 C^T, which the jump below assumes) */
-  for (int j = 0; j < m; j++)
-    for (int i = 0; i < m; i++) A->lcpM[i + (size_t)j * m] = A->Dd[i + (size_t)j * m];
-  if (lcp_solve(&A->lcp, A->lcpM, A->dq0, pivots) == CUP_OK) {
+  if (lcp_solve(&A->lcp, A->Dd, A->dq0, pivots) == CUP_OK) {
     /* w to the rounding of the solve: its residual is eps (|q| + |D| |zeta|)
      * in every row (a bridge behind a 10 kOhm shunt: 38 kV terms, a 2 V
      * row off by 2.4e-12); a w within the slack's own rounding is inside
