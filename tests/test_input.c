@@ -9,6 +9,7 @@
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_integration.h>
 #include "testutil.h"
+#include "input_impl.h"                          /* input_next_break_memo, input_term_piece */
 
 static cup_input *make(int p) {
   cup_input *u = NULL;
@@ -322,6 +323,146 @@ static void test_damped_sine(void **state) {
   cup_input_free(&u);
 }
 
+/* The full bridge's gates: PULSE(0 1 d jump jump 49u 100u), d = 1u, 51u,
+ * 76u, 26u. */
+static const double fb_delay[4] = {1e-6, 51e-6, 76e-6, 26e-6}, fb_width = 49e-6, fb_period = 100e-6;
+
+static cup_input *full_bridge_gates(void) {
+  cup_input *u = make(5);
+  cup_wave dc = {.kind = CUP_WAVE_CONSTANT, .value = 100};
+  assert_int_equal(cup_input_add(u, 0, &dc, NULL), CUP_OK);
+  for (int g = 0; g < 4; g++) {
+    cup_wave w = {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = fb_delay[g], .width = fb_width,
+                  .period = fb_period};
+    assert_int_equal(cup_input_add(u, 1 + g, &w, NULL), CUP_OK);
+  }
+  return u;
+}
+
+/* The first corner of the full bridge's gates after t in closed form:
+ * SPICE's PULSE corners d + P j (rise) and d + P j + (0 + width) (fall),
+ * summed in that order. */
+static double fb_corner_after(double t) {
+  double best = INFINITY;
+  for (int g = 0; g < 4; g++)
+    for (int j = 0; j < 200; j++) {
+      double base = fb_delay[g] + fb_period * j, c[2] = {base, base + (0 + fb_width)};
+      for (int k = 0; k < 2; k++)
+        if (c[k] > t && c[k] < best) best = c[k];
+    }
+  return best;
+}
+
+/* input_next_break_memo, term by term from memos a run keeps, against the
+ * closed form of the full bridge's gates walked from corner to corner over
+ * 100 periods (800 corners), and against cup_input_next_break (no memo) at
+ * random times, forwards and backwards, at every corner and an ulp either
+ * side of it, for a mix of every kind of term: ramps, a pulse whose period
+ * is rise + width + fall (a period's last corner and the next's first
+ * round either way), a one-shot pulse, a table, a damped sine's delay, a
+ * square wave (asked afresh) and terms past the memos' room (nm). */
+static void test_break_memos(void **state) {
+  (void)state;
+  cup_input *u = full_bridge_gates();
+  input_break_memo m[8] = {{0}};
+  double t = 0;
+  for (int k = 0; k < 800; k++) {
+    double want = fb_corner_after(t), got = input_next_break_memo(u, m, 8, t);
+    if (got != want) fail_msg("corner %d after %.17g: %.17g, the closed form %.17g", k, t, got, want);
+    t = got;
+  }
+  cup_input_free(&u);
+
+  u = make(3);
+  double pt[4] = {0.2e-3, 1e-3, 1.7e-3, 4e-3}, pv[4] = {0, 1, -1, 2};
+  const cup_wave w[] = {
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 5, .delay = 1e-3, .rise = 0.5e-3, .fall = 0.25e-3,
+     .width = 2e-3, .period = 5e-3},
+    {.kind = CUP_WAVE_PULSE, .value = -1, .value2 = 1, .delay = 0.1e-3, .rise = 0.3e-3, .fall = 0.3e-3,
+     .width = 0.4e-3, .period = 1e-3},
+    {.kind = CUP_WAVE_PULSE, .value = 1, .value2 = 3, .delay = 1e-3, .width = 2e-3, .fall = 1e-3},
+    {.kind = CUP_WAVE_PWL, .npoints = 4, .t = pt, .v = pv},
+    {.kind = CUP_WAVE_DAMPED_SINE, .amplitude = 1, .frequency = 1e3, .delay = 2.5e-3, .damping = 10},
+    {.kind = CUP_WAVE_SQUARE, .amplitude = 1, .frequency = 700},
+    {.kind = CUP_WAVE_SINE, .amplitude = 1, .frequency = 50},
+    {.kind = CUP_WAVE_CONSTANT, .value = 2},
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 0.05e-3, .width = 0.3e-3, .period = 0.7e-3},
+  };
+  for (size_t k = 0; k < sizeof w / sizeof w[0]; k++) assert_int_equal(cup_input_add(u, (int)k % 3, &w[k], NULL), CUP_OK);
+  double corner[4096];
+  int nc = 0;
+  for (double b = cup_input_next_break(u, 0); b < 12e-3 && nc < 4096; b = cup_input_next_break(u, b)) corner[nc++] = b;
+  assert_true(nc > 100 && nc < 4096);
+  for (int nm = 0; nm <= 9; nm += 3) {
+    input_break_memo mm[9];
+    memset(mm, 0, sizeof mm);
+    rng_t r = {7 + (uint64_t)nm};
+    long checked = 0;
+    for (int pass = 0; pass < 3; pass++)
+      for (int c = 0; c < nc; c++) {
+        /* each corner, an ulp either side, and a random time (now and then far back) */
+        double tq[4] = {nextafter(corner[c], 0), corner[c], nextafter(corner[c], 1), rng_unif(&r) * 12e-3};
+        if (pass == 2) tq[3] = corner[c] * rng_unif(&r);
+        for (int q = 0; q < 4; q++) {
+          double want = cup_input_next_break(u, tq[q]), got = input_next_break_memo(u, mm, nm, tq[q]);
+          if (memcmp(&got, &want, sizeof got))
+            fail_msg("nm %d, t = %.17g: %.17g, without memos %.17g", nm, tq[q], got, want);
+          checked++;
+        }
+      }
+    assert_int_equal(checked, 12L * nc);
+  }
+  cup_input_free(&u);
+}
+
+/* input_term_piece: a jump PULSE's value and the end of its piece, against
+ * the closed form (value2 on [d + P j, d + P j + width), value else; the
+ * piece ends at the next corner) and against input_term_value at the
+ * piece's start, middle and last double; a constant's for ever; other
+ * kinds no piece (hi = t) with input_term_value's value. */
+static void test_term_piece(void **state) {
+  (void)state;
+  cup_input *u = full_bridge_gates();
+  rng_t r = {3};
+  for (int k = 0; k < 4000; k++) {
+    double t = k < 800 ? fb_corner_after(k ? fb_corner_after(k * 12.5e-6 - 1e-9) - 1e-9 : 0) : rng_unif(&r) * 1e-2;
+    if (k >= 400 && k < 800) t = nextafter(t, 0);
+    for (int g = 0; g < 4; g++) {
+      const input_term *w = &u->terms[1 + g];
+      double hi, v = input_term_piece(w, t, &hi);
+      double s = t - fb_delay[g], j = floor(s / fb_period), on = s >= 0 && s - j * fb_period < fb_width;
+      /* (the closed form's own rounding aside: only where t is clear of a corner) */
+      double base = fb_delay[g] + fb_period * j;
+      int clear = fabs(t - base) > 1e-12 && fabs(t - (base + fb_width)) > 1e-12 &&
+                  fabs(t - (base + fb_period)) > 1e-12;
+      if (clear && v != on) fail_msg("gate %d at %.17g: %g, the closed form %g", g, t, v, on);
+      double next_corner = INFINITY;
+      for (int jj = 0; jj < 110; jj++) {
+        double b0 = fb_delay[g] + fb_period * jj, c[2] = {b0, b0 + (0 + fb_width)};
+        for (int q = 0; q < 2; q++)
+          if (c[q] > t && c[q] < next_corner) next_corner = c[q];
+      }
+      if (hi != next_corner) fail_msg("gate %d at %.17g: piece to %.17g, next corner %.17g", g, t, hi, next_corner);
+      double mid = t + (hi - t) / 2;                /* (an ulp's piece: its middle rounds to hi) */
+      const double at[3] = {t, mid < hi ? mid : t, nextafter(hi, t)};
+      for (int q = 0; q < 3; q++)
+        if (input_term_value(w, at[q]) != v)
+          fail_msg("gate %d: %g on [%.17g, %.17g) but %g at %.17g", g, v, t, hi, input_term_value(w, at[q]), at[q]);
+      if (input_term_value(w, hi) == v) fail_msg("gate %d: the same value after its corner %.17g", g, hi);
+    }
+    double hi, v = input_term_piece(&u->terms[0], rng_unif(&r), &hi);
+    assert_true(v == 100 && isinf(hi));
+  }
+  cup_input_free(&u);
+  u = make(1);
+  cup_wave ramp = {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .rise = 1e-6, .fall = 1e-6, .width = 3e-6,
+                   .period = 10e-6};
+  assert_int_equal(cup_input_add(u, 0, &ramp, NULL), CUP_OK);
+  double hi, v = input_term_piece(&u->terms[0], 0.5e-6, &hi);
+  assert_true(hi == 0.5e-6 && v == input_term_value(&u->terms[0], 0.5e-6) && v > 0.49 && v < 0.51);
+  cup_input_free(&u);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_case1_values_and_integrals),
@@ -333,6 +474,8 @@ int main(void) {
     cmocka_unit_test(test_validation),
     cmocka_unit_test(test_pulse),
     cmocka_unit_test(test_pulse_corners),
+    cmocka_unit_test(test_break_memos),
+    cmocka_unit_test(test_term_piece),
     cmocka_unit_test(test_damped_sine),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

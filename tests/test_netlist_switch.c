@@ -593,6 +593,96 @@ static void test_errors(void **state) {
                   "t.cir:4:1: S1: closed, the switch puts capacitors in a loop with a source");
 }
 
+/* The full bridge's gates, PULSE(0 1 d jump jump 49u 100u) for d = 1u,
+ * 51u, 76u, 26u (examples/circuits/fullbridge.cir), walked as a switched
+ * run asks: from each switching time the next (sw.next), the rule there
+ * (sw.settle). Every switching time is the first gate corner after the
+ * last in closed form (SPICE's PULSE: d + P j and d + P j + (0 + width),
+ * summed in that order), 798 in 100 periods, and the configuration after
+ * each is one per pattern of gates high in the piece that follows (the
+ * closed form at its middle). From a time origin t0 (the sources from t0
+ * on: memos afresh) the switching times are the corners of the shifted
+ * input in turn (cup_input_next_break), 200 of them (2.5 ms). */
+static const double fb_delay[4] = {1 * 1e-6, 51 * 1e-6, 76 * 1e-6, 26 * 1e-6}, fb_width = 49 * 1e-6,
+                    fb_period = 100 * 1e-6;   /* (as the reader scales "76u") */
+
+static double fb_corner_after(double t) {
+  double best = INFINITY;
+  for (int g = 0; g < 4; g++)
+    for (int j = 0; j < 120; j++) {
+      double base = fb_delay[g] + fb_period * j, c[2] = {base, base + (0 + fb_width)};
+      for (int k = 0; k < 2; k++)
+        if (c[k] > t && c[k] < best) best = c[k];
+    }
+  return best;
+}
+
+static void test_gate_schedule(void **state) {
+  (void)state;
+  cup_netlist *nl = text_ok("full bridge\nVDC dc 0 100\n"
+                            "VG1 g1 0 PULSE(0 1 1u jump jump 49u 100u)\nVG2 g2 0 PULSE(0 1 51u jump jump 49u 100u)\n"
+                            "VG3 g3 0 PULSE(0 1 76u jump jump 49u 100u)\nVG4 g4 0 PULSE(0 1 26u jump jump 49u 100u)\n"
+                            "S1 dc a g1 0 SWI\nS2 a 0 g2 0 SWI\nS3 dc b g3 0 SWI\nS4 b 0 g4 0 SWI\n"
+                            "D1 a dc\nD2 0 a\nD3 b dc\nD4 0 b\nL1 a o 1m\nC1 o b 2.2u\nRL o b 20\n"
+                            ".model SWI SW(VT=0.5 VH=0)\n.tran 1u 10m\n.end\n");
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  char err[CUP_ERRMSG_LEN];
+  const double T = 100 * fb_period;
+  double x[2] = {0, 0}, t = 0;
+  int topo = 0, of_pattern[16], count = 0;
+  for (int k = 0; k < 16; k++) of_pattern[k] = -1;
+  assert_int_equal(sw.settle(sw.ctx, &topo, 0, x, NULL, err), CUP_OK);
+  while (t < T) {
+    double tb, want = fb_corner_after(t);
+    assert_int_equal(sw.next(sw.ctx, topo, t, T, &tb), CUP_OK);
+    if (tb != (want < T ? want : T)) fail_msg("switching %d after %.17g: at %.17g, the closed form %.17g", count, t, tb, want);
+    if (tb == T) break;
+    assert_int_equal(sw.settle(sw.ctx, &topo, tb, x, NULL, err), CUP_OK);
+    double mid = (tb + fb_corner_after(tb)) / 2;
+    int pattern = 0;
+    for (int g = 0; g < 4; g++) {
+      double s = mid - fb_delay[g];
+      if (s >= 0 && s - floor(s / fb_period) * fb_period < fb_width) pattern |= 1 << g;
+    }
+    if (of_pattern[pattern] < 0) {
+      for (int k = 0; k < 16; k++)
+        if (of_pattern[k] == topo) fail_msg("at %.17g: configuration %d for gates %x and %x", tb, topo, k, pattern);
+      of_pattern[pattern] = topo;
+    }
+    if (of_pattern[pattern] != topo)
+      fail_msg("at %.17g: gates %x in configuration %d, before in %d", tb, pattern, topo, of_pattern[pattern]);
+    t = tb;
+    count++;
+  }
+  assert_int_equal(count, 798);                   /* (g2's and g3's last falls at T and past it) */
+  assert_int_equal(cup_netlist_configurations_formed(nl), 9);   /* all open at t = 0, 8 patterns after */
+  /* from t0: the shifted sources' own corners, walked on from 1 ms, where
+   * the memos last held the old ones */
+  topo = 0;
+  assert_int_equal(sw.settle(sw.ctx, &topo, 0, x, NULL, err), CUP_OK);
+  for (t = 0; t < 1e-3;) {
+    double tb;
+    assert_int_equal(sw.next(sw.ctx, topo, t, T, &tb), CUP_OK);
+    assert_int_equal(sw.settle(sw.ctx, &topo, tb, x, NULL, err), CUP_OK);
+    t = tb;
+  }
+  const double t0 = 1234.5e-6;
+  assert_int_equal(cup_netlist_set_time_origin(nl, t0, err), CUP_OK);
+  const cup_input *v = cup_netlist_input(nl);
+  assert_int_equal(sw.settle(sw.ctx, &topo, t, x, NULL, err), CUP_OK);   /* on from where the walk stopped */
+  for (int k = 0; k < 200; k++) {
+    double tb, want = cup_input_next_break(v, t);
+    assert_int_equal(sw.next(sw.ctx, topo, t, T, &tb), CUP_OK);
+    if (tb != want) fail_msg("from t0, switching %d after %.17g: at %.17g, the sources' corner %.17g", k, t, tb, want);
+    double c = fb_corner_after(t0 + tb - 1e-12);   /* (t0 + tb rounds apart from the corner it stands for) */
+    if (fabs(t0 + tb - c) > 1e-15) fail_msg("from t0: %.17g is no gate's corner (%.17g)", t0 + tb, c);
+    assert_int_equal(sw.settle(sw.ctx, &topo, tb, x, NULL, err), CUP_OK);
+    t = tb;
+  }
+  cup_netlist_free(&nl);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_two_capacitors), cmocka_unit_test(test_two_capacitors_every_step),
@@ -602,7 +692,7 @@ int main(void) {
     cmocka_unit_test(test_rc_through_switch), cmocka_unit_test(test_buck), cmocka_unit_test(test_relaxation),
     cmocka_unit_test(test_fixed_step), cmocka_unit_test(test_probe_all),
     cmocka_unit_test(test_circuit_gated_step_end), cmocka_unit_test(test_controller), cmocka_unit_test(test_errors),
-    cmocka_unit_test(test_settle_moves_another_control),
+    cmocka_unit_test(test_settle_moves_another_control), cmocka_unit_test(test_gate_schedule),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -316,11 +316,13 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
 
 /* A record at a breakpoint (adaptive_zeta) and the piece that starts there
  * (start_piece, the next window's in a switched run) ask the same: on the
- * full bridge, 12 pulses' corners, 640 instructions a record. */
+ * full bridge, 12 pulses' corners, 640 instructions a record. A switched
+ * run's windows, one a piece, ask term by term (input_next_break_memo:
+ * one gate's corner recomputed a piece rather than all four). */
 double ad_next_break(adaptive_ws *A, double t) {
   input_breaks *b = A->nb ? &A->nb->nb : &A->nb_own;
   if (!b->ok || t != b->t) {
-    b->next = cup_input_next_break(A->u, t);
+    b->next = input_next_break_memo(A->u, b->term, A->nb ? INPUT_BREAK_MEMOS : 0, t);
     b->t = t;
     b->ok = 1;
   }

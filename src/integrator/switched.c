@@ -46,7 +46,8 @@ struct switched_run {
   double piece_end, *xprev, *zsplit;   /* a split step: its last piece's end, x_{k-1}, zeta at t_k */
   int cur;                 /* the configuration in force (its child answers state and zeta) */
   double *x;
-  adaptive_breaks breaks; /* the input's next breakpoint, asked at a window's end and the next's start */
+  adaptive_breaks breaks; /* the input's next breakpoint, asked at a window's end and the next's start
+                             (the adaptive scheme's windows, or the split steps' pieces, twin_of) */
   /* circuit-gated switches: each sample and step end of a window is checked */
   int watch;               /* checking (the window's configuration has such a switch) */
   int crossed;             /* one changed: at tbad, after tg */
@@ -245,7 +246,10 @@ static cup_integrator *twin_of(switched_run *S, int topo) {
   o.max_wall_seconds = 0;
   char msg[CUP_ERRMSG_LEN];
   if (cup_integrator_create(&S->twin[topo], S->ops.lcs(S->ops.ctx, topo), S->u, &o, msg)) S->twin_off[topo] = 1;
-  else adaptive_seed(adaptive_of(S->twin[topo]), 1);   /* its pieces try the last start's set (sw_run) */
+  else {
+    adaptive_seed(adaptive_of(S->twin[topo]), 1);   /* its pieces try the last start's set (sw_run) */
+    adaptive_share_breaks(adaptive_of(S->twin[topo]), &S->breaks);   /* (a piece's start asks, as a window's) */
+  }
   return S->twin[topo];
 }
 
@@ -437,6 +441,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   S->wall0 = S->o.max_wall_seconds > 0 ? now_seconds() : 0;
   int topo = 0, st = sw->settle(sw->ctx, &topo, 0, x0, NULL, info->message);
   long steps = 0, next_sample = 0;
+  S->breaks = (adaptive_breaks){0};                /* (the input may have changed between runs) */
   if (st >= 0 && S->o.scheme != CUP_SCHEME_ADAPTIVE) {
     for (int k = 0; k < SW_MAX; k++)               /* the pieces' guesses afresh (a run never reads the one before) */
       if (S->twin[k]) adaptive_seed(adaptive_of(S->twin[k]), 1);
@@ -450,7 +455,6 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   /* every step recorded: a jump at a switching is recorded after it too */
   int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
   uint64_t seeded = 0;                             /* configurations whose windows try the last start's set */
-  S->breaks = (adaptive_breaks){0};                /* (the input may have changed between runs) */
   for (int first = 1; st >= 0 && t < T; first = 0) {
     if (each) la_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */

@@ -246,6 +246,16 @@ double input_term_value(const input_term *w, double t) {
   return 0;
 }
 
+double input_term_piece(const input_term *w, double t, double *hi) {
+  if (w->kind == CUP_WAVE_CONSTANT) {
+    *hi = INFINITY;
+    return w->value;
+  }
+  if (w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0) return spice_jump_pulse(w, t, hi);
+  *hi = t;
+  return input_term_value(w, t);
+}
+
 double input_term_integral(const input_term *w, double a, double b) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value * (b - a);
@@ -436,23 +446,48 @@ int cup_input_integral(const cup_input *u, double a, double b, double *out) {
   return st;
 }
 
+/* Term w's next break after t (INFINITY if none): cup_input_next_break's
+ * share of it. */
+static double term_break(const input_term *w, double t) {
+  if (w->kind == CUP_WAVE_SQUARE && w->omega > 0 && w->amp != 0) {
+    /* jumps at integer q */
+    double j = floor(input_square_q(w, t)) + 1;
+    double tb = (j * M_PI - w->phase) / w->omega;
+    if (!(tb > t)) tb = ((j + 1) * M_PI - w->phase) / w->omega;
+    return tb;
+  } else if (w->kind == CUP_WAVE_PWL) {
+    for (int i = 0; i < w->np; i++)
+      if (w->t[i] > t) return w->t[i];
+  } else if (w->kind == CUP_WAVE_PULSE || w->kind == CUP_WAVE_DAMPED_SINE) {
+    return spice_term_break(w, t);
+  }
+  return INFINITY;
+}
+
 double cup_input_next_break(const cup_input *u, double t) {
   double next = INFINITY;
   if (!u) return next;
+  for (int k = 0; k < u->nterms; k++) next = fmin(next, term_break(&u->terms[k], t));
+  return next;
+}
+
+double input_next_break_memo(const cup_input *u, input_break_memo *m, int nm, double t) {
+  double next = INFINITY;
+  if (!u) return next;
+  if (nm > u->nterms) nm = u->nterms;
   for (int k = 0; k < u->nterms; k++) {
     const input_term *w = &u->terms[k];
-    if (w->kind == CUP_WAVE_SQUARE && w->omega > 0 && w->amp != 0) {
-      /* jumps at integer q */
-      double j = floor(input_square_q(w, t)) + 1;
-      double tb = (j * M_PI - w->phase) / w->omega;
-      if (!(tb > t)) tb = ((j + 1) * M_PI - w->phase) / w->omega;
-      next = fmin(next, tb);
-    } else if (w->kind == CUP_WAVE_PWL) {
-      for (int i = 0; i < w->np; i++)
-        if (w->t[i] > t) { next = fmin(next, w->t[i]); break; }
-    } else if (w->kind == CUP_WAVE_PULSE || w->kind == CUP_WAVE_DAMPED_SINE) {
-      next = fmin(next, spice_term_break(w, t));
+    double b;
+    if (k >= nm) {
+      b = term_break(w, t);
+    } else if (m[k].from <= t && t < m[k].next) {
+      b = m[k].next;
+    } else {
+      b = term_break(w, t);
+      /* a square wave's next jump is rounded from q at t: asked afresh */
+      m[k] = (input_break_memo){w->kind == CUP_WAVE_SQUARE ? NAN : t, b};
     }
+    if (b < next) next = b;                        /* (fmin's, a NaN b too) */
   }
   return next;
 }

@@ -29,11 +29,28 @@ struct cup_input {
   double abs_tol, rel_tol;
 };
 
+/* One term's next break and the times it is the answer for: a PULSE's
+ * corners, a PWL's knots and a damped sine's delay are fixed numbers, so
+ * the least of them past t is the least past any t' in [t, next) too
+ * (from = NaN: none, asked afresh; {0} holds for no time). */
+typedef struct input_break_memo {
+  double from, next;
+} input_break_memo;
+
+/* cup_input_next_break(u, t), bit for bit, terms k < nm by their memos
+ * m[k] (kept by the caller; each refreshed when t is outside its times):
+ * a switched run asks at each piece's start and end, and between two of a
+ * converter's corners only the gate whose corner it was moves on. */
+double input_next_break_memo(const cup_input *u, input_break_memo *m, int nm, double t);
+
 /* cup_input_next_break's last answer, kept by a caller that asks at the
- * same time twice (the adaptive scheme's records and pieces, ad_next_break). */
+ * same time twice (the adaptive scheme's records and pieces, ad_next_break),
+ * and the first terms' memos for one that asks at each piece's start. */
+#define INPUT_BREAK_MEMOS 8
 typedef struct input_breaks {
   int ok;
   double t, next;
+  input_break_memo term[INPUT_BREAK_MEMOS];
 } input_breaks;
 
 typedef struct input_quad_ws {
@@ -152,6 +169,10 @@ int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
 
 /* One term's value at t (its component's share of u(t)). */
 double input_term_value(const input_term *w, double t);
+/* The same, and in *hi the end of the piece [t, *hi) where it holds bit
+ * for bit: a constant's forever, a PULSE's with jump edges up to its next
+ * corner (spice_jump_pulse); *hi = t, no piece, for other kinds. */
+double input_term_piece(const input_term *w, double t, double *hi);
 /* cup_input_eval's sums of terms[0 .. n) alone into out (p entries; the
  * others 0): u(t) where only the listed terms are read (a waveform u). */
 void input_eval_terms(const cup_input *u, const int *terms, int n, double t, double *out);

@@ -43,6 +43,9 @@ typedef struct nl_topo {
   int *uterm, nuterm;      /* the input's terms whose component a control reads (all: zeta's rows read u) */
   int reads_z;             /* a control reads zeta */
   int state_gated;         /* a control depends on the state or the diodes */
+  int memo;                /* its input is topo[0]'s, term by term: the memos hold for it (memo_reset) */
+  int steps;               /* the terms read are constants and jump PULSEs: between two breaks of
+                              the input, u(t) and the controls from it are one value */
   uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for changes) */
   int ctl_class;           /* > 0: configurations of one class have the same controls, of t alone
                               (same_controls): settle's rule holds in the one it moves to; 0: none */
@@ -59,6 +62,19 @@ struct nl_switched {
   int cur;                 /* the configuration in force (signals) */
   double *ut;              /* p: u(t) */
   double *zf;              /* scratch: a configuration's zeta with multipliers */
+  double *thr;             /* 2 nsw: each switch's VT + |VH| and VT - |VH| (rule) */
+  /* the searches' memos of topo[0]'s input, term by term (nl_topo.memo):
+   * a switched run asks each piece's end and a few times around it, and
+   * at a converter's corner one gate moves while the others hold */
+  int nmemo;               /* its terms */
+  input_break_memo *bmemo; /* each one's next break */
+  double *vmemo;           /* 3 each: its value on [from, hi) (input_term_piece), from, hi, value */
+  /* the controls a search read last (changes), where its terms' pieces
+   * overlap: the next piece's first check reads them again */
+  int cvm_class;           /* their configurations' control class (0: none held) */
+  double cvm_lo, cvm_hi, *cvm;
+  uint64_t cvm_from, cvm_to; /* the rule's last answer from them: cvm_from gave cvm_to */
+  double read_lo, read_hi; /* the last read_terms': where its terms' memos all hold */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* the switching time the last search found (a configuration with no
@@ -211,6 +227,11 @@ static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
   tp->nuterm = 0;
   for (int q = 0; q < nterms; q++)
     if (reads[u->terms[q].comp] || (tp->reads_z && sub->zrow)) tp->uterm[tp->nuterm++] = q;
+  tp->steps = !p || (u && !u->fn);
+  for (int q = 0; q < tp->nuterm; q++) {
+    const input_term *w = &u->terms[tp->uterm[q]];
+    if (w->kind != CUP_WAVE_CONSTANT && !(w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0)) tp->steps = 0;
+  }
   free(reads);
   return CUP_OK;
 }
@@ -295,6 +316,52 @@ static void control_class(nl_switched *S, nl_topo *tp) {
   tp->ctl_class = ++S->nclass;
 }
 
+/* 1 if configuration tp's input is topo[0]'s, term by term, bit for bit:
+ * the memos' values and breaks are its own. */
+static int reads_memo(const nl_switched *S, const nl_topo *tp) {
+  const cup_input *a = S->topo[0].sub->u, *b = tp->sub->u;
+  if (!S->bmemo || !a || !b || a->fn || b->fn || a->nterms != S->nmemo || b->nterms != S->nmemo) return 0;
+  for (int k = 0; k < a->nterms; k++)
+    if (!same_term(&a->terms[k], &b->terms[k])) return 0;
+  return 1;
+}
+
+/* The memos emptied (they hold for no time) and who reads them, after
+ * topo[0] or the sources changed. */
+static void memo_reset(nl_switched *S) {
+  if (!S->bmemo) return;
+  memset(S->bmemo, 0, sizeof *S->bmemo * (size_t)S->nmemo);
+  memset(S->vmemo, 0, sizeof *S->vmemo * 3 * (size_t)S->nmemo);
+  S->cvm_class = 0;
+  for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]);
+}
+
+/* u(t) into S->ut from the terms configuration tp's controls read (ut's
+ * other entries 0), input_eval_terms' sums: with the memos, each term's
+ * value while t is in the piece it was taken on. */
+static void read_terms(nl_switched *S, const nl_topo *tp, double t) {
+  const cup_input *u = tp->sub->u;
+  if (!tp->memo) {
+    input_eval_terms(u, tp->uterm, tp->nuterm, t, S->ut);
+    return;
+  }
+  double lo = -INFINITY, hi = INFINITY;
+  for (int j = 0; j < u->p; j++) S->ut[j] = 0;
+  for (int q = 0; q < tp->nuterm; q++) {
+    int k = tp->uterm[q];
+    double *c = S->vmemo + 3 * (size_t)k;
+    if (!(t >= c[0] && t < c[1])) {
+      c[0] = t;
+      c[2] = input_term_piece(&u->terms[k], t, &c[1]);
+    }
+    S->ut[u->terms[k].comp] += c[2];
+    if (c[0] > lo) lo = c[0];
+    if (c[1] < hi) hi = c[1];
+  }
+  S->read_lo = lo;                                 /* where every term read holds (t among them) */
+  S->read_hi = hi;
+}
+
 /* The configuration's index, formed now if it is new. */
 static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   nl_switched *S = nl->sw;
@@ -316,6 +383,7 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
     return st;
   }
   control_class(S, tp);
+  tp->memo = reads_memo(S, tp);
   *out = S->ntopo++;
   return CUP_OK;
 }
@@ -330,7 +398,7 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
   if (p && (!u || u->fn)) {
     if (cup_input_eval(u, t, S->ut)) return CUP_ERR_CALLBACK;
   } else if (p) {
-    input_eval_terms(u, tp->uterm, tp->nuterm, t, S->ut);   /* the terms read */
+    read_terms(S, tp, t);                          /* the terms read */
   }
   const double *z = zeta;
   if (sub->zrow && tp->reads_z) {
@@ -341,6 +409,17 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
       S->zf[r] = (x ? la_dot(l, x, n) : 0) + la_dot(l + n, S->ut, p) + (zeta ? la_dot(l + n + p, zeta, sub->mr) : 0);
     }
     z = S->zf;
+  }
+  if (!x && !z) {                                  /* a search's: u's part alone (the others 0) */
+    for (int k = 0; k < S->nsw; k++) {
+      double su = 0;
+      for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
+        unsigned j = (unsigned)(tp->ci[q] - n);
+        if (j < (unsigned)p) su += tp->cx[q] * S->ut[j];
+      }
+      cv[k] = 0.0 + su + 0.0;
+    }
+    return CUP_OK;
   }
   for (int k = 0; k < S->nsw; k++) {
     double sx = 0, su = 0, sz = 0;
@@ -355,13 +434,11 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
   return CUP_OK;
 }
 
-/* ngspice's rule: on above VT + |VH|, off below VT - |VH|, else as before. */
+/* ngspice's rule: on above VT + |VH|, off below VT - |VH| (S->thr), else as before. */
 static uint64_t rule(const nl_switched *S, uint64_t cfg, const double *cv) {
   for (int k = 0; k < S->nsw; k++) {
-    const nl_elem *el = &S->c.elem[S->sw[k]];
-    double h = fabs(el->vh);
-    if (cv[k] > el->vt + h) cfg |= (uint64_t)1 << k;
-    else if (cv[k] < el->vt - h) cfg &= ~((uint64_t)1 << k);
+    if (cv[k] > S->thr[2 * k]) cfg |= (uint64_t)1 << k;
+    else if (cv[k] < S->thr[2 * k + 1]) cfg &= ~((uint64_t)1 << k);
   }
   return cfg;
 }
@@ -408,10 +485,36 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
 /* 1 if, from configuration tp, a switch of one kind (by_state: those the
  * circuit gates, else those the sources alone gate) changes at s, state x. */
 static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
-  if (controls(S, tp, s, x, NULL, cv)) return -1;
+  /* controls of t alone (a class) from terms constant on pieces: one value
+   * where the pieces they were read on overlap, for every configuration
+   * of the class */
+  int cls = !x && !by_state && tp->steps && tp->memo ? tp->ctl_class : 0;
+  if (cls && cls == S->cvm_class && s >= S->cvm_lo && s < S->cvm_hi) {
+    /* the rule's answer from them, known for the configuration it was
+     * applied to and for the one it gave (applied to its own result, the
+     * rule gives it again) */
+    if (tp->cfg == S->cvm_from || tp->cfg == S->cvm_to) {
+      S->last_cfg = S->cvm_to;
+      return S->last_cfg != tp->cfg;
+    }
+    for (int k = 0; k < S->nsw; k++) cv[k] = S->cvm[k];
+  } else {
+    S->cvm_class = 0;
+    if (controls(S, tp, s, x, NULL, cv)) return -1;
+    if (cls) {
+      for (int k = 0; k < S->nsw; k++) S->cvm[k] = cv[k];
+      S->cvm_class = cls;
+      S->cvm_lo = S->read_lo;
+      S->cvm_hi = S->read_hi;
+    }
+  }
   for (int k = 0; k < S->nsw; k++)
     if ((int)(tp->by_state >> k & 1u) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
   S->last_cfg = rule(S, tp->cfg, cv);
+  if (cls) {
+    S->cvm_from = tp->cfg;
+    S->cvm_to = S->last_cfg;
+  }
   return S->last_cfg != tp->cfg;
 }
 
@@ -433,7 +536,8 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
     return CUP_OK;
   }
   while (a < tmax) {
-    double b = tp->sub->u ? cup_input_next_break(tp->sub->u, a) : tmax;
+    const cup_input *in = tp->sub->u;
+    double b = !in ? tmax : tp->memo ? input_next_break_memo(in, S->bmemo, S->nmemo, a) : cup_input_next_break(in, a);
     if (!(b <= tmax)) b = tmax;
     double lo = a, hi = -1;
     /* linear pieces: the rule is monotone along one, so its end decides (just
@@ -456,7 +560,11 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
        * One check an ulp on that side, then bisection for the rest: the
        * same crossing, the rule being monotone along the piece. */
       int at_end = hi == b;
-      for (int u = 0; u < 4; u++) {
+      /* the controls' terms constant on [a, b) (steps) and no change at lo
+       * inside it: none at any time below b, the crossing is b itself (what
+       * the check an ulp below and the bisection would find) */
+      int found = tp->steps && at_end && lo > a;
+      for (int u = 0; u < 4 && !found; u++) {
         double p = at_end ? nextafter(hi, lo) : nextafter(lo, hi);
         if (!(p > lo && p < hi)) break;
         int ch = changes(S, tp, p, NULL, 0, cv);
@@ -464,7 +572,7 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
         if (ch) hi = p, cfg = S->last_cfg; else lo = p;
         if (at_end != ch) break;                   /* the other side of the crossing: found */
       }
-      for (int it = 0; it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
+      for (int it = 0; !found && it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
         double mid = lo + (hi - lo) / 2;
         int ch = changes(S, tp, mid, NULL, 0, cv);
         if (ch < 0) return CUP_ERR_CALLBACK;
@@ -577,7 +685,7 @@ static void sw_free(nl_switched **Sp) {
     ctl_free(&S->topo[k]);
   }
   nl_circuit_free(&S->c);
-  free(S->sw); free(S->ut); free(S->zf); free(S->gate);
+  free(S->sw); free(S->ut); free(S->zf); free(S->gate); free(S->thr); free(S->cvm); free(S->bmemo); free(S->vmemo);
   free(S);
   *Sp = NULL;
 }
@@ -606,10 +714,12 @@ static int sw_origin(cup_netlist *nl, double t0, char *errmsg) {
     int st = nl_input_origin(S->topo[k].sub, t0, errmsg);
     if (st) {                                      /* the inputs now differ: no control class holds */
       for (int j = 0; j < S->ntopo; j++) S->topo[j].ctl_class = 0;
+      memo_reset(S);
       return st;
     }
   }
   S->t0 = t0;
+  memo_reset(S);
   return CUP_OK;
 }
 
@@ -646,7 +756,19 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   nl->hooks = &hooks;
   S->ut = calloc((size_t)nl->p + 1, sizeof(double));
   S->zf = calloc((size_t)nl->m + (size_t)c->nelem + (size_t)nl->n + 2, sizeof(double));
-  if (!S->ut || !S->zf) st = nl_switch_nomem(c, errmsg);
+  S->thr = malloc(sizeof(double) * (2 * (size_t)S->nsw + 1));
+  S->cvm = malloc(sizeof(double) * ((size_t)S->nsw + 1));
+  S->nmemo = nl->u && !nl->u->fn ? nl->u->nterms : 0;
+  S->bmemo = S->nmemo ? malloc(sizeof *S->bmemo * (size_t)S->nmemo) : NULL;
+  S->vmemo = S->nmemo ? malloc(sizeof *S->vmemo * 3 * (size_t)S->nmemo) : NULL;
+  if (!S->ut || !S->zf || !S->thr || !S->cvm || (S->nmemo && (!S->bmemo || !S->vmemo))) st = nl_switch_nomem(c, errmsg);
+  for (int k = 0; !st && k < S->nsw; k++) {
+    const nl_elem *el = &c->elem[S->sw[k]];
+    double h = fabs(el->vh);
+    S->thr[2 * k] = el->vt + h;
+    S->thr[2 * k + 1] = el->vt - h;
+  }
+  if (!st) memo_reset(S);
   int topo = 0;                                    /* the state at t = 0 from the controls at t = 0 */
   if (!st) st = settle(nl, &topo, 0, nl->x0, NULL, errmsg);
   if (!st && topo != 0) {                          /* that configuration is the netlist's */
@@ -658,6 +780,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
     nl = S->topo[0].sub;
     nl->sw = S;
     nl->hooks = &hooks;
+    memo_reset(S);                                 /* (for the new topo[0]'s input) */
   }
   if (st) { cup_netlist_free(&nl); return st; }    /* frees S and every configuration */
   *out = nl;
