@@ -82,10 +82,13 @@ typedef struct ad_series {
   const struct ad_mode *md; /* the mode it was asked for (NULL: not yet in this step) */
   const double *y0;         /* ... and the start vector */
   double h;
+  int dim;                  /* the components it carries: na, or n for start vectors (v, 0) (the
+                               error's: M = [Pi Q; 0 W] keeps w = 0, and its first n columns'
+                               nonzeros are the Pi Q block's) */
   int nseg;                 /* pieces; 0: not usable (h ||M|| > AD_SERIES_SEGS), ad_flow instead */
   int built;                /* the pieces made so far (each when a tau first falls in it) */
   int K[AD_SERIES_SEGS];    /* a piece's c_j0 .. c_jK */
-  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x na */
+  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x dim */
   double *mag;              /* na: the largest term of each component */
   double *v;                /* na: a start vector the caller keeps here */
 } ad_series;
@@ -286,7 +289,8 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector
  * that S stands for: by S's series (built on the first call in a step: S->md
- * = NULL; the caller resets it), or ad_flow when h ||M|| > AD_SERIES_SEGS. */
+ * = NULL; the caller resets it; its first S->dim components), or ad_flow
+ * when h ||M|| > AD_SERIES_SEGS. */
 void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
                   double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */

@@ -51,6 +51,7 @@ int ad_modes_init(adaptive_ws *A) {
     fail |= !ser[k]->c;
     ser[k]->mag = take((size_t)na, sizeof(double), &fail);
     ser[k]->v = take((size_t)na, sizeof(double), &fail);
+    ser[k]->dim = k ? n : na;
   }
   size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
   A->S = take((size_t)m * m, sizeof(double), &fail);
@@ -576,19 +577,23 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   }
 }
 
-/* c_k = (hs M)^k y / k! into c until two terms in a row are below a
+/* c_k = (hs M)^k y / k! into c (dim components: M's first dim columns'
+ * nonzeros, rows < dim, the whole product for a y whose rest is 0: the
+ * terms it leaves out add +-0) until two terms in a row are below a
  * quarter ulp of each component's largest term (what its sum already rounds
  * at: a component through zero stops too); hs ||M|| <= 1: the terms
  * decrease, and the sum rounds as they do. Their count, or 0. */
-static int piece_build(adaptive_ws *A, const ad_mode *md, double hs, const double *y, double *c, double *mag) {
-  int na = A->na, quiet = 0;
-  la_copy(c, y, na);
-  for (int i = 0; i < na; i++) mag[i] = fabs(c[i]);
+static int piece_build(const ad_mode *md, int dim, double hs, const double *y, double *c, double *mag) {
+  int quiet = 0, nnz = md->mp[dim];
+  la_copy(c, y, dim);
+  for (int i = 0; i < dim; i++) mag[i] = fabs(c[i]);
   for (int k = 1; k <= AD_SERIES_MAX; k++) {
-    double *ck = c + (size_t)k * na, f = hs / k;
-    ad_mode_mv(A, md, ck - na, ck);
+    double *ck = c + (size_t)k * dim, f = hs / k;
+    const double *cp = ck - dim;
+    for (int i = 0; i < dim; i++) ck[i] = 0;
+    for (int q = 0; q < nnz; q++) ck[md->mi[q]] += md->mx[q] * cp[md->mj[q]];
     int small = 1;
-    for (int i = 0; i < na; i++) {
+    for (int i = 0; i < dim; i++) {
       double v = ck[i] *= f, a = fabs(v);
       small &= a <= 0.25 * DBL_EPSILON * mag[i];
       if (a > mag[i]) mag[i] = a;
@@ -600,24 +605,24 @@ static int piece_build(adaptive_ws *A, const ad_mode *md, double hs, const doubl
 }
 
 /* sum_k c_k theta^k (K + 1 terms) into y. */
-static void piece_at(int na, const double *c, int K, double theta, double *y) {
-  la_copy(y, c + (size_t)K * na, na);
+static void piece_at(int dim, const double *c, int K, double theta, double *y) {
+  la_copy(y, c + (size_t)K * dim, dim);
   for (int k = K - 1; k >= 0; k--) {
-    const double *ck = c + (size_t)k * na;
-    for (int i = 0; i < na; i++) y[i] = y[i] * theta + ck[i];
+    const double *ck = c + (size_t)k * dim;
+    for (int i = 0; i < dim; i++) y[i] = y[i] * theta + ck[i];
   }
 }
 
 /* Pieces up to j made: 0 if one is not usable (the series is then not). */
 static int series_upto(adaptive_ws *A, ad_series *S, int j) {
-  int na = A->na;
-  size_t stride = (size_t)(AD_SERIES_MAX + 1) * na;
+  int dim = S->dim;
+  size_t stride = (size_t)(AD_SERIES_MAX + 1) * dim;
   double hs = S->h / S->nseg;
   for (; S->built <= j; S->built++) {
     int b = S->built;
     double *c = S->c + b * stride;
-    if (b > 0) piece_at(na, c - stride, S->K[b - 1], 1, A->fa);
-    if (!(S->K[b] = piece_build(A, S->md, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
+    if (b > 0) piece_at(dim, c - stride, S->K[b - 1], 1, A->fa);
+    if (!(S->K[b] = piece_build(S->md, dim, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
   }
   return 1;
 }
@@ -639,7 +644,7 @@ void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const dou
     if (j >= S->nseg) j = S->nseg - 1;
   }
   if (!S->nseg || !(tau >= 0 && tau <= h) || !series_upto(A, S, j)) { ad_flow(A, md, tau, y0, y_out); return; }
-  piece_at(A->na, S->c + (size_t)j * (AD_SERIES_MAX + 1) * A->na, S->K[j], (tau - j * hs) / hs, y_out);
+  piece_at(S->dim, S->c + (size_t)j * (AD_SERIES_MAX + 1) * S->dim, S->K[j], (tau - j * hs) / hs, y_out);
 }
 
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
