@@ -604,12 +604,25 @@ static int piece_build(const ad_mode *md, int dim, double hs, const double *y, d
   return 0;
 }
 
-/* sum_k c_k theta^k (K + 1 terms) into y. */
+/* sum_k c_k theta^k (K + 1 terms) into y, by Horner's rule two components
+ * at a time (their sums in registers). */
 static void piece_at(int dim, const double *c, int K, double theta, double *y) {
-  la_copy(y, c + (size_t)K * dim, dim);
-  for (int k = K - 1; k >= 0; k--) {
-    const double *ck = c + (size_t)k * dim;
-    for (int i = 0; i < dim; i++) y[i] = y[i] * theta + ck[i];
+  int i = 0;
+  for (; i + 1 < dim; i += 2) {
+    const double *ck = c + (size_t)K * dim + i;
+    double a0 = ck[0], a1 = ck[1];
+    for (int k = K - 1; k >= 0; k--) {
+      ck -= dim;
+      a0 = a0 * theta + ck[0];
+      a1 = a1 * theta + ck[1];
+    }
+    y[i] = a0;
+    y[i + 1] = a1;
+  }
+  if (i < dim) {
+    double acc = c[(size_t)K * dim + i];
+    for (int k = K - 1; k >= 0; k--) acc = acc * theta + c[(size_t)k * dim + i];
+    y[i] = acc;
   }
 }
 
