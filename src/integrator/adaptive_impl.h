@@ -88,7 +88,7 @@ typedef struct ad_series {
   int nseg;                 /* pieces; 0: not usable (h ||M|| > AD_SERIES_SEGS), ad_flow instead */
   int built;                /* the pieces made so far (each when a tau first falls in it) */
   int K[AD_SERIES_SEGS];    /* a piece's c_j0 .. c_jK */
-  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x dim */
+  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x dim, and a spare dim */
   double *mag;              /* na: the largest term of each component */
   double *v;                /* na: a start vector the caller keeps here */
 } ad_series;

@@ -47,7 +47,7 @@ int ad_modes_init(adaptive_ws *A) {
   ad_series *ser[] = {&A->sy, &A->se};
   for (int k = 0; k < 2; k++) {
     /* (written before it is read: not cleared, a switched run makes its integrators as it goes) */
-    ser[k]->c = malloc(sizeof(double) * AD_SERIES_SEGS * (AD_SERIES_MAX + 1) * (size_t)(na ? na : 1));
+    ser[k]->c = malloc(sizeof(double) * (AD_SERIES_SEGS * (AD_SERIES_MAX + 1) + 1) * (size_t)(na ? na : 1));
     fail |= !ser[k]->c;
     ser[k]->mag = take((size_t)na, sizeof(double), &fail);
     ser[k]->v = take((size_t)na, sizeof(double), &fail);
@@ -585,18 +585,24 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
  * decrease, and the sum rounds as they do. Their count, or 0. */
 static int piece_build(const ad_mode *md, int dim, double hs, const double *y, double *c, double *mag) {
   int quiet = 0, nnz = md->mp[dim];
-  la_copy(c, y, dim);
-  for (int i = 0; i < dim; i++) mag[i] = fabs(c[i]);
+  /* each pass clears the next term's sums (past the last term of the last
+   * piece: the buffer's spare dim; of another piece: the next piece's start,
+   * written when that piece is made) */
+  for (int i = 0; i < dim; i++) {
+    c[i] = y[i];
+    mag[i] = fabs(c[i]);
+    c[dim + i] = 0;
+  }
   for (int k = 1; k <= AD_SERIES_MAX; k++) {
     double *ck = c + (size_t)k * dim, f = hs / k;
     const double *cp = ck - dim;
-    for (int i = 0; i < dim; i++) ck[i] = 0;
     for (int q = 0; q < nnz; q++) ck[md->mi[q]] += md->mx[q] * cp[md->mj[q]];
     int small = 1;
     for (int i = 0; i < dim; i++) {
       double v = ck[i] *= f, a = fabs(v);
       small &= a <= 0.25 * DBL_EPSILON * mag[i];
       if (a > mag[i]) mag[i] = a;
+      ck[dim + i] = 0;
     }
     quiet = small ? quiet + 1 : 0;
     if (quiet == 2) return k;
