@@ -747,7 +747,7 @@ int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, u
    * aims a few rounding bounds inside), on the scale of the whole state (a
    * row whose own terms vanish still rounds at that scale) */
   double xn = 0;
-  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  for (int j = 0; j < n; j++) xn = la_max(fabs(x[j]), xn);   /* (fmax without the call) */
   const double *Md = K->Md;
   unsigned char *touch = A->touch;
   int touching = 0;
