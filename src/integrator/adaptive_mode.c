@@ -414,11 +414,15 @@ static void mode_finish(adaptive_ws *A, ad_mode *md) {
   mode_flow(A, md);
   mode_events(A, md);
   mode_sparse(A, md);
-  md->mnorm = 0;
+  md->mnorm = md->snorm = 0;
   for (int i = 0; i < na; i++) {
-    double r_ = 0;
-    for (int j = 0; j < na; j++) r_ += fabs(md->M[i + (size_t)j * na]);
+    double r_ = 0, d_ = 0;
+    for (int j = 0; j < na; j++) {
+      r_ += fabs(md->M[i + (size_t)j * na]);
+      if ((i < A->n) == (j < A->n)) d_ += fabs(md->M[i + (size_t)j * na]);
+    }
     md->mnorm = fmax(md->mnorm, r_);
+    md->snorm = fmax(md->snorm, d_);
   }
   md->hmax = -1;
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
@@ -581,8 +585,11 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
  * nonzeros, rows < dim, the whole product for a y whose rest is 0: the
  * terms it leaves out add +-0) until two terms in a row are below a
  * quarter ulp of each component's largest term (what its sum already rounds
- * at: a component through zero stops too); hs ||M|| <= 1: the terms
- * decrease, and the sum rounds as they do. Their count, or 0. */
+ * at: a component through zero stops too); hs snorm <= 1: the terms
+ * decrease (the diagonal blocks' as 1/k!, the input's coupling block's as
+ * hs ||Pi Q_w|| / (k - 1)!: a norm of the whole M, which counts that
+ * coupling, cut the precision rectifier's pieces 5x too short), and the
+ * sum rounds as they do. Their count, or 0. */
 static int piece_build(const ad_mode *md, int dim, double hs, const double *y, double *c, double *mag) {
   int quiet = 0, nnz = md->mp[dim];
   /* each pass clears the next term's sums (past the last term of the last
@@ -649,7 +656,7 @@ static int series_upto(adaptive_ws *A, ad_series *S, int j) {
 void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
                   double *y_out) {
   if (S->md != md || S->y0 != y0 || S->h != h) {
-    double norm = fabs(h) * md->mnorm;
+    double norm = fabs(h) * md->snorm;
     S->md = md;
     S->y0 = y0;
     S->h = h;
