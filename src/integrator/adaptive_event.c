@@ -9,7 +9,7 @@
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
   int m = A->m;
   double vmax = 0;                         /* the state's scale: v = x + K U w */
-  for (int j = 0; j < A->n; j++) vmax = fmax(vmax, fabs(y[j]));
+  for (int j = 0; j < A->n; j++) vmax = la_max(fabs(y[j]), vmax);   /* (fmax without the call) */
   for (int i = 0; i < m; i++) {            /* over L's and Lm's nonzeros (mode_sparse): the dense sums */
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
     for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {

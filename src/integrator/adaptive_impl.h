@@ -60,6 +60,8 @@ typedef struct ad_mode {
                                B_J N^-1 on the Z rows) */
   double *KU;               /* n x nw, column-major: v = x + K_J U w */
   double mnorm;             /* ||M||_inf */
+  double snorm;             /* max(||Pi A||_inf, ||W||_inf): M's diagonal blocks, which set how
+                               fast a flow series' terms fall (its pieces' length) */
   double hmax;              /* step limit for event detection (< 0: not computed yet, ad_mode_hmax) */
   double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
   double *Ec[AD_CACHE];
@@ -69,7 +71,7 @@ typedef struct ad_mode {
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
 
 /* A step's flow from one vector as polynomials in theta: on each of nseg
- * equal pieces of [0, h] (hs = h / nseg, hs ||M|| <= 1),
+ * equal pieces of [0, h] (hs = h / nseg, hs snorm <= 1),
  * exp((j hs + theta hs) M) y0 = sum_k c_jk theta^k, c_jk = (hs M)^k y_j / k!,
  * y_j the previous piece's end. Built once per step (about 20 products by
  * M's nonzeros a piece, made when first needed) and valued at any tau in
@@ -77,15 +79,18 @@ typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's A
  * Newton steps and the error's flows each took a Taylor series of their own
  * from the step's start (ad_series_at). */
 #define AD_SERIES_MAX 40    /* terms a piece */
-#define AD_SERIES_SEGS 16   /* pieces at most (h ||M|| <= 16; ad_flow beyond) */
+#define AD_SERIES_SEGS 16   /* pieces at most (h snorm <= 16; ad_flow beyond) */
 typedef struct ad_series {
   const struct ad_mode *md; /* the mode it was asked for (NULL: not yet in this step) */
   const double *y0;         /* ... and the start vector */
   double h;
-  int nseg;                 /* pieces; 0: not usable (h ||M|| > AD_SERIES_SEGS), ad_flow instead */
+  int dim;                  /* the components it carries: na, or n for start vectors (v, 0) (the
+                               error's: M = [Pi Q; 0 W] keeps w = 0, and its first n columns'
+                               nonzeros are the Pi Q block's) */
+  int nseg;                 /* pieces; 0: not usable (h snorm > AD_SERIES_SEGS), ad_flow instead */
   int built;                /* the pieces made so far (each when a tau first falls in it) */
   int K[AD_SERIES_SEGS];    /* a piece's c_j0 .. c_jK */
-  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x na */
+  double *c;                /* AD_SERIES_SEGS x (AD_SERIES_MAX + 1) x dim, and a spare dim */
   double *mag;              /* na: the largest term of each component */
   double *v;                /* na: a start vector the caller keeps here */
 } ad_series;
@@ -286,7 +291,8 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector
  * that S stands for: by S's series (built on the first call in a step: S->md
- * = NULL; the caller resets it), or ad_flow when h ||M|| > AD_SERIES_SEGS. */
+ * = NULL; the caller resets it; its first S->dim components), or ad_flow
+ * when h snorm > AD_SERIES_SEGS. */
 void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
                   double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */

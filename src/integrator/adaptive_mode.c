@@ -47,10 +47,11 @@ int ad_modes_init(adaptive_ws *A) {
   ad_series *ser[] = {&A->sy, &A->se};
   for (int k = 0; k < 2; k++) {
     /* (written before it is read: not cleared, a switched run makes its integrators as it goes) */
-    ser[k]->c = malloc(sizeof(double) * AD_SERIES_SEGS * (AD_SERIES_MAX + 1) * (size_t)(na ? na : 1));
+    ser[k]->c = malloc(sizeof(double) * (AD_SERIES_SEGS * (AD_SERIES_MAX + 1) + 1) * (size_t)(na ? na : 1));
     fail |= !ser[k]->c;
     ser[k]->mag = take((size_t)na, sizeof(double), &fail);
     ser[k]->v = take((size_t)na, sizeof(double), &fail);
+    ser[k]->dim = k ? n : na;
   }
   size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
   A->S = take((size_t)m * m, sizeof(double), &fail);
@@ -413,11 +414,15 @@ static void mode_finish(adaptive_ws *A, ad_mode *md) {
   mode_flow(A, md);
   mode_events(A, md);
   mode_sparse(A, md);
-  md->mnorm = 0;
+  md->mnorm = md->snorm = 0;
   for (int i = 0; i < na; i++) {
-    double r_ = 0;
-    for (int j = 0; j < na; j++) r_ += fabs(md->M[i + (size_t)j * na]);
+    double r_ = 0, d_ = 0;
+    for (int j = 0; j < na; j++) {
+      r_ += fabs(md->M[i + (size_t)j * na]);
+      if ((i < A->n) == (j < A->n)) d_ += fabs(md->M[i + (size_t)j * na]);
+    }
     md->mnorm = fmax(md->mnorm, r_);
+    md->snorm = fmax(md->snorm, d_);
   }
   md->hmax = -1;
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
@@ -576,22 +581,35 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   }
 }
 
-/* c_k = (hs M)^k y / k! into c until two terms in a row are below a
+/* c_k = (hs M)^k y / k! into c (dim components: M's first dim columns'
+ * nonzeros, rows < dim, the whole product for a y whose rest is 0: the
+ * terms it leaves out add +-0) until two terms in a row are below a
  * quarter ulp of each component's largest term (what its sum already rounds
- * at: a component through zero stops too); hs ||M|| <= 1: the terms
- * decrease, and the sum rounds as they do. Their count, or 0. */
-static int piece_build(adaptive_ws *A, const ad_mode *md, double hs, const double *y, double *c, double *mag) {
-  int na = A->na, quiet = 0;
-  la_copy(c, y, na);
-  for (int i = 0; i < na; i++) mag[i] = fabs(c[i]);
+ * at: a component through zero stops too); hs snorm <= 1: the terms
+ * decrease (the diagonal blocks' as 1/k!, the input's coupling block's as
+ * hs ||Pi Q_w|| / (k - 1)!: a norm of the whole M, which counts that
+ * coupling, cut the precision rectifier's pieces 5x too short), and the
+ * sum rounds as they do. Their count, or 0. */
+static int piece_build(const ad_mode *md, int dim, double hs, const double *y, double *c, double *mag) {
+  int quiet = 0, nnz = md->mp[dim];
+  /* each pass clears the next term's sums (past the last term of the last
+   * piece: the buffer's spare dim; of another piece: the next piece's start,
+   * written when that piece is made) */
+  for (int i = 0; i < dim; i++) {
+    c[i] = y[i];
+    mag[i] = fabs(c[i]);
+    c[dim + i] = 0;
+  }
   for (int k = 1; k <= AD_SERIES_MAX; k++) {
-    double *ck = c + (size_t)k * na, f = hs / k;
-    ad_mode_mv(A, md, ck - na, ck);
+    double *ck = c + (size_t)k * dim, f = hs / k;
+    const double *cp = ck - dim;
+    for (int q = 0; q < nnz; q++) ck[md->mi[q]] += md->mx[q] * cp[md->mj[q]];
     int small = 1;
-    for (int i = 0; i < na; i++) {
+    for (int i = 0; i < dim; i++) {
       double v = ck[i] *= f, a = fabs(v);
       small &= a <= 0.25 * DBL_EPSILON * mag[i];
       if (a > mag[i]) mag[i] = a;
+      ck[dim + i] = 0;
     }
     quiet = small ? quiet + 1 : 0;
     if (quiet == 2) return k;
@@ -599,25 +617,38 @@ static int piece_build(adaptive_ws *A, const ad_mode *md, double hs, const doubl
   return 0;
 }
 
-/* sum_k c_k theta^k (K + 1 terms) into y. */
-static void piece_at(int na, const double *c, int K, double theta, double *y) {
-  la_copy(y, c + (size_t)K * na, na);
-  for (int k = K - 1; k >= 0; k--) {
-    const double *ck = c + (size_t)k * na;
-    for (int i = 0; i < na; i++) y[i] = y[i] * theta + ck[i];
+/* sum_k c_k theta^k (K + 1 terms) into y, by Horner's rule two components
+ * at a time (their sums in registers). */
+static void piece_at(int dim, const double *c, int K, double theta, double *y) {
+  int i = 0;
+  for (; i + 1 < dim; i += 2) {
+    const double *ck = c + (size_t)K * dim + i;
+    double a0 = ck[0], a1 = ck[1];
+    for (int k = K - 1; k >= 0; k--) {
+      ck -= dim;
+      a0 = a0 * theta + ck[0];
+      a1 = a1 * theta + ck[1];
+    }
+    y[i] = a0;
+    y[i + 1] = a1;
+  }
+  if (i < dim) {
+    double acc = c[(size_t)K * dim + i];
+    for (int k = K - 1; k >= 0; k--) acc = acc * theta + c[(size_t)k * dim + i];
+    y[i] = acc;
   }
 }
 
 /* Pieces up to j made: 0 if one is not usable (the series is then not). */
 static int series_upto(adaptive_ws *A, ad_series *S, int j) {
-  int na = A->na;
-  size_t stride = (size_t)(AD_SERIES_MAX + 1) * na;
+  int dim = S->dim;
+  size_t stride = (size_t)(AD_SERIES_MAX + 1) * dim;
   double hs = S->h / S->nseg;
   for (; S->built <= j; S->built++) {
     int b = S->built;
     double *c = S->c + b * stride;
-    if (b > 0) piece_at(na, c - stride, S->K[b - 1], 1, A->fa);
-    if (!(S->K[b] = piece_build(A, S->md, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
+    if (b > 0) piece_at(dim, c - stride, S->K[b - 1], 1, A->fa);
+    if (!(S->K[b] = piece_build(S->md, dim, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
   }
   return 1;
 }
@@ -625,7 +656,7 @@ static int series_upto(adaptive_ws *A, ad_series *S, int j) {
 void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
                   double *y_out) {
   if (S->md != md || S->y0 != y0 || S->h != h) {
-    double norm = fabs(h) * md->mnorm;
+    double norm = fabs(h) * md->snorm;
     S->md = md;
     S->y0 = y0;
     S->h = h;
@@ -639,7 +670,7 @@ void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const dou
     if (j >= S->nseg) j = S->nseg - 1;
   }
   if (!S->nseg || !(tau >= 0 && tau <= h) || !series_upto(A, S, j)) { ad_flow(A, md, tau, y0, y_out); return; }
-  piece_at(A->na, S->c + (size_t)j * (AD_SERIES_MAX + 1) * A->na, S->K[j], (tau - j * hs) / hs, y_out);
+  piece_at(S->dim, S->c + (size_t)j * (AD_SERIES_MAX + 1) * S->dim, S->K[j], (tau - j * hs) / hs, y_out);
 }
 
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
@@ -723,7 +754,7 @@ int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, u
    * aims a few rounding bounds inside), on the scale of the whole state (a
    * row whose own terms vanish still rounds at that scale) */
   double xn = 0;
-  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  for (int j = 0; j < n; j++) xn = la_max(fabs(x[j]), xn);   /* (fmax without the call) */
   const double *Md = K->Md;
   unsigned char *touch = A->touch;
   int touching = 0;

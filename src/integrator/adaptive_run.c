@@ -35,7 +35,7 @@ static void warn(ad_run *R, int status, const char *fmt, ...) {
 
 static double inf_norm(const double *v, int n) {
   double r = 0;
-  for (int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
+  for (int i = 0; i < n; i++) r = la_max(fabs(v[i]), r);   /* fmax(r, |v_i|), NaN too, without a libm call */
   return r;
 }
 
