@@ -58,7 +58,8 @@ typedef struct nl_sw_hooks {
 } nl_sw_hooks;
 
 struct cup_netlist {
-  char warning[CUP_ERRMSG_LEN];   /* a loop of ideal diodes (nl_diode_loops), or "" */
+  char *warning;      /* a loop of ideal diodes (nl_diode_loops, CUP_ERRMSG_LEN), or NULL: allocated
+                         when there is one (each switch configuration's netlist cleared 12 KB) */
   cup_lcs *L;
   cup_input *u;       /* NULL when p = 0; the sources from the time origin t0 on */
   cup_input *u_written;   /* the sources as written, when t0 != 0 (u is then its shift) */
