@@ -200,69 +200,69 @@ static void offset_pattern(adaptive_ws *A) {
   }
 }
 
-/* Every matrix and vector of the run (its sizes set), from block b (cup_block_take). */
-static void vectors(adaptive_ws *A, cup_block *b) {
+/* Every matrix and vector of the run (its sizes set), from block b (block_take). */
+static void vectors(adaptive_ws *A, block_arena *b) {
   int n = A->n, m = A->m, p = A->p, nw = A->nw, na = A->na;
   size_t NA = (size_t)na * na;
-  A->A = cup_block_take(b, (size_t)n * n, sizeof(double));
-  A->E = cup_block_take(b, (size_t)n * p, sizeof(double));
-  A->G = cup_block_take(b, (size_t)m * p, sizeof(double));
-  A->U = cup_block_take(b, (size_t)p * nw, sizeof(double));
-  A->W = cup_block_take(b, (size_t)nw * nw, sizeof(double));
-  A->up = cup_block_take(b, (size_t)nw + 1, sizeof(int));
-  A->ui = cup_block_take(b, (size_t)p * nw + 1, sizeof(int));
-  A->ux = cup_block_take(b, (size_t)p * nw + 1, sizeof(double));
-  A->gp = cup_block_take(b, (size_t)m + 1, sizeof(int));
-  A->gi = cup_block_take(b, (size_t)m * p + 1, sizeof(int));
-  A->gx = cup_block_take(b, (size_t)m * p + 1, sizeof(double));
-  A->gterm = cup_block_take(b, A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int));
-  A->ework = cup_block_take(b, 7 * NA, sizeof(double));
+  A->A = block_take(b, (size_t)n * n, sizeof(double));
+  A->E = block_take(b, (size_t)n * p, sizeof(double));
+  A->G = block_take(b, (size_t)m * p, sizeof(double));
+  A->U = block_take(b, (size_t)p * nw, sizeof(double));
+  A->W = block_take(b, (size_t)nw * nw, sizeof(double));
+  A->up = block_take(b, (size_t)nw + 1, sizeof(int));
+  A->ui = block_take(b, (size_t)p * nw + 1, sizeof(int));
+  A->ux = block_take(b, (size_t)p * nw + 1, sizeof(double));
+  A->gp = block_take(b, (size_t)m + 1, sizeof(int));
+  A->gi = block_take(b, (size_t)m * p + 1, sizeof(int));
+  A->gx = block_take(b, (size_t)m * p + 1, sizeof(double));
+  A->gterm = block_take(b, A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int));
+  A->ework = block_take(b, 7 * NA, sizeof(double));
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++)
-    *vecs_na[k] = cup_block_take(b, (size_t)na, sizeof(double));
+    *vecs_na[k] = block_take(b, (size_t)na, sizeof(double));
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
                        &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++)
-    *vecs_m[k] = cup_block_take(b, (size_t)m, sizeof(double));
+    *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
   for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++)
-    *vecs_n[k] = cup_block_take(b, (size_t)n, sizeof(double));
-  A->ut = cup_block_take(b, (size_t)p, sizeof(double));
-  A->udot = cup_block_take(b, (size_t)p, sizeof(double));
-  A->uerr = cup_block_take(b, (size_t)p, sizeof(double));
-  A->wa = cup_block_take(b, (size_t)nw, sizeof(double));
-  A->wt = cup_block_take(b, (size_t)nw, sizeof(double));
-  A->piece_w = cup_block_take(b, (size_t)nw, sizeof(double));
-  A->wscale = cup_block_take(b, (size_t)nw, sizeof(double));
-  A->gscale = cup_block_take(b, (size_t)m, sizeof(double));
-  A->zw = cup_block_take(b, (size_t)nw, sizeof(double));
-  A->zy = cup_block_take(b, (size_t)na, sizeof(double));
-  A->xo = cup_block_take(b, (size_t)n, sizeof(double));
-  A->dy = cup_block_take(b, 2 * (size_t)na, sizeof(double));
-  A->erp = cup_block_take(b, (size_t)na + 1, sizeof(int));
-  A->erj = cup_block_take(b, NA, sizeof(int));
-  A->erx = cup_block_take(b, NA, sizeof(double));
-  A->xrp = cup_block_take(b, (size_t)n + m + 1, sizeof(int));
-  A->xrj = cup_block_take(b, ((size_t)n + m) * na, sizeof(int));
-  A->xrx = cup_block_take(b, ((size_t)n + m) * na, sizeof(double));
-  A->de = cup_block_take(b, (size_t)na, sizeof(double));
-  A->de2 = cup_block_take(b, (size_t)na, sizeof(double));
-  A->ed = cup_block_take(b, (size_t)n, sizeof(double));
-  A->pend.zy = cup_block_take(b, (size_t)na, sizeof(double));
-  A->pend.de = cup_block_take(b, (size_t)na, sizeof(double));
-  A->pend.y2 = cup_block_take(b, (size_t)na, sizeof(double));
-  A->pend.e2 = cup_block_take(b, (size_t)n, sizeof(double));
-  A->lcpM = cup_block_take(b, (size_t)m * m, sizeof(double));
-  A->touch = cup_block_take(b, (size_t)m, 1);
+    *vecs_n[k] = block_take(b, (size_t)n, sizeof(double));
+  A->ut = block_take(b, (size_t)p, sizeof(double));
+  A->udot = block_take(b, (size_t)p, sizeof(double));
+  A->uerr = block_take(b, (size_t)p, sizeof(double));
+  A->wa = block_take(b, (size_t)nw, sizeof(double));
+  A->wt = block_take(b, (size_t)nw, sizeof(double));
+  A->piece_w = block_take(b, (size_t)nw, sizeof(double));
+  A->wscale = block_take(b, (size_t)nw, sizeof(double));
+  A->gscale = block_take(b, (size_t)m, sizeof(double));
+  A->zw = block_take(b, (size_t)nw, sizeof(double));
+  A->zy = block_take(b, (size_t)na, sizeof(double));
+  A->xo = block_take(b, (size_t)n, sizeof(double));
+  A->dy = block_take(b, 2 * (size_t)na, sizeof(double));
+  A->erp = block_take(b, (size_t)na + 1, sizeof(int));
+  A->erj = block_take(b, NA, sizeof(int));
+  A->erx = block_take(b, NA, sizeof(double));
+  A->xrp = block_take(b, (size_t)n + m + 1, sizeof(int));
+  A->xrj = block_take(b, ((size_t)n + m) * na, sizeof(int));
+  A->xrx = block_take(b, ((size_t)n + m) * na, sizeof(double));
+  A->de = block_take(b, (size_t)na, sizeof(double));
+  A->de2 = block_take(b, (size_t)na, sizeof(double));
+  A->ed = block_take(b, (size_t)n, sizeof(double));
+  A->pend.zy = block_take(b, (size_t)na, sizeof(double));
+  A->pend.de = block_take(b, (size_t)na, sizeof(double));
+  A->pend.y2 = block_take(b, (size_t)na, sizeof(double));
+  A->pend.e2 = block_take(b, (size_t)n, sizeof(double));
+  A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
+  A->touch = block_take(b, (size_t)m, 1);
   if (A->has_D) {
-    A->Bd = cup_block_take(b, (size_t)n * m, sizeof(double));
-    A->Dd = cup_block_take(b, (size_t)m * m, sizeof(double));
-    A->CB = cup_block_take(b, (size_t)m * m, sizeof(double));
-    A->dcpl = cup_block_take(b, (size_t)m, 1);
+    A->Bd = block_take(b, (size_t)n * m, sizeof(double));
+    A->Dd = block_take(b, (size_t)m * m, sizeof(double));
+    A->CB = block_take(b, (size_t)m * m, sizeof(double));
+    A->dcpl = block_take(b, (size_t)m, 1);
   }
-  A->samp = cup_block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
-  A->samp_mid = cup_block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
-  A->coef = cup_block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
+  A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
+  A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
+  A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
   ad_modes_layout(A, b);
 }
 
@@ -273,7 +273,7 @@ static void vectors(adaptive_ws *A, cup_block *b) {
  * each starting on a page the set-up touches (the block's header, the
  * zeroed part), as their own mallocs did: not the run's first use (3 page
  * faults more in the six-pulse run else). */
-static void carve(adaptive_ws *A, cup_block *b, size_t *z0, size_t *z1) {
+static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
   ad_series_layout(A, &A->sy, b);
   *z0 = b->used;
   vectors(A, b);
@@ -282,12 +282,12 @@ static void carve(adaptive_ws *A, cup_block *b, size_t *z0, size_t *z1) {
 }
 
 static int alloc_block(adaptive_ws *A) {
-  cup_block b = {0};
+  block_arena b = {0};
   size_t z0, z1;
   carve(A, &b, &z0, &z1);
   if (!(A->block = malloc(b.used))) return CUP_ERR_NOMEM;
   memset((char *)A->block + z0, 0, z1 - z0);
-  b = (cup_block){A->block, 0};
+  b = (block_arena){A->block, 0};
   carve(A, &b, &z0, &z1);
   return CUP_OK;
 }

@@ -272,8 +272,8 @@ ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
 /* The slots' matrices, the series' small vectors and the construction's
  * scratch from b (adaptive.c's one block, zeroed); series S's
  * coefficients by ad_series_layout, not zeroed. */
-void ad_modes_layout(adaptive_ws *A, cup_block *b);
-void ad_series_layout(adaptive_ws *A, ad_series *S, cup_block *b);
+void ad_modes_layout(adaptive_ws *A, block_arena *b);
+void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b);
 /* The eigenvalue workspace (gsl's own allocations). */
 int ad_modes_init(adaptive_ws *A);
 void ad_modes_free(adaptive_ws *A);

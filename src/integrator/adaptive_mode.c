@@ -13,48 +13,48 @@
  * depends on the others: it is dropped from J (it holds when they do). */
 #define AD_RANK_TOL 1e-12
 
-void ad_modes_layout(adaptive_ws *A, cup_block *b) {
+void ad_modes_layout(adaptive_ws *A, block_arena *b) {
   int n = A->n, m = A->m, na = A->na, nw = A->nw;
   size_t NA = (size_t)na * na;
   for (int s = 0; s <= AD_MODES; s++) {   /* (and the spare) */
     ad_mode *md = &A->modes[s];
-    md->rows = cup_block_take(b, (size_t)m + 1, sizeof(int));
-    md->M = cup_block_take(b, NA, sizeof(double));
-    md->mp = cup_block_take(b, (size_t)na + 1, sizeof(int));
-    md->mi = cup_block_take(b, NA, sizeof(int));
-    md->mj = cup_block_take(b, NA, sizeof(int));
-    md->mx = cup_block_take(b, NA, sizeof(double));
-    md->lp = cup_block_take(b, (size_t)m + 1, sizeof(int));
-    md->li = cup_block_take(b, (size_t)m * na, sizeof(int));
-    md->lx = cup_block_take(b, (size_t)m * na, sizeof(double));
-    md->lmx = cup_block_take(b, (size_t)m * na, sizeof(double));
-    md->L = cup_block_take(b, (size_t)m * na, sizeof(double));
-    md->Lm = cup_block_take(b, (size_t)m * na, sizeof(double));
-    md->Lc = cup_block_take(b, (size_t)m, sizeof(double));
-    md->is_zeta = cup_block_take(b, (size_t)m, 1);
-    md->X = cup_block_take(b, (size_t)n * na, sizeof(double));
-    md->R = cup_block_take(b, (size_t)n * m, sizeof(double));
-    md->Zt = cup_block_take(b, (size_t)m * m, sizeof(double));
-    md->KU = cup_block_take(b, (size_t)n * nw, sizeof(double));
-    for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = cup_block_take(b, NA, sizeof(double));
+    md->rows = block_take(b, (size_t)m + 1, sizeof(int));
+    md->M = block_take(b, NA, sizeof(double));
+    md->mp = block_take(b, (size_t)na + 1, sizeof(int));
+    md->mi = block_take(b, NA, sizeof(int));
+    md->mj = block_take(b, NA, sizeof(int));
+    md->mx = block_take(b, NA, sizeof(double));
+    md->lp = block_take(b, (size_t)m + 1, sizeof(int));
+    md->li = block_take(b, (size_t)m * na, sizeof(int));
+    md->lx = block_take(b, (size_t)m * na, sizeof(double));
+    md->lmx = block_take(b, (size_t)m * na, sizeof(double));
+    md->L = block_take(b, (size_t)m * na, sizeof(double));
+    md->Lm = block_take(b, (size_t)m * na, sizeof(double));
+    md->Lc = block_take(b, (size_t)m, sizeof(double));
+    md->is_zeta = block_take(b, (size_t)m, 1);
+    md->X = block_take(b, (size_t)n * na, sizeof(double));
+    md->R = block_take(b, (size_t)n * m, sizeof(double));
+    md->Zt = block_take(b, (size_t)m * m, sizeof(double));
+    md->KU = block_take(b, (size_t)n * nw, sizeof(double));
+    for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = block_take(b, NA, sizeof(double));
   }
   ad_series *ser[] = {&A->sy, &A->se};
   for (int k = 0; k < 2; k++) {
-    ser[k]->mag = cup_block_take(b, (size_t)na, sizeof(double));
-    ser[k]->v = cup_block_take(b, (size_t)na, sizeof(double));
+    ser[k]->mag = block_take(b, (size_t)na, sizeof(double));
+    ser[k]->v = block_take(b, (size_t)na, sizeof(double));
   }
   size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
-  A->S = cup_block_take(b, (size_t)m * m, sizeof(double));
-  A->Sl = cup_block_take(b, (size_t)m * m, sizeof(double));
-  A->Sinv = cup_block_take(b, (size_t)m * m, sizeof(double));
-  A->T1 = cup_block_take(b, big, sizeof(double));
-  A->T2 = cup_block_take(b, big, sizeof(double));
-  A->T3 = cup_block_take(b, big, sizeof(double));
-  A->perm = cup_block_take(b, (size_t)m + 1, sizeof(int));
+  A->S = block_take(b, (size_t)m * m, sizeof(double));
+  A->Sl = block_take(b, (size_t)m * m, sizeof(double));
+  A->Sinv = block_take(b, (size_t)m * m, sizeof(double));
+  A->T1 = block_take(b, big, sizeof(double));
+  A->T2 = block_take(b, big, sizeof(double));
+  A->T3 = block_take(b, big, sizeof(double));
+  A->perm = block_take(b, (size_t)m + 1, sizeof(int));
 }
 
-void ad_series_layout(adaptive_ws *A, ad_series *S, cup_block *b) {
-  S->c = cup_block_take(b, AD_SERIES_SEGS * (AD_SERIES_MAX + 1) * (size_t)(A->na ? A->na : 1), sizeof(double));
+void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b) {
+  S->c = block_take(b, AD_SERIES_SEGS * (AD_SERIES_MAX + 1) * (size_t)(A->na ? A->na : 1), sizeof(double));
 }
 
 int ad_modes_init(adaptive_ws *A) {

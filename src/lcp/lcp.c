@@ -8,13 +8,13 @@
 #include "util/linalg.h"
 #include "lcp.h"
 
-static void layout(lcp_solver *s, cup_block *b) {
+static void layout(lcp_solver *s, block_arena *b) {
   size_t M = (size_t)s->m + 1;
-  s->lam = cup_block_take(b, M, sizeof(double)); s->w = cup_block_take(b, M, sizeof(double));
-  s->rhs = cup_block_take(b, M, sizeof(double)); s->lu = cup_block_take(b, M * M, sizeof(double));
-  s->work = cup_block_take(b, M, sizeof(double));
-  s->piv = cup_block_take(b, M, sizeof(int)); s->idx = cup_block_take(b, M, sizeof(int));
-  s->act = cup_block_take(b, M, 1); s->prev = cup_block_take(b, M, 1);
+  s->lam = block_take(b, M, sizeof(double)); s->w = block_take(b, M, sizeof(double));
+  s->rhs = block_take(b, M, sizeof(double)); s->lu = block_take(b, M * M, sizeof(double));
+  s->work = block_take(b, M, sizeof(double));
+  s->piv = block_take(b, M, sizeof(int)); s->idx = block_take(b, M, sizeof(int));
+  s->act = block_take(b, M, 1); s->prev = block_take(b, M, 1);
 }
 
 /* One zeroed block (lam is its start): an integrator has several solvers,
@@ -22,7 +22,7 @@ static void layout(lcp_solver *s, cup_block *b) {
 int lcp_init(lcp_solver *s, int m) {
   memset(s, 0, sizeof *s);
   s->m = m;
-  cup_block b = {0};
+  block_arena b = {0};
   layout(s, &b);
   if (!(b.base = calloc(1, b.used))) return CUP_ERR_NOMEM;
   b.used = 0;

@@ -7,14 +7,14 @@
 #define CUP_UTIL_BLOCK_H
 #include <stddef.h>
 
-typedef struct cup_block {
+typedef struct block_arena {
   char *base;   /* NULL: sizing */
   size_t used;  /* bytes handed out (or summed) so far */
-} cup_block;
+} block_arena;
 
 /* count elements of size bytes, 16-byte aligned as malloc's (at least 16
  * bytes: no two arrays share an address); NULL while sizing. */
-static inline void *cup_block_take(cup_block *b, size_t count, size_t size) {
+static inline void *block_take(block_arena *b, size_t count, size_t size) {
   size_t bytes = count * size;
   bytes = bytes ? (bytes + 15) & ~(size_t)15 : 16;
   void *q = b->base ? b->base + b->used : NULL;
