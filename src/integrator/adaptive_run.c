@@ -246,6 +246,7 @@ static void tangent_flow(adaptive_ws *A, ad_mode *md, double tau) {
 }
 
 static int report(adaptive_ws *A, ad_run *R, uint64_t before, uint64_t after, double t) {
+  if (before == after) return CUP_OK;            /* (most pieces: the mode goes on) */
   for (int i = 0; i < A->m; i++) {
     int was = before >> i & 1, now = after >> i & 1;
     if (was == now) continue;
@@ -284,7 +285,7 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   if (!R->md) A->seed = mask;
   A->pinned[0] = R->md = ad_mode_get(A, mask);
-  if (A->has_D) ad_offset(A, w, A->g);           /* (ad_select left it in A->g) */
+  /* (ad_select and ad_dae_select left g = F + G u(w) in A->g) */
   ad_manifold(A, R->md, A->g, A->x);
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
@@ -775,11 +776,14 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
 }
 
 /* A switched run's window (switched.c): from xa at ta to tb, the samples
- * (x0's when first) and steps counted on from *next_sample and *steps. */
+ * (x0's when first) and steps counted on from *next_sample and *steps.
+ * The clock is read only under a wall-time limit (step_checks' is the only
+ * use): a fixed-step run's split steps take two windows or more each. */
 int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
                     long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds(),
-              .t = ta, .steps = *steps, .next_sample = *next_sample};
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input,
+              .wall0 = A->o.max_wall_seconds > 0 ? now_seconds() : 0, .t = ta, .steps = *steps,
+              .next_sample = *next_sample};
   run_begin(A, &R, tb, xa, 0);
   int st = first ? emit(A, &R) : CUP_OK;
   st = start_from(A, &R, first, st);
