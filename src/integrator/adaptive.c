@@ -200,66 +200,96 @@ static void offset_pattern(adaptive_ws *A) {
   }
 }
 
-/* Every matrix and vector of the run (its sizes set): *fail = 1 when memory runs out. */
-static void alloc_vectors(adaptive_ws *A, int *fail) {
+/* Every matrix and vector of the run (its sizes set), from block b (block_take). */
+static void vectors(adaptive_ws *A, block_arena *b) {
   int n = A->n, m = A->m, p = A->p, nw = A->nw, na = A->na;
   size_t NA = (size_t)na * na;
-  A->A = take((size_t)n * n, sizeof(double), fail);
-  A->E = take((size_t)n * p, sizeof(double), fail);
-  A->G = take((size_t)m * p, sizeof(double), fail);
-  A->U = take((size_t)p * nw, sizeof(double), fail);
-  A->W = take((size_t)nw * nw, sizeof(double), fail);
-  A->up = take((size_t)nw + 1, sizeof(int), fail);
-  A->ui = take((size_t)p * nw + 1, sizeof(int), fail);
-  A->ux = take((size_t)p * nw + 1, sizeof(double), fail);
-  A->gp = take((size_t)m + 1, sizeof(int), fail);
-  A->gi = take((size_t)m * p + 1, sizeof(int), fail);
-  A->gx = take((size_t)m * p + 1, sizeof(double), fail);
-  A->gterm = take(A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int), fail);
-  A->ework = take(7 * NA, sizeof(double), fail);
+  A->A = block_take(b, (size_t)n * n, sizeof(double));
+  A->E = block_take(b, (size_t)n * p, sizeof(double));
+  A->G = block_take(b, (size_t)m * p, sizeof(double));
+  A->U = block_take(b, (size_t)p * nw, sizeof(double));
+  A->W = block_take(b, (size_t)nw * nw, sizeof(double));
+  A->up = block_take(b, (size_t)nw + 1, sizeof(int));
+  A->ui = block_take(b, (size_t)p * nw + 1, sizeof(int));
+  A->ux = block_take(b, (size_t)p * nw + 1, sizeof(double));
+  A->gp = block_take(b, (size_t)m + 1, sizeof(int));
+  A->gi = block_take(b, (size_t)m * p + 1, sizeof(int));
+  A->gx = block_take(b, (size_t)m * p + 1, sizeof(double));
+  A->gterm = block_take(b, A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int));
+  A->ework = block_take(b, 7 * NA, sizeof(double));
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
-  for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++) *vecs_na[k] = take((size_t)na, sizeof(double), fail);
+  for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++)
+    *vecs_na[k] = block_take(b, (size_t)na, sizeof(double));
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
                        &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
-  for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++) *vecs_m[k] = take((size_t)m, sizeof(double), fail);
+  for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++)
+    *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
-  for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++) *vecs_n[k] = take((size_t)n, sizeof(double), fail);
-  A->ut = take((size_t)p, sizeof(double), fail);
-  A->udot = take((size_t)p, sizeof(double), fail);
-  A->uerr = take((size_t)p, sizeof(double), fail);
-  A->wa = take((size_t)nw, sizeof(double), fail);
-  A->wt = take((size_t)nw, sizeof(double), fail);
-  A->piece_w = take((size_t)nw, sizeof(double), fail);
-  A->wscale = take((size_t)nw, sizeof(double), fail);
-  A->gscale = take((size_t)m, sizeof(double), fail);
-  A->zw = take((size_t)nw, sizeof(double), fail);
-  A->zy = take((size_t)na, sizeof(double), fail);
-  A->xo = take((size_t)n, sizeof(double), fail);
-  A->dy = take(2 * (size_t)na, sizeof(double), fail);
-  A->erp = take((size_t)na + 1, sizeof(int), fail);
-  A->erj = take(NA, sizeof(int), fail);
-  A->erx = take(NA, sizeof(double), fail);
-  A->xrp = take((size_t)n + m + 1, sizeof(int), fail);
-  A->xrj = take(((size_t)n + m) * na, sizeof(int), fail);
-  A->xrx = take(((size_t)n + m) * na, sizeof(double), fail);
-  A->de = take((size_t)na, sizeof(double), fail);
-  A->de2 = take((size_t)na, sizeof(double), fail);
-  A->ed = take((size_t)n, sizeof(double), fail);
-  A->pend.zy = take((size_t)na, sizeof(double), fail);
-  A->pend.de = take((size_t)na, sizeof(double), fail);
-  A->pend.y2 = take((size_t)na, sizeof(double), fail);
-  A->pend.e2 = take((size_t)n, sizeof(double), fail);
-  A->lcpM = take((size_t)m * m, sizeof(double), fail);
-  A->touch = take((size_t)m, 1, fail);
+  for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++)
+    *vecs_n[k] = block_take(b, (size_t)n, sizeof(double));
+  A->ut = block_take(b, (size_t)p, sizeof(double));
+  A->udot = block_take(b, (size_t)p, sizeof(double));
+  A->uerr = block_take(b, (size_t)p, sizeof(double));
+  A->wa = block_take(b, (size_t)nw, sizeof(double));
+  A->wt = block_take(b, (size_t)nw, sizeof(double));
+  A->piece_w = block_take(b, (size_t)nw, sizeof(double));
+  A->wscale = block_take(b, (size_t)nw, sizeof(double));
+  A->gscale = block_take(b, (size_t)m, sizeof(double));
+  A->zw = block_take(b, (size_t)nw, sizeof(double));
+  A->zy = block_take(b, (size_t)na, sizeof(double));
+  A->xo = block_take(b, (size_t)n, sizeof(double));
+  A->dy = block_take(b, 2 * (size_t)na, sizeof(double));
+  A->erp = block_take(b, (size_t)na + 1, sizeof(int));
+  A->erj = block_take(b, NA, sizeof(int));
+  A->erx = block_take(b, NA, sizeof(double));
+  A->xrp = block_take(b, (size_t)n + m + 1, sizeof(int));
+  A->xrj = block_take(b, ((size_t)n + m) * na, sizeof(int));
+  A->xrx = block_take(b, ((size_t)n + m) * na, sizeof(double));
+  A->de = block_take(b, (size_t)na, sizeof(double));
+  A->de2 = block_take(b, (size_t)na, sizeof(double));
+  A->ed = block_take(b, (size_t)n, sizeof(double));
+  A->pend.zy = block_take(b, (size_t)na, sizeof(double));
+  A->pend.de = block_take(b, (size_t)na, sizeof(double));
+  A->pend.y2 = block_take(b, (size_t)na, sizeof(double));
+  A->pend.e2 = block_take(b, (size_t)n, sizeof(double));
+  A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
+  A->touch = block_take(b, (size_t)m, 1);
   if (A->has_D) {
-    A->Bd = take((size_t)n * m, sizeof(double), fail);
-    A->Dd = take((size_t)m * m, sizeof(double), fail);
-    A->CB = take((size_t)m * m, sizeof(double), fail);
-    A->dcpl = take((size_t)m, 1, fail);
+    A->Bd = block_take(b, (size_t)n * m, sizeof(double));
+    A->Dd = block_take(b, (size_t)m * m, sizeof(double));
+    A->CB = block_take(b, (size_t)m * m, sizeof(double));
+    A->dcpl = block_take(b, (size_t)m, 1);
   }
-  A->samp = take((size_t)p * (AD_DEGREE + 1), sizeof(double), fail);
-  A->samp_mid = take((size_t)p * AD_DEGREE, sizeof(double), fail);
-  A->coef = take(4 * (size_t)(AD_DEGREE + 1), sizeof(double), fail);
+  A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
+  A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
+  A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
+  ad_modes_layout(A, b);
+}
+
+/* The run's arrays in one block, zeroed as callocs were, but for the two
+ * series' coefficients (written before they are read): a switched run makes
+ * its integrators as it goes, and each array was a calloc of its own (some
+ * 280 a configuration on the full bridge). The series come first and last,
+ * each starting on a page the set-up touches (the block's header, the
+ * zeroed part), as their own mallocs did: not the run's first use (3 page
+ * faults more in the six-pulse run else). */
+static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
+  ad_series_layout(A, &A->sy, b);
+  *z0 = b->used;
+  vectors(A, b);
+  *z1 = b->used;
+  ad_series_layout(A, &A->se, b);
+}
+
+static int alloc_block(adaptive_ws *A) {
+  block_arena b = {0};
+  size_t z0, z1;
+  carve(A, &b, &z0, &z1);
+  if (!(A->block = malloc(b.used))) return CUP_ERR_NOMEM;
+  memset((char *)A->block + z0, 0, z1 - z0);
+  b = (block_arena){A->block, 0};
+  carve(A, &b, &z0, &z1);
+  return CUP_OK;
 }
 
 int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
@@ -306,8 +336,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
   }
-  alloc_vectors(A, &fail);
-  if (fail || ad_modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
+  if (fail || alloc_block(A) || ad_modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     adaptive_free(&A);
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
@@ -353,23 +382,10 @@ void adaptive_free(adaptive_ws **Ap) {
   adaptive_ws *A = *Ap;
   ad_modes_free(A);
   if (A->has_D) ad_dae_free(A);
-  free(A->Bd); free(A->Dd); free(A->CB); free(A->dcpl);
   lcp_free(&A->lcp);
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
-  free(A->first_state); free(A->gen.terms); free(A->A); free(A->E); free(A->G); free(A->U); free(A->W); free(A->ework);
-  free(A->up); free(A->ui); free(A->ux); free(A->gp); free(A->gi); free(A->gx); free(A->gterm);
-  free(A->ya); free(A->yb); free(A->yt); free(A->yhi); free(A->yr); free(A->My); free(A->fa); free(A->fb);
-  free(A->ga); free(A->gb); free(A->gt); free(A->da); free(A->db); free(A->dt);
-  free(A->ta); free(A->tb); free(A->tt); free(A->cz); free(A->cs); free(A->c1);
-  free(A->s); free(A->gam); free(A->g); free(A->lcpq); free(A->zero);
-  free(A->x); free(A->xs); free(A->xr); free(A->xf); free(A->e); free(A->et); free(A->xok);
-  free(A->ut); free(A->udot); free(A->uerr); free(A->wa); free(A->wt); free(A->piece_w);
-  free(A->wscale); free(A->gscale); free(A->lcpM); free(A->touch);
-  free(A->samp); free(A->samp_mid); free(A->coef); free(A->zw); free(A->zy);
-  free(A->xo); free(A->dy); free(A->de); free(A->de2); free(A->ed);
-  free(A->erp); free(A->erj); free(A->erx); free(A->xrp); free(A->xrj); free(A->xrx);
-  free(A->pend.zy); free(A->pend.de); free(A->pend.y2); free(A->pend.e2);
+  free(A->first_state); free(A->gen.terms); free(A->block);
   free(A->tan);
   free(A);
   *Ap = NULL;

@@ -28,6 +28,7 @@
 #include "set/polyset_impl.h"
 #include "lcp/lcp.h"
 #include "lcp/step.h"
+#include "util/block.h"
 
 #define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
                                six-pulse bridge cycles through more than 6, each rebuilt 5 times */
@@ -130,6 +131,7 @@ typedef struct ad_stop {
 } ad_stop;
 
 struct adaptive_ws {
+  void *block;              /* the arrays the set-up sizes (adaptive.c, alloc_block): one allocation */
   const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
   const cup_polyset *K;
@@ -270,8 +272,14 @@ double ad_next_break(adaptive_ws *A, double t);
 /* The active set with rows `mask` (built, or found among the kept ones). A
  * set whose rows are linearly dependent keeps an independent subset (the
  * mode's mask says which). NULL only without memory (none is allocated
- * here: the slots are set up by ad_modes_init). */
+ * here: the slots are laid out by ad_modes_layout). */
 ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
+/* The slots' matrices, the series' small vectors and the construction's
+ * scratch from b (adaptive.c's one block, zeroed); series S's
+ * coefficients by ad_series_layout, not zeroed. */
+void ad_modes_layout(adaptive_ws *A, block_arena *b);
+void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b);
+/* The eigenvalue workspace (gsl's own allocations). */
 int ad_modes_init(adaptive_ws *A);
 void ad_modes_free(adaptive_ws *A);
 /* A checkpoint's kept active set in slot s: its rows (mask), built again,

@@ -13,71 +13,61 @@
  * depends on the others: it is dropped from J (it holds when they do). */
 #define AD_RANK_TOL 1e-12
 
-static void *take(size_t count, size_t size, int *fail) {
-  void *q = calloc(count ? count : 1, size);
-  if (!q) *fail = 1;
-  return q;
-}
-
-int ad_modes_init(adaptive_ws *A) {
-  int n = A->n, m = A->m, na = A->na, nw = A->nw, fail = 0;
+void ad_modes_layout(adaptive_ws *A, block_arena *b) {
+  int n = A->n, m = A->m, na = A->na, nw = A->nw;
   size_t NA = (size_t)na * na;
   for (int s = 0; s <= AD_MODES; s++) {   /* (and the spare) */
     ad_mode *md = &A->modes[s];
-    md->rows = take((size_t)m + 1, sizeof(int), &fail);
-    md->M = take(NA, sizeof(double), &fail);
-    md->mp = take((size_t)na + 1, sizeof(int), &fail);
-    md->mi = take(NA, sizeof(int), &fail);
-    md->mj = take(NA, sizeof(int), &fail);
-    md->mx = take(NA, sizeof(double), &fail);
-    md->lp = take((size_t)m + 1, sizeof(int), &fail);
-    md->li = take((size_t)m * na, sizeof(int), &fail);
-    md->lx = take((size_t)m * na, sizeof(double), &fail);
-    md->lmx = take((size_t)m * na, sizeof(double), &fail);
-    md->L = take((size_t)m * na, sizeof(double), &fail);
-    md->Lm = take((size_t)m * na, sizeof(double), &fail);
-    md->Lc = take((size_t)m, sizeof(double), &fail);
-    md->is_zeta = take((size_t)m, 1, &fail);
-    md->X = take((size_t)n * na, sizeof(double), &fail);
-    md->R = take((size_t)n * m, sizeof(double), &fail);
-    md->Zt = take((size_t)m * m, sizeof(double), &fail);
-    md->KU = take((size_t)n * nw, sizeof(double), &fail);
-    for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = take(NA, sizeof(double), &fail);
+    md->rows = block_take(b, (size_t)m + 1, sizeof(int));
+    md->M = block_take(b, NA, sizeof(double));
+    md->mp = block_take(b, (size_t)na + 1, sizeof(int));
+    md->mi = block_take(b, NA, sizeof(int));
+    md->mj = block_take(b, NA, sizeof(int));
+    md->mx = block_take(b, NA, sizeof(double));
+    md->lp = block_take(b, (size_t)m + 1, sizeof(int));
+    md->li = block_take(b, (size_t)m * na, sizeof(int));
+    md->lx = block_take(b, (size_t)m * na, sizeof(double));
+    md->lmx = block_take(b, (size_t)m * na, sizeof(double));
+    md->L = block_take(b, (size_t)m * na, sizeof(double));
+    md->Lm = block_take(b, (size_t)m * na, sizeof(double));
+    md->Lc = block_take(b, (size_t)m, sizeof(double));
+    md->is_zeta = block_take(b, (size_t)m, 1);
+    md->X = block_take(b, (size_t)n * na, sizeof(double));
+    md->R = block_take(b, (size_t)n * m, sizeof(double));
+    md->Zt = block_take(b, (size_t)m * m, sizeof(double));
+    md->KU = block_take(b, (size_t)n * nw, sizeof(double));
+    for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = block_take(b, NA, sizeof(double));
   }
   ad_series *ser[] = {&A->sy, &A->se};
   for (int k = 0; k < 2; k++) {
-    /* (written before it is read: not cleared, a switched run makes its integrators as it goes) */
-    ser[k]->c = malloc(sizeof(double) * (AD_SERIES_SEGS * (AD_SERIES_MAX + 1) + 1) * (size_t)(na ? na : 1));
-    fail |= !ser[k]->c;
-    ser[k]->mag = take((size_t)na, sizeof(double), &fail);
-    ser[k]->v = take((size_t)na, sizeof(double), &fail);
+    ser[k]->mag = block_take(b, (size_t)na, sizeof(double));
+    ser[k]->v = block_take(b, (size_t)na, sizeof(double));
     ser[k]->dim = k ? n : na;
   }
   size_t big = ((size_t)n + m + 1) * ((size_t)na + m + 1);
-  A->S = take((size_t)m * m, sizeof(double), &fail);
-  A->Sl = take((size_t)m * m, sizeof(double), &fail);
-  A->Sinv = take((size_t)m * m, sizeof(double), &fail);
-  A->T1 = take(big, sizeof(double), &fail);
-  A->T2 = take(big, sizeof(double), &fail);
-  A->T3 = take(big, sizeof(double), &fail);
-  A->perm = take((size_t)m + 1, sizeof(int), &fail);
-  if (fail) return CUP_ERR_NOMEM;
-  A->eig = gsl_eigen_nonsymm_alloc((size_t)n);
-  A->eigA = gsl_matrix_alloc((size_t)n, (size_t)n);
-  A->eigv = gsl_vector_complex_alloc((size_t)n);
+  A->S = block_take(b, (size_t)m * m, sizeof(double));
+  A->Sl = block_take(b, (size_t)m * m, sizeof(double));
+  A->Sinv = block_take(b, (size_t)m * m, sizeof(double));
+  A->T1 = block_take(b, big, sizeof(double));
+  A->T2 = block_take(b, big, sizeof(double));
+  A->T3 = block_take(b, big, sizeof(double));
+  A->perm = block_take(b, (size_t)m + 1, sizeof(int));
+}
+
+void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b) {
+  /* (one spare block of na past the last term: piece_build clears the next term's sums as it scales one) */
+  S->c = block_take(b, (AD_SERIES_SEGS * (AD_SERIES_MAX + 1) + 1) * (size_t)(A->na ? A->na : 1), sizeof(double));
+}
+
+int ad_modes_init(adaptive_ws *A) {
+  size_t n = (size_t)A->n;
+  A->eig = gsl_eigen_nonsymm_alloc(n);
+  A->eigA = gsl_matrix_alloc(n, n);
+  A->eigv = gsl_vector_complex_alloc(n);
   return A->eig && A->eigA && A->eigv ? CUP_OK : CUP_ERR_NOMEM;
 }
 
 void ad_modes_free(adaptive_ws *A) {
-  for (int s = 0; s <= AD_MODES; s++) {
-    ad_mode *md = &A->modes[s];
-    free(md->mp); free(md->mi); free(md->mj); free(md->mx); free(md->lp); free(md->li); free(md->lx); free(md->lmx);
-    free(md->rows); free(md->M); free(md->L); free(md->Lm); free(md->Lc); free(md->is_zeta);
-    free(md->X); free(md->R); free(md->Zt); free(md->KU);
-    for (int c = 0; c < AD_CACHE; c++) free(md->Ec[c]);
-  }
-  free(A->sy.c); free(A->sy.mag); free(A->sy.v); free(A->se.c); free(A->se.mag); free(A->se.v);
-  free(A->S); free(A->Sl); free(A->Sinv); free(A->T1); free(A->T2); free(A->T3); free(A->perm);
   if (A->eig) gsl_eigen_nonsymm_free(A->eig);
   if (A->eigA) gsl_matrix_free(A->eigA);
   if (A->eigv) gsl_vector_complex_free(A->eigv);

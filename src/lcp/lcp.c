@@ -4,26 +4,34 @@
 #include <stdlib.h>
 #include <string.h>
 #include "catchup.h"
+#include "util/block.h"
 #include "util/linalg.h"
 #include "lcp.h"
 
+static void layout(lcp_solver *s, block_arena *b) {
+  size_t M = (size_t)s->m + 1;
+  s->lam = block_take(b, M, sizeof(double)); s->w = block_take(b, M, sizeof(double));
+  s->rhs = block_take(b, M, sizeof(double)); s->lu = block_take(b, M * M, sizeof(double));
+  s->work = block_take(b, M, sizeof(double));
+  s->piv = block_take(b, M, sizeof(int)); s->idx = block_take(b, M, sizeof(int));
+  s->act = block_take(b, M, 1); s->prev = block_take(b, M, 1);
+}
+
+/* One zeroed block (lam is its start): an integrator has several solvers,
+ * and a switched run makes them per configuration inside its run. */
 int lcp_init(lcp_solver *s, int m) {
   memset(s, 0, sizeof *s);
   s->m = m;
-  size_t M = (size_t)m + 1;
-  s->lam = calloc(M, sizeof(double)); s->w = calloc(M, sizeof(double));
-  s->rhs = calloc(M, sizeof(double)); s->lu = calloc(M * M, sizeof(double));
-  s->work = calloc(M, sizeof(double));
-  s->piv = calloc(M, sizeof(int)); s->idx = calloc(M, sizeof(int));
-  s->act = calloc(M, 1); s->prev = calloc(M, 1);
-  if (!s->lam || !s->w || !s->rhs || !s->lu || !s->work || !s->piv || !s->idx || !s->act || !s->prev)
-    return CUP_ERR_NOMEM;
+  block_arena b = {0};
+  layout(s, &b);
+  if (!(b.base = calloc(1, b.used))) return CUP_ERR_NOMEM;
+  b.used = 0;
+  layout(s, &b);
   return CUP_OK;
 }
 
 void lcp_free(lcp_solver *s) {
-  free(s->lam); free(s->w); free(s->rhs); free(s->lu); free(s->work);
-  free(s->piv); free(s->idx); free(s->act); free(s->prev);
+  free(s->lam);
   lemke_free(&s->lemke);
   memset(s, 0, sizeof *s);
 }

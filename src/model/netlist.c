@@ -406,6 +406,7 @@ void cup_netlist_free(cup_netlist **p) {
   if (!p || !*p) return;
   cup_netlist *nl = *p;
   cup_lcs_free(&nl->L);
+  free(nl->warning);
   cup_input_free(&nl->u);
   cup_input_free(&nl->u_written);
   free(nl->x0);
@@ -491,7 +492,7 @@ const char *cup_netlist_state_name(const cup_netlist *nl, int j) {
   return nl && j >= 0 && j < nl->n ? nl->state_name[j] : NULL;
 }
 const char *cup_netlist_source(const cup_netlist *nl) { return nl ? nl->source : NULL; }
-const char *cup_netlist_warning(const cup_netlist *nl) { return nl && nl->warning[0] ? nl->warning : NULL; }
+const char *cup_netlist_warning(const cup_netlist *nl) { return nl && nl->warning && nl->warning[0] ? nl->warning : NULL; }
 
 const char *cup_netlist_row_name(const cup_netlist *nl, int i) {
   return nl && i >= 0 && i < (nl->zrow ? nl->mr : nl->m) ? nl->row_name[i] : NULL;

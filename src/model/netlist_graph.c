@@ -359,7 +359,9 @@ int nl_diode_loops(cup_netlist *nl, const nl_circuit *c) {
     if (pr[k].lo == pr[k + 1].lo && pr[k].hi == pr[k + 1].hi) { two[0] = pr[k].e; two[1] = pr[k + 1].e; }
   char names[CUP_ERRMSG_LEN];
   int st = CUP_OK, len = two[0] < 0 ? directed_cycle(c, diode, nd, loop) : 0;
-  if (two[0] >= 0) {
+  if ((two[0] >= 0 || len > 0) && !(nl->warning = malloc(CUP_ERRMSG_LEN))) {
+    st = CUP_ERR_NOMEM;
+  } else if (two[0] >= 0) {
     const nl_elem *d0 = &c->elem[two[0]];
     int same = d0->a == c->elem[two[1]].a;
     join_names(names, sizeof names, c, two, 2);

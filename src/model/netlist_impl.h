@@ -58,7 +58,8 @@ typedef struct nl_sw_hooks {
 } nl_sw_hooks;
 
 struct cup_netlist {
-  char warning[CUP_ERRMSG_LEN];   /* a loop of ideal diodes (nl_diode_loops), or "" */
+  char *warning;      /* a loop of ideal diodes (nl_diode_loops, CUP_ERRMSG_LEN), or NULL: allocated
+                         when there is one (each switch configuration's netlist cleared 12 KB) */
   cup_lcs *L;
   cup_input *u;       /* NULL when p = 0; the sources from the time origin t0 on */
   cup_input *u_written;   /* the sources as written, when t0 != 0 (u is then its shift) */
@@ -170,6 +171,12 @@ int nl_controlled(cup_netlist *nl, const nl_circuit *c, char *errmsg);
  * P (sparse, when any K) and Pinv. */
 int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, la_sparse *P, char *errmsg);
 
+/* Signal `name` (canonical: another configuration's sig_name) appended to
+ * sub's table, as cup_netlist_probe would, but neither formatted again nor
+ * looked for among those sub has: the caller records a configuration's
+ * signals in the order of the netlist's, whose names are unique. Returns
+ * its index or a status < 0. */
+int nl_probe_next(cup_netlist *sub, const char *name, char *errmsg);
 /* 0 if text is a valid probe of this circuit, else a message into msg. */
 int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t size);
 

@@ -244,7 +244,8 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
     for (int k = 0; k < s[5].nnz && !used; k++) used = s[5].i[k] == i;
     if (!used) { F[i] = 1; inert = 1; }
   }
-  char lib[CUP_ERRMSG_LEN] = "";
+  char lib[CUP_ERRMSG_LEN];                        /* (not cleared whole: 12 KB a configuration) */
+  lib[0] = '\0';
   if (!st) {
     cup_lcs_desc q = {0};
     q.n = n; q.m = m; q.p = p;

@@ -168,12 +168,8 @@ static char *canonical(char kind, const char *a, const char *b) {
   return s;
 }
 
-static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
-  const char *a = kind == 'i' ? nl->elem[x].name : nl->node[x], *b = y >= 0 ? nl->node[y] : NULL;
-  char *name = canonical(kind, a, b);
-  if (!name) return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
-  for (int k = 0; k < nl->nsig; k++)
-    if (!strcmp(nl->sig_name[k], name)) { free(name); return k; }
+/* The signal (kind, x, y) appended under name (owned, freed on failure). */
+static int probe_row(cup_netlist *nl, char kind, int x, int y, char *name, char *errmsg) {
   double *row = nl->dense, *prow = nl->prow;
   memset(row, 0, sizeof(double) * (size_t)nvar(nl));
   memset(prow, 0, sizeof(double) * (size_t)nports(nl));
@@ -183,6 +179,15 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
   if (!st) st = append(nl, name, row);
   if (st) { free(name); return fail_fmt(errmsg, st, "out of memory"); }
   return nl->nsig - 1;
+}
+
+static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
+  const char *a = kind == 'i' ? nl->elem[x].name : nl->node[x], *b = y >= 0 ? nl->node[y] : NULL;
+  char *name = canonical(kind, a, b);
+  if (!name) return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
+  for (int k = 0; k < nl->nsig; k++)
+    if (!strcmp(nl->sig_name[k], name)) { free(name); return k; }
+  return probe_row(nl, kind, x, y, name, errmsg);
 }
 
 /* A PULSE with jump edges: piecewise constant (sig_input). */
@@ -262,6 +267,22 @@ int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg) {
                     (int)(la < 60 ? la : 60), a, nl->file);
   int k = probe_one(nl, kind, x, y, errmsg);
   return k >= 0 && nl->hooks ? nl->hooks->probe(nl, k, errmsg) : k;
+}
+
+int nl_probe_next(cup_netlist *sub, const char *name, char *errmsg) {
+  char kind;
+  const char *a, *b;
+  size_t la, lb;
+  int x = -1, y = -1;
+  if (!sub->hooks && !scratch(sub, errmsg) && split(name, &kind, &a, &la, &b, &lb)) {
+    x = kind == 'i' ? find_elem(sub, a, la) : find_node(sub, a, la);
+    y = b ? find_node(sub, b, lb) : -1;
+    if ((b && y < 0) || (kind == 'i' && sub->nelem_user && x >= sub->nelem_user)) x = -1;
+  }
+  if (x < 0) return cup_netlist_probe(sub, name, errmsg);   /* (its message, or its answer) */
+  char *own = strdup(name);
+  if (!own) return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
+  return probe_row(sub, kind, x, y, own, errmsg);
 }
 
 int cup_netlist_probe_default(cup_netlist *nl, int limit, char *errmsg) {

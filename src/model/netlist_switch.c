@@ -373,7 +373,7 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   memset(tp, 0, sizeof *tp);
   int st = form(S, &tp->sub, cfg, tp, errmsg);
   for (int k = 0; !st && k < nl->nsig; k++) {     /* the signals recorded, in the same order */
-    int q = cup_netlist_probe(tp->sub, nl->sig_name[k], errmsg);
+    int q = nl_probe_next(tp->sub, nl->sig_name[k], errmsg);
     if (q != k) st = q < 0 ? q : nl_fail(&S->c, -1, errmsg, CUP_ERR_ARG, "signal order differs");
   }
   if (st) {
