@@ -389,12 +389,12 @@ static __attribute__((noinline)) int sig_input(cup_netlist *root, cup_netlist *n
   double *whole = cache + 3 * (size_t)u->nterms;
   int p = u->p;
   if (t >= whole[0] && t < whole[1]) {
-    la_copy(out, whole + 2, p);
+    la_copy_few(out, whole + 2, p);
     nl->u_lo = whole[0];
     nl->u_hi = whole[1];
     return CUP_OK;
   }
-  for (int j = 0; j < p; j++) out[j] = 0;
+  la_zero_few(out, p);
   for (int k = 0; k < u->nterms; k++) {
     const input_term *w = &u->terms[k];
     double *c = cache + 3 * (size_t)k, v;
@@ -414,7 +414,7 @@ static __attribute__((noinline)) int sig_input(cup_netlist *root, cup_netlist *n
   }
   whole[0] = nl->u_lo = t;
   whole[1] = nl->u_hi = hi;
-  la_copy(whole + 2, out, p);
+  la_copy_few(whole + 2, out, p);
   return CUP_OK;
 }
 
@@ -430,17 +430,20 @@ int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double
   if (nl->hooks) nl = nl->hooks->current(nl);
   int n = nl->n, p = nl->p, m = nl->m;
   double *v = nl->vals;
-  la_copy(v, x, n);
+  la_copy_few(v, x, n);
   if (nl->sig_seen != nl->nsig) {
     nl->sig_u = reads_u(nl);
     nl->sig_seen = nl->nsig;
   }
-  if (p && nl->sig_u && !(t >= nl->u_lo && t < nl->u_hi) &&   /* (else the last sample's u holds at t too) */
-      (nl->ucache ? sig_input(root, nl, t, v + n) : cup_input_eval(nl->u, t, v + n)))
-    return CUP_ERR_CALLBACK;
+  if (p && nl->sig_u) {
+    if (!nl->ucache) {
+      if (cup_input_eval(nl->u, t, v + n)) return CUP_ERR_CALLBACK;
+    } else if (!(t >= nl->u_lo && t < nl->u_hi) && sig_input(root, nl, t, v + n))   /* (else the last sample's u holds) */
+      return CUP_ERR_CALLBACK;
+  }
   if (nl->zrow) zeta_full(nl, x, zeta, v);
-  else if (zeta) la_copy(v + n + p, zeta, m);
-  else la_zero(v + n + p, m);
+  else if (zeta) la_copy_few(v + n + p, zeta, m);
+  else la_zero_few(v + n + p, m);
   const int *ptr = nl->sig_ptr, *idx = nl->sig_idx;
   const double *val = nl->sig_val;
   for (int k = 0; k < nl->nsig; k++) {
