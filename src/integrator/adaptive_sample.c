@@ -354,7 +354,7 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
     for (int i = 0; i < A->m; i++) zeta[i] = md->is_zeta[i] ? md->Lc[i] + row_times(A, A->n + i, A->zy) : 0;
     return CUP_OK;
   }
-  for (int i = 0; i < A->m; i++) zeta[i] = 0;
+  la_zero_few(zeta, A->m);
   if (!md) return CUP_OK;
   if (A->zy_ready) {                             /* a sample inside a step: its y is known */
     for (int i = 0; i < A->m; i++)
