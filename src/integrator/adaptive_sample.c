@@ -101,14 +101,17 @@ static void times(const adaptive_ws *A, const double *y, const double *e, double
     eo[i] = b;
     if (b != 0) last = i;
   }
-  for (; i < na; i++) {
-    double a = 0;
-    int k = rp[i], end = rp[i + 1];
-    for (; k + 1 < end; k += 2) {                /* two terms a turn, still added in order */
-      a += rx[k] * y[rj[k]];
-      a += rx[k + 1] * y[rj[k + 1]];
+  for (; i < na; i++) {                          /* (an input's states: rows of 1 or 2 terms, a sine's rotation) */
+    int k = rp[i], len = rp[i + 1] - k;
+    const int *j = rj + k;
+    const double *c = rx + k;
+    double a;
+    if (len == 2) a = (0 + c[0] * y[j[0]]) + c[1] * y[j[1]];
+    else if (len == 1) a = 0 + c[0] * y[j[0]];
+    else {
+      a = 0;
+      for (int q = 0; q < len; q++) a += c[q] * y[j[q]];
     }
-    if (k < end) a += rx[k] * y[rj[k]];
     yo[i] = a;
     eo[i] = 0;
   }
