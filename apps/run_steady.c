@@ -284,6 +284,8 @@ int run_steady_write(run_steady *s, cup_h5run *w, const cup_scene *scene, int ru
   if (!st && s->solved && run_status >= 0 && s->k == s->N) {
     st = measure(s);
     if (!st) st = write_measures(s, w, scene);
+    if (!st)                                     /* -1: more than 4 a sample, none placed (the warning printed) */
+      st = cup_h5run_attr_long(w, "steady_state_measure_jumps", s->jumps.overflow ? -1 : s->jumps.n);
   }
   return st;
 }

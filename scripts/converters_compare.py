@@ -57,6 +57,7 @@ OWN_STEPS = ["--set", "output.every=1"]   # catchup-run at its own steps (docs/n
 OWN_TOLS = [1e-3, 1e-6]                   # the adaptive scheme's tol at its own steps
 OWN_THETA_PER_PERIOD = [2, 4, 10, 30, 100]  # theta's n at its own steps, times the switching periods
 OWN_HMAX = [3, 10]                        # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
+OWN_SAMPLES_PER_PERIOD = [10, 30, 100]    # the adaptive scheme's dense output on a coarser uniform grid
 SWITCH = "RON=1m ROFF=1e9"
 DIODE = "D(IS=1e-15 N=0.01)"
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
@@ -358,6 +359,9 @@ def configs(name, cards, tstep, tstop, period):
     out += [("catchup", "adaptive tol=%g, own steps" % tol, ["--tol", tol] + OWN_STEPS) for tol in OWN_TOLS]
     out += [("catchup", "adaptive tol=%g hmax=Ts/%d, own steps" % (OWN_TOLS[-1], h),
              ["--tol", OWN_TOLS[-1], "--set", "hmax=%r" % (period / h)] + OWN_STEPS) for h in OWN_HMAX]
+    out += [("catchup", "adaptive tol=%g, %d samples" % (OWN_TOLS[-1], k * periods + 1),
+             ["--tol", OWN_TOLS[-1], "--set", "output.samples=%d" % (k * periods + 1)])
+            for k in OWN_SAMPLES_PER_PERIOD if k * periods < base]
     out += [("catchup", "theta n=%d, own steps" % (f * periods), ["--scheme", "theta", "--n", f * periods] + OWN_STEPS)
             for f in OWN_THETA_PER_PERIOD]
     out += [("ngspice", label, opts) for label, opts in NGSPICE_SETTINGS]
@@ -486,10 +490,12 @@ def section(rows, a, cost):
            "ngspice at its own time points (`wrdata`, no `.options interp`), pulsim at its own steps, catchup "
            "either on the `.tran` grid from its dense output (`catchup-run`'s default for a netlist: the rows "
            "without *own steps*) or at its own steps (`--set output.every=1`: each step's end, the input's "
-           "breakpoints and the events' switch points among them; the rows marked *own steps*). Each *at equal "
+           "breakpoints and the events' switch points among them; the rows marked *own steps*) or from its dense "
+           "output on a coarser uniform grid of its choosing (`--set output.samples=K`, K - 1 = %s times the "
+           "switching periods, below the `.tran` grid's size: the rows marked *K samples*). Each *at equal "
            "error* row pairs a run of ngspice or pulsim with the cheapest catchup run, of either kind, at "
            "least as accurate. No peer setting was dropped or loosened: ngspice and pulsim run exactly as "
-           "before catchup got its own-step rows.", "",
+           "before catchup got its own-step rows." % ", ".join(map(str, OWN_SAMPLES_PER_PERIOD)), "",
            "catchup: `catchup-run` (adaptive `--tol`, θ = ½ `--scheme theta --n N`; at its own steps the "
            "adaptive scheme, also with its step capped at Ts/%s, `--set hmax=`, and θ at %s steps per switching "
            "period Ts), its time in the integrator (sampling and HDF5 writes included). ngspice %s: a "

@@ -20,6 +20,8 @@
 #include <cmocka.h>
 #include "catchup.h"
 #include "sweep_run.h"
+#define CLI_TMPDIR_TEMPLATE "/tmp/cup_sweep_steady_XXXXXX"
+#include "tmpdir.h"
 
 #define EX CUP_EXAMPLES_DIR
 
@@ -194,11 +196,56 @@ static void lazy_variants(void **state) {
   sw_free(&s);
 }
 
+/* 200 switchings in the 1 ms period of a 1 kHz load (test_pss_jumps.c's
+ * too_many_jumps): at 21 samples, more than 4 a sample, the measurements
+ * cannot place the jumps and the task says so (CUP_WARN_COARSE_MEASURE and
+ * its message; before, CUP_OK and nothing); at 2001 samples they are placed
+ * and the average of v(sw) is the ideal buck's D Vin = 6. */
+static void coarse_measure_is_said(void **state) {
+  (void)state;
+  char cir[300], scene[300];
+  snprintf(cir, sizeof cir, "%s/buck-1k.cir", tmpdir);
+  snprintf(scene, sizeof scene, "%s/buck-1k.yaml", tmpdir);
+  FILE *fp = fopen(cir, "w");
+  assert_non_null(fp);
+  fputs("Buck, 1 kHz load\nV1 in 0 12\nVG g 0 PULSE(0 1 0 jump jump 5u 10u)\nS1 in sw g 0 SWI\nD1 0 sw\n"
+        "L1 sw out 100u\nC1 out 0 10u\nRL out 0 5\nIL out 0 SIN(0 0.1 1k)\n.model SWI SW(VT=0.5 VH=0)\n"
+        ".tran 100n 1m\n.end\n", fp);
+  fclose(fp);
+  fp = fopen(scene, "w");
+  assert_non_null(fp);
+  fputs("netlist: buck-1k.cir\nsteady_state:\n  measure: [v(sw)]\n  harmonics: 3\n", fp);
+  fclose(fp);
+  char text[600];
+  snprintf(text, sizeof text, "base: %s\nvariants:\n  - name: n\n    grid: {steady_state.samples: [21, 2001]}\n",
+           scene);
+  sw_sweep *s = parse(text, 1);
+  double traj[1];
+  for (int k = 0; k < 2; k++) {
+    sw_result r;
+    sw_run_job(s, s->n_variants + k, NULL, &r, traj);
+    printf("# %s: %s, avg v(sw) %.12g: %s\n", s->var[k].name, cup_status_name(r.status), r.steady.fig[0][0],
+           r.message);
+    assert_true(r.steady.solved);
+    if (k == 0) {
+      assert_int_equal(r.status, CUP_WARN_COARSE_MEASURE);
+      assert_non_null(strstr(r.message, "more than 148 switchings and events in the period, 4 a sample"));
+      assert_non_null(strstr(r.message, "raise steady_state.samples"));
+    } else {
+      assert_int_equal(r.status, CUP_OK);
+      assert_null(strstr(r.message, "4 a sample"));
+      assert_true(fabs(r.steady.fig[0][0] - 6) <= 1e-9 * 12);
+    }
+  }
+  sw_free(&s);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(steady_buck),
       cmocka_unit_test(latin_hypercube),
       cmocka_unit_test(lazy_variants),
+      cmocka_unit_test(coarse_measure_is_said),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }

@@ -775,11 +775,14 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
 }
 
 /* A switched run's window (switched.c): from xa at ta to tb, the samples
- * (x0's when first) and steps counted on from *next_sample and *steps. */
+ * (x0's when first) and steps counted on from *next_sample and *steps.
+ * The clock is read only under a wall-time limit (step_checks' is the only
+ * use): a fixed-step run's split steps take two windows or more each. */
 int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
                     long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds(),
-              .t = ta, .steps = *steps, .next_sample = *next_sample};
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input,
+              .wall0 = A->o.max_wall_seconds > 0 ? now_seconds() : 0, .t = ta, .steps = *steps,
+              .next_sample = *next_sample};
   run_begin(A, &R, tb, xa, 0);
   int st = first ? emit(A, &R) : CUP_OK;
   st = start_from(A, &R, first, st);

@@ -387,9 +387,13 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
         last = topo;
         k = k1;
         t = integrator_grid_time(C, k);
-        double ts = tb > t && tb - t <= 1e-9 * integrator_grid_step(C) ? tb : t;
+        double snap = 1e-9 * integrator_grid_step(C), ts = tb > t && tb - t <= snap ? tb : t;
         known = topo;
-        if (k < n) st = sw->settle(sw->ctx, &topo, ts, S->x, NULL, info->message);
+        /* no source-gated switching in (the last piece's start, tb) and no
+         * state-gated switch: the rule at t_k gives topo again (settle is
+         * for switching times, as the adaptive scheme's windows have it) */
+        if (k < n && (tb <= t + snap || sw->state_gated(sw->ctx, topo)))
+          st = sw->settle(sw->ctx, &topo, ts, S->x, NULL, info->message);
         continue;
       }
       S->cur = topo;                               /* no exact flow: the step as the grid has it */

@@ -76,6 +76,13 @@ static int measure(const sw_sweep *s, const sw_variant *v, const cup_scene_stead
   }
   r->steady.efficiency = f.efficiency;
   if (st < 0) snprintf(r->message, sizeof r->message, "the steady state's period: %s: %s", cup_status_name(st), err);
+  else if (J.overflow) {                       /* the figures are the samples' own: the task says so */
+    size_t n = strlen(r->message);
+    snprintf(r->message + n, sizeof r->message - n, "%smore than %ld switchings and events in the period, 4 a "
+             "sample: the measurements place none of them (O(h) where a signal jumps; raise steady_state.samples)",
+             n ? "; " : "", J.cap);
+    st = CUP_WARN_COARSE_MEASURE;
+  }
   cup_integrator_free(&I);
   pss_jumps_free(&J);
   free(p.sig); free(p.zeta); free(w);
@@ -114,7 +121,7 @@ void sw_steady_run(const sw_sweep *s, const sw_variant *v, const cup_integrator_
       if (period.max_wall_seconds > 0)           /* the task's limit: what the solve left */
         period.max_wall_seconds = fmax(period.max_wall_seconds - (now_seconds() - t0), DBL_MIN);
       int ms = measure(s, v, q, &period, cup_pss_x0(pss), r);
-      if (ms < 0) r->status = ms;
+      if (ms < 0 || (ms > 0 && r->status == CUP_OK)) r->status = ms;
     }
   }
   cup_pss_free(&pss);
