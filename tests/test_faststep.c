@@ -8,7 +8,9 @@
  * whole, bit for bit; whole runs of the paper's circuits and variants through the
  * fused steps against the same runs through the loop (a step callback turns
  * the fused steps off), bit for bit, states and statistics; la_floor
- * against libm's floor. */
+ * against libm's floor; the adaptive scheme's check of an active set with
+ * D (its slopes only where a value is at rounding) against the whole
+ * check, and its choice where no row touches against the LCP's. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -17,6 +19,9 @@
 #include <cmocka.h>
 #include "testutil.h"
 #include "lcp/step.h"
+#include "lcp/lcp.h"
+#include "integrator/adaptive.h"
+#include "integrator/adaptive_impl.h"
 #include "set/polyset_impl.h"
 #include "model/input_impl.h"
 #include "util/trig.h"
@@ -454,6 +459,168 @@ static void test_fused_steps_are_the_loop(void **state) {
   assert_true(projected > 0 && skipped > 0);
 }
 
+/* ---- the choice of an active set with D ------------------------------------------- */
+
+/* The check of a mode with D as it was written before its slopes were
+ * taken only where a value is at rounding (adaptive_dae.c's mode_fits):
+ * every row's value, slopes and thresholds computed, then the rows in
+ * order. *edge: a row's value was at rounding (its slopes checked);
+ * *slope: a slope failed it. */
+static int fits_whole(adaptive_ws *A, ad_mode *md, const double *x, const double *w, int *edge, int *slope) {
+  int n = A->n, na = A->na, m = A->m;
+  double xn = 0, xm[16], y[16], My[16], g[64], d[64], d2[64], thr[64];
+  assert_true(na <= 16 && m <= 64);
+  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  ad_offset(A, w, A->g);
+  for (int b = 0; b < md->nz; b++) {
+    double res = 0, mag = 0;
+    for (int a = 0; a < md->nj; a++) {
+      int i = md->rows[a];
+      double s = A->g[i], sm = fabs(A->g[i]) + A->c1[i] * xn + A->gscale[i];
+      for (int k = A->K->Ct.p[i]; k < A->K->Ct.p[i + 1]; k++) s += A->K->Ct.x[k] * x[A->K->Ct.i[k]];
+      res += md->Zt[(size_t)b * md->nj + a] * s;
+      mag += fabs(md->Zt[(size_t)b * md->nj + a]) * sm;
+    }
+    if (fabs(res) > 1024 * DBL_EPSILON * mag) return 0;
+  }
+  memcpy(xm, x, sizeof(double) * (size_t)n);
+  ad_manifold(A, md, A->g, xm);
+  ad_lift(A, md, xm, w, y);
+  ad_events_eval(A, md, y, g, thr);
+  ad_events_deriv(A, md, y, d);
+  memcpy(My, A->My, sizeof(double) * (size_t)na);
+  ad_events_deriv(A, md, My, d2);
+  for (int i = 0; i < m; i++) {
+    double tw = 0;
+    for (int j = A->n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * fmax(fabs(y[j]), A->wscale[j - A->n]);
+    double th = 16 * thr[i] + 64 * DBL_EPSILON * tw;
+    if (g[i] < -th) return 0;
+    if (g[i] > th) continue;
+    *edge = 1;
+    double dm = 0, d2m = 0;
+    for (int j = 0; j < na; j++) {
+      dm += md->Lm[(size_t)i * na + j] * fabs(My[j]);
+      d2m += md->Lm[(size_t)i * na + j] * fabs(A->My[j]);
+    }
+    *slope = 1;
+    if (d[i] < -1024 * DBL_EPSILON * dm) return 0;
+    if (d[i] <= 1024 * DBL_EPSILON * dm && d2[i] < -1024 * DBL_EPSILON * d2m) return 0;
+    *slope = 0;
+  }
+  return 1;
+}
+
+/* A run's states and times (the ends of its steps: at events a row at zero). */
+typedef struct { double t[4096], x[4096 * 8]; int n, dim; } trace;
+
+static int trace_sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  trace *c = vp;
+  if (c->n < 4096) {
+    c->t[c->n] = t;
+    memcpy(c->x + (size_t)c->n * 8, x, sizeof(double) * (size_t)c->dim);
+    c->n++;
+  }
+  return 0;
+}
+
+/* ad_dae_select keeps the current set exactly when it fits (a set that
+ * does not fit is never the answer of the LCP's candidates either). On the
+ * six-pulse rectifier (D from the sources' star), at the ends of the steps
+ * of a run over a period (the diodes commutating: rows at zero, where the
+ * slopes decide) and at random states put on the manifold of a set, every
+ * set of one or two rows whose mode is its own is kept iff the whole check
+ * passes; the whole check fails on a slope many times. */
+static void test_mode_fits_is_the_whole_check(void **state) {
+  (void)state;
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = NULL;
+  if (cup_netlist_load(&nl, CUP_SOURCE_DIR "/examples/circuits/sixpulse.cir", NULL, 0, err)) fail_msg("%s", err);
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = 0.02;
+  o.tol_abs = o.tol_rel = 1e-6;
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = 1;
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+  adaptive_ws *A = adaptive_of(I);
+  assert_non_null(A);
+  assert_true(A->has_D && A->m == 6 && A->n <= 8);
+  static trace run;
+  run.dim = A->n;
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), trace_sink, &run, &info), CUP_OK);
+  assert_true(info.events > 4 && run.n > 20 && run.n < 4096);
+  uint64_t sets[32];
+  int nsets = 0;
+  for (uint64_t J = 0; J < 64; J++) {
+    ad_mode *md = __builtin_popcountll(J) <= 2 ? ad_mode_get(A, J) : NULL;
+    if (md && md->mask == J) sets[nsets++] = J;
+  }
+  assert_true(nsets >= 5);
+  srand(7);
+  double x[8], w[16], err_w[16];
+  long kept = 0, dropped = 0, edges = 0, slopes = 0;
+  for (int trial = 0; trial < run.n + 200; trial++) {
+    double t = trial < run.n ? run.t[trial] : 0.02 * rand() / RAND_MAX;
+    assert_int_equal(ad_inputs_on(A, t, t + 1e-6, w, err_w), CUP_OK);
+    if (trial < run.n) {
+      memcpy(x, run.x + (size_t)trial * 8, sizeof(double) * (size_t)A->n);
+    } else {                                       /* onto a set's manifold: its rows at zero */
+      for (int j = 0; j < A->n; j++) x[j] = 200.0 * rand() / RAND_MAX - 100;
+      ad_mode *on = ad_mode_get(A, sets[rand() % nsets]);
+      ad_offset(A, w, A->g);
+      ad_manifold(A, on, A->g, x);
+    }
+    for (int s = 0; s < nsets; s++) {
+      int edge = 0, slope = 0, piv = 0;
+      int want = fits_whole(A, ad_mode_get(A, sets[s]), x, w, &edge, &slope);
+      uint64_t got = 0;
+      int st = ad_dae_select(A, x, w, sets[s], -1, 0, 0, 1e-3, &got, &piv);
+      if (want != (st == CUP_OK && got == sets[s]))
+        fail_msg("state %d, set %#llx: the whole check says %d, the choice %s %#llx", trial,
+                 (unsigned long long)sets[s], want, st == CUP_OK ? "keeps" : "fails,", (unsigned long long)got);
+      kept += want;
+      dropped += !want;
+      edges += edge;
+      slopes += slope;
+    }
+  }
+  if (!(kept > 50 && dropped > 500 && edges > 100 && slopes > 30))
+    fail_msg("kept %ld, dropped %ld, a row at rounding %ld, failed on a slope %ld", kept, dropped, edges, slopes);
+  cup_integrator_free(&I);
+  cup_netlist_free(&nl);
+}
+
+/* ad_select's choice where no row touches, from a cold start: the LCP
+ * lambda + q with q > 0, which lcp_solve answers with lambda = 0, w = q
+ * and no pivot, leaving the start cold. */
+static void test_decoupled_lcp_is_zero(void **state) {
+  (void)state;
+  srand(11);
+  for (int m = 1; m <= 8; m++) {
+    lcp_solver s;
+    assert_int_equal(lcp_init(&s, m), CUP_OK);
+    double M[64] = {0}, q[8];
+    for (int i = 0; i < m; i++) M[i + i * m] = 1;
+    for (int trial = 0; trial < 20; trial++) {
+      for (int i = 0; i < m; i++) q[i] = trial ? 1e-3 + (double)rand() / RAND_MAX : 1;
+      int piv = 0;
+      assert_true(lcp_cold(&s));
+      assert_int_equal(lcp_solve(&s, M, q, &piv), CUP_OK);
+      assert_int_equal(piv, 0);
+      for (int i = 0; i < m; i++) {
+        assert_true(s.lam[i] == 0 && !signbit(s.lam[i]));
+        assert_true(s.w[i] == q[i]);
+      }
+    }
+    assert_true(lcp_cold(&s));
+    lcp_free(&s);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_sin_within_two_ulps),
@@ -465,6 +632,8 @@ int main(void) {
     cmocka_unit_test(test_warm_step_is_the_general_one),
     cmocka_unit_test(test_cached_modes_are_the_general_ones),
     cmocka_unit_test(test_fused_steps_are_the_loop),
+    cmocka_unit_test(test_mode_fits_is_the_whole_check),
+    cmocka_unit_test(test_decoupled_lcp_is_zero),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

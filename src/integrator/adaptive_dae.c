@@ -80,12 +80,14 @@ static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w)
 /* Does the mode md continue from (x, w)? x on its manifold to rounding,
  * and every event function (multipliers of the held rows, slacks of the
  * others) nonnegative, lexicographically in its value and its first two
- * derivatives on the mode's own flow. */
+ * derivatives on the mode's own flow. The slopes are needed only where a
+ * value is at rounding: a row below it fails the mode, and with every row
+ * above it the mode fits (nearly every try, at a window's start). A->g
+ * holds ad_offset of w (ad_dae_select's). */
 static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w) {
   int n = A->n, na = A->na, m = A->m;
   double xn = 0;
   for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
-  ad_offset(A, w, A->g);
   for (int b = 0; b < md->nz; b++) {             /* the manifold's residual against its rounding */
     double res = 0, mag = 0;
     for (int a = 0; a < md->nj; a++) {
@@ -102,15 +104,22 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
   ad_manifold(A, md, A->g, xm);
   ad_lift(A, md, xm, w, y);
   ad_events_eval(A, md, y, g, thr);
+  double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
+  for (int j = n; j < na; j++) ws[j - n] = fmax(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
+  int edge = 0;                                  /* a value at rounding */
+  for (int i = 0; i < m; i++) {
+    double tw = 0;
+    for (int j = n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * ws[j - n];
+    thr[i] = 16 * thr[i] + 64 * DBL_EPSILON * tw;
+    if (g[i] < -thr[i]) return 0;
+    edge |= !(g[i] > thr[i]);
+  }
+  if (!edge) return 1;
   ad_events_deriv(A, md, y, d);                  /* leaves M y in A->My */
   la_copy(My, A->My, na);
   ad_events_deriv(A, md, My, d2);                /* L M (M y) */
   for (int i = 0; i < m; i++) {
-    double tw = 0;                               /* the input's rounding: a sine's zero is an ulp off */
-    for (int j = A->n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * fmax(fabs(y[j]), A->wscale[j - A->n]);
-    double th = 16 * thr[i] + 64 * DBL_EPSILON * tw;
-    if (g[i] < -th) return 0;
-    if (g[i] > th) continue;
+    if (g[i] > thr[i]) continue;
     double dm = 0, d2m = 0;                      /* the rounding of the slopes */
     for (int j = 0; j < na; j++) {
       dm += md->Lm[(size_t)i * na + j] * fabs(My[j]);
@@ -193,6 +202,7 @@ int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur
                   uint64_t seed, double tscale, uint64_t *mask, int *pivots) {
   int m = A->m;
   ad_mode *md;
+  ad_offset(A, w, A->g);                         /* for mode_fits; left there for the caller */
   if ((row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w))) ||   /* the event row alone */
       (row < 0 && (md = try_mode(A, cur, x, w))) ||                         /* the same set, still right */
       (seed && seed != cur && (md = try_mode(A, seed, x, w)))) {             /* the caller's guess */
@@ -232,12 +242,14 @@ int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, in
   /* the multipliers alone, x as it is: 0 <= zeta _|_ C x + D zeta + g >= 0
    * (a diode behind a resistance takes any slack; and there B need not be
    * P^-1 C^T, which the jump below assumes) */
-  for (int j = 0; j < m; j++)
-    for (int i = 0; i < m; i++) A->lcpM[i + (size_t)j * m] = A->Dd[i + (size_t)j * m];
-  if (lcp_solve(&A->lcp, A->lcpM, A->dq0, pivots) == CUP_OK) {
+  if (lcp_solve(&A->lcp, A->Dd, A->dq0, pivots) == CUP_OK) {
     /* w to the rounding of the solve: its residual is eps (|q| + |D| |zeta|)
      * in every row (a bridge behind a 10 kOhm shunt: 38 kV terms, a 2 V
-     * row off by 2.4e-12) */
+     * row off by 2.4e-12); a w within the slack's own rounding is inside
+     * that bound whatever it is (the usual case) */
+    int in = 1;
+    for (int i = 0; i < m; i++) in &= A->lcp.w[i] >= -16 * A->gam[i];
+    if (in) return 0;
     double sc = 0;
     for (int i = 0; i < m; i++) {
       double r = fabs(A->dq0[i]);

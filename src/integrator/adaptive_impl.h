@@ -330,7 +330,8 @@ void ad_dae_free(adaptive_ws *A);
  * the event row flipped (with no event, cur itself) when that fits, else
  * seed when nonzero and it fits, else the finite-h LCP with D
  * (docs/adaptive.md), each candidate checked on the mode's own flow.
- * CUP_OK, or CUP_ERR_LINALG when no candidate continues (or the LCP has no
+ * Leaves F + G u(w) in A->g (ad_offset; u in A->ut). CUP_OK, or
+ * CUP_ERR_LINALG when no candidate continues (or the LCP has no
  * solution). */
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   uint64_t seed, double tscale, uint64_t *mask, int *pivots);

@@ -728,10 +728,16 @@ int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, u
   unsigned char *touch = A->touch;
   int touching = 0;
   for (int i = 0; i < m; i++) {
-    double c1 = 0;
-    for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) c1 += fabs(K->Ct.x[k]);
-    touch[i] = (hint >> i & 1) || A->s[i] <= 64 * DBL_EPSILON * (fabs(A->g[i]) + c1 * xn);
+    touch[i] = (hint >> i & 1) || A->s[i] <= 64 * DBL_EPSILON * (fabs(A->g[i]) + A->c1[i] * xn);
     touching |= touch[i];
+  }
+  if (!touching && lcp_cold(&A->lcp)) {
+    /* the LCP is lambda + 1 (every row decoupled): lambda = 0, as
+     * lcp_solve finds it from a cold start with no pivot (the usual case:
+     * a window starts cold, and no row touches between a PWM's edges) */
+    for (int i = 0; i < m; i++) { A->lcp.lam[i] = 0; A->lcp.w[i] = 1; }
+    *mask = 0;
+    return CUP_OK;
   }
   /* u', and the free velocity f = A x + E u: the touching rows' q (none
    * touches between a PWM's edges in most windows) */

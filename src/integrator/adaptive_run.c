@@ -246,6 +246,7 @@ static void tangent_flow(adaptive_ws *A, ad_mode *md, double tau) {
 }
 
 static int report(adaptive_ws *A, ad_run *R, uint64_t before, uint64_t after, double t) {
+  if (before == after) return CUP_OK;            /* (most pieces: the mode goes on) */
   for (int i = 0; i < A->m; i++) {
     int was = before >> i & 1, now = after >> i & 1;
     if (was == now) continue;
@@ -284,7 +285,7 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   if (!R->md) A->seed = mask;
   A->pinned[0] = R->md = ad_mode_get(A, mask);
-  if (A->has_D) ad_offset(A, w, A->g);           /* (ad_select left it in A->g) */
+  /* (ad_select and ad_dae_select left g = F + G u(w) in A->g) */
   ad_manifold(A, R->md, A->g, A->x);
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);

@@ -38,5 +38,11 @@ int lcp_monotone(lcp_solver *s);
 int lcp_solve(lcp_solver *s, const double *M, const double *q, int *pivots);
 /* The next solve starts cold. */
 static inline void lcp_forget(lcp_solver *s) { memset(s->prev, 0, (size_t)s->m); }
+/* Does the next solve start cold (no row in the warm start)? */
+static inline int lcp_cold(const lcp_solver *s) {
+  for (int i = 0; i < s->m; i++)
+    if (s->prev[i]) return 0;
+  return 1;
+}
 
 #endif

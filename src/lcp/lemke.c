@@ -25,7 +25,14 @@ void lemke_free(lemke_solver *s) {
   memset(s, 0, sizeof *s);
 }
 
-#define TAB(s, i, j) ((s)->T[(i) + (size_t)(j) * (s)->m])
+#define TAB(s, i, j) ((s)->T[(size_t)(i) * (2 * (size_t)(s)->m + 2) + (j)])   /* row-major: a pivot runs along rows */
+
+/* fmax(s, |v|) for an s that is not NaN (a NaN v leaves s), without the
+ * call */
+static inline double max_abs(double s, double v) {
+  double a = fabs(v);
+  return a > s ? a : s;
+}
 
 /* The leaving row for entering column e: the least ratio q_i / a_ie over
  * a_ie > tol, ties broken lexicographically by the rows of B^-1 (the w
@@ -38,7 +45,7 @@ static int ratio_test(const lemke_solver *s, int e, double tol) {
   int m = s->m, qc = 2 * m + 1, best = -1, zrow = -1;
   double qscale = 0;
   for (int i = 0; i < m; i++) {
-    qscale = fmax(qscale, fabs(TAB(s, i, qc)));
+    qscale = max_abs(qscale, TAB(s, i, qc));
     if (s->basis[i] == 2 * m) zrow = i;
     double a = TAB(s, i, e);
     if (!(a > tol)) continue;
@@ -76,7 +83,7 @@ int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, do
   int r = -1;
   for (int i = 0; i < m; i++) {
     if (q[i] < 0 && q[i] <= qmin) { qmin = q[i]; r = i; }   /* ties: the last row, lexicographically least */
-    for (int j = 0; j < m; j++) scale = fmax(scale, fabs(M[i + (size_t)j * m]));
+    for (int j = 0; j < m; j++) scale = max_abs(scale, M[i + (size_t)j * m]);
   }
   for (int i = 0; i < m; i++) z[i] = 0;
   if (r < 0) {                                     /* q >= 0: z = 0 */

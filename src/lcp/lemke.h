@@ -12,7 +12,7 @@
 
 typedef struct lemke_solver {
   int m;
-  double *T;          /* m x (2m + 2) tableau, column-major: w | z | z0 | q */
+  double *T;          /* m x (2m + 2) tableau, row-major: w | z | z0 | q */
   int *basis;         /* basic variable of each row: 0..m-1 w, m..2m-1 z, 2m z0 */
 } lemke_solver;
 
