@@ -72,7 +72,7 @@ static double row_times(const adaptive_ws *A, int i, const double *y) {
   return acc;
 }
 
-/* The next sample's y and error, E y and E e in place (tmp: 2 na), in one
+/* The next sample's y and error, E y and E e into yo and eo, in one
  * pass over by_rows' nonzeros; the columns of e's trailing zeros (its
  * inputs' part) left out of E e (*nc: 1 + e's last nonzero, or -1 not
  * known yet; then the new e's). Each row summed from 0 in column order,
@@ -82,13 +82,10 @@ static double row_times(const adaptive_ws *A, int i, const double *y) {
  * nonzeros are in the first n columns, as they are) get E y alone and
  * e_i = +0, what their sums of no term gave. (Dense, these products were
  * 60 % of a sample's instructions on the six-pulse rectifier's grid.) */
-static void times(const adaptive_ws *A, double *y, double *e, double *tmp, int *ncp) {
+static void times(const adaptive_ws *A, const double *y, const double *e, double *yo, double *eo, int *ncp) {
   int na = A->na, nc = *ncp, last = -1;
   if (nc < 0)
     for (nc = na; nc > 0 && e[nc - 1] == 0;) nc--;
-  double *ty = tmp, *te = tmp + na;
-  memcpy(ty, y, sizeof(double) * (size_t)na);
-  memcpy(te, e, sizeof(double) * (size_t)nc);
   const int *rp = A->erp, *rj = A->erj;
   const double *rx = A->erx;
   int rows_e = nc <= A->n ? A->er_n : na, i = 0;   /* the rows after have no column < nc: e_i = +0 */
@@ -96,24 +93,27 @@ static void times(const adaptive_ws *A, double *y, double *e, double *tmp, int *
     double a = 0, b = 0;
     int k = rp[i], end = rp[i + 1];
     for (; k < end && rj[k] < nc; k++) {
-      a += rx[k] * ty[rj[k]];
-      b += rx[k] * te[rj[k]];
+      a += rx[k] * y[rj[k]];
+      b += rx[k] * e[rj[k]];
     }
-    for (; k < end; k++) a += rx[k] * ty[rj[k]];
-    y[i] = a;
-    e[i] = b;
+    for (; k < end; k++) a += rx[k] * y[rj[k]];
+    yo[i] = a;
+    eo[i] = b;
     if (b != 0) last = i;
   }
-  for (; i < na; i++) {
-    double a = 0;
-    int k = rp[i], end = rp[i + 1];
-    for (; k + 1 < end; k += 2) {                /* two terms a turn, still added in order */
-      a += rx[k] * ty[rj[k]];
-      a += rx[k + 1] * ty[rj[k + 1]];
+  for (; i < na; i++) {                          /* (an input's states: rows of 1 or 2 terms, a sine's rotation) */
+    int k = rp[i], len = rp[i + 1] - k;
+    const int *j = rj + k;
+    const double *c = rx + k;
+    double a;
+    if (len == 2) a = (0 + c[0] * y[j[0]]) + c[1] * y[j[1]];
+    else if (len == 1) a = 0 + c[0] * y[j[0]];
+    else {
+      a = 0;
+      for (int q = 0; q < len; q++) a += c[q] * y[j[q]];
     }
-    if (k < end) a += rx[k] * ty[rj[k]];
-    y[i] = a;
-    e[i] = 0;
+    yo[i] = a;
+    eo[i] = 0;
   }
   *ncp = last + 1;
 }
@@ -123,14 +123,17 @@ static void times(const adaptive_ws *A, double *y, double *e, double *tmp, int *
  * cached exp(dt M) of the output spacing dt (one product a sample: asking
  * 10^5 samples adds no steps). The sink is given step number k. A refused
  * sample leaves its states in A->pend (the step goes on to its end, where
- * the run stops): 1; else 0, or an error. */
-static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
+ * the run stops): 1; else 0, or an error. A->zy and A->de point to the
+ * sample's states, which times writes into the other pair of A->dy's
+ * halves and those (no copy a sample); dense_from puts them back. */
+static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
   const cup_integrator_options *o = &A->o;
   int n = A->n, na = A->na;
   double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
   double rnd = R->rloc + sqrt(R->r2);            /* (fixed inside the step) */
   const double *E = NULL;                        /* exp(dt M), looked up at the second sample */
   double ts = ad_sample_time(A, R->next_sample);
+  double *yn = A->dy, *en = A->dy + na;          /* the next sample's */
   int nc = -1;                                   /* (times) */
   A->rows_ready = 0;
   for (;;) {
@@ -173,8 +176,25 @@ static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
       by_rows(A, E);
       rows_of(A, md);
     }
-    times(A, A->zy, A->de, A->dy, &nc);
+    times(A, A->zy, A->de, yn, en, &nc);
+    double *y = A->zy, *e = A->de;
+    A->zy = yn;
+    A->de = en;
+    yn = y;
+    en = e;
   }
+}
+
+static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
+  double *zy = A->zy, *de = A->de;               /* (their own buffers, which free frees) */
+  int st = dense_loop(A, R, md, t1, k);
+  if (A->zy != zy) {
+    la_copy(zy, A->zy, A->na);
+    la_copy(de, A->de, A->na);
+    A->zy = zy;
+    A->de = de;
+  }
+  return st;
 }
 
 /* The samples due before t1 on the flow of md from (t0, ya), exact: the
@@ -339,7 +359,7 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
     for (int i = 0; i < A->m; i++) zeta[i] = md->is_zeta[i] ? md->Lc[i] + row_times(A, A->n + i, A->zy) : 0;
     return CUP_OK;
   }
-  for (int i = 0; i < A->m; i++) zeta[i] = 0;
+  la_zero_few(zeta, A->m);
   if (!md) return CUP_OK;
   if (A->zy_ready) {                             /* a sample inside a step: its y is known */
     for (int i = 0; i < A->m; i++)

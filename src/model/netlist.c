@@ -450,7 +450,8 @@ int nl_input_origin(cup_netlist *nl, double t0, char *errmsg) {
   char lib[CUP_ERRMSG_LEN];
   int st = t0 == nl->t0 ? CUP_OK : input_origin(&nl->u, &nl->u_written, t0, lib);
   if (st) return fail_fmt(errmsg, st, "%s: the sources from t0 = %.17g: %s", nl->file, t0, lib);
-  if (nl->ucache) memset(nl->ucache, 0, sizeof(double) * 3 * (size_t)nl->ucache_n);   /* other sources now */
+  if (nl->ucache) memset(nl->ucache, 0, sizeof(double) * (3 * (size_t)nl->ucache_n + 2 + (size_t)nl->p));   /* other sources now */
+  nl->u_hi = -INFINITY;
   nl->t0 = t0;
   return CUP_OK;
 }

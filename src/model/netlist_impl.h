@@ -111,9 +111,16 @@ struct cup_netlist {
   int sig_u, sig_seen;    /* the signals read u (directly or through a constraint's multiplier),
                              as found when there were sig_seen of them (cup_netlist_signals) */
   double *vals, *dense;   /* a sample's (x, u, zeta) side by side (n + p + m), and n + p + m + supernodes of scratch */
+  double u_lo, u_hi;      /* vals' u is u(t) for every t in [u_lo, u_hi) (sig_input) */
   double *ucache;         /* per input term, 3 doubles: a piecewise constant term's value v on [lo, hi)
                              (lo, hi, v; lo = hi: none), for the signals' samples (sig_input) */
-  int ucache_n;           /* ... terms it has room for */
+  int ucache_n;           /* ... terms it has room for; after them (lo, hi, u[0..p-1]): the whole u(t) on
+                             [lo, hi) when every term is constant or cached (sig_input) */
+  const cup_netlist *uref;   /* a switched netlist: the configuration whose terms its ucache holds, */
+  double uref_t0;            /* ... at that one's time origin, */
+  int ugen;                  /* ... and the generation of that choice (sig_ucache) */
+  int ushare;                /* a configuration: +-ugen when its terms were found (not) uref's, */
+  double ushare_t0;          /* ... at its time origin then */
   double *prow;           /* nv + ni: a signal's row over the ports */
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */

@@ -203,7 +203,7 @@ static int scratch(cup_netlist *nl, char *errmsg) {
   int nt = nl->u && !nl->u->fn ? nl->u->nterms : 0, jumps = 0;
   for (int k = 0; k < nt; k++) jumps += jump_pulse(&nl->u->terms[k]);
   if (!nl->ucache && jumps) {                      /* (none: cup_input_eval, as quick) */
-    if (!(nl->ucache = calloc(3 * (size_t)nt, sizeof(double))))
+    if (!(nl->ucache = calloc(3 * (size_t)nt + 2 + (size_t)nl->p, sizeof(double))))
       return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
     nl->ucache_n = nt;
   }
@@ -344,28 +344,112 @@ static int reads_u(const cup_netlist *nl) {
   return 0;
 }
 
+/* Whether inputs a and b have the same terms in the same components, their
+ * constants and jump edged PULSEs (spice_jump_pulse reads these fields
+ * alone) the same, bit for bit: what sig_input keeps of one holds for the
+ * other. */
+static int same_pieces(const cup_input *a, const cup_input *b) {
+  if (a->p != b->p || a->nterms != b->nterms) return 0;
+  for (int k = 0; k < a->nterms; k++) {
+    const input_term *x = &a->terms[k], *y = &b->terms[k];
+    if (x->comp != y->comp || x->kind != y->kind || jump_pulse(x) != jump_pulse(y)) return 0;
+    if (x->kind == CUP_WAVE_CONSTANT && x->value != y->value) return 0;
+    if (jump_pulse(x) && (x->delay != y->delay || x->period != y->period || x->width != y->width ||
+                          x->value != y->value || x->value2 != y->value2))
+      return 0;
+  }
+  return 1;
+}
+
+/* The cache of configuration nl's samples: the switched netlist's own
+ * (root's), shared by the configurations whose terms are those of the
+ * first one that asked (uref; checked once each, again after a time
+ * origin moved either), so that a converter's pieces, each in another
+ * configuration, find their gates' values still there (the full bridge's
+ * records at its own steps missed all 4 gates every time); else nl's own
+ * (none for the switched netlist itself as a configuration: its own is
+ * the shared one). */
+static __attribute__((noinline)) double *sig_ucache_check(cup_netlist *root, cup_netlist *nl) {
+  if (!root->ucache || root->ucache_n != nl->ucache_n || root->p != nl->p) return nl == root ? NULL : nl->ucache;
+  if (!root->uref || root->uref->t0 != root->uref_t0) {   /* the first, or uref's sources moved */
+    memset(root->ucache, 0, sizeof(double) * (3 * (size_t)root->ucache_n + 2 + (size_t)root->p));
+    root->uref = nl;
+    root->uref_t0 = nl->t0;
+    root->ugen++;
+  }
+  if ((nl->ushare != root->ugen && nl->ushare != -root->ugen) || nl->ushare_t0 != nl->t0) {
+    nl->ushare = same_pieces(nl->u, root->uref->u) ? root->ugen : -root->ugen;
+    nl->ushare_t0 = nl->t0;
+  }
+  return nl->ushare > 0 ? root->ucache : nl == root ? NULL : nl->ucache;   /* (root's own is the shared one) */
+}
+
+static double *sig_ucache(cup_netlist *root, cup_netlist *nl) {
+  if (!root->hooks) return nl->ucache;
+  const cup_netlist *r = root->uref;
+  if (r && nl->ushare == root->ugen && r->t0 == root->uref_t0 && nl->t0 == nl->ushare_t0) return root->ucache;
+  return sig_ucache_check(root, nl);
+}
+
 /* u(t) for the signals: cup_input_eval's sums (each component from 0, its
  * terms in order), a PULSE with jump edges (rise and fall 0) read from
- * nl->ucache while t is in the piece it was evaluated in (spice_jump_pulse:
- * the value and where it ends, bit for bit pulse_value's), so a
- * converter's gates are evaluated once a piece rather than at each of its
- * samples (about 70 instructions a gate and sample). Not inlined: inside
- * cup_netlist_signals it cost every netlist 16 instructions a sample. */
-static __attribute__((noinline)) int sig_input(cup_netlist *nl, double t, double *out) {
+ * the cache (sig_ucache) while t is in the piece it was evaluated in
+ * (spice_jump_pulse: the value and where it ends, bit for bit
+ * pulse_value's), so a converter's gates are evaluated once a piece rather
+ * than at each of its samples (about 70 instructions a gate and sample).
+ * When every term is constant or such a PULSE, the sums themselves are
+ * kept for the piece all of them hold on, and read back whole. Not
+ * inlined: inside cup_netlist_signals it cost every netlist 16
+ * instructions a sample. */
+static __attribute__((noinline)) int sig_input(cup_netlist *root, cup_netlist *nl, double t, double *out) {
   const cup_input *u = nl->u;
-  if (!u || u->fn || nl->ucache_n < u->nterms) return cup_input_eval(u, t, out);
-  for (int j = 0; j < u->p; j++) out[j] = 0;
+  nl->u_hi = -INFINITY;                                    /* (out is nl's vals' u: see below) */
+  if (!u || u->fn || nl->ucache_n != u->nterms) return cup_input_eval(u, t, out);
+  double *cache = sig_ucache(root, nl), hi = INFINITY;
+  if (!cache) return cup_input_eval(u, t, out);
+  double *whole = cache + 3 * (size_t)u->nterms;
+  int p = u->p;
+  if (t >= whole[0] && t < whole[1]) {
+    la_copy_few(out, whole + 2, p);
+    nl->u_lo = whole[0];
+    nl->u_hi = whole[1];
+    return CUP_OK;
+  }
+  la_zero_few(out, p);
   for (int k = 0; k < u->nterms; k++) {
     const input_term *w = &u->terms[k];
-    double *c = nl->ucache + 3 * (size_t)k, v;
+    double *c = cache + 3 * (size_t)k, v;
     if (t >= c[0] && t < c[1]) v = c[2];
-    else if (w->kind == CUP_WAVE_CONSTANT) v = w->value;   /* (input_term_value's, without the call) */
-    else if (!jump_pulse(w)) v = input_term_value(w, t);
-    else {
+    else if (w->kind == CUP_WAVE_CONSTANT) {
+      out[w->comp] += w->value;                            /* (input_term_value's, without the call) */
+      continue;
+    } else if (!jump_pulse(w)) {
+      v = input_term_value(w, t);
+      hi = -INFINITY;                                      /* no sums kept */
+    } else {
       c[0] = t;
       c[2] = v = spice_jump_pulse(w, t, &c[1]);
     }
+    if (!(c[1] >= hi)) hi = c[1];                          /* (never past a NaN) */
     out[w->comp] += v;
+  }
+  whole[0] = nl->u_lo = t;
+  whole[1] = nl->u_hi = hi;
+  la_copy_few(whole + 2, out, p);
+  return CUP_OK;
+}
+
+/* u(t) as cup_input_eval sums it (each component from 0, its terms in
+ * order), a constant's value read in place rather than through
+ * input_term_value, and no libc call to clear out: of the precision
+ * rectifier's 5 terms 4 are constants (about 60 of a sample's
+ * instructions). */
+static int sig_terms(const cup_input *u, double t, double *out) {
+  if (!u || u->fn) return cup_input_eval(u, t, out);
+  la_zero_few(out, u->p);
+  for (int k = 0; k < u->nterms; k++) {
+    const input_term *w = &u->terms[k];
+    out[w->comp] += w->kind == CUP_WAVE_CONSTANT ? w->value : input_term_value(w, t);
   }
   return CUP_OK;
 }
@@ -378,19 +462,24 @@ static __attribute__((noinline)) int sig_input(cup_netlist *nl, double t, double
 int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double *zeta, double *out) {
   if (!nl || !x || (!out && nl->nsig)) return CUP_ERR_ARG;
   if (!nl->nsig) return CUP_OK;
+  cup_netlist *root = nl;
   if (nl->hooks) nl = nl->hooks->current(nl);
   int n = nl->n, p = nl->p, m = nl->m;
   double *v = nl->vals;
-  la_copy(v, x, n);
+  la_copy_few(v, x, n);
   if (nl->sig_seen != nl->nsig) {
     nl->sig_u = reads_u(nl);
     nl->sig_seen = nl->nsig;
   }
-  if (p && nl->sig_u && (nl->ucache ? sig_input(nl, t, v + n) : cup_input_eval(nl->u, t, v + n)))
-    return CUP_ERR_CALLBACK;
+  if (p && nl->sig_u) {
+    if (!nl->ucache) {
+      if (sig_terms(nl->u, t, v + n)) return CUP_ERR_CALLBACK;
+    } else if (!(t >= nl->u_lo && t < nl->u_hi) && sig_input(root, nl, t, v + n))   /* (else the last sample's u holds) */
+      return CUP_ERR_CALLBACK;
+  }
   if (nl->zrow) zeta_full(nl, x, zeta, v);
-  else if (zeta) la_copy(v + n + p, zeta, m);
-  else la_zero(v + n + p, m);
+  else if (zeta) la_copy_few(v + n + p, zeta, m);
+  else la_zero_few(v + n + p, m);
   const int *ptr = nl->sig_ptr, *idx = nl->sig_idx;
   const double *val = nl->sig_val;
   for (int k = 0; k < nl->nsig; k++) {
