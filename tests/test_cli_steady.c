@@ -180,8 +180,8 @@ static void switched_signals(void **state) {
   free(is); free(id); free(il); free(vsw);
 }
 
-/* The same period with the signals left to their default (every signal,
- * 'all'): each must follow the configuration too. The capacitor's mean
+/* The same period with every signal ('--probe all'): each must follow the
+ * configuration too. The capacitor's mean
  * current is 0 in a steady state, v(out)'s mean is D Vin = 6 V and its
  * ripple ΔI Ts / (8 C) = 0.3 A * 10 us / 80 uF = 37.5 mV (the inductor's
  * ripple current integrated over half a period, the load's share of it
@@ -192,7 +192,7 @@ static void switched_default_signals(void **state) {
   (void)state;
   const char *out = tmp_path("buck-all.h5");
   result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/buck-ccm.cir", "-o", out, "--steady-state",
-                                           NULL}, 0, 0);
+                                           "--probe", "all", NULL}, 0, 0);
   expect_exit(&r, 0);
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
   assert_true(f >= 0);
@@ -215,6 +215,30 @@ static void switched_default_signals(void **state) {
   free(vo); free(ic);
 }
 
+/* A switched netlist's own .probe line chooses its signals, as any
+ * netlist's does (docs/run-output.md): buck-ccm.cir's `.probe v(out) i(L1)
+ * v(sw)`, those three and no other. The switched netlist is its first
+ * configuration's, whose derived circuit had no probes: every signal was
+ * recorded (11 here), whatever the line said. */
+static void switched_netlist_probes(void **state) {
+  (void)state;
+  const char *out = tmp_path("buck-probe.h5");
+  result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/buck-ccm.cir", "-o", out, NULL}, 0, 0);
+  expect_exit(&r, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  hid_t g = H5Gopen2(f, "signals", H5P_DEFAULT);
+  assert_true(g >= 0);
+  H5G_info_t info;
+  assert_true(H5Gget_info(g, &info) >= 0);
+  print_message("  %llu signals\n", (unsigned long long)info.nlinks);
+  assert_int_equal(info.nlinks, 3);
+  const char *want[3] = {"v(out)", "i(L1)", "v(sw)"};
+  for (int k = 0; k < 3; k++) assert_true(H5Lexists(g, want[k], H5P_DEFAULT) > 0);
+  H5Gclose(g);
+  H5Fclose(f);
+}
+
 /* The full bridge: its gate VG3 (delay 76 us, width 49 us, period 100 us)
  * repeats only from t0 = 25 us (the base build refused it, CUP_ERR_ARG,
  * and ran the transient). The period written is [t0, t0 + T] of the
@@ -224,7 +248,7 @@ static void fullbridge_phase(void **state) {
   (void)state;
   const char *out = tmp_path("fullbridge.h5");
   result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/fullbridge.cir", "-o", out, "--steady-state",
-                                           NULL}, 0, 0);
+                                           "--probe", "all", NULL}, 0, 0);
   expect_exit(&r, 0);
   expect_in(r.err, "steady state: period 0.0001 s from t0 = 2.5e-05 s");
   hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -280,6 +304,7 @@ int main(void) {
     cmocka_unit_test(netlist_option),
     cmocka_unit_test(switched_signals),
     cmocka_unit_test(switched_default_signals),
+    cmocka_unit_test(switched_netlist_probes),
     cmocka_unit_test(fullbridge_phase),
     cmocka_unit_test(bad_input),
   };

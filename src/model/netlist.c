@@ -294,6 +294,14 @@ static char *fmt_name(const char *pre, const char *name) {
   return s;
 }
 
+int nl_copy_probes(cup_netlist *nl, const nl_circuit *c) {
+  nl->probe_all = c->probe_all;
+  if (c->nprobe && !(nl->probe_text = calloc((size_t)c->nprobe, sizeof(char *)))) return CUP_ERR_NOMEM;
+  for (int k = 0; k < c->nprobe; k++, nl->nprobe++)
+    if (!(nl->probe_text[k] = strdup(c->probe[k].text))) return CUP_ERR_NOMEM;
+  return CUP_OK;
+}
+
 static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   nl->nnodes = c->nnodes;
   nl->nelem = c->nelem;
@@ -320,10 +328,7 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
   for (int v = 0; v < c->nnodes; v++)
     if (!(nl->node[v] = strdup(c->node[v] ? c->node[v] : "0"))) return CUP_ERR_NOMEM;
-  nl->probe_all = c->probe_all;
-  if (c->nprobe && !(nl->probe_text = calloc((size_t)c->nprobe, sizeof(char *)))) return CUP_ERR_NOMEM;
-  for (int k = 0; k < c->nprobe; k++, nl->nprobe++)
-    if (!(nl->probe_text[k] = strdup(c->probe[k].text))) return CUP_ERR_NOMEM;
+  if (nl_copy_probes(nl, c)) return CUP_ERR_NOMEM;
   for (int e = 0; e < c->nelem; e++) {
     nl->elem[e] = c->elem[e];
     memset(&nl->elem[e].src, 0, sizeof nl->elem[e].src);

@@ -133,6 +133,10 @@ struct cup_netlist {
   double *Lam;            /* nq x (n + p + mr), row-major: the constraints' multipliers */
 };
 
+/* The netlist's .probe/.save/.print lines (c's) as nl's own: the texts
+ * cup_netlist_probe_default probes (CUP_ERR_NOMEM, nl keeping what it got). */
+int nl_copy_probes(cup_netlist *nl, const nl_circuit *c);
+
 /* nl's own sources read from t0 on (u the shift of the sources as written,
  * kept in u_written; t0 = 0: as written again). */
 int nl_input_origin(cup_netlist *nl, double t0, char *errmsg);

@@ -782,6 +782,10 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
     nl->hooks = &hooks;
     memo_reset(S);                                 /* (for the new topo[0]'s input) */
   }
+  /* The lines' probes are the switched netlist's, whichever configuration it
+   * is (a derived one has none): cup_netlist_probe_default reads them there,
+   * else a switched netlist recorded every signal whatever its .probe said */
+  if (!st && nl_copy_probes(nl, c)) st = nl_switch_nomem(c, errmsg);
   if (st) { cup_netlist_free(&nl); return st; }    /* frees S and every configuration */
   *out = nl;
   return CUP_OK;
