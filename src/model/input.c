@@ -251,7 +251,7 @@ double input_term_piece(const input_term *w, double t, double *hi) {
     *hi = INFINITY;
     return w->value;
   }
-  if (w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0) return spice_jump_pulse(w, t, hi);
+  if (input_jump_pulse(w)) return spice_jump_pulse(w, t, hi);
   *hi = t;
   return input_term_value(w, t);
 }

@@ -169,6 +169,11 @@ int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
 
 /* One term's value at t (its component's share of u(t)). */
 double input_term_value(const input_term *w, double t);
+/* 1 for a PULSE with jump edges (rise and fall 0): piecewise constant,
+ * its pieces spice_jump_pulse's. */
+static inline int input_jump_pulse(const input_term *w) {
+  return w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0;
+}
 /* The same, and in *hi the end of the piece [t, *hi) where it holds bit
  * for bit: a constant's forever, a PULSE's with jump edges up to its next
  * corner (spice_jump_pulse); *hi = t, no piece, for other kinds. */

@@ -190,9 +190,6 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
   return probe_row(nl, kind, x, y, name, errmsg);
 }
 
-/* A PULSE with jump edges: piecewise constant (sig_input). */
-static int jump_pulse(const input_term *w) { return w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0; }
-
 static int scratch(cup_netlist *nl, char *errmsg) {
   if (!nl->dense && !(nl->dense = calloc((size_t)nvar(nl) + 1, sizeof(double))))
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
@@ -201,7 +198,7 @@ static int scratch(cup_netlist *nl, char *errmsg) {
   if (!nl->vals && !(nl->vals = calloc((size_t)nvar(nl) + 1, sizeof(double))))
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
   int nt = nl->u && !nl->u->fn ? nl->u->nterms : 0, jumps = 0;
-  for (int k = 0; k < nt; k++) jumps += jump_pulse(&nl->u->terms[k]);
+  for (int k = 0; k < nt; k++) jumps += input_jump_pulse(&nl->u->terms[k]);
   if (!nl->ucache && jumps) {                      /* (none: cup_input_eval, as quick) */
     if (!(nl->ucache = calloc(3 * (size_t)nt + 2 + (size_t)nl->p, sizeof(double))))
       return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
@@ -352,9 +349,9 @@ static int same_pieces(const cup_input *a, const cup_input *b) {
   if (a->p != b->p || a->nterms != b->nterms) return 0;
   for (int k = 0; k < a->nterms; k++) {
     const input_term *x = &a->terms[k], *y = &b->terms[k];
-    if (x->comp != y->comp || x->kind != y->kind || jump_pulse(x) != jump_pulse(y)) return 0;
+    if (x->comp != y->comp || x->kind != y->kind || input_jump_pulse(x) != input_jump_pulse(y)) return 0;
     if (x->kind == CUP_WAVE_CONSTANT && x->value != y->value) return 0;
-    if (jump_pulse(x) && (x->delay != y->delay || x->period != y->period || x->width != y->width ||
+    if (input_jump_pulse(x) && (x->delay != y->delay || x->period != y->period || x->width != y->width ||
                           x->value != y->value || x->value2 != y->value2))
       return 0;
   }
@@ -423,7 +420,7 @@ static __attribute__((noinline)) int sig_input(cup_netlist *root, cup_netlist *n
     else if (w->kind == CUP_WAVE_CONSTANT) {
       out[w->comp] += w->value;                            /* (input_term_value's, without the call) */
       continue;
-    } else if (!jump_pulse(w)) {
+    } else if (!input_jump_pulse(w)) {
       v = input_term_value(w, t);
       hi = -INFINITY;                                      /* no sums kept */
     } else {

@@ -230,7 +230,7 @@ static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
   tp->steps = !p || (u && !u->fn);
   for (int q = 0; q < tp->nuterm; q++) {
     const input_term *w = &u->terms[tp->uterm[q]];
-    if (w->kind != CUP_WAVE_CONSTANT && !(w->kind == CUP_WAVE_PULSE && w->rise == 0 && w->fall == 0)) tp->steps = 0;
+    if (w->kind != CUP_WAVE_CONSTANT && !input_jump_pulse(w)) tp->steps = 0;
   }
   free(reads);
   return CUP_OK;
