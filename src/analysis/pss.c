@@ -24,6 +24,7 @@
 #include "model/input_impl.h"
 #include "util/clock.h"
 #include "util/fail.h"
+#include "util/linalg.h"
 
 /* A multiplier this close to 1 (relative) leaves Phi(x) - x singular. */
 #define PSS_AT_ONE 1e-8
@@ -57,12 +58,6 @@ typedef struct pss_work {
   long ev_min, ev_max;      /* events per period over the iterations */
   double t0, limit;         /* the solve's start and the integrator's wall-time limit (0: none): the solve's */
 } pss_work;
-
-static double inf_norm(const double *v, int n) {
-  double r = 0;
-  for (int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
-  return r;
-}
 
 void cup_pss_options_default(cup_pss_options *o) {
   if (!o) return;
@@ -112,7 +107,7 @@ static int phi(pss_work *w, const double *x, double *out, const char *what) {
 static int jacobian(pss_work *w, const double *x, const double *F) {
   cup_pss *r = w->r;
   int n = w->n;
-  double scale = fmax(inf_norm(x, n), inf_norm(F, n));
+  double scale = fmax(la_norm_inf(x, n), la_norm_inf(F, n));
   if (w->tan)                                    /* the last run was from x: its tangent is the monodromy */
     memcpy(r->J, adaptive_tangent_matrix(w->tan), sizeof(double) * (size_t)n * (size_t)n);
   for (int j = 0; !w->tan && j < n; j++) {
@@ -197,7 +192,7 @@ static int newton_step(pss_work *w, const double *x, const double *F) {
 }
 
 static int converged(const pss_work *w, double res, const double *x) {
-  return res <= w->o->tol * (inf_norm(x, w->n) + w->o->tol_floor);
+  return res <= w->o->tol * (la_norm_inf(x, w->n) + w->o->tol_floor);
 }
 
 /* The residuals so far, "r0, r1, ..." (the last ones if many). */
@@ -272,11 +267,11 @@ static int newton(pss_work *w, const double *x_guess) {
       if (w->ev_min != w->ev_max)
         return say(r, CUP_ERR_NO_STEADY_STATE, "Newton's method did not converge in %d steps (residuals %s; "
                    "target %.3g): the events per period kept changing (%ld to %ld), the mode sequence does not "
-                   "settle", o->max_iter, list, o->tol * (inf_norm(w->x, n) + o->tol_floor), w->ev_min, w->ev_max);
+                   "settle", o->max_iter, list, o->tol * (la_norm_inf(w->x, n) + o->tol_floor), w->ev_min, w->ev_max);
       return say(r, CUP_ERR_NO_STEADY_STATE, "Newton's method did not converge in %d steps (residuals %s; target "
                  "%.3g, largest Floquet multiplier %.6g): the period map is not accurate enough for the target "
                  "(tighten map_tol) or the orbit is not isolated", o->max_iter, list,
-                 o->tol * (inf_norm(w->x, n) + o->tol_floor), r->info.max_multiplier);
+                 o->tol * (la_norm_inf(w->x, n) + o->tol_floor), r->info.max_multiplier);
     }
     if ((st = jacobian(w, w->x, w->F)) < 0) return st;
     if ((st = newton_step(w, w->x, w->F)) < 0) return st;

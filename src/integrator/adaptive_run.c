@@ -33,15 +33,9 @@ static void warn(ad_run *R, int status, const char *fmt, ...) {
   va_end(ap);
 }
 
-static double inf_norm(const double *v, int n) {
-  double r = 0;
-  for (int i = 0; i < n; i++) r = la_max(fabs(v[i]), r);   /* fmax(r, |v_i|), NaN too, without a libm call */
-  return r;
-}
-
 /* The absolute error target at the state x. */
 static double tolw(const adaptive_ws *A, const double *x) {
-  return A->o.tol_abs + A->o.tol_rel * inf_norm(x, A->n);
+  return A->o.tol_abs + A->o.tol_rel * la_norm_inf(x, A->n);
 }
 
 /* Where the next step must end at the latest: a breakpoint, T, or t + hlim
@@ -56,7 +50,7 @@ static double next_stop(const adaptive_ws *A, const ad_run *R, double hlim, int 
 }
 
 static double estimate_now(const adaptive_ws *A, const ad_run *R) {
-  return inf_norm(A->e, A->n) + R->rloc + sqrt(R->r2);
+  return la_norm_inf(A->e, A->n) + R->rloc + sqrt(R->r2);
 }
 
 /* A stop at a step's end that a checkpoint can resume from: the run's
@@ -132,7 +126,7 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
   info->step = R->steps;
   info->t = R->t;
   if (pi->skipped) info->skipped++;           /* projections are counted where they are made */
-  double xn = inf_norm(A->x, A->n);
+  double xn = la_norm_inf(A->x, A->n);
   R->r2 += (8 * DBL_EPSILON * xn) * (8 * DBL_EPSILON * xn);   /* rounding, as a random walk */
   if (!at_event) R->est_max = fmax(R->est_max, estimate_now(A, R));
   double tw = tolw(A, A->x);
@@ -163,7 +157,7 @@ static int jump(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t 
   pi->skipped = 0;
   pi->iterations = piv;
   R->info->projected++;
-  R->rloc += 8 * DBL_EPSILON * inf_norm(x, A->n);
+  R->rloc += 8 * DBL_EPSILON * la_norm_inf(x, A->n);
   return CUP_OK;
 }
 
@@ -211,7 +205,7 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
    * LCP solved by pivoting) up to rounding, and eta_cert from K; its eps
    * certificate bounds the squared distance only (sqrt(eps) would be a
    * bound of 1e-7 for an answer right to 1e-16) */
-  R->rloc += 8 * DBL_EPSILON * inf_norm(x, A->n) + (isfinite(pi->eta_cert) ? A->pinf * pi->eta_cert : 0);
+  R->rloc += 8 * DBL_EPSILON * la_norm_inf(x, A->n) + (isfinite(pi->eta_cert) ? A->pinf * pi->eta_cert : 0);
   for (int i = 0; i < A->m; i++)
     if (lam[i] > 0) *active |= (uint64_t)1 << i;
   return CUP_OK;
@@ -312,7 +306,7 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
     A->g[i] = acc;
   }
   uint64_t active;
-  double x0n = inf_norm(A->x, A->n);
+  double x0n = la_norm_inf(A->x, A->n);
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
   if (st < 0) return st;
   if (first && !pi->skipped)

@@ -12,17 +12,6 @@
 #include "adaptive_impl.h"
 #include "tally.h"
 
-/* As fmax(r, |v_i|) from r = 0, without a libm call an entry: r is never
- * NaN, so a NaN entry is passed over, as fmax passes it. */
-static double norm_inf(const double *v, int n) {
-  double r = 0;
-  for (int i = 0; i < n; i++) {
-    double a = fabs(v[i]);
-    if (a > r) r = a;
-  }
-  return r;
-}
-
 double ad_sample_time(const adaptive_ws *A, long j) {
   long last = A->o.output_samples - 1;
   double t0 = A->o.output_t0;
@@ -138,7 +127,7 @@ static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
   A->rows_ready = 0;
   for (;;) {
     R->next_sample++;
-    double est = norm_inf(A->de, n) + rnd;
+    double est = la_norm_inf(A->de, n) + rnd;
     if (!(est <= R->est_max)) R->est_max = fmax(R->est_max, est);   /* (the call only when it moves) */
     if (R->sink) {
       if (!A->rows_ready) ad_state(A, md, A->zy, A->xo);

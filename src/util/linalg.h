@@ -55,6 +55,13 @@ int la_cholmod_start(cholmod_common *c);
  * NaN through use explicit comparisons instead. */
 static inline double la_max(double a, double b) { return a > b ? a : b; }
 static inline double la_min(double a, double b) { return a < b ? a : b; }
+/* max |v_i| from 0, as fmax(r, |v_i|) sums it (a NaN entry passed over),
+ * without a libm call an entry. */
+static inline double la_norm_inf(const double *v, int n) {
+  double r = 0;
+  for (int i = 0; i < n; i++) r = la_max(fabs(v[i]), r);
+  return r;
+}
 /* floor(x) without a libm call (x86-64's baseline has no rounding
  * instruction): the same value, zeros, Inf and NaN included. */
 static inline double la_floor(double x) {
