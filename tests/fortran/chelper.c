@@ -71,7 +71,7 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_pss_info, iterations), OFF(cup_pss_info, period), OFF(cup_pss_info, residual),
         OFF(cup_pss_info, max_multiplier), OFF(cup_pss_info, period_runs), OFF(cup_pss_info, events),
         OFF(cup_pss_info, samples), OFF(cup_pss_info, seconds), OFF(cup_pss_info, message),
-        OFF(cup_pss_info, t0));
+        OFF(cup_pss_info, t0), OFF(cup_pss_info, jumps));
   if (!strcmp(name, "cup_measure"))
     PUT(sizeof(cup_measure), OFF(cup_measure, avg), OFF(cup_measure, rms), OFF(cup_measure, min),
         OFF(cup_measure, max), OFF(cup_measure, pp), OFF(cup_measure, thd));

@@ -146,7 +146,8 @@ contains
     call compare('cup_pss_info', [int(c_sizeof(si), c_long), off(b, c_loc(si%status)), off(b, c_loc(si%n)), &
       off(b, c_loc(si%m)), off(b, c_loc(si%iterations)), off(b, c_loc(si%period)), off(b, c_loc(si%residual)), &
       off(b, c_loc(si%max_multiplier)), off(b, c_loc(si%period_runs)), off(b, c_loc(si%events)), &
-      off(b, c_loc(si%samples)), off(b, c_loc(si%seconds)), off(b, c_loc(si%message)), off(b, c_loc(si%t0))])
+      off(b, c_loc(si%samples)), off(b, c_loc(si%seconds)), off(b, c_loc(si%message)), off(b, c_loc(si%t0)), &
+      off(b, c_loc(si%jumps))])
     b = c_loc(me)
     call compare('cup_measure', [int(c_sizeof(me), c_long), off(b, c_loc(me%avg)), off(b, c_loc(me%rms)), &
       off(b, c_loc(me%min)), off(b, c_loc(me%max)), off(b, c_loc(me%pp)), off(b, c_loc(me%thd))])
