@@ -90,6 +90,7 @@ static void exosystem(adaptive_ws *A) {
     if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) A->wscale[A->first_state[k] + 1] = sc;
   }
   input_gen_dynamics(gen, A->first_state, A->W, nw);
+  A->piece_from_t0 = input_gen_from_start(gen);
 }
 
 /* The built-in waveforms whose component a column of E (the drift) or of

@@ -151,6 +151,7 @@ struct adaptive_ws {
   uint64_t seed;            /* ... the last window's start is tried at the next one's before the LCP */
   int piece_ok;             /* built-in waveforms: piece_w holds the states on [piece_t0, piece_t1] */
   double piece_t0, piece_t1, *piece_w;   /* (a piece's start and its one step ask for the same: nwu) */
+  int piece_from_t0;        /* ... states that are functions of t0 alone (sines, constants): any t1 */
   input_breaks nb_own;      /* ad_next_break's memo, the workspace's own ... */
   struct adaptive_breaks *nb;   /* ... or a switched run's (adaptive_share_breaks), NULL */
   double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a

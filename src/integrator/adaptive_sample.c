@@ -300,19 +300,24 @@ static int poly_input(adaptive_ws *A, double t0, double h, double *w, double *er
 static int gen_whole(const adaptive_ws *A) { return A->u && A->gen.nterms == A->u->nterms; }
 
 /* The exosystem's states for a step [t0, t1] inside a piece (and the
- * constant state, with D). */
+ * constant state, with D). Sines' and constants' states are those at t0
+ * whatever t1 is: a record at a step's end (adaptive_zeta, to t0 + an
+ * eighth of a period) and the next step (to its own end) take the same,
+ * and on the six-pulse bridge each computed its three sines' sin and cos
+ * again (a ninth of its instructions). */
 int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   if (A->one >= 0) w[A->one] = 1;
   if (!A->nwu) return CUP_OK;
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
-  if (A->piece_ok && t0 == A->piece_t0 && t1 == A->piece_t1) {   /* the same piece again: its states */
+  int any = A->piece_from_t0;                    /* (gen_whole below: the same terms, the same answer) */
+  if (A->piece_ok && t0 == A->piece_t0 && (any || t1 == A->piece_t1)) {   /* the same piece again */
     la_copy(w, A->piece_w, A->nwu);
     return CUP_OK;
   }
   /* the last window's, same input: only when both hold every term of it
    * (live_terms: a configuration whose E and G read fewer has other states) */
   const adaptive_ws *O = A->nb && gen_whole(A) ? A->nb->piece_of : NULL;
-  if (O && O != A && O->piece_ok && t0 == O->piece_t0 && t1 == O->piece_t1 && gen_whole(O))
+  if (O && O != A && O->piece_ok && t0 == O->piece_t0 && (any || t1 == O->piece_t1) && gen_whole(O))
     la_copy(w, O->piece_w, A->nwu);
   else input_gen_piece(&A->gen, A->first_state, t0, t1, w);
   if (A->nb) A->nb->piece_of = A;

@@ -337,15 +337,17 @@ void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, i
 static void gen_term_values(const input_term *t, double a, double mid, double *wk) {
   switch (t->kind) {
     case CUP_WAVE_CONSTANT: wk[0] = t->value; break;
-    case CUP_WAVE_SINE:
-      wk[0] = t->amp * sin(t->omega * a + t->phase);
-      wk[1] = t->amp * cos(t->omega * a + t->phase);
+    case CUP_WAVE_SINE: {                          /* (one argument: the compiler's sincos, */
+      double x = t->omega * a + t->phase, amp = t->amp;   /* the same bits as sin and cos) */
+      wk[0] = amp * sin(x);
+      wk[1] = amp * cos(x);
       break;
+    }
     case CUP_WAVE_SQUARE: wk[0] = input_term_value(t, mid); break;
     case CUP_WAVE_DAMPED_SINE: {                   /* no delay (input_gen_check) */
-      double e = t->amp * exp(-t->damping * a);
-      wk[0] = e * sin(t->omega * a + t->phase);
-      wk[1] = e * cos(t->omega * a + t->phase);
+      double e = t->amp * exp(-t->damping * a), x = t->omega * a + t->phase;
+      wk[0] = e * sin(x);
+      wk[1] = e * cos(x);
       break;
     }
     case CUP_WAVE_PULSE:
@@ -386,6 +388,14 @@ void input_gen_piece(const cup_input *u, const int *first_state, double a, doubl
     wk[0] = v0 + slope * (a - t0);
     wk[1] = slope;
   }
+}
+
+int input_gen_from_start(const cup_input *u) {
+  for (int k = 0; k < u->nterms; k++) {          /* (gen_term_values: what reads mid) */
+    int kind = u->terms[k].kind;
+    if (kind != CUP_WAVE_CONSTANT && kind != CUP_WAVE_SINE && kind != CUP_WAVE_DAMPED_SINE) return 0;
+  }
+  return 1;
 }
 
 /* ---- callback quadrature ------------------------------------------------------ */

@@ -211,6 +211,10 @@ void input_gen_values(const cup_input *u, const int *first_state, double a, doub
  * scheme's steps run between breakpoints; a fixed step that straddles a
  * corner needs gen_values' secant instead). */
 void input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w);
+/* 1 if u's states on (a, b) are functions of a alone (constants and sines:
+ * no square, table or pulse, whose states read the step's middle), so that
+ * the states of one piece serve every step from the same a. */
+int input_gen_from_start(const cup_input *u);
 
 int input_quad_ws_init(input_quad_ws *ws, int p);
 void input_quad_ws_free(input_quad_ws *ws);
