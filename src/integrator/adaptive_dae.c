@@ -65,14 +65,14 @@ void ad_dae_free(adaptive_ws *A) {
  * bound (A->s, A->gam), and its velocity at zeta = 0, q1 = C (A x + E u) + G u'. */
 static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w) {
   const cup_polyset *K = A->K;
-  int m = A->m, p = A->p;
+  int m = A->m;
   ad_offset(A, w, A->g);
   ad_free_velocity(A, x, w);
   polyset_slack(K, A->g, x, A->dq0, A->gam);
   for (int i = 0; i < m; i++) {
     double acc = 0;
     for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) acc += K->Ct.x[k] * A->xf[K->Ct.i[k]];
-    for (int q = 0; q < p; q++) acc += A->G[i + (size_t)q * m] * A->udot[q];
+    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->udot[A->gi[k]];   /* G_i u' */
     A->dq1[i] = acc;
   }
 }

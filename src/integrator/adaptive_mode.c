@@ -161,7 +161,7 @@ static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask) {
  * algebraically, r = nj - nz of them) into A->Ym (r x na, row-major) and
  * A->Ym + r na; the columns of Y are A->svd_v's first r. */
 static void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ) {
-  int n = A->n, m = A->m, p = A->p, na = A->na, nj = md->nj, r = nj - md->nz;
+  int n = A->n, m = A->m, na = A->na, nj = md->nj, r = nj - md->nz;
   const int *J = md->rows;
   double *Yc = A->Ym + (size_t)r * na;
   for (int b = 0; b < r; b++) {
@@ -175,8 +175,8 @@ static void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ) {
       for (int j = 0; j < na; j++) {
         double acc = 0;
         for (int l = 0; l < n; l++) acc += CJ[(size_t)a * n + l] * md->X[(size_t)l * na + j];
-        if (j >= n)
-          for (int q = 0; q < p; q++) acc += A->G[J[a] + (size_t)q * m] * A->U[q + (size_t)(j - n) * p];
+        for (int k = j >= n ? A->up[j - n] : 0; j >= n && k < A->up[j - n + 1]; k++)   /* G_J U */
+          acc += A->G[J[a] + (size_t)A->ui[k] * m] * A->ux[k];
         row[j] += y * acc;
       }
     }
@@ -188,7 +188,7 @@ static void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ) {
  * Y rows' own terms of M. C_J goes to A->T1 (nj x n), Q to A->T3. */
 static void mode_flow(adaptive_ws *A, ad_mode *md) {
   const cup_polyset *K = A->K;
-  int n = A->n, m = A->m, nw = A->nw, na = A->na, p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
+  int n = A->n, m = A->m, nw = A->nw, na = A->na, nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
   const double *Sinv = A->has_D ? A->Ninv : A->Sinv;
   const double *Bcol = A->has_D ? A->Bd : K->Bt;  /* column J_l of B: Bcol + J_l n (P^-1 C^T is K's Bt) */
@@ -222,21 +222,23 @@ static void mode_flow(adaptive_ws *A, ad_mode *md) {
       for (int k = 0; k < nz; k++) acc -= md->R[i + (size_t)k * n] * Zc[(size_t)k * n + j];
       Pi[i + (size_t)j * n] = acc;
     }
-  for (int c = 0; c < nw; c++)                   /* KU = R Z^T G_J U */
+  for (int c = 0; c < nw; c++) {                 /* KU = R Z^T G_J U */
+    double gu[CUP_DENSE_MAX_ROWS];               /* Z^T G_J U's column c */
+    for (int k = 0; k < nz; k++) {
+      gu[k] = 0;
+      if (A->has_D)
+        for (int a = 0; a < nj; a++)
+          for (int e = A->up[c]; e < A->up[c + 1]; e++)
+            gu[k] += md->Zt[(size_t)k * nj + a] * A->G[J[a] + (size_t)A->ui[e] * m] * A->ux[e];
+      else
+        for (int e = A->up[c]; e < A->up[c + 1]; e++) gu[k] += A->G[J[k] + (size_t)A->ui[e] * m] * A->ux[e];
+    }
     for (int i = 0; i < n; i++) {
       double acc = 0;
-      for (int k = 0; k < nz; k++) {
-        double gu = 0;
-        if (A->has_D)
-          for (int a = 0; a < nj; a++)
-            for (int q = 0; q < p; q++)
-              gu += md->Zt[(size_t)k * nj + a] * A->G[J[a] + (size_t)q * m] * A->U[q + (size_t)c * p];
-        else
-          for (int q = 0; q < p; q++) gu += A->G[J[k] + (size_t)q * m] * A->U[q + (size_t)c * p];
-        acc += md->R[i + (size_t)k * n] * gu;
-      }
+      for (int k = 0; k < nz; k++) acc += md->R[i + (size_t)k * n] * gu[k];
       md->KU[i + (size_t)c * n] = acc;
     }
+  }
   /* Q = [A, E U - A K U]: the free field A x + E u in terms of y = (v, w) */
   double *Q = A->T3;
   for (int j = 0; j < na; j++)
@@ -246,7 +248,7 @@ static void mode_flow(adaptive_ws *A, ad_mode *md) {
         acc = A->A[i + (size_t)j * n];
       } else {
         int c = j - n;
-        for (int q = 0; q < p; q++) acc += A->E[i + (size_t)q * n] * A->U[q + (size_t)c * p];
+        for (int e = A->up[c]; e < A->up[c + 1]; e++) acc += A->E[i + (size_t)A->ui[e] * n] * A->ux[e];
         for (int k = 0; k < n; k++) acc -= A->A[i + (size_t)k * n] * md->KU[k + (size_t)c * n];
       }
       Q[i + (size_t)j * n] = acc;
@@ -298,6 +300,9 @@ static void mode_events(adaptive_ws *A, ad_mode *md) {
       if (j >= n) {
         int c = j - n;
         for (int q = 0; q < p; q++) {
+          int live = 0;                          /* G_J's column q (else the terms are +-0) */
+          for (int a = 0; a < nj && !live; a++) live = A->G[J[A->has_D ? a : k] + (size_t)q * m] != 0;
+          if (!live) continue;
           double uw = 0;
           for (int d = 0; d < nw; d++) uw += A->U[q + (size_t)d * p] * A->W[d + (size_t)c * nw];
           if (A->has_D)
@@ -346,12 +351,11 @@ static void mode_events(adaptive_ws *A, ad_mode *md) {
         acc += crow[l] * md->X[(size_t)l * na + j];
         mag += fabs(crow[l] * md->X[(size_t)l * na + j]);
       }
-      if (j >= n)
-        for (int q = 0; q < p; q++) {
-          double gu = A->G[i + (size_t)q * m] * A->U[q + (size_t)(j - n) * p];
-          acc += gu;
-          mag += fabs(gu);
-        }
+      for (int e = j >= n ? A->up[j - n] : 0; j >= n && e < A->up[j - n + 1]; e++) {   /* G_i U */
+        double gu = A->G[i + (size_t)A->ui[e] * m] * A->ux[e];
+        acc += gu;
+        mag += fabs(gu);
+      }
       Li[j] = acc;
       Lmi[j] = mag;
     }
@@ -717,14 +721,12 @@ void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, doubl
 
 void ad_free_velocity(adaptive_ws *A, const double *x, const double *w) {
   int n = A->n, p = A->p, nw = A->nw;
-  for (int q = 0; q < p; q++) {
-    double acc = 0;
-    for (int c = 0; c < nw; c++) {
-      double wd = 0;
-      for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
-      acc += A->U[q + (size_t)c * p] * wd;
-    }
-    A->udot[q] = acc;
+  for (int q = 0; q < p; q++) A->udot[q] = 0;
+  for (int c = 0; c < nw; c++) {                 /* u' = U (W w) by U's nonzeros */
+    if (A->up[c] == A->up[c + 1]) continue;
+    double wd = 0;
+    for (int d = 0; d < nw; d++) wd += A->W[c + (size_t)d * nw] * w[d];
+    for (int e = A->up[c]; e < A->up[c + 1]; e++) A->udot[A->ui[e]] += A->ux[e] * wd;
   }
   for (int i = 0; i < n; i++) {
     double acc = 0;

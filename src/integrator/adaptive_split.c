@@ -89,13 +89,16 @@ static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz
 
 int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz) {
   if (!factor_rows(A, rows, nj, Zt, nz)) return nj;
-  /* dependent rows: keep, in order, each row that leaves N nonsingular */
-  int keep[CUP_DENSE_MAX_ROWS], nk = 0;
+  /* dependent rows: keep, in order, each row that leaves N nonsingular;
+   * the buffers for the kept rows, unless the last try was theirs (a
+   * commutation's three rows of a six-pulse bridge hold as the last two) */
+  int keep[CUP_DENSE_MAX_ROWS], nk = 0, last = 0;
   for (int a = 0; a < nj; a++) {
     keep[nk] = rows[a];
-    if (!factor_rows(A, keep, nk + 1, Zt, nz)) nk++;
+    last = !factor_rows(A, keep, nk + 1, Zt, nz);
+    nk += last;
   }
-  factor_rows(A, keep, nk, Zt, nz);              /* leaves the buffers for the kept rows */
+  if (!last) factor_rows(A, keep, nk, Zt, nz);
   memcpy(rows, keep, sizeof(int) * (size_t)nk);
   return nk;
 }
