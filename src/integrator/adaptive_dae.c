@@ -86,8 +86,7 @@ static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w)
  * holds ad_offset of w (ad_dae_select's). */
 static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w) {
   int n = A->n, na = A->na, m = A->m;
-  double xn = 0;
-  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  double xn = la_norm_inf(x, n);
   for (int b = 0; b < md->nz; b++) {             /* the manifold's residual against its rounding */
     double res = 0, mag = 0;
     for (int a = 0; a < md->nj; a++) {
@@ -105,7 +104,7 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
   ad_lift(A, md, xm, w, y);
   ad_events_eval(A, md, y, g, thr);
   double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
-  for (int j = n; j < na; j++) ws[j - n] = fmax(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
+  for (int j = n; j < na; j++) ws[j - n] = la_max(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
   int edge = 0;                                  /* a value at rounding */
   for (int i = 0; i < m; i++) {
     double tw = 0;
@@ -147,8 +146,7 @@ static ad_mode *try_mode(adaptive_ws *A, uint64_t mask, const double *x, const d
 static int lcp_rows(adaptive_ws *A, const double *x, uint64_t hint, double h, uint64_t *mask, uint64_t *degen,
                     int *pivots) {
   int n = A->n, m = A->m;
-  double xn = 0;
-  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  double xn = la_norm_inf(x, n);
   unsigned char *touch = A->touch;
   for (int i = 0; i < m; i++) {
     double round_ = 64 * DBL_EPSILON * (fabs(A->g[i]) + A->c1[i] * xn) + 16 * A->gam[i];
@@ -170,8 +168,8 @@ static int lcp_rows(adaptive_ws *A, const double *x, uint64_t hint, double h, ui
   if (st) return st;
   double lmax = 0, wmax = 0;
   for (int i = 0; i < m; i++) {
-    lmax = fmax(lmax, fabs(A->lcp.lam[i]));
-    if (touch[i]) wmax = fmax(wmax, fabs(A->lcpq[i]));
+    lmax = la_max(fabs(A->lcp.lam[i]), lmax);   /* (fmax without the call: a NaN passed over) */
+    if (touch[i]) wmax = la_max(fabs(A->lcpq[i]), wmax);
   }
   *mask = *degen = 0;
   for (int i = 0; i < m; i++) {
@@ -254,7 +252,7 @@ int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, in
     for (int i = 0; i < m; i++) {
       double r = fabs(A->dq0[i]);
       for (int j = 0; j < m; j++) r += fabs(A->Dd[i + (size_t)j * m] * A->lcp.lam[j]);
-      sc = fmax(sc, r);
+      sc = la_max(r, sc);
     }
     int ok = 1;
     for (int i = 0; i < m; i++) ok &= A->lcp.w[i] >= -16 * A->gam[i] - 64 * DBL_EPSILON * sc;
@@ -274,13 +272,12 @@ int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, in
   for (int i = 0; i < m; i++) { A->jq[i] = A->dq0[i]; A->jq[m + i] = 0; }
   int st = lcp_solve(&A->jlcp, A->jM, A->jq, pivots);
   if (st) return CUP_ERR_LINALG;
-  double xn = 0, move = 0;
-  for (int j = 0; j < n; j++) xn = fmax(xn, fabs(x[j]));
+  double xn = la_norm_inf(x, n), move = 0;
   for (int r = 0; r < n; r++) {
     double acc = 0;
     for (int i = 0; i < m; i++) acc += A->Bd[r + (size_t)i * n] * A->jlcp.lam[i];
     A->jx[r] = acc;
-    move = fmax(move, fabs(acc));
+    move = la_max(fabs(acc), move);
   }
   if (move <= 64 * DBL_EPSILON * xn) return 0;  /* the multipliers absorb it */
   for (int r = 0; r < n; r++) x[r] += A->jx[r];

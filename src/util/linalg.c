@@ -241,7 +241,7 @@ void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, doubl
   }
 }
 
-static void dense_mul(const double *a, const double *b, int k, double *c) {
+static void dense_mul(const double *restrict a, const double *restrict b, int k, double *restrict c) {
   memset(c, 0, sizeof(double) * (size_t)k * k);
   for (int j = 0; j < k; j++)
     for (int l = 0; l < k; l++) {
@@ -289,12 +289,9 @@ void la_dense_expm_stiff(const double *a, int k, double *out, double *work) {
   for (int j = 3; j >= 0; j--) {            /* x = x s^4 + block j */
     const double *cj = c + 4 * j;
     if (j < 3) dense_mul(x, s4, k, tmp);
-    for (int col = 0; col < k; col++)
-      for (int row = 0; row < k; row++) {
-        size_t q = row + (size_t)col * k;
-        double v = (j < 3 ? tmp[q] : 0) + cj[1] * s[q] + cj[2] * s2[q] + cj[3] * s3[q];
-        x[q] = row == col ? v + cj[0] : v;
-      }
+    else la_zero(tmp, (int)K2);             /* (0 + c1 s: a -0 term makes +0) */
+    for (size_t q = 0; q < K2; q++) x[q] = tmp[q] + cj[1] * s[q] + cj[2] * s2[q] + cj[3] * s3[q];
+    for (int i = 0; i < k; i++) x[i + (size_t)i * k] += cj[0];
   }
   for (int r = 0; r < sq; r++) {            /* X <- 2 X + X^2 */
     dense_mul(x, x, k, tmp);
