@@ -139,8 +139,9 @@ static int sw_zeta(void *ws, double *zeta) {
 /* One window's statistics into the run's. */
 static void add_info(cup_run_info *info, const cup_run_info *w) {
   info->status = cup_status_merge(info->status, w->status);
-  if (w->status != CUP_OK && info->message[0] == '\0') memcpy(info->message, w->message, sizeof info->message);
-  if (w->status < 0) memcpy(info->message, w->message, sizeof info->message);
+  /* (a window's message is a string: its tail past the end is not cleared, adaptive_window) */
+  if ((w->status != CUP_OK && info->message[0] == '\0') || w->status < 0)
+    memcpy(info->message, w->message, strnlen(w->message, sizeof w->message - 1) + 1);
   info->step = w->step;
   info->t = w->t;
   info->projected += w->projected;
