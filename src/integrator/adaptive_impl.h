@@ -319,6 +319,9 @@ void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, doubl
  * *pivots. */
 int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
               int *pivots);
+/* ... with g = F + G U w in A->g and u in A->ut already (ad_offset's). */
+int ad_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+                 int *pivots);
 /* g = F + G U w. */
 void ad_offset(const adaptive_ws *A, const double *w, double *g);
 /* u' (A->udot, from the input's piece w) and the free velocity

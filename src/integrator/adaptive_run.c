@@ -271,11 +271,12 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * window starts with none current: the set its configuration's last window
  * started with is tried before the LCP (the dead time of a bridge opens on
  * the same diodes each period while the current keeps its sign); it is
- * kept only when it continues, as the LCP's answer must. */
-static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
+ * kept only when it continues, as the LCP's answer must. With at_offset,
+ * A->g and A->ut hold w's offset and input already (start_piece's). */
+static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), &mask, &piv)
-                             : ad_select(A, A->x, w, hint, &mask, &piv);
+                    : at_offset ? ad_select_at(A, A->x, w, hint, &mask, &piv) : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
@@ -286,6 +287,10 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
   ad_manifold(A, R->md, A->g, A->x);
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
+}
+
+static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
+  return choose(A, R, w, hint, t_event, 0);
 }
 
 /* ---- breakpoints ------------------------------------------------------------------- */
@@ -341,7 +346,7 @@ static int start_piece(adaptive_ws *A, ad_run *R) {
     error_onto(A, active, A->e);
   }
   R->kept = 0;
-  return choose_mode(A, R, A->wt, active, R->t);
+  return choose(A, R, A->wt, active, R->t, 1);     /* (A->g, A->ut: w's still) */
 }
 
 /* ---- steps ------------------------------------------------------------------------ */
