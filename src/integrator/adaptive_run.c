@@ -314,7 +314,7 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
     A->g[i] = acc;
   }
   uint64_t active;
-  double x0n = la_norm_inf(A->x, A->n);
+  double x0n = first ? la_norm_inf(A->x, A->n) : 0;   /* (the warning's) */
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
   if (st < 0) return st;
   R->kept = A->inside;

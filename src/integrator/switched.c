@@ -86,7 +86,7 @@ static int watch_sink(long k, double t, const double *x, void *ctx) {
 static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   switched_run *S = ctx;
   if (S->half) estimate_compare(&S->est, k, cup_integrator_state(S->child[S->cur]));
-  if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
+  if (S->watch && check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;   /* (a call a step saved) */
   if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
   return 0;
 }
