@@ -122,7 +122,7 @@ static void times(const adaptive_ws *A, const double *y, const double *e, double
 static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
   const cup_integrator_options *o = &A->o;
   int n = A->n, na = A->na;
-  long last = o->output_samples;
+  long nsamples = o->output_samples;
   double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
   double rnd = R->rloc + sqrt(R->r2);            /* (fixed inside the step) */
   const double *E = NULL;                        /* exp(dt M), looked up at the second sample */
@@ -161,7 +161,7 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
         return 1;
       }
     }
-    if (!(R->next_sample < last)) return 0;
+    if (!(R->next_sample < nsamples)) return 0;
     ts = ad_sample_time(A, R->next_sample);
     if (!(ts < t1)) return 0;
     if (!E) {

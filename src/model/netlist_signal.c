@@ -305,7 +305,9 @@ const char *cup_netlist_signal_unit(const cup_netlist *nl, int k) {
 }
 
 /* zeta over a configuration's rows into v + n + p: its diodes' and its
- * constraints' multipliers, Lam (x, u, zeta) (u at v + n). */
+ * constraints' multipliers, Lam (x, u, zeta) (u at v + n). (Out of line,
+ * as reads_u: inlined, cup_netlist_signals saved their registers at every
+ * sample of every netlist.) */
 static __attribute__((noinline)) void zeta_full(const cup_netlist *nl, const double *x, const double *zeta, double *v) {
   int n = nl->n, p = nl->p, mr = nl->mr, nv = n + p + mr;
   double *z = v + n + p;
