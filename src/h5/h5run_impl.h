@@ -34,6 +34,8 @@ struct cup_h5run {
   hid_t *dset_s;
   double *sbuf;           /* chunk_rows * nsig entries, one signal after another */
   double last_flush;      /* monotonic seconds */
+  double last_tick;       /* monotonic seconds at the last look at the clock (cup_h5run_append) */
+  int tick_every, tick_left;   /* rows between those looks (1 to TICK_ROWS_MAX), rows until the next */
   double unflushed;       /* bytes handed to HDF5 since the last H5Fflush: HDF5's chunk cache may
                              hold them (1 MiB per dataset), so the disk has not seen them yet */
   int data_status;        /* first failure of the data path; sticky */

@@ -114,37 +114,41 @@ static void times(const adaptive_ws *A, const double *y, const double *e, double
  * sample leaves its states in A->pend (the step goes on to its end, where
  * the run stops): 1; else 0, or an error. A->zy and A->de point to the
  * sample's states, which times writes into the other pair of A->dy's
- * halves and those (no copy a sample); dense_from puts them back. */
-static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
+ * halves and those (no copy a sample); dense_from puts them back. What
+ * the loop does not change is read once before it (the sink, its context,
+ * the run's counts: the sink may write anywhere, so each was read again
+ * at every sample); A->zmd and zy_ready (adaptive_zeta) are set by
+ * dense_loop around it. */
+static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
   const cup_integrator_options *o = &A->o;
   int n = A->n, na = A->na;
+  long nsamples = o->output_samples;
   double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
   double rnd = R->rloc + sqrt(R->r2);            /* (fixed inside the step) */
   const double *E = NULL;                        /* exp(dt M), looked up at the second sample */
   double ts = ad_sample_time(A, R->next_sample);
   double *yn = A->dy, *en = A->dy + na;          /* the next sample's */
+  double *xo = A->xo;
   int nc = -1;                                   /* (times) */
+  cup_sample_fn sink = R->sink;
+  void *ctx = R->sink_ctx;
+  long *samples = &R->info->samples;
   A->rows_ready = 0;
   for (;;) {
     R->next_sample++;
     double est = la_norm_inf(A->de, n) + rnd;
     if (!(est <= R->est_max)) R->est_max = fmax(R->est_max, est);   /* (the call only when it moves) */
-    if (R->sink) {
-      if (!A->rows_ready) ad_state(A, md, A->zy, A->xo);
-      else for (int i = 0; i < n; i++) A->xo[i] = row_times(A, i, A->zy);
-      if (tally_state_beyond(A->xo, n)) {            /* as step_done: never a state out of range */
-        int w = tally_state_worst(A->xo, n);
+    if (sink) {
+      if (!A->rows_ready) ad_state(A, md, A->zy, xo);
+      else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, A->zy);
+      if (tally_state_beyond(xo, n)) {              /* as step_done: never a state out of range */
+        int w = tally_state_worst(xo, n);
         return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
-                    "the scheme diverged", CUP_STATE_MAX, ts, w, A->xo[w]);
+                    "the scheme diverged", CUP_STATE_MAX, ts, w, xo[w]);
       }
-      R->info->samples++;
-      A->zmd = md;
+      ++*samples;
       A->zt = ts;
-      A->zy_ready = 1;
-      int stopped = R->sink(k, ts, A->xo, R->sink_ctx);   /* inside the step in progress */
-      A->zmd = NULL;
-      A->zy_ready = 0;
-      if (stopped) {
+      if (sink(k, ts, xo, ctx)) {                   /* inside the step in progress: refused */
         struct ad_pend *p = &A->pend;
         R->next_sample--;
         p->active = 1;
@@ -157,7 +161,7 @@ static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
         return 1;
       }
     }
-    if (!(R->next_sample < o->output_samples)) return 0;
+    if (!(R->next_sample < nsamples)) return 0;
     ts = ad_sample_time(A, R->next_sample);
     if (!(ts < t1)) return 0;
     if (!E) {
@@ -172,6 +176,16 @@ static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
     yn = y;
     en = e;
   }
+}
+
+/* (A->zmd and zy_ready: adaptive_zeta's, a sample's inside the step.) */
+static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
+  A->zmd = md;
+  A->zy_ready = 1;
+  int st = dense_samples(A, R, md, t1, k);
+  A->zmd = NULL;
+  A->zy_ready = 0;
+  return st;
 }
 
 static int dense_from(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {

@@ -238,7 +238,7 @@ static double pwl_integral(const input_term *w, double a, double b) {
 double input_term_value(const input_term *w, double t) {
   switch (w->kind) {
     case CUP_WAVE_CONSTANT: return w->value;
-    case CUP_WAVE_SINE: return w->amp * sin(w->omega * t + w->phase);
+    case CUP_WAVE_SINE: return input_sine_value(w, t);
     case CUP_WAVE_SQUARE: return w->amp * input_sign_sin_q(input_square_q(w, t));
     case CUP_WAVE_PWL: return pwl_value(w, t);
     case CUP_WAVE_PULSE: case CUP_WAVE_DAMPED_SINE: return spice_term_value(w, t);

@@ -305,8 +305,10 @@ const char *cup_netlist_signal_unit(const cup_netlist *nl, int k) {
 }
 
 /* zeta over a configuration's rows into v + n + p: its diodes' and its
- * constraints' multipliers, Lam (x, u, zeta) (u at v + n). */
-static void zeta_full(const cup_netlist *nl, const double *x, const double *zeta, double *v) {
+ * constraints' multipliers, Lam (x, u, zeta) (u at v + n). (Out of line,
+ * as reads_u: inlined, cup_netlist_signals saved their registers at every
+ * sample of every netlist.) */
+static __attribute__((noinline)) void zeta_full(const cup_netlist *nl, const double *x, const double *zeta, double *v) {
   int n = nl->n, p = nl->p, mr = nl->mr, nv = n + p + mr;
   double *z = v + n + p;
   for (int r = 0; r < nl->m; r++) {
@@ -332,7 +334,7 @@ int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row) {
 
 /* Whether a signal reads u: a column of u, or a constraint's multiplier
  * (zeta_full's rows -1 - q hold Lam's u part). */
-static int reads_u(const cup_netlist *nl) {
+static __attribute__((noinline)) int reads_u(const cup_netlist *nl) {
   int n = nl->n, p = nl->p;
   for (int q = 0; q < nl->sig_ptr[nl->nsig]; q++) {
     int i = nl->sig_idx[q];
@@ -437,16 +439,19 @@ static __attribute__((noinline)) int sig_input(cup_netlist *root, cup_netlist *n
 }
 
 /* u(t) as cup_input_eval sums it (each component from 0, its terms in
- * order), a constant's value read in place rather than through
- * input_term_value, and no libc call to clear out: of the precision
- * rectifier's 5 terms 4 are constants (about 60 of a sample's
- * instructions). */
+ * order), a constant's and a sine's value in place rather than through
+ * input_term_value, and no libc call to clear out: the precision
+ * rectifier's SIN is a constant and a sine (84 of a sample's instructions
+ * through the call, 52 in place, sin itself aside). */
 static int sig_terms(const cup_input *u, double t, double *out) {
   if (!u || u->fn) return cup_input_eval(u, t, out);
+  const input_term *w = u->terms, *end = w + u->nterms;
   la_zero_few(out, u->p);
-  for (int k = 0; k < u->nterms; k++) {
-    const input_term *w = &u->terms[k];
-    out[w->comp] += w->kind == CUP_WAVE_CONSTANT ? w->value : input_term_value(w, t);
+  for (; w < end; w++) {
+    double v = w->kind == CUP_WAVE_CONSTANT ? w->value
+               : w->kind == CUP_WAVE_SINE   ? input_sine_value(w, t)
+                                            : input_term_value(w, t);
+    out[w->comp] += v;
   }
   return CUP_OK;
 }
