@@ -737,13 +737,35 @@ void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const dou
   piece_at(S->dim, S->c + (size_t)j * (AD_SERIES_MAX + 1) * S->dim, S->K[j], (tau - j * hs) / hs, y_out);
 }
 
-void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
-  int n = A->n, nw = A->nw;
-  la_copy(y, x, n);
+/* v = x + K_J U w, each v_i's sum in a register for a constant n. */
+static inline __attribute__((always_inline)) void lift_sums(int n, int nw, const double *KU, const double *x,
+                                                            const double *w, double *y) {
+  double v[6];
+  for (int i = 0; i < n; i++) v[i] = x[i];
   for (int c = 0; c < nw; c++) {
     double wc = w[c];
     if (wc == 0) continue;
-    for (int i = 0; i < n; i++) y[i] += md->KU[i + (size_t)c * n] * wc;
+    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
+  }
+  for (int i = 0; i < n; i++) y[i] = v[i];
+}
+
+void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
+  int n = A->n, nw = A->nw;
+  switch (n) {                                   /* (a converter's few states: the loops unrolled) */
+    case 1: lift_sums(1, nw, md->KU, x, w, y); break;
+    case 2: lift_sums(2, nw, md->KU, x, w, y); break;
+    case 3: lift_sums(3, nw, md->KU, x, w, y); break;
+    case 4: lift_sums(4, nw, md->KU, x, w, y); break;
+    case 5: lift_sums(5, nw, md->KU, x, w, y); break;
+    case 6: lift_sums(6, nw, md->KU, x, w, y); break;
+    default:
+      la_copy(y, x, n);
+      for (int c = 0; c < nw; c++) {
+        double wc = w[c];
+        if (wc == 0) continue;
+        for (int i = 0; i < n; i++) y[i] += md->KU[i + (size_t)c * n] * wc;
+      }
   }
   la_copy(y + n, w, nw);
 }
