@@ -572,12 +572,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   if (series) {
     ad_series_at(A, &A->sy, md, h, A->ya, h, A->yb);
   } else {
-    for (int i = 0; i < na; i++) A->yb[i] = 0;
-    for (int j = 0; j < na; j++) {
-      double yj = A->ya[j];
-      if (yj == 0) continue;
-      for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
-    }
+    ad_matvec(na, E, A->ya, A->yb);
   }
   ad_events_eval(A, md, A->yb, A->gb, A->tb);
   ad_events_deriv(A, md, A->yb, A->db);
