@@ -797,7 +797,7 @@ void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *
  * products' order: the same sums, less the terms that are zero. */
 void ad_offset(const adaptive_ws *A, const double *w, double *g) {
   int m = A->m, p = A->p, nw = A->nw;
-  for (int q = 0; q < p; q++) A->ut[q] = 0;
+  la_zero_few(A->ut, p);
   for (int c = 0; c < nw; c++)
     for (int k = A->up[c]; k < A->up[c + 1]; k++) A->ut[A->ui[k]] += A->ux[k] * w[c];
   for (int i = 0; i < m; i++) {
