@@ -524,46 +524,47 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   return md->Ec[slot];
 }
 
-/* out = E y for a constant na, each out_i's sum in a register. */
-static inline __attribute__((always_inline)) void matvec_sums(int na, const double *E, const double *y, double *out) {
+/* out = E y for a constant n, each out_i's sum in a register. */
+static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, const double *E, const double *y,
+                                                              double *out) {
   double v[6] = {0};
-  for (int j = 0; j < na; j++) {
+  for (int j = 0; j < n; j++) {
     double yj = y[j];
     if (yj == 0) continue;
-    for (int i = 0; i < na; i++) v[i] += E[i + (size_t)j * na] * yj;
+    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
   }
-  for (int i = 0; i < na; i++) out[i] = v[i];
+  for (int i = 0; i < n; i++) out[i] = v[i];
 }
 
-void ad_matvec(int na, const double *E, const double *y, double *out) {
-  switch (na) {                                  /* (a converter's states and sources: the loops unrolled) */
-    case 1: matvec_sums(1, E, y, out); return;
-    case 2: matvec_sums(2, E, y, out); return;
-    case 3: matvec_sums(3, E, y, out); return;
-    case 4: matvec_sums(4, E, y, out); return;
-    case 5: matvec_sums(5, E, y, out); return;
-    case 6: matvec_sums(6, E, y, out); return;
+void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
+  switch (n) {                                   /* (a converter's states and sources: the loops unrolled) */
+    case 1: matvec_sums(1, lda, E, y, out); return;
+    case 2: matvec_sums(2, lda, E, y, out); return;
+    case 3: matvec_sums(3, lda, E, y, out); return;
+    case 4: matvec_sums(4, lda, E, y, out); return;
+    case 5: matvec_sums(5, lda, E, y, out); return;
+    case 6: matvec_sums(6, lda, E, y, out); return;
   }
-  for (int i = 0; i < na; i++) out[i] = 0;
-  for (int j = 0; j < na; j++) {
+  for (int i = 0; i < n; i++) out[i] = 0;
+  for (int j = 0; j < n; j++) {
     double yj = y[j];
     if (yj == 0) continue;
-    const double *col = E + (size_t)j * na;
-    for (int i = 0; i < na; i++) out[i] += col[i] * yj;
+    const double *col = E + (size_t)j * lda;
+    for (int i = 0; i < n; i++) out[i] += col[i] * yj;
   }
 }
 
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out) {
   int na = A->na;
   for (int c = 0; c < AD_CACHE; c++)
-    if (md->hc[c] == tau) { ad_matvec(na, md->Ec[c], y_in, y_out); return; }
+    if (md->hc[c] == tau) { ad_matvec(na, na, md->Ec[c], y_in, y_out); return; }
   double norm = fabs(tau) * md->mnorm;
   if (norm > 4) {                                /* stiff or long: the full exponential */
     size_t NA = (size_t)na * na;
     double *hM = A->ework + 5 * NA, *Et = A->ework + 6 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
     la_dense_expm_stiff(hM, na, Et, A->ework);
-    ad_matvec(na, Et, y_in, y_out);
+    ad_matvec(na, na, Et, y_in, y_out);
     return;
   }
   /* substeps of norm <= 1/2, each a Taylor series to its last term below
