@@ -789,9 +789,23 @@ void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const dou
   la_copy(y + n, w, nw);
 }
 
+/* x = X y for a constant na: la_dot's sums, unrolled. */
+static inline __attribute__((always_inline)) void state_sums(int n, int na, const double *X, const double *y,
+                                                             double *x) {
+  for (int i = 0; i < n; i++) x[i] = la_dot(X + (size_t)i * na, y, na);
+}
+
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
   int n = A->n, na = A->na;
-  for (int i = 0; i < n; i++) x[i] = la_dot(md->X + (size_t)i * na, y, na);
+  switch (na) {                                  /* (ad_lift's sizes) */
+    case 1: state_sums(n, 1, md->X, y, x); return;
+    case 2: state_sums(n, 2, md->X, y, x); return;
+    case 3: state_sums(n, 3, md->X, y, x); return;
+    case 4: state_sums(n, 4, md->X, y, x); return;
+    case 5: state_sums(n, 5, md->X, y, x); return;
+    case 6: state_sums(n, 6, md->X, y, x); return;
+  }
+  state_sums(n, na, md->X, y, x);
 }
 
 /* U w and F + G u by their nonzeros (offset_pattern), in the dense
@@ -806,6 +820,16 @@ void ad_offset(const adaptive_ws *A, const double *w, double *g) {
     for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
     g[i] = acc;
   }
+}
+
+/* x -= R s, each x_i in a register for a constant n. */
+static inline __attribute__((always_inline)) void manifold_sums(int n, int nz, const double *R, const double *s,
+                                                                double *x) {
+  double v[6];
+  for (int i = 0; i < n; i++) v[i] = x[i];
+  for (int k = 0; k < nz; k++)
+    for (int i = 0; i < n; i++) v[i] -= R[i + (size_t)k * n] * s[k];
+  for (int i = 0; i < n; i++) x[i] = v[i];
 }
 
 void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x) {
@@ -825,6 +849,14 @@ void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, doubl
       A->sz[b] = acc;
     }
     s = A->sz;
+  }
+  if (md->nz) switch (n) {                       /* (ad_lift's sizes; none to subtract off a manifold) */
+    case 1: manifold_sums(1, md->nz, md->R, s, x); return;
+    case 2: manifold_sums(2, md->nz, md->R, s, x); return;
+    case 3: manifold_sums(3, md->nz, md->R, s, x); return;
+    case 4: manifold_sums(4, md->nz, md->R, s, x); return;
+    case 5: manifold_sums(5, md->nz, md->R, s, x); return;
+    case 6: manifold_sums(6, md->nz, md->R, s, x); return;
   }
   for (int k = 0; k < md->nz; k++)
     for (int i = 0; i < n; i++) x[i] -= md->R[i + (size_t)k * n] * s[k];
