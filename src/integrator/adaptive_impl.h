@@ -1,6 +1,7 @@
 /* adaptive — the event-driven scheme (docs/adaptive.md). Internal layout
  * shared by adaptive.c (set-up), adaptive_mode.c (one active set's linear
- * system, its exact flow, the velocity LCP), adaptive_split.c (with D != 0,
+ * system, its exact flow, the velocity LCP), adaptive_series.c (a step's flow
+ * from one vector as Taylor series pieces), adaptive_split.c (with D != 0,
  * the algebraic part of a mode), adaptive_dae.c (with D != 0, the choice of
  * the active set and the state jump), adaptive_event.c (the event functions, detection and
  * location of a crossing) and adaptive_run.c (the run: steps, breakpoints,
