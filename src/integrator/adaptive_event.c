@@ -6,10 +6,23 @@
 #include "catchup.h"
 #include "adaptive_impl.h"
 
+/* max |y_j| over j < n (fmax without the call), unrolled for a constant n. */
+static inline __attribute__((always_inline)) double scale_of(int n, const double *y) {
+  double vmax = 0;
+  for (int j = 0; j < n; j++) vmax = la_max(fabs(y[j]), vmax);
+  return vmax;
+}
+
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
   int m = A->m;
-  double vmax = 0;                         /* the state's scale: v = x + K U w */
-  for (int j = 0; j < A->n; j++) vmax = la_max(fabs(y[j]), vmax);   /* (fmax without the call) */
+  double vmax;                             /* the state's scale: v = x + K U w */
+  switch (A->n) {                          /* (a converter's few states) */
+    case 1: vmax = scale_of(1, y); break;
+    case 2: vmax = scale_of(2, y); break;
+    case 3: vmax = scale_of(3, y); break;
+    case 4: vmax = scale_of(4, y); break;
+    default: vmax = scale_of(A->n, y);
+  }
   for (int i = 0; i < m; i++) {            /* over L's and Lm's nonzeros (mode_sparse): the dense sums */
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
     for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {

@@ -1,6 +1,7 @@
 /* adaptive — the event-driven scheme (docs/adaptive.md). Internal layout
  * shared by adaptive.c (set-up), adaptive_mode.c (one active set's linear
- * system, its exact flow, the velocity LCP), adaptive_split.c (with D != 0,
+ * system, its exact flow, the velocity LCP), adaptive_series.c (a step's flow
+ * from one vector as Taylor series pieces), adaptive_split.c (with D != 0,
  * the algebraic part of a mode), adaptive_dae.c (with D != 0, the choice of
  * the active set and the state jump), adaptive_event.c (the event functions, detection and
  * location of a crossing) and adaptive_run.c (the run: steps, breakpoints,
@@ -300,6 +301,10 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
 const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
+/* out = E y for E the n x n head of a column-major matrix with leading
+ * dimension lda (the terms of a y_j = 0 left out: +-0 each, they leave a
+ * sum started at +0 as it was). */
+void ad_matvec(int n, int lda, const double *E, const double *y, double *out);
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector

@@ -528,28 +528,47 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   return md->Ec[slot];
 }
 
-/* y_out = E y_in for a column-major na x na E. */
-static void matvec(int na, const double *E, const double *y, double *out) {
-  for (int i = 0; i < na; i++) out[i] = 0;
-  for (int j = 0; j < na; j++) {
+/* out = E y for a constant n, each out_i's sum in a register. */
+static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, const double *E, const double *y,
+                                                              double *out) {
+  double v[6] = {0};
+  for (int j = 0; j < n; j++) {
     double yj = y[j];
     if (yj == 0) continue;
-    const double *col = E + (size_t)j * na;
-    for (int i = 0; i < na; i++) out[i] += col[i] * yj;
+    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
+  }
+  for (int i = 0; i < n; i++) out[i] = v[i];
+}
+
+void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
+  switch (n) {                                   /* (a converter's states and sources: the loops unrolled) */
+    case 1: matvec_sums(1, lda, E, y, out); return;
+    case 2: matvec_sums(2, lda, E, y, out); return;
+    case 3: matvec_sums(3, lda, E, y, out); return;
+    case 4: matvec_sums(4, lda, E, y, out); return;
+    case 5: matvec_sums(5, lda, E, y, out); return;
+    case 6: matvec_sums(6, lda, E, y, out); return;
+  }
+  for (int i = 0; i < n; i++) out[i] = 0;
+  for (int j = 0; j < n; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    const double *col = E + (size_t)j * lda;
+    for (int i = 0; i < n; i++) out[i] += col[i] * yj;
   }
 }
 
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out) {
   int na = A->na;
   for (int c = 0; c < AD_CACHE; c++)
-    if (md->hc[c] == tau) { matvec(na, md->Ec[c], y_in, y_out); return; }
+    if (md->hc[c] == tau) { ad_matvec(na, na, md->Ec[c], y_in, y_out); return; }
   double norm = fabs(tau) * md->mnorm;
   if (norm > 4) {                                /* stiff or long: the full exponential */
     size_t NA = (size_t)na * na;
     double *hM = A->ework + 5 * NA, *Et = A->ework + 6 * NA;
     for (size_t q = 0; q < NA; q++) hM[q] = tau * md->M[q];
     la_dense_expm_stiff(hM, na, Et, A->ework);
-    matvec(na, Et, y_in, y_out);
+    ad_matvec(na, na, Et, y_in, y_out);
     return;
   }
   /* substeps of norm <= 1/2, each a Taylor series to its last term below
@@ -575,96 +594,17 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   }
 }
 
-/* c_k = (hs M)^k y / k! into c (dim components: M's first dim columns'
- * nonzeros, rows < dim, the whole product for a y whose rest is 0: the
- * terms it leaves out add +-0) until two terms in a row are below a
- * quarter ulp of each component's largest term (what its sum already rounds
- * at: a component through zero stops too); hs snorm <= 1: the terms
- * decrease (the diagonal blocks' as 1/k!, the input's coupling block's as
- * hs ||Pi Q_w|| / (k - 1)!: a norm of the whole M, which counts that
- * coupling, cut the precision rectifier's pieces 5x too short), and the
- * sum rounds as they do. Their count, or 0. */
-static int piece_build(const ad_mode *md, int dim, double hs, const double *y, double *c, double *mag) {
-  int quiet = 0, nnz = md->mp[dim];
-  /* each pass clears the next term's sums (past the last term of the last
-   * piece: the buffer's spare dim; of another piece: the next piece's start,
-   * written when that piece is made) */
-  for (int i = 0; i < dim; i++) {
-    c[i] = y[i];
-    mag[i] = fabs(c[i]);
-    c[dim + i] = 0;
+/* v = x + K_J U w, each v_i's sum in a register for a constant n. */
+static inline __attribute__((always_inline)) void lift_sums(int n, int nw, const double *KU, const double *x,
+                                                            const double *w, double *y) {
+  double v[6];
+  for (int i = 0; i < n; i++) v[i] = x[i];
+  for (int c = 0; c < nw; c++) {
+    double wc = w[c];
+    if (wc == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
   }
-  for (int k = 1; k <= AD_SERIES_MAX; k++) {
-    double *ck = c + (size_t)k * dim, f = hs / k;
-    const double *cp = ck - dim;
-    for (int q = 0; q < nnz; q++) ck[md->mi[q]] += md->mx[q] * cp[md->mj[q]];
-    int small = 1;
-    for (int i = 0; i < dim; i++) {
-      double v = ck[i] *= f, a = fabs(v);
-      small &= a <= 0.25 * DBL_EPSILON * mag[i];
-      if (a > mag[i]) mag[i] = a;
-      ck[dim + i] = 0;
-    }
-    quiet = small ? quiet + 1 : 0;
-    if (quiet == 2) return k;
-  }
-  return 0;
-}
-
-/* sum_k c_k theta^k (K + 1 terms) into y, by Horner's rule two components
- * at a time (their sums in registers). */
-static void piece_at(int dim, const double *c, int K, double theta, double *y) {
-  int i = 0;
-  for (; i + 1 < dim; i += 2) {
-    const double *ck = c + (size_t)K * dim + i;
-    double a0 = ck[0], a1 = ck[1];
-    for (int k = K - 1; k >= 0; k--) {
-      ck -= dim;
-      a0 = a0 * theta + ck[0];
-      a1 = a1 * theta + ck[1];
-    }
-    y[i] = a0;
-    y[i + 1] = a1;
-  }
-  if (i < dim) {
-    double acc = c[(size_t)K * dim + i];
-    for (int k = K - 1; k >= 0; k--) acc = acc * theta + c[(size_t)k * dim + i];
-    y[i] = acc;
-  }
-}
-
-/* Pieces up to j made: 0 if one is not usable (the series is then not). */
-static int series_upto(adaptive_ws *A, ad_series *S, int j) {
-  int dim = S->dim;
-  size_t stride = (size_t)(AD_SERIES_MAX + 1) * dim;
-  double hs = S->h / S->nseg;
-  for (; S->built <= j; S->built++) {
-    int b = S->built;
-    double *c = S->c + b * stride;
-    if (b > 0) piece_at(dim, c - stride, S->K[b - 1], 1, A->fa);
-    if (!(S->K[b] = piece_build(S->md, dim, hs, b > 0 ? A->fa : S->y0, c, S->mag))) return S->nseg = 0;
-  }
-  return 1;
-}
-
-void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const double *y0, double tau,
-                  double *y_out) {
-  if (S->md != md || S->y0 != y0 || S->h != h) {
-    double norm = fabs(h) * md->snorm;
-    S->md = md;
-    S->y0 = y0;
-    S->h = h;
-    S->nseg = !(norm <= AD_SERIES_SEGS) ? 0 : norm > 1 ? (int)ceil(norm) : 1;
-    S->built = 0;
-  }
-  int j = 0;
-  double hs = h / (S->nseg ? S->nseg : 1);
-  if (S->nseg) {
-    j = (int)(tau / hs);
-    if (j >= S->nseg) j = S->nseg - 1;
-  }
-  if (!S->nseg || !(tau >= 0 && tau <= h) || !series_upto(A, S, j)) { ad_flow(A, md, tau, y0, y_out); return; }
-  piece_at(S->dim, S->c + (size_t)j * (AD_SERIES_MAX + 1) * S->dim, S->K[j], (tau - j * hs) / hs, y_out);
+  for (int i = 0; i < n; i++) y[i] = v[i];
 }
 
 /* (Each y_i its sum in a register, over the columns in order: a record's
@@ -672,18 +612,41 @@ void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const dou
  * on the loops' set-up than on its 18 products.) */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
-  for (int i = 0; i < n; i++) {
-    double acc = x[i];
-    for (int c = 0; c < nw; c++)
-      if (w[c] != 0) acc += md->KU[i + (size_t)c * n] * w[c];
-    y[i] = acc;
+  switch (n) {                                   /* (a converter's few states: the loops unrolled) */
+    case 1: lift_sums(1, nw, md->KU, x, w, y); break;
+    case 2: lift_sums(2, nw, md->KU, x, w, y); break;
+    case 3: lift_sums(3, nw, md->KU, x, w, y); break;
+    case 4: lift_sums(4, nw, md->KU, x, w, y); break;
+    case 5: lift_sums(5, nw, md->KU, x, w, y); break;
+    case 6: lift_sums(6, nw, md->KU, x, w, y); break;
+    default:
+      la_copy(y, x, n);
+      for (int c = 0; c < nw; c++) {
+        double wc = w[c];
+        if (wc == 0) continue;
+        for (int i = 0; i < n; i++) y[i] += md->KU[i + (size_t)c * n] * wc;
+      }
   }
   la_copy_few(y + n, w, nw);
 }
 
+/* x = X y for a constant na: la_dot's sums, unrolled. */
+static inline __attribute__((always_inline)) void state_sums(int n, int na, const double *X, const double *y,
+                                                             double *x) {
+  for (int i = 0; i < n; i++) x[i] = la_dot(X + (size_t)i * na, y, na);
+}
+
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
   int n = A->n, na = A->na;
-  for (int i = 0; i < n; i++) x[i] = la_dot(md->X + (size_t)i * na, y, na);
+  switch (na) {                                  /* (ad_lift's sizes) */
+    case 1: state_sums(n, 1, md->X, y, x); return;
+    case 2: state_sums(n, 2, md->X, y, x); return;
+    case 3: state_sums(n, 3, md->X, y, x); return;
+    case 4: state_sums(n, 4, md->X, y, x); return;
+    case 5: state_sums(n, 5, md->X, y, x); return;
+    case 6: state_sums(n, 6, md->X, y, x); return;
+  }
+  state_sums(n, na, md->X, y, x);
 }
 
 /* U w and F + G u by their nonzeros (offset_pattern), in the dense
@@ -698,6 +661,16 @@ void ad_offset(const adaptive_ws *A, const double *w, double *g) {
     for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
     g[i] = acc;
   }
+}
+
+/* x -= R s, each x_i in a register for a constant n. */
+static inline __attribute__((always_inline)) void manifold_sums(int n, int nz, const double *R, const double *s,
+                                                                double *x) {
+  double v[6];
+  for (int i = 0; i < n; i++) v[i] = x[i];
+  for (int k = 0; k < nz; k++)
+    for (int i = 0; i < n; i++) v[i] -= R[i + (size_t)k * n] * s[k];
+  for (int i = 0; i < n; i++) x[i] = v[i];
 }
 
 void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x) {
@@ -717,6 +690,14 @@ void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, doubl
       A->sz[b] = acc;
     }
     s = A->sz;
+  }
+  if (md->nz) switch (n) {                       /* (ad_lift's sizes; none to subtract off a manifold) */
+    case 1: manifold_sums(1, md->nz, md->R, s, x); return;
+    case 2: manifold_sums(2, md->nz, md->R, s, x); return;
+    case 3: manifold_sums(3, md->nz, md->R, s, x); return;
+    case 4: manifold_sums(4, md->nz, md->R, s, x); return;
+    case 5: manifold_sums(5, md->nz, md->R, s, x); return;
+    case 6: manifold_sums(6, md->nz, md->R, s, x); return;
   }
   for (int k = 0; k < md->nz; k++)
     for (int i = 0; i < n; i++) x[i] -= md->R[i + (size_t)k * n] * s[k];

@@ -588,12 +588,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   if (series) {
     ad_series_at(A, &A->sy, md, h, A->ya, h, A->yb);
   } else {
-    for (int i = 0; i < na; i++) A->yb[i] = 0;
-    for (int j = 0; j < na; j++) {
-      double yj = A->ya[j];
-      if (yj == 0) continue;
-      for (int i = 0; i < na; i++) A->yb[i] += E[i + (size_t)j * na] * yj;
-    }
+    ad_matvec(na, na, E, A->ya, A->yb);
   }
   ad_events_eval(A, md, A->yb, A->gb, A->tb);
   ad_events_deriv(A, md, A->yb, A->db);
@@ -610,20 +605,12 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
     la_copy(A->et, A->yt, n);
   } else {
-    for (int i = 0; i < n; i++) {
-      double acc = 0;
-      for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * A->e[j];
-      A->et[i] = acc;
-    }
+    ad_matvec(n, na, E, A->e, A->et);
   }
   la_copy(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
     double *v = A->tan + (size_t)c * n;
-    for (int i = 0; i < n; i++) {
-      double acc = 0;
-      for (int j = 0; j < n; j++) acc += E[i + (size_t)j * na] * v[j];
-      A->et[i] = acc;
-    }
+    ad_matvec(n, na, E, v, A->et);
     la_copy(v, A->et, n);
   }
   R->t = t1;
