@@ -578,7 +578,7 @@ static void test_mode_fits_is_the_whole_check(void **state) {
       int edge = 0, slope = 0, piv = 0;
       int want = fits_whole(A, ad_mode_get(A, sets[s]), x, w, &edge, &slope);
       uint64_t got = 0;
-      int st = ad_dae_select(A, x, w, sets[s], -1, 0, 0, 1e-3, &got, &piv);
+      int st = ad_dae_select(A, x, w, sets[s], -1, 0, 0, 1e-3, 0, &got, &piv);
       if (want != (st == CUP_OK && got == sets[s]))
         fail_msg("state %d, set %#llx: the whole check says %d, the choice %s %#llx", trial,
                  (unsigned long long)sets[s], want, st == CUP_OK ? "keeps" : "fails,", (unsigned long long)got);

@@ -77,16 +77,18 @@ static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w)
   }
 }
 
-/* Does the mode md continue from (x, w)? x on its manifold to rounding,
- * and every event function (multipliers of the held rows, slacks of the
+/* Does the mode md continue from (x, w)? x on its manifold to rounding
+ * (or, near > 0, its move onto it within near in the P-norm), and
+ * every event function (multipliers of the held rows, slacks of the
  * others) nonnegative, lexicographically in its value and its first two
- * derivatives on the mode's own flow. The slopes are needed only where a
- * value is at rounding: a row below it fails the mode, and with every row
- * above it the mode fits (nearly every try, at a window's start). A->g
- * holds ad_offset of w (ad_dae_select's). */
-static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w) {
+ * derivatives on the mode's own flow from x put on the manifold. The
+ * slopes are needed only where a value is at rounding: a row below it
+ * fails the mode, and with every row above it the mode fits (nearly every
+ * try, at a window's start). A->g holds ad_offset of w (ad_dae_select's). */
+static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w, double near) {
   int n = A->n, na = A->na, m = A->m;
   double xn = la_norm_inf(x, n);
+  int off = 0;
   for (int b = 0; b < md->nz; b++) {             /* the manifold's residual against its rounding */
     double res = 0, mag = 0;
     for (int a = 0; a < md->nj; a++) {
@@ -96,11 +98,18 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
       res += md->Zt[(size_t)b * md->nj + a] * s;
       mag += fabs(md->Zt[(size_t)b * md->nj + a]) * sm;
     }
-    if (fabs(res) > 1024 * DBL_EPSILON * mag) return 0;
+    if (fabs(res) > 1024 * DBL_EPSILON * mag) {
+      if (!(near > 0)) return 0;
+      off = 1;
+    }
   }
   double *xm = A->jx, *y = A->cy, *My = A->cMy, *g = A->cg, *d = A->cd, *d2 = A->cd2, *thr = A->cthr;
   la_copy(xm, x, n);
   ad_manifold(A, md, A->g, xm);
+  if (off) {
+    for (int j = 0; j < n; j++) y[j] = xm[j] - x[j];
+    if (!(cup_polyset_norm(A->K, y) <= near)) return 0;
+  }
   ad_lift(A, md, xm, w, y);
   ad_events_eval(A, md, y, g, thr);
   double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
@@ -131,9 +140,9 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
 }
 
 /* The mode of mask if it continues from (x, w); NULL if not. */
-static ad_mode *try_mode(adaptive_ws *A, uint64_t mask, const double *x, const double *w) {
+static ad_mode *try_mode(adaptive_ws *A, uint64_t mask, const double *x, const double *w, double near) {
   ad_mode *md = ad_mode_get(A, mask);
-  return md && mode_fits(A, md, x, w) ? md : NULL;
+  return md && mode_fits(A, md, x, w, near) ? md : NULL;
 }
 
 /* The LCP of a short implicit step of length h with D: on the rows that
@@ -183,27 +192,28 @@ static int lcp_rows(adaptive_ws *A, const double *x, uint64_t hint, double h, ui
  * dependent (the mode keeps the first independent ones: two rows of a
  * bridge alike, their multipliers split evenly by the LCP's least norm),
  * the kept rows with one exchanged for a dropped one. */
-static ad_mode *try_rows(adaptive_ws *A, uint64_t J, const double *x, const double *w) {
+static ad_mode *try_rows(adaptive_ws *A, uint64_t J, const double *x, const double *w, double near) {
   ad_mode *md = ad_mode_get(A, J);
   if (!md) return NULL;
-  if (mode_fits(A, md, x, w)) return md;
+  if (mode_fits(A, md, x, w, near)) return md;
   uint64_t kept = md->mask, dropped = J & ~kept;
   for (int r = 0; r < A->m; r++) {
     if (!(dropped >> r & 1)) continue;
     for (int k = 0; k < A->m; k++)
-      if ((kept >> k & 1) && (md = try_mode(A, (kept & ~((uint64_t)1 << k)) | (uint64_t)1 << r, x, w))) return md;
+      if ((kept >> k & 1) && (md = try_mode(A, (kept & ~((uint64_t)1 << k)) | (uint64_t)1 << r, x, w, near)))
+        return md;
   }
   return NULL;
 }
 
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
-                  uint64_t seed, double tscale, uint64_t *mask, int *pivots) {
+                  uint64_t seed, double tscale, double near, uint64_t *mask, int *pivots) {
   int m = A->m;
   ad_mode *md;
   ad_offset(A, w, A->g);                         /* for mode_fits; left there for the caller */
-  if ((row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w))) ||   /* the event row alone */
-      (row < 0 && (md = try_mode(A, cur, x, w))) ||                         /* the same set, still right */
-      (seed && seed != cur && (md = try_mode(A, seed, x, w)))) {             /* the caller's guess */
+  if ((row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w, near))) ||   /* the event row alone */
+      (row < 0 && (md = try_mode(A, cur, x, w, near))) ||                      /* the same set, still right */
+      (seed && seed != cur && (md = try_mode(A, seed, x, w, near)))) {          /* the caller's guess */
     *mask = md->mask;
     return CUP_OK;
   }
@@ -212,13 +222,13 @@ int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur
     slack_and_velocity(A, x, w);
     int st = lcp_rows(A, x, hint | cur, 1e-6 * pow(1e-3, level) * tscale, &J, &degen, pivots);
     if (st) continue;
-    if ((md = try_rows(A, J, x, w))) { *mask = md->mask; return CUP_OK; }
+    if ((md = try_rows(A, J, x, w, near))) { *mask = md->mask; return CUP_OK; }
     for (int i = 0; i < m; i++)                  /* a degenerate row in or out */
-      if ((degen >> i & 1) && (md = try_rows(A, J ^ (uint64_t)1 << i, x, w))) { *mask = md->mask; return CUP_OK; }
+      if ((degen >> i & 1) && (md = try_rows(A, J ^ (uint64_t)1 << i, x, w, near))) { *mask = md->mask; return CUP_OK; }
     for (int i = 0; i < m; i++)
       for (int k = i + 1; k < m; k++)
         if ((degen >> i & 1) && (degen >> k & 1) &&
-            (md = try_rows(A, J ^ (uint64_t)1 << i ^ (uint64_t)1 << k, x, w))) {
+            (md = try_rows(A, J ^ (uint64_t)1 << i ^ (uint64_t)1 << k, x, w, near))) {
           *mask = md->mask;
           return CUP_OK;
         }

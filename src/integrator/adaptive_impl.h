@@ -356,12 +356,14 @@ void ad_dae_free(adaptive_ws *A);
 /* The active set that continues from (x, w) at a time: the mode cur with
  * the event row flipped (with no event, cur itself) when that fits, else
  * seed when nonzero and it fits, else the finite-h LCP with D
- * (docs/adaptive.md), each candidate checked on the mode's own flow.
+ * (docs/adaptive.md), each candidate checked on the mode's own flow, x
+ * on its manifold to rounding or (near > 0: an event's located state)
+ * within near of it in the P-norm.
  * Leaves F + G u(w) in A->g (ad_offset; u in A->ut). CUP_OK, or
  * CUP_ERR_LINALG when no candidate continues (or the LCP has no
  * solution). */
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
-                  uint64_t seed, double tscale, uint64_t *mask, int *pivots);
+                  uint64_t seed, double tscale, double near, uint64_t *mask, int *pivots);
 /* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some
  * zeta >= 0} by the impulsive LCP (x + B mu; the P-projection when
  * P B = C^T), for an x outside K(t) whose slack C x + g is in A->dq0

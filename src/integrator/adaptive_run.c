@@ -275,7 +275,7 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * A->g and A->ut hold w's offset and input already (start_piece's). */
 static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
-  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), &mask, &piv)
+  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), 0, &mask, &piv)
                     : at_offset ? ad_select_at(A, A->x, w, hint, &mask, &piv) : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
@@ -461,6 +461,15 @@ static double refine_root(adaptive_ws *A, ad_mode *md, int k, double tau, double
   return tau;
 }
 
+/* How far the state at the switch tau_sw may be from the root's (which
+ * lies in the bracket [tau_lo, tau_sw]), in the P-norm: twice its move
+ * across the bracket to first order, from its velocity there on md (y). */
+static double bracket_move(adaptive_ws *A, ad_mode *md, const ad_event *ev, const double *y) {
+  ad_mode_mv(A, md, y, A->yt);
+  ad_state(A, md, A->yt, A->xr);
+  return 2 * (ev->tau_sw - ev->tau_lo) * cup_polyset_norm(A->K, A->xr);
+}
+
 /* An event inside the step from R->t (bracketed by ad_detect): locate it,
  * switch past it (state made consistent, the next active set by the
  * velocity LCP), and estimate what switching there rather than at the root
@@ -487,7 +496,8 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     uint64_t mask = 0;
     int piv = 0;
     uint64_t hint = before | active | (ev->row >= 0 ? (uint64_t)1 << ev->row : 0);
-    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, 0, time_scale(A, R, R->t + tsw), &mask, &piv)
+    if (A->has_D ? ad_dae_select(A, A->xs, A->wt, before, ev->row, hint, 0, time_scale(A, R, R->t + tsw),
+                                 bracket_move(A, old, ev, A->yb), &mask, &piv)
                  : ad_select(A, A->xs, A->wt, hint, &mask, &piv))
       return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues after the event of row %d: none that "
                   "the LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
@@ -628,7 +638,7 @@ static ad_mode *catch_up_mode(adaptive_ws *A, ad_run *R, double h) {
     ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     return NULL;
   }
-  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, 0, time_scale(A, R, R->t), &mask, &piv)) {
+  if (ad_dae_select(A, A->x, A->wt, R->md->mask, -1, 0, 0, time_scale(A, R, R->t), 0, &mask, &piv)) {
     ad_fail(R, CUP_ERR_LINALG, "the LCP that chooses the active set has no solution by pivoting");
     return NULL;
   }
