@@ -22,6 +22,8 @@
 #include "lcp/lcp.h"
 #include "integrator/adaptive.h"
 #include "integrator/adaptive_impl.h"
+#include "integrator/fixed_impl.h"
+#include "integrator/integrator_impl.h"
 #include "set/polyset_impl.h"
 #include "model/input_impl.h"
 #include "util/trig.h"
@@ -393,6 +395,24 @@ static cup_run_info run(const cup_lcs *L, const cup_input *u, const cup_integrat
   return info;
 }
 
+/* Two runs' statistics and samples, bit for bit. */
+static void assert_same_runs(const cup_run_info *ia, const cup_run_info *ib, const keep *a, const keep *b) {
+  assert_int_equal(ia->status, ib->status);
+  assert_int_equal(ia->step, ib->step);
+  assert_true(same(ia->t, ib->t));
+  assert_int_equal(ia->projected, ib->projected);
+  assert_int_equal(ia->skipped, ib->skipped);
+  assert_int_equal(ia->not_certified, ib->not_certified);
+  assert_true(ia->dual_iterations == ib->dual_iterations);
+  assert_true(same(ia->max_eps_cert, ib->max_eps_cert));
+  assert_true(same(ia->max_eta_cert, ib->max_eta_cert));
+  assert_string_equal(ia->message, ib->message);
+  assert_int_equal(ia->samples, ib->samples);
+  assert_int_equal(a->count, b->count);
+  long kept = a->count < a->cap ? a->count : a->cap;
+  assert_true(memcmp(a->x, b->x, sizeof(double) * (size_t)a->dim * (size_t)kept) == 0);
+}
+
 static cup_input *input_of(int kind) {
   cup_input *u = NULL;
   assert_int_equal(cup_input_create(&u, 1, NULL), CUP_OK);
@@ -435,19 +455,7 @@ static void test_fused_steps_are_the_loop(void **state) {
         o.output_every = outs[oi].every;
         o.output_samples = outs[oi].samples;
         cup_run_info ia = run(L, u, &o, 0, &a), ib = run(L, u, &o, 1, &b);
-        assert_int_equal(ia.status, ib.status);
-        assert_int_equal(ia.step, ib.step);
-        assert_true(same(ia.t, ib.t));
-        assert_int_equal(ia.projected, ib.projected);
-        assert_int_equal(ia.skipped, ib.skipped);
-        assert_int_equal(ia.not_certified, ib.not_certified);
-        assert_true(ia.dual_iterations == ib.dual_iterations);
-        assert_true(same(ia.max_eps_cert, ib.max_eps_cert));
-        assert_true(same(ia.max_eta_cert, ib.max_eta_cert));
-        assert_string_equal(ia.message, ib.message);
-        assert_int_equal(ia.samples, ib.samples);
-        assert_int_equal(a.count, b.count);
-        assert_true(memcmp(a.x, b.x, sizeof(double) * 3 * (size_t)(a.count < a.cap ? a.count : a.cap)) == 0);
+        assert_same_runs(&ia, &ib, &a, &b);
         projected += ia.projected;
         skipped += ia.skipped;
       }
@@ -456,6 +464,70 @@ static void test_fused_steps_are_the_loop(void **state) {
   }
   free(a.x);
   free(b.x);
+  assert_true(projected > 0 && skipped > 0);
+}
+
+/* The switched converters of examples/circuits (a DC supply, a PULSE
+ * gate: each configuration's input has two components, the gate's moving
+ * neither state nor set) take the fused steps in their configurations'
+ * windows: each configuration's integrator has them on (with the input
+ * the same at every step), and whole switched runs, theta 1 and 1/2, every
+ * output mode, give the same samples and statistics, bit for bit, with
+ * them and without (a step callback turns them off in every
+ * configuration). */
+static void test_fused_switched_steps_are_the_loop(void **state) {
+  (void)state;
+  const char *names[] = {"buck-dcm", "buckboost", "boost", "buck-ccm", "flyback"};
+  struct { cup_output_kind out; long every, samples; } outs[] = {
+    {CUP_OUTPUT_EVERY, 1, 0}, {CUP_OUTPUT_EVERY, 7, 0}, {CUP_OUTPUT_SAMPLES, 0, 333}, {CUP_OUTPUT_FINAL, 0, 0}};
+  long n = 1000, projected = 0, skipped = 0;
+  char err[CUP_ERRMSG_LEN], path[512];
+  for (size_t c = 0; c < sizeof names / sizeof names[0]; c++) {
+    cup_netlist *nl = NULL;
+    snprintf(path, sizeof path, CUP_SOURCE_DIR "/examples/circuits/%s.cir", names[c]);
+    if (cup_netlist_load(&nl, path, NULL, 0, err)) fail_msg("%s", err);
+    cup_switching sw;
+    assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+    int dim = cup_lcs_dim(cup_netlist_lcs(nl));
+    keep a = {malloc(sizeof(double) * (size_t)dim * (n + 1)), 0, n + 1, dim}, b = a;
+    b.x = malloc(sizeof(double) * (size_t)dim * (n + 1));
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_THETA;
+    o.n = n;
+    o.T = 1e-3;                                    /* 100 switching periods */
+    for (int th = 0; th < 2; th++)
+      for (size_t oi = 0; oi < sizeof outs / sizeof outs[0]; oi++) {
+        o.theta = th ? 0.5 : 1;
+        o.output = outs[oi].out;
+        o.output_every = outs[oi].every;
+        o.output_samples = outs[oi].samples;
+        cup_run_info info[2];
+        for (int loop = 0; loop < 2; loop++) {
+          cup_integrator_options oo = o;
+          if (loop) oo.on_step = quiet_step;
+          cup_integrator *I = NULL;
+          if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &oo, err)) fail_msg("%s", err);
+          keep *k = loop ? &b : &a;
+          k->count = 0;
+          assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), keep_sink, k, &info[loop]), CUP_OK);
+          cup_integrator_free(&I);
+        }
+        assert_same_runs(&info[0], &info[1], &a, &b);
+        projected += info[0].projected;
+        skipped += info[0].skipped;
+      }
+    for (int topo = 0; topo < 2; topo++) {         /* every converter forms two configurations at least */
+      cup_integrator *I = NULL;
+      if (cup_integrator_create(&I, sw.lcs(sw.ctx, topo), cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+      const fixed_ws *F = I->ws;
+      if (!F->fast.on || !F->fast.konst) fail_msg("%s, configuration %d: fused steps off", names[c], topo);
+      cup_integrator_free(&I);
+    }
+    free(a.x);
+    free(b.x);
+    cup_netlist_free(&nl);
+  }
   assert_true(projected > 0 && skipped > 0);
 }
 
@@ -632,6 +704,7 @@ int main(void) {
     cmocka_unit_test(test_warm_step_is_the_general_one),
     cmocka_unit_test(test_cached_modes_are_the_general_ones),
     cmocka_unit_test(test_fused_steps_are_the_loop),
+    cmocka_unit_test(test_fused_switched_steps_are_the_loop),
     cmocka_unit_test(test_mode_fits_is_the_whole_check),
     cmocka_unit_test(test_decoupled_lcp_is_zero),
   };

@@ -12,7 +12,9 @@
  * no f term, the paper's tolerances (eps_n, eta_n > 0), no step callback
  * (the only reader of pi.scale, which is not computed here) nor step-doubling
  * estimate (which compares every step; integrator.c checks both), and an input
- * of at most one component built from constant, sine and square terms. A
+ * of which one component alone moves the state or the set (a switched
+ * circuit's gate sources move neither), built from constant, sine and
+ * square terms. A
  * step it cannot take as the loop would (NaN, a singular block, an offset
  * that is not finite) it declines, and the loop takes it. */
 #ifndef CUP_FASTSTEP_H
@@ -35,8 +37,8 @@ typedef struct faststep_ws {
   int has;                  /* an input enters through E */
   int integrate;            /* ... and is integrated at every step (not constant) */
   double uconst;            /* a constant input's h u */
-  /* the input's terms (one component) */
-  int nterms;
+  /* the input's terms (one component: comp, the one with a column in E or G) */
+  int comp, nterms;
   const input_term *term[CUP_FAST_TERMS];
   double term_h[CUP_FAST_TERMS];   /* freestep.c's step-length factors */
   /* the moving offset g = F + G u(t_{k+1}), the rows in lanes */
@@ -44,6 +46,9 @@ typedef struct faststep_ws {
   v2l grows;            /* all ones in the lanes of G's rows */
   double *g;                /* the integrator's offset buffer, written at the end of a run */
   int moving;
+  int konst;                /* the input the same at every step: its integral uconst, the offset gk */
+  v2d gk;
+  int key;                  /* the steps' variant: n * 8 + m + 64 konst (dispatch) */
   double eps_n, eta_n;
   long steps;               /* the grid: t_k = k T / steps, step h */
   double T, h;
