@@ -6,6 +6,11 @@
 #include "lcp/step.h"
 #include "tally.h"
 
+static long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                     cup_run_info *info);
+static long dispatch_konst(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                           cup_run_info *info);
+
 /* The one column of A with entries: its index, -1 for none (or no A), -2
  * for several. */
 static int one_column(const la_sparse *A) {
@@ -95,6 +100,7 @@ void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cu
     }
   constant_terms(f);
   f->key = n * 8 + th->m + 64 * f->konst;
+  f->go = f->konst ? dispatch_konst : dispatch;
   f->on = 1;
 }
 
@@ -200,14 +206,41 @@ fast_step(const faststep_ws *f, lcp_small_carry *c, double uint, v2d g, const v2
   return lcp_small_core(f->th, c, g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
 
+/* The statistics of the steps run() booked, through step kb (its end t),
+ * into info. */
+static inline __attribute__((always_inline)) void
+book(cup_run_info *info, long kb, double t, long booked, long skipped, long long iterations, v2d max_cert) {
+  info->step = kb;
+  info->t = t;
+  info->skipped += skipped;
+  info->projected += booked - skipped;
+  info->dual_iterations += iterations;
+  info->max_eps_cert = max_cert[0];
+  info->max_eta_cert = max_cert[1];
+}
+
+/* Whether z left the state's range (tally_state_beyond, the same sum). */
+static inline __attribute__((always_inline)) int beyond(const v2d *z, const int n) {
+  double s = 0;
+  for (int j = 0; j < n; j++) s += fabs(v2_lane(z, j));
+  return !(s <= CUP_STATE_MAX);
+}
+
 /* integrator.c's loop from step k, the state, the LCP's warm start and the
  * statistics in registers: each step that ends CUP_OK before stop is booked
  * as the loop books it (tally_projection, step, t: added up here, written into
- * info at the end); the first other one, or step stop, is left pending. */
+ * info at the end); the first other one, or step stop, is left pending.
+ * Recording (konst runs only, f->recording): each booked step's sample
+ * goes to the sink as the loop gives it (its state in x, the one before in
+ * xnew, lambda in the LCP step, zeta_from 1), each state checked against
+ * its range first (a record cannot be taken back: one beyond is left
+ * pending, declined, for the loop to find); a sink that refuses ends the
+ * run there (*st = CUP_FAST_REFUSED, the step booked). */
 static inline __attribute__((always_inline)) long
 run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m, const int konst) {
   v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = konst ? f->gk : f->g0;
+  const int rec = konst && f->recording;
   faststep_ahead t1, ui;
   v2d gs[CUP_FAST_AHEAD];
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
@@ -223,7 +256,12 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
       a = 0;
     }
     if (!konst && f->moving) g = gs[a];
+    lcp_small_carry c0 = c;
     int s = fast_step(f, &c, konst ? f->uconst : ui.d[a], g, x, xf, z, &o, n, m);
+    if (rec && s == CUP_OK && k != stop && beyond(z, n)) {
+      c = c0;
+      s = CUP_FAST_DECLINED;
+    }
     if (k == stop || s != CUP_OK) {
       for (int j = 0; j < n; j++) xp[j] = v2_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
@@ -232,18 +270,12 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
       }
       lcp_small_store(f->th, &c, m);
       for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
-      if (booked) {
-        info->step = k;
-        info->t = konst ? tally_grid_time(k, f->steps, f->T, f->h) : t;
-        info->skipped += skipped;
-        info->projected += booked - skipped;
-        info->dual_iterations += iterations;
-        info->max_eps_cert = max_cert[0];
-        info->max_eta_cert = max_cert[1];
-      }
+      if (booked) book(info, k, konst ? tally_grid_time(k, f->steps, f->T, f->h) : t, booked, skipped, iterations,
+                       max_cert);
       *st = s;
       return k;
     }
+    for (int j = 0; j < n && rec; j++) xnewp[j] = v2_lane(x, j);
     x[0] = z[0];
     x[1] = z[1];
     if (!konst) t = t1.d[a];
@@ -254,6 +286,19 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
      * (SSE2's maxpd): the same but for zeros of opposite signs, and the
      * certificates are never -0 (max(gap, 0), a distance) */
     max_cert = v2_max(max_cert, (v2d){o.eps_cert, o.eta_cert});
+    if (rec) {
+      double tb = tally_grid_time(k + 1, f->steps, f->T, f->h);
+      for (int j = 0; j < n; j++) xp[j] = v2_lane(x, j);
+      lcp_small_store(f->th, &c, m);
+      *f->rec.zeta_from = 1;
+      info->samples++;
+      if (f->rec.sink(k + 1, tb, xp, f->rec.ctx)) {
+        for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
+        book(info, k + 1, tb, booked, skipped, iterations, max_cert);
+        *st = CUP_FAST_REFUSED;
+        return k + 1;
+      }
+    }
   }
 }
 
@@ -302,28 +347,39 @@ static void undo_apply(const fast_undo *u, faststep_ws *f, double *x, cup_run_in
   info->max_eta_cert = u->max_eta_cert;
 }
 
-/* run() for the sizes: each size's steps compiled apart. */
-static __attribute__((noinline)) long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew,
-                                               cup_proj_info *pi, int *st, cup_run_info *info) {
+/* run() for the sizes: each size's steps compiled apart, the konst ones
+ * (which record, and need more registers) in a function of their own, so
+ * that they do not add to the others' entry and exit (f->go: one or the
+ * other). */
 #define CUP_FAST_CASE(N, M, C) \
   case (N) * 8 + (M) + 64 * (C): return run(f, k, stop, x, xnew, pi, st, info, N, M, C);
+static __attribute__((noinline)) long dispatch_konst(faststep_ws *f, long k, long stop, double *x, double *xnew,
+                                                     cup_proj_info *pi, int *st, cup_run_info *info) {
   switch (f->key) {
-    CUP_FAST_CASE(1, 1, 0) CUP_FAST_CASE(2, 1, 0) CUP_FAST_CASE(3, 1, 0) CUP_FAST_CASE(4, 1, 0)
-    CUP_FAST_CASE(1, 2, 0) CUP_FAST_CASE(2, 2, 0) CUP_FAST_CASE(3, 2, 0) CUP_FAST_CASE(4, 2, 0)
     CUP_FAST_CASE(1, 1, 1) CUP_FAST_CASE(2, 1, 1) CUP_FAST_CASE(3, 1, 1) CUP_FAST_CASE(4, 1, 1)
     CUP_FAST_CASE(1, 2, 1) CUP_FAST_CASE(2, 2, 1) CUP_FAST_CASE(3, 2, 1) CUP_FAST_CASE(4, 2, 1)
   }
-#undef CUP_FAST_CASE
   *st = CUP_FAST_DECLINED;
   return k;
 }
+
+static __attribute__((noinline)) long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew,
+                                               cup_proj_info *pi, int *st, cup_run_info *info) {
+  switch (f->key) {
+    CUP_FAST_CASE(1, 1, 0) CUP_FAST_CASE(2, 1, 0) CUP_FAST_CASE(3, 1, 0) CUP_FAST_CASE(4, 1, 0)
+    CUP_FAST_CASE(1, 2, 0) CUP_FAST_CASE(2, 2, 0) CUP_FAST_CASE(3, 2, 0) CUP_FAST_CASE(4, 2, 0)
+  }
+  *st = CUP_FAST_DECLINED;
+  return k;
+}
+#undef CUP_FAST_CASE
 
 /* A run of more than one step, its last booked state checked. */
 static __attribute__((noinline)) long run_checked(faststep_ws *f, long k, long stop, double *x, double *xnew,
                                                   cup_proj_info *pi, int *st, cup_run_info *info) {
   fast_undo u;
   undo_save(&u, f, x, info);
-  long pending = dispatch(f, k, stop, x, xnew, pi, st, info);
+  long pending = f->go(f, k, stop, x, xnew, pi, st, info);
   /* the last booked state against its range, here and not in run(): there
    * it cost the loop registers (1.4-3.5 instructions a step) */
   if (pending > k && tally_state_beyond(x, f->th->n)) {
@@ -337,6 +393,6 @@ static __attribute__((noinline)) long run_checked(faststep_ws *f, long k, long s
 
 long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
                   cup_run_info *info) {
-  return stop == k ? dispatch(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
+  return stop == k ? f->go(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
                    : run_checked(f, k, stop, x, xnew, pi, st, info);
 }

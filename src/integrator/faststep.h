@@ -27,6 +27,15 @@
 #define CUP_FAST_TERMS 8
 #define CUP_FAST_AHEAD 16        /* steps whose inputs are computed together */
 #define CUP_FAST_DECLINED 1000   /* not a status: the general loop takes the step */
+#define CUP_FAST_REFUSED 1001    /* not a status: the sink refused a recorded step's sample */
+
+/* A run's records: fixed.c's sink, output every step, and where its loop
+ * keeps which multipliers zeta is (1: the LCP step's). */
+typedef struct faststep_rec {
+  cup_sample_fn sink;
+  void *ctx;
+  int *zeta_from;
+} faststep_rec;
 
 typedef struct faststep_ws {
   int on;
@@ -49,6 +58,7 @@ typedef struct faststep_ws {
   int konst;                /* the input the same at every step: its integral uconst, the offset gk */
   v2d gk;
   int key;                  /* the steps' variant: n * 8 + m + 64 konst (dispatch) */
+  long (*go)(struct faststep_ws *, long, long, double *, double *, cup_proj_info *, int *, cup_run_info *);
   double eps_n, eta_n;
   long steps;               /* the grid: t_k = k T / steps, step h */
   double T, h;
@@ -58,6 +68,10 @@ typedef struct faststep_ws {
   /* a run of steps that left the state's range (CUP_STATE_MAX) is declined
    * whole: the loop takes its steps up to this one itself, checking each */
   long hold;
+  /* konst runs give each step's sample to rec.sink themselves (set by the
+   * loop before each stretch of its steps) */
+  int recording;
+  faststep_rec rec;
 } faststep_ws;
 
 /* on = 1 when the steps qualify (the caller checks for a step callback);
@@ -74,7 +88,10 @@ void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cu
  * steps (not in each step, the time loop's cost): when the last booked one
  * is beyond it, nothing is taken (*st = CUP_FAST_DECLINED, k returned) and
  * hold is set to the pending step, so that the loop finds the first state
- * beyond the range itself. */
+ * beyond the range itself. Recording (f->recording, a konst run), each
+ * booked step's sample goes to rec.sink as the loop gives it, its state
+ * checked first (one beyond is declined); a refusal returns the refused
+ * step's end, *st = CUP_FAST_REFUSED. */
 long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
                   cup_run_info *info);
 
