@@ -503,14 +503,15 @@ static void switched_both(cup_netlist *nl, const cup_integrator_options *o, keep
  * the same at every step), and whole switched runs, theta 1 and 1/2, every
  * output mode, give the same as the loop (switched_both); so do a run
  * whose sink refuses a sample inside a run of recorded steps (every step's
- * sample given by faststep.c) and one whose state leaves its range in one
- * (a supply of 1.3e150 V: step 51, the first of a window). */
+ * sample given by faststep.c) or at its end (t = 440 us, a window's end),
+ * and one whose state leaves its range in one (a supply of 1.3e150 V: step
+ * 51, the first of a window). */
 static void test_fused_switched_steps_are_the_loop(void **state) {
   (void)state;
   const char *names[] = {"buck-dcm", "buckboost", "boost", "buck-ccm", "flyback"};
   struct { cup_output_kind out; long every, samples, stop_at; } outs[] = {
     {CUP_OUTPUT_EVERY, 1, 0, 0}, {CUP_OUTPUT_EVERY, 7, 0, 0}, {CUP_OUTPUT_SAMPLES, 0, 333, 0},
-    {CUP_OUTPUT_FINAL, 0, 0, 0}, {CUP_OUTPUT_EVERY, 1, 0, 437}};
+    {CUP_OUTPUT_FINAL, 0, 0, 0}, {CUP_OUTPUT_EVERY, 1, 0, 437}, {CUP_OUTPUT_EVERY, 1, 0, 441}};
   long n = 1000, projected = 0, skipped = 0;
   char err[CUP_ERRMSG_LEN], path[512];
   keep a = {malloc(sizeof(double) * 3 * (size_t)(n + 1)), 0, n + 1, 3, 0}, b = a;

@@ -235,12 +235,13 @@ static inline __attribute__((always_inline)) int beyond(const v2d *z, const int 
  * xnew, lambda in the LCP step, zeta_from 1), each state checked against
  * its range first (a record cannot be taken back: one beyond is left
  * pending, declined, for the loop to find); a sink that refuses ends the
- * run there (*st = CUP_FAST_REFUSED, the step booked). */
+ * run there (*st = CUP_FAST_REFUSED, the step booked); with f->book_last,
+ * step stop is booked and recorded too (*st = CUP_FAST_DONE). */
 static inline __attribute__((always_inline)) long
 run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
     cup_run_info *info, const int n, const int m, const int konst) {
   v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = konst ? f->gk : f->g0;
-  const int rec = konst && f->recording;
+  const int rec = konst && f->recording, last = rec && f->book_last;
   faststep_ahead t1, ui;
   v2d gs[CUP_FAST_AHEAD];
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
@@ -258,11 +259,11 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
     if (!konst && f->moving) g = gs[a];
     lcp_small_carry c0 = c;
     int s = fast_step(f, &c, konst ? f->uconst : ui.d[a], g, x, xf, z, &o, n, m);
-    if (rec && s == CUP_OK && k != stop && beyond(z, n)) {
+    if (rec && s == CUP_OK && (k != stop || last) && beyond(z, n)) {
       c = c0;
       s = CUP_FAST_DECLINED;
     }
-    if (k == stop || s != CUP_OK) {
+    if ((k == stop && !last) || s != CUP_OK) {
       for (int j = 0; j < n; j++) xp[j] = v2_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
         for (int j = 0; j < n; j++) xnewp[j] = v2_lane(z, j);
@@ -296,6 +297,12 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
         for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
         book(info, k + 1, tb, booked, skipped, iterations, max_cert);
         *st = CUP_FAST_REFUSED;
+        return k + 1;
+      }
+      if (last && k == stop) {                  /* stop booked too: nothing pending */
+        for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
+        book(info, k + 1, tb, booked, skipped, iterations, max_cert);
+        *st = CUP_FAST_DONE;
         return k + 1;
       }
     }

@@ -28,6 +28,7 @@
 #define CUP_FAST_AHEAD 16        /* steps whose inputs are computed together */
 #define CUP_FAST_DECLINED 1000   /* not a status: the general loop takes the step */
 #define CUP_FAST_REFUSED 1001    /* not a status: the sink refused a recorded step's sample */
+#define CUP_FAST_DONE 1002       /* not a status: step stop booked and recorded, none pending */
 
 /* A run's records: fixed.c's sink, output every step, and where its loop
  * keeps which multipliers zeta is (1: the LCP step's). */
@@ -70,7 +71,7 @@ typedef struct faststep_ws {
   long hold;
   /* konst runs give each step's sample to rec.sink themselves (set by the
    * loop before each stretch of its steps) */
-  int recording;
+  int recording, book_last;   /* book_last: ... and step stop too, when it is the loop's last */
   faststep_rec rec;
 } faststep_ws;
 
@@ -91,7 +92,8 @@ void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cu
  * beyond the range itself. Recording (f->recording, a konst run), each
  * booked step's sample goes to rec.sink as the loop gives it, its state
  * checked first (one beyond is declined); a refusal returns the refused
- * step's end, *st = CUP_FAST_REFUSED. */
+ * step's end, *st = CUP_FAST_REFUSED; with book_last, step stop is booked
+ * and recorded as the others, stop + 1 returned, *st = CUP_FAST_DONE. */
 long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
                   cup_run_info *info);
 

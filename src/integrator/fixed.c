@@ -508,11 +508,14 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
     if (fast && k >= F->fast.hold) {     /* hold: a run of steps that left the range, stepped here */
-      k = faststep_run(&F->fast, k, loop_stop(F, &sp, sink && !F->fast.recording, k), F->x, F->xnew, &pi, &st,
-                       info);
+      long stop = loop_stop(F, &sp, sink && !F->fast.recording, k);
+      /* a recording run books the loop's last step too, but for one the interrupt check follows */
+      F->fast.book_last = F->fast.recording && stop == F->kend - 1 && (stop & 1023) != 1023;
+      k = faststep_run(&F->fast, k, stop, F->x, F->xnew, &pi, &st, info);
       if (st == CUP_FAST_REFUSED)
         return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "stopped by the output sink",
                     CUP_STOP_SAMPLE_REFUSED, &sp);
+      if (st == CUP_FAST_DONE) break;
     }
     double t0 = grid_time(F, k), t1 = grid_time(F, k + 1);
     if (st != CUP_FAST_DECLINED) {       /* fused: all that step() does, done by faststep.c */
