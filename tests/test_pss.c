@@ -44,8 +44,9 @@ static void opts_for(cup_integrator_options *io, int scheme, long n) {
   io->tol_abs = io->tol_rel = 1e-12;
 }
 
-/* The steady state of a netlist (status expected), samples of its period. */
-static solved solve(const char *text, int scheme, long n, long samples, int want) {
+/* The steady state of a netlist (status expected) over the period T (0: the
+ * sources' common period), samples of it. */
+static solved solve_over(const char *text, int scheme, long n, long samples, double T, int want) {
   solved s = {0};
   s.nl = load(text);
   const cup_lcs *L = cup_netlist_lcs(s.nl);
@@ -56,6 +57,7 @@ static solved solve(const char *text, int scheme, long n, long samples, int want
   cup_pss_options o;
   cup_pss_options_default(&o);
   o.samples = samples;
+  o.period = T;
   char err[CUP_ERRMSG_LEN] = "";
   int st = cup_pss_solve(&s.r, L, cup_netlist_input(s.nl), &io, NULL, &o, err);
   if (!s.r) fail_msg("no result: %s", err);
@@ -65,6 +67,10 @@ static solved solve(const char *text, int scheme, long n, long samples, int want
                 1e3 * s.info.seconds, s.info.message[0] ? "\"" : "", s.info.message, s.info.message[0] ? "\"" : "");
   if (st != want) fail_msg("status %s, expected %s: %s", cup_status_name(st), cup_status_name(want), s.info.message);
   return s;
+}
+
+static solved solve(const char *text, int scheme, long n, long samples, int want) {
+  return solve_over(text, scheme, n, samples, 0, want);
 }
 
 static void done(solved *s) {
@@ -627,6 +633,7 @@ static void buck_library(const char *what, double D, double L, double R, int ccm
   long nj = cup_pss_jumps(s.r, NULL);
   double jt[64];
   assert_true(nj >= 2 && nj <= 64);
+  assert_int_equal(s.info.jumps, nj);
   assert_int_equal(cup_pss_jumps(s.r, jt), nj);
   for (long q = 1; q < nj; q++) assert_true(jt[q] > s.info.t0 && jt[q] < s.info.t0 + Ts);
   assert_true(jt[0] == s.info.t0);               /* the PULSE's rising edge at t0 (and t0 + Ts) */
@@ -661,6 +668,36 @@ static void buck_library_ccm(void **state) {
 static void buck_library_dcm(void **state) {
   (void)state;
   buck_library("DCM D = 0.3 (D1 blocks inside the period)", 0.3, 10e-6, 20, 0);
+}
+
+/* cup_pss_jumps gives none both when there are none and when there are
+ * more than 4 a sample + 64; the info's jumps tells the two apart (-1).
+ * The DCM buck over 10 of its periods at 2001 samples: each period's jump
+ * times ten times over (its steady state repeats them: the edges at 0
+ * and D Ts, D1's turn-off), each once (D1's turn-on at an edge is the
+ * edge's time: it was counted twice); over 30 periods at 3 samples more
+ * than 76, so none given and jumps = -1. */
+static void jumps_overflow_is_said(void **state) {
+  (void)state;
+  const double Ts = 10e-6;
+  const char *buck = "ideal buck\nV1 a 0 PULSE(0 12 0 jump jump 3u 10u)\nD1 a sw\nL1 sw out 10u\n"
+                     "C1 out 0 10u\nRL out 0 20\n.end\n";
+  solved one = solve(buck, CUP_SCHEME_ADAPTIVE, 0, 2001, CUP_OK);
+  solved ten = solve_over(buck, CUP_SCHEME_ADAPTIVE, 0, 2001, 10 * Ts, CUP_OK);
+  solved few = solve_over(buck, CUP_SCHEME_ADAPTIVE, 0, 3, 30 * Ts, CUP_OK);
+  print_message("  jump times: one period %ld, ten periods %ld, 30 periods at 3 samples %ld (cup_pss_jumps %ld)\n",
+                one.info.jumps, ten.info.jumps, few.info.jumps, cup_pss_jumps(few.r, NULL));
+  assert_int_equal(one.info.jumps, 3);           /* the PULSE's two edges and D1's turn-off */
+  assert_int_equal(cup_pss_jumps(one.r, NULL), one.info.jumps);
+  assert_int_equal(ten.info.jumps, 10 * one.info.jumps);
+  double jt[64];
+  assert_int_equal(cup_pss_jumps(ten.r, jt), ten.info.jumps);
+  for (long q = 1; q < ten.info.jumps; q++) assert_true(jt[q] > jt[q - 1]);
+  assert_int_equal(few.info.jumps, -1);
+  assert_int_equal(cup_pss_jumps(few.r, NULL), 0);
+  done(&one);
+  done(&ten);
+  done(&few);
 }
 
 /* A wall-time limit is the solve's, not each period run's: Newton's
@@ -722,6 +759,7 @@ int main(void) {
     cmocka_unit_test(measure_closed_forms),
     cmocka_unit_test(buck_library_ccm),
     cmocka_unit_test(buck_library_dcm),
+    cmocka_unit_test(jumps_overflow_is_said),
     cmocka_unit_test(time_limit_is_the_solves),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

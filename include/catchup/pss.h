@@ -69,6 +69,9 @@ typedef struct cup_pss_info {
   double t0;              /**< the phase (cup_input_steady_phase): x0 is the state at t0, the
                                period [t0, t0 + T) of the sources as written (cup_pss_solve; 0
                                for cup_pss_solve_map, whose map starts where it was made to) */
+  long jumps;             /**< the trajectory's jump times (cup_pss_jumps gives them); -1 when there
+                               were more than 4 a sample + 64, none given (the measurements then take the
+                               samples alone: O(h) where a signal jumps); 0 with none or no trajectory */
 } cup_pss_info;
 
 /** A solve's result (opaque). */
@@ -149,8 +152,9 @@ CUP_API int cup_pss_trajectory(const cup_pss *r, double *t, double *x, double *z
  *  each event of the adaptive scheme (a diode turning on or off; the
  *  fixed-step schemes report none). Copied into t (NULL: the count only);
  *  returns how many: 0 with no trajectory, none, or more than 4 a sample
- *  (more than the samples resolve: measure those signals from the samples
- *  alone). For cup_measure_period_jumps. */
+ *  + 64 (more than the samples resolve: measure those signals from the
+ *  samples alone; cup_pss_info's jumps is -1 then). Each time once. For
+ *  cup_measure_period_jumps. */
 CUP_API long cup_pss_jumps(const cup_pss *r, double *t);
 
 /* ---- measurements of one period (SPICE's .meas and .four) ---- */

@@ -38,7 +38,7 @@ extern "C" {
   X(CUP_ERR_UNCERTIFIED,   -17, "no method found a point within a certified distance of the set (eta = inf)") \
   X(CUP_ERR_NO_STEADY_STATE, -18, "steady state: Newton's method on the period map found no periodic orbit (a Floquet multiplier at 1, or the iteration did not converge: the message says which)") \
   X(CUP_WARN_UNSTABLE_ORBIT,  8, "steady state: the periodic orbit has a Floquet multiplier of modulus >= 1: it is not asymptotically stable, a transient does not settle on it") \
-  X(CUP_WARN_COARSE_MEASURE,  9, "steady state: more switchings and events in the period than 4 a sample: the measurements place none of them (O(h) where a signal jumps); raise steady_state.samples")
+  X(CUP_WARN_COARSE_MEASURE,  9, "steady state: more switchings and events in the period than 4 a sample + 64: the measurements place none of them (O(h) where a signal jumps); raise steady_state.samples")
 
 typedef enum cup_status {
 #define CUP_STATUS_ENUM_(name, value, text) name = value,

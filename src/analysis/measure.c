@@ -396,6 +396,10 @@ void pss_jumps_finish(pss_jumps *J, pss_figures *f) {
   f->ends = 0;
   if (J->overflow) return;                       /* more than the samples can resolve: as cup_measure_period */
   qsort(J->t, (size_t)J->n, sizeof(double), by_time);
+  long k = 0;                                    /* each time once: an event at a break's time (a */
+  for (long q = 0; q < J->n; q++)                /* diode turning on at a PULSE edge) was noted twice */
+    if (k == 0 || J->t[q] != J->t[k - 1]) J->t[k++] = J->t[q];
+  J->n = k;
   if (J->at_ends && J->n < J->cap) {             /* a break at T is one at 0 too */
     memmove(J->t + 1, J->t, sizeof(double) * (size_t)J->n);
     J->t[0] = 0;

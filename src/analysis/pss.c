@@ -451,6 +451,7 @@ static int trajectory(cup_pss *r, const cup_lcs *L, const cup_input *u, const cu
   pss_figures f;
   pss_jumps_finish(J, &f);                       /* (a break at T is one at 0 too: a jump at t0) */
   r->nj = J->overflow ? 0 : J->n;
+  r->info.jumps = J->overflow ? -1 : J->n;
   for (long q = 0; q < r->nj; q++) J->t[q] += t0;   /* the samples' clock */
   return CUP_OK;
 }

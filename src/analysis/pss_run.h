@@ -67,7 +67,7 @@ int pss_measure(const double *sig, long N, int ns, pss_figures *f, double *w, ch
 typedef struct pss_jumps {
   double *t;
   long n, cap;
-  int overflow;             /* more than cap (4 a sample): none is used */
+  int overflow;             /* more than cap (4 a sample + 64; a time noted twice counts twice): none is used */
   int at_ends;              /* pss_jumps_breaks: the sources break at T too (so at 0 of the next period) */
   double T;
   cup_event_fn on_event;    /* the run's own, called after (or NULL) */
@@ -88,7 +88,7 @@ int pss_jumps_event(double t, int row, int on, void *ctx);
  * the sources break at T (at_ends): the last sample then reads them from
  * the next period, and the jump at T is one of the signals too (a
  * circuit without switches, a source's edge at the period's end); none if
- * they overflowed (J->overflow: more than 4 a sample, which the samples
+ * they overflowed (J->overflow: more than 4 a sample + 64, which the samples
  * cannot resolve: the signals measured as by cup_measure_period alone). */
 void pss_jumps_finish(pss_jumps *J, pss_figures *f);
 

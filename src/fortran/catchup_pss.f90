@@ -48,6 +48,7 @@ module catchup_pss
     real(c_double) :: seconds = 0
     character(kind=c_char) :: message(CUP_RUN_MSG_LEN) = c_null_char
     real(c_double) :: t0 = 0          !< the phase: x0 is the state at t0 (cup_input_steady_phase)
+    integer(c_long) :: jumps = 0      !< cup_pss_jumps' count; -1: more than 4 a sample + 64, none given
   end type cup_pss_info
 
   !> cup_measure (pss.h)
@@ -328,7 +329,7 @@ contains
 
   !> The times in the trajectory's period (on its samples' clock, sorted) at
   !> which a signal may jump (sources' breaks, the adaptive scheme's events);
-  !> none with no trajectory, or more than 4 a sample (pss.h).
+  !> none with no trajectory, or more than 4 a sample + 64 (info%jumps = -1; pss.h).
   subroutine cup_pss_jumps(r, t, ierr)
     type(cup_pss_t), intent(in) :: r
     real(c_double), allocatable, target, intent(out) :: t(:)

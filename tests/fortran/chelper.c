@@ -61,6 +61,20 @@ int cupt_layout(const char *name, long *out, int cap) {
   if (!strcmp(name, "cup_circuit"))
     PUT(sizeof(cup_circuit), OFF(cup_circuit, R1), OFF(cup_circuit, R2), OFF(cup_circuit, R3),
         OFF(cup_circuit, L2), OFF(cup_circuit, L3), OFF(cup_circuit, C4), OFF(cup_circuit, G));
+  if (!strcmp(name, "cup_pss_options"))
+    PUT(sizeof(cup_pss_options), OFF(cup_pss_options, period), OFF(cup_pss_options, max_iter),
+        OFF(cup_pss_options, tol), OFF(cup_pss_options, tol_floor), OFF(cup_pss_options, map_tol),
+        OFF(cup_pss_options, fd_step), OFF(cup_pss_options, warmup_periods), OFF(cup_pss_options, samples),
+        OFF(cup_pss_options, jacobian));
+  if (!strcmp(name, "cup_pss_info"))
+    PUT(sizeof(cup_pss_info), OFF(cup_pss_info, status), OFF(cup_pss_info, n), OFF(cup_pss_info, m),
+        OFF(cup_pss_info, iterations), OFF(cup_pss_info, period), OFF(cup_pss_info, residual),
+        OFF(cup_pss_info, max_multiplier), OFF(cup_pss_info, period_runs), OFF(cup_pss_info, events),
+        OFF(cup_pss_info, samples), OFF(cup_pss_info, seconds), OFF(cup_pss_info, message),
+        OFF(cup_pss_info, t0), OFF(cup_pss_info, jumps));
+  if (!strcmp(name, "cup_measure"))
+    PUT(sizeof(cup_measure), OFF(cup_measure, avg), OFF(cup_measure, rms), OFF(cup_measure, min),
+        OFF(cup_measure, max), OFF(cup_measure, pp), OFF(cup_measure, thd));
   if (!strcmp(name, "cup_crowd_desc"))
     PUT(sizeof(cup_crowd_desc), OFF(cup_crowd_desc, agents), OFF(cup_crowd_desc, q0), OFF(cup_crowd_desc, radius),
         OFF(cup_crowd_desc, room_points), OFF(cup_crowd_desc, room), OFF(cup_crowd_desc, doors),

@@ -58,6 +58,9 @@ contains
     type(cup_set_desc), target :: sd
     type(cup_process_desc), target :: pd
     type(cup_crowd_desc), target :: cd
+    type(cup_pss_options), target :: so
+    type(cup_pss_info), target :: si
+    type(cup_measure), target :: me
     type(c_ptr) :: b
     call section('struct layouts against the C compiler')
     b = c_loc(a)
@@ -134,6 +137,20 @@ contains
       off(b, c_loc(cd%obstacle)), off(b, c_loc(cd%walls)), off(b, c_loc(cd%wall)), off(b, c_loc(cd%speed)), &
       off(b, c_loc(cd%grid)), off(b, c_loc(cd%margin)), off(b, c_loc(cd%reach)), &
       off(b, c_loc(cd%clearance))])
+    b = c_loc(so)
+    call compare('cup_pss_options', [int(c_sizeof(so), c_long), off(b, c_loc(so%period)), &
+      off(b, c_loc(so%max_iter)), off(b, c_loc(so%tol)), off(b, c_loc(so%tol_floor)), off(b, c_loc(so%map_tol)), &
+      off(b, c_loc(so%fd_step)), off(b, c_loc(so%warmup_periods)), off(b, c_loc(so%samples)), &
+      off(b, c_loc(so%jacobian))])
+    b = c_loc(si)
+    call compare('cup_pss_info', [int(c_sizeof(si), c_long), off(b, c_loc(si%status)), off(b, c_loc(si%n)), &
+      off(b, c_loc(si%m)), off(b, c_loc(si%iterations)), off(b, c_loc(si%period)), off(b, c_loc(si%residual)), &
+      off(b, c_loc(si%max_multiplier)), off(b, c_loc(si%period_runs)), off(b, c_loc(si%events)), &
+      off(b, c_loc(si%samples)), off(b, c_loc(si%seconds)), off(b, c_loc(si%message)), off(b, c_loc(si%t0)), &
+      off(b, c_loc(si%jumps))])
+    b = c_loc(me)
+    call compare('cup_measure', [int(c_sizeof(me), c_long), off(b, c_loc(me%avg)), off(b, c_loc(me%rms)), &
+      off(b, c_loc(me%min)), off(b, c_loc(me%max)), off(b, c_loc(me%pp)), off(b, c_loc(me%thd))])
   end subroutine test_layouts
 end module layout_check
 
