@@ -14,9 +14,8 @@
  * estimate (which compares every step; integrator.c checks both), and an input
  * of which one component alone moves the state or the set (a switched
  * circuit's gate sources move neither), built from constant, sine and
- * square terms. A
- * step it cannot take as the loop would (NaN, a singular block, an offset
- * that is not finite) it declines, and the loop takes it. */
+ * square terms. A step it cannot take as the loop would (NaN, a singular
+ * block, an offset that is not finite) it declines, and the loop takes it. */
 #ifndef CUP_FASTSTEP_H
 #define CUP_FASTSTEP_H
 

@@ -66,7 +66,7 @@ static void sampler_next(const fixed_ws *F, sampler *sp) {
 static int selected(const fixed_ws *F, sampler *sp, long k) {
   const cup_integrator_options *o = &F->o;
   switch (o->output) {
-    case CUP_OUTPUT_EVERY: return o->output_every == 1 || k % o->output_every == 0 || k == o->n;   /* (no division a step) */
+    case CUP_OUTPUT_EVERY: return o->output_every == 1 || k % o->output_every == 0 || k == o->n;   /* 1: no division */
     case CUP_OUTPUT_FINAL: return k == o->n;
     case CUP_OUTPUT_NONE: return 0;
     case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
