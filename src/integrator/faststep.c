@@ -293,16 +293,11 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
       lcp_small_store(f->th, &c, m);
       *f->rec.zeta_from = 1;
       info->samples++;
-      if (f->rec.sink(k + 1, tb, xp, f->rec.ctx)) {
+      int refused = f->rec.sink(k + 1, tb, xp, f->rec.ctx);
+      if (refused || (last && k == stop)) {     /* (stop booked too: nothing pending) */
         for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
         book(info, k + 1, tb, booked, skipped, iterations, max_cert);
-        *st = CUP_FAST_REFUSED;
-        return k + 1;
-      }
-      if (last && k == stop) {                  /* stop booked too: nothing pending */
-        for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
-        book(info, k + 1, tb, booked, skipped, iterations, max_cert);
-        *st = CUP_FAST_DONE;
+        *st = refused ? CUP_FAST_REFUSED : CUP_FAST_DONE;
         return k + 1;
       }
     }
