@@ -353,6 +353,18 @@ static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, opener *l
 }
 
 int main(int argc, char **argv) {
+  /* Started without a launcher (a singleton: `catchup-sweep S.yaml -o R.h5`),
+   * Open MPI 4.1 forks a daemon to be its PMIx server; at MPI_Finalize an
+   * event from it can reach this process's progress thread after the PMIx
+   * component that handles it (mca_pmix_ext3x.so) was unloaded: a segfault
+   * (status 139) or a corrupted heap (134) after the work and its messages
+   * were done. Seen 4 times in about 4500 runs of the bad sweep files at a
+   * load of 10-16 (cores: the faulting address in the unloaded component's
+   * text; glibc's "unaligned fastbin chunk" in orte_session_dir_finalize).
+   * A sweep never spawns processes, so a singleton runs isolated: no daemon,
+   * no server, no such event (and no fork at start). Launched ranks do not
+   * read it; a user's own setting wins. */
+  setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
   MPI_Init(&argc, &argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &nranks);

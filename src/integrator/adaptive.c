@@ -221,7 +221,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++)
     *vecs_na[k] = block_take(b, (size_t)na, sizeof(double));
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
-                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero};
+                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero, &A->gk};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++)
     *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};

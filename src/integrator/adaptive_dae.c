@@ -232,13 +232,9 @@ int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur
 
 /* ---- the state jump --------------------------------------------------------------- */
 
-int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, int *pivots) {
+int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots) {
   int n = A->n, m = A->m, m2 = 2 * m;
   *active = 0;
-  polyset_slack(A->K, g, x, A->dq0, A->gam);
-  int outside = 0;                               /* zeta = 0 is consistent */
-  for (int i = 0; i < m; i++) outside |= A->dq0[i] < -A->gam[i];
-  if (!outside) return 0;
   /* the multipliers alone, x as it is: 0 <= zeta _|_ C x + D zeta + g >= 0
    * (a diode behind a resistance takes any slack; and there B need not be
    * P^-1 C^T, which the jump below assumes) */

@@ -113,6 +113,8 @@ typedef struct ad_run {
   long ev0;                 /* the events before the step under way (the accumulation check after it) */
   int after_event;          /* the steps since the last event met no breakpoint: a step that ends on
                                one (not at its length limit) has a length that will not recur */
+  int kept;                 /* at_break found x inside K(t) with the offset A->gk: start_piece's
+                               check at t+ with the same offset would find it again */
 } ad_run;
 
 /* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
@@ -201,6 +203,8 @@ struct adaptive_ws {
                                pinf ||A B_i||_P / (C B)_ii (pinf ||B_i||_P / D_ii where D_ii > 0) */
   double *c1;               /* per row: ||c_i||_1 */
   double *x, *xs, *xr, *xf, *s, *gam, *g, *ut, *udot, *uerr, *wa, *wt;
+  double *gk;               /* m: the offset at_break found x inside K with (ad_run's kept) */
+  int inside;               /* the last make_consistent found x inside, by the slack alone */
   double *e, *et;           /* the propagated error estimate, n */
   double *xok;              /* the last state within range (run-state check), n */
   double *zero;             /* m zeros */
@@ -315,6 +319,9 @@ void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, doubl
  * *pivots. */
 int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
               int *pivots);
+/* ... with g = F + G U w in A->g and u in A->ut already (ad_offset's). */
+int ad_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+                 int *pivots);
 /* g = F + G U w. */
 void ad_offset(const adaptive_ws *A, const double *w, double *g);
 /* u' (A->udot, from the input's piece w) and the free velocity
@@ -351,9 +358,10 @@ int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur
                   uint64_t seed, double tscale, uint64_t *mask, int *pivots);
 /* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some
  * zeta >= 0} by the impulsive LCP (x + B mu; the P-projection when
- * P B = C^T): 0 if x was consistent, 1 if it jumped (rows with mu > 0 in
- * *active), CUP_ERR_LINALG if the LCP has no solution. */
-int ad_dae_jump(adaptive_ws *A, const double *g, double *x, uint64_t *active, int *pivots);
+ * P B = C^T), for an x outside K(t) whose slack C x + g is in A->dq0
+ * (make_consistent's check): 0 if x was consistent, 1 if it jumped (rows
+ * with mu > 0 in *active), CUP_ERR_LINALG if the LCP has no solution. */
+int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots);
 
 /* ---- adaptive_event.c ---- */
 /* g = L y + Lc and the rounding thresholds thr. */

@@ -736,9 +736,14 @@ void ad_free_velocity(adaptive_ws *A, const double *x, const double *w) {
 
 int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
               int *pivots) {
+  ad_offset(A, w, A->g);                         /* also leaves u in A->ut */
+  return ad_select_at(A, x, w, hint, mask, pivots);
+}
+
+int ad_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+                 int *pivots) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, p = A->p;
-  ad_offset(A, w, A->g);                         /* also leaves u in A->ut */
   polyset_slack(K, A->g, x, A->s, NULL);
   /* touching rows: slack at the level a certified projection leaves (it
    * aims a few rounding bounds inside), on the scale of the whole state (a

@@ -8,6 +8,7 @@
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -147,8 +148,8 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
 
 /* With D: x onto the consistent states Q(t) (adaptive_dae.c), exact up to
  * rounding (the LCP solved by pivoting); not certified by a projector. */
-static int jump(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active, cup_proj_info *pi) {
-  int piv = 0, st = ad_dae_jump(A, g, x, active, &piv);
+static int jump(adaptive_ws *A, ad_run *R, double *x, uint64_t *active, cup_proj_info *pi) {
+  int piv = 0, st = ad_dae_jump(A, x, active, &piv);
   R->info->dual_iterations += piv;
   if (st < 0)
     return ad_fail(R, CUP_ERR_EMPTY_SET, "no state is consistent with the rows at this time: the jump's LCP "
@@ -169,11 +170,13 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
   *active = 0;
   *pi = (cup_proj_info){0};
   pi->skipped = 1;
-  if (A->has_D) return jump(A, R, g, x, active, pi);
-  polyset_slack(A->K, g, x, A->s, A->gam);
-  int outside = 0;                               /* beyond rounding: a held row is at 0 */
-  for (int i = 0; i < A->m; i++) outside |= A->s[i] < -A->gam[i];
+  double *s = A->has_D ? A->dq0 : A->s;          /* (with D, the jump's LCP reads it) */
+  polyset_slack(A->K, g, x, s, A->gam);
+  int outside = 0;                               /* beyond rounding: a held row is at 0 (with D: zeta = 0 */
+  for (int i = 0; i < A->m; i++) outside |= s[i] < -A->gam[i];   /* is consistent) */
+  A->inside = !outside;
   if (!outside) return CUP_OK;
+  if (A->has_D) return jump(A, R, x, active, pi);
   double S = cup_polyset_norm(A->K, x);
   la_copy(A->xr, x, A->n);
   int st = lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
@@ -268,11 +271,12 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * window starts with none current: the set its configuration's last window
  * started with is tried before the LCP (the dead time of a bridge opens on
  * the same diodes each period while the current keeps its sign); it is
- * kept only when it continues, as the LCP's answer must. */
-static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
+ * kept only when it continues, as the LCP's answer must. With at_offset,
+ * A->g and A->ut hold w's offset and input already (start_piece's). */
+static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), &mask, &piv)
-                             : ad_select(A, A->x, w, hint, &mask, &piv);
+                    : at_offset ? ad_select_at(A, A->x, w, hint, &mask, &piv) : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
@@ -283,6 +287,10 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
   ad_manifold(A, R->md, A->g, A->x);
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
+}
+
+static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event) {
+  return choose(A, R, w, hint, t_event, 0);
 }
 
 /* ---- breakpoints ------------------------------------------------------------------- */
@@ -306,9 +314,11 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
     A->g[i] = acc;
   }
   uint64_t active;
-  double x0n = la_norm_inf(A->x, A->n);
+  double x0n = first ? la_norm_inf(A->x, A->n) : 0;   /* (the warning's) */
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
   if (st < 0) return st;
+  R->kept = A->inside;
+  if (A->inside) la_copy(A->gk, A->g, A->m);
   if (first && !pi->skipped)
     warn(R, CUP_WARN_X0_OUTSIDE, "x0 is outside K(0) (|x0| = %.3g); it is projected", x0n);
   error_onto(A, active, A->e);
@@ -325,12 +335,18 @@ static int start_piece(adaptive_ws *A, ad_run *R) {
   if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
     return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   ad_offset(A, A->wt, A->g);
-  uint64_t active;
-  cup_proj_info pi;
-  int st = make_consistent(A, R, A->g, A->x, &active, &pi);
-  if (st < 0) return st;
-  error_onto(A, active, A->e);
-  return choose_mode(A, R, A->wt, active, R->t);
+  uint64_t active = 0;
+  /* at_break left x inside K(t) (nothing moved it since): with the same
+   * offset at t+ (the input that jumps here reaches no row: a converter's
+   * gates, read by the switches alone) the check finds it inside again */
+  if (!(R->kept && !memcmp(A->g, A->gk, sizeof(double) * (size_t)A->m))) {
+    cup_proj_info pi;
+    int st = make_consistent(A, R, A->g, A->x, &active, &pi);
+    if (st < 0) return st;
+    error_onto(A, active, A->e);
+  }
+  R->kept = 0;
+  return choose(A, R, A->wt, active, R->t, 1);     /* (A->g, A->ut: w's still) */
 }
 
 /* ---- steps ------------------------------------------------------------------------ */
@@ -724,6 +740,14 @@ static int run_to_end(adaptive_ws *A, ad_run *R, int st) {
   return R->info->status;
 }
 
+/* A window's statistics from zero but for the message's tail past its
+ * first byte (switched.c reads the message as a string): its 1 KiB was
+ * half of what a window's start cost on a converter's (800 a run). */
+static void info_clear(cup_run_info *info) {
+  memset(info, 0, offsetof(cup_run_info, message) + 1);
+  memset(&info->set_rebuilds, 0, sizeof *info - offsetof(cup_run_info, set_rebuilds));
+}
+
 /* What a run and a window start from: nothing pending, stopped or pinned
  * from before, the end at tend, the state xa at R's time (x0 refused when
  * beyond a state's range: check, the run's). */
@@ -732,7 +756,8 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
   A->pend.active = 0;
   A->piece_ok = A->nb_own.ok = 0;                /* (the input may have changed between runs) */
   A->tend = tend;
-  memset(R->info, 0, sizeof *R->info);
+  if (check) memset(R->info, 0, sizeof *R->info);
+  else info_clear(R->info);
   R->info->err_est = NAN;
   if (check && tally_state_beyond(xa, A->n)) {
     int w = tally_state_worst(xa, A->n);
@@ -808,6 +833,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   R.sink = sink;
   R.sink_ctx = sink_ctx;
   R.wall0 = now_seconds();
+  R.kept = 0;                                    /* (A->gk is not the checkpoint's) */
   R.md = s->md >= 0 ? &A->modes[s->md] : NULL;
   A->pinned[0] = R.md;
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;

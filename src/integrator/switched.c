@@ -86,7 +86,7 @@ static int watch_sink(long k, double t, const double *x, void *ctx) {
 static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   switched_run *S = ctx;
   if (S->half) estimate_compare(&S->est, k, cup_integrator_state(S->child[S->cur]));
-  if (check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;
+  if (S->watch && check(S, t, cup_integrator_state(S->child[S->cur]))) return 1;   /* (a call a step saved) */
   if (!S->probing && S->on_step && S->on_step(k, t, pi, S->step_ctx)) { S->user_stop = 1; return 1; }
   return 0;
 }
@@ -139,8 +139,9 @@ static int sw_zeta(void *ws, double *zeta) {
 /* One window's statistics into the run's. */
 static void add_info(cup_run_info *info, const cup_run_info *w) {
   info->status = cup_status_merge(info->status, w->status);
-  if (w->status != CUP_OK && info->message[0] == '\0') memcpy(info->message, w->message, sizeof info->message);
-  if (w->status < 0) memcpy(info->message, w->message, sizeof info->message);
+  /* (a window's message is a string: its tail past the end is not cleared, adaptive_window) */
+  if ((w->status != CUP_OK && info->message[0] == '\0') || w->status < 0)
+    memcpy(info->message, w->message, strnlen(w->message, sizeof w->message - 1) + 1);
   info->step = w->step;
   info->t = w->t;
   info->projected += w->projected;

@@ -535,9 +535,16 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
     if (next < tmax) *tnext = next;
     return CUP_OK;
   }
+  /* controls of t alone read from terms constant on pieces (changes' class):
+   * they hold to the end of the pieces the last check read them on, a
+   * corner of one of those terms, which the input's next break cannot pass
+   * (the other terms' breaks, across which the controls hold, are passed
+   * over; a switched run's window asks the input's next break itself) */
+  int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
   while (a < tmax) {
     const cup_input *in = tp->sub->u;
-    double b = !in ? tmax : tp->memo ? input_next_break_memo(in, S->bmemo, S->nmemo, a) : cup_input_next_break(in, a);
+    double b = cls && cls == S->cvm_class && a >= S->cvm_lo && a < S->cvm_hi ? S->cvm_hi
+               : !in ? tmax : tp->memo ? input_next_break_memo(in, S->bmemo, S->nmemo, a) : cup_input_next_break(in, a);
     if (!(b <= tmax)) b = tmax;
     double lo = a, hi = -1;
     /* linear pieces: the rule is monotone along one, so its end decides (just
