@@ -22,6 +22,8 @@
 #include "lcp/lcp.h"
 #include "integrator/adaptive.h"
 #include "integrator/adaptive_impl.h"
+#include "integrator/fixed_impl.h"
+#include "integrator/integrator_impl.h"
 #include "set/polyset_impl.h"
 #include "model/input_impl.h"
 #include "util/trig.h"
@@ -363,14 +365,15 @@ static void test_cached_modes_are_the_general_ones(void **state) {
 
 /* ---- fused steps against the loop ----------------------------------------------- */
 
-typedef struct { double *x; long count, cap; int dim; } keep;
+typedef struct { double *x; long count, cap; int dim; long stop_at; } keep;
 
+/* Keeps the samples; refuses the stop_at-th (0: none). */
 static int keep_sink(long k, double t, const double *x, void *vp) {
   (void)k; (void)t;
   keep *c = vp;
   if (c->count < c->cap) memcpy(c->x + c->count * c->dim, x, sizeof(double) * (size_t)c->dim);
   c->count++;
-  return 0;
+  return c->count == c->stop_at;
 }
 
 static int quiet_step(long k, double t, const cup_proj_info *pi, void *ctx) {
@@ -391,6 +394,24 @@ static cup_run_info run(const cup_lcs *L, const cup_input *u, const cup_integrat
   cup_integrator_run(I, x0, c->dim ? keep_sink : NULL, c, &info);
   cup_integrator_free(&I);
   return info;
+}
+
+/* Two runs' statistics and samples, bit for bit. */
+static void assert_same_runs(const cup_run_info *ia, const cup_run_info *ib, const keep *a, const keep *b) {
+  assert_int_equal(ia->status, ib->status);
+  assert_int_equal(ia->step, ib->step);
+  assert_true(same(ia->t, ib->t));
+  assert_int_equal(ia->projected, ib->projected);
+  assert_int_equal(ia->skipped, ib->skipped);
+  assert_int_equal(ia->not_certified, ib->not_certified);
+  assert_true(ia->dual_iterations == ib->dual_iterations);
+  assert_true(same(ia->max_eps_cert, ib->max_eps_cert));
+  assert_true(same(ia->max_eta_cert, ib->max_eta_cert));
+  assert_string_equal(ia->message, ib->message);
+  assert_int_equal(ia->samples, ib->samples);
+  assert_int_equal(a->count, b->count);
+  long kept = a->count < a->cap ? a->count : a->cap;
+  assert_true(memcmp(a->x, b->x, sizeof(double) * (size_t)a->dim * (size_t)kept) == 0);
 }
 
 static cup_input *input_of(int kind) {
@@ -418,7 +439,8 @@ static void test_fused_steps_are_the_loop(void **state) {
     {CUP_OUTPUT_EVERY, 1, 0}, {CUP_OUTPUT_EVERY, 7, 0}, {CUP_OUTPUT_SAMPLES, 0, 13}, {CUP_OUTPUT_FINAL, 0, 0},
     {CUP_OUTPUT_NONE, 0, 0}};
   long n = 3000, projected = 0, skipped = 0;
-  keep a = {malloc(sizeof(double) * 3 * (n + 1)), 0, n + 1, 3}, b = {malloc(sizeof(double) * 3 * (n + 1)), 0, n + 1, 3};
+  keep a = {malloc(sizeof(double) * 3 * (n + 1)), 0, n + 1, 3, 0},
+       b = {malloc(sizeof(double) * 3 * (n + 1)), 0, n + 1, 3, 0};
   for (size_t q = 0; q < sizeof model / sizeof model[0]; q++) {
     cup_circuit cc = {1, 2, 1, 1, 2, 1, {0, model[q].g2}};
     cup_lcs *L = NULL;
@@ -435,19 +457,7 @@ static void test_fused_steps_are_the_loop(void **state) {
         o.output_every = outs[oi].every;
         o.output_samples = outs[oi].samples;
         cup_run_info ia = run(L, u, &o, 0, &a), ib = run(L, u, &o, 1, &b);
-        assert_int_equal(ia.status, ib.status);
-        assert_int_equal(ia.step, ib.step);
-        assert_true(same(ia.t, ib.t));
-        assert_int_equal(ia.projected, ib.projected);
-        assert_int_equal(ia.skipped, ib.skipped);
-        assert_int_equal(ia.not_certified, ib.not_certified);
-        assert_true(ia.dual_iterations == ib.dual_iterations);
-        assert_true(same(ia.max_eps_cert, ib.max_eps_cert));
-        assert_true(same(ia.max_eta_cert, ib.max_eta_cert));
-        assert_string_equal(ia.message, ib.message);
-        assert_int_equal(ia.samples, ib.samples);
-        assert_int_equal(a.count, b.count);
-        assert_true(memcmp(a.x, b.x, sizeof(double) * 3 * (size_t)(a.count < a.cap ? a.count : a.cap)) == 0);
+        assert_same_runs(&ia, &ib, &a, &b);
         projected += ia.projected;
         skipped += ia.skipped;
       }
@@ -457,6 +467,108 @@ static void test_fused_steps_are_the_loop(void **state) {
   free(a.x);
   free(b.x);
   assert_true(projected > 0 && skipped > 0);
+}
+
+/* A switched netlist's run with the fused steps (into a) and without (into
+ * b: a step callback turns them off in every configuration): the same
+ * samples, statistics, and state and zeta at its end, bit for bit. */
+static void switched_both(cup_netlist *nl, const cup_integrator_options *o, keep *a, keep *b, cup_run_info *info) {
+  char err[CUP_ERRMSG_LEN];
+  cup_switching sw;
+  assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+  int dim = cup_lcs_dim(cup_netlist_lcs(nl)), m = cup_lcs_rows(cup_netlist_lcs(nl));
+  double xe[2][8], ze[2][8];
+  assert_true(dim <= 8 && m <= 8);
+  for (int loop = 0; loop < 2; loop++) {
+    cup_integrator_options oo = *o;
+    if (loop) oo.on_step = quiet_step;
+    cup_integrator *I = NULL;
+    if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &oo, err)) fail_msg("%s", err);
+    keep *k = loop ? b : a;
+    k->count = 0;
+    cup_integrator_run(I, cup_netlist_x0(nl), keep_sink, k, &info[loop]);
+    memcpy(xe[loop], cup_integrator_state(I), sizeof(double) * (size_t)dim);
+    assert_int_equal(cup_integrator_zeta(I, ze[loop]), CUP_OK);
+    cup_integrator_free(&I);
+  }
+  assert_same_runs(&info[0], &info[1], a, b);
+  assert_memory_equal(xe[0], xe[1], sizeof(double) * (size_t)dim);
+  assert_memory_equal(ze[0], ze[1], sizeof(double) * (size_t)m);
+}
+
+/* The switched converters of examples/circuits (a DC supply, a PULSE
+ * gate: each configuration's input has two components, the gate's moving
+ * neither state nor set) take the fused steps in their configurations'
+ * windows: each configuration's integrator has them on (with the input
+ * the same at every step), and whole switched runs, theta 1 and 1/2, every
+ * output mode, give the same as the loop (switched_both); so do a run
+ * whose sink refuses a sample inside a run of recorded steps (every step's
+ * sample given by faststep.c) or at its end (t = 440 us, a window's end),
+ * and one whose state leaves its range in one (a supply of 1.3e150 V: step
+ * 51, the first of a window). */
+static void test_fused_switched_steps_are_the_loop(void **state) {
+  (void)state;
+  const char *names[] = {"buck-dcm", "buckboost", "boost", "buck-ccm", "flyback"};
+  struct { cup_output_kind out; long every, samples, stop_at; } outs[] = {
+    {CUP_OUTPUT_EVERY, 1, 0, 0}, {CUP_OUTPUT_EVERY, 7, 0, 0}, {CUP_OUTPUT_SAMPLES, 0, 333, 0},
+    {CUP_OUTPUT_FINAL, 0, 0, 0}, {CUP_OUTPUT_EVERY, 1, 0, 437}, {CUP_OUTPUT_EVERY, 1, 0, 441}};
+  long n = 1000, projected = 0, skipped = 0;
+  char err[CUP_ERRMSG_LEN], path[512];
+  keep a = {malloc(sizeof(double) * 3 * (size_t)(n + 1)), 0, n + 1, 3, 0}, b = a;
+  b.x = malloc(sizeof(double) * 3 * (size_t)(n + 1));
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_THETA;
+  o.n = n;
+  o.T = 1e-3;                                      /* 100 switching periods */
+  cup_run_info info[2];
+  for (size_t c = 0; c < sizeof names / sizeof names[0]; c++) {
+    cup_netlist *nl = NULL;
+    snprintf(path, sizeof path, CUP_SOURCE_DIR "/examples/circuits/%s.cir", names[c]);
+    if (cup_netlist_load(&nl, path, NULL, 0, err)) fail_msg("%s", err);
+    a.dim = b.dim = cup_lcs_dim(cup_netlist_lcs(nl));
+    for (int th = 0; th < 2; th++)
+      for (size_t oi = 0; oi < sizeof outs / sizeof outs[0]; oi++) {
+        o.theta = th ? 0.5 : 1;
+        o.output = outs[oi].out;
+        o.output_every = outs[oi].every;
+        o.output_samples = outs[oi].samples;
+        a.stop_at = b.stop_at = outs[oi].stop_at;
+        switched_both(nl, &o, &a, &b, info);
+        assert_int_equal(info[0].status, outs[oi].stop_at ? CUP_ERR_INTERRUPTED : CUP_OK);
+        assert_int_equal(a.count, outs[oi].stop_at ? outs[oi].stop_at : info[0].samples);
+        projected += info[0].projected;
+        skipped += info[0].skipped;
+      }
+    cup_switching sw;
+    cup_netlist_switching(nl, &sw);
+    for (int topo = 0; topo < 2; topo++) {         /* every converter forms two configurations at least */
+      cup_integrator *I = NULL;
+      if (cup_integrator_create(&I, sw.lcs(sw.ctx, topo), cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+      const fixed_ws *F = I->ws;
+      if (!F->fast.on || !F->fast.konst) fail_msg("%s, configuration %d: fused steps off", names[c], topo);
+      cup_integrator_free(&I);
+    }
+    cup_netlist_free(&nl);
+  }
+  assert_true(projected > 0 && skipped > 0);
+  cup_netlist *nl = NULL;
+  if (cup_netlist_load_string(&nl, "buck-boost, its supply huge\nV1 in 0 1.3e150\n"
+                              "VG g 0 PULSE(0 1 0 jump jump 5u 10u)\nS1 in sw g 0 SWI\nL1 sw 0 50u\nD1 out sw\n"
+                              "C1 out 0 20u\nRL out 0 10\n.model SWI SW(VT=0.5 VH=0)\n.end\n", "huge.cir", NULL, 0,
+                              err))
+    fail_msg("%s", err);
+  a.dim = b.dim = 2;
+  a.stop_at = b.stop_at = 0;
+  o.theta = 1;
+  o.output = CUP_OUTPUT_EVERY;
+  o.output_every = 1;
+  switched_both(nl, &o, &a, &b, info);
+  assert_int_equal(info[0].status, CUP_ERR_DIVERGED);
+  assert_int_equal(a.count, 51);                   /* x_0 .. x_50 */
+  cup_netlist_free(&nl);
+  free(a.x);
+  free(b.x);
 }
 
 /* ---- the choice of an active set with D ------------------------------------------- */
@@ -632,6 +744,7 @@ int main(void) {
     cmocka_unit_test(test_warm_step_is_the_general_one),
     cmocka_unit_test(test_cached_modes_are_the_general_ones),
     cmocka_unit_test(test_fused_steps_are_the_loop),
+    cmocka_unit_test(test_fused_switched_steps_are_the_loop),
     cmocka_unit_test(test_mode_fits_is_the_whole_check),
     cmocka_unit_test(test_decoupled_lcp_is_zero),
   };

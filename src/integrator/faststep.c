@@ -6,39 +6,101 @@
 #include "lcp/step.h"
 #include "tally.h"
 
+static long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                     cup_run_info *info);
+static long dispatch_konst(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
+                           cup_run_info *info);
+
+/* The one column of A with entries: its index, -1 for none (or no A), -2
+ * for several. */
+static int one_column(const la_sparse *A) {
+  int c = -1;
+  for (int j = 0; A && j < A->ncol; j++)
+    if (A->p[j + 1] > A->p[j]) c = c == -1 ? j : -2;
+  return c;
+}
+
+/* The input component the steps read, and the terms that make it up: an
+ * input of several components qualifies when one alone has a column in E
+ * or G (a switched circuit's configuration keeps the gate sources, whose
+ * components move neither the state nor the set); the others are left
+ * out, whatever their kind, as freestep.c's and fixed.c's sums leave them
+ * (their zero columns add +0 to sums that are never -0: they start from
+ * +0). Returns 0 when it does not qualify. */
+static int input_terms(faststep_ws *f, const freestep_ws *fs, const la_sparse *G) {
+  const cup_input *u = fs->u;
+  int p = fs->p, comp = 0;
+  if (!u) return 1;
+  if (u->fn) return 0;
+  if (p > 1) {
+    int ce = fs->d.has_E ? one_column(&fs->d.E) : -1, cg = one_column(G);
+    if (ce == -2 || cg == -2 || (ce >= 0 && cg >= 0 && ce != cg) || (fs->d.has_E && fs->d.E.ncol != p) ||
+        (G && G->ncol != p))
+      return 0;
+    comp = ce >= 0 ? ce : cg;
+    f->has = f->has && ce >= 0;
+    if (fs->const_input && f->has) {         /* freestep.c adds Gam's zero columns times h u: finite */
+      for (int c = 0; c < p; c++)
+        if (!isfinite(fs->ubuf[c])) return 0;
+    }
+  }
+  for (int k = 0; k < u->nterms; k++) {
+    const input_term *w = &u->terms[k];
+    if (w->comp != comp) continue;           /* (p = 1: all) */
+    if (f->nterms == CUP_FAST_TERMS) return 0;
+    if (w->kind != CUP_WAVE_CONSTANT && w->kind != CUP_WAVE_SINE && w->kind != CUP_WAVE_SQUARE) return 0;
+    f->term[f->nterms] = w;
+    f->term_h[f->nterms++] = fs->term_h[k];
+  }
+  f->comp = comp;
+  return 1;
+}
+
+/* An input whose terms are all constants (a switched circuit's DC supply,
+ * its gate sources left out) is the same at every step: its integral and
+ * the offset it gives are taken here, as inputs_ahead would take them
+ * (the sums from +0, term by term), and the steps skip inputs_ahead. */
+static void constant_terms(faststep_ws *f) {
+  double ui = 0, u = 0;
+  for (int q = 0; q < f->nterms && (f->integrate || f->moving); q++) {
+    if (f->term[q]->kind != CUP_WAVE_CONSTANT) return;
+    ui += f->term_h[q];
+    u += input_term_value(f->term[q], 0);
+  }
+  if (f->integrate) {
+    f->integrate = 0;
+    f->uconst = ui;
+  }
+  f->gk = !f->moving ? f->g0 : v2_select(u != 0 ? f->grows : (v2l){0, 0}, f->g0 + f->gdir * u, f->g0);
+  f->konst = 1;
+}
+
 void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cup_polyset *K,
                    const la_sparse *G, double *g, int use_theta, double eps_n, double eta_n, long steps,
                    double T) {
   *f = (faststep_ws){.th = th, .g = g, .eps_n = eps_n, .eta_n = eta_n, .steps = steps, .T = T, .h = fs->h,
                       .last_t = NAN};
   const cup_input *u = fs->u;
-  if (!use_theta || !th->small || !fs->affine || fs->has_f || fs->p > 1 || !(eps_n > 0) || !(eta_n > 0) ||
-      (u && (u->fn || u->nterms > CUP_FAST_TERMS)))
-    return;
-  int n = fs->n;
+  if (!use_theta || !th->small || !fs->affine || fs->has_f || !(eps_n > 0) || !(eta_n > 0)) return;
+  f->has = u && fs->d.has_E;                /* freestep.c's step_input */
+  if (!input_terms(f, fs, G)) return;
+  int n = fs->n, p = fs->p;
   for (int i = 0; i < n; i++)
     for (int j = 0; j < n; j++) f->Phi[j][i >> 1][i & 1] = fs->Phi[i * n + j];
-  f->has = u && fs->d.has_E;                /* freestep.c's step_input */
   f->integrate = f->has && !fs->const_input;
-  f->uconst = f->has ? fs->ubuf[0] : 0;
-  for (int i = 0; i < n && f->has; i++) f->Gam[i >> 1][i & 1] = fs->Gam[i];
+  f->uconst = f->has ? fs->ubuf[f->comp] : 0;
+  for (int i = 0; i < n && f->has; i++) f->Gam[i >> 1][i & 1] = fs->Gam[i * p + f->comp];
   for (int i = 0; i < K->m; i++) f->g0[i] = K->g0[i];
-  f->nterms = u ? u->nterms : 0;
-  for (int k = 0; k < f->nterms; k++) {
-    f->term[k] = &u->terms[k];
-    f->term_h[k] = fs->term_h[k];
-    cup_wave_kind kind = u->terms[k].kind;
-    if (kind != CUP_WAVE_CONSTANT && kind != CUP_WAVE_SINE && kind != CUP_WAVE_SQUARE) return;
-  }
   f->moving = G && u;
-  if (f->moving) {
-    if (G->ncol != 1) return;
-    for (int q = G->p[0]; q < G->p[1]; q++) {
+  if (f->moving)
+    for (int q = G->p[f->comp]; q < G->p[f->comp + 1]; q++) {
       if (f->grows[G->i[q]]) return;        /* a repeated row: la_sparse_gaxpy adds twice */
       f->grows[G->i[q]] = -1;
       f->gdir[G->i[q]] = G->x[q];
     }
-  }
+  constant_terms(f);
+  f->key = n * 8 + th->m + 64 * f->konst;
+  f->go = f->konst ? dispatch_konst : dispatch;
   f->on = 1;
 }
 
@@ -144,14 +206,42 @@ fast_step(const faststep_ws *f, lcp_small_carry *c, double uint, v2d g, const v2
   return lcp_small_core(f->th, c, g, xf, z, f->eps_n, f->eta_n, o, n, m) ? o->status : CUP_FAST_DECLINED;
 }
 
+/* The statistics of the steps run() booked, through step kb (its end t),
+ * into info. */
+static inline __attribute__((always_inline)) void
+book(cup_run_info *info, long kb, double t, long booked, long skipped, long long iterations, v2d max_cert) {
+  info->step = kb;
+  info->t = t;
+  info->skipped += skipped;
+  info->projected += booked - skipped;
+  info->dual_iterations += iterations;
+  info->max_eps_cert = max_cert[0];
+  info->max_eta_cert = max_cert[1];
+}
+
+/* Whether z left the state's range (tally_state_beyond, the same sum). */
+static inline __attribute__((always_inline)) int beyond(const v2d *z, const int n) {
+  double s = 0;
+  for (int j = 0; j < n; j++) s += fabs(v2_lane(z, j));
+  return !(s <= CUP_STATE_MAX);
+}
+
 /* integrator.c's loop from step k, the state, the LCP's warm start and the
  * statistics in registers: each step that ends CUP_OK before stop is booked
  * as the loop books it (tally_projection, step, t: added up here, written into
- * info at the end); the first other one, or step stop, is left pending. */
+ * info at the end); the first other one, or step stop, is left pending.
+ * Recording (konst runs only, f->recording): each booked step's sample
+ * goes to the sink as the loop gives it (its state in x, the one before in
+ * xnew, lambda in the LCP step, zeta_from 1), each state checked against
+ * its range first (a record cannot be taken back: one beyond is left
+ * pending, declined, for the loop to find); a sink that refuses ends the
+ * run there (*st = CUP_FAST_REFUSED, the step booked); with f->book_last,
+ * step stop is booked and recorded too (*st = CUP_FAST_DONE). */
 static inline __attribute__((always_inline)) long
 run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info *pi, int *st,
-    cup_run_info *info, const int n, const int m) {
-  v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = f->g0;
+    cup_run_info *info, const int n, const int m, const int konst) {
+  v2d x[2] = {{0, 0}, {0, 0}}, xf[2], z[2], g = konst ? f->gk : f->g0;
+  const int rec = konst && f->recording, last = rec && f->book_last;
   faststep_ahead t1, ui;
   v2d gs[CUP_FAST_AHEAD];
   for (int j = 0; j < n; j++) x[j >> 1][j & 1] = xp[j];
@@ -162,13 +252,18 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
   v2d max_cert = {info->max_eps_cert, info->max_eta_cert};
   double t = info->t;
   for (int have = 0, a = 0;; k++, a++) {
-    if (a == have) {
+    if (!konst && a == have) {
       have = inputs_ahead(f, k, stop, &t1, &ui, gs);
       a = 0;
     }
-    if (f->moving) g = gs[a];
-    int s = fast_step(f, &c, ui.d[a], g, x, xf, z, &o, n, m);
-    if (k == stop || s != CUP_OK) {
+    if (!konst && f->moving) g = gs[a];
+    lcp_small_carry c0 = c;
+    int s = fast_step(f, &c, konst ? f->uconst : ui.d[a], g, x, xf, z, &o, n, m);
+    if (rec && s == CUP_OK && (k != stop || last) && beyond(z, n)) {
+      c = c0;
+      s = CUP_FAST_DECLINED;
+    }
+    if ((k == stop && !last) || s != CUP_OK) {
       for (int j = 0; j < n; j++) xp[j] = v2_lane(x, j);
       if (s != CUP_FAST_DECLINED) {
         for (int j = 0; j < n; j++) xnewp[j] = v2_lane(z, j);
@@ -176,21 +271,15 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
       }
       lcp_small_store(f->th, &c, m);
       for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
-      if (booked) {
-        info->step = k;
-        info->t = t;
-        info->skipped += skipped;
-        info->projected += booked - skipped;
-        info->dual_iterations += iterations;
-        info->max_eps_cert = max_cert[0];
-        info->max_eta_cert = max_cert[1];
-      }
+      if (booked) book(info, k, konst ? tally_grid_time(k, f->steps, f->T, f->h) : t, booked, skipped, iterations,
+                       max_cert);
       *st = s;
       return k;
     }
+    for (int j = 0; j < n && rec; j++) xnewp[j] = v2_lane(x, j);
     x[0] = z[0];
     x[1] = z[1];
-    t = t1.d[a];
+    if (!konst) t = t1.d[a];
     booked++;
     skipped += o.skipped;                                 /* tally_projection, per step */
     iterations += o.iterations;
@@ -198,6 +287,20 @@ run(faststep_ws *f, long k, long stop, double *xp, double *xnewp, cup_proj_info 
      * (SSE2's maxpd): the same but for zeros of opposite signs, and the
      * certificates are never -0 (max(gap, 0), a distance) */
     max_cert = v2_max(max_cert, (v2d){o.eps_cert, o.eta_cert});
+    if (rec) {
+      double tb = tally_grid_time(k + 1, f->steps, f->T, f->h);
+      for (int j = 0; j < n; j++) xp[j] = v2_lane(x, j);
+      lcp_small_store(f->th, &c, m);
+      *f->rec.zeta_from = 1;
+      info->samples++;
+      int refused = f->rec.sink(k + 1, tb, xp, f->rec.ctx);
+      if (refused || (last && k == stop)) {     /* (stop booked too: nothing pending) */
+        for (int i = 0; i < m && f->moving; i++) f->g[i] = g[i];
+        book(info, k + 1, tb, booked, skipped, iterations, max_cert);
+        *st = refused ? CUP_FAST_REFUSED : CUP_FAST_DONE;
+        return k + 1;
+      }
+    }
   }
 }
 
@@ -246,26 +349,39 @@ static void undo_apply(const fast_undo *u, faststep_ws *f, double *x, cup_run_in
   info->max_eta_cert = u->max_eta_cert;
 }
 
-/* run() for the sizes: each size's steps compiled apart. */
-static __attribute__((noinline)) long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew,
-                                               cup_proj_info *pi, int *st, cup_run_info *info) {
-#define CUP_FAST_CASE(N, M) \
-  case (N) * 8 + (M): return run(f, k, stop, x, xnew, pi, st, info, N, M);
-  switch (f->th->n * 8 + f->th->m) {
-    CUP_FAST_CASE(1, 1) CUP_FAST_CASE(2, 1) CUP_FAST_CASE(3, 1) CUP_FAST_CASE(4, 1)
-    CUP_FAST_CASE(1, 2) CUP_FAST_CASE(2, 2) CUP_FAST_CASE(3, 2) CUP_FAST_CASE(4, 2)
+/* run() for the sizes: each size's steps compiled apart, the konst ones
+ * (which record, and need more registers) in a function of their own, so
+ * that they do not add to the others' entry and exit (f->go: one or the
+ * other). */
+#define CUP_FAST_CASE(N, M, C) \
+  case (N) * 8 + (M) + 64 * (C): return run(f, k, stop, x, xnew, pi, st, info, N, M, C);
+static __attribute__((noinline)) long dispatch_konst(faststep_ws *f, long k, long stop, double *x, double *xnew,
+                                                     cup_proj_info *pi, int *st, cup_run_info *info) {
+  switch (f->key) {
+    CUP_FAST_CASE(1, 1, 1) CUP_FAST_CASE(2, 1, 1) CUP_FAST_CASE(3, 1, 1) CUP_FAST_CASE(4, 1, 1)
+    CUP_FAST_CASE(1, 2, 1) CUP_FAST_CASE(2, 2, 1) CUP_FAST_CASE(3, 2, 1) CUP_FAST_CASE(4, 2, 1)
   }
-#undef CUP_FAST_CASE
   *st = CUP_FAST_DECLINED;
   return k;
 }
+
+static __attribute__((noinline)) long dispatch(faststep_ws *f, long k, long stop, double *x, double *xnew,
+                                               cup_proj_info *pi, int *st, cup_run_info *info) {
+  switch (f->key) {
+    CUP_FAST_CASE(1, 1, 0) CUP_FAST_CASE(2, 1, 0) CUP_FAST_CASE(3, 1, 0) CUP_FAST_CASE(4, 1, 0)
+    CUP_FAST_CASE(1, 2, 0) CUP_FAST_CASE(2, 2, 0) CUP_FAST_CASE(3, 2, 0) CUP_FAST_CASE(4, 2, 0)
+  }
+  *st = CUP_FAST_DECLINED;
+  return k;
+}
+#undef CUP_FAST_CASE
 
 /* A run of more than one step, its last booked state checked. */
 static __attribute__((noinline)) long run_checked(faststep_ws *f, long k, long stop, double *x, double *xnew,
                                                   cup_proj_info *pi, int *st, cup_run_info *info) {
   fast_undo u;
   undo_save(&u, f, x, info);
-  long pending = dispatch(f, k, stop, x, xnew, pi, st, info);
+  long pending = f->go(f, k, stop, x, xnew, pi, st, info);
   /* the last booked state against its range, here and not in run(): there
    * it cost the loop registers (1.4-3.5 instructions a step) */
   if (pending > k && tally_state_beyond(x, f->th->n)) {
@@ -279,6 +395,6 @@ static __attribute__((noinline)) long run_checked(faststep_ws *f, long k, long s
 
 long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
                   cup_run_info *info) {
-  return stop == k ? dispatch(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
+  return stop == k ? f->go(f, k, stop, x, xnew, pi, st, info)     /* one step alone books nothing */
                    : run_checked(f, k, stop, x, xnew, pi, st, info);
 }

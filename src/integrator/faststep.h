@@ -12,9 +12,10 @@
  * no f term, the paper's tolerances (eps_n, eta_n > 0), no step callback
  * (the only reader of pi.scale, which is not computed here) nor step-doubling
  * estimate (which compares every step; integrator.c checks both), and an input
- * of at most one component built from constant, sine and square terms. A
- * step it cannot take as the loop would (NaN, a singular block, an offset
- * that is not finite) it declines, and the loop takes it. */
+ * of which one component alone moves the state or the set (a switched
+ * circuit's gate sources move neither), built from constant, sine and
+ * square terms. A step it cannot take as the loop would (NaN, a singular
+ * block, an offset that is not finite) it declines, and the loop takes it. */
 #ifndef CUP_FASTSTEP_H
 #define CUP_FASTSTEP_H
 
@@ -25,6 +26,16 @@
 #define CUP_FAST_TERMS 8
 #define CUP_FAST_AHEAD 16        /* steps whose inputs are computed together */
 #define CUP_FAST_DECLINED 1000   /* not a status: the general loop takes the step */
+#define CUP_FAST_REFUSED 1001    /* not a status: the sink refused a recorded step's sample */
+#define CUP_FAST_DONE 1002       /* not a status: step stop booked and recorded, none pending */
+
+/* A run's records: fixed.c's sink, output every step, and where its loop
+ * keeps which multipliers zeta is (1: the LCP step's). */
+typedef struct faststep_rec {
+  cup_sample_fn sink;
+  void *ctx;
+  int *zeta_from;
+} faststep_rec;
 
 typedef struct faststep_ws {
   int on;
@@ -35,8 +46,8 @@ typedef struct faststep_ws {
   int has;                  /* an input enters through E */
   int integrate;            /* ... and is integrated at every step (not constant) */
   double uconst;            /* a constant input's h u */
-  /* the input's terms (one component) */
-  int nterms;
+  /* the input's terms (one component: comp, the one with a column in E or G) */
+  int comp, nterms;
   const input_term *term[CUP_FAST_TERMS];
   double term_h[CUP_FAST_TERMS];   /* freestep.c's step-length factors */
   /* the moving offset g = F + G u(t_{k+1}), the rows in lanes */
@@ -44,6 +55,10 @@ typedef struct faststep_ws {
   v2l grows;            /* all ones in the lanes of G's rows */
   double *g;                /* the integrator's offset buffer, written at the end of a run */
   int moving;
+  int konst;                /* the input the same at every step: its integral uconst, the offset gk */
+  v2d gk;
+  int key;                  /* the steps' variant: n * 8 + m + 64 konst (dispatch) */
+  long (*go)(struct faststep_ws *, long, long, double *, double *, cup_proj_info *, int *, cup_run_info *);
   double eps_n, eta_n;
   long steps;               /* the grid: t_k = k T / steps, step h */
   double T, h;
@@ -53,6 +68,10 @@ typedef struct faststep_ws {
   /* a run of steps that left the state's range (CUP_STATE_MAX) is declined
    * whole: the loop takes its steps up to this one itself, checking each */
   long hold;
+  /* konst runs give each step's sample to rec.sink themselves (set by the
+   * loop before each stretch of its steps) */
+  int recording, book_last;   /* book_last: ... and step stop too, when it is the loop's last */
+  faststep_rec rec;
 } faststep_ws;
 
 /* on = 1 when the steps qualify (the caller checks for a step callback);
@@ -69,7 +88,11 @@ void faststep_init(faststep_ws *f, const freestep_ws *fs, lcp_step *th, const cu
  * steps (not in each step, the time loop's cost): when the last booked one
  * is beyond it, nothing is taken (*st = CUP_FAST_DECLINED, k returned) and
  * hold is set to the pending step, so that the loop finds the first state
- * beyond the range itself. */
+ * beyond the range itself. Recording (f->recording, a konst run), each
+ * booked step's sample goes to rec.sink as the loop gives it, its state
+ * checked first (one beyond is declined); a refusal returns the refused
+ * step's end, *st = CUP_FAST_REFUSED; with book_last, step stop is booked
+ * and recorded as the others, stop + 1 returned, *st = CUP_FAST_DONE. */
 long faststep_run(faststep_ws *f, long k, long stop, double *x, double *xnew, cup_proj_info *pi, int *st,
                   cup_run_info *info);
 

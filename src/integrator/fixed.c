@@ -66,7 +66,7 @@ static void sampler_next(const fixed_ws *F, sampler *sp) {
 static int selected(const fixed_ws *F, sampler *sp, long k) {
   const cup_integrator_options *o = &F->o;
   switch (o->output) {
-    case CUP_OUTPUT_EVERY: return k % o->output_every == 0 || k == o->n;
+    case CUP_OUTPUT_EVERY: return o->output_every == 1 || k % o->output_every == 0 || k == o->n;   /* 1: no division */
     case CUP_OUTPUT_FINAL: return k == o->n;
     case CUP_OUTPUT_NONE: return 0;
     case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
@@ -82,7 +82,8 @@ static long loop_stop(const fixed_ws *F, const sampler *sp, int sink, long k) {
   const cup_integrator_options *o = &F->o;
   long stop = k | 1023, next = LONG_MAX;       /* next: the first k' > k that selected() may take */
   if (stop > F->kend - 1) stop = F->kend - 1;
-  if (sink && o->output == CUP_OUTPUT_EVERY) next = (k / o->output_every + 1) * o->output_every;
+  if (sink && o->output == CUP_OUTPUT_EVERY)
+    next = o->output_every == 1 ? k + 1 : (k / o->output_every + 1) * o->output_every;
   if (sink && o->output == CUP_OUTPUT_SAMPLES && sp->kdue != LONG_MAX) {
     next = sp->aligned ? sp->kdue : sp->kdue - 1;
     if (next <= k) next = k + 1;
@@ -500,11 +501,22 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
   double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
   int fast = F->fast.on && !o->on_step && !F->half && !F->jump;   /* the estimate compares every step */
   F->fast.hold = 0;
+  /* a record every step: a konst run records its steps itself, as below */
+  F->fast.recording = fast && F->fast.konst && sink && o->output == CUP_OUTPUT_EVERY && o->output_every == 1;
+  F->fast.rec = (faststep_rec){sink, sink_ctx, &F->zeta_from};
   for (long k = k0; k < F->kend; k++) {
     cup_proj_info pi;
     int st = CUP_FAST_DECLINED;
-    if (fast && k >= F->fast.hold)       /* hold: a run of steps that left the range, stepped here */
-      k = faststep_run(&F->fast, k, loop_stop(F, &sp, sink != NULL, k), F->x, F->xnew, &pi, &st, info);
+    if (fast && k >= F->fast.hold) {     /* hold: a run of steps that left the range, stepped here */
+      long stop = loop_stop(F, &sp, sink && !F->fast.recording, k);
+      /* a recording run books the loop's last step too, but for one the interrupt check follows */
+      F->fast.book_last = F->fast.recording && stop == F->kend - 1 && (stop & 1023) != 1023;
+      k = faststep_run(&F->fast, k, stop, F->x, F->xnew, &pi, &st, info);
+      if (st == CUP_FAST_REFUSED)
+        return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "stopped by the output sink",
+                    CUP_STOP_SAMPLE_REFUSED, &sp);
+      if (st == CUP_FAST_DONE) break;
+    }
     double t0 = grid_time(F, k), t1 = grid_time(F, k + 1);
     if (st != CUP_FAST_DECLINED) {       /* fused: all that step() does, done by faststep.c */
       F->zeta_from = 1;

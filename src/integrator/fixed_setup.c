@@ -232,6 +232,10 @@ void fixed_grid(const void *ws, scheme_grid *g) {
 int fixed_zeta(void *ws, double *zeta) {
   const fixed_ws *F = ws;
   if (!F->K) return CUP_ERR_UNSUPPORTED;
+  if (F->zeta_from == 1 && !(F->zs < 1 && F->zprev)) {   /* the LCP step's, on a step: a theta run's records */
+    for (int i = 0; i < F->m; i++) zeta[i] = F->th.lcp.lam[i];   /* (1 * lam below: the same) */
+    return CUP_OK;
+  }
   const double *lam = F->zeta_from == 1 ? F->th.lcp.lam : F->zeta_from == 2 ? cup_projector_lambda(F->proj)
                     : F->zeta_from == 3 ? F->zeta_ext : NULL;
   double s = F->zeta_from == 2 ? 1 / F->h : 1;
