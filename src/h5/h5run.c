@@ -26,6 +26,7 @@
 #include "util/fail.h"
 
 enum { MAX_CHUNK_ROWS = 4096 };
+_Static_assert((MAX_CHUNK_ROWS & (MAX_CHUNK_ROWS - 1)) == 0, "room() masks by chunk_rows - 1: chunk_rows_for halves it");
 #define CHUNK_BYTES (1u << 20)  /* fits HDF5's default 1 MiB chunk cache */
 #define CACHE_BYTES (1u << 20)  /* HDF5's default chunk cache, per dataset */
 #define FLUSH_SECONDS 1.0

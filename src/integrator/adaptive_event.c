@@ -6,22 +6,15 @@
 #include "catchup.h"
 #include "adaptive_impl.h"
 
-/* max |y_j| over j < n (fmax without the call), unrolled for a constant n. */
-static inline __attribute__((always_inline)) double scale_of(int n, const double *y) {
-  double vmax = 0;
-  for (int j = 0; j < n; j++) vmax = la_max(fabs(y[j]), vmax);
-  return vmax;
-}
-
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
   int m = A->m;
   double vmax;                             /* the state's scale: v = x + K U w */
-  switch (A->n) {                          /* (a converter's few states) */
-    case 1: vmax = scale_of(1, y); break;
-    case 2: vmax = scale_of(2, y); break;
-    case 3: vmax = scale_of(3, y); break;
-    case 4: vmax = scale_of(4, y); break;
-    default: vmax = scale_of(A->n, y);
+  switch (A->n) {                          /* (a converter's few states: unrolled) */
+    case 1: vmax = la_norm_inf(y, 1); break;
+    case 2: vmax = la_norm_inf(y, 2); break;
+    case 3: vmax = la_norm_inf(y, 3); break;
+    case 4: vmax = la_norm_inf(y, 4); break;
+    default: vmax = la_norm_inf(y, A->n);
   }
   for (int i = 0; i < m; i++) {            /* over L's and Lm's nonzeros (mode_sparse): the dense sums */
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
