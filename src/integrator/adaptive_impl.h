@@ -68,6 +68,9 @@ typedef struct ad_mode {
   double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
   double *Ec[AD_CACHE];
   long cstamp[AD_CACHE];
+  int *ep[AD_CACHE], *ei[AD_CACHE];   /* ... and their input states' rows' nonzeros by column (na + 1 */
+  double *ex[AD_CACHE];     /* starts, rows), their values: exp(h [Pi Q; 0 W]) keeps the zeros of
+                               [0 W] (80 % of them on the six-pulse bridge, whose steps apply it) */
 } ad_mode;
 
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
@@ -160,7 +163,7 @@ struct adaptive_ws {
   double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
                                table's largest value; 0 for a slope: its own size) */
   double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
-  double *N, *Ninv, *Nw;    /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse, scratch */
+  double *N, *Ninv;         /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse */
   double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ and of N (m x m, m, m) */
   double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
   lcp_solver jlcp;
@@ -297,6 +300,9 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
 const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+/* out = E y for E = exp(h M_J) that ad_expm returned for md (ad_matvec's
+ * sums over E's nonzeros: the same bits). */
+void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out);
 /* ... the cached one that ad_expm would take, or NULL (nothing computed). */
 const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */

@@ -598,7 +598,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   if (series) {
     ad_series_at(A, &A->sy, md, h, A->ya, h, A->yb);
   } else {
-    ad_matvec(na, na, E, A->ya, A->yb);
+    ad_expm_mv(A, md, E, A->ya, A->yb);
   }
   ad_events_eval(A, md, A->yb, A->gb, A->tb);
   ad_events_deriv(A, md, A->yb, A->db);
