@@ -655,7 +655,7 @@ static inline __attribute__((always_inline)) void lift_sums(int n, int nw, const
 }
 
 /* (Each y_i its sum in a register, over the columns in order: a record's
- * lift on the six-pulse bridge, 2 states and 9 input states, spent more
+ * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
