@@ -384,6 +384,8 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots);
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr);
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
+/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it). */
+void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */
