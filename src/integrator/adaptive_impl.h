@@ -164,7 +164,7 @@ struct adaptive_ws {
                                table's largest value; 0 for a slope: its own size) */
   double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
   double *N, *Ninv;         /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse */
-  double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ and of N (m x m, m, m) */
+  double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ (m x m, m, m) */
   double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
   lcp_solver jlcp;
   double *dq0, *dq1;        /* the choice of the active set: slack and its velocity at zeta = 0 */
