@@ -232,6 +232,22 @@ struct adaptive_ws {
   int *xrp, *xrj;           /* n + m + 1, (n + m) na: the step's X and its zeta rows of L likewise ... */
   double *xrx;              /* (n + m) na: ... (rows_ready: made for the samples of this step) */
   int rows_ready;
+  /* catchup-run's signals at a sample inside a step (adaptive_record): a
+   * signal map composed with a mode's rows of x, u and zeta over y, sparse
+   * by row, an entry per set of mode buffers (a mode's matrices move with
+   * its buffers: X names them), allocated at the first such sample */
+  struct ad_rec {
+    const double *X;        /* the mode's buffers, NULL: empty */
+    uint64_t mask;          /* ... the mode they held, and the map's key, when composed */
+    const void *key;
+    int ok;                 /* 0: the map reads what y does not hold (an input outside the exosystem) */
+    int *rp, *rj;           /* ns + 1, ns na */
+    double *rx, *rc;        /* ns na, ns: the rows' nonzeros, their constants (zeta's Lc) */
+  } rec[AD_MODES + 1];
+  int rec_ns;               /* the signals the entries have room for (0: none yet) */
+  struct ad_rec *rec_last;  /* the last entry used */
+  void *rec_block;
+  double *rec_acc;          /* na: a row being composed */
   ad_stop stop;             /* where the last run stopped */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
