@@ -287,6 +287,10 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R);
  * The same t0 and t1 as the last piece's (the workspace's own, or in a
  * switched run the last window's, adaptive_breaks) copy its states. */
 int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err);
+/* A record at a step's end (A->zt, state A->x) on md's manifold: its y
+ * into A->zy, the input's states from there on (adaptive_zeta's); nonzero
+ * if the input failed. */
+int ad_record_y(adaptive_ws *A, const ad_mode *md);
 /* cup_input_next_break(A->u, t), the last answer again when t is the same. */
 double ad_next_break(adaptive_ws *A, double t);
 

@@ -106,9 +106,9 @@ static struct ad_rec *entry(adaptive_ws *A, const ad_mode *md, const signal_map 
 
 int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
   const ad_mode *md = A->zmd;
-  if (!md || !A->zy_ready) return 0;
+  if (!md) return 0;
   const struct ad_rec *e = entry(A, md, S);
-  if (!e) return 0;
+  if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
   const double *y = A->zy, *rx = e->rx;
   const int *rp = e->rp, *rj = e->rj;
   for (int k = 0; k < S->ns; k++) {

@@ -393,6 +393,16 @@ double ad_next_break(adaptive_ws *A, double t) {
 
 void adaptive_share_breaks(adaptive_ws *A, adaptive_breaks *b) { A->nb = b; }
 
+int ad_record_y(adaptive_ws *A, const ad_mode *md) {
+  /* the held terms' next break (a gate's corners move no state); when they
+   * are the whole input, the one start_piece asks for at t too (ad_next_break) */
+  double t = A->zt, tb = gen_whole(A) ? ad_next_break(A, t) : cup_input_next_break(A->held, t);
+  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
+  if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
+  ad_lift(A, md, A->x, A->zw, A->zy);
+  return CUP_OK;
+}
+
 /* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
  * state and the input's states from the output time on. */
 int adaptive_zeta(adaptive_ws *A, double *zeta) {
@@ -408,12 +418,7 @@ int adaptive_zeta(adaptive_ws *A, double *zeta) {
       if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
     return CUP_OK;
   }
-  /* the held terms' next break (a gate's corners move no state); when they
-   * are the whole input, the one start_piece asks for at t too (ad_next_break) */
-  double t = A->zt, tb = gen_whole(A) ? ad_next_break(A, t) : cup_input_next_break(A->held, t);
-  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
-  if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
-  ad_lift(A, md, A->x, A->zw, A->zy);
+  if (ad_record_y(A, md)) return CUP_ERR_CALLBACK;
   for (int i = 0; i < A->m; i++)
     if (md->is_zeta[i]) zeta[i] = md->Lc[i] + la_dot(md->L + (size_t)i * A->na, A->zy, A->na);
   return CUP_OK;
