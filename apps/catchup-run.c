@@ -330,6 +330,8 @@ static int check_probes(run_t *r, char *err) {
   r->sk.sig = calloc((size_t)ns + 1, sizeof(double));
   if (!r->sk.zeta || !r->sk.sig) { snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
   r->sk.nl = nl;
+  nl_signal_map(nl);                               /* (built here, not at the first record; a switched
+                                                      netlist's other configurations at their first) */
   return 0;
 }
 
