@@ -240,14 +240,17 @@ struct adaptive_ws {
     const double *X;        /* the mode's buffers, NULL: empty */
     uint64_t mask;          /* ... the mode they held, and the map's key, when composed */
     const void *key;
-    int ok;                 /* 0: the map reads what y does not hold (an input outside the exosystem) */
+    int ok;                 /* 0: not composed (another map's sizes or input) */
     int *rp, *rj;           /* ns + 1, ns na */
     double *rx, *rc;        /* ns na, ns: the rows' nonzeros, their constants (zeta's Lc) */
+    int nu, *uc;            /* the input components the map reads that y leaves out (a switch's
+                               gate, a supply a configuration disconnects): nu of them, p room */
+    double *ux;             /* ns x p: each row's coefficients on uc's components */
   } rec[AD_MODES + 1];
   int rec_ns;               /* the signals the entries have room for (0: none yet) */
   struct ad_rec *rec_last;  /* the last entry used */
   void *rec_block;
-  double *rec_acc;          /* na: a row being composed */
+  double *rec_acc, *rec_u;  /* na: a row being composed; p: u(t) when an entry's nu > 0 */
   ad_stop stop;             /* where the last run stopped */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */

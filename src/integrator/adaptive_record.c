@@ -2,7 +2,9 @@
  * (record.h, adaptive_impl.h's rec): there the mode md is fixed and the
  * sample is its flow state y, so x = X y, u = U w (w: y's input states)
  * and zeta_J = Lc + L y; a signal map over (x, u, zeta) composed with
- * them once per mode is one sparse row a signal over y. In place of
+ * them once per mode is one sparse row a signal over y (plus u(t) itself
+ * for a component the exosystem leaves out: a switch's gate, a supply a
+ * configuration disconnects, evaluated at the record). In place of
  * cup_integrator_zeta, the input's evaluation (a sine's libm call) and
  * cup_netlist_signals at each sample (about 400 instructions a sample on
  * the precision rectifier). The sums differ from those by rounding: x,
@@ -16,27 +18,30 @@
 
 /* Room for ns signals in every entry (emptied); 0 or CUP_ERR_NOMEM. */
 static int room(adaptive_ws *A, int ns) {
-  int na = A->na, ne = AD_MODES + 1;
-  size_t ints = (size_t)ns + 1 + (size_t)ns * na, dbls = (size_t)ns * na + ns;
+  int na = A->na, p = A->p, ne = AD_MODES + 1;
+  size_t ints = (size_t)ns + 1 + (size_t)ns * na + p, dbls = (size_t)ns * na + ns + (size_t)ns * p;
   free(A->rec_block);
   A->rec_ns = 0;
   A->rec_last = NULL;
-  A->rec_block = malloc((size_t)ne * (ints * sizeof(int) + dbls * sizeof(double)) + (size_t)na * sizeof(double));
+  A->rec_block = malloc((size_t)ne * (ints * sizeof(int) + dbls * sizeof(double)) + ((size_t)na + p) * sizeof(double));
   if (!A->rec_block) return CUP_ERR_NOMEM;
   double *d = A->rec_block;
   A->rec_acc = d;
-  d += na;
+  A->rec_u = d + na;
+  d += na + p;
   for (int k = 0; k < ne; k++) {
     struct ad_rec *e = &A->rec[k];
     e->X = NULL;
     e->rx = d;
     e->rc = d + (size_t)ns * na;
+    e->ux = e->rc + ns;
     d += dbls;
   }
   int *i = (int *)d;
   for (int k = 0; k < ne; k++) {
     A->rec[k].rp = i;
     A->rec[k].rj = i + ns + 1;
+    A->rec[k].uc = A->rec[k].rj + (size_t)ns * na;
     i += ints;
   }
   A->rec_ns = ns;
@@ -44,8 +49,10 @@ static int room(adaptive_ws *A, int ns) {
 }
 
 /* S's row k over (x, u, zeta) composed with md's rows into acc (na) and
- * its constant; 0 when it reads an input component U leaves out. */
-static int compose_row(const adaptive_ws *A, const ad_mode *md, const double *row, double *acc, double *c) {
+ * its constant; an input component U leaves out (live_terms: no term of
+ * it in E or G) onto e's list, its coefficient in row k of ux. */
+static void compose_row(const adaptive_ws *A, const ad_mode *md, const double *row, int k, struct ad_rec *e,
+                        double *acc, double *c) {
   int n = A->n, p = A->p, m = A->m, na = A->na, nw = A->nw;
   memset(acc, 0, sizeof(double) * (size_t)na);
   *c = 0;
@@ -60,7 +67,11 @@ static int compose_row(const adaptive_ws *A, const ad_mode *md, const double *ro
       double uq = A->U[q + (size_t)j * p];
       if (uq != 0) { acc[n + j] += s * uq; held = 1; }
     }
-    if (!held) return 0;                         /* (no term of it in E or G: live_terms dropped it) */
+    if (held) continue;
+    int j = 0;
+    while (j < e->nu && e->uc[j] != q) j++;
+    if (j == e->nu) e->uc[e->nu++] = q;
+    e->ux[(size_t)k * p + j] = s;
   }
   for (int r = 0; r < m; r++) {
     double s = row[n + p + r];
@@ -68,7 +79,6 @@ static int compose_row(const adaptive_ws *A, const ad_mode *md, const double *ro
     for (int j = 0; j < na; j++) acc[j] += s * md->L[(size_t)r * na + j];
     *c += s * md->Lc[r];
   }
-  return 1;
 }
 
 static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, struct ad_rec *e) {
@@ -77,10 +87,12 @@ static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, stru
   e->mask = md->mask;
   e->key = S->key;
   e->ok = !A->callback && S->n == A->n && S->p == A->p && S->m == A->m && nl_same_input(S->u, A->u);
+  e->nu = 0;
+  memset(e->ux, 0, sizeof(double) * (size_t)S->ns * (size_t)A->p);
   for (int k = 0; e->ok && k < S->ns; k++) {
     double *acc = A->rec_acc;
     e->rp[k] = nz;
-    e->ok = compose_row(A, md, S->rows + (size_t)k * nc, acc, &e->rc[k]);
+    compose_row(A, md, S->rows + (size_t)k * nc, k, e, acc, &e->rc[k]);
     for (int j = 0; j < na; j++)
       if (acc[j] != 0) { e->rj[nz] = j; e->rx[nz++] = acc[j]; }
   }
@@ -104,6 +116,20 @@ static struct ad_rec *entry(adaptive_ws *A, const ad_mode *md, const signal_map 
   return e->ok ? e : NULL;
 }
 
+/* The components uc of u(t) at the record's time, added to each row:
+ * cup_input_eval's sums, as cup_netlist_signals takes them. */
+static int add_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out) {
+  if (cup_input_eval(A->u, A->zt, A->rec_u)) return 0;
+  int p = A->p;
+  for (int k = 0; k < ns; k++) {
+    const double *c = e->ux + (size_t)k * p;
+    double acc = 0;
+    for (int j = 0; j < e->nu; j++) acc += c[j] * A->rec_u[e->uc[j]];
+    out[k] += acc;
+  }
+  return 1;
+}
+
 int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
   const ad_mode *md = A->zmd;
   if (!md) return 0;
@@ -116,5 +142,5 @@ int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
     for (int q = rp[k]; q < rp[k + 1]; q++) acc += rx[q] * y[rj[q]];
     out[k] = acc;
   }
-  return 1;
+  return e->nu ? add_inputs(A, e, S->ns, out) : 1;
 }
