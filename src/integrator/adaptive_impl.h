@@ -235,7 +235,9 @@ struct adaptive_ws {
   /* catchup-run's signals at a sample inside a step (adaptive_record): a
    * signal map composed with a mode's rows of x, u and zeta over y, sparse
    * by row, an entry per set of mode buffers (a mode's matrices move with
-   * its buffers: X names them), allocated at the first such sample */
+   * its buffers: X names them; the same rows in them, mask, are the same
+   * matrices, a mode being built from its rows alone), allocated at the
+   * first record (a switched run's configurations are made in the run too) */
   struct ad_rec {
     const double *X;        /* the mode's buffers, NULL: empty */
     uint64_t mask;          /* ... the mode they held, and the map's key, when composed */
