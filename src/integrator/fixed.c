@@ -500,7 +500,7 @@ static unsigned long long theta_support(const fixed_ws *F) {
   return J;
 }
 
-/* Steps taken again at most after a window's first (restart_step). */
+/* Steps taken again at most after a window's first (restart_again). */
 enum { RESTARTS = 3 };
 
 /* A window's first step with D and theta < 1 (integrator_window armed
@@ -515,22 +515,23 @@ enum { RESTARTS = 3 };
  * Within one mode Pi zeta is a function of the state, so only a support
  * that the step's end does not keep can be wrong: then the step is taken
  * again from x_k with the carry of its own end's zeta (solve_d leaves it),
- * until the support holds. zeta at t_k+ to O(h) is a local error O(h^2)
- * once, as an event inside a step makes, and theta = 1/2 stays second
- * order. A support that holds leaves the step as it was, bit for bit. */
-static __attribute__((noinline, cold)) int restart_step(fixed_ws *F, long k, double t0, double t1, int fixed,
-                                                        long rebuilds0, int stiff, cup_proj_info *pi, int st,
-                                                        cup_run_info *info) {
-  F->restart = 0;
-  unsigned long long was = F->mode0, now = theta_support(F);
-  for (int r = 0; r < RESTARTS && now != was && st >= 0; r++) {
-    int iterations = pi->iterations;
-    st = step(F, k, t0, t1, fixed, rebuilds0, stiff, pi, info);
-    pi->iterations += iterations;
-    was = now;
-    now = theta_support(F);
+ * until the support holds (1: again; *again counts). zeta at t_k+ to O(h)
+ * is a local error O(h^2) once, as an event inside a step makes, and
+ * theta = 1/2 stays second order. A support that holds leaves the step as
+ * it was, bit for bit. (steps calls step once, in a loop, so that step
+ * stays inlined there: a second call site cost the bridge's theta run 3 %.) */
+static __attribute__((noinline, cold)) int restart_again(fixed_ws *F, cup_proj_info *pi, int *again) {
+  unsigned long long now = theta_support(F);
+  if (*again == 0) F->restart_iters = 0;
+  if (now == F->mode0 || *again == RESTARTS) {
+    F->restart = 0;
+    pi->iterations += F->restart_iters;            /* the step's work, all its solves */
+    return 0;
   }
-  return st;
+  F->restart_iters += pi->iterations;
+  F->mode0 = now;
+  (*again)++;
+  return 1;
 }
 
 /* The steps from k0 (the sampler at next_j) to kend, as a run takes them
@@ -543,7 +544,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
   long rebuilds0 = F->rebuilds0;
   double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
   int fast = F->fast.on && !o->on_step && !F->half && !F->jump;   /* the estimate compares every step */
-  F->fast.hold = F->restart ? k0 + 1 : 0;          /* (a window's first step checked: restart_step) */
+  F->fast.hold = F->restart ? k0 + 1 : 0;          /* (a window's first step checked: restart_again) */
   /* a record every step: a konst run records its steps itself, as below */
   F->fast.recording = fast && F->fast.konst && sink && o->output == CUP_OUTPUT_EVERY && o->output_every == 1;
   F->fast.rec = (faststep_rec){sink, sink_ctx, &F->zeta_from};
@@ -565,8 +566,9 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
       F->zeta_from = 1;
       st = step_checked(F, k, t0, t1, fixed, 1, stiff, &pi, st, info);
     } else {
-      st = step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
-      if (F->restart && st >= 0) st = restart_step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, st, info);
+      int again = 0;
+      do st = step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
+      while (__builtin_expect(F->restart, 0) && st >= 0 && restart_again(F, &pi, &again));
     }
     if (st < 0) return st;
     if (tally_state_beyond(F->xnew, n)) return diverged(F, info, k + 1, t1, F->xnew);
@@ -649,7 +651,7 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
     if (F->zprev) la_zero(F->zprev, F->m);
     if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
     if (F->K && F->use_theta) theta_start(F, k0);  /* theta's zeta_k0 at the window's start */
-    F->restart = F->K && F->use_theta && F->th.D && F->th.theta < 1;   /* ... its mode checked (restart_step) */
+    F->restart = F->K && F->use_theta && F->th.D && F->th.theta < 1;   /* ... its mode checked (restart_again) */
     if (F->restart) F->mode0 = theta_support(F);
     st = steps(F, k0, *next_j, sink, sink_ctx, info);
   }
