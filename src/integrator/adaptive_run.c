@@ -74,8 +74,10 @@ static int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
   R->info->samples++;
   A->zmd = A->pinned[1] ? NULL : R->md;
   A->zt = R->t;
+  A->zx0 = x != A->x;
   int stopped = R->sink(R->steps, R->t, x, R->sink_ctx);
   A->zmd = NULL;
+  A->zx0 = 0;
   if (stopped) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_SAMPLE, "stopped by the output sink");
   return CUP_OK;
 }
