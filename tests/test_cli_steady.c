@@ -4,7 +4,8 @@
  * units and long names, the measurements against the samples of the file
  * itself (the RMS of v(out) against the resistor's power v^2 / R; the
  * balance of the absorbed powers, which the capacitor's zero average closes
- * only at the steady state), the summary lines; no steady state (the LC at
+ * only at the steady state), the summary lines; the six-pulse rectifier's
+ * first row (its diodes' right limit at 0+); no steady state (the LC at
  * resonance): the transient instead with a warning, or an error with
  * fallback: false; bad input: a period that is no whole number of the
  * sources', a usage error. */
@@ -180,6 +181,43 @@ static void switched_signals(void **state) {
   free(is); free(id); free(il); free(vsw);
 }
 
+/* The six-pulse rectifier's period from its steady state: at t = 0 (the
+ * period's first row) va = 0 is the middle phase, vc = 100 sin 120 deg the
+ * highest and vb = -vc the lowest, so D5 (c to p) and D6 (n to b) carry
+ * the inductor's current into the filter, D1 and D4 (phase a) carry
+ * nothing, v(p) = vc and v(n) = vb: the right limit at 0+ (netlist.md,
+ * "Signals"), continuous with the next rows. Before, the first row took
+ * zeta = 0 there: i(D1) = i(D4) = i(L1) = 16.7 A, v(p) = v(n) = 0. */
+static void sixpulse_first_row(void **state) {
+  (void)state;
+  const char *out = tmp_path("sixpulse.h5");
+  const char *probes[] = {"i(D1)", "i(D4)", "i(D5)", "i(D6)", "i(L1)", "v(p)", "v(n)"};
+  result r = run_cli((const char *const[]){CUP_EXAMPLES_DIR "/circuits/sixpulse.cir", "-o", out, "--steady-state",
+                                           "--probe", probes[0], "--probe", probes[1], "--probe", probes[2], "--probe",
+                                           probes[3], "--probe", probes[4], "--probe", probes[5], "--probe",
+                                           probes[6], NULL}, 0, 0);
+  expect_exit(&r, 0);
+  hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+  assert_true(f >= 0);
+  double *s[7], vc = 100 * sin(2 * M_PI / 3);
+  char name[32];
+  for (int k = 0; k < 7; k++) {
+    snprintf(name, sizeof name, "signals/%s", probes[k]);
+    assert_true(read_rows(f, name, 1, 1, &s[k]) > 100);
+  }
+  double il = s[4][0];
+  print_message("t = 0: i(D1) %g, i(D4) %g, i(D5) %.17g, i(D6) %.17g, i(L1) %.17g, v(p) %.17g, v(n) %.17g\n",
+                s[0][0], s[1][0], s[2][0], s[3][0], il, s[5][0], s[6][0]);
+  assert_true(il > 1);
+  assert_true(s[0][0] == 0 && s[1][0] == 0);
+  assert_close(s[2][0], il, 1e-12 * il);
+  assert_close(s[3][0], il, 1e-12 * il);
+  assert_close(s[5][0], vc, 1e-12 * vc);
+  assert_close(s[6][0], -vc, 1e-12 * vc);
+  H5Fclose(f);
+  for (int k = 0; k < 7; k++) free(s[k]);
+}
+
 /* The same period with every signal ('--probe all'): each must follow the
  * configuration too. The capacitor's mean
  * current is 0 in a steady state, v(out)'s mean is D Vin = 6 V and its
@@ -306,6 +344,7 @@ int main(void) {
     cmocka_unit_test(switched_default_signals),
     cmocka_unit_test(switched_netlist_probes),
     cmocka_unit_test(fullbridge_phase),
+    cmocka_unit_test(sixpulse_first_row),
     cmocka_unit_test(bad_input),
   };
   return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

@@ -294,12 +294,16 @@ CUP_API int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *s
 CUP_API const double *cup_integrator_state(const cup_integrator *I);
 /** zeta of the last step taken (m entries into zeta, m the LCS's rows):
  *  the theta step's LCP solution, or the projection's multipliers divided
- *  by h (the impulse of the step over its length); 0 before the first step.
- *  Valid inside the sink, for the state it receives (a netlist's diode
- *  currents and voltages, cup_netlist_signals). The adaptive scheme gives
- *  the multipliers of the active set that holds from the sample's time on
- *  (at an event, the one chosen there), and zeros at t = 0 and on its
- *  catching-up steps across accumulating events. A process on a polyset
+ *  by h (the impulse of the step over its length). Before the first step
+ *  (x0's sample): theta's LCP at x0, 0 <= zeta _|_ C x0 + D zeta + g >= 0,
+ *  which its first step starts from (with D = 0, or x0 not consistent: 0),
+ *  the other fixed-step schemes' 0. Valid inside the sink, for the state
+ *  it receives (a netlist's diode currents and voltages,
+ *  cup_netlist_signals). The adaptive scheme gives the multipliers of the
+ *  active set that holds from the sample's time on (at an event, the one
+ *  chosen there; at t = 0 the one the solution takes right after it, the
+ *  right limit), and zeros on its catching-up steps across accumulating
+ *  events. A process on a polyset
  *  has them too, one per row of its set: its normal cone is
  *  {P^-1 C^T zeta : 0 <= zeta _|_ C x + g}, so x' = f + P^-1 C^T zeta as an
  *  LCS's x' = A x + E u + B zeta. CUP_ERR_UNSUPPORTED for a process on any

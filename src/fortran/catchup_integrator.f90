@@ -385,7 +385,8 @@ contains
   end subroutine cup_integrator_resume
 
   !> zeta of the last step (rows entries): the diodes' currents and reverse
-  !> voltages of a netlist, for cup_netlist_signals (0 before the first step).
+  !> voltages of a netlist, for cup_netlist_signals (before the first step, at
+  !> t = 0: as the C function says, cup_integrator_zeta in catchup/integrator.h).
   !> A process on a polyset has one per row of its set (rows); a process on
   !> another set has none (rows = 0, ierr = CUP_ERR_UNSUPPORTED).
   subroutine cup_integrator_zeta(integ, zeta, ierr)

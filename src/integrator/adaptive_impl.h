@@ -226,10 +226,11 @@ struct adaptive_ws {
   int zeno_row[AD_ZENO_RING];
   long nzeno;
   /* the multipliers at an output time (adaptive_zeta, inside the sink) */
-  const ad_mode *zmd;       /* the active set that holds there, or NULL (none: x0, catching-up steps) */
-  double zt;
+  const ad_mode *zmd;       /* the active set that holds there (at x0's sample: the one chosen at 0+), */
+  double zt;                /* or NULL (none chosen, catching-up steps) */
   double *zw, *zy;          /* nw, na */
   int zy_ready;             /* a sample inside a step: zy is its y already */
+  int zx0;                  /* x0's sample: the sink has x0 as given, not A->x (adaptive_record declines) */
   double *xo, *dy, *de, *de2, *ed; /* n, 2 na, na, na, n: a sample inside a step (dense output), its error */
   int *erp, *erj;           /* na + 1, na * na: the sample spacing's exp(dt M) by rows, its nonzeros ... */
   double *erx;              /* na * na: ... and their values (adaptive_sample.c); er_n: 1 + the */

@@ -132,7 +132,7 @@ static int add_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *ou
 
 int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
   const ad_mode *md = A->zmd;
-  if (!md) return 0;
+  if (!md || A->zx0) return 0;                   /* (x0's sample: its signals from x0 as given, by the caller) */
   const struct ad_rec *e = entry(A, md, S);
   if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
   const double *y = A->zy, *rx = e->rx;

@@ -67,18 +67,24 @@ static int halt(adaptive_ws *A, ad_run *R, int status, int phase, const char *wh
   return ad_fail(R, status, "%s", what);
 }
 
-/* The sample at R->t to the sink. */
-static int offer(adaptive_ws *A, ad_run *R) {
+/* The sample at R->t to the sink: the state x (A->x, or x0 as given at a
+ * start), zeta the active set's at A->x (adaptive_zeta; none before a set
+ * is chosen, or under catching-up steps: pinned[1]). */
+static int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
   R->info->samples++;
-  A->zmd = A->pinned[1] || R->steps == 0 ? NULL : R->md;   /* pinned[1]: catching-up steps */
+  A->zmd = A->pinned[1] ? NULL : R->md;
   A->zt = R->t;
-  int stopped = R->sink(R->steps, R->t, A->x, R->sink_ctx);
+  A->zx0 = x != A->x;
+  int stopped = R->sink(R->steps, R->t, x, R->sink_ctx);
   A->zmd = NULL;
+  A->zx0 = 0;
   if (stopped) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_SAMPLE, "stopped by the output sink");
   return CUP_OK;
 }
 
-static int emit(adaptive_ws *A, ad_run *R) {
+static int offer(adaptive_ws *A, ad_run *R) { return offer_x(A, R, A->x); }
+
+static int emit_x(adaptive_ws *A, ad_run *R, const double *x) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
   switch (o->output) {
@@ -94,8 +100,10 @@ static int emit(adaptive_ws *A, ad_run *R) {
   }
   if (!out) return CUP_OK;
   R->est_max = fmax(R->est_max, estimate_now(A, R));
-  return R->sink ? offer(A, R) : CUP_OK;
+  return R->sink ? offer_x(A, R, x) : CUP_OK;
 }
+
+static int emit(adaptive_ws *A, ad_run *R) { return emit_x(A, R, A->x); }
 
 /* A step's callback, and the interrupt and wall-time checks. */
 static int step_checks(adaptive_ws *A, ad_run *R, const cup_proj_info *pi) {
@@ -778,6 +786,27 @@ static int start_from(adaptive_ws *A, ad_run *R, int first, int st) {
   return st;
 }
 
+/* A run's start (a switched run's first window's): the breakpoint and the
+ * first piece, then x0's sample, x0 as given (A->xok, which nothing moved
+ * yet; like the fixed-step schemes) with zeta the right limit at t+: the
+ * multipliers of the active set chosen there, at the state the start left
+ * (x0 put on that set's manifold; after a jump at t, the state after it).
+ * Taken before the start, it had none (zeta = 0: a full bridge's diode
+ * carrying an inductor's current at t = 0 showed i(D) = -i(L)). A start
+ * that fails still gives x0's sample (zeta = 0 unless a set was chosen). */
+static int start_sampled(adaptive_ws *A, ad_run *R) {
+  int st = start_from(A, R, 1, CUP_OK);
+  if (st >= 0) return emit_x(A, R, A->xok);
+  cup_run_info *info = R->info;
+  char message[sizeof info->message];
+  memcpy(message, info->message, sizeof message);
+  if (emit_x(A, R, A->xok) < 0) {                /* refused: the start's error stays the run's */
+    A->stop.phase = AD_STOP_NONE;
+    memcpy(info->message, message, sizeof message);
+  }
+  return info->status = st;
+}
+
 int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                  cup_run_info *info) {
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
@@ -785,8 +814,7 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
   if (st) return st;
   for (int j = 0; A->tan && j < A->n; j++)       /* V(0) = I */
     for (int i = 0; i < A->n; i++) A->tan[i + (size_t)j * A->n] = i == j;
-  st = emit(A, &R);                              /* x0 as given, like the fixed-step schemes */
-  return run_to_end(A, &R, start_from(A, &R, 1, st));
+  return run_to_end(A, &R, start_sampled(A, &R));
 }
 
 /* A switched run's window (switched.c): from xa at ta to tb, the samples
@@ -799,8 +827,7 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
               .wall0 = A->o.max_wall_seconds > 0 ? now_seconds() : 0, .t = ta, .steps = *steps,
               .next_sample = *next_sample};
   run_begin(A, &R, tb, xa, 0);
-  int st = first ? emit(A, &R) : CUP_OK;
-  st = start_from(A, &R, first, st);
+  int st = first ? start_sampled(A, &R) : start_from(A, &R, 0, CUP_OK);
   /* every step recorded: the state after the jump too, at the same time
    * (after the window's projections, with the active set chosen there, so
    * that zeta is the new configuration's); a line drawn through the
@@ -834,6 +861,11 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
   int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
   s->phase = AD_STOP_NONE;
+  if (phase == AD_STOP_SAMPLE && R.steps == 0) {   /* x0's sample after the start (start_sampled): again */
+    info->samples--;
+    if (sink) st = offer_x(A, &R, A->xok);
+    return run_to_end(A, &R, st);
+  }
   la_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
   if (phase == AD_STOP_SAMPLE) {
     info->samples--;                             /* counted when the sink refused it */
@@ -846,12 +878,6 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
     if (st >= 0) st = emit(A, &R);
   } else {
     st = emit(A, &R);
-  }
-  cup_proj_info pi;
-  if (R.steps == 0) {                            /* stopped at x0's sample: the start goes on */
-    if (st >= 0) st = at_break(A, &R, 1, &pi);
-    if (st >= 0 && A->tend > 0) st = start_piece(A, &R);
-    return run_to_end(A, &R, st);
   }
   if (st >= 0 && at_tb && R.t < A->tend) st = start_piece(A, &R);
   if (st >= 0 && R.tend > 0) st = catch_up_from(A, &R, at_tb);

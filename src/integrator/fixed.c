@@ -387,6 +387,12 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   F->rebuilds0 = cup_setproj_rebuilds(F->sp);
   if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
   F->jump = F->K && polyset_x0(F, fixed, info);
+  /* zeta at t = 0 (x0's sample, and the left end of the samples inside
+   * the first step): theta's LCP at x0, which polyset_x0 solved and its
+   * first step starts from (with D, the multipliers the state fixes: a
+   * bridge's pair carrying an inductor's current; 0 with D = 0 and where
+   * x0 is not consistent); the other schemes' 0 (no step has acted yet) */
+  if (F->K && F->use_theta) F->zeta_from = 1;
   if (!F->K && general_x0(F, info) < 0) return info->status;
   int stiff = o->scheme == CUP_SCHEME_EXPLICIT && F->h_rho > 2;
   if (stiff) {
@@ -406,7 +412,10 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   sampler sp = {0};
   sampler_next(F, &sp);
   F->zs = 1;
-  if (F->zprev) la_zero(F->zprev, F->m);
+  if (F->zprev) {
+    la_zero(F->zprev, F->m);
+    if (F->zeta_from) fixed_zeta(F, F->zprev);
+  }
   if (F->half) {
     memcpy(F->x0, x0, sizeof(double) * (size_t)n);      /* a resumed run runs the coarse one again */
     if (coarse_run(F, info) == CUP_ERR_INTERRUPTED)
