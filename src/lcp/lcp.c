@@ -112,7 +112,8 @@ int lcp_solve(lcp_solver *s, const double *M, const double *q, int *pivots) {
     int st = murty(s, M, q, pivots);
     if (st == CUP_OK) memcpy(s->prev, s->act, (size_t)s->m);
     if (st != CUP_ERR_LINALG) return st;
-    if (cold) return s->monotone ? lemke(s, M, q, pivots) : st;
+    /* (from an empty warm start, the cold one would fail the same way) */
+    if (cold || lcp_cold(s)) return s->monotone ? lemke(s, M, q, pivots) : st;
     memset(s->act, 0, (size_t)s->m);
   }
 }
