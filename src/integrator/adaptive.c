@@ -270,6 +270,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     A->Dd = block_take(b, (size_t)m * m, sizeof(double));
     A->CB = block_take(b, (size_t)m * m, sizeof(double));
     A->dcpl = block_take(b, (size_t)m, 1);
+    A->jseed = block_take(b, (size_t)m, 1);
   }
   A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));

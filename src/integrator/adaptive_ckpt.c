@@ -47,6 +47,7 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
   if (A->has_D) {                                /* the jump's LCP (2 m) warm-starts too */
     ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
     ckpt_io(c, A->jlcp.prev, 2 * M);
+    ckpt_io(c, A->jseed, M);
   }
   lcp_step_checkpoint(&A->proj, c);
   projector_checkpoint(A->projector, c);

@@ -244,8 +244,18 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots) {
   *active = 0;
   /* the multipliers alone, x as it is: 0 <= zeta _|_ C x + D zeta + g >= 0
    * (a diode behind a resistance takes any slack; and there B need not be
-   * P^-1 C^T, which the jump below assumes) */
-  if (lcp_solve(&A->lcp, A->Dd, A->dq0, pivots) == CUP_OK) {
+   * P^-1 C^T, which the jump below assumes). An empty warm start (A->lcp's
+   * is the active-set choice's, and a switched run's window starts cold)
+   * gives way to the jump's own last set: a bridge's dead time opens on
+   * the same diodes each period, and from nothing D's zero diagonal sent
+   * principal pivoting into Lemke's method. A->lcp's warm start is left as
+   * the solve leaves it, or empty when it fails. */
+  int empty = lcp_cold(&A->lcp);
+  if (empty) memcpy(A->lcp.prev, A->jseed, (size_t)m);
+  int solved = lcp_solve(&A->lcp, A->Dd, A->dq0, pivots) == CUP_OK;
+  if (solved) memcpy(A->jseed, A->lcp.prev, (size_t)m);
+  else if (empty) lcp_forget(&A->lcp);
+  if (solved) {
     /* w to the rounding of the solve: its residual is eps (|q| + |D| |zeta|)
      * in every row (a bridge behind a 10 kOhm shunt: 38 kV terms, a 2 V
      * row off by 2.4e-12); a w within the slack's own rounding is inside

@@ -151,6 +151,7 @@ struct adaptive_ws {
   double *Dd;               /* m x m, column-major */
   double *CB;               /* m x m, column-major: C B */
   unsigned char *dcpl;      /* rows with a nonzero in their row or column of D */
+  unsigned char *jseed;     /* m: the jump's last active set (ad_dae_jump's warm start) */
   int one;                  /* the exosystem's constant state 1 (F reaches zeta through D), or -1 */
   int nwu;                  /* the input's own exosystem states (nw without the constant) */
   int seed_on;              /* a switched run's windows (adaptive_seed): the active set chosen at ... */

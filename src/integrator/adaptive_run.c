@@ -172,7 +172,7 @@ static int jump(adaptive_ws *A, ad_run *R, double *x, uint64_t *active, cup_proj
 
 /* If x is outside {C x + g >= 0}, its certified P-projection (the exact
  * small-set LCP, as the explicit scheme's step); *active gets its active
- * rows (0 when nothing moved). */
+ * rows (0 when nothing moved), A->inside whether x stayed as it was. */
 static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
                            cup_proj_info *pi) {
   *active = 0;
@@ -184,7 +184,14 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
   for (int i = 0; i < A->m; i++) outside |= s[i] < -A->gam[i];   /* is consistent) */
   A->inside = !outside;
   if (!outside) return CUP_OK;
-  if (A->has_D) return jump(A, R, x, active, pi);
+  if (A->has_D) {
+    /* a conducting diode's row is below 0 with D: the jump's LCP finds x
+     * consistent as it is (the bridge's dead time, each window), and
+     * start_piece's check with the same offset would again */
+    int st = jump(A, R, x, active, pi);
+    A->inside = st == CUP_OK && pi->skipped;
+    return st;
+  }
   double S = cup_polyset_norm(A->K, x);
   la_copy(A->xr, x, A->n);
   int st = lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);

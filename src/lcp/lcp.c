@@ -70,6 +70,14 @@ static int solve_on(lcp_solver *s, const double *M, const double *q) {
     la_dense_lu_solve(s->lu, k, s->piv, s->rhs, s->work);
     for (int b = 0; b < k; b++) s->lam[s->idx[b]] = s->rhs[b];
   }
+  /* one or two columns (a circuit's event LCPs): the same sums, in the
+   * same order, with the columns found once */
+  if (k == 1 || k == 2) {
+    const double *ca = M + (size_t)s->idx[0] * m, *cb = M + (size_t)s->idx[k - 1] * m;
+    double la = s->lam[s->idx[0]], lb = s->lam[s->idx[k - 1]];
+    for (int i = 0; i < m; i++) s->w[i] = k == 1 ? q[i] + ca[i] * la : q[i] + ca[i] * la + cb[i] * lb;
+    return 0;
+  }
   for (int i = 0; i < m; i++) {
     double acc = q[i];
     for (int b = 0; b < k; b++) acc += M[i + (size_t)s->idx[b] * m] * s->lam[s->idx[b]];
@@ -112,7 +120,8 @@ int lcp_solve(lcp_solver *s, const double *M, const double *q, int *pivots) {
     int st = murty(s, M, q, pivots);
     if (st == CUP_OK) memcpy(s->prev, s->act, (size_t)s->m);
     if (st != CUP_ERR_LINALG) return st;
-    if (cold) return s->monotone ? lemke(s, M, q, pivots) : st;
+    /* (from an empty warm start, the cold one would fail the same way) */
+    if (cold || lcp_cold(s)) return s->monotone ? lemke(s, M, q, pivots) : st;
     memset(s->act, 0, (size_t)s->m);
   }
 }

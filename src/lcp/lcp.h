@@ -4,7 +4,8 @@
  * P-matrix). On the active set A, M_AA lambda_A = -q_A is solved in closed
  * form for one or two rows (Cramer's rule is forward stable for 2 x 2), else
  * by LU with partial pivoting (M need not be symmetric). Each solve starts
- * from the active set of the last solution and is retried cold. Dense, for
+ * from the active set of the last solution and is retried cold (not when
+ * that set was empty: the cold start it was fails the same way). Dense, for
  * the few rows of circuit models; allocation-free after lcp_init. */
 #ifndef CUP_LCP_H
 #define CUP_LCP_H

@@ -90,14 +90,14 @@ static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const part
   for (int e = 0; e < c->nelem && !st; e++) {
     if (c->elem[e].kind != NL_D || used[nl->evar[e]]) continue;
     int r = nl->evar[e];
-    char names[160] = "";
+    if (c->derived && c->elem[e].eq == NL_EQ_NONE && !column_used(q, r)) continue;   /* inert, or held off */
+    char names[160] = "";                        /* (the message's: a configuration's inert diodes need none) */
     size_t len = 0;
     for (int j = 0; j < q->sG.ncol && len < 120; j++)
       for (int k = q->sG.p[j]; k < q->sG.p[j + 1]; k++)
         if (q->sG.i[k] == r)
           len += (size_t)snprintf(names + len, sizeof names - len, "%s%s", len ? ", " : "",
                                   c->elem[nl->input_elem[j]].name);
-    if (c->derived && c->elem[e].eq == NL_EQ_NONE && !column_used(q, r)) continue;   /* inert, or held off */
     if (c->elem[e].eq != NL_EQ_NONE) {
       st = nl_fail(c, e, errmsg, CUP_ERR_PARSE, c->elem[e].eq == NL_EQ_LOOP
                    ? "no path: closed, the switch makes a loop of voltage sources (%s) with no capacitor: "

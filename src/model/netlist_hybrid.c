@@ -37,12 +37,16 @@ int nl_coo_add(nl_coo *t, int i, int j, double x, double mag) {
 void nl_coo_free(nl_coo *t) { free(t->i); free(t->j); free(t->x); free(t->mag); memset(t, 0, sizeof *t); }
 
 int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
-  int *cnt = calloc((size_t)ncol + 1, sizeof(int)), *order = malloc(sizeof(int) * ((size_t)t->n + 1));
-  int *mark = malloc(sizeof(int) * ((size_t)nrow + 1));
-  double *acc = malloc(sizeof(double) * ((size_t)nrow + 1)), *amag = malloc(sizeof(double) * ((size_t)nrow + 1));
-  int *rows = malloc(sizeof(int) * ((size_t)nrow + 1));
-  int st = cnt && order && mark && acc && amag && rows ? CUP_OK : CUP_ERR_NOMEM;
+  /* the scratch in one allocation (a switched run formulates each
+   * configuration inside its run, some 60 of these a bridge): acc, amag,
+   * then cnt (zeroed), order, mark, rows */
+  size_t R = (size_t)nrow + 1, C = (size_t)ncol + 1, N = (size_t)t->n + 1;
+  double *acc = malloc(sizeof(double) * 2 * R + sizeof(int) * (C + N + 2 * R)), *amag = acc ? acc + R : NULL;
+  int *cnt = acc ? (int *)(amag + R) : NULL, *order = cnt ? cnt + C : NULL;
+  int *mark = order ? order + N : NULL, *rows = mark ? mark + R : NULL;
+  int st = acc ? CUP_OK : CUP_ERR_NOMEM;
   if (!st) {
+    memset(cnt, 0, sizeof(int) * C);
     for (int k = 0; k < t->n; k++) cnt[t->j[k] + 1]++;
     for (int c = 0; c < ncol; c++) cnt[c + 1] += cnt[c];
     for (int k = 0; k < t->n; k++) order[cnt[t->j[k]]++] = k;   /* by column */
@@ -71,7 +75,7 @@ int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
     }
   }
   if (!st) { out->p[ncol] = nz; out->nnz = nz; }
-  free(cnt); free(order); free(mark); free(acc); free(amag); free(rows);
+  free(acc);
   return st;
 }
 
