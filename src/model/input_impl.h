@@ -71,6 +71,12 @@ void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, d
 int spice_term_constant(const input_term *t);
 /* A PULSE with rise = fall = 0 at tt, constant on [tt, *hi) (the signals' samples). */
 double spice_jump_pulse(const input_term *t, double tt, double *hi);
+/* The same, and in *j the period tt is in (-1 before the delay). */
+double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi);
+/* The same at tt = *hi of the piece before it, *j that piece's period (from
+ * spice_jump_pulse_j or this), moved on: the pieces one after another (a
+ * switched run's gates), bit for bit spice_jump_pulse's. */
+double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi);
 
 /* The square wave in units of pi: q = omega t / pi + phase / pi, so that
  * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from

@@ -49,6 +49,7 @@ typedef struct nl_topo {
   uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for changes) */
   int ctl_class;           /* > 0: configurations of one class have the same controls, of t alone
                               (same_controls): settle's rule holds in the one it moves to; 0: none */
+  int succ;                /* the configuration settle last moved to from it (a hint: its cfg is checked) */
 } nl_topo;
 
 struct nl_switched {
@@ -68,7 +69,8 @@ struct nl_switched {
    * at a converter's corner one gate moves while the others hold */
   int nmemo;               /* its terms */
   input_break_memo *bmemo; /* each one's next break */
-  double *vmemo;           /* 3 each: its value on [from, hi) (input_term_piece), from, hi, value */
+  double *vmemo;           /* 4 each: its value on [from, hi) (input_term_piece), from, hi, value, and a
+                              jump PULSE's period there (spice_jump_pulse_j; else NaN) */
   /* the controls a search read last (changes), where its terms' pieces
    * overlap: the next piece's first check reads them again */
   int cvm_class;           /* their configurations' control class (0: none held) */
@@ -331,7 +333,8 @@ static int reads_memo(const nl_switched *S, const nl_topo *tp) {
 static void memo_reset(nl_switched *S) {
   if (!S->bmemo) return;
   memset(S->bmemo, 0, sizeof *S->bmemo * (size_t)S->nmemo);
-  memset(S->vmemo, 0, sizeof *S->vmemo * 3 * (size_t)S->nmemo);
+  memset(S->vmemo, 0, sizeof *S->vmemo * 4 * (size_t)S->nmemo);
+  for (int k = 0; k < S->nmemo; k++) S->vmemo[4 * (size_t)k + 3] = NAN;
   S->cvm_class = 0;
   for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]);
 }
@@ -349,10 +352,14 @@ static void read_terms(nl_switched *S, const nl_topo *tp, double t) {
   for (int j = 0; j < u->p; j++) S->ut[j] = 0;
   for (int q = 0; q < tp->nuterm; q++) {
     int k = tp->uterm[q];
-    double *c = S->vmemo + 3 * (size_t)k;
+    double *c = S->vmemo + 4 * (size_t)k;
     if (!(t >= c[0] && t < c[1])) {
+      const input_term *w = &u->terms[k];
       c[0] = t;
-      c[2] = input_term_piece(&u->terms[k], t, &c[1]);
+      /* a gate's pieces one after another: the next from the last's period */
+      if (t == c[1] && !isnan(c[3])) c[2] = spice_jump_pulse_next(w, t, &c[3], &c[1]);
+      else if (input_jump_pulse(w)) c[2] = spice_jump_pulse_j(w, t, &c[3], &c[1]);
+      else c[2] = input_term_piece(w, t, &c[1]);
     }
     S->ut[u->terms[k].comp] += c[2];
     if (c[0] > lo) lo = c[0];
@@ -434,6 +441,13 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
   return CUP_OK;
 }
 
+/* 1 if the controls a search read last (changes' cvm) are configuration
+ * tp's at t: its class's, t in the pieces of their terms they were read on
+ * (every configuration of a class reads the same sums of the same terms). */
+static int held(const nl_switched *S, const nl_topo *tp, double t) {
+  return tp->steps && tp->memo && tp->ctl_class && tp->ctl_class == S->cvm_class && t >= S->cvm_lo && t < S->cvm_hi;
+}
+
 /* ngspice's rule: on above VT + |VH|, off below VT - |VH| (S->thr), else as before. */
 static uint64_t rule(const nl_switched *S, uint64_t cfg, const double *cv) {
   for (int k = 0; k < S->nsw; k++) {
@@ -466,15 +480,22 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
      * applied to its own result with the same values, gives it again */
     if (read && S->topo[*topo].ctl_class == read) return CUP_OK;
     read = S->topo[*topo].ctl_class;
+    const nl_topo *tp = &S->topo[*topo];
     uint64_t next = S->memo_cfg;                   /* the search's at t: the same controls (they read no state) */
-    if (!(pass == 0 && memo)) {
-      if (controls(S, &S->topo[*topo], t, x, zeta, cv))
+    if (pass == 0 && memo) {
+    } else if (held(S, tp, t)) {                   /* the controls the searches read last, the same sums */
+      next = tp->cfg == S->cvm_from || tp->cfg == S->cvm_to ? S->cvm_to : rule(S, tp->cfg, S->cvm);
+    } else {
+      if (controls(S, tp, t, x, zeta, cv))
         return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
-      next = rule(S, S->topo[*topo].cfg, cv);
+      next = rule(S, tp->cfg, cv);
     }
-    if (next == S->topo[*topo].cfg) return CUP_OK;
+    if (next == tp->cfg) return CUP_OK;
+    int from = *topo, succ = tp->succ;             /* a converter moves between the same few, in turn */
+    if (S->topo[succ].cfg == next) { *topo = succ; continue; }
     int st = topo_of(nl, next, topo, errmsg);
     if (st) return st;
+    S->topo[from].succ = *topo;
   }
   return nl_fail(&S->c, -1, errmsg, CUP_ERR_UNSUPPORTED, "the switches do not settle at t = %g: each "
                  "configuration turns another's control past its threshold (a loop of switches with no "
@@ -518,6 +539,33 @@ static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x,
   return S->last_cfg != tp->cfg;
 }
 
+/* next_switch from a time in the pieces the controls of configuration
+ * topo's class were read on last (cvm), the rule giving topo there: the
+ * pieces one after another, each read at its start, up to the first whose
+ * rule moves topo, the switching time its start. What the search below
+ * finds (its check just before a piece's end reads the piece the controls
+ * were read on; at the end, they are read afresh), by the same reads. */
+static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
+  const nl_topo *tp = &S->topo[topo];
+  uint64_t cfg = tp->cfg;
+  for (double b = S->cvm_hi; b <= tmax; b = S->cvm_hi) {
+    controls(S, tp, b, NULL, NULL, S->cvm);        /* (terms of t alone: no callback to fail) */
+    S->cvm_lo = S->read_lo;
+    S->cvm_hi = S->read_hi;
+    S->cvm_from = cfg;
+    S->cvm_to = S->last_cfg = rule(S, cfg, S->cvm);
+    if (S->cvm_to != cfg) {
+      *tnext = b;
+      S->memo_ok = 1;                              /* (a class's controls read no state) */
+      S->memo_topo = topo;
+      S->memo_t = b;
+      S->memo_cfg = S->cvm_to;
+      return CUP_OK;
+    }
+  }
+  return CUP_OK;
+}
+
 /* The first time in (t, tmax] at which a source-gated switch of
  * configuration topo changes (tmax if none): the input's pieces checked at
  * their ends when every source is DC, PULSE or PWL (linear pieces), else
@@ -541,6 +589,8 @@ static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double 
    * (the other terms' breaks, across which the controls hold, are passed
    * over; a switched run's window asks the input's next break itself) */
   int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
+  if (cls && held(S, tp, t) && S->cvm_to == cfg)    /* (the rule, applied to its own result, gives it again) */
+    return next_piece(S, topo, tmax, tnext);
   while (a < tmax) {
     const cup_input *in = tp->sub->u;
     double b = cls && cls == S->cvm_class && a >= S->cvm_lo && a < S->cvm_hi ? S->cvm_hi
@@ -767,7 +817,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   S->cvm = malloc(sizeof(double) * ((size_t)S->nsw + 1));
   S->nmemo = nl->u && !nl->u->fn ? nl->u->nterms : 0;
   S->bmemo = S->nmemo ? malloc(sizeof *S->bmemo * (size_t)S->nmemo) : NULL;
-  S->vmemo = S->nmemo ? malloc(sizeof *S->vmemo * 3 * (size_t)S->nmemo) : NULL;
+  S->vmemo = S->nmemo ? malloc(sizeof *S->vmemo * 4 * (size_t)S->nmemo) : NULL;
   if (!S->ut || !S->zf || !S->thr || !S->cvm || (S->nmemo && (!S->bmemo || !S->vmemo))) st = nl_switch_nomem(c, errmsg);
   for (int k = 0; !st && k < S->nsw; k++) {
     const nl_elem *el = &c->elem[S->sw[k]];
