@@ -465,7 +465,8 @@ static void test_term_piece(void **state) {
 
 /* spice_jump_pulse_next: a jump PULSE's pieces walked one after another
  * from the period each was in, bit for bit spice_jump_pulse's (value and
- * end) at each piece's start and at the end of the last, and each end the
+ * end) at each piece's start and at the end of the last (and its breaks by
+ * spice_jump_break, spice_term_break's), and each end the
  * closed form's next corner d + P j or d + P j + (0 + width) (a width
  * below P): the full bridge's gates, a buck's gate (width P / 2 from 0),
  * awkward decimals over 100,000 periods, a width of 0 and of P (the most
@@ -503,6 +504,13 @@ static void test_jump_pulse_walk(void **state) {
         fail_msg("pulse %zu, piece %ld at %.17g: ends at %.17g, the next corner %.17g", q, k, t, hi, corner);
       t = hi;
       v = spice_jump_pulse_next(tm, t, &j, &hi);
+    }
+    double per = 0, b = 0;                         /* the breaks likewise, against spice_term_break's */
+    for (long k = 0; k < pieces[q] && isfinite(b); k++) {
+      double want = spice_term_break(tm, b), got = spice_jump_break(tm, b, &per);
+      if (memcmp(&got, &want, sizeof got)) fail_msg("pulse %zu, break %ld after %.17g: %.17g, spice_term_break %.17g",
+                                                    q, k, b, got, want);
+      b = got;
     }
     cup_input_free(&u);
   }

@@ -201,6 +201,43 @@ static double pulse_break(const input_term *t, double tt) {
   return next;
 }
 
+/* pulse_break of a PULSE with jump edges in period pp of tt >= delay
+ * (pulse_period's): its corners delay + P j and that + (rise + width),
+ * pulse_break's sums; past tt and least among periods pp - 1 to pp + 1 only
+ * the top's end of pp - 1 (when it rounds past tt), of pp, and the start of
+ * pp + 1 can be (the others are below tt or past that start). */
+static double jump_break(const input_term *t, double tt, double pp) {
+  double P = t->period, w = t->rise + t->width;
+  if (!(P > 0)) {
+    double c2 = (t->delay + P * 0) + w;
+    return c2 > tt ? c2 : INFINITY;
+  }
+  double next = t->delay + P * (pp + 1), c2 = (t->delay + P * pp) + w;
+  if (c2 > tt && c2 < next) next = c2;
+  if (pp >= 1) {
+    double c1 = (t->delay + P * (pp - 1)) + w;
+    if (c1 > tt && c1 < next) next = c1;
+  }
+  return next;
+}
+
+/* (At the break tt from a time in period j the period is j + 1 when tt is
+ * its start, the sum pulse_period checks, else still j: spice_jump_pulse_next's.) */
+double spice_jump_break(const input_term *t, double tt, double *per) {
+  if (tt < t->delay) {
+    *per = 1;
+    return t->delay;
+  }
+  double j = *per - 2;
+  if (*per >= 2) {
+    if (t->period > 0 && tt == t->delay + t->period * (j + 1)) j += 1;
+  } else {
+    j = t->period > 0 ? pulse_period(t, tt) : 0;
+  }
+  *per = j + 2;
+  return jump_break(t, tt, j);
+}
+
 void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, double *slope) {
   /* the piece holding mid: after its corner (pulse_break's), up to the
    * next; a rise or fall below the corner's ulp leaves two corners equal,
