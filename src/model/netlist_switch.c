@@ -349,7 +349,7 @@ static void read_terms(nl_switched *S, const nl_topo *tp, double t) {
     return;
   }
   double lo = -INFINITY, hi = INFINITY;
-  for (int j = 0; j < u->p; j++) S->ut[j] = 0;
+  la_zero_few(S->ut, u->p);                        /* (a converter's few: memset's call cost more) */
   for (int q = 0; q < tp->nuterm; q++) {
     int k = tp->uterm[q];
     double *c = S->vmemo + 4 * (size_t)k;
@@ -395,6 +395,19 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   return CUP_OK;
 }
 
+/* controls' sums with x and zeta NULL (u's part alone) from u(t) in S->ut. */
+static void controls_u(const nl_switched *S, const nl_topo *tp, double *cv) {
+  int n = tp->sub->n, p = tp->sub->p;
+  for (int k = 0; k < S->nsw; k++) {
+    double su = 0;
+    for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
+      unsigned j = (unsigned)(tp->ci[q] - n);
+      if (j < (unsigned)p) su += tp->cx[q] * S->ut[j];
+    }
+    cv[k] = 0.0 + su + 0.0;
+  }
+}
+
 /* Each switch's control at t in configuration tp (x, zeta may be NULL: 0),
  * over the controls' nonzeros and the input terms they read (ctl_sparse):
  * the dense rows' sums less terms that are exactly 0, bit for bit. */
@@ -418,14 +431,7 @@ static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x
     z = S->zf;
   }
   if (!x && !z) {                                  /* a search's: u's part alone (the others 0) */
-    for (int k = 0; k < S->nsw; k++) {
-      double su = 0;
-      for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
-        unsigned j = (unsigned)(tp->ci[q] - n);
-        if (j < (unsigned)p) su += tp->cx[q] * S->ut[j];
-      }
-      cv[k] = 0.0 + su + 0.0;
-    }
+    controls_u(S, tp, cv);
     return CUP_OK;
   }
   for (int k = 0; k < S->nsw; k++) {
@@ -475,6 +481,13 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
   int memo = S->memo_ok && S->memo_topo == *topo && S->memo_t == t;
   int read = 0;                                    /* the control class the rule was last applied with */
   S->memo_ok = 0;
+  if (memo) {                                      /* the loop's first pass and, the class held, its last */
+    const nl_topo *tp = &S->topo[*topo], *to = &S->topo[tp->succ];
+    if (tp->ctl_class && to->cfg == S->memo_cfg && to->ctl_class == tp->ctl_class && S->memo_cfg != tp->cfg) {
+      *topo = tp->succ;
+      return CUP_OK;
+    }
+  }
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
     /* the configuration the rule gave reads the same controls: the rule,
      * applied to its own result with the same values, gives it again */
@@ -549,7 +562,8 @@ static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
   const nl_topo *tp = &S->topo[topo];
   uint64_t cfg = tp->cfg;
   for (double b = S->cvm_hi; b <= tmax; b = S->cvm_hi) {
-    controls(S, tp, b, NULL, NULL, S->cvm);        /* (terms of t alone: no callback to fail) */
+    read_terms(S, tp, b);                          /* (controls' with x and zeta NULL, of built-in terms) */
+    controls_u(S, tp, S->cvm);
     S->cvm_lo = S->read_lo;
     S->cvm_hi = S->read_hi;
     S->cvm_from = cfg;
