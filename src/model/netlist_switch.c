@@ -30,6 +30,7 @@
 #include "input_impl.h"
 
 #define NL_TOPO_MAX 64     /* configurations kept (a converter has a handful) */
+#define NL_TAB_TERMS 6     /* read_piece's table: a class reading up to 6 terms (a full bridge's 4 gates) */
 
 typedef struct nl_topo {
   uint64_t cfg;            /* bit k: switch k closed */
@@ -77,6 +78,11 @@ struct nl_switched {
   double cvm_lo, cvm_hi, *cvm;
   uint64_t cvm_from, cvm_to; /* the rule's last answer from them: cvm_from gave cvm_to */
   double read_lo, read_hi; /* the last read_terms': where its terms' memos all hold */
+  /* a class's controls by which of its terms are off their value (read_piece) */
+  int tab_class;           /* the class they are (0: none) */
+  double *tab;             /* 2^NL_TAB_TERMS x nsw */
+  uint64_t tab_ok;         /* bit key: its row holds */
+  uint64_t tab_from[1 << NL_TAB_TERMS], tab_to[1 << NL_TAB_TERMS];   /* the rule's last answer on it */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* the switching time the last search found (a configuration with no
@@ -336,7 +342,21 @@ static void memo_reset(nl_switched *S) {
   memset(S->vmemo, 0, sizeof *S->vmemo * 4 * (size_t)S->nmemo);
   for (int k = 0; k < S->nmemo; k++) S->vmemo[4 * (size_t)k + 3] = NAN;
   S->cvm_class = 0;
+  S->tab_class = 0;
   for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]);
+}
+
+/* Term k's memo (vmemo) on the piece that holds t, taken afresh when t is past it. */
+static inline const double *term_at(nl_switched *S, const input_term *w, int k, double t) {
+  double *c = S->vmemo + 4 * (size_t)k;
+  if (!(t >= c[0] && t < c[1])) {
+    c[0] = t;
+    /* a gate's pieces one after another: the next from the last's period */
+    if (t == c[1] && !isnan(c[3])) c[2] = spice_jump_pulse_next(w, t, &c[3], &c[1]);
+    else if (input_jump_pulse(w)) c[2] = spice_jump_pulse_j(w, t, &c[3], &c[1]);
+    else c[2] = input_term_piece(w, t, &c[1]);
+  }
+  return c;
 }
 
 /* u(t) into S->ut from the terms configuration tp's controls read (ut's
@@ -352,21 +372,76 @@ static void read_terms(nl_switched *S, const nl_topo *tp, double t) {
   la_zero_few(S->ut, u->p);                        /* (a converter's few: memset's call cost more) */
   for (int q = 0; q < tp->nuterm; q++) {
     int k = tp->uterm[q];
-    double *c = S->vmemo + 4 * (size_t)k;
-    if (!(t >= c[0] && t < c[1])) {
-      const input_term *w = &u->terms[k];
-      c[0] = t;
-      /* a gate's pieces one after another: the next from the last's period */
-      if (t == c[1] && !isnan(c[3])) c[2] = spice_jump_pulse_next(w, t, &c[3], &c[1]);
-      else if (input_jump_pulse(w)) c[2] = spice_jump_pulse_j(w, t, &c[3], &c[1]);
-      else c[2] = input_term_piece(w, t, &c[1]);
-    }
+    const double *c = term_at(S, &u->terms[k], k, t);
     S->ut[u->terms[k].comp] += c[2];
     if (c[0] > lo) lo = c[0];
     if (c[1] < hi) hi = c[1];
   }
   S->read_lo = lo;                                 /* where every term read holds (t among them) */
   S->read_hi = hi;
+}
+
+/* controls' sums with x and zeta NULL (u's part alone) from u(t) in S->ut. */
+static void controls_u(const nl_switched *S, const nl_topo *tp, double *cv) {
+  int n = tp->sub->n, p = tp->sub->p;
+  for (int k = 0; k < S->nsw; k++) {
+    double su = 0;
+    for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
+      unsigned j = (unsigned)(tp->ci[q] - n);
+      if (j < (unsigned)p) su += tp->cx[q] * S->ut[j];
+    }
+    cv[k] = 0.0 + su + 0.0;
+  }
+}
+
+/* 1 if a and b are the same double, bit for bit. */
+static inline int same_bits(double a, double b) {
+  uint64_t x, y;
+  memcpy(&x, &a, sizeof x);
+  memcpy(&y, &b, sizeof y);
+  return x == y;
+}
+
+/* The controls of configuration tp's class on the pieces of its terms
+ * that hold at b (read_terms, then controls_u: a search's), into S->cvm,
+ * and those pieces' span into cvm_lo, cvm_hi. Its terms are constants and
+ * PULSEs with jump edges (steps), each piece's value the term's value or
+ * value2: the controls are a function of which terms are off their value,
+ * kept for each such key (tab) the first time it occurs, the same sums.
+ * The key (-1: none, more terms than the table's). */
+static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
+  const cup_input *u = tp->sub->u;
+  if (tp->nuterm > NL_TAB_TERMS || !S->tab) {
+    read_terms(S, tp, b);
+    controls_u(S, tp, S->cvm);
+    S->cvm_lo = S->read_lo;
+    S->cvm_hi = S->read_hi;
+    return -1;
+  }
+  if (S->tab_class != tp->ctl_class) {
+    S->tab_class = tp->ctl_class;
+    S->tab_ok = 0;
+  }
+  double lo = -INFINITY, hi = INFINITY;
+  unsigned key = 0;
+  for (int q = 0; q < tp->nuterm; q++) {
+    int k = tp->uterm[q];
+    const double *c = term_at(S, &u->terms[k], k, b);
+    key |= (unsigned)!same_bits(c[2], u->terms[k].value) << q;
+    if (c[0] > lo) lo = c[0];
+    if (c[1] < hi) hi = c[1];
+  }
+  double *row = S->tab + (size_t)key * (size_t)S->nsw;
+  if (!(S->tab_ok >> key & 1)) {
+    read_terms(S, tp, b);                          /* (the pieces at b: held, as just read) */
+    controls_u(S, tp, row);
+    S->tab_ok |= (uint64_t)1 << key;
+    S->tab_from[key] = S->tab_to[key] = UINT64_MAX;   /* (no configuration: bit 63 is no switch) */
+  }
+  for (int k = 0; k < S->nsw; k++) S->cvm[k] = row[k];
+  S->cvm_lo = lo;
+  S->cvm_hi = hi;
+  return (int)key;
 }
 
 /* The configuration's index, formed now if it is new. */
@@ -393,19 +468,6 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   tp->memo = reads_memo(S, tp);
   *out = S->ntopo++;
   return CUP_OK;
-}
-
-/* controls' sums with x and zeta NULL (u's part alone) from u(t) in S->ut. */
-static void controls_u(const nl_switched *S, const nl_topo *tp, double *cv) {
-  int n = tp->sub->n, p = tp->sub->p;
-  for (int k = 0; k < S->nsw; k++) {
-    double su = 0;
-    for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
-      unsigned j = (unsigned)(tp->ci[q] - n);
-      if (j < (unsigned)p) su += tp->cx[q] * S->ut[j];
-    }
-    cv[k] = 0.0 + su + 0.0;
-  }
 }
 
 /* Each switch's control at t in configuration tp (x, zeta may be NULL: 0),
@@ -562,12 +624,15 @@ static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
   const nl_topo *tp = &S->topo[topo];
   uint64_t cfg = tp->cfg;
   for (double b = S->cvm_hi; b <= tmax; b = S->cvm_hi) {
-    read_terms(S, tp, b);                          /* (controls' with x and zeta NULL, of built-in terms) */
-    controls_u(S, tp, S->cvm);
-    S->cvm_lo = S->read_lo;
-    S->cvm_hi = S->read_hi;
+    int key = read_piece(S, tp, b);                /* (controls' with x and zeta NULL, of built-in terms) */
     S->cvm_from = cfg;
-    S->cvm_to = S->last_cfg = rule(S, cfg, S->cvm);
+    if (key >= 0 && (S->tab_from[key] == cfg || S->tab_to[key] == cfg)) {
+      S->cvm_to = S->tab_to[key];                  /* (a steady converter's: each period the same) */
+    } else {
+      S->cvm_to = rule(S, cfg, S->cvm);
+      if (key >= 0) S->tab_from[key] = cfg, S->tab_to[key] = S->cvm_to;
+    }
+    S->last_cfg = S->cvm_to;
     if (S->cvm_to != cfg) {
       *tnext = b;
       S->memo_ok = 1;                              /* (a class's controls read no state) */
@@ -757,6 +822,7 @@ static void sw_free(nl_switched **Sp) {
   }
   nl_circuit_free(&S->c);
   free(S->sw); free(S->ut); free(S->zf); free(S->gate); free(S->thr); free(S->cvm); free(S->bmemo); free(S->vmemo);
+  free(S->tab);
   free(S);
   *Sp = NULL;
 }
@@ -829,10 +895,12 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   S->zf = calloc((size_t)nl->m + (size_t)c->nelem + (size_t)nl->n + 2, sizeof(double));
   S->thr = malloc(sizeof(double) * (2 * (size_t)S->nsw + 1));
   S->cvm = malloc(sizeof(double) * ((size_t)S->nsw + 1));
+  S->tab = malloc(sizeof(double) * ((size_t)S->nsw << NL_TAB_TERMS));
   S->nmemo = nl->u && !nl->u->fn ? nl->u->nterms : 0;
   S->bmemo = S->nmemo ? malloc(sizeof *S->bmemo * (size_t)S->nmemo) : NULL;
   S->vmemo = S->nmemo ? malloc(sizeof *S->vmemo * 4 * (size_t)S->nmemo) : NULL;
-  if (!S->ut || !S->zf || !S->thr || !S->cvm || (S->nmemo && (!S->bmemo || !S->vmemo))) st = nl_switch_nomem(c, errmsg);
+  if (!S->ut || !S->zf || !S->thr || !S->cvm || !S->tab || (S->nmemo && (!S->bmemo || !S->vmemo)))
+    st = nl_switch_nomem(c, errmsg);
   for (int k = 0; !st && k < S->nsw; k++) {
     const nl_elem *el = &c->elem[S->sw[k]];
     double h = fabs(el->vh);
