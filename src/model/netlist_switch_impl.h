@@ -27,7 +27,7 @@ typedef struct nl_topo {
   int memo;                /* its input is topo[0]'s, term by term: the memos hold for it (memo_reset) */
   int steps;               /* the terms read are constants and jump PULSEs: between two breaks of
                               the input, u(t) and the controls from it are one value */
-  uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for changes) */
+  uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for nl_sw_changes) */
   int ctl_class;           /* > 0: configurations of one class have the same controls, of t alone
                               (same_controls): settle's rule holds in the one it moves to; 0: none */
   int succ;                /* the configuration settle last moved to from it (a hint: its cfg is checked) */
@@ -52,7 +52,7 @@ struct nl_switched {
   input_break_memo *bmemo; /* each one's next break */
   double *vmemo;           /* 4 each: its value on [from, hi) (input_term_piece), from, hi, value, and a
                               jump PULSE's period there (spice_jump_pulse_j; else NaN) */
-  /* the controls a search read last (changes), where its terms' pieces
+  /* the controls a search read last (nl_sw_changes), where its terms' pieces
    * overlap: the next piece's first check reads them again */
   int cvm_class;           /* their configurations' control class (0: none held) */
   double cvm_lo, cvm_hi, *cvm;
@@ -70,7 +70,7 @@ struct nl_switched {
    * the settle that follows it, at that time, takes it (once) */
   int memo_ok, memo_topo;
   double memo_t;
-  uint64_t memo_cfg, last_cfg;   /* ... and the rule's at the last check (changes) */
+  uint64_t memo_cfg, last_cfg;   /* ... and the rule's at the last check (nl_sw_changes) */
   /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
   cup_gate_fn gate_fn;
   void *gate_ctx;
@@ -84,7 +84,7 @@ static inline long nl_sw_instant(const nl_switched *S, double t) {
   return fabs(t - k * S->gate_ts) <= 1e-9 * S->gate_ts ? (long)k : -1;
 }
 
-/* 1 if the controls a search read last (changes' cvm) are configuration
+/* 1 if the controls a search read last (nl_sw_changes' cvm) are configuration
  * tp's at t: its class's, t in the pieces of their terms they were read on
  * (every configuration of a class reads the same sums of the same terms). */
 static inline int nl_sw_held(const nl_switched *S, const nl_topo *tp, double t) {

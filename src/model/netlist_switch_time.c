@@ -185,7 +185,7 @@ int nl_sw_changes(nl_switched *S, const nl_topo *tp, double s, const double *x, 
   return S->last_cfg != tp->cfg;
 }
 
-/* next_switch from a time in the pieces the controls of configuration
+/* nl_sw_next from a time in the pieces the controls of configuration
  * topo's class were read on last (cvm), the rule giving topo there: the
  * pieces one after another, each read at its start, up to the first whose
  * rule moves topo, the switching time its start. What the search below
