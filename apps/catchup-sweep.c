@@ -166,14 +166,14 @@ static int share_sweep(const args_t *a, sw_sweep **sp, char *err) {
     }
     if (lens[2] > INT_MAX) {
       say("%s: the variants' scenes take %ld bytes, more than one MPI message holds", a->sweep, lens[2]);
-      MPI_Abort(MPI_COMM_WORLD, 1);
+      singleton_abort(1);
     }
   }
   MPI_Bcast(lens, 3, MPI_LONG, 0, MPI_COMM_WORLD);
   char *text = rank == 0 ? s->text : malloc((size_t)lens[0] + 1);
   char *all = malloc((size_t)lens[2] + 1);
   char **scenes = calloc((size_t)lens[1] + 1, sizeof *scenes);
-  if (!text || !all || !scenes) MPI_Abort(MPI_COMM_WORLD, 1);
+  if (!text || !all || !scenes) singleton_abort(1);
   MPI_Bcast(text, (int)lens[0] + 1, MPI_CHAR, 0, MPI_COMM_WORLD);
   if (rank == 0)
     for (long k = 0, at = 0; k < lens[1]; k++) {
@@ -195,7 +195,7 @@ static int share_sweep(const args_t *a, sw_sweep **sp, char *err) {
   if (rank) free(text);
   if (rank && st) {                     /* the same texts gave rank 0 no error */
     say("rank %d: %s", rank, err);
-    MPI_Abort(MPI_COMM_WORLD, 1);
+    singleton_abort(1);
   }
   return st;
 }
@@ -348,7 +348,7 @@ static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, opener *l
   free_manager(&m);
   if (lost) {                  /* a worker did not answer the stop: end the job */
     fflush(stderr);
-    MPI_Abort(MPI_COMM_WORLD, rc ? rc : EXIT_RUN);
+    singleton_abort(rc ? rc : EXIT_RUN);
   }
   return rc;
 }

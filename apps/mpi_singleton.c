@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <mpi.h>
 #include "mpi_singleton.h"
 
 static char base[4096];    /* singleton_prepare's directory ("" when none was made) */
@@ -47,4 +48,18 @@ static void remove_empty(const char *dir, int depth) {
 
 void singleton_cleanup(void) {
   if (base[0]) remove_empty(base, 0);
+}
+
+_Noreturn void singleton_abort(int code) {
+  if (!base[0]) {
+    MPI_Abort(MPI_COMM_WORLD, code);
+    exit(code);            /* (MPI_Abort does not return) */
+  }
+  /* An isolated singleton is the whole job: nothing to kill, and MPI_Abort
+   * would end the process before its directory could be removed. */
+  fflush(stdout);
+  fflush(stderr);
+  MPI_Finalize();
+  singleton_cleanup();
+  exit(code);
 }

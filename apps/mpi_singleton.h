@@ -26,4 +26,10 @@ void singleton_prepare(void);
  * empty directories Open MPI left in it (nothing that holds a file). */
 void singleton_cleanup(void);
 
+/* MPI_Abort(MPI_COMM_WORLD, code), except in the isolated singleton of
+ * singleton_prepare: there the job is this one process, so it finalizes,
+ * removes its directory and exits with code (MPI_Abort would leave the
+ * directory behind). Does not return. */
+_Noreturn void singleton_abort(int code);
+
 #endif

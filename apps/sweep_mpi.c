@@ -9,6 +9,7 @@
 #include <time.h>
 #include <mpi.h>
 #include "catchup.h"
+#include "mpi_singleton.h"
 #include "stop_signal.h"
 #include "sweep_mpi.h"
 #include "sweep_run.h"
@@ -104,7 +105,7 @@ void hooks_read(hooks_t *h) {
   char *text = h->done_file && h->done_file[0] ? slurp(h->done_file) : NULL;
   if (h->done_file && h->done_file[0] && !text) {
     say("rank %d: CATCHUP_SWEEP_DONE_LIST=%s: cannot read: %s", rank, h->done_file, strerror(errno));
-    MPI_Abort(MPI_COMM_WORLD, 3);
+    singleton_abort(3);
   }
   idset_parse(&h->done_before, text);
   free(text);
@@ -169,7 +170,7 @@ static void compute(computer *c, long job, sw_result *r, double *traj) {
   if (task >= 0 && idset_has(&c->hooks->done_before, task)) {
     say("rank %d: asked to compute task %ld, which CATCHUP_SWEEP_DONE_LIST (%s) says was done before "
         "the resume: a finished task would be redone", rank, task, c->hooks->done_file);
-    MPI_Abort(MPI_COMM_WORLD, 3);
+    singleton_abort(3);
   }
   _Static_assert(sizeof(sig_atomic_t) == sizeof(int), "sig_atomic_t is an int here");
   sw_run_opts o = {(const volatile int *)&stop_signal, nranks > 1 ? poll_stop : NULL, c, c->time_limit,
@@ -235,7 +236,7 @@ int worker(const sw_sweep *s, const hooks_t *hooks, double time_limit) {
     size_t need = sizeof(msg_head) + one * (size_t)count;
     if (need > ob->cap) {
       free(ob->buf);
-      if (!(ob->buf = malloc(ob->cap = need))) MPI_Abort(MPI_COMM_WORLD, 1);
+      if (!(ob->buf = malloc(ob->cap = need))) singleton_abort(1);
     }
     int64_t n = run_batch(&c, ids, count, ob->buf);
     if (c.stop_msg || stop_signal) break;      /* a partial batch is not sent: the manager re-queues it */
@@ -371,7 +372,7 @@ static int manager_mpi(manager_t *m) {
     if (w == 0) continue;
     ws[w].alive = 1;
     for (int b = 0; b < AHEAD; b++) ws[w].sent[b] = MPI_REQUEST_NULL;
-    if (!(buf[w] = malloc(cap))) MPI_Abort(MPI_COMM_WORLD, 1);
+    if (!(buf[w] = malloc(cap))) singleton_abort(1);
   }
   int outstanding = feed(m, ws, workers), stopping = 0;
   manager_file_ready(m);                   /* made while the workers start on their batches */

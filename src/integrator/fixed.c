@@ -411,6 +411,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
     if (coarse_run(F, info) == CUP_ERR_INTERRUPTED)
       return halt(F, info, CUP_ERR_INTERRUPTED, 0, 0, "interrupted (in the estimate's run at n/2)",
                   CUP_STOP_SAMPLE_DUE, &sp);
+    estimate_anchor(&F->est, 0, F->x);             /* the samples of step 1 start from x0 */
   }
   if (sink && o->output != CUP_OUTPUT_SAMPLES && selected(F, &sp, 0)) {
     info->samples++;

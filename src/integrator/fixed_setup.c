@@ -168,7 +168,8 @@ static int create_half(fixed_ws *F, const freestep_drift *D, const cup_process_d
   h.n = F->o.n / 2;
   h.estimate = 0;
   h.on_step = NULL;
-  if (estimate_init(&F->est, F->o.n, F->n) || !(F->x0 = calloc((size_t)F->n, sizeof(double))))
+  if (estimate_init(&F->est, F->o.n, F->n) || estimate_samples(&F->est, &F->o) ||
+      !(F->x0 = calloc((size_t)F->n, sizeof(double))))
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   h.output = CUP_OUTPUT_EVERY;
   h.output_every = estimate_stride(&F->est);

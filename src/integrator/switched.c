@@ -356,7 +356,10 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
   for (int first = 1; st >= 0 && k < n; first = 0) {
     int jumps = each && !first && topo != last;
     if (jumps) la_copy(S->xprev, S->x, S->n);
-    if (!first) sw->jump(sw->ctx, topo, S->x);
+    if (!first) {
+      sw->jump(sw->ctx, topo, S->x);
+      if (S->half) estimate_anchor(&S->est, k, S->x);   /* (a jump: the samples after it start from it) */
+    }
     st = child_of(S, topo, info->message);
     if (st) break;
     S->cur = last = topo;
@@ -454,6 +457,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
       if (S->twin[k]) adaptive_seed(adaptive_of(S->twin[k]), 1);
     if (S->half && coarse_run(S, x0, info)) return info->status;
     sw->jump(sw->ctx, topo, S->x);
+    if (S->half) estimate_anchor(&S->est, 0, S->x);
     x0_moved(S, x0, info);
     st = sw_fixed_run(S, 0, topo, info);
     if (S->half) info->err_est = estimate_value(&S->est);
@@ -501,7 +505,8 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
 /* The estimate's coarse run: the same switched circuit at n/2, its output
  * every stride steps into the comparison's rows. */
 static int create_half(switched_run *S, const cup_switching *sw, const cup_input *u, char *errmsg) {
-  if (estimate_init(&S->est, S->o.n, S->n)) return fail_fmt(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
+  if (estimate_init(&S->est, S->o.n, S->n) || estimate_samples(&S->est, &S->o))
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "error estimate: out of memory");
   cup_integrator_options h = S->o;
   h.n = S->o.n / 2;
   h.estimate = 0;

@@ -67,4 +67,19 @@ fi
 run 2 "$WORK/steady.yaml" -o "$WORK/s.h5" --resume 2> "$WORK/steady.txt" > /dev/null
 grep -qF "$n tasks (steady states; no reference jobs) = $n jobs: $n done before, none run now" "$WORK/steady.txt" ||
   fail "steady --resume: summary line: $(cat "$WORK/steady.txt")"
-echo "cli: one-line errors, hash check, idle resume, log progress, summary lines ($tasks + $refs jobs; $n steady)"
+# A singleton (no launcher) runs in a session directory of its own under
+# TMPDIR and removes it at the end: after a run, after a one-line error, and
+# after a worker's abort (the done-list hook: a task it says was done).
+mkdir -p "$WORK/tmp"
+TMPDIR="$WORK/tmp" run 0 "$SMOKE" -o "$WORK/t.h5" --quiet
+TMPDIR="$WORK/tmp" expect 1 "/no/such.yaml: cannot open" run 0 /no/such.yaml -o "$WORK/x.h5"
+"$CHECK" donelist "$WORK/t.h5" "$WORK/done.txt" > /dev/null
+set +e
+TMPDIR="$WORK/tmp" CATCHUP_SWEEP_DONE_LIST="$WORK/done.txt" run 0 "$SMOKE" -o "$WORK/u.h5" 2> "$WORK/err.txt" > /dev/null
+rc=$?
+set -e
+[ "$rc" -eq 3 ] || fail "singleton abort: exit $rc, expected 3: $(cat "$WORK/err.txt")"
+grep -qF "CATCHUP_SWEEP_DONE_LIST" "$WORK/err.txt" || fail "singleton abort: no message: $(cat "$WORK/err.txt")"
+left=$(ls -A "$WORK/tmp")
+[ -z "$left" ] || fail "a singleton left its directory behind in TMPDIR: $left"
+echo "cli: one-line errors, hash check, idle resume, log progress, summary lines ($tasks + $refs jobs; $n steady), singleton directories removed"
