@@ -38,6 +38,7 @@
 #include "util/clock.h"
 #include "util/path.h"
 #include "run_steady.h"
+#include "integrator/record.h"
 
 enum { MSG_LEN = 2 * CUP_ERRMSG_LEN };     /* a path, then a library message, whole */
 
@@ -67,8 +68,11 @@ static int sink(long k, double t, const double *x, void *ctx) {
     if (c->steady) run_steady_record(c->steady, c->t0 + t, x, NULL);
     return cup_h5run_sink(k, c->t0 + t, x, c->w);
   }
-  cup_integrator_zeta(c->I, c->zeta);
-  if (cup_netlist_signals(c->nl, t, x, c->zeta, c->sig) != CUP_OK) return CUP_ERR_CALLBACK;
+  const signal_map *map = nl_signal_map(c->nl);   /* (a sample inside a step: from the scheme's own state) */
+  if (!map || !integrator_record(c->I, map, c->sig)) {
+    cup_integrator_zeta(c->I, c->zeta);
+    if (cup_netlist_signals(c->nl, t, x, c->zeta, c->sig) != CUP_OK) return CUP_ERR_CALLBACK;
+  }
   if (c->steady) run_steady_record(c->steady, c->t0 + t, x, c->sig);
   return cup_h5run_append(c->w, c->t0 + t, x, c->sig);
 }
@@ -326,6 +330,8 @@ static int check_probes(run_t *r, char *err) {
   r->sk.sig = calloc((size_t)ns + 1, sizeof(double));
   if (!r->sk.zeta || !r->sk.sig) { snprintf(err, MSG_LEN, "out of memory"); return EXIT_RUN; }
   r->sk.nl = nl;
+  nl_signal_map(nl);                               /* (built here, not at the first record; a switched
+                                                      netlist's other configurations at their first) */
   return 0;
 }
 

@@ -388,6 +388,7 @@ void adaptive_free(adaptive_ws **Ap) {
   cup_projector_free(&A->projector);
   free(A->first_state); free(A->gen.terms); free(A->block);
   free(A->tan);
+  free(A->rec_block);
   free(A);
   *Ap = NULL;
 }

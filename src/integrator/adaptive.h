@@ -65,6 +65,9 @@ const double *adaptive_state(const adaptive_ws *A);
  * chosen there; zeros at t = 0 and on catching-up steps across accumulating
  * events, whose multipliers are the projections' impulses). */
 int adaptive_zeta(adaptive_ws *A, double *zeta);
+/* Inside the sink, at a sample inside a step: S's signals there from the
+ * step's flow state (record.h), 1; else 0. */
+int adaptive_record(adaptive_ws *A, const struct signal_map *S, double *out);
 /* Checkpoints (integrator.h): 1 when the last run stopped at a step's end,
  * where it can resume; the status and message the stop replaced, into
  * info; the run's state to or from a checkpoint (util/ckpt.h); and the

@@ -232,6 +232,27 @@ struct adaptive_ws {
   int *xrp, *xrj;           /* n + m + 1, (n + m) na: the step's X and its zeta rows of L likewise ... */
   double *xrx;              /* (n + m) na: ... (rows_ready: made for the samples of this step) */
   int rows_ready;
+  /* catchup-run's signals at a sample inside a step (adaptive_record): a
+   * signal map composed with a mode's rows of x, u and zeta over y, sparse
+   * by row, an entry per set of mode buffers (a mode's matrices move with
+   * its buffers: X names them; the same rows in them, mask, are the same
+   * matrices, a mode being built from its rows alone), allocated at the
+   * first record (a switched run's configurations are made in the run too) */
+  struct ad_rec {
+    const double *X;        /* the mode's buffers, NULL: empty */
+    uint64_t mask;          /* ... the mode they held, and the map's key, when composed */
+    const void *key;
+    int ok;                 /* 0: not composed (another map's sizes or input) */
+    int *rp, *rj;           /* ns + 1, ns na */
+    double *rx, *rc;        /* ns na, ns: the rows' nonzeros, their constants (zeta's Lc) */
+    int nu, *uc;            /* the input components the map reads that y leaves out (a switch's
+                               gate, a supply a configuration disconnects): nu of them, p room */
+    double *ux;             /* ns x p: each row's coefficients on uc's components */
+  } rec[AD_MODES + 1];
+  int rec_ns;               /* the signals the entries have room for (0: none yet) */
+  struct ad_rec *rec_last;  /* the last entry used */
+  void *rec_block;
+  double *rec_acc, *rec_u;  /* na: a row being composed; p: u(t) when an entry's nu > 0 */
   ad_stop stop;             /* where the last run stopped */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
@@ -271,6 +292,10 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R);
  * The same t0 and t1 as the last piece's (the workspace's own, or in a
  * switched run the last window's, adaptive_breaks) copy its states. */
 int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err);
+/* A record at a step's end (A->zt, state A->x) on md's manifold: its y
+ * into A->zy, the input's states from there on (adaptive_zeta's); nonzero
+ * if the input failed. */
+int ad_record_y(adaptive_ws *A, const ad_mode *md);
 /* cup_input_next_break(A->u, t), the last answer again when t is the same. */
 double ad_next_break(adaptive_ws *A, double t);
 

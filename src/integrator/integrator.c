@@ -11,6 +11,7 @@
 #include "options.h"
 #include "schemes.h"
 #include "integrator_impl.h"
+#include "record.h"
 #include "model/lcs_impl.h"
 #include "set/set_impl.h"
 #include "util/fail.h"
@@ -143,6 +144,10 @@ const double *cup_integrator_state(const cup_integrator *I) { return I ? I->sch-
 int cup_integrator_zeta(const cup_integrator *I, double *zeta) {
   if (!I || !zeta) return CUP_ERR_ARG;
   return I->sch->zeta(I->ws, zeta);
+}
+
+int integrator_record(const cup_integrator *I, const signal_map *S, double *out) {
+  return I && S && I->sch->record ? I->sch->record(I->ws, S, out) : 0;
 }
 
 int cup_integrator_rows(const cup_integrator *I) { return I ? I->m : 0; }

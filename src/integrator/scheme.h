@@ -31,6 +31,8 @@ typedef struct scheme_grid {
   int theta_step;
 } scheme_grid;
 
+struct signal_map;                   /* record.h */
+
 typedef struct scheme_type {
   const char *name;
   /* 1 when it is the scheme the options name; NULL: made by its own front
@@ -43,6 +45,9 @@ typedef struct scheme_type {
   int (*run)(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
   const double *(*state)(const void *ws);
   int (*zeta)(void *ws, double *zeta);
+  /* inside the sink: signals S at its sample (record.h), 1; 0 (or NULL):
+   * not known here */
+  int (*record)(void *ws, const struct signal_map *S, double *out);
   /* the next runs' wall-time limit, in seconds from each run's start (0:
    * none): a caller running it many times under one limit (a switched
    * run's windows, a steady state's period runs) gives each run what is

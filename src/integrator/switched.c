@@ -29,6 +29,7 @@
 #include "integrator_impl.h"
 #include "adaptive.h"
 #include "estimate.h"
+#include "record.h"
 #include "util/clock.h"
 
 typedef struct switched_run switched_run;
@@ -140,6 +141,11 @@ static const double *sw_state(const void *ws) {
 static int sw_zeta(void *ws, double *zeta) {
   switched_run *S = ws;
   return cup_integrator_zeta(S->child[S->cur], zeta);
+}
+
+static int sw_record(void *ws, const struct signal_map *sig, double *out) {
+  switched_run *S = ws;
+  return integrator_record(S->child[S->cur], sig, out);
 }
 
 /* One window's statistics into the run's. */
@@ -523,7 +529,7 @@ static void sw_wall_limit(void *ws, double seconds) { ((switched_run *)ws)->o.ma
 
 /* Made by its own front door below, never chosen by the options; no checkpoints. */
 static const scheme_type switched_type = {
-  .name = "switched", .free = sw_free, .run = sw_run, .state = sw_state, .zeta = sw_zeta,
+  .name = "switched", .free = sw_free, .run = sw_run, .state = sw_state, .zeta = sw_zeta, .record = sw_record,
   .wall_limit = sw_wall_limit,
 };
 

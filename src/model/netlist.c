@@ -434,7 +434,7 @@ void cup_netlist_free(cup_netlist **p) {
   la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
   free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
-  free(nl->vals); free(nl->dense); free(nl->ucache);
+  free(nl->vals); free(nl->dense); free(nl->ucache); free(nl->smap_rows);
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
   for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);

@@ -27,6 +27,7 @@
 #include "catchup/netlist.h"
 #include "util/linalg.h"
 #include "netlist_desc.h"
+#include "signal_map.h"
 
 /* Which LCS variable a port's value is: the state, an input, a zeta, or
  * (NL_VAR_CTL) a controlled source's output, a linear function of the
@@ -122,6 +123,8 @@ struct cup_netlist {
   int ushare;                /* a configuration: +-ugen when its terms were found (not) uref's, */
   double ushare_t0;          /* ... at its time origin then */
   double *prow;           /* nv + ni: a signal's row over the ports */
+  signal_map smap;        /* the signals' rows as one dense map over (x, u, zeta of the LCS), folded */
+  double *smap_rows;      /* ... (nl_signal_map; smap.ns = 0: not built for the signals there are) */
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */
   const nl_sw_hooks *hooks;   /* ... and what its own functions ask of them */

@@ -14,6 +14,7 @@
 #include "catchup/netlist.h"
 #include "netlist_impl.h"
 #include "input_impl.h"
+#include "signal_map.h"
 
 static int nvar(const cup_netlist *nl) { return nl->n + nl->p + nl->m; }
 static int nports(const cup_netlist *nl) { return nl->nv + nl->ni; }
@@ -490,4 +491,56 @@ int cup_netlist_signals(cup_netlist *nl, double t, const double *x, const double
     out[k] = acc;
   }
   return CUP_OK;
+}
+
+/* ---- the signals as one map (signal_map.h) ---------------------------------------- */
+
+/* nl's signal rows dense over (x, u, zeta of the LCS): a configuration's
+ * constraint rows (zrow < 0) by their rows of Lam, as zeta_full sums them. */
+static void fold_rows(const cup_netlist *nl, double *rows, int nc) {
+  int n = nl->n, p = nl->p, nv = n + p + (nl->zrow ? nl->mr : nl->m);
+  for (int k = 0; k < nl->nsig; k++) {
+    double *r = rows + (size_t)k * nc;
+    for (int q = nl->sig_ptr[k]; q < nl->sig_ptr[k + 1]; q++) {
+      int i = nl->sig_idx[q], zr = i - n - p;
+      double s = nl->sig_val[q];
+      if (zr < 0 || !nl->zrow) r[i] += s;
+      else if (nl->zrow[zr] >= 0) r[n + p + nl->zrow[zr]] += s;
+      else {
+        const double *l = nl->Lam + (size_t)(-1 - nl->zrow[zr]) * (size_t)nv;
+        for (int j = 0; j < nv; j++) r[j] += s * l[j];
+      }
+    }
+  }
+}
+
+const signal_map *nl_signal_map(cup_netlist *nl) {
+  if (!nl || !nl->nsig) return NULL;
+  if (nl->hooks) nl = nl->hooks->current(nl);
+  if (nl->smap.ns == nl->nsig) return &nl->smap;
+  int m = nl->zrow ? nl->mr : nl->m, nc = nl->n + nl->p + m;
+  free(nl->smap_rows);
+  nl->smap.ns = 0;
+  nl->smap_rows = calloc((size_t)nl->nsig * (size_t)nc + 1, sizeof(double));
+  if (!nl->smap_rows) return NULL;
+  fold_rows(nl, nl->smap_rows, nc);
+  nl->smap = (signal_map){.key = nl, .rows = nl->smap_rows, .ns = nl->nsig, .n = nl->n, .p = nl->p, .m = m,
+                          .u = nl->u};
+  return &nl->smap;
+}
+
+int nl_same_input(const cup_input *a, const cup_input *b) {
+  if (a == b) return 1;
+  if (!a || !b || a->fn || b->fn || a->p != b->p || a->nterms != b->nterms) return 0;
+  for (int k = 0; k < a->nterms; k++) {
+    const input_term *x = &a->terms[k], *y = &b->terms[k];
+    if (x->comp != y->comp || x->kind != y->kind || x->value != y->value || x->amp != y->amp ||
+        x->omega != y->omega || x->phase != y->phase || x->delay != y->delay || x->damping != y->damping ||
+        x->value2 != y->value2 || x->rise != y->rise || x->fall != y->fall || x->width != y->width ||
+        x->period != y->period || x->np != y->np)
+      return 0;
+    for (int j = 0; j < x->np; j++)
+      if (x->t[j] != y->t[j] || x->v[j] != y->v[j]) return 0;
+  }
+  return 1;
 }
