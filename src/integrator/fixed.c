@@ -381,6 +381,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   memcpy(F->x, x0, sizeof(double) * (size_t)n);
   cup_projector_reset(F->proj);
   F->zeta_from = 0;
+  F->restart = 0;
   int fixed = F->fixed || !F->u;
   F->stop.phase = CUP_STOP_NONE;
   F->rebuilds0 = cup_setproj_rebuilds(F->sp);
@@ -491,6 +492,48 @@ static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebui
   return step_checked(F, k, t0, t1, fixed, 0, stiff, pi, st, info);
 }
 
+/* The support of the theta step's last zeta (with D), a bit per row. */
+static unsigned long long theta_support(const fixed_ws *F) {
+  unsigned long long J = 0;
+  for (int i = 0; i < F->m; i++)
+    if (F->th.lcp.lam[i] > 0) J |= 1ull << i;
+  return J;
+}
+
+/* Steps taken again at most after a window's first (restart_again). */
+enum { RESTARTS = 3 };
+
+/* A window's first step with D and theta < 1 (integrator_window armed
+ * it). Its carry h (1 - theta) W B Pi zeta_k took zeta_k from the LCP at
+ * x_k alone, whose support (the mode) the state does not always fix: at a
+ * switching that leaves a bridge's leg open with i(L1) = 0 (or a diode at
+ * zero current) zeta_k may be any point of a segment (both diodes off,
+ * the leg's node anywhere between the rails), and the pivoting's pick,
+ * often a rounding's sign (i = -8e-17: D4 on), is not the mode the flow
+ * takes from t_k. That carry moved the first step by O(h) (i(L1) by
+ * 100 V h / (2 L) in the full bridge), an error that stays: first order.
+ * Within one mode Pi zeta is a function of the state, so only a support
+ * that the step's end does not keep can be wrong: then the step is taken
+ * again from x_k with the carry of its own end's zeta (solve_d leaves it),
+ * until the support holds (1: again; *again counts). zeta at t_k+ to O(h)
+ * is a local error O(h^2) once, as an event inside a step makes, and
+ * theta = 1/2 stays second order. A support that holds leaves the step as
+ * it was, bit for bit. (steps calls step once, in a loop, so that step
+ * stays inlined there: a second call site cost the bridge's theta run 3 %.) */
+static __attribute__((noinline, cold)) int restart_again(fixed_ws *F, cup_proj_info *pi, int *again) {
+  unsigned long long now = theta_support(F);
+  if (*again == 0) F->restart_iters = 0;
+  if (now == F->mode0 || *again == RESTARTS) {
+    F->restart = 0;
+    pi->iterations += F->restart_iters;            /* the step's work, all its solves */
+    return 0;
+  }
+  F->restart_iters += pi->iterations;
+  F->mode0 = now;
+  (*again)++;
+  return 1;
+}
+
 /* The steps from k0 (the sampler at next_j) to kend, as a run takes them
  * after its start; a window and a resumed run go on through them. */
 static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
@@ -501,7 +544,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
   long rebuilds0 = F->rebuilds0;
   double start = o->max_wall_seconds > 0 ? now_seconds() : 0;
   int fast = F->fast.on && !o->on_step && !F->half && !F->jump;   /* the estimate compares every step */
-  F->fast.hold = 0;
+  F->fast.hold = F->restart ? k0 + 1 : 0;          /* (a window's first step checked: restart_again) */
   /* a record every step: a konst run records its steps itself, as below */
   F->fast.recording = fast && F->fast.konst && sink && o->output == CUP_OUTPUT_EVERY && o->output_every == 1;
   F->fast.rec = (faststep_rec){sink, sink_ctx, &F->zeta_from};
@@ -523,7 +566,9 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
       F->zeta_from = 1;
       st = step_checked(F, k, t0, t1, fixed, 1, stiff, &pi, st, info);
     } else {
-      st = step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
+      int again = 0;
+      do st = step(F, k, t0, t1, fixed, rebuilds0, stiff, &pi, info);
+      while (__builtin_expect(F->restart, 0) && st >= 0 && restart_again(F, &pi, &again));
     }
     if (st < 0) return st;
     if (tally_state_beyond(F->xnew, n)) return diverged(F, info, k + 1, t1, F->xnew);
@@ -606,6 +651,8 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
     if (F->zprev) la_zero(F->zprev, F->m);
     if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
     if (F->K && F->use_theta) theta_start(F, k0);  /* theta's zeta_k0 at the window's start */
+    F->restart = F->K && F->use_theta && F->th.D && F->th.theta < 1;   /* ... its mode checked (restart_again) */
+    if (F->restart) F->mode0 = theta_support(F);
     st = steps(F, k0, *next_j, sink, sink_ctx, info);
   }
   *next_j = F->next_j;

@@ -58,6 +58,9 @@ struct fixed_ws {
                                3 zeta_ext (a switched circuit's split step, switched.c) */
   const double *zeta_ext;
   int jump;                 /* x0 was not consistent and the first step is yet to measure the jump */
+  int restart;              /* theta with D: a window's first step, its end's support against mode0 (fixed.c) */
+  unsigned long long mode0; /* ... the support of zeta at the window's start */
+  int restart_iters;        /* ... the pivots of its solves before the last */
   faststep_ws fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
   double *x, *xnew, *xf, *g, *ut, *s0, *sg;
   double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */

@@ -286,19 +286,55 @@ static int set_mode(lcp_step *ls, unsigned long long J) {
 }
 
 /* carry = Pi zeta: zeta less its part in the kernel, sum_t zeta_t z_t
- * (0 on D's zero columns). */
-static void carry_of(lcp_step *ls) {
+ * (0 on D's zero columns), for the nk kernel vectors Z (free columns kc)
+ * of the support J; zeta_j off J counts as 0. */
+static void carry_on(lcp_step *ls, unsigned long long J, int nk, const int *kc, const double *Z) {
   int m = ls->m;
   const double *lam = ls->lcp.lam;
-  for (int j = 0; j < m; j++) ls->carry[j] = ls->dcol0[j] ? 0 : lam[j];
-  for (int k = 0; k < ls->nker; k++) {
-    double zt = lam[ls->kcol[k]];
+  for (int j = 0; j < m; j++) ls->carry[j] = ls->dcol0[j] || !(J >> j & 1) ? 0 : lam[j];
+  for (int k = 0; k < nk; k++) {
+    double zt = lam[kc[k]];
     if (zt == 0) continue;
-    const double *z = ls->Z + (size_t)k * m;
+    const double *z = Z + (size_t)k * m;
     for (int j = 0; j < m; j++)
       if (z[j] != 0) ls->carry[j] -= zt * z[j];
-    ls->carry[ls->kcol[k]] = 0;
+    ls->carry[kc[k]] = 0;
   }
+}
+
+/* The carry of the last zeta (aimed: solved with the aims tau). An entry
+ * zeta_j whose every effect on the rows, |M_ij| zeta_j, is within 4 tau_i
+ * is the aims', not the state's: a row pinned by two others (a bridge
+ * that blocks, i(L1) = 0 between D1-D3's and D2-D4's rows, a set without
+ * interior) holds z within its aims only through such a zeta_j (D4's
+ * 1e-15 A at i = -5e-16). Counted in the support, it made the leg's
+ * voltage multiplier a function of the state (D_JJ nonsingular on {D3,
+ * D4}), and its carry pushed i(L1) off 0 by 100 V h / (2 L) in the next
+ * step. The part of zeta that is a function of the state is that of the
+ * support without them (their kernel), and they carry nothing. */
+static void carry_of(lcp_step *ls, int aimed) {
+  int m = ls->m;
+  const double *lam = ls->lcp.lam;
+  unsigned long long J = 0, keep = 0;
+  for (int j = 0; aimed && j < m; j++) {
+    if (!(lam[j] > 0)) continue;
+    J |= 1ull << j;
+    int moves = 0, beyond = 0;                    /* (a column that moves no row is kept: it is no aim's) */
+    for (int i = 0; i < m && !beyond; i++) {
+      double e = fabs(ls->M[i + (size_t)j * m]) * lam[j];
+      beyond = e > 4 * ls->tau[i];
+      moves |= e > 0;
+    }
+    if (beyond || !moves) keep |= 1ull << j;
+  }
+  if (keep == J) {
+    carry_on(ls, ~0ull, ls->nker, ls->kcol, ls->Z);
+    return;
+  }
+  int nk, *kc = ls->kcol + m + 1;                 /* (set_mode's second halves: free after it) */
+  double *Z = ls->Z + (size_t)(m + 1) * (m + 1);
+  kernel_of(ls, keep, &nk, kc, Z);
+  carry_on(ls, keep, nk, kc, Z);
 }
 
 /* With D, a step carries the weights in force (the support they were set
@@ -323,7 +359,7 @@ int lcp_step_start(lcp_step *ls, const double *x0, const double *g) {
   int consistent = lemke_solve(&ls->lcp.lemke, ls->D, ls->qs, lam, ls->lcp.w, &pivots) == CUP_OK;
   if (!consistent) la_zero(lam, m);
   set_mode(ls, support(ls));
-  carry_of(ls);
+  carry_of(ls, 0);
   return consistent;
 }
 
@@ -619,7 +655,7 @@ static int solve_d(lcp_step *ls, const double *q, const double **g, const double
     if (!ok) break;
     short_ = short_rows(ls, &active);
   }
-  carry_of(ls);
+  carry_of(ls, 1);
   return CUP_OK;
 }
 
@@ -677,7 +713,7 @@ CUP_ALWAYS_INLINE int warm_d(lcp_step *ls, const double *q, const double **g, co
     ls->tau[i] = tau[i];
     ls->qs[i] = qs[i];
   }
-  carry_of(ls);
+  carry_of(ls, 1);
   return 1;
 }
 
