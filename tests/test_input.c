@@ -516,6 +516,49 @@ static void test_jump_pulse_walk(void **state) {
   }
 }
 
+/* Three phases of one frequency and a fourth sine of another
+ * (input_gen_piece with input_gen_rot_plan): the first sine of a frequency
+ * keeps the bits of amp sin(omega a + phi) and amp cos(...); the others,
+ * turned from it by the phase difference, stay within the rounding of the
+ * direct form's own argument (an ulp of omega a + phi, a few ulps of the
+ * amplitude) of amp sin(omega a + phi) over 100 periods. */
+static void test_gen_rotation(void **state) {
+  (void)state;
+  cup_input *u = make(4);
+  const double ph[4] = {0.3, 0.3 - 2 * M_PI / 3, 0.3 + 2 * M_PI / 3, 1.1}, amp[4] = {100, 230, 50, 7};
+  for (int k = 0; k < 4; k++) {
+    cup_wave s = {.kind = CUP_WAVE_SINE, .amplitude = amp[k], .frequency = k < 3 ? 50 : 60, .phase = ph[k]};
+    assert_int_equal(cup_input_add(u, k, &s, NULL), CUP_OK);
+  }
+  int first[4];
+  assert_int_equal(input_gen_dim(u, first), 8);
+  input_gen_rot rot[4];
+  input_gen_rot_plan(u, rot);
+  assert_true(rot[0].base == -1 && rot[1].base == 0 && rot[2].base == 0 && rot[3].base == -1);
+  rng_t r = {11};
+  double worst = 0;
+  for (int i = 0; i < 20000; i++) {
+    double a = rng_unif(&r) * 2.0, w[8], wd[8];
+    input_gen_piece(u, first, rot, a, a + 1e-4, w);
+    input_gen_piece(u, first, NULL, a, a + 1e-4, wd);   /* the direct sines */
+    for (int k = 0; k < 4; k++) {
+      const input_term *t = &u->terms[k];
+      double d0 = fabs(w[first[k]] - wd[first[k]]), d1 = fabs(w[first[k] + 1] - wd[first[k] + 1]);
+      if (rot[k].base < 0) {
+        assert_true(d0 == 0 && d1 == 0);
+        continue;
+      }
+      double bound = 4 * DBL_EPSILON * (fabs(t->omega * a) + fabs(t->phase) + 1);
+      worst = fmax(worst, fmax(d0, d1) / t->amp);
+      if (!(fmax(d0, d1) <= bound * t->amp))
+        fail_msg("sine %d at a = %.17g: %.3g off the direct form (bound %.3g)", k, a, fmax(d0, d1), bound * t->amp);
+    }
+  }
+  printf("rotated sines: %.3g of their amplitude off the direct form at worst\n", worst);
+  assert_true(worst > 0);                        /* (they are computed another way) */
+  cup_input_free(&u);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_case1_values_and_integrals),
@@ -531,6 +574,7 @@ int main(void) {
     cmocka_unit_test(test_term_piece),
     cmocka_unit_test(test_jump_pulse_walk),
     cmocka_unit_test(test_damped_sine),
+    cmocka_unit_test(test_gen_rotation),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

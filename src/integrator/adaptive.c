@@ -99,18 +99,28 @@ static void exosystem(adaptive_ws *A) {
  * which the switched run reads from the input itself). On the full bridge
  * the four PULSE gates' 8 states made the flow 11 x 11 where 3 x 3 does
  * (L, C and the DC source). Breakpoints still come from the whole input
- * (A->u), and so does the step limit of a sine (exosystem). */
+ * (A->u), and so does the step limit of a sine (exosystem). A constant 0
+ * reaches nothing either: each SIN's VO makes one, and the six-pulse
+ * bridge's three made its flow 11 x 11 where 8 x 8 does. */
 static int live_terms(adaptive_ws *A, const freestep_drift *D, const la_sparse *G, int *fail) {
   const cup_input *u = A->u;
   A->gen = (cup_input){.p = u ? u->p : 0};
   A->gen.terms = take(u ? (size_t)u->nterms : 0, sizeof(input_term), fail);
+  A->gen_whole = u != NULL;
   for (int k = 0; u && !*fail && k < u->nterms; k++) {
-    int q = u->terms[k].comp;
+    const input_term *t = &u->terms[k];
+    int q = t->comp;
+    if (t->kind == CUP_WAVE_CONSTANT && t->value == 0) continue;   /* (a SIN's VO = 0: a state that stays 0) */
     if ((D->has_E && q < D->E.ncol && D->E.p[q + 1] > D->E.p[q]) || (G && q < G->ncol && G->p[q + 1] > G->p[q]))
-      A->gen.terms[A->gen.nterms++] = u->terms[k];
+      A->gen.terms[A->gen.nterms++] = *t;
+    else
+      A->gen_whole = 0;
   }
   A->first_state = take((size_t)A->gen.nterms + 1, sizeof(int), fail);
-  return *fail ? 0 : input_gen_dim(&A->gen, A->first_state);
+  A->gen_rot = take((size_t)A->gen.nterms + 1, sizeof(input_gen_rot), fail);
+  if (*fail) return 0;
+  input_gen_rot_plan(&A->gen, A->gen_rot);
+  return input_gen_dim(&A->gen, A->first_state);
 }
 
 /* D != 0: B and D dense, C B, the rows D couples; the late-switch model of
@@ -386,7 +396,7 @@ void adaptive_free(adaptive_ws **Ap) {
   lcp_free(&A->lcp);
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
-  free(A->first_state); free(A->gen.terms); free(A->block);
+  free(A->first_state); free(A->gen_rot); free(A->gen.terms); free(A->block);
   free(A->tan);
   free(A->rec_block);
   free(A);

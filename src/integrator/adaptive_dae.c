@@ -29,7 +29,6 @@ int ad_dae_init(adaptive_ws *A) {
   size_t MM = (size_t)m * m;
   A->N = take(MM, sizeof(double), &fail);
   A->Ninv = take(MM, sizeof(double), &fail);
-  A->Nw = take(MM, sizeof(double), &fail);
   A->svd_u = take(MM, sizeof(double), &fail);
   A->svd_v = take(MM, sizeof(double), &fail);
   A->svd_s = take((size_t)m, sizeof(double), &fail);
@@ -52,7 +51,7 @@ int ad_dae_init(adaptive_ws *A) {
 }
 
 void ad_dae_free(adaptive_ws *A) {
-  free(A->N); free(A->Ninv); free(A->Nw); free(A->svd_u); free(A->svd_v); free(A->svd_s); free(A->svd_w);
+  free(A->N); free(A->Ninv); free(A->svd_u); free(A->svd_v); free(A->svd_s); free(A->svd_w);
   free(A->jM); free(A->jq); free(A->dq0); free(A->dq1); free(A->Ry); free(A->Ym); free(A->Zc);
   free(A->sz); free(A->eqr); free(A->eqc); free(A->cg); free(A->cd); free(A->cd2); free(A->cthr);
   free(A->cy); free(A->cMy); free(A->jx);

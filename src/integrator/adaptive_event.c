@@ -6,16 +6,20 @@
 #include "catchup.h"
 #include "adaptive_impl.h"
 
+/* The state's scale: v = x + K U w. */
+static inline double state_scale(const adaptive_ws *A, const double *y) {
+  switch (A->n) {                          /* (a converter's few states: unrolled) */
+    case 1: return la_norm_inf(y, 1);
+    case 2: return la_norm_inf(y, 2);
+    case 3: return la_norm_inf(y, 3);
+    case 4: return la_norm_inf(y, 4);
+    default: return la_norm_inf(y, A->n);
+  }
+}
+
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr) {
   int m = A->m;
-  double vmax;                             /* the state's scale: v = x + K U w */
-  switch (A->n) {                          /* (a converter's few states: unrolled) */
-    case 1: vmax = la_norm_inf(y, 1); break;
-    case 2: vmax = la_norm_inf(y, 2); break;
-    case 3: vmax = la_norm_inf(y, 3); break;
-    case 4: vmax = la_norm_inf(y, 4); break;
-    default: vmax = la_norm_inf(y, A->n);
-  }
+  double vmax = state_scale(A, y);
   for (int i = 0; i < m; i++) {            /* over L's and Lm's nonzeros (mode_sparse): the dense sums */
     double acc = md->Lc[i], mag = fabs(md->Lc[i]);
     for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {
@@ -41,12 +45,31 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
   }
 }
 
+/* (One pass over L's nonzeros for both: each sum as in its own function.) */
+void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
+  double *My = A->My;
+  ad_mode_mv(A, md, y, My);
+  double vmax = state_scale(A, y);
+  for (int i = 0; i < A->m; i++) {
+    double acc = md->Lc[i], mag = fabs(md->Lc[i]), dacc = 0;
+    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {
+      int j = md->li[k];
+      double l = md->lx[k], yj = y[j];
+      acc += l * yj;
+      mag += md->lmx[k] * fabs(yj);
+      dacc += l * My[j];
+    }
+    g[i] = acc;
+    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+    d[i] = dacc;
+  }
+}
+
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */
 static void probe(adaptive_ws *A, ad_mode *md, double tau, double *g, double *d, double *thr,
                   ad_event *ev) {
   ad_series_at(A, &A->sy, md, ev->h, A->ya, tau, A->yt);
-  ad_events_eval(A, md, A->yt, g, thr);
-  ad_events_deriv(A, md, A->yt, d);
+  ad_events_both(A, md, A->yt, g, thr, d);
   ev->evals++;
 }
 

@@ -68,6 +68,9 @@ typedef struct ad_mode {
   double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
   double *Ec[AD_CACHE];
   long cstamp[AD_CACHE];
+  int *ep[AD_CACHE], *ei[AD_CACHE];   /* ... and their input states' rows' nonzeros by column (na + 1 */
+  double *ex[AD_CACHE];     /* starts, rows), their values: exp(h [Pi Q; 0 W]) keeps the zeros of
+                               [0 W] (80 % of them on the six-pulse bridge, whose steps apply it) */
 } ad_mode;
 
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
@@ -160,8 +163,8 @@ struct adaptive_ws {
   double *wscale;           /* nw: the scale each state's value rounds at (a sine's amplitude, a
                                table's largest value; 0 for a slope: its own size) */
   double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
-  double *N, *Ninv, *Nw;    /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse, scratch */
-  double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ and of N (m x m, m, m) */
+  double *N, *Ninv;         /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse */
+  double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ (m x m, m, m) */
   double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
   lcp_solver jlcp;
   double *dq0, *dq1;        /* the choice of the active set: slack and its velocity at zeta = 0 */
@@ -173,7 +176,9 @@ struct adaptive_ws {
                                ((m + 1) x na: the last row their constants), Z^T C_J (m x n) */
   cup_input gen;            /* built-in waveforms: u's terms that E or G reads (copies; adaptive.c,
                                live_terms), those the exosystem holds */
-  int *first_state;         /* ... and the first exosystem state of each */
+  int *first_state;         /* ... and the first exosystem state of each, */
+  input_gen_rot *gen_rot;   /* ... and the sines that share a frequency (input_gen_piece) */
+  int gen_whole;            /* gen holds every term of u but its constants 0 (live_terms) */
   const cup_input *held;    /* &gen, or a callback's u: the breakpoints that end an exosystem piece
                                (adaptive_zeta's; a gate's corners move no state) */
   double *A, *E, *G;        /* dense, column-major: n x n, n x p, m x p */
@@ -322,6 +327,9 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
 const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+/* out = E y for E = exp(h M_J) that ad_expm returned for md (ad_matvec's
+ * sums over E's nonzeros: the same bits). */
+void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out);
 /* ... the cached one that ad_expm would take, or NULL (nothing computed). */
 const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
@@ -401,6 +409,8 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots);
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr);
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
+/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it). */
+void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */

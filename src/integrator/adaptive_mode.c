@@ -36,7 +36,12 @@ void ad_modes_layout(adaptive_ws *A, block_arena *b) {
     md->R = block_take(b, (size_t)n * m, sizeof(double));
     md->Zt = block_take(b, (size_t)m * m, sizeof(double));
     md->KU = block_take(b, (size_t)n * nw, sizeof(double));
-    for (int c = 0; c < AD_CACHE; c++) md->Ec[c] = block_take(b, NA, sizeof(double));
+    for (int c = 0; c < AD_CACHE; c++) {
+      md->Ec[c] = block_take(b, NA, sizeof(double));
+      md->ep[c] = block_take(b, (size_t)na + 1, sizeof(int));
+      md->ei[c] = block_take(b, NA, sizeof(int));
+      md->ex[c] = block_take(b, NA, sizeof(double));
+    }
   }
   ad_series *ser[] = {&A->sy, &A->se};
   for (int k = 0; k < 2; k++) {
@@ -486,6 +491,14 @@ static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
   la_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
+  int n = A->n, na = A->na, k = 0;             /* the input states' rows' nonzeros (ad_expm_mv) */
+  const double *E = md->Ec[c];
+  for (int j = 0; j < na; j++) {
+    md->ep[c][j] = k;
+    for (int i = n; i < na; i++)
+      if (E[i + (size_t)j * na] != 0) { md->ei[c][k] = i; md->ex[c][k++] = E[i + (size_t)j * na]; }
+  }
+  md->ep[c][na] = k;
 }
 
 void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp) {
@@ -558,10 +571,44 @@ void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
   }
 }
 
+/* The rows of the state (i < n, a constant: their sums in registers, over
+ * every column) and those of the input's states over their nonzeros (from
+ * expm_into): ad_matvec's generic sums less the terms of E's zeros, +-0
+ * each, which leave a sum started at +0 as it was. */
+static inline __attribute__((always_inline)) void expm_mv_sums(int n, int na, const double *E, const int *ep,
+                                                               const int *ei, const double *ex,
+                                                               const double *y, double *out) {
+  double v[6] = {0};
+  for (int i = n; i < na; i++) out[i] = 0;
+  for (int j = 0; j < na; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * na] * yj;
+    for (int k = ep[j]; k < ep[j + 1]; k++) out[ei[k]] += ex[k] * yj;
+  }
+  for (int i = 0; i < n; i++) out[i] = v[i];
+}
+
+void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out) {
+  int n = A->n, na = A->na, c = 0;
+  while (c < AD_CACHE && md->Ec[c] != E) c++;
+  if (na <= 6 || n > 6 || c == AD_CACHE) { ad_matvec(na, na, E, y, out); return; }
+  const int *ep = md->ep[c], *ei = md->ei[c];
+  const double *ex = md->ex[c];
+  switch (n) {                                   /* (ad_lift's sizes) */
+    case 1: expm_mv_sums(1, na, E, ep, ei, ex, y, out); return;
+    case 2: expm_mv_sums(2, na, E, ep, ei, ex, y, out); return;
+    case 3: expm_mv_sums(3, na, E, ep, ei, ex, y, out); return;
+    case 4: expm_mv_sums(4, na, E, ep, ei, ex, y, out); return;
+    case 5: expm_mv_sums(5, na, E, ep, ei, ex, y, out); return;
+    default: expm_mv_sums(6, na, E, ep, ei, ex, y, out); return;
+  }
+}
+
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out) {
   int na = A->na;
   for (int c = 0; c < AD_CACHE; c++)
-    if (md->hc[c] == tau) { ad_matvec(na, na, md->Ec[c], y_in, y_out); return; }
+    if (md->hc[c] == tau) { ad_expm_mv(A, md, md->Ec[c], y_in, y_out); return; }
   double norm = fabs(tau) * md->mnorm;
   if (norm > 4) {                                /* stiff or long: the full exponential */
     size_t NA = (size_t)na * na;
@@ -608,7 +655,7 @@ static inline __attribute__((always_inline)) void lift_sums(int n, int nw, const
 }
 
 /* (Each y_i its sum in a register, over the columns in order: a record's
- * lift on the six-pulse bridge, 2 states and 9 input states, spent more
+ * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;

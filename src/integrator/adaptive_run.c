@@ -587,21 +587,19 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     return end_of_step(A, R, &pi, 0);
   }
   ad_lift(A, md, A->x, A->wa, A->ya);
-  ad_events_eval(A, md, A->ya, A->ga, A->ta);
+  ad_events_both(A, md, A->ya, A->ga, A->ta, A->da);
   if (any_negative(A)) {                         /* an inconsistent start: choose again */
     uint64_t was = md->mask;
     int st = choose_mode(A, R, A->wa, 0, R->t);
     if (st < 0 || R->md->mask != was) return st;
   }
-  ad_events_deriv(A, md, A->ya, A->da);
   double h = t1 - R->t;
   if (series) {
     ad_series_at(A, &A->sy, md, h, A->ya, h, A->yb);
   } else {
-    ad_matvec(na, na, E, A->ya, A->yb);
+    ad_expm_mv(A, md, E, A->ya, A->yb);
   }
-  ad_events_eval(A, md, A->yb, A->gb, A->tb);
-  ad_events_deriv(A, md, A->yb, A->db);
+  ad_events_both(A, md, A->yb, A->gb, A->tb, A->db);
   ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);

@@ -344,8 +344,9 @@ static int poly_input(adaptive_ws *A, double t0, double h, double *w, double *er
   return CUP_OK;
 }
 
-/* The exosystem holds every term of the input (live_terms dropped none). */
-static int gen_whole(const adaptive_ws *A) { return A->u && A->gen.nterms == A->u->nterms; }
+/* The exosystem holds every term of the input (live_terms dropped none but
+ * constants 0). */
+static int gen_whole(const adaptive_ws *A) { return A->gen_whole; }
 
 /* The exosystem's states for a step [t0, t1] inside a piece (and the
  * constant state, with D). Sines' and constants' states are those at t0
@@ -367,7 +368,7 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   const adaptive_ws *O = A->nb && gen_whole(A) ? A->nb->piece_of : NULL;
   if (O && O != A && O->piece_ok && t0 == O->piece_t0 && (any || t1 == O->piece_t1) && gen_whole(O))
     la_copy(w, O->piece_w, A->nwu);
-  else input_gen_piece(&A->gen, A->first_state, t0, t1, w);
+  else input_gen_piece(&A->gen, A->first_state, A->gen_rot, t0, t1, w);
   if (A->nb) A->nb->piece_of = A;
   la_copy(A->piece_w, w, A->nwu);
   A->piece_t0 = t0;

@@ -369,11 +369,41 @@ void input_gen_values(const cup_input *u, const int *first_state, double a, doub
  * of the piece that holds mid instead (the values they would have had
  * first are not computed: a switched run's windows start a piece each,
  * and those were a tenth of a window's instructions). */
-void input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w) {
+void input_gen_rot_plan(const cup_input *u, input_gen_rot *rot) {
+  for (int k = 0; k < u->nterms; k++) {
+    const input_term *t = &u->terms[k];
+    rot[k] = (input_gen_rot){.base = -1};
+    for (int j = 0; t->kind == CUP_WAVE_SINE && j < k; j++) {
+      const input_term *b = &u->terms[j];
+      if (b->kind != CUP_WAVE_SINE || rot[j].base >= 0 || b->omega != t->omega) continue;
+      double d = t->phase - b->phase;
+      rot[k] = (input_gen_rot){.base = j, .c = cos(d), .s = sin(d)};
+      break;
+    }
+  }
+}
+
+void input_gen_piece(const cup_input *u, const int *first_state, input_gen_rot *rot, double a, double b,
+                     double *w) {
   double mid = 0.5 * (a + b);
   for (int k = 0; k < u->nterms; k++) {
     const input_term *t = &u->terms[k];
     double *wk = w + first_state[k], t0, v0, slope;
+    if (rot && t->kind == CUP_WAVE_SINE) {
+      input_gen_rot *r = &rot[k];
+      if (r->base < 0) {                           /* (gen_term_values' sums) */
+        double x = t->omega * a + t->phase;
+        r->sx = sin(x);
+        r->cx = cos(x);
+      } else {                                     /* sin(x + d), cos(x + d) from the base's x */
+        const input_gen_rot *q = &rot[r->base];
+        r->sx = q->sx * r->c + q->cx * r->s;
+        r->cx = q->cx * r->c - q->sx * r->s;
+      }
+      wk[0] = t->amp * r->sx;
+      wk[1] = t->amp * r->cx;
+      continue;
+    }
     if (t->kind == CUP_WAVE_PULSE) {
       spice_pulse_line(t, mid, &t0, &v0, &slope);
     } else if (t->kind == CUP_WAVE_PWL && mid > t->t[0] && mid < t->t[t->np - 1]) {

@@ -226,7 +226,21 @@ void input_gen_values(const cup_input *u, const int *first_state, double a, doub
  * piece before and after meet, whatever a and b round to (the adaptive
  * scheme's steps run between breakpoints; a fixed step that straddles a
  * corner needs gen_values' secant instead). */
-void input_gen_piece(const cup_input *u, const int *first_state, double a, double b, double *w);
+/* With rot (input_gen_rot_plan's, or NULL), a sine whose frequency an
+ * earlier sine's has takes that one's sin and cos turned by the phases'
+ * difference (four products, no sincos): a three-phase source's three
+ * sines a piece cost one sincos (a ninth of the six-pulse bridge's step),
+ * and round a few ulps of their amplitude off the direct sin(omega a + phi)
+ * (the base keeps those bits). */
+typedef struct input_gen_rot {
+  int base;                                 /* the earlier sine's term, or -1 */
+  double c, s;                              /* cos and sin of the phase difference from it */
+  double sx, cx;                            /* a base's sin and cos at the last piece's a (scratch) */
+} input_gen_rot;
+void input_gen_piece(const cup_input *u, const int *first_state, input_gen_rot *rot, double a, double b,
+                     double *w);
+/* rot[k] for each term of u (nterms entries). */
+void input_gen_rot_plan(const cup_input *u, input_gen_rot *rot);
 /* 1 if u's states on (a, b) are functions of a alone (constants and sines:
  * no square, table or pulse, whose states read the step's middle), so that
  * the states of one piece serve every step from the same a. */
