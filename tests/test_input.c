@@ -463,6 +463,59 @@ static void test_term_piece(void **state) {
   cup_input_free(&u);
 }
 
+/* spice_jump_pulse_next: a jump PULSE's pieces walked one after another
+ * from the period each was in, bit for bit spice_jump_pulse's (value and
+ * end) at each piece's start and at the end of the last (and its breaks by
+ * spice_jump_break, spice_term_break's), and each end the
+ * closed form's next corner d + P j or d + P j + (0 + width) (a width
+ * below P): the full bridge's gates, a buck's gate (width P / 2 from 0),
+ * awkward decimals over 100,000 periods, a width of 0 and of P (the most
+ * spice_term_init takes), and a one-shot pulse. */
+static void test_jump_pulse_walk(void **state) {
+  (void)state;
+  const cup_wave w[] = {
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 1e-6, .width = 49e-6, .period = 100e-6},
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 51e-6, .width = 49e-6, .period = 100e-6},
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 0, .width = 5e-6, .period = 10e-6},
+    {.kind = CUP_WAVE_PULSE, .value = -3, .value2 = 7, .delay = 0.3e-6, .width = 1.1e-6, .period = 3.3e-6},
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 2e-6, .width = 0, .period = 3e-6},
+    {.kind = CUP_WAVE_PULSE, .value = 0, .value2 = 1, .delay = 1e-6, .width = 3e-6, .period = 3e-6},
+    {.kind = CUP_WAVE_PULSE, .value = 1, .value2 = 2, .delay = 1e-6, .width = 2e-6},
+  };
+  const long pieces[] = {2000, 2000, 2000, 200000, 2000, 2000, 5};
+  for (size_t q = 0; q < sizeof w / sizeof w[0]; q++) {
+    cup_input *u = make(1);
+    assert_int_equal(cup_input_add(u, 0, &w[q], NULL), CUP_OK);
+    const input_term *tm = &u->terms[0];
+    double t = 0, j, hi, hw, v = spice_jump_pulse_j(tm, t, &j, &hi);
+    for (long k = 0; k < pieces[q] && isfinite(hi); k++) {
+      double want = spice_jump_pulse(tm, t, &hw);
+      if (v != want || hi != hw) fail_msg("pulse %zu, piece %ld at %.17g: %g to %.17g, spice_jump_pulse %g to %.17g",
+                                          q, k, t, v, hi, want, hw);
+      double corner = INFINITY, P = w[q].period, d = w[q].delay;   /* the closed form's next corner */
+      for (double jj = P > 0 ? fmax(floor((t - d) / P) - 2, 0) : 0; jj < (P > 0 ? floor((t - d) / P) + 3 : 1); jj++) {
+        double c[2] = {d + P * jj, d + P * jj + (0 + w[q].width)};
+        for (int e = 0; e < 2; e++)
+          if (c[e] > t && c[e] < corner) corner = c[e];
+      }
+      /* (a width of P is on from d: its pieces are periods, and a top's
+       * end may round an ulp past the next period's start) */
+      if (hi != corner && !(P > 0 && w[q].width == P))
+        fail_msg("pulse %zu, piece %ld at %.17g: ends at %.17g, the next corner %.17g", q, k, t, hi, corner);
+      t = hi;
+      v = spice_jump_pulse_next(tm, t, &j, &hi);
+    }
+    double per = 0, b = 0;                         /* the breaks likewise, against spice_term_break's */
+    for (long k = 0; k < pieces[q] && isfinite(b); k++) {
+      double want = spice_term_break(tm, b), got = spice_jump_break(tm, b, &per);
+      if (memcmp(&got, &want, sizeof got)) fail_msg("pulse %zu, break %ld after %.17g: %.17g, spice_term_break %.17g",
+                                                    q, k, b, got, want);
+      b = got;
+    }
+    cup_input_free(&u);
+  }
+}
+
 /* Three phases of one frequency and a fourth sine of another
  * (input_gen_piece with input_gen_rot_plan): the first sine of a frequency
  * keeps the bits of amp sin(omega a + phi) and amp cos(...); the others,
@@ -519,6 +572,7 @@ int main(void) {
     cmocka_unit_test(test_pulse_corners),
     cmocka_unit_test(test_break_memos),
     cmocka_unit_test(test_term_piece),
+    cmocka_unit_test(test_jump_pulse_walk),
     cmocka_unit_test(test_damped_sine),
     cmocka_unit_test(test_gen_rotation),
   };

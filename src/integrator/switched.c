@@ -92,9 +92,15 @@ static int watch_step(long k, double t, const cup_proj_info *pi, void *ctx) {
   return 0;
 }
 
-static int child_of(switched_run *S, int topo, char *errmsg) {
+static int child_make(switched_run *S, int topo, char *errmsg);
+
+/* Configuration topo's integrator, made the first time it is in force. */
+static inline int child_of(switched_run *S, int topo, char *errmsg) {
+  return topo >= 0 && topo < SW_MAX && S->child[topo] ? CUP_OK : child_make(S, topo, errmsg);
+}
+
+static int child_make(switched_run *S, int topo, char *errmsg) {
   if (topo < 0 || topo >= SW_MAX) return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "more than %d switch configurations", SW_MAX);
-  if (S->child[topo]) return CUP_OK;
   const cup_lcs *L = S->ops.lcs(S->ops.ctx, topo);
   char msg[CUP_ERRMSG_LEN];
   cup_integrator_options o = S->o;
@@ -144,7 +150,7 @@ static int sw_record(void *ws, const struct signal_map *sig, double *out) {
 
 /* One window's statistics into the run's. */
 static void add_info(cup_run_info *info, const cup_run_info *w) {
-  info->status = cup_status_merge(info->status, w->status);
+  info->status = status_merge(info->status, w->status);   /* (linalg.h's: a window's call saved) */
   /* (a window's message is a string: its tail past the end is not cleared, adaptive_window) */
   if ((w->status != CUP_OK && info->message[0] == '\0') || w->status < 0)
     memcpy(info->message, w->message, strnlen(w->message, sizeof w->message - 1) + 1);

@@ -522,10 +522,15 @@ double input_next_break_memo(const cup_input *u, input_break_memo *m, int nm, do
       b = term_break(w, t);
     } else if (m[k].from <= t && t < m[k].next) {
       b = m[k].next;
+    } else if (input_jump_pulse(w) && w->value2 != w->value) {
+      /* a gate's corners one after another: from the last one's period */
+      double per = t == m[k].next ? m[k].per : 0;
+      b = spice_jump_break(w, t, &per);
+      m[k] = (input_break_memo){t, b, per};
     } else {
       b = term_break(w, t);
       /* a square wave's next jump is rounded from q at t: asked afresh */
-      m[k] = (input_break_memo){w->kind == CUP_WAVE_SQUARE ? NAN : t, b};
+      m[k] = (input_break_memo){w->kind == CUP_WAVE_SQUARE ? NAN : t, b, 0};
     }
     if (b < next) next = b;                        /* (fmin's, a NaN b too) */
   }

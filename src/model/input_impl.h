@@ -35,6 +35,8 @@ struct cup_input {
  * (from = NaN: none, asked afresh; {0} holds for no time). */
 typedef struct input_break_memo {
   double from, next;
+  double per;           /* a jump PULSE's period at from, plus 2 (1: before its delay; 0: none known):
+                           the break after next from it (spice_jump_break) */
 } input_break_memo;
 
 /* cup_input_next_break(u, t), bit for bit, terms k < nm by their memos
@@ -64,6 +66,11 @@ int spice_term_init(input_term *t, const cup_wave *w, char *errmsg);
 double spice_term_value(const input_term *t, double tt);
 double spice_term_integral(const input_term *t, double a, double b);
 double spice_term_break(const input_term *t, double tt);   /* the next corner after tt, or INFINITY */
+/* The same for a PULSE with jump edges (rise = fall = 0, value2 != value),
+ * bit for bit, and in *per its period at tt (input_break_memo's per). With
+ * *per > 0, tt is the break this gave from a time in period *per - 2 (or
+ * before the delay, 1): the period moved on from it, without a division. */
+double spice_jump_break(const input_term *t, double tt, double *per);
 /* A PULSE's piece around mid as the line u = v0 + slope (t - t0) through its
  * corners at the times spice_term_break gives them (t0 the one before
  * mid), with the corners' own values. */
@@ -71,6 +78,12 @@ void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, d
 int spice_term_constant(const input_term *t);
 /* A PULSE with rise = fall = 0 at tt, constant on [tt, *hi) (the signals' samples). */
 double spice_jump_pulse(const input_term *t, double tt, double *hi);
+/* The same, and in *j the period tt is in (-1 before the delay). */
+double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi);
+/* The same at tt = *hi of the piece before it, *j that piece's period (from
+ * spice_jump_pulse_j or this), moved on: the pieces one after another (a
+ * switched run's gates), bit for bit spice_jump_pulse's. */
+double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi);
 
 /* The square wave in units of pi: q = omega t / pi + phase / pi, so that
  * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from

@@ -119,11 +119,13 @@ static double pulse_value(const input_term *t, double tt) {
  * through pulse_period, the next period's start), so every time in
  * [tt, *hi) has the value returned, bit for bit. */
 double spice_jump_pulse(const input_term *t, double tt, double *hi) {
-  if (tt - t->delay < 0) {
-    *hi = t->delay;
-    return t->value;
-  }
-  double j = t->period > 0 ? pulse_period(t, tt) : 0, base = t->delay + t->period * j;
+  double j;
+  return spice_jump_pulse_j(t, tt, &j, hi);
+}
+
+/* spice_jump_pulse at tt >= delay in period j (pulse_period's, 0 without a period). */
+static double jump_piece(const input_term *t, double tt, double j, double *hi) {
+  double base = t->delay + t->period * j;
   double c2 = base + (t->rise + t->width), next = t->period > 0 ? t->delay + t->period * (j + 1) : INFINITY;
   if (tt < c2) {
     *hi = fmin(c2, next);
@@ -131,6 +133,27 @@ double spice_jump_pulse(const input_term *t, double tt, double *hi) {
   }
   *hi = next;
   return t->value;
+}
+
+double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi) {
+  if (tt - t->delay < 0) {
+    *j = -1;
+    *hi = t->delay;
+    return t->value;
+  }
+  *j = t->period > 0 ? pulse_period(t, tt) : 0;
+  return jump_piece(t, tt, *j, hi);
+}
+
+/* At a piece's end tt = hi, the period is the next one when tt is its
+ * start delay + P (j + 1), the sum pulse_period checks, else still j (tt
+ * the top's end base + (rise + width), below the next start): what
+ * pulse_period finds there (its floor is within one of it and corrected by
+ * those very sums), without its division. */
+double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi) {
+  if (*j < 0) return spice_jump_pulse_j(t, tt, j, hi);   /* (tt = delay: once a run) */
+  if (t->period > 0 && tt == t->delay + t->period * (*j + 1)) *j += 1;
+  return jump_piece(t, tt, *j, hi);
 }
 
 static double pulse_integral(const input_term *t, double a, double b) {
@@ -176,6 +199,43 @@ static double pulse_break(const input_term *t, double tt) {
     }
   }
   return next;
+}
+
+/* pulse_break of a PULSE with jump edges in period pp of tt >= delay
+ * (pulse_period's): its corners delay + P j and that + (rise + width),
+ * pulse_break's sums; past tt and least among periods pp - 1 to pp + 1 only
+ * the top's end of pp - 1 (when it rounds past tt), of pp, and the start of
+ * pp + 1 can be (the others are below tt or past that start). */
+static double jump_break(const input_term *t, double tt, double pp) {
+  double P = t->period, w = t->rise + t->width;
+  if (!(P > 0)) {
+    double c2 = (t->delay + P * 0) + w;
+    return c2 > tt ? c2 : INFINITY;
+  }
+  double next = t->delay + P * (pp + 1), c2 = (t->delay + P * pp) + w;
+  if (c2 > tt && c2 < next) next = c2;
+  if (pp >= 1) {
+    double c1 = (t->delay + P * (pp - 1)) + w;
+    if (c1 > tt && c1 < next) next = c1;
+  }
+  return next;
+}
+
+/* (At the break tt from a time in period j the period is j + 1 when tt is
+ * its start, the sum pulse_period checks, else still j: spice_jump_pulse_next's.) */
+double spice_jump_break(const input_term *t, double tt, double *per) {
+  if (tt < t->delay) {
+    *per = 1;
+    return t->delay;
+  }
+  double j = *per - 2;
+  if (*per >= 2) {
+    if (t->period > 0 && tt == t->delay + t->period * (j + 1)) j += 1;
+  } else {
+    j = t->period > 0 ? pulse_period(t, tt) : 0;
+  }
+  *per = j + 2;
+  return jump_break(t, tt, j);
 }
 
 void spice_pulse_line(const input_term *t, double mid, double *t0, double *v0, double *slope) {

@@ -26,75 +26,7 @@
 #include <string.h>
 #include "catchup.h"
 #include "catchup/netlist.h"
-#include "netlist_impl.h"
-#include "input_impl.h"
-
-#define NL_TOPO_MAX 64     /* configurations kept (a converter has a handful) */
-
-typedef struct nl_topo {
-  uint64_t cfg;            /* bit k: switch k closed */
-  cup_netlist *sub;        /* its netlist (LCS, signals); topo[0]'s is the netlist itself */
-  double *Pi;              /* n x n, column-major: the jump onto its constraints (nq > 0) */
-  double *ctl;             /* nsw x (n + p + m_sub), row-major: each switch's control */
-  /* the controls' nonzeros (ctl_sparse): the searches evaluate them, and
-   * only the input terms they read, some thousand times a run */
-  int *cp, *ci;            /* nsw + 1 starts, columns (in x, u, zeta) */
-  double *cx;              /* ... their values */
-  int *uterm, nuterm;      /* the input's terms whose component a control reads (all: zeta's rows read u) */
-  int reads_z;             /* a control reads zeta */
-  int state_gated;         /* a control depends on the state or the diodes */
-  int memo;                /* its input is topo[0]'s, term by term: the memos hold for it (memo_reset) */
-  int steps;               /* the terms read are constants and jump PULSEs: between two breaks of
-                              the input, u(t) and the controls from it are one value */
-  uint64_t by_state;       /* bit k: switch k's does (gated_by_state, for changes) */
-  int ctl_class;           /* > 0: configurations of one class have the same controls, of t alone
-                              (same_controls): settle's rule holds in the one it moves to; 0: none */
-} nl_topo;
-
-struct nl_switched {
-  nl_circuit c;            /* the circuit as read (owned) */
-  int nsw;
-  int *sw;                 /* the switches' elements */
-  int ntopo;
-  nl_topo topo[NL_TOPO_MAX];
-  long formed;             /* configurations formulated */
-  int nclass;              /* the control classes given out (nl_topo's ctl_class) */
-  int cur;                 /* the configuration in force (signals) */
-  double *ut;              /* p: u(t) */
-  double *zf;              /* scratch: a configuration's zeta with multipliers */
-  double *thr;             /* 2 nsw: each switch's VT + |VH| and VT - |VH| (rule) */
-  /* the searches' memos of topo[0]'s input, term by term (nl_topo.memo):
-   * a switched run asks each piece's end and a few times around it, and
-   * at a converter's corner one gate moves while the others hold */
-  int nmemo;               /* its terms */
-  input_break_memo *bmemo; /* each one's next break */
-  double *vmemo;           /* 3 each: its value on [from, hi) (input_term_piece), from, hi, value */
-  /* the controls a search read last (changes), where its terms' pieces
-   * overlap: the next piece's first check reads them again */
-  int cvm_class;           /* their configurations' control class (0: none held) */
-  double cvm_lo, cvm_hi, *cvm;
-  uint64_t cvm_from, cvm_to; /* the rule's last answer from them: cvm_from gave cvm_to */
-  double read_lo, read_hi; /* the last read_terms': where its terms' memos all hold */
-  int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
-  double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
-  /* the switching time the last search found (a configuration with no
-   * switch the circuit gates) and the configuration the rule gave there:
-   * the settle that follows it, at that time, takes it (once) */
-  int memo_ok, memo_topo;
-  double memo_t;
-  uint64_t memo_cfg, last_cfg;   /* ... and the rule's at the last check (changes) */
-  /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
-  cup_gate_fn gate_fn;
-  void *gate_ctx;
-  double gate_ts;
-  int *gate;               /* nsw */
-};
-
-/* t's sampling instant k if t is one (within 1e-9 ts), else -1. */
-static long instant(const nl_switched *S, double t) {
-  double k = floor(t / S->gate_ts + 0.5);
-  return fabs(t - k * S->gate_ts) <= 1e-9 * S->gate_ts ? (long)k : -1;
-}
+#include "netlist_switch_impl.h"
 
 /* ---- a configuration's circuit ---------------------------------------------------- */
 
@@ -331,35 +263,11 @@ static int reads_memo(const nl_switched *S, const nl_topo *tp) {
 static void memo_reset(nl_switched *S) {
   if (!S->bmemo) return;
   memset(S->bmemo, 0, sizeof *S->bmemo * (size_t)S->nmemo);
-  memset(S->vmemo, 0, sizeof *S->vmemo * 3 * (size_t)S->nmemo);
+  memset(S->vmemo, 0, sizeof *S->vmemo * 4 * (size_t)S->nmemo);
+  for (int k = 0; k < S->nmemo; k++) S->vmemo[4 * (size_t)k + 3] = NAN;
   S->cvm_class = 0;
+  S->tab_class = 0;
   for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]);
-}
-
-/* u(t) into S->ut from the terms configuration tp's controls read (ut's
- * other entries 0), input_eval_terms' sums: with the memos, each term's
- * value while t is in the piece it was taken on. */
-static void read_terms(nl_switched *S, const nl_topo *tp, double t) {
-  const cup_input *u = tp->sub->u;
-  if (!tp->memo) {
-    input_eval_terms(u, tp->uterm, tp->nuterm, t, S->ut);
-    return;
-  }
-  double lo = -INFINITY, hi = INFINITY;
-  for (int j = 0; j < u->p; j++) S->ut[j] = 0;
-  for (int q = 0; q < tp->nuterm; q++) {
-    int k = tp->uterm[q];
-    double *c = S->vmemo + 3 * (size_t)k;
-    if (!(t >= c[0] && t < c[1])) {
-      c[0] = t;
-      c[2] = input_term_piece(&u->terms[k], t, &c[1]);
-    }
-    S->ut[u->terms[k].comp] += c[2];
-    if (c[0] > lo) lo = c[0];
-    if (c[1] < hi) hi = c[1];
-  }
-  S->read_lo = lo;                                 /* where every term read holds (t among them) */
-  S->read_hi = hi;
 }
 
 /* The configuration's index, formed now if it is new. */
@@ -388,68 +296,13 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   return CUP_OK;
 }
 
-/* Each switch's control at t in configuration tp (x, zeta may be NULL: 0),
- * over the controls' nonzeros and the input terms they read (ctl_sparse):
- * the dense rows' sums less terms that are exactly 0, bit for bit. */
-static int controls(nl_switched *S, const nl_topo *tp, double t, const double *x, const double *zeta, double *cv) {
-  cup_netlist *sub = tp->sub;
-  int n = sub->n, p = sub->p, m = sub->m;
-  const cup_input *u = sub->u;
-  if (p && (!u || u->fn)) {
-    if (cup_input_eval(u, t, S->ut)) return CUP_ERR_CALLBACK;
-  } else if (p) {
-    read_terms(S, tp, t);                          /* the terms read */
-  }
-  const double *z = zeta;
-  if (sub->zrow && tp->reads_z) {
-    for (int r = 0; r < m; r++) {
-      int k = sub->zrow[r];
-      if (k >= 0) { S->zf[r] = zeta ? zeta[k] : 0; continue; }
-      const double *l = sub->Lam + (size_t)(-1 - k) * (size_t)(n + p + sub->mr);
-      S->zf[r] = (x ? la_dot(l, x, n) : 0) + la_dot(l + n, S->ut, p) + (zeta ? la_dot(l + n + p, zeta, sub->mr) : 0);
-    }
-    z = S->zf;
-  }
-  if (!x && !z) {                                  /* a search's: u's part alone (the others 0) */
-    for (int k = 0; k < S->nsw; k++) {
-      double su = 0;
-      for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
-        unsigned j = (unsigned)(tp->ci[q] - n);
-        if (j < (unsigned)p) su += tp->cx[q] * S->ut[j];
-      }
-      cv[k] = 0.0 + su + 0.0;
-    }
-    return CUP_OK;
-  }
-  for (int k = 0; k < S->nsw; k++) {
-    double sx = 0, su = 0, sz = 0;
-    for (int q = tp->cp[k]; q < tp->cp[k + 1]; q++) {
-      int j = tp->ci[q];
-      if (j < n) sx += x ? tp->cx[q] * x[j] : 0;
-      else if (j < n + p) su += tp->cx[q] * S->ut[j - n];
-      else sz += z ? tp->cx[q] * z[j - n - p] : 0;
-    }
-    cv[k] = (x ? sx : 0) + su + (z ? sz : 0);
-  }
-  return CUP_OK;
-}
-
-/* ngspice's rule: on above VT + |VH|, off below VT - |VH| (S->thr), else as before. */
-static uint64_t rule(const nl_switched *S, uint64_t cfg, const double *cv) {
-  for (int k = 0; k < S->nsw; k++) {
-    if (cv[k] > S->thr[2 * k]) cfg |= (uint64_t)1 << k;
-    else if (cv[k] < S->thr[2 * k + 1]) cfg &= ~((uint64_t)1 << k);
-  }
-  return cfg;
-}
-
 /* The configuration in force from t on, from the one before: the rule
  * applied until it holds (a switch may move another's control). */
 static int settle(cup_netlist *nl, int *topo, double t, const double *x, const double *zeta, char *errmsg) {
   nl_switched *S = nl->sw;
   double cv[64];
   if (S->gate_fn) {                                /* a controller: its gates at its instants, held between */
-    if (instant(S, t) < 0) return CUP_OK;
+    if (nl_sw_instant(S, t) < 0) return CUP_OK;
     for (int k = 0; k < S->nsw; k++) S->gate[k] = (int)(S->topo[*topo].cfg >> k & 1u);
     if (S->gate_fn(t, x, S->nsw, S->gate, S->gate_ctx))
       return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "t = %.17g: the controller callback failed", t);
@@ -461,141 +314,40 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
   int memo = S->memo_ok && S->memo_topo == *topo && S->memo_t == t;
   int read = 0;                                    /* the control class the rule was last applied with */
   S->memo_ok = 0;
+  if (memo) {                                      /* the loop's first pass and, the class held, its last */
+    const nl_topo *tp = &S->topo[*topo], *to = &S->topo[tp->succ];
+    if (tp->ctl_class && to->cfg == S->memo_cfg && to->ctl_class == tp->ctl_class && S->memo_cfg != tp->cfg) {
+      *topo = tp->succ;
+      return CUP_OK;
+    }
+  }
   for (int pass = 0; pass <= S->nsw + 1; pass++) {
     /* the configuration the rule gave reads the same controls: the rule,
      * applied to its own result with the same values, gives it again */
     if (read && S->topo[*topo].ctl_class == read) return CUP_OK;
     read = S->topo[*topo].ctl_class;
-    uint64_t next = S->memo_cfg;                   /* the search's at t: the same controls (they read no state) */
-    if (!(pass == 0 && memo)) {
-      if (controls(S, &S->topo[*topo], t, x, zeta, cv))
-        return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
-      next = rule(S, S->topo[*topo].cfg, cv);
-    }
-    if (next == S->topo[*topo].cfg) return CUP_OK;
+    const nl_topo *tp = &S->topo[*topo];
+    uint64_t next;
+    if (pass == 0 && memo)                         /* the search's at t: the same controls (they read no state) */
+      next = S->memo_cfg;
+    else if (nl_sw_held(S, tp, t))                 /* the controls the searches read last, the same sums */
+      next = tp->cfg == S->cvm_from || tp->cfg == S->cvm_to ? S->cvm_to : nl_sw_rule(S, tp->cfg, S->cvm);
+    else if (nl_sw_controls(S, tp, t, x, zeta, cv))
+      return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
+    else
+      next = nl_sw_rule(S, tp->cfg, cv);
+    if (next == tp->cfg) return CUP_OK;
+    int from = *topo, succ = tp->succ;             /* a converter moves between the same few, in turn */
+    if (S->topo[succ].cfg == next) { *topo = succ; continue; }
     int st = topo_of(nl, next, topo, errmsg);
     if (st) return st;
+    S->topo[from].succ = *topo;
   }
   return nl_fail(&S->c, -1, errmsg, CUP_ERR_UNSUPPORTED, "the switches do not settle at t = %g: each "
                  "configuration turns another's control past its threshold (a loop of switches with no "
                  "hysteresis)", t);
 }
 
-
-/* 1 if, from configuration tp, a switch of one kind (by_state: those the
- * circuit gates, else those the sources alone gate) changes at s, state x. */
-static int changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv) {
-  /* controls of t alone (a class) from terms constant on pieces: one value
-   * where the pieces they were read on overlap, for every configuration
-   * of the class */
-  int cls = !x && !by_state && tp->steps && tp->memo ? tp->ctl_class : 0;
-  if (cls && cls == S->cvm_class && s >= S->cvm_lo && s < S->cvm_hi) {
-    /* the rule's answer from them, known for the configuration it was
-     * applied to and for the one it gave (applied to its own result, the
-     * rule gives it again) */
-    if (tp->cfg == S->cvm_from || tp->cfg == S->cvm_to) {
-      S->last_cfg = S->cvm_to;
-      return S->last_cfg != tp->cfg;
-    }
-    for (int k = 0; k < S->nsw; k++) cv[k] = S->cvm[k];
-  } else {
-    S->cvm_class = 0;
-    if (controls(S, tp, s, x, NULL, cv)) return -1;
-    if (cls) {
-      for (int k = 0; k < S->nsw; k++) S->cvm[k] = cv[k];
-      S->cvm_class = cls;
-      S->cvm_lo = S->read_lo;
-      S->cvm_hi = S->read_hi;
-    }
-  }
-  for (int k = 0; k < S->nsw; k++)
-    if ((int)(tp->by_state >> k & 1u) != by_state) cv[k] = S->c.elem[S->sw[k]].vt;   /* at VT: as before */
-  S->last_cfg = rule(S, tp->cfg, cv);
-  if (cls) {
-    S->cvm_from = tp->cfg;
-    S->cvm_to = S->last_cfg;
-  }
-  return S->last_cfg != tp->cfg;
-}
-
-/* The first time in (t, tmax] at which a source-gated switch of
- * configuration topo changes (tmax if none): the input's pieces checked at
- * their ends when every source is DC, PULSE or PWL (linear pieces), else
- * sampled 16 times each; the crossing bisected to the last bit; a jump edge
- * switches at its time. */
-static int next_switch(cup_netlist *nl, int topo, double t, double tmax, double *tnext) {
-  nl_switched *S = nl->sw;
-  const nl_topo *tp = &S->topo[topo];
-  double cv[64], a = t;
-  uint64_t cfg = tp->cfg;
-  *tnext = tmax;
-  if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
-    long k = instant(S, t);
-    double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
-    if (next < tmax) *tnext = next;
-    return CUP_OK;
-  }
-  /* controls of t alone read from terms constant on pieces (changes' class):
-   * they hold to the end of the pieces the last check read them on, a
-   * corner of one of those terms, which the input's next break cannot pass
-   * (the other terms' breaks, across which the controls hold, are passed
-   * over; a switched run's window asks the input's next break itself) */
-  int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
-  while (a < tmax) {
-    const cup_input *in = tp->sub->u;
-    double b = cls && cls == S->cvm_class && a >= S->cvm_lo && a < S->cvm_hi ? S->cvm_hi
-               : !in ? tmax : tp->memo ? input_next_break_memo(in, S->bmemo, S->nmemo, a) : cup_input_next_break(in, a);
-    if (!(b <= tmax)) b = tmax;
-    double lo = a, hi = -1;
-    /* linear pieces: the rule is monotone along one, so its end decides (just
-     * before b, clear of the input's rounding of its own breakpoints, then b
-     * itself: a jump edge switches there; bisection finds the last bit) */
-    int samples = S->linear ? 2 : 16;
-    for (int j = 1; j <= samples && hi < 0; j++) {
-      double s = j == samples ? b : S->linear ? b - (b - a) * 1e-9 : a + (b - a) * j / 16;
-      if (!(s > lo)) continue;
-      int ch = changes(S, tp, s, NULL, 0, cv);
-      if (ch < 0) return CUP_ERR_CALLBACK;
-      if (ch) hi = s, cfg = S->last_cfg; else lo = s;
-    }
-    if (hi >= 0) {
-      /* a jump edge rounds apart from its breakpoint by an ulp or a few
-       * (the source's corner delay + P j + knot against the breakpoint's
-       * own sum): at the piece's end b, or just below it; or just after
-       * the piece's start, the breakpoint below the corner where the value
-       * jumps (the crossing then lies inside the piece, as a ramp's does).
-       * One check an ulp on that side, then bisection for the rest: the
-       * same crossing, the rule being monotone along the piece. */
-      int at_end = hi == b;
-      /* the controls' terms constant on [a, b) (steps) and no change at lo
-       * inside it: none at any time below b, the crossing is b itself (what
-       * the check an ulp below and the bisection would find) */
-      int found = tp->steps && at_end && lo > a;
-      for (int u = 0; u < 4 && !found; u++) {
-        double p = at_end ? nextafter(hi, lo) : nextafter(lo, hi);
-        if (!(p > lo && p < hi)) break;
-        int ch = changes(S, tp, p, NULL, 0, cv);
-        if (ch < 0) return CUP_ERR_CALLBACK;
-        if (ch) hi = p, cfg = S->last_cfg; else lo = p;
-        if (at_end != ch) break;                   /* the other side of the crossing: found */
-      }
-      for (int it = 0; !found && it < 200 && hi > lo && nextafter(lo, hi) < hi; it++) {
-        double mid = lo + (hi - lo) / 2;
-        int ch = changes(S, tp, mid, NULL, 0, cv);
-        if (ch < 0) return CUP_ERR_CALLBACK;
-        if (ch) hi = mid, cfg = S->last_cfg; else lo = mid;
-      }
-      *tnext = hi;
-      S->memo_ok = !tp->state_gated;               /* (a state-gated switch's control is settle's to read) */
-      S->memo_topo = topo;
-      S->memo_t = hi;
-      S->memo_cfg = cfg;
-      return CUP_OK;
-    }
-    a = b;
-  }
-  return CUP_OK;
-}
 
 /* ---- the hook the integrator calls (integrator.h, cup_switching) ------------------- */
 
@@ -607,7 +359,7 @@ static int op_settle(void *ctx, int *topo, double t, const double *x, const doub
 }
 
 static int op_next(void *ctx, int topo, double t, double tmax, double *tnext) {
-  return next_switch(ctx, topo, t, tmax, tnext);
+  return nl_sw_next(ctx, topo, t, tmax, tnext);
 }
 
 static const cup_lcs *op_lcs(void *ctx, int topo) {
@@ -635,7 +387,7 @@ static int op_crossed(void *ctx, int topo, double t, const double *x) {
   cup_netlist *nl = ctx;
   double cv[64];
   if (nl->sw->gate_fn) return 0;
-  return changes(nl->sw, &nl->sw->topo[topo], t, x, 1, cv);
+  return nl_sw_changes(nl->sw, &nl->sw->topo[topo], t, x, 1, cv);
 }
 
 static int op_state_gated(void *ctx, int topo) {
@@ -693,6 +445,7 @@ static void sw_free(nl_switched **Sp) {
   }
   nl_circuit_free(&S->c);
   free(S->sw); free(S->ut); free(S->zf); free(S->gate); free(S->thr); free(S->cvm); free(S->bmemo); free(S->vmemo);
+  free(S->tab);
   free(S);
   *Sp = NULL;
 }
@@ -765,10 +518,12 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   S->zf = calloc((size_t)nl->m + (size_t)c->nelem + (size_t)nl->n + 2, sizeof(double));
   S->thr = malloc(sizeof(double) * (2 * (size_t)S->nsw + 1));
   S->cvm = malloc(sizeof(double) * ((size_t)S->nsw + 1));
+  S->tab = malloc(sizeof(double) * ((size_t)S->nsw << NL_TAB_TERMS));
   S->nmemo = nl->u && !nl->u->fn ? nl->u->nterms : 0;
   S->bmemo = S->nmemo ? malloc(sizeof *S->bmemo * (size_t)S->nmemo) : NULL;
-  S->vmemo = S->nmemo ? malloc(sizeof *S->vmemo * 3 * (size_t)S->nmemo) : NULL;
-  if (!S->ut || !S->zf || !S->thr || !S->cvm || (S->nmemo && (!S->bmemo || !S->vmemo))) st = nl_switch_nomem(c, errmsg);
+  S->vmemo = S->nmemo ? malloc(sizeof *S->vmemo * 4 * (size_t)S->nmemo) : NULL;
+  if (!S->ut || !S->zf || !S->thr || !S->cvm || !S->tab || (S->nmemo && (!S->bmemo || !S->vmemo)))
+    st = nl_switch_nomem(c, errmsg);
   for (int k = 0; !st && k < S->nsw; k++) {
     const nl_elem *el = &c->elem[S->sw[k]];
     double h = fabs(el->vh);
