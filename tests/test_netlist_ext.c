@@ -317,6 +317,52 @@ static void write_file(const char *path, const char *text) {
   fclose(f);
 }
 
+/* Diodes with series resistors (D != 0) past the dense limits (64 rows):
+ * theta and the adaptive scheme, the two that take D != 0, are dense, so
+ * every scheme refuses it, and each says that no scheme runs it instead of
+ * sending the user to another scheme that refuses it too (on 61ac75c:
+ * implicit "use the theta or the adaptive scheme", theta "use the explicit,
+ * implicit or exponential scheme", adaptive "use a fixed-step scheme").
+ * With 2 stages the advice is the dense schemes, which run it. */
+static void test_d_beyond_dense(void **state) {
+  (void)state;
+  char dir[] = "/tmp/cup_dd_XXXXXX", path[256], err[CUP_ERRMSG_LEN];
+  assert_non_null(mkdtemp(dir));
+  snprintf(path, sizeof path, "%s/ladder.cir", dir);
+  for (int stages = 2; stages <= 70; stages += 68) {
+    char text[16384];
+    int at = snprintf(text, sizeof text, "rd ladder\nV1 n0 0 SIN(0 10 50)\n");
+    for (int k = 1; k <= stages; k++)
+      at += snprintf(text + at, sizeof text - (size_t)at, "D%d n%d m%d\nR%d m%d n%d 10\nC%d n%d 0 1u\n",
+                     k, k - 1, k, k, k, k, k, k);
+    snprintf(text + at, sizeof text - (size_t)at, ".tran 10u 20m\n.end\n");
+    write_file(path, text);
+    cup_netlist *nl = NULL;
+    if (cup_netlist_load(&nl, path, NULL, 0, err)) fail_msg("%s", err);
+    static const cup_scheme schemes[3] = {CUP_SCHEME_IMPLICIT, CUP_SCHEME_THETA, CUP_SCHEME_ADAPTIVE};
+    for (int q = 0; q < 3; q++) {
+      cup_integrator_options o;
+      cup_integrator_options_default(&o);
+      o.scheme = schemes[q];
+      o.T = 0.02;
+      o.n = 1000;
+      cup_integrator *I = NULL;
+      int st = cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err);
+      if (stages == 2 && schemes[q] != CUP_SCHEME_IMPLICIT) {
+        if (st) fail_msg("%d stages, %s: %s", stages, cup_scheme_name(schemes[q]), err);
+        cup_integrator_free(&I);
+        continue;
+      }
+      assert_int_equal(st, CUP_ERR_UNSUPPORTED);
+      if (!strstr(err, stages == 2 ? "use the theta or the adaptive scheme" : "no scheme runs it"))
+        fail_msg("%d stages, %s: %s", stages, cup_scheme_name(schemes[q]), err);
+    }
+    cup_netlist_free(&nl);
+  }
+  remove(path);
+  rmdir(dir);
+}
+
 /* .include and .lib with paths relative to the including file, and errors
  * located in the file that holds them. */
 static void test_include_lib(void **state) {
@@ -375,6 +421,7 @@ int main(void) {
     cmocka_unit_test(test_coupled_diode),
     cmocka_unit_test(test_subckt),
     cmocka_unit_test(test_include_lib),
+    cmocka_unit_test(test_d_beyond_dense),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -311,7 +311,9 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   if (!K->dense)
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
-                    "use a fixed-step scheme", K->m, K->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM);
+                    "%s", K->m, K->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM, Dm
+                    ? "with D != 0 (a diode whose current the state does not fix) no scheme runs it"
+                    : "use a fixed-step scheme");
   if (o->f)
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: a perturbation f(t, x) is not supported (the scheme integrates "

@@ -34,13 +34,19 @@ static int needs_theta(const cup_lcs *L, cup_scheme scheme, char *errmsg) {
     for (int q = L->D.p[j]; q < L->D.p[j + 1]; q++)
       if (L->D.x[q] != 0) used[L->D.i[q]] = used[j] = 1;
   for (int i = 0; i < L->m; i++) if (used[i]) rows[k++] = i;
-  char text[128];
+  char text[128], what[160];
   lcs_rows_text(L, rows, k, text, sizeof text);
   free(rows); free(used);
+  /* theta and the adaptive scheme, the two that take D != 0, are dense:
+   * beyond their limits no scheme runs it, and the advice says so */
+  if (L->m <= CUP_DENSE_MAX_ROWS && L->n <= CUP_DENSE_MAX_DIM)
+    snprintf(what, sizeof what, "use the theta or the adaptive scheme");
+  else
+    snprintf(what, sizeof what, "no scheme runs it: theta and the adaptive scheme, which take D != 0, are dense "
+             "(at most %d rows and %d states; this has %d and %d)", CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM, L->m, L->n);
   return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "the %s scheme needs D = 0 (it projects onto K(t) = {C x + G u "
                   "+ F >= 0}, which D != 0 does not define); %s %s D != 0 (a diode whose current the state does "
-                  "not fix): use the theta or the adaptive scheme", cup_scheme_name(scheme), text,
-                  k == 1 ? "has" : "have");
+                  "not fix): %s", cup_scheme_name(scheme), text, k == 1 ? "has" : "have", what);
 }
 
 /* The theta step; an LCS with D != 0 gives it B and D as dense arrays. */
@@ -78,8 +84,9 @@ static int polyset_setup(fixed_ws *F, char *errmsg) {
   if (F->use_theta && !F->K->dense)
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "theta scheme: %d rows and %d states exceed the dense limits (%d rows, %d states); "
-                    "use the explicit, implicit or exponential scheme", F->K->m, F->K->n, CUP_DENSE_MAX_ROWS,
-                    CUP_DENSE_MAX_DIM);
+                    "%s", F->K->m, F->K->n, CUP_DENSE_MAX_ROWS, CUP_DENSE_MAX_DIM, F->L && F->L->has_D
+                    ? "with D != 0 (a diode whose current the state does not fix) no scheme runs it"
+                    : "use the explicit, implicit or exponential scheme");
   if (F->use_theta) {
     double *W = F->fs.W, *eye = NULL;
     if (!W) {
