@@ -95,10 +95,13 @@ static double pulse_period(const input_term *t, double tt) {
   return j;
 }
 
+/* The period of tt >= delay: pulse_period's, 0 without a period. */
+static double period_of(const input_term *t, double tt) { return t->period > 0 ? pulse_period(t, tt) : 0; }
+
 static double pulse_value(const input_term *t, double tt) {
   double s = tt - t->delay;
   if (s < 0) return t->value;
-  double j = t->period > 0 ? pulse_period(t, tt) : 0, base = t->delay + t->period * j;
+  double j = period_of(t, tt), base = t->delay + t->period * j;
   if (t->period > 0) s -= t->period * j;
   /* a ramp's fraction clamped to [0, 1] (s rounds apart from tt - base);
    * a ramp shorter than its corner's ulp starts there all the same (the
@@ -135,24 +138,29 @@ static double jump_piece(const input_term *t, double tt, double j, double *hi) {
   return t->value;
 }
 
+/* The period at a piece's end tt, from the piece's period j: the next one
+ * when tt is its start delay + P (j + 1), the sum pulse_period checks, else
+ * still j (tt the top's end, below the next start): what pulse_period
+ * finds there (its floor is within one of it and corrected by those very
+ * sums), without its division. */
+static double period_after(const input_term *t, double tt, double j) {
+  return t->period > 0 && tt == t->delay + t->period * (j + 1) ? j + 1 : j;
+}
+
 double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi) {
   if (tt - t->delay < 0) {
     *j = -1;
     *hi = t->delay;
     return t->value;
   }
-  *j = t->period > 0 ? pulse_period(t, tt) : 0;
+  *j = period_of(t, tt);
   return jump_piece(t, tt, *j, hi);
 }
 
-/* At a piece's end tt = hi, the period is the next one when tt is its
- * start delay + P (j + 1), the sum pulse_period checks, else still j (tt
- * the top's end base + (rise + width), below the next start): what
- * pulse_period finds there (its floor is within one of it and corrected by
- * those very sums), without its division. */
+/* At a piece's end tt = hi: its period by period_after. */
 double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi) {
   if (*j < 0) return spice_jump_pulse_j(t, tt, j, hi);   /* (tt = delay: once a run) */
-  if (t->period > 0 && tt == t->delay + t->period * (*j + 1)) *j += 1;
+  *j = period_after(t, tt, *j);
   return jump_piece(t, tt, *j, hi);
 }
 
@@ -221,19 +229,13 @@ static double jump_break(const input_term *t, double tt, double pp) {
   return next;
 }
 
-/* (At the break tt from a time in period j the period is j + 1 when tt is
- * its start, the sum pulse_period checks, else still j: spice_jump_pulse_next's.) */
+/* (At the break tt from a time in period j: period_after, as spice_jump_pulse_next.) */
 double spice_jump_break(const input_term *t, double tt, double *per) {
   if (tt < t->delay) {
     *per = 1;
     return t->delay;
   }
-  double j = *per - 2;
-  if (*per >= 2) {
-    if (t->period > 0 && tt == t->delay + t->period * (j + 1)) j += 1;
-  } else {
-    j = t->period > 0 ? pulse_period(t, tt) : 0;
-  }
+  double j = *per >= 2 ? period_after(t, tt, *per - 2) : period_of(t, tt);
   *per = j + 2;
   return jump_break(t, tt, j);
 }
