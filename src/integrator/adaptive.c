@@ -275,22 +275,26 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
-  ad_modes_layout(A, b);
+  ad_scratch_layout(A, b);
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two
- * series' coefficients (written before they are read): a switched run makes
- * its integrators as it goes, and each array was a calloc of its own (some
- * 280 a configuration on the full bridge). The series come first and last,
- * each starting on a page the set-up touches (the block's header, the
- * zeroed part), as their own mallocs did: not the run's first use (3 page
- * faults more in the six-pulse run else). */
+ * series' coefficients and the active sets' slots (each written before it
+ * is read): a switched run makes its integrators as it goes, and each array
+ * was a calloc of its own (some 280 a configuration on the full bridge).
+ * The series come first and after the zeroed part, each starting on a page
+ * the set-up touches (the block's header, the zeroed part), as their own
+ * mallocs did: not the run's first use (3 page faults more in the six-pulse
+ * run else). The slots come last, not zeroed: that was some 70 % of the
+ * memset (16 k instructions a configuration on the full bridge), and the
+ * pages of slots no set is built in are never touched. */
 static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
   ad_series_layout(A, &A->sy, b);
   *z0 = b->used;
   vectors(A, b);
   *z1 = b->used;
   ad_series_layout(A, &A->se, b);
+  ad_modes_layout(A, b);
 }
 
 static int alloc_block(adaptive_ws *A) {

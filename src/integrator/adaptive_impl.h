@@ -312,10 +312,14 @@ double ad_next_break(adaptive_ws *A, double t);
  * mode's mask says which). NULL only without memory (none is allocated
  * here: the slots are laid out by ad_modes_layout). */
 ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
-/* The slots' matrices, the series' small vectors and the construction's
- * scratch from b (adaptive.c's one block, zeroed); series S's
- * coefficients by ad_series_layout, not zeroed. */
+/* The slots' matrices from b (adaptive.c's one block, not zeroed: a slot's
+ * arrays are written whole when a set is built in it, mode_factor and
+ * mode_finish, before they are read; its exponentials by their lengths,
+ * md->hc); the series' small vectors and the construction's scratch
+ * (zeroed) by ad_scratch_layout; series S's coefficients by
+ * ad_series_layout, not zeroed. */
 void ad_modes_layout(adaptive_ws *A, block_arena *b);
+void ad_scratch_layout(adaptive_ws *A, block_arena *b);
 void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b);
 /* The eigenvalue workspace (gsl's own allocations). */
 int ad_modes_init(adaptive_ws *A);

@@ -43,6 +43,10 @@ void ad_modes_layout(adaptive_ws *A, block_arena *b) {
       md->ex[c] = block_take(b, NA, sizeof(double));
     }
   }
+}
+
+void ad_scratch_layout(adaptive_ws *A, block_arena *b) {
+  int n = A->n, m = A->m, na = A->na;
   ad_series *ser[] = {&A->sy, &A->se};
   for (int k = 0; k < 2; k++) {
     ser[k]->mag = block_take(b, (size_t)na, sizeof(double));
