@@ -287,10 +287,17 @@ static void build_x0(cup_netlist *nl, const nl_circuit *c, double *vic) {
 
 /* ---- names ------------------------------------------------------------------------ */
 
+/* "pre(name)" (by copies: snprintf's format walk was 1.3 k instructions a
+ * name, twice for each switch configuration formed). */
 static char *fmt_name(const char *pre, const char *name) {
-  size_t len = strlen(pre) + strlen(name) + 2;
-  char *s = malloc(len + 1);
-  if (s) snprintf(s, len + 1, "%s(%s)", pre, name);
+  size_t lp = strlen(pre), ln = strlen(name);
+  char *s = malloc(lp + ln + 3);
+  if (!s) return NULL;
+  memcpy(s, pre, lp);
+  s[lp] = '(';
+  memcpy(s + lp + 1, name, ln);
+  s[lp + ln + 1] = ')';
+  s[lp + ln + 2] = '\0';
   return s;
 }
 
@@ -316,23 +323,29 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   nl->chgtol = c->chgtol;
   nl->steady = c->steady;
   nl->steady_period = c->steady_period;
-  if (!(nl->file = strdup(c->file))) return CUP_ERR_NOMEM;
+  /* a switch configuration's names are lent (each configuration formed in
+   * the run copied some 30, a malloc and a free each) */
+  int lend = c->names_lent > 0;
+  nl->names_lent = c->names_lent;
+  if (!(nl->file = lend ? c->file : strdup(c->file))) return CUP_ERR_NOMEM;
   if (!(nl->files = calloc((size_t)c->nfiles + 1, sizeof(char *)))) return CUP_ERR_NOMEM;
   for (int f = 0; f < c->nfiles; f++) {
     int seen = 0;
     for (int g = 0; g < nl->nfiles && !seen; g++) seen = !strcmp(nl->files[g], c->files[f]);
-    if (!seen && !(nl->files[nl->nfiles++] = strdup(c->files[f]))) return CUP_ERR_NOMEM;
+    if (!seen && !(nl->files[nl->nfiles++] = lend ? c->files[f] : strdup(c->files[f]))) return CUP_ERR_NOMEM;
   }
   nl->node = calloc((size_t)c->nnodes, sizeof(char *));
   nl->elem = calloc((size_t)c->nelem, sizeof(nl_elem));
   if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
+  static char ground[] = "0";
   for (int v = 0; v < c->nnodes; v++)
-    if (!(nl->node[v] = strdup(c->node[v] ? c->node[v] : "0"))) return CUP_ERR_NOMEM;
+    if (!(nl->node[v] = lend ? (c->node[v] ? c->node[v] : ground) : strdup(c->node[v] ? c->node[v] : "0")))
+      return CUP_ERR_NOMEM;
   if (nl_copy_probes(nl, c)) return CUP_ERR_NOMEM;
   for (int e = 0; e < c->nelem; e++) {
     nl->elem[e] = c->elem[e];
     memset(&nl->elem[e].src, 0, sizeof nl->elem[e].src);
-    if (!(nl->elem[e].name = strdup(c->elem[e].name))) return CUP_ERR_NOMEM;
+    if (!(nl->elem[e].name = e < c->names_lent ? c->elem[e].name : strdup(c->elem[e].name))) return CUP_ERR_NOMEM;
   }
   return CUP_OK;
 }
@@ -415,9 +428,10 @@ void cup_netlist_free(cup_netlist **p) {
   cup_input_free(&nl->u);
   cup_input_free(&nl->u_written);
   free(nl->x0);
-  for (int v = 0; nl->node && v < nl->nnodes; v++) free(nl->node[v]);
+  int lent = nl->names_lent > 0;                 /* (the switched netlist's circuit's names) */
+  for (int v = 0; nl->node && !lent && v < nl->nnodes; v++) free(nl->node[v]);
   free(nl->node);
-  for (int e = 0; nl->elem && e < nl->nelem; e++) free(nl->elem[e].name);
+  for (int e = nl->names_lent; nl->elem && e < nl->nelem; e++) free(nl->elem[e].name);
   free(nl->elem);
   for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);
   for (int j = 0; nl->row_name && j < nl->m; j++) free(nl->row_name[j]);
@@ -437,9 +451,9 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->vals); free(nl->dense); free(nl->ucache); free(nl->smap_rows);
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
-  for (int f = 0; nl->files && f < nl->nfiles; f++) free(nl->files[f]);
+  for (int f = 0; nl->files && !lent && f < nl->nfiles; f++) free(nl->files[f]);
   free(nl->files);
-  free(nl->file);
+  if (!lent) free(nl->file);
   free(nl->source);
   if (nl->hooks) nl->hooks->free(&nl->sw);
   if (nl->raw) {

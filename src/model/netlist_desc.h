@@ -103,6 +103,9 @@ typedef struct nl_circuit {
   int nswitch;        /* S and W elements */
   int derived;        /* a switch configuration's circuit (netlist_switch.c): constraint rows
                          (eq) allowed, dangling nodes allowed, inert diodes kept */
+  int names_lent;     /* a derived circuit: the names of its first names_lent elements, of its
+                         nodes and files are the switched netlist's circuit's, which outlives
+                         every netlist formed from it (netlist_formulate lends them on) */
 } nl_circuit;
 
 void nl_circuit_free(nl_circuit *c);

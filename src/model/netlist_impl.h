@@ -130,6 +130,8 @@ struct cup_netlist {
   const nl_sw_hooks *hooks;   /* ... and what its own functions ask of them */
   nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction */
   int nelem_user;         /* elements written (a configuration's circuit appends constraints) */
+  int names_lent;         /* > 0: the names of nodes, files and the first names_lent elements are
+                             the switched netlist's circuit's (nl_circuit.names_lent): not freed */
   int mr;                 /* a configuration's diode rows (m counts its constraint rows too) */
   int *zrow;              /* m: each row's diode row (>= 0) or constraint -1 - q; NULL: none */
   int nq;                 /* constraint rows */

@@ -76,8 +76,10 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   const nl_circuit *c = &S->c;
   *d = *c;
   d->derived = 1;
+  d->names_lent = c->nelem;                        /* (S->c outlives every configuration's netlist) */
   d->nprobe = 0; d->probe = NULL; d->probe_all = 0;
-  d->elem = calloc((size_t)c->nelem + (size_t)c->nnodes + 1, sizeof(nl_elem));
+  /* (not zeroed: the circuit's elements are copied over, append clears each one after) */
+  d->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + (size_t)c->nnodes + 1));
   int *uf = malloc(sizeof(int) * (size_t)c->nnodes);
   if (!d->elem || !uf) { free(uf); return CUP_ERR_NOMEM; }
   for (int e = 0, k = 0; e < c->nelem; e++) {
