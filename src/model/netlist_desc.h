@@ -104,8 +104,9 @@ typedef struct nl_circuit {
   int derived;        /* a switch configuration's circuit (netlist_switch.c): constraint rows
                          (eq) allowed, dangling nodes allowed, inert diodes kept */
   int names_lent;     /* a derived circuit: the names of its first names_lent elements, of its
-                         nodes and files are the switched netlist's circuit's, which outlives
-                         every netlist formed from it (netlist_formulate lends them on) */
+                         nodes and files are the switched netlist's circuit's (netlist_switch.c's
+                         S->c), freed with the switched netlist after every configuration's
+                         netlist: netlist_formulate lends them on */
 } nl_circuit;
 
 void nl_circuit_free(nl_circuit *c);

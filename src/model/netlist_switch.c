@@ -76,7 +76,7 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   const nl_circuit *c = &S->c;
   *d = *c;
   d->derived = 1;
-  d->names_lent = c->nelem;                        /* (S->c outlives every configuration's netlist) */
+  d->names_lent = c->nelem;                        /* (sw_free frees S->c after every configuration) */
   d->nprobe = 0; d->probe = NULL; d->probe_all = 0;
   /* (not zeroed: the circuit's elements are copied over, append clears each one after) */
   d->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + (size_t)c->nnodes + 1));
