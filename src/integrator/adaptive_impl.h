@@ -31,8 +31,9 @@
 #include "lcp/step.h"
 #include "util/block.h"
 
-#define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
-                               six-pulse bridge cycles through more than 6, each rebuilt 5 times */
+#define AD_MODES 10         /* active sets kept with their matrices (least recently used goes): a
+                               six-pulse bridge meets 10 in its first period (the inrush, then the
+                               commutations), and 8 slots built 2 of them twice */
 #define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
