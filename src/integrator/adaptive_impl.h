@@ -35,6 +35,7 @@
                                six-pulse bridge meets 10 in its first period (the inrush, then the
                                commutations), and 8 slots built 2 of them twice */
 #define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
+#define AD_KNOWN 32         /* with D, row sets whose N was factored, remembered regular or singular */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
@@ -199,6 +200,9 @@ struct adaptive_ws {
   ad_mode modes[AD_MODES + 1];  /* the last: a spare, where a new one is built (ad_mode_get) */
   uint64_t alias_from[AD_ALIASES], alias_to[AD_ALIASES];   /* a set asked for, the subset it holds as */
   long nalias;
+  uint64_t known[AD_KNOWN]; /* with D: row sets factored (ad_dae_factor), and whether N was singular */
+  unsigned char known_singular[AD_KNOWN];
+  long nknown;
   long clock;
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
