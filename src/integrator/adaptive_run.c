@@ -633,8 +633,10 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
   if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
-  ad_offset(A, A->yb + n, A->g);
-  ad_manifold(A, md, A->g, A->x);
+  if (md->nz) {                                  /* (a mode with no manifold rows: the bridges' with D) */
+    ad_offset(A, A->yb + n, A->g);
+    ad_manifold(A, md, A->g, A->x);
+  }
   if (series) {                                  /* (e, 0) by its series */
     la_zero(A->se.v, na);
     la_copy(A->se.v, A->e, n);
