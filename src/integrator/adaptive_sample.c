@@ -358,6 +358,10 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   if (A->one >= 0) w[A->one] = 1;
   if (!A->nwu) return CUP_OK;
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
+  if (A->w_const) {                              /* (DC sources alone: every piece's states) */
+    la_copy_few(w, A->wc, A->nwu);
+    return CUP_OK;
+  }
   int any = A->piece_from_t0;                    /* (gen_whole below: the same terms, the same answer) */
   if (A->piece_ok && t0 == A->piece_t0 && (any || t1 == A->piece_t1)) {   /* the same piece again */
     la_copy(w, A->piece_w, A->nwu);
