@@ -214,7 +214,7 @@ static void offset_pattern(adaptive_ws *A) {
 /* DC sources alone reach E and G (adaptive_impl.h's w_const): the
  * exosystem's states, u and g once, by the sums ad_inputs_on, ad_offset
  * and at_break make (the same bits at every time); likewise at_break's
- * u(t) and g when the terms G reads are constants (gbrk_const). */
+ * g when the terms G reads are constants (gbrk_const). */
 static void constant_inputs(adaptive_ws *A) {
   const cup_input *u = A->u;
   int w_const = !A->callback;
@@ -230,8 +230,8 @@ static void constant_inputs(adaptive_ws *A) {
   for (int q = 0; A->gbrk_const && u && q < A->ngterm; q++)
     A->gbrk_const = u->terms[A->gterm[q]].kind == CUP_WAVE_CONSTANT;
   if (!A->gbrk_const) return;
-  if (u) input_eval_terms(u, A->gterm, A->ngterm, 0, A->ubrk);
-  ad_offset_of(A, A->ubrk, A->gbrk);
+  if (u) input_eval_terms(u, A->gterm, A->ngterm, 0, A->ut);
+  ad_offset_of(A, A->ut, A->gbrk);
   A->gc_brk = A->w_const && ad_same_bits(A->gc, A->gbrk, A->m);
 }
 
@@ -265,7 +265,6 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     *vecs_n[k] = block_take(b, (size_t)n, sizeof(double));
   A->ut = block_take(b, (size_t)p, sizeof(double));
   A->uc = block_take(b, (size_t)p, sizeof(double));
-  A->ubrk = block_take(b, (size_t)p, sizeof(double));
   A->wc = block_take(b, (size_t)nw, sizeof(double));
   A->udot = block_take(b, (size_t)p, sizeof(double));
   A->uerr = block_take(b, (size_t)p, sizeof(double));

@@ -197,8 +197,8 @@ struct adaptive_ws {
   int w_const;              /* every exosystem state is a constant: wc (nw), and u = U wc (uc, p) and
                                g = F + G uc (gc, m), ad_offset's for w = wc bit for bit */
   double *wc, *uc, *gc;
-  int gbrk_const;           /* every term of gterm is a constant: at_break's u(t) (ubrk) and g (gbrk) */
-  double *ubrk, *gbrk;
+  int gbrk_const;           /* every term of gterm is a constant: at_break's g = F + G u(t) (gbrk) */
+  double *gbrk;
   int gc_brk;               /* both, and gc = gbrk bit for bit: a piece's offset is its breakpoint's */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */

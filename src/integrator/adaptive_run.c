@@ -324,8 +324,8 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
     if (cup_input_eval(A->u, R->t, A->ut))
       return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     ad_offset_of(A, A->ut, A->g);
-  } else if ((gbrk = A->gbrk_const)) {           /* the terms G reads are constants: made once (u(t), */
-    la_copy_few(A->g, A->gbrk, A->m);            /* ubrk, is not read past here) */
+  } else if ((gbrk = A->gbrk_const)) {           /* the terms G reads are constants: made once (u(t) */
+    la_copy_few(A->g, A->gbrk, A->m);            /* in A->ut is not read past here) */
   } else {
     if (A->u) input_eval_terms(A->u, A->gterm, A->ngterm, R->t, A->ut);
     ad_offset_of(A, A->ut, A->g);

@@ -293,7 +293,8 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R) {
  * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
  * (p entries) estimates the interpolation error from the last Chebyshev
  * coefficients (geometric decay assumed). */
-static __attribute__((noinline)) int poly_input(adaptive_ws *A, double t0, double h, double *w, double *err) {
+static __attribute__((noinline)) int poly_input(adaptive_ws *A, double t0, double h, double *w,
+                                                double *err) {
   enum { q = AD_DEGREE };
   int p = A->p;
   double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
