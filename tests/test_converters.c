@@ -409,7 +409,8 @@ static double bridge_theta_error(double i0, double v0, double theta, long n, dou
   cup_run_info info;
   *status = cup_integrator_run(I, cup_netlist_x0(nl), sink, &rc, &info);
   /* a bridge at rest with both legs open pins i = 0 between two diodes'
-   * rows: a set without interior, whose distance no step can certify */
+   * rows: a set without interior (certified since its answer snapped onto
+   * i = 0 is in it: test_fullbridge_certified; a warning is still taken) */
   if (*status != CUP_OK && *status != CUP_WARN_NOT_CERTIFIED)
     fail_msg("theta %g n %ld: %s: %s", theta, n, cup_status_name(*status), info.message);
   assert_int_equal(info.samples, n + 1);
@@ -607,6 +608,87 @@ static void test_edges_right_limit(void **state) {
   check_edges("pump", pump_cir, &c, y0, 200e-6, 2000, 4, 0.501);
 }
 
+/* ---- the theta step's certificate on a set without interior ------------------------ */
+
+typedef struct { long k; double t, eta, eta_target, eps, eps_target, x[2]; const cup_integrator *I; } first_step;
+
+static int first_step_cb(long k, double t, const cup_proj_info *pi, void *vp) {
+  first_step *f = vp;
+  if (k != 1) return 0;
+  f->k = k;
+  f->t = t;
+  f->eta = pi->eta_cert;
+  f->eta_target = pi->eta_target;
+  f->eps = pi->eps_cert;
+  f->eps_target = pi->eps_target;
+  memcpy(f->x, cup_integrator_state(f->I), sizeof f->x);
+  return 0;
+}
+
+/* The full bridge from i(L1) = 0, v(C1) = v0 < 0 under theta (n steps over
+ * 200 us): all four switches are open until g1 at 1 us and the bridge
+ * blocks (i = 0, v(a) - v(b) = v(C1) within [-100, 100] V), so the first
+ * step's set is the line i(L1) = 0 (the diodes' rows i >= 0 and -i >= 0:
+ * no interior) and, in the energy metric diag(L1, C1), the distance of the
+ * step's answer to it is sqrt(L1) |i(L1)|, computed here. The step's
+ * answer has i(L1) = -1.6e-15 (5e-17 from K), yet its certificate walked
+ * from it to the origin, the only anchor certainly in K: eta 0.0725
+ * against a target of 0.00384, a false CUP_WARN_NOT_CERTIFIED at step 1
+ * (n = 200, 400, 1000, and v0 = -1 V at n = 1000). Now the answer snapped
+ * onto i = 0 is in K certainly (certify.c, snap_zeros): eta is at least the
+ * distance (a bound) and within its target. */
+static void test_fullbridge_certified(void **state) {
+  (void)state;
+  static const struct { double v0; long n; } cases[] = {{-50, 200}, {-50, 400}, {-50, 1000}, {-1, 1000}};
+  const double L = 1e-3, C = 2.2e-6, R = 20, T = 200e-6;
+  for (int q = 0; q < 4; q++) {
+    char text[4096], line[256], err[CUP_ERRMSG_LEN];
+    FILE *f = fopen(CIR "fullbridge.cir", "r");
+    assert_non_null(f);
+    size_t len = 0;
+    while (fgets(line, sizeof line, f)) {
+      line[strcspn(line, "\n")] = '\0';
+      int w = !strncmp(line, "C1 ", 3) ? snprintf(text + len, sizeof text - len, "%s IC=%g\n", line, cases[q].v0)
+                                       : snprintf(text + len, sizeof text - len, "%s\n", line);
+      assert_true(w > 0 && (size_t)w < sizeof text - len);
+      len += (size_t)w;
+    }
+    fclose(f);
+    cup_netlist *nl = NULL;
+    if (cup_netlist_load_string(&nl, text, "fullbridge-ic.cir", NULL, 0, err)) fail_msg("%s", err);
+    first_step fs = {0};
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_THETA;
+    o.T = T;
+    o.n = cases[q].n;
+    o.output = CUP_OUTPUT_NONE;
+    o.on_step = first_step_cb;
+    o.step_ctx = &fs;
+    cup_switching sw;
+    cup_integrator *I = NULL;
+    assert_true(cup_netlist_switching(nl, &sw));
+    if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+    fs.I = I;
+    cup_run_info info;
+    int st = cup_integrator_run(I, cup_netlist_x0(nl), NULL, NULL, &info);
+    double h = T / (double)cases[q].n, d = sqrt(L) * fabs(fs.x[0]);
+    double vexact = cases[q].v0 * exp(-h / (R * C));
+    print_message("full bridge from v(C1) = %g V, theta n = %ld: step 1 (t = %.3g) x = (%.3g A, %.10g V), exact (0, "
+                  "%.10g); distance to i = 0: %.3g, certified eta %.3g (target %.3g), eps %.3g (target %.3g): %s\n",
+                  cases[q].v0, cases[q].n, fs.t, fs.x[0], fs.x[1], vexact, d, fs.eta, fs.eta_target, fs.eps,
+                  fs.eps_target, cup_status_name(st));
+    assert_int_equal(fs.k, 1);
+    assert_true(d <= 1e-6 * fs.eta_target);           /* the answer is within its target: a true (eps, eta) point */
+    assert_true(fabs(fs.x[1] - vexact) <= 1e-3 * fabs(cases[q].v0));   /* (theta's own error over one step) */
+    assert_true(fs.eta >= d);                         /* the certificate bounds the distance ... */
+    assert_true(fs.eta <= fs.eta_target && fs.eps <= fs.eps_target);   /* ... within the targets */
+    assert_int_equal(st, CUP_OK);
+    cup_integrator_free(&I);
+    cup_netlist_free(&nl);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_ref_buck_ccm),
@@ -628,6 +710,7 @@ int main(void) {
     cmocka_unit_test(test_buck_ccm_fixed_step),
     cmocka_unit_test(test_fullbridge_theta_gate),
     cmocka_unit_test(test_edges_right_limit),
+    cmocka_unit_test(test_fullbridge_certified),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

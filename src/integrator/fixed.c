@@ -239,8 +239,9 @@ static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, 
    * is farther than eta_n (or, below what rounding allows, 1e-10 of the
    * scale) from one of them is certainly no (eps, eta)-projection, and
    * stops the run; one nearer is kept, warned of (a set without interior,
-   * as two opposite rows, has no point certainly in it, and no distance to
-   * it can be certified: the answer may be right) */
+   * as two opposite rows, has no point certainly in it but where they pin
+   * a coordinate to 0, certify.c's snap_zeros, and no distance to it can be
+   * certified: the answer may be right) */
   const double *sz = F->s0, *gam = F->sg;        /* z's slack and its rounding */
   if (F->use_theta && F->th.D) sz = F->th.s, gam = F->th.gam;   /* the step's own, with D zeta's rounding */
   else polyset_slack(F->K, g, F->xnew, F->s0, F->sg);
