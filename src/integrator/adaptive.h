@@ -38,8 +38,9 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
  * one configuration (integrator/switched.c). first: ta = 0, x0 as given is
  * the first sample; jumped: xa is the state after a jump at ta (a switching),
  * which output every 1 records at ta, after the one before it that ended the
- * window before (jumped & 2: the sample the window before held, adaptive_hold_end); steps and next_sample carry the numbering across the
- * windows. The statistics of the window into info. */
+ * window before (jumped & 2: the sample the window before held,
+ * adaptive_hold_end, given at ta); steps and next_sample carry the
+ * numbering across the windows. The statistics of the window into info. */
 int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
                     long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* A switched run's windows of this configuration (switched.c, window):

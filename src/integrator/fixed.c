@@ -678,7 +678,8 @@ static int step_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, vo
   const cup_integrator_options *o = &F->o;
   double t = grid_time(F, k);
   if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-    if (emit_samples(F, sp, k, sink, sink_ctx, info)) return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+    if (emit_samples(F, sp, k, sink, sink_ctx, info))
+      return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
     keep_zeta(F, sp, k);
   } else if (sink && selected(F, sp, k) && !(F->hold && k == F->kend)) {
     info->samples++;
