@@ -428,6 +428,17 @@ void adaptive_seed(adaptive_ws *A, int on) {
   A->seed = 0;
 }
 
+void adaptive_hold_end(adaptive_ws *A, int on) {
+  A->hold_end = on;
+  A->held_end = 0;
+}
+
+int adaptive_held(adaptive_ws *A) {
+  int h = A->held_end;
+  A->held_end = 0;
+  return h;
+}
+
 void adaptive_free(adaptive_ws **Ap) {
   if (!Ap || !*Ap) return;
   adaptive_ws *A = *Ap;

@@ -41,14 +41,26 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
  * one configuration (integrator/switched.c). first: ta = 0, x0 as given is
  * the first sample; jumped: xa is the state after a jump at ta (a switching),
  * which output every 1 records at ta, after the one before it that ended the
- * window before; steps and next_sample carry the numbering across the
- * windows. The statistics of the window into info. */
+ * window before (jumped & 2: the sample the window before held,
+ * adaptive_hold_end, given at ta); steps and next_sample carry the
+ * numbering across the windows. The statistics of the window into info. */
 int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
                     long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* A switched run's windows of this configuration (switched.c, window):
  * from now on each tries the active set the last one started with before
  * its LCP (on: 1); 0 forgets it and stops (a run starts afresh). */
 void adaptive_seed(adaptive_ws *A, int on);
+/* A switched run's windows of this configuration (switched.c, sw_run):
+ * on, the sample due at a window's end tb < T is not given there (the
+ * state before the switching's jump) but by the next window, from the
+ * state after it, offered at its start (adaptive_window's jumped & 2).
+ * adaptive_held: 1 when the last window held one (cleared). */
+void adaptive_hold_end(adaptive_ws *A, int on);
+int adaptive_held(adaptive_ws *A);
+/* A held sample given after all (the run stopped before the next window):
+ * the state the window left at its end t, as it would have been. */
+int adaptive_offer_held(adaptive_ws *A, double t, long steps, long *next_sample, cup_sample_fn sink,
+                        void *sink_ctx, cup_run_info *info);
 /* What a record at a window's end asks of the input, and the next
  * window's first piece asks again at the same time: cup_input_next_break's
  * last answer (ad_next_break), and the workspace that built the last

@@ -21,6 +21,8 @@
 #ifndef CUP_ADAPTIVE_IMPL_H
 #define CUP_ADAPTIVE_IMPL_H
 
+#include <float.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <string.h>
@@ -165,6 +167,9 @@ struct adaptive_ws {
   int nwu;                  /* the input's own exosystem states (nw without the constant) */
   int seed_on;              /* a switched run's windows (adaptive_seed): the active set chosen at ... */
   uint64_t seed;            /* ... the last window's start is tried at the next one's before the LCP */
+  int hold_end;             /* a switched run's windows (adaptive_hold_end): the sample at a window's end
+                               before T waits for the next window, after the jump (the right limit) */
+  int held_end;             /* ... one waited (adaptive_held) */
   int piece_ok;             /* built-in waveforms: piece_w holds the states on [piece_t0, piece_t1] */
   double piece_t0, piece_t1, *piece_w;   /* (a piece's start and its one step ask for the same: nwu) */
   int piece_from_t0;        /* ... states that are functions of t0 alone (sines, constants): any t1 */
@@ -317,6 +322,13 @@ int ad_fail(ad_run *R, int status, const char *fmt, ...);
 /* ---- adaptive_sample.c ---- */
 /* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */
 double ad_sample_time(const adaptive_ws *A, long j);
+/* Where a step ending at t1 stops giving its dense samples: before a
+ * switched run's window end (adaptive_hold_end), those within 8 ulps of
+ * it are the end's, held for the next window (a .tran time and a gate's
+ * edge, computed apart, round a few ulps apart). */
+static inline double ad_dense_end(const adaptive_ws *A, double t1) {
+  return A->hold_end && t1 == A->tend && t1 < A->o.T ? t1 - 8 * DBL_EPSILON * fabs(t1) : t1;
+}
 /* The samples due in [t0, t1) on md's flow from y = ya with error e0,
  * offered to the sink (a refusal kept in A->pend: the step goes on, the
  * run stops at its end); CUP_OK or an error. */

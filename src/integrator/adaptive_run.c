@@ -85,9 +85,28 @@ static int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
 
 static int offer(adaptive_ws *A, ad_run *R) { return offer_x(A, R, A->x); }
 
+/* A switched run's window end before T (adaptive_hold_end): the sample
+ * due there, or a rounding before it (ad_dense_end), waits for the next
+ * window, after the switching's jump (give_held). */
+static __attribute__((noinline)) int hold(adaptive_ws *A, ad_run *R) {
+  const cup_integrator_options *o = &A->o;
+  int due = 0;
+  if (o->output == CUP_OUTPUT_EVERY) due = R->steps % o->output_every == 0;
+  else if (o->output == CUP_OUTPUT_SAMPLES && R->next_sample < o->output_samples) {
+    double ts = ad_sample_time(A, R->next_sample);
+    due = ts <= R->t && ts >= ad_dense_end(A, R->t);
+  }
+  if (due) {
+    R->est_max = fmax(R->est_max, estimate_now(A, R));
+    A->held_end = 1;
+  }
+  return CUP_OK;
+}
+
 static int emit_x(adaptive_ws *A, ad_run *R, const double *x) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
+  if (A->hold_end && R->t == A->tend && !last && R->sink) return hold(A, R);
   switch (o->output) {
     case CUP_OUTPUT_EVERY: out = R->steps % o->output_every == 0 || last; break;
     case CUP_OUTPUT_SAMPLES:
@@ -102,6 +121,18 @@ static int emit_x(adaptive_ws *A, ad_run *R, const double *x) {
   if (!out) return CUP_OK;
   R->est_max = fmax(R->est_max, estimate_now(A, R));
   return R->sink ? offer_x(A, R, x) : CUP_OK;
+}
+
+/* The sample the window before held (hold), at this window's start: its
+ * own time (a rounding before the switching's at most), the state after
+ * the jump, zeta the active set chosen here. */
+static int give_held(adaptive_ws *A, ad_run *R) {
+  if (A->o.output != CUP_OUTPUT_SAMPLES) return offer(A, R);
+  double t = R->t;
+  R->t = ad_sample_time(A, R->next_sample++);
+  int st = offer(A, R);
+  R->t = t;
+  return st;
 }
 
 static int emit(adaptive_ws *A, ad_run *R) { return emit_x(A, R, A->x); }
@@ -868,11 +899,27 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
    * that zeta is the new configuration's); a line drawn through the
    * records then shows the jump, not a ramp across the next step (a
    * window of length 0 chooses none: its state is the next window's) */
-  if (st >= 0 && jumped && !first && ta < tb && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
+  if (st >= 0 && jumped & 2 && !first && ta < tb && sink)   /* the sample the window before held, here */
+    st = give_held(A, &R);
+  else if (st >= 0 && jumped && !first && ta < tb && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
     st = offer(A, &R);
   st = run_to_end(A, &R, st);
   A->tend = A->o.T;
   *steps = R.steps;
+  *next_sample = R.next_sample;
+  return st;
+}
+
+int adaptive_offer_held(adaptive_ws *A, double t, long steps, long *next_sample, cup_sample_fn sink,
+                        void *sink_ctx, cup_run_info *info) {
+  ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .t = t, .steps = steps,
+              .next_sample = *next_sample, .md = (ad_mode *)A->pinned[0]};   /* (the window's last) */
+  int st = CUP_OK;
+  if (A->o.output == CUP_OUTPUT_SAMPLES) {         /* (held: a rounding before t at most) */
+    if (R.next_sample < A->o.output_samples && ad_sample_time(A, R.next_sample) <= t) st = give_held(A, &R);
+  } else {
+    st = offer(A, &R);
+  }
   *next_sample = R.next_sample;
   return st;
 }

@@ -262,6 +262,7 @@ int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, cons
   }
   if (!(R->next_sample < o->output_samples)) return CUP_OK;
   double ts = ad_sample_time(A, R->next_sample);
+  t1 = ad_dense_end(A, t1);
   if (!(ts < t1)) return CUP_OK;
   ad_flow(A, md, ts - t0, ya, A->zy);
   error_at(A, md, ts - t0, e0);

@@ -94,7 +94,7 @@ static long loop_stop(const fixed_ws *F, const sampler *sp, int sink, long k) {
 /* The samples due at step k (x_k in F->x, x_{k-1} in F->xnew): on the step,
  * or interpolated between the two. */
 static int emit_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
-  while (selected(F, sp, k)) {
+  while (selected(F, sp, k) && !(sp->aligned && F->hold && k == F->kend)) {   /* (held: integrator_held) */
     const double *x = F->x;
     double t = grid_time(F, k);
     if (!sp->aligned && k > 0) {
@@ -239,8 +239,9 @@ static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, 
    * is farther than eta_n (or, below what rounding allows, 1e-10 of the
    * scale) from one of them is certainly no (eps, eta)-projection, and
    * stops the run; one nearer is kept, warned of (a set without interior,
-   * as two opposite rows, has no point certainly in it, and no distance to
-   * it can be certified: the answer may be right) */
+   * as two opposite rows, has no point certainly in it but where they pin
+   * a coordinate to 0, certify.c's snap_zeros, and no distance to it can be
+   * certified: the answer may be right) */
   const double *sz = F->s0, *gam = F->sg;        /* z's slack and its rounding */
   if (F->use_theta && F->th.D) sz = F->th.s, gam = F->th.gam;   /* the step's own, with D zeta's rounding */
   else polyset_slack(F->K, g, F->xnew, F->s0, F->sg);
@@ -603,7 +604,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
       if (emit_samples(F, &sp, k + 1, sink, sink_ctx, info))
         return halt(F, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
       keep_zeta(F, &sp, k + 1);
-    } else if (sink && selected(F, &sp, k + 1)) {
+    } else if (sink && selected(F, &sp, k + 1) && !(F->hold && k + 1 == F->kend)) {
       info->samples++;
       if (sink(k + 1, t1, F->x, sink_ctx))
         return halt(F, info, CUP_ERR_INTERRUPTED, k + 1, t1, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
@@ -642,10 +643,11 @@ static void theta_start(fixed_ws *F, long k) {
   lcp_step_start(&F->th, F->x, g);
 }
 
-int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
   F->kend = k1;
+  F->hold = hold;
   int st;
   if (first) {
     st = fixed_run(F, x, sink, sink_ctx, info);
@@ -666,11 +668,28 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
   }
   *next_j = F->next_j;
   F->kend = F->o.n;
+  F->hold = 0;
   return st;
 }
 
+/* The samples due at the end of step k outside the loop (a split step's,
+ * a held one's): as the loop gives them. */
+static int step_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  const cup_integrator_options *o = &F->o;
+  double t = grid_time(F, k);
+  if (sink && o->output == CUP_OUTPUT_SAMPLES) {
+    if (emit_samples(F, sp, k, sink, sink_ctx, info))
+      return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+    keep_zeta(F, sp, k);
+  } else if (sink && selected(F, sp, k) && !(F->hold && k == F->kend)) {
+    info->samples++;
+    if (sink(k, t, F->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+  }
+  return CUP_OK;
+}
+
 int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
-                         long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+                         int hold, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
   const cup_integrator_options *o = &F->o;
   double t = grid_time(F, k);
@@ -689,15 +708,27 @@ int integrator_split_end(cup_integrator *I, long k, const double *xprev, const d
   int st = CUP_OK;
   if (o->on_step && o->on_step(k, t, &pi, o->step_ctx)) {
     st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the step callback");
-  } else if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-    if (emit_samples(F, &sp, k, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
-    else keep_zeta(F, &sp, k);
-  } else if (sink && selected(F, &sp, k)) {
-    info->samples++;
-    if (sink(k, t, F->x, sink_ctx)) st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
+  } else {
+    F->kend = k;                                   /* (emit_samples' hold) */
+    F->hold = hold;
+    st = step_samples(F, &sp, k, sink, sink_ctx, info);
+    F->kend = F->o.n;
+    F->hold = 0;
   }
   *next_j = sp.next_j;
   return st;
+}
+
+/* The state x after a switching's jump at t_k, as a run's start has it:
+ * zeta theta's LCP at x, else 0. */
+static void jumped_to(fixed_ws *F, long k, const double *x) {
+  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
+  F->zeta_from = 0;
+  F->zs = 1;
+  if (F->K && F->use_theta) {
+    theta_start(F, k);
+    F->zeta_from = 1;
+  }
 }
 
 int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sample_fn sink, void *sink_ctx,
@@ -707,16 +738,24 @@ int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sampl
   window_info(F, info);
   info->step = k;
   info->t = t;
-  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
-  F->zeta_from = 0;                                /* zeta as at a run's start: theta's LCP at x, else 0 */
-  F->zs = 1;
-  if (F->K && F->use_theta) {
-    theta_start(F, k);
-    F->zeta_from = 1;
-  }
+  jumped_to(F, k, x);
   info->samples++;
   if (sink(k, t, F->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
   return CUP_OK;
+}
+
+int integrator_held(cup_integrator *I, long k, const double *x, long *next_j, cup_sample_fn sink, void *sink_ctx,
+                    cup_run_info *info) {
+  fixed_ws *F = I->ws;
+  window_info(F, info);
+  info->step = k;
+  info->t = grid_time(F, k);
+  if (x) jumped_to(F, k, x);
+  sampler sp = {*next_j, 0, 0, 0};
+  sampler_next(F, &sp);
+  int st = step_samples(F, &sp, k, sink, sink_ctx, info);
+  *next_j = sp.next_j;
+  return st;
 }
 
 /* A restored checkpoint (checkpoint.c) goes on from the step it stopped

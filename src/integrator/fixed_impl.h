@@ -51,6 +51,7 @@ struct fixed_ws {
   lcp_step th;          /* the theta scheme's LCP step (used instead of the projector) */
   int use_theta;
   long kend;                /* the run's last step: n, or a switched circuit's window's end */
+  int hold;                 /* a switching at t_kend: its samples on t_kend held back (integrator_held) */
   long next_j;              /* where the last run left the output samples (a window's next one) */
   fixed_ws *half;           /* estimate: the same run at n/2 (step doubling), or NULL */
   estimate_ws est;         /* ... and the comparison with it */

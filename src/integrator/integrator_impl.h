@@ -31,8 +31,9 @@ struct cup_integrator {
 /* A fixed-step run's window (a switched circuit's stretch in one
  * configuration, switched.c): steps k0 + 1 .. k1 on the run's grid from
  * state x at t_k0 (first: k0 = 0, the run's own start and x0's sample),
- * the samples from *next_j on; *next_j advanced. */
-int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, long *next_j,
+ * the samples from *next_j on; *next_j advanced. hold: a switching at
+ * t_k1 follows, the samples on t_k1 are held back for integrator_held. */
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* The wall-time limit of I's next runs (seconds; 0: none), through its
  * scheme's table: each run starts its clock afresh, so a caller running I
@@ -45,15 +46,23 @@ void integrator_wall_limit(cup_integrator *I, double seconds);
  * the caller until the next step). Sets the integrator there and gives
  * step k's end as the loop does: the step callback, the samples due at k
  * (between t_{k-1} and t_k: x interpolated linearly, zeta the step's);
- * *next_j advanced. */
+ * *next_j advanced; hold as integrator_window's. */
 int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
-                         long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+                         int hold, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* A switched circuit's jump at grid time t_k (switched.c): x, the state
  * after it, given to the sink as a second record at t_k (the first was
  * the step's end, before the jump); zeta as at a run's start (theta's LCP
  * at x, else 0). No step callback. */
 int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sample_fn sink, void *sink_ctx,
                            cup_run_info *info);
+/* The samples on t_k held back by a window's or a split step's hold, after
+ * the switching there: x, the state after its jump, given from I (the
+ * configuration in force from t_k on) with zeta as at a run's start (the
+ * right limit, as the adaptive scheme's samples at a switching time); x
+ * NULL: from I as the window left it (the run stopped before the
+ * switching), as the window would have given them. *next_j advanced. */
+int integrator_held(cup_integrator *I, long k, const double *x, long *next_j, cup_sample_fn sink, void *sink_ctx,
+                    cup_run_info *info);
 /* Its grid's time t_k, and its step h = T / n. */
 double integrator_grid_time(const cup_integrator *I, long k);
 double integrator_grid_step(const cup_integrator *I);

@@ -19,7 +19,10 @@
  * on each configuration's LCS, made on its first split step), so that the
  * error stays the scheme's own order. A switching of a switch the circuit
  * gates is taken at the end of the step whose end state passes the
- * threshold: a crossing that comes and goes inside one step is not seen. */
+ * threshold: a crossing that comes and goes inside one step is not seen.
+ * A sample at a switching time is its right limit under every scheme: the
+ * window that ends there holds it back, and the next one gives it after
+ * the jump, from the configuration in force (docs/netlist.md, .tran). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
@@ -64,6 +67,9 @@ struct switched_run {
   void *step_ctx;
   double wall0;            /* the run's start, when it has a wall-time limit */
   int coarse;              /* the estimate's run at n/2: its records are compared by step, no jump's */
+  int holds;               /* a window's samples at a switching time wait for the jump (the right limit) */
+  long kheld;              /* fixed-step: the step whose samples on t_k are held (-1: none), ... */
+  int cheld;               /* ... by this configuration's integrator */
   cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
   estimate_ws est;        /* ... and the comparison with it at each step's end */
 };
@@ -331,8 +337,10 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
   *topo = to;
   S->cur = to;
   cup_run_info w;
-  st = integrator_split_end(S->child[to], k, S->xprev, S->x, S->zsplit, next_j, S->sink, S->sink_ctx, &w);
+  int hold = S->holds && k < S->o.n && (*tb <= tk + snap || sw->state_gated(sw->ctx, to));   /* a switching at t_k */
+  st = integrator_split_end(S->child[to], k, S->xprev, S->x, S->zsplit, hold, next_j, S->sink, S->sink_ctx, &w);
   add_info(info, &w);
+  if (hold) S->kheld = k, S->cheld = to;
   return st;
 }
 
@@ -350,6 +358,32 @@ static long grid_step_at(const cup_integrator *C, long k, long n, double tb) {
   return k1 <= k ? k + 1 : k1;
 }
 
+/* The model's configuration in force (its signals' rows) set to topo
+ * again: the jump's call sets it (on a copy of the state: S->xg). */
+static void in_force(switched_run *S, int topo) {
+  la_copy(S->xg, S->x, S->n);
+  S->ops.jump(S->ops.ctx, topo, S->xg);
+}
+
+/* The samples on t_k that the window before the switching there held
+ * back: the right limit, from the configuration in force from t_k on
+ * (topo: the state after the jump, S->x, and zeta as at a run's start,
+ * with that configuration's signals, as the adaptive scheme's sample
+ * there); topo < 0, the run stopped before the switching: as the window
+ * would have given them (its configuration set in force again). */
+static int release(switched_run *S, int topo, long *next_j, cup_run_info *info) {
+  int cur = S->cur, by = topo >= 0 ? topo : S->cheld;
+  long k = S->kheld;
+  cup_run_info w;
+  S->kheld = -1;
+  if (topo < 0) in_force(S, by);
+  S->cur = by;
+  int st = integrator_held(S->child[by], k, topo >= 0 ? S->x : NULL, next_j, S->sink, S->sink_ctx, &w);
+  S->cur = cur;
+  add_info(info, &w);
+  return st;
+}
+
 /* The fixed-step schemes: each configuration's integrator on the run's
  * grid (all have the same T and n), a window from t_k up to the next
  * source-gated switching time, or one step when a switch the circuit gates
@@ -364,6 +398,8 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
   int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1 && !S->coarse;
   int last = topo;                                 /* the configuration that ran up to t */
   double tb = 0;
+  S->holds = S->sink && !each && !S->coarse;
+  S->kheld = -1;
   for (int first = 1; st >= 0 && k < n; first = 0) {
     int jumps = each && !first && topo != last;
     if (jumps) la_copy(S->xprev, S->x, S->n);
@@ -373,6 +409,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
     }
     st = child_of(S, topo, info->message);
     if (st) break;
+    if (S->kheld >= 0 && (st = release(S, topo, &next_j, info)) < 0) break;
     S->cur = last = topo;
     cup_integrator *C = S->child[topo];
     /* every step recorded: a switching that moved the state has a second
@@ -398,10 +435,12 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
     if (sw->state_gated(sw->ctx, topo) && kw > k) kw = k + 1, split = 0;   /* its end checked */
     cup_run_info w;
     if (kw > k || first) {
-      int wst = integrator_window(C, k, kw, S->x, first, &next_j, S->sink, S->sink_ctx, &w);
+      int hold = S->holds && !split && kw < n;     /* a switching at t_kw */
+      int wst = integrator_window(C, k, kw, S->x, first, hold, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
       if (wst < 0) { st = wst; break; }
       la_copy(S->x, cup_integrator_state(C), S->n);
+      if (hold) S->kheld = kw, S->cheld = topo;
     }
     k = kw;
     known = -1;
@@ -422,15 +461,22 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
         continue;
       }
       S->cur = topo;                               /* no exact flow: the step as the grid has it */
-      int wst = integrator_window(C, k, k1, S->x, 0, &next_j, S->sink, S->sink_ctx, &w);
+      int hold = S->holds && k1 < n;
+      int wst = integrator_window(C, k, k1, S->x, 0, hold, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
       if (wst < 0) { st = wst; break; }
       la_copy(S->x, cup_integrator_state(C), S->n);
+      if (hold) S->kheld = k1, S->cheld = topo;
       k = k1;
     }
     t = integrator_grid_time(C, k);
     /* the rule at the switching time when the grid time was snapped to it from below */
     if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
+  }
+  if (S->kheld >= 0) {                             /* stopped before the switching: the samples as they were */
+    cup_run_info w = *info;
+    release(S, -1, &next_j, &w);
+    info->samples = w.samples;
   }
   if (st < 0) info->status = st;
   else info->t = t;                                /* (a stop's: the window's, from add_info) */
@@ -476,6 +522,10 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   }
   /* every step recorded: a jump at a switching is recorded after it too */
   int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
+  /* else a sample at a switching time is the state after its jump: the
+   * window before holds it (adaptive_hold_end) and, when the jump moved
+   * the state, the next window gives it, else this one after all */
+  int held = 0, hc = 0;                            /* hc: the configuration whose window held it */
   uint64_t seeded = 0;                             /* configurations whose windows try the last start's set */
   for (int first = 1; st >= 0 && t < T; first = 0) {
     if (each) la_copy(S->xprev, S->x, S->n);
@@ -487,6 +537,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (!(seeded >> topo & 1)) {                   /* (afresh each run: a run never reads the one before) */
       adaptive_seed(S->ad[topo], 1);
       adaptive_share_breaks(S->ad[topo], &S->breaks);
+      adaptive_hold_end(S->ad[topo], S->sink && !each);
       seeded |= (uint64_t)1 << topo;
     }
     S->cur = topo;
@@ -494,13 +545,23 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     st = sw->next(sw->ctx, topo, t, T, &tb);
     if (st) { st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
     if ((st = wall_left(S, topo, steps, t, info))) break;
-    st = window(S, topo, t, tb, first, jumped, &steps, &next_sample, sw->state_gated(sw->ctx, topo), info);
+    int give = held && t < tb;                     /* the window gives it at its start */
+    if (give) held = 0;
+    st = window(S, topo, t, tb, first, jumped | give << 1, &steps, &next_sample, sw->state_gated(sw->ctx, topo),
+                info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;
     if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);
     if (st < 0) break;
+    if (adaptive_held(S->ad[topo])) held = 1, hc = topo;
     t = tb;
     if (t < T) st = sw->settle(sw->ctx, &topo, t, S->x, NULL, info->message);
+  }
+  if (held && st < 0) {                            /* stopped at t before the next window: its sample as it was */
+    cup_run_info w = *info;
+    in_force(S, hc);
+    adaptive_offer_held(S->ad[hc], t, steps, &next_sample, S->sink, S->sink_ctx, &w);
+    info->samples = w.samples;
   }
   if (st < 0) info->status = st;
   if (S->user_stop && info->status >= 0) {
