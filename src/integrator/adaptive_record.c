@@ -100,7 +100,7 @@ static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, stru
 }
 
 /* The entry of md's buffers, composed for md and S (NULL: not composable). */
-static struct ad_rec *entry(adaptive_ws *A, const ad_mode *md, const signal_map *S) {
+const struct ad_rec *ad_rec_entry(adaptive_ws *A, const ad_mode *md, const signal_map *S) {
   struct ad_rec *e = A->rec_last;
   if (e && e->X == md->X && e->mask == md->mask && e->key == S->key && A->rec_ns == S->ns) return e->ok ? e : NULL;
   if (A->rec_ns != S->ns && room(A, S->ns)) return NULL;
@@ -133,14 +133,32 @@ static int add_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *ou
 int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
   const ad_mode *md = A->zmd;
   if (!md || A->zx0) return 0;                   /* (x0's sample: its signals from x0 as given, by the caller) */
-  const struct ad_rec *e = entry(A, md, S);
+  const struct ad_rec *e = ad_rec_entry(A, md, S);
   if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
-  const double *y = A->zy, *rx = e->rx;
-  const int *rp = e->rp, *rj = e->rj;
-  for (int k = 0; k < S->ns; k++) {
-    double acc = e->rc[k];
-    for (int q = rp[k]; q < rp[k + 1]; q++) acc += rx[q] * y[rj[q]];
-    out[k] = acc;
-  }
+  ad_rec_rows(e, S->ns, A->zy, out);
   return e->nu ? add_inputs(A, e, S->ns, out) : 1;
+}
+
+int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
+  free(A->put_block);
+  A->put_block = NULL;
+  A->put = NULL;
+  A->put_nl = NULL;
+  A->put_ns = 0;
+  if (!put || !nl) return 1;
+  int ns = cup_netlist_signal_count(nl), n = A->n, na = A->na;
+  size_t b = AD_BATCH, slots = (b + 1) * (size_t)na;
+  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots));
+  if (!d) return CUP_ERR_NOMEM;
+  A->put_block = d;
+  A->bt = d;
+  A->bx = A->bt + b;
+  A->bs = A->bx + b * (size_t)n;
+  A->best = A->bs + b * (size_t)ns;
+  A->by = A->best + b;
+  A->be = A->by + slots;
+  A->put = put;
+  A->put_nl = nl;
+  A->put_ns = ns;
+  return 1;
 }
