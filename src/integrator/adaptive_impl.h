@@ -307,8 +307,18 @@ static inline void ad_rec_rows(const struct ad_rec *e, int ns, const double *y, 
     out[k] = acc;
   }
 }
-/* md's entry composed for S (NULL: not composable). */
+/* md's entry composed for S (NULL: not composable); ad_rec_of looks at
+ * the last one used first, inline (a call a record was 17 instructions,
+ * 13 k on the full bridge's own steps). */
 const struct ad_rec *ad_rec_entry(adaptive_ws *A, const ad_mode *md, const struct signal_map *S);
+static inline const struct ad_rec *ad_rec_of(adaptive_ws *A, const ad_mode *md, const struct signal_map *S) {
+  const struct ad_rec *e = A->rec_last;
+  if (e && e->X == md->X && e->mask == md->mask && e->key == S->key && A->rec_ns == S->ns) return e->ok ? e : NULL;
+  return ad_rec_entry(A, md, S);
+}
+/* The input components entry e reads that y leaves out (e->nu), at A->zt,
+ * added to its ns signals in out: 1, or 0 when the input failed. */
+int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out);
 
 /* ---- adaptive_sample.c ---- */
 /* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */

@@ -342,7 +342,7 @@ static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k)
   A->zmd = md;
   A->zy_ready = 1;
   const signal_map *S = A->put && R->sink ? nl_signal_map(A->put_nl) : NULL;
-  const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_entry(A, md, S) : NULL;
+  const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_of(A, md, S) : NULL;
   int st = re && !re->nu ? dense_batch(A, R, md, t1, k, S, re) : dense_samples(A, R, md, t1, k);
   A->zmd = NULL;
   A->zy_ready = 0;
@@ -563,6 +563,17 @@ int ad_record_y(adaptive_ws *A, const ad_mode *md) {
   if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
   return CUP_OK;
+}
+
+/* adaptive_record.c's composed rows (adaptive_record.c holds them and the
+ * batches' buffers; the records' y, here, ad_record_y). */
+int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
+  const ad_mode *md = A->zmd;
+  if (!md || A->zx0) return 0;                   /* (x0's sample: its signals from x0 as given, by the caller) */
+  const struct ad_rec *e = ad_rec_of(A, md, S);
+  if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
+  ad_rec_rows(e, S->ns, A->zy, out);
+  return e->nu ? ad_rec_inputs(A, e, S->ns, out) : 1;
 }
 
 /* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the
