@@ -257,6 +257,8 @@ static const scene_case cases[] = {
   {"adaptive, samples", FIG2, {"scheme=adaptive", "tol=1e-8", "output={samples: 501}", "T=3"}},
   {"adaptive through a diode bridge (D != 0), samples inside steps and events", BRIDGE,
    {"scheme=adaptive", "tol=1e-8", "output={samples: 801}"}},
+  {"adaptive through a diode into an RC load (D != 0), every step: a step's end carried to the next",
+   EX "/circuits/halfwave-rc.yaml", {"scheme=adaptive", "tol=1e-8", "output={every: 1}", "hmax=1e-4"}},
   {"theta, samples between steps (interpolated)", FIG2, {"n=20000", "scheme=theta", "output={samples: 301}"}},
   {"explicit, square wave", EX "/paper-fig3.yaml", {"n=30000", "output={every: 11}"}},
   {"adaptive, square wave (breakpoints)", EX "/paper-fig3.yaml",

@@ -29,6 +29,14 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
   CUP_CKPT_IO(c, R->floor_warned); CUP_CKPT_IO(c, R->tend); CUP_CKPT_IO(c, R->ev0); CUP_CKPT_IO(c, R->after_event);
   ckpt_io(c, A->x, N);
   ckpt_io(c, A->e, N);
+  CUP_CKPT_IO(c, s->carry);
+  if (s->carry) {                                /* the step's end that the next one starts from */
+    CUP_CKPT_IO(c, A->carried);
+    ckpt_io(c, A->yb, sizeof(double) * (size_t)A->na);
+    ckpt_io(c, A->gb, sizeof(double) * M);
+    ckpt_io(c, A->tb, sizeof(double) * M);
+    ckpt_io(c, A->db, sizeof(double) * M);
+  }
   if (s->phase == AD_STOP_SAMPLE && R->steps == 0) ckpt_io(c, A->xok, N);   /* x0's sample: x0 as given */
   if (s->phase == AD_STOP_DENSE) {               /* the refused sample's states, the step's projection */
     struct ad_pend *p = &A->pend;

@@ -32,13 +32,19 @@
 #include "util/block.h"
 #include "record.h"
 
-#define AD_MODES 8          /* active sets kept with their matrices (least recently used goes): a
-                               six-pulse bridge cycles through more than 6, each rebuilt 5 times */
+#define AD_MODES 10         /* active sets kept with their matrices (least recently used goes): a
+                               six-pulse bridge meets 10 in its first period (the inrush, then the
+                               commutations), and 8 slots built 2 of them twice */
 #define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
 #define AD_BATCH 64         /* samples inside a step a call of integrator_set_put's put */
+#define AD_KNOWN 32         /* with D, row sets whose N was factored, remembered regular or singular */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
 #define AD_ZENO_RING 64     /* events counted for the rate cap */
+#define AD_CARRY 64         /* with D, steps in a row that start from the last one's end (adaptive_run.c):
+                               then one starts from the state put on the manifold and the input's own
+                               states (the drift of y off the manifold and of the exosystem's flow
+                               from the input: rounding, at most AD_CARRY steps of it) */
 
 typedef struct ad_mode {
   uint64_t mask;            /* the active rows J */
@@ -134,6 +140,7 @@ typedef struct ad_stop {
   cup_proj_info pi;         /* AD_STOP_DENSE: the step's, for its callback */
   ad_run R;                 /* the run's scalars (its pointers are set again on resume) */
   int md, pinned1;          /* slots of R.md and of the other set in use (-1: none) */
+  int carry;                /* the step's end is carried to the next step's start (adaptive_ws's) */
   int status;               /* the run's status and message before the stop replaced them */
   char message[CUP_RUN_MSG_LEN];
 } ad_stop;
@@ -195,6 +202,9 @@ struct adaptive_ws {
   ad_mode modes[AD_MODES + 1];  /* the last: a spare, where a new one is built (ad_mode_get) */
   uint64_t alias_from[AD_ALIASES], alias_to[AD_ALIASES];   /* a set asked for, the subset it holds as */
   long nalias;
+  uint64_t known[AD_KNOWN]; /* with D: row sets factored (ad_dae_factor), and whether N was singular */
+  unsigned char known_singular[AD_KNOWN];
+  long nknown;
   long clock;
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
@@ -206,6 +216,15 @@ struct adaptive_ws {
   /* scratch of the run */
   double *ework;            /* 7 na^2: exponentials (5 work, the scaled M, one out) */
   double *ya, *yb, *yt, *yr, *My, *fa, *fb;
+  /* with D: a step that ended inside a piece with no event leaves its end
+   * (yb, gb, tb, db) to the next step on carry_md from carry_t, which
+   * starts there instead of lifting the state put on the manifold again
+   * (at every step the same mode's flow of the same y: rounding apart, the
+   * same point; the state x is put on the manifold at each step's end as
+   * before); NULL: none */
+  const struct ad_mode *carry_md;
+  double carry_t;
+  int carried;              /* steps in a row that started from a carried end (at most AD_CARRY) */
   ad_series sy, se;         /* this step's flow from ya, and from (e, 0) (the error's), when asked */
   double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */

@@ -723,6 +723,7 @@ static inline __attribute__((always_inline)) void manifold_sums(int n, int nz, c
 void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x) {
   const cup_polyset *K = A->K;
   int n = A->n;
+  if (!md->nz) return;                           /* (with D, rows that fix zeta alone: nothing to move) */
   for (int k = 0; k < md->nj; k++) {
     int i = md->rows[k];
     double r_ = g[i];
@@ -738,7 +739,7 @@ void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, doubl
     }
     s = A->sz;
   }
-  if (md->nz) switch (n) {                       /* (ad_lift's sizes; none to subtract off a manifold) */
+  switch (n) {                                   /* (ad_lift's sizes) */
     case 1: manifold_sums(1, md->nz, md->R, s, x); return;
     case 2: manifold_sums(2, md->nz, md->R, s, x); return;
     case 3: manifold_sums(3, md->nz, md->R, s, x); return;

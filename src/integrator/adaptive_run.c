@@ -62,6 +62,7 @@ static int halt(adaptive_ws *A, ad_run *R, int status, int phase, const char *wh
   s->R = *R;
   s->md = R->md ? (int)(R->md - A->modes) : -1;
   s->pinned1 = A->pinned[1] ? (int)(A->pinned[1] - A->modes) : -1;
+  s->carry = A->carry_md && A->carry_md == R->md && A->carry_t == R->t;
   s->status = R->info->status;
   memcpy(s->message, R->info->message, sizeof s->message);
   return ad_fail(R, status, "%s", what);
@@ -297,6 +298,7 @@ static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, dou
                       "LCP with D proposes keeps its multipliers and slacks >= 0 on its own flow"
                       : "the velocity LCP that chooses the active set has no solution by pivoting (dependent rows?)");
   if (!R->md) A->seed = mask;
+  A->carry_md = NULL;                            /* (x moves onto the set's manifold here) */
   A->pinned[0] = R->md = ad_mode_get(A, mask);
   /* (ad_select and ad_dae_select left g = F + G u(w) in A->g) */
   ad_manifold(A, R->md, A->g, A->x);
@@ -596,13 +598,24 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   A->sy.md = A->se.md = NULL;                    /* (the flow's series are this step's) */
   cup_proj_info pi = {0};
   pi.skipped = 1;
+  int carry = A->carry_md == md && A->carry_t == R->t;
+  A->carry_md = NULL;
   if (!E && !series) {
     if (!snap) return R->info->status;
     R->t = t1;
     return end_of_step(A, R, &pi, 0);
   }
-  ad_lift(A, md, A->x, A->wa, A->ya);
-  ad_events_both(A, md, A->ya, A->ga, A->ta, A->da);
+  if (carry) {                                   /* the last step's end (A->carry_md) */
+    la_copy(A->ya, A->yb, na);
+    la_copy(A->ga, A->gb, A->m);
+    la_copy(A->ta, A->tb, A->m);
+    la_copy(A->da, A->db, A->m);
+    A->carried++;
+  } else {
+    ad_lift(A, md, A->x, A->wa, A->ya);
+    ad_events_both(A, md, A->ya, A->ga, A->ta, A->da);
+    A->carried = 0;
+  }
   if (any_negative(A)) {                         /* an inconsistent start: choose again */
     uint64_t was = md->mask;
     int st = choose_mode(A, R, A->wa, 0, R->t);
@@ -620,8 +633,10 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
   if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
-  ad_offset(A, A->yb + n, A->g);
-  ad_manifold(A, md, A->g, A->x);
+  if (md->nz) {                                  /* (a mode with no manifold rows: the bridges' with D) */
+    ad_offset(A, A->yb + n, A->g);
+    ad_manifold(A, md, A->g, A->x);
+  }
   if (series) {                                  /* (e, 0) by its series */
     la_zero(A->se.v, na);
     la_copy(A->se.v, A->e, n);
@@ -637,6 +652,10 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     la_copy(v, A->et, n);
   }
   R->t = t1;
+  if (A->has_D && !A->callback && t1 != R->tb && A->carried < AD_CARRY - 1) {
+    A->carry_md = md;                            /* (a breakpoint's projection and choice move x) */
+    A->carry_t = t1;
+  }
   return end_of_step(A, R, &pi, 0);
 }
 
@@ -780,6 +799,7 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
   la_zero(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
+  A->carry_md = NULL;
   lcp_forget(&A->lcp);
   return CUP_OK;
 }
@@ -866,6 +886,8 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   R.md = s->md >= 0 ? &A->modes[s->md] : NULL;
   A->pinned[0] = R.md;
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
+  A->carry_md = s->carry ? R.md : NULL;          /* (its vectors and count: the checkpoint's) */
+  A->carry_t = R.t;
   int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
   s->phase = AD_STOP_NONE;
   if (phase == AD_STOP_SAMPLE && R.steps == 0) {   /* x0's sample after the start (start_sampled): again */

@@ -15,7 +15,7 @@
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
-enum { VERSION = 2 };
+enum { VERSION = 3 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end */
 
 /* What a blob belongs to: restored only into an integrator of the same
  * build (sizes and byte order) and configuration. */
