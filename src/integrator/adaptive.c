@@ -211,6 +211,30 @@ static void offset_pattern(adaptive_ws *A) {
   }
 }
 
+/* DC sources alone reach E and G (adaptive_impl.h's w_const): the
+ * exosystem's states, u and g once, by the sums ad_inputs_on, ad_offset
+ * and at_break make (the same bits at every time); likewise at_break's
+ * g when the terms G reads are constants (gbrk_const). */
+static void constant_inputs(adaptive_ws *A) {
+  const cup_input *u = A->u;
+  int w_const = !A->callback;
+  for (int k = 0; w_const && k < A->gen.nterms; k++) w_const = A->gen.terms[k].kind == CUP_WAVE_CONSTANT;
+  if (w_const) {
+    if (A->nwu) input_gen_piece(&A->gen, A->first_state, A->gen_rot, 0, 0, A->wc);
+    if (A->one >= 0) A->wc[A->one] = 1;
+    ad_offset(A, A->wc, A->gc);                  /* (its sums: w_const is not set yet) */
+    la_copy(A->uc, A->ut, A->p);
+    A->w_const = 1;
+  }
+  A->gbrk_const = !A->callback;
+  for (int q = 0; A->gbrk_const && u && q < A->ngterm; q++)
+    A->gbrk_const = u->terms[A->gterm[q]].kind == CUP_WAVE_CONSTANT;
+  if (!A->gbrk_const) return;
+  if (u) input_eval_terms(u, A->gterm, A->ngterm, 0, A->ut);
+  ad_offset_of(A, A->ut, A->gbrk);
+  A->gc_brk = A->w_const && ad_same_bits(A->gc, A->gbrk, A->m);
+}
+
 /* Every matrix and vector of the run (its sizes set), from block b (block_take). */
 static void vectors(adaptive_ws *A, block_arena *b) {
   int n = A->n, m = A->m, p = A->p, nw = A->nw, na = A->na;
@@ -232,13 +256,16 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++)
     *vecs_na[k] = block_take(b, (size_t)na, sizeof(double));
   double **vecs_m[] = {&A->ga, &A->gb, &A->gt, &A->da, &A->db, &A->dt, &A->ta, &A->tb, &A->tt,
-                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero, &A->gk};
+                       &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero, &A->gk,
+                       &A->gc, &A->gbrk};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++)
     *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
   for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++)
     *vecs_n[k] = block_take(b, (size_t)n, sizeof(double));
   A->ut = block_take(b, (size_t)p, sizeof(double));
+  A->uc = block_take(b, (size_t)p, sizeof(double));
+  A->wc = block_take(b, (size_t)nw, sizeof(double));
   A->udot = block_take(b, (size_t)p, sizeof(double));
   A->uerr = block_take(b, (size_t)p, sizeof(double));
   A->wa = block_take(b, (size_t)nw, sizeof(double));
@@ -372,6 +399,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   exosystem(A);
   offset_pattern(A);
   if (A->one >= 0) A->wscale[A->one] = 1;
+  constant_inputs(A);
   for (int i = 0; i < m; i++)                    /* g's rounding scale: sum |G_iq| |u_q| at most */
     for (int c = 0; c < nw; c++)
       for (int q = 0; q < p; q++)
@@ -385,6 +413,11 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
 }
 
 void adaptive_wall_limit(adaptive_ws *A, double seconds) { A->o.max_wall_seconds = seconds; }
+
+void adaptive_on_step(adaptive_ws *A, cup_step_fn fn, void *ctx) {
+  A->o.on_step = fn;
+  A->o.step_ctx = ctx;
+}
 
 void adaptive_seed(adaptive_ws *A, int on) {
   A->seed_on = on;

@@ -32,6 +32,9 @@ void adaptive_free(adaptive_ws **A);
 /* A switched run's wall-time limit (switched.c): the seconds left of the
  * run's, for the next window (0: none). */
 void adaptive_wall_limit(adaptive_ws *A, double seconds);
+/* A switched run's window: its step callback (NULL: none), for the next
+ * window (switched.c calls it only where it checks something). */
+void adaptive_on_step(adaptive_ws *A, cup_step_fn fn, void *ctx);
 int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sink_ctx,
                  cup_run_info *info);
 /* The run from ta (state xa) to tb only: a switched circuit's stretch in

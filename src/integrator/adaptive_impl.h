@@ -23,6 +23,7 @@
 
 #include <stdarg.h>
 #include <stdint.h>
+#include <string.h>
 #include <gsl/gsl_eigen.h>
 #include "catchup/integrator.h"
 #include "model/input_impl.h"
@@ -125,8 +126,9 @@ typedef struct ad_run {
   long ev0;                 /* the events before the step under way (the accumulation check after it) */
   int after_event;          /* the steps since the last event met no breakpoint: a step that ends on
                                one (not at its length limit) has a length that will not recur */
-  int kept;                 /* at_break found x inside K(t) with the offset A->gk: start_piece's
-                               check at t+ with the same offset would find it again */
+  int kept;                 /* at_break found x inside K(t) with the offset A->gk (2: A->gbrk, not
+                               copied): start_piece's check at t+ with the same offset would find
+                               it again */
 } ad_run;
 
 /* Where a run stopped at a step's end (adaptive_run.c, for a checkpoint). */
@@ -197,6 +199,16 @@ struct adaptive_ws {
   double *ux, *gx;          /* ... their values (ad_offset) */
   int *gterm, ngterm;       /* built-in waveforms: the terms whose input has a column in G (at_break's
                                g = F + G u(t): a switch's gate source moves no row) */
+  /* DC sources alone reach E and G (a converter's supply; its gates reach
+   * neither): the exosystem's states, u and g are the same at every time,
+   * made once at set-up by the sums each piece, step and breakpoint made
+   * (a buck-boost's 200 windows computed them some 1,600 times) */
+  int w_const;              /* every exosystem state is a constant: wc (nw), and u = U wc (uc, p) and
+                               g = F + G uc (gc, m), ad_offset's for w = wc bit for bit */
+  double *wc, *uc, *gc;
+  int gbrk_const;           /* every term of gterm is a constant: at_break's g = F + G u(t) (gbrk) */
+  double *gbrk;
+  int gc_brk;               /* both, and gc = gbrk bit for bit: a piece's offset is its breakpoint's */
   double hmax_input;        /* an eighth of the fastest sine's period, at most T / 8 */
   double pinf;              /* ||v||_inf <= pinf ||v||_P */
   ad_mode modes[AD_MODES + 1];  /* the last: a spare, where a new one is built (ad_mode_get) */
@@ -419,8 +431,23 @@ int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, u
 /* ... with g = F + G U w in A->g and u in A->ut already (ad_offset's). */
 int ad_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
                  int *pivots);
-/* g = F + G U w. */
+/* ... and the slack C x + g in A->s too (make_consistent's, x unmoved since). */
+int ad_select_slack(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+                    int *pivots);
+/* g = F + G U w (u = U w into A->ut). */
 void ad_offset(const adaptive_ws *A, const double *w, double *g);
+/* g = F + G u, by G's nonzeros. */
+void ad_offset_of(const adaptive_ws *A, const double *u, double *g);
+/* 1 if a and b hold the same n doubles, bit for bit. */
+static inline int ad_same_bits(const double *a, const double *b, int n) {
+  for (int k = 0; k < n; k++) {
+    uint64_t x, y;
+    memcpy(&x, a + k, sizeof x);
+    memcpy(&y, b + k, sizeof y);
+    if (x != y) return 0;
+  }
+  return 1;
+}
 /* u' (A->udot, from the input's piece w) and the free velocity
  * A->xf = A x + E u (u in A->ut). */
 void ad_free_velocity(adaptive_ws *A, const double *x, const double *w);

@@ -700,12 +700,21 @@ void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *
  * products' order: the same sums, less the terms that are zero. */
 void ad_offset(const adaptive_ws *A, const double *w, double *g) {
   int m = A->m, nw = A->nw;
+  if (A->w_const && ad_same_bits(w, A->wc, nw)) {   /* DC sources alone: made once (constant_inputs) */
+    la_copy_few(A->ut, A->uc, A->p);
+    la_copy_few(g, A->gc, m);
+    return;
+  }
   la_zero_few(A->ut, A->p);                      /* (a few inputs: no memset call) */
   for (int c = 0; c < nw; c++)
     for (int k = A->up[c]; k < A->up[c + 1]; k++) A->ut[A->ui[k]] += A->ux[k] * w[c];
-  for (int i = 0; i < m; i++) {
+  ad_offset_of(A, A->ut, g);
+}
+
+void ad_offset_of(const adaptive_ws *A, const double *u, double *g) {
+  for (int i = 0; i < A->m; i++) {
     double acc = A->F[i];
-    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
+    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * u[A->gi[k]];
     g[i] = acc;
   }
 }
@@ -776,9 +785,14 @@ int ad_select(adaptive_ws *A, const double *x, const double *w, uint64_t hint, u
 
 int ad_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
                  int *pivots) {
+  polyset_slack(A->K, A->g, x, A->s, NULL);
+  return ad_select_slack(A, x, w, hint, mask, pivots);
+}
+
+int ad_select_slack(adaptive_ws *A, const double *x, const double *w, uint64_t hint, uint64_t *mask,
+                    int *pivots) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, p = A->p;
-  polyset_slack(K, A->g, x, A->s, NULL);
   /* touching rows: slack at the level a certified projection leaves (it
    * aims a few rounding bounds inside), on the scale of the whole state (a
    * row whose own terms vanish still rounds at that scale) */

@@ -139,7 +139,7 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
   double xn = la_norm_inf(A->x, A->n);
   R->r2 += (8 * DBL_EPSILON * xn) * (8 * DBL_EPSILON * xn);   /* rounding, as a random walk */
   if (!at_event) R->est_max = fmax(R->est_max, estimate_now(A, R));
-  double tw = tolw(A, A->x);
+  double tw = A->o.tol_abs + A->o.tol_rel * xn;  /* (tolw's at A->x) */
   if (!R->floor_warned && tw < 16 * DBL_EPSILON * xn) {
     R->floor_warned = 1;
     warn(R, CUP_WARN_TOL_FLOOR, "tol (abs %.3g, rel %.3g) gives %.3g at |x| = %.3g, below what double "
@@ -288,10 +288,12 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * started with is tried before the LCP (the dead time of a bridge opens on
  * the same diodes each period while the current keeps its sign); it is
  * kept only when it continues, as the LCP's answer must. With at_offset,
- * A->g and A->ut hold w's offset and input already (start_piece's). */
+ * A->g and A->ut hold w's offset and input already (start_piece's); 2:
+ * and A->s the slack C x + g at A->x (D = 0). */
 static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), 0, &mask, &piv)
+                    : at_offset == 2 ? ad_select_slack(A, A->x, w, hint, &mask, &piv)
                     : at_offset ? ad_select_at(A, A->x, w, hint, &mask, &piv) : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
   if (st) return ad_fail(R, CUP_ERR_LINALG, A->has_D ? "no active set continues from this state: none that the "
@@ -319,23 +321,23 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
  * run's window starts and ends here, and a converter's gates, read by the
  * switches alone, were half of what it cost). */
 static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
+  int gbrk = 0;
   if (A->u && A->u->fn) {
     if (cup_input_eval(A->u, R->t, A->ut))
       return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-  } else if (A->u) {
-    input_eval_terms(A->u, A->gterm, A->ngterm, R->t, A->ut);
-  }
-  for (int i = 0; i < A->m; i++) {
-    double acc = A->F[i];
-    for (int k = A->gp[i]; k < A->gp[i + 1]; k++) acc += A->gx[k] * A->ut[A->gi[k]];
-    A->g[i] = acc;
+    ad_offset_of(A, A->ut, A->g);
+  } else if ((gbrk = A->gbrk_const)) {           /* the terms G reads are constants: made once (u(t) */
+    la_copy_few(A->g, A->gbrk, A->m);            /* in A->ut is not read past here) */
+  } else {
+    if (A->u) input_eval_terms(A->u, A->gterm, A->ngterm, R->t, A->ut);
+    ad_offset_of(A, A->ut, A->g);
   }
   uint64_t active;
   double x0n = first ? la_norm_inf(A->x, A->n) : 0;   /* (the warning's) */
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
   if (st < 0) return st;
-  R->kept = A->inside;
-  if (A->inside) la_copy(A->gk, A->g, A->m);
+  R->kept = A->inside ? 1 + gbrk : 0;             /* (2: g is gbrk, not copied to gk) */
+  if (R->kept == 1) la_copy(A->gk, A->g, A->m);
   if (first && !pi->skipped)
     warn(R, CUP_WARN_X0_OUTSIDE, "x0 is outside K(0) (|x0| = %.3g); it is projected", x0n);
   error_onto(A, active, A->e);
@@ -343,8 +345,10 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
 }
 
 /* The piece after a breakpoint: its exosystem states, the jump of K onto
- * K(t+) (a projection, certified), and the active set by the velocity LCP. */
-static int start_piece(adaptive_ws *A, ad_run *R) {
+ * K(t+) (a projection, certified), and the active set by the velocity LCP.
+ * fresh: at_break has just checked A->x (nothing between, as at a window's
+ * start): with the same offset its slack in A->s is the choice's too. */
+static int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
   double tb = ad_next_break(A, R->t);   /* a record here asked already */
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
@@ -356,14 +360,17 @@ static int start_piece(adaptive_ws *A, ad_run *R) {
   /* at_break left x inside K(t) (nothing moved it since): with the same
    * offset at t+ (the input that jumps here reaches no row: a converter's
    * gates, read by the switches alone) the check finds it inside again */
-  if (!(R->kept && !memcmp(A->g, A->gk, sizeof(double) * (size_t)A->m))) {
+  int kept = R->kept == 2 ? A->gc_brk || ad_same_bits(A->g, A->gbrk, A->m)
+             : R->kept && ad_same_bits(A->g, A->gk, A->m);
+  if (!kept) {
     cup_proj_info pi;
     int st = make_consistent(A, R, A->g, A->x, &active, &pi);
     if (st < 0) return st;
     error_onto(A, active, A->e);
   }
   R->kept = 0;
-  return choose(A, R, A->wt, active, R->t, 1);     /* (A->g, A->ut: w's still) */
+  /* (A->g, A->ut: w's still; A->s: at_break's when fresh, D = 0) */
+  return choose(A, R, A->wt, active, R->t, kept && fresh && !A->has_D ? 2 : 1);
 }
 
 /* ---- steps ------------------------------------------------------------------------ */
@@ -390,16 +397,16 @@ static double interp_error(const adaptive_ws *A, const ad_mode *md, const double
 
 /* The end of a step at R->t: a breakpoint's projection, the output, the
  * next piece. */
-static int end_of_step(adaptive_ws *A, ad_run *R, cup_proj_info *pi, int at_event) {
+static int end_of_step(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_event) {
   int at_tb = R->t == R->tb, st;
+  cup_proj_info pb;
   if (at_tb) {
     R->after_event = 0;
-    cup_proj_info pb;
     if ((st = at_break(A, R, 0, &pb)) < 0) return st;
-    if (!pb.skipped) *pi = pb;
+    if (!pb.skipped) pi = &pb;
   }
   if ((st = step_done(A, R, pi, at_event && !at_tb)) < 0 || (st = emit(A, R)) < 0) return st;
-  if (at_tb && R->t < A->tend && (st = start_piece(A, R)) < 0) return st;
+  if (at_tb && R->t < A->tend && (st = start_piece(A, R, 0)) < 0) return st;
   return CUP_OK;
 }
 
@@ -589,6 +596,9 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   return end_of_step(A, R, &pi, 1);
 }
 
+/* A step's projection info when it made none (a flow step's). */
+static const cup_proj_info no_projection = {.skipped = 1};
+
 static int take_step(adaptive_ws *A, ad_run *R) {
   ad_mode *md = R->md;
   int n = A->n, na = A->na, snap;
@@ -596,14 +606,12 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   int series;
   const double *E = begin_step(A, R, &t1, &snap, &series);
   A->sy.md = A->se.md = NULL;                    /* (the flow's series are this step's) */
-  cup_proj_info pi = {0};
-  pi.skipped = 1;
   int carry = A->carry_md == md && A->carry_t == R->t;
   A->carry_md = NULL;
   if (!E && !series) {
     if (!snap) return R->info->status;
     R->t = t1;
-    return end_of_step(A, R, &pi, 0);
+    return end_of_step(A, R, &no_projection, 0);
   }
   if (carry) {                                   /* the last step's end (A->carry_md) */
     la_copy(A->ya, A->yb, na);
@@ -656,7 +664,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     A->carry_md = md;                            /* (a breakpoint's projection and choice move x) */
     A->carry_t = t1;
   }
-  return end_of_step(A, R, &pi, 0);
+  return end_of_step(A, R, &no_projection, 0);
 }
 
 /* ---- accumulating events: catching-up steps across them --------------------------- */
@@ -809,7 +817,7 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
 static int start_from(adaptive_ws *A, ad_run *R, int first, int st) {
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, R, first, &pi);
-  if (st >= 0 && R->t < A->tend) st = start_piece(A, R);
+  if (st >= 0 && R->t < A->tend) st = start_piece(A, R, 1);
   return st;
 }
 
@@ -908,7 +916,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   } else {
     st = emit(A, &R);
   }
-  if (st >= 0 && at_tb && R.t < A->tend) st = start_piece(A, &R);
+  if (st >= 0 && at_tb && R.t < A->tend) st = start_piece(A, &R, 0);
   if (st >= 0 && R.tend > 0) st = catch_up_from(A, &R, at_tb);
   else if (st >= 0 && info->events > R.ev0) st = zeno_check(A, &R);
   return run_to_end(A, &R, st);

@@ -454,7 +454,8 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R) {
  * nodes, as Taylor states w = (u, u', ..., u^(q)) at t0 per component; err
  * (p entries) estimates the interpolation error from the last Chebyshev
  * coefficients (geometric decay assumed). */
-static int poly_input(adaptive_ws *A, double t0, double h, double *w, double *err) {
+static __attribute__((noinline)) int poly_input(adaptive_ws *A, double t0, double h, double *w,
+                                                double *err) {
   enum { q = AD_DEGREE };
   int p = A->p;
   double *d = A->coef, *c = A->coef + (q + 1), *tau = A->coef + 2 * (q + 1);
@@ -515,14 +516,28 @@ static int gen_whole(const adaptive_ws *A) { return A->gen_whole; }
  * eighth of a period) and the next step (to its own end) take the same,
  * and on the six-pulse bridge each computed its three sines' sin and cos
  * again (a ninth of its instructions). */
+static __attribute__((noinline)) void piece_states(adaptive_ws *A, double t0, double t1, double *w);
+
 int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   if (A->one >= 0) w[A->one] = 1;
   if (!A->nwu) return CUP_OK;
+  if (A->w_const) {                              /* (DC sources alone: every piece's states) */
+    la_copy_few(w, A->wc, A->nwu);
+    return CUP_OK;
+  }
+  /* (the others out of line: their registers' saves were half of a
+   * converter's call, the six-pulse bridge's pieces as often copies) */
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);
+  piece_states(A, t0, t1, w);
+  return CUP_OK;
+}
+
+/* A built-in input's piece: kept, the last window's, or made. */
+static void piece_states(adaptive_ws *A, double t0, double t1, double *w) {
   int any = A->piece_from_t0;                    /* (gen_whole below: the same terms, the same answer) */
   if (A->piece_ok && t0 == A->piece_t0 && (any || t1 == A->piece_t1)) {   /* the same piece again */
     la_copy(w, A->piece_w, A->nwu);
-    return CUP_OK;
+    return;
   }
   /* the last window's, same input: only when both hold every term of it
    * (live_terms: a configuration whose E and G read fewer has other states) */
@@ -535,7 +550,6 @@ int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   A->piece_t0 = t0;
   A->piece_t1 = t1;
   A->piece_ok = 1;
-  return CUP_OK;
 }
 
 /* A record at a breakpoint (adaptive_zeta) and the piece that starts there

@@ -42,6 +42,7 @@ struct switched_run {
   cup_integrator_options o;
   int n;
   cup_integrator *child[SW_MAX];
+  adaptive_ws *ad[SW_MAX];  /* ... their adaptive scheme's workspace (the adaptive scheme's windows) */
   cup_integrator *twin[SW_MAX];   /* each configuration's exact flow, for split steps (fixed-step schemes) */
   int twin_off[SW_MAX];    /* ... which the adaptive scheme does not take */
   double piece_end, *xprev, *zsplit;   /* a split step: its last piece's end, x_{k-1}, zeta at t_k */
@@ -113,7 +114,9 @@ static int child_make(switched_run *S, int topo, char *errmsg) {
   o.on_step = calls ? watch_step : NULL;
   o.step_ctx = calls ? S : NULL;
   int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
-  return st ? fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg) : CUP_OK;
+  if (st) return fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg);
+  S->ad[topo] = adaptive_of(S->child[topo]);
+  return CUP_OK;
 }
 
 
@@ -185,14 +188,16 @@ static int wall_left(switched_run *S, int topo, long k, double t, cup_run_info *
  * (through the checks when watching); the state at its end into S->x. */
 static int window(switched_run *S, int topo, double t, double tb, int first, int jumped, long *steps,
                   long *next_sample, int watching, cup_run_info *info) {
-  cup_integrator *C = S->child[topo];
+  adaptive_ws *A = S->ad[topo];
   cup_run_info w;
   S->watch = watching;
   S->crossed = S->user_stop = S->refused = 0;
   S->tg = t;
-  la_copy(S->xg, S->x, S->n);
-  int st = adaptive_window(adaptive_of(C), t, tb, S->x, first, jumped, steps, next_sample, watch_sink, S,
-                           &w);
+  if (watching) la_copy(S->xg, S->x, S->n);     /* (check's and locate's alone) */
+  /* a step's callback checks the circuit-gated switches, or is the user's:
+   * without either (a converter's PWM), no call a step */
+  adaptive_on_step(A, watching || S->on_step ? watch_step : NULL, S);
+  int st = adaptive_window(A, t, tb, S->x, first, jumped, steps, next_sample, watch_sink, S, &w);
   S->watch = 0;
   if (S->crossed) {                                /* our stop, not an error; its sample not taken */
     st = CUP_OK;
@@ -202,7 +207,7 @@ static int window(switched_run *S, int topo, double t, double tb, int first, int
   }
   add_info(info, &w);
   if (st < 0) return st;
-  la_copy(S->x, adaptive_state(adaptive_of(C)), S->n);
+  la_copy(S->x, adaptive_state(A), S->n);
   return CUP_OK;
 }
 
@@ -480,8 +485,8 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     st = child_of(S, topo, info->message);
     if (st) break;
     if (!(seeded >> topo & 1)) {                   /* (afresh each run: a run never reads the one before) */
-      adaptive_seed(adaptive_of(S->child[topo]), 1);
-      adaptive_share_breaks(adaptive_of(S->child[topo]), &S->breaks);
+      adaptive_seed(S->ad[topo], 1);
+      adaptive_share_breaks(S->ad[topo], &S->breaks);
       seeded |= (uint64_t)1 << topo;
     }
     S->cur = topo;
