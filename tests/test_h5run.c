@@ -25,6 +25,7 @@
 #include <hdf5_hl.h>
 #include "catchup.h"
 #include "catchup/h5run.h"
+#include "h5/h5run_rows.h"
 
 #define CLI_TMPDIR_TEMPLATE "/tmp/cup_h5run_XXXXXX"
 #include "tmpdir.h"
@@ -185,6 +186,52 @@ static void test_flushes_in_between(void **state) {
   }
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
   expect_run(path, 13001, 0);
+}
+
+/* Rows in batches (h5run_append_rows, catchup-run's samples inside a
+ * step) of every size from 1 to 300, against the chunk of 4096 rows and
+ * the writer's clock looks: the file holds the reference rows and signals
+ * bit for bit, as written one by one. */
+static void test_rows_in_batches(void **state) {
+  (void)state;
+  enum { N = 10007, DIM = 2, NSIG = 3, MAXB = 300 };
+  char path[256];
+  cup_h5run *w = create_in_tmp(path, sizeof path, "batches.h5", DIM);
+  assert_int_equal(cup_h5run_signals(w, NSIG, (const char *const[]){"a", "b", "c"}), CUP_OK);
+  static double t[MAXB], x[MAXB * DIM], sig[MAXB * NSIG];
+  int done = -1;
+  assert_int_equal(h5run_append_rows(w, 0, t, x, sig, &done), CUP_OK);
+  assert_int_equal(done, 0);
+  assert_int_equal(h5run_append_rows(w, 1, t, x, NULL, &done), CUP_ERR_ARG);
+  for (long k = 0, b = 1; k < N; k += b, b = b % MAXB + 1) {
+    int c = (int)(k + b <= N ? b : N - k);
+    for (int i = 0; i < c; i++) {
+      sample(k + i, DIM, &t[i], x + (size_t)i * DIM);
+      for (int s = 0; s < NSIG; s++) sig[i * NSIG + s] = value(k + i, DIM + s, DIM + NSIG);
+    }
+    assert_int_equal(h5run_append_rows(w, c, t, x, sig, &done), CUP_OK);
+    assert_int_equal(done, c);
+  }
+  assert_int_equal(cup_h5run_count(w), N);
+  assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
+  expect_run(path, N, DIM);
+  hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  double *got = malloc(sizeof(double) * N);
+  for (int s = 0; s < NSIG; s++) {
+    hsize_t dims[1];
+    char name[16];
+    snprintf(name, sizeof name, "signals/%c", 'a' + s);
+    hid_t d = open_checked(f, name, 1, dims);
+    assert_true(dims[0] == N);
+    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, got) >= 0);
+    for (long k = 0; k < N; k++) {
+      double v = value(k, DIM + s, DIM + NSIG);
+      if (memcmp(&v, got + k, sizeof v) != 0) fail_msg("signal %d, row %ld differs", s, k);
+    }
+    H5Dclose(d);
+  }
+  free(got);
+  H5Fclose(f);
 }
 
 /* ---- attributes ---- */
@@ -654,6 +701,7 @@ int main(void) {
     ROUNDTRIP(0), ROUNDTRIP(1), ROUNDTRIP(2), ROUNDTRIP(3),
     ROUNDTRIP(4), ROUNDTRIP(5), ROUNDTRIP(6), ROUNDTRIP(7),
     cmocka_unit_test(test_flushes_in_between),
+    cmocka_unit_test(test_rows_in_batches),
     cmocka_unit_test(test_events),
     cmocka_unit_test(test_dimension_scales),
     cmocka_unit_test(test_attributes_roundtrip),

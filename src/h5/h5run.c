@@ -22,6 +22,7 @@
 #include "catchup.h"
 #include "catchup/h5run.h"
 #include "h5run_impl.h"
+#include "h5run_rows.h"
 #include "util/clock.h"
 #include "util/fail.h"
 
@@ -456,6 +457,40 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
   if (!w || !x || (w->nsig && !sig)) return CUP_ERR_ARG;
   if (w->data_status != CUP_OK) return w->data_status;
   return w->dim > 4 ? put_row_wide(w, t, x, sig) : put_row(w, t, x, sig, 0);
+}
+
+/* Whole runs of rows up to the next look at the clock or the chunk's end,
+ * whichever is first: there tick or write_buffer, as put_row does after
+ * that row (the same rows written, flushed and failed; a column's copy a
+ * run of rows rather than a call a row). */
+int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int *done) {
+  if (done) *done = 0;
+  if (!w || count < 0 || !done || (count && (!t || !x || (w->nsig && !sig)))) return CUP_ERR_ARG;
+  int dim = w->dim, nsig = w->nsig;
+  hsize_t rows = w->chunk_rows;
+  while (*done < count) {
+    if (w->data_status != CUP_OK) return w->data_status;
+    hsize_t r = w->nbuf, m = room(w) - r;
+    if (m > (hsize_t)(count - *done)) m = (hsize_t)(count - *done);
+    hsize_t tl = w->tick_left > 0 ? (hsize_t)w->tick_left : 1;   /* (the row that looks at the clock ends a run) */
+    if (m > tl) m = tl;
+    size_t i0 = (size_t)*done;
+    memcpy(w->tbuf + r, t + i0, sizeof(double) * m);
+    memcpy(w->xbuf + r * (hsize_t)dim, x + i0 * (size_t)dim, sizeof(double) * m * (size_t)dim);
+    for (int k = 0; k < nsig; k++) {
+      double *sb = w->sbuf + (size_t)k * rows + r;
+      const double *s = sig + i0 * (size_t)nsig + k;
+      for (hsize_t i = 0; i < m; i++) sb[i] = s[i * (size_t)nsig];
+    }
+    w->nbuf = r + m;
+    w->tick_left -= (int)m;
+    int st = CUP_OK;
+    if (w->tick_left <= 0) st = tick(w);
+    else if (w->nbuf >= room(w)) st = write_buffer(w);
+    *done += (int)m - (st != CUP_OK);
+    if (st != CUP_OK) return st;
+  }
+  return CUP_OK;
 }
 
 int cup_h5run_event(double t, int row, int on, void *ctx) {

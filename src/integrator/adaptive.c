@@ -450,6 +450,7 @@ void adaptive_free(adaptive_ws **Ap) {
   free(A->first_state); free(A->gen_rot); free(A->gen.terms); free(A->block);
   free(A->tan);
   free(A->rec_block);
+  free(A->put_block);
   free(A);
   *Ap = NULL;
 }

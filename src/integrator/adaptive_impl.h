@@ -33,11 +33,13 @@
 #include "lcp/lcp.h"
 #include "lcp/step.h"
 #include "util/block.h"
+#include "record.h"
 
 #define AD_MODES 10         /* active sets kept with their matrices (least recently used goes): a
                                six-pulse bridge meets 10 in its first period (the inrush, then the
                                commutations), and 8 slots built 2 of them twice */
 #define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
+#define AD_BATCH 64         /* samples inside a step a call of integrator_set_put's put */
 #define AD_KNOWN 32         /* with D, row sets whose N was factored, remembered regular or singular */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
@@ -296,6 +298,16 @@ struct adaptive_ws {
   struct ad_rec *rec_last;  /* the last entry used */
   void *rec_block;
   double *rec_acc, *rec_u;  /* na: a row being composed; p: u(t) when an entry's nu > 0 */
+  /* integrator_set_put (record.h): the samples inside a step with put_nl's
+   * signals (put_ns of them) to put, AD_BATCH at a time, NULL: to the
+   * sink; a batch's times, states, signals and estimates (bt, bx, bs, best)
+   * and its samples' y and error (by, be: AD_BATCH + 1 of each, the next
+   * batch's first last), in one block (put_block) */
+  record_put_fn put;
+  cup_netlist *put_nl;
+  int put_ns;
+  void *put_block;
+  double *bt, *bx, *bs, *best, *by, *be;
   ad_stop stop;             /* where the last run stopped */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
@@ -318,6 +330,31 @@ struct adaptive_ws {
 void ad_say(ad_run *R, const char *fmt, va_list ap);
 __attribute__((format(printf, 3, 4)))
 int ad_fail(ad_run *R, int status, const char *fmt, ...);
+
+/* ---- adaptive_record.c ---- */
+/* Entry e's ns rows times y, each from its constant, in column order:
+ * the signals that read no input outside y (e->nu 0, else add them). */
+static inline void ad_rec_rows(const struct ad_rec *e, int ns, const double *y, double *out) {
+  const double *rx = e->rx, *rc = e->rc;
+  const int *rp = e->rp, *rj = e->rj;
+  for (int k = 0; k < ns; k++) {
+    double acc = rc[k];
+    for (int q = rp[k]; q < rp[k + 1]; q++) acc += rx[q] * y[rj[q]];
+    out[k] = acc;
+  }
+}
+/* md's entry composed for S (NULL: not composable); ad_rec_of looks at
+ * the last one used first, inline (a call a record was 17 instructions,
+ * 13 k on the full bridge's own steps). */
+const struct ad_rec *ad_rec_entry(adaptive_ws *A, const ad_mode *md, const struct signal_map *S);
+static inline const struct ad_rec *ad_rec_of(adaptive_ws *A, const ad_mode *md, const struct signal_map *S) {
+  const struct ad_rec *e = A->rec_last;
+  if (e && e->X == md->X && e->mask == md->mask && e->key == S->key && A->rec_ns == S->ns) return e->ok ? e : NULL;
+  return ad_rec_entry(A, md, S);
+}
+/* The input components entry e reads that y leaves out (e->nu), at A->zt,
+ * added to its ns signals in out: 1, or 0 when the input failed. */
+int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out);
 
 /* ---- adaptive_sample.c ---- */
 /* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */

@@ -99,10 +99,10 @@ static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, stru
   e->rp[S->ns] = nz;
 }
 
-/* The entry of md's buffers, composed for md and S (NULL: not composable). */
-static struct ad_rec *entry(adaptive_ws *A, const ad_mode *md, const signal_map *S) {
-  struct ad_rec *e = A->rec_last;
-  if (e && e->X == md->X && e->mask == md->mask && e->key == S->key && A->rec_ns == S->ns) return e->ok ? e : NULL;
+/* The entry of md's buffers, composed for md and S (NULL: not composable):
+ * past ad_rec_of's look at the last one. */
+const struct ad_rec *ad_rec_entry(adaptive_ws *A, const ad_mode *md, const signal_map *S) {
+  struct ad_rec *e;
   if (A->rec_ns != S->ns && room(A, S->ns)) return NULL;
   struct ad_rec *free_e = NULL;
   for (e = A->rec; e < A->rec + AD_MODES + 1; e++) {
@@ -118,7 +118,7 @@ static struct ad_rec *entry(adaptive_ws *A, const ad_mode *md, const signal_map 
 
 /* The components uc of u(t) at the record's time, added to each row:
  * cup_input_eval's sums, as cup_netlist_signals takes them. */
-static int add_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out) {
+int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out) {
   if (cup_input_eval(A->u, A->zt, A->rec_u)) return 0;
   int p = A->p;
   for (int k = 0; k < ns; k++) {
@@ -130,17 +130,26 @@ static int add_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *ou
   return 1;
 }
 
-int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
-  const ad_mode *md = A->zmd;
-  if (!md || A->zx0) return 0;                   /* (x0's sample: its signals from x0 as given, by the caller) */
-  const struct ad_rec *e = entry(A, md, S);
-  if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
-  const double *y = A->zy, *rx = e->rx;
-  const int *rp = e->rp, *rj = e->rj;
-  for (int k = 0; k < S->ns; k++) {
-    double acc = e->rc[k];
-    for (int q = rp[k]; q < rp[k + 1]; q++) acc += rx[q] * y[rj[q]];
-    out[k] = acc;
-  }
-  return e->nu ? add_inputs(A, e, S->ns, out) : 1;
+int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
+  free(A->put_block);
+  A->put_block = NULL;
+  A->put = NULL;
+  A->put_nl = NULL;
+  A->put_ns = 0;
+  if (!put || !nl) return 1;
+  int ns = cup_netlist_signal_count(nl), n = A->n, na = A->na;
+  size_t b = AD_BATCH, slots = (b + 1) * (size_t)na;
+  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots));
+  if (!d) return CUP_ERR_NOMEM;
+  A->put_block = d;
+  A->bt = d;
+  A->bx = A->bt + b;
+  A->bs = A->bx + b * (size_t)n;
+  A->best = A->bs + b * (size_t)ns;
+  A->by = A->best + b;
+  A->be = A->by + slots;
+  A->put = put;
+  A->put_nl = nl;
+  A->put_ns = ns;
+  return 1;
 }

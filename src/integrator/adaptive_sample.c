@@ -11,6 +11,7 @@
 #include "adaptive.h"
 #include "adaptive_impl.h"
 #include "tally.h"
+#include "model/signal_map.h"
 
 double ad_sample_time(const adaptive_ws *A, long j) {
   long last = A->o.output_samples - 1;
@@ -61,6 +62,16 @@ static double row_times(const adaptive_ws *A, int i, const double *y) {
   return acc;
 }
 
+typedef struct {                                 /* by_rows' product, read once for a run of them */
+  const int *rp, *rj;
+  const double *rx;
+  int na, n, er_n;
+} e_rows;
+
+static e_rows rows_e_of(const adaptive_ws *A) {
+  return (e_rows){.rp = A->erp, .rj = A->erj, .rx = A->erx, .na = A->na, .n = A->n, .er_n = A->er_n};
+}
+
 /* The next sample's y and error, E y and E e into yo and eo, in one
  * pass over by_rows' nonzeros; the columns of e's trailing zeros (its
  * inputs' part) left out of E e (*nc: 1 + e's last nonzero, or -1 not
@@ -71,13 +82,14 @@ static double row_times(const adaptive_ws *A, int i, const double *y) {
  * nonzeros are in the first n columns, as they are) get E y alone and
  * e_i = +0, what their sums of no term gave. (Dense, these products were
  * 60 % of a sample's instructions on the six-pulse rectifier's grid.) */
-static void times(const adaptive_ws *A, const double *y, const double *e, double *yo, double *eo, int *ncp) {
-  int na = A->na, nc = *ncp, last = -1;
+static inline __attribute__((always_inline)) int times_by(const e_rows *E, const double *y, const double *e,
+                                                          double *yo, double *eo, int nc) {
+  int na = E->na, last = -1;
   if (nc < 0)
     for (nc = na; nc > 0 && e[nc - 1] == 0;) nc--;
-  const int *rp = A->erp, *rj = A->erj;
-  const double *rx = A->erx;
-  int rows_e = nc <= A->n ? A->er_n : na, i = 0;   /* the rows after have no column < nc: e_i = +0 */
+  const int *rp = E->rp, *rj = E->rj;
+  const double *rx = E->rx;
+  int rows_e = nc <= E->n ? E->er_n : na, i = 0;   /* the rows after have no column < nc: e_i = +0 */
   for (; i < rows_e; i++) {
     double a = 0, b = 0;
     int k = rp[i], end = rp[i + 1];
@@ -104,8 +116,64 @@ static void times(const adaptive_ws *A, const double *y, const double *e, double
     yo[i] = a;
     eo[i] = 0;
   }
-  *ncp = last + 1;
+  return last + 1;
 }
+
+static inline __attribute__((always_inline)) void times(const adaptive_ws *A, const double *y, const double *e,
+                                                       double *yo, double *eo, int *ncp) {
+  e_rows E = rows_e_of(A);
+  *ncp = times_by(&E, y, e, yo, eo, *ncp);
+}
+
+/* times by E itself (column-major, na x na; na a constant here, the
+ * loops unrolled): every term, zeros too, each sum from +0 in column
+ * order. A zero's term is +-0 (E, y and e finite), which leaves a sum
+ * begun at +0 as it was, and E e's terms of e's trailing zeros (from
+ * column nc on) are +-0 too, so these are times_by's sums bit for bit,
+ * without an index a term: its rows from er_n on (no nonzero below
+ * column n) get +0 here too. Returns times_by's nc. */
+static inline __attribute__((always_inline)) int times_dense(int na, const double *E, const double *y,
+                                                             const double *e, double *yo, double *eo) {
+  int last = -1;
+#pragma GCC unroll 4
+  for (int i = 0; i < na; i++) {
+    double a = 0, b = 0;
+#pragma GCC unroll 4
+    for (int j = 0; j < na; j++) {
+      a += E[i + j * na] * y[j];
+      b += E[i + j * na] * e[j];
+    }
+    yo[i] = a;
+    eo[i] = b;
+    if (b != 0) last = i;
+  }
+  return last + 1;
+}
+
+#define TIMES_DENSE(NA)                                                                        \
+  for (int s = 0; s < count; s++, y += NA, e += NA) nc = times_dense(NA, E, y, e, y + NA, e + NA); \
+  break
+
+/* times from slot 0 of y and e (na each) into slots 1 to count: E (the
+ * matrix by_rows took) dense up to 4 states with the inputs' (at most 16
+ * terms a row, unrolled: by_rows' lists cost an index and a loop a term,
+ * 125 instructions a sample on the precision rectifier's 3), else by_rows'
+ * arrays, read once. */
+static void times_run(const adaptive_ws *A, const double *E, double *y, double *e, int count, int *ncp) {
+  int na = A->na, nc = *ncp;
+  switch (na) {
+    case 1: TIMES_DENSE(1);
+    case 2: TIMES_DENSE(2);
+    case 3: TIMES_DENSE(3);
+    case 4: TIMES_DENSE(4);
+    default: {
+      e_rows R = rows_e_of(A);
+      for (int s = 0; s < count; s++, y += na, e += na) nc = times_by(&R, y, e, y + na, e + na, nc);
+    }
+  }
+  *ncp = nc;
+}
+#undef TIMES_DENSE
 
 /* The samples due before t1 on the flow of md, the first of them (sample
  * R->next_sample) in A->zy with its error in A->de; each next one by the
@@ -178,11 +246,104 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
   }
 }
 
-/* (A->zmd and zy_ready: adaptive_zeta's, a sample's inside the step.) */
+/* A batch of put's (integrator_set_put): the c samples from
+ * R->next_sample on, their states y and errors in A->by and A->be, the
+ * rest in A->bt, bx, bs and best. What dense_samples' sink calls do, as
+ * the sink would have been called: the estimate and count of each sample
+ * offered, R->next_sample after those taken, A->zy and A->de the last
+ * offered one's, and a refused one kept in A->pend (1; else 0). */
+static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, int c) {
+  int na = A->na, took = c ? A->put(R->sink_ctx, k, c, A->bt, A->bx, A->bs) : 0;
+  if (took < 0) took = 0;
+  if (took > c) took = c;
+  int offered = took < c ? took + 1 : c;
+  for (int i = 0; i < offered; i++)
+    if (!(A->best[i] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[i]);
+  R->info->samples += offered;
+  R->next_sample += took;
+  if (!offered) return 0;
+  la_copy(A->zy, A->by + (size_t)(offered - 1) * na, na);
+  la_copy(A->de, A->be + (size_t)(offered - 1) * na, na);
+  A->zt = A->bt[offered - 1];
+  if (took == c) return 0;
+  struct ad_pend *p = &A->pend;                  /* inside the step in progress: refused */
+  p->active = 1;
+  p->seg2 = 0;
+  p->md = (int)(md - A->modes);
+  p->k = k;
+  p->t_end = t1;
+  la_copy(p->zy, A->zy, na);
+  la_copy(p->de, A->de, na);
+  return 1;
+}
+
+/* dense_samples with put for the sink, a batch at a time: the batch's
+ * times (up to AD_BATCH, those before t1), their y and errors (slots of
+ * A->by and A->be, from slot 0 by times_run: and slot c, the next batch's
+ * first), then each one's estimate, state and signals (the composed rows
+ * re of S, no input outside y), and the batch to put. The same sums in
+ * the same order as dense_samples and the sink's integrator_record, the
+ * first sample's state by ad_state as there; A->zy and A->de are left as
+ * dense_samples leaves them (the last sample offered). */
+static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, const signal_map *S,
+                       const struct ad_rec *re) {
+  const cup_integrator_options *o = &A->o;
+  int n = A->n, na = A->na, ns = S->ns, nc = -1, first = 1;
+  long nsamples = o->output_samples, j = R->next_sample;
+  double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
+  double rnd = R->rloc + sqrt(R->r2);
+  double ts = ad_sample_time(A, j), *bt = A->bt, *bx = A->bx, *bs = A->bs, *by = A->by, *be = A->be;
+  la_copy(by, A->zy, na);
+  la_copy(be, A->de, na);
+  const double *E = NULL;
+  A->rows_ready = 0;
+  for (;;) {
+    int c = 0, last = 0;
+    while (c < AD_BATCH && !last) {
+      bt[c++] = ts;
+      last = !(++j < nsamples) || !((ts = ad_sample_time(A, j)) < t1);
+    }
+    int more = c - 1 + !last;                     /* the y's to make: the batch's after its first, the next's first */
+    if (more && !E) {
+      E = ad_expm(A, md, dt, 0);                  /* (applied sample after sample: dt itself) */
+      by_rows(A, E);
+      rows_of(A, md);
+    }
+    times_run(A, E, by, be, more, &nc);
+    for (int q = 0; q < c; q++) {
+      const double *y = by + (size_t)q * na;
+      double *xo = bx + (size_t)q * n;
+      A->best[q] = la_norm_inf(be + (size_t)q * na, n) + rnd;
+      if (first && q == 0) ad_state(A, md, y, xo);
+      else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, y);
+      if (tally_state_beyond(xo, n)) {            /* the samples before it offered first, as they were */
+        if (batch_put(A, R, md, t1, k, q)) return 1;
+        R->next_sample++;
+        if (!(A->best[q] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[q]);
+        la_copy(A->zy, y, na);
+        la_copy(A->de, be + (size_t)q * na, na);
+        int w = tally_state_worst(xo, n);
+        return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
+                    "the scheme diverged", CUP_STATE_MAX, bt[q], w, xo[w]);
+      }
+      ad_rec_rows(re, ns, y, bs + (size_t)q * ns);
+    }
+    first = 0;
+    int st = batch_put(A, R, md, t1, k, c);
+    if (st || last) return st;
+    la_copy(by, by + (size_t)c * na, na);
+    la_copy(be, be + (size_t)c * na, na);
+  }
+}
+
+/* (A->zmd and zy_ready: adaptive_zeta's, a sample's inside the step; with
+ * put, dense_batch when the map composes with md's rows alone.) */
 static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
   A->zmd = md;
   A->zy_ready = 1;
-  int st = dense_samples(A, R, md, t1, k);
+  const signal_map *S = A->put && R->sink ? nl_signal_map(A->put_nl) : NULL;
+  const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_of(A, md, S) : NULL;
+  int st = re && !re->nu ? dense_batch(A, R, md, t1, k, S, re) : dense_samples(A, R, md, t1, k);
   A->zmd = NULL;
   A->zy_ready = 0;
   return st;
@@ -417,6 +578,17 @@ int ad_record_y(adaptive_ws *A, const ad_mode *md) {
   if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
   return CUP_OK;
+}
+
+/* adaptive_record.c's composed rows (adaptive_record.c holds them and the
+ * batches' buffers; the records' y, here, ad_record_y). */
+int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
+  const ad_mode *md = A->zmd;
+  if (!md || A->zx0) return 0;                   /* (x0's sample: its signals from x0 as given, by the caller) */
+  const struct ad_rec *e = ad_rec_of(A, md, S);
+  if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
+  ad_rec_rows(e, S->ns, A->zy, out);
+  return e->nu ? ad_rec_inputs(A, e, S->ns, out) : 1;
 }
 
 /* zeta_J = L_J y on the active set's manifold (adaptive_impl.h), y from the

@@ -44,6 +44,10 @@ static const double *state(const void *ws) { return adaptive_state(ws); }
 static int zeta(void *ws, double *z) { return adaptive_zeta(ws, z); }
 static int record(void *ws, const struct signal_map *S, double *out) { return adaptive_record(ws, S, out); }
 
+static int set_put(void *ws, cup_netlist *nl, record_put_fn put) {
+  return adaptive_set_put(ws, nl, put);
+}
+
 static int stopped(const void *ws, cup_run_info *info) {
   if (!adaptive_stopped(ws)) return 0;
   adaptive_unstop(ws, info);
@@ -60,7 +64,7 @@ static void wall_limit(void *ws, double seconds) { adaptive_wall_limit(ws, secon
 
 static const scheme_type adaptive_type = {
   .name = "adaptive", .takes = takes, .create = create, .free = free_ws, .run = run, .state = state,
-  .zeta = zeta, .record = record, .stopped = stopped, .checkpoint = checkpoint, .resume = resume, .wall_limit = wall_limit,
+  .zeta = zeta, .record = record, .set_put = set_put, .stopped = stopped, .checkpoint = checkpoint, .resume = resume, .wall_limit = wall_limit,
 };
 const scheme_type *const scheme_adaptive = &adaptive_type;
 

@@ -150,4 +150,8 @@ int integrator_record(const cup_integrator *I, const signal_map *S, double *out)
   return I && S && I->sch->record ? I->sch->record(I->ws, S, out) : 0;
 }
 
+int integrator_set_put(cup_integrator *I, cup_netlist *nl, record_put_fn put) {
+  return I && I->sch->set_put ? I->sch->set_put(I->ws, nl, put) : 0;
+}
+
 int cup_integrator_rows(const cup_integrator *I) { return I ? I->m : 0; }

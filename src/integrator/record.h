@@ -17,4 +17,21 @@
  * input of the signals the scheme's exosystem does not hold, no memory). */
 int integrator_record(const cup_integrator *I, const signal_map *S, double *out);
 
+/* count samples of step k with their signals, in order (catchup-run's
+ * writer): times t (count), states x (count x n) and signals sig (count x
+ * ns), row-major. Returns how many it took, the first ones; the one after
+ * them (if fewer than count) is refused, as a sink's nonzero return
+ * refuses its sample, and the later ones were not offered. */
+typedef int (*record_put_fn)(void *ctx, long k, int count, const double *t, const double *x, const double *sig);
+
+/* From the next run or resume on, the samples whose signals I's scheme
+ * knows from its own state (integrator_record's) go to put with nl's
+ * signals (nl_signal_map's, the configuration in force) in batches, the
+ * sink's context its context; the others to the sink, which computes them
+ * itself. The same samples, signals and refusals as the sink alone gives,
+ * in order, without two calls a sample: the adaptive scheme's samples
+ * inside a step (NULL put: none). 1 if the scheme takes it, else 0 (every
+ * sample to the sink); CUP_ERR_NOMEM. */
+int integrator_set_put(cup_integrator *I, cup_netlist *nl, record_put_fn put);
+
 #endif

@@ -9,6 +9,7 @@
 
 #include "catchup.h"
 #include "freestep.h"
+#include "record.h"
 #include "util/ckpt.h"
 
 /* What a scheme is made from, after the front door's checks (an LCS's or a
@@ -31,7 +32,6 @@ typedef struct scheme_grid {
   int theta_step;
 } scheme_grid;
 
-struct signal_map;                   /* record.h */
 
 typedef struct scheme_type {
   const char *name;
@@ -48,6 +48,8 @@ typedef struct scheme_type {
   /* inside the sink: signals S at its sample (record.h), 1; 0 (or NULL):
    * not known here */
   int (*record)(void *ws, const struct signal_map *S, double *out);
+  /* record.h's integrator_set_put; NULL: not taken */
+  int (*set_put)(void *ws, cup_netlist *nl, record_put_fn put);
   /* the next runs' wall-time limit, in seconds from each run's start (0:
    * none): a caller running it many times under one limit (a switched
    * run's windows, a steady state's period runs) gives each run what is

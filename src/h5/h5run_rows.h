@@ -1,0 +1,17 @@
+/* h5run_rows — rows of samples appended at once (catchup-run's batches of
+ * samples inside a step, integrator/record.h's put). Internal to catchup
+ * and its apps, which link catchup_h5 statically. */
+#ifndef CUP_H5RUN_ROWS_H
+#define CUP_H5RUN_ROWS_H
+
+#include "catchup/h5run.h"
+
+/* Append count samples, as count calls of cup_h5run_append would, row by
+ * row: t (count), x (count x dim, row-major), sig (count x nsig,
+ * row-major; NULL when none were declared). The rows the calls would have
+ * taken with CUP_OK into *done, and the status of the call after them
+ * (CUP_OK: all count). */
+__attribute__((visibility("hidden")))
+int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int *done);
+
+#endif
