@@ -366,18 +366,14 @@ static void test_buck_ccm_fixed_step(void **state) {
   cup_netlist_free(&nl);
 }
 
-/* The full bridge (fullbridge.cir) from the initial state (i(L1), v(C1))
- * = (i0, v0) under theta on n steps over T: the max error over the grid
- * against the reference; *status: the run's. */
-static double bridge_theta_error(double i0, double v0, double theta, long n, double T, int *status) {
-  static pr_circuit c;
+/* fullbridge.cir with IC= on L1 (i0) and C1 (v0), at 17 digits. */
+static cup_netlist *fullbridge_ic(double i0, double v0) {
   char err[CUP_ERRMSG_LEN], text[4096], line[256];
   FILE *f = fopen(CIR "fullbridge.cir", "r");
   assert_non_null(f);
   size_t len = 0;
   while (fgets(line, sizeof line, f)) {              /* the element lines of L1 and C1 with IC= */
-    size_t l = strcspn(line, "\n");
-    line[l] = '\0';
+    line[strcspn(line, "\n")] = '\0';
     int w = !strncmp(line, "L1 ", 3) ? snprintf(text + len, sizeof text - len, "%s IC=%.17g\n", line, i0)
           : !strncmp(line, "C1 ", 3) ? snprintf(text + len, sizeof text - len, "%s IC=%.17g\n", line, v0)
                                      : snprintf(text + len, sizeof text - len, "%s\n", line);
@@ -387,6 +383,16 @@ static double bridge_theta_error(double i0, double v0, double theta, long n, dou
   fclose(f);
   cup_netlist *nl = NULL;
   if (cup_netlist_load_string(&nl, text, "fullbridge-ic.cir", NULL, 0, err)) fail_msg("%s", err);
+  return nl;
+}
+
+/* The full bridge (fullbridge.cir) from the initial state (i(L1), v(C1))
+ * = (i0, v0) under theta on n steps over T: the max error over the grid
+ * against the reference; *status: the run's. */
+static double bridge_theta_error(double i0, double v0, double theta, long n, double T, int *status) {
+  static pr_circuit c;
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = fullbridge_ic(i0, v0);
   assert_true(cup_netlist_x0(nl)[0] == i0 && cup_netlist_x0(nl)[1] == v0);
   double y0[PR_Y], Tnet;
   assert_int_equal(pc_example("fullbridge", &c, y0, &Tnet), 0);
@@ -642,20 +648,8 @@ static void test_fullbridge_certified(void **state) {
   static const struct { double v0; long n; } cases[] = {{-50, 200}, {-50, 400}, {-50, 1000}, {-1, 1000}};
   const double L = 1e-3, C = 2.2e-6, R = 20, T = 200e-6;
   for (int q = 0; q < 4; q++) {
-    char text[4096], line[256], err[CUP_ERRMSG_LEN];
-    FILE *f = fopen(CIR "fullbridge.cir", "r");
-    assert_non_null(f);
-    size_t len = 0;
-    while (fgets(line, sizeof line, f)) {
-      line[strcspn(line, "\n")] = '\0';
-      int w = !strncmp(line, "C1 ", 3) ? snprintf(text + len, sizeof text - len, "%s IC=%g\n", line, cases[q].v0)
-                                       : snprintf(text + len, sizeof text - len, "%s\n", line);
-      assert_true(w > 0 && (size_t)w < sizeof text - len);
-      len += (size_t)w;
-    }
-    fclose(f);
-    cup_netlist *nl = NULL;
-    if (cup_netlist_load_string(&nl, text, "fullbridge-ic.cir", NULL, 0, err)) fail_msg("%s", err);
+    char err[CUP_ERRMSG_LEN];
+    cup_netlist *nl = fullbridge_ic(0, cases[q].v0);
     first_step fs = {0};
     cup_integrator_options o;
     cup_integrator_options_default(&o);

@@ -175,6 +175,21 @@ static void times_run(const adaptive_ws *A, const double *E, double *y, double *
 }
 #undef TIMES_DENSE
 
+/* A sample refused by the sink inside the step in progress: its states
+ * (A->zy, A->de) kept in A->pend, the step going on to its end where the
+ * run stops. Returns 1. */
+static int pend_refused(adaptive_ws *A, const ad_mode *md, long k, double t1) {
+  struct ad_pend *p = &A->pend;
+  p->active = 1;
+  p->seg2 = 0;
+  p->md = (int)(md - A->modes);
+  p->k = k;
+  p->t_end = t1;
+  la_copy(p->zy, A->zy, A->na);
+  la_copy(p->de, A->de, A->na);
+  return 1;
+}
+
 /* The samples due before t1 on the flow of md, the first of them (sample
  * R->next_sample) in A->zy with its error in A->de; each next one by the
  * cached exp(dt M) of the output spacing dt (one product a sample: asking
@@ -217,16 +232,8 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
       ++*samples;
       A->zt = ts;
       if (sink(k, ts, xo, ctx)) {                   /* inside the step in progress: refused */
-        struct ad_pend *p = &A->pend;
         R->next_sample--;
-        p->active = 1;
-        p->seg2 = 0;
-        p->md = (int)(md - A->modes);
-        p->k = k;
-        p->t_end = t1;
-        la_copy(p->zy, A->zy, na);
-        la_copy(p->de, A->de, na);
-        return 1;
+        return pend_refused(A, md, k, t1);
       }
     }
     if (!(R->next_sample < nsamples)) return 0;
@@ -266,15 +273,7 @@ static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, 
   la_copy(A->de, A->be + (size_t)(offered - 1) * na, na);
   A->zt = A->bt[offered - 1];
   if (took == c) return 0;
-  struct ad_pend *p = &A->pend;                  /* inside the step in progress: refused */
-  p->active = 1;
-  p->seg2 = 0;
-  p->md = (int)(md - A->modes);
-  p->k = k;
-  p->t_end = t1;
-  la_copy(p->zy, A->zy, na);
-  la_copy(p->de, A->de, na);
-  return 1;
+  return pend_refused(A, md, k, t1);             /* inside the step in progress: refused */
 }
 
 /* dense_samples with put for the sink, a batch at a time: the batch's
