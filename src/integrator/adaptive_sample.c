@@ -175,6 +175,13 @@ static void times_run(const adaptive_ws *A, const double *E, double *y, double *
 }
 #undef TIMES_DENSE
 
+/* A sample's state xo at ts beyond its range (tally.h): the run stops. */
+static int diverged(ad_run *R, double ts, const double *xo, int n) {
+  int w = tally_state_worst(xo, n);
+  return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
+                 "the scheme diverged", CUP_STATE_MAX, ts, w, xo[w]);
+}
+
 /* A sample refused by the sink inside the step in progress: its states
  * (A->zy, A->de) kept in A->pend, the step going on to its end where the
  * run stops. Returns 1. */
@@ -224,11 +231,7 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
     if (sink) {
       if (!A->rows_ready) ad_state(A, md, A->zy, xo);
       else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, A->zy);
-      if (tally_state_beyond(xo, n)) {              /* as step_done: never a state out of range */
-        int w = tally_state_worst(xo, n);
-        return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
-                    "the scheme diverged", CUP_STATE_MAX, ts, w, xo[w]);
-      }
+      if (tally_state_beyond(xo, n)) return diverged(R, ts, xo, n);   /* as step_done: never a state out of range */
       ++*samples;
       A->zt = ts;
       if (sink(k, ts, xo, ctx)) {                   /* inside the step in progress: refused */
@@ -321,9 +324,7 @@ static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k
         if (!(A->best[q] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[q]);
         la_copy(A->zy, y, na);
         la_copy(A->de, be + (size_t)q * na, na);
-        int w = tally_state_worst(xo, n);
-        return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
-                    "the scheme diverged", CUP_STATE_MAX, bt[q], w, xo[w]);
+        return diverged(R, bt[q], xo, n);
       }
       ad_rec_rows(re, ns, y, bs + (size_t)q * ns);
     }
