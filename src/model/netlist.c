@@ -189,24 +189,26 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
 
 /* ---- a switch configuration's parts, dense (netlist_switch.c reduces them) ---------- */
 
-static double *dense(const la_sparse *s, int nrow, int ncol) {
-  double *a = calloc((size_t)nrow * (size_t)ncol + 1, sizeof(double));
-  if (!a) return NULL;
+static void dense_into(const la_sparse *s, int nrow, double *a) {
   for (int j = 0; s->p && j < s->ncol; j++)
     for (int k = s->p[j]; k < s->p[j + 1]; k++) a[s->i[k] + (size_t)j * (size_t)nrow] = s->x[k];
-  return a;
 }
 
+/* The seven parts in one zeroed block behind the struct (one calloc, not
+ * eight: a switched run forms its configurations as it goes). */
 int nl_raw_store(cup_netlist *nl, const la_sparse *const six[6], const double *pdiag, const la_sparse *Pc) {
-  int n = nl->n, m = nl->m, p = nl->p;
-  nl_raw *R = calloc(1, sizeof *R);
+  size_t n = (size_t)nl->n, m = (size_t)nl->m, p = (size_t)nl->p;
+  size_t size[7] = {n * n, n * m, m * n, m * m, n * p, m * p, n * n}, total = 0;
+  for (int k = 0; k < 7; k++) total += size[k];
+  nl_raw *R = calloc(1, sizeof *R + sizeof(double) * (total + 1));
   if (!R) return CUP_ERR_NOMEM;
   nl->raw = R;
-  R->A = dense(six[0], n, n); R->B = dense(six[1], n, m); R->C = dense(six[2], m, n);
-  R->D = dense(six[3], m, m); R->E = dense(six[4], n, p); R->G = dense(six[5], m, p);
-  R->P = Pc ? dense(Pc, n, n) : calloc((size_t)n * (size_t)n, sizeof(double));
-  if (!R->A || !R->B || !R->C || !R->D || !R->E || !R->G || !R->P) return CUP_ERR_NOMEM;
-  for (int j = 0; !Pc && j < n; j++) R->P[j + (size_t)j * n] = pdiag[j];
+  double *at = (double *)(R + 1), **part[7] = {&R->A, &R->B, &R->C, &R->D, &R->E, &R->G, &R->P};
+  for (int k = 0; k < 7; k++) { *part[k] = at; at += size[k]; }
+  const int nrow[6] = {nl->n, nl->n, nl->m, nl->m, nl->n, nl->m};
+  for (int k = 0; k < 6; k++) dense_into(six[k], nrow[k], *part[k]);
+  if (Pc) dense_into(Pc, nl->n, R->P);
+  for (size_t j = 0; !Pc && j < n; j++) R->P[j + j * n] = pdiag[j];
   R->keep_B = nl->nctl > 0;
   return CUP_OK;
 }
@@ -335,7 +337,7 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
     if (!seen && !(nl->files[nl->nfiles++] = lend ? c->files[f] : strdup(c->files[f]))) return CUP_ERR_NOMEM;
   }
   nl->node = calloc((size_t)c->nnodes, sizeof(char *));
-  nl->elem = calloc((size_t)c->nelem, sizeof(nl_elem));
+  nl->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + 1));   /* (each one copied below) */
   if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
   static char ground[] = "0";
   for (int v = 0; v < c->nnodes; v++)
@@ -456,10 +458,7 @@ void cup_netlist_free(cup_netlist **p) {
   if (!lent) free(nl->file);
   free(nl->source);
   if (nl->hooks) nl->hooks->free(&nl->sw);
-  if (nl->raw) {
-    free(nl->raw->A); free(nl->raw->B); free(nl->raw->C); free(nl->raw->D);
-    free(nl->raw->E); free(nl->raw->G); free(nl->raw->P); free(nl->raw);
-  }
+  free(nl->raw);                                   /* (its parts in the same block) */
   free(nl->zrow); free(nl->Lam);
   free(nl);
   *p = NULL;

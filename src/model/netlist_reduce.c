@@ -194,10 +194,13 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
   const nl_raw *R = sub->raw;
   int n = r->n, p = r->p, m = r->m, mq = r->mq, nq = r->nq;
   size_t big = (size_t)(n > m ? n : m) * (size_t)(n > p ? (n > m ? n : m) : (p > m ? p : m)) + 1;
-  double *X = malloc(sizeof(double) * big), *Y = malloc(sizeof(double) * big), *M = malloc(sizeof(double) * big);
-  double *F = calloc((size_t)m + 1, sizeof(double));
+  /* X, Y, M, |a| (with constraints) and F in one block, F zeroed */
+  double *X = malloc(sizeof(double) * ((nq ? 4 : 3) * big + (size_t)m + 1));
+  double *Y = X ? X + big : NULL, *M = X ? Y + big : NULL, *Mb = X && nq ? M + big : NULL;
+  double *F = X ? (nq ? Mb : M) + big : NULL;
+  if (F) la_zero(F, m + 1);
   la_sparse s[6] = {{0}};
-  int st = X && Y && M && F ? CUP_OK : CUP_ERR_NOMEM;
+  int st = X ? CUP_OK : CUP_ERR_NOMEM;
   /* A, E, B: Pi times the formulation's; C: its diode rows times Pi; D, G: its diode rows and columns */
   const double *src[3] = {R->A, R->E, NULL};
   int ncol[3] = {n, p, m};
@@ -206,11 +209,8 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
     if (t == 2) { cols(R->B, n, r->dr, m, Y); a = Y; }
     if (nq) {
       mul(r->Pi, a, n, n, ncol[t], X, M);
-      double *Mb = malloc(sizeof(double) * big);
-      if (!Mb) { st = CUP_ERR_NOMEM; break; }
       for (size_t k = 0; k < (size_t)n * ncol[t]; k++) Mb[k] = fabs(a[k]);
       mul(r->Pim, Mb, n, n, ncol[t], M, NULL);
-      free(Mb);
       st = to_csc(X, M, n, ncol[t], &s[t]);
     } else {
       st = to_csc(a, NULL, n, ncol[t], &s[t]);
@@ -270,7 +270,7 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
     free(pd);
     la_sparse_free(&Ps);
   }
-  free(X); free(Y); free(M); free(F);
+  free(X);                                         /* (Y, M, Mb and F in its block) */
   for (int t = 0; t < 6; t++) la_sparse_free(&s[t]);
   if (st == CUP_ERR_NOMEM) return nl_switch_nomem(d, errmsg);
   return st ? nl_fail(d, -1, errmsg, st, "%s", lib) : CUP_OK;
