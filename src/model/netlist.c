@@ -159,8 +159,10 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   st = decoupled_rows(nl, c, &q, errmsg);
   if (!st) st = idle_columns(nl, c, &q, errmsg);
   if (!st && c->derived) {                        /* a switch configuration: netlist_switch.c reduces it */
-    const la_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
-    st = nl_raw_store(nl, six, pdiag, Pc.p ? &Pc : NULL);
+    la_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
+    int rows = 0;                                 /* its constraint rows */
+    for (int e = 0; e < c->nelem; e++) rows += c->elem[e].kind == NL_D && c->elem[e].eq != NL_EQ_NONE;
+    st = nl_raw_store(nl, six, &pdiag, &Pc, !rows);
     if (st) st = nl_fail(c, -1, errmsg, st, "out of memory");
   } else if (!st) {
     cup_lcs_desc d = {0};
@@ -195,22 +197,42 @@ static void dense_into(const la_sparse *s, int nrow, double *a) {
 }
 
 /* The seven parts in one zeroed block behind the struct (one calloc, not
- * eight: a switched run forms its configurations as it goes). */
-int nl_raw_store(cup_netlist *nl, const la_sparse *const six[6], const double *pdiag, const la_sparse *Pc) {
+ * eight: a switched run forms its configurations as it goes); with no
+ * constraint row (sparse), the sparse parts, pdiag and Pc moved in. */
+int nl_raw_store(cup_netlist *nl, la_sparse *const six[6], double **pdiag, la_sparse *Pc, int sparse) {
   size_t n = (size_t)nl->n, m = (size_t)nl->m, p = (size_t)nl->p;
   size_t size[7] = {n * n, n * m, m * n, m * m, n * p, m * p, n * n}, total = 0;
-  for (int k = 0; k < 7; k++) total += size[k];
+  for (int k = 0; !sparse && k < 7; k++) total += size[k];
   nl_raw *R = calloc(1, sizeof *R + sizeof(double) * (total + 1));
   if (!R) return CUP_ERR_NOMEM;
   nl->raw = R;
+  R->keep_B = nl->nctl > 0;
+  R->sparse = sparse;
+  if (sparse) {
+    for (int k = 0; k < 6; k++) { R->part[k] = *six[k]; memset(six[k], 0, sizeof *six[k]); }
+    R->Pc = *Pc;
+    memset(Pc, 0, sizeof *Pc);
+    R->pdiag = *pdiag;
+    *pdiag = NULL;
+    return CUP_OK;
+  }
   double *at = (double *)(R + 1), **part[7] = {&R->A, &R->B, &R->C, &R->D, &R->E, &R->G, &R->P};
   for (int k = 0; k < 7; k++) { *part[k] = at; at += size[k]; }
   const int nrow[6] = {nl->n, nl->n, nl->m, nl->m, nl->n, nl->m};
   for (int k = 0; k < 6; k++) dense_into(six[k], nrow[k], *part[k]);
-  if (Pc) dense_into(Pc, nl->n, R->P);
-  for (size_t j = 0; !Pc && j < n; j++) R->P[j + j * n] = pdiag[j];
-  R->keep_B = nl->nctl > 0;
+  if (Pc->p) dense_into(Pc, nl->n, R->P);
+  for (size_t j = 0; !Pc->p && j < n; j++) R->P[j + j * n] = (*pdiag)[j];
   return CUP_OK;
+}
+
+void nl_raw_free(cup_netlist *nl) {
+  nl_raw *R = nl->raw;
+  if (!R) return;
+  for (int k = 0; k < 6; k++) la_sparse_free(&R->part[k]);
+  la_sparse_free(&R->Pc);
+  free(R->pdiag);
+  free(R);                                         /* (the dense parts in its block) */
+  nl->raw = NULL;
 }
 
 /* ---- the input and x0 ------------------------------------------------------------ */
@@ -458,7 +480,7 @@ void cup_netlist_free(cup_netlist **p) {
   if (!lent) free(nl->file);
   free(nl->source);
   if (nl->hooks) nl->hooks->free(&nl->sw);
-  free(nl->raw);                                   /* (its parts in the same block) */
+  nl_raw_free(nl);
   free(nl->zrow); free(nl->Lam);
   free(nl);
   *p = NULL;
