@@ -460,9 +460,8 @@ void cup_netlist_free(cup_netlist **p) {
   for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);
   for (int j = 0; nl->row_name && j < nl->m; j++) free(nl->row_name[j]);
   free(nl->state_name); free(nl->row_name); free(nl->row_fixed); free(nl->input_elem);
-  free(nl->eport); free(nl->evar); free(nl->port);
-  free(nl->parent); free(nl->pport); free(nl->depth); free(nl->snode); free(nl->psign);
-  free(nl->ctl_elem); free(nl->zmap); free(nl->coupled); free(nl->prow);
+  free(nl->port);                                  /* (eport, evar, ctl_elem, parent, pport, depth, snode, psign) */
+  free(nl->zmap); free(nl->coupled); free(nl->prow);
   la_sparse_free(&nl->Pinv);
   if (nl->cm_started) {
     cholmod_free_factor(&nl->Lf, &nl->cm);
