@@ -134,7 +134,7 @@ struct cup_netlist {
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */
   const nl_sw_hooks *hooks;   /* ... and what its own functions ask of them */
-  nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction */
+  nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction (freed after it) */
   int nelem_user;         /* elements written (a configuration's circuit appends constraints) */
   int names_lent;         /* > 0: the names of nodes, files and the first names_lent elements are
                              the switched netlist's circuit's (nl_circuit.names_lent): not freed */
