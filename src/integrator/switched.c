@@ -160,10 +160,6 @@ static int sw_record(void *ws, const struct signal_map *sig, double *out) {
   return A ? adaptive_record(A, sig, out) : integrator_record(S->child[S->cur], sig, out);
 }
 
-/* fmax(a, b) without its call, as glibc's (maxsd: b unless a > b; a
- * NaN b gives a). */
-static inline double max_of(double a, double b) { return a > b || b != b ? a : b; }
-
 /* One window's statistics into the run's. */
 static void add_info(cup_run_info *info, const cup_run_info *w) {
   info->status = status_merge(info->status, w->status);   /* (linalg.h's: a window's call saved) */
@@ -177,8 +173,8 @@ static void add_info(cup_run_info *info, const cup_run_info *w) {
   info->not_certified += w->not_certified;
   info->dual_iterations += w->dual_iterations;
   info->factorizations += w->factorizations;
-  info->max_eps_cert = max_of(info->max_eps_cert, w->max_eps_cert);
-  info->max_eta_cert = max_of(info->max_eta_cert, w->max_eta_cert);
+  info->max_eps_cert = la_fmax(info->max_eps_cert, w->max_eps_cert);
+  info->max_eta_cert = la_fmax(info->max_eta_cert, w->max_eta_cert);
   info->samples += w->samples;
   info->events += w->events;
   info->rejected += w->rejected;
