@@ -130,7 +130,10 @@ int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz) {
   for (int a = 0; a < nj; a++) {
     keep[nk] = rows[a];
     int ok = !singular(A, keep, nk + 1, Zt, nz, &fresh);
-    held = ok && fresh;
+    /* a known answer leaves the buffers as they were: the kept rows' still
+     * when this row is dropped (a bridge's dependent row, last: the kept
+     * rows were factored again) */
+    held = fresh ? ok : held && !ok;
     nk += ok;
   }
   if (!held) factor_rows(A, keep, nk, Zt, nz);
