@@ -484,8 +484,12 @@ void ad_row_of_C(const cup_polyset *K, int i, double *out);
 /* ---- adaptive_split.c (D != 0) ---- */
 /* Of the rows J (nj, in increasing order), a subset whose N is nonsingular
  * (all of them when it is): returns the new count and writes Zt (nz x nj),
- * nz, and A->Ninv (nj x nj, column-major: N's rows are Y's then Z's). */
-int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz);
+ * nz, and A->Ninv (nj x nj, column-major: N's rows are Y's then Z's).
+ * With pending non-NULL, a subset whose factors the tries did not leave
+ * in the buffers is not factored again: *pending = 1 says so, and
+ * ad_dae_refactor does it when the caller needs them. */
+int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz, int *pending);
+void ad_dae_refactor(adaptive_ws *A, const int *rows, int nj, double *Zt, int *nz);
 
 /* ---- adaptive_dae.c (D != 0) ---- */
 int ad_dae_init(adaptive_ws *A);
