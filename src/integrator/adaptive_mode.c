@@ -146,9 +146,11 @@ static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask, int lazy) {
   if (A->has_D) {
     int pending = 0;
     nj = ad_dae_factor(A, md->rows, nj, md->Zt, &md->nz, lazy ? &pending : NULL);
-    uint64_t sub = 0;
-    for (int k = 0; k < nj; k++) sub |= (uint64_t)1 << md->rows[k];
-    if (pending && !kept(A, sub)) ad_dae_refactor(A, md->rows, nj, md->Zt, &md->nz);
+    if (pending) {
+      uint64_t sub = 0;
+      for (int k = 0; k < nj; k++) sub |= (uint64_t)1 << md->rows[k];
+      if (!kept(A, sub)) ad_dae_refactor(A, md->rows, nj, md->Zt, &md->nz);
+    }
   } else {
     int r = factor_S(A, md->rows, nj);
     if (r < nj) {                                /* keep an independent subset */

@@ -43,7 +43,8 @@ int lcp_monotone(lcp_solver *s) {
 }
 
 /* lambda on A from M_AA lambda_A = -q_A, 0 elsewhere, and w = q + M lambda
- * (inlined in murty and lcp_try: a call each cost a circuit's events 4 %).
+ * (inlined in murty and lcp_try: a call each cost the full bridge's run
+ * 5 k instructions).
  * Returns nonzero for a singular block. */
 static inline __attribute__((always_inline)) int solve_on(lcp_solver *s, const double *M, const double *q) {
   int m = s->m, k = 0;
