@@ -733,6 +733,52 @@ static void test_decoupled_lcp_is_zero(void **state) {
   }
 }
 
+/* lcp_try on a six-pulse bridge's jump LCP (adaptive_dae.c): D skew, two
+ * blocks [0 -1 -1; 1 0 0; 1 0 0] (a top and a bottom diode group), q at
+ * a commutation. Closed form: rows 2 and 4 negative make zeta_0 = -q_2
+ * and zeta_3 = -q_4; then w_0 = q_0 - zeta_2 = 0 and w_3 = q_3 - zeta_4
+ * = 0 give zeta_2 = q_0, zeta_4 = q_3, the others 0. Principal pivoting
+ * from nothing meets a singular 1 x 1 block (Lemke's method then); the
+ * set itself, tried, is that solution at once (its block is a signed
+ * permutation: exact), and a wrong or odd set is refused, the warm start
+ * left as it was. */
+static void test_tried_set_is_the_closed_form(void **state) {
+  (void)state;
+  enum { m = 6 };
+  double D[m * m] = {0}, q[m] = {13.0004, 8.64887e-06, -150, 13.0004, -8.64887e-06, 150};
+  for (int b = 0; b < 2; b++) {
+    int o = 3 * b;
+    D[o + (o + 1) * m] = D[o + (o + 2) * m] = -1;   /* w_o = q_o - zeta_{o+1} - zeta_{o+2} */
+    D[(o + 1) + o * m] = D[(o + 2) + o * m] = 1;
+  }
+  const double want[m] = {150, 0, 13.0004, 8.64887e-06, 13.0004, 0};
+  lcp_solver s;
+  assert_int_equal(lcp_init(&s, m), CUP_OK);
+  assert_int_equal(lcp_monotone(&s), CUP_OK);
+  int piv = 0;
+  assert_int_equal(lcp_solve(&s, D, q, &piv), CUP_OK);   /* (Lemke's: a few pivots) */
+  assert_true(piv > 0);
+  for (int i = 0; i < m; i++) assert_true(fabs(s.lam[i] - want[i]) <= 1e-12 * 150);
+  const unsigned char right[m] = {1, 0, 1, 1, 1, 0}, wrong[m] = {1, 1, 0, 0, 0, 0}, odd[m] = {1, 0, 0, 0, 0, 0};
+  lcp_forget(&s);
+  assert_int_equal(lcp_try(&s, D, q, wrong), 1);
+  assert_true(lcp_cold(&s));
+  assert_int_equal(lcp_try(&s, D, q, odd), 1);     /* singular */
+  assert_true(lcp_cold(&s));
+  assert_int_equal(lcp_try(&s, D, q, right), CUP_OK);
+  for (int i = 0; i < m; i++) {
+    assert_true(s.lam[i] == want[i]);
+    assert_int_equal(s.prev[i], right[i]);
+    double w = q[i];
+    for (int j = 0; j < m; j++) w += D[i + j * m] * want[j];
+    assert_true(fabs(s.w[i] - w) <= 1e-12 * 150 && s.w[i] >= -1e-12 * 150);
+  }
+  piv = 0;                                          /* the set is the warm start now */
+  assert_int_equal(lcp_solve(&s, D, q, &piv), CUP_OK);
+  assert_int_equal(piv, 0);
+  lcp_free(&s);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_sin_within_two_ulps),
@@ -747,6 +793,7 @@ int main(void) {
     cmocka_unit_test(test_fused_switched_steps_are_the_loop),
     cmocka_unit_test(test_mode_fits_is_the_whole_check),
     cmocka_unit_test(test_decoupled_lcp_is_zero),
+    cmocka_unit_test(test_tried_set_is_the_closed_form),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

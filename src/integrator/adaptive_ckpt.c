@@ -58,6 +58,8 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
     ckpt_io(c, A->jlcp.lam, sizeof(double) * 2 * M);
     ckpt_io(c, A->jlcp.prev, 2 * M);
     ckpt_io(c, A->jseed, M);
+    CUP_CKPT_IO(c, A->jfrom); CUP_CKPT_IO(c, A->jto); CUP_CKPT_IO(c, A->njump);   /* (its sets tried first) */
+    if (!c->saving && A->njump < 0) c->bad = 1;  /* (an index of jump_keep's) */
   }
   lcp_step_checkpoint(&A->proj, c);
   projector_checkpoint(A->projector, c);

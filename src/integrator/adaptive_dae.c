@@ -239,6 +239,55 @@ int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur
 
 /* ---- the state jump --------------------------------------------------------------- */
 
+static uint64_t set_mask(const unsigned char *set, int m) {
+  uint64_t mask = 0;
+  for (int i = 0; i < m; i++)
+    if (set[i]) mask |= (uint64_t)1 << i;
+  return mask;
+}
+
+/* The set the jump's LCP was solved at the last time it started from
+ * `from` (from itself when not known). */
+static uint64_t jump_seen(const adaptive_ws *A, uint64_t from) {
+  long have = A->njump < AD_JUMPS ? A->njump : AD_JUMPS;
+  for (long k = 0; k < have; k++)
+    if (A->jfrom[k] == from) return A->jto[k];
+  return from;
+}
+
+static void jump_keep(adaptive_ws *A, uint64_t from, uint64_t to) {
+  long have = A->njump < AD_JUMPS ? A->njump : AD_JUMPS, k = 0;
+  while (k < have && A->jfrom[k] != from) k++;
+  if (k == have) k = A->njump++ % AD_JUMPS;
+  A->jfrom[k] = from;
+  A->jto[k] = to;
+}
+
+/* The multipliers' LCP of the jump, 0 <= zeta _|_ C x + D zeta + g >= 0,
+ * from A->lcp's warm start; 1 if solved. D of ideal diodes in loops with
+ * sources alone is skew (a six-pulse bridge's), whose principal blocks of
+ * odd order are singular: principal pivoting, one row a pivot, fails
+ * unless its warm start is the answer, and Lemke's method solved it (5
+ * of 6 of the bridge's event cost in this LCP). The set solved at the
+ * last time from the same warm start is tried first, as it stands: a
+ * converter's commutations follow each other in the same order each
+ * period. */
+static int jump_multipliers(adaptive_ws *A, int *pivots) {
+  int m = A->m;
+  /* the warm start itself first (lcp_solve's first pass): a full bridge's */
+  if (lcp_try(&A->lcp, A->Dd, A->dq0, A->lcp.prev) == CUP_OK) return 1;
+  uint64_t from = set_mask(A->lcp.prev, m), to = jump_seen(A, from);
+  int solved = 0;
+  if (to != from) {
+    unsigned char *act = A->touch;
+    for (int i = 0; i < m; i++) act[i] = to >> i & 1;
+    solved = lcp_try(&A->lcp, A->Dd, A->dq0, act) == CUP_OK;
+  }
+  if (!solved) solved = lcp_solve(&A->lcp, A->Dd, A->dq0, pivots) == CUP_OK;
+  if (solved) jump_keep(A, from, set_mask(A->lcp.prev, m));
+  return solved;
+}
+
 int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots) {
   int n = A->n, m = A->m, m2 = 2 * m;
   *active = 0;
@@ -252,7 +301,7 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots) {
    * the solve leaves it, or empty when it fails. */
   int empty = lcp_cold(&A->lcp);
   if (empty) memcpy(A->lcp.prev, A->jseed, (size_t)m);
-  int solved = lcp_solve(&A->lcp, A->Dd, A->dq0, pivots) == CUP_OK;
+  int solved = jump_multipliers(A, pivots);
   if (solved) memcpy(A->jseed, A->lcp.prev, (size_t)m);
   else if (empty) lcp_forget(&A->lcp);
   if (solved) {

@@ -40,6 +40,7 @@
                                commutations), and 8 slots built 2 of them twice */
 #define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
 #define AD_BATCH 64         /* samples inside a step a call of integrator_set_put's put */
+#define AD_JUMPS 8          /* with D, the jump's LCP: warm starts remembered with the set solved from them */
 #define AD_KNOWN 32         /* with D, row sets whose N was factored, remembered regular or singular */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
@@ -165,6 +166,8 @@ struct adaptive_ws {
   double *CB;               /* m x m, column-major: C B */
   unsigned char *dcpl;      /* rows with a nonzero in their row or column of D */
   unsigned char *jseed;     /* m: the jump's last active set (ad_dae_jump's warm start) */
+  uint64_t jfrom[AD_JUMPS], jto[AD_JUMPS];   /* the jump's LCP: a warm start, the set it solved at */
+  long njump;               /* ... (written in turn; checkpointed: the pivots counted depend on it) */
   int one;                  /* the exosystem's constant state 1 (F reaches zeta through D), or -1 */
   int nwu;                  /* the input's own exosystem states (nw without the constant) */
   int seed_on;              /* a switched run's windows (adaptive_seed): the active set chosen at ... */
@@ -481,8 +484,12 @@ void ad_row_of_C(const cup_polyset *K, int i, double *out);
 /* ---- adaptive_split.c (D != 0) ---- */
 /* Of the rows J (nj, in increasing order), a subset whose N is nonsingular
  * (all of them when it is): returns the new count and writes Zt (nz x nj),
- * nz, and A->Ninv (nj x nj, column-major: N's rows are Y's then Z's). */
-int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz);
+ * nz, and A->Ninv (nj x nj, column-major: N's rows are Y's then Z's).
+ * With pending non-NULL, a subset whose factors the tries did not leave
+ * in the buffers is not factored again: *pending = 1 says so, and
+ * ad_dae_refactor does it when the caller needs them. */
+int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz, int *pending);
+void ad_dae_refactor(adaptive_ws *A, const int *rows, int nj, double *Zt, int *nz);
 
 /* ---- adaptive_dae.c (D != 0) ---- */
 int ad_dae_init(adaptive_ws *A);

@@ -131,15 +131,26 @@ double ad_mode_hmax(adaptive_ws *A, ad_mode *md) {
   return md->hmax;
 }
 
+static ad_mode *kept(adaptive_ws *A, uint64_t mask);
+
 /* The rows of mask, an independent subset of them (the mode's mask says
  * which), and the inverse of S = C_J P^-1 C_J^T into A->Sinv; with D, of
- * N (ad_dae_factor) into A->Ninv, and Z^T into md->Zt. */
-static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask) {
+ * N (ad_dae_factor) into A->Ninv, and Z^T into md->Zt. With lazy, a
+ * subset that a kept mode holds already is left unfactored (ad_mode_get
+ * takes that mode: a six-pulse bridge's commutations ask for three rows
+ * that hold as two kept ones, which were factored again for nothing). */
+static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask, int lazy) {
   int m = A->m, nj = 0;
   for (int i = 0; i < m; i++)
     if (mask >> i & 1) md->rows[nj++] = i;
   if (A->has_D) {
-    nj = ad_dae_factor(A, md->rows, nj, md->Zt, &md->nz);
+    int pending = 0;
+    nj = ad_dae_factor(A, md->rows, nj, md->Zt, &md->nz, lazy ? &pending : NULL);
+    if (pending) {
+      uint64_t sub = 0;
+      for (int k = 0; k < nj; k++) sub |= (uint64_t)1 << md->rows[k];
+      if (!kept(A, sub)) ad_dae_refactor(A, md->rows, nj, md->Zt, &md->nz);
+    }
   } else {
     int r = factor_S(A, md->rows, nj);
     if (r < nj) {                                /* keep an independent subset */
@@ -432,7 +443,7 @@ static void mode_finish(adaptive_ws *A, ad_mode *md) {
 }
 
 static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {
-  mode_factor(A, md, mask);
+  mode_factor(A, md, mask, 0);
   mode_finish(A, md);
 }
 
@@ -466,7 +477,7 @@ ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
   /* built in the spare slot first: a subset that is kept already takes
    * nothing from the others */
   ad_mode *spare = &A->modes[AD_MODES];
-  mode_factor(A, spare, mask);
+  mode_factor(A, spare, mask, 1);
   if (spare->mask != mask) {
     A->alias_from[A->nalias % AD_ALIASES] = mask;
     A->alias_to[A->nalias % AD_ALIASES] = spare->mask;

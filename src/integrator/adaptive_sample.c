@@ -572,7 +572,11 @@ void adaptive_share_breaks(adaptive_ws *A, adaptive_breaks *b) { A->nb = b; }
 
 int ad_record_y(adaptive_ws *A, const ad_mode *md) {
   double t = A->zt, t1 = t;
-  if (A->nwu && !A->w_const) {                   /* (else the states read no piece: ad_inputs_on) */
+  /* no piece's end to find where the input's states read none: no states
+   * or DC alone (ad_inputs_on copies them whatever the interval), or states
+   * of t alone (sines, constants; the search was a fifth of a record on the
+   * six-pulse bridge) */
+  if (A->nwu && !A->w_const && (A->callback || !A->piece_from_t0)) {
     /* the held terms' next break (a gate's corners move no state); when they
      * are the whole input, the one start_piece asks for at t too (ad_next_break) */
     double tb = gen_whole(A) ? ad_next_break(A, t) : cup_input_next_break(A->held, t);

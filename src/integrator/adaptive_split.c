@@ -115,7 +115,9 @@ static int singular(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz, i
   return s;
 }
 
-int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz) {
+void ad_dae_refactor(adaptive_ws *A, const int *rows, int nj, double *Zt, int *nz) { factor_rows(A, rows, nj, Zt, nz); }
+
+int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz, int *pending) {
   int fresh;
   if (!singular(A, rows, nj, Zt, nz, &fresh)) {
     if (!fresh) factor_rows(A, rows, nj, Zt, nz);
@@ -130,10 +132,14 @@ int ad_dae_factor(adaptive_ws *A, int *rows, int nj, double *Zt, int *nz) {
   for (int a = 0; a < nj; a++) {
     keep[nk] = rows[a];
     int ok = !singular(A, keep, nk + 1, Zt, nz, &fresh);
-    held = ok && fresh;
+    /* a known answer leaves the buffers as they were: the kept rows' still
+     * when this row is dropped (a bridge's dependent row, last: the kept
+     * rows were factored again) */
+    held = fresh ? ok : held && !ok;
     nk += ok;
   }
-  if (!held) factor_rows(A, keep, nk, Zt, nz);
+  if (!held && pending) *pending = 1;
+  else if (!held) factor_rows(A, keep, nk, Zt, nz);
   memcpy(rows, keep, sizeof(int) * (size_t)nk);
   return nk;
 }

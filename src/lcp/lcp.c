@@ -42,9 +42,11 @@ int lcp_monotone(lcp_solver *s) {
   return CUP_OK;
 }
 
-/* lambda on A from M_AA lambda_A = -q_A, 0 elsewhere, and w = q + M lambda.
+/* lambda on A from M_AA lambda_A = -q_A, 0 elsewhere, and w = q + M lambda
+ * (inlined in murty and lcp_try: a call each cost the full bridge's run
+ * 5 k instructions).
  * Returns nonzero for a singular block. */
-static int solve_on(lcp_solver *s, const double *M, const double *q) {
+static inline __attribute__((always_inline)) int solve_on(lcp_solver *s, const double *M, const double *q) {
   int m = s->m, k = 0;
   for (int i = 0; i < m; i++) if (s->act[i]) s->idx[k++] = i;
   for (int i = 0; i < m; i++) s->lam[i] = 0;
@@ -86,24 +88,42 @@ static int solve_on(lcp_solver *s, const double *M, const double *q) {
   return 0;
 }
 
-/* Murty's least-index principal pivoting from the active set in s->act. */
-static int murty(lcp_solver *s, const double *M, const double *q, int *pivots) {
+/* The first row (least index) whose sign is wrong on s->act's solution,
+ * or -1: it solves the LCP. */
+static inline __attribute__((always_inline)) int wrong_sign(const lcp_solver *s, double scale) {
   int m = s->m;
+  double lmax = 0;
+  for (int i = 0; i < m; i++) lmax = la_max(lmax, fabs(s->lam[i]));
+  double tol_l = 64 * DBL_EPSILON * lmax, tol_w = 64 * DBL_EPSILON * scale;
+  for (int i = 0; i < m; i++)
+    if ((s->act[i] && s->lam[i] < -tol_l) || (!s->act[i] && s->w[i] < -tol_w)) return i;
+  return -1;
+}
+
+static double q_scale(const double *q, int m) {
   double scale = 0;
   for (int i = 0; i < m; i++) scale = la_max(scale, fabs(q[i]));
-  for (int it = 0; it < 16 * m + 64; it++) {
+  return scale;
+}
+
+/* Murty's least-index principal pivoting from the active set in s->act. */
+static int murty(lcp_solver *s, const double *M, const double *q, int *pivots) {
+  double scale = q_scale(q, s->m);
+  for (int it = 0; it < 16 * s->m + 64; it++) {
     if (solve_on(s, M, q)) return CUP_ERR_LINALG;
-    double lmax = 0;
-    for (int i = 0; i < m; i++) lmax = la_max(lmax, fabs(s->lam[i]));
-    double tol_l = 64 * DBL_EPSILON * lmax, tol_w = 64 * DBL_EPSILON * scale;
-    int flip = -1;
-    for (int i = 0; i < m && flip < 0; i++)
-      if ((s->act[i] && s->lam[i] < -tol_l) || (!s->act[i] && s->w[i] < -tol_w)) flip = i;
+    int flip = wrong_sign(s, scale);
     if (flip < 0) return CUP_OK;
     s->act[flip] = !s->act[flip];
     (*pivots)++;
   }
   return CUP_ERR_LINALG;                          /* cycling: not a P-matrix */
+}
+
+int lcp_try(lcp_solver *s, const double *M, const double *q, const unsigned char *act) {
+  memcpy(s->act, act, (size_t)s->m);
+  if (solve_on(s, M, q) || wrong_sign(s, q_scale(q, s->m)) >= 0) return 1;
+  memcpy(s->prev, s->act, (size_t)s->m);
+  return CUP_OK;
 }
 
 static int lemke(lcp_solver *s, const double *M, const double *q, int *pivots) {

@@ -37,6 +37,12 @@ int lcp_monotone(lcp_solver *s);
  * P-matrix; after lcp_monotone: Lemke's method found no solution
  * either), leaving the warm start as it was. */
 int lcp_solve(lcp_solver *s, const double *M, const double *q, int *pivots);
+/* Is the active set act (m flags) the solution, as the first pass of
+ * lcp_solve from it would find (the same block solve and tests)? Then its
+ * lambda and w are in s->lam, s->w, act becomes the warm start and CUP_OK
+ * is returned; else 1, with the warm start as it was (s->lam, s->w
+ * overwritten). No pivot is counted: none is made. act may be s->prev. */
+int lcp_try(lcp_solver *s, const double *M, const double *q, const unsigned char *act);
 /* The next solve starts cold. */
 static inline void lcp_forget(lcp_solver *s) { memset(s->prev, 0, (size_t)s->m); }
 /* Does the next solve start cold (no row in the warm start)? */
