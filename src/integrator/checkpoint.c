@@ -15,7 +15,8 @@
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
-enum { VERSION = 3 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end */
+enum { VERSION = 4 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
+                           4: implicit and exponential, the splitting check's sums */
 
 /* What a blob belongs to: restored only into an integrator of the same
  * build (sizes and byte order) and configuration. */
