@@ -40,6 +40,7 @@ typedef struct splitcheck {
   double *phib, *g;         /* Phi B (n x m) and C Phi B (m x m) */
   double *blk, *z, *zw;     /* a J x J block, its right-hand side and scratch */
   double *e, *d, *v, *Pv, *w;   /* the error, the step's correction, scratch (n, n, n, n, 2 n) */
+  double *P;                /* the metric, n x n, when n is small (else NULL: through the polyset) */
   int *J, *piv;             /* the rows that acted, the block's pivots */
   int live;                 /* e is not 0 */
   double emax, peak;        /* the largest ||e||_P and ||x||_P */
