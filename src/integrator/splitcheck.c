@@ -9,6 +9,7 @@
 #include "util/fail.h"
 
 #define SPLIT_DENSE_P 64   /* up to this dimension P is kept dense here */
+#define SPLIT_PHI1_MAX 128 /* ... and phi_1(hA) computed (an exponential of twice the size) */
 
 /* phi_1(hA), the top right block of exp([hA I; 0 0]) (2n x 2n), into out. */
 static int phi1(const freestep_drift *A, double h, double *out) {
@@ -125,7 +126,8 @@ int splitcheck_init(splitcheck *s, const freestep_ws *fs, const cup_polyset *K, 
     memcpy(phi, s->lin, sizeof(double) * N * N);
   } else {                                       /* e^{hA}, the generators' block left out; phi_1(hA) */
     for (int j = 0; j < n; j++) memcpy(s->lin + (size_t)j * n, fs->Eh + (size_t)j * fs->na, sizeof(double) * N);
-    if (phi1(&fs->d, fs->h, phi)) {
+    if (n > SPLIT_PHI1_MAX) memcpy(phi, s->lin, sizeof(double) * N * N);   /* e^{hA}: about twice the estimate */
+    else if (phi1(&fs->d, fs->h, phi)) {
       splitcheck_free(s);
       return fail_fmt(errmsg, CUP_ERR_NOMEM, "splitting check: out of memory");
     }
