@@ -31,7 +31,7 @@ extern "C" {
   X(CUP_WARN_STIFF,          2, "explicit scheme with h*rho(A) > 2: the free step is unstable") \
   X(CUP_WARN_QUADRATURE,     3, "input quadrature did not reach its tolerance") \
   X(CUP_WARN_X0_OUTSIDE,     4, "x0 is not consistent (outside K(0); with D != 0, no zeta >= 0 makes C x0 + D zeta + g >= 0): the first step jumps, by the size in the message") \
-  X(CUP_WARN_SPLITTING,      5, "implicit/exponential scheme with h above the time constant of a constraint direction: the projection along B loses what the step moved") \
+  X(CUP_WARN_SPLITTING,      5, "implicit/exponential scheme: the projection along B loses what the free step moved (h above the time constant of a constraint direction, or a source driving a blocked state fast within a step); the message says where and how much") \
   X(CUP_ERR_STEP_SIZE,     -16, "adaptive scheme: the step size underflowed (the input or the solution is not smooth enough for tol there)") \
   X(CUP_WARN_ZENO,           6, "adaptive scheme: events accumulate (Zeno behaviour or chattering) beyond the event rate cap; catching-up steps took over there") \
   X(CUP_WARN_TOL_FLOOR,      7, "adaptive scheme: tol is below what double precision can deliver at the state's scale") \

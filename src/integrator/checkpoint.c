@@ -15,8 +15,9 @@
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
-enum { VERSION = 4 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
-                           4: and the sets its jump's LCP was solved at (AD_JUMPS) */
+enum { VERSION = 5 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
+                           4: and the sets its jump's LCP was solved at (AD_JUMPS);
+                           5: implicit and exponential, the splitting check's sums */
 
 /* What a blob belongs to: restored only into an integrator of the same
  * build (sizes and byte order) and configuration. */

@@ -386,6 +386,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   int fixed = F->fixed || !F->u;
   F->stop.phase = CUP_STOP_NONE;
   F->rebuilds0 = cup_setproj_rebuilds(F->sp);
+  splitcheck_reset(&F->chk);
   if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
   F->jump = F->K && polyset_x0(F, fixed, info);
   /* zeta at t = 0 (x0's sample, and the left end of the samples inside
@@ -498,6 +499,7 @@ static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebui
     st = cup_project(F->proj, F->xf, F->xnew, pi);
     F->zeta_from = 2;
     if (F->jump) jump_size(F, st, info);
+    if (F->chk.on && st >= 0) splitcheck_step(&F->chk, k + 1, t1, F->xf, F->xnew, cup_projector_lambda(F->proj));
   }
   return step_checked(F, k, t0, t1, fixed, 0, stiff, pi, st, info);
 }
@@ -617,6 +619,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
     }
   }
   F->next_j = sp.next_j;
+  if (F->chk.on && !F->window) splitcheck_verdict(&F->chk, o->scheme, o->n, info);
   return info->status;
 }
 
@@ -648,6 +651,7 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
   fixed_ws *F = I->ws;
   F->kend = k1;
   F->hold = hold;
+  F->window = 1;
   int st;
   if (first) {
     st = fixed_run(F, x, sink, sink_ctx, info);
@@ -668,7 +672,7 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
   }
   *next_j = F->next_j;
   F->kend = F->o.n;
-  F->hold = 0;
+  F->hold = F->window = 0;
   return st;
 }
 

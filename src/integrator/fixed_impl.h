@@ -10,6 +10,7 @@
 #include "faststep.h"
 #include "freestep.h"
 #include "estimate.h"
+#include "splitcheck.h"
 #include "lcp/step.h"
 
 /* Where a run stopped before its end, at a step's end, and how far that
@@ -63,6 +64,8 @@ struct fixed_ws {
   unsigned long long mode0; /* ... the support of zeta at the window's start */
   int restart_iters;        /* ... the pivots of its solves before the last */
   faststep_ws fast;        /* a small LCS's whole step in one function, or fast.on = 0 */
+  splitcheck chk;          /* implicit, exponential: the splitting error a step at a time, or chk.on = 0 */
+  int window;               /* a switched run's window: its run judges the splitting (switched.c) */
   double *x, *xnew, *xf, *g, *ut, *s0, *sg;
   double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
   double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */

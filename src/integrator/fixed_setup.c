@@ -161,6 +161,7 @@ static int setup(fixed_ws *F, const freestep_drift *D, const cup_process_desc *p
   if (st) return st;
   F->h_rho = freestep_h_rho(D, F->h);
   F->split = freestep_splitting(&F->fs, &F->split_row);
+  if (F->K && (st = splitcheck_init(&F->chk, &F->fs, F->K, errmsg))) return st;
   if (F->K)
     faststep_init(&F->fast, &F->fs, &F->th, F->K, F->fixed || !F->u ? NULL : F->G, F->g, F->use_theta,
                   F->eps_n, F->eta_n, o->n, o->T);
@@ -216,6 +217,7 @@ void fixed_free(void *ws) {
   if (F->half) fixed_free(F->half);              /* the estimate's: its model borrowed */
   estimate_free(&F->est);
   freestep_free(&F->fs);
+  splitcheck_free(&F->chk);
   cup_projector_free(&F->proj);
   cup_setproj_free(&F->sp);
   cup_set_free(&F->S_own);
@@ -224,6 +226,19 @@ void fixed_free(void *ws) {
   free(F->xs); free(F->zprev); free(F->gterms);
   free(F->x0);
   free(F);
+}
+
+void integrator_split_reset(cup_integrator *const *child, int count) {
+  for (int c = 0; c < count; c++)
+    if (child[c]) splitcheck_reset(&((fixed_ws *)child[c]->ws)->chk);
+}
+
+void integrator_split_verdict(cup_integrator *const *child, int count, cup_run_info *info) {
+  splitcheck all = {0};
+  const fixed_ws *F = NULL;
+  for (int c = 0; c < count; c++)
+    if (child[c]) splitcheck_merge(&all, &(F = child[c]->ws)->chk);
+  if (F) splitcheck_verdict(&all, F->o.scheme, F->o.n, info);
 }
 
 const double *fixed_state(const void *ws) { return ((const fixed_ws *)ws)->x; }
@@ -286,6 +301,12 @@ void fixed_checkpoint(void *ws, ckpt *c) {
   if (F->half) {
     ckpt_io(c, F->x0, sizeof(double) * (size_t)F->n);
     CUP_CKPT_IO(c, F->est.err);
+  }
+  if (F->chk.on) {                               /* the splitting check's sums so far (splitcheck.h) */
+    splitcheck *k = &F->chk;
+    ckpt_io(c, k->e, sizeof(double) * (size_t)k->n);
+    CUP_CKPT_IO(c, k->live); CUP_CKPT_IO(c, k->emax); CUP_CKPT_IO(c, k->peak);
+    CUP_CKPT_IO(c, k->worst); CUP_CKPT_IO(c, k->tworst); CUP_CKPT_IO(c, k->first); CUP_CKPT_IO(c, k->tfirst);
   }
   projector_checkpoint(F->proj, c);
   if (F->use_theta) lcp_step_checkpoint(&F->th, c);

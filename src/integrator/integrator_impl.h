@@ -63,6 +63,12 @@ int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sampl
  * switching), as the window would have given them. *next_j advanced. */
 int integrator_held(cup_integrator *I, long k, const double *x, long *next_j, cup_sample_fn sink, void *sink_ctx,
                     cup_run_info *info);
+/* A switched run's splitting check (splitcheck.h) over its configurations'
+ * fixed-step integrators (child[0..count), NULL where none): reset at the
+ * run's start; at its end, their sums together against the run's largest
+ * state, the warning into info. */
+void integrator_split_reset(cup_integrator *const *child, int count);
+void integrator_split_verdict(cup_integrator *const *child, int count, cup_run_info *info);
 /* Its grid's time t_k, and its step h = T / n. */
 double integrator_grid_time(const cup_integrator *I, long k);
 double integrator_grid_step(const cup_integrator *I);

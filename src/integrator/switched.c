@@ -481,6 +481,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
     /* the rule at the switching time when the grid time was snapped to it from below */
     if (k < n) st = sw->settle(sw->ctx, &topo, t > tb ? t : tb, S->x, NULL, info->message);
   }
+  if (st >= 0 && k == n) integrator_split_verdict(S->child, SW_MAX, info);
   if (S->kheld >= 0) {                             /* stopped before the switching: the samples as they were */
     cup_run_info w = *info;
     release(S, -1, &next_j, &w);
@@ -524,6 +525,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     sw->jump(sw->ctx, topo, S->x);
     if (S->half) estimate_anchor(&S->est, 0, S->x);
     x0_moved(S, x0, info);
+    integrator_split_reset(S->child, SW_MAX);
     st = sw_fixed_run(S, 0, topo, info);
     if (S->half) info->err_est = estimate_value(&S->est);
     return st;
