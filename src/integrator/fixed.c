@@ -643,11 +643,12 @@ static void theta_start(fixed_ws *F, long k) {
   lcp_step_start(&F->th, F->x, g);
 }
 
-int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int *hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
   F->kend = k1;
-  F->hold = hold;
+  F->hold = *hold;
+  F->stop.phase = CUP_STOP_NONE;                 /* (a stop after step k1 is told by it, below) */
   int st;
   if (first) {
     st = fixed_run(F, x, sink, sink_ctx, info);
@@ -666,7 +667,10 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
     if (F->restart) F->mode0 = theta_support(F);
     st = steps(F, k0, *next_j, sink, sink_ctx, info);
   }
-  *next_j = F->next_j;
+  /* the samples on t_k1 wait when the window got past them: to its end, or
+   * stopped right after its last step (the interrupt, the wall-time limit) */
+  *hold = *hold && (st >= 0 || (F->stop.phase == CUP_STOP_STEP_DONE && F->stop.k == k1));
+  *next_j = F->stop.phase != CUP_STOP_NONE ? F->stop.next_j : F->next_j;   /* (a stop's: where its sampler was) */
   F->kend = F->o.n;
   F->hold = 0;
   return st;

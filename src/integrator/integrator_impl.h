@@ -31,9 +31,11 @@ struct cup_integrator {
 /* A fixed-step run's window (a switched circuit's stretch in one
  * configuration, switched.c): steps k0 + 1 .. k1 on the run's grid from
  * state x at t_k0 (first: k0 = 0, the run's own start and x0's sample),
- * the samples from *next_j on; *next_j advanced. hold: a switching at
- * t_k1 follows, the samples on t_k1 are held back for integrator_held. */
-int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
+ * the samples from *next_j on; *next_j advanced. *hold: a switching at
+ * t_k1 follows, the samples on t_k1 are held back for integrator_held; on
+ * return, 1 when they were (the window reached t_k1, though it may have
+ * stopped right after: then they are still to be given). */
+int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int *hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 /* The wall-time limit of I's next runs (seconds; 0: none), through its
  * scheme's table: each run starts its clock afresh, so a caller running I

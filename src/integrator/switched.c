@@ -340,7 +340,7 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
   int hold = S->holds && k < S->o.n && (*tb <= tk + snap || sw->state_gated(sw->ctx, to));   /* a switching at t_k */
   st = integrator_split_end(S->child[to], k, S->xprev, S->x, S->zsplit, hold, next_j, S->sink, S->sink_ctx, &w);
   add_info(info, &w);
-  if (hold) S->kheld = k, S->cheld = to;
+  if (hold && st >= 0) S->kheld = k, S->cheld = to;   /* (a stop before them: not reached, never offered) */
   return st;
 }
 
@@ -436,11 +436,11 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
     cup_run_info w;
     if (kw > k || first) {
       int hold = S->holds && !split && kw < n;     /* a switching at t_kw */
-      int wst = integrator_window(C, k, kw, S->x, first, hold, &next_j, S->sink, S->sink_ctx, &w);
+      int wst = integrator_window(C, k, kw, S->x, first, &hold, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
+      if (hold) S->kheld = kw, S->cheld = topo;    /* (also when it stopped right after: given below) */
       if (wst < 0) { st = wst; break; }
       la_copy(S->x, cup_integrator_state(C), S->n);
-      if (hold) S->kheld = kw, S->cheld = topo;
     }
     k = kw;
     known = -1;
@@ -462,11 +462,11 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
       }
       S->cur = topo;                               /* no exact flow: the step as the grid has it */
       int hold = S->holds && k1 < n;
-      int wst = integrator_window(C, k, k1, S->x, 0, hold, &next_j, S->sink, S->sink_ctx, &w);
+      int wst = integrator_window(C, k, k1, S->x, 0, &hold, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
+      if (hold) S->kheld = k1, S->cheld = topo;
       if (wst < 0) { st = wst; break; }
       la_copy(S->x, cup_integrator_state(C), S->n);
-      if (hold) S->kheld = k1, S->cheld = topo;
       k = k1;
     }
     t = integrator_grid_time(C, k);
@@ -546,9 +546,13 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (st) { st = fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", t); break; }
     if ((st = wall_left(S, topo, steps, t, info))) break;
     int give = held && t < tb;                     /* the window gives it at its start */
-    if (give) held = 0;
+    long offered = info->samples;
     st = window(S, topo, t, tb, first, jumped | give << 1, &steps, &next_sample, sw->state_gated(sw->ctx, topo),
                 info);
+    /* offered (the sink may have refused it: its stop) once the window's
+     * start chose the active set; a start that failed gave none, and the
+     * run's stop below gives it as the window before left it */
+    if (give && info->samples > offered) held = 0;
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) break;
     if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);
