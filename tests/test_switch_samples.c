@@ -13,7 +13,11 @@
  *    interrupt at the held window's last step) still gives that sample:
  *    as the window left it (the left limit) where the next configuration
  *    did not start, else the right limit; and a sink that refuses a sample
- *    is not called again. */
+ *    is not called again.
+ * 2. Samples inside a fixed-step step that holds a switching time (split
+ *    there) are on their side of the jump: the left limit's flow before
+ *    it, the right limit's after, each interpolated between its own
+ *    piece's ends, never across the jump. */
 #include <float.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -263,9 +267,63 @@ static void test_held_sample_kept(void **state) {
   }
 }
 
+/* 2. Samples inside a split step: S1 closes at ts inside step k (h = 10
+ * us) and, in the second case, opens again within the same step (three
+ * pieces); samples every 1 us, one of them on a switching time in the
+ * third case (that sample's time a rounding from the gate's edge: the
+ * right limit). Each sample against the closed form on its side: inside
+ * the split step within the pieces' linear interpolation (h^2 |v''| / 8 =
+ * 6e-6 V), i(S1) 0 left of the closing and after the opening. They were
+ * interpolated between the step's ends across the jump: up to 6.8 V off,
+ * and i(S1) the closed switch's before it closed. */
+static void test_split_step_samples(void **state) {
+  (void)state;
+  const double T = 2e-3, h = 1e-5;
+  static const struct { double ts, width; } cases[] = {{1.0037e-3, 1}, {1.0032e-3, 4e-6}, {1.004e-3, 1}};
+  static const cup_scheme fixed[] = {CUP_SCHEME_THETA, CUP_SCHEME_IMPLICIT, CUP_SCHEME_EXPONENTIAL,
+                                     CUP_SCHEME_EXPLICIT};
+  static rec r;
+  char msg[CUP_RUN_MSG_LEN];
+  for (int c = 0; c < 3; c++)
+    for (int q = 0; q < 4; q++) {
+      double ts = cases[c].ts, t2 = ts + cases[c].width, ta = floor(ts / h) * h, tb = ta + h;
+      cup_integrator_options o;
+      options(&o, fixed[q], 200, 2001, T);
+      int st = run_case2(ts, cases[c].width, &o, NONE, &r, msg);
+      if (st != CUP_OK) fail_msg("%s: %s", cup_status_name(st), msg);
+      assert_int_equal(r.count, 2001);
+      double in = 0, out = 0, ileft = 0, iright = 0, x[2], is;
+      long inside = 0, left = 0;
+      for (long j = 0; j < r.count; j++) {
+        double t = r.t[j];
+        /* a sample time a rounding short of a switching time is that time's, the right limit */
+        double tt = fabs(t - ts) <= 8 * DBL_EPSILON * ts ? ts : fabs(t - t2) <= 8 * DBL_EPSILON * t2 ? t2 : t;
+        exact2(tt, ts, t2, 1, x, &is);
+        double e = fmax(fabs(r.x[j][0] - x[0]), fabs(r.x[j][1] - x[1]));
+        if (t > ta && t < tb) {
+          in = fmax(in, e), inside++;
+          if (is == 0) ileft = fmax(ileft, fabs(r.s[j])), left++;
+          else iright = fmax(iright, fabs(fabs(r.s[j]) - is) / is);
+        } else {
+          out = fmax(out, e);
+        }
+      }
+      print_message("%-11s S1 on [%.6g, %.6g) ms: %ld samples in the split step (%ld with S1 open): error %.2e V "
+                    "there (i(S1) %.1e A open, %.1e relative closed), %.2e V elsewhere\n", cup_scheme_name(fixed[q]),
+                    1e3 * ts, 1e3 * fmin(t2, T), inside, left, in, ileft, iright, out);
+      assert_int_equal(inside, 9);
+      assert_true(left >= 3);
+      assert_true(in <= 1e-5 * V1);
+      assert_true(ileft <= 1e-12);
+      assert_true(iright <= 1e-2);
+      assert_true(out <= (fixed[q] == CUP_SCHEME_THETA ? 1e-5 : 2e-3) * V1);
+    }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(test_held_sample_kept),
+    cmocka_unit_test(test_split_step_samples),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
