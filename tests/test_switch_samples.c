@@ -141,11 +141,10 @@ static int sink(long k, double t, const double *x, void *ctx) {
   return 0;
 }
 
-static long g_refuse_at = -1;     /* REFUSE: the sample the sink refuses */
-
-/* The circuit switching at ts under options o, with failure f: the status,
- * the samples in r. */
-static int run_case2(double ts, double width, cup_integrator_options *o, enum fail f, rec *r, char *message) {
+/* The circuit, S1 closed from ts for width, under options o with failure
+ * f (REFUSE: of sample refuse_at): the status, the samples in r. */
+static int run_case2(double ts, double width, cup_integrator_options *o, enum fail f, long refuse_at, rec *r,
+                     char *message) {
   char text[512], err[CUP_ERRMSG_LEN];
   snprintf(text, sizeof text, circuit, ts, width);
   cup_netlist *nl = NULL;
@@ -161,7 +160,7 @@ static int run_case2(double ts, double width, cup_integrator_options *o, enum fa
   r->nl = nl;
   r->W = &W;
   r->cap = 8192;
-  r->refuse_at = f == REFUSE ? g_refuse_at : -1;
+  r->refuse_at = f == REFUSE ? refuse_at : -1;
   r->sig = cup_netlist_probe(nl, "i(S1)", err);
   if (r->sig < 0) fail_msg("%s", err);
   o->interrupt = f == INTERRUPT ? (const volatile int *)&W.stop : NULL;
@@ -180,7 +179,7 @@ static int run_case2(double ts, double width, cup_integrator_options *o, enum fa
 }
 
 static int run_case(double ts, cup_integrator_options *o, enum fail f, rec *r, char *message) {
-  return run_case2(ts, 1, o, f, r, message);
+  return run_case2(ts, 1, o, f, -1, r, message);
 }
 
 static void options(cup_integrator_options *o, cup_scheme s, long n, long samples, double T) {
@@ -254,9 +253,7 @@ static void test_held_sample_kept(void **state) {
     /* a sink that refuses the held sample is not called again; one that
      * refuses the next has the held one, the right limit */
     for (long at = 1024; at <= 1025; at++) {
-      g_refuse_at = at;
-      int st = run_case(ts, &o, REFUSE, &r, msg);
-      g_refuse_at = -1;
+      int st = run_case2(ts, 1, &o, REFUSE, at, &r, msg);
       snprintf(what, sizeof what, "%s, sample %ld refused", schemes[q].name, at);
       print_message("%-28s %s: %s\n", what, cup_status_name(st), msg);
       assert_int_equal(st, CUP_ERR_INTERRUPTED);
@@ -289,7 +286,7 @@ static void test_split_step_samples(void **state) {
       double ts = cases[c].ts, t2 = ts + cases[c].width, ta = floor(ts / h) * h, tb = ta + h;
       cup_integrator_options o;
       options(&o, fixed[q], 200, 2001, T);
-      int st = run_case2(ts, cases[c].width, &o, NONE, &r, msg);
+      int st = run_case2(ts, cases[c].width, &o, NONE, -1, &r, msg);
       if (st != CUP_OK) fail_msg("%s: %s", cup_status_name(st), msg);
       assert_int_equal(r.count, 2001);
       double in = 0, out = 0, ileft = 0, iright = 0, x[2], is;

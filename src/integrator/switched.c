@@ -218,7 +218,7 @@ static int window(switched_run *S, int topo, double t, double tb, int first, int
     /* the sample the window before held is offered (the sink may refuse
      * it: its stop) once the start chose the active set; a start that
      * failed offered none */
-    S->unoffered = jumped & 2 && w.samples == 0;
+    S->unoffered = (jumped & 2) && w.samples == 0;
     return st;
   }
   la_copy(S->x, adaptive_state(A), S->n);
@@ -322,8 +322,10 @@ static int piece(switched_run *S, int topo, double ta, double tb, int last, cup_
  * between the piece's ends (the state before the jump at its end, after
  * the one at its start), zeta the piece's at its end: on their side of
  * every jump. 1 when a configuration has no exact flow (nothing done: the
- * step is taken as before, switching at its end). */
-static __attribute__((noinline)) int split_step(switched_run *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
+ * step is taken as before, switching at its end). (Out of line: inlined
+ * into sw_run, its registers cost the adaptive scheme's windows.) */
+static __attribute__((noinline)) int split_step(switched_run *S, long k, double *tb, int *topo, long *next_j,
+                                                cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   cup_integrator *C = S->child[*topo];
   double ta = integrator_grid_time(C, k - 1), tk = integrator_grid_time(C, k);
@@ -339,7 +341,8 @@ static __attribute__((noinline)) int split_step(switched_run *S, long k, double 
     if (te == tk) break;
     if (inside) {
       cup_run_info w;
-      st = integrator_split_piece(S->child[to], k, ta, S->xprev, te, S->x, S->zsplit, next_j, S->sink, S->sink_ctx, &w);
+      st = integrator_split_piece(S->child[to], k, ta, S->xprev, te, S->x, S->zsplit, next_j, S->sink, S->sink_ctx,
+                                  &w);
       add_info(info, &w);
       if (st < 0) return st;
     }
