@@ -656,9 +656,9 @@ static void theta_start(fixed_ws *F, long k) {
 int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
+  F->stop.phase = CUP_STOP_NONE;                 /* (integrator_window_reached reads its stop) */
   F->kend = k1;
   F->hold = hold;
-  F->stop.phase = CUP_STOP_NONE;                 /* (integrator_window_reached reads its stop) */
   int st;
   if (first) {
     st = fixed_run(F, x, sink, sink_ctx, info);
