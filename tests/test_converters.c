@@ -298,6 +298,69 @@ static void test_fullbridge_rerun(void **state) {
   cup_netlist_free(&nl);
 }
 static void test_sixpulse(void **state) { (void)state; check_adaptive("sixpulse"); }
+
+/* cup_switching's moves (switched.c skips the jumped check where it says
+ * a jump cannot move x): against the jump itself on a random state, for
+ * every configuration a run forms; and a run whose switching has no moves
+ * (each jump compared) records the same every-step output, bit for bit. */
+typedef struct { double *buf; long cap, n; } rec_buf;
+static int rec_sink(long k, double t, const double *x, void *vp) {
+  (void)k;
+  rec_buf *r = vp;
+  if (r->n + 3 > r->cap) return 1;
+  r->buf[r->n++] = t;
+  r->buf[r->n++] = x[0];
+  r->buf[r->n++] = x[1];
+  return 0;
+}
+
+static void test_jump_moves(void **state) {
+  (void)state;
+  const char *names[] = {"buckboost", "buck-dcm", "fullbridge", "flyback"};
+  for (size_t q = 0; q < sizeof names / sizeof *names; q++) {
+    char file[512], err[CUP_ERRMSG_LEN];
+    snprintf(file, sizeof file, CIR "%s.cir", names[q]);
+    cup_netlist *nl = NULL;
+    if (cup_netlist_load(&nl, file, NULL, 0, err)) fail_msg("%s", err);
+    cup_integrator_options o;
+    cup_integrator_options_default(&o);
+    o.scheme = CUP_SCHEME_ADAPTIVE;
+    o.T = 2e-4;
+    o.tol_abs = o.tol_rel = 1e-6;
+    o.output = CUP_OUTPUT_EVERY;
+    o.output_every = 1;
+    static double a[3 * 20000], b[3 * 20000];
+    rec_buf ra = {a, 3 * 20000, 0}, rb = {b, 3 * 20000, 0};
+    for (int pass = 0; pass < 2; pass++) {
+      cup_switching sw;
+      assert_int_equal(cup_netlist_switching(nl, &sw), 1);
+      assert_non_null(sw.moves);
+      if (pass) sw.moves = NULL;
+      cup_integrator *I = NULL;
+      if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+      cup_run_info info;
+      assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), rec_sink, pass ? &rb : &ra, &info), CUP_OK);
+      cup_integrator_free(&I);
+    }
+    assert_true(ra.n > 30);
+    assert_int_equal(ra.n, rb.n);
+    assert_memory_equal(a, b, sizeof(double) * (size_t)ra.n);
+    cup_switching sw;
+    cup_netlist_switching(nl, &sw);
+    int n = cup_lcs_dim(cup_netlist_lcs(nl)), formed = (int)cup_netlist_configurations_formed(nl);
+    assert_true(formed >= 2 && n <= 16);
+    for (int k = 0; k < formed; k++) {
+      double x[16], y[16];
+      for (int i = 0; i < n; i++) x[i] = y[i] = 0.37 + 1.3 * i - 0.21 * i * i + 0.05 * k;
+      sw.jump(sw.ctx, k, y);
+      int moved = memcmp(x, y, sizeof(double) * (size_t)n) != 0;
+      print_message("%-12s configuration %d: moves %d, the jump moved a state %d\n", names[q], k, sw.moves(sw.ctx, k),
+                    moved);
+      assert_int_equal(sw.moves(sw.ctx, k) != 0, moved);
+    }
+    cup_netlist_free(&nl);
+  }
+}
 static void test_precision_rectifier(void **state) { (void)state; check_adaptive("precision-rectifier"); }
 
 /* The buck in CCM under the fixed-step schemes on a grid that holds none
@@ -700,6 +763,7 @@ int main(void) {
     cmocka_unit_test(test_fullbridge),
     cmocka_unit_test(test_fullbridge_rerun),
     cmocka_unit_test(test_sixpulse),
+    cmocka_unit_test(test_jump_moves),
     cmocka_unit_test(test_precision_rectifier),
     cmocka_unit_test(test_buck_ccm_fixed_step),
     cmocka_unit_test(test_fullbridge_theta_gate),

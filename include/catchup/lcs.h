@@ -95,6 +95,9 @@ typedef struct cup_switching {
   /** 1 if a switch the circuit gates leaves configuration topo at time t,
    *  state x (its control past the threshold), 0 if not, < 0 on error. */
   int (*crossed)(void *ctx, int topo, double t, const double *x);
+  /** Optional (NULL: every jump may move x): 0 if jump leaves every x as
+   *  it is in configuration topo (no constraint of its own), else 1. */
+  int (*moves)(void *ctx, int topo);
 } cup_switching;
 
 #ifdef __cplusplus

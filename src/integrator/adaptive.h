@@ -91,6 +91,9 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put);
  * info; the run's state to or from a checkpoint (util/ckpt.h); and the
  * restored run continued (info: the saved run's statistics). */
 int adaptive_stopped(const adaptive_ws *A);
+/* 1 when the last run or window stopped because its sink refused a sample
+ * (at a step's end or inside a step), not its step callback or a limit. */
+int adaptive_refused(const adaptive_ws *A);
 void adaptive_unstop(const adaptive_ws *A, cup_run_info *info);
 void adaptive_checkpoint(adaptive_ws *A, ckpt *c);
 int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);

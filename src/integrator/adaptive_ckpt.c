@@ -10,6 +10,8 @@
 
 int adaptive_stopped(const adaptive_ws *A) { return A->stop.phase != AD_STOP_NONE; }
 
+int adaptive_refused(const adaptive_ws *A) { return A->stop.phase == AD_STOP_SAMPLE || A->stop.phase == AD_STOP_DENSE; }
+
 void adaptive_unstop(const adaptive_ws *A, cup_run_info *info) {
   info->status = A->stop.status;
   memcpy(info->message, A->stop.message, sizeof info->message);

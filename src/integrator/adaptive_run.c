@@ -43,10 +43,10 @@ static double tolw(const adaptive_ws *A, const double *x) {
  * (hlim within hmax); with to_samples, an output time too (catching-up
  * steps: the other steps' samples come from their exact flow, emit_dense). */
 static double next_stop(const adaptive_ws *A, const ad_run *R, double hlim, int to_samples) {
-  double s = fmin(R->tb, A->tend);
+  double s = la_fmin(R->tb, A->tend);
   if (to_samples && A->o.output == CUP_OUTPUT_SAMPLES && R->next_sample < A->o.output_samples)
-    s = fmin(s, ad_sample_time(A, R->next_sample));
-  if (A->o.hmax > 0) hlim = fmin(hlim, A->o.hmax);
+    s = la_fmin(s, ad_sample_time(A, R->next_sample));
+  if (A->o.hmax > 0) hlim = la_fmin(hlim, A->o.hmax);
   return R->t + hlim < s ? R->t + hlim : s;
 }
 
@@ -97,13 +97,15 @@ static __attribute__((noinline)) int hold(adaptive_ws *A, ad_run *R) {
     due = ts <= R->t && ts >= ad_dense_end(A, R->t);
   }
   if (due) {
-    R->est_max = fmax(R->est_max, estimate_now(A, R));
+    R->est_max = la_fmax(R->est_max, estimate_now(A, R));
     A->held_end = 1;
   }
   return CUP_OK;
 }
 
-static int emit_x(adaptive_ws *A, ad_run *R, const double *x) {
+/* est: R->est_max holds the estimate now already (step_done's, at a
+ * step's end not at an event: the same sum, and its max again is a no-op) */
+static int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
   if (A->hold_end && R->t == A->tend && !last && R->sink) return hold(A, R);
@@ -119,9 +121,11 @@ static int emit_x(adaptive_ws *A, ad_run *R, const double *x) {
     case CUP_OUTPUT_NONE: break;
   }
   if (!out) return CUP_OK;
-  R->est_max = fmax(R->est_max, estimate_now(A, R));
+  if (!est) R->est_max = la_fmax(R->est_max, estimate_now(A, R));
   return R->sink ? offer_x(A, R, x) : CUP_OK;
 }
+
+static int emit_x(adaptive_ws *A, ad_run *R, const double *x) { return emit_at(A, R, x, 0); }
 
 /* The sample the window before held (hold), at this window's start: its
  * own time (a rounding before the switching's at most), the state after
@@ -169,7 +173,7 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
   if (pi->skipped) info->skipped++;           /* projections are counted where they are made */
   double xn = la_norm_inf(A->x, A->n);
   R->r2 += (8 * DBL_EPSILON * xn) * (8 * DBL_EPSILON * xn);   /* rounding, as a random walk */
-  if (!at_event) R->est_max = fmax(R->est_max, estimate_now(A, R));
+  if (!at_event) R->est_max = la_fmax(R->est_max, estimate_now(A, R));
   double tw = A->o.tol_abs + A->o.tol_rel * xn;  /* (tolw's at A->x) */
   if (!R->floor_warned && tw < 16 * DBL_EPSILON * xn) {
     R->floor_warned = 1;
@@ -204,11 +208,14 @@ static int jump(adaptive_ws *A, ad_run *R, double *x, uint64_t *active, cup_proj
 
 /* If x is outside {C x + g >= 0}, its certified P-projection (the exact
  * small-set LCP, as the explicit scheme's step); *active gets its active
- * rows (0 when nothing moved), A->inside whether x stayed as it was. */
+ * rows (0 when nothing moved), A->inside whether x stayed as it was. x
+ * inside: pi->skipped = 1 and the rest of *pi as it was (a caller that
+ * hands pi on zeroes it first; a breakpoint's at a window's ends read
+ * skipped alone, and the zeroing was a sixth of the check); else *pi the
+ * projection's. */
 static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
                            cup_proj_info *pi) {
   *active = 0;
-  *pi = (cup_proj_info){0};
   pi->skipped = 1;
   double *s = A->has_D ? A->dq0 : A->s;          /* (with D, the jump's LCP reads it) */
   polyset_slack(A->K, g, x, s, A->gam);
@@ -216,6 +223,8 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
   for (int i = 0; i < A->m; i++) outside |= s[i] < -A->gam[i];   /* is consistent) */
   A->inside = !outside;
   if (!outside) return CUP_OK;
+  *pi = (cup_proj_info){0};
+  pi->skipped = 1;
   if (A->has_D) {
     /* a conducting diode's row is below 0 with D: the jump's LCP finds x
      * consistent as it is (the bridge's dead time, each window), and
@@ -383,7 +392,7 @@ static int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
   double tb = ad_next_break(A, R->t);   /* a record here asked already */
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
-  double h = A->callback ? fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
+  double h = A->callback ? la_fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
   if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
     return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
   ad_offset(A, A->wt, A->g);
@@ -436,7 +445,8 @@ static int end_of_step(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int a
     if ((st = at_break(A, R, 0, &pb)) < 0) return st;
     if (!pb.skipped) pi = &pb;
   }
-  if ((st = step_done(A, R, pi, at_event && !at_tb)) < 0 || (st = emit(A, R)) < 0) return st;
+  int ev = at_event && !at_tb;
+  if ((st = step_done(A, R, pi, ev)) < 0 || (st = emit_at(A, R, A->x, !ev)) < 0) return st;
   if (at_tb && R->t < A->tend && (st = start_piece(A, R, 0)) < 0) return st;
   return CUP_OK;
 }
@@ -451,9 +461,9 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
   ad_mode *md = R->md;
   *snap = *series = 0;
   for (;;) {
-    double hm = ad_mode_hmax(A, md), hl = A->callback ? fmin(hm, R->h_cb) : hm;
+    double hm = ad_mode_hmax(A, md), hl = A->callback ? la_fmin(hm, R->h_cb) : hm;
     *t1 = next_stop(A, R, hl, 0);
-    double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * fmax(fabs(R->t), DBL_MIN);
+    double h = *t1 - R->t, tiny = 4 * DBL_EPSILON * la_fmax(fabs(R->t), DBL_MIN);
     if (!(h > tiny)) {
       if (*t1 < R->t + hl) { *snap = 1; return NULL; }   /* a stop point a rounding away */
       ad_fail(R, CUP_ERR_STEP_SIZE, "the step size %.3g underflows", h);
@@ -466,7 +476,7 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
     /* a step from an event to a breakpoint has a length of its own: the
      * flow's series (two of them: y and the error) cost less than the
      * exponential, where h ||M|| <= 2 (its length limit's recurs) */
-    double hlim = A->o.hmax > 0 ? fmin(hl, A->o.hmax) : hl;
+    double hlim = A->o.hmax > 0 ? la_fmin(hl, A->o.hmax) : hl;
     if (R->after_event && !A->callback && !A->tan && *t1 != R->t + hlim && h * md->mnorm <= 2 &&
         !ad_expm_cached(A, md, h, *t1)) {
       *series = 1;
@@ -547,6 +557,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     la_copy(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);
     ad_manifold(A, old, A->g, A->xs);
+    pi = (cup_proj_info){0};                     /* (end_of_step's and the step callback's) */
     if ((st = make_consistent(A, R, A->g, A->xs, &active, &pi)) < 0) return st;
     uint64_t mask = 0;
     int piv = 0;
@@ -767,7 +778,7 @@ static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb) {
     la_copy(A->xf, A->x, n);
     ad_offset(A, A->yb + n, A->g);
     uint64_t active;
-    cup_proj_info pi;
+    cup_proj_info pi = {0};                        /* (end_of_step's and the step callback's) */
     if ((st = make_consistent(A, R, A->g, A->x, &active, &pi)) < 0) return st;
     double moved = 0;
     for (int i = 0; i < n; i++) moved = fmax(moved, fabs(A->x[i] - A->xf[i]));

@@ -571,11 +571,15 @@ double ad_next_break(adaptive_ws *A, double t) {
 void adaptive_share_breaks(adaptive_ws *A, adaptive_breaks *b) { A->nb = b; }
 
 int ad_record_y(adaptive_ws *A, const ad_mode *md) {
-  /* the held terms' next break (a gate's corners move no state); when they
-   * are the whole input, the one start_piece asks for at t too (ad_next_break) */
-  double t = A->zt, tb = gen_whole(A) ? ad_next_break(A, t) : cup_input_next_break(A->held, t);
-  double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
-  if (ad_inputs_on(A, t, A->callback && t >= A->o.T ? t - h : t + h, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
+  double t = A->zt, t1 = t;
+  if (A->nwu && !A->w_const) {                   /* (else the states read no piece: ad_inputs_on) */
+    /* the held terms' next break (a gate's corners move no state); when they
+     * are the whole input, the one start_piece asks for at t too (ad_next_break) */
+    double tb = gen_whole(A) ? ad_next_break(A, t) : cup_input_next_break(A->held, t);
+    double h = fmin(A->hmax_input, (tb < INFINITY ? tb : t + A->o.T) - t);
+    t1 = A->callback && t >= A->o.T ? t - h : t + h;
+  }
+  if (ad_inputs_on(A, t, t1, A->zw, A->uerr)) return CUP_ERR_CALLBACK;
   ad_lift(A, md, A->x, A->zw, A->zy);
   return CUP_OK;
 }

@@ -48,6 +48,8 @@ struct switched_run {
   adaptive_ws *ad[SW_MAX];  /* ... their adaptive scheme's workspace (the adaptive scheme's windows) */
   cup_integrator *twin[SW_MAX];   /* each configuration's exact flow, for split steps (fixed-step schemes) */
   int twin_off[SW_MAX];    /* ... which the adaptive scheme does not take */
+  unsigned char gated[SW_MAX], moves[SW_MAX];   /* the adaptive scheme's windows: state_gated and moves of
+                                                   each configuration, asked at its first window of a run */
   double piece_end, *xprev, *zsplit;   /* a split step: a piece's end, its start (x_{k-1}, or after a jump),
                                           zeta at its end */
   int cur;                 /* the configuration in force (its child answers state and zeta) */
@@ -156,7 +158,8 @@ static int sw_zeta(void *ws, double *zeta) {
 
 static int sw_record(void *ws, const struct signal_map *sig, double *out) {
   switched_run *S = ws;
-  return integrator_record(S->child[S->cur], sig, out);
+  adaptive_ws *A = S->ad[S->cur];                  /* (the adaptive scheme's record without the table's calls) */
+  return A ? adaptive_record(A, sig, out) : integrator_record(S->child[S->cur], sig, out);
 }
 
 /* One window's statistics into the run's. */
@@ -172,8 +175,8 @@ static void add_info(cup_run_info *info, const cup_run_info *w) {
   info->not_certified += w->not_certified;
   info->dual_iterations += w->dual_iterations;
   info->factorizations += w->factorizations;
-  info->max_eps_cert = fmax(info->max_eps_cert, w->max_eps_cert);
-  info->max_eta_cert = fmax(info->max_eta_cert, w->max_eta_cert);
+  info->max_eps_cert = la_fmax(info->max_eps_cert, w->max_eps_cert);
+  info->max_eta_cert = la_fmax(info->max_eta_cert, w->max_eta_cert);
   info->samples += w->samples;
   info->events += w->events;
   info->rejected += w->rejected;
@@ -205,7 +208,12 @@ static int window(switched_run *S, int topo, double t, double tb, int first, int
   /* a step's callback checks the circuit-gated switches, or is the user's:
    * without either (a converter's PWM), no call a step */
   adaptive_on_step(A, watching || S->on_step ? watch_step : NULL, S);
-  int st = adaptive_window(A, t, tb, S->x, first, jumped, steps, next_sample, watch_sink, S, &w);
+  /* with nothing to check at a sample, the user's sink itself (a call a
+   * sample saved); its refusal is the user's stop, as watch_sink's */
+  int direct = !watching && S->sink;
+  int st = adaptive_window(A, t, tb, S->x, first, jumped, steps, next_sample, direct ? S->sink : watch_sink,
+                           direct ? S->sink_ctx : S, &w);
+  if (direct && st < 0 && adaptive_refused(A)) S->user_stop = 1;
   S->watch = 0;
   if (S->crossed) {                                /* our stop, not an error; its sample not taken */
     st = CUP_OK;
@@ -557,11 +565,18 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
    * window before holds it (adaptive_hold_end) and, when the jump moved
    * the state, the next window gives it, else this one after all */
   int held = 0, hc = 0;                            /* hc: the configuration whose window held it */
-  uint64_t seeded = 0;                             /* configurations whose windows try the last start's set */
-  for (int first = 1; st >= 0 && t < T; first = 0) {
-    if (each) la_copy(S->xprev, S->x, S->n);
+  uint64_t seeded = 0, asked = 0;                  /* configurations whose windows try the last start's set; */
+  for (int first = 1; st >= 0 && t < T; first = 0) {   /* ... whose gated and moves are known */
+    int in = topo >= 0 && topo < SW_MAX;           /* (else child_of below fails) */
+    if (in && !(asked >> topo & 1)) {              /* (a formed configuration's: settle formed topo) */
+      S->gated[topo] = sw->state_gated(sw->ctx, topo) != 0;
+      S->moves[topo] = !sw->moves || sw->moves(sw->ctx, topo);
+      asked |= (uint64_t)1 << topo;
+    }
+    int mv = each && (!in || S->moves[topo]);      /* (a jump that cannot move x: no copy, no comparison) */
+    if (mv) la_copy(S->xprev, S->x, S->n);
     sw->jump(sw->ctx, topo, S->x);               /* onto the configuration's constraints */
-    int jumped = each && memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0;
+    int jumped = mv && memcmp(S->xprev, S->x, sizeof(double) * (size_t)S->n) != 0;
     if (first) x0_moved(S, x0, info);
     st = child_of(S, topo, info->message);
     if (st) break;
@@ -578,8 +593,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if ((st = wall_left(S, topo, steps, t, info))) break;
     int give = held && t < tb;                     /* the window gives it at its start */
     if (give) held = 0;
-    st = window(S, topo, t, tb, first, jumped | give << 1, &steps, &next_sample, sw->state_gated(sw->ctx, topo),
-                info);
+    st = window(S, topo, t, tb, first, jumped | give << 1, &steps, &next_sample, S->gated[topo], info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) {
       if (st < 0 && S->unoffered) held = 1;        /* its start failed: the stop below gives it */

@@ -101,16 +101,16 @@ int lcp_step_init_bd(lcp_step *ls, const cup_polyset *K, const double *W, double
   ls->K = K;
   ls->h = h;
   size_t N = (size_t)n, M = (size_t)m + 1;
-  ls->H = calloc(N * M, sizeof(double));
-  ls->M = calloc(M * M, sizeof(double));
-  ls->s = calloc(M, sizeof(double)); ls->gam = calloc(M, sizeof(double));
-  ls->v = calloc(N, sizeof(double));
-  ls->tau = calloc(M, sizeof(double)); ls->qs = calloc(M, sizeof(double));
-  ls->sv = calloc(M, sizeof(double)); ls->gamv = calloc(M, sizeof(double));
+  /* H, M, s, gam, v, tau, qs, sv, gamv: one zeroed block that H owns (a
+   * switched run makes one of these a configuration) */
+  ls->H = calloc(N * M + M * M + 6 * M + N + 1, sizeof(double));
+  if (ls->H) {
+    ls->M = ls->H + N * M;
+    ls->s = ls->M + M * M; ls->gam = ls->s + M; ls->v = ls->gam + M;
+    ls->tau = ls->v + N; ls->qs = ls->tau + M; ls->sv = ls->qs + M; ls->gamv = ls->sv + M;
+  }
   int fail = lcp_init(&ls->lcp, m);
-  if (fail || !ls->H || !ls->M || !ls->s || !ls->gam || !ls->v || !ls->tau || !ls->qs || !ls->sv ||
-      !ls->gamv)
-    return CUP_ERR_NOMEM;
+  if (fail || !ls->H) return CUP_ERR_NOMEM;
   if (D && init_d(ls, D, theta)) return CUP_ERR_NOMEM;
   /* H = h W B with B = P^-1 C^T (the polyset's Bt, exact by P B = C^T), or
    * the B given; with D, the weights of build_hm */
@@ -144,8 +144,8 @@ int lcp_step_init_bd(lcp_step *ls, const cup_polyset *K, const double *W, double
 }
 
 void lcp_step_free(lcp_step *ls) {
-  free(ls->H); free(ls->M); free(ls->s); free(ls->gam); free(ls->v); free(ls->tau); free(ls->qs);
-  free(ls->sv); free(ls->gamv); free(ls->D); free(ls->geff); free(ls->WB); free(ls->Hprev);
+  free(ls->H);                                     /* (M, s, gam, v, tau, qs, sv, gamv in its block) */
+  free(ls->D); free(ls->geff); free(ls->WB); free(ls->Hprev);
   free(ls->carry); free(ls->xpred); free(ls->q0); free(ls->dcol0); free(ls->kcol); free(ls->Z);
   free(ls->work); free(ls->kwork); free(ls->Ms); free(ls->rsc); free(ls->wscr);
   lcp_blocks_free(&ls->blocks);

@@ -159,8 +159,10 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   st = decoupled_rows(nl, c, &q, errmsg);
   if (!st) st = idle_columns(nl, c, &q, errmsg);
   if (!st && c->derived) {                        /* a switch configuration: netlist_switch.c reduces it */
-    const la_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
-    st = nl_raw_store(nl, six, pdiag, Pc.p ? &Pc : NULL);
+    la_sparse *const six[6] = {&q.sA, &q.sB, &q.sC, &q.sD, &q.sE, &q.sG};
+    int rows = 0;                                 /* its constraint rows */
+    for (int e = 0; e < c->nelem; e++) rows += c->elem[e].kind == NL_D && c->elem[e].eq != NL_EQ_NONE;
+    st = nl_raw_store(nl, six, &pdiag, &Pc, !rows);
     if (st) st = nl_fail(c, -1, errmsg, st, "out of memory");
   } else if (!st) {
     cup_lcs_desc d = {0};
@@ -189,26 +191,48 @@ static int build_lcs(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
 
 /* ---- a switch configuration's parts, dense (netlist_switch.c reduces them) ---------- */
 
-static double *dense(const la_sparse *s, int nrow, int ncol) {
-  double *a = calloc((size_t)nrow * (size_t)ncol + 1, sizeof(double));
-  if (!a) return NULL;
+static void dense_into(const la_sparse *s, int nrow, double *a) {
   for (int j = 0; s->p && j < s->ncol; j++)
     for (int k = s->p[j]; k < s->p[j + 1]; k++) a[s->i[k] + (size_t)j * (size_t)nrow] = s->x[k];
-  return a;
 }
 
-int nl_raw_store(cup_netlist *nl, const la_sparse *const six[6], const double *pdiag, const la_sparse *Pc) {
-  int n = nl->n, m = nl->m, p = nl->p;
-  nl_raw *R = calloc(1, sizeof *R);
+/* The seven parts in one zeroed block behind the struct (one calloc, not
+ * eight: a switched run forms its configurations as it goes); with no
+ * constraint row (sparse), the sparse parts, pdiag and Pc moved in. */
+int nl_raw_store(cup_netlist *nl, la_sparse *const six[6], double **pdiag, la_sparse *Pc, int sparse) {
+  size_t n = (size_t)nl->n, m = (size_t)nl->m, p = (size_t)nl->p;
+  size_t size[7] = {n * n, n * m, m * n, m * m, n * p, m * p, n * n}, total = 0;
+  for (int k = 0; !sparse && k < 7; k++) total += size[k];
+  nl_raw *R = calloc(1, sizeof *R + sizeof(double) * (total + 1));
   if (!R) return CUP_ERR_NOMEM;
   nl->raw = R;
-  R->A = dense(six[0], n, n); R->B = dense(six[1], n, m); R->C = dense(six[2], m, n);
-  R->D = dense(six[3], m, m); R->E = dense(six[4], n, p); R->G = dense(six[5], m, p);
-  R->P = Pc ? dense(Pc, n, n) : calloc((size_t)n * (size_t)n, sizeof(double));
-  if (!R->A || !R->B || !R->C || !R->D || !R->E || !R->G || !R->P) return CUP_ERR_NOMEM;
-  for (int j = 0; !Pc && j < n; j++) R->P[j + (size_t)j * n] = pdiag[j];
   R->keep_B = nl->nctl > 0;
+  R->sparse = sparse;
+  if (sparse) {
+    for (int k = 0; k < 6; k++) { R->part[k] = *six[k]; memset(six[k], 0, sizeof *six[k]); }
+    R->Pc = *Pc;
+    memset(Pc, 0, sizeof *Pc);
+    R->pdiag = *pdiag;
+    *pdiag = NULL;
+    return CUP_OK;
+  }
+  double *at = (double *)(R + 1), **part[7] = {&R->A, &R->B, &R->C, &R->D, &R->E, &R->G, &R->P};
+  for (int k = 0; k < 7; k++) { *part[k] = at; at += size[k]; }
+  const int nrow[6] = {nl->n, nl->n, nl->m, nl->m, nl->n, nl->m};
+  for (int k = 0; k < 6; k++) dense_into(six[k], nrow[k], *part[k]);
+  if (Pc->p) dense_into(Pc, nl->n, R->P);
+  for (size_t j = 0; !Pc->p && j < n; j++) R->P[j + j * n] = (*pdiag)[j];
   return CUP_OK;
+}
+
+void nl_raw_free(cup_netlist *nl) {
+  nl_raw *R = nl->raw;
+  if (!R) return;
+  for (int k = 0; k < 6; k++) la_sparse_free(&R->part[k]);
+  la_sparse_free(&R->Pc);
+  free(R->pdiag);
+  free(R);                                         /* (the dense parts in its block) */
+  nl->raw = NULL;
 }
 
 /* ---- the input and x0 ------------------------------------------------------------ */
@@ -335,7 +359,7 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
     if (!seen && !(nl->files[nl->nfiles++] = lend ? c->files[f] : strdup(c->files[f]))) return CUP_ERR_NOMEM;
   }
   nl->node = calloc((size_t)c->nnodes, sizeof(char *));
-  nl->elem = calloc((size_t)c->nelem, sizeof(nl_elem));
+  nl->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + 1));   /* (each one copied below) */
   if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
   static char ground[] = "0";
   for (int v = 0; v < c->nnodes; v++)
@@ -436,9 +460,8 @@ void cup_netlist_free(cup_netlist **p) {
   for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);
   for (int j = 0; nl->row_name && j < nl->m; j++) free(nl->row_name[j]);
   free(nl->state_name); free(nl->row_name); free(nl->row_fixed); free(nl->input_elem);
-  free(nl->eport); free(nl->evar); free(nl->port);
-  free(nl->parent); free(nl->pport); free(nl->depth); free(nl->snode); free(nl->psign);
-  free(nl->ctl_elem); free(nl->zmap); free(nl->coupled); free(nl->prow);
+  free(nl->port);                                  /* (eport, evar, ctl_elem, parent, pport, depth, snode, psign) */
+  free(nl->zmap); free(nl->coupled); free(nl->prow);
   la_sparse_free(&nl->Pinv);
   if (nl->cm_started) {
     cholmod_free_factor(&nl->Lf, &nl->cm);
@@ -456,10 +479,7 @@ void cup_netlist_free(cup_netlist **p) {
   if (!lent) free(nl->file);
   free(nl->source);
   if (nl->hooks) nl->hooks->free(&nl->sw);
-  if (nl->raw) {
-    free(nl->raw->A); free(nl->raw->B); free(nl->raw->C); free(nl->raw->D);
-    free(nl->raw->E); free(nl->raw->G); free(nl->raw->P); free(nl->raw);
-  }
+  nl_raw_free(nl);
   free(nl->zrow); free(nl->Lam);
   free(nl);
   *p = NULL;

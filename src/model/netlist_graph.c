@@ -97,8 +97,8 @@ static int control_nodes(const nl_circuit *c, int e, char *errmsg) {
 }
 
 static int check_elements(const nl_circuit *c, char *errmsg) {
-  int *deg = calloc((size_t)c->nnodes, sizeof(int)), *who = calloc((size_t)c->nnodes, sizeof(int));
-  if (!deg || !who) { free(deg); free(who); return nomem(c, errmsg); }
+  int *deg = calloc(2 * (size_t)c->nnodes, sizeof(int)), *who = deg ? deg + c->nnodes : NULL;   /* (one block) */
+  if (!deg) return nomem(c, errmsg);
   int st = CUP_OK;
   for (int e = 0; e < c->nelem && !st; e++) {
     const nl_elem *el = &c->elem[e];
@@ -120,7 +120,7 @@ static int check_elements(const nl_circuit *c, char *errmsg) {
     if (deg[v] == 1)
       st = nl_fail(c, who[v], errmsg, CUP_ERR_PARSE, "node '%s' is connected to %s only (a dangling node)",
                    c->node[v], c->elem[who[v]].name);
-  free(deg); free(who);
+  free(deg);
   return st;
 }
 
@@ -180,9 +180,9 @@ static int cutsets(const nl_circuit *c, int *uf, char *errmsg) {
 /* Breadth-first trees of the voltage ports; ground's tree is supernode -1. */
 static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned char *vport, char *errmsg) {
   int nn = c->nnodes;
-  int *start = calloc((size_t)nn + 1, sizeof(int)), *adj = malloc(sizeof(int) * (2 * (size_t)c->nelem + 1));
-  int *queue = malloc(sizeof(int) * ((size_t)nn + 1));
-  if (!start || !adj || !queue) { free(start); free(adj); free(queue); return nomem(c, errmsg); }
+  int *start = calloc((size_t)nn + 1 + 2 * (size_t)c->nelem + 1 + (size_t)nn + 1, sizeof(int));   /* (one block) */
+  if (!start) return nomem(c, errmsg);
+  int *adj = start + nn + 1, *queue = adj + 2 * c->nelem + 1;
   for (int e = 0; e < c->nelem; e++)
     if (vport[e]) { start[c->elem[e].a + 1]++; start[c->elem[e].b + 1]++; }
   for (int v = 0; v < nn; v++) start[v + 1] += start[v];
@@ -212,7 +212,7 @@ static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned cha
       }
     }
   }
-  free(start); free(adj); free(queue);
+  free(start);
   return CUP_OK;
 }
 
@@ -260,20 +260,19 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   int nn = c->nnodes, ne = c->nelem;
   int st = check_elements(c, errmsg);
   if (st) return st;
-  int *uf = malloc(sizeof(int) * (size_t)nn);
-  unsigned char *fixed = calloc((size_t)ne + 1, 1), *vport = calloc((size_t)ne + 1, 1);
-  nl->eport = malloc(sizeof(int) * ((size_t)ne + 1));
-  nl->evar = malloc(sizeof(int) * ((size_t)ne + 1));
-  nl->port = malloc(sizeof(nl_port) * ((size_t)ne + 1));
-  nl->parent = malloc(sizeof(int) * (size_t)nn);
-  nl->pport = malloc(sizeof(int) * (size_t)nn);
-  nl->depth = malloc(sizeof(int) * (size_t)nn);
-  nl->snode = malloc(sizeof(int) * (size_t)nn);
-  nl->psign = malloc((size_t)nn);
-  nl->ctl_elem = malloc(sizeof(int) * ((size_t)ne + 1));
-  if (!nl->ctl_elem || !uf || !fixed || !vport || !nl->eport || !nl->evar || !nl->port || !nl->parent || !nl->pport ||
-      !nl->depth || !nl->snode || !nl->psign)
-    st = nomem(c, errmsg);
+  /* the scratch in one block (uf, then fixed and vport zeroed), the
+   * netlist's arrays in another that port owns (cup_netlist_free) */
+  size_t E = (size_t)ne + 1, N = (size_t)nn;
+  int *uf = calloc(sizeof(int) * N + 2 * E, 1);
+  unsigned char *fixed = uf ? (unsigned char *)(uf + N) : NULL, *vport = fixed ? fixed + E : NULL;
+  nl->port = malloc(sizeof(nl_port) * E + sizeof(int) * (3 * E + 4 * N) + N);
+  int *iw = nl->port ? (int *)(nl->port + E) : NULL;
+  if (iw) {
+    nl->eport = iw; nl->evar = iw + E; nl->ctl_elem = iw + 2 * E;
+    nl->parent = iw + 3 * E; nl->pport = nl->parent + N; nl->depth = nl->pport + N; nl->snode = nl->depth + N;
+    nl->psign = (signed char *)(nl->snode + N);
+  }
+  if (!uf || !iw) st = nomem(c, errmsg);
   for (int v = 0; !st && v < nn; v++) uf[v] = v;
   if (!st) st = voltage_loops(c, uf, errmsg);
   for (int e = 0; !st && e < ne; e++)
@@ -291,7 +290,7 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     for (int e = 0; e < ne; e++) vport[e] = nl->eport[e] >= 0 && nl->eport[e] < nl->nv;
     st = build_forest(nl, c, vport, errmsg);
   }
-  free(uf); free(fixed); free(vport);
+  free(uf);
   return st;
 }
 
@@ -311,10 +310,11 @@ static int pair_cmp(const void *x, const void *y) {
  * its elements into loop, their count returned (0: none, -1: no memory). */
 static int directed_cycle(const nl_circuit *c, const int *diode, int nd, int *loop) {
   int nn = c->nnodes, len = 0;
-  int *start = calloc((size_t)nn + 1, sizeof(int)), *adj = malloc(sizeof(int) * ((size_t)nd + 1));
-  int *state = calloc((size_t)nn, sizeof(int)), *via = malloc(sizeof(int) * (size_t)nn);
-  int *stack = malloc(sizeof(int) * ((size_t)nn + 1)), *next = malloc(sizeof(int) * (size_t)nn);
-  if (!start || !adj || !state || !via || !stack || !next) len = -1;
+  size_t N = (size_t)nn;                         /* (one block: start, state, adj, via, stack, next) */
+  int *start = calloc(5 * N + 2 + (size_t)nd + 1, sizeof(int)), *state = start ? start + N + 1 : NULL;
+  int *adj = state ? state + N : NULL, *via = adj ? adj + nd + 1 : NULL;
+  int *stack = via ? via + N : NULL, *next = stack ? stack + N + 1 : NULL;
+  if (!start) len = -1;
   for (int k = 0; len == 0 && k < nd; k++) start[c->elem[diode[k]].a + 1]++;
   for (int v = 0; len == 0 && v < nn; v++) start[v + 1] += start[v];
   for (int k = 0; len == 0 && k < nd; k++) adj[start[c->elem[diode[k]].a]++] = diode[k];
@@ -337,16 +337,17 @@ static int directed_cycle(const nl_circuit *c, const int *diode, int nd, int *lo
       }
     }
   }
-  free(start); free(adj); free(state); free(via); free(stack); free(next);
+  free(start);
   for (int i = 0, j = len - 1; i < j; i++, j--) { int t = loop[i]; loop[i] = loop[j]; loop[j] = t; }
   return len;
 }
 
 int nl_diode_loops(cup_netlist *nl, const nl_circuit *c) {
   int nd = 0;
-  int *diode = malloc(sizeof(int) * ((size_t)c->nelem + 1)), *loop = malloc(sizeof(int) * ((size_t)c->nnodes + 1));
-  nl_pair *pr = malloc(sizeof(nl_pair) * ((size_t)c->nelem + 1));
-  if (!diode || !loop || !pr) { free(diode); free(loop); free(pr); return CUP_ERR_NOMEM; }
+  size_t E = (size_t)c->nelem + 1;               /* (one block: pr, diode, loop) */
+  nl_pair *pr = malloc(sizeof(nl_pair) * E + sizeof(int) * (E + (size_t)c->nnodes + 1));
+  if (!pr) return CUP_ERR_NOMEM;
+  int *diode = (int *)(pr + E), *loop = diode + E;
   for (int e = 0; e < c->nelem; e++) {
     const nl_elem *el = &c->elem[e];
     if (el->kind != NL_D) continue;
@@ -376,7 +377,7 @@ int nl_diode_loops(cup_netlist *nl, const nl_circuit *c) {
   } else if (len < 0) {
     st = CUP_ERR_NOMEM;
   }
-  free(diode); free(loop); free(pr);
+  free(pr);
   return st;
 }
 

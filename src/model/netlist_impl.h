@@ -41,10 +41,16 @@ typedef struct nl_port {
 } nl_port;
 
 /* A switch configuration's circuit as formulated (dense, column-major),
- * before its constraint rows are eliminated (netlist_reduce.c). */
+ * before its constraint rows are eliminated (netlist_reduce.c); with no
+ * constraint row there is nothing to eliminate: the formulation's sparse
+ * parts are its LCS as they are, kept instead (the dense ones NULL). */
 typedef struct nl_raw {
   double *A, *B, *C, *D, *E, *G, *P;   /* n x n, n x m, m x n, m x m, n x p, m x p, n x n */
   int keep_B;                          /* controlled sources: B as formed, not P^-1 C^T */
+  int sparse;                          /* no constraint row: part, pdiag and Pc hold it */
+  la_sparse part[6];                   /* A, B, C, D, E, G (CSC, no zero stored) */
+  la_sparse Pc;                        /* P with coupled inductors (Pc.p NULL: diagonal, pdiag) */
+  double *pdiag;                       /* n */
 } nl_raw;
 
 typedef struct nl_switched nl_switched;
@@ -128,7 +134,7 @@ struct cup_netlist {
   /* switches (netlist_switch.c) */
   nl_switched *sw;        /* the netlist with switches: its configurations, or NULL */
   const nl_sw_hooks *hooks;   /* ... and what its own functions ask of them */
-  nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction */
+  nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction (freed after it) */
   int nelem_user;         /* elements written (a configuration's circuit appends constraints) */
   int names_lent;         /* > 0: the names of nodes, files and the first names_lent elements are
                              the switched netlist's circuit's (nl_circuit.names_lent): not freed */
@@ -210,8 +216,12 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg);
  * when there are none), the LCS formed over the rest. */
 int nl_switch_nomem(const nl_circuit *c, char *errmsg);
 int nl_switch_reduce(cup_netlist *sub, const nl_circuit *c, const nl_circuit *d, double **Pi, char *errmsg);
-/* build_lcs for a configuration's circuit: the parts kept dense in nl->raw (netlist.c). */
-int nl_raw_store(cup_netlist *nl, const la_sparse *const parts[6], const double *pdiag, const la_sparse *Pc);
+/* build_lcs for a configuration's circuit: the parts kept dense in nl->raw,
+ * or, with no constraint row, moved there as they are (their owners then
+ * hold none; netlist.c). */
+int nl_raw_store(cup_netlist *nl, la_sparse *const parts[6], double **pdiag, la_sparse *Pc, int sparse);
+/* nl->raw freed (netlist.c). */
+void nl_raw_free(cup_netlist *nl);
 /* A row over (x, u, zeta) of signal kind 'v' (nodes a, b; b < 0: ground) or
  * 'i' (element a), into row (n + p + m). */
 int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row);

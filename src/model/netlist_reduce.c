@@ -187,17 +187,75 @@ static cup_csc view(const la_sparse *s) {
   return s->nnz || s->ncol ? (cup_csc){s->nrow, s->ncol, s->p, s->i, s->x} : (cup_csc){0, 0, NULL, NULL, NULL};
 }
 
+/* The configuration's LCS from its parts s (A, E, B, C, G, D over its
+ * diode rows), F's room (m, zeroed), P sparse (Ps) or diagonal (pd): F = 1
+ * on a diode that is inert in it. */
+static int lcs_of(cup_netlist *sub, const la_sparse *const s[6], double *F, const la_sparse *Ps, const double *pd,
+                  const nl_circuit *d, char *errmsg) {
+  const nl_raw *R = sub->raw;
+  int n = sub->n, p = sub->p, m = s[3]->nrow;
+  int inert = 0, hasD = s[5]->nnz > 0;
+  for (int i = 0; i < m; i++) {                  /* a row that nothing reaches: never conducts */
+    int used = 0;
+    for (int k = 0; k < s[3]->nnz && !used; k++) used = s[3]->i[k] == i;
+    for (int k = 0; k < s[4]->nnz && !used; k++) used = s[4]->i[k] == i;
+    for (int k = 0; k < s[5]->nnz && !used; k++) used = s[5]->i[k] == i;
+    if (!used) { F[i] = 1; inert = 1; }
+  }
+  char lib[CUP_ERRMSG_LEN];                        /* (not cleared whole: 12 KB a configuration) */
+  lib[0] = '\0';
+  cup_lcs_desc q = {0};
+  q.n = n; q.m = m; q.p = p;
+  q.A = view(s[0]); q.E = view(s[1]); q.B = view(s[2]); q.C = view(s[3]); q.G = view(s[4]);
+  if (hasD) q.D = view(s[5]);
+  q.F = inert ? F : NULL;
+  q.P = Ps ? (cup_metric){CUP_METRIC_SPARSE, NULL, view(Ps), 0} : (cup_metric){CUP_METRIC_DIAGONAL, pd, {0}, 0};
+  q.row_names = (const char *const *)sub->row_name;
+  q.keep_B = R->keep_B && !hasD;
+  int st = cup_lcs_create(&sub->L, &q, lib);
+  if (st && R->keep_B) { q.keep_B = 1; st = cup_lcs_create(&sub->L, &q, lib); }
+  if (st == CUP_ERR_NOMEM) return nl_switch_nomem(d, errmsg);
+  return st ? nl_fail(d, -1, errmsg, st, "%s", lib) : CUP_OK;
+}
+
+/* No constraint row: the formulation's parts are the LCS (its diode rows
+ * in the written order, P as formed), as the dense path below would give
+ * them back (their CSC holds no zero, and that path drops exact zeros
+ * alone), without the round trip through dense matrices. */
+static int sparse_lcs(cup_netlist *sub, const nl_circuit *d, char *errmsg) {
+  const nl_raw *R = sub->raw;
+  int n = sub->n, dia = 1;
+  const la_sparse *Pc = R->Pc.p ? &R->Pc : NULL;
+  double *pd = malloc(sizeof(double) * ((size_t)n + 1 + (size_t)sub->m + 1)), *F = pd ? pd + n + 1 : NULL;
+  if (!pd) return nl_switch_nomem(d, errmsg);
+  la_zero(F, sub->m + 1);
+  for (int j = 0; j < n; j++) pd[j] = Pc ? 0 : R->pdiag[j];
+  for (int j = 0; Pc && j < n; j++)                /* (its entries: no zero stored) */
+    for (int k = Pc->p[j]; k < Pc->p[j + 1]; k++) {
+      if (Pc->i[k] == j) pd[j] = Pc->x[k];
+      else dia = 0;
+    }
+  const la_sparse *const six[6] = {&R->part[0], &R->part[4], &R->part[1], &R->part[2], &R->part[5], &R->part[3]};
+  int st = lcs_of(sub, six, F, dia ? NULL : Pc, pd, d, errmsg);
+  free(pd);
+  return st;
+}
+
 /* The configuration's LCS: Pi A, Pi E, Pi B, C Pi on the diode rows (the
  * formulation's own matrices where there is no constraint), F = 1 on a
  * diode that is inert in it. */
 static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errmsg) {
   const nl_raw *R = sub->raw;
+  if (R->sparse) return sparse_lcs(sub, d, errmsg);
   int n = r->n, p = r->p, m = r->m, mq = r->mq, nq = r->nq;
   size_t big = (size_t)(n > m ? n : m) * (size_t)(n > p ? (n > m ? n : m) : (p > m ? p : m)) + 1;
-  double *X = malloc(sizeof(double) * big), *Y = malloc(sizeof(double) * big), *M = malloc(sizeof(double) * big);
-  double *F = calloc((size_t)m + 1, sizeof(double));
+  /* X, Y, M, |a| (with constraints) and F in one block, F zeroed */
+  double *X = malloc(sizeof(double) * ((nq ? 4 : 3) * big + (size_t)m + 1));
+  double *Y = X ? X + big : NULL, *M = X ? Y + big : NULL, *Mb = X && nq ? M + big : NULL;
+  double *F = X ? (nq ? Mb : M) + big : NULL;
+  if (F) la_zero(F, m + 1);
   la_sparse s[6] = {{0}};
-  int st = X && Y && M && F ? CUP_OK : CUP_ERR_NOMEM;
+  int st = X ? CUP_OK : CUP_ERR_NOMEM;
   /* A, E, B: Pi times the formulation's; C: its diode rows times Pi; D, G: its diode rows and columns */
   const double *src[3] = {R->A, R->E, NULL};
   int ncol[3] = {n, p, m};
@@ -206,11 +264,8 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
     if (t == 2) { cols(R->B, n, r->dr, m, Y); a = Y; }
     if (nq) {
       mul(r->Pi, a, n, n, ncol[t], X, M);
-      double *Mb = malloc(sizeof(double) * big);
-      if (!Mb) { st = CUP_ERR_NOMEM; break; }
       for (size_t k = 0; k < (size_t)n * ncol[t]; k++) Mb[k] = fabs(a[k]);
       mul(r->Pim, Mb, n, n, ncol[t], M, NULL);
-      free(Mb);
       st = to_csc(X, M, n, ncol[t], &s[t]);
     } else {
       st = to_csc(a, NULL, n, ncol[t], &s[t]);
@@ -236,44 +291,22 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
       for (int i = 0; i < m; i++) Y[i + (size_t)j * m] = R->D[r->dr[i] + (size_t)r->dr[j] * mq];
     st = to_csc(Y, NULL, m, m, &s[5]);
   }
-  int inert = 0, hasD = !st && s[5].nnz > 0;
-  for (int i = 0; !st && i < m; i++) {           /* a row that nothing reaches: never conducts */
-    int used = 0;
-    for (int k = 0; k < s[3].nnz && !used; k++) used = s[3].i[k] == i;
-    for (int k = 0; k < s[4].nnz && !used; k++) used = s[4].i[k] == i;
-    for (int k = 0; k < s[5].nnz && !used; k++) used = s[5].i[k] == i;
-    if (!used) { F[i] = 1; inert = 1; }
-  }
-  char lib[CUP_ERRMSG_LEN];                        /* (not cleared whole: 12 KB a configuration) */
-  lib[0] = '\0';
-  if (!st) {
-    cup_lcs_desc q = {0};
-    q.n = n; q.m = m; q.p = p;
-    q.A = view(&s[0]); q.E = view(&s[1]); q.B = view(&s[2]); q.C = view(&s[3]); q.G = view(&s[4]);
-    if (hasD) q.D = view(&s[5]);
-    q.F = inert ? F : NULL;
-    la_sparse Ps = {0};
-    int dia = 1;
-    for (int j = 0; j < n; j++)
-      for (int i = 0; i < n; i++) dia &= i == j || R->P[i + (size_t)j * n] == 0;
-    double *pd = malloc(sizeof(double) * ((size_t)n + 1));
-    if (!pd) st = CUP_ERR_NOMEM;
-    for (int j = 0; !st && j < n; j++) pd[j] = R->P[j + (size_t)j * n];
-    if (!st && !dia) st = to_csc(R->P, NULL, n, n, &Ps);
-    if (!st) {
-      q.P = dia ? (cup_metric){CUP_METRIC_DIAGONAL, pd, {0}, 0} : (cup_metric){CUP_METRIC_SPARSE, NULL, view(&Ps), 0};
-      q.row_names = (const char *const *)sub->row_name;
-      q.keep_B = R->keep_B && !hasD;
-      st = cup_lcs_create(&sub->L, &q, lib);
-      if (st && R->keep_B) { q.keep_B = 1; st = cup_lcs_create(&sub->L, &q, lib); }
-    }
-    free(pd);
-    la_sparse_free(&Ps);
-  }
-  free(X); free(Y); free(M); free(F);
+  la_sparse Ps = {0};
+  int dia = 1;
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < n; i++) dia &= i == j || R->P[i + (size_t)j * n] == 0;
+  double *pd = !st ? malloc(sizeof(double) * ((size_t)n + 1)) : NULL;
+  if (!st && !pd) st = CUP_ERR_NOMEM;
+  for (int j = 0; !st && j < n; j++) pd[j] = R->P[j + (size_t)j * n];
+  if (!st && !dia) st = to_csc(R->P, NULL, n, n, &Ps);
+  const la_sparse *const six[6] = {&s[0], &s[1], &s[2], &s[3], &s[4], &s[5]};
+  if (!st) st = lcs_of(sub, six, F, dia ? NULL : &Ps, pd, d, errmsg);
+  else st = nl_switch_nomem(d, errmsg);
+  free(pd);
+  la_sparse_free(&Ps);
+  free(X);                                         /* (Y, M, Mb and F in its block) */
   for (int t = 0; t < 6; t++) la_sparse_free(&s[t]);
-  if (st == CUP_ERR_NOMEM) return nl_switch_nomem(d, errmsg);
-  return st ? nl_fail(d, -1, errmsg, st, "%s", lib) : CUP_OK;
+  return st;
 }
 
 /* The rows renamed: the diodes' first, in the written order (the public
@@ -302,5 +335,6 @@ int nl_switch_reduce(cup_netlist *sub, const nl_circuit *c, const nl_circuit *d,
   if (!st && !r.nq) { free(sub->zrow); sub->zrow = NULL; }   /* diode rows as formulated */
   if (!st && r.nq) { *Pi = r.Pi; r.Pi = NULL; }
   red_free(&r);
+  nl_raw_free(sub);                                /* (read by the steps above alone) */
   return st;
 }

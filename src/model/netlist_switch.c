@@ -397,10 +397,15 @@ static int op_state_gated(void *ctx, int topo) {
   return !nl->sw->gate_fn && nl->sw->topo[topo].state_gated;
 }
 
+static int op_moves(void *ctx, int topo) {
+  cup_netlist *nl = ctx;
+  return nl->sw->topo[topo].Pi != NULL;            /* (op_jump's test) */
+}
+
 int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
   if (!nl || !nl->sw || !ops) return 0;
   *ops = (cup_switching){.ctx = nl, .settle = op_settle, .next = op_next, .lcs = op_lcs, .jump = op_jump,
-                         .state_gated = op_state_gated, .crossed = op_crossed};
+                         .state_gated = op_state_gated, .crossed = op_crossed, .moves = op_moves};
   return 1;
 }
 

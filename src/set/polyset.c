@@ -39,11 +39,14 @@ int polyset_create_ex(cup_polyset **out, const cup_csc *C, const double *g,
   int st = la_sparse_copy(&K->C, C, "C", K->m, K->n, errmsg);
   if (!st) st = la_sparse_transpose(&K->Ct, &K->C);
   if (!st) {
-    K->g0 = calloc((size_t)K->m + 1, sizeof(double));
-    K->rownnz = calloc((size_t)K->m + 1, sizeof(int));
-    K->rownorm = calloc((size_t)K->m + 1, sizeof(double));
-    K->rowgam = calloc((size_t)K->m + 1, sizeof(double));
-    if (!K->g0 || !K->rownnz || !K->rownorm || !K->rowgam) st = CUP_ERR_NOMEM;
+    size_t M = (size_t)K->m + 1;                  /* one zeroed block that g0 owns: rownorm, rowgam, rownnz */
+    K->g0 = calloc(3 * M * sizeof(double) + M * sizeof(int), 1);
+    if (!K->g0) st = CUP_ERR_NOMEM;
+    else {
+      K->rownorm = K->g0 + M;
+      K->rowgam = K->rownorm + M;
+      K->rownnz = (int *)(K->rowgam + M);
+    }
   }
   if (st == CUP_ERR_NOMEM) fail_fmt(errmsg, st, "polyset: out of memory");
   for (int i = 0; !st && i < K->m; i++) {
@@ -81,7 +84,7 @@ void cup_polyset_free(cup_polyset **Kp) {
     cholmod_finish(K->cm);
     free(K->cm);
   }
-  free(K->g0); free(K->pd); free(K->pdinv); free(K->rownorm); free(K->rownnz); free(K->rowgam);
+  free(K->g0); free(K->pd);                        /* (rownorm, rowgam, rownnz in g0's block; pdinv in pd's) */
   free(K->Md); free(K->Bt); free(K->rdir); free(K->Crdir);
   free(K);
   *Kp = NULL;
@@ -97,9 +100,9 @@ const double *cup_polyset_interior_direction(const cup_polyset *K) {
 /* ---- metric ---------------------------------------------------------------- */
 
 static int diag_setup(cup_polyset *K, const double *d, char *errmsg) {
-  K->pd = malloc(sizeof(double) * (size_t)K->n);
-  K->pdinv = malloc(sizeof(double) * (size_t)K->n);
-  if (!K->pd || !K->pdinv) return fail_fmt(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+  K->pd = malloc(sizeof(double) * 2 * (size_t)K->n);   /* pdinv in its block */
+  if (!K->pd) return fail_fmt(errmsg, CUP_ERR_NOMEM, "P: out of memory");
+  K->pdinv = K->pd + K->n;
   for (int j = 0; j < K->n; j++) {
     double v = d ? d[j] : 1.0;
     if (!isfinite(v)) return fail_fmt(errmsg, CUP_ERR_NONFINITE, "P(%d,%d) is %g", j, j, v);

@@ -55,6 +55,10 @@ int la_cholmod_start(cholmod_common *c);
  * NaN through use explicit comparisons instead. */
 static inline double la_max(double a, double b) { return a > b ? a : b; }
 static inline double la_min(double a, double b) { return a < b ? a : b; }
+/* fmax and fmin themselves without the call, to the bit (glibc's: maxsd
+ * and minsd give b when a == b; a NaN argument gives the other one). */
+static inline double la_fmax(double a, double b) { return a > b || b != b ? a : b; }
+static inline double la_fmin(double a, double b) { return a < b || b != b ? a : b; }
 /* max |v_i| from 0, as fmax(r, |v_i|) sums it (a NaN entry passed over),
  * without a libm call an entry. */
 static inline double la_norm_inf(const double *v, int n) {
