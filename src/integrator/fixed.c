@@ -7,6 +7,7 @@
  * makes the four schemes one entry (fixed_setup.c sets them up). A step
  * allocates nothing and a run keeps only the current state. */
 #define _POSIX_C_SOURCE 200809L
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -92,13 +93,18 @@ static long loop_stop(const fixed_ws *F, const sampler *sp, int sink, long k) {
 }
 
 /* The samples due at step k (x_k in F->x, x_{k-1} in F->xnew): on the step,
- * or interpolated between the two. */
-static int emit_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
+ * or interpolated between the two; in a split step's piece (piece: F->x
+ * and F->xnew its ends, at F->piece.ta and .tb), those before its cut,
+ * interpolated between the piece's ends (never across a jump). */
+static inline int emit_in(fixed_ws *F, sampler *sp, long k, int piece,
+                          cup_sample_fn sink, void *ctx, cup_run_info *info) {
   while (selected(F, sp, k) && !(sp->aligned && F->hold && k == F->kend)) {   /* (held: integrator_held) */
+    if (piece && !(sp->tau < F->piece.cut)) break;
     const double *x = F->x;
     double t = grid_time(F, k);
     if (!sp->aligned && k > 0) {
-      double t_prev = grid_time(F, k - 1), s = (sp->tau - t_prev) / (t - t_prev);
+      double t_prev = piece ? F->piece.ta : grid_time(F, k - 1), t_end = piece ? F->piece.tb : t;
+      double s = (sp->tau - t_prev) / (t_end - t_prev);
       if (s < 1) {
         for (int i = 0; i < F->n; i++) F->xs[i] = F->xnew[i] + s * (F->x[i] - F->xnew[i]);
         x = F->xs;
@@ -114,6 +120,10 @@ static int emit_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, vo
     sampler_next(F, sp);
   }
   return 0;
+}
+
+static int emit_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
+  return emit_in(F, sp, k, 0, sink, ctx, info);
 }
 
 /* After the samples of step k: zeta_k kept when the next sample falls
@@ -649,6 +659,7 @@ static void theta_start(fixed_ws *F, long k) {
 int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
+  F->stop.phase = CUP_STOP_NONE;                 /* (integrator_window_reached reads its stop) */
   F->kend = k1;
   F->hold = hold;
   F->window = 1;
@@ -676,13 +687,20 @@ int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int 
   return st;
 }
 
-/* The samples due at the end of step k outside the loop (a split step's,
- * a held one's): as the loop gives them. */
-static int step_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int integrator_window_reached(const cup_integrator *I, long k1, long *next_j) {
+  const fixed_ws *F = I->ws;
+  if (F->stop.phase != CUP_STOP_NONE) *next_j = F->stop.next_j;
+  return F->stop.phase == CUP_STOP_STEP_DONE && F->stop.k == k1;
+}
+
+/* The samples due at the end of step k outside the loop (a split step's
+ * last piece's, a held one's): as the loop gives them. */
+static int step_samples(fixed_ws *F, sampler *sp, long k, int piece, cup_sample_fn sink, void *sink_ctx,
+                        cup_run_info *info) {
   const cup_integrator_options *o = &F->o;
   double t = grid_time(F, k);
   if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-    if (emit_samples(F, sp, k, sink, sink_ctx, info))
+    if (piece ? emit_in(F, sp, k, 1, sink, sink_ctx, info) : emit_samples(F, sp, k, sink, sink_ctx, info))
       return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
     keep_zeta(F, sp, k);
   } else if (sink && selected(F, sp, k) && !(F->hold && k == F->kend)) {
@@ -692,7 +710,44 @@ static int step_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, vo
   return CUP_OK;
 }
 
-int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+/* A split step's piece in I, from (ta, xa) to (tb, x) with zeta its
+ * multipliers, no jump inside it: x the state there (x_k for the last). */
+static void piece_set(fixed_ws *F, double ta, const double *xa, double tb, const double *x, const double *zeta) {
+  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
+  memcpy(F->xnew, xa, sizeof(double) * (size_t)F->n);
+  F->zeta_from = 3;
+  F->zeta_ext = zeta;
+  F->zs = 1;
+  if (F->zprev) memcpy(F->zprev, zeta, sizeof(double) * (size_t)F->m);   /* zeta: the piece's, at every sample in it */
+  F->piece.ta = ta;
+  F->piece.tb = tb;
+  F->piece.cut = INFINITY;
+}
+
+int integrator_split_piece(cup_integrator *I, long k, double ta, const double *xa, double tb, const double *x,
+                           const double *zeta, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+  fixed_ws *F = I->ws;
+  window_info(F, info);
+  info->step = k - 1;
+  info->t = tb;
+  piece_set(F, ta, xa, tb, x, zeta);
+  F->piece.cut = tb - 8 * DBL_EPSILON * fabs(tb);   /* (a sample time a rounding short of tb: tb's, the next piece's) */
+  sampler sp = {*next_j, 0, 0, 0};
+  sampler_next(F, &sp);
+  int st = CUP_OK;
+  if (emit_in(F, &sp, k, 1, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k - 1, tb,
+                                                                "stopped by the output sink");
+  *next_j = sp.next_j;
+  return st;
+}
+
+double integrator_sample_time(const cup_integrator *I, long j) {
+  sampler sp = {j, 0, 0, 0};
+  sampler_next(I->ws, &sp);
+  return sp.kdue == LONG_MAX ? INFINITY : sp.tau;
+}
+
+int integrator_split_end(cup_integrator *I, long k, double ta, const double *xa, const double *x, const double *zeta,
                          int hold, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = I->ws;
   const cup_integrator_options *o = &F->o;
@@ -700,12 +755,7 @@ int integrator_split_end(cup_integrator *I, long k, const double *xprev, const d
   window_info(F, info);
   info->step = k;
   info->t = t;
-  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
-  memcpy(F->xnew, xprev, sizeof(double) * (size_t)F->n);
-  F->zeta_from = 3;
-  F->zeta_ext = zeta;
-  F->zs = 1;
-  if (F->zprev) memcpy(F->zprev, zeta, sizeof(double) * (size_t)F->m);   /* zeta: the step's, at every sample in it */
+  piece_set(F, ta, xa, t, x, zeta);                /* the last piece: from the last switching time to t_k */
   sampler sp = {*next_j, 0, 0, 0};
   sampler_next(F, &sp);
   cup_proj_info pi = {0};
@@ -715,7 +765,7 @@ int integrator_split_end(cup_integrator *I, long k, const double *xprev, const d
   } else {
     F->kend = k;                                   /* (emit_samples' hold) */
     F->hold = hold;
-    st = step_samples(F, &sp, k, sink, sink_ctx, info);
+    st = step_samples(F, &sp, k, 1, sink, sink_ctx, info);
     F->kend = F->o.n;
     F->hold = 0;
   }
@@ -757,7 +807,7 @@ int integrator_held(cup_integrator *I, long k, const double *x, long *next_j, cu
   if (x) jumped_to(F, k, x);
   sampler sp = {*next_j, 0, 0, 0};
   sampler_next(F, &sp);
-  int st = step_samples(F, &sp, k, sink, sink_ctx, info);
+  int st = step_samples(F, &sp, k, 0, sink, sink_ctx, info);
   *next_j = sp.next_j;
   return st;
 }

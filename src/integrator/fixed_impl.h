@@ -70,6 +70,10 @@ struct fixed_ws {
   double *v;                /* 2 n: a projection of the step's answer and scratch (certify_or_stop) */
   double *xs, *zprev;       /* a sample between two steps: its x, and zeta at the step before it */
   double zs;                /* ... and its place between them (1: on a step) */
+  struct {                  /* a split step's piece (switched.c): its samples between its own ends, */
+    double ta, tb, cut;     /* xnew at ta (after the jump there) and x at tb (before the next one); those
+                               before cut alone (at and after a switching time: the next piece's) */
+  } piece;
   long rebuilds0;           /* a state polyset's rebuilds before the run */
   double *x0;               /* the estimate's: x0 of the run, for a resumed run's coarse one */
   fixed_stop stop;          /* where the last run stopped, for a checkpoint (checkpoint.c) */

@@ -35,20 +35,38 @@ struct cup_integrator {
  * t_k1 follows, the samples on t_k1 are held back for integrator_held. */
 int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
                       cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* After a window that stopped (integrator_window < 0): 1 when it stopped
+ * right after its last step k1 (the interrupt, the wall-time limit), the
+ * samples it held on t_k1 then still to be given; *next_j, where its
+ * samples stopped. */
+int integrator_window_reached(const cup_integrator *I, long k1, long *next_j);
 /* The wall-time limit of I's next runs (seconds; 0: none), through its
  * scheme's table: each run starts its clock afresh, so a caller running I
  * many times under one limit gives each run what is left (a switched
  * run's windows, switched.c; a steady state's period runs, pss.c). */
 void integrator_wall_limit(cup_integrator *I, double seconds);
 /* A switched circuit's split step (switched.c): step k - 1 -> k was
- * taken outside, by the configurations' exact flows from xprev (at
- * t_{k-1}) to x (at t_k), zeta its multipliers at t_k (m entries, kept by
- * the caller until the next step). Sets the integrator there and gives
- * step k's end as the loop does: the step callback, the samples due at k
- * (between t_{k-1} and t_k: x interpolated linearly, zeta the step's);
- * *next_j advanced; hold as integrator_window's. */
-int integrator_split_end(cup_integrator *I, long k, const double *xprev, const double *x, const double *zeta,
+ * taken outside, piece after piece, by the configurations' exact flows,
+ * the state jumping at each switching time between. A piece before the
+ * last ends at tb < t_k with x (before the jump there), zeta its
+ * multipliers there (m entries, kept by the caller while it runs), and
+ * started at ta from xa (x_{k-1}, or the state after the jump at ta):
+ * integrator_split_piece gives the samples in it, times before tb (those a
+ * rounding short of it are tb's: the next piece's), x interpolated
+ * linearly between its ends, never across a jump, from I, the
+ * configuration in force on it; *next_j advanced. */
+int integrator_split_piece(cup_integrator *I, long k, double ta, const double *xa, double tb, const double *x,
+                           const double *zeta, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* The last piece, from (ta, xa) to x at t_k, zeta at t_k: sets the
+ * integrator there and gives step k's end as the loop does: the step
+ * callback, the samples due at k (those before t_k interpolated in the
+ * piece, as above; the pieces before gave theirs already); hold as
+ * integrator_window's. */
+int integrator_split_end(cup_integrator *I, long k, double ta, const double *xa, const double *x, const double *zeta,
                          int hold, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
+/* The time of output sample j, or INFINITY when none is due there (all
+ * given, or not a run on samples). */
+double integrator_sample_time(const cup_integrator *I, long j);
 /* A switched circuit's jump at grid time t_k (switched.c): x, the state
  * after it, given to the sink as a second record at t_k (the first was
  * the step's end, before the jump); zeta as at a run's start (theta's LCP

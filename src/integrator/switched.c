@@ -50,7 +50,8 @@ struct switched_run {
   int twin_off[SW_MAX];    /* ... which the adaptive scheme does not take */
   unsigned char gated[SW_MAX], moves[SW_MAX];   /* the adaptive scheme's windows: state_gated and moves of
                                                    each configuration, asked at its first window of a run */
-  double piece_end, *xprev, *zsplit;   /* a split step: its last piece's end, x_{k-1}, zeta at t_k */
+  double piece_end, *xprev, *zsplit;   /* a split step: a piece's end, its start (x_{k-1}, or after a jump),
+                                          zeta at its end */
   int cur;                 /* the configuration in force (its child answers state and zeta) */
   double *x;
   adaptive_breaks breaks; /* the input's next breakpoint, asked at a window's end and the next's start
@@ -70,6 +71,7 @@ struct switched_run {
   double wall0;            /* the run's start, when it has a wall-time limit */
   int coarse;              /* the estimate's run at n/2: its records are compared by step, no jump's */
   int holds;               /* a window's samples at a switching time wait for the jump (the right limit) */
+  int unoffered;           /* adaptive: a window that failed had not offered the one the window before held */
   long kheld;              /* fixed-step: the step whose samples on t_k are held (-1: none), ... */
   int cheld;               /* ... by this configuration's integrator */
   cup_integrator *half;    /* estimate (fixed-step schemes): the same switched run at n/2, or NULL */
@@ -220,7 +222,13 @@ static int window(switched_run *S, int topo, double t, double tb, int first, int
     w.samples -= S->refused;
   }
   add_info(info, &w);
-  if (st < 0) return st;
+  if (st < 0) {
+    /* the sample the window before held is offered (the sink may refuse
+     * it: its stop) once the start chose the active set; a start that
+     * failed offered none */
+    S->unoffered = (jumped & 2) && w.samples == 0;
+    return st;
+  }
   la_copy(S->x, adaptive_state(A), S->n);
   return CUP_OK;
 }
@@ -317,10 +325,15 @@ static int piece(switched_run *S, int topo, double ta, double tb, int last, cup_
  * it is split there. From x_{k-1} (S->x) each configuration in force runs
  * by its exact flow to the next switching time and the state jumps onto
  * the next one's constraints, up to t_k; then step k's end is given to the
- * configuration in force (its samples, zeta the last piece's). 1 when a
- * configuration has no exact flow (nothing done: the step is taken as
- * before, switching at its end). */
-static int split_step(switched_run *S, long k, double *tb, int *topo, long *next_j, cup_run_info *info) {
+ * configuration in force (its samples, zeta the last piece's). The
+ * samples inside the step are each piece's, given by its configuration
+ * between the piece's ends (the state before the jump at its end, after
+ * the one at its start), zeta the piece's at its end: on their side of
+ * every jump. 1 when a configuration has no exact flow (nothing done: the
+ * step is taken as before, switching at its end). (Out of line: inlined
+ * into sw_run, its registers cost the adaptive scheme's windows.) */
+static __attribute__((noinline)) int split_step(switched_run *S, long k, double *tb, int *topo, long *next_j,
+                                                cup_run_info *info) {
   const cup_switching *sw = &S->ops;
   cup_integrator *C = S->child[*topo];
   double ta = integrator_grid_time(C, k - 1), tk = integrator_grid_time(C, k);
@@ -330,8 +343,17 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
   int st = CUP_OK, to = *topo;
   for (;;) {
     double te = *tb < tk - snap ? *tb : tk;        /* within 1e-9 h of t_k: on it (as sw_fixed_run snaps) */
-    if ((st = piece(S, to, ta, te, te == tk, info)) < 0) return st;
+    /* a sample before te: the piece's zeta there, and its samples */
+    int inside = te < tk && S->holds && integrator_sample_time(S->child[to], *next_j) < te;
+    if ((st = piece(S, to, ta, te, te == tk || inside, info)) < 0) return st;
     if (te == tk) break;
+    if (inside) {
+      cup_run_info w;
+      st = integrator_split_piece(S->child[to], k, ta, S->xprev, te, S->x, S->zsplit, next_j, S->sink, S->sink_ctx,
+                                  &w);
+      add_info(info, &w);
+      if (st < 0) return st;
+    }
     if ((st = sw->settle(sw->ctx, &to, te, S->x, NULL, info->message)) < 0) return st;
     sw->jump(sw->ctx, to, S->x);
     if ((st = child_of(S, to, info->message)) != CUP_OK) return st;
@@ -339,6 +361,7 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
       return fail_fmt(info->message, CUP_ERR_UNSUPPORTED, "t = %.17g: switch configuration %d has no exact flow "
                       "(an active network) to step from the switching time to the grid", te, to);
     ta = te;
+    la_copy(S->xprev, S->x, S->n);                 /* the next piece's start: after the jump */
     if (sw->next(sw->ctx, to, ta, S->o.T, tb))
       return fail_fmt(info->message, CUP_ERR_CALLBACK, "t = %g: the input u(t) failed", ta);
   }
@@ -346,9 +369,9 @@ static int split_step(switched_run *S, long k, double *tb, int *topo, long *next
   S->cur = to;
   cup_run_info w;
   int hold = S->holds && k < S->o.n && (*tb <= tk + snap || sw->state_gated(sw->ctx, to));   /* a switching at t_k */
-  st = integrator_split_end(S->child[to], k, S->xprev, S->x, S->zsplit, hold, next_j, S->sink, S->sink_ctx, &w);
+  st = integrator_split_end(S->child[to], k, ta, S->xprev, S->x, S->zsplit, hold, next_j, S->sink, S->sink_ctx, &w);
   add_info(info, &w);
-  if (hold) S->kheld = k, S->cheld = to;
+  if (hold && st >= 0) S->kheld = k, S->cheld = to;   /* (a stop before them: not reached, never offered) */
   return st;
 }
 
@@ -389,6 +412,14 @@ static int release(switched_run *S, int topo, long *next_j, cup_run_info *info) 
   int st = integrator_held(S->child[by], k, topo >= 0 ? S->x : NULL, next_j, S->sink, S->sink_ctx, &w);
   S->cur = cur;
   add_info(info, &w);
+  return st;
+}
+
+/* Configuration topo's window to step kw stopped (status st): right after
+ * its last step (the interrupt, the wall-time limit), the samples it held
+ * on t_kw are the run's stop's to give (release). st. */
+static int stopped_holding(switched_run *S, int topo, int hold, long kw, long *next_j, int st) {
+  if (hold && integrator_window_reached(S->child[topo], kw, next_j)) S->kheld = kw, S->cheld = topo;
   return st;
 }
 
@@ -446,7 +477,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
       int hold = S->holds && !split && kw < n;     /* a switching at t_kw */
       int wst = integrator_window(C, k, kw, S->x, first, hold, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
-      if (wst < 0) { st = wst; break; }
+      if (wst < 0) { st = stopped_holding(S, topo, hold, kw, &next_j, wst); break; }
       la_copy(S->x, cup_integrator_state(C), S->n);
       if (hold) S->kheld = kw, S->cheld = topo;
     }
@@ -472,7 +503,7 @@ static int sw_fixed_run(switched_run *S, double t, int topo, cup_run_info *info)
       int hold = S->holds && k1 < n;
       int wst = integrator_window(C, k, k1, S->x, 0, hold, &next_j, S->sink, S->sink_ctx, &w);
       add_info(info, &w);
-      if (wst < 0) { st = wst; break; }
+      if (wst < 0) { st = stopped_holding(S, topo, hold, k1, &next_j, wst); break; }
       la_copy(S->x, cup_integrator_state(C), S->n);
       if (hold) S->kheld = k1, S->cheld = topo;
       k = k1;
@@ -566,7 +597,10 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (give) held = 0;
     st = window(S, topo, t, tb, first, jumped | give << 1, &steps, &next_sample, S->gated[topo], info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
-    if (st < 0 || S->user_stop) break;
+    if (st < 0 || S->user_stop) {
+      if (st < 0 && S->unoffered) held = 1;        /* its start failed: the stop below gives it */
+      break;
+    }
     if (S->crossed) st = locate(S, topo, &tb, &steps, &next_sample, info);
     if (st < 0) break;
     if (adaptive_held(S->ad[topo])) held = 1, hc = topo;
