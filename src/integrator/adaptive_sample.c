@@ -131,18 +131,19 @@ static inline __attribute__((always_inline)) void times(const adaptive_ws *A, co
  * begun at +0 as it was, and E e's terms of e's trailing zeros (from
  * column nc on) are +-0 too, so these are times_by's sums bit for bit,
  * without an index a term: its rows from er_n on (no nonzero below
- * column n) get +0 here too. Returns times_by's nc. */
-static inline __attribute__((always_inline)) int times_dense(int na, const double *E, const double *y,
+ * column n) get +0 here too. E e takes e's first ce columns (a constant
+ * too: 1 when e's nonzeros are in its first, as a converter's one state
+ * has it, E e's other terms being +-0 then). Returns times_by's nc. */
+static inline __attribute__((always_inline)) int times_dense(int na, int ce, const double *E, const double *y,
                                                              const double *e, double *yo, double *eo) {
   int last = -1;
 #pragma GCC unroll 4
   for (int i = 0; i < na; i++) {
     double a = 0, b = 0;
 #pragma GCC unroll 4
-    for (int j = 0; j < na; j++) {
-      a += E[i + j * na] * y[j];
-      b += E[i + j * na] * e[j];
-    }
+    for (int j = 0; j < na; j++) a += E[i + j * na] * y[j];
+#pragma GCC unroll 4
+    for (int j = 0; j < ce; j++) b += E[i + j * na] * e[j];
     yo[i] = a;
     eo[i] = b;
     if (b != 0) last = i;
@@ -151,7 +152,9 @@ static inline __attribute__((always_inline)) int times_dense(int na, const doubl
 }
 
 #define TIMES_DENSE(NA)                                                                        \
-  for (int s = 0; s < count; s++, y += NA, e += NA) nc = times_dense(NA, E, y, e, y + NA, e + NA); \
+  for (int s = 0; s < count; s++, y += NA, e += NA)                                                \
+    nc = nc == 0 || nc == 1 ? times_dense(NA, 1, E, y, e, y + NA, e + NA)                           \
+                            : times_dense(NA, NA, E, y, e, y + NA, e + NA);                         \
   break
 
 /* times from slot 0 of y and e (na each) into slots 1 to count: E (the
