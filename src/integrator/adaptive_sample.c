@@ -152,9 +152,13 @@ static inline __attribute__((always_inline)) int times_dense(int na, int ce, con
 }
 
 #define TIMES_DENSE(NA)                                                                        \
-  for (int s = 0; s < count; s++, y += NA, e += NA)                                                \
-    nc = nc == 0 || nc == 1 ? times_dense(NA, 1, E, y, e, y + NA, e + NA)                           \
-                            : times_dense(NA, NA, E, y, e, y + NA, e + NA);                         \
+  {                                                                                                \
+    double Ev[NA * NA];                          /* (E's own copy: in registers, not read again a sample) */ \
+    memcpy(Ev, E, sizeof Ev);                                                                      \
+    for (int s = 0; s < count; s++, y += NA, e += NA)                                              \
+      nc = nc == 0 || nc == 1 ? times_dense(NA, 1, Ev, y, e, y + NA, e + NA)                        \
+                              : times_dense(NA, NA, Ev, y, e, y + NA, e + NA);                      \
+  }                                                                                                \
   break
 
 /* times from slot 0 of y and e (na each) into slots 1 to count: E (the
