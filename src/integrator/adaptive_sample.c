@@ -168,6 +168,7 @@ static inline __attribute__((always_inline)) int times_dense(int na, int ce, con
  * arrays, read once. */
 static void times_run(const adaptive_ws *A, const double *E, double *y, double *e, int count, int *ncp) {
   int na = A->na, nc = *ncp;
+  if (count <= 0) return;                        /* (E not made: NULL) */
   switch (na) {
     case 1: TIMES_DENSE(1);
     case 2: TIMES_DENSE(2);
@@ -306,8 +307,9 @@ static void signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
  * is never -0: compose's sums begin at +0), so these are the sums of
  * row_times and ad_rec_rows over the nonzeros bit for bit. Returns the
  * first sample whose state is beyond range (its signals not made), else
- * c. (By rows, then each row's list: 150 instructions a sample on the
- * precision rectifier's x and 3 signals over y's 3.) */
+ * c. (Sample by sample through each row's list, x and the 3 signals
+ * over y's 3 took 236 k instructions of the precision rectifier's 3001
+ * samples; so, about 130 k.) */
 static inline __attribute__((always_inline)) int samples_dense(int na, adaptive_ws *A, const double *X, int ns,
                                                                int c, double rnd) {
   int n = A->n;
