@@ -301,10 +301,10 @@ struct adaptive_ws {
   /* integrator_set_put (record.h): the samples inside a step with put_nl's
    * signals (put_ns of them) to put, AD_BATCH at a time, NULL: to the
    * sink; a batch's times, states, signals (by columns of AD_BATCH) and
-   * estimates (bt, bx, bs, best)
-   * and its samples' y and error (by, be: AD_BATCH + 1 of each, the next
-   * batch's first last), and with na <= 4 the signals' rows over y dense
-   * (bk, ns x na by rows, bkc their constants), in one block (put_block) */
+   * estimates (bt, bx, bs, best) and its samples' y and error (by, be:
+   * AD_BATCH + 1 of each, the next batch's first last), and with na <= 4
+   * the signals' rows over y dense (bk, ns x na by rows, bkc their
+   * constants), in one block (put_block) */
   record_put_fn put;
   cup_netlist *put_nl;
   int put_ns;
