@@ -133,20 +133,24 @@ static inline __attribute__((always_inline)) void times(const adaptive_ws *A, co
  * without an index a term: its rows from er_n on (no nonzero below
  * column n) get +0 here too. E e takes e's first ce columns (a constant
  * too: 1 when e's nonzeros are in its first, as a converter's one state
- * has it, E e's other terms being +-0 then). Returns times_by's nc. */
-static inline __attribute__((always_inline)) int times_dense(int na, int ce, const double *E, const double *y,
-                                                             const double *e, double *yo, double *eo) {
+ * has it, E e's other terms being +-0 then) in its first re rows (re 1:
+ * with ce 1 and E's first column 0 below its first row, the others are
+ * 0 + (+-0) = +0). Returns times_by's nc. */
+static inline __attribute__((always_inline)) int times_dense(int na, int ce, int re, const double *E,
+                                                             const double *y, const double *e, double *yo,
+                                                             double *eo) {
   int last = -1;
 #pragma GCC unroll 4
   for (int i = 0; i < na; i++) {
     double a = 0, b = 0;
 #pragma GCC unroll 4
     for (int j = 0; j < na; j++) a += E[i + j * na] * y[j];
+    if (i < re)
 #pragma GCC unroll 4
-    for (int j = 0; j < ce; j++) b += E[i + j * na] * e[j];
+      for (int j = 0; j < ce; j++) b += E[i + j * na] * e[j];
     yo[i] = a;
     eo[i] = b;
-    if (b != 0) last = i;
+    if (i < re && b != 0) last = i;
   }
   return last + 1;
 }
@@ -155,9 +159,12 @@ static inline __attribute__((always_inline)) int times_dense(int na, int ce, con
   {                                                                                                \
     double Ev[NA * NA];                          /* (E's own copy: in registers, not read again a sample) */ \
     memcpy(Ev, E, sizeof Ev);                                                                      \
+    int low0 = 1;                                /* (E's first column 0 below its first row) */    \
+    for (int i = 1; i < NA; i++) low0 &= Ev[i] == 0;                                               \
     for (int s = 0; s < count; s++, y += NA, e += NA)                                              \
-      nc = nc == 0 || nc == 1 ? times_dense(NA, 1, Ev, y, e, y + NA, e + NA)                        \
-                              : times_dense(NA, NA, Ev, y, e, y + NA, e + NA);                      \
+      nc = nc == 0 || nc == 1 ? (low0 ? times_dense(NA, 1, 1, Ev, y, e, y + NA, e + NA)             \
+                                      : times_dense(NA, 1, NA, Ev, y, e, y + NA, e + NA))           \
+                              : times_dense(NA, NA, NA, Ev, y, e, y + NA, e + NA);                  \
   }                                                                                                \
   break
 
