@@ -82,15 +82,17 @@ static int sink(long k, double t, const double *x, void *ctx) {
  * count of them: what sink does after integrator_record, sample by sample
  * (the test hook, then a stop refuses), without --steady-state (whose
  * samples sink keeps; t0 is 0 here). */
-static int put(void *ctx, long k, int count, const double *t, const double *x, const double *sig) {
+static int put(void *ctx, long k, int count, const double *t, const double *x, const double *sig, int stride) {
   (void)k;
   int j = 0, done = 0;
-  for (; j < count; j++) {
-    if (hook_at > 0 && ++hook_seen == hook_at) raise(SIGINT);
-    if (stop_signal) break;
-  }
+  if (hook_at <= 0) j = stop_signal ? 0 : count;   /* (no hook: one look at the flag a batch) */
+  else
+    for (; j < count; j++) {
+      if (++hook_seen == hook_at) raise(SIGINT);
+      if (stop_signal) break;
+    }
   sink_t *c = ctx;
-  h5run_append_rows(c->w, j, t, x, sig, &done);
+  h5run_append_rows(c->w, j, t, x, sig, stride, &done);
   return done;
 }
 

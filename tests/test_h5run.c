@@ -200,16 +200,17 @@ static void test_rows_in_batches(void **state) {
   assert_int_equal(cup_h5run_signals(w, NSIG, (const char *const[]){"a", "b", "c"}), CUP_OK);
   static double t[MAXB], x[MAXB * DIM], sig[MAXB * NSIG];
   int done = -1;
-  assert_int_equal(h5run_append_rows(w, 0, t, x, sig, &done), CUP_OK);
+  assert_int_equal(h5run_append_rows(w, 0, t, x, sig, MAXB, &done), CUP_OK);
   assert_int_equal(done, 0);
-  assert_int_equal(h5run_append_rows(w, 1, t, x, NULL, &done), CUP_ERR_ARG);
+  assert_int_equal(h5run_append_rows(w, 1, t, x, NULL, MAXB, &done), CUP_ERR_ARG);
+  assert_int_equal(h5run_append_rows(w, 2, t, x, sig, 1, &done), CUP_ERR_ARG);   /* columns overlap */
   for (long k = 0, b = 1; k < N; k += b, b = b % MAXB + 1) {
     int c = (int)(k + b <= N ? b : N - k);
     for (int i = 0; i < c; i++) {
       sample(k + i, DIM, &t[i], x + (size_t)i * DIM);
-      for (int s = 0; s < NSIG; s++) sig[i * NSIG + s] = value(k + i, DIM + s, DIM + NSIG);
+      for (int s = 0; s < NSIG; s++) sig[s * MAXB + i] = value(k + i, DIM + s, DIM + NSIG);
     }
-    assert_int_equal(h5run_append_rows(w, c, t, x, sig, &done), CUP_OK);
+    assert_int_equal(h5run_append_rows(w, c, t, x, sig, MAXB, &done), CUP_OK);
     assert_int_equal(done, c);
   }
   assert_int_equal(cup_h5run_count(w), N);

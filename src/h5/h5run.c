@@ -462,10 +462,13 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
 /* Whole runs of rows up to the next look at the clock or the chunk's end,
  * whichever is first: there tick or write_buffer, as put_row does after
  * that row (the same rows written, flushed and failed; a column's copy a
- * run of rows rather than a call a row). */
-int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int *done) {
+ * run of rows rather than a call a row: the signals come by columns, as
+ * the buffer holds them; by rows, their transposition was 6 instructions
+ * a value, 55 k of the precision rectifier's 3001 samples). */
+int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int stride,
+                      int *done) {
   if (done) *done = 0;
-  if (!w || count < 0 || !done || (count && (!t || !x || (w->nsig && !sig)))) return CUP_ERR_ARG;
+  if (!w || count < 0 || !done || (count && (!t || !x || (w->nsig && (!sig || stride < count))))) return CUP_ERR_ARG;
   int dim = w->dim, nsig = w->nsig;
   hsize_t rows = w->chunk_rows;
   while (*done < count) {
@@ -477,11 +480,8 @@ int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x,
     size_t i0 = (size_t)*done;
     memcpy(w->tbuf + r, t + i0, sizeof(double) * m);
     memcpy(w->xbuf + r * (hsize_t)dim, x + i0 * (size_t)dim, sizeof(double) * m * (size_t)dim);
-    for (int k = 0; k < nsig; k++) {
-      double *sb = w->sbuf + (size_t)k * rows + r;
-      const double *s = sig + i0 * (size_t)nsig + k;
-      for (hsize_t i = 0; i < m; i++) sb[i] = s[i * (size_t)nsig];
-    }
+    for (int k = 0; k < nsig; k++)
+      memcpy(w->sbuf + (size_t)k * rows + r, sig + (size_t)k * (size_t)stride + i0, sizeof(double) * m);
     w->nbuf = r + m;
     w->tick_left -= (int)m;
     int st = CUP_OK;

@@ -7,11 +7,13 @@
 #include "catchup/h5run.h"
 
 /* Append count samples, as count calls of cup_h5run_append would, row by
- * row: t (count), x (count x dim, row-major), sig (count x nsig,
- * row-major; NULL when none were declared). The rows the calls would have
- * taken with CUP_OK into *done, and the status of the call after them
- * (CUP_OK: all count). */
+ * row: t (count), x (count x dim, row-major), sig by columns, signal
+ * k's count values at sig + k stride (stride >= count; NULL when none
+ * were declared: a column's memcpy, as the writer keeps them). The rows
+ * the calls would have taken with CUP_OK into *done, and the status of
+ * the call after them (CUP_OK: all count). */
 __attribute__((visibility("hidden")))
-int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int *done);
+int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int stride,
+                      int *done);
 
 #endif

@@ -303,14 +303,16 @@ struct adaptive_ws {
   double *rec_acc, *rec_u;  /* na: a row being composed; p: u(t) when an entry's nu > 0 */
   /* integrator_set_put (record.h): the samples inside a step with put_nl's
    * signals (put_ns of them) to put, AD_BATCH at a time, NULL: to the
-   * sink; a batch's times, states, signals and estimates (bt, bx, bs, best)
-   * and its samples' y and error (by, be: AD_BATCH + 1 of each, the next
-   * batch's first last), in one block (put_block) */
+   * sink; a batch's times, states, signals (by columns of AD_BATCH) and
+   * estimates (bt, bx, bs, best) and its samples' y and error (by, be:
+   * AD_BATCH + 1 of each, the next batch's first last), and with na <= 4
+   * the signals' rows over y dense (bk, ns x na by rows, bkc their
+   * constants), in one block (put_block) */
   record_put_fn put;
   cup_netlist *put_nl;
   int put_ns;
   void *put_block;
-  double *bt, *bx, *bs, *best, *by, *be;
+  double *bt, *bx, *bs, *best, *by, *be, *bk, *bkc;
   ad_stop stop;             /* where the last run stopped */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
@@ -335,15 +337,16 @@ __attribute__((format(printf, 3, 4)))
 int ad_fail(ad_run *R, int status, const char *fmt, ...);
 
 /* ---- adaptive_record.c ---- */
-/* Entry e's ns rows times y, each from its constant, in column order:
- * the signals that read no input outside y (e->nu 0, else add them). */
-static inline void ad_rec_rows(const struct ad_rec *e, int ns, const double *y, double *out) {
+/* Entry e's ns rows times y, each from its constant, in column order,
+ * into out[k stride]: the signals that read no input outside y (e->nu 0,
+ * else add them). */
+static inline void ad_rec_rows(const struct ad_rec *e, int ns, const double *y, double *out, int stride) {
   const double *rx = e->rx, *rc = e->rc;
   const int *rp = e->rp, *rj = e->rj;
   for (int k = 0; k < ns; k++) {
     double acc = rc[k];
     for (int q = rp[k]; q < rp[k + 1]; q++) acc += rx[q] * y[rj[q]];
-    out[k] = acc;
+    out[(size_t)k * stride] = acc;
   }
 }
 /* md's entry composed for S (NULL: not composable); ad_rec_of looks at

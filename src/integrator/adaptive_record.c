@@ -139,7 +139,7 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   if (!put || !nl) return 1;
   int ns = cup_netlist_signal_count(nl), n = A->n, na = A->na;
   size_t b = AD_BATCH, slots = (b + 1) * (size_t)na;
-  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots));
+  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots + (size_t)ns * (na + 1)));
   if (!d) return CUP_ERR_NOMEM;
   A->put_block = d;
   A->bt = d;
@@ -148,6 +148,8 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   A->best = A->bs + b * (size_t)ns;
   A->by = A->best + b;
   A->be = A->by + slots;
+  A->bk = A->be + slots;
+  A->bkc = A->bk + (size_t)ns * na;
   A->put = put;
   A->put_nl = nl;
   A->put_ns = ns;

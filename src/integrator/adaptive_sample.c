@@ -131,27 +131,41 @@ static inline __attribute__((always_inline)) void times(const adaptive_ws *A, co
  * begun at +0 as it was, and E e's terms of e's trailing zeros (from
  * column nc on) are +-0 too, so these are times_by's sums bit for bit,
  * without an index a term: its rows from er_n on (no nonzero below
- * column n) get +0 here too. Returns times_by's nc. */
-static inline __attribute__((always_inline)) int times_dense(int na, const double *E, const double *y,
-                                                             const double *e, double *yo, double *eo) {
+ * column n) get +0 here too. E e takes e's first ce columns (a constant
+ * too: 1 when e's nonzeros are in its first, as a converter's one state
+ * has it, E e's other terms being +-0 then) in its first re rows (re 1:
+ * with ce 1 and E's first column 0 below its first row, the others are
+ * 0 + (+-0) = +0). Returns times_by's nc. */
+static inline __attribute__((always_inline)) int times_dense(int na, int ce, int re, const double *E,
+                                                             const double *y, const double *e, double *yo,
+                                                             double *eo) {
   int last = -1;
 #pragma GCC unroll 4
   for (int i = 0; i < na; i++) {
     double a = 0, b = 0;
 #pragma GCC unroll 4
-    for (int j = 0; j < na; j++) {
-      a += E[i + j * na] * y[j];
-      b += E[i + j * na] * e[j];
-    }
+    for (int j = 0; j < na; j++) a += E[i + j * na] * y[j];
+    if (i < re)
+#pragma GCC unroll 4
+      for (int j = 0; j < ce; j++) b += E[i + j * na] * e[j];
     yo[i] = a;
     eo[i] = b;
-    if (b != 0) last = i;
+    if (i < re && b != 0) last = i;
   }
   return last + 1;
 }
 
 #define TIMES_DENSE(NA)                                                                        \
-  for (int s = 0; s < count; s++, y += NA, e += NA) nc = times_dense(NA, E, y, e, y + NA, e + NA); \
+  {                                                                                                \
+    double Ev[NA * NA];                          /* (E's own copy: in registers, not read again a sample) */ \
+    memcpy(Ev, E, sizeof Ev);                                                                      \
+    int low0 = 1;                                /* (E's first column 0 below its first row) */    \
+    for (int i = 1; i < NA; i++) low0 &= Ev[i] == 0;                                               \
+    for (int s = 0; s < count; s++, y += NA, e += NA)                                              \
+      nc = nc == 0 || nc == 1 ? (low0 ? times_dense(NA, 1, 1, Ev, y, e, y + NA, e + NA)             \
+                                      : times_dense(NA, 1, NA, Ev, y, e, y + NA, e + NA))           \
+                              : times_dense(NA, NA, NA, Ev, y, e, y + NA, e + NA);                  \
+  }                                                                                                \
   break
 
 /* times from slot 0 of y and e (na each) into slots 1 to count: E (the
@@ -161,6 +175,7 @@ static inline __attribute__((always_inline)) int times_dense(int na, const doubl
  * arrays, read once. */
 static void times_run(const adaptive_ws *A, const double *E, double *y, double *e, int count, int *ncp) {
   int na = A->na, nc = *ncp;
+  if (count <= 0) return;                        /* (E not made: NULL) */
   switch (na) {
     case 1: TIMES_DENSE(1);
     case 2: TIMES_DENSE(2);
@@ -263,7 +278,7 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
  * offered, R->next_sample after those taken, A->zy and A->de the last
  * offered one's, and a refused one kept in A->pend (1; else 0). */
 static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, int c) {
-  int na = A->na, took = c ? A->put(R->sink_ctx, k, c, A->bt, A->bx, A->bs) : 0;
+  int na = A->na, took = c ? A->put(R->sink_ctx, k, c, A->bt, A->bx, A->bs, AD_BATCH) : 0;
   if (took < 0) took = 0;
   if (took > c) took = c;
   int offered = took < c ? took + 1 : c;
@@ -279,54 +294,123 @@ static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, 
   return pend_refused(A, md, k, t1);             /* inside the step in progress: refused */
 }
 
+/* The signals' rows of re over y into A->bk by rows, dense with their
+ * zeros, and their constants into A->bkc (na <= 4: samples_dense's). */
+static void signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
+  int na = A->na;
+  double *K = A->bk;
+  memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
+  for (int k = 0; k < ns; k++) {
+    A->bkc[k] = re->rc[k];
+    for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
+  }
+}
+
+/* A batch's c samples from slot 0, na (at most 4) a constant here: each
+ * one's estimate, state x = X y (md's rows, la_dot's sums as ad_state's)
+ * and signals (signal_rows', each from its constant), every term, zeros
+ * too, unrolled. A zero's term is +-0 (y finite, as times_dense has it),
+ * which leaves a sum begun at +0 or at a constant as it was (a constant
+ * is never -0: compose's sums begin at +0), so these are the sums of
+ * row_times and ad_rec_rows over the nonzeros bit for bit. Returns the
+ * first sample whose state is beyond range (its signals not made), else
+ * c. (Sample by sample through each row's list, x and the 3 signals
+ * over y's 3 took 236 k instructions of the precision rectifier's 3001
+ * samples; so, about 130 k.) */
+static inline __attribute__((always_inline)) int samples_dense(int na, adaptive_ws *A, const double *X, int ns,
+                                                               int c, double rnd) {
+  int n = A->n;
+  const double *restrict y = A->by, *restrict e = A->be, *restrict K = A->bk, *restrict kc = A->bkc;
+  double *restrict xo = A->bx, *restrict so = A->bs, *restrict best = A->best;
+  int q = 0;
+  for (; q < c; q++, y += na, e += na, xo += n) {
+    best[q] = la_norm_inf(e, n) + rnd;
+    for (int i = 0; i < n; i++) xo[i] = la_dot(X + (size_t)i * na, y, na);
+    if (tally_state_beyond(xo, n)) break;
+  }
+  for (int k = 0; k < ns; k++, K += na) {        /* (a row's terms held across the samples) */
+    double kr[4] = {0}, c0 = kc[k];
+    for (int j = 0; j < na; j++) kr[j] = K[j];
+    y = A->by;
+    for (int s = 0; s < q; s++, y += na) {
+      double acc = c0;
+#pragma GCC unroll 4
+      for (int j = 0; j < na; j++) acc += kr[j] * y[j];
+      so[(size_t)k * AD_BATCH + s] = acc;
+    }
+  }
+  return q;
+}
+
+/* samples_dense by rows_of's and re's lists (any na), the first sample
+ * of a step (first) by ad_state. */
+static int samples_rows(adaptive_ws *A, const ad_mode *md, const struct ad_rec *re, int ns, int c, double rnd,
+                        int first) {
+  int n = A->n, na = A->na;
+  for (int q = 0; q < c; q++) {
+    const double *y = A->by + (size_t)q * na;
+    double *xo = A->bx + (size_t)q * n;
+    A->best[q] = la_norm_inf(A->be + (size_t)q * na, n) + rnd;
+    if (first && q == 0) ad_state(A, md, y, xo);
+    else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, y);
+    if (tally_state_beyond(xo, n)) return q;
+    ad_rec_rows(re, ns, y, A->bs + q, AD_BATCH);
+  }
+  return c;
+}
+
 /* dense_samples with put for the sink, a batch at a time: the batch's
  * times (up to AD_BATCH, those before t1), their y and errors (slots of
  * A->by and A->be, from slot 0 by times_run: and slot c, the next batch's
  * first), then each one's estimate, state and signals (the composed rows
- * re of S, no input outside y), and the batch to put. The same sums in
- * the same order as dense_samples and the sink's integrator_record, the
- * first sample's state by ad_state as there; A->zy and A->de are left as
- * dense_samples leaves them (the last sample offered). */
+ * re of S, no input outside y: samples_dense, or samples_rows), and the
+ * batch to put. The same sums in the same order as dense_samples and the
+ * sink's integrator_record, the first sample's state as ad_state's;
+ * A->zy and A->de are left as dense_samples leaves them (the last sample
+ * offered). The output times are ad_sample_time's, its operands read once. */
 static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, const signal_map *S,
                        const struct ad_rec *re) {
   const cup_integrator_options *o = &A->o;
   int n = A->n, na = A->na, ns = S->ns, nc = -1, first = 1;
-  long nsamples = o->output_samples, j = R->next_sample;
+  long nsamples = o->output_samples, j = R->next_sample, jlast = nsamples - 1;
   double dt = (o->T - o->output_t0) / (double)(o->output_samples - 1);
-  double rnd = R->rloc + sqrt(R->r2);
-  double ts = ad_sample_time(A, j), *bt = A->bt, *bx = A->bx, *bs = A->bs, *by = A->by, *be = A->be;
+  double rnd = R->rloc + sqrt(R->r2), T = o->T, t0 = o->output_t0, span = T - t0;
+  double ts = ad_sample_time(A, j), *bt = A->bt, *by = A->by, *be = A->be;
   la_copy(by, A->zy, na);
   la_copy(be, A->de, na);
   const double *E = NULL;
   A->rows_ready = 0;
+  if (na <= 4) signal_rows(A, re, ns);
   for (;;) {
     int c = 0, last = 0;
     while (c < AD_BATCH && !last) {
       bt[c++] = ts;
-      last = !(++j < nsamples) || !((ts = ad_sample_time(A, j)) < t1);
+      last = !(++j < nsamples) || !((ts = j >= jlast ? T : t0 + span * (double)j / (double)jlast) < t1);
     }
     int more = c - 1 + !last;                     /* the y's to make: the batch's after its first, the next's first */
     if (more && !E) {
       E = ad_expm(A, md, dt, 0);                  /* (applied sample after sample: dt itself) */
-      by_rows(A, E);
-      rows_of(A, md);
+      if (na > 4) {                               /* (times_run's and samples_rows' lists) */
+        by_rows(A, E);
+        rows_of(A, md);
+      }
     }
     times_run(A, E, by, be, more, &nc);
-    for (int q = 0; q < c; q++) {
-      const double *y = by + (size_t)q * na;
-      double *xo = bx + (size_t)q * n;
-      A->best[q] = la_norm_inf(be + (size_t)q * na, n) + rnd;
-      if (first && q == 0) ad_state(A, md, y, xo);
-      else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, y);
-      if (tally_state_beyond(xo, n)) {            /* the samples before it offered first, as they were */
-        if (batch_put(A, R, md, t1, k, q)) return 1;
-        R->next_sample++;
-        if (!(A->best[q] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[q]);
-        la_copy(A->zy, y, na);
-        la_copy(A->de, be + (size_t)q * na, na);
-        return diverged(R, bt[q], xo, n);
-      }
-      ad_rec_rows(re, ns, y, bs + (size_t)q * ns);
+    int q;
+    switch (na) {
+      case 1: q = samples_dense(1, A, md->X, ns, c, rnd); break;
+      case 2: q = samples_dense(2, A, md->X, ns, c, rnd); break;
+      case 3: q = samples_dense(3, A, md->X, ns, c, rnd); break;
+      case 4: q = samples_dense(4, A, md->X, ns, c, rnd); break;
+      default: q = samples_rows(A, md, re, ns, c, rnd, first);
+    }
+    if (q < c) {                                  /* beyond range: the samples before it offered first, as they were */
+      if (batch_put(A, R, md, t1, k, q)) return 1;
+      R->next_sample++;
+      if (!(A->best[q] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[q]);
+      la_copy(A->zy, by + (size_t)q * na, na);
+      la_copy(A->de, be + (size_t)q * na, na);
+      return diverged(R, bt[q], A->bx + (size_t)q * n, n);
     }
     first = 0;
     int st = batch_put(A, R, md, t1, k, c);
@@ -595,7 +679,7 @@ int adaptive_record(adaptive_ws *A, const signal_map *S, double *out) {
   if (!md || A->zx0) return 0;                   /* (x0's sample: its signals from x0 as given, by the caller) */
   const struct ad_rec *e = ad_rec_of(A, md, S);
   if (!e || (!A->zy_ready && ad_record_y(A, md))) return 0;   /* (a failed input: adaptive_zeta's zeros, as before) */
-  ad_rec_rows(e, S->ns, A->zy, out);
+  ad_rec_rows(e, S->ns, A->zy, out, 1);
   return e->nu ? ad_rec_inputs(A, e, S->ns, out) : 1;
 }
 

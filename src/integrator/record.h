@@ -18,11 +18,14 @@
 int integrator_record(const cup_integrator *I, const signal_map *S, double *out);
 
 /* count samples of step k with their signals, in order (catchup-run's
- * writer): times t (count), states x (count x n) and signals sig (count x
- * ns), row-major. Returns how many it took, the first ones; the one after
- * them (if fewer than count) is refused, as a sink's nonzero return
- * refuses its sample, and the later ones were not offered. */
-typedef int (*record_put_fn)(void *ctx, long k, int count, const double *t, const double *x, const double *sig);
+ * writer): times t (count), states x (count x n, row-major) and signals
+ * sig by columns, signal j's count values at sig + j stride (stride >=
+ * count: the writer's columns, a copy each). Returns how many it took,
+ * the first ones; the one after them (if fewer than count) is refused,
+ * as a sink's nonzero return refuses its sample, and the later ones were
+ * not offered. */
+typedef int (*record_put_fn)(void *ctx, long k, int count, const double *t, const double *x, const double *sig,
+                             int stride);
 
 /* From the next run or resume on, the samples whose signals I's scheme
  * knows from its own state (integrator_record's) go to put with nl's
