@@ -610,6 +610,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
   if (held && st < 0) {                            /* stopped at t before the next window: its sample as it was */
     cup_run_info w = *info;
     in_force(S, hc);
+    S->cur = hc;                                   /* (the sink's record: hc's signals and zeta, not the failed window's) */
     adaptive_offer_held(S->ad[hc], t, steps, &next_sample, S->sink, S->sink_ctx, &w);
     info->samples = w.samples;
   }
