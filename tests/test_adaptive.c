@@ -188,6 +188,44 @@ static void test_rectifier(void **state) {
   unbuild_lcs(&b);
 }
 
+/* A sample inside a step refused by the sink: the run stops at the
+ * step's end, and the message names both times (the step's, the
+ * refused sample's: index 500 of 1001 on [0, 2], t = 1 exactly). */
+typedef struct { long seen, refuse; } refuse_ctx;
+static int refuse_sink(long k, double t, const double *x, void *vp) {
+  (void)k; (void)t; (void)x;
+  refuse_ctx *r = vp;
+  return r->seen++ == r->refuse;
+}
+
+static void test_refused_dense_sample(void **state) {
+  (void)state;
+  rect_par q = {1, 0.2, 1, 2 * M_PI, 0};
+  rect_setup(&q);
+  double A[1] = {-q.R / q.L}, B[1] = {1 / q.L}, C[1] = {1}, E[1] = {q.V / q.L}, P[1] = {q.L};
+  lcs_built b;
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(&b, 1, 1, 1, A, B, C, E, NULL, NULL, P, NULL, msg)) fail_msg("%s", msg);
+  cup_input *u = sine(1, 1);
+  double x0[1] = {0};
+  cup_integrator_options o;
+  adaptive_options(&o, 2, 1e-6, 1e-6, 1001);
+  cup_integrator *I = NULL;
+  if (cup_integrator_create(&I, b.L, u, &o, msg)) fail_msg("create: %s", msg);
+  refuse_ctx r = {0, 500};
+  cup_run_info info;
+  assert_int_equal(cup_integrator_run(I, x0, refuse_sink, &r, &info), CUP_ERR_INTERRUPTED);
+  print_message("refused sample: %s\n", info.message);
+  double tstep = 0;
+  long kstop = 0;
+  assert_int_equal(sscanf(info.message, "step %ld (t = %lf)", &kstop, &tstep), 2);
+  assert_true(tstep > 1);                          /* inside a step: the stop is at its end */
+  assert_non_null(strstr(info.message, "stopped by the output sink (its sample at t = 1)"));
+  cup_integrator_free(&I);
+  cup_input_free(&u);
+  unbuild_lcs(&b);
+}
+
 static void test_corner(void **state) {
   (void)state;
   double A[4] = {-1, 0, 0, -2}, C[4] = {1, 0, 0, 1}, E[2] = {-1, -1}, P[2] = {2, 3};
@@ -661,6 +699,7 @@ int main(void) {
     cmocka_unit_test(test_interval_with_relaxation),
     cmocka_unit_test(test_cone),
     cmocka_unit_test(test_rectifier),
+    cmocka_unit_test(test_refused_dense_sample),
     cmocka_unit_test(test_corner),
     cmocka_unit_test(test_jumping_set),
     cmocka_unit_test(test_paper_cases),

@@ -68,6 +68,14 @@ static int halt(adaptive_ws *A, ad_run *R, int status, int phase, const char *wh
   return ad_fail(R, status, "%s", what);
 }
 
+/* A sample inside the step refused by the sink (A->pend; A->zt its
+ * time): the run stops at the step's end, the message naming both. */
+static int halt_dense(adaptive_ws *A, ad_run *R) {
+  char what[96];
+  snprintf(what, sizeof what, "stopped by the output sink (its sample at t = %.17g)", A->zt);
+  return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, what);
+}
+
 /* The sample at R->t to the sink: the state x (A->x, or x0 as given at a
  * start), zeta the active set's at A->x (adaptive_zeta; none before a set
  * is chosen, or under catching-up steps: pinned[1]). */
@@ -183,7 +191,7 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
   }
   if (A->pend.active) {                          /* the sink refused a sample inside the step */
     A->stop.pi = *pi;
-    return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, "stopped by the output sink");
+    return halt_dense(A, R);
   }
   return step_checks(A, R, pi);
 }
@@ -968,7 +976,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   } else if (phase == AD_STOP_DENSE) {           /* the step's samples from the refused one, its callback */
     info->samples--;
     st = ad_dense_resume(A, &R);
-    if (st == 1) return halt(A, &R, CUP_ERR_INTERRUPTED, AD_STOP_DENSE, "stopped by the output sink");
+    if (st == 1) return halt_dense(A, &R);
     if (st >= 0) st = step_checks(A, &R, &s->pi);
     if (st >= 0) st = emit(A, &R);
   } else {
