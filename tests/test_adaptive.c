@@ -164,14 +164,21 @@ static void test_cone(void **state) {
   unbuild_lcs(&b);
 }
 
+/* The RL half-wave rectifier (closed_forms.h's rect_*: R 1, L 0.2, V 1,
+ * sin t at 1 Hz) as an LCS in b, its parameters in q. */
+static void rectifier_lcs(lcs_built *b, rect_par *q) {
+  *q = (rect_par){1, 0.2, 1, 2 * M_PI, 0};
+  rect_setup(q);
+  double A[1] = {-q->R / q->L}, B[1] = {1 / q->L}, C[1] = {1}, E[1] = {q->V / q->L}, P[1] = {q->L};
+  char msg[CUP_ERRMSG_LEN];
+  if (build_lcs(b, 1, 1, 1, A, B, C, E, NULL, NULL, P, NULL, msg)) fail_msg("%s", msg);
+}
+
 static void test_rectifier(void **state) {
   (void)state;
-  rect_par q = {1, 0.2, 1, 2 * M_PI, 0};
-  rect_setup(&q);
-  double A[1] = {-q.R / q.L}, B[1] = {1 / q.L}, C[1] = {1}, E[1] = {q.V / q.L}, P[1] = {q.L};
+  rect_par q;
   lcs_built b;
-  char msg[CUP_ERRMSG_LEN];
-  if (build_lcs(&b, 1, 1, 1, A, B, C, E, NULL, NULL, P, NULL, msg)) fail_msg("%s", msg);
+  rectifier_lcs(&b, &q);
   cup_input *u = sine(1, 1);
   double x0[1] = {0};
   /* conducting from 0 (row on: zeta > 0 holds i = 0? no: i > 0, the row is
@@ -200,12 +207,10 @@ static int refuse_sink(long k, double t, const double *x, void *vp) {
 
 static void test_refused_dense_sample(void **state) {
   (void)state;
-  rect_par q = {1, 0.2, 1, 2 * M_PI, 0};
-  rect_setup(&q);
-  double A[1] = {-q.R / q.L}, B[1] = {1 / q.L}, C[1] = {1}, E[1] = {q.V / q.L}, P[1] = {q.L};
+  rect_par q;
   lcs_built b;
+  rectifier_lcs(&b, &q);
   char msg[CUP_ERRMSG_LEN];
-  if (build_lcs(&b, 1, 1, 1, A, B, C, E, NULL, NULL, P, NULL, msg)) fail_msg("%s", msg);
   cup_input *u = sine(1, 1);
   double x0[1] = {0};
   cup_integrator_options o;
