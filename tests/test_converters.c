@@ -207,6 +207,17 @@ static int sink(long k, double t, const double *x, void *vp) {
   return 0;
 }
 
+/* The adaptive scheme's options to T at tol (absolute and relative), the
+ * rest the defaults. */
+static cup_integrator_options adaptive_opts(double T, double tol) {
+  cup_integrator_options o;
+  cup_integrator_options_default(&o);
+  o.scheme = CUP_SCHEME_ADAPTIVE;
+  o.T = T;
+  o.tol_abs = o.tol_rel = tol;
+  return o;
+}
+
 /* The netlist under the adaptive scheme at tol = 1e-4 ... 1e-10 (T its
  * TSTOP, 2001 samples) against the reference: within 10 tol (1 + max |x|). */
 static void check_adaptive(const char *name) {
@@ -223,11 +234,7 @@ static void check_adaptive(const char *name) {
   pr_traj tr;
   assert_int_equal(pr_solve(&c, y0, T, &tr), 0);
   for (double tol = 1e-4; tol >= 0.99e-10; tol *= 1e-2) {
-    cup_integrator_options o;
-    cup_integrator_options_default(&o);
-    o.scheme = CUP_SCHEME_ADAPTIVE;
-    o.T = T;
-    o.tol_abs = o.tol_rel = tol;
+    cup_integrator_options o = adaptive_opts(T, tol);
     o.output = CUP_OUTPUT_SAMPLES;
     o.output_samples = 2001;
     cup_integrator *I = NULL;
@@ -276,11 +283,7 @@ static void test_fullbridge_rerun(void **state) {
   cup_netlist *nl = NULL;
   if (cup_netlist_load(&nl, CIR "fullbridge.cir", NULL, 0, err)) fail_msg("%s", err);
   assert_int_equal(cup_lcs_dim(cup_netlist_lcs(nl)), 2);
-  cup_integrator_options o;
-  cup_integrator_options_default(&o);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  o.T = 2e-3;
-  o.tol_abs = o.tol_rel = 1e-6;
+  cup_integrator_options o = adaptive_opts(2e-3, 1e-6);
   o.output = CUP_OUTPUT_SAMPLES;
   o.output_samples = 401;
   cup_switching sw;
@@ -322,11 +325,7 @@ static void test_jump_moves(void **state) {
     snprintf(file, sizeof file, CIR "%s.cir", names[q]);
     cup_netlist *nl = NULL;
     if (cup_netlist_load(&nl, file, NULL, 0, err)) fail_msg("%s", err);
-    cup_integrator_options o;
-    cup_integrator_options_default(&o);
-    o.scheme = CUP_SCHEME_ADAPTIVE;
-    o.T = 2e-4;
-    o.tol_abs = o.tol_rel = 1e-6;
+    cup_integrator_options o = adaptive_opts(2e-4, 1e-6);
     o.output = CUP_OUTPUT_EVERY;
     o.output_every = 1;
     static double a[3 * 20000], b[3 * 20000];
