@@ -13,36 +13,54 @@
  * depends on the others: it is dropped from J (it holds when they do). */
 #define AD_RANK_TOL 1e-12
 
-void ad_modes_layout(adaptive_ws *A, block_arena *b) {
+/* Exponential c of md's cache. */
+static inline void cache_layout(ad_mode *md, int c, size_t NA, int na, block_arena *b) {
+  md->Ec[c] = block_take(b, NA, sizeof(double));
+  md->ep[c] = block_take(b, (size_t)na + 1, sizeof(int));
+  md->ei[c] = block_take(b, NA, sizeof(int));
+  md->ex[c] = block_take(b, NA, sizeof(double));
+}
+
+/* A slot's set and its first ncache exponentials. */
+static inline void slot_layout(const adaptive_ws *A, ad_mode *md, int ncache, block_arena *b) {
   int n = A->n, m = A->m, na = A->na, nw = A->nw;
   size_t NA = (size_t)na * na;
-  for (int s = 0; s <= AD_MODES; s++) {   /* (and the spare) */
-    ad_mode *md = &A->modes[s];
-    md->rows = block_take(b, (size_t)m + 1, sizeof(int));
-    md->M = block_take(b, NA, sizeof(double));
-    md->mp = block_take(b, (size_t)na + 1, sizeof(int));
-    md->mi = block_take(b, NA, sizeof(int));
-    md->mj = block_take(b, NA, sizeof(int));
-    md->mx = block_take(b, NA, sizeof(double));
-    md->lp = block_take(b, (size_t)m + 1, sizeof(int));
-    md->li = block_take(b, (size_t)m * na, sizeof(int));
-    md->lx = block_take(b, (size_t)m * na, sizeof(double));
-    md->lmx = block_take(b, (size_t)m * na, sizeof(double));
-    md->L = block_take(b, (size_t)m * na, sizeof(double));
-    md->Lm = block_take(b, (size_t)m * na, sizeof(double));
-    md->Lc = block_take(b, (size_t)m, sizeof(double));
-    md->is_zeta = block_take(b, (size_t)m, 1);
-    md->X = block_take(b, (size_t)n * na, sizeof(double));
-    md->R = block_take(b, (size_t)n * m, sizeof(double));
-    md->Zt = block_take(b, (size_t)m * m, sizeof(double));
-    md->KU = block_take(b, (size_t)n * nw, sizeof(double));
-    for (int c = 0; c < AD_CACHE; c++) {
-      md->Ec[c] = block_take(b, NA, sizeof(double));
-      md->ep[c] = block_take(b, (size_t)na + 1, sizeof(int));
-      md->ei[c] = block_take(b, NA, sizeof(int));
-      md->ex[c] = block_take(b, NA, sizeof(double));
-    }
-  }
+  md->rows = block_take(b, (size_t)m + 1, sizeof(int));
+  md->M = block_take(b, NA, sizeof(double));
+  md->mp = block_take(b, (size_t)na + 1, sizeof(int));
+  md->mi = block_take(b, NA, sizeof(int));
+  md->mj = block_take(b, NA, sizeof(int));
+  md->mx = block_take(b, NA, sizeof(double));
+  md->lp = block_take(b, (size_t)m + 1, sizeof(int));
+  md->li = block_take(b, (size_t)m * na, sizeof(int));
+  md->lx = block_take(b, (size_t)m * na, sizeof(double));
+  md->lmx = block_take(b, (size_t)m * na, sizeof(double));
+  md->L = block_take(b, (size_t)m * na, sizeof(double));
+  md->Lm = block_take(b, (size_t)m * na, sizeof(double));
+  md->Lc = block_take(b, (size_t)m, sizeof(double));
+  md->is_zeta = block_take(b, (size_t)m, 1);
+  md->X = block_take(b, (size_t)n * na, sizeof(double));
+  md->R = block_take(b, (size_t)n * m, sizeof(double));
+  md->Zt = block_take(b, (size_t)m * m, sizeof(double));
+  md->KU = block_take(b, (size_t)n * nw, sizeof(double));
+  for (int c = 0; c < ncache; c++) cache_layout(md, c, NA, na, b);
+}
+
+/* The slots in the order the run first writes them (a page the run
+ * touches first is a page fault, 2.3 us). The first set is built in the
+ * spare (last), whose buffers go to slot 0 and stay there as long as it is
+ * kept: a switched run's configuration with one set, whose cache takes
+ * several step lengths. Then slot 0's buffers, slot 1's, ..., each set
+ * written whole with its first exponential; a second and a third come
+ * for other step lengths only when a set is used long. Those are laid out
+ * apart, before the spare: slot by slot, the six-pulse bridge's 10 sets
+ * spread over 22 pages, each one touched (15 now). */
+void ad_modes_layout(adaptive_ws *A, block_arena *b) {
+  size_t NA = (size_t)A->na * A->na;
+  for (int s = 0; s < AD_MODES; s++) slot_layout(A, &A->modes[s], 1, b);
+  for (int s = 0; s < AD_MODES; s++)
+    for (int c = 1; c < AD_CACHE; c++) cache_layout(&A->modes[s], c, NA, A->na, b);
+  slot_layout(A, &A->modes[AD_MODES], AD_CACHE, b);
 }
 
 void ad_scratch_layout(adaptive_ws *A, block_arena *b) {
