@@ -39,9 +39,20 @@ static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz
   double *U = A->svd_u, *V = A->svd_v, *s = A->svd_s, *N = A->N;
   for (int a = 0; a < nj; a++)
     for (int c = 0; c < nj; c++) U[(size_t)a * nj + c] = A->Dd[J[c] + (size_t)J[a] * m];
-  if (svd(U, V, s, A->svd_w, nj)) return 1;
-  int r = 0;
-  while (r < nj && s[r] > AD_D_RANK_TOL * nj * s[0]) r++;
+  int r = 0, zero = 1;
+  for (size_t q = 0; q < (size_t)nj * nj && zero; q++) zero = U[q] == 0;
+  if (zero) {
+    /* D_JJ = 0 (rows whose multipliers D couples to none of theirs: 9
+     * of a six-pulse bridge's 23 factorings): no rank and Z = I, V as
+     * GSL's SVD gives it bit for bit (its Householder steps are the
+     * identity on zero columns; one column: V = 1), without its 3 k
+     * instructions */
+    for (int a = 0; a < nj; a++)
+      for (int b = 0; b < nj; b++) V[(size_t)a * nj + b] = a == b;
+  } else {
+    if (svd(U, V, s, A->svd_w, nj)) return 1;
+    while (r < nj && s[r] > AD_D_RANK_TOL * nj * s[0]) r++;
+  }
   *nz = nj - r;
   /* N, column-major: Y^T D_JJ = S_Y U'_Y^T, then Z^T C_J B_J */
   for (int c = 0; c < nj; c++) {
@@ -59,13 +70,13 @@ static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz
   double *dr = A->eqr, *dc = A->eqc;
   for (int b = 0; b < nj; b++) {
     dr[b] = 0;
-    for (int c = 0; c < nj; c++) dr[b] = fmax(dr[b], fabs(N[b + (size_t)c * nj]));
+    for (int c = 0; c < nj; c++) dr[b] = la_fmax(dr[b], fabs(N[b + (size_t)c * nj]));
     if (!(dr[b] > 0)) return 1;
     dr[b] = 1 / dr[b];
   }
   for (int c = 0; c < nj; c++) {
     dc[c] = 0;
-    for (int b = 0; b < nj; b++) dc[c] = fmax(dc[c], fabs(dr[b] * N[b + (size_t)c * nj]));
+    for (int b = 0; b < nj; b++) dc[c] = la_fmax(dc[c], fabs(dr[b] * N[b + (size_t)c * nj]));
     if (!(dc[c] > 0)) return 1;
     dc[c] = 1 / dc[c];
   }
@@ -81,7 +92,7 @@ static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz
       lu[b + (size_t)c * nj] = dr[b] * N[b + (size_t)c * nj] * dc[c];
       sum += fabs(lu[b + (size_t)c * nj]);
     }
-    norm = fmax(norm, sum);
+    norm = la_fmax(norm, sum);
   }
   if (la_dense_lu(lu, nj, A->perm)) return 1;
   for (int k = 0; k < nj; k++) {
@@ -92,7 +103,7 @@ static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz
       sum += fabs(col[c]);
       A->Ninv[c + (size_t)k * nj] = dc[c] * col[c];
     }
-    inorm = fmax(inorm, sum / dr[k]);
+    inorm = la_fmax(inorm, sum / dr[k]);
   }
   if (!(norm * inorm < 1 / AD_N_RCOND)) return 1;
   return 0;
