@@ -453,8 +453,8 @@ static void mode_finish(adaptive_ws *A, ad_mode *md) {
       r_ += fabs(md->M[i + (size_t)j * na]);
       if ((i < A->n) == (j < A->n)) d_ += fabs(md->M[i + (size_t)j * na]);
     }
-    md->mnorm = fmax(md->mnorm, r_);
-    md->snorm = fmax(md->snorm, d_);
+    md->mnorm = la_fmax(md->mnorm, r_);
+    md->snorm = la_fmax(md->snorm, d_);
   }
   md->hmax = -1;
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
@@ -586,6 +586,25 @@ static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, co
   for (int i = 0; i < n; i++) out[i] = v[i];
 }
 
+/* ad_matvec for n of 7 or 8, each out_i's sum in a register (apart from
+ * ad_matvec's body: its prologue there cost the full bridge's sizes 3 and
+ * 4 3 k instructions). */
+static inline __attribute__((always_inline)) void matvec_sums8(int n, int lda, const double *E, const double *y,
+                                                               double *out) {
+  double v[8] = {0};
+  for (int j = 0; j < n; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
+  }
+  for (int i = 0; i < n; i++) out[i] = v[i];
+}
+
+static __attribute__((noinline)) void matvec8(int n, int lda, const double *E, const double *y, double *out) {
+  if (n == 7) matvec_sums8(7, lda, E, y, out);
+  else matvec_sums8(8, lda, E, y, out);
+}
+
 void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
   switch (n) {                                   /* (a converter's states and sources: the loops unrolled) */
     case 1: matvec_sums(1, lda, E, y, out); return;
@@ -594,6 +613,7 @@ void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
     case 4: matvec_sums(4, lda, E, y, out); return;
     case 5: matvec_sums(5, lda, E, y, out); return;
     case 6: matvec_sums(6, lda, E, y, out); return;
+    case 7: case 8: matvec8(n, lda, E, y, out); return;
   }
   for (int i = 0; i < n; i++) out[i] = 0;
   for (int j = 0; j < n; j++) {
@@ -625,7 +645,11 @@ static inline __attribute__((always_inline)) void expm_mv_sums(int n, int na, co
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out) {
   int n = A->n, na = A->na, c = 0;
   while (c < AD_CACHE && md->Ec[c] != E) c++;
-  if (na <= 6 || n > 6 || c == AD_CACHE) { ad_matvec(na, na, E, y, out); return; }
+  /* (up to 8 rows, every sum in a register: a six-pulse bridge's 2 states
+   * and 6 input states took 320 instructions a product by the input rows'
+   * nonzeros, 260 so; E's zeros add +-0 to sums started at +0, which
+   * leaves them as they were) */
+  if (na <= 8 || n > 6 || c == AD_CACHE) { ad_matvec(na, na, E, y, out); return; }
   const int *ep = md->ep[c], *ei = md->ei[c];
   const double *ex = md->ex[c];
   switch (n) {                                   /* (ad_lift's sizes) */
