@@ -577,20 +577,6 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
 /* out = E y for a constant n, each out_i's sum in a register. */
 static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, const double *E, const double *y,
                                                               double *out) {
-  double v[6] = {0};
-  for (int j = 0; j < n; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
-  }
-  for (int i = 0; i < n; i++) out[i] = v[i];
-}
-
-/* ad_matvec for n of 7 or 8, each out_i's sum in a register (apart from
- * ad_matvec's body: its prologue there cost the full bridge's sizes 3 and
- * 4 3 k instructions). */
-static inline __attribute__((always_inline)) void matvec_sums8(int n, int lda, const double *E, const double *y,
-                                                               double *out) {
   double v[8] = {0};
   for (int j = 0; j < n; j++) {
     double yj = y[j];
@@ -600,9 +586,11 @@ static inline __attribute__((always_inline)) void matvec_sums8(int n, int lda, c
   for (int i = 0; i < n; i++) out[i] = v[i];
 }
 
+/* ad_matvec for n of 7 or 8, apart from its body (inline there, the
+ * registers cost the full bridge's sizes 3 and 4 3 k instructions). */
 static __attribute__((noinline)) void matvec8(int n, int lda, const double *E, const double *y, double *out) {
-  if (n == 7) matvec_sums8(7, lda, E, y, out);
-  else matvec_sums8(8, lda, E, y, out);
+  if (n == 7) matvec_sums(7, lda, E, y, out);
+  else matvec_sums(8, lda, E, y, out);
 }
 
 void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
