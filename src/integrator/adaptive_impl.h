@@ -82,7 +82,7 @@ typedef struct ad_mode {
   long cstamp[AD_CACHE];
   int *ep[AD_CACHE], *ei[AD_CACHE];   /* ... and their input states' rows' nonzeros by column (na + 1 */
   double *ex[AD_CACHE];     /* starts, rows), their values: exp(h [Pi Q; 0 W]) keeps the zeros of
-                               [0 W] (80 % of them on the six-pulse bridge, whose steps apply it) */
+                               [0 W] (read with 9 states or more: up to 8, ad_matvec's dense sums) */
 } ad_mode;
 
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */
