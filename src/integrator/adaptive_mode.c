@@ -68,8 +68,15 @@ void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b) {
   S->c = block_take(b, (AD_SERIES_SEGS * (AD_SERIES_MAX + 1) + 1) * (size_t)(A->na ? A->na : 1), sizeof(double));
 }
 
+/* Up to this many states the step limit's eigenvalues are a closed form
+ * (mode_hmax): GSL's workspace is not allocated, nor touched in the run
+ * (its first eigenproblem faulted two fresh pages in, some 5 us of a
+ * buck-boost's 160). */
+#define AD_EIG_CLOSED 2
+
 int ad_modes_init(adaptive_ws *A) {
   size_t n = (size_t)A->n;
+  if (A->n <= AD_EIG_CLOSED) return CUP_OK;
   A->eig = gsl_eigen_nonsymm_alloc(n);
   A->eigA = gsl_matrix_alloc(n, n);
   A->eigv = gsl_vector_complex_alloc(n);
@@ -101,10 +108,33 @@ void ad_row_of_C(const cup_polyset *K, int i, double *out) {
 /* The step limit of event detection for this active set: an eighth of the
  * period of its fastest oscillation (and of the input's), and the time an
  * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL. */
+static double hmax_of(double h, double re, double im) {
+  if (im > 0) h = fmin(h, M_PI / 4 / im);
+  if (re > 0) h = fmin(h, 1 / re);
+  return h;
+}
+
+/* mode_hmax of a 2 x 2 [a b; c d] (column-major in AJ): its eigenvalues
+ * mid +- sqrt(p^2 + bc), p = (a - d) / 2, on entries scaled by a power of
+ * 2 (exact) to 1; a real pair's larger one as det / (the other) when mid <
+ * 0 (mid + r would cancel). */
+static double hmax_2x2(double h, const double *AJ) {
+  double s = fmax(fmax(fabs(AJ[0]), fabs(AJ[1])), fmax(fabs(AJ[2]), fabs(AJ[3])));
+  if (!(s > 0) || !isfinite(s)) return h;
+  int e = ilogb(s);
+  double a = scalbn(AJ[0], -e), c = scalbn(AJ[1], -e), b = scalbn(AJ[2], -e), d = scalbn(AJ[3], -e);
+  double mid = 0.5 * (a + d), p = 0.5 * (a - d), disc = p * p + b * c;
+  if (disc < 0) return hmax_of(h, scalbn(mid, e), scalbn(sqrt(-disc), e));
+  double r = sqrt(disc), lo = mid - r, hi = mid >= 0 || lo == 0 ? mid + r : (a * d - b * c) / lo;
+  return hmax_of(h, scalbn(hi, e), 0);
+}
+
 static double mode_hmax(adaptive_ws *A, const double *AJ) {
   int n = A->n;
   double h = A->hmax_input;
   if (n == 0) return h;
+  if (n == 1) return hmax_of(h, AJ[0], 0);
+  if (n == 2) return hmax_2x2(h, AJ);
   for (int j = 0; j < n; j++)
     for (int i = 0; i < n; i++) gsl_matrix_set(A->eigA, (size_t)i, (size_t)j, AJ[i + (size_t)j * n]);
   gsl_error_handler_t *old = gsl_set_error_handler_off();
@@ -113,9 +143,7 @@ static double mode_hmax(adaptive_ws *A, const double *AJ) {
   if (bad) return h;
   for (int i = 0; i < n; i++) {
     gsl_complex z = gsl_vector_complex_get(A->eigv, (size_t)i);
-    double im = fabs(GSL_IMAG(z)), re = GSL_REAL(z);
-    if (im > 0) h = fmin(h, M_PI / 4 / im);
-    if (re > 0) h = fmin(h, 1 / re);
+    h = hmax_of(h, GSL_REAL(z), fabs(GSL_IMAG(z)));
   }
   return h;
 }
