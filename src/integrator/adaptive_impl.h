@@ -226,6 +226,8 @@ struct adaptive_ws {
   unsigned char known_singular[AD_KNOWN];
   long nknown;
   long clock;
+  ad_mode *got;             /* the slot ad_mode_get answered last (looked at first: its mask and stamp
+                               say whether it still holds that set) */
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
   double *S, *Sl, *Sinv, *T1, *T2, *T3;
@@ -479,8 +481,13 @@ void ad_free_velocity(adaptive_ws *A, const double *x, const double *w);
  * measure of an event's local error, whose effect a resonance carries from
  * one component to another (scratch: n). */
 double ad_energy_bound(const adaptive_ws *A, const double *v, double *scratch);
-/* The step limit of event detection of md (computed on first use). */
-double ad_mode_hmax(adaptive_ws *A, ad_mode *md);
+/* The step limit of event detection of md (computed on first use, by
+ * ad_mode_hmax_first; inline: a call a step was some 50 instructions of a
+ * buck-boost's window). */
+double ad_mode_hmax_first(adaptive_ws *A, ad_mode *md);
+static inline double ad_mode_hmax(adaptive_ws *A, ad_mode *md) {
+  return md->hmax >= 0 ? md->hmax : ad_mode_hmax_first(A, md);
+}
 /* Row i of C, dense, into out (n entries). */
 void ad_row_of_C(const cup_polyset *K, int i, double *out);
 

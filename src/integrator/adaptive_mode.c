@@ -148,18 +148,16 @@ static double mode_hmax(adaptive_ws *A, const double *AJ) {
   return h;
 }
 
-double ad_mode_hmax(adaptive_ws *A, ad_mode *md) {
-  if (md->hmax < 0) {                            /* Pi A, compact: an eigenproblem per mode used */
-    int n = A->n, na = A->na;
-    double *AJ = A->T1;
-    for (int j = 0; j < n; j++)
-      for (int i = 0; i < n; i++) AJ[i + (size_t)j * n] = md->M[i + (size_t)j * na];
-    md->hmax = mode_hmax(A, AJ);
-  }
-  return md->hmax;
+double ad_mode_hmax_first(adaptive_ws *A, ad_mode *md) {
+  int n = A->n, na = A->na;                      /* Pi A, compact: an eigenproblem per mode used */
+  double *AJ = A->T1;
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < n; i++) AJ[i + (size_t)j * n] = md->M[i + (size_t)j * na];
+  return md->hmax = mode_hmax(A, AJ);
 }
 
 static ad_mode *kept(adaptive_ws *A, uint64_t mask);
+static ad_mode *mode_get(adaptive_ws *A, uint64_t mask);
 
 /* The rows of mask, an independent subset of them (the mode's mask says
  * which), and the inverse of S = C_J P^-1 C_J^T into A->Sinv; with D, of
@@ -444,10 +442,33 @@ static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
 
 /* (Terms with y_j = 0 are added too: +-0, which leaves a sum started at +0
  * as it was.) */
-void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
-  int na = A->na, nnz = md->mp[na];
+static inline __attribute__((always_inline)) void mode_mv_dense(int na, const double *M, const double *y,
+                                                                double *out) {
+  double v[4] = {0};
+  for (int j = 0; j < na; j++) {
+    double yj = y[j];
+    for (int i = 0; i < na; i++) v[i] += M[i + (size_t)j * na] * yj;
+  }
+  for (int i = 0; i < na; i++) out[i] = v[i];
+}
+
+static inline void mode_mv_sparse(int na, const ad_mode *md, const double *y, double *out) {
+  int nnz = md->mp[na];
   for (int i = 0; i < na; i++) out[i] = 0;
   for (int k = 0; k < nnz; k++) out[md->mi[k]] += md->mx[k] * y[md->mj[k]];
+}
+
+/* (A few components: M's dense columns in registers, unrolled; the zeros'
+ * terms are +-0 as above: the same sums. The buck-boost's event functions
+ * took 66 instructions a product by the nonzeros.) */
+void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
+  switch (A->na) {
+    case 1: mode_mv_dense(1, md->M, y, out); return;
+    case 2: mode_mv_dense(2, md->M, y, out); return;
+    case 3: mode_mv_dense(3, md->M, y, out); return;
+    case 4: mode_mv_dense(4, md->M, y, out); return;
+  }
+  mode_mv_sparse(A->na, md, y, out);
 }
 
 /* The rest of a mode once mode_factor has chosen its rows. */
@@ -496,6 +517,13 @@ static uint64_t alias_of(const adaptive_ws *A, uint64_t mask) {
 }
 
 ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
+  ad_mode *md = A->got;                  /* (a window asks for the set the last one ran on) */
+  if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
+  return A->got = mode_get(A, mask);
+}
+
+/* (A set's slot is the one with its mask and a stamp: kept's first.) */
+static ad_mode *mode_get(adaptive_ws *A, uint64_t mask) {
   ad_mode *md = kept(A, mask);
   if (!md) {                             /* (a kept mode's rows are independent: no alias) */
     uint64_t sub = alias_of(A, mask);
@@ -669,7 +697,8 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   for (int s = 0; s < sub; s++) {
     la_copy(term, y_out, na);
     for (int k = 1; k <= 30; k++) {
-      ad_mode_mv(A, md, term, tmp);
+      if (na > 4) mode_mv_sparse(na, md, term, tmp);   /* (inlined, as before the few's dense case) */
+      else ad_mode_mv(A, md, term, tmp);
       /* done when every component's term is below its rounding: a callback's
        * Taylor states (u, u', ..., u^(7)) span 20 orders of magnitude, and a
        * test against the largest stopped x's series at 1e-5 of x */
