@@ -171,10 +171,10 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
     int w = tally_state_worst(A->x, A->n);
     snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): the state left its range ||x||_1 <= "
              "%g (x[%d] = %.3g): the scheme diverged", R->steps + 1, R->t, CUP_STATE_MAX, w, A->x[w]);
-    la_copy(A->x, A->xok, A->n);
+    la_copy_few(A->x, A->xok, A->n);
     return info->status = CUP_ERR_DIVERGED;
   }
-  la_copy(A->xok, A->x, A->n);
+  la_copy_few(A->xok, A->x, A->n);
   R->steps++;
   info->step = R->steps;
   info->t = R->t;
@@ -242,7 +242,7 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
     return st;
   }
   double S = cup_polyset_norm(A->K, x);
-  la_copy(A->xr, x, A->n);
+  la_copy_few(A->xr, x, A->n);
   int st = lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
   const double *lam = A->proj.lcp.lam;
   if (st == CUP_ERR_LINALG) {
@@ -254,7 +254,7 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
     lam = cup_projector_lambda(A->projector);
   }
   if (st < 0) {
-    la_copy(x, A->xr, A->n);
+    la_copy_few(x, A->xr, A->n);
     if (st == CUP_ERR_EMPTY_SET)
       return ad_fail(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
                   pi->farkas_gap, pi->farkas_residual);
@@ -290,10 +290,10 @@ static void error_onto(adaptive_ws *A, uint64_t mask, double *e) {
 /* v <- its propagation by the exact flow of md over tau (w = 0: the
  * homogeneous part). */
 static void flow_vector(adaptive_ws *A, ad_mode *md, double tau, double *v) {
-  la_zero(A->yr, A->na);
-  la_copy(A->yr, v, A->n);
+  la_zero_few(A->yr, A->na);
+  la_copy_few(A->yr, v, A->n);
   ad_flow(A, md, tau, A->yr, A->yt);
-  la_copy(v, A->yt, A->n);
+  la_copy_few(v, A->yt, A->n);
 }
 
 static void error_flow(adaptive_ws *A, ad_mode *md, double tau) {
@@ -385,7 +385,7 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
   if (st < 0) return st;
   R->kept = A->inside ? 1 + gbrk : 0;             /* (2: g is gbrk, not copied to gk) */
-  if (R->kept == 1) la_copy(A->gk, A->g, A->m);
+  if (R->kept == 1) la_copy_few(A->gk, A->g, A->m);
   if (first && !pi->skipped)
     warn(R, CUP_WARN_X0_OUTSIDE, "x0 is outside K(0) (|x0| = %.3g); it is projected", x0n);
   error_onto(A, active, A->e);
@@ -559,10 +559,10 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   for (int attempt = 0;; attempt++) {
     ad_locate(A, old, tw, ev);
     double tsw = ev->tau_sw;
-    if (ev->hi_ok) la_copy(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
+    if (ev->hi_ok) la_copy_few(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
     else ad_series_at(A, &A->sy, old, h, A->ya, tsw, A->yb);
     ad_state(A, old, A->yb, A->xs);
-    la_copy(A->wt, A->yb + n, nw);
+    la_copy_few(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);
     ad_manifold(A, old, A->g, A->xs);
     pi = (cup_proj_info){0};                     /* (end_of_step's and the step callback's) */
@@ -584,7 +584,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     ad_manifold(A, nm, A->g, A->xs);
     tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw, h);   /* the reference path */
     ad_state(A, old, A->yr, A->xr);
-    la_copy(A->wa, A->yr + n, nw);
+    la_copy_few(A->wa, A->yr + n, nw);
     ad_offset(A, A->wa, A->g);
     ad_manifold(A, nm, A->g, A->xr);
     ad_lift(A, nm, A->xr, A->wa, A->yt);
@@ -615,18 +615,18 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
    * the late switch lets through, first order in its delay */
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
   if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
-  la_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
-  la_zero(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
-  la_copy(A->se.v, A->e, n);
+  la_copy_few(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  la_zero_few(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
+  la_copy_few(A->se.v, A->e, n);
   if (troot > t0) {
     ad_series_at(A, &A->se, old, h, A->se.v, troot - t0, A->de);
-    la_copy(A->ed, A->de, n);
+    la_copy_few(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   if (ev->tau_sw > 0) {
     ad_series_at(A, &A->se, old, h, A->se.v, ev->tau_sw, A->yt);
-    la_copy(A->e, A->yt, n);
+    la_copy_few(A->e, A->yt, n);
   }
   if (A->tan) {   /* the tangent: the old flow to the root, its saltation (the new manifold's projection), the new flow */
     double tr = fmin(fmax(tau_rep, 0), ev->tau_sw);
@@ -639,7 +639,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   error_onto(A, nm->mask, A->e);
   if (nm->mask != before)
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
-  la_copy(A->x, A->xs, n);
+  la_copy_few(A->x, A->xs, n);
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
   R->after_event = 1;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
@@ -696,18 +696,18 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     ad_manifold(A, md, A->g, A->x);
   }
   if (series) {                                  /* (e, 0) by its series */
-    la_zero(A->se.v, na);
-    la_copy(A->se.v, A->e, n);
+    la_zero_few(A->se.v, na);
+    la_copy_few(A->se.v, A->e, n);
     ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
-    la_copy(A->et, A->yt, n);
+    la_copy_few(A->et, A->yt, n);
   } else {
     ad_matvec(n, na, E, A->e, A->et);
   }
-  la_copy(A->e, A->et, n);
+  la_copy_few(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
     double *v = A->tan + (size_t)c * n;
     ad_matvec(n, na, E, v, A->et);
-    la_copy(v, A->et, n);
+    la_copy_few(v, A->et, n);
   }
   R->t = t1;
   if (A->has_D && !A->callback && t1 != R->tb && A->carried < AD_CARRY - 1) {
@@ -783,7 +783,7 @@ static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb) {
       A->yb[i] = acc;
     }
     ad_state(A, md0, A->yb, A->x);
-    la_copy(A->xf, A->x, n);
+    la_copy_few(A->xf, A->x, n);
     ad_offset(A, A->yb + n, A->g);
     uint64_t active;
     cup_proj_info pi = {0};                        /* (end_of_step's and the step callback's) */
@@ -852,9 +852,9 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
     return ad_fail(R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
                 CUP_STATE_MAX, w, xa[w]);
   }
-  la_copy(A->x, xa, A->n);
-  la_copy(A->xok, xa, A->n);
-  la_zero(A->e, A->n);
+  la_copy_few(A->x, xa, A->n);
+  la_copy_few(A->xok, xa, A->n);
+  la_zero_few(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
   A->carry_md = NULL;
@@ -969,7 +969,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
     if (sink) st = offer_x(A, &R, A->xok);
     return run_to_end(A, &R, st);
   }
-  la_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
+  la_copy_few(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
   if (phase == AD_STOP_SAMPLE) {
     info->samples--;                             /* counted when the sink refused it */
     if (sink) st = offer(A, &R);
