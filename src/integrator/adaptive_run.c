@@ -231,7 +231,7 @@ static inline __attribute__((always_inline)) int make_consistent(adaptive_ws *A,
   double *s = A->has_D ? A->dq0 : A->s;          /* (with D, the jump's LCP reads it) */
   polyset_slack(A->K, g, x, s, A->gam);
   int outside = 0;                               /* beyond rounding: a held row is at 0 (with D: zeta = 0 */
-  for (int i = 0; i < A->m; i++) outside |= s[i] < -A->gam[i];   /* is consistent) */
+  for (int i = 0; i < A->m && !outside; i++) outside = s[i] < -A->gam[i];   /* is consistent) */
   A->inside = !outside;
   return outside ? move_inside(A, R, g, x, active, pi) : CUP_OK;
 }
