@@ -348,7 +348,8 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * kept only when it continues, as the LCP's answer must. With at_offset,
  * A->g and A->ut hold w's offset and input already (start_piece's); 2:
  * and A->s the slack C x + g at A->x (D = 0). */
-static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
+static inline __attribute__((always_inline)) int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint,
+                                                        double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), 0, &mask, &piv)
                     : at_offset == 2 ? ad_select_slack(A, A->x, w, hint, &mask, &piv)
@@ -856,7 +857,8 @@ static void info_clear(cup_run_info *info) {
 /* What a run and a window start from: nothing pending, stopped or pinned
  * from before, the end at tend, the state xa at R's time (x0 refused when
  * beyond a state's range: check, the run's). */
-static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
+static inline __attribute__((always_inline)) int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa,
+                                                           int check) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = A->nb_own.ok = 0;                /* (the input may have changed between runs) */
