@@ -409,7 +409,7 @@ static inline __attribute__((always_inline)) int at_break(adaptive_ws *A, ad_run
  * K(t+) (a projection, certified), and the active set by the velocity LCP.
  * fresh: at_break has just checked A->x (nothing between, as at a window's
  * start): with the same offset its slack in A->s is the choice's too. */
-static int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
+static inline __attribute__((always_inline)) int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
   double tb = ad_next_break(A, R->t);   /* a record here asked already */
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
