@@ -19,6 +19,12 @@
 #include "tally.h"
 #include "util/clock.h"
 
+/* The run's helpers that a switched converter calls once or twice a window
+ * (the breakpoint's check, the choice of the set, the output, ...): inlined
+ * in their few callers, where GCC kept them out of line and their calls'
+ * register saves and restores were a fifth to a half of each. */
+#define RUN_INLINE static inline __attribute__((always_inline))
+
 /* Callback inputs: the interpolation error of a step may take this share of
  * tol (the exact flow has none of its own). */
 #define AD_STEP_SHARE 0.1
@@ -79,7 +85,7 @@ static int halt_dense(adaptive_ws *A, ad_run *R) {
 /* The sample at R->t to the sink: the state x (A->x, or x0 as given at a
  * start), zeta the active set's at A->x (adaptive_zeta; none before a set
  * is chosen, or under catching-up steps: pinned[1]). */
-static int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
+RUN_INLINE int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
   R->info->samples++;
   A->zmd = A->pinned[1] ? NULL : R->md;
   A->zt = R->t;
@@ -113,7 +119,7 @@ static __attribute__((noinline)) int hold(adaptive_ws *A, ad_run *R) {
 
 /* est: R->est_max holds the estimate now already (step_done's, at a
  * step's end not at an event: the same sum, and its max again is a no-op) */
-static int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
+RUN_INLINE int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
   if (A->hold_end && R->t == A->tend && !last && R->sink) return hold(A, R);
@@ -150,7 +156,7 @@ static int give_held(adaptive_ws *A, ad_run *R) {
 static int emit(adaptive_ws *A, ad_run *R) { return emit_x(A, R, A->x); }
 
 /* A step's callback, and the interrupt and wall-time checks. */
-static int step_checks(adaptive_ws *A, ad_run *R, const cup_proj_info *pi) {
+RUN_INLINE int step_checks(adaptive_ws *A, ad_run *R, const cup_proj_info *pi) {
   if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
     return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
   if ((R->steps & 1023) == 0) {
@@ -224,8 +230,8 @@ static int jump(adaptive_ws *A, ad_run *R, double *x, uint64_t *active, cup_proj
 static int move_inside(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
                        cup_proj_info *pi);
 
-static inline __attribute__((always_inline)) int make_consistent(adaptive_ws *A, ad_run *R, const double *g,
-                                                                 double *x, uint64_t *active, cup_proj_info *pi) {
+RUN_INLINE int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
+                               cup_proj_info *pi) {
   *active = 0;
   pi->skipped = 1;
   double *s = A->has_D ? A->dq0 : A->s;          /* (with D, the jump's LCP reads it) */
@@ -236,9 +242,7 @@ static inline __attribute__((always_inline)) int make_consistent(adaptive_ws *A,
   return outside ? move_inside(A, R, g, x, active, pi) : CUP_OK;
 }
 
-/* (make_consistent's check inline, its projection out of line: a call's
- * saves and restores were half of the check's 140 instructions, twice a
- * window on a converter.) */
+/* (make_consistent's check inline, its projection out of line.) */
 static __attribute__((noinline)) int move_inside(adaptive_ws *A, ad_run *R, const double *g, double *x,
                                                  uint64_t *active, cup_proj_info *pi) {
   *pi = (cup_proj_info){0};
@@ -348,8 +352,7 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * kept only when it continues, as the LCP's answer must. With at_offset,
  * A->g and A->ut hold w's offset and input already (start_piece's); 2:
  * and A->s the slack C x + g at A->x (D = 0). */
-static inline __attribute__((always_inline)) int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint,
-                                                        double t_event, int at_offset) {
+RUN_INLINE int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), 0, &mask, &piv)
                     : at_offset == 2 ? ad_select_slack(A, A->x, w, hint, &mask, &piv)
@@ -378,10 +381,8 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
  * F + G u(t) by G's nonzeros, a waveform's terms those that reach them
  * (ad_offset's sums: the dense ones less terms that are zero; a switched
  * run's window starts and ends here, and a converter's gates, read by the
- * switches alone, were half of what it cost). Inline in its two callers, a
- * window's end and start (its call was a fifth of it). */
-static inline __attribute__((always_inline)) int at_break(adaptive_ws *A, ad_run *R, int first,
-                                                          cup_proj_info *pi) {
+ * switches alone, were half of what it cost). */
+RUN_INLINE int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
   int gbrk = 0;
   if (A->u && A->u->fn) {
     if (cup_input_eval(A->u, R->t, A->ut))
@@ -409,7 +410,7 @@ static inline __attribute__((always_inline)) int at_break(adaptive_ws *A, ad_run
  * K(t+) (a projection, certified), and the active set by the velocity LCP.
  * fresh: at_break has just checked A->x (nothing between, as at a window's
  * start): with the same offset its slack in A->s is the choice's too. */
-static inline __attribute__((always_inline)) int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
+RUN_INLINE int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
   double tb = ad_next_break(A, R->t);   /* a record here asked already */
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
@@ -857,8 +858,7 @@ static void info_clear(cup_run_info *info) {
 /* What a run and a window start from: nothing pending, stopped or pinned
  * from before, the end at tend, the state xa at R's time (x0 refused when
  * beyond a state's range: check, the run's). */
-static inline __attribute__((always_inline)) int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa,
-                                                           int check) {
+RUN_INLINE int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = A->nb_own.ok = 0;                /* (the input may have changed between runs) */
