@@ -428,6 +428,28 @@ void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const 
 const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
+/* ... with na <= 4 by M's dense columns in registers, unrolled (the zeros'
+ * terms are +-0, which leave a sum started at +0 as it was: the same sums):
+ * 1, else 0 (nothing done). */
+static inline __attribute__((always_inline)) void ad_mode_mv_dense(int na, const double *M, const double *y,
+                                                                   double *out) {
+  double v[4] = {0};
+  for (int j = 0; j < na; j++) {
+    double yj = y[j];
+    for (int i = 0; i < na; i++) v[i] += M[i + (size_t)j * na] * yj;
+  }
+  for (int i = 0; i < na; i++) out[i] = v[i];
+}
+static inline __attribute__((always_inline)) int ad_mode_mv_few(int na, const double *M, const double *y,
+                                                                double *out) {
+  switch (na) {
+    case 1: ad_mode_mv_dense(1, M, y, out); return 1;
+    case 2: ad_mode_mv_dense(2, M, y, out); return 1;
+    case 3: ad_mode_mv_dense(3, M, y, out); return 1;
+    case 4: ad_mode_mv_dense(4, M, y, out); return 1;
+  }
+  return 0;
+}
 /* out = E y for E the n x n head of a column-major matrix with leading
  * dimension lda (the terms of a y_j = 0 left out: +-0 each, they leave a
  * sum started at +0 as it was). */

@@ -442,33 +442,16 @@ static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
 
 /* (Terms with y_j = 0 are added too: +-0, which leaves a sum started at +0
  * as it was.) */
-static inline __attribute__((always_inline)) void mode_mv_dense(int na, const double *M, const double *y,
-                                                                double *out) {
-  double v[4] = {0};
-  for (int j = 0; j < na; j++) {
-    double yj = y[j];
-    for (int i = 0; i < na; i++) v[i] += M[i + (size_t)j * na] * yj;
-  }
-  for (int i = 0; i < na; i++) out[i] = v[i];
-}
-
 static inline void mode_mv_sparse(int na, const ad_mode *md, const double *y, double *out) {
   int nnz = md->mp[na];
   for (int i = 0; i < na; i++) out[i] = 0;
   for (int k = 0; k < nnz; k++) out[md->mi[k]] += md->mx[k] * y[md->mj[k]];
 }
 
-/* (A few components: M's dense columns in registers, unrolled; the zeros'
- * terms are +-0 as above: the same sums. The buck-boost's event functions
- * took 66 instructions a product by the nonzeros.) */
+/* (A few components: ad_mode_mv_few's dense sums; the buck-boost's event
+ * functions took 66 instructions a product by the nonzeros.) */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
-  switch (A->na) {
-    case 1: mode_mv_dense(1, md->M, y, out); return;
-    case 2: mode_mv_dense(2, md->M, y, out); return;
-    case 3: mode_mv_dense(3, md->M, y, out); return;
-    case 4: mode_mv_dense(4, md->M, y, out); return;
-  }
-  mode_mv_sparse(A->na, md, y, out);
+  if (!ad_mode_mv_few(A->na, md->M, y, out)) mode_mv_sparse(A->na, md, y, out);
 }
 
 /* The rest of a mode once mode_factor has chosen its rows. */
