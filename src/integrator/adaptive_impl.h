@@ -429,8 +429,8 @@ const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
 /* ... with na <= 4 by M's dense columns in registers, unrolled (the zeros'
- * terms are +-0, which leave a sum started at +0 as it was: the same sums):
- * 1, else 0 (nothing done). */
+ * terms are +-0, which leave a sum started at +0 as it was: the same sums)
+ * by ad_mode_mv_few: 1, else 0 (nothing done). */
 static inline __attribute__((always_inline)) void ad_mode_mv_dense(int na, const double *M, const double *y,
                                                                    double *out) {
   double v[4] = {0};

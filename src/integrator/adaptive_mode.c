@@ -105,9 +105,8 @@ void ad_row_of_C(const cup_polyset *K, int i, double *out) {
   for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) out[K->Ct.i[k]] = K->Ct.x[k];
 }
 
-/* The step limit of event detection for this active set: an eighth of the
- * period of its fastest oscillation (and of the input's), and the time an
- * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL. */
+/* h within an eighth of the period of an eigenvalue's oscillation and the
+ * time its growth takes to reach e. */
 static double hmax_of(double h, double re, double im) {
   if (im > 0) h = fmin(h, M_PI / 4 / im);
   if (re > 0) h = fmin(h, 1 / re);
@@ -129,6 +128,10 @@ static double hmax_2x2(double h, const double *AJ) {
   return hmax_of(h, scalbn(hi, e), 0);
 }
 
+/* The step limit of event detection for this active set: an eighth of the
+ * period of its fastest oscillation (and of the input's), and the time an
+ * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL (up to
+ * AD_EIG_CLOSED states, closed forms). */
 static double mode_hmax(adaptive_ws *A, const double *AJ) {
   int n = A->n;
   double h = A->hmax_input;
