@@ -48,7 +48,8 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
 /* (One pass over L's nonzeros for both: each sum as in its own function.) */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
   double *My = A->My;
-  ad_mode_mv(A, md, y, My);
+  if (A->na > 4) ad_mode_mv(A, md, y, My);
+  else ad_mode_mv_few(A->na, md->M, y, My);      /* (inline) */
   double vmax = state_scale(A, y);
   for (int i = 0; i < A->m; i++) {
     double acc = md->Lc[i], mag = fabs(md->Lc[i]), dacc = 0;

@@ -226,6 +226,8 @@ struct adaptive_ws {
   unsigned char known_singular[AD_KNOWN];
   long nknown;
   long clock;
+  ad_mode *got;             /* the slot ad_mode_get answered last (looked at first: its mask and stamp
+                               say whether it still holds that set) */
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
   double *S, *Sl, *Sinv, *T1, *T2, *T3;
@@ -426,6 +428,28 @@ void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const 
 const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end);
 /* out = M_J y over M's nonzeros (the dense product's sums, bit for bit). */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out);
+/* ... with na <= 4 by M's dense columns in registers, unrolled (the zeros'
+ * terms are +-0, which leave a sum started at +0 as it was: the same sums)
+ * by ad_mode_mv_few: 1, else 0 (nothing done). */
+static inline __attribute__((always_inline)) void ad_mode_mv_dense(int na, const double *M, const double *y,
+                                                                   double *out) {
+  double v[4] = {0};
+  for (int j = 0; j < na; j++) {
+    double yj = y[j];
+    for (int i = 0; i < na; i++) v[i] += M[i + (size_t)j * na] * yj;
+  }
+  for (int i = 0; i < na; i++) out[i] = v[i];
+}
+static inline __attribute__((always_inline)) int ad_mode_mv_few(int na, const double *M, const double *y,
+                                                                double *out) {
+  switch (na) {
+    case 1: ad_mode_mv_dense(1, M, y, out); return 1;
+    case 2: ad_mode_mv_dense(2, M, y, out); return 1;
+    case 3: ad_mode_mv_dense(3, M, y, out); return 1;
+    case 4: ad_mode_mv_dense(4, M, y, out); return 1;
+  }
+  return 0;
+}
 /* out = E y for E the n x n head of a column-major matrix with leading
  * dimension lda (the terms of a y_j = 0 left out: +-0 each, they leave a
  * sum started at +0 as it was). */
@@ -479,8 +503,13 @@ void ad_free_velocity(adaptive_ws *A, const double *x, const double *w);
  * measure of an event's local error, whose effect a resonance carries from
  * one component to another (scratch: n). */
 double ad_energy_bound(const adaptive_ws *A, const double *v, double *scratch);
-/* The step limit of event detection of md (computed on first use). */
-double ad_mode_hmax(adaptive_ws *A, ad_mode *md);
+/* The step limit of event detection of md (computed on first use, by
+ * ad_mode_hmax_first; inline: a call a step was some 50 instructions of a
+ * buck-boost's window). */
+double ad_mode_hmax_first(adaptive_ws *A, ad_mode *md);
+static inline double ad_mode_hmax(adaptive_ws *A, ad_mode *md) {
+  return md->hmax >= 0 ? md->hmax : ad_mode_hmax_first(A, md);
+}
 /* Row i of C, dense, into out (n entries). */
 void ad_row_of_C(const cup_polyset *K, int i, double *out);
 

@@ -86,8 +86,15 @@ void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b) {
   S->c = block_take(b, (AD_SERIES_SEGS * (AD_SERIES_MAX + 1) + 1) * (size_t)(A->na ? A->na : 1), sizeof(double));
 }
 
+/* Up to this many states the step limit's eigenvalues are a closed form
+ * (mode_hmax): GSL's workspace is not allocated, nor touched in the run
+ * (its first eigenproblem faulted two fresh pages in, some 5 us of a
+ * buck-boost's 160). */
+#define AD_EIG_CLOSED 2
+
 int ad_modes_init(adaptive_ws *A) {
   size_t n = (size_t)A->n;
+  if (A->n <= AD_EIG_CLOSED) return CUP_OK;
   A->eig = gsl_eigen_nonsymm_alloc(n);
   A->eigA = gsl_matrix_alloc(n, n);
   A->eigv = gsl_vector_complex_alloc(n);
@@ -116,13 +123,39 @@ void ad_row_of_C(const cup_polyset *K, int i, double *out) {
   for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) out[K->Ct.i[k]] = K->Ct.x[k];
 }
 
+/* h within an eighth of the period of an eigenvalue's oscillation and the
+ * time its growth takes to reach e. */
+static double hmax_of(double h, double re, double im) {
+  if (im > 0) h = fmin(h, M_PI / 4 / im);
+  if (re > 0) h = fmin(h, 1 / re);
+  return h;
+}
+
+/* mode_hmax of a 2 x 2 [a b; c d] (column-major in AJ): its eigenvalues
+ * mid +- sqrt(p^2 + bc), p = (a - d) / 2, on entries scaled by a power of
+ * 2 (exact) to 1; a real pair's larger one as det / (the other) when mid <
+ * 0 (mid + r would cancel). */
+static double hmax_2x2(double h, const double *AJ) {
+  double s = fmax(fmax(fabs(AJ[0]), fabs(AJ[1])), fmax(fabs(AJ[2]), fabs(AJ[3])));
+  if (!(s > 0) || !isfinite(s)) return h;
+  int e = ilogb(s);
+  double a = scalbn(AJ[0], -e), c = scalbn(AJ[1], -e), b = scalbn(AJ[2], -e), d = scalbn(AJ[3], -e);
+  double mid = 0.5 * (a + d), p = 0.5 * (a - d), disc = p * p + b * c;
+  if (disc < 0) return hmax_of(h, scalbn(mid, e), scalbn(sqrt(-disc), e));
+  double r = sqrt(disc), lo = mid - r, hi = mid >= 0 || lo == 0 ? mid + r : (a * d - b * c) / lo;
+  return hmax_of(h, scalbn(hi, e), 0);
+}
+
 /* The step limit of event detection for this active set: an eighth of the
  * period of its fastest oscillation (and of the input's), and the time an
- * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL. */
+ * unstable mode takes to grow by e; eigenvalues of Pi_J A by GSL (up to
+ * AD_EIG_CLOSED states, closed forms). */
 static double mode_hmax(adaptive_ws *A, const double *AJ) {
   int n = A->n;
   double h = A->hmax_input;
   if (n == 0) return h;
+  if (n == 1) return hmax_of(h, AJ[0], 0);
+  if (n == 2) return hmax_2x2(h, AJ);
   for (int j = 0; j < n; j++)
     for (int i = 0; i < n; i++) gsl_matrix_set(A->eigA, (size_t)i, (size_t)j, AJ[i + (size_t)j * n]);
   gsl_error_handler_t *old = gsl_set_error_handler_off();
@@ -131,25 +164,21 @@ static double mode_hmax(adaptive_ws *A, const double *AJ) {
   if (bad) return h;
   for (int i = 0; i < n; i++) {
     gsl_complex z = gsl_vector_complex_get(A->eigv, (size_t)i);
-    double im = fabs(GSL_IMAG(z)), re = GSL_REAL(z);
-    if (im > 0) h = fmin(h, M_PI / 4 / im);
-    if (re > 0) h = fmin(h, 1 / re);
+    h = hmax_of(h, GSL_REAL(z), fabs(GSL_IMAG(z)));
   }
   return h;
 }
 
-double ad_mode_hmax(adaptive_ws *A, ad_mode *md) {
-  if (md->hmax < 0) {                            /* Pi A, compact: an eigenproblem per mode used */
-    int n = A->n, na = A->na;
-    double *AJ = A->T1;
-    for (int j = 0; j < n; j++)
-      for (int i = 0; i < n; i++) AJ[i + (size_t)j * n] = md->M[i + (size_t)j * na];
-    md->hmax = mode_hmax(A, AJ);
-  }
-  return md->hmax;
+double ad_mode_hmax_first(adaptive_ws *A, ad_mode *md) {
+  int n = A->n, na = A->na;                      /* Pi A, compact: an eigenproblem per mode used */
+  double *AJ = A->T1;
+  for (int j = 0; j < n; j++)
+    for (int i = 0; i < n; i++) AJ[i + (size_t)j * n] = md->M[i + (size_t)j * na];
+  return md->hmax = mode_hmax(A, AJ);
 }
 
 static ad_mode *kept(adaptive_ws *A, uint64_t mask);
+static ad_mode *mode_get(adaptive_ws *A, uint64_t mask);
 
 /* The rows of mask, an independent subset of them (the mode's mask says
  * which), and the inverse of S = C_J P^-1 C_J^T into A->Sinv; with D, of
@@ -434,10 +463,16 @@ static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
 
 /* (Terms with y_j = 0 are added too: +-0, which leaves a sum started at +0
  * as it was.) */
-void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
-  int na = A->na, nnz = md->mp[na];
+static inline void mode_mv_sparse(int na, const ad_mode *md, const double *y, double *out) {
+  int nnz = md->mp[na];
   for (int i = 0; i < na; i++) out[i] = 0;
   for (int k = 0; k < nnz; k++) out[md->mi[k]] += md->mx[k] * y[md->mj[k]];
+}
+
+/* (A few components: ad_mode_mv_few's dense sums; the buck-boost's event
+ * functions took 66 instructions a product by the nonzeros.) */
+void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
+  if (!ad_mode_mv_few(A->na, md->M, y, out)) mode_mv_sparse(A->na, md, y, out);
 }
 
 /* The rest of a mode once mode_factor has chosen its rows. */
@@ -486,6 +521,13 @@ static uint64_t alias_of(const adaptive_ws *A, uint64_t mask) {
 }
 
 ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
+  ad_mode *md = A->got;                  /* (a window asks for the set the last one ran on) */
+  if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
+  return A->got = mode_get(A, mask);
+}
+
+/* (A set's slot is the one with its mask and a stamp: kept's first.) */
+static ad_mode *mode_get(adaptive_ws *A, uint64_t mask) {
   ad_mode *md = kept(A, mask);
   if (!md) {                             /* (a kept mode's rows are independent: no alias) */
     uint64_t sub = alias_of(A, mask);
@@ -671,7 +713,8 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   for (int s = 0; s < sub; s++) {
     la_copy(term, y_out, na);
     for (int k = 1; k <= 30; k++) {
-      ad_mode_mv(A, md, term, tmp);
+      if (na > 4) mode_mv_sparse(na, md, term, tmp);   /* (inlined, as before the few's dense case) */
+      else ad_mode_mv(A, md, term, tmp);
       /* done when every component's term is below its rounding: a callback's
        * Taylor states (u, u', ..., u^(7)) span 20 orders of magnitude, and a
        * test against the largest stopped x's series at 1e-5 of x */
@@ -730,11 +773,11 @@ static inline __attribute__((always_inline)) void state_sums(int n, int na, cons
 
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
   int n = A->n, na = A->na;
-  switch (na) {                                  /* (ad_lift's sizes) */
+  switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled) */
     case 1: state_sums(n, 1, md->X, y, x); return;
-    case 2: state_sums(n, 2, md->X, y, x); return;
-    case 3: state_sums(n, 3, md->X, y, x); return;
-    case 4: state_sums(n, 4, md->X, y, x); return;
+    case 2: if (n == 2) state_sums(2, 2, md->X, y, x); else state_sums(n, 2, md->X, y, x); return;
+    case 3: if (n == 2) state_sums(2, 3, md->X, y, x); else state_sums(n, 3, md->X, y, x); return;
+    case 4: if (n == 2) state_sums(2, 4, md->X, y, x); else state_sums(n, 4, md->X, y, x); return;
     case 5: state_sums(n, 5, md->X, y, x); return;
     case 6: state_sums(n, 6, md->X, y, x); return;
   }

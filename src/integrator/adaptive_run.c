@@ -19,6 +19,12 @@
 #include "tally.h"
 #include "util/clock.h"
 
+/* The run's helpers that a switched converter calls once or twice a window
+ * (the breakpoint's check, the choice of the set, the output, ...): inlined
+ * in their few callers, where GCC kept them out of line and their calls'
+ * register saves and restores were a fifth to a half of each. */
+#define RUN_INLINE static inline __attribute__((always_inline))
+
 /* Callback inputs: the interpolation error of a step may take this share of
  * tol (the exact flow has none of its own). */
 #define AD_STEP_SHARE 0.1
@@ -79,7 +85,7 @@ static int halt_dense(adaptive_ws *A, ad_run *R) {
 /* The sample at R->t to the sink: the state x (A->x, or x0 as given at a
  * start), zeta the active set's at A->x (adaptive_zeta; none before a set
  * is chosen, or under catching-up steps: pinned[1]). */
-static int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
+RUN_INLINE int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
   R->info->samples++;
   A->zmd = A->pinned[1] ? NULL : R->md;
   A->zt = R->t;
@@ -113,7 +119,7 @@ static __attribute__((noinline)) int hold(adaptive_ws *A, ad_run *R) {
 
 /* est: R->est_max holds the estimate now already (step_done's, at a
  * step's end not at an event: the same sum, and its max again is a no-op) */
-static int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
+RUN_INLINE int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
   const cup_integrator_options *o = &A->o;
   int out = 0, last = R->t == o->T;
   if (A->hold_end && R->t == A->tend && !last && R->sink) return hold(A, R);
@@ -150,7 +156,7 @@ static int give_held(adaptive_ws *A, ad_run *R) {
 static int emit(adaptive_ws *A, ad_run *R) { return emit_x(A, R, A->x); }
 
 /* A step's callback, and the interrupt and wall-time checks. */
-static int step_checks(adaptive_ws *A, ad_run *R, const cup_proj_info *pi) {
+RUN_INLINE int step_checks(adaptive_ws *A, ad_run *R, const cup_proj_info *pi) {
   if (A->o.on_step && A->o.on_step(R->steps, R->t, pi, A->o.step_ctx))
     return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_STEP, "stopped by the step callback");
   if ((R->steps & 1023) == 0) {
@@ -171,10 +177,10 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
     int w = tally_state_worst(A->x, A->n);
     snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): the state left its range ||x||_1 <= "
              "%g (x[%d] = %.3g): the scheme diverged", R->steps + 1, R->t, CUP_STATE_MAX, w, A->x[w]);
-    la_copy(A->x, A->xok, A->n);
+    la_copy_few(A->x, A->xok, A->n);
     return info->status = CUP_ERR_DIVERGED;
   }
-  la_copy(A->xok, A->x, A->n);
+  la_copy_few(A->xok, A->x, A->n);
   R->steps++;
   info->step = R->steps;
   info->t = R->t;
@@ -221,16 +227,24 @@ static int jump(adaptive_ws *A, ad_run *R, double *x, uint64_t *active, cup_proj
  * hands pi on zeroes it first; a breakpoint's at a window's ends read
  * skipped alone, and the zeroing was a sixth of the check); else *pi the
  * projection's. */
-static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
-                           cup_proj_info *pi) {
+static int move_inside(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
+                       cup_proj_info *pi);
+
+RUN_INLINE int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x, uint64_t *active,
+                               cup_proj_info *pi) {
   *active = 0;
   pi->skipped = 1;
   double *s = A->has_D ? A->dq0 : A->s;          /* (with D, the jump's LCP reads it) */
   polyset_slack(A->K, g, x, s, A->gam);
   int outside = 0;                               /* beyond rounding: a held row is at 0 (with D: zeta = 0 */
-  for (int i = 0; i < A->m; i++) outside |= s[i] < -A->gam[i];   /* is consistent) */
+  for (int i = 0; i < A->m && !outside; i++) outside = s[i] < -A->gam[i];   /* is consistent) */
   A->inside = !outside;
-  if (!outside) return CUP_OK;
+  return outside ? move_inside(A, R, g, x, active, pi) : CUP_OK;
+}
+
+/* (make_consistent's check inline, its projection out of line.) */
+static __attribute__((noinline)) int move_inside(adaptive_ws *A, ad_run *R, const double *g, double *x,
+                                                 uint64_t *active, cup_proj_info *pi) {
   *pi = (cup_proj_info){0};
   pi->skipped = 1;
   if (A->has_D) {
@@ -242,7 +256,7 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
     return st;
   }
   double S = cup_polyset_norm(A->K, x);
-  la_copy(A->xr, x, A->n);
+  la_copy_few(A->xr, x, A->n);
   int st = lcp_step_solve(&A->proj, g, A->xr, x, S, -1, 1e-10 * S, pi);
   const double *lam = A->proj.lcp.lam;
   if (st == CUP_ERR_LINALG) {
@@ -254,7 +268,7 @@ static int make_consistent(adaptive_ws *A, ad_run *R, const double *g, double *x
     lam = cup_projector_lambda(A->projector);
   }
   if (st < 0) {
-    la_copy(x, A->xr, A->n);
+    la_copy_few(x, A->xr, A->n);
     if (st == CUP_ERR_EMPTY_SET)
       return ad_fail(R, st, "K(t) is empty: Farkas certificate y >= 0 with g^T y = %.3g, ||C^T y||_{P^-1} = %.3g",
                   pi->farkas_gap, pi->farkas_residual);
@@ -290,10 +304,10 @@ static void error_onto(adaptive_ws *A, uint64_t mask, double *e) {
 /* v <- its propagation by the exact flow of md over tau (w = 0: the
  * homogeneous part). */
 static void flow_vector(adaptive_ws *A, ad_mode *md, double tau, double *v) {
-  la_zero(A->yr, A->na);
-  la_copy(A->yr, v, A->n);
+  la_zero_few(A->yr, A->na);
+  la_copy_few(A->yr, v, A->n);
   ad_flow(A, md, tau, A->yr, A->yt);
-  la_copy(v, A->yt, A->n);
+  la_copy_few(v, A->yt, A->n);
 }
 
 static void error_flow(adaptive_ws *A, ad_mode *md, double tau) {
@@ -338,7 +352,7 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * kept only when it continues, as the LCP's answer must. With at_offset,
  * A->g and A->ut hold w's offset and input already (start_piece's); 2:
  * and A->s the slack C x + g at A->x (D = 0). */
-static int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
+RUN_INLINE int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
   int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), 0, &mask, &piv)
                     : at_offset == 2 ? ad_select_slack(A, A->x, w, hint, &mask, &piv)
@@ -368,7 +382,7 @@ static int choose_mode(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint
  * (ad_offset's sums: the dense ones less terms that are zero; a switched
  * run's window starts and ends here, and a converter's gates, read by the
  * switches alone, were half of what it cost). */
-static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
+RUN_INLINE int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
   int gbrk = 0;
   if (A->u && A->u->fn) {
     if (cup_input_eval(A->u, R->t, A->ut))
@@ -385,7 +399,7 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
   int st = make_consistent(A, R, A->g, A->x, &active, pi);
   if (st < 0) return st;
   R->kept = A->inside ? 1 + gbrk : 0;             /* (2: g is gbrk, not copied to gk) */
-  if (R->kept == 1) la_copy(A->gk, A->g, A->m);
+  if (R->kept == 1) la_copy_few(A->gk, A->g, A->m);
   if (first && !pi->skipped)
     warn(R, CUP_WARN_X0_OUTSIDE, "x0 is outside K(0) (|x0| = %.3g); it is projected", x0n);
   error_onto(A, active, A->e);
@@ -396,14 +410,20 @@ static int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi) {
  * K(t+) (a projection, certified), and the active set by the velocity LCP.
  * fresh: at_break has just checked A->x (nothing between, as at a window's
  * start): with the same offset its slack in A->s is the choice's too. */
-static int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
+RUN_INLINE int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
   double tb = ad_next_break(A, R->t);   /* a record here asked already */
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
   double h = A->callback ? la_fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
-  if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
-    return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
-  ad_offset(A, A->wt, A->g);
+  if (A->w_const) {                              /* (DC sources alone: ad_inputs_on's and ad_offset's */
+    la_copy_few(A->wt, A->wc, A->nw);            /* answers, made at set-up, without their checks) */
+    la_copy_few(A->ut, A->uc, A->p);
+    la_copy_few(A->g, A->gc, A->m);
+  } else {
+    if (ad_inputs_on(A, R->t, R->t + h, A->wt, A->uerr))
+      return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
+    ad_offset(A, A->wt, A->g);
+  }
   uint64_t active = 0;
   /* at_break left x inside K(t) (nothing moved it since): with the same
    * offset at t+ (the input that jumps here reaches no row: a converter's
@@ -559,10 +579,10 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   for (int attempt = 0;; attempt++) {
     ad_locate(A, old, tw, ev);
     double tsw = ev->tau_sw;
-    if (ev->hi_ok) la_copy(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
+    if (ev->hi_ok) la_copy_few(A->yb, A->yhi, A->na);   /* the run's path: ad_locate's probe there */
     else ad_series_at(A, &A->sy, old, h, A->ya, tsw, A->yb);
     ad_state(A, old, A->yb, A->xs);
-    la_copy(A->wt, A->yb + n, nw);
+    la_copy_few(A->wt, A->yb + n, nw);
     ad_offset(A, A->wt, A->g);
     ad_manifold(A, old, A->g, A->xs);
     pi = (cup_proj_info){0};                     /* (end_of_step's and the step callback's) */
@@ -584,7 +604,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     ad_manifold(A, nm, A->g, A->xs);
     tau_rep = refine_root(A, old, ev->row, ev->tau_est, tsw, h);   /* the reference path */
     ad_state(A, old, A->yr, A->xr);
-    la_copy(A->wa, A->yr + n, nw);
+    la_copy_few(A->wa, A->yr + n, nw);
     ad_offset(A, A->wa, A->g);
     ad_manifold(A, nm, A->g, A->xr);
     ad_lift(A, nm, A->xr, A->wa, A->yt);
@@ -615,18 +635,18 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
    * the late switch lets through, first order in its delay */
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
   if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
-  la_copy(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
-  la_zero(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
-  la_copy(A->se.v, A->e, n);
+  la_copy_few(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
+  la_zero_few(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
+  la_copy_few(A->se.v, A->e, n);
   if (troot > t0) {
     ad_series_at(A, &A->se, old, h, A->se.v, troot - t0, A->de);
-    la_copy(A->ed, A->de, n);
+    la_copy_few(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
   if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
   if (ev->tau_sw > 0) {
     ad_series_at(A, &A->se, old, h, A->se.v, ev->tau_sw, A->yt);
-    la_copy(A->e, A->yt, n);
+    la_copy_few(A->e, A->yt, n);
   }
   if (A->tan) {   /* the tangent: the old flow to the root, its saltation (the new manifold's projection), the new flow */
     double tr = fmin(fmax(tau_rep, 0), ev->tau_sw);
@@ -639,7 +659,7 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   error_onto(A, nm->mask, A->e);
   if (nm->mask != before)
     for (int i = 0; i < n; i++) A->e[i] += A->et[i];
-  la_copy(A->x, A->xs, n);
+  la_copy_few(A->x, A->xs, n);
   R->t = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw;
   R->after_event = 1;
   if ((st = report(A, R, before, nm->mask, t0 + tau_rep)) < 0) return st;
@@ -696,18 +716,18 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     ad_manifold(A, md, A->g, A->x);
   }
   if (series) {                                  /* (e, 0) by its series */
-    la_zero(A->se.v, na);
-    la_copy(A->se.v, A->e, n);
+    la_zero_few(A->se.v, na);
+    la_copy_few(A->se.v, A->e, n);
     ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
-    la_copy(A->et, A->yt, n);
+    la_copy_few(A->et, A->yt, n);
   } else {
     ad_matvec(n, na, E, A->e, A->et);
   }
-  la_copy(A->e, A->et, n);
+  la_copy_few(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
     double *v = A->tan + (size_t)c * n;
     ad_matvec(n, na, E, v, A->et);
-    la_copy(v, A->et, n);
+    la_copy_few(v, A->et, n);
   }
   R->t = t1;
   if (A->has_D && !A->callback && t1 != R->tb && A->carried < AD_CARRY - 1) {
@@ -783,7 +803,7 @@ static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb) {
       A->yb[i] = acc;
     }
     ad_state(A, md0, A->yb, A->x);
-    la_copy(A->xf, A->x, n);
+    la_copy_few(A->xf, A->x, n);
     ad_offset(A, A->yb + n, A->g);
     uint64_t active;
     cup_proj_info pi = {0};                        /* (end_of_step's and the step callback's) */
@@ -838,7 +858,7 @@ static void info_clear(cup_run_info *info) {
 /* What a run and a window start from: nothing pending, stopped or pinned
  * from before, the end at tend, the state xa at R's time (x0 refused when
  * beyond a state's range: check, the run's). */
-static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
+RUN_INLINE int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
   A->stop.phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = A->nb_own.ok = 0;                /* (the input may have changed between runs) */
@@ -852,9 +872,9 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
     return ad_fail(R, CUP_ERR_ARG, "x0 is beyond the range of a state, ||x||_1 <= %g (CUP_STATE_MAX): x0[%d] = %g",
                 CUP_STATE_MAX, w, xa[w]);
   }
-  la_copy(A->x, xa, A->n);
-  la_copy(A->xok, xa, A->n);
-  la_zero(A->e, A->n);
+  la_copy_few(A->x, xa, A->n);
+  la_copy_few(A->xok, xa, A->n);
+  la_zero_few(A->e, A->n);
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
   A->carry_md = NULL;
@@ -969,7 +989,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
     if (sink) st = offer_x(A, &R, A->xok);
     return run_to_end(A, &R, st);
   }
-  la_copy(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
+  la_copy_few(A->xok, A->x, A->n);                  /* the last state within range: the stop's */
   if (phase == AD_STOP_SAMPLE) {
     info->samples--;                             /* counted when the sink refused it */
     if (sink) st = offer(A, &R);
