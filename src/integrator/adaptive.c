@@ -251,7 +251,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->gi = block_take(b, (size_t)m * p + 1, sizeof(int));
   A->gx = block_take(b, (size_t)m * p + 1, sizeof(double));
   A->gterm = block_take(b, A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int));
-  A->ework = block_take(b, 7 * NA, sizeof(double));
+  if (!A->scratch) A->ework = block_take(b, 7 * NA, sizeof(double));   /* (shared: scratch_carve's) */
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++)
     *vecs_na[k] = block_take(b, (size_t)na, sizeof(double));
@@ -302,7 +302,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
-  ad_scratch_layout(A, b);
+  if (!A->scratch) ad_scratch_layout(A, b);
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two
@@ -316,12 +316,74 @@ static void vectors(adaptive_ws *A, block_arena *b) {
  * memset (16 k instructions a configuration on the full bridge), and the
  * pages of slots no set is built in are never touched. */
 static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
-  ad_series_layout(A, &A->sy, b);
+  if (!A->scratch) ad_series_layout(A, &A->sy, b);
   *z0 = b->used;
   vectors(A, b);
   *z1 = b->used;
-  ad_series_layout(A, &A->se, b);
+  if (!A->scratch) ad_series_layout(A, &A->se, b);
   ad_modes_layout(A, b);
+}
+
+/* A switched run's configurations run one window at a time: the scratch
+ * of a window (what it writes before it reads: the exponentials', the
+ * active sets' construction's, the step's flow series) is one block for
+ * all of them, carved for the largest sizes and again for each one's own
+ * (each array grows with n, m and na: a carve for smaller sizes fits in
+ * it). Each configuration had its own, zeroed at its set-up: on the full
+ * bridge 9 of them, in the run, some 3 KB and a page fault each. */
+#define AD_SCRATCH_USERS 64        /* workspaces (switched.c's SW_MAX configurations) */
+struct adaptive_scratch {
+  void *block;
+  int n, m, na;                    /* the sizes it is carved for: its users' largest */
+  int nuser;
+  adaptive_ws *user[AD_SCRATCH_USERS];
+};
+
+/* A's scratch from b: the zeroed part (its end in *z), then the series. */
+static void scratch_carve(adaptive_ws *A, block_arena *b, size_t *z) {
+  int na = A->na;
+  ad_scratch_layout(A, b);
+  A->ework = block_take(b, 7 * (size_t)na * na, sizeof(double));
+  *z = b->used;
+  ad_series_layout(A, &A->sy, b);
+  ad_series_layout(A, &A->se, b);
+}
+
+static void scratch_point(adaptive_ws *A, adaptive_scratch *s) {
+  block_arena b = {s->block, 0};
+  size_t z;
+  scratch_carve(A, &b, &z);
+}
+
+/* A joins s: the block made (or made again, larger, for every user) to fit A. */
+static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
+  if (s->nuser == AD_SCRATCH_USERS) return CUP_ERR_NOMEM;   /* (switched.c makes no more) */
+  int n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m, na = A->na > s->na ? A->na : s->na;
+  if (!s->block || n > s->n || m > s->m || na > s->na) {
+    int own[3] = {A->n, A->m, A->na};
+    block_arena b = {0};
+    size_t z;
+    A->n = n, A->m = m, A->na = na;                /* (sized for the largest) */
+    scratch_carve(A, &b, &z);
+    A->n = own[0], A->m = own[1], A->na = own[2];
+    void *blk = malloc(b.used);
+    if (!blk) return CUP_ERR_NOMEM;
+    memset(blk, 0, z);                             /* (as the workspaces' own were) */
+    free(s->block);
+    s->block = blk;
+    s->n = n, s->m = m, s->na = na;
+    for (int k = 0; k < s->nuser; k++) scratch_point(s->user[k], s);
+  }
+  s->user[s->nuser++] = A;
+  scratch_point(A, s);
+  return CUP_OK;
+}
+
+void adaptive_scratch_free(adaptive_scratch **s) {
+  if (!s || !*s) return;
+  free((*s)->block);
+  free(*s);
+  *s = NULL;
 }
 
 static int alloc_block(adaptive_ws *A) {
@@ -337,7 +399,7 @@ static int alloc_block(adaptive_ws *A) {
 
 int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
                     const la_sparse *B, const la_sparse *Dm, const cup_input *u,
-                    const cup_integrator_options *o, char *errmsg) {
+                    const cup_integrator_options *o, adaptive_scratch **scratch, char *errmsg) {
   *out = NULL;
   if (!K->dense)
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
@@ -359,7 +421,9 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
     if (st) return st;
   }
   adaptive_ws *A = calloc(1, sizeof *A);
-  if (!A) return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  if (scratch && !*scratch) *scratch = calloc(1, sizeof **scratch);
+  if (!A || (scratch && !*scratch)) { free(A); return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory"); }
+  A->scratch = scratch ? *scratch : NULL;         /* (joined at the end: nothing here runs a window) */
   A->F = K->g0;
   A->u = D->p > 0 ? u : NULL;
   A->K = K;
@@ -412,6 +476,10 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   A->pinf = p_to_inf(K);
   if (A->has_D) dae_setup(A, B, Dm);
   switch_model(A);
+  if (A->scratch && scratch_join(A, A->scratch)) {
+    adaptive_free(&A);
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  }
   *out = A;
   return CUP_OK;
 }
