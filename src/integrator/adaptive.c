@@ -259,7 +259,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
                        &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero, &A->gk,
                        &A->gc, &A->gbrk};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++)
-    *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
+    if (!A->scratch || vecs_m[k] != &A->lcpq) *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
   for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++)
     *vecs_n[k] = block_take(b, (size_t)n, sizeof(double));
@@ -290,8 +290,10 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->pend.de = block_take(b, (size_t)na, sizeof(double));
   A->pend.y2 = block_take(b, (size_t)na, sizeof(double));
   A->pend.e2 = block_take(b, (size_t)n, sizeof(double));
-  A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
-  A->touch = block_take(b, (size_t)m, 1);
+  if (!A->scratch) {
+    A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
+    A->touch = block_take(b, (size_t)m, 1);
+  }
   if (A->has_D) {
     A->Bd = block_take(b, (size_t)n * m, sizeof(double));
     A->Dd = block_take(b, (size_t)m * m, sizeof(double));
@@ -299,10 +301,11 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     A->dcpl = block_take(b, (size_t)m, 1);
     A->jseed = block_take(b, (size_t)m, 1);
   }
+  if (A->scratch) return;                         /* (shared: scratch_carve's) */
   A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
-  if (!A->scratch) ad_scratch_layout(A, b);
+  ad_scratch_layout(A, b);
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two
@@ -326,52 +329,83 @@ static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
 
 /* A switched run's configurations run one window at a time: the scratch
  * of a window (what it writes before it reads: the exponentials', the
- * active sets' construction's, the step's flow series) is one block for
+ * active sets' construction's and choice's (the velocity LCP; with D, the
+ * candidates' checks, N and the jump's LCP), a callback input's
+ * interpolation's, the step's flow series) is one block for
  * all of them, carved for the largest sizes and again for each one's own
  * (each array grows with n, m and na: a carve for smaller sizes fits in
  * it). Each configuration had its own, zeroed at its set-up: on the full
- * bridge 9 of them, in the run, some 3 KB and a page fault each. */
+ * bridge 9 of them, in the run, some 4 KB and a page fault each. */
 #define AD_SCRATCH_USERS 64        /* workspaces (switched.c's SW_MAX configurations) */
 struct adaptive_scratch {
   void *block;
-  int n, m, na;                    /* the sizes it is carved for: its users' largest */
+  int n, m, na, p, has_D;          /* the sizes it is carved for: its users' largest (with D's arrays
+                                      when one has D) */
   int nuser;
   adaptive_ws *user[AD_SCRATCH_USERS];
 };
 
-/* A's scratch from b: the zeroed part (its end in *z), then the series. */
-static void scratch_carve(adaptive_ws *A, block_arena *b, size_t *z) {
-  int na = A->na;
+/* With D (adaptive_dae.c's ad_dae_init, its own callocs without a shared
+ * scratch): the active sets' choice and check, the jump's LCP, N and its
+ * SVD. */
+static void dae_carve(adaptive_ws *A, block_arena *b) {
+  int n = A->n, m = A->m, na = A->na;
+  size_t MM = (size_t)m * m;
+  double **mm[] = {&A->N, &A->Ninv, &A->svd_u, &A->svd_v};
+  for (size_t k = 0; k < sizeof mm / sizeof *mm; k++) *mm[k] = block_take(b, MM, sizeof(double));
+  A->jM = block_take(b, 4 * MM, sizeof(double));
+  A->jq = block_take(b, 2 * (size_t)m, sizeof(double));
+  A->Ry = block_take(b, (size_t)n * m, sizeof(double));
+  A->Ym = block_take(b, ((size_t)m + 1) * na, sizeof(double));
+  A->Zc = block_take(b, (size_t)m * n, sizeof(double));
+  double **vm[] = {&A->svd_s, &A->svd_w, &A->dq0, &A->dq1, &A->sz, &A->eqr, &A->eqc, &A->cg, &A->cd, &A->cd2,
+                   &A->cthr};
+  for (size_t k = 0; k < sizeof vm / sizeof *vm; k++) *vm[k] = block_take(b, (size_t)m, sizeof(double));
+  A->cy = block_take(b, (size_t)na, sizeof(double));
+  A->cMy = block_take(b, (size_t)na, sizeof(double));
+  A->jx = block_take(b, (size_t)n, sizeof(double));
+}
+
+/* A's scratch from b. */
+static void scratch_carve(adaptive_ws *A, block_arena *b) {
+  int na = A->na, m = A->m, p = A->p;
   ad_scratch_layout(A, b);
   A->ework = block_take(b, 7 * (size_t)na * na, sizeof(double));
-  *z = b->used;
+  A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
+  A->lcpq = block_take(b, (size_t)m, sizeof(double));
+  A->touch = block_take(b, (size_t)m, 1);
+  A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
+  A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
+  A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
+  if (A->has_D) dae_carve(A, b);
   ad_series_layout(A, &A->sy, b);
   ad_series_layout(A, &A->se, b);
 }
 
 static void scratch_point(adaptive_ws *A, adaptive_scratch *s) {
   block_arena b = {s->block, 0};
-  size_t z;
-  scratch_carve(A, &b, &z);
+  scratch_carve(A, &b);
 }
 
 /* A joins s: the block made (or made again, larger, for every user) to fit A. */
 static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
   if (s->nuser == AD_SCRATCH_USERS) return CUP_ERR_NOMEM;   /* (switched.c makes no more) */
-  int n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m, na = A->na > s->na ? A->na : s->na;
-  if (!s->block || n > s->n || m > s->m || na > s->na) {
-    int own[3] = {A->n, A->m, A->na};
+  int n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m, na = A->na > s->na ? A->na : s->na,
+      p = A->p > s->p ? A->p : s->p, has_D = A->has_D || s->has_D;
+  if (!s->block || n > s->n || m > s->m || na > s->na || p > s->p || has_D > s->has_D) {
+    int own[5] = {A->n, A->m, A->na, A->p, A->has_D};
     block_arena b = {0};
-    size_t z;
-    A->n = n, A->m = m, A->na = na;                /* (sized for the largest) */
-    scratch_carve(A, &b, &z);
-    A->n = own[0], A->m = own[1], A->na = own[2];
+    A->n = n, A->m = m, A->na = na, A->p = p, A->has_D = has_D;   /* (sized for the largest) */
+    scratch_carve(A, &b);
+    A->n = own[0], A->m = own[1], A->na = own[2], A->p = own[3], A->has_D = own[4];
+    /* not zeroed: each array is written before it is read (a window's
+     * scratch is another's leftovers already), and only the pages the
+     * windows use are touched */
     void *blk = malloc(b.used);
     if (!blk) return CUP_ERR_NOMEM;
-    memset(blk, 0, z);                             /* (as the workspaces' own were) */
     free(s->block);
     s->block = blk;
-    s->n = n, s->m = m, s->na = na;
+    s->n = n, s->m = m, s->na = na, s->p = p, s->has_D = has_D;
     for (int k = 0; k < s->nuser; k++) scratch_point(s->user[k], s);
   }
   s->user[s->nuser++] = A;
