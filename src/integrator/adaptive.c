@@ -343,7 +343,27 @@ struct adaptive_scratch {
                                       when one has D) */
   int nuser;
   adaptive_ws *user[AD_SCRATCH_USERS];
+  /* ad_mode_hmax's eigenvalue workspace (gsl's own allocations), for n
+   * states: its first user's, which it owns from then on */
+  gsl_eigen_nonsymm_workspace *eig;
+  gsl_matrix *eigA;
+  gsl_vector_complex *eigv;
+  int eig_n;
 };
+
+/* The eigenvalue workspace: a shared scratch's when it has one for n
+ * states (a switched run's configurations all have the run's), else A's
+ * own (ad_modes_init), which the scratch then takes over. */
+static int modes_init(adaptive_ws *A) {
+  adaptive_scratch *s = A->scratch;
+  if (s && s->eig && s->eig_n == A->n) {
+    A->eig = s->eig, A->eigA = s->eigA, A->eigv = s->eigv;
+    return CUP_OK;
+  }
+  int st = ad_modes_init(A);
+  if (!st && s && !s->eig) s->eig = A->eig, s->eigA = A->eigA, s->eigv = A->eigv, s->eig_n = A->n;
+  return st;
+}
 
 /* With D (adaptive_dae.c's ad_dae_init, its own callocs without a shared
  * scratch): the active sets' choice and check, the jump's LCP, N and its
@@ -415,6 +435,9 @@ static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
 
 void adaptive_scratch_free(adaptive_scratch **s) {
   if (!s || !*s) return;
+  if ((*s)->eig) gsl_eigen_nonsymm_free((*s)->eig);
+  if ((*s)->eigA) gsl_matrix_free((*s)->eigA);
+  if ((*s)->eigv) gsl_vector_complex_free((*s)->eigv);
   free((*s)->block);
   free(*s);
   *s = NULL;
@@ -479,7 +502,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
   }
-  if (fail || alloc_block(A) || ad_modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
+  if (fail || alloc_block(A) || modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     adaptive_free(&A);
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
@@ -544,7 +567,7 @@ int adaptive_held(adaptive_ws *A) {
 void adaptive_free(adaptive_ws **Ap) {
   if (!Ap || !*Ap) return;
   adaptive_ws *A = *Ap;
-  ad_modes_free(A);
+  if (!A->scratch || A->eig != A->scratch->eig) ad_modes_free(A);   /* (else the scratch's) */
   if (A->has_D) ad_dae_free(A);
   lcp_free(&A->lcp);
   lcp_step_free(&A->proj);
