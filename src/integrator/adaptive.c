@@ -479,7 +479,10 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   }
   adaptive_ws *A = calloc(1, sizeof *A);
   if (scratch && !*scratch) *scratch = calloc(1, sizeof **scratch);
-  if (!A || (scratch && !*scratch)) { free(A); return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory"); }
+  if (!A || (scratch && !*scratch)) {
+    free(A);
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  }
   A->scratch = scratch ? *scratch : NULL;         /* (joined at the end: nothing here runs a window) */
   A->F = K->g0;
   A->u = D->p > 0 ? u : NULL;

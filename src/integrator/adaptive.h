@@ -25,10 +25,12 @@ adaptive_ws *adaptive_of(const cup_integrator *I);
  * Requires a small dense set (K in dense form), no perturbation f, and
  * state plus input generators within the dense limit; errmsg says which
  * does not hold. Copies what it uses. scratch non-NULL: the run scratch
- * (the exponentials', the active sets' construction's, the step's flow
- * series) is *scratch's, made on the first call (*scratch NULL) and shared
- * by every workspace made with it, which must never run at once (a
- * switched run's configurations, one window at a time); NULL: its own. */
+ * (what a window writes before it reads: the exponentials', the active
+ * sets' construction's and choice's, the step's flow series, the
+ * eigenvalue workspace; adaptive.c, struct adaptive_scratch) is *scratch's,
+ * made on the first call (*scratch NULL) and shared by every workspace
+ * made with it, which must never run at once (a switched run's
+ * configurations, one window at a time); NULL: its own. */
 typedef struct adaptive_scratch adaptive_scratch;
 int adaptive_create(adaptive_ws **A, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
                     const la_sparse *B, const la_sparse *Dm, const cup_input *u,
