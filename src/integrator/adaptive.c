@@ -386,8 +386,8 @@ static void dae_carve(adaptive_ws *A, block_arena *b) {
   A->jx = block_take(b, (size_t)n, sizeof(double));
 }
 
-/* A's scratch from b. */
-static void scratch_carve(adaptive_ws *A, block_arena *b) {
+/* A's scratch from b: the part its own block zeroed (its end in *z), then the series. */
+static void scratch_carve(adaptive_ws *A, block_arena *b, size_t *z) {
   int na = A->na, m = A->m, p = A->p;
   ad_scratch_layout(A, b);
   A->ework = block_take(b, 7 * (size_t)na * na, sizeof(double));
@@ -398,29 +398,44 @@ static void scratch_carve(adaptive_ws *A, block_arena *b) {
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
   if (A->has_D) dae_carve(A, b);
+  *z = b->used;
   ad_series_layout(A, &A->sy, b);
   ad_series_layout(A, &A->se, b);
 }
 
-static void scratch_point(adaptive_ws *A, adaptive_scratch *s) {
+static size_t scratch_point(adaptive_ws *A, adaptive_scratch *s) {
   block_arena b = {s->block, 0};
-  scratch_carve(A, &b);
+  size_t z;
+  scratch_carve(A, &b, &z);
+  return z;
 }
 
-/* A joins s: the block made (or made again, larger, for every user) to fit A. */
+/* A joins s: the block made (or made again, larger, for every user) to fit
+ * A. The first is carved for as many states as the input can give any
+ * configuration (each one's are some of its terms', live_terms, and D's
+ * constant) and D's arrays: its pages past the part A uses are touched
+ * by none (a buck-boost's second configuration, one input state more than
+ * the first's, made it again in the run). That part is zeroed, as A's own
+ * would have been; the rest is not, nor a block made again (each array is
+ * written before it is read: a window's scratch is another's leftovers
+ * already), and only the pages the windows use are touched. */
 static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
   if (s->nuser == AD_SCRATCH_USERS) return CUP_ERR_NOMEM;   /* (switched.c makes no more) */
-  int n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m, na = A->na > s->na ? A->na : s->na,
-      p = A->p > s->p ? A->p : s->p, has_D = A->has_D || s->has_D;
-  if (!s->block || n > s->n || m > s->m || na > s->na || p > s->p || has_D > s->has_D) {
+  int first = !s->block, n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m,
+      na = A->na > s->na ? A->na : s->na, p = A->p > s->p ? A->p : s->p, has_D = A->has_D || s->has_D || first;
+  if (first) {
+    int bound = A->n + (A->callback ? A->p * (AD_DEGREE + 1) : input_gen_dim(A->u, NULL)) + 1;
+    if (bound > na + 16) bound = na + 16;          /* (a wide input's room: address space alone) */
+    if (bound > CUP_EXPONENTIAL_MAX_DIM) bound = CUP_EXPONENTIAL_MAX_DIM;
+    if (bound > na) na = bound;
+  }
+  if (first || n > s->n || m > s->m || na > s->na || p > s->p || has_D > s->has_D) {
     int own[5] = {A->n, A->m, A->na, A->p, A->has_D};
     block_arena b = {0};
+    size_t z;
     A->n = n, A->m = m, A->na = na, A->p = p, A->has_D = has_D;   /* (sized for the largest) */
-    scratch_carve(A, &b);
+    scratch_carve(A, &b, &z);
     A->n = own[0], A->m = own[1], A->na = own[2], A->p = own[3], A->has_D = own[4];
-    /* not zeroed: each array is written before it is read (a window's
-     * scratch is another's leftovers already), and only the pages the
-     * windows use are touched */
     void *blk = malloc(b.used);
     if (!blk) return CUP_ERR_NOMEM;
     free(s->block);
@@ -429,7 +444,8 @@ static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
     for (int k = 0; k < s->nuser; k++) scratch_point(s->user[k], s);
   }
   s->user[s->nuser++] = A;
-  scratch_point(A, s);
+  size_t z = scratch_point(A, s);
+  if (first) memset(s->block, 0, z);
   return CUP_OK;
 }
 
