@@ -251,7 +251,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->gi = block_take(b, (size_t)m * p + 1, sizeof(int));
   A->gx = block_take(b, (size_t)m * p + 1, sizeof(double));
   A->gterm = block_take(b, A->u && !A->u->fn ? (size_t)A->u->nterms + 1 : 1, sizeof(int));
-  A->ework = block_take(b, 7 * NA, sizeof(double));
+  if (!A->scratch) A->ework = block_take(b, 7 * NA, sizeof(double));   /* (shared: scratch_carve's) */
   double **vecs_na[] = {&A->ya, &A->yb, &A->yt, &A->yr, &A->My, &A->fa, &A->fb, &A->yhi};
   for (size_t k = 0; k < sizeof vecs_na / sizeof *vecs_na; k++)
     *vecs_na[k] = block_take(b, (size_t)na, sizeof(double));
@@ -259,7 +259,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
                        &A->cz, &A->cs, &A->c1, &A->s, &A->gam, &A->g, &A->lcpq, &A->zero, &A->gk,
                        &A->gc, &A->gbrk};
   for (size_t k = 0; k < sizeof vecs_m / sizeof *vecs_m; k++)
-    *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
+    if (!A->scratch || vecs_m[k] != &A->lcpq) *vecs_m[k] = block_take(b, (size_t)m, sizeof(double));
   double **vecs_n[] = {&A->x, &A->xs, &A->xr, &A->xf, &A->e, &A->et, &A->xok};
   for (size_t k = 0; k < sizeof vecs_n / sizeof *vecs_n; k++)
     *vecs_n[k] = block_take(b, (size_t)n, sizeof(double));
@@ -290,8 +290,10 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->pend.de = block_take(b, (size_t)na, sizeof(double));
   A->pend.y2 = block_take(b, (size_t)na, sizeof(double));
   A->pend.e2 = block_take(b, (size_t)n, sizeof(double));
-  A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
-  A->touch = block_take(b, (size_t)m, 1);
+  if (!A->scratch) {
+    A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
+    A->touch = block_take(b, (size_t)m, 1);
+  }
   if (A->has_D) {
     A->Bd = block_take(b, (size_t)n * m, sizeof(double));
     A->Dd = block_take(b, (size_t)m * m, sizeof(double));
@@ -299,6 +301,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     A->dcpl = block_take(b, (size_t)m, 1);
     A->jseed = block_take(b, (size_t)m, 1);
   }
+  if (A->scratch) return;                         /* (shared: scratch_carve's) */
   A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
@@ -316,12 +319,144 @@ static void vectors(adaptive_ws *A, block_arena *b) {
  * memset (16 k instructions a configuration on the full bridge), and the
  * pages of slots no set is built in are never touched. */
 static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
-  ad_series_layout(A, &A->sy, b);
+  if (!A->scratch) ad_series_layout(A, &A->sy, b);
   *z0 = b->used;
   vectors(A, b);
   *z1 = b->used;
-  ad_series_layout(A, &A->se, b);
+  if (!A->scratch) ad_series_layout(A, &A->se, b);
   ad_modes_layout(A, b);
+}
+
+/* A switched run's configurations run one window at a time: the scratch
+ * of a window (what it writes before it reads: the exponentials', the
+ * active sets' construction's and choice's (the velocity LCP; with D, the
+ * candidates' checks, N and the jump's LCP), a callback input's
+ * interpolation's, the step's flow series) is one block for
+ * all of them, carved for the largest sizes and again for each one's own
+ * (each array grows with n, m and na: a carve for smaller sizes fits in
+ * it). Each configuration had its own, zeroed at its set-up: on the full
+ * bridge 9 of them, in the run, some 4 KB and a page fault each. */
+#define AD_SCRATCH_USERS 64        /* workspaces (switched.c's SW_MAX configurations) */
+struct adaptive_scratch {
+  void *block;
+  int n, m, na, p, has_D;          /* the sizes it is carved for: its users' largest (with D's arrays
+                                      when one has D) */
+  int nuser;
+  adaptive_ws *user[AD_SCRATCH_USERS];
+  /* ad_mode_hmax's eigenvalue workspace (gsl's own allocations), for n
+   * states: its first user's, which it owns from then on */
+  gsl_eigen_nonsymm_workspace *eig;
+  gsl_matrix *eigA;
+  gsl_vector_complex *eigv;
+  int eig_n;
+};
+
+/* The eigenvalue workspace: a shared scratch's when it has one for n
+ * states (a switched run's configurations all have the run's), else A's
+ * own (ad_modes_init), which the scratch then takes over. */
+static int modes_init(adaptive_ws *A) {
+  adaptive_scratch *s = A->scratch;
+  if (s && s->eig && s->eig_n == A->n) {
+    A->eig = s->eig, A->eigA = s->eigA, A->eigv = s->eigv;
+    return CUP_OK;
+  }
+  int st = ad_modes_init(A);
+  if (!st && s && !s->eig) s->eig = A->eig, s->eigA = A->eigA, s->eigv = A->eigv, s->eig_n = A->n;
+  return st;
+}
+
+/* With D (adaptive_dae.c's ad_dae_init, its own callocs without a shared
+ * scratch): the active sets' choice and check, the jump's LCP, N and its
+ * SVD. */
+static void dae_carve(adaptive_ws *A, block_arena *b) {
+  int n = A->n, m = A->m, na = A->na;
+  size_t MM = (size_t)m * m;
+  double **mm[] = {&A->N, &A->Ninv, &A->svd_u, &A->svd_v};
+  for (size_t k = 0; k < sizeof mm / sizeof *mm; k++) *mm[k] = block_take(b, MM, sizeof(double));
+  A->jM = block_take(b, 4 * MM, sizeof(double));
+  A->jq = block_take(b, 2 * (size_t)m, sizeof(double));
+  A->Ry = block_take(b, (size_t)n * m, sizeof(double));
+  A->Ym = block_take(b, ((size_t)m + 1) * na, sizeof(double));
+  A->Zc = block_take(b, (size_t)m * n, sizeof(double));
+  double **vm[] = {&A->svd_s, &A->svd_w, &A->dq0, &A->dq1, &A->sz, &A->eqr, &A->eqc, &A->cg, &A->cd, &A->cd2,
+                   &A->cthr};
+  for (size_t k = 0; k < sizeof vm / sizeof *vm; k++) *vm[k] = block_take(b, (size_t)m, sizeof(double));
+  A->cy = block_take(b, (size_t)na, sizeof(double));
+  A->cMy = block_take(b, (size_t)na, sizeof(double));
+  A->jx = block_take(b, (size_t)n, sizeof(double));
+}
+
+/* A's scratch from b: the part its own block zeroed (its end in *z), then the series. */
+static void scratch_carve(adaptive_ws *A, block_arena *b, size_t *z) {
+  int na = A->na, m = A->m, p = A->p;
+  ad_scratch_layout(A, b);
+  A->ework = block_take(b, 7 * (size_t)na * na, sizeof(double));
+  A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
+  A->lcpq = block_take(b, (size_t)m, sizeof(double));
+  A->touch = block_take(b, (size_t)m, 1);
+  A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
+  A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
+  A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
+  if (A->has_D) dae_carve(A, b);
+  *z = b->used;
+  ad_series_layout(A, &A->sy, b);
+  ad_series_layout(A, &A->se, b);
+}
+
+static size_t scratch_point(adaptive_ws *A, adaptive_scratch *s) {
+  block_arena b = {s->block, 0};
+  size_t z;
+  scratch_carve(A, &b, &z);
+  return z;
+}
+
+/* A joins s: the block made (or made again, larger, for every user) to fit
+ * A. The first is carved for as many states as the input can give any
+ * configuration (each one's are some of its terms', live_terms, and D's
+ * constant) and D's arrays: its pages past the part A uses are touched
+ * by none (a buck-boost's second configuration, one input state more than
+ * the first's, made it again in the run). That part is zeroed, as A's own
+ * would have been; the rest is not, nor a block made again (each array is
+ * written before it is read: a window's scratch is another's leftovers
+ * already), and only the pages the windows use are touched. */
+static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
+  if (s->nuser == AD_SCRATCH_USERS) return CUP_ERR_NOMEM;   /* (switched.c makes no more) */
+  int first = !s->block, n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m,
+      na = A->na > s->na ? A->na : s->na, p = A->p > s->p ? A->p : s->p, has_D = A->has_D || s->has_D || first;
+  if (first) {
+    int bound = A->n + (A->callback ? A->p * (AD_DEGREE + 1) : input_gen_dim(A->u, NULL)) + 1;
+    if (bound > na + 16) bound = na + 16;          /* (a wide input's room: address space alone) */
+    if (bound > CUP_EXPONENTIAL_MAX_DIM) bound = CUP_EXPONENTIAL_MAX_DIM;
+    if (bound > na) na = bound;
+  }
+  if (first || n > s->n || m > s->m || na > s->na || p > s->p || has_D > s->has_D) {
+    int own[5] = {A->n, A->m, A->na, A->p, A->has_D};
+    block_arena b = {0};
+    size_t z;
+    A->n = n, A->m = m, A->na = na, A->p = p, A->has_D = has_D;   /* (sized for the largest) */
+    scratch_carve(A, &b, &z);
+    A->n = own[0], A->m = own[1], A->na = own[2], A->p = own[3], A->has_D = own[4];
+    void *blk = malloc(b.used);
+    if (!blk) return CUP_ERR_NOMEM;
+    free(s->block);
+    s->block = blk;
+    s->n = n, s->m = m, s->na = na, s->p = p, s->has_D = has_D;
+    for (int k = 0; k < s->nuser; k++) scratch_point(s->user[k], s);
+  }
+  s->user[s->nuser++] = A;
+  size_t z = scratch_point(A, s);
+  if (first) memset(s->block, 0, z);
+  return CUP_OK;
+}
+
+void adaptive_scratch_free(adaptive_scratch **s) {
+  if (!s || !*s) return;
+  if ((*s)->eig) gsl_eigen_nonsymm_free((*s)->eig);
+  if ((*s)->eigA) gsl_matrix_free((*s)->eigA);
+  if ((*s)->eigv) gsl_vector_complex_free((*s)->eigv);
+  free((*s)->block);
+  free(*s);
+  *s = NULL;
 }
 
 static int alloc_block(adaptive_ws *A) {
@@ -337,7 +472,7 @@ static int alloc_block(adaptive_ws *A) {
 
 int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
                     const la_sparse *B, const la_sparse *Dm, const cup_input *u,
-                    const cup_integrator_options *o, char *errmsg) {
+                    const cup_integrator_options *o, adaptive_scratch **scratch, char *errmsg) {
   *out = NULL;
   if (!K->dense)
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
@@ -359,7 +494,12 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
     if (st) return st;
   }
   adaptive_ws *A = calloc(1, sizeof *A);
-  if (!A) return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  if (scratch && !*scratch) *scratch = calloc(1, sizeof **scratch);
+  if (!A || (scratch && !*scratch)) {
+    free(A);
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  }
+  A->scratch = scratch ? *scratch : NULL;         /* (joined at the end: nothing here runs a window) */
   A->F = K->g0;
   A->u = D->p > 0 ? u : NULL;
   A->K = K;
@@ -381,7 +521,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
   }
-  if (fail || alloc_block(A) || ad_modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
+  if (fail || alloc_block(A) || modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     adaptive_free(&A);
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
   }
@@ -412,6 +552,10 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
   A->pinf = p_to_inf(K);
   if (A->has_D) dae_setup(A, B, Dm);
   switch_model(A);
+  if (A->scratch && scratch_join(A, A->scratch)) {
+    adaptive_free(&A);
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");
+  }
   *out = A;
   return CUP_OK;
 }
@@ -442,7 +586,7 @@ int adaptive_held(adaptive_ws *A) {
 void adaptive_free(adaptive_ws **Ap) {
   if (!Ap || !*Ap) return;
   adaptive_ws *A = *Ap;
-  ad_modes_free(A);
+  if (!A->scratch || A->eig != A->scratch->eig) ad_modes_free(A);   /* (else the scratch's) */
   if (A->has_D) ad_dae_free(A);
   lcp_free(&A->lcp);
   lcp_step_free(&A->proj);

@@ -24,11 +24,20 @@ adaptive_ws *adaptive_of(const cup_integrator *I);
  * D = 0): then w = C x + D zeta + g0 + G u and x' = A x + B zeta + E u.
  * Requires a small dense set (K in dense form), no perturbation f, and
  * state plus input generators within the dense limit; errmsg says which
- * does not hold. Copies what it uses. */
+ * does not hold. Copies what it uses. scratch non-NULL: the run scratch
+ * (what a window writes before it reads: the exponentials', the active
+ * sets' construction's and choice's, the step's flow series, the
+ * eigenvalue workspace; adaptive.c, struct adaptive_scratch) is *scratch's,
+ * made on the first call (*scratch NULL) and shared by every workspace
+ * made with it, which must never run at once (a switched run's
+ * configurations, one window at a time); NULL: its own. */
+typedef struct adaptive_scratch adaptive_scratch;
 int adaptive_create(adaptive_ws **A, const freestep_drift *D, const cup_polyset *K, const la_sparse *G,
                     const la_sparse *B, const la_sparse *Dm, const cup_input *u,
-                    const cup_integrator_options *o, char *errmsg);
+                    const cup_integrator_options *o, adaptive_scratch **scratch, char *errmsg);
 void adaptive_free(adaptive_ws **A);
+/* The shared scratch, after every workspace that uses it is freed. */
+void adaptive_scratch_free(adaptive_scratch **s);
 /* A switched run's wall-time limit (switched.c): the seconds left of the
  * run's, for the next window (0: none). */
 void adaptive_wall_limit(adaptive_ws *A, double seconds);

@@ -24,7 +24,8 @@ static void *take(size_t count, size_t size, int *fail) {
   return q;
 }
 
-int ad_dae_init(adaptive_ws *A) {
+/* The arrays below, each its own (a workspace without a shared scratch). */
+static int dae_arrays(adaptive_ws *A) {
   int n = A->n, m = A->m, na = A->na, fail = 0;
   size_t MM = (size_t)m * m;
   A->N = take(MM, sizeof(double), &fail);
@@ -45,17 +46,24 @@ int ad_dae_init(adaptive_ws *A) {
   A->cy = take((size_t)na, sizeof(double), &fail);
   A->cMy = take((size_t)na, sizeof(double), &fail);
   A->jx = take((size_t)n, sizeof(double), &fail);
-  if (fail || lcp_init(&A->jlcp, 2 * m) || lcp_monotone(&A->jlcp) || lcp_monotone(&A->lcp))
+  return fail;
+}
+
+int ad_dae_init(adaptive_ws *A) {
+  /* (shared: the arrays are the scratch's, adaptive.c's scratch_carve) */
+  if ((!A->scratch && dae_arrays(A)) || lcp_init(&A->jlcp, 2 * A->m) || lcp_monotone(&A->jlcp) ||
+      lcp_monotone(&A->lcp))
     return CUP_ERR_NOMEM;
   return CUP_OK;
 }
 
 void ad_dae_free(adaptive_ws *A) {
+  lcp_free(&A->jlcp);
+  if (A->scratch) return;
   free(A->N); free(A->Ninv); free(A->svd_u); free(A->svd_v); free(A->svd_s); free(A->svd_w);
   free(A->jM); free(A->jq); free(A->dq0); free(A->dq1); free(A->Ry); free(A->Ym); free(A->Zc);
   free(A->sz); free(A->eqr); free(A->eqc); free(A->cg); free(A->cd); free(A->cd2); free(A->cthr);
   free(A->cy); free(A->cMy); free(A->jx);
-  lcp_free(&A->jlcp);
 }
 
 /* ---- the choice of the active set ----------------------------------------------- */

@@ -152,6 +152,7 @@ typedef struct ad_stop {
 
 struct adaptive_ws {
   void *block;              /* the arrays the set-up sizes (adaptive.c, alloc_block): one allocation */
+  struct adaptive_scratch *scratch; /* the run scratch's owner when shared (adaptive_create), or NULL */
   const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
   const cup_polyset *K;

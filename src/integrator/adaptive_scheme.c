@@ -26,7 +26,7 @@ static int create(cup_integrator *I, const scheme_model *md, void **ws, char *er
                     !md->K ? "another set" : d->f ? "a callback f" : "a term f_integral");
   adaptive_ws *A = NULL;
   int st = adaptive_create(&A, md->D, md->K, md->G, L && L->has_D ? &L->B : NULL, L && L->has_D ? &L->D : NULL,
-                           md->u, md->o, errmsg);
+                           md->u, md->o, md->scratch, errmsg);
   *ws = A;
   return st;
 }

@@ -25,6 +25,11 @@ static int build(cup_integrator *I, const scheme_model *md, char *errmsg) {
 
 int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_input *u,
                           const cup_integrator_options *opt, char *errmsg) {
+  return integrator_create_shared(out, L, u, opt, NULL, errmsg);
+}
+
+int integrator_create_shared(cup_integrator **out, const cup_lcs *L, const cup_input *u,
+                             const cup_integrator_options *opt, struct adaptive_scratch **scratch, char *errmsg) {
   if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "integrator: output pointer is NULL");
   *out = NULL;
   if (!L) return fail_fmt(errmsg, CUP_ERR_ARG, "integrator: LCS is NULL");
@@ -38,7 +43,7 @@ int cup_integrator_create(cup_integrator **out, const cup_lcs *L, const cup_inpu
   I->G = L->has_G ? &L->G : NULL;
   I->fixed = L->fixed;
   freestep_drift D = {L->n, L->p, L->has_A, L->has_E, L->A, L->E, "LCS"};
-  scheme_model md = {&D, L, NULL, I->K, I->G, u, &I->o};
+  scheme_model md = {&D, L, NULL, I->K, I->G, u, &I->o, scratch};
   st = build(I, &md, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;
@@ -89,7 +94,7 @@ int cup_integrator_create_process(cup_integrator **out, const cup_process_desc *
   if (!I) return st;
   freestep_drift D;
   st = process_model(I, d, &D, errmsg);
-  scheme_model md = {&D, NULL, d, I->K, I->G, I->u, &I->o};
+  scheme_model md = {&D, NULL, d, I->K, I->G, I->u, &I->o, NULL};
   if (!st) st = build(I, &md, errmsg);
   if (st) { cup_integrator_free(&I); return st; }
   *out = I;

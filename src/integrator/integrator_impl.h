@@ -28,6 +28,13 @@ struct cup_integrator {
   } stop;
 };
 
+/* cup_integrator_create whose adaptive scheme takes its run scratch from
+ * *scratch (adaptive.h, adaptive_scratch: a switched run's configurations
+ * share one; NULL: its own). Other schemes ignore it. */
+struct adaptive_scratch;
+int integrator_create_shared(cup_integrator **out, const cup_lcs *L, const cup_input *u,
+                             const cup_integrator_options *opt, struct adaptive_scratch **scratch, char *errmsg);
+
 /* A fixed-step run's window (a switched circuit's stretch in one
  * configuration, switched.c): steps k0 + 1 .. k1 on the run's grid from
  * state x at t_k0 (first: k0 = 0, the run's own start and x0's sample),

@@ -22,6 +22,8 @@ typedef struct scheme_model {
   const la_sparse *G;              /* the offset's motion, or NULL */
   const cup_input *u;
   const cup_integrator_options *o;
+  struct adaptive_scratch **scratch;  /* the adaptive scheme's run scratch shared with other workspaces
+                                         (a switched run's configurations, adaptive.h), or NULL */
 } scheme_model;
 
 /* What a checkpoint's header names of a scheme's set-up beyond the options

@@ -46,6 +46,7 @@ struct switched_run {
   int n;
   cup_integrator *child[SW_MAX];
   adaptive_ws *ad[SW_MAX];  /* ... their adaptive scheme's workspace (the adaptive scheme's windows) */
+  adaptive_scratch *scratch;   /* ... whose run scratch is one, theirs (one window at a time) */
   cup_integrator *twin[SW_MAX];   /* each configuration's exact flow, for split steps (fixed-step schemes) */
   int twin_off[SW_MAX];    /* ... which the adaptive scheme does not take */
   unsigned char gated[SW_MAX], moves[SW_MAX];   /* the adaptive scheme's windows: state_gated and moves of
@@ -123,7 +124,7 @@ static int child_make(switched_run *S, int topo, char *errmsg) {
   int calls = S->o.scheme == CUP_SCHEME_ADAPTIVE || S->o.estimate || S->on_step;
   o.on_step = calls ? watch_step : NULL;
   o.step_ctx = calls ? S : NULL;
-  int st = cup_integrator_create(&S->child[topo], L, S->u, &o, msg);
+  int st = integrator_create_shared(&S->child[topo], L, S->u, &o, &S->scratch, msg);
   if (st) return fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg);
   S->ad[topo] = adaptive_of(S->child[topo]);
   return CUP_OK;
@@ -136,6 +137,7 @@ static void sw_free(void *ws) {
     cup_integrator_free(&S->child[k]);
     cup_integrator_free(&S->twin[k]);
   }
+  adaptive_scratch_free(&S->scratch);              /* (after its users) */
   cup_integrator_free(&S->half);
   estimate_free(&S->est);
   free(S->x);

@@ -55,12 +55,19 @@ typedef struct nl_raw {
 
 typedef struct nl_switched nl_switched;
 
+/* A signal's element or nodes in a netlist (nl_probe_next, the hooks' probe). */
+typedef struct nl_probe_at {
+  char kind;               /* 'v' or 'i'; 0: not found yet */
+  int x, y;                /* the node (y: the second, or -1) or the element */
+} nl_probe_at;
+
 /* What the netlist's own functions ask of netlist_switch.c (a table, so that
  * the formulation does not depend on it: it depends on the formulation). */
 typedef struct nl_sw_hooks {
   void (*free)(nl_switched **S);
   cup_netlist *(*current)(cup_netlist *nl);              /* the configuration in force */
-  int (*probe)(cup_netlist *nl, int k, char *errmsg);    /* signal k added to every configuration */
+  int (*probe)(cup_netlist *nl, int k, const nl_probe_at *at, char *errmsg);   /* signal k (of the element or
+                                                         nodes at) added to every configuration */
   int (*origin)(cup_netlist *nl, double t0, char *errmsg);   /* every configuration's sources from t0 */
 } nl_sw_hooks;
 
@@ -197,8 +204,13 @@ int nl_coupling_metric(cup_netlist *nl, const nl_circuit *c, la_sparse *P, char 
  * sub's table, as cup_netlist_probe would, but neither formatted again nor
  * looked for among those sub has: the caller records a configuration's
  * signals in the order of the netlist's, whose names are unique. Returns
- * its index or a status < 0. */
-int nl_probe_next(cup_netlist *sub, const char *name, char *errmsg);
+ * its index or a status < 0. at, when not NULL: the element or nodes the
+ * name names, found by name on the first call (at->kind 0: not yet) and
+ * kept there for the next, in another configuration of the same circuit
+ * (each has the circuit's nodes and elements in its order, its own
+ * constraints after them: netlist_switch.c's derive), which reads no
+ * name again. */
+int nl_probe_next(cup_netlist *sub, const char *name, nl_probe_at *at, char *errmsg);
 /* 0 if text is a valid probe of this circuit, else a message into msg. */
 int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t size);
 

@@ -216,11 +216,11 @@ static int probe_all(cup_netlist *nl, char *errmsg) {
   int st = CUP_OK, ne = nl->nelem_user ? nl->nelem_user : nl->nelem;
   for (int v = 1; v < nl->nnodes && st >= 0; v++) {
     st = probe_one(nl, 'v', v, -1, errmsg);
-    if (st >= 0 && nl->hooks) st = nl->hooks->probe(nl, st, errmsg);
+    if (st >= 0 && nl->hooks) st = nl->hooks->probe(nl, st, &(nl_probe_at){'v', v, -1}, errmsg);
   }
   for (int e = 0; e < ne && st >= 0; e++) {
     st = probe_one(nl, 'i', e, -1, errmsg);
-    if (st >= 0 && nl->hooks) st = nl->hooks->probe(nl, st, errmsg);
+    if (st >= 0 && nl->hooks) st = nl->hooks->probe(nl, st, &(nl_probe_at){'i', e, -1}, errmsg);
   }
   return st < 0 ? st : CUP_OK;
 }
@@ -264,18 +264,21 @@ int cup_netlist_probe(cup_netlist *nl, const char *signal, char *errmsg) {
     return fail_fmt(errmsg, CUP_ERR_ARG, "probe '%.60s': no element named '%.*s' in %s", signal,
                     (int)(la < 60 ? la : 60), a, nl->file);
   int k = probe_one(nl, kind, x, y, errmsg);
-  return k >= 0 && nl->hooks ? nl->hooks->probe(nl, k, errmsg) : k;
+  return k >= 0 && nl->hooks ? nl->hooks->probe(nl, k, &(nl_probe_at){kind, x, y}, errmsg) : k;
 }
 
-int nl_probe_next(cup_netlist *sub, const char *name, char *errmsg) {
+int nl_probe_next(cup_netlist *sub, const char *name, nl_probe_at *at, char *errmsg) {
   char kind;
   const char *a, *b;
   size_t la, lb;
   int x = -1, y = -1;
-  if (!sub->hooks && !scratch(sub, errmsg) && split(name, &kind, &a, &la, &b, &lb)) {
+  if (!sub->hooks && !scratch(sub, errmsg) && at && at->kind) {
+    kind = at->kind, x = at->x, y = at->y;
+  } else if (!sub->hooks && !scratch(sub, errmsg) && split(name, &kind, &a, &la, &b, &lb)) {
     x = kind == 'i' ? find_elem(sub, a, la) : find_node(sub, a, la);
     y = b ? find_node(sub, b, lb) : -1;
     if ((b && y < 0) || (kind == 'i' && sub->nelem_user && x >= sub->nelem_user)) x = -1;
+    if (at && x >= 0) *at = (nl_probe_at){kind, x, y};
   }
   if (x < 0) return cup_netlist_probe(sub, name, errmsg);   /* (its message, or its answer) */
   char *own = strdup(name);

@@ -283,7 +283,7 @@ static int topo_of(cup_netlist *nl, uint64_t cfg, int *out, char *errmsg) {
   memset(tp, 0, sizeof *tp);
   int st = form(S, &tp->sub, cfg, tp, errmsg);
   for (int k = 0; !st && k < nl->nsig; k++) {     /* the signals recorded, in the same order */
-    int q = nl_probe_next(tp->sub, nl->sig_name[k], errmsg);
+    int q = nl_probe_next(tp->sub, nl->sig_name[k], k < NL_SIG_AT ? &S->sig_at[k] : NULL, errmsg);
     if (q != k) st = q < 0 ? q : nl_fail(&S->c, -1, errmsg, CUP_ERR_ARG, "signal order differs");
   }
   if (st) {
@@ -432,8 +432,9 @@ long cup_netlist_configurations_formed(const cup_netlist *nl) { return nl && nl-
 
 static cup_netlist *sw_current(cup_netlist *nl) { return nl->sw->topo[nl->sw->cur].sub; }
 
-static int sw_probe(cup_netlist *nl, int k, char *errmsg) {
+static int sw_probe(cup_netlist *nl, int k, const nl_probe_at *at, char *errmsg) {
   nl_switched *S = nl->sw;
+  if (k < NL_SIG_AT) S->sig_at[k] = *at;           /* (each configuration's: topo_of's) */
   for (int j = 1; j < S->ntopo; j++) {
     int q = cup_netlist_probe(S->topo[j].sub, nl->sig_name[k], errmsg);
     if (q < 0) return q;

@@ -11,6 +11,7 @@
 
 #define NL_TOPO_MAX 64     /* configurations kept (a converter has a handful) */
 #define NL_TAB_TERMS 6     /* read_piece's table: a class reading up to 6 terms (a full bridge's 4 gates) */
+#define NL_SIG_AT 64       /* signals whose element or nodes a run finds by name once (topo_of) */
 
 typedef struct nl_topo {
   uint64_t cfg;            /* bit k: switch k closed */
@@ -76,6 +77,9 @@ struct nl_switched {
   void *gate_ctx;
   double gate_ts;
   int *gate;               /* nsw */
+  /* the recorded signals' elements and nodes, as the netlist's probe found
+   * them by name (sw_probe), the same in each configuration (nl_probe_next) */
+  nl_probe_at sig_at[NL_SIG_AT];
 };
 
 /* t's sampling instant k if t is one (within 1e-9 ts), else -1. */
