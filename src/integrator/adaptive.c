@@ -303,6 +303,7 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
   ad_scratch_layout(A, b);
+  if (A->o.output == CUP_OUTPUT_TOL) ad_tol_layout(A, b);   /* (the other outputs' layout as it was) */
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two

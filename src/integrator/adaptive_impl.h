@@ -326,8 +326,18 @@ struct adaptive_ws {
     long k;                 /* the step number the sink was given */
     double t_end, t2a, t2b;
     double *zy, *de, *y2, *e2;   /* na, na, na, n */
+    /* output tol: the refused point's piece, chosen again from its start
+     * (zy its y there, at ta, with the scales opk then), offered from tr on */
+    double ta, tr, *opk;    /* opk: n */
+    int with_t0;            /* ... its start is offered too (an event's new flow) */
   } pend;
+  /* output tol (adaptive_outtol.c; allocated with CUP_OUTPUT_TOL alone):
+   * each state's largest |x_i| over the points so far (n), the points
+   * bisection keeps to be checked (AD_TOL_DEPTH + 1 of t, x, x' and y:
+   * 1 + 2n + na each), and the left end's */
+  double *opeak, *ostk, *oleft;
 };
+#define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 
 /* ---- adaptive.c: the run's messages ---- */
 /* "step k (t = ...): " and the text into the run's message; ad_fail also
@@ -380,6 +390,17 @@ int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, cons
 /* A stop at a refused sample inside a step, resumed: that sample and the
  * rest of the step's; 1 if the sink refused one again. */
 int ad_dense_resume(adaptive_ws *A, ad_run *R);
+/* A sample's state beyond its range (tally.h): the run stops, CUP_ERR_DIVERGED. */
+int ad_diverged(ad_run *R, double ts, const double *xo, int n);
+
+/* ---- adaptive_outtol.c ---- */
+/* Output tol: the points inside [t0, t1) on md's flow from y = ya (and t0
+ * itself when with_t0), those before skip not offered; as ad_emit_dense:
+ * a refusal kept in A->pend, 1; else 0 or an error. */
+int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
+                int with_t0, double skip);
+/* The slots it needs (with CUP_OUTPUT_TOL alone), from block b. */
+void ad_tol_layout(adaptive_ws *A, block_arena *b);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a

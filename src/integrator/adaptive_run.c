@@ -100,6 +100,7 @@ static __attribute__((noinline)) int hold(adaptive_ws *A, ad_run *R) {
   const cup_integrator_options *o = &A->o;
   int due = 0;
   if (o->output == CUP_OUTPUT_EVERY) due = R->steps % o->output_every == 0;
+  else if (o->output == CUP_OUTPUT_TOL) due = 1;
   else if (o->output == CUP_OUTPUT_SAMPLES && R->next_sample < o->output_samples) {
     double ts = ad_sample_time(A, R->next_sample);
     due = ts <= R->t && ts >= ad_dense_end(A, R->t);
@@ -125,6 +126,7 @@ static int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
         R->next_sample++;
       }
       break;
+    case CUP_OUTPUT_TOL: out = 1; break;         /* (each step's end, as every 1: adaptive_outtol.c between) */
     case CUP_OUTPUT_FINAL: out = last; break;
     case CUP_OUTPUT_NONE: break;
   }

@@ -191,7 +191,7 @@ static void times_run(const adaptive_ws *A, const double *E, double *y, double *
 #undef TIMES_DENSE
 
 /* A sample's state xo at ts beyond its range (tally.h): the run stops. */
-static int diverged(ad_run *R, double ts, const double *xo, int n) {
+int ad_diverged(ad_run *R, double ts, const double *xo, int n) {
   int w = tally_state_worst(xo, n);
   return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
                  "the scheme diverged", CUP_STATE_MAX, ts, w, xo[w]);
@@ -246,7 +246,7 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
     if (sink) {
       if (!A->rows_ready) ad_state(A, md, A->zy, xo);
       else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, A->zy);
-      if (tally_state_beyond(xo, n)) return diverged(R, ts, xo, n);   /* as step_done: never a state out of range */
+      if (tally_state_beyond(xo, n)) return ad_diverged(R, ts, xo, n);   /* as step_done: never a state out of range */
       ++*samples;
       A->zt = ts;
       if (sink(k, ts, xo, ctx)) {                   /* inside the step in progress: refused */
@@ -410,7 +410,7 @@ static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k
       if (!(A->best[q] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[q]);
       la_copy(A->zy, by + (size_t)q * na, na);
       la_copy(A->de, be + (size_t)q * na, na);
-      return diverged(R, bt[q], A->bx + (size_t)q * n, n);
+      return ad_diverged(R, bt[q], A->bx + (size_t)q * n, n);
     }
     first = 0;
     int st = batch_put(A, R, md, t1, k, c);
@@ -492,7 +492,7 @@ static void error_at(adaptive_ws *A, ad_mode *md, double tau, const double *e0) 
 int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
                       double t1) {
   const cup_integrator_options *o = &A->o;
-  if (o->output != CUP_OUTPUT_SAMPLES) return CUP_OK;
+  if (o->output != CUP_OUTPUT_SAMPLES && o->output != CUP_OUTPUT_TOL) return CUP_OK;
   struct ad_pend *p = &A->pend;
   if (p->active) {
     if (!p->seg2) {
@@ -504,6 +504,10 @@ int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, cons
       la_copy(p->e2, e0, A->n);
     }
     return CUP_OK;
+  }
+  if (o->output == CUP_OUTPUT_TOL) {              /* (an event's new flow: its start too) */
+    int st = ad_emit_tol(A, R, md, ya, t0, t1, R->steps + 1, t0 > R->t, -INFINITY);
+    return st < 0 ? st : CUP_OK;
   }
   if (!(R->next_sample < o->output_samples)) return CUP_OK;
   double ts = ad_sample_time(A, R->next_sample);
@@ -521,6 +525,13 @@ int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, cons
 int ad_dense_resume(adaptive_ws *A, ad_run *R) {
   struct ad_pend *p = &A->pend;
   p->active = 0;
+  if (A->o.output == CUP_OUTPUT_TOL) {            /* the piece chosen again, from the refused point on */
+    la_copy(A->opeak, p->opk, A->n);
+    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->ta, p->t_end, p->k, p->with_t0, p->tr);
+    if (st || !p->seg2) return st;
+    p->seg2 = 0;
+    return ad_emit_tol(A, R, &A->modes[p->md2], p->y2, p->t2a, p->t2b, p->k, p->t2a > p->ta, -INFINITY);
+  }
   la_copy(A->zy, p->zy, A->na);
   la_copy(A->de, p->de, A->na);
   int st = dense_from(A, R, &A->modes[p->md], p->t_end, p->k);

@@ -655,6 +655,9 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
   if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
     return fail_fmt(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
   *out = NULL;
+  if (o->output == CUP_OUTPUT_TOL)                 /* (its points inside a window's steps: not yet) */
+    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "output tol is not available for a switched circuit (a "
+                    "netlist with switches) yet: use output every (each step's end) or samples");
   int estimate = o->estimate && o->scheme != CUP_SCHEME_ADAPTIVE;   /* (the adaptive scheme estimates always) */
   if (estimate && (o->n < 2 || o->n % 2))
     return fail_fmt(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
