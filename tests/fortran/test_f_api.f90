@@ -109,7 +109,7 @@ contains
       off(b, c_loc(o%step_ctx)), off(b, c_loc(o%interrupt)), off(b, c_loc(o%tol_abs)), &
       off(b, c_loc(o%tol_rel)), off(b, c_loc(o%max_event_rate)), off(b, c_loc(o%on_event)), &
       off(b, c_loc(o%event_ctx)), off(b, c_loc(o%estimate)), off(b, c_loc(o%hmax)), &
-      off(b, c_loc(o%output_t0))])
+      off(b, c_loc(o%output_t0)), off(b, c_loc(o%output_tol))])
     b = c_loc(r)
     call compare('cup_run_info', [int(c_sizeof(r), c_long), off(b, c_loc(r%status)), off(b, c_loc(r%step)), &
       off(b, c_loc(r%t)), off(b, c_loc(r%projected)), off(b, c_loc(r%skipped)), &
