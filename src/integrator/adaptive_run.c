@@ -857,6 +857,7 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
   la_copy(A->x, xa, A->n);
   la_copy(A->xok, xa, A->n);
   la_zero(A->e, A->n);
+  if (check && A->opeak) la_zero(A->opeak, A->n);   /* (output tol's scales: a run's own) */
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
   A->carry_md = NULL;
