@@ -303,7 +303,13 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
   ad_scratch_layout(A, b);
-  if (A->o.output == CUP_OUTPUT_TOL) ad_tol_layout(A, b);   /* (the other outputs' layout as it was) */
+  if (A->o.output == CUP_OUTPUT_TOL) {           /* adaptive_outtol.c's (the other outputs' layout as it was) */
+    size_t slot = 1 + 2 * (size_t)n + (size_t)na;
+    A->opeak = block_take(b, (size_t)n, sizeof(double));
+    A->pend.opk = block_take(b, (size_t)n, sizeof(double));
+    A->ostk = block_take(b, (AD_TOL_DEPTH + 1) * slot, sizeof(double));
+    A->oleft = block_take(b, slot, sizeof(double));
+  }
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two

@@ -382,16 +382,20 @@ double ad_sample_time(const adaptive_ws *A, long j);
 static inline double ad_dense_end(const adaptive_ws *A, double t1) {
   return A->hold_end && t1 == A->tend && t1 < A->o.T ? t1 - 8 * DBL_EPSILON * fabs(t1) : t1;
 }
-/* The samples due in [t0, t1) on md's flow from y = ya with error e0,
- * offered to the sink (a refusal kept in A->pend: the step goes on, the
- * run stops at its end); CUP_OK or an error. */
-int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
-                  double t1);
+/* The samples due in [t0, t1) on md's flow from y = ya with error e0
+ * (output samples; output tol's points), offered to the sink (a refusal
+ * kept in A->pend: the step goes on, the run stops at its end); CUP_OK or
+ * an error. The other outputs have none: no call. */
+int ad_emit_out(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                double t1);
+static inline int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0,
+                                double t0, double t1) {
+  int out = A->o.output;
+  return out == CUP_OUTPUT_SAMPLES || out == CUP_OUTPUT_TOL ? ad_emit_out(A, R, md, ya, e0, t0, t1) : CUP_OK;
+}
 /* A stop at a refused sample inside a step, resumed: that sample and the
  * rest of the step's; 1 if the sink refused one again. */
 int ad_dense_resume(adaptive_ws *A, ad_run *R);
-/* A sample's state beyond its range (tally.h): the run stops, CUP_ERR_DIVERGED. */
-int ad_diverged(ad_run *R, double ts, const double *xo, int n);
 
 /* ---- adaptive_outtol.c ---- */
 /* Output tol: the points inside [t0, t1) on md's flow from y = ya (and t0
@@ -399,8 +403,6 @@ int ad_diverged(ad_run *R, double ts, const double *xo, int n);
  * a refusal kept in A->pend, 1; else 0 or an error. */
 int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
                 int with_t0, double skip);
-/* The slots it needs (with CUP_OUTPUT_TOL alone), from block b. */
-void ad_tol_layout(adaptive_ws *A, block_arena *b);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a

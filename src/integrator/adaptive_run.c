@@ -857,7 +857,6 @@ static int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, i
   la_copy(A->x, xa, A->n);
   la_copy(A->xok, xa, A->n);
   la_zero(A->e, A->n);
-  if (check && A->opeak) la_zero(A->opeak, A->n);   /* (output tol's scales: a run's own) */
   A->nzeno = 0;
   A->pinned[0] = A->pinned[1] = NULL;
   A->carry_md = NULL;
@@ -900,6 +899,7 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
   int st = run_begin(A, &R, A->o.T, x0, 1);
   if (st) return st;
+  if (A->opeak) la_zero(A->opeak, A->n);         /* (output tol's scales: a run's own) */
   for (int j = 0; A->tan && j < A->n; j++)       /* V(0) = I */
     for (int i = 0; i < A->n; i++) A->tan[i + (size_t)j * A->n] = i == j;
   return run_to_end(A, &R, start_sampled(A, &R));

@@ -191,7 +191,7 @@ static void times_run(const adaptive_ws *A, const double *E, double *y, double *
 #undef TIMES_DENSE
 
 /* A sample's state xo at ts beyond its range (tally.h): the run stops. */
-int ad_diverged(ad_run *R, double ts, const double *xo, int n) {
+static int diverged(ad_run *R, double ts, const double *xo, int n) {
   int w = tally_state_worst(xo, n);
   return ad_fail(R, CUP_ERR_DIVERGED, "the state left its range ||x||_1 <= %g at t = %.17g (x[%d] = %.3g): "
                  "the scheme diverged", CUP_STATE_MAX, ts, w, xo[w]);
@@ -246,7 +246,7 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
     if (sink) {
       if (!A->rows_ready) ad_state(A, md, A->zy, xo);
       else for (int i = 0; i < n; i++) xo[i] = row_times(A, i, A->zy);
-      if (tally_state_beyond(xo, n)) return ad_diverged(R, ts, xo, n);   /* as step_done: never a state out of range */
+      if (tally_state_beyond(xo, n)) return diverged(R, ts, xo, n);   /* as step_done: never a state out of range */
       ++*samples;
       A->zt = ts;
       if (sink(k, ts, xo, ctx)) {                   /* inside the step in progress: refused */
@@ -410,7 +410,7 @@ static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k
       if (!(A->best[q] <= R->est_max)) R->est_max = fmax(R->est_max, A->best[q]);
       la_copy(A->zy, by + (size_t)q * na, na);
       la_copy(A->de, be + (size_t)q * na, na);
-      return ad_diverged(R, bt[q], A->bx + (size_t)q * n, n);
+      return diverged(R, bt[q], A->bx + (size_t)q * n, n);
     }
     first = 0;
     int st = batch_put(A, R, md, t1, k, c);
@@ -484,31 +484,41 @@ static void error_at(adaptive_ws *A, ad_mode *md, double tau, const double *e0) 
   }
 }
 
+/* After a refused sample in this step, nothing is offered: a second
+ * piece (an event's new flow) is kept for the resumed run. 1 if so. */
+static int keep_second(adaptive_ws *A, ad_mode *md, const double *ya, const double *e0, double t0, double t1) {
+  struct ad_pend *p = &A->pend;
+  if (!p->active) return 0;
+  if (!p->seg2) {
+    p->seg2 = 1;
+    p->md2 = (int)(md - A->modes);
+    p->t2a = t0;
+    p->t2b = t1;
+    la_copy(p->y2, ya, A->na);
+    la_copy(p->e2, e0, A->n);
+  }
+  return 1;
+}
+
+/* Output tol's points on the piece (adaptive_outtol.c; an event's new
+ * flow: its start too). */
+static int emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                    double t1) {
+  if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
+  int st = ad_emit_tol(A, R, md, ya, t0, t1, R->steps + 1, t0 > R->t, -INFINITY);
+  return st < 0 ? st : CUP_OK;
+}
+
 /* The samples due before t1 on the flow of md from (t0, ya), exact: the
  * first by exp((t_j - t0) M), the next ones by dense_from; the error
  * estimate there is e0's (the error at t0) carried along by the same flow.
- * After a refused sample in this step, nothing is offered: a second piece
- * (an event's new flow) is kept for the resumed run. */
-int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
-                      double t1) {
+ * After a refused sample in this step, nothing is offered (keep_second). */
+int ad_emit_out(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                double t1) {
   const cup_integrator_options *o = &A->o;
-  if (o->output != CUP_OUTPUT_SAMPLES && o->output != CUP_OUTPUT_TOL) return CUP_OK;
+  if (o->output == CUP_OUTPUT_TOL) return emit_tol(A, R, md, ya, e0, t0, t1);
   struct ad_pend *p = &A->pend;
-  if (p->active) {
-    if (!p->seg2) {
-      p->seg2 = 1;
-      p->md2 = (int)(md - A->modes);
-      p->t2a = t0;
-      p->t2b = t1;
-      la_copy(p->y2, ya, A->na);
-      la_copy(p->e2, e0, A->n);
-    }
-    return CUP_OK;
-  }
-  if (o->output == CUP_OUTPUT_TOL) {              /* (an event's new flow: its start too) */
-    int st = ad_emit_tol(A, R, md, ya, t0, t1, R->steps + 1, t0 > R->t, -INFINITY);
-    return st < 0 ? st : CUP_OK;
-  }
+  if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
   if (!(R->next_sample < o->output_samples)) return CUP_OK;
   double ts = ad_sample_time(A, R->next_sample);
   t1 = ad_dense_end(A, t1);
