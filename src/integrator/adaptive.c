@@ -307,8 +307,11 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     size_t slot = 1 + 2 * (size_t)n + (size_t)na;
     A->opeak = block_take(b, (size_t)n, sizeof(double));
     A->pend.opk = block_take(b, (size_t)n, sizeof(double));
-    A->ostk = block_take(b, (AD_TOL_DEPTH + 1) * slot, sizeof(double));
-    A->oleft = block_take(b, slot, sizeof(double));
+    A->othr = block_take(b, (size_t)n, sizeof(double));
+    A->oxm = block_take(b, (size_t)n * na, sizeof(double));
+    A->ostk = block_take(b, (AD_TOL_DEPTH + 3) * slot, sizeof(double));
+    if (na <= AD_TOL_LEVELS_NA)                  /* (exp(2^-j h M) a halving level, and two to make them) */
+      A->olev = block_take(b, (AD_TOL_DEPTH + 4) * NA, sizeof(double));
   }
 }
 

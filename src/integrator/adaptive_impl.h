@@ -332,12 +332,20 @@ struct adaptive_ws {
     int with_t0;            /* ... its start is offered too (an event's new flow) */
   } pend;
   /* output tol (adaptive_outtol.c; allocated with CUP_OUTPUT_TOL alone):
-   * each state's largest |x_i| over the points so far (n), the points
-   * bisection keeps to be checked (AD_TOL_DEPTH + 1 of t, x, x' and y:
-   * 1 + 2n + na each), and the left end's */
-  double *opeak, *ostk, *oleft;
+   * each state's largest |x_i| over the points so far and its tolerance
+   * (n, n), a piece's X M (n x na), and the points halving holds
+   * (AD_TOL_DEPTH + 3 of t, x, x' and y: 1 + 2n + na each) */
+  double *opeak, *othr, *oxm, *ostk;
+  double *olev;             /* ... with na <= AD_TOL_LEVELS_NA, exp(2^-j h M) for a piece of length h
+                               (AD_TOL_DEPTH + 2 of them, na x na column-major, as halving needs
+                               them; then two to make them), or NULL: the piece's Taylor series */
+  uint64_t olev_ok;         /* ... the levels j made for this piece (bit j) */
+  int olev_base, olev_hint; /* ... the level made by its series (-1: none yet), the last piece's deepest */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
+#define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
+                               (na^2 a point; a level's matrix na^3 a Taylor term, made when first
+                               needed), beyond it the piece's series (ad_series_at) */
 
 /* ---- adaptive.c: the run's messages ---- */
 /* "step k (t = ...): " and the text into the run's message; ad_fail also

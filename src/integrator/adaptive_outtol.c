@@ -20,54 +20,193 @@
 #include "tally.h"
 #include "model/signal_map.h"
 
-/* A point of the flow: t, then x (n), x' (n) and y (na). */
+/* A point of the flow: t, then x (n), x' (n) and y (na); slot s of A->ostk. */
 typedef struct {
   double *t, *x, *d, *y;
 } tol_pt;
 
-static tol_pt slot_at(const adaptive_ws *A, double *base) {
+static inline tol_pt slot_at(const adaptive_ws *A, int s) {
   int n = A->n;
+  double *base = A->ostk + (size_t)s * (1 + 2 * (size_t)n + (size_t)A->na);
   return (tol_pt){.t = base, .x = base + 1, .d = base + 1 + n, .y = base + 1 + 2 * n};
-}
-
-/* P at t0 + tau: y by the piece's series (S, from ya over h; ya itself at
- * 0), x = X y, x' = X M y. */
-static void flow_point(adaptive_ws *A, ad_mode *md, const double *ya, double h, double t0, double tau, tol_pt P) {
-  *P.t = tau == h ? t0 + h : t0 + tau;
-  if (tau == 0) la_copy(P.y, ya, A->na);
-  else ad_series_at(A, &A->sy, md, h, ya, tau, P.y);
-  ad_state(A, md, P.y, P.x);
-  ad_mode_mv(A, md, P.y, A->fb);                 /* (fb: the series' scratch is fa) */
-  ad_state(A, md, A->fb, P.d);
 }
 
 /* (no libm fmax a component: its NaN rules cost a call; a NaN state is refused at its offer) */
 static inline double max2(double a, double b) { return a > b ? a : b; }
 
+/* A->oxm = X M (n x na, row-major: x' = X M y), once a piece. */
+static void xm_of(adaptive_ws *A, const ad_mode *md) {
+  int n = A->n, na = A->na;
+  for (int i = 0; i < n; i++)
+    for (int j = 0; j < na; j++) {
+      double acc = 0;
+      for (int k = 0; k < na; k++) acc += md->X[(size_t)i * na + k] * md->M[k + (size_t)j * na];
+      A->oxm[(size_t)i * na + j] = acc;
+    }
+}
+
+/* x = X y and x' = (X M) y of P, in one pass. */
+static void x_and_d(const adaptive_ws *A, const ad_mode *md, tol_pt P) {
+  int n = A->n, na = A->na;
+  const double *X = md->X, *XM = A->oxm, *y = P.y;
+  for (int i = 0; i < n; i++, X += na, XM += na) {
+    double a = 0, b = 0;
+    for (int j = 0; j < na; j++) {
+      a += X[j] * y[j];
+      b += XM[j] * y[j];
+    }
+    P.x[i] = a;
+    P.d[i] = b;
+  }
+}
+
+/* P at t0 + tau by the piece's series (from ya over h; ya itself at 0). */
+static void flow_point(adaptive_ws *A, ad_mode *md, const double *ya, double h, double t0, double tau, tol_pt P) {
+  *P.t = t0 + tau;
+  if (tau == 0) la_copy(P.y, ya, A->na);
+  else ad_series_at(A, &A->sy, md, h, ya, tau, P.y);
+  x_and_d(A, md, P);
+}
+
+/* C = A B (na x na, column-major; na a constant in each case). */
+static inline __attribute__((always_inline)) void mat_mul_n(int na, const double *a, const double *b, double *c) {
+  for (int j = 0; j < na; j++)
+    for (int i = 0; i < na; i++) {
+      double acc = 0;
+      for (int k = 0; k < na; k++) acc += a[i + k * na] * b[k + j * na];
+      c[i + j * na] = acc;
+    }
+}
+
+static void mat_mul(int na, const double *a, const double *b, double *c) {
+  switch (na) {
+    case 1: mat_mul_n(1, a, b, c); return;
+    case 2: mat_mul_n(2, a, b, c); return;
+    case 3: mat_mul_n(3, a, b, c); return;
+    default: mat_mul_n(4, a, b, c); return;     /* (na <= AD_TOL_LEVELS_NA) */
+  }
+}
+
+/* exp(tau M) into E by its Taylor series, tau snorm <= 1/2: to the first
+ * term below a quarter ulp of the sum's largest entry (at most 30). */
+static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E) {
+  int na = A->na, NA = na * na;
+  double *term = A->olev + (size_t)(AD_TOL_DEPTH + 2) * NA, *tmp = term + NA;
+  for (int q = 0; q < NA; q++) E[q] = term[q] = (q % (na + 1) == 0);
+  for (int k = 1; k <= 30; k++) {
+    mat_mul(na, term, md->M, tmp);
+    double big = 0, emax = 0, f = tau / k;
+    for (int q = 0; q < NA; q++) {
+      term[q] = tmp[q] * f;
+      E[q] += term[q];
+      big = max2(big, fabs(term[q]));
+      emax = max2(emax, fabs(E[q]));
+    }
+    if (big <= 0.25 * DBL_EPSILON * emax) break;
+  }
+}
+
+/* exp(2^-j h M), made when first asked in this piece. One level by its
+ * Taylor series (the deepest the last piece used, between the first whose
+ * tau snorm <= 1/2 and 6 below it: the coarser ones' rounding grows as
+ * eps / (tau snorm) with it), the coarser ones by squaring it (exp(2 tau
+ * M) = exp(tau M)^2, a product of na^3 each), a deeper one by its own
+ * series. (The input's coupling block of M is nilpotent: the series'
+ * terms fall as the diagonal blocks', snorm, as adaptive_series.c's.) */
+static const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
+  int NA = A->na * A->na;
+  double *E = A->olev + (size_t)j * NA;
+  if (A->olev_ok >> j & 1) return E;
+  if (j < A->olev_base) {
+    const double *F = level(A, md, h, j + 1);
+    mat_mul(A->na, F, F, E);
+  } else {
+    int j0 = 0;
+    while (j0 < AD_TOL_DEPTH && !(h / (double)((uint64_t)1 << j0) * md->snorm <= 0.5)) j0++;
+    int base = A->olev_base < 0 ? A->olev_hint : j;
+    base = base < j0 ? j0 : base > j0 + 6 ? j0 + 6 : base;
+    if (base < j) base = j;
+    if (A->olev_base < 0) A->olev_base = base;
+    double *B = A->olev + (size_t)base * NA;
+    expm_taylor(A, md, h / (double)((uint64_t)1 << base), B);
+    A->olev_ok |= (uint64_t)1 << base;
+    if (base != j) return level(A, md, h, j);
+  }
+  A->olev_ok |= (uint64_t)1 << j;
+  return E;
+}
+
+/* y = E y_L, x = X y, x' = (X M) y, na a constant (n <= na rows). */
+static inline __attribute__((always_inline)) void times_n(int na, int n, const double *restrict E,
+                                                          const double *restrict yl, const double *restrict X,
+                                                          const double *restrict XM, double *restrict y,
+                                                          double *restrict x, double *restrict d) {
+  double v[4];
+  for (int i = 0; i < na; i++) {
+    double acc = 0;
+    for (int k = 0; k < na; k++) acc += E[i + k * na] * yl[k];
+    v[i] = y[i] = acc;
+  }
+  for (int i = 0; i < n; i++, X += na, XM += na) {
+    double a = 0, b = 0;
+    for (int j = 0; j < na; j++) {
+      a += X[j] * v[j];
+      b += XM[j] * v[j];
+    }
+    x[i] = a;
+    d[i] = b;
+  }
+}
+
+/* P = the point 2^-j h after L: exp(2^-j h M) y_L, or the series. */
+static void flow_after(adaptive_ws *A, ad_mode *md, const double *ya, double h, double t0, tol_pt L, int j,
+                       double tm, tol_pt P) {
+  if (!A->olev) {
+    flow_point(A, md, ya, h, t0, tm - t0, P);
+    *P.t = tm;                                   /* (t1 itself at the end: not t0 + h) */
+    return;
+  }
+  const double *E = level(A, md, h, j);
+  *P.t = tm;
+  switch (A->na) {
+    case 1: times_n(1, A->n, E, L.y, md->X, A->oxm, P.y, P.x, P.d); return;
+    case 2: times_n(2, A->n, E, L.y, md->X, A->oxm, P.y, P.x, P.d); return;
+    case 3: times_n(3, A->n, E, L.y, md->X, A->oxm, P.y, P.x, P.d); return;
+    default: times_n(4, A->n, E, L.y, md->X, A->oxm, P.y, P.x, P.d); return;   /* (na <= AD_TOL_LEVELS_NA) */
+  }
+}
+
+/* Each state's tolerance (A->othr) from the scales A->opeak. */
+static void thresholds(adaptive_ws *A) {
+  int n = A->n;
+  double smax = 0;
+  for (int i = 0; i < n; i++) smax = max2(smax, A->opeak[i]);
+  double floor = A->o.tol_abs + A->o.tol_rel * smax, tol = A->o.output_tol, rnd = 64 * DBL_EPSILON * smax;
+  for (int i = 0; i < n; i++) A->othr[i] = tol * max2(A->opeak[i], floor) + rnd;
+}
+
+/* The scales with x; the tolerances again if one moved. */
 static void peak_of(adaptive_ws *A, const double *x) {
-  for (int i = 0; i < A->n; i++) A->opeak[i] = max2(A->opeak[i], fabs(x[i]));
+  int moved = 0;
+  for (int i = 0; i < A->n; i++)
+    if (fabs(x[i]) > A->opeak[i]) {
+      A->opeak[i] = fabs(x[i]);
+      moved = 1;
+    }
+  if (moved) thresholds(A);
 }
 
 /* Is the line from L to R within tol? mid: the middle's x, or NULL. */
 static int line_ok(const adaptive_ws *A, tol_pt L, tol_pt R, const double *mid) {
   int n = A->n;
-  double w = *R.t - *L.t, smax = 0;
-  for (int i = 0; i < n; i++) smax = max2(smax, A->opeak[i]);
-  double floor = A->o.tol_abs + A->o.tol_rel * smax, tol = A->o.output_tol, rnd = 64 * DBL_EPSILON * smax;
+  double w = *R.t - *L.t, iw = 1 / w, q = 0.25 * w;
   for (int i = 0; i < n; i++) {
-    double c = (R.x[i] - L.x[i]) / w, thr = tol * max2(A->opeak[i], floor) + rnd;
-    double err = 0.25 * w * max2(fabs(L.d[i] - c), fabs(R.d[i] - c));
+    double c = (R.x[i] - L.x[i]) * iw;
+    double err = q * max2(fabs(L.d[i] - c), fabs(R.d[i] - c));
     if (mid) err = max2(err, fabs(mid[i] - 0.5 * (L.x[i] + R.x[i])));
-    if (!(err <= thr)) return 0;
+    if (!(err <= A->othr[i])) return 0;
   }
   return 1;
-}
-
-static void pt_copy(const adaptive_ws *A, tol_pt to, tol_pt from) {
-  *to.t = *from.t;
-  la_copy(to.x, from.x, A->n);
-  la_copy(to.d, from.d, A->n);
-  la_copy(to.y, from.y, A->na);
 }
 
 /* Where the points go: the sink one at a time, or with integrator_set_put's
@@ -141,16 +280,25 @@ static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, double t0, 
 }
 
 /* The piece's points by halving (the file's comment): a stack of right
- * ends (slots of A->ostk) above the left end L, each check of [L, top]
- * either keeping it (top is the next point) or pushing its middle. */
+ * ends above the left end L (slots of A->ostk, by number: a point kept is
+ * not copied), each check of [L, top] either keeping it (top is the next
+ * point) or pushing its middle. */
 static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
                int with_t0, double skip, tol_out *O) {
-  int n = A->n, na = A->na, slot = 1 + 2 * n + na, sp = 1;
+  enum { SLOTS = AD_TOL_DEPTH + 3 };
+  int stk[SLOTS], dep[SLOTS], freel[SLOTS], nf = 0, sp = 1, li = 0;
   double h = t1 - t0;
-  tol_pt L = slot_at(A, A->oleft), top = slot_at(A, A->ostk);
+  for (int s = SLOTS - 1; s >= 2; s--) freel[nf++] = s;
+  stk[0] = 1;
+  dep[0] = 0;                                    /* (the halvings of [L, stk[i]] when it is the top) */
+  A->olev_ok = 0;
+  A->olev_base = -1;
+  int deepest = 0;
+  xm_of(A, md);
+  tol_pt L = slot_at(A, 0), top = slot_at(A, 1);
   flow_point(A, md, ya, h, t0, 0, L);
-  flow_point(A, md, ya, h, t0, h, top);
-  *top.t = t1;
+  flow_after(A, md, ya, h, t0, L, 0, t1, top);
+  thresholds(A);
   peak_of(A, L.x);
   peak_of(A, top.x);
   if (with_t0 && t0 >= skip) {
@@ -158,26 +306,33 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     if (st) return st;
   }
   while (sp > 0) {
-    tol_pt Rt = slot_at(A, A->ostk + (size_t)(sp - 1) * slot), M = slot_at(A, A->ostk + (size_t)sp * slot);
+    tol_pt Rt = slot_at(A, stk[sp - 1]);
+    int d = dep[sp - 1];
     double tm = *L.t + 0.5 * (*Rt.t - *L.t);
-    int ok = sp > AD_TOL_DEPTH || !(tm > *L.t && tm < *Rt.t);
-    if (!ok && sp > 2) ok = line_ok(A, L, Rt, NULL);
+    int ok = d >= AD_TOL_DEPTH || !(tm > *L.t && tm < *Rt.t);
+    if (!ok && d >= 2) ok = line_ok(A, L, Rt, NULL);
     if (!ok) {
-      flow_point(A, md, ya, h, t0, tm - t0, M);
+      int m = freel[--nf];
+      tol_pt M = slot_at(A, m);
+      flow_after(A, md, ya, h, t0, L, d + 1, tm, M);
+      if (d + 1 > deepest) deepest = d + 1;
       peak_of(A, M.x);
-      ok = sp <= 2 && line_ok(A, L, Rt, M.x);
+      if (!(d < 2 && line_ok(A, L, Rt, M.x))) {  /* halved: the middle is the new right end */
+        dep[sp - 1] = dep[sp] = d + 1;
+        stk[sp++] = m;
+        continue;
+      }
+      freel[nf++] = m;
     }
-    if (!ok) {                                   /* halved: the middle is the new right end */
-      sp++;
-      continue;
-    }
-    pt_copy(A, L, Rt);                           /* [L, R] kept: R is the next point */
-    sp--;
+    freel[nf++] = li;                            /* [L, R] kept: R is the next point */
+    li = stk[--sp];
+    L = Rt;
     if (sp > 0 && *L.t >= skip) {
       int st = offer(A, R, md, L, k, O);
       if (st) return st;
     }
   }
+  A->olev_hint = deepest;                        /* (the next piece's series level) */
   return O->re ? flush(A, R, k, O) : 0;
 }
 
