@@ -339,8 +339,12 @@ struct adaptive_ws {
   double *olev;             /* ... with na <= AD_TOL_LEVELS_NA, exp(2^-j h M) for a piece of length h
                                (AD_TOL_DEPTH + 2 of them, na x na column-major, as halving needs
                                them; then two to make them), or NULL: the piece's Taylor series */
-  uint64_t olev_ok;         /* ... the levels j made for this piece (bit j) */
-  int olev_base, olev_hint; /* ... the level made by its series (-1: none yet), the last piece's deepest */
+  uint64_t olev_ok;         /* ... the levels j made (bit j) for the piece length olev_h on the mode
+                               olev_md holding olev_mask (the X M of A->oxm too) */
+  const struct ad_mode *olev_md;
+  uint64_t olev_mask;
+  double olev_h;
+  int olev_base;            /* ... the level made by its series, the coarser by squaring (-1: not yet) */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 #define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y

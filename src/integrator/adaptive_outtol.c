@@ -106,31 +106,29 @@ static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E
   }
 }
 
-/* exp(2^-j h M), made when first asked in this piece. One level by its
- * Taylor series (the deepest the last piece used, between the first whose
- * tau snorm <= 1/2 and 6 below it: the coarser ones' rounding grows as
- * eps / (tau snorm) with it), the coarser ones by squaring it (exp(2 tau
- * M) = exp(tau M)^2, a product of na^3 each), a deeper one by its own
- * series. (The input's coupling block of M is nilpotent: the series'
- * terms fall as the diagonal blocks', snorm, as adaptive_series.c's.) */
+/* exp(2^-j h M), made when first asked for this mode and h (consecutive
+ * pieces of the same length on the same mode share them: steps at hmax, a
+ * sine's eighths). Level j0 + 5 by its Taylor series (j0 the first whose
+ * tau snorm <= 1/2: the input's coupling block of M is nilpotent, the
+ * terms fall as the diagonal blocks', snorm, as adaptive_series.c's), the
+ * coarser ones by squaring it (exp(2 tau M) = exp(tau M)^2: na^3 each; the
+ * rounding grows as eps / (tau snorm), 64 eps at most), a deeper one by its
+ * own series. Each level is the same function of (M, h, j) whatever asked
+ * first: a resumed run's points are the same bits. */
 static const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
   int NA = A->na * A->na;
   double *E = A->olev + (size_t)j * NA;
   if (A->olev_ok >> j & 1) return E;
+  if (A->olev_base < 0) {
+    int j0 = 0;
+    while (j0 < AD_TOL_DEPTH - 5 && !(h / (double)((uint64_t)1 << j0) * md->snorm <= 0.5)) j0++;
+    A->olev_base = j0 + 5;
+  }
   if (j < A->olev_base) {
     const double *F = level(A, md, h, j + 1);
     mat_mul(A->na, F, F, E);
   } else {
-    int j0 = 0;
-    while (j0 < AD_TOL_DEPTH && !(h / (double)((uint64_t)1 << j0) * md->snorm <= 0.5)) j0++;
-    int base = A->olev_base < 0 ? A->olev_hint : j;
-    base = base < j0 ? j0 : base > j0 + 6 ? j0 + 6 : base;
-    if (base < j) base = j;
-    if (A->olev_base < 0) A->olev_base = base;
-    double *B = A->olev + (size_t)base * NA;
-    expm_taylor(A, md, h / (double)((uint64_t)1 << base), B);
-    A->olev_ok |= (uint64_t)1 << base;
-    if (base != j) return level(A, md, h, j);
+    expm_taylor(A, md, h / (double)((uint64_t)1 << j), E);
   }
   A->olev_ok |= (uint64_t)1 << j;
   return E;
@@ -196,15 +194,17 @@ static void peak_of(adaptive_ws *A, const double *x) {
   if (moved) thresholds(A);
 }
 
-/* Is the line from L to R within tol? mid: the middle's x, or NULL. */
-static int line_ok(const adaptive_ws *A, tol_pt L, tol_pt R, const double *mid) {
-  int n = A->n;
-  double w = *R.t - *L.t, iw = 1 / w, q = 0.25 * w;
+/* Is the line from L to R within tol (thr: A->othr)? l, r: their slots
+ * (t, x, x'); mid: the middle's x, or NULL. Plain pointers, read into
+ * registers: A's fields were read again after each store to a slot. */
+static inline int line_ok(int n, const double *thr, const double *l, const double *r, const double *mid) {
+  double w = r[0] - l[0], iw = 1 / w, q = 0.25 * w;
+  const double *lx = l + 1, *rx = r + 1, *ld = l + 1 + n, *rd = r + 1 + n;
   for (int i = 0; i < n; i++) {
-    double c = (R.x[i] - L.x[i]) * iw;
-    double err = q * max2(fabs(L.d[i] - c), fabs(R.d[i] - c));
-    if (mid) err = max2(err, fabs(mid[i] - 0.5 * (L.x[i] + R.x[i])));
-    if (!(err <= A->othr[i])) return 0;
+    double c = (rx[i] - lx[i]) * iw;
+    double err = q * max2(fabs(ld[i] - c), fabs(rd[i] - c));
+    if (mid) err = max2(err, fabs(mid[i] - 0.5 * (lx[i] + rx[i])));
+    if (!(err <= thr[i])) return 0;
   }
   return 1;
 }
@@ -291,10 +291,14 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
   for (int s = SLOTS - 1; s >= 2; s--) freel[nf++] = s;
   stk[0] = 1;
   dep[0] = 0;                                    /* (the halvings of [L, stk[i]] when it is the top) */
-  A->olev_ok = 0;
-  A->olev_base = -1;
-  int deepest = 0;
-  xm_of(A, md);
+  if (md != A->olev_md || md->mask != A->olev_mask || h != A->olev_h) {   /* (level's matrices and X M kept) */
+    A->olev_md = md;
+    A->olev_mask = md->mask;
+    A->olev_h = h;
+    A->olev_ok = 0;
+    A->olev_base = -1;
+    xm_of(A, md);
+  }
   tol_pt L = slot_at(A, 0), top = slot_at(A, 1);
   flow_point(A, md, ya, h, t0, 0, L);
   flow_after(A, md, ya, h, t0, L, 0, t1, top);
@@ -305,19 +309,21 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     int st = offer(A, R, md, L, k, O);
     if (st) return st;
   }
+  const int n = A->n;
+  const double *thr = A->othr;
   while (sp > 0) {
     tol_pt Rt = slot_at(A, stk[sp - 1]);
+    const double *l = L.t, *r = Rt.t;
     int d = dep[sp - 1];
-    double tm = *L.t + 0.5 * (*Rt.t - *L.t);
-    int ok = d >= AD_TOL_DEPTH || !(tm > *L.t && tm < *Rt.t);
-    if (!ok && d >= 2) ok = line_ok(A, L, Rt, NULL);
+    double tm = l[0] + 0.5 * (r[0] - l[0]);
+    int ok = d >= AD_TOL_DEPTH || !(tm > l[0] && tm < r[0]);
+    if (!ok && d >= 2) ok = line_ok(n, thr, l, r, NULL);
     if (!ok) {
       int m = freel[--nf];
       tol_pt M = slot_at(A, m);
       flow_after(A, md, ya, h, t0, L, d + 1, tm, M);
-      if (d + 1 > deepest) deepest = d + 1;
       peak_of(A, M.x);
-      if (!(d < 2 && line_ok(A, L, Rt, M.x))) {  /* halved: the middle is the new right end */
+      if (!(d < 2 && line_ok(n, thr, l, r, M.x))) {   /* halved: the middle is the new right end */
         dep[sp - 1] = dep[sp] = d + 1;
         stk[sp++] = m;
         continue;
@@ -327,12 +333,11 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     freel[nf++] = li;                            /* [L, R] kept: R is the next point */
     li = stk[--sp];
     L = Rt;
-    if (sp > 0 && *L.t >= skip) {
+    if (sp > 0 && r[0] >= skip) {
       int st = offer(A, R, md, L, k, O);
       if (st) return st;
     }
   }
-  A->olev_hint = deepest;                        /* (the next piece's series level) */
   return O->re ? flush(A, R, k, O) : 0;
 }
 
