@@ -11,7 +11,9 @@
  * that for a parabola. The first two halvings also ask the middle's value
  * itself (a piece whose ends' slopes equal its chord's, a bump between,
  * passes the slopes' test). Each point checked is a point kept: one flow
- * value and two products by X a point, by the step's Taylor series
+ * value and one pass of X and X M over it a point; the flow value is
+ * exp(2^-j h M) times the point before it for na <= AD_TOL_LEVELS_NA (a
+ * matrix a halving level: level), else the step's Taylor series
  * (adaptive_series.c). Allocates nothing. */
 #include <float.h>
 #include <math.h>
