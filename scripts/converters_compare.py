@@ -58,7 +58,7 @@ OWN_TOLS = [1e-3, 1e-6]                   # the adaptive scheme's tol at its own
 OWN_THETA_PER_PERIOD = [2, 4, 10, 30, 100]  # theta's n at its own steps, times the switching periods
 OWN_HMAX = [3, 10]                        # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
 OWN_SAMPLES_PER_PERIOD = [10, 30, 100]    # the adaptive scheme's dense output on a coarser uniform grid
-OUTPUT_TOLS = [1e-3, 1e-4, 1e-5]          # its dense output where lines need it (output.tol; not switched yet)
+OUTPUT_TOLS = [1e-3, 1e-4, 1e-5]          # its dense output where lines need points (output.tol)
 SWITCH = "RON=1m ROFF=1e9"
 DIODE = "D(IS=1e-15 N=0.01)"
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
@@ -363,9 +363,8 @@ def configs(name, cards, tstep, tstop, period):
     out += [("catchup", "adaptive tol=%g, %d samples" % (OWN_TOLS[-1], k * periods + 1),
              ["--tol", OWN_TOLS[-1], "--set", "output.samples=%d" % (k * periods + 1)])
             for k in OWN_SAMPLES_PER_PERIOD if k * periods < base]
-    if not any(w[0][0].lower() in "sw" for w in cards):   # (output tol: no switched circuit yet)
-        out += [("catchup", "adaptive tol=%g, output tol=%g" % (OWN_TOLS[-1], x),
-                 ["--tol", OWN_TOLS[-1], "--set", "output.tol=%g" % x]) for x in OUTPUT_TOLS]
+    out += [("catchup", "adaptive tol=%g, output tol=%g" % (OWN_TOLS[-1], x),
+             ["--tol", OWN_TOLS[-1], "--set", "output.tol=%g" % x]) for x in OUTPUT_TOLS]
     out += [("catchup", "theta n=%d, own steps" % (f * periods), ["--scheme", "theta", "--n", f * periods] + OWN_STEPS)
             for f in OWN_THETA_PER_PERIOD]
     out += [("ngspice", label, opts) for label, opts in NGSPICE_SETTINGS]
@@ -499,7 +498,7 @@ def section(rows, a, cost):
            "switching periods, below the `.tran` grid's size: the rows marked *K samples*) or from its dense "
            "output where straight lines need points (`--set output.tol=X`: each step's end and the points "
            "inside steps that keep the lines within X of each state's peak, docs/run-output.md; the rows marked "
-           "*output tol*, on the circuits without switches for now). Each *at equal "
+           "*output tol*). Each *at equal "
            "error* row pairs a run of ngspice or pulsim with the cheapest catchup run, of either kind, at "
            "least as accurate. No peer setting was dropped or loosened: ngspice and pulsim run exactly as "
            "before catchup got its own-step rows." % ", ".join(map(str, OWN_SAMPLES_PER_PERIOD)), "",

@@ -86,7 +86,7 @@ static void exact_pwl(const void *ctx, double t, double *x) {
   for (int i = 0; i < tr->c->n; i++) x[i] = y[i];
 }
 
-static cup_integrator *make(const cup_netlist *nl, double T, double otol, char *err) {
+static cup_integrator *make(cup_netlist *nl, double T, double otol, char *err) {
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = CUP_SCHEME_ADAPTIVE;
@@ -95,7 +95,10 @@ static cup_integrator *make(const cup_netlist *nl, double T, double otol, char *
   o.output = CUP_OUTPUT_TOL;
   o.output_tol = otol;
   cup_integrator *I = NULL;
-  if (cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err)) fail_msg("%s", err);
+  cup_switching sw;
+  int st = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)
+                                          : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err);
+  if (st) fail_msg("%s", err);
   return I;
 }
 
@@ -146,6 +149,9 @@ static void check_example(const char *name) {
 
 static void test_precision_rectifier(void **state) { (void)state; check_example("precision-rectifier"); }
 static void test_sixpulse(void **state) { (void)state; check_example("sixpulse"); }
+/* a switched run: each window's steps, the configurations sharing the scales */
+static void test_fullbridge(void **state) { (void)state; check_example("fullbridge"); }
+static void test_buckboost(void **state) { (void)state; check_example("buckboost"); }
 
 /* An RC charged through a diode from 1 V (tau = 1 ms, 5 tau): v(t) = 1 -
  * exp(-t / tau), closed form. */
@@ -248,7 +254,33 @@ static void test_resume(void **state) {
   check_resume("precision-rectifier");
 }
 
-/* What is refused, with a message naming it. */
+/* A switched run stopped by its sink: the points before the refused one
+ * are the uninterrupted run's, and it has no checkpoint (as with every
+ * output: switched.c), refused with a status, not a blob. */
+static void test_switched_stop(void **state) {
+  (void)state;
+  static pts a, b;
+  char err[CUP_ERRMSG_LEN];
+  cup_netlist *nl = NULL;
+  if (cup_netlist_load(&nl, CIR "fullbridge.cir", NULL, 0, err)) fail_msg("%s", err);
+  double tstep, T;
+  assert_true(cup_netlist_tran(nl, &tstep, &T));
+  cup_integrator *I = make(nl, T, 1e-3, err);
+  cup_run_info info;
+  a.n = 0; a.refuse_at = -1; a.dim = 2;
+  b.n = 0; b.refuse_at = 1234; b.dim = 2;
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), keep, &a, &info), CUP_OK);
+  assert_int_equal(cup_integrator_run(I, cup_netlist_x0(nl), keep, &b, &info), CUP_ERR_INTERRUPTED);
+  assert_int_equal(b.n, 1234);
+  assert_memory_equal(a.t, b.t, sizeof(double) * (size_t)b.n);
+  assert_memory_equal(a.x, b.x, sizeof a.x[0] * (size_t)b.n);
+  assert_true(cup_integrator_checkpoint_size(I) < 0);
+  cup_integrator_free(&I);
+  cup_netlist_free(&nl);
+}
+
+/* What is refused, with a message naming it: bad values, a fixed-step
+ * scheme (a switched circuit's too). */
 static void test_refused(void **state) {
   (void)state;
   char err[CUP_ERRMSG_LEN];
@@ -281,9 +313,8 @@ static void test_refused(void **state) {
   if (cup_netlist_load(&nl, CIR "fullbridge.cir", NULL, 0, err)) fail_msg("%s", err);
   cup_switching sw;
   assert_int_equal(cup_netlist_switching(nl, &sw), 1);
-  o.scheme = CUP_SCHEME_ADAPTIVE;
-  assert_int_equal(cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err), CUP_ERR_UNSUPPORTED);
-  assert_non_null(strstr(err, "output tol"));
+  assert_int_equal(cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err), CUP_ERR_ARG);
+  assert_non_null(strstr(err, "adaptive"));
   assert_int_equal(cup_output_parse("tol"), CUP_OUTPUT_TOL);
   assert_string_equal(cup_output_name(CUP_OUTPUT_TOL), "tol");
   cup_netlist_free(&nl);
@@ -294,7 +325,10 @@ int main(void) {
       cmocka_unit_test(test_rc),
       cmocka_unit_test(test_precision_rectifier),
       cmocka_unit_test(test_sixpulse),
+      cmocka_unit_test(test_fullbridge),
+      cmocka_unit_test(test_buckboost),
       cmocka_unit_test(test_resume),
+      cmocka_unit_test(test_switched_stop),
       cmocka_unit_test(test_refused),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

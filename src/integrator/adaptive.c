@@ -438,6 +438,14 @@ void adaptive_seed(adaptive_ws *A, int on) {
   A->seed = 0;
 }
 
+void adaptive_tol_share(adaptive_ws *A, const adaptive_ws *from) {
+  if (A && from && A->opeak && from->opeak) A->opeak = from->opeak;   /* (from's block holds them: it lives as long) */
+}
+
+void adaptive_tol_reset(adaptive_ws *A) {
+  if (A && A->opeak) la_zero(A->opeak, A->n);
+}
+
 void adaptive_hold_end(adaptive_ws *A, int on) {
   A->hold_end = on;
   A->held_end = 0;

@@ -561,8 +561,10 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (S->half) info->err_est = estimate_value(&S->est);
     return st;
   }
-  /* every step recorded: a jump at a switching is recorded after it too */
-  int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
+  /* every step recorded (output tol too: adaptive_outtol.c's points
+   * between): a jump at a switching is recorded after it too */
+  int each = S->sink && ((S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1) || S->o.output == CUP_OUTPUT_TOL);
+  adaptive_tol_reset(S->ad[0]);                    /* (output tol's scales: the run's, shared by its configurations) */
   /* else a sample at a switching time is the state after its jump: the
    * window before holds it (adaptive_hold_end) and, when the jump moved
    * the state, the next window gives it, else this one after all */
@@ -586,6 +588,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
       adaptive_seed(S->ad[topo], 1);
       adaptive_share_breaks(S->ad[topo], &S->breaks);
       adaptive_hold_end(S->ad[topo], S->sink && !each);
+      adaptive_tol_share(S->ad[topo], S->ad[0]);
       seeded |= (uint64_t)1 << topo;
     }
     S->cur = topo;
@@ -655,9 +658,6 @@ int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw
   if (!out || !sw || !o || !sw->settle || !sw->next || !sw->lcs || !sw->jump || !sw->state_gated || !sw->crossed)
     return fail_fmt(errmsg, CUP_ERR_ARG, "switched integrator: NULL argument");
   *out = NULL;
-  if (o->output == CUP_OUTPUT_TOL)                 /* (its points inside a window's steps: not yet) */
-    return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED, "output tol is not available for a switched circuit (a "
-                    "netlist with switches) yet: use output every (each step's end) or samples");
   int estimate = o->estimate && o->scheme != CUP_SCHEME_ADAPTIVE;   /* (the adaptive scheme estimates always) */
   if (estimate && (o->n < 2 || o->n % 2))
     return fail_fmt(errmsg, CUP_ERR_ARG, "the step-doubling estimate compares with a run at n/2: n = %ld "
