@@ -344,7 +344,8 @@ struct adaptive_ws {
   const struct ad_mode *olev_md;
   uint64_t olev_mask;
   double olev_h;
-  int olev_base;            /* ... the level made by its series, the coarser by squaring (-1: not yet) */
+  int olev_base;            /* ... the level made by its series, the coarser by squaring (beyond
+                               AD_TOL_DEPTH: none, the piece's series instead) */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 #define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
@@ -404,6 +405,18 @@ static inline int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const do
                                 double t0, double t1) {
   int out = A->o.output;
   return out == CUP_OUTPUT_SAMPLES || out == CUP_OUTPUT_TOL ? ad_emit_out(A, R, md, ya, e0, t0, t1) : CUP_OK;
+}
+/* A sample refused inside the step in progress (on md, step number k, the
+ * step ending at t1): A->pend active, no second piece yet; the caller
+ * keeps the states to start again from. */
+static inline struct ad_pend *ad_pend_start(adaptive_ws *A, const ad_mode *md, long k, double t1) {
+  struct ad_pend *p = &A->pend;
+  p->active = 1;
+  p->seg2 = 0;
+  p->md = (int)(md - A->modes);
+  p->k = k;
+  p->t_end = t1;
+  return p;
 }
 /* A stop at a refused sample inside a step, resumed: that sample and the
  * rest of the step's; 1 if the sink refused one again. */

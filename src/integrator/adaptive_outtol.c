@@ -121,11 +121,6 @@ static const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
   int NA = A->na * A->na;
   double *E = A->olev + (size_t)j * NA;
   if (A->olev_ok >> j & 1) return E;
-  if (A->olev_base < 0) {
-    int j0 = 0;
-    while (j0 < AD_TOL_DEPTH - 5 && !(h / (double)((uint64_t)1 << j0) * md->snorm <= 0.5)) j0++;
-    A->olev_base = j0 + 5;
-  }
   if (j < A->olev_base) {
     const double *F = level(A, md, h, j + 1);
     mat_mul(A->na, F, F, E);
@@ -161,7 +156,7 @@ static inline __attribute__((always_inline)) void times_n(int na, int n, const d
 /* P = the point 2^-j h after L: exp(2^-j h M) y_L, or the series. */
 static void flow_after(adaptive_ws *A, ad_mode *md, const double *ya, double h, double t0, tol_pt L, int j,
                        double tm, tol_pt P) {
-  if (!A->olev) {
+  if (!A->olev || A->olev_base > AD_TOL_DEPTH) {   /* (no levels, or too stiff a piece for them) */
     flow_point(A, md, ya, h, t0, tm - t0, P);
     *P.t = tm;                                   /* (t1 itself at the end: not t0 + h) */
     return;
@@ -267,12 +262,7 @@ static int offer(adaptive_ws *A, ad_run *R, ad_mode *md, tol_pt P, long k, tol_o
 /* A refusal at time tr: the piece kept for the resumed run (ad_dense_resume). */
 static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, double t0, double t1, long k, int with_t0,
                       double tr, const double *peak0) {
-  struct ad_pend *p = &A->pend;
-  p->active = 1;
-  p->seg2 = 0;
-  p->md = (int)(md - A->modes);
-  p->k = k;
-  p->t_end = t1;
+  struct ad_pend *p = ad_pend_start(A, md, k, t1);
   p->ta = t0;
   p->tr = tr;
   p->with_t0 = with_t0;
@@ -298,7 +288,9 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     A->olev_mask = md->mask;
     A->olev_h = h;
     A->olev_ok = 0;
-    A->olev_base = -1;
+    int j0 = 0;                                  /* (the series' pieces beyond 2^25 of tau snorm <= 1/2) */
+    while (j0 <= AD_TOL_DEPTH - 5 && !(h / (double)((uint64_t)1 << j0) * md->snorm <= 0.5)) j0++;
+    A->olev_base = j0 + 5;
     xm_of(A, md);
   }
   tol_pt L = slot_at(A, 0), top = slot_at(A, 1);

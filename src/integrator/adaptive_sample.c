@@ -201,12 +201,7 @@ static int diverged(ad_run *R, double ts, const double *xo, int n) {
  * (A->zy, A->de) kept in A->pend, the step going on to its end where the
  * run stops. Returns 1. */
 static int pend_refused(adaptive_ws *A, const ad_mode *md, long k, double t1) {
-  struct ad_pend *p = &A->pend;
-  p->active = 1;
-  p->seg2 = 0;
-  p->md = (int)(md - A->modes);
-  p->k = k;
-  p->t_end = t1;
+  struct ad_pend *p = ad_pend_start(A, md, k, t1);
   la_copy(p->zy, A->zy, A->na);
   la_copy(p->de, A->de, A->na);
   return 1;
