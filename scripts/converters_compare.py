@@ -58,7 +58,7 @@ OWN_TOLS = [1e-3, 1e-6]                   # the adaptive scheme's tol at its own
 OWN_THETA_PER_PERIOD = [2, 4, 10, 30, 100]  # theta's n at its own steps, times the switching periods
 OWN_HMAX = [3, 10]                        # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
 OWN_SAMPLES_PER_PERIOD = [10, 30, 100]    # the adaptive scheme's dense output on a coarser uniform grid
-OUTPUT_TOLS = [1e-3, 1e-4, 1e-5]          # its dense output where lines need points (output.tol)
+OUTPUT_TOLS = [1e-3, 3e-4, 1e-4, 8e-5, 3e-5, 1e-5]         # its dense output where lines need points (output.tol)
 SWITCH = "RON=1m ROFF=1e9"
 DIODE = "D(IS=1e-15 N=0.01)"
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
