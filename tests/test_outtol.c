@@ -53,8 +53,8 @@ static double line_at(const pts *p, long *j, int i, double t) {
 typedef void (*exact_fn)(const void *ctx, double t, double *x);
 
 static double worst_error(int dim, double T, int G, exact_fn f, const void *ctx, const pts *p, long N) {
-  double err[NX] = {0}, peak[NX] = {0}, x[NX], a[NX], b[NX];
-  long j = 0;
+  double err[NX] = {0}, peak[NX] = {0}, x[NX], a[NX] = {0}, b[NX] = {0};
+  long j = 0, kab = -1;                          /* (the uniform grid's interval whose ends a, b hold) */
   for (int g = 0; g < G; g++) {
     double t = T * g / (G - 1);
     f(ctx, t, x);
@@ -65,8 +65,11 @@ static double worst_error(int dim, double T, int G, exact_fn f, const void *ctx,
       long k = (long)floor(t / T * (double)(N - 1));
       if (k >= N - 1) k = N - 2;
       double ta = T * (double)k / (double)(N - 1), tb = T * (double)(k + 1) / (double)(N - 1);
-      f(ctx, ta, a);
-      f(ctx, tb, b);
+      if (k != kab) {
+        f(ctx, ta, a);
+        f(ctx, tb, b);
+        kab = k;
+      }
       for (int i = 0; i < dim; i++) approx[i] = a[i] + (t - ta) / (tb - ta) * (b[i] - a[i]);
     }
     for (int i = 0; i < dim; i++) {
