@@ -156,9 +156,9 @@ typedef struct cup_integrator_options {
   double output_tol;          /**< TOL (adaptive scheme): > 0, finite. Each step's end is kept, as
                                    EVERY with K = 1 keeps it, and inside a step the points of its
                                    exact flow that make the straight lines between consecutive
-                                   kept points stay within output_tol s_i + tol_abs of x_i(t) in
-                                   every component i, s_i = max |x_i| over the points of the run
-                                   so far (docs/run-output.md, "output tol") */
+                                   kept points stay within output_tol max(s_i, tol_abs + tol_rel
+                                   max_j s_j) of x_i(t) in every component i, s_i = max |x_i| over
+                                   the points of the run so far (docs/run-output.md, "Output tol") */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */

@@ -1,10 +1,10 @@
 /* adaptive_outtol — output tol (CUP_OUTPUT_TOL, docs/run-output.md): the
  * points inside a step's piece of exact flow that the straight lines
  * between consecutive reported points need to stay within
- *     output_tol s_i + tol_abs' ,  s_i = max |x_i| over the points so far,
- * of x_i(t) in each component (tol_abs' = output_tol times the scheme's own
- * error target, tol_abs + tol_rel max_j s_j: a floor, so that a state at
- * rounding level never asks for points). Each piece [a, b] is halved until
+ *     output_tol max(s_i, tol_abs + tol_rel max_j s_j) + 64 eps max_j s_j
+ * of x_i(t) in each component, s_i = max |x_i| over the points so far (the
+ * scheme's own error target a floor, and rounding: a state at rounding
+ * level never asks for points). Each piece [a, b] is halved until
  * the line's error, estimated from x and x' = X M y at its ends, is below
  * that: for the cubic with those ends (Hermite's) the line is off by at most
  * (b - a) / 4 max(|x'(a) - c|, |x'(b) - c|) (c the chord's slope), exactly
