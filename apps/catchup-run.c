@@ -122,10 +122,6 @@ static int event_sink(double t, int row, int on, void *ctx) {
   return r->w ? cup_h5run_event(r->sk.t0 + t, row, on, r->w) : 0;
 }
 
-static const char *output_name(int kind) {
-  static const char *names[] = {"every", "samples", "final", "none"};
-  return kind >= 0 && kind < 4 ? names[kind] : "unknown";
-}
 
 /* The schedule as the scene wrote it, or in canonical form if it did not. */
 static const char *spec_text(const char *spec, const cup_schedule *s, char *buf, size_t size) {
@@ -226,7 +222,9 @@ static int write_provenance(run_t *r) {
   st = cup_status_merge(st, cup_h5run_attr_double(w, "tol_rel", o->tol_rel));
   st = cup_status_merge(st, cup_h5run_attr_long(w, "estimate", o->estimate || o->scheme == CUP_SCHEME_ADAPTIVE));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "projector", cup_proj_method_name(o->proj.method)));
-  st = cup_status_merge(st, cup_h5run_attr_string(w, "output", output_name(o->output)));
+  st = cup_status_merge(st, cup_h5run_attr_string(w, "output", cup_output_name(o->output)));
+  if (o->output == CUP_OUTPUT_TOL)                 /* (docs/run-output.md: what the points are within) */
+    st = cup_status_merge(st, cup_h5run_attr_double(w, "output_tol", o->output_tol));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "catchup_version", cup_version()));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "dependency_versions", deps));
   st = cup_status_merge(st, cup_h5run_attr_string(w, "scene", cup_scene_text(r->scene)));

@@ -18,6 +18,7 @@ void run_plan_make(run_plan *p, const cup_integrator_options *o, int dim, int ns
       break;
     case CUP_OUTPUT_SAMPLES: p->samples = (double)o->output_samples; break;
     case CUP_OUTPUT_FINAL: p->samples = 1; break;
+    case CUP_OUTPUT_TOL: p->samples = NAN; break;  /* (the points the waveform needs: not known before) */
     default: p->samples = 0; break;
   }
   p->samples += 1;                                 /* a stop's flagged row */

@@ -58,6 +58,7 @@ OWN_TOLS = [1e-3, 1e-6]                   # the adaptive scheme's tol at its own
 OWN_THETA_PER_PERIOD = [2, 4, 10, 30, 100]  # theta's n at its own steps, times the switching periods
 OWN_HMAX = [3, 10]                        # the adaptive scheme's hmax at its own steps: Ts / OWN_HMAX
 OWN_SAMPLES_PER_PERIOD = [10, 30, 100]    # the adaptive scheme's dense output on a coarser uniform grid
+OUTPUT_TOLS = [1e-3, 3e-4, 1e-4, 8e-5, 3e-5, 1e-5]         # its dense output where lines need points (output.tol)
 SWITCH = "RON=1m ROFF=1e9"
 DIODE = "D(IS=1e-15 N=0.01)"
 NGSPICE_SETTINGS = [("default", ""), ("tight", "reltol=1e-6 abstol=1e-12 vntol=1e-9")]
@@ -362,6 +363,8 @@ def configs(name, cards, tstep, tstop, period):
     out += [("catchup", "adaptive tol=%g, %d samples" % (OWN_TOLS[-1], k * periods + 1),
              ["--tol", OWN_TOLS[-1], "--set", "output.samples=%d" % (k * periods + 1)])
             for k in OWN_SAMPLES_PER_PERIOD if k * periods < base]
+    out += [("catchup", "adaptive tol=%g, output tol=%g" % (OWN_TOLS[-1], x),
+             ["--tol", OWN_TOLS[-1], "--set", "output.tol=%g" % x]) for x in OUTPUT_TOLS]
     out += [("catchup", "theta n=%d, own steps" % (f * periods), ["--scheme", "theta", "--n", f * periods] + OWN_STEPS)
             for f in OWN_THETA_PER_PERIOD]
     out += [("ngspice", label, opts) for label, opts in NGSPICE_SETTINGS]
@@ -492,7 +495,10 @@ def section(rows, a, cost):
            "without *own steps*) or at its own steps (`--set output.every=1`: each step's end, the input's "
            "breakpoints and the events' switch points among them; the rows marked *own steps*) or from its dense "
            "output on a coarser uniform grid of its choosing (`--set output.samples=K`, K - 1 = %s times the "
-           "switching periods, below the `.tran` grid's size: the rows marked *K samples*). Each *at equal "
+           "switching periods, below the `.tran` grid's size: the rows marked *K samples*) or from its dense "
+           "output where straight lines need points (`--set output.tol=X`: each step's end and the points "
+           "inside steps that keep the lines within X of each state's peak, docs/run-output.md; the rows marked "
+           "*output tol*). Each *at equal "
            "error* row pairs a run of ngspice or pulsim with the cheapest catchup run, of either kind, at "
            "least as accurate. No peer setting was dropped or loosened: ngspice and pulsim run exactly as "
            "before catchup got its own-step rows." % ", ".join(map(str, OWN_SAMPLES_PER_PERIOD)), "",

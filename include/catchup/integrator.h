@@ -66,7 +66,10 @@ CUP_API int cup_schedule_format(const cup_schedule *s, char *buf, unsigned long 
   X(CUP_OUTPUT_SAMPLES, 1, "samples", "{samples: N}",                                   \
     "N >= 2 states at t_j = j T / (N - 1), j = 0..N-1, interpolated between steps")   \
   X(CUP_OUTPUT_FINAL, 2, "final", "final", "the final state only")                      \
-  X(CUP_OUTPUT_NONE, 3, "none", "none", "nothing: statistics only")
+  X(CUP_OUTPUT_NONE, 3, "none", "none", "nothing: statistics only")                     \
+  X(CUP_OUTPUT_TOL, 4, "tol", "{tol: X}",                                               \
+    "every step's end and, inside the steps, the points of the exact flow that linear "   \
+    "interpolation needs to stay within X of it (adaptive scheme; docs/run-output.md)")
 
 typedef enum cup_output_kind {
 #define CUP_OUTPUT_ENUM_(e, v, name, form, doc) e = v,
@@ -150,6 +153,12 @@ typedef struct cup_integrator_options {
                                    the adaptive scheme's from its exact flow, the fixed-step
                                    schemes' interpolated linearly between the steps around
                                    them (a sample on a step is that step's state); default 0 */
+  double output_tol;          /**< TOL (adaptive scheme): > 0, finite. Each step's end is kept, as
+                                   EVERY with K = 1 keeps it, and inside a step the points of its
+                                   exact flow that make the straight lines between consecutive
+                                   kept points stay within output_tol max(s_i, tol_abs + tol_rel
+                                   max_j s_j) of x_i(t) in every component i, s_i = max |x_i| over
+                                   the points of the run so far (docs/run-output.md, "Output tol") */
 } cup_integrator_options;
 
 /** What a run did. A run stops at the first error and says where. */

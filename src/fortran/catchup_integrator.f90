@@ -422,7 +422,7 @@ contains
     s = cup_c_string(c_cup_output_name(int(output, c_int)))
   end function cup_output_name
 
-  !> "every", "samples", "final", "none" -> CUP_OUTPUT_*; -1 if unknown.
+  !> "every", "samples", "final", "none", "tol" -> CUP_OUTPUT_*; -1 if unknown.
   integer function cup_output_parse(name)
     character(len=*), intent(in) :: name
     cup_output_parse = int(c_cup_output_parse(cup_f_c_string(name)))

@@ -154,6 +154,7 @@ module catchup_types
     integer(c_int) :: estimate = 0              !< fixed-step schemes: 1 = step-doubling error estimate
     real(c_double) :: hmax = 0                  !< ADAPTIVE: no step longer than this (TMAX); 0: none
     real(c_double) :: output_t0 = 0             !< SAMPLES: the first sample's time (TSTART)
+    real(c_double) :: output_tol = 0            !< TOL (adaptive): what lines between the points are within
   end type cup_integrator_options
 
   type, bind(C), public :: cup_run_info

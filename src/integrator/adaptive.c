@@ -306,6 +306,16 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
   A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
   ad_scratch_layout(A, b);
+  if (A->o.output == CUP_OUTPUT_TOL) {           /* adaptive_outtol.c's (the other outputs' layout as it was) */
+    size_t slot = 1 + 2 * (size_t)n + (size_t)na;
+    A->opeak = block_take(b, (size_t)n, sizeof(double));
+    A->pend.opk = block_take(b, (size_t)n, sizeof(double));
+    A->othr = block_take(b, (size_t)n, sizeof(double));
+    A->oxm = block_take(b, (size_t)n * na, sizeof(double));
+    A->ostk = block_take(b, (AD_TOL_DEPTH + 3) * slot, sizeof(double));
+    if (na <= AD_TOL_LEVELS_NA)                  /* (exp(2^-j h M) a halving level, and two to make them) */
+      A->olev = block_take(b, (AD_TOL_DEPTH + 4) * NA, sizeof(double));
+  }
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two
@@ -570,6 +580,14 @@ void adaptive_on_step(adaptive_ws *A, cup_step_fn fn, void *ctx) {
 void adaptive_seed(adaptive_ws *A, int on) {
   A->seed_on = on;
   A->seed = 0;
+}
+
+void adaptive_tol_share(adaptive_ws *A, const adaptive_ws *from) {
+  if (A && from && A->opeak && from->opeak) A->opeak = from->opeak;   /* (from's block holds them: it lives as long) */
+}
+
+void adaptive_tol_reset(adaptive_ws *A) {
+  if (A && A->opeak) la_zero(A->opeak, A->n);
 }
 
 void adaptive_hold_end(adaptive_ws *A, int on) {

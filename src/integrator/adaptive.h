@@ -65,6 +65,12 @@ void adaptive_seed(adaptive_ws *A, int on);
  * state after it, offered at its start (adaptive_window's jumped & 2).
  * adaptive_held: 1 when the last window held one (cleared). */
 void adaptive_hold_end(adaptive_ws *A, int on);
+/* Output tol (adaptive_outtol.c) in a switched run: A's scales (each
+ * state's largest |x_i| so far) are from's, one set for all the run's
+ * configurations (a no-op for another output); adaptive_tol_reset zeroes
+ * them (a run's start). */
+void adaptive_tol_share(adaptive_ws *A, const adaptive_ws *from);
+void adaptive_tol_reset(adaptive_ws *A);
 int adaptive_held(adaptive_ws *A);
 /* A held sample given after all (the run stopped before the next window):
  * the state the window left at its end t, as it would have been. */

@@ -50,7 +50,12 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
     ckpt_io(c, p->de, NA);
     ckpt_io(c, p->y2, NA);
     ckpt_io(c, p->e2, N);
+    if (A->o.output == CUP_OUTPUT_TOL) {         /* (the refused point's piece: adaptive_outtol.c) */
+      CUP_CKPT_IO(c, p->ta); CUP_CKPT_IO(c, p->tr); CUP_CKPT_IO(c, p->with_t0);
+      ckpt_io(c, p->opk, N);
+    }
   }
+  if (A->o.output == CUP_OUTPUT_TOL) ckpt_io(c, A->opeak, N);   /* output tol's scales */
   CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
   ckpt_io(c, A->lcp.lam, sizeof(double) * M);
   ckpt_io(c, A->lcp.prev, M);

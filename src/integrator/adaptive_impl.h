@@ -329,8 +329,31 @@ struct adaptive_ws {
     long k;                 /* the step number the sink was given */
     double t_end, t2a, t2b;
     double *zy, *de, *y2, *e2;   /* na, na, na, n */
+    /* output tol: the refused point's piece, chosen again from its start
+     * (zy its y there, at ta, with the scales opk then), offered from tr on */
+    double ta, tr, *opk;    /* opk: n */
+    int with_t0;            /* ... its start is offered too (an event's new flow) */
   } pend;
+  /* output tol (adaptive_outtol.c; allocated with CUP_OUTPUT_TOL alone):
+   * each state's largest |x_i| over the points so far and its tolerance
+   * (n, n), a piece's X M (n x na), and the points halving holds
+   * (AD_TOL_DEPTH + 3 of t, x, x' and y: 1 + 2n + na each) */
+  double *opeak, *othr, *oxm, *ostk;
+  double *olev;             /* ... with na <= AD_TOL_LEVELS_NA, exp(2^-j h M) for a piece of length h
+                               (AD_TOL_DEPTH + 2 of them, na x na column-major, as halving needs
+                               them; then two to make them), or NULL: the piece's Taylor series */
+  uint64_t olev_ok;         /* ... the levels j made (bit j) for the piece length olev_h on the mode
+                               olev_md holding olev_mask (the X M of A->oxm too) */
+  const struct ad_mode *olev_md;
+  uint64_t olev_mask;
+  double olev_h;
+  int olev_base;            /* ... the level made by its series, the coarser by squaring (beyond
+                               AD_TOL_DEPTH: none, the piece's series instead) */
 };
+#define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
+#define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
+                               (na^2 a point; a level's matrix na^3 a Taylor term, made when first
+                               needed), beyond it the piece's series (ad_series_at) */
 
 /* ---- adaptive.c: the run's messages ---- */
 /* "step k (t = ...): " and the text into the run's message; ad_fail also
@@ -375,14 +398,39 @@ double ad_sample_time(const adaptive_ws *A, long j);
 static inline double ad_dense_end(const adaptive_ws *A, double t1) {
   return A->hold_end && t1 == A->tend && t1 < A->o.T ? t1 - 8 * DBL_EPSILON * fabs(t1) : t1;
 }
-/* The samples due in [t0, t1) on md's flow from y = ya with error e0,
- * offered to the sink (a refusal kept in A->pend: the step goes on, the
- * run stops at its end); CUP_OK or an error. */
-int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
-                  double t1);
+/* The samples due in [t0, t1) on md's flow from y = ya with error e0
+ * (output samples; output tol's points), offered to the sink (a refusal
+ * kept in A->pend: the step goes on, the run stops at its end); CUP_OK or
+ * an error. The other outputs have none: no call. */
+int ad_emit_out(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                double t1);
+static inline int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0,
+                                double t0, double t1) {
+  int out = A->o.output;
+  return out == CUP_OUTPUT_SAMPLES || out == CUP_OUTPUT_TOL ? ad_emit_out(A, R, md, ya, e0, t0, t1) : CUP_OK;
+}
+/* A sample refused inside the step in progress (on md, step number k, the
+ * step ending at t1): A->pend active, no second piece yet; the caller
+ * keeps the states to start again from. */
+static inline struct ad_pend *ad_pend_start(adaptive_ws *A, const ad_mode *md, long k, double t1) {
+  struct ad_pend *p = &A->pend;
+  p->active = 1;
+  p->seg2 = 0;
+  p->md = (int)(md - A->modes);
+  p->k = k;
+  p->t_end = t1;
+  return p;
+}
 /* A stop at a refused sample inside a step, resumed: that sample and the
  * rest of the step's; 1 if the sink refused one again. */
 int ad_dense_resume(adaptive_ws *A, ad_run *R);
+
+/* ---- adaptive_outtol.c ---- */
+/* Output tol: the points inside [t0, t1) on md's flow from y = ya (and t0
+ * itself when with_t0), those before skip not offered; as ad_emit_dense:
+ * a refusal kept in A->pend, 1; else 0 or an error. */
+int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
+                int with_t0, double skip);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a

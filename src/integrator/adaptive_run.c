@@ -106,6 +106,7 @@ static __attribute__((noinline)) int hold(adaptive_ws *A, ad_run *R) {
   const cup_integrator_options *o = &A->o;
   int due = 0;
   if (o->output == CUP_OUTPUT_EVERY) due = R->steps % o->output_every == 0;
+  else if (o->output == CUP_OUTPUT_TOL) due = 1;
   else if (o->output == CUP_OUTPUT_SAMPLES && R->next_sample < o->output_samples) {
     double ts = ad_sample_time(A, R->next_sample);
     due = ts <= R->t && ts >= ad_dense_end(A, R->t);
@@ -131,6 +132,7 @@ RUN_INLINE int emit_at(adaptive_ws *A, ad_run *R, const double *x, int est) {
         R->next_sample++;
       }
       break;
+    case CUP_OUTPUT_TOL: out = 1; break;         /* (each step's end, as every 1: adaptive_outtol.c between) */
     case CUP_OUTPUT_FINAL: out = last; break;
     case CUP_OUTPUT_NONE: break;
   }
@@ -917,6 +919,7 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input, .wall0 = now_seconds()};
   int st = run_begin(A, &R, A->o.T, x0, 1);
   if (st) return st;
+  adaptive_tol_reset(A);                         /* (output tol's scales: a run's own) */
   for (int j = 0; A->tan && j < A->n; j++)       /* V(0) = I */
     for (int i = 0; i < A->n; i++) A->tan[i + (size_t)j * A->n] = i == j;
   return run_to_end(A, &R, start_sampled(A, &R));
@@ -940,7 +943,8 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
    * window of length 0 chooses none: its state is the next window's) */
   if (st >= 0 && jumped & 2 && !first && ta < tb && sink)   /* the sample the window before held, here */
     st = give_held(A, &R);
-  else if (st >= 0 && jumped && !first && ta < tb && sink && A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1)
+  else if (st >= 0 && jumped && !first && ta < tb && sink &&
+           ((A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1) || A->o.output == CUP_OUTPUT_TOL))
     st = offer(A, &R);
   st = run_to_end(A, &R, st);
   A->tend = A->o.T;

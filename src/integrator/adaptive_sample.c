@@ -201,12 +201,7 @@ static int diverged(ad_run *R, double ts, const double *xo, int n) {
  * (A->zy, A->de) kept in A->pend, the step going on to its end where the
  * run stops. Returns 1. */
 static int pend_refused(adaptive_ws *A, const ad_mode *md, long k, double t1) {
-  struct ad_pend *p = &A->pend;
-  p->active = 1;
-  p->seg2 = 0;
-  p->md = (int)(md - A->modes);
-  p->k = k;
-  p->t_end = t1;
+  struct ad_pend *p = ad_pend_start(A, md, k, t1);
   la_copy(p->zy, A->zy, A->na);
   la_copy(p->de, A->de, A->na);
   return 1;
@@ -484,27 +479,41 @@ static void error_at(adaptive_ws *A, ad_mode *md, double tau, const double *e0) 
   }
 }
 
+/* After a refused sample in this step, nothing is offered: a second
+ * piece (an event's new flow) is kept for the resumed run. 1 if so. */
+static int keep_second(adaptive_ws *A, ad_mode *md, const double *ya, const double *e0, double t0, double t1) {
+  struct ad_pend *p = &A->pend;
+  if (!p->active) return 0;
+  if (!p->seg2) {
+    p->seg2 = 1;
+    p->md2 = (int)(md - A->modes);
+    p->t2a = t0;
+    p->t2b = t1;
+    la_copy(p->y2, ya, A->na);
+    la_copy(p->e2, e0, A->n);
+  }
+  return 1;
+}
+
+/* Output tol's points on the piece (adaptive_outtol.c; an event's new
+ * flow: its start too). */
+static int emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                    double t1) {
+  if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
+  int st = ad_emit_tol(A, R, md, ya, t0, t1, R->steps + 1, t0 > R->t, -INFINITY);
+  return st < 0 ? st : CUP_OK;
+}
+
 /* The samples due before t1 on the flow of md from (t0, ya), exact: the
  * first by exp((t_j - t0) M), the next ones by dense_from; the error
  * estimate there is e0's (the error at t0) carried along by the same flow.
- * After a refused sample in this step, nothing is offered: a second piece
- * (an event's new flow) is kept for the resumed run. */
-int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
-                      double t1) {
+ * After a refused sample in this step, nothing is offered (keep_second). */
+int ad_emit_out(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
+                double t1) {
   const cup_integrator_options *o = &A->o;
-  if (o->output != CUP_OUTPUT_SAMPLES) return CUP_OK;
+  if (o->output == CUP_OUTPUT_TOL) return emit_tol(A, R, md, ya, e0, t0, t1);
   struct ad_pend *p = &A->pend;
-  if (p->active) {
-    if (!p->seg2) {
-      p->seg2 = 1;
-      p->md2 = (int)(md - A->modes);
-      p->t2a = t0;
-      p->t2b = t1;
-      la_copy(p->y2, ya, A->na);
-      la_copy(p->e2, e0, A->n);
-    }
-    return CUP_OK;
-  }
+  if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
   if (!(R->next_sample < o->output_samples)) return CUP_OK;
   double ts = ad_sample_time(A, R->next_sample);
   t1 = ad_dense_end(A, t1);
@@ -521,6 +530,13 @@ int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, cons
 int ad_dense_resume(adaptive_ws *A, ad_run *R) {
   struct ad_pend *p = &A->pend;
   p->active = 0;
+  if (A->o.output == CUP_OUTPUT_TOL) {            /* the piece chosen again, from the refused point on */
+    la_copy(A->opeak, p->opk, A->n);
+    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->ta, p->t_end, p->k, p->with_t0, p->tr);
+    if (st || !p->seg2) return st;
+    p->seg2 = 0;
+    return ad_emit_tol(A, R, &A->modes[p->md2], p->y2, p->t2a, p->t2b, p->k, p->t2a > p->ta, -INFINITY);
+  }
   la_copy(A->zy, p->zy, A->na);
   la_copy(A->de, p->de, A->na);
   int st = dense_from(A, R, &A->modes[p->md], p->t_end, p->k);

@@ -15,16 +15,17 @@
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
-enum { VERSION = 5 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
+enum { VERSION = 6 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
                            4: and the sets its jump's LCP was solved at (AD_JUMPS);
-                           5: implicit and exponential, the splitting check's sums */
+                           5: implicit and exponential, the splitting check's sums;
+                           6: output tol (the fingerprint's output_tol, a refused point's piece) */
 
 /* What a blob belongs to: restored only into an integrator of the same
  * build (sizes and byte order) and configuration. */
 typedef struct fingerprint {
   int32_t endian, sizes, version, scheme, n, m, p, method, output, estimate, f_order, warm_start, theta_step;
   int64_t steps, every, samples;
-  double T, h, eps_n, eta_n, theta, tol_abs, tol_rel, max_event_rate, lipschitz, hmax, output_t0;
+  double T, h, eps_n, eta_n, theta, tol_abs, tol_rel, max_event_rate, lipschitz, hmax, output_t0, output_tol;
 } fingerprint;
 
 static void fingerprint_of(const cup_integrator *I, fingerprint *f) {
@@ -49,6 +50,7 @@ static void fingerprint_of(const cup_integrator *I, fingerprint *f) {
   f->lipschitz = o->proj.lipschitz;
   f->hmax = o->hmax;
   f->output_t0 = o->output_t0;
+  f->output_tol = o->output == CUP_OUTPUT_TOL ? o->output_tol : 0;
 }
 
 /* The first field that differs, named in errmsg; CUP_OK when none. */
@@ -66,7 +68,7 @@ static int same_run(const fingerprint *a, const fingerprint *b, char *errmsg) {
   CK_INT(samples, "output.samples") CK_DBL(T, "T") CK_DBL(h, "h") CK_DBL(eps_n, "eps_n") CK_DBL(eta_n, "eta_n")
   CK_DBL(theta, "theta") CK_DBL(tol_abs, "tol_abs") CK_DBL(tol_rel, "tol_rel")
   CK_DBL(max_event_rate, "max_event_rate") CK_DBL(lipschitz, "projector.lipschitz") CK_DBL(hmax, "hmax")
-  CK_DBL(output_t0, "output_t0")
+  CK_DBL(output_t0, "output_t0") CK_DBL(output_tol, "output.tol")
 #undef CK_INT
 #undef CK_DBL
   return CUP_OK;

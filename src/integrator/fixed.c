@@ -69,7 +69,8 @@ static int selected(const fixed_ws *F, sampler *sp, long k) {
   switch (o->output) {
     case CUP_OUTPUT_EVERY: return o->output_every == 1 || k % o->output_every == 0 || k == o->n;   /* 1: no division */
     case CUP_OUTPUT_FINAL: return k == o->n;
-    case CUP_OUTPUT_NONE: return 0;
+    case CUP_OUTPUT_NONE:
+    case CUP_OUTPUT_TOL: return 0;                 /* (refused by options_check) */
     case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
   }
   return 0;

@@ -69,6 +69,14 @@ int options_check(const cup_integrator_options *o, char *errmsg) {
       if (!(o->output_t0 >= 0 && o->output_t0 < o->T))
         return fail_fmt(errmsg, CUP_ERR_ARG, "output_t0 = %g must be in [0, T = %g)", o->output_t0, o->T);
       break;
+    case CUP_OUTPUT_TOL:
+      if (o->scheme != CUP_SCHEME_ADAPTIVE)
+        return fail_fmt(errmsg, CUP_ERR_ARG, "output tol is the adaptive scheme's (points from its exact flow "
+                        "inside a step); the %s scheme has none: choose output every or samples, or scheme "
+                        "adaptive", cup_scheme_name(o->scheme));
+      if (!(o->output_tol > 0) || !isfinite(o->output_tol))
+        return fail_fmt(errmsg, CUP_ERR_ARG, "output tol = %g must be finite and > 0", o->output_tol);
+      break;
     case CUP_OUTPUT_FINAL:
     case CUP_OUTPUT_NONE:
       break;

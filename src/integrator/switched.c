@@ -563,8 +563,10 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if (S->half) info->err_est = estimate_value(&S->est);
     return st;
   }
-  /* every step recorded: a jump at a switching is recorded after it too */
-  int each = S->sink && S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1;
+  /* every step recorded (output tol too: adaptive_outtol.c's points
+   * between): a jump at a switching is recorded after it too */
+  int each = S->sink && ((S->o.output == CUP_OUTPUT_EVERY && S->o.output_every == 1) || S->o.output == CUP_OUTPUT_TOL);
+  adaptive_tol_reset(S->ad[0]);                    /* (output tol's scales: the run's, shared by its configurations) */
   /* else a sample at a switching time is the state after its jump: the
    * window before holds it (adaptive_hold_end) and, when the jump moved
    * the state, the next window gives it, else this one after all */
@@ -588,6 +590,7 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
       adaptive_seed(S->ad[topo], 1);
       adaptive_share_breaks(S->ad[topo], &S->breaks);
       adaptive_hold_end(S->ad[topo], S->sink && !each);
+      adaptive_tol_share(S->ad[topo], S->ad[0]);
       seeded |= (uint64_t)1 << topo;
     }
     S->cur = topo;

@@ -395,6 +395,9 @@ static int read_output(rd *r, const st_node *nd, cup_integrator_options *o) {
   if (!st && kind == CUP_OUTPUT_EVERY) {
     o->output = CUP_OUTPUT_EVERY;
     st = integer(r, v, "output.every", 1, LONG_MAX, &o->output_every);
+  } else if (!st && kind == CUP_OUTPUT_TOL) {
+    o->output = CUP_OUTPUT_TOL;
+    st = number_min(r, v, "output.tol", 0, 1, &o->output_tol);
   } else if (!st) {
     o->output = CUP_OUTPUT_SAMPLES;
     st = integer(r, v, "output.samples", 2, LONG_MAX, &o->output_samples);

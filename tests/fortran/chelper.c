@@ -97,7 +97,7 @@ int cupt_layout(const char *name, long *out, int cap) {
         OFF(cup_integrator_options, tol_rel), OFF(cup_integrator_options, max_event_rate),
         OFF(cup_integrator_options, on_event), OFF(cup_integrator_options, event_ctx),
         OFF(cup_integrator_options, estimate), OFF(cup_integrator_options, hmax),
-        OFF(cup_integrator_options, output_t0));
+        OFF(cup_integrator_options, output_t0), OFF(cup_integrator_options, output_tol));
   if (!strcmp(name, "cup_run_info"))
     PUT(sizeof(cup_run_info), OFF(cup_run_info, status), OFF(cup_run_info, step),
         OFF(cup_run_info, t), OFF(cup_run_info, projected), OFF(cup_run_info, skipped),

@@ -109,7 +109,7 @@ contains
       off(b, c_loc(o%step_ctx)), off(b, c_loc(o%interrupt)), off(b, c_loc(o%tol_abs)), &
       off(b, c_loc(o%tol_rel)), off(b, c_loc(o%max_event_rate)), off(b, c_loc(o%on_event)), &
       off(b, c_loc(o%event_ctx)), off(b, c_loc(o%estimate)), off(b, c_loc(o%hmax)), &
-      off(b, c_loc(o%output_t0))])
+      off(b, c_loc(o%output_t0)), off(b, c_loc(o%output_tol))])
     b = c_loc(r)
     call compare('cup_run_info', [int(c_sizeof(r), c_long), off(b, c_loc(r%status)), off(b, c_loc(r%step)), &
       off(b, c_loc(r%t)), off(b, c_loc(r%projected)), off(b, c_loc(r%skipped)), &
@@ -570,7 +570,8 @@ contains
     call check_int(cup_scheme_parse('theta'), 3, 'theta parse')
     call check(cup_scheme_name(CUP_SCHEME_COUNT) == 'unknown', 'past the list')
     call check_int(cup_output_parse('samples'), CUP_OUTPUT_SAMPLES, 'output parse')
-    call check(cup_output_name(CUP_OUTPUT_NONE) == 'none' .and. CUP_OUTPUT_COUNT == 4, 'output name')
+    call check(cup_output_name(CUP_OUTPUT_NONE) == 'none' .and. CUP_OUTPUT_COUNT == 5, 'output name')
+    call check(cup_output_name(CUP_OUTPUT_TOL) == 'tol' .and. cup_output_parse('tol') == CUP_OUTPUT_TOL, 'output tol')
     call check_int(cup_wave_parse('pwl'), CUP_WAVE_PWL, 'wave parse')
     call check(cup_wave_name(CUP_WAVE_SQUARE) == 'square' .and. cup_wave_parse('saw') == -1, 'wave name')
     call check_int(cup_proj_method_parse('fista'), CUP_PROJ_FISTA, 'method parse')
