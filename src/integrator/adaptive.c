@@ -301,12 +301,8 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     A->dcpl = block_take(b, (size_t)m, 1);
     A->jseed = block_take(b, (size_t)m, 1);
   }
-  if (A->scratch) return;                         /* (shared: scratch_carve's) */
-  A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
-  A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
-  A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
-  ad_scratch_layout(A, b);
-  if (A->o.output == CUP_OUTPUT_TOL) {           /* adaptive_outtol.c's (the other outputs' layout as it was) */
+  if (A->o.output == CUP_OUTPUT_TOL) {           /* adaptive_outtol.c's (the other outputs' layout as it was; a
+                                                   * configuration's own, not the shared scratch's) */
     size_t slot = 1 + 2 * (size_t)n + (size_t)na;
     A->opeak = block_take(b, (size_t)n, sizeof(double));
     A->pend.opk = block_take(b, (size_t)n, sizeof(double));
@@ -316,6 +312,11 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     if (na <= AD_TOL_LEVELS_NA)                  /* (exp(2^-j h M) a halving level, and two to make them) */
       A->olev = block_take(b, (AD_TOL_DEPTH + 4) * NA, sizeof(double));
   }
+  if (A->scratch) return;                         /* (shared: scratch_carve's) */
+  A->samp = block_take(b, (size_t)p * (AD_DEGREE + 1), sizeof(double));
+  A->samp_mid = block_take(b, (size_t)p * AD_DEGREE, sizeof(double));
+  A->coef = block_take(b, 4 * (size_t)(AD_DEGREE + 1), sizeof(double));
+  ad_scratch_layout(A, b);
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two
