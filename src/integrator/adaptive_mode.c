@@ -478,9 +478,13 @@ static inline void mode_mv_sparse(int na, const ad_mode *md, const double *y, do
 }
 
 /* (A few components: ad_mode_mv_few's dense sums; the buck-boost's event
- * functions took 66 instructions a product by the nonzeros.) */
+ * functions took 66 instructions a product by the nonzeros. 8: the
+ * six-pulse bridge's 2 states and 6 input states, na a constant, whose
+ * zeroing was a call of memset.) */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
-  if (!ad_mode_mv_few(A->na, md->M, y, out)) mode_mv_sparse(A->na, md, y, out);
+  if (ad_mode_mv_few(A->na, md->M, y, out)) return;
+  if (A->na == 8) mode_mv_sparse(8, md, y, out);
+  else mode_mv_sparse(A->na, md, y, out);
 }
 
 /* The rest of a mode once mode_factor has chosen its rows. */

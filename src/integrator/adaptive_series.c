@@ -90,7 +90,8 @@ static inline __attribute__((always_inline)) int piece_dense(const double *restr
  * scaling unrolled (270 instructions a term, 200 so); M's nonzeros still
  * (its dense columns cost more: the bridge's M has 22 of 64 entries).
  * Apart from piece_build's body, as horner8 is from piece_at's. */
-static __attribute__((noinline)) int piece_sparse8(const ad_mode *md, int dim, double hs, const double *y, double *c) {
+static __attribute__((noinline)) int piece_sparse8(const ad_mode *md, int dim, double hs, const double *y,
+                                                   double *c) {
   double mag[8];
   return dim == 8 ? piece_sparse(md, 8, hs, y, c, mag) : piece_sparse(md, 7, hs, y, c, mag);
 }
