@@ -82,7 +82,8 @@ typedef struct ad_mode {
   long cstamp[AD_CACHE];
   int *ep[AD_CACHE], *ei[AD_CACHE];   /* ... and their input states' rows' nonzeros by column (na + 1 */
   double *ex[AD_CACHE];     /* starts, rows), their values: exp(h [Pi Q; 0 W]) keeps the zeros of
-                               [0 W] (read with 9 states or more: up to 8, ad_matvec's dense sums) */
+                               [0 W] (written and read with 9 states or more, of which at most 6 the
+                               circuit's, adaptive_mode.c's expm_rows_read: else ad_matvec's sums) */
 } ad_mode;
 
 typedef struct adaptive_ws adaptive_ws;   /* as in adaptive.h, which the run's API is in */

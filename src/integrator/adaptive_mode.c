@@ -13,6 +13,14 @@
  * depends on the others: it is dropped from J (it holds when they do). */
 #define AD_RANK_TOL 1e-12
 
+/* Does ad_expm_mv read an exponential's input rows by their nonzeros (ep,
+ * ei, ex)? Only past 8 flow states with at most 6 of the circuit's: up to
+ * 8, ad_matvec's dense sums; with more circuit states, its generic ones.
+ * Elsewhere expm_into leaves them unwritten (they stay laid out: leaving
+ * them out moved a switched run's later blocks onto other pages, 3 faults
+ * more on the full bridge). */
+static inline int expm_rows_read(const adaptive_ws *A) { return A->na > 8 && A->n <= 6; }
+
 /* Exponential c of md's cache. */
 static inline void cache_layout(ad_mode *md, int c, size_t NA, int na, block_arena *b) {
   md->Ec[c] = block_take(b, NA, sizeof(double));
@@ -470,9 +478,13 @@ static inline void mode_mv_sparse(int na, const ad_mode *md, const double *y, do
 }
 
 /* (A few components: ad_mode_mv_few's dense sums; the buck-boost's event
- * functions took 66 instructions a product by the nonzeros.) */
+ * functions took 66 instructions a product by the nonzeros. 8: the
+ * six-pulse bridge's 2 states and 6 input states, na a constant, whose
+ * zeroing was a call of memset.) */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
-  if (!ad_mode_mv_few(A->na, md->M, y, out)) mode_mv_sparse(A->na, md, y, out);
+  if (ad_mode_mv_few(A->na, md->M, y, out)) return;
+  if (A->na == 8) mode_mv_sparse(8, md, y, out);
+  else mode_mv_sparse(A->na, md, y, out);
 }
 
 /* The rest of a mode once mode_factor has chosen its rows. */
@@ -566,6 +578,7 @@ static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
   la_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
+  if (!expm_rows_read(A)) return;
   int n = A->n, na = A->na, k = 0;             /* the input states' rows' nonzeros (ad_expm_mv) */
   const double *E = md->Ec[c];
   for (int j = 0; j < na; j++) {
@@ -679,7 +692,7 @@ void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const 
    * and 6 input states took 320 instructions a product by the input rows'
    * nonzeros, 260 so; E's zeros add +-0 to sums started at +0, which
    * leaves them as they were) */
-  if (na <= 8 || n > 6 || c == AD_CACHE) { ad_matvec(na, na, E, y, out); return; }
+  if (!expm_rows_read(A) || c == AD_CACHE) { ad_matvec(na, na, E, y, out); return; }
   const int *ep = md->ep[c], *ei = md->ei[c];
   const double *ex = md->ex[c];
   switch (n) {                                   /* (ad_lift's sizes) */
