@@ -291,6 +291,10 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->pend.de = block_take(b, (size_t)na, sizeof(double));
   A->pend.y2 = block_take(b, (size_t)na, sizeof(double));
   A->pend.e2 = block_take(b, (size_t)n, sizeof(double));
+  if (!A->scratch) {                              /* (shared: the scratch's, adaptive_create) */
+    ad_window_state *w = block_take(b, 1, sizeof *w);
+    if (w) A->stop = &w->stop, A->zeno = w->zeno, A->zeno_row = w->zeno_row;
+  }
   if (!A->scratch) {
     A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
     A->touch = block_take(b, (size_t)m, 1);
@@ -355,6 +359,7 @@ struct adaptive_scratch {
                                       when one has D) */
   int nuser;
   adaptive_ws *user[AD_SCRATCH_USERS];
+  ad_window_state win;             /* the stop record and event-rate ring of the window under way */
   /* ad_mode_hmax's eigenvalue workspace (gsl's own allocations), for n
    * states: its first user's, which it owns from then on */
   gsl_eigen_nonsymm_workspace *eig;
@@ -492,9 +497,9 @@ static int alloc_block(adaptive_ws *A) {
 /* A workspace zeroed as a calloc's, but for the active sets' slots (3.8 KB:
  * their pointers are alloc_block's layout's, their scalars zeroed there)
  * and the record entries (1 KB, each written whole by adaptive_record.c's
- * room before one is read): of its 11.8 KB, the 5 KB that a switched run
- * zeroed again for each configuration (some 4.8 k instructions of rep
- * stosb each, a tenth of a buck-boost configuration's set-up). */
+ * room before one is read): of its 9.7 KB, the 4.8 KB that a switched run
+ * zeroed again for each configuration (as rep stosb, some 4.8 k
+ * instructions each under callgrind). */
 static adaptive_ws *ws_new(void) {
   adaptive_ws *A = malloc(sizeof *A);
   if (!A) return NULL;
@@ -559,6 +564,10 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
     return fail_fmt(errmsg, CUP_ERR_UNSUPPORTED,
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
+  }
+  if (!fail && A->scratch) {
+    ad_window_state *w = &A->scratch->win;
+    A->stop = &w->stop, A->zeno = w->zeno, A->zeno_row = w->zeno_row;
   }
   if (fail || alloc_block(A) || modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     adaptive_free(&A);
