@@ -291,10 +291,6 @@ static void vectors(adaptive_ws *A, block_arena *b) {
   A->pend.de = block_take(b, (size_t)na, sizeof(double));
   A->pend.y2 = block_take(b, (size_t)na, sizeof(double));
   A->pend.e2 = block_take(b, (size_t)n, sizeof(double));
-  if (!A->scratch) {                              /* (shared: the scratch's, adaptive_create) */
-    ad_window_state *w = block_take(b, 1, sizeof *w);
-    if (w) A->stop = &w->stop, A->zeno = w->zeno, A->zeno_row = w->zeno_row;
-  }
   if (!A->scratch) {
     A->lcpM = block_take(b, (size_t)m * m, sizeof(double));
     A->touch = block_take(b, (size_t)m, 1);
@@ -494,14 +490,19 @@ static int alloc_block(adaptive_ws *A) {
   return CUP_OK;
 }
 
+/* The stop record and event-rate ring A uses: w's. */
+static void window_state(adaptive_ws *A, ad_window_state *w) {
+  A->stop = &w->stop, A->zeno = w->zeno, A->zeno_row = w->zeno_row;
+}
+
 /* A workspace zeroed as a calloc's, but for the active sets' slots (3.8 KB:
  * their pointers are alloc_block's layout's, their scalars zeroed there)
  * and the record entries (1 KB, each written whole by adaptive_record.c's
  * room before one is read): of its 9.7 KB, the 4.8 KB that a switched run
  * zeroed again for each configuration (as rep stosb, some 4.8 k
  * instructions each under callgrind). */
-static adaptive_ws *ws_new(void) {
-  adaptive_ws *A = malloc(sizeof *A);
+static adaptive_ws *ws_new(int own_window) {
+  adaptive_ws *A = malloc(sizeof *A + (own_window ? sizeof(ad_window_state) : 0));
   if (!A) return NULL;
   char *a = (char *)A;
   size_t m0 = offsetof(adaptive_ws, modes), m1 = m0 + sizeof A->modes;
@@ -511,6 +512,10 @@ static adaptive_ws *ws_new(void) {
   memset(a, 0, m0);
   memset(a + m1, 0, r0 - m1);
   memset(a + r1, 0, sizeof *A - r1);
+  if (own_window) {                               /* (zeroed: a checkpoint writes the whole ring) */
+    memset(A + 1, 0, sizeof(ad_window_state));
+    window_state(A, (ad_window_state *)(A + 1));
+  }
   return A;
 }
 
@@ -537,7 +542,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
     int st = input_gen_check(u, "adaptive", errmsg);
     if (st) return st;
   }
-  adaptive_ws *A = ws_new();
+  adaptive_ws *A = ws_new(!scratch);
   if (scratch && !*scratch) *scratch = calloc(1, sizeof **scratch);
   if (!A || (scratch && !*scratch)) {
     free(A);
@@ -565,10 +570,7 @@ int adaptive_create(adaptive_ws **out, const freestep_drift *D, const cup_polyse
                     "adaptive scheme: %d states plus %d input generator states exceed the dense limit %d; "
                     "use a fixed-step scheme", n, nw, CUP_EXPONENTIAL_MAX_DIM);
   }
-  if (!fail && A->scratch) {
-    ad_window_state *w = &A->scratch->win;
-    A->stop = &w->stop, A->zeno = w->zeno, A->zeno_row = w->zeno_row;
-  }
+  if (A->scratch) window_state(A, &A->scratch->win);
   if (fail || alloc_block(A) || modes_init(A) || lcp_init(&A->lcp, m) || (A->has_D && ad_dae_init(A))) {
     adaptive_free(&A);
     return fail_fmt(errmsg, CUP_ERR_NOMEM, "adaptive scheme: out of memory");

@@ -154,8 +154,9 @@ typedef struct ad_stop {
  * stopped, the event-rate ring. A switched run's configurations run one
  * window at a time and share one (adaptive_scratch's): 2 KB less a
  * configuration to set up (switched.c reads a configuration's stop right
- * after its window, and such a run has no checkpoint); a workspace of
- * its own carries it in its block (zeroed). */
+ * after its window, and such a run has no checkpoint); a workspace
+ * without a shared scratch carries its own after itself (zeroed: the
+ * block's layout, and so the pages a single run touches first, as before). */
 typedef struct ad_window_state {
   ad_stop stop;
   double zeno[AD_ZENO_RING];
