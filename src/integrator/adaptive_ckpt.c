@@ -8,13 +8,13 @@
 #include "adaptive_impl.h"
 #include "projector/projector.h"
 
-int adaptive_stopped(const adaptive_ws *A) { return A->stop.phase != AD_STOP_NONE; }
+int adaptive_stopped(const adaptive_ws *A) { return A->stop->phase != AD_STOP_NONE; }
 
-int adaptive_refused(const adaptive_ws *A) { return A->stop.phase == AD_STOP_SAMPLE || A->stop.phase == AD_STOP_DENSE; }
+int adaptive_refused(const adaptive_ws *A) { return A->stop->phase == AD_STOP_SAMPLE || A->stop->phase == AD_STOP_DENSE; }
 
 void adaptive_unstop(const adaptive_ws *A, cup_run_info *info) {
-  info->status = A->stop.status;
-  memcpy(info->message, A->stop.message, sizeof info->message);
+  info->status = A->stop->status;
+  memcpy(info->message, A->stop->message, sizeof info->message);
 }
 
 /* Everything a step carries to the next: the stopped run's scalars, x and
@@ -22,7 +22,7 @@ void adaptive_unstop(const adaptive_ws *A, cup_run_info *info) {
  * starts, and the kept active sets with their exponentials' step lengths
  * (which ad_flow takes from the cache, or computes another way). */
 void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
-  ad_stop *s = &A->stop;
+  ad_stop *s = A->stop;
   ad_run *R = &s->R;
   size_t N = sizeof(double) * (size_t)A->n, M = (size_t)A->m;
   CUP_CKPT_IO(c, s->phase); CUP_CKPT_IO(c, s->md); CUP_CKPT_IO(c, s->pinned1);
@@ -56,7 +56,7 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
     }
   }
   if (A->o.output == CUP_OUTPUT_TOL) ckpt_io(c, A->opeak, N);   /* output tol's scales */
-  CUP_CKPT_IO(c, A->zeno); CUP_CKPT_IO(c, A->zeno_row); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
+  ckpt_io(c, A->zeno, sizeof(double) * AD_ZENO_RING); ckpt_io(c, A->zeno_row, sizeof(int) * AD_ZENO_RING); CUP_CKPT_IO(c, A->nzeno); CUP_CKPT_IO(c, A->clock);
   ckpt_io(c, A->lcp.lam, sizeof(double) * M);
   ckpt_io(c, A->lcp.prev, M);
   if (A->has_D) {                                /* the jump's LCP (2 m) warm-starts too */

@@ -151,6 +151,19 @@ typedef struct ad_stop {
   char message[CUP_RUN_MSG_LEN];
 } ad_stop;
 
+/* What a run or a window resets at its start (run_begin): where it
+ * stopped, the event-rate ring. A switched run's configurations run one
+ * window at a time and share one (adaptive_scratch's): 2 KB less a
+ * configuration to set up (switched.c reads a configuration's stop right
+ * after its window, and such a run has no checkpoint); a workspace
+ * without a shared scratch carries its own after itself (zeroed: the
+ * block's layout, and so the pages a single run touches first, as before). */
+typedef struct ad_window_state {
+  ad_stop stop;
+  double zeno[AD_ZENO_RING];
+  int zeno_row[AD_ZENO_RING];
+} ad_window_state;
+
 struct adaptive_ws {
   void *block;              /* the arrays the set-up sizes (adaptive.c, alloc_block): one allocation */
   struct adaptive_scratch *scratch; /* the run scratch's owner when shared (adaptive_create), or NULL */
@@ -268,8 +281,8 @@ struct adaptive_ws {
   cup_projector *projector; /* ... and the projector where pivoting fails (degenerate rows, empty K) */
   /* callback inputs: Chebyshev-Lobatto nodes on [0, 1], samples, coefficients */
   double node[AD_DEGREE + 1], *samp, *samp_mid, *coef;
-  double zeno[AD_ZENO_RING]; /* times and rows of the last changes of the active set */
-  int zeno_row[AD_ZENO_RING];
+  double *zeno;              /* AD_ZENO_RING: times and rows of the last changes of the active set */
+  int *zeno_row;            /* (with the stop record, ad_window_state's) */
   long nzeno;
   /* the multipliers at an output time (adaptive_zeta, inside the sink) */
   const ad_mode *zmd;       /* the active set that holds there (at x0's sample: the one chosen at 0+), */
@@ -317,7 +330,7 @@ struct adaptive_ws {
   int put_ns;
   void *put_block;
   double *bt, *bx, *bs, *best, *by, *be, *bk, *bkc;
-  ad_stop stop;             /* where the last run stopped */
+  ad_stop *stop;            /* where the last run stopped (ad_window_state's) */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
   /* a sample inside a step that the sink refused: the step goes on to its

@@ -65,6 +65,15 @@ static inline void slot_layout(const adaptive_ws *A, ad_mode *md, int ncache, bl
  * spread over 22 pages, each one touched (15 now). */
 void ad_modes_layout(adaptive_ws *A, block_arena *b) {
   size_t NA = (size_t)A->na * A->na;
+  if (!b->base) {                                /* sizing: AD_MODES + 1 sets and 3 AD_MODES + 3 exponentials
+                                                    (each piece rounded alone: the sum's order is free) */
+    ad_mode md;
+    block_arena one = {0}, cache = {0};
+    slot_layout(A, &md, 0, &one);
+    cache_layout(&md, 0, NA, A->na, &cache);
+    b->used += (AD_MODES + 1) * one.used + (AD_MODES * AD_CACHE + AD_CACHE) * cache.used;
+    return;
+  }
   for (int s = 0; s < AD_MODES; s++) slot_layout(A, &A->modes[s], 1, b);
   for (int s = 0; s < AD_MODES; s++)
     for (int c = 1; c < AD_CACHE; c++) cache_layout(&A->modes[s], c, NA, A->na, b);

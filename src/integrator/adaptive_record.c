@@ -103,7 +103,7 @@ static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, stru
  * past ad_rec_of's look at the last one. */
 const struct ad_rec *ad_rec_entry(adaptive_ws *A, const ad_mode *md, const signal_map *S) {
   struct ad_rec *e;
-  if (A->rec_ns != S->ns && room(A, S->ns)) return NULL;
+  if ((A->rec_ns != S->ns || !A->rec_block) && room(A, S->ns)) return NULL;   /* (the entries: room's) */
   struct ad_rec *free_e = NULL;
   for (e = A->rec; e < A->rec + AD_MODES + 1; e++) {
     if (e->X == md->X) break;

@@ -63,7 +63,7 @@ static double estimate_now(const adaptive_ws *A, const ad_run *R) {
 /* A stop at a step's end that a checkpoint can resume from: the run's
  * place, and the status and message the stop replaces (adaptive.h). */
 static int halt(adaptive_ws *A, ad_run *R, int status, int phase, const char *what) {
-  ad_stop *s = &A->stop;
+  ad_stop *s = A->stop;
   s->phase = phase;
   s->R = *R;
   s->md = R->md ? (int)(R->md - A->modes) : -1;
@@ -198,7 +198,7 @@ static int step_done(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int at_
          16 * DBL_EPSILON * xn);
   }
   if (A->pend.active) {                          /* the sink refused a sample inside the step */
-    A->stop.pi = *pi;
+    A->stop->pi = *pi;
     return halt_dense(A, R);
   }
   return step_checks(A, R, pi);
@@ -861,7 +861,7 @@ static void info_clear(cup_run_info *info) {
  * from before, the end at tend, the state xa at R's time (x0 refused when
  * beyond a state's range: check, the run's). */
 RUN_INLINE int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *xa, int check) {
-  A->stop.phase = AD_STOP_NONE;
+  A->stop->phase = AD_STOP_NONE;
   A->pend.active = 0;
   A->piece_ok = A->nb_own.ok = 0;                /* (the input may have changed between runs) */
   A->tend = tend;
@@ -908,7 +908,7 @@ static int start_sampled(adaptive_ws *A, ad_run *R) {
   char message[sizeof info->message];
   memcpy(message, info->message, sizeof message);
   if (emit_x(A, R, A->xok) < 0) {                /* refused: the start's error stays the run's */
-    A->stop.phase = AD_STOP_NONE;
+    A->stop->phase = AD_STOP_NONE;
     memcpy(info->message, message, sizeof message);
   }
   return info->status = st;
@@ -972,7 +972,7 @@ int adaptive_offer_held(adaptive_ws *A, double t, long steps, long *next_sample,
  * breakpoint, the catching-up steps under way, the accumulation check),
  * then the steps to T. */
 int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  ad_stop *s = &A->stop;
+  ad_stop *s = A->stop;
   if (s->phase == AD_STOP_NONE) return info->status = CUP_ERR_ARG;
   A->tend = A->o.T;
   ad_run R = s->R;
