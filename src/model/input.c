@@ -511,28 +511,39 @@ double cup_input_next_break(const cup_input *u, double t) {
   return next;
 }
 
+/* Term w's next break after t, its memo m missed: made afresh. */
+static double break_missed(const input_term *w, input_break_memo *m, double t) {
+  double b;
+  if (input_jump_pulse(w) && w->value2 != w->value) {
+    /* a gate's corners one after another: from the last one's period */
+    double per = t == m->next ? m->per : 0;
+    b = spice_jump_break(w, t, &per);
+    *m = (input_break_memo){t, b, per};
+  } else {
+    b = term_break(w, t);
+    /* a square wave's next jump is rounded from q at t: asked afresh */
+    *m = (input_break_memo){w->kind == CUP_WAVE_SQUARE ? NAN : t, b, 0};
+  }
+  return b;
+}
+
+/* (The memos' terms first, by the memos alone: a term read only when its
+ * memo missed, the one gate whose corner t is at a switched run's window
+ * start; the terms past them, as cup_input_next_break. The same terms in
+ * the same order: the same minimum.) */
 double input_next_break_memo(const cup_input *u, input_break_memo *m, int nm, double t) {
   double next = INFINITY;
   if (!u) return next;
-  if (nm > u->nterms) nm = u->nterms;
-  for (int k = 0; k < u->nterms; k++) {
-    const input_term *w = &u->terms[k];
-    double b;
-    if (k >= nm) {
-      b = term_break(w, t);
-    } else if (m[k].from <= t && t < m[k].next) {
-      b = m[k].next;
-    } else if (input_jump_pulse(w) && w->value2 != w->value) {
-      /* a gate's corners one after another: from the last one's period */
-      double per = t == m[k].next ? m[k].per : 0;
-      b = spice_jump_break(w, t, &per);
-      m[k] = (input_break_memo){t, b, per};
-    } else {
-      b = term_break(w, t);
-      /* a square wave's next jump is rounded from q at t: asked afresh */
-      m[k] = (input_break_memo){w->kind == CUP_WAVE_SQUARE ? NAN : t, b, 0};
-    }
+  int n = u->nterms;
+  if (nm > n) nm = n;
+  for (int k = 0; k < nm; k++) {
+    double b = m[k].next;
+    if (!(m[k].from <= t && t < b)) b = break_missed(&u->terms[k], &m[k], t);
     if (b < next) next = b;                        /* (fmin's, a NaN b too) */
+  }
+  for (int k = nm; k < n; k++) {
+    double b = term_break(&u->terms[k], t);
+    if (b < next) next = b;
   }
   return next;
 }
