@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <cmocka.h>
 #include "catchup.h"
+#include "netlist_integrator.h"
 #include "pwl_circuits.h"
 
 enum { MAXSIG = 16 };
@@ -61,7 +62,6 @@ static cup_netlist *load(const char *text, const char *const *probes, int np) {
 }
 
 static cup_integrator *make(cup_netlist *nl, int scheme, double T) {
-  char err[CUP_ERRMSG_LEN];
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = scheme;
@@ -70,12 +70,7 @@ static cup_integrator *make(cup_netlist *nl, int scheme, double T) {
   o.tol_abs = o.tol_rel = 1e-9;
   o.output = CUP_OUTPUT_SAMPLES;
   o.output_samples = 11;
-  cup_integrator *I = NULL;
-  cup_switching sw;
-  int st = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)
-                                          : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err);
-  if (st) fail_msg("%s", err);
-  return I;
+  return netlist_integrator(nl, &o);
 }
 
 /* The first record of a run of nl under scheme over [0, T]. */

@@ -14,6 +14,7 @@
 #include <string.h>
 #include <cmocka.h>
 #include "catchup.h"
+#include "netlist_integrator.h"
 #include "pwl_circuits.h"
 
 #define CIR CUP_SOURCE_DIR "/examples/circuits/"
@@ -89,7 +90,7 @@ static void exact_pwl(const void *ctx, double t, double *x) {
   for (int i = 0; i < tr->c->n; i++) x[i] = y[i];
 }
 
-static cup_integrator *make(cup_netlist *nl, double T, double otol, char *err) {
+static cup_integrator *make(cup_netlist *nl, double T, double otol) {
   cup_integrator_options o;
   cup_integrator_options_default(&o);
   o.scheme = CUP_SCHEME_ADAPTIVE;
@@ -97,12 +98,7 @@ static cup_integrator *make(cup_netlist *nl, double T, double otol, char *err) {
   o.tol_abs = o.tol_rel = 1e-9;                  /* (the flow's own error well below the lines') */
   o.output = CUP_OUTPUT_TOL;
   o.output_tol = otol;
-  cup_integrator *I = NULL;
-  cup_switching sw;
-  int st = cup_netlist_switching(nl, &sw) ? cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), &o, err)
-                                          : cup_integrator_create(&I, cup_netlist_lcs(nl), cup_netlist_input(nl), &o, err);
-  if (st) fail_msg("%s", err);
-  return I;
+  return netlist_integrator(nl, &o);
 }
 
 /* Each point's time after the last's, the first 0 and the last T. */
@@ -129,7 +125,7 @@ static void check_example(const char *name) {
   pr_traj tr;
   assert_int_equal(pr_solve(&c, y0, T, &tr), 0);
   for (double otol = 1e-2; otol >= 0.99e-4; otol *= 0.1) {
-    cup_integrator *I = make(nl, T, otol, err);
+    cup_integrator *I = make(nl, T, otol);
     p.n = 0;
     p.refuse_at = -1;
     p.dim = c.n;
@@ -173,7 +169,7 @@ static void test_rc(void **state) {
   if (cup_netlist_load_string(&nl, rc_text, "rc.cir", NULL, 0, err)) fail_msg("%s", err);
   assert_int_equal(cup_lcs_dim(cup_netlist_lcs(nl)), 1);
   for (double otol = 1e-2; otol >= 0.99e-5; otol *= 0.1) {
-    cup_integrator *I = make(nl, 5e-3, otol, err);
+    cup_integrator *I = make(nl, 5e-3, otol);
     p.n = 0;
     p.refuse_at = -1;
     p.dim = 1;
@@ -203,7 +199,7 @@ static void check_resume(const char *name) {
   int n = cup_lcs_dim(cup_netlist_lcs(nl));
   double tstep, T;
   assert_true(cup_netlist_tran(nl, &tstep, &T));
-  cup_integrator *I = make(nl, T, 1e-3, err);
+  cup_integrator *I = make(nl, T, 1e-3);
   int st;
   cup_run_info info;
   a.n = 0; a.refuse_at = -1; a.dim = n;
@@ -221,7 +217,7 @@ static void check_resume(const char *name) {
     assert_int_equal(cup_integrator_checkpoint_restore(I, buf, (unsigned long)size, err), CUP_OK);
     st = cup_integrator_resume(I, keep, &b, &info);
     if (st != CUP_OK) fail_msg("resume at %ld: %s: %s", at, cup_status_name(st), info.message);
-    cup_integrator *J = make(nl, T, 1e-3, err);
+    cup_integrator *J = make(nl, T, 1e-3);
     assert_int_equal(cup_integrator_checkpoint_restore(J, buf, (unsigned long)size, err), CUP_OK);
     assert_int_equal(cup_integrator_resume(J, keep, &c, &info), CUP_OK);
     cup_integrator_free(&J);
@@ -240,7 +236,7 @@ static void check_resume(const char *name) {
   long size = cup_integrator_checkpoint_size(I);
   void *buf = malloc((size_t)size);
   assert_int_equal(cup_integrator_checkpoint_save(I, &info, buf, (unsigned long)size), CUP_OK);
-  cup_integrator *J = make(nl, T, 2e-3, err);
+  cup_integrator *J = make(nl, T, 2e-3);
   assert_int_equal(cup_integrator_checkpoint_restore(J, buf, (unsigned long)size, err), CUP_ERR_ARG);
   assert_non_null(strstr(err, "output.tol"));
   cup_integrator_free(&J);
@@ -268,7 +264,7 @@ static void test_switched_stop(void **state) {
   if (cup_netlist_load(&nl, CIR "fullbridge.cir", NULL, 0, err)) fail_msg("%s", err);
   double tstep, T;
   assert_true(cup_netlist_tran(nl, &tstep, &T));
-  cup_integrator *I = make(nl, T, 1e-3, err);
+  cup_integrator *I = make(nl, T, 1e-3);
   cup_run_info info;
   a.n = 0; a.refuse_at = -1; a.dim = 2;
   b.n = 0; b.refuse_at = 1234; b.dim = 2;
