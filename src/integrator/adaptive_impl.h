@@ -423,6 +423,10 @@ static inline int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const do
   int out = A->o.output;
   return out == CUP_OUTPUT_SAMPLES || out == CUP_OUTPUT_TOL ? ad_emit_out(A, R, md, ya, e0, t0, t1) : CUP_OK;
 }
+/* integrator_set_put's put of a batch's c points (A->bt, bx, bs; step
+ * number k): how many it took, within [0, c], and the samples offered
+ * counted (those taken, and a refused one). */
+int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c);
 /* A sample refused inside the step in progress (on md, step number k, the
  * step ending at t1): A->pend active, no second piece yet; the caller
  * keeps the states to start again from. */

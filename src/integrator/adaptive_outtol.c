@@ -218,11 +218,8 @@ typedef struct {
 /* The batch to put: 1 if a point was refused (its time in O->tr). The
  * samples counted as the sink's: those offered, the refused one too. */
 static int flush(adaptive_ws *A, ad_run *R, long k, tol_out *O) {
-  int c = O->c, took = c ? A->put(R->sink_ctx, k, c, A->bt, A->bx, A->bs, AD_BATCH) : 0;
+  int c = O->c, took = ad_put_batch(A, R, k, c);
   O->c = 0;
-  if (took < 0) took = 0;
-  if (took > c) took = c;
-  R->info->samples += took < c ? took + 1 : c;
   if (took == c) return 0;
   O->tr = A->bt[took];
   return 1;
