@@ -425,8 +425,15 @@ static inline int ad_emit_dense(adaptive_ws *A, ad_run *R, ad_mode *md, const do
 }
 /* integrator_set_put's put of a batch's c points (A->bt, bx, bs; step
  * number k): how many it took, within [0, c], and the samples offered
- * counted (those taken, and a refused one). */
-int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c);
+ * counted (those taken, and a refused one); adaptive_sample.c's dense
+ * samples and adaptive_outtol.c's points. */
+static inline int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
+  int took = c ? A->put(R->sink_ctx, k, c, A->bt, A->bx, A->bs, AD_BATCH) : 0;
+  if (took < 0) took = 0;
+  if (took > c) took = c;
+  R->info->samples += took < c ? took + 1 : c;
+  return took;
+}
 /* A sample refused inside the step in progress (on md, step number k, the
  * step ending at t1): A->pend active, no second piece yet; the caller
  * keeps the states to start again from. */

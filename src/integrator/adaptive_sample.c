@@ -272,14 +272,6 @@ static int dense_samples(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long
  * the sink would have been called: the estimate and count of each sample
  * offered, R->next_sample after those taken, A->zy and A->de the last
  * offered one's, and a refused one kept in A->pend (1; else 0). */
-int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
-  int took = c ? A->put(R->sink_ctx, k, c, A->bt, A->bx, A->bs, AD_BATCH) : 0;
-  if (took < 0) took = 0;
-  if (took > c) took = c;
-  R->info->samples += took < c ? took + 1 : c;
-  return took;
-}
-
 static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, int c) {
   int na = A->na, took = ad_put_batch(A, R, k, c);
   int offered = took < c ? took + 1 : c;
