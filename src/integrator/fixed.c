@@ -29,52 +29,7 @@
 #include "estimate.h"
 #include "integrator_impl.h"
 #include "fixed_impl.h"
-
-static double grid_time(const fixed_ws *F, long k) { return tally_grid_time(k, F->o.n, F->o.T, F->h); }
-
-/* The output: every k-th step, the last, none; or samples at
- * tau_j = output_t0 + j (T - output_t0) / (N - 1), each due at kdue, the
- * first step that reaches it: on a step (aligned: that step's state, as it
- * always was) or between two (interpolated linearly, the scheme's own
- * order at most two: x and zeta both). */
-typedef struct { long next_j, kdue; int aligned; double tau; } sampler;
-
-static void sampler_next(const fixed_ws *F, sampler *sp) {
-  const cup_integrator_options *o = &F->o;
-  long S = o->output_samples, n = o->n, j = sp->next_j;
-  if (o->output != CUP_OUTPUT_SAMPLES || j >= S) { sp->kdue = LONG_MAX; return; }
-  double t0 = o->output_t0;
-  sp->tau = j == S - 1 ? o->T : t0 + (o->T - t0) * (double)j / (double)(S - 1);
-  long k;
-  if (t0 == 0 && S > 1 && S < (1L << 31) && n < (1L << 31)) {
-    /* on a step when k (S - 1) = j n exactly, in integers, for k = llround(tau / h): that is when
-     * S - 1 divides j n, and then llround gives k = j n / (S - 1) (tau / h is within a few ulps
-     * of it, k < 2^31), so the remainder decides, in 64 bits, without llround's call a sample */
-    long jn = j * n;
-    sp->aligned = jn % (S - 1) == 0;
-    k = sp->aligned ? jn / (S - 1) : (long)ceil(sp->tau / F->h);
-  } else {
-    k = (long)llround(sp->tau / F->h);
-    if (t0 == 0) sp->aligned = (__int128)k * (S - 1) == (__int128)j * n;   /* exactly, in integers */
-    else sp->aligned = grid_time(F, k) == sp->tau;
-    if (!sp->aligned) k = (long)ceil(sp->tau / F->h);
-  }
-  if (k < 0) k = 0;
-  if (k > n) k = n;
-  sp->kdue = k;
-}
-
-static int selected(const fixed_ws *F, sampler *sp, long k) {
-  const cup_integrator_options *o = &F->o;
-  switch (o->output) {
-    case CUP_OUTPUT_EVERY: return o->output_every == 1 || k % o->output_every == 0 || k == o->n;   /* 1: no division */
-    case CUP_OUTPUT_FINAL: return k == o->n;
-    case CUP_OUTPUT_NONE:
-    case CUP_OUTPUT_TOL: return 0;                 /* (refused by options_check) */
-    case CUP_OUTPUT_SAMPLES: return sp->kdue <= k;
-  }
-  return 0;
-}
+#include "fixed_output.h"
 
 /* The first step j >= k whose end the loop must see itself: a sample (and
  * the step before an interpolated one, whose zeta it keeps), the interrupt
@@ -93,62 +48,9 @@ static long loop_stop(const fixed_ws *F, const sampler *sp, int sink, long k) {
   return next - 1 < stop ? next - 1 : stop;
 }
 
-/* The samples due at step k (x_k in F->x, x_{k-1} in F->xnew): on the step,
- * or interpolated between the two; in a split step's piece (piece: F->x
- * and F->xnew its ends, at F->piece.ta and .tb), those before its cut,
- * interpolated between the piece's ends (never across a jump). */
-static inline int emit_in(fixed_ws *F, sampler *sp, long k, int piece,
-                          cup_sample_fn sink, void *ctx, cup_run_info *info) {
-  while (selected(F, sp, k) && !(sp->aligned && F->hold && k == F->kend)) {   /* (held: integrator_held) */
-    if (piece && !(sp->tau < F->piece.cut)) break;
-    const double *x = F->x;
-    double t = grid_time(F, k);
-    if (!sp->aligned && k > 0) {
-      double t_prev = piece ? F->piece.ta : grid_time(F, k - 1), t_end = piece ? F->piece.tb : t;
-      double s = (sp->tau - t_prev) / (t_end - t_prev);
-      if (s < 1) {
-        for (int i = 0; i < F->n; i++) F->xs[i] = F->xnew[i] + s * (F->x[i] - F->xnew[i]);
-        x = F->xs;
-        F->zs = s;
-      }
-      t = sp->tau;
-    }
-    info->samples++;
-    int stopped = sink(k, t, x, ctx);
-    F->zs = 1;
-    if (stopped) return 1;
-    sp->next_j++;
-    sampler_next(F, sp);
-  }
-  return 0;
-}
-
-static int emit_samples(fixed_ws *F, sampler *sp, long k, cup_sample_fn sink, void *ctx, cup_run_info *info) {
-  return emit_in(F, sp, k, 0, sink, ctx, info);
-}
-
-/* After the samples of step k: zeta_k kept when the next sample falls
- * between steps k and k + 1 (its zeta is interpolated from it). */
-static void keep_zeta(fixed_ws *F, const sampler *sp, long k) {
-  if (!sp->aligned && k + 1 == sp->kdue && F->zprev) fixed_zeta(F, F->zprev);
-}
-
-/* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
- * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
- * the cause's (what[WHAT_LEN] buffers below). */
-enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
-
-static int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
-  info->status = status;
-  snprintf(info->message, sizeof info->message, "step %ld (t = %.17g): %s", k, t, what);
-  return status;
-}
-
 /* The estimate's run at n/2 from F->x0 (its states kept for the
  * comparisons). CUP_ERR_INTERRUPTED when the interrupt flag stopped it:
  * the run it serves stops too (a signal is not to wait for half the work). */
-static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
-
 static int coarse_run(fixed_ws *F, cup_run_info *info) {
   cup_run_info hi;
   int st = fixed_run(F->half, F->x0, estimate_keep, &F->est, &hi);
@@ -171,7 +73,7 @@ static int halt(fixed_ws *F, cup_run_info *info, int status, long k, double t, c
 }
 
 /* g = F + G u(t) for a moving polyset. */
-static int moving_offset(fixed_ws *F, double t) {
+int fixed_moving_offset(fixed_ws *F, double t) {
   if (F->gterms) input_eval_terms(F->u, F->gterms, F->ngterms, t, F->ut);   /* those with a column in G */
   else if (cup_input_eval(F->u, t, F->ut)) return CUP_ERR_CALLBACK;
   memcpy(F->g, F->K->g0, sizeof(double) * (size_t)F->m);
@@ -277,7 +179,7 @@ static __attribute__((noinline, cold)) int certify_or_stop(fixed_ws *F, long k, 
  * capacitor at rest is, though C x0 + g alone may be negative. 1 when x0
  * is not: the first step jumps (jump_size tells by how much). */
 static int polyset_x0(fixed_ws *F, int fixed, cup_run_info *info) {
-  const double *g0 = !fixed && moving_offset(F, 0) == CUP_OK ? F->g : F->K->g0;
+  const double *g0 = !fixed && fixed_moving_offset(F, 0) == CUP_OK ? F->g : F->K->g0;
   int consistent = F->use_theta ? lcp_step_start(&F->th, F->x, g0)
                                 : polyset_slack(F->K, g0, F->x, F->s0, NULL) >= 0;
   if (consistent) return 0;
@@ -369,11 +271,10 @@ static int general_x0(fixed_ws *F, cup_run_info *info) {
   return CUP_OK;
 }
 
-static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);
 
 /* The run's start (x0's checks and warnings, the estimate's run at n/2,
  * x0's sample), then its steps. */
-static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   fixed_ws *F = ws;
   memset(info, 0, sizeof *info);
   info->err_est = NAN;
@@ -443,7 +344,7 @@ static int fixed_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_
   }
   if (sink && o->output == CUP_OUTPUT_SAMPLES && emit_samples(F, &sp, 0, sink, sink_ctx, info))
     return halt(F, info, CUP_ERR_INTERRUPTED, 0, 0, "stopped by the output sink", CUP_STOP_SAMPLE_REFUSED, &sp);
-  return steps(F, 0, sp.next_j, sink, sink_ctx, info);
+  return fixed_steps(F, 0, sp.next_j, sink, sink_ctx, info);
 }
 
 /* The step's answer without a certified distance to K(t), or its error:
@@ -486,7 +387,7 @@ static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebui
     info->set_rebuilds = cup_setproj_rebuilds(F->sp) - rebuilds0;
     return st;                           /* stopped already when negative */
   }
-  if (!fixed && (st = moving_offset(F, t1)) != CUP_OK)
+  if (!fixed && (st = fixed_moving_offset(F, t1)) != CUP_OK)
     return stop_at(info, st == CUP_ERR_NONFINITE ? CUP_ERR_CALLBACK : st, k + 1, t1,
                    "the input u(t) that moves K failed or returned NaN/Inf");
   if (F->use_theta) {
@@ -516,7 +417,7 @@ static int step(fixed_ws *F, long k, double t0, double t1, int fixed, long rebui
 }
 
 /* The support of the theta step's last zeta (with D), a bit per row. */
-static unsigned long long theta_support(const fixed_ws *F) {
+unsigned long long fixed_theta_support(const fixed_ws *F) {
   unsigned long long J = 0;
   for (int i = 0; i < F->m; i++)
     if (F->th.lcp.lam[i] > 0) J |= 1ull << i;
@@ -544,7 +445,7 @@ enum { RESTARTS = 3 };
  * it was, bit for bit. (steps calls step once, in a loop, so that step
  * stays inlined there: a second call site cost the bridge's theta run 3 %.) */
 static __attribute__((noinline, cold)) int restart_again(fixed_ws *F, cup_proj_info *pi, int *again) {
-  unsigned long long now = theta_support(F);
+  unsigned long long now = fixed_theta_support(F);
   if (*again == 0) F->restart_iters = 0;
   if (now == F->mode0 || *again == RESTARTS) {
     F->restart = 0;
@@ -559,7 +460,7 @@ static __attribute__((noinline, cold)) int restart_again(fixed_ws *F, cup_proj_i
 
 /* The steps from k0 (the sampler at next_j) to kend, as a run takes them
  * after its start; a window and a resumed run go on through them. */
-static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
+int fixed_steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
   const cup_integrator_options *o = &F->o;
   sampler sp = {next_j, 0, 0, 0};
   sampler_next(F, &sp);
@@ -634,184 +535,7 @@ static int steps(fixed_ws *F, long k0, long next_j, cup_sample_fn sink, void *si
   return info->status;
 }
 
-double integrator_grid_time(const cup_integrator *I, long k) { return grid_time(I->ws, k); }
-
-double integrator_grid_step(const cup_integrator *I) { return ((const fixed_ws *)I->ws)->h; }
-
-/* A window's (or a split step's) statistics, from nothing. */
-static void window_info(const fixed_ws *F, cup_run_info *info) {
-  memset(info, 0, sizeof *info);
-  info->err_est = NAN;
-  info->eps_target = F->eps_n;
-  info->eta_target = F->eta_n;
-  info->h_rho = F->h_rho;
-}
-
 static void fixed_wall_limit(void *ws, double seconds) { ((fixed_ws *)ws)->o.max_wall_seconds = seconds; }
-
-/* The theta step's start at t_k from F->x: zeta_k by the LCP there (0
- * with D = 0), its support's weights. */
-static void theta_start(fixed_ws *F, long k) {
-  int fixed = F->fixed || !F->u;
-  const double *g = !fixed && moving_offset(F, grid_time(F, k)) == CUP_OK ? F->g : F->K->g0;
-  lcp_step_start(&F->th, F->x, g);
-}
-
-int integrator_window(cup_integrator *I, long k0, long k1, const double *x, int first, int hold, long *next_j,
-                      cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  fixed_ws *F = I->ws;
-  F->stop.phase = CUP_STOP_NONE;                 /* (integrator_window_reached reads its stop) */
-  F->kend = k1;
-  F->hold = hold;
-  F->window = 1;
-  int st;
-  if (first) {
-    st = fixed_run(F, x, sink, sink_ctx, info);
-  } else {                                         /* as a run starts, at t_k0 (no x0 checks: the jump was the model's) */
-    window_info(F, info);
-    memcpy(F->x, x, sizeof(double) * (size_t)F->n);
-    memcpy(F->xnew, x, sizeof(double) * (size_t)F->n);   /* x_{k-1} of a sample between t_k0 and t_k0+1 */
-    int fixed = F->fixed || !F->u;
-    F->zeta_from = 0;
-    F->jump = 0;
-    F->zs = 1;
-    if (F->zprev) la_zero(F->zprev, F->m);
-    if (F->K && fixed) cup_projector_set_offset(F->proj, F->K->g0);
-    if (F->K && F->use_theta) theta_start(F, k0);  /* theta's zeta_k0 at the window's start */
-    F->restart = F->K && F->use_theta && F->th.D && F->th.theta < 1;   /* ... its mode checked (restart_again) */
-    if (F->restart) F->mode0 = theta_support(F);
-    st = steps(F, k0, *next_j, sink, sink_ctx, info);
-  }
-  *next_j = F->next_j;
-  F->kend = F->o.n;
-  F->hold = F->window = 0;
-  return st;
-}
-
-int integrator_window_reached(const cup_integrator *I, long k1, long *next_j) {
-  const fixed_ws *F = I->ws;
-  if (F->stop.phase != CUP_STOP_NONE) *next_j = F->stop.next_j;
-  return F->stop.phase == CUP_STOP_STEP_DONE && F->stop.k == k1;
-}
-
-/* The samples due at the end of step k outside the loop (a split step's
- * last piece's, a held one's): as the loop gives them. */
-static int step_samples(fixed_ws *F, sampler *sp, long k, int piece, cup_sample_fn sink, void *sink_ctx,
-                        cup_run_info *info) {
-  const cup_integrator_options *o = &F->o;
-  double t = grid_time(F, k);
-  if (sink && o->output == CUP_OUTPUT_SAMPLES) {
-    if (piece ? emit_in(F, sp, k, 1, sink, sink_ctx, info) : emit_samples(F, sp, k, sink, sink_ctx, info))
-      return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
-    keep_zeta(F, sp, k);
-  } else if (sink && selected(F, sp, k) && !(F->hold && k == F->kend)) {
-    info->samples++;
-    if (sink(k, t, F->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
-  }
-  return CUP_OK;
-}
-
-/* A split step's piece in I, from (ta, xa) to (tb, x) with zeta its
- * multipliers, no jump inside it: x the state there (x_k for the last). */
-static void piece_set(fixed_ws *F, double ta, const double *xa, double tb, const double *x, const double *zeta) {
-  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
-  memcpy(F->xnew, xa, sizeof(double) * (size_t)F->n);
-  F->zeta_from = 3;
-  F->zeta_ext = zeta;
-  F->zs = 1;
-  if (F->zprev) memcpy(F->zprev, zeta, sizeof(double) * (size_t)F->m);   /* zeta: the piece's, at every sample in it */
-  F->piece.ta = ta;
-  F->piece.tb = tb;
-  F->piece.cut = INFINITY;
-}
-
-int integrator_split_piece(cup_integrator *I, long k, double ta, const double *xa, double tb, const double *x,
-                           const double *zeta, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  fixed_ws *F = I->ws;
-  window_info(F, info);
-  info->step = k - 1;
-  info->t = tb;
-  piece_set(F, ta, xa, tb, x, zeta);
-  F->piece.cut = tb - 8 * DBL_EPSILON * fabs(tb);   /* (a sample time a rounding short of tb: tb's, the next piece's) */
-  sampler sp = {*next_j, 0, 0, 0};
-  sampler_next(F, &sp);
-  int st = CUP_OK;
-  if (emit_in(F, &sp, k, 1, sink, sink_ctx, info)) st = stop_at(info, CUP_ERR_INTERRUPTED, k - 1, tb,
-                                                                "stopped by the output sink");
-  *next_j = sp.next_j;
-  return st;
-}
-
-double integrator_sample_time(const cup_integrator *I, long j) {
-  sampler sp = {j, 0, 0, 0};
-  sampler_next(I->ws, &sp);
-  return sp.kdue == LONG_MAX ? INFINITY : sp.tau;
-}
-
-int integrator_split_end(cup_integrator *I, long k, double ta, const double *xa, const double *x, const double *zeta,
-                         int hold, long *next_j, cup_sample_fn sink, void *sink_ctx, cup_run_info *info) {
-  fixed_ws *F = I->ws;
-  const cup_integrator_options *o = &F->o;
-  double t = grid_time(F, k);
-  window_info(F, info);
-  info->step = k;
-  info->t = t;
-  piece_set(F, ta, xa, t, x, zeta);                /* the last piece: from the last switching time to t_k */
-  sampler sp = {*next_j, 0, 0, 0};
-  sampler_next(F, &sp);
-  cup_proj_info pi = {0};
-  int st = CUP_OK;
-  if (o->on_step && o->on_step(k, t, &pi, o->step_ctx)) {
-    st = stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the step callback");
-  } else {
-    F->kend = k;                                   /* (emit_samples' hold) */
-    F->hold = hold;
-    st = step_samples(F, &sp, k, 1, sink, sink_ctx, info);
-    F->kend = F->o.n;
-    F->hold = 0;
-  }
-  *next_j = sp.next_j;
-  return st;
-}
-
-/* The state x after a switching's jump at t_k, as a run's start has it:
- * zeta theta's LCP at x, else 0. */
-static void jumped_to(fixed_ws *F, long k, const double *x) {
-  memcpy(F->x, x, sizeof(double) * (size_t)F->n);
-  F->zeta_from = 0;
-  F->zs = 1;
-  if (F->K && F->use_theta) {
-    theta_start(F, k);
-    F->zeta_from = 1;
-  }
-}
-
-int integrator_jump_sample(cup_integrator *I, long k, const double *x, cup_sample_fn sink, void *sink_ctx,
-                           cup_run_info *info) {
-  fixed_ws *F = I->ws;
-  double t = grid_time(F, k);
-  window_info(F, info);
-  info->step = k;
-  info->t = t;
-  jumped_to(F, k, x);
-  info->samples++;
-  if (sink(k, t, F->x, sink_ctx)) return stop_at(info, CUP_ERR_INTERRUPTED, k, t, "stopped by the output sink");
-  return CUP_OK;
-}
-
-int integrator_held(cup_integrator *I, long k, const double *x, long *next_j, cup_sample_fn sink, void *sink_ctx,
-                    cup_run_info *info) {
-  fixed_ws *F = I->ws;
-  window_info(F, info);
-  info->step = k;
-  info->t = grid_time(F, k);
-  if (x) jumped_to(F, k, x);
-  sampler sp = {*next_j, 0, 0, 0};
-  sampler_next(F, &sp);
-  int st = step_samples(F, &sp, k, 0, sink, sink_ctx, info);
-  *next_j = sp.next_j;
-  return st;
-}
 
 /* A restored checkpoint (checkpoint.c) goes on from the step it stopped
  * after: the coarse run of the estimate again (the same states), the
@@ -841,7 +565,7 @@ static int fixed_resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_in
                     CUP_STOP_SAMPLE_REFUSED, &sp);
       if (k > 0) keep_zeta(F, &sp, k);
     }
-    return steps(F, k, sp.next_j, sink, sink_ctx, info);
+    return fixed_steps(F, k, sp.next_j, sink, sink_ctx, info);
   }
   int offer = phase == CUP_STOP_SAMPLE_REFUSED || (phase == CUP_STOP_SAMPLE_DUE && sink && selected(F, &sp, k));
   if (sink && offer) {
@@ -850,7 +574,7 @@ static int fixed_resume(void *ws, cup_sample_fn sink, void *sink_ctx, cup_run_in
       return halt(F, info, CUP_ERR_INTERRUPTED, k, grid_time(F, k), "stopped by the output sink",
                   CUP_STOP_SAMPLE_REFUSED, &sp);
   }
-  return steps(F, k, sp.next_j, sink, sink_ctx, info);
+  return fixed_steps(F, k, sp.next_j, sink, sink_ctx, info);
 }
 
 static int takes(const cup_integrator_options *o) {
