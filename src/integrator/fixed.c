@@ -2,9 +2,10 @@
  * (paper, Sec. 3, eq. for x_{k+1}) on the grid t_k = k T / n, a free step
  * (freestep.c), then an (eps_n, eta_n)-projection onto K(t_{k+1}) in the
  * P-metric (projector.c) or the step's exact LCP (lcp/step.c), stretches of
- * a small LCS's steps fused (faststep.c); the output samples, the
- * estimate's run at n/2, stops and their resumption; and the table that
- * makes the four schemes one entry (fixed_setup.c sets them up). A step
+ * a small LCS's steps fused (faststep.c); the output samples
+ * (fixed_output.h), the estimate's run at n/2, stops and their resumption;
+ * and the table that makes the four schemes one entry (fixed_setup.c sets
+ * them up, fixed_window.c takes a switched circuit's windows). A step
  * allocates nothing and a run keeps only the current state. */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
