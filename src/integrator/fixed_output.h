@@ -101,7 +101,7 @@ static inline void keep_zeta(fixed_ws *F, const sampler *sp, long k) {
 
 /* The cause of a stop, whole: the message's prefix "step K (t = T): " takes
  * at most 5 + 20 + 6 + 24 + 3 characters, the rest of CUP_RUN_MSG_LEN is
- * the cause's (what[WHAT_LEN] buffers below). */
+ * the cause's (fixed.c's what[WHAT_LEN] buffers). */
 enum { WHAT_LEN = CUP_RUN_MSG_LEN - 64 };
 
 static inline int stop_at(cup_run_info *info, int status, long k, double t, const char *what) {
