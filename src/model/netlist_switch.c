@@ -269,7 +269,8 @@ static void memo_reset(nl_switched *S) {
   for (int k = 0; k < S->nmemo; k++) S->vmemo[4 * (size_t)k + 3] = NAN;
   S->cvm_class = 0;
   S->tab_class = 0;
-  for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]);
+  for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]), S->topo[k].quiet = 0;
+  S->quiet_ok = 0;
 }
 
 /* The configuration's index, formed now if it is new. */
@@ -364,6 +365,10 @@ static int op_next(void *ctx, int topo, double t, double tmax, double *tnext) {
   return nl_sw_next(ctx, topo, t, tmax, tnext);
 }
 
+static int op_quiet(void *ctx, int topo, const cup_input *u, double t, double tnext) {
+  return nl_sw_quiet(ctx, topo, u, t, tnext);
+}
+
 static const cup_lcs *op_lcs(void *ctx, int topo) {
   cup_netlist *nl = ctx;
   return nl->sw->topo[topo].sub->L;
@@ -405,7 +410,8 @@ static int op_moves(void *ctx, int topo) {
 int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
   if (!nl || !nl->sw || !ops) return 0;
   *ops = (cup_switching){.ctx = nl, .settle = op_settle, .next = op_next, .lcs = op_lcs, .jump = op_jump,
-                         .state_gated = op_state_gated, .crossed = op_crossed, .moves = op_moves};
+                         .state_gated = op_state_gated, .crossed = op_crossed, .moves = op_moves,
+                         .quiet = op_quiet};
   return 1;
 }
 

@@ -216,6 +216,32 @@ static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
   return CUP_OK;
 }
 
+/* 1 if every term of configuration tp's input is a constant or a jump
+ * PULSE its controls read: then the input breaks only where those terms'
+ * pieces end (next_piece's walk). Not a PULSE with value2 == value (its
+ * breaks are pulse_break's, not spice_jump_break's), nor one whose top
+ * reaches within 1e-6 of its period (the top's end of the period before
+ * may round past the next start: spice_jump_break looks there, the
+ * pieces do not). */
+static int quiet_terms(const nl_topo *tp) {
+  const cup_input *u = tp->sub->u;
+  if (!tp->steps || !u || u->fn) return 0;
+  for (int k = 0, q = 0; k < u->nterms; k++) {
+    const input_term *w = &u->terms[k];
+    int read = q < tp->nuterm && tp->uterm[q] == k;
+    q += read;
+    if (w->kind == CUP_WAVE_CONSTANT) continue;
+    if (!read || !input_jump_pulse(w) || w->value2 == w->value) return 0;
+    if (w->period > 0 && !(w->rise + w->width < w->period * (1 - 1e-6))) return 0;
+  }
+  return 1;
+}
+
+int nl_sw_quiet(const cup_netlist *nl, int topo, const cup_input *u, double t, double tnext) {
+  const nl_switched *S = nl->sw;
+  return S->quiet_ok && u == nl->u && topo == S->quiet_topo && t == S->quiet_t && tnext == S->quiet_to;
+}
+
 /* The first time in (t, tmax] at which a source-gated switch of
  * configuration topo changes (tmax if none): the input's pieces checked at
  * their ends when every source is DC, PULSE or PWL (linear pieces), else
@@ -227,6 +253,7 @@ int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) 
   double cv[64], a = t;
   uint64_t cfg = tp->cfg;
   *tnext = tmax;
+  S->quiet_ok = 0;
   if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
     long k = nl_sw_instant(S, t);
     double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
@@ -239,8 +266,22 @@ int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) 
    * (the other terms' breaks, across which the controls hold, are passed
    * over; a switched run's window asks the input's next break itself) */
   int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
-  if (cls && nl_sw_held(S, tp, t) && S->cvm_to == cfg)    /* (the rule, applied to its own result, gives it again) */
-    return next_piece(S, topo, tmax, tnext);
+  if (cls && nl_sw_held(S, tp, t) && S->cvm_to == cfg) {  /* (the rule, applied to its own result, gives it again) */
+    /* the controls' terms hold on [t, hi): a switching at hi, or tmax
+     * below it, has none of their breaks before it, nor any of the
+     * input's when its other terms are constants (nl_sw_quiet) */
+    double hi = S->cvm_hi;
+    int st = next_piece(S, topo, tmax, tnext);
+    nl_topo *tq = &S->topo[topo];
+    if (!tq->quiet) tq->quiet = 1 + quiet_terms(tq);
+    if (*tnext <= hi && tq->quiet == 2) {
+      S->quiet_ok = 1;
+      S->quiet_topo = topo;
+      S->quiet_t = t;
+      S->quiet_to = *tnext;
+    }
+    return st;
+  }
   while (a < tmax) {
     const cup_input *in = tp->sub->u;
     double b = cls && cls == S->cvm_class && a >= S->cvm_lo && a < S->cvm_hi ? S->cvm_hi
