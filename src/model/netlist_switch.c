@@ -334,7 +334,7 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
     if (pass == 0 && memo)                         /* the search's at t: the same controls (they read no state) */
       next = S->memo_cfg;
     else if (nl_sw_held(S, tp, t))                 /* the controls the searches read last, the same sums */
-      next = tp->cfg == S->cvm_from || tp->cfg == S->cvm_to ? S->cvm_to : nl_sw_rule(S, tp->cfg, S->cvm);
+      next = tp->cfg == S->cvm_from || tp->cfg == S->cvm_to ? S->cvm_to : nl_sw_rule(S, tp->cfg, S->cvr);
     else if (nl_sw_controls(S, tp, t, x, zeta, cv))
       return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
     else
@@ -532,6 +532,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   S->zf = calloc((size_t)nl->m + (size_t)c->nelem + (size_t)nl->n + 2, sizeof(double));
   S->thr = malloc(sizeof(double) * (2 * (size_t)S->nsw + 1));
   S->cvm = malloc(sizeof(double) * ((size_t)S->nsw + 1));
+  S->cvr = S->cvm;
   S->tab = malloc(sizeof(double) * ((size_t)S->nsw << NL_TAB_TERMS));
   S->nmemo = nl->u && !nl->u->fn ? nl->u->nterms : 0;
   S->bmemo = S->nmemo ? malloc(sizeof *S->bmemo * (size_t)S->nmemo) : NULL;

@@ -69,7 +69,7 @@ static inline int same_bits(double a, double b) {
 }
 
 /* The controls of configuration tp's class on the pieces of its terms
- * that hold at b (read_terms, then controls_u: a search's), into S->cvm,
+ * that hold at b (read_terms, then controls_u: a search's), at S->cvr,
  * and those pieces' span into cvm_lo, cvm_hi. Its terms are constants and
  * PULSEs with jump edges (steps), each piece's value the term's value or
  * value2: the controls are a function of which terms are off their value,
@@ -80,6 +80,7 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
   if (tp->nuterm > NL_TAB_TERMS || !S->tab) {
     read_terms(S, tp, b);
     controls_u(S, tp, S->cvm);
+    S->cvr = S->cvm;
     S->cvm_lo = S->read_lo;
     S->cvm_hi = S->read_hi;
     return -1;
@@ -104,7 +105,7 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
     S->tab_ok |= (uint64_t)1 << key;
     S->tab_from[key] = S->tab_to[key] = UINT64_MAX;   /* (no configuration: bit 63 is no switch) */
   }
-  for (int k = 0; k < S->nsw; k++) S->cvm[k] = row[k];
+  S->cvr = row;                                    /* (its row itself: rewritten only for another class) */
   S->cvm_lo = lo;
   S->cvm_hi = hi;
   return (int)key;
@@ -164,12 +165,13 @@ int nl_sw_changes(nl_switched *S, const nl_topo *tp, double s, const double *x, 
       S->last_cfg = S->cvm_to;
       return S->last_cfg != tp->cfg;
     }
-    for (int k = 0; k < S->nsw; k++) cv[k] = S->cvm[k];
+    for (int k = 0; k < S->nsw; k++) cv[k] = S->cvr[k];
   } else {
     S->cvm_class = 0;
     if (nl_sw_controls(S, tp, s, x, NULL, cv)) return -1;
     if (cls) {
       for (int k = 0; k < S->nsw; k++) S->cvm[k] = cv[k];
+      S->cvr = S->cvm;
       S->cvm_class = cls;
       S->cvm_lo = S->read_lo;
       S->cvm_hi = S->read_hi;
@@ -200,7 +202,7 @@ static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
     if (key >= 0 && (S->tab_from[key] == cfg || S->tab_to[key] == cfg)) {
       S->cvm_to = S->tab_to[key];                  /* (a steady converter's: each period the same) */
     } else {
-      S->cvm_to = nl_sw_rule(S, cfg, S->cvm);
+      S->cvm_to = nl_sw_rule(S, cfg, S->cvr);
       if (key >= 0) S->tab_from[key] = cfg, S->tab_to[key] = S->cvm_to;
     }
     S->last_cfg = S->cvm_to;
@@ -235,11 +237,6 @@ static int quiet_terms(const nl_topo *tp) {
     if (w->period > 0 && !(w->rise + w->width < w->period * (1 - 1e-6))) return 0;
   }
   return 1;
-}
-
-int nl_sw_quiet(const cup_netlist *nl, int topo, const cup_input *u, double t, double tnext) {
-  const nl_switched *S = nl->sw;
-  return S->quiet_ok && u == nl->u && topo == S->quiet_topo && t == S->quiet_t && tnext == S->quiet_to;
 }
 
 /* The first time in (t, tmax] at which a source-gated switch of
