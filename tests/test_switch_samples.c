@@ -157,7 +157,7 @@ static int run_case2(double ts, double width, cup_integrator_options *o, enum fa
   wrap W = {.fail = f, .ts = ts};
   assert_int_equal(cup_netlist_switching(nl, &W.sw), 1);
   W.u = cup_netlist_input(nl);
-  cup_switching sw = {&W, w_settle, w_next, w_lcs, w_jump, w_state_gated, w_crossed, w_moves};
+  cup_switching sw = {&W, w_settle, w_next, w_lcs, w_jump, w_state_gated, w_crossed, w_moves, NULL};
   cup_input *u = NULL;
   assert_int_equal(cup_input_create(&u, cup_input_dim(W.u), err), CUP_OK);
   assert_int_equal(cup_input_set_callback(u, w_input, &W, 1e-12, 1e-12), CUP_OK);

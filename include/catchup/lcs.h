@@ -98,6 +98,10 @@ typedef struct cup_switching {
   /** Optional (NULL: every jump may move x): 0 if jump leaves every x as
    *  it is in configuration topo (no constraint of its own), else 1. */
   int (*moves)(void *ctx, int topo);
+  /** Optional (NULL: never known): 1 if the input u has no breakpoint in
+   *  (t, tnext), tnext next's last answer, in configuration topo from t
+   *  (a switched run's window then asks the input for none), else 0. */
+  int (*quiet)(void *ctx, int topo, const struct cup_input *u, double t, double tnext);
 } cup_switching;
 
 #ifdef __cplusplus

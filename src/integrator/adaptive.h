@@ -51,7 +51,8 @@ int adaptive_run(adaptive_ws *A, const double *x0, cup_sample_fn sink, void *sin
  * the first sample; jumped: xa is the state after a jump at ta (a switching),
  * which output every 1 records at ta, after the one before it that ended the
  * window before (jumped & 2: the sample the window before held,
- * adaptive_hold_end, given at ta); steps and next_sample carry the
+ * adaptive_hold_end, given at ta; jumped & 4: the input has no breakpoint
+ * in (ta, tb), cup_switching's quiet: none asked); steps and next_sample carry the
  * numbering across the windows. The statistics of the window into info. */
 int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int first, int jumped,
                     long *steps, long *next_sample, cup_sample_fn sink, void *sink_ctx, cup_run_info *info);

@@ -412,8 +412,10 @@ RUN_INLINE int at_break(adaptive_ws *A, ad_run *R, int first, cup_proj_info *pi)
  * K(t+) (a projection, certified), and the active set by the velocity LCP.
  * fresh: at_break has just checked A->x (nothing between, as at a window's
  * start): with the same offset its slack in A->s is the choice's too. */
-RUN_INLINE int start_piece(adaptive_ws *A, ad_run *R, int fresh) {
-  double tb = ad_next_break(A, R->t);   /* a record here asked already */
+RUN_INLINE int start_piece(adaptive_ws *A, ad_run *R, int fresh, int quiet) {
+  /* (a record here asked already; quiet, a switched run's window: the
+   * model knows the input has no breakpoint before its end, the min's) */
+  double tb = quiet ? A->tend : ad_next_break(A, R->t);
   R->tb = tb < A->tend ? tb : A->tend;
   /* a callback is taken continuous: only u(t+) and u'(t+) matter here */
   double h = A->callback ? la_fmin(R->h_cb, R->tb - R->t) : R->tb - R->t;
@@ -477,7 +479,7 @@ static int end_of_step(adaptive_ws *A, ad_run *R, const cup_proj_info *pi, int a
   }
   int ev = at_event && !at_tb;
   if ((st = step_done(A, R, pi, ev)) < 0 || (st = emit_at(A, R, A->x, !ev)) < 0) return st;
-  if (at_tb && R->t < A->tend && (st = start_piece(A, R, 0)) < 0) return st;
+  if (at_tb && R->t < A->tend && (st = start_piece(A, R, 0, 0)) < 0) return st;
   return CUP_OK;
 }
 
@@ -885,11 +887,12 @@ RUN_INLINE int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *x
 }
 
 /* ... then, after its first sample (first: x0's), the breakpoint there and
- * the first piece (the steps to tend follow: run_to_end). */
-static int start_from(adaptive_ws *A, ad_run *R, int first, int st) {
+ * the first piece (the steps to tend follow: run_to_end); quiet: the input
+ * has no breakpoint before tend (adaptive_window's jumped & 4). */
+static int start_from(adaptive_ws *A, ad_run *R, int first, int quiet, int st) {
   cup_proj_info pi;
   if (st >= 0) st = at_break(A, R, first, &pi);
-  if (st >= 0 && R->t < A->tend) st = start_piece(A, R, 1);
+  if (st >= 0 && R->t < A->tend) st = start_piece(A, R, 1, quiet);
   return st;
 }
 
@@ -902,7 +905,7 @@ static int start_from(adaptive_ws *A, ad_run *R, int first, int st) {
  * carrying an inductor's current at t = 0 showed i(D) = -i(L)). A start
  * that fails still gives x0's sample (zeta = 0 unless a set was chosen). */
 static int start_sampled(adaptive_ws *A, ad_run *R) {
-  int st = start_from(A, R, 1, CUP_OK);
+  int st = start_from(A, R, 1, 0, CUP_OK);
   if (st >= 0) return emit_x(A, R, A->xok);
   cup_run_info *info = R->info;
   char message[sizeof info->message];
@@ -935,7 +938,7 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
               .wall0 = A->o.max_wall_seconds > 0 ? now_seconds() : 0, .t = ta, .steps = *steps,
               .next_sample = *next_sample};
   run_begin(A, &R, tb, xa, 0);
-  int st = first ? start_sampled(A, &R) : start_from(A, &R, 0, CUP_OK);
+  int st = first ? start_sampled(A, &R) : start_from(A, &R, 0, jumped >> 2 & 1, CUP_OK);
   /* every step recorded: the state after the jump too, at the same time
    * (after the window's projections, with the active set chosen there, so
    * that zeta is the new configuration's); a line drawn through the
@@ -943,7 +946,7 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
    * window of length 0 chooses none: its state is the next window's) */
   if (st >= 0 && jumped & 2 && !first && ta < tb && sink)   /* the sample the window before held, here */
     st = give_held(A, &R);
-  else if (st >= 0 && jumped && !first && ta < tb && sink &&
+  else if (st >= 0 && jumped & 3 && !first && ta < tb && sink &&
            ((A->o.output == CUP_OUTPUT_EVERY && A->o.output_every == 1) || A->o.output == CUP_OUTPUT_TOL))
     st = offer(A, &R);
   st = run_to_end(A, &R, st);
@@ -1006,7 +1009,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   } else {
     st = emit(A, &R);
   }
-  if (st >= 0 && at_tb && R.t < A->tend) st = start_piece(A, &R, 0);
+  if (st >= 0 && at_tb && R.t < A->tend) st = start_piece(A, &R, 0, 0);
   if (st >= 0 && R.tend > 0) st = catch_up_from(A, &R, at_tb);
   else if (st >= 0 && info->events > R.ev0) st = zeno_check(A, &R);
   return run_to_end(A, &R, st);

@@ -600,7 +600,9 @@ static int sw_run(void *ws, const double *x0, cup_sample_fn sink, void *sink_ctx
     if ((st = wall_left(S, topo, steps, t, info))) break;
     int give = held && t < tb;                     /* the window gives it at its start */
     if (give) held = 0;
-    st = window(S, topo, t, tb, first, jumped | give << 1, &steps, &next_sample, S->gated[topo], info);
+    /* no breakpoint of the input before tb (the model's search knows): the window asks for none */
+    int quiet = sw->quiet && sw->quiet(sw->ctx, topo, S->u, t, tb) == 1;
+    st = window(S, topo, t, tb, first, jumped | give << 1 | quiet << 2, &steps, &next_sample, S->gated[topo], info);
     if (S->user_stop) t = info->t;                 /* where the window stopped */
     if (st < 0 || S->user_stop) {
       if (st < 0 && S->unoffered) held = 1;        /* its start failed: the stop below gives it */

@@ -269,7 +269,8 @@ static void memo_reset(nl_switched *S) {
   for (int k = 0; k < S->nmemo; k++) S->vmemo[4 * (size_t)k + 3] = NAN;
   S->cvm_class = 0;
   S->tab_class = 0;
-  for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]);
+  for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]), S->topo[k].quiet = 0;
+  S->quiet_ok = 0;
 }
 
 /* The configuration's index, formed now if it is new. */
@@ -333,7 +334,7 @@ static int settle(cup_netlist *nl, int *topo, double t, const double *x, const d
     if (pass == 0 && memo)                         /* the search's at t: the same controls (they read no state) */
       next = S->memo_cfg;
     else if (nl_sw_held(S, tp, t))                 /* the controls the searches read last, the same sums */
-      next = tp->cfg == S->cvm_from || tp->cfg == S->cvm_to ? S->cvm_to : nl_sw_rule(S, tp->cfg, S->cvm);
+      next = tp->cfg == S->cvm_from || tp->cfg == S->cvm_to ? S->cvm_to : nl_sw_rule(S, tp->cfg, S->cvr);
     else if (nl_sw_controls(S, tp, t, x, zeta, cv))
       return nl_fail(&S->c, -1, errmsg, CUP_ERR_CALLBACK, "the input u(t) failed at t = %g", t);
     else
@@ -362,6 +363,10 @@ static int op_settle(void *ctx, int *topo, double t, const double *x, const doub
 
 static int op_next(void *ctx, int topo, double t, double tmax, double *tnext) {
   return nl_sw_next(ctx, topo, t, tmax, tnext);
+}
+
+static int op_quiet(void *ctx, int topo, const cup_input *u, double t, double tnext) {
+  return nl_sw_quiet(ctx, topo, u, t, tnext);
 }
 
 static const cup_lcs *op_lcs(void *ctx, int topo) {
@@ -405,7 +410,8 @@ static int op_moves(void *ctx, int topo) {
 int cup_netlist_switching(cup_netlist *nl, cup_switching *ops) {
   if (!nl || !nl->sw || !ops) return 0;
   *ops = (cup_switching){.ctx = nl, .settle = op_settle, .next = op_next, .lcs = op_lcs, .jump = op_jump,
-                         .state_gated = op_state_gated, .crossed = op_crossed, .moves = op_moves};
+                         .state_gated = op_state_gated, .crossed = op_crossed, .moves = op_moves,
+                         .quiet = op_quiet};
   return 1;
 }
 
@@ -526,6 +532,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
   S->zf = calloc((size_t)nl->m + (size_t)c->nelem + (size_t)nl->n + 2, sizeof(double));
   S->thr = malloc(sizeof(double) * (2 * (size_t)S->nsw + 1));
   S->cvm = malloc(sizeof(double) * ((size_t)S->nsw + 1));
+  S->cvr = S->cvm;
   S->tab = malloc(sizeof(double) * ((size_t)S->nsw << NL_TAB_TERMS));
   S->nmemo = nl->u && !nl->u->fn ? nl->u->nterms : 0;
   S->bmemo = S->nmemo ? malloc(sizeof *S->bmemo * (size_t)S->nmemo) : NULL;

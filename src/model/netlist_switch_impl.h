@@ -32,6 +32,8 @@ typedef struct nl_topo {
   int ctl_class;           /* > 0: configurations of one class have the same controls, of t alone
                               (same_controls): settle's rule holds in the one it moves to; 0: none */
   int succ;                /* the configuration settle last moved to from it (a hint: its cfg is checked) */
+  int quiet;               /* 2: every term of its input is a constant or a jump PULSE its controls read
+                              (nl_sw_quiet), 1: not, 0: not known yet (memo_reset) */
 } nl_topo;
 
 struct nl_switched {
@@ -57,6 +59,7 @@ struct nl_switched {
    * overlap: the next piece's first check reads them again */
   int cvm_class;           /* their configurations' control class (0: none held) */
   double cvm_lo, cvm_hi, *cvm;
+  const double *cvr;       /* them: cvm, or read_piece's row of tab (not copied) */
   uint64_t cvm_from, cvm_to; /* the rule's last answer from them: cvm_from gave cvm_to */
   double read_lo, read_hi; /* the last read_terms': where its terms' memos all hold */
   /* a class's controls by which of its terms are off their value (read_piece) */
@@ -72,6 +75,10 @@ struct nl_switched {
   int memo_ok, memo_topo;
   double memo_t;
   uint64_t memo_cfg, last_cfg;   /* ... and the rule's at the last check (nl_sw_changes) */
+  /* the last search's (topo, t -> tnext) when its input, topo[0]'s, has no
+   * breakpoint in (t, tnext) (cup_switching's quiet, nl_sw_quiet) */
+  int quiet_ok, quiet_topo;
+  double quiet_t, quiet_to;
   /* a controller from code (cup_netlist_set_controller): it alone sets the gates, at t = k ts */
   cup_gate_fn gate_fn;
   void *gate_ctx;
@@ -106,6 +113,12 @@ static inline uint64_t nl_sw_rule(const nl_switched *S, uint64_t cfg, const doub
 
 /* Each switch's control at t in configuration tp (netlist_switch_time.c). */
 int nl_sw_controls(nl_switched *S, const nl_topo *tp, double t, const double *x, const double *zeta, double *cv);
+/* cup_switching's quiet: 1 if u, the netlist's input, has no breakpoint in
+ * (t, tnext), nl_sw_next's last answer in topo from t (its walk noted it). */
+static inline int nl_sw_quiet(const cup_netlist *nl, int topo, const cup_input *u, double t, double tnext) {
+  const nl_switched *S = nl->sw;
+  return S->quiet_ok && u == nl->u && topo == S->quiet_topo && t == S->quiet_t && tnext == S->quiet_to;
+}
 /* 1 if a switch of one kind changes at s from configuration tp, 0 if not, < 0 on error. */
 int nl_sw_changes(nl_switched *S, const nl_topo *tp, double s, const double *x, int by_state, double *cv);
 /* The first time in (t, tmax] at which a source-gated switch of configuration topo changes. */

@@ -69,7 +69,7 @@ static inline int same_bits(double a, double b) {
 }
 
 /* The controls of configuration tp's class on the pieces of its terms
- * that hold at b (read_terms, then controls_u: a search's), into S->cvm,
+ * that hold at b (read_terms, then controls_u: a search's), at S->cvr,
  * and those pieces' span into cvm_lo, cvm_hi. Its terms are constants and
  * PULSEs with jump edges (steps), each piece's value the term's value or
  * value2: the controls are a function of which terms are off their value,
@@ -80,6 +80,7 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
   if (tp->nuterm > NL_TAB_TERMS || !S->tab) {
     read_terms(S, tp, b);
     controls_u(S, tp, S->cvm);
+    S->cvr = S->cvm;
     S->cvm_lo = S->read_lo;
     S->cvm_hi = S->read_hi;
     return -1;
@@ -104,7 +105,7 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
     S->tab_ok |= (uint64_t)1 << key;
     S->tab_from[key] = S->tab_to[key] = UINT64_MAX;   /* (no configuration: bit 63 is no switch) */
   }
-  for (int k = 0; k < S->nsw; k++) S->cvm[k] = row[k];
+  S->cvr = row;                                    /* (its row itself: rewritten only for another class) */
   S->cvm_lo = lo;
   S->cvm_hi = hi;
   return (int)key;
@@ -164,12 +165,13 @@ int nl_sw_changes(nl_switched *S, const nl_topo *tp, double s, const double *x, 
       S->last_cfg = S->cvm_to;
       return S->last_cfg != tp->cfg;
     }
-    for (int k = 0; k < S->nsw; k++) cv[k] = S->cvm[k];
+    for (int k = 0; k < S->nsw; k++) cv[k] = S->cvr[k];
   } else {
     S->cvm_class = 0;
     if (nl_sw_controls(S, tp, s, x, NULL, cv)) return -1;
     if (cls) {
       for (int k = 0; k < S->nsw; k++) S->cvm[k] = cv[k];
+      S->cvr = S->cvm;
       S->cvm_class = cls;
       S->cvm_lo = S->read_lo;
       S->cvm_hi = S->read_hi;
@@ -200,7 +202,7 @@ static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
     if (key >= 0 && (S->tab_from[key] == cfg || S->tab_to[key] == cfg)) {
       S->cvm_to = S->tab_to[key];                  /* (a steady converter's: each period the same) */
     } else {
-      S->cvm_to = nl_sw_rule(S, cfg, S->cvm);
+      S->cvm_to = nl_sw_rule(S, cfg, S->cvr);
       if (key >= 0) S->tab_from[key] = cfg, S->tab_to[key] = S->cvm_to;
     }
     S->last_cfg = S->cvm_to;
@@ -216,6 +218,27 @@ static int next_piece(nl_switched *S, int topo, double tmax, double *tnext) {
   return CUP_OK;
 }
 
+/* 1 if every term of configuration tp's input is a constant or a jump
+ * PULSE its controls read: then the input breaks only where those terms'
+ * pieces end (next_piece's walk). Not a PULSE with value2 == value (its
+ * breaks are pulse_break's, not spice_jump_break's), nor one whose top
+ * reaches within 1e-6 of its period (the top's end of the period before
+ * may round past the next start: spice_jump_break looks there, the
+ * pieces do not). */
+static int quiet_terms(const nl_topo *tp) {
+  const cup_input *u = tp->sub->u;
+  if (!tp->steps || !u || u->fn) return 0;
+  for (int k = 0, q = 0; k < u->nterms; k++) {
+    const input_term *w = &u->terms[k];
+    int read = q < tp->nuterm && tp->uterm[q] == k;
+    q += read;
+    if (w->kind == CUP_WAVE_CONSTANT) continue;
+    if (!read || !input_jump_pulse(w) || w->value2 == w->value) return 0;
+    if (w->period > 0 && !(w->rise + w->width < w->period * (1 - 1e-6))) return 0;
+  }
+  return 1;
+}
+
 /* The first time in (t, tmax] at which a source-gated switch of
  * configuration topo changes (tmax if none): the input's pieces checked at
  * their ends when every source is DC, PULSE or PWL (linear pieces), else
@@ -227,6 +250,7 @@ int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) 
   double cv[64], a = t;
   uint64_t cfg = tp->cfg;
   *tnext = tmax;
+  S->quiet_ok = 0;
   if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
     long k = nl_sw_instant(S, t);
     double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
@@ -239,8 +263,22 @@ int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) 
    * (the other terms' breaks, across which the controls hold, are passed
    * over; a switched run's window asks the input's next break itself) */
   int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
-  if (cls && nl_sw_held(S, tp, t) && S->cvm_to == cfg)    /* (the rule, applied to its own result, gives it again) */
-    return next_piece(S, topo, tmax, tnext);
+  if (cls && nl_sw_held(S, tp, t) && S->cvm_to == cfg) {  /* (the rule, applied to its own result, gives it again) */
+    /* the controls' terms hold on [t, hi): a switching at hi, or tmax
+     * below it, has none of their breaks before it, nor any of the
+     * input's when its other terms are constants (nl_sw_quiet) */
+    double hi = S->cvm_hi;
+    int st = next_piece(S, topo, tmax, tnext);
+    nl_topo *tq = &S->topo[topo];
+    if (!tq->quiet) tq->quiet = 1 + quiet_terms(tq);
+    if (*tnext <= hi && tq->quiet == 2) {
+      S->quiet_ok = 1;
+      S->quiet_topo = topo;
+      S->quiet_t = t;
+      S->quiet_to = *tnext;
+    }
+    return st;
+  }
   while (a < tmax) {
     const cup_input *in = tp->sub->u;
     double b = cls && cls == S->cvm_class && a >= S->cvm_lo && a < S->cvm_hi ? S->cvm_hi
