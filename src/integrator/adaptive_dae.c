@@ -122,9 +122,12 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
   double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
   for (int j = n; j < na; j++) ws[j - n] = la_max(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
   int edge = 0;                                  /* a value at rounding */
+  const int *lp = md->lp, *li = md->li;          /* (Lm's nonzeros: the dense sums of terms >= 0, +0 */
+  const double *lmx = md->lmx;                   /* left out) */
   for (int i = 0; i < m; i++) {
     double tw = 0;
-    for (int j = n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * ws[j - n];
+    for (int q = lp[i]; q < lp[i + 1]; q++)
+      if (li[q] >= n) tw += lmx[q] * ws[li[q] - n];
     thr[i] = 16 * thr[i] + 64 * DBL_EPSILON * tw;
     if (g[i] < -thr[i]) return 0;
     edge |= !(g[i] > thr[i]);
@@ -136,9 +139,9 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
   for (int i = 0; i < m; i++) {
     if (g[i] > thr[i]) continue;
     double dm = 0, d2m = 0;                      /* the rounding of the slopes */
-    for (int j = 0; j < na; j++) {
-      dm += md->Lm[(size_t)i * na + j] * fabs(My[j]);
-      d2m += md->Lm[(size_t)i * na + j] * fabs(A->My[j]);
+    for (int q = lp[i]; q < lp[i + 1]; q++) {
+      dm += lmx[q] * fabs(My[li[q]]);
+      d2m += lmx[q] * fabs(A->My[li[q]]);
     }
     if (d[i] < -1024 * DBL_EPSILON * dm) return 0;
     if (d[i] <= 1024 * DBL_EPSILON * dm && d2[i] < -1024 * DBL_EPSILON * d2m) return 0;

@@ -60,11 +60,12 @@ typedef struct ad_mode {
   double *mx;               /* [Pi Q; 0 W], its w rows almost empty (a few percent of M in a converter) */
   double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
   double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */
-  double *Lm;               /* m x na, row-major: magnitudes of the terms an event value is
-                               computed from (|C_i| |X| for a slack: a row that depends on
-                               the active ones has a tiny L_i, but its slack rounds at that) */
   int *lp, *li;             /* the nonzeros of L or Lm by row (m + 1 starts, columns), their values */
-  double *lx, *lmx;         /* in L and Lm: the event rows' sums over them, in the dense order */
+  double *lx, *lmx;         /* in L and Lm: the event rows' sums over them, in the dense order; Lm
+                               (not kept dense: its nonzeros alone) the magnitudes of the terms an
+                               event value is computed from (|C_i| |X| for a slack: a row that
+                               depends on the active ones has a tiny L_i, but its slack rounds at
+                               that) */
   unsigned char *is_zeta;   /* m */
   double *X;                /* n x na, row-major: x = X y */
   int nz;                   /* the rows of the manifold: nj when D = 0; with D, those of Z^T (left
