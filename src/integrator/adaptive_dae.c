@@ -50,15 +50,18 @@ static int dae_arrays(adaptive_ws *A) {
 }
 
 int ad_dae_init(adaptive_ws *A) {
-  /* (shared: the arrays are the scratch's, adaptive.c's scratch_carve) */
-  if ((!A->scratch && dae_arrays(A)) || lcp_init(&A->jlcp, 2 * A->m) || lcp_monotone(&A->jlcp) ||
-      lcp_monotone(&A->lcp))
+  /* (shared: the arrays are the scratch's, adaptive.c's scratch_carve; the SVDs' memo is the
+   * workspace's own, written before it is read) */
+  A->svd_memo_used = 0;
+  if ((!A->scratch && dae_arrays(A)) || !(A->svd_memo = malloc(AD_SVD_MEMO * sizeof(double))) ||
+      lcp_init(&A->jlcp, 2 * A->m) || lcp_monotone(&A->jlcp) || lcp_monotone(&A->lcp))
     return CUP_ERR_NOMEM;
   return CUP_OK;
 }
 
 void ad_dae_free(adaptive_ws *A) {
   lcp_free(&A->jlcp);
+  free(A->svd_memo);
   if (A->scratch) return;
   free(A->N); free(A->Ninv); free(A->svd_u); free(A->svd_v); free(A->svd_s); free(A->svd_w);
   free(A->jM); free(A->jq); free(A->dq0); free(A->dq1); free(A->Ry); free(A->Ym); free(A->Zc);
