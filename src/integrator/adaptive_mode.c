@@ -61,11 +61,12 @@ static inline void slot_layout(const adaptive_ws *A, ad_mode *md, int ncache, bl
  * touches first is a page fault, 2.3 us). The first set is built in the
  * spare (last), whose buffers go to slot 0 and stay there as long as it is
  * kept: a switched run's configuration with one set, whose cache takes
- * several step lengths. Then slot 0's buffers, slot 1's, ..., each set
- * written whole with its first exponential; a second and a third come
- * for other step lengths only when a set is used long. Those are laid out
- * apart, before the spare: slot by slot, the six-pulse bridge's 10 sets
- * spread over 22 pages, each one touched (15 now). */
+ * several step lengths; they come first, with its three exponentials.
+ * Then slot 0's buffers, slot 1's, ..., each set written whole with its
+ * first exponential; a second and a third come for other step lengths
+ * only when a set is used long. Those are laid out apart, last: slot by
+ * slot, the six-pulse bridge's 10 sets spread over 22 pages, each one
+ * touched (12 now). */
 void ad_modes_layout(adaptive_ws *A, block_arena *b) {
   size_t NA = (size_t)A->na * A->na;
   if (!b->base) {                                /* sizing: AD_MODES + 1 sets and 3 AD_MODES + 3 exponentials
@@ -77,10 +78,10 @@ void ad_modes_layout(adaptive_ws *A, block_arena *b) {
     b->used += (AD_MODES + 1) * one.used + (AD_MODES * AD_CACHE + AD_CACHE) * cache.used;
     return;
   }
+  slot_layout(A, &A->modes[AD_MODES], AD_CACHE, b);
   for (int s = 0; s < AD_MODES; s++) slot_layout(A, &A->modes[s], 1, b);
   for (int s = 0; s < AD_MODES; s++)
     for (int c = 1; c < AD_CACHE; c++) cache_layout(A, &A->modes[s], c, NA, b);
-  slot_layout(A, &A->modes[AD_MODES], AD_CACHE, b);
 }
 
 void ad_scratch_layout(adaptive_ws *A, block_arena *b) {
