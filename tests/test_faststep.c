@@ -573,6 +573,13 @@ static void test_fused_switched_steps_are_the_loop(void **state) {
 
 /* ---- the choice of an active set with D ------------------------------------------- */
 
+/* Lm's entry (i, j), dense, from the nonzeros the mode keeps (lmx). */
+static double lm_at(const ad_mode *md, int i, int j) {
+  for (int q = md->lp[i]; q < md->lp[i + 1]; q++)
+    if (md->li[q] == j) return md->lmx[q];
+  return 0;
+}
+
 /* The check of a mode with D as it was written before its slopes were
  * taken only where a value is at rounding (adaptive_dae.c's mode_fits):
  * every row's value, slopes and thresholds computed, then the rows in
@@ -604,15 +611,15 @@ static int fits_whole(adaptive_ws *A, ad_mode *md, const double *x, const double
   ad_events_deriv(A, md, My, d2);
   for (int i = 0; i < m; i++) {
     double tw = 0;
-    for (int j = A->n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * fmax(fabs(y[j]), A->wscale[j - A->n]);
+    for (int j = A->n; j < na; j++) tw += lm_at(md, i, j) * fmax(fabs(y[j]), A->wscale[j - A->n]);
     double th = 16 * thr[i] + 64 * DBL_EPSILON * tw;
     if (g[i] < -th) return 0;
     if (g[i] > th) continue;
     *edge = 1;
     double dm = 0, d2m = 0;
     for (int j = 0; j < na; j++) {
-      dm += md->Lm[(size_t)i * na + j] * fabs(My[j]);
-      d2m += md->Lm[(size_t)i * na + j] * fabs(A->My[j]);
+      dm += lm_at(md, i, j) * fabs(My[j]);
+      d2m += lm_at(md, i, j) * fabs(A->My[j]);
     }
     *slope = 1;
     if (d[i] < -1024 * DBL_EPSILON * dm) return 0;

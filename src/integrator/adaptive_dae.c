@@ -50,15 +50,18 @@ static int dae_arrays(adaptive_ws *A) {
 }
 
 int ad_dae_init(adaptive_ws *A) {
-  /* (shared: the arrays are the scratch's, adaptive.c's scratch_carve) */
-  if ((!A->scratch && dae_arrays(A)) || lcp_init(&A->jlcp, 2 * A->m) || lcp_monotone(&A->jlcp) ||
-      lcp_monotone(&A->lcp))
+  /* (shared: the arrays are the scratch's, adaptive.c's scratch_carve; the SVDs' memo is the
+   * workspace's own, written before it is read) */
+  A->svd_memo_used = 0;
+  if ((!A->scratch && dae_arrays(A)) || !(A->svd_memo = malloc(AD_SVD_MEMO * sizeof(double))) ||
+      lcp_init(&A->jlcp, 2 * A->m) || lcp_monotone(&A->jlcp) || lcp_monotone(&A->lcp))
     return CUP_ERR_NOMEM;
   return CUP_OK;
 }
 
 void ad_dae_free(adaptive_ws *A) {
   lcp_free(&A->jlcp);
+  free(A->svd_memo);
   if (A->scratch) return;
   free(A->N); free(A->Ninv); free(A->svd_u); free(A->svd_v); free(A->svd_s); free(A->svd_w);
   free(A->jM); free(A->jq); free(A->dq0); free(A->dq1); free(A->Ry); free(A->Ym); free(A->Zc);
@@ -122,9 +125,12 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
   double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
   for (int j = n; j < na; j++) ws[j - n] = la_max(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
   int edge = 0;                                  /* a value at rounding */
+  const int *lp = md->lp, *li = md->li;          /* (Lm's nonzeros: the dense sums of terms >= 0, +0 */
+  const double *lmx = md->lmx;                   /* left out) */
   for (int i = 0; i < m; i++) {
     double tw = 0;
-    for (int j = n; j < na; j++) tw += md->Lm[(size_t)i * na + j] * ws[j - n];
+    for (int q = lp[i]; q < lp[i + 1]; q++)
+      if (li[q] >= n) tw += lmx[q] * ws[li[q] - n];
     thr[i] = 16 * thr[i] + 64 * DBL_EPSILON * tw;
     if (g[i] < -thr[i]) return 0;
     edge |= !(g[i] > thr[i]);
@@ -136,9 +142,9 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
   for (int i = 0; i < m; i++) {
     if (g[i] > thr[i]) continue;
     double dm = 0, d2m = 0;                      /* the rounding of the slopes */
-    for (int j = 0; j < na; j++) {
-      dm += md->Lm[(size_t)i * na + j] * fabs(My[j]);
-      d2m += md->Lm[(size_t)i * na + j] * fabs(A->My[j]);
+    for (int q = lp[i]; q < lp[i + 1]; q++) {
+      dm += lmx[q] * fabs(My[li[q]]);
+      d2m += lmx[q] * fabs(A->My[li[q]]);
     }
     if (d[i] < -1024 * DBL_EPSILON * dm) return 0;
     if (d[i] <= 1024 * DBL_EPSILON * dm && d2[i] < -1024 * DBL_EPSILON * d2m) return 0;

@@ -41,6 +41,8 @@
 #define AD_ALIASES 16       /* sets with a dependent row remembered with the subset they hold as */
 #define AD_BATCH 64         /* samples inside a step a call of integrator_set_put's put */
 #define AD_JUMPS 8          /* with D, the jump's LCP: warm starts remembered with the set solved from them */
+#define AD_SVD_MEMO 256     /* with D, the SVDs of D_JJ kept by its values: 2 KB (a six-pulse bridge's 14
+                               SVDs are of 6 matrices; 214 doubles) */
 #define AD_KNOWN 32         /* with D, row sets whose N was factored, remembered regular or singular */
 #define AD_CACHE 3          /* exponentials kept per active set, by step length */
 #define AD_DEGREE 7         /* callback inputs: interpolating polynomial degree per step */
@@ -60,11 +62,12 @@ typedef struct ad_mode {
   double *mx;               /* [Pi Q; 0 W], its w rows almost empty (a few percent of M in a converter) */
   double *L;                /* m x na event rows, row-major: zeta_i (i in J), slack_i (else) */
   double *Lc;               /* m constants of the event rows (F_i for slacks, 0 for zeta) */
-  double *Lm;               /* m x na, row-major: magnitudes of the terms an event value is
-                               computed from (|C_i| |X| for a slack: a row that depends on
-                               the active ones has a tiny L_i, but its slack rounds at that) */
   int *lp, *li;             /* the nonzeros of L or Lm by row (m + 1 starts, columns), their values */
-  double *lx, *lmx;         /* in L and Lm: the event rows' sums over them, in the dense order */
+  double *lx, *lmx;         /* in L and Lm: the event rows' sums over them, in the dense order; Lm
+                               (not kept dense: its nonzeros alone) the magnitudes of the terms an
+                               event value is computed from (|C_i| |X| for a slack: a row that
+                               depends on the active ones has a tiny L_i, but its slack rounds at
+                               that) */
   unsigned char *is_zeta;   /* m */
   double *X;                /* n x na, row-major: x = X y */
   int nz;                   /* the rows of the manifold: nj when D = 0; with D, those of Z^T (left
@@ -200,6 +203,8 @@ struct adaptive_ws {
   double *gscale;           /* m: the scale of g's rounding, sum |G_iq| over the inputs' scales */
   double *N, *Ninv;         /* m x m: a mode's N = [Y^T D_JJ; Z^T C_J B_J], its inverse */
   double *svd_u, *svd_v, *svd_s, *svd_w;  /* SVD of D_JJ (m x m, m, m) */
+  double *svd_memo;         /* AD_SVD_MEMO doubles: SVDs of D_JJ kept by its values (adaptive_split.c), */
+  int svd_memo_used;        /* ... the doubles its entries fill (ad_dae_init's own allocation) */
   double *jM, *jq;          /* the jump LCP, 2m x 2m and 2m */
   lcp_solver jlcp;
   double *dq0, *dq1;        /* the choice of the active set: slack and its velocity at zeta = 0 */

@@ -16,15 +16,19 @@
 /* Does ad_expm_mv read an exponential's input rows by their nonzeros (ep,
  * ei, ex)? Only past 8 flow states with at most 6 of the circuit's: up to
  * 8, ad_matvec's dense sums; with more circuit states, its generic ones.
- * Elsewhere expm_into leaves them unwritten (they stay laid out: leaving
- * them out moved a switched run's later blocks onto other pages, 3 faults
- * more on the full bridge). */
+ * Elsewhere expm_into leaves them unwritten, and they are not laid out
+ * (NULL). */
 static inline int expm_rows_read(const adaptive_ws *A) { return A->na > 8 && A->n <= 6; }
 
 /* Exponential c of md's cache. */
-static inline void cache_layout(ad_mode *md, int c, size_t NA, int na, block_arena *b) {
+static inline void cache_layout(const adaptive_ws *A, ad_mode *md, int c, size_t NA, block_arena *b) {
   md->Ec[c] = block_take(b, NA, sizeof(double));
-  md->ep[c] = block_take(b, (size_t)na + 1, sizeof(int));
+  if (!expm_rows_read(A)) {
+    md->ep[c] = md->ei[c] = NULL;
+    md->ex[c] = NULL;
+    return;
+  }
+  md->ep[c] = block_take(b, (size_t)A->na + 1, sizeof(int));
   md->ei[c] = block_take(b, NA, sizeof(int));
   md->ex[c] = block_take(b, NA, sizeof(double));
 }
@@ -44,25 +48,25 @@ static inline void slot_layout(const adaptive_ws *A, ad_mode *md, int ncache, bl
   md->lx = block_take(b, (size_t)m * na, sizeof(double));
   md->lmx = block_take(b, (size_t)m * na, sizeof(double));
   md->L = block_take(b, (size_t)m * na, sizeof(double));
-  md->Lm = block_take(b, (size_t)m * na, sizeof(double));
   md->Lc = block_take(b, (size_t)m, sizeof(double));
   md->is_zeta = block_take(b, (size_t)m, 1);
   md->X = block_take(b, (size_t)n * na, sizeof(double));
   md->R = block_take(b, (size_t)n * m, sizeof(double));
   md->Zt = block_take(b, (size_t)m * m, sizeof(double));
   md->KU = block_take(b, (size_t)n * nw, sizeof(double));
-  for (int c = 0; c < ncache; c++) cache_layout(md, c, NA, na, b);
+  for (int c = 0; c < ncache; c++) cache_layout(A, md, c, NA, b);
 }
 
 /* The slots in the order the run first writes them (a page the run
  * touches first is a page fault, 2.3 us). The first set is built in the
  * spare (last), whose buffers go to slot 0 and stay there as long as it is
  * kept: a switched run's configuration with one set, whose cache takes
- * several step lengths. Then slot 0's buffers, slot 1's, ..., each set
- * written whole with its first exponential; a second and a third come
- * for other step lengths only when a set is used long. Those are laid out
- * apart, before the spare: slot by slot, the six-pulse bridge's 10 sets
- * spread over 22 pages, each one touched (15 now). */
+ * several step lengths; they come first, with its three exponentials.
+ * Then slot 0's buffers, slot 1's, ..., each set written whole with its
+ * first exponential; a second and a third come for other step lengths
+ * only when a set is used long. Those are laid out apart, last: slot by
+ * slot, the six-pulse bridge's 10 sets spread over 22 pages, each one
+ * touched (12 now). */
 void ad_modes_layout(adaptive_ws *A, block_arena *b) {
   size_t NA = (size_t)A->na * A->na;
   if (!b->base) {                                /* sizing: AD_MODES + 1 sets and 3 AD_MODES + 3 exponentials
@@ -70,14 +74,14 @@ void ad_modes_layout(adaptive_ws *A, block_arena *b) {
     ad_mode md;
     block_arena one = {0}, cache = {0};
     slot_layout(A, &md, 0, &one);
-    cache_layout(&md, 0, NA, A->na, &cache);
+    cache_layout(A, &md, 0, NA, &cache);
     b->used += (AD_MODES + 1) * one.used + (AD_MODES * AD_CACHE + AD_CACHE) * cache.used;
     return;
   }
+  slot_layout(A, &A->modes[AD_MODES], AD_CACHE, b);
   for (int s = 0; s < AD_MODES; s++) slot_layout(A, &A->modes[s], 1, b);
   for (int s = 0; s < AD_MODES; s++)
-    for (int c = 1; c < AD_CACHE; c++) cache_layout(&A->modes[s], c, NA, A->na, b);
-  slot_layout(A, &A->modes[AD_MODES], AD_CACHE, b);
+    for (int c = 1; c < AD_CACHE; c++) cache_layout(A, &A->modes[s], c, NA, b);
 }
 
 void ad_scratch_layout(adaptive_ws *A, block_arena *b) {
@@ -369,8 +373,11 @@ static void mode_flow(adaptive_ws *A, ad_mode *md) {
 
 /* The event rows: zeta_J = -S^-1 (C_J Q y + G_J U W w) for the active rows
  * (with D, -N^-1 [Y^T (C_J X y + G_J U w + F_J); Z^T (C_J Q y + G_J U W w)]),
- * slack_i = C_i X y + G_i U w + F_i (+ D_iJ zeta_J) for the others. */
-static void mode_events(adaptive_ws *A, ad_mode *md) {
+ * slack_i = C_i X y + G_i U w + F_i (+ D_iJ zeta_J) for the others; and the
+ * magnitudes of their terms into Lm (m x na, row-major: |C_i| |X| for a
+ * slack, a row that depends on the active ones has a tiny L_i but its slack
+ * rounds at that), scratch: the slot keeps their nonzeros alone (lmx). */
+static void mode_events(adaptive_ws *A, ad_mode *md, double *Lm) {
   const cup_polyset *K = A->K;
   int n = A->n, m = A->m, nw = A->nw, na = A->na, p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
@@ -405,7 +412,7 @@ static void mode_events(adaptive_ws *A, ad_mode *md) {
     int k = kj[i];
     md->is_zeta[i] = k >= 0;
     if (k < 0) continue;
-    double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
+    double *Li = md->L + (size_t)i * na, *Lmi = Lm + (size_t)i * na;
     for (int j = 0; j < na; j++) {
       double acc = 0, mag = 0;
       for (int l = 0; l < nz; l++) {
@@ -427,7 +434,7 @@ static void mode_events(adaptive_ws *A, ad_mode *md) {
   }
   for (int i = 0; i < m; i++) {
     if (kj[i] >= 0) continue;
-    double *Li = md->L + (size_t)i * na, *Lmi = md->Lm + (size_t)i * na;
+    double *Li = md->L + (size_t)i * na, *Lmi = Lm + (size_t)i * na;
     ad_row_of_C(K, i, crow);
     for (int j = 0; j < na; j++) {
       double acc = 0, mag = 0;
@@ -448,16 +455,17 @@ static void mode_events(adaptive_ws *A, ad_mode *md) {
     for (int a = 0; a < nj; a++) {               /* + D_iJ zeta_J */
       double d = A->Dd[i + (size_t)J[a] * m];
       if (d == 0) continue;
-      const double *La = md->L + (size_t)J[a] * na, *Lma = md->Lm + (size_t)J[a] * na;
+      const double *La = md->L + (size_t)J[a] * na, *Lma = Lm + (size_t)J[a] * na;
       for (int j = 0; j < na; j++) { Li[j] += d * La[j]; Lmi[j] += fabs(d) * Lma[j]; }
       md->Lc[i] += d * md->Lc[J[a]];
     }
   }
 }
 
-/* M's and the event rows' nonzeros (the products over them skip only
- * terms that are exactly 0: the same sums, bit for bit). */
-static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
+/* M's and the event rows' nonzeros, and Lm's (mode_events') where L or Lm
+ * has one (the products over them skip only terms that are exactly 0: the
+ * same sums, bit for bit). */
+static void mode_sparse(const adaptive_ws *A, ad_mode *md, const double *Lm) {
   int na = A->na, m = A->m, k = 0;
   for (int j = 0; j < na; j++) {
     md->mp[j] = k;
@@ -471,7 +479,7 @@ static void mode_sparse(const adaptive_ws *A, ad_mode *md) {
   for (int i = 0; i < m; i++) {
     md->lp[i] = k;
     for (int j = 0; j < na; j++) {
-      double l = md->L[(size_t)i * na + j], lm = md->Lm[(size_t)i * na + j];
+      double l = md->L[(size_t)i * na + j], lm = Lm[(size_t)i * na + j];
       if (l != 0 || lm != 0) { md->li[k] = j; md->lx[k] = l; md->lmx[k++] = lm; }
     }
   }
@@ -499,9 +507,11 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
 /* The rest of a mode once mode_factor has chosen its rows. */
 static void mode_finish(adaptive_ws *A, ad_mode *md) {
   int na = A->na;
+  /* (Lm past C_J and a row of C in T1: (m + 1) n + m na fits in its (n + m + 1) (na + m + 1)) */
+  double *Lm = A->T1 + (size_t)(A->m + 1) * A->n;
   mode_flow(A, md);
-  mode_events(A, md);
-  mode_sparse(A, md);
+  mode_events(A, md, Lm);
+  mode_sparse(A, md, Lm);
   md->mnorm = md->snorm = 0;
   for (int i = 0; i < na; i++) {
     double r_ = 0, d_ = 0;

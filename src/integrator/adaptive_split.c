@@ -28,6 +28,42 @@ static int svd(double *a, double *v, double *s, double *work, int k) {
   return st;
 }
 
+/* svd() of the k x k matrix a as it was for the same values, bit for bit
+ * (a row set's D_JJ is often another's: a six-pulse bridge's 14 SVDs are
+ * of 6 matrices, ~5 k instructions each): 1 if found (a, v, s its
+ * answers), else 0. An entry: k, a's values, then U, V and s. */
+static int svd_memo_find(const adaptive_ws *A, double *a, double *v, double *s, int k) {
+  size_t kk = (size_t)k * k;
+  for (int e = 0; e < A->svd_memo_used;) {
+    const double *q = A->svd_memo + e;
+    int kq = (int)q[0];
+    if (kq == k && !memcmp(q + 1, a, kk * sizeof(double))) {
+      memcpy(a, q + 1 + kk, kk * sizeof(double));
+      memcpy(v, q + 1 + 2 * kk, kk * sizeof(double));
+      memcpy(s, q + 1 + 3 * kk, (size_t)k * sizeof(double));
+      return 1;
+    }
+    e += 3 * kq * kq + kq + 1;
+  }
+  return 0;
+}
+
+/* Keep the SVD of key (k x k) whose answers are a, v and s; a full memo
+ * starts again from its beginning. */
+static void svd_memo_keep(adaptive_ws *A, const double *key, const double *a, const double *v, const double *s,
+                          int k) {
+  size_t kk = (size_t)k * k, len = 3 * kk + (size_t)k + 1;
+  if (len > AD_SVD_MEMO) return;
+  if ((size_t)A->svd_memo_used + len > AD_SVD_MEMO) A->svd_memo_used = 0;
+  double *q = A->svd_memo + A->svd_memo_used;
+  q[0] = k;
+  memcpy(q + 1, key, kk * sizeof(double));
+  memcpy(q + 1 + kk, a, kk * sizeof(double));
+  memcpy(q + 1 + 2 * kk, v, kk * sizeof(double));
+  memcpy(q + 1 + 3 * kk, s, (size_t)k * sizeof(double));
+  A->svd_memo_used += (int)len;
+}
+
 /* N for the rows J, its inverse into A->Ninv and Z^T into Zt; 1 if N is
  * singular (or the SVD failed). The SVD is D_JJ^T's, U' S V'^T (GSL leaves
  * the columns of U for zero singular values zero; V is complete): D_JJ's
@@ -50,7 +86,12 @@ static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz
     for (int a = 0; a < nj; a++)
       for (int b = 0; b < nj; b++) V[(size_t)a * nj + b] = a == b;
   } else {
-    if (svd(U, V, s, A->svd_w, nj)) return 1;
+    if (!svd_memo_find(A, U, V, s, nj)) {
+      double *key = A->N;                        /* (N is written after: D_JJ's values kept there) */
+      memcpy(key, U, sizeof(double) * (size_t)nj * nj);
+      if (svd(U, V, s, A->svd_w, nj)) return 1;
+      svd_memo_keep(A, key, U, V, s, nj);
+    }
     while (r < nj && s[r] > AD_D_RANK_TOL * nj * s[0]) r++;
   }
   *nz = nj - r;
