@@ -434,6 +434,37 @@ static inline int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
   R->info->samples += took < c ? took + 1 : c;
   return took;
 }
+/* The signals' rows of re over y into A->bk by rows, dense with their
+ * zeros, and their constants into A->bkc (na <= 4: ad_batch_signals'). */
+static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
+  int na = A->na;
+  double *K = A->bk;
+  memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
+  for (int k = 0; k < ns; k++) {
+    A->bkc[k] = re->rc[k];
+    for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
+  }
+}
+/* The signals of a batch's first q samples (their y in A->by, na at most 4
+ * a constant here) into A->bs, by ad_signal_rows' rows, each from its
+ * constant, every term, zeros too: a zero's term is +-0 (y finite), which
+ * leaves a sum begun at +0 or at a constant as it was, so these are
+ * ad_rec_rows' sums bit for bit (dense samples, output tol's points). */
+static inline __attribute__((always_inline)) void ad_batch_signals(int na, adaptive_ws *A, int ns, int q) {
+  const double *restrict K = A->bk, *restrict kc = A->bkc;
+  double *restrict so = A->bs;
+  for (int k = 0; k < ns; k++, K += na) {        /* (a row's terms held across the samples) */
+    double kr[4] = {0}, c0 = kc[k];
+    for (int j = 0; j < na; j++) kr[j] = K[j];
+    const double *restrict y = A->by;
+    for (int s = 0; s < q; s++, y += na) {
+      double acc = c0;
+#pragma GCC unroll 4
+      for (int j = 0; j < na; j++) acc += kr[j] * y[j];
+      so[(size_t)k * AD_BATCH + s] = acc;
+    }
+  }
+}
 /* A sample refused inside the step in progress (on md, step number k, the
  * step ending at t1): A->pend active, no second piece yet; the caller
  * keeps the states to start again from. */

@@ -117,7 +117,7 @@ static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E
  * rounding grows as eps / (tau snorm), 64 eps at most), a deeper one by its
  * own series. Each level is the same function of (M, h, j) whatever asked
  * first: a resumed run's points are the same bits. */
-static const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
+static __attribute__((noinline)) const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
   int NA = A->na * A->na;
   double *E = A->olev + (size_t)j * NA;
   if (A->olev_ok >> j & 1) return E;
@@ -161,7 +161,7 @@ static void flow_after(adaptive_ws *A, ad_mode *md, const double *ya, double h, 
     *P.t = tm;                                   /* (t1 itself at the end: not t0 + h) */
     return;
   }
-  const double *E = level(A, md, h, j);
+  const double *E = A->olev_ok >> j & 1 ? A->olev + (size_t)j * A->na * A->na : level(A, md, h, j);
   *P.t = tm;
   switch (A->na) {
     case 1: times_n(1, A->n, E, L.y, md->X, A->oxm, P.y, P.x, P.d); return;
@@ -212,13 +212,22 @@ static inline int line_ok(int n, const double *thr, const double *l, const doubl
 typedef struct {
   const struct ad_rec *re;                       /* NULL: the sink */
   int ns, c;                                     /* signals; points in the batch */
+  int dense;                                     /* na <= 4: the batch's y kept (A->by), its signals made at
+                                                    its put by ad_batch_signals (ad_signal_rows' rows) */
   double tr;                                     /* a refused point's time */
 } tol_out;
 
 /* The batch to put: 1 if a point was refused (its time in O->tr). The
  * samples counted as the sink's: those offered, the refused one too. */
 static int flush(adaptive_ws *A, ad_run *R, long k, tol_out *O) {
-  int c = O->c, took = ad_put_batch(A, R, k, c);
+  int c = O->c;
+  if (O->dense) switch (A->na) {
+      case 1: ad_batch_signals(1, A, O->ns, c); break;
+      case 2: ad_batch_signals(2, A, O->ns, c); break;
+      case 3: ad_batch_signals(3, A, O->ns, c); break;
+      default: ad_batch_signals(4, A, O->ns, c); break;
+    }
+  int took = ad_put_batch(A, R, k, c);
   O->c = 0;
   if (took == c) return 0;
   O->tr = A->bt[took];
@@ -240,7 +249,8 @@ static int offer(adaptive_ws *A, ad_run *R, ad_mode *md, tol_pt P, long k, tol_o
     int c = O->c++;
     A->bt[c] = *P.t;
     la_copy(A->bx + (size_t)c * n, P.x, n);
-    ad_rec_rows(O->re, O->ns, P.y, A->bs + c, AD_BATCH);
+    if (O->dense) la_copy(A->by + (size_t)c * A->na, P.y, A->na);
+    else ad_rec_rows(O->re, O->ns, P.y, A->bs + c, AD_BATCH);
     return O->c == AD_BATCH ? flush(A, R, k, O) : 0;
   }
   R->info->samples++;
@@ -268,18 +278,96 @@ static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, double t0, 
   return 1;
 }
 
-/* The piece's points by halving (the file's comment): a stack of right
- * ends above the left end L (slots of A->ostk, by number: a point kept is
- * not copied), each check of [L, top] either keeping it (top is the next
- * point) or pushing its middle. */
-static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-               int with_t0, double skip, tol_out *O) {
+/* peak_of with n held: 1 if a scale moved (the tolerances made again). */
+static inline int peak_n(adaptive_ws *A, int n, const double *x) {
+  double *pk = A->opeak;
+  int moved = 0;
+  for (int i = 0; i < n; i++)
+    if (fabs(x[i]) > pk[i]) {
+      pk[i] = fabs(x[i]);
+      moved = 1;
+    }
+  if (moved) thresholds(A);
+  return moved;
+}
+
+/* The point 2^-j h after l into p (slots: t, x, x', y), na a constant
+ * NA with the levels (times_n), else flow_after (NA 0). */
+static inline __attribute__((always_inline)) void point_after(const int NA, adaptive_ws *A, ad_mode *md,
+                                                              const double *ya, double h, double t0,
+                                                              double *l, int j, double tm, double *p) {
+  int n = A->n;
+  if (NA) {
+    const double *E = A->olev_ok >> j & 1 ? A->olev + (size_t)j * NA * NA : level(A, md, h, j);
+    p[0] = tm;
+    times_n(NA, n, E, l + 1 + 2 * n, md->X, A->oxm, p + 1 + 2 * n, p + 1, p + 1 + n);
+  } else {
+    tol_pt L = {.t = l, .x = l + 1, .d = l + 1 + n, .y = l + 1 + 2 * n};
+    tol_pt P = {.t = p, .x = p + 1, .d = p + 1 + n, .y = p + 1 + 2 * n};
+    flow_after(A, md, ya, h, t0, L, j, tm, P);
+  }
+}
+
+/* The halving loop of cut (its comment), na a constant NA with the
+ * levels, else 0: a stack of right ends above the left end (slot li),
+ * each check of [left, top] either keeping it (top is the next point) or
+ * pushing its middle. The slots by pointer, the sizes held: each of A's
+ * fields was read again after a store to a slot. */
+static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws *A, ad_run *R, ad_mode *md,
+                                                       const double *ya, double t0, double h, long k, double skip,
+                                                       tol_out *O) {
   enum { SLOTS = AD_TOL_DEPTH + 3 };
   int stk[SLOTS], dep[SLOTS], freel[SLOTS], nf = 0, sp = 1, li = 0;
-  double h = t1 - t0;
   for (int s = SLOTS - 1; s >= 2; s--) freel[nf++] = s;
   stk[0] = 1;
-  dep[0] = 0;                                    /* (the halvings of [L, stk[i]] when it is the top) */
+  dep[0] = 0;                                    /* (the halvings of [left, stk[i]] when it is the top) */
+  const int n = A->n, na = NA ? NA : A->na;
+  const size_t stride = 1 + 2 * (size_t)n + (size_t)na;
+  double *const ostk = A->ostk, *l = ostk;
+  const double *thr = A->othr;
+  while (sp > 0) {
+    double *r = ostk + (size_t)stk[sp - 1] * stride;
+    int d = dep[sp - 1];
+    double tl = l[0], tr = r[0], tm = tl + 0.5 * (tr - tl);
+    int ok = d >= AD_TOL_DEPTH || !(tm > tl && tm < tr);
+    if (!ok && d >= 2) ok = line_ok(n, thr, l, r, NULL);
+    if (!ok) {
+      int m = freel[--nf];
+      double *p = ostk + (size_t)m * stride;
+      point_after(NA, A, md, ya, h, t0, l, d + 1, tm, p);
+      peak_n(A, n, p + 1);
+      if (!(d < 2 && line_ok(n, thr, l, r, p + 1))) {   /* halved: the middle is the new right end */
+        dep[sp - 1] = dep[sp] = d + 1;
+        stk[sp++] = m;
+        continue;
+      }
+      freel[nf++] = m;
+    }
+    freel[nf++] = li;                            /* [left, top] kept: top is the next point */
+    li = stk[--sp];
+    l = r;
+    if (sp > 0 && tr >= skip) {
+      if (O->dense && !tally_state_beyond(r + 1, n)) {   /* (a batch's point: offer's, inline) */
+        int c = O->c++;
+        A->bt[c] = tr;
+        la_copy(A->bx + (size_t)c * n, r + 1, n);
+        la_copy(A->by + (size_t)c * na, r + 1 + 2 * n, na);
+        if (O->c == AD_BATCH && flush(A, R, k, O)) return 1;
+        continue;
+      }
+      tol_pt P = {.t = r, .x = r + 1, .d = r + 1 + n, .y = r + 1 + 2 * n};
+      int st = offer(A, R, md, P, k, O);
+      if (st) return st;
+    }
+  }
+  return O->re ? flush(A, R, k, O) : 0;
+}
+
+/* The piece's points by halving (the file's comment): its ends, then
+ * halve's loop. */
+static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
+               int with_t0, double skip, tol_out *O) {
+  double h = t1 - t0;
   if (md != A->olev_md || md->mask != A->olev_mask || h != A->olev_h) {   /* (level's matrices and X M kept) */
     A->olev_md = md;
     A->olev_mask = md->mask;
@@ -300,36 +388,13 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     int st = offer(A, R, md, L, k, O);
     if (st) return st;
   }
-  const int n = A->n;
-  const double *thr = A->othr;
-  while (sp > 0) {
-    tol_pt Rt = slot_at(A, stk[sp - 1]);
-    const double *l = L.t, *r = Rt.t;
-    int d = dep[sp - 1];
-    double tm = l[0] + 0.5 * (r[0] - l[0]);
-    int ok = d >= AD_TOL_DEPTH || !(tm > l[0] && tm < r[0]);
-    if (!ok && d >= 2) ok = line_ok(n, thr, l, r, NULL);
-    if (!ok) {
-      int m = freel[--nf];
-      tol_pt M = slot_at(A, m);
-      flow_after(A, md, ya, h, t0, L, d + 1, tm, M);
-      peak_of(A, M.x);
-      if (!(d < 2 && line_ok(n, thr, l, r, M.x))) {   /* halved: the middle is the new right end */
-        dep[sp - 1] = dep[sp] = d + 1;
-        stk[sp++] = m;
-        continue;
-      }
-      freel[nf++] = m;
-    }
-    freel[nf++] = li;                            /* [L, R] kept: R is the next point */
-    li = stk[--sp];
-    L = Rt;
-    if (sp > 0 && r[0] >= skip) {
-      int st = offer(A, R, md, L, k, O);
-      if (st) return st;
-    }
+  if (!A->olev || A->olev_base > AD_TOL_DEPTH) return halve(0, A, R, md, ya, t0, h, k, skip, O);
+  switch (A->na) {
+    case 1: return halve(1, A, R, md, ya, t0, h, k, skip, O);
+    case 2: return halve(2, A, R, md, ya, t0, h, k, skip, O);
+    case 3: return halve(3, A, R, md, ya, t0, h, k, skip, O);
+    default: return halve(4, A, R, md, ya, t0, h, k, skip, O);   /* (na <= AD_TOL_LEVELS_NA) */
   }
-  return O->re ? flush(A, R, k, O) : 0;
 }
 
 int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
@@ -342,6 +407,8 @@ int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double
   const signal_map *S = A->put ? nl_signal_map(A->put_nl) : NULL;
   const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_of(A, md, S) : NULL;
   tol_out O = {.re = re && !re->nu ? re : NULL, .ns = S ? S->ns : 0};
+  O.dense = O.re && A->na <= 4;
+  if (O.dense) ad_signal_rows(A, O.re, O.ns);
   int st = cut(A, R, md, ya, t0, t1, k, with_t0, skip, &O);
   if (st > 0) st = keep_piece(A, md, ya, t0, t1, k, with_t0, O.tr, A->pend.opk);
   if (A->sy.md != smd || A->sy.y0 != sy0 || A->sy.h != sh) A->sy.md = NULL;

@@ -286,21 +286,9 @@ static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, 
   return pend_refused(A, md, k, t1);             /* inside the step in progress: refused */
 }
 
-/* The signals' rows of re over y into A->bk by rows, dense with their
- * zeros, and their constants into A->bkc (na <= 4: samples_dense's). */
-static void signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
-  int na = A->na;
-  double *K = A->bk;
-  memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
-  for (int k = 0; k < ns; k++) {
-    A->bkc[k] = re->rc[k];
-    for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
-  }
-}
-
 /* A batch's c samples from slot 0, na (at most 4) a constant here: each
  * one's estimate, state x = X y (md's rows, la_dot's sums as ad_state's)
- * and signals (signal_rows', each from its constant), every term, zeros
+ * and signals (ad_signal_rows', each from its constant), every term, zeros
  * too, unrolled. A zero's term is +-0 (y finite, as times_dense has it),
  * which leaves a sum begun at +0 or at a constant as it was (a constant
  * is never -0: compose's sums begin at +0), so these are the sums of
@@ -312,25 +300,15 @@ static void signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
 static inline __attribute__((always_inline)) int samples_dense(int na, adaptive_ws *A, const double *X, int ns,
                                                                int c, double rnd) {
   int n = A->n;
-  const double *restrict y = A->by, *restrict e = A->be, *restrict K = A->bk, *restrict kc = A->bkc;
-  double *restrict xo = A->bx, *restrict so = A->bs, *restrict best = A->best;
+  const double *restrict y = A->by, *restrict e = A->be;
+  double *restrict xo = A->bx, *restrict best = A->best;
   int q = 0;
   for (; q < c; q++, y += na, e += na, xo += n) {
     best[q] = la_norm_inf(e, n) + rnd;
     for (int i = 0; i < n; i++) xo[i] = la_dot(X + (size_t)i * na, y, na);
     if (tally_state_beyond(xo, n)) break;
   }
-  for (int k = 0; k < ns; k++, K += na) {        /* (a row's terms held across the samples) */
-    double kr[4] = {0}, c0 = kc[k];
-    for (int j = 0; j < na; j++) kr[j] = K[j];
-    y = A->by;
-    for (int s = 0; s < q; s++, y += na) {
-      double acc = c0;
-#pragma GCC unroll 4
-      for (int j = 0; j < na; j++) acc += kr[j] * y[j];
-      so[(size_t)k * AD_BATCH + s] = acc;
-    }
-  }
+  ad_batch_signals(na, A, ns, q);
   return q;
 }
 
@@ -372,7 +350,7 @@ static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k
   la_copy(be, A->de, na);
   const double *E = NULL;
   A->rows_ready = 0;
-  if (na <= 4) signal_rows(A, re, ns);
+  if (na <= 4) ad_signal_rows(A, re, ns);
   for (;;) {
     int c = 0, last = 0;
     while (c < AD_BATCH && !last) {
