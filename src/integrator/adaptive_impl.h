@@ -347,6 +347,9 @@ struct adaptive_ws {
      * (zy its y there, at ta, with the scales opk then), offered from tr on */
     double ta, tr, *opk;    /* opk: n */
     int with_t0;            /* ... its start is offered too (an event's new flow) */
+    int with_yb;            /* ... its end's y is zb (na), the run's own (a step's), else its levels' */
+    double *zb;
+    int taylor;             /* ... its middle by flow_taylor (adaptive_outtol.c's A->otaylor) */
   } pend;
   /* output tol (adaptive_outtol.c; allocated with CUP_OUTPUT_TOL alone):
    * each state's largest |x_i| over the points so far and its tolerance
@@ -363,6 +366,8 @@ struct adaptive_ws {
   double olev_h;
   int olev_base;            /* ... the level made by its series, the coarser by squaring (beyond
                                AD_TOL_DEPTH: none, the piece's series instead) */
+  const double *oyb;        /* the run's own y at the end of the piece it emits (a step's yb), or NULL */
+  int otaylor;              /* the piece's middle by its Taylor series when its slopes pass, not a level */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 #define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
@@ -483,10 +488,12 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R);
 
 /* ---- adaptive_outtol.c ---- */
 /* Output tol: the points inside [t0, t1) on md's flow from y = ya (and t0
- * itself when with_t0), those before skip not offered; as ad_emit_dense:
+ * itself when with_t0; yb: the flow's y at t1 when the caller has it, else
+ * NULL), those before skip not offered (taylor: a refused piece's choice
+ * of its middle, pend's, else -1); as ad_emit_dense:
  * a refusal kept in A->pend, 1; else 0 or an error. */
-int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-                int with_t0, double skip);
+int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+                long k, int with_t0, double skip, int taylor);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a

@@ -131,6 +131,30 @@ static __attribute__((noinline)) const double *level(adaptive_ws *A, const ad_mo
   return E;
 }
 
+/* out = exp(tau M) y, na <= 4, by its Taylor series in 2^s substeps
+ * (tau 2^-s snorm <= 1/2), each to the first term below a quarter ulp of
+ * the sum's largest component (at most 30): one point without the levels
+ * (na^2 a term, where a level is na^3). */
+static void flow_taylor(const adaptive_ws *A, const ad_mode *md, double tau, int s, const double *y, double *out) {
+  int na = A->na;
+  double term[4], tmp[4], dt = ldexp(tau, -s);
+  la_copy(out, y, na);
+  for (long q = 0; q < 1L << s; q++) {
+    la_copy(term, out, na);
+    for (int k = 1; k <= 30; k++) {
+      ad_mode_mv_few(na, md->M, term, tmp);
+      double big = 0, omax = 0, f = dt / k;
+      for (int i = 0; i < na; i++) {
+        term[i] = tmp[i] * f;
+        out[i] += term[i];
+        big = max2(big, fabs(term[i]));
+        omax = max2(omax, fabs(out[i]));
+      }
+      if (big <= 0.25 * DBL_EPSILON * omax) break;
+    }
+  }
+}
+
 /* y = E y_L, x = X y, x' = (X M) y, na a constant (n <= na rows). */
 static inline __attribute__((always_inline)) void times_n(int na, int n, const double *restrict E,
                                                           const double *restrict yl, const double *restrict X,
@@ -267,13 +291,16 @@ static int offer(adaptive_ws *A, ad_run *R, ad_mode *md, tol_pt P, long k, tol_o
 }
 
 /* A refusal at time tr: the piece kept for the resumed run (ad_dense_resume). */
-static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, double t0, double t1, long k, int with_t0,
-                      double tr, const double *peak0) {
+static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+                      long k, int with_t0, double tr, const double *peak0) {
   struct ad_pend *p = ad_pend_start(A, md, k, t1);
   p->ta = t0;
   p->tr = tr;
   p->with_t0 = with_t0;
   if (p->zy != ya) la_copy(p->zy, ya, A->na);   /* (a resumed piece's are these already) */
+  p->with_yb = yb != NULL;
+  p->taylor = A->otaylor;
+  if (yb && p->zb != yb) la_copy(p->zb, yb, A->na);
   if (p->opk != peak0) la_copy(p->opk, peak0, A->n);
   return 1;
 }
@@ -334,7 +361,14 @@ static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws
     if (!ok) {
       int m = freel[--nf];
       double *p = ostk + (size_t)m * stride;
-      point_after(NA, A, md, ya, h, t0, l, d + 1, tm, p);
+      if (NA && d == 0 && A->otaylor && line_ok(n, thr, l, r, NULL)) {
+        p[0] = tm;                               /* (the slopes pass: likely no point inside, no level made) */
+        flow_taylor(A, md, tm - t0, A->olev_base > 5 ? A->olev_base - 6 : 0, ya, p + 1 + 2 * n);
+        tol_pt P = {.t = p, .x = p + 1, .d = p + 1 + n, .y = p + 1 + 2 * n};
+        x_and_d(A, md, P);
+      } else {
+        point_after(NA, A, md, ya, h, t0, l, d + 1, tm, p);
+      }
       peak_n(A, n, p + 1);
       if (!(d < 2 && line_ok(n, thr, l, r, p + 1))) {   /* halved: the middle is the new right end */
         dep[sp - 1] = dep[sp] = d + 1;
@@ -365,10 +399,11 @@ static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws
 
 /* The piece's points by halving (the file's comment): its ends, then
  * halve's loop. */
-static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-               int with_t0, double skip, tol_out *O) {
+static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+               long k, int with_t0, double skip, int taylor, tol_out *O) {
   double h = t1 - t0;
-  if (md != A->olev_md || md->mask != A->olev_mask || h != A->olev_h) {   /* (level's matrices and X M kept) */
+  int hit = md == A->olev_md && md->mask == A->olev_mask && h == A->olev_h;
+  if (!hit) {                                    /* (level's matrices and X M kept) */
     A->olev_md = md;
     A->olev_mask = md->mask;
     A->olev_h = h;
@@ -378,9 +413,22 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     A->olev_base = j0 + 5;
     xm_of(A, md);
   }
+  /* The root's middle by flow_taylor when its slopes pass (then likely
+   * the piece's only check): on a piece whose mode and length the last
+   * one had not, j0 <= 1 (2 substeps, where the levels ask for 13 products
+   * of na^3); else the levels, made for the last piece. The choice a
+   * refused piece made is kept (keep_piece), so that its resumed run's
+   * points are the same bits whatever the levels made so far. */
+  A->otaylor = taylor >= 0 ? taylor : !hit && A->olev && A->olev_base <= 6;
   tol_pt L = slot_at(A, 0), top = slot_at(A, 1);
   flow_point(A, md, ya, h, t0, 0, L);
-  flow_after(A, md, ya, h, t0, L, 0, t1, top);
+  if (yb) {                                      /* (the run's own end: no level 0) */
+    *top.t = t1;
+    la_copy(top.y, yb, A->na);
+    x_and_d(A, md, top);
+  } else {
+    flow_after(A, md, ya, h, t0, L, 0, t1, top);
+  }
   thresholds(A);
   peak_of(A, L.x);
   peak_of(A, top.x);
@@ -397,8 +445,8 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
   }
 }
 
-int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-                int with_t0, double skip) {
+int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+                long k, int with_t0, double skip, int taylor) {
   if (!R->sink || !(t1 - t0 > 0)) return CUP_OK;
   const ad_mode *smd = A->sy.md;                 /* the step's series, if another's: made again after */
   const double *sy0 = A->sy.y0;
@@ -409,8 +457,8 @@ int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double
   tol_out O = {.re = re && !re->nu ? re : NULL, .ns = S ? S->ns : 0};
   O.dense = O.re && A->na <= 4;
   if (O.dense) ad_signal_rows(A, O.re, O.ns);
-  int st = cut(A, R, md, ya, t0, t1, k, with_t0, skip, &O);
-  if (st > 0) st = keep_piece(A, md, ya, t0, t1, k, with_t0, O.tr, A->pend.opk);
+  int st = cut(A, R, md, ya, yb, t0, t1, k, with_t0, skip, taylor, &O);
+  if (st > 0) st = keep_piece(A, md, ya, yb, t0, t1, k, with_t0, O.tr, A->pend.opk);
   if (A->sy.md != smd || A->sy.y0 != sy0 || A->sy.h != sh) A->sy.md = NULL;
   return st;
 }

@@ -710,7 +710,9 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   ad_events_both(A, md, A->yb, A->gb, A->tb, A->db);
   ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
   if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
+  A->oyb = A->yb;                                /* (output tol's piece ends on the step's own y) */
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
+  A->oyb = NULL;
   if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
   if (md->nz) {                                  /* (a mode with no manifold rows: the bridges' with D) */

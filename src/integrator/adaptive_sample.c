@@ -475,7 +475,7 @@ static int keep_second(adaptive_ws *A, ad_mode *md, const double *ya, const doub
 static int emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
                     double t1) {
   if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
-  int st = ad_emit_tol(A, R, md, ya, t0, t1, R->steps + 1, t0 > R->t, -INFINITY);
+  int st = ad_emit_tol(A, R, md, ya, A->oyb, t0, t1, R->steps + 1, t0 > R->t, -INFINITY, -1);
   return st < 0 ? st : CUP_OK;
 }
 
@@ -507,10 +507,11 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R) {
   p->active = 0;
   if (A->o.output == CUP_OUTPUT_TOL) {            /* the piece chosen again, from the refused point on */
     la_copy(A->opeak, p->opk, A->n);
-    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->ta, p->t_end, p->k, p->with_t0, p->tr);
+    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->with_yb ? p->zb : NULL, p->ta, p->t_end, p->k,
+                         p->with_t0, p->tr, p->taylor);
     if (st || !p->seg2) return st;
     p->seg2 = 0;
-    return ad_emit_tol(A, R, &A->modes[p->md2], p->y2, p->t2a, p->t2b, p->k, p->t2a > p->ta, -INFINITY);
+    return ad_emit_tol(A, R, &A->modes[p->md2], p->y2, NULL, p->t2a, p->t2b, p->k, p->t2a > p->ta, -INFINITY, -1);
   }
   la_copy(A->zy, p->zy, A->na);
   la_copy(A->de, p->de, A->na);
