@@ -14,7 +14,10 @@
  * value and one pass of X and X M over it a point; the flow value is
  * exp(2^-j h M) times the point before it for na <= AD_TOL_LEVELS_NA (a
  * matrix a halving level: level), else the step's Taylor series
- * (adaptive_series.c). Allocates nothing. */
+ * (adaptive_series.c); a step's piece ends on the run's own y there (no
+ * level 0), and a piece new to the levels checks its first middle by its
+ * own Taylor series (flow_taylor: most such pieces keep no point inside,
+ * and need no level). Allocates nothing. */
 #include <float.h>
 #include <math.h>
 #include "catchup.h"
