@@ -307,7 +307,6 @@ static void vectors(adaptive_ws *A, block_arena *b) {
     size_t slot = 1 + 2 * (size_t)n + (size_t)na;
     A->opeak = block_take(b, (size_t)n, sizeof(double));
     A->pend.opk = block_take(b, (size_t)n, sizeof(double));
-    A->pend.zb = block_take(b, (size_t)na, sizeof(double));
     A->othr = block_take(b, (size_t)n, sizeof(double));
     A->oxm = block_take(b, (size_t)n * na, sizeof(double));
     A->ostk = block_take(b, (AD_TOL_DEPTH + 3) * slot, sizeof(double));

@@ -54,7 +54,6 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
       CUP_CKPT_IO(c, p->ta); CUP_CKPT_IO(c, p->tr); CUP_CKPT_IO(c, p->with_t0); CUP_CKPT_IO(c, p->with_yb);
       CUP_CKPT_IO(c, p->taylor);
       ckpt_io(c, p->opk, N);
-      ckpt_io(c, p->zb, NA);
     }
   }
   if (A->o.output == CUP_OUTPUT_TOL) ckpt_io(c, A->opeak, N);   /* output tol's scales */

@@ -347,8 +347,8 @@ struct adaptive_ws {
      * (zy its y there, at ta, with the scales opk then), offered from tr on */
     double ta, tr, *opk;    /* opk: n */
     int with_t0;            /* ... its start is offered too (an event's new flow) */
-    int with_yb;            /* ... its end's y is zb (na), the run's own (a step's), else its levels' */
-    double *zb;
+    int with_yb;            /* ... its end's y is y2, the run's own (a step's, which has no second
+                               piece), else its levels' */
     int taylor;             /* ... its middle by flow_taylor (adaptive_outtol.c's A->otaylor) */
   } pend;
   /* output tol (adaptive_outtol.c; allocated with CUP_OUTPUT_TOL alone):

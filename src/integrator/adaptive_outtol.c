@@ -303,7 +303,7 @@ static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, const doubl
   if (p->zy != ya) la_copy(p->zy, ya, A->na);   /* (a resumed piece's are these already) */
   p->with_yb = yb != NULL;
   p->taylor = A->otaylor;
-  if (yb && p->zb != yb) la_copy(p->zb, yb, A->na);
+  if (yb && p->y2 != yb) la_copy(p->y2, yb, A->na);   /* (a step's piece: no second piece in y2) */
   if (p->opk != peak0) la_copy(p->opk, peak0, A->n);
   return 1;
 }

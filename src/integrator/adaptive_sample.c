@@ -507,7 +507,7 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R) {
   p->active = 0;
   if (A->o.output == CUP_OUTPUT_TOL) {            /* the piece chosen again, from the refused point on */
     la_copy(A->opeak, p->opk, A->n);
-    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->with_yb ? p->zb : NULL, p->ta, p->t_end, p->k,
+    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->with_yb ? p->y2 : NULL, p->ta, p->t_end, p->k,
                          p->with_t0, p->tr, p->taylor);
     if (st || !p->seg2) return st;
     p->seg2 = 0;
