@@ -366,7 +366,7 @@ struct adaptive_ws {
   double olev_h;
   int olev_base;            /* ... the level made by its series, the coarser by squaring (beyond
                                AD_TOL_DEPTH: none, the piece's series instead) */
-  const double *oyb;        /* the run's own y at the end of the piece it emits (a step's yb), or NULL */
+  int oevent;               /* the run emits an event's pieces: not a step's, which ends on A->yb */
   int otaylor;              /* the piece's middle by its Taylor series when its slopes pass, not a level */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
@@ -450,18 +450,20 @@ static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int n
     for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
   }
 }
-/* The signals of a batch's first q samples (their y in A->by, na at most 4
- * a constant here) into A->bs, by ad_signal_rows' rows, each from its
+/* The signals of a batch's first q samples (their y in by: A->by, na at
+ * most 4 a constant here) into so (A->bs), by ad_signal_rows' rows (K, kc:
+ * A->bk, A->bkc), each from its
  * constant, every term, zeros too: a zero's term is +-0 (y finite), which
  * leaves a sum begun at +0 or at a constant as it was, so these are
  * ad_rec_rows' sums bit for bit (dense samples, output tol's points). */
-static inline __attribute__((always_inline)) void ad_batch_signals(int na, adaptive_ws *A, int ns, int q) {
-  const double *restrict K = A->bk, *restrict kc = A->bkc;
-  double *restrict so = A->bs;
+static inline __attribute__((always_inline)) void ad_batch_signals(int na, const double *restrict K,
+                                                                   const double *restrict kc,
+                                                                   const double *restrict by, double *restrict so,
+                                                                   int ns, int q) {
   for (int k = 0; k < ns; k++, K += na) {        /* (a row's terms held across the samples) */
     double kr[4] = {0}, c0 = kc[k];
     for (int j = 0; j < na; j++) kr[j] = K[j];
-    const double *restrict y = A->by;
+    const double *restrict y = by;
     for (int s = 0; s < q; s++, y += na) {
       double acc = c0;
 #pragma GCC unroll 4

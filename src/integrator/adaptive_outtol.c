@@ -249,10 +249,10 @@ typedef struct {
 static int flush(adaptive_ws *A, ad_run *R, long k, tol_out *O) {
   int c = O->c;
   if (O->dense) switch (A->na) {
-      case 1: ad_batch_signals(1, A, O->ns, c); break;
-      case 2: ad_batch_signals(2, A, O->ns, c); break;
-      case 3: ad_batch_signals(3, A, O->ns, c); break;
-      default: ad_batch_signals(4, A, O->ns, c); break;
+      case 1: ad_batch_signals(1, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+      case 2: ad_batch_signals(2, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+      case 3: ad_batch_signals(3, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+      default: ad_batch_signals(4, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
     }
   int took = ad_put_batch(A, R, k, c);
   O->c = 0;

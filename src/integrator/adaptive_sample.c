@@ -300,15 +300,15 @@ static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, 
 static inline __attribute__((always_inline)) int samples_dense(int na, adaptive_ws *A, const double *X, int ns,
                                                                int c, double rnd) {
   int n = A->n;
-  const double *restrict y = A->by, *restrict e = A->be;
-  double *restrict xo = A->bx, *restrict best = A->best;
+  const double *restrict y = A->by, *restrict e = A->be, *restrict K = A->bk, *restrict kc = A->bkc;
+  double *restrict xo = A->bx, *restrict so = A->bs, *restrict best = A->best;
   int q = 0;
   for (; q < c; q++, y += na, e += na, xo += n) {
     best[q] = la_norm_inf(e, n) + rnd;
     for (int i = 0; i < n; i++) xo[i] = la_dot(X + (size_t)i * na, y, na);
     if (tally_state_beyond(xo, n)) break;
   }
-  ad_batch_signals(na, A, ns, q);
+  ad_batch_signals(na, K, kc, A->by, so, ns, q);
   return q;
 }
 
@@ -475,7 +475,7 @@ static int keep_second(adaptive_ws *A, ad_mode *md, const double *ya, const doub
 static int emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
                     double t1) {
   if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
-  int st = ad_emit_tol(A, R, md, ya, A->oyb, t0, t1, R->steps + 1, t0 > R->t, -INFINITY, -1);
+  int st = ad_emit_tol(A, R, md, ya, A->oevent ? NULL : A->yb, t0, t1, R->steps + 1, t0 > R->t, -INFINITY, -1);
   return st < 0 ? st : CUP_OK;
 }
 
