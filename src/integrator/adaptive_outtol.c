@@ -92,6 +92,20 @@ static void mat_mul(int na, const double *a, const double *b, double *c) {
   }
 }
 
+/* A Taylor series' next term, f tmp, into term and added to sum (len
+ * entries): 1 when it is below a quarter ulp of the sum's largest entry
+ * (the series ends there). */
+static inline int taylor_add(int len, const double *tmp, double f, double *term, double *sum) {
+  double big = 0, smax = 0;
+  for (int q = 0; q < len; q++) {
+    term[q] = tmp[q] * f;
+    sum[q] += term[q];
+    big = max2(big, fabs(term[q]));
+    smax = max2(smax, fabs(sum[q]));
+  }
+  return big <= 0.25 * DBL_EPSILON * smax;
+}
+
 /* exp(tau M) into E by its Taylor series, tau snorm <= 1/2: to the first
  * term below a quarter ulp of the sum's largest entry (at most 30). */
 static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E) {
@@ -100,14 +114,7 @@ static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E
   for (int q = 0; q < NA; q++) E[q] = term[q] = (q % (na + 1) == 0);
   for (int k = 1; k <= 30; k++) {
     mat_mul(na, term, md->M, tmp);
-    double big = 0, emax = 0, f = tau / k;
-    for (int q = 0; q < NA; q++) {
-      term[q] = tmp[q] * f;
-      E[q] += term[q];
-      big = max2(big, fabs(term[q]));
-      emax = max2(emax, fabs(E[q]));
-    }
-    if (big <= 0.25 * DBL_EPSILON * emax) break;
+    if (taylor_add(NA, tmp, tau / k, term, E)) break;
   }
 }
 
@@ -146,14 +153,7 @@ static void flow_taylor(const adaptive_ws *A, const ad_mode *md, double tau, int
     la_copy(term, out, na);
     for (int k = 1; k <= 30; k++) {
       ad_mode_mv_few(na, md->M, term, tmp);
-      double big = 0, omax = 0, f = dt / k;
-      for (int i = 0; i < na; i++) {
-        term[i] = tmp[i] * f;
-        out[i] += term[i];
-        big = max2(big, fabs(term[i]));
-        omax = max2(omax, fabs(out[i]));
-      }
-      if (big <= 0.25 * DBL_EPSILON * omax) break;
+      if (taylor_add(na, tmp, dt / k, term, out)) break;
     }
   }
 }
