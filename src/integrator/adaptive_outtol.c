@@ -418,8 +418,9 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const d
   }
   /* The root's middle by flow_taylor when its slopes pass (then likely
    * the piece's only check): on a piece whose mode and length the last
-   * one had not, j0 <= 1 (2 substeps, where the levels ask for 13 products
-   * of na^3); else the levels, made for the last piece. The choice a
+   * one had not, j0 <= 1 (h snorm <= 1: one series of na^2 a term, where
+   * the levels ask for 13 products of na^3); else the levels, made for the
+   * last piece. The choice a
    * refused piece made is kept (keep_piece), so that its resumed run's
    * points are the same bits whatever the levels made so far. */
   A->otaylor = taylor >= 0 ? taylor : !hit && A->olev && A->olev_base <= 6;
