@@ -246,11 +246,15 @@ static void check_resume(const char *name) {
 }
 
 /* The six-pulse bridge's points come from its Taylor series (na > 4), the
- * precision rectifier's from the halving levels' exponentials (na 3). */
+ * precision rectifier's from the halving levels' exponentials (na 3), the
+ * voltage doubler's pieces' middles often from their own Taylor series
+ * (short pieces of modes and lengths new to the levels: adaptive_outtol.c's
+ * otaylor, the choice a refused piece made kept for its resumed run). */
 static void test_resume(void **state) {
   (void)state;
   check_resume("sixpulse");
   check_resume("precision-rectifier");
+  check_resume("doubler");
 }
 
 /* A switched run stopped by its sink: the points before the refused one

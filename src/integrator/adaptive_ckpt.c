@@ -51,7 +51,8 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
     ckpt_io(c, p->y2, NA);
     ckpt_io(c, p->e2, N);
     if (A->o.output == CUP_OUTPUT_TOL) {         /* (the refused point's piece: adaptive_outtol.c) */
-      CUP_CKPT_IO(c, p->ta); CUP_CKPT_IO(c, p->tr); CUP_CKPT_IO(c, p->with_t0);
+      CUP_CKPT_IO(c, p->ta); CUP_CKPT_IO(c, p->tr); CUP_CKPT_IO(c, p->with_t0); CUP_CKPT_IO(c, p->with_yb);
+      CUP_CKPT_IO(c, p->taylor);
       ckpt_io(c, p->opk, N);
     }
   }

@@ -352,6 +352,9 @@ struct adaptive_ws {
      * (zy its y there, at ta, with the scales opk then), offered from tr on */
     double ta, tr, *opk;    /* opk: n */
     int with_t0;            /* ... its start is offered too (an event's new flow) */
+    int with_yb;            /* ... its end's y is y2, the run's own (a step's, which has no second
+                               piece), else its levels' */
+    int taylor;             /* ... its middle by flow_taylor (adaptive_outtol.c's A->otaylor) */
   } pend;
   /* output tol (adaptive_outtol.c; allocated with CUP_OUTPUT_TOL alone):
    * each state's largest |x_i| over the points so far and its tolerance
@@ -368,6 +371,8 @@ struct adaptive_ws {
   double olev_h;
   int olev_base;            /* ... the level made by its series, the coarser by squaring (beyond
                                AD_TOL_DEPTH: none, the piece's series instead) */
+  int oevent;               /* the run emits an event's pieces: not a step's, which ends on A->yb */
+  int otaylor;              /* the piece's middle by its Taylor series when its slopes pass, not a level */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 #define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
@@ -439,6 +444,39 @@ static inline int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
   R->info->samples += took < c ? took + 1 : c;
   return took;
 }
+/* The signals' rows of re over y into A->bk by rows, dense with their
+ * zeros, and their constants into A->bkc (na <= 4: ad_batch_signals'). */
+static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
+  int na = A->na;
+  double *K = A->bk;
+  memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
+  for (int k = 0; k < ns; k++) {
+    A->bkc[k] = re->rc[k];
+    for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
+  }
+}
+/* The signals of a batch's first q samples (their y in by: A->by, na at
+ * most 4 a constant here) into so (A->bs), by ad_signal_rows' rows (K, kc:
+ * A->bk, A->bkc), each from its
+ * constant, every term, zeros too: a zero's term is +-0 (y finite), which
+ * leaves a sum begun at +0 or at a constant as it was, so these are
+ * ad_rec_rows' sums bit for bit (dense samples, output tol's points). */
+static inline __attribute__((always_inline)) void ad_batch_signals(int na, const double *restrict K,
+                                                                   const double *restrict kc,
+                                                                   const double *restrict by, double *restrict so,
+                                                                   int ns, int q) {
+  for (int k = 0; k < ns; k++, K += na) {        /* (a row's terms held across the samples) */
+    double kr[4] = {0}, c0 = kc[k];
+    for (int j = 0; j < na; j++) kr[j] = K[j];
+    const double *restrict y = by;
+    for (int s = 0; s < q; s++, y += na) {
+      double acc = c0;
+#pragma GCC unroll 4
+      for (int j = 0; j < na; j++) acc += kr[j] * y[j];
+      so[(size_t)k * AD_BATCH + s] = acc;
+    }
+  }
+}
 /* A sample refused inside the step in progress (on md, step number k, the
  * step ending at t1): A->pend active, no second piece yet; the caller
  * keeps the states to start again from. */
@@ -457,10 +495,12 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R);
 
 /* ---- adaptive_outtol.c ---- */
 /* Output tol: the points inside [t0, t1) on md's flow from y = ya (and t0
- * itself when with_t0), those before skip not offered; as ad_emit_dense:
+ * itself when with_t0; yb: the flow's y at t1 when the caller has it, else
+ * NULL), those before skip not offered (taylor: a refused piece's choice
+ * of its middle, pend's, else -1); as ad_emit_dense:
  * a refusal kept in A->pend, 1; else 0 or an error. */
-int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-                int with_t0, double skip);
+int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+                long k, int with_t0, double skip, int taylor);
 /* The input's exosystem states at t0 for a step to t1 into w (a callback's
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a

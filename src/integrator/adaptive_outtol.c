@@ -14,7 +14,10 @@
  * value and one pass of X and X M over it a point; the flow value is
  * exp(2^-j h M) times the point before it for na <= AD_TOL_LEVELS_NA (a
  * matrix a halving level: level), else the step's Taylor series
- * (adaptive_series.c). Allocates nothing. */
+ * (adaptive_series.c); a step's piece ends on the run's own y there (no
+ * level 0), and a piece new to the levels checks its first middle by its
+ * own Taylor series (flow_taylor: most such pieces keep no point inside,
+ * and need no level). Allocates nothing. */
 #include <float.h>
 #include <math.h>
 #include "catchup.h"
@@ -89,6 +92,20 @@ static void mat_mul(int na, const double *a, const double *b, double *c) {
   }
 }
 
+/* A Taylor series' next term, f tmp, into term and added to sum (len
+ * entries): 1 when it is below a quarter ulp of the sum's largest entry
+ * (the series ends there). */
+static inline int taylor_add(int len, const double *tmp, double f, double *term, double *sum) {
+  double big = 0, smax = 0;
+  for (int q = 0; q < len; q++) {
+    term[q] = tmp[q] * f;
+    sum[q] += term[q];
+    big = max2(big, fabs(term[q]));
+    smax = max2(smax, fabs(sum[q]));
+  }
+  return big <= 0.25 * DBL_EPSILON * smax;
+}
+
 /* exp(tau M) into E by its Taylor series, tau snorm <= 1/2: to the first
  * term below a quarter ulp of the sum's largest entry (at most 30). */
 static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E) {
@@ -97,14 +114,7 @@ static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E
   for (int q = 0; q < NA; q++) E[q] = term[q] = (q % (na + 1) == 0);
   for (int k = 1; k <= 30; k++) {
     mat_mul(na, term, md->M, tmp);
-    double big = 0, emax = 0, f = tau / k;
-    for (int q = 0; q < NA; q++) {
-      term[q] = tmp[q] * f;
-      E[q] += term[q];
-      big = max2(big, fabs(term[q]));
-      emax = max2(emax, fabs(E[q]));
-    }
-    if (big <= 0.25 * DBL_EPSILON * emax) break;
+    if (taylor_add(NA, tmp, tau / k, term, E)) break;
   }
 }
 
@@ -117,7 +127,7 @@ static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E
  * rounding grows as eps / (tau snorm), 64 eps at most), a deeper one by its
  * own series. Each level is the same function of (M, h, j) whatever asked
  * first: a resumed run's points are the same bits. */
-static const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
+static __attribute__((noinline)) const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
   int NA = A->na * A->na;
   double *E = A->olev + (size_t)j * NA;
   if (A->olev_ok >> j & 1) return E;
@@ -129,6 +139,23 @@ static const double *level(adaptive_ws *A, const ad_mode *md, double h, int j) {
   }
   A->olev_ok |= (uint64_t)1 << j;
   return E;
+}
+
+/* out = exp(tau M) y, na <= 4, by its Taylor series in 2^s substeps
+ * (tau 2^-s snorm <= 1/2), each to the first term below a quarter ulp of
+ * the sum's largest component (at most 30): one point without the levels
+ * (na^2 a term, where a level is na^3). */
+static void flow_taylor(const adaptive_ws *A, const ad_mode *md, double tau, int s, const double *y, double *out) {
+  int na = A->na;
+  double term[4], tmp[4], dt = ldexp(tau, -s);
+  la_copy(out, y, na);
+  for (long q = 0; q < 1L << s; q++) {
+    la_copy(term, out, na);
+    for (int k = 1; k <= 30; k++) {
+      ad_mode_mv_few(na, md->M, term, tmp);
+      if (taylor_add(na, tmp, dt / k, term, out)) break;
+    }
+  }
 }
 
 /* y = E y_L, x = X y, x' = (X M) y, na a constant (n <= na rows). */
@@ -161,7 +188,7 @@ static void flow_after(adaptive_ws *A, ad_mode *md, const double *ya, double h, 
     *P.t = tm;                                   /* (t1 itself at the end: not t0 + h) */
     return;
   }
-  const double *E = level(A, md, h, j);
+  const double *E = A->olev_ok >> j & 1 ? A->olev + (size_t)j * A->na * A->na : level(A, md, h, j);
   *P.t = tm;
   switch (A->na) {
     case 1: times_n(1, A->n, E, L.y, md->X, A->oxm, P.y, P.x, P.d); return;
@@ -212,13 +239,22 @@ static inline int line_ok(int n, const double *thr, const double *l, const doubl
 typedef struct {
   const struct ad_rec *re;                       /* NULL: the sink */
   int ns, c;                                     /* signals; points in the batch */
+  int dense;                                     /* na <= 4: the batch's y kept (A->by), its signals made at
+                                                    its put by ad_batch_signals (ad_signal_rows' rows) */
   double tr;                                     /* a refused point's time */
 } tol_out;
 
 /* The batch to put: 1 if a point was refused (its time in O->tr). The
  * samples counted as the sink's: those offered, the refused one too. */
 static int flush(adaptive_ws *A, ad_run *R, long k, tol_out *O) {
-  int c = O->c, took = ad_put_batch(A, R, k, c);
+  int c = O->c;
+  if (O->dense) switch (A->na) {
+      case 1: ad_batch_signals(1, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+      case 2: ad_batch_signals(2, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+      case 3: ad_batch_signals(3, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+      default: ad_batch_signals(4, A->bk, A->bkc, A->by, A->bs, O->ns, c); break;
+    }
+  int took = ad_put_batch(A, R, k, c);
   O->c = 0;
   if (took == c) return 0;
   O->tr = A->bt[took];
@@ -240,7 +276,8 @@ static int offer(adaptive_ws *A, ad_run *R, ad_mode *md, tol_pt P, long k, tol_o
     int c = O->c++;
     A->bt[c] = *P.t;
     la_copy(A->bx + (size_t)c * n, P.x, n);
-    ad_rec_rows(O->re, O->ns, P.y, A->bs + c, AD_BATCH);
+    if (O->dense) la_copy(A->by + (size_t)c * A->na, P.y, A->na);
+    else ad_rec_rows(O->re, O->ns, P.y, A->bs + c, AD_BATCH);
     return O->c == AD_BATCH ? flush(A, R, k, O) : 0;
   }
   R->info->samples++;
@@ -257,30 +294,119 @@ static int offer(adaptive_ws *A, ad_run *R, ad_mode *md, tol_pt P, long k, tol_o
 }
 
 /* A refusal at time tr: the piece kept for the resumed run (ad_dense_resume). */
-static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, double t0, double t1, long k, int with_t0,
-                      double tr, const double *peak0) {
+static int keep_piece(adaptive_ws *A, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+                      long k, int with_t0, double tr, const double *peak0) {
   struct ad_pend *p = ad_pend_start(A, md, k, t1);
   p->ta = t0;
   p->tr = tr;
   p->with_t0 = with_t0;
   if (p->zy != ya) la_copy(p->zy, ya, A->na);   /* (a resumed piece's are these already) */
+  p->with_yb = yb != NULL;
+  p->taylor = A->otaylor;
+  if (yb && p->y2 != yb) la_copy(p->y2, yb, A->na);   /* (a step's piece: no second piece in y2) */
   if (p->opk != peak0) la_copy(p->opk, peak0, A->n);
   return 1;
 }
 
-/* The piece's points by halving (the file's comment): a stack of right
- * ends above the left end L (slots of A->ostk, by number: a point kept is
- * not copied), each check of [L, top] either keeping it (top is the next
- * point) or pushing its middle. */
-static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-               int with_t0, double skip, tol_out *O) {
+/* peak_of with n held: 1 if a scale moved (the tolerances made again). */
+static inline int peak_n(adaptive_ws *A, int n, const double *x) {
+  double *pk = A->opeak;
+  int moved = 0;
+  for (int i = 0; i < n; i++)
+    if (fabs(x[i]) > pk[i]) {
+      pk[i] = fabs(x[i]);
+      moved = 1;
+    }
+  if (moved) thresholds(A);
+  return moved;
+}
+
+/* The point 2^-j h after l into p (slots: t, x, x', y), na a constant
+ * NA with the levels (times_n), else flow_after (NA 0). */
+static inline __attribute__((always_inline)) void point_after(const int NA, adaptive_ws *A, ad_mode *md,
+                                                              const double *ya, double h, double t0,
+                                                              double *l, int j, double tm, double *p) {
+  int n = A->n;
+  if (NA) {
+    const double *E = A->olev_ok >> j & 1 ? A->olev + (size_t)j * NA * NA : level(A, md, h, j);
+    p[0] = tm;
+    times_n(NA, n, E, l + 1 + 2 * n, md->X, A->oxm, p + 1 + 2 * n, p + 1, p + 1 + n);
+  } else {
+    tol_pt L = {.t = l, .x = l + 1, .d = l + 1 + n, .y = l + 1 + 2 * n};
+    tol_pt P = {.t = p, .x = p + 1, .d = p + 1 + n, .y = p + 1 + 2 * n};
+    flow_after(A, md, ya, h, t0, L, j, tm, P);
+  }
+}
+
+/* The halving loop of cut (its comment), na a constant NA with the
+ * levels, else 0: a stack of right ends above the left end (slot li),
+ * each check of [left, top] either keeping it (top is the next point) or
+ * pushing its middle. The slots by pointer, the sizes held: each of A's
+ * fields was read again after a store to a slot. */
+static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws *A, ad_run *R, ad_mode *md,
+                                                       const double *ya, double t0, double h, long k, double skip,
+                                                       tol_out *O) {
   enum { SLOTS = AD_TOL_DEPTH + 3 };
   int stk[SLOTS], dep[SLOTS], freel[SLOTS], nf = 0, sp = 1, li = 0;
-  double h = t1 - t0;
   for (int s = SLOTS - 1; s >= 2; s--) freel[nf++] = s;
   stk[0] = 1;
-  dep[0] = 0;                                    /* (the halvings of [L, stk[i]] when it is the top) */
-  if (md != A->olev_md || md->mask != A->olev_mask || h != A->olev_h) {   /* (level's matrices and X M kept) */
+  dep[0] = 0;                                    /* (the halvings of [left, stk[i]] when it is the top) */
+  const int n = A->n, na = NA ? NA : A->na;
+  const size_t stride = 1 + 2 * (size_t)n + (size_t)na;
+  double *const ostk = A->ostk, *l = ostk;
+  const double *thr = A->othr;
+  while (sp > 0) {
+    double *r = ostk + (size_t)stk[sp - 1] * stride;
+    int d = dep[sp - 1];
+    double tl = l[0], tr = r[0], tm = tl + 0.5 * (tr - tl);
+    int ok = d >= AD_TOL_DEPTH || !(tm > tl && tm < tr);
+    if (!ok && d >= 2) ok = line_ok(n, thr, l, r, NULL);
+    if (!ok) {
+      int m = freel[--nf];
+      double *p = ostk + (size_t)m * stride;
+      if (NA && d == 0 && A->otaylor && line_ok(n, thr, l, r, NULL)) {
+        p[0] = tm;                               /* (the slopes pass: likely no point inside, no level made) */
+        flow_taylor(A, md, tm - t0, A->olev_base > 5 ? A->olev_base - 6 : 0, ya, p + 1 + 2 * n);
+        tol_pt P = {.t = p, .x = p + 1, .d = p + 1 + n, .y = p + 1 + 2 * n};
+        x_and_d(A, md, P);
+      } else {
+        point_after(NA, A, md, ya, h, t0, l, d + 1, tm, p);
+      }
+      peak_n(A, n, p + 1);
+      if (!(d < 2 && line_ok(n, thr, l, r, p + 1))) {   /* halved: the middle is the new right end */
+        dep[sp - 1] = dep[sp] = d + 1;
+        stk[sp++] = m;
+        continue;
+      }
+      freel[nf++] = m;
+    }
+    freel[nf++] = li;                            /* [left, top] kept: top is the next point */
+    li = stk[--sp];
+    l = r;
+    if (sp > 0 && tr >= skip) {
+      if (O->dense && !tally_state_beyond(r + 1, n)) {   /* (a batch's point: offer's, inline) */
+        int c = O->c++;
+        A->bt[c] = tr;
+        la_copy(A->bx + (size_t)c * n, r + 1, n);
+        la_copy(A->by + (size_t)c * na, r + 1 + 2 * n, na);
+        if (O->c == AD_BATCH && flush(A, R, k, O)) return 1;
+        continue;
+      }
+      tol_pt P = {.t = r, .x = r + 1, .d = r + 1 + n, .y = r + 1 + 2 * n};
+      int st = offer(A, R, md, P, k, O);
+      if (st) return st;
+    }
+  }
+  return O->re ? flush(A, R, k, O) : 0;
+}
+
+/* The piece's points by halving (the file's comment): its ends, then
+ * halve's loop. */
+static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+               long k, int with_t0, double skip, int taylor, tol_out *O) {
+  double h = t1 - t0;
+  int hit = md == A->olev_md && md->mask == A->olev_mask && h == A->olev_h;
+  if (!hit) {                                    /* (level's matrices and X M kept) */
     A->olev_md = md;
     A->olev_mask = md->mask;
     A->olev_h = h;
@@ -290,9 +416,23 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     A->olev_base = j0 + 5;
     xm_of(A, md);
   }
+  /* The root's middle by flow_taylor when its slopes pass (then likely
+   * the piece's only check): on a piece whose mode and length the last
+   * one had not, j0 <= 1 (h snorm <= 1: one series of na^2 a term, where
+   * the levels ask for 13 products of na^3); else the levels, made for the
+   * last piece. The choice a
+   * refused piece made is kept (keep_piece), so that its resumed run's
+   * points are the same bits whatever the levels made so far. */
+  A->otaylor = taylor >= 0 ? taylor : !hit && A->olev && A->olev_base <= 6;
   tol_pt L = slot_at(A, 0), top = slot_at(A, 1);
   flow_point(A, md, ya, h, t0, 0, L);
-  flow_after(A, md, ya, h, t0, L, 0, t1, top);
+  if (yb) {                                      /* (the run's own end: no level 0) */
+    *top.t = t1;
+    la_copy(top.y, yb, A->na);
+    x_and_d(A, md, top);
+  } else {
+    flow_after(A, md, ya, h, t0, L, 0, t1, top);
+  }
   thresholds(A);
   peak_of(A, L.x);
   peak_of(A, top.x);
@@ -300,40 +440,17 @@ static int cut(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double 
     int st = offer(A, R, md, L, k, O);
     if (st) return st;
   }
-  const int n = A->n;
-  const double *thr = A->othr;
-  while (sp > 0) {
-    tol_pt Rt = slot_at(A, stk[sp - 1]);
-    const double *l = L.t, *r = Rt.t;
-    int d = dep[sp - 1];
-    double tm = l[0] + 0.5 * (r[0] - l[0]);
-    int ok = d >= AD_TOL_DEPTH || !(tm > l[0] && tm < r[0]);
-    if (!ok && d >= 2) ok = line_ok(n, thr, l, r, NULL);
-    if (!ok) {
-      int m = freel[--nf];
-      tol_pt M = slot_at(A, m);
-      flow_after(A, md, ya, h, t0, L, d + 1, tm, M);
-      peak_of(A, M.x);
-      if (!(d < 2 && line_ok(n, thr, l, r, M.x))) {   /* halved: the middle is the new right end */
-        dep[sp - 1] = dep[sp] = d + 1;
-        stk[sp++] = m;
-        continue;
-      }
-      freel[nf++] = m;
-    }
-    freel[nf++] = li;                            /* [L, R] kept: R is the next point */
-    li = stk[--sp];
-    L = Rt;
-    if (sp > 0 && r[0] >= skip) {
-      int st = offer(A, R, md, L, k, O);
-      if (st) return st;
-    }
+  if (!A->olev || A->olev_base > AD_TOL_DEPTH) return halve(0, A, R, md, ya, t0, h, k, skip, O);
+  switch (A->na) {
+    case 1: return halve(1, A, R, md, ya, t0, h, k, skip, O);
+    case 2: return halve(2, A, R, md, ya, t0, h, k, skip, O);
+    case 3: return halve(3, A, R, md, ya, t0, h, k, skip, O);
+    default: return halve(4, A, R, md, ya, t0, h, k, skip, O);   /* (na <= AD_TOL_LEVELS_NA) */
   }
-  return O->re ? flush(A, R, k, O) : 0;
 }
 
-int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double t0, double t1, long k,
-                int with_t0, double skip) {
+int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *yb, double t0, double t1,
+                long k, int with_t0, double skip, int taylor) {
   if (!R->sink || !(t1 - t0 > 0)) return CUP_OK;
   const ad_mode *smd = A->sy.md;                 /* the step's series, if another's: made again after */
   const double *sy0 = A->sy.y0;
@@ -342,8 +459,10 @@ int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, double
   const signal_map *S = A->put ? nl_signal_map(A->put_nl) : NULL;
   const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_of(A, md, S) : NULL;
   tol_out O = {.re = re && !re->nu ? re : NULL, .ns = S ? S->ns : 0};
-  int st = cut(A, R, md, ya, t0, t1, k, with_t0, skip, &O);
-  if (st > 0) st = keep_piece(A, md, ya, t0, t1, k, with_t0, O.tr, A->pend.opk);
+  O.dense = O.re && A->na <= 4;
+  if (O.dense) ad_signal_rows(A, O.re, O.ns);
+  int st = cut(A, R, md, ya, yb, t0, t1, k, with_t0, skip, taylor, &O);
+  if (st > 0) st = keep_piece(A, md, ya, yb, t0, t1, k, with_t0, O.tr, A->pend.opk);
   if (A->sy.md != smd || A->sy.y0 != sy0 || A->sy.h != sh) A->sy.md = NULL;
   return st;
 }

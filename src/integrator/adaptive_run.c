@@ -638,7 +638,11 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
    * measured against): the run's own path there would show the violation
    * the late switch lets through, first order in its delay */
   double t0 = R->t, tend = ev->tau_sw >= h ? t1 : t0 + ev->tau_sw, troot = fmin(t0 + tau_rep, tend);
-  if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) return st;
+  A->oevent = 1;                                 /* (output tol: these pieces do not end on A->yb) */
+  if ((st = ad_emit_dense(A, R, old, A->ya, A->e, t0, troot)) < 0) {
+    A->oevent = 0;
+    return st;
+  }
   la_copy_few(A->ed, A->e, n);                      /* the error at the root, on the new manifold */
   la_zero_few(A->se.v, A->na);                      /* (e, 0): its flow to the root and to the switch */
   la_copy_few(A->se.v, A->e, n);
@@ -647,7 +651,9 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
     la_copy_few(A->ed, A->de, n);
   }
   ad_manifold(A, nm, A->zero, A->ed);
-  if ((st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend)) < 0) return st;
+  st = ad_emit_dense(A, R, nm, A->yt, A->ed, troot, tend);
+  A->oevent = 0;
+  if (st < 0) return st;
   if (ev->tau_sw > 0) {
     ad_series_at(A, &A->se, old, h, A->se.v, ev->tau_sw, A->yt);
     la_copy_few(A->e, A->yt, n);

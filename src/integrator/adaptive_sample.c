@@ -286,21 +286,9 @@ static int batch_put(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k, 
   return pend_refused(A, md, k, t1);             /* inside the step in progress: refused */
 }
 
-/* The signals' rows of re over y into A->bk by rows, dense with their
- * zeros, and their constants into A->bkc (na <= 4: samples_dense's). */
-static void signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
-  int na = A->na;
-  double *K = A->bk;
-  memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
-  for (int k = 0; k < ns; k++) {
-    A->bkc[k] = re->rc[k];
-    for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
-  }
-}
-
 /* A batch's c samples from slot 0, na (at most 4) a constant here: each
  * one's estimate, state x = X y (md's rows, la_dot's sums as ad_state's)
- * and signals (signal_rows', each from its constant), every term, zeros
+ * and signals (ad_signal_rows', each from its constant), every term, zeros
  * too, unrolled. A zero's term is +-0 (y finite, as times_dense has it),
  * which leaves a sum begun at +0 or at a constant as it was (a constant
  * is never -0: compose's sums begin at +0), so these are the sums of
@@ -320,17 +308,7 @@ static inline __attribute__((always_inline)) int samples_dense(int na, adaptive_
     for (int i = 0; i < n; i++) xo[i] = la_dot(X + (size_t)i * na, y, na);
     if (tally_state_beyond(xo, n)) break;
   }
-  for (int k = 0; k < ns; k++, K += na) {        /* (a row's terms held across the samples) */
-    double kr[4] = {0}, c0 = kc[k];
-    for (int j = 0; j < na; j++) kr[j] = K[j];
-    y = A->by;
-    for (int s = 0; s < q; s++, y += na) {
-      double acc = c0;
-#pragma GCC unroll 4
-      for (int j = 0; j < na; j++) acc += kr[j] * y[j];
-      so[(size_t)k * AD_BATCH + s] = acc;
-    }
-  }
+  ad_batch_signals(na, K, kc, A->by, so, ns, q);
   return q;
 }
 
@@ -372,7 +350,7 @@ static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k
   la_copy(be, A->de, na);
   const double *E = NULL;
   A->rows_ready = 0;
-  if (na <= 4) signal_rows(A, re, ns);
+  if (na <= 4) ad_signal_rows(A, re, ns);
   for (;;) {
     int c = 0, last = 0;
     while (c < AD_BATCH && !last) {
@@ -497,7 +475,7 @@ static int keep_second(adaptive_ws *A, ad_mode *md, const double *ya, const doub
 static int emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const double *e0, double t0,
                     double t1) {
   if (keep_second(A, md, ya, e0, t0, t1)) return CUP_OK;
-  int st = ad_emit_tol(A, R, md, ya, t0, t1, R->steps + 1, t0 > R->t, -INFINITY);
+  int st = ad_emit_tol(A, R, md, ya, A->oevent ? NULL : A->yb, t0, t1, R->steps + 1, t0 > R->t, -INFINITY, -1);
   return st < 0 ? st : CUP_OK;
 }
 
@@ -529,10 +507,11 @@ int ad_dense_resume(adaptive_ws *A, ad_run *R) {
   p->active = 0;
   if (A->o.output == CUP_OUTPUT_TOL) {            /* the piece chosen again, from the refused point on */
     la_copy(A->opeak, p->opk, A->n);
-    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->ta, p->t_end, p->k, p->with_t0, p->tr);
+    int st = ad_emit_tol(A, R, &A->modes[p->md], p->zy, p->with_yb ? p->y2 : NULL, p->ta, p->t_end, p->k,
+                         p->with_t0, p->tr, p->taylor);
     if (st || !p->seg2) return st;
     p->seg2 = 0;
-    return ad_emit_tol(A, R, &A->modes[p->md2], p->y2, p->t2a, p->t2b, p->k, p->t2a > p->ta, -INFINITY);
+    return ad_emit_tol(A, R, &A->modes[p->md2], p->y2, NULL, p->t2a, p->t2b, p->k, p->t2a > p->ta, -INFINITY, -1);
   }
   la_copy(A->zy, p->zy, A->na);
   la_copy(A->de, p->de, A->na);
