@@ -139,10 +139,12 @@ int cup_integrator_checkpoint_restore(cup_integrator *I, const void *buf, unsign
   fingerprint_of(I, &want);
   int st = same_run(&have, &want, errmsg);
   if (st) return st;
-  io_state(I, &c, &I->stop.info);
+  if (!I->restored_info && !(I->restored_info = malloc(sizeof *I->restored_info)))
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "checkpoint: out of memory");
+  io_state(I, &c, I->restored_info);
   if (c.bad || c.len != size)
     return fail_fmt(errmsg, CUP_ERR_ARG, "the checkpoint is %lu bytes, a run like this one's is %zu: cut short, "
                     "or of another build", size, c.len);
-  I->stop.restored = 1;
+  I->restored = 1;
   return CUP_OK;
 }

@@ -107,6 +107,7 @@ void cup_integrator_free(cup_integrator **Ip) {
   if (I->sch && I->ws) I->sch->free(I->ws);
   la_sparse_free(&I->A_own);
   la_sparse_free(&I->E_own);
+  free(I->restored_info);
   free(I);
   *Ip = NULL;
 }
@@ -120,7 +121,7 @@ int cup_integrator_run(cup_integrator *I, const double *x0, cup_sample_fn sink, 
     info->err_est = NAN;
     return info->status = CUP_ERR_ARG;
   }
-  I->stop.restored = 0;
+  I->restored = 0;
   return I->sch->run(I->ws, x0, sink, sink_ctx, info);
 }
 
@@ -134,13 +135,13 @@ void integrator_wall_limit(cup_integrator *I, double seconds) {
 int cup_integrator_resume(cup_integrator *I, cup_sample_fn sink, void *sink_ctx, cup_run_info *info_out) {
   cup_run_info local;
   cup_run_info *info = info_out ? info_out : &local;
-  if (!I || !I->stop.restored) {
+  if (!I || !I->restored) {
     memset(info, 0, sizeof *info);
     info->err_est = NAN;
     return info->status = CUP_ERR_ARG;
   }
-  *info = I->stop.info;
-  I->stop.restored = 0;
+  *info = *I->restored_info;
+  I->restored = 0;
   return I->sch->resume(I->ws, sink, sink_ctx, info);
 }
 

@@ -22,10 +22,10 @@ struct cup_integrator {
   int fixed;                /* the polyset does not move */
   la_sparse A_own, E_own;  /* a process's drift (an LCS's is borrowed) */
   const cup_lcs *L;         /* the LCS it was made from, or NULL */
-  struct {
-    int restored;           /* a checkpoint was restored: cup_integrator_resume may run */
-    cup_run_info info;      /* ... with the restored run's statistics */
-  } stop;
+  int restored;             /* a checkpoint was restored: cup_integrator_resume may run */
+  cup_run_info *restored_info;   /* ... with the restored run's statistics: the first restore's
+                               allocation, else NULL (inline, 1.2 KB that every integrator carried
+                               zeroed: a switched run's each configuration's, made in the run) */
 };
 
 /* cup_integrator_create whose adaptive scheme takes its run scratch from

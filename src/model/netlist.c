@@ -463,10 +463,11 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->port);                                  /* (eport, evar, ctl_elem, parent, pport, depth, snode, psign) */
   free(nl->zmap); free(nl->coupled); free(nl->prow);
   la_sparse_free(&nl->Pinv);
-  if (nl->cm_started) {
-    cholmod_free_factor(&nl->Lf, &nl->cm);
-    cholmod_free_sparse(&nl->K, &nl->cm);
-    cholmod_finish(&nl->cm);
+  if (nl->cm) {
+    cholmod_free_factor(&nl->Lf, nl->cm);
+    cholmod_free_sparse(&nl->K, nl->cm);
+    cholmod_finish(nl->cm);
+    free(nl->cm);
   }
   la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);

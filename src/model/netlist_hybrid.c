@@ -147,7 +147,7 @@ static int add_current_port(hy *y, int q) {
 
 static cholmod_sparse *to_cholmod(cup_netlist *nl, const nl_coo *t, int nrow, int ncol, int stype) {
   cholmod_triplet *T = cholmod_allocate_triplet((size_t)nrow, (size_t)ncol, (size_t)t->n + 1, stype,
-                                                CHOLMOD_REAL, &nl->cm);
+                                                CHOLMOD_REAL, nl->cm);
   if (!T) return NULL;
   if (t->n) {                                     /* no triplets: t's arrays are NULL */
     memcpy(T->i, t->i, sizeof(int) * (size_t)t->n);
@@ -155,13 +155,13 @@ static cholmod_sparse *to_cholmod(cup_netlist *nl, const nl_coo *t, int nrow, in
     memcpy(T->x, t->x, sizeof(double) * (size_t)t->n);
   }
   T->nnz = (size_t)t->n;
-  cholmod_sparse *A = cholmod_triplet_to_sparse(T, (size_t)t->n + 1, &nl->cm);
-  cholmod_free_triplet(&T, &nl->cm);
+  cholmod_sparse *A = cholmod_triplet_to_sparse(T, (size_t)t->n + 1, nl->cm);
+  cholmod_free_triplet(&T, nl->cm);
   return A;
 }
 
 static cholmod_sparse *abs_copy(cup_netlist *nl, cholmod_sparse *A) {
-  cholmod_sparse *B = cholmod_copy_sparse(A, &nl->cm);
+  cholmod_sparse *B = cholmod_copy_sparse(A, nl->cm);
   if (!B) return NULL;
   double *x = B->x;
   const int *p = B->p;
@@ -172,7 +172,7 @@ static cholmod_sparse *abs_copy(cup_netlist *nl, cholmod_sparse *A) {
 /* X^T X (and |X|^T |X|) with J's signs, into the triplets of H. */
 static int add_xtx(hy *y) {
   cup_netlist *nl = y->nl;
-  cholmod_common *cm = &nl->cm;
+  cholmod_common *cm = nl->cm;
   cholmod_sparse *Lap = to_cholmod(nl, &y->lap, nl->ns, nl->ns, 1);
   nl->K = Lap ? to_cholmod(nl, &y->k, nl->ns, y->np, 0) : NULL;
   if (!Lap || !nl->K) { cholmod_free_sparse(&Lap, cm); return CUP_ERR_NOMEM; }
@@ -211,8 +211,10 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   y.pp = malloc(sizeof(int) * (2 * (size_t)maxd + 2));
   y.pc = malloc(sizeof(double) * (2 * (size_t)maxd + 2));
   int st = y.pp && y.pc ? CUP_OK : CUP_ERR_NOMEM;
-  if (!st && la_cholmod_start(&nl->cm) == CUP_OK) nl->cm_started = 1;
-  else if (!st) st = CUP_ERR_LINALG;
+  if (!st && nl->ns > 0) {                      /* (the supernodes' Laplacian alone needs CHOLMOD: add_xtx) */
+    if (!(nl->cm = malloc(sizeof *nl->cm))) st = CUP_ERR_NOMEM;
+    else if (la_cholmod_start(nl->cm) != CUP_OK) { free(nl->cm); nl->cm = NULL; st = CUP_ERR_LINALG; }
+  }
   for (int e = 0; e < c->nelem && !st; e++)
     if (c->elem[e].kind == NL_R && c->elem[e].a != c->elem[e].b) st = add_resistor(&y, &c->elem[e]);
   for (int q = nl->nv; q < y.np && !st; q++) st = add_current_port(&y, q);
@@ -233,6 +235,6 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   nl_coo_free(&y.lap); nl_coo_free(&y.k); nl_coo_free(&y.h);
   if (st == CUP_ERR_NOMEM) return nl_fail(c, -1, errmsg, st, "out of memory while formulating the circuit");
   if (st) return nl_fail(c, -1, errmsg, st, "the resistor network could not be factored (CHOLMOD status %d)",
-                         nl->cm.status);
+                         nl->cm ? nl->cm->status : CHOLMOD_INVALID);
   return CUP_OK;
 }

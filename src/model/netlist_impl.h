@@ -112,8 +112,9 @@ struct cup_netlist {
   int *coupled;       /* per state: 1 if in a coupled block (its P^-1 column is in Pinv) */
   signed char *psign; /* phi(node) = phi(parent) + psign * v(pport) */
   int ns;             /* supernodes other than ground's */
-  cholmod_common cm;
-  int cm_started;
+  cholmod_common *cm; /* CHOLMOD's, started with ns > 0 alone (nl_hybrid), else NULL: inline it
+                         was 2.7 KB of each switch configuration's netlist, zeroed and started for
+                         none of the converters' (ns = 0) */
   cholmod_factor *Lf; /* Lap = L L^T (ns > 0) */
   cholmod_sparse *K;  /* ns x (nv + ni) */
   la_sparse H;       /* (nv + ni) x (nv + ni), CSC */

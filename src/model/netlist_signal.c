@@ -45,11 +45,11 @@ int nl_prow_node(cup_netlist *nl, int v, double coef, double *prow) {
   for (int w = v; nl->parent[w] >= 0; w = nl->parent[w]) prow[nl->pport[w]] += coef * nl->psign[w];
   int s = nl->snode[v];
   if (s < 0) return CUP_OK;
-  cholmod_dense *b = cholmod_zeros((size_t)nl->ns, 1, CHOLMOD_REAL, &nl->cm);
+  cholmod_dense *b = cholmod_zeros((size_t)nl->ns, 1, CHOLMOD_REAL, nl->cm);
   if (!b) return CUP_ERR_NOMEM;
   ((double *)b->x)[s] = 1;
-  cholmod_dense *y = cholmod_solve(CHOLMOD_A, nl->Lf, b, &nl->cm);
-  cholmod_free_dense(&b, &nl->cm);
+  cholmod_dense *y = cholmod_solve(CHOLMOD_A, nl->Lf, b, nl->cm);
+  cholmod_free_dense(&b, nl->cm);
   if (!y) return CUP_ERR_NOMEM;
   const double *yv = y->x;
   const int *Kp = nl->K->p, *Ki = nl->K->i;
@@ -59,7 +59,7 @@ int nl_prow_node(cup_netlist *nl, int v, double coef, double *prow) {
     for (int k = Kp[j]; k < Kp[j + 1]; k++) acc += yv[Ki[k]] * Kx[k];
     if (acc != 0) prow[j] -= coef * acc;
   }
-  cholmod_free_dense(&y, &nl->cm);
+  cholmod_free_dense(&y, nl->cm);
   return CUP_OK;
 }
 
