@@ -339,31 +339,34 @@ static inline __attribute__((always_inline)) void point_after(const int NA, adap
 }
 
 /* The halving loop of cut (its comment), na a constant NA with the
- * levels, else 0: a stack of right ends above the left end (slot li),
- * each check of [left, top] either keeping it (top is the next point) or
- * pushing its middle. The slots by pointer, the sizes held: each of A's
- * fields was read again after a store to a slot. */
+ * levels, else 0: a stack of right ends above the left end l, each check
+ * of [left, top] either keeping it (top is the next point) or pushing its
+ * middle. A middle made at depth c (c halvings) sits in slot c + 1 (the
+ * piece's ends in 0 and 1): the stack's points were made at depths rising
+ * to its top, the left end at the depth the top's check is made at, so no
+ * live point has the slot a new middle takes (no free list). The slots by
+ * pointer, the sizes held: each of A's fields was read again after a store
+ * to a slot. */
 static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws *A, ad_run *R, ad_mode *md,
                                                        const double *ya, double t0, double h, long k, double skip,
                                                        tol_out *O) {
   enum { SLOTS = AD_TOL_DEPTH + 3 };
-  int stk[SLOTS], dep[SLOTS], freel[SLOTS], nf = 0, sp = 1, li = 0;
-  for (int s = SLOTS - 1; s >= 2; s--) freel[nf++] = s;
-  stk[0] = 1;
-  dep[0] = 0;                                    /* (the halvings of [left, stk[i]] when it is the top) */
+  double *stk[SLOTS];
+  int dep[SLOTS], sp = 1;
   const int n = A->n, na = NA ? NA : A->na;
   const size_t stride = 1 + 2 * (size_t)n + (size_t)na;
   double *const ostk = A->ostk, *l = ostk;
   const double *thr = A->othr;
+  stk[0] = ostk + stride;
+  dep[0] = 0;                                    /* (the halvings of [left, stk[i]] when it is the top) */
   while (sp > 0) {
-    double *r = ostk + (size_t)stk[sp - 1] * stride;
+    double *r = stk[sp - 1];
     int d = dep[sp - 1];
     double tl = l[0], tr = r[0], tm = tl + 0.5 * (tr - tl);
     int ok = d >= AD_TOL_DEPTH || !(tm > tl && tm < tr);
     if (!ok && d >= 2) ok = line_ok(n, thr, l, r, NULL);
     if (!ok) {
-      int m = freel[--nf];
-      double *p = ostk + (size_t)m * stride;
+      double *p = ostk + (size_t)(d + 2) * stride;
       if (NA && d == 0 && A->otaylor && line_ok(n, thr, l, r, NULL)) {
         p[0] = tm;                               /* (the slopes pass: likely no point inside, no level made) */
         flow_taylor(A, md, tm - t0, A->olev_base > 5 ? A->olev_base - 6 : 0, ya, p + 1 + 2 * n);
@@ -375,13 +378,11 @@ static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws
       peak_n(A, n, p + 1);
       if (!(d < 2 && line_ok(n, thr, l, r, p + 1))) {   /* halved: the middle is the new right end */
         dep[sp - 1] = dep[sp] = d + 1;
-        stk[sp++] = m;
+        stk[sp++] = p;
         continue;
       }
-      freel[nf++] = m;
     }
-    freel[nf++] = li;                            /* [left, top] kept: top is the next point */
-    li = stk[--sp];
+    sp--;                                        /* [left, top] kept: top is the next point */
     l = r;
     if (sp > 0 && tr >= skip) {
       if (O->dense && !tally_state_beyond(r + 1, n)) {   /* (a batch's point: offer's, inline) */
