@@ -322,15 +322,21 @@ static inline int peak_n(adaptive_ws *A, int n, const double *x) {
 }
 
 /* The point 2^-j h after l into p (slots: t, x, x', y), na a constant
- * NA with the levels (times_n), else flow_after (NA 0). */
+ * NA with the levels (times_n: X, XM and the levels olev as halve holds
+ * them, *ok its copy of A->olev_ok), else flow_after (NA 0). */
 static inline __attribute__((always_inline)) void point_after(const int NA, adaptive_ws *A, ad_mode *md,
-                                                              const double *ya, double h, double t0,
-                                                              double *l, int j, double tm, double *p) {
-  int n = A->n;
+                                                              const double *ya, double h, double t0, int n,
+                                                              const double *X, const double *XM,
+                                                              const double *olev, uint64_t *ok, double *l,
+                                                              int j, double tm, double *p) {
   if (NA) {
-    const double *E = A->olev_ok >> j & 1 ? A->olev + (size_t)j * NA * NA : level(A, md, h, j);
+    const double *E = olev + (size_t)j * NA * NA;
+    if (!(*ok >> j & 1)) {
+      E = level(A, md, h, j);
+      *ok = A->olev_ok;
+    }
     p[0] = tm;
-    times_n(NA, n, E, l + 1 + 2 * n, md->X, A->oxm, p + 1 + 2 * n, p + 1, p + 1 + n);
+    times_n(NA, n, E, l + 1 + 2 * n, X, XM, p + 1 + 2 * n, p + 1, p + 1 + n);
   } else {
     tol_pt L = {.t = l, .x = l + 1, .d = l + 1 + n, .y = l + 1 + 2 * n};
     tol_pt P = {.t = p, .x = p + 1, .d = p + 1 + n, .y = p + 1 + 2 * n};
@@ -356,7 +362,8 @@ static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws
   const int n = A->n, na = NA ? NA : A->na;
   const size_t stride = 1 + 2 * (size_t)n + (size_t)na;
   double *const ostk = A->ostk, *l = ostk;
-  const double *thr = A->othr;
+  const double *thr = A->othr, *X = md->X, *XM = A->oxm, *olev = A->olev;
+  uint64_t lev_ok = A->olev_ok;                  /* (A's, read again only after level made one) */
   stk[0] = ostk + stride;
   dep[0] = 0;                                    /* (the halvings of [left, stk[i]] when it is the top) */
   while (sp > 0) {
@@ -373,7 +380,7 @@ static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws
         tol_pt P = {.t = p, .x = p + 1, .d = p + 1 + n, .y = p + 1 + 2 * n};
         x_and_d(A, md, P);
       } else {
-        point_after(NA, A, md, ya, h, t0, l, d + 1, tm, p);
+        point_after(NA, A, md, ya, h, t0, n, X, XM, olev, &lev_ok, l, d + 1, tm, p);
       }
       peak_n(A, n, p + 1);
       if (!(d < 2 && line_ok(n, thr, l, r, p + 1))) {   /* halved: the middle is the new right end */
