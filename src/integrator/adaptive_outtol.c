@@ -107,12 +107,17 @@ static inline int taylor_add(int len, const double *tmp, double f, double *term,
 }
 
 /* exp(tau M) into E by its Taylor series, tau snorm <= 1/2: to the first
- * term below a quarter ulp of the sum's largest entry (at most 30). */
+ * term below a quarter ulp of the sum's largest entry (at most 30). The
+ * first term's I M is M itself (the same sums: 0 + m + 0 ... is m, but
+ * for a -0 entry +0, and a zero's sign never reaches a sum that starts at
+ * +0; M is finite where the levels are made: snorm bounds it). */
 static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E) {
   int na = A->na, NA = na * na;
-  double *term = A->olev + (size_t)(AD_TOL_DEPTH + 2) * NA, *tmp = term + NA;
-  for (int q = 0; q < NA; q++) E[q] = term[q] = (q % (na + 1) == 0);
-  for (int k = 1; k <= 30; k++) {
+  double *term = A->olev + (size_t)(AD_TOL_DEPTH + 2) * NA;
+  for (int q = 0; q < NA; q++) E[q] = (q % (na + 1) == 0);
+  if (taylor_add(NA, md->M, tau, term, E)) return;
+  double *tmp = term + NA;
+  for (int k = 2; k <= 30; k++) {
     mat_mul(na, term, md->M, tmp);
     if (taylor_add(NA, tmp, tau / k, term, E)) break;
   }
