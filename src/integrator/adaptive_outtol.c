@@ -353,11 +353,11 @@ static inline __attribute__((always_inline)) void point_after(const int NA, adap
  * levels, else 0: a stack of right ends above the left end l, each check
  * of [left, top] either keeping it (top is the next point) or pushing its
  * middle. A middle made at depth c (c halvings) sits in slot c + 1 (the
- * piece's ends in 0 and 1): the stack's points were made at depths rising
- * to its top, the left end at the depth the top's check is made at, so no
- * live point has the slot a new middle takes (no free list). The slots by
- * pointer, the sizes held: each of A's fields was read again after a store
- * to a slot. */
+ * piece's ends in 0 and 1): the live points (the stack's and the left
+ * end) were made at distinct depths, none deeper than the top's check d,
+ * so the new middle's slot d + 2 is free (no free list). The slots by
+ * pointer, the sizes held: each of A's fields was read again after a
+ * store to a slot. */
 static inline __attribute__((always_inline)) int halve(const int NA, adaptive_ws *A, ad_run *R, ad_mode *md,
                                                        const double *ya, double t0, double h, long k, double skip,
                                                        tol_out *O) {
