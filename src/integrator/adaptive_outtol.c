@@ -114,7 +114,8 @@ static inline int taylor_add(int len, const double *tmp, double f, double *term,
 static void expm_taylor(adaptive_ws *A, const ad_mode *md, double tau, double *E) {
   int na = A->na, NA = na * na;
   double *term = A->olev + (size_t)(AD_TOL_DEPTH + 2) * NA;
-  for (int q = 0; q < NA; q++) E[q] = (q % (na + 1) == 0);
+  for (int q = 0; q < NA; q++) E[q] = 0;
+  for (int q = 0; q < NA; q += na + 1) E[q] = 1;   /* (no q % (na + 1) an entry: a division each) */
   if (taylor_add(NA, md->M, tau, term, E)) return;
   double *tmp = term + NA;
   for (int k = 2; k <= 30; k++) {
