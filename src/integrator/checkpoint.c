@@ -15,10 +15,11 @@
 #include "util/linalg.h"
 
 static const char magic[8] = "cupckpt";
-enum { VERSION = 6 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
+enum { VERSION = 7 };   /* 3: the adaptive scheme keeps 10 active sets (AD_MODES) and, with D, a step's end;
                            4: and the sets its jump's LCP was solved at (AD_JUMPS);
                            5: implicit and exponential, the splitting check's sums;
-                           6: output tol (the fingerprint's output_tol, a refused point's piece) */
+                           6: output tol (the fingerprint's output_tol, a refused point's piece);
+                           7: and that piece's end and middle choices (with_yb, taylor) */
 
 /* What a blob belongs to: restored only into an integrator of the same
  * build (sizes and byte order) and configuration. */
