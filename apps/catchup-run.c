@@ -34,6 +34,7 @@
 #include "run_plan.h"
 #include "run_stop.h"
 #include "stop_signal.h"
+#include "heap_pad.h"
 #include "io/read_text.h"
 #include "util/clock.h"
 #include "util/path.h"
@@ -624,6 +625,7 @@ static int end_by_signal(int sig) {
 }
 
 int main(int argc, char **argv) {
+  heap_pad();                    /* see heap_pad.h */
   run_args args;
   int rc = run_args_parse(&args, argc, argv);
   if (rc >= 0) { run_args_free(&args); return rc; }

@@ -43,6 +43,7 @@
 #include "sweep_mpi.h"
 #include "run_plan.h"
 #include "stop_signal.h"
+#include "heap_pad.h"
 #include "mpi_singleton.h"
 #include "git_revision.h"
 
@@ -354,6 +355,7 @@ static int run_manager(const args_t *a, const sw_sweep *s, sw_file *f, opener *l
 }
 
 int main(int argc, char **argv) {
+  heap_pad();                                   /* see heap_pad.h */
   singleton_prepare();                          /* see mpi_singleton.h */
   MPI_Init(&argc, &argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
