@@ -28,11 +28,11 @@ struct cup_h5run {
   hsize_t chunk_rows;     /* rows per chunk = buffer capacity */
   hsize_t written;        /* rows already handed to HDF5 */
   hsize_t nbuf;           /* rows waiting in the buffer */
-  double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries */
+  double *tbuf, *xbuf;    /* chunk_rows and chunk_rows * dim entries; NULL until the first row */
   int nsig;               /* named signals: /signals/<name> */
   hid_t group;
   hid_t *dset_s;
-  double *sbuf;           /* chunk_rows * nsig entries, one signal after another */
+  double *sbuf;           /* chunk_rows * nsig entries, one signal after another; as tbuf */
   double last_flush;      /* monotonic seconds */
   double last_tick;       /* monotonic seconds at the last look at the clock (cup_h5run_append) */
   int tick_every, tick_left;   /* rows between those looks (1 to TICK_ROWS_MAX), rows until the next */
@@ -53,7 +53,7 @@ struct cup_h5run {
 H5R_HIDDEN int set_error(cup_h5run *w, int status, const char *op);
 H5R_HIDDEN hid_t keep_stack(int failed);
 H5R_HIDDEN void restore_stack(hid_t saved);
-/* A writer for path and dim with its buffers, no file yet (NULL: the
+/* A writer for path and dim, no file yet and no row buffers (taken at the first row) (NULL: the
  * status, with the message, in *st). */
 H5R_HIDDEN cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st);
 H5R_HIDDEN void free_writer(cup_h5run *w);

@@ -55,8 +55,7 @@ static int open_signals(cup_h5run *w, int nsig, const char *const *names) {
   w->group = has > 0 ? H5Gopen2(w->file, "signals", H5P_DEFAULT) : H5I_INVALID_HID;
   if (w->group < 0 || !same_signals(w, nsig, names)) return -1;
   w->dset_s = malloc(sizeof(hid_t) * (size_t)nsig);
-  w->sbuf = malloc(sizeof(double) * (size_t)nsig * w->chunk_rows);
-  if (!w->dset_s || !w->sbuf) return -1;
+  if (!w->dset_s) return -1;
   for (int k = 0; k < nsig; k++) {
     w->dset_s[k] = H5Dopen2(w->group, names[k], H5P_DEFAULT);
     w->nsig = k + 1;
