@@ -506,7 +506,8 @@ def section(rows, a, cost):
            "before catchup got its own-step rows." % ", ".join(map(str, OWN_SAMPLES_PER_PERIOD)), "",
            "catchup: `catchup-run` (adaptive `--tol`, θ = ½ `--scheme theta --n N`; at its own steps the "
            "adaptive scheme, also with its step capped at Ts/%s, `--set hmax=`, and θ at %s steps per switching "
-           "period Ts), its time in the integrator (sampling and HDF5 writes included). ngspice %s: a "
+           "period Ts), its time in the integrator (sampling and HDF5 writes included; the process grows its heap 4 MiB "
+           "at a time, apps/heap_pad.h). ngspice %s: a "
            "near-ideal copy (switches `%s`, "
            "`jump` edges 1 ns, diodes `%s`, TMAX = TSTEP, UIC, rshunt = 1e12), its transient analysis time "
            "(1 ms resolution). pulsim %s (PyPI): the same circuit through its CircuitBuilder, switches and "
