@@ -267,6 +267,15 @@ struct adaptive_ws {
   const struct ad_mode *carry_md;
   double carry_t;
   int carried;              /* steps in a row that started from a carried end (at most AD_CARRY) */
+  /* a step that ended with no event leaves end_md (its mask end_mask) and
+   * end_t: (gb, tb, db) are the event functions at yb on that mode, and a
+   * step from end_t on it whose lifted start has yb's bits takes them
+   * rather than evaluating them again (the same function of the same
+   * y: a D = 0 mode with no manifold rows gives its own y back); NULL:
+   * none */
+  const struct ad_mode *end_md;
+  uint64_t end_mask;
+  double end_t;
   ad_series sy, se;         /* this step's flow from ya, and from (e, 0) (the error's), when asked */
   double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
