@@ -45,25 +45,45 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
   }
 }
 
-/* (One pass over L's nonzeros for both: each sum as in its own function.) */
+/* Row i's rounding threshold at y, as ad_events_eval makes it. */
+static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const double *y, double vmax) {
+  double mag = fabs(md->Lc[i]);
+  for (int k = md->lp[i]; k < md->lp[i + 1]; k++) mag += md->lmx[k] * fabs(y[md->li[k]]);
+  return 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+}
+
+/* (One pass over L's nonzeros for both: each sum as in its own function.)
+ * A row's threshold counts only where its value is below zero: crossed()
+ * and any_negative() ask g < -thr (never true for g >= 0, thr >= 0) and g
+ * >= -thr (always). It is left out (0) where g >= 0 and the state is
+ * finite, where it cannot be NaN either: it takes the magnitudes' sum and
+ * a product by the state's scale, 12 of the 60 instructions a row of a
+ * full bridge's (every row's: ad_events_thresholds). */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
   double *My = A->My;
   if (A->na > 4) ad_mode_mv(A, md, y, My);
   else ad_mode_mv_few(A->na, md->M, y, My);      /* (inline) */
   double vmax = state_scale(A, y);
-  for (int i = 0; i < A->m; i++) {
-    double acc = md->Lc[i], mag = fabs(md->Lc[i]), dacc = 0;
-    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {
-      int j = md->li[k];
-      double l = md->lx[k], yj = y[j];
-      acc += l * yj;
-      mag += md->lmx[k] * fabs(yj);
+  int m = A->m, every = !(vmax <= DBL_MAX);      /* (an infinite state: c1 = 0 makes a NaN) */
+  const int *lp = md->lp, *li = md->li;
+  const double *lx = md->lx, *Lc = md->Lc;
+  for (int i = 0; i < m; i++) {
+    double acc = Lc[i], dacc = 0;
+    for (int k = lp[i]; k < lp[i + 1]; k++) {
+      int j = li[k];
+      double l = lx[k];
+      acc += l * y[j];
       dacc += l * My[j];
     }
     g[i] = acc;
-    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
     d[i] = dacc;
+    thr[i] = acc >= 0 && !every ? 0 : threshold(A, md, i, y, vmax);
   }
+}
+
+void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr) {
+  double vmax = state_scale(A, y);
+  for (int i = 0; i < A->m; i++) thr[i] = threshold(A, md, i, y, vmax);
 }
 
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */

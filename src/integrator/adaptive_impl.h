@@ -677,8 +677,12 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots);
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr);
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
-/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it). */
+/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it), but
+ * thr only where g < 0 (or the state is not finite), 0 elsewhere: a value
+ * >= 0 crosses nothing, whatever its threshold. */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
+/* Every row's threshold at y, as ad_events_eval's (a checkpoint's). */
+void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr);
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */
