@@ -105,8 +105,9 @@ static int crossed(double glo, double tlo, double ghi, double thi) { return glo 
 
 /* Any row crossing between the bracket's start (ga, ta) and (g, thr)? */
 static int any_crossed(const adaptive_ws *A, const double *g, const double *thr) {
-  for (int i = 0; i < A->m; i++)
-    if (crossed(A->ga[i], A->ta[i], g[i], thr[i])) return 1;
+  const double *ga = A->ga, *ta = A->ta;
+  for (int i = 0; i < A->m; i++)                 /* (g < -thr needs g < 0: the test first) */
+    if (g[i] < 0 && crossed(ga[i], ta[i], g[i], thr[i])) return 1;
   return 0;
 }
 

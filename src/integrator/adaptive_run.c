@@ -529,8 +529,9 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
 }
 
 static int any_negative(const adaptive_ws *A) {
-  for (int i = 0; i < A->m; i++)
-    if (A->ga[i] < -A->ta[i]) return 1;
+  const double *ga = A->ga, *ta = A->ta;
+  for (int i = 0; i < A->m; i++)                 /* (ga < -ta needs ga < 0, ta >= 0: the test first) */
+    if (ga[i] < 0 && ga[i] < -ta[i]) return 1;
   return 0;
 }
 
