@@ -64,7 +64,7 @@ void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *
   if (A->na > 4) ad_mode_mv(A, md, y, My);
   else ad_mode_mv_few(A->na, md->M, y, My);      /* (inline) */
   double vmax = state_scale(A, y);
-  int m = A->m, every = !(vmax <= DBL_MAX);      /* (an infinite state: c1 = 0 makes a NaN) */
+  int m = A->m;
   const int *lp = md->lp, *li = md->li;
   const double *lx = md->lx, *Lc = md->Lc;
   for (int i = 0; i < m; i++) {
@@ -77,8 +77,9 @@ void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *
     }
     g[i] = acc;
     d[i] = dacc;
-    thr[i] = acc >= 0 && !every ? 0 : threshold(A, md, i, y, vmax);
+    thr[i] = acc >= 0 ? 0 : threshold(A, md, i, y, vmax);
   }
+  if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);   /* (an infinite state: c1 = 0 makes a NaN) */
 }
 
 void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr) {
