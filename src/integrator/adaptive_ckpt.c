@@ -33,6 +33,8 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
   ckpt_io(c, A->e, N);
   CUP_CKPT_IO(c, s->carry);
   if (s->carry) {                                /* the step's end that the next one starts from */
+    if (c->saving && s->md >= 0)                 /* (every row's threshold: ad_events_both's made some) */
+      ad_events_thresholds(A, &A->modes[s->md], A->yb, A->tb);
     CUP_CKPT_IO(c, A->carried);
     ckpt_io(c, A->yb, sizeof(double) * (size_t)A->na);
     ckpt_io(c, A->gb, sizeof(double) * M);

@@ -45,25 +45,46 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
   }
 }
 
-/* (One pass over L's nonzeros for both: each sum as in its own function.) */
+/* Row i's rounding threshold at y, as ad_events_eval makes it. */
+static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const double *y, double vmax) {
+  double mag = fabs(md->Lc[i]);
+  for (int k = md->lp[i]; k < md->lp[i + 1]; k++) mag += md->lmx[k] * fabs(y[md->li[k]]);
+  return 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+}
+
+/* (One pass over L's nonzeros for both: each sum as in its own function.)
+ * A row's threshold counts only where its value is below zero: crossed()
+ * and any_negative() ask g < -thr (never true for g >= 0, thr >= 0) and g
+ * >= -thr (always). It is left out (0) where g >= 0 and the state is
+ * finite, where it cannot be NaN either: it takes the magnitudes' sum and
+ * a product by the state's scale, 12 of the 60 instructions a row of a
+ * full bridge's (every row's: ad_events_thresholds). */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
   double *My = A->My;
   if (A->na > 4) ad_mode_mv(A, md, y, My);
   else ad_mode_mv_few(A->na, md->M, y, My);      /* (inline) */
   double vmax = state_scale(A, y);
-  for (int i = 0; i < A->m; i++) {
-    double acc = md->Lc[i], mag = fabs(md->Lc[i]), dacc = 0;
-    for (int k = md->lp[i]; k < md->lp[i + 1]; k++) {
-      int j = md->li[k];
-      double l = md->lx[k], yj = y[j];
-      acc += l * yj;
-      mag += md->lmx[k] * fabs(yj);
+  int m = A->m;
+  const int *lp = md->lp, *li = md->li;
+  const double *lx = md->lx, *Lc = md->Lc;
+  for (int i = 0; i < m; i++) {
+    double acc = Lc[i], dacc = 0;
+    for (int k = lp[i]; k < lp[i + 1]; k++) {
+      int j = li[k];
+      double l = lx[k];
+      acc += l * y[j];
       dacc += l * My[j];
     }
     g[i] = acc;
-    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
     d[i] = dacc;
+    thr[i] = acc >= 0 ? 0 : threshold(A, md, i, y, vmax);
   }
+  if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);   /* (an infinite state: c1 = 0 makes a NaN) */
+}
+
+void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr) {
+  double vmax = state_scale(A, y);
+  for (int i = 0; i < A->m; i++) thr[i] = threshold(A, md, i, y, vmax);
 }
 
 /* Values, slopes and thresholds at tau into (g, d, thr); the state in A->yt. */
@@ -85,8 +106,9 @@ static int crossed(double glo, double tlo, double ghi, double thi) { return glo 
 
 /* Any row crossing between the bracket's start (ga, ta) and (g, thr)? */
 static int any_crossed(const adaptive_ws *A, const double *g, const double *thr) {
-  for (int i = 0; i < A->m; i++)
-    if (crossed(A->ga[i], A->ta[i], g[i], thr[i])) return 1;
+  const double *ga = A->ga, *ta = A->ta;
+  for (int i = 0; i < A->m; i++)                 /* (g < -thr needs g < 0: the test first) */
+    if (g[i] < 0 && crossed(ga[i], ta[i], g[i], thr[i])) return 1;
   return 0;
 }
 
@@ -149,11 +171,10 @@ static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) 
   return 0;
 }
 
-int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
+/* ad_detect past its first test (kept out of line: the common step's
+ * test then saves no registers). */
+static __attribute__((noinline)) int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
-  ev->tau_lo = 0;
-  ev->tau_sw = h;
-  ev->hi_ok = 0;
   if (any_crossed(A, A->gb, A->tb)) return 1;
   for (int i = 0; i < m; i++) {
     if (!(A->da[i] < 0 && A->db[i] > 0)) continue;
@@ -163,6 +184,19 @@ int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
     if (low < 0.25 * fmin(A->ga[i], A->gb[i]) && find_dip(A, md, i, h, ev)) return 1;
   }
   return 0;
+}
+
+int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
+  const double *gb = A->gb, *da = A->da, *db = A->db;
+  int m = A->m, i = 0;
+  ev->tau_lo = 0;
+  ev->tau_sw = h;
+  ev->hi_ok = 0;
+  /* the common step first, a row at a time: a crossing needs gb < 0 (gb <
+   * -tb, tb >= 0), a dip da < 0 < db; with neither, none of detect_rows'
+   * tests can fire */
+  while (i < m && !(gb[i] < 0) && !(da[i] < 0 && db[i] > 0)) i++;
+  return i < m ? detect_rows(A, md, h, ev) : 0;
 }
 
 /* The row crossing first: of those crossed at the bracket's end, the one

@@ -267,6 +267,15 @@ struct adaptive_ws {
   const struct ad_mode *carry_md;
   double carry_t;
   int carried;              /* steps in a row that started from a carried end (at most AD_CARRY) */
+  /* a step that ended with no event leaves end_md (its mask end_mask) and
+   * end_t: (gb, tb, db) are the event functions at yb on that mode, and a
+   * step from end_t on it whose lifted start has yb's bits takes them
+   * rather than evaluating them again (the same function of the same
+   * y: a D = 0 mode with no manifold rows gives its own y back); NULL:
+   * none */
+  const struct ad_mode *end_md;
+  uint64_t end_mask;
+  double end_t;
   ad_series sy, se;         /* this step's flow from ya, and from (e, 0) (the error's), when asked */
   double *yhi;              /* an event's bracket: the flow at its right end (ad_event's hi_ok) */
   double *ga, *gb, *gt, *da, *db, *dt, *ta, *tb, *tt;   /* event values, slopes, thresholds: bracket ends, probe */
@@ -668,8 +677,12 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots);
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr);
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
-/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it). */
+/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it), but
+ * thr only where g < 0 (or the state is not finite), 0 elsewhere: a value
+ * >= 0 crosses nothing, whatever its threshold. */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
+/* Every row's threshold at y, as ad_events_eval's (a checkpoint's). */
+void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr);
 
 typedef struct ad_event {
   double t0;                /* the step's start time (for rounding floors) */

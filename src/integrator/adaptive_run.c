@@ -529,8 +529,9 @@ static const double *begin_step(adaptive_ws *A, ad_run *R, double *t1, int *snap
 }
 
 static int any_negative(const adaptive_ws *A) {
-  for (int i = 0; i < A->m; i++)
-    if (A->ga[i] < -A->ta[i]) return 1;
+  const double *ga = A->ga, *ta = A->ta;
+  for (int i = 0; i < A->m; i++)                 /* (ga < -ta needs ga < 0, ta >= 0: the test first) */
+    if (ga[i] < 0 && ga[i] < -ta[i]) return 1;
   return 0;
 }
 
@@ -676,6 +677,20 @@ static int event(adaptive_ws *A, ad_run *R, ad_event *ev, double h, double t1) {
   return end_of_step(A, R, &pi, 1);
 }
 
+/* The event functions at the last step's end as this one's start (three
+ * copies of m in one plain loop: la_copy's three loops took 67
+ * instructions for m = 4, a full bridge's rows). */
+static void events_from_end(adaptive_ws *A) {
+  double *ga = A->ga, *ta = A->ta, *da = A->da;
+  const double *gb = A->gb, *tb = A->tb, *db = A->db;
+  for (int i = 0; i < A->m; i++) {
+    ga[i] = gb[i];
+    ta[i] = tb[i];
+    da[i] = db[i];
+    __asm__ volatile("");                        /* (a loop, not a vectorized one with its set-up) */
+  }
+}
+
 /* A step's projection info when it made none (a flow step's). */
 static const cup_proj_info no_projection = {.skipped = 1};
 
@@ -687,21 +702,21 @@ static int take_step(adaptive_ws *A, ad_run *R) {
   const double *E = begin_step(A, R, &t1, &snap, &series);
   A->sy.md = A->se.md = NULL;                    /* (the flow's series are this step's) */
   int carry = A->carry_md == md && A->carry_t == R->t;
-  A->carry_md = NULL;
+  int ended = A->end_md == md && md->mask == A->end_mask && A->end_t == R->t;
+  A->carry_md = A->end_md = NULL;
   if (!E && !series) {
     if (!snap) return R->info->status;
     R->t = t1;
     return end_of_step(A, R, &no_projection, 0);
   }
   if (carry) {                                   /* the last step's end (A->carry_md) */
-    la_copy(A->ya, A->yb, na);
-    la_copy(A->ga, A->gb, A->m);
-    la_copy(A->ta, A->tb, A->m);
-    la_copy(A->da, A->db, A->m);
+    la_copy_few(A->ya, A->yb, na);
+    events_from_end(A);
     A->carried++;
   } else {
     ad_lift(A, md, A->x, A->wa, A->ya);
-    ad_events_both(A, md, A->ya, A->ga, A->ta, A->da);
+    if (ended && ad_same_bits(A->ya, A->yb, na)) events_from_end(A);   /* (A->end_md) */
+    else ad_events_both(A, md, A->ya, A->ga, A->ta, A->da);
     A->carried = 0;
   }
   if (any_negative(A)) {                         /* an inconsistent start: choose again */
@@ -740,6 +755,9 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     la_copy_few(v, A->et, n);
   }
   R->t = t1;
+  A->end_md = md;                                /* (gb, tb, db: the events at yb) */
+  A->end_mask = md->mask;
+  A->end_t = t1;
   if (A->has_D && !A->callback && t1 != R->tb && A->carried < AD_CARRY - 1) {
     A->carry_md = md;                            /* (a breakpoint's projection and choice move x) */
     A->carry_t = t1;
@@ -806,6 +824,7 @@ static int catch_up_from(adaptive_ws *A, ad_run *R, int at_tb) {
     if (ad_inputs_on(A, R->t, t1, A->wa, A->uerr))
       return ad_fail(R, CUP_ERR_CALLBACK, "the input u(t) failed or returned NaN/Inf");
     const double *E = ad_expm(A, md0, t1 - R->t, t1);
+    A->end_md = NULL;                            /* (yb is this step's) */
     ad_lift(A, md0, A->x, A->wa, A->ya);
     for (int i = 0; i < na; i++) {
       double acc = 0;
@@ -994,6 +1013,7 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   A->pinned[0] = R.md;
   A->pinned[1] = s->pinned1 >= 0 ? &A->modes[s->pinned1] : NULL;
   A->carry_md = s->carry ? R.md : NULL;          /* (its vectors and count: the checkpoint's) */
+  A->end_md = NULL;
   A->carry_t = R.t;
   int phase = s->phase, at_tb = R.t == R.tb, st = CUP_OK;
   s->phase = AD_STOP_NONE;
