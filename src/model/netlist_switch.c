@@ -178,7 +178,9 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
   if (st) { derived_free(c, &d); return nl_switch_nomem(c, errmsg); }
   cup_netlist *sub = NULL;
   double *Pi = NULL;
-  st = netlist_formulate(&sub, &d, errmsg);
+  /* the sources as written are the circuit's in every configuration: the first one's copied */
+  const cup_netlist *first = S->ntopo ? S->topo[0].sub : NULL;
+  st = nl_formulate(&sub, &d, first ? (first->u_written ? first->u_written : first->u) : NULL, errmsg);
   if (!st) { sub->nelem_user = c->nelem; st = nl_switch_reduce(sub, c, &d, &Pi, errmsg); }
   if (!st && S->t0 != 0) st = nl_input_origin(sub, S->t0, errmsg);   /* formed after the origin was set */
   tp->cfg = cfg;
