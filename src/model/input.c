@@ -178,6 +178,28 @@ int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg) {
   return CUP_OK;
 }
 
+int input_copy(const cup_input *u, cup_input **out) {
+  cup_input *v = *out = calloc(1, sizeof *v);
+  if (!v) return CUP_ERR_NOMEM;
+  *v = *u;
+  v->nterms = 0;
+  v->terms = u->nterms ? malloc(sizeof(input_term) * (size_t)u->nterms) : NULL;   /* (NULL with none, as cup_input_add's) */
+  for (int k = 0; k < u->nterms && v->terms; k++) {
+    input_term t = u->terms[k];
+    if (t.np > 0) {
+      t.t = malloc(sizeof(double) * (size_t)t.np);
+      t.v = malloc(sizeof(double) * (size_t)t.np);
+      if (!t.t || !t.v) { free(t.t); free(t.v); break; }
+      memcpy(t.t, u->terms[k].t, sizeof(double) * (size_t)t.np);
+      memcpy(t.v, u->terms[k].v, sizeof(double) * (size_t)t.np);
+    }
+    v->terms[v->nterms++] = t;
+  }
+  if (v->nterms == u->nterms) return CUP_OK;
+  cup_input_free(out);
+  return CUP_ERR_NOMEM;
+}
+
 int cup_input_set_callback(cup_input *u, cup_input_fn fn, void *ctx, double abs_tol, double rel_tol) {
   if (!u || !fn) return CUP_ERR_ARG;
   if (!(abs_tol >= 0) || !(rel_tol >= 0) || (abs_tol == 0 && rel_tol == 0)) return CUP_ERR_ARG;

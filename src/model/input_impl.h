@@ -179,6 +179,11 @@ int input_shift(const cup_input *u, double t0, cup_input **v, char *errmsg);
  * while t0 != 0, *u its shift; t0 = 0 puts the written one back. An
  * integrator made with the old *u must be freed first. */
 int input_origin(cup_input **u, cup_input **written, double t0, char *errmsg);
+/* A copy of u, term by term, bit for bit (CUP_ERR_NOMEM, *v NULL): a switch
+ * configuration's sources are its circuit's, the same in each one
+ * (netlist_switch.c's form), and building them again was 45 reallocs on the
+ * full bridge's 9. */
+int input_copy(const cup_input *u, cup_input **v);
 
 /* One term's value at t (its component's share of u(t)). */
 double input_term_value(const input_term *w, double t);

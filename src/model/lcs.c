@@ -6,8 +6,6 @@
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
-#include <gsl/gsl_eigen.h>
-#include <gsl/gsl_errno.h>
 #include "catchup.h"
 #include "lcs_impl.h"
 #include "set/polyset_impl.h"
@@ -109,10 +107,10 @@ static int p_matrix(const double *D, int m, double *work, int *piv) {
 static int check_D(const la_sparse *Ds, char *errmsg) {
   int m = Ds->nrow;
   if (m > 1024) return CUP_OK;               /* too big to check densely: the LCP solver will tell */
-  double *D = calloc((size_t)m * m, sizeof(double)), *S = malloc(sizeof(double) * (size_t)m * m);
-  gsl_vector *ev = gsl_vector_alloc((size_t)m);
-  gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc((size_t)m);
-  int st = D && S && ev && w ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  /* D, S, the eigenvalues and their workspace in one zeroed block */
+  double *D = calloc(2 * (size_t)m * m + 3 * (size_t)m + 1, sizeof(double)), *S = D ? D + (size_t)m * m : NULL;
+  double *ev = S ? S + (size_t)m * m : NULL;
+  int st = D ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   double lmin = 0, norm = 0;
   if (!st) {
     for (int j = 0; j < m; j++)
@@ -122,11 +120,8 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
         S[i + (size_t)j * m] = 0.5 * (D[i + (size_t)j * m] + D[j + (size_t)i * m]);
         norm = la_max(norm, fabs(D[i + (size_t)j * m]));
       }
-    gsl_matrix_view Sv = gsl_matrix_view_array(S, (size_t)m, (size_t)m);
-    gsl_error_handler_t *old = gsl_set_error_handler_off();
-    if (gsl_eigen_symm(&Sv.matrix, ev, w)) st = fail_fmt(errmsg, CUP_ERR_LINALG, "LCS: eigenvalues of D failed");
-    gsl_set_error_handler(old);
-    for (int i = 0; !st && i < m; i++) lmin = la_min(lmin, gsl_vector_get(ev, i));
+    if (la_dense_symm_eig(S, m, ev, ev + m)) st = fail_fmt(errmsg, CUP_ERR_LINALG, "LCS: eigenvalues of D failed");
+    for (int i = 0; !st && i < m; i++) lmin = la_min(lmin, ev[i]);
   }
   if (!st && lmin < -1e-12 * m * norm) {
     double *work = malloc(sizeof(double) * 16 * 16);
@@ -137,9 +132,7 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
       st = fail_fmt(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
                     "and not a P-matrix: the LCP of a step may have no or several solutions", lmin);
   }
-  free(D); free(S);
-  if (ev) gsl_vector_free(ev);
-  if (w) gsl_eigen_symm_free(w);
+  free(D);                                       /* (S and ev in its block) */
   return st;
 }
 

@@ -287,8 +287,11 @@ static int source_terms(cup_netlist *nl, const nl_circuit *c, int e, char *errms
   return add_wave(nl->u, j, &w, c, e, errmsg);
 }
 
-static int build_input(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
+/* u, when not NULL: the same sources formed before (nl_formulate). */
+static int build_input(cup_netlist *nl, const nl_circuit *c, const cup_input *u, char *errmsg) {
   if (nl->p == 0) return CUP_OK;
+  if (u && u->p == nl->p)
+    return input_copy(u, &nl->u) ? nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory") : CUP_OK;
   char lib[CUP_ERRMSG_LEN];
   int st = cup_input_create(&nl->u, nl->p, lib);
   if (st) return nl_fail(c, -1, errmsg, st, "%s", lib);
@@ -375,10 +378,11 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
 }
 
 static int name_variables(cup_netlist *nl, const nl_circuit *c) {
-  nl->state_name = calloc((size_t)nl->n + 1, sizeof(char *));
+  /* (input_elem in state_name's block: a calloc and a free less a switch configuration) */
+  nl->state_name = calloc(1, sizeof(char *) * ((size_t)nl->n + 1) + sizeof(int) * ((size_t)nl->p + 1));
   nl->row_name = calloc((size_t)nl->m + 1, sizeof(char *));
   nl->row_fixed = calloc((size_t)nl->m + 1, sizeof(int));
-  nl->input_elem = calloc((size_t)nl->p + 1, sizeof(int));
+  nl->input_elem = nl->state_name ? (int *)(nl->state_name + nl->n + 1) : NULL;
   if (!nl->state_name || !nl->row_name || !nl->row_fixed || !nl->input_elem) return CUP_ERR_NOMEM;
   for (int e = 0; e < c->nelem; e++) {
     const nl_elem *el = &c->elem[e];
@@ -386,7 +390,8 @@ static int name_variables(cup_netlist *nl, const nl_circuit *c) {
     if (el->kind == NL_L && !(nl->state_name[j] = fmt_name("i", el->name))) return CUP_ERR_NOMEM;
     if (el->kind == NL_C && !(nl->state_name[j] = fmt_name("v", el->name))) return CUP_ERR_NOMEM;
     if (el->kind == NL_D) {
-      if (!(nl->row_name[j] = strdup(el->name))) return CUP_ERR_NOMEM;
+      /* a switch configuration's: its element's name (lent, or its own), not a copy */
+      if (!(nl->row_name[j] = nl->names_lent > 0 ? nl->elem[e].name : strdup(el->name))) return CUP_ERR_NOMEM;
       nl->row_fixed[j] = nl->eport[e] < nl->nv;
     }
     if (el->kind == NL_V || el->kind == NL_I) nl->input_elem[j] = e;
@@ -395,6 +400,10 @@ static int name_variables(cup_netlist *nl, const nl_circuit *c) {
 }
 
 int netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) {
+  return nl_formulate(out, c, NULL, errmsg);
+}
+
+int nl_formulate(cup_netlist **out, const nl_circuit *c, const cup_input *u, char *errmsg) {
   cup_netlist *nl = calloc(1, sizeof *nl);
   int st = nl ? copy_circuit(nl, c) : CUP_ERR_NOMEM;
   if (!st) st = nl_topology(nl, c, errmsg);
@@ -404,13 +413,17 @@ int netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg) {
   if (!st) st = nl_hybrid(nl, c, errmsg);
   if (!st) st = nl_controlled(nl, c, errmsg);
   if (!st) st = build_lcs(nl, c, errmsg);
-  if (!st) st = build_input(nl, c, errmsg);
-  double *vic = NULL;
+  if (!st) st = build_input(nl, c, u, errmsg);
+  /* the nodes' .ic voltages: on the stack for a small circuit (a calloc and a free less a switch configuration) */
+  double vsmall[64], *vic = NULL, *vheap = NULL;
   if (!st && (!(nl->x0 = calloc((size_t)nl->n + 1, sizeof(double))) ||
-              !(vic = calloc((size_t)c->nnodes, sizeof(double)))))
+              !(vic = c->nnodes <= 64 ? vsmall : (vheap = malloc(sizeof(double) * (size_t)c->nnodes)))))
     st = nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
-  if (!st) build_x0(nl, c, vic);
-  free(vic);
+  if (!st) {
+    memset(vic, 0, sizeof(double) * (size_t)c->nnodes);
+    build_x0(nl, c, vic);
+  }
+  free(vheap);
   char msg[160];
   for (int k = 0; k < c->nprobe && !st; k++)
     if (nl_probe_check(nl, c->probe[k].text, msg, sizeof msg))
@@ -458,8 +471,8 @@ void cup_netlist_free(cup_netlist **p) {
   for (int e = nl->names_lent; nl->elem && e < nl->nelem; e++) free(nl->elem[e].name);
   free(nl->elem);
   for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);
-  for (int j = 0; nl->row_name && j < nl->m; j++) free(nl->row_name[j]);
-  free(nl->state_name); free(nl->row_name); free(nl->row_fixed); free(nl->input_elem);
+  for (int j = 0; nl->row_name && !lent && j < nl->m; j++) free(nl->row_name[j]);   /* (lent: the elements') */
+  free(nl->state_name); free(nl->row_name); free(nl->row_fixed);   /* (input_elem in state_name's block) */
   free(nl->port);                                  /* (eport, evar, ctl_elem, parent, pport, depth, snode, psign) */
   free(nl->zmap); free(nl->coupled); free(nl->prow);
   la_sparse_free(&nl->Pinv);

@@ -50,7 +50,10 @@ int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
    * configuration inside its run, some 60 of these a bridge): acc, amag,
    * then cnt (zeroed), order, mark, rows */
   size_t R = (size_t)nrow + 1, C = (size_t)ncol + 1, N = (size_t)t->n + 1;
-  double *acc = malloc(sizeof(double) * 2 * R + sizeof(int) * (C + N + 2 * R)), *amag = acc ? acc + R : NULL;
+  size_t need = sizeof(double) * 2 * R + sizeof(int) * (C + N + 2 * R);
+  /* a small one on the stack (a converter's all are: a malloc and a free each, ~200 instructions) */
+  double small[512], *heap = need > sizeof small ? malloc(need) : NULL;
+  double *acc = need > sizeof small ? heap : small, *amag = acc ? acc + R : NULL;
   int *cnt = acc ? (int *)(amag + R) : NULL, *order = cnt ? cnt + C : NULL;
   int *mark = order ? order + N : NULL, *rows = mark ? mark + R : NULL;
   int st = acc ? CUP_OK : CUP_ERR_NOMEM;
@@ -84,7 +87,7 @@ int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
     }
   }
   if (!st) { out->p[ncol] = nz; out->nnz = nz; }
-  free(acc);
+  free(heap);
   return st;
 }
 

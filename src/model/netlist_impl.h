@@ -145,7 +145,8 @@ struct cup_netlist {
   nl_raw *raw;            /* a configuration's circuit: the formulation before its reduction (freed after it) */
   int nelem_user;         /* elements written (a configuration's circuit appends constraints) */
   int names_lent;         /* > 0: the names of nodes, files and the first names_lent elements are
-                             the switched netlist's circuit's (nl_circuit.names_lent): not freed */
+                             the switched netlist's circuit's (nl_circuit.names_lent): not freed;
+                             nor its row names, which are its elements' (name_variables) */
   int mr;                 /* a configuration's diode rows (m counts its constraint rows too) */
   int *zrow;              /* m: each row's diode row (>= 0) or constraint -1 - q; NULL: none */
   int nq;                 /* constraint rows */
@@ -217,6 +218,9 @@ int nl_probe_check(const cup_netlist *nl, const char *text, char *msg, size_t si
 
 /* The formulation of a parsed circuit (netlist.c); the reader calls it. */
 int netlist_formulate(cup_netlist **out, const nl_circuit *c, char *errmsg);
+/* ... with u, when not NULL, its input as written (its sources' terms):
+ * copied, not built again (a switch configuration's, netlist_switch.c). */
+int nl_formulate(cup_netlist **out, const nl_circuit *c, const cup_input *u, char *errmsg);
 
 /* ---- switches (netlist_switch.c, netlist_reduce.c) ---- */
 /* A circuit with switches: its configuration at t = 0 formulated as the

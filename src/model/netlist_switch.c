@@ -129,23 +129,20 @@ static int gated_by_state(const nl_topo *tp, int k) {
 }
 
 static void ctl_free(nl_topo *tp) {
-  free(tp->ctl); free(tp->cp); free(tp->ci); free(tp->cx); free(tp->uterm);
+  free(tp->ctl);                                   /* (cx, cp, ci and uterm in its block: form) */
   tp->ctl = tp->cx = NULL;
   tp->cp = tp->ci = tp->uterm = NULL;
 }
 
-/* The controls' rows by their nonzeros, and the input terms they read. */
+/* The controls' rows by their nonzeros, and the input terms they read (into form's block). */
 static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
   const cup_netlist *sub = tp->sub;
   int n = sub->n, p = sub->p, nv = n + p + sub->m, k = 0;
   const cup_input *u = sub->u;
   int nterms = p && u && !u->fn ? u->nterms : 0;
-  tp->cp = malloc(sizeof(int) * ((size_t)S->nsw + 1));
-  tp->ci = malloc(sizeof(int) * ((size_t)S->nsw * nv + 1));
-  tp->cx = malloc(sizeof(double) * ((size_t)S->nsw * nv + 1));
-  tp->uterm = malloc(sizeof(int) * ((size_t)nterms + 1));
-  unsigned char *reads = calloc((size_t)p + 1, 1);
-  if (!tp->cp || !tp->ci || !tp->cx || !tp->uterm || !reads) { free(reads); return CUP_ERR_NOMEM; }
+  unsigned char rsmall[256], *reads = p < 256 ? rsmall : calloc((size_t)p + 1, 1);
+  if (!reads) return CUP_ERR_NOMEM;
+  if (reads == rsmall) memset(rsmall, 0, (size_t)p + 1);
   for (int w = 0; w < S->nsw; w++) {
     tp->cp[w] = k;
     for (int j = 0; j < nv; j++) {
@@ -166,7 +163,7 @@ static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
     const input_term *w = &u->terms[tp->uterm[q]];
     if (w->kind != CUP_WAVE_CONSTANT && !input_jump_pulse(w)) tp->steps = 0;
   }
-  free(reads);
+  if (reads != rsmall) free(reads);
   return CUP_OK;
 }
 
@@ -178,14 +175,27 @@ static int form(nl_switched *S, cup_netlist **subp, uint64_t cfg, nl_topo *tp, c
   if (st) { derived_free(c, &d); return nl_switch_nomem(c, errmsg); }
   cup_netlist *sub = NULL;
   double *Pi = NULL;
-  st = netlist_formulate(&sub, &d, errmsg);
+  /* the sources as written are the circuit's in every configuration: the first one's copied */
+  const cup_netlist *first = S->ntopo ? S->topo[0].sub : NULL;
+  st = nl_formulate(&sub, &d, first ? (first->u_written ? first->u_written : first->u) : NULL, errmsg);
   if (!st) { sub->nelem_user = c->nelem; st = nl_switch_reduce(sub, c, &d, &Pi, errmsg); }
   if (!st && S->t0 != 0) st = nl_input_origin(sub, S->t0, errmsg);   /* formed after the origin was set */
   tp->cfg = cfg;
   tp->Pi = Pi;
   int nv = sub ? sub->n + sub->p + sub->m : 0;
-  tp->ctl = !st ? calloc((size_t)S->nsw * nv + 1, sizeof(double)) : NULL;
+  /* the controls (zeroed) and their nonzeros (ctl_sparse: cx, cp, ci, the
+   * input terms they read) in one block: five allocations a configuration were */
+  size_t nz = (size_t)S->nsw * nv + 1;
+  int nterms = sub && sub->p && sub->u && !sub->u->fn ? sub->u->nterms : 0;
+  tp->ctl = !st ? malloc(sizeof(double) * 2 * nz + sizeof(int) * ((size_t)S->nsw + 1 + nz + (size_t)nterms + 1)) : NULL;
   if (!st && !tp->ctl) st = nl_switch_nomem(c, errmsg);
+  if (!st) {
+    memset(tp->ctl, 0, sizeof(double) * nz);
+    tp->cx = tp->ctl + nz;
+    tp->cp = (int *)(tp->cx + nz);
+    tp->ci = tp->cp + S->nsw + 1;
+    tp->uterm = tp->ci + nz;
+  }
   for (int k = 0; k < S->nsw && !st; k++) {       /* each switch's control over (x, u, zeta) */
     const nl_elem *el = &c->elem[S->sw[k]];
     double *row = tp->ctl + (size_t)k * nv;

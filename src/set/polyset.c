@@ -485,32 +485,22 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
       K->Md[i + (size_t)j * m] = K->Md[j + (size_t)i * m] = a;
     }
   /* A backward-stable eigenvalue is within c u ||M||_F of the true one. */
-  if (m > 0) {
-    gsl_error_handler_t *old = gsl_set_error_handler_off();   /* GSL would abort */
-    gsl_matrix *A = gsl_matrix_alloc((size_t)m, (size_t)m);
-    gsl_vector *ev = gsl_vector_alloc((size_t)m);
-    gsl_eigen_symm_workspace *ws = gsl_eigen_symm_alloc((size_t)m);
-    gsl_set_error_handler(old);
-    if (!A || !ev || !ws) {
-      if (A) gsl_matrix_free(A);
-      if (ev) gsl_vector_free(ev);
-      if (ws) gsl_eigen_symm_free(ws);
-      return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
-    }
+  if (m > 0) {                             /* (A row-major, ev, the workspace: one block) */
+    double *A = malloc(sizeof(double) * ((size_t)m * m + 3 * (size_t)m)), *ev = A ? A + (size_t)m * m : NULL;
+    if (!A) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
     double fro = 0;
     for (int j = 0; j < m; j++)
       for (int i = 0; i < m; i++) {
         double a = K->Md[i + (size_t)j * m];
-        gsl_matrix_set(A, (size_t)i, (size_t)j, a);
+        A[(size_t)i * m + j] = a;
         fro += a * a;
       }
-    old = gsl_set_error_handler_off();
-    int rc = gsl_eigen_symm(A, ev, ws);
-    gsl_set_error_handler(old);
-    double lmax = rc ? INFINITY : gsl_vector_max(ev);
+    int rc = la_dense_symm_eig(A, m, ev, ev + m);
+    gsl_vector_view evv = gsl_vector_view_array(ev, (size_t)m);
+    double lmax = rc ? INFINITY : gsl_vector_max(&evv.vector);
     double bound = lmax + 16.0 * (m + 1) * DBL_EPSILON * sqrt(fro);
     if (bound < K->lip) K->lip = bound;
-    gsl_eigen_symm_free(ws); gsl_vector_free(ev); gsl_matrix_free(A);
+    free(A);
   }
   K->dense = 1;
   return CUP_OK;

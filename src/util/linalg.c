@@ -5,6 +5,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
 #include "catchup.h"
 #include "linalg.h"
 
@@ -319,4 +321,15 @@ void la_dense_expm(const double *a, int k, double *out, double *work) {
     dense_mul(out, out, k, tmp);
     memcpy(out, tmp, sizeof(double) * (size_t)k * k);
   }
+}
+
+int la_dense_symm_eig(double *a, int k, double *ev, double *w) {
+  if (k < 1) return 0;                           /* (a view of none is GSL's error) */
+  gsl_matrix_view A = gsl_matrix_view_array(a, (size_t)k, (size_t)k);
+  gsl_vector_view v = gsl_vector_view_array(ev, (size_t)k);
+  gsl_eigen_symm_workspace ws = {(size_t)k, w, w + k};   /* (gsl_eigen_symm_alloc's: size, d, sd) */
+  gsl_error_handler_t *old = gsl_set_error_handler_off();   /* GSL would abort */
+  int rc = gsl_eigen_symm(&A.matrix, &v.vector, &ws);
+  gsl_set_error_handler(old);
+  return rc;
 }

@@ -127,6 +127,12 @@ void la_simplicial_solve(const cholmod_factor *L, double *x, double *w);
 int la_dense_lu(double *a, int k, int *piv);
 /* Solve with the factor from la_dense_lu, in place; w: k doubles. */
 void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w);
+/* The eigenvalues of the symmetric k x k matrix a (overwritten) into ev, by
+ * GSL's gsl_eigen_symm with its error handler off, its workspace in w (2 k
+ * doubles): no allocation (gsl_eigen_symm_alloc and gsl_*_alloc were six
+ * mallocs and six frees a call, some 2 k instructions for each switch
+ * configuration formed). Returns GSL's status (0: done). */
+int la_dense_symm_eig(double *a, int k, double *ev, double *w);
 /* out = exp(a) by scaling and squaring of a degree-18 Taylor polynomial;
  * work holds 3 k*k doubles. a and out must differ. */
 void la_dense_expm(const double *a, int k, double *out, double *work);
