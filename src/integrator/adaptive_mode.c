@@ -84,6 +84,20 @@ void ad_modes_layout(adaptive_ws *A, block_arena *b) {
     for (int c = 1; c < AD_CACHE; c++) cache_layout(A, &A->modes[s], c, NA, b);
 }
 
+/* (A run's first set is built at its start: the slots are taken with it,
+ * in the run, where the six-pulse bridge's 12 pages of them faulted in
+ * fresh at their first sets, 1.7 us each, laid out at set-up before
+ * catchup-run made its file.) */
+int ad_modes_take(adaptive_ws *A) {
+  if (A->slots) return CUP_OK;
+  block_arena b = {0};
+  ad_modes_layout(A, &b);
+  if (!(A->slots = malloc(b.used))) return CUP_ERR_NOMEM;
+  b = (block_arena){A->slots, 0};
+  ad_modes_layout(A, &b);
+  return CUP_OK;
+}
+
 void ad_scratch_layout(adaptive_ws *A, block_arena *b) {
   int n = A->n, m = A->m, na = A->na;
   ad_series *ser[] = {&A->sy, &A->se};
@@ -612,6 +626,7 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
   ad_mode *md = &A->modes[s];
   md->stamp = 0;
   if (!stamp) return;
+  if (ad_modes_take(A)) { A->slots_lost = 1; return; }   /* (adaptive_resume refuses to go on) */
   mode_build(A, md, mask);
   for (int c = 0; c < AD_CACHE; c++) {
     if (hc[c] >= 0) expm_into(A, md, hc[c], c);
