@@ -540,7 +540,8 @@ void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b);
 /* The eigenvalue workspace (gsl's own allocations). */
 int ad_modes_init(adaptive_ws *A);
 void ad_modes_free(adaptive_ws *A);
-/* A checkpoint's kept active set in slot s (the slots taken: ad_modes_take): its rows (mask), built again,
+/* A checkpoint's kept active set in slot s: its rows (mask), built again
+ * (the slots taken first, ad_modes_take; without memory A->slots_lost),
  * its exponentials for the step lengths hc (< 0: none) computed again (the
  * same bits: the same function of the same h M) and its stamps of use. */
 void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);
