@@ -630,11 +630,14 @@ static void test_adaptive_degenerate_rows(void **state) {
   cup_input_free(&u);
 }
 
-/* An adaptive run allocates nothing (its active sets, their exponentials,
- * the LCPs and GSL's eigenvalue workspace are taken by
- * cup_integrator_create): paper case 1 (events), case 2 (the set jumps at
- * breakpoints), case 1 with a callback input (rejected steps), counted from
- * the first run of a fresh integrator. */
+/* An adaptive run allocates nothing in its steps (the LCPs and GSL's
+ * eigenvalue workspace are taken by cup_integrator_create; the active sets'
+ * slots with their exponentials at the first run's start, one block, so
+ * that a program that makes its output file after the integrator has their
+ * pages come from memory already touched: ad_modes_take): paper case 1
+ * (events), case 2 (the set jumps at breakpoints), case 1 with a callback
+ * input (rejected steps), counted from the first run of a fresh integrator
+ * (that one block) and over a second run of it (none). */
 #if HEAP_INTERPOSED
 static int sine_cb(double t, double *u, void *ctx) {
   (void)ctx;
@@ -669,15 +672,17 @@ static void test_adaptive_allocates_nothing(void **state) {
     if (cup_integrator_create(&I, L, u, &o, msg)) fail_msg("create: %s", msg);
     double x0[3] = {0, 0, 0};
     cup_run_info info;
-    heap_calls = 0;
-    heap_counting = 1;
-    int st = cup_integrator_run(I, x0, NULL, NULL, &info);
-    heap_counting = 0;
-    print_message("adaptive run %d: %s, %ld events, %ld rejected steps, %ld allocations\n", k,
-                  cup_status_name(st), info.events, info.rejected, heap_calls);
-    assert_int_equal(st, CUP_OK);
-    assert_true(info.events >= 5);
-    assert_int_equal(heap_calls, 0);
+    for (int again = 0; again < 2; again++) {
+      heap_calls = 0;
+      heap_counting = 1;
+      int st = cup_integrator_run(I, x0, NULL, NULL, &info);
+      heap_counting = 0;
+      print_message("adaptive run %d (%s run): %s, %ld events, %ld rejected steps, %ld allocations\n", k,
+                    again ? "second" : "first", cup_status_name(st), info.events, info.rejected, heap_calls);
+      assert_int_equal(st, CUP_OK);
+      assert_true(info.events >= 5);
+      assert_int_equal(heap_calls, again ? 0 : 1);
+    }
     cup_integrator_free(&I);
     cup_input_free(&u);
     cup_lcs_free(&L);

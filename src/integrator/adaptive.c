@@ -321,21 +321,28 @@ static void vectors(adaptive_ws *A, block_arena *b) {
 }
 
 /* The run's arrays in one block, zeroed as callocs were, but for the two
- * series' coefficients and the active sets' slots (each written before it
- * is read): a switched run makes its integrators as it goes, and each array
- * was a calloc of its own (some 280 a configuration on the full bridge).
- * The series come first and after the zeroed part, each starting on a page
- * the set-up touches (the block's header, the zeroed part), as their own
- * mallocs did: not the run's first use (3 page faults more in the six-pulse
- * run else). The slots come last, not zeroed: that was some 70 % of the
- * memset (16 k instructions a configuration on the full bridge), and the
- * pages of slots no set is built in are never touched. */
+ * series' coefficients (each written before it is read): a switched run
+ * makes its integrators as it goes, and each array was a calloc of its own
+ * (some 280 a configuration on the full bridge). The series come first and
+ * after the zeroed part, each starting on a page the set-up touches (the
+ * block's header, the zeroed part), as their own mallocs did: not the
+ * run's first use (3 page faults more in the six-pulse run else). A
+ * switched run's configuration (made in the run) has the active sets'
+ * slots last, not zeroed: that was some 70 % of the memset (16 k
+ * instructions a configuration on the full bridge), and the pages of slots
+ * no set is built in are never touched. A workspace of its own takes them
+ * at its run's start (ad_modes_take: the six-pulse bridge's 12 pages of
+ * them, laid out here before catchup-run made its file, faulted in fresh;
+ * a malloc of their own in each configuration cost the full bridge 13 k
+ * instructions). */
 static void carve(adaptive_ws *A, block_arena *b, size_t *z0, size_t *z1) {
   if (!A->scratch) ad_series_layout(A, &A->sy, b);
   *z0 = b->used;
   vectors(A, b);
   *z1 = b->used;
   if (!A->scratch) ad_series_layout(A, &A->se, b);
+  if (!A->scratch) return;
+  A->slots = b->base ? b->base + b->used : NULL;
   ad_modes_layout(A, b);
 }
 
@@ -650,6 +657,7 @@ void adaptive_free(adaptive_ws **Ap) {
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
   free(A->first_state); free(A->gen_rot); free(A->gen.terms); free(A->block);
+  if (!A->scratch) free(A->slots);
   free(A->tan);
   free(A->rec_block);
   free(A->put_block);

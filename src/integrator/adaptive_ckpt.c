@@ -71,6 +71,7 @@ void adaptive_checkpoint(adaptive_ws *A, ckpt *c) {
   }
   lcp_step_checkpoint(&A->proj, c);
   projector_checkpoint(A->projector, c);
+  if (!c->saving) A->slots_lost = 0;
   for (int k = 0; k < AD_MODES; k++) {
     ad_mode *md = &A->modes[k];
     uint64_t mask = md->mask;

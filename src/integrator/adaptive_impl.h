@@ -169,6 +169,9 @@ typedef struct ad_window_state {
 
 struct adaptive_ws {
   void *block;              /* the arrays the set-up sizes (adaptive.c, alloc_block): one allocation */
+  void *slots;              /* the active sets' slots' arrays: in block with a shared scratch, else
+                               their own allocation (ad_modes_take, at a run's start: NULL before) */
+  int slots_lost;           /* a checkpoint's kept sets were not rebuilt: no memory for the slots */
   struct adaptive_scratch *scratch; /* the run scratch's owner when shared (adaptive_create), or NULL */
   const double *F;          /* the offset at u = 0: K's g0 */
   const cup_input *u;
@@ -525,22 +528,29 @@ double ad_next_break(adaptive_ws *A, double t);
 /* ---- adaptive_mode.c ---- */
 /* The active set with rows `mask` (built, or found among the kept ones). A
  * set whose rows are linearly dependent keeps an independent subset (the
- * mode's mask says which). NULL only without memory (none is allocated
- * here: the slots are laid out by ad_modes_layout). */
+ * mode's mask says which). Allocates nothing: the slots are taken at the
+ * run's start (ad_modes_take). */
 ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
-/* The slots' matrices from b (adaptive.c's one block, not zeroed: a slot's
- * arrays are written whole when a set is built in it, mode_factor and
- * mode_finish, before they are read; its exponentials by their lengths,
- * md->hc); the series' small vectors and the construction's scratch
- * (zeroed) by ad_scratch_layout; series S's coefficients by
- * ad_series_layout, not zeroed. */
+/* The slots' matrices from b, not zeroed: a slot's arrays are written
+ * whole when a set is built in it, mode_factor and mode_finish, before
+ * they are read; its exponentials by their lengths, md->hc. A switched
+ * run's configuration (made in the run) has them in its one block
+ * (adaptive.c's); a workspace of its own takes them at its first run's or
+ * window's start, an allocation of their own (ad_modes_take: not at
+ * set-up, before a program makes its output file, whose library's freed
+ * buffers the run's memory then reuses, pages already touched). CUP_OK
+ * (taken already too) or CUP_ERR_NOMEM. The series' small vectors and the
+ * construction's scratch (zeroed) by ad_scratch_layout; series S's
+ * coefficients by ad_series_layout, not zeroed. */
 void ad_modes_layout(adaptive_ws *A, block_arena *b);
+int ad_modes_take(adaptive_ws *A);
 void ad_scratch_layout(adaptive_ws *A, block_arena *b);
 void ad_series_layout(adaptive_ws *A, ad_series *S, block_arena *b);
 /* The eigenvalue workspace (gsl's own allocations). */
 int ad_modes_init(adaptive_ws *A);
 void ad_modes_free(adaptive_ws *A);
-/* A checkpoint's kept active set in slot s: its rows (mask), built again,
+/* A checkpoint's kept active set in slot s: its rows (mask), built again
+ * (the slots taken first, ad_modes_take; without memory A->slots_lost),
  * its exponentials for the step lengths hc (< 0: none) computed again (the
  * same bits: the same function of the same h M) and its stamps of use. */
 void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const double *hc, const long *cstamp);

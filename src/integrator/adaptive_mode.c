@@ -84,6 +84,20 @@ void ad_modes_layout(adaptive_ws *A, block_arena *b) {
     for (int c = 1; c < AD_CACHE; c++) cache_layout(A, &A->modes[s], c, NA, b);
 }
 
+/* (A run's first set is built at its start: the slots are taken with it,
+ * in the run, where the six-pulse bridge's 12 pages of them faulted in
+ * fresh at their first sets, 1.7 us each, laid out at set-up before
+ * catchup-run made its file.) */
+int ad_modes_take(adaptive_ws *A) {
+  if (A->slots) return CUP_OK;
+  block_arena b = {0};
+  ad_modes_layout(A, &b);
+  if (!(A->slots = malloc(b.used))) return CUP_ERR_NOMEM;
+  b = (block_arena){A->slots, 0};
+  ad_modes_layout(A, &b);
+  return CUP_OK;
+}
+
 void ad_scratch_layout(adaptive_ws *A, block_arena *b) {
   int n = A->n, m = A->m, na = A->na;
   ad_series *ser[] = {&A->sy, &A->se};
@@ -612,6 +626,7 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
   ad_mode *md = &A->modes[s];
   md->stamp = 0;
   if (!stamp) return;
+  if (ad_modes_take(A)) { A->slots_lost = 1; return; }   /* (adaptive_resume refuses to go on) */
   mode_build(A, md, mask);
   for (int c = 0; c < AD_CACHE; c++) {
     if (hc[c] >= 0) expm_into(A, md, hc[c], c);
@@ -805,13 +820,17 @@ static inline __attribute__((always_inline)) void state_sums(int n, int na, cons
 
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
   int n = A->n, na = A->na;
-  switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled) */
+  switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled; 8: a
+                                                    six-pulse bridge's 2 states and 6 input states, whose
+                                                    run spent 52 k instructions here by the generic sums,
+                                                    45 k so) */
     case 1: state_sums(n, 1, md->X, y, x); return;
     case 2: if (n == 2) state_sums(2, 2, md->X, y, x); else state_sums(n, 2, md->X, y, x); return;
     case 3: if (n == 2) state_sums(2, 3, md->X, y, x); else state_sums(n, 3, md->X, y, x); return;
     case 4: if (n == 2) state_sums(2, 4, md->X, y, x); else state_sums(n, 4, md->X, y, x); return;
     case 5: state_sums(n, 5, md->X, y, x); return;
     case 6: state_sums(n, 6, md->X, y, x); return;
+    case 8: if (n == 2) state_sums(2, 8, md->X, y, x); else state_sums(n, 8, md->X, y, x); return;
   }
   state_sums(n, na, md->X, y, x);
 }

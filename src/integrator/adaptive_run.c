@@ -895,6 +895,8 @@ RUN_INLINE int run_begin(adaptive_ws *A, ad_run *R, double tend, const double *x
   if (check) memset(R->info, 0, sizeof *R->info);
   else info_clear(R->info);
   R->info->err_est = NAN;
+  if (!A->slots && ad_modes_take(A))              /* (a window: in its block, a load and a branch) */
+    return ad_fail(R, CUP_ERR_NOMEM, "out of memory for the active sets' slots");
   if (check && tally_state_beyond(xa, A->n)) {
     int w = tally_state_worst(xa, A->n);
     if (!isfinite(xa[w])) return ad_fail(R, CUP_ERR_NONFINITE, "x0[%d] is %g", w, xa[w]);
@@ -962,8 +964,8 @@ int adaptive_window(adaptive_ws *A, double ta, double tb, const double *xa, int 
   ad_run R = {.info = info, .sink = sink, .sink_ctx = sink_ctx, .h_cb = A->hmax_input,
               .wall0 = A->o.max_wall_seconds > 0 ? now_seconds() : 0, .t = ta, .steps = *steps,
               .next_sample = *next_sample};
-  run_begin(A, &R, tb, xa, 0);
-  int st = first ? start_sampled(A, &R) : start_from(A, &R, 0, jumped >> 2 & 1, CUP_OK);
+  int st = run_begin(A, &R, tb, xa, 0);          /* (no memory for the slots: an error) */
+  if (st >= 0) st = first ? start_sampled(A, &R) : start_from(A, &R, 0, jumped >> 2 & 1, CUP_OK);
   /* every step recorded: the state after the jump too, at the same time
    * (after the window's projections, with the active set chosen there, so
    * that zeta is the new configuration's); a line drawn through the
@@ -1007,6 +1009,8 @@ int adaptive_resume(adaptive_ws *A, cup_sample_fn sink, void *sink_ctx, cup_run_
   R.info = info;
   R.sink = sink;
   R.sink_ctx = sink_ctx;
+  if (A->slots_lost || ad_modes_take(A))          /* (the restore's kept sets need them) */
+    return ad_fail(&R, CUP_ERR_NOMEM, "out of memory for the active sets' slots");
   R.wall0 = now_seconds();
   R.kept = 0;                                    /* (A->gk is not the checkpoint's) */
   R.md = s->md >= 0 ? &A->modes[s->md] : NULL;

@@ -247,7 +247,35 @@ void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, doubl
   }
 }
 
+/* c's column j for a constant k (up to 8), its sums in registers: from +0
+ * over l in order, a term of b_lj = 0 left out, as the generic loop's. */
+static inline __attribute__((always_inline)) void dense_mul_few(const double *restrict a,
+                                                                const double *restrict b, int k,
+                                                                double *restrict c) {
+  for (int j = 0; j < k; j++) {
+    double v[8] = {0};
+    for (int l = 0; l < k; l++) {
+      double blj = b[l + (size_t)j * k];
+      if (blj == 0) continue;
+      for (int i = 0; i < k; i++) v[i] += a[i + (size_t)l * k] * blj;
+    }
+    for (int i = 0; i < k; i++) c[i + (size_t)j * k] = v[i];
+  }
+}
+
+/* (A converter's exponentials are of 2 to 8 states and sources: the
+ * loops unrolled, the same sums; the six-pulse bridge's 8 x 8 took 12 k
+ * instructions an exponential, 9 k so.) */
 static void dense_mul(const double *restrict a, const double *restrict b, int k, double *restrict c) {
+  switch (k) {
+    case 2: dense_mul_few(a, b, 2, c); return;
+    case 3: dense_mul_few(a, b, 3, c); return;
+    case 4: dense_mul_few(a, b, 4, c); return;
+    case 5: dense_mul_few(a, b, 5, c); return;
+    case 6: dense_mul_few(a, b, 6, c); return;
+    case 7: dense_mul_few(a, b, 7, c); return;
+    case 8: dense_mul_few(a, b, 8, c); return;
+  }
   memset(c, 0, sizeof(double) * (size_t)k * k);
   for (int j = 0; j < k; j++)
     for (int l = 0; l < k; l++) {
