@@ -314,8 +314,8 @@ static inline __attribute__((always_inline)) double slack_rows(const cup_polyset
   const int *p = K->Ct.p, *ri = K->Ct.i;
   const double *cx = K->Ct.x, *rg = K->rowgam;
   double worst = INFINITY;
-  int below = 0;
-  for (int i = 0; i < K->m; i++) {
+  int below = 0, m = K->m, rounding = outside || gam;   /* (outside: gam is not NULL) */
+  for (int i = 0; i < m; i++) {
     double acc = g[i], mag = fabs(g[i]);
     for (int k = p[i]; k < p[i + 1]; k++) {
       double t = cx[k] * x[ri[k]];
@@ -323,8 +323,8 @@ static inline __attribute__((always_inline)) double slack_rows(const cup_polyset
       mag += fabs(t);
     }
     s[i] = acc;
-    double margin = gam ? rg[i] * mag : 0;
-    if (gam) gam[i] = margin;
+    double margin = rounding ? rg[i] * mag : 0;
+    if (rounding) gam[i] = margin;
     if (outside) {
       below |= acc < -margin;
       continue;
