@@ -97,7 +97,7 @@ static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w)
  * try, at a window's start). A->g holds ad_offset of w (ad_dae_select's). */
 static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w, double near) {
   int n = A->n, na = A->na, m = A->m;
-  double xn = la_norm_inf(x, n);
+  double xn = md->nz ? la_norm_inf(x, n) : 0;    /* (the residual's alone) */
   int off = 0;
   for (int b = 0; b < md->nz; b++) {             /* the manifold's residual against its rounding */
     double res = 0, mag = 0;
@@ -114,13 +114,17 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
     }
   }
   double *xm = A->jx, *y = A->cy, *My = A->cMy, *g = A->cg, *d = A->cd, *d2 = A->cd2, *thr = A->cthr;
-  la_copy(xm, x, n);
-  ad_manifold(A, md, A->g, xm);
+  const double *xl = x;                          /* (no manifold rows, a bridge's modes with D: x as it is) */
+  if (md->nz) {
+    la_copy(xm, x, n);
+    ad_manifold(A, md, A->g, xm);
+    xl = xm;
+  }
   if (off) {
     for (int j = 0; j < n; j++) y[j] = xm[j] - x[j];
     if (!(cup_polyset_norm(A->K, y) <= near)) return 0;
   }
-  ad_lift(A, md, xm, w, y);
+  ad_lift(A, md, xl, w, y);
   double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
   for (int j = n; j < na; j++) ws[j - n] = la_max(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
   int edge = 0;                                  /* a value at rounding */
