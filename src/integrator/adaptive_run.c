@@ -298,6 +298,7 @@ static __attribute__((noinline)) int move_inside(adaptive_ws *A, ad_run *R, cons
 static void error_onto(adaptive_ws *A, uint64_t mask, double *e) {
   if (!mask) return;
   ad_mode *md = ad_mode_get(A, mask);
+  if (!md->nz) return;                           /* (ad_manifold's no-op: no manifold rows) */
   ad_manifold(A, md, A->zero, e);
   for (int j = 0; A->tan && j < A->n; j++) ad_manifold(A, md, A->zero, A->tan + (size_t)j * A->n);   /* as e */
 }
@@ -367,7 +368,7 @@ RUN_INLINE int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint,
   A->carry_md = NULL;                            /* (x moves onto the set's manifold here) */
   A->pinned[0] = R->md = ad_mode_get(A, mask);
   /* (ad_select and ad_dae_select left g = F + G u(w) in A->g) */
-  ad_manifold(A, R->md, A->g, A->x);
+  if (R->md->nz) ad_manifold(A, R->md, A->g, A->x);   /* (none: a no-op, its call saved) */
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
 }
