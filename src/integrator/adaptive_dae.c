@@ -97,7 +97,7 @@ static void slack_and_velocity(adaptive_ws *A, const double *x, const double *w)
  * try, at a window's start). A->g holds ad_offset of w (ad_dae_select's). */
 static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double *w, double near) {
   int n = A->n, na = A->na, m = A->m;
-  double xn = la_norm_inf(x, n);
+  double xn = md->nz ? la_norm_inf(x, n) : 0;    /* (the residual's alone) */
   int off = 0;
   for (int b = 0; b < md->nz; b++) {             /* the manifold's residual against its rounding */
     double res = 0, mag = 0;
@@ -114,23 +114,38 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
     }
   }
   double *xm = A->jx, *y = A->cy, *My = A->cMy, *g = A->cg, *d = A->cd, *d2 = A->cd2, *thr = A->cthr;
-  la_copy(xm, x, n);
-  ad_manifold(A, md, A->g, xm);
+  const double *xl = x;                          /* (no manifold rows, a bridge's modes with D: x as it is) */
+  if (md->nz) {
+    la_copy(xm, x, n);
+    ad_manifold(A, md, A->g, xm);
+    xl = xm;
+  }
   if (off) {
     for (int j = 0; j < n; j++) y[j] = xm[j] - x[j];
     if (!(cup_polyset_norm(A->K, y) <= near)) return 0;
   }
-  ad_lift(A, md, xm, w, y);
-  ad_events_eval(A, md, y, g, thr);
+  ad_lift(A, md, xl, w, y);
   double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
   for (int j = n; j < na; j++) ws[j - n] = la_max(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
   int edge = 0;                                  /* a value at rounding */
   const int *lp = md->lp, *li = md->li;          /* (Lm's nonzeros: the dense sums of terms >= 0, +0 */
-  const double *lmx = md->lmx;                   /* left out) */
+  const double *lx = md->lx, *lmx = md->lmx;     /* left out) */
+  double vmax = la_norm_inf(y, n);
   for (int i = 0; i < m; i++) {
-    double tw = 0;
-    for (int q = lp[i]; q < lp[i + 1]; q++)
-      if (li[q] >= n) tw += lmx[q] * ws[li[q] - n];
+    /* ad_events_eval's value and rounding and the input's, one pass over
+     * the row's nonzeros, the same sums; a row below its rounding ends the
+     * check there (a window's start tries the empty set first: half the
+     * bridge's dead times have a diode on) */
+    double acc = md->Lc[i], mag = fabs(md->Lc[i]), tw = 0;
+    for (int q = lp[i]; q < lp[i + 1]; q++) {
+      int j = li[q];
+      double yj = y[j];
+      acc += lx[q] * yj;
+      mag += lmx[q] * fabs(yj);
+      if (j >= n) tw += lmx[q] * ws[j - n];
+    }
+    g[i] = acc;
+    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
     thr[i] = 16 * thr[i] + 64 * DBL_EPSILON * tw;
     if (g[i] < -thr[i]) return 0;
     edge |= !(g[i] > thr[i]);
@@ -221,9 +236,14 @@ static ad_mode *try_rows(adaptive_ws *A, uint64_t J, const double *x, const doub
 
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   uint64_t seed, double tscale, double near, uint64_t *mask, int *pivots) {
+  ad_offset(A, w, A->g);                         /* for mode_fits; left there for the caller */
+  return ad_dae_select_at(A, x, w, cur, row, hint, seed, tscale, near, mask, pivots);
+}
+
+int ad_dae_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
+                     uint64_t seed, double tscale, double near, uint64_t *mask, int *pivots) {
   int m = A->m;
   ad_mode *md;
-  ad_offset(A, w, A->g);                         /* for mode_fits; left there for the caller */
   if ((row >= 0 && (md = try_mode(A, cur ^ (uint64_t)1 << row, x, w, near))) ||   /* the event row alone */
       (row < 0 && (md = try_mode(A, cur, x, w, near))) ||                      /* the same set, still right */
       (seed && seed != cur && (md = try_mode(A, seed, x, w, near)))) {          /* the caller's guess */

@@ -251,6 +251,7 @@ struct adaptive_ws {
   long clock;
   ad_mode *got;             /* the slot ad_mode_get answered last (looked at first: its mask and stamp
                                say whether it still holds that set) */
+  ad_mode *got2;            /* ... and the one before it (looked at next) */
   const ad_mode *pinned[2]; /* in use by the run: never evicted */
   /* scratch of the mode construction */
   double *S, *Sl, *Sinv, *T1, *T2, *T3;
@@ -675,6 +676,9 @@ void ad_dae_free(adaptive_ws *A);
  * solution). */
 int ad_dae_select(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
                   uint64_t seed, double tscale, double near, uint64_t *mask, int *pivots);
+/* ... with A->g and A->ut holding w's already (a piece's start, start_piece). */
+int ad_dae_select_at(adaptive_ws *A, const double *x, const double *w, uint64_t cur, int row, uint64_t hint,
+                     uint64_t seed, double tscale, double near, uint64_t *mask, int *pivots);
 /* x onto the consistent states Q(t) = {x : C x + D zeta + g >= 0 for some
  * zeta >= 0} by the impulsive LCP (x + B mu; the P-projection when
  * P B = C^T), for an x outside K(t) whose slack C x + g is in A->dq0

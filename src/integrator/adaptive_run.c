@@ -237,9 +237,8 @@ RUN_INLINE int make_consistent(adaptive_ws *A, ad_run *R, const double *g, doubl
   *active = 0;
   pi->skipped = 1;
   double *s = A->has_D ? A->dq0 : A->s;          /* (with D, the jump's LCP reads it) */
-  polyset_slack(A->K, g, x, s, A->gam);
-  int outside = 0;                               /* beyond rounding: a held row is at 0 (with D: zeta = 0 */
-  for (int i = 0; i < A->m && !outside; i++) outside = s[i] < -A->gam[i];   /* is consistent) */
+  /* beyond rounding: a held row is at 0 (with D: zeta = 0 is consistent) */
+  int outside = polyset_slack_outside(A->K, g, x, s, A->gam);
   A->inside = !outside;
   return outside ? move_inside(A, R, g, x, active, pi) : CUP_OK;
 }
@@ -299,6 +298,7 @@ static __attribute__((noinline)) int move_inside(adaptive_ws *A, ad_run *R, cons
 static void error_onto(adaptive_ws *A, uint64_t mask, double *e) {
   if (!mask) return;
   ad_mode *md = ad_mode_get(A, mask);
+  if (!md->nz) return;                           /* (ad_manifold's no-op: no manifold rows) */
   ad_manifold(A, md, A->zero, e);
   for (int j = 0; A->tan && j < A->n; j++) ad_manifold(A, md, A->zero, A->tan + (size_t)j * A->n);   /* as e */
 }
@@ -342,8 +342,8 @@ static int report(adaptive_ws *A, ad_run *R, uint64_t before, uint64_t after, do
  * input's, and no longer than what is left of the input's piece (a pulse's
  * 1 fs fall, linearised over 25 ns, drove the other pair of a bridge on). */
 static double time_scale(adaptive_ws *A, ad_run *R, double t) {
-  double s = fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);
-  return R->tb > t ? fmin(s, R->tb - t) : s;
+  double s = la_fmin(R->md ? ad_mode_hmax(A, R->md) : A->hmax_input, A->o.T);   /* (fmin's bits, no call) */
+  return R->tb > t ? la_fmin(s, R->tb - t) : s;
 }
 
 /* The active set that continues from (x, w) at R->t, made current, x put
@@ -356,7 +356,8 @@ static double time_scale(adaptive_ws *A, ad_run *R, double t) {
  * and A->s the slack C x + g at A->x (D = 0). */
 RUN_INLINE int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint, double t_event, int at_offset) {
   uint64_t mask = 0, before = R->md ? R->md->mask : 0, seed = !R->md && A->seed_on ? A->seed : 0;
-  int piv = 0, st = A->has_D ? ad_dae_select(A, A->x, w, before, -1, hint, seed, time_scale(A, R, R->t), 0, &mask, &piv)
+  int piv = 0, st = A->has_D ? (at_offset ? ad_dae_select_at : ad_dae_select)(A, A->x, w, before, -1, hint, seed,
+                                                                             time_scale(A, R, R->t), 0, &mask, &piv)
                     : at_offset == 2 ? ad_select_slack(A, A->x, w, hint, &mask, &piv)
                     : at_offset ? ad_select_at(A, A->x, w, hint, &mask, &piv) : ad_select(A, A->x, w, hint, &mask, &piv);
   R->info->dual_iterations += piv;
@@ -367,7 +368,7 @@ RUN_INLINE int choose(adaptive_ws *A, ad_run *R, const double *w, uint64_t hint,
   A->carry_md = NULL;                            /* (x moves onto the set's manifold here) */
   A->pinned[0] = R->md = ad_mode_get(A, mask);
   /* (ad_select and ad_dae_select left g = F + G u(w) in A->g) */
-  ad_manifold(A, R->md, A->g, A->x);
+  if (R->md->nz) ad_manifold(A, R->md, A->g, A->x);   /* (none: a no-op, its call saved) */
   error_onto(A, R->md->mask, A->e);
   return report(A, R, before, R->md->mask, t_event);
 }

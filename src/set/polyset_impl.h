@@ -75,5 +75,8 @@ static inline void polyset_metric_solve_diag(const cup_polyset *K, double *v) {
  * error of s_i. Returns min_i (s_i - gam_i) (or min s_i when gam is NULL). */
 double polyset_slack(const cup_polyset *K, const double *g, const double *x,
                      double *s, double *gam);
+/* ... s and gam (not NULL) as it leaves them; 1 if a row is below its
+ * rounding, s_i < -gam_i (the adaptive scheme's check at a breakpoint). */
+int polyset_slack_outside(const cup_polyset *K, const double *g, const double *x, double *s, double *gam);
 
 #endif
