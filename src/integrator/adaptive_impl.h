@@ -333,8 +333,12 @@ struct adaptive_ws {
   record_put_fn put;
   cup_netlist *put_nl;
   int put_ns;
+  int put_off;              /* a switched run's window whose sink is not the user's (watch_sink): to the sink */
+  const struct signal_map *put_map;   /* put_nl's map of this workspace's configuration (ad_put_map), NULL:
+                                         not asked yet */
   void *put_block;
   double *bt, *bx, *bs, *best, *by, *be, *bk, *bkc;
+  const struct ad_rec *bk_rec;   /* the entry bk and bkc hold (NULL: none; compose forgets it) */
   ad_stop *stop;            /* where the last run stopped (ad_window_state's) */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
@@ -411,6 +415,16 @@ static inline const struct ad_rec *ad_rec_of(adaptive_ws *A, const ad_mode *md, 
 /* The input components entry e reads that y leaves out (e->nu), at A->zt,
  * added to its ns signals in out: 1, or 0 when the input failed. */
 int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out);
+/* put_nl's signal map: the configuration in force at the first ask (a
+ * switched run's workspace is one configuration's; set_put forgets it). */
+static inline const struct signal_map *ad_put_map(adaptive_ws *A) {
+  return A->put_map ? A->put_map : (A->put_map = nl_signal_map(A->put_nl));
+}
+/* The sample at a step's end (offer_x: A->zt, A->zmd, state x = A->x)
+ * with its signals to put, as the sink would compute them
+ * (integrator_record's sums): 0 taken, 1 refused; -1 not here (the
+ * signals not from y: the sink's). */
+int ad_put_row(adaptive_ws *A, ad_run *R, const double *x);
 
 /* ---- adaptive_sample.c ---- */
 /* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */
@@ -449,6 +463,7 @@ static inline int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
 static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
   int na = A->na;
   double *K = A->bk;
+  A->bk_rec = re;
   memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
   for (int k = 0; k < ns; k++) {
     A->bkc[k] = re->rc[k];

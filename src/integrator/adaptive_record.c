@@ -83,6 +83,7 @@ static void compose_row(const adaptive_ws *A, const ad_mode *md, const double *r
 
 static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, struct ad_rec *e) {
   int na = A->na, nc = S->n + S->p + S->m, nz = 0;
+  A->bk_rec = NULL;                              /* (e's rows change) */
   e->X = md->X;
   e->mask = md->mask;
   e->key = S->key;
@@ -130,11 +131,85 @@ int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out) {
   return 1;
 }
 
+/* Signals of y by the dense rows ad_signal_rows made (A->bk, bkc: e's),
+ * na a constant here, y's in registers: each from its constant, every
+ * term in column order, zeros too, as ad_batch_signals' sums (ad_rec_rows'
+ * bit for bit: a zero's term is +-0, y finite). */
+static inline __attribute__((always_inline)) void row_signals(int na, const adaptive_ws *A, const double *y,
+                                                              int ns, double *sig) {
+  const double *K = A->bk, *kc = A->bkc;
+  double yv[4];
+  for (int j = 0; j < na; j++) yv[j] = y[j];
+  for (int k = 0; k < ns; k++, K += na) {
+    double acc = kc[k];
+    for (int j = 0; j < na; j++) acc += K[j] * yv[j];
+    sig[k] = acc;
+  }
+}
+
+/* ad_record_y's y (into A->zw and A->zy) for an input of constants alone
+ * (their states the same at any time: ad_inputs_on's copy of A->wc) with
+ * n and na constants here: ad_lift's sums (lift_sums', the zero states'
+ * terms left out), then row_signals'. (A step's end on the full bridge:
+ * the calls of ad_record_y, ad_inputs_on and ad_lift were 110 instructions
+ * a row, their sums about 20.) */
+static inline __attribute__((always_inline)) void row_const(int n, int na, adaptive_ws *A, const ad_mode *md,
+                                                            int ns, double *sig) {
+  int nw = na - n;
+  const double *x = A->x, *KU = md->KU;
+  double *w = A->zw, *y = A->zy, v[4];
+  if (A->one >= 0) w[A->one] = 1;
+  for (int c = 0; c < A->nwu; c++) w[c] = A->wc[c];
+  for (int i = 0; i < n; i++) v[i] = x[i];
+  for (int c = 0; c < nw; c++) {
+    double wc = w[c];
+    if (wc == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
+  }
+  for (int i = 0; i < n; i++) y[i] = v[i];
+  for (int c = 0; c < nw; c++) y[n + c] = w[c];
+  row_signals(na, A, y, ns, sig);
+}
+
+int ad_put_row(adaptive_ws *A, ad_run *R, const double *x) {
+  const signal_map *S = ad_put_map(A);
+  const ad_mode *md = A->zmd;
+  if (!S || S->ns != A->put_ns) return -1;
+  const struct ad_rec *e = ad_rec_of(A, md, S);
+  if (!e) return -1;
+  double *sig = A->bs, t = R->t;
+  int ns = S->ns, n = A->n, na = A->na;
+  if (na <= 4 && !e->nu) {                       /* (a converter's few states) */
+    if (A->bk_rec != e) ad_signal_rows(A, e, ns);
+    if (!A->nwu || A->w_const) {
+      switch (na * 8 + n) {
+#define ROW(NA, N) case NA * 8 + N: row_const(N, NA, A, md, ns, sig); break;
+        ROW(1, 1) ROW(2, 1) ROW(2, 2) ROW(3, 1) ROW(3, 2) ROW(3, 3) ROW(4, 1) ROW(4, 2) ROW(4, 3) ROW(4, 4)
+#undef ROW
+      }
+    } else {
+      if (ad_record_y(A, md)) return -1;         /* (a failed input: the sink's, as before) */
+      switch (na) {
+        case 1: row_signals(1, A, A->zy, ns, sig); break;
+        case 2: row_signals(2, A, A->zy, ns, sig); break;
+        case 3: row_signals(3, A, A->zy, ns, sig); break;
+        default: row_signals(4, A, A->zy, ns, sig);
+      }
+    }
+  } else {
+    if (ad_record_y(A, md)) return -1;
+    ad_rec_rows(e, ns, A->zy, sig, 1);
+    if (e->nu && !ad_rec_inputs(A, e, ns, sig)) return -1;
+  }
+  return A->put(R->sink_ctx, R->steps, 1, &t, x, sig, 1) != 1;
+}
+
 int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   free(A->put_block);
   A->put_block = NULL;
   A->put = NULL;
   A->put_nl = NULL;
+  A->put_map = NULL;
   A->put_ns = 0;
   if (!put || !nl) return 1;
   int ns = cup_netlist_signal_count(nl), n = A->n, na = A->na;
@@ -155,3 +230,5 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   A->put_ns = ns;
   return 1;
 }
+
+void adaptive_put_on(adaptive_ws *A, int on) { A->put_off = !on; }
