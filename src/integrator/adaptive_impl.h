@@ -333,12 +333,8 @@ struct adaptive_ws {
   record_put_fn put;
   cup_netlist *put_nl;
   int put_ns;
-  int put_off;              /* a switched run's window whose sink is not the user's (watch_sink): to the sink */
-  const struct signal_map *put_map;   /* put_nl's map of this workspace's configuration (ad_put_map), NULL:
-                                         not asked yet */
   void *put_block;
   double *bt, *bx, *bs, *best, *by, *be, *bk, *bkc;
-  const struct ad_rec *bk_rec;   /* the entry bk and bkc hold (NULL: none; compose forgets it) */
   ad_stop *stop;            /* where the last run stopped (ad_window_state's) */
   double *tan;              /* the period map's tangent dx(t)/dx0 (n x n, column-major), or NULL:
                                carried through the error estimate's linear maps (adaptive.h) */
@@ -377,6 +373,13 @@ struct adaptive_ws {
                                AD_TOL_DEPTH: none, the piece's series instead) */
   int oevent;               /* the run emits an event's pieces: not a step's, which ends on A->yb */
   int otaylor;              /* the piece's middle by its Taylor series when its slopes pass, not a level */
+  /* integrator_set_put's, continued (here: placed before, they moved the
+   * dense samples' loop's code, 3 instructions a sample more) */
+  int put_off;              /* a switched run's window whose sink is not the user's (watch_sink): to the sink */
+  const struct signal_map *put_map;   /* put_nl's map of this workspace's configuration (ad_put_map), NULL:
+                                         not asked yet */
+  double *rk, *rkc;         /* a step's end's signals' rows over y (ad_put_row, na <= 4: as bk and bkc) ... */
+  const struct ad_rec *rk_rec;   /* ... of this entry (NULL: none; compose forgets it) */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 #define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
@@ -417,8 +420,9 @@ static inline const struct ad_rec *ad_rec_of(adaptive_ws *A, const ad_mode *md, 
 int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out);
 /* put_nl's signal map: the configuration in force at the first ask (a
  * switched run's workspace is one configuration's; set_put forgets it). */
+const struct signal_map *ad_put_map_ask(adaptive_ws *A);
 static inline const struct signal_map *ad_put_map(adaptive_ws *A) {
-  return A->put_map ? A->put_map : (A->put_map = nl_signal_map(A->put_nl));
+  return A->put_map ? A->put_map : ad_put_map_ask(A);
 }
 /* The sample at a step's end (offer_x: A->zt, A->zmd, state x = A->x)
  * with its signals to put, as the sink would compute them
@@ -460,15 +464,15 @@ static inline int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
 }
 /* The signals' rows of re over y into A->bk by rows, dense with their
  * zeros, and their constants into A->bkc (na <= 4: ad_batch_signals'). */
-static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
-  int na = A->na;
-  double *K = A->bk;
-  A->bk_rec = re;
+static inline void ad_dense_rows(const struct ad_rec *re, int ns, int na, double *K, double *kc) {
   memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
   for (int k = 0; k < ns; k++) {
-    A->bkc[k] = re->rc[k];
+    kc[k] = re->rc[k];
     for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
   }
+}
+static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
+  ad_dense_rows(re, ns, A->na, A->bk, A->bkc);
 }
 /* The signals of a batch's first q samples (their y in by: A->by, na at
  * most 4 a constant here) into so (A->bs), by ad_signal_rows' rows (K, kc:

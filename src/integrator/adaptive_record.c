@@ -83,7 +83,7 @@ static void compose_row(const adaptive_ws *A, const ad_mode *md, const double *r
 
 static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, struct ad_rec *e) {
   int na = A->na, nc = S->n + S->p + S->m, nz = 0;
-  A->bk_rec = NULL;                              /* (e's rows change) */
+  A->rk_rec = NULL;                              /* (e's rows change) */
   e->X = md->X;
   e->mask = md->mask;
   e->key = S->key;
@@ -131,13 +131,13 @@ int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out) {
   return 1;
 }
 
-/* Signals of y by the dense rows ad_signal_rows made (A->bk, bkc: e's),
- * na a constant here, y's in registers: each from its constant, every
- * term in column order, zeros too, as ad_batch_signals' sums (ad_rec_rows'
- * bit for bit: a zero's term is +-0, y finite). */
-static inline __attribute__((always_inline)) void row_signals(int na, const adaptive_ws *A, const double *y,
-                                                              int ns, double *sig) {
-  const double *K = A->bk, *kc = A->bkc;
+/* Signals of y by the dense rows ad_dense_rows made (A->rk, rkc: e's),
+ * na and ns constants here, y's in registers: each from its constant,
+ * every term in column order, zeros too, as ad_batch_signals' sums
+ * (ad_rec_rows' bit for bit: a zero's term is +-0, y finite). */
+static inline __attribute__((always_inline)) void signals_of(int na, int ns, const adaptive_ws *A, const double *y,
+                                                             double *sig) {
+  const double *K = A->rk, *kc = A->rkc;
   double yv[4];
   for (int j = 0; j < na; j++) yv[j] = y[j];
   for (int k = 0; k < ns; k++, K += na) {
@@ -147,14 +147,29 @@ static inline __attribute__((always_inline)) void row_signals(int na, const adap
   }
 }
 
+/* signals_of for na <= 4 (and ns <= 4: unrolled; a loop over the rows was
+ * 20 instructions of the full bridge's 3). */
+static void row_signals(const adaptive_ws *A, int na, int ns, double *sig) {
+  const double *y = A->zy;
+  switch (ns <= 4 ? na * 8 + ns : na * 8) {
+#define SIG(NA)                                                                                             \
+    case NA * 8 + 1: signals_of(NA, 1, A, y, sig); return;                                                  \
+    case NA * 8 + 2: signals_of(NA, 2, A, y, sig); return;                                                  \
+    case NA * 8 + 3: signals_of(NA, 3, A, y, sig); return;                                                  \
+    case NA * 8 + 4: signals_of(NA, 4, A, y, sig); return;                                                  \
+    case NA * 8: signals_of(NA, ns, A, y, sig); return;
+    SIG(1) SIG(2) SIG(3) SIG(4)
+#undef SIG
+  }
+}
+
 /* ad_record_y's y (into A->zw and A->zy) for an input of constants alone
  * (their states the same at any time: ad_inputs_on's copy of A->wc) with
  * n and na constants here: ad_lift's sums (lift_sums', the zero states'
- * terms left out), then row_signals'. (A step's end on the full bridge:
+ * terms left out). (A step's end on the full bridge:
  * the calls of ad_record_y, ad_inputs_on and ad_lift were 110 instructions
  * a row, their sums about 20.) */
-static inline __attribute__((always_inline)) void row_const(int n, int na, adaptive_ws *A, const ad_mode *md,
-                                                            int ns, double *sig) {
+static inline __attribute__((always_inline)) void row_const(int n, int na, adaptive_ws *A, const ad_mode *md) {
   int nw = na - n;
   const double *x = A->x, *KU = md->KU;
   double *w = A->zw, *y = A->zy, v[4];
@@ -168,7 +183,12 @@ static inline __attribute__((always_inline)) void row_const(int n, int na, adapt
   }
   for (int i = 0; i < n; i++) y[i] = v[i];
   for (int c = 0; c < nw; c++) y[n + c] = w[c];
-  row_signals(na, A, y, ns, sig);
+}
+
+/* (Out of line: a call and a store inlined into dense_loop moved the
+ * dense samples' code, 3 instructions a sample more.) */
+__attribute__((noinline)) const signal_map *ad_put_map_ask(adaptive_ws *A) {
+  return A->put_map ? A->put_map : (A->put_map = nl_signal_map(A->put_nl));
 }
 
 int ad_put_row(adaptive_ws *A, ad_run *R, const double *x) {
@@ -180,22 +200,20 @@ int ad_put_row(adaptive_ws *A, ad_run *R, const double *x) {
   double *sig = A->bs, t = R->t;
   int ns = S->ns, n = A->n, na = A->na;
   if (na <= 4 && !e->nu) {                       /* (a converter's few states) */
-    if (A->bk_rec != e) ad_signal_rows(A, e, ns);
+    if (A->rk_rec != e) {
+      ad_dense_rows(e, ns, na, A->rk, A->rkc);
+      A->rk_rec = e;
+    }
     if (!A->nwu || A->w_const) {
       switch (na * 8 + n) {
-#define ROW(NA, N) case NA * 8 + N: row_const(N, NA, A, md, ns, sig); break;
+#define ROW(NA, N) case NA * 8 + N: row_const(N, NA, A, md); break;
         ROW(1, 1) ROW(2, 1) ROW(2, 2) ROW(3, 1) ROW(3, 2) ROW(3, 3) ROW(4, 1) ROW(4, 2) ROW(4, 3) ROW(4, 4)
 #undef ROW
       }
-    } else {
-      if (ad_record_y(A, md)) return -1;         /* (a failed input: the sink's, as before) */
-      switch (na) {
-        case 1: row_signals(1, A, A->zy, ns, sig); break;
-        case 2: row_signals(2, A, A->zy, ns, sig); break;
-        case 3: row_signals(3, A, A->zy, ns, sig); break;
-        default: row_signals(4, A, A->zy, ns, sig);
-      }
+    } else if (ad_record_y(A, md)) {
+      return -1;                                 /* (a failed input: the sink's, as before) */
     }
+    row_signals(A, na, ns, sig);
   } else {
     if (ad_record_y(A, md)) return -1;
     ad_rec_rows(e, ns, A->zy, sig, 1);
@@ -214,7 +232,7 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   if (!put || !nl) return 1;
   int ns = cup_netlist_signal_count(nl), n = A->n, na = A->na;
   size_t b = AD_BATCH, slots = (b + 1) * (size_t)na;
-  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots + (size_t)ns * (na + 1)));
+  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots + 2 * (size_t)ns * (na + 1)));
   if (!d) return CUP_ERR_NOMEM;
   A->put_block = d;
   A->bt = d;
@@ -225,6 +243,9 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   A->be = A->by + slots;
   A->bk = A->be + slots;
   A->bkc = A->bk + (size_t)ns * na;
+  A->rk = A->bkc + ns;
+  A->rkc = A->rk + (size_t)ns * na;
+  A->rk_rec = NULL;
   A->put = put;
   A->put_nl = nl;
   A->put_ns = ns;
