@@ -373,8 +373,8 @@ struct adaptive_ws {
                                AD_TOL_DEPTH: none, the piece's series instead) */
   int oevent;               /* the run emits an event's pieces: not a step's, which ends on A->yb */
   int otaylor;              /* the piece's middle by its Taylor series when its slopes pass, not a level */
-  /* integrator_set_put's, continued (here: placed before, they moved the
-   * dense samples' loop's code, 3 instructions a sample more) */
+  /* integrator_set_put's, continued: a switched run's window, the map, a
+   * step's end's rows (ad_put_row) */
   int put_off;              /* a switched run's window whose sink is not the user's (watch_sink): to the sink */
   const struct signal_map *put_map;   /* put_nl's map of this workspace's configuration (ad_put_map), NULL:
                                          not asked yet */
@@ -602,6 +602,19 @@ void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const dou
                   double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y);
+/* ad_lift's sums: v = x + K_J U w into y (n), each v_i's sum in a register
+ * for a constant n (at most 6), the zero w_c's terms left out. */
+static inline __attribute__((always_inline)) void ad_lift_sums(int n, int nw, const double *KU, const double *x,
+                                                               const double *w, double *y) {
+  double v[6];
+  for (int i = 0; i < n; i++) v[i] = x[i];
+  for (int c = 0; c < nw; c++) {
+    double wc = w[c];
+    if (wc == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
+  }
+  for (int i = 0; i < n; i++) y[i] = v[i];
+}
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x);
 /* x onto C_J x + g_J = 0 along B_J (P-orthogonal): removes rounding drift. */
 void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x);

@@ -165,23 +165,15 @@ static void row_signals(const adaptive_ws *A, int na, int ns, double *sig) {
 
 /* ad_record_y's y (into A->zw and A->zy) for an input of constants alone
  * (their states the same at any time: ad_inputs_on's copy of A->wc) with
- * n and na constants here: ad_lift's sums (lift_sums', the zero states'
- * terms left out). (A step's end on the full bridge:
+ * n and na constants here: ad_lift's sums (ad_lift_sums). (A step's end on the full bridge:
  * the calls of ad_record_y, ad_inputs_on and ad_lift were 110 instructions
  * a row, their sums about 20.) */
 static inline __attribute__((always_inline)) void row_const(int n, int na, adaptive_ws *A, const ad_mode *md) {
   int nw = na - n;
-  const double *x = A->x, *KU = md->KU;
-  double *w = A->zw, *y = A->zy, v[4];
+  double *w = A->zw, *y = A->zy;
   if (A->one >= 0) w[A->one] = 1;
   for (int c = 0; c < A->nwu; c++) w[c] = A->wc[c];
-  for (int i = 0; i < n; i++) v[i] = x[i];
-  for (int c = 0; c < nw; c++) {
-    double wc = w[c];
-    if (wc == 0) continue;
-    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
-  }
-  for (int i = 0; i < n; i++) y[i] = v[i];
+  ad_lift_sums(n, nw, md->KU, A->x, w, y);
   for (int c = 0; c < nw; c++) y[n + c] = w[c];
 }
 
