@@ -424,6 +424,8 @@ const struct signal_map *ad_put_map_ask(adaptive_ws *A);
 static inline const struct signal_map *ad_put_map(adaptive_ws *A) {
   return A->put_map ? A->put_map : ad_put_map_ask(A);
 }
+
+/* ---- adaptive_put.c ---- */
 /* The sample at a step's end (offer_x: A->zt, A->zmd, state x = A->x)
  * with its signals to put, as the sink would compute them
  * (integrator_record's sums): 0 taken, 1 refused; -1 not here (the
