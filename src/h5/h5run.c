@@ -419,17 +419,31 @@ static __attribute__((noinline)) int tick(cup_h5run *w) {
   return CUP_OK;
 }
 
-/* Row nbuf of the buffer: t, x and the signals (into their columns),
- * then the clock every tick_every rows and the chunk once full. */
-static inline int put_row(cup_h5run *w, double t, const double *x, const double *sig, int wide) {
+/* Row nbuf of the buffer: t, x and the signals (into their columns; sig's
+ * k-th at sig + k ss), then the clock every tick_every rows and the chunk
+ * once full. */
+static inline int put_row(cup_h5run *w, double t, const double *x, const double *sig, size_t ss, int wide) {
   hsize_t r = w->nbuf, rows = w->chunk_rows;
   int dim = w->dim, nsig = w->nsig;
   w->tbuf[r] = t;
   double *xb = w->xbuf + r * (hsize_t)dim, *sb = w->sbuf + r;
   if (wide) memcpy(xb, x, sizeof(double) * (size_t)dim);
   else
-    for (int j = 0; j < dim; j++) xb[j] = x[j];
-  for (int k = 0; k < nsig; k++, sb += rows) *sb = sig[k];
+    switch (dim) {                               /* (1 to 4: no loop) */
+      case 4: xb[3] = x[3]; /* fall through */
+      case 3: xb[2] = x[2]; /* fall through */
+      case 2: xb[1] = x[1]; /* fall through */
+      default: xb[0] = x[0];
+    }
+  switch (nsig) {                                /* (a converter's few: no loop) */
+    case 4: sb[3 * rows] = sig[3 * ss]; /* fall through */
+    case 3: sb[2 * rows] = sig[2 * ss]; /* fall through */
+    case 2: sb[rows] = sig[ss]; /* fall through */
+    case 1: sb[0] = sig[0]; /* fall through */
+    case 0: break;
+    default:
+      for (int k = 0; k < nsig; k++, sb += rows) *sb = sig[(size_t)k * ss];
+  }
   w->nbuf = r + 1;
   if (--w->tick_left <= 0) return tick(w);
   if (w->nbuf >= room(w)) return write_buffer(w);
@@ -438,8 +452,9 @@ static inline int put_row(cup_h5run *w, double t, const double *x, const double 
 
 /* (Out of line: memcpy's call in the few entries' path made it save and
  * restore six registers.) */
-static __attribute__((noinline)) int put_row_wide(cup_h5run *w, double t, const double *x, const double *sig) {
-  return put_row(w, t, x, sig, 1);
+static __attribute__((noinline)) int put_row_wide(cup_h5run *w, double t, const double *x, const double *sig,
+                                                  size_t ss) {
+  return put_row(w, t, x, sig, ss, 1);
 }
 
 /* The row buffers are taken at the first row, not with the writer: by
@@ -474,7 +489,13 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
   if (!w || !x || (w->nsig && !sig)) return CUP_ERR_ARG;
   if (w->data_status != CUP_OK) return w->data_status;
   if (!w->tbuf && take_buffers(w) != CUP_OK) return w->data_status;
-  return w->dim > 4 ? put_row_wide(w, t, x, sig) : put_row(w, t, x, sig, 0);
+  return w->dim > 4 ? put_row_wide(w, t, x, sig, 1) : put_row(w, t, x, sig, 1, 0);
+}
+
+int h5run_append_row(cup_h5run *w, double t, const double *x, const double *sig, int stride) {
+  if (w->data_status != CUP_OK) return w->data_status;
+  if (!w->tbuf && take_buffers(w) != CUP_OK) return w->data_status;
+  return w->dim > 4 ? put_row_wide(w, t, x, sig, (size_t)stride) : put_row(w, t, x, sig, (size_t)stride, 0);
 }
 
 /* Whole runs of rows up to the next look at the clock or the chunk's end,

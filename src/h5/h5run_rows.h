@@ -16,4 +16,9 @@ __attribute__((visibility("hidden")))
 int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x, const double *sig, int stride,
                       int *done);
 
+/* One sample, as cup_h5run_append (w, x and sig as that takes them; no
+ * check), signal k at sig + k stride: a step's end (put's count 1). */
+__attribute__((visibility("hidden")))
+int h5run_append_row(cup_h5run *w, double t, const double *x, const double *sig, int stride);
+
 #endif

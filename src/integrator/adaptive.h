@@ -99,9 +99,12 @@ int adaptive_zeta(adaptive_ws *A, double *zeta);
 /* Inside the sink, at a sample inside a step: S's signals there from the
  * step's flow state (record.h), 1; else 0. */
 int adaptive_record(adaptive_ws *A, const struct signal_map *S, double *out);
-/* record.h's integrator_set_put: the samples inside a step to put with
- * nl's signals (NULL put: all to the sink); 1, or CUP_ERR_NOMEM. */
+/* record.h's integrator_set_put: the samples inside a step and at its
+ * end to put with nl's signals (NULL put: all to the sink); 1, or
+ * CUP_ERR_NOMEM. adaptive_put_on: with on 0, the next windows' samples
+ * all go to the sink (switched.c: a sink of its own, not the user's). */
 int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put);
+void adaptive_put_on(adaptive_ws *A, int on);
 /* Checkpoints (integrator.h): 1 when the last run stopped at a step's end,
  * where it can resume; the status and message the stop replaced, into
  * info; the run's state to or from a checkpoint (util/ckpt.h); and the

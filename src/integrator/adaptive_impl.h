@@ -386,6 +386,13 @@ struct adaptive_ws {
                                AD_TOL_DEPTH: none, the piece's series instead) */
   int oevent;               /* the run emits an event's pieces: not a step's, which ends on A->yb */
   int otaylor;              /* the piece's middle by its Taylor series when its slopes pass, not a level */
+  /* integrator_set_put's, continued: a switched run's window, the map, a
+   * step's end's rows (ad_put_row) */
+  int put_off;              /* a switched run's window whose sink is not the user's (watch_sink): to the sink */
+  const struct signal_map *put_map;   /* put_nl's map of this workspace's configuration (ad_put_map), NULL:
+                                         not asked yet */
+  double *rk, *rkc;         /* a step's end's signals' rows over y (ad_put_row, na <= 4: as bk and bkc) ... */
+  const struct ad_rec *rk_rec;   /* ... of this entry (NULL: none; compose forgets it) */
 };
 #define AD_TOL_DEPTH 30     /* output tol: halvings of a step's piece at most (2^-30 of it) */
 #define AD_TOL_LEVELS_NA 4  /* output tol: up to this na, a point is exp(2^-j h M) times its left end's y
@@ -424,6 +431,19 @@ static inline const struct ad_rec *ad_rec_of(adaptive_ws *A, const ad_mode *md, 
 /* The input components entry e reads that y leaves out (e->nu), at A->zt,
  * added to its ns signals in out: 1, or 0 when the input failed. */
 int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out);
+/* put_nl's signal map: the configuration in force at the first ask (a
+ * switched run's workspace is one configuration's; set_put forgets it). */
+const struct signal_map *ad_put_map_ask(adaptive_ws *A);
+static inline const struct signal_map *ad_put_map(adaptive_ws *A) {
+  return A->put_map ? A->put_map : ad_put_map_ask(A);
+}
+
+/* ---- adaptive_put.c ---- */
+/* The sample at a step's end (offer_x: A->zt, A->zmd, state x = A->x)
+ * with its signals to put, as the sink would compute them
+ * (integrator_record's sums): 0 taken, 1 refused; -1 not here (the
+ * signals not from y: the sink's). */
+int ad_put_row(adaptive_ws *A, ad_run *R, const double *x);
 
 /* ---- adaptive_sample.c ---- */
 /* Output time j: t0 + j (T - t0) / (N - 1), T itself for the last. */
@@ -459,14 +479,15 @@ static inline int ad_put_batch(adaptive_ws *A, ad_run *R, long k, int c) {
 }
 /* The signals' rows of re over y into A->bk by rows, dense with their
  * zeros, and their constants into A->bkc (na <= 4: ad_batch_signals'). */
-static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
-  int na = A->na;
-  double *K = A->bk;
+static inline void ad_dense_rows(const struct ad_rec *re, int ns, int na, double *K, double *kc) {
   memset(K, 0, sizeof(double) * (size_t)ns * (size_t)na);
   for (int k = 0; k < ns; k++) {
-    A->bkc[k] = re->rc[k];
+    kc[k] = re->rc[k];
     for (int q = re->rp[k]; q < re->rp[k + 1]; q++) K[(size_t)k * na + re->rj[q]] = re->rx[q];
   }
+}
+static inline void ad_signal_rows(adaptive_ws *A, const struct ad_rec *re, int ns) {
+  ad_dense_rows(re, ns, A->na, A->bk, A->bkc);
 }
 /* The signals of a batch's first q samples (their y in by: A->by, na at
  * most 4 a constant here) into so (A->bs), by ad_signal_rows' rows (K, kc:
@@ -603,6 +624,19 @@ void ad_series_at(adaptive_ws *A, ad_series *S, ad_mode *md, double h, const dou
                   double *y_out);
 /* y = (x + K_J U w, w) and back: x = X_J y. */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y);
+/* ad_lift's sums: v = x + K_J U w into y (n), each v_i's sum in a register
+ * for a constant n (at most 6), the zero w_c's terms left out. */
+static inline __attribute__((always_inline)) void ad_lift_sums(int n, int nw, const double *KU, const double *x,
+                                                               const double *w, double *y) {
+  double v[6];
+  for (int i = 0; i < n; i++) v[i] = x[i];
+  for (int c = 0; c < nw; c++) {
+    double wc = w[c];
+    if (wc == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
+  }
+  for (int i = 0; i < n; i++) y[i] = v[i];
+}
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x);
 /* x onto C_J x + g_J = 0 along B_J (P-orthogonal): removes rounding drift. */
 void ad_manifold(const adaptive_ws *A, const ad_mode *md, const double *g, double *x);

@@ -779,31 +779,18 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   }
 }
 
-/* v = x + K_J U w, each v_i's sum in a register for a constant n. */
-static inline __attribute__((always_inline)) void lift_sums(int n, int nw, const double *KU, const double *x,
-                                                            const double *w, double *y) {
-  double v[6];
-  for (int i = 0; i < n; i++) v[i] = x[i];
-  for (int c = 0; c < nw; c++) {
-    double wc = w[c];
-    if (wc == 0) continue;
-    for (int i = 0; i < n; i++) v[i] += KU[i + (size_t)c * n] * wc;
-  }
-  for (int i = 0; i < n; i++) y[i] = v[i];
-}
-
 /* (Each y_i its sum in a register, over the columns in order: a record's
  * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
   switch (n) {                                   /* (a converter's few states: the loops unrolled) */
-    case 1: lift_sums(1, nw, md->KU, x, w, y); break;
-    case 2: lift_sums(2, nw, md->KU, x, w, y); break;
-    case 3: lift_sums(3, nw, md->KU, x, w, y); break;
-    case 4: lift_sums(4, nw, md->KU, x, w, y); break;
-    case 5: lift_sums(5, nw, md->KU, x, w, y); break;
-    case 6: lift_sums(6, nw, md->KU, x, w, y); break;
+    case 1: ad_lift_sums(1, nw, md->KU, x, w, y); break;
+    case 2: ad_lift_sums(2, nw, md->KU, x, w, y); break;
+    case 3: ad_lift_sums(3, nw, md->KU, x, w, y); break;
+    case 4: ad_lift_sums(4, nw, md->KU, x, w, y); break;
+    case 5: ad_lift_sums(5, nw, md->KU, x, w, y); break;
+    case 6: ad_lift_sums(6, nw, md->KU, x, w, y); break;
     default:
       la_copy(y, x, n);
       for (int c = 0; c < nw; c++) {

@@ -470,7 +470,7 @@ int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const 
   const double *sy0 = A->sy.y0;
   double sh = A->sy.h;
   la_copy(A->pend.opk, A->opeak, A->n);          /* (the scales at the piece's start: a refusal's) */
-  const signal_map *S = A->put ? nl_signal_map(A->put_nl) : NULL;
+  const signal_map *S = A->put && !A->put_off ? ad_put_map(A) : NULL;
   const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_of(A, md, S) : NULL;
   tol_out O = {.re = re && !re->nu ? re : NULL, .ns = S ? S->ns : 0};
   O.dense = O.re && A->na <= 4;

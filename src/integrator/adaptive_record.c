@@ -83,6 +83,7 @@ static void compose_row(const adaptive_ws *A, const ad_mode *md, const double *r
 
 static void compose(adaptive_ws *A, const ad_mode *md, const signal_map *S, struct ad_rec *e) {
   int na = A->na, nc = S->n + S->p + S->m, nz = 0;
+  A->rk_rec = NULL;                              /* (e's rows change) */
   e->X = md->X;
   e->mask = md->mask;
   e->key = S->key;
@@ -130,16 +131,23 @@ int ad_rec_inputs(adaptive_ws *A, const struct ad_rec *e, int ns, double *out) {
   return 1;
 }
 
+/* (Out of line: a call and a store inlined into dense_loop moved the
+ * dense samples' code, 3 instructions a sample more.) */
+__attribute__((noinline)) const signal_map *ad_put_map_ask(adaptive_ws *A) {
+  return A->put_map ? A->put_map : (A->put_map = nl_signal_map(A->put_nl));
+}
+
 int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   free(A->put_block);
   A->put_block = NULL;
   A->put = NULL;
   A->put_nl = NULL;
+  A->put_map = NULL;
   A->put_ns = 0;
   if (!put || !nl) return 1;
   int ns = cup_netlist_signal_count(nl), n = A->n, na = A->na;
   size_t b = AD_BATCH, slots = (b + 1) * (size_t)na;
-  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots + (size_t)ns * (na + 1)));
+  double *d = malloc(sizeof(double) * (b * (size_t)(1 + n + ns + 1) + 2 * slots + 2 * (size_t)ns * (na + 1)));
   if (!d) return CUP_ERR_NOMEM;
   A->put_block = d;
   A->bt = d;
@@ -150,8 +158,13 @@ int adaptive_set_put(adaptive_ws *A, cup_netlist *nl, record_put_fn put) {
   A->be = A->by + slots;
   A->bk = A->be + slots;
   A->bkc = A->bk + (size_t)ns * na;
+  A->rk = A->bkc + ns;
+  A->rkc = A->rk + (size_t)ns * na;
+  A->rk_rec = NULL;
   A->put = put;
   A->put_nl = nl;
   A->put_ns = ns;
   return 1;
 }
+
+void adaptive_put_on(adaptive_ws *A, int on) { A->put_off = !on; }

@@ -84,13 +84,17 @@ static int halt_dense(adaptive_ws *A, ad_run *R) {
 
 /* The sample at R->t to the sink: the state x (A->x, or x0 as given at a
  * start), zeta the active set's at A->x (adaptive_zeta; none before a set
- * is chosen, or under catching-up steps: pinned[1]). */
+ * is chosen, or under catching-up steps: pinned[1]). With put
+ * (integrator_set_put), A->x's sample with its signals from the active
+ * set's y goes there instead (ad_put_row: what the sink would do with
+ * integrator_record's, without its calls). */
 RUN_INLINE int offer_x(adaptive_ws *A, ad_run *R, const double *x) {
   R->info->samples++;
   A->zmd = A->pinned[1] ? NULL : R->md;
   A->zt = R->t;
   A->zx0 = x != A->x;
-  int stopped = R->sink(R->steps, R->t, x, R->sink_ctx);
+  int stopped = A->put && !A->put_off && A->zmd && !A->zx0 ? ad_put_row(A, R, x) : -1;
+  if (stopped < 0) stopped = R->sink(R->steps, R->t, x, R->sink_ctx);
   A->zmd = NULL;
   A->zx0 = 0;
   if (stopped) return halt(A, R, CUP_ERR_INTERRUPTED, AD_STOP_SAMPLE, "stopped by the output sink");

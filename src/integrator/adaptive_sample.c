@@ -395,7 +395,7 @@ static int dense_batch(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k
 static int dense_loop(adaptive_ws *A, ad_run *R, ad_mode *md, double t1, long k) {
   A->zmd = md;
   A->zy_ready = 1;
-  const signal_map *S = A->put && R->sink ? nl_signal_map(A->put_nl) : NULL;
+  const signal_map *S = A->put && !A->put_off && R->sink ? ad_put_map_ask(A) : NULL;
   const struct ad_rec *re = S && S->ns == A->put_ns ? ad_rec_of(A, md, S) : NULL;
   int st = re && !re->nu ? dense_batch(A, R, md, t1, k, S, re) : dense_samples(A, R, md, t1, k);
   A->zmd = NULL;

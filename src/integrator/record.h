@@ -33,8 +33,9 @@ typedef int (*record_put_fn)(void *ctx, long k, int count, const double *t, cons
  * sink's context its context; the others to the sink, which computes them
  * itself. The same samples, signals and refusals as the sink alone gives,
  * in order, without two calls a sample: the adaptive scheme's samples
- * inside a step (NULL put: none). 1 if the scheme takes it, else 0 (every
- * sample to the sink); CUP_ERR_NOMEM. */
+ * inside a step and at its ends (count 1), a switched run's under it too
+ * (its windows whose sink is the user's) (NULL put: none). 1 if the
+ * scheme takes it, else 0 (every sample to the sink); CUP_ERR_NOMEM. */
 int integrator_set_put(cup_integrator *I, cup_netlist *nl, record_put_fn put);
 
 #endif

@@ -67,6 +67,8 @@ struct switched_run {
   double *xg;
   cup_sample_fn sink;      /* the user's */
   void *sink_ctx;
+  record_put_fn put;       /* integrator_set_put's, each configuration's adaptive scheme's (child_make) */
+  cup_netlist *put_nl;
   cup_step_fn on_step;
   void *step_ctx;
   double wall0;            /* the run's start, when it has a wall-time limit */
@@ -127,6 +129,8 @@ static int child_make(switched_run *S, int topo, char *errmsg) {
   int st = integrator_create_shared(&S->child[topo], L, S->u, &o, &S->scratch, msg);
   if (st) return fail_fmt(errmsg, st, "switch configuration %d: %s", topo, msg);
   S->ad[topo] = adaptive_of(S->child[topo]);
+  if (S->ad[topo] && S->put && (st = adaptive_set_put(S->ad[topo], S->put_nl, S->put)) < 0)
+    return fail_fmt(errmsg, st, "switch configuration %d: out of memory", topo);
   return CUP_OK;
 }
 
@@ -162,6 +166,23 @@ static int sw_record(void *ws, const struct signal_map *sig, double *out) {
   switched_run *S = ws;
   adaptive_ws *A = S->ad[S->cur];                  /* (the adaptive scheme's record without the table's calls) */
   return A ? adaptive_record(A, sig, out) : integrator_record(S->child[S->cur], sig, out);
+}
+
+/* record.h's integrator_set_put: the configurations' adaptive schemes,
+ * those made later too (child_make); a window whose sink is watch_sink
+ * gives its samples to the sink (window). */
+static int sw_set_put(void *ws, cup_netlist *nl, record_put_fn put) {
+  switched_run *S = ws;
+  int took = 0;
+  S->put = nl ? put : NULL;
+  S->put_nl = nl;
+  for (int k = 0; k < SW_MAX; k++) {
+    if (!S->ad[k]) continue;
+    int st = adaptive_set_put(S->ad[k], nl, S->put);
+    if (st < 0) return st;
+    took = 1;
+  }
+  return took && S->put;
 }
 
 /* One window's statistics into the run's. */
@@ -213,6 +234,7 @@ static int window(switched_run *S, int topo, double t, double tb, int first, int
   /* with nothing to check at a sample, the user's sink itself (a call a
    * sample saved); its refusal is the user's stop, as watch_sink's */
   int direct = !watching && S->sink;
+  adaptive_put_on(A, direct);
   int st = adaptive_window(A, t, tb, S->x, first, jumped, steps, next_sample, direct ? S->sink : watch_sink,
                            direct ? S->sink_ctx : S, &w);
   if (direct && st < 0 && adaptive_refused(A)) S->user_stop = 1;
@@ -654,7 +676,7 @@ static void sw_wall_limit(void *ws, double seconds) { ((switched_run *)ws)->o.ma
 /* Made by its own front door below, never chosen by the options; no checkpoints. */
 static const scheme_type switched_type = {
   .name = "switched", .free = sw_free, .run = sw_run, .state = sw_state, .zeta = sw_zeta, .record = sw_record,
-  .wall_limit = sw_wall_limit,
+  .set_put = sw_set_put, .wall_limit = sw_wall_limit,
 };
 
 int cup_integrator_create_switched(cup_integrator **out, const cup_switching *sw, const cup_input *u,
