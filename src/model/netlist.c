@@ -408,7 +408,7 @@ int nl_formulate(cup_netlist **out, const nl_circuit *c, const cup_input *u, cha
   int st = nl ? copy_circuit(nl, c) : CUP_ERR_NOMEM;
   if (!st) st = nl_topology(nl, c, errmsg);
   else st = nl_fail(c, -1, errmsg, st, "out of memory");
-  if (!st && (st = nl_diode_loops(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
+  if (!st && !c->no_warning && (st = nl_diode_loops(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st && (st = name_variables(nl, c))) st = nl_fail(c, -1, errmsg, st, "out of memory");
   if (!st) st = nl_hybrid(nl, c, errmsg);
   if (!st) st = nl_controlled(nl, c, errmsg);

@@ -107,6 +107,8 @@ typedef struct nl_circuit {
                          nodes and files are the switched netlist's circuit's (netlist_switch.c's
                          S->c), freed with the switched netlist after every configuration's
                          netlist: netlist_formulate lends them on */
+  int no_warning;     /* a derived circuit formed in the run: no diode loops' warning (only the
+                         switched netlist's own, its topo[0]'s, is read: cup_netlist_warning) */
 } nl_circuit;
 
 void nl_circuit_free(nl_circuit *c);

@@ -77,6 +77,7 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   *d = *c;
   d->derived = 1;
   d->names_lent = c->nelem;                        /* (sw_free frees S->c after every configuration) */
+  d->no_warning = S->created;
   d->nprobe = 0; d->probe = NULL; d->probe_all = 0;
   /* (not zeroed: the circuit's elements are copied over, append clears each one after) */
   d->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + (size_t)c->nnodes + 1));
@@ -574,6 +575,7 @@ int nl_switched_formulate(cup_netlist **out, nl_circuit *c, char *errmsg) {
    * else a switched netlist recorded every signal whatever its .probe said */
   if (!st && nl_copy_probes(nl, c)) st = nl_switch_nomem(c, errmsg);
   if (st) { cup_netlist_free(&nl); return st; }    /* frees S and every configuration */
+  S->created = 1;                                  /* (topo[0] is the netlist's for good) */
   *out = nl;
   return CUP_OK;
 }

@@ -43,6 +43,8 @@ struct nl_switched {
   int ntopo;
   nl_topo topo[NL_TOPO_MAX];
   long formed;             /* configurations formulated */
+  int created;             /* the netlist is made: a configuration formed now is not topo[0] (its
+                              diode loops' warning, which nobody reads, not computed) */
   int nclass;              /* the control classes given out (nl_topo's ctl_class) */
   int cur;                 /* the configuration in force (signals) */
   double *ut;              /* p: u(t) */
