@@ -136,12 +136,15 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
   return st;
 }
 
-static int copy_names(cup_lcs *L, const char *const *names, char *errmsg) {
+static int copy_names(cup_lcs *L, const char *const *names, int lend, char *errmsg) {
   if (!names) return CUP_OK;
   L->row_names = calloc((size_t)L->m + 1, sizeof(char *));
   if (!L->row_names) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  for (int i = 0; lend && i < L->m; i++) lend = names[i] != NULL;   /* (a missing one: "?", copied) */
+  L->names_lent = lend;
   for (int i = 0; i < L->m; i++)
-    if (!(L->row_names[i] = strdup(names[i] ? names[i] : "?"))) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+    if (!(L->row_names[i] = lend ? (char *)names[i] : strdup(names[i] ? names[i] : "?")))
+      return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   return CUP_OK;
 }
 
@@ -162,7 +165,12 @@ int lcs_needs_reciprocal(const char *scheme, const char *why, char *errmsg) {
                   scheme, why);
 }
 
-int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
+static int create(cup_lcs **out, const cup_lcs_desc *d, int lend, char *errmsg);
+
+int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) { return create(out, d, 0, errmsg); }
+int lcs_create_lent(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) { return create(out, d, 1, errmsg); }
+
+static int create(cup_lcs **out, const cup_lcs_desc *d, int lend, char *errmsg) {
   if (!out) return fail_fmt(errmsg, CUP_ERR_ARG, "LCS: output pointer is NULL");
   *out = NULL;
   if (!d) return fail_fmt(errmsg, CUP_ERR_ARG, "LCS: description is NULL");
@@ -190,7 +198,7 @@ int cup_lcs_create(cup_lcs **out, const cup_lcs_desc *d, char *errmsg) {
     }
   }
   if (!st) st = cup_polyset_create(&L->K, &d->C, L->F, &d->P, errmsg);
-  if (!st) st = copy_names(L, d->row_names, errmsg);
+  if (!st) st = copy_names(L, d->row_names, lend, errmsg);
   L->has_D = !st && has_nonzero(&d->D);
   L->keep_B = !st && d->keep_B && d->m > 0;
   if (L->keep_B && !L->has_D) {              /* D = 0, B as given: stored as a zero D */
@@ -230,7 +238,7 @@ void cup_lcs_free(cup_lcs **Lp) {
   cup_polyset_free(&L->K);
   la_sparse_free(&L->B);
   la_sparse_free(&L->D);
-  for (int i = 0; L->row_names && i < L->m; i++) free(L->row_names[i]);
+  for (int i = 0; L->row_names && !L->names_lent && i < L->m; i++) free(L->row_names[i]);
   free(L->row_names);
   free(L);
   *Lp = NULL;

@@ -24,6 +24,12 @@ struct cup_lcs {
   int keep_B;           /* B kept as given (P B != C^T allowed): the reason when D = 0 */
   la_sparse B, D;      /* has_D: n x m and m x m as given (D may be all zero) */
   char **row_names;     /* m names for messages, or NULL */
+  int names_lent;       /* row_names' strings are the caller's (lcs_create_lent), not freed */
 };
+
+/* cup_lcs_create, with the row names' strings not copied (the array is):
+ * the caller's, which must outlive the LCS (a switch configuration's, its
+ * elements' names: a strdup and a free less a row). */
+int lcs_create_lent(struct cup_lcs **out, const cup_lcs_desc *d, char *errmsg);
 
 #endif

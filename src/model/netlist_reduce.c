@@ -13,6 +13,7 @@
 #include <string.h>
 #include "catchup.h"
 #include "catchup/netlist.h"
+#include "lcs_impl.h"
 #include "netlist_impl.h"
 
 int nl_switch_nomem(const nl_circuit *c, char *errmsg) {
@@ -212,8 +213,9 @@ static int lcs_of(cup_netlist *sub, const la_sparse *const s[6], double *F, cons
   q.P = Ps ? (cup_metric){CUP_METRIC_SPARSE, NULL, view(Ps), 0} : (cup_metric){CUP_METRIC_DIAGONAL, pd, {0}, 0};
   q.row_names = (const char *const *)sub->row_name;
   q.keep_B = R->keep_B && !hasD;
-  int st = cup_lcs_create(&sub->L, &q, lib);
-  if (st && R->keep_B) { q.keep_B = 1; st = cup_lcs_create(&sub->L, &q, lib); }
+  /* the row names: its elements' (the switched netlist's circuit's, or its own), freed after L: lent */
+  int st = lcs_create_lent(&sub->L, &q, lib);
+  if (st && R->keep_B) { q.keep_B = 1; st = lcs_create_lent(&sub->L, &q, lib); }
   if (st == CUP_ERR_NOMEM) return nl_switch_nomem(d, errmsg);
   return st ? nl_fail(d, -1, errmsg, st, "%s", lib) : CUP_OK;
 }
