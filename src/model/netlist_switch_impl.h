@@ -67,6 +67,14 @@ struct nl_switched {
   double *tab;             /* 2^NL_TAB_TERMS x nsw */
   uint64_t tab_ok;         /* bit key: its row holds */
   uint64_t tab_from[1 << NL_TAB_TERMS], tab_to[1 << NL_TAB_TERMS];   /* the rule's last answer on it */
+  /* read_piece's last key and its terms' memos, kept while no memo was
+   * taken afresh since (vgen): the next piece's key from the terms whose
+   * piece ended alone (a full bridge's window: one gate of 4) */
+  uint64_t vgen;           /* memos taken afresh (term_at), all readers' */
+  uint64_t walk_gen;       /* vgen when walk_key was right (walk_ok) */
+  int walk_ok;             /* walk_key, walk_c hold for tab_class (reset with it) */
+  unsigned walk_key;
+  double *walk_c[NL_TAB_TERMS];   /* the class's terms' memos, in uterm's order */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* the switching time the last search found (a configuration with no
