@@ -67,14 +67,12 @@ struct nl_switched {
   double *tab;             /* 2^NL_TAB_TERMS x nsw */
   uint64_t tab_ok;         /* bit key: its row holds */
   uint64_t tab_from[1 << NL_TAB_TERMS], tab_to[1 << NL_TAB_TERMS];   /* the rule's last answer on it */
-  /* read_piece's last key and its terms' memos, kept while no memo was
-   * taken afresh since (vgen): the next piece's key from the terms whose
-   * piece ended alone (a full bridge's window: one gate of 4) */
-  uint64_t vgen;           /* memos taken afresh (term_at), all readers' */
-  uint64_t walk_gen;       /* vgen when walk_key was right (walk_ok) */
-  int walk_ok;             /* walk_key, walk_c hold for tab_class (reset with it) */
-  unsigned walk_key;
-  double *walk_c[NL_TAB_TERMS];   /* the class's terms' memos, in uterm's order */
+  /* the terms tab_class's controls read, in uterm's order (read_piece's
+   * loop, once a window: a full bridge's 4 gates) */
+  int walk_ok;             /* they are tab_class's (reset with it) */
+  double *walk_c[NL_TAB_TERMS];   /* each one's memo (vmemo) */
+  double walk_v[NL_TAB_TERMS];    /* ... its value (the key's bit: off it) */
+  int walk_k[NL_TAB_TERMS];       /* ... its index in the input */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* the switching time the last search found (a configuration with no

@@ -17,7 +17,6 @@ static inline const double *term_at(nl_switched *S, const input_term *w, int k, 
   double *c = S->vmemo + 4 * (size_t)k;
   if (!(t >= c[0] && t < c[1])) {
     c[0] = t;
-    S->vgen++;                                     /* (read_piece's key may no longer hold) */
     /* a gate's pieces one after another: the next from the last's period */
     if (t == c[1] && !isnan(c[3])) c[2] = spice_jump_pulse_next(w, t, &c[3], &c[1]);
     else if (input_jump_pulse(w)) c[2] = spice_jump_pulse_j(w, t, &c[3], &c[1]);
@@ -93,33 +92,22 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
   }
   double lo = -INFINITY, hi = INFINITY;
   unsigned key = 0;
-  if (S->walk_ok && S->walk_gen == S->vgen) {
-    /* no memo taken afresh since the key was read: the bits of the terms
-     * whose memo holds at b stand; those taken afresh here are read again */
-    key = S->walk_key;
-    for (int q = 0; q < tp->nuterm; q++) {
-      const double *c = S->walk_c[q];
-      if (!(b >= c[0] && b < c[1])) {
-        int k = tp->uterm[q];
-        c = term_at(S, &u->terms[k], k, b);
-        key = (key & ~(1u << q)) | (unsigned)!same_bits(c[2], u->terms[k].value) << q;
-      }
-      if (c[0] > lo) lo = c[0];
-      if (c[1] < hi) hi = c[1];
-    }
-  } else {
+  if (!S->walk_ok) {                               /* the class's terms, where the loop below finds them */
     for (int q = 0; q < tp->nuterm; q++) {
       int k = tp->uterm[q];
-      const double *c = term_at(S, &u->terms[k], k, b);
-      key |= (unsigned)!same_bits(c[2], u->terms[k].value) << q;
-      if (c[0] > lo) lo = c[0];
-      if (c[1] < hi) hi = c[1];
       S->walk_c[q] = S->vmemo + 4 * (size_t)k;
+      S->walk_v[q] = u->terms[k].value;
+      S->walk_k[q] = k;
     }
     S->walk_ok = 1;
   }
-  S->walk_key = key;
-  S->walk_gen = S->vgen;
+  for (int q = 0; q < tp->nuterm; q++) {
+    const double *c = S->walk_c[q];
+    if (!(b >= c[0] && b < c[1])) c = term_at(S, &u->terms[S->walk_k[q]], S->walk_k[q], b);   /* (term_at's test, once) */
+    key |= (unsigned)!same_bits(c[2], S->walk_v[q]) << q;
+    if (c[0] > lo) lo = c[0];
+    if (c[1] < hi) hi = c[1];
+  }
   double *row = S->tab + (size_t)key * (size_t)S->nsw;
   if (!(S->tab_ok >> key & 1)) {
     read_terms(S, tp, b);                          /* (the pieces at b: held, as just read) */
