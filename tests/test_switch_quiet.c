@@ -7,7 +7,9 @@
  * and one without (quiet NULL) record the same every-step output, bit for
  * bit. A circuit whose input breaks where no switch reads it (a PULSE on
  * the supply) gets no claim at all, though some of its windows hold such
- * a break. */
+ * a break. The full bridge's and the buck-boost's next switching times
+ * (nl_sw_next, its walk piece after piece) are their gates' next corners,
+ * computed in closed form. */
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -23,7 +25,29 @@ typedef struct {
   cup_switching in;        /* the netlist's */
   const cup_input *other;  /* an input that is not the netlist's */
   long asked, claims, clear, wrong;
+  /* the gates' PULSEs (delay, period, width; jump edges, 0 to 1 against
+   * VT = 0.5, each edge a different switch's), when known: each next
+   * switching checked against their closed-form corners */
+  const double (*gate)[3];
+  int ngate;
+  long nexts, next_wrong;
 } wrap;
+
+/* The first corner after t of the gates' PULSEs, d + P j and d + P j + w
+ * (one within 1e-12 of t is t's own: the netlist's corners are its sums
+ * of its parsed values, an ulp or a few from these). */
+static double first_edge(const double (*gate)[3], int ngate, double t) {
+  double best = INFINITY;
+  for (int g = 0; g < ngate; g++) {
+    double d = gate[g][0], P = gate[g][1], w = gate[g][2];
+    for (double j = fmax(floor((t - d) / P) - 1, 0); j <= floor((t - d) / P) + 2; j++) {
+      double e[2] = {d + P * j, d + P * j + w};
+      for (int q = 0; q < 2; q++)
+        if (e[q] > t + 1e-12 && e[q] < best) best = e[q];
+    }
+  }
+  return best;
+}
 
 static int w_settle(void *c, int *topo, double t, const double *x, const double *z, char *e) {
   wrap *W = c;
@@ -31,7 +55,17 @@ static int w_settle(void *c, int *topo, double t, const double *x, const double 
 }
 static int w_next(void *c, int topo, double t, double tmax, double *tnext) {
   wrap *W = c;
-  return W->in.next(W->in.ctx, topo, t, tmax, tnext);
+  int st = W->in.next(W->in.ctx, topo, t, tmax, tnext);
+  if (!st && W->ngate) {
+    double e = first_edge(W->gate, W->ngate, t), want = e < tmax ? e : tmax;
+    W->nexts++;
+    if (!(fabs(*tnext - want) <= 1e-12 * fmax(1, fabs(want)))) {   /* (the edge, within the ulps of its sums) */
+      W->next_wrong++;
+      print_message("next switching from t = %.17g: %.17g, the gates' next corner %.17g (tmax %.17g)\n", t, *tnext, e,
+                    tmax);
+    }
+  }
+  return st;
 }
 static const cup_lcs *w_lcs(void *c, int topo) {
   wrap *W = c;
@@ -96,7 +130,7 @@ static void one_run(cup_netlist *nl, const cup_integrator_options *o, int quiet,
 
 /* The netlist (a file, or text when file is NULL) run with and without
  * the claims, the same records; the claims' counts into *W. */
-static void run_both(const char *file, const char *text, wrap *W) {
+static void run_both(const char *file, const char *text, wrap *W, const double (*gate)[3], int ngate) {
   char err[CUP_ERRMSG_LEN];
   cup_netlist *nl = NULL;
   if (file ? cup_netlist_load(&nl, file, NULL, 0, err) : cup_netlist_load_string(&nl, text, "q.cir", NULL, 0, err))
@@ -120,6 +154,8 @@ static void run_both(const char *file, const char *text, wrap *W) {
   cup_run_info ia, ib;
   memset(W, 0, sizeof *W);
   W->other = other;
+  W->gate = none.gate = gate;
+  W->ngate = none.ngate = ngate;
   one_run(nl, &o, 1, W, &ra, &ia);
   one_run(nl, &o, 0, &none, &rb, &ib);
   assert_true(ra.n > 100 && ra.n < CAP);
@@ -129,6 +165,8 @@ static void run_both(const char *file, const char *text, wrap *W) {
   assert_int_equal(ia.events, ib.events);
   assert_int_equal(ia.samples, ib.samples);
   assert_int_equal(W->wrong, 0);
+  assert_int_equal(W->next_wrong + none.next_wrong, 0);
+  assert_true(!ngate || (W->nexts > 100 && none.nexts > 100));
   print_message("%-14s windows %ld, clear of the input's breaks %ld, quiet %ld\n", file ? strrchr(file, '/') + 1 : "q.cir",
                 W->asked, W->clear, W->claims);
   cup_input_free(&other);
@@ -140,11 +178,15 @@ static void run_both(const char *file, const char *text, wrap *W) {
 static void test_converters_quiet(void **state) {
   (void)state;
   const char *names[] = {"buckboost", "fullbridge", "buck-ccm", "buck-dcm", "boost", "flyback"};
+  /* the gates of the first two, as their files give them: every corner a switching */
+  static const double bb[][3] = {{0, 10e-6, 5e-6}};
+  static const double fb[][3] = {{1e-6, 100e-6, 49e-6}, {51e-6, 100e-6, 49e-6}, {76e-6, 100e-6, 49e-6},
+                                 {26e-6, 100e-6, 49e-6}};
   for (size_t q = 0; q < sizeof names / sizeof *names; q++) {
     char file[512];
     snprintf(file, sizeof file, CIR "%s.cir", names[q]);
     wrap W;
-    run_both(file, NULL, &W);
+    run_both(file, NULL, &W, q == 0 ? bb : q == 1 ? fb : NULL, q == 0 ? 1 : q == 1 ? 4 : 0);
     assert_true(W.asked > 100);
     assert_true(W.claims >= W.asked * 9 / 10);     /* (the first window's search is not the walk's) */
   }
@@ -160,7 +202,7 @@ static void test_unread_pulse(void **state) {
                              "S1 in sw g 0 SWI\nL1 sw 0 50u\nD1 out sw\nC1 out 0 20u\nRL out 0 10\n"
                              ".model SWI SW(VT=0.5 VH=0)\n.tran 100n 200u\n.end\n";
   wrap W;
-  run_both(NULL, text, &W);
+  run_both(NULL, text, &W, NULL, 0);
   assert_true(W.asked > 20);
   assert_true(W.clear < W.asked);
   assert_int_equal(W.claims, 0);

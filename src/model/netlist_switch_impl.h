@@ -69,6 +69,12 @@ struct nl_switched {
   double *tab;             /* 2^NL_TAB_TERMS x nsw */
   uint64_t tab_ok;         /* bit key: its row holds */
   uint64_t tab_from[1 << NL_TAB_TERMS], tab_to[1 << NL_TAB_TERMS];   /* the rule's last answer on it */
+  /* the terms tab_class's controls read, in uterm's order (read_piece's
+   * loop, once a window: a full bridge's 4 gates) */
+  int walk_ok;             /* they are tab_class's (reset with it) */
+  double *walk_c[NL_TAB_TERMS];   /* each one's memo (vmemo) */
+  double walk_v[NL_TAB_TERMS];    /* ... its value (the key's bit: off it) */
+  int walk_k[NL_TAB_TERMS];       /* ... its index in the input */
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* the switching time the last search found (a configuration with no

@@ -88,13 +88,23 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
   if (S->tab_class != tp->ctl_class) {
     S->tab_class = tp->ctl_class;
     S->tab_ok = 0;
+    S->walk_ok = 0;                                /* (and after memo_reset, which empties tab_class) */
   }
   double lo = -INFINITY, hi = INFINITY;
   unsigned key = 0;
+  if (!S->walk_ok) {                               /* the class's terms, where the loop below finds them */
+    for (int q = 0; q < tp->nuterm; q++) {
+      int k = tp->uterm[q];
+      S->walk_c[q] = S->vmemo + 4 * (size_t)k;
+      S->walk_v[q] = u->terms[k].value;
+      S->walk_k[q] = k;
+    }
+    S->walk_ok = 1;
+  }
   for (int q = 0; q < tp->nuterm; q++) {
-    int k = tp->uterm[q];
-    const double *c = term_at(S, &u->terms[k], k, b);
-    key |= (unsigned)!same_bits(c[2], u->terms[k].value) << q;
+    const double *c = S->walk_c[q];
+    if (!(b >= c[0] && b < c[1])) c = term_at(S, &u->terms[S->walk_k[q]], S->walk_k[q], b);   /* (term_at's test, once) */
+    key |= (unsigned)!same_bits(c[2], S->walk_v[q]) << q;
     if (c[0] > lo) lo = c[0];
     if (c[1] < hi) hi = c[1];
   }
@@ -239,46 +249,13 @@ static int quiet_terms(const nl_topo *tp) {
   return 1;
 }
 
-/* The first time in (t, tmax] at which a source-gated switch of
- * configuration topo changes (tmax if none): the input's pieces checked at
- * their ends when every source is DC, PULSE or PWL (linear pieces), else
- * sampled 16 times each; the crossing bisected to the last bit; a jump edge
- * switches at its time. */
-int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) {
-  nl_switched *S = nl->sw;
+/* nl_sw_next's search piece after piece from t, where no class's walk
+ * (next_piece) holds (apart: the common window's call saves no registers
+ * for it). */
+static __attribute__((noinline)) int search(nl_switched *S, int topo, int cls, double t, double tmax, double *tnext) {
   const nl_topo *tp = &S->topo[topo];
   double cv[64], a = t;
   uint64_t cfg = tp->cfg;
-  *tnext = tmax;
-  S->quiet_ok = 0;
-  if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
-    long k = nl_sw_instant(S, t);
-    double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
-    if (next < tmax) *tnext = next;
-    return CUP_OK;
-  }
-  /* controls of t alone read from terms constant on pieces (changes' class):
-   * they hold to the end of the pieces the last check read them on, a
-   * corner of one of those terms, which the input's next break cannot pass
-   * (the other terms' breaks, across which the controls hold, are passed
-   * over; a switched run's window asks the input's next break itself) */
-  int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
-  if (cls && nl_sw_held(S, tp, t) && S->cvm_to == cfg) {  /* (the rule, applied to its own result, gives it again) */
-    /* the controls' terms hold on [t, hi): a switching at hi, or tmax
-     * below it, has none of their breaks before it, nor any of the
-     * input's when its other terms are constants (nl_sw_quiet) */
-    double hi = S->cvm_hi;
-    int st = next_piece(S, topo, tmax, tnext);
-    nl_topo *tq = &S->topo[topo];
-    if (!tq->quiet) tq->quiet = 1 + quiet_terms(tq);
-    if (*tnext <= hi && tq->quiet == 2) {
-      S->quiet_ok = 1;
-      S->quiet_topo = topo;
-      S->quiet_t = t;
-      S->quiet_to = *tnext;
-    }
-    return st;
-  }
   while (a < tmax) {
     const cup_input *in = tp->sub->u;
     double b = cls && cls == S->cvm_class && a >= S->cvm_lo && a < S->cvm_hi ? S->cvm_hi
@@ -333,4 +310,45 @@ int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) 
     a = b;
   }
   return CUP_OK;
+}
+
+/* The first time in (t, tmax] at which a source-gated switch of
+ * configuration topo changes (tmax if none): the input's pieces checked at
+ * their ends when every source is DC, PULSE or PWL (linear pieces), else
+ * sampled 16 times each; the crossing bisected to the last bit; a jump edge
+ * switches at its time. */
+int nl_sw_next(cup_netlist *nl, int topo, double t, double tmax, double *tnext) {
+  nl_switched *S = nl->sw;
+  const nl_topo *tp = &S->topo[topo];
+  *tnext = tmax;
+  S->quiet_ok = 0;
+  if (S->gate_fn) {                                /* the controller's next instant (k ts, not accumulated) */
+    long k = nl_sw_instant(S, t);
+    double next = (double)(k >= 0 ? k + 1 : (long)floor(t / S->gate_ts) + 1) * S->gate_ts;
+    if (next < tmax) *tnext = next;
+    return CUP_OK;
+  }
+  /* controls of t alone read from terms constant on pieces (changes' class):
+   * they hold to the end of the pieces the last check read them on, a
+   * corner of one of those terms, which the input's next break cannot pass
+   * (the other terms' breaks, across which the controls hold, are passed
+   * over; a switched run's window asks the input's next break itself) */
+  int cls = S->linear && tp->steps && tp->memo ? tp->ctl_class : 0;
+  if (cls && nl_sw_held(S, tp, t) && S->cvm_to == tp->cfg) {  /* (the rule, applied to its own result, gives it again) */
+    /* the controls' terms hold on [t, hi): a switching at hi, or tmax
+     * below it, has none of their breaks before it, nor any of the
+     * input's when its other terms are constants (nl_sw_quiet) */
+    double hi = S->cvm_hi;
+    int st = next_piece(S, topo, tmax, tnext);
+    nl_topo *tq = &S->topo[topo];
+    if (!tq->quiet) tq->quiet = 1 + quiet_terms(tq);
+    if (*tnext <= hi && tq->quiet == 2) {
+      S->quiet_ok = 1;
+      S->quiet_topo = topo;
+      S->quiet_t = t;
+      S->quiet_to = *tnext;
+    }
+    return st;
+  }
+  return search(S, topo, cls, t, tmax, tnext);
 }
