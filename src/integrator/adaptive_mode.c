@@ -782,8 +782,27 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
 /* (Each y_i its sum in a register, over the columns in order: a record's
  * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
+/* ... with nw a constant too, the input's states copied unrolled (two
+ * states: the six-pulse bridge's 6 input states, whose lift was 143
+ * instructions, a record's and a mode check's). */
+static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, const ad_mode *md, const double *x,
+                                                             const double *w, double *y) {
+  ad_lift_sums(n, nw, md->KU, x, w, y);
+  for (int c = 0; c < nw; c++) y[n + c] = w[c];
+}
+
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
+  if (n == 2 && nw >= 1 && nw <= 6) {
+    switch (nw) {
+      case 1: lift_fixed(2, 1, md, x, w, y); return;
+      case 2: lift_fixed(2, 2, md, x, w, y); return;
+      case 3: lift_fixed(2, 3, md, x, w, y); return;
+      case 4: lift_fixed(2, 4, md, x, w, y); return;
+      case 5: lift_fixed(2, 5, md, x, w, y); return;
+      case 6: lift_fixed(2, 6, md, x, w, y); return;
+    }
+  }
   switch (n) {                                   /* (a converter's few states: the loops unrolled) */
     case 1: ad_lift_sums(1, nw, md->KU, x, w, y); break;
     case 2: ad_lift_sums(2, nw, md->KU, x, w, y); break;
