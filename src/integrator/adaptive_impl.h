@@ -83,6 +83,8 @@ typedef struct ad_mode {
   double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
   double *Ec[AD_CACHE];
   long cstamp[AD_CACHE];
+  unsigned char elow0[AD_CACHE];   /* its input states' rows are exactly zero in the state's columns
+                               (exp of [Pi Q; 0 W] as computed: ad_expm_mv leaves their terms out) */
   int *ep[AD_CACHE], *ei[AD_CACHE];   /* ... and their input states' rows' nonzeros by column (na + 1 */
   double *ex[AD_CACHE];     /* starts, rows), their values: exp(h [Pi Q; 0 W]) keeps the zeros of
                                [0 W] (written and read with 9 states or more, of which at most 6 the

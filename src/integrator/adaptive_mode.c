@@ -614,6 +614,10 @@ static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
   la_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
+  int low0 = 1;                                  /* (ad_expm_mv's rows of the input's states) */
+  for (int j = 0; j < A->n; j++)
+    for (int i = A->n; i < A->na; i++) low0 &= md->Ec[c][i + (size_t)j * A->na] == 0;
+  md->elow0[c] = (unsigned char)low0;
   if (!expm_rows_read(A)) return;
   int n = A->n, na = A->na, k = 0;             /* the input states' rows' nonzeros (ad_expm_mv) */
   const double *E = md->Ec[c];
@@ -678,6 +682,26 @@ static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, co
   for (int i = 0; i < n; i++) out[i] = v[i];
 }
 
+/* out = E y for E of [Pi Q; 0 W] (na of 8: two states, six input states)
+ * whose rows of the input's states are exactly zero in the state's
+ * columns: matvec_sums' sums less those terms, +-0 each, which leave the
+ * sums started at +0 as they were (y finite). The six-pulse bridge's
+ * step: 207 instructions a product, 184 so. */
+static __attribute__((noinline)) void matvec_2_8(const double *E, const double *y, double *out) {
+  double v[8] = {0};
+  for (int j = 0; j < 2; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    for (int i = 0; i < 2; i++) v[i] += E[i + (size_t)j * 8] * yj;
+  }
+  for (int j = 2; j < 8; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    for (int i = 0; i < 8; i++) v[i] += E[i + (size_t)j * 8] * yj;
+  }
+  for (int i = 0; i < 8; i++) out[i] = v[i];
+}
+
 /* ad_matvec for n of 7 or 8, apart from its body (inline there, the
  * registers cost the full bridge's sizes 3 and 4 3 k instructions). */
 static __attribute__((noinline)) void matvec8(int n, int lda, const double *E, const double *y, double *out) {
@@ -725,6 +749,7 @@ static inline __attribute__((always_inline)) void expm_mv_sums(int n, int na, co
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out) {
   int n = A->n, na = A->na, c = 0;
   while (c < AD_CACHE && md->Ec[c] != E) c++;
+  if (na == 8 && n == 2 && c < AD_CACHE && md->elow0[c]) { matvec_2_8(E, y, out); return; }
   /* (up to 8 rows, every sum in a register: a six-pulse bridge's 2 states
    * and 6 input states took 320 instructions a product by the input rows'
    * nonzeros, 260 so; E's zeros add +-0 to sums started at +0, which
@@ -779,11 +804,30 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   }
 }
 
+/* ad_lift with nw a constant too, the input's states copied unrolled (two
+ * states: the six-pulse bridge's 6 input states, whose lift, a record's
+ * and a mode check's, was 143 instructions, 104 so). */
+static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, const ad_mode *md, const double *x,
+                                                             const double *w, double *y) {
+  ad_lift_sums(n, nw, md->KU, x, w, y);
+  for (int c = 0; c < nw; c++) y[n + c] = w[c];
+}
+
 /* (Each y_i its sum in a register, over the columns in order: a record's
  * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
+  if (n == 2 && nw >= 1 && nw <= 6) {
+    switch (nw) {
+      case 1: lift_fixed(2, 1, md, x, w, y); return;
+      case 2: lift_fixed(2, 2, md, x, w, y); return;
+      case 3: lift_fixed(2, 3, md, x, w, y); return;
+      case 4: lift_fixed(2, 4, md, x, w, y); return;
+      case 5: lift_fixed(2, 5, md, x, w, y); return;
+      case 6: lift_fixed(2, 6, md, x, w, y); return;
+    }
+  }
   switch (n) {                                   /* (a converter's few states: the loops unrolled) */
     case 1: ad_lift_sums(1, nw, md->KU, x, w, y); break;
     case 2: ad_lift_sums(2, nw, md->KU, x, w, y); break;
