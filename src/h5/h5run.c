@@ -492,10 +492,8 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
   return w->dim > 4 ? put_row_wide(w, t, x, sig, 1) : put_row(w, t, x, sig, 1, 0);
 }
 
-/* h5run_take_row's first row (its buffers taken), one after a failure and
- * a wide one: out of line, so that the rows between save no registers for
- * a call (the full bridge's 1200 rows: 75 instructions a row in the
- * function, 14 of them its pushes and pops). */
+/* h5run_take_row's first row, a failed writer's and a wide one: out of line
+ * (a row's path saved 5 registers and a frame for take_buffers' call). */
 static __attribute__((noinline)) int take_row_cold(cup_h5run *w, double t, const double *x, const double *sig,
                                                    size_t ss) {
   if (w->data_status != CUP_OK) return 0;
