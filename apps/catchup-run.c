@@ -99,8 +99,10 @@ static __attribute__((noinline)) int put_rows(sink_t *c, int count, const double
 static int put(void *ctx, long k, int count, const double *t, const double *x, const double *sig, int stride) {
   (void)k;
   sink_t *c = ctx;
-  if (count == 1 && hook_at <= 0)                /* (a step's end, as h5run_append_rows' one row) */
-    return !stop_signal && h5run_append_row(c->w, *t, x, sig, stride) == CUP_OK;
+  if (count == 1 && hook_at <= 0) {              /* (a step's end, as h5run_append_rows' one row) */
+    if (stop_signal) return 0;
+    return h5run_take_row(c->w, *t, x, sig, stride);   /* (its answer put's: a jump, no frame) */
+  }
   return put_rows(c, count, t, x, sig, stride);
 }
 

@@ -188,6 +188,28 @@ static void test_flushes_in_between(void **state) {
   expect_run(path, 13001, 0);
 }
 
+/* The file's signals a, b, c, ... against value(k, dim + s, dim + nsig),
+ * bit for bit. */
+static void expect_signals(const char *path, long N, int DIM, int NSIG) {
+  hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  double *got = malloc(sizeof(double) * (size_t)N);
+  for (int s = 0; s < NSIG; s++) {
+    hsize_t dims[1];
+    char name[16];
+    snprintf(name, sizeof name, "signals/%c", 'a' + s);
+    hid_t d = open_checked(f, name, 1, dims);
+    assert_true(dims[0] == (hsize_t)N);
+    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, got) >= 0);
+    for (long k = 0; k < N; k++) {
+      double v = value(k, DIM + s, DIM + NSIG);
+      if (memcmp(&v, got + k, sizeof v) != 0) fail_msg("signal %d, row %ld differs", s, k);
+    }
+    H5Dclose(d);
+  }
+  free(got);
+  H5Fclose(f);
+}
+
 /* Rows in batches (h5run_append_rows, catchup-run's samples inside a
  * step) of every size from 1 to 300, against the chunk of 4096 rows and
  * the writer's clock looks: the file holds the reference rows and signals
@@ -216,23 +238,32 @@ static void test_rows_in_batches(void **state) {
   assert_int_equal(cup_h5run_count(w), N);
   assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
   expect_run(path, N, DIM);
-  hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-  double *got = malloc(sizeof(double) * N);
-  for (int s = 0; s < NSIG; s++) {
-    hsize_t dims[1];
-    char name[16];
-    snprintf(name, sizeof name, "signals/%c", 'a' + s);
-    hid_t d = open_checked(f, name, 1, dims);
-    assert_true(dims[0] == N);
-    assert_true(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, got) >= 0);
+  expect_signals(path, N, DIM, NSIG);
+}
+
+/* Rows one by one as catchup-run's put gives a step's end (h5run_take_row,
+ * signal k at sig + k stride), a few entries and a wide row (beyond the
+ * unrolled copies): 1 for every row taken, and the file holds the
+ * reference rows and signals bit for bit across the chunks and the clock's
+ * looks. */
+static void test_rows_one_by_one(void **state) {
+  (void)state;
+  enum { N = 10007, NSIG = 3, STRIDE = 7 };
+  for (int dim = 2; dim <= 6; dim += 4) {
+    char path[256];
+    cup_h5run *w = create_in_tmp(path, sizeof path, "one-by-one.h5", dim);
+    assert_int_equal(cup_h5run_signals(w, NSIG, (const char *const[]){"a", "b", "c"}), CUP_OK);
+    double t, x[6], sig[NSIG * STRIDE];
     for (long k = 0; k < N; k++) {
-      double v = value(k, DIM + s, DIM + NSIG);
-      if (memcmp(&v, got + k, sizeof v) != 0) fail_msg("signal %d, row %ld differs", s, k);
+      sample(k, dim, &t, x);
+      for (int s = 0; s < NSIG; s++) sig[s * STRIDE] = value(k, dim + s, dim + NSIG);
+      assert_int_equal(h5run_take_row(w, t, x, sig, STRIDE), 1);
     }
-    H5Dclose(d);
+    assert_int_equal(cup_h5run_count(w), N);
+    assert_int_equal(cup_h5run_close(&w, NULL), CUP_OK);
+    expect_run(path, N, dim);
+    expect_signals(path, N, dim, NSIG);
   }
-  free(got);
-  H5Fclose(f);
 }
 
 /* ---- attributes ---- */
@@ -703,6 +734,7 @@ int main(void) {
     ROUNDTRIP(4), ROUNDTRIP(5), ROUNDTRIP(6), ROUNDTRIP(7),
     cmocka_unit_test(test_flushes_in_between),
     cmocka_unit_test(test_rows_in_batches),
+    cmocka_unit_test(test_rows_one_by_one),
     cmocka_unit_test(test_events),
     cmocka_unit_test(test_dimension_scales),
     cmocka_unit_test(test_attributes_roundtrip),

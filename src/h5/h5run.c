@@ -492,10 +492,19 @@ int cup_h5run_append(cup_h5run *w, double t, const double *x, const double *sig)
   return w->dim > 4 ? put_row_wide(w, t, x, sig, 1) : put_row(w, t, x, sig, 1, 0);
 }
 
-int h5run_append_row(cup_h5run *w, double t, const double *x, const double *sig, int stride) {
-  if (w->data_status != CUP_OK) return w->data_status;
-  if (!w->tbuf && take_buffers(w) != CUP_OK) return w->data_status;
-  return w->dim > 4 ? put_row_wide(w, t, x, sig, (size_t)stride) : put_row(w, t, x, sig, (size_t)stride, 0);
+/* h5run_take_row's first row, a failed writer's and a wide one: out of line
+ * (a row's path saved 5 registers and a frame for take_buffers' call). */
+static __attribute__((noinline)) int take_row_cold(cup_h5run *w, double t, const double *x, const double *sig,
+                                                   size_t ss) {
+  if (w->data_status != CUP_OK) return 0;
+  if (!w->tbuf && take_buffers(w) != CUP_OK) return 0;
+  return (w->dim > 4 ? put_row_wide(w, t, x, sig, ss) : put_row(w, t, x, sig, ss, 0)) == CUP_OK;
+}
+
+int h5run_take_row(cup_h5run *w, double t, const double *x, const double *sig, int stride) {
+  size_t ss = (size_t)stride;
+  if (w->data_status != CUP_OK || !w->tbuf || w->dim > 4) return take_row_cold(w, t, x, sig, ss);
+  return put_row(w, t, x, sig, ss, 0) == CUP_OK;
 }
 
 /* Whole runs of rows up to the next look at the clock or the chunk's end,

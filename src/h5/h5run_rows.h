@@ -17,8 +17,10 @@ int h5run_append_rows(cup_h5run *w, int count, const double *t, const double *x,
                       int *done);
 
 /* One sample, as cup_h5run_append (w, x and sig as that takes them; no
- * check), signal k at sig + k stride: a step's end (put's count 1). */
+ * check), signal k at sig + k stride: a step's end (put's count 1). 1 if
+ * it was taken (cup_h5run_append's CUP_OK), 0 if not (the writer's status
+ * says why): the sink's own answer, so that put ends in a jump here. */
 __attribute__((visibility("hidden")))
-int h5run_append_row(cup_h5run *w, double t, const double *x, const double *sig, int stride);
+int h5run_take_row(cup_h5run *w, double t, const double *x, const double *sig, int stride);
 
 #endif
