@@ -145,7 +145,7 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
       if (j >= n) tw += lmx[q] * ws[j - n];
     }
     g[i] = acc;
-    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+    thr[i] = ad_row_rounding(A, md, i, mag, vmax);
     thr[i] = 16 * thr[i] + 64 * DBL_EPSILON * tw;
     if (g[i] < -thr[i]) return 0;
     edge |= !(g[i] > thr[i]);

@@ -28,10 +28,7 @@ void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, do
       mag += md->lmx[k] * fabs(yj);
     }
     g[i] = acc;
-    /* a few ulps of the terms summed; a slack also of the state's scale,
-     * to which the held rows are kept (a row that depends on them sits at
-     * zero with that rounding) */
-    thr[i] = 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+    thr[i] = ad_row_rounding(A, md, i, mag, vmax);
   }
 }
 
@@ -49,7 +46,7 @@ void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double 
 static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const double *y, double vmax) {
   double mag = fabs(md->Lc[i]);
   for (int k = md->lp[i]; k < md->lp[i + 1]; k++) mag += md->lmx[k] * fabs(y[md->li[k]]);
-  return 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+  return ad_row_rounding(A, md, i, mag, vmax);
 }
 
 /* (One pass over L's nonzeros for both: each sum as in its own function.)

@@ -725,6 +725,15 @@ int ad_dae_jump(adaptive_ws *A, double *x, uint64_t *active, int *pivots);
 /* ---- adaptive_event.c ---- */
 /* g = L y + Lc and the rounding thresholds thr. */
 void ad_events_eval(const adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr);
+/* Row i's rounding threshold from mag, the magnitudes' sum |Lc_i| + sum
+ * |L_ij y_j|, and vmax, the state's scale |x|_inf: a few ulps of the terms
+ * summed, and a slack of the state's scale, to which the held rows are
+ * kept (a row that depends on them sits at zero with that rounding). One
+ * formula for ad_events_eval, ad_events_both's and the window start's
+ * check (adaptive_dae.c's mode_fits). */
+static inline double ad_row_rounding(const adaptive_ws *A, const ad_mode *md, int i, double mag, double vmax) {
+  return 64 * DBL_EPSILON * (mag + (md->is_zeta[i] ? 0 : A->c1[i] * vmax));
+}
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
 /* Both, the same bits (M y in A->My, as ad_events_deriv leaves it), but
