@@ -31,6 +31,23 @@ if(NOT GSL_FOUND)
   catchup_missing("GSL (GNU Scientific Library)" "libgsl-dev")
 endif()
 
+# catchup_gsl_static: GSL's static archive and the system BLAS for its CBLAS
+# calls, for the programs (apps/CMakeLists.txt says why). libgsl.so resolves
+# those calls to libblas.so.3, which CHOLMOD's LAPACK loads first, so the
+# programs' results are the same bits either way. Without libgsl.a or
+# libblas.so (or with -DCATCHUP_STATIC_GSL=OFF) the programs link libgsl.so.
+option(CATCHUP_STATIC_GSL "Link GSL statically into catchup-run and catchup-sweep" ON)
+if(CATCHUP_STATIC_GSL)
+  find_library(CATCHUP_GSL_ARCHIVE NAMES libgsl.a)
+  find_library(CATCHUP_BLAS_LIBRARY NAMES blas)
+  if(CATCHUP_GSL_ARCHIVE AND CATCHUP_BLAS_LIBRARY)
+    add_library(catchup_gsl_static INTERFACE)
+    target_link_libraries(catchup_gsl_static INTERFACE ${CATCHUP_GSL_ARCHIVE} ${CATCHUP_BLAS_LIBRARY})
+  else()
+    message(STATUS "catchup: libgsl.a or libblas.so not found; the programs link libgsl.so")
+  endif()
+endif()
+
 # --- CHOLMOD (SuiteSparse): prefer SuiteSparse 7+ config files ---------------
 find_package(CHOLMOD CONFIG QUIET)
 if(TARGET SuiteSparse::CHOLMOD)
