@@ -81,16 +81,17 @@ static void exosystem(adaptive_ws *A) {
     return;
   }
   const cup_input *gen = &A->gen;
-  for (int k = 0; k < gen->nterms; k++) A->U[gen->terms[k].comp + (size_t)A->first_state[k] * p] = 1;
+  input_gen_output(gen, A->gen_rot, A->first_state, A->U, p);
   for (int k = 0; k < gen->nterms; k++) {        /* the rounding scale of the value states */
     const input_term *t = &gen->terms[k];
+    if (A->gen_rot[k].base >= 0) continue;       /* (its base's states, at the base's amplitude) */
     double sc = fabs(t->value) + fabs(t->amp);
     if (t->kind == CUP_WAVE_PULSE) sc = fmax(fabs(t->value), fabs(t->value2));
     for (int j = 0; t->kind == CUP_WAVE_PWL && j < t->np; j++) sc = fmax(sc, fabs(t->v[j]));
     A->wscale[A->first_state[k]] = sc;
     if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) A->wscale[A->first_state[k] + 1] = sc;
   }
-  input_gen_dynamics(gen, A->first_state, A->W, nw);
+  input_gen_dynamics(gen, A->gen_rot, A->first_state, A->W, nw);
   A->piece_from_t0 = input_gen_from_start(gen);
 }
 
@@ -102,7 +103,9 @@ static void exosystem(adaptive_ws *A) {
  * (L, C and the DC source). Breakpoints still come from the whole input
  * (A->u), and so does the step limit of a sine (exosystem). A constant 0
  * reaches nothing either: each SIN's VO makes one, and the six-pulse
- * bridge's three made its flow 11 x 11 where 8 x 8 does. */
+ * bridge's three made its flow 11 x 11 where 8 x 8 does. Sines of one
+ * frequency share one sine's two states (input_gen_rot_plan): its three
+ * phases, 8 x 8 where 4 x 4 does. */
 static int live_terms(adaptive_ws *A, const freestep_drift *D, const la_sparse *G, int *fail) {
   const cup_input *u = A->u;
   A->gen = (cup_input){.p = u ? u->p : 0};
@@ -121,7 +124,7 @@ static int live_terms(adaptive_ws *A, const freestep_drift *D, const la_sparse *
   A->gen_rot = take((size_t)A->gen.nterms + 1, sizeof(input_gen_rot), fail);
   if (*fail) return 0;
   input_gen_rot_plan(&A->gen, A->gen_rot);
-  return input_gen_dim(&A->gen, A->first_state);
+  return input_gen_dim(&A->gen, A->gen_rot, A->first_state);
 }
 
 /* D != 0: B and D dense, C B, the rows D couples; the late-switch model of
@@ -187,7 +190,8 @@ static void switch_model(adaptive_ws *A) {
 }
 
 /* U's and G's nonzeros, for ad_offset (a step's g from the input's
- * states): U holds one 1 a waveform, G the sources each row sees; on the
+ * states): U holds one 1 a waveform (a sine that shares another's states,
+ * two factors), G the sources each row sees; on the
  * full bridge the dense products were 9 % of the run. */
 static void offset_pattern(adaptive_ws *A) {
   int m = A->m, p = A->p, nw = A->nw, k = 0;
@@ -444,7 +448,7 @@ static int scratch_join(adaptive_ws *A, adaptive_scratch *s) {
   int first = !s->block, n = A->n > s->n ? A->n : s->n, m = A->m > s->m ? A->m : s->m,
       na = A->na > s->na ? A->na : s->na, p = A->p > s->p ? A->p : s->p, has_D = A->has_D || s->has_D || first;
   if (first) {
-    int bound = A->n + (A->callback ? A->p * (AD_DEGREE + 1) : input_gen_dim(A->u, NULL)) + 1;
+    int bound = A->n + (A->callback ? A->p * (AD_DEGREE + 1) : input_gen_dim(A->u, NULL, NULL)) + 1;
     if (bound > na + 16) bound = na + 16;          /* (a wide input's room: address space alone) */
     if (bound > CUP_EXPONENTIAL_MAX_DIM) bound = CUP_EXPONENTIAL_MAX_DIM;
     if (bound > na) na = bound;

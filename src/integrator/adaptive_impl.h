@@ -222,7 +222,7 @@ struct adaptive_ws {
   cup_input gen;            /* built-in waveforms: u's terms that E or G reads (copies; adaptive.c,
                                live_terms), those the exosystem holds */
   int *first_state;         /* ... and the first exosystem state of each, */
-  input_gen_rot *gen_rot;   /* ... and the sines that share a frequency (input_gen_piece) */
+  input_gen_rot *gen_rot;   /* ... and the sines that share another's states (input_gen_rot_plan) */
   int gen_whole;            /* gen holds every term of u but its constants 0 (live_terms) */
   const cup_input *held;    /* &gen, or a callback's u: the breakpoints that end an exosystem piece
                                (adaptive_zeta's; a gate's corners move no state) */

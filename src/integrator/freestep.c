@@ -75,7 +75,7 @@ static int exp_init(freestep_ws *fs, char *errmsg) {
   int nterms = u && !u->fn ? u->nterms : 0;
   fs->nw = 0;
   fs->gen_of_term = zalloc((size_t)nterms + 1, sizeof(int), &fail);
-  if (!fail) fs->nw = input_gen_dim(u, fs->gen_of_term);
+  if (!fail) fs->nw = input_gen_dim(u, NULL, fs->gen_of_term);
   if (!fail) {
     int st = input_gen_check(u, "exponential", errmsg);
     if (st) return st;
@@ -104,7 +104,7 @@ static int exp_init(freestep_ws *fs, char *errmsg) {
     if (D->has_E)                            /* x' += E(:, comp) * (first generator state) */
       for (int q = D->E.p[t->comp]; q < D->E.p[t->comp + 1]; q++) fs->M[D->E.i[q] + (size_t)g * na] = D->E.x[q];
   }
-  if (nterms) input_gen_dynamics(u, fs->gen_of_term, fs->M + n + (size_t)n * na, na);
+  if (nterms) input_gen_dynamics(u, NULL, fs->gen_of_term, fs->M + n + (size_t)n * na, na);
   double *hM = fs->Es;
   for (size_t q = 0; q < NA; q++) hM[q] = fs->h * fs->M[q];
   la_dense_expm(hM, na, fs->Eh, fs->ework);

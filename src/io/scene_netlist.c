@@ -138,7 +138,7 @@ static int adaptive_fits(const cup_netlist *nl) {
   const cup_polyset *K = cup_lcs_polyset(L);
   const cup_input *u = cup_netlist_input(nl);
   if (!proj_small_lcp(K, NULL) || L->keep_B || (u && input_gen_check(u, "adaptive", NULL))) return 0;
-  return K->n + input_gen_dim(u, NULL) + 1 <= CUP_EXPONENTIAL_MAX_DIM;
+  return K->n + input_gen_dim(u, NULL, NULL) + 1 <= CUP_EXPONENTIAL_MAX_DIM;
 }
 
 void scene_netlist_sampling(const cup_netlist *nl, cup_integrator_options *o) {

@@ -330,20 +330,25 @@ int input_gen_check(const cup_input *u, const char *scheme, char *errmsg) {
   return CUP_OK;
 }
 
-int input_gen_dim(const cup_input *u, int *first_state) {
+int input_gen_dim(const cup_input *u, const input_gen_rot *rot, int *first_state) {
   int nw = 0;
   if (!u || u->fn) return 0;
   for (int k = 0; k < u->nterms; k++) {
+    if (rot && rot[k].base >= 0) {
+      if (first_state) first_state[k] = first_state[rot[k].base];
+      continue;
+    }
     if (first_state) first_state[k] = nw;
     nw += input_term_gen_states(&u->terms[k]);
   }
   return nw;
 }
 
-void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld) {
+void input_gen_dynamics(const cup_input *u, const input_gen_rot *rot, const int *first_state, double *W, int ld) {
   for (int k = 0; u && !u->fn && k < u->nterms; k++) {
     const input_term *t = &u->terms[k];
     int g = first_state[k];
+    if (rot && rot[k].base >= 0) continue;        /* (its base's block) */
     if (t->kind == CUP_WAVE_SINE || t->kind == CUP_WAVE_DAMPED_SINE) {
       double d = t->kind == CUP_WAVE_DAMPED_SINE ? t->damping : 0;
       W[g + (size_t)(g + 1) * ld] = t->omega;     /* s' = om c - d s */
@@ -351,6 +356,18 @@ void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, i
       W[g + (size_t)g * ld] = W[(g + 1) + (size_t)(g + 1) * ld] = -d;
     } else if (t->kind == CUP_WAVE_PWL || t->kind == CUP_WAVE_PULSE) {
       W[g + (size_t)(g + 1) * ld] = 1;             /* v' = slope */
+    }
+  }
+}
+
+void input_gen_output(const cup_input *u, const input_gen_rot *rot, const int *first_state, double *U, int ld) {
+  for (int k = 0; u && !u->fn && k < u->nterms; k++) {
+    int q = u->terms[k].comp, g = first_state[k];
+    if (rot && rot[k].base >= 0) {
+      U[q + (size_t)g * ld] += rot[k].c;
+      U[q + (size_t)(g + 1) * ld] += rot[k].s;
+    } else {
+      U[q + (size_t)g * ld] += 1;
     }
   }
 }
@@ -397,35 +414,21 @@ void input_gen_rot_plan(const cup_input *u, input_gen_rot *rot) {
     rot[k] = (input_gen_rot){.base = -1};
     for (int j = 0; t->kind == CUP_WAVE_SINE && j < k; j++) {
       const input_term *b = &u->terms[j];
-      if (b->kind != CUP_WAVE_SINE || rot[j].base >= 0 || b->omega != t->omega) continue;
-      double d = t->phase - b->phase;
-      rot[k] = (input_gen_rot){.base = j, .c = cos(d), .s = sin(d)};
+      if (b->kind != CUP_WAVE_SINE || rot[j].base >= 0 || b->omega != t->omega || b->amp == 0) continue;
+      double d = t->phase - b->phase, f = t->amp / b->amp;
+      rot[k] = (input_gen_rot){.base = j, .c = f * cos(d), .s = f * sin(d)};
       break;
     }
   }
 }
 
-void input_gen_piece(const cup_input *u, const int *first_state, input_gen_rot *rot, double a, double b,
+void input_gen_piece(const cup_input *u, const int *first_state, const input_gen_rot *rot, double a, double b,
                      double *w) {
   double mid = 0.5 * (a + b);
   for (int k = 0; k < u->nterms; k++) {
     const input_term *t = &u->terms[k];
     double *wk = w + first_state[k], t0, v0, slope;
-    if (rot && t->kind == CUP_WAVE_SINE) {
-      input_gen_rot *r = &rot[k];
-      if (r->base < 0) {                           /* (gen_term_values' sums) */
-        double x = t->omega * a + t->phase;
-        r->sx = sin(x);
-        r->cx = cos(x);
-      } else {                                     /* sin(x + d), cos(x + d) from the base's x */
-        const input_gen_rot *q = &rot[r->base];
-        r->sx = q->sx * r->c + q->cx * r->s;
-        r->cx = q->cx * r->c - q->sx * r->s;
-      }
-      wk[0] = t->amp * r->sx;
-      wk[1] = t->amp * r->cx;
-      continue;
-    }
+    if (rot && rot[k].base >= 0) continue;        /* (its base's states) */
     if (t->kind == CUP_WAVE_PULSE) {
       spice_pulse_line(t, mid, &t0, &v0, &slope);
     } else if (t->kind == CUP_WAVE_PWL && mid > t->t[0] && mid < t->t[t->np - 1]) {

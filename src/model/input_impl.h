@@ -214,12 +214,32 @@ int input_term_gen_states(const input_term *t);
 /* CUP_ERR_UNSUPPORTED (naming the scheme and the term) for a waveform the
  * exosystem cannot hold: a damped sine with a delay. */
 int input_gen_check(const cup_input *u, const char *scheme, char *errmsg);
+/* Sines that share a frequency share their states (input_gen_rot_plan):
+ * rot[k].base is the earlier undamped sine of term k's frequency whose
+ * states term k reads, or -1 (the term has states of its own). Term k's
+ * value is then amp_k sin(x + d) = (amp_k / amp_j)(cos d s_j + sin d c_j)
+ * of the base j's states s_j = amp_j sin x, c_j = amp_j cos x, d the
+ * phases' difference: rot[k].c and .s are those two factors. A three-phase
+ * source's three sines are 2 states, not 6 (the six-pulse bridge's flow
+ * 4 x 4, not 8 x 8), and a piece costs one sincos a frequency. */
+typedef struct input_gen_rot {
+  int base;                                 /* the earlier sine's term, or -1 */
+  double c, s;                              /* term k's factors on the base's sine and cosine state */
+} input_gen_rot;
+/* rot[k] for each term of u (nterms entries): a base has amp != 0. */
+void input_gen_rot_plan(const cup_input *u, input_gen_rot *rot);
 /* Total exosystem states of u (0 for a callback or NULL); first_state[k]
- * (if not NULL, nterms entries) gets the first state of term k. */
-int input_gen_dim(const cup_input *u, int *first_state);
+ * (if not NULL, nterms entries) gets the first state of term k, with rot
+ * (or NULL: a term's states its own) its base's for a term that shares. */
+int input_gen_dim(const cup_input *u, const input_gen_rot *rot, int *first_state);
 /* W into the nw x nw block at W (column-major, leading dimension ld),
- * added to what is there: the sine rotations and the table slopes. */
-void input_gen_dynamics(const cup_input *u, const int *first_state, double *W, int ld);
+ * added to what is there: the sine rotations and the table slopes (a
+ * block once, with rot). */
+void input_gen_dynamics(const cup_input *u, const input_gen_rot *rot, const int *first_state, double *W, int ld);
+/* U (p x nw, column-major, leading dimension ld), added to what is there:
+ * term k's value from its states, 1 on its first, or with rot its base's
+ * two factors. */
+void input_gen_output(const cup_input *u, const input_gen_rot *rot, const int *first_state, double *U, int ld);
 /* The states on the interval (a, b) (no breakpoint inside), at a: constants,
  * sin/cos at a, the square's value on the open interval (at its midpoint:
  * the jump instants carry no weight), the table's value at a and its slope
@@ -230,22 +250,10 @@ void input_gen_values(const cup_input *u, const int *first_state, double a, doub
  * the value at a and the slope of the step's piece are then the ones the
  * piece before and after meet, whatever a and b round to (the adaptive
  * scheme's steps run between breakpoints; a fixed step that straddles a
- * corner needs gen_values' secant instead). */
-/* With rot (input_gen_rot_plan's, or NULL), a sine whose frequency an
- * earlier sine's has takes that one's sin and cos turned by the phases'
- * difference (four products, no sincos): a three-phase source's three
- * sines a piece cost one sincos (a ninth of the six-pulse bridge's step),
- * and round a few ulps of their amplitude off the direct sin(omega a + phi)
- * (the base keeps those bits). */
-typedef struct input_gen_rot {
-  int base;                                 /* the earlier sine's term, or -1 */
-  double c, s;                              /* cos and sin of the phase difference from it */
-  double sx, cx;                            /* a base's sin and cos at the last piece's a (scratch) */
-} input_gen_rot;
-void input_gen_piece(const cup_input *u, const int *first_state, input_gen_rot *rot, double a, double b,
+ * corner needs gen_values' secant instead). With rot, a term that shares
+ * its base's states writes none. */
+void input_gen_piece(const cup_input *u, const int *first_state, const input_gen_rot *rot, double a, double b,
                      double *w);
-/* rot[k] for each term of u (nterms entries). */
-void input_gen_rot_plan(const cup_input *u, input_gen_rot *rot);
 /* 1 if u's states on (a, b) are functions of a alone (constants and sines:
  * no square, table or pulse, whose states read the step's middle), so that
  * the states of one piece serve every step from the same a. */
