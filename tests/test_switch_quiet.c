@@ -18,11 +18,12 @@
 #include <string.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "switch_wrap.h"
 
 #define CIR CUP_EXAMPLES_DIR "/circuits/"
 
 typedef struct {
-  cup_switching in;        /* the netlist's */
+  cup_switching in;        /* the netlist's (first: switch_wrap.h) */
   const cup_input *other;  /* an input that is not the netlist's */
   long asked, claims, clear, wrong;
   /* the gates' PULSEs (delay, period, width; jump edges, 0 to 1 against
@@ -49,10 +50,6 @@ static double first_edge(const double (*gate)[3], int ngate, double t) {
   return best;
 }
 
-static int w_settle(void *c, int *topo, double t, const double *x, const double *z, char *e) {
-  wrap *W = c;
-  return W->in.settle(W->in.ctx, topo, t, x, z, e);
-}
 static int w_next(void *c, int topo, double t, double tmax, double *tnext) {
   wrap *W = c;
   int st = W->in.next(W->in.ctx, topo, t, tmax, tnext);
@@ -66,26 +63,6 @@ static int w_next(void *c, int topo, double t, double tmax, double *tnext) {
     }
   }
   return st;
-}
-static const cup_lcs *w_lcs(void *c, int topo) {
-  wrap *W = c;
-  return W->in.lcs(W->in.ctx, topo);
-}
-static void w_jump(void *c, int topo, double *x) {
-  wrap *W = c;
-  W->in.jump(W->in.ctx, topo, x);
-}
-static int w_state_gated(void *c, int topo) {
-  wrap *W = c;
-  return W->in.state_gated(W->in.ctx, topo);
-}
-static int w_crossed(void *c, int topo, double t, const double *x) {
-  wrap *W = c;
-  return W->in.crossed(W->in.ctx, topo, t, x);
-}
-static int w_moves(void *c, int topo) {
-  wrap *W = c;
-  return W->in.moves(W->in.ctx, topo);
 }
 static int w_quiet(void *c, int topo, const cup_input *u, double t, double tnext) {
   wrap *W = c;
@@ -121,7 +98,9 @@ static void one_run(cup_netlist *nl, const cup_integrator_options *o, int quiet,
   char err[CUP_ERRMSG_LEN];
   assert_int_equal(cup_netlist_switching(nl, &W->in), 1);
   assert_non_null(W->in.quiet);
-  cup_switching sw = {W, w_settle, w_next, w_lcs, w_jump, w_state_gated, w_crossed, w_moves, quiet ? w_quiet : NULL};
+  cup_switching sw = fwd_switching(W);
+  sw.next = w_next;
+  sw.quiet = quiet ? w_quiet : NULL;
   cup_integrator *I = NULL;
   if (cup_integrator_create_switched(&I, &sw, cup_netlist_input(nl), o, err)) fail_msg("%s", err);
   if (cup_integrator_run(I, cup_netlist_x0(nl), rec_sink, r, info) < 0) fail_msg("%s", info->message);

@@ -25,6 +25,7 @@
 #include <stdio.h>
 #include <cmocka.h>
 #include "testutil.h"
+#include "switch_wrap.h"
 
 static const double V1 = 10, R1 = 1e3, C1 = 1e-6, C2 = 3e-6;
 
@@ -57,7 +58,7 @@ static void exact(double t, double ts, int right, double *x, double *is) { exact
 enum fail { NONE, FORM, SETTLE, INPUT, INTERRUPT, REFUSE };
 
 typedef struct {
-  cup_switching sw;            /* the netlist's */
+  cup_switching sw;            /* the netlist's (first: switch_wrap.h) */
   const cup_input *u;          /* the netlist's input */
   enum fail fail;
   double ts;
@@ -77,34 +78,9 @@ static int w_settle(void *ctx, int *topo, double t, const double *x, const doubl
   return W->sw.settle(W->sw.ctx, topo, t, x, zeta, errmsg);
 }
 
-static int w_next(void *ctx, int topo, double t, double tmax, double *tnext) {
-  wrap *W = ctx;
-  return W->sw.next(W->sw.ctx, topo, t, tmax, tnext);
-}
-
 static const cup_lcs *w_lcs(void *ctx, int topo) {
   wrap *W = ctx;
   return W->fail == FORM && topo != 0 ? NULL : W->sw.lcs(W->sw.ctx, topo);
-}
-
-static void w_jump(void *ctx, int topo, double *x) {
-  wrap *W = ctx;
-  W->sw.jump(W->sw.ctx, topo, x);
-}
-
-static int w_state_gated(void *ctx, int topo) {
-  wrap *W = ctx;
-  return W->sw.state_gated(W->sw.ctx, topo);
-}
-
-static int w_crossed(void *ctx, int topo, double t, const double *x) {
-  wrap *W = ctx;
-  return W->sw.crossed(W->sw.ctx, topo, t, x);
-}
-
-static int w_moves(void *ctx, int topo) {
-  wrap *W = ctx;
-  return W->sw.moves ? W->sw.moves(W->sw.ctx, topo) : 1;
 }
 
 static int w_input(double t, double *u, void *ctx) {
@@ -157,7 +133,9 @@ static int run_case2(double ts, double width, cup_integrator_options *o, enum fa
   wrap W = {.fail = f, .ts = ts};
   assert_int_equal(cup_netlist_switching(nl, &W.sw), 1);
   W.u = cup_netlist_input(nl);
-  cup_switching sw = {&W, w_settle, w_next, w_lcs, w_jump, w_state_gated, w_crossed, w_moves, NULL};
+  cup_switching sw = fwd_switching(&W);
+  sw.settle = w_settle;
+  sw.lcs = w_lcs;
   cup_input *u = NULL;
   assert_int_equal(cup_input_create(&u, cup_input_dim(W.u), err), CUP_OK);
   assert_int_equal(cup_input_set_callback(u, w_input, &W, 1e-12, 1e-12), CUP_OK);
