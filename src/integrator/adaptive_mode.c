@@ -814,9 +814,9 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
 }
 
 /* ad_lift with nw a constant too, the input's states copied unrolled (two
- * states and 1 to 3 input states: the buck's, the pi filter's; the
- * six-pulse bridge's 6 input states then, whose lift, a record's and a
- * mode check's, was 143 instructions, 104 so). */
+ * states and 1 to 3 input states, the sizes the examples and tests reach;
+ * the six-pulse bridge's 6 input states before 865d3b5, whose lift, a
+ * record's and a mode check's, was 143 instructions, 104 so). */
 static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, const ad_mode *md, const double *x,
                                                              const double *w, double *y) {
   ad_lift_sums(n, nw, md->KU, x, w, y);
