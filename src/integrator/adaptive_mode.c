@@ -509,13 +509,10 @@ static inline void mode_mv_sparse(int na, const ad_mode *md, const double *y, do
 }
 
 /* (A few components: ad_mode_mv_few's dense sums; the buck-boost's event
- * functions took 66 instructions a product by the nonzeros. 8: the
- * six-pulse bridge's 2 states and 6 input states, na a constant, whose
- * zeroing was a call of memset.) */
+ * functions took 66 instructions a product by the nonzeros.) */
 void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double *out) {
   if (ad_mode_mv_few(A->na, md->M, y, out)) return;
-  if (A->na == 8) mode_mv_sparse(8, md, y, out);
-  else mode_mv_sparse(A->na, md, y, out);
+  mode_mv_sparse(A->na, md, y, out);
 }
 
 /* The rest of a mode once mode_factor has chosen its rows. */
@@ -682,24 +679,24 @@ static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, co
   for (int i = 0; i < n; i++) out[i] = v[i];
 }
 
-/* out = E y for E of [Pi Q; 0 W] (na of 8: two states, six input states)
- * whose rows of the input's states are exactly zero in the state's
- * columns: matvec_sums' sums less those terms, +-0 each, which leave the
- * sums started at +0 as they were (y finite). The six-pulse bridge's
- * step: 207 instructions a product, 184 so. */
-static __attribute__((noinline)) void matvec_2_8(const double *E, const double *y, double *out) {
+/* out = E y for E of [Pi Q; 0 W] (n states, na - n input states; n and na
+ * constants) whose rows of the input's states are exactly zero in the
+ * state's columns: matvec_sums' sums less those terms, +-0 each, which
+ * leave the sums started at +0 as they were (y finite). */
+static inline __attribute__((always_inline)) void matvec_low0(int n, int na, const double *E, const double *y,
+                                                              double *out) {
   double v[8] = {0};
-  for (int j = 0; j < 2; j++) {
+  for (int j = 0; j < n; j++) {
     double yj = y[j];
     if (yj == 0) continue;
-    for (int i = 0; i < 2; i++) v[i] += E[i + (size_t)j * 8] * yj;
+    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * na] * yj;
   }
-  for (int j = 2; j < 8; j++) {
+  for (int j = n; j < na; j++) {
     double yj = y[j];
     if (yj == 0) continue;
-    for (int i = 0; i < 8; i++) v[i] += E[i + (size_t)j * 8] * yj;
+    for (int i = 0; i < na; i++) v[i] += E[i + (size_t)j * na] * yj;
   }
-  for (int i = 0; i < 8; i++) out[i] = v[i];
+  for (int i = 0; i < na; i++) out[i] = v[i];
 }
 
 /* ad_matvec for n of 7 or 8, apart from its body (inline there, the
@@ -749,7 +746,9 @@ static inline __attribute__((always_inline)) void expm_mv_sums(int n, int na, co
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out) {
   int n = A->n, na = A->na, c = 0;
   while (c < AD_CACHE && md->Ec[c] != E) c++;
-  if (na == 8 && n == 2 && c < AD_CACHE && md->elow0[c]) { matvec_2_8(E, y, out); return; }
+  /* (the six-pulse bridge's 2 states and 2 input states, inline: 98
+   * instructions a product and a call by ad_matvec) */
+  if (na == 4 && n == 2 && c < AD_CACHE && md->elow0[c]) { matvec_low0(2, 4, E, y, out); return; }
   /* (up to 8 rows, every sum in a register: a six-pulse bridge's 2 states
    * and 6 input states took 320 instructions a product by the input rows'
    * nonzeros, 260 so; E's zeros add +-0 to sums started at +0, which
@@ -764,6 +763,31 @@ void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const 
     case 4: expm_mv_sums(4, na, E, ep, ei, ex, y, out); return;
     case 5: expm_mv_sums(5, na, E, ep, ei, ex, y, out); return;
     default: expm_mv_sums(6, na, E, ep, ei, ex, y, out); return;
+  }
+}
+
+/* ad_flow's Taylor substeps (na a constant for the few: M y by
+ * ad_mode_mv_few's dense sums in registers, the terms' loops unrolled; the
+ * same sums as ad_mode_mv's). */
+static inline __attribute__((always_inline)) void flow_taylor(adaptive_ws *A, const ad_mode *md, int na, int sub,
+                                                              double dt, const double *y_in, double *y_out) {
+  double *term = A->fa, *tmp = A->fb;
+  la_copy(y_out, y_in, na);
+  for (int s = 0; s < sub; s++) {
+    la_copy(term, y_out, na);
+    for (int k = 1; k <= 30; k++) {
+      if (na > 4 || !ad_mode_mv_few(na, md->M, term, tmp)) mode_mv_sparse(na, md, term, tmp);
+      /* done when every component's term is below its rounding: a callback's
+       * Taylor states (u, u', ..., u^(7)) span 20 orders of magnitude, and a
+       * test against the largest stopped x's series at 1e-5 of x */
+      int done = 1;
+      for (int i = 0; i < na; i++) {
+        term[i] = tmp[i] * dt / k;
+        y_out[i] += term[i];
+        done &= fabs(term[i]) <= 0.25 * DBL_EPSILON * fabs(y_out[i]);
+      }
+      if (done) break;
+    }
   }
 }
 
@@ -783,30 +807,16 @@ void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double
   /* substeps of norm <= 1/2, each a Taylor series to its last term below
    * eps: na^2 per term instead of na^3 per matrix product */
   int sub = norm > 0.5 ? (int)ceil(norm / 0.5) : 1;
-  double dt = tau / sub, *term = A->fa, *tmp = A->fb;
-  la_copy(y_out, y_in, na);
-  for (int s = 0; s < sub; s++) {
-    la_copy(term, y_out, na);
-    for (int k = 1; k <= 30; k++) {
-      if (na > 4) mode_mv_sparse(na, md, term, tmp);   /* (inlined, as before the few's dense case) */
-      else ad_mode_mv(A, md, term, tmp);
-      /* done when every component's term is below its rounding: a callback's
-       * Taylor states (u, u', ..., u^(7)) span 20 orders of magnitude, and a
-       * test against the largest stopped x's series at 1e-5 of x */
-      int done = 1;
-      for (int i = 0; i < na; i++) {
-        term[i] = tmp[i] * dt / k;
-        y_out[i] += term[i];
-        done &= fabs(term[i]) <= 0.25 * DBL_EPSILON * fabs(y_out[i]);
-      }
-      if (done) break;
-    }
-  }
+  double dt = tau / sub;
+  if (na == 4) flow_taylor(A, md, 4, sub, dt, y_in, y_out);   /* (the six-pulse bridge's 2 + 2: 748
+                                                                 instructions an event's flow, 379 so) */
+  else flow_taylor(A, md, na, sub, dt, y_in, y_out);
 }
 
 /* ad_lift with nw a constant too, the input's states copied unrolled (two
- * states: the six-pulse bridge's 6 input states, whose lift, a record's
- * and a mode check's, was 143 instructions, 104 so). */
+ * states and 1 to 3 input states, the sizes the examples and tests reach;
+ * the six-pulse bridge's 6 input states before 865d3b5, whose lift, a
+ * record's and a mode check's, was 143 instructions, 104 so). */
 static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, const ad_mode *md, const double *x,
                                                              const double *w, double *y) {
   ad_lift_sums(n, nw, md->KU, x, w, y);
@@ -818,14 +828,11 @@ static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, cons
  * on the loops' set-up than on its 18 products.) */
 void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
   int n = A->n, nw = A->nw;
-  if (n == 2 && nw >= 1 && nw <= 6) {
+  if (n == 2 && nw >= 1 && nw <= 3) {
     switch (nw) {
       case 1: lift_fixed(2, 1, md, x, w, y); return;
       case 2: lift_fixed(2, 2, md, x, w, y); return;
       case 3: lift_fixed(2, 3, md, x, w, y); return;
-      case 4: lift_fixed(2, 4, md, x, w, y); return;
-      case 5: lift_fixed(2, 5, md, x, w, y); return;
-      case 6: lift_fixed(2, 6, md, x, w, y); return;
     }
   }
   switch (n) {                                   /* (a converter's few states: the loops unrolled) */
@@ -854,17 +861,13 @@ static inline __attribute__((always_inline)) void state_sums(int n, int na, cons
 
 void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
   int n = A->n, na = A->na;
-  switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled; 8: a
-                                                    six-pulse bridge's 2 states and 6 input states, whose
-                                                    run spent 52 k instructions here by the generic sums,
-                                                    45 k so) */
+  switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled) */
     case 1: state_sums(n, 1, md->X, y, x); return;
     case 2: if (n == 2) state_sums(2, 2, md->X, y, x); else state_sums(n, 2, md->X, y, x); return;
     case 3: if (n == 2) state_sums(2, 3, md->X, y, x); else state_sums(n, 3, md->X, y, x); return;
     case 4: if (n == 2) state_sums(2, 4, md->X, y, x); else state_sums(n, 4, md->X, y, x); return;
     case 5: state_sums(n, 5, md->X, y, x); return;
     case 6: state_sums(n, 6, md->X, y, x); return;
-    case 8: if (n == 2) state_sums(2, 8, md->X, y, x); else state_sums(n, 8, md->X, y, x); return;
   }
   state_sums(n, na, md->X, y, x);
 }

@@ -54,9 +54,14 @@ static inline __attribute__((always_inline)) int piece_sparse(const ad_mode *md,
  * bit: row i's products in M's column order from +0, less those of a
  * c_j = 0; a product of a zero entry is +-0, which leaves a sum started
  * at +0 as it was (it is never -0). A non-finite c_j spreads to more rows
- * than the sparse sums', and the piece is not usable either way (0). */
-static inline __attribute__((always_inline)) int piece_dense(const double *restrict M, int lda, int dim, double hs,
-                                                             const double *restrict y, double *restrict c) {
+ * than the sparse sums', and the piece is not usable either way (0).
+ * lo > 0 (a constant): the first lo components are the states and the
+ * rest the input's, whose rows of M are 0 in the states' columns (M = [Pi
+ * Q; 0 W], mode_flow): those columns' products are the states' rows' alone
+ * (the rest are +-0 by the same argument; the six-pulse bridge's 2 + 2). */
+static inline __attribute__((always_inline)) int piece_dense(const double *restrict M, int lda, int dim, int lo,
+                                                             double hs, const double *restrict y,
+                                                             double *restrict c) {
   double mag[6];
   int quiet = 0;
   for (int i = 0; i < dim; i++) {
@@ -71,7 +76,8 @@ static inline __attribute__((always_inline)) int piece_dense(const double *restr
       double cj = cp[j];
       if (cj == 0) continue;
       const double *col = M + (size_t)j * lda;
-      for (int i = 0; i < dim; i++) ck[i] += col[i] * cj;
+      int rows = j < lo ? lo : dim;
+      for (int i = 0; i < rows; i++) ck[i] += col[i] * cj;
     }
     int small = 1;
     for (int i = 0; i < dim; i++) {
@@ -100,12 +106,14 @@ static __attribute__((noinline)) int piece_sparse8(const ad_mode *md, int dim, d
 static int piece_build(const adaptive_ws *A, const ad_mode *md, int dim, double hs, const double *y, double *c,
                        double *mag) {
   switch (dim) {
-    case 1: return piece_dense(md->M, A->na, 1, hs, y, c);
-    case 2: return piece_dense(md->M, A->na, 2, hs, y, c);
-    case 3: return piece_dense(md->M, A->na, 3, hs, y, c);
-    case 4: return piece_dense(md->M, A->na, 4, hs, y, c);
-    case 5: return piece_dense(md->M, A->na, 5, hs, y, c);
-    case 6: return piece_dense(md->M, A->na, 6, hs, y, c);
+    case 1: return piece_dense(md->M, A->na, 1, 0, hs, y, c);
+    case 2: return piece_dense(md->M, A->na, 2, 0, hs, y, c);
+    case 3: return piece_dense(md->M, A->na, 3, 0, hs, y, c);
+    case 4:
+      if (A->n == 2 && A->na == 4) return piece_dense(md->M, 4, 4, 2, hs, y, c);
+      return piece_dense(md->M, A->na, 4, 0, hs, y, c);
+    case 5: return piece_dense(md->M, A->na, 5, 0, hs, y, c);
+    case 6: return piece_dense(md->M, A->na, 6, 0, hs, y, c);
     case 7: case 8: return piece_sparse8(md, dim, hs, y, c);
     default: return piece_sparse(md, dim, hs, y, c, mag);
   }
