@@ -16,7 +16,8 @@
 # util/fail.c (the error message into errmsg) is compiled in too: libcatchup
 # hides its own copy. In catchup_h5_static the two archives' fail.o are the
 # same object, so a program takes whichever it meets first.
-add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c
+add_library(catchup_h5_objects OBJECT ${CMAKE_CURRENT_LIST_DIR}/h5run.c ${CMAKE_CURRENT_LIST_DIR}/h5run_rows.c
+            ${CMAKE_CURRENT_LIST_DIR}/h5run_stop.c
             ${CMAKE_CURRENT_LIST_DIR}/h5util.c ${PROJECT_SOURCE_DIR}/src/util/fail.c)
 set_target_properties(catchup_h5_objects PROPERTIES C_VISIBILITY_PRESET hidden)
 target_include_directories(catchup_h5_objects PRIVATE

@@ -1,7 +1,8 @@
-/* h5run_impl — the run writer's state, shared by h5run.c (create, the data
- * path, attributes, close) and h5run_stop.c (a staged file and its commit,
- * reopening a stopped run's file, checkpoints). Internal to catchup_h5:
- * the functions below are hidden from the shared library's users. */
+/* h5run_impl — the run writer's state, shared by h5run.c (create,
+ * attributes, close), h5run_rows.c (the data path) and h5run_stop.c (a
+ * staged file and its commit, reopening a stopped run's file, checkpoints).
+ * Internal to catchup_h5: the functions below are hidden from the shared
+ * library's users. */
 #ifndef CUP_H5RUN_IMPL_H
 #define CUP_H5RUN_IMPL_H
 
@@ -47,12 +48,23 @@ struct cup_h5run {
   int err_status;         /* its status; CUP_OK while errmsg is "" */
 };
 
-/* h5run.c: record the first HDF5 failure ("h5run: cannot OP 'PATH': ...")
- * and stop the writer; keep the error stack across a cleanup (a message
- * into errmsg: util/fail.h's fail_fmt, compiled into catchup_h5 too). */
+/* h5run_rows.c: record the first HDF5 failure ("h5run: cannot OP 'PATH':
+ * ...") and stop the writer, h5run.c's failures too (a message into
+ * errmsg: util/fail.h's fail_fmt, compiled into catchup_h5 too). */
 H5R_HIDDEN int set_error(cup_h5run *w, int status, const char *op);
-H5R_HIDDEN hid_t keep_stack(int failed);
-H5R_HIDDEN void restore_stack(hid_t saved);
+
+/* Closing handles after a failure is itself an HDF5 call, which clears the
+ * error stack: keep the failure's stack across the cleanup for set_error.
+ * (Inline: h5run_rows.c's appends and h5run.c's set-up inline them, as
+ * when both were one file.) */
+static inline hid_t keep_stack(int failed) {
+  return failed ? H5Eget_current_stack() : H5I_INVALID_HID;
+}
+
+static inline void restore_stack(hid_t saved) {
+  if (saved >= 0) H5Eset_current_stack(saved);
+}
+
 /* A writer for path and dim, no file yet and no row buffers (taken at the first row) (NULL: the
  * status, with the message, in *st). */
 H5R_HIDDEN cup_h5run *writer_new(const char *path, int dim, char *errmsg, int *st);

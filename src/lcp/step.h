@@ -126,6 +126,11 @@ int lcp_step_solve(lcp_step *ls, const double *g, const double *xf, double *z,
  * push along the polyset's direction into K, verified; INFINITY when
  * neither works. */
 double lcp_step_eta(lcp_step *ls, const double *g, const double *z);
+/* step.c's, for step_solve.c (with D): the weights and H, M for the
+ * support J (1 when they changed, 0 when those in force were J's), and the
+ * carry Pi zeta of the last zeta (aimed: solved with the aims tau). */
+int set_mode(lcp_step *ls, unsigned long long J);
+void carry_of(lcp_step *ls, int aimed);
 
 /* ---- lcp_step_solve unrolled for a small set (CUP_STEP_SMALL_N
  * states, CUP_STEP_SMALL_M rows, no D), as always-inline

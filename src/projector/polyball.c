@@ -37,7 +37,7 @@ static double dist_hi(cup_setproj *sp, const double *a, const double *b, double 
 static int in_ball(cup_setproj *sp, const double *y) { return dist_hi(sp, y, sp->c, NULL) <= sp->r; }
 
 /* y pushed along the polyset's interior direction d (C d > 0) just far
- * enough that every row holds beyond its rounding, as lcp/step.c's eta
+ * enough that every row holds beyond its rounding, as lcp/step_solve.c's eta
  * certificate does, into out (may alias y): 1 when that point is certainly
  * in the rows. A point on a face (the polyset's answer for a point of that
  * face) is not certainly in them; this one is, a rounding away. */

@@ -13,7 +13,7 @@
  * result only overwrites raw bytes at fixed offsets: no B-tree, heap or
  * object header changes ever again. The file uses the 1.8 format (superblock
  * version 0: no "open for writing" flag, so no h5clear after a kill; the
- * same lesson as h5run.c). HDF5's sieve buffer is switched off so that every
+ * same lesson as h5run_rows.c). HDF5's sieve buffer is switched off so that every
  * H5Dwrite reaches the operating system when it returns, in our order: the
  * trajectories of a batch of tasks first, then their /summary rows with
  * done = 1, each row in one piece with done as its last byte. A process
