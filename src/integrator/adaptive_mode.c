@@ -670,21 +670,9 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   return md->Ec[slot];
 }
 
-/* out = E y for a constant n, each out_i's sum in a register. */
-static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, const double *E, const double *y,
-                                                              double *out) {
-  double v[8] = {0};
-  for (int j = 0; j < n; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
-  }
-  for (int i = 0; i < n; i++) out[i] = v[i];
-}
-
 /* out = E y for E of [Pi Q; 0 W] (na of 8: two states, six input states)
  * whose rows of the input's states are exactly zero in the state's
- * columns: matvec_sums' sums less those terms, +-0 each, which leave the
+ * columns: ad_matvec_sums' sums less those terms, +-0 each, which leave the
  * sums started at +0 as they were (y finite). The six-pulse bridge's
  * step: 207 instructions a product, 184 so. */
 static __attribute__((noinline)) void matvec_2_8(const double *E, const double *y, double *out) {
@@ -705,18 +693,18 @@ static __attribute__((noinline)) void matvec_2_8(const double *E, const double *
 /* ad_matvec for n of 7 or 8, apart from its body (inline there, the
  * registers cost the full bridge's sizes 3 and 4 3 k instructions). */
 static __attribute__((noinline)) void matvec8(int n, int lda, const double *E, const double *y, double *out) {
-  if (n == 7) matvec_sums(7, lda, E, y, out);
-  else matvec_sums(8, lda, E, y, out);
+  if (n == 7) ad_matvec_sums(7, lda, E, y, out);
+  else ad_matvec_sums(8, lda, E, y, out);
 }
 
 void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
   switch (n) {                                   /* (a converter's states and sources: the loops unrolled) */
-    case 1: matvec_sums(1, lda, E, y, out); return;
-    case 2: matvec_sums(2, lda, E, y, out); return;
-    case 3: matvec_sums(3, lda, E, y, out); return;
-    case 4: matvec_sums(4, lda, E, y, out); return;
-    case 5: matvec_sums(5, lda, E, y, out); return;
-    case 6: matvec_sums(6, lda, E, y, out); return;
+    case 1: ad_matvec_sums(1, lda, E, y, out); return;
+    case 2: ad_matvec_sums(2, lda, E, y, out); return;
+    case 3: ad_matvec_sums(3, lda, E, y, out); return;
+    case 4: ad_matvec_sums(4, lda, E, y, out); return;
+    case 5: ad_matvec_sums(5, lda, E, y, out); return;
+    case 6: ad_matvec_sums(6, lda, E, y, out); return;
     case 7: case 8: matvec8(n, lda, E, y, out); return;
   }
   for (int i = 0; i < n; i++) out[i] = 0;
@@ -749,10 +737,10 @@ static inline __attribute__((always_inline)) void expm_mv_sums(int n, int na, co
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out) {
   int n = A->n, na = A->na, c = 0;
   switch (na) {                                  /* (a converter's few states: ad_matvec's sums here, */
-    case 1: matvec_sums(1, 1, E, y, out); return;   /* without its call and register saves and the slot's */
-    case 2: matvec_sums(2, 2, E, y, out); return;   /* search, 70 of a full bridge's 116 instructions a */
-    case 3: matvec_sums(3, 3, E, y, out); return;   /* product) */
-    case 4: matvec_sums(4, 4, E, y, out); return;
+    case 1: ad_matvec_sums(1, 1, E, y, out); return;   /* without its call and register saves and the slot's */
+    case 2: ad_matvec_sums(2, 2, E, y, out); return;   /* search, 70 of a full bridge's 116 instructions a */
+    case 3: ad_matvec_sums(3, 3, E, y, out); return;   /* product) */
+    case 4: ad_matvec_sums(4, 4, E, y, out); return;
   }
   while (c < AD_CACHE && md->Ec[c] != E) c++;
   if (na == 8 && n == 2 && c < AD_CACHE && md->elow0[c]) { matvec_2_8(E, y, out); return; }

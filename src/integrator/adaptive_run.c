@@ -753,7 +753,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
     la_copy_few(A->et, A->yt, n);
   } else {
-    ad_matvec(n, na, E, A->e, A->et);
+    ad_matvec_few(n, na, E, A->e, A->et);
   }
   la_copy_few(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */
