@@ -810,7 +810,8 @@ static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, cons
 /* (Each y_i its sum in a register, over the columns in order: a record's
  * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
-void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
+static __attribute__((noinline)) void lift_any(const adaptive_ws *A, const ad_mode *md, const double *x,
+                                                const double *w, double *y) {
   int n = A->n, nw = A->nw;
   if (n == 2 && nw >= 1 && nw <= 6) {
     switch (nw) {
@@ -838,6 +839,15 @@ void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const dou
       }
   }
   la_copy_few(y + n, w, nw);
+}
+
+/* Two states and one or two input states (the bridges': a DC source, a
+ * pair of a sine's) here, the rest in lift_any: its switches' registers,
+ * saved and restored a call, were a third of a full bridge's lift. */
+void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
+  if (A->n == 2 && A->nw == 1) { lift_fixed(2, 1, md, x, w, y); return; }
+  if (A->n == 2 && A->nw == 2) { lift_fixed(2, 2, md, x, w, y); return; }
+  lift_any(A, md, x, w, y);
 }
 
 /* x = X y for a constant na: la_dot's sums, unrolled. */
