@@ -56,10 +56,44 @@ static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const do
  * finite, where it cannot be NaN either: it takes the magnitudes' sum and
  * a product by the state's scale, 12 of the 60 instructions a row of a
  * full bridge's (every row's: ad_events_thresholds). */
+/* For na <= 4 (a constant here), (M y)_j only where a row reads it, as
+ * ad_mode_mv_dense sums it (from +0, over the columns in order): a full
+ * bridge's 4 rows read 2 or 3 of M y's 3 components, and the product and
+ * its stores were a quarter of the call. */
+static inline __attribute__((always_inline)) void both_few(int na, const adaptive_ws *A, const ad_mode *md,
+                                                           const double *y, double *g, double *thr, double *d) {
+  double yv[4];
+  for (int c = 0; c < na; c++) yv[c] = y[c];
+  const double *M = md->M;
+  double vmax = state_scale(A, y);
+  int m = A->m;
+  const int *lp = md->lp, *li = md->li;
+  const double *lx = md->lx, *Lc = md->Lc;
+  for (int i = 0; i < m; i++) {
+    double acc = Lc[i], dacc = 0;
+    for (int k = lp[i]; k < lp[i + 1]; k++) {
+      int j = li[k];
+      double l = lx[k], myj = 0;
+      for (int c = 0; c < na; c++) myj += M[j + c * na] * yv[c];
+      acc += l * yv[j];
+      dacc += l * myj;
+    }
+    g[i] = acc;
+    d[i] = dacc;
+    thr[i] = acc >= 0 ? 0 : threshold(A, md, i, y, vmax);
+  }
+  if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);
+}
+
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
+  switch (A->na) {
+    case 1: both_few(1, A, md, y, g, thr, d); return;
+    case 2: both_few(2, A, md, y, g, thr, d); return;
+    case 3: both_few(3, A, md, y, g, thr, d); return;
+    case 4: both_few(4, A, md, y, g, thr, d); return;
+  }
   double *My = A->My;
-  if (A->na > 4) ad_mode_mv(A, md, y, My);
-  else ad_mode_mv_few(A->na, md->M, y, My);      /* (inline) */
+  ad_mode_mv(A, md, y, My);
   double vmax = state_scale(A, y);
   int m = A->m;
   const int *lp = md->lp, *li = md->li;

@@ -759,7 +759,9 @@ static inline double ad_row_rounding(const adaptive_ws *A, const ad_mode *md, in
 }
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
-/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it), but
+/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it, when
+ * na > 4; na <= 4: M y's components where a row reads them, A->My not
+ * written), but
  * thr only where g < 0 (or the state is not finite), 0 elsewhere: a value
  * >= 0 crosses nothing, whatever its threshold. */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
