@@ -856,7 +856,8 @@ static inline __attribute__((always_inline)) void state_sums(int n, int na, cons
   for (int i = 0; i < n; i++) x[i] = la_dot(X + (size_t)i * na, y, na);
 }
 
-void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
+static __attribute__((noinline)) void state_any(const adaptive_ws *A, const ad_mode *md, const double *y,
+                                                 double *x) {
   int n = A->n, na = A->na;
   switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled; 8: a
                                                     six-pulse bridge's 2 states and 6 input states, whose
@@ -871,6 +872,14 @@ void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *
     case 8: if (n == 2) state_sums(2, 8, md->X, y, x); else state_sums(n, 8, md->X, y, x); return;
   }
   state_sums(n, na, md->X, y, x);
+}
+
+/* Two states and one or two input states (the bridges') here, the rest in
+ * state_any: its switch's register saves were a third of the call. */
+void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
+  if (A->n == 2 && A->na == 3) { state_sums(2, 3, md->X, y, x); return; }
+  if (A->n == 2 && A->na == 4) { state_sums(2, 4, md->X, y, x); return; }
+  state_any(A, md, y, x);
 }
 
 /* U w and F + G u by their nonzeros (offset_pattern), in the dense
