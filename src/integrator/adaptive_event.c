@@ -202,9 +202,8 @@ static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) 
   return 0;
 }
 
-/* ad_detect past its first test (kept out of line: the common step's
- * test then saves no registers). */
-static __attribute__((noinline)) int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
+/* ad_detect past its first test (ad_detect_may, inline in take_step). */
+static int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
   if (any_crossed(A, A->gb, A->tb)) return 1;
   for (int i = 0; i < m; i++) {
@@ -218,16 +217,10 @@ static __attribute__((noinline)) int detect_rows(adaptive_ws *A, ad_mode *md, do
 }
 
 int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
-  const double *gb = A->gb, *da = A->da, *db = A->db;
-  int m = A->m, i = 0;
   ev->tau_lo = 0;
   ev->tau_sw = h;
   ev->hi_ok = 0;
-  /* the common step first, a row at a time: a crossing needs gb < 0 (gb <
-   * -tb, tb >= 0), a dip da < 0 < db; with neither, none of detect_rows'
-   * tests can fire */
-  while (i < m && !(gb[i] < 0) && !(da[i] < 0 && db[i] > 0)) i++;
-  return i < m ? detect_rows(A, md, h, ev) : 0;
+  return detect_rows(A, md, h, ev);
 }
 
 /* The row crossing first: of those crossed at the bracket's end, the one
