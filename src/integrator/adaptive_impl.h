@@ -582,7 +582,16 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * ending at t (t_end) takes a cached one within two ulps of t of it
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
-const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+const double *ad_expm_miss(adaptive_ws *A, ad_mode *md, double h);
+/* (The cache's look-up inline, ad_expm_cached's: its call and register
+ * saves were half of a full bridge's hmax step's look-up; a miss computes
+ * the exponential into the least recently used slot: ad_expm_miss.) */
+static inline const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
+  double same = 2 * DBL_EPSILON * fabs(t_end);
+  for (int c = 0; c < AD_CACHE; c++)
+    if (fabs(md->hc[c] - h) <= same) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
+  return ad_expm_miss(A, md, h);
+}
 /* out = E y for E = exp(h M_J) that ad_expm returned for md (ad_matvec's
  * sums over E's nonzeros: the same bits). */
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out);
