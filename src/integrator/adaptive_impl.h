@@ -541,7 +541,16 @@ int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const 
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a
  * switched run the last window's, adaptive_breaks) copy its states. */
-int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err);
+int ad_inputs_varied(adaptive_ws *A, double t0, double t1, double *w, double *err);
+/* (No input states, or DC sources alone, every piece's the same, inline:
+ * the call was half of a full bridge's step's; the others, a waveform's
+ * pieces and a callback's: ad_inputs_varied.) */
+static inline int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
+  if (A->nwu && !A->w_const) return ad_inputs_varied(A, t0, t1, w, err);
+  if (A->one >= 0) w[A->one] = 1;
+  la_copy_few(w, A->wc, A->nwu);
+  return CUP_OK;
+}
 /* A record at a step's end (A->zt, state A->x) on md's manifold: its y
  * into A->zy, the input's states from there on (adaptive_zeta's); nonzero
  * if the input failed. */
