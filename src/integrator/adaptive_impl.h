@@ -563,7 +563,15 @@ double ad_next_break(adaptive_ws *A, double t);
  * set whose rows are linearly dependent keeps an independent subset (the
  * mode's mask says which). Allocates nothing: the slots are taken at the
  * run's start (ad_modes_take). */
-ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
+ad_mode *ad_mode_get_other(adaptive_ws *A, uint64_t mask);
+/* (The set the last ask answered, inline: a window asks for the set the
+ * last one ran on; the others, the one before and the slots' search, in
+ * ad_mode_get_other.) */
+static inline ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
+  ad_mode *md = A->got;
+  if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
+  return ad_mode_get_other(A, mask);
+}
 /* The slots' matrices from b, not zeroed: a slot's arrays are written
  * whole when a set is built in it, mode_factor and mode_finish, before
  * they are read; its exponentials by their lengths, md->hc. A switched
