@@ -49,13 +49,6 @@ static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const do
   return ad_row_rounding(A, md, i, mag, vmax);
 }
 
-/* (One pass over L's nonzeros for both: each sum as in its own function.)
- * A row's threshold counts only where its value is below zero: crossed()
- * and any_negative() ask g < -thr (never true for g >= 0, thr >= 0) and g
- * >= -thr (always). It is left out (0) where g >= 0 and the state is
- * finite, where it cannot be NaN either: it takes the magnitudes' sum and
- * a product by the state's scale, 12 of the 60 instructions a row of a
- * full bridge's (every row's: ad_events_thresholds). */
 /* For na <= 4 (a constant here), (M y)_j only where a row reads it, as
  * ad_mode_mv_dense sums it (from +0, over the columns in order): a full
  * bridge's 4 rows read 2 or 3 of M y's 3 components, and the product and
@@ -85,6 +78,13 @@ static inline __attribute__((always_inline)) void both_few(int na, const adaptiv
   if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);
 }
 
+/* (One pass over L's nonzeros for both: each sum as in its own function.)
+ * A row's threshold counts only where its value is below zero: crossed()
+ * and any_negative() ask g < -thr (never true for g >= 0, thr >= 0) and g
+ * >= -thr (always). It is left out (0) where g >= 0 and the state is
+ * finite, where it cannot be NaN either: it takes the magnitudes' sum and
+ * a product by the state's scale, 12 of the 60 instructions a row of a
+ * full bridge's (every row's: ad_events_thresholds). */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
   switch (A->na) {
     case 1: both_few(1, A, md, y, g, thr, d); return;

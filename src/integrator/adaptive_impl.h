@@ -785,11 +785,10 @@ static inline double ad_row_rounding(const adaptive_ws *A, const ad_mode *md, in
 }
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
-/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it, when
- * na > 4; na <= 4: M y's components where a row reads them, A->My not
- * written), but
- * thr only where g < 0 (or the state is not finite), 0 elsewhere: a value
- * >= 0 crosses nothing, whatever its threshold. */
+/* Both, the same bits (na > 4: M y in A->My, as ad_events_deriv leaves
+ * it; na <= 4: M y's components where a row reads them, A->My not
+ * written), but thr only where g < 0 (or the state is not finite), 0
+ * elsewhere: a value >= 0 crosses nothing, whatever its threshold. */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
 /* Every row's threshold at y, as ad_events_eval's (a checkpoint's). */
 void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr);
@@ -806,9 +805,10 @@ typedef struct ad_event {
   int hi_ok;                /* A->yhi holds the flow from the step's start to tau_sw (a probe's) */
 } ad_event;
 /* After a step of length h from ya (values ga, slopes da, thresholds ta at
- * the start; gb, db, tb at the end), where ad_detect_may says one can: 1 if an event function crosses zero
- * downwards (an interior dip below zero included), with the bracket
- * (tau_lo, tau_sw] and the values at its ends in ga.. and gb..; 0 if none. */
+ * the start; gb, db, tb at the end; take_step asks where ad_detect_may
+ * says one can): 1 if an event function crosses zero downwards (an
+ * interior dip below zero included), with the bracket (tau_lo, tau_sw] and
+ * the values at its ends in ga.. and gb..; 0 if none. */
 int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev);
 /* Whether ad_detect can find anything (inline: the common step's test, a
  * row at a time): a crossing needs gb < 0 (gb < -tb, tb >= 0), a dip da <

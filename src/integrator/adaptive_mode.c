@@ -566,7 +566,7 @@ static uint64_t alias_of(const adaptive_ws *A, uint64_t mask) {
 }
 
 ad_mode *ad_mode_get_other(adaptive_ws *A, uint64_t mask) {
-  ad_mode *md = A->got2;                          /* (a window's start with D tries the empty set, then its seed) */
+  ad_mode *md = A->got2;                 /* (a window's start with D tries the empty set, then its seed) */
   A->got2 = A->got;
   if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return A->got = md; }
   return A->got = mode_get(A, mask);

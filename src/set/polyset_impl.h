@@ -71,11 +71,12 @@ static inline void polyset_metric_solve_diag(const cup_polyset *K, double *v) {
   if (K->pkind == CUP_METRIC_IDENTITY) return;
   for (int j = 0; j < K->n; j++) v[j] *= K->pdinv[j];
 }
-/* polyset_slack's rows (inline: polyset_slack_outside's too); outside: whether a row is below its rounding
- * instead of the worst slack (gam not NULL). */
+/* polyset_slack's rows (inline: polyset_slack_outside's too); outside:
+ * whether a row is below its rounding instead of the worst slack (gam not
+ * NULL). */
 static inline __attribute__((always_inline)) double polyset_slack_rows(const cup_polyset *K, const double *g,
-                                                               const double *x, double *s, double *gam,
-                                                               int outside) {
+                                                                       const double *x, double *s, double *gam,
+                                                                       int outside) {
   const int *p = K->Ct.p, *ri = K->Ct.i;
   const double *cx = K->Ct.x, *rg = K->rowgam;
   double worst = INFINITY;
