@@ -49,15 +49,16 @@ static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const do
   return ad_row_rounding(A, md, i, mag, vmax);
 }
 
-/* For na <= 4 (a constant here), (M y)_j only where a row reads it, as
- * ad_mode_mv_dense sums it (from +0, over the columns in order): a full
- * bridge's 4 rows read 2 or 3 of M y's 3 components, and the product and
- * its stores were a quarter of the call. */
-static inline __attribute__((always_inline)) void both_few(int na, const adaptive_ws *A, const ad_mode *md,
-                                                           const double *y, double *g, double *thr, double *d) {
+/* The rows of ad_events_both. few: na <= 4, a constant here: (M y)_j only
+ * where a row reads it, as ad_mode_mv_dense sums it (from +0, over the
+ * columns in order), y's entries in registers (a full bridge's 4 rows read
+ * 2 or 3 of M y's 3 components, and the product and its stores were a
+ * quarter of the call); else M y from A->My, made whole. */
+static inline __attribute__((always_inline)) void both_rows(int few, int na, const adaptive_ws *A, const ad_mode *md,
+                                                            const double *y, double *g, double *thr, double *d) {
   double yv[4];
-  for (int c = 0; c < na; c++) yv[c] = y[c];
-  const double *M = md->M;
+  const double *M = md->M, *My = A->My;
+  for (int c = 0; few && c < na; c++) yv[c] = y[c];
   double vmax = state_scale(A, y);
   int m = A->m;
   const int *lp = md->lp, *li = md->li;
@@ -67,15 +68,18 @@ static inline __attribute__((always_inline)) void both_few(int na, const adaptiv
     for (int k = lp[i]; k < lp[i + 1]; k++) {
       int j = li[k];
       double l = lx[k], myj = 0;
-      for (int c = 0; c < na; c++) myj += M[j + c * na] * yv[c];
-      acc += l * yv[j];
+      if (few)
+        for (int c = 0; c < na; c++) myj += M[j + c * na] * yv[c];
+      else
+        myj = My[j];
+      acc += l * (few ? yv[j] : y[j]);
       dacc += l * myj;
     }
     g[i] = acc;
     d[i] = dacc;
     thr[i] = acc >= 0 ? 0 : threshold(A, md, i, y, vmax);
   }
-  if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);
+  if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);   /* (an infinite state: c1 = 0 makes a NaN) */
 }
 
 /* (One pass over L's nonzeros for both: each sum as in its own function.)
@@ -87,30 +91,13 @@ static inline __attribute__((always_inline)) void both_few(int na, const adaptiv
  * full bridge's (every row's: ad_events_thresholds). */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
   switch (A->na) {
-    case 1: both_few(1, A, md, y, g, thr, d); return;
-    case 2: both_few(2, A, md, y, g, thr, d); return;
-    case 3: both_few(3, A, md, y, g, thr, d); return;
-    case 4: both_few(4, A, md, y, g, thr, d); return;
+    case 1: both_rows(1, 1, A, md, y, g, thr, d); return;
+    case 2: both_rows(1, 2, A, md, y, g, thr, d); return;
+    case 3: both_rows(1, 3, A, md, y, g, thr, d); return;
+    case 4: both_rows(1, 4, A, md, y, g, thr, d); return;
   }
-  double *My = A->My;
-  ad_mode_mv(A, md, y, My);
-  double vmax = state_scale(A, y);
-  int m = A->m;
-  const int *lp = md->lp, *li = md->li;
-  const double *lx = md->lx, *Lc = md->Lc;
-  for (int i = 0; i < m; i++) {
-    double acc = Lc[i], dacc = 0;
-    for (int k = lp[i]; k < lp[i + 1]; k++) {
-      int j = li[k];
-      double l = lx[k];
-      acc += l * y[j];
-      dacc += l * My[j];
-    }
-    g[i] = acc;
-    d[i] = dacc;
-    thr[i] = acc >= 0 ? 0 : threshold(A, md, i, y, vmax);
-  }
-  if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);   /* (an infinite state: c1 = 0 makes a NaN) */
+  ad_mode_mv(A, md, y, A->My);
+  both_rows(0, A->na, A, md, y, g, thr, d);
 }
 
 void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr) {
