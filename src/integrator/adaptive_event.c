@@ -49,17 +49,16 @@ static double threshold(const adaptive_ws *A, const ad_mode *md, int i, const do
   return ad_row_rounding(A, md, i, mag, vmax);
 }
 
-/* (One pass over L's nonzeros for both: each sum as in its own function.)
- * A row's threshold counts only where its value is below zero: crossed()
- * and any_negative() ask g < -thr (never true for g >= 0, thr >= 0) and g
- * >= -thr (always). It is left out (0) where g >= 0 and the state is
- * finite, where it cannot be NaN either: it takes the magnitudes' sum and
- * a product by the state's scale, 12 of the 60 instructions a row of a
- * full bridge's (every row's: ad_events_thresholds). */
-void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
-  double *My = A->My;
-  if (A->na > 4) ad_mode_mv(A, md, y, My);
-  else ad_mode_mv_few(A->na, md->M, y, My);      /* (inline) */
+/* The rows of ad_events_both. few: na <= 4, a constant here: (M y)_j only
+ * where a row reads it, as ad_mode_mv_dense sums it (from +0, over the
+ * columns in order), y's entries in registers (a full bridge's 4 rows read
+ * 2 or 3 of M y's 3 components, and the product and its stores were a
+ * quarter of the call); else M y from A->My, made whole. */
+static inline __attribute__((always_inline)) void both_rows(int few, int na, const adaptive_ws *A, const ad_mode *md,
+                                                            const double *y, double *g, double *thr, double *d) {
+  double yv[4];
+  const double *M = md->M, *My = A->My;
+  for (int c = 0; few && c < na; c++) yv[c] = y[c];
   double vmax = state_scale(A, y);
   int m = A->m;
   const int *lp = md->lp, *li = md->li;
@@ -68,15 +67,37 @@ void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *
     double acc = Lc[i], dacc = 0;
     for (int k = lp[i]; k < lp[i + 1]; k++) {
       int j = li[k];
-      double l = lx[k];
-      acc += l * y[j];
-      dacc += l * My[j];
+      double l = lx[k], myj = 0;
+      if (few)
+        for (int c = 0; c < na; c++) myj += M[j + c * na] * yv[c];
+      else
+        myj = My[j];
+      acc += l * (few ? yv[j] : y[j]);
+      dacc += l * myj;
     }
     g[i] = acc;
     d[i] = dacc;
     thr[i] = acc >= 0 ? 0 : threshold(A, md, i, y, vmax);
   }
   if (!(vmax <= DBL_MAX)) ad_events_thresholds(A, md, y, thr);   /* (an infinite state: c1 = 0 makes a NaN) */
+}
+
+/* (One pass over L's nonzeros for both: each sum as in its own function.)
+ * A row's threshold counts only where its value is below zero: crossed()
+ * and any_negative() ask g < -thr (never true for g >= 0, thr >= 0) and g
+ * >= -thr (always). It is left out (0) where g >= 0 and the state is
+ * finite, where it cannot be NaN either: it takes the magnitudes' sum and
+ * a product by the state's scale, 12 of the 60 instructions a row of a
+ * full bridge's (every row's: ad_events_thresholds). */
+void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d) {
+  switch (A->na) {
+    case 1: both_rows(1, 1, A, md, y, g, thr, d); return;
+    case 2: both_rows(1, 2, A, md, y, g, thr, d); return;
+    case 3: both_rows(1, 3, A, md, y, g, thr, d); return;
+    case 4: both_rows(1, 4, A, md, y, g, thr, d); return;
+  }
+  ad_mode_mv(A, md, y, A->My);
+  both_rows(0, A->na, A, md, y, g, thr, d);
 }
 
 void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr) {
@@ -168,9 +189,8 @@ static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) 
   return 0;
 }
 
-/* ad_detect past its first test (kept out of line: the common step's
- * test then saves no registers). */
-static __attribute__((noinline)) int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
+/* ad_detect past its first test (ad_detect_may, inline in take_step). */
+static int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
   if (any_crossed(A, A->gb, A->tb)) return 1;
   for (int i = 0; i < m; i++) {
@@ -184,16 +204,10 @@ static __attribute__((noinline)) int detect_rows(adaptive_ws *A, ad_mode *md, do
 }
 
 int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
-  const double *gb = A->gb, *da = A->da, *db = A->db;
-  int m = A->m, i = 0;
   ev->tau_lo = 0;
   ev->tau_sw = h;
   ev->hi_ok = 0;
-  /* the common step first, a row at a time: a crossing needs gb < 0 (gb <
-   * -tb, tb >= 0), a dip da < 0 < db; with neither, none of detect_rows'
-   * tests can fire */
-  while (i < m && !(gb[i] < 0) && !(da[i] < 0 && db[i] > 0)) i++;
-  return i < m ? detect_rows(A, md, h, ev) : 0;
+  return detect_rows(A, md, h, ev);
 }
 
 /* The row crossing first: of those crossed at the bracket's end, the one

@@ -83,8 +83,6 @@ typedef struct ad_mode {
   double hc[AD_CACHE];      /* cached exponentials exp(h M): h, matrix, last use */
   double *Ec[AD_CACHE];
   long cstamp[AD_CACHE];
-  unsigned char elow0[AD_CACHE];   /* its input states' rows are exactly zero in the state's columns
-                               (exp of [Pi Q; 0 W] as computed: ad_expm_mv leaves their terms out) */
   int *ep[AD_CACHE], *ei[AD_CACHE];   /* ... and their input states' rows' nonzeros by column (na + 1 */
   double *ex[AD_CACHE];     /* starts, rows), their values: exp(h [Pi Q; 0 W]) keeps the zeros of
                                [0 W] (written and read with 9 states or more, of which at most 6 the
@@ -541,7 +539,16 @@ int ad_emit_tol(adaptive_ws *A, ad_run *R, ad_mode *md, const double *ya, const 
  * interpolation error per component into err); nonzero if the input failed.
  * The same t0 and t1 as the last piece's (the workspace's own, or in a
  * switched run the last window's, adaptive_breaks) copy its states. */
-int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err);
+int ad_inputs_varied(adaptive_ws *A, double t0, double t1, double *w, double *err);
+/* (No input states, or DC sources alone, every piece's the same, inline:
+ * the call was half of a full bridge's step's; the others, a waveform's
+ * pieces and a callback's: ad_inputs_varied.) */
+static inline int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
+  if (A->nwu && !A->w_const) return ad_inputs_varied(A, t0, t1, w, err);
+  if (A->one >= 0) w[A->one] = 1;
+  la_copy_few(w, A->wc, A->nwu);
+  return CUP_OK;
+}
 /* A record at a step's end (A->zt, state A->x) on md's manifold: its y
  * into A->zy, the input's states from there on (adaptive_zeta's); nonzero
  * if the input failed. */
@@ -554,7 +561,15 @@ double ad_next_break(adaptive_ws *A, double t);
  * set whose rows are linearly dependent keeps an independent subset (the
  * mode's mask says which). Allocates nothing: the slots are taken at the
  * run's start (ad_modes_take). */
-ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask);
+ad_mode *ad_mode_get_other(adaptive_ws *A, uint64_t mask);
+/* (The set the last ask answered, inline: a window asks for the set the
+ * last one ran on; the others, the one before and the slots' search, in
+ * ad_mode_get_other.) */
+static inline ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
+  ad_mode *md = A->got;
+  if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
+  return ad_mode_get_other(A, mask);
+}
 /* The slots' matrices from b, not zeroed: a slot's arrays are written
  * whole when a set is built in it, mode_factor and mode_finish, before
  * they are read; its exponentials by their lengths, md->hc. A switched
@@ -582,7 +597,16 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
  * ending at t (t_end) takes a cached one within two ulps of t of it
  * (adaptive_mode.c); t_end = 0 takes only h itself (the samples' spacing,
  * applied sample after sample). */
-const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end);
+const double *ad_expm_miss(adaptive_ws *A, ad_mode *md, double h);
+/* (The cache's look-up inline, ad_expm_cached's: its call and register
+ * saves were half of a full bridge's hmax step's look-up; a miss computes
+ * the exponential into the least recently used slot: ad_expm_miss.) */
+static inline const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
+  double same = 2 * DBL_EPSILON * fabs(t_end);
+  for (int c = 0; c < AD_CACHE; c++)
+    if (fabs(md->hc[c] - h) <= same) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
+  return ad_expm_miss(A, md, h);
+}
 /* out = E y for E = exp(h M_J) that ad_expm returned for md (ad_matvec's
  * sums over E's nonzeros: the same bits). */
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out);
@@ -616,6 +640,29 @@ static inline __attribute__((always_inline)) int ad_mode_mv_few(int na, const do
  * dimension lda (the terms of a y_j = 0 left out: +-0 each, they leave a
  * sum started at +0 as it was). */
 void ad_matvec(int n, int lda, const double *E, const double *y, double *out);
+/* Its sums for a constant n, each out_i's in a register (inline). */
+static inline __attribute__((always_inline)) void ad_matvec_sums(int n, int lda, const double *E, const double *y,
+                                                                 double *out) {
+  double v[8] = {0};
+  for (int j = 0; j < n; j++) {
+    double yj = y[j];
+    if (yj == 0) continue;
+    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
+  }
+  for (int i = 0; i < n; i++) out[i] = v[i];
+}
+/* ad_matvec inline for n <= 4 (a converter's states: a step's error
+ * product, whose call and register saves were two thirds of it). */
+static inline __attribute__((always_inline)) void ad_matvec_few(int n, int lda, const double *E, const double *y,
+                                                                double *out) {
+  switch (n) {
+    case 1: ad_matvec_sums(1, lda, E, y, out); return;
+    case 2: ad_matvec_sums(2, lda, E, y, out); return;
+    case 3: ad_matvec_sums(3, lda, E, y, out); return;
+    case 4: ad_matvec_sums(4, lda, E, y, out); return;
+  }
+  ad_matvec(n, lda, E, y, out);
+}
 /* y_out = exp(tau M_J) y_in (a short tau by a vector Taylor series). */
 void ad_flow(adaptive_ws *A, ad_mode *md, double tau, const double *y_in, double *y_out);
 /* y_out = exp(tau M_J) y0 for 0 <= tau <= h, y0 the step's start vector
@@ -736,9 +783,10 @@ static inline double ad_row_rounding(const adaptive_ws *A, const ad_mode *md, in
 }
 /* d = L M y (the event functions' time derivatives). */
 void ad_events_deriv(adaptive_ws *A, const ad_mode *md, const double *y, double *d);
-/* Both, the same bits (M y in A->My, as ad_events_deriv leaves it), but
- * thr only where g < 0 (or the state is not finite), 0 elsewhere: a value
- * >= 0 crosses nothing, whatever its threshold. */
+/* Both, the same bits (na > 4: M y in A->My, as ad_events_deriv leaves
+ * it; na <= 4: M y's components where a row reads them, A->My not
+ * written), but thr only where g < 0 (or the state is not finite), 0
+ * elsewhere: a value >= 0 crosses nothing, whatever its threshold. */
 void ad_events_both(adaptive_ws *A, const ad_mode *md, const double *y, double *g, double *thr, double *d);
 /* Every row's threshold at y, as ad_events_eval's (a checkpoint's). */
 void ad_events_thresholds(const adaptive_ws *A, const ad_mode *md, const double *y, double *thr);
@@ -755,10 +803,22 @@ typedef struct ad_event {
   int hi_ok;                /* A->yhi holds the flow from the step's start to tau_sw (a probe's) */
 } ad_event;
 /* After a step of length h from ya (values ga, slopes da, thresholds ta at
- * the start; gb, db, tb at the end): 1 if an event function crosses zero
- * downwards (an interior dip below zero included), with the bracket
- * (tau_lo, tau_sw] and the values at its ends in ga.. and gb..; 0 if none. */
+ * the start; gb, db, tb at the end; take_step asks where ad_detect_may
+ * says one can): 1 if an event function crosses zero downwards (an
+ * interior dip below zero included), with the bracket (tau_lo, tau_sw] and
+ * the values at its ends in ga.. and gb..; 0 if none. */
 int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev);
+/* Whether ad_detect can find anything (inline: the common step's test, a
+ * row at a time): a crossing needs gb < 0 (gb < -tb, tb >= 0), a dip da <
+ * 0 < db; with neither, none of its tests can fire. (Out of line with the
+ * event's set-up, the call and the set-up were 40 % of the test a full
+ * bridge's step.) */
+static inline int ad_detect_may(const adaptive_ws *A) {
+  const double *gb = A->gb, *da = A->da, *db = A->db;
+  int m = A->m, i = 0;
+  while (i < m && !(gb[i] < 0) && !(da[i] < 0 && db[i] > 0)) i++;
+  return i < m;
+}
 /* Shrink the bracket around the earliest crossing until the switch at its
  * right end, tau_sw, lies past the root by no more than the time accuracy
  * at which the late switch's effect on x, second order in that delay

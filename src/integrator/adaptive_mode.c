@@ -562,10 +562,8 @@ static uint64_t alias_of(const adaptive_ws *A, uint64_t mask) {
   return mask;
 }
 
-ad_mode *ad_mode_get(adaptive_ws *A, uint64_t mask) {
-  ad_mode *md = A->got;                  /* (a window asks for the set the last one ran on) */
-  if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return md; }
-  md = A->got2;                          /* (a window's start with D tries the empty set, then its seed) */
+ad_mode *ad_mode_get_other(adaptive_ws *A, uint64_t mask) {
+  ad_mode *md = A->got2;                 /* (a window's start with D tries the empty set, then its seed) */
   A->got2 = A->got;
   if (md && md->stamp && md->mask == mask) { md->stamp = ++A->clock; return A->got = md; }
   return A->got = mode_get(A, mask);
@@ -611,10 +609,6 @@ static void expm_into(adaptive_ws *A, ad_mode *md, double h, int c) {
   /* a stiff generator needs the small entries of exp - I kept (linalg.h):
    * the run reuses this exponential on every step */
   la_dense_expm_stiff(hM, A->na, md->Ec[c], A->ework);
-  int low0 = 1;                                  /* (ad_expm_mv's rows of the input's states) */
-  for (int j = 0; j < A->n; j++)
-    for (int i = A->n; i < A->na; i++) low0 &= md->Ec[c][i + (size_t)j * A->na] == 0;
-  md->elow0[c] = (unsigned char)low0;
   if (!expm_rows_read(A)) return;
   int n = A->n, na = A->na, k = 0;             /* the input states' rows' nonzeros (ad_expm_mv) */
   const double *E = md->Ec[c];
@@ -655,9 +649,7 @@ const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end
   return NULL;
 }
 
-const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
-  const double *E = ad_expm_cached(A, md, h, t_end);
-  if (E) return E;
+const double *ad_expm_miss(adaptive_ws *A, ad_mode *md, double h) {
   int slot = 0;
   for (int c = 1; c < AD_CACHE; c++)
     if (md->cstamp[c] < md->cstamp[slot]) slot = c;
@@ -667,53 +659,21 @@ const double *ad_expm(adaptive_ws *A, ad_mode *md, double h, double t_end) {
   return md->Ec[slot];
 }
 
-/* out = E y for a constant n, each out_i's sum in a register. */
-static inline __attribute__((always_inline)) void matvec_sums(int n, int lda, const double *E, const double *y,
-                                                              double *out) {
-  double v[8] = {0};
-  for (int j = 0; j < n; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * lda] * yj;
-  }
-  for (int i = 0; i < n; i++) out[i] = v[i];
-}
-
-/* out = E y for E of [Pi Q; 0 W] (n states, na - n input states; n and na
- * constants) whose rows of the input's states are exactly zero in the
- * state's columns: matvec_sums' sums less those terms, +-0 each, which
- * leave the sums started at +0 as they were (y finite). */
-static inline __attribute__((always_inline)) void matvec_low0(int n, int na, const double *E, const double *y,
-                                                              double *out) {
-  double v[8] = {0};
-  for (int j = 0; j < n; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < n; i++) v[i] += E[i + (size_t)j * na] * yj;
-  }
-  for (int j = n; j < na; j++) {
-    double yj = y[j];
-    if (yj == 0) continue;
-    for (int i = 0; i < na; i++) v[i] += E[i + (size_t)j * na] * yj;
-  }
-  for (int i = 0; i < na; i++) out[i] = v[i];
-}
-
 /* ad_matvec for n of 7 or 8, apart from its body (inline there, the
  * registers cost the full bridge's sizes 3 and 4 3 k instructions). */
 static __attribute__((noinline)) void matvec8(int n, int lda, const double *E, const double *y, double *out) {
-  if (n == 7) matvec_sums(7, lda, E, y, out);
-  else matvec_sums(8, lda, E, y, out);
+  if (n == 7) ad_matvec_sums(7, lda, E, y, out);
+  else ad_matvec_sums(8, lda, E, y, out);
 }
 
 void ad_matvec(int n, int lda, const double *E, const double *y, double *out) {
   switch (n) {                                   /* (a converter's states and sources: the loops unrolled) */
-    case 1: matvec_sums(1, lda, E, y, out); return;
-    case 2: matvec_sums(2, lda, E, y, out); return;
-    case 3: matvec_sums(3, lda, E, y, out); return;
-    case 4: matvec_sums(4, lda, E, y, out); return;
-    case 5: matvec_sums(5, lda, E, y, out); return;
-    case 6: matvec_sums(6, lda, E, y, out); return;
+    case 1: ad_matvec_sums(1, lda, E, y, out); return;
+    case 2: ad_matvec_sums(2, lda, E, y, out); return;
+    case 3: ad_matvec_sums(3, lda, E, y, out); return;
+    case 4: ad_matvec_sums(4, lda, E, y, out); return;
+    case 5: ad_matvec_sums(5, lda, E, y, out); return;
+    case 6: ad_matvec_sums(6, lda, E, y, out); return;
     case 7: case 8: matvec8(n, lda, E, y, out); return;
   }
   for (int i = 0; i < n; i++) out[i] = 0;
@@ -745,10 +705,13 @@ static inline __attribute__((always_inline)) void expm_mv_sums(int n, int na, co
 
 void ad_expm_mv(const adaptive_ws *A, const ad_mode *md, const double *E, const double *y, double *out) {
   int n = A->n, na = A->na, c = 0;
+  switch (na) {                                  /* (a converter's few states: ad_matvec's sums here, */
+    case 1: ad_matvec_sums(1, 1, E, y, out); return;   /* without its call and register saves and the slot's */
+    case 2: ad_matvec_sums(2, 2, E, y, out); return;   /* search, 70 of a full bridge's 116 instructions a */
+    case 3: ad_matvec_sums(3, 3, E, y, out); return;   /* product) */
+    case 4: ad_matvec_sums(4, 4, E, y, out); return;
+  }
   while (c < AD_CACHE && md->Ec[c] != E) c++;
-  /* (the six-pulse bridge's 2 states and 2 input states, inline: 98
-   * instructions a product and a call by ad_matvec) */
-  if (na == 4 && n == 2 && c < AD_CACHE && md->elow0[c]) { matvec_low0(2, 4, E, y, out); return; }
   /* (up to 8 rows, every sum in a register: a six-pulse bridge's 2 states
    * and 6 input states took 320 instructions a product by the input rows'
    * nonzeros, 260 so; E's zeros add +-0 to sums started at +0, which
@@ -826,7 +789,8 @@ static inline __attribute__((always_inline)) void lift_fixed(int n, int nw, cons
 /* (Each y_i its sum in a register, over the columns in order: a record's
  * lift on the six-pulse bridge, 2 states and 9 input states then, spent more
  * on the loops' set-up than on its 18 products.) */
-void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
+static __attribute__((noinline)) void lift_any(const adaptive_ws *A, const ad_mode *md, const double *x,
+                                                const double *w, double *y) {
   int n = A->n, nw = A->nw;
   if (n == 2 && nw >= 1 && nw <= 3) {
     switch (nw) {
@@ -853,13 +817,23 @@ void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const dou
   la_copy_few(y + n, w, nw);
 }
 
+/* Two states and one or two input states (the bridges': a DC source, a
+ * pair of a sine's) here, the rest in lift_any: its switches' registers,
+ * saved and restored a call, were a third of a full bridge's lift. */
+void ad_lift(const adaptive_ws *A, const ad_mode *md, const double *x, const double *w, double *y) {
+  if (A->n == 2 && A->nw == 1) { lift_fixed(2, 1, md, x, w, y); return; }
+  if (A->n == 2 && A->nw == 2) { lift_fixed(2, 2, md, x, w, y); return; }
+  lift_any(A, md, x, w, y);
+}
+
 /* x = X y for a constant na: la_dot's sums, unrolled. */
 static inline __attribute__((always_inline)) void state_sums(int n, int na, const double *X, const double *y,
                                                              double *x) {
   for (int i = 0; i < n; i++) x[i] = la_dot(X + (size_t)i * na, y, na);
 }
 
-void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
+static __attribute__((noinline)) void state_any(const adaptive_ws *A, const ad_mode *md, const double *y,
+                                                 double *x) {
   int n = A->n, na = A->na;
   switch (na) {                                  /* (ad_lift's sizes; two states: both loops unrolled) */
     case 1: state_sums(n, 1, md->X, y, x); return;
@@ -870,6 +844,14 @@ void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *
     case 6: state_sums(n, 6, md->X, y, x); return;
   }
   state_sums(n, na, md->X, y, x);
+}
+
+/* Two states and one or two input states (the bridges') here, the rest in
+ * state_any: its switch's register saves were a third of the call. */
+void ad_state(const adaptive_ws *A, const ad_mode *md, const double *y, double *x) {
+  if (A->n == 2 && A->na == 3) { state_sums(2, 3, md->X, y, x); return; }
+  if (A->n == 2 && A->na == 4) { state_sums(2, 4, md->X, y, x); return; }
+  state_any(A, md, y, x);
 }
 
 /* U w and F + G u by their nonzeros (offset_pattern), in the dense

@@ -738,8 +738,10 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     ad_expm_mv(A, md, E, A->ya, A->yb);
   }
   ad_events_both(A, md, A->yb, A->gb, A->tb, A->db);
-  ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
-  if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
+  if (ad_detect_may(A)) {
+    ad_event ev = {.t0 = R->t, .h = h, .cfac = 1, .row = -1};
+    if (ad_detect(A, md, h, &ev)) return event(A, R, &ev, h, t1);
+  }
   int st = ad_emit_dense(A, R, md, A->ya, A->e, R->t, t1);
   if (st < 0) return st;
   ad_state(A, md, A->yb, A->x);
@@ -753,7 +755,7 @@ static int take_step(adaptive_ws *A, ad_run *R) {
     ad_series_at(A, &A->se, md, h, A->se.v, h, A->yt);
     la_copy_few(A->et, A->yt, n);
   } else {
-    ad_matvec(n, na, E, A->e, A->et);
+    ad_matvec_few(n, na, E, A->e, A->et);
   }
   la_copy_few(A->e, A->et, n);
   for (int c = 0; A->tan && c < n; c++) {        /* the tangent's columns, as e */

@@ -595,13 +595,8 @@ static int gen_whole(const adaptive_ws *A) { return A->gen_whole; }
  * again (a ninth of its instructions). */
 static __attribute__((noinline)) void piece_states(adaptive_ws *A, double t0, double t1, double *w);
 
-int ad_inputs_on(adaptive_ws *A, double t0, double t1, double *w, double *err) {
+int ad_inputs_varied(adaptive_ws *A, double t0, double t1, double *w, double *err) {
   if (A->one >= 0) w[A->one] = 1;
-  if (!A->nwu) return CUP_OK;
-  if (A->w_const) {                              /* (DC sources alone: every piece's states) */
-    la_copy_few(w, A->wc, A->nwu);
-    return CUP_OK;
-  }
   /* (the others out of line: their registers' saves were half of a
    * converter's call, the six-pulse bridge's pieces as often copies) */
   if (A->callback) return poly_input(A, t0, t1 - t0, w, err);

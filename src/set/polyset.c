@@ -306,42 +306,9 @@ double polyset_metric_dist_hi(const cup_polyset *K, const double *a, const doubl
   return hi;
 }
 
-/* polyset_slack's rows; outside: whether a row is below its rounding
- * instead of the worst slack (gam not NULL). */
-static inline __attribute__((always_inline)) double slack_rows(const cup_polyset *K, const double *g,
-                                                               const double *x, double *s, double *gam,
-                                                               int outside) {
-  const int *p = K->Ct.p, *ri = K->Ct.i;
-  const double *cx = K->Ct.x, *rg = K->rowgam;
-  double worst = INFINITY;
-  int below = 0, m = K->m, rounding = outside || gam;   /* (outside: gam is not NULL) */
-  for (int i = 0; i < m; i++) {
-    double acc = g[i], mag = fabs(g[i]);
-    for (int k = p[i]; k < p[i + 1]; k++) {
-      double t = cx[k] * x[ri[k]];
-      acc += t;
-      mag += fabs(t);
-    }
-    s[i] = acc;
-    double margin = rounding ? rg[i] * mag : 0;
-    if (rounding) gam[i] = margin;
-    if (outside) {
-      below |= acc < -margin;
-      continue;
-    }
-    double slack = acc - margin;
-    if (isnan(slack) || slack < worst) worst = slack;   /* a NaN row stays the minimum */
-  }
-  return outside ? below : worst;
-}
-
 double polyset_slack(const cup_polyset *K, const double *g, const double *x,
                      double *s, double *gam) {
-  return slack_rows(K, g, x, s, gam, 0);
-}
-
-int polyset_slack_outside(const cup_polyset *K, const double *g, const double *x, double *s, double *gam) {
-  return (int)slack_rows(K, g, x, s, gam, 1);
+  return polyset_slack_rows(K, g, x, s, gam, 0);
 }
 
 int cup_polyset_contains(const cup_polyset *K, const double *g, const double *x) {

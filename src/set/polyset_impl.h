@@ -71,12 +71,45 @@ static inline void polyset_metric_solve_diag(const cup_polyset *K, double *v) {
   if (K->pkind == CUP_METRIC_IDENTITY) return;
   for (int j = 0; j < K->n; j++) v[j] *= K->pdinv[j];
 }
+/* polyset_slack's rows (inline: polyset_slack_outside's too); outside:
+ * whether a row is below its rounding instead of the worst slack (gam not
+ * NULL). */
+static inline __attribute__((always_inline)) double polyset_slack_rows(const cup_polyset *K, const double *g,
+                                                                       const double *x, double *s, double *gam,
+                                                                       int outside) {
+  const int *p = K->Ct.p, *ri = K->Ct.i;
+  const double *cx = K->Ct.x, *rg = K->rowgam;
+  double worst = INFINITY;
+  int below = 0, m = K->m, rounding = outside || gam;   /* (outside: gam is not NULL) */
+  for (int i = 0; i < m; i++) {
+    double acc = g[i], mag = fabs(g[i]);
+    for (int k = p[i]; k < p[i + 1]; k++) {
+      double t = cx[k] * x[ri[k]];
+      acc += t;
+      mag += fabs(t);
+    }
+    s[i] = acc;
+    double margin = rounding ? rg[i] * mag : 0;
+    if (rounding) gam[i] = margin;
+    if (outside) {
+      below |= acc < -margin;
+      continue;
+    }
+    double slack = acc - margin;
+    if (isnan(slack) || slack < worst) worst = slack;   /* a NaN row stays the minimum */
+  }
+  return outside ? below : worst;
+}
+
 /* s = C x + g and, if gam is not NULL, gam_i = a bound on the rounding
  * error of s_i. Returns min_i (s_i - gam_i) (or min s_i when gam is NULL). */
 double polyset_slack(const cup_polyset *K, const double *g, const double *x,
                      double *s, double *gam);
 /* ... s and gam (not NULL) as it leaves them; 1 if a row is below its
  * rounding, s_i < -gam_i (the adaptive scheme's check at a breakpoint). */
-int polyset_slack_outside(const cup_polyset *K, const double *g, const double *x, double *s, double *gam);
+static inline int polyset_slack_outside(const cup_polyset *K, const double *g, const double *x, double *s,
+                                        double *gam) {
+  return (int)polyset_slack_rows(K, g, x, s, gam, 1);
+}
 
 #endif
