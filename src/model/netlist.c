@@ -378,12 +378,13 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
 }
 
 static int name_variables(cup_netlist *nl, const nl_circuit *c) {
-  /* (input_elem in state_name's block: a calloc and a free less a switch configuration) */
+  /* (input_elem in state_name's block, row_fixed in row_name's: two callocs
+   * and two frees less a switch configuration) */
   nl->state_name = calloc(1, sizeof(char *) * ((size_t)nl->n + 1) + sizeof(int) * ((size_t)nl->p + 1));
-  nl->row_name = calloc((size_t)nl->m + 1, sizeof(char *));
-  nl->row_fixed = calloc((size_t)nl->m + 1, sizeof(int));
+  nl->row_name = calloc(1, (sizeof(char *) + sizeof(int)) * ((size_t)nl->m + 1));
   nl->input_elem = nl->state_name ? (int *)(nl->state_name + nl->n + 1) : NULL;
-  if (!nl->state_name || !nl->row_name || !nl->row_fixed || !nl->input_elem) return CUP_ERR_NOMEM;
+  nl->row_fixed = nl->row_name ? (int *)(nl->row_name + nl->m + 1) : NULL;
+  if (!nl->state_name || !nl->row_name) return CUP_ERR_NOMEM;
   for (int e = 0; e < c->nelem; e++) {
     const nl_elem *el = &c->elem[e];
     int j = nl->evar[e];
@@ -472,9 +473,9 @@ void cup_netlist_free(cup_netlist **p) {
   free(nl->elem);
   for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);
   for (int j = 0; nl->row_name && !lent && j < nl->m; j++) free(nl->row_name[j]);   /* (lent: the elements') */
-  free(nl->state_name); free(nl->row_name); free(nl->row_fixed);   /* (input_elem in state_name's block) */
+  free(nl->state_name); free(nl->row_name);       /* (input_elem and row_fixed in their blocks) */
   free(nl->port);                                  /* (eport, evar, ctl_elem, parent, pport, depth, snode, psign) */
-  free(nl->zmap); free(nl->coupled); free(nl->prow);
+  free(nl->zmap); free(nl->coupled);             /* (prow in dense's block) */
   la_sparse_free(&nl->Pinv);
   if (nl->cm) {
     cholmod_free_factor(&nl->Lf, nl->cm);
@@ -485,7 +486,7 @@ void cup_netlist_free(cup_netlist **p) {
   la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
   free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
-  free(nl->vals); free(nl->dense); free(nl->ucache); free(nl->smap_rows);
+  free(nl->dense); free(nl->ucache); free(nl->smap_rows);   /* (vals in dense's block) */
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);
   for (int f = 0; nl->files && !lent && f < nl->nfiles; f++) free(nl->files[f]);

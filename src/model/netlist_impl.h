@@ -96,7 +96,7 @@ struct cup_netlist {
   int *eport;         /* element -> port, -1 for resistors */
   int *evar;          /* element -> index in x (L, C), u (V, I) or zeta (D) */
   char **state_name, **row_name;
-  int *row_fixed;     /* per diode row */
+  int *row_fixed;     /* per diode row (in row_name's block) */
   int *input_elem;    /* per input: its source element */
   int nprobe, probe_all;
   char **probe_text;  /* the netlist's .probe/.save/.print signals */
@@ -136,7 +136,7 @@ struct cup_netlist {
   int ugen;                  /* ... and the generation of that choice (sig_ucache) */
   int ushare;                /* a configuration: +-ugen when its terms were found (not) uref's, */
   double ushare_t0;          /* ... at its time origin then */
-  double *prow;           /* nv + ni: a signal's row over the ports */
+  double *prow;           /* nv + ni: a signal's row over the ports (in dense's block, as vals) */
   signal_map smap;        /* the signals' rows as one dense map over (x, u, zeta of the LCS), folded */
   double *smap_rows;      /* ... (nl_signal_map; smap.ns = 0: not built for the signals there are) */
   /* switches (netlist_switch.c) */

@@ -314,13 +314,24 @@ static int reduced_lcs(cup_netlist *sub, const nl_circuit *d, red *r, char *errm
 /* The rows renamed: the diodes' first, in the written order (the public
  * accessors see mr of them), the constraints' after. */
 static int rename_rows(cup_netlist *sub, const red *r) {
-  char **nm = malloc(sizeof(char *) * ((size_t)r->mq + 1));
-  int *fx = malloc(sizeof(int) * ((size_t)r->mq + 1));
-  if (!nm || !fx) { free(nm); free(fx); return CUP_ERR_NOMEM; }
+  /* in place, through a copy on the stack for a small circuit (a converter's
+   * all are: two mallocs and two frees less a switch configuration) */
+  size_t mq = (size_t)r->mq;
+  char *nsmall[64], **nm = mq <= 64 ? nsmall : malloc(sizeof(char *) * mq);
+  int fsmall[64], *fx = mq <= 64 ? fsmall : malloc(sizeof(int) * mq);
+  if (!nm || !fx) {
+    if (nm != nsmall) free(nm);
+    if (fx != fsmall) free(fx);
+    return CUP_ERR_NOMEM;
+  }
   for (int k = 0; k < r->m; k++) { nm[k] = sub->row_name[r->dr[k]]; fx[k] = sub->row_fixed[r->dr[k]]; }
   for (int k = 0; k < r->nq; k++) { nm[r->m + k] = sub->row_name[r->qr[k]]; fx[r->m + k] = sub->row_fixed[r->qr[k]]; }
-  free(sub->row_name); free(sub->row_fixed);
-  sub->row_name = nm; sub->row_fixed = fx;
+  if (mq) {
+    memcpy(sub->row_name, nm, sizeof(char *) * mq);
+    memcpy(sub->row_fixed, fx, sizeof(int) * mq);
+  }
+  if (nm != nsmall) free(nm);
+  if (fx != fsmall) free(fx);
   sub->mr = r->m;
   sub->nq = r->nq;
   return CUP_OK;

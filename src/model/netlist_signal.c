@@ -192,12 +192,15 @@ static int probe_one(cup_netlist *nl, char kind, int x, int y, char *errmsg) {
 }
 
 static int scratch(cup_netlist *nl, char *errmsg) {
-  if (!nl->dense && !(nl->dense = calloc((size_t)nvar(nl) + 1, sizeof(double))))
-    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
-  if (!nl->prow && !(nl->prow = calloc((size_t)nports(nl) + 1, sizeof(double))))
-    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
-  if (!nl->vals && !(nl->vals = calloc((size_t)nvar(nl) + 1, sizeof(double))))
-    return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
+  /* dense, vals and prow in one block that dense owns (a switched run
+   * makes one a configuration: two callocs and two frees less) */
+  if (!nl->dense) {
+    size_t nv = (size_t)nvar(nl) + 1;
+    if (!(nl->dense = calloc(2 * nv + (size_t)nports(nl) + 1, sizeof(double))))
+      return fail_fmt(errmsg, CUP_ERR_NOMEM, "out of memory");
+    nl->vals = nl->dense + nv;
+    nl->prow = nl->vals + nv;
+  }
   int nt = nl->u && !nl->u->fn ? nl->u->nterms : 0, jumps = 0;
   for (int k = 0; k < nt; k++) jumps += input_jump_pulse(&nl->u->terms[k]);
   if (!nl->ucache && jumps) {                      /* (none: cup_input_eval, as quick) */
