@@ -138,8 +138,7 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
 
 static int copy_names(cup_lcs *L, const char *const *names, int lend, char *errmsg) {
   if (!names) return CUP_OK;
-  L->row_names = calloc((size_t)L->m + 1, sizeof(char *));
-  if (!L->row_names) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  L->row_names = (char **)(L->F + L->m + 1);       /* (in L's block: create) */
   for (int i = 0; lend && i < L->m; i++) lend = names[i] != NULL;   /* (a missing one: "?", copied) */
   L->names_lent = lend;
   for (int i = 0; i < L->m; i++)
@@ -178,8 +177,11 @@ static int create(cup_lcs **out, const cup_lcs_desc *d, int lend, char *errmsg) 
     return fail_fmt(errmsg, CUP_ERR_DIM, "LCS: n = %d, m = %d, p = %d; need n >= 1, m >= 0, p >= 0",
                     d->n, d->m, d->p);
   if (!(d->pb_tol >= 0)) return fail_fmt(errmsg, CUP_ERR_ARG, "LCS: pb_tol = %g must be >= 0", d->pb_tol);
-  cup_lcs *L = calloc(1, sizeof *L);
+  /* F and the row names' array in L's block (a switched run makes an LCS a
+   * configuration: two callocs and two frees less) */
+  cup_lcs *L = calloc(1, sizeof *L + ((size_t)d->m + 1) * (sizeof(double) + sizeof(char *)));
   if (!L) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  L->F = (double *)(L + 1);
   L->n = d->n; L->m = d->m; L->p = d->p;
   int st = CUP_OK;
   if (d->C.nrow != d->m || d->C.ncol != d->n)
@@ -190,8 +192,6 @@ static int create(cup_lcs **out, const cup_lcs_desc *d, int lend, char *errmsg) 
   if (!st && (L->has_E || L->has_G) && d->p == 0)
     st = fail_fmt(errmsg, CUP_ERR_DIM, "E or G given but the input dimension p is 0");
   if (!st) {
-    L->F = calloc((size_t)d->m + 1, sizeof(double));
-    if (!L->F) st = fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
     for (int i = 0; !st && d->F && i < d->m; i++) {
       if (!isfinite(d->F[i])) st = fail_fmt(errmsg, CUP_ERR_NONFINITE, "F[%d] is %g", i, d->F[i]);
       L->F[i] = d->F[i];
@@ -234,13 +234,11 @@ void cup_lcs_free(cup_lcs **Lp) {
   la_sparse_free(&L->A);
   la_sparse_free(&L->E);
   la_sparse_free(&L->G);
-  free(L->F);
   cup_polyset_free(&L->K);
   la_sparse_free(&L->B);
   la_sparse_free(&L->D);
   for (int i = 0; L->row_names && !L->names_lent && i < L->m; i++) free(L->row_names[i]);
-  free(L->row_names);
-  free(L);
+  free(L);                                   /* (F and row_names in its block) */
   *Lp = NULL;
 }
 

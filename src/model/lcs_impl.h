@@ -16,14 +16,14 @@ struct cup_lcs {
   int n, m, p;
   int has_A, has_E, has_G;
   la_sparse A, E, G;   /* present when has_*: n x n, n x p, m x p */
-  double *F;            /* m */
+  double *F;            /* m (in L's block) */
   cup_polyset *K;       /* {x : C x + F >= 0}, metric P */
   int fixed;            /* G absent or zero */
   /* D != 0: the LCS is not a sweeping process; the theta and adaptive schemes run it */
   int has_D;            /* D given with a nonzero entry, or keep_B: B and D as given */
   int keep_B;           /* B kept as given (P B != C^T allowed): the reason when D = 0 */
   la_sparse B, D;      /* has_D: n x m and m x m as given (D may be all zero) */
-  char **row_names;     /* m names for messages, or NULL */
+  char **row_names;     /* m names for messages, or NULL (the array in L's block) */
   int names_lent;       /* row_names' strings are the caller's (lcs_create_lent), not freed */
 };
 
