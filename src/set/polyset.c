@@ -10,6 +10,10 @@
 #include "catchup/polyset.h"
 #include "polyset_impl.h"
 
+/* A small set's scratch (doubles) on the stack: a switched run makes its
+ * sets inside its run, a malloc and a free each was some 250 instructions */
+#define PS_SMALL 256
+
 static int metric_setup(cup_polyset *K, const cup_metric *P, char *errmsg);
 static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg);
 static int dense_setup(cup_polyset *K, char *errmsg);
@@ -85,7 +89,7 @@ void cup_polyset_free(cup_polyset **Kp) {
     free(K->cm);
   }
   free(K->g0); free(K->pd);                        /* (rownorm, rowgam, rownnz in g0's block; pdinv in pd's) */
-  free(K->Md); free(K->Bt); free(K->rdir); free(K->Crdir);
+  free(K->Bt); free(K->rdir);                      /* (Md in Bt's block, Crdir in rdir's) */
   free(K);
   *Kp = NULL;
 }
@@ -389,8 +393,13 @@ static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const v
 /* work: 2 m + n doubles, or NULL to allocate them. */
 static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
   if (K->m == 0) { K->lip = 0; return CUP_OK; }
-  double *v = work ? work : malloc(sizeof(double) * (2 * (size_t)K->m + (size_t)K->n));
-  if (!v) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  /* a small set's scratch on the stack (a switched run makes a set a configuration) */
+  double small[PS_SMALL], *heap = NULL, *v = work;
+  if (!v) {
+    size_t need = 2 * (size_t)K->m + (size_t)K->n;
+    v = need <= PS_SMALL ? small : (heap = malloc(sizeof(double) * need));
+    if (!v) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  }
   double *w = v + K->m, *tmp = w + K->m;
   if (K->pkind != CUP_METRIC_SPARSE) {
     for (int i = 0; i < K->m; i++) {
@@ -414,7 +423,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
     cholmod_sparse *W = PC ? cholmod_spsolve(CHOLMOD_L, K->LP, PC, K->cm) : NULL;
     cholmod_free_sparse(&PC, K->cm);
     if (!W) {
-      if (!work) free(v);
+      free(heap);
       return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed");
     }
     const int *p = W->p;
@@ -427,7 +436,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
     K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp, 0);
     cholmod_free_sparse(&W, K->cm);
   }
-  if (!work) free(v);
+  free(heap);
   return CUP_OK;
 }
 
@@ -439,9 +448,9 @@ void polyset_revalue(cup_polyset *K, double *work) {
 
 static int dense_setup(cup_polyset *K, char *errmsg) {
   int n = K->n, m = K->m;
-  K->Bt = calloc((size_t)n * m + 1, sizeof(double));
-  K->Md = calloc((size_t)m * m + 1, sizeof(double));
-  if (!K->Bt || !K->Md) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  K->Bt = calloc((size_t)n * m + 1 + (size_t)m * m + 1, sizeof(double));   /* Md in its block */
+  if (!K->Bt) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
+  K->Md = K->Bt + (size_t)n * m + 1;
   for (int i = 0; i < m; i++) {            /* column i of Bt = P^-1 c_i */
     double *b = K->Bt + (size_t)i * n;
     for (int k = K->Ct.p[i]; k < K->Ct.p[i + 1]; k++) b[K->Ct.i[k]] = K->Ct.x[k];
@@ -470,7 +479,9 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
     }
   /* A backward-stable eigenvalue is within c u ||M||_F of the true one. */
   if (m > 0) {                             /* (A row-major, ev, the workspace: one block) */
-    double *A = malloc(sizeof(double) * ((size_t)m * m + 3 * (size_t)m)), *ev = A ? A + (size_t)m * m : NULL;
+    size_t need = (size_t)m * m + 3 * (size_t)m;   /* (on the stack for a small set) */
+    double small[PS_SMALL], *heap = need <= PS_SMALL ? NULL : malloc(sizeof(double) * need);
+    double *A = need <= PS_SMALL ? small : heap, *ev = A ? A + (size_t)m * m : NULL;
     if (!A) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
     double fro = 0;
     for (int j = 0; j < m; j++)
@@ -484,7 +495,7 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
     double lmax = rc ? INFINITY : gsl_vector_max(&evv.vector);
     double bound = lmax + 16.0 * (m + 1) * DBL_EPSILON * sqrt(fro);
     if (bound < K->lip) K->lip = bound;
-    free(A);
+    free(heap);
   }
   K->dense = 1;
   return CUP_OK;
@@ -496,8 +507,11 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
 static void find_interior_direction(cup_polyset *K) {
   int m = K->m, n = K->n;
   if (m == 0 || !(K->lip > 0)) return;
-  double *buf = calloc((size_t)5 * m + 2 * (size_t)n, sizeof(double));
+  size_t need = (size_t)5 * m + 2 * (size_t)n;     /* (zeroed; on the stack for a small set) */
+  double small[PS_SMALL], *heap = need <= PS_SMALL ? NULL : calloc(need, sizeof(double));
+  double *buf = need <= PS_SMALL ? small : heap;
   if (!buf) return;
+  if (buf == small) memset(small, 0, sizeof(double) * need);
   double *mu = buf, *mu_old = mu + m, *yv = mu_old + m, *grad = yv + m, *cd = grad + m;
   double *d = cd + m, *pdv = d + n;
   double t = 1, step = 1.0 / K->lip;
@@ -525,17 +539,14 @@ static void find_interior_direction(cup_polyset *K) {
     }
   }
   if (found) {
-    K->rdir = malloc(sizeof(double) * (size_t)n);
-    K->Crdir = malloc(sizeof(double) * (size_t)m);
-    if (K->rdir && K->Crdir) {
+    K->rdir = malloc(sizeof(double) * ((size_t)n + (size_t)m));   /* Crdir in its block */
+    if (K->rdir) {
+      K->Crdir = K->rdir + n;
       memcpy(K->rdir, d, sizeof(double) * (size_t)n);
       memcpy(K->Crdir, cd, sizeof(double) * (size_t)m);
       K->rdir_norm = cup_polyset_norm(K, d);
-    } else {
-      free(K->rdir); free(K->Crdir);
-      K->rdir = K->Crdir = NULL;
     }
   }
   (void)pdv;
-  free(buf);
+  free(heap);
 }
