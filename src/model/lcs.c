@@ -25,13 +25,16 @@ static int copy_opt(la_sparse *dst, int *has, const cup_csc *src, const char *na
  * largest mismatch (the first, by column then row, among equal ones). */
 static int check_pb(const cup_polyset *K, const la_sparse *B, double tol, char *errmsg) {
   int n = K->n, m = K->m;
-  double *pb = calloc((size_t)n + 1, sizeof(double)), *ct = calloc((size_t)n + 1, sizeof(double));
-  int *rows = malloc(sizeof(int) * ((size_t)n + 1));
-  unsigned char *seen = calloc((size_t)n + 1, 1);
-  if (!pb || !ct || !rows || !seen) {
-    free(pb); free(ct); free(rows); free(seen);
-    return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
-  }
+  /* pb, ct, rows and seen in one zeroed block, on the stack for a small
+   * LCS (a switched run makes one a configuration: four callocs and frees were) */
+  size_t N = (size_t)n + 1, need = (N * (2 * sizeof(double) + sizeof(int) + 1) + sizeof(double) - 1) / sizeof(double);
+  double small[128], *heap = need <= 128 ? NULL : calloc(need, sizeof(double));
+  double *pb = need <= 128 ? small : heap;
+  if (!pb) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
+  if (pb == small) memset(small, 0, sizeof(double) * need);
+  double *ct = pb + N;
+  int *rows = (int *)(ct + N);
+  unsigned char *seen = (unsigned char *)(rows + N);
   double worst = 0, scale = 0, pbv = 0, ctv = 0;
   int wi = -1, wj = -1;
   for (int j = 0; j < m; j++) {
@@ -65,7 +68,7 @@ static int check_pb(const cup_polyset *K, const la_sparse *B, double tol, char *
       seen[i] = 0;
     }
   }
-  free(pb); free(ct); free(rows); free(seen);
+  free(heap);
   if (wi >= 0 && !(worst <= tol * scale))
     return fail_fmt(errmsg, CUP_ERR_PB_CT,
                     "P B differs from C^T: largest mismatch at (%d,%d): (P B) = %.17g but C^T = %.17g "
@@ -107,8 +110,11 @@ static int p_matrix(const double *D, int m, double *work, int *piv) {
 static int check_D(const la_sparse *Ds, char *errmsg) {
   int m = Ds->nrow;
   if (m > 1024) return CUP_OK;               /* too big to check densely: the LCP solver will tell */
-  /* D, S, the eigenvalues and their workspace in one zeroed block */
-  double *D = calloc(2 * (size_t)m * m + 3 * (size_t)m + 1, sizeof(double)), *S = D ? D + (size_t)m * m : NULL;
+  /* D, S, the eigenvalues and their workspace in one zeroed block (on the stack for a small D) */
+  size_t need = 2 * (size_t)m * m + 3 * (size_t)m + 1;
+  double small[256], *heap = need <= 256 ? NULL : calloc(need, sizeof(double));
+  double *D = need <= 256 ? small : heap, *S = D ? D + (size_t)m * m : NULL;
+  if (D == small) memset(small, 0, sizeof(double) * need);
   double *ev = S ? S + (size_t)m * m : NULL;
   int st = D ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   double lmin = 0, norm = 0;
@@ -132,7 +138,7 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
       st = fail_fmt(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
                     "and not a P-matrix: the LCP of a step may have no or several solutions", lmin);
   }
-  free(D);                                       /* (S and ev in its block) */
+  free(heap);                                    /* (S and ev in its block) */
   return st;
 }
 

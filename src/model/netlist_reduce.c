@@ -73,7 +73,7 @@ typedef struct red {
 } red;
 
 static void red_free(red *r) {
-  free(r->dr); free(r->qr); free(r->Pinv); free(r->Cq); free(r->T); free(r->Pi); free(r->Pim);
+  free(r->dr); free(r->Pinv); free(r->Cq); free(r->T); free(r->Pi); free(r->Pim);   /* (qr in dr's block) */
   free(r->S); free(r->piv); free(r->w);
 }
 
@@ -82,10 +82,10 @@ static void red_free(red *r) {
 static int classify(cup_netlist *sub, const nl_circuit *c, const nl_circuit *d, red *r, char *errmsg) {
   const nl_raw *R = sub->raw;
   r->n = sub->n; r->p = sub->p; r->mq = sub->m;
-  r->dr = malloc(sizeof(int) * ((size_t)r->mq + 1));
-  r->qr = malloc(sizeof(int) * ((size_t)r->mq + 1));
+  r->dr = malloc(sizeof(int) * 2 * ((size_t)r->mq + 1));   /* qr in its block */
+  r->qr = r->dr ? r->dr + r->mq + 1 : NULL;
   sub->zrow = malloc(sizeof(int) * ((size_t)r->mq + 1));
-  if (!r->dr || !r->qr || !sub->zrow) return nl_switch_nomem(c, errmsg);
+  if (!r->dr || !sub->zrow) return nl_switch_nomem(c, errmsg);
   for (int e = 0, k = 0; e < d->nelem; e++) {
     if (d->elem[e].kind != NL_D) continue;
     int row = sub->evar[e];
@@ -228,7 +228,9 @@ static int sparse_lcs(cup_netlist *sub, const nl_circuit *d, char *errmsg) {
   const nl_raw *R = sub->raw;
   int n = sub->n, dia = 1;
   const la_sparse *Pc = R->Pc.p ? &R->Pc : NULL;
-  double *pd = malloc(sizeof(double) * ((size_t)n + 1 + (size_t)sub->m + 1)), *F = pd ? pd + n + 1 : NULL;
+  size_t need = (size_t)n + 1 + (size_t)sub->m + 1;   /* (on the stack for a small circuit) */
+  double small[256], *heap = need <= 256 ? NULL : malloc(sizeof(double) * need);
+  double *pd = need <= 256 ? small : heap, *F = pd ? pd + n + 1 : NULL;
   if (!pd) return nl_switch_nomem(d, errmsg);
   la_zero(F, sub->m + 1);
   for (int j = 0; j < n; j++) pd[j] = Pc ? 0 : R->pdiag[j];
@@ -239,7 +241,7 @@ static int sparse_lcs(cup_netlist *sub, const nl_circuit *d, char *errmsg) {
     }
   const la_sparse *const six[6] = {&R->part[0], &R->part[4], &R->part[1], &R->part[2], &R->part[5], &R->part[3]};
   int st = lcs_of(sub, six, F, dia ? NULL : Pc, pd, d, errmsg);
-  free(pd);
+  free(heap);
   return st;
 }
 
