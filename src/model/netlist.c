@@ -81,11 +81,8 @@ static int row_used(const parts *q, int i, int with_g) {
  * (netlist_switch.c); a source that drives it forward leaves K(t) empty,
  * and the run stops there. */
 static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const parts *q, char *errmsg) {
-  /* (zeroed, on the stack for up to 256 rows: a calloc and a free less a switch configuration) */
-  int small[256], *heap = nl->m < 256 ? NULL : calloc((size_t)nl->m + 1, sizeof(int));
-  int *used = nl->m < 256 ? small : heap;
+  int small[256], *used = nl_scratch(small, sizeof small, sizeof(int) * ((size_t)nl->m + 1), 1);
   if (!used) return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
-  if (used == small) memset(small, 0, sizeof(int) * ((size_t)nl->m + 1));
   for (int k = 0; k < q->sC.nnz; k++) used[q->sC.i[k]] = 1;
   for (int j = 0; j < q->sD.ncol; j++)
     for (int k = q->sD.p[j]; k < q->sD.p[j + 1]; k++) used[q->sD.i[k]] = used[j] = 1;
@@ -116,7 +113,7 @@ static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const part
                 "voltage sources and the diode): when it conducts its current is unbounded; put a resistor "
                 "or inductor in the loop", len ? names : "nothing");
   }
-  free(heap);
+  nl_scratch_free(used, small);
   return st;
 }
 

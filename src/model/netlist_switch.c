@@ -81,8 +81,8 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   d->nprobe = 0; d->probe = NULL; d->probe_all = 0;
   /* (not zeroed: the circuit's elements are copied over, append clears each one after) */
   d->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + (size_t)c->nnodes + 1));
-  int *uf = malloc(sizeof(int) * (size_t)c->nnodes);
-  if (!d->elem || !uf) { free(uf); return CUP_ERR_NOMEM; }
+  int small[256], *uf = nl_scratch(small, sizeof small, sizeof(int) * (size_t)c->nnodes, 0);
+  if (!d->elem || !uf) { nl_scratch_free(uf, small); return CUP_ERR_NOMEM; }
   for (int e = 0, k = 0; e < c->nelem; e++) {
     nl_elem *el = &d->elem[e];
     *el = c->elem[e];
@@ -109,7 +109,7 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   int st = CUP_OK;
   for (int v = 1; v < c->nnodes && !st; v++)
     if (find(uf, v) != find(uf, 0)) st = close_cut(d, uf, v);
-  free(uf);
+  nl_scratch_free(uf, small);
   return st;
 }
 
