@@ -485,7 +485,7 @@ void cup_netlist_free(cup_netlist **p) {
   }
   la_sparse_free(&nl->H);
   for (int k = 0; nl->sig_name && k < nl->nsig; k++) free(nl->sig_name[k]);
-  free(nl->sig_name); free(nl->sig_ptr); free(nl->sig_idx); free(nl->sig_val);
+  free(nl->sig_name); free(nl->sig_val);          /* (sig_ptr, sig_idx in their blocks) */
   free(nl->dense); free(nl->ucache); free(nl->smap_rows);   /* (vals in dense's block) */
   for (int k = 0; k < nl->nprobe; k++) free(nl->probe_text[k]);
   free(nl->probe_text);

@@ -123,7 +123,7 @@ struct cup_netlist {
   /* signals: sparse rows over (x, u, zeta) */
   int nsig, capsig, signnz, capnnz;
   char **sig_name;
-  int *sig_ptr, *sig_idx;
+  int *sig_ptr, *sig_idx;   /* (in sig_name's block, sig_val's) */
   double *sig_val;
   int sig_u, sig_seen;    /* the signals read u (directly or through a constraint's multiplier),
                              as found when there were sig_seen of them (cup_netlist_signals) */

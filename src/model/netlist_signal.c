@@ -86,23 +86,34 @@ static void to_vars(const cup_netlist *nl, const double *prow, double *row) {
 static int append(cup_netlist *nl, char *name, const double *row) {
   int nv = nvar(nl), nz = 0;
   for (int k = 0; k < nv; k++) nz += row[k] != 0;
+  /* the names with the pointers, the values with the indices: one block
+   * each (a switched run's configurations fill their tables in its run:
+   * four reallocs a configuration were) */
   if (nl->nsig + 1 >= nl->capsig) {
     int cap = nl->capsig ? 2 * nl->capsig : 16;
-    char **nn = realloc(nl->sig_name, sizeof *nn * (size_t)cap);
-    if (nn) nl->sig_name = nn;
-    int *np = realloc(nl->sig_ptr, sizeof *np * ((size_t)cap + 1));
-    if (np) nl->sig_ptr = np;
-    if (!nn || !np) return CUP_ERR_NOMEM;
-    if (!nl->capsig) nl->sig_ptr[0] = 0;
+    char **nn = malloc(sizeof *nn * (size_t)cap + sizeof(int) * ((size_t)cap + 1));
+    if (!nn) return CUP_ERR_NOMEM;
+    int *np = (int *)(nn + cap);
+    np[0] = 0;
+    if (nl->capsig) {
+      memcpy(nn, nl->sig_name, sizeof *nn * (size_t)nl->nsig);
+      memcpy(np, nl->sig_ptr, sizeof *np * ((size_t)nl->nsig + 1));
+    }
+    free(nl->sig_name);
+    nl->sig_name = nn, nl->sig_ptr = np;
     nl->capsig = cap;
   }
   if (nl->signnz + nz > nl->capnnz) {
     int cap = 2 * (nl->signnz + nz) + 64;
-    int *ni = realloc(nl->sig_idx, sizeof *ni * (size_t)cap);
-    if (ni) nl->sig_idx = ni;
-    double *nx = realloc(nl->sig_val, sizeof *nx * (size_t)cap);
-    if (nx) nl->sig_val = nx;
-    if (!ni || !nx) return CUP_ERR_NOMEM;
+    double *nx = malloc((sizeof *nx + sizeof(int)) * (size_t)cap);
+    if (!nx) return CUP_ERR_NOMEM;
+    int *ni = (int *)(nx + cap);
+    if (nl->signnz) {
+      memcpy(nx, nl->sig_val, sizeof *nx * (size_t)nl->signnz);
+      memcpy(ni, nl->sig_idx, sizeof *ni * (size_t)nl->signnz);
+    }
+    free(nl->sig_val);
+    nl->sig_val = nx, nl->sig_idx = ni;
     nl->capnnz = cap;
   }
   for (int k = 0; k < nv; k++)
