@@ -109,7 +109,11 @@ static void exosystem(adaptive_ws *A) {
 static int live_terms(adaptive_ws *A, const freestep_drift *D, const la_sparse *G, int *fail) {
   const cup_input *u = A->u;
   A->gen = (cup_input){.p = u ? u->p : 0};
-  A->gen.terms = take(u ? (size_t)u->nterms : 0, sizeof(input_term), fail);
+  /* the terms, their rotations and first states in one zeroed block that
+   * terms owns, sized for all the input's (a switched run makes one a
+   * configuration: two callocs and two frees less) */
+  size_t nt = u ? (size_t)u->nterms : 0;
+  A->gen.terms = take(1, sizeof(input_term) * (nt ? nt : 1) + (sizeof(input_gen_rot) + sizeof(int)) * (nt + 1), fail);
   A->gen_whole = u != NULL;
   for (int k = 0; u && !*fail && k < u->nterms; k++) {
     const input_term *t = &u->terms[k];
@@ -120,9 +124,9 @@ static int live_terms(adaptive_ws *A, const freestep_drift *D, const la_sparse *
     else
       A->gen_whole = 0;
   }
-  A->first_state = take((size_t)A->gen.nterms + 1, sizeof(int), fail);
-  A->gen_rot = take((size_t)A->gen.nterms + 1, sizeof(input_gen_rot), fail);
   if (*fail) return 0;
+  A->gen_rot = (input_gen_rot *)(A->gen.terms + (nt ? nt : 1));
+  A->first_state = (int *)(A->gen_rot + nt + 1);
   input_gen_rot_plan(&A->gen, A->gen_rot);
   return input_gen_dim(&A->gen, A->gen_rot, A->first_state);
 }
@@ -660,7 +664,7 @@ void adaptive_free(adaptive_ws **Ap) {
   lcp_free(&A->lcp);
   lcp_step_free(&A->proj);
   cup_projector_free(&A->projector);
-  free(A->first_state); free(A->gen_rot); free(A->gen.terms); free(A->block);
+  free(A->gen.terms); free(A->block);             /* (gen_rot, first_state in terms' block) */
   if (!A->scratch) free(A->slots);
   free(A->tan);
   free(A->rec_block);

@@ -219,8 +219,8 @@ struct adaptive_ws {
                                ((m + 1) x na: the last row their constants), Z^T C_J (m x n) */
   cup_input gen;            /* built-in waveforms: u's terms that E or G reads (copies; adaptive.c,
                                live_terms), those the exosystem holds */
-  int *first_state;         /* ... and the first exosystem state of each, */
-  input_gen_rot *gen_rot;   /* ... and the sines that share another's states (input_gen_rot_plan) */
+  int *first_state;         /* ... and the first exosystem state of each (in gen.terms' block), */
+  input_gen_rot *gen_rot;   /* ... and the sines that share another's states (input_gen_rot_plan; likewise) */
   int gen_whole;            /* gen holds every term of u but its constants 0 (live_terms) */
   const cup_input *held;    /* &gen, or a callback's u: the breakpoints that end an exosystem piece
                                (adaptive_zeta's; a gate's corners move no state) */
