@@ -355,15 +355,16 @@ static int copy_circuit(cup_netlist *nl, const nl_circuit *c) {
   int lend = c->names_lent > 0;
   nl->names_lent = c->names_lent;
   if (!(nl->file = lend ? c->file : strdup(c->file))) return CUP_ERR_NOMEM;
-  if (!(nl->files = calloc((size_t)c->nfiles + 1, sizeof(char *)))) return CUP_ERR_NOMEM;
+  /* (node in files' block: a calloc and a free less a switch configuration) */
+  if (!(nl->files = calloc((size_t)c->nfiles + 1 + (size_t)c->nnodes, sizeof(char *)))) return CUP_ERR_NOMEM;
   for (int f = 0; f < c->nfiles; f++) {
     int seen = 0;
     for (int g = 0; g < nl->nfiles && !seen; g++) seen = !strcmp(nl->files[g], c->files[f]);
     if (!seen && !(nl->files[nl->nfiles++] = lend ? c->files[f] : strdup(c->files[f]))) return CUP_ERR_NOMEM;
   }
-  nl->node = calloc((size_t)c->nnodes, sizeof(char *));
+  nl->node = nl->files + c->nfiles + 1;
   nl->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + 1));   /* (each one copied below) */
-  if (!nl->node || !nl->elem) return CUP_ERR_NOMEM;
+  if (!nl->elem) return CUP_ERR_NOMEM;
   static char ground[] = "0";
   for (int v = 0; v < c->nnodes; v++)
     if (!(nl->node[v] = lend ? (c->node[v] ? c->node[v] : ground) : strdup(c->node[v] ? c->node[v] : "0")))
@@ -467,8 +468,7 @@ void cup_netlist_free(cup_netlist **p) {
   cup_input_free(&nl->u_written);
   free(nl->x0);
   int lent = nl->names_lent > 0;                 /* (the switched netlist's circuit's names) */
-  for (int v = 0; nl->node && !lent && v < nl->nnodes; v++) free(nl->node[v]);
-  free(nl->node);
+  for (int v = 0; nl->node && !lent && v < nl->nnodes; v++) free(nl->node[v]);   /* (the array in files' block) */
   for (int e = nl->names_lent; nl->elem && e < nl->nelem; e++) free(nl->elem[e].name);
   free(nl->elem);
   for (int j = 0; nl->state_name && j < nl->n; j++) free(nl->state_name[j]);

@@ -211,9 +211,12 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   hy y = {nl, c, nl->nv + nl->ni, NULL, NULL, {0}, {0}, {0}};
   int maxd = 0;
   for (int v = 0; v < c->nnodes; v++) maxd = nl->depth[v] > maxd ? nl->depth[v] : maxd;
-  y.pp = malloc(sizeof(int) * (2 * (size_t)maxd + 2));
-  y.pc = malloc(sizeof(double) * (2 * (size_t)maxd + 2));
-  int st = y.pp && y.pc ? CUP_OK : CUP_ERR_NOMEM;
+  /* the path scratch, pc then pp, in one block: on the stack for a shallow forest */
+  double small[128];
+  size_t np = 2 * (size_t)maxd + 2;
+  y.pc = nl_scratch(small, sizeof small, (sizeof(double) + sizeof(int)) * np, 0);
+  y.pp = y.pc ? (int *)(y.pc + np) : NULL;
+  int st = y.pc ? CUP_OK : CUP_ERR_NOMEM;
   if (!st && nl->ns > 0) {                      /* (the supernodes' Laplacian alone needs CHOLMOD: add_xtx) */
     if (!(nl->cm = malloc(sizeof *nl->cm))) st = CUP_ERR_NOMEM;
     else if (la_cholmod_start(nl->cm) != CUP_OK) { free(nl->cm); nl->cm = NULL; st = CUP_ERR_LINALG; }
@@ -234,7 +237,7 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     y.h.n = w;
     st = nl_coo_to_csc(&y.h, y.np, y.np, &nl->H);
   }
-  free(y.pp); free(y.pc);
+  nl_scratch_free(y.pc, small);
   nl_coo_free(&y.lap); nl_coo_free(&y.k); nl_coo_free(&y.h);
   if (st == CUP_ERR_NOMEM) return nl_fail(c, -1, errmsg, st, "out of memory while formulating the circuit");
   if (st) return nl_fail(c, -1, errmsg, st, "the resistor network could not be factored (CHOLMOD status %d)",

@@ -93,7 +93,7 @@ struct cup_netlist {
   int nfiles;
   char **files;       /* every file read, each once */
   int nnodes, nelem;
-  char **node;
+  char **node;        /* (in files' block) */
   nl_elem *elem;      /* copies (names owned; no sources) */
   int *eport;         /* element -> port, -1 for resistors */
   int *evar;          /* element -> index in x (L, C), u (V, I) or zeta (D) */
