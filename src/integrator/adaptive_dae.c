@@ -125,8 +125,7 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
     if (!(cup_polyset_norm(A->K, y) <= near)) return 0;
   }
   ad_lift(A, md, xl, w, y);
-  double *ws = My;                               /* the input's rounding: a sine's zero is an ulp off */
-  for (int j = n; j < na; j++) ws[j - n] = la_max(fabs(y[j]), A->wscale[j - n]);   /* (My is set after) */
+  const double *wsc = A->wscale;                 /* the input's rounding: a sine's zero is an ulp off */
   int edge = 0;                                  /* a value at rounding */
   const int *lp = md->lp, *li = md->li;          /* (Lm's nonzeros: the dense sums of terms >= 0, +0 */
   const double *lx = md->lx, *lmx = md->lmx;     /* left out) */
@@ -142,7 +141,7 @@ static int mode_fits(adaptive_ws *A, ad_mode *md, const double *x, const double 
       double yj = y[j];
       acc += lx[q] * yj;
       mag += lmx[q] * fabs(yj);
-      if (j >= n) tw += lmx[q] * ws[j - n];
+      if (j >= n) tw += lmx[q] * la_max(fabs(yj), wsc[j - n]);   /* (at each use: a bridge's one DC state) */
     }
     g[i] = acc;
     thr[i] = ad_row_rounding(A, md, i, mag, vmax);

@@ -80,10 +80,35 @@ int spice_term_constant(const input_term *t);
 double spice_jump_pulse(const input_term *t, double tt, double *hi);
 /* The same, and in *j the period tt is in (-1 before the delay). */
 double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi);
+/* spice_jump_pulse at tt >= delay in period j (pulse_period's, 0 without a
+ * period): its value and the piece's end, the least of the top's end and
+ * the next period's start (fmin's bits, la_fmin, without the call). */
+static inline double spice_jump_piece(const input_term *t, double tt, double j, double *hi) {
+  double base = t->delay + t->period * j;
+  double c2 = base + (t->rise + t->width), next = t->period > 0 ? t->delay + t->period * (j + 1) : INFINITY;
+  if (tt < c2) {
+    *hi = la_fmin(c2, next);
+    return t->value2;
+  }
+  *hi = next;
+  return t->value;
+}
+/* The period at a piece's end tt, from the piece's period j: the next one
+ * when tt is its start delay + P (j + 1), the sum pulse_period checks, else
+ * still j (tt the top's end, below the next start): what pulse_period
+ * finds there (its floor is within one of it and corrected by those very
+ * sums), without its division. */
+static inline double spice_period_after(const input_term *t, double tt, double j) {
+  return t->period > 0 && tt == t->delay + t->period * (j + 1) ? j + 1 : j;
+}
 /* The same at tt = *hi of the piece before it, *j that piece's period (from
  * spice_jump_pulse_j or this), moved on: the pieces one after another (a
- * switched run's gates), bit for bit spice_jump_pulse's. */
-double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi);
+ * switched run's gates, a walk inlined in it), bit for bit spice_jump_pulse's. */
+static inline double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi) {
+  if (*j < 0) return spice_jump_pulse_j(t, tt, j, hi);   /* (tt = delay: once a run) */
+  *j = spice_period_after(t, tt, *j);
+  return spice_jump_piece(t, tt, *j, hi);
+}
 
 /* The square wave in units of pi: q = omega t / pi + phase / pi, so that
  * sign(sin(pi q)) jumps at integers q. Deciding the sign from q (not from

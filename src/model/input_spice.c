@@ -126,27 +126,6 @@ double spice_jump_pulse(const input_term *t, double tt, double *hi) {
   return spice_jump_pulse_j(t, tt, &j, hi);
 }
 
-/* spice_jump_pulse at tt >= delay in period j (pulse_period's, 0 without a period). */
-static double jump_piece(const input_term *t, double tt, double j, double *hi) {
-  double base = t->delay + t->period * j;
-  double c2 = base + (t->rise + t->width), next = t->period > 0 ? t->delay + t->period * (j + 1) : INFINITY;
-  if (tt < c2) {
-    *hi = fmin(c2, next);
-    return t->value2;
-  }
-  *hi = next;
-  return t->value;
-}
-
-/* The period at a piece's end tt, from the piece's period j: the next one
- * when tt is its start delay + P (j + 1), the sum pulse_period checks, else
- * still j (tt the top's end, below the next start): what pulse_period
- * finds there (its floor is within one of it and corrected by those very
- * sums), without its division. */
-static double period_after(const input_term *t, double tt, double j) {
-  return t->period > 0 && tt == t->delay + t->period * (j + 1) ? j + 1 : j;
-}
-
 double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi) {
   if (tt - t->delay < 0) {
     *j = -1;
@@ -154,15 +133,9 @@ double spice_jump_pulse_j(const input_term *t, double tt, double *j, double *hi)
     return t->value;
   }
   *j = period_of(t, tt);
-  return jump_piece(t, tt, *j, hi);
+  return spice_jump_piece(t, tt, *j, hi);
 }
 
-/* At a piece's end tt = hi: its period by period_after. */
-double spice_jump_pulse_next(const input_term *t, double tt, double *j, double *hi) {
-  if (*j < 0) return spice_jump_pulse_j(t, tt, j, hi);   /* (tt = delay: once a run) */
-  *j = period_after(t, tt, *j);
-  return jump_piece(t, tt, *j, hi);
-}
 
 static double pulse_integral(const input_term *t, double a, double b) {
   double sum = 0;
@@ -229,13 +202,13 @@ static double jump_break(const input_term *t, double tt, double pp) {
   return next;
 }
 
-/* (At the break tt from a time in period j: period_after, as spice_jump_pulse_next.) */
+/* (At the break tt from a time in period j: spice_period_after, as spice_jump_pulse_next.) */
 double spice_jump_break(const input_term *t, double tt, double *per) {
   if (tt < t->delay) {
     *per = 1;
     return t->delay;
   }
-  double j = *per >= 2 ? period_after(t, tt, *per - 2) : period_of(t, tt);
+  double j = *per >= 2 ? spice_period_after(t, tt, *per - 2) : period_of(t, tt);
   *per = j + 2;
   return jump_break(t, tt, j);
 }

@@ -278,6 +278,7 @@ static void memo_reset(nl_switched *S) {
   memset(S->bmemo, 0, sizeof *S->bmemo * (size_t)S->nmemo);
   memset(S->vmemo, 0, sizeof *S->vmemo * 4 * (size_t)S->nmemo);
   for (int k = 0; k < S->nmemo; k++) S->vmemo[4 * (size_t)k + 3] = NAN;
+  S->vgen++;                                       /* (every memo moved: read_piece's walk reads them all) */
   S->cvm_class = 0;
   S->tab_class = 0;
   for (int k = 0; k < S->ntopo; k++) S->topo[k].memo = reads_memo(S, &S->topo[k]), S->topo[k].quiet = 0;

@@ -75,6 +75,13 @@ struct nl_switched {
   double *walk_c[NL_TAB_TERMS];   /* each one's memo (vmemo) */
   double walk_v[NL_TAB_TERMS];    /* ... its value (the key's bit: off it) */
   int walk_k[NL_TAB_TERMS];       /* ... its index in the input */
+  /* the last walk's key and its pieces' start (the latest of their
+   * starts), while no memo has moved since (vgen, bumped at each move of
+   * one): the next walk moves on only the pieces that end at its time */
+  uint64_t vgen, walk_gen;
+  int walk_inc;            /* walk_key and walk_lo are walk_gen's (0: not yet, or reset with walk_ok) */
+  unsigned walk_key;
+  double walk_lo;
   int linear;              /* every source is DC, PULSE or PWL: the input is linear between breakpoints */
   double t0;               /* the time origin: each configuration's sources from t0 on (nl_input_origin) */
   /* the switching time the last search found (a configuration with no

@@ -16,6 +16,7 @@
 static inline const double *term_at(nl_switched *S, const input_term *w, int k, double t) {
   double *c = S->vmemo + 4 * (size_t)k;
   if (!(t >= c[0] && t < c[1])) {
+    S->vgen++;                                     /* (read_piece's walk: a memo moved) */
     c[0] = t;
     /* a gate's pieces one after another: the next from the last's period */
     if (t == c[1] && !isnan(c[3])) c[2] = spice_jump_pulse_next(w, t, &c[3], &c[1]);
@@ -100,14 +101,38 @@ static int read_piece(nl_switched *S, const nl_topo *tp, double b) {
       S->walk_k[q] = k;
     }
     S->walk_ok = 1;
+    S->walk_inc = 0;
   }
-  for (int q = 0; q < tp->nuterm; q++) {
-    const double *c = S->walk_c[q];
-    if (!(b >= c[0] && b < c[1])) c = term_at(S, &u->terms[S->walk_k[q]], S->walk_k[q], b);   /* (term_at's test, once) */
-    key |= (unsigned)!same_bits(c[2], S->walk_v[q]) << q;
-    if (c[0] > lo) lo = c[0];
-    if (c[1] < hi) hi = c[1];
+  if (S->walk_inc && S->walk_gen == S->vgen && b >= S->walk_lo) {
+    /* no memo moved since the last walk, whose pieces all start at or
+     * before b: a term's piece holds b unless it ends there or before, and
+     * one that moves on starts at b, the latest start; the others' bits
+     * and starts are the last walk's (the same key and lo as the loop
+     * below finds, hi the same min in the same order) */
+    key = S->walk_key;
+    lo = S->walk_lo;
+    for (int q = 0; q < tp->nuterm; q++) {
+      const double *c = S->walk_c[q];
+      if (!(b < c[1])) {
+        c = term_at(S, &u->terms[S->walk_k[q]], S->walk_k[q], b);
+        key = (key & ~(1u << q)) | (unsigned)!same_bits(c[2], S->walk_v[q]) << q;
+        lo = b;
+      }
+      if (c[1] < hi) hi = c[1];
+    }
+  } else {
+    for (int q = 0; q < tp->nuterm; q++) {
+      const double *c = S->walk_c[q];
+      if (!(b >= c[0] && b < c[1])) c = term_at(S, &u->terms[S->walk_k[q]], S->walk_k[q], b);   /* (term_at's test, once) */
+      key |= (unsigned)!same_bits(c[2], S->walk_v[q]) << q;
+      if (c[0] > lo) lo = c[0];
+      if (c[1] < hi) hi = c[1];
+    }
   }
+  S->walk_inc = 1;
+  S->walk_key = key;
+  S->walk_lo = lo;
+  S->walk_gen = S->vgen;                           /* (read_terms below moves none: every piece holds b) */
   double *row = S->tab + (size_t)key * (size_t)S->nsw;
   if (!(S->tab_ok >> key & 1)) {
     read_terms(S, tp, b);                          /* (the pieces at b: held, as just read) */
