@@ -43,9 +43,7 @@ static inline double max_abs(double s, double v) {
  * end on a ray although the LCP is feasible. -1: a ray. */
 static int ratio_test(const lemke_solver *s, int e, double tol) {
   int m = s->m, qc = 2 * m + 1, best = -1, zrow = -1;
-  double qscale = 0;
   for (int i = 0; i < m; i++) {
-    qscale = max_abs(qscale, TAB(s, i, qc));
     if (s->basis[i] == 2 * m) zrow = i;
     double a = TAB(s, i, e);
     if (!(a > tol)) continue;
@@ -56,6 +54,8 @@ static int ratio_test(const lemke_solver *s, int e, double tol) {
     if (d < 0) best = i;
   }
   if (best >= 0 && zrow >= 0 && zrow != best && TAB(s, zrow, e) > tol) {
+    double qscale = 0;                             /* (here alone: most tests end before) */
+    for (int i = 0; i < m; i++) qscale = max_abs(qscale, TAB(s, i, qc));
     double az = TAB(s, zrow, e), rz = TAB(s, zrow, qc) / az, rb = TAB(s, best, qc) / TAB(s, best, e);
     if (rz - rb <= 64 * DBL_EPSILON * (fabs(rb) + qscale / az)) return zrow;
   }
