@@ -81,19 +81,24 @@ int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, do
   int m = s->m, z0 = 2 * m, qc = 2 * m + 1;
   double scale = 0, qmin = 0;
   int r = -1;
-  for (int i = 0; i < m; i++) {
+  for (int i = 0; i < m; i++)
     if (q[i] < 0 && q[i] <= qmin) { qmin = q[i]; r = i; }   /* ties: the last row, lexicographically least */
-    for (int j = 0; j < m; j++) scale = max_abs(scale, M[i + (size_t)j * m]);
-  }
   for (int i = 0; i < m; i++) z[i] = 0;
   if (r < 0) {                                     /* q >= 0: z = 0 */
     for (int i = 0; i < m; i++) w[i] = q[i];
     return CUP_OK;
   }
-  memset(s->T, 0, sizeof(double) * (size_t)m * (size_t)(2 * m + 2));
+  /* every entry of the tableau's m rows written (no memset first); M's
+   * largest entry on the way (a max, in any order the same; a NaN passed
+   * over as before) */
   for (int i = 0; i < m; i++) {
+    for (int j = 0; j < m; j++) {
+      double v = M[i + (size_t)j * m];
+      scale = max_abs(scale, v);
+      TAB(s, i, j) = 0;
+      TAB(s, i, m + j) = -v;
+    }
     TAB(s, i, i) = 1;
-    for (int j = 0; j < m; j++) TAB(s, i, m + j) = -M[i + (size_t)j * m];
     TAB(s, i, z0) = -1;
     TAB(s, i, qc) = q[i];
     s->basis[i] = i;
