@@ -262,7 +262,8 @@ static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask, int lazy) {
 /* With D: Y^T (C_J X + G_J U) and Y^T F_J (the rows that fix zeta_J
  * algebraically, r = nj - nz of them) into A->Ym (r x na, row-major) and
  * A->Ym + r na; the columns of Y are A->svd_v's first r. */
-static inline __attribute__((always_inline)) void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ, int n, int m, int na) {
+static inline __attribute__((always_inline)) void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ, int n,
+                                                          int m, int na) {
   int nj = md->nj, r = nj - md->nz;
   const int *J = md->rows;
   double *Yc = A->Ym + (size_t)r * na;
@@ -391,7 +392,8 @@ static inline __attribute__((always_inline)) void mode_flow(adaptive_ws *A, ad_m
  * magnitudes of their terms into Lm (m x na, row-major: |C_i| |X| for a
  * slack, a row that depends on the active ones has a tiny L_i but its slack
  * rounds at that), scratch: the slot keeps their nonzeros alone (lmx). */
-static inline __attribute__((always_inline)) void mode_events(adaptive_ws *A, ad_mode *md, double *Lm, int n, int m, int nw, int na) {
+static inline __attribute__((always_inline)) void mode_events(adaptive_ws *A, ad_mode *md, double *Lm, int n, int m,
+                                                               int nw, int na) {
   const cup_polyset *K = A->K;
   int p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
@@ -517,7 +519,8 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
 
 /* The rest of a mode once mode_factor has chosen its rows, for the sizes
  * given (constants below). */
-static inline __attribute__((always_inline)) void finish_sized(adaptive_ws *A, ad_mode *md, int n, int m, int nw, int na) {
+static inline __attribute__((always_inline)) void finish_sized(adaptive_ws *A, ad_mode *md, int n, int m, int nw,
+                                                                int na) {
   /* (Lm past C_J and a row of C in T1: (m + 1) n + m na fits in its (n + m + 1) (na + m + 1)) */
   double *Lm = A->T1 + (size_t)(m + 1) * n;
   mode_flow(A, md, n, m, nw, na);
@@ -537,9 +540,8 @@ static inline __attribute__((always_inline)) void finish_sized(adaptive_ws *A, a
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
 }
 
-/* (The six-pulse bridge's sizes, 2 states, 2 input states and 6 rows, as
- * constants: the same sums, unrolled; its 10 modes took 6 k instructions
- * each here.) */
+/* (A six-pulse bridge's 2 states, 2 input states and 6 rows as constants:
+ * the same sums, unrolled; its 10 modes took 6 k instructions each here.) */
 static void mode_finish(adaptive_ws *A, ad_mode *md) {
   if (A->n == 2 && A->nw == 2 && A->na == 4 && A->m == 6) { finish_sized(A, md, 2, 6, 2, 4); return; }
   finish_sized(A, md, A->n, A->m, A->nw, A->na);
