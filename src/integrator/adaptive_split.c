@@ -68,8 +68,8 @@ static void svd_memo_keep(adaptive_ws *A, const double *key, const double *a, co
  * singular (or the SVD failed). The SVD is D_JJ^T's, U' S V'^T (GSL leaves
  * the columns of U for zero singular values zero; V is complete): D_JJ's
  * left singular vectors are V', kept in A->svd_v (row-major, nj x nj). */
-static inline __attribute__((always_inline)) int factor_sized(adaptive_ws *A, const int *J, int nj, double *Zt,
-                                                              int *nz, int m) {
+static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz) {
+  int m = A->m;
   *nz = 0;
   if (nj == 0) return 0;
   double *U = A->svd_u, *V = A->svd_v, *s = A->svd_s, *N = A->N;
@@ -148,17 +148,6 @@ static inline __attribute__((always_inline)) int factor_sized(adaptive_ws *A, co
   }
   if (!(norm * inorm < 1 / AD_N_RCOND)) return 1;
   return 0;
-}
-
-/* (A six-pulse bridge's 6 rows, its sets of 2 to 4 of them, as constants:
- * the same operations in the same order, unrolled.) */
-static int factor_rows(adaptive_ws *A, const int *J, int nj, double *Zt, int *nz) {
-  if (A->m == 6) switch (nj) {
-      case 2: return factor_sized(A, J, 2, Zt, nz, 6);
-      case 3: return factor_sized(A, J, 3, Zt, nz, 6);
-      case 4: return factor_sized(A, J, 4, Zt, nz, 6);
-    }
-  return factor_sized(A, J, nj, Zt, nz, A->m);
 }
 
 /* Is N of the rows J singular? As factor_rows says, or as it said when

@@ -25,9 +25,7 @@ void lemke_free(lemke_solver *s) {
   memset(s, 0, sizeof *s);
 }
 
-/* row-major: a pivot runs along rows (m: the caller's, a constant where
- * lemke_solve dispatches on it) */
-#define TAB(s, i, j) ((s)->T[(size_t)(i) * (2 * (size_t)m + 2) + (j)])
+#define TAB(s, i, j) ((s)->T[(size_t)(i) * (2 * (size_t)(s)->m + 2) + (j)])   /* row-major: a pivot runs along rows */
 
 /* fmax(s, |v|) for an s that is not NaN (a NaN v leaves s), without the
  * call */
@@ -43,8 +41,8 @@ static inline double max_abs(double s, double v) {
  * ratios that are equal in exact arithmetic differ by rounding after some
  * pivots, and the lexicographic order then follows the rounding, which can
  * end on a ray although the LCP is feasible. -1: a ray. */
-static inline __attribute__((always_inline)) int ratio_test(const lemke_solver *s, int m, int e, double tol) {
-  int qc = 2 * m + 1, best = -1, zrow = -1;
+static int ratio_test(const lemke_solver *s, int e, double tol) {
+  int m = s->m, qc = 2 * m + 1, best = -1, zrow = -1;
   for (int i = 0; i < m; i++) {
     if (s->basis[i] == 2 * m) zrow = i;
     double a = TAB(s, i, e);
@@ -64,8 +62,8 @@ static inline __attribute__((always_inline)) int ratio_test(const lemke_solver *
   return best;
 }
 
-static inline __attribute__((always_inline)) void pivot(lemke_solver *s, int m, int r, int e) {
-  int nc = 2 * m + 2;
+static void pivot(lemke_solver *s, int r, int e) {
+  int m = s->m, nc = 2 * m + 2;
   double p = TAB(s, r, e);
   for (int j = 0; j < nc; j++) TAB(s, r, j) /= p;
   for (int i = 0; i < m; i++) {
@@ -79,9 +77,8 @@ static inline __attribute__((always_inline)) void pivot(lemke_solver *s, int m, 
   s->basis[r] = e;
 }
 
-static inline __attribute__((always_inline)) int solve_sized(lemke_solver *s, int m, const double *M, const double *q,
-                                                             double *z, double *w, int *pivots) {
-  int z0 = 2 * m, qc = 2 * m + 1;
+int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, double *w, int *pivots) {
+  int m = s->m, z0 = 2 * m, qc = 2 * m + 1;
   double scale = 0, qmin = 0;
   int r = -1;
   for (int i = 0; i < m; i++)
@@ -109,10 +106,10 @@ static inline __attribute__((always_inline)) int solve_sized(lemke_solver *s, in
   double tol = 64 * DBL_EPSILON * fmax(scale, 1);
   int e = z0;
   for (int it = 0; it < 50 * m + 100; it++) {
-    int leaving = it == 0 ? r : ratio_test(s, m, e, tol);
+    int leaving = it == 0 ? r : ratio_test(s, e, tol);
     if (leaving < 0) return CUP_ERR_LINALG;        /* a secondary ray */
     int out = s->basis[leaving];
-    pivot(s, m, leaving, e);
+    pivot(s, leaving, e);
     (*pivots)++;
     if (out == z0) {
       for (int i = 0; i < m; i++)
@@ -127,13 +124,4 @@ static inline __attribute__((always_inline)) int solve_sized(lemke_solver *s, in
     e = out < m ? out + m : out - m;               /* the complement enters */
   }
   return CUP_ERR_LINALG;
-}
-
-/* (A six-pulse bridge's jump LCPs, the multipliers' of 6 rows and the
- * state jump's of 12, with m a constant: the same operations in the same
- * order, unrolled; its first period solves 12 of them by this method.) */
-int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, double *w, int *pivots) {
-  if (s->m == 6) return solve_sized(s, 6, M, q, z, w, pivots);
-  if (s->m == 12) return solve_sized(s, 12, M, q, z, w, pivots);
-  return solve_sized(s, s->m, M, q, z, w, pivots);
 }
