@@ -262,8 +262,9 @@ static void mode_factor(adaptive_ws *A, ad_mode *md, uint64_t mask, int lazy) {
 /* With D: Y^T (C_J X + G_J U) and Y^T F_J (the rows that fix zeta_J
  * algebraically, r = nj - nz of them) into A->Ym (r x na, row-major) and
  * A->Ym + r na; the columns of Y are A->svd_v's first r. */
-static void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ) {
-  int n = A->n, m = A->m, na = A->na, nj = md->nj, r = nj - md->nz;
+static inline __attribute__((always_inline)) void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ, int n,
+                                                          int m, int na) {
+  int nj = md->nj, r = nj - md->nz;
   const int *J = md->rows;
   double *Yc = A->Ym + (size_t)r * na;
   for (int b = 0; b < r; b++) {
@@ -288,9 +289,9 @@ static void y_rows(adaptive_ws *A, const ad_mode *md, const double *CJ) {
 /* R = B_J N^-1 on the Z rows (or S^-1), Pi = I - R Z^T C_J, KU, Q, X, and
  * the generator M; with D also Ry = B_J N^-1 on the Y rows (A->Ry) and the
  * Y rows' own terms of M. C_J goes to A->T1 (nj x n), Q to A->T3. */
-static void mode_flow(adaptive_ws *A, ad_mode *md) {
+static inline __attribute__((always_inline)) void mode_flow(adaptive_ws *A, ad_mode *md, int n, int m, int nw, int na) {
   const cup_polyset *K = A->K;
-  int n = A->n, m = A->m, nw = A->nw, na = A->na, nj = md->nj, nz = md->nz, r = nj - nz;
+  int nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
   const double *Sinv = A->has_D ? A->Ninv : A->Sinv;
   const double *Bcol = A->has_D ? A->Bd : K->Bt;  /* column J_l of B: Bcol + J_l n (P^-1 C^T is K's Bt) */
@@ -369,7 +370,7 @@ static void mode_flow(adaptive_ws *A, ad_mode *md) {
       md->X[(size_t)i * na + j] = j < n ? (i == j) : -md->KU[i + (size_t)(j - n) * n];
   if (r == 0) return;
   /* with D, the Y rows fix zeta: v' gains -Ry (Y^T (C_J x + G_J u + F_J)) */
-  y_rows(A, md, CJ);
+  y_rows(A, md, CJ, n, m, na);
   const double *Yc = A->Ym + (size_t)r * na;
   for (int j = 0; j < na; j++)
     for (int i = 0; i < n; i++) {
@@ -391,9 +392,10 @@ static void mode_flow(adaptive_ws *A, ad_mode *md) {
  * magnitudes of their terms into Lm (m x na, row-major: |C_i| |X| for a
  * slack, a row that depends on the active ones has a tiny L_i but its slack
  * rounds at that), scratch: the slot keeps their nonzeros alone (lmx). */
-static void mode_events(adaptive_ws *A, ad_mode *md, double *Lm) {
+static inline __attribute__((always_inline)) void mode_events(adaptive_ws *A, ad_mode *md, double *Lm, int n, int m,
+                                                               int nw, int na) {
   const cup_polyset *K = A->K;
-  int n = A->n, m = A->m, nw = A->nw, na = A->na, p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
+  int p = A->p, nj = md->nj, nz = md->nz, r = nj - nz;
   const int *J = md->rows;
   const double *Sinv = A->has_D ? A->Ninv : A->Sinv, *Q = A->T3;
   const double *Zc = A->has_D ? A->Zc : A->T1;
@@ -479,8 +481,8 @@ static void mode_events(adaptive_ws *A, ad_mode *md, double *Lm) {
 /* M's and the event rows' nonzeros, and Lm's (mode_events') where L or Lm
  * has one (the products over them skip only terms that are exactly 0: the
  * same sums, bit for bit). */
-static void mode_sparse(const adaptive_ws *A, ad_mode *md, const double *Lm) {
-  int na = A->na, m = A->m, k = 0;
+static inline __attribute__((always_inline)) void mode_sparse(ad_mode *md, const double *Lm, int m, int na) {
+  int k = 0;
   for (int j = 0; j < na; j++) {
     md->mp[j] = k;
     for (int i = 0; i < na; i++) {
@@ -515,26 +517,34 @@ void ad_mode_mv(const adaptive_ws *A, const ad_mode *md, const double *y, double
   mode_mv_sparse(A->na, md, y, out);
 }
 
-/* The rest of a mode once mode_factor has chosen its rows. */
-static void mode_finish(adaptive_ws *A, ad_mode *md) {
-  int na = A->na;
+/* The rest of a mode once mode_factor has chosen its rows, for the sizes
+ * given (constants below). */
+static inline __attribute__((always_inline)) void finish_sized(adaptive_ws *A, ad_mode *md, int n, int m, int nw,
+                                                                int na) {
   /* (Lm past C_J and a row of C in T1: (m + 1) n + m na fits in its (n + m + 1) (na + m + 1)) */
-  double *Lm = A->T1 + (size_t)(A->m + 1) * A->n;
-  mode_flow(A, md);
-  mode_events(A, md, Lm);
-  mode_sparse(A, md, Lm);
+  double *Lm = A->T1 + (size_t)(m + 1) * n;
+  mode_flow(A, md, n, m, nw, na);
+  mode_events(A, md, Lm, n, m, nw, na);
+  mode_sparse(md, Lm, m, na);
   md->mnorm = md->snorm = 0;
   for (int i = 0; i < na; i++) {
     double r_ = 0, d_ = 0;
     for (int j = 0; j < na; j++) {
       r_ += fabs(md->M[i + (size_t)j * na]);
-      if ((i < A->n) == (j < A->n)) d_ += fabs(md->M[i + (size_t)j * na]);
+      if ((i < n) == (j < n)) d_ += fabs(md->M[i + (size_t)j * na]);
     }
     md->mnorm = la_fmax(md->mnorm, r_);
     md->snorm = la_fmax(md->snorm, d_);
   }
   md->hmax = -1;
   for (int c = 0; c < AD_CACHE; c++) { md->hc[c] = -1; md->cstamp[c] = 0; }
+}
+
+/* (A six-pulse bridge's 2 states, 2 input states and 6 rows as constants:
+ * the same sums, unrolled; its 10 modes took 6 k instructions each here.) */
+static void mode_finish(adaptive_ws *A, ad_mode *md) {
+  if (A->n == 2 && A->nw == 2 && A->na == 4 && A->m == 6) { finish_sized(A, md, 2, 6, 2, 4); return; }
+  finish_sized(A, md, A->n, A->m, A->nw, A->na);
 }
 
 static void mode_build(adaptive_ws *A, ad_mode *md, uint64_t mask) {

@@ -80,6 +80,16 @@ static inline __attribute__((always_inline)) int solve_on(lcp_solver *s, const d
     for (int i = 0; i < m; i++) s->w[i] = k == 1 ? q[i] + ca[i] * la : q[i] + ca[i] * la + cb[i] * lb;
     return 0;
   }
+  if (k == 3 || k == 4) {                       /* (a six-pulse bridge's: the same sums) */
+    const double *c0 = M + (size_t)s->idx[0] * m, *c1 = M + (size_t)s->idx[1] * m, *c2 = M + (size_t)s->idx[2] * m;
+    const double *c3 = M + (size_t)s->idx[k - 1] * m;
+    double l0 = s->lam[s->idx[0]], l1 = s->lam[s->idx[1]], l2 = s->lam[s->idx[2]], l3 = s->lam[s->idx[k - 1]];
+    for (int i = 0; i < m; i++) {
+      double acc = q[i] + c0[i] * l0 + c1[i] * l1 + c2[i] * l2;
+      s->w[i] = k == 3 ? acc : acc + c3[i] * l3;
+    }
+    return 0;
+  }
   for (int i = 0; i < m; i++) {
     double acc = q[i];
     for (int b = 0; b < k; b++) acc += M[i + (size_t)s->idx[b] * m] * s->lam[s->idx[b]];

@@ -43,9 +43,7 @@ static inline double max_abs(double s, double v) {
  * end on a ray although the LCP is feasible. -1: a ray. */
 static int ratio_test(const lemke_solver *s, int e, double tol) {
   int m = s->m, qc = 2 * m + 1, best = -1, zrow = -1;
-  double qscale = 0;
   for (int i = 0; i < m; i++) {
-    qscale = max_abs(qscale, TAB(s, i, qc));
     if (s->basis[i] == 2 * m) zrow = i;
     double a = TAB(s, i, e);
     if (!(a > tol)) continue;
@@ -56,6 +54,8 @@ static int ratio_test(const lemke_solver *s, int e, double tol) {
     if (d < 0) best = i;
   }
   if (best >= 0 && zrow >= 0 && zrow != best && TAB(s, zrow, e) > tol) {
+    double qscale = 0;                             /* (here alone: most tests end before) */
+    for (int i = 0; i < m; i++) qscale = max_abs(qscale, TAB(s, i, qc));
     double az = TAB(s, zrow, e), rz = TAB(s, zrow, qc) / az, rb = TAB(s, best, qc) / TAB(s, best, e);
     if (rz - rb <= 64 * DBL_EPSILON * (fabs(rb) + qscale / az)) return zrow;
   }
@@ -81,19 +81,24 @@ int lemke_solve(lemke_solver *s, const double *M, const double *q, double *z, do
   int m = s->m, z0 = 2 * m, qc = 2 * m + 1;
   double scale = 0, qmin = 0;
   int r = -1;
-  for (int i = 0; i < m; i++) {
+  for (int i = 0; i < m; i++)
     if (q[i] < 0 && q[i] <= qmin) { qmin = q[i]; r = i; }   /* ties: the last row, lexicographically least */
-    for (int j = 0; j < m; j++) scale = max_abs(scale, M[i + (size_t)j * m]);
-  }
   for (int i = 0; i < m; i++) z[i] = 0;
   if (r < 0) {                                     /* q >= 0: z = 0 */
     for (int i = 0; i < m; i++) w[i] = q[i];
     return CUP_OK;
   }
-  memset(s->T, 0, sizeof(double) * (size_t)m * (size_t)(2 * m + 2));
+  /* every entry of the tableau's m rows written (no memset first); M's
+   * largest entry on the way (a max, in any order the same; a NaN passed
+   * over as before) */
   for (int i = 0; i < m; i++) {
+    for (int j = 0; j < m; j++) {
+      double v = M[i + (size_t)j * m];
+      scale = max_abs(scale, v);
+      TAB(s, i, j) = 0;
+      TAB(s, i, m + j) = -v;
+    }
     TAB(s, i, i) = 1;
-    for (int j = 0; j < m; j++) TAB(s, i, m + j) = -M[i + (size_t)j * m];
     TAB(s, i, z0) = -1;
     TAB(s, i, qc) = q[i];
     s->basis[i] = i;

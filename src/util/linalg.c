@@ -211,7 +211,9 @@ void la_simplicial_solve(const cholmod_factor *L, double *x, double *w) {
   }
 }
 
-int la_dense_lu(double *a, int k, int *piv) {
+/* (la_dense_lu's body, inlined for a constant k below: the same operations
+ * in the same order, unrolled) */
+static inline __attribute__((always_inline)) int lu_body(double *a, int k, int *piv) {
   for (int i = 0; i < k; i++) piv[i] = i;
   for (int j = 0; j < k; j++) {
     int p = j;
@@ -236,15 +238,34 @@ int la_dense_lu(double *a, int k, int *piv) {
   return 0;
 }
 
-void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w) {
+/* (The LCPs' principal blocks and the split's N of a circuit are 3 x 3 and
+ * 4 x 4: a six-pulse bridge's run factors ~60 of them.) */
+int la_dense_lu(double *a, int k, int *piv) {
+  switch (k) {
+    case 3: return lu_body(a, 3, piv);
+    case 4: return lu_body(a, 4, piv);
+  }
+  return lu_body(a, k, piv);
+}
+
+static inline __attribute__((always_inline)) void lu_solve_body(const double *lu, int k, const int *piv, double *b,
+                                                                double *w) {
   for (int i = 0; i < k; i++) w[i] = b[piv[i]];
-  memcpy(b, w, sizeof(double) * (size_t)k);
+  for (int i = 0; i < k; i++) b[i] = w[i];
   for (int j = 0; j < k; j++)               /* L y = Pb, unit diagonal */
     for (int i = j + 1; i < k; i++) b[i] -= lu[i + (size_t)j * k] * b[j];
   for (int j = k - 1; j >= 0; j--) {        /* U x = y */
     b[j] /= lu[j + (size_t)j * k];
     for (int i = 0; i < j; i++) b[i] -= lu[i + (size_t)j * k] * b[j];
   }
+}
+
+void la_dense_lu_solve(const double *lu, int k, const int *piv, double *b, double *w) {
+  switch (k) {
+    case 3: lu_solve_body(lu, 3, piv, b, w); return;
+    case 4: lu_solve_body(lu, 4, piv, b, w); return;
+  }
+  lu_solve_body(lu, k, piv, b, w);
 }
 
 /* c's column j for a constant k (up to 8), its sums in registers: from +0
