@@ -189,9 +189,12 @@ static int find_dip(adaptive_ws *A, ad_mode *md, int i, double h, ad_event *ev) 
   return 0;
 }
 
-/* ad_detect past its first test (ad_detect_may, inline in take_step). */
-static int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
+/* (Past its first test: ad_detect_may, inline in take_step.) */
+int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
   int m = A->m;
+  ev->tau_lo = 0;
+  ev->tau_sw = h;
+  ev->hi_ok = 0;
   if (any_crossed(A, A->gb, A->tb)) return 1;
   for (int i = 0; i < m; i++) {
     if (!(A->da[i] < 0 && A->db[i] > 0)) continue;
@@ -201,13 +204,6 @@ static int detect_rows(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
     if (low < 0.25 * fmin(A->ga[i], A->gb[i]) && find_dip(A, md, i, h, ev)) return 1;
   }
   return 0;
-}
-
-int ad_detect(adaptive_ws *A, ad_mode *md, double h, ad_event *ev) {
-  ev->tau_lo = 0;
-  ev->tau_sw = h;
-  ev->hi_ok = 0;
-  return detect_rows(A, md, h, ev);
 }
 
 /* The row crossing first: of those crossed at the bracket's end, the one

@@ -644,21 +644,6 @@ void ad_mode_restore(adaptive_ws *A, int s, uint64_t mask, long stamp, const dou
   md->stamp = stamp;
 }
 
-/* A step's length is the difference of two times, each rounded to half an
- * ulp of itself: lengths that differ by two ulps of the step's end t are
- * the same length to the rounding of the times, and take the same
- * exponential. (A gate's windows k PER + PW .. (k+1) PER differ by ulps
- * of t, hundreds of ulps of h, and each took its own exponential: 7 % of
- * the buck's time loop.) The state moves by |x'| 2 eps |t| at most, what
- * rounding t itself does. The samples' spacing is applied sample after
- * sample, where such differences would add up: it takes only itself. */
-const double *ad_expm_cached(adaptive_ws *A, ad_mode *md, double h, double t_end) {
-  double same = 2 * DBL_EPSILON * fabs(t_end);
-  for (int c = 0; c < AD_CACHE; c++)
-    if (fabs(md->hc[c] - h) <= same) { md->cstamp[c] = ++A->clock; return md->Ec[c]; }
-  return NULL;
-}
-
 const double *ad_expm_miss(adaptive_ws *A, ad_mode *md, double h) {
   int slot = 0;
   for (int c = 1; c < AD_CACHE; c++)
