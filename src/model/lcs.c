@@ -9,6 +9,7 @@
 #include "catchup.h"
 #include "lcs_impl.h"
 #include "set/polyset_impl.h"
+#include "util/block.h"
 
 static int present(const cup_csc *c) { return c->ncol > 0 && c->colptr; }
 
@@ -28,10 +29,8 @@ static int check_pb(const cup_polyset *K, const la_sparse *B, double tol, char *
   /* pb, ct, rows and seen in one zeroed block, on the stack for a small
    * LCS (a switched run makes one a configuration: four callocs and frees were) */
   size_t N = (size_t)n + 1, need = (N * (2 * sizeof(double) + sizeof(int) + 1) + sizeof(double) - 1) / sizeof(double);
-  double small[128], *heap = need <= 128 ? NULL : calloc(need, sizeof(double));
-  double *pb = need <= 128 ? small : heap;
+  double small[128], *pb = scratch_take(small, sizeof small, sizeof(double) * need, 1);
   if (!pb) return fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
-  if (pb == small) memset(small, 0, sizeof(double) * need);
   double *ct = pb + N;
   int *rows = (int *)(ct + N);
   unsigned char *seen = (unsigned char *)(rows + N);
@@ -68,7 +67,7 @@ static int check_pb(const cup_polyset *K, const la_sparse *B, double tol, char *
       seen[i] = 0;
     }
   }
-  free(heap);
+  scratch_free(pb, small);
   if (wi >= 0 && !(worst <= tol * scale))
     return fail_fmt(errmsg, CUP_ERR_PB_CT,
                     "P B differs from C^T: largest mismatch at (%d,%d): (P B) = %.17g but C^T = %.17g "
@@ -112,9 +111,8 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
   if (m > 1024) return CUP_OK;               /* too big to check densely: the LCP solver will tell */
   /* D, S, the eigenvalues and their workspace in one zeroed block (on the stack for a small D) */
   size_t need = 2 * (size_t)m * m + 3 * (size_t)m + 1;
-  double small[256], *heap = need <= 256 ? NULL : calloc(need, sizeof(double));
-  double *D = need <= 256 ? small : heap, *S = D ? D + (size_t)m * m : NULL;
-  if (D == small) memset(small, 0, sizeof(double) * need);
+  double small[256], *D = scratch_take(small, sizeof small, sizeof(double) * need, 1);
+  double *S = D ? D + (size_t)m * m : NULL;
   double *ev = S ? S + (size_t)m * m : NULL;
   int st = D ? CUP_OK : fail_fmt(errmsg, CUP_ERR_NOMEM, "LCS: out of memory");
   double lmin = 0, norm = 0;
@@ -138,7 +136,7 @@ static int check_D(const la_sparse *Ds, char *errmsg) {
       st = fail_fmt(errmsg, CUP_ERR_ARG, "D is not positive semidefinite ((D + D^T)/2 has the eigenvalue %.3g) "
                     "and not a P-matrix: the LCP of a step may have no or several solutions", lmin);
   }
-  free(heap);                                    /* (S and ev in its block) */
+  scratch_free(D, small);                        /* (S and ev in its block) */
   return st;
 }
 

@@ -81,7 +81,7 @@ static int row_used(const parts *q, int i, int with_g) {
  * (netlist_switch.c); a source that drives it forward leaves K(t) empty,
  * and the run stops there. */
 static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const parts *q, char *errmsg) {
-  int small[256], *used = nl_scratch(small, sizeof small, sizeof(int) * ((size_t)nl->m + 1), 1);
+  int small[256], *used = scratch_take(small, sizeof small, sizeof(int) * ((size_t)nl->m + 1), 1);
   if (!used) return nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
   for (int k = 0; k < q->sC.nnz; k++) used[q->sC.i[k]] = 1;
   for (int j = 0; j < q->sD.ncol; j++)
@@ -113,7 +113,7 @@ static int decoupled_rows(const cup_netlist *nl, const nl_circuit *c, const part
                 "voltage sources and the diode): when it conducts its current is unbounded; put a resistor "
                 "or inductor in the loop", len ? names : "nothing");
   }
-  nl_scratch_free(used, small);
+  scratch_free(used, small);
   return st;
 }
 
@@ -417,15 +417,12 @@ int nl_formulate(cup_netlist **out, const nl_circuit *c, const cup_input *u, cha
   if (!st) st = build_lcs(nl, c, errmsg);
   if (!st) st = build_input(nl, c, u, errmsg);
   /* the nodes' .ic voltages: on the stack for a small circuit (a calloc and a free less a switch configuration) */
-  double vsmall[64], *vic = NULL, *vheap = NULL;
+  double vsmall[64], *vic = NULL;
   if (!st && (!(nl->x0 = calloc((size_t)nl->n + 1, sizeof(double))) ||
-              !(vic = c->nnodes <= 64 ? vsmall : (vheap = malloc(sizeof(double) * (size_t)c->nnodes)))))
+              !(vic = scratch_take(vsmall, sizeof vsmall, sizeof(double) * (size_t)c->nnodes, 1))))
     st = nl_fail(c, -1, errmsg, CUP_ERR_NOMEM, "out of memory");
-  if (!st) {
-    memset(vic, 0, sizeof(double) * (size_t)c->nnodes);
-    build_x0(nl, c, vic);
-  }
-  free(vheap);
+  if (!st) build_x0(nl, c, vic);
+  scratch_free(vic, vsmall);
   char msg[160];
   for (int k = 0; k < c->nprobe && !st; k++)
     if (nl_probe_check(nl, c->probe[k].text, msg, sizeof msg))

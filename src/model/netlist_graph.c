@@ -98,7 +98,7 @@ static int control_nodes(const nl_circuit *c, int e, char *errmsg) {
 
 static int check_elements(const nl_circuit *c, char *errmsg) {
   int small[512];                                /* (one block, zeroed) */
-  int *deg = nl_scratch(small, sizeof small, sizeof(int) * 2 * (size_t)c->nnodes, 1);
+  int *deg = scratch_take(small, sizeof small, sizeof(int) * 2 * (size_t)c->nnodes, 1);
   int *who = deg ? deg + c->nnodes : NULL;
   if (!deg) return nomem(c, errmsg);
   int st = CUP_OK;
@@ -122,7 +122,7 @@ static int check_elements(const nl_circuit *c, char *errmsg) {
     if (deg[v] == 1)
       st = nl_fail(c, who[v], errmsg, CUP_ERR_PARSE, "node '%s' is connected to %s only (a dangling node)",
                    c->node[v], c->elem[who[v]].name);
-  nl_scratch_free(deg, small);
+  scratch_free(deg, small);
   return st;
 }
 
@@ -183,7 +183,7 @@ static int cutsets(const nl_circuit *c, int *uf, char *errmsg) {
 static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned char *vport, char *errmsg) {
   int nn = c->nnodes;
   int small[512];                                /* (one block, zeroed) */
-  int *start = nl_scratch(small, sizeof small, sizeof(int) * ((size_t)nn + 1 + 2 * (size_t)c->nelem + 1 + (size_t)nn + 1), 1);
+  int *start = scratch_take(small, sizeof small, sizeof(int) * ((size_t)nn + 1 + 2 * (size_t)c->nelem + 1 + (size_t)nn + 1), 1);
   if (!start) return nomem(c, errmsg);
   int *adj = start + nn + 1, *queue = adj + 2 * c->nelem + 1;
   for (int e = 0; e < c->nelem; e++)
@@ -215,7 +215,7 @@ static int build_forest(cup_netlist *nl, const nl_circuit *c, const unsigned cha
       }
     }
   }
-  nl_scratch_free(start, small);
+  scratch_free(start, small);
   return CUP_OK;
 }
 
@@ -278,7 +278,7 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
    * netlist's arrays in another that port owns (cup_netlist_free) */
   size_t E = (size_t)ne + 1, N = (size_t)nn;
   int small[512];
-  int *uf = nl_scratch(small, sizeof small, sizeof(int) * N + 2 * E, 1);
+  int *uf = scratch_take(small, sizeof small, sizeof(int) * N + 2 * E, 1);
   unsigned char *fixed = uf ? (unsigned char *)(uf + N) : NULL, *vport = fixed ? fixed + E : NULL;
   nl->port = malloc(sizeof(nl_port) * E + sizeof(int) * (3 * E + 4 * N) + N);
   int *iw = nl->port ? (int *)(nl->port + E) : NULL;
@@ -305,7 +305,7 @@ int nl_topology(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     for (int e = 0; e < ne; e++) vport[e] = nl->eport[e] >= 0 && nl->eport[e] < nl->nv;
     st = build_forest(nl, c, vport, errmsg);
   }
-  nl_scratch_free(uf, small);
+  scratch_free(uf, small);
   return st;
 }
 

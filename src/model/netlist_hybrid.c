@@ -52,8 +52,7 @@ int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
   size_t R = (size_t)nrow + 1, C = (size_t)ncol + 1, N = (size_t)t->n + 1;
   size_t need = sizeof(double) * 2 * R + sizeof(int) * (C + N + 2 * R);
   /* a small one on the stack (a converter's all are: a malloc and a free each, ~200 instructions) */
-  double small[512], *heap = need > sizeof small ? malloc(need) : NULL;
-  double *acc = need > sizeof small ? heap : small, *amag = acc ? acc + R : NULL;
+  double small[512], *acc = scratch_take(small, sizeof small, need, 0), *amag = acc ? acc + R : NULL;
   int *cnt = acc ? (int *)(amag + R) : NULL, *order = cnt ? cnt + C : NULL;
   int *mark = order ? order + N : NULL, *rows = mark ? mark + R : NULL;
   int st = acc ? CUP_OK : CUP_ERR_NOMEM;
@@ -87,7 +86,7 @@ int nl_coo_to_csc(const nl_coo *t, int nrow, int ncol, la_sparse *out) {
     }
   }
   if (!st) { out->p[ncol] = nz; out->nnz = nz; }
-  free(heap);
+  scratch_free(acc, small);
   return st;
 }
 
@@ -214,7 +213,7 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
   /* the path scratch, pc then pp, in one block: on the stack for a shallow forest */
   double small[128];
   size_t np = 2 * (size_t)maxd + 2;
-  y.pc = nl_scratch(small, sizeof small, (sizeof(double) + sizeof(int)) * np, 0);
+  y.pc = scratch_take(small, sizeof small, (sizeof(double) + sizeof(int)) * np, 0);
   y.pp = y.pc ? (int *)(y.pc + np) : NULL;
   int st = y.pc ? CUP_OK : CUP_ERR_NOMEM;
   if (!st && nl->ns > 0) {                      /* (the supernodes' Laplacian alone needs CHOLMOD: add_xtx) */
@@ -237,7 +236,7 @@ int nl_hybrid(cup_netlist *nl, const nl_circuit *c, char *errmsg) {
     y.h.n = w;
     st = nl_coo_to_csc(&y.h, y.np, y.np, &nl->H);
   }
-  nl_scratch_free(y.pc, small);
+  scratch_free(y.pc, small);
   nl_coo_free(&y.lap); nl_coo_free(&y.k); nl_coo_free(&y.h);
   if (st == CUP_ERR_NOMEM) return nl_fail(c, -1, errmsg, st, "out of memory while formulating the circuit");
   if (st) return nl_fail(c, -1, errmsg, st, "the resistor network could not be factored (CHOLMOD status %d)",

@@ -23,10 +23,9 @@
 #ifndef CUP_NETLIST_IMPL_H
 #define CUP_NETLIST_IMPL_H
 
-#include <stdlib.h>
-#include <string.h>
 #include <cholmod.h>
 #include "catchup/netlist.h"
+#include "util/block.h"
 #include "util/linalg.h"
 #include "netlist_desc.h"
 #include "signal_map.h"
@@ -244,17 +243,5 @@ void nl_raw_free(cup_netlist *nl);
 /* A row over (x, u, zeta) of signal kind 'v' (nodes a, b; b < 0: ground) or
  * 'i' (element a), into row (n + p + m). */
 int nl_signal_row(cup_netlist *nl, char kind, int a, int b, double *row);
-
-/* A short-lived scratch of bytes: the caller's buffer small (cap bytes,
- * on its stack) when it fits, zeroed if zero, else the heap's (NULL: no
- * memory); nl_scratch_free frees the heap's alone. A switch configuration
- * is formed inside its run: a malloc and a free were some 250 instructions. */
-static inline void *nl_scratch(void *small, size_t cap, size_t bytes, int zero) {
-  if (bytes <= cap) return zero ? memset(small, 0, bytes) : small;
-  return zero ? calloc(bytes, 1) : malloc(bytes);
-}
-static inline void nl_scratch_free(void *p, const void *small) {
-  if (p != small) free(p);
-}
 
 #endif

@@ -228,7 +228,7 @@ static int sparse_lcs(cup_netlist *sub, const nl_circuit *d, char *errmsg) {
   const nl_raw *R = sub->raw;
   int n = sub->n, dia = 1;
   const la_sparse *Pc = R->Pc.p ? &R->Pc : NULL;
-  double small[256], *pd = nl_scratch(small, sizeof small, sizeof(double) * ((size_t)n + 1 + (size_t)sub->m + 1), 0);
+  double small[256], *pd = scratch_take(small, sizeof small, sizeof(double) * ((size_t)n + 1 + (size_t)sub->m + 1), 0);
   double *F = pd ? pd + n + 1 : NULL;
   if (!pd) return nl_switch_nomem(d, errmsg);
   la_zero(F, sub->m + 1);
@@ -240,7 +240,7 @@ static int sparse_lcs(cup_netlist *sub, const nl_circuit *d, char *errmsg) {
     }
   const la_sparse *const six[6] = {&R->part[0], &R->part[4], &R->part[1], &R->part[2], &R->part[5], &R->part[3]};
   int st = lcs_of(sub, six, F, dia ? NULL : Pc, pd, d, errmsg);
-  nl_scratch_free(pd, small);
+  scratch_free(pd, small);
   return st;
 }
 
@@ -318,11 +318,11 @@ static int rename_rows(cup_netlist *sub, const red *r) {
   /* in place, through a copy (on the stack for a small circuit: two mallocs
    * and two frees less a switch configuration) */
   size_t mq = (size_t)r->mq;
-  char *nsmall[64], **nm = nl_scratch(nsmall, sizeof nsmall, sizeof(char *) * mq, 0);
-  int fsmall[64], *fx = nl_scratch(fsmall, sizeof fsmall, sizeof(int) * mq, 0);
+  char *nsmall[64], **nm = scratch_take(nsmall, sizeof nsmall, sizeof(char *) * mq, 0);
+  int fsmall[64], *fx = scratch_take(fsmall, sizeof fsmall, sizeof(int) * mq, 0);
   if (!nm || !fx) {
-    nl_scratch_free(nm, nsmall);
-    nl_scratch_free(fx, fsmall);
+    scratch_free(nm, nsmall);
+    scratch_free(fx, fsmall);
     return CUP_ERR_NOMEM;
   }
   for (int k = 0; k < r->m; k++) { nm[k] = sub->row_name[r->dr[k]]; fx[k] = sub->row_fixed[r->dr[k]]; }
@@ -331,8 +331,8 @@ static int rename_rows(cup_netlist *sub, const red *r) {
     memcpy(sub->row_name, nm, sizeof(char *) * mq);
     memcpy(sub->row_fixed, fx, sizeof(int) * mq);
   }
-  nl_scratch_free(nm, nsmall);
-  nl_scratch_free(fx, fsmall);
+  scratch_free(nm, nsmall);
+  scratch_free(fx, fsmall);
   sub->mr = r->m;
   sub->nq = r->nq;
   return CUP_OK;

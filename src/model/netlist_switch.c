@@ -81,8 +81,8 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   d->nprobe = 0; d->probe = NULL; d->probe_all = 0;
   /* (not zeroed: the circuit's elements are copied over, append clears each one after) */
   d->elem = malloc(sizeof(nl_elem) * ((size_t)c->nelem + (size_t)c->nnodes + 1));
-  int small[256], *uf = nl_scratch(small, sizeof small, sizeof(int) * (size_t)c->nnodes, 0);
-  if (!d->elem || !uf) { nl_scratch_free(uf, small); return CUP_ERR_NOMEM; }
+  int small[256], *uf = scratch_take(small, sizeof small, sizeof(int) * (size_t)c->nnodes, 0);
+  if (!d->elem || !uf) { scratch_free(uf, small); return CUP_ERR_NOMEM; }
   for (int e = 0, k = 0; e < c->nelem; e++) {
     nl_elem *el = &d->elem[e];
     *el = c->elem[e];
@@ -109,7 +109,7 @@ static int derive(const nl_switched *S, uint64_t cfg, nl_circuit *d) {
   int st = CUP_OK;
   for (int v = 1; v < c->nnodes && !st; v++)
     if (find(uf, v) != find(uf, 0)) st = close_cut(d, uf, v);
-  nl_scratch_free(uf, small);
+  scratch_free(uf, small);
   return st;
 }
 
@@ -141,9 +141,8 @@ static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
   int n = sub->n, p = sub->p, nv = n + p + sub->m, k = 0;
   const cup_input *u = sub->u;
   int nterms = p && u && !u->fn ? u->nterms : 0;
-  unsigned char rsmall[256], *reads = p < 256 ? rsmall : calloc((size_t)p + 1, 1);
+  unsigned char rsmall[256], *reads = scratch_take(rsmall, sizeof rsmall, (size_t)p + 1, 1);
   if (!reads) return CUP_ERR_NOMEM;
-  if (reads == rsmall) memset(rsmall, 0, (size_t)p + 1);
   for (int w = 0; w < S->nsw; w++) {
     tp->cp[w] = k;
     for (int j = 0; j < nv; j++) {
@@ -164,7 +163,7 @@ static int ctl_sparse(const nl_switched *S, nl_topo *tp) {
     const input_term *w = &u->terms[tp->uterm[q]];
     if (w->kind != CUP_WAVE_CONSTANT && !input_jump_pulse(w)) tp->steps = 0;
   }
-  if (reads != rsmall) free(reads);
+  scratch_free(reads, rsmall);
   return CUP_OK;
 }
 

@@ -9,6 +9,7 @@
 #include "catchup.h"
 #include "catchup/polyset.h"
 #include "polyset_impl.h"
+#include "util/block.h"
 
 /* A small set's scratch (doubles) on the stack: a switched run makes its
  * sets inside its run, a malloc and a free each was some 250 instructions */
@@ -394,12 +395,9 @@ static double collatz_wielandt(const cup_polyset *K, abs_apply_fn apply, const v
 static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
   if (K->m == 0) { K->lip = 0; return CUP_OK; }
   /* a small set's scratch on the stack (a switched run makes a set a configuration) */
-  double small[PS_SMALL], *heap = NULL, *v = work;
-  if (!v) {
-    size_t need = 2 * (size_t)K->m + (size_t)K->n;
-    v = need <= PS_SMALL ? small : (heap = malloc(sizeof(double) * need));
-    if (!v) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
-  }
+  double small[PS_SMALL], *v = work;
+  if (!v && !(v = scratch_take(small, sizeof small, sizeof(double) * (2 * (size_t)K->m + (size_t)K->n), 0)))
+    return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
   double *w = v + K->m, *tmp = w + K->m;
   if (K->pkind != CUP_METRIC_SPARSE) {
     for (int i = 0; i < K->m; i++) {
@@ -423,7 +421,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
     cholmod_sparse *W = PC ? cholmod_spsolve(CHOLMOD_L, K->LP, PC, K->cm) : NULL;
     cholmod_free_sparse(&PC, K->cm);
     if (!W) {
-      free(heap);
+      if (!work) scratch_free(v, small);
       return fail_fmt(errmsg, CUP_ERR_LINALG, "P: CHOLMOD solve for ||c_i||_{P^-1} failed");
     }
     const int *p = W->p;
@@ -436,7 +434,7 @@ static int row_norms_and_lipschitz(cup_polyset *K, double *work, char *errmsg) {
     K->lip = collatz_wielandt(K, abs_apply_w, W, v, w, tmp, 0);
     cholmod_free_sparse(&W, K->cm);
   }
-  free(heap);
+  if (!work) scratch_free(v, small);
   return CUP_OK;
 }
 
@@ -480,8 +478,8 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
   /* A backward-stable eigenvalue is within c u ||M||_F of the true one. */
   if (m > 0) {                             /* (A row-major, ev, the workspace: one block) */
     size_t need = (size_t)m * m + 3 * (size_t)m;   /* (on the stack for a small set) */
-    double small[PS_SMALL], *heap = need <= PS_SMALL ? NULL : malloc(sizeof(double) * need);
-    double *A = need <= PS_SMALL ? small : heap, *ev = A ? A + (size_t)m * m : NULL;
+    double small[PS_SMALL], *A = scratch_take(small, sizeof small, sizeof(double) * need, 0);
+    double *ev = A ? A + (size_t)m * m : NULL;
     if (!A) return fail_fmt(errmsg, CUP_ERR_NOMEM, "polyset: out of memory");
     double fro = 0;
     for (int j = 0; j < m; j++)
@@ -495,7 +493,7 @@ static int dense_setup(cup_polyset *K, char *errmsg) {
     double lmax = rc ? INFINITY : gsl_vector_max(&evv.vector);
     double bound = lmax + 16.0 * (m + 1) * DBL_EPSILON * sqrt(fro);
     if (bound < K->lip) K->lip = bound;
-    free(heap);
+    scratch_free(A, small);
   }
   K->dense = 1;
   return CUP_OK;
@@ -508,10 +506,8 @@ static void find_interior_direction(cup_polyset *K) {
   int m = K->m, n = K->n;
   if (m == 0 || !(K->lip > 0)) return;
   size_t need = (size_t)5 * m + 2 * (size_t)n;     /* (zeroed; on the stack for a small set) */
-  double small[PS_SMALL], *heap = need <= PS_SMALL ? NULL : calloc(need, sizeof(double));
-  double *buf = need <= PS_SMALL ? small : heap;
+  double small[PS_SMALL], *buf = scratch_take(small, sizeof small, sizeof(double) * need, 1);
   if (!buf) return;
-  if (buf == small) memset(small, 0, sizeof(double) * need);
   double *mu = buf, *mu_old = mu + m, *yv = mu_old + m, *grad = yv + m, *cd = grad + m;
   double *d = cd + m, *pdv = d + n;
   double t = 1, step = 1.0 / K->lip;
@@ -548,5 +544,5 @@ static void find_interior_direction(cup_polyset *K) {
     }
   }
   (void)pdv;
-  free(heap);
+  scratch_free(buf, small);
 }

@@ -6,6 +6,8 @@
 #ifndef CUP_UTIL_BLOCK_H
 #define CUP_UTIL_BLOCK_H
 #include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
 
 typedef struct block_arena {
   char *base;   /* NULL: sizing */
@@ -20,5 +22,18 @@ static inline void *block_take(block_arena *b, size_t count, size_t size) {
   void *q = b->base ? b->base + b->used : NULL;
   b->used += bytes;
   return q;
+}
+
+/* A short-lived scratch of bytes: the caller's buffer small (cap bytes,
+ * on its stack) when it fits, zeroed if zero, else the heap's (NULL: no
+ * memory); scratch_free frees the heap's alone (and NULL). A switch
+ * configuration is formed inside its run: a malloc and a free were some
+ * 250 instructions. */
+static inline void *scratch_take(void *small, size_t cap, size_t bytes, int zero) {
+  if (bytes <= cap) return zero ? memset(small, 0, bytes) : small;
+  return zero ? calloc(bytes, 1) : malloc(bytes);
+}
+static inline void scratch_free(void *p, const void *small) {
+  if (p != small) free(p);
 }
 #endif
